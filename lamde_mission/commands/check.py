@@ -1,0 +1,51 @@
+"""`lamde-mission check MAP`: validate a map and print its summary."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    p = sub.add_parser(
+        "check",
+        help="validate a map file and print its summary",
+        description="Validate a map file: every problem is reported on its own line naming the "
+        "field (exit status 2). On success print counts, area, I_max and the defaults in force.",
+    )
+    p.add_argument("map", help="map file (JSON)")
+    p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    from lamde_mission.commands._common import load_map_or_fail
+
+    m = load_map_or_fail(args.map)
+    s = m.summary()
+    if args.json:
+        print(json.dumps(s, indent=2))
+        return 0
+    default = " (default for this size)" if s["max_hover_points_default"] else ""
+    u, r, o = s["uav"], s["radio"], s["objective"]
+    print(f"map '{s['name']}': OK")
+    print(f"  area            {s['area_m'][0]:g} m x {s['area_m'][1]:g} m")
+    print(f"  origin          lat {s['origin']['lat']}, lon {s['origin']['lon']}, "
+          f"alt {s['origin']['alt']} m")
+    print(f"  start -> end    ({s['start'][0]:g}, {s['start'][1]:g}) -> "
+          f"({s['end'][0]:g}, {s['end'][1]:g})")
+    print(f"  sensors         {s['sensors']} (total required {s['total_required_data_mbit']:g} "
+          "Mbit)")
+    print(f"  obstacles       {s['circles']} circles, {s['rectangles']} rectangles, "
+          f"{s['no_fly_zones']} no-fly zones")
+    print(f"  I_max           {s['max_hover_points']}{default}")
+    print(f"  uav             H {u['altitude']:g} m, v_max {u['max_speed']:g} m/s, "
+          f"a {u['acceleration']:g} m/s^2, T_max {u['max_hover_time']:g} s, "
+          f"tau {u['activation_threshold']:g}")
+    print(f"  radio           R_c {r['peak_rate']:g} Mbit/s, xi {r['decay']:g} Mbit/s/m, "
+          f"R_lambda {r['bandwidth']:g} Mbit/s, Q_lambda {r['required_data']:g} Mbit")
+    print(f"  objective       alpha {o['alpha']:g}, mu {o['collision_offset']:g}, "
+          f"nu {o['collision_weight']:g} /m")
+    if s["has_witness"]:
+        print("  witness         a known feasible plan is stored in the map")
+    return 0

@@ -1,0 +1,21 @@
+"""`lamde-mission schema`: print the JSON Schema of the map format."""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    return sub.add_parser(
+        "schema",
+        help="print the JSON Schema of the map file",
+        description="Print the JSON Schema (draft 2020-12) of the map file format.",
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    from planner_core.mapio import map_json_schema
+
+    print(json.dumps(map_json_schema(), indent=2))
+    return 0

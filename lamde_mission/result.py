@@ -1,0 +1,118 @@
+"""`Plan`: the immutable result of planning, read by every later stage (items, files, sim)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+__all__ = ["Plan", "PLAN_FORMAT_VERSION"]
+
+PLAN_FORMAT_VERSION = 1
+
+
+def _frozen(a: Any, shape: tuple[int, ...] | None = None) -> np.ndarray:
+    arr = np.array(a, dtype=float)
+    if shape is not None:
+        arr = arr.reshape(shape)
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class Plan:
+    """Hover points (I x 2, local metres) with hover times (s), their scores and provenance.
+
+    `breakdown` is `Problem.breakdown` of the final solution; `history` holds per-generation
+    arrays (`evaluations`, `best_f`, `best_phi`, `feasible_fraction`); `polish` records f and
+    phi before and after the hover-time LP (None when polishing was off).
+    """
+
+    map_name: str
+    hover_points: np.ndarray
+    hover_times: np.ndarray
+    f: float
+    phi: float
+    feasible: bool
+    breakdown: dict[str, Any]
+    evaluations: int
+    wall_time: float
+    history: dict[str, np.ndarray]
+    seed: int
+    configurator: str = "adaptive"
+    variable_length: bool = True
+    polish: dict[str, Any] | None = None
+    timings: dict[str, float] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "hover_points", _frozen(self.hover_points, (-1, 2)))
+        object.__setattr__(self, "hover_times", _frozen(self.hover_times, (-1,)))
+        object.__setattr__(
+            self, "history", {k: _frozen(v) for k, v in dict(self.history).items()}
+        )
+        if len(self.hover_points) != len(self.hover_times):
+            raise ValueError("hover_points and hover_times differ in length")
+
+    @property
+    def n_hover(self) -> int:
+        return len(self.hover_times)
+
+    @property
+    def score(self) -> float:
+        """f + 10 * phi (paper Sec. 5.2)."""
+        return self.f + 10.0 * self.phi
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready data; `Plan.from_dict(plan.to_dict())` gives an equal plan."""
+        return {
+            "format_version": PLAN_FORMAT_VERSION,
+            "map_name": self.map_name,
+            "hover_points": self.hover_points.tolist(),
+            "hover_times": self.hover_times.tolist(),
+            "f": self.f,
+            "phi": self.phi,
+            "feasible": self.feasible,
+            "breakdown": self.breakdown,
+            "evaluations": self.evaluations,
+            "wall_time": self.wall_time,
+            "history": {k: v.tolist() for k, v in self.history.items()},
+            "seed": self.seed,
+            "configurator": self.configurator,
+            "variable_length": self.variable_length,
+            "polish": self.polish,
+            "timings": dict(self.timings),
+        }
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> Plan:
+        """Inverse of `to_dict`."""
+        version = d.get("format_version", PLAN_FORMAT_VERSION)
+        if version != PLAN_FORMAT_VERSION:
+            raise ValueError(f"format_version: unsupported plan format {version}")
+        return cls(
+            map_name=d["map_name"],
+            hover_points=np.array(d["hover_points"], dtype=float).reshape(-1, 2),
+            hover_times=d["hover_times"],
+            f=float(d["f"]),
+            phi=float(d["phi"]),
+            feasible=bool(d["feasible"]),
+            breakdown=d["breakdown"],
+            evaluations=int(d["evaluations"]),
+            wall_time=float(d["wall_time"]),
+            history=d.get("history", {}),
+            seed=int(d["seed"]),
+            configurator=d.get("configurator", "adaptive"),
+            variable_length=bool(d.get("variable_length", True)),
+            polish=d.get("polish"),
+            timings=d.get("timings", {}),
+        )
+
+    def same_as(self, other: Plan) -> bool:
+        """Bit-for-bit equality of the decision content (points, times, f, phi)."""
+        return (
+            np.array_equal(self.hover_points, other.hover_points)
+            and np.array_equal(self.hover_times, other.hover_times)
+            and self.f == other.f
+            and self.phi == other.phi
+        )

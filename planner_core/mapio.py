@@ -1,0 +1,439 @@
+"""The map file users write: pydantic v2 models for validation, and `Map`, the frozen value inside.
+
+The JSON field names are fixed (other tools already write them). Local frame: metres, x east,
+y north, from the geographic `origin`. Every problem found is reported on its own line, naming
+the field, so a user can fix a map in one pass.
+"""
+
+from __future__ import annotations
+
+import difflib
+import json
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from planner_core.geometry import Obstacles, points_inside, rectangle_vertices
+
+__all__ = [
+    "Map",
+    "MapError",
+    "MapFile",
+    "load_map",
+    "map_json_schema",
+    "default_max_hover_points",
+]
+
+_STRICT = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
+
+Point2 = tuple[float, float]
+
+
+class Origin(BaseModel):
+    """WGS84 position of the local (0, 0)."""
+
+    model_config = _STRICT
+    lat: float = Field(22.3193, ge=-90, le=90, description="latitude, degrees")
+    lon: float = Field(114.1694, ge=-180, le=180, description="longitude, degrees")
+    alt: float = Field(0.0, description="altitude above mean sea level of the take-off ground, m")
+
+
+class Area(BaseModel):
+    """The rectangle [0, width] x [0, height] the hover points must lie in (C1)."""
+
+    model_config = _STRICT
+    width: float = Field(gt=0, description="metres along x (east)")
+    height: float = Field(gt=0, description="metres along y (north)")
+
+
+class Sensor(BaseModel):
+    """A ground sensor; `required_data` overrides `radio.required_data` for this sensor."""
+
+    model_config = _STRICT
+    id: str = Field(min_length=1)
+    x: float
+    y: float
+    required_data: float | None = Field(None, ge=0, description="Mbit (Q_lambda for this sensor)")
+
+
+class Circle(BaseModel):
+    model_config = _STRICT
+    x: float
+    y: float
+    radius: float = Field(gt=0)
+
+
+class Rectangle(BaseModel):
+    """A building; `length` lies along its axis rotated `angle_deg` counter-clockwise from east."""
+
+    model_config = _STRICT
+    x: float
+    y: float
+    length: float = Field(gt=0)
+    width: float = Field(gt=0)
+    angle_deg: float = 0.0
+
+
+class NoFlyZone(BaseModel):
+    """A convex polygon; vertices counter-clockwise (clockwise input is reordered)."""
+
+    model_config = _STRICT
+    vertices: list[Point2]
+
+
+class ObstaclesSpec(BaseModel):
+    model_config = _STRICT
+    circles: list[Circle] = []
+    rectangles: list[Rectangle] = []
+    no_fly_zones: list[NoFlyZone] = []
+
+
+class Uav(BaseModel):
+    model_config = _STRICT
+    altitude: float = Field(100.0, gt=0, description="H, cruise altitude above take-off, m")
+    max_speed: float = Field(20.0, gt=0, description="v_max, m/s")
+    acceleration: float = Field(4.0, gt=0, description="a, m/s^2")
+    max_hover_time: float = Field(300.0, gt=0, description="T_max, s per hover point")
+    max_hover_points: int | None = Field(
+        None, gt=0, description="I_max; null: 10 when the larger side <= 5000 m, else 20"
+    )
+    activation_threshold: float = Field(0.5, ge=0, le=1, description="tau")
+
+
+class Radio(BaseModel):
+    model_config = _STRICT
+    peak_rate: float = Field(10.0, gt=0, description="R_c, Mbit/s")
+    decay: float = Field(0.01, ge=0, description="xi, Mbit/s per metre")
+    bandwidth: float = Field(25.0, gt=0, description="R_lambda, Mbit/s")
+    required_data: float = Field(200.0, ge=0, description="Q_lambda, Mbit")
+
+
+class Objective(BaseModel):
+    model_config = _STRICT
+    alpha: float = Field(0.5, ge=0, le=1, description="weight of flight time against hover time")
+    collision_offset: float = Field(1000.0, ge=0, description="mu")
+    collision_weight: float = Field(10.0, ge=0, description="nu, per metre")
+
+
+class Witness(BaseModel):
+    """A known feasible plan stored by the map generator."""
+
+    model_config = _STRICT
+    hover_points: list[Point2]
+    hover_times: list[float]
+
+
+class MapFile(BaseModel):
+    """The whole map file (JSON)."""
+
+    model_config = _STRICT
+    name: str = "unnamed"
+    origin: Origin = Origin()
+    area: Area
+    start: Point2
+    end: Point2
+    sensors: list[Sensor] = Field(min_length=1)
+    obstacles: ObstaclesSpec = ObstaclesSpec()
+    uav: Uav = Uav()
+    radio: Radio = Radio()
+    objective: Objective = Objective()
+    witness: Witness | None = None
+
+
+class MapError(ValueError):
+    """A map that cannot be used; `problems` holds one line per problem, each naming the field."""
+
+    def __init__(self, problems: list[str], notes: list[str] | None = None):
+        self.problems = list(problems)
+        self.notes = list(notes or [])
+        super().__init__("\n".join(self.problems))
+
+
+def default_max_hover_points(width: float, height: float) -> int:
+    """The paper's heuristic: I_max = 10 on maps up to 5 km a side, else 20."""
+    return 10 if max(width, height) <= 5000 else 20
+
+
+def map_json_schema() -> dict[str, Any]:
+    """JSON Schema of the map file."""
+    return MapFile.model_json_schema()
+
+
+@dataclass(frozen=True, eq=False)
+class Map:
+    """A validated map: the file as given (`spec`) plus the arrays the model uses."""
+
+    spec: MapFile
+    nfz_polygons: tuple[np.ndarray, ...]
+    notes: tuple[str, ...] = field(default=())
+
+    # --- scalars in the paper's symbols ---
+    @property
+    def name(self) -> str:
+        return self.spec.name
+
+    @property
+    def width(self) -> float:
+        return self.spec.area.width
+
+    @property
+    def height(self) -> float:
+        return self.spec.area.height
+
+    @property
+    def max_hover_points(self) -> int:
+        """I_max in force (the file's value or the default)."""
+        u = self.spec.uav.max_hover_points
+        return u if u is not None else default_max_hover_points(self.width, self.height)
+
+    @cached_property
+    def start(self) -> np.ndarray:
+        return np.array(self.spec.start, dtype=float)
+
+    @cached_property
+    def end(self) -> np.ndarray:
+        return np.array(self.spec.end, dtype=float)
+
+    @cached_property
+    def sensor_ids(self) -> tuple[str, ...]:
+        return tuple(s.id for s in self.spec.sensors)
+
+    @cached_property
+    def sensors(self) -> np.ndarray:
+        """(J, 2) sensor positions."""
+        return np.array([[s.x, s.y] for s in self.spec.sensors], dtype=float)
+
+    @cached_property
+    def required_data(self) -> np.ndarray:
+        """(J,) Q_lambda per sensor, Mbit."""
+        q = self.spec.radio.required_data
+        return np.array(
+            [s.required_data if s.required_data is not None else q for s in self.spec.sensors]
+        )
+
+    @cached_property
+    def rectangle_polygons(self) -> tuple[np.ndarray, ...]:
+        return tuple(
+            rectangle_vertices(r.x, r.y, r.length, r.width, r.angle_deg)
+            for r in self.spec.obstacles.rectangles
+        )
+
+    @cached_property
+    def obstacles(self) -> Obstacles:
+        """All obstacles in the geometry kernel's packed form (rectangles, then no-fly zones)."""
+        circles = [(c.x, c.y, c.radius) for c in self.spec.obstacles.circles]
+        return Obstacles.build(circles, list(self.rectangle_polygons) + list(self.nfz_polygons))
+
+    def to_dict(self) -> dict[str, Any]:
+        """The map as JSON-ready data (no-fly zones in the counter-clockwise order used)."""
+        d = self.spec.model_dump(mode="json", exclude_none=False)
+        d["obstacles"]["no_fly_zones"] = [{"vertices": p.tolist()} for p in self.nfz_polygons]
+        if d.get("witness") is None:
+            d.pop("witness", None)
+        return d
+
+    def summary(self) -> dict[str, Any]:
+        """Counts, area, I_max and the defaults in force, for `lamde-mission check`."""
+        s = self.spec
+        return {
+            "name": s.name,
+            "area_m": [s.area.width, s.area.height],
+            "origin": s.origin.model_dump(),
+            "start": list(s.start),
+            "end": list(s.end),
+            "sensors": len(s.sensors),
+            "circles": len(s.obstacles.circles),
+            "rectangles": len(s.obstacles.rectangles),
+            "no_fly_zones": len(s.obstacles.no_fly_zones),
+            "max_hover_points": self.max_hover_points,
+            "max_hover_points_default": s.uav.max_hover_points is None,
+            "uav": s.uav.model_dump(),
+            "radio": s.radio.model_dump(),
+            "objective": s.objective.model_dump(),
+            "total_required_data_mbit": float(self.required_data.sum()),
+            "has_witness": s.witness is not None,
+        }
+
+
+# ----------------------------------------------------------------------------- validation
+
+
+def _loc(loc: tuple[Any, ...]) -> str:
+    out = ""
+    for part in loc:
+        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
+    return out or "(map)"
+
+
+def _model_at(loc: tuple[Any, ...]) -> type[BaseModel] | None:
+    """The pydantic model that owns the parent of `loc`, to suggest valid field names."""
+    model: Any = MapFile
+    for part in loc[:-1]:
+        if isinstance(part, int):
+            continue
+        if model is None or not hasattr(model, "model_fields") or part not in model.model_fields:
+            return None
+        ann = model.model_fields[part].annotation
+        model = _unwrap(ann)
+    return model if isinstance(model, type) and issubclass(model, BaseModel) else None
+
+
+def _unwrap(ann: Any) -> Any:
+    for arg in getattr(ann, "__args__", ()) or ():
+        u = _unwrap(arg)
+        if isinstance(u, type) and issubclass(u, BaseModel):
+            return u
+    return ann
+
+
+def _pydantic_problems(err: ValidationError) -> list[str]:
+    lines = []
+    for e in err.errors():
+        loc = tuple(e["loc"])
+        where = _loc(loc)
+        kind = e["type"]
+        if kind == "extra_forbidden":
+            model = _model_at(loc)
+            hint = ""
+            if model is not None:
+                close = difflib.get_close_matches(str(loc[-1]), list(model.model_fields), n=1)
+                hint = f" (did you mean '{close[0]}'?)" if close else ""
+            lines.append(f"{where}: unknown field{hint}")
+        elif kind == "missing":
+            lines.append(f"{where}: required field is missing")
+        elif kind == "finite_number":
+            lines.append(f"{where}: must be a finite number (got NaN or infinity)")
+        elif kind == "too_short" and loc and loc[-1] == "sensors":
+            lines.append(f"{where}: at least one sensor is required")
+        else:
+            lines.append(f"{where}: {e['msg']}")
+    return lines
+
+
+def _convex_ccw(vertices: np.ndarray) -> tuple[np.ndarray | None, str | None, bool]:
+    """Check a polygon is simple and strictly convex; return (ccw vertices, problem, reordered)."""
+    n = len(vertices)
+    if n < 3:
+        return None, f"needs at least 3 vertices, got {n}", False
+    nxt = np.roll(vertices, -1, axis=0)
+    if np.any(np.linalg.norm(nxt - vertices, axis=1) == 0):
+        return None, "has repeated consecutive vertices", False
+    e1 = nxt - vertices
+    e2 = np.roll(e1, -1, axis=0)
+    cross = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    scale = np.linalg.norm(e1, axis=1) * np.linalg.norm(e2, axis=1)
+    turn = cross / scale
+    if np.any(np.abs(turn) < 1e-12):
+        return None, "has collinear consecutive vertices (degenerate or not strictly convex)", False
+    if not (np.all(turn > 0) or np.all(turn < 0)):
+        return None, "is not a convex polygon", False
+    # all turns one way; a star-shaped self-intersecting path also turns one way: the total
+    # turning of a simple convex polygon is exactly one full turn.
+    ang = np.arctan2(cross, np.einsum("ij,ij->i", e1, e2))
+    if abs(abs(ang.sum()) - 2 * math.pi) > 1e-6:
+        return None, "is not a simple polygon (its edges cross)", False
+    if np.all(turn < 0):
+        return vertices[::-1].copy(), None, True
+    return vertices.copy(), None, False
+
+
+def _semantic_problems(spec: MapFile) -> tuple[list[str], list[str], list[np.ndarray]]:
+    problems: list[str] = []
+    notes: list[str] = []
+    W, H = spec.area.width, spec.area.height
+
+    def inside_area(x: float, y: float) -> bool:
+        return 0.0 <= x <= W and 0.0 <= y <= H
+
+    for name in ("start", "end"):
+        x, y = getattr(spec, name)
+        if not inside_area(x, y):
+            problems.append(f"{name}: ({x:g}, {y:g}) is outside the area [0, {W:g}] x [0, {H:g}]")
+    seen: set[str] = set()
+    for j, s in enumerate(spec.sensors):
+        if not inside_area(s.x, s.y):
+            problems.append(
+                f"sensors[{j}]: sensor '{s.id}' at ({s.x:g}, {s.y:g}) is outside the area "
+                f"[0, {W:g}] x [0, {H:g}]"
+            )
+        if s.id in seen:
+            problems.append(f"sensors[{j}].id: duplicate sensor id '{s.id}'")
+        seen.add(s.id)
+    obs = spec.obstacles
+    for k, c in enumerate(obs.circles):
+        if not inside_area(c.x, c.y):
+            problems.append(
+                f"obstacles.circles[{k}]: centre ({c.x:g}, {c.y:g}) is outside the area"
+            )
+    for k, r in enumerate(obs.rectangles):
+        if not inside_area(r.x, r.y):
+            problems.append(
+                f"obstacles.rectangles[{k}]: centre ({r.x:g}, {r.y:g}) is outside the area"
+            )
+    polys: list[np.ndarray] = []
+    for k, z in enumerate(obs.no_fly_zones):
+        v = np.array(z.vertices, dtype=float).reshape(-1, 2)
+        ccw, problem, reordered = _convex_ccw(v)
+        where = f"obstacles.no_fly_zones[{k}].vertices"
+        if problem:
+            problems.append(f"{where}: {problem}")
+            continue
+        if reordered:
+            notes.append(f"{where}: given clockwise; reordered counter-clockwise")
+        polys.append(ccw)
+    u = spec.uav
+    if u.max_hover_points is not None and u.max_hover_points > 200:
+        problems.append(f"uav.max_hover_points: {u.max_hover_points} is too large (at most 200)")
+    if spec.witness is not None and len(spec.witness.hover_points) != len(spec.witness.hover_times):
+        problems.append("witness: hover_points and hover_times differ in length")
+    if not problems:
+        circles = [(c.x, c.y, c.radius) for c in obs.circles]
+        rects = [
+            rectangle_vertices(r.x, r.y, r.length, r.width, r.angle_deg) for r in obs.rectangles
+        ]
+        obstacles = Obstacles.build(circles, rects + polys)
+        ends = np.array([spec.start, spec.end], dtype=float)
+        inside = points_inside(ends, obstacles)
+        for name, flag in zip(("start", "end"), inside, strict=True):
+            if flag:
+                x, y = getattr(spec, name)
+                problems.append(f"{name}: ({x:g}, {y:g}) lies inside an obstacle")
+    return problems, notes, polys
+
+
+def load_map(source: str | Path | Mapping[str, Any] | Map) -> Map:
+    """Read and validate a map from a path, a JSON string's dict, or a Map; raise MapError."""
+    if isinstance(source, Map):
+        return source
+    if isinstance(source, str | Path):
+        path = Path(source)
+        try:
+            text = path.read_text()
+        except FileNotFoundError:
+            raise MapError([f"{path}: file not found"]) from None
+        except OSError as exc:
+            raise MapError([f"{path}: cannot read ({exc.strerror})"]) from None
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise MapError([f"{path}: not valid JSON ({exc.msg} at line {exc.lineno})"]) from None
+    elif isinstance(source, Mapping):
+        data = dict(source)
+    else:
+        raise TypeError(f"load_map expects a path, a dict or a Map, got {type(source).__name__}")
+    if not isinstance(data, dict):
+        raise MapError(["(map): the top level must be a JSON object"])
+    try:
+        spec = MapFile.model_validate(data)
+    except ValidationError as err:
+        raise MapError(_pydantic_problems(err)) from None
+    problems, notes, polys = _semantic_problems(spec)
+    if problems:
+        raise MapError(problems, notes)
+    return Map(spec=spec, nfz_polygons=tuple(polys), notes=tuple(notes))

@@ -1,0 +1,186 @@
+"""The paper's optimisation model (Sec. 3 and the constraint handling of Sec. 4.1), vectorised.
+
+A decision vector is x = [x_i, y_i, t_i, eps_i] for i = 1..I_max; hover point i is active when
+eps_i >= tau (variable-length encoding) or always (fixed-length mode, the paper's LAMDE-F).
+`Problem.evaluate` scores a whole population at once; `Problem.breakdown` explains one solution.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from planner_core.geometry import overlap_lengths
+from planner_core.mapio import Map, load_map
+
+__all__ = ["Problem", "PENALTY_FACTOR", "penalised_score", "flight_time", "L_VIO_TOL"]
+
+#: The factor of the penalised score f + 10 * phi used to compare optimisers (paper Sec. 5.2).
+PENALTY_FACTOR = 10.0
+
+#: Overlap lengths at or below this many metres count as no collision (floating-point noise of
+#: tangent legs); anything longer triggers the full penalty mu + nu * L_vio.
+L_VIO_TOL = 1e-9
+
+
+def penalised_score(f: np.ndarray | float, phi: np.ndarray | float) -> np.ndarray | float:
+    """f + 10 * phi, the single number the paper ranks optimisers by."""
+    return f + PENALTY_FACTOR * phi
+
+
+def flight_time(d: np.ndarray, v_max: float, accel: float) -> np.ndarray:
+    """Eq. 1: time to fly distance d from rest to rest with a trapezoid (or triangle) profile."""
+    d = np.asarray(d, dtype=float)
+    cruise = d > v_max * v_max / accel
+    return np.where(cruise, d / v_max + v_max / accel, 2.0 * np.sqrt(np.maximum(d, 0.0) / accel))
+
+
+class Problem:
+    """The UAV data-collection problem on one map: bounds, `evaluate(X) -> (f, phi)`, breakdown."""
+
+    def __init__(self, map: Map | str | dict, *, variable_length: bool = True):  # noqa: A002
+        self.map = load_map(map)
+        self.variable_length = bool(variable_length)
+        m = self.map
+        self.n_points = m.max_hover_points
+        self.dim = 4 * self.n_points
+        block = np.array([m.width, m.height, m.spec.uav.max_hover_time, 1.0])
+        self.lower = np.zeros(self.dim)
+        self.upper = np.tile(block, self.n_points)
+        uav, radio, obj = m.spec.uav, m.spec.radio, m.spec.objective
+        self.tau = uav.activation_threshold
+        self.altitude = uav.altitude
+        self.v_max = uav.max_speed
+        self.accel = uav.acceleration
+        self.t_max = uav.max_hover_time
+        self.peak_rate = radio.peak_rate
+        self.decay = radio.decay
+        self.bandwidth = radio.bandwidth
+        self.alpha = obj.alpha
+        self.mu = obj.collision_offset
+        self.nu = obj.collision_weight
+        self.start = m.start
+        self.end = m.end
+        self.sensors = m.sensors
+        self.required = m.required_data
+        self.obstacles = m.obstacles
+
+    def __repr__(self) -> str:
+        mode = "variable" if self.variable_length else "fixed"
+        return f"Problem({self.map.name!r}, dim={self.dim}, {mode}-length)"
+
+    # ------------------------------------------------------------------ decoding
+    def _split(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        X = np.clip(np.asarray(X, dtype=float), self.lower, self.upper)
+        n = X.shape[0]
+        blocks = X.reshape(n, self.n_points, 4)
+        pts = blocks[:, :, :2]
+        times = blocks[:, :, 2]
+        if self.variable_length:
+            active = blocks[:, :, 3] >= self.tau
+        else:
+            active = np.ones((n, self.n_points), dtype=bool)
+        return pts, times, active
+
+    def _legs(self, pts: np.ndarray, active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Leg start and end points (n, I_max + 1, 2): start, active points in order, end;
+        the unused tail is padded with zero-length legs at the end point."""
+        n, m = active.shape
+        order = np.argsort(~active, axis=1, kind="stable")
+        compact = np.take_along_axis(pts, order[:, :, None], axis=1)
+        count = active.sum(axis=1)
+        pad = np.arange(m)[None, :] >= count[:, None]
+        compact = np.where(pad[:, :, None], self.end, compact)
+        nodes = np.empty((n, m + 2, 2))
+        nodes[:, 0] = self.start
+        nodes[:, 1:-1] = compact
+        nodes[:, -1] = self.end
+        return nodes[:, :-1], nodes[:, 1:]
+
+    def rates(self, pts: np.ndarray) -> np.ndarray:
+        """R_ij = max(R_c - xi * sqrt(|p_i - s_j|^2 + H^2), 0), shape (..., I, J) in Mbit/s."""
+        diff = pts[..., :, None, :] - self.sensors
+        dist = np.sqrt(np.einsum("...k,...k->...", diff, diff) + self.altitude**2)
+        return np.maximum(self.peak_rate - self.decay * dist, 0.0)
+
+    # ------------------------------------------------------------------ evaluation
+    def _evaluate_parts(self, X: np.ndarray) -> dict[str, np.ndarray]:
+        X = np.atleast_2d(X)
+        pts, times, active = self._split(X)
+        a, b = self._legs(pts, active)
+        seg = b - a
+        dist = np.sqrt(np.einsum("nlk,nlk->nl", seg, seg))
+        leg_times = flight_time(dist, self.v_max, self.accel)
+        t_fly = leg_times.sum(axis=1)
+        hov = np.where(active, times, 0.0)
+        t_hover = hov.sum(axis=1)
+        f = self.alpha * t_fly + (1.0 - self.alpha) * t_hover
+        R = self.rates(pts) * active[:, :, None]
+        v3_each = np.maximum(R.sum(axis=2) - self.bandwidth, 0.0)
+        Q = np.einsum("nij,ni->nj", R, hov)
+        v4_each = np.maximum(self.required - Q, 0.0)
+        l_vio = overlap_lengths(a, b, self.obstacles).sum(axis=1)
+        v5 = np.where(l_vio > L_VIO_TOL, self.mu + self.nu * l_vio, 0.0)
+        v3 = v3_each.sum(axis=1)
+        v4 = v4_each.sum(axis=1)
+        phi = v3 + v4 + v5
+        return {
+            "f": f, "phi": phi, "t_fly": t_fly, "t_hover": t_hover, "l_vio": l_vio,
+            "v3": v3, "v4": v4, "v5": v5, "v3_each": v3_each, "v4_each": v4_each,
+            "collected": Q, "leg_times": leg_times, "leg_lengths": dist,
+            "active": active, "points": pts, "times": times,
+        }  # fmt: skip
+
+    def evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Objective f and total violation phi for a population X of shape (n, dim)."""
+        parts = self._evaluate_parts(X)
+        return parts["f"], parts["phi"]
+
+    def breakdown(self, x: np.ndarray) -> dict[str, Any]:
+        """Every term of the model for one solution, as plain Python values (JSON-ready)."""
+        p = self._evaluate_parts(np.asarray(x, dtype=float)[None, :])
+        act = p["active"][0]
+        hp = p["points"][0][act]
+        ht = p["times"][0][act]
+        n_legs = int(act.sum()) + 1
+        return {
+            "f": float(p["f"][0]),
+            "phi": float(p["phi"][0]),
+            "score": float(penalised_score(p["f"][0], p["phi"][0])),
+            "t_fly": float(p["t_fly"][0]),
+            "t_hover": float(p["t_hover"][0]),
+            "l_vio": float(p["l_vio"][0]),
+            "v3": float(p["v3"][0]),
+            "v4": float(p["v4"][0]),
+            "v5": float(p["v5"][0]),
+            "n_hover": int(act.sum()),
+            "hover_points": hp.tolist(),
+            "hover_times": ht.tolist(),
+            "leg_times": p["leg_times"][0][:n_legs].tolist(),
+            "leg_lengths": p["leg_lengths"][0][:n_legs].tolist(),
+            "v3_per_point": p["v3_each"][0][act].tolist(),
+            "collected": dict(zip(self.map.sensor_ids, p["collected"][0].tolist(), strict=True)),
+            "required": dict(zip(self.map.sensor_ids, self.required.tolist(), strict=True)),
+            "shortfall": dict(zip(self.map.sensor_ids, p["v4_each"][0].tolist(), strict=True)),
+        }
+
+    # ------------------------------------------------------------------ encoding
+    def encode(self, hover_points: np.ndarray, hover_times: np.ndarray) -> np.ndarray:
+        """A decision vector whose decoded plan is exactly these hover points and times."""
+        hp = np.asarray(hover_points, dtype=float).reshape(-1, 2)
+        ht = np.asarray(hover_times, dtype=float).reshape(-1)
+        k = len(hp)
+        if k > self.n_points:
+            raise ValueError(f"{k} hover points exceed I_max = {self.n_points}")
+        if not self.variable_length and k != self.n_points:
+            raise ValueError(f"fixed-length mode needs exactly {self.n_points} hover points")
+        x = np.zeros((self.n_points, 4))
+        x[:k, :2] = hp
+        x[:k, 2] = ht
+        x[:k, 3] = 1.0
+        # inactive slots: placed at the end point, zero hover time, eps = 0 (< tau unless tau = 0)
+        x[k:, :2] = self.end
+        if self.variable_length and self.tau <= 0.0 and k < self.n_points:
+            raise ValueError("with activation_threshold 0 every slot is active; give I_max points")
+        return x.reshape(-1)

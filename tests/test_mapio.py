@@ -1,0 +1,119 @@
+"""Map validation: every problem named on its own line; defaults; the CLI's exit status."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from planner_core import MapError, load_map, map_json_schema
+
+
+def _problems(data: dict) -> list[str]:
+    with pytest.raises(MapError) as info:
+        load_map(data)
+    return info.value.problems
+
+
+def test_defaults_in_force(hand_map: dict) -> None:
+    del hand_map["uav"]
+    m = load_map(hand_map)
+    assert m.max_hover_points == 10
+    assert m.spec.uav.altitude == 100 and m.spec.radio.required_data == 200
+    np.testing.assert_array_equal(m.required_data, [200, 400])
+    hand_map["area"] = {"width": 6000, "height": 1000}
+    assert load_map(hand_map).max_hover_points == 20
+
+
+def test_unknown_key_suggests_closest(hand_map: dict) -> None:
+    hand_map["uav"]["max_sped"] = 10
+    hand_map["sensor"] = []
+    lines = _problems(hand_map)
+    assert "uav.max_sped: unknown field (did you mean 'max_speed'?)" in lines
+    assert "sensor: unknown field (did you mean 'sensors'?)" in lines
+
+
+def test_missing_nan_nonpositive_empty(hand_map: dict) -> None:
+    del hand_map["end"]
+    hand_map["area"]["width"] = -5
+    hand_map["start"] = [math.nan, 0]
+    lines = _problems(hand_map)
+    assert "end: required field is missing" in lines
+    assert any(line.startswith("area.width:") and "greater than 0" in line for line in lines)
+    assert any(line.startswith("start[0]:") and "finite" in line for line in lines)
+    hand_map2 = {"area": {"width": 10, "height": 10}, "start": [0, 0], "end": [1, 1],
+                 "sensors": []}
+    assert _problems(hand_map2) == ["sensors: at least one sensor is required"]
+
+
+def test_points_outside_area_and_inside_obstacles(hand_map: dict) -> None:
+    hand_map["sensors"][0]["x"] = 5000
+    hand_map["obstacles"] = {"circles": [{"x": 0, "y": 0, "radius": 50}]}
+    lines = _problems(hand_map)
+    assert any(line.startswith("sensors[0]:") and "outside the area" in line for line in lines)
+    hand_map["sensors"][0]["x"] = 10
+    lines = _problems(hand_map)
+    assert lines == ["start: (0, 0) lies inside an obstacle"]
+
+
+def test_no_fly_zone_shapes(hand_map: dict) -> None:
+    cw = [[100, 600], [300, 900], [400, 600]]
+    hand_map["obstacles"] = {"no_fly_zones": [{"vertices": cw}]}
+    m = load_map(hand_map)
+    assert m.notes == ("obstacles.no_fly_zones[0].vertices: given clockwise; "
+                       "reordered counter-clockwise",)
+    np.testing.assert_array_equal(m.nfz_polygons[0], np.array(cw[::-1], dtype=float))
+    bad = {
+        "no_fly_zones": [
+            {"vertices": [[100, 600], [300, 900]]},
+            {"vertices": [[100, 100], [500, 100], [300, 200], [500, 500], [100, 500]]},
+            {"vertices": [[0, 0], [400, 400], [400, 0], [0, 400]]},
+        ]
+    }
+    hand_map["obstacles"] = bad
+    lines = _problems(hand_map)
+    assert "obstacles.no_fly_zones[0].vertices: needs at least 3 vertices, got 2" in lines
+    assert "obstacles.no_fly_zones[1].vertices: is not a convex polygon" in lines
+    assert any(line.startswith("obstacles.no_fly_zones[2].vertices: is not") for line in lines)
+
+
+def test_schema_has_fields() -> None:
+    s = map_json_schema()
+    assert set(s["required"]) == {"area", "start", "end", "sensors"}
+    assert "no_fly_zones" in json.dumps(s)
+
+
+def test_to_dict_round_trip(hand_map: dict) -> None:
+    m = load_map(hand_map)
+    assert load_map(m.to_dict()).to_dict() == m.to_dict()
+
+
+def _cli(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "lamde_mission.cli", *args],
+                          capture_output=True, text=True, timeout=120)
+
+
+def test_cli_check_and_schema(tmp_path, hand_map: dict) -> None:
+    good = tmp_path / "good.json"
+    good.write_text(json.dumps(hand_map))
+    r = _cli("check", str(good))
+    assert r.returncode == 0, r.stderr
+    assert "I_max           2" in r.stdout
+    hand_map["radio"]["bandwith"] = 3
+    hand_map["area"]["height"] = 0
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(hand_map))
+    r = _cli("check", str(bad))
+    assert r.returncode == 2
+    assert "Traceback" not in r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 2
+    assert any("radio.bandwith: unknown field (did you mean 'bandwidth'?)" in x for x in lines)
+    r = _cli("check", str(tmp_path / "missing.json"))
+    assert r.returncode == 2 and "file not found" in r.stderr
+    r = _cli("schema")
+    assert r.returncode == 0 and json.loads(r.stdout)["title"] == "MapFile"

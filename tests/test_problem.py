@@ -1,0 +1,114 @@
+"""The paper's model pinned on a map small enough to compute by hand."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from planner_core import Problem, flight_time, load_map, penalised_score
+
+
+def _x(problem: Problem, second_eps: float = 0.2) -> np.ndarray:
+    # slot 1: hover 50 s at (300, 0); slot 2: (900, 900), 40 s, active iff eps >= tau
+    return np.array([300, 0, 50, 0.9, 900, 900, 40, second_eps], dtype=float)
+
+
+def test_flight_time_trapezoid_and_triangle() -> None:
+    # v = 20, a = 4: v^2/a = 100 m separates the two cases, which meet continuously there
+    assert flight_time(np.array(500.0), 20, 4) == pytest.approx(500 / 20 + 20 / 4)
+    assert flight_time(np.array(64.0), 20, 4) == pytest.approx(2 * math.sqrt(64 / 4))
+    assert flight_time(np.array(100.0), 20, 4) == pytest.approx(10.0)
+    assert flight_time(np.array(100.0 + 1e-9), 20, 4) == pytest.approx(10.0)
+    assert flight_time(np.array(0.0), 20, 4) == 0.0
+
+
+def test_hand_computed_terms(hand_map: dict) -> None:
+    p = Problem(hand_map)
+    assert p.dim == 8
+    np.testing.assert_array_equal(p.upper, [1000, 1000, 300, 1, 1000, 1000, 300, 1])
+    b = p.breakdown(_x(p))
+    # legs 300 m and 400 m, both in the cruise regime: 300/20+5 and 400/20+5
+    assert b["t_fly"] == pytest.approx(45.0)
+    assert b["t_hover"] == pytest.approx(50.0)
+    assert b["f"] == pytest.approx(0.5 * 45 + 0.5 * 50)
+    r_a = 10 - 0.01 * 100.0
+    r_b = 10 - 0.01 * math.sqrt(300**2 + 100**2)
+    assert b["collected"]["a"] == pytest.approx(r_a * 50)
+    assert b["collected"]["b"] == pytest.approx(r_b * 50)
+    # C3: bandwidth 15 < r_a + r_b; C4: b needs 400 Mbit
+    assert b["v3"] == pytest.approx(r_a + r_b - 15)
+    assert b["v4"] == pytest.approx(400 - r_b * 50)
+    assert b["v5"] == 0.0 and b["l_vio"] == 0.0
+    assert b["phi"] == pytest.approx(b["v3"] + b["v4"])
+    assert b["n_hover"] == 1
+    assert b["hover_points"] == [[300.0, 0.0]]
+    f, phi = p.evaluate(_x(p)[None, :])
+    assert f[0] == pytest.approx(b["f"]) and phi[0] == pytest.approx(b["phi"])
+    assert b["score"] == pytest.approx(penalised_score(b["f"], b["phi"]))
+
+
+def test_activation_threshold_and_fixed_length(hand_map: dict) -> None:
+    p = Problem(hand_map)
+    x = _x(p, second_eps=0.5)  # eps == tau is active
+    b = p.breakdown(x)
+    assert b["n_hover"] == 2
+    d2 = math.hypot(600, 900)
+    d3 = math.hypot(600, 500)
+    assert b["t_fly"] == pytest.approx(20 + (d2 / 20 + 5) + (d3 / 20 + 5))
+    fixed = Problem(hand_map, variable_length=False)
+    assert fixed.breakdown(_x(fixed, second_eps=0.0))["n_hover"] == 2
+
+
+def test_collision_penalty(hand_map: dict) -> None:
+    hand_map["obstacles"] = {"circles": [{"x": 150, "y": 0, "radius": 50}]}
+    p = Problem(hand_map)
+    b = p.breakdown(_x(p))
+    assert b["l_vio"] == pytest.approx(100.0)
+    assert b["v5"] == pytest.approx(1000 + 10 * 100.0)
+
+
+def test_population_matches_single_breakdowns(hand_map: dict) -> None:
+    hand_map["obstacles"] = {
+        "circles": [{"x": 500, "y": 500, "radius": 80}],
+        "rectangles": [{"x": 200, "y": 700, "length": 150, "width": 90, "angle_deg": 30}],
+        "no_fly_zones": [{"vertices": [[700, 100], [950, 150], [800, 350]]}],
+    }
+    p = Problem(hand_map)
+    rng = np.random.default_rng(3)
+    X = p.lower + rng.random((64, p.dim)) * (p.upper - p.lower)
+    f, phi = p.evaluate(X)
+    for i in range(0, 64, 7):
+        b = p.breakdown(X[i])
+        assert f[i] == pytest.approx(b["f"], rel=1e-12)
+        assert phi[i] == pytest.approx(b["phi"], rel=1e-12)
+
+
+def test_out_of_bounds_values_are_clamped(hand_map: dict) -> None:
+    p = Problem(hand_map)
+    x = _x(p)
+    y = x.copy()
+    y[2] = 1e6  # hover time beyond T_max counts as T_max
+    y[0] = -50  # x below 0 counts as 0
+    b = p.breakdown(y)
+    assert b["hover_times"] == [300.0]
+    assert b["hover_points"] == [[0.0, 0.0]]
+
+
+def test_encode_round_trip(hand_map: dict) -> None:
+    p = Problem(hand_map)
+    x = p.encode([[300, 0]], [50])
+    b = p.breakdown(x)
+    assert b["hover_points"] == [[300.0, 0.0]] and b["hover_times"] == [50.0]
+    with pytest.raises(ValueError):
+        p.encode([[1, 1]] * 3, [1, 1, 1])
+
+
+def test_problem_accepts_map_path_and_value(tmp_path, hand_map: dict) -> None:
+    import json
+
+    path = tmp_path / "m.json"
+    path.write_text(json.dumps(hand_map))
+    m = load_map(path)
+    assert Problem(path).dim == Problem(m).dim == Problem(hand_map).dim
