@@ -1,0 +1,170 @@
+"""Hover-time polish: for fixed hover positions, the least total hover time that meets C4 (an LP).
+
+Given the hover points of a finished plan, the rates R_ij are fixed, so the hover times solve
+    minimise sum_i T_i   s.t.  sum_i R_ij T_i >= Q_j (all sensors j),  0 <= T_i <= T_max.
+C3 depends on positions only and is reported, not changed. Points whose polished time is ~0 are
+dropped when the path without them stays collision-free and its flight time does not grow.
+Q_j is monotone in every T_i, so the LP is feasible exactly when each sensor alone is served with
+every T_i = T_max: an infeasible plan is always explained sensor by sensor.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from planner_core.geometry import overlap_lengths
+from planner_core.problem import L_VIO_TOL, Problem, flight_time
+
+__all__ = ["PolishResult", "polish_hover_times", "ZERO_TIME"]
+
+#: A polished hover time at or below this many seconds counts as zero (candidate for dropping).
+ZERO_TIME = 1e-3
+
+
+@dataclass(frozen=True)
+class PolishResult:
+    """Polished hover points/times, which original points were dropped, and what cannot be met."""
+
+    hover_points: np.ndarray
+    hover_times: np.ndarray
+    dropped: tuple[int, ...]
+    feasible_c4: bool
+    unserved: tuple[dict[str, Any], ...] = field(default=())
+    c3_violation: float = 0.0
+    solver: str = ""
+
+    def describe(self) -> list[str]:
+        """One line per sensor that no hover times can serve, saying why."""
+        return [u["message"] for u in self.unserved]
+
+
+def _route_flight_time(problem: Problem, pts: np.ndarray) -> float:
+    nodes = np.vstack([problem.start, pts, problem.end])
+    d = np.linalg.norm(np.diff(nodes, axis=0), axis=1)
+    return float(flight_time(d, problem.v_max, problem.accel).sum())
+
+
+def _route_overlap(problem: Problem, pts: np.ndarray) -> float:
+    """L_vio of start -> pts -> end (0 when collision-free)."""
+    nodes = np.vstack([problem.start, pts, problem.end])
+    length = float(overlap_lengths(nodes[:-1], nodes[1:], problem.obstacles).sum())
+    return length if length > L_VIO_TOL else 0.0
+
+
+def _unserved(problem: Problem, R: np.ndarray) -> list[dict[str, Any]]:
+    out = []
+    best = R.sum(axis=0) * problem.t_max if len(R) else np.zeros(len(problem.required))
+    for j, sid in enumerate(problem.map.sensor_ids):
+        need = float(problem.required[j])
+        if need <= 0 or best[j] >= need:
+            continue
+        if len(R) == 0 or not np.any(R[:, j] > 0):
+            reason = "out of radio range of every hover point"
+            msg = f"sensor '{sid}': {reason} (needs {need:g} Mbit, gets 0)"
+        else:
+            reason = "T_max too small"
+            msg = (
+                f"sensor '{sid}': {reason}: hovering T_max = {problem.t_max:g} s at every point "
+                f"collects {best[j]:.6g} of {need:g} Mbit"
+            )
+        out.append({"sensor": sid, "reason": reason, "required": need,
+                    "max_collectable": float(best[j]), "message": msg})
+    return out
+
+
+def _solve_lp(
+    R: np.ndarray, req: np.ndarray, t_max: float, feasible: bool
+) -> tuple[np.ndarray, str]:
+    """Minimal total hover time meeting req (or, if impossible, least shortfall first)."""
+    import cvxpy as cp
+
+    n, _ = R.shape
+    need = req > 0
+    A = (R[:, need] / req[need]).T  # rows: sensors, scaled so each needs 1 unit
+    T = cp.Variable(n)
+    cons = [T >= 0, T <= t_max]
+    # a hair above the requirement, so solver tolerance cannot leave a tiny shortfall
+    target = 1.0 + 1e-9
+    if not need.any():
+        objective = cp.Minimize(cp.sum(T))
+    elif feasible:
+        objective = cp.Minimize(cp.sum(T))
+        cons.append(A @ T >= target)
+    else:
+        # least relative shortfall first, then least hover time (weights keep the two apart)
+        s = cp.Variable(int(need.sum()))
+        cons += [s >= 0, A @ T + s >= target]
+        objective = cp.Minimize(1e3 * cp.sum(s) + cp.sum(T) / (n * t_max))
+    prob = cp.Problem(objective, cons)
+    prob.solve()
+    if T.value is None:
+        raise RuntimeError(f"hover-time LP failed: {prob.status}")
+    times = np.clip(np.asarray(T.value, dtype=float), 0.0, t_max)
+    solver = prob.solver_stats.solver_name if prob.solver_stats else ""
+    return times, solver
+
+
+def _top_up(R: np.ndarray, req: np.ndarray, times: np.ndarray, t_max: float) -> np.ndarray:
+    """Scale times up by the worst remaining ratio (tiny) so Q_j >= req_j holds exactly."""
+    for _ in range(5):
+        Q = R.T @ times
+        short = (req > 0) & (Q < req)
+        if not short.any():
+            break
+        ratio = float(np.max(req[short] / np.maximum(Q[short], 1e-300)))
+        times = np.minimum(times * min(ratio * (1 + 1e-12), 1.0 + 1e-6) + 1e-12, t_max)
+    return times
+
+
+def polish_hover_times(
+    problem: Problem, hover_points: np.ndarray, hover_times: np.ndarray | None = None
+) -> PolishResult:
+    """Solve the hover-time LP for these positions and drop points whose time is ~0 when safe."""
+    pts = np.asarray(hover_points, dtype=float).reshape(-1, 2)
+    req = problem.required.astype(float)
+    R = problem.rates(pts) if len(pts) else np.zeros((0, len(req)))
+    unserved = _unserved(problem, R)
+    feasible = not unserved
+    solver = ""
+    if len(pts):
+        times, solver = _solve_lp(R, req, problem.t_max, feasible)
+        if feasible:
+            times = _top_up(R, req, times, problem.t_max)
+    else:
+        times = np.zeros(0)
+    keep = np.ones(len(pts), dtype=bool)
+    if problem.variable_length:
+        changed = True
+        while changed:
+            changed = False
+            for i in np.flatnonzero(keep & (times <= ZERO_TIME)):
+                trial = keep.copy()
+                trial[i] = False
+                # a collision-free path must stay so; a colliding one must not get worse
+                if _route_overlap(problem, pts[trial]) > _route_overlap(problem, pts[keep]):
+                    continue
+                if _route_flight_time(problem, pts[trial]) > _route_flight_time(problem, pts[keep]):
+                    continue
+                keep = trial
+                changed = True
+                break
+        # dropping a ~0 s point may leave a sliver of data uncollected: re-solve on the kept points
+        if not keep.all() and keep.any():
+            times_k, solver = _solve_lp(R[keep], req, problem.t_max, feasible)
+            if feasible:
+                times_k = _top_up(R[keep], req, times_k, problem.t_max)
+            times = np.zeros(len(pts))
+            times[keep] = times_k
+    c3 = float(np.maximum(R[keep].sum(axis=1) - problem.bandwidth, 0.0).sum())
+    return PolishResult(
+        hover_points=pts[keep],
+        hover_times=times[keep],
+        dropped=tuple(int(i) for i in np.flatnonzero(~keep)),
+        feasible_c4=feasible,
+        unserved=tuple(unserved),
+        c3_violation=c3,
+        solver=solver,
+    )

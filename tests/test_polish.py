@@ -1,0 +1,86 @@
+"""The hover-time LP on maps whose optimum is known by hand."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from planner_core import Problem
+from planner_core.polish import polish_hover_times
+
+BASE = {
+    "area": {"width": 2000, "height": 2000},
+    "start": [0, 0],
+    "end": [1000, 0],
+    "uav": {"max_hover_points": 4},
+}
+
+
+def _rate(dx: float, dy: float = 0.0, h: float = 100.0) -> float:
+    return 10 - 0.01 * math.sqrt(dx * dx + dy * dy + h * h)
+
+
+def test_time_goes_to_the_best_point_and_the_useless_point_is_dropped() -> None:
+    m = dict(BASE, sensors=[{"id": "s", "x": 400, "y": 0}])
+    p = Problem(m)
+    # point 0 right above the sensor (9 Mbit/s), point 1 500 m away on the same line
+    res = polish_hover_times(p, [[400, 0], [900, 0]], [60, 60])
+    assert res.feasible_c4
+    assert res.dropped == (1,)
+    np.testing.assert_allclose(res.hover_points, [[400, 0]])
+    assert res.hover_times[0] == pytest.approx(200 / 9, rel=1e-6)
+    assert res.hover_times[0] * 9 >= 200  # C4 holds exactly, not within solver tolerance
+
+
+def test_two_separate_sensors() -> None:
+    m = dict(BASE, sensors=[{"id": "a", "x": 200, "y": 0, "required_data": 100},
+                            {"id": "b", "x": 1800, "y": 1800, "required_data": 300}])
+    p = Problem(m)
+    res = polish_hover_times(p, [[200, 0], [1800, 1800]])
+    assert res.dropped == ()
+    np.testing.assert_allclose(res.hover_times, [100 / 9, 300 / 9], rtol=1e-6)
+    x = p.encode(res.hover_points, res.hover_times)
+    assert p.breakdown(x)["v4"] == 0.0
+
+
+def test_shared_sensor_lp_optimum() -> None:
+    # two sensors, three points: the middle one hears both, so the LP puts all time there
+    m = dict(BASE, sensors=[{"id": "a", "x": 500, "y": 0}, {"id": "b", "x": 700, "y": 0}])
+    p = Problem(m)
+    res = polish_hover_times(p, [[300, 0], [600, 0], [900, 0]])
+    r = _rate(100)
+    assert res.dropped == (0, 2)
+    np.testing.assert_allclose(res.hover_times, [200 / r], rtol=1e-6)
+
+
+def test_zero_point_kept_when_dropping_it_would_collide() -> None:
+    # the detour point hears no sensor, but without it the straight leg crosses the circle
+    m = dict(BASE, sensors=[{"id": "s", "x": 1000, "y": 100}],
+             obstacles={"circles": [{"x": 500, "y": 0, "radius": 100}]})
+    m["end"] = [1000, 100]
+    p = Problem(m)
+    res = polish_hover_times(p, [[500, 1500], [1000, 100]])
+    assert res.dropped == ()
+    assert res.hover_times[0] == pytest.approx(0.0, abs=1e-6)
+
+
+def test_unserved_sensors_are_explained() -> None:
+    m = dict(BASE, sensors=[{"id": "far", "x": 1900, "y": 1900},
+                            {"id": "greedy", "x": 100, "y": 0, "required_data": 1e5}])
+    p = Problem(m)
+    res = polish_hover_times(p, [[100, 0]])
+    assert not res.feasible_c4
+    msgs = res.describe()
+    assert any("'far': out of radio range of every hover point" in s for s in msgs)
+    assert any("'greedy': T_max too small" in s for s in msgs)
+    # the least-shortfall LP still hovers T_max where data can be had
+    assert res.hover_times[0] == pytest.approx(300.0, rel=1e-6)
+
+
+def test_c3_reported() -> None:
+    m = dict(BASE, sensors=[{"id": f"s{k}", "x": 400 + k, "y": 0} for k in range(3)])
+    p = Problem(m)
+    res = polish_hover_times(p, [[401, 0]])
+    assert res.c3_violation == pytest.approx(p.rates(np.array([[401.0, 0]])).sum() - 25)
