@@ -99,7 +99,7 @@ def _solve_lp(
         cons += [s >= 0, A @ T + s >= target]
         objective = cp.Minimize(1e3 * cp.sum(s) + cp.sum(T) / (n * t_max))
     prob = cp.Problem(objective, cons)
-    prob.solve()
+    prob.solve(solver="HIGHS" if "HIGHS" in cp.installed_solvers() else None)
     if T.value is None:
         raise RuntimeError(f"hover-time LP failed: {prob.status}")
     times = np.clip(np.asarray(T.value, dtype=float), 0.0, t_max)

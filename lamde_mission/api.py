@@ -1,0 +1,146 @@
+"""`plan(map, ...) -> Plan`: the public planning call (map -> problem -> DE -> polish -> Plan)."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from lamde_mission.result import Plan
+
+__all__ = ["plan", "CONFIGURATORS"]
+
+#: configurator names accepted by `plan`; the adaptive DE is the default until a trained
+#: policy beats it on unseen maps
+CONFIGURATORS = ("adaptive", "fixed", "random")
+
+
+class _TimedProblem:
+    """Wraps a problem to add up the wall time spent in `evaluate` (the rest is optimiser work)."""
+
+    def __init__(self, problem: Any):
+        self.problem = problem
+        self.lower = problem.lower
+        self.upper = problem.upper
+        self.seconds = 0.0
+
+    def evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        t0 = time.perf_counter()
+        out = self.problem.evaluate(X)
+        self.seconds += time.perf_counter() - t0
+        return out
+
+
+def _deb_not_worse(a: dict[str, Any], b: dict[str, Any]) -> bool:
+    """True when breakdown `a` is at least as good as `b` under Deb's ranking."""
+    return a["phi"] < b["phi"] or (a["phi"] == b["phi"] and a["f"] <= b["f"])
+
+
+def _check_args(budget: int, population: int, configurator: Any) -> None:
+    if not isinstance(population, int | np.integer) or population < 5:
+        raise ValueError(f"population: must be an integer >= 5, got {population!r}")
+    if not isinstance(budget, int | np.integer) or budget < population:
+        raise ValueError(
+            f"budget: must be an integer >= population ({population}), got {budget!r}"
+        )
+    if isinstance(configurator, str) and configurator not in CONFIGURATORS:
+        raise ValueError(
+            f"configurator: unknown '{configurator}', choose one of {', '.join(CONFIGURATORS)}"
+        )
+
+
+def plan(
+    map: str | Path | dict | Any,  # noqa: A002 - the issue's public signature
+    *,
+    seed: int = 0,
+    budget: int = 10_000,
+    population: int = 100,
+    configurator: str | Any = "adaptive",
+    variable_length: bool = True,
+    polish: bool = True,
+    progress: Callable[[Any], None] | None = None,
+) -> Plan:
+    """Plan hover points and hover times for `map` (a path, dict or Map); same seed, same plan.
+
+    `progress` is called once per generation with a record holding generation, evaluations,
+    budget, best_f, best_phi and feasible_fraction. With `polish`, the final best's hover times
+    are re-solved by the LP of `planner_core.polish`, kept only if not worse under Deb's rule.
+    """
+    from planner_core.de import run
+    from planner_core.mapio import load_map
+    from planner_core.problem import Problem
+
+    _check_args(budget, population, configurator)
+    t_start = time.perf_counter()
+    m = load_map(map)
+    problem = Problem(m, variable_length=variable_length)
+    timed = _TimedProblem(problem)
+    t0 = time.perf_counter()
+    result = run(
+        timed,
+        configurator=configurator,
+        seed=int(seed),
+        population=int(population),
+        budget=int(budget),
+        callback=progress,
+    )
+    t_optimise = time.perf_counter() - t0
+    best = problem.breakdown(result.x)
+    chosen = best
+    polish_info = None
+    t_polish = 0.0
+    if polish:
+        from planner_core.polish import polish_hover_times
+
+        t1 = time.perf_counter()
+        pol = polish_hover_times(problem, best["hover_points"], best["hover_times"])
+        after = problem.breakdown(problem.encode(pol.hover_points, pol.hover_times))
+        accepted = _deb_not_worse(after, best)
+        if accepted:
+            chosen = after
+        t_polish = time.perf_counter() - t1
+        polish_info = {
+            "f_before": best["f"],
+            "phi_before": best["phi"],
+            "f_after": after["f"],
+            "phi_after": after["phi"],
+            "accepted": accepted,
+            "dropped_points": list(pol.dropped),
+            "c3_violation": pol.c3_violation,
+            "c4_achievable": pol.feasible_c4,
+            "unserved": [u["message"] for u in pol.unserved],
+            "solver": pol.solver,
+        }
+    wall = time.perf_counter() - t_start
+    h = result.history
+    name = configurator if isinstance(configurator, str) else type(configurator).__name__
+    return Plan(
+        map_name=m.name,
+        hover_points=np.array(chosen["hover_points"], dtype=float).reshape(-1, 2),
+        hover_times=np.array(chosen["hover_times"], dtype=float),
+        f=chosen["f"],
+        phi=chosen["phi"],
+        feasible=chosen["phi"] == 0.0,
+        breakdown=chosen,
+        evaluations=int(result.evaluations),
+        wall_time=wall,
+        history={
+            "evaluations": h.evaluations,
+            "best_f": h.best_f,
+            "best_phi": h.best_phi,
+            "feasible_fraction": h.feasible_fraction,
+        },
+        seed=int(seed),
+        configurator=name,
+        variable_length=variable_length,
+        polish=polish_info,
+        timings={
+            "evaluation": timed.seconds,
+            "optimiser": max(t_optimise - timed.seconds, 0.0),
+            "polish": t_polish,
+            "total": wall,
+        },
+    )

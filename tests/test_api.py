@@ -1,0 +1,86 @@
+"""The public planning call: determinism, the Plan value, options, argument errors."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import lamde_mission
+from lamde_mission import Plan
+from planner_core import Problem
+
+SMALL = {
+    "name": "api-small",
+    "area": {"width": 2000, "height": 2000},
+    "start": [100, 100],
+    "end": [1900, 1900],
+    "sensors": [
+        {"id": f"s{i}", "x": x, "y": y}
+        for i, (x, y) in enumerate([(500, 400), (1500, 600), (900, 1500), (1700, 1700)])
+    ],
+    "obstacles": {"circles": [{"x": 1000, "y": 1000, "radius": 90}]},
+    "uav": {"max_hover_points": 6},
+}
+
+
+@pytest.fixture(scope="module")
+def small_plan() -> Plan:
+    return lamde_mission.plan(SMALL, seed=3, budget=3000, population=50)
+
+
+def test_plan_is_feasible_and_consistent(small_plan: Plan) -> None:
+    p = small_plan
+    assert p.feasible and p.phi == 0.0
+    assert p.evaluations <= 3000
+    assert p.hover_points.shape == (p.n_hover, 2)
+    # the recorded breakdown is the model's own verdict on the recorded points and times
+    prob = Problem(SMALL)
+    b = prob.breakdown(prob.encode(p.hover_points, p.hover_times))
+    assert b["f"] == pytest.approx(p.f, rel=1e-12) and b["phi"] == p.phi
+    assert set(p.history) == {"evaluations", "best_f", "best_phi", "feasible_fraction"}
+    assert np.all(np.diff(p.history["evaluations"]) > 0)
+    assert p.polish is not None and p.polish["f_after"] <= p.polish["f_before"] + 1e-9
+    assert set(p.timings) >= {"evaluation", "optimiser", "polish", "total"}
+
+
+def test_plan_is_immutable(small_plan: Plan) -> None:
+    with pytest.raises(ValueError):
+        small_plan.hover_points[0, 0] = 1.0
+    with pytest.raises(AttributeError):
+        small_plan.f = 0.0  # type: ignore[misc]
+
+
+def test_same_seed_same_plan_bit_for_bit(small_plan: Plan) -> None:
+    again = lamde_mission.plan(SMALL, seed=3, budget=3000, population=50)
+    assert again.same_as(small_plan)
+    other = lamde_mission.plan(SMALL, seed=4, budget=3000, population=50)
+    assert not other.same_as(small_plan)
+
+
+def test_to_dict_from_dict_round_trip(small_plan: Plan) -> None:
+    d = json.loads(json.dumps(small_plan.to_dict()))
+    back = Plan.from_dict(d)
+    assert back.same_as(small_plan)
+    assert back.to_dict() == d
+
+
+def test_options(tmp_path) -> None:
+    path = tmp_path / "m.json"
+    path.write_text(json.dumps(SMALL))
+    raw = lamde_mission.plan(path, seed=0, budget=600, population=20, polish=False,
+                             configurator="fixed")
+    assert raw.polish is None and raw.configurator == "fixed"
+    fixed = lamde_mission.plan(SMALL, seed=0, budget=600, population=20, variable_length=False)
+    assert fixed.n_hover == 6 and not fixed.variable_length
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "field"),
+    [({"budget": 10}, "budget"), ({"population": 2}, "population"),
+     ({"configurator": "magic"}, "configurator")],
+)
+def test_bad_arguments_name_the_field(kwargs: dict, field: str) -> None:
+    with pytest.raises(ValueError, match=f"^{field}:"):
+        lamde_mission.plan(SMALL, **kwargs)
