@@ -105,6 +105,10 @@ class Problem:
         return np.maximum(self.peak_rate - self.decay * dist, 0.0)
 
     # ------------------------------------------------------------------ evaluation
+    def _overlap(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Length of each leg a -> b inside obstacles (the compiled kernel; see geometry.py)."""
+        return overlap_lengths(a, b, self.obstacles)
+
     def _evaluate_parts(self, X: np.ndarray) -> dict[str, np.ndarray]:
         X = np.atleast_2d(X)
         pts, times, active = self._split(X)
@@ -120,7 +124,7 @@ class Problem:
         v3_each = np.maximum(R.sum(axis=2) - self.bandwidth, 0.0)
         Q = np.einsum("nij,ni->nj", R, hov)
         v4_each = np.maximum(self.required - Q, 0.0)
-        l_vio = overlap_lengths(a, b, self.obstacles).sum(axis=1)
+        l_vio = self._overlap(a, b).sum(axis=1)
         v5 = np.where(l_vio > L_VIO_TOL, self.mu + self.nu * l_vio, 0.0)
         v3 = v3_each.sum(axis=1)
         v4 = v4_each.sum(axis=1)
