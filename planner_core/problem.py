@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from planner_core.geometry import overlap_lengths
+from planner_core.kernels import model_terms
 from planner_core.mapio import Map, load_map
 
 __all__ = ["Problem", "PENALTY_FACTOR", "penalised_score", "flight_time", "L_VIO_TOL"]
@@ -60,10 +61,10 @@ class Problem:
         self.alpha = obj.alpha
         self.mu = obj.collision_offset
         self.nu = obj.collision_weight
-        self.start = m.start
-        self.end = m.end
-        self.sensors = m.sensors
-        self.required = m.required_data
+        self.start = np.ascontiguousarray(m.start, dtype=float)
+        self.end = np.ascontiguousarray(m.end, dtype=float)
+        self.sensors = np.ascontiguousarray(m.sensors, dtype=float)
+        self.required = np.ascontiguousarray(m.required_data, dtype=float)
         self.obstacles = m.obstacles
 
     def __repr__(self) -> str:
@@ -100,9 +101,11 @@ class Problem:
 
     def rates(self, pts: np.ndarray) -> np.ndarray:
         """R_ij = max(R_c - xi * sqrt(|p_i - s_j|^2 + H^2), 0), shape (..., I, J) in Mbit/s."""
-        diff = pts[..., :, None, :] - self.sensors
-        dist = np.sqrt(np.einsum("...k,...k->...", diff, diff) + self.altitude**2)
-        return np.maximum(self.peak_rate - self.decay * dist, 0.0)
+        dx = pts[..., :, None, 0] - self.sensors[:, 0]
+        dy = pts[..., :, None, 1] - self.sensors[:, 1]
+        dist = np.sqrt(dx * dx + dy * dy + self.altitude**2)
+        rate = self.peak_rate - self.decay * dist
+        return np.maximum(rate, 0.0, out=rate)
 
     # ------------------------------------------------------------------ evaluation
     def _overlap(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -114,7 +117,7 @@ class Problem:
         pts, times, active = self._split(X)
         a, b = self._legs(pts, active)
         seg = b - a
-        dist = np.sqrt(np.einsum("nlk,nlk->nl", seg, seg))
+        dist = np.hypot(seg[..., 0], seg[..., 1])
         leg_times = flight_time(dist, self.v_max, self.accel)
         t_fly = leg_times.sum(axis=1)
         hov = np.where(active, times, 0.0)
@@ -122,7 +125,7 @@ class Problem:
         f = self.alpha * t_fly + (1.0 - self.alpha) * t_hover
         R = self.rates(pts) * active[:, :, None]
         v3_each = np.maximum(R.sum(axis=2) - self.bandwidth, 0.0)
-        Q = np.einsum("nij,ni->nj", R, hov)
+        Q = np.matmul(hov[:, None, :], R)[:, 0, :]
         v4_each = np.maximum(self.required - Q, 0.0)
         l_vio = self._overlap(a, b).sum(axis=1)
         v5 = np.where(l_vio > L_VIO_TOL, self.mu + self.nu * l_vio, 0.0)
@@ -137,9 +140,28 @@ class Problem:
         }  # fmt: skip
 
     def evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Objective f and total violation phi for a population X of shape (n, dim)."""
-        parts = self._evaluate_parts(X)
-        return parts["f"], parts["phi"]
+        """Objective f and total violation phi for a population X of shape (n, dim).
+
+        The compiled fast path (`planner_core.kernels`); `_evaluate_parts` is its numpy twin.
+        """
+        X = np.ascontiguousarray(np.atleast_2d(X), dtype=float)
+        if X.ndim != 2 or X.shape[1] != self.dim:
+            raise ValueError(f"X: expected shape (n, {self.dim}), got {X.shape}")
+        n = X.shape[0]
+        legs = self.n_points + 1
+        A = np.empty((n, legs, 2))
+        B = np.empty((n, legs, 2))
+        f = np.empty(n)
+        v3 = np.empty(n)
+        v4 = np.empty(n)
+        model_terms(
+            X, self.n_points, self.variable_length, self.tau, self.upper, self.start, self.end,
+            self.sensors, self.required, self.altitude, self.peak_rate, self.decay,
+            self.bandwidth, self.v_max, self.accel, self.alpha, A, B, f, v3, v4,
+        )  # fmt: skip
+        l_vio = self._overlap(A, B).sum(axis=1)
+        v5 = np.where(l_vio > L_VIO_TOL, self.mu + self.nu * l_vio, 0.0)
+        return f, v3 + v4 + v5
 
     def breakdown(self, x: np.ndarray) -> dict[str, Any]:
         """Every term of the model for one solution, as plain Python values (JSON-ready)."""

@@ -112,3 +112,24 @@ def test_problem_accepts_map_path_and_value(tmp_path, hand_map: dict) -> None:
     path.write_text(json.dumps(hand_map))
     m = load_map(path)
     assert Problem(path).dim == Problem(m).dim == Problem(hand_map).dim
+
+
+@pytest.mark.parametrize("variable", [True, False])
+def test_compiled_path_matches_numpy_reference(variable: bool) -> None:
+    from tests.conftest import SUITE
+
+    p = Problem(load_map(SUITE / "T16.json"), variable_length=variable)
+    rng = np.random.default_rng(11)
+    span = p.upper - p.lower
+    X = p.lower - 0.05 * span + rng.random((300, p.dim)) * 1.1 * span  # some out of bounds
+    f, phi = p.evaluate(X)
+    parts = p._evaluate_parts(X)
+    np.testing.assert_allclose(f, parts["f"], rtol=1e-12)
+    np.testing.assert_allclose(phi, parts["phi"], rtol=1e-12, atol=1e-9)
+    assert np.any(phi == 0) or np.any(parts["l_vio"] > 0)
+
+
+def test_evaluate_rejects_wrong_shape(hand_map: dict) -> None:
+    p = Problem(hand_map)
+    with pytest.raises(ValueError, match="X: expected shape"):
+        p.evaluate(np.zeros((3, p.dim + 1)))
