@@ -1,6 +1,7 @@
 """Hover-time polish: for fixed hover positions, the least total hover time that meets C4 (an LP).
 
 Given the hover points of a finished plan, the rates R_ij are fixed, so the hover times solve
+(with HiGHS through scipy by default, or the same LP stated in cvxpy)
     minimise sum_i T_i   s.t.  sum_i R_ij T_i >= Q_j (all sensors j),  0 <= T_i <= T_max.
 C3 depends on positions only and is reported, not changed. Points whose polished time is ~0 are
 dropped when the path without them stays collision-free and its flight time does not grow.
@@ -18,7 +19,7 @@ import numpy as np
 from planner_core.geometry import overlap_lengths
 from planner_core.problem import L_VIO_TOL, Problem, flight_time
 
-__all__ = ["PolishResult", "polish_hover_times", "ZERO_TIME"]
+__all__ = ["BACKENDS", "PolishResult", "polish_hover_times", "ZERO_TIME"]
 
 #: A polished hover time at or below this many seconds counts as zero (candidate for dropping).
 ZERO_TIME = 1e-3
@@ -75,36 +76,63 @@ def _unserved(problem: Problem, R: np.ndarray) -> list[dict[str, Any]]:
     return out
 
 
-def _solve_lp(
-    R: np.ndarray, req: np.ndarray, t_max: float, feasible: bool
-) -> tuple[np.ndarray, str]:
-    """Minimal total hover time meeting req (or, if impossible, least shortfall first)."""
-    import cvxpy as cp
+#: LP back-ends: "highs" calls HiGHS through scipy (fast to import: the planner's default);
+#: "cvxpy" states the same LP in cvxpy (the modelling layer; about a second of import time).
+BACKENDS = ("highs", "cvxpy")
 
-    n, _ = R.shape
+
+def _lp_matrices(
+    R: np.ndarray, req: np.ndarray, t_max: float, feasible: bool
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The LP as  min c.z  s.t.  G z <= h,  0 <= z <= ub,  with z = [T (I), s (shortfalls)].
+
+    Feasible: minimise sum T with (R^T T)_j / Q_j >= 1 for every sensor that needs data.
+    Infeasible: least relative shortfall s first, then least hover time (weights keep them apart).
+    """
+    n = R.shape[0]
     need = req > 0
     A = (R[:, need] / req[need]).T  # rows: sensors, scaled so each needs 1 unit
-    T = cp.Variable(n)
-    cons = [T >= 0, T <= t_max]
+    m = A.shape[0]
     # a hair above the requirement, so solver tolerance cannot leave a tiny shortfall
-    target = 1.0 + 1e-9
-    if not need.any():
-        objective = cp.Minimize(cp.sum(T))
-    elif feasible:
-        objective = cp.Minimize(cp.sum(T))
-        cons.append(A @ T >= target)
+    target = np.full(m, 1.0 + 1e-9)
+    if feasible or m == 0:
+        return np.ones(n), -A, -target, np.full(n, t_max)
+    c = np.concatenate([np.full(n, 1.0 / (n * t_max)), np.full(m, 1e3)])
+    G = -np.hstack([A, np.eye(m)])
+    ub = np.concatenate([np.full(n, t_max), np.full(m, np.inf)])
+    return c, G, -target, ub
+
+
+def _solve_lp(
+    R: np.ndarray, req: np.ndarray, t_max: float, feasible: bool, backend: str = "highs"
+) -> tuple[np.ndarray, str]:
+    """Hover times (I,) solving the LP of `_lp_matrices`, and the solver's name."""
+    c, G, h, ub = _lp_matrices(R, req, t_max, feasible)
+    if backend == "highs":
+        from scipy.optimize import linprog
+
+        bounds = list(zip(np.zeros_like(ub), np.where(np.isinf(ub), None, ub), strict=True))
+        res = linprog(c, A_ub=G if len(h) else None, b_ub=h if len(h) else None,
+                      bounds=bounds, method="highs")
+        if res.x is None:
+            raise RuntimeError(f"hover-time LP failed: {res.message}")
+        z, solver = res.x, "HiGHS (scipy)"
+    elif backend == "cvxpy":
+        import cvxpy as cp
+
+        zv = cp.Variable(len(c))
+        cons = [zv >= 0, zv[np.isfinite(ub)] <= ub[np.isfinite(ub)]]
+        if len(h):
+            cons.append(G @ zv <= h)
+        prob = cp.Problem(cp.Minimize(c @ zv), cons)
+        prob.solve(solver="HIGHS" if "HIGHS" in cp.installed_solvers() else None)
+        if zv.value is None:
+            raise RuntimeError(f"hover-time LP failed: {prob.status}")
+        z = np.asarray(zv.value, dtype=float)
+        solver = f"cvxpy/{prob.solver_stats.solver_name}" if prob.solver_stats else "cvxpy"
     else:
-        # least relative shortfall first, then least hover time (weights keep the two apart)
-        s = cp.Variable(int(need.sum()))
-        cons += [s >= 0, A @ T + s >= target]
-        objective = cp.Minimize(1e3 * cp.sum(s) + cp.sum(T) / (n * t_max))
-    prob = cp.Problem(objective, cons)
-    prob.solve(solver="HIGHS" if "HIGHS" in cp.installed_solvers() else None)
-    if T.value is None:
-        raise RuntimeError(f"hover-time LP failed: {prob.status}")
-    times = np.clip(np.asarray(T.value, dtype=float), 0.0, t_max)
-    solver = prob.solver_stats.solver_name if prob.solver_stats else ""
-    return times, solver
+        raise ValueError(f"backend: unknown '{backend}', choose one of {', '.join(BACKENDS)}")
+    return np.clip(z[: R.shape[0]], 0.0, t_max), solver
 
 
 def _top_up(R: np.ndarray, req: np.ndarray, times: np.ndarray, t_max: float) -> np.ndarray:
@@ -120,9 +148,16 @@ def _top_up(R: np.ndarray, req: np.ndarray, times: np.ndarray, t_max: float) -> 
 
 
 def polish_hover_times(
-    problem: Problem, hover_points: np.ndarray, hover_times: np.ndarray | None = None
+    problem: Problem,
+    hover_points: np.ndarray,
+    hover_times: np.ndarray | None = None,
+    *,
+    backend: str = "highs",
 ) -> PolishResult:
-    """Solve the hover-time LP for these positions and drop points whose time is ~0 when safe."""
+    """Solve the hover-time LP for these positions and drop points whose time is ~0 when safe.
+
+    `backend` is "highs" (scipy's HiGHS, the default: quick to import) or "cvxpy"; same LP.
+    """
     pts = np.asarray(hover_points, dtype=float).reshape(-1, 2)
     req = problem.required.astype(float)
     R = problem.rates(pts) if len(pts) else np.zeros((0, len(req)))
@@ -130,7 +165,7 @@ def polish_hover_times(
     feasible = not unserved
     solver = ""
     if len(pts):
-        times, solver = _solve_lp(R, req, problem.t_max, feasible)
+        times, solver = _solve_lp(R, req, problem.t_max, feasible, backend)
         if feasible:
             times = _top_up(R, req, times, problem.t_max)
     else:
@@ -153,7 +188,7 @@ def polish_hover_times(
                 break
         # dropping a ~0 s point may leave a sliver of data uncollected: re-solve on the kept points
         if not keep.all() and keep.any():
-            times_k, solver = _solve_lp(R[keep], req, problem.t_max, feasible)
+            times_k, solver = _solve_lp(R[keep], req, problem.t_max, feasible, backend)
             if feasible:
                 times_k = _top_up(R[keep], req, times_k, problem.t_max)
             times = np.zeros(len(pts))

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from planner_core import Problem
-from planner_core.polish import polish_hover_times
+from planner_core.polish import BACKENDS, polish_hover_times
 
 BASE = {
     "area": {"width": 2000, "height": 2000},
@@ -18,15 +18,20 @@ BASE = {
 }
 
 
+@pytest.fixture(params=BACKENDS)
+def backend(request) -> str:
+    return request.param
+
+
 def _rate(dx: float, dy: float = 0.0, h: float = 100.0) -> float:
     return 10 - 0.01 * math.sqrt(dx * dx + dy * dy + h * h)
 
 
-def test_time_goes_to_the_best_point_and_the_useless_point_is_dropped() -> None:
+def test_time_goes_to_the_best_point_and_the_useless_point_is_dropped(backend: str) -> None:
     m = dict(BASE, sensors=[{"id": "s", "x": 400, "y": 0}])
     p = Problem(m)
     # point 0 right above the sensor (9 Mbit/s), point 1 500 m away on the same line
-    res = polish_hover_times(p, [[400, 0], [900, 0]], [60, 60])
+    res = polish_hover_times(p, [[400, 0], [900, 0]], [60, 60], backend=backend)
     assert res.feasible_c4
     assert res.dropped == (1,)
     np.testing.assert_allclose(res.hover_points, [[400, 0]])
@@ -34,43 +39,43 @@ def test_time_goes_to_the_best_point_and_the_useless_point_is_dropped() -> None:
     assert res.hover_times[0] * 9 >= 200  # C4 holds exactly, not within solver tolerance
 
 
-def test_two_separate_sensors() -> None:
+def test_two_separate_sensors(backend: str) -> None:
     m = dict(BASE, sensors=[{"id": "a", "x": 200, "y": 0, "required_data": 100},
                             {"id": "b", "x": 1800, "y": 1800, "required_data": 300}])
     p = Problem(m)
-    res = polish_hover_times(p, [[200, 0], [1800, 1800]])
+    res = polish_hover_times(p, [[200, 0], [1800, 1800]], backend=backend)
     assert res.dropped == ()
     np.testing.assert_allclose(res.hover_times, [100 / 9, 300 / 9], rtol=1e-6)
     x = p.encode(res.hover_points, res.hover_times)
     assert p.breakdown(x)["v4"] == 0.0
 
 
-def test_shared_sensor_lp_optimum() -> None:
+def test_shared_sensor_lp_optimum(backend: str) -> None:
     # two sensors, three points: the middle one hears both, so the LP puts all time there
     m = dict(BASE, sensors=[{"id": "a", "x": 500, "y": 0}, {"id": "b", "x": 700, "y": 0}])
     p = Problem(m)
-    res = polish_hover_times(p, [[300, 0], [600, 0], [900, 0]])
+    res = polish_hover_times(p, [[300, 0], [600, 0], [900, 0]], backend=backend)
     r = _rate(100)
     assert res.dropped == (0, 2)
     np.testing.assert_allclose(res.hover_times, [200 / r], rtol=1e-6)
 
 
-def test_zero_point_kept_when_dropping_it_would_collide() -> None:
+def test_zero_point_kept_when_dropping_it_would_collide(backend: str) -> None:
     # the detour point hears no sensor, but without it the straight leg crosses the circle
     m = dict(BASE, sensors=[{"id": "s", "x": 1000, "y": 100}],
              obstacles={"circles": [{"x": 500, "y": 0, "radius": 100}]})
     m["end"] = [1000, 100]
     p = Problem(m)
-    res = polish_hover_times(p, [[500, 1500], [1000, 100]])
+    res = polish_hover_times(p, [[500, 1500], [1000, 100]], backend=backend)
     assert res.dropped == ()
     assert res.hover_times[0] == pytest.approx(0.0, abs=1e-6)
 
 
-def test_unserved_sensors_are_explained() -> None:
+def test_unserved_sensors_are_explained(backend: str) -> None:
     m = dict(BASE, sensors=[{"id": "far", "x": 1900, "y": 1900},
                             {"id": "greedy", "x": 100, "y": 0, "required_data": 1e5}])
     p = Problem(m)
-    res = polish_hover_times(p, [[100, 0]])
+    res = polish_hover_times(p, [[100, 0]], backend=backend)
     assert not res.feasible_c4
     msgs = res.describe()
     assert any("'far': out of radio range of every hover point" in s for s in msgs)
@@ -79,8 +84,27 @@ def test_unserved_sensors_are_explained() -> None:
     assert res.hover_times[0] == pytest.approx(300.0, rel=1e-6)
 
 
-def test_c3_reported() -> None:
+def test_c3_reported(backend: str) -> None:
     m = dict(BASE, sensors=[{"id": f"s{k}", "x": 400 + k, "y": 0} for k in range(3)])
     p = Problem(m)
-    res = polish_hover_times(p, [[401, 0]])
+    res = polish_hover_times(p, [[401, 0]], backend=backend)
     assert res.c3_violation == pytest.approx(p.rates(np.array([[401.0, 0]])).sum() - 25)
+
+
+def test_backends_agree_on_suite_witnesses() -> None:
+    from planner_core import load_map
+    from tests.conftest import SUITE
+
+    for name in ("T04.json", "T16.json"):
+        m = load_map(SUITE / name)
+        p = Problem(m)
+        w = m.spec.witness
+        a = polish_hover_times(p, w.hover_points, backend="highs")
+        b = polish_hover_times(p, w.hover_points, backend="cvxpy")
+        assert a.feasible_c4 and b.feasible_c4
+        assert a.dropped == b.dropped
+        assert a.hover_times.sum() == pytest.approx(b.hover_times.sum(), rel=1e-6)
+        # the LP never needs more hover time than the generator's witness
+        assert a.hover_times.sum() <= sum(w.hover_times) + 1e-6
+        x = p.encode(a.hover_points, a.hover_times)
+        assert p.breakdown(x)["v4"] == 0.0
