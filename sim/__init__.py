@@ -1,0 +1,11 @@
+"""A mission simulator independent of the optimiser: replay MAVLink items, verify C1..C5.
+
+`replay(items, map)` flies mission items with the paper's model and returns a `Timeline`;
+`verify(timeline, map)` judges it with its own shapely geometry. Nothing here imports the
+optimiser (`planner_core.de`, `planner_core.problem`), so the sim is a second opinion.
+"""
+
+from sim.checks import Verdict, Verdicts, verify
+from sim.replay import Timeline, Totals, replay, replay_route
+
+__all__ = ["Timeline", "Totals", "Verdict", "Verdicts", "replay", "replay_route", "verify"]

@@ -1,0 +1,150 @@
+"""Mission files: QGroundControl `.plan`, ArduPilot `.waypoints`, GeoJSON (export only).
+
+`write_mission` picks the format from the suffix (or `fmt`); `read_mission` recognises a file
+by its content (a `.plan` JSON object or a "QGC WPL 110" text), whatever its suffix.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any, Literal
+
+from lamde_mission.geo import enu_to_latlon
+from lamde_mission.items import MissionError, MissionItem, geofence_items, plan_to_items
+
+__all__ = [
+    "FORMATS",
+    "MissionFileError",
+    "format_for",
+    "write_mission",
+    "read_mission",
+    "load_mission_items",
+    "home_of",
+]
+
+#: suffix -> format name
+FORMATS = {".plan": "plan", ".waypoints": "waypoints", ".geojson": "geojson"}
+
+
+class MissionFileError(ValueError):
+    """A mission file that cannot be read or written (message names the file)."""
+
+
+def format_for(path: str | Path, fmt: str | None = None) -> str:
+    """The format name for `path` ("plan", "waypoints", "geojson"); MissionFileError if unknown."""
+    if fmt is not None:
+        f = fmt.lower().lstrip(".")
+        if f == "json":
+            f = "geojson"
+        if f not in FORMATS.values():
+            raise MissionFileError(f"unknown mission format {fmt!r} (use plan, waypoints, geojson)")
+        return f
+    suffix = Path(path).suffix.lower()
+    if suffix not in FORMATS:
+        known = ", ".join(FORMATS)
+        raise MissionFileError(f"{path}: cannot tell the format from the suffix (use {known})")
+    return FORMATS[suffix]
+
+
+def home_of(map: Any) -> tuple[float, float, float]:  # noqa: A002
+    """Planned home: the start point's latitude/longitude and the origin's altitude AMSL."""
+    lat, lon = enu_to_latlon(map.start[0], map.start[1], map)
+    return float(lat), float(lon), float(map.spec.origin.alt)
+
+
+def write_mission(
+    path: str | Path,
+    plan: Any,
+    map: Any,  # noqa: A002
+    fmt: str | None = None,
+    *,
+    finish: Literal["land", "rtl"] = "land",
+    fence: bool = True,
+) -> Path:
+    """Write `plan` on `map` as a mission file (atomically) and return the path.
+
+    `.plan` holds the mission and (with `fence`) an exclusion geofence for every obstacle;
+    `.waypoints` holds the mission only; `.geojson` holds the map and plan for display.
+    """
+    kind = format_for(path, fmt)
+    if kind == "geojson":
+        from lamde_mission.formats.geojson import write_geojson
+
+        return write_geojson(path, plan, map)
+    items = plan_to_items(plan, map, finish=finish)
+    if kind == "plan":
+        from lamde_mission.formats.qgc_plan import write_qgc_plan
+
+        fence_items = geofence_items(map) if fence else []
+        v = float(map.spec.uav.max_speed)
+        return write_qgc_plan(path, items, fence_items, home=home_of(map), cruise_speed=v)
+    from lamde_mission.formats.waypoints import write_waypoints
+
+    return write_waypoints(path, items, home_of(map))
+
+
+def read_mission(path: str | Path) -> tuple[list[MissionItem], list[MissionItem]]:
+    """(mission items, fence items) of a `.plan` or `.waypoints` file.
+
+    Raises MissionFileError, naming the file, for anything unreadable or unsupported
+    (a GeoJSON file is refused: it is a display format without MAVLink commands).
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise MissionFileError(f"{path}: file not found") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise MissionFileError(f"{path}: cannot read ({exc})") from None
+    head = text.lstrip()
+    try:
+        if head.startswith("QGC WPL"):
+            from lamde_mission.formats.waypoints import parse_waypoints
+
+            return parse_waypoints(text)[1], []
+        if head.startswith("{"):
+            try:
+                doc = json.loads(text)
+            except json.JSONDecodeError as exc:
+                raise MissionError(f"not valid JSON ({exc.msg} at line {exc.lineno})") from None
+            if isinstance(doc, dict) and doc.get("type") == "FeatureCollection":
+                raise MissionError(
+                    "a GeoJSON file is a display export, not a mission; use the .plan or "
+                    ".waypoints file written with it"
+                )
+            from lamde_mission.formats.qgc_plan import parse_plan_document
+
+            return parse_plan_document(doc)
+    except MissionError as exc:
+        raise MissionFileError(f"{path}: {exc}") from None
+    raise MissionFileError(
+        f"{path}: not a mission file (expected a QGroundControl .plan or a 'QGC WPL 110' "
+        ".waypoints file)"
+    )
+
+
+def load_mission_items(
+    path: str | Path,
+    map: Any,  # noqa: A002
+) -> tuple[list[MissionItem], list[MissionItem]]:
+    """Like `read_mission`, and also accepts a saved plan result (JSON with hover_points and
+    hover_times, as `Plan.to_dict` writes), turned into items on `map` with `plan_to_items`."""
+    path = Path(path)
+    if path.suffix.lower() == ".json":
+        try:
+            doc = json.loads(path.read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            raise MissionFileError(f"{path}: file not found") from None
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+            raise MissionFileError(f"{path}: cannot read a plan result ({exc})") from None
+        if isinstance(doc, dict) and "hover_points" in doc and "hover_times" in doc:
+            from types import SimpleNamespace
+
+            try:
+                plan = SimpleNamespace(hover_points=doc["hover_points"],
+                                       hover_times=doc["hover_times"])  # fmt: skip
+                return plan_to_items(plan, map), geofence_items(map)
+            except (TypeError, ValueError) as exc:
+                raise MissionFileError(f"{path}: bad hover_points/hover_times ({exc})") from None
+    return read_mission(path)

@@ -1,0 +1,116 @@
+"""GeoJSON (RFC 7946) view of a plan on its map, for GIS tools and web maps.
+
+A FeatureCollection in WGS84 with [longitude, latitude] positions. Every feature has a
+`kind` property: "area", "circle", "rectangle", "no_fly_zone" (Polygons: closed rings,
+exterior counter-clockwise; circles approximated by a regular polygon through the circle,
+with `centre` and `radius` kept as properties), "sensor" (Point: id, required, collected),
+"path" (LineString start -> hover points -> end), "hover" (Point: index, hover_time),
+"start" and "end" (Points). Export only: a GeoJSON file is not read back as a mission.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from lamde_mission.atomic import write_text_atomic
+from lamde_mission.geo import enu_to_latlon
+from lamde_mission.items import fence_shapes
+
+__all__ = ["geojson_document", "write_geojson", "CIRCLE_SEGMENTS"]
+
+#: vertices of the polygon approximating each circular obstacle
+CIRCLE_SEGMENTS = 72
+
+
+def _lonlat(map_: Any, pts: np.ndarray) -> list[list[float]]:
+    pts = np.asarray(pts, dtype=float).reshape(-1, 2)
+    lat, lon = enu_to_latlon(pts[:, 0], pts[:, 1], map_)
+    return [[float(b), float(a)] for a, b in zip(lat, lon, strict=True)]
+
+
+def _ring(map_: Any, poly: np.ndarray) -> list[list[float]]:
+    """A closed, counter-clockwise linear ring in [lon, lat]."""
+    poly = np.asarray(poly, dtype=float)
+    x, y = poly[:, 0], poly[:, 1]
+    area2 = float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+    if area2 < 0:
+        poly = poly[::-1]
+    ring = _lonlat(map_, poly)
+    ring.append(list(ring[0]))
+    return ring
+
+
+def _feature(geometry: dict[str, Any], **props: Any) -> dict[str, Any]:
+    return {"type": "Feature", "geometry": geometry, "properties": props}
+
+
+def _clean(v: Any) -> Any:
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
+    return v
+
+
+def geojson_document(plan: Any, map: Any) -> dict[str, Any]:  # noqa: A002
+    """The FeatureCollection for `plan` (hover points, times, breakdown) on `map`."""
+    spec = map.spec
+    feats: list[dict[str, Any]] = []
+    w, h = spec.area.width, spec.area.height
+    area = np.array([[0.0, 0.0], [w, 0.0], [w, h], [0.0, h]])
+    feats.append(_feature({"type": "Polygon", "coordinates": [_ring(map, area)]},
+                          kind="area", width_m=w, height_m=h, name=spec.name))  # fmt: skip
+    circles, polys = fence_shapes(map)
+    ang = np.linspace(0.0, 2.0 * math.pi, CIRCLE_SEGMENTS, endpoint=False)
+    for k, (centre, r) in enumerate(circles):
+        ring = np.column_stack([centre[0] + r * np.cos(ang), centre[1] + r * np.sin(ang)])
+        feats.append(_feature(
+            {"type": "Polygon", "coordinates": [_ring(map, ring)]},
+            kind="circle", index=k, radius=r, centre=_lonlat(map, centre)[0],
+            centre_local=[float(centre[0]), float(centre[1])],
+        ))  # fmt: skip
+    n_rect = len(spec.obstacles.rectangles)
+    for k, poly in enumerate(polys):
+        kind, idx = ("rectangle", k) if k < n_rect else ("no_fly_zone", k - n_rect)
+        props: dict[str, Any] = {"kind": kind, "index": idx}
+        if kind == "rectangle":
+            r = spec.obstacles.rectangles[idx]
+            props.update(length=r.length, width=r.width, angle_deg=r.angle_deg,
+                         centre=_lonlat(map, np.array([r.x, r.y]))[0])  # fmt: skip
+        feats.append(_feature({"type": "Polygon", "coordinates": [_ring(map, poly)]}, **props))
+    bd = getattr(plan, "breakdown", None) or {}
+    collected = bd.get("collected", {}) if isinstance(bd, dict) else {}
+    required = map.required_data
+    for j, s in enumerate(spec.sensors):
+        got = collected.get(s.id)
+        feats.append(_feature(
+            {"type": "Point", "coordinates": _lonlat(map, np.array([s.x, s.y]))[0]},
+            kind="sensor", id=s.id, required=float(required[j]),
+            collected=_clean(float(got)) if got is not None else None,
+            satisfied=(bool(got >= required[j]) if got is not None else None),
+        ))  # fmt: skip
+    hp = np.asarray(plan.hover_points, dtype=float).reshape(-1, 2)
+    ht = np.asarray(plan.hover_times, dtype=float).reshape(-1)
+    nodes = np.vstack([map.start, hp, map.end])
+    feats.append(_feature(
+        {"type": "LineString", "coordinates": _lonlat(map, nodes)},
+        kind="path", n_hover=len(hp),
+        f=_clean(float(getattr(plan, "f", math.nan))),
+        t_fly=_clean(bd.get("t_fly")), t_hover=_clean(bd.get("t_hover")),
+        feasible=getattr(plan, "feasible", None),
+    ))  # fmt: skip
+    for i, (p, t) in enumerate(zip(hp, ht, strict=True)):
+        feats.append(_feature({"type": "Point", "coordinates": _lonlat(map, p)[0]},
+                              kind="hover", index=i, hover_time=float(t)))  # fmt: skip
+    for kind, p in (("start", map.start), ("end", map.end)):
+        feats.append(_feature({"type": "Point", "coordinates": _lonlat(map, p)[0]}, kind=kind))
+    return {"type": "FeatureCollection", "features": feats}
+
+
+def write_geojson(path: str | Path, plan: Any, map: Any) -> Path:  # noqa: A002
+    """Write the GeoJSON view atomically."""
+    doc = geojson_document(plan, map)
+    return write_text_atomic(path, json.dumps(doc, indent=1, allow_nan=False) + "\n")

@@ -1,0 +1,234 @@
+"""QGroundControl `.plan` files (JSON): mission items, exclusion geofence, no rally points.
+
+Layout follows QGC's documented plan format (file version 1, mission version 2, geoFence
+version 2, rallyPoints version 2). Choices:
+
+- firmwareType 12 (MAV_AUTOPILOT_PX4) by default: QGC's default, and our NaN yaw parameters
+  follow PX4's "NaN = keep the yaw mode" meaning. ArduPilot reads the same items (it ignores
+  those yaw parameters); pass `firmware_type=3` to tag a file for ArduPilot.
+- vehicleType 2 (MAV_TYPE_QUADROTOR): the paper's rotary-wing UAV.
+- NaN parameters are written as JSON null, as QGC does; read back as NaN.
+- Every fence shape carries "inclusion": false explicitly (QGC treats a missing key as an
+  inclusion fence).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from lamde_mission.atomic import write_text_atomic
+from lamde_mission.items import (
+    CMD,
+    FRAME,
+    MISSION_TYPE,
+    MissionError,
+    MissionItem,
+    fence_from_items,
+)
+
+__all__ = [
+    "FIRMWARE_PX4",
+    "FIRMWARE_ARDUPILOT",
+    "VEHICLE_QUADROTOR",
+    "plan_document",
+    "parse_plan_document",
+    "write_qgc_plan",
+    "read_qgc_plan",
+]
+
+FIRMWARE_PX4 = 12  # MAV_AUTOPILOT_PX4
+FIRMWARE_ARDUPILOT = 3  # MAV_AUTOPILOT_ARDUPILOTMEGA
+VEHICLE_QUADROTOR = 2  # MAV_TYPE_QUADROTOR
+ALTITUDE_MODE_RELATIVE = 1  # QGC: altitude relative to launch
+
+
+def _num(v: float) -> float | None:
+    v = float(v)
+    return None if math.isnan(v) else v
+
+
+def _simple_item(it: MissionItem) -> dict[str, Any]:
+    return {
+        "AMSLAltAboveTerrain": None,
+        "Altitude": _num(it.z),
+        "AltitudeMode": ALTITUDE_MODE_RELATIVE,
+        "autoContinue": bool(it.autocontinue),
+        "command": int(it.command),
+        "doJumpId": int(it.seq) + 1,
+        "frame": int(it.frame),
+        "params": [_num(p) for p in it.params],
+        "type": "SimpleItem",
+    }
+
+
+def _fence_section(fence: Sequence[MissionItem]) -> dict[str, Any]:
+    try:
+        circles, polygons = fence_from_items(fence)
+    except MissionError as exc:
+        raise ValueError(str(exc)) from None
+    return {
+        "circles": [
+            {
+                "circle": {"center": [lat, lon], "radius": float(r)},
+                "inclusion": bool(inc),
+                "version": 1,
+            }
+            for lat, lon, r, inc in circles
+        ],
+        "polygons": [
+            {
+                "inclusion": bool(poly[0][2]),
+                "polygon": [[lat, lon] for lat, lon, _ in poly],
+                "version": 1,
+            }
+            for poly in polygons
+        ],
+        "version": 2,
+    }
+
+
+def plan_document(
+    items: Sequence[MissionItem],
+    fence: Sequence[MissionItem] = (),
+    *,
+    home: tuple[float, float, float],
+    cruise_speed: float,
+    hover_speed: float | None = None,
+    firmware_type: int = FIRMWARE_PX4,
+    vehicle_type: int = VEHICLE_QUADROTOR,
+) -> dict[str, Any]:
+    """The `.plan` JSON object. `home` is (lat, lon, altitude AMSL) of the planned home."""
+    if not items:
+        raise ValueError("a QGC plan needs at least one mission item")
+    return {
+        "fileType": "Plan",
+        "geoFence": _fence_section(fence),
+        "groundStation": "lamde-mission",
+        "mission": {
+            "cruiseSpeed": float(cruise_speed),
+            "firmwareType": int(firmware_type),
+            "globalPlanAltitudeMode": ALTITUDE_MODE_RELATIVE,
+            "hoverSpeed": float(cruise_speed if hover_speed is None else hover_speed),
+            "items": [_simple_item(it) for it in items],
+            "plannedHomePosition": [float(home[0]), float(home[1]), float(home[2])],
+            "vehicleType": int(vehicle_type),
+            "version": 2,
+        },
+        "rallyPoints": {"points": [], "version": 2},
+        "version": 1,
+    }
+
+
+def _float(v: Any, where: str) -> float:
+    if v is None:
+        return float("nan")
+    if isinstance(v, bool) or not isinstance(v, int | float):
+        raise MissionError(f"{where}: expected a number or null, got {v!r}")
+    return float(v)
+
+
+def _latlon_pair(v: Any, where: str) -> tuple[float, float]:
+    if not isinstance(v, list) or len(v) < 2:
+        raise MissionError(f"{where}: expected [lat, lon]")
+    return _float(v[0], where), _float(v[1], where)
+
+
+def parse_plan_document(doc: Any) -> tuple[list[MissionItem], list[MissionItem]]:
+    """Mission items and fence items of a `.plan` JSON object; raise MissionError if malformed."""
+    if not isinstance(doc, dict) or doc.get("fileType") != "Plan":
+        raise MissionError('not a QGroundControl plan (fileType must be "Plan")')
+    mission = doc.get("mission")
+    if not isinstance(mission, dict) or not isinstance(mission.get("items"), list):
+        raise MissionError("mission.items: missing or not a list")
+    items: list[MissionItem] = []
+    for k, raw in enumerate(mission["items"]):
+        where = f"mission.items[{k}]"
+        if not isinstance(raw, dict):
+            raise MissionError(f"{where}: not an object")
+        if raw.get("type") != "SimpleItem":
+            raise MissionError(
+                f"{where}: item type {raw.get('type')!r} is not supported (only SimpleItem; "
+                "complex items such as surveys must be converted in QGroundControl first)"
+            )
+        params = raw.get("params")
+        if not isinstance(params, list) or len(params) != 7:
+            raise MissionError(f"{where}.params: expected 7 values")
+        p = [_float(v, f"{where}.params[{i}]") for i, v in enumerate(params)]
+        try:
+            command, frame = int(raw["command"]), int(raw["frame"])
+        except (KeyError, TypeError, ValueError):
+            raise MissionError(f"{where}: command and frame must be integers") from None
+        items.append(
+            MissionItem(
+                seq=len(items), command=command, frame=frame, current=0,
+                autocontinue=int(bool(raw.get("autoContinue", True))),
+                param1=p[0], param2=p[1], param3=p[2], param4=p[3], x=p[4], y=p[5], z=p[6],
+                mission_type=MISSION_TYPE.MISSION,
+            )
+        )  # fmt: skip
+    fence = _parse_fence(doc.get("geoFence"))
+    return items, fence
+
+
+def _parse_fence(gf: Any) -> list[MissionItem]:
+    if gf is None:
+        return []
+    if not isinstance(gf, dict):
+        raise MissionError("geoFence: not an object")
+    out: list[MissionItem] = []
+
+    def add(command: int, p1: float, lat: float, lon: float) -> None:
+        out.append(
+            MissionItem(
+                seq=len(out), command=command, frame=FRAME.GLOBAL, param1=float(p1),
+                x=lat, y=lon, z=0.0, mission_type=MISSION_TYPE.FENCE,
+            )
+        )  # fmt: skip
+
+    for k, c in enumerate(gf.get("circles") or []):
+        where = f"geoFence.circles[{k}]"
+        circle = c.get("circle") if isinstance(c, dict) else None
+        if not isinstance(circle, dict):
+            raise MissionError(f"{where}: missing 'circle'")
+        lat, lon = _latlon_pair(circle.get("center"), f"{where}.circle.center")
+        r = _float(circle.get("radius"), f"{where}.circle.radius")
+        inclusion = bool(c.get("inclusion", True))
+        cmd = CMD.FENCE_CIRCLE_INCLUSION if inclusion else CMD.FENCE_CIRCLE_EXCLUSION
+        add(cmd, r, lat, lon)
+    for k, poly in enumerate(gf.get("polygons") or []):
+        where = f"geoFence.polygons[{k}]"
+        verts = poly.get("polygon") if isinstance(poly, dict) else None
+        if not isinstance(verts, list) or len(verts) < 3:
+            raise MissionError(f"{where}.polygon: needs at least 3 [lat, lon] vertices")
+        inclusion = bool(poly.get("inclusion", True))
+        cmd = (CMD.FENCE_POLYGON_VERTEX_INCLUSION if inclusion
+               else CMD.FENCE_POLYGON_VERTEX_EXCLUSION)  # fmt: skip
+        for i, v in enumerate(verts):
+            lat, lon = _latlon_pair(v, f"{where}.polygon[{i}]")
+            add(cmd, len(verts), lat, lon)
+    return out
+
+
+def write_qgc_plan(
+    path: str | Path,
+    items: Sequence[MissionItem],
+    fence: Sequence[MissionItem] = (),
+    **kwargs: Any,
+) -> Path:
+    """Write a `.plan` file atomically; keyword arguments as for `plan_document`."""
+    doc = plan_document(items, fence, **kwargs)
+    return write_text_atomic(path, json.dumps(doc, indent=4, allow_nan=False) + "\n")
+
+
+def read_qgc_plan(path: str | Path) -> tuple[list[MissionItem], list[MissionItem]]:
+    """(mission items, fence items) of a `.plan` file; raise MissionError if malformed."""
+    text = Path(path).read_text(encoding="utf-8")
+    try:
+        doc = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise MissionError(f"not valid JSON ({exc.msg} at line {exc.lineno})") from None
+    return parse_plan_document(doc)

@@ -1,0 +1,99 @@
+"""ArduPilot / Mission Planner `.waypoints` files (the plain-text "QGC WPL 110" format).
+
+One header line, then one tab-separated line per item:
+``seq current frame command p1 p2 p3 p4 lat lon alt autocontinue``. Line 0 is the home
+position (ArduPilot convention: MAV_CMD_NAV_WAYPOINT, frame GLOBAL, altitude AMSL, current 1);
+our items follow as seq 1..N. The reader drops that home line and numbers items from 0 again.
+
+NaN parameters (our "keep yaw" values) are written as 0: the text format has no NaN that every
+reader accepts, and ArduPilot ignores the yaw parameter of TAKEOFF, WAYPOINT and LAND. Numbers
+are written in the shortest form that reads back to the same float. The format holds no fence.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from lamde_mission.atomic import write_text_atomic
+from lamde_mission.items import CMD, FRAME, MISSION_TYPE, MissionError, MissionItem
+
+__all__ = ["HEADER", "format_waypoints", "parse_waypoints", "write_waypoints", "read_waypoints"]
+
+HEADER = "QGC WPL 110"
+
+
+def _num(v: float) -> str:
+    v = float(v)
+    if math.isnan(v):
+        v = 0.0
+    if math.isinf(v):
+        raise ValueError("infinite parameter cannot be written to a .waypoints file")
+    return np.format_float_positional(v, unique=True, trim="0")
+
+
+def _line(seq: int, it: MissionItem) -> str:
+    fields = [str(seq), str(int(it.current)), str(int(it.frame)), str(int(it.command))]
+    fields += [_num(p) for p in it.params]
+    fields.append(str(int(it.autocontinue)))
+    return "\t".join(fields)
+
+
+def format_waypoints(items: Sequence[MissionItem], home: tuple[float, float, float]) -> str:
+    """The file text: header, home line (lat, lon, altitude AMSL), then the items as 1..N."""
+    home_item = MissionItem(
+        seq=0, command=CMD.WAYPOINT, frame=FRAME.GLOBAL, current=1, autocontinue=1,
+        x=float(home[0]), y=float(home[1]), z=float(home[2]),
+    )  # fmt: skip
+    lines = [HEADER, _line(0, home_item)]
+    lines += [_line(k + 1, it) for k, it in enumerate(items)]
+    return "\n".join(lines) + "\n"
+
+
+def parse_waypoints(text: str) -> tuple[MissionItem, list[MissionItem]]:
+    """(home item, mission items numbered from 0) of `.waypoints` text; MissionError if bad."""
+    lines = text.splitlines()
+    if not lines or lines[0].strip() != HEADER:
+        found = lines[0].strip()[:40] if lines else ""
+        raise MissionError(f"not a '{HEADER}' waypoint file (first line is {found!r})")
+    rows: list[MissionItem] = []
+    for lineno, line in enumerate(lines[1:], start=2):
+        s = line.strip()
+        if not s or s.startswith("#"):
+            continue
+        a = s.split()
+        if len(a) != 12:
+            raise MissionError(f"line {lineno}: expected 12 values, got {len(a)}")
+        try:
+            ints = [int(a[i]) for i in (0, 1, 2, 3, 11)]
+            floats = [float(v) for v in a[4:11]]
+        except ValueError:
+            raise MissionError(f"line {lineno}: not a number where one is expected") from None
+        seq, current, frame, command, autocontinue = ints
+        rows.append(
+            MissionItem(
+                seq=seq, command=command, frame=frame, current=current,
+                autocontinue=autocontinue, param1=floats[0], param2=floats[1],
+                param3=floats[2], param4=floats[3], x=floats[4], y=floats[5], z=floats[6],
+                mission_type=MISSION_TYPE.MISSION,
+            )
+        )  # fmt: skip
+    if not rows:
+        raise MissionError("the file holds no items (not even the home line)")
+    home, items = rows[0], rows[1:]
+    return home, [it.with_seq(k) for k, it in enumerate(items)]
+
+
+def write_waypoints(
+    path: str | Path, items: Sequence[MissionItem], home: tuple[float, float, float]
+) -> Path:
+    """Write a `.waypoints` file atomically."""
+    return write_text_atomic(path, format_waypoints(items, home))
+
+
+def read_waypoints(path: str | Path) -> list[MissionItem]:
+    """Mission items of a `.waypoints` file (the home line dropped, seq from 0)."""
+    return parse_waypoints(Path(path).read_text(encoding="utf-8"))[1]

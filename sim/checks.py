@@ -1,0 +1,202 @@
+"""Verdicts on a replayed mission: the paper's constraints C1..C5, each with a margin.
+
+A margin is the worst slack in the constraint's unit: >= 0 when it holds, negative by how much
+it is broken. Small tolerances absorb what a mission file cannot carry exactly (latitude and
+longitude round-trips, float32 parameters): `REL_TOL` for times, rates and data, `GEOM_TOL`
+metres for positions and overlap lengths. One extra verdict, ENDS, checks that the mission takes
+off at the map's start and comes to rest at its end (the paper's fixed p_0 and p_{I+1}).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+import shapely
+
+from sim.obstacles import obstacle_shapes, overlap_lengths
+from sim.replay import Timeline
+
+__all__ = ["Verdict", "Verdicts", "verify", "REL_TOL", "GEOM_TOL", "ENDS_TOL"]
+
+#: relative tolerance on hover times (C2), rate sums (C3) and collected data (C4)
+REL_TOL = 1e-9
+#: metres: hover points on the area's edge (C1), overlap length counted as zero (C5)
+GEOM_TOL = 1e-6
+#: metres: take-off / final stop within this of the map's start / end (float32 MAVLink
+#: parameters carry latitude to ~1 m, int32 MISSION_ITEM_INT to ~1 cm)
+ENDS_TOL = 0.05
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """One constraint's outcome: passed, worst margin (unit), and where the worst case is."""
+
+    name: str
+    title: str
+    passed: bool
+    margin: float
+    unit: str
+    detail: str
+
+    def to_dict(self) -> dict[str, Any]:
+        d = asdict(self)
+        d["margin"] = self.margin if math.isfinite(self.margin) else None
+        return d
+
+
+@dataclass(frozen=True)
+class Verdicts:
+    """All verdicts (C1..C5, ENDS) of one replay, with the totals they were judged on."""
+
+    items: tuple[Verdict, ...]
+    t_fly: float
+    t_hover: float
+    f: float
+
+    @property
+    def passed(self) -> bool:
+        return all(v.passed for v in self.items)
+
+    @property
+    def failed(self) -> list[str]:
+        """Names of the verdicts that failed, in order."""
+        return [v.name for v in self.items if not v.passed]
+
+    def __getitem__(self, name: str) -> Verdict:
+        for v in self.items:
+            if v.name == name:
+                return v
+        raise KeyError(name)
+
+    def __iter__(self) -> Iterator[Verdict]:
+        return iter(self.items)
+
+    def table(self) -> str:
+        """A fixed-width text table: constraint, PASS/FAIL, margin, worst case."""
+        rows = [("check", "result", "margin", "detail")]
+        for v in self.items:
+            m = f"{v.margin:.6g} {v.unit}" if math.isfinite(v.margin) else "-"
+            rows.append((f"{v.name} {v.title}", "PASS" if v.passed else "FAIL", m, v.detail))
+        w = [max(len(r[i]) for r in rows) for i in range(3)]
+        lines = [f"{r[0]:<{w[0]}}  {r[1]:<{w[1]}}  {r[2]:>{w[2]}}  {r[3]}".rstrip() for r in rows]
+        lines.insert(1, "-" * max(len(s) for s in lines))
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "passed": self.passed,
+            "failed": self.failed,
+            "t_fly": self.t_fly,
+            "t_hover": self.t_hover,
+            "f": self.f,
+            "verdicts": [v.to_dict() for v in self.items],
+        }
+
+
+def _hover_label(i: int, seqs: tuple[int, ...]) -> str:
+    return f"hover point {i + 1} (item {seqs[i]})"
+
+
+def verify(timeline: Timeline, map: Any) -> Verdicts:  # noqa: A002
+    """Judge a replayed mission against the map: C1..C5 of the paper and ENDS."""
+    spec = map.spec
+    hp, ht, seqs = timeline.hover_points, timeline.hover_times, timeline.hover_seqs
+    n = len(ht)
+    out: list[Verdict] = []
+
+    # C1: hover points inside the area [0, W] x [0, H]
+    W, H = spec.area.width, spec.area.height
+    if n:
+        slack = np.minimum.reduce([hp[:, 0], W - hp[:, 0], hp[:, 1], H - hp[:, 1]])
+        i = int(np.argmin(slack))
+        m = float(slack[i])
+        detail = f"closest to the edge: {_hover_label(i, seqs)}"
+        if m < -GEOM_TOL:
+            detail = f"{_hover_label(i, seqs)} at ({hp[i, 0]:.1f}, {hp[i, 1]:.1f}) is outside"
+        out.append(Verdict("C1", "hover points in area", m >= -GEOM_TOL, m, "m", detail))
+    else:
+        out.append(Verdict("C1", "hover points in area", True, math.inf, "m", "no hover points"))
+
+    # C2: 0 <= T_i <= T_max
+    t_max = spec.uav.max_hover_time
+    if n:
+        slack = np.minimum(ht, t_max - ht)
+        i = int(np.argmin(slack))
+        m = float(slack[i])
+        ok = m >= -REL_TOL * t_max
+        detail = f"tightest: {_hover_label(i, seqs)}, T = {ht[i]:.6g} s of T_max {t_max:g} s"
+        out.append(Verdict("C2", "0 <= T <= T_max", bool(ok), m, "s", detail))
+    else:
+        out.append(Verdict("C2", "0 <= T <= T_max", True, math.inf, "s", "no hover points"))
+
+    # C3: sum_j R_ij <= R_lambda at each hover point
+    bw = spec.radio.bandwidth
+    if n:
+        slack = bw - timeline.rates.sum(axis=1)
+        i = int(np.argmin(slack))
+        m = float(slack[i])
+        ok = m >= -REL_TOL * bw
+        detail = f"tightest: {_hover_label(i, seqs)}, {bw - m:.6g} of {bw:g} Mbit/s"
+        out.append(Verdict("C3", "sum_j R_ij <= R_lambda", bool(ok), m, "Mbit/s", detail))
+    else:
+        out.append(
+            Verdict("C3", "sum_j R_ij <= R_lambda", True, math.inf, "Mbit/s", "no hover points")
+        )
+
+    # C4: Q_j >= Q_lambda for every sensor
+    q = timeline.collected
+    req = np.asarray(map.required_data, dtype=float)
+    slack = q - req
+    tol = REL_TOL * np.maximum(req, 1.0)
+    short = np.flatnonzero(slack < -tol)
+    j = int(np.argmin(slack)) if len(slack) else 0
+    ids = timeline.sensor_ids
+    if len(short):
+        names = ", ".join(f"'{ids[k]}'" for k in short[:5]) + (" ..." if len(short) > 5 else "")
+        detail = (f"{len(short)} sensor(s) short: {names}; worst '{ids[j]}' "
+                  f"{q[j]:.6g} of {req[j]:g} Mbit")  # fmt: skip
+    else:
+        detail = f"tightest: sensor '{ids[j]}' {q[j]:.6g} of {req[j]:g} Mbit"
+    out.append(Verdict("C4", "Q_j >= Q_lambda", not len(short), float(slack[j]), "Mbit", detail))
+
+    # C5: L_vio = 0 over the flown horizontal path (and an RTL return leg, if any)
+    obstacles = obstacle_shapes(map)
+    path = timeline.path
+    legs = [path]
+    if timeline.return_leg is not None:
+        legs.append(timeline.return_leg)
+    over = np.vstack([overlap_lengths(p, obstacles) for p in legs]) if obstacles else None
+    if over is None or over.size == 0:
+        out.append(Verdict("C5", "L_vio = 0", True, math.inf, "m", "no obstacles"))
+    else:
+        per_obstacle = over.sum(axis=0)
+        l_vio = float(per_obstacle.sum())
+        if l_vio > GEOM_TOL:
+            hit = np.flatnonzero(per_obstacle > GEOM_TOL)
+            order = hit[np.argsort(-per_obstacle[hit])]
+            names = ", ".join(f"{obstacles[k].label} {per_obstacle[k]:.3g} m" for k in order[:4])
+            extra = " (includes the RTL return leg)" if timeline.return_leg is not None else ""
+            detail = f"path inside obstacles for {l_vio:.6g} m: {names}{extra}"
+            out.append(Verdict("C5", "L_vio = 0", False, -l_vio, "m", detail))
+        else:
+            lines = shapely.multilinestrings([shapely.linestrings(p) for p in legs
+                                              if len(p) >= 2])  # fmt: skip
+            dist = shapely.distance(lines, np.array([o.shape for o in obstacles], dtype=object))
+            k = int(np.argmin(dist))
+            detail = f"clearance {float(dist[k]):.3f} m from {obstacles[k].label}"
+            out.append(Verdict("C5", "L_vio = 0", True, float(dist[k]), "m", detail))
+
+    # ENDS: take off at the start, come to rest at the end
+    d0 = float(np.linalg.norm(timeline.route.launch - map.start))
+    d1 = float(np.linalg.norm(timeline.path[-1] - map.end))
+    worst = max(d0, d1)
+    worst = 0.0 if worst < GEOM_TOL else worst  # round-off of the lat/lon round trip
+    detail = f"take-off {d0:.3f} m from start, last stop {d1:.3f} m from end"
+    out.append(Verdict("ENDS", "start -> end", worst <= ENDS_TOL, -worst + 0.0, "m", detail))
+
+    t = timeline.totals
+    return Verdicts(items=tuple(out), t_fly=t.t_fly, t_hover=t.t_hover, f=t.f)

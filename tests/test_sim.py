@@ -1,0 +1,275 @@
+"""The sim: replay mission items with the paper's model and verify C1..C5 independently."""
+
+from __future__ import annotations
+
+import ast
+import json
+import math
+from dataclasses import replace
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from lamde_mission.formats import read_mission, write_mission
+from lamde_mission.geo import enu_to_latlon
+from lamde_mission.items import CMD, plan_to_items
+from planner_core.mapio import load_map
+from planner_core.problem import Problem, flight_time
+from sim import replay, verify
+from sim.replay import leg_position, leg_time
+
+ROOT = Path(__file__).resolve().parent.parent
+SUITE = ROOT / "examples" / "maps" / "suite"
+
+MAP = {
+    "name": "sim",
+    "area": {"width": 2000, "height": 2000},
+    "start": [0, 0],
+    "end": [1900, 1800],
+    "sensors": [
+        {"id": "a", "x": 300, "y": 100},
+        {"id": "b", "x": 1000, "y": 1000, "required_data": 150},
+        {"id": "c", "x": 1700, "y": 1500},
+    ],
+    "obstacles": {
+        "circles": [{"x": 600, "y": 1400, "radius": 90}],
+        "rectangles": [{"x": 1500, "y": 500, "length": 180, "width": 100, "angle_deg": 25}],
+        "no_fly_zones": [{"vertices": [[200, 700], [500, 650], [450, 1000]]}],
+    },
+    "uav": {"max_hover_points": 5},
+    "radio": {"bandwidth": 25},
+}
+HOVER = [[300, 120], [1000, 980], [1700, 1480]]
+TIMES = [40.0, 30.0, 35.0]
+
+
+def _plan(m, hover, times):
+    p = Problem(m)
+    b = p.breakdown(p.encode(hover, times))
+    return SimpleNamespace(hover_points=np.array(b["hover_points"]),
+                           hover_times=np.array(b["hover_times"]), f=b["f"], phi=b["phi"],
+                           feasible=b["phi"] == 0, breakdown=b)  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def m():
+    return load_map(MAP)
+
+
+def _rel(a, b):
+    return abs(a - b) / max(abs(b), 1e-12)
+
+
+def _agrees(tl, b, tol):
+    t = tl.totals
+    assert _rel(t.t_fly, b["t_fly"]) < tol
+    assert _rel(t.t_hover, b["t_hover"]) < tol
+    assert _rel(t.f, b["f"]) < tol
+    for k, q in b["collected"].items():
+        assert abs(t.collected[k] - q) <= tol * max(abs(q), 1.0)
+
+
+# ----------------------------------------------------------------------------- motion model
+
+
+@pytest.mark.parametrize("d", [0.0, 1e-3, 10.0, 99.9, 100.0, 100.1, 500.0, 12_345.0])
+def test_leg_time_is_eq_1(d):
+    v, a = 20.0, 4.0  # v^2 / a = 100 m
+    assert leg_time(d, v, a) == pytest.approx(float(flight_time(np.array(d), v, a)), rel=1e-15)
+
+
+@pytest.mark.parametrize("d", [30.0, 100.0, 800.0])
+def test_leg_position_profile(d):
+    v, a = 20.0, 4.0
+    total = leg_time(d, v, a)
+    t = np.linspace(0.0, total, 2001)
+    s = leg_position(t, d, v, a)
+    assert s[0] == 0.0 and s[-1] == pytest.approx(d, abs=1e-9)
+    assert np.all(np.diff(s) >= -1e-12)  # never goes backwards
+    speed = np.diff(s) / np.diff(t)
+    assert speed.max() <= v + 1e-6  # never above v_max
+    accel = np.diff(speed) / np.diff(t[:-1])
+    assert np.abs(accel).max() <= a * 1.01 + 1e-6  # never above a (finite differences)
+
+
+# ----------------------------------------------------------------------------- replay
+
+
+def test_replay_matches_the_model_and_the_timeline_is_consistent(m):
+    plan = _plan(m, HOVER, TIMES)
+    tl = replay(plan_to_items(plan, m), m, dt=0.5)
+    _agrees(tl, plan.breakdown, 1e-9)
+    np.testing.assert_allclose(tl.leg_times[:-1], plan.breakdown["leg_times"], rtol=1e-9)
+    assert tl.leg_times[-1] == 0.0  # WAYPOINT and LAND at the same end point
+    assert np.all(np.diff(tl.t) >= 0)
+    assert tl.t[-1] == pytest.approx(tl.totals.t_total)
+    assert tl.totals.t_total == pytest.approx(
+        tl.totals.t_takeoff + tl.totals.t_fly + tl.totals.t_hover + tl.totals.t_land
+    )
+    assert tl.totals.t_takeoff == pytest.approx(leg_time(100.0, 20.0, 4.0))
+    phases = [p for k, p in enumerate(tl.phase) if k == 0 or p != tl.phase[k - 1]]
+    assert phases == ["takeoff", "fly", "hover", "fly", "hover", "fly", "hover", "fly", "land"]
+    assert np.all(np.diff(tl.data, axis=0) >= -1e-12)  # data only accumulates
+    fly = np.array([p == "fly" for p in tl.phase])
+    for j in range(3):  # nothing collected while flying: constant within each flying stretch
+        seg_starts = np.flatnonzero(np.diff(np.r_[False, fly].astype(int)) == 1)
+        for s0 in seg_starts:
+            s1 = s0
+            while s1 + 1 < len(fly) and fly[s1 + 1]:
+                s1 += 1
+            assert tl.data[s0, j] == tl.data[s1, j]
+    np.testing.assert_allclose(tl.collected, list(plan.breakdown["collected"].values()),
+                               rtol=1e-9)  # fmt: skip
+    assert tl.z.max() == pytest.approx(100.0) and tl.z[0] == 0.0 and tl.z[-1] == 0.0
+    np.testing.assert_allclose(tl.xy[-1], [1900, 1800], atol=1e-6)
+
+
+def test_replay_rtl_flies_back_outside_f(m):
+    plan = _plan(m, HOVER, TIMES)
+    tl = replay(plan_to_items(plan, m, finish="rtl"), m)
+    _agrees(tl, plan.breakdown, 1e-9)
+    d = math.hypot(1900, 1800)
+    assert tl.totals.t_return == pytest.approx(leg_time(d, 20.0, 4.0))
+    assert "return" in tl.phase
+    np.testing.assert_allclose(tl.xy[-1], [0, 0], atol=1e-6)
+
+
+def test_mission_speed_is_flown(m):
+    plan = _plan(m, HOVER, TIMES)
+    slow = replay(plan_to_items(plan, m, speed=10.0), m)
+    assert slow.totals.speed == 10.0 and slow.totals.t_fly > plan.breakdown["t_fly"]
+    fast = replay(plan_to_items(plan, m, speed=50.0), m)
+    assert fast.totals.speed == 20.0 and any("exceeds" in n for n in fast.notes)
+
+
+# ----------------------------------------------------------------------------- verify
+
+
+def test_feasible_plan_passes_every_check(m):
+    plan = _plan(m, HOVER, TIMES)
+    assert plan.feasible
+    v = verify(replay(plan_to_items(plan, m), m), m)
+    assert v.passed and v.failed == []
+    assert [x.name for x in v] == ["C1", "C2", "C3", "C4", "C5", "ENDS"]
+    assert v["C1"].margin == pytest.approx(120.0)  # hover point 1 is 120 m from the edge
+    assert v["C2"].margin == pytest.approx(30.0)
+    assert v["C5"].margin > 0 and "clearance" in v["C5"].detail
+    assert v["ENDS"].margin == 0.0
+    table = v.table()
+    for name in ("C1", "C2", "C3", "C4", "C5"):
+        assert name in table
+    assert "FAIL" not in table
+    json.dumps(v.to_dict())
+
+
+def test_cut_hover_time_fails_c4(m):
+    items = plan_to_items(_plan(m, HOVER, TIMES), m)
+    k = next(i for i, it in enumerate(items) if it.command == CMD.LOITER_TIME)
+    items[k] = replace(items[k], param1=items[k].param1 / 10)
+    v = verify(replay(items, m), m)
+    assert not v.passed and v.failed == ["C4"]
+    assert v["C4"].margin < 0 and "'a'" in v["C4"].detail
+
+
+def test_c1_c2_c3_failures(m):
+    items = plan_to_items(_plan(m, HOVER, TIMES), m)
+    # C1: move hover point 2 outside the area (x = -50)
+    lat, lon = enu_to_latlon(-50.0, 980.0, m)
+    out = list(items)
+    out[3] = replace(out[3], x=float(lat), y=float(lon))
+    v = verify(replay(out, m), m)
+    assert "C1" in v.failed and v["C1"].margin == pytest.approx(-50.0, abs=1e-6)
+    assert "hover point 2 (item 3)" in v["C1"].detail
+    # C2: a hover time above T_max
+    out = list(items)
+    out[2] = replace(out[2], param1=301.0)
+    v = verify(replay(out, m), m)
+    assert v.failed == ["C2"] and v["C2"].margin == pytest.approx(-1.0)
+    # C3: a lower bandwidth than the sensors' summed rates at a hover point
+    tight = load_map({**MAP, "radio": {"bandwidth": 5}})
+    v = verify(replay(plan_to_items(_plan(tight, HOVER, TIMES), tight), tight), tight)
+    assert "C3" in v.failed and v["C3"].margin < 0
+
+
+def test_c5_overlap_matches_the_planner_within_circle_resolution(m):
+    # straight through the circle (600, 1400, r 90) and the no-fly zone
+    hover = [[600, 1300], [600, 1500], [300, 800]]
+    plan = _plan(m, hover, [10.0, 10.0, 10.0])
+    assert plan.breakdown["l_vio"] > 0
+    v = verify(replay(plan_to_items(plan, m), m), m)
+    assert "C5" in v.failed
+    assert -v["C5"].margin == pytest.approx(plan.breakdown["l_vio"], rel=1e-4)
+    assert "circle 0" in v["C5"].detail and "no-fly-zone 0" in v["C5"].detail
+
+
+def test_rtl_return_leg_is_checked_for_collisions():
+    data = {**MAP, "start": [0, 1400], "end": [1200, 1400],
+            "sensors": [{"id": "a", "x": 900, "y": 1200}]}  # fmt: skip
+    mm = load_map(data)
+    plan = _plan(mm, [[900, 1200]], [30.0])
+    assert verify(replay(plan_to_items(plan, mm), mm), mm).passed
+    v = verify(replay(plan_to_items(plan, mm, finish="rtl"), mm), mm)
+    assert v.failed == ["C5"] and "RTL" in v["C5"].detail
+
+
+def test_ends_check(m):
+    items = plan_to_items(_plan(m, HOVER, TIMES), m)
+    lat, lon = enu_to_latlon(1000.0, 1800.0, m)
+    out = [*items[:-2], replace(items[-2], x=float(lat), y=float(lon)),
+           replace(items[-1], x=float(lat), y=float(lon))]  # fmt: skip
+    v = verify(replay(out, m), m)
+    assert "ENDS" in v.failed and v["ENDS"].margin == pytest.approx(-900.0)
+
+
+def test_sim_does_not_import_the_optimiser():
+    """The sim is a second opinion: from planner_core it may use the map loader only."""
+    paths = [*(ROOT / "sim").glob("*.py"), ROOT / "lamde_mission" / "items.py",
+             ROOT / "lamde_mission" / "geo.py"]  # fmt: skip
+    for path in paths:
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.module:
+                names = [node.module]
+            else:
+                continue
+            for name in names:
+                if name == "planner_core" or name.startswith("planner_core."):
+                    assert name == "planner_core.mapio", f"{path.name} imports {name}"
+
+
+# ----------------------------------------------------------------------------- suite
+
+
+@pytest.fixture(scope="module")
+def suite_maps():
+    files = sorted(SUITE.glob("T*.json"))
+    if files:
+        return {p.stem: load_map(p) for p in files}
+    from planner_core.suite import suite_maps as generate  # the files are not written yet
+
+    return {name: load_map(d) for name, d in generate().items()}
+
+
+def test_suite_witnesses_agree_with_the_model_and_pass(suite_maps, tmp_path):
+    assert len(suite_maps) == 16
+    for k, (name, mm) in enumerate(sorted(suite_maps.items())):
+        w = mm.spec.witness
+        assert w is not None, name
+        plan = _plan(mm, w.hover_points, w.hover_times)
+        items = plan_to_items(plan, mm)
+        if k in (0, 15):  # through the files for the smallest and the largest map
+            for suffix in (".plan", ".waypoints"):
+                items, _ = read_mission(write_mission(tmp_path / f"{name}{suffix}", plan, mm))
+        tl = replay(items, mm)
+        _agrees(tl, plan.breakdown, 1e-6)
+        v = verify(tl, mm)
+        assert v.passed, f"{name}:\n{v.table()}"
+        # the same mission with one hover time cut fails C4
+        cut = list(items)
+        i = next(i for i, it in enumerate(cut) if it.command == CMD.LOITER_TIME)
+        cut[i] = replace(cut[i], param1=0.0)
+        v = verify(replay(cut, mm), mm)
+        assert "C4" in v.failed, f"{name}:\n{v.table()}"
