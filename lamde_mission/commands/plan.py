@@ -1,0 +1,195 @@
+"""`lamde-mission plan MAP -o OUT`: optimise, verify in the sim, write the mission file."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from typing import Any
+
+_CONFIGURATORS = ("adaptive", "fixed", "random")
+
+
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    p = sub.add_parser(
+        "plan",
+        help="plan a mission for a map and write it as .plan, .waypoints or .geojson",
+        description="Optimise hover points and hover times for MAP with LAMDE's variable-length "
+        "DE, replay the mission in the simulator, print a summary and write the mission file. "
+        "An infeasible mission is not written unless --allow-infeasible. Exit status: 0 ok, "
+        "1 infeasible, 2 bad input.",
+    )
+    p.add_argument("map", help="map file (JSON)")
+    p.add_argument("-o", "--output", required=True, metavar="OUT",
+                   help="mission file to write (.plan, .waypoints or .geojson)")
+    p.add_argument("--format", choices=("plan", "waypoints", "geojson"),
+                   help="output format (default: from OUT's suffix)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (same seed, same plan)")
+    p.add_argument("--budget", type=int, default=10_000, help="evaluations (default 10000)")
+    p.add_argument("--population", type=int, default=100, help="DE population (default 100)")
+    p.add_argument("--configurator", choices=_CONFIGURATORS, default="adaptive",
+                   help="how DE operators and F/Cr are chosen each generation (default adaptive)")
+    p.add_argument("--fixed-length", action="store_true",
+                   help="use all I_max hover points (the paper's LAMDE-F ablation)")
+    p.add_argument("--no-polish", action="store_true", help="skip the hover-time LP polish")
+    p.add_argument("--finish", choices=("land", "rtl"), default="land",
+                   help="end the mission by landing at the end point or returning to launch")
+    p.add_argument("--plot", metavar="PNG", help="also draw the mission (.png or .svg)")
+    p.add_argument("--report", metavar="JSON", help="also write the plan and verdicts as JSON")
+    p.add_argument("--allow-infeasible", action="store_true",
+                   help="write the mission even if constraints are violated (exit status 1)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
+    return p
+
+
+class _ProgressBar:
+    """One updating line on stderr (a TTY), or a line per quarter of the budget otherwise."""
+
+    def __init__(self, stream: Any = sys.stderr, width: int = 24):
+        self.stream = stream
+        self.width = width
+        self.tty = bool(getattr(stream, "isatty", lambda: False)())
+        self.last = 0.0
+        self.next_quarter = 0.25
+
+    def __call__(self, p: Any) -> None:
+        frac = p.evaluations / max(p.budget, 1)
+        done = frac >= 1.0
+        now = time.monotonic()
+        if self.tty:
+            if not done and now - self.last < 0.1:
+                return
+        elif not done and frac < self.next_quarter:
+            return
+        self.last = now
+        while self.next_quarter <= frac:
+            self.next_quarter += 0.25
+        fill = int(round(frac * self.width))
+        bar = "#" * fill + "." * (self.width - fill)
+        state = "feasible" if p.best_phi == 0 else "infeasible"
+        line = (f"gen {p.generation:4d} [{bar}] {p.evaluations}/{p.budget} evals  "
+                f"best f {p.best_f:10.2f}  phi {p.best_phi:10.4g}  {state}")
+        if self.tty:
+            self.stream.write("\r" + line + ("\n" if done else ""))
+        else:
+            self.stream.write(line + "\n")
+        self.stream.flush()
+
+
+def _summary(plan: Any, m: Any, timeline: Any, verdicts: Any, out: str | None) -> str:
+    b = plan.breakdown
+    t = timeline.totals
+    lines = [
+        f"map '{m.name}': {plan.n_hover} hover points, {plan.evaluations} evaluations, "
+        f"{plan.wall_time:.2f} s (seed {plan.seed}, {plan.configurator})",
+        f"  flight time   {b['t_fly']:10.2f} s    (sim {t.t_fly:.2f} s)",
+        f"  hover time    {b['t_hover']:10.2f} s    (sim {t.t_hover:.2f} s)",
+        f"  f             {plan.f:10.2f}      (alpha {m.spec.objective.alpha:g})",
+        f"  phi           {plan.phi:10.4g}",
+    ]
+    if plan.polish is not None:
+        pol = plan.polish
+        lines.append(f"  polish        f {pol['f_before']:.2f} -> {pol['f_after']:.2f}, "
+                     f"phi {pol['phi_before']:.4g} -> {pol['phi_after']:.4g}"
+                     + ("" if pol["accepted"] else " (kept the unpolished plan)"))
+    lines.append("  data collected vs required (Mbit):")
+    req = dict(zip(m.sensor_ids, m.required_data.tolist(), strict=True))
+    got = t.collected
+    for sid in m.sensor_ids:
+        ok = "ok" if got[sid] >= req[sid] else "SHORT"
+        lines.append(f"    {sid:<12} {got[sid]:10.1f} / {req[sid]:<8.1f} {ok}")
+    lines.append("  constraints (simulator):")
+    lines.extend("    " + row for row in verdicts.table().splitlines())
+    if out:
+        lines.append(f"wrote {out}")
+    return "\n".join(lines)
+
+
+def _violations(plan: Any, verdicts: Any) -> list[str]:
+    b = plan.breakdown
+    out = []
+    if b["v3"] > 0:
+        out.append(f"C3 bandwidth exceeded by {b['v3']:.4g} Mbit/s in total")
+    for sid, short in b["shortfall"].items():
+        if short > 0:
+            out.append(f"C4 sensor '{sid}' short by {short:.4g} Mbit")
+    if b["l_vio"] > 0:
+        out.append(f"C5 path runs {b['l_vio']:.4g} m inside obstacles")
+    for v in verdicts:
+        if not v.passed:
+            out.append(f"sim {v.name} {v.title}: FAIL, margin {v.margin:.4g} {v.unit}; {v.detail}")
+    if plan.polish and plan.polish.get("unserved"):
+        out.extend(plan.polish["unserved"])
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    from lamde_mission.commands._common import load_map_or_fail
+    from lamde_mission.errors import UsageError
+    from lamde_mission.formats import MissionFileError, format_for
+
+    # check every output before the (long) optimisation, so bad input fails fast
+    try:
+        fmt = format_for(args.output, args.format)
+    except MissionFileError as exc:
+        raise UsageError(f"-o/--output: {exc}") from None
+    if args.plot and not args.plot.lower().endswith((".png", ".svg")):
+        raise UsageError(f"--plot: {args.plot}: image format must be PNG or SVG (.png or .svg)")
+    if args.population < 5:
+        raise UsageError(f"--population: must be >= 5, got {args.population}")
+    if args.budget < args.population:
+        raise UsageError(f"--budget: must be >= the population ({args.population}), "
+                         f"got {args.budget}")
+    m = load_map_or_fail(args.map)
+
+    from lamde_mission.api import plan as make_plan
+    from lamde_mission.formats import write_mission
+    from lamde_mission.items import plan_to_items
+    from sim import replay, verify
+
+    progress = None if args.quiet else _ProgressBar()
+    plan = make_plan(
+        m,
+        seed=args.seed,
+        budget=args.budget,
+        population=args.population,
+        configurator=args.configurator,
+        variable_length=not args.fixed_length,
+        polish=not args.no_polish,
+        progress=progress,
+    )
+    items = plan_to_items(plan, m, finish=args.finish)
+    timeline = replay(items, m)
+    verdicts = verify(timeline, m)
+    feasible = plan.feasible and verdicts.passed
+    if not feasible and not args.allow_infeasible:
+        if not args.quiet:
+            print(_summary(plan, m, timeline, verdicts, None))
+        print(f"lamde-mission plan: no feasible mission found for {args.map} "
+              f"(budget {args.budget}, seed {args.seed}); nothing written:", file=sys.stderr)
+        for line in _violations(plan, verdicts):
+            print(f"  {line}", file=sys.stderr)
+        print("  try a larger --budget, another --seed, or --allow-infeasible to write it anyway",
+              file=sys.stderr)
+        return 1
+    write_mission(args.output, plan, m, fmt, finish=args.finish)
+    if args.plot:
+        from lamde_mission.plot import plot_mission
+
+        plot_mission(m, args.plot, timeline=timeline, plan=plan)
+    if args.report:
+        from lamde_mission.atomic import write_text_atomic
+
+        report = {"plan": plan.to_dict(), "verdicts": verdicts.to_dict(),
+                  "map": args.map, "output": args.output, "format": fmt}
+        write_text_atomic(args.report, json.dumps(report, indent=2))
+    if not args.quiet:
+        print(_summary(plan, m, timeline, verdicts, args.output))
+    if not feasible:
+        print("lamde-mission plan: the mission is INFEASIBLE (written because of "
+              "--allow-infeasible):", file=sys.stderr)
+        for line in _violations(plan, verdicts):
+            print(f"  {line}", file=sys.stderr)
+        return 1
+    return 0

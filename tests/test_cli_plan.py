@@ -1,0 +1,99 @@
+"""`lamde-mission plan` through a subprocess: exit codes, files written (or not), summary."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from tests.conftest import MAPS
+
+DEMO = MAPS / "small-demo.json"
+
+
+def _cli(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "lamde_mission.cli", *map(str, args)],
+                          capture_output=True, text=True, timeout=300, cwd=cwd)
+
+
+def test_plan_writes_plan_plot_report_and_verifies(tmp_path: Path) -> None:
+    out, png, rep = tmp_path / "m.plan", tmp_path / "m.png", tmp_path / "r.json"
+    r = _cli("plan", DEMO, "-o", out, "--plot", png, "--report", rep, "--budget", 3000)
+    assert r.returncode == 0, r.stderr
+    assert "constraints (simulator)" in r.stdout and "C5" in r.stdout
+    assert "gen" in r.stderr and "evals" in r.stderr  # progress on stderr
+    doc = json.loads(out.read_text())
+    assert doc["fileType"] == "Plan" and doc["mission"]["items"]
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    report = json.loads(rep.read_text())
+    assert report["verdicts"]["passed"] and report["plan"]["feasible"]
+    v = _cli("verify", DEMO, out)
+    assert v.returncode == 0, v.stdout + v.stderr
+
+
+def test_plan_same_seed_same_file(tmp_path: Path) -> None:
+    a, b = tmp_path / "a.waypoints", tmp_path / "b.waypoints"
+    for path in (a, b):
+        r = _cli("plan", DEMO, "-o", path, "--budget", 1500, "--seed", 7, "--quiet")
+        assert r.returncode == 0, r.stderr
+        assert r.stdout == ""
+    assert a.read_text() == b.read_text()
+    assert a.read_text().startswith("QGC WPL 110")
+
+
+def test_infeasible_map_writes_nothing_unless_allowed(tmp_path: Path) -> None:
+    m = json.loads(DEMO.read_text())
+    m["sensors"][0]["required_data"] = 1e6  # no hover time can deliver this
+    mp = tmp_path / "greedy.json"
+    mp.write_text(json.dumps(m))
+    out = tmp_path / "x.plan"
+    r = _cli("plan", mp, "-o", out, "--budget", 600, "--quiet")
+    assert r.returncode == 1
+    assert not out.exists() and list(tmp_path.iterdir()) == [mp]
+    assert "nothing written" in r.stderr and "C4 sensor" in r.stderr
+    assert "T_max too small" in r.stderr
+    r = _cli("plan", mp, "-o", out, "--budget", 600, "--quiet", "--allow-infeasible")
+    assert r.returncode == 1 and out.exists()
+    assert "INFEASIBLE" in r.stderr
+    assert _cli("verify", mp, out).returncode == 1
+
+
+@pytest.mark.parametrize(
+    ("args", "needle"),
+    [
+        (["-o", "x.txt"], "-o/--output"),
+        (["-o", "x.plan", "--plot", "x.jpg"], "--plot"),
+        (["-o", "x.plan", "--budget", "3"], "--budget"),
+    ],
+)
+def test_bad_input_exits_2_with_one_line(tmp_path: Path, args: list[str], needle: str) -> None:
+    r = _cli("plan", DEMO, *args, cwd=tmp_path)
+    assert r.returncode == 2
+    assert needle in r.stderr and "Traceback" not in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_bad_map_exits_2(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"area": {"width": 10, "height": 10}, "start": [0, 0], "end": [1, 1]}')
+    r = _cli("plan", bad, "-o", tmp_path / "x.plan")
+    assert r.returncode == 2 and "sensors: required field is missing" in r.stderr
+    assert not (tmp_path / "x.plan").exists()
+
+
+def test_help_is_fast_and_lists_commands() -> None:
+    code = ("import sys, time; t = time.perf_counter(); from lamde_mission.cli import "
+            "build_parser; build_parser().format_help(); "
+            "heavy = [m for m in ('numba', 'cvxpy', 'matplotlib', 'mavsdk', 'torch', 'scipy') "
+            "if m in sys.modules]; print(heavy)")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert r.stdout.strip() == "[]", r.stdout + r.stderr
+    r = _cli("--help")
+    for cmd in ("plan", "verify", "show", "check", "schema", "generate"):
+        assert cmd in r.stdout
+    for cmd in ("plan", "verify", "show", "check", "schema", "generate"):
+        assert _cli(cmd, "--help").returncode == 0
