@@ -1,0 +1,135 @@
+"""`lamde-mission bench`: every optimiser x task x run on the same budget (resumable JSON lines)."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shlex
+import sys
+
+from lamde_mission.errors import UsageError
+
+_DEFAULT_SUITE = "examples/maps/suite"
+_DEFAULT_OUT = "results"
+_DEFAULT_RUNS = 25
+_DEFAULT_BUDGET = 10_000
+# --best-known: the protocol for the best-known solutions (100 x the budget, 5 runs each, the
+# strongest optimisers); planner_core.bench.runner.BEST_KNOWN_* hold the same values
+_BK_RUNS = 5
+_BK_BUDGET = 1_000_000
+_BK_OUT = "results-best-known"
+
+
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    p = sub.add_parser(
+        "bench",
+        help="compare optimisers on the benchmark suite (same maps, same budget)",
+        description="Run every optimiser x task x run with the same evaluation budget and "
+        "independent seeds; each finished run is appended to OUT/results.jsonl at once, so an "
+        "interrupted benchmark resumes where it stopped (runs already there are skipped). A "
+        "feasible run that beats a task's best-known f updates SUITE_best_known.json beside the "
+        "suite folder (e.g. examples/maps/suite_best_known.json). "
+        "Then: `lamde-mission report OUT -o docs/results.md`.",
+    )
+    p.add_argument("--suite", default=_DEFAULT_SUITE, help=f"map folder (default {_DEFAULT_SUITE})")
+    p.add_argument("--tasks", nargs="+", metavar="T", help="only these tasks (file stems, e.g. "
+                   "T01 T02 or T01,T02; default all maps in the suite)")
+    p.add_argument("--optimizers", "--optimisers", nargs="+", metavar="NAME", dest="optimizers",
+                   help="optimisers to run (space or comma separated; default all; "
+                   "--list shows them)")
+    p.add_argument("--runs", type=int, help=f"runs per optimiser and task (default "
+                   f"{_DEFAULT_RUNS}; {_BK_RUNS} with --best-known)")
+    p.add_argument("--budget", type=int, help=f"evaluations per run, initial population "
+                   f"included (default {_DEFAULT_BUDGET:,}; {_BK_BUDGET:,} with --best-known)")
+    p.add_argument("--jobs", type=int, help="worker processes (default: the CPU count; 0 = run "
+                   "in this process)")
+    p.add_argument("--out", help=f"results folder (default {_DEFAULT_OUT}/; {_BK_OUT}/ with "
+                   "--best-known)")
+    p.add_argument("--seed", type=int, default=0, help="base seed; run r of task t uses a "
+                   "seed derived from (seed, t, r) (default 0)")
+    p.add_argument("--best-known", action="store_true", help="the best-known protocol: "
+                   f"budget {_BK_BUDGET:,}, {_BK_RUNS} runs, the strongest optimisers (cmaes, "
+                   "de-adaptive, de-adaptive-fixedlen), out "
+                   f"{_BK_OUT}/ (each can still be overridden)")
+    p.add_argument("--best-known-file", metavar="PATH", help="best-known file to update "
+                   "(default SUITE_best_known.json beside the suite folder)")
+    p.add_argument("--no-best-known-update", action="store_true",
+                   help="do not touch the best-known file")
+    p.add_argument("--list", action="store_true", help="list the optimisers and exit")
+    p.add_argument("--quiet", action="store_true", help="print only the summary")
+    return p
+
+
+def _names(values: list[str] | None) -> list[str] | None:
+    if not values:
+        return None
+    return [n for v in values for n in v.split(",") if n]
+
+
+def _command(args: argparse.Namespace, optimisers: list[str], tasks: list[str] | None) -> str:
+    """The exact command (every option spelled out), recorded with the results."""
+    parts = ["lamde-mission", "bench", "--suite", args.suite]
+    if tasks:
+        parts += ["--tasks", *tasks]
+    parts += ["--optimizers", ",".join(optimisers), "--runs", str(args.runs),
+              "--budget", str(args.budget), "--jobs", str(args.jobs), "--out", args.out,
+              "--seed", str(args.seed)]
+    if args.best_known_file:
+        parts += ["--best-known-file", args.best_known_file]
+    if args.no_best_known_update:
+        parts.append("--no-best-known-update")
+    return shlex.join(parts)
+
+
+def run(args: argparse.Namespace) -> int:
+    from planner_core.baselines import REGISTRY
+    from planner_core.bench.runner import BEST_KNOWN_OPTIMISERS, BenchError, run_bench
+
+    if args.list:
+        for name, spec in REGISTRY.items():
+            print(f"{name:22s} {spec.description}")
+        return 0
+    bk = args.best_known
+    args.runs = args.runs if args.runs is not None else (_BK_RUNS if bk else _DEFAULT_RUNS)
+    args.budget = (args.budget if args.budget is not None
+                   else (_BK_BUDGET if bk else _DEFAULT_BUDGET))
+    args.out = args.out or (_BK_OUT if bk else _DEFAULT_OUT)
+    if args.jobs is None:
+        args.jobs = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (
+            os.cpu_count() or 1)
+    optimisers = _names(args.optimizers) or (list(BEST_KNOWN_OPTIMISERS) if bk
+                                             else list(REGISTRY))
+    tasks = _names(args.tasks)
+    if args.runs < 1:
+        raise UsageError(f"--runs must be >= 1 (got {args.runs})")
+    if args.budget < 1:
+        raise UsageError(f"--budget must be >= 1 (got {args.budget})")
+    if args.jobs < 0:
+        raise UsageError(f"--jobs must be >= 0 (got {args.jobs})")
+    unknown = [o for o in optimisers if o not in REGISTRY]
+    if unknown:
+        raise UsageError(f"--optimizers: unknown {', '.join(unknown)}; choose from "
+                         f"{', '.join(REGISTRY)}")
+    command = _command(args, optimisers, tasks)
+    best_known: str | bool = False if args.no_best_known_update else (
+        args.best_known_file or True)
+
+    def log(msg: str) -> None:
+        if not args.quiet:
+            print(msg, flush=True)
+
+    log(command)
+    try:
+        s = run_bench(args.suite, optimisers, runs=args.runs, budget=args.budget, out=args.out,
+                      tasks=tasks, jobs=args.jobs, base_seed=args.seed, best_known=best_known,
+                      command=command, log=log)
+    except (BenchError, FileNotFoundError) as exc:
+        raise UsageError(str(exc)) from None
+    print(f"bench: {s.done} run(s) done, {s.skipped} already present, {len(s.failed)} failed; "
+          f"results in {s.results}")
+    if s.best_known_updates:
+        print(f"bench: best-known improved on {', '.join(sorted(set(s.best_known_updates)))}")
+    for rec in s.failed:
+        print(f"failed: {rec['optimiser']} {rec['task']} run {rec['run']}: {rec['error']}",
+              file=sys.stderr)
+    return 1 if s.failed else 0

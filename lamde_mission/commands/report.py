@@ -1,0 +1,64 @@
+"""`lamde-mission report RESULTS -o docs/results.md`: the benchmark's markdown table and figures."""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+
+from lamde_mission.errors import UsageError
+
+
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    p = sub.add_parser(
+        "report",
+        help="write the markdown report of a benchmark folder (table, limits, figures)",
+        description="Summarise RESULTS/results.jsonl like the paper's Table 2: mean ± std of "
+        "f + 10 phi per task, best bold, Wilcoxon rank-sum marks (+ ~ -) against the reference "
+        "column, feasibility, wall time, ratios to the best-known f and the lower bound, a "
+        "convergence plot per task and the best paths on four tasks (PNGs beside the report).",
+    )
+    p.add_argument("results", help="benchmark folder (written by `lamde-mission bench`)")
+    p.add_argument("-o", "--output", default="docs/results.md",
+                   help="markdown file to write (default docs/results.md)")
+    p.add_argument("--reference", default="de-adaptive",
+                   help="the column the marks compare against (default de-adaptive)")
+    p.add_argument("--suite", help="map folder (default: the one recorded in RESULTS/meta.json)")
+    p.add_argument("--figures", metavar="DIR",
+                   help="folder for the PNGs (default: beside the report, e.g. docs/results/)")
+    p.add_argument("--path-tasks", nargs="+", metavar="T",
+                   help="tasks of the best-path figure (default: four spread over the suite)")
+    p.add_argument("--no-limits", action="store_true",
+                   help="leave out the lower-bound / best-known section")
+    return p
+
+
+def _command(args: argparse.Namespace, tasks: list[str] | None) -> str:
+    parts = ["lamde-mission", "report", args.results, "-o", args.output,
+             "--reference", args.reference]
+    if args.suite:
+        parts += ["--suite", args.suite]
+    if args.figures:
+        parts += ["--figures", args.figures]
+    if tasks:
+        parts += ["--path-tasks", *tasks]
+    if args.no_limits:
+        parts.append("--no-limits")
+    return shlex.join(parts)
+
+
+def run(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from planner_core.bench.report import build_report
+
+    if not (Path(args.results) / "results.jsonl").exists():
+        raise UsageError(f"{args.results}: no results.jsonl (run `lamde-mission bench` first)")
+    tasks = [t for v in args.path_tasks for t in v.split(",") if t] if args.path_tasks else None
+    try:
+        out = build_report(args.results, args.output, reference=args.reference,
+                           suite=args.suite, figures=args.figures, path_tasks=tasks,
+                           limits=not args.no_limits, command=_command(args, tasks))
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    print(f"report: wrote {out}")
+    return 0

@@ -1,0 +1,150 @@
+"""Optimisers compared by the benchmark, behind one interface and one budget accounting.
+
+Each optimiser lives in its own module with ``optimise(problem, budget, seed) -> OptimiseResult``
+(x, f, phi, evaluations, history). The registry below maps names to those functions (imported
+lazily, so listing names never imports cma or scipy). `optimise(name, problem, budget, seed)`
+builds the problem in the variant's encoding (variable- or fixed-length), wraps it in a
+`BudgetedProblem` so nothing can be evaluated past the budget, and checks the count.
+
+Our DE variants report the raw DE result (no cvxpy hover polish), so the comparison is on the
+optimiser alone; `lamde_mission.api.plan` adds the polish for users.
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass, field
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from planner_core.baselines.budget import (
+    BudgetedProblem,
+    BudgetExceeded,
+    Criterion,
+    Trace,
+    as_budgeted,
+)
+
+__all__ = [
+    "BudgetExceeded",
+    "BudgetedProblem",
+    "Criterion",
+    "OptimiseResult",
+    "OptimiserSpec",
+    "REGISTRY",
+    "Trace",
+    "as_budgeted",
+    "get",
+    "names",
+    "optimise",
+    "problem_for",
+]
+
+
+class OptimiseResult(NamedTuple):
+    """Best solution found (problem space), its f and phi, evaluations spent, convergence trace."""
+
+    x: np.ndarray
+    f: float
+    phi: float
+    evaluations: int
+    history: Trace
+
+
+@dataclass(frozen=True)
+class OptimiserSpec:
+    """A registry entry: where the function lives, fixed keyword arguments, the encoding used."""
+
+    name: str
+    target: str  # "module:function"
+    description: str
+    kwargs: dict[str, Any] = field(default_factory=dict)
+    variable_length: bool | None = True  # None: whatever the given problem uses
+
+    def function(self) -> Any:
+        module, func = self.target.split(":")
+        return getattr(importlib.import_module(module), func)
+
+
+def _de(configurator: str, variable_length: bool) -> OptimiserSpec:
+    suffix = "" if variable_length else "-fixedlen"
+    enc = "variable-length" if variable_length else "fixed-length (all I_max points active)"
+    return OptimiserSpec(
+        name=f"de-{configurator}{suffix}",
+        target="planner_core.baselines.de:optimise",
+        description=f"our DE, {configurator} configurator, {enc}, population 100, no polish",
+        kwargs={"configurator": configurator},
+        variable_length=variable_length,
+    )
+
+
+#: every optimiser the benchmark knows, in the report's column order
+REGISTRY: dict[str, OptimiserSpec] = {
+    s.name: s
+    for s in (
+        _de("adaptive", True),
+        _de("adaptive", False),
+        _de("fixed", True),
+        _de("fixed", False),
+        _de("random", True),
+        _de("random", False),
+        OptimiserSpec(
+            "cmaes",
+            "planner_core.baselines.cmaes:optimise",
+            "pycma CMA-ES on f + 10 phi in the unit box (BoundTransform), sigma0 0.3, default "
+            "popsize, restarts within the budget",
+        ),
+        OptimiserSpec(
+            "scipy-de",
+            "planner_core.baselines.scipy_de:optimise",
+            "scipy.optimize.differential_evolution on f + 10 phi (best1bin, F in (0.5, 1), "
+            "CR 0.7, deferred updating), population 100, restarts within the budget",
+        ),
+        OptimiserSpec(
+            "random-search",
+            "planner_core.baselines.random_search:optimise",
+            "uniform random sampling, best under Deb's rule (the floor)",
+        ),
+    )
+}
+
+
+def names() -> list[str]:
+    """Registered optimiser names, in the report's column order."""
+    return list(REGISTRY)
+
+
+def get(name: str) -> OptimiserSpec:
+    """The registry entry for `name`; KeyError names the valid choices."""
+    try:
+        return REGISTRY[name]
+    except KeyError:
+        raise KeyError(f"unknown optimiser '{name}'; choose from {', '.join(REGISTRY)}") from None
+
+
+def problem_for(name: str, problem: Any) -> Any:
+    """The problem in the encoding optimiser `name` uses (a new fixed-length Problem if needed)."""
+    spec = get(name)
+    want = spec.variable_length
+    if want is None or getattr(problem, "variable_length", want) == want:
+        return problem
+    from planner_core.problem import Problem
+
+    return Problem(problem.map, variable_length=want)
+
+
+def optimise(name: str, problem: Any, budget: int, seed: int) -> OptimiseResult:
+    """Run optimiser `name` on `problem` with at most `budget` evaluations; same seed, same result.
+
+    The returned x is in the encoding of `problem_for(name, problem)` (use that problem to decode).
+    """
+    spec = get(name)
+    budgeted = BudgetedProblem(problem_for(name, problem), budget)
+    res = spec.function()(budgeted, int(budget), int(seed), **spec.kwargs)
+    if res.evaluations != budgeted.count or budgeted.count > budget:
+        raise RuntimeError(
+            f"{name}: reported {res.evaluations} evaluations, counted {budgeted.count} "
+            f"(budget {budget})"
+        )
+    return res

@@ -1,0 +1,262 @@
+"""What is possible on each suite task: the LB cache and the best-known solutions beside the suite.
+
+Both files sit beside the suite folder, not in it (the folder holds exactly the maps):
+for `examples/maps/suite/` they are `examples/maps/suite_lower_bounds.json` and
+`examples/maps/suite_best_known.json`. The first caches `planner_core.bounds.lower_bound` per
+map, keyed by the map file's SHA-256 (a changed map is recomputed). The second holds, per task,
+the best feasible f
+found so far, its hover points/times, and who found it (optimiser, seed, budget, command); the
+map's witness plan is the initial entry, and any benchmark run that finds a better feasible f
+replaces it (re-checked on the map before it is stored; a file lock keeps concurrent runners from
+losing each other's updates).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import datetime as _dt
+import fcntl
+import hashlib
+import math
+import os
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from planner_core.bench._io import read_json, write_json_atomic
+
+__all__ = [
+    "BEST_KNOWN_PROTOCOL",
+    "BestKnown",
+    "best_known_path",
+    "lower_bounds_path",
+    "file_sha256",
+    "suite_task_files",
+    "lower_bounds",
+    "verify_plan",
+    "write_json_atomic",
+]
+
+
+
+#: the command that runs the best-known protocol (1,000,000 evaluations x 5 runs, strongest
+#: optimisers; see lamde_mission.commands.bench)
+BEST_KNOWN_PROTOCOL = "lamde-mission bench --best-known --suite examples/maps/suite"
+
+
+def best_known_path(suite: str | Path) -> Path:
+    """`<parent>/<suite name>_best_known.json`, beside the suite folder."""
+    folder = Path(suite)
+    return folder.parent / f"{folder.name}_best_known.json"
+
+
+def lower_bounds_path(suite: str | Path) -> Path:
+    """`<parent>/<suite name>_lower_bounds.json`, beside the suite folder."""
+    folder = Path(suite)
+    return folder.parent / f"{folder.name}_lower_bounds.json"
+
+
+def file_sha256(path: str | Path) -> str:
+    """Hex SHA-256 of a file's bytes (identifies the exact map a result belongs to)."""
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def suite_task_files(suite: str | Path) -> dict[str, Path]:
+    """Task name (file stem) -> map file, for every map JSON in the suite folder, sorted."""
+    folder = Path(suite)
+    if not folder.is_dir():
+        raise FileNotFoundError(f"suite folder not found: {folder}")
+    out = {}
+    for p in sorted(folder.glob("*.json")):
+        if p.name.startswith((".", "_")):
+            continue
+        out[p.stem] = p
+    return out
+
+
+@contextlib.contextmanager
+def _locked(path: Path) -> Iterator[None]:
+    """An exclusive advisory lock for a read-modify-write of `path`, held on its folder (the file
+    itself is replaced atomically, so it cannot carry the lock; no lock file is left behind)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd = os.open(path.parent, os.O_RDONLY)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        fcntl.flock(fd, fcntl.LOCK_UN)
+        os.close(fd)
+
+
+# ----------------------------------------------------------------------------- lower bounds
+
+
+def lower_bounds(
+    suite: str | Path,
+    tasks: list[str] | None = None,
+    *,
+    cache: str | Path | None = None,
+    compute_missing: bool = True,
+) -> dict[str, dict[str, Any]]:
+    """LB per task from the cache beside the suite; missing or stale entries are computed and
+    stored (unless `compute_missing` is False, then they are left out)."""
+    from planner_core.bounds import DEFAULT_SPACING, lower_bound
+
+    files = suite_task_files(suite)
+    names = list(files) if tasks is None else [t for t in tasks if t in files]
+    path = Path(cache) if cache is not None else lower_bounds_path(suite)
+    out: dict[str, dict[str, Any]] = {}
+    todo = []
+    entries = read_json(path).get("tasks", {})
+    for name in names:
+        sha = file_sha256(files[name])
+        e = entries.get(name)
+        if e is not None and e.get("sha256") == sha:
+            out[name] = e
+        else:
+            todo.append((name, sha))
+    if todo and compute_missing:
+        fresh = {}
+        for name, sha in todo:
+            lb = lower_bound(files[name], DEFAULT_SPACING)
+            fresh[name] = {"sha256": sha, **lb.to_dict()}
+        with _locked(path):
+            data = read_json(path)
+            tasks_all = {**data.get("tasks", {}), **fresh}
+            write_json_atomic(path, {
+                "description": "Lower bound on f per map (planner_core.bounds.lower_bound), "
+                "keyed by the map file's SHA-256: LB = alpha * T_fly(|end - start|) + "
+                "(1 - alpha) * H_LB (LP over <= 25 m cells; C3, C5 and flight relaxed).",
+                "tasks": dict(sorted(tasks_all.items())),
+            })
+        out.update(fresh)
+    return {n: out[n] for n in names if n in out}
+
+
+# ----------------------------------------------------------------------------- best known
+
+
+def verify_plan(
+    map_path: str | Path, hover_points: Any, hover_times: Any
+) -> tuple[float, float]:
+    """(f, phi) of a decoded plan (hover points and times in order) on the map."""
+    from planner_core.problem import Problem
+
+    problem = Problem(map_path, variable_length=True)
+    hp = np.asarray(hover_points, dtype=float).reshape(-1, 2)
+    ht = np.asarray(hover_times, dtype=float).reshape(-1)
+    f, phi = problem.evaluate(problem.encode(hp, ht)[None, :])
+    return float(f[0]), float(phi[0])
+
+
+def _now() -> str:
+    return _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
+
+
+class BestKnown:
+    """The best-known feasible solution per task, stored in `path` (usually beside the suite)."""
+
+    def __init__(self, path: str | Path):
+        self.path = Path(path)
+
+    def load(self) -> dict[str, dict[str, Any]]:
+        """Task -> entry (f, map_sha256, hover_points, hover_times, optimiser, seed, ...)."""
+        return dict(read_json(self.path).get("tasks", {}))
+
+    def f_values(self, files: dict[str, Path]) -> dict[str, float]:
+        """Best-known f per task whose entry matches the current map file (stale ones left out)."""
+        entries = self.load()
+        out = {}
+        for name, p in files.items():
+            e = entries.get(name)
+            if e is not None and e.get("map_sha256") == file_sha256(p):
+                out[name] = float(e["f"])
+        return out
+
+    def ensure(self, files: dict[str, Path], command: str = "") -> dict[str, float]:
+        """Seed missing or stale entries (the map file changed) from each map's witness plan;
+        return the best-known f per task (tasks without a witness or entry are left out)."""
+        from planner_core.mapio import load_map
+
+        with _locked(self.path):
+            data = read_json(self.path)
+            tasks = data.setdefault("tasks", {})
+            changed = False
+            for name, p in files.items():
+                sha = file_sha256(p)
+                e = tasks.get(name)
+                if e is not None and e.get("map_sha256") == sha:
+                    continue
+                w = load_map(p).spec.witness
+                if w is None:
+                    continue
+                f, phi = verify_plan(p, w.hover_points, w.hover_times)
+                if phi != 0.0:
+                    continue
+                tasks[name] = {
+                    "f": f,
+                    "map_sha256": sha,
+                    "optimiser": "witness",
+                    "seed": None,
+                    "budget": None,
+                    "run": None,
+                    "command": "stored witness of the map (planner_core.suite)",
+                    "found": _now(),
+                    "hover_points": [list(map(float, q)) for q in w.hover_points],
+                    "hover_times": [float(t) for t in w.hover_times],
+                }
+                changed = True
+            if changed:
+                self._write(data)
+        return self.f_values(files)
+
+    def offer(
+        self,
+        task: str,
+        map_path: str | Path,
+        hover_points: Any,
+        hover_times: Any,
+        *,
+        optimiser: str,
+        seed: int | None,
+        budget: int | None,
+        run: int | None = None,
+        command: str = "",
+    ) -> bool:
+        """Store this plan if it is feasible on the map and beats the stored f; True if stored."""
+        f, phi = verify_plan(map_path, hover_points, hover_times)
+        if phi != 0.0 or not math.isfinite(f):
+            return False
+        sha = file_sha256(map_path)
+        with _locked(self.path):
+            data = read_json(self.path)
+            tasks = data.setdefault("tasks", {})
+            e = tasks.get(task)
+            if e is not None and e.get("map_sha256") == sha and float(e["f"]) <= f:
+                return False
+            tasks[task] = {
+                "f": f,
+                "map_sha256": sha,
+                "optimiser": optimiser,
+                "seed": seed,
+                "budget": budget,
+                "run": run,
+                "command": command,
+                "found": _now(),
+                "hover_points": np.asarray(hover_points, dtype=float).reshape(-1, 2).tolist(),
+                "hover_times": np.asarray(hover_times, dtype=float).reshape(-1).tolist(),
+            }
+            self._write(data)
+        return True
+
+    def _write(self, data: dict[str, Any]) -> None:
+        out = {
+            "description": "Best-known feasible f per task (lower is better) with its plan and "
+            "provenance: initially the map's witness, replaced whenever a benchmark run finds a "
+            "better feasible f (checked on the map before it is stored).",
+            "protocol": BEST_KNOWN_PROTOCOL,
+            "tasks": dict(sorted(data.get("tasks", {}).items())),
+        }
+        write_json_atomic(self.path, out)

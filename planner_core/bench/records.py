@@ -1,0 +1,141 @@
+"""Benchmark results as JSON lines: one finished run per line, appended and flushed as it ends.
+
+A run killed mid-write leaves a truncated last line: reading skips it, and opening the file for
+appending first cuts it off, so the next record starts on a fresh line. A (optimiser, task, run)
+key already present is never written again, so an interrupted benchmark resumes where it stopped.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Iterable
+from pathlib import Path
+from typing import IO, Any, NamedTuple
+
+__all__ = ["RESULTS_FILE", "Key", "key_of", "read_records", "ResultsWriter", "ReadReport"]
+
+#: the results file inside a benchmark output folder
+RESULTS_FILE = "results.jsonl"
+
+
+class Key(NamedTuple):
+    optimiser: str
+    task: str
+    run: int
+
+
+def key_of(record: dict[str, Any]) -> Key:
+    """The identity of a run record."""
+    return Key(str(record["optimiser"]), str(record["task"]), int(record["run"]))
+
+
+class ReadReport(NamedTuple):
+    """Records read (first of each key), and what was skipped."""
+
+    records: list[dict[str, Any]]
+    truncated_tail: bool  # the last line was cut off (an interrupted write)
+    bad_lines: list[int]  # 1-based line numbers that were not valid records (tail excluded)
+    duplicates: int
+
+
+_REQUIRED = ("optimiser", "task", "run", "f", "phi", "score", "evaluations")
+
+
+def read_records(path: str | Path) -> ReadReport:
+    """All valid records of a results file (missing file: none), first occurrence per key."""
+    path = Path(path)
+    if not path.exists():
+        return ReadReport([], False, [], 0)
+    data = path.read_bytes()
+    lines = data.split(b"\n")
+    tail_open = not data.endswith(b"\n") and data != b""
+    records: list[dict[str, Any]] = []
+    seen: set[Key] = set()
+    bad: list[int] = []
+    truncated = False
+    dup = 0
+    for i, raw in enumerate(lines):
+        if not raw.strip():
+            continue
+        last = i == len(lines) - 1
+        try:
+            rec = json.loads(raw)
+            if not isinstance(rec, dict) or any(k not in rec for k in _REQUIRED):
+                raise ValueError("not a run record")
+            k = key_of(rec)
+        except (ValueError, TypeError, KeyError):
+            if last and tail_open:
+                truncated = True
+            else:
+                bad.append(i + 1)
+            continue
+        if k in seen:
+            dup += 1
+            continue
+        seen.add(k)
+        records.append(rec)
+    return ReadReport(records, truncated, bad, dup)
+
+
+def _repair_tail(path: Path) -> None:
+    """Cut an unterminated last line (a partial record) or terminate a complete one."""
+    if not path.exists():
+        return
+    with path.open("rb+") as fh:
+        fh.seek(0, os.SEEK_END)
+        size = fh.tell()
+        if size == 0:
+            return
+        fh.seek(size - 1)
+        if fh.read(1) == b"\n":
+            return
+        fh.seek(0)
+        data = fh.read()
+        cut = data.rfind(b"\n") + 1  # 0 when there is no newline at all
+        tail = data[cut:]
+        try:
+            complete = isinstance(json.loads(tail), dict)
+        except ValueError:
+            complete = False
+        if complete:
+            fh.seek(0, os.SEEK_END)
+            fh.write(b"\n")
+        else:
+            fh.truncate(cut)
+        fh.flush()
+        os.fsync(fh.fileno())
+
+
+class ResultsWriter:
+    """Appends records to a results file, one line each, flushed and synced per record."""
+
+    def __init__(self, path: str | Path):
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        _repair_tail(self.path)
+        self._fh: IO[str] | None = self.path.open("a", encoding="utf-8")
+
+    def write(self, record: dict[str, Any]) -> None:
+        """Append one record as a single JSON line and push it to disk."""
+        if self._fh is None:
+            raise ValueError("writer is closed")
+        line = json.dumps(record, separators=(",", ":"))
+        self._fh.write(line + "\n")
+        self._fh.flush()
+        os.fsync(self._fh.fileno())
+
+    def write_all(self, records: Iterable[dict[str, Any]]) -> None:
+        for r in records:
+            self.write(r)
+
+    def close(self) -> None:
+        if self._fh is not None:
+            self._fh.close()
+            self._fh = None
+
+    def __enter__(self) -> ResultsWriter:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

@@ -1,0 +1,426 @@
+"""Markdown report of a benchmark folder, like the paper's Table 2, with figures (matplotlib Agg).
+
+Sections: the commands that produced the results, the setup, the penalised-score table (mean +-
+std per task, best mean bold, Wilcoxon marks and +/~/- counts against the reference column), a
+per-optimiser summary (feasibility, wall time, mean rank), feasibility per task, the results
+against the limits (mean f of feasible runs / best-known and / LB), one convergence plot per task
+and a figure of each optimiser's best path on four tasks.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import os
+from collections import defaultdict
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from planner_core.bench._io import read_json, write_bytes_atomic, write_text_atomic
+from planner_core.bench.records import RESULTS_FILE, read_records
+from planner_core.bench.stats import ALPHA, ScoreTable, score_table
+
+__all__ = ["DEFAULT_REFERENCE", "build_report", "order_optimisers", "format_table", "fmt"]
+
+#: the column the Wilcoxon marks compare against unless told otherwise
+DEFAULT_REFERENCE = "de-adaptive"
+
+
+def fmt(v: float) -> str:
+    """A score for the table: 1 decimal below 1e5, else 3 significant digits in e-notation."""
+    if v is None or not np.isfinite(v):
+        return "-" if v is None or np.isnan(v) else ("inf" if v > 0 else "-inf")
+    return f"{v:.1f}" if abs(v) < 1e5 else f"{v:.3e}"
+
+
+def order_optimisers(present: Sequence[str], reference: str | None) -> list[str]:
+    """Reference first, then the registry's order, then any other names alphabetically."""
+    from planner_core.baselines import REGISTRY
+
+    known = [o for o in REGISTRY if o in present and o != reference]
+    other = sorted(o for o in present if o not in REGISTRY and o != reference)
+    return ([reference] if reference in present else []) + known + other
+
+
+def format_table(table: ScoreTable) -> list[str]:
+    """Markdown lines of the score table (cells "mean ± std mark", best bold, counts row)."""
+    opts = table.optimisers
+    lines = ["| Task | " + " | ".join(_col(o, table.reference) for o in opts) + " |",
+             "|---|" + "---:|" * len(opts)]
+    for t in table.tasks:
+        cells = []
+        for o in opts:
+            c = table.cells[t][o]
+            if c.n == 0:
+                cells.append("-")
+                continue
+            body = f"{fmt(c.mean)} ± {fmt(c.std)}"
+            body = f"**{body}**" if c.best else body
+            cells.append(f"{body} {c.mark}".rstrip())
+        lines.append(f"| {t} | " + " | ".join(cells) + " |")
+    if table.reference is not None:
+        row = []
+        for o in opts:
+            if o == table.reference:
+                row.append("(reference)")
+            else:
+                p, s, m = table.counts[o]
+                row.append(f"{p}/{s}/{m}")
+        lines.append("| +/~/- | " + " | ".join(row) + " |")
+    return lines
+
+
+def _col(o: str, reference: str | None) -> str:
+    return f"{o} (ref)" if o == reference else o
+
+
+def _by(records: list[dict[str, Any]]) -> dict[str, dict[str, list[dict[str, Any]]]]:
+    out: dict[str, dict[str, list[dict[str, Any]]]] = defaultdict(lambda: defaultdict(list))
+    for r in records:
+        out[r["task"]][r["optimiser"]].append(r)
+    for per in out.values():
+        for runs in per.values():
+            runs.sort(key=lambda r: int(r["run"]))
+    return out
+
+
+def _rel(path: Path, start: Path) -> str:
+    return Path(os.path.relpath(path.resolve(), start.resolve())).as_posix()
+
+
+# ----------------------------------------------------------------------------- figures
+
+
+def _step_on_grid(ev: Sequence[int], values: Sequence[float], grid: np.ndarray) -> np.ndarray:
+    """Value current at each grid point (NaN before the first entry) of a step trace."""
+    ev_a = np.asarray(ev, dtype=float)
+    idx = np.searchsorted(ev_a, grid, side="right") - 1
+    v = np.asarray(values, dtype=float)
+    out = np.where(idx >= 0, v[np.clip(idx, 0, len(v) - 1)], np.nan)
+    return out
+
+
+def _save(fig: Any, path: Path) -> Path:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    return write_bytes_atomic(path, buf.getvalue())
+
+
+def _new_figure(figsize: tuple[float, float]) -> Any:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=figsize, layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def convergence_figure(task: str, per_opt: dict[str, list[dict[str, Any]]], opts: list[str],
+                       budget: int, path: Path) -> Path:
+    """Median (and 25-75 % band) of the incumbent's penalised score against evaluations."""
+    fig = _new_figure((6.4, 4.2))
+    ax = fig.add_subplot()
+    grid = np.linspace(0, budget, 201)[1:]
+    for i, o in enumerate(opts):
+        runs = per_opt.get(o, [])
+        if not runs:
+            continue
+        curves = []
+        for r in runs:
+            h = r["history"]
+            score = np.asarray(h["best_f"], float) + 10.0 * np.asarray(h["best_phi"], float)
+            curves.append(_step_on_grid(h["evaluations"], score, grid))
+        C = np.vstack(curves)
+        ok = ~np.all(np.isnan(C), axis=0)
+        g = grid[ok]
+        med = np.nanmedian(C[:, ok], axis=0)
+        lo, hi = np.nanpercentile(C[:, ok], [25, 75], axis=0)
+        color = f"C{i % 10}"
+        ax.plot(g, med, color=color, label=o, lw=1.4, ls="-" if i < 10 else "--")
+        ax.fill_between(g, lo, hi, color=color, alpha=0.15, lw=0)
+    ax.set_yscale("log")
+    ax.set_xlabel("evaluations")
+    ax.set_ylabel("best f + 10 phi (median, 25-75 %)")
+    ax.set_title(f"{task}: convergence")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7, ncols=2)
+    return _save(fig, path)
+
+
+def _draw_map(ax: Any, m: Any) -> None:
+    from matplotlib.patches import Circle, Polygon
+
+    ax.add_patch(Polygon([[0, 0], [m.width, 0], [m.width, m.height], [0, m.height]],
+                         closed=True, fill=False, ec="0.3", lw=0.8))
+    for c in m.spec.obstacles.circles:
+        ax.add_patch(Circle((c.x, c.y), c.radius, fc="0.55", ec="0.35", lw=0.4))
+    for poly in m.rectangle_polygons:
+        ax.add_patch(Polygon(poly, closed=True, fc="0.7", ec="0.4", lw=0.4))
+    for poly in m.nfz_polygons:
+        ax.add_patch(Polygon(poly, closed=True, fc=(0.9, 0.3, 0.3, 0.2), ec="tab:red", lw=0.8))
+    s = m.sensors
+    ax.scatter(s[:, 0], s[:, 1], s=10, marker="^", c="tab:green", zorder=4)
+    ax.plot(*m.start, marker="o", c="k", ms=6, zorder=5)
+    ax.plot(*m.end, marker="s", c="k", ms=6, zorder=5)
+    ax.set_xlim(-0.02 * m.width, 1.02 * m.width)
+    ax.set_ylim(-0.02 * m.height, 1.02 * m.height)
+    ax.set_aspect("equal")
+    ax.tick_params(labelsize=6)
+
+
+def paths_figure(tasks: list[str], maps: dict[str, Any], best: dict[str, dict[str, Any]],
+                 opts: list[str], path: Path,
+                 known: dict[str, dict[str, Any]] | None = None) -> Path:
+    """Each optimiser's best run (lowest score) drawn on each task's map, one panel per task;
+    `known[task]` (a best-known entry: hover_points, f, optimiser) is drawn in black."""
+    n = len(tasks)
+    cols = 2 if n > 1 else 1
+    rows = math.ceil(n / cols)
+    fig = _new_figure((5.2 * cols, 5.0 * rows))
+    for k, t in enumerate(tasks):
+        ax = fig.add_subplot(rows, cols, k + 1)
+        m = maps[t]
+        _draw_map(ax, m)
+        k_entry = (known or {}).get(t)
+        if k_entry is not None:
+            hp = np.asarray(k_entry["hover_points"], float).reshape(-1, 2)
+            P = np.vstack([m.start, hp, m.end])
+            ax.plot(P[:, 0], P[:, 1], color="k", lw=2.2, alpha=0.35, zorder=1,
+                    label=f"best known ({k_entry['optimiser']}): {fmt(k_entry['f'])}")
+        for i, o in enumerate(opts):
+            r = best.get(t, {}).get(o)
+            if r is None:
+                continue
+            hp = np.asarray(r["hover_points"], float).reshape(-1, 2)
+            P = np.vstack([m.start, hp, m.end])
+            tag = "" if r["feasible"] else " (infeasible)"
+            ax.plot(P[:, 0], P[:, 1], color=f"C{i % 10}", lw=1.2, marker=".", ms=4,
+                    ls="-" if r["feasible"] else ":", label=f"{o}: {fmt(r['score'])}{tag}")
+        ax.set_title(f"{t}: best path per optimiser (f + 10 phi)", fontsize=9)
+        ax.legend(fontsize=6, loc="best")
+    return _save(fig, path)
+
+
+def _spread(tasks: list[str], k: int = 4) -> list[str]:
+    if len(tasks) <= k:
+        return list(tasks)
+    idx = np.unique(np.round(np.linspace(0, len(tasks) - 1, k)).astype(int))
+    return [tasks[i] for i in idx]
+
+
+# ----------------------------------------------------------------------------- the report
+
+
+def build_report(
+    results_dir: str | Path,
+    output: str | Path,
+    *,
+    reference: str | None = DEFAULT_REFERENCE,
+    suite: str | Path | None = None,
+    figures: str | Path | None = None,
+    path_tasks: Sequence[str] | None = None,
+    limits: bool = True,
+    command: str = "",
+    alpha: float = ALPHA,
+) -> Path:
+    """Write the markdown report of `results_dir` to `output` (figures beside it); return it.
+
+    `reference` must be one of the optimisers present when given explicitly; the default falls
+    back to the first optimiser present. `figures`: folder for the PNGs (default: a folder named
+    after the report, e.g. docs/results/ for docs/results.md).
+    """
+    from planner_core.baselines import REGISTRY
+
+    results_dir = Path(results_dir)
+    output = Path(output)
+    read = read_records(results_dir / RESULTS_FILE)
+    records = read.records
+    if not records:
+        raise ValueError(f"no results in {results_dir / RESULTS_FILE}")
+    meta = read_json(results_dir / "meta.json")
+    present = sorted({r["optimiser"] for r in records})
+    if reference is not None and reference not in present:
+        if reference != DEFAULT_REFERENCE:
+            raise ValueError(f"reference '{reference}' has no results (have {', '.join(present)})")
+        reference = None
+    opts = order_optimisers(present, reference)
+    if reference is None:
+        reference = opts[0]
+        opts = order_optimisers(present, reference)
+    tasks = sorted({r["task"] for r in records})
+    by = _by(records)
+    budgets = sorted({int(r["budget"]) for r in records})
+    budget = budgets[-1]
+    scores = {t: {o: [r["score"] for r in by[t].get(o, [])] for o in opts} for t in tasks}
+    table = score_table(scores, tasks, opts, reference, alpha)
+    figures = Path(figures) if figures is not None else output.with_suffix("")
+    suite_dir = Path(suite) if suite is not None else (Path(meta["suite"]) if "suite" in meta
+                                                       else None)
+
+    L: list[str] = ["# Benchmark results", ""]
+    cmds = [c.get("command", "") for c in meta.get("commands", []) if c.get("command")]
+    if cmds:
+        L.append("Results produced by:")
+        L.append("")
+        L += [f"    {c}" for c in dict.fromkeys(cmds)]
+        L.append("")
+    if command:
+        L += ["Report produced by:", "", f"    {command}", ""]
+    runs_per = sorted({len(by[t][o]) for t in tasks for o in opts if by[t].get(o)})
+    L += [
+        "## Setup",
+        "",
+        f"- {len(tasks)} task(s) ({', '.join(tasks)}) from `{suite_dir}`; "
+        f"budget {budget:,} evaluations per run (initial population included); "
+        f"runs per optimiser and task: {', '.join(map(str, runs_per))}.",
+        "- Score = f + 10 * phi (lower is better; phi = 0 means feasible), as in the paper's "
+        "Table 2. Cells: mean ± std (ddof 0) over runs; best mean per task in bold.",
+        f"- Marks: Wilcoxon rank-sum test (`scipy.stats.ranksums`, two-sided, alpha {alpha}) of "
+        f"each optimiser against the reference **{reference}**: `+` the reference is "
+        "significantly better, `-` significantly worse, `~` no significant difference.",
+        "- Our DE variants report the raw DE result (no hover-time polish), so the comparison "
+        "is on the optimiser alone.",
+        "",
+        "| Optimiser | What it is |",
+        "|---|---|",
+    ]
+    for o in opts:
+        desc = REGISTRY[o].description if o in REGISTRY else "(not in the registry)"
+        L.append(f"| {o} | {desc} |")
+    if read.truncated_tail or read.bad_lines or read.duplicates:
+        L += ["", f"Note: skipped in the results file: truncated tail {read.truncated_tail}, "
+                  f"unreadable lines {read.bad_lines}, duplicates {read.duplicates}."]
+    if len(budgets) > 1:
+        L += ["", f"Warning: the results mix budgets {budgets}."]
+
+    L += ["", "## Penalised score f + 10 phi", ""] + format_table(table)
+
+    # ---- per optimiser summary
+    ranks = _mean_ranks(table)
+    L += ["", "## Per optimiser", "",
+          "| Optimiser | runs | feasible runs | mean wall time (s) | mean evaluations "
+          "| mean rank | +/~/- vs ref |",
+          "|---|---:|---:|---:|---:|---:|---:|"]
+    for o in opts:
+        rs = [r for t in tasks for r in by[t].get(o, [])]
+        feas = sum(r["feasible"] for r in rs)
+        wall = np.mean([r["wall_s"] for r in rs])
+        ev = np.mean([r["evaluations"] for r in rs])
+        cnt = "(reference)" if o == reference else "/".join(map(str, table.counts[o]))
+        L.append(f"| {o} | {len(rs)} | {feas} ({100 * feas / len(rs):.0f} %) | {wall:.2f} "
+                 f"| {ev:,.0f} | {ranks[o]:.2f} | {cnt} |")
+
+    L += ["", "## Feasibility rate per task (runs with phi = 0)", "",
+          "| Task | " + " | ".join(opts) + " |", "|---|" + "---:|" * len(opts)]
+    for t in tasks:
+        row = []
+        for o in opts:
+            rs = by[t].get(o, [])
+            row.append(f"{100 * np.mean([r['feasible'] for r in rs]):.0f} %" if rs else "-")
+        L.append(f"| {t} | " + " | ".join(row) + " |")
+
+    maps: dict[str, Any] = {}
+    if suite_dir is not None and suite_dir.is_dir():
+        from planner_core.bench.limits import suite_task_files
+        from planner_core.mapio import load_map
+
+        files = suite_task_files(suite_dir)
+        maps = {t: load_map(files[t]) for t in tasks if t in files}
+    if limits:
+        L += _limits_section(tasks, opts, by, suite_dir, maps)
+
+    # ---- figures
+    L += ["", "## Convergence", "",
+          "Median incumbent score (25-75 % band) against evaluations, log scale. For our DE and "
+          "random search the incumbent is the Deb-best; for CMA-ES and scipy's DE the best "
+          "penalised score seen.", ""]
+    for t in tasks:
+        p = convergence_figure(t, by[t], opts, budget, figures / f"convergence_{t}.png")
+        L.append(f"![{t} convergence]({_rel(p, output.parent)})")
+    ptasks = list(path_tasks) if path_tasks else _spread([t for t in tasks if t in maps])
+    ptasks = [t for t in ptasks if t in maps]
+    if ptasks:
+        best = {t: {o: min(by[t][o], key=lambda r: r["score"]) for o in opts if by[t].get(o)}
+                for t in ptasks}
+        known = _known_entries(suite_dir, {t: maps[t] for t in ptasks})
+        p = paths_figure(ptasks, maps, best, opts, figures / "best_paths.png", known)
+        L += ["", "## Best paths", "",
+              f"Each optimiser's best run (lowest score over its runs) on {', '.join(ptasks)}; "
+              "dotted = infeasible; wide grey = the best-known plan. Circles, rectangles grey; "
+              "no-fly zones red; sensors green triangles; start o, end square.", "",
+              f"![best paths]({_rel(p, output.parent)})"]
+    write_text_atomic(output, "\n".join(L) + "\n")
+    return output
+
+
+def _known_entries(suite_dir: Path | None, maps: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """Best-known entries of these tasks that match the current map files."""
+    if suite_dir is None or not suite_dir.is_dir():
+        return {}
+    from planner_core.bench.limits import BestKnown, best_known_path, suite_task_files
+
+    files = {t: p for t, p in suite_task_files(suite_dir).items() if t in maps}
+    bk = BestKnown(best_known_path(suite_dir))
+    current = bk.f_values(files)
+    return {t: e for t, e in bk.load().items() if t in current}
+
+
+def _mean_ranks(table: ScoreTable) -> dict[str, float]:
+    from scipy.stats import rankdata
+
+    acc: dict[str, list[float]] = defaultdict(list)
+    for t in table.tasks:
+        present = [o for o in table.optimisers if table.cells[t][o].n > 0]
+        if not present:
+            continue
+        r = rankdata([table.cells[t][o].mean for o in present])
+        for o, v in zip(present, r, strict=True):
+            acc[o].append(float(v))
+    return {o: float(np.mean(acc[o])) if acc[o] else math.nan for o in table.optimisers}
+
+
+def _limits_section(tasks: list[str], opts: list[str], by: Any, suite_dir: Path | None,
+                    maps: dict[str, Any]) -> list[str]:
+    from planner_core.bench.limits import BestKnown, best_known_path, lower_bounds
+
+    if suite_dir is None or not suite_dir.is_dir():
+        return ["", "## Against the limits", "", f"(suite folder {suite_dir} not found)"]
+    from planner_core.bench.limits import suite_task_files
+
+    files = {t: p for t, p in suite_task_files(suite_dir).items() if t in tasks}
+    lbs = lower_bounds(suite_dir, list(files))
+    bk_all = BestKnown(best_known_path(suite_dir))
+    bk_f = bk_all.f_values(files)
+    bk_entries = bk_all.load()
+    L = ["", "## Against the limits", "",
+         "LB: `planner_core.bounds` (alpha * flight time of the straight line start -> end + "
+         "(1 - alpha) * the LP minimum hover time over 25 m cells, ignoring C3, C5 and flight); "
+         f"best-known: `{best_known_path(suite_dir)}` (the best feasible f found by any run "
+         "so far; initially the map's witness). Ratios: mean f over an optimiser's feasible "
+         "runs divided by best-known (1 = as good as the best known) and by LB "
+         "(both >= 1; \"-\" = no feasible run).", "", "Mean feasible f / best-known:", "",
+         "| Task | LB | best-known f | found by | " + " | ".join(opts) + " |",
+         "|---|---:|---:|---|" + "---:|" * len(opts)]
+    ratio_lb: list[str] = []
+    for t in tasks:
+        lb = lbs.get(t, {}).get("lb", math.nan)
+        bk = bk_f.get(t, math.nan)
+        src = bk_entries.get(t, {}).get("optimiser", "-") if t in bk_f else "-"
+        cells, cells_lb = [], []
+        for o in opts:
+            feas = [r["f"] for r in by[t].get(o, []) if r["feasible"]]
+            if not feas:
+                cells.append("-")
+                cells_lb.append("-")
+                continue
+            mf = float(np.mean(feas))
+            cells.append(f"{mf / bk:.3f}" if np.isfinite(bk) and bk > 0 else "-")
+            cells_lb.append(f"{mf / lb:.3f}" if np.isfinite(lb) and lb > 0 else "-")
+        L.append(f"| {t} | {fmt(lb)} | {fmt(bk)} | {src} | " + " | ".join(cells) + " |")
+        ratio_lb.append(f"| {t} | " + " | ".join(cells_lb) + " |")
+    L += ["", "Mean feasible f / LB:", "",
+          "| Task | " + " | ".join(opts) + " |", "|---|" + "---:|" * len(opts)] + ratio_lb
+    return L

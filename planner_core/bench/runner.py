@@ -1,0 +1,285 @@
+"""The benchmark runner: every optimiser x task x run on the same budget, resumable.
+
+Each (optimiser, task, run) is one job with its own seed (derived from the base seed, the task
+name and the run index; the same for every optimiser, so all see the same seeds). Jobs go through
+an `Executor`; each finished run is appended to `<out>/results.jsonl` at once, so an interrupted
+benchmark resumes where it stopped. `<out>/meta.json` records the suite, budget and every command
+that wrote to the folder. Feasible runs that beat the best-known f of their task update the
+best-known file beside the suite.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import math
+import time
+import traceback
+import zlib
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from planner_core.bench._io import read_json, write_json_atomic
+from planner_core.bench.executor import Executor, make_executor
+from planner_core.bench.limits import BestKnown, best_known_path, file_sha256, suite_task_files
+from planner_core.bench.records import RESULTS_FILE, Key, ResultsWriter, key_of, read_records
+
+__all__ = [
+    "BEST_KNOWN_BUDGET",
+    "BEST_KNOWN_OPTIMISERS",
+    "BEST_KNOWN_RUNS",
+    "BenchError",
+    "BenchSummary",
+    "Job",
+    "META_FILE",
+    "HISTORY_POINTS",
+    "execute",
+    "plan_jobs",
+    "run_bench",
+    "run_seed",
+    "downsample",
+]
+
+META_FILE = "meta.json"
+#: the best-known protocol: 100 x the paper's budget, 5 runs each, the strongest optimisers
+BEST_KNOWN_BUDGET = 1_000_000
+BEST_KNOWN_RUNS = 5
+BEST_KNOWN_OPTIMISERS = ("cmaes", "de-adaptive", "de-adaptive-fixedlen")
+#: convergence checkpoints stored per run (evenly spaced over the budget, plus the first)
+HISTORY_POINTS = 100
+SCHEMA = 1
+
+
+class BenchError(ValueError):
+    """A benchmark request that cannot be carried out as asked (message says why)."""
+
+
+@dataclass(frozen=True)
+class Job:
+    """One run: which optimiser on which map, with which seed and budget."""
+
+    optimiser: str
+    task: str
+    run: int
+    seed: int
+    budget: int
+    map_path: str
+    map_sha256: str
+
+
+@dataclass
+class BenchSummary:
+    """What a call to `run_bench` did."""
+
+    planned: int = 0  # jobs this call had to run
+    skipped: int = 0  # already in the results file
+    done: int = 0
+    failed: list[dict[str, Any]] = field(default_factory=list)
+    best_known_updates: list[str] = field(default_factory=list)
+    results: Path | None = None
+
+
+def run_seed(base_seed: int, task: str, run: int) -> int:
+    """Seed of run `run` on `task`: independent across runs and tasks, stable across calls."""
+    ss = np.random.SeedSequence([int(base_seed), zlib.crc32(task.encode()), int(run)])
+    return int(ss.generate_state(1)[0] % (2**31 - 1))
+
+
+def downsample(evaluations: np.ndarray, values: list[np.ndarray], budget: int,
+               points: int = HISTORY_POINTS) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Keep the trace entries current at `points` evenly spaced evaluation counts (and the first
+    and last entries): a step function the report can put on a common grid."""
+    ev = np.asarray(evaluations)
+    if ev.size == 0:
+        return ev, [np.asarray(v) for v in values]
+    grid = np.linspace(budget / points, budget, points)
+    idx = np.searchsorted(ev, grid, side="right") - 1
+    idx = np.unique(np.concatenate([[0], idx[idx >= 0], [ev.size - 1]]))
+    return ev[idx], [np.asarray(v)[idx] for v in values]
+
+
+def _floats(a: Any) -> list[Any]:
+    return np.asarray(a, dtype=float).tolist()
+
+
+def execute(job: Job) -> dict[str, Any]:
+    """Run one job and return its record (or an error record with the traceback); top-level,
+    so worker processes can unpickle it."""
+    from planner_core.baselines import get, optimise, problem_for
+    from planner_core.problem import PENALTY_FACTOR, Problem
+
+    base = {"optimiser": job.optimiser, "task": job.task, "run": job.run, "seed": job.seed,
+            "budget": job.budget, "map_sha256": job.map_sha256}
+    try:
+        problem = problem_for(job.optimiser, Problem(job.map_path))
+        # warm up outside the timer: import the optimiser's module (cma, scipy) and load the
+        # compiled geometry kernels, so wall time measures the optimiser alone
+        get(job.optimiser).function()
+        problem.evaluate(problem.lower[None, :])
+        t0 = time.perf_counter()
+        res = optimise(job.optimiser, problem, job.budget, job.seed)
+        wall = time.perf_counter() - t0
+        bd = problem.breakdown(res.x)
+        h = res.history
+        ev, (bf, bp) = downsample(h.evaluations, [h.best_f, h.best_phi], job.budget)
+        return {
+            **base,
+            "schema": SCHEMA,
+            "score": float(res.f + PENALTY_FACTOR * res.phi),
+            "f": float(res.f),
+            "phi": float(res.phi),
+            "feasible": bool(res.phi == 0.0),
+            "evaluations": int(res.evaluations),
+            "wall_s": round(wall, 4),
+            "n_hover": int(bd["n_hover"]),
+            "hover_points": bd["hover_points"],
+            "hover_times": bd["hover_times"],
+            "x": _floats(res.x),
+            "history": {"evaluations": ev.astype(int).tolist(), "best_f": _floats(bf),
+                        "best_phi": _floats(bp)},
+        }
+    except Exception as exc:  # one broken run must not end the benchmark
+        return {**base, "error": f"{type(exc).__name__}: {exc}",
+                "traceback": traceback.format_exc()}
+
+
+def plan_jobs(files: dict[str, Path], optimisers: list[str], runs: int, budget: int,
+              base_seed: int = 0) -> list[Job]:
+    """All jobs, run-major (every task and optimiser gets run 0 before any gets run 1), so a
+    partial benchmark is balanced."""
+    shas = {t: file_sha256(p) for t, p in files.items()}
+    return [
+        Job(o, t, r, run_seed(base_seed, t, r), int(budget), str(p), shas[t])
+        for r in range(runs)
+        for t, p in files.items()
+        for o in optimisers
+    ]
+
+
+def _now() -> str:
+    return _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
+
+
+def _check_existing(records: list[dict[str, Any]], budget: int, shas: dict[str, str],
+                    results: Path) -> None:
+    budgets = {int(r["budget"]) for r in records if "budget" in r}
+    if budgets and budgets != {int(budget)}:
+        raise BenchError(
+            f"{results} holds runs with budget {sorted(budgets)}, not {budget}: "
+            "use another --out folder for a different budget"
+        )
+    for r in records:
+        t = r.get("task")
+        if t in shas and r.get("map_sha256") not in (None, shas[t]):
+            raise BenchError(
+                f"{results}: task {t} was run on a different version of its map file "
+                "(SHA-256 differs): use another --out folder"
+            )
+
+
+def run_bench(
+    suite: str | Path,
+    optimisers: list[str],
+    *,
+    runs: int,
+    budget: int,
+    out: str | Path,
+    tasks: list[str] | None = None,
+    jobs: int = 1,
+    base_seed: int = 0,
+    best_known: str | Path | None | bool = True,
+    command: str = "",
+    executor: Executor | None = None,
+    log: Callable[[str], None] | None = None,
+) -> BenchSummary:
+    """Run every missing (optimiser, task, run) and append each result to `<out>/results.jsonl`.
+
+    `best_known`: True = `<suite>_best_known.json` beside the suite folder, a path = that file,
+    None/False = no updates.
+    `executor` overrides `jobs` (0 = in this process, N = N worker processes).
+    """
+    from planner_core.baselines import REGISTRY
+
+    log = log or (lambda _msg: None)
+    unknown = [o for o in optimisers if o not in REGISTRY]
+    if unknown:
+        raise BenchError(f"unknown optimiser(s) {', '.join(unknown)}; choose from "
+                         f"{', '.join(REGISTRY)}")
+    if runs < 1 or budget < 1:
+        raise BenchError("runs and budget must be positive")
+    files = suite_task_files(suite)
+    if not files:
+        raise BenchError(f"no map files in {suite}")
+    if tasks:
+        missing = [t for t in tasks if t not in files]
+        if missing:
+            raise BenchError(f"task(s) {', '.join(missing)} not in {suite} "
+                             f"(have {', '.join(files)})")
+        files = {t: files[t] for t in tasks}
+    out = Path(out)
+    results = out / RESULTS_FILE
+    existing = read_records(results)
+    if existing.truncated_tail:
+        log(f"note: {results}: dropping a truncated last line (an interrupted write)")
+    if existing.bad_lines:
+        log(f"note: {results}: ignoring unreadable line(s) {existing.bad_lines}")
+    all_jobs = plan_jobs(files, list(optimisers), runs, budget, base_seed)
+    _check_existing(existing.records, budget, {j.task: j.map_sha256 for j in all_jobs}, results)
+    have: set[Key] = {key_of(r) for r in existing.records}
+    todo = [j for j in all_jobs if Key(j.optimiser, j.task, j.run) not in have]
+    summary = BenchSummary(planned=len(todo), skipped=len(all_jobs) - len(todo), results=results)
+
+    meta_path = out / META_FILE
+    meta = read_json(meta_path)
+    if meta.get("budget") not in (None, int(budget)):
+        raise BenchError(f"{meta_path} records budget {meta['budget']}, not {budget}: "
+                         "use another --out folder")
+    meta.update({"schema": SCHEMA, "suite": str(suite), "budget": int(budget),
+                 "base_seed": int(base_seed)})
+    meta.setdefault("commands", []).append({"command": command, "started": _now(),
+                                            "jobs_planned": len(todo)})
+    write_json_atomic(meta_path, meta)
+
+    bk: BestKnown | None = None
+    best: dict[str, float] = {}
+    if best_known:
+        bk_path = best_known_path(suite) if best_known is True else Path(best_known)
+        bk = BestKnown(bk_path)
+        best = bk.ensure(files, command)
+    log(f"{len(all_jobs)} runs requested, {summary.skipped} already in {results}, "
+        f"{len(todo)} to run")
+    if not todo:
+        return summary
+    own = executor is None
+    ex = make_executor(jobs) if executor is None else executor
+    t_start = time.perf_counter()
+    try:
+        with ResultsWriter(results) as writer:
+            for rec in ex.map_unordered(execute, todo):
+                if "error" in rec:
+                    summary.failed.append(rec)
+                    log(f"FAILED {rec['optimiser']} {rec['task']} run {rec['run']}: "
+                        f"{rec['error']}")
+                    continue
+                writer.write(rec)
+                summary.done += 1
+                mark = "feasible" if rec["feasible"] else f"phi {rec['phi']:.4g}"
+                log(f"[{summary.done}/{len(todo)}] {rec['optimiser']} {rec['task']} run "
+                    f"{rec['run']}: score {rec['score']:.6g} ({mark}), {rec['wall_s']:.1f} s, "
+                    f"elapsed {time.perf_counter() - t_start:.0f} s")
+                task = rec["task"]
+                if bk is not None and rec["feasible"] and rec["f"] < best.get(task, math.inf):
+                    stored = bk.offer(task, files[task], rec["hover_points"], rec["hover_times"],
+                                      optimiser=rec["optimiser"], seed=rec["seed"],
+                                      budget=rec["budget"], run=rec["run"], command=command)
+                    if stored:
+                        best[task] = float(rec["f"])
+                        summary.best_known_updates.append(task)
+                        log(f"  new best-known f on {task}: {rec['f']:.6g} ({rec['optimiser']})")
+    finally:
+        if own:
+            ex.close()
+    return summary

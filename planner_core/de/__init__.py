@@ -1,0 +1,58 @@
+"""Differential Evolution with per-individual configuration (the paper's low-level optimiser)."""
+
+from planner_core.de.configurators import (
+    AdaptiveConfigurator,
+    FixedConfigurator,
+    RandomConfigurator,
+    make_configurator,
+)
+from planner_core.de.core import (
+    BoxProblem,
+    Config,
+    Configurator,
+    DEState,
+    History,
+    Outcome,
+    Progress,
+    Result,
+    ask,
+    deb_best,
+    deb_better,
+    deb_order,
+    init,
+    max_generations,
+    outcome,
+    run,
+    step,
+    tell,
+    to_problem,
+)
+from planner_core.de.operators import CROSSOVERS, MUTATIONS
+
+__all__ = [
+    "CROSSOVERS",
+    "MUTATIONS",
+    "AdaptiveConfigurator",
+    "BoxProblem",
+    "Config",
+    "Configurator",
+    "DEState",
+    "FixedConfigurator",
+    "History",
+    "Outcome",
+    "Progress",
+    "RandomConfigurator",
+    "Result",
+    "ask",
+    "deb_best",
+    "deb_better",
+    "deb_order",
+    "init",
+    "make_configurator",
+    "max_generations",
+    "outcome",
+    "run",
+    "step",
+    "tell",
+    "to_problem",
+]

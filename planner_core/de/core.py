@@ -1,0 +1,410 @@
+"""Ask/tell Differential Evolution over one immutable state value, with Deb's feasibility rule.
+
+The search runs in the unit box: ``x = lower + u * (upper - lower)``; trial vectors are clamped
+to [0, 1] (the paper's value clamping). The randomness of generation g is a pure function of
+``(state.seed, g)`` (a fresh ``numpy`` Generator from a SeedSequence with spawn key ``(g, stream)``),
+so ``ask`` is pure and a run is reproducible bit for bit from its seed.
+
+Budget: the initial population (N evaluations) counts. Each generation evaluates
+``k = min(N, budget - evaluations)`` trials; when ``k < N`` (the last generation) only
+individuals ``0..k-1`` (population order) produce trials, the others are carried unchanged.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, NamedTuple, Protocol
+
+import numpy as np
+
+from planner_core.de.operators import (
+    MIN_POPULATION,
+    N_CROSSOVERS,
+    N_MUTATIONS,
+    crossover,
+    draw_crossover,
+    draw_donors,
+    mutate,
+)
+
+STREAM_ASK = 0
+STREAM_CONFIGURE = 1
+
+
+class BoxProblem(Protocol):
+    """What the DE needs from a problem (the UAV Problem and synthetic problems both fit)."""
+
+    lower: np.ndarray
+    upper: np.ndarray
+
+    def evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
+
+
+class Config(NamedTuple):
+    """Per-individual configuration (the paper's action): each field has shape (N,).
+
+    ``mutation`` ids 0..6 (see operators.MUTATIONS), ``crossover`` 0 = bin / 1 = exp,
+    ``F`` and ``Cr`` in [0, 1]. ``guide`` (optional, (N,) ints) replaces the Deb-best as
+    "x_best" per individual (used by the adaptive configurator for a p-best guide); None = best.
+    """
+
+    mutation: np.ndarray
+    crossover: np.ndarray
+    F: np.ndarray
+    Cr: np.ndarray
+    guide: np.ndarray | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class DEState:
+    """Everything a DE run is: population in the unit box, its f and phi (read-only arrays),
+    Deb-best index, counters, the run's seed and budget, and opaque configurator memory."""
+
+    X: np.ndarray
+    f: np.ndarray
+    phi: np.ndarray
+    best: int
+    generation: int
+    evaluations: int
+    budget: int
+    seed: int
+    memory: Any = None
+
+    @property
+    def population(self) -> int:
+        return int(self.X.shape[0])
+
+    @property
+    def dim(self) -> int:
+        return int(self.X.shape[1])
+
+    @property
+    def max_generations(self) -> int:
+        """G: the number of generations the budget allows after the initial population."""
+        return max_generations(self.population, self.budget)
+
+    @property
+    def done(self) -> bool:
+        return self.evaluations >= self.budget
+
+    @property
+    def best_f(self) -> float:
+        return float(self.f[self.best])
+
+    @property
+    def best_phi(self) -> float:
+        return float(self.phi[self.best])
+
+    @property
+    def feasible_fraction(self) -> float:
+        return float(np.count_nonzero(self.phi == 0.0)) / self.population
+
+
+class Outcome(NamedTuple):
+    """What one generation did, for configurators that learn (rows = the k trials)."""
+
+    config: Config  # the configuration used (all N rows; only the first k produced trials)
+    parents: np.ndarray  # (k, d) unit-box parents
+    trials: np.ndarray  # (k, d) unit-box trials
+    f_parent: np.ndarray
+    phi_parent: np.ndarray
+    f_trial: np.ndarray
+    phi_trial: np.ndarray
+    success: np.ndarray  # (k,) bool: the trial replaced its parent (Deb's rule)
+    evaluations: int  # after this generation
+    budget: int
+
+
+class Progress(NamedTuple):
+    """Small record handed to ``run``'s callback once per generation (0 = initial population)."""
+
+    generation: int
+    evaluations: int
+    budget: int
+    best_f: float
+    best_phi: float
+    feasible_fraction: float
+
+
+class History(NamedTuple):
+    """Per-generation trace, entry 0 = initial population; arrays of length generations + 1."""
+
+    evaluations: np.ndarray
+    best_f: np.ndarray
+    best_phi: np.ndarray
+    feasible_fraction: np.ndarray
+
+
+@dataclass(frozen=True)
+class Result:
+    """Outcome of :func:`run`: best solution in problem space with its f and phi."""
+
+    x: np.ndarray
+    f: float
+    phi: float
+    evaluations: int
+    generations: int
+    history: History
+    state: DEState
+
+    @property
+    def feasible(self) -> bool:
+        return self.phi == 0.0
+
+
+class Configurator(Protocol):
+    """Chooses the per-individual configuration; may learn through an immutable memory value.
+
+    ``init(state)`` returns the initial memory (None if stateless), ``configure(state, rng)``
+    reads ``state.memory`` and returns a :class:`Config`, ``update(memory, outcome)`` returns the
+    next memory. The core never looks inside the memory.
+    """
+
+    def init(self, state: DEState) -> Any: ...
+
+    def configure(self, state: DEState, rng: np.random.Generator) -> Config: ...
+
+    def update(self, memory: Any, outcome: Outcome) -> Any: ...
+
+
+# --------------------------------------------------------------------------- Deb's rule
+
+
+def deb_better(f_a: np.ndarray, phi_a: np.ndarray, f_b: np.ndarray, phi_b: np.ndarray) -> np.ndarray:
+    """Paper's selection: a replaces b iff phi_a < phi_b, or phi_a == phi_b and f_a < f_b."""
+    return (phi_a < phi_b) | ((phi_a == phi_b) & (f_a < f_b))
+
+
+def deb_order(f: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    """Indices sorted by Deb's ranking: smaller phi first, ties broken by smaller f (stable)."""
+    return np.lexsort((f, phi))
+
+
+def deb_best(f: np.ndarray, phi: np.ndarray) -> int:
+    """Index of the Deb-best individual (lowest phi, then lowest f; first index on full ties)."""
+    cand = np.flatnonzero(phi == phi.min())
+    return int(cand[np.argmin(f[cand])])
+
+
+def _sanitise(f: np.ndarray, phi: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Float copies with NaN -> +inf so that a broken evaluation never wins a comparison."""
+    f = np.array(f, dtype=float).reshape(-1)
+    phi = np.array(phi, dtype=float).reshape(-1)
+    if f.shape != (n,) or phi.shape != (n,):
+        raise ValueError(f"evaluate returned shapes {f.shape}, {phi.shape}; expected ({n},)")
+    f[np.isnan(f)] = np.inf
+    phi[np.isnan(phi)] = np.inf
+    return f, phi
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    a.flags.writeable = False
+    return a
+
+
+# --------------------------------------------------------------------------- ask / tell
+
+
+def max_generations(population: int, budget: int) -> int:
+    """G = ceil((budget - N) / N): generations after the initial population."""
+    return max(0, math.ceil((budget - population) / population))
+
+
+def generation_rng(state: DEState, stream: int) -> np.random.Generator:
+    """The Generator for (seed, generation, stream): pure, so ask/configure are repeatable."""
+    seq = np.random.SeedSequence(state.seed, spawn_key=(state.generation, stream))
+    return np.random.Generator(np.random.PCG64(seq))
+
+
+def to_problem(problem: BoxProblem, U: np.ndarray) -> np.ndarray:
+    """Map unit-box points to the problem's bounds: lower + u * (upper - lower)."""
+    lower = np.asarray(problem.lower, dtype=float)
+    return lower + U * (np.asarray(problem.upper, dtype=float) - lower)
+
+
+def init(
+    problem: BoxProblem, seed: int, population: int = 100, budget: int = 10_000
+) -> DEState:
+    """Uniform initial population in the unit box, evaluated (these N evaluations count)."""
+    if population < MIN_POPULATION:
+        raise ValueError(f"population must be >= {MIN_POPULATION}, got {population}")
+    if budget < population:
+        raise ValueError(f"budget {budget} smaller than the population {population}")
+    seed = int(seed)
+    if seed < 0:
+        raise ValueError("seed must be a non-negative integer")
+    d = int(np.asarray(problem.lower).shape[0])
+    rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=(2**32,))))
+    X = rng.random((population, d))
+    f, phi = _sanitise(*problem.evaluate(to_problem(problem, X)), population)
+    return DEState(
+        X=_frozen(X),
+        f=_frozen(f),
+        phi=_frozen(phi),
+        best=deb_best(f, phi),
+        generation=0,
+        evaluations=population,
+        budget=int(budget),
+        seed=seed,
+    )
+
+
+def trial_count(state: DEState) -> int:
+    """How many trials the next generation evaluates: min(N, budget - evaluations)."""
+    return max(0, min(state.population, state.budget - state.evaluations))
+
+
+def validate_config(config: Config, n: int) -> Config:
+    """Coerce a configuration to arrays of shape (n,) with ids in range and F, Cr clipped to [0,1]."""
+    mut = np.asarray(config.mutation, dtype=np.intp).reshape(-1)
+    cx = np.asarray(config.crossover, dtype=np.intp).reshape(-1)
+    F = np.clip(np.asarray(config.F, dtype=float).reshape(-1), 0.0, 1.0)
+    Cr = np.clip(np.asarray(config.Cr, dtype=float).reshape(-1), 0.0, 1.0)
+    for name, a in (("mutation", mut), ("crossover", cx), ("F", F), ("Cr", Cr)):
+        if a.shape != (n,):
+            raise ValueError(f"config.{name} has shape {a.shape}, expected ({n},)")
+    if mut.min() < 0 or mut.max() >= N_MUTATIONS:
+        raise ValueError(f"mutation ids must lie in 0..{N_MUTATIONS - 1}")
+    if cx.min() < 0 or cx.max() >= N_CROSSOVERS:
+        raise ValueError(f"crossover ids must lie in 0..{N_CROSSOVERS - 1}")
+    guide = config.guide
+    if guide is not None:
+        guide = np.asarray(guide, dtype=np.intp).reshape(-1)
+        if guide.shape != (n,) or guide.min() < 0 or guide.max() >= n:
+            raise ValueError("config.guide must be (N,) indices into the population")
+    return Config(mut, cx, F, Cr, guide)
+
+
+def ask(state: DEState, config: Config) -> np.ndarray:
+    """Trial vectors (k, d) in the unit box for individuals 0..k-1 (k = :func:`trial_count`)."""
+    k = trial_count(state)
+    n, d = state.X.shape
+    if k == 0:
+        return np.empty((0, d))
+    config = validate_config(config, n)
+    rng = generation_rng(state, STREAM_ASK)
+    donors = draw_donors(rng, n, k)
+    u, j = draw_crossover(rng, k, d)
+    best = state.best if config.guide is None else config.guide[:k]
+    V = mutate(state.X, config.mutation[:k], config.F[:k], best, donors)
+    T = crossover(state.X[:k], V, config.crossover[:k], config.Cr[:k], u, j)
+    return np.clip(T, 0.0, 1.0, out=T)
+
+
+def tell(state: DEState, trials: np.ndarray, f: np.ndarray, phi: np.ndarray) -> DEState:
+    """Deb selection of trials (k, d) against parents 0..k-1; a new state one generation on."""
+    k = trials.shape[0]
+    f_t, phi_t = _sanitise(f, phi, k)
+    win = deb_better(f_t, phi_t, state.f[:k], state.phi[:k])
+    X, fn, phin = state.X.copy(), state.f.copy(), state.phi.copy()
+    X[:k][win] = trials[win]
+    fn[:k][win] = f_t[win]
+    phin[:k][win] = phi_t[win]
+    return dataclasses.replace(
+        state,
+        X=_frozen(X),
+        f=_frozen(fn),
+        phi=_frozen(phin),
+        best=deb_best(fn, phin),
+        generation=state.generation + 1,
+        evaluations=state.evaluations + k,
+    )
+
+
+def outcome(
+    state: DEState, config: Config, trials: np.ndarray, f: np.ndarray, phi: np.ndarray
+) -> Outcome:
+    """The generation's outcome for ``update`` hooks (``state`` is the state before ``tell``)."""
+    k = trials.shape[0]
+    f_t, phi_t = _sanitise(f, phi, k)
+    f_p, phi_p = state.f[:k], state.phi[:k]
+    return Outcome(
+        config=config,
+        parents=state.X[:k],
+        trials=trials,
+        f_parent=f_p,
+        phi_parent=phi_p,
+        f_trial=f_t,
+        phi_trial=phi_t,
+        success=deb_better(f_t, phi_t, f_p, phi_p),
+        evaluations=state.evaluations + k,
+        budget=state.budget,
+    )
+
+
+def evaluate(problem: BoxProblem, trials: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Evaluate unit-box trials on the problem (mapped to its bounds)."""
+    if trials.shape[0] == 0:
+        return np.empty(0), np.empty(0)
+    return problem.evaluate(to_problem(problem, trials))
+
+
+def step(
+    state: DEState, problem: BoxProblem, configurator: Configurator
+) -> tuple[DEState, Outcome]:
+    """One generation: configure, ask, evaluate, tell, and feed the outcome to the configurator."""
+    config = configurator.configure(state, generation_rng(state, STREAM_CONFIGURE))
+    trials = ask(state, config)
+    f, phi = evaluate(problem, trials)
+    out = outcome(state, config, trials, f, phi)
+    new = tell(state, trials, f, phi)
+    return dataclasses.replace(new, memory=configurator.update(state.memory, out)), out
+
+
+def _progress(state: DEState) -> Progress:
+    return Progress(
+        state.generation,
+        state.evaluations,
+        state.budget,
+        state.best_f,
+        state.best_phi,
+        state.feasible_fraction,
+    )
+
+
+def run(
+    problem: BoxProblem,
+    *,
+    configurator: Configurator | str = "adaptive",
+    seed: int = 0,
+    population: int = 100,
+    budget: int = 10_000,
+    callback: Callable[[Progress], None] | None = None,
+) -> Result:
+    """Optimise ``problem`` until the budget is spent; same seed -> identical result.
+
+    ``configurator`` is an object or a registry name ("fixed", "random", "adaptive");
+    ``callback`` receives a :class:`Progress` after the initial population and each generation.
+    """
+    if isinstance(configurator, str):
+        from planner_core.de.configurators import make_configurator
+
+        configurator = make_configurator(configurator)
+    state = init(problem, seed, population, budget)
+    state = dataclasses.replace(state, memory=configurator.init(state))
+    trace = [_progress(state)]
+    if callback is not None:
+        callback(trace[-1])
+    while not state.done:
+        state, _ = step(state, problem, configurator)
+        trace.append(_progress(state))
+        if callback is not None:
+            callback(trace[-1])
+    history = History(
+        evaluations=np.array([p.evaluations for p in trace], dtype=np.int64),
+        best_f=np.array([p.best_f for p in trace]),
+        best_phi=np.array([p.best_phi for p in trace]),
+        feasible_fraction=np.array([p.feasible_fraction for p in trace]),
+    )
+    return Result(
+        x=to_problem(problem, state.X[state.best]),
+        f=state.best_f,
+        phi=state.best_phi,
+        evaluations=state.evaluations,
+        generations=state.generation,
+        history=history,
+        state=state,
+    )

@@ -1,0 +1,164 @@
+"""DE variation operators, vectorised over the population with one operator per individual.
+
+Everything here is pure: randomness enters as explicit arrays (donor indices, uniforms, start
+positions) drawn by the ``draw_*`` helpers, so tests can pass hand-picked values.
+
+Mutations (i = current individual, best = Deb-best individual, r1..r5 = donors that are
+distinct from each other and from i; ``best`` may coincide with i or a donor):
+
+====  ====================  ==========================================================
+ id    name                  mutant v_i
+====  ====================  ==========================================================
+ 0     rand/1                x_r1 + F (x_r2 - x_r3)
+ 1     best/1                x_best + F (x_r1 - x_r2)
+ 2     rand/2                x_r1 + F (x_r2 - x_r3) + F (x_r4 - x_r5)
+ 3     best/2                x_best + F (x_r1 - x_r2) + F (x_r3 - x_r4)
+ 4     current-to-rand/1     x_i + F (x_r1 - x_i) + F (x_r2 - x_r3)
+ 5     current-to-best/1     x_i + F (x_best - x_i) + F (x_r1 - x_r2)
+ 6     rand-to-best/1        x_r1 + F (x_best - x_r1) + F (x_r2 - x_r3)
+====  ====================  ==========================================================
+
+Crossovers: 0 = binomial, 1 = exponential (see :func:`crossover_mask`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+MUTATIONS: tuple[str, ...] = (
+    "rand/1",
+    "best/1",
+    "rand/2",
+    "best/2",
+    "current-to-rand/1",
+    "current-to-best/1",
+    "rand-to-best/1",
+)
+CROSSOVERS: tuple[str, ...] = ("bin", "exp")
+N_MUTATIONS = len(MUTATIONS)
+N_CROSSOVERS = len(CROSSOVERS)
+N_DONORS = 5  # the most donors any mutation needs (rand/2)
+MIN_POPULATION = N_DONORS + 1
+
+# Every mutation is  v = x[a] + F (x[b] - x[c]) + F (x[p] - x[q]).  Columns of the candidate
+# matrix: 0 = i, 1 = best, 2..6 = r1..r5.  A one-difference operator uses (p, q) = (i, i), whose
+# difference is exactly zero in floating point.
+_I, _B, _R1, _R2, _R3, _R4, _R5 = range(7)
+_TERMS = np.array(
+    [
+        # a    b    c    p    q
+        [_R1, _R2, _R3, _I, _I],  # rand/1
+        [_B, _R1, _R2, _I, _I],  # best/1
+        [_R1, _R2, _R3, _R4, _R5],  # rand/2
+        [_B, _R1, _R2, _R3, _R4],  # best/2
+        [_I, _R1, _I, _R2, _R3],  # current-to-rand/1
+        [_I, _B, _I, _R1, _R2],  # current-to-best/1
+        [_R1, _B, _R1, _R2, _R3],  # rand-to-best/1
+    ],
+    dtype=np.intp,
+)
+
+
+def mutation_index(name: str | int) -> int:
+    """Operator id from a name such as ``"rand/1"`` (ids pass through after a range check)."""
+    if isinstance(name, str):
+        try:
+            return MUTATIONS.index(name)
+        except ValueError:
+            raise ValueError(f"unknown mutation {name!r}; choose from {MUTATIONS}") from None
+    idx = int(name)
+    if not 0 <= idx < N_MUTATIONS:
+        raise ValueError(f"mutation id {idx} outside 0..{N_MUTATIONS - 1}")
+    return idx
+
+
+def crossover_index(name: str | int) -> int:
+    """Crossover id from ``"bin"``/``"binomial"`` or ``"exp"``/``"exponential"`` (or an id)."""
+    if isinstance(name, str):
+        key = {"binomial": "bin", "exponential": "exp"}.get(name, name)
+        try:
+            return CROSSOVERS.index(key)
+        except ValueError:
+            raise ValueError(f"unknown crossover {name!r}; choose from {CROSSOVERS}") from None
+    idx = int(name)
+    if not 0 <= idx < N_CROSSOVERS:
+        raise ValueError(f"crossover id {idx} outside 0..{N_CROSSOVERS - 1}")
+    return idx
+
+
+def draw_donors(rng: np.random.Generator, n: int, rows: int, k: int = N_DONORS) -> np.ndarray:
+    """Draw ``(rows, k)`` donor indices in ``0..n-1``: row i holds k indices distinct from each
+    other and from i, uniformly over ordered k-subsets (sequential draw from the remaining set)."""
+    if n < k + 1:
+        raise ValueError(f"population {n} too small for {k} distinct donors (need >= {k + 1})")
+    out = np.empty((rows, k), dtype=np.intp)
+    taken = np.arange(rows, dtype=np.intp)[:, None]  # excluded so far, sorted per row
+    for j in range(k):
+        r = rng.integers(0, n - 1 - j, size=rows)
+        # Map r from 0..(n-len(taken)-1) onto the values not taken: walk the sorted exclusions.
+        for col in range(taken.shape[1]):
+            r += r >= taken[:, col]
+        out[:, j] = r
+        taken = np.sort(np.concatenate([taken, r[:, None]], axis=1), axis=1)
+    return out
+
+
+def mutate(
+    X: np.ndarray,
+    mutation: np.ndarray,
+    F: np.ndarray,
+    best: int | np.ndarray,
+    donors: np.ndarray,
+) -> np.ndarray:
+    """Mutants for rows ``i = 0..m-1`` (m = len(mutation)) of population ``X`` (n, d).
+
+    ``mutation`` (m,) operator ids, ``F`` (m,), ``best`` the guide index (scalar or (m,)),
+    ``donors`` (m, 5) from :func:`draw_donors`. Formulas in the module docstring.
+    """
+    m = len(mutation)
+    cand = np.empty((m, 2 + N_DONORS), dtype=np.intp)
+    cand[:, _I] = np.arange(m)
+    cand[:, _B] = best
+    cand[:, 2:] = donors[:, :N_DONORS]
+    idx = np.take_along_axis(cand, _TERMS[np.asarray(mutation, dtype=np.intp)], axis=1)
+    Fc = np.asarray(F, dtype=float)[:, None]
+    return X[idx[:, 0]] + Fc * (X[idx[:, 1]] - X[idx[:, 2]]) + Fc * (X[idx[:, 3]] - X[idx[:, 4]])
+
+
+def draw_crossover(rng: np.random.Generator, rows: int, d: int) -> tuple[np.ndarray, np.ndarray]:
+    """Randomness for :func:`crossover_mask`: uniforms ``u`` (rows, d) and a start/forced
+    index ``j`` (rows,) per row; the same draws serve both crossover kinds."""
+    return rng.random((rows, d)), rng.integers(0, d, size=rows)
+
+
+def crossover_mask(
+    crossover: np.ndarray, Cr: np.ndarray, u: np.ndarray, j: np.ndarray
+) -> np.ndarray:
+    """Boolean (m, d) mask: True where the trial takes the mutant's gene.
+
+    Binomial (0): gene k from the mutant iff ``u[k] < Cr`` or ``k == j`` (forced j_rand).
+    Exponential (1): a circular run starting at ``j``; it has length
+    ``L = 1 + #(leading True in u[0..d-2] < Cr)`` (capped at d), i.e. after each copied gene the
+    run continues while the next uniform is below Cr; genes ``j, j+1, .., j+L-1 (mod d)``.
+    """
+    m, d = u.shape
+    cr = np.asarray(Cr, dtype=float)[:, None]
+    cols = np.arange(d)
+    below = u < cr
+    forced = cols[None, :] == np.asarray(j)[:, None]
+    binom = below | forced
+    run = 1 + np.cumprod(below[:, : d - 1], axis=1).sum(axis=1)
+    expo = ((cols[None, :] - np.asarray(j)[:, None]) % d) < run[:, None]
+    return np.where(np.asarray(crossover, dtype=bool)[:, None], expo, binom)
+
+
+def crossover(
+    x: np.ndarray,
+    v: np.ndarray,
+    crossover_ids: np.ndarray,
+    Cr: np.ndarray,
+    u: np.ndarray,
+    j: np.ndarray,
+) -> np.ndarray:
+    """Trials: mutant genes where :func:`crossover_mask` is True, parent genes elsewhere."""
+    return np.where(crossover_mask(crossover_ids, Cr, u, j), v, x)

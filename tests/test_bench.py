@@ -1,0 +1,283 @@
+"""The benchmark runner (resume, executors, best-known updates), statistics and the report."""
+
+from __future__ import annotations
+
+import copy
+import json
+import os
+from collections.abc import Callable, Iterable, Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from planner_core.bench import BenchError, ProcessExecutor, SerialExecutor, run_bench
+from planner_core.bench.limits import (
+    BestKnown,
+    best_known_path,
+    file_sha256,
+    suite_task_files,
+    verify_plan,
+)
+from planner_core.bench.records import RESULTS_FILE, ResultsWriter, key_of, read_records
+from planner_core.bench.report import format_table
+from planner_core.bench.runner import downsample, run_seed
+from planner_core.bench.stats import score_table, wilcoxon_mark
+from planner_core.problem import Problem
+
+OPTS = ["de-adaptive", "random-search"]
+BUDGET = 300
+
+_BASE = {
+    "area": {"width": 1200, "height": 1000},
+    "start": [50, 50],
+    "end": [1150, 950],
+    "sensors": [
+        {"id": "a", "x": 250, "y": 300},
+        {"id": "b", "x": 800, "y": 250},
+        {"id": "c", "x": 700, "y": 800},
+    ],
+    "obstacles": {"circles": [{"x": 600, "y": 560, "radius": 80}]},
+    "uav": {"max_hover_points": 3},
+}
+
+
+def _map(name: str, shift: float) -> dict[str, Any]:
+    m = copy.deepcopy(_BASE)
+    m["name"] = name
+    for s in m["sensors"]:
+        s["y"] += shift
+    # a deliberately poor witness: hover 120 s over each sensor (easy to beat)
+    m["witness"] = {"hover_points": [[s["x"], s["y"]] for s in m["sensors"]],
+                    "hover_times": [120.0, 120.0, 120.0]}
+    p = Problem(m)
+    w = m["witness"]
+    assert p.evaluate(p.encode(w["hover_points"], w["hover_times"])[None, :])[1][0] == 0.0
+    return m
+
+
+@pytest.fixture
+def suite(tmp_path: Path) -> Path:
+    folder = tmp_path / "suite"
+    folder.mkdir()
+    for name, shift in (("A1", 0.0), ("B2", 60.0)):
+        (folder / f"{name}.json").write_text(json.dumps(_map(name, shift)))
+    return folder
+
+
+def _run(suite: Path, out: Path, executor: Any = None, optimisers: list[str] = OPTS,
+         runs: int = 2, budget: int = BUDGET) -> Any:
+    return run_bench(suite, optimisers, runs=runs, budget=budget, out=out, command="test",
+                     executor=executor or SerialExecutor())
+
+
+def _scores(out: Path) -> dict[Any, float]:
+    return {key_of(r): r["score"] for r in read_records(out / RESULTS_FILE).records}
+
+
+# ----------------------------------------------------------------------------- runner
+
+
+def test_runner_two_tasks_two_runs_two_optimisers(suite: Path, tmp_path: Path) -> None:
+    out = tmp_path / "res"
+    s = _run(suite, out)
+    assert (s.planned, s.done, s.skipped, s.failed) == (8, 8, 0, [])
+    recs = read_records(out / RESULTS_FILE).records
+    assert len(recs) == 8 and len({key_of(r) for r in recs}) == 8
+    for r in recs:
+        assert r["evaluations"] == BUDGET and r["budget"] == BUDGET
+        assert r["score"] == pytest.approx(r["f"] + 10 * r["phi"])
+        assert r["feasible"] == (r["phi"] == 0.0) and r["wall_s"] >= 0
+        assert r["seed"] == run_seed(0, r["task"], r["run"])
+        h = r["history"]
+        assert h["evaluations"][-1] == BUDGET and len(h["best_f"]) == len(h["evaluations"])
+        f, phi = verify_plan(suite / f"{r['task']}.json", r["hover_points"], r["hover_times"])
+        assert f == pytest.approx(r["f"], rel=1e-9) and phi == pytest.approx(r["phi"], abs=1e-9)
+    meta = json.loads((out / "meta.json").read_text())
+    assert meta["budget"] == BUDGET and meta["commands"][0]["command"] == "test"
+    # nothing left to do: a rerun is a no-op
+    s2 = _run(suite, out)
+    assert (s2.planned, s2.done, s2.skipped) == (0, 0, 8)
+
+
+def test_resume_after_truncated_write(suite: Path, tmp_path: Path) -> None:
+    full = tmp_path / "full"
+    _run(suite, full)
+    lines = (full / RESULTS_FILE).read_bytes().splitlines(keepends=True)
+    part = tmp_path / "part"
+    part.mkdir()
+    # three whole records, then a record cut off mid-line (the process was killed mid-write)
+    (part / RESULTS_FILE).write_bytes(b"".join(lines[:3]) + lines[3][: len(lines[3]) // 2])
+    read = read_records(part / RESULTS_FILE)
+    assert len(read.records) == 3 and read.truncated_tail and not read.bad_lines
+    s = _run(suite, part)
+    assert (s.done, s.skipped) == (5, 3)
+    again = read_records(part / RESULTS_FILE)
+    assert not again.truncated_tail and not again.bad_lines and again.duplicates == 0
+    assert len(again.records) == 8
+    assert _scores(part) == _scores(full)  # same seeds, same results, whatever the order
+
+
+class _Interrupting:
+    """Yields `n` results, then fails like a Ctrl-C in the middle of the benchmark."""
+
+    def __init__(self, n: int):
+        self.n = n
+
+    def map_unordered(self, fn: Callable[[Any], Any], items: Iterable[Any]) -> Iterator[Any]:
+        for i, item in enumerate(items):
+            if i == self.n:
+                raise KeyboardInterrupt
+            yield fn(item)
+
+    def close(self) -> None:
+        return None
+
+
+def test_resume_after_interruption(suite: Path, tmp_path: Path) -> None:
+    out = tmp_path / "res"
+    with pytest.raises(KeyboardInterrupt):
+        _run(suite, out, executor=_Interrupting(3))
+    assert len(read_records(out / RESULTS_FILE).records) == 3
+    s = _run(suite, out)
+    assert (s.done, s.skipped) == (5, 3)
+    recs = read_records(out / RESULTS_FILE)
+    assert len(recs.records) == 8 and recs.duplicates == 0
+    assert len((out / RESULTS_FILE).read_text().splitlines()) == 8
+
+
+def test_refuses_to_mix_budgets_or_maps(suite: Path, tmp_path: Path) -> None:
+    out = tmp_path / "res"
+    _run(suite, out, runs=1, optimisers=["random-search"])
+    with pytest.raises(BenchError, match="budget"):
+        _run(suite, out, runs=1, budget=BUDGET + 1, optimisers=["random-search"])
+    m = json.loads((suite / "A1.json").read_text())
+    m["sensors"][0]["x"] += 1.0
+    (suite / "A1.json").write_text(json.dumps(m))
+    with pytest.raises(BenchError, match="different version"):
+        _run(suite, out, runs=1, optimisers=["random-search"])
+    with pytest.raises(BenchError, match="unknown optimiser"):
+        _run(suite, out, optimisers=["nope"])
+
+
+def test_records_reader_tolerates_damage(tmp_path: Path) -> None:
+    path = tmp_path / RESULTS_FILE
+    rec = {"optimiser": "o", "task": "t", "run": 0, "f": 1.0, "phi": 0.0, "score": 1.0,
+           "evaluations": 5}
+    with ResultsWriter(path) as w:
+        w.write(rec)
+        w.write({**rec, "run": 1})
+        w.write(rec)  # duplicate key: the first one counts
+    with path.open("a") as fh:
+        fh.write("not json\n")
+        fh.write(json.dumps({**rec, "run": 2}))  # complete, but no newline
+    r = read_records(path)
+    assert [x["run"] for x in r.records] == [0, 1, 2]
+    assert r.duplicates == 1 and r.bad_lines == [4] and not r.truncated_tail
+    with ResultsWriter(path) as w:  # terminates the last line instead of cutting it
+        w.write({**rec, "run": 3})
+    assert [x["run"] for x in read_records(path).records] == [0, 1, 2, 3]
+
+
+def test_downsample_keeps_a_step_function() -> None:
+    ev = np.arange(1, 1001) * 10
+    val = -np.arange(1000.0)
+    e, (v,) = downsample(ev, [val], 10_000, points=10)
+    assert e[0] == 10 and e[-1] == 10_000 and len(e) == 11
+    assert np.all(v == -(e // 10 - 1))
+
+
+def test_process_executor_runs_workers_single_threaded() -> None:
+    before = os.environ.get("OPENBLAS_NUM_THREADS")
+    with ProcessExecutor(2) as ex:
+        names = ["OPENBLAS_NUM_THREADS"] * 3 + ["NUMBA_NUM_THREADS"]
+        got = list(ex.map_unordered(os.getenv, names))
+    assert got == ["1"] * 4
+    assert os.environ.get("OPENBLAS_NUM_THREADS") == before
+
+
+# ----------------------------------------------------------------------------- best known
+
+
+def test_best_known_seeded_from_witness_and_improved(suite: Path, tmp_path: Path) -> None:
+    files = suite_task_files(suite)
+    bk = BestKnown(best_known_path(suite))
+    assert bk.path == suite.parent / "suite_best_known.json"
+    start = bk.ensure(files)
+    assert set(start) == {"A1", "B2"}
+    assert all(e["optimiser"] == "witness" for e in bk.load().values())
+    s = _run(suite, tmp_path / "res", optimisers=["de-adaptive"], budget=1000, runs=1)
+    assert s.best_known_updates  # the witness is poor: the DE beats it
+    entries = bk.load()
+    for task in s.best_known_updates:
+        e = entries[task]
+        assert e["optimiser"] == "de-adaptive" and e["budget"] == 1000 and e["f"] < start[task]
+        assert e["map_sha256"] == file_sha256(files[task])
+        f, phi = verify_plan(files[task], e["hover_points"], e["hover_times"])
+        assert phi == 0.0 and f == pytest.approx(e["f"])
+    # a worse plan or an infeasible one never replaces the entry
+    task = s.best_known_updates[0]
+    w = json.loads(files[task].read_text())["witness"]
+    assert not bk.offer(task, files[task], w["hover_points"], w["hover_times"],
+                        optimiser="x", seed=0, budget=1)
+    assert not bk.offer(task, files[task], w["hover_points"], [0.0, 0.0, 0.0],
+                        optimiser="x", seed=0, budget=1)
+    assert bk.load()[task] == entries[task]
+
+
+# ----------------------------------------------------------------------------- statistics
+
+
+def test_wilcoxon_marks_on_a_hand_made_table() -> None:
+    ref = [float(v) for v in range(10, 20)]
+    assert wilcoxon_mark(ref, [v + 100 for v in ref]) == "+"  # reference clearly better
+    assert wilcoxon_mark(ref, [v - 100 for v in ref]) == "-"  # reference clearly worse
+    assert wilcoxon_mark(ref, ref[::-1]) == "~"
+    assert wilcoxon_mark(ref, [v + 0.5 for v in ref]) == "~"  # overlapping: not significant
+    scores = {
+        "T1": {"ref": ref, "worse": [v + 100 for v in ref], "better": [v - 100 for v in ref]},
+        "T2": {"ref": ref, "worse": [v + 100 for v in ref], "better": ref[::-1]},
+        "T3": {"ref": ref, "worse": [v + 0.5 for v in ref], "better": [v - 5 for v in ref]},
+    }
+    t = score_table(scores, ["T1", "T2", "T3"], ["ref", "worse", "better"], "ref")
+    assert t.counts["worse"] == (2, 1, 0)
+    assert t.counts["better"] == (0, 1, 2)
+    assert [o for o in t.optimisers if t.cells["T1"][o].best] == ["better"]
+    assert {o for o in t.optimisers if t.cells["T2"][o].best} == {"ref", "better"}
+    c = t.cells["T1"]["worse"]
+    assert (c.mean, c.n, c.mark) == (pytest.approx(114.5), 10, "+")
+    assert c.std == pytest.approx(np.std(ref))
+    lines = format_table(t)
+    assert lines[0] == "| Task | ref (ref) | worse | better |"
+    assert lines[2] == "| T1 | 14.5 ± 2.9 | 114.5 ± 2.9 + | **-85.5 ± 2.9** - |"
+    assert lines[-1] == "| +/~/- | (reference) | 2/1/0 | 0/1/2 |"
+
+
+# ----------------------------------------------------------------------------- CLI + report
+
+
+def test_cli_bench_then_report(suite: Path, tmp_path: Path) -> None:
+    from lamde_mission.cli import main
+
+    out = tmp_path / "res"
+    args = ["bench", "--suite", str(suite), "--optimizers", "de-adaptive,random-search",
+            "--runs", "2", "--budget", str(BUDGET), "--jobs", "2", "--out", str(out), "--quiet"]
+    assert main(args) == 0
+    assert len(read_records(out / RESULTS_FILE).records) == 8
+    md = tmp_path / "docs" / "results.md"
+    assert main(["report", str(out), "-o", str(md), "--reference", "random-search"]) == 0
+    text = md.read_text()
+    head = text.splitlines()[:8]
+    assert any(line.strip().startswith("lamde-mission bench --suite") for line in head)
+    assert "--budget 300" in text and "| +/~/- | (reference) |" in text
+    assert "| Task | random-search (ref) | de-adaptive |" in text
+    assert "Mean feasible f / LB" in text
+    figs = tmp_path / "docs" / "results"
+    assert (figs / "convergence_A1.png").stat().st_size > 0
+    assert (figs / "best_paths.png").stat().st_size > 0
+    assert "](results/best_paths.png)" in text
+    # bad input: exit status 2
+    assert main(["report", str(tmp_path / "missing"), "-o", str(md)]) == 2
+    assert main(["report", str(out), "-o", str(md), "--reference", "cmaes"]) == 2
+    assert main(["bench", "--suite", str(suite), "--optimizers", "nope", "--out", str(out)]) == 2
