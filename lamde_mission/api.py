@@ -26,6 +26,8 @@ class _TimedProblem:
         self.lower = problem.lower
         self.upper = problem.upper
         self.seconds = 0.0
+        if hasattr(problem, "initial_population"):
+            self.initial_population = problem.initial_population
 
     def evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         t0 = time.perf_counter()

@@ -228,7 +228,11 @@ def to_problem(problem: BoxProblem, U: np.ndarray) -> np.ndarray:
 def init(
     problem: BoxProblem, seed: int, population: int = 100, budget: int = 10_000
 ) -> DEState:
-    """Uniform initial population in the unit box, evaluated (these N evaluations count)."""
+    """Initial population in the unit box, evaluated (these N evaluations count).
+
+    Uniform, unless the problem offers `initial_population(rng, n)` (problem-space points,
+    e.g. the UAV problem's sensor-aware starts); those are clamped into the box.
+    """
     if population < MIN_POPULATION:
         raise ValueError(f"population must be >= {MIN_POPULATION}, got {population}")
     if budget < population:
@@ -238,7 +242,13 @@ def init(
         raise ValueError("seed must be a non-negative integer")
     d = int(np.asarray(problem.lower).shape[0])
     rng = np.random.Generator(np.random.PCG64(np.random.SeedSequence(seed, spawn_key=(2**32,))))
-    X = rng.random((population, d))
+    sampler = getattr(problem, "initial_population", None)
+    if sampler is None:
+        X = rng.random((population, d))
+    else:
+        lower = np.asarray(problem.lower, dtype=float)
+        span = np.asarray(problem.upper, dtype=float) - lower
+        X = np.clip((np.asarray(sampler(rng, population), dtype=float) - lower) / span, 0.0, 1.0)
     f, phi = _sanitise(*problem.evaluate(to_problem(problem, X)), population)
     return DEState(
         X=_frozen(X),
