@@ -54,6 +54,9 @@ def test_budget_exact_and_deterministic(name: str, problem: Problem) -> None:
             counted.append(len(X))
             return problem.evaluate(X)
 
+        def initial_population(self, rng: np.random.Generator, n: int) -> np.ndarray:
+            return problem.initial_population(rng, n)  # the hook does not evaluate
+
     spy = Spy()
     target = problem_for(name, problem)
     if target is problem:

@@ -2,7 +2,8 @@
 
 Searches the unit box (x = lower + u * (upper - lower)) with pycma's own bound handling
 (`bounds=[0, 1]`, BoundTransform), sigma0 = 0.3, default population size. Ask/tell with a hard
-budget cap: every evaluated candidate counts; when fewer evaluations remain than a population,
+budget cap: every evaluated candidate counts; the first start is the problem's `initial_population`
+hook's first point when it has one (else uniform); when fewer evaluations remain than a population,
 only the first ones are evaluated and the run ends (that partial population is never told). When
 CMA-ES stops early (its own termination criteria) it restarts from a new uniform point with the
 budget left. Returns the best penalised score seen within the budget.
@@ -46,7 +47,13 @@ def optimise(problem: Any, budget: int, seed: int, *, sigma0: float = SIGMA0) ->
             "seed": _cma_seed(seed, restart),
             "verbose": -9,
         }
-        es = cma.CMAEvolutionStrategy(rng.random(d), sigma0, opts)
+        x0 = rng.random(d)
+        sampler = getattr(problem, "initial_population", None)
+        if sampler is not None and restart == 0:
+            # start from the problem's own first suggested point (the UAV problem: a
+            # sensor-aware route), the same information our DE starts from
+            x0 = np.clip((np.asarray(sampler(rng, 2), dtype=float)[0] - lo) / span, 0.0, 1.0)
+        es = cma.CMAEvolutionStrategy(x0, sigma0, opts)
         while budgeted.remaining > 0 and not es.stop():
             U = np.asarray(es.ask(), dtype=float)
             k = min(len(U), budgeted.remaining)

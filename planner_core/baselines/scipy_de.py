@@ -1,14 +1,15 @@
 """`scipy.optimize.differential_evolution` on the penalised score f + 10 * phi, budget-capped.
 
-Scipy's defaults (best1bin, dithered F in (0.5, 1), CR 0.7, tol 0.01) except: the population
-is 100 Latin-hypercube points like our DE (scipy's default 15 * dim = 600..1200 individuals
-would leave only 7..15 generations in 10,000 evaluations), `updating='deferred'` with
-`vectorized=True` (whole generations evaluated as one batch), and no gradient polish (it would
-spend evaluations outside the budget). The objective wrapper counts evaluations and stops at the
-budget exactly: in the last generation only the first candidates that fit are evaluated (the rest
-get +inf, so they never enter the population) and the callback ends the run. If scipy converges
-before the budget is spent, it restarts with a fresh population and the budget left. Returns the
-best penalised score seen.
+Scipy's defaults (best1bin, dithered F in (0.5, 1), CR 0.7, tol 0.01) except: the population is 100
+Latin-hypercube points like our DE (scipy's default 15 * dim = 600..1200 individuals would leave
+only 7..15 generations in 10,000 evaluations), `updating='deferred'` with `vectorized=True` (whole
+generations evaluated as one batch), and no gradient polish (it would spend evaluations outside the
+budget). The objective wrapper counts evaluations and stops at the budget exactly (the first
+population comes from the problem's `initial_population` hook when it has one, as for our DE): in
+the last generation only the first candidates that fit are evaluated (the rest get +inf, so they
+never enter the population) and the callback ends the run. If scipy converges before the budget is
+spent, it restarts with a fresh population and the budget left. Returns the best penalised score
+seen.
 """
 
 from __future__ import annotations
@@ -57,6 +58,10 @@ def optimise(
         n = max(5, min(int(population), budgeted.remaining))
         rng = np.random.default_rng(np.random.SeedSequence([int(seed), restart]))
         init = qmc.LatinHypercube(d=d, rng=rng).random(n)
+        sampler = getattr(problem, "initial_population", None)
+        if sampler is not None and restart == 0:
+            # the same problem-provided starts our DE gets (e.g. sensor-aware hover points)
+            init = np.clip((np.asarray(sampler(rng, n), dtype=float) - lo) / span, 0.0, 1.0)
         differential_evolution(
             objective,
             [(0.0, 1.0)] * d,
