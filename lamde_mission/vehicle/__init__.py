@@ -1,0 +1,45 @@
+"""Talking to vehicles over MAVLink: a mock autopilot and two mission uploaders.
+
+- `MockVehicle` (`mock.py`): a pymavlink autopilot on UDP that stores what it is sent.
+- `upload_mission` (`upload.py`): mission + geofence up, read back, compared item by item,
+  through MAVSDK (`via="mavsdk"`, the only module importing it) or our pymavlink client
+  (`via="pymavlink"`, `mavlink_client.py`).
+- `wire.py`: items as MAVLink carries them and the comparison; `transfer.py`: errors, report,
+  and the retry loop both uploaders share.
+
+Names load lazily, so importing this package loads neither pymavlink's dialect nor MAVSDK.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+__all__ = [
+    "MockVehicle",
+    "upload_mission",
+    "UploadReport",
+    "VehicleError",
+    "NoVehicleError",
+    "TransferError",
+    "MissionRejectedError",
+    "ReadbackMismatchError",
+]
+
+_WHERE = {
+    "MockVehicle": "lamde_mission.vehicle.mock",
+    "upload_mission": "lamde_mission.vehicle.upload",
+    "UploadReport": "lamde_mission.vehicle.transfer",
+    "VehicleError": "lamde_mission.vehicle.transfer",
+    "NoVehicleError": "lamde_mission.vehicle.transfer",
+    "TransferError": "lamde_mission.vehicle.transfer",
+    "MissionRejectedError": "lamde_mission.vehicle.transfer",
+    "ReadbackMismatchError": "lamde_mission.vehicle.transfer",
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name in _WHERE:
+        import importlib
+
+        return getattr(importlib.import_module(_WHERE[name]), name)
+    raise AttributeError(f"module 'lamde_mission.vehicle' has no attribute {name!r}")

@@ -1,0 +1,558 @@
+"""A mock autopilot on pymavlink: the MAVLink mission protocol over UDP, no simulator needed.
+
+`MockVehicle` is a quadrotor (system 1, component 1, PX4 autopilot type) that speaks
+MAVLink 2 over UDP: HEARTBEAT at 1 Hz, AUTOPILOT_VERSION on request (MISSION_INT,
+MISSION_FENCE, MISSION_RALLY and MAVLINK2 capability bits), COMMAND_ACK, and the mission
+protocol for mission types MISSION, FENCE and RALLY:
+
+- upload: MISSION_COUNT -> MISSION_REQUEST_INT ... MISSION_ITEM_INT -> MISSION_ACK. The vehicle
+  drives it and re-requests a missing item every `rerequest_s` (MAVSDK never resends an item by
+  itself); a client that resends the last item after the final ACK was lost gets the ACK again.
+  A new MISSION_COUNT or MISSION_REQUEST_LIST abandons an unfinished upload (the stored list
+  stays as it was): a ground station that gave up may not say so (MAVSDK does not).
+- download: MISSION_REQUEST_LIST -> MISSION_COUNT; MISSION_REQUEST_INT / MISSION_REQUEST are
+  answered with MISSION_ITEM_INT; the client's MISSION_ACK ends it.
+- MISSION_CLEAR_ALL (one type or MAV_MISSION_TYPE_ALL), MISSION_SET_CURRENT -> MISSION_CURRENT.
+- errors by MISSION_ACK: MAV_MISSION_INVALID_SEQUENCE (item out of order, request past the end),
+  MAV_MISSION_UNSUPPORTED (unknown mission type), MAV_MISSION_NO_SPACE (more than `max_items`),
+  or the `reject` code for every MISSION_COUNT (to test how uploaders report a refusal).
+
+Every message has mission_type echoed. `loss` drops that fraction of outgoing messages (seeded),
+`latency_ms` delays them. Run it in a background thread (`with MockVehicle(...) as v:`) or in
+the foreground (`serve_forever`, what `lamde-mission mock-vehicle` does).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import heapq
+import random
+import select
+import socket
+import threading
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+from pymavlink.dialects.v20 import common as mavlink2
+
+from lamde_mission.items import MISSION_TYPE, MissionItem
+from lamde_mission.vehicle.wire import (
+    Endpoint,
+    WireItem,
+    from_wire,
+    mission_result_code,
+    mission_result_name,
+    mission_type_name,
+    parse_endpoint,
+    to_wire,
+)
+
+__all__ = ["MockVehicle", "MockStats", "CAPABILITIES"]
+
+_m = mavlink2
+
+#: AUTOPILOT_VERSION.capabilities of the mock
+CAPABILITIES = (
+    _m.MAV_PROTOCOL_CAPABILITY_MISSION_INT
+    | _m.MAV_PROTOCOL_CAPABILITY_MISSION_FENCE
+    | _m.MAV_PROTOCOL_CAPABILITY_MISSION_RALLY
+    | _m.MAV_PROTOCOL_CAPABILITY_MAVLINK2
+)
+
+_TYPES = (MISSION_TYPE.MISSION, MISSION_TYPE.FENCE, MISSION_TYPE.RALLY)
+_TYPE_ALL = _m.MAV_MISSION_TYPE_ALL
+
+
+@dataclass
+class MockStats:
+    """Message counters (for tests and the foreground summary)."""
+
+    received: int = 0
+    sent: int = 0
+    dropped: int = 0
+    rerequests: int = 0
+    uploads: dict[int, int] = field(default_factory=lambda: dict.fromkeys(_TYPES, 0))
+    downloads: dict[int, int] = field(default_factory=lambda: dict.fromkeys(_TYPES, 0))
+
+
+@dataclass
+class _Upload:
+    mission_type: int
+    count: int
+    items: list[WireItem]
+    last_request: float
+    src: tuple[int, int] = (0, 0)
+    tries: int = 0
+
+
+class _Capture:
+    """The 'file' pymavlink's MAVLink.send writes packed bytes to."""
+
+    def __init__(self) -> None:
+        self.buf = b""
+
+    def write(self, buf: bytes) -> None:
+        self.buf = bytes(buf)
+
+
+class MockVehicle:
+    """A mock quadrotor autopilot (MAVLink 2 over UDP) that stores what it is sent.
+
+    `connect` is where it talks: `udpout:HOST:PORT` sends to a ground station listening there
+    (MAVSDK's `udpin://`), `udpin:HOST:PORT` listens and answers whoever wrote last.
+    `reject` (a MAV_MISSION_RESULT code or name) makes it refuse every upload with that code;
+    `corrupt` (a function of a received WireItem) makes it store something else (a faulty
+    vehicle, to test the read-back comparison).
+    """
+
+    def __init__(
+        self,
+        connect: str = "udpout:127.0.0.1:14540",
+        *,
+        loss: float = 0.0,
+        latency_ms: float = 0.0,
+        seed: int | None = None,
+        reject: int | str | None = None,
+        max_items: int = 1000,
+        rerequest_s: float | None = None,
+        give_up_s: float = 5.0,
+        heartbeat_hz: float = 1.0,
+        system_id: int = 1,
+        component_id: int = 1,
+        corrupt: Callable[[WireItem], WireItem] | None = None,
+        on_event: Callable[[str], None] | None = None,
+    ) -> None:
+        if not 0.0 <= loss < 1.0:
+            raise ValueError(f"loss must be in [0, 1), got {loss!r}")
+        if latency_ms < 0:
+            raise ValueError(f"latency_ms must be >= 0, got {latency_ms!r}")
+        if max_items < 0:
+            raise ValueError(f"max_items must be >= 0, got {max_items!r}")
+        self.endpoint: Endpoint = parse_endpoint(connect)
+        self.loss = float(loss)
+        self.latency = float(latency_ms) / 1000.0
+        self.seed = seed
+        self.reject = None if reject is None else mission_result_code(reject)
+        self.max_items = int(max_items)
+        # well under MAVSDK's 0.5 s item timeout, and longer than a round trip at this latency
+        self.rerequest_s = (
+            float(rerequest_s) if rerequest_s is not None else max(0.1, 2 * self.latency + 0.05)
+        )
+        self.give_up_s = float(give_up_s)
+        self.heartbeat_period = 1.0 / float(heartbeat_hz)
+        self.system_id = int(system_id)
+        self.component_id = int(component_id)
+        self.corrupt = corrupt
+        self.on_event = on_event
+        self.stats = MockStats()
+
+        self._rng = random.Random(seed)
+        self._mav = _m.MAVLink(_Capture(), srcSystem=self.system_id, srcComponent=self.component_id)
+        self._mav.robust_parsing = True
+        self._lock = threading.Lock()
+        self._store: dict[int, list[WireItem]] = {t: [] for t in _TYPES}
+        self._upload: _Upload | None = None
+        self._completed: tuple[int, int] | None = None  # (mission_type, count) of the last upload
+        self._current = 0
+        self._outbox: list[tuple[float, int, bytes]] = []
+        self._outbox_n = 0
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._sock: socket.socket | None = None
+        self._peer: tuple[str, int] | None = None
+        self._next_heartbeat = 0.0
+        self._open()
+
+    # ------------------------------------------------------------------ life cycle
+
+    def _open(self) -> None:
+        ep = self.endpoint
+        sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        try:
+            if ep.mode == "udpin":
+                sock.bind((ep.host, ep.port))
+            else:
+                loopback = ep.host in ("127.0.0.1", "localhost")
+                sock.bind(("127.0.0.1" if loopback else "0.0.0.0", 0))
+                self._peer = (socket.gethostbyname(ep.host), ep.port)
+        except OSError:
+            sock.close()
+            raise
+        sock.setblocking(False)
+        self._sock = sock
+
+    @property
+    def address(self) -> tuple[str, int]:
+        """The local (host, port) the mock's socket is bound to."""
+        if self._sock is None:
+            raise RuntimeError("the mock vehicle is closed")
+        return self._sock.getsockname()
+
+    def start(self) -> MockVehicle:
+        """Run the vehicle in a background thread (returns self)."""
+        if self._thread is not None:
+            raise RuntimeError("the mock vehicle is already running")
+        if self._sock is None:
+            raise RuntimeError("the mock vehicle is closed")
+        self._stop.clear()
+        self._thread = threading.Thread(target=self._loop, name="mock-vehicle", daemon=True)
+        self._thread.start()
+        return self
+
+    def stop(self, timeout: float = 2.0) -> None:
+        """Stop the background thread and close the socket (idempotent)."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout)
+            self._thread = None
+        if self._sock is not None:
+            self._sock.close()
+            self._sock = None
+
+    close = stop
+
+    def serve_forever(self) -> None:
+        """Run in the calling thread until `stop()` is called from elsewhere or Ctrl-C."""
+        if self._sock is None:
+            raise RuntimeError("the mock vehicle is closed")
+        try:
+            self._loop()
+        finally:
+            self.stop()
+
+    def __enter__(self) -> MockVehicle:
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    # ------------------------------------------------------------------ stored lists
+
+    def wire_items(self, mission_type: int = MISSION_TYPE.MISSION) -> list[WireItem]:
+        """The list stored for `mission_type`, exactly as received."""
+        with self._lock:
+            return list(self._store[int(mission_type)])
+
+    def items(self, mission_type: int = MISSION_TYPE.MISSION) -> list[MissionItem]:
+        """The list stored for `mission_type` as MissionItems (lat/lon back in degrees)."""
+        return [from_wire(w) for w in self.wire_items(mission_type)]
+
+    def set_items(
+        self, items: Sequence[MissionItem | WireItem], mission_type: int | None = None
+    ) -> None:
+        """Store a list as if it had been uploaded (seq renumbered from 0)."""
+        wire = [w if isinstance(w, WireItem) else to_wire(w, seq=k) for k, w in enumerate(items)]
+        t = int(mission_type if mission_type is not None else (wire[0].mission_type if wire else 0))
+        if t not in _TYPES:
+            raise ValueError(f"unsupported mission type {t}")
+        with self._lock:
+            self._store[t] = wire
+
+    @property
+    def peer(self) -> tuple[str, int] | None:
+        """Where the mock sends (None for udpin until someone has written to it)."""
+        return self._peer
+
+    # ------------------------------------------------------------------ the loop
+
+    def _event(self, text: str) -> None:
+        if self.on_event is not None:
+            self.on_event(text)
+
+    def _loop(self) -> None:
+        sock = self._sock
+        assert sock is not None
+        while not self._stop.is_set():
+            now = time.monotonic()
+            if self._peer is not None and now >= self._next_heartbeat:
+                self._send_heartbeat()
+                self._next_heartbeat = now + self.heartbeat_period
+            self._tick(now)
+            self._flush(now)
+            wait = 0.02 if self._upload is not None else 0.1
+            if self._outbox:
+                wait = min(wait, self._outbox[0][0] - now)
+            if self._peer is not None:
+                wait = min(wait, self._next_heartbeat - now)
+            wait = max(wait, 0.0)
+            try:
+                ready, _, _ = select.select([sock], [], [], wait)
+            except (OSError, ValueError):
+                break
+            if not ready:
+                continue
+            for _ in range(64):  # drain what is there
+                try:
+                    data, addr = sock.recvfrom(65536)
+                except (BlockingIOError, InterruptedError):
+                    break
+                except OSError:  # e.g. ICMP port unreachable reported on some systems
+                    break
+                if self.endpoint.mode == "udpin" and addr != self._peer:
+                    self._peer = addr
+                    self._next_heartbeat = 0.0
+                try:
+                    msgs = self._mav.parse_buffer(data) or []
+                except Exception:  # a malformed datagram must not stop the vehicle
+                    continue
+                for msg in msgs:
+                    with self._lock:
+                        self._handle(msg)
+
+    def _tick(self, now: float) -> None:
+        """Vehicle-side re-request of a missing upload item; give up after `give_up_s`."""
+        with self._lock:
+            up = self._upload
+            if up is None or now - up.last_request < self.rerequest_s:
+                return
+            if up.tries * self.rerequest_s >= self.give_up_s:
+                self._upload = None
+                self._event(
+                    f"{mission_type_name(up.mission_type)} upload abandoned: no item "
+                    f"{len(up.items)} after {self.give_up_s:g} s"
+                )
+                self._ack(_m.MAV_MISSION_OPERATION_CANCELLED, up.mission_type, up.src)
+                return
+            up.tries += 1
+            self.stats.rerequests += 1
+            self._request(up, now)
+
+    def _flush(self, now: float) -> None:
+        while self._outbox and self._outbox[0][0] <= now:
+            _, _, buf = heapq.heappop(self._outbox)
+            self._sendto(buf)
+
+    # ------------------------------------------------------------------ sending
+
+    def _sendto(self, buf: bytes) -> None:
+        if self._sock is None or self._peer is None:
+            return
+        # nobody listening yet: a radio link would lose it too
+        with contextlib.suppress(OSError):
+            self._sock.sendto(buf, self._peer)
+
+    def _send(self, msg: object) -> None:
+        cap = self._mav.file
+        self._mav.send(msg)
+        self.stats.sent += 1
+        if self.loss > 0.0 and self._rng.random() < self.loss:
+            self.stats.dropped += 1
+            return
+        if self.latency > 0.0:
+            self._outbox_n += 1
+            heapq.heappush(self._outbox, (time.monotonic() + self.latency, self._outbox_n, cap.buf))
+        else:
+            self._sendto(cap.buf)
+
+    def _send_heartbeat(self) -> None:
+        self._send(
+            _m.MAVLink_heartbeat_message(
+                _m.MAV_TYPE_QUADROTOR, _m.MAV_AUTOPILOT_PX4,
+                _m.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 0, _m.MAV_STATE_STANDBY, 3,
+            )
+        )  # fmt: skip
+
+    def _ack(self, code: int, mission_type: int, to: tuple[int, int] = (0, 0)) -> None:
+        self._send(_m.MAVLink_mission_ack_message(to[0], to[1], code, mission_type))
+
+    def _request(self, up: _Upload, now: float) -> None:
+        up.last_request = now
+        self._send(
+            _m.MAVLink_mission_request_int_message(
+                up.src[0], up.src[1], len(up.items), up.mission_type
+            )
+        )
+
+    def _command_ack(self, command: int, result: int, src: tuple[int, int]) -> None:
+        self._send(_m.MAVLink_command_ack_message(command, result, 0, 0, src[0], src[1]))
+
+    def _autopilot_version(self) -> None:
+        self._send(
+            _m.MAVLink_autopilot_version_message(
+                CAPABILITIES, 0x010E0000, 0, 0, 0, [0] * 8, [0] * 8, [0] * 8, 0, 0, 0, [0] * 18
+            )
+        )
+
+    # ------------------------------------------------------------------ receiving
+
+    def _for_me(self, msg: object) -> bool:
+        ts = getattr(msg, "target_system", 0)
+        tc = getattr(msg, "target_component", 0)
+        return ts in (0, self.system_id) and tc in (0, self.component_id)
+
+    def _handle(self, msg: object) -> None:
+        self.stats.received += 1
+        name = msg.get_type()
+        if name in ("BAD_DATA", "HEARTBEAT") or not self._for_me(msg):
+            return
+        src = (msg.get_srcSystem(), msg.get_srcComponent())
+        handler = getattr(self, "_on_" + name.lower(), None)
+        if handler is not None:
+            handler(msg, src)
+
+    def _on_command_long(self, msg: object, src: tuple[int, int]) -> None:
+        cmd = int(msg.command)
+        if cmd == _m.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES or (
+            cmd == _m.MAV_CMD_REQUEST_MESSAGE
+            and int(msg.param1) == _m.MAVLINK_MSG_ID_AUTOPILOT_VERSION
+        ):
+            self._command_ack(cmd, _m.MAV_RESULT_ACCEPTED, src)
+            self._autopilot_version()
+        elif cmd == _m.MAV_CMD_REQUEST_MESSAGE and int(msg.param1) == _m.MAVLINK_MSG_ID_HEARTBEAT:
+            self._command_ack(cmd, _m.MAV_RESULT_ACCEPTED, src)
+            self._send_heartbeat()
+        else:
+            self._command_ack(cmd, _m.MAV_RESULT_UNSUPPORTED, src)
+
+    def _on_command_int(self, msg: object, src: tuple[int, int]) -> None:
+        self._command_ack(int(msg.command), _m.MAV_RESULT_UNSUPPORTED, src)
+
+    def _on_mission_count(self, msg: object, src: tuple[int, int]) -> None:
+        t, count = int(msg.mission_type), int(msg.count)
+        self._completed = None
+        if self._upload is not None:
+            old = self._upload
+            if not (old.mission_type == t and old.count == count and not old.items):
+                self._event(
+                    f"{mission_type_name(old.mission_type)} upload abandoned at item "
+                    f"{len(old.items)} of {old.count} (new MISSION_COUNT)"
+                )
+            self._upload = None
+        if t not in _TYPES:
+            self._ack(_m.MAV_MISSION_UNSUPPORTED, t, src)
+            return
+        if self.reject is not None:
+            self._event(
+                f"{mission_type_name(t)} upload of {count} items rejected: "
+                f"{mission_result_name(self.reject)}"
+            )
+            self._ack(self.reject, t, src)
+            return
+        if count > self.max_items:
+            self._event(f"{mission_type_name(t)} upload of {count} items rejected: no space")
+            self._ack(_m.MAV_MISSION_NO_SPACE, t, src)
+            return
+        if count == 0:
+            self._store[t] = []
+            self._completed = (t, 0)
+            self.stats.uploads[t] += 1
+            self._event(f"{mission_type_name(t)} cleared (empty upload)")
+            self._ack(_m.MAV_MISSION_ACCEPTED, t, src)
+            return
+        self._upload = _Upload(t, count, [], 0.0, src)
+        self._request(self._upload, time.monotonic())
+
+    def _on_mission_item_int(self, msg: object, src: tuple[int, int], scaled: bool = True) -> None:
+        t, seq = int(msg.mission_type), int(msg.seq)
+        up = self._upload
+        if up is None or up.mission_type != t:
+            # the final ACK was lost and the client resent its last item: ACK again
+            if self._completed is not None and self._completed == (t, seq + 1):
+                self._ack(_m.MAV_MISSION_ACCEPTED, t, src)
+            return  # a stray item (an abandoned transfer): ignored, as PX4 does
+        expected = len(up.items)
+        if seq < expected:
+            return  # a duplicate (answer to a re-request that crossed the item)
+        if seq > expected or seq >= up.count:
+            self._upload = None
+            self._event(
+                f"{mission_type_name(t)} upload aborted: item {seq} while expecting {expected}"
+            )
+            self._ack(_m.MAV_MISSION_INVALID_SEQUENCE, t, src)
+            return
+        if scaled:
+            item = WireItem(seq, int(msg.frame), int(msg.command), int(msg.current),
+                            int(msg.autocontinue), float(msg.param1), float(msg.param2),
+                            float(msg.param3), float(msg.param4), int(msg.x), int(msg.y),
+                            float(msg.z), t)  # fmt: skip
+        else:  # MISSION_ITEM (float x/y): stored as MISSION_ITEM_INT would carry it
+            item = to_wire(
+                MissionItem(seq, int(msg.command), int(msg.frame), int(msg.current),
+                            int(msg.autocontinue), msg.param1, msg.param2, msg.param3,
+                            msg.param4, msg.x, msg.y, msg.z, t)
+            )  # fmt: skip
+        if self.corrupt is not None:
+            item = self.corrupt(item)
+        up.items.append(item)
+        up.tries = 0
+        if len(up.items) == up.count:
+            self._store[t] = list(up.items)
+            self._upload = None
+            self._completed = (t, up.count)
+            self.stats.uploads[t] += 1
+            self._event(f"{mission_type_name(t)} received: {up.count} items")
+            self._ack(_m.MAV_MISSION_ACCEPTED, t, src)
+        else:
+            self._request(up, time.monotonic())
+
+    def _on_mission_item(self, msg: object, src: tuple[int, int]) -> None:
+        self._on_mission_item_int(msg, src, scaled=False)
+
+    def _on_mission_request_list(self, msg: object, src: tuple[int, int]) -> None:
+        t = int(msg.mission_type)
+        if t not in _TYPES:
+            self._ack(_m.MAV_MISSION_UNSUPPORTED, t, src)
+            return
+        if self._upload is not None:  # the ground station gave up on it (MAVSDK says nothing)
+            old = self._upload
+            self._event(
+                f"{mission_type_name(old.mission_type)} upload abandoned at item "
+                f"{len(old.items)} of {old.count} (download requested)"
+            )
+            self._upload = None
+        self._send(_m.MAVLink_mission_count_message(src[0], src[1], len(self._store[t]), t))
+
+    def _on_mission_request_int(self, msg: object, src: tuple[int, int]) -> None:
+        t, seq = int(msg.mission_type), int(msg.seq)
+        if t not in _TYPES:
+            self._ack(_m.MAV_MISSION_UNSUPPORTED, t, src)
+            return
+        if self._upload is not None and self._upload.mission_type == t:
+            self._ack(_m.MAV_MISSION_DENIED, t, src)  # busy receiving that list
+            return
+        items = self._store[t]
+        if not 0 <= seq < len(items):
+            self._ack(_m.MAV_MISSION_INVALID_SEQUENCE, t, src)
+            return
+        w = items[seq]
+        self._send(_m.MAVLink_mission_item_int_message(src[0], src[1], *w.fields()))
+
+    _on_mission_request = _on_mission_request_int
+
+    def _on_mission_ack(self, msg: object, src: tuple[int, int]) -> None:
+        t = int(msg.mission_type)
+        if int(msg.type) == _m.MAV_MISSION_ACCEPTED:
+            if t in _TYPES and self._upload is None:
+                self.stats.downloads[t] += 1
+                self._event(f"{mission_type_name(t)} sent: {len(self._store[t])} items")
+            return
+        if self._upload is not None and self._upload.mission_type == t:
+            self._event(
+                f"{mission_type_name(t)} upload cancelled by the ground station "
+                f"({mission_result_name(int(msg.type))})"
+            )
+            self._upload = None
+
+    def _on_mission_clear_all(self, msg: object, src: tuple[int, int]) -> None:
+        t = int(msg.mission_type)
+        if t == _TYPE_ALL:
+            for k in _TYPES:
+                self._store[k] = []
+        elif t in _TYPES:
+            self._store[t] = []
+        else:
+            self._ack(_m.MAV_MISSION_UNSUPPORTED, t, src)
+            return
+        if self._upload is not None and t in (_TYPE_ALL, self._upload.mission_type):
+            self._upload = None
+        self._completed = None
+        self._event(f"{'all lists' if t == _TYPE_ALL else mission_type_name(t)} cleared")
+        self._ack(_m.MAV_MISSION_ACCEPTED, t, src)
+
+    def _on_mission_set_current(self, msg: object, src: tuple[int, int]) -> None:
+        seq = int(msg.seq)
+        n = len(self._store[MISSION_TYPE.MISSION])
+        if 0 <= seq < n:
+            self._current = seq
+        self._send(_m.MAVLink_mission_current_message(self._current, n, 0, 0))

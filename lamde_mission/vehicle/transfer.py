@@ -1,0 +1,297 @@
+"""Upload, read back, compare, retry: the part both uploaders share.
+
+A client (`MavsdkClient` in `upload.py`, `MavlinkClient` in `mavlink_client.py`) knows how to
+connect, upload, download and clear one list of one mission type. `upload_and_verify` runs the
+whole transfer on it: mission up, fence up (or cleared), both down, compared item by item, and
+the whole transfer again (up to `attempts` times) when a step times out or the read-back
+differs. The read-back is what decides: an upload whose final MISSION_ACK was lost (MAVSDK
+reports a timeout) still counts when the vehicle hands back exactly what was sent.
+
+A refusal by the vehicle (MISSION_ACK with an error code, other than a generic error) is not
+retried: the vehicle would refuse again.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Protocol
+
+from pymavlink.dialects.v20 import common as mavlink2
+
+from lamde_mission.items import MISSION_TYPE, MissionItem
+from lamde_mission.vehicle.wire import (
+    Difference,
+    WireItem,
+    compare_items,
+    mission_type_name,
+    wire_mission,
+)
+
+__all__ = [
+    "VehicleError",
+    "NoVehicleError",
+    "TransferError",
+    "MissionRejectedError",
+    "ReadbackMismatchError",
+    "VehicleInfo",
+    "MissionClient",
+    "UploadReport",
+    "upload_and_verify",
+]
+
+
+class VehicleError(Exception):
+    """A transfer to or from a vehicle failed (the CLI prints it and exits with status 1)."""
+
+    report: UploadReport | None = None
+
+
+class NoVehicleError(VehicleError):
+    """Nothing answered at the address within the timeout."""
+
+
+class TransferError(VehicleError):
+    """A transfer step timed out or broke off (lost messages, vehicle gone); worth a retry."""
+
+
+class MissionRejectedError(VehicleError):
+    """The vehicle refused a list: `name` is its MISSION_ACK code (or MAVSDK's result) by name."""
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        name: str,
+        code: int | None = None,
+        mission_type: int = MISSION_TYPE.MISSION,
+        retryable: bool = False,
+    ) -> None:
+        super().__init__(message)
+        self.name = name
+        self.code = code
+        self.mission_type = mission_type
+        self.retryable = retryable
+
+
+class ReadbackMismatchError(VehicleError):
+    """The lists read back differ from what was sent; `differences` says where."""
+
+    def __init__(self, differences: Sequence[Difference]) -> None:
+        self.differences = list(differences)
+        shown = "; ".join(str(d) for d in self.differences[:5])
+        more = len(self.differences) - 5
+        tail = f" (+{more} more)" if more > 0 else ""
+        super().__init__(f"read-back differs from what was sent: {shown}{tail}")
+
+
+#: MISSION_ACK codes that mean "try again" rather than "no"
+RETRYABLE_ACKS = frozenset({mavlink2.MAV_MISSION_ERROR, mavlink2.MAV_MISSION_OPERATION_CANCELLED})
+
+
+@dataclass(frozen=True)
+class VehicleInfo:
+    """Who answered: MAVLink system/component ids, autopilot and vehicle type (names)."""
+
+    system_id: int
+    component_id: int = 1
+    autopilot: str | None = None  # e.g. "PX4", "ARDUPILOTMEGA"
+    vehicle_type: str | None = None  # e.g. "quadrotor", "multicopter"
+
+    @classmethod
+    def from_heartbeat(cls, msg: object) -> VehicleInfo:
+        """From a pymavlink HEARTBEAT message."""
+        ap = mavlink2.enums["MAV_AUTOPILOT"].get(int(msg.autopilot))
+        vt = mavlink2.enums["MAV_TYPE"].get(int(msg.type))
+        return cls(
+            system_id=int(msg.get_srcSystem()), component_id=int(msg.get_srcComponent()),
+            autopilot=ap.name.removeprefix("MAV_AUTOPILOT_") if ap else None,
+            vehicle_type=vt.name.removeprefix("MAV_TYPE_").lower() if vt else None,
+        )  # fmt: skip
+
+    def describe(self) -> str:
+        parts = [f"system {self.system_id}"]
+        parts += [p for p in (self.autopilot, self.vehicle_type) if p]
+        return ", ".join(parts)
+
+
+class MissionClient(Protocol):
+    """What `upload_and_verify` needs from an uploader; every call blocks at most `timeout` s."""
+
+    name: str
+
+    def connect(self, timeout: float) -> VehicleInfo: ...
+
+    def upload(self, items: Sequence[WireItem], mission_type: int, timeout: float) -> None: ...
+
+    def download(self, mission_type: int, timeout: float) -> list[WireItem]: ...
+
+    def clear(self, mission_type: int, timeout: float) -> None: ...
+
+    def close(self) -> None: ...
+
+
+@dataclass
+class UploadReport:
+    """What happened: timings in seconds, attempts used, notes and read-back differences."""
+
+    via: str
+    endpoint: str
+    mission_items: int
+    fence_items: int | None  # None: the fence was left as it was (no fence in the file)
+    vehicle: VehicleInfo | None = None
+    ok: bool = False
+    connect_s: float | None = None
+    upload_s: float | None = None
+    verify_s: float | None = None
+    total_s: float | None = None
+    attempts: int = 0
+    max_attempts: int = 1
+    errors: list[str] = field(default_factory=list)  # one line per failed attempt
+    notes: list[str] = field(default_factory=list)
+    differences: list[Difference] = field(default_factory=list)
+
+    def lines(self, max_differences: int = 20) -> list[str]:
+        """The short report `lamde-mission upload` prints."""
+        out = []
+        if self.vehicle is not None and self.connect_s is not None:
+            out.append(
+                f"connected to {self.vehicle.describe()} at {self.endpoint} via {self.via} "
+                f"in {self.connect_s:.2f} s"
+            )
+        if self.fence_items is None:
+            fence = "(the fence left as it is: the file has none)"
+        elif self.fence_items == 0:
+            fence = "and cleared the fence (the file has none)"
+        else:
+            fence = f"and {self.fence_items} fence items"
+        for k, err in enumerate(self.errors, start=1):
+            out.append(f"attempt {k} of {self.max_attempts} failed: {err}")
+        out.extend(f"note: {n}" for n in self.notes)
+        if self.ok:
+            out.append(
+                f"uploaded {self.mission_items} mission items {fence} in "
+                f"{self.upload_s:.2f} s (attempt {self.attempts} of {self.max_attempts})"
+            )
+            out.append(f"read back and compared in {self.verify_s:.2f} s: identical")
+        elif self.differences:
+            out.append(
+                f"read-back differs from what was sent ({len(self.differences)} differences):"
+            )
+            out.extend(f"  {d}" for d in self.differences[:max_differences])
+            if len(self.differences) > max_differences:
+                out.append(f"  ... and {len(self.differences) - max_differences} more")
+        return out
+
+
+def _step(fn: Callable[[float], object], deadline: float, what: str) -> object:
+    left = deadline - time.monotonic()
+    if left <= 0:
+        raise TransferError(f"{what}: out of time for this attempt")
+    return fn(left)
+
+
+def upload_and_verify(
+    client: MissionClient,
+    mission: Sequence[MissionItem],
+    fence: Sequence[MissionItem] | None = (),
+    *,
+    timeout: float = 30.0,
+    attempts: int = 3,
+    endpoint: str = "",
+    log: Callable[[str], None] | None = None,
+) -> UploadReport:
+    """Upload `mission` and `fence` through `client`, read both back and compare them.
+
+    `fence=None` leaves the vehicle's fence alone; an empty fence clears it. Connecting may
+    take up to `timeout` s, and so may each attempt. Returns the report on success; raises
+    NoVehicleError, MissionRejectedError, TransferError or ReadbackMismatchError (each with
+    `.report`) on failure. ValueError for items MAVLink cannot carry.
+    """
+    if attempts < 1:
+        raise ValueError(f"attempts must be >= 1, got {attempts}")
+    if timeout <= 0:
+        raise ValueError(f"timeout must be > 0, got {timeout}")
+    if not mission:
+        raise ValueError("the mission is empty")
+    up_mission = wire_mission(mission, MISSION_TYPE.MISSION)
+    up_fence = None if fence is None else wire_mission(fence, MISSION_TYPE.FENCE)
+    report = UploadReport(
+        via=client.name, endpoint=endpoint, mission_items=len(up_mission),
+        fence_items=None if up_fence is None else len(up_fence), max_attempts=attempts,
+    )  # fmt: skip
+    say = log or (lambda _s: None)
+    t_start = time.monotonic()
+    try:
+        t0 = time.monotonic()
+        report.vehicle = client.connect(timeout)
+        report.connect_s = time.monotonic() - t0
+        say(f"connected to {report.vehicle.describe()} in {report.connect_s:.2f} s")
+        last: VehicleError | None = None
+        for attempt in range(1, attempts + 1):
+            report.attempts = attempt
+            report.differences = []
+            try:
+                _attempt(client, up_mission, up_fence, timeout, report, say)
+                report.ok = True
+                return report
+            except MissionRejectedError as exc:
+                if not exc.retryable:
+                    raise
+                last = exc
+            except (TransferError, ReadbackMismatchError) as exc:
+                last = exc
+            if attempt < attempts:
+                report.errors.append(str(last))
+                say(f"attempt {attempt} of {attempts} failed: {last}")
+        assert last is not None
+        raise last
+    except VehicleError as exc:
+        exc.report = report
+        raise
+    finally:
+        report.total_s = time.monotonic() - t_start
+
+
+def _attempt(
+    client: MissionClient,
+    mission: list[WireItem],
+    fence: list[WireItem] | None,
+    timeout: float,
+    report: UploadReport,
+    say: Callable[[str], None],
+) -> None:
+    deadline = time.monotonic() + timeout
+    unconfirmed: list[str] = []
+    t0 = time.monotonic()
+    lists = [(MISSION_TYPE.MISSION, mission)]
+    if fence is not None:
+        lists.append((MISSION_TYPE.FENCE, fence))
+    for t, items in lists:
+        what = f"{mission_type_name(t)} upload"
+        try:
+            if items:
+                _step(lambda left, t=t, items=items: client.upload(items, t, left), deadline, what)
+            else:
+                what = f"{mission_type_name(t)} clear"
+                _step(lambda left, t=t: client.clear(t, left), deadline, what)
+        except TransferError as exc:
+            # the final ACK may be what was lost: the read-back decides
+            unconfirmed.append(str(exc))
+            say(f"{exc}; the read-back decides")
+    report.upload_s = time.monotonic() - t0
+    t0 = time.monotonic()
+    diffs: list[Difference] = []
+    for t, items in lists:
+        got = _step(
+            lambda left, t=t: client.download(t, left), deadline, f"{mission_type_name(t)} download"
+        )
+        diffs += compare_items(items, got, mission_type_name(t))
+    report.verify_s = time.monotonic() - t0
+    report.differences = diffs
+    if diffs and unconfirmed:
+        raise TransferError(f"{'; '.join(unconfirmed)}; the read-back differs ({diffs[0]})")
+    if diffs:
+        raise ReadbackMismatchError(diffs)
+    report.notes.extend(f"{u}, but the read-back matches" for u in unconfirmed)

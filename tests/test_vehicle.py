@@ -1,0 +1,301 @@
+"""Upload + read-back through MAVSDK and through pymavlink, against the mock vehicle.
+
+Every test takes a fresh UDP port on 127.0.0.1, and every mock/client is closed at its end.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from dataclasses import replace
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from lamde_mission.cli import main
+from lamde_mission.formats import read_mission, write_mission
+from lamde_mission.items import MISSION_TYPE
+from lamde_mission.vehicle.mock import MockVehicle
+from lamde_mission.vehicle.transfer import (
+    MissionRejectedError,
+    NoVehicleError,
+    ReadbackMismatchError,
+)
+from lamde_mission.vehicle.upload import upload_mission
+from lamde_mission.vehicle.wire import compare_items
+from planner_core.mapio import load_map
+from tests.test_vehicle_helpers import free_udp_port, hand_fence, hand_mission
+
+VIAS = ("mavsdk", "pymavlink")
+
+MAP = {
+    "name": "vehicle",
+    "origin": {"lat": 47.3977, "lon": 8.5456, "alt": 488.0},
+    "area": {"width": 2000, "height": 1500},
+    "start": [100, 100],
+    "end": [1900, 1400],
+    "sensors": [{"id": "a", "x": 500, "y": 400}, {"id": "b", "x": 1400, "y": 900}],
+    "obstacles": {
+        "circles": [{"x": 1000, "y": 700, "radius": 60}],
+        "rectangles": [{"x": 300, "y": 1100, "length": 120, "width": 50, "angle_deg": 35}],
+        "no_fly_zones": [{"vertices": [[1500, 200], [1700, 250], [1600, 400]]}],
+    },
+    "uav": {"altitude": 80, "max_speed": 15},
+}
+
+
+@pytest.fixture(autouse=True)
+def _no_leftover_mock_threads():
+    yield
+    left = [t for t in threading.enumerate() if t.name == "mock-vehicle" and t.is_alive()]
+    assert not left, "a mock vehicle thread outlived its test"
+
+
+@pytest.fixture
+def port() -> int:
+    return free_udp_port()
+
+
+def _mock(port: int, **kw) -> MockVehicle:
+    """A mock sending to 127.0.0.1:port; 4 Hz heartbeats so tests connect fast."""
+    kw.setdefault("heartbeat_hz", 4.0)
+    return MockVehicle(f"udpout:127.0.0.1:{port}", **kw)
+
+
+def _listen(port: int) -> str:
+    return f"udpin://127.0.0.1:{port}"
+
+
+@pytest.fixture(scope="module")
+def plan_files(tmp_path_factory):
+    """A .plan (mission + fence of 3 shapes) and a .waypoints of the same plan."""
+    m = load_map(MAP)
+    plan = SimpleNamespace(hover_points=np.array([[500, 420], [1400, 880]]),
+                           hover_times=np.array([31.5, 47.25]))  # fmt: skip
+    d = tmp_path_factory.mktemp("plans")
+    return write_mission(d / "demo.plan", plan, m), write_mission(d / "demo.waypoints", plan, m)
+
+
+# ----------------------------------------------------------------------------- round trips
+
+
+@pytest.mark.parametrize("via", VIAS)
+def test_upload_and_read_back(via, port):
+    mission, fence = hand_mission(3), hand_fence()
+    with _mock(port) as v:
+        report = upload_mission(mission, fence, connect=_listen(port), via=via, timeout=10)
+        assert compare_items(mission, v.items(MISSION_TYPE.MISSION)) == []
+        assert compare_items(fence, v.items(MISSION_TYPE.FENCE), "fence") == []
+    assert report.ok and report.attempts == 1 and report.via == via
+    assert (report.mission_items, report.fence_items) == (7, 5)
+    assert report.vehicle.system_id == 1 and report.vehicle.autopilot == "PX4"
+    assert report.connect_s < 2.0 and report.upload_s < 2.0 and report.verify_s < 2.0
+    assert "identical" in report.lines()[-1]
+
+
+@pytest.mark.parametrize("via", VIAS)
+def test_fifty_items_round_trip(via, port):
+    mission = hand_mission(46)
+    assert len(mission) == 50
+    with _mock(port) as v:
+        report = upload_mission(mission, [], connect=_listen(port), via=via, timeout=10)
+        got = v.items()
+    assert report.ok and report.mission_items == 50
+    assert len(got) == 50 and compare_items(mission, got) == []
+    # lat/lon came back as int 1e7 degrees: within 1e-7 degree, and NaN yaw stayed NaN
+    for a, b in zip(mission, got, strict=True):
+        assert abs(a.x - b.x) <= 1e-7 and abs(a.y - b.y) <= 1e-7
+    assert math.isnan(got[0].param4) and got[0].current == 1
+    assert got[2].param1 == pytest.approx(mission[2].param1, rel=1e-7)  # float32 on the wire
+
+
+@pytest.mark.parametrize("via", VIAS)
+def test_vehicle_side_rerequests_keep_an_upload_going(via, port):
+    """20% of the mock's messages lost: 2 seeded uploads each, whole-transfer retries allowed."""
+    mission, fence = hand_mission(4), hand_fence()
+    for seed in (1, 2):
+        with _mock(port, loss=0.2, seed=seed) as v:
+            t0 = time.monotonic()
+            report = upload_mission(mission, fence, connect=_listen(port), via=via, timeout=20,
+                                    attempts=5)  # fmt: skip
+            assert time.monotonic() - t0 < 60
+            assert report.ok
+            assert compare_items(mission, v.items()) == []
+            assert v.stats.dropped > 0
+        port = free_udp_port()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("via", VIAS)
+def test_twenty_seeded_uploads_with_20_percent_loss(via):
+    mission, fence = hand_mission(6), hand_fence()
+    for seed in range(20):
+        port = free_udp_port()
+        with _mock(port, loss=0.2, seed=seed) as v:
+            t0 = time.monotonic()
+            report = upload_mission(mission, fence, connect=_listen(port), via=via, timeout=20,
+                                    attempts=5)  # fmt: skip
+            took = time.monotonic() - t0
+            assert report.ok, f"seed {seed}"
+            assert took < 60, f"seed {seed}: {took:.1f} s"
+            assert compare_items(fence, v.items(MISSION_TYPE.FENCE), "fence") == []
+
+
+# ----------------------------------------------------------------------------- failures
+
+
+@pytest.mark.parametrize("via", VIAS)
+def test_no_vehicle_times_out_within_the_timeout(via, port):
+    t0 = time.monotonic()
+    with pytest.raises(NoVehicleError, match="no vehicle heard at .* within 1 s") as info:
+        upload_mission(hand_mission(1), [], connect=_listen(port), via=via, timeout=1.0)
+    assert 0.9 <= time.monotonic() - t0 < 3.0
+    assert info.value.report is not None and not info.value.report.ok
+
+
+@pytest.mark.parametrize(
+    ("via", "name", "shown"),
+    [("pymavlink", "MAV_MISSION_NO_SPACE", "MAV_MISSION_NO_SPACE"),
+     ("mavsdk", "TOO_MANY_MISSION_ITEMS", "MAV_MISSION_NO_SPACE")],
+)  # fmt: skip
+def test_rejecting_vehicle_gives_its_code_by_name(via, name, shown, port):
+    with _mock(port, reject="MAV_MISSION_NO_SPACE") as v:
+        with pytest.raises(MissionRejectedError) as info:
+            upload_mission(hand_mission(2), [], connect=_listen(port), via=via, timeout=10)
+        assert v.items() == []
+    exc = info.value
+    assert exc.name == name and shown in str(exc)
+    assert exc.report.attempts == 1  # a refusal is not retried
+
+
+@pytest.mark.parametrize("via", VIAS)
+def test_read_back_mismatch_names_item_and_field(via, port):
+    def faulty(w):
+        return replace(w, param1=w.param1 + 1.0) if w.seq == 3 and w.mission_type == 0 else w
+
+    mismatch = pytest.raises(ReadbackMismatchError, match="mission item 3: param1")
+    with _mock(port, corrupt=faulty), mismatch as info:
+        upload_mission(hand_mission(3), hand_fence(), connect=_listen(port), via=via,
+                       timeout=10, attempts=2)  # fmt: skip
+    exc = info.value
+    assert [(d.what, d.index, d.field) for d in exc.differences] == [("mission", 3, "param1")]
+    assert exc.report.attempts == 2 and len(exc.report.errors) == 1
+
+
+def test_empty_fence_clears_the_vehicles_fence_and_none_leaves_it(port):
+    with _mock(port) as v:
+        v.set_items(hand_fence(), MISSION_TYPE.FENCE)
+        upload_mission(hand_mission(1), None, connect=_listen(port), via="pymavlink", timeout=5)
+        assert len(v.items(MISSION_TYPE.FENCE)) == 5
+        upload_mission(hand_mission(1), [], connect=_listen(port), via="pymavlink", timeout=5)
+        assert v.items(MISSION_TYPE.FENCE) == []
+
+
+def test_items_mavlink_cannot_carry_are_refused_before_connecting(port):
+    bad = [replace(hand_mission(1)[0], param1=1e40)]
+    t0 = time.monotonic()
+    with pytest.raises(ValueError, match="float32"):
+        upload_mission(bad, [], connect=_listen(port), via="pymavlink", timeout=5)
+    assert time.monotonic() - t0 < 1.0
+
+
+def test_mock_vehicle_as_udpin_and_client_as_udpout(port):
+    mission = hand_mission(2)
+    with MockVehicle(f"udpin:127.0.0.1:{port}") as v:
+        for via in VIAS:
+            report = upload_mission(mission, [], connect=f"udpout://127.0.0.1:{port}", via=via,
+                                    timeout=10)  # fmt: skip
+            assert report.ok and compare_items(mission, v.items()) == []
+
+
+# ----------------------------------------------------------------------------- the CLI
+
+
+@pytest.mark.parametrize("via", VIAS)
+def test_cli_upload_plan(via, port, plan_files, capsys):
+    plan_path, _ = plan_files
+    mission, fence = read_mission(plan_path)
+    with _mock(port) as v:
+        rc = main(["upload", str(plan_path), "--connect", _listen(port), "--via", via,
+                   "--timeout", "10"])  # fmt: skip
+        assert compare_items(mission, v.items()) == []
+        assert compare_items(fence, v.items(MISSION_TYPE.FENCE), "fence") == []
+    out = capsys.readouterr().out
+    assert rc == 0
+    assert f"via {via}" in out and "identical" in out
+    assert f"uploaded {len(mission)} mission items and {len(fence)} fence items" in out
+
+
+def test_cli_upload_waypoints_uploads_the_same_mission_and_leaves_the_fence(
+    port, plan_files, capsys
+):
+    plan_path, wp_path = plan_files
+    mission_plan, _ = read_mission(plan_path)
+    with _mock(port) as v:
+        v.set_items(hand_fence(), MISSION_TYPE.FENCE)
+        rc = main(["upload", str(wp_path), "--connect", _listen(port), "--via", "pymavlink",
+                   "--timeout", "10"])  # fmt: skip
+        got = v.items()
+        assert len(v.items(MISSION_TYPE.FENCE)) == 5
+    assert rc == 0 and "fence left as it is" in capsys.readouterr().out
+    # the home line is not uploaded: item 0 is the TAKEOFF, as from the .plan (NaN yaw -> 0)
+    assert [w.command for w in got] == [w.command for w in mission_plan]
+    assert compare_items([it.without_nan() for it in mission_plan], got) == []
+
+
+def test_cli_upload_errors(port, plan_files, tmp_path, capsys):
+    plan_path, _ = plan_files
+    assert main(["upload", str(tmp_path / "missing.plan")]) == 2
+    assert "file not found" in capsys.readouterr().err
+    bad = tmp_path / "bad.plan"
+    bad.write_text("{not json")
+    assert main(["upload", str(bad)]) == 2
+    assert main(["upload", str(plan_path), "--attempts", "0"]) == 2
+    assert main(["upload", str(plan_path), "--timeout", "-1"]) == 2
+    capsys.readouterr()
+    # no vehicle: exit 1 within the timeout
+    t0 = time.monotonic()
+    rc = main(["upload", str(plan_path), "--connect", _listen(port), "--via", "pymavlink",
+               "--timeout", "0.5"])  # fmt: skip
+    assert rc == 1 and time.monotonic() - t0 < 2.0
+    assert "no vehicle heard" in capsys.readouterr().err
+    # a rejecting vehicle: exit 1, the code by name
+    with _mock(port, reject="DENIED"):
+        rc = main(["upload", str(plan_path), "--connect", _listen(port), "--via", "pymavlink",
+                   "--timeout", "5"])  # fmt: skip
+    assert rc == 1 and "MAV_MISSION_DENIED" in capsys.readouterr().err
+
+
+def test_cli_mock_vehicle_runs_until_ctrl_c(port):
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "lamde_mission.cli", "mock-vehicle", "--connect",
+         f"udpout:127.0.0.1:{port}", "--loss", "0.1", "--seed", "3"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+    )  # fmt: skip
+    try:
+        first = proc.stdout.readline()
+        assert "mock vehicle" in first and f"127.0.0.1:{port}" in first and "loss 0.1" in first
+        report = upload_mission(hand_mission(2), hand_fence(), connect=_listen(port),
+                                via="pymavlink", timeout=10, attempts=5)  # fmt: skip
+        assert report.ok
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=10)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert proc.returncode == 0
+    assert "mission received: 6 items" in out and "stopped:" in err
+
+
+def test_cli_mock_vehicle_bad_options():
+    assert main(["mock-vehicle", "--loss", "1.5"]) == 2
+    assert main(["mock-vehicle", "--reject", "NOT_A_CODE"]) == 2
+    assert main(["mock-vehicle", "--connect", "tcp:1.2.3.4:5"]) == 2

@@ -1,0 +1,110 @@
+"""Helpers for the tests/test_vehicle*.py files (no tests here): ports, missions, a raw GCS."""
+
+from __future__ import annotations
+
+import math
+import select
+import socket
+import time
+from typing import Any
+
+from pymavlink.dialects.v20 import common as mavlink2
+
+from lamde_mission.items import CMD, FRAME, MISSION_TYPE, MissionItem
+
+NAN = math.nan
+
+
+def free_udp_port() -> int:
+    """A UDP port on 127.0.0.1 nobody uses right now (bind to port 0, read it, close)."""
+    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    try:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+    finally:
+        s.close()
+
+
+def hand_mission(n_hover: int = 3, *, lat: float = -35.3632, lon: float = 149.1652) -> list:
+    """TAKEOFF, DO_CHANGE_SPEED, n LOITER_TIME, WAYPOINT, LAND: n + 4 items, NaN yaws included."""
+    rel = FRAME.GLOBAL_RELATIVE_ALT
+    out = [
+        MissionItem(0, CMD.TAKEOFF, rel, param4=NAN, x=lat, y=lon, z=90.0),
+        MissionItem(1, CMD.DO_CHANGE_SPEED, FRAME.MISSION, param1=1.0, param2=18.0, param3=-1.0),
+    ]
+    for k in range(n_hover):
+        out.append(
+            MissionItem(len(out), CMD.LOITER_TIME, rel, param1=12.5 + k / 3,
+                        x=lat + 1.234567891e-3 * (k + 1), y=lon - 7.654321e-4 * (k + 1), z=90.0)
+        )  # fmt: skip
+    end = (lat + 0.01, lon + 0.02)
+    out.append(MissionItem(len(out), CMD.WAYPOINT, rel, param4=NAN, x=end[0], y=end[1], z=90.0))
+    out.append(MissionItem(len(out), CMD.LAND, rel, param4=NAN, x=end[0], y=end[1], z=0.0))
+    return out
+
+
+def hand_fence(*, lat: float = -35.3632, lon: float = 149.1652) -> list:
+    """One exclusion circle and one exclusion quadrilateral: 5 FENCE items."""
+    items = [
+        MissionItem(0, CMD.FENCE_CIRCLE_EXCLUSION, FRAME.GLOBAL, param1=80.0,
+                    x=lat + 0.002, y=lon + 0.003, mission_type=MISSION_TYPE.FENCE),
+    ]  # fmt: skip
+    for k, (dy, dx) in enumerate([(0, 0), (0, 1e-3), (1e-3, 1e-3), (1e-3, 0)]):
+        items.append(
+            MissionItem(1 + k, CMD.FENCE_POLYGON_VERTEX_EXCLUSION, FRAME.GLOBAL, param1=4.0,
+                        x=lat + 0.005 + dy, y=lon + 0.005 + dx, mission_type=MISSION_TYPE.FENCE)
+        )  # fmt: skip
+    return items
+
+
+class RawGcs:
+    """A bare ground station for protocol tests: send any message, wait for a given type."""
+
+    def __init__(self, port: int) -> None:
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.sock.bind(("127.0.0.1", port))
+        self.sock.setblocking(False)
+        self.mav = mavlink2.MAVLink(None, srcSystem=255, srcComponent=190)
+        self.mav.robust_parsing = True
+        self.peer: tuple[str, int] | None = None
+        self.pending: list[Any] = []
+
+    def close(self) -> None:
+        self.sock.close()
+
+    def __enter__(self) -> RawGcs:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def send(self, msg: Any) -> None:
+        assert self.peer is not None, "wait for the vehicle's heartbeat first"
+        self.sock.sendto(msg.pack(self.mav), self.peer)
+        self.mav.seq = (self.mav.seq + 1) % 256
+
+    def _fill(self, until: float) -> None:
+        left = until - time.monotonic()
+        if left <= 0:
+            return
+        ready, _, _ = select.select([self.sock], [], [], left)
+        if ready:
+            data, addr = self.sock.recvfrom(65536)
+            self.peer = addr
+            for m in self.mav.parse_buffer(data) or []:
+                self.pending.append(m)
+
+    def wait(self, mtype: str, timeout: float = 2.0, **fields: Any) -> Any | None:
+        """The next message of `mtype` whose fields match, within `timeout` s; else None."""
+        until = time.monotonic() + timeout
+        while True:
+            for k, m in enumerate(self.pending):
+                if m.get_type() == mtype and all(getattr(m, f) == v for f, v in fields.items()):
+                    del self.pending[: k + 1]
+                    return m
+            if time.monotonic() >= until:
+                return None
+            self._fill(until)
+
+    def drain(self) -> None:
+        self.pending.clear()
