@@ -217,9 +217,10 @@ def fence_shapes(map: Any) -> tuple[list[tuple[np.ndarray, float]], list[np.ndar
 def geofence_items(map: Any) -> list[MissionItem]:  # noqa: A002
     """Exclusion fence (MAV_MISSION_TYPE_FENCE) items for every obstacle of the map.
 
-    Circles: FENCE_CIRCLE_EXCLUSION (param1 = radius m). Rectangles and no-fly zones:
-    FENCE_POLYGON_VERTEX_EXCLUSION, one item per vertex (param1 = vertex count). Frame GLOBAL
-    (the altitude is unused by fences).
+    Rectangles and no-fly zones: FENCE_POLYGON_VERTEX_EXCLUSION, one item per vertex (param1 =
+    vertex count); then circles: FENCE_CIRCLE_EXCLUSION (param1 = radius m). Polygons first and
+    autocontinue 0, as QGroundControl and MAVSDK's importer produce them, so the same fence
+    reads the same through either. Frame GLOBAL (the altitude is unused by fences).
     """
     circles, polys = fence_shapes(map)
     out: list[MissionItem] = []
@@ -227,17 +228,17 @@ def geofence_items(map: Any) -> list[MissionItem]:  # noqa: A002
     def add(command: int, p1: float, lat: float, lon: float) -> None:
         out.append(
             MissionItem(
-                seq=len(out), command=command, frame=FRAME.GLOBAL, param1=float(p1),
-                x=lat, y=lon, z=0.0, mission_type=MISSION_TYPE.FENCE,
+                seq=len(out), command=command, frame=FRAME.GLOBAL, autocontinue=0,
+                param1=float(p1), x=lat, y=lon, z=0.0, mission_type=MISSION_TYPE.FENCE,
             )
         )  # fmt: skip
 
-    for centre, r in circles:
-        ((lat, lon),) = _latlon(map, centre)
-        add(CMD.FENCE_CIRCLE_EXCLUSION, r, lat, lon)
     for poly in polys:
         for lat, lon in _latlon(map, poly):
             add(CMD.FENCE_POLYGON_VERTEX_EXCLUSION, len(poly), lat, lon)
+    for centre, r in circles:
+        ((lat, lon),) = _latlon(map, centre)
+        add(CMD.FENCE_CIRCLE_EXCLUSION, r, lat, lon)
     return out
 
 

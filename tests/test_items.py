@@ -99,6 +99,9 @@ def test_geofence_items(m):
     fence = geofence_items(m)
     assert all(it.mission_type == M.MAV_MISSION_TYPE_FENCE for it in fence)
     assert [it.seq for it in fence] == list(range(len(fence)))
+    # QGroundControl's order and flags: polygon vertices first, then circles; autocontinue 0
+    kinds = [it.command == M.MAV_CMD_NAV_FENCE_CIRCLE_EXCLUSION for it in fence]
+    assert kinds == sorted(kinds) and all(it.autocontinue == 0 for it in fence)
     circles = [it for it in fence if it.command == M.MAV_CMD_NAV_FENCE_CIRCLE_EXCLUSION]
     verts = [it for it in fence if it.command == M.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_EXCLUSION]
     assert len(circles) == 2 and len(verts) == 4 + 4
@@ -119,8 +122,9 @@ def test_fence_grouping_rejects_broken_polygons(m):
     verts = [it for it in fence if it.command == CMD.FENCE_POLYGON_VERTEX_EXCLUSION]
     with pytest.raises(MissionError, match="fewer vertices"):
         fence_from_items(verts[:3])
+    circle = next(it for it in fence if it.command == CMD.FENCE_CIRCLE_EXCLUSION)
     with pytest.raises(MissionError, match="interrupted"):
-        fence_from_items([verts[0], fence[0]])
+        fence_from_items([verts[0], circle])
 
 
 def test_route_is_the_inverse(m):

@@ -5,9 +5,9 @@ small-demo's witness, and a hand-made map with every obstacle kind. MAVSDK's imp
 connected vehicle (it asks the autopilot type), so one MAVSDK client stays connected to the mock
 for the module.
 
-Two conventions differ between our reader and MAVSDK's (and QGroundControl's) for the fence;
-the comparison normalises them (see `_as_mavsdk_orders_fences`), everything else must be equal:
-QGC/MAVSDK list polygon vertices before circles, and send fence items with autocontinue 0.
+Our fence follows QGroundControl's and MAVSDK's conventions (polygon vertices before circles,
+autocontinue 0), so the items must be equal as they are; only the `current` flag of the upload
+wire form (item 0 current) is set on ours before comparing.
 """
 
 from __future__ import annotations
@@ -20,7 +20,6 @@ import numpy as np
 import pytest
 
 from lamde_mission.formats import read_mission, write_mission
-from lamde_mission.items import CMD
 from lamde_mission.vehicle.mock import MockVehicle
 from lamde_mission.vehicle.wire import WireItem, compare_items, wire_mission
 from planner_core.mapio import load_map
@@ -76,12 +75,9 @@ def mavsdk_client():
         yield client
 
 
-def _as_mavsdk_orders_fences(fence: list[WireItem]) -> list[WireItem]:
-    """Our fence in QGC/MAVSDK's order (polygon vertices, then circles), autocontinue 0."""
-    polys = (CMD.FENCE_POLYGON_VERTEX_EXCLUSION, CMD.FENCE_POLYGON_VERTEX_INCLUSION)
-    ordered = [w for w in fence if w.command in polys]
-    ordered += [w for w in fence if w.command not in polys]
-    return [replace(w, seq=k, autocontinue=0, current=int(k == 0)) for k, w in enumerate(ordered)]
+def _as_uploaded(fence: list[WireItem]) -> list[WireItem]:
+    """Our fence as it goes on the wire: item 0 marked current, nothing else changed."""
+    return [replace(w, current=int(k == 0)) for k, w in enumerate(fence)]
 
 
 @pytest.mark.parametrize("map_source", _cases())
@@ -94,7 +90,7 @@ def test_mavsdk_importer_reads_our_plan_as_we_do(map_source, mavsdk_client, tmp_
     ours = wire_mission(mission)
     assert compare_items(ours, got_mission) == []
     assert [w.current for w in got_mission] == [w.current for w in ours]  # item 0 current
-    assert compare_items(_as_mavsdk_orders_fences(wire_mission(fence)), got_fence, "fence") == []
+    assert compare_items(_as_uploaded(wire_mission(fence)), got_fence, "fence") == []
     assert [w.autocontinue for w in got_fence] == [0] * len(got_fence)
     assert got_rally == []
 

@@ -175,6 +175,7 @@ def parse_plan_document(doc: Any) -> tuple[list[MissionItem], list[MissionItem]]
 
 
 def _parse_fence(gf: Any) -> list[MissionItem]:
+    """Fence items from a geoFence section: polygons first, then circles (QGC's order)."""
     if gf is None:
         return []
     if not isinstance(gf, dict):
@@ -184,21 +185,11 @@ def _parse_fence(gf: Any) -> list[MissionItem]:
     def add(command: int, p1: float, lat: float, lon: float) -> None:
         out.append(
             MissionItem(
-                seq=len(out), command=command, frame=FRAME.GLOBAL, param1=float(p1),
-                x=lat, y=lon, z=0.0, mission_type=MISSION_TYPE.FENCE,
+                seq=len(out), command=command, frame=FRAME.GLOBAL, autocontinue=0,
+                param1=float(p1), x=lat, y=lon, z=0.0, mission_type=MISSION_TYPE.FENCE,
             )
         )  # fmt: skip
 
-    for k, c in enumerate(gf.get("circles") or []):
-        where = f"geoFence.circles[{k}]"
-        circle = c.get("circle") if isinstance(c, dict) else None
-        if not isinstance(circle, dict):
-            raise MissionError(f"{where}: missing 'circle'")
-        lat, lon = _latlon_pair(circle.get("center"), f"{where}.circle.center")
-        r = _float(circle.get("radius"), f"{where}.circle.radius")
-        inclusion = bool(c.get("inclusion", True))
-        cmd = CMD.FENCE_CIRCLE_INCLUSION if inclusion else CMD.FENCE_CIRCLE_EXCLUSION
-        add(cmd, r, lat, lon)
     for k, poly in enumerate(gf.get("polygons") or []):
         where = f"geoFence.polygons[{k}]"
         verts = poly.get("polygon") if isinstance(poly, dict) else None
@@ -210,6 +201,16 @@ def _parse_fence(gf: Any) -> list[MissionItem]:
         for i, v in enumerate(verts):
             lat, lon = _latlon_pair(v, f"{where}.polygon[{i}]")
             add(cmd, len(verts), lat, lon)
+    for k, c in enumerate(gf.get("circles") or []):
+        where = f"geoFence.circles[{k}]"
+        circle = c.get("circle") if isinstance(c, dict) else None
+        if not isinstance(circle, dict):
+            raise MissionError(f"{where}: missing 'circle'")
+        lat, lon = _latlon_pair(circle.get("center"), f"{where}.circle.center")
+        r = _float(circle.get("radius"), f"{where}.circle.radius")
+        inclusion = bool(c.get("inclusion", True))
+        cmd = CMD.FENCE_CIRCLE_INCLUSION if inclusion else CMD.FENCE_CIRCLE_EXCLUSION
+        add(cmd, r, lat, lon)
     return out
 
 
