@@ -193,13 +193,13 @@ class Problem:
 
     # ------------------------------------------------------------------ initial population
     def initial_population(self, rng: np.random.Generator, n: int) -> np.ndarray:
-        """n starting solutions: half uniform in the box, half sensor-aware (clustered).
+        """n starting solutions: the first half obstacle-aware sensor routes, the rest uniform.
 
-        A sensor-aware solution puts its active hover points at centroids of randomly seeded
-        sensor clusters, visits them in nearest-neighbour order from the start and hovers long
-        enough to serve each cluster; obstacles are left to the optimiser. Uniform ones keep
-        the population diverse. The DE uses this hook when a problem has it (synthetic
-        problems do not), and its draws come from the DE's own seeded generator.
+        A sensor-aware start (`planner_core.seeding`) clusters the sensors, visits the cluster
+        centres in a short order, routes blocked legs around obstacles through a visibility
+        graph and hovers long enough to serve every sensor, so most starts are feasible.
+        Uniform ones keep the population diverse. The DE uses this hook when a problem has it
+        (synthetic problems do not), and its draws come from the DE's own seeded generator.
         """
         span = self.upper - self.lower
         X = self.lower + rng.random((n, self.dim)) * span
@@ -208,52 +208,13 @@ class Problem:
         return X
 
     def _clustered_solution(self, rng: np.random.Generator) -> np.ndarray:
-        I, J = self.n_points, len(self.sensors)
-        lo = min(I, max(1, int(np.ceil(J / 3))))
-        k = I if not self.variable_length else int(rng.integers(lo, min(I, J) + 1))
-        k = max(1, min(k, I))
-        # k-means++-style seeding over sensors, then one assignment + centroid pass
-        centres = [self.sensors[rng.integers(J)]]
-        for _ in range(1, min(k, J)):
-            d2 = np.min([np.sum((self.sensors - c) ** 2, axis=1) for c in centres], axis=0)
-            p = d2 / d2.sum() if d2.sum() > 0 else np.full(J, 1.0 / J)
-            centres.append(self.sensors[rng.choice(J, p=p)])
-        C = np.array(centres)
-        owner = np.argmin(((self.sensors[:, None, :] - C[None]) ** 2).sum(axis=2), axis=1)
-        for c in range(len(C)):
-            members = self.sensors[owner == c]
-            if len(members):
-                C[c] = members.mean(axis=0)
-        C = C + rng.normal(0.0, 30.0, C.shape)
-        while len(C) < k:  # fixed length with fewer sensors than points: extra random points
-            C = np.vstack([C, self.lower[:2] + rng.random(2) * (self.upper[:2] - self.lower[:2])])
-        C = np.clip(C, 0.0, self.upper[:2])
-        # nearest-neighbour order from the start, biased toward the end
-        order, left, cur = [], list(range(len(C))), self.start
-        while left:
-            d = np.linalg.norm(C[left] - cur, axis=1) + 0.3 * np.linalg.norm(C[left] - self.end,
-                                                                               axis=1)
-            nxt = left.pop(int(np.argmin(d)))
-            order.append(nxt)
-            cur = C[nxt]
-        C = C[order]
-        R = self.rates(C)  # (k, J)
-        best = np.argmax(R, axis=0)
-        times = np.zeros(len(C))
-        for j in range(J):
-            r = R[best[j], j]
-            need = self.required[j] / r if r > 0 else self.t_max
-            times[best[j]] = max(times[best[j]], need)
-        times = np.minimum(times * rng.uniform(1.0, 1.2), self.t_max)
-        slots = np.sort(rng.choice(I, size=len(C), replace=False))
-        x = np.empty((I, 4))
-        x[:, :2] = self.lower[:2] + rng.random((I, 2)) * (self.upper[:2] - self.lower[:2])
-        x[:, 2] = rng.random(I) * self.t_max
-        x[:, 3] = rng.random(I) * self.tau  # inactive
-        x[slots, :2] = C
-        x[slots, 2] = times
-        x[slots, 3] = self.tau + rng.random(len(C)) * (1.0 - self.tau)
-        return x.reshape(-1)
+        """One obstacle-aware sensor-serving start; the seeder is built once per problem."""
+        seeder = self.__dict__.get("_seeder")
+        if seeder is None:
+            from planner_core.seeding import Seeder
+
+            seeder = self.__dict__["_seeder"] = Seeder(self)
+        return seeder.solution(rng)
 
     # ------------------------------------------------------------------ encoding
     def encode(self, hover_points: np.ndarray, hover_times: np.ndarray) -> np.ndarray:
