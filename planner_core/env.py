@@ -19,6 +19,10 @@ the largest finite double's exponent. ``eta = 10`` by default: objective and vio
 of interest span roughly 1e-10 .. 1e10 (flight times of 1e3..1e4 s, violations from 1e-8 up to
 the collision offset mu + nu * metres), which then map to scaled exponents in [-1, 1].
 
+Reward: :func:`reward` (the paper's Eq. reward) on the Deb-best (phi, f) before and after the
+step, with feasibility tolerance ``delta = 1e-8`` by default (violations below it count as
+feasible for the reward only; the DE's selection still compares phi exactly).
+
 Episode end: ``terminated`` is True once the evaluation budget is spent. Time is part of the
 observation (g / G), so the budget's end is a true terminal state of this MDP, not a time
 limit imposed from outside; ``truncated`` is always False (Gymnasium's semantics).
@@ -46,6 +50,7 @@ from planner_core.de.core import (
 DEFAULT_ETA = 10.0
 DEFAULT_DELTA = 1e-8
 _INF_EXPONENT = 400.0  # beyond the largest finite double exponent (309)
+_BELOW_ONE = float(np.nextafter(1.0, 0.0))
 
 
 def mantissa_exponent(y: np.ndarray, eta: float = DEFAULT_ETA) -> np.ndarray:
@@ -58,12 +63,15 @@ def mantissa_exponent(y: np.ndarray, eta: float = DEFAULT_ETA) -> np.ndarray:
         af = a[finite]
         b = np.floor(np.log10(af)) + 1.0
         omega = af / 10.0**b
-        # log10 may round across a power of ten; nudge so that 0.1 <= omega < 1 exactly.
+        # log10 and 10**b round near powers of ten: move one decade if needed, then clip the
+        # last-ulp leftovers so that 0.1 <= |omega| < 1 holds exactly.
         hi = omega >= 1.0
+        omega[hi] /= 10.0
         b[hi] += 1.0
         lo = omega < 0.1
+        omega[lo] *= 10.0
         b[lo] -= 1.0
-        omega = af / 10.0**b
+        omega = np.clip(omega, 0.1, _BELOW_ONE)
         out[finite, 0] = np.sign(y[finite]) * omega
         out[finite, 1] = b / eta
     inf = np.isinf(y)
@@ -96,10 +104,12 @@ def reward(
     1. ``phi_cur > delta``: relative violation decrease (phi_prev - phi_cur) / phi_prev.
     2. ``phi_prev > delta >= phi_cur``: bonus 1 + exp(-g/G) for entering the feasible region.
     3. both <= delta: relative objective decrease (f_prev - f_cur) / |f_prev| (|.| so that a
-       decrease is positive when f < 0). A zero denominator gives 0.
+       decrease is positive when f < 0). A zero or infinite denominator gives 0.
     """
     if phi_cur > delta:
-        return float((phi_prev - phi_cur) / phi_prev) if phi_prev != 0 else 0.0
+        if phi_prev == 0 or not math.isfinite(phi_prev):
+            return 0.0
+        return float((phi_prev - phi_cur) / phi_prev)
     if phi_prev > delta:
         return 1.0 + math.exp(-progress)
     denom = abs(f_prev)
@@ -113,13 +123,7 @@ def as_config(action: Any) -> Config:
     if isinstance(action, Config):
         return action
     if isinstance(action, Mapping):
-        return Config(
-            action["mutation"],
-            action["crossover"],
-            action["F"],
-            action["Cr"],
-            action.get("guide"),
-        )
+        return Config(action["mutation"], action["crossover"], action["F"], action["Cr"])
     mutation, crossover, F, Cr = action
     return Config(mutation, crossover, F, Cr)
 
@@ -168,10 +172,8 @@ class OptimizationEnv:
         self.state = init(self.problem, run_seed, self.population, self.budget)
         return observe(self.state, self.eta), self._info(self.state)
 
-    def step(
-        self, action: Any
-    ) -> tuple[dict[str, np.ndarray], float, bool, bool, dict[str, Any]]:
-        """One DE generation under ``action``; returns (obs, reward, terminated, truncated, info)."""
+    def step(self, action: Any) -> tuple[dict[str, np.ndarray], float, bool, bool, dict[str, Any]]:
+        """One DE generation under ``action`` -> (obs, reward, terminated, truncated, info)."""
         state = self.state
         if state is None:
             raise RuntimeError("call reset() before step()")

@@ -68,7 +68,8 @@ def test_deb_better_hand_pairs() -> None:
         ((3.0, 0.4), (2.0, 0.4), False),
         ((-1.0, 0.0), (1.0, 0.0), True),  # negative objectives
     ]
-    ft, pt, fp, pp = (np.array(v) for v in zip(*[(t[0], t[1], p[0], p[1]) for t, p, _ in cases]))
+    rows = np.array([(t[0], t[1], p[0], p[1]) for t, p, _ in cases])
+    ft, pt, fp, pp = rows.T
     np.testing.assert_array_equal(deb_better(ft, pt, fp, pp), [w for *_, w in cases])
 
 
@@ -91,7 +92,7 @@ def test_tell_applies_deb_rule_and_keeps_state_immutable() -> None:
     new = tell(s, trials, ft, pt)
     np.testing.assert_array_equal(new.X[:, 0] == 0.99, [True, False, True, True, False, False])
     assert new.f[5] == 1.0  # NaN f is treated as +inf and loses the f tie-break
-    assert not tell(s, trials, ft, np.full(6, np.nan)).X[:, 0].max() == 0.99  # NaN phi loses
+    assert tell(s, trials, ft, np.full(6, np.nan)).X[:, 0].max() != 0.99  # NaN phi loses
     assert new.generation == 1 and new.evaluations == s.evaluations + 6
     assert new.best == 0 and s.X[0, 0] == 0.0  # old state untouched
     with pytest.raises(ValueError):
@@ -171,8 +172,14 @@ def test_same_seed_same_result_different_seed_different() -> None:
 
 def test_callback_reports_each_generation() -> None:
     seen: list[Progress] = []
-    r = run(ConstrainedSphere(3), configurator="fixed", seed=0, population=10, budget=95,
-            callback=seen.append)
+    r = run(
+        ConstrainedSphere(3),
+        configurator="fixed",
+        seed=0,
+        population=10,
+        budget=95,
+        callback=seen.append,
+    )
     assert [s.generation for s in seen] == list(range(r.generations + 1))
     assert seen[-1].evaluations == 95 and seen[-1].budget == 95
     np.testing.assert_array_equal([s.best_f for s in seen], r.history.best_f)
@@ -188,3 +195,30 @@ def test_run_reaches_the_constrained_optimum() -> None:
     assert f[0] == r.f and phi[0] == r.phi  # best reported in problem space
     # history is monotone under Deb's elitist selection
     assert np.all(np.diff(r.history.best_phi) <= 0)
+
+
+class SeededSphere(ConstrainedSphere):
+    """The same problem with the optional ``initial_population`` hook (problem-space points)."""
+
+    def initial_population(self, rng: np.random.Generator, n: int) -> np.ndarray:
+        X = rng.uniform(-5.0, 5.0, (n, len(self.lower)))
+        X[0] = self.c  # the ball centre: feasible
+        X[1] = 9.0  # outside the bounds: clamped into the box
+        return X
+
+
+def test_initial_population_hook_is_used_and_clamped() -> None:
+    p = SeededSphere(4)
+    s = init(p, seed=2, population=8)
+    np.testing.assert_allclose(s.X[0], (p.c - p.lower) / (p.upper - p.lower))
+    np.testing.assert_array_equal(s.X[1], 1.0)
+    assert s.phi[0] == 0.0 and s.feasible_fraction >= 1 / 8
+    np.testing.assert_array_equal(s.X, init(p, seed=2, population=8).X)  # seeded generator
+    assert not np.array_equal(s.X, init(p, seed=3, population=8).X)
+
+    class Wrong(SeededSphere):
+        def initial_population(self, rng: np.random.Generator, n: int) -> np.ndarray:
+            return np.zeros((n - 1, 4))
+
+    with pytest.raises(ValueError):
+        init(Wrong(4), seed=0, population=8)

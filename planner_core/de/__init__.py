@@ -26,6 +26,7 @@ from planner_core.de.core import (
     step,
     tell,
     to_problem,
+    to_unit,
 )
 from planner_core.de.operators import CROSSOVERS, MUTATIONS
 
@@ -55,4 +56,5 @@ __all__ = [
     "step",
     "tell",
     "to_problem",
+    "to_unit",
 ]

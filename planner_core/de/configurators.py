@@ -13,7 +13,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from planner_core.de.core import Config, DEState, Outcome, deb_order
+from planner_core.de.core import Config, DEState, Outcome, deb_best, deb_better
 from planner_core.de.operators import (
     N_CROSSOVERS,
     N_MUTATIONS,
@@ -77,157 +77,121 @@ class RandomConfigurator:
         return None
 
 
+ARMS: np.ndarray = np.array([(m, c) for m in range(N_MUTATIONS) for c in range(N_CROSSOVERS)])
+"""The 14 (mutation, crossover) pairs the adaptive configurator chooses among; arm = 2 m + c."""
+_GREEDY_ARM = 1 * N_CROSSOVERS + 1  # best/1 with exponential crossover
+
+
 class AdaptiveMemory(NamedTuple):
-    """Success-history memory of :class:`AdaptiveConfigurator` (arrays are never mutated)."""
+    """Memory of :class:`AdaptiveConfigurator`, one entry per arm (arrays are never mutated)."""
 
-    m_f: np.ndarray  # (H,) location of the Cauchy F distribution
-    m_cr: np.ndarray  # (H,) mean of the normal Cr distribution
-    slot: int  # next memory slot to overwrite
-    mut_quality: np.ndarray  # (7,) smoothed success rate per mutation operator
-    cx_quality: np.ndarray  # (2,) smoothed success rate per crossover
-
-
-def _probabilities(quality: np.ndarray, floor: float) -> np.ndarray:
-    """Probabilities proportional to quality, each at least ``floor``."""
-    k = len(quality)
-    q = np.maximum(quality, 0.0)
-    total = q.sum()
-    share = q / total if total > 0 else np.full(k, 1.0 / k)
-    return floor + (1.0 - k * floor) * share
+    m_f: np.ndarray  # (14,) centre of the F distribution
+    m_cr: np.ndarray  # (14,) centre of the Cr distribution
+    quality: np.ndarray  # (14,) smoothed mean credit per trial
+    stall: int = 0  # generations since a trial last beat the best parent
 
 
-def _improvement_weights(outcome: Outcome) -> np.ndarray:
-    """Non-negative weight per trial: 0 for failures; successes that cut the violation share
-    (by their share of the violation decrease) the weight of violation-improving successes,
-    the others (same phi, lower f) share the rest by their f decrease."""
-    s = outcome.success
-    w = np.zeros(len(s))
-    if not s.any():
-        return w
-    dphi = np.where(s, outcome.phi_parent - outcome.phi_trial, 0.0)
-    by_phi = s & (dphi > 0)
-    by_f = s & ~by_phi
-    n_s = s.sum()
-    for mask, delta in ((by_phi, dphi), (by_f, outcome.f_parent - outcome.f_trial)):
-        if mask.any():
-            d = np.where(mask, delta, 0.0)
-            d = np.where(np.isfinite(d), d, 0.0)
-            tot = d.sum()
-            part = d / tot if tot > 0 else mask / mask.sum()
-            w += part * (mask.sum() / n_s)
-    return w
+def rank_credit(outcome: Outcome) -> np.ndarray:
+    """Per trial: 0 if it failed, else the fraction of the generation's parents it Deb-beats.
 
-
-def _rank_credit(outcome: Outcome) -> np.ndarray:
-    """Per trial: 0 on failure, else the fraction of all parents the trial Deb-beats."""
+    Scale-free (mixes violation and objective progress without units) and rewards trials that
+    land near the top of the population more than trials that merely beat a poor parent.
+    """
     ft, pt = outcome.f_trial[:, None], outcome.phi_trial[:, None]
     fp, pp = outcome.f_parent[None, :], outcome.phi_parent[None, :]
-    beats = ((pt < pp) | ((pt == pp) & (ft < fp))).mean(axis=1)
+    beats = deb_better(ft, pt, fp, pp).mean(axis=1)
     return np.where(outcome.success, beats, 0.0)
 
 
 @dataclass(frozen=True)
 class AdaptiveConfigurator:
-    """SHADE-style success-history adaptation of F and Cr plus success-rate operator choice.
+    """Strategy-portfolio DE (SaDE/SHADE family) with stall-triggered intensification.
 
-    * F ~ Cauchy(M_F[r], 0.1) (redrawn while <= 0, cut at 1), Cr ~ N(M_Cr[r], 0.1) clipped to
-      [0, 1], r uniform over H memory slots. After each generation the slot ``slot`` becomes the
-      weighted Lehmer mean of successful F (resp. weighted mean of successful Cr), weights from
-      :func:`_improvement_weights` (violation decrease first, objective decrease for ties).
-    * Mutation and crossover operators are drawn from probabilities proportional to an
-      exponentially smoothed success rate per operator (``rate`` = smoothing), with a ``floor``
-      probability each so no operator dies out.
-    * Extra (documented): with ``pbest`` > 0 the "best" used by best/1, best/2, current-to-best/1
-      and rand-to-best/1 is, per individual, a uniform pick from the top ``pbest`` fraction of
-      the population under Deb's ranking (current-to-pbest style), which keeps greedy operators
-      from collapsing onto one point.
+    * Arms are the 14 (mutation, crossover) pairs. Each arm keeps its own centre for F and Cr
+      (exponential crossover needs a much higher Cr than binomial for the same number of genes).
+    * Per individual: arm ~ probabilities proportional to each arm's quality (``floor`` each),
+      F ~ N(M_F[arm], ``f_sd``) clipped to [0.02, 1], Cr ~ N(M_Cr[arm], ``cr_sd``) clipped to
+      [0, 1].
+    * Credit (:func:`rank_credit`): a successful trial scores the fraction of parents it beats.
+      Quality = exponential moving average (``rate``) of an arm's mean credit per use; F and Cr
+      centres move (``lr``) towards the credit-weighted mean of the arm's successful values.
+    * Intensification: when no trial has beaten the best parent for ``stall`` generations, a
+      share ``intensify * min(1, stall / stall_gens)`` of the draws goes to best/1 with
+      exponential crossover: a perturbed contiguous block of the Deb-best copied into a parent.
+      It gets UAV runs off violation plateaus (a hover point is a contiguous 4-gene block), and
+      it stays off while the best keeps improving, so it does not collapse the population early.
     """
 
-    memory_size: int = 6
-    f_init: float = 0.5
-    cr_init: float = 0.8
-    f_scale: float = 0.1
-    cr_scale: float = 0.1
-    rate: float = 0.3
-    mut_floor: float = 0.03
-    cx_floor: float = 0.1
-    pbest: float = 0.0
-    credit: str = "success"
-    weights: str = "improvement"
-    f_mean: str = "lehmer"
+    f_init: float = 0.3
+    cr_bin: float = 0.5
+    cr_exp: float = 0.9
+    f_sd: float = 0.1
+    cr_sd: float = 0.1
+    rate: float = 0.2
+    lr: float = 0.1
+    floor: float = 0.02
+    intensify: float = 0.5
+    stall_gens: float = 5.0
+
+    def __post_init__(self) -> None:
+        if not 0.0 <= self.floor * len(ARMS) <= 1.0:
+            raise ValueError("floor * 14 must lie in [0, 1]")
+        if not 0.0 <= self.intensify <= 1.0:
+            raise ValueError("intensify must lie in [0, 1]")
+        if self.stall_gens <= 0:
+            raise ValueError("stall_gens must be positive")
 
     def init(self, state: DEState) -> AdaptiveMemory:
-        h = self.memory_size
+        a = len(ARMS)
         return AdaptiveMemory(
-            m_f=np.full(h, self.f_init),
-            m_cr=np.full(h, self.cr_init),
-            slot=0,
-            mut_quality=np.full(N_MUTATIONS, 0.5),
-            cx_quality=np.full(N_CROSSOVERS, 0.5),
+            m_f=np.full(a, self.f_init),
+            m_cr=np.where(ARMS[:, 1] == 0, self.cr_bin, self.cr_exp),
+            quality=np.full(a, 0.1),
         )
 
+    def probabilities(self, memory: AdaptiveMemory) -> np.ndarray:
+        """Arm probabilities (14,) for the next generation."""
+        a = len(ARMS)
+        q = np.maximum(memory.quality, 0.0)
+        share = q / q.sum() if q.sum() > 0 else np.full(a, 1.0 / a)
+        greedy = self.intensify * min(1.0, memory.stall / self.stall_gens)
+        p = (1.0 - greedy) * (self.floor + (1.0 - a * self.floor) * share)
+        p[_GREEDY_ARM] += greedy
+        return p
+
     def configure(self, state: DEState, rng: np.random.Generator) -> Config:
-        mem: AdaptiveMemory = state.memory
-        if mem is None:
-            mem = self.init(state)
+        mem: AdaptiveMemory = state.memory if state.memory is not None else self.init(state)
         n = state.population
-        r = rng.integers(0, len(mem.m_f), size=n)
-        F = mem.m_f[r] + self.f_scale * rng.standard_cauchy(n)
-        bad = F <= 0
-        while bad.any():
-            F[bad] = mem.m_f[r[bad]] + self.f_scale * rng.standard_cauchy(int(bad.sum()))
-            bad = F <= 0
-        F = np.minimum(F, 1.0)
-        Cr = np.clip(mem.m_cr[r] + self.cr_scale * rng.standard_normal(n), 0.0, 1.0)
-        p_mut = _probabilities(mem.mut_quality, self.mut_floor)
-        p_cx = _probabilities(mem.cx_quality, self.cx_floor)
-        mutation = rng.choice(N_MUTATIONS, size=n, p=p_mut)
-        crossover = rng.choice(N_CROSSOVERS, size=n, p=p_cx)
-        guide = None
-        if self.pbest > 0:
-            top = max(2, int(round(self.pbest * n)))
-            order = deb_order(state.f, state.phi)
-            guide = order[rng.integers(0, top, size=n)]
-        return Config(mutation, crossover, F, Cr, guide)
+        arm = rng.choice(len(ARMS), size=n, p=self.probabilities(mem))
+        F = np.clip(mem.m_f[arm] + self.f_sd * rng.standard_normal(n), 0.02, 1.0)
+        Cr = np.clip(mem.m_cr[arm] + self.cr_sd * rng.standard_normal(n), 0.0, 1.0)
+        return Config(ARMS[arm, 0], ARMS[arm, 1], F, Cr)
 
     def update(self, memory: AdaptiveMemory, outcome: Outcome) -> AdaptiveMemory:
         k = len(outcome.success)
         if k == 0:
             return memory
+        a = len(ARMS)
         cfg = outcome.config
-        s = outcome.success.astype(float)
-        w = _improvement_weights(outcome)
-        q = _rank_credit(outcome) if "rank" in (self.credit, self.weights) else None
-        if self.credit == "improvement":
-            s = w * k
-        elif self.credit == "mixed":
-            s = 0.5 * s + 0.5 * w * s.sum()
-        elif self.credit == "rank":
-            s = q
-        if self.weights == "rank":
-            w = q
-        mut_q = memory.mut_quality.copy()
-        cx_q = memory.cx_quality.copy()
-        for q, ids, n_ops in (
-            (mut_q, cfg.mutation[:k], N_MUTATIONS),
-            (cx_q, cfg.crossover[:k], N_CROSSOVERS),
-        ):
-            used = np.bincount(ids, minlength=n_ops)
-            wins = np.bincount(ids, weights=s, minlength=n_ops)
-            seen = used > 0
-            q[seen] = (1 - self.rate) * q[seen] + self.rate * wins[seen] / used[seen]
-        m_f, m_cr, slot = memory.m_f, memory.m_cr, memory.slot
-        if w.sum() > 0:
-            F, Cr = cfg.F[:k], cfg.Cr[:k]
+        arm = cfg.mutation[:k] * N_CROSSOVERS + cfg.crossover[:k]
+        credit = rank_credit(outcome)
+        used = np.bincount(arm, minlength=a)
+        gain = np.bincount(arm, weights=credit, minlength=a)
+        seen = used > 0
+        quality = memory.quality.copy()
+        quality[seen] += self.rate * (gain[seen] / used[seen] - quality[seen])
+        m_f, m_cr = memory.m_f, memory.m_cr
+        won = gain > 0
+        if won.any():
+            mean_f = np.bincount(arm, weights=credit * cfg.F[:k], minlength=a)[won] / gain[won]
+            mean_cr = np.bincount(arm, weights=credit * cfg.Cr[:k], minlength=a)[won] / gain[won]
             m_f, m_cr = m_f.copy(), m_cr.copy()
-            w = w / w.sum()
-            if self.f_mean == "lehmer":
-                m_f[slot] = np.sum(w * F * F) / max(np.sum(w * F), 1e-12)
-            else:
-                m_f[slot] = np.sum(w * F)
-            m_cr[slot] = np.sum(w * Cr)
-            slot = (slot + 1) % len(m_f)
-        return AdaptiveMemory(m_f, m_cr, slot, mut_q, cx_q)
+            m_f[won] += self.lr * (mean_f - m_f[won])
+            m_cr[won] += self.lr * (mean_cr - m_cr[won])
+        b = deb_best(outcome.f_parent, outcome.phi_parent)
+        fb, pb = outcome.f_parent[b], outcome.phi_parent[b]
+        improved = bool(deb_better(outcome.f_trial, outcome.phi_trial, fb, pb).any())
+        return AdaptiveMemory(m_f, m_cr, quality, 0 if improved else memory.stall + 1)
 
 
 _REGISTRY = {
@@ -242,5 +206,7 @@ def make_configurator(name: str, **kw: Any) -> Any:
     try:
         cls = _REGISTRY[name]
     except KeyError:
-        raise ValueError(f"unknown configurator {name!r}; choose from {sorted(_REGISTRY)}") from None
+        raise ValueError(
+            f"unknown configurator {name!r}; choose from {sorted(_REGISTRY)}"
+        ) from None
     return cls(**kw)

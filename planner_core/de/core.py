@@ -2,8 +2,8 @@
 
 The search runs in the unit box: ``x = lower + u * (upper - lower)``; trial vectors are clamped
 to [0, 1] (the paper's value clamping). The randomness of generation g is a pure function of
-``(state.seed, g)`` (a fresh ``numpy`` Generator from a SeedSequence with spawn key ``(g, stream)``),
-so ``ask`` is pure and a run is reproducible bit for bit from its seed.
+``(state.seed, g)``: a fresh numpy Generator from a SeedSequence with spawn key ``(g, stream)``.
+So ``ask`` is pure and a run is reproducible bit for bit from its seed.
 
 Budget: the initial population (N evaluations) counts. Each generation evaluates
 ``k = min(N, budget - evaluations)`` trials; when ``k < N`` (the last generation) only
@@ -35,7 +35,11 @@ STREAM_CONFIGURE = 1
 
 
 class BoxProblem(Protocol):
-    """What the DE needs from a problem (the UAV Problem and synthetic problems both fit)."""
+    """What the DE needs from a problem (the UAV Problem and synthetic problems both fit).
+
+    Optional hook: ``initial_population(rng, n) -> (n, d)`` problem-space starting points (not
+    evaluated by the hook); :func:`init` uses it with the run's own seeded generator.
+    """
 
     lower: np.ndarray
     upper: np.ndarray
@@ -47,15 +51,13 @@ class Config(NamedTuple):
     """Per-individual configuration (the paper's action): each field has shape (N,).
 
     ``mutation`` ids 0..6 (see operators.MUTATIONS), ``crossover`` 0 = bin / 1 = exp,
-    ``F`` and ``Cr`` in [0, 1]. ``guide`` (optional, (N,) ints) replaces the Deb-best as
-    "x_best" per individual (used by the adaptive configurator for a p-best guide); None = best.
+    ``F`` and ``Cr`` in [0, 1] (values outside are clipped).
     """
 
     mutation: np.ndarray
     crossover: np.ndarray
     F: np.ndarray
     Cr: np.ndarray
-    guide: np.ndarray | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -173,7 +175,9 @@ class Configurator(Protocol):
 # --------------------------------------------------------------------------- Deb's rule
 
 
-def deb_better(f_a: np.ndarray, phi_a: np.ndarray, f_b: np.ndarray, phi_b: np.ndarray) -> np.ndarray:
+def deb_better(
+    f_a: np.ndarray, phi_a: np.ndarray, f_b: np.ndarray, phi_b: np.ndarray
+) -> np.ndarray:
     """Paper's selection: a replaces b iff phi_a < phi_b, or phi_a == phi_b and f_a < f_b."""
     return (phi_a < phi_b) | ((phi_a == phi_b) & (f_a < f_b))
 
@@ -225,9 +229,15 @@ def to_problem(problem: BoxProblem, U: np.ndarray) -> np.ndarray:
     return lower + U * (np.asarray(problem.upper, dtype=float) - lower)
 
 
-def init(
-    problem: BoxProblem, seed: int, population: int = 100, budget: int = 10_000
-) -> DEState:
+def to_unit(problem: BoxProblem, X: np.ndarray) -> np.ndarray:
+    """Map problem-space points into the unit box, clamped (a zero-width bound maps to 0)."""
+    lower = np.asarray(problem.lower, dtype=float)
+    span = np.asarray(problem.upper, dtype=float) - lower
+    U = (np.asarray(X, dtype=float) - lower) / np.where(span > 0, span, 1.0)
+    return np.clip(np.where(span > 0, U, 0.0), 0.0, 1.0)
+
+
+def init(problem: BoxProblem, seed: int, population: int = 100, budget: int = 10_000) -> DEState:
     """Initial population in the unit box, evaluated (these N evaluations count).
 
     Uniform, unless the problem offers `initial_population(rng, n)` (problem-space points,
@@ -246,9 +256,9 @@ def init(
     if sampler is None:
         X = rng.random((population, d))
     else:
-        lower = np.asarray(problem.lower, dtype=float)
-        span = np.asarray(problem.upper, dtype=float) - lower
-        X = np.clip((np.asarray(sampler(rng, population), dtype=float) - lower) / span, 0.0, 1.0)
+        X = to_unit(problem, sampler(rng, population))
+        if X.shape != (population, d):
+            raise ValueError(f"initial_population gave shape {X.shape}, not ({population}, {d})")
     f, phi = _sanitise(*problem.evaluate(to_problem(problem, X)), population)
     return DEState(
         X=_frozen(X),
@@ -268,7 +278,7 @@ def trial_count(state: DEState) -> int:
 
 
 def validate_config(config: Config, n: int) -> Config:
-    """Coerce a configuration to arrays of shape (n,) with ids in range and F, Cr clipped to [0,1]."""
+    """Coerce a configuration to (n,) arrays: ids checked in range, F and Cr clipped to [0, 1]."""
     mut = np.asarray(config.mutation, dtype=np.intp).reshape(-1)
     cx = np.asarray(config.crossover, dtype=np.intp).reshape(-1)
     F = np.clip(np.asarray(config.F, dtype=float).reshape(-1), 0.0, 1.0)
@@ -280,12 +290,7 @@ def validate_config(config: Config, n: int) -> Config:
         raise ValueError(f"mutation ids must lie in 0..{N_MUTATIONS - 1}")
     if cx.min() < 0 or cx.max() >= N_CROSSOVERS:
         raise ValueError(f"crossover ids must lie in 0..{N_CROSSOVERS - 1}")
-    guide = config.guide
-    if guide is not None:
-        guide = np.asarray(guide, dtype=np.intp).reshape(-1)
-        if guide.shape != (n,) or guide.min() < 0 or guide.max() >= n:
-            raise ValueError("config.guide must be (N,) indices into the population")
-    return Config(mut, cx, F, Cr, guide)
+    return Config(mut, cx, F, Cr)
 
 
 def ask(state: DEState, config: Config) -> np.ndarray:
@@ -298,8 +303,7 @@ def ask(state: DEState, config: Config) -> np.ndarray:
     rng = generation_rng(state, STREAM_ASK)
     donors = draw_donors(rng, n, k)
     u, j = draw_crossover(rng, k, d)
-    best = state.best if config.guide is None else config.guide[:k]
-    V = mutate(state.X, config.mutation[:k], config.F[:k], best, donors)
+    V = mutate(state.X, config.mutation[:k], config.F[:k], state.best, donors)
     T = crossover(state.X[:k], V, config.crossover[:k], config.Cr[:k], u, j)
     return np.clip(T, 0.0, 1.0, out=T)
 
