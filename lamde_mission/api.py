@@ -19,15 +19,23 @@ CONFIGURATORS = ("adaptive", "fixed", "random")
 
 
 class _TimedProblem:
-    """Wraps a problem to add up the wall time spent in `evaluate` (the rest is optimiser work)."""
+    """Wraps a problem to add up the wall time spent in `evaluate` and in building the initial
+    population (the rest of the DE's time is optimiser work)."""
 
     def __init__(self, problem: Any):
         self.problem = problem
         self.lower = problem.lower
         self.upper = problem.upper
         self.seconds = 0.0
+        self.seeding_seconds = 0.0
         if hasattr(problem, "initial_population"):
-            self.initial_population = problem.initial_population
+            self.initial_population = self._initial_population
+
+    def _initial_population(self, rng: np.random.Generator, n: int) -> np.ndarray:
+        t0 = time.perf_counter()
+        out = self.problem.initial_population(rng, n)
+        self.seeding_seconds += time.perf_counter() - t0
+        return out
 
     def evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         t0 = time.perf_counter()
@@ -141,7 +149,8 @@ def plan(
         polish=polish_info,
         timings={
             "evaluation": timed.seconds,
-            "optimiser": max(t_optimise - timed.seconds, 0.0),
+            "seeding": timed.seeding_seconds,
+            "optimiser": max(t_optimise - timed.seconds - timed.seeding_seconds, 0.0),
             "polish": t_polish,
             "total": wall,
         },

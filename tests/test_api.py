@@ -42,7 +42,7 @@ def test_plan_is_feasible_and_consistent(small_plan: Plan) -> None:
     assert set(p.history) == {"evaluations", "best_f", "best_phi", "feasible_fraction"}
     assert np.all(np.diff(p.history["evaluations"]) > 0)
     assert p.polish is not None and p.polish["f_after"] <= p.polish["f_before"] + 1e-9
-    assert set(p.timings) >= {"evaluation", "optimiser", "polish", "total"}
+    assert set(p.timings) >= {"evaluation", "seeding", "optimiser", "polish", "total"}
 
 
 def test_plan_is_immutable(small_plan: Plan) -> None:
