@@ -97,3 +97,12 @@ def test_help_is_fast_and_lists_commands() -> None:
         assert cmd in r.stdout
     for cmd in ("plan", "verify", "show", "check", "schema", "generate"):
         assert _cli(cmd, "--help").returncode == 0
+
+
+def test_example_script_plans_and_verifies(tmp_path: Path) -> None:
+    script = MAPS.parent / "plan_and_verify.py"
+    out = tmp_path / "ex.plan"
+    r = subprocess.run([sys.executable, str(script), str(DEMO), str(out)], capture_output=True,
+                       text=True, timeout=300)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert out.exists() and "C5" in r.stdout
