@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import contextlib
 import json
-import os
 import re
-import tempfile
 from pathlib import Path
 from typing import Any
+
+from planner_core.atomic import write_bytes_atomic, write_text_atomic
 
 __all__ = [
     "dumps_json",
@@ -17,29 +16,6 @@ __all__ = [
     "write_json_atomic",
     "write_text_atomic",
 ]
-
-
-def write_bytes_atomic(path: str | Path, data: bytes) -> Path:
-    """Write `data` so readers see the old file or the whole new one, never a part."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
-        raise
-    return path
-
-
-def write_text_atomic(path: str | Path, text: str) -> Path:
-    """UTF-8 text version of `write_bytes_atomic`."""
-    return write_bytes_atomic(path, text.encode("utf-8"))
 
 
 _NUMBER_LIST = re.compile(r"\[\s*(-?[\d.eE+-]+(?:,\s*-?[\d.eE+-]+)*)\s*\]")
