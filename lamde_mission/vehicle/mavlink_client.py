@@ -32,6 +32,7 @@ from lamde_mission.vehicle.transfer import (
 )
 from lamde_mission.vehicle.wire import (
     Endpoint,
+    PacketCapture,
     WireItem,
     mission_result_name,
     mission_type_name,
@@ -42,14 +43,6 @@ from lamde_mission.vehicle.wire import (
 __all__ = ["MavlinkClient"]
 
 _m = mavlink2
-
-
-class _Capture:
-    def __init__(self) -> None:
-        self.buf = b""
-
-    def write(self, buf: bytes) -> None:
-        self.buf = bytes(buf)
 
 
 class MavlinkClient:
@@ -78,7 +71,9 @@ class MavlinkClient:
         self.system_id = int(system_id)
         self.component_id = int(component_id)
         self.vehicle: VehicleInfo | None = None
-        self._mav = _m.MAVLink(_Capture(), srcSystem=self.system_id, srcComponent=self.component_id)
+        self._mav = _m.MAVLink(
+            PacketCapture(), srcSystem=self.system_id, srcComponent=self.component_id
+        )
         self._mav.robust_parsing = True
         self._pending: collections.deque[Any] = collections.deque()
         self._peer: tuple[str, int] | None = None

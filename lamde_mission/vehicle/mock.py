@@ -39,6 +39,7 @@ from pymavlink.dialects.v20 import common as mavlink2
 from lamde_mission.items import MISSION_TYPE, MissionItem
 from lamde_mission.vehicle.wire import (
     Endpoint,
+    PacketCapture,
     WireItem,
     from_wire,
     mission_result_code,
@@ -84,16 +85,6 @@ class _Upload:
     last_request: float
     src: tuple[int, int] = (0, 0)
     tries: int = 0
-
-
-class _Capture:
-    """The 'file' pymavlink's MAVLink.send writes packed bytes to."""
-
-    def __init__(self) -> None:
-        self.buf = b""
-
-    def write(self, buf: bytes) -> None:
-        self.buf = bytes(buf)
 
 
 class MockVehicle:
@@ -148,7 +139,9 @@ class MockVehicle:
         self.stats = MockStats()
 
         self._rng = random.Random(seed)
-        self._mav = _m.MAVLink(_Capture(), srcSystem=self.system_id, srcComponent=self.component_id)
+        self._mav = _m.MAVLink(
+            PacketCapture(), srcSystem=self.system_id, srcComponent=self.component_id
+        )
         self._mav.robust_parsing = True
         self._lock = threading.Lock()
         self._store: dict[int, list[WireItem]] = {t: [] for t in _TYPES}

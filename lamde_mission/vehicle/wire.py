@@ -27,6 +27,7 @@ from pymavlink.dialects.v20 import common as mavlink2
 from lamde_mission.items import FRAME, MISSION_TYPE, MissionItem
 
 __all__ = [
+    "PacketCapture",
     "WireItem",
     "Difference",
     "Endpoint",
@@ -319,3 +320,13 @@ def parse_endpoint(text: str) -> Endpoint:
     if not host or port is None or not 0 < port < 65536:
         raise ValueError(f"{text!r}: expected {mode}://HOST:PORT with a port 1..65535")
     return Endpoint(mode, host, int(port))
+
+
+class PacketCapture:
+    """The 'file' pymavlink's `MAVLink.send` writes packed bytes to: we send them ourselves."""
+
+    def __init__(self) -> None:
+        self.buf = b""
+
+    def write(self, buf: bytes) -> None:
+        self.buf = bytes(buf)
