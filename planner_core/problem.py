@@ -15,7 +15,9 @@ from planner_core.geometry import overlap_lengths
 from planner_core.kernels import model_terms
 from planner_core.mapio import Map, load_map
 
-__all__ = ["Problem", "PENALTY_FACTOR", "penalised_score", "flight_time", "L_VIO_TOL"]
+__all__ = [
+    "Problem", "PENALTY_FACTOR", "penalised_score", "flight_time", "link_rates", "L_VIO_TOL"
+]
 
 #: The factor of the penalised score f + 10 * phi used to compare optimisers (paper Sec. 5.2).
 PENALTY_FACTOR = 10.0
@@ -28,6 +30,17 @@ L_VIO_TOL = 1e-9
 def penalised_score(f: np.ndarray | float, phi: np.ndarray | float) -> np.ndarray | float:
     """f + 10 * phi, the single number the paper ranks optimisers by."""
     return f + PENALTY_FACTOR * phi
+
+
+def link_rates(
+    pts: np.ndarray, sensors: np.ndarray, altitude: float, peak_rate: float, decay: float
+) -> np.ndarray:
+    """R_ij = max(R_c - xi * sqrt(|p_i - s_j|^2 + H^2), 0): shape (..., I, J), Mbit/s."""
+    dx = pts[..., :, None, 0] - sensors[:, 0]
+    dy = pts[..., :, None, 1] - sensors[:, 1]
+    dist = np.sqrt(dx * dx + dy * dy + altitude**2)
+    rate = peak_rate - decay * dist
+    return np.maximum(rate, 0.0, out=rate)
 
 
 def flight_time(d: np.ndarray, v_max: float, accel: float) -> np.ndarray:
@@ -101,11 +114,7 @@ class Problem:
 
     def rates(self, pts: np.ndarray) -> np.ndarray:
         """R_ij = max(R_c - xi * sqrt(|p_i - s_j|^2 + H^2), 0), shape (..., I, J) in Mbit/s."""
-        dx = pts[..., :, None, 0] - self.sensors[:, 0]
-        dy = pts[..., :, None, 1] - self.sensors[:, 1]
-        dist = np.sqrt(dx * dx + dy * dy + self.altitude**2)
-        rate = self.peak_rate - self.decay * dist
-        return np.maximum(rate, 0.0, out=rate)
+        return link_rates(pts, self.sensors, self.altitude, self.peak_rate, self.decay)
 
     # ------------------------------------------------------------------ evaluation
     def _overlap(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:

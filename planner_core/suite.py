@@ -26,7 +26,7 @@ import shapely
 
 from planner_core.geometry import rectangle_vertices
 from planner_core.mapio import Radio, Uav, load_map
-from planner_core.problem import Problem
+from planner_core.problem import Problem, link_rates
 
 __all__ = [
     "SIZES",
@@ -184,8 +184,7 @@ class _Draw:
 
     def rates(self, hover: np.ndarray, sensors: np.ndarray) -> np.ndarray:
         """R (I, J), the model's rate formula."""
-        d2 = ((hover[:, None, :] - sensors[None, :, :]) ** 2).sum(axis=2)
-        return np.maximum(self.peak_rate - self.decay * np.sqrt(d2 + self.altitude**2), 0.0)
+        return link_rates(hover, sensors, self.altitude, self.peak_rate, self.decay)
 
     def nfz_distance(self, geoms: Any) -> np.ndarray:
         """Distance of shapely geometries to the nearest no-fly zone (inf when there is none)."""
