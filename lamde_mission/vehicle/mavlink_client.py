@@ -36,6 +36,7 @@ from lamde_mission.vehicle.wire import (
     WireItem,
     mission_result_name,
     mission_type_name,
+    open_udp,
     parse_endpoint,
     to_wire,
 )
@@ -79,18 +80,10 @@ class MavlinkClient:
         self._peer: tuple[str, int] | None = None
         self._next_heartbeat = 0.0
         ep = self.endpoint
-        sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         try:
-            if ep.mode == "udpin":
-                sock.bind((ep.host, ep.port))
-            else:
-                loopback = ep.host in ("127.0.0.1", "localhost")
-                sock.bind(("127.0.0.1" if loopback else "0.0.0.0", 0))
-                self._peer = (socket.gethostbyname(ep.host), ep.port)
+            sock, self._peer = open_udp(ep)
         except OSError as exc:
-            sock.close()
             raise VehicleError(f"cannot open {ep}: {exc.strerror or exc}") from None
-        sock.setblocking(False)
         self._sock: socket.socket | None = sock
 
     # ------------------------------------------------------------------ life cycle

@@ -45,6 +45,7 @@ from lamde_mission.vehicle.wire import (
     mission_result_code,
     mission_result_name,
     mission_type_name,
+    open_udp,
     parse_endpoint,
     to_wire,
 )
@@ -160,19 +161,9 @@ class MockVehicle:
     # ------------------------------------------------------------------ life cycle
 
     def _open(self) -> None:
-        ep = self.endpoint
-        sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        try:
-            if ep.mode == "udpin":
-                sock.bind((ep.host, ep.port))
-            else:
-                loopback = ep.host in ("127.0.0.1", "localhost")
-                sock.bind(("127.0.0.1" if loopback else "0.0.0.0", 0))
-                self._peer = (socket.gethostbyname(ep.host), ep.port)
-        except OSError:
-            sock.close()
-            raise
-        sock.setblocking(False)
+        sock, peer = open_udp(self.endpoint)
+        if peer is not None:
+            self._peer = peer
         self._sock = sock
 
     @property

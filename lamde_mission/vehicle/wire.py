@@ -17,6 +17,7 @@ are compared in one place, after the conversions MAVLink imposes:
 from __future__ import annotations
 
 import math
+import socket
 from collections.abc import Sequence
 from dataclasses import dataclass
 from urllib.parse import urlsplit
@@ -28,6 +29,7 @@ from lamde_mission.items import FRAME, MISSION_TYPE, MissionItem
 
 __all__ = [
     "PacketCapture",
+    "open_udp",
     "WireItem",
     "Difference",
     "Endpoint",
@@ -330,3 +332,23 @@ class PacketCapture:
 
     def write(self, buf: bytes) -> None:
         self.buf = bytes(buf)
+
+
+def open_udp(ep: Endpoint) -> tuple[socket.socket, tuple[str, int] | None]:
+    """A non-blocking UDP socket for `ep` and the peer to send to (None for udpin, which answers
+    whoever talks first). udpin binds the endpoint; udpout binds an ephemeral local port, on
+    loopback when the peer is on loopback. Raises OSError (the socket closed) on failure."""
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    try:
+        peer = None
+        if ep.mode == "udpin":
+            sock.bind((ep.host, ep.port))
+        else:
+            loopback = ep.host in ("127.0.0.1", "localhost")
+            sock.bind(("127.0.0.1" if loopback else "0.0.0.0", 0))
+            peer = (socket.gethostbyname(ep.host), ep.port)
+    except OSError:
+        sock.close()
+        raise
+    sock.setblocking(False)
+    return sock, peer
