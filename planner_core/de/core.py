@@ -20,14 +20,12 @@ from typing import Any, NamedTuple, Protocol
 
 import numpy as np
 
+from planner_core.de import fast
 from planner_core.de.operators import (
     MIN_POPULATION,
     N_CROSSOVERS,
     N_MUTATIONS,
-    crossover,
     draw_crossover,
-    draw_donors,
-    mutate,
 )
 
 STREAM_ASK = 0
@@ -301,11 +299,13 @@ def ask(state: DEState, config: Config) -> np.ndarray:
         return np.empty((0, d))
     config = validate_config(config, n)
     rng = generation_rng(state, STREAM_ASK)
-    donors = draw_donors(rng, n, k)
+    donors = fast.draw_donors(rng, n, k)
     u, j = draw_crossover(rng, k, d)
-    V = mutate(state.X, config.mutation[:k], config.F[:k], state.best, donors)
-    T = crossover(state.X[:k], V, config.crossover[:k], config.Cr[:k], u, j)
-    return np.clip(T, 0.0, 1.0, out=T)
+    # the compiled twin of clip(crossover(x, mutate(...))) from operators.py, bit for bit
+    return fast.trials(
+        state.X, config.mutation[:k], config.F[:k], state.best, donors,
+        config.crossover[:k], config.Cr[:k], u, j,
+    )  # fmt: skip
 
 
 def tell(state: DEState, trials: np.ndarray, f: np.ndarray, phi: np.ndarray) -> DEState:
