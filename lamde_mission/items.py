@@ -31,6 +31,7 @@ __all__ = [
     "Route",
     "plan_to_items",
     "geofence_items",
+    "fence_item",
     "fence_shapes",
     "items_to_route",
     "items_equal",
@@ -214,6 +215,15 @@ def fence_shapes(map: Any) -> tuple[list[tuple[np.ndarray, float]], list[np.ndar
     return circles, polys
 
 
+def fence_item(seq: int, command: int, p1: float, lat: float, lon: float) -> MissionItem:
+    """One fence vertex or circle item as QGroundControl and MAVSDK write them (frame GLOBAL,
+    autocontinue 0, mission type FENCE; param1 = vertex count or radius)."""
+    return MissionItem(
+        seq=seq, command=command, frame=FRAME.GLOBAL, autocontinue=0, param1=float(p1),
+        x=lat, y=lon, z=0.0, mission_type=MISSION_TYPE.FENCE,
+    )  # fmt: skip
+
+
 def geofence_items(map: Any) -> list[MissionItem]:  # noqa: A002
     """Exclusion fence (MAV_MISSION_TYPE_FENCE) items for every obstacle of the map.
 
@@ -226,12 +236,7 @@ def geofence_items(map: Any) -> list[MissionItem]:  # noqa: A002
     out: list[MissionItem] = []
 
     def add(command: int, p1: float, lat: float, lon: float) -> None:
-        out.append(
-            MissionItem(
-                seq=len(out), command=command, frame=FRAME.GLOBAL, autocontinue=0,
-                param1=float(p1), x=lat, y=lon, z=0.0, mission_type=MISSION_TYPE.FENCE,
-            )
-        )  # fmt: skip
+        out.append(fence_item(len(out), command, p1, lat, lon))
 
     for poly in polys:
         for lat, lon in _latlon(map, poly):

@@ -23,11 +23,11 @@ from typing import Any
 from lamde_mission.atomic import write_text_atomic
 from lamde_mission.items import (
     CMD,
-    FRAME,
     MISSION_TYPE,
     MissionError,
     MissionItem,
     fence_from_items,
+    fence_item,
 )
 
 __all__ = [
@@ -183,12 +183,7 @@ def _parse_fence(gf: Any) -> list[MissionItem]:
     out: list[MissionItem] = []
 
     def add(command: int, p1: float, lat: float, lon: float) -> None:
-        out.append(
-            MissionItem(
-                seq=len(out), command=command, frame=FRAME.GLOBAL, autocontinue=0,
-                param1=float(p1), x=lat, y=lon, z=0.0, mission_type=MISSION_TYPE.FENCE,
-            )
-        )  # fmt: skip
+        out.append(fence_item(len(out), command, p1, lat, lon))
 
     for k, poly in enumerate(gf.get("polygons") or []):
         where = f"geoFence.polygons[{k}]"
