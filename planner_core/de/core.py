@@ -312,7 +312,14 @@ def tell(state: DEState, trials: np.ndarray, f: np.ndarray, phi: np.ndarray) -> 
     """Deb selection of trials (k, d) against parents 0..k-1; a new state one generation on."""
     k = trials.shape[0]
     f_t, phi_t = _sanitise(f, phi, k)
-    win = deb_better(f_t, phi_t, state.f[:k], state.phi[:k])
+    return _select(state, trials, f_t, phi_t, deb_better(f_t, phi_t, state.f[:k], state.phi[:k]))
+
+
+def _select(
+    state: DEState, trials: np.ndarray, f_t: np.ndarray, phi_t: np.ndarray, win: np.ndarray
+) -> DEState:
+    """`tell` after the Deb comparison: replace the winning parents, one generation on."""
+    k = trials.shape[0]
     X, fn, phin = state.X.copy(), state.f.copy(), state.phi.copy()
     X[:k][win] = trials[win]
     fn[:k][win] = f_t[win]
@@ -364,7 +371,8 @@ def step(
     trials = ask(state, config)
     f, phi = evaluate(problem, trials)
     out = outcome(state, config, trials, f, phi)
-    new = tell(state, trials, f, phi)
+    # the outcome already holds the sanitised values and Deb's verdict: select with them
+    new = _select(state, trials, out.f_trial, out.phi_trial, out.success)
     return dataclasses.replace(new, memory=configurator.update(state.memory, out)), out
 
 
