@@ -163,3 +163,41 @@ def test_adaptive_beats_fixed_and_random_on_a_constrained_toy() -> None:
         finals[name] = [r.f for r in results]
     mean = {k: float(np.mean(v)) for k, v in finals.items()}
     assert mean["adaptive"] < 0.7 * min(mean["fixed"], mean["random"]), finals
+
+
+@pytest.mark.parametrize("seed", range(30))
+def test_compiled_update_equals_numpy_reference(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(6, 120))
+    k = int(rng.integers(1, n + 1))
+    # coarse values so that ties in phi and f (Deb's tie-break) occur often
+    f_p, f_t = rng.integers(0, 5, n).astype(float), rng.integers(0, 5, k).astype(float)
+    phi_p = np.where(rng.random(n) < 0.5, 0.0, rng.integers(1, 4, n).astype(float))
+    phi_t = np.where(rng.random(k) < 0.5, 0.0, rng.integers(1, 4, k).astype(float))
+    arm = rng.integers(0, len(ARMS), n)
+    cfg = Config(ARMS[arm, 0], ARMS[arm, 1], rng.random(n), rng.random(n))
+    out = Outcome(cfg, np.zeros((k, 1)), np.zeros((k, 1)), f_p[:k], phi_p[:k], f_t, phi_t,
+                  rng.random(k) < 0.5, k, 10 * n)  # fmt: skip
+    conf = AdaptiveConfigurator(rate=float(rng.uniform(0.05, 0.5)), lr=float(rng.random()))
+    mem = AdaptiveMemory(rng.random(14), rng.random(14), rng.random(14), int(rng.integers(9)))
+    kept = [a.copy() for a in mem[:3]]
+    got, ref = conf.update(mem, out), conf.update_reference(mem, out)
+    for a, b in zip(got, ref, strict=True):
+        assert np.array_equal(a, b)
+    for a, b in zip(mem[:3], kept, strict=True):
+        assert np.array_equal(a, b)  # the old memory is never written
+
+
+def test_adaptive_draws_follow_the_arm_probabilities() -> None:
+    conf = AdaptiveConfigurator()
+    n = 20_000
+    state = _state(n=n)
+    mem = AdaptiveMemory(np.linspace(0.2, 0.8, 14), np.full(14, 0.5),
+                         np.linspace(0.0, 1.0, 14), stall=3)  # fmt: skip
+    state = DEState(state.X, state.f, state.phi, state.best, 0, n, 10 * n, 0, mem)
+    cfg = conf.configure(state, np.random.default_rng(4))
+    arm = cfg.mutation * 2 + cfg.crossover
+    freq = np.bincount(arm, minlength=14) / n
+    np.testing.assert_allclose(freq, conf.probabilities(mem), atol=0.01)
+    for a in (0, 13):  # F centred on the arm's m_f (clipping is rare at sd 0.1)
+        assert abs(np.median(cfg.F[arm == a]) - mem.m_f[a]) < 0.02

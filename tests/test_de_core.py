@@ -13,6 +13,7 @@ from planner_core.de import (
     FixedConfigurator,
     Progress,
     ask,
+    ask_words,
     deb_best,
     deb_better,
     deb_order,
@@ -222,3 +223,18 @@ def test_initial_population_hook_is_used_and_clamped() -> None:
 
     with pytest.raises(ValueError):
         init(Wrong(4), seed=0, population=8)
+
+
+def test_step_gives_the_trials_of_configure_then_ask() -> None:
+    """ask's words come first in a generation's stream, so step == configure + ask."""
+    from planner_core.de import AdaptiveConfigurator, generation_rng, step
+
+    p = ConstrainedSphere(5)
+    conf = AdaptiveConfigurator()
+    s = init(p, seed=4, population=12, budget=120)
+    s = dataclasses.replace(s, memory=conf.init(s))
+    _, out = step(s, p, conf)
+    rng = generation_rng(s)
+    rng.bit_generator.random_raw(len(ask_words(s)))  # skip ask's words, as step does
+    cfg = conf.configure(s, rng)
+    np.testing.assert_array_equal(out.trials, ask(s, cfg))

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from typing import Any, NamedTuple
 
 import numpy as np
+from numba import njit
 
 from planner_core.de.core import Config, DEState, Outcome, deb_best, deb_better
 from planner_core.de.operators import (
@@ -162,12 +163,34 @@ class AdaptiveConfigurator:
     def configure(self, state: DEState, rng: np.random.Generator) -> Config:
         mem: AdaptiveMemory = state.memory if state.memory is not None else self.init(state)
         n = state.population
-        arm = rng.choice(len(ARMS), size=n, p=self.probabilities(mem))
-        F = np.clip(mem.m_f[arm] + self.f_sd * rng.standard_normal(n), 0.02, 1.0)
-        Cr = np.clip(mem.m_cr[arm] + self.cr_sd * rng.standard_normal(n), 0.0, 1.0)
+        # one uniform per individual picks its arm (inverse CDF), two normals its F and Cr
+        cdf = np.cumsum(self.probabilities(mem))
+        arm = np.searchsorted(cdf, rng.random(n) * cdf[-1], side="right")
+        arm = np.minimum(arm, len(ARMS) - 1)
+        z = rng.standard_normal((2, n))
+        F = np.minimum(np.maximum(mem.m_f[arm] + self.f_sd * z[0], 0.02), 1.0)
+        Cr = np.minimum(np.maximum(mem.m_cr[arm] + self.cr_sd * z[1], 0.0), 1.0)
         return Config(ARMS[arm, 0], ARMS[arm, 1], F, Cr)
 
     def update(self, memory: AdaptiveMemory, outcome: Outcome) -> AdaptiveMemory:
+        """The next memory (compiled; equal bit for bit to :meth:`update_reference`)."""
+        k = len(outcome.success)
+        if k == 0:
+            return memory
+        cfg = outcome.config
+        quality, m_f, m_cr = memory.quality.copy(), memory.m_f.copy(), memory.m_cr.copy()
+        improved = _update(
+            np.asarray(cfg.mutation[:k] * N_CROSSOVERS + cfg.crossover[:k], dtype=np.intp),
+            np.asarray(outcome.success, dtype=np.bool_),
+            np.asarray(outcome.f_trial, dtype=float), np.asarray(outcome.phi_trial, dtype=float),
+            np.asarray(outcome.f_parent, dtype=float), np.asarray(outcome.phi_parent, dtype=float),
+            np.asarray(cfg.F[:k], dtype=float), np.asarray(cfg.Cr[:k], dtype=float),
+            self.rate, self.lr, quality, m_f, m_cr,
+        )  # fmt: skip
+        return AdaptiveMemory(m_f, m_cr, quality, 0 if improved else memory.stall + 1)
+
+    def update_reference(self, memory: AdaptiveMemory, outcome: Outcome) -> AdaptiveMemory:
+        """:meth:`update` in plain numpy: the readable statement of the rule, kept for tests."""
         k = len(outcome.success)
         if k == 0:
             return memory
@@ -180,18 +203,55 @@ class AdaptiveConfigurator:
         seen = used > 0
         quality = memory.quality.copy()
         quality[seen] += self.rate * (gain[seen] / used[seen] - quality[seen])
-        m_f, m_cr = memory.m_f, memory.m_cr
+        m_f, m_cr = memory.m_f.copy(), memory.m_cr.copy()
         won = gain > 0
-        if won.any():
-            mean_f = np.bincount(arm, weights=credit * cfg.F[:k], minlength=a)[won] / gain[won]
-            mean_cr = np.bincount(arm, weights=credit * cfg.Cr[:k], minlength=a)[won] / gain[won]
-            m_f, m_cr = m_f.copy(), m_cr.copy()
-            m_f[won] += self.lr * (mean_f - m_f[won])
-            m_cr[won] += self.lr * (mean_cr - m_cr[won])
+        mean_f = np.bincount(arm, weights=credit * cfg.F[:k], minlength=a)[won] / gain[won]
+        mean_cr = np.bincount(arm, weights=credit * cfg.Cr[:k], minlength=a)[won] / gain[won]
+        m_f[won] += self.lr * (mean_f - m_f[won])
+        m_cr[won] += self.lr * (mean_cr - m_cr[won])
         b = deb_best(outcome.f_parent, outcome.phi_parent)
         fb, pb = outcome.f_parent[b], outcome.phi_parent[b]
         improved = bool(deb_better(outcome.f_trial, outcome.phi_trial, fb, pb).any())
         return AdaptiveMemory(m_f, m_cr, quality, 0 if improved else memory.stall + 1)
+
+
+@njit(cache=True, fastmath=False)
+def _update(arm, success, f_t, phi_t, f_p, phi_p, F, Cr, rate, lr, quality, m_f, m_cr):  # noqa: E501  # pragma: no cover
+    """:meth:`AdaptiveConfigurator.update_reference`, compiled; writes quality, m_f, m_cr."""
+    a = quality.shape[0]
+    k = arm.shape[0]
+    n = f_p.shape[0]
+    used = np.zeros(a)
+    gain = np.zeros(a)
+    gain_f = np.zeros(a)
+    gain_cr = np.zeros(a)
+    b = 0  # Deb-best parent, first index on ties (as core.deb_best)
+    for i in range(1, n):
+        if phi_p[i] < phi_p[b] or (phi_p[i] == phi_p[b] and f_p[i] < f_p[b]):
+            b = i
+    improved = False
+    for i in range(k):
+        ft, pt = f_t[i], phi_t[i]
+        used[arm[i]] += 1.0
+        if pt < phi_p[b] or (pt == phi_p[b] and ft < f_p[b]):
+            improved = True
+        if not success[i]:
+            continue
+        beats = 0  # rank credit: the fraction of the generation's parents this trial Deb-beats
+        for c in range(n):
+            if pt < phi_p[c] or (pt == phi_p[c] and ft < f_p[c]):
+                beats += 1
+        credit = beats / n
+        gain[arm[i]] += credit
+        gain_f[arm[i]] += credit * F[i]
+        gain_cr[arm[i]] += credit * Cr[i]
+    for j in range(a):
+        if used[j] > 0:
+            quality[j] += rate * (gain[j] / used[j] - quality[j])
+        if gain[j] > 0:
+            m_f[j] += lr * (gain_f[j] / gain[j] - m_f[j])
+            m_cr[j] += lr * (gain_cr[j] / gain[j] - m_cr[j])
+    return improved
 
 
 _REGISTRY = {

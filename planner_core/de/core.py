@@ -2,8 +2,11 @@
 
 The search runs in the unit box: ``x = lower + u * (upper - lower)``; trial vectors are clamped
 to [0, 1] (the paper's value clamping). The randomness of generation g is a pure function of
-``(state.seed, g)``: a fresh numpy Generator from a SeedSequence with spawn key ``(g, stream)``.
-So ``ask`` is pure and a run is reproducible bit for bit from its seed.
+``(state.seed, g)``: a fresh numpy Generator from a SeedSequence with spawn key ``(g,)``. Its
+first raw words are ask's (how many depends only on the population and dimension, not on the
+configuration); a configurator draws from the same generator after them. So ``ask`` is pure,
+``step`` gives the same trials as ``configure`` then ``ask``, and a run is reproducible bit for
+bit from its seed.
 
 Budget: the initial population (N evaluations) counts. Each generation evaluates
 ``k = min(N, budget - evaluations)`` trials; when ``k < N`` (the last generation) only
@@ -25,11 +28,9 @@ from planner_core.de.operators import (
     MIN_POPULATION,
     N_CROSSOVERS,
     N_MUTATIONS,
-    draw_crossover,
+    crossover_words,
+    donor_words,
 )
-
-STREAM_ASK = 0
-STREAM_CONFIGURE = 1
 
 
 class BoxProblem(Protocol):
@@ -192,14 +193,20 @@ def deb_best(f: np.ndarray, phi: np.ndarray) -> int:
 
 
 def _sanitise(f: np.ndarray, phi: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Float copies with NaN -> +inf so that a broken evaluation never wins a comparison."""
-    f = np.array(f, dtype=float).reshape(-1)
-    phi = np.array(phi, dtype=float).reshape(-1)
+    """Float arrays with NaN -> +inf so that a broken evaluation never wins a comparison
+    (copied only when a NaN must be replaced; the caller's arrays are never written)."""
+    f = np.asarray(f, dtype=float).reshape(-1)
+    phi = np.asarray(phi, dtype=float).reshape(-1)
     if f.shape != (n,) or phi.shape != (n,):
         raise ValueError(f"evaluate returned shapes {f.shape}, {phi.shape}; expected ({n},)")
-    f[np.isnan(f)] = np.inf
-    phi[np.isnan(phi)] = np.inf
+    if np.isnan(f).any():
+        f = np.where(np.isnan(f), np.inf, f)
+    if np.isnan(phi).any():
+        phi = np.where(np.isnan(phi), np.inf, phi)
     return f, phi
+
+
+_KEEP = object()  # _select's default: keep the configurator memory
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:
@@ -215,16 +222,27 @@ def max_generations(population: int, budget: int) -> int:
     return max(0, math.ceil((budget - population) / population))
 
 
-def generation_rng(state: DEState, stream: int) -> np.random.Generator:
-    """The Generator for (seed, generation, stream): pure, so ask/configure are repeatable."""
-    seq = np.random.SeedSequence(state.seed, spawn_key=(state.generation, stream))
+def generation_rng(state: DEState) -> np.random.Generator:
+    """The Generator of generation ``state.generation``: pure in (seed, generation)."""
+    seq = np.random.SeedSequence(state.seed, spawn_key=(state.generation,))
     return np.random.Generator(np.random.PCG64(seq))
+
+
+def ask_words(state: DEState, rng: np.random.Generator | None = None) -> np.ndarray:
+    """The raw 64-bit words ask splits into donors and crossover draws: the first
+    ``donor_words(k) + crossover_words(k, d)`` of the generation's generator (``rng``, when
+    given, must be that generator, fresh)."""
+    k, d = trial_count(state), state.dim
+    rng = generation_rng(state) if rng is None else rng
+    return rng.bit_generator.random_raw(donor_words(k) + crossover_words(k, d))
 
 
 def to_problem(problem: BoxProblem, U: np.ndarray) -> np.ndarray:
     """Map unit-box points to the problem's bounds: lower + u * (upper - lower)."""
     lower = np.asarray(problem.lower, dtype=float)
-    return lower + U * (np.asarray(problem.upper, dtype=float) - lower)
+    out = np.multiply(U, np.asarray(problem.upper, dtype=float) - lower)
+    out += lower
+    return out
 
 
 def to_unit(problem: BoxProblem, X: np.ndarray) -> np.ndarray:
@@ -260,8 +278,8 @@ def init(problem: BoxProblem, seed: int, population: int = 100, budget: int = 10
     f, phi = _sanitise(*problem.evaluate(to_problem(problem, X)), population)
     return DEState(
         X=_frozen(X),
-        f=_frozen(f),
-        phi=_frozen(phi),
+        f=_frozen(f.copy()),
+        phi=_frozen(phi.copy()),
         best=deb_best(f, phi),
         generation=0,
         evaluations=population,
@@ -279,8 +297,8 @@ def validate_config(config: Config, n: int) -> Config:
     """Coerce a configuration to (n,) arrays: ids checked in range, F and Cr clipped to [0, 1]."""
     mut = np.asarray(config.mutation, dtype=np.intp).reshape(-1)
     cx = np.asarray(config.crossover, dtype=np.intp).reshape(-1)
-    F = np.clip(np.asarray(config.F, dtype=float).reshape(-1), 0.0, 1.0)
-    Cr = np.clip(np.asarray(config.Cr, dtype=float).reshape(-1), 0.0, 1.0)
+    F = np.asarray(config.F, dtype=float).reshape(-1)
+    Cr = np.asarray(config.Cr, dtype=float).reshape(-1)
     for name, a in (("mutation", mut), ("crossover", cx), ("F", F), ("Cr", Cr)):
         if a.shape != (n,):
             raise ValueError(f"config.{name} has shape {a.shape}, expected ({n},)")
@@ -288,23 +306,43 @@ def validate_config(config: Config, n: int) -> Config:
         raise ValueError(f"mutation ids must lie in 0..{N_MUTATIONS - 1}")
     if cx.min() < 0 or cx.max() >= N_CROSSOVERS:
         raise ValueError(f"crossover ids must lie in 0..{N_CROSSOVERS - 1}")
+    # clip only when needed (NaN fails both tests and is clipped, to NaN: it then never copies)
+    if not (F.min() >= 0.0 and F.max() <= 1.0):
+        F = np.clip(F, 0.0, 1.0)
+    if not (Cr.min() >= 0.0 and Cr.max() <= 1.0):
+        Cr = np.clip(Cr, 0.0, 1.0)
     return Config(mut, cx, F, Cr)
 
 
-def ask(state: DEState, config: Config) -> np.ndarray:
-    """Trial vectors (k, d) in the unit box for individuals 0..k-1 (k = :func:`trial_count`)."""
+def ask(state: DEState, config: Config, words: np.ndarray | None = None) -> np.ndarray:
+    """Trial vectors (k, d) in the unit box for individuals 0..k-1 (k = :func:`trial_count`).
+
+    ``words``: :func:`ask_words` of this state, when the caller already drew them.
+    """
+    return _ask(state, config, words)
+
+
+def _ask(
+    state: DEState,
+    config: Config,
+    words: np.ndarray | None,
+    problem: BoxProblem | None = None,
+) -> Any:
+    """`ask`; given ``problem``, also the trials mapped to its box (one pass, as to_problem)."""
     k = trial_count(state)
     n, d = state.X.shape
     if k == 0:
-        return np.empty((0, d))
+        return np.empty((0, d)) if problem is None else (np.empty((0, d)), np.empty((0, d)))
     config = validate_config(config, n)
-    rng = generation_rng(state, STREAM_ASK)
-    donors = fast.draw_donors(rng, n, k)
-    u, j = draw_crossover(rng, k, d)
-    # the compiled twin of clip(crossover(x, mutate(...))) from operators.py, bit for bit
-    return fast.trials(
-        state.X, config.mutation[:k], config.F[:k], state.best, donors,
-        config.crossover[:k], config.Cr[:k], u, j,
+    bounds = None
+    if problem is not None:
+        lower = np.asarray(problem.lower, dtype=float)
+        bounds = (lower, np.asarray(problem.upper, dtype=float) - lower)
+    # the compiled twin of draw_donors, draw_crossover, then clip(crossover(x, mutate(...)))
+    # from operators.py: the same draws and trials, bit for bit (tests/test_de_fast.py)
+    return fast.ask(
+        ask_words(state) if words is None else words, state.X, config.mutation[:k],
+        config.F[:k], state.best, config.crossover[:k], config.Cr[:k], bounds,
     )  # fmt: skip
 
 
@@ -316,22 +354,26 @@ def tell(state: DEState, trials: np.ndarray, f: np.ndarray, phi: np.ndarray) -> 
 
 
 def _select(
-    state: DEState, trials: np.ndarray, f_t: np.ndarray, phi_t: np.ndarray, win: np.ndarray
+    state: DEState,
+    trials: np.ndarray,
+    f_t: np.ndarray,
+    phi_t: np.ndarray,
+    win: np.ndarray,
+    memory: Any = _KEEP,
 ) -> DEState:
-    """`tell` after the Deb comparison: replace the winning parents, one generation on."""
-    k = trials.shape[0]
-    X, fn, phin = state.X.copy(), state.f.copy(), state.phi.copy()
-    X[:k][win] = trials[win]
-    fn[:k][win] = f_t[win]
-    phin[:k][win] = phi_t[win]
-    return dataclasses.replace(
-        state,
+    """`tell` after the Deb comparison: replace the winning parents, one generation on
+    (``memory``: the next state's configurator memory, by default the current one)."""
+    X, fn, phin, best = fast.select(state.X, state.f, state.phi, trials, f_t, phi_t, win)
+    return DEState(
         X=_frozen(X),
         f=_frozen(fn),
         phi=_frozen(phin),
-        best=deb_best(fn, phin),
+        best=best,
         generation=state.generation + 1,
-        evaluations=state.evaluations + k,
+        evaluations=state.evaluations + trials.shape[0],
+        budget=state.budget,
+        seed=state.seed,
+        memory=state.memory if memory is _KEEP else memory,
     )
 
 
@@ -367,13 +409,15 @@ def step(
     state: DEState, problem: BoxProblem, configurator: Configurator
 ) -> tuple[DEState, Outcome]:
     """One generation: configure, ask, evaluate, tell, and feed the outcome to the configurator."""
-    config = configurator.configure(state, generation_rng(state, STREAM_CONFIGURE))
-    trials = ask(state, config)
-    f, phi = evaluate(problem, trials)
+    rng = generation_rng(state)
+    words = ask_words(state, rng)  # ask's words come first, the configurator draws after them
+    config = configurator.configure(state, rng)
+    trials, points = _ask(state, config, words, problem)
+    f, phi = problem.evaluate(points) if len(points) else (np.empty(0), np.empty(0))
     out = outcome(state, config, trials, f, phi)
     # the outcome already holds the sanitised values and Deb's verdict: select with them
-    new = _select(state, trials, out.f_trial, out.phi_trial, out.success)
-    return dataclasses.replace(new, memory=configurator.update(state.memory, out)), out
+    memory = configurator.update(state.memory, out)
+    return _select(state, trials, out.f_trial, out.phi_trial, out.success, memory), out
 
 
 def _progress(state: DEState) -> Progress:

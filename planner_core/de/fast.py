@@ -1,10 +1,10 @@
-"""Compiled trial generation: mutation, crossover and clamping in one pass (numba).
+"""Compiled DE steps (numba): trial generation and Deb selection, each one pass.
 
-`ask` calls `trials` with the same random draws the numpy operators take; the result is the
-same array bit for bit as `clip(crossover(x, mutate(...)), 0, 1)` from `operators.py`, which
-stays as the readable, hand-tested reference (a test holds the two together). One pass over
-the population instead of a dozen numpy temporaries keeps the optimiser's own time per
-generation small next to the problem's evaluation.
+`ask` splits one block of raw random words exactly as `operators.draw_donors` and
+`operators.draw_crossover` do, and returns bit for bit `clip(crossover(x, mutate(...)), 0, 1)`
+from `operators.py`, which stays as the readable, hand-tested reference (tests hold the two
+together). One pass over the population instead of a dozen numpy temporaries keeps the
+optimiser's own time per generation small next to the problem's evaluation.
 """
 
 from __future__ import annotations
@@ -12,9 +12,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from planner_core.de.operators import _TERMS
+from planner_core.de.operators import _TERMS, N_DONORS, crossover_words, donor_words
 
-__all__ = ["draw_donors", "trials"]
+__all__ = ["ask", "select"]
 
 
 @njit(cache=True, fastmath=False)
@@ -45,29 +45,6 @@ def _trials(X, mutation, F, best, donors, terms, crossover, Cr, u, j, out):  # p
             out[i, k] = min(max(v, 0.0), 1.0)
 
 
-def trials(
-    X: np.ndarray,
-    mutation: np.ndarray,
-    F: np.ndarray,
-    best: int,
-    donors: np.ndarray,
-    crossover: np.ndarray,
-    Cr: np.ndarray,
-    u: np.ndarray,
-    j: np.ndarray,
-) -> np.ndarray:
-    """Clamped trials (m, d) for rows 0..m-1 of X: the operators of `operators.py`, fused."""
-    m = len(mutation)
-    out = np.empty((m, X.shape[1]))
-    _trials(
-        np.ascontiguousarray(X, dtype=float), np.asarray(mutation, dtype=np.intp),
-        np.asarray(F, dtype=float), int(best), np.asarray(donors, dtype=np.intp), _TERMS,
-        np.asarray(crossover, dtype=np.intp), np.asarray(Cr, dtype=float),
-        np.ascontiguousarray(u, dtype=float), np.asarray(j, dtype=np.intp), out,
-    )  # fmt: skip
-    return out
-
-
 @njit(cache=True, fastmath=False)
 def _map_donors(raw, out):  # pragma: no cover
     rows, k = raw.shape
@@ -89,13 +66,128 @@ def _map_donors(raw, out):  # pragma: no cover
             count += 1
 
 
-def draw_donors(rng: np.random.Generator, n: int, rows: int, k: int = 5) -> np.ndarray:
-    """`operators.draw_donors` with the index mapping compiled: same draws, same result."""
-    if n < k + 1:
-        raise ValueError(f"population {n} too small for {k} distinct donors (need >= {k + 1})")
-    raw = np.empty((rows, k), dtype=np.intp)
-    for c in range(k):
-        raw[:, c] = rng.integers(0, n - 1 - c, size=rows)
-    out = np.empty((rows, k), dtype=np.intp)
-    _map_donors(raw, out)
-    return out
+_SHIFT53 = np.uint64(11)
+_SHIFT32 = np.uint64(32)
+_LOW32 = np.uint64(0xFFFFFFFF)
+_TWO_M53 = 2.0**-53
+_TWO_M32 = 2.0**-32
+
+
+@njit(cache=True, fastmath=False)
+def _below(word, m):  # pragma: no cover
+    """operators.below(unit_doubles(word), m) for one word."""
+    r = int(np.float64(np.int64(word >> _SHIFT53)) * _TWO_M53 * m)
+    return min(r, m - 1)
+
+
+@njit(cache=True, fastmath=False)
+def _ask(X, mutation, F, best, terms, crossover, Cr, words, out, lower, span, points):  # noqa: E501  # pragma: no cover
+    m, d = out.shape
+    n = X.shape[0]
+    k = N_DONORS  # a global: a compile-time constant for numba
+    # split the words as operators.draw_donors, then operators.draw_crossover, do
+    ranks = np.empty((m, k), dtype=np.intp)
+    p = 0
+    for i in range(m):
+        for c in range(k):
+            ranks[i, c] = _below(words[p], n - 1 - c)
+            p += 1
+    j = np.empty(m, dtype=np.intp)
+    for i in range(m):
+        j[i] = _below(words[p], d)
+        p += 1
+    count = m * d
+    flat = np.empty(count)
+    pairs = count // 2
+    for t in range(pairs):  # high half first; via int64 (exact): cheaper than from uint64
+        w = words[p + t]
+        flat[2 * t] = np.float64(np.int64(w >> _SHIFT32)) * _TWO_M32
+        flat[2 * t + 1] = np.float64(np.int64(w & _LOW32)) * _TWO_M32
+    if count % 2:
+        flat[count - 1] = np.float64(np.int64(words[p + pairs] >> _SHIFT32)) * _TWO_M32
+    u = flat.reshape((m, d))
+    donors = np.empty((m, k), dtype=np.intp)
+    _map_donors(ranks, donors)
+    _trials(X, mutation, F, best, donors, terms, crossover, Cr, u, j, out)
+    if points.shape[0] == m:  # also map to the problem's box: core.to_problem, same arithmetic
+        for i in range(m):
+            for c in range(d):
+                points[i, c] = out[i, c] * span[c] + lower[c]
+
+
+def ask(
+    words: np.ndarray,
+    X: np.ndarray,
+    mutation: np.ndarray,
+    F: np.ndarray,
+    best: int,
+    crossover: np.ndarray,
+    Cr: np.ndarray,
+    bounds: tuple[np.ndarray, np.ndarray] | None = None,
+) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+    """Clamped trials (m, d) for rows 0..m-1 of X (m = len(mutation)) from raw random ``words``.
+
+    Bit for bit what the numpy operators give when they draw the same words: donors from
+    `operators.draw_donors`, then `operators.draw_crossover`, then `mutate`, `crossover` and
+    clipping to [0, 1]. ``words`` holds ``donor_words(m) + crossover_words(m, d)`` uint64s.
+    With ``bounds = (lower, span)`` it returns ``(trials, lower + trials * span)``, the second
+    equal to `core.to_problem` of the first, computed in the same pass.
+    """
+    n, d = X.shape
+    if n < N_DONORS + 1:
+        raise ValueError(f"population {n} too small for {N_DONORS} distinct donors")
+    m = len(mutation)
+    words = np.asarray(words, dtype=np.uint64)
+    if words.shape != (donor_words(m) + crossover_words(m, d),):
+        raise ValueError(f"ask needs {donor_words(m) + crossover_words(m, d)} raw words")
+    out = np.empty((m, d))
+    if bounds is None:
+        lower = span = np.zeros(d)
+        points = np.empty((0, d))
+    else:
+        lower, span = (np.asarray(b, dtype=float) for b in bounds)
+        points = np.empty((m, d))
+    _ask(
+        np.ascontiguousarray(X, dtype=float), np.asarray(mutation, dtype=np.intp),
+        np.asarray(F, dtype=float), int(best), _TERMS, np.asarray(crossover, dtype=np.intp),
+        np.asarray(Cr, dtype=float), words, out, lower, span, points,
+    )  # fmt: skip
+    return out if bounds is None else (out, points)
+
+
+@njit(cache=True, fastmath=False)
+def _select(X, f, phi, trials, f_t, phi_t, win):  # pragma: no cover
+    k, d = trials.shape
+    for i in range(k):
+        if win[i]:
+            f[i] = f_t[i]
+            phi[i] = phi_t[i]
+            for c in range(d):
+                X[i, c] = trials[i, c]
+    b = 0
+    for i in range(1, f.shape[0]):
+        if phi[i] < phi[b] or (phi[i] == phi[b] and f[i] < f[b]):
+            b = i
+    return b
+
+
+def select(
+    X: np.ndarray,
+    f: np.ndarray,
+    phi: np.ndarray,
+    trials: np.ndarray,
+    f_trial: np.ndarray,
+    phi_trial: np.ndarray,
+    win: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """New (X, f, phi) with rows i < k replaced where ``win[i]``, and the Deb-best index of the
+    result (lowest phi, then lowest f, first index on ties: `core.deb_best`). Inputs untouched."""
+    Xn = np.array(X, dtype=float, order="C")
+    fn = np.array(f, dtype=float)
+    phin = np.array(phi, dtype=float)
+    best = _select(
+        Xn, fn, phin, np.ascontiguousarray(trials, dtype=float),
+        np.asarray(f_trial, dtype=float), np.asarray(phi_trial, dtype=float),
+        np.asarray(win, dtype=np.bool_),
+    )  # fmt: skip
+    return Xn, fn, phin, int(best)

@@ -86,15 +86,58 @@ def crossover_index(name: str | int) -> int:
     return idx
 
 
+# ---- randomness: one block of raw 64-bit words per draw, split the same way here and in fast.py
+_TWO_M53 = 2.0**-53
+_TWO_M32 = 2.0**-32
+
+
+def unit_doubles(words: np.ndarray) -> np.ndarray:
+    """Uniforms in [0, 1) with 53 random bits, one per raw 64-bit word (numpy's own mapping)."""
+    return (words >> np.uint64(11)).astype(float) * _TWO_M53
+
+
+def unit_halves(words: np.ndarray, count: int) -> np.ndarray:
+    """``count`` uniforms in [0, 1) with 32 random bits, two per word (high half first).
+
+    Half the raw draws of :func:`unit_doubles`; the crossover's ``u < Cr`` tests need no more
+    resolution than 2**-32.
+    """
+    halves = np.empty((words.size, 2), dtype=np.uint64)
+    halves[:, 0] = words >> np.uint64(32)
+    halves[:, 1] = words & np.uint64(0xFFFFFFFF)
+    return halves.reshape(-1)[:count].astype(float) * _TWO_M32
+
+
+def below(uniforms: np.ndarray, m: int | np.ndarray) -> np.ndarray:
+    """Integers uniform in ``0..m-1`` from uniforms in [0, 1): ``floor(u * m)``, kept < m."""
+    return np.minimum((uniforms * m).astype(np.intp), np.asarray(m, dtype=np.intp) - 1)
+
+
+def donor_words(rows: int, k: int = N_DONORS) -> int:
+    """Raw words :func:`draw_donors` takes: one per donor."""
+    return rows * k
+
+
+def crossover_words(rows: int, d: int) -> int:
+    """Raw words :func:`draw_crossover` takes: one per row for ``j``, then ``u`` two per word."""
+    return rows + (rows * d + 1) // 2
+
+
 def draw_donors(rng: np.random.Generator, n: int, rows: int, k: int = N_DONORS) -> np.ndarray:
     """Draw ``(rows, k)`` donor indices in ``0..n-1``: row i holds k indices distinct from each
-    other and from i, uniformly over ordered k-subsets (sequential draw from the remaining set)."""
+    other and from i, uniformly over ordered k-subsets (sequential draw from the remaining set).
+
+    Randomness: :func:`donor_words` raw words, row-major; donor c of a row is a rank uniform in
+    ``0..n-2-c`` among the indices not yet taken (:func:`below` of :func:`unit_doubles`).
+    """
     if n < k + 1:
         raise ValueError(f"population {n} too small for {k} distinct donors (need >= {k + 1})")
+    words = rng.bit_generator.random_raw(donor_words(rows, k))
+    ranks = below(unit_doubles(words).reshape(rows, k), n - 1 - np.arange(k))
     out = np.empty((rows, k), dtype=np.intp)
     taken = np.arange(rows, dtype=np.intp)[:, None]  # excluded so far, sorted per row
     for j in range(k):
-        r = rng.integers(0, n - 1 - j, size=rows)
+        r = ranks[:, j].copy()
         # Map r from 0..(n-len(taken)-1) onto the values not taken: walk the sorted exclusions.
         for col in range(taken.shape[1]):
             r += r >= taken[:, col]
@@ -127,8 +170,14 @@ def mutate(
 
 def draw_crossover(rng: np.random.Generator, rows: int, d: int) -> tuple[np.ndarray, np.ndarray]:
     """Randomness for :func:`crossover_mask`: uniforms ``u`` (rows, d) and a start/forced
-    index ``j`` (rows,) per row; the same draws serve both crossover kinds."""
-    return rng.random((rows, d)), rng.integers(0, d, size=rows)
+    index ``j`` (rows,) per row; the same draws serve both crossover kinds.
+
+    :func:`crossover_words` raw words: ``j`` from the first ``rows`` (:func:`below` of
+    :func:`unit_doubles`), then ``u`` row-major from :func:`unit_halves`.
+    """
+    words = rng.bit_generator.random_raw(crossover_words(rows, d))
+    j = below(unit_doubles(words[:rows]), d)
+    return unit_halves(words[rows:], rows * d).reshape(rows, d), j
 
 
 def crossover_mask(
