@@ -122,8 +122,13 @@ def test_ask_is_pure_and_uses_the_configuration() -> None:
     assert not np.array_equal(a, ask(s, _cfg(8, mutation=1)))
     zero = ask(s, _cfg(8, crossover=0, Cr=0.0, F=0.0))  # F = 0 rand/1: one gene of x_r1
     assert np.all((zero != s.X).sum(axis=1) <= 1)
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="mutation ids"):
         ask(s, _cfg(8, mutation=7))
+    with pytest.raises(ValueError, match="crossover ids"):
+        ask(s, _cfg(8, crossover=-1))
+    with pytest.raises(ValueError, match="NaN"):
+        ask(s, _cfg(8, F=float("nan")))
+    np.testing.assert_array_equal(ask(s, _cfg(8, F=1.7, Cr=-3.0)), ask(s, _cfg(8, F=1.0, Cr=0.0)))
     with pytest.raises(ValueError):
         ask(s, _cfg(7))
 
@@ -238,3 +243,18 @@ def test_step_gives_the_trials_of_configure_then_ask() -> None:
     rng.bit_generator.random_raw(len(ask_words(s)))  # skip ask's words, as step does
     cfg = conf.configure(s, rng)
     np.testing.assert_array_equal(out.trials, ask(s, cfg))
+
+
+def test_reused_streams_change_nothing() -> None:
+    """run() reuses one Streams per run; a loop of plain step() calls gives the same run."""
+    from planner_core.de import AdaptiveConfigurator, step
+
+    p = ConstrainedSphere(4)
+    conf = AdaptiveConfigurator()
+    r = run(p, configurator=conf, seed=9, population=10, budget=150)
+    s = init(p, seed=9, population=10, budget=150)
+    s = dataclasses.replace(s, memory=conf.init(s))
+    while not s.done:
+        s, _ = step(s, p, conf)
+    np.testing.assert_array_equal(s.X, r.state.X)
+    assert s.best_f == r.f and s.best_phi == r.phi

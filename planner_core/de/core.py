@@ -2,7 +2,7 @@
 
 The search runs in the unit box: ``x = lower + u * (upper - lower)``; trial vectors are clamped
 to [0, 1] (the paper's value clamping). The randomness of generation g is a pure function of
-``(state.seed, g)``: a fresh numpy Generator from a SeedSequence with spawn key ``(g,)``. Its
+``(state.seed, g)``: a PCG64 stream (:class:`Streams`, :func:`generation_rng`). Its
 first raw words are ask's (how many depends only on the population and dimension, not on the
 configuration); a configurator draws from the same generator after them. So ``ask`` is pure,
 ``step`` gives the same trials as ``configure`` then ``ask``, and a run is reproducible bit for
@@ -26,8 +26,6 @@ import numpy as np
 from planner_core.de import fast
 from planner_core.de.operators import (
     MIN_POPULATION,
-    N_CROSSOVERS,
-    N_MUTATIONS,
     crossover_words,
     donor_words,
 )
@@ -222,10 +220,34 @@ def max_generations(population: int, budget: int) -> int:
     return max(0, math.ceil((budget - population) / population))
 
 
+#: PCG64 steps between the random streams of consecutive generations (a generation draws a few
+#: thousand words, so streams never overlap)
+GENERATION_STRIDE = 1 << 64
+
+
+class Streams:
+    """The random streams of one seed: generation g's generator is the root PCG64 of
+    ``SeedSequence(seed)`` advanced by ``g * GENERATION_STRIDE``.
+
+    Keeps the root state and one reusable bit generator, so a generator costs a state copy and
+    an advance instead of building a SeedSequence and a PCG64 (most of a generation's fixed
+    cost). A generator from :meth:`rng` is valid until the next call.
+    """
+
+    def __init__(self, seed: int) -> None:
+        self.seed = int(seed)
+        self._root = np.random.PCG64(np.random.SeedSequence(self.seed)).state
+        self._bits = np.random.PCG64(0)
+
+    def rng(self, generation: int) -> np.random.Generator:
+        self._bits.state = self._root
+        self._bits.advance(int(generation) * GENERATION_STRIDE)
+        return np.random.Generator(self._bits)
+
+
 def generation_rng(state: DEState) -> np.random.Generator:
     """The Generator of generation ``state.generation``: pure in (seed, generation)."""
-    seq = np.random.SeedSequence(state.seed, spawn_key=(state.generation,))
-    return np.random.Generator(np.random.PCG64(seq))
+    return Streams(state.seed).rng(state.generation)
 
 
 def ask_words(state: DEState, rng: np.random.Generator | None = None) -> np.ndarray:
@@ -294,7 +316,8 @@ def trial_count(state: DEState) -> int:
 
 
 def validate_config(config: Config, n: int) -> Config:
-    """Coerce a configuration to (n,) arrays: ids checked in range, F and Cr clipped to [0, 1]."""
+    """Coerce a configuration to (n,) arrays of ids and rates. The values are checked where they
+    are used (`fast.ask`): ids in range, F and Cr not NaN (and clipped to [0, 1])."""
     mut = np.asarray(config.mutation, dtype=np.intp).reshape(-1)
     cx = np.asarray(config.crossover, dtype=np.intp).reshape(-1)
     F = np.asarray(config.F, dtype=float).reshape(-1)
@@ -302,15 +325,6 @@ def validate_config(config: Config, n: int) -> Config:
     for name, a in (("mutation", mut), ("crossover", cx), ("F", F), ("Cr", Cr)):
         if a.shape != (n,):
             raise ValueError(f"config.{name} has shape {a.shape}, expected ({n},)")
-    if mut.min() < 0 or mut.max() >= N_MUTATIONS:
-        raise ValueError(f"mutation ids must lie in 0..{N_MUTATIONS - 1}")
-    if cx.min() < 0 or cx.max() >= N_CROSSOVERS:
-        raise ValueError(f"crossover ids must lie in 0..{N_CROSSOVERS - 1}")
-    # clip only when needed (NaN fails both tests and is clipped, to NaN: it then never copies)
-    if not (F.min() >= 0.0 and F.max() <= 1.0):
-        F = np.clip(F, 0.0, 1.0)
-    if not (Cr.min() >= 0.0 and Cr.max() <= 1.0):
-        Cr = np.clip(Cr, 0.0, 1.0)
     return Config(mut, cx, F, Cr)
 
 
@@ -363,12 +377,16 @@ def _select(
 ) -> DEState:
     """`tell` after the Deb comparison: replace the winning parents, one generation on
     (``memory``: the next state's configurator memory, by default the current one)."""
-    X, fn, phin, best = fast.select(state.X, state.f, state.phi, trials, f_t, phi_t, win)
+    k = trials.shape[0]
+    X, fn, phin = state.X.copy(), state.f.copy(), state.phi.copy()
+    np.copyto(X[:k], trials, where=win[:, None])
+    np.copyto(fn[:k], f_t, where=win)
+    np.copyto(phin[:k], phi_t, where=win)
     return DEState(
         X=_frozen(X),
         f=_frozen(fn),
         phi=_frozen(phin),
-        best=best,
+        best=deb_best(fn, phin),
         generation=state.generation + 1,
         evaluations=state.evaluations + trials.shape[0],
         budget=state.budget,
@@ -406,10 +424,19 @@ def evaluate(problem: BoxProblem, trials: np.ndarray) -> tuple[np.ndarray, np.nd
 
 
 def step(
-    state: DEState, problem: BoxProblem, configurator: Configurator
+    state: DEState,
+    problem: BoxProblem,
+    configurator: Configurator,
+    streams: Streams | None = None,
 ) -> tuple[DEState, Outcome]:
-    """One generation: configure, ask, evaluate, tell, and feed the outcome to the configurator."""
-    rng = generation_rng(state)
+    """One generation: configure, ask, evaluate, tell, and feed the outcome to the configurator.
+
+    ``streams``: a :class:`Streams` of ``state.seed`` to reuse across generations (same result,
+    less overhead); the generator handed to ``configure`` is valid during that call only.
+    """
+    if streams is None or streams.seed != state.seed:
+        streams = Streams(state.seed)
+    rng = streams.rng(state.generation)
     words = ask_words(state, rng)  # ask's words come first, the configurator draws after them
     config = configurator.configure(state, rng)
     trials, points = _ask(state, config, words, problem)
@@ -454,8 +481,9 @@ def run(
     trace = [_progress(state)]
     if callback is not None:
         callback(trace[-1])
+    streams = Streams(state.seed)
     while not state.done:
-        state, _ = step(state, problem, configurator)
+        state, _ = step(state, problem, configurator, streams)
         trace.append(_progress(state))
         if callback is not None:
             callback(trace[-1])

@@ -1,4 +1,4 @@
-"""Compiled DE steps (numba): trial generation and Deb selection, each one pass.
+"""Compiled trial generation (numba): donors, mutation, crossover and clamping in one pass.
 
 `ask` splits one block of raw random words exactly as `operators.draw_donors` and
 `operators.draw_crossover` do, and returns bit for bit `clip(crossover(x, mutate(...)), 0, 1)`
@@ -12,9 +12,16 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from planner_core.de.operators import _TERMS, N_DONORS, crossover_words, donor_words
+from planner_core.de.operators import (
+    _TERMS,
+    N_CROSSOVERS,
+    N_DONORS,
+    N_MUTATIONS,
+    crossover_words,
+    donor_words,
+)
 
-__all__ = ["ask", "select"]
+__all__ = ["ask"]
 
 
 @njit(cache=True, fastmath=False)
@@ -85,6 +92,18 @@ def _ask(X, mutation, F, best, terms, crossover, Cr, words, out, lower, span, po
     m, d = out.shape
     n = X.shape[0]
     k = N_DONORS  # a global: a compile-time constant for numba
+    # check the configuration (a status code for the caller to raise on), clip F and Cr
+    Fc = np.empty(m)
+    Crc = np.empty(m)
+    for i in range(m):
+        if mutation[i] < 0 or mutation[i] >= terms.shape[0]:
+            return 1
+        if crossover[i] < 0 or crossover[i] > 1:
+            return 2
+        if np.isnan(F[i]) or np.isnan(Cr[i]):
+            return 3
+        Fc[i] = min(max(F[i], 0.0), 1.0)
+        Crc[i] = min(max(Cr[i], 0.0), 1.0)
     # split the words as operators.draw_donors, then operators.draw_crossover, do
     ranks = np.empty((m, k), dtype=np.intp)
     p = 0
@@ -108,11 +127,19 @@ def _ask(X, mutation, F, best, terms, crossover, Cr, words, out, lower, span, po
     u = flat.reshape((m, d))
     donors = np.empty((m, k), dtype=np.intp)
     _map_donors(ranks, donors)
-    _trials(X, mutation, F, best, donors, terms, crossover, Cr, u, j, out)
+    _trials(X, mutation, Fc, best, donors, terms, crossover, Crc, u, j, out)
     if points.shape[0] == m:  # also map to the problem's box: core.to_problem, same arithmetic
         for i in range(m):
             for c in range(d):
                 points[i, c] = out[i, c] * span[c] + lower[c]
+    return 0
+
+
+_ASK_ERRORS = {
+    1: f"mutation ids must lie in 0..{N_MUTATIONS - 1}",
+    2: f"crossover ids must lie in 0..{N_CROSSOVERS - 1}",
+    3: "F and Cr must be numbers in [0, 1] (got NaN)",
+}
 
 
 def ask(
@@ -130,6 +157,7 @@ def ask(
     Bit for bit what the numpy operators give when they draw the same words: donors from
     `operators.draw_donors`, then `operators.draw_crossover`, then `mutate`, `crossover` and
     clipping to [0, 1]. ``words`` holds ``donor_words(m) + crossover_words(m, d)`` uint64s.
+    Operator ids out of range and NaN rates raise ValueError; F and Cr are clipped to [0, 1].
     With ``bounds = (lower, span)`` it returns ``(trials, lower + trials * span)``, the second
     equal to `core.to_problem` of the first, computed in the same pass.
     """
@@ -147,47 +175,11 @@ def ask(
     else:
         lower, span = (np.asarray(b, dtype=float) for b in bounds)
         points = np.empty((m, d))
-    _ask(
+    status = _ask(
         np.ascontiguousarray(X, dtype=float), np.asarray(mutation, dtype=np.intp),
         np.asarray(F, dtype=float), int(best), _TERMS, np.asarray(crossover, dtype=np.intp),
         np.asarray(Cr, dtype=float), words, out, lower, span, points,
     )  # fmt: skip
+    if status:
+        raise ValueError(_ASK_ERRORS[status])
     return out if bounds is None else (out, points)
-
-
-@njit(cache=True, fastmath=False)
-def _select(X, f, phi, trials, f_t, phi_t, win):  # pragma: no cover
-    k, d = trials.shape
-    for i in range(k):
-        if win[i]:
-            f[i] = f_t[i]
-            phi[i] = phi_t[i]
-            for c in range(d):
-                X[i, c] = trials[i, c]
-    b = 0
-    for i in range(1, f.shape[0]):
-        if phi[i] < phi[b] or (phi[i] == phi[b] and f[i] < f[b]):
-            b = i
-    return b
-
-
-def select(
-    X: np.ndarray,
-    f: np.ndarray,
-    phi: np.ndarray,
-    trials: np.ndarray,
-    f_trial: np.ndarray,
-    phi_trial: np.ndarray,
-    win: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
-    """New (X, f, phi) with rows i < k replaced where ``win[i]``, and the Deb-best index of the
-    result (lowest phi, then lowest f, first index on ties: `core.deb_best`). Inputs untouched."""
-    Xn = np.array(X, dtype=float, order="C")
-    fn = np.array(f, dtype=float)
-    phin = np.array(phi, dtype=float)
-    best = _select(
-        Xn, fn, phin, np.ascontiguousarray(trials, dtype=float),
-        np.asarray(f_trial, dtype=float), np.asarray(phi_trial, dtype=float),
-        np.asarray(win, dtype=np.bool_),
-    )  # fmt: skip
-    return Xn, fn, phin, int(best)
