@@ -201,3 +201,18 @@ def test_adaptive_draws_follow_the_arm_probabilities() -> None:
     np.testing.assert_allclose(freq, conf.probabilities(mem), atol=0.01)
     for a in (0, 13):  # F centred on the arm's m_f (clipping is rare at sd 0.1)
         assert abs(np.median(cfg.F[arm == a]) - mem.m_f[a]) < 0.02
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_compiled_configure_equals_numpy_reference(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    conf = AdaptiveConfigurator()
+    n = int(rng.integers(6, 300))
+    q = rng.random(14) * (rng.random(14) < 0.7)  # some arms at zero quality
+    mem = AdaptiveMemory(rng.random(14), rng.random(14), q, int(rng.integers(0, 9)))
+    state = _state(n=n)
+    state = DEState(state.X, state.f, state.phi, state.best, 0, n, 10 * n, 0, mem)
+    got = conf.configure(state, np.random.default_rng(seed))
+    ref = conf.configure_reference(state, np.random.default_rng(seed))
+    for a, b in zip(got, ref, strict=True):
+        assert np.array_equal(a, b)

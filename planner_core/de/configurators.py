@@ -161,9 +161,25 @@ class AdaptiveConfigurator:
         return p
 
     def configure(self, state: DEState, rng: np.random.Generator) -> Config:
+        """Draw each individual's arm, F and Cr (compiled; equal bit for bit to
+        :meth:`configure_reference`)."""
         mem: AdaptiveMemory = state.memory if state.memory is not None else self.init(state)
         n = state.population
-        # one uniform per individual picks its arm (inverse CDF), two normals its F and Cr
+        u = rng.random(n)
+        z = rng.standard_normal((2, n))
+        mutation, crossover = np.empty(n, dtype=np.intp), np.empty(n, dtype=np.intp)
+        F, Cr = np.empty(n), np.empty(n)
+        _draw(self.probabilities(mem), u, z, mem.m_f, mem.m_cr, self.f_sd, self.cr_sd, ARMS,
+              mutation, crossover, F, Cr)  # fmt: skip
+        return Config(mutation, crossover, F, Cr)
+
+    def configure_reference(self, state: DEState, rng: np.random.Generator) -> Config:
+        """:meth:`configure` in plain numpy: the readable statement of the draw, kept for tests.
+
+        One uniform per individual picks its arm by inverse CDF, two normals its F and Cr.
+        """
+        mem: AdaptiveMemory = state.memory if state.memory is not None else self.init(state)
+        n = state.population
         cdf = np.cumsum(self.probabilities(mem))
         arm = np.searchsorted(cdf, rng.random(n) * cdf[-1], side="right")
         arm = np.minimum(arm, len(ARMS) - 1)
@@ -213,6 +229,22 @@ class AdaptiveConfigurator:
         fb, pb = outcome.f_parent[b], outcome.phi_parent[b]
         improved = bool(deb_better(outcome.f_trial, outcome.phi_trial, fb, pb).any())
         return AdaptiveMemory(m_f, m_cr, quality, 0 if improved else memory.stall + 1)
+
+
+@njit(cache=True, fastmath=False)
+def _draw(p, u, z, m_f, m_cr, f_sd, cr_sd, arms, mutation, crossover, F, Cr):  # pragma: no cover
+    """:meth:`AdaptiveConfigurator.configure_reference`, compiled; writes the four outputs."""
+    a = p.shape[0]
+    cdf = np.cumsum(p)
+    for i in range(u.shape[0]):
+        x = u[i] * cdf[a - 1]
+        arm = 0  # the first arm whose cdf exceeds x (searchsorted, side "right")
+        while arm < a - 1 and cdf[arm] <= x:
+            arm += 1
+        mutation[i] = arms[arm, 0]
+        crossover[i] = arms[arm, 1]
+        F[i] = min(max(m_f[arm] + f_sd * z[0, i], 0.02), 1.0)
+        Cr[i] = min(max(m_cr[arm] + cr_sd * z[1, i], 0.0), 1.0)
 
 
 @njit(cache=True, fastmath=False)
