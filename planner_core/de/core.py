@@ -388,7 +388,7 @@ def _select(
         phi=_frozen(phin),
         best=deb_best(fn, phin),
         generation=state.generation + 1,
-        evaluations=state.evaluations + trials.shape[0],
+        evaluations=state.evaluations + k,
         budget=state.budget,
         seed=state.seed,
         memory=state.memory if memory is _KEEP else memory,

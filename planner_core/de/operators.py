@@ -109,7 +109,8 @@ def unit_halves(words: np.ndarray, count: int) -> np.ndarray:
 
 
 def below(uniforms: np.ndarray, m: int | np.ndarray) -> np.ndarray:
-    """Integers uniform in ``0..m-1`` from uniforms in [0, 1): ``floor(u * m)``, kept < m."""
+    """Integers in ``0..m-1`` from uniforms in [0, 1): ``floor(u * m)``, kept < m (uniform to
+    within ``m * 2**-53`` for 53-bit uniforms)."""
     return np.minimum((uniforms * m).astype(np.intp), np.asarray(m, dtype=np.intp) - 1)
 
 
