@@ -248,7 +248,9 @@ def _draw(p, u, z, m_f, m_cr, f_sd, cr_sd, arms, mutation, crossover, F, Cr):  #
 
 
 @njit(cache=True, fastmath=False)
-def _update(arm, success, f_t, phi_t, f_p, phi_p, F, Cr, rate, lr, quality, m_f, m_cr):  # noqa: E501  # pragma: no cover
+def _update(  # pragma: no cover
+    arm, success, f_t, phi_t, f_p, phi_p, F, Cr, rate, lr, quality, m_f, m_cr
+):
     """:meth:`AdaptiveConfigurator.update_reference`, compiled; writes quality, m_f, m_cr."""
     a = quality.shape[0]
     k = arm.shape[0]

@@ -88,7 +88,9 @@ def _below(word, m):  # pragma: no cover
 
 
 @njit(cache=True, fastmath=False)
-def _ask(X, mutation, F, best, terms, crossover, Cr, words, out, lower, span, points):  # noqa: E501  # pragma: no cover
+def _ask(  # pragma: no cover
+    X, mutation, F, best, terms, crossover, Cr, words, out, lower, span, points
+):
     m, d = out.shape
     n = X.shape[0]
     k = N_DONORS  # a global: a compile-time constant for numba
