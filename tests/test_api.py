@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -57,6 +59,19 @@ def test_same_seed_same_plan_bit_for_bit(small_plan: Plan) -> None:
     assert again.same_as(small_plan)
     other = lamde_mission.plan(SMALL, seed=4, budget=3000, population=50)
     assert not other.same_as(small_plan)
+
+
+def test_same_seed_same_plan_in_a_fresh_process(small_plan: Plan) -> None:
+    """No hidden process state (caches, reused generators) changes a plan."""
+    code = (
+        "import json, sys, lamde_mission; "
+        "p = lamde_mission.plan(json.loads(sys.argv[1]), seed=3, budget=3000, population=50); "
+        "print(json.dumps(p.to_dict()))"
+    )
+    r = subprocess.run([sys.executable, "-c", code, json.dumps(SMALL)], capture_output=True,
+                       text=True, timeout=300)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert Plan.from_dict(json.loads(r.stdout)).same_as(small_plan)
 
 
 def test_to_dict_from_dict_round_trip(small_plan: Plan) -> None:
