@@ -13,7 +13,12 @@ import numpy as np
 from numba import njit
 
 from planner_core.de.operators import (
+    _LOW32,
+    _SHIFT32,
+    _SHIFT53,
     _TERMS,
+    _TWO_M32,
+    _TWO_M53,
     N_CROSSOVERS,
     N_DONORS,
     N_MUTATIONS,
@@ -71,13 +76,6 @@ def _map_donors(raw, out):  # pragma: no cover
                 pos -= 1
             taken[pos] = r
             count += 1
-
-
-_SHIFT53 = np.uint64(11)
-_SHIFT32 = np.uint64(32)
-_LOW32 = np.uint64(0xFFFFFFFF)
-_TWO_M53 = 2.0**-53
-_TWO_M32 = 2.0**-32
 
 
 @njit(cache=True, fastmath=False)

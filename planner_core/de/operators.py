@@ -87,13 +87,17 @@ def crossover_index(name: str | int) -> int:
 
 
 # ---- randomness: one block of raw 64-bit words per draw, split the same way here and in fast.py
+# shared with the compiled split in fast.py
+_SHIFT53 = np.uint64(11)  # a word's top 53 bits make a double in [0, 1)
+_SHIFT32 = np.uint64(32)
+_LOW32 = np.uint64(0xFFFFFFFF)
 _TWO_M53 = 2.0**-53
 _TWO_M32 = 2.0**-32
 
 
 def unit_doubles(words: np.ndarray) -> np.ndarray:
     """Uniforms in [0, 1) with 53 random bits, one per raw 64-bit word (numpy's own mapping)."""
-    return (words >> np.uint64(11)).astype(float) * _TWO_M53
+    return (words >> _SHIFT53).astype(float) * _TWO_M53
 
 
 def unit_halves(words: np.ndarray, count: int) -> np.ndarray:
@@ -103,8 +107,8 @@ def unit_halves(words: np.ndarray, count: int) -> np.ndarray:
     resolution than 2**-32.
     """
     halves = np.empty((words.size, 2), dtype=np.uint64)
-    halves[:, 0] = words >> np.uint64(32)
-    halves[:, 1] = words & np.uint64(0xFFFFFFFF)
+    halves[:, 0] = words >> _SHIFT32
+    halves[:, 1] = words & _LOW32
     return halves.reshape(-1)[:count].astype(float) * _TWO_M32
 
 
