@@ -11,11 +11,13 @@ import numpy as np
 
 from lamde_mission.result import Plan
 
-__all__ = ["plan", "CONFIGURATORS"]
+__all__ = ["plan", "CONFIGURATORS", "INIT_MODES"]
 
 #: configurator names accepted by `plan`; the adaptive DE is the default until a trained
 #: policy beats it on unseen maps
-CONFIGURATORS = ("adaptive", "fixed", "random")
+CONFIGURATORS = ("adaptive", "fixed", "random", "lamde")
+#: start modes accepted by `plan` (planner_core.starts): the seeded starts or uniform
+INIT_MODES = ("seeded", "uniform")
 
 
 class _TimedProblem:
@@ -49,7 +51,7 @@ def _deb_not_worse(a: dict[str, Any], b: dict[str, Any]) -> bool:
     return a["phi"] < b["phi"] or (a["phi"] == b["phi"] and a["f"] <= b["f"])
 
 
-def _check_args(budget: int, population: int, configurator: Any) -> None:
+def _check_args(budget: int, population: int, configurator: Any, init: str = "seeded") -> None:
     if not isinstance(population, int | np.integer) or population < 5:
         raise ValueError(f"population: must be an integer >= 5, got {population!r}")
     if not isinstance(budget, int | np.integer) or budget < population:
@@ -60,6 +62,8 @@ def _check_args(budget: int, population: int, configurator: Any) -> None:
         raise ValueError(
             f"configurator: unknown '{configurator}', choose one of {', '.join(CONFIGURATORS)}"
         )
+    if init not in INIT_MODES:
+        raise ValueError(f"init: unknown '{init}', choose one of {', '.join(INIT_MODES)}")
 
 
 def plan(
@@ -69,6 +73,7 @@ def plan(
     budget: int = 10_000,
     population: int = 100,
     configurator: str | Any = "adaptive",
+    init: str = "seeded",
     variable_length: bool = True,
     polish: bool = True,
     progress: Callable[[Any], None] | None = None,
@@ -78,16 +83,20 @@ def plan(
     `progress` is called once per generation with a record holding generation, evaluations,
     budget, best_f, best_phi and feasible_fraction. With `polish`, the final best's hover times
     are re-solved by the LP of `planner_core.polish`, kept only if not worse under Deb's rule.
+    `configurator`: "adaptive" (default), "fixed", "random", "lamde" (the shipped learned
+    policy, planner_core.policy) or a configurator object. `init`: "seeded" (the problem's
+    sensor-aware starts, default) or "uniform" (the paper's protocol: uniform in the box).
     """
     from planner_core.de import run
     from planner_core.mapio import load_map
     from planner_core.problem import Problem
+    from planner_core.starts import with_init
 
-    _check_args(budget, population, configurator)
+    _check_args(budget, population, configurator, init)
     t_start = time.perf_counter()
     m = load_map(map)
     problem = Problem(m, variable_length=variable_length)
-    timed = _TimedProblem(problem)
+    timed = _TimedProblem(with_init(problem, init))
     t0 = time.perf_counter()
     result = run(
         timed,

@@ -8,7 +8,7 @@ import sys
 import time
 from typing import Any
 
-_CONFIGURATORS = ("adaptive", "fixed", "random")
+_CONFIGURATORS = ("adaptive", "fixed", "random", "lamde")
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -29,7 +29,11 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--budget", type=int, default=10_000, help="evaluations (default 10000)")
     p.add_argument("--population", type=int, default=100, help="DE population (default 100)")
     p.add_argument("--configurator", choices=_CONFIGURATORS, default="adaptive",
-                   help="how DE operators and F/Cr are chosen each generation (default adaptive)")
+                   help="how DE operators and F/Cr are chosen each generation: adaptive "
+                   "(default), fixed, random, or lamde (the shipped learned policy)")
+    p.add_argument("--init", choices=("seeded", "uniform"), default="seeded",
+                   help="initial population: seeded (sensor-aware starts, default) or uniform "
+                   "in the box (the paper's protocol)")
     p.add_argument("--fixed-length", action="store_true",
                    help="use all I_max hover points (the paper's LAMDE-F ablation)")
     p.add_argument("--no-polish", action="store_true", help="skip the hover-time LP polish")
@@ -155,6 +159,7 @@ def run(args: argparse.Namespace) -> int:
         budget=args.budget,
         population=args.population,
         configurator=args.configurator,
+        init=args.init,
         variable_length=not args.fixed_length,
         polish=not args.no_polish,
         progress=progress,

@@ -288,15 +288,24 @@ def _update(  # pragma: no cover
     return improved
 
 
+def _lamde(**kw: Any) -> Any:
+    """The learned policy (planner_core.policy, imported on first use; numpy only)."""
+    from planner_core.policy import PolicyConfigurator
+
+    return PolicyConfigurator(**kw)
+
+
 _REGISTRY = {
     "fixed": FixedConfigurator,
     "random": RandomConfigurator,
     "adaptive": AdaptiveConfigurator,
+    "lamde": _lamde,
 }
 
 
 def make_configurator(name: str, **kw: Any) -> Any:
-    """Build a configurator by name: "fixed", "random" or "adaptive" (keywords go to it)."""
+    """Build a configurator by name: "fixed", "random", "adaptive" or "lamde" (the shipped
+    policy checkpoint; keywords go to it)."""
     try:
         cls = _REGISTRY[name]
     except KeyError:
