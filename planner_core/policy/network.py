@@ -163,9 +163,11 @@ def _layer_norm(x: np.ndarray, g: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def _softmax(z: np.ndarray) -> np.ndarray:
-    z = z - z.max(axis=-1, keepdims=True)
-    e = np.exp(z)
-    return e / e.sum(axis=-1, keepdims=True)
+    """Softmax over the last axis, in place on ``z`` (a temporary of the caller)."""
+    z -= z.max(axis=-1, keepdims=True)
+    np.exp(z, out=z)
+    z /= z.sum(axis=-1, keepdims=True)
+    return z
 
 
 def _softplus(z: np.ndarray) -> np.ndarray:
@@ -178,10 +180,12 @@ def _block(x: np.ndarray, p: dict[str, np.ndarray], prefix: str, heads: int) -> 
     dh = E // heads
     qkv = x @ p[f"{prefix}.qkv.weight"] + p[f"{prefix}.qkv.bias"]
     qkv = qkv.reshape(*lead, L, 3, heads, dh)
-    q = np.moveaxis(qkv[..., 0, :, :], -2, -3)  # (..., heads, L, dh)
-    k = np.moveaxis(qkv[..., 1, :, :], -2, -3)
-    v = np.moveaxis(qkv[..., 2, :, :], -2, -3)
-    att = _softmax((q @ np.swapaxes(k, -1, -2)) / np.sqrt(dh))
+    # (..., heads, L, dh), contiguous so that the batched matmuls run on BLAS-friendly blocks
+    q = np.ascontiguousarray(np.moveaxis(qkv[..., 0, :, :], -2, -3))
+    q *= 1.0 / np.sqrt(dh)
+    k = np.ascontiguousarray(np.moveaxis(qkv[..., 1, :, :], -3, -1))  # (..., heads, dh, L)
+    v = np.ascontiguousarray(np.moveaxis(qkv[..., 2, :, :], -2, -3))
+    att = _softmax(q @ k)
     y = np.moveaxis(att @ v, -3, -2).reshape(*lead, L, E)
     y = y @ p[f"{prefix}.out.weight"] + p[f"{prefix}.out.bias"]
     x = _layer_norm(x + y, p[f"{prefix}.ln1.weight"], p[f"{prefix}.ln1.bias"])
@@ -194,10 +198,11 @@ def forward(
     params: dict[str, np.ndarray],
     cfg: NetConfig,
     obs: dict[str, np.ndarray],
-    dtype: Any = np.float64,
+    dtype: Any = np.float32,
 ) -> PolicyOutput:
     """The policy on one observation (:func:`planner_core.env.observe`): X (N, d), f (N, 2),
-    phi (N, 2), progress (1,). ``dtype``: the arithmetic precision (float64 by default).
+    phi (N, 2), progress (1,). ``dtype``: the arithmetic precision (float32 by default, as
+    the weights and the torch twin; the outputs are returned as float64).
 
     Raises ValueError when the observation's shapes disagree.
     """
@@ -220,7 +225,9 @@ def forward(
     Cr_ab = 1.0 + _softplus(h @ p["Cr.weight"] + p["Cr.bias"])
     c = np.maximum(h.mean(axis=0) @ p["critic1.weight"] + p["critic1.bias"], 0.0)
     value = float((c @ p["critic2.weight"] + p["critic2.bias"])[0])
-    return PolicyOutput(mut, cx, F_ab, Cr_ab, value)
+    f64 = np.float64
+    return PolicyOutput(mut.astype(f64), cx.astype(f64), F_ab.astype(f64), Cr_ab.astype(f64),
+                        value)
 
 
 #: F and Cr actions are kept in [RATE_EPS, 1 - RATE_EPS] so that their float32 log-probability
@@ -230,7 +237,7 @@ RATE_EPS = 1e-6
 
 def _categorical(logits: np.ndarray, u: np.ndarray) -> np.ndarray:
     """Inverse-CDF draw per row from softmax(logits) with uniforms u (N,)."""
-    cdf = np.cumsum(_softmax(logits), axis=1)
+    cdf = np.cumsum(_softmax(np.array(logits, dtype=float)), axis=1)
     idx = (u[:, None] * cdf[:, -1:] >= cdf).sum(axis=1)
     return np.minimum(idx, logits.shape[1] - 1).astype(np.intp)
 
