@@ -37,6 +37,7 @@ from typing import Any
 
 import numpy as np
 
+from planner_core import defaults as _defaults
 from planner_core.de.core import (
     BoxProblem,
     Config,
@@ -47,8 +48,8 @@ from planner_core.de.core import (
     tell,
 )
 
-DEFAULT_ETA = 10.0
-DEFAULT_DELTA = 1e-8
+DEFAULT_ETA = _defaults.ETA
+DEFAULT_DELTA = _defaults.DELTA
 _INF_EXPONENT = 400.0  # beyond the largest finite double exponent (309)
 _BELOW_ONE = float(np.nextafter(1.0, 0.0))
 
@@ -141,8 +142,8 @@ class OptimizationEnv:
         self,
         problem: BoxProblem | None = None,
         *,
-        population: int = 100,
-        budget: int = 10_000,
+        population: int = _defaults.POPULATION,
+        budget: int = _defaults.BUDGET,
         eta: float = DEFAULT_ETA,
         delta: float = DEFAULT_DELTA,
     ) -> None:
