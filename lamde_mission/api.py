@@ -10,14 +10,15 @@ from typing import Any
 import numpy as np
 
 from lamde_mission.result import Plan
+from planner_core import defaults as _defaults
 
 __all__ = ["plan", "CONFIGURATORS", "INIT_MODES"]
 
-#: configurator names accepted by `plan`; the adaptive DE is the default until a trained
-#: policy beats it on unseen maps
-CONFIGURATORS = ("adaptive", "fixed", "random", "lamde")
-#: start modes accepted by `plan` (planner_core.starts): the seeded starts or uniform
-INIT_MODES = ("seeded", "uniform")
+#: configurator names accepted by `plan` (from `planner_core.defaults`); the adaptive DE is the
+#: default until a trained policy beats it on unseen maps
+CONFIGURATORS = _defaults.CONFIGURATORS
+#: start modes accepted by `plan` (planner_core.starts), the default first
+INIT_MODES = _defaults.INIT_MODES
 
 
 class _TimedProblem:
@@ -51,29 +52,14 @@ def _deb_not_worse(a: dict[str, Any], b: dict[str, Any]) -> bool:
     return a["phi"] < b["phi"] or (a["phi"] == b["phi"] and a["f"] <= b["f"])
 
 
-def _check_args(budget: int, population: int, configurator: Any, init: str = "seeded") -> None:
-    if not isinstance(population, int | np.integer) or population < 5:
-        raise ValueError(f"population: must be an integer >= 5, got {population!r}")
-    if not isinstance(budget, int | np.integer) or budget < population:
-        raise ValueError(
-            f"budget: must be an integer >= population ({population}), got {budget!r}"
-        )
-    if isinstance(configurator, str) and configurator not in CONFIGURATORS:
-        raise ValueError(
-            f"configurator: unknown '{configurator}', choose one of {', '.join(CONFIGURATORS)}"
-        )
-    if init not in INIT_MODES:
-        raise ValueError(f"init: unknown '{init}', choose one of {', '.join(INIT_MODES)}")
-
-
 def plan(
     map: str | Path | dict | Any,  # noqa: A002 - the issue's public signature
     *,
-    seed: int = 0,
-    budget: int = 10_000,
-    population: int = 100,
-    configurator: str | Any = "adaptive",
-    init: str = "seeded",
+    seed: int = _defaults.SEED,
+    budget: int = _defaults.BUDGET,
+    population: int = _defaults.POPULATION,
+    configurator: str | Any = _defaults.CONFIGURATOR,
+    init: str = _defaults.INIT,
     variable_length: bool = True,
     polish: bool = True,
     progress: Callable[[Any], None] | None = None,
@@ -86,13 +72,19 @@ def plan(
     `configurator`: "adaptive" (default), "fixed", "random", "lamde" (the shipped learned
     policy, planner_core.policy) or a configurator object. `init`: "seeded" (the problem's
     sensor-aware starts, default) or "uniform" (the paper's protocol: uniform in the box).
+    Defaults and valid ranges: `planner_core.defaults`.
+
+    Raises ValueError with one line naming the field ("population: must be an integer >= 6,
+    got 5") for a population below the minimum, a budget below the population or an unknown
+    configurator name; `planner_core.MapError` for a bad map.
     """
     from planner_core.de import run
     from planner_core.mapio import load_map
     from planner_core.problem import Problem
     from planner_core.starts import with_init
 
-    _check_args(budget, population, configurator, init)
+    _defaults.check_run_args(population=population, budget=budget, configurator=configurator,
+                             init=init)
     t_start = time.perf_counter()
     m = load_map(map)
     problem = Problem(m, variable_length=variable_length)
