@@ -8,8 +8,9 @@ A problem is described by a JSON-able *spec* (so a training manifest is data, no
 * ``{"kind": "map", "path": "file.json"}`` or ``{"kind": "map", "map": {...}}``: any map.
 
 A training-set file is JSON with a ``"problems"`` list of such specs (the landscape-aware
-module's ``lam select -o trainset.json`` output uses the same key; specs of other kinds are
-rejected with a clear error until that module provides a builder for them).
+module's ``lam select -o trainset.json`` output uses the same key); specs of any other kind go
+to ``planner_core.lam.build_problem(spec)`` when that module provides it, and are otherwise
+rejected with one line naming the kind.
 
 Generator seeds: the suite uses 2025 (:data:`planner_core.suite.SUITE_SEED`); training maps use
 :data:`TRAIN_SEED_BASE` + k and validation maps :data:`VALIDATION_SEED_BASE` + k, so the three
@@ -78,7 +79,11 @@ def build(spec: dict[str, Any]) -> Any:
         if "path" in spec:
             return Problem(str(spec["path"]))
         raise ValueError(f"problems: map spec {spec} needs 'path' or 'map'")
-    raise ValueError(f"problems: unknown problem kind {kind!r} (known: uav, map)")
+    try:  # the landscape-aware module's synthetic problems (issue 13), when it is installed
+        from planner_core.lam import build_problem  # type: ignore[attr-defined]
+    except ImportError:
+        raise ValueError(f"problems: unknown problem kind {kind!r} (known: uav, map)") from None
+    return build_problem(spec)
 
 
 def read_trainset(path: str | Path) -> list[dict[str, Any]]:
