@@ -96,3 +96,28 @@ def test_cli_plan_with_a_trained_checkpoint_folder(tmp_path, capsys) -> None:  #
     assert "--policy: only with --configurator lamde" in capsys.readouterr().err
     assert main([*args, "--configurator", "lamde", "--policy", str(tmp_path / "none")]) == 2
     assert "--policy: checkpoint:" in capsys.readouterr().err
+
+
+def test_shipped_checkpoint_is_small_and_documented() -> None:
+    from planner_core.policy.checkpoint import SHIPPED
+
+    folder = SHIPPED / "lamde-v1"
+    assert sum(p.stat().st_size for p in folder.iterdir()) < 5 * 2**20
+    manifest = json.loads((folder / "manifest.json").read_text())
+    assert manifest["problems"] and all(s["kind"] == "uav" for s in manifest["problems"])
+    curve = (folder / "curve.csv").read_text().splitlines()
+    config = json.loads((folder / "config.json").read_text())
+    assert len(curve) == 1 + config["training"]["epochs_done"]
+
+
+def test_bench_policy_runs_on_a_small_map() -> None:
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    r = subprocess.run([sys.executable, str(root / "benchmarks" / "bench_policy.py"),
+                        str(MAPS / "tiny.json"), "--generations", "4", "--population", "10"],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert "policy / evaluation = " in r.stdout
