@@ -26,7 +26,9 @@ import shapely
 
 from planner_core.geometry import rectangle_vertices
 from planner_core.mapio import Radio, Uav, load_map
-from planner_core.problem import Problem, link_rates
+from planner_core.model import ModelParams
+from planner_core.problem import Problem
+from planner_core.routing import offset_convex, open_tour, path_hops, shortest_paths
 
 __all__ = [
     "SIZES",
@@ -147,15 +149,6 @@ def _seg_point_dist(a: np.ndarray, b: np.ndarray, p: np.ndarray) -> np.ndarray:
     return np.hypot(*(p[None, :, :] - close).transpose(2, 0, 1))
 
 
-def _offset_vertices(poly: np.ndarray, c: float) -> np.ndarray:
-    """Vertices of a convex CCW polygon pushed out by c along the mitre (c from both edges)."""
-    e = np.roll(poly, -1, axis=0) - poly
-    n = np.stack([e[:, 1], -e[:, 0]], axis=1) / np.hypot(e[:, 0], e[:, 1])[:, None]
-    n_prev = np.roll(n, 1, axis=0)
-    dot = np.einsum("ik,ik->i", n, n_prev)
-    return poly + c * (n + n_prev) / (1.0 + dot)[:, None]
-
-
 # ----------------------------------------------------------------------------- the generator
 
 
@@ -170,12 +163,13 @@ class _Draw:
         self.n_sensors = n_sensors
         self.n_circles, self.n_rects, self.n_nfz = obstacle_counts(size, density)
         self.n_bends = _BENDS[size][density]
-        uav, radio = Uav(), Radio()
-        self.altitude = uav.altitude
-        self.t_max = uav.max_hover_time
-        self.peak_rate = radio.peak_rate
-        self.decay = radio.decay
-        self.bandwidth = radio.bandwidth
+        radio = Radio()
+        #: the model's parameters with the schema's default UAV and radio (no sensors yet)
+        self.model = ModelParams.from_settings(
+            Uav(), radio, width=self.size, height=self.size, n_points=self.imax
+        )
+        self.t_max = self.model.t_max
+        self.bandwidth = self.model.bandwidth
         self.required = radio.required_data
 
     # ---------------------------------------------------------------- helpers
@@ -184,7 +178,7 @@ class _Draw:
 
     def rates(self, hover: np.ndarray, sensors: np.ndarray) -> np.ndarray:
         """R (I, J), the model's rate formula."""
-        return link_rates(hover, sensors, self.altitude, self.peak_rate, self.decay)
+        return self.model.rates(hover, sensors)
 
     def nfz_distance(self, geoms: Any) -> np.ndarray:
         """Distance of shapely geometries to the nearest no-fly zone (inf when there is none)."""
@@ -276,7 +270,7 @@ class _Draw:
     def route(self) -> None:
         """Order the stops into a tour and route it around the no-fly zones (visibility graph)."""
         targets = np.vstack([self.start, self.stop_points, self.end])
-        corners = [_r1(_offset_vertices(p, _NFZ_CORNER_OFFSET)) for p in self.nfz]
+        corners = [_r1(offset_convex(p, _NFZ_CORNER_OFFSET)) for p in self.nfz]
         cand = np.vstack(corners) if corners else np.zeros((0, 2))
         if len(cand):
             ok = np.all((cand >= 1.0) & (cand <= self.size - 1.0), axis=1)
@@ -293,26 +287,15 @@ class _Draw:
         w = np.full((n, n), np.inf)
         w[i[visible], j[visible]] = length[visible] + _HOP_PENALTY
         w[j[visible], i[visible]] = length[visible] + _HOP_PENALTY
-        np.fill_diagonal(w, 0.0)
-        nxt = np.where(np.isfinite(w), np.arange(n)[None, :], -1)
-        for k in range(n):  # Floyd-Warshall with next-hop tracking
-            alt = w[:, k : k + 1] + w[k : k + 1, :]
-            better = alt < w
-            w = np.where(better, alt, w)
-            nxt = np.where(better, nxt[:, k : k + 1], nxt)
+        w, nxt = shortest_paths(w)
         cost = w[:nt, :nt]
         if not np.all(np.isfinite(cost)):
             raise _Retry
-        order = self._tour(cost)
-        seq = [0, *order, nt - 1]
+        seq = open_tour(np.ascontiguousarray(cost), True).tolist()
         hover: list[np.ndarray] = []
         kinds: list[str] = []
         for a, b in zip(seq[:-1], seq[1:], strict=True):
-            u = a
-            while u != b:
-                u = int(nxt[u, b])
-                if u == b:
-                    break
+            for u in path_hops(nxt, a, b):
                 hover.append(nodes[u])
                 kinds.append("corner")
             if b != nt - 1:
@@ -323,32 +306,6 @@ class _Draw:
         self.hover = [np.array(h) for h in hover]
         self.kinds = kinds
         self.tour_stops = targets[seq]  # start, stops in tour order, end
-
-    @staticmethod
-    def _tour(cost: np.ndarray) -> list[int]:
-        """Stops 1..n-2 between fixed ends 0 and n-1: nearest neighbour, then 2-opt."""
-        nt = len(cost)
-        left = list(range(1, nt - 1))
-        order: list[int] = []
-        cur = 0
-        while left:
-            nxt = min(left, key=lambda q: (cost[cur, q], q))
-            order.append(nxt)
-            left.remove(nxt)
-            cur = nxt
-        improved = True
-        while improved:
-            improved = False
-            seq = [0, *order, nt - 1]
-            for a in range(1, len(seq) - 2):
-                for b in range(a + 1, len(seq) - 1):
-                    old = cost[seq[a - 1], seq[a]] + cost[seq[b], seq[b + 1]]
-                    new = cost[seq[a - 1], seq[b]] + cost[seq[a], seq[b + 1]]
-                    if new < old - 1e-6:
-                        seq[a : b + 1] = seq[a : b + 1][::-1]
-                        improved = True
-            order = seq[1:-1]
-        return order
 
     # ---------------------------------------------------------------- 4. bends
     def bends(self) -> None:
