@@ -24,13 +24,13 @@ from planner_core.de.core import (
     init,
     max_generations,
     outcome,
-    run,
     step,
     tell,
     to_problem,
     to_unit,
 )
 from planner_core.de.operators import CROSSOVERS, MUTATIONS
+from planner_core.de.run import run
 
 __all__ = [
     "CROSSOVERS",
