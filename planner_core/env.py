@@ -37,15 +37,8 @@ from typing import Any
 
 import numpy as np
 
-from planner_core.de.core import (
-    BoxProblem,
-    Config,
-    DEState,
-    ask,
-    evaluate,
-    init,
-    tell,
-)
+from planner_core.de.core import ask, evaluate, init, tell
+from planner_core.de.types import BoxProblem, Config, DEState
 
 DEFAULT_ETA = 10.0
 DEFAULT_DELTA = 1e-8

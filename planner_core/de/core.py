@@ -29,48 +29,14 @@ from planner_core.de.operators import (
     crossover_words,
     donor_words,
 )
-from planner_core.de.rng import GENERATION_STRIDE, Streams, generation_rng
-from planner_core.de.types import (
-    BoxProblem,
-    Config,
-    Configurator,
-    DEState,
-    History,
-    Outcome,
-    Progress,
-    Result,
-    max_generations,
-)
-from planner_core.model import deb_best, deb_better, deb_order
+from planner_core.de.rng import Streams, generation_rng
+from planner_core.de.types import BoxProblem, Config, Configurator, DEState, Outcome
+from planner_core.model import deb_best, deb_better
 
 __all__ = [
-    "GENERATION_STRIDE",
-    "BoxProblem",
-    "Config",
-    "Configurator",
-    "DEState",
-    "History",
-    "Outcome",
-    "Progress",
-    "Result",
-    "Streams",
-    "ask",
-    "ask_words",
-    "deb_best",
-    "deb_better",
-    "deb_order",
-    "evaluate",
-    "generation_rng",
-    "init",
-    "max_generations",
-    "outcome",
-    "step",
-    "tell",
-    "to_problem",
-    "to_unit",
-    "trial_count",
-    "validate_config",
-]
+    "ask", "ask_words", "evaluate", "init", "outcome", "step", "tell", "to_problem", "to_unit",
+    "trial_count", "validate_config",
+]  # fmt: skip
 
 
 # --------------------------------------------------------------------------- evaluation results

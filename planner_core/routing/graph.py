@@ -99,6 +99,22 @@ def _tangent_mask(pts, nodes, prev, nxt):
 
 
 @njit(cache=True, nogil=True)
+def _heap_push(hk, hv, size, key, val):
+    """Push (key, val) onto the binary min-heap (hk, hv) holding `size` items; the new size."""
+    pos = size
+    while pos > 0:
+        par = (pos - 1) // 2
+        if hk[par] <= key:
+            break
+        hk[pos] = hk[par]
+        hv[pos] = hv[par]
+        pos = par
+    hk[pos] = key
+    hv[pos] = val
+    return size + 1
+
+
+@njit(cache=True, nogil=True)
 def _route(indptr, indices, weights, src_dist, dst_dist):
     """Multi-source Dijkstra (binary heap, lazy deletion) from the nodes a sees to the nodes b
     sees, stopping once no shorter way to b can appear."""
@@ -111,18 +127,7 @@ def _route(indptr, indices, weights, src_dist, dst_dist):
     size = 0
     for u in range(n):
         if d[u] < np.inf:
-            # push u
-            pos = size
-            size += 1
-            while pos > 0:
-                par = (pos - 1) // 2
-                if hk[par] <= d[u]:
-                    break
-                hk[pos] = hk[par]
-                hv[pos] = hv[par]
-                pos = par
-            hk[pos] = d[u]
-            hv[pos] = u
+            size = _heap_push(hk, hv, size, d[u], u)
     best = np.inf
     last = -1
     while size > 0:
@@ -158,17 +163,7 @@ def _route(indptr, indices, weights, src_dist, dst_dist):
             if nd < d[w]:
                 d[w] = nd
                 pred[w] = u
-                pos = size
-                size += 1
-                while pos > 0:
-                    par = (pos - 1) // 2
-                    if hk[par] <= nd:
-                        break
-                    hk[pos] = hk[par]
-                    hv[pos] = hv[par]
-                    pos = par
-                hk[pos] = nd
-                hv[pos] = w
+                size = _heap_push(hk, hv, size, nd, w)
     count = 0
     u = last
     while u >= 0:
