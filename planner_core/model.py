@@ -1,12 +1,12 @@
 """The paper's model, once: flight time (Eq. 1), link rate, Deb's rule, the penalised score, and
 the frozen parameter record everything else reads them from (paper Sec. 3, Sec. 4.1, Sec. 5.2).
 
-A leaf module: it imports nothing of the project, so the problem, the seeder, the map generator,
-the lower bound, the polish LP, the compiled kernels and the baselines all take their formulas
-from here. Each formula comes in the form its callers need: numpy over arrays and, where a
-compiled (numba) kernel needs it per element, an ``@njit`` scalar defined right next to it and
-held equal to it by a test. The sim (`sim.replay`) keeps its own deliberate second
-implementation.
+A leaf module: it imports nothing of the project but the import-free defaults table, so the
+problem, the seeder, the map generator, the lower bound, the polish LP, the compiled kernels and
+the baselines all take their formulas from here. Each formula comes in the form its callers
+need: numpy over arrays and, where a compiled (numba) kernel needs it per element, an ``@njit``
+scalar defined right next to it and held equal to it by a test. The sim (`sim.replay`) keeps
+its own deliberate second implementation.
 
 Units: metres, seconds, Mbit and Mbit/s; positions in the map's local ENU frame.
 """
@@ -19,6 +19,8 @@ from typing import Any
 
 import numpy as np
 from numba import njit
+
+from planner_core.defaults import SCORE_FACTOR
 
 __all__ = [
     "PENALTY_FACTOR",
@@ -37,8 +39,9 @@ __all__ = [
     "deb_order",
 ]
 
-#: The factor of the penalised score f + 10 * phi used to compare optimisers (paper Sec. 5.2).
-PENALTY_FACTOR = 10.0
+#: The factor of the penalised score f + 10 * phi used to compare optimisers (paper Sec. 5.2);
+#: its value lives in the defaults table (`planner_core.defaults.SCORE_FACTOR`).
+PENALTY_FACTOR = SCORE_FACTOR
 
 #: Overlap lengths at or below this many metres count as no collision (floating-point noise of
 #: tangent legs); anything longer triggers the full penalty mu + nu * L_vio.

@@ -7,9 +7,9 @@ from planner_core.de.configurators import (
     make_configurator,
 )
 from planner_core.de.core import ask, ask_words, init, outcome, step, tell, to_problem, to_unit
+from planner_core.de.loop import run
 from planner_core.de.operators import CROSSOVERS, MUTATIONS
 from planner_core.de.rng import generation_rng
-from planner_core.de.run import run
 from planner_core.de.types import (
     BoxProblem,
     Config,

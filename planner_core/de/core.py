@@ -9,7 +9,7 @@ configuration); a configurator draws from the same generator after them. So ``as
 bit from its seed.
 
 This module is the core (init / ask / tell / step over one state value, Deb's rule from
-`planner_core.model`); it takes configurator objects and knows no registry: `de.run` resolves
+`planner_core.model`); it takes configurator objects and knows no registry: `de.loop.run` resolves
 names. Values live in `de.types`, random streams in `de.rng`.
 
 Budget: the initial population (N evaluations) counts. Each generation evaluates
@@ -25,12 +25,12 @@ import numpy as np
 
 from planner_core.de import fast
 from planner_core.de.operators import (
-    MIN_POPULATION,
     crossover_words,
     donor_words,
 )
 from planner_core.de.rng import Streams, generation_rng
 from planner_core.de.types import BoxProblem, Config, Configurator, DEState, Outcome
+from planner_core.defaults import BUDGET, MIN_POPULATION, POPULATION
 from planner_core.model import deb_best, deb_better
 
 __all__ = [
@@ -92,7 +92,9 @@ def to_unit(problem: BoxProblem, X: np.ndarray) -> np.ndarray:
     return np.clip(np.where(span > 0, U, 0.0), 0.0, 1.0)
 
 
-def init(problem: BoxProblem, seed: int, population: int = 100, budget: int = 10_000) -> DEState:
+def init(
+    problem: BoxProblem, seed: int, population: int = POPULATION, budget: int = BUDGET
+) -> DEState:
     """Initial population in the unit box, evaluated (these N evaluations count).
 
     Uniform, unless the problem offers `initial_population(rng, n)` (problem-space points,

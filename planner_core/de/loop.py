@@ -15,6 +15,7 @@ from planner_core.de.configurators import make_configurator
 from planner_core.de.core import init, step, to_problem
 from planner_core.de.rng import Streams
 from planner_core.de.types import BoxProblem, Configurator, DEState, History, Progress, Result
+from planner_core.defaults import BUDGET, CONFIGURATOR, POPULATION
 
 __all__ = ["run"]
 
@@ -33,10 +34,10 @@ def _progress(state: DEState) -> Progress:
 def run(
     problem: BoxProblem,
     *,
-    configurator: Configurator | str = "adaptive",
+    configurator: Configurator | str = CONFIGURATOR,
     seed: int = 0,
-    population: int = 100,
-    budget: int = 10_000,
+    population: int = POPULATION,
+    budget: int = BUDGET,
     callback: Callable[[Progress], None] | None = None,
 ) -> Result:
     """Optimise ``problem`` until the budget is spent; same seed -> identical result.
