@@ -190,7 +190,7 @@ class ModelParams:
         cls,
         uav: Any,
         radio: Any,
-        objective: Any = None,
+        objective: Any,
         *,
         width: float = 0.0,
         height: float = 0.0,
@@ -201,7 +201,7 @@ class ModelParams:
         n_points: int | None = None,
     ) -> ModelParams:
         """From the map file's `uav`, `radio` and `objective` settings (objects with the
-        schema's field names); without `objective`, alpha = 0.5, mu = nu = 0."""
+        schema's field names, `planner_core.mapio.Uav` etc.) and the map's geometry."""
         return cls(
             altitude=float(uav.altitude),
             v_max=float(uav.max_speed),
@@ -212,9 +212,9 @@ class ModelParams:
             peak_rate=float(radio.peak_rate),
             decay=float(radio.decay),
             bandwidth=float(radio.bandwidth),
-            alpha=float(objective.alpha) if objective is not None else 0.5,
-            mu=float(objective.collision_offset) if objective is not None else 0.0,
-            nu=float(objective.collision_weight) if objective is not None else 0.0,
+            alpha=float(objective.alpha),
+            mu=float(objective.collision_offset),
+            nu=float(objective.collision_weight),
             width=float(width),
             height=float(height),
             start=np.asarray(start, dtype=float).reshape(2),
