@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from planner_core import defaults as _defaults
 from planner_core.bench._io import read_json, write_json_atomic
 from planner_core.bench.limits import BestKnown, best_known_path, suite_task_files
 from planner_core.bench.records import RESULTS_FILE, Key, ResultsWriter, key_of, read_records
@@ -49,8 +50,8 @@ __all__ = [
 
 META_FILE = "meta.json"
 #: the best-known protocol: 100 x the paper's budget, 5 runs each, the strongest optimisers
-BEST_KNOWN_BUDGET = 1_000_000
-BEST_KNOWN_RUNS = 5
+BEST_KNOWN_BUDGET = _defaults.BEST_KNOWN_BUDGET
+BEST_KNOWN_RUNS = _defaults.BEST_KNOWN_RUNS
 BEST_KNOWN_OPTIMISERS = ("cmaes", "de-adaptive", "de-adaptive-fixedlen")
 #: convergence checkpoints stored per run (evenly spaced over the budget, plus the first)
 HISTORY_POINTS = 100
