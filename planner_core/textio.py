@@ -253,7 +253,6 @@ def read_text(path: str | Path, *, max_bytes: int | None = None) -> str:
 
 # a JSON string (unrolled loop: no backtracking per character), or one structural character
 _STRING = r'"[^"\\]*(?:\\.[^"\\]*)*"'
-_STRING_RE = re.compile(_STRING, re.S)
 _TOKEN_RE = re.compile(_STRING + r"|[\[\]{}:,]", re.S)
 _SURROGATE_ESCAPE = re.compile(r"\\u[dD][89a-fA-F]")
 _OPEN = np.zeros(256, dtype=np.int8)
@@ -262,11 +261,15 @@ _OPEN[[ord("]"), ord("}")]] = -1
 
 
 def _may_exceed_depth(text: str, max_depth: int) -> bool:
-    """A fast over-estimate: False only if the text surely nests at most `max_depth` levels."""
+    """A fast screen over every bracket, strings included (numpy, no regex).
+
+    Brackets inside strings can only mislead it in two ways: openers make it say True (the
+    exact `_depth_error` scan then decides), and closers hide real depth (a file would need as
+    many "]" in strings as levels of nesting; `loads_json` still catches the RecursionError).
+    """
     if text.count("[") + text.count("{") <= max_depth:
         return False
-    stripped = _STRING_RE.sub("", text).encode("utf-8", "surrogatepass")
-    steps = _OPEN[np.frombuffer(stripped, dtype=np.uint8)]
+    steps = _OPEN[np.frombuffer(text.encode("utf-8", "surrogatepass"), dtype=np.uint8)]
     steps = steps[steps != 0].astype(np.int32)
     return bool(steps.size) and int(np.cumsum(steps).max()) > max_depth
 
@@ -381,8 +384,8 @@ def loads_json(text: str, *, max_depth: int | None = None) -> Any:
     except json.JSONDecodeError as exc:
         raise InputError(f"not valid JSON ({exc.msg} at line {exc.lineno}, column {exc.colno})"
                          ) from None  # fmt: skip
-    except RecursionError:  # not reached: the depth scan comes first
-        raise InputError("nested too deeply to parse") from None
+    except RecursionError:  # only when strings full of "]" hid the depth from the screen
+        raise InputError(f"nested too deeply to parse (limit {LIMITS['depth'].env})") from None
     if bad:
         first = bad[0]
         for path, v, _is_key in _walk(data):
