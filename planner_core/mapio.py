@@ -19,6 +19,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from planner_core import textio
+from planner_core.defaults import MAP_DEFAULTS
 from planner_core.geometry import Obstacles, points_inside, rectangle_vertices
 
 __all__ = [
@@ -48,12 +49,6 @@ _WHY_SIDE = (
     "accurate to 100 km"
 )
 _WHY_SIZE = "no obstacle is larger than 1000 km; larger sizes overflow the geometry's arithmetic"
-#: most data one sensor may ask for, Mbit (about 1.25 TB)
-MAX_DATA = 1e7
-_WHY_DATA = "1e7 Mbit (1.25 TB) takes days at any radio rate: no single flight collects more"
-#: fastest radio rate, Mbit/s
-MAX_RATE = 1e5
-_WHY_RATE = "100 Gbit/s is beyond any UAV radio link"
 
 
 def _ranged(
@@ -74,6 +69,14 @@ def _ranged(
 
 Coord = Annotated[float, Field(ge=-MAX_COORD, le=MAX_COORD, description=f"metres; {_WHY_COORD}")]
 Point2 = tuple[Coord, Coord]
+
+
+def _field(path: str) -> Any:
+    """The Field of an optional map field: default, bounds and their reason from the table
+    `planner_core.defaults.MAP_DEFAULTS` (one place for README, `check` and `plan`)."""
+    d = MAP_DEFAULTS[path]
+    lo, hi, lo_open, hi_open = d.bounds
+    return _ranged(d.value, lo, hi, d.meaning, d.why, lo_open=lo_open, hi_open=hi_open)
 
 
 class Origin(BaseModel):
@@ -104,7 +107,8 @@ class Sensor(BaseModel):
     x: Coord
     y: Coord
     required_data: float | None = _ranged(
-        None, 0.0, MAX_DATA, "Mbit (Q_lambda for this sensor)", _WHY_DATA
+        None, *MAP_DEFAULTS["radio.required_data"].bounds[:2], "Mbit (Q_lambda for this sensor)",
+        MAP_DEFAULTS["radio.required_data"].why
     )
 
 
@@ -144,60 +148,27 @@ class ObstaclesSpec(BaseModel):
 
 class Uav(BaseModel):
     model_config = _STRICT
-    altitude: float = _ranged(
-        100.0, 0.0, 10_000.0, "H, cruise altitude above take-off, m",
-        "a rotary-wing UAV flies above the ground and below 10 km (airliner level)",
-        lo_open=True,
-    )
-    max_speed: float = _ranged(
-        20.0, 0.1, 200.0, "v_max, m/s",
-        "below 0.1 m/s flight times and the simulator's steps grow without bound (1e-9 m/s "
-        "asked for ~745 GiB); no rotary-wing UAV flies 200 m/s",
-    )
-    acceleration: float = _ranged(
-        4.0, 0.01, 100.0, "a, m/s^2",
-        "below 0.01 m/s^2 a UAV never reaches cruise speed on any map; 100 m/s^2 is about 10 g",
-    )
-    max_hover_time: float = _ranged(
-        300.0, 0.0, 86_400.0, "T_max, s per hover point",
-        "no battery hovers longer than a day; the value bounds the decision space",
-        lo_open=True,
-    )
-    max_hover_points: int | None = _ranged(
-        None, 1, 200, "I_max; null: 10 when the larger side <= 5000 m, else 20",
-        "the decision vector has 4 x I_max numbers; the paper uses 10 or 20",
-    )
-    activation_threshold: float = _ranged(
-        0.5, 0.0, 1.0, "tau: a hover point is active when its eps >= tau, eps in [0, 1]",
-        "tau 0 makes every point active and tau 1 none, so the length can no longer vary",
-        lo_open=True, hi_open=True,
-    )
+    altitude: float = _field("uav.altitude")
+    max_speed: float = _field("uav.max_speed")
+    acceleration: float = _field("uav.acceleration")
+    max_hover_time: float = _field("uav.max_hover_time")
+    max_hover_points: int | None = _field("uav.max_hover_points")
+    activation_threshold: float = _field("uav.activation_threshold")
 
 
 class Radio(BaseModel):
     model_config = _STRICT
-    peak_rate: float = _ranged(10.0, 0.0, MAX_RATE, "R_c, Mbit/s", _WHY_RATE, lo_open=True)
-    decay: float = _ranged(
-        0.01, 0.0, 1_000.0, "xi, Mbit/s per metre",
-        "the rate falls to zero within a millimetre at 1000 Mbit/s per metre",
-    )
-    bandwidth: float = _ranged(25.0, 0.0, MAX_RATE, "R_lambda, Mbit/s", _WHY_RATE, lo_open=True)
-    required_data: float = _ranged(200.0, 0.0, MAX_DATA, "Q_lambda, Mbit", _WHY_DATA)
+    peak_rate: float = _field("radio.peak_rate")
+    decay: float = _field("radio.decay")
+    bandwidth: float = _field("radio.bandwidth")
+    required_data: float = _field("radio.required_data")
 
 
 class Objective(BaseModel):
     model_config = _STRICT
-    alpha: float = _ranged(
-        0.5, 0.0, 1.0, "weight of flight time against hover time", "a convex weight"
-    )
-    collision_offset: float = _ranged(
-        1000.0, 0.0, 1e9, "mu, the penalty of any collision",
-        "penalties beyond 1e9 swamp every objective value in rounding",
-    )
-    collision_weight: float = _ranged(
-        10.0, 0.0, 1e9, "nu, penalty per metre inside obstacles",
-        "penalties beyond 1e9 swamp every objective value in rounding",
-    )
+    alpha: float = _field("objective.alpha")
+    collision_offset: float = _field("objective.collision_offset")
+    collision_weight: float = _field("objective.collision_weight")
 
 
 class Witness(BaseModel):
