@@ -153,17 +153,16 @@ def mutate(data: bytes, rng: random.Random, *, rounds: int | None = None) -> byt
     """A hostile variant of `data` (1-3 mutations; tree mutations when it is JSON)."""
     k = rounds if rounds is not None else rng.choice((1, 1, 2, 3))
     for _ in range(k):
-        doc = None
-        if rng.random() < 0.6:
-            try:
-                doc = json.loads(data)
-            except ValueError:
-                doc = None
-        if doc is not None:
-            doc = _mutate_tree(doc, rng)
-            data = json.dumps(doc, indent=rng.choice((None, 1))).encode("utf-8", "surrogatepass")
-        else:
-            data = _mutate_bytes(data, rng)
+        tree = rng.random() < 0.6
+        indent = rng.choice((None, 1))
+        if tree:
+            try:  # a tree mutation when the input is JSON the standard parser can hold
+                doc = _mutate_tree(json.loads(data), rng)
+                data = json.dumps(doc, indent=indent).encode("utf-8", "surrogatepass")
+                continue
+            except (ValueError, RecursionError):
+                pass
+        data = _mutate_bytes(data, rng)
     return data
 
 

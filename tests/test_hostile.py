@@ -261,3 +261,13 @@ def test_readers_raise_only_their_errors() -> None:
             pass
         except TypeError:  # a JSON array/number at the top: load_map's documented TypeError
             pass
+
+
+def test_long_hover_replays_at_bounded_cost(tmp_path: Path) -> None:
+    """A float32-valid hover of 3e38 s is read; the sim samples it coarsely and C2 fails."""
+    doc = json.loads((DATA / "hover-1e39.plan").read_text())
+    doc["mission"]["items"][2]["params"][0] = 3e38
+    out = run_cli(["verify", "--json", str(TINY), _write(tmp_path, "long.plan", json.dumps(doc))])
+    assert out.error is None and out.status == 1, out.stderr
+    verdicts = json.loads(out.stdout)
+    assert verdicts["totals"]["t_hover"] == pytest.approx(3e38)
