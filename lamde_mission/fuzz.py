@@ -76,6 +76,14 @@ def _hostile_value(rng: random.Random) -> Any:
 
 def _mutate_tree(doc: Any, rng: random.Random) -> Any:
     paths = _paths(doc)
+    if rng.random() < 0.25:  # a gentle change that often keeps the file valid: go deeper
+        numeric = [p for p in paths if p and isinstance(_get(doc, p), int | float)
+                   and not isinstance(_get(doc, p), bool)]  # fmt: skip
+        if numeric:
+            path = rng.choice(numeric)
+            parent = _get(doc, path[:-1])
+            parent[path[-1]] = parent[path[-1]] * rng.uniform(0.5, 1.5)
+            return doc
     path = rng.choice(paths)
     op = rng.random()
     if not path or op < 0.55:

@@ -179,7 +179,10 @@ def test_waypoints_fields_named_by_line(tmp_path: Path) -> None:
 def test_plan_result_json_is_range_checked(tmp_path: Path) -> None:
     doc = {"hover_points": [[300.0, 900.0]], "hover_times": [1e39]}
     _refused(["verify", str(TINY), _write(tmp_path, "r.json", json.dumps(doc))],
-             "hover_points/hover_times: item 2 param1")  # fmt: skip
+             "hover_times[0]: 1e+39 is outside [0, 3.40282e+38]")  # fmt: skip
+    doc = {"hover_points": [[1e300, 900.0]], "hover_times": [10]}
+    _refused(["verify", str(TINY), _write(tmp_path, "r2.json", json.dumps(doc))],
+             "hover_points[0][0]: 1e+300 is outside")  # fmt: skip
 
 
 def test_schema_gives_the_reason_for_each_range() -> None:

@@ -137,17 +137,48 @@ def load_mission_items(
         if isinstance(doc, dict) and "hover_points" in doc and "hover_times" in doc:
             from types import SimpleNamespace
 
-            from lamde_mission.formats.ranges import check_item_count, check_mission_item
+            from lamde_mission.formats.ranges import check_mission_item
 
             try:
                 plan = SimpleNamespace(hover_points=doc["hover_points"],
                                        hover_times=doc["hover_times"])  # fmt: skip
-                if isinstance(plan.hover_points, list):
-                    check_item_count(len(plan.hover_points), "hover_points")
+                _check_plan_result(plan.hover_points, plan.hover_times)
                 items = plan_to_items(plan, map)
                 for k, it in enumerate(items):
                     check_mission_item(it, lambda f, k=k: f"hover_points/hover_times: item {k} {f}")
                 return items, geofence_items(map)
+            except MissionError as exc:
+                raise MissionFileError(f"{path}: {exc}") from None
             except (TypeError, ValueError) as exc:
                 raise MissionFileError(f"{path}: bad hover_points/hover_times ({exc})") from None
     return read_mission(path)
+
+
+def _check_plan_result(hover_points: Any, hover_times: Any) -> None:
+    """Shapes and ranges of a plan result's hover points (local metres) and times (s), before
+    any of them reaches numpy or the geodesy; MissionError naming the entry."""
+    import math
+
+    from lamde_mission.formats.ranges import FLOAT32_MAX, check_item_count
+    from planner_core.mapio import MAX_COORD
+
+    def number(v: Any, where: str, lo: float, hi: float) -> None:
+        if isinstance(v, bool) or not isinstance(v, int | float):
+            raise MissionError(f"{where}: expected a number, got {v!r}"[:200])
+        if not (math.isfinite(v) and lo <= v <= hi):
+            raise MissionError(f"{where}: {v:g} is outside [{lo:g}, {hi:g}]")
+
+    for name, v in (("hover_points", hover_points), ("hover_times", hover_times)):
+        if not isinstance(v, list):
+            raise MissionError(f"{name}: expected a list")
+        check_item_count(len(v), name)
+    if len(hover_points) != len(hover_times):
+        raise MissionError(f"hover_points and hover_times differ in length "
+                           f"({len(hover_points)} and {len(hover_times)})")  # fmt: skip
+    for k, p in enumerate(hover_points):
+        if not isinstance(p, list) or len(p) != 2:
+            raise MissionError(f"hover_points[{k}]: expected [x, y] in metres")
+        for i, c in enumerate(p):
+            number(c, f"hover_points[{k}][{i}]", -MAX_COORD, MAX_COORD)
+    for k, t in enumerate(hover_times):
+        number(t, f"hover_times[{k}]", 0.0, FLOAT32_MAX)
