@@ -111,4 +111,16 @@ def test_readme_defaults_table_is_rendered_from_the_module() -> None:
     assert m, "README.md lost its generated defaults table markers"
     assert m.group(1) == D.render_markdown(), (
         "README's defaults table is stale: regenerate it with "
-        "`python -m planner_core.defaults --markdown`")
+        "`python -m planner_core.defaults README.md`")
+
+
+def test_update_readme_rewrites_only_the_table(tmp_path) -> None:
+    doc = tmp_path / "R.md"
+    doc.write_text("intro\n<!-- defaults:begin -->\nold\n<!-- defaults:end -->\nrest\n")
+    assert D.update_readme(str(doc)) is True
+    assert doc.read_text() == ("intro\n<!-- defaults:begin -->\n" + D.render_markdown()
+                               + "<!-- defaults:end -->\nrest\n")
+    assert D.update_readme(str(doc)) is False
+    (tmp_path / "bare.md").write_text("no table\n")
+    with pytest.raises(ValueError, match="markers"):
+        D.update_readme(str(tmp_path / "bare.md"))

@@ -6,7 +6,6 @@ import ast
 import json
 import math
 from dataclasses import replace
-from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -20,9 +19,7 @@ from planner_core.model import flight_time
 from planner_core.problem import Problem
 from sim import replay, verify
 from sim.replay import leg_position, leg_time
-
-ROOT = Path(__file__).resolve().parent.parent
-SUITE = ROOT / "examples" / "maps" / "suite"
+from tests.conftest import ROOT, SUITE
 
 MAP = {
     "name": "sim",
