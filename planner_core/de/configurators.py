@@ -8,19 +8,21 @@ and a run is reproducible from its seed alone.
 
 from __future__ import annotations
 
+import importlib
 from dataclasses import dataclass
 from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
 
-from planner_core.de.core import Config, DEState, Outcome, deb_best, deb_better
 from planner_core.de.operators import (
     N_CROSSOVERS,
     N_MUTATIONS,
     crossover_index,
     mutation_index,
 )
+from planner_core.de.types import Config, DEState, Outcome
+from planner_core.model import deb_best, deb_better
 
 
 def _full(n: int, value: float, dtype: type = float) -> np.ndarray:
@@ -288,28 +290,27 @@ def _update(  # pragma: no cover
     return improved
 
 
-def _lamde(**kw: Any) -> Any:
-    """The learned policy (planner_core.policy, imported on first use; numpy only)."""
-    from planner_core.policy import PolicyConfigurator
-
-    return PolicyConfigurator(**kw)
-
-
-_REGISTRY = {
+#: configurators by name: a class, or "module:attribute" of one that lives above the DE (the
+#: learned policy depends on the DE and the env, so the DE names it without importing it, as the
+#: baselines registry names its optimisers); planner_core.defaults.CONFIGURATORS lists the names
+_REGISTRY: dict[str, Any] = {
     "fixed": FixedConfigurator,
     "random": RandomConfigurator,
     "adaptive": AdaptiveConfigurator,
-    "lamde": _lamde,
+    "lamde": "planner_core.policy:PolicyConfigurator",
 }
 
 
 def make_configurator(name: str, **kw: Any) -> Any:
     """Build a configurator by name: "fixed", "random", "adaptive" or "lamde" (the shipped
-    policy checkpoint; keywords go to it)."""
+    policy checkpoint, planner_core.policy; numpy only); keywords go to it."""
     try:
         cls = _REGISTRY[name]
     except KeyError:
         raise ValueError(
             f"unknown configurator {name!r}; choose from {sorted(_REGISTRY)}"
         ) from None
+    if isinstance(cls, str):
+        module, attr = cls.split(":")
+        cls = getattr(importlib.import_module(module), attr)
     return cls(**kw)
