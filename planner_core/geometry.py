@@ -4,7 +4,13 @@ L_vio = L_rec + L_cir + L_nfz is a sum over obstacles: a leg crossing two overla
 counts once per obstacle. Only the open interior counts, so legs that touch a circle, run along an
 edge or pass through a corner contribute 0.
 
-Obstacles are circles and convex counter-clockwise polygons (rotated rectangles, no-fly zones).
+Obstacles are circles, convex counter-clockwise polygons (rotated rectangles, convex no-fly
+zones) and *regions*: any simple polygon with holes (footprints, non-convex no-fly zones), cut into
+convex pieces with disjoint interiors by `planner_core.polygons.convex_pieces`; a region's overlap
+is the sum over its pieces. A piece's internal edges (diagonals, ``Obstacles.edge_flags``) are
+not boundaries, so the tolerance rules below do not apply to them: a leg is clipped at a
+diagonal's exact line (what one piece drops, its neighbour keeps), and a leg lying within tol of
+a diagonal all along counts for exactly one of the two pieces, the one that *owns* the diagonal.
 The fast path (`overlap_lengths`) is a numba kernel that works obstacle by obstacle with the
 legs in the inner loops: a branch-free float32 pass tests the obstacle's culling disc against
 every leg's capsule (vectorises 8 wide; on the paper's 10 km maps it keeps ~2% of pairs), the hits
@@ -32,6 +38,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
+from planner_core.polygons import EDGE_BOUNDARY, EDGE_OWNED, EDGE_SHARED, convex_pieces
+
 __all__ = [
     "Obstacles",
     "overlap_lengths",
@@ -48,6 +56,8 @@ _COORD_LIMIT = 1e15  # metres; legs beyond this skip the float32 first pass (slo
 # capsule test's quantities (h, s) is off by at most ~20 * 2**-24 * S ~ 1.2e-6 * S (conversions,
 # unit-vector rounding, three products and sums); the culling radius is padded by 3x that.
 _F32_PAD_PER_METRE = 4e-6
+_EDGE_BOUNDARY = EDGE_BOUNDARY  # module-level constants the compiled kernels read
+_EDGE_OWNED = EDGE_OWNED
 
 
 def _readonly(x: np.ndarray) -> np.ndarray:
@@ -93,13 +103,19 @@ def _clean_polygon(poly: np.ndarray, index: int) -> np.ndarray:
 class Obstacles:
     """All obstacles of a map in packed arrays for the kernel; build once per map, share freely.
 
-    Only the first three fields are inputs; the rest are derived in ``__post_init__``. Arrays are
-    read-only. Equality is identity (arrays do not compare as a single bool).
+    Only the first six fields are inputs; the rest are derived in ``__post_init__``. Arrays are
+    read-only. Equality is identity (arrays do not compare as a single bool). Regions (general
+    polygons) enter as their convex pieces: `edge_flags` says which piece edges are diagonals
+    (`planner_core.polygons`), `piece_region` which region each polygon is a piece of (-1: a
+    convex polygon of its own), and `regions` keeps each region's rings (for the reference).
     """
 
     circles: np.ndarray  # (K, 3) rows [cx, cy, r]
     poly_vertices: np.ndarray  # (V_total, 2), each polygon CCW
     poly_offsets: np.ndarray  # (P + 1,) int64
+    edge_flags: np.ndarray | None = None  # (V_total,) int8 EDGE_*; None: all boundary
+    piece_region: np.ndarray | None = None  # (P,) int64 region index or -1; None: all -1
+    regions: tuple[tuple[np.ndarray, tuple[np.ndarray, ...]], ...] = ()  # (shell, holes) each
     edge_normals: np.ndarray = field(init=False, repr=False)  # (V_total, 2) unit outward normals
     tol: float = field(init=False)  # boundary tolerance, metres (see the module docstring)
     # culling discs, one per obstacle (circles first, then polygons), for the kernel's first pass
@@ -121,6 +137,25 @@ class Obstacles:
             raise ValueError("circles must be finite with positive radius")
         for p in range(len(offs) - 1):
             _check_polygon(verts[offs[p] : offs[p + 1]], p)
+        if self.edge_flags is None:
+            flags = np.zeros(len(verts), dtype=np.int8)
+        else:
+            flags = np.array(self.edge_flags, dtype=np.int8).reshape(-1)
+        if len(flags) != len(verts) or not np.all(
+            (flags == EDGE_BOUNDARY) | (flags == EDGE_OWNED) | (flags == EDGE_SHARED)
+        ):
+            raise ValueError("edge_flags must hold one EDGE_* flag per polygon vertex")
+        if self.piece_region is None:
+            region = np.full(len(offs) - 1, -1, dtype=np.int64)
+        else:
+            region = np.array(self.piece_region, dtype=np.int64).reshape(-1)
+        regions = tuple(
+            (np.array(sh, dtype=np.float64).reshape(-1, 2),
+             tuple(np.array(h, dtype=np.float64).reshape(-1, 2) for h in hs))
+            for sh, hs in self.regions
+        )  # fmt: skip
+        if len(region) != len(offs) - 1 or np.any(region < -1) or np.any(region >= len(regions)):
+            raise ValueError("piece_region must give each polygon a region index or -1")
 
         scale = 0.0
         if len(circles):
@@ -152,6 +187,9 @@ class Obstacles:
         object.__setattr__(self, "poly_offsets", _readonly(offs))
         object.__setattr__(self, "edge_normals", _readonly(normals))
         object.__setattr__(self, "tol", tol)
+        object.__setattr__(self, "edge_flags", _readonly(flags))
+        object.__setattr__(self, "piece_region", _readonly(region))
+        object.__setattr__(self, "regions", regions)
         # the first pass runs in float32 on coordinates relative to the obstacles' centre
         if cull.shape[1]:
             origin = 0.5 * (cull[:2].min(axis=1) + cull[:2].max(axis=1))
@@ -167,15 +205,43 @@ class Obstacles:
 
     @classmethod
     def build(
-        cls, circles: Sequence[tuple[float, float, float]], polygons: Sequence[np.ndarray]
+        cls,
+        circles: Sequence[tuple[float, float, float]],
+        polygons: Sequence[np.ndarray],
+        regions: Sequence[tuple[np.ndarray, Sequence[np.ndarray]]] = (),
     ) -> Obstacles:
-        """Pack circles (cx, cy, r) and convex CCW polygons ((V, 2) each); validates both."""
+        """Pack circles (cx, cy, r), convex CCW polygons ((V, 2) each) and regions.
+
+        A region is (shell (V, 2), [hole (V_h, 2), ...]): any valid simple polygon with holes,
+        rings as cleaned vertex cycles in any orientation (`planner_core.polygons.clean_ring`,
+        `polygon_problem`); it is decomposed into convex pieces placed after `polygons`.
+        Validates everything; raises ValueError naming the polygon or region index.
+        """
         c = np.array(circles, dtype=np.float64).reshape(-1, 3)
         cleaned = [_clean_polygon(p, i) for i, p in enumerate(polygons)]
+        flags = [np.zeros(len(v), dtype=np.int8) for v in cleaned]
+        piece_region = [-1] * len(cleaned)
+        kept: list[tuple[np.ndarray, tuple[np.ndarray, ...]]] = []
+        for r, (shell, holes) in enumerate(regions):
+            try:
+                pieces = convex_pieces(shell, holes)
+            except (ValueError, KeyError) as exc:
+                raise ValueError(f"region {r}: {exc}") from None
+            for v, f in pieces:
+                cleaned.append(v)
+                flags.append(f)
+                piece_region.append(r)
+            kept.append((np.asarray(shell, dtype=np.float64), tuple(map(np.asarray, holes))))
         offsets = np.zeros(len(cleaned) + 1, dtype=np.int64)
         offsets[1:] = np.cumsum([len(v) for v in cleaned])
         verts = np.concatenate(cleaned) if cleaned else np.zeros((0, 2), dtype=np.float64)
-        return cls(circles=c, poly_vertices=verts, poly_offsets=offsets)
+        fl = np.concatenate(flags) if flags else np.zeros(0, dtype=np.int8)
+        return cls(circles=c, poly_vertices=verts, poly_offsets=offsets, edge_flags=fl,
+                   piece_region=np.array(piece_region, dtype=np.int64), regions=tuple(kept))
+
+    @property
+    def n_regions(self) -> int:
+        return len(self.regions)
 
     @property
     def n_circles(self) -> int:
@@ -225,7 +291,7 @@ def _circle_overlap(ax, ay, ux, uy, length, cx, cy, r, tol):
 
 
 @njit(cache=True, fastmath=False, nogil=True)
-def _polygon_overlap(ax, ay, bx, by, length, verts, normals, start, stop, tol):
+def _polygon_overlap(ax, ay, bx, by, length, verts, normals, eflags, start, stop, tol):
     # Cyrus-Beck: intersect the parameter interval [0, 1] with each edge's inner half-plane.
     # Written without branches in the loop (selects only): the sign patterns are unpredictable.
     t_lo = 0.0
@@ -238,12 +304,19 @@ def _polygon_overlap(ax, ay, bx, by, length, verts, normals, start, stop, tol):
         vy = verts[i, 1]
         sa = nx * (ax - vx) + ny * (ay - vy)  # signed distance to the edge line, > 0 outside
         sb = nx * (bx - vx) + ny * (by - vy)
-        # outside this half-plane, or within tol of its boundary line all along the leg
-        off |= (sa > -tol) & (sb > -tol)
         den = sa - sb
         t = sa / (den if den != 0.0 else 1.0)  # where the leg crosses the line, if it does
         entering = (sa >= 0.0) & (sb < 0.0)
         leaving = (sa < 0.0) & (sb >= 0.0)
+        if eflags[i] == _EDGE_BOUNDARY:
+            # outside this half-plane, or within tol of its boundary line all along the leg
+            off |= (sa > -tol) & (sb > -tol)
+        else:
+            # a diagonal: a leg along it (within tol) belongs to its owner; others clip exactly
+            hug = (abs(sa) < tol) & (abs(sb) < tol)
+            off |= ((sa >= 0.0) & (sb >= 0.0) & (not hug)) | (hug & (eflags[i] != _EDGE_OWNED))
+            entering &= not hug
+            leaving &= not hug
         t_lo = max(t_lo, t if entering else 0.0)
         t_hi = min(t_hi, t if leaving else 1.0)
     d = (t_hi - t_lo) * length
@@ -251,7 +324,7 @@ def _polygon_overlap(ax, ay, bx, by, length, verts, normals, start, stop, tol):
 
 
 @njit(cache=True, fastmath=False, nogil=True)
-def _leg_overlap_scalar(ax, ay, bx, by, circles, verts, offs, normals, tol):
+def _leg_overlap_scalar(ax, ay, bx, by, circles, verts, offs, normals, eflags, tol):
     """One leg against every obstacle, no culling: the fallback for far-away coordinates."""
     length = math.hypot(bx - ax, by - ay)
     if not math.isfinite(length):
@@ -266,13 +339,16 @@ def _leg_overlap_scalar(ax, ay, bx, by, circles, verts, offs, normals, tol):
             ax, ay, ux, uy, length, circles[j, 0], circles[j, 1], circles[j, 2], tol
         )
     for p in range(offs.shape[0] - 1):
-        total += _polygon_overlap(ax, ay, bx, by, length, verts, normals, offs[p], offs[p + 1], tol)
+        total += _polygon_overlap(
+            ax, ay, bx, by, length, verts, normals, eflags, offs[p], offs[p + 1], tol
+        )
     return total
 
 
 @njit(cache=True, fastmath=False, nogil=True)
 def _overlap_chunk(
-    a, b, circles, verts, offs, normals, tol, cull_r, cull_c32, origin, extent, out, m0, m1
+    a, b, circles, verts, offs, normals, eflags, tol, cull_r, cull_c32, origin, extent, out, m0,
+    m1,
 ):
     """Legs m0..m1 against all obstacles, obstacle by obstacle (inner loops run over legs).
 
@@ -314,7 +390,9 @@ def _overlap_chunk(
             llen[i] = length
             scale = max(scale, far)
         elif not length <= tol:  # NaN, inf or beyond the float32 range: no culling
-            out[m] = _leg_overlap_scalar(ax, ay, bx, by, circles, verts, offs, normals, tol)
+            out[m] = _leg_overlap_scalar(
+                ax, ay, bx, by, circles, verts, offs, normals, eflags, tol
+            )
     pad = _F32_PAD_PER_METRE * scale + 1e-6
     fax = np.empty(n_pad, dtype=np.float32)
     fay = np.empty(n_pad, dtype=np.float32)
@@ -393,15 +471,30 @@ def _overlap_chunk(
                 ny = normals[e, 1]
                 vx = verts[e, 0]
                 vy = verts[e, 1]
-                for q in range(k):
-                    sa = nx * (gax[q] - vx) + ny * (gay[q] - vy)  # signed distance, > 0 outside
-                    sb = nx * (gbx[q] - vx) + ny * (gby[q] - vy)
-                    # outside this half-plane, or within tol of its line all along the leg
-                    off[q] |= (sa > -tol) & (sb > -tol)
-                    den = sa - sb
-                    t = sa / (den if den != 0.0 else 1.0)  # crossing (signs differ: no cancel)
-                    t_lo[q] = max(t_lo[q], t if (sa >= 0.0) & (sb < 0.0) else 0.0)  # entering
-                    t_hi[q] = min(t_hi[q], t if (sa < 0.0) & (sb >= 0.0) else 1.0)  # leaving
+                if eflags[e] == _EDGE_BOUNDARY:
+                    for q in range(k):
+                        sa = nx * (gax[q] - vx) + ny * (gay[q] - vy)  # signed dist., > 0 outside
+                        sb = nx * (gbx[q] - vx) + ny * (gby[q] - vy)
+                        # outside this half-plane, or within tol of its line all along the leg
+                        off[q] |= (sa > -tol) & (sb > -tol)
+                        den = sa - sb
+                        t = sa / (den if den != 0.0 else 1.0)  # crossing (signs differ)
+                        t_lo[q] = max(t_lo[q], t if (sa >= 0.0) & (sb < 0.0) else 0.0)  # entering
+                        t_hi[q] = min(t_hi[q], t if (sa < 0.0) & (sb >= 0.0) else 1.0)  # leaving
+                else:
+                    # a diagonal: exact clipping; a leg along it (within tol) is the owner's
+                    shared = eflags[e] != _EDGE_OWNED
+                    for q in range(k):
+                        sa = nx * (gax[q] - vx) + ny * (gay[q] - vy)
+                        sb = nx * (gbx[q] - vx) + ny * (gby[q] - vy)
+                        hug = (abs(sa) < tol) & (abs(sb) < tol)
+                        off[q] |= ((sa >= 0.0) & (sb >= 0.0) & (not hug)) | (hug & shared)
+                        den = sa - sb
+                        t = sa / (den if den != 0.0 else 1.0)
+                        ent = (sa >= 0.0) & (sb < 0.0) & (not hug)
+                        lea = (sa < 0.0) & (sb >= 0.0) & (not hug)
+                        t_lo[q] = max(t_lo[q], t if ent else 0.0)
+                        t_hi[q] = min(t_hi[q], t if lea else 1.0)
             for q in range(k):
                 i = idx[q]
                 d = (t_hi[q] - t_lo[q]) * llen[i]
@@ -410,20 +503,20 @@ def _overlap_chunk(
 
 @njit(cache=True, fastmath=False, nogil=True)
 def _overlap_serial(
-    a, b, circles, verts, offs, normals, tol, cull_r, cull_c32, origin, extent, out
+    a, b, circles, verts, offs, normals, eflags, tol, cull_r, cull_c32, origin, extent, out
 ):
     # chunks of legs small enough that the per-leg arrays stay in the L1/L2 cache
     m = a.shape[0]
     n_chunks = (m + _CHUNK_LEGS - 1) // _CHUNK_LEGS
     for c in range(n_chunks):
         _overlap_chunk(
-            a, b, circles, verts, offs, normals, tol, cull_r, cull_c32, origin, extent, out,
-            (m * c) // n_chunks, (m * (c + 1)) // n_chunks,
+            a, b, circles, verts, offs, normals, eflags, tol, cull_r, cull_c32, origin, extent,
+            out, (m * c) // n_chunks, (m * (c + 1)) // n_chunks,
         )  # fmt: skip
 
 
 @njit(cache=True, fastmath=False, nogil=True)
-def _points_inside_kernel(pts, circles, verts, offs, normals, tol, out):
+def _points_inside_kernel(pts, circles, verts, offs, normals, eflags, tol, out):
     n_circ = circles.shape[0]
     n_poly = offs.shape[0] - 1
     for m in range(pts.shape[0]):
@@ -439,9 +532,18 @@ def _points_inside_kernel(pts, circles, verts, offs, normals, tol, out):
                 ok = True
                 for i in range(offs[p], offs[p + 1]):
                     s = normals[i, 0] * (x - verts[i, 0]) + normals[i, 1] * (y - verts[i, 1])
-                    if not s < -tol:
-                        ok = False
-                        break
+                    if s < -tol:
+                        continue
+                    # a point on (within tol of) an owned diagonal is inside its owner, unless
+                    # it is at one of the diagonal's ends: those are the polygon's vertices
+                    if eflags[i] == _EDGE_OWNED and s < tol:
+                        j = i + 1 if i + 1 < offs[p + 1] else offs[p]
+                        d0 = math.hypot(x - verts[i, 0], y - verts[i, 1])
+                        d1 = math.hypot(x - verts[j, 0], y - verts[j, 1])
+                        if d0 > tol and d1 > tol:
+                            continue
+                    ok = False
+                    break
                 if ok:
                     inside = True
                     break
@@ -474,8 +576,8 @@ def overlap_lengths(a: np.ndarray, b: np.ndarray, obstacles: Obstacles) -> np.nd
     if a2.shape[0]:
         o = obstacles
         _overlap_serial(
-            a2, b2, o.circles, o.poly_vertices, o.poly_offsets, o.edge_normals, o.tol,
-            o.cull_radii, o.cull_centres32, o.origin, o.extent, out,
+            a2, b2, o.circles, o.poly_vertices, o.poly_offsets, o.edge_normals, o.edge_flags,
+            o.tol, o.cull_radii, o.cull_centres32, o.origin, o.extent, out,
         )  # fmt: skip
     return out.reshape(lead)
 
@@ -522,12 +624,16 @@ def overlap_lengths_reference(a: np.ndarray, b: np.ndarray, obstacles: Obstacles
     closed-form chord, because shapely only approximates circles by polygons (buffer), which is
     off by up to r * (1 - cos(pi / n_segments)) in radius. The boundary-tolerance rules of the
     module docstring are applied explicitly, so both paths implement the same definition.
+    Regions (general polygons) are measured whole, as shapely polygons with holes, not piece by
+    piece: length(leg & region) - length(leg & boundary), counted when above tol.
     """
     from shapely.geometry import LineString, Polygon
 
     a2, b2, lead = _legs(a, b)
     o = obstacles
-    polys = [Polygon(o.polygon(p)) for p in range(o.n_polygons)]
+    own = [p for p in range(o.n_polygons) if o.piece_region[p] < 0]
+    polys = [(p, Polygon(o.polygon(p))) for p in own]
+    regions = [Polygon(shell, list(holes)) for shell, holes in o.regions]
     out = np.zeros(a2.shape[0], dtype=np.float64)
     for m in range(a2.shape[0]):
         ax, ay = float(a2[m, 0]), float(a2[m, 1])
@@ -540,10 +646,13 @@ def overlap_lengths_reference(a: np.ndarray, b: np.ndarray, obstacles: Obstacles
             total += _circle_overlap_py(ax, ay, bx, by, cx, cy, r, o.tol)
         if (ax, ay) != (bx, by):
             leg = LineString([(ax, ay), (bx, by)])
-            for p, poly in enumerate(polys):
+            for p, poly in polys:
                 if _hugs_an_edge_py(ax, ay, bx, by, o.polygon(p), o.tol):
                     continue
                 inside = leg.intersection(poly).length - leg.intersection(poly.exterior).length
+                total += inside if inside > o.tol else 0.0
+            for poly in regions:
+                inside = leg.intersection(poly).length - leg.intersection(poly.boundary).length
                 total += inside if inside > o.tol else 0.0
         out[m] = total
     return out.reshape(lead)
@@ -560,6 +669,7 @@ def points_inside(points: np.ndarray, obstacles: Obstacles) -> np.ndarray:
     o = obstacles
     if p2.shape[0]:
         _points_inside_kernel(
-            p2, o.circles, o.poly_vertices, o.poly_offsets, o.edge_normals, o.tol, out
-        )
+            p2, o.circles, o.poly_vertices, o.poly_offsets, o.edge_normals, o.edge_flags,
+            o.tol, out,
+        )  # fmt: skip
     return out.reshape(lead)

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import difflib
 import json
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -20,10 +19,19 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from planner_core.geometry import Obstacles, points_inside, rectangle_vertices
+from planner_core.polygons import (
+    VERTEX_TOL,
+    clean_ring,
+    convex_pieces,
+    is_convex,
+    polygon_problem,
+    ring_area,
+)
 
 __all__ = [
     "Map",
     "MapError",
+    "PolygonShape",
     "MapFile",
     "load_map",
     "map_json_schema",
@@ -80,11 +88,29 @@ class Rectangle(BaseModel):
     angle_deg: float = 0.0
 
 
+_RING_DOC = (
+    "any simple polygon, convex or not: either orientation (reordered), a closing vertex equal "
+    "to the first is accepted, vertices closer than 5 mm to the previous one or to the segment "
+    "joining their neighbours are removed (noted)"
+)
+
+
 class NoFlyZone(BaseModel):
-    """A convex polygon; vertices counter-clockwise (clockwise input is reordered)."""
+    """A no-fly zone: any simple polygon (`vertices`, the exterior ring) with optional `holes`."""
 
     model_config = _STRICT
-    vertices: list[Point2]
+    vertices: list[Point2] = Field(description=_RING_DOC)
+    holes: list[list[Point2]] = Field([], description="rings inside, where flight is allowed")
+    name: str | None = Field(None, description="label shown in messages, plots and exports")
+
+
+class PolygonObstacle(BaseModel):
+    """An obstacle footprint (a building): any simple polygon with optional `holes`."""
+
+    model_config = _STRICT
+    vertices: list[Point2] = Field(description=_RING_DOC)
+    holes: list[list[Point2]] = Field([], description="rings inside (a courtyard), flyable")
+    name: str | None = Field(None, description="label shown in messages, plots and exports")
 
 
 class ObstaclesSpec(BaseModel):
@@ -92,6 +118,9 @@ class ObstaclesSpec(BaseModel):
     circles: list[Circle] = []
     rectangles: list[Rectangle] = []
     no_fly_zones: list[NoFlyZone] = []
+    polygons: list[PolygonObstacle] = Field(
+        [], description="obstacle footprints of any polygonal shape (buildings)"
+    )
 
 
 class Uav(BaseModel):
@@ -166,12 +195,43 @@ def map_json_schema() -> dict[str, Any]:
 
 
 @dataclass(frozen=True, eq=False)
+class PolygonShape:
+    """One no-fly zone or polygon obstacle as used: cleaned rings, exterior counter-clockwise,
+    holes clockwise (RFC 7946's orientation), in local metres."""
+
+    kind: str  # "no_fly_zone" or "polygon"
+    index: int  # position in its list of the map file
+    name: str | None
+    shell: np.ndarray  # (V, 2)
+    holes: tuple[np.ndarray, ...] = ()
+
+    @property
+    def convex(self) -> bool:
+        """Convex and without holes: the kernel takes it as one polygon."""
+        return not self.holes and is_convex(self.shell)
+
+    @property
+    def label(self) -> str:
+        base = f"{self.kind.replace('_', '-')} {self.index}"
+        return f"{base} '{self.name}'" if self.name else base
+
+    def pieces(self) -> list[np.ndarray]:
+        """Convex pieces (V, 2) counter-clockwise, disjoint interiors, union = the shape."""
+        return [v for v, _ in convex_pieces(self.shell, self.holes)]
+
+
+@dataclass(frozen=True, eq=False)
 class Map:
-    """A validated map: the file as given (`spec`) plus the arrays the model uses."""
+    """A validated map: the file as given (`spec`) plus the arrays the model uses.
+
+    `shapes` holds every no-fly zone then every polygon obstacle, cleaned; `nfz_polygons` the
+    no-fly zones' exterior rings (counter-clockwise).
+    """
 
     spec: MapFile
     nfz_polygons: tuple[np.ndarray, ...]
     notes: tuple[str, ...] = field(default=())
+    shapes: tuple[PolygonShape, ...] = field(default=())
 
     # --- scalars in the paper's symbols ---
     @property
@@ -226,14 +286,24 @@ class Map:
 
     @cached_property
     def obstacles(self) -> Obstacles:
-        """All obstacles in the geometry kernel's packed form (rectangles, then no-fly zones)."""
-        circles = [(c.x, c.y, c.radius) for c in self.spec.obstacles.circles]
-        return Obstacles.build(circles, list(self.rectangle_polygons) + list(self.nfz_polygons))
+        """All obstacles in the geometry kernel's packed form: circles; rectangles, convex
+        no-fly zones and convex polygon obstacles as polygons; the other shapes as regions."""
+        return _pack(self.spec, self.shapes)
 
     def to_dict(self) -> dict[str, Any]:
-        """The map as JSON-ready data (no-fly zones in the counter-clockwise order used)."""
+        """The map as JSON-ready data (polygons cleaned, exteriors counter-clockwise)."""
         d = self.spec.model_dump(mode="json", exclude_none=False)
-        d["obstacles"]["no_fly_zones"] = [{"vertices": p.tolist()} for p in self.nfz_polygons]
+        obs = d["obstacles"]
+        for sh in self.shapes:
+            entry: dict[str, Any] = {"vertices": sh.shell.tolist()}
+            if sh.holes:
+                entry["holes"] = [h.tolist() for h in sh.holes]
+            if sh.name is not None:
+                entry["name"] = sh.name
+            key = "no_fly_zones" if sh.kind == "no_fly_zone" else "polygons"
+            obs[key][sh.index] = entry
+        if not obs["polygons"]:
+            del obs["polygons"]
         if d.get("witness") is None:
             d.pop("witness", None)
         return d
@@ -251,6 +321,7 @@ class Map:
             "circles": len(s.obstacles.circles),
             "rectangles": len(s.obstacles.rectangles),
             "no_fly_zones": len(s.obstacles.no_fly_zones),
+            "polygons": len(s.obstacles.polygons),
             "max_hover_points": self.max_hover_points,
             "max_hover_points_default": s.uav.max_hover_points is None,
             "uav": s.uav.model_dump(),
@@ -316,33 +387,6 @@ def _pydantic_problems(err: ValidationError) -> list[str]:
     return lines
 
 
-def _convex_ccw(vertices: np.ndarray) -> tuple[np.ndarray | None, str | None, bool]:
-    """Check a polygon is simple and strictly convex; return (ccw vertices, problem, reordered)."""
-    n = len(vertices)
-    if n < 3:
-        return None, f"needs at least 3 vertices, got {n}", False
-    nxt = np.roll(vertices, -1, axis=0)
-    if np.any(np.linalg.norm(nxt - vertices, axis=1) == 0):
-        return None, "has repeated consecutive vertices", False
-    e1 = nxt - vertices
-    e2 = np.roll(e1, -1, axis=0)
-    cross = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
-    scale = np.linalg.norm(e1, axis=1) * np.linalg.norm(e2, axis=1)
-    turn = cross / scale
-    if np.any(np.abs(turn) < 1e-12):
-        return None, "has collinear consecutive vertices (degenerate or not strictly convex)", False
-    if not (np.all(turn > 0) or np.all(turn < 0)):
-        return None, "is not a convex polygon", False
-    # all turns one way; a star-shaped self-intersecting path also turns one way: the total
-    # turning of a simple convex polygon is exactly one full turn.
-    ang = np.arctan2(cross, np.einsum("ij,ij->i", e1, e2))
-    if abs(abs(ang.sum()) - 2 * math.pi) > 1e-6:
-        return None, "is not a simple polygon (its edges cross)", False
-    if np.all(turn < 0):
-        return vertices[::-1].copy(), None, True
-    return vertices.copy(), None, False
-
-
 def _semantic_problems(spec: MapFile) -> tuple[list[str], list[str], list[np.ndarray]]:
     problems: list[str] = []
     notes: list[str] = []
@@ -376,35 +420,83 @@ def _semantic_problems(spec: MapFile) -> tuple[list[str], list[str], list[np.nda
             problems.append(
                 f"obstacles.rectangles[{k}]: centre ({r.x:g}, {r.y:g}) is outside the area"
             )
-    polys: list[np.ndarray] = []
-    for k, z in enumerate(obs.no_fly_zones):
-        v = np.array(z.vertices, dtype=float).reshape(-1, 2)
-        ccw, problem, reordered = _convex_ccw(v)
-        where = f"obstacles.no_fly_zones[{k}].vertices"
-        if problem:
-            problems.append(f"{where}: {problem}")
-            continue
-        if reordered:
-            notes.append(f"{where}: given clockwise; reordered counter-clockwise")
-        polys.append(ccw)
+    shapes: list[PolygonShape] = []
+    for kind, key, items in (("no_fly_zone", "no_fly_zones", obs.no_fly_zones),
+                             ("polygon", "polygons", obs.polygons)):  # fmt: skip
+        for k, z in enumerate(items):
+            shape = _polygon_shape(kind, f"obstacles.{key}[{k}]", k, z, problems, notes)
+            if shape is not None:
+                shapes.append(shape)
     u = spec.uav
     if u.max_hover_points is not None and u.max_hover_points > 200:
         problems.append(f"uav.max_hover_points: {u.max_hover_points} is too large (at most 200)")
     if spec.witness is not None and len(spec.witness.hover_points) != len(spec.witness.hover_times):
         problems.append("witness: hover_points and hover_times differ in length")
     if not problems:
-        circles = [(c.x, c.y, c.radius) for c in obs.circles]
-        rects = [
-            rectangle_vertices(r.x, r.y, r.length, r.width, r.angle_deg) for r in obs.rectangles
-        ]
-        obstacles = Obstacles.build(circles, rects + polys)
+        try:
+            obstacles = _pack(spec, tuple(shapes))
+        except ValueError as exc:  # a degenerate polygon the triangulation cannot cut
+            problems.append(f"obstacles: {exc}")
+            return problems, notes, shapes
         ends = np.array([spec.start, spec.end], dtype=float)
         inside = points_inside(ends, obstacles)
         for name, flag in zip(("start", "end"), inside, strict=True):
             if flag:
                 x, y = getattr(spec, name)
                 problems.append(f"{name}: ({x:g}, {y:g}) lies inside an obstacle")
-    return problems, notes, polys
+    return problems, notes, shapes
+
+
+def _polygon_shape(
+    kind: str, where: str, index: int, z: NoFlyZone | PolygonObstacle,
+    problems: list[str], notes: list[str],
+) -> PolygonShape | None:
+    """Clean, orient and check one polygon of the map file; None (and a problem) if unusable."""
+    label = f"{where} '{z.name}'" if z.name else where
+    rings: list[np.ndarray] = []
+    merged = {"duplicate": 0, "collinear": 0}
+    for r, ring in enumerate([z.vertices, *z.holes]):
+        at = f"{label}.vertices" if r == 0 else f"{label}.holes[{r - 1}]"
+        try:
+            v, counts = clean_ring(ring)
+        except ValueError as exc:
+            problems.append(f"{at}: {exc}")
+            return None
+        if len(v) < 3:
+            got = len(np.asarray(ring).reshape(-1, 2)) if len(ring) else 0
+            problems.append(f"{at}: needs at least 3 vertices, got {got}"
+                            + (f" ({len(v)} distinct)" if len(v) != got else ""))  # fmt: skip
+            return None
+        merged["duplicate"] += counts["duplicate"]
+        merged["collinear"] += counts["collinear"]
+        rings.append(v)
+    shell, holes = rings[0], rings[1:]
+    problem = polygon_problem(shell, holes)
+    if problem:
+        problems.append(f"{label}: {problem}")
+        return None
+    if ring_area(shell) < 0.0:
+        shell = shell[::-1].copy()
+        notes.append(f"{label}.vertices: given clockwise; reordered counter-clockwise")
+    holes = [h if ring_area(h) < 0.0 else h[::-1].copy() for h in holes]
+    done = []
+    if merged["duplicate"]:
+        done.append(f"merged {merged['duplicate']} near-duplicate vertex(es)")
+    if merged["collinear"]:
+        done.append(f"removed {merged['collinear']} vertex(es) in the middle of an edge")
+    if done:
+        notes.append(f"{label}: {' and '.join(done)} (tolerance {VERTEX_TOL * 1000:g} mm)")
+    return PolygonShape(kind, index, z.name, shell, tuple(holes))
+
+
+def _pack(spec: MapFile, shapes: tuple[PolygonShape, ...]) -> Obstacles:
+    """The kernel's obstacles: rectangles, then convex shapes, then the others as regions."""
+    obs = spec.obstacles
+    circles = [(c.x, c.y, c.radius) for c in obs.circles]
+    rects = [rectangle_vertices(r.x, r.y, r.length, r.width, r.angle_deg) for r in obs.rectangles]
+    convex = [sh.shell for sh in shapes if sh.convex]
+    regions = [(sh.shell, sh.holes) for sh in shapes if not sh.convex]
+    return Obstacles.build(circles, rects + convex, regions)
 
 
 def load_map(source: str | Path | Mapping[str, Any] | Map) -> Map:
@@ -433,7 +525,8 @@ def load_map(source: str | Path | Mapping[str, Any] | Map) -> Map:
         spec = MapFile.model_validate(data)
     except ValidationError as err:
         raise MapError(_pydantic_problems(err)) from None
-    problems, notes, polys = _semantic_problems(spec)
+    problems, notes, shapes = _semantic_problems(spec)
     if problems:
         raise MapError(problems, notes)
-    return Map(spec=spec, nfz_polygons=tuple(polys), notes=tuple(notes))
+    nfz = tuple(sh.shell for sh in shapes if sh.kind == "no_fly_zone")
+    return Map(spec=spec, nfz_polygons=nfz, notes=tuple(notes), shapes=tuple(shapes))
