@@ -31,7 +31,7 @@ above 0.1 degree); legs touching the polygon's real boundary are unaffected.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -124,11 +124,16 @@ def is_convex(ring: np.ndarray) -> bool:
     return bool(np.all(cross > 0.0))
 
 
-def polygon_problem(shell: np.ndarray, holes: Sequence[np.ndarray] = ()) -> str | None:
+def polygon_problem(
+    shell: np.ndarray,
+    holes: Sequence[np.ndarray] = (),
+    locate: Callable[[float, float], str] | None = None,
+) -> str | None:
     """Why the polygon (rings as vertex cycles) is not a simple polygon with area, or None.
 
     Uses GEOS's validity test; the answer names the problem and where, e.g.
-    "self-intersection at (12.5, 40)".
+    "self-intersection at (12.5, 40)"; `locate(x, y)` may word the place instead (e.g. as
+    longitude and latitude).
     """
     import shapely
     from shapely.geometry import Polygon
@@ -146,7 +151,9 @@ def polygon_problem(shell: np.ndarray, holes: Sequence[np.ndarray] = ()) -> str 
             what, _, where = why[:-1].partition("[")
             xy = where.split()
             if len(xy) >= 2:
-                return f"{what.lower()} at ({float(xy[0]):.6g}, {float(xy[1]):.6g})"
+                x, y = float(xy[0]), float(xy[1])
+                place = locate(x, y) if locate is not None else f"{x:.6g}, {y:.6g}"
+                return f"{what.lower()} at ({place})"
         return why.lower()
     if not poly.area > 0.0:
         return "has zero area"
