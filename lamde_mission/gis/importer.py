@@ -51,6 +51,9 @@ __all__ = ["GisError", "GisLayers", "read_layers", "build_map", "DEFAULT_MARGIN"
 
 #: metres added around the data's bounding box when the area is not given
 DEFAULT_MARGIN = 100.0
+#: metres: parts of the area outside an inclusion fence thinner than this are not no-fly zones
+#: (the fence's straight edges in WGS84 are a few millimetres off the local frame's axes)
+SLIVER_WIDTH = 0.1
 #: segments per quarter circle of an inclusion circle's inscribed polygon (QGroundControl)
 INCLUSION_CIRCLE_QUAD_SEGS = 16
 
@@ -180,7 +183,7 @@ def _add_feature(layers: GisLayers, feat: Any, where: str, layer: str | None) ->
                 raise ValueError(f"{label}: MultiPoint coordinates must be a list")
             points = [_position(p, label) for p in coords]
         else:
-            raise ValueError(f"{label}: a {kind} must be a Point, got {gtype}")
+            raise ValueError(f"{label}: {kind} features must be a Point, got {gtype}")
         if kind == "sensor":
             q = props.get("required_data")
             if q is not None and (isinstance(q, bool) or not isinstance(q, int | float)
@@ -205,8 +208,8 @@ def _add_feature(layers: GisLayers, feat: Any, where: str, layer: str | None) ->
             raise ValueError(f"{label}: MultiPolygon coordinates must be a list")
         polys = [_rings(c, f"{label} polygon {k}") for k, c in enumerate(coords)]
     else:
-        raise ValueError(f"{label}: a {kind.replace('_', '-')} must be a Polygon or "
-                         f"MultiPolygon, got {gtype}")  # fmt: skip
+        raise ValueError(f"{label}: {kind} features must be a Polygon or MultiPolygon, "
+                         f"got {gtype}")  # fmt: skip
     target = {"obstacle": layers.obstacles, "no_fly_zone": layers.no_fly_zones,
               "area": layers.areas}[kind]  # fmt: skip
     for k, rings in enumerate(polys):
@@ -457,7 +460,7 @@ def build_map(
 
     def locate(x: float, y: float) -> str:
         lat, lon = enu_to_latlon(x, y, o)
-        return f"lon {float(lon):.8f}, lat {float(lat):.8f}"
+        return f"lon {float(lon):.6f}, lat {float(lat):.6f}"
 
     def point(e: dict[str, Any], label: str) -> list[float] | None:
         (x, y), = _local([(e["lon"], e["lat"])], o)
@@ -544,8 +547,13 @@ def build_map(
             problems += [f"{w}: the inclusion polygon is not simple" for w in bad]
         else:
             outside = area_box.difference(shapely.union_all(allowed))
-            for g in shapely.get_parts(outside):
-                if g.geom_type != "Polygon" or g.area < 1e-6:
+            # morphological opening: slivers thinner than SLIVER_WIDTH between the box and the
+            # fence (its edges are not exactly the frame's axes) go, mitred corners stay
+            d = 0.5 * SLIVER_WIDTH
+            opened = outside.buffer(-d, join_style="mitre", mitre_limit=10.0)
+            opened = opened.buffer(d, join_style="mitre", mitre_limit=10.0).intersection(area_box)
+            for g in shapely.get_parts(opened):
+                if g.geom_type != "Polygon" or g.is_empty:
                     continue
                 rings = [np.asarray(g.exterior.coords)] + [np.asarray(h.coords)
                                                            for h in g.interiors]  # fmt: skip
@@ -555,7 +563,8 @@ def build_map(
                     continue
                 zones.append(_entry(c2, "outside the inclusion fence"))
             notes.append("area: the bounding box of the inclusion fence; the part of it outside "
-                         "the fence is a no-fly zone")  # fmt: skip
+                         f"the fence is a no-fly zone (slivers thinner than {SLIVER_WIDTH * 100:g} "
+                         "cm left out)")  # fmt: skip
     if problems:
         raise GisError(problems)
     doc: dict[str, Any] = {
