@@ -19,7 +19,7 @@ import numpy as np
 
 from lamde_mission.geo import enu_to_latlon
 
-__all__ = ["map_to_geojson", "map_features", "CIRCLE_SEGMENTS"]
+__all__ = ["map_to_geojson", "map_features", "polygon_geometry", "CIRCLE_SEGMENTS"]
 
 #: vertices of the polygon drawn for each circular obstacle
 CIRCLE_SEGMENTS = 72
@@ -42,7 +42,8 @@ def _ring(map_: Any, ring: np.ndarray, ccw: bool) -> list[list[float]]:
     return out
 
 
-def _polygon(map_: Any, shell: np.ndarray, holes: Any = ()) -> dict[str, Any]:
+def polygon_geometry(map_: Any, shell: np.ndarray, holes: Any = ()) -> dict[str, Any]:
+    """A GeoJSON Polygon (closed rings, exterior CCW, holes CW) of local rings (V, 2)."""
     rings = [_ring(map_, shell, True)] + [_ring(map_, h, False) for h in holes]
     return {"type": "Polygon", "coordinates": rings}
 
@@ -57,22 +58,23 @@ def map_features(map: Any) -> list[dict[str, Any]]:  # noqa: A002
     spec = map.spec
     W, H = spec.area.width, spec.area.height
     o = spec.origin
-    feats = [_feature(_polygon(map, np.array([[0.0, 0.0], [W, 0.0], [W, H], [0.0, H]])),
+    feats = [_feature(polygon_geometry(map, np.array([[0.0, 0.0], [W, 0.0], [W, H], [0.0, H]])),
                       kind="area", name=spec.name, origin=[o.lat, o.lon, o.alt],
                       width_m=W, height_m=H)]  # fmt: skip
     ang = np.linspace(0.0, 2.0 * math.pi, CIRCLE_SEGMENTS, endpoint=False)
     for k, c in enumerate(spec.obstacles.circles):
         ring = np.column_stack([c.x + c.radius * np.cos(ang), c.y + c.radius * np.sin(ang)])
-        feats.append(_feature(_polygon(map, ring), kind="circle", index=k, radius_m=c.radius,
+        feats.append(_feature(polygon_geometry(map, ring), kind="circle", index=k,
+                              radius_m=c.radius,
                               center=_lonlat(map, np.array([c.x, c.y]))[0]))  # fmt: skip
     for k, (r, poly) in enumerate(zip(spec.obstacles.rectangles, map.rectangle_polygons,
                                       strict=True)):  # fmt: skip
-        feats.append(_feature(_polygon(map, poly), kind="obstacle", shape="rectangle", index=k,
-                              length_m=r.length, width_m=r.width, angle_deg=r.angle_deg,
+        feats.append(_feature(polygon_geometry(map, poly), kind="obstacle", shape="rectangle",
+                              index=k, length_m=r.length, width_m=r.width, angle_deg=r.angle_deg,
                               center=_lonlat(map, np.array([r.x, r.y]))[0]))  # fmt: skip
     for sh in map.shapes:
         kind = "no_fly_zone" if sh.kind == "no_fly_zone" else "obstacle"
-        feats.append(_feature(_polygon(map, sh.shell, sh.holes), kind=kind, name=sh.name,
+        feats.append(_feature(polygon_geometry(map, sh.shell, sh.holes), kind=kind, name=sh.name,
                               index=sh.index))  # fmt: skip
     for s in spec.sensors:
         feats.append(_feature({"type": "Point", "coordinates": _lonlat(map, [s.x, s.y])[0]},
