@@ -387,7 +387,9 @@ def _pydantic_problems(err: ValidationError) -> list[str]:
     return lines
 
 
-def _semantic_problems(spec: MapFile) -> tuple[list[str], list[str], list[np.ndarray]]:
+def _semantic_problems(
+    spec: MapFile,
+) -> tuple[list[str], list[str], list[PolygonShape], Obstacles | None]:
     problems: list[str] = []
     notes: list[str] = []
     W, H = spec.area.width, spec.area.height
@@ -437,14 +439,15 @@ def _semantic_problems(spec: MapFile) -> tuple[list[str], list[str], list[np.nda
             obstacles = _pack(spec, tuple(shapes))
         except ValueError as exc:  # a degenerate polygon the triangulation cannot cut
             problems.append(f"obstacles: {exc}")
-            return problems, notes, shapes
+            return problems, notes, shapes, None
         ends = np.array([spec.start, spec.end], dtype=float)
         inside = points_inside(ends, obstacles)
         for name, flag in zip(("start", "end"), inside, strict=True):
             if flag:
                 x, y = getattr(spec, name)
                 problems.append(f"{name}: ({x:g}, {y:g}) lies inside an obstacle")
-    return problems, notes, shapes
+        return problems, notes, shapes, obstacles
+    return problems, notes, shapes, None
 
 
 def _polygon_shape(
@@ -525,8 +528,10 @@ def load_map(source: str | Path | Mapping[str, Any] | Map) -> Map:
         spec = MapFile.model_validate(data)
     except ValidationError as err:
         raise MapError(_pydantic_problems(err)) from None
-    problems, notes, shapes = _semantic_problems(spec)
+    problems, notes, shapes, obstacles = _semantic_problems(spec)
     if problems:
         raise MapError(problems, notes)
     nfz = tuple(sh.shell for sh in shapes if sh.kind == "no_fly_zone")
-    return Map(spec=spec, nfz_polygons=nfz, notes=tuple(notes), shapes=tuple(shapes))
+    m = Map(spec=spec, nfz_polygons=nfz, notes=tuple(notes), shapes=tuple(shapes))
+    m.__dict__["obstacles"] = obstacles  # the cached_property, already built while checking
+    return m

@@ -61,7 +61,8 @@ EDGE_SHARED = 2
 def ring_area(ring: np.ndarray) -> float:
     """Signed area (m^2) of a vertex cycle (V, 2), positive when counter-clockwise."""
     x, y = ring[:, 0], ring[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+    xn, yn = np.concatenate((x[1:], x[:1])), np.concatenate((y[1:], y[:1]))
+    return 0.5 * float(np.dot(x, yn) - np.dot(xn, y))
 
 
 def _seg_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
@@ -118,8 +119,8 @@ def clean_ring(points: Sequence[Sequence[float]] | np.ndarray,
 
 def is_convex(ring: np.ndarray) -> bool:
     """Whether a counter-clockwise cycle (V, 2) turns left (or straight) at every vertex."""
-    e = np.roll(ring, -1, axis=0) - ring
-    e2 = np.roll(e, -1, axis=0)
+    e = np.concatenate((ring[1:], ring[:1])) - ring
+    e2 = np.concatenate((e[1:], e[:1]))
     cross = e[:, 0] * e2[:, 1] - e[:, 1] * e2[:, 0]
     return bool(np.all(cross > 0.0))
 

@@ -337,8 +337,22 @@ def _tour(W):
 # ----------------------------------------------------------------------------- graph
 
 
+def _pushed_out(v: np.ndarray, n: np.ndarray, margin: float) -> np.ndarray:
+    """Corners of the CCW polygon v (unit outward edge normals n) offset by `margin`."""
+    n_prev = np.roll(n, 1, axis=0)
+    # the offset polygon's corner, capped at needle-sharp corners (still outside)
+    s = (n + n_prev) / np.maximum(1.0 + np.sum(n * n_prev, axis=1), 0.08)[:, None]
+    return v + margin * s
+
+
 def _corner_polygons(problem: Problem, margin: float) -> list[np.ndarray]:
-    """Every obstacle as a convex CCW polygon pushed out by `margin` (circles circumscribed)."""
+    """Every obstacle as a convex CCW polygon pushed out by `margin` (circles circumscribed).
+
+    A general polygon (a region of convex pieces, e.g. an L-shaped footprint) stands in by its
+    convex hull: shortest paths outside it bend only at its convex-hull corners or enter its
+    notches, and whether a graph edge is clear is decided on the real shape (a leg along an
+    internal diagonal of the pieces counts as inside, see `planner_core.polygons`).
+    """
     polys: list[np.ndarray] = []
     ang = 2.0 * np.pi * (np.arange(CIRCLE_SIDES) + 0.5) / CIRCLE_SIDES
     obs = problem.obstacles
@@ -346,13 +360,36 @@ def _corner_polygons(problem: Problem, margin: float) -> list[np.ndarray]:
         rad = (r + margin) / math.cos(math.pi / CIRCLE_SIDES)
         polys.append(np.column_stack([cx + rad * np.cos(ang), cy + rad * np.sin(ang)]))
     for p in range(obs.n_polygons):
+        if obs.piece_region[p] >= 0:
+            continue  # a piece of a region: the region's hull is used below
         v = np.asarray(obs.polygon(p), dtype=float)
         n = obs.edge_normals[obs.poly_offsets[p] : obs.poly_offsets[p + 1]]
-        n_prev = np.roll(n, 1, axis=0)
-        # the offset polygon's corner, capped at needle-sharp corners (still outside)
-        s = (n + n_prev) / np.maximum(1.0 + np.sum(n * n_prev, axis=1), 0.08)[:, None]
-        polys.append(v + margin * s)
+        polys.append(_pushed_out(v, n, margin))
+    for shell, _ in obs.regions:
+        h = _convex_hull(np.asarray(shell, dtype=float))
+        e = np.roll(h, -1, axis=0) - h
+        n = np.column_stack([e[:, 1], -e[:, 0]]) / np.hypot(e[:, 0], e[:, 1])[:, None]
+        polys.append(_pushed_out(h, n, margin))
     return polys
+
+
+def _convex_hull(pts: np.ndarray) -> np.ndarray:
+    """Counter-clockwise convex hull (Andrew's monotone chain), collinear points left out."""
+    p = pts[np.lexsort((pts[:, 1], pts[:, 0]))]
+
+    def half(seq: np.ndarray) -> list[np.ndarray]:
+        out: list[np.ndarray] = []
+        for q in seq:
+            while len(out) >= 2 and (
+                (out[-1][0] - out[-2][0]) * (q[1] - out[-2][1])
+                - (out[-1][1] - out[-2][1]) * (q[0] - out[-2][0])
+            ) <= 0.0:
+                out.pop()
+            out.append(q)
+        return out
+
+    lower, upper = half(p), half(p[::-1])
+    return np.array(lower[:-1] + upper[:-1])
 
 
 def build_visibility_graph(problem: Problem, margin: float = MARGIN) -> VisibilityGraph:
@@ -437,12 +474,16 @@ class Seeder:
                 a = rng.random() * 2.0 * math.pi
                 u = (q - (cx, cy)) / d if d > 1e-9 else np.array([math.cos(a), math.sin(a)])
                 return np.array([cx, cy]) + u * (r + self.margin)
-        for p in range(obs.n_polygons):
+        box = obs.poly_boxes
+        near = (box[:, 0] <= q[0]) & (q[0] <= box[:, 2]) & (box[:, 1] <= q[1]) & (q[1] <= box[:, 3])
+        for p in np.flatnonzero(near):  # only polygons whose bounding box holds q
             lo, hi = obs.poly_offsets[p], obs.poly_offsets[p + 1]
             nrm = obs.edge_normals[lo:hi]
             sd = np.sum(nrm * (q - obs.poly_vertices[lo:hi]), axis=1)  # < 0 inside
             if np.all(sd < 0.0):
-                e = int(np.argmax(sd))
+                # out through the nearest real side (a piece's diagonals lead into its region)
+                outer = obs.edge_flags[lo:hi] == 0
+                e = int(np.argmax(np.where(outer, sd, -np.inf) if outer.any() else sd))
                 return q + nrm[e] * (self.margin - sd[e])
         return q
 

@@ -229,3 +229,25 @@ def test_rectilinear_footprints_with_grid_legs(cells, seed) -> None:
     expect = [any(ShapelyPolygon(s, h).contains(shapely.Point(*m)) for s, h in regions)
               for m in mid]  # fmt: skip
     np.testing.assert_array_equal(inside, expect)
+
+
+def test_many_obstacles_tiled_kernel_matches_reference() -> None:
+    """From 256 obstacles on, the kernel culls by tiles first: same answers as the reference."""
+    from planner_core.geometry import _TILE_MIN
+
+    rng = np.random.default_rng(3)
+    circles = [(x, y, r) for x, y, r in zip(rng.uniform(0, 3000, 150), rng.uniform(0, 3000, 150),
+                                            rng.uniform(5, 40, 150), strict=True)]  # fmt: skip
+    squares = [np.array([(x, y), (x + 30, y), (x + 30, y + 30), (x, y + 30)])
+               for x, y in rng.uniform(0, 3000, (100, 2))]  # fmt: skip
+    regions = [(L_SHAPE * 0.5 + rng.uniform(0, 3000, 2), []) for _ in range(60)]
+    obs = Obstacles.build(circles, squares, regions)
+    assert len(obs.cull_radii) >= _TILE_MIN and len(obs.tile_offsets) > 2
+    a = rng.uniform(-100, 3100, (300, 2))
+    b = rng.uniform(-100, 3100, (300, 2))
+    fast = overlap_lengths(a, b, obs)
+    assert np.count_nonzero(fast) > 100
+    np.testing.assert_allclose(fast, overlap_lengths_reference(a, b, obs), rtol=0, atol=ATOL)
+    short_b = a + rng.uniform(-60, 60, (300, 2))  # short legs: most tiles culled
+    np.testing.assert_allclose(overlap_lengths(a, short_b, obs),
+                               overlap_lengths_reference(a, short_b, obs), rtol=0, atol=ATOL)
