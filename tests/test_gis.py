@@ -318,3 +318,24 @@ def test_export_has_kinds_and_orientation(campus) -> None:
     assert shell[0] == shell[-1] and hole[0] == hole[-1]
     assert LineString(shell).is_ring and Polygon(shell).exterior.is_ccw
     assert not Polygon(hole).exterior.is_ccw  # RFC 7946: holes clockwise
+
+
+def test_campus_generator_is_seeded_and_non_convex() -> None:
+    from lamde_mission.gis.synthetic import campus_map
+
+    a, b = campus_map(40, seed=3), campus_map(40, seed=3)
+    assert a == b and a != campus_map(40, seed=4)
+    m = load_map(a)
+    assert len(m.shapes) == 40 and not any(sh.convex for sh in m.shapes)
+    assert m.obstacles.n_regions == 40
+
+
+def test_bench_evaluate_prints_suite_and_campus_in_one_run() -> None:
+    r = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "bench_evaluate.py"),
+                        str(ROOT / "examples" / "maps" / "tiny.json"), "campus-30",
+                        "--batches", "2", "--population", "10", "--reference-solutions", "3"],
+                       capture_output=True, text=True, timeout=600)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert "map campus-30-seed0: " in r.stdout and "30 polygon footprints" in r.stdout
+    assert r.stdout.count("fast evaluator:") == 2
+    assert r.stdout.count("(results agree: True)") == 2
