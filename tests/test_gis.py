@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 from shapely.geometry import LineString, Polygon
 
-from lamde_mission.geo import latlon_to_enu
 from lamde_mission.gis import GisError, build_map, map_to_geojson, read_layers
 from planner_core.geometry import overlap_lengths
 from planner_core.mapio import load_map
+from sim.geo import latlon_to_enu
 from tests.conftest import ROOT
 
 CAMPUS = ROOT / "tests" / "data" / "campus.geojson"

@@ -6,7 +6,6 @@ import ast
 import json
 import math
 from dataclasses import replace
-from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -16,12 +15,11 @@ from lamde_mission.formats import read_mission, write_mission
 from lamde_mission.geo import enu_to_latlon
 from lamde_mission.items import CMD, plan_to_items
 from planner_core.mapio import load_map
-from planner_core.problem import Problem, flight_time
+from planner_core.model import flight_time
+from planner_core.problem import Problem
 from sim import replay, verify
 from sim.replay import leg_position, leg_time
-
-ROOT = Path(__file__).resolve().parent.parent
-SUITE = ROOT / "examples" / "maps" / "suite"
+from tests.conftest import ROOT, SUITE
 
 MAP = {
     "name": "sim",
@@ -161,7 +159,11 @@ def test_feasible_plan_passes_every_check(m):
     for name in ("C1", "C2", "C3", "C4", "C5"):
         assert name in table
     assert "FAIL" not in table
-    json.dumps(v.to_dict())
+    d = json.loads(json.dumps(v.to_dict()))  # JSON-ready, and it says what the object says
+    assert d["passed"] is True and d["failed"] == []
+    assert [x["name"] for x in d["verdicts"]] == ["C1", "C2", "C3", "C4", "C5", "ENDS"]
+    assert d["verdicts"][0]["margin"] == pytest.approx(120.0)
+    assert (d["t_fly"], d["t_hover"], d["f"]) == (v.t_fly, v.t_hover, v.f)
 
 
 def test_cut_hover_time_fails_c4(m):

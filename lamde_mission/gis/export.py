@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from lamde_mission.geo import enu_to_latlon
+from sim.geo import enu_to_latlon
 
 __all__ = ["map_to_geojson", "map_features", "polygon_geometry", "CIRCLE_SEGMENTS"]
 

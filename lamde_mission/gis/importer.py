@@ -45,7 +45,7 @@ from typing import Any
 
 import numpy as np
 
-from lamde_mission.geo import enu_to_latlon, latlon_to_enu
+from sim.geo import enu_to_latlon, latlon_to_enu
 
 __all__ = ["GisError", "GisLayers", "read_layers", "build_map", "DEFAULT_MARGIN", "KINDS"]
 
