@@ -251,3 +251,37 @@ def test_many_obstacles_tiled_kernel_matches_reference() -> None:
     short_b = a + rng.uniform(-60, 60, (300, 2))  # short legs: most tiles culled
     np.testing.assert_allclose(overlap_lengths(a, short_b, obs),
                                overlap_lengths_reference(a, short_b, obs), rtol=0, atol=ATOL)
+
+
+def test_seeder_routes_around_non_convex_footprints() -> None:
+    """A U-shaped hall and an L between start and the sensors: the graph's edges and the
+    seeded routes stay clear of the real shapes (never through a building along a cut)."""
+    from planner_core import Problem, load_map
+    from planner_core.seeding import Seeder
+
+    u = [[1000, 1000], [3000, 1000], [3000, 3000], [2600, 3000], [2600, 1400], [1400, 1400],
+         [1400, 3000], [1000, 3000]]  # fmt: skip
+    ell = [[3400, 600], [4400, 600], [4400, 900], [3700, 900], [3700, 2400], [3400, 2400]]
+    m = load_map({
+        "area": {"width": 5000, "height": 5000}, "start": [2000, 300], "end": [2000, 4700],
+        "sensors": [{"id": "a", "x": 2000, "y": 2200}, {"id": "b", "x": 4000, "y": 1500},
+                    {"id": "c", "x": 500, "y": 4500}],
+        "obstacles": {"polygons": [{"vertices": u, "name": "U"}, {"vertices": ell}]},
+    })  # fmt: skip
+    assert m.obstacles.n_regions == 2
+    p = Problem(m)
+    s = Seeder.for_problem(p)
+    g = s.graph
+    assert g.n > 0 and len(g.edges)
+    i, j = g.edges[:, 0], g.edges[:, 1]
+    assert not overlap_lengths(g.nodes[i], g.nodes[j], m.obstacles).any()
+    assert not points_inside(g.nodes, m.obstacles).any()
+    rng = np.random.default_rng(0)
+    clear = 0
+    for _ in range(10):
+        hp, _ = s.hover_plan(rng)
+        nodes = np.vstack([m.start, hp, m.end])
+        legs = overlap_lengths(nodes[:-1], nodes[1:], m.obstacles)
+        clear += int(not legs.any())
+        assert not points_inside(hp, m.obstacles).any()
+    assert clear >= 8, clear  # the starts are collision-free (the DE then keeps them so)

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["CIRCLE_SIDES", "convex_hull", "offset_convex", "obstacle_polygons"]
+__all__ = ["CIRCLE_SIDES", "offset_convex", "obstacle_polygons"]
 
 #: sides of the polygon circumscribed about a circle (radius + margin)
 CIRCLE_SIDES = 6
@@ -18,8 +18,9 @@ _NEEDLE = 0.08
 def offset_convex(
     poly: np.ndarray, c: float, normals: np.ndarray | None = None, min_denominator: float = 0.0
 ) -> np.ndarray:
-    """Vertices (n, 2) of a convex counter-clockwise polygon pushed out by c metres along the
-    mitre, so each new vertex is c from both its edges' lines.
+    """Vertices (n, 2) of a counter-clockwise polygon pushed out by c metres along the mitre, so
+    each new vertex is c from both its edges' lines (at a reflex corner of a non-convex polygon
+    the new vertex lies in the notch, c from both lines).
 
     `normals` (n, 2): unit outward normals of the edges v_k -> v_k+1 when already known
     (computed from the vertices otherwise). `min_denominator` > 0 caps the mitre at very sharp
@@ -35,12 +36,14 @@ def offset_convex(
 
 
 def obstacle_polygons(obstacles: Any, margin: float) -> list[np.ndarray]:
-    """Every obstacle of a `geometry.Obstacles` as a convex CCW polygon pushed out by `margin`:
-    circles first (circumscribed `CIRCLE_SIDES`-gons), then the polygons in their order, then
-    each region (a general polygon, e.g. an L-shaped footprint, packed as convex pieces) as its
-    convex hull: a shortest path outside it bends only at hull corners (or enters a notch), and
-    whether an edge is clear is decided on the real shape, where a leg along an internal cut
-    between two pieces counts as inside (`planner_core.polygons`)."""
+    """Every obstacle of a `geometry.Obstacles` as a CCW polygon pushed out by `margin`: circles
+    first (circumscribed `CIRCLE_SIDES`-gons), then the convex polygons in their order, then each
+    region (a general polygon such as an L- or U-shaped footprint, packed as convex pieces) as
+    its own exterior ring pushed out, not its pieces: its convex corners are where paths bend,
+    also into a notch (a hull would hide the notch); its reflex corners give offset points in
+    the notch that few tangent lines use. Holes are left out (a courtyard cannot be reached
+    without crossing the building). Whether an edge is clear is decided on the real shape, where
+    a leg along an internal cut between two pieces counts as inside (`planner_core.polygons`)."""
     polys: list[np.ndarray] = []
     ang = 2.0 * np.pi * (np.arange(CIRCLE_SIDES) + 0.5) / CIRCLE_SIDES
     for cx, cy, r in obstacles.circles:
@@ -49,31 +52,14 @@ def obstacle_polygons(obstacles: Any, margin: float) -> list[np.ndarray]:
     region = getattr(obstacles, "piece_region", None)
     for p in range(obstacles.n_polygons):
         if region is not None and region[p] >= 0:
-            continue  # a piece of a region: the region's hull stands in, below
+            continue  # a piece of a region: the region's own ring stands in, below
         v = np.asarray(obstacles.polygon(p), dtype=float)
         n = obstacles.edge_normals[obstacles.poly_offsets[p] : obstacles.poly_offsets[p + 1]]
         polys.append(offset_convex(v, margin, n, _NEEDLE))
     for shell, _ in getattr(obstacles, "regions", ()):
-        polys.append(offset_convex(convex_hull(np.asarray(shell, dtype=float)), margin,
-                                   min_denominator=_NEEDLE))  # fmt: skip
+        v = np.asarray(shell, dtype=float)
+        x, y = v[:, 0], v[:, 1]
+        if np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y) < 0.0:
+            v = v[::-1]  # counter-clockwise, so the normals point out
+        polys.append(offset_convex(v, margin, min_denominator=_NEEDLE))
     return polys
-
-
-def convex_hull(pts: np.ndarray) -> np.ndarray:
-    """Counter-clockwise convex hull (V, 2) of points (Andrew's monotone chain; collinear points
-    left out)."""
-    p = pts[np.lexsort((pts[:, 1], pts[:, 0]))]
-
-    def half(seq: np.ndarray) -> list[np.ndarray]:
-        out: list[np.ndarray] = []
-        for q in seq:
-            while len(out) >= 2 and (
-                (out[-1][0] - out[-2][0]) * (q[1] - out[-2][1])
-                - (out[-1][1] - out[-2][1]) * (q[0] - out[-2][0])
-            ) <= 0.0:
-                out.pop()
-            out.append(q)
-        return out
-
-    lower, upper = half(p), half(p[::-1])
-    return np.array(lower[:-1] + upper[:-1])
