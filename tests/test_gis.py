@@ -339,3 +339,26 @@ def test_bench_evaluate_prints_suite_and_campus_in_one_run() -> None:
     assert "map campus-30-seed0: " in r.stdout and "30 polygon footprints" in r.stdout
     assert r.stdout.count("fast evaluator:") == 2
     assert r.stdout.count("(results agree: True)") == 2
+
+
+def test_show_draws_footprints_and_bad_options_exit_2(campus, tmp_path) -> None:
+    path, _ = campus
+    png = tmp_path / "campus.png"
+    r = _cli("show", str(path), "-o", str(png))
+    assert r.returncode == 0, r.stderr
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    r = _cli("map", "from-geojson", str(CAMPUS), "--origin", "north", "-o", str(tmp_path / "x"))
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and "--origin" in r.stderr
+    r = _cli("map", "from-geojson", "-o", str(tmp_path / "x"))
+    assert r.returncode == 2 and "at least one input FILE" in r.stderr
+    r = _cli("map", "from-geojson", str(tmp_path / "missing.geojson"), "-o", str(tmp_path / "x"))
+    assert r.returncode == 2 and "missing.geojson: file not found" in r.stderr
+
+
+def test_multipolygon_problem_names_the_part(tmp_path) -> None:
+    ok = [[_pt(2, 2), _pt(3, 2), _pt(3, 3), _pt(2, 2)]]
+    bow = [[_pt(2, 4), _pt(3, 5), _pt(3, 4), _pt(2, 5), _pt(2, 4)]]
+    doc = _fc(*_basics(), _feat("obstacle", "MultiPolygon", [ok, bow], name="pair"))
+    layers = read_layers([(_write(tmp_path, "mp.geojson", doc), None)])
+    with pytest.raises(GisError, match=r"features\[3\] 'pair' polygon 1: self-intersection"):
+        build_map(layers)
