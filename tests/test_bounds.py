@@ -11,7 +11,8 @@ import pytest
 
 from planner_core.bench.limits import file_sha256, lower_bounds_path, suite_task_files
 from planner_core.bounds import lower_bound
-from planner_core.problem import Problem, flight_time
+from planner_core.model import flight_time
+from planner_core.problem import Problem
 from tests.conftest import SUITE
 
 CACHE = lower_bounds_path(SUITE)

@@ -15,7 +15,8 @@ from lamde_mission.formats import read_mission, write_mission
 from lamde_mission.geo import enu_to_latlon
 from lamde_mission.items import CMD, plan_to_items
 from planner_core.mapio import load_map
-from planner_core.problem import Problem, flight_time
+from planner_core.model import flight_time
+from planner_core.problem import Problem
 from sim import replay, verify
 from sim.replay import leg_position, leg_time
 from tests.conftest import ROOT, SUITE

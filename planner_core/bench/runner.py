@@ -119,7 +119,8 @@ def execute(job: Job) -> dict[str, Any]:
     """Run one job and return its record (or an error record with the traceback); top-level,
     so worker processes can unpickle it."""
     from planner_core.baselines import get, optimise, problem_for
-    from planner_core.problem import PENALTY_FACTOR, Problem
+    from planner_core.model import penalised_score
+    from planner_core.problem import Problem
 
     base = {"optimiser": job.optimiser, "task": job.task, "run": job.run, "seed": job.seed,
             "budget": job.budget, "map_sha256": job.map_sha256}
@@ -138,7 +139,7 @@ def execute(job: Job) -> dict[str, Any]:
         return {
             **base,
             "schema": SCHEMA,
-            "score": float(res.f + PENALTY_FACTOR * res.phi),
+            "score": float(penalised_score(res.f, res.phi)),
             "f": float(res.f),
             "phi": float(res.phi),
             "feasible": bool(res.phi == 0.0),
