@@ -8,6 +8,7 @@ the field, so a user can fix a map in one pass.
 from __future__ import annotations
 
 import difflib
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -20,14 +21,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from planner_core import textio
 from planner_core.defaults import MAP_DEFAULTS
 from planner_core.geometry import Obstacles, points_inside, rectangle_vertices
-from planner_core.polygons import (
-    VERTEX_TOL,
-    clean_ring,
-    convex_pieces,
-    is_convex,
-    polygon_problem,
-    ring_area,
-)
+from planner_core.polygons import clean_polygon, convex_pieces, is_convex
 
 __all__ = [
     "Map",
@@ -537,39 +531,20 @@ def _polygon_shape(
 ) -> PolygonShape | None:
     """Clean, orient and check one polygon of the map file; None (and a problem) if unusable."""
     label = f"{where} '{z.name}'" if z.name else where
-    rings: list[np.ndarray] = []
-    merged = {"duplicate": 0, "collinear": 0}
-    for r, ring in enumerate([z.vertices, *z.holes]):
-        at = f"{label}.vertices" if r == 0 else f"{label}.holes[{r - 1}]"
-        try:
-            v, counts = clean_ring(ring)
-        except ValueError as exc:
-            problems.append(f"{at}: {exc}")
-            return None
-        if len(v) < 3:
-            got = len(np.asarray(ring).reshape(-1, 2)) if len(ring) else 0
-            problems.append(f"{at}: needs at least 3 vertices, got {got}"
-                            + (f" ({len(v)} distinct)" if len(v) != got else ""))  # fmt: skip
-            return None
-        merged["duplicate"] += counts["duplicate"]
-        merged["collinear"] += counts["collinear"]
-        rings.append(v)
-    shell, holes = rings[0], rings[1:]
-    problem = polygon_problem(shell, holes)
-    if problem:
-        problems.append(f"{label}: {problem}")
+    try:
+        shell, holes, said = clean_polygon([z.vertices, *z.holes])
+    except ValueError as exc:
+        # name the ring as the file does: ...vertices / ...holes[k]
+        msg = str(exc)
+        ring = re.match(r"(exterior ring|hole (\d+)) (.*)", msg)
+        if ring:
+            at = ".vertices" if ring.group(2) is None else f".holes[{ring.group(2)}]"
+            problems.append(f"{label}{at}: {ring.group(3)}")
+        else:
+            problems.append(f"{label}: {msg}")
         return None
-    if ring_area(shell) < 0.0:
-        shell = shell[::-1].copy()
-        notes.append(f"{label}.vertices: given clockwise; reordered counter-clockwise")
-    holes = [h if ring_area(h) < 0.0 else h[::-1].copy() for h in holes]
-    done = []
-    if merged["duplicate"]:
-        done.append(f"merged {merged['duplicate']} near-duplicate vertex(es)")
-    if merged["collinear"]:
-        done.append(f"removed {merged['collinear']} vertex(es) in the middle of an edge")
-    if done:
-        notes.append(f"{label}: {' and '.join(done)} (tolerance {VERTEX_TOL * 1000:g} mm)")
+    notes += [f"{label}.vertices: {n}" if n.startswith("given clockwise") else f"{label}: {n}"
+              for n in said]  # fmt: skip
     return PolygonShape(kind, index, z.name, shell, tuple(holes))
 
 

@@ -41,6 +41,7 @@ __all__ = [
     "EDGE_SHARED",
     "VERTEX_TOL",
     "clean_ring",
+    "clean_polygon",
     "convex_pieces",
     "is_convex",
     "polygon_problem",
@@ -159,6 +160,53 @@ def polygon_problem(
     if not poly.area > 0.0:
         return "has zero area"
     return None
+
+
+def clean_polygon(
+    rings: Sequence[Sequence[Sequence[float]] | np.ndarray],
+    locate: Callable[[float, float], str] | None = None,
+) -> tuple[np.ndarray, list[np.ndarray], list[str]]:
+    """A polygon's rings (exterior first, then holes) made ready for `convex_pieces`.
+
+    Each ring is cleaned (`clean_ring`), the polygon checked (`polygon_problem`), the exterior
+    made counter-clockwise and the holes clockwise (RFC 7946). Returns (shell, holes, notes):
+    notes say what was changed ("given clockwise; ...", "merged 1 near-duplicate vertex(es)
+    ..."). Raises ValueError with one line naming the problem (and the ring, or where).
+    """
+    out: list[np.ndarray] = []
+    merged = {"duplicate": 0, "collinear": 0}
+    for r, ring in enumerate(rings):
+        what = "exterior ring" if r == 0 else f"hole {r - 1}"
+        try:
+            v, counts = clean_ring(ring)
+        except ValueError as exc:
+            raise ValueError(f"{what} {exc}") from None
+        if len(v) < 3:
+            got = len(np.asarray(ring, dtype=float).reshape(-1, 2))
+            distinct = f" ({len(v)} distinct)" if len(v) != got else ""
+            raise ValueError(f"{what} needs at least 3 vertices, got {got}{distinct}")
+        merged["duplicate"] += counts["duplicate"]
+        merged["collinear"] += counts["collinear"]
+        out.append(v)
+    if not out:
+        raise ValueError("has no exterior ring")
+    problem = polygon_problem(out[0], out[1:], locate=locate)
+    if problem:
+        raise ValueError(problem)
+    notes = []
+    shell = out[0]
+    if ring_area(shell) < 0.0:
+        shell = shell[::-1].copy()
+        notes.append("given clockwise; reordered counter-clockwise")
+    holes = [h if ring_area(h) < 0.0 else h[::-1].copy() for h in out[1:]]
+    done = []
+    if merged["duplicate"]:
+        done.append(f"merged {merged['duplicate']} near-duplicate vertex(es)")
+    if merged["collinear"]:
+        done.append(f"removed {merged['collinear']} vertex(es) in the middle of an edge")
+    if done:
+        notes.append(f"{' and '.join(done)} (tolerance {VERTEX_TOL * 1000:g} mm)")
+    return shell, holes, notes
 
 
 def _cross(o: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:

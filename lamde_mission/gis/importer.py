@@ -411,30 +411,15 @@ def _frame(layers: GisLayers, origin: tuple[float, float, float] | None,
 
 def _clean_shape(rings_xy: list[np.ndarray], where: str, notes: list[str],
                  locate: Any) -> tuple[np.ndarray, list[np.ndarray]] | str:
-    from planner_core.polygons import VERTEX_TOL, clean_ring, polygon_problem, ring_area
+    """The feature's rings cleaned and oriented (`planner_core.polygons.clean_polygon`), or the
+    problem as one line naming the feature."""
+    from planner_core.polygons import clean_polygon
 
-    out: list[np.ndarray] = []
-    merged = {"duplicate": 0, "collinear": 0}
-    for r, ring in enumerate(rings_xy):
-        v, counts = clean_ring(ring)
-        if len(v) < 3:
-            what = "exterior ring" if r == 0 else f"hole {r - 1}"
-            return f"{where}: {what} has fewer than 3 distinct vertices"
-        merged["duplicate"] += counts["duplicate"]
-        merged["collinear"] += counts["collinear"]
-        out.append(v)
-    problem = polygon_problem(out[0], out[1:], locate=locate)
-    if problem:
-        return f"{where}: {problem}"
-    shell = out[0] if ring_area(out[0]) > 0 else out[0][::-1].copy()
-    holes = [h if ring_area(h) < 0 else h[::-1].copy() for h in out[1:]]
-    done = []
-    if merged["duplicate"]:
-        done.append(f"merged {merged['duplicate']} near-duplicate vertex(es)")
-    if merged["collinear"]:
-        done.append(f"removed {merged['collinear']} vertex(es) in the middle of an edge")
-    if done:
-        notes.append(f"{where}: {' and '.join(done)} (tolerance {VERTEX_TOL * 1000:g} mm)")
+    try:
+        shell, holes, said = clean_polygon(rings_xy, locate=locate)
+    except ValueError as exc:
+        return f"{where}: {exc}"
+    notes += [f"{where}: {n}" for n in said if not n.startswith("given clockwise")]
     return shell, holes
 
 
