@@ -82,9 +82,10 @@ LIMITS: dict[str, Limit] = {
         "parser's recursion",
     ),
     "sensors": Limit(
-        5_000,
+        1_000,
         "LAMDE_MAX_SENSORS",
-        "sensors in one map; every evaluation costs O(population x I_max x sensors)",
+        "sensors in one map; the starting routes cost about sensors^2 (60 sensors: ~10 s of "
+        "CPU for a population of 20) and every evaluation population x I_max x sensors",
     ),
     "obstacles": Limit(
         5_000,
