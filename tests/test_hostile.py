@@ -107,7 +107,7 @@ def test_too_many_sensors_obstacles_and_vertices(tmp_path: Path) -> None:
     d = _tiny()
     d["sensors"] = [{"id": f"s{i}", "x": 10.0, "y": 10.0} for i in range(100_000)]
     _refused(["check", _write(tmp_path, "s.json", json.dumps(d))],
-             "sensors: 100,000 sensors, more than the limit of 1,000")  # fmt: skip
+             "sensors: 100,000 sensors, more than the limit of 200")  # fmt: skip
     d = _tiny()
     d["obstacles"]["circles"] = [{"x": 5.0, "y": 5.0, "radius": 1.0}] * 100_000
     _refused(["check", _write(tmp_path, "o.json", json.dumps(d))], "obstacles: 100,001 obstacles")
@@ -301,3 +301,15 @@ def test_every_map_number_is_refused_just_outside_its_range() -> None:
                 line = info.value.problems[0]
                 assert line.startswith(f"{name}: ") and d.why in line, (name, value, line)
                 assert math.isfinite(value)
+
+
+def test_control_characters_never_split_a_message() -> None:
+    d = _tiny()
+    d["sensors"][0]["id"] = "a\nb"
+    d["uav"] = {"max\nsped": 1}
+    with pytest.raises(MapError) as info:
+        load_map(d)
+    assert info.value.problems == [
+        "sensors[0].id: must be printable text (no control characters such as newlines or tabs)",
+        "uav.'max\\nsped': unknown field (did you mean 'max_speed'?)",
+    ]
