@@ -313,3 +313,12 @@ def test_control_characters_never_split_a_message() -> None:
         "sensors[0].id: must be printable text (no control characters such as newlines or tabs)",
         "uav.'max\\nsped': unknown field (did you mean 'max_speed'?)",
     ]
+
+
+def test_readme_lists_every_input_limit() -> None:
+    readme = (Path(__file__).resolve().parent.parent / "README.md").read_text(encoding="utf-8")
+    for name, lim in textio.LIMITS.items():
+        shown = "64 MiB" if name == "bytes" else f"{lim.default:,}"
+        row = [ln for ln in readme.splitlines() if ln.startswith("| ") and shown in ln
+               and (lim.env is None or f"`{lim.env}`" in ln)]  # fmt: skip
+        assert row, f"README's input-limits table lacks {name} ({shown}, {lim.env})"
