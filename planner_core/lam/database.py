@@ -1,0 +1,177 @@
+"""D_syn's landscape features, computed once and cached on disk under a content hash.
+
+The database is cut into chunks, one per (dimension, function): a chunk holds the features of
+that function's instances at that dimension, for every extractor (``"ela"``, ``"learned"``).
+A chunk's file name is the sha256 (first 24 hex) of everything its content depends on:
+format version, key list, N_probe, probe seed, and each extractor's identity (ELA definition
+version; encoder weights digest). Building skips chunks whose file exists, so an interrupted
+build resumes where it stopped, and changing any input builds new files beside the old ones.
+Each file is written to a temp name and renamed (never half-written).
+
+Probe of instance (f, d, i): LHS with seed ``SeedSequence([seed, f, d, i])``, so a probe does
+not depend on which other instances the database holds.
+
+Cache folder: ``$LAMDE_CACHE/lam`` if set, else ``~/.cache/lamde-mission/lam``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import os
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from planner_core.atomic import write_bytes_atomic
+from planner_core.lam.bbob import DEFAULT, BBOBProblem, DatabaseSpec, InstanceKey
+from planner_core.lam.probe import N_PROBE, Probe, probe
+
+__all__ = [
+    "FORMAT",
+    "Database",
+    "default_cache_dir",
+    "instance_probe",
+    "make_extractors",
+]
+
+FORMAT = "lamde-lam-chunk/1"
+
+
+def default_cache_dir() -> Path:
+    """``$LAMDE_CACHE/lam`` or ``~/.cache/lamde-mission/lam``."""
+    root = os.environ.get("LAMDE_CACHE")
+    return Path(root) / "lam" if root else Path.home() / ".cache" / "lamde-mission" / "lam"
+
+
+def make_extractors(names: Sequence[str] = ("ela", "learned")) -> dict[str, Any]:
+    """Extractor objects by name ("ela", "learned"); ValueError on an unknown name."""
+    out: dict[str, Any] = {}
+    for name in names:
+        if name == "ela":
+            from planner_core.lam.ela import ELAExtractor
+
+            out[name] = ELAExtractor()
+        elif name == "learned":
+            from planner_core.lam.encoder import LearnedExtractor
+
+            out[name] = LearnedExtractor()
+        else:
+            raise ValueError(f"features: unknown extractor {name!r} (ela, learned)")
+    return out
+
+
+def instance_probe(key: InstanceKey, n_probe: int = N_PROBE, seed: int = 0) -> Probe:
+    """The database's probe of one instance (module doc)."""
+    ss = np.random.SeedSequence([int(seed), key.function, key.dimension, key.instance])
+    return probe(BBOBProblem(key), n_probe, ss)
+
+
+@dataclass
+class Database:
+    """D_syn: spec, probe settings, extractors and the cache folder (module doc)."""
+
+    spec: DatabaseSpec = DEFAULT
+    n_probe: int = N_PROBE
+    seed: int = 0
+    cache_dir: Path | None = None
+    extractors: dict[str, Any] | None = None
+
+    def __post_init__(self) -> None:
+        if self.n_probe < 4:
+            raise ValueError(f"n_probe: {self.n_probe} < 4")
+        self.cache_dir = Path(self.cache_dir) if self.cache_dir else default_cache_dir()
+        if self.extractors is None:
+            self.extractors = make_extractors()
+        self._loaded: dict[str, tuple[list[InstanceKey], np.ndarray]] | None = None
+
+    # ------------------------------------------------------------------ chunks
+    def chunks(self) -> list[list[InstanceKey]]:
+        """Key lists, one per (dimension, function), in spec order."""
+        return [
+            [InstanceKey(f, d, i) for i in self.spec.instances]
+            for d in self.spec.dimensions
+            for f in self.spec.functions
+        ]
+
+    def chunk_hash(self, keys: Sequence[InstanceKey]) -> str:
+        """Content hash naming a chunk's file (module doc)."""
+        blob = json.dumps(
+            {
+                "format": FORMAT,
+                "keys": [list(k) for k in keys],
+                "n_probe": self.n_probe,
+                "seed": self.seed,
+                "extractors": {n: e.identity for n, e in sorted(self.extractors.items())},
+            },
+            sort_keys=True,
+        )
+        return hashlib.sha256(blob.encode()).hexdigest()[:24]
+
+    def chunk_path(self, keys: Sequence[InstanceKey]) -> Path:
+        return Path(self.cache_dir) / f"chunk-{self.chunk_hash(keys)}.npz"
+
+    def missing(self) -> list[list[InstanceKey]]:
+        """Chunks not yet on disk."""
+        return [c for c in self.chunks() if not self.chunk_path(c).exists()]
+
+    def compute_chunk(self, keys: Sequence[InstanceKey]) -> dict[str, np.ndarray]:
+        """Probe each instance once and run every extractor on (U, f)."""
+        feats = {n: np.empty((len(keys), e.dim)) for n, e in self.extractors.items()}
+        for r, key in enumerate(keys):
+            p = instance_probe(key, self.n_probe, self.seed)
+            for n, e in self.extractors.items():
+                feats[n][r] = e(p.U, p.f)
+        return feats
+
+    def build(self, progress: Callable[[int, int], None] | None = None) -> int:
+        """Compute and store every missing chunk; returns how many were computed.
+
+        ``progress(done, total)`` is called after each chunk (done counts cached ones too).
+        """
+        chunks = self.chunks()
+        total = len(chunks)
+        done = total - len(self.missing())
+        computed = 0
+        if progress is not None:
+            progress(done, total)
+        for keys in chunks:
+            path = self.chunk_path(keys)
+            if path.exists():
+                continue
+            feats = self.compute_chunk(keys)
+            buf = io.BytesIO()
+            np.savez(buf, keys=np.array([list(k) for k in keys], dtype=np.int64), **feats)
+            write_bytes_atomic(path, buf.getvalue())
+            computed += 1
+            done += 1
+            self._loaded = None
+            if progress is not None:
+                progress(done, total)
+        return computed
+
+    # ------------------------------------------------------------------ reading
+    def load(self, name: str) -> tuple[list[InstanceKey], np.ndarray]:
+        """All keys and the (len, dim) features of extractor ``name``.
+
+        Raises FileNotFoundError naming the count of missing chunks if the build is incomplete.
+        """
+        if name not in self.extractors:
+            raise ValueError(f"features: {name!r} not in this database ({sorted(self.extractors)})")
+        missing = self.missing()
+        if missing:
+            raise FileNotFoundError(
+                f"{len(missing)} of {len(self.chunks())} feature chunks missing in "
+                f"{self.cache_dir}: run `lamde-mission lam build` with the same options"
+            )
+        keys: list[InstanceKey] = []
+        rows = []
+        for chunk in self.chunks():
+            with np.load(self.chunk_path(chunk)) as z:
+                keys.extend(InstanceKey(*map(int, k)) for k in z["keys"])
+                rows.append(np.array(z[name], dtype=float))
+        return keys, np.concatenate(rows, axis=0)
