@@ -18,7 +18,14 @@ from planner_core.lam.encoder import (
     load_params,
     n_params,
 )
-from planner_core.lam.probe import finite_values, lhs, probe
+from planner_core.lam.probe import blas_single_thread, finite_values, lhs, probe
+
+
+@pytest.fixture(autouse=True)
+def _one_blas_thread():
+    with blas_single_thread():
+        yield
+
 
 IDX = {n: i for i, n in enumerate(ELA_NAMES)}
 

@@ -29,7 +29,7 @@ import numpy as np
 
 from planner_core.atomic import write_bytes_atomic
 from planner_core.lam.bbob import DEFAULT, BBOBProblem, DatabaseSpec, InstanceKey
-from planner_core.lam.probe import N_PROBE, Probe, probe
+from planner_core.lam.probe import N_PROBE, Probe, blas_single_thread, probe
 
 __all__ = [
     "FORMAT",
@@ -122,10 +122,11 @@ class Database:
     def compute_chunk(self, keys: Sequence[InstanceKey]) -> dict[str, np.ndarray]:
         """Probe each instance once and run every extractor on (U, f)."""
         feats = {n: np.empty((len(keys), e.dim)) for n, e in self.extractors.items()}
-        for r, key in enumerate(keys):
-            p = instance_probe(key, self.n_probe, self.seed)
-            for n, e in self.extractors.items():
-                feats[n][r] = e(p.U, p.f)
+        with blas_single_thread():
+            for r, key in enumerate(keys):
+                p = instance_probe(key, self.n_probe, self.seed)
+                for n, e in self.extractors.items():
+                    feats[n][r] = e(p.U, p.f)
         return feats
 
     def build(self, progress: Callable[[int, int], None] | None = None) -> int:

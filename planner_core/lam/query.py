@@ -41,7 +41,7 @@ from typing import Any
 import numpy as np
 
 from planner_core.lam.bbob import InstanceKey, bbob_values
-from planner_core.lam.probe import N_PROBE, probe
+from planner_core.lam.probe import N_PROBE, blas_single_thread, probe
 
 __all__ = [
     "RHO_RANGE",
@@ -80,12 +80,13 @@ def task_features(
 ) -> TaskFeatures:
     """Probe each task (LHS, seed ``SeedSequence([seed, m])``) and extract z_f and z_phi."""
     zf, zp, ff, dims = [], [], [], []
-    for m, prob in enumerate(problems):
-        p = probe(prob, n_probe, np.random.SeedSequence([int(seed), m]))
-        zf.append(extractor(p.U, p.f))
-        zp.append(extractor(p.U, p.phi))
-        ff.append(p.feasible_fraction)
-        dims.append(int(np.asarray(prob.lower).size))
+    with blas_single_thread():
+        for m, prob in enumerate(problems):
+            p = probe(prob, n_probe, np.random.SeedSequence([int(seed), m]))
+            zf.append(extractor(p.U, p.f))
+            zp.append(extractor(p.U, p.phi))
+            ff.append(p.feasible_fraction)
+            dims.append(int(np.asarray(prob.lower).size))
     return TaskFeatures(tuple(names), tuple(dims), np.array(zf), np.array(zp), np.array(ff))
 
 
