@@ -56,7 +56,7 @@ def test_build_is_cached_and_resumable(tmp_path):
     calls = []
     db.build(progress=lambda done, total: calls.append((done, total)))
     assert calls[-1] == (3, 3)
-    db.chunk_path(first).unlink()
+    db.chunk_path(first, "ela").unlink()
     assert db.build() == 1  # only the missing chunk is computed again
     assert db.build() == 0
     keys, Z = db.load("ela")

@@ -1,11 +1,13 @@
 """D_syn's landscape features, computed once and cached on disk under a content hash.
 
 The database is cut into chunks, one per (dimension, function): a chunk holds the features of
-that function's instances at that dimension, for every extractor (``"ela"``, ``"learned"``).
-A chunk's file name is the sha256 (first 24 hex) of everything its content depends on:
-format version, key list, N_probe, probe seed, and each extractor's identity (ELA definition
-version; encoder weights digest). Building skips chunks whose file exists, so an interrupted
-build resumes where it stopped, and changing any input builds new files beside the old ones.
+that function's instances at that dimension; each extractor (``"ela"``, ``"learned"``) has its
+own file per chunk, named ``<extractor>-<hash>.npz`` with the sha256 (first 24 hex) of
+everything its content depends on: format version, key list, N_probe, probe seed, and the
+extractor's identity (ELA definition version; encoder weights digest). Building skips files
+that exist, so an interrupted build resumes where it stopped, a database built for one
+extractor is reused by the other's build, and changing any input builds new files beside the
+old ones.
 Each file is written to a temp name and renamed (never half-written).
 
 Probe of instance (f, d, i): LHS with seed ``SeedSequence([seed, f, d, i])``, so a probe does
@@ -87,7 +89,6 @@ class Database:
         self.cache_dir = Path(self.cache_dir) if self.cache_dir else default_cache_dir()
         if self.extractors is None:
             self.extractors = make_extractors()
-        self._loaded: dict[str, tuple[list[InstanceKey], np.ndarray]] | None = None
 
     # ------------------------------------------------------------------ chunks
     def chunks(self) -> list[list[InstanceKey]]:
@@ -98,39 +99,43 @@ class Database:
             for f in self.spec.functions
         ]
 
-    def chunk_hash(self, keys: Sequence[InstanceKey]) -> str:
-        """Content hash naming a chunk's file (module doc)."""
+    def chunk_hash(self, keys: Sequence[InstanceKey], name: str) -> str:
+        """Content hash naming the file of one chunk's features by extractor ``name``."""
         blob = json.dumps(
             {
                 "format": FORMAT,
                 "keys": [list(k) for k in keys],
                 "n_probe": self.n_probe,
                 "seed": self.seed,
-                "extractors": {n: e.identity for n, e in sorted(self.extractors.items())},
+                "extractor": self.extractors[name].identity,
             },
             sort_keys=True,
         )
         return hashlib.sha256(blob.encode()).hexdigest()[:24]
 
-    def chunk_path(self, keys: Sequence[InstanceKey]) -> Path:
-        return Path(self.cache_dir) / f"chunk-{self.chunk_hash(keys)}.npz"
+    def chunk_path(self, keys: Sequence[InstanceKey], name: str) -> Path:
+        return Path(self.cache_dir) / f"{name}-{self.chunk_hash(keys, name)}.npz"
 
-    def missing(self) -> list[list[InstanceKey]]:
-        """Chunks not yet on disk."""
-        return [c for c in self.chunks() if not self.chunk_path(c).exists()]
+    def missing(self, names: Sequence[str] | None = None) -> list[list[InstanceKey]]:
+        """Chunks with at least one of the extractors ``names`` (default all) not on disk."""
+        names = list(self.extractors) if names is None else list(names)
+        return [c for c in self.chunks() if any(not self.chunk_path(c, n).exists() for n in names)]
 
-    def compute_chunk(self, keys: Sequence[InstanceKey]) -> dict[str, np.ndarray]:
-        """Probe each instance once and run every extractor on (U, f)."""
-        feats = {n: np.empty((len(keys), e.dim)) for n, e in self.extractors.items()}
+    def compute_chunk(
+        self, keys: Sequence[InstanceKey], names: Sequence[str] | None = None
+    ) -> dict[str, np.ndarray]:
+        """Probe each instance once and run the extractors ``names`` (default all) on (U, f)."""
+        names = list(self.extractors) if names is None else list(names)
+        feats = {n: np.empty((len(keys), self.extractors[n].dim)) for n in names}
         with blas_single_thread():
             for r, key in enumerate(keys):
                 p = instance_probe(key, self.n_probe, self.seed)
-                for n, e in self.extractors.items():
-                    feats[n][r] = e(p.U, p.f)
+                for n in names:
+                    feats[n][r] = self.extractors[n](p.U, p.f)
         return feats
 
     def build(self, progress: Callable[[int, int], None] | None = None) -> int:
-        """Compute and store every missing chunk; returns how many were computed.
+        """Compute and store every missing chunk; returns how many chunks were computed.
 
         ``progress(done, total)`` is called after each chunk (done counts cached ones too).
         """
@@ -141,16 +146,17 @@ class Database:
         if progress is not None:
             progress(done, total)
         for keys in chunks:
-            path = self.chunk_path(keys)
-            if path.exists():
+            todo = [n for n in self.extractors if not self.chunk_path(keys, n).exists()]
+            if not todo:
                 continue
-            feats = self.compute_chunk(keys)
-            buf = io.BytesIO()
-            np.savez(buf, keys=np.array([list(k) for k in keys], dtype=np.int64), **feats)
-            write_bytes_atomic(path, buf.getvalue())
+            feats = self.compute_chunk(keys, todo)
+            for n in todo:
+                buf = io.BytesIO()
+                np.savez(buf, keys=np.array([list(k) for k in keys], dtype=np.int64),
+                         features=feats[n])  # fmt: skip
+                write_bytes_atomic(self.chunk_path(keys, n), buf.getvalue())
             computed += 1
             done += 1
-            self._loaded = None
             if progress is not None:
                 progress(done, total)
         return computed
@@ -163,7 +169,7 @@ class Database:
         """
         if name not in self.extractors:
             raise ValueError(f"features: {name!r} not in this database ({sorted(self.extractors)})")
-        missing = self.missing()
+        missing = self.missing([name])
         if missing:
             raise FileNotFoundError(
                 f"{len(missing)} of {len(self.chunks())} feature chunks missing in "
@@ -172,7 +178,7 @@ class Database:
         keys: list[InstanceKey] = []
         rows = []
         for chunk in self.chunks():
-            with np.load(self.chunk_path(chunk)) as z:
+            with np.load(self.chunk_path(chunk, name)) as z:
                 keys.extend(InstanceKey(*map(int, k)) for k in z["keys"])
-                rows.append(np.array(z[name], dtype=float))
+                rows.append(np.array(z["features"], dtype=float))
         return keys, np.concatenate(rows, axis=0)
