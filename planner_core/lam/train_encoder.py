@@ -5,9 +5,9 @@ with the BBOB function id as the label. A batch holds 12 of the 24 functions (dr
 two instances of each, each probed twice with independent LHS designs (N_probe = 100 points,
 one dimension per batch, alternating): probes of the same function, whether of the same
 instance or another, are positives; probes of other functions are negatives. Temperature 0.1,
-cosine similarity on the encoder's unit-norm output. So two probes of one instance land close,
-different functions apart, and instance transformations (shift, rotation) and the probe's
-randomness are what the feature must ignore.
+cosine similarity on the encoder's unit-norm output, Adam with a cosine-decayed learning rate
+from 3e-3. So two probes of one instance land close, different functions apart, and instance
+transformations (shift, rotation) and the probe's randomness are what the feature must ignore.
 
 Training instances use BBOB instance ids 1001.. (held out from every database, which uses ids
 1..100), 8 instances x 3 probes per function, dimensions 10 and 20 by default (the cost of a
@@ -135,6 +135,7 @@ def train(
     pool = make_pool(seed=seed) if pool is None else pool
     model = TorchEncoder(init_params(seed))
     opt = torch.optim.Adam(model.parameters(), lr=lr)
+    sched = torch.optim.lr_scheduler.CosineAnnealingLR(opt, T_max=max(steps, 1))
     dims = sorted(pool)
     t0 = time.time()
     for step in range(steps):
@@ -151,6 +152,7 @@ def train(
         opt.zero_grad()
         loss.backward()
         opt.step()
+        sched.step()
         if log_every and (step % log_every == 0 or step == steps - 1):
             print(f"step {step:4d}  loss {loss.item():.4f}  {time.time() - t0:.0f} s", flush=True)
     return model.numpy_params()
