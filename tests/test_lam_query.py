@@ -219,3 +219,18 @@ def test_cli_bad_input_exits_2(tmp_path, capsys):
     assert "--dims" in capsys.readouterr().err
     assert main(["lam", "build", "--functions", "30", "--cache", str(tmp_path)]) == 2
     assert not any(tmp_path.iterdir())
+
+
+def test_bench_lam_runs_and_prints_the_estimates():
+    import subprocess
+    import sys
+
+    r = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "bench_lam.py"), "--dims", "20,40,80",
+         "--functions", "1"],
+        capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert "estimate default database (360 instances)" in r.stdout
+    assert "full (paper): dimensions [120, 160, 200] not timed" in r.stdout
+    assert "task T16 (d=80)" in r.stdout
