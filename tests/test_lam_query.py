@@ -235,3 +235,26 @@ def test_bench_lam_runs_and_prints_the_estimates():
     assert "estimate default database (360 instances)" in r.stdout
     assert "full (paper): dimensions [120, 160, 200] not timed" in r.stdout
     assert "task T16 (d=80)" in r.stdout
+
+
+def test_pair_problem_pickles_as_content(tmp_path):
+    """Jobs carry content, not handles: a pickled training problem evaluates the same."""
+    import pickle
+
+    p = PairProblem((2, 10, 1), (15, 10, 2), 100.0, 10.0)
+    U = np.random.default_rng(0).random((8, 10))
+    q = pickle.loads(pickle.dumps(p))
+    for a, b in zip(p.evaluate(U), q.evaluate(U), strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_cli_build_reports_progress_and_resumes(tmp_path, capsys):
+    from lamde_mission.cli import main
+
+    args = ["lam", "build", "--functions", "1,2", "--dims", "10", "--instances", "2",
+            "--features", "ela", "--cache", str(tmp_path)]  # fmt: skip
+    assert main(args) == 0
+    cap = capsys.readouterr()
+    assert "2/2 chunks" in cap.err and "(2 computed now)" in cap.out
+    assert main(args) == 0
+    assert "(0 computed now)" in capsys.readouterr().out
