@@ -15,8 +15,8 @@ step grows with d; two shared cores set this); the features are then used at any
 encoder is dimension-agnostic).
 
 Run: ``python -m planner_core.lam.train_encoder --out planner_core/lam/data/encoder.npz``
-(about 10 minutes on a busy core for the default 400 steps; same seed, same weights on one
-machine).
+(about 25 minutes on a busy core for the default 700 steps; same seed, same weights on one
+machine). The shipped weights are this command's output at its defaults.
 """
 
 from __future__ import annotations
@@ -119,7 +119,7 @@ def _supcon(z, labels, temperature: float):
 
 
 def train(
-    steps: int = 400,
+    steps: int = 700,
     seed: int = 0,
     lr: float = 3e-3,
     temperature: float = 0.1,
@@ -170,12 +170,13 @@ def save_params(params: dict[str, np.ndarray], path: str | Path) -> None:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default="planner_core/lam/data/encoder.npz")
-    ap.add_argument("--steps", type=int, default=400)
+    ap.add_argument("--steps", type=int, default=700)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--lr", type=float, default=3e-3, help="initial Adam learning rate")
     args = ap.parse_args(argv)
     torch = _torch()
     torch.set_num_threads(1)
-    save_params(train(steps=args.steps, seed=args.seed), args.out)
+    save_params(train(steps=args.steps, seed=args.seed, lr=args.lr), args.out)
     print(f"wrote {args.out}")
     return 0
 
