@@ -258,3 +258,16 @@ def test_cli_build_reports_progress_and_resumes(tmp_path, capsys):
     assert "2/2 chunks" in cap.err and "(2 computed now)" in cap.out
     assert main(args) == 0
     assert "(0 computed now)" in capsys.readouterr().out
+
+
+def test_build_in_worker_processes_matches_this_process(tmp_path):
+    from planner_core.bench.executor import ProcessExecutor
+
+    spec = DatabaseSpec.make((1, 6, 21), (10,), 2)
+    serial = Database(spec=spec, cache_dir=tmp_path / "a")
+    parallel = Database(spec=spec, cache_dir=tmp_path / "b")
+    serial.build()
+    with ProcessExecutor(2) as ex:
+        assert parallel.build(executor=ex) == 3
+    for name in ("ela", "learned"):
+        np.testing.assert_array_equal(serial.load(name)[1], parallel.load(name)[1])

@@ -89,6 +89,12 @@ def _database_options(q: argparse.ArgumentParser) -> None:
     q.add_argument("--instances", metavar="N", help="instances per function and dimension")
     q.add_argument("--n-probe", default="100", metavar="N", help="LHS probe size (default 100)")
     q.add_argument("--db-seed", default="0", metavar="S", help="database probe seed (default 0)")
+    q.add_argument(
+        "--jobs",
+        default="0",
+        metavar="N",
+        help="worker processes for the database build (default 0: this process)",
+    )
     q.add_argument("--cache", metavar="DIR", help="feature cache folder "
                    "(default $LAMDE_CACHE/lam or ~/.cache/lamde-mission/lam)")  # fmt: skip
 
@@ -166,8 +172,15 @@ class _Bar:
         sys.stderr.flush()
 
 
-def _build(db: Any, quiet: bool) -> int:
-    return db.build(progress=_Bar("lam build", quiet))
+def _build(db: Any, args: argparse.Namespace) -> int:
+    from planner_core.bench.executor import make_executor
+
+    jobs = _int(args.jobs, "--jobs")
+    executor = make_executor(jobs)
+    try:
+        return db.build(progress=_Bar("lam build", args.quiet), executor=executor)
+    finally:
+        executor.close()
 
 
 def _task_files(path: str) -> list[Path]:
@@ -183,13 +196,14 @@ def _task_files(path: str) -> list[Path]:
 
 
 def run(args: argparse.Namespace) -> int:
+    _int(args.jobs, "--jobs")
     if args.lam_command == "build":
         names = [s.strip() for s in args.features.split(",") if s.strip()]
         bad = [n for n in names if n not in _FEATURES]
         if bad or not names:
             raise UsageError(f"--features: {bad or 'empty'}; choose from {', '.join(_FEATURES)}")
         db = _database(args, names)
-        n = _build(db, args.quiet)
+        n = _build(db, args)
         print(f"{len(db.spec)} instances, {len(db.chunks())} chunks ({n} computed now) "
               f"in {db.cache_dir}")  # fmt: skip
         return 0
@@ -210,7 +224,7 @@ def _select(args: argparse.Namespace) -> int:
     if db.missing():
         if args.no_build:
             raise UsageError(f"database features missing in {db.cache_dir}: run `lam build`")
-        _build(db, args.quiet)
+        _build(db, args)
 
     from planner_core.lam import select
     from planner_core.lam.trainset import write_trainset

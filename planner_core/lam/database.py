@@ -126,40 +126,43 @@ class Database:
     ) -> dict[str, np.ndarray]:
         """Probe each instance once and run the extractors ``names`` (default all) on (U, f)."""
         names = list(self.extractors) if names is None else list(names)
-        feats = {n: np.empty((len(keys), self.extractors[n].dim)) for n in names}
-        with blas_single_thread():
-            for r, key in enumerate(keys):
-                p = instance_probe(key, self.n_probe, self.seed)
-                for n in names:
-                    feats[n][r] = self.extractors[n](p.U, p.f)
-        return feats
+        job = (list(keys), {n: self.extractors[n] for n in names}, self.n_probe, self.seed)
+        return _chunk_job(job)[1]
 
-    def build(self, progress: Callable[[int, int], None] | None = None) -> int:
+    def build(
+        self,
+        progress: Callable[[int, int], None] | None = None,
+        executor: Any = None,
+    ) -> int:
         """Compute and store every missing chunk; returns how many chunks were computed.
 
         ``progress(done, total)`` is called after each chunk (done counts cached ones too).
+        ``executor`` (``planner_core.bench.executor``: ``map_unordered(fn, items)``) spreads
+        chunks over processes; a job carries its keys, extractors (with weights) and probe
+        settings, never a path. Files are written here, as each result arrives.
         """
         chunks = self.chunks()
         total = len(chunks)
-        done = total - len(self.missing())
-        computed = 0
-        if progress is not None:
-            progress(done, total)
+        jobs = []
         for keys in chunks:
             todo = [n for n in self.extractors if not self.chunk_path(keys, n).exists()]
-            if not todo:
-                continue
-            feats = self.compute_chunk(keys, todo)
-            for n in todo:
+            if todo:
+                jobs.append((keys, {n: self.extractors[n] for n in todo}, self.n_probe, self.seed))
+        done = total - len(jobs)
+        if progress is not None:
+            progress(done, total)
+        results = (
+            map(_chunk_job, jobs) if executor is None else executor.map_unordered(_chunk_job, jobs)
+        )
+        for keys, feats in results:
+            for n, Z in feats.items():
                 buf = io.BytesIO()
-                np.savez(buf, keys=np.array([list(k) for k in keys], dtype=np.int64),
-                         features=feats[n])  # fmt: skip
+                np.savez(buf, keys=np.array([list(k) for k in keys], dtype=np.int64), features=Z)
                 write_bytes_atomic(self.chunk_path(keys, n), buf.getvalue())
-            computed += 1
             done += 1
             if progress is not None:
                 progress(done, total)
-        return computed
+        return len(jobs)
 
     # ------------------------------------------------------------------ reading
     def load(self, name: str) -> tuple[list[InstanceKey], np.ndarray]:
@@ -182,3 +185,17 @@ class Database:
                 keys.extend(InstanceKey(*map(int, k)) for k in z["keys"])
                 rows.append(np.array(z["features"], dtype=float))
         return keys, np.concatenate(rows, axis=0)
+
+
+def _chunk_job(
+    job: tuple[list[InstanceKey], dict[str, Any], int, int],
+) -> tuple[list[InstanceKey], dict[str, np.ndarray]]:
+    """Worker: (keys, extractors, n_probe, seed) -> (keys, {name: (len(keys), dim) features})."""
+    keys, extractors, n_probe, seed = job
+    feats = {n: np.empty((len(keys), e.dim)) for n, e in extractors.items()}
+    with blas_single_thread():
+        for r, key in enumerate(keys):
+            p = instance_probe(InstanceKey(*key), n_probe, seed)
+            for n, e in extractors.items():
+                feats[n][r] = e(p.U, p.f)
+    return [InstanceKey(*k) for k in keys], feats
