@@ -261,7 +261,7 @@ def test_cli_build_reports_progress_and_resumes(tmp_path, capsys):
 
 
 def test_build_in_worker_processes_matches_this_process(tmp_path):
-    from planner_core.bench.executor import ProcessExecutor
+    from planner_core.execution import ProcessExecutor
 
     spec = DatabaseSpec.make((1, 6, 21), (10,), 2)
     serial = Database(spec=spec, cache_dir=tmp_path / "a")

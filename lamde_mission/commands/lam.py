@@ -173,7 +173,7 @@ class _Bar:
 
 
 def _build(db: Any, args: argparse.Namespace) -> int:
-    from planner_core.bench.executor import make_executor
+    from planner_core.execution import make_executor
 
     jobs = _int(args.jobs, "--jobs")
     executor = make_executor(jobs)

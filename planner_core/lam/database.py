@@ -137,7 +137,7 @@ class Database:
         """Compute and store every missing chunk; returns how many chunks were computed.
 
         ``progress(done, total)`` is called after each chunk (done counts cached ones too).
-        ``executor`` (``planner_core.bench.executor``: ``map_unordered(fn, items)``) spreads
+        ``executor`` (``planner_core.execution``: ``map_unordered(fn, items)``) spreads
         chunks over processes; a job carries its keys, extractors (with weights) and probe
         settings, never a path. Files are written here, as each result arrives.
         """
