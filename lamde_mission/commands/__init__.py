@@ -17,4 +17,5 @@ COMMANDS = (
     "upload",
     "bench",
     "report",
+    "lam",
 )
