@@ -121,3 +121,29 @@ def test_bench_policy_runs_on_a_small_map() -> None:
                        capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr
     assert "policy / evaluation = " in r.stdout
+
+
+def test_cli_train_reads_the_lam_trainset_format(tmp_path) -> None:  # noqa: ANN001
+    """A `lamde-mission lam select` file (format lamde-trainset/1) trains as it is."""
+    pytest.importorskip("torch")
+    pytest.importorskip("ioh")
+    from planner_core.policy.problems import build, read_trainset
+
+    pair = {"objective": {"function": 1, "dimension": 4, "instance": 1},
+            "constraint": {"function": 2, "dimension": 4, "instance": 1},
+            "threshold": 0.0, "scale": 10.0, "task": "T01", "distance_f": 0.1,
+            "distance_phi": 0.2}
+    trainset = tmp_path / "trainset.json"
+    trainset.write_text(json.dumps({"format": "lamde-trainset/1", "options": {},
+                                    "problems": [pair, {**pair, "threshold": 5.0}]}))
+    specs = read_trainset(trainset)
+    assert [s["kind"] for s in specs] == ["lam-pair", "lam-pair"]
+    problem = build(specs[0])
+    f, phi = problem.evaluate(np.full((3, 4), 0.5))
+    assert f.shape == phi.shape == (3,)
+    rc = main(["train", "-o", str(tmp_path / "ck"), "--problems", str(trainset), "--epochs",
+               "1", "--envs", "2", "--population", "6", "--budget", "30", "--quiet",
+               "--set", "n_steps=2", "--set", "net.embed=8"])
+    assert rc == 0
+    manifest = json.loads((tmp_path / "ck" / "manifest.json").read_text())
+    assert manifest["problems"] == specs

@@ -10,11 +10,13 @@ COMMANDS = (
     "verify",
     "show",
     "check",
+    "map",
     "schema",
     "generate",
     "mock_vehicle",
     "upload",
     "bench",
     "report",
+    "lam",
     "train",
 )

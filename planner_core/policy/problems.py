@@ -7,10 +7,13 @@ A problem is described by a JSON-able *spec* (so a training manifest is data, no
   generator (:func:`planner_core.suite.generate_map`) built into the UAV :class:`Problem`.
 * ``{"kind": "map", "path": "file.json"}`` or ``{"kind": "map", "map": {...}}``: any map.
 
-A training-set file is JSON with a ``"problems"`` list of such specs (the landscape-aware
-module's ``lam select -o trainset.json`` output uses the same key); specs of any other kind go
-to ``planner_core.lam.build_problem(spec)`` when that module provides it, and are otherwise
-rejected with one line naming the kind.
+* ``{"kind": "lam-pair", "objective": {...}, "constraint": {...}, "threshold": t,
+  "scale": s}``: a synthetic BBOB pair of the landscape-aware module
+  (:class:`planner_core.lam.query.PairProblem`).
+
+A training-set file is JSON with a ``"problems"`` list of such specs, or the landscape-aware
+module's own file (``lamde-mission lam select -o trainset.json``, format ``lamde-trainset/1``),
+whose entries become ``lam-pair`` specs.
 
 Generator seeds: the suite uses 2025 (:data:`planner_core.suite.SUITE_SEED`); training maps use
 :data:`TRAIN_SEED_BASE` + k and validation maps :data:`VALIDATION_SEED_BASE` + k, so the three
@@ -56,6 +59,10 @@ def spec_name(spec: dict[str, Any]) -> str:
         return f"uav-{spec['size']}-d{spec['density']}-s{spec['seed']}"
     if spec.get("kind") == "map":
         return str(spec.get("path") or spec.get("map", {}).get("name", "map"))
+    if spec.get("kind") == "lam-pair":
+        o, c = spec["objective"], spec["constraint"]
+        return (f"bbob-f{o['function']}i{o['instance']}-c{c['function']}i{c['instance']}"
+                f"-d{o['dimension']}")
     return str(spec.get("name", spec.get("kind")))
 
 
@@ -79,11 +86,18 @@ def build(spec: dict[str, Any]) -> Any:
         if "path" in spec:
             return Problem(str(spec["path"]))
         raise ValueError(f"problems: map spec {spec} needs 'path' or 'map'")
-    try:  # the landscape-aware module's synthetic problems (issue 13), when it is installed
-        from planner_core.lam import build_problem  # type: ignore[attr-defined]
-    except ImportError:
-        raise ValueError(f"problems: unknown problem kind {kind!r} (known: uav, map)") from None
-    return build_problem(spec)
+    if kind == "lam-pair":
+        from planner_core.lam.query import PairProblem
+
+        try:
+            return PairProblem(
+                tuple(int(spec["objective"][k]) for k in ("function", "dimension", "instance")),
+                tuple(int(spec["constraint"][k]) for k in ("function", "dimension", "instance")),
+                float(spec["threshold"]), float(spec["scale"]),
+            )
+        except (KeyError, TypeError) as exc:
+            raise ValueError(f"problems: lam-pair spec lacks {exc}") from None
+    raise ValueError(f"problems: unknown problem kind {kind!r} (known: uav, map, lam-pair)")
 
 
 def read_trainset(path: str | Path) -> list[dict[str, Any]]:
@@ -98,6 +112,15 @@ def read_trainset(path: str | Path) -> list[dict[str, Any]]:
         raise ValueError(f"--problems: {path}: no such file") from None
     except json.JSONDecodeError as exc:
         raise ValueError(f"--problems: {path}: bad JSON ({exc})") from None
+    if isinstance(data, dict) and data.get("format") == "lamde-trainset/1":
+        from planner_core.lam.trainset import read_trainset as read_lam
+
+        try:
+            doc = read_lam(path)
+        except ValueError as exc:
+            raise ValueError(f"--problems: {exc}") from None
+        keep = ("objective", "constraint", "threshold", "scale")
+        return [{"kind": "lam-pair", **{k: p[k] for k in keep}} for p in doc["problems"]]
     problems = data.get("problems") if isinstance(data, dict) else None
     if not isinstance(problems, list) or not problems:
         raise ValueError(f"--problems: {path}: needs a non-empty 'problems' list")
