@@ -35,6 +35,11 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--no-polish", action="store_true", help="skip the hover-time LP polish")
     p.add_argument("--finish", choices=("land", "rtl"), default="land",
                    help="end the mission by landing at the end point or returning to launch")
+    p.add_argument("--autopilot", choices=("px4", "ardupilot", "generic"), default="generic",
+                   help="write what this autopilot stores: lat/lon on the 1e-7 degree grid, "
+                   "float32 parameters, hover times in whole seconds (rounded up) for ardupilot "
+                   "and generic (a file either autopilot stores unchanged; default), float32 for "
+                   "px4. The summary and exit status are those of the stored mission")
     p.add_argument("--plot", metavar="PNG", help="also draw the mission (.png or .svg)")
     p.add_argument("--report", metavar="JSON", help="also write the plan and verdicts as JSON")
     p.add_argument("--allow-infeasible", action="store_true",
@@ -77,17 +82,26 @@ class _ProgressBar:
         self.stream.flush()
 
 
-def _summary(plan: Any, m: Any, timeline: Any, verdicts: Any, out: str | None) -> str:
+def _summary(
+    plan: Any, m: Any, timeline: Any, verdicts: Any, out: str | None, stored: Any = None
+) -> str:
     b = plan.breakdown
     t = timeline.totals
+    who = "stored" if stored is not None else "sim"
     lines = [
         f"map '{m.name}': {plan.n_hover} hover points, {plan.evaluations} evaluations, "
         f"{plan.wall_time:.2f} s (seed {plan.seed}, {plan.configurator})",
-        f"  flight time   {b['t_fly']:10.2f} s    (sim {t.t_fly:.2f} s)",
-        f"  hover time    {b['t_hover']:10.2f} s    (sim {t.t_hover:.2f} s)",
-        f"  f             {plan.f:10.2f}      (alpha {m.spec.objective.alpha:g})",
+        f"  flight time   {b['t_fly']:10.2f} s    ({who} {t.t_fly:.2f} s)",
+        f"  hover time    {b['t_hover']:10.2f} s    ({who} {t.t_hover:.2f} s)",
+        f"  f             {plan.f:10.2f}      ({who} {t.f:.2f}; alpha {m.spec.objective.alpha:g})",
         f"  phi           {plan.phi:10.4g}",
     ]
+    if stored is not None:
+        lines.append(
+            f"  stored as     {stored.dialect.name}: points moved <= "
+            f"{float(stored.moved_m.max(initial=0.0)) * 100:.2f} cm onto the 1e-7 degree grid, "
+            f"hover times +{float(stored.added_s.sum()):.3g} s in all"
+        )
     if plan.polish is not None:
         pol = plan.polish
         lines.append(f"  polish        f {pol['f_before']:.2f} -> {pol['f_after']:.2f}, "
@@ -99,7 +113,8 @@ def _summary(plan: Any, m: Any, timeline: Any, verdicts: Any, out: str | None) -
     for sid in m.sensor_ids:
         ok = "ok" if got[sid] >= req[sid] else "SHORT"
         lines.append(f"    {sid:<12} {got[sid]:10.1f} / {req[sid]:<8.1f} {ok}")
-    lines.append("  constraints (simulator):")
+    lines.append("  constraints (simulator) of the stored mission:" if stored is not None
+                 else "  constraints (simulator):")
     lines.extend("    " + row for row in verdicts.table().splitlines())
     if out:
         lines.append(f"wrote {out}")
@@ -146,6 +161,7 @@ def run(args: argparse.Namespace) -> int:
     from lamde_mission.api import plan as make_plan
     from lamde_mission.formats import write_mission
     from lamde_mission.items import plan_to_items
+    from lamde_mission.storage import storable_plan, stored_items
     from sim import replay, verify
 
     progress = None if args.quiet else _ProgressBar()
@@ -159,13 +175,14 @@ def run(args: argparse.Namespace) -> int:
         polish=not args.no_polish,
         progress=progress,
     )
-    items = plan_to_items(plan, m, finish=args.finish)
+    stored = storable_plan(plan, m, args.autopilot, finish=args.finish)
+    items = stored_items(plan_to_items(stored, m, finish=args.finish), stored.dialect)
     timeline = replay(items, m)
     verdicts = verify(timeline, m)
-    feasible = plan.feasible and verdicts.passed
+    feasible = verdicts.passed
     if not feasible and not args.allow_infeasible:
         if not args.quiet:
-            print(_summary(plan, m, timeline, verdicts, None))
+            print(_summary(plan, m, timeline, verdicts, None, stored))
         print(f"lamde-mission plan: no feasible mission found for {args.map} "
               f"(budget {args.budget}, seed {args.seed}); nothing written:", file=sys.stderr)
         for line in _violations(plan, verdicts):
@@ -173,7 +190,7 @@ def run(args: argparse.Namespace) -> int:
         print("  try a larger --budget, another --seed, or --allow-infeasible to write it anyway",
               file=sys.stderr)
         return 1
-    write_mission(args.output, plan, m, fmt, finish=args.finish)
+    write_mission(args.output, stored, m, fmt, finish=args.finish, autopilot=args.autopilot)
     if args.plot:
         from lamde_mission.plot import plot_mission
 
@@ -182,10 +199,13 @@ def run(args: argparse.Namespace) -> int:
         from lamde_mission.atomic import write_text_atomic
 
         report = {"plan": plan.to_dict(), "verdicts": verdicts.to_dict(),
+                  "stored": {"autopilot": stored.dialect.name,
+                             "hover_points": stored.hover_points.tolist(),
+                             "hover_times": stored.hover_times.tolist()},
                   "map": args.map, "output": args.output, "format": fmt}
         write_text_atomic(args.report, json.dumps(report, indent=2))
     if not args.quiet:
-        print(_summary(plan, m, timeline, verdicts, args.output))
+        print(_summary(plan, m, timeline, verdicts, args.output, stored))
     if not feasible:
         print("lamde-mission plan: the mission is INFEASIBLE (written because of "
               "--allow-infeasible):", file=sys.stderr)

@@ -7,11 +7,13 @@ by its content (a `.plan` JSON object or a "QGC WPL 110" text), whatever its suf
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, Literal
 
 from lamde_mission.geo import enu_to_latlon
-from lamde_mission.items import MissionError, MissionItem, geofence_items, plan_to_items
+from lamde_mission.items import CMD, MissionError, MissionItem, geofence_items, plan_to_items
+from lamde_mission.storage import float32, float32_up, grid_degrees
 
 __all__ = [
     "FORMATS",
@@ -61,27 +63,46 @@ def write_mission(
     *,
     finish: Literal["land", "rtl"] = "land",
     fence: bool = True,
+    autopilot: str = "generic",
+    planning_map: Any = None,
 ) -> Path:
     """Write `plan` on `map` as a mission file (atomically) and return the path.
 
-    `.plan` holds the mission and (with `fence`) an exclusion geofence for every obstacle;
+    `.plan` holds the mission and (with `fence`) an exclusion geofence for every obstacle of
+    `map` (the uninflated shapes: a clearance is the planner's business, not the fence's);
     `.waypoints` holds the mission only; `.geojson` holds the map and plan for display.
+    Every number written is what `autopilot` (px4, ardupilot, generic) stores: the plan is
+    first made storable (`lamde_mission.storage.storable_plan`, on `planning_map` when the plan
+    was made on a map with safety margins; a no-op for a plan that already is), so lat/lon lie
+    on the 1e-7 degree grid, parameters are float32 values and hover times are rounded *up* to
+    whole seconds where the autopilot keeps whole seconds; storing the file changes nothing.
     """
+    from lamde_mission.storage import dialect_of, storable_plan, stored_items
+
+    dialect = dialect_of(autopilot)
     kind = format_for(path, fmt)
     if kind == "geojson":
         from lamde_mission.formats.geojson import write_geojson
 
         return write_geojson(path, plan, map)
-    items = plan_to_items(plan, map, finish=finish)
+    plan = storable_plan(plan, map, dialect, planning_map=planning_map, finish=finish)
+    items = stored_items(plan_to_items(plan, map, finish=finish), dialect)
+    home = home_of(map)
+    home = (float(grid_degrees(home[0])), float(grid_degrees(home[1])), float32(home[2]))
     if kind == "plan":
         from lamde_mission.formats.qgc_plan import write_qgc_plan
 
-        fence_items = geofence_items(map) if fence else []
-        v = float(map.spec.uav.max_speed)
-        return write_qgc_plan(path, items, fence_items, home=home_of(map), cruise_speed=v)
+        # an exclusion circle's float32 radius is rounded up, never shrinking the fence
+        fence_items = [replace(it, param1=float32_up(it.param1))
+                       if it.command == CMD.FENCE_CIRCLE_EXCLUSION else it
+                       for it in geofence_items(map)] if fence else []  # fmt: skip
+        fence_items = stored_items(fence_items, dialect)
+        v = float32(map.spec.uav.max_speed)
+        return write_qgc_plan(path, items, fence_items, home=home, cruise_speed=v,
+                              firmware_type=dialect.firmware_type)  # fmt: skip
     from lamde_mission.formats.waypoints import write_waypoints
 
-    return write_waypoints(path, items, home_of(map))
+    return write_waypoints(path, items, home)
 
 
 def read_mission(path: str | Path) -> tuple[list[MissionItem], list[MissionItem]]:
