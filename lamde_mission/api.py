@@ -76,8 +76,10 @@ def plan(
     """Plan hover points and hover times for `map` (a path, dict or Map); same seed, same plan.
 
     `progress` is called once per generation with a record holding generation, evaluations,
-    budget, best_f, best_phi and feasible_fraction. With `polish`, the final best's hover times
-    are re-solved by the LP of `planner_core.polish`, kept only if not worse under Deb's rule.
+    budget, best_f, best_phi and feasible_fraction. The plan is made on `Map.planning_map()`:
+    obstacles inflated by the map's `safety.clearance`, required data raised by its
+    `safety.data_margin` (the map itself when both are 0); `breakdown` is on that map. With
+    `polish`, the final best's hover times are re-solved by the LP of `planner_core.polish`, kept only if not worse under Deb's rule.
     """
     from planner_core.de import run
     from planner_core.mapio import load_map
@@ -86,7 +88,9 @@ def plan(
     _check_args(budget, population, configurator)
     t_start = time.perf_counter()
     m = load_map(map)
-    problem = Problem(m, variable_length=variable_length)
+    # safety margins (clearance, data margin) are a transformation of the map: the model is the
+    # paper's, on the inflated map (the same map when both margins are 0)
+    problem = Problem(m.planning_map(), variable_length=variable_length)
     timed = _TimedProblem(problem)
     t0 = time.perf_counter()
     result = run(

@@ -121,6 +121,34 @@ class Objective(BaseModel):
     collision_weight: float = Field(10.0, ge=0, description="nu, per metre")
 
 
+#: metres: obstacles and no-fly zones are inflated by this much for planning (`safety.clearance`)
+DEFAULT_CLEARANCE = 10.0
+#: fraction added to every sensor's required data for planning (`safety.data_margin`)
+DEFAULT_DATA_MARGIN = 0.02
+
+
+class Safety(BaseModel):
+    """Margins applied to the map before the model sees it (the paper's model is unchanged).
+
+    `clearance` (m): every circle, rectangle and no-fly zone is inflated by it for planning, so
+    no leg comes closer to an obstacle; the geofence written to the vehicle keeps the real
+    shapes. Near the start or end point an obstacle is inflated only as far as leaves that
+    point outside it (the take-off and landing are where the map says). `data_margin`: every
+    sensor's required data is planned as (1 + data_margin) x Q_lambda. Sensors themselves may
+    lie inside an inflated obstacle: data is collected by radio from wherever the UAV hovers.
+    A map with both at 0 is planned exactly as the paper's model states it.
+    """
+
+    model_config = _STRICT
+    clearance: float = Field(
+        DEFAULT_CLEARANCE, ge=0, description="metres kept between every leg and every obstacle"
+    )
+    data_margin: float = Field(
+        DEFAULT_DATA_MARGIN, ge=0, le=1,
+        description="fraction added to every sensor's required data for planning",
+    )  # fmt: skip
+
+
 class Witness(BaseModel):
     """A known feasible plan stored by the map generator."""
 
@@ -143,6 +171,7 @@ class MapFile(BaseModel):
     uav: Uav = Uav()
     radio: Radio = Radio()
     objective: Objective = Objective()
+    safety: Safety = Safety()
     witness: Witness | None = None
 
 
@@ -230,6 +259,65 @@ class Map:
         circles = [(c.x, c.y, c.radius) for c in self.spec.obstacles.circles]
         return Obstacles.build(circles, list(self.rectangle_polygons) + list(self.nfz_polygons))
 
+    # --- safety margins (a transformation of the map; see `Safety`) ---
+    @cached_property
+    def obstacle_clearances(self) -> tuple[float, ...]:
+        """Clearance in force per obstacle (circles, rectangles, no-fly zones; metres):
+        `safety.clearance`, reduced where the start or end point is closer than that to the
+        obstacle (down to that distance less `CLEARANCE_PAD`, at least 0)."""
+        import shapely
+
+        c = float(self.spec.safety.clearance)
+        shapes = _obstacle_polygons(self)
+        if c <= 0.0 or not shapes:
+            return tuple(0.0 for _ in shapes)
+        ends = shapely.points([self.spec.start, self.spec.end])
+        out = []
+        for poly in shapes:
+            d = float(np.min(shapely.distance(ends, poly)))
+            out.append(max(min(c, d - CLEARANCE_PAD), 0.0))
+        return tuple(out)
+
+    def planning_map(self) -> Map:
+        """The map the optimiser plans on: obstacles inflated by their clearance (plus
+        `CLEARANCE_PAD`), rectangles turned into the equivalent no-fly zones, every sensor's
+        required data times (1 + data_margin), safety margins then 0. Returns `self` when both
+        margins are 0, so such a map is planned and scored exactly as before."""
+        cached = self.__dict__.get("_planning_map")
+        if cached is not None:
+            return cached
+        sf = self.spec.safety
+        if sf.clearance <= 0.0 and sf.data_margin <= 0.0:
+            return self
+        import shapely
+        from shapely.geometry.polygon import orient
+
+        d = self.spec.model_dump(mode="json")
+        d.pop("witness", None)
+        d["safety"] = {"clearance": 0.0, "data_margin": 0.0}
+        q = self.required_data * (1.0 + float(sf.data_margin))
+        for s, req in zip(d["sensors"], q, strict=True):
+            s["required_data"] = float(req)
+        cl = self.obstacle_clearances
+        obs = self.spec.obstacles
+        nc = len(obs.circles)
+        d["obstacles"]["circles"] = [
+            {"x": c.x, "y": c.y, "radius": c.radius + (cl[k] + CLEARANCE_PAD if cl[k] > 0 else 0)}
+            for k, c in enumerate(obs.circles)
+        ]
+        zones = []
+        for k, poly in enumerate(_obstacle_polygons(self)[nc:], start=nc):
+            if cl[k] > 0.0:
+                grown = (cl[k] + CLEARANCE_PAD) / math.cos(math.pi / (4 * _QUAD_SEGS))
+                poly = orient(poly.buffer(grown, quad_segs=_QUAD_SEGS), 1.0)
+                poly = shapely.simplify(poly, 0.0)  # drop collinear vertices
+            zones.append({"vertices": [list(v) for v in poly.exterior.coords[:-1]]})
+        d["obstacles"]["rectangles"] = []
+        d["obstacles"]["no_fly_zones"] = zones
+        pm = load_map(d)
+        self.__dict__["_planning_map"] = pm
+        return pm
+
     def to_dict(self) -> dict[str, Any]:
         """The map as JSON-ready data (no-fly zones in the counter-clockwise order used)."""
         d = self.spec.model_dump(mode="json", exclude_none=False)
@@ -256,9 +344,29 @@ class Map:
             "uav": s.uav.model_dump(),
             "radio": s.radio.model_dump(),
             "objective": s.objective.model_dump(),
+            "safety": s.safety.model_dump(),
             "total_required_data_mbit": float(self.required_data.sum()),
             "has_witness": s.witness is not None,
         }
+
+
+#: metres added to every non-zero clearance when inflating: covers where a stored mission's
+#: points may lie (MAVLink's 1e-7 degree grid is ~1.1 cm), so the real clearance is kept
+CLEARANCE_PAD = 0.05
+#: segments per quarter circle of an inflated polygon's rounded corners; the offset is divided
+#: by cos(pi / (4 * _QUAD_SEGS)) so the polygon contains the true offset (~2 % more clearance)
+_QUAD_SEGS = 4
+
+
+def _obstacle_polygons(m: Map) -> list[Any]:
+    """Circles (as exact-enough shapely buffers), rectangles and no-fly zones, in that order."""
+    from shapely.geometry import Point, Polygon
+
+    obs = m.spec.obstacles
+    out: list[Any] = [Point(c.x, c.y).buffer(c.radius, quad_segs=64) for c in obs.circles]
+    out += [Polygon(v) for v in m.rectangle_polygons]
+    out += [Polygon(v) for v in m.nfz_polygons]
+    return out
 
 
 # ----------------------------------------------------------------------------- validation

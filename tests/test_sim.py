@@ -152,7 +152,7 @@ def test_feasible_plan_passes_every_check(m):
     assert plan.feasible
     v = verify(replay(plan_to_items(plan, m), m), m)
     assert v.passed and v.failed == []
-    assert [x.name for x in v] == ["C1", "C2", "C3", "C4", "C5", "ENDS"]
+    assert [x.name for x in v] == ["C1", "C2", "C3", "C4", "C5", "CLEAR", "MARGIN", "ENDS"]
     assert v["C1"].margin == pytest.approx(120.0)  # hover point 1 is 120 m from the edge
     assert v["C2"].margin == pytest.approx(30.0)
     assert v["C5"].margin > 0 and "clearance" in v["C5"].detail
@@ -169,7 +169,7 @@ def test_cut_hover_time_fails_c4(m):
     k = next(i for i, it in enumerate(items) if it.command == CMD.LOITER_TIME)
     items[k] = replace(items[k], param1=items[k].param1 / 10)
     v = verify(replay(items, m), m)
-    assert not v.passed and v.failed == ["C4"]
+    assert not v.passed and v.failed == ["C4", "MARGIN"]  # short of data: short of margin too
     assert v["C4"].margin < 0 and "'a'" in v["C4"].detail
 
 
@@ -211,7 +211,7 @@ def test_rtl_return_leg_is_checked_for_collisions():
     plan = _plan(mm, [[900, 1200]], [30.0])
     assert verify(replay(plan_to_items(plan, mm), mm), mm).passed
     v = verify(replay(plan_to_items(plan, mm, finish="rtl"), mm), mm)
-    assert v.failed == ["C5"] and "RTL" in v["C5"].detail
+    assert v.failed == ["C5", "CLEAR"] and "RTL" in v["C5"].detail
 
 
 def test_ends_check(m):

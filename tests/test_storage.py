@@ -112,7 +112,7 @@ def test_unrepaired_plan_fails_once_stored_which_is_what_storable_plan_fixes(tmp
     (ArduPilot's truncation), is short of data; the storable plan is not."""
     import lamde_mission
 
-    m = load_map(CASE_TINY)
+    m = load_map({**CASE_TINY, "safety": {"clearance": 0, "data_margin": 0}})
     plan = lamde_mission.plan(m, seed=0, budget=2000)
     raw = [vehicle_stores(it, "ardupilot") for it in plan_to_items(plan, m)]
     assert "C4" in verify(replay(raw, m), m).failed

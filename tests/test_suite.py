@@ -59,7 +59,9 @@ def test_committed_map(name: str, size: int, density: int) -> None:
     assert m.name == name and m.width == m.height == size
     assert data["uav"] == {"max_hover_points": SIZES[size]}  # the rest at defaults
     assert set(data) == {"name", "origin", "area", "start", "end", "sensors", "obstacles", "uav",
-                         "witness"}  # fmt: skip
+                         "safety", "witness"}  # fmt: skip
+    # the paper's model as it is: the suite says so explicitly
+    assert data["safety"] == {"clearance": 0, "data_margin": 0}
     lo, hi = (8, 15) if size == 5000 else (15, 30)
     assert lo <= len(m.sensors) <= hi
     assert len(m.sensors) == default_sensor_count(size, density)

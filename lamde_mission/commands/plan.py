@@ -112,7 +112,11 @@ def _summary(
     got = t.collected
     for sid in m.sensor_ids:
         ok = "ok" if got[sid] >= req[sid] else "SHORT"
-        lines.append(f"    {sid:<12} {got[sid]:10.1f} / {req[sid]:<8.1f} {ok}")
+        over = f"{100 * (got[sid] / req[sid] - 1):+.2f} %" if req[sid] > 0 else ""
+        lines.append(f"    {sid:<12} {got[sid]:10.1f} / {req[sid]:<8.1f} {ok:<5} {over}")
+    sf = m.spec.safety
+    lines.append(f"  safety: clearance {verdicts.clearance:.2f} m (asked {sf.clearance:g} m), "
+                 f"data margin asked {100 * sf.data_margin:g} %")
     lines.append("  constraints (simulator) of the stored mission:" if stored is not None
                  else "  constraints (simulator):")
     lines.extend("    " + row for row in verdicts.table().splitlines())
@@ -175,7 +179,8 @@ def run(args: argparse.Namespace) -> int:
         polish=not args.no_polish,
         progress=progress,
     )
-    stored = storable_plan(plan, m, args.autopilot, finish=args.finish)
+    pm = m.planning_map()
+    stored = storable_plan(plan, m, args.autopilot, planning_map=pm, finish=args.finish)
     items = stored_items(plan_to_items(stored, m, finish=args.finish), stored.dialect)
     timeline = replay(items, m)
     verdicts = verify(timeline, m)
@@ -190,7 +195,8 @@ def run(args: argparse.Namespace) -> int:
         print("  try a larger --budget, another --seed, or --allow-infeasible to write it anyway",
               file=sys.stderr)
         return 1
-    write_mission(args.output, stored, m, fmt, finish=args.finish, autopilot=args.autopilot)
+    write_mission(args.output, stored, m, fmt, finish=args.finish, autopilot=args.autopilot,
+                  planning_map=pm)
     if args.plot:
         from lamde_mission.plot import plot_mission
 

@@ -63,6 +63,10 @@ def run(args: argparse.Namespace) -> int:
         print(f"mission {args.mission} on map '{m.name}': "
               f"{len(timeline.hover_times)} hover points")  # fmt: skip
         print(verdicts.table())
+        sf = m.spec.safety
+        margins = ", ".join(f"'{k}' {100 * v:+.3g} %" for k, v in verdicts.data_margins.items())
+        print(f"safety: clearance {verdicts.clearance:.3f} m (asked {sf.clearance:g} m); data "
+              f"margin per sensor (asked {100 * sf.data_margin:g} %): {margins}")
         print(f"f = {t.f:.6f}  (alpha {t.alpha:g}: t_fly {t.t_fly:.3f} s, "
               f"t_hover {t.t_hover:.3f} s)")  # fmt: skip
         print(f"mission time {t.t_total:.1f} s including take-off {t.t_takeoff:.1f} s, "
