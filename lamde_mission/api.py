@@ -79,7 +79,8 @@ def plan(
     budget, best_f, best_phi and feasible_fraction. The plan is made on `Map.planning_map()`:
     obstacles inflated by the map's `safety.clearance`, required data raised by its
     `safety.data_margin` (the map itself when both are 0); `breakdown` is on that map. With
-    `polish`, the final best's hover times are re-solved by the LP of `planner_core.polish`, kept only if not worse under Deb's rule.
+    `polish`, the final best's hover times are re-solved by the LP of `planner_core.polish`,
+    kept only if not worse under Deb's rule.
     """
     from planner_core.de import run
     from planner_core.mapio import load_map
