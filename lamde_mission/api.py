@@ -10,12 +10,13 @@ from typing import Any
 import numpy as np
 
 from lamde_mission.result import Plan
+from planner_core import defaults as _defaults
 
 __all__ = ["plan", "CONFIGURATORS"]
 
-#: configurator names accepted by `plan`; the adaptive DE is the default until a trained
-#: policy beats it on unseen maps
-CONFIGURATORS = ("adaptive", "fixed", "random")
+#: configurator names accepted by `plan` (from `planner_core.defaults`); the adaptive DE is the
+#: default until a trained policy beats it on unseen maps
+CONFIGURATORS = _defaults.CONFIGURATORS
 
 
 class _TimedProblem:
@@ -49,26 +50,13 @@ def _deb_not_worse(a: dict[str, Any], b: dict[str, Any]) -> bool:
     return a["phi"] < b["phi"] or (a["phi"] == b["phi"] and a["f"] <= b["f"])
 
 
-def _check_args(budget: int, population: int, configurator: Any) -> None:
-    if not isinstance(population, int | np.integer) or population < 5:
-        raise ValueError(f"population: must be an integer >= 5, got {population!r}")
-    if not isinstance(budget, int | np.integer) or budget < population:
-        raise ValueError(
-            f"budget: must be an integer >= population ({population}), got {budget!r}"
-        )
-    if isinstance(configurator, str) and configurator not in CONFIGURATORS:
-        raise ValueError(
-            f"configurator: unknown '{configurator}', choose one of {', '.join(CONFIGURATORS)}"
-        )
-
-
 def plan(
     map: str | Path | dict | Any,  # noqa: A002 - the issue's public signature
     *,
-    seed: int = 0,
-    budget: int = 10_000,
-    population: int = 100,
-    configurator: str | Any = "adaptive",
+    seed: int = _defaults.SEED,
+    budget: int = _defaults.BUDGET,
+    population: int = _defaults.POPULATION,
+    configurator: str | Any = _defaults.CONFIGURATOR,
     variable_length: bool = True,
     polish: bool = True,
     progress: Callable[[Any], None] | None = None,
@@ -80,13 +68,17 @@ def plan(
     obstacles inflated by the map's `safety.clearance`, required data raised by its
     `safety.data_margin` (the map itself when both are 0); `breakdown` is on that map. With
     `polish`, the final best's hover times are re-solved by the LP of `planner_core.polish`,
-    kept only if not worse under Deb's rule.
+    kept only if not worse under Deb's rule. Defaults and valid ranges: `planner_core.defaults`.
+
+    Raises ValueError with one line naming the field ("population: must be an integer >= 6,
+    got 5") for a population below the minimum, a budget below the population or an unknown
+    configurator name; `planner_core.MapError` for a bad map.
     """
     from planner_core.de import run
     from planner_core.mapio import load_map
     from planner_core.problem import Problem
 
-    _check_args(budget, population, configurator)
+    _defaults.check_run_args(population=population, budget=budget, configurator=configurator)
     t_start = time.perf_counter()
     m = load_map(map)
     # safety margins (clearance, data margin) are a transformation of the map: the model is the

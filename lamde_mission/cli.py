@@ -48,7 +48,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return int(args._run(args) or 0)
+        status = int(args._run(args) or 0)
+        sys.stdout.flush()  # a closed pipe shows here, not in the interpreter's exit
+        return status
+    except BrokenPipeError:
+        return _reader_went_away()
     except UsageError as exc:
         for line in str(exc).splitlines():
             print(f"lamde-mission {args.command}: {line}", file=sys.stderr)
@@ -56,6 +60,21 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+
+
+def _reader_went_away() -> int:
+    """The reader of stdout closed early (`lamde-mission schema | head -1`): stop quietly with
+    status 0, as `grep | head` does. Later writes, and the interpreter's final flush, go to
+    /dev/null instead of raising again (the recipe of Python's `signal` docs, SIGPIPE note)."""
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError):  # stdout without a file descriptor (captured in tests)
+        pass
+    return 0
 
 
 if __name__ == "__main__":  # pragma: no cover

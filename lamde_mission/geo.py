@@ -1,64 +1,9 @@
-"""Local map metres (x east, y north) <-> WGS84 latitude/longitude through the map's origin.
+"""Local map metres <-> WGS84 latitude/longitude: the sim's conversion (`sim.geo`), re-exported.
 
-The planner works on a flat local frame; missions need latitude and longitude. A map point
-(x, y) is the point on the surface at the origin's height whose east/north coordinates in the
-origin's ENU frame are (x, y) (pymap3d, WGS84 ellipsoid). Altitudes in our missions are relative
-to home (MAV_FRAME_GLOBAL_RELATIVE_ALT), so only the horizontal position goes through here.
-
-Why the "surface at the origin's height": the inverse must work from latitude and longitude
-alone (a mission file has no ENU up-coordinate). Using the plane u = 0 instead would drift by
-several centimetres at 10 km, because the ENU plane rises above the ellipsoid away from the origin.
+The mission vocabulary lives in the simulator (`sim`), which the mission writer depends on; this
+module keeps the `lamde_mission.geo` import path.
 """
 
-from __future__ import annotations
-
-from typing import Any
-
-import numpy as np
-import pymap3d
+from sim.geo import enu_to_latlon, latlon_to_enu, origin_of
 
 __all__ = ["enu_to_latlon", "latlon_to_enu", "origin_of"]
-
-_ITERATIONS = 4
-
-
-def origin_of(map_or_origin: Any) -> tuple[float, float, float]:
-    """(lat, lon, alt) of a Map, a MapFile, an Origin model or a 3-tuple."""
-    obj = map_or_origin
-    if hasattr(obj, "spec"):
-        obj = obj.spec
-    if hasattr(obj, "origin"):
-        obj = obj.origin
-    if hasattr(obj, "lat"):
-        return float(obj.lat), float(obj.lon), float(getattr(obj, "alt", 0.0))
-    lat, lon, *rest = obj
-    return float(lat), float(lon), float(rest[0]) if rest else 0.0
-
-
-def enu_to_latlon(x: Any, y: Any, origin: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Latitude and longitude (degrees) of local points (x east, y north, metres).
-
-    Accepts scalars or arrays; returns float64 arrays of the broadcast shape.
-    """
-    lat0, lon0, h0 = origin_of(origin)
-    e = np.asarray(x, dtype=float)
-    n = np.asarray(y, dtype=float)
-    e, n = np.broadcast_arrays(e, n)
-    u = np.zeros_like(e)
-    # Find the up-coordinate putting the point at height h0: the local vertical is within a
-    # fraction of a degree of the origin's, so each step shrinks the height error ~1e5 times.
-    for _ in range(_ITERATIONS):
-        lat, lon, h = pymap3d.enu2geodetic(e, n, u, lat0, lon0, h0)
-        u = u - (np.asarray(h) - h0)
-    lat, lon, _ = pymap3d.enu2geodetic(e, n, u, lat0, lon0, h0)
-    return np.asarray(lat, dtype=float), np.asarray(lon, dtype=float)
-
-
-def latlon_to_enu(lat: Any, lon: Any, origin: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Local (x east, y north) metres of latitude/longitude points (inverse of `enu_to_latlon`)."""
-    lat0, lon0, h0 = origin_of(origin)
-    la = np.asarray(lat, dtype=float)
-    lo = np.asarray(lon, dtype=float)
-    la, lo = np.broadcast_arrays(la, lo)
-    e, n, _ = pymap3d.geodetic2enu(la, lo, np.full(la.shape, h0), lat0, lon0, h0)
-    return np.asarray(e, dtype=float), np.asarray(n, dtype=float)

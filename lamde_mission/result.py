@@ -7,6 +7,8 @@ from typing import Any
 
 import numpy as np
 
+from planner_core.defaults import CONFIGURATOR, SCORE_FACTOR
+
 __all__ = ["Plan", "PLAN_FORMAT_VERSION"]
 
 PLAN_FORMAT_VERSION = 1
@@ -40,7 +42,7 @@ class Plan:
     wall_time: float
     history: dict[str, np.ndarray]
     seed: int
-    configurator: str = "adaptive"
+    configurator: str = CONFIGURATOR
     variable_length: bool = True
     polish: dict[str, Any] | None = None
     timings: dict[str, float] = field(default_factory=dict)
@@ -61,7 +63,7 @@ class Plan:
     @property
     def score(self) -> float:
         """f + 10 * phi (paper Sec. 5.2)."""
-        return self.f + 10.0 * self.phi
+        return self.f + SCORE_FACTOR * self.phi
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready data; `Plan.from_dict(plan.to_dict())` gives an equal plan."""
@@ -102,7 +104,7 @@ class Plan:
             wall_time=float(d["wall_time"]),
             history=d.get("history", {}),
             seed=int(d["seed"]),
-            configurator=d.get("configurator", "adaptive"),
+            configurator=d.get("configurator", CONFIGURATOR),
             variable_length=bool(d.get("variable_length", True)),
             polish=d.get("polish"),
             timings=d.get("timings", {}),

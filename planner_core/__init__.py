@@ -1,7 +1,13 @@
-"""LAMDE's planning core: the map, the paper's model as a vectorised evaluator, the optimiser."""
+"""LAMDE's planning core: the map, the paper's model as a vectorised evaluator, the optimiser.
 
-from planner_core.mapio import Map, MapError, load_map, map_json_schema
-from planner_core.problem import PENALTY_FACTOR, Problem, flight_time, penalised_score
+The names below are loaded on first use (PEP 562), so importing a light submodule such as
+`planner_core.defaults` (the CLI does, to build `--help`) does not load numpy, shapely or numba.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
 
 __all__ = [
     "Map",
@@ -13,3 +19,28 @@ __all__ = [
     "map_json_schema",
     "penalised_score",
 ]
+
+_WHERE = {
+    "Map": "planner_core.mapio",
+    "MapError": "planner_core.mapio",
+    "load_map": "planner_core.mapio",
+    "map_json_schema": "planner_core.mapio",
+    "PENALTY_FACTOR": "planner_core.problem",
+    "Problem": "planner_core.problem",
+    "flight_time": "planner_core.problem",
+    "penalised_score": "planner_core.problem",
+}
+
+
+def __getattr__(name: str) -> Any:
+    try:
+        module = _WHERE[name]
+    except KeyError:
+        raise AttributeError(f"module 'planner_core' has no attribute {name!r}") from None
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

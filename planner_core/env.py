@@ -1,4 +1,4 @@
-"""The optimisation MDP of the paper (Sec. 4.2) as a Gymnasium-style environment.
+"""The optimisation MDP of the paper (Sec. 4.2) as a :class:`gymnasium.Env`.
 
 One step = one DE generation. Action = the per-individual configuration (a
 :class:`~planner_core.de.core.Config`, a 4-tuple ``(mutation, crossover, F, Cr)`` or a dict with
@@ -26,6 +26,15 @@ feasible for the reward only; the DE's selection still compares phi exactly).
 Episode end: ``terminated`` is True once the evaluation budget is spent. Time is part of the
 observation (g / G), so the budget's end is a true terminal state of this MDP, not a time
 limit imposed from outside; ``truncated`` is always False (Gymnasium's semantics).
+
+Spaces (Gymnasium): ``observation_space`` is a ``Dict`` of ``Box`` es with the shapes above
+(X in [0, 1]; mantissa in [-1, 1]; scaled exponent in [-324 / eta, 400 / eta], the range of
+finite doubles and the +-inf code; progress in [0, 1]); ``action_space`` is a ``Dict`` with
+``mutation`` ``MultiDiscrete([7] * N)``, ``crossover`` ``MultiDiscrete([2] * N)``, ``F`` and
+``Cr`` ``Box(0, 1, (N,))``. Both depend on the problem's dimension d and the population N, so
+they are declared for the current problem and population: at construction when a problem is
+given, and again at every ``reset`` (a vector env needs every sub-env to keep the same d and N).
+The env is registered as ``"lamde/Optimization-v0"`` (``gymnasium.make(ENV_ID, problem=p)``).
 """
 
 from __future__ import annotations
@@ -35,8 +44,11 @@ import math
 from collections.abc import Mapping
 from typing import Any
 
+import gymnasium
 import numpy as np
+from gymnasium import spaces
 
+from planner_core import defaults as _defaults
 from planner_core.de.core import (
     BoxProblem,
     Config,
@@ -46,10 +58,14 @@ from planner_core.de.core import (
     init,
     tell,
 )
+from planner_core.de.operators import N_CROSSOVERS, N_MUTATIONS
 
-DEFAULT_ETA = 10.0
-DEFAULT_DELTA = 1e-8
+DEFAULT_ETA = _defaults.ETA
+DEFAULT_DELTA = _defaults.DELTA
 _INF_EXPONENT = 400.0  # beyond the largest finite double exponent (309)
+_MIN_EXPONENT = -324.0  # b of the smallest subnormal double (4.9e-324), after rounding fix-ups
+#: the id under which :class:`OptimizationEnv` is registered with Gymnasium
+ENV_ID = "lamde/Optimization-v0"
 _BELOW_ONE = float(np.nextafter(1.0, 0.0))
 
 
@@ -128,11 +144,18 @@ def as_config(action: Any) -> Config:
     return Config(mutation, crossover, F, Cr)
 
 
-class OptimizationEnv:
-    """Gymnasium-style env over the DE core (no gymnasium dependency).
+class OptimizationEnv(gymnasium.Env):
+    """The paper's optimisation MDP over the DE core, a :class:`gymnasium.Env`.
 
     ``reset(seed, options={"problem": p, "population": N, "budget": B})`` starts a run;
-    options override the constructor's defaults. ``step(action)`` runs one generation.
+    options override the constructor's defaults (``planner_core.defaults``) and re-declare the
+    spaces. ``step(action)`` runs one generation. Seeding is Gymnasium's: ``reset(seed=s)``
+    re-seeds :attr:`np_random`, from which each episode draws its DE run seed, so one seed
+    fixes this and every later episode (same streams as ``np.random.default_rng(s)``).
+
+    Attributes: ``problem``, ``population``, ``budget``, ``eta``, ``delta``, ``state`` (the
+    current :class:`~planner_core.de.core.DEState`, None before the first reset),
+    ``observation_space`` and ``action_space`` (absent until a problem is known).
     """
 
     metadata: dict[str, Any] = {"render_modes": []}
@@ -141,34 +164,75 @@ class OptimizationEnv:
         self,
         problem: BoxProblem | None = None,
         *,
-        population: int = 100,
-        budget: int = 10_000,
+        population: int = _defaults.POPULATION,
+        budget: int = _defaults.BUDGET,
         eta: float = DEFAULT_ETA,
         delta: float = DEFAULT_DELTA,
+        render_mode: str | None = None,
     ) -> None:
+        if render_mode is not None:
+            raise ValueError(f"render_mode: this env draws nothing, got {render_mode!r}")
+        self.render_mode = render_mode
         self.problem = problem
         self.population = population
         self.budget = budget
         self.eta = eta
         self.delta = delta
         self.state: DEState | None = None
-        self._seeder = np.random.default_rng()
+        if problem is not None:
+            self._declare_spaces()
+
+    @property
+    def _seeder(self) -> np.random.Generator:
+        """The generator episode seeds are drawn from (Gymnasium's :attr:`np_random`)."""
+        return self.np_random
+
+    def _declare_spaces(self) -> None:
+        """Observation and action spaces for the current problem's dimension and population."""
+        n, d = int(self.population), int(np.asarray(self.problem.lower).shape[0])
+        code = spaces.Box(
+            low=np.tile([-1.0, _MIN_EXPONENT / self.eta], (n, 1)),
+            high=np.tile([1.0, _INF_EXPONENT / self.eta], (n, 1)),
+            dtype=np.float64,
+        )
+        self.observation_space = spaces.Dict(
+            {
+                "X": spaces.Box(0.0, 1.0, (n, d), dtype=np.float64),
+                "f": code,
+                "phi": code,
+                "progress": spaces.Box(0.0, 1.0, (1,), dtype=np.float64),
+            }
+        )
+        self.action_space = spaces.Dict(
+            {
+                "mutation": spaces.MultiDiscrete(np.full(n, N_MUTATIONS)),
+                "crossover": spaces.MultiDiscrete(np.full(n, N_CROSSOVERS)),
+                "F": spaces.Box(0.0, 1.0, (n,), dtype=np.float64),
+                "Cr": spaces.Box(0.0, 1.0, (n,), dtype=np.float64),
+            }
+        )
 
     def reset(
         self, *, seed: int | None = None, options: Mapping[str, Any] | None = None
     ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
-        """Start a new run; a given seed makes this and every later episode reproducible."""
+        """Start a new run; a given seed makes this and every later episode reproducible.
+
+        Raises ValueError for a missing problem, an unknown option, or a population/budget
+        outside ``planner_core.defaults``' ranges (the message names the field).
+        """
+        super().reset(seed=seed)
         options = dict(options or {})
-        if seed is not None:
-            self._seeder = np.random.default_rng(seed)
-        self.problem = options.pop("problem", self.problem)
-        if self.problem is None:
+        problem = options.pop("problem", self.problem)
+        if problem is None:
             raise ValueError("no problem: pass options={'problem': ...} or give one to the env")
-        self.population = int(options.pop("population", self.population))
-        self.budget = int(options.pop("budget", self.budget))
+        population = options.pop("population", self.population)
+        budget = options.pop("budget", self.budget)
         if options:
             raise ValueError(f"unknown reset options {sorted(options)}")
-        run_seed = int(self._seeder.integers(0, 2**63 - 1))
+        _defaults.check_run_args(population=population, budget=budget)
+        self.problem, self.population, self.budget = problem, int(population), int(budget)
+        self._declare_spaces()
+        run_seed = int(self.np_random.integers(0, 2**63 - 1))
         self.state = init(self.problem, run_seed, self.population, self.budget)
         return observe(self.state, self.eta), self._info(self.state)
 
@@ -191,7 +255,7 @@ class OptimizationEnv:
             new.generation / max(new.max_generations, 1),
             self.delta,
         )
-        return observe(new, self.eta), r, new.done, False, self._info(new)
+        return observe(new, self.eta), r, bool(new.done), False, self._info(new)
 
     @staticmethod
     def _info(state: DEState) -> dict[str, Any]:
@@ -202,3 +266,7 @@ class OptimizationEnv:
             "best_phi": state.best_phi,
             "feasible_fraction": state.feasible_fraction,
         }
+
+
+if ENV_ID not in gymnasium.registry:
+    gymnasium.register(id=ENV_ID, entry_point="planner_core.env:OptimizationEnv")

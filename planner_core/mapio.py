@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
+from planner_core.defaults import MAP_DEFAULTS
 from planner_core.geometry import Obstacles, points_inside, rectangle_vertices
 
 __all__ = [
@@ -33,6 +34,11 @@ __all__ = [
 _STRICT = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
 
 Point2 = tuple[float, float]
+
+
+def _d(path: str) -> Any:
+    """Default of an optional map field, from `planner_core.defaults.MAP_DEFAULTS`."""
+    return MAP_DEFAULTS[path].value
 
 
 class Origin(BaseModel):
@@ -96,35 +102,46 @@ class ObstaclesSpec(BaseModel):
 
 class Uav(BaseModel):
     model_config = _STRICT
-    altitude: float = Field(100.0, gt=0, description="H, cruise altitude above take-off, m")
-    max_speed: float = Field(20.0, gt=0, description="v_max, m/s")
-    acceleration: float = Field(4.0, gt=0, description="a, m/s^2")
-    max_hover_time: float = Field(300.0, gt=0, description="T_max, s per hover point")
-    max_hover_points: int | None = Field(
-        None, gt=0, description="I_max; null: 10 when the larger side <= 5000 m, else 20"
+    altitude: float = Field(
+        _d("uav.altitude"), gt=0, description="H, cruise altitude above take-off, m"
     )
-    activation_threshold: float = Field(0.5, ge=0, le=1, description="tau")
+    max_speed: float = Field(_d("uav.max_speed"), gt=0, description="v_max, m/s")
+    acceleration: float = Field(_d("uav.acceleration"), gt=0, description="a, m/s^2")
+    max_hover_time: float = Field(
+        _d("uav.max_hover_time"), gt=0, description="T_max, s per hover point"
+    )
+    max_hover_points: int | None = Field(
+        _d("uav.max_hover_points"), gt=0,
+        description="I_max; null: 10 when the larger side <= 5000 m, else 20"
+    )
+    activation_threshold: float = Field(
+        _d("uav.activation_threshold"), ge=0, le=1, description="tau"
+    )
 
 
 class Radio(BaseModel):
     model_config = _STRICT
-    peak_rate: float = Field(10.0, gt=0, description="R_c, Mbit/s")
-    decay: float = Field(0.01, ge=0, description="xi, Mbit/s per metre")
-    bandwidth: float = Field(25.0, gt=0, description="R_lambda, Mbit/s")
-    required_data: float = Field(200.0, ge=0, description="Q_lambda, Mbit")
+    peak_rate: float = Field(_d("radio.peak_rate"), gt=0, description="R_c, Mbit/s")
+    decay: float = Field(_d("radio.decay"), ge=0, description="xi, Mbit/s per metre")
+    bandwidth: float = Field(_d("radio.bandwidth"), gt=0, description="R_lambda, Mbit/s")
+    required_data: float = Field(_d("radio.required_data"), ge=0, description="Q_lambda, Mbit")
 
 
 class Objective(BaseModel):
     model_config = _STRICT
-    alpha: float = Field(0.5, ge=0, le=1, description="weight of flight time against hover time")
-    collision_offset: float = Field(1000.0, ge=0, description="mu")
-    collision_weight: float = Field(10.0, ge=0, description="nu, per metre")
+    alpha: float = Field(
+        _d("objective.alpha"), ge=0, le=1, description="weight of flight time against hover time"
+    )
+    collision_offset: float = Field(_d("objective.collision_offset"), ge=0, description="mu")
+    collision_weight: float = Field(
+        _d("objective.collision_weight"), ge=0, description="nu, per metre"
+    )
 
 
 #: metres: obstacles and no-fly zones are inflated by this much for planning (`safety.clearance`)
-DEFAULT_CLEARANCE = 10.0
+DEFAULT_CLEARANCE: float = _d("safety.clearance")
 #: fraction added to every sensor's required data for planning (`safety.data_margin`)
-DEFAULT_DATA_MARGIN = 0.02
+DEFAULT_DATA_MARGIN: float = _d("safety.data_margin")
 
 
 class Safety(BaseModel):

@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from planner_core.defaults import SCORE_FACTOR
 from planner_core.geometry import overlap_lengths
 from planner_core.kernels import model_terms
 from planner_core.mapio import Map, load_map
@@ -20,7 +21,7 @@ __all__ = [
 ]
 
 #: The factor of the penalised score f + 10 * phi used to compare optimisers (paper Sec. 5.2).
-PENALTY_FACTOR = 10.0
+PENALTY_FACTOR = SCORE_FACTOR
 
 #: Overlap lengths at or below this many metres count as no collision (floating-point noise of
 #: tangent legs); anything longer triggers the full penalty mu + nu * L_vio.

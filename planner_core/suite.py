@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 import shapely
 
+from planner_core.defaults import SUITE_SEED as _SUITE_SEED
 from planner_core.geometry import rectangle_vertices
 from planner_core.mapio import Radio, Uav, load_map
 from planner_core.problem import Problem, link_rates
@@ -49,7 +50,7 @@ SIZES: dict[int, int] = {5000: 10, 10000: 20}
 #: obstacle densities per size (0 = sparsest, 7 = densest)
 N_DENSITIES = 8
 #: the seed the committed suite was generated with
-SUITE_SEED = 2025
+SUITE_SEED = _SUITE_SEED
 #: one fixed, realistic origin for all generated maps (Guangzhou Higher Education Mega Center)
 SUITE_ORIGIN: dict[str, float] = {"lat": 23.0493, "lon": 113.3975, "alt": 10.0}
 

@@ -2,7 +2,9 @@
 
 `replay(items, map)` flies mission items with the paper's model and returns a `Timeline`;
 `verify(timeline, map)` judges it with its own shapely geometry. Nothing here imports the
-optimiser (`planner_core.de`, `planner_core.problem`), so the sim is a second opinion.
+optimiser (`planner_core.de`, `planner_core.problem`) nor `lamde_mission`, so the sim is a second
+opinion. `sim.mission` (items, MAVLink enums, items -> route) and `sim.geo` (ENU <-> WGS84) are
+the mission vocabulary that `lamde_mission` writes plans into.
 """
 
 from sim.checks import Verdict, Verdicts, verify

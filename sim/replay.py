@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from lamde_mission.items import CMD, SNAP_M, MissionItem, Route, items_to_route
+from sim.mission import CMD, SNAP_M, MissionItem, Route, items_to_route
 
 __all__ = [
     "Timeline",
@@ -162,7 +162,7 @@ def replay(
 ) -> Timeline:
     """Fly `items` (mission type MISSION, seq order) over `map`; samples every `dt` seconds.
 
-    Raises lamde_mission.items.MissionError for missions the sim cannot fly.
+    Raises sim.mission.MissionError for missions the sim cannot fly.
     """
     return replay_route(items_to_route(items, map), map, dt=dt)
 

@@ -1,8 +1,10 @@
-"""Shared fixtures: small hand-readable maps built in code."""
+"""Shared fixtures (small hand-readable maps built in code) and the one CLI runner."""
 
 from __future__ import annotations
 
 import copy
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -29,3 +31,41 @@ HAND_MAP = {
 def hand_map() -> dict:
     """Hover at (300, 0) for 50 s between start (0, 0) and end (300, 400): every term by hand."""
     return copy.deepcopy(HAND_MAP)
+
+
+def run_cli(
+    *args: str | Path, cwd: str | Path | None = None, timeout: float = 300
+) -> subprocess.CompletedProcess[str]:
+    """Run ``lamde-mission ARGS`` in a fresh process (``python -m lamde_mission.cli``); text
+    stdout/stderr captured. Paths may be given as Path objects."""
+    return run_cli_many(args, cwd=cwd, timeout=timeout)[0]
+
+
+def run_cli_many(
+    *calls: tuple[str | Path, ...], cwd: str | Path | None = None, timeout: float = 300
+) -> list[subprocess.CompletedProcess[str]]:
+    """Run several ``lamde-mission`` commands at once, in parallel (each process spends seconds
+    importing); results in the order given."""
+    cmds = [[sys.executable, "-m", "lamde_mission.cli", *map(str, c)] for c in calls]
+    pipe = subprocess.PIPE
+    procs = [(c, subprocess.Popen(c, stdout=pipe, stderr=pipe, text=True, cwd=cwd or ROOT))
+             for c in cmds]
+    out = []
+    for cmd, p in procs:
+        try:
+            stdout, stderr = p.communicate(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            p.kill()
+            p.communicate()
+            raise
+        out.append(subprocess.CompletedProcess(cmd, p.returncode, stdout, stderr))
+    return out
+
+
+def one_line_error(r: subprocess.CompletedProcess[str]) -> str:
+    """Assert the CLI's bad-input contract (exit 2, no traceback, one stderr line); the line."""
+    assert r.returncode == 2, (r.returncode, r.stderr)
+    assert "Traceback" not in r.stderr, r.stderr
+    lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1, r.stderr
+    return lines[0]

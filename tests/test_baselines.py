@@ -95,16 +95,30 @@ def test_penalised_optimisers_return_best_score_seen(problem: Problem) -> None:
 
 def test_budgeted_problem_refuses_to_overspend(problem: Problem) -> None:
     b = BudgetedProblem(problem, 10)
-    X = np.tile(problem.upper / 2, (6, 1))
-    b.evaluate(X)
+    rng = np.random.default_rng(0)
+    X = problem.lower + rng.random((10, problem.dim)) * (problem.upper - problem.lower)
+    b.evaluate(X[:6])
     with pytest.raises(BudgetExceeded):
-        b.evaluate(X)
+        b.evaluate(X[:6])
     assert b.count == 6 and b.remaining == 4
-    b.evaluate(X[:4])
+    b.evaluate(X[6:])
     assert b.exhausted
-    # Deb incumbent: lowest phi first; penalised: lowest f + 10 phi
-    x, f, phi = b.best("deb")
-    assert phi == min(b.trace("deb").best_phi)
+    # the incumbents against a plain recomputation over all ten rows
+    f, phi = problem.evaluate(X)
+    deb = int(np.lexsort((f, phi))[0])  # lowest phi, then lowest f
+    pen = int(np.argmin(f + PENALTY_FACTOR * phi))
+    x, bf, bp = b.best("deb")
+    np.testing.assert_array_equal(x, X[deb])
+    assert (bf, bp) == (f[deb], phi[deb])
+    x, bf, bp = b.best("penalised")
+    np.testing.assert_array_equal(x, X[pen])
+    assert (bf, bp) == (f[pen], phi[pen])
+    # the trace holds the incumbent after each call: best of the first six, then of all ten
+    first = int(np.lexsort((f[:6], phi[:6]))[0])
+    tr = b.trace("deb")
+    assert tr.evaluations.tolist() == [6, 10]
+    assert tr.best_phi.tolist() == [phi[first], phi[deb]]
+    assert tr.best_f.tolist() == [f[first], f[deb]]
 
 
 def test_optimise_checks_the_count(problem: Problem, monkeypatch: pytest.MonkeyPatch) -> None:

@@ -9,19 +9,14 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import MAPS
+from tests.conftest import MAPS, run_cli
 
 DEMO = MAPS / "small-demo.json"
 
 
-def _cli(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "lamde_mission.cli", *map(str, args)],
-                          capture_output=True, text=True, timeout=300, cwd=cwd)
-
-
 def test_plan_writes_plan_plot_report_and_verifies(tmp_path: Path) -> None:
     out, png, rep = tmp_path / "m.plan", tmp_path / "m.png", tmp_path / "r.json"
-    r = _cli("plan", DEMO, "-o", out, "--plot", png, "--report", rep, "--budget", 3000)
+    r = run_cli("plan", DEMO, "-o", out, "--plot", png, "--report", rep, "--budget", 3000)
     assert r.returncode == 0, r.stderr
     assert "constraints (simulator)" in r.stdout and "C5" in r.stdout
     assert "gen" in r.stderr and "evals" in r.stderr  # progress on stderr
@@ -30,14 +25,14 @@ def test_plan_writes_plan_plot_report_and_verifies(tmp_path: Path) -> None:
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     report = json.loads(rep.read_text())
     assert report["verdicts"]["passed"] and report["plan"]["feasible"]
-    v = _cli("verify", DEMO, out)
+    v = run_cli("verify", DEMO, out)
     assert v.returncode == 0, v.stdout + v.stderr
 
 
 def test_plan_same_seed_same_file(tmp_path: Path) -> None:
     a, b = tmp_path / "a.waypoints", tmp_path / "b.waypoints"
     for path in (a, b):
-        r = _cli("plan", DEMO, "-o", path, "--budget", 1500, "--seed", 7, "--quiet")
+        r = run_cli("plan", DEMO, "-o", path, "--budget", 1500, "--seed", 7, "--quiet")
         assert r.returncode == 0, r.stderr
         assert r.stdout == ""
     assert a.read_text() == b.read_text()
@@ -50,15 +45,15 @@ def test_infeasible_map_writes_nothing_unless_allowed(tmp_path: Path) -> None:
     mp = tmp_path / "greedy.json"
     mp.write_text(json.dumps(m))
     out = tmp_path / "x.plan"
-    r = _cli("plan", mp, "-o", out, "--budget", 600, "--quiet")
+    r = run_cli("plan", mp, "-o", out, "--budget", 600, "--quiet")
     assert r.returncode == 1
     assert not out.exists() and list(tmp_path.iterdir()) == [mp]
     assert "nothing written" in r.stderr and "C4 sensor" in r.stderr
     assert "T_max too small" in r.stderr
-    r = _cli("plan", mp, "-o", out, "--budget", 600, "--quiet", "--allow-infeasible")
+    r = run_cli("plan", mp, "-o", out, "--budget", 600, "--quiet", "--allow-infeasible")
     assert r.returncode == 1 and out.exists()
     assert "INFEASIBLE" in r.stderr
-    assert _cli("verify", mp, out).returncode == 1
+    assert run_cli("verify", mp, out).returncode == 1
 
 
 @pytest.mark.parametrize(
@@ -70,7 +65,7 @@ def test_infeasible_map_writes_nothing_unless_allowed(tmp_path: Path) -> None:
     ],
 )
 def test_bad_input_exits_2_with_one_line(tmp_path: Path, args: list[str], needle: str) -> None:
-    r = _cli("plan", DEMO, *args, cwd=tmp_path)
+    r = run_cli("plan", DEMO, *args, cwd=tmp_path)
     assert r.returncode == 2
     assert needle in r.stderr and "Traceback" not in r.stderr
     assert len(r.stderr.strip().splitlines()) == 1
@@ -80,7 +75,7 @@ def test_bad_input_exits_2_with_one_line(tmp_path: Path, args: list[str], needle
 def test_bad_map_exits_2(tmp_path: Path) -> None:
     bad = tmp_path / "bad.json"
     bad.write_text('{"area": {"width": 10, "height": 10}, "start": [0, 0], "end": [1, 1]}')
-    r = _cli("plan", bad, "-o", tmp_path / "x.plan")
+    r = run_cli("plan", bad, "-o", tmp_path / "x.plan")
     assert r.returncode == 2 and "sensors: required field is missing" in r.stderr
     assert not (tmp_path / "x.plan").exists()
 
@@ -92,11 +87,11 @@ def test_help_is_fast_and_lists_commands() -> None:
             "if m in sys.modules]; print(heavy)")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert r.stdout.strip() == "[]", r.stdout + r.stderr
-    r = _cli("--help")
+    r = run_cli("--help")
     for cmd in ("plan", "verify", "show", "check", "schema", "generate"):
         assert cmd in r.stdout
     for cmd in ("plan", "verify", "show", "check", "schema", "generate"):
-        assert _cli(cmd, "--help").returncode == 0
+        assert run_cli(cmd, "--help").returncode == 0
 
 
 def test_example_script_plans_and_verifies(tmp_path: Path) -> None:

@@ -139,3 +139,81 @@ def test_reset_needs_a_problem_and_valid_actions() -> None:
     env.reset(seed=0, options={"problem": ShiftedBall(2), "population": 10, "budget": 50})
     with pytest.raises(ValueError):
         env.step(_actions(9, 1)[0])  # wrong population size
+
+
+# ---------------------------------------------------------------- Gymnasium
+
+
+@pytest.fixture(scope="module")
+def suite_problem():
+    from planner_core.problem import Problem
+    from tests.conftest import SUITE
+
+    return Problem(SUITE / "T01.json")
+
+
+def test_check_env_passes_on_a_suite_map(suite_problem) -> None:
+    import warnings
+
+    import gymnasium
+    from gymnasium.utils.env_checker import check_env
+
+    from planner_core.env import ENV_ID
+
+    assert isinstance(OptimizationEnv(suite_problem), gymnasium.Env)
+    env = gymnasium.make(ENV_ID, problem=suite_problem, population=8, budget=8 * 6).unwrapped
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        check_env(env)
+    gym_warnings = [str(w.message) for w in caught if "gymnasium" in w.filename]
+    assert gym_warnings == []
+    # the declared spaces fit this problem and population, and hold what the env returns
+    obs, _ = env.reset(seed=0)
+    assert env.observation_space["X"].shape == (8, suite_problem.dim)
+    assert env.action_space["mutation"].shape == (8,)
+    assert env.observation_space.contains(obs)
+    obs, r, terminated, truncated, _ = env.step(env.action_space.sample())
+    assert env.observation_space.contains(obs) and isinstance(r, float)
+    assert terminated is False and truncated is False
+
+
+def test_spaces_follow_the_problem_and_population_at_reset() -> None:
+    env = OptimizationEnv(ShiftedBall(3), population=10, budget=100)
+    assert env.observation_space["X"].shape == (10, 3)
+    env.reset(seed=0, options={"problem": ShiftedBall(5), "population": 14})
+    assert env.observation_space["X"].shape == (14, 5)
+    assert env.observation_space["f"].shape == (14, 2)
+    assert env.action_space["F"].shape == (14,) and env.action_space["crossover"].shape == (14,)
+    assert not hasattr(OptimizationEnv(), "observation_space")  # no problem, no spaces yet
+
+
+def test_seeding_goes_through_np_random() -> None:
+    env = OptimizationEnv(ShiftedBall(3), population=10, budget=100)
+    env.reset(seed=11)
+    expected = np.random.default_rng(11)  # the streams the env had before it was a gymnasium.Env
+    assert env.state.seed == int(expected.integers(0, 2**63 - 1))
+    env.reset()  # the next episode continues the seeded stream
+    assert env.state.seed == int(expected.integers(0, 2**63 - 1))
+    assert env.np_random_seed == 11
+
+
+def test_reset_names_a_bad_population() -> None:
+    env = OptimizationEnv(ShiftedBall(2))
+    with pytest.raises(ValueError, match="^population: "):
+        env.reset(seed=0, options={"population": 5, "budget": 50})
+    with pytest.raises(ValueError, match="^budget: "):
+        env.reset(seed=0, options={"population": 10, "budget": 9})
+
+
+def test_vector_env_steps_every_copy() -> None:
+    import gymnasium
+
+    from planner_core.env import ENV_ID
+
+    vec = gymnasium.make_vec(ENV_ID, num_envs=2, vectorization_mode="sync",
+                             problem=ShiftedBall(3), population=10, budget=60)
+    obs, _ = vec.reset(seed=[1, 2])
+    assert obs["X"].shape == (2, 10, 3)
+    obs, r, term, trunc, _ = vec.step(vec.action_space.sample())
+    assert r.shape == (2,) and not term.any() and not trunc.any()
+    vec.close()

@@ -14,7 +14,6 @@ from lamde_mission.geo import latlon_to_enu
 from lamde_mission.items import (
     CMD,
     FRAME,
-    MISSION_TYPE,
     MissionError,
     MissionItem,
     fence_from_items,
@@ -178,4 +177,23 @@ def test_item_equality_helpers(m):
     clean = a[0].without_nan()
     assert clean.param4 == 0.0 and clean.x == a[0].x
     assert a[2].params == (42.5, 0.0, 0.0, 0.0, a[2].x, a[2].y, 80.0)
-    assert MISSION_TYPE.FENCE == 1 and CMD.LOITER_TIME == 19
+    assert not items_equal(a, [*b[:2], replace(b[2], param1=42.5 + 1e-3), *b[3:]])
+
+
+def test_items_carry_the_mavlink_spec_numbers_on_disk(m):
+    """What other tools read is the raw numbers: check them against MAVLink's common.xml
+    (MAV_CMD_NAV_TAKEOFF 22, MAV_CMD_DO_CHANGE_SPEED 178, MAV_CMD_NAV_LOITER_TIME 19,
+    MAV_CMD_NAV_WAYPOINT 16, MAV_CMD_NAV_LAND 21; MAV_FRAME_GLOBAL_RELATIVE_ALT 3,
+    MAV_FRAME_MISSION 2), not against pymavlink's own constants."""
+    from lamde_mission.formats import home_of
+    from lamde_mission.formats.waypoints import format_waypoints
+
+    lines = format_waypoints(plan_to_items(PLAN, m), home_of(m)).splitlines()
+    assert lines[0] == "QGC WPL 110"
+    rows = [ln.split("\t") for ln in lines[2:]]  # lines[1] is the home position
+    assert [int(r[3]) for r in rows] == [22, 178, 19, 19, 16, 21]
+    assert [int(r[2]) for r in rows] == [3, 2, 3, 3, 3, 3]
+    assert [float(r[4]) for r in rows if int(r[3]) == 19] == [42.5, 61.25]  # hover seconds
+    fence = geofence_items(m)
+    assert {it.mission_type for it in fence} == {1}  # MAV_MISSION_TYPE_FENCE
+    assert {it.command for it in fence} == {5002, 5004}  # FENCE_POLYGON_VERTEX_/CIRCLE_EXCLUSION

@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import json
 import math
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 
 from planner_core import MapError, load_map, map_json_schema
+from tests.conftest import run_cli
 
 
 def _problems(data: dict) -> list[str]:
@@ -92,28 +91,23 @@ def test_to_dict_round_trip(hand_map: dict) -> None:
     assert load_map(m.to_dict()).to_dict() == m.to_dict()
 
 
-def _cli(*args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "lamde_mission.cli", *args],
-                          capture_output=True, text=True, timeout=120)
-
-
 def test_cli_check_and_schema(tmp_path, hand_map: dict) -> None:
     good = tmp_path / "good.json"
     good.write_text(json.dumps(hand_map))
-    r = _cli("check", str(good))
+    r = run_cli("check", str(good))
     assert r.returncode == 0, r.stderr
     assert "I_max           2" in r.stdout
     hand_map["radio"]["bandwith"] = 3
     hand_map["area"]["height"] = 0
     bad = tmp_path / "bad.json"
     bad.write_text(json.dumps(hand_map))
-    r = _cli("check", str(bad))
+    r = run_cli("check", str(bad))
     assert r.returncode == 2
     assert "Traceback" not in r.stderr
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 2
     assert any("radio.bandwith: unknown field (did you mean 'bandwidth'?)" in x for x in lines)
-    r = _cli("check", str(tmp_path / "missing.json"))
+    r = run_cli("check", str(tmp_path / "missing.json"))
     assert r.returncode == 2 and "file not found" in r.stderr
-    r = _cli("schema")
+    r = run_cli("schema")
     assert r.returncode == 0 and json.loads(r.stdout)["title"] == "MapFile"

@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from dataclasses import replace
 from pathlib import Path
 from types import SimpleNamespace
@@ -19,6 +17,7 @@ from lamde_mission.plot import nice_length, plot_mission
 from planner_core.mapio import load_map
 from planner_core.problem import Problem
 from sim import replay
+from tests.conftest import one_line_error, run_cli, run_cli_many
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -66,30 +65,6 @@ def files(tmp_path_factory):
                            cut=d / "cut.waypoints", m=m, plan=plan)  # fmt: skip
 
 
-def cli(*args: str | Path) -> subprocess.CompletedProcess:
-    return cli_many(args)[0]
-
-
-def cli_many(*calls: tuple[str | Path, ...]) -> list[subprocess.CompletedProcess]:
-    """Run several `lamde-mission` commands at once (each process spends seconds importing)."""
-    cmds = [[sys.executable, "-m", "lamde_mission.cli", *map(str, c)] for c in calls]
-    pipe = subprocess.PIPE
-    procs = [(c, subprocess.Popen(c, stdout=pipe, stderr=pipe, text=True, cwd=ROOT)) for c in cmds]
-    out = []
-    for cmd, p in procs:
-        stdout, stderr = p.communicate(timeout=180)
-        out.append(subprocess.CompletedProcess(cmd, p.returncode, stdout, stderr))
-    return out
-
-
-def _one_line_error(r: subprocess.CompletedProcess) -> str:
-    assert r.returncode == 2, r.stderr
-    assert "Traceback" not in r.stderr
-    lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
-    assert len(lines) == 1, r.stderr
-    return lines[0]
-
-
 # ----------------------------------------------------------------------------- figure
 
 
@@ -118,7 +93,8 @@ def test_plot_png_svg_and_bad_suffix(files, tmp_path):
 
 
 def test_verify_good_mission_exits_0(files):
-    r, rj = cli_many(("verify", files.map, files.good), ("verify", files.map, files.good, "--json"))
+    r, rj = run_cli_many(("verify", files.map, files.good),
+                         ("verify", files.map, files.good, "--json"))
     assert r.returncode == 0, r.stdout + r.stderr
     for name in ("C1", "C2", "C3", "C4", "C5"):
         line = next(ln for ln in r.stdout.splitlines() if ln.startswith(name))
@@ -132,7 +108,7 @@ def test_verify_good_mission_exits_0(files):
 
 
 def test_verify_cut_mission_exits_1_naming_c4(files):
-    r = cli("verify", files.map, files.cut)
+    r = run_cli("verify", files.map, files.cut)
     assert r.returncode == 1, r.stdout + r.stderr
     line = next(ln for ln in r.stdout.splitlines() if ln.startswith("C4"))
     assert "FAIL" in line
@@ -143,12 +119,12 @@ def test_verify_bad_input_exits_2_with_one_line(files, tmp_path):
     junk = tmp_path / "junk.plan"
     junk.write_text("{not json")
     geo = write_mission(tmp_path / "m.geojson", files.plan, files.m)
-    results = cli_many(
+    results = run_cli_many(
         ("verify", files.map, junk),
         ("verify", tmp_path / "nomap.json", files.good),
         ("verify", files.map, geo),
     )
-    lines = [_one_line_error(r) for r in results]
+    lines = [one_line_error(r) for r in results]
     assert "junk.plan" in lines[0] and "not valid JSON" in lines[0]
     assert "nomap.json" in lines[1]
     assert "GeoJSON" in lines[2]
@@ -159,7 +135,8 @@ def test_verify_bad_input_exits_2_with_one_line(files, tmp_path):
 
 def test_show_writes_png(files, tmp_path):
     out, out2 = tmp_path / "fig.png", tmp_path / "map.svg"
-    r, r2 = cli_many(("show", files.map, files.good, "-o", out), ("show", files.map, "-o", out2))
+    r, r2 = run_cli_many(("show", files.map, files.good, "-o", out),
+                         ("show", files.map, "-o", out2))
     assert r.returncode == 0, r.stderr
     assert out.read_bytes()[:4] == b"\x89PNG"
     assert r2.returncode == 0, r2.stderr
@@ -169,8 +146,8 @@ def test_show_writes_png(files, tmp_path):
 def test_show_bad_input_leaves_no_file(files, tmp_path):
     junk = tmp_path / "junk.waypoints"
     junk.write_text("QGC WPL 110\n0\t1\t0\n")
-    r1, r2 = cli_many(("show", files.map, junk, "-o", tmp_path / "fig.png"),
+    r1, r2 = run_cli_many(("show", files.map, junk, "-o", tmp_path / "fig.png"),
                       ("show", files.map, files.good, "-o", tmp_path / "fig.jpg"))  # fmt: skip
-    assert "junk.waypoints" in _one_line_error(r1)
-    assert ".png or .svg" in _one_line_error(r2)
+    assert "junk.waypoints" in one_line_error(r1)
+    assert ".png or .svg" in one_line_error(r2)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["junk.waypoints"]

@@ -161,7 +161,12 @@ def test_feasible_plan_passes_every_check(m):
     for name in ("C1", "C2", "C3", "C4", "C5"):
         assert name in table
     assert "FAIL" not in table
-    json.dumps(v.to_dict())
+    d = json.loads(json.dumps(v.to_dict()))  # JSON-ready, and it says what the object says
+    assert d["passed"] is True and d["failed"] == []
+    assert [x["name"] for x in d["verdicts"]] == ["C1", "C2", "C3", "C4", "C5", "CLEAR", "MARGIN",
+                                                  "ENDS"]
+    assert d["verdicts"][0]["margin"] == pytest.approx(120.0)
+    assert (d["t_fly"], d["t_hover"], d["f"]) == (v.t_fly, v.t_hover, v.f)
 
 
 def test_cut_hover_time_fails_c4(m):

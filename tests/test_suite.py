@@ -3,15 +3,13 @@
 from __future__ import annotations
 
 import json
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from planner_core import Problem, load_map
-from planner_core.geometry import Obstacles, points_inside
+from planner_core.geometry import points_inside
 from planner_core.suite import (
     SIZES,
     SUITE_SEED,
@@ -21,21 +19,12 @@ from planner_core.suite import (
     obstacle_counts,
     suite_tasks,
 )
+from tests.conftest import run_cli
 
 ROOT = Path(__file__).resolve().parent.parent
 MAPS = ROOT / "examples" / "maps"
 SUITE = MAPS / "suite"
 TASKS = suite_tasks()
-
-
-def _cli(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "lamde_mission.cli", *args],
-        capture_output=True,
-        text=True,
-        cwd=cwd,
-        timeout=120,
-    )
 
 
 def _witness(problem: Problem, data: dict) -> dict:
@@ -150,7 +139,7 @@ def test_bad_arguments_raise(kwargs: dict) -> None:
 
 
 def test_cli_suite_reproduces_committed_files(tmp_path: Path) -> None:
-    out = _cli("generate", "--suite", str(tmp_path / "suite"))
+    out = run_cli("generate", "--suite", str(tmp_path / "suite"))
     assert out.returncode == 0, out.stderr
     differ = [
         p.name
@@ -164,7 +153,7 @@ def test_cli_suite_reproduces_committed_files(tmp_path: Path) -> None:
 def test_cli_one_map(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     path = tmp_path / "m.json"
     args = ("generate", str(path), "--size", "5000", "--density", "2", "--seed", "5")
-    out = _cli(*args, "--sensors", "9", "--name", "mine")
+    out = run_cli(*args, "--sensors", "9", "--name", "mine")
     assert out.returncode == 0, out.stderr
     assert out.stdout.startswith(f"wrote {path}")
     assert path.read_text() == dumps_map(generate_map(5000, 2, 5, name="mine", n_sensors=9))
@@ -188,7 +177,7 @@ def test_cli_one_map(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None
     ],
 )
 def test_cli_bad_arguments(args: list[str], tmp_path: Path) -> None:
-    out = _cli("generate", *args, cwd=tmp_path)
+    out = run_cli("generate", *args, cwd=tmp_path)
     assert out.returncode == 2
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("lamde-mission generate: "), out.stderr
@@ -206,4 +195,6 @@ def test_examples_load() -> None:
     t = load_map(tiny)
     n_obstacles = sum(len(v) for v in tiny["obstacles"].values())
     assert n_obstacles == 1 and len(t.sensors) >= 1
-    assert isinstance(t.obstacles, Obstacles)
+    # the one circle (500, 500) r 60 is what the loaded map blocks: inside it, not just outside
+    probe = np.array([[500.0, 500.0], [500.0, 559.0], [500.0, 561.0], [50.0, 50.0]])
+    assert points_inside(probe, t.obstacles).tolist() == [True, True, False, False]

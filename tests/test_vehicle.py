@@ -30,7 +30,7 @@ from lamde_mission.vehicle.transfer import (
 from lamde_mission.vehicle.upload import upload_mission
 from lamde_mission.vehicle.wire import compare_items
 from planner_core.mapio import load_map
-from tests.test_vehicle_helpers import free_udp_port, hand_fence, hand_mission
+from tests.vehicle_helpers import free_udp_port, hand_fence, hand_mission
 
 VIAS = ("mavsdk", "pymavlink")
 

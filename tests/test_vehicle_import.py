@@ -25,7 +25,7 @@ from lamde_mission.vehicle.wire import WireItem, compare_items, wire_mission
 from planner_core.mapio import load_map
 from planner_core.problem import Problem
 from tests.conftest import MAPS, SUITE
-from tests.test_vehicle_helpers import free_udp_port
+from tests.vehicle_helpers import free_udp_port
 
 HAND = {
     "name": "every-obstacle",

@@ -25,7 +25,7 @@ from lamde_mission.vehicle.wire import (
     to_wire,
     wire_mission,
 )
-from tests.test_vehicle_helpers import RawGcs, free_udp_port, hand_fence, hand_mission
+from tests.vehicle_helpers import RawGcs, free_udp_port, hand_fence, hand_mission
 
 m = mavlink2
 FENCE = MISSION_TYPE.FENCE

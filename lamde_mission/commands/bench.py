@@ -8,11 +8,12 @@ import shlex
 import sys
 
 from lamde_mission.errors import UsageError
+from planner_core import defaults as D
 
 _DEFAULT_SUITE = "examples/maps/suite"
 _DEFAULT_OUT = "results"
-_DEFAULT_RUNS = 25
-_DEFAULT_BUDGET = 10_000
+_DEFAULT_RUNS = D.RUNS
+_DEFAULT_BUDGET = D.BUDGET
 # --best-known: the protocol for the best-known solutions (100 x the budget, 5 runs each, the
 # strongest optimisers); planner_core.bench.runner.BEST_KNOWN_* hold the same values
 _BK_RUNS = 5

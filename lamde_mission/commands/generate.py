@@ -8,9 +8,10 @@ import time
 from pathlib import Path
 
 from lamde_mission.errors import UsageError
+from planner_core import defaults as D
 
 _SIZES = (5000, 10000)
-_DEFAULT_SEED = 2025  # planner_core.suite.SUITE_SEED (not imported here: --help stays fast)
+_DEFAULT_SEED = D.SUITE_SEED
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:

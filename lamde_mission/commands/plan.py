@@ -8,7 +8,7 @@ import sys
 import time
 from typing import Any
 
-_CONFIGURATORS = ("adaptive", "fixed", "random")
+from planner_core import defaults as D
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -25,11 +25,15 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="mission file to write (.plan, .waypoints or .geojson)")
     p.add_argument("--format", choices=("plan", "waypoints", "geojson"),
                    help="output format (default: from OUT's suffix)")
-    p.add_argument("--seed", type=int, default=0, help="random seed (same seed, same plan)")
-    p.add_argument("--budget", type=int, default=10_000, help="evaluations (default 10000)")
-    p.add_argument("--population", type=int, default=100, help="DE population (default 100)")
-    p.add_argument("--configurator", choices=_CONFIGURATORS, default="adaptive",
-                   help="how DE operators and F/Cr are chosen each generation (default adaptive)")
+    p.add_argument("--seed", type=int, default=D.SEED,
+                   help=f"random seed (same seed, same plan; default {D.SEED})")
+    p.add_argument("--budget", type=int, default=D.BUDGET,
+                   help=f"evaluations (default {D.BUDGET}; must be >= the population)")
+    p.add_argument("--population", type=int, default=D.POPULATION,
+                   help=f"DE population (default {D.POPULATION}, at least {D.MIN_POPULATION})")
+    p.add_argument("--configurator", choices=D.CONFIGURATORS, default=D.CONFIGURATOR,
+                   help="how DE operators and F/Cr are chosen each generation "
+                   f"(default {D.CONFIGURATOR})")
     p.add_argument("--fixed-length", action="store_true",
                    help="use all I_max hover points (the paper's LAMDE-F ablation)")
     p.add_argument("--no-polish", action="store_true", help="skip the hover-time LP polish")
@@ -155,11 +159,10 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"-o/--output: {exc}") from None
     if args.plot and not args.plot.lower().endswith((".png", ".svg")):
         raise UsageError(f"--plot: {args.plot}: image format must be PNG or SVG (.png or .svg)")
-    if args.population < 5:
-        raise UsageError(f"--population: must be >= 5, got {args.population}")
-    if args.budget < args.population:
-        raise UsageError(f"--budget: must be >= the population ({args.population}), "
-                         f"got {args.budget}")
+    try:
+        D.check_run_args(population=args.population, budget=args.budget)
+    except ValueError as exc:  # "population: must be ...": name the option as typed
+        raise UsageError(f"--{exc}") from None
     m = load_map_or_fail(args.map)
 
     from lamde_mission.api import plan as make_plan

@@ -25,6 +25,7 @@ from planner_core.baselines.budget import (
     Trace,
     as_budgeted,
 )
+from planner_core.defaults import CONFIGURATORS, POPULATION, SCORE_FACTOR
 
 __all__ = [
     "BudgetExceeded",
@@ -73,7 +74,8 @@ def _de(configurator: str, variable_length: bool) -> OptimiserSpec:
     return OptimiserSpec(
         name=f"de-{configurator}{suffix}",
         target="planner_core.baselines.de:optimise",
-        description=f"our DE, {configurator} configurator, {enc}, population 100, no polish",
+        description=f"our DE, {configurator} configurator, {enc}, population {POPULATION}, "
+        "no polish",
         kwargs={"configurator": configurator},
         variable_length=variable_length,
     )
@@ -83,23 +85,19 @@ def _de(configurator: str, variable_length: bool) -> OptimiserSpec:
 REGISTRY: dict[str, OptimiserSpec] = {
     s.name: s
     for s in (
-        _de("adaptive", True),
-        _de("adaptive", False),
-        _de("fixed", True),
-        _de("fixed", False),
-        _de("random", True),
-        _de("random", False),
+        *(_de(name, fixed) for name in CONFIGURATORS for fixed in (True, False)),
         OptimiserSpec(
             "cmaes",
             "planner_core.baselines.cmaes:optimise",
-            "pycma CMA-ES on f + 10 phi in the unit box (BoundTransform), sigma0 0.3, default "
-            "popsize, restarts within the budget",
+            f"pycma CMA-ES on f + {SCORE_FACTOR:g} phi in the unit box (BoundTransform), "
+            "sigma0 0.3, default popsize, restarts within the budget",
         ),
         OptimiserSpec(
             "scipy-de",
             "planner_core.baselines.scipy_de:optimise",
-            "scipy.optimize.differential_evolution on f + 10 phi (best1bin, F in (0.5, 1), "
-            "CR 0.7, deferred updating), population 100, restarts within the budget",
+            f"scipy.optimize.differential_evolution on f + {SCORE_FACTOR:g} phi (best1bin, "
+            f"F in (0.5, 1), CR 0.7, deferred updating), population {POPULATION}, restarts "
+            "within the budget",
         ),
         OptimiserSpec(
             "random-search",

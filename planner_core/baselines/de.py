@@ -11,16 +11,17 @@ from typing import Any
 from planner_core.baselines import OptimiseResult
 from planner_core.baselines.budget import as_budgeted
 from planner_core.de import run
-from planner_core.de.operators import MIN_POPULATION
+from planner_core.defaults import CONFIGURATOR, MIN_POPULATION
+from planner_core.defaults import POPULATION as _POPULATION
 
 __all__ = ["optimise", "POPULATION"]
 
 #: population size of our DE in the benchmark (the planner's default)
-POPULATION = 100
+POPULATION = _POPULATION
 
 
 def optimise(
-    problem: Any, budget: int, seed: int, *, configurator: str = "adaptive"
+    problem: Any, budget: int, seed: int, *, configurator: str = CONFIGURATOR
 ) -> OptimiseResult:
     """Run the DE with `configurator` for exactly `budget` evaluations (initial population
     included)."""

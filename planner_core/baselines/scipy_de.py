@@ -23,12 +23,13 @@ from scipy.stats import qmc
 
 from planner_core.baselines import OptimiseResult
 from planner_core.baselines.budget import as_budgeted
+from planner_core.defaults import POPULATION as _POPULATION
 from planner_core.problem import PENALTY_FACTOR
 
 __all__ = ["optimise", "POPULATION"]
 
 #: population size (scipy's `init` array); at least 5 as scipy requires
-POPULATION = 100
+POPULATION = _POPULATION
 
 
 def optimise(

@@ -22,6 +22,7 @@ import numpy as np
 from planner_core.bench._io import read_json, write_bytes_atomic, write_text_atomic
 from planner_core.bench.records import RESULTS_FILE, read_records
 from planner_core.bench.stats import ALPHA, ScoreTable, score_table
+from planner_core.defaults import SCORE_FACTOR
 
 __all__ = ["DEFAULT_REFERENCE", "build_report", "order_optimisers", "format_table", "fmt"]
 
@@ -131,7 +132,7 @@ def convergence_figure(task: str, per_opt: dict[str, list[dict[str, Any]]], opts
         curves = []
         for r in runs:
             h = r["history"]
-            score = np.asarray(h["best_f"], float) + 10.0 * np.asarray(h["best_phi"], float)
+            score = np.asarray(h["best_f"], float) + SCORE_FACTOR * np.asarray(h["best_phi"], float)
             curves.append(_step_on_grid(h["evaluations"], score, grid))
         C = np.vstack(curves)
         ok = ~np.all(np.isnan(C), axis=0)
@@ -276,8 +277,8 @@ def build_report(
         f"- {len(tasks)} task(s) ({', '.join(tasks)}) from `{suite_dir}`; "
         f"budget {budget:,} evaluations per run (initial population included); "
         f"runs per optimiser and task: {', '.join(map(str, runs_per))}.",
-        "- Score = f + 10 * phi (lower is better; phi = 0 means feasible), as in the paper's "
-        "Table 2. Cells: mean ± std (ddof 0) over runs; best mean per task in bold.",
+        f"- Score = f + {SCORE_FACTOR:g} * phi (lower is better; phi = 0 means feasible), as in "
+        "the paper's Table 2. Cells: mean ± std (ddof 0) over runs; best mean per task in bold.",
         f"- Marks: Wilcoxon rank-sum test (`scipy.stats.ranksums`, two-sided, alpha {alpha}) of "
         f"each optimiser against the reference **{reference}**: `+` the reference is "
         "significantly better, `-` significantly worse, `~` no significant difference.",

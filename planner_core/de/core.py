@@ -25,10 +25,10 @@ import numpy as np
 
 from planner_core.de import fast
 from planner_core.de.operators import (
-    MIN_POPULATION,
     crossover_words,
     donor_words,
 )
+from planner_core.defaults import BUDGET, CONFIGURATOR, MIN_POPULATION, POPULATION
 
 
 class BoxProblem(Protocol):
@@ -275,7 +275,9 @@ def to_unit(problem: BoxProblem, X: np.ndarray) -> np.ndarray:
     return np.clip(np.where(span > 0, U, 0.0), 0.0, 1.0)
 
 
-def init(problem: BoxProblem, seed: int, population: int = 100, budget: int = 10_000) -> DEState:
+def init(
+    problem: BoxProblem, seed: int, population: int = POPULATION, budget: int = BUDGET
+) -> DEState:
     """Initial population in the unit box, evaluated (these N evaluations count).
 
     Uniform, unless the problem offers `initial_population(rng, n)` (problem-space points,
@@ -461,10 +463,10 @@ def _progress(state: DEState) -> Progress:
 def run(
     problem: BoxProblem,
     *,
-    configurator: Configurator | str = "adaptive",
+    configurator: Configurator | str = CONFIGURATOR,
     seed: int = 0,
-    population: int = 100,
-    budget: int = 10_000,
+    population: int = POPULATION,
+    budget: int = BUDGET,
     callback: Callable[[Progress], None] | None = None,
 ) -> Result:
     """Optimise ``problem`` until the budget is spent; same seed -> identical result.

@@ -37,8 +37,7 @@ MUTATIONS: tuple[str, ...] = (
 CROSSOVERS: tuple[str, ...] = ("bin", "exp")
 N_MUTATIONS = len(MUTATIONS)
 N_CROSSOVERS = len(CROSSOVERS)
-N_DONORS = 5  # the most donors any mutation needs (rand/2)
-MIN_POPULATION = N_DONORS + 1
+N_DONORS = 5  # the most donors any mutation needs (rand/2); MIN_POPULATION = N_DONORS + 1
 
 # Every mutation is  v = x[a] + F (x[b] - x[c]) + F (x[p] - x[q]).  Columns of the candidate
 # matrix: 0 = i, 1 = best, 2..6 = r1..r5.  A one-difference operator uses (p, q) = (i, i), whose

@@ -1,4 +1,5 @@
-"""Helpers for the tests/test_vehicle*.py files (no tests here): ports, missions, a raw GCS."""
+"""Helpers for the tests/test_vehicle*.py files: ports, missions, a raw GCS (no tests, so not
+named test_*)."""
 
 from __future__ import annotations
 

@@ -1,0 +1,216 @@
+"""Every default of the planner in one table: name, value, one-line meaning, valid range.
+
+In the spirit of pycma's options (``cma.CMAOptions``): one entry per setting, read by the CLI,
+the Python API, the optimisation env, the benchmark and the map loader, so a value is changed in
+one place and every ``--help`` text, error message and README table follows. This module
+imports nothing but the standard library (the CLI reads it while building ``--help`` without
+loading numpy or numba).
+
+Read a value with ``DEFAULTS["population"].value`` or the module constants (``POPULATION``,
+``BUDGET``, ...); check a user's value with :func:`check`, which raises a ``ValueError`` whose
+message starts with the entry's name (``"population: must be an integer >= 6, got 5"``).
+:func:`render_markdown` renders the table (the README's "Defaults" section is generated from it
+and a test keeps the two equal).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+__all__ = [
+    "BUDGET",
+    "CONFIGURATOR",
+    "CONFIGURATORS",
+    "DEFAULTS",
+    "DELTA",
+    "Default",
+    "ETA",
+    "MAP_DEFAULTS",
+    "MIN_POPULATION",
+    "POPULATION",
+    "RUNS",
+    "SCORE_FACTOR",
+    "SEED",
+    "SUITE_SEED",
+    "check",
+    "check_run_args",
+    "render_markdown",
+]
+
+
+@dataclass(frozen=True)
+class Default:
+    """One setting: its name, default value, a one-line meaning, and its valid range.
+
+    ``valid`` is the range in words (shown in tables and error messages); ``ok`` is the same
+    range as a predicate over a candidate value (None: any value of the default's type).
+    """
+
+    name: str
+    value: Any
+    meaning: str
+    valid: str
+    ok: Callable[[Any], bool] | None = None
+
+    def check(self, value: Any) -> Any:
+        """Return ``value`` if it lies in the valid range, else raise ``ValueError`` naming
+        the setting: ``"<name>: must be <valid>, got <value!r>"``."""
+        if self.ok is not None and not self.ok(value):
+            raise ValueError(f"{self.name}: must be {self.valid}, got {value!r}")
+        return value
+
+
+def _is_int(v: Any) -> bool:
+    # bool is an int subclass but never a count; numpy integers expose __index__
+    return not isinstance(v, bool) and hasattr(v, "__index__") and not isinstance(v, float)
+
+
+def _int_at_least(lo: int) -> Callable[[Any], bool]:
+    return lambda v: _is_int(v) and int(v) >= lo
+
+
+def _positive_number(v: Any) -> bool:
+    return (not isinstance(v, bool) and isinstance(v, int | float) and math.isfinite(v)
+            and v > 0)
+
+
+#: the DE's mutations draw up to five donors distinct from each other and from the target
+#: (rand/2), so a population needs at least six members (``de.operators.N_DONORS + 1``)
+MIN_POPULATION = 6
+#: configurator names, the default first (the hand-made adaptive DE until a trained policy beats
+#: it on unseen maps); ``planner_core.de.configurators`` registers exactly these
+CONFIGURATORS: tuple[str, ...] = ("adaptive", "fixed", "random")
+
+_RUN: tuple[Default, ...] = (
+    Default("population", 100, "DE population size N (individuals per generation)",
+            f"an integer >= {MIN_POPULATION}", _int_at_least(MIN_POPULATION)),
+    Default("budget", 10_000, "objective evaluations per run, the initial population included "
+            "(paper Sec. 5.1)", "an integer >= population", _int_at_least(MIN_POPULATION)),
+    Default("min_population", MIN_POPULATION, "smallest population the mutations work with "
+            "(five distinct donors + the target, for rand/2)", f"fixed at {MIN_POPULATION}",
+            lambda v: v == MIN_POPULATION),
+    Default("configurator", CONFIGURATORS[0], "how each generation's mutation, crossover, F and "
+            "Cr are chosen per individual", "one of " + ", ".join(CONFIGURATORS),
+            lambda v: v in CONFIGURATORS),
+    Default("seed", 0, "random seed of a planning run (same seed, same plan)", "an integer >= 0",
+            _int_at_least(0)),
+    Default("score_factor", 10.0, "penalised score f + 10 * phi that ranks optimisers "
+            "(paper Sec. 5.2)", "a number > 0", _positive_number),
+    Default("suite_seed", 2025, "seed the committed 16-map benchmark suite was generated with",
+            "an integer >= 0", _int_at_least(0)),
+    Default("runs", 25, "benchmark runs per optimiser and task (paper Sec. 5.1)",
+            "an integer >= 1", _int_at_least(1)),
+    Default("eta", 10.0, "scale of the env's mantissa-exponent encoding: exponent b is "
+            "observed as b / eta (paper Sec. 4.2)", "a number > 0", _positive_number),
+    Default("delta", 1e-8, "violation at or below which the env's reward counts a solution "
+            "feasible (paper Sec. 4.2)", "a number > 0", _positive_number),
+)
+
+
+def _number(lo: float, *, strict: bool) -> Callable[[Any], bool]:
+    def ok(v: Any) -> bool:
+        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+            return False
+        return v > lo if strict else v >= lo
+
+    return ok
+
+
+def _unit(v: Any) -> bool:
+    return _number(0.0, strict=False)(v) and v <= 1
+
+
+#: the map file's optional fields (``planner_core.mapio`` takes its defaults from here), keyed
+#: by their JSON path; paper symbols in the meaning
+_MAP: tuple[Default, ...] = (
+    Default("uav.altitude", 100.0, "H, cruise altitude above take-off, m", "> 0",
+            _number(0, strict=True)),
+    Default("uav.max_speed", 20.0, "v_max, m/s", "> 0", _number(0, strict=True)),
+    Default("uav.acceleration", 4.0, "a, m/s^2", "> 0", _number(0, strict=True)),
+    Default("uav.max_hover_time", 300.0, "T_max, s per hover point", "> 0",
+            _number(0, strict=True)),
+    Default("uav.max_hover_points", None, "I_max; null: 10 when the larger side <= 5000 m, "
+            "else 20", "null or an integer > 0", lambda v: v is None or _int_at_least(1)(v)),
+    Default("uav.activation_threshold", 0.5, "tau: hover point i is active when eps_i >= tau",
+            "0 .. 1", _unit),
+    Default("radio.peak_rate", 10.0, "R_c, Mbit/s", "> 0", _number(0, strict=True)),
+    Default("radio.decay", 0.01, "xi, Mbit/s per metre", ">= 0", _number(0, strict=False)),
+    Default("radio.bandwidth", 25.0, "R_lambda, Mbit/s", "> 0", _number(0, strict=True)),
+    Default("radio.required_data", 200.0, "Q_lambda, Mbit (per sensor unless it sets its own)",
+            ">= 0", _number(0, strict=False)),
+    Default("objective.alpha", 0.5, "weight of flight time against hover time", "0 .. 1",
+            _unit),
+    Default("objective.collision_offset", 1000.0, "mu", ">= 0", _number(0, strict=False)),
+    Default("objective.collision_weight", 10.0, "nu, per metre", ">= 0",
+            _number(0, strict=False)),
+    Default("safety.clearance", 10.0, "metres kept between every leg and every obstacle: "
+            "obstacles are inflated by it for planning (0: the paper's model)", ">= 0",
+            _number(0, strict=False)),
+    Default("safety.data_margin", 0.02, "fraction added to every sensor's required data for "
+            "planning (0: the paper's model)", "0 .. 1", _unit),
+)
+
+#: every run setting by name, in table order
+DEFAULTS: dict[str, Default] = {d.name: d for d in _RUN}
+#: every optional map field by its JSON path (``"uav.altitude"``), in table order
+MAP_DEFAULTS: dict[str, Default] = {d.name: d for d in _MAP}
+
+POPULATION: int = DEFAULTS["population"].value
+BUDGET: int = DEFAULTS["budget"].value
+CONFIGURATOR: str = DEFAULTS["configurator"].value
+SEED: int = DEFAULTS["seed"].value
+SCORE_FACTOR: float = DEFAULTS["score_factor"].value
+SUITE_SEED: int = DEFAULTS["suite_seed"].value
+RUNS: int = DEFAULTS["runs"].value
+ETA: float = DEFAULTS["eta"].value
+DELTA: float = DEFAULTS["delta"].value
+
+
+def check(name: str, value: Any) -> Any:
+    """Return ``value`` if it is valid for setting ``name``; else ``ValueError`` naming it."""
+    table = DEFAULTS if name in DEFAULTS else MAP_DEFAULTS
+    return table[name].check(value)
+
+
+def check_run_args(*, population: Any, budget: Any, configurator: Any = None) -> None:
+    """Check a planning run's population, budget and configurator name together.
+
+    Raises ``ValueError`` with one line naming the first bad field: population must be an
+    integer >= ``MIN_POPULATION``; budget an integer >= population; configurator (when a str)
+    one of ``CONFIGURATORS`` (a configurator object passes unchecked).
+    """
+    check("population", population)
+    check("budget", budget)
+    if int(budget) < int(population):
+        raise ValueError(f"budget: must be an integer >= population ({population}), "
+                         f"got {budget!r}")
+    if isinstance(configurator, str):
+        check("configurator", configurator)
+
+
+def _cell(v: Any) -> str:
+    if v is None:
+        return "null"
+    if isinstance(v, str):
+        return f"`{v}`"
+    if isinstance(v, int) and not isinstance(v, bool) and abs(v) >= 10_000:
+        return f"{v:,}"
+    return f"{v:g}" if isinstance(v, float) else str(v)
+
+
+def render_markdown(table: dict[str, Default] | None = None) -> str:
+    """The table as GitHub Markdown (name, default, meaning, valid range), one row per entry,
+    ending with a newline. ``table`` defaults to the run settings followed by the map fields."""
+    rows = list((table or {**DEFAULTS, **MAP_DEFAULTS}).values())
+    lines = ["| name | default | meaning | valid |", "| --- | --- | --- | --- |"]
+    lines += [f"| `{d.name}` | {_cell(d.value)} | {d.meaning} | {d.valid} |" for d in rows]
+    return "\n".join(lines) + "\n"
+
+
+if __name__ == "__main__":  # python -m planner_core.defaults: the table as README Markdown
+    import sys
+
+    sys.stdout.write(render_markdown())

@@ -1,0 +1,311 @@
+"""The mission as the vehicle sees it: MAVLink items, their command/frame enums, and the route
+they fly.
+
+This is the sim's vocabulary: `lamde_mission` writes plans into it (`lamde_mission.items`
+re-exports these names) and the sim reads missions through it. Pure values and functions: no
+I/O, no vehicle, nothing of the optimiser. Command, frame and mission-type numbers are pymavlink's
+generated constants (MAVLink common.xml).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any, Literal
+
+import numpy as np
+from pymavlink import mavutil
+
+from sim.geo import latlon_to_enu, origin_of
+
+__all__ = [
+    "CMD",
+    "FRAME",
+    "MISSION_TYPE",
+    "SNAP_M",
+    "MissionError",
+    "MissionItem",
+    "Route",
+    "fence_from_items",
+    "items_equal",
+    "items_to_route",
+]
+
+_m = mavutil.mavlink
+
+
+class CMD:
+    """The MAV_CMD values this module writes or reads (from pymavlink's generated constants)."""
+
+    WAYPOINT = _m.MAV_CMD_NAV_WAYPOINT  # 16
+    LOITER_UNLIM = _m.MAV_CMD_NAV_LOITER_UNLIM  # 17
+    LOITER_TIME = _m.MAV_CMD_NAV_LOITER_TIME  # 19
+    RETURN_TO_LAUNCH = _m.MAV_CMD_NAV_RETURN_TO_LAUNCH  # 20
+    LAND = _m.MAV_CMD_NAV_LAND  # 21
+    TAKEOFF = _m.MAV_CMD_NAV_TAKEOFF  # 22
+    DO_CHANGE_SPEED = _m.MAV_CMD_DO_CHANGE_SPEED  # 178
+    FENCE_POLYGON_VERTEX_INCLUSION = _m.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION  # 5001
+    FENCE_POLYGON_VERTEX_EXCLUSION = _m.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_EXCLUSION  # 5002
+    FENCE_CIRCLE_INCLUSION = _m.MAV_CMD_NAV_FENCE_CIRCLE_INCLUSION  # 5003
+    FENCE_CIRCLE_EXCLUSION = _m.MAV_CMD_NAV_FENCE_CIRCLE_EXCLUSION  # 5004
+
+
+class FRAME:
+    GLOBAL = _m.MAV_FRAME_GLOBAL  # 0: altitude above mean sea level
+    MISSION = _m.MAV_FRAME_MISSION  # 2: not a position (DO commands)
+    GLOBAL_RELATIVE_ALT = _m.MAV_FRAME_GLOBAL_RELATIVE_ALT  # 3: altitude above home
+    GLOBAL_INT = _m.MAV_FRAME_GLOBAL_INT  # 5
+    GLOBAL_RELATIVE_ALT_INT = _m.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT  # 6
+
+
+class MISSION_TYPE:  # noqa: N801 - mirrors the MAVLink enum name
+    MISSION = _m.MAV_MISSION_TYPE_MISSION  # 0
+    FENCE = _m.MAV_MISSION_TYPE_FENCE  # 1
+    RALLY = _m.MAV_MISSION_TYPE_RALLY  # 2
+
+
+class MissionError(ValueError):
+    """A mission the sim cannot fly (unsupported command or frame, missing positions)."""
+
+
+@dataclass(frozen=True)
+class MissionItem:
+    """One MAVLink MISSION_ITEM: x = latitude (deg), y = longitude (deg), z = altitude (m)."""
+
+    seq: int
+    command: int
+    frame: int = FRAME.GLOBAL_RELATIVE_ALT
+    current: int = 0
+    autocontinue: int = 1
+    param1: float = 0.0
+    param2: float = 0.0
+    param3: float = 0.0
+    param4: float = 0.0
+    x: float = 0.0
+    y: float = 0.0
+    z: float = 0.0
+    mission_type: int = MISSION_TYPE.MISSION
+
+    @property
+    def params(self) -> tuple[float, float, float, float, float, float, float]:
+        """The seven MAVLink parameters [p1, p2, p3, p4, lat, lon, alt]."""
+        return (self.param1, self.param2, self.param3, self.param4, self.x, self.y, self.z)
+
+    def with_seq(self, seq: int) -> MissionItem:
+        return replace(self, seq=int(seq))
+
+    def without_nan(self, fill: float = 0.0) -> MissionItem:
+        """This item with NaN parameters replaced by `fill` (for formats without NaN)."""
+        names = ("param1", "param2", "param3", "param4", "x", "y", "z")
+        return replace(self, **{k: fill for k in names if math.isnan(getattr(self, k))})
+
+    def same_as(self, other: MissionItem, *, rel: float = 0.0, abs_: float = 0.0) -> bool:
+        """Equality that treats NaN parameters as equal (dataclass `==` does not)."""
+        ints = ("seq", "command", "frame", "current", "autocontinue", "mission_type")
+        if any(int(getattr(self, k)) != int(getattr(other, k)) for k in ints):
+            return False
+        for a, b in zip(self.params, other.params, strict=True):
+            if math.isnan(a) or math.isnan(b):
+                if not (math.isnan(a) and math.isnan(b)):
+                    return False
+            elif not math.isclose(a, b, rel_tol=rel, abs_tol=abs_):
+                return False
+        return True
+
+
+def items_equal(
+    a: Sequence[MissionItem], b: Sequence[MissionItem], *, rel: float = 0.0, abs_: float = 0.0
+) -> bool:
+    """Two item lists are equal item by item (NaN equal to NaN)."""
+    if len(a) != len(b):
+        return False
+    return all(x.same_as(y, rel=rel, abs_=abs_) for x, y in zip(a, b, strict=True))
+
+
+# ------------------------------------------------------------------------- fence items -> shapes
+
+
+def fence_from_items(items: Iterable[MissionItem]) -> tuple[list[tuple], list[list[tuple]]]:
+    """Group fence items into circles [(lat, lon, radius, inclusion)] and polygons
+    [[(lat, lon), ...] with `inclusion` as the first element's 3rd field]; raise MissionError
+    on a polygon whose vertex count does not match param1."""
+    circles: list[tuple] = []
+    polygons: list[list[tuple]] = []
+    pending: list[MissionItem] = []
+    poly_cmds = (CMD.FENCE_POLYGON_VERTEX_EXCLUSION, CMD.FENCE_POLYGON_VERTEX_INCLUSION)
+    for it in items:
+        if it.command in (CMD.FENCE_CIRCLE_EXCLUSION, CMD.FENCE_CIRCLE_INCLUSION):
+            if pending:
+                raise MissionError(f"fence item {it.seq}: polygon interrupted before its end")
+            inclusion = it.command == CMD.FENCE_CIRCLE_INCLUSION
+            circles.append((it.x, it.y, it.param1, inclusion))
+        elif it.command in poly_cmds:
+            if pending and (it.command != pending[0].command or it.param1 != pending[0].param1):
+                raise MissionError(f"fence item {it.seq}: polygon interrupted before its end")
+            pending.append(it)
+            n = int(round(pending[0].param1))
+            if n < 3:
+                raise MissionError(f"fence item {it.seq}: a polygon needs at least 3 vertices")
+            if len(pending) == n:
+                inclusion = pending[0].command == CMD.FENCE_POLYGON_VERTEX_INCLUSION
+                polygons.append([(p.x, p.y, inclusion) for p in pending])
+                pending = []
+        else:
+            raise MissionError(f"fence item {it.seq}: command {it.command} is not a fence item")
+    if pending:
+        raise MissionError("fence: the last polygon has fewer vertices than its param1 says")
+    return circles, polygons
+
+
+# ----------------------------------------------------------------------------- items -> route
+
+#: legs shorter than this (metres) are zero: below what a mission file carries (MAVLink's
+#: int32 1e-7 degree latitude is ~1.1 cm); avoids sqrt(d) blowing round-off up into seconds.
+SNAP_M = 1e-6
+
+_GLOBAL_FRAMES = {FRAME.GLOBAL, FRAME.GLOBAL_INT}
+_RELATIVE_FRAMES = {FRAME.GLOBAL_RELATIVE_ALT, FRAME.GLOBAL_RELATIVE_ALT_INT}
+
+
+@dataclass(frozen=True, eq=False)
+class Route:
+    """What a mission asks the vehicle to fly, in the map's local metres.
+
+    `stops` are the horizontal positions the vehicle comes to rest at, in order (every
+    navigation item is a full stop, as in the paper); `launch` is where it takes off.
+    `hover_times[k]` is the time spent hovering at stop k (LOITER_TIME param1, or a WAYPOINT's
+    hold time); `is_hover[k]` marks the stops that are hover points of the paper's model.
+    """
+
+    launch: np.ndarray
+    takeoff_altitude: float | None
+    stops: np.ndarray
+    altitudes: np.ndarray
+    hover_times: np.ndarray
+    is_hover: np.ndarray
+    seqs: tuple[int, ...]
+    commands: tuple[int, ...]
+    speed: float | None
+    finish: Literal["land", "rtl", "none"]
+    notes: tuple[str, ...] = field(default=())
+
+    @property
+    def hover_points(self) -> np.ndarray:
+        return self.stops[self.is_hover]
+
+    @property
+    def hover_durations(self) -> np.ndarray:
+        return self.hover_times[self.is_hover]
+
+
+def _relative_alt(it: MissionItem, home_alt: float) -> float:
+    if it.frame in _RELATIVE_FRAMES:
+        return float(it.z)
+    if it.frame in _GLOBAL_FRAMES:
+        return float(it.z) - home_alt
+    raise MissionError(
+        f"item {it.seq}: frame {it.frame} is not supported (use a global frame, absolute or "
+        "relative altitude)"
+    )
+
+
+def _has_position(it: MissionItem) -> bool:
+    """MAVLink: latitude and longitude both 0 (or NaN) mean "the current position"."""
+    if math.isnan(it.x) or math.isnan(it.y):
+        return False
+    return not (it.x == 0.0 and it.y == 0.0)
+
+
+def _command_name(c: int) -> str:
+    entry = mavutil.mavlink.enums["MAV_CMD"].get(c)
+    return entry.name if entry is not None else f"command {c}"
+
+
+def items_to_route(items: Sequence[MissionItem], map: Any) -> Route:  # noqa: A002
+    """Read a mission back into local metres: launch, stops, hover times, speed and finish.
+
+    Supported navigation commands: TAKEOFF, WAYPOINT (param1 = hold s), LOITER_TIME
+    (param1 = s), LAND, RETURN_TO_LAUNCH; DO_CHANGE_SPEED sets the speed; other DO/CONDITION
+    commands are ignored with a note. Items after LAND/RTL are ignored with a note. Raises
+    MissionError for anything else the sim cannot fly.
+    """
+    lat0, lon0, home_alt = origin_of(map)
+    start = np.asarray(map.start, dtype=float)
+    launch = start.copy()
+    takeoff_alt: float | None = None
+    stops: list[tuple[float, float]] = []
+    alts: list[float] = []
+    hover: list[float] = []
+    is_hover: list[bool] = []
+    seqs: list[int] = []
+    cmds: list[int] = []
+    speed: float | None = None
+    finish: Literal["land", "rtl", "none"] = "none"
+    notes: list[str] = []
+    mission = [it for it in items if it.mission_type == MISSION_TYPE.MISSION]
+    if len(mission) != len(list(items)):
+        notes.append("non-mission items (fence/rally) were ignored")
+
+    def position(it: MissionItem) -> tuple[float, float]:
+        e, n = latlon_to_enu(it.x, it.y, (lat0, lon0, home_alt))
+        return float(e), float(n)
+
+    def current() -> tuple[float, float]:
+        return stops[-1] if stops else (float(launch[0]), float(launch[1]))
+
+    for it in mission:
+        c = it.command
+        if finish != "none":
+            notes.append(f"items from seq {it.seq} on come after the landing and were ignored")
+            break
+        if c == CMD.TAKEOFF:
+            if stops or takeoff_alt is not None:
+                raise MissionError(f"item {it.seq}: TAKEOFF in flight is not supported")
+            if _has_position(it):
+                launch = np.array(position(it))
+            takeoff_alt = _relative_alt(it, home_alt)
+        elif c in (CMD.WAYPOINT, CMD.LOITER_TIME):
+            if c == CMD.LOITER_TIME and not (it.param1 >= 0 and math.isfinite(it.param1)):
+                raise MissionError(f"item {it.seq}: LOITER_TIME needs a finite time >= 0 s")
+            hold = float(it.param1) if math.isfinite(it.param1) else 0.0
+            stops.append(position(it) if _has_position(it) else current())
+            alts.append(_relative_alt(it, home_alt))
+            hover.append(max(hold, 0.0))
+            is_hover.append(c == CMD.LOITER_TIME or hold > 0.0)
+            seqs.append(int(it.seq))
+            cmds.append(int(c))
+        elif c == CMD.LAND:
+            stops.append(position(it) if _has_position(it) else current())
+            alts.append(0.0)
+            hover.append(0.0)
+            is_hover.append(False)
+            seqs.append(int(it.seq))
+            cmds.append(int(c))
+            finish = "land"
+        elif c == CMD.RETURN_TO_LAUNCH:
+            finish = "rtl"
+        elif c == CMD.DO_CHANGE_SPEED:
+            if it.param2 > 0 and math.isfinite(it.param2):
+                speed = float(it.param2)
+        elif c < 100:  # MAV_CMD_NAV_* range: a movement the sim cannot model
+            raise MissionError(f"item {it.seq}: {_command_name(c)} is not supported by the sim")
+        else:  # CONDITION_* / DO_* / others: no horizontal motion
+            notes.append(f"item {it.seq}: {_command_name(c)} ignored by the sim")
+    if not stops:
+        raise MissionError("the mission has no navigation items to fly")
+    if takeoff_alt is None:
+        notes.append("no TAKEOFF item: launch assumed at the map's start")
+    return Route(
+        launch=launch,
+        takeoff_altitude=takeoff_alt,
+        stops=np.array(stops, dtype=float).reshape(-1, 2),
+        altitudes=np.array(alts, dtype=float),
+        hover_times=np.array(hover, dtype=float),
+        is_hover=np.array(is_hover, dtype=bool),
+        seqs=tuple(seqs),
+        commands=tuple(cmds),
+        speed=speed,
+        finish=finish,
+        notes=tuple(notes),
+    )

@@ -1,0 +1,115 @@
+"""The one defaults table: its readers agree with it, bad values name the field, the README
+table is rendered from it."""
+
+from __future__ import annotations
+
+import ast
+import inspect
+import re
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import lamde_mission
+from planner_core import defaults as D
+from planner_core.de import core as de_core
+from planner_core.de.configurators import _REGISTRY as CONFIGURATOR_REGISTRY
+from planner_core.de.operators import N_DONORS
+from planner_core.env import OptimizationEnv
+from planner_core.mapio import MapFile
+from tests.conftest import MAPS, ROOT, one_line_error, run_cli
+
+
+def test_module_imports_only_the_standard_library() -> None:
+    tree = ast.parse(inspect.getsource(D))
+    names = {a.name.split(".")[0] for n in ast.walk(tree) if isinstance(n, ast.Import)
+             for a in n.names}
+    names |= {n.module.split(".")[0] for n in ast.walk(tree)
+              if isinstance(n, ast.ImportFrom) and n.module}
+    assert names <= set(sys.stdlib_module_names) | {"__future__"}, names
+    # and the CLI can read it without loading numpy (a fresh process)
+    code = "import planner_core.defaults, sys; print('numpy' in sys.modules)"
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert r.stdout.strip() == "False", r.stderr
+
+
+def test_every_entry_is_complete_and_its_default_is_valid() -> None:
+    for table in (D.DEFAULTS, D.MAP_DEFAULTS):
+        for name, d in table.items():
+            assert d.name == name and d.meaning and d.valid
+            assert d.check(d.value) == d.value  # a default lies in its own valid range
+    assert D.check_run_args(population=D.POPULATION, budget=D.BUDGET,
+                            configurator=D.CONFIGURATOR) is None
+
+
+def test_the_readers_use_the_table() -> None:
+    assert N_DONORS + 1 == D.MIN_POPULATION  # rand/2 needs five donors besides the target
+    assert set(CONFIGURATOR_REGISTRY) == set(D.CONFIGURATORS)
+    sig = inspect.signature(lamde_mission.plan).parameters
+    assert sig["population"].default == D.POPULATION == 100
+    assert sig["budget"].default == D.BUDGET == 10_000
+    assert sig["configurator"].default == D.CONFIGURATOR == "adaptive"
+    run_sig = inspect.signature(de_core.run).parameters
+    assert run_sig["population"].default == D.POPULATION and run_sig["budget"].default == D.BUDGET
+    env = OptimizationEnv()
+    assert (env.population, env.budget, env.eta, env.delta) == (D.POPULATION, D.BUDGET, D.ETA,
+                                                                  D.DELTA)
+    from planner_core.baselines import REGISTRY
+    from planner_core.problem import PENALTY_FACTOR
+    from planner_core.suite import SUITE_SEED
+
+    assert PENALTY_FACTOR == D.SCORE_FACTOR == 10.0 and SUITE_SEED == D.SUITE_SEED == 2025
+    assert {n for n in REGISTRY if n.startswith("de-")} == {
+        f"de-{c}{s}" for c in D.CONFIGURATORS for s in ("", "-fixedlen")}
+    from lamde_mission.api import CONFIGURATORS
+
+    assert CONFIGURATORS == D.CONFIGURATORS
+
+
+def test_map_loader_defaults_come_from_the_table() -> None:
+    schema = MapFile.model_json_schema()["$defs"]
+    for path, d in D.MAP_DEFAULTS.items():
+        section, field = path.split(".")
+        model = {"uav": "Uav", "radio": "Radio", "objective": "Objective",
+                 "safety": "Safety"}[section]
+        assert schema[model]["properties"][field].get("default") == d.value, path
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "field"),
+    [
+        ({"population": 5}, "population"),
+        ({"population": 6.0}, "population"),
+        ({"population": True}, "population"),
+        ({"population": 20, "budget": 19}, "budget"),
+        ({"configurator": "policy-v0"}, "configurator"),
+    ],
+)
+def test_api_names_the_bad_field(kwargs: dict, field: str) -> None:
+    with pytest.raises(ValueError, match=rf"^{field}: must be ") as exc:
+        lamde_mission.plan(MAPS / "tiny.json", **kwargs)
+    assert "\n" not in str(exc.value)
+
+
+def test_numpy_integers_are_accepted() -> None:
+    D.check_run_args(population=np.int64(6), budget=np.int32(12), configurator="fixed")
+    D.check("seed", np.uint8(3))
+
+
+def test_cli_population_5_is_one_line_and_exit_2(tmp_path) -> None:
+    out = tmp_path / "x.plan"
+    r = run_cli("plan", MAPS / "small-demo.json", "-o", out, "--population", "5")
+    line = one_line_error(r)
+    assert "--population" in line and str(D.MIN_POPULATION) in line
+    assert not out.exists()
+
+
+def test_readme_defaults_table_is_rendered_from_the_module() -> None:
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    m = re.search(r"<!-- defaults:begin -->\n(.*?)<!-- defaults:end -->", readme, re.S)
+    assert m, "README.md lost its generated defaults table markers"
+    assert m.group(1) == D.render_markdown(), (
+        "README's defaults table is stale: regenerate it with "
+        "`python -m planner_core.defaults --markdown`")
