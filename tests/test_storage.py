@@ -26,7 +26,7 @@ from planner_core.mapio import load_map
 from sim import replay, verify
 from tests.conftest import SUITE
 
-CASES = Path("/work/shared/cases/flyable")
+CASES = Path(__file__).resolve().parent / "data" / "flyable"
 CASE_TINY = {
     "name": "case-tiny",
     "origin": {"lat": 46.2, "lon": 7.3, "alt": 500.0},

@@ -21,6 +21,7 @@ __all__ = [
     "format_for",
     "write_mission",
     "read_mission",
+    "read_mission_lists",
     "load_mission_items",
     "home_of",
 ]
@@ -106,14 +107,25 @@ def write_mission(
 
 
 def read_mission(path: str | Path) -> tuple[list[MissionItem], list[MissionItem]]:
-    """(mission items, fence items) of a `.plan` or `.waypoints` file.
+    """(mission items, fence items) of a `.plan` or `.waypoints` file (`read_mission_lists`
+    also gives the rally points; an upload must use it, to leave nothing out).
 
     Raises MissionFileError, naming the file, for anything unreadable or unsupported
     (a GeoJSON file is refused: it is a display format without MAVLink commands).
     """
+    mission, fence, _rally = read_mission_lists(path)
+    return mission, fence
+
+
+def read_mission_lists(
+    path: str | Path,
+) -> tuple[list[MissionItem], list[MissionItem], list[MissionItem]]:
+    """(mission, fence, rally) items of a `.plan` or `.waypoints` file (a `.waypoints` file
+    has neither fence nor rally). A UTF-8 byte-order mark is accepted. MissionFileError naming
+    the file for anything unreadable or unsupported."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8-sig")
     except FileNotFoundError:
         raise MissionFileError(f"{path}: file not found") from None
     except (OSError, UnicodeDecodeError) as exc:
@@ -123,7 +135,7 @@ def read_mission(path: str | Path) -> tuple[list[MissionItem], list[MissionItem]
         if head.startswith("QGC WPL"):
             from lamde_mission.formats.waypoints import parse_waypoints
 
-            return parse_waypoints(text)[1], []
+            return parse_waypoints(text)[1], [], []
         if head.startswith("{"):
             try:
                 doc = json.loads(text)
@@ -134,9 +146,9 @@ def read_mission(path: str | Path) -> tuple[list[MissionItem], list[MissionItem]
                     "a GeoJSON file is a display export, not a mission; use the .plan or "
                     ".waypoints file written with it"
                 )
-            from lamde_mission.formats.qgc_plan import parse_plan_document
+            from lamde_mission.formats.qgc_plan import parse_plan_lists
 
-            return parse_plan_document(doc)
+            return parse_plan_lists(doc)
     except MissionError as exc:
         raise MissionFileError(f"{path}: {exc}") from None
     raise MissionFileError(

@@ -1,0 +1,115 @@
+"""The cases of ../shared/cases/flyable (copied to tests/data/flyable), each with the right value
+its README states; and the kind of fault each shows, on inputs of our own."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from lamde_mission.formats import MissionFileError, read_mission, read_mission_lists
+from lamde_mission.formats.qgc_plan import plan_document
+from lamde_mission.items import CMD, MISSION_TYPE, MissionItem
+from planner_core.mapio import load_map
+from sim import replay
+
+CASES = Path(__file__).resolve().parent / "data" / "flyable"
+
+
+def cli(*args: object) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "lamde_mission.cli", *map(str, args)],
+                          capture_output=True, text=True, timeout=300)  # fmt: skip
+
+
+def test_speed_change_applies_from_its_position_on():
+    m = load_map(CASES / "speed-map.json")
+    items, _ = read_mission(CASES / "speed-change.waypoints")
+    tl = replay(items, m)
+    assert tl.leg_times[0] == pytest.approx(25.0, abs=5e-3)  # 400 m at 20 m/s (+ v/a)
+    assert tl.leg_times[1] == pytest.approx(81.25, abs=5e-3)  # 400 m at 5 m/s
+    assert tl.totals.t_fly == pytest.approx(106.25, abs=5e-3)
+
+
+def test_do_jump_target_renumbered_and_repeats_flown():
+    items, _ = read_mission(CASES / "do-jump.waypoints")
+    jump = next(it for it in items if it.command == CMD.DO_JUMP)
+    target = items[int(jump.param1)]
+    assert target.command == CMD.LOITER_TIME  # row 2 of the file is item 1 of the list
+    m = load_map(CASES / "speed-map.json")
+    tl = replay(items, m)
+    assert tl.totals.t_hover == pytest.approx(5.0 * 3)  # once, then 2 repeats
+    assert len(tl.hover_times) == 3
+
+
+def test_do_jump_forever_is_refused_clearly():
+    from lamde_mission.items import MissionError
+
+    m = load_map(CASES / "speed-map.json")
+    items, _ = read_mission(CASES / "do-jump.waypoints")
+    k = next(i for i, it in enumerate(items) if it.command == CMD.DO_JUMP)
+    from dataclasses import replace
+
+    items[k] = replace(items[k], param2=-1.0)
+    with pytest.raises(MissionError, match="forever"):
+        replay(items, m)
+
+
+def test_plan_rally_breach_return_and_do_jump_id():
+    mission, fence, rally = read_mission_lists(CASES / "rally-and-jump.plan")
+    jump = next(it for it in mission if it.command == CMD.DO_JUMP)
+    assert jump.param1 == 1.0  # doJumpId 2 is the WAYPOINT, list index 1
+    assert len(rally) == 2 and all(r.mission_type == MISSION_TYPE.RALLY for r in rally)
+    assert rally[0].command == CMD.RALLY_POINT and rally[0].z == 30.0
+    assert [f.command for f in fence] == [CMD.FENCE_RETURN_POINT]
+    # written back, the file holds the same
+    doc = plan_document(mission, fence, home=(46.2, 7.3, 500), cruise_speed=15, rally=rally)
+    assert doc["geoFence"]["breachReturn"][2] == 30.0
+    assert len(doc["rallyPoints"]["points"]) == 2
+    assert doc["mission"]["items"][2]["params"][0] == 2  # doJumpId again
+
+
+def test_fence_vertices_in_a_mission_list_are_refused():
+    with pytest.raises(MissionFileError, match="row 0: .*5001.*fence item"):
+        read_mission(CASES / "fence-vertices.waypoints")
+    r = cli("upload", CASES / "fence-vertices.waypoints", "--timeout", "1")
+    assert r.returncode == 2 and "fence item" in r.stderr
+
+
+def test_bom_is_read_as_usual(tmp_path):
+    plain = tmp_path / "plain.waypoints"
+    plain.write_bytes((CASES / "bom.waypoints").read_bytes().removeprefix(b"\xef\xbb\xbf"))
+    with_bom, _ = read_mission(CASES / "bom.waypoints")
+    without, _ = read_mission(plain)
+    assert with_bom == without and len(with_bom) == 5
+    r = cli("verify", CASES / "tiny-map.json", CASES / "bom.waypoints")
+    assert r.returncode in (0, 1) and "not a mission file" not in r.stderr
+    assert "C4 Q_j >= Q_lambda         PASS" in r.stdout
+
+
+@pytest.mark.parametrize(("path", "value", "field"), [
+    ((), 42, "version"), (("mission",), 7, "mission.version"),
+    (("geoFence",), 3, "geoFence.version"), (("rallyPoints",), 9, "rallyPoints.version")])
+def test_unsupported_plan_versions_are_refused_naming_the_field(tmp_path, path, value, field):
+    doc = json.loads((CASES / "rally-and-jump.plan").read_text())
+    node = doc
+    for p in path:
+        node = node[p]
+    node["version"] = value
+    f = tmp_path / "v.plan"
+    f.write_text(json.dumps(doc))
+    with pytest.raises(MissionFileError, match=f"{field}: version {value} is not supported"):
+        read_mission(f)
+
+
+def test_waypoints_row_0_kept_when_it_is_not_home(tmp_path):
+    f = tmp_path / "nohome.waypoints"
+    f.write_text("QGC WPL 110\n"
+                 "0\t0\t3\t22\t0\t0\t0\t0\t46.2\t7.3\t20\t1\n"
+                 "1\t0\t3\t19\t5\t0\t0\t0\t46.2001\t7.3001\t20\t1\n"
+                 "2\t0\t3\t21\t0\t0\t0\t0\t46.2002\t7.3002\t0\t1\n")  # fmt: skip
+    items, _ = read_mission(f)
+    assert [it.command for it in items] == [CMD.TAKEOFF, CMD.LOITER_TIME, CMD.LAND]
+    assert isinstance(items[0], MissionItem) and items[0].seq == 0
