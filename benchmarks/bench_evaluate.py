@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from planner_core import Problem, load_map
+from planner_core import defaults as D
 from planner_core.geometry import overlap_lengths_reference
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -34,7 +35,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("map", nargs="?", default=str(DEFAULT_MAP))
     ap.add_argument("--batches", type=int, default=100)
-    ap.add_argument("--population", type=int, default=100)
+    ap.add_argument("--population", type=int, default=D.POPULATION)
     ap.add_argument("--reference-solutions", type=int, default=100)
     args = ap.parse_args()
     m = load_map(args.map)

@@ -34,6 +34,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from planner_core import defaults as D
+
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_MAP = ROOT / "examples" / "maps" / "suite" / "T16.json"
 PHASES = ("evaluation", "seeding", "optimiser", "polish")
@@ -72,8 +74,8 @@ def child(args: argparse.Namespace) -> None:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("map", nargs="?", default=str(DEFAULT_MAP))
-    ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--budget", type=int, default=10_000)
+    ap.add_argument("--seed", type=int, default=D.SEED)
+    ap.add_argument("--budget", type=int, default=D.BUDGET)
     ap.add_argument("--cold", type=int, default=3, help="fresh processes, one plan() each")
     ap.add_argument("--warm", type=int, default=5, help="warm plan() calls in this process")
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)

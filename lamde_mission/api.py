@@ -11,6 +11,7 @@ import numpy as np
 
 from lamde_mission.result import Plan
 from planner_core import defaults as _defaults
+from planner_core.model import deb_not_worse
 
 __all__ = ["plan", "CONFIGURATORS"]
 
@@ -47,7 +48,7 @@ class _TimedProblem:
 
 def _deb_not_worse(a: dict[str, Any], b: dict[str, Any]) -> bool:
     """True when breakdown `a` is at least as good as `b` under Deb's ranking."""
-    return a["phi"] < b["phi"] or (a["phi"] == b["phi"] and a["f"] <= b["f"])
+    return bool(deb_not_worse(a["f"], a["phi"], b["f"], b["phi"]))
 
 
 def plan(

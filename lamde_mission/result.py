@@ -7,7 +7,8 @@ from typing import Any
 
 import numpy as np
 
-from planner_core.defaults import CONFIGURATOR, SCORE_FACTOR
+from planner_core.defaults import CONFIGURATOR
+from planner_core.model import penalised_score
 
 __all__ = ["Plan", "PLAN_FORMAT_VERSION"]
 
@@ -62,8 +63,8 @@ class Plan:
 
     @property
     def score(self) -> float:
-        """f + 10 * phi (paper Sec. 5.2)."""
-        return self.f + SCORE_FACTOR * self.phi
+        """f + 10 * phi (paper Sec. 5.2; `planner_core.model.penalised_score`)."""
+        return float(penalised_score(self.f, self.phi))
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready data; `Plan.from_dict(plan.to_dict())` gives an equal plan."""

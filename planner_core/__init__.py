@@ -12,6 +12,7 @@ from typing import Any
 __all__ = [
     "Map",
     "MapError",
+    "ModelParams",
     "PENALTY_FACTOR",
     "Problem",
     "flight_time",
@@ -25,10 +26,11 @@ _WHERE = {
     "MapError": "planner_core.mapio",
     "load_map": "planner_core.mapio",
     "map_json_schema": "planner_core.mapio",
-    "PENALTY_FACTOR": "planner_core.problem",
+    "ModelParams": "planner_core.model",
+    "PENALTY_FACTOR": "planner_core.model",
     "Problem": "planner_core.problem",
-    "flight_time": "planner_core.problem",
-    "penalised_score": "planner_core.problem",
+    "flight_time": "planner_core.model",
+    "penalised_score": "planner_core.model",
 }
 
 

@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from planner_core.mapio import Map, load_map
-from planner_core.problem import flight_time
+from planner_core.model import ModelParams, flight_time, slant_rates
 
 __all__ = ["LowerBound", "lower_bound", "hover_lower_bound", "DEFAULT_SPACING"]
 
@@ -57,8 +57,8 @@ class LowerBound:
 
 def _cell_rates(m: Map, spacing: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """Sparse (row = sensor, col = candidate cell, value = max rate over the cell) and the side."""
-    spec = m.spec
-    H, rc, xi = spec.uav.altitude, spec.radio.peak_rate, spec.radio.decay
+    mp = ModelParams.from_map(m)
+    H, rc, xi = mp.altitude, mp.peak_rate, mp.decay
     nx = max(1, math.ceil(m.width / spacing))
     ny = max(1, math.ceil(m.height / spacing))
     wx, wy = m.width / nx, m.height / ny
@@ -81,7 +81,7 @@ def _cell_rates(m: Map, spacing: float) -> tuple[np.ndarray, np.ndarray, np.ndar
         dx = np.maximum(np.maximum(ix * wx - sx, sx - (ix + 1) * wx), 0.0)
         dy = np.maximum(np.maximum(ky * wy - sy, sy - (ky + 1) * wy), 0.0)
         d2 = dx[:, None] ** 2 + dy[None, :] ** 2
-        rate = rc - xi * np.sqrt(d2 + H * H)
+        rate = slant_rates(d2, H, rc, xi)
         ii, kk = np.nonzero(rate > 0)
         rows.append(np.full(len(ii), j))
         cols.append(ix[ii] * ny + ky[kk])
@@ -131,9 +131,9 @@ def hover_lower_bound(
 def lower_bound(m: Map | str | dict, spacing: float = DEFAULT_SPACING) -> LowerBound:
     """LB = alpha * T_fly(|end - start|) + (1 - alpha) * H_LB for map `m` (see module docstring)."""
     m = load_map(m)
-    alpha = m.spec.objective.alpha
-    spec = m.spec.uav
-    fly = float(flight_time(np.linalg.norm(m.end - m.start), spec.max_speed, spec.acceleration))
+    mp = ModelParams.from_map(m)
+    alpha = mp.alpha
+    fly = float(flight_time(np.linalg.norm(mp.end - mp.start), mp.v_max, mp.accel))
     hover, n, side, status = hover_lower_bound(m, spacing)
     lb = alpha * fly + ((1.0 - alpha) * hover if alpha < 1.0 else 0.0)
     return LowerBound(

@@ -21,6 +21,8 @@ from dataclasses import dataclass
 from typing import Any
 
 __all__ = [
+    "BEST_KNOWN_BUDGET",
+    "BEST_KNOWN_RUNS",
     "BUDGET",
     "CONFIGURATOR",
     "CONFIGURATORS",
@@ -103,6 +105,11 @@ _RUN: tuple[Default, ...] = (
             "an integer >= 0", _int_at_least(0)),
     Default("runs", 25, "benchmark runs per optimiser and task (paper Sec. 5.1)",
             "an integer >= 1", _int_at_least(1)),
+    Default("best_known_budget", 1_000_000, "evaluations per run when searching best-known "
+            "solutions (`bench --best-known`: 100 x the paper's budget)", "an integer >= 1",
+            _int_at_least(1)),
+    Default("best_known_runs", 5, "runs per optimiser and task of `bench --best-known`",
+            "an integer >= 1", _int_at_least(1)),
     Default("eta", 10.0, "scale of the env's mantissa-exponent encoding: exponent b is "
             "observed as b / eta (paper Sec. 4.2)", "a number > 0", _positive_number),
     Default("delta", 1e-8, "violation at or below which the env's reward counts a solution "
@@ -165,6 +172,8 @@ SEED: int = DEFAULTS["seed"].value
 SCORE_FACTOR: float = DEFAULTS["score_factor"].value
 SUITE_SEED: int = DEFAULTS["suite_seed"].value
 RUNS: int = DEFAULTS["runs"].value
+BEST_KNOWN_BUDGET: int = DEFAULTS["best_known_budget"].value
+BEST_KNOWN_RUNS: int = DEFAULTS["best_known_runs"].value
 ETA: float = DEFAULTS["eta"].value
 DELTA: float = DEFAULTS["delta"].value
 
@@ -210,7 +219,37 @@ def render_markdown(table: dict[str, Default] | None = None) -> str:
     return "\n".join(lines) + "\n"
 
 
-if __name__ == "__main__":  # python -m planner_core.defaults: the table as README Markdown
+#: the README lines the generated table sits between
+README_MARKERS = ("<!-- defaults:begin -->\n", "<!-- defaults:end -->")
+
+
+def update_readme(path: str) -> bool:
+    """Rewrite the table between ``README_MARKERS`` in the file at ``path`` (temp file, then
+    rename); True if it changed. ValueError if the markers are missing."""
+    import os
+
+    with open(path, encoding="utf-8") as fh:
+        text = fh.read()
+    begin, end = README_MARKERS
+    i, j = text.find(begin), text.find(end)
+    if i < 0 or j < i:
+        raise ValueError(f"{path}: no {begin.strip()} ... {end} markers")
+    new = text[: i + len(begin)] + render_markdown() + text[j:]
+    if new == text:
+        return False
+    tmp = f"{path}.tmp{os.getpid()}"
+    with open(tmp, "w", encoding="utf-8") as fh:
+        fh.write(new)
+    os.replace(tmp, path)
+    return True
+
+
+if __name__ == "__main__":
+    # python -m planner_core.defaults            print the table as Markdown
+    # python -m planner_core.defaults README.md  rewrite README's generated table in place
     import sys
 
-    sys.stdout.write(render_markdown())
+    if len(sys.argv) > 1:
+        print(f"{sys.argv[1]}: " + ("updated" if update_readme(sys.argv[1]) else "up to date"))
+    else:
+        sys.stdout.write(render_markdown())

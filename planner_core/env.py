@@ -49,16 +49,9 @@ import numpy as np
 from gymnasium import spaces
 
 from planner_core import defaults as _defaults
-from planner_core.de.core import (
-    BoxProblem,
-    Config,
-    DEState,
-    ask,
-    evaluate,
-    init,
-    tell,
-)
+from planner_core.de.core import ask, evaluate, init, tell
 from planner_core.de.operators import N_CROSSOVERS, N_MUTATIONS
+from planner_core.de.types import BoxProblem, Config, DEState
 
 DEFAULT_ETA = _defaults.ETA
 DEFAULT_DELTA = _defaults.DELTA

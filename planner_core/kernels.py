@@ -3,7 +3,9 @@
 `Problem.evaluate` calls `model_terms` for the population, then the geometry kernel for the legs
 it wrote. It computes exactly what the numpy path of `Problem._evaluate_parts` computes (that path
 stays as the readable reference and feeds `breakdown`); a test holds the two together. Inactive
-hover points are skipped outright, which the numpy path cannot do.
+hover points are skipped outright, which the numpy path cannot do. The per-leg formulas (Eq. 1,
+the link rate) are the compiled scalars of `planner_core.model`; the parameters are the fields of
+the problem's `ModelParams`.
 """
 
 from __future__ import annotations
@@ -13,14 +15,9 @@ import math
 import numpy as np
 from numba import njit
 
+from planner_core.model import leg_time, slant_rate
+
 __all__ = ["model_terms"]
-
-
-@njit(cache=True, fastmath=False)
-def _leg_time(d: float, v_max: float, accel: float) -> float:
-    if d > v_max * v_max / accel:
-        return d / v_max + v_max / accel
-    return 2.0 * math.sqrt(d / accel)
 
 
 @njit(cache=True, fastmath=False)
@@ -55,13 +52,13 @@ def model_terms(
             B[s, k, 0] = x
             B[s, k, 1] = y
             k += 1
-            t_fly += _leg_time(math.hypot(x - px, y - py), v_max, accel)
+            t_fly += leg_time(math.hypot(x - px, y - py), v_max, accel)
             t_hover += t
             total = 0.0
             for j in range(J):
                 dx = x - sensors[j, 0]
                 dy = y - sensors[j, 1]
-                r = peak_rate - decay * math.sqrt(dx * dx + dy * dy + h2)
+                r = slant_rate(dx * dx + dy * dy, h2, peak_rate, decay)
                 if r > 0.0:
                     total += r
                     Q[j] += r * t
@@ -73,7 +70,7 @@ def model_terms(
         A[s, k, 1] = py
         B[s, k, 0] = end[0]
         B[s, k, 1] = end[1]
-        t_fly += _leg_time(math.hypot(end[0] - px, end[1] - py), v_max, accel)
+        t_fly += leg_time(math.hypot(end[0] - px, end[1] - py), v_max, accel)
         for m in range(k + 1, n_points + 1):  # unused legs: zero length at the end point
             A[s, m, 0] = end[0]
             A[s, m, 1] = end[1]

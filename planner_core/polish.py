@@ -17,7 +17,8 @@ from typing import Any
 import numpy as np
 
 from planner_core.geometry import overlap_lengths
-from planner_core.problem import L_VIO_TOL, Problem, flight_time
+from planner_core.model import L_VIO_TOL
+from planner_core.problem import Problem
 
 __all__ = ["BACKENDS", "PolishResult", "polish_hover_times", "ZERO_TIME"]
 
@@ -45,7 +46,7 @@ class PolishResult:
 def _route_flight_time(problem: Problem, pts: np.ndarray) -> float:
     nodes = np.vstack([problem.start, pts, problem.end])
     d = np.linalg.norm(np.diff(nodes, axis=0), axis=1)
-    return float(flight_time(d, problem.v_max, problem.accel).sum())
+    return float(problem.model.flight_time(d).sum())
 
 
 def _route_overlap(problem: Problem, pts: np.ndarray) -> float:

@@ -11,44 +11,13 @@ from typing import Any
 
 import numpy as np
 
-from planner_core.defaults import SCORE_FACTOR
 from planner_core.geometry import overlap_lengths
 from planner_core.kernels import model_terms
 from planner_core.mapio import Map, load_map
+from planner_core.model import ModelParams, collision_penalty, penalised_score
+from planner_core.seeding import Seeder
 
-__all__ = [
-    "Problem", "PENALTY_FACTOR", "penalised_score", "flight_time", "link_rates", "L_VIO_TOL"
-]
-
-#: The factor of the penalised score f + 10 * phi used to compare optimisers (paper Sec. 5.2).
-PENALTY_FACTOR = SCORE_FACTOR
-
-#: Overlap lengths at or below this many metres count as no collision (floating-point noise of
-#: tangent legs); anything longer triggers the full penalty mu + nu * L_vio.
-L_VIO_TOL = 1e-9
-
-
-def penalised_score(f: np.ndarray | float, phi: np.ndarray | float) -> np.ndarray | float:
-    """f + 10 * phi, the single number the paper ranks optimisers by."""
-    return f + PENALTY_FACTOR * phi
-
-
-def link_rates(
-    pts: np.ndarray, sensors: np.ndarray, altitude: float, peak_rate: float, decay: float
-) -> np.ndarray:
-    """R_ij = max(R_c - xi * sqrt(|p_i - s_j|^2 + H^2), 0): shape (..., I, J), Mbit/s."""
-    dx = pts[..., :, None, 0] - sensors[:, 0]
-    dy = pts[..., :, None, 1] - sensors[:, 1]
-    dist = np.sqrt(dx * dx + dy * dy + altitude**2)
-    rate = peak_rate - decay * dist
-    return np.maximum(rate, 0.0, out=rate)
-
-
-def flight_time(d: np.ndarray, v_max: float, accel: float) -> np.ndarray:
-    """Eq. 1: time to fly distance d from rest to rest with a trapezoid (or triangle) profile."""
-    d = np.asarray(d, dtype=float)
-    cruise = d > v_max * v_max / accel
-    return np.where(cruise, d / v_max + v_max / accel, 2.0 * np.sqrt(np.maximum(d, 0.0) / accel))
+__all__ = ["Problem"]
 
 
 class Problem:
@@ -57,29 +26,30 @@ class Problem:
     def __init__(self, map: Map | str | dict, *, variable_length: bool = True):  # noqa: A002
         self.map = load_map(map)
         self.variable_length = bool(variable_length)
-        m = self.map
-        self.n_points = m.max_hover_points
+        #: the model's parameters (`planner_core.model.ModelParams`), shared with the seeder,
+        #: the polish LP and the compiled kernels; the attributes below are its fields
+        self.model = mp = ModelParams.from_map(self.map)
+        self.n_points = mp.n_points
         self.dim = 4 * self.n_points
-        block = np.array([m.width, m.height, m.spec.uav.max_hover_time, 1.0])
+        block = np.array([mp.width, mp.height, mp.t_max, 1.0])
         self.lower = np.zeros(self.dim)
         self.upper = np.tile(block, self.n_points)
-        uav, radio, obj = m.spec.uav, m.spec.radio, m.spec.objective
-        self.tau = uav.activation_threshold
-        self.altitude = uav.altitude
-        self.v_max = uav.max_speed
-        self.accel = uav.acceleration
-        self.t_max = uav.max_hover_time
-        self.peak_rate = radio.peak_rate
-        self.decay = radio.decay
-        self.bandwidth = radio.bandwidth
-        self.alpha = obj.alpha
-        self.mu = obj.collision_offset
-        self.nu = obj.collision_weight
-        self.start = np.ascontiguousarray(m.start, dtype=float)
-        self.end = np.ascontiguousarray(m.end, dtype=float)
-        self.sensors = np.ascontiguousarray(m.sensors, dtype=float)
-        self.required = np.ascontiguousarray(m.required_data, dtype=float)
-        self.obstacles = m.obstacles
+        self.tau = mp.tau
+        self.altitude = mp.altitude
+        self.v_max = mp.v_max
+        self.accel = mp.accel
+        self.t_max = mp.t_max
+        self.peak_rate = mp.peak_rate
+        self.decay = mp.decay
+        self.bandwidth = mp.bandwidth
+        self.alpha = mp.alpha
+        self.mu = mp.mu
+        self.nu = mp.nu
+        self.start = mp.start
+        self.end = mp.end
+        self.sensors = mp.sensors
+        self.required = mp.required
+        self.obstacles = self.map.obstacles
 
     def __repr__(self) -> str:
         mode = "variable" if self.variable_length else "fixed"
@@ -115,7 +85,7 @@ class Problem:
 
     def rates(self, pts: np.ndarray) -> np.ndarray:
         """R_ij = max(R_c - xi * sqrt(|p_i - s_j|^2 + H^2), 0), shape (..., I, J) in Mbit/s."""
-        return link_rates(pts, self.sensors, self.altitude, self.peak_rate, self.decay)
+        return self.model.rates(pts)
 
     # ------------------------------------------------------------------ evaluation
     def _overlap(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -128,7 +98,7 @@ class Problem:
         a, b = self._legs(pts, active)
         seg = b - a
         dist = np.hypot(seg[..., 0], seg[..., 1])
-        leg_times = flight_time(dist, self.v_max, self.accel)
+        leg_times = self.model.flight_time(dist)
         t_fly = leg_times.sum(axis=1)
         hov = np.where(active, times, 0.0)
         t_hover = hov.sum(axis=1)
@@ -138,7 +108,7 @@ class Problem:
         Q = np.matmul(hov[:, None, :], R)[:, 0, :]
         v4_each = np.maximum(self.required - Q, 0.0)
         l_vio = self._overlap(a, b).sum(axis=1)
-        v5 = np.where(l_vio > L_VIO_TOL, self.mu + self.nu * l_vio, 0.0)
+        v5 = collision_penalty(l_vio, self.mu, self.nu)
         v3 = v3_each.sum(axis=1)
         v4 = v4_each.sum(axis=1)
         phi = v3 + v4 + v5
@@ -170,7 +140,7 @@ class Problem:
             self.bandwidth, self.v_max, self.accel, self.alpha, A, B, f, v3, v4,
         )  # fmt: skip
         l_vio = self._overlap(A, B).sum(axis=1)
-        v5 = np.where(l_vio > L_VIO_TOL, self.mu + self.nu * l_vio, 0.0)
+        v5 = collision_penalty(l_vio, self.mu, self.nu)
         return f, v3 + v4 + v5
 
     def breakdown(self, x: np.ndarray) -> dict[str, Any]:
@@ -221,9 +191,7 @@ class Problem:
         """One obstacle-aware sensor-serving start; the seeder is built once per problem."""
         seeder = self.__dict__.get("_seeder")
         if seeder is None:
-            from planner_core.seeding import Seeder
-
-            seeder = self.__dict__["_seeder"] = Seeder(self)
+            seeder = self.__dict__["_seeder"] = Seeder.for_problem(self)
         return seeder.solution(rng)
 
     # ------------------------------------------------------------------ encoding

@@ -5,9 +5,9 @@ Mbit of shortfall (V4), so on dense maps a population that starts from colliding
 sensor-serving routes ends collision-free with sensors unserved. `Seeder` builds starts that
 are feasible in most cases:
 
-1. once per problem, a *reduced visibility graph*: obstacle corners pushed out by a margin
-   (circles as circumscribed hexagons), edges between mutually visible nodes whose line is
-   tangent to both nodes' polygons (the only edges a shortest path uses);
+1. once per map, a *reduced visibility graph* (`planner_core.routing`): obstacle corners
+   pushed out by a margin (circles as circumscribed hexagons), edges between mutually visible
+   nodes whose line is tangent to both nodes' polygons (the only edges a shortest path uses);
 2. per start (every random draw from the caller's generator): k-means++-seeded sensor clusters
    grown until every sensor lies within a random service radius of a centre; centres pushed out
    of obstacles; an order by nearest neighbour + 2-opt on lengths that charge for crossing
@@ -19,32 +19,27 @@ are feasible in most cases:
    attempt, finally the least-colliding truncation. Hover times: each sensor from its best
    point (corners included), times a random 1.0-1.1 margin, capped at T_max.
 
-Only geometry queries run here (`overlap_lengths`, `points_inside`, `Problem.rates`): the DE
+Only geometry queries run here (`overlap_lengths`, `points_inside`, `ModelParams.rates`): the DE
 counts the evaluations of the starts itself.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 from numba import njit
 
-from planner_core.geometry import overlap_lengths, points_inside
-from planner_core.problem import flight_time
+from planner_core.geometry import Obstacles, overlap_lengths, points_inside
+from planner_core.model import ModelParams, flight_time, leg_time, slant_rate
+from planner_core.routing import build_visibility_graph, open_tour
+from planner_core.routing.graph import CLEAR as _CLEAR
 
-if TYPE_CHECKING:
-    from planner_core.problem import Problem
-
-__all__ = ["MARGIN", "Seeder", "VisibilityGraph", "build_visibility_graph"]
+__all__ = ["MARGIN", "Seeder"]
 
 #: metres by which graph nodes (and pushed-out points) stand off the obstacles
 MARGIN = 20.0
-#: sides of the polygon circumscribed about a circle (radius + margin)
-CIRCLE_SIDES = 6
-_CLEAR = 1e-9  # overlap lengths (m) at or below this count as a clear line of sight
 _ORDER_DETOUR = 2.0  # ordering: a blocked leg costs its length + this x its length inside
 _BLOCKED = 1e6  # slide objective: cost of one blocked leg (V5 >= mu)
 _OVER_BANDWIDTH = 1e4  # slide objective: cost of exceeding the bandwidth (V3), per (1 + Mbit/s)
@@ -57,171 +52,7 @@ _SHRINK = 0.6  # the candidate rings shrink by this factor after each full sweep
 _SWEEPS = 3
 
 
-@dataclass(frozen=True, eq=False)
-class VisibilityGraph:
-    """Reduced visibility graph over pushed-out obstacle corners (undirected, CSR adjacency).
-
-    ``nodes`` (N, 2); ``prev``/``next`` (N, 2): the neighbouring corners on each node's own
-    polygon, for the tangency test; ``indptr``/``indices``/``weights``: both directions of every
-    edge; ``edges`` (E, 2): node index pairs i < j.
-    """
-
-    nodes: np.ndarray
-    prev: np.ndarray
-    next: np.ndarray
-    indptr: np.ndarray
-    indices: np.ndarray
-    weights: np.ndarray
-    edges: np.ndarray
-
-    @property
-    def n(self) -> int:
-        return int(self.nodes.shape[0])
-
-    def tangent_mask(self, pts: np.ndarray) -> np.ndarray:
-        """(P, N): whether the line from each point to each node is tangent at the node."""
-        return _tangent_mask(np.ascontiguousarray(pts, dtype=float), self.nodes, self.prev,
-                             self.next)  # fmt: skip
-
-    def route(self, src_dist: np.ndarray, dst_dist: np.ndarray) -> tuple[float, list[int]]:
-        """Shortest a -> nodes -> b given a's (src_dist) and b's (dst_dist) distances to the
-        nodes they see (inf elsewhere): (length, node path); (inf, []) when there is none."""
-        length, path = _route(self.indptr, self.indices, self.weights, src_dist, dst_dist)
-        return float(length), path.tolist()
-
-
 # ----------------------------------------------------------------------------- kernels
-
-
-@njit(cache=True, nogil=True)
-def _tangent(u, fx, fy, nodes, prev, nxt):
-    """Whether the line from (fx, fy) to node u only touches u's (pushed-out) polygon: both
-    polygon neighbours of u on one side. Shortest paths bend only at such nodes."""
-    dx = nodes[u, 0] - fx
-    dy = nodes[u, 1] - fy
-    s1 = dx * (prev[u, 1] - nodes[u, 1]) - dy * (prev[u, 0] - nodes[u, 0])
-    s2 = dx * (nxt[u, 1] - nodes[u, 1]) - dy * (nxt[u, 0] - nodes[u, 0])
-    tol = 1e-9 * (abs(dx) + abs(dy) + 1.0) * 20.0
-    return s1 * s2 >= -tol * tol
-
-
-@njit(cache=True, nogil=True)
-def _tangent_pairs(nodes, prev, nxt):
-    """All node pairs (i < j) whose line is tangent at both nodes."""
-    n = nodes.shape[0]
-    out_i = np.empty(n * (n - 1) // 2, dtype=np.int64)
-    out_j = np.empty(n * (n - 1) // 2, dtype=np.int64)
-    k = 0
-    for i in range(n):
-        for j in range(i + 1, n):
-            if _tangent(i, nodes[j, 0], nodes[j, 1], nodes, prev, nxt) and _tangent(
-                j, nodes[i, 0], nodes[i, 1], nodes, prev, nxt
-            ):
-                out_i[k] = i
-                out_j[k] = j
-                k += 1
-    return out_i[:k], out_j[:k]
-
-
-@njit(cache=True, nogil=True)
-def _tangent_mask(pts, nodes, prev, nxt):
-    out = np.empty((pts.shape[0], nodes.shape[0]), dtype=np.bool_)
-    for a in range(pts.shape[0]):
-        for u in range(nodes.shape[0]):
-            out[a, u] = _tangent(u, pts[a, 0], pts[a, 1], nodes, prev, nxt)
-    return out
-
-
-@njit(cache=True, nogil=True)
-def _route(indptr, indices, weights, src_dist, dst_dist):
-    """Multi-source Dijkstra (binary heap, lazy deletion) from the nodes a sees to the nodes b
-    sees, stopping once no shorter way to b can appear."""
-    n = src_dist.shape[0]
-    d = src_dist.copy()
-    pred = np.full(n, -1, dtype=np.int64)
-    m = indices.shape[0] + n + 1
-    hk = np.empty(m)
-    hv = np.empty(m, dtype=np.int64)
-    size = 0
-    for u in range(n):
-        if d[u] < np.inf:
-            # push u
-            pos = size
-            size += 1
-            while pos > 0:
-                par = (pos - 1) // 2
-                if hk[par] <= d[u]:
-                    break
-                hk[pos] = hk[par]
-                hv[pos] = hv[par]
-                pos = par
-            hk[pos] = d[u]
-            hv[pos] = u
-    best = np.inf
-    last = -1
-    while size > 0:
-        key = hk[0]
-        u = hv[0]
-        size -= 1
-        lk = hk[size]
-        lv = hv[size]
-        pos = 0
-        while True:  # sift the last item down from the root
-            c = 2 * pos + 1
-            if c >= size:
-                break
-            if c + 1 < size and hk[c + 1] < hk[c]:
-                c += 1
-            if hk[c] >= lk:
-                break
-            hk[pos] = hk[c]
-            hv[pos] = hv[c]
-            pos = c
-        hk[pos] = lk
-        hv[pos] = lv
-        if key >= best:
-            break
-        if key > d[u]:
-            continue  # stale entry
-        if key + dst_dist[u] < best:
-            best = key + dst_dist[u]
-            last = u
-        for e in range(indptr[u], indptr[u + 1]):
-            w = indices[e]
-            nd = key + weights[e]
-            if nd < d[w]:
-                d[w] = nd
-                pred[w] = u
-                pos = size
-                size += 1
-                while pos > 0:
-                    par = (pos - 1) // 2
-                    if hk[par] <= nd:
-                        break
-                    hk[pos] = hk[par]
-                    hv[pos] = hv[par]
-                    pos = par
-                hk[pos] = nd
-                hv[pos] = w
-    count = 0
-    u = last
-    while u >= 0:
-        count += 1
-        u = pred[u]
-    path = np.empty(count, dtype=np.int64)
-    u = last
-    for i in range(count - 1, -1, -1):
-        path[i] = u
-        u = pred[u]
-    return best, path
-
-
-@njit(cache=True, nogil=True)
-def _flight(d, v_max, accel):
-    """Eq. 1 for one leg (as `problem.flight_time`)."""
-    if d > v_max * v_max / accel:
-        return d / v_max + v_max / accel
-    return 2.0 * math.sqrt(max(d, 0.0) / accel)
 
 
 @njit(cache=True, nogil=True)
@@ -241,7 +72,7 @@ def _slide_costs(cand, prv, nxt, member, S, lim, req, H, peak, decay, bw, v_max,
             ok = True
             for j in range(S.shape[0]):
                 d2 = (x - S[j, 0]) ** 2 + (y - S[j, 1]) ** 2
-                rate = peak - decay * math.sqrt(d2 + H * H)
+                rate = slant_rate(d2, H * H, peak, decay)
                 total += max(rate, 0.0)
                 if member[r, j]:
                     if d2 > lim[j] * lim[j]:
@@ -252,7 +83,7 @@ def _slide_costs(cand, prv, nxt, member, S, lim, req, H, peak, decay, bw, v_max,
                 continue
             l1 = math.hypot(x - prv[r, 0], y - prv[r, 1])
             l2 = math.hypot(nxt[r, 0] - x, nxt[r, 1] - y)
-            fly = _flight(l1, v_max, accel) + _flight(l2, v_max, accel)
+            fly = leg_time(l1, v_max, accel) + leg_time(l2, v_max, accel)
             out[r, q] = alpha * fly + (1.0 - alpha) * hover
             if total > bw:
                 out[r, q] += _OVER_BANDWIDTH * (1.0 + total - bw)
@@ -293,116 +124,30 @@ def _slide_candidates(cur, prv, nxt, rings, frac, w, h):
     return cand, a, b
 
 
-@njit(cache=True, nogil=True)
-def _tour(W):
-    """Open path 0 -> ... -> P-1 through all points: nearest neighbour, then best-move 2-opt."""
-    P = W.shape[0]
-    t = np.empty(P, dtype=np.int64)
-    left = np.ones(P, dtype=np.bool_)
-    t[0] = 0
-    left[0] = False
-    left[P - 1] = False
-    for s in range(1, P - 1):
-        best = -1
-        for c in range(P):
-            if left[c] and (best < 0 or W[t[s - 1], c] < W[t[s - 1], best]):
-                best = c
-        t[s] = best
-        left[best] = False
-    t[P - 1] = P - 1
-    for _ in range(8 * P):
-        gbest = 1e-6
-        bi = -1
-        bj = -1
-        for i in range(P - 2):
-            for j in range(i + 1, P - 1):
-                g = W[t[i], t[i + 1]] + W[t[j], t[j + 1]] - W[t[i], t[j]] - W[t[i + 1], t[j + 1]]
-                if g > gbest:
-                    gbest = g
-                    bi = i
-                    bj = j
-        if bi < 0:
-            break
-        lo = bi + 1
-        hi = bj
-        while lo < hi:
-            tmp = t[lo]
-            t[lo] = t[hi]
-            t[hi] = tmp
-            lo += 1
-            hi -= 1
-    return t
-
-
-# ----------------------------------------------------------------------------- graph
-
-
-def _corner_polygons(problem: Problem, margin: float) -> list[np.ndarray]:
-    """Every obstacle as a convex CCW polygon pushed out by `margin` (circles circumscribed)."""
-    polys: list[np.ndarray] = []
-    ang = 2.0 * np.pi * (np.arange(CIRCLE_SIDES) + 0.5) / CIRCLE_SIDES
-    obs = problem.obstacles
-    for cx, cy, r in obs.circles:
-        rad = (r + margin) / math.cos(math.pi / CIRCLE_SIDES)
-        polys.append(np.column_stack([cx + rad * np.cos(ang), cy + rad * np.sin(ang)]))
-    for p in range(obs.n_polygons):
-        v = np.asarray(obs.polygon(p), dtype=float)
-        n = obs.edge_normals[obs.poly_offsets[p] : obs.poly_offsets[p + 1]]
-        n_prev = np.roll(n, 1, axis=0)
-        # the offset polygon's corner, capped at needle-sharp corners (still outside)
-        s = (n + n_prev) / np.maximum(1.0 + np.sum(n * n_prev, axis=1), 0.08)[:, None]
-        polys.append(v + margin * s)
-    return polys
-
-
-def build_visibility_graph(problem: Problem, margin: float = MARGIN) -> VisibilityGraph:
-    """The reduced visibility graph of the problem's obstacles (see `VisibilityGraph`); nodes
-    inside an obstacle or outside the area are left out."""
-    polys = _corner_polygons(problem, margin)
-    if polys:
-        nodes = np.concatenate(polys)
-        prev = np.concatenate([np.roll(q, 1, axis=0) for q in polys])
-        nxt = np.concatenate([np.roll(q, -1, axis=0) for q in polys])
-    else:
-        nodes = prev = nxt = np.zeros((0, 2))
-    w, h = problem.upper[0], problem.upper[1]
-    keep = (nodes[:, 0] >= 0.0) & (nodes[:, 1] >= 0.0) & (nodes[:, 0] <= w) & (nodes[:, 1] <= h)
-    if len(nodes):
-        keep &= ~points_inside(nodes, problem.obstacles)
-    nodes = np.ascontiguousarray(nodes[keep])
-    prev = np.ascontiguousarray(prev[keep])
-    nxt = np.ascontiguousarray(nxt[keep])
-    n = len(nodes)
-    if n:
-        i, j = _tangent_pairs(nodes, prev, nxt)
-        clear = overlap_lengths(nodes[i], nodes[j], problem.obstacles) <= _CLEAR
-        i, j = i[clear], j[clear]
-    else:
-        i = j = np.zeros(0, dtype=np.int64)
-    length = np.hypot(nodes[i, 0] - nodes[j, 0], nodes[i, 1] - nodes[j, 1])
-    src = np.concatenate([i, j])
-    dst = np.concatenate([j, i])
-    wts = np.concatenate([length, length])
-    order = np.lexsort((dst, src))
-    indptr = np.zeros(n + 1, dtype=np.int64)
-    np.cumsum(np.bincount(src, minlength=n), out=indptr[1:])
-    return VisibilityGraph(
-        nodes, prev, nxt, indptr, np.ascontiguousarray(dst[order]),
-        np.ascontiguousarray(wts[order]), np.column_stack([i, j]),
-    )  # fmt: skip
-
-
 # ----------------------------------------------------------------------------- seeder
 
 
 class Seeder:
-    """Builds obstacle-aware, sensor-serving starting solutions for one problem (reusable)."""
+    """Builds obstacle-aware, sensor-serving starting solutions for one map (reusable).
 
-    def __init__(self, problem: Problem, margin: float = MARGIN):
-        p = self.p = problem
+    `model`: the map's `ModelParams`; `obstacles`: its `geometry.Obstacles`;
+    `variable_length`: False for the fixed-length encoding (every start then has I_max points).
+    """
+
+    def __init__(
+        self,
+        model: ModelParams,
+        obstacles: Obstacles,
+        *,
+        variable_length: bool = True,
+        margin: float = MARGIN,
+    ):
+        p = self.p = model
+        self.obstacles = obstacles
+        self.variable_length = bool(variable_length)
         self.margin = float(margin)
-        self.graph = build_visibility_graph(problem, margin)
-        self.size = np.array([p.upper[0], p.upper[1]], dtype=float)
+        self.graph = build_visibility_graph(obstacles, p.width, p.height, self.margin)
+        self.size = np.array([p.width, p.height], dtype=float)
         # farthest ground distance at which 90% of T_max still serves each sensor
         rate_needed = np.maximum(p.required, 1e-9) / (0.9 * p.t_max)
         slant = np.maximum(p.peak_rate - rate_needed, 0.0) / max(p.decay, 1e-12)
@@ -411,16 +156,22 @@ class Seeder:
         ang = 2.0 * np.pi * np.arange(_SLIDE_DIRS) / _SLIDE_DIRS
         self._unit = np.column_stack([np.cos(ang), np.sin(ang)])
 
+    @classmethod
+    def for_problem(cls, problem: Any, margin: float = MARGIN) -> Seeder:
+        """The seeder of a `planner_core.problem.Problem` (its model, obstacles and encoding)."""
+        return cls(problem.model, problem.obstacles, variable_length=problem.variable_length,
+                   margin=margin)  # fmt: skip
+
     # ------------------------------------------------------------------ geometry helpers
     def _clear(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Whether each leg a -> b is collision-free."""
-        return overlap_lengths(a, b, self.p.obstacles) <= _CLEAR
+        return overlap_lengths(a, b, self.obstacles) <= _CLEAR
 
     def _push_out(self, pts: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """Points clipped to the area and moved out of any obstacle they are in."""
         pts = np.clip(pts, 0.0, self.size)
         for _ in range(4):
-            inside = points_inside(pts, self.p.obstacles)
+            inside = points_inside(pts, self.obstacles)
             if not inside.any():
                 break
             for m in np.flatnonzero(inside):
@@ -430,7 +181,7 @@ class Seeder:
 
     def _push_one(self, q: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """q moved `margin` beyond the nearest side of the first obstacle containing it."""
-        obs = self.p.obstacles
+        obs = self.obstacles
         for cx, cy, r in obs.circles:
             d = math.hypot(q[0] - cx, q[1] - cy)
             if d < r:
@@ -512,10 +263,10 @@ class Seeder:
         P = len(pts)
         W = np.hypot(*(pts[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))
         ia, ib = np.triu_indices(P, 1)
-        inside = overlap_lengths(pts[ia], pts[ib], p.obstacles)
+        inside = overlap_lengths(pts[ia], pts[ib], self.obstacles)
         W[ia, ib] += _ORDER_DETOUR * inside
         W[ib, ia] = W[ia, ib]
-        t = _tour(W)
+        t = open_tour(W)
         return t[1:-1] - 1
 
     # ------------------------------------------------------------------ sliding
@@ -555,13 +306,13 @@ class Seeder:
                 cand, prv, nxt, member[idx - 1], S, lim, p.required, p.altitude, p.peak_rate,
                 p.decay, _BANDWIDTH_USE * p.bandwidth, p.v_max, p.accel, p.alpha,
             )  # fmt: skip
-            inside = overlap_lengths(a, b, p.obstacles)
+            inside = overlap_lengths(a, b, self.obstacles)
             blocked = (inside[:, :Q] > _CLEAR).astype(float) + (inside[:, Q:] > _CLEAR)
             cost = cost + _BLOCKED * blocked + inside[:, :Q] + inside[:, Q:]
             # a point inside an obstacle has blocked legs, so it only wins when every
             # candidate is blocked; keep the old position then
             pick = cand[np.arange(n), np.argmin(cost, axis=1)]
-            pts[idx] = np.where(points_inside(pick, p.obstacles)[:, None], cur, pick)
+            pts[idx] = np.where(points_inside(pick, self.obstacles)[:, None], cur, pick)
         return pts[1:-1]
 
     # ------------------------------------------------------------------ routing
@@ -656,7 +407,7 @@ class Seeder:
         while len(M) > limit:
             full = np.vstack([p.start, M, p.end])
             m_idx = np.arange(len(M))
-            cost = overlap_lengths(full[m_idx], full[m_idx + 2], p.obstacles)
+            cost = overlap_lengths(full[m_idx], full[m_idx + 2], self.obstacles)
             M = np.delete(M, int(np.argmin(cost)), axis=0)
         return M
 
@@ -722,7 +473,7 @@ class Seeder:
         M = best[1]
         if len(M) > I:
             M = self._truncate(M, I)
-        if not p.variable_length or p.tau <= 0.0:
+        if not self.variable_length or p.tau <= 0.0:
             M = self._fill(M, I)
         times, _ = self._times(M)
         return M, np.minimum(times * rng.uniform(1.0, 1.1), p.t_max)

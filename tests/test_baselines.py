@@ -7,7 +7,8 @@ import pytest
 
 from planner_core import baselines
 from planner_core.baselines import BudgetedProblem, BudgetExceeded, optimise, problem_for
-from planner_core.problem import PENALTY_FACTOR, Problem
+from planner_core.model import PENALTY_FACTOR
+from planner_core.problem import Problem
 
 SMALL_MAP = {
     "name": "small",

@@ -5,6 +5,7 @@ from __future__ import annotations
 import copy
 import json
 import os
+import pickle
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import Any
@@ -12,7 +13,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from planner_core.bench import BenchError, ProcessExecutor, SerialExecutor, run_bench
+from planner_core.bench import BenchError, run_bench
 from planner_core.bench.limits import (
     BestKnown,
     best_known_path,
@@ -22,8 +23,9 @@ from planner_core.bench.limits import (
 )
 from planner_core.bench.records import RESULTS_FILE, ResultsWriter, key_of, read_records
 from planner_core.bench.report import format_table
-from planner_core.bench.runner import downsample, run_seed
+from planner_core.bench.runner import downsample, execute, plan_jobs, run_seed
 from planner_core.bench.stats import score_table, wilcoxon_mark
+from planner_core.execution import ProcessExecutor, SerialExecutor
 from planner_core.problem import Problem
 
 OPTS = ["de-adaptive", "random-search"]
@@ -186,6 +188,32 @@ def test_downsample_keeps_a_step_function() -> None:
     e, (v,) = downsample(ev, [val], 10_000, points=10)
     assert e[0] == 10 and e[-1] == 10_000 and len(e) == 11
     assert np.all(v == -(e // 10 - 1))
+
+
+def test_jobs_carry_the_map_content_not_its_path(suite: Path, tmp_path: Path) -> None:
+    files = suite_task_files(suite)
+    jobs = plan_jobs(files, ["random-search"], runs=1, budget=50)
+    for job in jobs:
+        assert job.map == json.loads(files[job.task].read_text())
+        assert job.map_sha256 == file_sha256(files[job.task])
+        assert str(suite).encode() not in pickle.dumps(job)  # nothing for a remote worker to open
+    moved = tmp_path / "elsewhere"
+    suite.rename(moved)  # the files are gone from where they were planned: jobs still run
+    with ProcessExecutor(1) as ex:
+        recs = list(ex.map_unordered(execute, jobs))
+    assert sorted(r["task"] for r in recs) == ["A1", "B2"]
+    assert all("error" not in r and r["evaluations"] == 50 for r in recs), recs
+    # a worker result equals the in-process one (same seed, same content)
+    local = execute(jobs[0])
+    (same,) = [r for r in recs if r["task"] == jobs[0].task]
+    assert (same["score"], same["x"]) == (local["score"], local["x"])
+
+
+def test_bad_map_json_fails_before_any_run(suite: Path, tmp_path: Path) -> None:
+    (suite / "C3.json").write_text("{not json")
+    with pytest.raises(BenchError, match="C3.json: not valid JSON"):
+        _run(suite, tmp_path / "res")
+    assert not (tmp_path / "res" / RESULTS_FILE).exists()
 
 
 def test_process_executor_runs_workers_single_threaded() -> None:

@@ -11,10 +11,10 @@ import pytest
 
 from planner_core.bench.limits import file_sha256, lower_bounds_path, suite_task_files
 from planner_core.bounds import lower_bound
-from planner_core.problem import Problem, flight_time
+from planner_core.model import flight_time
+from planner_core.problem import Problem
+from tests.conftest import SUITE
 
-ROOT = Path(__file__).resolve().parent.parent
-SUITE = ROOT / "examples" / "maps" / "suite"
 CACHE = lower_bounds_path(SUITE)
 
 ONE = {

@@ -14,7 +14,7 @@ import pytest
 
 import lamde_mission
 from planner_core import defaults as D
-from planner_core.de import core as de_core
+from planner_core.de import loop as de_loop
 from planner_core.de.configurators import _REGISTRY as CONFIGURATOR_REGISTRY
 from planner_core.de.operators import N_DONORS
 from planner_core.env import OptimizationEnv
@@ -51,13 +51,13 @@ def test_the_readers_use_the_table() -> None:
     assert sig["population"].default == D.POPULATION == 100
     assert sig["budget"].default == D.BUDGET == 10_000
     assert sig["configurator"].default == D.CONFIGURATOR == "adaptive"
-    run_sig = inspect.signature(de_core.run).parameters
+    run_sig = inspect.signature(de_loop.run).parameters
     assert run_sig["population"].default == D.POPULATION and run_sig["budget"].default == D.BUDGET
     env = OptimizationEnv()
     assert (env.population, env.budget, env.eta, env.delta) == (D.POPULATION, D.BUDGET, D.ETA,
                                                                   D.DELTA)
     from planner_core.baselines import REGISTRY
-    from planner_core.problem import PENALTY_FACTOR
+    from planner_core.model import PENALTY_FACTOR
     from planner_core.suite import SUITE_SEED
 
     assert PENALTY_FACTOR == D.SCORE_FACTOR == 10.0 and SUITE_SEED == D.SUITE_SEED == 2025
@@ -112,4 +112,16 @@ def test_readme_defaults_table_is_rendered_from_the_module() -> None:
     assert m, "README.md lost its generated defaults table markers"
     assert m.group(1) == D.render_markdown(), (
         "README's defaults table is stale: regenerate it with "
-        "`python -m planner_core.defaults --markdown`")
+        "`python -m planner_core.defaults README.md`")
+
+
+def test_update_readme_rewrites_only_the_table(tmp_path) -> None:
+    doc = tmp_path / "R.md"
+    doc.write_text("intro\n<!-- defaults:begin -->\nold\n<!-- defaults:end -->\nrest\n")
+    assert D.update_readme(str(doc)) is True
+    assert doc.read_text() == ("intro\n<!-- defaults:begin -->\n" + D.render_markdown()
+                               + "<!-- defaults:end -->\nrest\n")
+    assert D.update_readme(str(doc)) is False
+    (tmp_path / "bare.md").write_text("no table\n")
+    with pytest.raises(ValueError, match="markers"):
+        D.update_readme(str(tmp_path / "bare.md"))

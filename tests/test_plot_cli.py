@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 from dataclasses import replace
-from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -18,8 +17,6 @@ from planner_core.mapio import load_map
 from planner_core.problem import Problem
 from sim import replay
 from tests.conftest import one_line_error, run_cli, run_cli_many
-
-ROOT = Path(__file__).resolve().parent.parent
 
 MAP = {
     "name": "cli",

@@ -11,7 +11,8 @@ import pytest
 
 from planner_core import Problem
 from planner_core.geometry import overlap_lengths_reference, points_inside
-from planner_core.seeding import Seeder, build_visibility_graph
+from planner_core.routing import build_visibility_graph
+from planner_core.seeding import MARGIN, Seeder
 from tests.conftest import MAPS, SUITE
 
 
@@ -27,7 +28,7 @@ def _seeded(problem: Problem, n: int = 40, seed: int = 0) -> list[dict]:
 
 def test_graph_edges_are_collision_free_and_nodes_outside() -> None:
     p = Problem(_suite("T16"))
-    g = build_visibility_graph(p)
+    g = build_visibility_graph(p.obstacles, p.model.width, p.model.height, MARGIN)
     assert g.n > 100 and len(g.edges) > g.n
     assert not points_inside(g.nodes, p.obstacles).any()
     assert np.all((g.nodes >= 0.0) & (g.nodes <= p.upper[:2]))
@@ -47,7 +48,7 @@ def test_graph_route_goes_around_a_wall() -> None:
         "obstacles": {"rectangles": [{"x": 1000, "y": 1000, "length": 60, "width": 1500}]},
     }
     p = Problem(m)
-    s = Seeder(p)
+    s = Seeder.for_problem(p)
     ends = s._connect(np.array([p.start, p.end]))
     length, path = s.graph.route(ends[0], ends[1])
     assert path and np.isfinite(length)
@@ -95,7 +96,7 @@ def test_map_without_obstacles() -> None:
     d["obstacles"] = {}
     d.pop("witness")
     p = Problem(d)
-    assert build_visibility_graph(p).n == 0
+    assert build_visibility_graph(p.obstacles, p.model.width, p.model.height, MARGIN).n == 0
     bd = _seeded(p, n=10)
     assert all(b["phi"] == 0.0 for b in bd)
 

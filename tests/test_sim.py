@@ -6,7 +6,6 @@ import ast
 import json
 import math
 from dataclasses import replace
-from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -16,12 +15,11 @@ from lamde_mission.formats import read_mission, write_mission
 from lamde_mission.geo import enu_to_latlon
 from lamde_mission.items import CMD, plan_to_items
 from planner_core.mapio import load_map
-from planner_core.problem import Problem, flight_time
+from planner_core.model import flight_time
+from planner_core.problem import Problem
 from sim import replay, verify
 from sim.replay import leg_position, leg_time
-
-ROOT = Path(__file__).resolve().parent.parent
-SUITE = ROOT / "examples" / "maps" / "suite"
+from tests.conftest import ROOT, SUITE
 
 MAP = {
     "name": "sim",

@@ -19,11 +19,8 @@ from planner_core.suite import (
     obstacle_counts,
     suite_tasks,
 )
-from tests.conftest import run_cli
+from tests.conftest import MAPS, SUITE, run_cli
 
-ROOT = Path(__file__).resolve().parent.parent
-MAPS = ROOT / "examples" / "maps"
-SUITE = MAPS / "suite"
 TASKS = suite_tasks()
 
 

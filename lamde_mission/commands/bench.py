@@ -15,9 +15,9 @@ _DEFAULT_OUT = "results"
 _DEFAULT_RUNS = D.RUNS
 _DEFAULT_BUDGET = D.BUDGET
 # --best-known: the protocol for the best-known solutions (100 x the budget, 5 runs each, the
-# strongest optimisers); planner_core.bench.runner.BEST_KNOWN_* hold the same values
-_BK_RUNS = 5
-_BK_BUDGET = 1_000_000
+# strongest optimisers)
+_BK_RUNS = D.BEST_KNOWN_RUNS
+_BK_BUDGET = D.BEST_KNOWN_BUDGET
 _BK_OUT = "results-best-known"
 
 

@@ -12,7 +12,7 @@ from typing import Any, Literal, NamedTuple
 
 import numpy as np
 
-from planner_core.problem import PENALTY_FACTOR
+from planner_core.model import deb_best, deb_better, penalised_score
 
 __all__ = ["BudgetExceeded", "BudgetedProblem", "Criterion", "Trace", "as_budgeted"]
 
@@ -34,7 +34,7 @@ class Trace(NamedTuple):
     @property
     def best_score(self) -> np.ndarray:
         """The incumbent's penalised score f + 10 * phi along the run."""
-        return self.best_f + PENALTY_FACTOR * self.best_phi
+        return penalised_score(self.best_f, self.best_phi)
 
 
 def _sanitise(v: Any, n: int) -> np.ndarray:
@@ -94,16 +94,14 @@ class BudgetedProblem:
         return f, phi
 
     def _update(self, X: np.ndarray, f: np.ndarray, phi: np.ndarray) -> None:
-        # Deb: lowest phi, then lowest f (first index on ties)
-        cand = np.flatnonzero(phi == phi.min())
-        i = int(cand[np.argmin(f[cand])])
+        i = deb_best(f, phi)
         _, bf, bp = self._best["deb"]
-        if phi[i] < bp or (phi[i] == bp and f[i] < bf):
+        if deb_better(f[i], phi[i], bf, bp):
             self._best["deb"] = (X[i].copy(), float(f[i]), float(phi[i]))
-        score = f + PENALTY_FACTOR * phi
+        score = penalised_score(f, phi)
         j = int(np.argmin(score))
         _, bf, bp = self._best["penalised"]
-        if score[j] < bf + PENALTY_FACTOR * bp:
+        if score[j] < penalised_score(bf, bp):
             self._best["penalised"] = (X[j].copy(), float(f[j]), float(phi[j]))
         for key, (_, bf, bp) in self._best.items():
             self._trace[key].append((self.count, bf, bp))

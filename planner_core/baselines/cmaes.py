@@ -18,7 +18,7 @@ import numpy as np
 
 from planner_core.baselines import OptimiseResult
 from planner_core.baselines.budget import as_budgeted
-from planner_core.problem import PENALTY_FACTOR
+from planner_core.model import penalised_score
 
 __all__ = ["optimise", "SIGMA0"]
 
@@ -60,7 +60,7 @@ def optimise(problem: Any, budget: int, seed: int, *, sigma0: float = SIGMA0) ->
             f, phi = budgeted.evaluate(lo + np.clip(U[:k], 0.0, 1.0) * span)
             if k < len(U):
                 break  # budget spent mid-population: never tell a partial population
-            score = f + PENALTY_FACTOR * phi
+            score = penalised_score(f, phi)
             # pycma cannot rank inf; an unusable candidate gets a huge finite value instead
             es.tell(list(U), np.where(np.isfinite(score), score, 1e300).tolist())
         restart += 1

@@ -24,7 +24,7 @@ from scipy.stats import qmc
 from planner_core.baselines import OptimiseResult
 from planner_core.baselines.budget import as_budgeted
 from planner_core.defaults import POPULATION as _POPULATION
-from planner_core.problem import PENALTY_FACTOR
+from planner_core.model import penalised_score
 
 __all__ = ["optimise", "POPULATION"]
 
@@ -48,7 +48,7 @@ def optimise(
         k = min(U.shape[0], budgeted.remaining)
         if k > 0:
             f, phi = budgeted.evaluate(lo + np.clip(U[:k], 0.0, 1.0) * span)
-            out[:k] = f + PENALTY_FACTOR * phi
+            out[:k] = penalised_score(f, phi)
         return out
 
     def stop(intermediate_result: Any) -> bool:  # scipy picks the signature by name

@@ -23,6 +23,7 @@ from planner_core.bench._io import read_json, write_bytes_atomic, write_text_ato
 from planner_core.bench.records import RESULTS_FILE, read_records
 from planner_core.bench.stats import ALPHA, ScoreTable, score_table
 from planner_core.defaults import SCORE_FACTOR
+from planner_core.model import penalised_score
 
 __all__ = ["DEFAULT_REFERENCE", "build_report", "order_optimisers", "format_table", "fmt"]
 
@@ -132,7 +133,8 @@ def convergence_figure(task: str, per_opt: dict[str, list[dict[str, Any]]], opts
         curves = []
         for r in runs:
             h = r["history"]
-            score = np.asarray(h["best_f"], float) + SCORE_FACTOR * np.asarray(h["best_phi"], float)
+            f, phi = np.asarray(h["best_f"], float), np.asarray(h["best_phi"], float)
+            score = penalised_score(f, phi)
             curves.append(_step_on_grid(h["evaluations"], score, grid))
         C = np.vstack(curves)
         ok = ~np.all(np.isnan(C), axis=0)

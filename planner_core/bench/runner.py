@@ -1,16 +1,19 @@
 """The benchmark runner: every optimiser x task x run on the same budget, resumable.
 
 Each (optimiser, task, run) is one job with its own seed (derived from the base seed, the task
-name and the run index; the same for every optimiser, so all see the same seeds). Jobs go through
-an `Executor`; each finished run is appended to `<out>/results.jsonl` at once, so an interrupted
-benchmark resumes where it stopped. `<out>/meta.json` records the suite, budget and every command
-that wrote to the folder. Feasible runs that beat the best-known f of their task update the
-best-known file beside the suite.
+name and the run index; the same for every optimiser, so all see the same seeds). A job carries
+its map's JSON content (not its path), so any worker, on any machine, can run it. Jobs go through
+an executor (`planner_core.execution`); results stream back and each finished run is appended
+to `<out>/results.jsonl` at once, so an interrupted benchmark resumes where it stopped.
+`<out>/meta.json` records the suite, budget and every command that wrote to the folder. Feasible
+runs that beat the best-known f of their task update the best-known file beside the suite.
 """
 
 from __future__ import annotations
 
 import datetime as _dt
+import hashlib
+import json
 import math
 import time
 import traceback
@@ -22,10 +25,11 @@ from typing import Any
 
 import numpy as np
 
+from planner_core import defaults as _defaults
 from planner_core.bench._io import read_json, write_json_atomic
-from planner_core.bench.executor import Executor, make_executor
-from planner_core.bench.limits import BestKnown, best_known_path, file_sha256, suite_task_files
+from planner_core.bench.limits import BestKnown, best_known_path, suite_task_files
 from planner_core.bench.records import RESULTS_FILE, Key, ResultsWriter, key_of, read_records
+from planner_core.execution import Executor, make_executor
 
 __all__ = [
     "BEST_KNOWN_BUDGET",
@@ -38,6 +42,7 @@ __all__ = [
     "HISTORY_POINTS",
     "execute",
     "plan_jobs",
+    "read_map_file",
     "run_bench",
     "run_seed",
     "downsample",
@@ -45,8 +50,8 @@ __all__ = [
 
 META_FILE = "meta.json"
 #: the best-known protocol: 100 x the paper's budget, 5 runs each, the strongest optimisers
-BEST_KNOWN_BUDGET = 1_000_000
-BEST_KNOWN_RUNS = 5
+BEST_KNOWN_BUDGET = _defaults.BEST_KNOWN_BUDGET
+BEST_KNOWN_RUNS = _defaults.BEST_KNOWN_RUNS
 BEST_KNOWN_OPTIMISERS = ("cmaes", "de-adaptive", "de-adaptive-fixedlen")
 #: convergence checkpoints stored per run (evenly spaced over the budget, plus the first)
 HISTORY_POINTS = 100
@@ -57,16 +62,21 @@ class BenchError(ValueError):
     """A benchmark request that cannot be carried out as asked (message says why)."""
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Job:
-    """One run: which optimiser on which map, with which seed and budget."""
+    """One run: which optimiser on which map, with which seed and budget.
+
+    ``map`` is the map file's parsed JSON content (what `planner_core.load_map` accepts), so the
+    job is complete in itself: a worker never opens a file. ``map_sha256`` is the SHA-256 of
+    the file's bytes, recorded with the result (a resumed benchmark refuses a changed map).
+    """
 
     optimiser: str
     task: str
     run: int
     seed: int
     budget: int
-    map_path: str
+    map: dict[str, Any]
     map_sha256: str
 
 
@@ -109,12 +119,13 @@ def execute(job: Job) -> dict[str, Any]:
     """Run one job and return its record (or an error record with the traceback); top-level,
     so worker processes can unpickle it."""
     from planner_core.baselines import get, optimise, problem_for
-    from planner_core.problem import PENALTY_FACTOR, Problem
+    from planner_core.model import penalised_score
+    from planner_core.problem import Problem
 
     base = {"optimiser": job.optimiser, "task": job.task, "run": job.run, "seed": job.seed,
             "budget": job.budget, "map_sha256": job.map_sha256}
     try:
-        problem = problem_for(job.optimiser, Problem(job.map_path))
+        problem = problem_for(job.optimiser, Problem(job.map))
         # warm up outside the timer: import the optimiser's module (cma, scipy) and load the
         # compiled geometry kernels, so wall time measures the optimiser alone
         get(job.optimiser).function()
@@ -128,7 +139,7 @@ def execute(job: Job) -> dict[str, Any]:
         return {
             **base,
             "schema": SCHEMA,
-            "score": float(res.f + PENALTY_FACTOR * res.phi),
+            "score": float(penalised_score(res.f, res.phi)),
             "f": float(res.f),
             "phi": float(res.phi),
             "feasible": bool(res.phi == 0.0),
@@ -149,14 +160,26 @@ def execute(job: Job) -> dict[str, Any]:
 def plan_jobs(files: dict[str, Path], optimisers: list[str], runs: int, budget: int,
               base_seed: int = 0) -> list[Job]:
     """All jobs, run-major (every task and optimiser gets run 0 before any gets run 1), so a
-    partial benchmark is balanced."""
-    shas = {t: file_sha256(p) for t, p in files.items()}
+    partial benchmark is balanced. Each map file is read once; its jobs share the content."""
+    content = {t: read_map_file(p) for t, p in files.items()}
     return [
-        Job(o, t, r, run_seed(base_seed, t, r), int(budget), str(p), shas[t])
+        Job(o, t, r, run_seed(base_seed, t, r), int(budget), *content[t])
         for r in range(runs)
-        for t, p in files.items()
+        for t in files
         for o in optimisers
     ]
+
+
+def read_map_file(path: str | Path) -> tuple[dict[str, Any], str]:
+    """(parsed JSON content, hex SHA-256 of the bytes) of a map file, from one read."""
+    data = Path(path).read_bytes()
+    try:
+        content = json.loads(data)
+    except ValueError as exc:
+        raise BenchError(f"{path}: not valid JSON ({exc})") from None
+    if not isinstance(content, dict):
+        raise BenchError(f"{path}: the top level must be a JSON object")
+    return content, hashlib.sha256(data).hexdigest()
 
 
 def _now() -> str:

@@ -6,7 +6,11 @@ from planner_core.de.configurators import (
     RandomConfigurator,
     make_configurator,
 )
-from planner_core.de.core import (
+from planner_core.de.core import ask, ask_words, init, outcome, step, tell, to_problem, to_unit
+from planner_core.de.loop import run
+from planner_core.de.operators import CROSSOVERS, MUTATIONS
+from planner_core.de.rng import generation_rng
+from planner_core.de.types import (
     BoxProblem,
     Config,
     Configurator,
@@ -15,22 +19,9 @@ from planner_core.de.core import (
     Outcome,
     Progress,
     Result,
-    ask,
-    ask_words,
-    deb_best,
-    deb_better,
-    deb_order,
-    generation_rng,
-    init,
     max_generations,
-    outcome,
-    run,
-    step,
-    tell,
-    to_problem,
-    to_unit,
 )
-from planner_core.de.operators import CROSSOVERS, MUTATIONS
+from planner_core.model import deb_best, deb_better, deb_order
 
 __all__ = [
     "CROSSOVERS",

@@ -14,13 +14,14 @@ from typing import Any, NamedTuple
 import numpy as np
 from numba import njit
 
-from planner_core.de.core import Config, DEState, Outcome, deb_best, deb_better
 from planner_core.de.operators import (
     N_CROSSOVERS,
     N_MUTATIONS,
     crossover_index,
     mutation_index,
 )
+from planner_core.de.types import Config, DEState, Outcome
+from planner_core.model import deb_best, deb_better
 
 
 def _full(n: int, value: float, dtype: type = float) -> np.ndarray:

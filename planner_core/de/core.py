@@ -8,6 +8,10 @@ configuration); a configurator draws from the same generator after them. So ``as
 ``step`` gives the same trials as ``configure`` then ``ask``, and a run is reproducible bit for
 bit from its seed.
 
+This module is the core (init / ask / tell / step over one state value, Deb's rule from
+`planner_core.model`); it takes configurator objects and knows no registry: `de.loop.run` resolves
+names. Values live in `de.types`, random streams in `de.rng`.
+
 Budget: the initial population (N evaluations) counts. Each generation evaluates
 ``k = min(N, budget - evaluations)`` trials; when ``k < N`` (the last generation) only
 individuals ``0..k-1`` (population order) produce trials, the others are carried unchanged.
@@ -15,11 +19,7 @@ individuals ``0..k-1`` (population order) produce trials, the others are carried
 
 from __future__ import annotations
 
-import dataclasses
-import math
-from collections.abc import Callable
-from dataclasses import dataclass
-from typing import Any, NamedTuple, Protocol
+from typing import Any
 
 import numpy as np
 
@@ -28,166 +28,18 @@ from planner_core.de.operators import (
     crossover_words,
     donor_words,
 )
-from planner_core.defaults import BUDGET, CONFIGURATOR, MIN_POPULATION, POPULATION
+from planner_core.de.rng import Streams, generation_rng
+from planner_core.de.types import BoxProblem, Config, Configurator, DEState, Outcome
+from planner_core.defaults import BUDGET, MIN_POPULATION, POPULATION
+from planner_core.model import deb_best, deb_better
+
+__all__ = [
+    "ask", "ask_words", "evaluate", "init", "outcome", "step", "tell", "to_problem", "to_unit",
+    "trial_count", "validate_config",
+]  # fmt: skip
 
 
-class BoxProblem(Protocol):
-    """What the DE needs from a problem (the UAV Problem and synthetic problems both fit).
-
-    Optional hook: ``initial_population(rng, n) -> (n, d)`` problem-space starting points (not
-    evaluated by the hook); :func:`init` uses it with the run's own seeded generator.
-    """
-
-    lower: np.ndarray
-    upper: np.ndarray
-
-    def evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
-
-
-class Config(NamedTuple):
-    """Per-individual configuration (the paper's action): each field has shape (N,).
-
-    ``mutation`` ids 0..6 (see operators.MUTATIONS), ``crossover`` 0 = bin / 1 = exp,
-    ``F`` and ``Cr`` in [0, 1] (values outside are clipped).
-    """
-
-    mutation: np.ndarray
-    crossover: np.ndarray
-    F: np.ndarray
-    Cr: np.ndarray
-
-
-@dataclass(frozen=True, eq=False)
-class DEState:
-    """Everything a DE run is: population in the unit box, its f and phi (read-only arrays),
-    Deb-best index, counters, the run's seed and budget, and opaque configurator memory."""
-
-    X: np.ndarray
-    f: np.ndarray
-    phi: np.ndarray
-    best: int
-    generation: int
-    evaluations: int
-    budget: int
-    seed: int
-    memory: Any = None
-
-    @property
-    def population(self) -> int:
-        return int(self.X.shape[0])
-
-    @property
-    def dim(self) -> int:
-        return int(self.X.shape[1])
-
-    @property
-    def max_generations(self) -> int:
-        """G: the number of generations the budget allows after the initial population."""
-        return max_generations(self.population, self.budget)
-
-    @property
-    def done(self) -> bool:
-        return self.evaluations >= self.budget
-
-    @property
-    def best_f(self) -> float:
-        return float(self.f[self.best])
-
-    @property
-    def best_phi(self) -> float:
-        return float(self.phi[self.best])
-
-    @property
-    def feasible_fraction(self) -> float:
-        return float(np.count_nonzero(self.phi == 0.0)) / self.population
-
-
-class Outcome(NamedTuple):
-    """What one generation did, for configurators that learn (rows = the k trials)."""
-
-    config: Config  # the configuration used (all N rows; only the first k produced trials)
-    parents: np.ndarray  # (k, d) unit-box parents
-    trials: np.ndarray  # (k, d) unit-box trials
-    f_parent: np.ndarray
-    phi_parent: np.ndarray
-    f_trial: np.ndarray
-    phi_trial: np.ndarray
-    success: np.ndarray  # (k,) bool: the trial replaced its parent (Deb's rule)
-    evaluations: int  # after this generation
-    budget: int
-
-
-class Progress(NamedTuple):
-    """Small record handed to ``run``'s callback once per generation (0 = initial population)."""
-
-    generation: int
-    evaluations: int
-    budget: int
-    best_f: float
-    best_phi: float
-    feasible_fraction: float
-
-
-class History(NamedTuple):
-    """Per-generation trace, entry 0 = initial population; arrays of length generations + 1."""
-
-    evaluations: np.ndarray
-    best_f: np.ndarray
-    best_phi: np.ndarray
-    feasible_fraction: np.ndarray
-
-
-@dataclass(frozen=True)
-class Result:
-    """Outcome of :func:`run`: best solution in problem space with its f and phi."""
-
-    x: np.ndarray
-    f: float
-    phi: float
-    evaluations: int
-    generations: int
-    history: History
-    state: DEState
-
-    @property
-    def feasible(self) -> bool:
-        return self.phi == 0.0
-
-
-class Configurator(Protocol):
-    """Chooses the per-individual configuration; may learn through an immutable memory value.
-
-    ``init(state)`` returns the initial memory (None if stateless), ``configure(state, rng)``
-    reads ``state.memory`` and returns a :class:`Config`, ``update(memory, outcome)`` returns the
-    next memory. The core never looks inside the memory.
-    """
-
-    def init(self, state: DEState) -> Any: ...
-
-    def configure(self, state: DEState, rng: np.random.Generator) -> Config: ...
-
-    def update(self, memory: Any, outcome: Outcome) -> Any: ...
-
-
-# --------------------------------------------------------------------------- Deb's rule
-
-
-def deb_better(
-    f_a: np.ndarray, phi_a: np.ndarray, f_b: np.ndarray, phi_b: np.ndarray
-) -> np.ndarray:
-    """Paper's selection: a replaces b iff phi_a < phi_b, or phi_a == phi_b and f_a < f_b."""
-    return (phi_a < phi_b) | ((phi_a == phi_b) & (f_a < f_b))
-
-
-def deb_order(f: np.ndarray, phi: np.ndarray) -> np.ndarray:
-    """Indices sorted by Deb's ranking: smaller phi first, ties broken by smaller f (stable)."""
-    return np.lexsort((f, phi))
-
-
-def deb_best(f: np.ndarray, phi: np.ndarray) -> int:
-    """Index of the Deb-best individual (lowest phi, then lowest f; first index on full ties)."""
-    cand = np.flatnonzero(phi == phi.min())
-    return int(cand[np.argmin(f[cand])])
+# --------------------------------------------------------------------------- evaluation results
 
 
 def _sanitise(f: np.ndarray, phi: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -213,41 +65,6 @@ def _frozen(a: np.ndarray) -> np.ndarray:
 
 
 # --------------------------------------------------------------------------- ask / tell
-
-
-def max_generations(population: int, budget: int) -> int:
-    """G = ceil((budget - N) / N): generations after the initial population."""
-    return max(0, math.ceil((budget - population) / population))
-
-
-#: PCG64 steps between the random streams of consecutive generations (a generation draws a few
-#: thousand words, so streams never overlap)
-GENERATION_STRIDE = 1 << 64
-
-
-class Streams:
-    """The random streams of one seed: generation g's generator is the root PCG64 of
-    ``SeedSequence(seed)`` advanced by ``g * GENERATION_STRIDE``.
-
-    Keeps the root state and one reusable bit generator, so a generator costs a state copy and
-    an advance instead of building a SeedSequence and a PCG64 (most of a generation's fixed
-    cost). A generator from :meth:`rng` is valid until the next call.
-    """
-
-    def __init__(self, seed: int) -> None:
-        self.seed = int(seed)
-        self._root = np.random.PCG64(np.random.SeedSequence(self.seed)).state
-        self._bits = np.random.PCG64(0)
-
-    def rng(self, generation: int) -> np.random.Generator:
-        self._bits.state = self._root
-        self._bits.advance(int(generation) * GENERATION_STRIDE)
-        return np.random.Generator(self._bits)
-
-
-def generation_rng(state: DEState) -> np.random.Generator:
-    """The Generator of generation ``state.generation``: pure in (seed, generation)."""
-    return Streams(state.seed).rng(state.generation)
 
 
 def ask_words(state: DEState, rng: np.random.Generator | None = None) -> np.ndarray:
@@ -449,58 +266,3 @@ def step(
     return _select(state, trials, out.f_trial, out.phi_trial, out.success, memory), out
 
 
-def _progress(state: DEState) -> Progress:
-    return Progress(
-        state.generation,
-        state.evaluations,
-        state.budget,
-        state.best_f,
-        state.best_phi,
-        state.feasible_fraction,
-    )
-
-
-def run(
-    problem: BoxProblem,
-    *,
-    configurator: Configurator | str = CONFIGURATOR,
-    seed: int = 0,
-    population: int = POPULATION,
-    budget: int = BUDGET,
-    callback: Callable[[Progress], None] | None = None,
-) -> Result:
-    """Optimise ``problem`` until the budget is spent; same seed -> identical result.
-
-    ``configurator`` is an object or a registry name ("fixed", "random", "adaptive");
-    ``callback`` receives a :class:`Progress` after the initial population and each generation.
-    """
-    if isinstance(configurator, str):
-        from planner_core.de.configurators import make_configurator
-
-        configurator = make_configurator(configurator)
-    state = init(problem, seed, population, budget)
-    state = dataclasses.replace(state, memory=configurator.init(state))
-    trace = [_progress(state)]
-    if callback is not None:
-        callback(trace[-1])
-    streams = Streams(state.seed)
-    while not state.done:
-        state, _ = step(state, problem, configurator, streams)
-        trace.append(_progress(state))
-        if callback is not None:
-            callback(trace[-1])
-    history = History(
-        evaluations=np.array([p.evaluations for p in trace], dtype=np.int64),
-        best_f=np.array([p.best_f for p in trace]),
-        best_phi=np.array([p.best_phi for p in trace]),
-        feasible_fraction=np.array([p.feasible_fraction for p in trace]),
-    )
-    return Result(
-        x=to_problem(problem, state.X[state.best]),
-        f=state.best_f,
-        phi=state.best_phi,
-        evaluations=state.evaluations,
-        generations=state.generation,
-        history=history,
-        state=state,
-    )

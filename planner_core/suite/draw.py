@@ -1,65 +1,24 @@
-"""Benchmark map generator (paper Sec. 3.2 and 5.1): maps with a known feasible plan stored inside.
+"""One attempt at one benchmark map: the witness route, sensors, hover times and obstacles.
 
-Every map is feasible by construction. A witness plan is drawn first (stops spread over the area,
-ordered into a tour, routed around the no-fly zones, with extra bends on some legs); sensors are
-then placed around its hover points (C3 kept at every hover point), its hover times are the
-smallest that deliver every sensor's data plus a margin (C4, T <= T_max), and circles and
-rectangles are placed off its legs: on the straight line start -> end, on the shortcuts the bends
-avoid, along the route and anywhere. The witness is stored in the map and checked with `Problem`
-(phi == 0) before a map is returned.
-
-The suite (16 tasks): T01..T08 on 5 km x 5 km (I_max 10) and T09..T16 on 10 km x 10 km (I_max 20),
-obstacle density 0..7 within each size. Same seed, same bytes (coordinates rounded to 0.1 m,
-hover times to 0.01 s).
+Every random draw comes from the attempt's generator, in a fixed order; an attempt that draws
+something unusable raises `Retry` and the caller starts over with the next sub-seed.
 """
 
 from __future__ import annotations
 
-import json
 import math
-from collections.abc import Callable
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import shapely
 
-from planner_core.defaults import SUITE_SEED as _SUITE_SEED
 from planner_core.geometry import rectangle_vertices
-from planner_core.mapio import Radio, Uav, load_map
-from planner_core.problem import Problem, link_rates
+from planner_core.mapio import Radio, Uav
+from planner_core.model import ModelParams
+from planner_core.routing import offset_convex, open_tour, path_hops, shortest_paths
+from planner_core.suite.tables import BENDS, SIZES, obstacle_counts
 
-__all__ = [
-    "SIZES",
-    "N_DENSITIES",
-    "SUITE_SEED",
-    "SUITE_ORIGIN",
-    "suite_tasks",
-    "default_sensor_count",
-    "max_sensor_count",
-    "obstacle_counts",
-    "generate_map",
-    "suite_maps",
-    "generate_suite",
-    "dumps_map",
-    "GenerationError",
-]
-
-#: map side (m) -> I_max, the two sizes of the paper's suite
-SIZES: dict[int, int] = {5000: 10, 10000: 20}
-#: obstacle densities per size (0 = sparsest, 7 = densest)
-N_DENSITIES = 8
-#: the seed the committed suite was generated with
-SUITE_SEED = _SUITE_SEED
-#: one fixed, realistic origin for all generated maps (Guangzhou Higher Education Mega Center)
-SUITE_ORIGIN: dict[str, float] = {"lat": 23.0493, "lon": 113.3975, "alt": 10.0}
-
-# obstacle counts per density, per size
-_CIRCLES = {5000: (3, 5, 8, 11, 14, 18, 22, 26), 10000: (6, 12, 18, 25, 32, 40, 48, 56)}
-_RECTANGLES = {5000: (2, 4, 7, 10, 13, 17, 21, 25), 10000: (5, 11, 17, 24, 31, 39, 47, 55)}
-_NFZS = {5000: (0, 0, 0, 1, 1, 1, 2, 2), 10000: (0, 0, 1, 1, 2, 2, 3, 4)}
-# legs of the witness bent sideways, with an obstacle on the shortcut they avoid
-_BENDS = {5000: (0, 0, 1, 1, 2, 2, 3, 3), 10000: (0, 1, 1, 2, 3, 4, 5, 6)}
+__all__ = ["Draw", "Retry"]
 
 # paper Sec. 3.2 dimensions, metres
 _CIRCLE_R = (40.0, 100.0)
@@ -81,52 +40,10 @@ _OBSTACLE_GAP = 10.0  # between circles / rectangles (bounding circles)
 _HOP_PENALTY = 400.0  # metres added per routed leg, so tours prefer few routing corners
 _DATA_MARGIN = 0.03  # witness hover times deliver 3 % more than required
 _C3_MARGIN = 0.5  # Mbit/s kept free under R_lambda at every witness hover point
-_MAX_ATTEMPTS = 60
 
 
-class GenerationError(RuntimeError):
-    """No map met every check within the attempt budget (should not happen for valid input)."""
-
-
-class _Retry(Exception):
+class Retry(Exception):
     """This attempt drew something unusable; start over with the next sub-seed."""
-
-
-# ----------------------------------------------------------------------------- tables
-
-
-def suite_tasks() -> list[tuple[str, int, int]]:
-    """The 16 tasks as (name, size, density): T01..T08 on 5 km, T09..T16 on 10 km."""
-    return [
-        (f"T{k * N_DENSITIES + d + 1:02d}", size, d)
-        for k, size in enumerate(sorted(SIZES))
-        for d in range(N_DENSITIES)
-    ]
-
-
-def default_sensor_count(size: int, density: int) -> int:
-    """Sensors grow with size and density: 8..15 on 5 km, 15..29 on 10 km."""
-    _check_size_density(size, density)
-    return 8 + density if size == 5000 else 15 + 2 * density
-
-
-def max_sensor_count(size: int) -> int:
-    """The most sensors a map of this size may ask for (two per hover point)."""
-    _check_size_density(size, 0)
-    return 2 * SIZES[size]
-
-
-def obstacle_counts(size: int, density: int) -> tuple[int, int, int]:
-    """(circles, rectangles, no-fly zones) at this size and density."""
-    _check_size_density(size, density)
-    return _CIRCLES[size][density], _RECTANGLES[size][density], _NFZS[size][density]
-
-
-def _check_size_density(size: int, density: int) -> None:
-    if size not in SIZES:
-        raise ValueError(f"size must be one of {sorted(SIZES)} (got {size})")
-    if not 0 <= density < N_DENSITIES:
-        raise ValueError(f"density must be 0..{N_DENSITIES - 1} (got {density})")
 
 
 # ----------------------------------------------------------------------------- small geometry
@@ -148,19 +65,10 @@ def _seg_point_dist(a: np.ndarray, b: np.ndarray, p: np.ndarray) -> np.ndarray:
     return np.hypot(*(p[None, :, :] - close).transpose(2, 0, 1))
 
 
-def _offset_vertices(poly: np.ndarray, c: float) -> np.ndarray:
-    """Vertices of a convex CCW polygon pushed out by c along the mitre (c from both edges)."""
-    e = np.roll(poly, -1, axis=0) - poly
-    n = np.stack([e[:, 1], -e[:, 0]], axis=1) / np.hypot(e[:, 0], e[:, 1])[:, None]
-    n_prev = np.roll(n, 1, axis=0)
-    dot = np.einsum("ik,ik->i", n, n_prev)
-    return poly + c * (n + n_prev) / (1.0 + dot)[:, None]
-
-
 # ----------------------------------------------------------------------------- the generator
 
 
-class _Draw:
+class Draw:
     """One attempt at one map: every random draw comes from `rng`, in a fixed order."""
 
     def __init__(self, rng: np.random.Generator, size: int, density: int, n_sensors: int):
@@ -170,13 +78,14 @@ class _Draw:
         self.imax = SIZES[size]
         self.n_sensors = n_sensors
         self.n_circles, self.n_rects, self.n_nfz = obstacle_counts(size, density)
-        self.n_bends = _BENDS[size][density]
-        uav, radio = Uav(), Radio()
-        self.altitude = uav.altitude
-        self.t_max = uav.max_hover_time
-        self.peak_rate = radio.peak_rate
-        self.decay = radio.decay
-        self.bandwidth = radio.bandwidth
+        self.n_bends = BENDS[size][density]
+        radio = Radio()
+        #: the model's parameters with the schema's default UAV and radio (no sensors yet)
+        self.model = ModelParams.from_settings(
+            Uav(), radio, width=self.size, height=self.size, n_points=self.imax
+        )
+        self.t_max = self.model.t_max
+        self.bandwidth = self.model.bandwidth
         self.required = radio.required_data
 
     # ---------------------------------------------------------------- helpers
@@ -185,7 +94,7 @@ class _Draw:
 
     def rates(self, hover: np.ndarray, sensors: np.ndarray) -> np.ndarray:
         """R (I, J), the model's rate formula."""
-        return link_rates(hover, sensors, self.altitude, self.peak_rate, self.decay)
+        return self.model.rates(hover, sensors)
 
     def nfz_distance(self, geoms: Any) -> np.ndarray:
         """Distance of shapely geometries to the nearest no-fly zone (inf when there is none)."""
@@ -247,7 +156,7 @@ class _Draw:
                 self.nfz.append(pts)
                 break
             else:
-                raise _Retry
+                raise Retry
         self.nfz_shapes = [shapely.Polygon(p) for p in self.nfz]
         for p in self.nfz_shapes:
             shapely.prepare(p)
@@ -271,13 +180,13 @@ class _Draw:
                 stops.append(p)
                 break
             else:
-                raise _Retry
+                raise Retry
         self.stop_points = np.array(stops)
 
     def route(self) -> None:
         """Order the stops into a tour and route it around the no-fly zones (visibility graph)."""
         targets = np.vstack([self.start, self.stop_points, self.end])
-        corners = [_r1(_offset_vertices(p, _NFZ_CORNER_OFFSET)) for p in self.nfz]
+        corners = [_r1(offset_convex(p, _NFZ_CORNER_OFFSET)) for p in self.nfz]
         cand = np.vstack(corners) if corners else np.zeros((0, 2))
         if len(cand):
             ok = np.all((cand >= 1.0) & (cand <= self.size - 1.0), axis=1)
@@ -294,62 +203,25 @@ class _Draw:
         w = np.full((n, n), np.inf)
         w[i[visible], j[visible]] = length[visible] + _HOP_PENALTY
         w[j[visible], i[visible]] = length[visible] + _HOP_PENALTY
-        np.fill_diagonal(w, 0.0)
-        nxt = np.where(np.isfinite(w), np.arange(n)[None, :], -1)
-        for k in range(n):  # Floyd-Warshall with next-hop tracking
-            alt = w[:, k : k + 1] + w[k : k + 1, :]
-            better = alt < w
-            w = np.where(better, alt, w)
-            nxt = np.where(better, nxt[:, k : k + 1], nxt)
+        w, nxt = shortest_paths(w)
         cost = w[:nt, :nt]
         if not np.all(np.isfinite(cost)):
-            raise _Retry
-        order = self._tour(cost)
-        seq = [0, *order, nt - 1]
+            raise Retry
+        seq = open_tour(np.ascontiguousarray(cost), True).tolist()
         hover: list[np.ndarray] = []
         kinds: list[str] = []
         for a, b in zip(seq[:-1], seq[1:], strict=True):
-            u = a
-            while u != b:
-                u = int(nxt[u, b])
-                if u == b:
-                    break
+            for u in path_hops(nxt, a, b):
                 hover.append(nodes[u])
                 kinds.append("corner")
             if b != nt - 1:
                 hover.append(nodes[b])
                 kinds.append("stop")
         if len(hover) > self.imax:
-            raise _Retry
+            raise Retry
         self.hover = [np.array(h) for h in hover]
         self.kinds = kinds
         self.tour_stops = targets[seq]  # start, stops in tour order, end
-
-    @staticmethod
-    def _tour(cost: np.ndarray) -> list[int]:
-        """Stops 1..n-2 between fixed ends 0 and n-1: nearest neighbour, then 2-opt."""
-        nt = len(cost)
-        left = list(range(1, nt - 1))
-        order: list[int] = []
-        cur = 0
-        while left:
-            nxt = min(left, key=lambda q: (cost[cur, q], q))
-            order.append(nxt)
-            left.remove(nxt)
-            cur = nxt
-        improved = True
-        while improved:
-            improved = False
-            seq = [0, *order, nt - 1]
-            for a in range(1, len(seq) - 2):
-                for b in range(a + 1, len(seq) - 1):
-                    old = cost[seq[a - 1], seq[a]] + cost[seq[b], seq[b + 1]]
-                    new = cost[seq[a - 1], seq[b]] + cost[seq[a], seq[b + 1]]
-                    if new < old - 1e-6:
-                        seq[a : b + 1] = seq[a : b + 1][::-1]
-                        improved = True
-            order = seq[1:-1]
-        return order
 
     # ---------------------------------------------------------------- 4. bends
     def bends(self) -> None:
@@ -391,7 +263,7 @@ class _Draw:
         for tier in (stops, stops, others, stops, others):
             slots.extend(int(k) for k in rng.permutation(tier))
         if len(slots) < self.n_sensors:
-            raise _Retry
+            raise Retry
         placed: list[np.ndarray] = []
         load = np.zeros(len(hover))  # sum of rates at each hover point
         for k in slots[: self.n_sensors]:
@@ -412,7 +284,7 @@ class _Draw:
                 load += add
                 break
             else:
-                raise _Retry
+                raise Retry
         self.sensor_points = np.array(placed)
 
     # ---------------------------------------------------------------- 6. hover times
@@ -426,7 +298,7 @@ class _Draw:
         t = np.zeros(len(hover))
         for j, i in enumerate(best):
             if rate[i, j] <= 0.0:
-                raise _Retry
+                raise Retry
             t[i] = max(t[i], need / rate[i, j])
         for i in range(len(hover)):
             others = rate.T @ t - rate[i] * t[i]
@@ -437,7 +309,7 @@ class _Draw:
                 t[i] = 0.0
         t = np.ceil(t * 100.0 - 1e-6) / 100.0 + 0.0  # + 0.0: no -0.0 in the file
         if np.any(t > self.t_max) or np.any(rate.T @ t < self.required):
-            raise _Retry
+            raise Retry
         self.times = t
 
     # ---------------------------------------------------------------- 7. circles, rectangles
@@ -484,7 +356,7 @@ class _Draw:
                 if self._try_place(kind, _r1(centre)):
                     break
             else:
-                raise _Retry
+                raise Retry
 
     def _near(self, a: np.ndarray, d: np.ndarray, sigma: float) -> np.ndarray:
         t = self.rng.uniform(0.05, 0.95)
@@ -571,124 +443,3 @@ class _Draw:
                 "hover_times": [float(t) for t in self.times],
             },
         }
-
-
-def _witness_ok(data: dict[str, Any]) -> bool:
-    """Load the map and check its witness: phi == 0, times <= T_max, points in the area."""
-    m = load_map(data)
-    w = m.spec.witness
-    if w is None:
-        return False
-    hp = np.array(w.hover_points, dtype=float).reshape(-1, 2)
-    ht = np.array(w.hover_times, dtype=float)
-    if len(hp) > m.max_hover_points or np.any(ht < 0) or np.any(ht > m.spec.uav.max_hover_time):
-        return False
-    if np.any(hp < 0) or np.any(hp[:, 0] > m.width) or np.any(hp[:, 1] > m.height):
-        return False
-    problem = Problem(m)
-    _, phi = problem.evaluate(problem.encode(hp, ht)[None, :])
-    return bool(phi[0] == 0.0)
-
-
-def generate_map(
-    size: int,
-    density: int,
-    seed: int = SUITE_SEED,
-    *,
-    name: str | None = None,
-    n_sensors: int | None = None,
-    origin: dict[str, float] | None = None,
-) -> dict[str, Any]:
-    """One map with a stored witness (phi == 0), as JSON-ready data; same arguments, same map.
-
-    size: 5000 or 10000 (metres a side); density: 0..7; n_sensors: default grows with size and
-    density (`default_sensor_count`). Raises ValueError for bad arguments.
-    """
-    _check_size_density(size, density)
-    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
-        raise ValueError(f"seed must be a non-negative integer (got {seed!r})")
-    if n_sensors is None:
-        n_sensors = default_sensor_count(size, density)
-    if not 1 <= n_sensors <= max_sensor_count(size):
-        raise ValueError(
-            f"sensors must be 1..{max_sensor_count(size)} on a {size} m map (got {n_sensors})"
-        )
-    if name is None:
-        name = f"gen-{size}-d{density}-s{seed}"
-    for attempt in range(_MAX_ATTEMPTS):
-        rng = np.random.default_rng([int(seed), size, density, n_sensors, attempt])
-        draw = _Draw(rng, size, density, n_sensors)
-        try:
-            draw.run()
-        except _Retry:
-            continue
-        data = draw.to_dict(name, origin or SUITE_ORIGIN)
-        if _witness_ok(data):
-            return data
-    raise GenerationError(
-        f"no feasible map after {_MAX_ATTEMPTS} attempts (size {size}, density {density}, "
-        f"seed {seed}, {n_sensors} sensors)"
-    )
-
-
-def suite_maps(seed: int = SUITE_SEED) -> dict[str, dict[str, Any]]:
-    """The 16 suite maps by name (T01..T16); each task uses `seed` with its own size/density."""
-    return {name: generate_map(size, d, seed, name=name) for name, size, d in suite_tasks()}
-
-
-def generate_suite(
-    folder: str | Path,
-    seed: int = SUITE_SEED,
-    *,
-    write: Callable[[Path, str], object] | None = None,
-) -> list[Path]:
-    """Write T01.json..T16.json into `folder`; `write(path, text)` defaults to Path.write_text."""
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    paths = []
-    for name, data in suite_maps(seed).items():
-        path = folder / f"{name}.json"
-        if write is None:
-            path.write_text(dumps_map(data))
-        else:
-            write(path, dumps_map(data))
-        paths.append(path)
-    return paths
-
-
-# ----------------------------------------------------------------------------- JSON text
-
-_WIDTH = 100
-
-
-def dumps_map(data: dict[str, Any]) -> str:
-    """Readable, stable JSON: short containers on one line, long number lists wrapped."""
-    return _fmt(data, 0, 0) + "\n"
-
-
-def _fmt(v: Any, indent: int, used: int) -> str:
-    compact = json.dumps(v, separators=(", ", ": "))
-    if not isinstance(v, dict | list) or not v or used + len(compact) <= _WIDTH:
-        return compact
-    pad = " " * (indent + 2)
-    if isinstance(v, dict):
-        items = []
-        for k, x in v.items():
-            key = json.dumps(k) + ": "
-            items.append(pad + key + _fmt(x, indent + 2, indent + 2 + len(key) + 1))
-        return "{\n" + ",\n".join(items) + "\n" + " " * indent + "}"
-    if all(not isinstance(x, dict) for x in v) and all(
-        len(json.dumps(x, separators=(", ", ": "))) + indent + 4 <= _WIDTH for x in v
-    ):  # pack numbers / short lists several to a line
-        lines, cur = [], ""
-        for x in v:
-            t = json.dumps(x, separators=(", ", ": "))
-            if cur and len(pad) + len(cur) + 2 + len(t) + 1 > _WIDTH:
-                lines.append(cur)
-                cur = t
-            else:
-                cur = f"{cur}, {t}" if cur else t
-        lines.append(cur)
-        return "[\n" + ",\n".join(pad + ln for ln in lines) + "\n" + " " * indent + "]"
-    items = [pad + _fmt(x, indent + 2, indent + 3) for x in v]
-    return "[\n" + ",\n".join(items) + "\n" + " " * indent + "]"

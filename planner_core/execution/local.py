@@ -1,9 +1,5 @@
-"""The one executor interface batch work goes through (benchmark runs; later training rollouts).
-
-An executor maps a picklable top-level function over picklable items and yields each result as
-soon as it is done (any order). `SerialExecutor` runs in this process (tests, debugging);
-`ProcessExecutor` spreads items over worker processes with `concurrent.futures`. A distributed
-engine (Ray, Dask, ...) can take over later by implementing the same two methods.
+"""Local executors: in this process (`SerialExecutor`) or over a pool of worker processes
+(`ProcessExecutor`, `concurrent.futures` with spawned, single-threaded workers).
 """
 
 from __future__ import annotations
@@ -12,29 +8,14 @@ import multiprocessing
 import os
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
-from typing import Any, Protocol, TypeVar
+from typing import Any, TypeVar
 
-__all__ = ["Executor", "SerialExecutor", "ProcessExecutor", "make_executor", "SINGLE_THREAD_ENV"]
+from planner_core.execution.base import SINGLE_THREAD_ENV
+
+__all__ = ["SerialExecutor", "ProcessExecutor", "make_executor"]
 
 T = TypeVar("T")
 R = TypeVar("R")
-
-#: set in worker processes: one process per core, so numeric libraries must not spawn threads
-#: of their own (a 40 x 40 eigh took 30 ms instead of 0.6 ms with OpenBLAS threads on 2 busy cores)
-SINGLE_THREAD_ENV = {
-    "OPENBLAS_NUM_THREADS": "1",
-    "OMP_NUM_THREADS": "1",
-    "MKL_NUM_THREADS": "1",
-    "NUMBA_NUM_THREADS": "1",
-}
-
-
-class Executor(Protocol):
-    """Runs fn over items; results come back as they finish (order not guaranteed)."""
-
-    def map_unordered(self, fn: Callable[[T], R], items: Iterable[T]) -> Iterator[R]: ...
-
-    def close(self) -> None: ...
 
 
 class SerialExecutor:

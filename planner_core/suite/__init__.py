@@ -1,0 +1,182 @@
+"""Benchmark map generator (paper Sec. 3.2 and 5.1): maps with a known feasible plan stored inside.
+
+Every map is feasible by construction. A witness plan is drawn first (stops spread over the area,
+ordered into a tour, routed around the no-fly zones, with extra bends on some legs); sensors are
+then placed around its hover points (C3 kept at every hover point), its hover times are the
+smallest that deliver every sensor's data plus a margin (C4, T <= T_max), and circles and
+rectangles are placed off its legs: on the straight line start -> end, on the shortcuts the bends
+avoid, along the route and anywhere. The witness is stored in the map and checked with `Problem`
+(phi == 0) before a map is returned.
+
+The suite (16 tasks): T01..T08 on 5 km x 5 km (I_max 10) and T09..T16 on 10 km x 10 km (I_max 20),
+obstacle density 0..7 within each size. Same seed, same bytes (coordinates rounded to 0.1 m,
+hover times to 0.01 s).
+"""
+
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from planner_core.mapio import load_map
+from planner_core.problem import Problem
+from planner_core.suite.draw import Draw, Retry
+from planner_core.suite.tables import (
+    N_DENSITIES,
+    SIZES,
+    SUITE_ORIGIN,
+    SUITE_SEED,
+    check_size_density,
+    default_sensor_count,
+    max_sensor_count,
+    obstacle_counts,
+    suite_tasks,
+)
+
+__all__ = [
+    "SIZES",
+    "N_DENSITIES",
+    "SUITE_SEED",
+    "SUITE_ORIGIN",
+    "suite_tasks",
+    "default_sensor_count",
+    "max_sensor_count",
+    "obstacle_counts",
+    "generate_map",
+    "suite_maps",
+    "generate_suite",
+    "dumps_map",
+    "GenerationError",
+]
+
+_MAX_ATTEMPTS = 60
+
+
+class GenerationError(RuntimeError):
+    """No map met every check within the attempt budget (should not happen for valid input)."""
+
+
+def _witness_ok(data: dict[str, Any]) -> bool:
+    """Load the map and check its witness: phi == 0, times <= T_max, points in the area."""
+    m = load_map(data)
+    w = m.spec.witness
+    if w is None:
+        return False
+    hp = np.array(w.hover_points, dtype=float).reshape(-1, 2)
+    ht = np.array(w.hover_times, dtype=float)
+    if len(hp) > m.max_hover_points or np.any(ht < 0) or np.any(ht > m.spec.uav.max_hover_time):
+        return False
+    if np.any(hp < 0) or np.any(hp[:, 0] > m.width) or np.any(hp[:, 1] > m.height):
+        return False
+    problem = Problem(m)
+    _, phi = problem.evaluate(problem.encode(hp, ht)[None, :])
+    return bool(phi[0] == 0.0)
+
+
+def generate_map(
+    size: int,
+    density: int,
+    seed: int = SUITE_SEED,
+    *,
+    name: str | None = None,
+    n_sensors: int | None = None,
+    origin: dict[str, float] | None = None,
+) -> dict[str, Any]:
+    """One map with a stored witness (phi == 0), as JSON-ready data; same arguments, same map.
+
+    size: 5000 or 10000 (metres a side); density: 0..7; n_sensors: default grows with size and
+    density (`default_sensor_count`). Raises ValueError for bad arguments.
+    """
+    check_size_density(size, density)
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise ValueError(f"seed must be a non-negative integer (got {seed!r})")
+    if n_sensors is None:
+        n_sensors = default_sensor_count(size, density)
+    if not 1 <= n_sensors <= max_sensor_count(size):
+        raise ValueError(
+            f"sensors must be 1..{max_sensor_count(size)} on a {size} m map (got {n_sensors})"
+        )
+    if name is None:
+        name = f"gen-{size}-d{density}-s{seed}"
+    for attempt in range(_MAX_ATTEMPTS):
+        rng = np.random.default_rng([int(seed), size, density, n_sensors, attempt])
+        draw = Draw(rng, size, density, n_sensors)
+        try:
+            draw.run()
+        except Retry:
+            continue
+        data = draw.to_dict(name, origin or SUITE_ORIGIN)
+        if _witness_ok(data):
+            return data
+    raise GenerationError(
+        f"no feasible map after {_MAX_ATTEMPTS} attempts (size {size}, density {density}, "
+        f"seed {seed}, {n_sensors} sensors)"
+    )
+
+
+def suite_maps(seed: int = SUITE_SEED) -> dict[str, dict[str, Any]]:
+    """The 16 suite maps by name (T01..T16); each task uses `seed` with its own size/density."""
+    return {name: generate_map(size, d, seed, name=name) for name, size, d in suite_tasks()}
+
+
+def generate_suite(
+    folder: str | Path,
+    seed: int = SUITE_SEED,
+    *,
+    write: Callable[[Path, str], object] | None = None,
+) -> list[Path]:
+    """Write T01.json..T16.json into `folder`; `write(path, text)` defaults to Path.write_text."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for name, data in suite_maps(seed).items():
+        path = folder / f"{name}.json"
+        if write is None:
+            path.write_text(dumps_map(data))
+        else:
+            write(path, dumps_map(data))
+        paths.append(path)
+    return paths
+
+
+# ----------------------------------------------------------------------------- JSON text
+
+_WIDTH = 100
+
+
+def dumps_map(data: dict[str, Any]) -> str:
+    """Readable, stable JSON: short containers on one line, long number lists wrapped."""
+    return _fmt(data, 0, 0) + "\n"
+
+
+def _fmt(v: Any, indent: int, used: int) -> str:
+    compact = json.dumps(v, separators=(", ", ": "))
+    if not isinstance(v, dict | list) or not v or used + len(compact) <= _WIDTH:
+        return compact
+    pad = " " * (indent + 2)
+    if isinstance(v, dict):
+        items = []
+        for k, x in v.items():
+            key = json.dumps(k) + ": "
+            items.append(pad + key + _fmt(x, indent + 2, indent + 2 + len(key) + 1))
+        return "{\n" + ",\n".join(items) + "\n" + " " * indent + "}"
+    if all(not isinstance(x, dict) for x in v) and all(
+        len(json.dumps(x, separators=(", ", ": "))) + indent + 4 <= _WIDTH for x in v
+    ):  # pack numbers / short lists several to a line
+        lines, cur = [], ""
+        for x in v:
+            t = json.dumps(x, separators=(", ", ": "))
+            if cur and len(pad) + len(cur) + 2 + len(t) + 1 > _WIDTH:
+                lines.append(cur)
+                cur = t
+            else:
+                cur = f"{cur}, {t}" if cur else t
+        lines.append(cur)
+        return "[\n" + ",\n".join(pad + ln for ln in lines) + "\n" + " " * indent + "]"
+    items = [pad + _fmt(x, indent + 2, indent + 3) for x in v]
+    return "[\n" + ",\n".join(items) + "\n" + " " * indent + "]"

@@ -1,0 +1,73 @@
+"""planner_core.model: the paper's formulas once; the compiled scalars equal the numpy forms."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from planner_core.mapio import load_map
+from planner_core.model import (
+    ModelParams,
+    deb_best,
+    deb_better,
+    deb_not_worse,
+    flight_time,
+    leg_time,
+    link_rates,
+    penalised_score,
+    slant_rate,
+    slant_rates,
+)
+from planner_core.problem import Problem
+from planner_core.routing import open_tour
+from tests.conftest import SUITE
+
+
+def test_compiled_leg_time_is_bit_equal_to_flight_time() -> None:
+    rng = np.random.default_rng(1)
+    d = np.concatenate([[0.0, -3.0, 100.0, 100.0 + 1e-9], rng.uniform(0, 8000, 200)])
+    ref = flight_time(d, 20.0, 4.0)
+    got = np.array([leg_time(float(x), 20.0, 4.0) for x in d])
+    assert np.array_equal(got, ref)
+    assert leg_time(-3.0, 20.0, 4.0) == 0.0  # the d >= 0 guard
+
+
+def test_compiled_slant_rate_is_bit_equal_and_link_rates_clip() -> None:
+    rng = np.random.default_rng(2)
+    d2 = rng.uniform(0, 2e6, 100)
+    ref = slant_rates(d2, 100.0, 10.0, 0.01)
+    assert np.array_equal([slant_rate(float(x), 100.0 * 100.0, 10.0, 0.01) for x in d2], ref)
+    R = link_rates(np.array([[0.0, 0.0], [2000.0, 0.0]]), np.array([[0.0, 0.0]]), 100.0, 10.0, 0.01)
+    assert R[0, 0] == pytest.approx(9.0) and R[1, 0] == 0.0
+
+
+def test_deb_rule_and_score() -> None:
+    f = np.array([3.0, 1.0, 2.0, 0.5])
+    phi = np.array([0.0, 0.0, 1.0, 2.0])
+    assert deb_best(f, phi) == 1
+    assert list(deb_better(f, phi, np.full(4, 2.0), np.full(4, 0.0))) == [False, True, False, False]
+    assert deb_not_worse(2.0, 0.0, 2.0, 0.0) and not deb_better(2.0, 0.0, 2.0, 0.0)
+    assert penalised_score(1.0, 2.0) == 21.0
+
+
+def test_model_params_from_map_match_the_problem() -> None:
+    m = load_map(SUITE / "T08.json")
+    mp = ModelParams.from_map(m)
+    p = Problem(m)
+    assert p.model.n_points == mp.n_points == m.max_hover_points
+    assert mp.altitude == m.spec.uav.altitude and mp.decay == m.spec.radio.decay
+    assert np.array_equal(mp.sensors, m.sensors) and not mp.sensors.flags.writeable
+    assert np.array_equal(p.rates(mp.sensors[:2]), mp.rates(mp.sensors[:2]))
+
+
+@pytest.mark.parametrize("first", [False, True])
+def test_open_tour_is_two_opt_optimal(first: bool) -> None:
+    rng = np.random.default_rng(3)
+    pts = rng.uniform(0, 1000, (12, 2))
+    W = np.hypot(*(pts[:, None] - pts[None]).transpose(2, 0, 1))
+    t = open_tour(W, first)
+    assert t[0] == 0 and t[-1] == 11 and sorted(t.tolist()) == list(range(12))
+    for i in range(10):
+        for j in range(i + 1, 11):
+            g = W[t[i], t[i + 1]] + W[t[j], t[j + 1]] - W[t[i], t[j]] - W[t[i + 1], t[j + 1]]
+            assert g <= 1e-6
