@@ -45,8 +45,8 @@ class Origin(BaseModel):
     """WGS84 position of the local (0, 0)."""
 
     model_config = _STRICT
-    lat: float = Field(22.3193, ge=-90, le=90, description="latitude, degrees")
-    lon: float = Field(114.1694, ge=-180, le=180, description="longitude, degrees")
+    lat: float = Field(ge=-90, le=90, description="latitude, degrees")
+    lon: float = Field(ge=-180, le=180, description="longitude, degrees")
     alt: float = Field(0.0, description="altitude above mean sea level of the take-off ground, m")
 
 
@@ -179,7 +179,9 @@ class MapFile(BaseModel):
 
     model_config = _STRICT
     name: str = "unnamed"
-    origin: Origin = Origin()
+    origin: Origin | None = Field(
+        None, description="WGS84 position of (0, 0); needed to write or read a mission (no "
+        "default place is assumed)")
     area: Area
     start: Point2
     end: Point2
@@ -295,6 +297,13 @@ class Map:
             out.append(max(min(c, d - CLEARANCE_PAD), 0.0))
         return tuple(out)
 
+    def with_origin(self, lat: float, lon: float, alt: float = 0.0) -> Map:
+        """This map placed at (lat, lon, alt) (what `--origin LAT,LON[,ALT]` does); MapError
+        for coordinates out of range."""
+        d = self.spec.model_dump(mode="json")
+        d["origin"] = {"lat": lat, "lon": lon, "alt": alt}
+        return load_map(d)
+
     def planning_map(self) -> Map:
         """The map the optimiser plans on: obstacles inflated by their clearance (plus
         `CLEARANCE_PAD`), rectangles turned into the equivalent no-fly zones, every sensor's
@@ -349,7 +358,7 @@ class Map:
         return {
             "name": s.name,
             "area_m": [s.area.width, s.area.height],
-            "origin": s.origin.model_dump(),
+            "origin": None if s.origin is None else s.origin.model_dump(),
             "start": list(s.start),
             "end": list(s.end),
             "sensors": len(s.sensors),

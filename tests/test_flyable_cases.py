@@ -113,3 +113,64 @@ def test_waypoints_row_0_kept_when_it_is_not_home(tmp_path):
     items, _ = read_mission(f)
     assert [it.command for it in items] == [CMD.TAKEOFF, CMD.LOITER_TIME, CMD.LAND]
     assert isinstance(items[0], MissionItem) and items[0].seq == 0
+
+
+# ----------------------------------------------------------------------------- no silent defaults
+
+
+def test_no_origin_map_is_refused_when_a_mission_is_written(tmp_path):
+    """cases/flyable no-origin-map.json: exit 2 naming `origin`, nothing written; --origin
+    places it."""
+    out = tmp_path / "m.plan"
+    r = cli("plan", CASES / "no-origin-map.json", "-o", out, "--budget", 500, "--quiet")
+    assert r.returncode == 2 and "origin" in r.stderr and not out.exists()
+    r = cli("plan", CASES / "no-origin-map.json", "-o", out, "--budget", 2000, "--quiet",
+            "--origin", "46.2,7.3,500")  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    home = json.loads(out.read_text())["mission"]["plannedHomePosition"]
+    assert home[0] == pytest.approx(46.2, abs=0.01) and home[2] == 500.0
+    r = cli("verify", CASES / "no-origin-map.json", out)
+    assert r.returncode == 2 and "origin" in r.stderr
+    assert cli("verify", CASES / "no-origin-map.json", out, "--origin", "46.2,7.3,500"
+               ).returncode == 0
+    r = cli("plan", CASES / "no-origin-map.json", "-o", out, "--origin", "46.2")
+    assert r.returncode == 2 and "--origin" in r.stderr
+
+
+def test_check_names_the_sensors_no_single_point_serves(tmp_path):
+    """cases/flyable unreachable-map.json: check names 'b' (inside a no-fly zone) and 'greedy'
+    (more data than one hover point collects in T_max). The README calls both unservable, but
+    in the paper's model they are not: 'b' is served by radio from outside the zone and 'greedy'
+    by two hover points, as `plan` shows (the sim passes its mission). So check names both with
+    why, and exit 0; exit 1 is for what no plan can meet (tested below)."""
+    r = cli("check", CASES / "unreachable-map.json")
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "'b' lies inside no-fly-zone 0" in r.stdout
+    assert "'greedy' needs 5100 Mbit" in r.stdout and "at least 2" in r.stdout
+    out = tmp_path / "u.plan"
+    assert cli("plan", CASES / "unreachable-map.json", "-o", out, "--quiet").returncode == 0
+
+
+def test_check_exits_1_naming_what_no_plan_can_meet(tmp_path):
+    d = json.loads((CASES / "unreachable-map.json").read_text())
+    d["sensors"][3]["required_data"] = 50_000  # > I_max x T_max x best rate
+    d["sensors"].append({"id": "far", "x": 1190, "y": 1190})
+    d["radio"] = {"decay": 0.08}  # rate 0 beyond 125 m
+    d["obstacles"]["circles"].append({"x": 1190, "y": 1190, "radius": 150})
+    d["end"] = [1000, 700]
+    f = tmp_path / "bad.json"
+    f.write_text(json.dumps(d))
+    r = cli("check", f)
+    assert r.returncode == 1, r.stdout + r.stderr
+    assert "CANNOT  sensor 'greedy' needs 51000 Mbit" in r.stdout
+    assert "CANNOT  sensor 'far': no reachable hover point" in r.stdout
+    # an end point walled in by four buildings
+    d = json.loads((CASES / "tiny-map.json").read_text())
+    d["end"] = [1000, 1000]
+    d["obstacles"]["rectangles"] = [
+        {"x": 1000, "y": 900, "length": 260, "width": 20}, {"x": 1000, "y": 1100, "length": 260,
+         "width": 20}, {"x": 900, "y": 1000, "length": 20, "width": 260},
+        {"x": 1100, "y": 1000, "length": 20, "width": 260}]  # fmt: skip
+    f.write_text(json.dumps(d))
+    r = cli("check", f)
+    assert r.returncode == 1 and "end point cannot be reached" in r.stdout

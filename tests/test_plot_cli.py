@@ -20,6 +20,7 @@ from tests.conftest import one_line_error, run_cli, run_cli_many
 
 MAP = {
     "name": "cli",
+    "origin": {"lat": 22.3193, "lon": 114.1694, "alt": 0.0},
     "area": {"width": 2000, "height": 1500},
     "start": [50, 50],
     "end": [1900, 1400],

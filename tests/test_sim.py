@@ -23,6 +23,7 @@ from tests.conftest import ROOT, SUITE
 
 MAP = {
     "name": "sim",
+    "origin": {"lat": 22.3193, "lon": 114.1694, "alt": 0.0},
     "area": {"width": 2000, "height": 2000},
     "start": [0, 0],
     "end": [1900, 1800],

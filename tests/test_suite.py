@@ -188,7 +188,7 @@ def test_examples_load() -> None:
     assert _witness(p, json.loads((MAPS / "small-demo.json").read_text()))["phi"] == 0.0
     assert p.breakdown(p.encode(np.zeros((0, 2)), []))["l_vio"] > 0  # the straight line is blocked
     tiny = json.loads((MAPS / "tiny.json").read_text())
-    assert set(tiny) == {"area", "start", "end", "sensors", "obstacles"}
+    assert set(tiny) == {"origin", "area", "start", "end", "sensors", "obstacles"}
     t = load_map(tiny)
     n_obstacles = sum(len(v) for v in tiny["obstacles"].values())
     assert n_obstacles == 1 and len(t.sensors) >= 1

@@ -21,6 +21,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "1 infeasible, 2 bad input.",
     )
     p.add_argument("map", help="map file (JSON)")
+    from lamde_mission.commands._common import add_origin_option
+
+    add_origin_option(p)
     p.add_argument("-o", "--output", required=True, metavar="OUT",
                    help="mission file to write (.plan, .waypoints or .geojson)")
     p.add_argument("--format", choices=("plan", "waypoints", "geojson"),
@@ -148,7 +151,7 @@ def _violations(plan: Any, verdicts: Any) -> list[str]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from lamde_mission.commands._common import load_map_or_fail
+    from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
     from lamde_mission.errors import UsageError
     from lamde_mission.formats import MissionFileError, format_for
 
@@ -164,6 +167,7 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:  # "population: must be ...": name the option as typed
         raise UsageError(f"--{exc}") from None
     m = load_map_or_fail(args.map)
+    m = with_origin_or_fail(m, args.origin)
 
     from lamde_mission.api import plan as make_plan
     from lamde_mission.formats import write_mission

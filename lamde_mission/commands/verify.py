@@ -18,6 +18,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "2 bad input.",
     )
     p.add_argument("map", help="map file (JSON)")
+    from lamde_mission.commands._common import add_origin_option
+
+    add_origin_option(p)
     p.add_argument("mission", help="mission file: .plan, .waypoints (or a plan result .json)")
     p.add_argument("--json", action="store_true", help="print verdicts and totals as JSON")
     return p
@@ -44,10 +47,11 @@ def replay_mission_file(path: str, m: Any) -> Any:
 
 
 def run(args: argparse.Namespace) -> int:
-    from lamde_mission.commands._common import load_map_or_fail
+    from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
     from sim import verify
 
     m = load_map_or_fail(args.map)
+    m = with_origin_or_fail(m, args.origin)
     timeline = replay_mission_file(args.mission, m)
     verdicts = verify(timeline, m)
     t = timeline.totals
