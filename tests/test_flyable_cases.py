@@ -174,3 +174,29 @@ def test_check_exits_1_naming_what_no_plan_can_meet(tmp_path):
     f.write_text(json.dumps(d))
     r = cli("check", f)
     assert r.returncode == 1 and "end point cannot be reached" in r.stdout
+
+
+def test_verify_and_show_take_the_plan_report(tmp_path):
+    out, rep = tmp_path / "m.plan", tmp_path / "r.json"
+    r = cli("plan", CASES / "tiny-map.json", "-o", out, "--report", rep, "--budget", 2000,
+            "--quiet", "--autopilot", "ardupilot")  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    a = cli("verify", CASES / "tiny-map.json", rep, "--json")
+    b = cli("verify", CASES / "tiny-map.json", out, "--json")
+    assert a.returncode == 0 and b.returncode == 0, a.stderr
+    assert json.loads(a.stdout)["f"] == pytest.approx(json.loads(b.stdout)["f"], rel=1e-6)
+    assert cli("show", CASES / "tiny-map.json", rep, "-o", tmp_path / "s.svg").returncode == 0
+
+
+def test_finish_rtl_is_planned_or_refused_up_front(tmp_path):
+    out = tmp_path / "rtl.plan"
+    # tiny case: the straight leg from end (1140, 1140) back to start (60, 60) hits circle 0
+    r = cli("plan", CASES / "tiny-map.json", "-o", out, "--finish", "rtl", "--quiet")
+    assert r.returncode == 2 and "crosses circle 0" in r.stderr and not out.exists()
+    d = json.loads((CASES / "tiny-map.json").read_text())
+    d["obstacles"]["circles"][0]["x"] = 900  # off the diagonal
+    f = tmp_path / "clear.json"
+    f.write_text(json.dumps(d))
+    r = cli("plan", f, "-o", out, "--finish", "rtl", "--quiet", "--budget", 2000)
+    assert r.returncode == 0, r.stderr
+    assert cli("verify", f, out).returncode == 0

@@ -41,7 +41,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="use all I_max hover points (the paper's LAMDE-F ablation)")
     p.add_argument("--no-polish", action="store_true", help="skip the hover-time LP polish")
     p.add_argument("--finish", choices=("land", "rtl"), default="land",
-                   help="end the mission by landing at the end point or returning to launch")
+                   help="end the mission by landing at the end point or returning to launch "
+                   "(rtl: refused up front when the straight leg back to the start crosses an "
+                   "obstacle, which the planner does not route around)")
     p.add_argument("--autopilot", choices=("px4", "ardupilot", "generic"), default="generic",
                    help="write what this autopilot stores: lat/lon on the 1e-7 degree grid, "
                    "float32 parameters, hover times in whole seconds (rounded up) for ardupilot "
@@ -150,6 +152,31 @@ def _violations(plan: Any, verdicts: Any) -> list[str]:
     return out
 
 
+def _check_return_leg(m: Any) -> None:
+    """`--finish rtl`: the vehicle flies straight back from the end point to the launch point,
+    a leg the paper's model (start -> hover points -> end) does not plan. Refuse up front, with
+    why, when that straight leg crosses an obstacle (inflated by the clearance), since no plan
+    could then make the mission safe; otherwise the leg is clear whatever the plan."""
+    import numpy as np
+
+    from lamde_mission.errors import UsageError
+    from sim.obstacles import obstacle_shapes, overlap_lengths
+
+    pm = m.planning_map()
+    shapes = obstacle_shapes(pm)
+    if not shapes:
+        return
+    over = overlap_lengths(np.array([m.end, m.start], dtype=float), shapes)[0]
+    hit = [shapes[k].label for k in np.flatnonzero(over > 1e-9)]
+    if hit:
+        raise UsageError(
+            "--finish rtl: RETURN_TO_LAUNCH flies straight from the end point back to the start, "
+            f"and that leg crosses {', '.join(hit[:4])}{' ...' if len(hit) > 4 else ''} "
+            f"(with the {m.spec.safety.clearance:g} m clearance); the planner plans start -> "
+            "hover points -> end only, so use --finish land (or move the end point)"
+        )
+
+
 def run(args: argparse.Namespace) -> int:
     from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
     from lamde_mission.errors import UsageError
@@ -168,6 +195,8 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--{exc}") from None
     m = load_map_or_fail(args.map)
     m = with_origin_or_fail(m, args.origin)
+    if args.finish == "rtl":
+        _check_return_leg(m)
 
     from lamde_mission.api import plan as make_plan
     from lamde_mission.formats import write_mission
@@ -212,7 +241,7 @@ def run(args: argparse.Namespace) -> int:
         from lamde_mission.atomic import write_text_atomic
 
         report = {"plan": plan.to_dict(), "verdicts": verdicts.to_dict(),
-                  "stored": {"autopilot": stored.dialect.name,
+                  "stored": {"autopilot": stored.dialect.name, "finish": args.finish,
                              "hover_points": stored.hover_points.tolist(),
                              "hover_times": stored.hover_times.tolist()},
                   "map": args.map, "output": args.output, "format": fmt}

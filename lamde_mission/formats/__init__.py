@@ -13,7 +13,7 @@ from typing import Any, Literal
 
 from lamde_mission.geo import enu_to_latlon
 from lamde_mission.items import CMD, MissionError, MissionItem, geofence_items, plan_to_items
-from lamde_mission.storage import float32, float32_up, grid_degrees
+from lamde_mission.storage import DIALECTS, float32, float32_up, grid_degrees, stored_items
 
 __all__ = [
     "FORMATS",
@@ -162,7 +162,8 @@ def load_mission_items(
     map: Any,  # noqa: A002
 ) -> tuple[list[MissionItem], list[MissionItem]]:
     """Like `read_mission`, and also accepts a saved plan result (JSON with hover_points and
-    hover_times, as `Plan.to_dict` writes), turned into items on `map` with `plan_to_items`."""
+    hover_times, as `Plan.to_dict` writes, or the report `plan --report` writes: its `stored`
+    mission), turned into items on `map` with `plan_to_items`."""
     path = Path(path)
     if path.suffix.lower() == ".json":
         try:
@@ -171,13 +172,21 @@ def load_mission_items(
             raise MissionFileError(f"{path}: file not found") from None
         except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
             raise MissionFileError(f"{path}: cannot read a plan result ({exc})") from None
+        if isinstance(doc, dict) and isinstance(doc.get("stored"), dict):
+            doc = doc["stored"]  # `plan --report`: the mission as written (storable plan)
+        elif isinstance(doc, dict) and isinstance(doc.get("plan"), dict):
+            doc = doc["plan"]  # an older report: the optimiser's plan
         if isinstance(doc, dict) and "hover_points" in doc and "hover_times" in doc:
             from types import SimpleNamespace
 
             try:
                 plan = SimpleNamespace(hover_points=doc["hover_points"],
                                        hover_times=doc["hover_times"])  # fmt: skip
-                return plan_to_items(plan, map), geofence_items(map)
+                finish = "rtl" if doc.get("finish") == "rtl" else "land"
+                items = plan_to_items(plan, map, finish=finish)
+                if doc.get("autopilot") in DIALECTS:  # the report's stored mission, as written
+                    items = stored_items(items, doc["autopilot"])
+                return items, geofence_items(map)
             except (TypeError, ValueError) as exc:
                 raise MissionFileError(f"{path}: bad hover_points/hover_times ({exc})") from None
     return read_mission(path)
