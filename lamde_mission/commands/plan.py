@@ -97,9 +97,13 @@ def _summary(
     b = plan.breakdown
     t = timeline.totals
     who = "stored" if stored is not None else "sim"
+    t_compile = plan.timings.get("compile", 0.0)
+    compiling = f"; {t_compile:.1f} s compiling (or loading) the kernels" if t_compile > 0.05 \
+        else ""
     lines = [
         f"map '{m.name}': {plan.n_hover} hover points, {plan.evaluations} evaluations, "
-        f"{plan.wall_time:.2f} s (seed {plan.seed}, {plan.configurator})",
+        f"{plan.wall_time - plan.timings.get('compile', 0.0):.2f} s (seed {plan.seed}, "
+        f"{plan.configurator})" + compiling,
         f"  flight time   {b['t_fly']:10.2f} s    ({who} {t.t_fly:.2f} s)",
         f"  hover time    {b['t_hover']:10.2f} s    ({who} {t.t_hover:.2f} s)",
         f"  f             {plan.f:10.2f}      ({who} {t.f:.2f}; alpha {m.spec.objective.alpha:g})",
@@ -198,12 +202,16 @@ def run(args: argparse.Namespace) -> int:
     if args.finish == "rtl":
         _check_return_leg(m)
 
+    from lamde_mission.api import kernels_cached
     from lamde_mission.api import plan as make_plan
     from lamde_mission.formats import write_mission
     from lamde_mission.items import plan_to_items
     from lamde_mission.storage import storable_plan, stored_items
     from sim import replay, verify
 
+    if not args.quiet and not kernels_cached():
+        print("compiling the planner's kernels (first run after install; they are cached on "
+              "disk for later runs)...", file=sys.stderr, flush=True)
     progress = None if args.quiet else _ProgressBar()
     plan = make_plan(
         m,
