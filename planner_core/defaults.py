@@ -56,6 +56,10 @@ class Default:
     meaning: str
     valid: str
     ok: Callable[[Any], bool] | None = None
+    #: a map number's physical range (lo, hi, lo_open, hi_open), applied by planner_core.mapio
+    bounds: tuple[float, float, bool, bool] | None = None
+    #: why the range is what it is (shown in the map's JSON Schema and its error lines)
+    why: str = ""
 
     def check(self, value: Any) -> Any:
         """Return ``value`` if it lies in the valid range, else raise ``ValueError`` naming
@@ -117,47 +121,66 @@ _RUN: tuple[Default, ...] = (
 )
 
 
-def _number(lo: float, *, strict: bool) -> Callable[[Any], bool]:
+def _ranged(name: str, value: Any, meaning: str, lo: float, hi: float, why: str, *,
+            lo_open: bool = False, hi_open: bool = False, integer: bool = False) -> Default:
+    """A map number with a physical range [lo, hi] (open ends where asked) and its reason."""
+    interval = f"{'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'}"
+    valid = f"null or an integer in {interval}" if integer else f"a number in {interval}"
+
     def ok(v: Any) -> bool:
-        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+        if integer:
+            if v is None:
+                return True
+            if not _is_int(v):
+                return False
+        elif isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
             return False
-        return v > lo if strict else v >= lo
+        return (v > lo if lo_open else v >= lo) and (v < hi if hi_open else v <= hi)
 
-    return ok
-
-
-def _unit(v: Any) -> bool:
-    return _number(0.0, strict=False)(v) and v <= 1
+    return Default(name, value, meaning, valid, ok, (lo, hi, lo_open, hi_open), why)
 
 
-#: the map file's optional fields (``planner_core.mapio`` takes its defaults from here), keyed
-#: by their JSON path; paper symbols in the meaning
+_WHY_RATE = "100 Gbit/s is beyond any UAV radio link"
+_WHY_DATA = "1e7 Mbit (1.25 TB) takes days at any radio rate: no single flight collects more"
+_WHY_PENALTY = "penalties beyond 1e9 drown every objective value in rounding"
+
+#: the map file's optional fields (``planner_core.mapio`` takes its defaults and ranges from
+#: here), keyed by their JSON path; paper symbols in the meaning, the reason for each range in
+#: `why`
 _MAP: tuple[Default, ...] = (
-    Default("uav.altitude", 100.0, "H, cruise altitude above take-off, m", "> 0",
-            _number(0, strict=True)),
-    Default("uav.max_speed", 20.0, "v_max, m/s", "> 0", _number(0, strict=True)),
-    Default("uav.acceleration", 4.0, "a, m/s^2", "> 0", _number(0, strict=True)),
-    Default("uav.max_hover_time", 300.0, "T_max, s per hover point", "> 0",
-            _number(0, strict=True)),
-    Default("uav.max_hover_points", None, "I_max; null: 10 when the larger side <= 5000 m, "
-            "else 20", "null or an integer > 0", lambda v: v is None or _int_at_least(1)(v)),
-    Default("uav.activation_threshold", 0.5, "tau: hover point i is active when eps_i >= tau",
-            "0 .. 1", _unit),
-    Default("radio.peak_rate", 10.0, "R_c, Mbit/s", "> 0", _number(0, strict=True)),
-    Default("radio.decay", 0.01, "xi, Mbit/s per metre", ">= 0", _number(0, strict=False)),
-    Default("radio.bandwidth", 25.0, "R_lambda, Mbit/s", "> 0", _number(0, strict=True)),
-    Default("radio.required_data", 200.0, "Q_lambda, Mbit (per sensor unless it sets its own)",
-            ">= 0", _number(0, strict=False)),
-    Default("objective.alpha", 0.5, "weight of flight time against hover time", "0 .. 1",
-            _unit),
-    Default("objective.collision_offset", 1000.0, "mu", ">= 0", _number(0, strict=False)),
-    Default("objective.collision_weight", 10.0, "nu, per metre", ">= 0",
-            _number(0, strict=False)),
-    Default("safety.clearance", 10.0, "metres kept between every leg and every obstacle: "
-            "obstacles are inflated by it for planning (0: the paper's model)", ">= 0",
-            _number(0, strict=False)),
-    Default("safety.data_margin", 0.02, "fraction added to every sensor's required data for "
-            "planning (0: the paper's model)", "0 .. 1", _unit),
+    _ranged("uav.altitude", 100.0, "H, cruise altitude above take-off, m", 0.0, 10_000.0,
+            "a rotary-wing UAV flies above the ground and below 10 km", lo_open=True),
+    _ranged("uav.max_speed", 20.0, "v_max, m/s", 0.1, 200.0,
+            "below 0.1 m/s flight times (and the simulator's samples, one per second) grow "
+            "without bound, e.g. 1e-9 m/s asked for ~745 GiB; no rotary-wing UAV flies 200 m/s"),
+    _ranged("uav.acceleration", 4.0, "a, m/s^2", 0.01, 100.0,
+            "below 0.01 m/s^2 a UAV hardly reaches cruise speed on any map; 100 m/s^2 is 10 g"),
+    _ranged("uav.max_hover_time", 300.0, "T_max, s per hover point", 0.0, 86_400.0,
+            "no battery hovers for more than a day; T_max bounds the decision space",
+            lo_open=True),
+    _ranged("uav.max_hover_points", None, "I_max; null: 10 when the larger side <= 5000 m, "
+            "else 20", 1, 200,
+            "the decision vector holds 4 x I_max numbers; the paper uses 10 or 20",
+            integer=True),
+    _ranged("uav.activation_threshold", 0.5, "tau: hover point i is active when eps_i >= tau",
+            0.0, 1.0, "eps_i lies in [0, 1]: tau 0 makes every point active and tau 1 none, so "
+            "the number of hover points could no longer vary", lo_open=True, hi_open=True),
+    _ranged("radio.peak_rate", 10.0, "R_c, Mbit/s", 0.0, 1e5, _WHY_RATE, lo_open=True),
+    _ranged("radio.decay", 0.01, "xi, Mbit/s per metre", 0.0, 1_000.0,
+            "at 1000 Mbit/s per metre any link dies within a millimetre"),
+    _ranged("radio.bandwidth", 25.0, "R_lambda, Mbit/s", 0.0, 1e5, _WHY_RATE, lo_open=True),
+    _ranged("radio.required_data", 200.0, "Q_lambda, Mbit (per sensor unless it sets its own)",
+            0.0, 1e7, _WHY_DATA),
+    _ranged("objective.alpha", 0.5, "weight of flight time against hover time", 0.0, 1.0,
+            "a convex weight"),
+    _ranged("objective.collision_offset", 1000.0, "mu", 0.0, 1e9, _WHY_PENALTY),
+    _ranged("objective.collision_weight", 10.0, "nu, per metre", 0.0, 1e9, _WHY_PENALTY),
+    _ranged("safety.clearance", 10.0, "metres kept between every leg and every obstacle: "
+            "obstacles are inflated by it for planning (0: the paper's model)", 0.0, 1_000.0,
+            "a kilometre of clearance closes every urban map"),
+    _ranged("safety.data_margin", 0.02, "fraction added to every sensor's required data for "
+            "planning (0: the paper's model)", 0.0, 1.0, "a margin above 100 % is a different "
+            "requirement, not a margin"),
 )
 
 #: every run setting by name, in table order

@@ -8,17 +8,17 @@ the field, so a user can fix a map in one pass.
 from __future__ import annotations
 
 import difflib
-import json
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
+from planner_core import textio
 from planner_core.defaults import MAP_DEFAULTS
 from planner_core.geometry import Obstacles, points_inside, rectangle_vertices
 
@@ -33,12 +33,50 @@ __all__ = [
 
 _STRICT = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
 
-Point2 = tuple[float, float]
+# ----------------------------------------------------------------------------- physical ranges
+# Every number of a map has a documented range; the reason is part of the field's description
+# (so `lamde-mission schema` shows it) and of the error line. `check` and `plan` both validate
+# here, so they agree. The bounds keep the model away from degenerate arithmetic (1e308 sizes,
+# flight times that overflow, grids of ~1e12 cells) and inside what MAVLink carries.
+
+#: largest side of the area, m: the local flat frame from one origin and the paper's maps (<=10 km)
+MAX_SIDE = 100_000.0
+#: largest |coordinate| of any point, m (points must also lie in the area where the model says so)
+MAX_COORD = 1_000_000.0
+_WHY_COORD = "10x the largest area; beyond it the local flat frame means nothing"
+_WHY_SIDE = (
+    "the paper's maps are at most 10 km a side; one flat local frame from the origin stays "
+    "accurate to 100 km"
+)
+_WHY_SIZE = "no obstacle is larger than 1000 km; larger sizes overflow the geometry's arithmetic"
 
 
-def _d(path: str) -> Any:
-    """Default of an optional map field, from `planner_core.defaults.MAP_DEFAULTS`."""
-    return MAP_DEFAULTS[path].value
+def _ranged(
+    default: Any, lo: float | None, hi: float | None, what: str, why: str, *,
+    lo_open: bool = False, hi_open: bool = False,
+) -> Any:  # fmt: skip
+    """A Field with bounds [lo, hi] (open ends where asked), `why` kept in the description."""
+    kw: dict[str, Any] = {}
+    if lo is not None:
+        kw["gt" if lo_open else "ge"] = lo
+    if hi is not None:
+        kw["lt" if hi_open else "le"] = hi
+    lb = "" if lo is None else ("(" if lo_open else "[") + f"{lo:g}"
+    ub = "" if hi is None else f"{hi:g}" + (")" if hi_open else "]")
+    desc = f"{what}; range {lb or '(-inf'}, {ub or 'inf)'}: {why}"
+    return Field(default, description=desc, json_schema_extra={"x-range-reason": why}, **kw)
+
+
+Coord = Annotated[float, Field(ge=-MAX_COORD, le=MAX_COORD, description=f"metres; {_WHY_COORD}")]
+Point2 = tuple[Coord, Coord]
+
+
+def _field(path: str) -> Any:
+    """The Field of an optional map field: default, bounds and their reason from the table
+    `planner_core.defaults.MAP_DEFAULTS` (one place for README, `check` and `plan`)."""
+    d = MAP_DEFAULTS[path]
+    lo, hi, lo_open, hi_open = d.bounds
+    return _ranged(d.value, lo, hi, d.meaning, d.why, lo_open=lo_open, hi_open=hi_open)
 
 
 class Origin(BaseModel):
@@ -47,43 +85,51 @@ class Origin(BaseModel):
     model_config = _STRICT
     lat: float = Field(ge=-90, le=90, description="latitude, degrees")
     lon: float = Field(ge=-180, le=180, description="longitude, degrees")
-    alt: float = Field(0.0, description="altitude above mean sea level of the take-off ground, m")
+    alt: float = _ranged(
+        0.0, -500.0, 9_000.0, "altitude above mean sea level of the take-off ground, m",
+        "ground on Earth lies between the Dead Sea shore (-430 m) and Everest (8849 m)",
+    )
 
 
 class Area(BaseModel):
     """The rectangle [0, width] x [0, height] the hover points must lie in (C1)."""
 
     model_config = _STRICT
-    width: float = Field(gt=0, description="metres along x (east)")
-    height: float = Field(gt=0, description="metres along y (north)")
+    width: float = _ranged(..., 0.0, MAX_SIDE, "metres along x (east)", _WHY_SIDE, lo_open=True)
+    height: float = _ranged(..., 0.0, MAX_SIDE, "metres along y (north)", _WHY_SIDE, lo_open=True)
 
 
 class Sensor(BaseModel):
     """A ground sensor; `required_data` overrides `radio.required_data` for this sensor."""
 
     model_config = _STRICT
-    id: str = Field(min_length=1)
-    x: float
-    y: float
-    required_data: float | None = Field(None, ge=0, description="Mbit (Q_lambda for this sensor)")
+    id: str = Field(min_length=1, max_length=100)
+    x: Coord
+    y: Coord
+    required_data: float | None = _ranged(
+        None, *MAP_DEFAULTS["radio.required_data"].bounds[:2], "Mbit (Q_lambda for this sensor)",
+        MAP_DEFAULTS["radio.required_data"].why
+    )
 
 
 class Circle(BaseModel):
     model_config = _STRICT
-    x: float
-    y: float
-    radius: float = Field(gt=0)
+    x: Coord
+    y: Coord
+    radius: float = _ranged(..., 0.0, MAX_COORD, "metres", _WHY_SIZE, lo_open=True)
 
 
 class Rectangle(BaseModel):
     """A building; `length` lies along its axis rotated `angle_deg` counter-clockwise from east."""
 
     model_config = _STRICT
-    x: float
-    y: float
-    length: float = Field(gt=0)
-    width: float = Field(gt=0)
-    angle_deg: float = 0.0
+    x: Coord
+    y: Coord
+    length: float = _ranged(..., 0.0, MAX_COORD, "metres", _WHY_SIZE, lo_open=True)
+    width: float = _ranged(..., 0.0, MAX_COORD, "metres", _WHY_SIZE, lo_open=True)
+    angle_deg: float = _ranged(
+        0.0, -360.0, 360.0, "degrees", "one turn either way says every direction"
+    )
 
 
 class NoFlyZone(BaseModel):
@@ -102,46 +148,33 @@ class ObstaclesSpec(BaseModel):
 
 class Uav(BaseModel):
     model_config = _STRICT
-    altitude: float = Field(
-        _d("uav.altitude"), gt=0, description="H, cruise altitude above take-off, m"
-    )
-    max_speed: float = Field(_d("uav.max_speed"), gt=0, description="v_max, m/s")
-    acceleration: float = Field(_d("uav.acceleration"), gt=0, description="a, m/s^2")
-    max_hover_time: float = Field(
-        _d("uav.max_hover_time"), gt=0, description="T_max, s per hover point"
-    )
-    max_hover_points: int | None = Field(
-        _d("uav.max_hover_points"), gt=0,
-        description="I_max; null: 10 when the larger side <= 5000 m, else 20"
-    )
-    activation_threshold: float = Field(
-        _d("uav.activation_threshold"), ge=0, le=1, description="tau"
-    )
+    altitude: float = _field("uav.altitude")
+    max_speed: float = _field("uav.max_speed")
+    acceleration: float = _field("uav.acceleration")
+    max_hover_time: float = _field("uav.max_hover_time")
+    max_hover_points: int | None = _field("uav.max_hover_points")
+    activation_threshold: float = _field("uav.activation_threshold")
 
 
 class Radio(BaseModel):
     model_config = _STRICT
-    peak_rate: float = Field(_d("radio.peak_rate"), gt=0, description="R_c, Mbit/s")
-    decay: float = Field(_d("radio.decay"), ge=0, description="xi, Mbit/s per metre")
-    bandwidth: float = Field(_d("radio.bandwidth"), gt=0, description="R_lambda, Mbit/s")
-    required_data: float = Field(_d("radio.required_data"), ge=0, description="Q_lambda, Mbit")
+    peak_rate: float = _field("radio.peak_rate")
+    decay: float = _field("radio.decay")
+    bandwidth: float = _field("radio.bandwidth")
+    required_data: float = _field("radio.required_data")
 
 
 class Objective(BaseModel):
     model_config = _STRICT
-    alpha: float = Field(
-        _d("objective.alpha"), ge=0, le=1, description="weight of flight time against hover time"
-    )
-    collision_offset: float = Field(_d("objective.collision_offset"), ge=0, description="mu")
-    collision_weight: float = Field(
-        _d("objective.collision_weight"), ge=0, description="nu, per metre"
-    )
+    alpha: float = _field("objective.alpha")
+    collision_offset: float = _field("objective.collision_offset")
+    collision_weight: float = _field("objective.collision_weight")
 
 
 #: metres: obstacles and no-fly zones are inflated by this much for planning (`safety.clearance`)
-DEFAULT_CLEARANCE: float = _d("safety.clearance")
+DEFAULT_CLEARANCE: float = MAP_DEFAULTS["safety.clearance"].value
 #: fraction added to every sensor's required data for planning (`safety.data_margin`)
-DEFAULT_DATA_MARGIN: float = _d("safety.data_margin")
+DEFAULT_DATA_MARGIN: float = MAP_DEFAULTS["safety.data_margin"].value
 
 
 class Safety(BaseModel):
@@ -157,28 +190,23 @@ class Safety(BaseModel):
     """
 
     model_config = _STRICT
-    clearance: float = Field(
-        DEFAULT_CLEARANCE, ge=0, description="metres kept between every leg and every obstacle"
-    )
-    data_margin: float = Field(
-        DEFAULT_DATA_MARGIN, ge=0, le=1,
-        description="fraction added to every sensor's required data for planning",
-    )  # fmt: skip
+    clearance: float = _field("safety.clearance")
+    data_margin: float = _field("safety.data_margin")
 
 
 class Witness(BaseModel):
     """A known feasible plan stored by the map generator."""
 
     model_config = _STRICT
-    hover_points: list[Point2]
-    hover_times: list[float]
+    hover_points: list[Point2] = Field(max_length=200)
+    hover_times: list[Annotated[float, Field(ge=0.0, le=86_400.0)]] = Field(max_length=200)
 
 
 class MapFile(BaseModel):
     """The whole map file (JSON)."""
 
     model_config = _STRICT
-    name: str = "unnamed"
+    name: str = Field("unnamed", max_length=200)
     origin: Origin | None = Field(
         None, description="WGS84 position of (0, 0); needed to write or read a mission (no "
         "default place is assumed)")
@@ -426,6 +454,32 @@ def _unwrap(ann: Any) -> Any:
     return ann
 
 
+_RANGE_KINDS = frozenset({"greater_than", "greater_than_equal", "less_than", "less_than_equal"})
+#: reasons for bounds on values inside lists and pairs (which have no field of their own)
+_ITEM_REASONS = {
+    "start": _WHY_COORD, "end": _WHY_COORD, "vertices": _WHY_COORD, "hover_points": _WHY_COORD,
+    "hover_times": "a witness hover time lies in [0, 86400] s, as T_max",
+}  # fmt: skip
+
+
+def _range_reason(loc: tuple[Any, ...]) -> str:
+    """The documented reason for the bound that the value at `loc` broke."""
+    names = [i for i, part in enumerate(loc) if isinstance(part, str)]
+    if not names:
+        return "out of the documented range"
+    i = names[-1]
+    if i < len(loc) - 1 or loc[i] in _ITEM_REASONS:
+        return _ITEM_REASONS.get(str(loc[i]), "out of the documented range")
+    model = _model_at(loc[: i + 1])
+    info = model.model_fields.get(str(loc[i])) if model is not None else None
+    extra = getattr(info, "json_schema_extra", None)
+    if isinstance(extra, dict) and "x-range-reason" in extra:
+        return str(extra["x-range-reason"])
+    if info is not None and info.description and "; " in info.description:
+        return info.description.split("; ", 1)[1]
+    return "out of the documented range"
+
+
 def _pydantic_problems(err: ValidationError) -> list[str]:
     lines = []
     for e in err.errors():
@@ -445,6 +499,11 @@ def _pydantic_problems(err: ValidationError) -> list[str]:
             lines.append(f"{where}: must be a finite number (got NaN or infinity)")
         elif kind == "too_short" and loc and loc[-1] == "sensors":
             lines.append(f"{where}: at least one sensor is required")
+        elif kind in _RANGE_KINDS:
+            got = e.get("input")
+            shown = f"{got:g}" if isinstance(got, float) else repr(got)
+            msg = e["msg"].replace("Input should be", "must be")
+            lines.append(f"{where}: {msg} (got {shown}); {_range_reason(loc)}")
         else:
             lines.append(f"{where}: {e['msg']}")
     return lines
@@ -541,6 +600,45 @@ def _semantic_problems(spec: MapFile) -> tuple[list[str], list[str], list[np.nda
     return problems, notes, polys
 
 
+def _size_problems(data: Mapping[str, Any]) -> list[str]:
+    """Counts over the limits of `planner_core.textio.LIMITS`, checked on the raw data before
+    validation (so a 100,000-sensor file costs no validation time); one line per problem."""
+    try:
+        caps = {k: textio.limit(k) for k in ("sensors", "obstacles", "zone_vertices", "vertices")}
+    except textio.InputError as exc:
+        return [f"(environment) {exc}"]
+
+    def over(where: str, n: int, key: str, what: str) -> str:
+        lim = textio.LIMITS[key]
+        return (f"{where}: {n:,} {what}, more than the limit of {caps[key]:,} "
+                f"({lim.why}; raise it with {lim.env})")  # fmt: skip
+
+    problems = []
+    sensors = data.get("sensors")
+    if isinstance(sensors, list) and len(sensors) > caps["sensors"]:
+        problems.append(over("sensors", len(sensors), "sensors", "sensors"))
+    obs = data.get("obstacles")
+    if isinstance(obs, Mapping):
+        kinds = ("circles", "rectangles", "no_fly_zones")
+        n = sum(len(v) for k in kinds if isinstance(v := obs.get(k), list))
+        if n > caps["obstacles"]:
+            problems.append(over("obstacles", n, "obstacles", "obstacles"))
+        zones = obs.get("no_fly_zones")
+        total = 0
+        for k, z in enumerate(zones if isinstance(zones, list) and not problems else []):
+            v = z.get("vertices") if isinstance(z, Mapping) else None
+            if isinstance(v, list):
+                total += len(v)
+                if len(v) > caps["zone_vertices"]:
+                    where = f"obstacles.no_fly_zones[{k}].vertices"
+                    problems.append(over(where, len(v), "zone_vertices", "vertices"))
+                    break
+        if not problems and total > caps["vertices"]:
+            where = "obstacles.no_fly_zones"
+            problems.append(over(where, total, "vertices", "vertices in all"))
+    return problems
+
+
 def load_map(source: str | Path | Mapping[str, Any] | Map) -> Map:
     """Read and validate a map from a path, a JSON string's dict, or a Map; raise MapError."""
     if isinstance(source, Map):
@@ -548,21 +646,18 @@ def load_map(source: str | Path | Mapping[str, Any] | Map) -> Map:
     if isinstance(source, str | Path):
         path = Path(source)
         try:
-            text = path.read_text()
-        except FileNotFoundError:
-            raise MapError([f"{path}: file not found"]) from None
-        except OSError as exc:
-            raise MapError([f"{path}: cannot read ({exc.strerror})"]) from None
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as exc:
-            raise MapError([f"{path}: not valid JSON ({exc.msg} at line {exc.lineno})"]) from None
+            data = textio.read_json(path)
+        except textio.InputError as exc:
+            raise MapError([f"{path}: {exc}"]) from None
     elif isinstance(source, Mapping):
         data = dict(source)
     else:
         raise TypeError(f"load_map expects a path, a dict or a Map, got {type(source).__name__}")
     if not isinstance(data, dict):
         raise MapError(["(map): the top level must be a JSON object"])
+    sizes = _size_problems(data)
+    if sizes:
+        raise MapError(sizes)
     try:
         spec = MapFile.model_validate(data)
     except ValidationError as err:

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from sim.mission import CMD, SNAP_M, MissionItem, Route, items_to_route
+from sim.mission import CMD, SNAP_M, MissionError, MissionItem, Route, items_to_route
 
 __all__ = [
     "Timeline",
@@ -132,6 +132,10 @@ class Timeline:
         return self.data[-1].copy()
 
 
+#: most numbers the per-sensor data samples (N x J) may hold: 160 MB of float64
+_MAX_CELLS = 20_000_000
+
+
 class _Recorder:
     def __init__(self, n_sensors: int, dt: float):
         self.dt = dt
@@ -211,6 +215,16 @@ def replay_route(route: Route, map: Any, *, dt: float = 1.0) -> Timeline:  # noq
     rates_all = hover_rates(stops, route.altitudes, sensors, radio.peak_rate, radio.decay)
     rates = rates_all[hov_mask]
 
+    # bounded cost: a long mission (hours of hovering, or a file's 1e38 s) is sampled more
+    # coarsely so that `data` (N x J) holds at most _MAX_CELLS numbers; totals stay exact
+    alt_max = float(np.max(np.abs(route.altitudes), initial=abs(float(uav.altitude))))
+    span = (float(times.sum()) + float(np.nansum(route.hover_times[hov_mask]))
+            + 2.0 * leg_time(alt_max, v, a) + leg_time(float(np.abs(seg).sum()), v, a))  # fmt: skip
+    n_max = max(_MAX_CELLS // (J + 4), 1000)
+    if not math.isfinite(span):
+        raise MissionError(f"the mission's duration is not finite ({span} s)")
+    if span / dt > n_max:
+        dt = span / n_max
     rec = _Recorder(J, dt)
     clock = 0.0
     pos = route.launch.astype(float).copy()

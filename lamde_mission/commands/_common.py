@@ -15,7 +15,8 @@ def load_map_or_fail(path: str) -> Any:
     try:
         m = load_map(path)
     except MapError as exc:
-        raise UsageError("\n".join(f"{path}: {p}" for p in exc.problems)) from None
+        lines = (p if p.startswith(f"{path}: ") else f"{path}: {p}" for p in exc.problems)
+        raise UsageError("\n".join(lines)) from None
     for note in m.notes:
         print(f"note: {path}: {note}", file=sys.stderr)
     return m

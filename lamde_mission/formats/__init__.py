@@ -6,7 +6,6 @@ by its content (a `.plan` JSON object or a "QGC WPL 110" text), whatever its suf
 
 from __future__ import annotations
 
-import json
 from dataclasses import replace
 from pathlib import Path
 from typing import Any, Literal
@@ -14,6 +13,7 @@ from typing import Any, Literal
 from lamde_mission.geo import enu_to_latlon
 from lamde_mission.items import CMD, MissionError, MissionItem, geofence_items, plan_to_items
 from lamde_mission.storage import DIALECTS, float32, float32_up, grid_degrees, stored_items
+from planner_core.textio import InputError, loads_json, read_json, read_text
 
 __all__ = [
     "FORMATS",
@@ -125,11 +125,9 @@ def read_mission_lists(
     the file for anything unreadable or unsupported."""
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise MissionFileError(f"{path}: file not found") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise MissionFileError(f"{path}: cannot read ({exc})") from None
+        text = read_text(path)
+    except InputError as exc:
+        raise MissionFileError(f"{path}: {exc}") from None
     head = text.lstrip()
     try:
         if head.startswith("QGC WPL"):
@@ -138,9 +136,9 @@ def read_mission_lists(
             return parse_waypoints(text)[1], [], []
         if head.startswith("{"):
             try:
-                doc = json.loads(text)
-            except json.JSONDecodeError as exc:
-                raise MissionError(f"not valid JSON ({exc.msg} at line {exc.lineno})") from None
+                doc = loads_json(text)
+            except InputError as exc:
+                raise MissionError(str(exc)) from None
             if isinstance(doc, dict) and doc.get("type") == "FeatureCollection":
                 raise MissionError(
                     "a GeoJSON file is a display export, not a mission; use the .plan or "
@@ -167,11 +165,9 @@ def load_mission_items(
     path = Path(path)
     if path.suffix.lower() == ".json":
         try:
-            doc = json.loads(path.read_text(encoding="utf-8"))
-        except FileNotFoundError:
-            raise MissionFileError(f"{path}: file not found") from None
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-            raise MissionFileError(f"{path}: cannot read a plan result ({exc})") from None
+            doc = read_json(path)
+        except InputError as exc:
+            raise MissionFileError(f"{path}: {exc}") from None
         if isinstance(doc, dict) and isinstance(doc.get("stored"), dict):
             doc = doc["stored"]  # `plan --report`: the mission as written (storable plan)
         elif isinstance(doc, dict) and isinstance(doc.get("plan"), dict):
@@ -179,14 +175,51 @@ def load_mission_items(
         if isinstance(doc, dict) and "hover_points" in doc and "hover_times" in doc:
             from types import SimpleNamespace
 
+            from lamde_mission.formats.ranges import check_mission_item
+
             try:
                 plan = SimpleNamespace(hover_points=doc["hover_points"],
                                        hover_times=doc["hover_times"])  # fmt: skip
+                _check_plan_result(plan.hover_points, plan.hover_times)
                 finish = "rtl" if doc.get("finish") == "rtl" else "land"
                 items = plan_to_items(plan, map, finish=finish)
+                for k, it in enumerate(items):
+                    check_mission_item(it, lambda f, k=k: f"hover_points/hover_times: item {k} {f}")
                 if doc.get("autopilot") in DIALECTS:  # the report's stored mission, as written
                     items = stored_items(items, doc["autopilot"])
                 return items, geofence_items(map)
+            except MissionError as exc:
+                raise MissionFileError(f"{path}: {exc}") from None
             except (TypeError, ValueError) as exc:
                 raise MissionFileError(f"{path}: bad hover_points/hover_times ({exc})") from None
     return read_mission(path)
+
+
+def _check_plan_result(hover_points: Any, hover_times: Any) -> None:
+    """Shapes and ranges of a plan result's hover points (local metres) and times (s), before
+    any of them reaches numpy or the geodesy; MissionError naming the entry."""
+    import math
+
+    from lamde_mission.formats.ranges import FLOAT32_MAX, check_item_count
+    from planner_core.mapio import MAX_COORD
+
+    def number(v: Any, where: str, lo: float, hi: float) -> None:
+        if isinstance(v, bool) or not isinstance(v, int | float):
+            raise MissionError(f"{where}: expected a number, got {v!r}"[:200])
+        if not (math.isfinite(v) and lo <= v <= hi):
+            raise MissionError(f"{where}: {v:g} is outside [{lo:g}, {hi:g}]")
+
+    for name, v in (("hover_points", hover_points), ("hover_times", hover_times)):
+        if not isinstance(v, list):
+            raise MissionError(f"{name}: expected a list")
+        check_item_count(len(v), name)
+    if len(hover_points) != len(hover_times):
+        raise MissionError(f"hover_points and hover_times differ in length "
+                           f"({len(hover_points)} and {len(hover_times)})")  # fmt: skip
+    for k, p in enumerate(hover_points):
+        if not isinstance(p, list) or len(p) != 2:
+            raise MissionError(f"hover_points[{k}]: expected [x, y] in metres")
+        for i, c in enumerate(p):
+            number(c, f"hover_points[{k}][{i}]", -MAX_COORD, MAX_COORD)
+    for k, t in enumerate(hover_times):
+        number(t, f"hover_times[{k}]", 0.0, FLOAT32_MAX)

@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from lamde_mission.atomic import write_text_atomic
+from lamde_mission.formats.ranges import FLOAT32_MAX, check_item_count, check_mission_item
 from lamde_mission.items import (
     CMD,
     FRAME,
@@ -31,6 +32,7 @@ from lamde_mission.items import (
     fence_from_items,
     fence_item,
 )
+from planner_core.textio import InputError, read_json
 
 __all__ = [
     "FIRMWARE_PX4",
@@ -45,6 +47,7 @@ __all__ = [
 FIRMWARE_PX4 = 12  # MAV_AUTOPILOT_PX4
 FIRMWARE_ARDUPILOT = 3  # MAV_AUTOPILOT_ARDUPILOTMEGA
 VEHICLE_QUADROTOR = 2  # MAV_TYPE_QUADROTOR
+_CIRCLES = (CMD.FENCE_CIRCLE_INCLUSION, CMD.FENCE_CIRCLE_EXCLUSION)
 ALTITUDE_MODE_RELATIVE = 1  # QGC: altitude relative to launch
 
 
@@ -167,6 +170,14 @@ def _check_versions(doc: dict[str, Any]) -> None:
                                f"version {want})")  # fmt: skip
 
 
+def _plan_field(where: str, name: str) -> str:
+    """The .plan name of a MissionItem field of item `where`."""
+    params = {"param1": 0, "param2": 1, "param3": 2, "param4": 3, "x": 4, "y": 5, "z": 6}
+    if name in params:
+        return f"{where}.params[{params[name]}]"
+    return f"{where}.{'autoContinue' if name == 'autocontinue' else name}"
+
+
 def parse_plan_document(doc: Any) -> tuple[list[MissionItem], list[MissionItem]]:
     """Mission items and fence items of a `.plan` JSON object; raise MissionError if malformed.
     (`parse_plan_lists` also gives the rally points.)"""
@@ -190,6 +201,7 @@ def parse_plan_lists(
     mission = doc.get("mission")
     if not isinstance(mission, dict) or not isinstance(mission.get("items"), list):
         raise MissionError("mission.items: missing or not a list")
+    check_item_count(len(mission["items"]), "mission.items")
     items: list[MissionItem] = []
     jump_ids: dict[int, int] = {}
     for k, raw in enumerate(mission["items"]):
@@ -206,12 +218,12 @@ def parse_plan_lists(
             raise MissionError(f"{where}.params: expected 7 values")
         p = [_float(v, f"{where}.params[{i}]") for i, v in enumerate(params)]
         try:
-            command, frame = int(raw["command"]), int(raw["frame"])
-        except (KeyError, TypeError, ValueError):
-            raise MissionError(f"{where}: command and frame must be integers") from None
+            command, frame = raw["command"], raw["frame"]
+        except KeyError as exc:
+            raise MissionError(f"{where}.{exc.args[0]}: required field is missing") from None
         if isinstance(raw.get("doJumpId"), int):
             jump_ids[int(raw["doJumpId"])] = len(items)
-        items.append(
+        item = (
             MissionItem(
                 seq=len(items), command=command, frame=frame, current=0,
                 autocontinue=int(bool(raw.get("autoContinue", True))),
@@ -219,6 +231,8 @@ def parse_plan_lists(
                 mission_type=MISSION_TYPE.MISSION,
             )
         )  # fmt: skip
+        check_mission_item(item, lambda f, w=where: _plan_field(w, f))
+        items.append(item)
     for k, it in enumerate(items):
         if it.command == CMD.DO_JUMP:
             target = jump_ids.get(int(it.param1)) if math.isfinite(it.param1) else None
@@ -260,8 +274,13 @@ def _parse_fence(gf: Any) -> list[MissionItem]:
         raise MissionError("geoFence: not an object")
     out: list[MissionItem] = []
 
-    def add(command: int, p1: float, lat: float, lon: float) -> None:
-        out.append(fence_item(len(out), command, p1, lat, lon))
+    def add(command: int, p1: float, lat: float, lon: float, where: str) -> None:
+        it = fence_item(len(out), command, p1, lat, lon)
+        names = {"param1": "radius" if command in _CIRCLES else "vertex count",
+                 "x": "latitude", "y": "longitude"}  # fmt: skip
+        check_mission_item(it, lambda f: f"{where} ({names.get(f, f)})")
+        out.append(it)
+        check_item_count(len(out), "geoFence")
 
     br = gf.get("breachReturn")
     if br is not None:
@@ -283,7 +302,7 @@ def _parse_fence(gf: Any) -> list[MissionItem]:
                else CMD.FENCE_POLYGON_VERTEX_EXCLUSION)  # fmt: skip
         for i, v in enumerate(verts):
             lat, lon = _latlon_pair(v, f"{where}.polygon[{i}]")
-            add(cmd, len(verts), lat, lon)
+            add(cmd, len(verts), lat, lon, f"{where}.polygon[{i}]")
     for k, c in enumerate(gf.get("circles") or []):
         where = f"geoFence.circles[{k}]"
         circle = c.get("circle") if isinstance(c, dict) else None
@@ -291,9 +310,12 @@ def _parse_fence(gf: Any) -> list[MissionItem]:
             raise MissionError(f"{where}: missing 'circle'")
         lat, lon = _latlon_pair(circle.get("center"), f"{where}.circle.center")
         r = _float(circle.get("radius"), f"{where}.circle.radius")
+        if not (math.isfinite(r) and 0 < r <= FLOAT32_MAX):
+            raise MissionError(f"{where}.circle.radius: must be a positive finite number, "
+                               f"got {r:g}")  # fmt: skip
         inclusion = bool(c.get("inclusion", True))
         cmd = CMD.FENCE_CIRCLE_INCLUSION if inclusion else CMD.FENCE_CIRCLE_EXCLUSION
-        add(cmd, r, lat, lon)
+        add(cmd, r, lat, lon, f"{where}.circle")
     return out
 
 
@@ -310,9 +332,8 @@ def write_qgc_plan(
 
 def read_qgc_plan(path: str | Path) -> tuple[list[MissionItem], list[MissionItem]]:
     """(mission items, fence items) of a `.plan` file; raise MissionError if malformed."""
-    text = Path(path).read_text(encoding="utf-8-sig")
     try:
-        doc = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise MissionError(f"not valid JSON ({exc.msg} at line {exc.lineno})") from None
+        doc = read_json(path)
+    except InputError as exc:
+        raise MissionError(str(exc)) from None
     return parse_plan_document(doc)

@@ -22,7 +22,9 @@ from pathlib import Path
 import numpy as np
 
 from lamde_mission.atomic import write_text_atomic
+from lamde_mission.formats.ranges import check_item_count, check_mission_item
 from lamde_mission.items import CMD, FRAME, MISSION_TYPE, MissionError, MissionItem
+from planner_core.textio import InputError, limit, read_text
 from sim.mission import command_name
 
 __all__ = ["HEADER", "format_waypoints", "parse_waypoints", "write_waypoints", "read_waypoints",
@@ -60,6 +62,17 @@ def format_waypoints(items: Sequence[MissionItem], home: tuple[float, float, flo
     return "\n".join(lines) + "\n"
 
 
+#: the column names used in messages ("line 5: param1")
+_WPL_NAMES = {"x": "latitude", "y": "longitude", "z": "altitude"}
+
+
+def _int(s: str) -> int:
+    """An integer field: at most 20 digits (Python refuses long ones slowly or not at all)."""
+    if len(s.lstrip("+-")) > 20:
+        raise ValueError(s)
+    return int(s)
+
+
 def parse_waypoints(text: str) -> tuple[MissionItem | None, list[MissionItem]]:
     """(home item, mission items numbered from 0) of `.waypoints` text; MissionError if bad.
 
@@ -68,6 +81,12 @@ def parse_waypoints(text: str) -> tuple[MissionItem | None, list[MissionItem]]:
     file has no home line. A UTF-8 byte-order mark is accepted. Fence or rally commands
     (5000-5004, 5100) in the list are refused: the file format holds a mission only.
     """
+    # a line per item, a home line, and room for blank or comment lines: refuse a huge file
+    # before splitting it
+    cap = limit("mission_items")
+    if text.count("\n") > 2 * (cap + 1):
+        raise MissionError(f"{text.count(chr(10)):,} lines, far more than the {cap:,} items "
+                           "MAVLink can number (seq and count are uint16)")  # fmt: skip
     lines = text.removeprefix("\ufeff").splitlines()
     if not lines or lines[0].strip() != HEADER:
         found = lines[0].strip()[:40] if lines else ""
@@ -81,12 +100,14 @@ def parse_waypoints(text: str) -> tuple[MissionItem | None, list[MissionItem]]:
         if len(a) != 12:
             raise MissionError(f"line {lineno}: expected 12 values, got {len(a)}")
         try:
-            ints = [int(a[i]) for i in (0, 1, 2, 3, 11)]
+            ints = [_int(a[i]) for i in (0, 1, 2, 3, 11)]
             floats = [float(v) for v in a[4:11]]
         except ValueError:
             raise MissionError(f"line {lineno}: not a number where one is expected") from None
+        if not -(2**31) <= ints[0] < 2**31:
+            raise MissionError(f"line {lineno}: seq {ints[0]} is not a sequence number")
         seq, current, frame, command, autocontinue = ints
-        rows.append(
+        item = (
             MissionItem(
                 seq=seq, command=command, frame=frame, current=current,
                 autocontinue=autocontinue, param1=floats[0], param2=floats[1],
@@ -94,6 +115,9 @@ def parse_waypoints(text: str) -> tuple[MissionItem | None, list[MissionItem]]:
                 mission_type=MISSION_TYPE.MISSION,
             )
         )  # fmt: skip
+        check_mission_item(item, lambda f, n=lineno: f"line {n}: {_WPL_NAMES.get(f, f)}")
+        rows.append(item)
+        check_item_count(len(rows) - 1, "the file")
     if not rows:
         raise MissionError("the file holds no items (not even the home line)")
     if not is_home_row(rows[0]):
@@ -106,7 +130,7 @@ def parse_waypoints(text: str) -> tuple[MissionItem | None, list[MissionItem]]:
     for k, it in enumerate(items):
         if it.command == CMD.DO_JUMP:
             # targets count rows (home = row 0); the list without the home row starts at 0
-            target = int(it.param1)
+            target = int(it.param1) if math.isfinite(it.param1) else -1
             if target < 1 or target > len(items):
                 raise MissionError(f"row {it.seq}: DO_JUMP targets row {target}, not a mission "
                                    "item of this file")  # fmt: skip
@@ -131,7 +155,11 @@ def write_waypoints(
 
 def read_waypoints(path: str | Path) -> list[MissionItem]:
     """Mission items of a `.waypoints` file (the home line dropped, seq from 0)."""
-    return parse_waypoints(Path(path).read_text(encoding="utf-8-sig"))[1]
+    try:
+        text = read_text(path)
+    except InputError as exc:
+        raise MissionError(str(exc)) from None
+    return parse_waypoints(text)[1]
 
 
 def check_mission_list(items: Sequence[MissionItem], what: str = "item") -> None:

@@ -1,0 +1,227 @@
+"""Fuzz the command line with mutated maps and missions; count how each input ended.
+
+Mutates the shipped maps (examples/maps, the suite included) and missions written at start by
+`lamde-mission plan` into a temporary folder (a .plan and a .waypoints for two maps), with
+`lamde_mission.fuzz.mutate` seeded by ``--seed`` and the input's index (same seed, same inputs).
+
+Each mutated map goes through `check`; a refused one also through `plan -o OUT` (it must be
+refused too, with nothing written); an accepted one is planned with a small budget and its
+mission read back. Each mutated mission goes through `verify`. Runs are in-process (the CLI's
+`main()` with stdout/stderr captured) for speed; a sample (and a named pipe given as a map) is
+run again in a subprocess under ``--timeout`` to catch hangs.
+
+Prints counts: clean refusals (exit 2, every stderr line prefixed by the command; how many were
+a single line), successes (exit 0, or 1 for a mission that fails a constraint / an infeasible
+plan), tracebacks (must be 0), hangs over the timeout (0), partial files (0). Exit status 1 if
+any of the last three is not 0; ``--keep DIR`` saves the offending inputs there.
+
+    python benchmarks/fuzz_inputs.py --n 1000 --seed 0 [--hang-sample 20] [--timeout 30]
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import json
+import os
+import random
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+MAPS = ROOT / "examples" / "maps"
+sys.path.insert(0, str(ROOT))
+
+from lamde_mission.formats import read_mission  # noqa: E402
+from lamde_mission.fuzz import CliOutcome, mutate, run_cli  # noqa: E402
+
+
+def _map_files() -> list[Path]:
+    out = []
+    for p in sorted(MAPS.rglob("*.json")):
+        try:
+            if "area" in json.loads(p.read_text()):
+                out.append(p)
+        except ValueError:
+            pass
+    return out
+
+
+def _missions(folder: Path) -> list[tuple[Path, Path]]:
+    """(map, mission) pairs written by `plan` for the two small example maps."""
+    pairs = []
+    for name in ("tiny.json", "small-demo.json"):
+        for suffix in (".plan", ".waypoints"):
+            out = folder / f"{Path(name).stem}{suffix}"
+            res = run_cli(["plan", str(MAPS / name), "-o", str(out), "--budget", "2000",
+                           "--quiet", "--allow-infeasible"])  # fmt: skip
+            if res.error is not None or not out.exists():
+                raise SystemExit(f"could not write the seed mission {out}: {res.stderr}")
+            pairs.append((MAPS / name, out))
+    return pairs
+
+
+def _clean(res: CliOutcome, command: str) -> bool:
+    lines = res.stderr.splitlines()
+    prefix = f"lamde-mission {command}: "
+    if "Traceback" in res.stderr:
+        return False
+    if res.status == 2:
+        errors = [ln for ln in lines if not ln.startswith("note: ")]
+        return bool(errors) and all(ln.startswith(prefix) for ln in errors)
+    return all(ln.startswith((prefix, "note: ", "  ")) for ln in lines)
+
+
+def _leftovers(folder: Path, keep: set[str]) -> list[str]:
+    return sorted(p.name for p in folder.iterdir() if p.name not in keep)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--n", type=int, default=1000, help="mutated inputs (default 1000)")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--timeout", type=float, default=30.0, help="a hang is longer than this (s)")
+    ap.add_argument("--hang-sample", type=int, default=20,
+                    help="inputs re-run in a subprocess under --timeout (default 20)")
+    ap.add_argument("--plan-budget", type=int, default=200,
+                    help="evaluations when planning an accepted mutated map (default 200)")
+    ap.add_argument("--keep", metavar="DIR", help="save inputs that broke the contract here")
+    args = ap.parse_args(argv)
+
+    t0 = time.perf_counter()
+    work = Path(tempfile.mkdtemp(prefix="fuzz-inputs-"))
+    counts: collections.Counter[str] = collections.Counter()
+    kinds: collections.Counter[str] = collections.Counter()
+    bad: list[tuple[str, str, Path]] = []
+    slowest = (0.0, "")
+    hang_cases: list[tuple[str, list[str], Path]] = []
+    try:
+        maps = _map_files()
+        missions = _missions(work / "seed")
+        sample_every = max(args.n // max(args.hang_sample, 1), 1)
+        for i in range(args.n):
+            rng = random.Random(f"{args.seed}:{i}")
+            case = work / f"case{i:05d}"
+            case.mkdir()
+            if rng.random() < 0.5:
+                src = rng.choice(maps)
+                kind = "map"
+                path = case / "map.json"
+                path.write_bytes(mutate(src.read_bytes(), rng))
+                argv_first = ["check", str(path)]
+            else:
+                map_path, src = rng.choice(missions)
+                kind = src.suffix
+                path = case / f"mission{src.suffix}"
+                path.write_bytes(mutate(src.read_bytes(), rng))
+                argv_first = ["verify", str(map_path), str(path)]
+            kinds[kind] += 1
+            keep = {path.name}
+            t = time.perf_counter()
+            res = run_cli(argv_first)
+            problem = ""
+            if res.error is not None or "Traceback" in res.stderr:
+                counts["tracebacks"] += 1
+                problem = f"traceback: {res.error!r}"
+            elif not _clean(res, argv_first[0]):
+                counts["unclean stderr"] += 1
+                problem = f"stderr: {res.stderr[:200]!r}"
+            elif res.status == 2:
+                counts["clean refusals"] += 1
+                if len(res.stderr.splitlines()) == 1:
+                    counts["refusals in one line"] += 1
+            else:
+                counts["successes"] += 1
+            if kind == "map" and not problem:
+                out = case / "out.plan"
+                if res.status == 2:
+                    res2 = run_cli(["plan", str(path), "-o", str(out), "--quiet"])
+                    if res2.error is not None:
+                        counts["tracebacks"] += 1
+                        problem = f"plan traceback: {res2.error!r}"
+                    elif res2.status != 2:
+                        counts["check/plan disagree"] += 1
+                        problem = f"check refused, plan gave {res2.status}"
+                else:
+                    res2 = run_cli(["plan", str(path), "-o", str(out), "--quiet", "--budget",
+                                    str(args.plan_budget), "--population", "20", "--no-polish"])
+                    if res2.error is not None:
+                        counts["tracebacks"] += 1
+                        problem = f"plan traceback: {res2.error!r}"
+                    elif res2.status == 0:
+                        keep.add(out.name)
+                        try:
+                            read_mission(out)
+                        except ValueError as exc:
+                            counts["partial files"] += 1
+                            problem = f"written mission unreadable: {exc}"
+                    elif res2.status == 2:
+                        counts["check/plan disagree"] += 1
+                        problem = f"check accepted, plan refused: {res2.stderr[:200]!r}"
+                left = _leftovers(case, keep)
+                if left and not problem:
+                    counts["partial files"] += 1
+                    problem = f"left behind: {left}"
+            dt = time.perf_counter() - t
+            if dt > slowest[0]:
+                slowest = (dt, f"case {i} ({kind})")
+            if dt > args.timeout:
+                counts["hangs"] += 1
+                problem = problem or f"took {dt:.1f} s"
+            if problem:
+                bad.append((f"case {i} ({kind})", problem, path))
+            if i % sample_every == 0:
+                hang_cases.append((f"case {i} ({kind})", argv_first, case))
+            elif not problem:
+                shutil.rmtree(case)
+        # hangs: a sample in fresh processes, plus a named pipe given as a map
+        if hasattr(os, "mkfifo"):
+            fifo = work / "fifo.json"
+            os.mkfifo(fifo)
+            hang_cases.append(("named pipe as the map", ["check", str(fifo)], work))
+        for label, argv_, _case in hang_cases:
+            try:
+                r = subprocess.run([sys.executable, "-m", "lamde_mission.cli", *argv_],
+                                   capture_output=True, text=True, timeout=args.timeout,
+                                   cwd=ROOT)  # fmt: skip
+                if "Traceback" in r.stderr:
+                    counts["tracebacks"] += 1
+                    bad.append((label, "traceback in a subprocess", Path(argv_[-1])))
+            except subprocess.TimeoutExpired:
+                counts["hangs"] += 1
+                bad.append((label, f"no answer within {args.timeout:g} s", Path(argv_[-1])))
+        if args.keep and bad:
+            keep_dir = Path(args.keep)
+            keep_dir.mkdir(parents=True, exist_ok=True)
+            for label, _problem, p in bad:
+                if p.is_file():
+                    shutil.copy(p, keep_dir / f"{label.split()[1]}-{p.name}")
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+
+    total = time.perf_counter() - t0
+    print(f"fuzz_inputs: {args.n} mutated inputs, seed {args.seed}: "
+          + ", ".join(f"{kinds[k]} {k if k != 'map' else 'maps'}" for k in sorted(kinds)))
+    print(f"  clean refusals       {counts['clean refusals']:6d}  (exit 2; "
+          f"{counts['refusals in one line']} in one line, the rest one line per problem)")
+    print(f"  successes            {counts['successes']:6d}  (exit 0, or 1: a constraint fails)")
+    print(f"  tracebacks           {counts['tracebacks']:6d}")
+    print(f"  hangs over {args.timeout:g} s     {counts['hangs']:6d}  (slowest in-process "
+          f"{slowest[0]:.2f} s, {slowest[1]}; {len(hang_cases)} re-run in subprocesses)")
+    print(f"  partial files        {counts['partial files']:6d}")
+    print(f"  unclean stderr       {counts['unclean stderr']:6d}")
+    print(f"  check/plan disagree  {counts['check/plan disagree']:6d}")
+    print(f"  wall time            {total:6.1f} s")
+    for label, problem, _p in bad[:20]:
+        print(f"  ! {label}: {problem}")
+    broken = sum(counts[k] for k in ("tracebacks", "hangs", "partial files", "unclean stderr",
+                                     "check/plan disagree"))  # fmt: skip
+    return 1 if broken else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

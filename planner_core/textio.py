@@ -1,0 +1,408 @@
+"""One decoding path for every text input: maps, `.plan`, `.waypoints` and GeoJSON files.
+
+Every reader goes through `read_text` (and `loads_json` for JSON), so every file meets the same
+rules before a single number reaches the model, numpy or a MAVLink packer:
+
+- the path must name a regular file: a directory, a named pipe (FIFO), a socket or a device is
+  refused from `os.stat` before anything is opened (a FIFO would block a reader forever);
+- the file holds at most `limit("bytes")` bytes (default 64 MiB, `LAMDE_MAX_INPUT_BYTES`);
+- the bytes are UTF-8 (a UTF-8 byte-order mark is accepted and dropped); anything else is named
+  with the offending byte and its offset, and UTF-16/UTF-32 byte-order marks are recognised;
+- JSON nests at most `limit("depth")` levels (default 64, `LAMDE_MAX_JSON_DEPTH`), measured by a
+  linear scan *before* `json.loads`, so a 50,000-deep file never reaches the recursive parser;
+- JSON integers have at most `MAX_INT_DIGITS` digits (every integer field of our formats fits in
+  20), numbers overflowing a double (``1e400``) and the non-JSON ``NaN``/``Infinity`` literals are
+  refused, and strings holding unpaired UTF-16 surrogates (``"\\ud800"``) are refused; each
+  problem names the JSON field where it sits (``uav.max_speed``, ``mission.items[3].params[0]``).
+
+Item counts (sensors, obstacles, vertices, mission items) are limits of the readers that know
+the structure; their values live here, in `LIMITS`, so the README's table and the code agree.
+A limit a user could need more of is read from an environment variable (a positive integer).
+
+Errors are `InputError` (a ValueError): ``str(err)`` is one line, ``"<field>: <problem>"`` or just
+``"<problem>"`` for the file as a whole; callers prefix the file name.
+"""
+
+from __future__ import annotations
+
+import codecs
+import json
+import math
+import os
+import re
+import stat
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = [
+    "InputError",
+    "Limit",
+    "LIMITS",
+    "MAX_INT_DIGITS",
+    "limit",
+    "json_path",
+    "read_bytes",
+    "decode_text",
+    "read_text",
+    "loads_json",
+    "read_json",
+]
+
+#: most digits a JSON integer may have: our integer fields fit in 20 (uint64 has 20 digits);
+#: Python refuses to convert strings of more than 4300 digits, and big ones cost quadratic time
+MAX_INT_DIGITS = 20
+
+
+@dataclass(frozen=True)
+class Limit:
+    """A size limit: its default, the environment variable that overrides it (None: fixed),
+    and why it exists."""
+
+    default: int
+    env: str | None
+    why: str
+
+
+#: every size limit on input files, by name (README "Input limits" lists the same table)
+LIMITS: dict[str, Limit] = {
+    "bytes": Limit(
+        64 * 1024 * 1024,
+        "LAMDE_MAX_INPUT_BYTES",
+        "size of one input file; the largest valid mission (65,535 items) is about 30 MB as a "
+        ".plan",
+    ),
+    "depth": Limit(
+        64,
+        "LAMDE_MAX_JSON_DEPTH",
+        "JSON nesting; maps nest 7 levels and GeoJSON 8, and a deep file would exhaust the "
+        "parser's recursion",
+    ),
+    "sensors": Limit(
+        5_000,
+        "LAMDE_MAX_SENSORS",
+        "sensors in one map; every evaluation costs O(population x I_max x sensors)",
+    ),
+    "obstacles": Limit(
+        5_000,
+        "LAMDE_MAX_OBSTACLES",
+        "circles + rectangles + no-fly zones in one map; every leg is tested against each",
+    ),
+    "zone_vertices": Limit(
+        5_000,
+        "LAMDE_MAX_ZONE_VERTICES",
+        "vertices of one no-fly zone (or polygon)",
+    ),
+    "vertices": Limit(
+        50_000,
+        "LAMDE_MAX_VERTICES",
+        "vertices of all no-fly zones of one map together",
+    ),
+    "mission_items": Limit(
+        65_535,
+        None,
+        "items in one mission or fence: MAVLink numbers them with a uint16 (seq, count)",
+    ),
+}
+
+
+class InputError(ValueError):
+    """Bad input found while decoding: `where` names the field ("" for the whole file)."""
+
+    def __init__(self, problem: str, where: str = ""):
+        self.problem = problem
+        self.where = where
+        super().__init__(f"{where}: {problem}" if where else problem)
+
+
+def limit(name: str) -> int:
+    """The limit `name` in force: its environment variable if set, else the default.
+
+    Raises InputError naming the variable when it is set to anything but a positive integer.
+    """
+    lim = LIMITS[name]
+    if lim.env is None:
+        return lim.default
+    raw = os.environ.get(lim.env)
+    if raw is None or raw.strip() == "":
+        return lim.default
+    s = raw.strip().replace("_", "")
+    if not (s.isascii() and s.isdigit()) or len(s) > 12 or int(s) < 1:
+        raise InputError(f"must be a positive integer (at most 12 digits), got {raw[:40]!r}",
+                         lim.env)  # fmt: skip
+    return int(s)
+
+
+def json_path(parts: Any) -> str:
+    """`("uav", "max_speed")` -> "uav.max_speed"; integers become `[i]`."""
+    out = ""
+    for part in parts:
+        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
+    return out
+
+
+# ----------------------------------------------------------------------------- bytes
+
+
+_KINDS = (
+    (stat.S_ISDIR, "a directory"),
+    (stat.S_ISFIFO, "a named pipe (FIFO)"),
+    (stat.S_ISSOCK, "a socket"),
+    (stat.S_ISCHR, "a character device"),
+    (stat.S_ISBLK, "a block device"),
+)
+
+
+def _not_regular(mode: int) -> str:
+    for test, name in _KINDS:
+        if test(mode):
+            return f"is {name}, not a regular file"
+    return "is not a regular file"
+
+
+def read_bytes(path: str | Path, *, max_bytes: int | None = None) -> bytes:
+    """The bytes of the regular file `path`, at most `max_bytes` (default `limit("bytes")`).
+
+    A non-regular file is refused from `os.stat` before it is opened; the file is then opened
+    non-blocking and checked again (it may have been swapped). Raises InputError (no `where`)
+    for a missing, unreadable, non-regular or oversized file.
+    """
+    cap = limit("bytes") if max_bytes is None else int(max_bytes)
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        raise InputError("file not found") from None
+    except OSError as exc:
+        raise InputError(f"cannot read ({exc.strerror or exc})") from None
+    except ValueError as exc:  # embedded NUL in the path
+        raise InputError(f"not a usable path ({exc})") from None
+    if not stat.S_ISREG(st.st_mode):
+        raise InputError(_not_regular(st.st_mode))
+    if st.st_size > cap:
+        raise InputError(_too_big(st.st_size, cap))
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    except OSError as exc:
+        raise InputError(f"cannot read ({exc.strerror or exc})") from None
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            raise InputError(_not_regular(st.st_mode))
+        with os.fdopen(fd, "rb", closefd=False) as fh:
+            data = fh.read(cap + 1)
+    except OSError as exc:
+        raise InputError(f"cannot read ({exc.strerror or exc})") from None
+    finally:
+        os.close(fd)
+    if len(data) > cap:
+        raise InputError(_too_big(len(data), cap))
+    return data
+
+
+def _too_big(size: int, cap: int) -> str:
+    env = LIMITS["bytes"].env
+    return f"file is {size:,} bytes, more than the limit of {cap:,} (raise it with {env})"
+
+
+_FOREIGN_BOMS = (
+    (codecs.BOM_UTF32_LE, "UTF-32 (little-endian)"),
+    (codecs.BOM_UTF32_BE, "UTF-32 (big-endian)"),
+    (codecs.BOM_UTF16_LE, "UTF-16 (little-endian)"),
+    (codecs.BOM_UTF16_BE, "UTF-16 (big-endian)"),
+)
+
+
+def decode_text(data: bytes) -> str:
+    """`data` as UTF-8 text, a leading UTF-8 byte-order mark dropped; InputError otherwise.
+
+    The error names the first offending byte and its offset in the file (and its line), or the
+    encoding announced by a UTF-16/UTF-32 byte-order mark.
+    """
+    skip = 0
+    if data.startswith(codecs.BOM_UTF8):
+        skip = len(codecs.BOM_UTF8)
+    else:
+        for bom, name in _FOREIGN_BOMS:
+            if data.startswith(bom):
+                raise InputError(f"not UTF-8: the file starts with a {name} byte-order mark; "
+                                 "save it as UTF-8")  # fmt: skip
+    try:
+        text = data[skip:].decode("utf-8")
+    except UnicodeDecodeError as exc:
+        off = skip + exc.start
+        line = data.count(b"\n", 0, off) + 1
+        raise InputError(f"not UTF-8 (byte 0x{data[off]:02X} at offset {off}, line {line}); "
+                         "save the file as UTF-8") from None  # fmt: skip
+    nul = text.find("\x00")
+    if nul >= 0:
+        line = text.count("\n", 0, nul) + 1
+        raise InputError(f"contains a NUL character (offset {nul + skip}, line {line}); "
+                         "a text file in UTF-8 is expected (UTF-16 without a byte-order mark?)")
+    return text
+
+
+def read_text(path: str | Path, *, max_bytes: int | None = None) -> str:
+    """`read_bytes` then `decode_text`: the text of a regular, bounded, UTF-8 file."""
+    return decode_text(read_bytes(path, max_bytes=max_bytes))
+
+
+# ----------------------------------------------------------------------------- JSON
+
+# a JSON string (unrolled loop: no backtracking per character), or one structural character
+_STRING = r'"[^"\\]*(?:\\.[^"\\]*)*"'
+_TOKEN_RE = re.compile(_STRING + r"|[\[\]{}:,]", re.S)
+_SURROGATE_ESCAPE = re.compile(r"\\u[dD][89a-fA-F]")
+_OPEN = np.zeros(256, dtype=np.int8)
+_OPEN[[ord("["), ord("{")]] = 1
+_OPEN[[ord("]"), ord("}")]] = -1
+
+
+def _may_exceed_depth(text: str, max_depth: int) -> bool:
+    """A fast screen over every bracket, strings included (numpy, no regex).
+
+    Brackets inside strings can only mislead it in two ways: openers make it say True (the
+    exact `_depth_error` scan then decides), and closers hide real depth (a file would need as
+    many "]" in strings as levels of nesting; `loads_json` still catches the RecursionError).
+    """
+    if text.count("[") + text.count("{") <= max_depth:
+        return False
+    steps = _OPEN[np.frombuffer(text.encode("utf-8", "surrogatepass"), dtype=np.uint8)]
+    steps = steps[steps != 0].astype(np.int32)
+    return bool(steps.size) and int(np.cumsum(steps).max()) > max_depth
+
+
+def _depth_error(text: str, max_depth: int) -> InputError | None:
+    """Walk the tokens, tracking the path, up to the first container deeper than `max_depth`."""
+    stack: list[list[Any]] = []  # [kind, key or index, expecting a key]
+    for tok in _TOKEN_RE.finditer(text):
+        c = tok.group()
+        if c in "[{":
+            if len(stack) >= max_depth:
+                parts = [e[1] for e in stack if e[1] is not None]
+                shown = json_path(parts[:6]) + ("..." if len(parts) > 6 else "")
+                off = tok.start()
+                line = text.count("\n", 0, off) + 1
+                col = off - (text.rfind("\n", 0, off) + 1) + 1
+                return InputError(
+                    f"nested deeper than {max_depth} levels of arrays/objects (line {line}, "
+                    f"column {col}; limit {LIMITS['depth'].env})",
+                    shown or "(top level)",
+                )
+            stack.append(["obj", None, True] if c == "{" else ["arr", 0, False])
+        elif c in "]}":
+            if not stack:
+                return None  # malformed: json.loads will say where
+            stack.pop()
+        elif c == ",":
+            if stack and stack[-1][0] == "arr":
+                stack[-1][1] += 1
+            elif stack:
+                stack[-1][2] = True
+        elif c == ":":
+            if stack:
+                stack[-1][2] = False
+        elif stack and stack[-1][0] == "obj" and stack[-1][2]:
+            try:
+                stack[-1][1] = json.loads(c)
+            except ValueError:
+                stack[-1][1] = c[1:-1]
+    return None
+
+
+class _Bad:
+    """Placeholder the number hooks return for a refused number; the walk finds its path."""
+
+    __slots__ = ("problem",)
+
+    def __init__(self, problem: str):
+        self.problem = problem
+
+
+def _walk(data: Any) -> Iterator[tuple[tuple[Any, ...], Any, bool]]:
+    """(path, value, is_key) for every node, depth first, without recursion."""
+    todo: list[tuple[tuple[Any, ...], Any]] = [((), data)]
+    while todo:
+        path, v = todo.pop()
+        yield path, v, False
+        if isinstance(v, dict):
+            for k in reversed(list(v)):
+                yield path + (k,), k, True
+                todo.append((path + (k,), v[k]))
+        elif isinstance(v, list):
+            todo.extend((path + (i,), v[i]) for i in range(len(v) - 1, -1, -1))
+
+
+def _lone_surrogate(s: str) -> bool:
+    try:
+        s.encode("utf-8")
+    except UnicodeEncodeError:
+        return True
+    return False
+
+
+def loads_json(text: str, *, max_depth: int | None = None) -> Any:
+    """Parse JSON text under the module's rules; InputError naming the field otherwise.
+
+    `max_depth` defaults to `limit("depth")`. Integers longer than `MAX_INT_DIGITS` digits,
+    numbers beyond a double's range, NaN/Infinity literals and unpaired surrogates are refused.
+    """
+    depth = limit("depth") if max_depth is None else int(max_depth)
+    if _may_exceed_depth(text, depth):
+        err = _depth_error(text, depth)
+        if err is not None:
+            raise err
+    bad: list[_Bad] = []
+
+    def parse_int(s: str) -> Any:
+        digits = len(s) - (s[0] == "-")
+        if digits > MAX_INT_DIGITS:
+            b = _Bad(f"an integer of {digits} digits is out of range (at most {MAX_INT_DIGITS})")
+            bad.append(b)
+            return b
+        return int(s)
+
+    def parse_float(s: str) -> Any:
+        v = float(s)
+        if not math.isfinite(v):
+            b = _Bad(f"{s[:24]}{'...' if len(s) > 24 else ''} is beyond the range of a double "
+                     "(about 1.8e308)")  # fmt: skip
+            bad.append(b)
+            return b
+        return v
+
+    def parse_constant(s: str) -> Any:
+        b = _Bad(f"{s} is not a JSON number (JSON has no NaN or Infinity)")
+        bad.append(b)
+        return b
+
+    try:
+        data = json.loads(text, parse_int=parse_int, parse_float=parse_float,
+                          parse_constant=parse_constant)  # fmt: skip
+    except json.JSONDecodeError as exc:
+        raise InputError(f"not valid JSON ({exc.msg} at line {exc.lineno}, column {exc.colno})"
+                         ) from None  # fmt: skip
+    except RecursionError:  # only when strings full of "]" hid the depth from the screen
+        raise InputError(f"nested too deeply to parse (limit {LIMITS['depth'].env})") from None
+    if bad:
+        first = bad[0]
+        for path, v, _is_key in _walk(data):
+            if v is first:
+                raise InputError(first.problem, json_path(path) or "(top level)")
+        raise InputError(first.problem)  # a dict key cannot be a number: not reached
+    if _SURROGATE_ESCAPE.search(text):
+        for path, v, is_key in _walk(data):
+            if isinstance(v, str) and _lone_surrogate(v):
+                what = "key" if is_key else "string"
+                where = json_path(path[:-1] if is_key else path) or "(top level)"
+                raise InputError(f"a {what} holds an unpaired UTF-16 surrogate "
+                                 "(\\ud800-\\udfff escape); not valid Unicode", where)
+    return data
+
+
+def read_json(path: str | Path, *, max_bytes: int | None = None,
+              max_depth: int | None = None) -> Any:  # fmt: skip
+    """`read_text` then `loads_json`: the JSON value of a file, under every rule above."""
+    return loads_json(read_text(path, max_bytes=max_bytes), max_depth=max_depth)
