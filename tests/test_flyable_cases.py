@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import json
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -20,8 +19,19 @@ CASES = Path(__file__).resolve().parent / "data" / "flyable"
 
 
 def cli(*args: object) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "lamde_mission.cli", *map(str, args)],
-                          capture_output=True, text=True, timeout=300)  # fmt: skip
+    """The command line, in this process (one import of the planner for every case)."""
+    import contextlib
+    import io
+
+    from lamde_mission.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        try:
+            rc = main([str(a) for a in args])
+        except SystemExit as exc:  # argparse errors
+            rc = int(exc.code or 0)
+    return subprocess.CompletedProcess(args, rc, out.getvalue(), err.getvalue())
 
 
 def test_speed_change_applies_from_its_position_on():
