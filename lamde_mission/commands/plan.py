@@ -232,12 +232,24 @@ def run(args: argparse.Namespace) -> int:
     if not feasible and not args.allow_infeasible:
         if not args.quiet:
             print(_summary(plan, m, timeline, verdicts, None, stored))
-        print(f"lamde-mission plan: no feasible mission found for {args.map} "
-              f"(budget {args.budget}, seed {args.seed}); nothing written:", file=sys.stderr)
+        if plan.feasible:  # the plan met the model; the mission as stored does not
+            print(f"lamde-mission plan: the plan for {args.map} is feasible, but not once stored "
+                  f"as {stored.dialect.name} stores it (1e-7 degree lat/lon, float32, hover "
+                  "time resolution); nothing written:", file=sys.stderr)  # fmt: skip
+        else:
+            print(f"lamde-mission plan: no feasible mission found for {args.map} "
+                  f"(budget {args.budget}, seed {args.seed}); nothing written:", file=sys.stderr)
         for line in _violations(plan, verdicts):
             print(f"  {line}", file=sys.stderr)
-        print("  try a larger --budget, another --seed, or --allow-infeasible to write it anyway",
-              file=sys.stderr)
+        if not plan.feasible:
+            from planner_core.diagnose import diagnose
+
+            fatal = [f.message for f in diagnose(m).findings if f.fatal]
+            for line in fatal:
+                print(f"  no plan can meet this map: {line}", file=sys.stderr)
+            if not fatal:
+                print("  try a larger --budget, another --seed, or --allow-infeasible to write "
+                      "it anyway", file=sys.stderr)  # fmt: skip
         return 1
     write_mission(args.output, stored, m, fmt, finish=args.finish, autopilot=args.autopilot,
                   planning_map=pm)
