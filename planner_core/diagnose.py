@@ -57,19 +57,20 @@ class Diagnosis:
 def diagnose(m: Any) -> Diagnosis:
     """Diagnose `m` (a Map; its planning map is what is judged)."""
     import shapely
-    from shapely.geometry import Point, Polygon, box
+    from shapely.geometry import Point, box
 
     pm = m.planning_map()
     spec = pm.spec
     uav, radio = spec.uav, spec.radio
-    shapes = [Point(c.x, c.y).buffer(c.radius, quad_segs=32) for c in spec.obstacles.circles]
-    shapes += [Polygon(v) for v in pm.rectangle_polygons]
-    shapes += [Polygon(v) for v in pm.nfz_polygons]
-    real = [Point(c.x, c.y).buffer(c.radius, quad_segs=32) for c in m.spec.obstacles.circles]
-    real += [Polygon(v) for v in m.rectangle_polygons] + [Polygon(v) for v in m.nfz_polygons]
-    labels = ([f"circle {k}" for k in range(len(m.spec.obstacles.circles))]
-              + [f"rectangle {k}" for k in range(len(m.rectangle_polygons))]
-              + [f"no-fly-zone {k}" for k in range(len(m.nfz_polygons))])  # fmt: skip
+    from planner_core.mapio import _obstacle_polygons
+
+    shapes = _obstacle_polygons(pm)  # inflated by the clearance
+    real = _obstacle_polygons(m)  # as the map gives them
+    obs = m.spec.obstacles
+    labels = ([f"circle {k}" for k in range(len(obs.circles))]
+              + [f"rectangle {k}" for k in range(len(obs.rectangles))]
+              + [f"no-fly-zone {k}" for k in range(len(obs.no_fly_zones))]
+              + [f"polygon {k}" for k in range(len(obs.polygons))])  # fmt: skip
     free = box(0.0, 0.0, pm.width, pm.height)
     if shapes:
         free = free.difference(shapely.union_all(shapes))

@@ -8,6 +8,7 @@ the field, so a user can fix a map in one pass.
 from __future__ import annotations
 
 import difflib
+import math
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -412,20 +413,35 @@ class Map:
             s["required_data"] = float(req)
         cl = self.obstacle_clearances
         obs = self.spec.obstacles
-        nc = len(obs.circles)
+        nc, nr, nz = len(obs.circles), len(obs.rectangles), len(obs.no_fly_zones)
         d["obstacles"]["circles"] = [
             {"x": c.x, "y": c.y, "radius": c.radius + (cl[k] + CLEARANCE_PAD if cl[k] > 0 else 0)}
             for k, c in enumerate(obs.circles)
         ]
-        zones = []
-        for k, poly in enumerate(_obstacle_polygons(self)[nc:], start=nc):
+        shapes = _obstacle_polygons(self)
+
+        def grown(k: int, name: str | None) -> dict[str, Any]:
+            poly = shapes[k]
             if cl[k] > 0.0:
-                grown = (cl[k] + CLEARANCE_PAD) / math.cos(math.pi / (4 * _QUAD_SEGS))
-                poly = orient(poly.buffer(grown, quad_segs=_QUAD_SEGS), 1.0)
+                r = (cl[k] + CLEARANCE_PAD) / math.cos(math.pi / (4 * _QUAD_SEGS))
+                poly = orient(poly.buffer(r, quad_segs=_QUAD_SEGS), 1.0)
                 poly = shapely.simplify(poly, 0.0)  # drop collinear vertices
-            zones.append({"vertices": [list(v) for v in poly.exterior.coords[:-1]]})
+            out: dict[str, Any] = {"vertices": [list(v) for v in poly.exterior.coords[:-1]]}
+            holes = [[list(v) for v in ring.coords[:-1]] for ring in poly.interiors]
+            if holes:
+                out["holes"] = holes
+            if name is not None:
+                out["name"] = name
+            return out
+
+        # rectangles become polygon obstacles (a rounded rectangle is no rectangle), in order
         d["obstacles"]["rectangles"] = []
-        d["obstacles"]["no_fly_zones"] = zones
+        d["obstacles"]["no_fly_zones"] = [grown(nc + nr + k, z.name)
+                                          for k, z in enumerate(obs.no_fly_zones)]
+        d["obstacles"]["polygons"] = (
+            [grown(nc + k, None) for k in range(nr)]
+            + [grown(nc + nr + nz + k, z.name) for k, z in enumerate(obs.polygons)]
+        )  # fmt: skip
         pm = load_map(d)
         self.__dict__["_planning_map"] = pm
         return pm
@@ -482,13 +498,15 @@ _QUAD_SEGS = 4
 
 
 def _obstacle_polygons(m: Map) -> list[Any]:
-    """Circles (as exact-enough shapely buffers), rectangles and no-fly zones, in that order."""
+    """Circles (as exact-enough shapely buffers), rectangles, no-fly zones and polygon
+    obstacles, in that order (the sim's order, `sim.obstacles.obstacle_shapes`)."""
     from shapely.geometry import Point, Polygon
 
     obs = m.spec.obstacles
     out: list[Any] = [Point(c.x, c.y).buffer(c.radius, quad_segs=64) for c in obs.circles]
     out += [Polygon(v) for v in m.rectangle_polygons]
-    out += [Polygon(v) for v in m.nfz_polygons]
+    out += [Polygon(z.vertices, z.holes) for z in obs.no_fly_zones]
+    out += [Polygon(z.vertices, z.holes) for z in obs.polygons]
     return out
 
 

@@ -81,7 +81,11 @@ def test_planning_map_inflates_obstacles_and_raises_data():
         [c.radius + 12.05 for c in m.spec.obstacles.circles])
     # every rectangle and no-fly zone grown by at least the clearance, and not much more
     real = [o.shape for o in obstacle_shapes(m) if o.kind != "circle"]
-    grown = [shapely.Polygon(p) for p in pm.nfz_polygons]
+    # the planning map: rectangles became polygon obstacles (first), no-fly zones stay
+    nr = len(m.spec.obstacles.rectangles)
+    planned = [o.shape for o in obstacle_shapes(pm) if o.kind != "circle"]
+    nz = len(pm.spec.obstacles.no_fly_zones)
+    grown = planned[nz:nz + nr] + planned[:nz] + planned[nz + nr:]
     assert len(real) == len(grown)
     for r, g in zip(real, grown, strict=True):
         assert g.contains(r.buffer(12.0, quad_segs=32))
@@ -105,3 +109,27 @@ def test_clearance_near_the_start_leaves_the_start_outside():
     assert plan.feasible
     v = verify(replay(plan_to_items(storable_plan(plan, m, "px4", planning_map=pm), m), m), m)
     assert v.passed, v.table()
+
+
+def test_non_convex_polygons_and_holes_are_inflated_too():
+    d = {"name": "campus", "origin": {"lat": 46.2, "lon": 7.3},
+         "area": {"width": 1000, "height": 1000}, "start": [50, 50], "end": [950, 950],
+         "sensors": [{"id": "a", "x": 500, "y": 800}, {"id": "b", "x": 800, "y": 300}],
+         "obstacles": {
+             "polygons": [{"vertices": [[300, 300], [600, 300], [600, 400], [400, 400],
+                                        [400, 600], [300, 600]], "name": "L"}],
+             "no_fly_zones": [{"vertices": [[650, 550], [900, 550], [900, 800], [650, 800]],
+                               "holes": [[[700, 600], [850, 600], [850, 750], [700, 750]]]}]},
+         "safety": {"clearance": 15}}  # fmt: skip
+    m = load_map(d)
+    pm = m.planning_map()
+    assert len(pm.spec.obstacles.polygons) == 1 and len(pm.spec.obstacles.no_fly_zones) == 1
+    assert pm.spec.obstacles.polygons[0].name == "L"
+    real = [o.shape for o in obstacle_shapes(m)]
+    grown = [o.shape for o in obstacle_shapes(pm)]
+    assert grown[0].contains(real[0].buffer(15.0, quad_segs=32))  # the no-fly zone, hole shrunk
+    assert grown[1].contains(real[1].buffer(15.0, quad_segs=32))  # the L
+    plan = lamde_mission.plan(m, seed=0, budget=3000)
+    sp = storable_plan(plan, m, "px4", planning_map=pm)
+    tl = replay(stored_items(plan_to_items(sp, m), "px4"), m)
+    assert np.all(_flown_distance(m, tl) >= 15.0)
