@@ -216,13 +216,18 @@ def run_bench(
     best_known: str | Path | None | bool = True,
     command: str = "",
     executor: Executor | None = None,
+    backend: str = "local",
+    address: str | None = None,
     log: Callable[[str], None] | None = None,
 ) -> BenchSummary:
     """Run every missing (optimiser, task, run) and append each result to `<out>/results.jsonl`.
 
     `best_known`: True = `<suite>_best_known.json` beside the suite folder, a path = that file,
     None/False = no updates.
-    `executor` overrides `jobs` (0 = in this process, N = N worker processes).
+    `executor` overrides `jobs`, `backend` and `address`; without it the executor is
+    `planner_core.execution.make_executor(jobs, backend, address)` (local: 0 = in this process,
+    N = N worker processes; ray: a Ray cluster at `address`, or a local Ray instance with `jobs`
+    CPUs), closed when the benchmark ends. Results are the same on every backend.
     """
     from planner_core.baselines import REGISTRY
 
@@ -277,7 +282,7 @@ def run_bench(
     if not todo:
         return summary
     own = executor is None
-    ex = make_executor(jobs) if executor is None else executor
+    ex = make_executor(jobs, backend, address) if executor is None else executor
     t_start = time.perf_counter()
     try:
         with ResultsWriter(results) as writer:
