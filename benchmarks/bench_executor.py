@@ -34,7 +34,6 @@ import argparse
 import json
 import math
 import os
-import re
 import statistics
 import tempfile
 import time
@@ -84,14 +83,14 @@ def cost_at_10k() -> tuple[float, float, int]:
     text = RESULTS_MD.read_text()
     if "--budget 10000" not in text:
         raise SystemExit(f"{RESULTS_MD}: not a 10,000-evaluation report")
-    head = next(line for line in text.splitlines() if line.startswith("| Optimiser | runs |"))
-    col = [c.strip() for c in head.strip("|").split("|")].index("mean wall time (s)")
-    rows = re.findall(r"^\| ([a-z][\w-]*) \| (\d[\d,]*) \|.*$", text, flags=re.M)
+    lines = text.splitlines()
+    start = next(i for i, ln in enumerate(lines) if ln.startswith("| Optimiser | runs |"))
+    col = [c.strip() for c in lines[start].strip("|").split("|")].index("mean wall time (s)")
     walls = []
-    for name, _ in rows:
-        line = next(ln for ln in text.splitlines() if ln.startswith(f"| {name} | "))
-        cell = [c.strip() for c in line.strip("|").split("|")][col]
-        walls.append(float(cell))
+    for ln in lines[start + 2:]:  # the table's rows, up to the blank line after it
+        if not ln.startswith("|"):
+            break
+        walls.append(float([c.strip() for c in ln.strip("|").split("|")][col]))
     return statistics.mean(walls), max(walls), len(walls)
 
 
