@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from planner_core.mapio import Map, load_map
-from planner_core.model import ModelParams, flight_time, slant_rates
+from planner_core.model import ModelParams, flight_time, ground_reach, slant_rates
 
 __all__ = ["LowerBound", "lower_bound", "hover_lower_bound", "DEFAULT_SPACING"]
 
@@ -62,19 +62,13 @@ def _cell_rates(m: Map, spacing: float) -> tuple[np.ndarray, np.ndarray, np.ndar
     nx = max(1, math.ceil(m.width / spacing))
     ny = max(1, math.ceil(m.height / spacing))
     wx, wy = m.width / nx, m.height / ny
-    if xi <= 0:
-        reach = math.inf
-    else:
-        slant = rc / xi  # rate > 0 iff sqrt(d^2 + H^2) < R_c / xi
-        reach = math.sqrt(slant * slant - H * H) if slant > H else -1.0
+    reach = float(ground_reach(0.0, H, rc, xi))  # cells beyond it get no rate at all
     rows, cols, vals = [], [], []
     for j, (sx, sy) in enumerate(m.sensors):
-        if reach < 0:
-            continue
-        i0 = max(0, math.floor((sx - reach) / wx)) if math.isfinite(reach) else 0
-        i1 = min(nx - 1, math.floor((sx + reach) / wx)) if math.isfinite(reach) else nx - 1
-        k0 = max(0, math.floor((sy - reach) / wy)) if math.isfinite(reach) else 0
-        k1 = min(ny - 1, math.floor((sy + reach) / wy)) if math.isfinite(reach) else ny - 1
+        i0 = max(0, math.floor((sx - reach) / wx))
+        i1 = min(nx - 1, math.floor((sx + reach) / wx))
+        k0 = max(0, math.floor((sy - reach) / wy))
+        k1 = min(ny - 1, math.floor((sy + reach) / wy))
         ix = np.arange(i0, i1 + 1)
         ky = np.arange(k0, k1 + 1)
         # distance from the sensor to each cell along each axis (0 when inside the cell's span)

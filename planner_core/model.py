@@ -29,6 +29,7 @@ __all__ = [
     "flight_time",
     "leg_time",
     "link_rates",
+    "ground_reach",
     "slant_rate",
     "slant_rates",
     "collision_penalty",
@@ -80,6 +81,16 @@ def slant_rates(d2: np.ndarray, altitude: float, peak_rate: float, decay: float)
 def slant_rate(d2: float, h2: float, peak_rate: float, decay: float) -> float:  # pragma: no cover
     """`slant_rates` for one pair, for compiled kernels; h2 = H^2 (bit-equal; tests)."""
     return peak_rate - decay * math.sqrt(d2 + h2)
+
+
+def ground_reach(
+    rate: np.ndarray | float, altitude: float, peak_rate: float, decay: float
+) -> np.ndarray:
+    """The link rate read backwards: the largest ground distance (m) at which the rate is still
+    at least `rate` (Mbit/s, any shape), sqrt(((R_c - rate) / xi)^2 - H^2), and 0 where not even
+    the point overhead reaches it; xi = 0 counts as 1e-12 (a reach of ~1e13 m)."""
+    slant = np.maximum(peak_rate - rate, 0.0) / max(decay, 1e-12)
+    return np.sqrt(np.maximum(slant * slant - altitude**2, 0.0))
 
 
 def link_rates(
@@ -179,7 +190,7 @@ class ModelParams:
         cls,
         uav: Any,
         radio: Any,
-        objective: Any = None,
+        objective: Any,
         *,
         width: float = 0.0,
         height: float = 0.0,
@@ -190,7 +201,7 @@ class ModelParams:
         n_points: int | None = None,
     ) -> ModelParams:
         """From the map file's `uav`, `radio` and `objective` settings (objects with the
-        schema's field names); without `objective`, alpha = 0.5, mu = nu = 0."""
+        schema's field names, `planner_core.mapio.Uav` etc.) and the map's geometry."""
         return cls(
             altitude=float(uav.altitude),
             v_max=float(uav.max_speed),
@@ -201,9 +212,9 @@ class ModelParams:
             peak_rate=float(radio.peak_rate),
             decay=float(radio.decay),
             bandwidth=float(radio.bandwidth),
-            alpha=float(objective.alpha) if objective is not None else 0.5,
-            mu=float(objective.collision_offset) if objective is not None else 0.0,
-            nu=float(objective.collision_weight) if objective is not None else 0.0,
+            alpha=float(objective.alpha),
+            mu=float(objective.collision_offset),
+            nu=float(objective.collision_weight),
             width=float(width),
             height=float(height),
             start=np.asarray(start, dtype=float).reshape(2),

@@ -32,7 +32,7 @@ import numpy as np
 from numba import njit
 
 from planner_core.geometry import Obstacles, overlap_lengths, points_inside
-from planner_core.model import ModelParams, flight_time, leg_time, slant_rate
+from planner_core.model import ModelParams, flight_time, ground_reach, leg_time, slant_rate
 from planner_core.routing import build_visibility_graph, open_tour
 from planner_core.routing.graph import CLEAR as _CLEAR
 
@@ -150,8 +150,7 @@ class Seeder:
         self.size = np.array([p.width, p.height], dtype=float)
         # farthest ground distance at which 90% of T_max still serves each sensor
         rate_needed = np.maximum(p.required, 1e-9) / (0.9 * p.t_max)
-        slant = np.maximum(p.peak_rate - rate_needed, 0.0) / max(p.decay, 1e-12)
-        self.reach = np.sqrt(np.maximum(slant * slant - p.altitude**2, 0.0))
+        self.reach = ground_reach(rate_needed, p.altitude, p.peak_rate, p.decay)
         self._ends = self._connect(np.vstack([p.start, p.end]))  # graph links of start, end
         ang = 2.0 * np.pi * np.arange(_SLIDE_DIRS) / _SLIDE_DIRS
         self._unit = np.column_stack([np.cos(ang), np.sin(ang)])

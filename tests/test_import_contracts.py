@@ -45,6 +45,8 @@ def test_contracts_hold_on_the_tree() -> None:
         ("planner_core/model.py", "import planner_core.mapio", "planner_core.model imports"),
         ("planner_core/de/core.py", "import planner_core.de.configurators", "DE core"),
         ("planner_core/seeding.py", "import planner_core.problem", "take ModelParams"),
+        ("planner_core/execution/local.py", "import planner_core.bench.runner",
+         "The executor is a seam"),
     ],
 )
 def test_a_back_edge_breaks_its_contract(

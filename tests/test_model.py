@@ -12,6 +12,7 @@ from planner_core.model import (
     deb_better,
     deb_not_worse,
     flight_time,
+    ground_reach,
     leg_time,
     link_rates,
     penalised_score,
@@ -71,3 +72,12 @@ def test_open_tour_is_two_opt_optimal(first: bool) -> None:
         for j in range(i + 1, 11):
             g = W[t[i], t[i + 1]] + W[t[j], t[j + 1]] - W[t[i], t[j]] - W[t[i + 1], t[j + 1]]
             assert g <= 1e-6
+
+
+def test_ground_reach_inverts_the_link_rate() -> None:
+    need = np.array([1.0, 5.0, 9.0, 9.5])
+    reach = ground_reach(need, 100.0, 10.0, 0.01)
+    # at the reach the rate is exactly what was asked for; 9.5 Mbit/s is not even overhead (9.0)
+    assert slant_rates(reach[:3] ** 2, 100.0, 10.0, 0.01) == pytest.approx(need[:3])
+    assert reach[3] == 0.0
+    assert ground_reach(0.0, 100.0, 10.0, 0.0) > 1e12  # no decay: everywhere in range

@@ -13,7 +13,7 @@ import numpy as np
 import shapely
 
 from planner_core.geometry import rectangle_vertices
-from planner_core.mapio import Radio, Uav
+from planner_core.mapio import Objective, Radio, Uav
 from planner_core.model import ModelParams
 from planner_core.routing import offset_convex, open_tour, path_hops, shortest_paths
 from planner_core.suite.tables import BENDS, SIZES, obstacle_counts
@@ -80,9 +80,9 @@ class Draw:
         self.n_circles, self.n_rects, self.n_nfz = obstacle_counts(size, density)
         self.n_bends = BENDS[size][density]
         radio = Radio()
-        #: the model's parameters with the schema's default UAV and radio (no sensors yet)
+        #: the model's parameters with the schema's default settings (no sensors yet)
         self.model = ModelParams.from_settings(
-            Uav(), radio, width=self.size, height=self.size, n_points=self.imax
+            Uav(), radio, Objective(), width=self.size, height=self.size, n_points=self.imax
         )
         self.t_max = self.model.t_max
         self.bandwidth = self.model.bandwidth
