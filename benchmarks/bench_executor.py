@@ -8,7 +8,8 @@ local, ray) so a drifting machine affects both alike, and prints per run:
 * start-up: creating the executor until every worker answered a trivial task (process spawn;
   for Ray: `ray.init` of a local instance with that many CPUs plus its workers),
 * sweep: the benchmark itself (first job's imports and compiled-kernel loads included),
-* compute: the sum of the jobs' own optimiser time (`wall_s` in each record),
+* compute: the sum of the jobs' own optimiser time, wall (`wall_s` in each record) and CPU
+  (`cpu_s`: what the job took of a CPU; on a busy machine wall is larger by the waits),
 * driver CPU: this process's CPU time during the sweep (submitting, collecting, writing JSONL),
 
 then the ratio ray/local of the sweep time at each worker count, whether both backends wrote the
@@ -17,9 +18,11 @@ docs/scaling.md):
 
     T(W) = start-up + max(N * (c + o) / W, N * d)
 
-with N jobs, W workers, c the per-job compute, o the per-job overhead on a worker (sweep time at
-one worker / N - c: problem set-up, pickling, scheduling) and d the driver's CPU per job (the
-serial part). It extrapolates T to more workers and to `--nodes` x `--cpus-per-node` for the full
+with N jobs, W workers, c the per-job compute (CPU time), o the per-job overhead on a worker
+(sweep time at one worker / N - wall compute per job: problem set-up, pickling, scheduling,
+scaled by the CPU share the jobs got, cpu/wall) and d the driver's CPU per job (the serial
+part). On a dedicated machine cpu = wall and the scaling is the plain measured one. It
+extrapolates T to more workers and to `--nodes` x `--cpus-per-node` for the full
 paper protocol (16 tasks x 25 runs x 15 optimisers at 10,000 evaluations) with the per-job cost
 at 10,000 evaluations read from docs/results.md (mean wall time per optimiser, measured by the
 full `lamde-mission bench` run that produced that report).
@@ -73,8 +76,9 @@ def sweep(backend: str, workers: int, args: argparse.Namespace, out: Path) -> di
                          f"{summary.failed[:1]}")
     return {"backend": backend, "workers": workers, "jobs": len(recs),
             "startup_s": t1 - t0, "sweep_s": t2 - t1, "compute_s": sum(r["wall_s"] for r in recs),
-            "driver_cpu_s": cpu,
-            "records": {key_of(r): {k: v for k, v in r.items() if k != "wall_s"} for r in recs}}
+            "compute_cpu_s": sum(r["cpu_s"] for r in recs), "driver_cpu_s": cpu,
+            "records": {key_of(r): {k: v for k, v in r.items() if k not in ("wall_s", "cpu_s")}
+                        for r in recs}}
 
 
 def cost_at_10k() -> tuple[float, float, int]:
@@ -95,11 +99,13 @@ def cost_at_10k() -> tuple[float, float, int]:
 
 
 def model(m: dict[str, Any]) -> dict[str, float]:
-    """Start-up s0, per-job compute c, per-job worker overhead o and driver CPU per job d, from
-    a one-worker measurement."""
+    """Start-up s0, per-job compute c (CPU), per-job worker overhead o (wall, scaled by the CPU
+    share cpu/wall the jobs got) and driver CPU per job d, from a one-worker measurement."""
     n = m["jobs"]
-    c = m["compute_s"] / n
-    return {"s0": m["startup_s"], "c": c, "o": m["sweep_s"] / n - c, "d": m["driver_cpu_s"] / n}
+    share = m["compute_cpu_s"] / m["compute_s"]
+    o_wall = m["sweep_s"] / n - m["compute_s"] / n
+    return {"s0": m["startup_s"], "c": m["compute_cpu_s"] / n, "o": o_wall * share,
+            "d": m["driver_cpu_s"] / n, "share": share}
 
 
 def predict(p: dict[str, float], jobs: int, workers: int, c: float | None = None,
@@ -134,7 +140,8 @@ def main() -> None:
                 m = sweep(b, w, args, Path(tmp) / f"{b}-{w}")
                 got[(b, w)] = m
                 print(f"{b:5s} x {w} worker(s): start-up {m['startup_s']:6.2f} s, sweep "
-                      f"{m['sweep_s']:6.2f} s, compute {m['compute_s']:6.2f} s, driver CPU "
+                      f"{m['sweep_s']:6.2f} s, compute {m['compute_s']:6.2f} s (CPU "
+                      f"{m['compute_cpu_s']:6.2f} s), driver CPU "
                       f"{m['driver_cpu_s']:5.2f} s, {m['sweep_s'] / n * 1000:6.1f} ms/job",
                       flush=True)
     print()
@@ -157,14 +164,17 @@ def main() -> None:
         if (b, 1) not in got:
             continue
         p = model(got[(b, 1)])
-        print(f"\n{b}: model from the 1-worker run: start-up {p['s0']:.2f} s, compute c "
+        print(f"\n{b}: model from the 1-worker run (jobs got {p['share']:.0%} of a CPU while "
+              f"running): start-up {p['s0']:.2f} s, compute c "
               f"{p['c'] * 1000:.1f} ms/job, worker overhead o {p['o'] * 1000:.1f} ms/job, "
               f"driver CPU d {p['d'] * 1000:.2f} ms/job")
         for w in args.workers[1:]:
             if (b, w) in got:
-                meas = got[(b, w)]["startup_s"] + got[(b, w)]["sweep_s"]
-                print(f"  check at {w} workers: predicted {predict(p, n, w):.1f} s, measured "
-                      f"{meas:.1f} s")
+                m = got[(b, w)]
+                meas = m["startup_s"] + m["sweep_s"]
+                sh = m["compute_cpu_s"] / m["compute_s"]
+                print(f"  check at {w} workers: predicted {predict(p, n, w):.1f} s on dedicated "
+                      f"CPUs, measured {meas:.1f} s with jobs at {sh:.0%} of a CPU")
         print("  this sweep at W workers (predicted): " + ", ".join(
             f"W={w}: {predict(p, n, w):.1f} s" for w in (1, 2, 4, 8, 16, 64, 256)))
         lim = 1 / p["d"] if p["d"] > 0 else math.inf

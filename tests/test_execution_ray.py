@@ -36,8 +36,8 @@ def ray_runtime() -> Iterator[None]:
 
 
 def _records(out: Path) -> dict[Any, dict[str, Any]]:
-    """Records by (optimiser, task, run), without the one field that may differ (wall time)."""
-    return {key_of(r): {k: v for k, v in r.items() if k != "wall_s"}
+    """Records by (optimiser, task, run), without the fields that may differ (wall, CPU time)."""
+    return {key_of(r): {k: v for k, v in r.items() if k not in ("wall_s", "cpu_s")}
             for r in read_records(out / RESULTS_FILE).records}
 
 
