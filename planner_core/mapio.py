@@ -67,6 +67,9 @@ def _ranged(
     return Field(default, description=desc, json_schema_extra={"x-range-reason": why}, **kw)
 
 
+#: text without control characters (names and ids are printed in one-line messages)
+_PRINTABLE = r"^[^\x00-\x1f\x7f]*$"
+
 Coord = Annotated[float, Field(ge=-MAX_COORD, le=MAX_COORD, description=f"metres; {_WHY_COORD}")]
 Point2 = tuple[Coord, Coord]
 
@@ -103,7 +106,8 @@ class Sensor(BaseModel):
     """A ground sensor; `required_data` overrides `radio.required_data` for this sensor."""
 
     model_config = _STRICT
-    id: str = Field(min_length=1, max_length=100)
+    id: str = Field(min_length=1, max_length=100, pattern=_PRINTABLE,
+                    description="printable text (it is quoted in messages, one line each)")
     x: Coord
     y: Coord
     required_data: float | None = _ranged(
@@ -183,7 +187,7 @@ class MapFile(BaseModel):
     """The whole map file (JSON)."""
 
     model_config = _STRICT
-    name: str = Field("unnamed", max_length=200)
+    name: str = Field("unnamed", max_length=200, pattern=_PRINTABLE)
     origin: Origin = Origin()
     area: Area
     start: Point2
@@ -315,10 +319,7 @@ class Map:
 
 
 def _loc(loc: tuple[Any, ...]) -> str:
-    out = ""
-    for part in loc:
-        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
-    return out or "(map)"
+    return textio.json_path(loc) or "(map)"
 
 
 def _model_at(loc: tuple[Any, ...]) -> type[BaseModel] | None:
@@ -387,6 +388,9 @@ def _pydantic_problems(err: ValidationError) -> list[str]:
             lines.append(f"{where}: must be a finite number (got NaN or infinity)")
         elif kind == "too_short" and loc and loc[-1] == "sensors":
             lines.append(f"{where}: at least one sensor is required")
+        elif kind == "string_pattern_mismatch":
+            lines.append(f"{where}: must be printable text (no control characters such as "
+                         "newlines or tabs)")  # fmt: skip
         elif kind in _RANGE_KINDS:
             got = e.get("input")
             shown = f"{got:g}" if isinstance(got, float) else repr(got)

@@ -82,9 +82,10 @@ LIMITS: dict[str, Limit] = {
         "parser's recursion",
     ),
     "sensors": Limit(
-        5_000,
+        200,
         "LAMDE_MAX_SENSORS",
-        "sensors in one map; every evaluation costs O(population x I_max x sensors)",
+        "sensors in one map; planning time grows steeply with them (the starting routes: 60 "
+        "sensors ~10 s, 120 sensors ~66 s of CPU for 20 starts; the paper's maps have <= 29)",
     ),
     "obstacles": Limit(
         5_000,
@@ -140,7 +141,13 @@ def json_path(parts: Any) -> str:
     """`("uav", "max_speed")` -> "uav.max_speed"; integers become `[i]`."""
     out = ""
     for part in parts:
-        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
+        if isinstance(part, int):
+            out += f"[{part}]"
+            continue
+        name = str(part)
+        if not name.isprintable() or len(name) > 80:  # a key with a newline stays one line
+            name = ascii(name[:80])
+        out += f".{name}" if out else name
     return out
 
 

@@ -16,4 +16,5 @@ COMMANDS = (
     "upload",
     "bench",
     "report",
+    "lam",
 )
