@@ -95,3 +95,25 @@ def test_make_executor_ray_uses_a_running_instance(ray_runtime: None) -> None:
     assert ex.cluster_cpus() == 2
     ex.close()
     assert ray.is_initialized()
+
+
+def test_lam_build_on_ray_equals_this_process_and_resumes(ray_runtime: None,
+                                                          tmp_path: Path) -> None:
+    import numpy as np
+
+    from lamde_mission.cli import main
+    from planner_core.lam.bbob import DatabaseSpec
+    from planner_core.lam.database import Database
+
+    spec = DatabaseSpec.make((1, 6, 21), (10,), 2)
+    here = Database(spec=spec, cache_dir=tmp_path / "here")
+    assert here.build() == 3
+    # on Ray through the CLI: one chunk first (an interrupted build), then the rest
+    base = ["lam", "build", "--dims", "10", "--instances", "2", "--cache", str(tmp_path / "ray"),
+            "--backend", "ray", "--jobs", "2", "--quiet"]
+    assert main([*base, "--functions", "1"]) == 0
+    assert main([*base, "--functions", "1,6,21"]) == 0
+    on_ray = Database(spec=spec, cache_dir=tmp_path / "ray")
+    assert on_ray.missing() == [] and on_ray.build() == 0
+    for name in ("ela", "learned"):
+        np.testing.assert_array_equal(here.load(name)[1], on_ray.load(name)[1])
