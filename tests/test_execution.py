@@ -83,3 +83,18 @@ def test_cli_backend_errors_exit_2(tmp_path, capsys, monkeypatch) -> None:
     assert "--backend ray: Ray is not installed; pip install 'lamde-mission[ray]'" in (
         capsys.readouterr().err)
     assert not (tmp_path / "o").exists()
+
+
+def test_ray_init_arguments_per_address(monkeypatch) -> None:
+    from planner_core.execution import SINGLE_THREAD_ENV
+    from planner_core.execution.ray_executor import RayExecutor
+
+    env = {"env_vars": SINGLE_THREAD_ENV}
+    monkeypatch.delenv("RAY_ADDRESS", raising=False)
+    assert RayExecutor(num_cpus=2)._init_kwargs() == {
+        "runtime_env": env, "include_dashboard": False, "num_cpus": 2}
+    # a cluster: its own CPUs and dashboard; the Ray Client forwards every argument given
+    assert RayExecutor("ray://head:10001", num_cpus=2)._init_kwargs() == {
+        "runtime_env": env, "address": "ray://head:10001"}
+    monkeypatch.setenv("RAY_ADDRESS", "auto")
+    assert RayExecutor(num_cpus=2)._init_kwargs() == {"runtime_env": env}

@@ -25,6 +25,7 @@ Source: Ray Core API (``ray.init``, ``ray.remote``, ``ray.wait``, runtime enviro
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any, TypeVar
 
@@ -81,17 +82,25 @@ class RayExecutor:
         self._ray: Any = None
         self._owns_runtime = False
 
+    def _init_kwargs(self) -> dict[str, Any]:
+        """Arguments of ``ray.init``: the thread limits as the job's runtime environment; the
+        CPU count and no dashboard only for an instance started here (a cluster, reached by
+        ``address`` or ``RAY_ADDRESS``, takes neither; the Ray Client forwards every
+        non-default argument to the cluster's own ``ray.init``)."""
+        kwargs: dict[str, Any] = {"runtime_env": _runtime_env()}
+        if self.address is not None:
+            kwargs["address"] = self.address
+        elif not os.environ.get("RAY_ADDRESS"):
+            kwargs["include_dashboard"] = False
+            if self.num_cpus is not None:
+                kwargs["num_cpus"] = self.num_cpus
+        return kwargs
+
     def _ensure_ray(self) -> Any:
         if self._ray is None:
             ray = import_ray()
             if not ray.is_initialized():
-                kwargs: dict[str, Any] = {"runtime_env": _runtime_env(),
-                                          "include_dashboard": False, "log_to_driver": True}
-                if self.address is not None:
-                    kwargs["address"] = self.address
-                elif self.num_cpus is not None:
-                    kwargs["num_cpus"] = self.num_cpus
-                ray.init(**kwargs)
+                ray.init(**self._init_kwargs())
                 self._owns_runtime = True
             self._ray = ray
         return self._ray
