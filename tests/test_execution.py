@@ -98,3 +98,20 @@ def test_ray_init_arguments_per_address(monkeypatch) -> None:
         "runtime_env": env, "address": "ray://head:10001"}
     monkeypatch.setenv("RAY_ADDRESS", "auto")
     assert RayExecutor(num_cpus=2)._init_kwargs() == {"runtime_env": env}
+
+
+def test_pool_initializer_sets_the_thread_limits(monkeypatch) -> None:
+    import numba
+
+    from planner_core.execution import SINGLE_THREAD_ENV
+    from planner_core.execution.local import _init_worker
+
+    for k in SINGLE_THREAD_ENV:
+        monkeypatch.delenv(k, raising=False)
+    before = numba.get_num_threads()
+    try:
+        _init_worker(dict(SINGLE_THREAD_ENV))
+        assert {k: os.environ[k] for k in SINGLE_THREAD_ENV} == SINGLE_THREAD_ENV
+        assert numba.get_num_threads() == 1  # numba was loaded already: capped at run time
+    finally:
+        numba.set_num_threads(before)
