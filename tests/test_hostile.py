@@ -322,3 +322,15 @@ def test_readme_lists_every_input_limit() -> None:
         row = [ln for ln in readme.splitlines() if ln.startswith("| ") and shown in ln
                and (lim.env is None or f"`{lim.env}`" in ln)]  # fmt: skip
         assert row, f"README's input-limits table lacks {name} ({shown}, {lim.env})"
+
+
+def test_output_that_is_a_directory_is_refused_before_planning(tmp_path: Path) -> None:
+    folder = tmp_path / "out.plan"
+    folder.mkdir()
+    _refused(["plan", str(TINY), "-o", str(folder), "--quiet"],
+             "-o/--output: " + str(folder) + " is a directory")  # fmt: skip
+    _refused(["plan", str(TINY), "-o", str(tmp_path / "x.plan"), "--report",
+              str(TINY / "r.json"), "--quiet"], "--report: ")  # fmt: skip
+    (tmp_path / "img.svg").mkdir()
+    _refused(["show", str(TINY), "-o", str(tmp_path / "img.svg")], "-o/--output: ")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["img.svg", "out.plan"]
