@@ -91,7 +91,8 @@ LIMITS: dict[str, Limit] = {
     "obstacles": Limit(
         5_000,
         "LAMDE_MAX_OBSTACLES",
-        "circles + rectangles + no-fly zones in one map; every leg is tested against each",
+        "circles + rectangles + no-fly zones + polygon obstacles in one map; every leg is tested "
+        "against each",
     ),
     "zone_vertices": Limit(
         5_000,
@@ -101,7 +102,7 @@ LIMITS: dict[str, Limit] = {
     "vertices": Limit(
         50_000,
         "LAMDE_MAX_VERTICES",
-        "vertices of all no-fly zones of one map together",
+        "vertices of all no-fly zones and polygon obstacles of one map together (holes included)",
     ),
     "mission_items": Limit(
         65_535,

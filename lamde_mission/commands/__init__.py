@@ -10,6 +10,7 @@ COMMANDS = (
     "verify",
     "show",
     "check",
+    "map",
     "schema",
     "generate",
     "mock_vehicle",
