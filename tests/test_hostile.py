@@ -253,6 +253,38 @@ def test_fuzz_missions(suffix: str, rng: random.Random, missions, tmp_path_facto
         read_mission(path)
 
 
+CAMPUS = Path(__file__).resolve().parent / "data" / "campus.geojson"
+
+
+@given(rng=st.randoms(use_true_random=False))
+@_FUZZ
+def test_fuzz_geojson(rng: random.Random, tmp_path_factory) -> None:
+    """`map from-geojson` on mutated GeoJSON: a map is written or nothing at all."""
+    d = tmp_path_factory.mktemp("fuzzgeojson")
+    path = d / "in.geojson"
+    path.write_bytes(mutate(CAMPUS.read_bytes(), rng))
+    out = d / "map.json"
+    out_ = run_cli(["map", "from-geojson", str(path), "-o", str(out)])
+    assert out_.error is None, f"exception {out_.error!r}"
+    assert out_.status in (0, 2), (out_.status, out_.stderr)
+    for line in out_.stderr.splitlines():
+        assert line.startswith(("lamde-mission map: ", "note: ")), line
+    if out_.status == 2:
+        assert sorted(p.name for p in d.iterdir()) == ["in.geojson"]
+    else:
+        assert run_cli(["check", str(out)]).status == 0
+
+
+def test_hostile_geojson_is_refused_by_the_same_decoder(tmp_path: Path) -> None:
+    text = CAMPUS.read_text(encoding="utf-8")
+    _refused(["map", "from-geojson", _write(tmp_path, "a.geojson", text.encode("utf-16")),
+              "-o", str(tmp_path / "m.json")], "UTF-16")  # fmt: skip
+    deep = text.replace('"features"', '"x": ' + "[" * 70_000 + "]" * 70_000 + ', "features"', 1)
+    _refused(["map", "from-geojson", _write(tmp_path, "b.geojson", deep),
+              "-o", str(tmp_path / "m.json")], "x[0][0]")  # fmt: skip
+    assert not (tmp_path / "m.json").exists()
+
+
 def test_readers_raise_only_their_errors() -> None:
     """The Python API: a mutated map raises MapError, never another exception."""
     rng = random.Random(7)
