@@ -366,3 +366,17 @@ def test_output_that_is_a_directory_is_refused_before_planning(tmp_path: Path) -
     (tmp_path / "img.svg").mkdir()
     _refused(["show", str(TINY), "-o", str(tmp_path / "img.svg")], "-o/--output: ")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["img.svg", "out.plan"]
+
+
+def test_rally_points_and_breach_return_are_range_checked(tmp_path: Path) -> None:
+    doc = json.loads((DATA / "hover-1e39.plan").read_text())
+    doc["mission"]["items"][2]["params"][0] = 40.0
+    doc["rallyPoints"] = {"points": [[1e308, 7.3, 50.0]], "version": 2}
+    _refused(["upload", _write(tmp_path, "r.plan", json.dumps(doc)), "--connect",
+              "udpin://127.0.0.1:1", "--timeout", "1"],
+             "rallyPoints.points[0] (latitude): latitude 1e+308")  # fmt: skip
+    doc["rallyPoints"] = {"points": [], "version": 2}
+    doc.setdefault("geoFence", {"version": 2})["breachReturn"] = [46.2, 7.3, float("inf")]
+    text = json.dumps(doc).replace("Infinity", "1e39")
+    _refused(["verify", str(TINY), _write(tmp_path, "b.plan", text)],
+             "geoFence.breachReturn (altitude): altitude 1e+39")  # fmt: skip
