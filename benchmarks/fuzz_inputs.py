@@ -1,6 +1,7 @@
 """Fuzz the command line with mutated maps and missions; count how each input ended.
 
-Mutates the shipped maps (examples/maps, the suite included) and missions written at start by
+Mutates the shipped maps (examples/maps, the suite included), the GeoJSON layers of
+tests/data/campus.geojson (through `map from-geojson`) and missions written at start by
 `lamde-mission plan` into a temporary folder (a .plan and a .waypoints for two maps), with
 `lamde_mission.fuzz.mutate` seeded by ``--seed`` and the input's index (same seed, same inputs).
 
@@ -34,6 +35,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 MAPS = ROOT / "examples" / "maps"
+CAMPUS = ROOT / "tests" / "data" / "campus.geojson"
 sys.path.insert(0, str(ROOT))
 
 from lamde_mission.formats import read_mission  # noqa: E402
@@ -107,7 +109,13 @@ def main(argv: list[str] | None = None) -> int:
             rng = random.Random(f"{args.seed}:{i}")
             case = work / f"case{i:05d}"
             case.mkdir()
-            if rng.random() < 0.5:
+            draw = rng.random()
+            if draw < 0.15:
+                kind = "geojson"
+                path = case / "in.geojson"
+                path.write_bytes(mutate(CAMPUS.read_bytes(), rng))
+                argv_first = ["map", "from-geojson", str(path), "-o", str(case / "map.json")]
+            elif draw < 0.55:
                 src = rng.choice(maps)
                 kind = "map"
                 path = case / "map.json"
@@ -121,6 +129,8 @@ def main(argv: list[str] | None = None) -> int:
                 argv_first = ["verify", str(map_path), str(path)]
             kinds[kind] += 1
             keep = {path.name}
+            if kind == "geojson":
+                keep.add("map.json")
             t = time.perf_counter()
             res = run_cli(argv_first)
             problem = ""
@@ -136,6 +146,18 @@ def main(argv: list[str] | None = None) -> int:
                     counts["refusals in one line"] += 1
             else:
                 counts["successes"] += 1
+            if kind == "geojson" and not problem:
+                written = case / "map.json"
+                if res.status == 2 and written.exists():
+                    counts["partial files"] += 1
+                    problem = "map written although refused"
+                elif res.status == 0 and run_cli(["check", str(written)]).status != 0:
+                    counts["partial files"] += 1
+                    problem = "written map does not pass check"
+                left = _leftovers(case, keep)
+                if left and not problem:
+                    counts["partial files"] += 1
+                    problem = f"left behind: {left}"
             if kind == "map" and not problem:
                 out = case / "out.plan"
                 if res.status == 2:

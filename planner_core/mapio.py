@@ -152,7 +152,8 @@ class NoFlyZone(BaseModel):
     model_config = _STRICT
     vertices: list[Point2] = Field(description=_RING_DOC)
     holes: list[list[Point2]] = Field([], description="rings inside, where flight is allowed")
-    name: str | None = Field(None, description="label shown in messages, plots and exports")
+    name: str | None = Field(None, max_length=200, pattern=_PRINTABLE,
+                             description="label shown in messages, plots and exports")
 
 
 class PolygonObstacle(BaseModel):
@@ -161,7 +162,8 @@ class PolygonObstacle(BaseModel):
     model_config = _STRICT
     vertices: list[Point2] = Field(description=_RING_DOC)
     holes: list[list[Point2]] = Field([], description="rings inside (a courtyard), flyable")
-    name: str | None = Field(None, description="label shown in messages, plots and exports")
+    name: str | None = Field(None, max_length=200, pattern=_PRINTABLE,
+                             description="label shown in messages, plots and exports")
 
 
 class ObstaclesSpec(BaseModel):
@@ -724,7 +726,7 @@ def _size_problems(data: Mapping[str, Any]) -> list[str]:
                 holes = z.get("holes") if isinstance(z.get("holes"), list) else []
                 for r, v in enumerate([z.get("vertices"), *holes]):
                     if isinstance(v, list):
-                        total += len(v)
+                        total += max(len(v), 1)  # an empty ring still costs validation
                         if len(v) > caps["zone_vertices"]:
                             where = f"obstacles.{key}[{k}]." + (
                                 "vertices" if r == 0 else f"holes[{r - 1}]")  # fmt: skip

@@ -45,6 +45,7 @@ __all__ = [
     "MAX_INT_DIGITS",
     "limit",
     "json_path",
+    "not_regular",
     "read_bytes",
     "decode_text",
     "read_text",
@@ -164,7 +165,8 @@ _KINDS = (
 )
 
 
-def _not_regular(mode: int) -> str:
+def not_regular(mode: int) -> str:
+    """Why a file of this `st_mode` cannot be read or written as a file ("is a directory, ...")."""
     for test, name in _KINDS:
         if test(mode):
             return f"is {name}, not a regular file"
@@ -188,7 +190,7 @@ def read_bytes(path: str | Path, *, max_bytes: int | None = None) -> bytes:
     except ValueError as exc:  # embedded NUL in the path
         raise InputError(f"not a usable path ({exc})") from None
     if not stat.S_ISREG(st.st_mode):
-        raise InputError(_not_regular(st.st_mode))
+        raise InputError(not_regular(st.st_mode))
     if st.st_size > cap:
         raise InputError(_too_big(st.st_size, cap))
     try:
@@ -198,7 +200,7 @@ def read_bytes(path: str | Path, *, max_bytes: int | None = None) -> bytes:
     try:
         st = os.fstat(fd)
         if not stat.S_ISREG(st.st_mode):
-            raise InputError(_not_regular(st.st_mode))
+            raise InputError(not_regular(st.st_mode))
         with os.fdopen(fd, "rb", closefd=False) as fh:
             data = fh.read(cap + 1)
     except OSError as exc:

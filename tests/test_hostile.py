@@ -253,6 +253,38 @@ def test_fuzz_missions(suffix: str, rng: random.Random, missions, tmp_path_facto
         read_mission(path)
 
 
+CAMPUS = Path(__file__).resolve().parent / "data" / "campus.geojson"
+
+
+@given(rng=st.randoms(use_true_random=False))
+@_FUZZ
+def test_fuzz_geojson(rng: random.Random, tmp_path_factory) -> None:
+    """`map from-geojson` on mutated GeoJSON: a map is written or nothing at all."""
+    d = tmp_path_factory.mktemp("fuzzgeojson")
+    path = d / "in.geojson"
+    path.write_bytes(mutate(CAMPUS.read_bytes(), rng))
+    out = d / "map.json"
+    out_ = run_cli(["map", "from-geojson", str(path), "-o", str(out)])
+    assert out_.error is None, f"exception {out_.error!r}"
+    assert out_.status in (0, 2), (out_.status, out_.stderr)
+    for line in out_.stderr.splitlines():
+        assert line.startswith(("lamde-mission map: ", "note: ")), line
+    if out_.status == 2:
+        assert sorted(p.name for p in d.iterdir()) == ["in.geojson"]
+    else:
+        assert run_cli(["check", str(out)]).status == 0
+
+
+def test_hostile_geojson_is_refused_by_the_same_decoder(tmp_path: Path) -> None:
+    text = CAMPUS.read_text(encoding="utf-8")
+    _refused(["map", "from-geojson", _write(tmp_path, "a.geojson", text.encode("utf-16")),
+              "-o", str(tmp_path / "m.json")], "UTF-16")  # fmt: skip
+    deep = text.replace('"features"', '"x": ' + "[" * 70_000 + "]" * 70_000 + ', "features"', 1)
+    _refused(["map", "from-geojson", _write(tmp_path, "b.geojson", deep),
+              "-o", str(tmp_path / "m.json")], "x[0][0]")  # fmt: skip
+    assert not (tmp_path / "m.json").exists()
+
+
 def test_readers_raise_only_their_errors() -> None:
     """The Python API: a mutated map raises MapError, never another exception."""
     rng = random.Random(7)
@@ -322,3 +354,29 @@ def test_readme_lists_every_input_limit() -> None:
         row = [ln for ln in readme.splitlines() if ln.startswith("| ") and shown in ln
                and (lim.env is None or f"`{lim.env}`" in ln)]  # fmt: skip
         assert row, f"README's input-limits table lacks {name} ({shown}, {lim.env})"
+
+
+def test_output_that_is_a_directory_is_refused_before_planning(tmp_path: Path) -> None:
+    folder = tmp_path / "out.plan"
+    folder.mkdir()
+    _refused(["plan", str(TINY), "-o", str(folder), "--quiet"],
+             "-o/--output: " + str(folder) + " is a directory")  # fmt: skip
+    _refused(["plan", str(TINY), "-o", str(tmp_path / "x.plan"), "--report",
+              str(TINY / "r.json"), "--quiet"], "--report: ")  # fmt: skip
+    (tmp_path / "img.svg").mkdir()
+    _refused(["show", str(TINY), "-o", str(tmp_path / "img.svg")], "-o/--output: ")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["img.svg", "out.plan"]
+
+
+def test_rally_points_and_breach_return_are_range_checked(tmp_path: Path) -> None:
+    doc = json.loads((DATA / "hover-1e39.plan").read_text())
+    doc["mission"]["items"][2]["params"][0] = 40.0
+    doc["rallyPoints"] = {"points": [[1e308, 7.3, 50.0]], "version": 2}
+    _refused(["upload", _write(tmp_path, "r.plan", json.dumps(doc)), "--connect",
+              "udpin://127.0.0.1:1", "--timeout", "1"],
+             "rallyPoints.points[0] (latitude): latitude 1e+308")  # fmt: skip
+    doc["rallyPoints"] = {"points": [], "version": 2}
+    doc.setdefault("geoFence", {"version": 2})["breachReturn"] = [46.2, 7.3, float("inf")]
+    text = json.dumps(doc).replace("Infinity", "1e39")
+    _refused(["verify", str(TINY), _write(tmp_path, "b.plan", text)],
+             "geoFence.breachReturn (altitude): altitude 1e+39")  # fmt: skip

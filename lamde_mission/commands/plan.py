@@ -188,7 +188,11 @@ def _check_return_leg(m: Any) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
+    from lamde_mission.commands._common import (
+        check_output_path,
+        load_map_or_fail,
+        with_origin_or_fail,
+    )
     from lamde_mission.errors import UsageError
     from lamde_mission.formats import MissionFileError, format_for
 
@@ -199,6 +203,9 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"-o/--output: {exc}") from None
     if args.plot and not args.plot.lower().endswith((".png", ".svg")):
         raise UsageError(f"--plot: {args.plot}: image format must be PNG or SVG (.png or .svg)")
+    for path, flag in ((args.output, "-o/--output"), (args.plot, "--plot"),
+                       (args.report, "--report")):  # fmt: skip
+        check_output_path(path, flag)
     try:
         D.check_run_args(population=args.population, budget=args.budget)
     except ValueError as exc:  # "population: must be ...": name the option as typed

@@ -26,7 +26,11 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
-    from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
+    from lamde_mission.commands._common import (
+        check_output_path,
+        load_map_or_fail,
+        with_origin_or_fail,
+    )
     from lamde_mission.errors import UsageError
     from lamde_mission.plot import IMAGE_SUFFIXES
 
@@ -35,6 +39,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"{out}: output must be a .png or .svg file")
     if args.dpi <= 0:
         raise UsageError(f"--dpi must be positive, got {args.dpi}")
+    check_output_path(args.output, "-o/--output")
     m = load_map_or_fail(args.map)
     m = with_origin_or_fail(m, args.origin)
     timeline = None

@@ -48,6 +48,7 @@ FIRMWARE_PX4 = 12  # MAV_AUTOPILOT_PX4
 FIRMWARE_ARDUPILOT = 3  # MAV_AUTOPILOT_ARDUPILOTMEGA
 VEHICLE_QUADROTOR = 2  # MAV_TYPE_QUADROTOR
 _CIRCLES = (CMD.FENCE_CIRCLE_INCLUSION, CMD.FENCE_CIRCLE_EXCLUSION)
+_LLA = {"x": "latitude", "y": "longitude", "z": "altitude"}
 ALTITUDE_MODE_RELATIVE = 1  # QGC: altitude relative to launch
 
 
@@ -260,9 +261,12 @@ def _parse_rally(rp: Any) -> list[MissionItem]:
             raise MissionError(f"{where}: expected [lat, lon, alt]")
         lat, lon = _latlon_pair(p, where)
         alt = _float(p[2], where)
-        out.append(MissionItem(seq=len(out), command=CMD.RALLY_POINT,
-                               frame=FRAME.GLOBAL_RELATIVE_ALT, x=lat, y=lon, z=alt,
-                               mission_type=MISSION_TYPE.RALLY))  # fmt: skip
+        it = MissionItem(seq=len(out), command=CMD.RALLY_POINT,
+                         frame=FRAME.GLOBAL_RELATIVE_ALT, x=lat, y=lon, z=alt,
+                         mission_type=MISSION_TYPE.RALLY)  # fmt: skip
+        check_mission_item(it, lambda f, w=where: f"{w} ({_LLA.get(f, f)})")
+        out.append(it)
+        check_item_count(len(out), "rallyPoints.points")
     return out
 
 
@@ -289,9 +293,11 @@ def _parse_fence(gf: Any) -> list[MissionItem]:
         lat, lon = _latlon_pair(br, "geoFence.breachReturn")
         alt = _float(br[2], "geoFence.breachReturn")
         if not (math.isnan(lat) or math.isnan(lon)):
-            out.append(MissionItem(seq=0, command=CMD.FENCE_RETURN_POINT,
-                                   frame=FRAME.GLOBAL_RELATIVE_ALT, x=lat, y=lon, z=alt,
-                                   mission_type=MISSION_TYPE.FENCE))  # fmt: skip
+            it = MissionItem(seq=0, command=CMD.FENCE_RETURN_POINT,
+                             frame=FRAME.GLOBAL_RELATIVE_ALT, x=lat, y=lon, z=alt,
+                             mission_type=MISSION_TYPE.FENCE)  # fmt: skip
+            check_mission_item(it, lambda f: f"geoFence.breachReturn ({_LLA.get(f, f)})")
+            out.append(it)
     for k, poly in enumerate(gf.get("polygons") or []):
         where = f"geoFence.polygons[{k}]"
         verts = poly.get("polygon") if isinstance(poly, dict) else None

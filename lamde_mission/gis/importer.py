@@ -37,7 +37,6 @@ refused naming the feature. Every problem is one line naming the file and featur
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -45,6 +44,7 @@ from typing import Any
 
 import numpy as np
 
+from planner_core.textio import InputError, read_json
 from sim.geo import enu_to_latlon, latlon_to_enu
 
 __all__ = ["GisError", "GisLayers", "read_layers", "build_map", "DEFAULT_MARGIN", "KINDS"]
@@ -292,18 +292,10 @@ def read_layers(files: list[tuple[str | Path, str | None]]) -> GisLayers:
     layers = GisLayers()
     for path, layer in files:
         src = str(path)
-        try:
-            text = Path(path).read_text(encoding="utf-8-sig")
-        except FileNotFoundError:
-            layers.problems.append(f"{src}: file not found")
-            continue
-        except (OSError, UnicodeDecodeError) as exc:
-            layers.problems.append(f"{src}: cannot read ({exc})")
-            continue
-        try:
-            doc = json.loads(text)
-        except json.JSONDecodeError as exc:
-            layers.problems.append(f"{src}: not valid JSON ({exc.msg} at line {exc.lineno})")
+        try:  # the one decoding path: regular file, size, UTF-8 (BOM ok), depth, numbers
+            doc = read_json(path)
+        except InputError as exc:
+            layers.problems.append(f"{src}: {exc}")
             continue
         try:
             if isinstance(doc, dict) and doc.get("fileType") == "Plan":
