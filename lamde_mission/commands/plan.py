@@ -43,6 +43,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--report", metavar="JSON", help="also write the plan and verdicts as JSON")
     p.add_argument("--allow-infeasible", action="store_true",
                    help="write the mission even if constraints are violated (exit status 1)")
+    p.add_argument("--mkdir", action="store_true",
+                   help="create missing folders of the output paths (otherwise exit 2)")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
     return p
 
@@ -82,10 +84,13 @@ class _ProgressBar:
 
 
 def _summary(plan: Any, m: Any, timeline: Any, verdicts: Any, out: str | None) -> str:
+    from planner_core.textio import printable
+
     b = plan.breakdown
     t = timeline.totals
     lines = [
-        f"map '{m.name}': {plan.n_hover} hover points, {plan.evaluations} evaluations, "
+        f"map '{printable(m.name)}': {plan.n_hover} hover points, "
+        f"{plan.evaluations} evaluations, "
         f"{plan.wall_time:.2f} s (seed {plan.seed}, {plan.configurator})",
         f"  flight time   {b['t_fly']:10.2f} s    (sim {t.t_fly:.2f} s)",
         f"  hover time    {b['t_hover']:10.2f} s    (sim {t.t_hover:.2f} s)",
@@ -102,30 +107,56 @@ def _summary(plan: Any, m: Any, timeline: Any, verdicts: Any, out: str | None) -
     got = t.collected
     for sid in m.sensor_ids:
         ok = "ok" if got[sid] >= req[sid] else "SHORT"
-        lines.append(f"    {sid:<12} {got[sid]:10.1f} / {req[sid]:<8.1f} {ok}")
+        lines.append(f"    {printable(sid):<12} {got[sid]:10.1f} / {req[sid]:<8.1f} {ok}")
     lines.append("  constraints (simulator):")
-    lines.extend("    " + row for row in verdicts.table().splitlines())
+    lines.extend("    " + printable(row) for row in verdicts.table().splitlines())
     if out:
-        lines.append(f"wrote {out}")
+        lines.append(f"wrote {printable(out)}")
     return "\n".join(lines)
 
 
 def _violations(plan: Any, verdicts: Any) -> list[str]:
+    from planner_core.textio import printable
+
     b = plan.breakdown
     out = []
     if b["v3"] > 0:
         out.append(f"C3 bandwidth exceeded by {b['v3']:.4g} Mbit/s in total")
     for sid, short in b["shortfall"].items():
         if short > 0:
-            out.append(f"C4 sensor '{sid}' short by {short:.4g} Mbit")
+            out.append(f"C4 sensor '{printable(sid)}' short by {short:.4g} Mbit")
     if b["l_vio"] > 0:
         out.append(f"C5 path runs {b['l_vio']:.4g} m inside obstacles")
     for v in verdicts:
         if not v.passed:
-            out.append(f"sim {v.name} {v.title}: FAIL, margin {v.margin:.4g} {v.unit}; {v.detail}")
+            out.append(printable(f"sim {v.name} {v.title}: FAIL, margin {v.margin:.4g} {v.unit}; "
+                                 f"{v.detail}"))
     if plan.polish and plan.polish.get("unserved"):
-        out.extend(plan.polish["unserved"])
+        out.extend(printable(u) for u in plan.polish["unserved"])
     return out
+
+
+def check_outputs(paths: list[tuple[str, str | None]], *, mkdir: bool = False) -> None:
+    """UsageError naming the option and path of the first output that cannot be written (or
+    that two options share), before any work; `mkdir` creates missing folders instead."""
+    from pathlib import Path
+
+    from lamde_mission.errors import UsageError
+    from planner_core.atomic import OutputPathError, check_writable
+    from planner_core.textio import printable
+
+    seen: dict[str, str] = {}
+    for option, path in paths:
+        if not path:
+            continue
+        key = str(Path(path).resolve())
+        if key in seen:
+            raise UsageError(f"{option}: {printable(path)} is also the {seen[key]} output")
+        seen[key] = option
+        try:
+            check_writable(path, mkdir=mkdir, what=option)
+        except OutputPathError as exc:
+            raise UsageError(printable(str(exc))) from None
 
 
 def run(args: argparse.Namespace) -> int:
@@ -144,6 +175,10 @@ def run(args: argparse.Namespace) -> int:
         D.check_run_args(population=args.population, budget=args.budget)
     except ValueError as exc:  # "population: must be ...": name the option as typed
         raise UsageError(f"--{exc}") from None
+    check_outputs(
+        [("-o/--output", args.output), ("--plot", args.plot), ("--report", args.report)],
+        mkdir=args.mkdir,
+    )
     m = load_map_or_fail(args.map)
 
     from lamde_mission.api import plan as make_plan

@@ -60,9 +60,11 @@ def run(args: argparse.Namespace) -> int:
         }  # fmt: skip
         print(json.dumps(out, indent=2))
     else:
-        print(f"mission {args.mission} on map '{m.name}': "
+        from planner_core.textio import printable
+
+        print(f"mission {args.mission} on map '{printable(m.name)}': "
               f"{len(timeline.hover_times)} hover points")  # fmt: skip
-        print(verdicts.table())
+        print("\n".join(printable(r) for r in verdicts.table().splitlines()))
         print(f"f = {t.f:.6f}  (alpha {t.alpha:g}: t_fly {t.t_fly:.3f} s, "
               f"t_hover {t.t_hover:.3f} s)")  # fmt: skip
         print(f"mission time {t.t_total:.1f} s including take-off {t.t_takeoff:.1f} s, "
