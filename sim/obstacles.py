@@ -3,8 +3,9 @@
 Independent of the planner's fast evaluator (planner_core.geometry): circles are buffered
 points with `CIRCLE_QUAD_SEGS` segments per quarter (inscribed polygon: an overlap deeper
 than r * (1 - cos(pi / (4 * CIRCLE_QUAD_SEGS))), ~0.5 mm at r = 100 m, is always found),
-rectangles are rotated from their centre, length and angle, no-fly zones are the given
-vertices.
+rectangles are rotated from their centre, length and angle, no-fly zones and polygon obstacles
+(building footprints) are shapely polygons of the given rings, holes included, whatever their
+shape (shapely measures non-convex polygons directly; the planner cuts them into convex pieces).
 """
 
 from __future__ import annotations
@@ -24,15 +25,18 @@ CIRCLE_QUAD_SEGS = 256
 
 @dataclass(frozen=True, eq=False)
 class Obstacle:
-    """One obstacle: `kind` circle/rectangle/no_fly_zone, its index in that list, its shape."""
+    """One obstacle: `kind` circle/rectangle/no_fly_zone/polygon, its index in that list, its
+    shape, and its name if the map gives one."""
 
     kind: str
     index: int
     shape: Polygon
+    name: str | None = None
 
     @property
     def label(self) -> str:
-        return f"{self.kind.replace('_', '-')} {self.index}"
+        base = f"{self.kind.replace('_', '-')} {self.index}"
+        return f"{base} '{self.name}'" if self.name else base
 
 
 def _rectangle(x: float, y: float, length: float, width: float, angle_deg: float) -> Polygon:
@@ -48,7 +52,8 @@ def _rectangle(x: float, y: float, length: float, width: float, angle_deg: float
 
 
 def obstacle_shapes(map: Any) -> list[Obstacle]:  # noqa: A002
-    """Every obstacle of the map (circles, rectangles, no-fly zones) as a shapely polygon."""
+    """Every obstacle of the map (circles, rectangles, no-fly zones, polygon obstacles) as a
+    shapely polygon."""
     obs = map.spec.obstacles
     out = [
         Obstacle("circle", k, Point(c.x, c.y).buffer(c.radius, quad_segs=CIRCLE_QUAD_SEGS))
@@ -58,7 +63,9 @@ def obstacle_shapes(map: Any) -> list[Obstacle]:  # noqa: A002
         Obstacle("rectangle", k, _rectangle(r.x, r.y, r.length, r.width, r.angle_deg))
         for k, r in enumerate(obs.rectangles)
     ]
-    out += [Obstacle("no_fly_zone", k, Polygon(z.vertices)) for k, z in enumerate(obs.no_fly_zones)]
+    for kind, items in (("no_fly_zone", obs.no_fly_zones), ("polygon", obs.polygons)):
+        out += [Obstacle(kind, k, Polygon(z.vertices, z.holes), z.name)
+                for k, z in enumerate(items)]  # fmt: skip
     return out
 
 
