@@ -333,3 +333,18 @@ def test_mavsdk_over_tcp(port):
             bridge.close()
         assert compare_items(mission, v.items()) == []
     assert report.ok
+
+
+def test_mavsdk_log_stays_off_stderr_unless_verbose(tmp_path):
+    from tests.conftest import run_cli
+
+    plan_path = _plan_files(tmp_path)[0]
+    url = _listen(free_udp_port())
+    quiet = run_cli("upload", plan_path, "--via", "mavsdk", "--timeout", "0.5", "--connect", url)
+    assert quiet.returncode == 1
+    assert quiet.stderr.strip().splitlines() == [
+        f"lamde-mission upload: no vehicle heard at {url} within 0.5 s"
+    ]
+    loud = run_cli("upload", plan_path, "--via", "mavsdk", "--timeout", "0.5", "--connect", url,
+                   "--verbose")  # fmt: skip
+    assert loud.returncode == 1 and "mavsdk: " in loud.stderr
