@@ -308,7 +308,8 @@ class Endpoint:
 def parse_endpoint(text: str) -> Endpoint:
     """`udpin://host:port`, `udpin:host:port`, `udpout:...` (and `udp:` = udpin, as mavutil).
 
-    ValueError for anything else (serial and TCP links go through MAVSDK's own URLs).
+    ValueError for anything else. The mock vehicle speaks UDP only; the uploaders take every
+    link `connection.parse_connection` knows (UDP, TCP, serial).
     """
     raw = text.strip()
     mode, sep, rest = raw.partition(":")
