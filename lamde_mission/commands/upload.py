@@ -52,6 +52,13 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         help="retry a failed transfer as a whole up to N times in all (default: 3)",
     )
     p.add_argument(
+        "--autopilot",
+        choices=("px4", "ardupilot", "generic"),
+        help="storage rules to upload and compare under (default: from the vehicle's "
+        "HEARTBEAT autopilot field). ardupilot: item 0 is a home placeholder, DO_JUMP targets "
+        "move with the items, hover times are whole seconds (rounded up)",
+    )
+    p.add_argument(
         "--map",
         metavar="MAP",
         help="replay the mission on MAP in the simulator before sending; a mission the "
@@ -69,23 +76,24 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     return p
 
 
-def _read(path: str) -> tuple[list, list | None]:
-    """(mission, fence); the fence is None for a .waypoints file (it cannot hold one)."""
+def _read(path: str) -> tuple[list, list | None, list | None]:
+    """(mission, fence, rally); the fence is None for a .waypoints file (it cannot hold one),
+    the rally list None when the file has no rally points (the vehicle's are left alone)."""
     from lamde_mission.errors import UsageError
-    from lamde_mission.formats import MissionFileError, read_mission
+    from lamde_mission.formats import MissionFileError, read_mission_lists
 
     try:
-        mission, fence = read_mission(path)
+        mission, fence, rally = read_mission_lists(path)
     except MissionFileError as exc:
         raise UsageError(str(exc)) from None
     try:
-        with open(path, encoding="utf-8") as fh:
+        with open(path, encoding="utf-8-sig") as fh:
             waypoints = fh.read(64).lstrip().startswith("QGC WPL")
     except (OSError, UnicodeDecodeError):  # read_mission just read it
         waypoints = False
     if not mission:
         raise UsageError(f"{path}: the mission holds no items")
-    return mission, (None if waypoints else fence)
+    return mission, (None if waypoints else fence), (rally or None)
 
 
 class _Progress:
@@ -110,7 +118,7 @@ class _Progress:
             print(f"  {what}: {done}/{total} items", file=sys.stderr, flush=True)
 
 
-def _wire_check(path: str, mission: list, fence: list | None) -> None:
+def _wire_check(path: str, mission: list, fence: list | None, rally: list | None = None) -> None:
     """Every item as MISSION_ITEM_INT will carry it, before a byte is sent: UsageError naming
     the list, item and field (not forceable: the wire cannot carry it)."""
     from lamde_mission.errors import UsageError
@@ -118,7 +126,8 @@ def _wire_check(path: str, mission: list, fence: list | None) -> None:
     from lamde_mission.vehicle.wire import wire_mission
 
     for what, items, t in (("mission", mission, MISSION_TYPE.MISSION),
-                           ("fence", fence or [], MISSION_TYPE.FENCE)):  # fmt: skip
+                           ("fence", fence or [], MISSION_TYPE.FENCE),
+                           ("rally", rally or [], MISSION_TYPE.RALLY)):  # fmt: skip
         try:
             wire_mission(items, t)
         except ValueError as exc:
@@ -166,8 +175,8 @@ def run(args: argparse.Namespace) -> int:
         parse_connection(args.connect)
     except ValueError as exc:
         raise UsageError(f"--connect: {exc}") from None
-    mission, fence = _read(args.mission)
-    _wire_check(args.mission, mission, fence)
+    mission, fence, rally = _read(args.mission)
+    _wire_check(args.mission, mission, fence, rally)
     if args.map:
         _sim_check(args.mission, args.map, mission, force=args.force)
 
@@ -197,6 +206,8 @@ def run(args: argparse.Namespace) -> int:
             attempts=args.attempts,
             log=log,
             progress=_Progress(verbose=args.verbose),
+            rally=rally,
+            autopilot=args.autopilot,
         )
     except ValueError as exc:  # items MAVLink cannot carry
         raise UsageError(f"{args.mission}: {exc}") from None
