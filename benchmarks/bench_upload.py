@@ -11,6 +11,14 @@ Against the mock vehicle on 127.0.0.1 (MAVLink 2 over UDP), each client in turn,
   compared) with the mock already running.
 
     python benchmarks/bench_upload.py [--runs 10] [--loss 0.0] [--via mavsdk,pymavlink]
+
+With `--mission` (a .plan file, or T01..T16 for the golden plan of that suite task in
+tests/golden) it instead uploads that mission and its fence end to end (`upload_mission`,
+default `--timeout 30 --attempts 3`) on a mock that loses `--loss` of its messages in both
+directions (`--loss-in` to set the incoming side apart), and prints per client the success
+rate and the median time of the successful runs:
+
+    python benchmarks/bench_upload.py --mission T16 --loss 0.4 --runs 5
 """
 
 from __future__ import annotations
@@ -100,6 +108,33 @@ def end_to_end(via: str, items: list, loss: float, seed: int) -> float:
         return time.perf_counter() - t0
 
 
+def mission_file(name: str) -> Path:
+    """A .plan path, or the golden plan of a suite task ("T16")."""
+    p = Path(name)
+    if p.suffix:
+        return p
+    return ROOT / "tests" / "golden" / f"{name}-seed0.plan"
+
+
+def whole_mission(via: str, path: Path, loss: float, loss_in: float, seed: int, timeout: float,
+                  attempts: int, noisy: float) -> tuple[bool, float, str]:  # fmt: skip
+    """One end-to-end upload of `path`'s mission and fence: (ok, seconds, error or note)."""
+    from lamde_mission.formats import read_mission
+    from lamde_mission.vehicle.transfer import VehicleError
+
+    items, fence_items = read_mission(path)
+    port = free_udp_port()
+    with MockVehicle(f"udpout:127.0.0.1:{port}", loss=loss, loss_in=loss_in, seed=seed,
+                     noisy_gcs_hz=noisy, heartbeat_hz=4.0):  # fmt: skip
+        t0 = time.perf_counter()
+        try:
+            r = upload_mission(items, fence_items, connect=f"udpin://127.0.0.1:{port}", via=via,
+                               timeout=timeout, attempts=attempts)  # fmt: skip
+            return r.ok, time.perf_counter() - t0, f"attempt {r.attempts}"
+        except VehicleError as exc:
+            return False, time.perf_counter() - t0, str(exc)
+
+
 def fmt(xs: list[float]) -> str:
     xs = sorted(xs)
     p90 = xs[min(len(xs) - 1, int(round(0.9 * (len(xs) - 1))))]
@@ -112,7 +147,36 @@ def main() -> None:
     ap.add_argument("--loss", type=float, default=0.0, help="fraction of the mock's messages lost")
     ap.add_argument("--via", default="mavsdk,pymavlink")
     ap.add_argument("--items", type=int, default=50)
+    ap.add_argument("--mission", help="a .plan file or a suite task (T16): end-to-end runs")
+    ap.add_argument("--loss-in", type=float, default=None,
+                    help="fraction of the messages to the mock lost (default: --loss)")
+    ap.add_argument("--noisy-gcs-hz", type=float, default=0.0,
+                    help="a second ground station broadcasting mission messages at this rate")
+    ap.add_argument("--timeout", type=float, default=30.0)
+    ap.add_argument("--attempts", type=int, default=3)
     args = ap.parse_args()
+    if args.mission:
+        from lamde_mission.formats import read_mission
+
+        path = mission_file(args.mission)
+        m, f = read_mission(path)
+        loss_in = args.loss if args.loss_in is None else args.loss_in
+        print(f"{path.name}: {len(m)} mission + {len(f)} fence items; mock on 127.0.0.1 losing "
+              f"{args.loss:g} of its messages out and {loss_in:g} in, noisy ground station "
+              f"{args.noisy_gcs_hz:g} Hz; --timeout {args.timeout:g} --attempts "
+              f"{args.attempts}; {args.runs} runs (seeds 0..{args.runs - 1})", flush=True)
+        for via in args.via.split(","):
+            res = [whole_mission(via, path, args.loss, loss_in, seed, args.timeout,
+                                 args.attempts, args.noisy_gcs_hz)
+                   for seed in range(args.runs)]  # fmt: skip
+            ok = [t for good, t, _ in res if good]
+            med = f"median {statistics.median(ok):.1f} s" if ok else "no success"
+            print(f"{via:10s} {len(ok)}/{len(res)} ok, {med} "
+                  f"(all runs: {', '.join(f'{t:.1f}' for _, t, _ in res)} s)", flush=True)
+            for seed, (good, _, note) in enumerate(res):
+                if not good:
+                    print(f"  seed {seed}: {note}", flush=True)
+        return
     items = mission(args.items)
     print(f"mock vehicle on 127.0.0.1, loss {args.loss:g}, {args.runs} runs, "
           f"{len(items)} mission items")  # fmt: skip

@@ -1,27 +1,147 @@
 """Atomic file writes: a temp file in the target's folder, then rename; no partial files.
 
 The lowest layer (no project imports), so planner_core and lamde_mission share one writer.
+
+Temp files are named `.NAME.lamde-tmp-PID-RANDOM` next to the target, so a write killed in
+its window (SIGKILL, power loss) leaves a file that is recognisably ours: the next write to the
+same target removes those whose process is gone. Overwriting an existing file keeps its mode
+(a 0600 file stays 0600); a new file gets what a plain `open()` would give (0666 & ~umask).
+
+`check_writable` answers "can this path be written?" before the work that produces it starts
+(by creating and removing a probe temp file in the folder, so read-only mounts, ACLs and
+permissions all count, also for root).
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
+import re
+import stat
 import tempfile
 from pathlib import Path
 
-__all__ = ["write_text_atomic", "write_bytes_atomic"]
+__all__ = ["write_text_atomic", "write_bytes_atomic", "check_writable", "OutputPathError"]
+
+_TMP_TAG = ".lamde-tmp-"
 
 
-def write_bytes_atomic(path: str | Path, data: bytes) -> Path:
-    """Write `data` to `path` so that readers see either the old file or the whole new one."""
+class OutputPathError(ValueError):
+    """An output path that cannot be written; the message names the path and the problem."""
+
+
+def _tmp_prefix(path: Path) -> str:
+    return f".{path.name}{_TMP_TAG}{os.getpid()}-"
+
+
+def _pid_alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # someone else's live process
+        return True
+    except OSError:
+        return True
+    return True
+
+
+def clean_stale_temps(path: str | Path) -> list[Path]:
+    """Remove temp files an earlier, killed write to `path` left behind; returns them.
+
+    Only files named `.NAME.lamde-tmp-PID-*` whose process PID no longer runs are removed
+    (a write in progress in another process is left alone).
+    """
     path = Path(path)
     folder = path.parent if str(path.parent) else Path(".")
-    folder.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+    pat = re.compile(re.escape(f".{path.name}{_TMP_TAG}") + r"(\d+)-[^/]*$")
+    removed: list[Path] = []
     try:
-        # mkstemp makes the file 0600; give it the mode a plain open() would (0666 & ~umask)
-        os.chmod(tmp, 0o666 & ~_umask())
+        names = os.listdir(folder)
+    except OSError:
+        return removed
+    for name in names:
+        m = pat.match(name)
+        if m is None or _pid_alive(int(m.group(1))):
+            continue
+        with contextlib.suppress(OSError):
+            os.unlink(folder / name)
+            removed.append(folder / name)
+    return removed
+
+
+def check_writable(path: str | Path, *, mkdir: bool = False, what: str = "") -> Path:
+    """Check that `path` can be written atomically; raise OutputPathError naming it if not.
+
+    Refused: an existing folder as the output, a parent that is a file, a missing folder
+    (created instead when `mkdir`), a folder where no file can be created (read-only folder or
+    mount), an existing file that is read-only. `what` (e.g. "--report") prefixes the message.
+    Also removes stale temp files of earlier killed writes (`clean_stale_temps`).
+    """
+    path = Path(path)
+    head = f"{what}: {path}" if what else str(path)
+    if not path.name or path.name in (".", ".."):
+        raise OutputPathError(f"{head}: not a file name")
+    if path.is_dir():
+        raise OutputPathError(f"{head}: is a folder, not a file")
+    folder = path.parent if str(path.parent) else Path(".")
+    # the first existing ancestor must be a folder
+    probe = folder
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
+    if probe.exists() and not probe.is_dir():
+        raise OutputPathError(f"{head}: {probe} is a file, not a folder")
+    if not folder.is_dir():
+        if not mkdir:
+            raise OutputPathError(
+                f"{head}: the folder {folder} does not exist (create it, or pass --mkdir)"
+            )
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise OutputPathError(
+                f"{head}: cannot create the folder {folder} ({exc.strerror or exc})"
+            ) from None
+    if path.exists():
+        st = path.stat()
+        if not stat.S_ISREG(st.st_mode):
+            raise OutputPathError(f"{head}: exists and is not a regular file")
+        if not st.st_mode & 0o222:
+            raise OutputPathError(f"{head}: the existing file is read-only")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=_tmp_prefix(path), dir=folder)
+    except OSError as exc:
+        raise OutputPathError(
+            f"{head}: cannot write in the folder {folder} ({exc.strerror or exc})"
+        ) from None
+    os.close(fd)
+    with contextlib.suppress(OSError):
+        os.unlink(tmp)
+    clean_stale_temps(path)
+    return path
+
+
+def write_bytes_atomic(path: str | Path, data: bytes, *, mkdir: bool = True) -> Path:
+    """Write `data` to `path` so that readers see either the old file or the whole new one.
+
+    An existing file's permission bits are kept; a missing folder is created unless
+    `mkdir=False` (then FileNotFoundError). Stale temp files of earlier killed writes to the
+    same path are removed first. Raises OSError when the folder cannot be written.
+    """
+    path = Path(path)
+    folder = path.parent if str(path.parent) else Path(".")
+    if mkdir:
+        folder.mkdir(parents=True, exist_ok=True)
+    clean_stale_temps(path)
+    try:
+        mode = stat.S_IMODE(os.stat(path).st_mode)
+    except OSError:
+        mode = 0o666 & ~_umask()  # what a plain open() would give
+    fd, tmp = tempfile.mkstemp(prefix=_tmp_prefix(path), dir=folder)
+    try:
+        os.chmod(tmp, mode)  # mkstemp makes the file 0600
         with os.fdopen(fd, "wb") as fh:
             fh.write(data)
             fh.flush()
@@ -40,6 +160,6 @@ def _umask() -> int:
     return mask
 
 
-def write_text_atomic(path: str | Path, text: str) -> Path:
+def write_text_atomic(path: str | Path, text: str, *, mkdir: bool = True) -> Path:
     """Text version of `write_bytes_atomic` (UTF-8)."""
-    return write_bytes_atomic(path, text.encode("utf-8"))
+    return write_bytes_atomic(path, text.encode("utf-8"), mkdir=mkdir)

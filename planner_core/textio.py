@@ -51,6 +51,7 @@ __all__ = [
     "read_text",
     "loads_json",
     "read_json",
+    "printable",
 ]
 
 #: most digits a JSON integer may have: our integer fields fit in 20 (uint64 has 20 digits);
@@ -416,3 +417,28 @@ def read_json(path: str | Path, *, max_bytes: int | None = None,
               max_depth: int | None = None) -> Any:  # fmt: skip
     """`read_text` then `loads_json`: the JSON value of a file, under every rule above."""
     return loads_json(read_text(path, max_bytes=max_bytes), max_depth=max_depth)
+
+
+_ESCAPES = {"\n": "\\n", "\r": "\\r", "\t": "\\t"}
+
+
+def printable(text: object) -> str:
+    """`text` safe to print on a terminal: control characters (C0, DEL, C1), format characters
+    (bidi overrides, zero-width) and line/paragraph separators shown as escapes (``\\n``,
+    ``\\x1b``, ``\\u202e``), so a map's name or a sensor id cannot forge lines of a summary or
+    send terminal escape codes. Other text (accents, CJK) is kept as it is."""
+    import unicodedata
+
+    out = []
+    for ch in str(text):
+        cat = unicodedata.category(ch)
+        if cat in ("Cc", "Cf", "Zl", "Zp", "Cs"):
+            if ch in _ESCAPES:
+                out.append(_ESCAPES[ch])
+            elif ord(ch) < 0x100:
+                out.append(f"\\x{ord(ch):02x}")
+            else:
+                out.append(f"\\u{ord(ch):04x}")
+        else:
+            out.append(ch)
+    return "".join(out)

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import os
-import stat
 import sys
 from pathlib import Path
 from typing import Any
@@ -25,27 +23,26 @@ def load_map_or_fail(path: str) -> Any:
     return m
 
 
-def check_output_path(path: str | None, flag: str) -> None:
-    """Refuse, before any work is done, an output path that is a directory, a named pipe or a
-    device, or whose folder is not a directory; UsageError naming the option."""
-    if not path:
-        return
-    from planner_core.textio import not_regular
+def check_outputs(paths: list[tuple[str, str | None]], *, mkdir: bool = False) -> None:
+    """UsageError naming the option and path of the first output that cannot be written (or
+    that two options share), before any work; `mkdir` creates missing folders instead."""
 
-    p = Path(path)
-    try:
-        st = os.stat(p)
-    except FileNotFoundError:
-        st = None
-    except OSError as exc:
-        raise UsageError(f"{flag}: {path}: cannot be written ({exc.strerror or exc})") from None
-    if st is not None and not stat.S_ISREG(st.st_mode):
-        raise UsageError(f"{flag}: {path} {not_regular(st.st_mode)}")
-    folder = p.parent
-    while not folder.exists() and folder != folder.parent:
-        folder = folder.parent
-    if not folder.is_dir():
-        raise UsageError(f"{flag}: {path}: {folder} is not a folder")
+    from lamde_mission.errors import UsageError
+    from planner_core.atomic import OutputPathError, check_writable
+    from planner_core.textio import printable
+
+    seen: dict[str, str] = {}
+    for option, path in paths:
+        if not path:
+            continue
+        key = str(Path(path).resolve())
+        if key in seen:
+            raise UsageError(f"{option}: {printable(path)} is also the {seen[key]} output")
+        seen[key] = option
+        try:
+            check_writable(path, mkdir=mkdir, what=option)
+        except OutputPathError as exc:
+            raise UsageError(printable(str(exc))) from None
 
 
 def add_executor_args(p: Any, what: str = "jobs") -> None:

@@ -30,6 +30,21 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         help="drop this fraction of outgoing messages, 0 <= P < 1 (default: 0)",
     )
     p.add_argument(
+        "--loss-in",
+        type=float,
+        default=0.0,
+        metavar="P",
+        help="drop this fraction of incoming messages, 0 <= P < 1 (default: 0)",
+    )
+    p.add_argument(
+        "--noisy-gcs-hz",
+        type=float,
+        default=0.0,
+        metavar="HZ",
+        help="run a second, noisy ground station (system 254) on the link, broadcasting "
+        "mission messages HZ times a second (default: 0, none)",
+    )
+    p.add_argument(
         "--latency-ms",
         type=float,
         default=0.0,
@@ -67,7 +82,8 @@ def run(args: argparse.Namespace) -> int:
 
     try:
         vehicle = MockVehicle(
-            args.connect, loss=args.loss, latency_ms=args.latency_ms, seed=args.seed,
+            args.connect, loss=args.loss, loss_in=args.loss_in, noisy_gcs_hz=args.noisy_gcs_hz,
+            latency_ms=args.latency_ms, seed=args.seed,
             reject=args.reject, max_items=args.max_items, on_event=None if args.quiet else event,
             autopilot=args.autopilot,
         )  # fmt: skip
@@ -81,6 +97,10 @@ def run(args: argparse.Namespace) -> int:
     extras = []
     if args.loss:
         extras.append(f"loss {args.loss:g}")
+    if args.loss_in:
+        extras.append(f"incoming loss {args.loss_in:g}")
+    if args.noisy_gcs_hz:
+        extras.append(f"noisy ground station at {args.noisy_gcs_hz:g} Hz")
     if args.latency_ms:
         extras.append(f"latency {args.latency_ms:g} ms")
     if vehicle.reject is not None:
@@ -101,7 +121,8 @@ def run(args: argparse.Namespace) -> int:
         vehicle.stop()
     s = vehicle.stats
     print(
-        f"stopped: {s.received} messages in, {s.sent} out ({s.dropped} dropped), "
+        f"stopped: {s.received} messages in ({s.dropped_in} dropped), {s.sent} out "
+        f"({s.dropped} dropped), "
         f"{sum(s.uploads.values())} uploads, {sum(s.downloads.values())} downloads",
         file=sys.stderr,
     )

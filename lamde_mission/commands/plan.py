@@ -59,6 +59,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--report", metavar="JSON", help="also write the plan and verdicts as JSON")
     p.add_argument("--allow-infeasible", action="store_true",
                    help="write the mission even if constraints are violated (exit status 1)")
+    p.add_argument("--mkdir", action="store_true",
+                   help="create missing folders of the output paths (otherwise exit 2)")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
     return p
 
@@ -100,6 +102,8 @@ class _ProgressBar:
 def _summary(
     plan: Any, m: Any, timeline: Any, verdicts: Any, out: str | None, stored: Any = None
 ) -> str:
+    from planner_core.textio import printable
+
     b = plan.breakdown
     t = timeline.totals
     who = "stored" if stored is not None else "sim"
@@ -107,7 +111,7 @@ def _summary(
     compiling = f"; {t_compile:.1f} s compiling (or loading) the kernels" if t_compile > 0.05 \
         else ""
     lines = [
-        f"map '{m.name}': {plan.n_hover} hover points, {plan.evaluations} evaluations, "
+        f"map '{printable(m.name)}': {plan.n_hover} hover points, {plan.evaluations} evaluations, "
         f"{plan.wall_time - plan.timings.get('compile', 0.0):.2f} s (seed {plan.seed}, "
         f"{plan.configurator})" + compiling,
         f"  flight time   {b['t_fly']:10.2f} s    ({who} {t.t_fly:.2f} s)",
@@ -132,33 +136,36 @@ def _summary(
     for sid in m.sensor_ids:
         ok = "ok" if got[sid] >= req[sid] else "SHORT"
         over = f"{100 * (got[sid] / req[sid] - 1):+.2f} %" if req[sid] > 0 else ""
-        lines.append(f"    {sid:<12} {got[sid]:10.1f} / {req[sid]:<8.1f} {ok:<5} {over}")
+        lines.append(f"    {printable(sid):<12} {got[sid]:10.1f} / {req[sid]:<8.1f} {ok:<5} {over}")
     sf = m.spec.safety
     lines.append(f"  safety: clearance {verdicts.clearance:.2f} m (asked {sf.clearance:g} m), "
                  f"data margin asked {100 * sf.data_margin:g} %")
     lines.append("  constraints (simulator) of the stored mission:" if stored is not None
                  else "  constraints (simulator):")
-    lines.extend("    " + row for row in verdicts.table().splitlines())
+    lines.extend("    " + printable(row) for row in verdicts.table().splitlines())
     if out:
-        lines.append(f"wrote {out}")
+        lines.append(f"wrote {printable(out)}")
     return "\n".join(lines)
 
 
 def _violations(plan: Any, verdicts: Any) -> list[str]:
+    from planner_core.textio import printable
+
     b = plan.breakdown
     out = []
     if b["v3"] > 0:
         out.append(f"C3 bandwidth exceeded by {b['v3']:.4g} Mbit/s in total")
     for sid, short in b["shortfall"].items():
         if short > 0:
-            out.append(f"C4 sensor '{sid}' short by {short:.4g} Mbit")
+            out.append(f"C4 sensor '{printable(sid)}' short by {short:.4g} Mbit")
     if b["l_vio"] > 0:
         out.append(f"C5 path runs {b['l_vio']:.4g} m inside obstacles")
     for v in verdicts:
         if not v.passed:
-            out.append(f"sim {v.name} {v.title}: FAIL, margin {v.margin:.4g} {v.unit}; {v.detail}")
+            out.append(printable(f"sim {v.name} {v.title}: FAIL, margin {v.margin:.4g} {v.unit}; "
+                                 f"{v.detail}"))
     if plan.polish and plan.polish.get("unserved"):
-        out.extend(plan.polish["unserved"])
+        out.extend(printable(u) for u in plan.polish["unserved"])
     return out
 
 
@@ -189,7 +196,7 @@ def _check_return_leg(m: Any) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from lamde_mission.commands._common import (
-        check_output_path,
+        check_outputs,
         load_map_or_fail,
         with_origin_or_fail,
     )
@@ -203,13 +210,14 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"-o/--output: {exc}") from None
     if args.plot and not args.plot.lower().endswith((".png", ".svg")):
         raise UsageError(f"--plot: {args.plot}: image format must be PNG or SVG (.png or .svg)")
-    for path, flag in ((args.output, "-o/--output"), (args.plot, "--plot"),
-                       (args.report, "--report")):  # fmt: skip
-        check_output_path(path, flag)
     try:
         D.check_run_args(population=args.population, budget=args.budget)
     except ValueError as exc:  # "population: must be ...": name the option as typed
         raise UsageError(f"--{exc}") from None
+    check_outputs(
+        [("-o/--output", args.output), ("--plot", args.plot), ("--report", args.report)],
+        mkdir=args.mkdir,
+    )
     configurator = args.configurator
     if args.policy is not None:
         if args.configurator != "lamde":

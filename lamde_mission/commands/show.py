@@ -27,7 +27,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     from lamde_mission.commands._common import (
-        check_output_path,
+        check_outputs,
         load_map_or_fail,
         with_origin_or_fail,
     )
@@ -39,7 +39,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"{out}: output must be a .png or .svg file")
     if args.dpi <= 0:
         raise UsageError(f"--dpi must be positive, got {args.dpi}")
-    check_output_path(args.output, "-o/--output")
+    check_outputs([("-o/--output", args.output)], mkdir=True)
     m = load_map_or_fail(args.map)
     m = with_origin_or_fail(m, args.origin)
     timeline = None

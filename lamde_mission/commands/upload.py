@@ -25,8 +25,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "--connect",
         default="udpin://0.0.0.0:14540",
         metavar="URL",
-        help="udpin://HOST:PORT listens for the vehicle, udpout://HOST:PORT sends to "
-        "it (default: %(default)s)",
+        help="udpin://HOST:PORT listens for the vehicle on UDP, udpout://HOST:PORT sends to "
+        "it, tcpout://HOST:PORT connects to its TCP server, tcpin://HOST:PORT waits for a TCP "
+        "connection, serial:///dev/DEVICE:BAUD opens a serial port; the same for both "
+        "uploaders (default: %(default)s)",
     )
     p.add_argument(
         "--via",
@@ -39,7 +41,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         type=float,
         default=30.0,
         metavar="S",
-        help="seconds to wait for the vehicle, and for each attempt (default: 30)",
+        help="seconds to wait for the vehicle, and without progress in a transfer before the "
+        "attempt is given up (lost items are re-requested one by one; default: 30)",
     )
     p.add_argument(
         "--attempts",
@@ -55,7 +58,21 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "HEARTBEAT autopilot field). ardupilot: item 0 is a home placeholder, DO_JUMP targets "
         "move with the items, hover times are whole seconds (rounded up)",
     )
-    p.add_argument("-v", "--verbose", action="store_true", help="print each step")
+    p.add_argument(
+        "--map",
+        metavar="MAP",
+        help="replay the mission on MAP in the simulator before sending; a mission the "
+        "simulator rejects (a constraint C1..C5 fails, a second take-off, an unusable hover "
+        "time) is refused with exit status 2 unless --force",
+    )
+    p.add_argument(
+        "--force",
+        action="store_true",
+        help="send a mission the simulator rejects (never one whose fields MAVLink cannot carry)",
+    )
+    p.add_argument("-v", "--verbose", action="store_true",
+                   help="print each step, what was ignored (traffic not from the vehicle or not "
+                   "addressed to us) and MAVSDK's own log lines")
     return p
 
 
@@ -79,26 +96,105 @@ def _read(path: str) -> tuple[list, list | None, list | None]:
     return mission, (None if waypoints else fence), (rally or None)
 
 
+class _Progress:
+    """Items done per list: an updating line on a terminal's stderr, else (with --verbose) a
+    line at each quarter."""
+
+    def __init__(self, verbose: bool) -> None:
+        self.tty = sys.stderr.isatty()
+        self.verbose = verbose
+        self.shown: dict[str, int] = {}
+
+    def __call__(self, what: str, done: int, total: int) -> None:
+        if self.tty:
+            end = "\n" if done >= total else ""
+            print(f"\r  {what}: {done}/{total} items", end=end, file=sys.stderr, flush=True)
+            return
+        if not self.verbose:
+            return
+        quarter = 4 * done // max(total, 1)
+        if self.shown.get(what, -1) < quarter:
+            self.shown[what] = quarter
+            print(f"  {what}: {done}/{total} items", file=sys.stderr, flush=True)
+
+
+def _wire_check(path: str, mission: list, fence: list | None, rally: list | None = None) -> None:
+    """Every item as MISSION_ITEM_INT will carry it, before a byte is sent: UsageError naming
+    the list, item and field (not forceable: the wire cannot carry it)."""
+    from lamde_mission.errors import UsageError
+    from lamde_mission.items import MISSION_TYPE
+    from lamde_mission.vehicle.wire import wire_mission
+
+    for what, items, t in (("mission", mission, MISSION_TYPE.MISSION),
+                           ("fence", fence or [], MISSION_TYPE.FENCE),
+                           ("rally", rally or [], MISSION_TYPE.RALLY)):  # fmt: skip
+        try:
+            wire_mission(items, t)
+        except ValueError as exc:
+            raise UsageError(f"{path}: {what} {exc}") from None
+
+
+def _sim_check(path: str, map_path: str, mission: list, *, force: bool) -> None:
+    """Replay `mission` on the map and judge it (as `verify` does); UsageError unless `force`."""
+    from lamde_mission.commands._common import load_map_or_fail
+    from lamde_mission.errors import UsageError
+    from planner_core.textio import printable
+    from sim import replay, verify
+    from sim.mission import MissionError
+
+    m = load_map_or_fail(map_path)
+    try:
+        problems = [f for f in verify(replay(mission, m), m) if not f.passed]
+        lines = [printable(f"{v.name} {v.title}: FAIL, margin {v.margin:.4g} {v.unit}; "
+                           f"{v.detail}") for v in problems]  # fmt: skip
+    except MissionError as exc:
+        lines = [printable(str(exc))]
+    if not lines:
+        return
+    if force:
+        for line in lines:
+            print(f"warning: {path}: the simulator rejects it ({line}); sent anyway (--force)",
+                  file=sys.stderr)
+        return
+    raise UsageError(f"{path}: the simulator rejects it on {map_path}: {'; '.join(lines)} "
+                     "(--force sends it anyway)")
+
+
 def run(args: argparse.Namespace) -> int:
     from lamde_mission.errors import UsageError
     from lamde_mission.vehicle.transfer import VehicleError
     from lamde_mission.vehicle.upload import upload_mission
-    from lamde_mission.vehicle.wire import parse_endpoint
 
     if not (math.isfinite(args.timeout) and args.timeout > 0):
         raise UsageError(f"--timeout must be a positive number of seconds, got {args.timeout:g}")
     if args.attempts < 1:
         raise UsageError(f"--attempts must be at least 1, got {args.attempts}")
-    if args.via == "pymavlink":
-        try:
-            parse_endpoint(args.connect)
-        except ValueError as exc:
-            raise UsageError(f"--connect: {exc} (the pymavlink uploader speaks UDP only)") from None
+    from lamde_mission.vehicle.connection import parse_connection
+
+    try:
+        parse_connection(args.connect)
+    except ValueError as exc:
+        raise UsageError(f"--connect: {exc}") from None
     mission, fence, rally = _read(args.mission)
+    _wire_check(args.mission, mission, fence, rally)
+    if args.map:
+        _sim_check(args.mission, args.map, mission, force=args.force)
 
     def log(text: str) -> None:
         if args.verbose:
-            print(f"  {text}", file=sys.stderr, flush=True)
+            from planner_core.textio import printable
+
+            print(f"  {printable(text)}", file=sys.stderr, flush=True)
+
+    if args.verbose:  # MAVSDK's own log lines (routed to Python logging) on stderr
+        import logging
+
+        h = logging.StreamHandler(sys.stderr)
+        h.setFormatter(logging.Formatter("  mavsdk: %(message)s"))
+        lg = logging.getLogger("lamde_mission.vehicle.mavsdk")
+        lg.addHandler(h)
+        lg.setLevel(logging.DEBUG)
+        lg.propagate = False
 
     try:
         report = upload_mission(
@@ -109,6 +205,7 @@ def run(args: argparse.Namespace) -> int:
             timeout=args.timeout,
             attempts=args.attempts,
             log=log,
+            progress=_Progress(verbose=args.verbose),
             rally=rally,
             autopilot=args.autopilot,
         )

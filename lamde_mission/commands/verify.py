@@ -64,11 +64,14 @@ def run(args: argparse.Namespace) -> int:
         }  # fmt: skip
         print(json.dumps(out, indent=2))
     else:
-        print(f"mission {args.mission} on map '{m.name}': "
+        from planner_core.textio import printable
+
+        print(f"mission {args.mission} on map '{printable(m.name)}': "
               f"{len(timeline.hover_times)} hover points")  # fmt: skip
-        print(verdicts.table())
+        print("\n".join(printable(r) for r in verdicts.table().splitlines()))
         sf = m.spec.safety
-        margins = ", ".join(f"'{k}' {100 * v:+.3g} %" for k, v in verdicts.data_margins.items())
+        margins = ", ".join(f"'{printable(k)}' {100 * v:+.3g} %"
+                            for k, v in verdicts.data_margins.items())  # fmt: skip
         print(f"safety: clearance {verdicts.clearance:.3f} m (asked {sf.clearance:g} m); data "
               f"margin per sensor (asked {100 * sf.data_margin:g} %): {margins}")
         print(f"f = {t.f:.6f}  (alpha {t.alpha:g}: t_fly {t.t_fly:.3f} s, "

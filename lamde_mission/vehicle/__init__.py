@@ -5,7 +5,8 @@
   through MAVSDK (`via="mavsdk"`, the only module importing it) or our pymavlink client
   (`via="pymavlink"`, `mavlink_client.py`).
 - `wire.py`: items as MAVLink carries them and the comparison; `transfer.py`: errors, report,
-  and the retry loop both uploaders share.
+  and the retry loop both uploaders share; `connection.py`: the one connection syntax (UDP,
+  TCP, serial), validated, and the byte links of the pymavlink client.
 
 Names load lazily, so importing this package loads neither pymavlink's dialect nor MAVSDK.
 """

@@ -1,27 +1,36 @@
 """A mission uploader on pymavlink alone: the ground-station side of the MAVLink mission protocol.
 
-`MavlinkClient` talks MAVLink 2 over UDP (`udpin://HOST:PORT` listens for the vehicle,
-`udpout://HOST:PORT` sends to it) and is a `MissionClient` for `transfer.upload_and_verify`.
-Where the protocol leaves retries to the ground station it retries after a silence:
-MISSION_COUNT, MISSION_REQUEST_LIST, MISSION_REQUEST_INT and MISSION_CLEAR_ALL are resent, and so
-is the last item when the final MISSION_ACK does not come (a vehicle that got it answers with the
-ACK again). The silence waited for adapts to the link as TCP's retransmission timeout does:
+`MavlinkClient` talks MAVLink 2 over UDP, TCP or a serial port (`connection.parse_connection`:
+`udpin://HOST:PORT`, `udpout://HOST:PORT`, `tcp://HOST:PORT`, `serial:///dev/ttyUSB0:57600`) and
+is a `MissionClient` for `transfer.upload_and_verify`.
+
+Recovery is per message, as the mission protocol specifies (mavlink.io, "Mission Protocol",
+timeouts and retries): MISSION_COUNT, MISSION_REQUEST_LIST, each MISSION_REQUEST_INT and
+MISSION_CLEAR_ALL are resent after a silence, and so is the last item sent when the vehicle's
+next request or its final MISSION_ACK does not come (a vehicle that already has it asks again or
+ACKs again). The silence waited for adapts to the link as TCP's retransmission timeout does:
 `item_timeout` until a round trip has been measured, then 4x the smoothed round trip (at least
-`min_timeout`), doubled after each silence for the same message up to `max_timeout`. Every call
-ends by its `timeout`.
+`min_timeout`); after `backoff_after` silences in a row for the same message it grows 1.5x
+per silence up to `max_timeout`. A transfer
+gives up only after `timeout` seconds *without progress* (no new item), so a long list on a
+lossy link is not cut off by a total time limit.
+
+Talks only to the vehicle: after the first autopilot HEARTBEAT the vehicle's address (UDP/TCP
+peer) and system/component ids are pinned; messages from another address, from other
+system/component ids, or addressed to another system or component (a second ground station's
+traffic, forged replies) are ignored and counted, and said under `log` (`--verbose`).
 """
 
 from __future__ import annotations
 
 import collections
-import select
-import socket
 import time
 from collections.abc import Callable, Sequence
 from typing import Any
 
 from pymavlink.dialects.v20 import common as mavlink2
 
+from lamde_mission.vehicle.connection import Connection, Link, parse_connection
 from lamde_mission.vehicle.transfer import (
     RETRYABLE_ACKS,
     MissionRejectedError,
@@ -31,13 +40,10 @@ from lamde_mission.vehicle.transfer import (
     VehicleInfo,
 )
 from lamde_mission.vehicle.wire import (
-    Endpoint,
     PacketCapture,
     WireItem,
     mission_result_name,
     mission_type_name,
-    open_udp,
-    parse_endpoint,
     to_wire,
 )
 
@@ -45,54 +51,71 @@ __all__ = ["MavlinkClient"]
 
 _m = mavlink2
 
+#: messages the mission protocol exchanges (what a second ground station's traffic consists of)
+_MISSION_MSGS = frozenset({
+    "MISSION_COUNT", "MISSION_REQUEST_LIST", "MISSION_REQUEST_INT", "MISSION_REQUEST",
+    "MISSION_ITEM_INT", "MISSION_ITEM", "MISSION_ACK", "MISSION_CLEAR_ALL",
+})  # fmt: skip
+
 
 class MavlinkClient:
-    """Ground-station side of the mission protocol over UDP (pymavlink messages, our sockets)."""
+    """Ground-station side of the mission protocol (pymavlink messages, our sockets/port)."""
 
     name = "pymavlink"
 
     def __init__(
         self,
-        connect: str = "udpin://0.0.0.0:14540",
+        connect: str | Connection = "udpin://0.0.0.0:14540",
         *,
         item_timeout: float = 0.25,
         min_timeout: float = 0.05,
-        max_timeout: float = 2.0,
-        max_retries: int = 10,
+        max_timeout: float = 1.5,
+        max_retries: int | None = None,
+        backoff_after: int = 8,
         system_id: int = 255,
         component_id: int = _m.MAV_COMP_ID_MISSIONPLANNER,
+        log: Callable[[str], None] | None = None,
+        progress: Callable[[str, int, int], None] | None = None,
     ) -> None:
-        self.endpoint: Endpoint = parse_endpoint(connect)
+        try:
+            self.endpoint: Connection = (
+                connect if isinstance(connect, Connection) else parse_connection(connect)
+            )
+        except ValueError as exc:
+            raise VehicleError(str(exc)) from None
         self.item_timeout = float(item_timeout)
         self.min_timeout = float(min_timeout)
         self.max_timeout = float(max_timeout)
-        self.max_retries = int(max_retries)
+        self.max_retries = None if max_retries is None else int(max_retries)
+        self.backoff_after = int(backoff_after)
         self._srtt: float | None = None
         self._rto = self.item_timeout
         self.system_id = int(system_id)
         self.component_id = int(component_id)
         self.vehicle: VehicleInfo | None = None
+        self.log = log or (lambda _s: None)
+        self.progress = progress
+        #: (reason, source) -> count of messages ignored (`ignored_lines` says them)
+        self.ignored: collections.Counter[tuple[str, str]] = collections.Counter()
         self._mav = _m.MAVLink(
             PacketCapture(), srcSystem=self.system_id, srcComponent=self.component_id
         )
         self._mav.robust_parsing = True
         self._pending: collections.deque[Any] = collections.deque()
-        self._peer: tuple[str, int] | None = None
+        self._vehicle_addr: tuple[str, int] | None = None
         self._next_heartbeat = 0.0
-        ep = self.endpoint
         try:
-            sock, self._peer = open_udp(ep)
+            self._link: Link | None = Link(self.endpoint)
         except OSError as exc:
-            raise VehicleError(f"cannot open {ep}: {exc.strerror or exc}") from None
-        self._sock: socket.socket | None = sock
+            raise VehicleError(f"cannot open {self.endpoint}: {exc.strerror or exc}") from None
 
     # ------------------------------------------------------------------ life cycle
 
     def close(self) -> None:
-        """Close the socket (idempotent)."""
-        if self._sock is not None:
-            self._sock.close()
-            self._sock = None
+        """Close the link (idempotent)."""
+        if self._link is not None:
+            self._link.close()
+            self._link = None
 
     def __enter__(self) -> MavlinkClient:
         return self
@@ -103,19 +126,17 @@ class MavlinkClient:
     # ------------------------------------------------------------------ transport
 
     def _send(self, msg: Any) -> None:
-        if self._sock is None:
+        if self._link is None:
             raise TransferError("the connection is closed")
         self._mav.send(msg)
-        if self._peer is not None:
-            try:
-                self._sock.sendto(self._mav.file.buf, self._peer)
-            except OSError as exc:
-                host, port = self._peer
-                raise TransferError(f"cannot send to {host}:{port} ({exc})") from None
+        try:
+            self._link.send(self._mav.file.buf)
+        except OSError as exc:
+            raise TransferError(f"cannot send to {self.endpoint} ({exc})") from None
 
     def _heartbeat_if_due(self) -> None:
         now = time.monotonic()
-        if self._peer is not None and now >= self._next_heartbeat:
+        if self._link is not None and now >= self._next_heartbeat:
             self._next_heartbeat = now + 1.0
             self._send(
                 _m.MAVLink_heartbeat_message(
@@ -135,23 +156,55 @@ class MavlinkClient:
         else:
             self._rto = min(max(4.0 * self._srtt, self.min_timeout), self.max_timeout)
 
-    def _backoff(self) -> None:
-        self._rto = min(2.0 * self._rto, self.max_timeout)
+    def _backoff(self, silences: int) -> None:
+        """After the `silences`-th silence in a row for one message: the same wait for the first
+        `backoff_after`, then 1.5x each time up to `max_timeout`. On a lossy radio a lost
+        message says nothing about congestion, and with loss p both ways a growing wait costs
+        sum_k (1-(1-p)^2)^k * growth^k per item, which diverges at 40 % loss with doubling;
+        many silences in a row, though, say the round trip was underestimated."""
+        if silences >= self.backoff_after:
+            self._rto = min(1.5 * self._rto, self.max_timeout)
 
     @property
     def retry_timeout(self) -> float:
         """The silence (s) after which the next message is resent."""
         return self._rto
 
+    def _ignore(self, reason: str, msg: Any) -> None:
+        addr = getattr(msg, "_lamde_addr", None)
+        where = f"{addr[0]}:{addr[1]}" if addr else "the link"
+        src = (f"{msg.get_type()} from system {msg.get_srcSystem()} component "
+               f"{msg.get_srcComponent()} at {where}")  # fmt: skip
+        key = (reason, src)
+        if key not in self.ignored:
+            self.log(f"ignored {src}: {reason}")
+        self.ignored[key] += 1
+
+    def ignored_lines(self) -> list[str]:
+        """One line per (reason, sender) of what was ignored, with counts."""
+        return [f"ignored {n} x {src}: {reason}" for (reason, src), n in self.ignored.items()]
+
     def _from_vehicle(self, msg: Any) -> bool:
+        """Is `msg` the pinned vehicle's, addressed to us (or broadcast)? Says why if not."""
         v = self.vehicle
-        if v is None or (msg.get_srcSystem(), msg.get_srcComponent()) != (
-            v.system_id,
-            v.component_id,
-        ):
+        if v is None:
+            return False
+        addr = getattr(msg, "_lamde_addr", None)
+        if self._vehicle_addr is not None and addr is not None and addr != self._vehicle_addr:
+            self._ignore(f"not the vehicle's address "
+                         f"{self._vehicle_addr[0]}:{self._vehicle_addr[1]}", msg)  # fmt: skip
+            return False
+        if (msg.get_srcSystem(), msg.get_srcComponent()) != (v.system_id, v.component_id):
+            if msg.get_type() in _MISSION_MSGS:
+                self._ignore(f"not the vehicle (system {v.system_id} component "
+                             f"{v.component_id})", msg)  # fmt: skip
             return False
         ts = getattr(msg, "target_system", 0)
-        return ts in (0, self.system_id)
+        tc = getattr(msg, "target_component", 0)
+        if ts not in (0, self.system_id) or tc not in (0, self.component_id):
+            self._ignore(f"addressed to system {ts} component {tc}, not to us", msg)
+            return False
+        return True
 
     def _recv(self, until: float, accept: Callable[[Any], bool]) -> Any | None:
         """The first message that `accept`s before `until` (monotonic), else None."""
@@ -162,18 +215,9 @@ class MavlinkClient:
                     return msg
             self._heartbeat_if_due()
             left = until - time.monotonic()
-            if left <= 0 or self._sock is None:
+            if left <= 0 or self._link is None:
                 return None
-            ready, _, _ = select.select([self._sock], [], [], min(left, 0.2))
-            if not ready:
-                continue
-            for _ in range(64):
-                try:
-                    data, addr = self._sock.recvfrom(65536)
-                except (BlockingIOError, InterruptedError):
-                    break
-                except OSError:
-                    break
+            for data, addr in self._link.recv(min(left, 0.2)):
                 try:
                     msgs = self._mav.parse_buffer(data) or []
                 except Exception:
@@ -187,7 +231,10 @@ class MavlinkClient:
     # ------------------------------------------------------------------ connect
 
     def connect(self, timeout: float) -> VehicleInfo:
-        """Wait up to `timeout` s for an autopilot's HEARTBEAT (component 1); NoVehicleError."""
+        """Wait up to `timeout` s for an autopilot's HEARTBEAT (component 1); NoVehicleError.
+
+        Pins the vehicle: its address and its system/component ids; from here on nothing else
+        is listened to or answered."""
         deadline = time.monotonic() + timeout
 
         def autopilot(msg: Any) -> bool:
@@ -198,10 +245,15 @@ class MavlinkClient:
         hb = self._recv(deadline, autopilot)
         if hb is None:
             raise NoVehicleError(f"no vehicle heard at {self.endpoint} within {timeout:g} s")
-        if self.endpoint.mode == "udpin":
-            self._peer = hb._lamde_addr
+        addr = getattr(hb, "_lamde_addr", None)
+        if self._link is not None and self.endpoint.scheme == "udpin" and addr is not None:
+            self._link.peer = addr
             self._next_heartbeat = 0.0
+        self._vehicle_addr = addr
         self.vehicle = VehicleInfo.from_heartbeat(hb)
+        if addr is not None:
+            self.log(f"pinned the vehicle: system {self.vehicle.system_id} component "
+                     f"{self.vehicle.component_id} at {addr[0]}:{addr[1]}")  # fmt: skip
         self._heartbeat_if_due()
         return self.vehicle
 
@@ -210,22 +262,29 @@ class MavlinkClient:
             raise TransferError("not connected (call connect first)")
         return self.vehicle.system_id, self.vehicle.component_id
 
+    def _progress(self, what: str, done: int, total: int) -> None:
+        if self.progress is not None:
+            self.progress(what, done, total)
+
     # ------------------------------------------------------------------ the protocol
 
     def _exchange(
         self,
         send: Callable[[], None],
         accept: Callable[[Any], bool],
-        deadline: float,
+        timeout: float,
         what: str,
     ) -> Any:
-        """Send, wait for an accepted answer, resend after a silence; TransferError at the end.
+        """Send, wait for an accepted answer, resend after a silence; TransferError after
+        `timeout` s without one (or `max_retries` resends).
 
-        The silence doubles with each resend of this message only: on a lossy radio a lost
-        message says nothing about the next one (no congestion to back off from).
+        The wait grows only after many silences for this message (`_backoff`): on a lossy
+        radio a lost message says nothing about the next one (no congestion to back off from).
         """
         self._reset_rto()
-        for k in range(self.max_retries + 1):
+        deadline = time.monotonic() + timeout
+        k = 0
+        while True:
             t0 = time.monotonic()
             send()
             msg = self._recv(min(deadline, t0 + self._rto), accept)
@@ -233,10 +292,14 @@ class MavlinkClient:
                 if k == 0:
                     self._rtt_sample(time.monotonic() - t0)
                 return msg
-            if time.monotonic() >= deadline:
+            k += 1
+            if time.monotonic() >= deadline or (
+                self.max_retries is not None and k > self.max_retries
+            ):
                 break
-            self._backoff()
-        raise TransferError(f"no answer from the vehicle to {what}")
+            self._backoff(k)
+        raise TransferError(f"no answer from the vehicle to {what} "
+                            f"({k} tries in {timeout:.3g} s)")  # fmt: skip
 
     def _nack(self, msg: Any, mission_type: int, doing: str) -> MissionRejectedError:
         code = int(msg.type)
@@ -247,57 +310,76 @@ class MavlinkClient:
         )  # fmt: skip
 
     def upload(self, items: Sequence[WireItem], mission_type: int, timeout: float) -> None:
-        """Upload one list (seq 0..n-1, all of `mission_type`); raise on refusal or timeout."""
+        """Upload one list (seq 0..n-1, all of `mission_type`); raise on refusal, or after
+        `timeout` s without progress (no new item requested, no final ACK)."""
         ts, tc = self._target()
         t = int(mission_type)
         n = len(items)
         if n == 0:
             self.clear(t, timeout)
             return
+        kind = mission_type_name(t)
         deadline = time.monotonic() + timeout
         highest = -1  # highest seq sent so far
         last: Any = _m.MAVLink_mission_count_message(ts, tc, n, t)
 
         def mine(msg: Any) -> bool:
-            return (self._from_vehicle(msg)
-                    and msg.get_type() in ("MISSION_REQUEST_INT", "MISSION_REQUEST", "MISSION_ACK")
+            return (msg.get_type() in ("MISSION_REQUEST_INT", "MISSION_REQUEST", "MISSION_ACK")
+                    and self._from_vehicle(msg)
                     and int(msg.mission_type) == t)  # fmt: skip
 
-        # no round-trip samples here: the vehicle paces an upload (its re-requests would count).
+        # round-trip samples (Karn): only from a message sent once answered by the request for
+        # the next item (a vehicle's timer-driven re-request would overstate it, never understate)
         # MISSION_REQUEST (not _INT) is answered with MISSION_ITEM_INT too, as MAVSDK does.
         retries = 0
+        resends = 0
+        sent_at: float | None = time.monotonic()
         self._reset_rto()
         self._send(last)
+        self._progress(f"{kind} upload", 0, n)
         while True:
             msg = self._recv(min(deadline, time.monotonic() + self._rto), mine)
             if msg is None:
                 retries += 1
-                self._backoff()
-                if time.monotonic() >= deadline or retries > self.max_retries:
+                self._backoff(retries)
+                if time.monotonic() >= deadline or (
+                    self.max_retries is not None and retries > self.max_retries
+                ):
                     waiting = ("the first item request" if highest < 0 else
                                "the final MISSION_ACK" if highest == n - 1 else
                                f"the request for item {highest + 1}")  # fmt: skip
                     raise TransferError(
-                        f"{mission_type_name(t)} upload: no answer from the "
-                        f"vehicle while waiting for {waiting}"
+                        f"{kind} upload: no answer from the vehicle while waiting for "
+                        f"{waiting} ({highest + 1} of {n} items sent; {timeout:.3g} s "
+                        "without progress)"
                     )
+                resends += 1
+                sent_at = None
                 self._send(last)  # the count again, or the last item sent
                 continue
             if msg.get_type() == "MISSION_ACK":
                 if int(msg.type) != _m.MAV_MISSION_ACCEPTED:
                     raise self._nack(msg, t, f"upload of {n} items")
                 if highest == n - 1:
+                    self._progress(f"{kind} upload", n, n)
+                    if resends:
+                        self.log(f"{kind} upload: {resends} messages resent after a silence")
                     return
                 continue  # a stale ACK (an earlier transfer's): not for this one
             seq = int(msg.seq)
             if not 0 <= seq < n:
-                raise TransferError(
-                    f"{mission_type_name(t)} upload: the vehicle asked for item {seq} of {n}"
-                )
+                raise TransferError(f"{kind} upload: the vehicle asked for item {seq} of {n}")
             if seq > highest:
+                if seq == highest + 1 and sent_at is not None:
+                    self._rtt_sample(time.monotonic() - sent_at)
                 highest = seq
                 retries = 0
+                deadline = time.monotonic() + timeout
                 self._reset_rto()
+                self._progress(f"{kind} upload", seq, n)
+                sent_at = time.monotonic()
+            else:
+                sent_at = None  # a re-request: the item is sent again
             w = items[seq]
             last = _m.MAVLink_mission_item_int_message(ts, tc, *w.fields()[:-1], t)
             self._send(last)
@@ -306,14 +388,15 @@ class MavlinkClient:
         """Read one list back (MISSION_REQUEST_LIST, then each item by MISSION_REQUEST_INT)."""
         ts, tc = self._target()
         t = int(mission_type)
-        deadline = time.monotonic() + timeout
         kind = mission_type_name(t)
 
         def answer(types: tuple[str, ...], seq: int | None = None) -> Callable[[Any], bool]:
             def ok(msg: Any) -> bool:
+                name = msg.get_type()
+                if name not in types and name != "MISSION_ACK":
+                    return False
                 if not self._from_vehicle(msg) or int(getattr(msg, "mission_type", -1)) != t:
                     return False
-                name = msg.get_type()
                 if name == "MISSION_ACK":
                     return int(msg.type) != _m.MAV_MISSION_ACCEPTED
                 return name in types and (seq is None or int(msg.seq) == seq)
@@ -322,21 +405,23 @@ class MavlinkClient:
 
         msg = self._exchange(
             lambda: self._send(_m.MAVLink_mission_request_list_message(ts, tc, t)),
-            answer(("MISSION_COUNT",)), deadline, f"the {kind} list request",
+            answer(("MISSION_COUNT",)), timeout, f"the {kind} list request",
         )  # fmt: skip
         if msg.get_type() == "MISSION_ACK":
             raise self._nack(msg, t, "download")
         count = int(msg.count)
         out: list[WireItem] = []
+        self._progress(f"{kind} download", 0, count)
         for seq in range(count):
             msg = self._exchange(
                 lambda seq=seq: self._send(_m.MAVLink_mission_request_int_message(ts, tc, seq, t)),
-                answer(("MISSION_ITEM_INT", "MISSION_ITEM"), seq), deadline,
+                answer(("MISSION_ITEM_INT", "MISSION_ITEM"), seq), timeout,
                 f"the request for {kind} item {seq} of {count}",
             )  # fmt: skip
             if msg.get_type() == "MISSION_ACK":
                 raise self._nack(msg, t, f"download (item {seq})")
             out.append(_wire_of(msg, t))
+            self._progress(f"{kind} download", seq + 1, count)
         self._send(_m.MAVLink_mission_ack_message(ts, tc, _m.MAV_MISSION_ACCEPTED, t))
         return out
 
@@ -344,15 +429,14 @@ class MavlinkClient:
         """MISSION_CLEAR_ALL for one mission type, resent until the vehicle's MISSION_ACK."""
         ts, tc = self._target()
         t = int(mission_type)
-        deadline = time.monotonic() + timeout
 
         def ack(msg: Any) -> bool:
-            return (self._from_vehicle(msg) and msg.get_type() == "MISSION_ACK"
+            return (msg.get_type() == "MISSION_ACK" and self._from_vehicle(msg)
                     and int(msg.mission_type) == t)  # fmt: skip
 
         msg = self._exchange(
             lambda: self._send(_m.MAVLink_mission_clear_all_message(ts, tc, t)),
-            ack, deadline, f"the {mission_type_name(t)} clear",
+            ack, timeout, f"the {mission_type_name(t)} clear",
         )  # fmt: skip
         if int(msg.type) != _m.MAV_MISSION_ACCEPTED:
             raise self._nack(msg, t, "clear")

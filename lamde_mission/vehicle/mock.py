@@ -22,9 +22,16 @@ MAV_AUTOPILOT_ARDUPILOTMEGA in its HEARTBEAT and stores a mission as ArduPilot d
 its home position (`home`), whatever was sent there, and NAV_LOITER_TIME's hover seconds are
 cut to a whole number.
 
-Every message has mission_type echoed. `loss` drops that fraction of outgoing messages (seeded),
-`latency_ms` delays them. Run it in a background thread (`with MockVehicle(...) as v:`) or in
-the foreground (`serve_forever`, what `lamde-mission mock-vehicle` does).
+Every message has mission_type echoed. `loss` drops that fraction of outgoing messages and
+`loss_in` that fraction of incoming ones (seeded; a lossy radio both ways), `latency_ms` delays
+outgoing ones. While an upload from one ground station is in progress, mission messages from
+another (other system/component ids) are refused with MAV_MISSION_DENIED addressed to it, as
+PX4 does, and never disturb that upload. `noisy_gcs_hz` runs a second, noisy ground station on
+the same radio link: system `NOISY_GCS_SYSTEM` broadcasting mission messages (target system 0:
+list requests, item requests, items and ACKs) that both the vehicle and the ground station
+hear; the vehicle answers them, addressed to system `NOISY_GCS_SYSTEM`. Run it in a background
+thread (`with MockVehicle(...) as v:`) or in the foreground (`serve_forever`, what
+`lamde-mission mock-vehicle` does).
 """
 
 from __future__ import annotations
@@ -57,7 +64,10 @@ from lamde_mission.vehicle.wire import (
     to_wire,
 )
 
-__all__ = ["MockVehicle", "MockStats", "CAPABILITIES"]
+__all__ = ["MockVehicle", "MockStats", "CAPABILITIES", "NOISY_GCS_SYSTEM"]
+
+#: system id of the mock's second, noisy ground station
+NOISY_GCS_SYSTEM = 254
 
 _m = mavlink2
 
@@ -70,6 +80,10 @@ CAPABILITIES = (
 )
 
 _TYPES = (MISSION_TYPE.MISSION, MISSION_TYPE.FENCE, MISSION_TYPE.RALLY)
+_MISSION_MSGS = frozenset({
+    "MISSION_COUNT", "MISSION_REQUEST_LIST", "MISSION_REQUEST_INT", "MISSION_REQUEST",
+    "MISSION_ITEM_INT", "MISSION_ITEM", "MISSION_ACK", "MISSION_CLEAR_ALL",
+})  # fmt: skip
 _TYPE_ALL = _m.MAV_MISSION_TYPE_ALL
 
 
@@ -80,6 +94,9 @@ class MockStats:
     received: int = 0
     sent: int = 0
     dropped: int = 0
+    dropped_in: int = 0
+    noise: int = 0
+    denied_others: int = 0
     rerequests: int = 0
     uploads: dict[int, int] = field(default_factory=lambda: dict.fromkeys(_TYPES, 0))
     downloads: dict[int, int] = field(default_factory=lambda: dict.fromkeys(_TYPES, 0))
@@ -110,6 +127,8 @@ class MockVehicle:
         connect: str = "udpout:127.0.0.1:14540",
         *,
         loss: float = 0.0,
+        loss_in: float = 0.0,
+        noisy_gcs_hz: float = 0.0,
         latency_ms: float = 0.0,
         seed: int | None = None,
         reject: int | str | None = None,
@@ -126,12 +145,18 @@ class MockVehicle:
     ) -> None:
         if not 0.0 <= loss < 1.0:
             raise ValueError(f"loss must be in [0, 1), got {loss!r}")
+        if not 0.0 <= loss_in < 1.0:
+            raise ValueError(f"loss_in must be in [0, 1), got {loss_in!r}")
+        if not 0.0 <= noisy_gcs_hz <= 1000.0:
+            raise ValueError(f"noisy_gcs_hz must be in [0, 1000], got {noisy_gcs_hz!r}")
         if latency_ms < 0:
             raise ValueError(f"latency_ms must be >= 0, got {latency_ms!r}")
         if max_items < 0:
             raise ValueError(f"max_items must be >= 0, got {max_items!r}")
         self.endpoint: Endpoint = parse_endpoint(connect)
         self.loss = float(loss)
+        self.loss_in = float(loss_in)
+        self.noisy_gcs_hz = float(noisy_gcs_hz)
         self.latency = float(latency_ms) / 1000.0
         self.seed = seed
         self.reject = None if reject is None else mission_result_code(reject)
@@ -153,6 +178,12 @@ class MockVehicle:
         self.stats = MockStats()
 
         self._rng = random.Random(seed)
+        self._rng_in = random.Random(None if seed is None else seed + 7919)
+        self._rng_noise = random.Random(None if seed is None else seed + 104729)
+        self._noise_mav = _m.MAVLink(
+            PacketCapture(), srcSystem=NOISY_GCS_SYSTEM, srcComponent=_m.MAV_COMP_ID_MISSIONPLANNER
+        )
+        self._next_noise = 0.0
         self._mav = _m.MAVLink(
             PacketCapture(), srcSystem=self.system_id, srcComponent=self.component_id
         )
@@ -266,8 +297,13 @@ class MockVehicle:
                 self._send_heartbeat()
                 self._next_heartbeat = now + self.heartbeat_period
             self._tick(now)
+            if self.noisy_gcs_hz > 0 and self._peer is not None and now >= self._next_noise:
+                self._next_noise = now + 1.0 / self.noisy_gcs_hz
+                self._noise()
             self._flush(now)
             wait = 0.02 if self._upload is not None else 0.1
+            if self.noisy_gcs_hz > 0:
+                wait = min(wait, max(self._next_noise - now, 0.0))
             if self._outbox:
                 wait = min(wait, self._outbox[0][0] - now)
             if self._peer is not None:
@@ -286,6 +322,9 @@ class MockVehicle:
                     break
                 except OSError:  # e.g. ICMP port unreachable reported on some systems
                     break
+                if self.loss_in > 0.0 and self._rng_in.random() < self.loss_in:
+                    self.stats.dropped_in += 1
+                    continue
                 if self.endpoint.mode == "udpin" and addr != self._peer:
                     self._peer = addr
                     self._next_heartbeat = 0.0
@@ -314,6 +353,44 @@ class MockVehicle:
             up.tries += 1
             self.stats.rerequests += 1
             self._request(up, now)
+
+    def _noise(self) -> None:
+        """One broadcast mission message of the noisy ground station: heard by the vehicle
+        (handled as from system NOISY_GCS_SYSTEM) and sent on the link to the ground station."""
+        r = self._rng_noise
+        t = r.choice(_TYPES)
+        kind = r.randrange(4)
+        # no MISSION_COUNT or MISSION_CLEAR_ALL: a ground station that uploads or clears
+        # holds or changes the vehicle's lists for real (PX4 and ArduPilot serve one transfer
+        # at a time); this one only reads, re-requests and acknowledges, addressed to everyone
+        if kind == 0:
+            msg = _m.MAVLink_mission_request_list_message(0, 0, t)
+        elif kind == 1:
+            msg = _m.MAVLink_mission_request_int_message(0, 0, r.randrange(0, 400), t)
+        elif kind == 2:
+            msg = _m.MAVLink_mission_ack_message(0, 0, r.choice(
+                [_m.MAV_MISSION_ACCEPTED, _m.MAV_MISSION_ERROR, _m.MAV_MISSION_DENIED]), t)
+        else:
+            msg = _m.MAVLink_mission_item_int_message(
+                0, 0, r.randrange(0, 400), _m.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+                _m.MAV_CMD_NAV_WAYPOINT, 0, 1, 0, 0, 0, 0, 0, 0, 10.0, t)
+        self._noise_mav.send(msg)
+        buf = self._noise_mav.file.buf
+        self.stats.noise += 1
+        self._sendto(buf)  # the ground station hears it on the shared link
+        for heard in self._mav.parse_buffer(buf) or []:  # and so does the vehicle
+            with self._lock:
+                self._handle(heard)
+
+    def _busy_with_other(self, msg: object, src: tuple[int, int]) -> bool:
+        """An upload from another ground station is in progress: refuse `msg` (PX4: DENIED)."""
+        up = self._upload
+        if up is None or src == up.src or msg.get_type() not in _MISSION_MSGS:
+            return False
+        self.stats.denied_others += 1
+        if msg.get_type() != "MISSION_ACK":
+            self._ack(_m.MAV_MISSION_DENIED, int(getattr(msg, "mission_type", 0)), src)
+        return True
 
     def _flush(self, now: float) -> None:
         while self._outbox and self._outbox[0][0] <= now:
@@ -386,6 +463,8 @@ class MockVehicle:
         if name in ("BAD_DATA", "HEARTBEAT") or not self._for_me(msg):
             return
         src = (msg.get_srcSystem(), msg.get_srcComponent())
+        if self._busy_with_other(msg, src):
+            return
         handler = getattr(self, "_on_" + name.lower(), None)
         if handler is not None:
             handler(msg, src)

@@ -4,8 +4,10 @@ A client (`MavsdkClient` in `upload.py`, `MavlinkClient` in `mavlink_client.py`)
 connect, upload, download and clear one list of one mission type. `upload_and_verify` runs the
 whole transfer on it: mission up, fence up (or cleared), both down, compared item by item, and
 the whole transfer again (up to `attempts` times) when a step times out or the read-back
-differs. The read-back is what decides: an upload whose final MISSION_ACK was lost (MAVSDK
-reports a timeout) still counts when the vehicle hands back exactly what was sent.
+differs. Lost messages are recovered inside each step (per-item re-requests and resends, the
+mission protocol's own recovery); a step times out after `timeout` s without progress.
+The read-back is what decides: an upload whose final MISSION_ACK was lost (MAVSDK reports a
+timeout) still counts when the vehicle hands back exactly what was sent.
 
 A refusal by the vehicle (MISSION_ACK with an error code, other than a generic error) is not
 retried: the vehicle would refuse again.
@@ -120,7 +122,8 @@ class VehicleInfo:
 
 
 class MissionClient(Protocol):
-    """What `upload_and_verify` needs from an uploader; every call blocks at most `timeout` s."""
+    """What `upload_and_verify` needs from an uploader; every call gives up (TransferError)
+    after `timeout` s without progress."""
 
     name: str
 
@@ -204,11 +207,10 @@ class UploadReport:
         return out
 
 
-def _step(fn: Callable[[float], object], deadline: float, what: str) -> object:
-    left = deadline - time.monotonic()
-    if left <= 0:
-        raise TransferError(f"{what}: out of time for this attempt")
-    return fn(left)
+def _step(fn: Callable[[float], object], timeout: float, what: str) -> object:
+    """One client call with `timeout` s allowed without progress (the client's per-message
+    timeouts and re-requests do the recovery; see `MissionClient`)."""
+    return fn(timeout)
 
 
 def mission_for_dialect(
@@ -280,8 +282,10 @@ def upload_and_verify(
     the vehicle's HEARTBEAT unless given: for ArduPilot a home placeholder goes first and DO_JUMP
     targets move with the items (`mission_for_dialect`), and the read-back is compared under
     those rules (item 0, the vehicle's home, is not compared); `report.readback` holds it in
-    the file's numbering. Connecting may
-    take up to `timeout` s, and so may each attempt. Returns the report on success; raises
+    the file's numbering. Connecting may take up to `timeout` s; each list's transfer gives up
+    after `timeout` s without progress (the clients recover lost messages one by one, as the
+    mission protocol specifies), and the whole transfer is tried again up to `attempts` times.
+    Returns the report on success; raises
     NoVehicleError, MissionRejectedError, TransferError or ReadbackMismatchError (each with
     `.report`) on failure. ValueError for items MAVLink cannot carry.
     """
@@ -352,7 +356,6 @@ def _attempt(
     *,
     home_item: bool = False,
 ) -> None:
-    deadline = time.monotonic() + timeout
     unconfirmed: list[str] = []
     t0 = time.monotonic()
     lists = [(MISSION_TYPE.MISSION, mission)]
@@ -364,10 +367,10 @@ def _attempt(
         what = f"{mission_type_name(t)} upload"
         try:
             if items:
-                _step(lambda left, t=t, items=items: client.upload(items, t, left), deadline, what)
+                _step(lambda left, t=t, items=items: client.upload(items, t, left), timeout, what)
             else:
                 what = f"{mission_type_name(t)} clear"
-                _step(lambda left, t=t: client.clear(t, left), deadline, what)
+                _step(lambda left, t=t: client.clear(t, left), timeout, what)
         except TransferError as exc:
             # the final ACK may be what was lost: the read-back decides
             unconfirmed.append(str(exc))
@@ -377,7 +380,7 @@ def _attempt(
     diffs: list[Difference] = []
     for t, items in lists:
         got = _step(
-            lambda left, t=t: client.download(t, left), deadline, f"{mission_type_name(t)} download"
+            lambda left, t=t: client.download(t, left), timeout, f"{mission_type_name(t)} download"
         )
         found = compare_items(items, got, mission_type_name(t))
         if t == MISSION_TYPE.MISSION:

@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from lamde_mission.items import MISSION_TYPE, MissionItem
+from lamde_mission.vehicle.connection import Connection, parse_connection
 from lamde_mission.vehicle.transfer import (
     MissionRejectedError,
     NoVehicleError,
@@ -36,7 +37,7 @@ from lamde_mission.vehicle.transfer import (
     VehicleInfo,
     upload_and_verify,
 )
-from lamde_mission.vehicle.wire import WireItem, mission_type_name, parse_endpoint
+from lamde_mission.vehicle.wire import WireItem, mission_type_name
 
 __all__ = ["MavsdkClient", "upload_mission", "make_client", "VIAS"]
 
@@ -74,16 +75,34 @@ def _route_mavsdk_log() -> None:
     log_subscribe(handler)
 
 
+#: MAVSDK's own limits on one mission message (MavlinkMissionTransferClient: its default
+#: message timeout 0.5 s, 5 retries); the Python binding does not expose them, so a list's
+#: call is given the time MAVSDK may take for each item on top of our no-progress `timeout`.
+MAVSDK_ITEM_TIMEOUT_S = 0.5
+MAVSDK_RETRIES = 5
+
+
 class MavsdkClient:
-    """Mission transfers through MAVSDK's MissionRaw plugin (blocking calls, own event loop)."""
+    """Mission transfers through MAVSDK's MissionRaw plugin (blocking calls, own event loop).
+
+    MAVSDK owns its link: it pins nothing by address, and its mission transfer recovers lost
+    messages itself (re-requesting a download item or resending the count up to
+    `MAVSDK_RETRIES` times, `MAVSDK_ITEM_TIMEOUT_S` apart; it never resends an upload item
+    unasked, the vehicle re-requests), then fails the whole list with TIMEOUT. None of this is
+    configurable from the Python binding; `upload_and_verify` then retries the whole transfer.
+    """
 
     name = "mavsdk"
 
-    def __init__(self, connect: str = "udpin://0.0.0.0:14540", *, quiet: bool = True) -> None:
+    def __init__(
+        self, connect: str | Connection = "udpin://0.0.0.0:14540", *, quiet: bool = True
+    ) -> None:
         try:
-            self.url = parse_endpoint(connect).url()
-        except ValueError:
-            self.url = connect  # serial://, tcpout://, ...: MAVSDK's business
+            conn = connect if isinstance(connect, Connection) else parse_connection(connect)
+        except ValueError as exc:
+            raise VehicleError(str(exc)) from None
+        self.url = conn.url()
+        self._expected: dict[int, int] = {}
         from mavsdk.asyncio import ComponentType, Configuration, Mavsdk
 
         if quiet:
@@ -188,6 +207,8 @@ class MavsdkClient:
         from mavsdk.asyncio.plugins.mission_raw import MissionItem as RawItem
 
         raw_items = [RawItem(*w.fields()) for w in items]
+        self._expected[int(mission_type)] = len(raw_items)
+        timeout = self._limit(timeout, len(raw_items))
         up = {
             MISSION_TYPE.MISSION: self._raw.upload_mission,
             MISSION_TYPE.FENCE: self._raw.upload_geofence,
@@ -197,8 +218,15 @@ class MavsdkClient:
             "upload", mission_type, timeout, lambda: up(raw_items), self._raw.cancel_mission_upload
         )
 
+    @staticmethod
+    def _limit(timeout: float, n: int) -> float:
+        """The whole call's limit: `timeout`, plus what MAVSDK's own retries may take per item
+        (MAVSDK reports no progress we could reset a no-progress timer on)."""
+        return timeout + n * MAVSDK_ITEM_TIMEOUT_S * (MAVSDK_RETRIES + 1)
+
     def download(self, mission_type: int, timeout: float) -> list[WireItem]:
         """Read one list back through MissionRaw."""
+        timeout = self._limit(timeout, self._expected.get(int(mission_type), 0))
         down = {
             MISSION_TYPE.MISSION: self._raw.download_mission,
             MISSION_TYPE.FENCE: self._raw.download_geofence,
@@ -258,14 +286,21 @@ def _wire_of(r: Any) -> WireItem:
     )  # fmt: skip
 
 
-def make_client(via: str, connect: str) -> Any:
-    """A MissionClient: "mavsdk" (MAVSDK's MissionRaw) or "pymavlink" (ours)."""
+def make_client(
+    via: str,
+    connect: str | Connection,
+    *,
+    log: Callable[[str], None] | None = None,
+    progress: Callable[[str, int, int], None] | None = None,
+) -> Any:
+    """A MissionClient: "mavsdk" (MAVSDK's MissionRaw) or "pymavlink" (ours). `log` gets what
+    the client ignored and recovered (pymavlink), `progress(what, done, total)` the items."""
     if via == "mavsdk":
         return MavsdkClient(connect)
     if via == "pymavlink":
         from lamde_mission.vehicle.mavlink_client import MavlinkClient
 
-        return MavlinkClient(connect)
+        return MavlinkClient(connect, log=log, progress=progress)
     raise ValueError(f"via must be one of {', '.join(VIAS)}, got {via!r}")
 
 
@@ -278,6 +313,7 @@ def upload_mission(
     timeout: float = 30.0,
     attempts: int = 3,
     log: Callable[[str], None] | None = None,
+    progress: Callable[[str, int, int], None] | None = None,
     rally: Sequence[MissionItem] | None = None,
     autopilot: str | None = None,
 ) -> UploadReport:
@@ -287,21 +323,38 @@ def upload_mission(
     fence clears it. `rally` (MISSION_TYPE_RALLY items; None leaves the vehicle's alone) goes up
     as the rally list. `autopilot` (px4, ardupilot, generic) overrides the storage rules read
     from the vehicle's HEARTBEAT (`transfer.upload_and_verify`). Waits up to `timeout` s for
-    the vehicle and up to `timeout` s per attempt;
-    a failed attempt (time-out, lost messages, read-back difference) is retried as a whole up
-    to `attempts` times. Returns the report; raises a `VehicleError` subclass (NoVehicleError,
-    MissionRejectedError, TransferError, ReadbackMismatchError; `.report` attached) on failure,
-    ValueError for bad arguments or items MAVLink cannot carry.
+    the vehicle; a list's transfer gives up after `timeout` s without progress (lost messages
+    are re-requested one by one); a failed attempt (time-out, read-back difference) is retried
+    as a whole up to `attempts` times. `connect` is checked first
+    (`connection.parse_connection`), and every item against MAVLink's field types before the
+    client is made: nothing is sent that the wire cannot carry. Returns the report; raises a
+    `VehicleError` subclass (NoVehicleError, MissionRejectedError, TransferError,
+    ReadbackMismatchError; `.report` attached) on failure, ValueError for bad arguments or
+    items MAVLink cannot carry.
     """
     if not (isinstance(timeout, int | float) and math.isfinite(timeout) and timeout > 0):
         raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
     if via not in VIAS:
         raise ValueError(f"via must be one of {', '.join(VIAS)}, got {via!r}")
-    client = make_client(via, connect)
+    conn = parse_connection(connect)  # ValueError, one line
+    from lamde_mission.vehicle.wire import wire_mission
+
+    wire_mission(mission, MISSION_TYPE.MISSION)  # ValueError naming item and field
+    if fence:
+        wire_mission(fence, MISSION_TYPE.FENCE)
+    if rally:
+        wire_mission(rally, MISSION_TYPE.RALLY)
+    client = make_client(via, conn, log=log, progress=progress)
     try:
-        return upload_and_verify(
+        report = upload_and_verify(
             client, mission, fence, rally=rally, autopilot=autopilot, timeout=timeout,
             attempts=attempts, endpoint=connect, log=log,
         )  # fmt: skip
+    except VehicleError as exc:
+        if exc.report is not None:
+            exc.report.notes.extend(getattr(client, "ignored_lines", list)())
+        raise
     finally:
         client.close()
+    report.notes.extend(getattr(client, "ignored_lines", list)())
+    return report

@@ -118,8 +118,14 @@ def _xy_to_int(v: float, frame: int, name: str, seq: int) -> int:
 
 
 def to_wire(item: MissionItem, *, seq: int | None = None, current: int | None = None) -> WireItem:
-    """`item` as MISSION_ITEM_INT carries it; ValueError if a value does not fit."""
+    """`item` as MISSION_ITEM_INT carries it; ValueError naming the item and field if a value
+    does not fit MAVLink's type for it (`formats.ranges.check_mission_item`: command uint16,
+    frame/current/autocontinue uint8, params and z float32, x/y int32 after scaling, latitude
+    and longitude in range). Nothing is ever wrapped or truncated to fit."""
+    from lamde_mission.formats.ranges import check_mission_item
+
     s = int(item.seq if seq is None else seq)
+    check_mission_item(item, lambda f: f"item {s}: {f}")
     frame = int(item.frame)
     try:
         p = [_f32(getattr(item, k)) for k in ("param1", "param2", "param3", "param4", "z")]
@@ -302,7 +308,8 @@ class Endpoint:
 def parse_endpoint(text: str) -> Endpoint:
     """`udpin://host:port`, `udpin:host:port`, `udpout:...` (and `udp:` = udpin, as mavutil).
 
-    ValueError for anything else (serial and TCP links go through MAVSDK's own URLs).
+    ValueError for anything else. The mock vehicle speaks UDP only; the uploaders take every
+    link `connection.parse_connection` knows (UDP, TCP, serial).
     """
     raw = text.strip()
     mode, sep, rest = raw.partition(":")

@@ -1,0 +1,151 @@
+"""Outputs fail before the work: `plan`'s output paths are checked before the optimisation;
+the atomic writer cleans temp files of killed writes and keeps an existing file's mode; names
+and ids from a map are printed with control characters escaped (issue 20)."""
+
+from __future__ import annotations
+
+import json
+import os
+import stat
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from planner_core.atomic import (
+    OutputPathError,
+    check_writable,
+    clean_stale_temps,
+    write_text_atomic,
+)
+from planner_core.textio import printable
+from tests.conftest import MAPS, run_cli, run_cli_many
+
+DEMO = MAPS / "small-demo.json"
+
+
+def _bad_outputs(tmp: Path) -> dict[str, list[str]]:
+    afile = tmp / "afile"
+    afile.write_text("x")
+    folder = tmp / "folder.plan"
+    folder.mkdir()
+    ro = tmp / "ro.plan"
+    ro.write_text("old")
+    ro.chmod(0o444)
+    return {
+        "is a folder": ["-o", str(folder)],
+        "is a file, not a folder": ["-o", str(afile / "m.plan")],
+        "does not exist": ["-o", str(tmp / "missing" / "m.plan")],
+        # /sys refuses new files even to root: a read-only folder whoever runs the test
+        "cannot write in the folder": ["-o", "/sys/lamde-test.plan"],
+        "read-only": ["-o", str(ro)],
+        "--report": ["-o", str(tmp / "ok.plan"), "--report", str(folder)],
+        "--plot": ["-o", str(tmp / "ok.plan"), "--plot", str(afile / "p.png")],
+        "also the": ["-o", str(tmp / "same.plan"), "--report", str(tmp / "same.plan")],
+    }
+
+
+def test_every_bad_output_exits_2_before_the_optimisation(tmp_path: Path) -> None:
+    cases = _bad_outputs(tmp_path)
+    # the default budget: an optimisation that started would show progress lines on stderr
+    results = run_cli_many(*[("plan", DEMO, *args) for args in cases.values()], timeout=120)
+    for (needle, args), r in zip(cases.items(), results, strict=True):
+        assert r.returncode == 2, (args, r.stderr)
+        lines = r.stderr.strip().splitlines()
+        assert len(lines) == 1 and needle in lines[0], (args, r.stderr)
+        assert "gen " not in r.stderr and "Traceback" not in r.stderr
+        assert r.stdout == ""
+    assert not (tmp_path / "missing").exists()  # no silent folder creation
+    assert not (tmp_path / "ok.plan").exists()
+    assert (tmp_path / "ro.plan").read_text() == "old"
+
+
+def test_mkdir_creates_the_folder(tmp_path: Path) -> None:
+    out = tmp_path / "new" / "deeper" / "m.waypoints"
+    r = run_cli("plan", DEMO, "-o", out, "--budget", 600, "--quiet", "--mkdir",
+                "--allow-infeasible")  # fmt: skip
+    assert r.returncode in (0, 1), r.stderr
+    assert out.read_text().startswith("QGC WPL 110")
+
+
+def test_check_writable_cases(tmp_path: Path) -> None:
+    ok = tmp_path / "ok.plan"
+    assert check_writable(ok) == ok and not ok.exists()
+    with pytest.raises(OutputPathError, match="--report: .*is a folder"):
+        check_writable(tmp_path, what="--report")
+    with pytest.raises(OutputPathError, match="does not exist"):
+        check_writable(tmp_path / "a" / "b.plan")
+    check_writable(tmp_path / "a" / "b.plan", mkdir=True)
+    assert (tmp_path / "a").is_dir()
+    assert list((tmp_path / "a").iterdir()) == []  # the probe left nothing
+
+
+def test_stale_temp_of_a_killed_write_is_cleaned(tmp_path: Path) -> None:
+    out = tmp_path / "m.plan"
+    # a write killed between its temp file and the rename (SIGKILL in the write window)
+    code = ("import os, tempfile; from planner_core.atomic import _tmp_prefix; "
+            "from pathlib import Path; "
+            f"fd, t = tempfile.mkstemp(prefix=_tmp_prefix(Path({str(out)!r})), "
+            f"dir={str(tmp_path)!r}); os.write(fd, b'half'); os.kill(os.getpid(), 9)")  # fmt: skip
+    subprocess.run([sys.executable, "-c", code], check=False)
+    left = [p.name for p in tmp_path.iterdir()]
+    assert len(left) == 1 and left[0].startswith(".m.plan.lamde-tmp-"), left
+    # a live writer's temp file (this process) is not touched
+    mine = tmp_path / f".m.plan.lamde-tmp-{os.getpid()}-live"
+    mine.write_text("in progress")
+    write_text_atomic(out, "new")
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(["m.plan", mine.name])
+    assert out.read_text() == "new"
+    mine.unlink()
+    assert clean_stale_temps(out) == []
+
+
+def test_overwrite_keeps_the_mode(tmp_path: Path) -> None:
+    out = tmp_path / "secret.plan"
+    out.write_text("old")
+    out.chmod(0o600)
+    write_text_atomic(out, "new")
+    assert stat.S_IMODE(out.stat().st_mode) == 0o600 and out.read_text() == "new"
+    fresh = tmp_path / "fresh.plan"
+    write_text_atomic(fresh, "x")
+    umask = os.umask(0)
+    os.umask(umask)
+    assert stat.S_IMODE(fresh.stat().st_mode) == 0o666 & ~umask
+
+
+def test_write_without_mkdir_refuses_a_missing_folder(tmp_path: Path) -> None:
+    with pytest.raises(FileNotFoundError):
+        write_text_atomic(tmp_path / "no" / "x.txt", "x", mkdir=False)
+    assert not (tmp_path / "no").exists()
+
+
+def test_printable_escapes_controls() -> None:
+    assert printable("S1") == "S1" and printable("Zürich 東京") == "Zürich 東京"
+    assert printable("a\nb") == "a\\nb"
+    assert printable("\x1b[2J") == "\\x1b[2J"
+    assert printable("x\u202ey\u2028") == "x\\u202ey\\u2028"
+    assert printable("\x9b") == "\\x9b"
+
+
+@pytest.mark.parametrize("field", ["name", "id"])
+def test_plan_never_prints_a_maps_control_characters(field: str, tmp_path: Path) -> None:
+    """The map reader refuses C0 controls in names and ids; whatever it lets through (format
+    characters such as a bidi override) is printed escaped, and a refusal prints no raw bytes."""
+    for k, evil in enumerate(["demo\nwrote /etc/passwd\x1b[2J", "demo\u202egnp.exe\u200b"]):
+        m = json.loads(DEMO.read_text())
+        if field == "name":
+            m["name"] = evil
+        else:
+            m["sensors"][0]["id"] = evil
+        mp = tmp_path / f"evil{k}.json"
+        mp.write_text(json.dumps(m))
+        r = run_cli("plan", mp, "-o", tmp_path / f"m{k}.plan", "--budget", 600,
+                    "--allow-infeasible")  # fmt: skip
+        out = r.stdout + r.stderr
+        assert r.returncode in (0, 1, 2), r.stderr
+        for raw in ("\x1b", "\u202e", "\u200b"):
+            assert raw not in out
+        assert not any(line.startswith("wrote /etc") for line in out.splitlines())
+        if r.returncode != 2:
+            assert printable(evil) in r.stdout

@@ -1,0 +1,350 @@
+"""Uploads over a hostile link (issue 20): loss both ways, a second noisy ground station, forged
+replies, items the wire cannot carry, the simulator's veto, one connection syntax (UDP, TCP,
+serial) for both uploaders."""
+
+from __future__ import annotations
+
+import json
+import os
+import select
+import socket
+import threading
+import time
+from dataclasses import replace
+
+import pytest
+from pymavlink.dialects.v20 import common as mavlink2
+
+from lamde_mission.cli import main
+from lamde_mission.formats import read_mission, write_mission
+from lamde_mission.items import CMD, MISSION_TYPE
+from lamde_mission.vehicle.connection import Connection, parse_connection
+from lamde_mission.vehicle.mock import NOISY_GCS_SYSTEM, MockVehicle
+from lamde_mission.vehicle.upload import upload_mission
+from lamde_mission.vehicle.wire import compare_items
+from planner_core.mapio import load_map
+from tests.test_vehicle import MAP
+from tests.vehicle_helpers import free_udp_port, hand_fence, hand_mission
+
+VIAS = ("mavsdk", "pymavlink")
+
+
+@pytest.fixture
+def port() -> int:
+    return free_udp_port()
+
+
+def _mock(port: int, **kw) -> MockVehicle:
+    kw.setdefault("heartbeat_hz", 4.0)
+    return MockVehicle(f"udpout:127.0.0.1:{port}", **kw)
+
+
+def _listen(port: int) -> str:
+    return f"udpin://127.0.0.1:{port}"
+
+
+# ----------------------------------------------------------------------------- loss, noise
+
+
+def test_pymavlink_recovers_items_one_by_one_at_40_percent_loss_both_ways(port):
+    mission, fence = hand_mission(16), hand_fence()
+    lines: list[str] = []
+    progress: list[tuple[str, int, int]] = []
+    with _mock(port, loss=0.4, loss_in=0.4, seed=3) as v:
+        report = upload_mission(mission, fence, connect=_listen(port), via="pymavlink",
+                                timeout=10, attempts=1, log=lines.append,
+                                progress=lambda *a: progress.append(a))  # fmt: skip
+        assert compare_items(mission, v.items()) == []
+        assert compare_items(fence, v.items(MISSION_TYPE.FENCE), "fence") == []
+        assert v.stats.dropped > 0 and v.stats.dropped_in > 0
+    assert report.ok and report.attempts == 1  # no whole-transfer retry was needed
+    assert ("mission upload", 20, 20) in progress and ("fence download", 5, 5) in progress
+
+
+@pytest.mark.parametrize("via", VIAS)
+def test_second_ground_station_broadcasting_mission_messages(via, port):
+    mission, fence = hand_mission(6), hand_fence()
+    lines: list[str] = []
+    with _mock(port, noisy_gcs_hz=200.0, latency_ms=20.0, seed=1) as v:
+        report = upload_mission(mission, fence, connect=_listen(port), via=via, timeout=10,
+                                attempts=1, log=lines.append)  # fmt: skip
+        assert compare_items(mission, v.items()) == []
+        assert v.stats.noise > 0
+    assert report.ok
+    if via == "pymavlink":  # says what it ignored
+        said = "\n".join(lines + report.notes)
+        assert f"system {NOISY_GCS_SYSTEM}" in said
+
+
+def test_forged_replies_from_another_address_are_ignored(port):
+    """A forger on another socket sends MISSION_ACK(DENIED) and bogus item requests with the
+    vehicle's ids (system 1, component 1) to the ground station throughout the upload."""
+    mav = mavlink2.MAVLink(None, srcSystem=1, srcComponent=1)
+    forger = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    forger.bind(("127.0.0.1", 0))
+    stop = threading.Event()
+
+    def forge() -> None:
+        k = 0
+        while not stop.is_set():
+            for t in (MISSION_TYPE.MISSION, MISSION_TYPE.FENCE):
+                msgs = [mavlink2.MAVLink_mission_ack_message(255, 190,
+                                                             mavlink2.MAV_MISSION_DENIED, t),
+                        mavlink2.MAVLink_mission_request_int_message(255, 190, 1000 + k, t),
+                        mavlink2.MAVLink_mission_count_message(255, 190, 3, t)]  # fmt: skip
+                for m in msgs:
+                    forger.sendto(m.pack(mav), ("127.0.0.1", port))
+            k += 1
+            time.sleep(0.002)
+
+    lines: list[str] = []
+    mission = hand_mission(8)
+    th = threading.Thread(target=forge, daemon=True)
+    try:
+        with _mock(port) as v:
+            th.start()
+            report = upload_mission(mission, hand_fence(), connect=_listen(port),
+                                    via="pymavlink", timeout=10, attempts=1,
+                                    log=lines.append)  # fmt: skip
+            assert compare_items(mission, v.items()) == []
+    finally:
+        stop.set()
+        th.join(2)
+        forger.close()
+    assert report.ok and report.attempts == 1
+    assert any("not the vehicle's address" in n for n in report.notes), report.notes
+    assert any("pinned the vehicle" in s for s in lines)
+
+
+# ----------------------------------------------------------------------------- validate first
+
+_BAD_FIELDS = {
+    "command": dict(command=99999),
+    "frame": dict(frame=300),
+    "current": dict(current=256),
+    "x": dict(x=91.0),
+    "y": dict(y=-181.0),
+    "z": dict(z=float("inf")),
+    "param1": dict(param1=1e40),
+    "param4": dict(param4=float("-inf")),
+}
+
+
+@pytest.mark.parametrize("via", VIAS)
+@pytest.mark.parametrize("field", sorted(_BAD_FIELDS))
+def test_every_field_range_refused_before_a_byte_is_sent(via, field):
+    """Nothing reaches a listening vehicle: the check runs before the client is made."""
+    sink = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    sink.bind(("127.0.0.1", 0))
+    try:
+        mission = hand_mission(2)
+        mission[2] = replace(mission[2], **_BAD_FIELDS[field])
+        with pytest.raises(ValueError, match=rf"item 2: {field}\b"):
+            upload_mission(mission, [], connect=f"udpout://127.0.0.1:{sink.getsockname()[1]}",
+                           via=via, timeout=1)  # fmt: skip
+        assert select.select([sink], [], [], 0.3)[0] == []
+    finally:
+        sink.close()
+
+
+def test_local_frame_coordinates_beyond_int32_are_refused():
+    mission = hand_mission(1)
+    mission[1] = replace(mission[1], frame=mavlink2.MAV_FRAME_LOCAL_NED, x=1e6)
+    with pytest.raises(ValueError, match="int32"):
+        upload_mission(mission, [], connect="udpout://127.0.0.1:9", via="pymavlink", timeout=1)
+
+
+def _plan_files(tmp_path):
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    m = load_map(MAP)
+    plan = SimpleNamespace(hover_points=np.array([[500, 420], [1400, 880]]),
+                           hover_times=np.array([31.5, 47.25]))  # fmt: skip
+    good = write_mission(tmp_path / "demo.plan", plan, m)
+    mp = tmp_path / "map.json"
+    mp.write_text(json.dumps({k: v for k, v in MAP.items() if k != "obstacles"}))
+    greedy = dict(MAP, sensors=[dict(MAP["sensors"][0], required_data=1e6), MAP["sensors"][1]])
+    gp = tmp_path / "greedy.json"
+    gp.write_text(json.dumps(greedy))
+    return good, mp, gp
+
+
+@pytest.mark.parametrize("via", VIAS)
+def test_cli_sim_check_refuses_unless_force(via, port, tmp_path, capsys):
+    plan_path, map_ok, map_greedy = _plan_files(tmp_path)
+    with _mock(port) as v:
+        # rejected by the simulator on the greedy map: exit 2, nothing sent
+        rc = main(["upload", str(plan_path), "--map", str(map_greedy), "--connect",
+                   _listen(port), "--via", via, "--timeout", "5"])  # fmt: skip
+        err = capsys.readouterr().err
+        assert rc == 2 and "simulator rejects" in err and "C4" in err and "--force" in err
+        assert v.stats.uploads[MISSION_TYPE.MISSION] == 0
+        # accepted on its own map
+        rc = main(["upload", str(plan_path), "--map", str(map_ok), "--connect", _listen(port),
+                   "--via", via, "--timeout", "10"])  # fmt: skip
+        assert rc == 0, capsys.readouterr().err
+        # --force sends what the simulator rejects, with a warning
+        v.set_items([], MISSION_TYPE.MISSION)
+        rc = main(["upload", str(plan_path), "--map", str(map_greedy), "--force", "--connect",
+                   _listen(port), "--via", via, "--timeout", "10"])  # fmt: skip
+        assert rc == 0
+        assert "sent anyway (--force)" in capsys.readouterr().err
+        mission, _ = read_mission(plan_path)
+        assert compare_items(mission, v.items()) == []
+
+
+def test_cli_force_never_sends_what_the_wire_cannot_carry(tmp_path, capsys):
+    mission = hand_mission(1)
+    mission[0] = replace(mission[0], command=CMD.TAKEOFF)
+    from lamde_mission.formats.qgc_plan import write_qgc_plan
+
+    p = write_qgc_plan(tmp_path / "bad.plan", mission, (), home=(-35.36, 149.16, 0.0),
+                       cruise_speed=10.0)  # fmt: skip
+    doc = json.loads(p.read_text())
+    doc["mission"]["items"][1]["command"] = 99999
+    p.write_text(json.dumps(doc))
+    for via in VIAS:
+        assert main(["upload", str(p), "--force", "--via", via, "--connect",
+                     "udpout://127.0.0.1:9"]) == 2  # fmt: skip
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "command" in err[0] and "65535" in err[0]
+
+
+# ----------------------------------------------------------------------------- connections
+
+
+def test_parse_connection_forms():
+    assert parse_connection("udpin://0.0.0.0:14540") == Connection("udpin", "0.0.0.0", 14540)
+    assert parse_connection("udp::14540") == Connection("udpin", "0.0.0.0", 14540)
+    assert parse_connection("udpout:10.0.0.2:14550").url() == "udpout://10.0.0.2:14550"
+    assert parse_connection("tcp://127.0.0.1:5760").url() == "tcpout://127.0.0.1:5760"
+    assert parse_connection("tcpin://:5760").url() == "tcpin://0.0.0.0:5760"
+    s = parse_connection("serial:///dev/null:57600", check_device=True)
+    assert (s.scheme, s.device, s.baud) == ("serial", "/dev/null", 57600)
+    assert s.url() == "serial:///dev/null:57600"
+
+
+@pytest.mark.parametrize("text, needle", [
+    ("bogus://x:1", "unknown connection"),
+    ("udpin://127.0.0.1", "port 1..65535"),
+    ("udpout://127.0.0.1:70000", "port 1..65535"),
+    ("tcpout://:5760", "HOST:PORT"),
+    ("udpin://127.0.0.1:14540/extra", "nothing after it"),
+    ("serial:///dev/ttyNOPE0:57600", "No such file"),
+    ("serial:///dev/null:12345", "baud rate"),
+    ("serial:///tmp:57600", "not a serial"),
+    ("/dev/ttyUSB0", "unknown connection"),
+])  # fmt: skip
+def test_bad_connections_exit_2_with_one_line(text, needle, capsys, tmp_path):
+    with pytest.raises(ValueError, match=needle):
+        parse_connection(text)
+    plan_path = _plan_files(tmp_path)[0]
+    for via in VIAS:
+        assert main(["upload", str(plan_path), "--connect", text, "--via", via]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("lamde-mission") and "--connect" in err[0]
+        assert needle in err[0]
+
+
+class _Bridge:
+    """A byte stream (a TCP server socket, or a pty master) joined to a mock on UDP."""
+
+    def __init__(self, mock_port: int, stream: str) -> None:
+        self.udp = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.udp.bind(("127.0.0.1", 0))
+        self.mock_addr = ("127.0.0.1", mock_port)
+        self.udp.sendto(b"\0", self.mock_addr)  # the mock (udpin) answers whoever wrote last
+        self.stop = threading.Event()
+        self.conn: socket.socket | None = None
+        self.fd: int | None = None
+        if stream == "tcp":
+            self.server = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+            self.server.bind(("127.0.0.1", 0))
+            self.server.listen(1)
+            self.url = f"tcpout://127.0.0.1:{self.server.getsockname()[1]}"
+        else:
+            self.server = None
+            self.fd, slave = os.openpty()
+            self.slave = slave
+            self.url = f"serial://{os.ttyname(slave)}:57600"
+        self.thread = threading.Thread(target=self.run, daemon=True)
+        self.thread.start()
+
+    def run(self) -> None:
+        if self.server is not None:
+            self.server.settimeout(10)
+            try:
+                self.conn, _ = self.server.accept()
+            except OSError:
+                return
+        src = self.conn if self.conn is not None else self.fd
+        while not self.stop.is_set():
+            r, _, _ = select.select([src, self.udp], [], [], 0.05)
+            try:
+                if src in r:
+                    data = self.conn.recv(65536) if self.conn else os.read(self.fd, 65536)
+                    if not data:
+                        return
+                    self.udp.sendto(data, self.mock_addr)
+                if self.udp in r:
+                    data, _ = self.udp.recvfrom(65536)
+                    if self.conn is not None:
+                        self.conn.sendall(data)
+                    else:
+                        os.write(self.fd, data)
+            except OSError:
+                return
+
+    def close(self) -> None:
+        self.stop.set()
+        self.thread.join(2)
+        for s in (self.udp, self.conn, self.server):
+            if s is not None:
+                s.close()
+        if self.fd is not None:
+            os.close(self.fd)
+            os.close(self.slave)
+
+
+@pytest.mark.parametrize("stream", ["tcp", "serial"])
+def test_pymavlink_over_tcp_and_serial(stream, port):
+    mission, fence = hand_mission(4), hand_fence()
+    with MockVehicle(f"udpin:127.0.0.1:{port}", heartbeat_hz=4.0) as v:
+        bridge = _Bridge(port, stream)
+        try:
+            # the mock answers whoever wrote last: our heartbeats open the way
+            report = upload_mission(mission, fence, connect=bridge.url, via="pymavlink",
+                                    timeout=10)  # fmt: skip
+        finally:
+            bridge.close()
+        assert compare_items(mission, v.items()) == []
+    assert report.ok
+
+
+def test_mavsdk_over_tcp(port):
+    mission = hand_mission(3)
+    with MockVehicle(f"udpin:127.0.0.1:{port}", heartbeat_hz=4.0) as v:
+        bridge = _Bridge(port, "tcp")
+        try:
+            report = upload_mission(mission, [], connect=bridge.url, via="mavsdk", timeout=10)
+        finally:
+            bridge.close()
+        assert compare_items(mission, v.items()) == []
+    assert report.ok
+
+
+def test_mavsdk_log_stays_off_stderr_unless_verbose(tmp_path):
+    from tests.conftest import run_cli
+
+    plan_path = _plan_files(tmp_path)[0]
+    url = _listen(free_udp_port())
+    quiet = run_cli("upload", plan_path, "--via", "mavsdk", "--timeout", "0.5", "--connect", url)
+    assert quiet.returncode == 1
+    assert quiet.stderr.strip().splitlines() == [
+        f"lamde-mission upload: no vehicle heard at {url} within 0.5 s"
+    ]
+    loud = run_cli("upload", plan_path, "--via", "mavsdk", "--timeout", "0.5", "--connect", url,
+                   "--verbose")  # fmt: skip
+    assert loud.returncode == 1 and "mavsdk: " in loud.stderr
