@@ -12,15 +12,22 @@ are compacted, and they get the exact float64 answer, again branch-free: the cho
 circles, Cyrus-Beck clipping against the edge half-planes for polygons. Branch-free matters: the
 per-pair branches of a straightforward loop mispredict and cost ~100 ns per candidate pair.
 
-Boundary tolerance. Floating point cannot say whether a leg built from rounded coordinates is
-exactly tangent or exactly on an edge, and near tangency the chord length is ill-conditioned
-(a rounding error delta in the distance gives a chord of 2*sqrt(2*r*delta)). So, with
-``tol = Obstacles.tol`` (1e-9 m for coordinates up to 10 km, growing with the map's extent):
-  * a leg whose supporting line passes at distance >= r - tol from a circle's centre counts 0;
-  * a leg that stays within tol of (or outside) one edge line of a polygon counts 0 for it;
-  * a single (leg, obstacle) overlap of length <= tol counts 0 (a leg grazing a corner gives
-    exactly 0, so the feasibility test L_vio == 0 of constraint C5 is not tripped by rounding).
-Everything else is exact up to rounding.
+Boundary tolerance (conservative). Floating point cannot say whether a leg built from rounded
+coordinates is exactly tangent or exactly on an edge, and near tangency the chord length is
+ill-conditioned (a rounding error delta in the distance gives a chord of 2*sqrt(2*r*delta)).
+The paper's C5 is exact (any positive overlap is a violation), so the rounding band is resolved
+towards the violation: with ``tol = Obstacles.tol`` (the float rounding scale of the geometry,
+`_TOL_PER_METRE` times the map's extent, at least `planner_core.model.L_VIO_TOL`), every obstacle
+is inflated by tol before the exact overlap is taken:
+  * a circle of radius r counts the chord of radius r + tol;
+  * a polygon counts its overlap with the polygon whose edge lines are moved out by tol (mitred
+    corners); a leg at or beyond an inflated edge line all along its length counts 0 for it;
+  * a single (leg, obstacle) overlap of length <= tol counts 0 (only legs shorter than tol).
+So a tangent leg, a leg along an edge and a leg through a corner all count as touching (a small
+positive overlap, hence a violation), and a leg the kernel calls collision-free keeps a clearance
+of at least tol from every obstacle: its exact overlap, under shapely or any exact predicate,
+is 0 (tests/test_geometry.py::test_feasible_means_zero_exact_overlap). Seeds and routes stand
+off obstacles by the clearance c, far above tol.
 """
 
 from __future__ import annotations
@@ -32,6 +39,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
+from planner_core.model import L_VIO_TOL
+
 __all__ = [
     "Obstacles",
     "overlap_lengths",
@@ -41,7 +50,7 @@ __all__ = [
 ]
 
 _TOL_PER_METRE = 1e-13  # boundary tolerance relative to the largest coordinate magnitude
-_TOL_MIN = 1e-9  # metres: the tolerance never drops below this (maps up to 10 km)
+_TOL_MIN = L_VIO_TOL  # metres: the tolerance never drops below this (maps up to 10 km)
 _CHUNK_LEGS = 4096  # legs per kernel chunk (the per-leg work arrays stay in cache)
 _COORD_LIMIT = 1e15  # metres; legs beyond this skip the float32 first pass (slow, exact path)
 # Error bound of the float32 first pass, relative to the coordinate magnitude S: each of the
@@ -133,7 +142,7 @@ class Obstacles:
         normals = np.empty_like(verts)
         cull = np.empty((3, len(circles) + n_poly), dtype=np.float64)  # rows x, y, radius
         cull[:2, : len(circles)] = circles[:, :2].T
-        cull[2, : len(circles)] = circles[:, 2] - tol  # the exact test, tangent band removed
+        cull[2, : len(circles)] = circles[:, 2] + tol  # the inflated circle
         for p in range(n_poly):
             v = verts[offs[p] : offs[p + 1]]
             e = np.roll(v, -1, axis=0) - v
@@ -143,7 +152,7 @@ class Obstacles:
             centre = 0.5 * (v.min(axis=0) + v.max(axis=0))
             radius = float(np.max(np.hypot(v[:, 0] - centre[0], v[:, 1] - centre[1])))
             cull[:2, len(circles) + p] = centre
-            cull[2, len(circles) + p] = radius * (1.0 + 1e-9) + tol  # conservative
+            cull[2, len(circles) + p] = radius * (1.0 + 1e-9) + 4.0 * tol  # mitred inflation
         if not np.all(np.abs(cull[:2]) < _COORD_LIMIT):
             raise ValueError(f"obstacle coordinates must be below {_COORD_LIMIT:g} in magnitude")
 
@@ -214,7 +223,8 @@ def _circle_overlap(ax, ay, ux, uy, length, cx, cy, r, tol):
     fx = cx - ax
     fy = cy - ay
     h = abs(ux * fy - uy * fx)  # distance from the centre to the leg's line
-    if h >= r - tol:
+    r = r + tol  # inflated (module docstring)
+    if h >= r:
         return 0.0
     s = ux * fx + uy * fy  # arc length along the leg of the closest approach
     w = math.sqrt((r - h) * (r + h))  # half chord
@@ -236,10 +246,11 @@ def _polygon_overlap(ax, ay, bx, by, length, verts, normals, start, stop, tol):
         ny = normals[i, 1]
         vx = verts[i, 0]
         vy = verts[i, 1]
-        sa = nx * (ax - vx) + ny * (ay - vy)  # signed distance to the edge line, > 0 outside
-        sb = nx * (bx - vx) + ny * (by - vy)
-        # outside this half-plane, or within tol of its boundary line all along the leg
-        off |= (sa > -tol) & (sb > -tol)
+        # signed distance to the edge line moved out by tol, > 0 outside
+        sa = nx * (ax - vx) + ny * (ay - vy) - tol
+        sb = nx * (bx - vx) + ny * (by - vy) - tol
+        # at or beyond this inflated half-plane's line all along the leg
+        off |= (sa >= 0.0) & (sb >= 0.0)
         den = sa - sb
         t = sa / (den if den != 0.0 else 1.0)  # where the leg crosses the line, if it does
         entering = (sa >= 0.0) & (sb < 0.0)
@@ -363,7 +374,7 @@ def _overlap_chunk(
         if j < n_circ:
             cx64 = circles[j, 0]
             cy64 = circles[j, 1]
-            r = circles[j, 2]
+            r = circles[j, 2] + tol  # inflated (module docstring)
             for q in range(k):
                 i = idx[q]
                 fx = cx64 - lax[i]
@@ -373,7 +384,7 @@ def _overlap_chunk(
                 w2 = (r - h) * (r + h)
                 half = math.sqrt(w2 if w2 > 0.0 else 0.0)  # half chord
                 d = min(s + half, llen[i]) - max(s - half, 0.0)
-                t_lo[q] = d if (d > tol) & (h < r - tol) else 0.0
+                t_lo[q] = d if (d > tol) & (h < r) else 0.0
             for q in range(k):
                 out[m0 + idx[q]] += t_lo[q]
         else:
@@ -394,10 +405,11 @@ def _overlap_chunk(
                 vx = verts[e, 0]
                 vy = verts[e, 1]
                 for q in range(k):
-                    sa = nx * (gax[q] - vx) + ny * (gay[q] - vy)  # signed distance, > 0 outside
-                    sb = nx * (gbx[q] - vx) + ny * (gby[q] - vy)
-                    # outside this half-plane, or within tol of its line all along the leg
-                    off[q] |= (sa > -tol) & (sb > -tol)
+                    # signed distance to the edge line moved out by tol, > 0 outside
+                    sa = nx * (gax[q] - vx) + ny * (gay[q] - vy) - tol
+                    sb = nx * (gbx[q] - vx) + ny * (gby[q] - vy) - tol
+                    # at or beyond this inflated half-plane's line all along the leg
+                    off[q] |= (sa >= 0.0) & (sb >= 0.0)
                     den = sa - sb
                     t = sa / (den if den != 0.0 else 1.0)  # crossing (signs differ: no cancel)
                     t_lo[q] = max(t_lo[q], t if (sa >= 0.0) & (sb < 0.0) else 0.0)  # entering
@@ -483,7 +495,7 @@ def overlap_lengths(a: np.ndarray, b: np.ndarray, obstacles: Obstacles) -> np.nd
 def _circle_overlap_py(
     ax: float, ay: float, bx: float, by: float, cx: float, cy: float, r: float, tol: float
 ) -> float:
-    """Plain-Python chord of the leg's line clipped to the leg (the kernel's boundary rule)."""
+    """Plain-Python chord of the leg's line clipped to the leg, circle inflated by tol."""
     length = math.hypot(bx - ax, by - ay)
     if length <= tol:
         return 0.0
@@ -491,8 +503,9 @@ def _circle_overlap_py(
     # closest approach of the infinite line to the centre: foot at arc length s, distance h
     s = (cx - ax) * ux + (cy - ay) * uy
     h = abs((cx - ax) * uy - (cy - ay) * ux)
-    if h >= r - tol:
-        return 0.0  # misses, or tangent within tol
+    r = r + tol  # the kernel's conservative boundary rule
+    if h >= r:
+        return 0.0  # misses the inflated circle
     half = math.sqrt(r * r - h * h)
     inside = min(length, s + half) - max(0.0, s - half)
     return inside if inside > tol else 0.0
@@ -501,7 +514,7 @@ def _circle_overlap_py(
 def _hugs_an_edge_py(
     ax: float, ay: float, bx: float, by: float, poly: np.ndarray, tol: float
 ) -> bool:
-    """True if both leg ends are outside some edge's line or within tol of it (rule 2)."""
+    """True if both leg ends are at or beyond some edge's line moved out by tol (rule 2)."""
     v = poly.tolist()
     for (x0, y0), (x1, y1) in zip(v, v[1:] + v[:1], strict=True):
         ex, ey = x1 - x0, y1 - y0
@@ -509,17 +522,30 @@ def _hugs_an_edge_py(
         # signed distances to the edge's line, positive outside (to the right of a CCW edge)
         da = (ey * (ax - x0) - ex * (ay - y0)) / norm
         db = (ey * (bx - x0) - ex * (by - y0)) / norm
-        if da > -tol and db > -tol:
+        if da - tol >= 0.0 and db - tol >= 0.0:
             return True
     return False
+
+
+def _inflated_py(poly: np.ndarray, tol: float) -> list[tuple[float, float]]:
+    """Vertices of the convex CCW polygon with every edge line moved out by tol (mitred):
+    vertex i moves by tol * (n_prev + n_next) / (1 + n_prev . n_next), n the unit outward
+    normals of its two edges."""
+    v = np.asarray(poly, dtype=float)
+    e = np.roll(v, -1, axis=0) - v
+    n = np.stack([e[:, 1], -e[:, 0]], axis=1) / np.hypot(e[:, 0], e[:, 1])[:, None]
+    n_prev = np.roll(n, 1, axis=0)
+    k = tol / (1.0 + np.einsum("ij,ij->i", n, n_prev))
+    return [tuple(p) for p in (v + k[:, None] * (n + n_prev)).tolist()]
 
 
 def overlap_lengths_reference(a: np.ndarray, b: np.ndarray, obstacles: Obstacles) -> np.ndarray:
     """Slow, obviously correct twin of `overlap_lengths`, one leg and one obstacle at a time.
 
-    Polygons: shapely, length(leg & polygon) - length(leg & boundary), i.e. the open interior
-    (shapely's predicates are exact, so a leg along an edge gives 0). Circles: a plain-Python
-    closed-form chord, because shapely only approximates circles by polygons (buffer), which is
+    Polygons: shapely on the polygon inflated by tol (edge lines moved out, mitred),
+    length(leg & polygon) - length(leg & boundary), i.e. the open interior (shapely's
+    predicates are exact). Circles: a plain-Python closed-form chord, because shapely only
+    approximates circles by polygons (buffer), which is
     off by up to r * (1 - cos(pi / n_segments)) in radius. The boundary-tolerance rules of the
     module docstring are applied explicitly, so both paths implement the same definition.
     """
@@ -527,7 +553,7 @@ def overlap_lengths_reference(a: np.ndarray, b: np.ndarray, obstacles: Obstacles
 
     a2, b2, lead = _legs(a, b)
     o = obstacles
-    polys = [Polygon(o.polygon(p)) for p in range(o.n_polygons)]
+    polys = [Polygon(_inflated_py(o.polygon(p), o.tol)) for p in range(o.n_polygons)]
     out = np.zeros(a2.shape[0], dtype=np.float64)
     for m in range(a2.shape[0]):
         ax, ay = float(a2[m, 0]), float(a2[m, 1])
