@@ -21,15 +21,22 @@ POPULATION = _POPULATION
 
 
 def optimise(
-    problem: Any, budget: int, seed: int, *, configurator: str = CONFIGURATOR
+    problem: Any, budget: int, seed: int, *, configurator: str = CONFIGURATOR, lp: bool = False
 ) -> OptimiseResult:
     """Run the DE with `configurator` for exactly `budget` evaluations (initial population
-    included)."""
+    included). `lp`: what `plan` does, the DE on budget - 1, then the hover-time LP on its best
+    (`planner_core.baselines.seed_lp.lp_finish`, the last evaluation)."""
+    from planner_core.baselines.seed_lp import can_lp, lp_finish
 
     budgeted = as_budgeted(problem, budget)
+    reserve = 1 if lp and can_lp(budgeted) else 0
     population = min(POPULATION, int(budget))
     if population < MIN_POPULATION:
         raise ValueError(f"budget {budget} is below the DE's minimum population {MIN_POPULATION}")
     res = run(budgeted, configurator=configurator, seed=int(seed), population=population,
-              budget=int(budget))
+              budget=int(budget) - reserve)
+    if reserve:
+        lp_finish(budgeted, res.x)
+        x, f, phi = budgeted.best("deb")
+        return OptimiseResult(x, f, phi, budgeted.count, budgeted.trace("deb"))
     return OptimiseResult(res.x, res.f, res.phi, budgeted.count, budgeted.trace("deb"))
