@@ -65,8 +65,9 @@ def plan(
     """Plan hover points and hover times for `map` (a path, dict or Map); same seed, same plan.
 
     `progress` is called once per generation with a record holding generation, evaluations,
-    budget, best_f, best_phi and feasible_fraction. With `polish`, the final best's hover times
-    are re-solved by the LP of `planner_core.polish`, kept only if not worse under Deb's rule.
+    budget, best_f, best_phi and feasible_fraction. With `polish`, the hover times of the final
+    population's `planner_core.polish.ELITE` Deb-best individuals are re-solved by the LP of
+    `planner_core.polish`; the Deb-best of those is kept if not worse than the DE's best.
     Defaults and valid ranges: `planner_core.defaults`.
 
     Raises ValueError with one line naming the field ("population: must be an integer >= 6,
@@ -97,11 +98,18 @@ def plan(
     polish_info = None
     t_polish = 0.0
     if polish:
-        from planner_core.polish import polish_hover_times
+        from planner_core.de.core import to_problem
+        from planner_core.model import deb_best
+        from planner_core.polish import polish_elite
 
         t1 = time.perf_counter()
-        pol = polish_hover_times(problem, best["hover_points"], best["hover_times"])
-        after = problem.breakdown(problem.encode(pol.hover_points, pol.hover_times))
+        # the LP for the final population's elite, not only its Deb-best (docs/search.md)
+        st = result.state
+        xs, pols = polish_elite(problem, to_problem(problem, st.X), st.f, st.phi)
+        fs, phis = problem.evaluate(xs)
+        c = deb_best(fs, phis)
+        pol = pols[c]
+        after = problem.breakdown(xs[c])
         accepted = _deb_not_worse(after, best)
         if accepted:
             chosen = after

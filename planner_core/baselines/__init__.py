@@ -97,8 +97,15 @@ REGISTRY: dict[str, OptimiserSpec] = {
             "planner",
             "planner_core.baselines.de:optimise",
             f"what `plan` does: our DE ({CONFIGURATOR} configurator, population {POPULATION}) "
-            "on budget - 1, then the polish LP on its best",
+            "on budget - 16, then the polish LP on the final population's 16 Deb-best",
             kwargs={"lp": True},
+        ),
+        OptimiserSpec(
+            "planner-memetic",
+            "planner_core.baselines.de:optimise",
+            "the planner with the memetic step on the elite every 10 generations (2-opt order, "
+            "LP hover times, removals, pulls; planner_core.memetic), then the polish LP",
+            kwargs={"lp": True, "memetic": True},
         ),
         OptimiserSpec(
             "seed-lp",

@@ -1,4 +1,4 @@
-""""Best seed + LP, no search": the floor every search must beat (issue 14).
+""" "Best seed + LP, no search": the floor every search must beat (issue 14).
 
 Builds exactly our DE's initial population for this seed (`planner_core.de.core.init`: the
 seeder's obstacle-aware sensor routes plus uniform points, POPULATION evaluations), takes its
