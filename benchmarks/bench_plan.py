@@ -20,6 +20,10 @@ Targets on a 2-core machine: cold plan() <= 2 s; optimiser overhead below evalua
 plan (warm medians; the cold ratio is printed too); peak memory <= 300 MB.
 
     python benchmarks/bench_plan.py [MAP] [--seed 0] [--budget 10000] [--cold 3] [--warm 5]
+
+MAP may be `campus-N`: the generated campus of N non-convex footprints (seed 0, see
+`lamde_mission.gis.synthetic`), written to a temporary file first. Real scale (issue 15):
+`python benchmarks/bench_plan.py campus-500`; target there: cold plan() under 5 s.
 """
 
 from __future__ import annotations
@@ -83,6 +87,17 @@ def main() -> None:
     if args.child:
         child(args)
         return
+    cold_limit = 2.0
+    if args.map.startswith("campus-") and args.map[7:].isdigit():
+        cold_limit = 5.0  # issue 15: a campus of hundreds of footprints plans in seconds
+        import tempfile
+
+        from lamde_mission.gis.synthetic import campus_map
+        from planner_core.suite import dumps_map
+
+        tmp = Path(tempfile.mkdtemp()) / f"{args.map}.json"
+        tmp.write_text(dumps_map(campus_map(int(args.map[7:]), seed=0)))
+        args.map = str(tmp)
     cmd = [sys.executable, __file__, args.map, "--seed", str(args.seed),
            "--budget", str(args.budget), "--child"]  # fmt: skip
     import lamde_mission
@@ -116,11 +131,11 @@ def main() -> None:
         warm_ratio = warm["optimiser"] / warm["evaluation"]
         print(f"warm (median of {len(runs)} calls in one process): {_split(warm)}")
         print(f"warm: optimiser/evaluation ratio {warm_ratio:.2f} (per run: {_ratios(runs)})")
-    ok = (cold["total"] <= 2.0, warm_ratio is not None and warm_ratio < 1.0,
+    ok = (cold["total"] <= cold_limit, warm_ratio is not None and warm_ratio < 1.0,
           rss_mb <= 300 and not heavy)  # fmt: skip
     verdict = ["met" if x else "NOT met" for x in ok]
-    print("targets: cold plan() <= 2 s [{}], optimiser < evaluation per plan (warm) [{}], "
-          "<= 300 MB without torch/matplotlib [{}]".format(*verdict))
+    print(f"targets: cold plan() <= {cold_limit:g} s [{verdict[0]}], optimiser < evaluation per "
+          f"plan (warm) [{verdict[1]}], <= 300 MB without torch/matplotlib [{verdict[2]}]")
 
 
 if __name__ == "__main__":

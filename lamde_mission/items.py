@@ -127,13 +127,16 @@ def plan_to_items(
 def fence_shapes(map: Any) -> tuple[list[tuple[np.ndarray, float]], list[np.ndarray]]:  # noqa: A002
     """The map's obstacles as fence shapes in local metres: (circles [(centre, r)], polygons).
 
-    Polygons are the rotated rectangles (from `map.rectangle_polygons`) then the no-fly zones,
-    each an (n, 2) counter-clockwise vertex array.
+    Polygons are the rotated rectangles (from `map.rectangle_polygons`) then the no-fly zones
+    and polygon obstacles (`map.shapes`), each an (n, 2) counter-clockwise vertex array: a shape
+    without holes as its exterior ring (exclusion polygons need not be convex), a shape with
+    holes as its convex pieces (a fence polygon has no holes; the pieces leave a courtyard open).
     """
     circles = [(np.array([c.x, c.y], dtype=float), float(c.radius))
                for c in map.spec.obstacles.circles]  # fmt: skip
     polys = [np.asarray(p, dtype=float) for p in map.rectangle_polygons]
-    polys += [np.asarray(p, dtype=float) for p in map.nfz_polygons]
+    for sh in map.shapes:
+        polys += sh.pieces() if sh.holes else [np.asarray(sh.shell, dtype=float)]
     return circles, polys
 
 

@@ -1,6 +1,7 @@
 """A picture of a map and (optionally) a mission flown on it, saved as PNG or SVG.
 
-Draws the area, circles, rotated rectangles, no-fly zones, sensors coloured by the share of
+Draws the area, circles, rotated rectangles, polygon footprints (courtyards left open), no-fly
+zones (holes open, names on large maps left out), sensors coloured by the share of
 their required data collected, the path with hover points sized by hover time, start and end,
 a legend and a scale bar in metres. Uses matplotlib's Agg canvas directly (no pyplot state),
 imported inside the functions so importing this module stays cheap.
@@ -16,7 +17,6 @@ from typing import Any
 import numpy as np
 
 from lamde_mission.atomic import write_bytes_atomic
-from lamde_mission.items import fence_shapes
 
 __all__ = ["mission_figure", "save_figure", "plot_mission", "IMAGE_SUFFIXES", "nice_length"]
 
@@ -61,6 +61,22 @@ def _mission_view(map_: Any, timeline: Any, plan: Any) -> dict[str, Any] | None:
     return None
 
 
+def _shape_patch(shell: np.ndarray, holes: Any, **style: Any) -> Any:
+    """A patch for a polygon with holes (holes drawn open: a courtyard is flyable)."""
+    from matplotlib.patches import PathPatch
+    from matplotlib.path import Path as MplPath
+
+    verts: list[np.ndarray] = []
+    codes: list[np.ndarray] = []
+    for ring in [shell, *holes]:
+        ring = np.asarray(ring, dtype=float)
+        verts.append(np.vstack([ring, ring[:1]]))
+        c = np.full(len(ring) + 1, MplPath.LINETO, dtype=np.uint8)
+        c[0], c[-1] = MplPath.MOVETO, MplPath.CLOSEPOLY
+        codes.append(c)
+    return PathPatch(MplPath(np.concatenate(verts), np.concatenate(codes)), **style)
+
+
 def mission_figure(
     map: Any,  # noqa: A002
     *,
@@ -95,20 +111,23 @@ def mission_figure(
                                 linestyle="--"))  # fmt: skip
     handles: list[Any] = [Line2D([], [], color="0.3", linestyle="--", label="area")]
 
-    circles, polys = fence_shapes(map)
-    n_rect = len(spec.obstacles.rectangles)
-    obstacle_style = {"facecolor": "0.55", "edgecolor": "0.25", "alpha": 0.75, "linewidth": 0.8}
-    for centre, r in circles:
-        ax.add_patch(Circle(tuple(centre), r, **obstacle_style))
-    for k, poly in enumerate(polys):
-        if k < n_rect:
-            ax.add_patch(PolygonPatch(poly, closed=True, **obstacle_style))
-        else:
-            ax.add_patch(PolygonPatch(poly, closed=True, facecolor="tab:red", alpha=0.18,
-                                      edgecolor="tab:red", hatch="//", linewidth=1.0))  # fmt: skip
-    if circles or n_rect:
+    shapes = list(getattr(map, "shapes", ()))
+    n_footprints = sum(sh.kind != "no_fly_zone" for sh in shapes)
+    # thin outlines when there are many footprints (a campus), so neighbours stay apart
+    lw = 0.8 if n_footprints < 100 else 0.3
+    obstacle_style = {"facecolor": "0.55", "edgecolor": "0.25", "alpha": 0.75, "linewidth": lw}
+    nfz_style = {"facecolor": "tab:red", "alpha": 0.18, "edgecolor": "tab:red", "hatch": "//",
+                 "linewidth": 1.0}  # fmt: skip
+    for c in spec.obstacles.circles:
+        ax.add_patch(Circle((c.x, c.y), c.radius, **obstacle_style))
+    for poly in map.rectangle_polygons:
+        ax.add_patch(PolygonPatch(poly, closed=True, **obstacle_style))
+    for sh in shapes:
+        style = nfz_style if sh.kind == "no_fly_zone" else obstacle_style
+        ax.add_patch(_shape_patch(sh.shell, sh.holes, **style))
+    if spec.obstacles.circles or spec.obstacles.rectangles or n_footprints:
         handles.append(Patch(label="obstacles", **obstacle_style))
-    if len(polys) > n_rect:
+    if len(shapes) > n_footprints:
         handles.append(Patch(facecolor="tab:red", alpha=0.3, edgecolor="tab:red", hatch="//",
                              label="no-fly zones"))  # fmt: skip
 

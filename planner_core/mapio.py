@@ -8,7 +8,7 @@ the field, so a user can fix a map in one pass.
 from __future__ import annotations
 
 import difflib
-import math
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -21,10 +21,12 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from planner_core import textio
 from planner_core.defaults import MAP_DEFAULTS
 from planner_core.geometry import Obstacles, points_inside, rectangle_vertices
+from planner_core.polygons import clean_polygon, convex_pieces, is_convex
 
 __all__ = [
     "Map",
     "MapError",
+    "PolygonShape",
     "MapFile",
     "load_map",
     "map_json_schema",
@@ -67,6 +69,9 @@ def _ranged(
     return Field(default, description=desc, json_schema_extra={"x-range-reason": why}, **kw)
 
 
+#: text without control characters (names and ids are printed in one-line messages)
+_PRINTABLE = r"^[^\x00-\x1f\x7f]*$"
+
 Coord = Annotated[float, Field(ge=-MAX_COORD, le=MAX_COORD, description=f"metres; {_WHY_COORD}")]
 Point2 = tuple[Coord, Coord]
 
@@ -103,7 +108,8 @@ class Sensor(BaseModel):
     """A ground sensor; `required_data` overrides `radio.required_data` for this sensor."""
 
     model_config = _STRICT
-    id: str = Field(min_length=1, max_length=100)
+    id: str = Field(min_length=1, max_length=100, pattern=_PRINTABLE,
+                    description="printable text (it is quoted in messages, one line each)")
     x: Coord
     y: Coord
     required_data: float | None = _ranged(
@@ -132,11 +138,29 @@ class Rectangle(BaseModel):
     )
 
 
+_RING_DOC = (
+    "any simple polygon, convex or not: either orientation (reordered), a closing vertex equal "
+    "to the first is accepted, vertices closer than 5 mm to the previous one or to the segment "
+    "joining their neighbours are removed (noted)"
+)
+
+
 class NoFlyZone(BaseModel):
-    """A convex polygon; vertices counter-clockwise (clockwise input is reordered)."""
+    """A no-fly zone: any simple polygon (`vertices`, the exterior ring) with optional `holes`."""
 
     model_config = _STRICT
-    vertices: list[Point2]
+    vertices: list[Point2] = Field(description=_RING_DOC)
+    holes: list[list[Point2]] = Field([], description="rings inside, where flight is allowed")
+    name: str | None = Field(None, description="label shown in messages, plots and exports")
+
+
+class PolygonObstacle(BaseModel):
+    """An obstacle footprint (a building): any simple polygon with optional `holes`."""
+
+    model_config = _STRICT
+    vertices: list[Point2] = Field(description=_RING_DOC)
+    holes: list[list[Point2]] = Field([], description="rings inside (a courtyard), flyable")
+    name: str | None = Field(None, description="label shown in messages, plots and exports")
 
 
 class ObstaclesSpec(BaseModel):
@@ -144,6 +168,9 @@ class ObstaclesSpec(BaseModel):
     circles: list[Circle] = []
     rectangles: list[Rectangle] = []
     no_fly_zones: list[NoFlyZone] = []
+    polygons: list[PolygonObstacle] = Field(
+        [], description="obstacle footprints of any polygonal shape (buildings)"
+    )
 
 
 class Uav(BaseModel):
@@ -183,7 +210,7 @@ class MapFile(BaseModel):
     """The whole map file (JSON)."""
 
     model_config = _STRICT
-    name: str = Field("unnamed", max_length=200)
+    name: str = Field("unnamed", max_length=200, pattern=_PRINTABLE)
     origin: Origin = Origin()
     area: Area
     start: Point2
@@ -216,12 +243,43 @@ def map_json_schema() -> dict[str, Any]:
 
 
 @dataclass(frozen=True, eq=False)
+class PolygonShape:
+    """One no-fly zone or polygon obstacle as used: cleaned rings, exterior counter-clockwise,
+    holes clockwise (RFC 7946's orientation), in local metres."""
+
+    kind: str  # "no_fly_zone" or "polygon"
+    index: int  # position in its list of the map file
+    name: str | None
+    shell: np.ndarray  # (V, 2)
+    holes: tuple[np.ndarray, ...] = ()
+
+    @property
+    def convex(self) -> bool:
+        """Convex and without holes: the kernel takes it as one polygon."""
+        return not self.holes and is_convex(self.shell)
+
+    @property
+    def label(self) -> str:
+        base = f"{self.kind.replace('_', '-')} {self.index}"
+        return f"{base} '{self.name}'" if self.name else base
+
+    def pieces(self) -> list[np.ndarray]:
+        """Convex pieces (V, 2) counter-clockwise, disjoint interiors, union = the shape."""
+        return [v for v, _ in convex_pieces(self.shell, self.holes)]
+
+
+@dataclass(frozen=True, eq=False)
 class Map:
-    """A validated map: the file as given (`spec`) plus the arrays the model uses."""
+    """A validated map: the file as given (`spec`) plus the arrays the model uses.
+
+    `shapes` holds every no-fly zone then every polygon obstacle, cleaned; `nfz_polygons` the
+    no-fly zones' exterior rings (counter-clockwise).
+    """
 
     spec: MapFile
     nfz_polygons: tuple[np.ndarray, ...]
     notes: tuple[str, ...] = field(default=())
+    shapes: tuple[PolygonShape, ...] = field(default=())
 
     # --- scalars in the paper's symbols ---
     @property
@@ -276,14 +334,24 @@ class Map:
 
     @cached_property
     def obstacles(self) -> Obstacles:
-        """All obstacles in the geometry kernel's packed form (rectangles, then no-fly zones)."""
-        circles = [(c.x, c.y, c.radius) for c in self.spec.obstacles.circles]
-        return Obstacles.build(circles, list(self.rectangle_polygons) + list(self.nfz_polygons))
+        """All obstacles in the geometry kernel's packed form: circles; rectangles, convex
+        no-fly zones and convex polygon obstacles as polygons; the other shapes as regions."""
+        return _pack(self.spec, self.shapes)
 
     def to_dict(self) -> dict[str, Any]:
-        """The map as JSON-ready data (no-fly zones in the counter-clockwise order used)."""
+        """The map as JSON-ready data (polygons cleaned, exteriors counter-clockwise)."""
         d = self.spec.model_dump(mode="json", exclude_none=False)
-        d["obstacles"]["no_fly_zones"] = [{"vertices": p.tolist()} for p in self.nfz_polygons]
+        obs = d["obstacles"]
+        for sh in self.shapes:
+            entry: dict[str, Any] = {"vertices": sh.shell.tolist()}
+            if sh.holes:
+                entry["holes"] = [h.tolist() for h in sh.holes]
+            if sh.name is not None:
+                entry["name"] = sh.name
+            key = "no_fly_zones" if sh.kind == "no_fly_zone" else "polygons"
+            obs[key][sh.index] = entry
+        if not obs["polygons"]:
+            del obs["polygons"]
         if d.get("witness") is None:
             d.pop("witness", None)
         return d
@@ -301,6 +369,7 @@ class Map:
             "circles": len(s.obstacles.circles),
             "rectangles": len(s.obstacles.rectangles),
             "no_fly_zones": len(s.obstacles.no_fly_zones),
+            "polygons": len(s.obstacles.polygons),
             "max_hover_points": self.max_hover_points,
             "max_hover_points_default": s.uav.max_hover_points is None,
             "uav": s.uav.model_dump(),
@@ -315,10 +384,7 @@ class Map:
 
 
 def _loc(loc: tuple[Any, ...]) -> str:
-    out = ""
-    for part in loc:
-        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
-    return out or "(map)"
+    return textio.json_path(loc) or "(map)"
 
 
 def _model_at(loc: tuple[Any, ...]) -> type[BaseModel] | None:
@@ -387,6 +453,9 @@ def _pydantic_problems(err: ValidationError) -> list[str]:
             lines.append(f"{where}: must be a finite number (got NaN or infinity)")
         elif kind == "too_short" and loc and loc[-1] == "sensors":
             lines.append(f"{where}: at least one sensor is required")
+        elif kind == "string_pattern_mismatch":
+            lines.append(f"{where}: must be printable text (no control characters such as "
+                         "newlines or tabs)")  # fmt: skip
         elif kind in _RANGE_KINDS:
             got = e.get("input")
             shown = f"{got:g}" if isinstance(got, float) else repr(got)
@@ -397,34 +466,9 @@ def _pydantic_problems(err: ValidationError) -> list[str]:
     return lines
 
 
-def _convex_ccw(vertices: np.ndarray) -> tuple[np.ndarray | None, str | None, bool]:
-    """Check a polygon is simple and strictly convex; return (ccw vertices, problem, reordered)."""
-    n = len(vertices)
-    if n < 3:
-        return None, f"needs at least 3 vertices, got {n}", False
-    nxt = np.roll(vertices, -1, axis=0)
-    if np.any(np.linalg.norm(nxt - vertices, axis=1) == 0):
-        return None, "has repeated consecutive vertices", False
-    e1 = nxt - vertices
-    e2 = np.roll(e1, -1, axis=0)
-    cross = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
-    scale = np.linalg.norm(e1, axis=1) * np.linalg.norm(e2, axis=1)
-    turn = cross / scale
-    if np.any(np.abs(turn) < 1e-12):
-        return None, "has collinear consecutive vertices (degenerate or not strictly convex)", False
-    if not (np.all(turn > 0) or np.all(turn < 0)):
-        return None, "is not a convex polygon", False
-    # all turns one way; a star-shaped self-intersecting path also turns one way: the total
-    # turning of a simple convex polygon is exactly one full turn.
-    ang = np.arctan2(cross, np.einsum("ij,ij->i", e1, e2))
-    if abs(abs(ang.sum()) - 2 * math.pi) > 1e-6:
-        return None, "is not a simple polygon (its edges cross)", False
-    if np.all(turn < 0):
-        return vertices[::-1].copy(), None, True
-    return vertices.copy(), None, False
-
-
-def _semantic_problems(spec: MapFile) -> tuple[list[str], list[str], list[np.ndarray]]:
+def _semantic_problems(
+    spec: MapFile,
+) -> tuple[list[str], list[str], list[PolygonShape], Obstacles | None]:
     problems: list[str] = []
     notes: list[str] = []
     W, H = spec.area.width, spec.area.height
@@ -457,35 +501,65 @@ def _semantic_problems(spec: MapFile) -> tuple[list[str], list[str], list[np.nda
             problems.append(
                 f"obstacles.rectangles[{k}]: centre ({r.x:g}, {r.y:g}) is outside the area"
             )
-    polys: list[np.ndarray] = []
-    for k, z in enumerate(obs.no_fly_zones):
-        v = np.array(z.vertices, dtype=float).reshape(-1, 2)
-        ccw, problem, reordered = _convex_ccw(v)
-        where = f"obstacles.no_fly_zones[{k}].vertices"
-        if problem:
-            problems.append(f"{where}: {problem}")
-            continue
-        if reordered:
-            notes.append(f"{where}: given clockwise; reordered counter-clockwise")
-        polys.append(ccw)
+    shapes: list[PolygonShape] = []
+    for kind, key, items in (("no_fly_zone", "no_fly_zones", obs.no_fly_zones),
+                             ("polygon", "polygons", obs.polygons)):  # fmt: skip
+        for k, z in enumerate(items):
+            shape = _polygon_shape(kind, f"obstacles.{key}[{k}]", k, z, problems, notes)
+            if shape is not None:
+                shapes.append(shape)
     u = spec.uav
     if u.max_hover_points is not None and u.max_hover_points > 200:
         problems.append(f"uav.max_hover_points: {u.max_hover_points} is too large (at most 200)")
     if spec.witness is not None and len(spec.witness.hover_points) != len(spec.witness.hover_times):
         problems.append("witness: hover_points and hover_times differ in length")
     if not problems:
-        circles = [(c.x, c.y, c.radius) for c in obs.circles]
-        rects = [
-            rectangle_vertices(r.x, r.y, r.length, r.width, r.angle_deg) for r in obs.rectangles
-        ]
-        obstacles = Obstacles.build(circles, rects + polys)
+        try:
+            obstacles = _pack(spec, tuple(shapes))
+        except ValueError as exc:  # a degenerate polygon the triangulation cannot cut
+            problems.append(f"obstacles: {exc}")
+            return problems, notes, shapes, None
         ends = np.array([spec.start, spec.end], dtype=float)
         inside = points_inside(ends, obstacles)
         for name, flag in zip(("start", "end"), inside, strict=True):
             if flag:
                 x, y = getattr(spec, name)
                 problems.append(f"{name}: ({x:g}, {y:g}) lies inside an obstacle")
-    return problems, notes, polys
+        return problems, notes, shapes, obstacles
+    return problems, notes, shapes, None
+
+
+def _polygon_shape(
+    kind: str, where: str, index: int, z: NoFlyZone | PolygonObstacle,
+    problems: list[str], notes: list[str],
+) -> PolygonShape | None:
+    """Clean, orient and check one polygon of the map file; None (and a problem) if unusable."""
+    label = f"{where} '{z.name}'" if z.name else where
+    try:
+        shell, holes, said = clean_polygon([z.vertices, *z.holes])
+    except ValueError as exc:
+        # name the ring as the file does: ...vertices / ...holes[k]
+        msg = str(exc)
+        ring = re.match(r"(exterior ring|hole (\d+)) (.*)", msg)
+        if ring:
+            at = ".vertices" if ring.group(2) is None else f".holes[{ring.group(2)}]"
+            problems.append(f"{label}{at}: {ring.group(3)}")
+        else:
+            problems.append(f"{label}: {msg}")
+        return None
+    notes += [f"{label}.vertices: {n}" if n.startswith("given clockwise") else f"{label}: {n}"
+              for n in said]  # fmt: skip
+    return PolygonShape(kind, index, z.name, shell, tuple(holes))
+
+
+def _pack(spec: MapFile, shapes: tuple[PolygonShape, ...]) -> Obstacles:
+    """The kernel's obstacles: rectangles, then convex shapes, then the others as regions."""
+    obs = spec.obstacles
+    circles = [(c.x, c.y, c.radius) for c in obs.circles]
+    rects = [rectangle_vertices(r.x, r.y, r.length, r.width, r.angle_deg) for r in obs.rectangles]
+    convex = [sh.shell for sh in shapes if sh.convex]
+    regions = [(sh.shell, sh.holes) for sh in shapes if not sh.convex]
+    return Obstacles.build(circles, rects + convex, regions)
 
 
 def _size_problems(data: Mapping[str, Any]) -> list[str]:
@@ -507,22 +581,27 @@ def _size_problems(data: Mapping[str, Any]) -> list[str]:
         problems.append(over("sensors", len(sensors), "sensors", "sensors"))
     obs = data.get("obstacles")
     if isinstance(obs, Mapping):
-        kinds = ("circles", "rectangles", "no_fly_zones")
+        kinds = ("circles", "rectangles", "no_fly_zones", "polygons")
         n = sum(len(v) for k in kinds if isinstance(v := obs.get(k), list))
         if n > caps["obstacles"]:
             problems.append(over("obstacles", n, "obstacles", "obstacles"))
-        zones = obs.get("no_fly_zones")
         total = 0
-        for k, z in enumerate(zones if isinstance(zones, list) and not problems else []):
-            v = z.get("vertices") if isinstance(z, Mapping) else None
-            if isinstance(v, list):
-                total += len(v)
-                if len(v) > caps["zone_vertices"]:
-                    where = f"obstacles.no_fly_zones[{k}].vertices"
-                    problems.append(over(where, len(v), "zone_vertices", "vertices"))
-                    break
+        for key in ("no_fly_zones", "polygons"):
+            zones = obs.get(key)
+            for k, z in enumerate(zones if isinstance(zones, list) and not problems else []):
+                if not isinstance(z, Mapping):
+                    continue
+                holes = z.get("holes") if isinstance(z.get("holes"), list) else []
+                for r, v in enumerate([z.get("vertices"), *holes]):
+                    if isinstance(v, list):
+                        total += len(v)
+                        if len(v) > caps["zone_vertices"]:
+                            where = f"obstacles.{key}[{k}]." + (
+                                "vertices" if r == 0 else f"holes[{r - 1}]")  # fmt: skip
+                            problems.append(over(where, len(v), "zone_vertices", "vertices"))
+                            break
         if not problems and total > caps["vertices"]:
-            where = "obstacles.no_fly_zones"
+            where = "obstacles.no_fly_zones" if not obs.get("polygons") else "obstacles"
             problems.append(over(where, total, "vertices", "vertices in all"))
     return problems
 
@@ -550,7 +629,10 @@ def load_map(source: str | Path | Mapping[str, Any] | Map) -> Map:
         spec = MapFile.model_validate(data)
     except ValidationError as err:
         raise MapError(_pydantic_problems(err)) from None
-    problems, notes, polys = _semantic_problems(spec)
+    problems, notes, shapes, obstacles = _semantic_problems(spec)
     if problems:
         raise MapError(problems, notes)
-    return Map(spec=spec, nfz_polygons=tuple(polys), notes=tuple(notes))
+    nfz = tuple(sh.shell for sh in shapes if sh.kind == "no_fly_zone")
+    m = Map(spec=spec, nfz_polygons=nfz, notes=tuple(notes), shapes=tuple(shapes))
+    m.__dict__["obstacles"] = obstacles  # the cached_property, already built while checking
+    return m

@@ -187,12 +187,16 @@ class Seeder:
                 a = rng.random() * 2.0 * math.pi
                 u = (q - (cx, cy)) / d if d > 1e-9 else np.array([math.cos(a), math.sin(a)])
                 return np.array([cx, cy]) + u * (r + self.margin)
-        for p in range(obs.n_polygons):
+        box = obs.poly_boxes
+        near = (box[:, 0] <= q[0]) & (q[0] <= box[:, 2]) & (box[:, 1] <= q[1]) & (q[1] <= box[:, 3])
+        for p in np.flatnonzero(near):  # only polygons whose bounding box holds q
             lo, hi = obs.poly_offsets[p], obs.poly_offsets[p + 1]
             nrm = obs.edge_normals[lo:hi]
             sd = np.sum(nrm * (q - obs.poly_vertices[lo:hi]), axis=1)  # < 0 inside
             if np.all(sd < 0.0):
-                e = int(np.argmax(sd))
+                # out through the nearest real side (a piece's diagonals lead into its region)
+                outer = obs.edge_flags[lo:hi] == 0
+                e = int(np.argmax(np.where(outer, sd, -np.inf) if outer.any() else sd))
                 return q + nrm[e] * (self.margin - sd[e])
         return q
 

@@ -82,14 +82,16 @@ LIMITS: dict[str, Limit] = {
         "parser's recursion",
     ),
     "sensors": Limit(
-        5_000,
+        200,
         "LAMDE_MAX_SENSORS",
-        "sensors in one map; every evaluation costs O(population x I_max x sensors)",
+        "sensors in one map; planning time grows steeply with them (the starting routes: 60 "
+        "sensors ~10 s, 120 sensors ~66 s of CPU for 20 starts; the paper's maps have <= 29)",
     ),
     "obstacles": Limit(
         5_000,
         "LAMDE_MAX_OBSTACLES",
-        "circles + rectangles + no-fly zones in one map; every leg is tested against each",
+        "circles + rectangles + no-fly zones + polygon obstacles in one map; every leg is tested "
+        "against each",
     ),
     "zone_vertices": Limit(
         5_000,
@@ -99,7 +101,7 @@ LIMITS: dict[str, Limit] = {
     "vertices": Limit(
         50_000,
         "LAMDE_MAX_VERTICES",
-        "vertices of all no-fly zones of one map together",
+        "vertices of all no-fly zones and polygon obstacles of one map together (holes included)",
     ),
     "mission_items": Limit(
         65_535,
@@ -140,7 +142,13 @@ def json_path(parts: Any) -> str:
     """`("uav", "max_speed")` -> "uav.max_speed"; integers become `[i]`."""
     out = ""
     for part in parts:
-        out += f"[{part}]" if isinstance(part, int) else (f".{part}" if out else str(part))
+        if isinstance(part, int):
+            out += f"[{part}]"
+            continue
+        name = str(part)
+        if not name.isprintable() or len(name) > 80:  # a key with a newline stays one line
+            name = ascii(name[:80])
+        out += f".{name}" if out else name
     return out
 
 

@@ -1,8 +1,10 @@
 """The map's obstacles as shapely geometry, built from the map file alone.
 
 Independent of the planner's fast evaluator (planner_core.geometry). Rectangles are rotated
-from their centre, length and angle, no-fly zones are the given vertices, both measured by
-shapely (exact predicates, closed shapes). Circles are measured exactly, as the roots of
+from their centre, length and angle; no-fly zones and polygon obstacles (building footprints)
+are shapely polygons of the given rings, holes included, whatever their shape (shapely measures
+non-convex polygons directly; the planner cuts them into convex pieces); all measured by shapely
+(exact predicates, closed shapes). Circles are measured exactly, as the roots of
 |a + t (b - a) - c|^2 = r^2 clipped to the leg (a shapely buffer is an inscribed polygon that
 would miss a leg cutting less than r * (1 - cos(pi / (4 * quad_segs))) deep, ~0.5 mm at
 r = 100 m); their `shape` (a buffer with `CIRCLE_QUAD_SEGS` segments per quarter) is for
@@ -26,11 +28,13 @@ CIRCLE_QUAD_SEGS = 256
 
 @dataclass(frozen=True, eq=False)
 class Obstacle:
-    """One obstacle: `kind` circle/rectangle/no_fly_zone, its index in that list, its shape."""
+    """One obstacle: `kind` circle/rectangle/no_fly_zone/polygon, its index in that list, its
+    shape, and its name if the map gives one."""
 
     kind: str
     index: int
     shape: Polygon
+    name: str | None = None
     circle: tuple[float, float, float] | None = None  # (cx, cy, r) m for circles, exact
 
     def clearance(self, lines: Any) -> float:
@@ -43,7 +47,8 @@ class Obstacle:
 
     @property
     def label(self) -> str:
-        return f"{self.kind.replace('_', '-')} {self.index}"
+        base = f"{self.kind.replace('_', '-')} {self.index}"
+        return f"{base} '{self.name}'" if self.name else base
 
 
 def _rectangle(x: float, y: float, length: float, width: float, angle_deg: float) -> Polygon:
@@ -59,12 +64,13 @@ def _rectangle(x: float, y: float, length: float, width: float, angle_deg: float
 
 
 def obstacle_shapes(map: Any) -> list[Obstacle]:  # noqa: A002
-    """Every obstacle of the map (circles, rectangles, no-fly zones) as a shapely polygon."""
+    """Every obstacle of the map (circles, rectangles, no-fly zones, polygon obstacles) as a
+    shapely polygon."""
     obs = map.spec.obstacles
     out = [
         Obstacle(
             "circle", k, Point(c.x, c.y).buffer(c.radius, quad_segs=CIRCLE_QUAD_SEGS),
-            (float(c.x), float(c.y), float(c.radius)),
+            circle=(float(c.x), float(c.y), float(c.radius)),
         )  # fmt: skip
         for k, c in enumerate(obs.circles)
     ]
@@ -72,7 +78,9 @@ def obstacle_shapes(map: Any) -> list[Obstacle]:  # noqa: A002
         Obstacle("rectangle", k, _rectangle(r.x, r.y, r.length, r.width, r.angle_deg))
         for k, r in enumerate(obs.rectangles)
     ]
-    out += [Obstacle("no_fly_zone", k, Polygon(z.vertices)) for k, z in enumerate(obs.no_fly_zones)]
+    for kind, items in (("no_fly_zone", obs.no_fly_zones), ("polygon", obs.polygons)):
+        out += [Obstacle(kind, k, Polygon(z.vertices, z.holes), z.name)
+                for k, z in enumerate(items)]  # fmt: skip
     return out
 
 

@@ -21,7 +21,7 @@ CX, CY, R = 1234.5, 678.25, 100.0
 RECT = (1500.0, 900.0, 180.0, 80.0, 33.0)  # centre x, y, length, width, angle (deg)
 PLANNER = Obstacles.build([(CX, CY, R)], [rectangle_vertices(*RECT)])
 SIM = [
-    Obstacle("circle", 0, Point(CX, CY).buffer(R), (CX, CY, R)),
+    Obstacle("circle", 0, Point(CX, CY).buffer(R), circle=(CX, CY, R)),
     Obstacle("rectangle", 0, Polygon(rectangle_vertices(*RECT))),
 ]
 

@@ -107,7 +107,7 @@ def test_too_many_sensors_obstacles_and_vertices(tmp_path: Path) -> None:
     d = _tiny()
     d["sensors"] = [{"id": f"s{i}", "x": 10.0, "y": 10.0} for i in range(100_000)]
     _refused(["check", _write(tmp_path, "s.json", json.dumps(d))],
-             "sensors: 100,000 sensors, more than the limit of 5,000")  # fmt: skip
+             "sensors: 100,000 sensors, more than the limit of 200")  # fmt: skip
     d = _tiny()
     d["obstacles"]["circles"] = [{"x": 5.0, "y": 5.0, "radius": 1.0}] * 100_000
     _refused(["check", _write(tmp_path, "o.json", json.dumps(d))], "obstacles: 100,001 obstacles")
@@ -274,3 +274,51 @@ def test_long_hover_replays_at_bounded_cost(tmp_path: Path) -> None:
     assert out.error is None and out.status == 1, out.stderr
     verdicts = json.loads(out.stdout)
     assert verdicts["totals"]["t_hover"] == pytest.approx(3e38)
+
+
+def test_every_map_number_is_refused_just_outside_its_range() -> None:
+    """Each ranged map field: the bound itself (when closed) passes, just outside is refused
+    with a line naming the field and the reason (so `check` and `plan` agree on it)."""
+    import math
+
+    from planner_core.defaults import MAP_DEFAULTS
+
+    for name, d in MAP_DEFAULTS.items():
+        assert d.bounds is not None and d.why, name
+        lo, hi, lo_open, hi_open = d.bounds
+        section, key = name.split(".")
+        for bound, is_open, outside in ((lo, lo_open, -1), (hi, hi_open, 1)):
+            step = 1 if isinstance(bound, int) else max(abs(bound), 1.0) * 1e-9
+            cases = [(bound + outside * step, False), (bound, not is_open)]
+            for value, ok in cases:
+                data = _tiny()
+                data.setdefault(section, {})[key] = value
+                if ok:
+                    load_map(data)
+                    continue
+                with pytest.raises(MapError) as info:
+                    load_map(data)
+                line = info.value.problems[0]
+                assert line.startswith(f"{name}: ") and d.why in line, (name, value, line)
+                assert math.isfinite(value)
+
+
+def test_control_characters_never_split_a_message() -> None:
+    d = _tiny()
+    d["sensors"][0]["id"] = "a\nb"
+    d["uav"] = {"max\nsped": 1}
+    with pytest.raises(MapError) as info:
+        load_map(d)
+    assert info.value.problems == [
+        "sensors[0].id: must be printable text (no control characters such as newlines or tabs)",
+        "uav.'max\\nsped': unknown field (did you mean 'max_speed'?)",
+    ]
+
+
+def test_readme_lists_every_input_limit() -> None:
+    readme = (Path(__file__).resolve().parent.parent / "README.md").read_text(encoding="utf-8")
+    for name, lim in textio.LIMITS.items():
+        shown = "64 MiB" if name == "bytes" else f"{lim.default:,}"
+        row = [ln for ln in readme.splitlines() if ln.startswith("| ") and shown in ln
+               and (lim.env is None or f"`{lim.env}`" in ln)]  # fmt: skip
+        assert row, f"README's input-limits table lacks {name} ({shown}, {lim.env})"

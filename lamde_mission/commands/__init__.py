@@ -10,10 +10,12 @@ COMMANDS = (
     "verify",
     "show",
     "check",
+    "map",
     "schema",
     "generate",
     "mock_vehicle",
     "upload",
     "bench",
     "report",
+    "lam",
 )

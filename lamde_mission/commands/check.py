@@ -37,7 +37,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"  sensors         {s['sensors']} (total required {s['total_required_data_mbit']:g} "
           "Mbit)")
     print(f"  obstacles       {s['circles']} circles, {s['rectangles']} rectangles, "
-          f"{s['no_fly_zones']} no-fly zones")
+          f"{s['polygons']} polygons, {s['no_fly_zones']} no-fly zones")
     print(f"  I_max           {s['max_hover_points']}{default}")
     print(f"  uav             H {u['altitude']:g} m, v_max {u['max_speed']:g} m/s, "
           f"a {u['acceleration']:g} m/s^2, T_max {u['max_hover_time']:g} s, "

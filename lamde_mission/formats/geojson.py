@@ -1,8 +1,9 @@
 """GeoJSON (RFC 7946) view of a plan on its map, for GIS tools and web maps.
 
 A FeatureCollection in WGS84 with [longitude, latitude] positions. Every feature has a
-`kind` property: "area", "circle", "rectangle", "no_fly_zone" (Polygons: closed rings,
-exterior counter-clockwise; circles approximated by a regular polygon through the circle,
+`kind` property: "area", "circle", "rectangle", "no_fly_zone", "obstacle" (polygon footprints)
+(Polygons: closed rings, exterior counter-clockwise, holes clockwise; circles approximated by a
+regular polygon through the circle,
 with `centre` and `radius` kept as properties), "sensor" (Point: id, required, collected),
 "path" (LineString start -> hover points -> end), "hover" (Point: index, hover_time),
 "start" and "end" (Points). Export only: a GeoJSON file is not read back as a mission.
@@ -19,6 +20,7 @@ import numpy as np
 
 from lamde_mission.atomic import write_text_atomic
 from lamde_mission.geo import enu_to_latlon
+from lamde_mission.gis.export import polygon_geometry
 from lamde_mission.items import fence_shapes
 
 __all__ = ["geojson_document", "write_geojson", "CIRCLE_SEGMENTS"]
@@ -63,7 +65,7 @@ def geojson_document(plan: Any, map: Any) -> dict[str, Any]:  # noqa: A002
     area = np.array([[0.0, 0.0], [w, 0.0], [w, h], [0.0, h]])
     feats.append(_feature({"type": "Polygon", "coordinates": [_ring(map, area)]},
                           kind="area", width_m=w, height_m=h, name=spec.name))  # fmt: skip
-    circles, polys = fence_shapes(map)
+    circles, _ = fence_shapes(map)
     ang = np.linspace(0.0, 2.0 * math.pi, CIRCLE_SEGMENTS, endpoint=False)
     for k, (centre, r) in enumerate(circles):
         ring = np.column_stack([centre[0] + r * np.cos(ang), centre[1] + r * np.sin(ang)])
@@ -72,15 +74,18 @@ def geojson_document(plan: Any, map: Any) -> dict[str, Any]:  # noqa: A002
             kind="circle", index=k, radius=r, centre=_lonlat(map, centre)[0],
             centre_local=[float(centre[0]), float(centre[1])],
         ))  # fmt: skip
-    n_rect = len(spec.obstacles.rectangles)
-    for k, poly in enumerate(polys):
-        kind, idx = ("rectangle", k) if k < n_rect else ("no_fly_zone", k - n_rect)
-        props: dict[str, Any] = {"kind": kind, "index": idx}
-        if kind == "rectangle":
-            r = spec.obstacles.rectangles[idx]
-            props.update(length=r.length, width=r.width, angle_deg=r.angle_deg,
-                         centre=_lonlat(map, np.array([r.x, r.y]))[0])  # fmt: skip
-        feats.append(_feature({"type": "Polygon", "coordinates": [_ring(map, poly)]}, **props))
+    for k, (r, poly) in enumerate(zip(spec.obstacles.rectangles, map.rectangle_polygons,
+                                      strict=True)):  # fmt: skip
+        feats.append(_feature({"type": "Polygon", "coordinates": [_ring(map, poly)]},
+                              kind="rectangle", index=k, length=r.length, width=r.width,
+                              angle_deg=r.angle_deg,
+                              centre=_lonlat(map, np.array([r.x, r.y]))[0]))  # fmt: skip
+    for sh in map.shapes:  # no-fly zones and polygon footprints, holes kept
+        props: dict[str, Any] = {"kind": "no_fly_zone" if sh.kind == "no_fly_zone"
+                                 else "obstacle", "index": sh.index}  # fmt: skip
+        if sh.name is not None:
+            props["name"] = sh.name
+        feats.append(_feature(polygon_geometry(map, sh.shell, sh.holes), **props))
     bd = getattr(plan, "breakdown", None) or {}
     collected = bd.get("collected", {}) if isinstance(bd, dict) else {}
     required = map.required_data

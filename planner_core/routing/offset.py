@@ -18,8 +18,9 @@ _NEEDLE = 0.08
 def offset_convex(
     poly: np.ndarray, c: float, normals: np.ndarray | None = None, min_denominator: float = 0.0
 ) -> np.ndarray:
-    """Vertices (n, 2) of a convex counter-clockwise polygon pushed out by c metres along the
-    mitre, so each new vertex is c from both its edges' lines.
+    """Vertices (n, 2) of a counter-clockwise polygon pushed out by c metres along the mitre, so
+    each new vertex is c from both its edges' lines (at a reflex corner of a non-convex polygon
+    the new vertex lies in the notch, c from both lines).
 
     `normals` (n, 2): unit outward normals of the edges v_k -> v_k+1 when already known
     (computed from the vertices otherwise). `min_denominator` > 0 caps the mitre at very sharp
@@ -35,15 +36,30 @@ def offset_convex(
 
 
 def obstacle_polygons(obstacles: Any, margin: float) -> list[np.ndarray]:
-    """Every obstacle of a `geometry.Obstacles` as a convex CCW polygon pushed out by `margin`:
-    circles first (circumscribed `CIRCLE_SIDES`-gons), then the polygons in their order."""
+    """Every obstacle of a `geometry.Obstacles` as a CCW polygon pushed out by `margin`: circles
+    first (circumscribed `CIRCLE_SIDES`-gons), then the convex polygons in their order, then each
+    region (a general polygon such as an L- or U-shaped footprint, packed as convex pieces) as
+    its own exterior ring pushed out, not its pieces: its convex corners are where paths bend,
+    also into a notch (a hull would hide the notch); its reflex corners give offset points in
+    the notch that few tangent lines use. Holes are left out (a courtyard cannot be reached
+    without crossing the building). Whether an edge is clear is decided on the real shape, where
+    a leg along an internal cut between two pieces counts as inside (`planner_core.polygons`)."""
     polys: list[np.ndarray] = []
     ang = 2.0 * np.pi * (np.arange(CIRCLE_SIDES) + 0.5) / CIRCLE_SIDES
     for cx, cy, r in obstacles.circles:
         rad = (r + margin) / math.cos(math.pi / CIRCLE_SIDES)
         polys.append(np.column_stack([cx + rad * np.cos(ang), cy + rad * np.sin(ang)]))
+    region = getattr(obstacles, "piece_region", None)
     for p in range(obstacles.n_polygons):
+        if region is not None and region[p] >= 0:
+            continue  # a piece of a region: the region's own ring stands in, below
         v = np.asarray(obstacles.polygon(p), dtype=float)
         n = obstacles.edge_normals[obstacles.poly_offsets[p] : obstacles.poly_offsets[p + 1]]
         polys.append(offset_convex(v, margin, n, _NEEDLE))
+    for shell, _ in getattr(obstacles, "regions", ()):
+        v = np.asarray(shell, dtype=float)
+        x, y = v[:, 0], v[:, 1]
+        if np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y) < 0.0:
+            v = v[::-1]  # counter-clockwise, so the normals point out
+        polys.append(offset_convex(v, margin, min_denominator=_NEEDLE))
     return polys

@@ -1,0 +1,90 @@
+"""A map as GeoJSON (RFC 7946), for a GIS, and readable back by `lamde-mission map from-geojson`.
+
+Every feature has the `kind` property the importer reads: "area" (Polygon; properties `origin`
+[lat, lon, alt], `width_m`, `height_m`, `name`: the importer takes the frame from it, so a round
+trip keeps the local coordinates), "sensor" (Point; `id`, `required_data` when the map sets it),
+"obstacle" (Polygon with holes, for polygon obstacles and rectangles; `name`; rectangles also
+`shape`: "rectangle" and their centre/size/angle), "no_fly_zone" (Polygon with holes; `name`),
+"circle" (a Polygon through `CIRCLE_SEGMENTS` points of the circle for display, with `center`
+[lon, lat] and `radius_m`: the importer reads the circle from those), "start" and "end" (Points).
+Rings are closed, exteriors counter-clockwise and holes clockwise (RFC 7946 Sec. 3.1.6).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from sim.geo import enu_to_latlon
+
+__all__ = ["map_to_geojson", "map_features", "polygon_geometry", "CIRCLE_SEGMENTS"]
+
+#: vertices of the polygon drawn for each circular obstacle
+CIRCLE_SEGMENTS = 72
+
+
+def _lonlat(map_: Any, pts: np.ndarray) -> list[list[float]]:
+    pts = np.asarray(pts, dtype=float).reshape(-1, 2)
+    lat, lon = enu_to_latlon(pts[:, 0], pts[:, 1], map_)
+    return [[float(b), float(a)] for a, b in zip(lat, lon, strict=True)]
+
+
+def _ring(map_: Any, ring: np.ndarray, ccw: bool) -> list[list[float]]:
+    ring = np.asarray(ring, dtype=float).reshape(-1, 2)
+    x, y = ring[:, 0], ring[:, 1]
+    area2 = float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+    if (area2 > 0) != ccw:
+        ring = ring[::-1]
+    out = _lonlat(map_, ring)
+    out.append(list(out[0]))
+    return out
+
+
+def polygon_geometry(map_: Any, shell: np.ndarray, holes: Any = ()) -> dict[str, Any]:
+    """A GeoJSON Polygon (closed rings, exterior CCW, holes CW) of local rings (V, 2)."""
+    rings = [_ring(map_, shell, True)] + [_ring(map_, h, False) for h in holes]
+    return {"type": "Polygon", "coordinates": rings}
+
+
+def _feature(geometry: dict[str, Any], **props: Any) -> dict[str, Any]:
+    return {"type": "Feature", "geometry": geometry,
+            "properties": {k: v for k, v in props.items() if v is not None}}  # fmt: skip
+
+
+def map_features(map: Any) -> list[dict[str, Any]]:  # noqa: A002
+    """The map's area, obstacles, no-fly zones and sensors, start and end as GeoJSON features."""
+    spec = map.spec
+    W, H = spec.area.width, spec.area.height
+    o = spec.origin
+    feats = [_feature(polygon_geometry(map, np.array([[0.0, 0.0], [W, 0.0], [W, H], [0.0, H]])),
+                      kind="area", name=spec.name, origin=[o.lat, o.lon, o.alt],
+                      width_m=W, height_m=H)]  # fmt: skip
+    ang = np.linspace(0.0, 2.0 * math.pi, CIRCLE_SEGMENTS, endpoint=False)
+    for k, c in enumerate(spec.obstacles.circles):
+        ring = np.column_stack([c.x + c.radius * np.cos(ang), c.y + c.radius * np.sin(ang)])
+        feats.append(_feature(polygon_geometry(map, ring), kind="circle", index=k,
+                              radius_m=c.radius,
+                              center=_lonlat(map, np.array([c.x, c.y]))[0]))  # fmt: skip
+    for k, (r, poly) in enumerate(zip(spec.obstacles.rectangles, map.rectangle_polygons,
+                                      strict=True)):  # fmt: skip
+        feats.append(_feature(polygon_geometry(map, poly), kind="obstacle", shape="rectangle",
+                              index=k, length_m=r.length, width_m=r.width, angle_deg=r.angle_deg,
+                              center=_lonlat(map, np.array([r.x, r.y]))[0]))  # fmt: skip
+    for sh in map.shapes:
+        kind = "no_fly_zone" if sh.kind == "no_fly_zone" else "obstacle"
+        feats.append(_feature(polygon_geometry(map, sh.shell, sh.holes), kind=kind, name=sh.name,
+                              index=sh.index))  # fmt: skip
+    for s in spec.sensors:
+        feats.append(_feature({"type": "Point", "coordinates": _lonlat(map, [s.x, s.y])[0]},
+                              kind="sensor", id=s.id, required_data=s.required_data))  # fmt: skip
+    for kind in ("start", "end"):
+        p = getattr(map, kind)
+        feats.append(_feature({"type": "Point", "coordinates": _lonlat(map, p)[0]}, kind=kind))
+    return feats
+
+
+def map_to_geojson(map: Any) -> dict[str, Any]:  # noqa: A002
+    """The map as a GeoJSON FeatureCollection (WGS84 [lon, lat]); see the module docstring."""
+    return {"type": "FeatureCollection", "features": map_features(map)}

@@ -1,0 +1,575 @@
+"""GIS layers (GeoJSON, QGroundControl geofence) -> a map file in the local frame.
+
+Inputs
+------
+* GeoJSON (RFC 7946): a FeatureCollection, a Feature or a bare geometry; positions are
+  [longitude, latitude] in WGS84 (a legacy ``crs`` member naming anything else is refused).
+  A feature's layer is its ``kind`` property: ``sensor`` (Point or MultiPoint; optional ``id``
+  (else ``name``, else ``s<n>``) and ``required_data`` in Mbit), ``obstacle`` or its alias
+  ``building`` (Polygon or MultiPolygon), ``no_fly_zone`` (Polygon or MultiPolygon), ``start``
+  and ``end`` (Points), ``area`` (a Polygon; see below), ``circle`` (``center`` [lon, lat] and
+  ``radius_m`` properties, as `map to-geojson` writes circular obstacles). A file given with
+  ``--obstacles``, ``--no-fly-zones`` or ``--sensors`` is that layer whole (footprint exports
+  carry no ``kind``).
+* QGroundControl ``.plan`` (detected by ``"fileType": "Plan"``): its geofence's exclusion
+  polygons become no-fly zones, its exclusion circles circular obstacles, its inclusion polygons
+  (and circles) the area; the planned home position is the start and the end unless the other
+  inputs give them.
+
+The local frame
+---------------
+Origin: ``origin`` if given; else the south-west corner of the data's bounding box (sensors,
+obstacles, zones, start, end) grown by ``margin`` metres (default 100 m) on every side, so every
+feature lies inside the area [0, W] x [0, H] with at least that margin. W and H reach the data's
+north-east corner plus the margin. Positions go through the project's ENU <-> WGS84 conversion
+(`lamde_mission.geo`). An ``area`` Polygon feature, or QGroundControl inclusion fences, fix the
+area instead: its bounding box is the map's area, and the part of the box outside it becomes a
+no-fly zone, so "stay inside" holds exactly. An ``area`` feature that carries ``origin``,
+``width_m`` and ``height_m`` (as `to_geojson` writes them) is taken literally, so a map exported and
+imported again keeps its frame.
+
+Features outside the area: obstacles and zones are clipped to it (a leg between points inside
+the rectangular area never leaves it, so L_vio is unchanged), those wholly outside are dropped;
+sensors, start and end outside are refused. Rings are cleaned as the map loader does (closing,
+near-duplicate and collinear vertices within 5 mm; orientation), and a self-intersecting ring is
+refused naming the feature. Every problem is one line naming the file and feature.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from sim.geo import enu_to_latlon, latlon_to_enu
+
+__all__ = ["GisError", "GisLayers", "read_layers", "build_map", "DEFAULT_MARGIN", "KINDS"]
+
+#: metres added around the data's bounding box when the area is not given
+DEFAULT_MARGIN = 100.0
+#: metres: parts of the area outside an inclusion fence thinner than this are not no-fly zones
+#: (the fence's straight edges in WGS84 are a few millimetres off the local frame's axes)
+SLIVER_WIDTH = 0.1
+#: segments per quarter circle of an inclusion circle's inscribed polygon (QGroundControl)
+INCLUSION_CIRCLE_QUAD_SEGS = 16
+
+KINDS = {
+    "sensor": "sensor",
+    "obstacle": "obstacle",
+    "building": "obstacle",
+    "no_fly_zone": "no_fly_zone",
+    "no-fly-zone": "no_fly_zone",
+    "start": "start",
+    "end": "end",
+    "area": "area",
+    "circle": "circle",
+}
+LAYER_OPTIONS = {"obstacle": "--obstacles", "no_fly_zone": "--no-fly-zones", "sensor": "--sensors"}
+
+
+class GisError(ValueError):
+    """Input that cannot become a map; `problems` holds one line each, naming file and feature."""
+
+    def __init__(self, problems: list[str]):
+        self.problems = list(problems)
+        super().__init__("\n".join(self.problems))
+
+
+@dataclass
+class _Poly:
+    where: str
+    name: str | None
+    rings: list[list[tuple[float, float]]]  # lon, lat; exterior first
+
+
+@dataclass
+class GisLayers:
+    """What the inputs hold, still in WGS84 (lon, lat)."""
+
+    sensors: list[dict[str, Any]] = field(default_factory=list)  # where, id, lon, lat, q
+    obstacles: list[_Poly] = field(default_factory=list)
+    no_fly_zones: list[_Poly] = field(default_factory=list)
+    circles: list[dict[str, Any]] = field(default_factory=list)  # where, lon, lat, radius
+    areas: list[_Poly] = field(default_factory=list)  # polygons the flight must stay within
+    area_circles: list[dict[str, Any]] = field(default_factory=list)
+    area_frame: dict[str, Any] | None = None  # origin, width_m, height_m of an exported area
+    start: dict[str, Any] | None = None  # where, lon, lat
+    end: dict[str, Any] | None = None
+    home: dict[str, Any] | None = None  # QGC planned home position
+    problems: list[str] = field(default_factory=list)
+
+
+# ----------------------------------------------------------------------------- reading
+
+
+def _positive(r: Any) -> bool:
+    return (not isinstance(r, bool)) and isinstance(r, int | float) and r > 0 and math.isfinite(r)
+
+
+def _position(p: Any, where: str) -> tuple[float, float]:
+    if not isinstance(p, list | tuple) or len(p) < 2:
+        raise ValueError(f"{where}: a position must be [longitude, latitude]")
+    lon, lat = p[0], p[1]
+    if not all(isinstance(v, int | float) and not isinstance(v, bool) for v in (lon, lat)):
+        raise ValueError(f"{where}: coordinates must be numbers")
+    lon, lat = float(lon), float(lat)
+    if not (math.isfinite(lon) and math.isfinite(lat)):
+        raise ValueError(f"{where}: coordinates must be finite")
+    if not (-180.0 <= lon <= 180.0 and -90.0 <= lat <= 90.0):
+        raise ValueError(
+            f"{where}: ({lon:g}, {lat:g}) is not a WGS84 [longitude, latitude] (RFC 7946); "
+            "reproject projected data to EPSG:4326 first"
+        )
+    return lon, lat
+
+
+def _rings(coords: Any, where: str) -> list[list[tuple[float, float]]]:
+    if not isinstance(coords, list) or not coords:
+        raise ValueError(f"{where}: a Polygon needs at least its exterior ring")
+    out = []
+    for r, ring in enumerate(coords):
+        if not isinstance(ring, list):
+            raise ValueError(f"{where}: ring {r} is not a list of positions")
+        out.append([_position(p, f"{where} ring {r}") for p in ring])
+    return out
+
+
+def _label(where: str, props: dict[str, Any]) -> tuple[str, str | None]:
+    name = props.get("name")
+    name = str(name) if name is not None else None
+    return (f"{where} '{name}'" if name else where), name
+
+
+def _add_feature(layers: GisLayers, feat: Any, where: str, layer: str | None) -> None:
+    if not isinstance(feat, dict) or feat.get("type") != "Feature":
+        raise ValueError(f"{where}: not a GeoJSON Feature")
+    props = feat.get("properties") or {}
+    if not isinstance(props, dict):
+        raise ValueError(f"{where}: properties must be an object")
+    label, name = _label(where, props)
+    kind = layer
+    if kind is None:
+        raw = props.get("kind")
+        if raw is None:
+            raise ValueError(
+                f"{label}: no 'kind' property (sensor, obstacle/building, no_fly_zone, start, "
+                "end, area); or give the whole file as one layer with --obstacles, "
+                "--no-fly-zones or --sensors"
+            )
+        kind = KINDS.get(str(raw).strip().lower())
+        if kind is None:
+            raise ValueError(f"{label}: unknown kind {raw!r} (expected one of: "
+                             f"{', '.join(sorted(KINDS))})")  # fmt: skip
+    if kind == "circle":  # as `map to-geojson` writes circles: centre and radius in properties
+        r = props.get("radius_m")
+        if not _positive(r):
+            raise ValueError(f"{label}: a circle needs radius_m > 0 and center [lon, lat]")
+        lon, lat = _position(props.get("center"), f"{label} center")
+        layers.circles.append({"where": label, "lon": lon, "lat": lat, "radius": float(r)})
+        return
+    geom = feat.get("geometry")
+    if not isinstance(geom, dict):
+        raise ValueError(f"{label}: has no geometry")
+    gtype, coords = geom.get("type"), geom.get("coordinates")
+    if kind in ("sensor", "start", "end"):
+        if gtype == "Point":
+            points = [_position(coords, label)]
+        elif gtype == "MultiPoint" and kind == "sensor":
+            if not isinstance(coords, list):
+                raise ValueError(f"{label}: MultiPoint coordinates must be a list")
+            points = [_position(p, label) for p in coords]
+        else:
+            raise ValueError(f"{label}: {kind} features must be a Point, got {gtype}")
+        if kind == "sensor":
+            q = props.get("required_data")
+            if q is not None and (isinstance(q, bool) or not isinstance(q, int | float)
+                                  or not math.isfinite(q) or q < 0):  # fmt: skip
+                raise ValueError(f"{label}: required_data must be a number >= 0 (Mbit)")
+            base = props.get("id", name)
+            for k, (lon, lat) in enumerate(points):
+                sid = None if base is None else (str(base) if len(points) == 1 else f"{base}-{k}")
+                layers.sensors.append({"where": label, "id": sid, "lon": lon, "lat": lat,
+                                       "required_data": q})  # fmt: skip
+        else:
+            if getattr(layers, kind) is not None:
+                first = getattr(layers, kind)["where"]
+                raise ValueError(f"{label}: a second '{kind}' (the first: {first})")
+            setattr(layers, kind, {"where": label, "lon": points[0][0], "lat": points[0][1]})
+        return
+    # polygon layers
+    if gtype == "Polygon":
+        polys = [_rings(coords, label)]
+    elif gtype == "MultiPolygon":
+        if not isinstance(coords, list):
+            raise ValueError(f"{label}: MultiPolygon coordinates must be a list")
+        polys = [_rings(c, f"{label} polygon {k}") for k, c in enumerate(coords)]
+    else:
+        raise ValueError(f"{label}: {kind} features must be a Polygon or MultiPolygon, "
+                         f"got {gtype}")  # fmt: skip
+    target = {"obstacle": layers.obstacles, "no_fly_zone": layers.no_fly_zones,
+              "area": layers.areas}[kind]  # fmt: skip
+    for k, rings in enumerate(polys):
+        at = label if len(polys) == 1 else f"{label} polygon {k}"
+        target.append(_Poly(at, name, rings))
+    if kind == "area" and all(key in props for key in ("origin", "width_m", "height_m")):
+        layers.area_frame = {"where": label, "origin": props["origin"],
+                             "width": props["width_m"], "height": props["height_m"]}  # fmt: skip
+
+
+def _read_geojson(layers: GisLayers, doc: Any, src: str, layer: str | None) -> None:
+    if not isinstance(doc, dict):
+        raise ValueError(f"{src}: not a GeoJSON object")
+    crs = doc.get("crs")
+    if crs is not None:
+        name = str((crs.get("properties") or {}).get("name", "")) if isinstance(crs, dict) else ""
+        if not any(t in name for t in ("CRS84", "4326")):
+            raise ValueError(f"{src}: crs {name or crs!r} is not WGS84; RFC 7946 GeoJSON is "
+                             "WGS84 longitude/latitude (reproject to EPSG:4326 first)")  # fmt: skip
+    t = doc.get("type")
+    if t == "FeatureCollection":
+        feats = doc.get("features")
+        if not isinstance(feats, list):
+            raise ValueError(f"{src}: features must be a list")
+        for k, f in enumerate(feats):
+            try:
+                _add_feature(layers, f, f"{src}: features[{k}]", layer)
+            except ValueError as exc:
+                layers.problems.append(str(exc))
+    elif t == "Feature":
+        _add_feature(layers, doc, f"{src}: feature", layer)
+    elif t in ("Point", "MultiPoint", "Polygon", "MultiPolygon"):
+        if layer is None:
+            raise ValueError(f"{src}: a bare {t} has no 'kind'; give the file with "
+                             "--obstacles, --no-fly-zones or --sensors")  # fmt: skip
+        _add_feature(layers, {"type": "Feature", "geometry": doc, "properties": {}},
+                     f"{src}: geometry", layer)  # fmt: skip
+    else:
+        raise ValueError(f"{src}: not GeoJSON (type {t!r}; expected FeatureCollection, "
+                         "Feature or a geometry)")  # fmt: skip
+
+
+def _read_qgc_plan(layers: GisLayers, doc: dict[str, Any], src: str) -> None:
+    gf = doc.get("geoFence") or {}
+    if not isinstance(gf, dict):
+        raise ValueError(f"{src}: geoFence is not an object")
+    for k, poly in enumerate(gf.get("polygons") or []):
+        where = f"{src}: geoFence.polygons[{k}]"
+        verts = poly.get("polygon") if isinstance(poly, dict) else None
+        if not isinstance(verts, list) or len(verts) < 3:
+            raise ValueError(f"{where}: needs at least 3 [lat, lon] vertices")
+        ring = []
+        for i, v in enumerate(verts):
+            if not isinstance(v, list) or len(v) < 2:
+                raise ValueError(f"{where}.polygon[{i}]: expected [lat, lon]")
+            ring.append(_position([v[1], v[0]], f"{where}.polygon[{i}]"))
+        inclusion = bool(poly.get("inclusion", True))  # QGC: a missing key means inclusion
+        (layers.areas if inclusion else layers.no_fly_zones).append(_Poly(where, None, [ring]))
+    for k, c in enumerate(gf.get("circles") or []):
+        where = f"{src}: geoFence.circles[{k}]"
+        circle = c.get("circle") if isinstance(c, dict) else None
+        centre = circle.get("center") if isinstance(circle, dict) else None
+        if not isinstance(centre, list) or len(centre) < 2:
+            raise ValueError(f"{where}: missing circle.center [lat, lon]")
+        lon, lat = _position([centre[1], centre[0]], f"{where}.circle.center")
+        r = circle.get("radius")
+        if not _positive(r):
+            raise ValueError(f"{where}.circle.radius: must be a positive number (metres)")
+        entry = {"where": where, "lon": lon, "lat": lat, "radius": float(r)}
+        (layers.area_circles if c.get("inclusion", True) else layers.circles).append(entry)
+    home = (doc.get("mission") or {}).get("plannedHomePosition")
+    if isinstance(home, list) and len(home) >= 2:
+        lon, lat = _position([home[1], home[0]], f"{src}: mission.plannedHomePosition")
+        layers.home = {"where": f"{src}: planned home", "lon": lon, "lat": lat}
+
+
+def read_layers(files: list[tuple[str | Path, str | None]]) -> GisLayers:
+    """Read (path, layer) pairs; layer None: per-feature ``kind`` (or a QGC plan). Raises
+    GisError with every problem found."""
+    layers = GisLayers()
+    for path, layer in files:
+        src = str(path)
+        try:
+            text = Path(path).read_text(encoding="utf-8-sig")
+        except FileNotFoundError:
+            layers.problems.append(f"{src}: file not found")
+            continue
+        except (OSError, UnicodeDecodeError) as exc:
+            layers.problems.append(f"{src}: cannot read ({exc})")
+            continue
+        try:
+            doc = json.loads(text)
+        except json.JSONDecodeError as exc:
+            layers.problems.append(f"{src}: not valid JSON ({exc.msg} at line {exc.lineno})")
+            continue
+        try:
+            if isinstance(doc, dict) and doc.get("fileType") == "Plan":
+                if layer is not None:
+                    opt = LAYER_OPTIONS[layer]
+                    raise ValueError(f"{src}: a QGroundControl plan cannot be given as {opt}; "
+                                     "give it as a plain input")  # fmt: skip
+                _read_qgc_plan(layers, doc, src)
+            else:
+                _read_geojson(layers, doc, src, layer)
+        except ValueError as exc:
+            layers.problems.append(str(exc))
+    if layers.problems:
+        raise GisError(layers.problems)
+    return layers
+
+
+# ----------------------------------------------------------------------------- building
+
+
+def _parse_origin(value: Any, where: str) -> tuple[float, float, float]:
+    try:
+        lat, lon, *rest = (float(v) for v in value)
+    except (TypeError, ValueError):
+        raise GisError([f"{where}: origin must be [lat, lon] or [lat, lon, alt]"]) from None
+    alt = rest[0] if rest else 0.0
+    if not (-90 <= lat <= 90 and -180 <= lon <= 180 and all(map(math.isfinite, (lat, lon, alt)))):
+        raise GisError([f"{where}: origin ({lat:g}, {lon:g}) is not a latitude, longitude"])
+    return lat, lon, alt
+
+
+def _all_lonlat(layers: GisLayers) -> np.ndarray:
+    pts: list[tuple[float, float]] = []
+    for s in layers.sensors:
+        pts.append((s["lon"], s["lat"]))
+    for p in layers.obstacles + layers.no_fly_zones + layers.areas:
+        for ring in p.rings[:1]:
+            pts.extend(ring)
+    for c in layers.circles + layers.area_circles:
+        pts.append((c["lon"], c["lat"]))
+    for e in (layers.start, layers.end, layers.home):
+        if e is not None:
+            pts.append((e["lon"], e["lat"]))
+    return np.array(pts, dtype=float).reshape(-1, 2)
+
+
+def _local(lonlat: Any, origin: tuple[float, float, float]) -> np.ndarray:
+    a = np.asarray(lonlat, dtype=float).reshape(-1, 2)
+    x, y = latlon_to_enu(a[:, 1], a[:, 0], origin)
+    return np.column_stack([x, y])
+
+
+def _circle_bounds(c: dict[str, Any], origin: tuple[float, float, float]) -> np.ndarray:
+    (x, y), = _local([(c["lon"], c["lat"])], origin)
+    r = c["radius"]
+    return np.array([[x - r, y - r], [x + r, y + r]])
+
+
+def _frame(layers: GisLayers, origin: tuple[float, float, float] | None,
+           margin: float) -> tuple[tuple[float, float, float], float, float, bool, list[str]]:
+    """(origin, width, height, area given, notes)."""
+    notes: list[str] = []
+    if layers.area_frame is not None and origin is None:
+        f = layers.area_frame
+        o = _parse_origin(f["origin"], f["where"])
+        try:
+            w, h = float(f["width"]), float(f["height"])
+        except (TypeError, ValueError):
+            raise GisError([f"{f['where']}: width_m and height_m must be numbers"]) from None
+        notes.append(f"origin and area from {f['where']}")
+        return o, w, h, True, notes
+    data = _all_lonlat(layers)
+    if not len(data):
+        raise GisError(["no features: nothing to build a map from"])
+    provisional = origin or (float(data[:, 1].min()), float(data[:, 0].min()), 0.0)
+    if layers.areas or layers.area_circles:
+        # the inclusion fences (or area polygons) bound the area
+        pts = [_local(p.rings[0], provisional) for p in layers.areas]
+        pts += [_circle_bounds(c, provisional) for c in layers.area_circles]
+        xy = np.concatenate(pts)
+        lo, hi = xy.min(axis=0), xy.max(axis=0)
+        given = True
+    else:
+        xy = _local(data, provisional)
+        for c in layers.circles:
+            xy = np.vstack([xy, _circle_bounds(c, provisional)])
+        lo, hi = xy.min(axis=0) - margin, xy.max(axis=0) + margin
+        given = False
+    if origin is None:
+        lat, lon = enu_to_latlon(lo[0], lo[1], provisional)
+        o = (round(float(lat), 9), round(float(lon), 9), 0.0)
+        notes.append(f"origin (lat {o[0]:.9f}, lon {o[1]:.9f}): the south-west corner of the "
+                     + ("area" if given else f"data's bounds grown by {margin:g} m"))  # fmt: skip
+        w, h = float(hi[0] - lo[0]), float(hi[1] - lo[1])
+    else:
+        o = origin
+        w, h = float(hi[0]), float(hi[1])
+    # round the area outward to the centimetre
+    w, h = math.ceil(w * 100.0) / 100.0, math.ceil(h * 100.0) / 100.0
+    if not (w > 0 and h > 0):
+        raise GisError([f"the area would be {w:g} m x {h:g} m: the data lie south or west of "
+                        "the origin"])  # fmt: skip
+    return o, w, h, given, notes
+
+
+def _clean_shape(rings_xy: list[np.ndarray], where: str, notes: list[str],
+                 locate: Any) -> tuple[np.ndarray, list[np.ndarray]] | str:
+    """The feature's rings cleaned and oriented (`planner_core.polygons.clean_polygon`), or the
+    problem as one line naming the feature."""
+    from planner_core.polygons import clean_polygon
+
+    try:
+        shell, holes, said = clean_polygon(rings_xy, locate=locate)
+    except ValueError as exc:
+        return f"{where}: {exc}"
+    notes += [f"{where}: {n}" for n in said if not n.startswith("given clockwise")]
+    return shell, holes
+
+
+def build_map(
+    layers: GisLayers,
+    *,
+    origin: tuple[float, float, float] | None = None,
+    margin: float = DEFAULT_MARGIN,
+    name: str = "imported",
+) -> tuple[dict[str, Any], list[str]]:
+    """The map file (a dict for `planner_core.load_map`) and notes on what was done.
+
+    Raises GisError with every problem found (one line each, naming file and feature).
+    """
+    import shapely
+    from shapely.geometry import Polygon, box
+
+    if not (margin >= 0 and math.isfinite(margin)):
+        raise GisError([f"--margin must be a finite number >= 0 (got {margin:g})"])
+    o, W, H, area_given, notes = _frame(layers, origin, margin)
+    problems: list[str] = []
+    area_box = box(0.0, 0.0, W, H)
+
+    def locate(x: float, y: float) -> str:
+        lat, lon = enu_to_latlon(x, y, o)
+        return f"lon {float(lon):.6f}, lat {float(lat):.6f}"
+
+    def point(e: dict[str, Any], label: str) -> list[float] | None:
+        (x, y), = _local([(e["lon"], e["lat"])], o)
+        if not (0.0 <= x <= W and 0.0 <= y <= H):
+            problems.append(f"{e['where']}: {label} ({locate(x, y)}) is outside the area")
+            return None
+        return [round(float(x), 4), round(float(y), 4)]
+
+    sensors = []
+    seen: set[str] = set()
+    for j, s in enumerate(layers.sensors):
+        xy = point(s, "sensor")
+        sid = s["id"] if s["id"] is not None else f"s{j + 1}"
+        if sid in seen:
+            problems.append(f"{s['where']}: duplicate sensor id '{sid}'")
+        seen.add(sid)
+        if xy is not None:
+            entry: dict[str, Any] = {"id": sid, "x": xy[0], "y": xy[1]}
+            if s["required_data"] is not None:
+                entry["required_data"] = float(s["required_data"])
+            sensors.append(entry)
+    if not layers.sensors:
+        problems.append("no sensors: add Point features with kind 'sensor' (or --sensors FILE)")
+    start_src = layers.start or layers.home
+    end_src = layers.end or layers.home
+    if start_src is None:
+        problems.append("no start: add a Point feature with kind 'start' (or a QGroundControl "
+                        "plan with a planned home position)")  # fmt: skip
+    if end_src is None:
+        problems.append("no end: add a Point feature with kind 'end'")
+    start = point(start_src, "start") if start_src else None
+    end = point(end_src, "end") if end_src else None
+    if layers.start is None and layers.home is not None:
+        notes.append(f"start and end default to {layers.home['where']}")
+
+    def shapes(polys: list[_Poly], label: str) -> list[dict[str, Any]]:
+        out: list[dict[str, Any]] = []
+        for p in polys:
+            rings_xy = [_local(r, o) for r in p.rings]
+            cleaned = _clean_shape(rings_xy, p.where, notes, locate)
+            if isinstance(cleaned, str):
+                problems.append(cleaned)
+                continue
+            shell, holes = cleaned
+            geom = Polygon(shell, holes)
+            if not area_box.contains(geom):
+                clipped = geom.intersection(area_box)
+                parts = [g for g in shapely.get_parts(clipped) if g.geom_type == "Polygon"
+                         and g.area > 0.0]  # fmt: skip
+                if not parts:
+                    notes.append(f"{p.where}: outside the area; dropped")
+                    continue
+                notes.append(f"{p.where}: clipped to the area")
+                for g in parts:
+                    ring_sets = [np.asarray(g.exterior.coords)]
+                    ring_sets += [np.asarray(h.coords) for h in g.interiors]
+                    c2 = _clean_shape(ring_sets, p.where, notes, locate)
+                    if isinstance(c2, str):
+                        problems.append(c2)
+                        continue
+                    out.append(_entry(c2, p.name))
+                continue
+            out.append(_entry(cleaned, p.name))
+        return out
+
+    obstacles = shapes(layers.obstacles, "obstacle")
+    zones = shapes(layers.no_fly_zones, "no-fly zone")
+    circles = []
+    for c in layers.circles:
+        (x, y), = _local([(c["lon"], c["lat"])], o)
+        if not (0.0 <= x <= W and 0.0 <= y <= H):
+            problems.append(f"{c['where']}: circle centre ({locate(x, y)}) is outside the area")
+            continue
+        circles.append({"x": round(float(x), 4), "y": round(float(y), 4), "radius": c["radius"]})
+    if area_given and (layers.areas or layers.area_circles):
+        allowed = [Polygon(_local(p.rings[0], o)) for p in layers.areas]
+        for c in layers.area_circles:
+            (x, y), = _local([(c["lon"], c["lat"])], o)
+            # inscribed polygon: the allowed region shrinks by at most r(1 - cos(pi/4/segs))
+            allowed.append(shapely.Point(x, y).buffer(c["radius"],
+                                                      quad_segs=INCLUSION_CIRCLE_QUAD_SEGS))
+        bad = [p.where for p, g in zip(layers.areas, allowed, strict=False) if not g.is_valid]
+        if bad:
+            problems += [f"{w}: the inclusion polygon is not simple" for w in bad]
+        else:
+            outside = area_box.difference(shapely.union_all(allowed))
+            # morphological opening: slivers thinner than SLIVER_WIDTH between the box and the
+            # fence (its edges are not exactly the frame's axes) go, mitred corners stay
+            d = 0.5 * SLIVER_WIDTH
+            opened = outside.buffer(-d, join_style="mitre", mitre_limit=10.0)
+            opened = opened.buffer(d, join_style="mitre", mitre_limit=10.0).intersection(area_box)
+            for g in shapely.get_parts(opened):
+                if g.geom_type != "Polygon" or g.is_empty:
+                    continue
+                rings = [np.asarray(g.exterior.coords)] + [np.asarray(h.coords)
+                                                           for h in g.interiors]  # fmt: skip
+                c2 = _clean_shape(rings, "outside the inclusion fence", notes, locate)
+                if isinstance(c2, str):
+                    problems.append(c2)
+                    continue
+                zones.append(_entry(c2, "outside the inclusion fence"))
+            notes.append("area: the bounding box of the inclusion fence; the part of it outside "
+                         f"the fence is a no-fly zone (slivers thinner than {SLIVER_WIDTH * 100:g} "
+                         "cm left out)")  # fmt: skip
+    if problems:
+        raise GisError(problems)
+    doc: dict[str, Any] = {
+        "name": name,
+        "origin": {"lat": o[0], "lon": o[1], "alt": o[2]},
+        "area": {"width": W, "height": H},
+        "start": start,
+        "end": end,
+        "sensors": sensors,
+        "obstacles": {"circles": circles, "rectangles": [], "no_fly_zones": zones,
+                      "polygons": obstacles},  # fmt: skip
+    }
+    return doc, notes
+
+
+def _entry(shape: tuple[np.ndarray, list[np.ndarray]], name: str | None) -> dict[str, Any]:
+    shell, holes = shape
+    e: dict[str, Any] = {"vertices": np.round(shell, 4).tolist()}
+    if holes:
+        e["holes"] = [np.round(h, 4).tolist() for h in holes]
+    if name is not None:
+        e["name"] = name
+    return e

@@ -1,0 +1,163 @@
+"""D_syn: the BBOB database (paper Sec. 4.3) as lazily built ``ioh`` instances.
+
+An instance is keyed by ``(function, dimension, instance)``: BBOB function id 1..24 (Hansen et
+al., "Real-parameter black-box optimization benchmarking 2009: noiseless functions definitions"),
+dimension d, and BBOB instance id (the seed of the random shift ``x_opt``, rotation and ``f_opt``
+of that function). The paper builds its 14,400 instances with MetaBox's augmentation interface
+(random shift and rotation per instance); BBOB's own instance ids are exactly such shift/rotation
+draws, so ``ioh.get_problem(fid, instance=iid, dimension=d)`` gives the same kind of database
+without MetaBox (which pins numpy < 2 and cannot share this environment).
+
+Sizes: :data:`FULL` is the paper's setting, 24 functions x {20, 40, 80, 120, 160, 200} dims x 100
+instances = 14,400. :data:`DEFAULT` is the default here (2 cores): 24 x {20, 40, 80} x 5 = 360;
+the suite's tasks have d = 40 (I_max = 10) and d = 80 (I_max = 20).
+
+Every instance is a box problem in the DE's sense: ``lower = 0``, ``upper = 1`` (the unit box,
+mapped affinely to BBOB's [-5, 5]^d inside ``evaluate``), ``evaluate(X) -> (f, phi)`` with
+``f = s(x) - f_opt`` (precision, >= 0; the offset ``f_opt`` is a per-instance constant of BBOB
+and carries no landscape information) and ``phi = 0``.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Any, NamedTuple
+
+import numpy as np
+
+__all__ = [
+    "BBOB_LOWER",
+    "BBOB_UPPER",
+    "DEFAULT",
+    "FULL",
+    "FUNCTION_NAMES",
+    "BBOBProblem",
+    "DatabaseSpec",
+    "InstanceKey",
+    "bbob_values",
+]
+
+BBOB_LOWER = -5.0
+BBOB_UPPER = 5.0
+
+#: BBOB noiseless function names, f1..f24 (Hansen et al. 2009)
+FUNCTION_NAMES = (
+    "Sphere", "Ellipsoid", "Rastrigin", "BuecheRastrigin", "LinearSlope",
+    "AttractiveSector", "StepEllipsoid", "Rosenbrock", "RosenbrockRotated", "EllipsoidRotated",
+    "Discus", "BentCigar", "SharpRidge", "DifferentPowers", "RastriginRotated", "Weierstrass",
+    "Schaffers10", "Schaffers1000", "GriewankRosenbrock", "Schwefel", "Gallagher101",
+    "Gallagher21", "Katsuura", "LunacekBiRastrigin",
+)  # fmt: skip
+
+
+class InstanceKey(NamedTuple):
+    """One database entry: BBOB function id (1..24), dimension d, BBOB instance id (>= 1)."""
+
+    function: int
+    dimension: int
+    instance: int
+
+
+@dataclass(frozen=True)
+class DatabaseSpec:
+    """Which instances D_syn holds: the product functions x dimensions x instances."""
+
+    functions: tuple[int, ...]
+    dimensions: tuple[int, ...]
+    instances: tuple[int, ...]
+
+    def __post_init__(self) -> None:
+        for f in self.functions:
+            if not 1 <= f <= 24:
+                raise ValueError(f"functions: {f} is not a BBOB function id (1..24)")
+        for d in self.dimensions:
+            if d < 2:
+                raise ValueError(f"dimensions: {d} < 2")
+        for i in self.instances:
+            if i < 1:
+                raise ValueError(f"instances: {i} < 1")
+
+    @classmethod
+    def make(
+        cls, functions: Any = None, dimensions: Any = None, instances: Any = None
+    ) -> DatabaseSpec:
+        """Build from iterables (None -> the DEFAULT's value); an int n for instances = 1..n."""
+        if isinstance(instances, int):
+            instances = range(1, instances + 1)
+        return cls(
+            tuple(int(v) for v in (functions if functions is not None else DEFAULT.functions)),
+            tuple(int(v) for v in (dimensions if dimensions is not None else DEFAULT.dimensions)),
+            tuple(int(v) for v in (instances if instances is not None else DEFAULT.instances)),
+        )
+
+    def keys(self) -> list[InstanceKey]:
+        """All keys, ordered by dimension, then function, then instance."""
+        return [
+            InstanceKey(f, d, i)
+            for d, f, i in itertools.product(self.dimensions, self.functions, self.instances)
+        ]
+
+    def __len__(self) -> int:
+        return len(self.functions) * len(self.dimensions) * len(self.instances)
+
+    def to_json(self) -> dict[str, list[int]]:
+        return {
+            "functions": list(self.functions),
+            "dimensions": list(self.dimensions),
+            "instances": list(self.instances),
+        }
+
+
+#: the paper's D_syn: 24 x 6 x 100 = 14,400 instances
+FULL = DatabaseSpec(tuple(range(1, 25)), (20, 40, 80, 120, 160, 200), tuple(range(1, 101)))
+#: the default on this machine: 24 x 3 x 5 = 360 instances
+DEFAULT = DatabaseSpec(tuple(range(1, 25)), (20, 40, 80), tuple(range(1, 6)))
+
+
+@lru_cache(maxsize=64)
+def _ioh_problem(function: int, dimension: int, instance: int) -> Any:
+    import ioh
+
+    return ioh.get_problem(
+        int(function), instance=int(instance), dimension=int(dimension),
+        problem_class=ioh.ProblemClass.BBOB,
+    )  # fmt: skip
+
+
+def bbob_values(key: InstanceKey, U: np.ndarray) -> np.ndarray:
+    """BBOB precision ``s(x) - f_opt`` at unit-box points ``U`` (n, d) -> (n,), x = -5 + 10 U.
+
+    Raises ValueError when U's second axis is not the key's dimension.
+    """
+    U = np.atleast_2d(np.asarray(U, dtype=float))
+    if U.shape[1] != key.dimension:
+        raise ValueError(f"X has {U.shape[1]} columns, instance {key} has d={key.dimension}")
+    p = _ioh_problem(*key)
+    X = BBOB_LOWER + (BBOB_UPPER - BBOB_LOWER) * np.clip(U, 0.0, 1.0)
+    y = np.asarray(p(np.ascontiguousarray(X)), dtype=float).reshape(-1)
+    return y - float(p.optimum.y)
+
+
+class BBOBProblem:
+    """One BBOB instance as a box problem: unit box, ``evaluate(X) -> (f, 0)`` (module doc).
+
+    The ``ioh`` object is built on first evaluation (creating a rotated 200-d instance costs
+    tenths of a second) and shared through a small cache.
+    """
+
+    def __init__(self, key: InstanceKey | tuple[int, int, int]):
+        self.key = InstanceKey(*(int(v) for v in key))
+        self.dim = self.key.dimension
+        self.lower = np.zeros(self.dim)
+        self.upper = np.ones(self.dim)
+
+    def __repr__(self) -> str:
+        f, d, i = self.key
+        return f"BBOBProblem(f{f} {FUNCTION_NAMES[f - 1]}, d={d}, instance={i})"
+
+    def evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(n, d) unit-box points -> (f (n,), phi (n,) zeros)."""
+        f = bbob_values(self.key, X)
+        return f, np.zeros_like(f)

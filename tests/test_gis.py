@@ -1,0 +1,364 @@
+"""Real maps in and out (issue 15): GeoJSON / QGroundControl import, GeoJSON export, the campus.
+
+The campus case (`../shared/cases/gis/campus.geojson`, copied to tests/data/) has two L-shaped
+halls with a corridor, a block with a courtyard, an annex with a collinear and a 2 mm duplicate
+vertex, a clockwise no-fly zone, three sensors (one in the corridor, one in the courtyard).
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from shapely.geometry import LineString, Polygon
+
+from lamde_mission.gis import GisError, build_map, map_to_geojson, read_layers
+from planner_core.geometry import overlap_lengths
+from planner_core.mapio import load_map
+from sim.geo import latlon_to_enu
+from tests.conftest import ROOT
+
+CAMPUS = ROOT / "tests" / "data" / "campus.geojson"
+
+
+def _cli(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "lamde_mission.cli", *args],
+                          capture_output=True, text=True, timeout=300)  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def campus(tmp_path_factory) -> tuple[Path, subprocess.CompletedProcess]:
+    out = tmp_path_factory.mktemp("campus") / "campus.json"
+    r = _cli("map", "from-geojson", str(CAMPUS), "-o", str(out))
+    return out, r
+
+
+def _by_name(m) -> dict:
+    return {sh.name: sh for sh in m.shapes}
+
+
+def test_campus_imports_exactly(campus) -> None:
+    path, r = campus
+    assert r.returncode == 0, r.stderr
+    m = load_map(path)
+    assert not m.notes  # written clean: loading it again changes nothing
+    assert m.sensor_ids == ("gw-1", "gw-2", "gw-3")
+    np.testing.assert_array_equal(m.required_data, [150.0, 200.0, 200.0])
+    shapes = _by_name(m)
+    assert set(shapes) == {"hall-west", "hall-east", "court", "annex", "restricted"}
+    assert len(shapes["hall-west"].shell) == 6 and len(shapes["hall-east"].shell) == 6  # L-shapes
+    assert len(shapes["court"].holes) == 1 and len(shapes["court"].holes[0]) == 4  # the courtyard
+    assert len(shapes["annex"].shell) == 4  # cleaned: collinear and 2 mm duplicate vertex gone
+    assert shapes["restricted"].kind == "no_fly_zone"
+    assert Polygon(shapes["restricted"].shell).exterior.is_ccw  # given clockwise, reordered
+    # the origin is the data's south-west corner grown by the 100 m margin (documented)
+    assert "south-west corner of the data's bounds grown by 100 m" in r.stderr
+    assert "'annex': merged 1 near-duplicate vertex(es) and removed 1 vertex(es) in the middle " \
+        "of an edge (tolerance 5 mm)" in r.stderr
+    xy = np.vstack([m.sensors, m.start, m.end] + [sh.shell for sh in m.shapes])
+    assert xy.min() == pytest.approx(100.0, abs=0.05)
+    assert m.width - xy[:, 0].max() == pytest.approx(100.0, abs=0.05)
+    assert m.height - xy[:, 1].max() == pytest.approx(100.0, abs=0.05)
+    # the corridor between the halls stays open: a sensor in it is outside every footprint
+    from planner_core.geometry import points_inside
+    assert not points_inside(m.sensors, m.obstacles).any()
+
+
+def test_campus_overlap_equals_shapely(campus) -> None:
+    path, _ = campus
+    m = load_map(path)
+    rng = np.random.default_rng(7)
+    for name in ("hall-west", "hall-east", "court"):
+        sh = _by_name(m)[name]
+        poly = Polygon(sh.shell, sh.holes)
+        obs = type(m.obstacles).build([], [], [(sh.shell, sh.holes)])
+        lo, hi = sh.shell.min(axis=0) - 50, sh.shell.max(axis=0) + 50
+        a = lo + rng.random((200, 2)) * (hi - lo)
+        b = lo + rng.random((200, 2)) * (hi - lo)
+        got = overlap_lengths(a, b, obs)
+        want = [LineString([p, q]).intersection(poly).length for p, q in zip(a, b, strict=True)]
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-6)
+    # a leg straight across the courtyard block is charged for the walls, not the courtyard
+    sh = _by_name(m)["court"]
+    (x0, y0), (x1, y1) = sh.shell.min(axis=0), sh.shell.max(axis=0)
+    y = 0.5 * (y0 + y1)
+    leg = np.array([[x0 - 10, y], [x1 + 10, y]])
+    inside = float(overlap_lengths(leg[0], leg[1], m.obstacles))
+    hole = sh.holes[0]
+    walls = (x1 - x0) - (hole[:, 0].max() - hole[:, 0].min())
+    assert inside == pytest.approx(walls, abs=0.01)  # walls a few mm off the grid lines
+    assert inside == pytest.approx(LineString(leg).intersection(Polygon(sh.shell, sh.holes)).length,
+                                   abs=1e-6)  # fmt: skip
+
+
+@pytest.mark.slow
+def test_campus_plans_and_serves_every_sensor(campus) -> None:
+    from lamde_mission.api import plan
+
+    path, _ = campus
+    m = load_map(path)
+    result = plan(m, seed=0, budget=3000)
+    assert result.feasible
+    collected = result.breakdown["collected"]
+    for sid, q in zip(m.sensor_ids, m.required_data, strict=True):
+        assert collected[sid] >= q * (1 - 1e-9)
+    nodes = np.vstack([m.start, np.asarray(result.hover_points).reshape(-1, 2), m.end])
+    assert float(overlap_lengths(nodes[:-1], nodes[1:], m.obstacles).sum()) == 0.0
+
+
+def test_campus_plan_cli_verifies(campus, tmp_path) -> None:
+    path, _ = campus
+    out = tmp_path / "campus.plan"
+    r = _cli("plan", str(path), "-o", str(out), "--budget", "2000", "--quiet")
+    assert r.returncode == 0, r.stderr
+    r = _cli("verify", str(path), str(out))
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "C5 L_vio = 0               PASS" in r.stdout
+
+
+def _metres(lonlat_a, lonlat_b, origin) -> float:
+    a = np.asarray(lonlat_a, dtype=float).reshape(-1, 2)
+    b = np.asarray(lonlat_b, dtype=float).reshape(-1, 2)
+    xa, ya = latlon_to_enu(a[:, 1], a[:, 0], origin)
+    xb, yb = latlon_to_enu(b[:, 1], b[:, 0], origin)
+    return np.hypot(xa[:, None] - xb[None, :], ya[:, None] - yb[None, :])
+
+
+def test_round_trip_keeps_every_vertex_within_a_centimetre(campus, tmp_path) -> None:
+    path, _ = campus
+    m = load_map(path)
+    out = tmp_path / "campus.geojson"
+    r = _cli("map", "to-geojson", str(path), "-o", str(out))
+    assert r.returncode == 0, r.stderr
+    back = json.loads(out.read_text())
+    src = json.loads(CAMPUS.read_text())
+    origin = (m.spec.origin.lat, m.spec.origin.lon, 0.0)
+    def key(f):
+        p = f["properties"]
+        return p["kind"] if p["kind"] in ("start", "end") else p.get("name", p.get("id"))
+
+    named = {key(f): f for f in back["features"] if f["properties"]["kind"] != "area"}
+    for f in src["features"]:
+        name = f["properties"]["name"]
+        g = named[key(f) if f["properties"]["kind"] in ("start", "end") else name]
+        if f["geometry"]["type"] == "Point":
+            d = _metres(f["geometry"]["coordinates"], g["geometry"]["coordinates"], origin)
+            assert d.max() < 0.01, name
+            continue
+        for ring_in, ring_out in zip(f["geometry"]["coordinates"], g["geometry"]["coordinates"],
+                                     strict=True):  # fmt: skip
+            d = _metres(ring_in, ring_out, origin)
+            assert d.min(axis=0).max() < 0.01, name  # every output vertex is an input vertex
+            if name != "annex":  # the annex lost its collinear and duplicate vertex (noted)
+                assert d.min(axis=1).max() < 0.01, name  # and every input vertex survives
+            else:
+                far = d.min(axis=1) >= 0.01
+                assert far.sum() == 1  # the vertex in the middle of an edge, within 5 mm of it
+                ring_xy = np.column_stack(latlon_to_enu(np.array(ring_out)[:, 1],
+                                                        np.array(ring_out)[:, 0], origin))
+                p = np.column_stack(latlon_to_enu(np.array(ring_in)[far, 1],
+                                                  np.array(ring_in)[far, 0], origin))
+                assert LineString(ring_xy).distance(
+                    LineString([p[0], p[0] + 1e-9])) < 0.005
+    # and GeoJSON -> map again: the same map, to the centimetre (the frame comes from the area)
+    out2 = tmp_path / "again.json"
+    r = _cli("map", "from-geojson", str(out), "-o", str(out2))
+    assert r.returncode == 0, r.stderr
+    m2 = load_map(out2)
+    assert (m2.width, m2.height) == (m.width, m.height)
+    assert m2.spec.origin == m.spec.origin
+    for a, b in zip(m.shapes, m2.shapes, strict=True):
+        np.testing.assert_allclose(a.shell, b.shell, atol=0.01)
+    np.testing.assert_allclose(m2.sensors, m.sensors, atol=0.01)
+
+
+def _fc(*features) -> dict:
+    return {"type": "FeatureCollection", "features": list(features)}
+
+
+def _feat(kind, geom_type, coords, **props) -> dict:
+    p = dict(props)
+    if kind is not None:
+        p["kind"] = kind
+    return {"type": "Feature", "properties": p,
+            "geometry": {"type": geom_type, "coordinates": coords}}  # fmt: skip
+
+
+LON, LAT = 7.32, 46.21
+D = 0.001  # ~ 77 m east, 111 m north
+
+
+def _pt(i, j) -> list[float]:
+    return [LON + i * D, LAT + j * D]
+
+
+def _basics() -> list[dict]:
+    return [_feat("sensor", "Point", _pt(1, 1), id="s1"), _feat("start", "Point", _pt(0, 0)),
+            _feat("end", "Point", _pt(5, 5))]  # fmt: skip
+
+
+def _write(tmp_path, name, doc) -> Path:
+    p = tmp_path / name
+    p.write_text(json.dumps(doc))
+    return p
+
+
+def test_errors_name_file_and_feature(tmp_path) -> None:
+    bow = [[_pt(2, 2), _pt(4, 4), _pt(4, 2), _pt(2, 4), _pt(2, 2)]]
+    doc = _fc(*_basics(), _feat("building", "Polygon", bow, name="bowtie"),
+              _feat(None, "Point", _pt(3, 3), name="nokind"),
+              _feat("tower", "Point", _pt(3, 3)),
+              _feat("obstacle", "LineString", [_pt(1, 2), _pt(2, 2)]),
+              _feat("sensor", "Point", [600000.0, 5100000.0]))  # fmt: skip
+    f = _write(tmp_path, "bad.geojson", doc)
+    out = tmp_path / "map.json"
+    r = _cli("map", "from-geojson", str(f), "-o", str(out))
+    assert r.returncode == 2
+    lines = r.stderr.strip().splitlines()
+    assert any("features[4] 'nokind': no 'kind' property" in x for x in lines)
+    assert any("features[5]: unknown kind 'tower'" in x for x in lines)
+    assert any("features[6]: obstacle features must be a Polygon or MultiPolygon, got "
+               "LineString" in x for x in lines)  # fmt: skip
+    assert any("features[7]" in x and "not a WGS84" in x for x in lines)
+    assert not out.exists()
+    # with the others fixed, the self-intersection is refused naming the feature and the place
+    doc = _fc(*_basics(), _feat("building", "Polygon", bow, name="bowtie"))
+    r = _cli("map", "from-geojson", str(_write(tmp_path, "bow.geojson", doc)), "-o", str(out))
+    assert r.returncode == 2
+    assert "features[3] 'bowtie': self-intersection at (lon 7.323000, lat 46.213000)" in \
+        r.stderr  # fmt: skip
+    assert not out.exists()
+
+
+def test_whole_file_layers_and_multipolygons(tmp_path) -> None:
+    square = lambda i, j: [[_pt(i, j), _pt(i + 1, j), _pt(i + 1, j + 1), _pt(i, j + 1)]]  # noqa: E731
+    footprints = _fc(_feat(None, "MultiPolygon", [square(2, 2), square(3.5, 2)], name="twin"),
+                     _feat(None, "Polygon", square(2, 3.5)))  # fmt: skip
+    sensors = _fc(_feat(None, "Point", _pt(1, 1), required_data=50),
+                  _feat(None, "Point", _pt(4, 4), id="roof"))  # fmt: skip
+    ends = _fc(_feat("start", "Point", _pt(0, 0)), _feat("end", "Point", _pt(5, 5)))
+    layers = read_layers([(_write(tmp_path, "e.geojson", ends), None),
+                          (_write(tmp_path, "o.geojson", footprints), "obstacle"),
+                          (_write(tmp_path, "s.geojson", sensors), "sensor")])  # fmt: skip
+    doc, notes = build_map(layers, margin=50.0, name="layers")
+    m = load_map(doc)
+    assert len(m.spec.obstacles.polygons) == 3  # the MultiPolygon's two parts, and one more
+    assert [p.name for p in m.spec.obstacles.polygons] == ["twin", "twin", None]
+    assert m.sensor_ids == ("s1", "roof")
+    assert m.required_data[0] == 50.0
+    with pytest.raises(GisError, match="no 'kind' property"):
+        read_layers([(_write(tmp_path, "o2.geojson", footprints), None)])
+
+
+def test_given_origin_clips_obstacles_and_refuses_sensors_outside(tmp_path) -> None:
+    wide = [[_pt(-1, 2), _pt(3, 2), _pt(3, 3), _pt(-1, 3), _pt(-1, 2)]]
+    doc = _fc(*_basics(), _feat("obstacle", "Polygon", wide, name="long"),
+              _feat("obstacle", "Polygon", [[_pt(-3, 2), _pt(-2, 2), _pt(-2, 3)]], name="gone"))
+    layers = read_layers([(_write(tmp_path, "c.geojson", doc), None)])
+    origin = (LAT - 0.5 * D, LON - 0.5 * D, 0.0)
+    mdoc, notes = build_map(layers, origin=origin)
+    assert any("'long': clipped to the area" in n for n in notes)
+    assert any("'gone': outside the area; dropped" in n for n in notes)
+    m = load_map(mdoc)
+    assert [p.name for p in m.spec.obstacles.polygons] == ["long"]
+    assert m.shapes[0].shell[:, 0].min() == pytest.approx(0.0, abs=1e-6)
+    doc["features"].append(_feat("sensor", "Point", _pt(-1, 1), id="west"))
+    layers = read_layers([(_write(tmp_path, "c2.geojson", doc), None)])
+    with pytest.raises(GisError, match="sensor .* is outside the area"):
+        build_map(layers, origin=origin)
+
+
+def test_qgroundcontrol_geofence(tmp_path) -> None:
+    def ll(i, j):
+        lon, lat = _pt(i, j)
+        return [lat, lon]
+
+    plan = {
+        "fileType": "Plan", "version": 1, "groundStation": "QGroundControl",
+        "mission": {"items": [], "plannedHomePosition": [*ll(0.5, 0.5), 400.0], "version": 2},
+        "geoFence": {"version": 2, "polygons": [
+            {"inclusion": True, "version": 1,
+             "polygon": [ll(0, 0), ll(6, 0), ll(6, 3), ll(3, 3), ll(3, 6), ll(0, 6)]},
+            {"inclusion": False, "version": 1, "polygon": [ll(1, 2), ll(2, 2), ll(2, 2.5)]},
+        ], "circles": [
+            {"inclusion": False, "version": 1, "circle": {"center": ll(1, 4), "radius": 30.0}},
+        ]},
+        "rallyPoints": {"points": [], "version": 2},
+    }  # fmt: skip
+    p = _write(tmp_path, "fence.plan", plan)
+    s = _write(tmp_path, "s.geojson", _fc(_feat(None, "Point", _pt(2, 1), id="a")))
+    out = tmp_path / "fence.json"
+    r = _cli("map", "from-geojson", str(p), "--sensors", str(s), "-o", str(out))
+    assert r.returncode == 0, r.stderr
+    m = load_map(out)
+    assert len(m.spec.obstacles.circles) == 1 and m.spec.obstacles.circles[0].radius == 30.0
+    zones = [sh for sh in m.shapes if sh.kind == "no_fly_zone"]
+    assert len(zones) == 2  # the exclusion triangle and the part of the box outside the L fence
+    outside = next(z for z in zones if z.name == "outside the inclusion fence")
+    assert Polygon(outside.shell).area == pytest.approx(m.width * m.height / 4, rel=1e-3)
+    home = latlon_to_enu(ll(0.5, 0.5)[0], ll(0.5, 0.5)[1],
+                         (m.spec.origin.lat, m.spec.origin.lon, 0.0))  # fmt: skip
+    np.testing.assert_allclose(m.start, np.ravel(home), atol=1e-3)
+    assert "start and end default to" in r.stderr
+    np.testing.assert_allclose(m.start, m.end)
+
+
+def test_export_has_kinds_and_orientation(campus) -> None:
+    path, _ = campus
+    doc = map_to_geojson(load_map(path))
+    kinds = [f["properties"]["kind"] for f in doc["features"]]
+    assert kinds.count("obstacle") == 4 and kinds.count("no_fly_zone") == 1
+    assert kinds.count("sensor") == 3 and kinds.count("area") == 1
+    court = next(f for f in doc["features"] if f["properties"].get("name") == "court")
+    shell, hole = court["geometry"]["coordinates"]
+    assert shell[0] == shell[-1] and hole[0] == hole[-1]
+    assert LineString(shell).is_ring and Polygon(shell).exterior.is_ccw
+    assert not Polygon(hole).exterior.is_ccw  # RFC 7946: holes clockwise
+
+
+def test_campus_generator_is_seeded_and_non_convex() -> None:
+    from lamde_mission.gis.synthetic import campus_map
+
+    a, b = campus_map(40, seed=3), campus_map(40, seed=3)
+    assert a == b and a != campus_map(40, seed=4)
+    m = load_map(a)
+    assert len(m.shapes) == 40 and not any(sh.convex for sh in m.shapes)
+    assert m.obstacles.n_regions == 40
+
+
+def test_bench_evaluate_prints_suite_and_campus_in_one_run() -> None:
+    r = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "bench_evaluate.py"),
+                        str(ROOT / "examples" / "maps" / "tiny.json"), "campus-30",
+                        "--batches", "2", "--population", "10", "--reference-solutions", "3"],
+                       capture_output=True, text=True, timeout=600)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert "map campus-30-seed0: " in r.stdout and "30 polygon footprints" in r.stdout
+    assert r.stdout.count("fast evaluator:") == 2
+    assert r.stdout.count("(results agree: True)") == 2
+
+
+def test_show_draws_footprints_and_bad_options_exit_2(campus, tmp_path) -> None:
+    path, _ = campus
+    png = tmp_path / "campus.png"
+    r = _cli("show", str(path), "-o", str(png))
+    assert r.returncode == 0, r.stderr
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    r = _cli("map", "from-geojson", str(CAMPUS), "--origin", "north", "-o", str(tmp_path / "x"))
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and "--origin" in r.stderr
+    r = _cli("map", "from-geojson", "-o", str(tmp_path / "x"))
+    assert r.returncode == 2 and "at least one input FILE" in r.stderr
+    r = _cli("map", "from-geojson", str(tmp_path / "missing.geojson"), "-o", str(tmp_path / "x"))
+    assert r.returncode == 2 and "missing.geojson: file not found" in r.stderr
+
+
+def test_multipolygon_problem_names_the_part(tmp_path) -> None:
+    ok = [[_pt(2, 2), _pt(3, 2), _pt(3, 3), _pt(2, 2)]]
+    bow = [[_pt(2, 4), _pt(3, 5), _pt(3, 4), _pt(2, 5), _pt(2, 4)]]
+    doc = _fc(*_basics(), _feat("obstacle", "MultiPolygon", [ok, bow], name="pair"))
+    layers = read_layers([(_write(tmp_path, "mp.geojson", doc), None)])
+    with pytest.raises(GisError, match=r"features\[3\] 'pair' polygon 1: self-intersection"):
+        build_map(layers)
