@@ -30,8 +30,8 @@ __all__ = ["optimise", "SIGMA0", "SEEDED_SIGMA0"]
 
 #: initial step size in the unit box
 SIGMA0 = 0.3
-#: initial step size of the seeded variant: a local search around the best seed (issue 14's
-#: sweep of sigma0 in {0.02, 0.05, 0.1, 0.2}; docs/search.md)
+#: initial step size of the seeded variant: a local search around the best seed (the value of
+#: issue 14's measurement; no sweep was run yet, docs/search.md)
 SEEDED_SIGMA0 = 0.05
 
 
