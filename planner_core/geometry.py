@@ -29,11 +29,13 @@ is inflated by tol across its boundary before the exact overlap is taken:
   * a polygon (or piece) counts its overlap with the polygon whose boundary edge lines are moved
     out by tol (mitred corners; diagonals between pieces stay exact); a leg at or beyond an
     inflated boundary line all along its length counts 0 for it;
-  * a single (leg, obstacle) overlap of length <= tol counts 0 (only legs shorter than tol).
+  * a single (leg, obstacle) overlap of length <= 2 tol counts 0: the band itself (a leg leaving
+    a point on the boundary crosses tol of it) and a true overlap up to tol, which the sim's C5
+    check (`L_VIO_TOL`) passes too.
 So a tangent leg, a leg along an edge and a leg through a corner all count as touching (a small
-positive overlap, hence a violation), and a leg the kernel calls collision-free keeps a clearance
-of at least tol from every obstacle: its exact overlap, under shapely or any exact predicate,
-is 0 (tests/test_edge.py). Seeds and routes stand off obstacles by the clearance c, far above
+positive overlap, hence a violation), and a leg the kernel calls collision-free has an exact
+overlap of at most tol with any obstacle, which the sim's C5 check (same `L_VIO_TOL`) passes
+(tests/test_edge.py). Seeds and routes stand off obstacles by the clearance c, far above
 tol.
 """
 
@@ -390,7 +392,7 @@ def _circle_overlap(ax, ay, ux, uy, length, cx, cy, r, tol):
     lo = max(s - w, 0.0)
     hi = min(s + w, length)
     d = hi - lo
-    return d if d > tol else 0.0
+    return d if d > 2.0 * tol else 0.0
 
 
 @njit(cache=True, fastmath=False, nogil=True)
@@ -425,7 +427,7 @@ def _polygon_overlap(ax, ay, bx, by, length, verts, normals, eflags, start, stop
         t_lo = max(t_lo, t if entering else 0.0)
         t_hi = min(t_hi, t if leaving else 1.0)
     d = (t_hi - t_lo) * length
-    return d if (d > tol) & (not off) else 0.0
+    return d if (d > 2.0 * tol) & (not off) else 0.0
 
 
 @njit(cache=True, fastmath=False, nogil=True)
@@ -622,7 +624,7 @@ def _overlap_chunk(
                     w2 = (r - h) * (r + h)
                     half = math.sqrt(w2 if w2 > 0.0 else 0.0)  # half chord
                     d = min(s + half, llen[i]) - max(s - half, 0.0)
-                    t_lo[q] = d if (d > tol) & (h < r) else 0.0
+                    t_lo[q] = d if (d > 2.0 * tol) & (h < r) else 0.0
                 for q in range(k):
                     out[m0 + idx[q]] += t_lo[q]
             else:
@@ -671,7 +673,7 @@ def _overlap_chunk(
                 for q in range(k):
                     i = idx[q]
                     d = (t_hi[q] - t_lo[q]) * llen[i]
-                    out[m0 + i] += d if (d > tol) & (not off[q]) else 0.0
+                    out[m0 + i] += d if (d > 2.0 * tol) & (not off[q]) else 0.0
 
 
 @njit(cache=True, fastmath=False, nogil=True)
@@ -777,7 +779,7 @@ def _circle_overlap_py(
         return 0.0  # misses the inflated circle
     half = math.sqrt(r * r - h * h)
     inside = min(length, s + half) - max(0.0, s - half)
-    return inside if inside > tol else 0.0
+    return inside if inside > 2.0 * tol else 0.0
 
 
 def _hugs_an_edge_py(
@@ -847,10 +849,10 @@ def overlap_lengths_reference(a: np.ndarray, b: np.ndarray, obstacles: Obstacles
                 if _hugs_an_edge_py(ax, ay, bx, by, o.polygon(p), o.tol):
                     continue
                 inside = leg.intersection(poly).length - leg.intersection(poly.exterior).length
-                total += inside if inside > o.tol else 0.0
+                total += inside if inside > 2.0 * o.tol else 0.0
             for poly in regions:
                 inside = leg.intersection(poly).length - leg.intersection(poly.boundary).length
-                total += inside if inside > o.tol else 0.0
+                total += inside if inside > 2.0 * o.tol else 0.0
         out[m] = total
     return out.reshape(lead)
 

@@ -73,4 +73,4 @@ def test_called_free_means_no_positive_overlap_in_the_sim(seed: int) -> None:
     planner = overlap_lengths(a, b, PLANNER)
     for k in np.flatnonzero(planner <= L_VIO_TOL):
         sim = sim_overlaps(np.stack([a[k], b[k]]), SIM)
-        assert float(sim.sum()) == 0.0, (a[k], b[k], sim)
+        assert float(sim.sum()) <= C5_TOL, (a[k], b[k], sim)  # the sim passes C5
