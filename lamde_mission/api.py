@@ -99,19 +99,13 @@ def plan(
     budget, best_f, best_phi and feasible_fraction. The plan is made on `Map.planning_map()`:
     obstacles inflated by the map's `safety.clearance`, required data raised by its
     `safety.data_margin` (the map itself when both are 0); `breakdown` is on that map. With
-<<<<<<< HEAD
     `polish`, the hover times of the final population's `planner_core.polish.ELITE` Deb-best
     individuals are re-solved by the LP of `planner_core.polish`; the Deb-best of those is kept
-    if not worse than the DE's best under Deb's rule. Defaults and valid ranges:
-    `planner_core.defaults`.
-=======
-    `polish`, the final best's hover times are re-solved by the LP of `planner_core.polish`,
-    kept only if not worse under Deb's rule. `configurator`: "adaptive" (default), "fixed",
-    "random", "lamde" (the shipped learned policy, planner_core.policy) or a configurator
-    object. `init`: "seeded" (the problem's sensor-aware starts, default) or "uniform" (the
-    paper's protocol: uniform in the box).
+    if not worse than the DE's best under Deb's rule. `configurator`: "adaptive" (default),
+    "fixed", "random", "lamde" (the shipped learned policy, planner_core.policy) or a
+    configurator object. `init`: "seeded" (the problem's sensor-aware starts, default) or
+    "uniform" (the paper's protocol: uniform in the box).
     Defaults and valid ranges: `planner_core.defaults`.
->>>>>>> main
 
     Raises ValueError with one line naming the field ("population: must be an integer >= 6,
     got 5") for a population below the minimum, a budget below the population or an unknown
