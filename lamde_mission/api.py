@@ -99,11 +99,12 @@ def plan(
     budget, best_f, best_phi and feasible_fraction. The plan is made on `Map.planning_map()`:
     obstacles inflated by the map's `safety.clearance`, required data raised by its
     `safety.data_margin` (the map itself when both are 0); `breakdown` is on that map. With
-    `polish`, the final best's hover times are re-solved by the LP of `planner_core.polish`,
-    kept only if not worse under Deb's rule. `configurator`: "adaptive" (default), "fixed",
-    "random", "lamde" (the shipped learned policy, planner_core.policy) or a configurator
-    object. `init`: "seeded" (the problem's sensor-aware starts, default) or "uniform" (the
-    paper's protocol: uniform in the box).
+    `polish`, the hover times of the final population's `planner_core.polish.ELITE` Deb-best
+    individuals are re-solved by the LP of `planner_core.polish`; the Deb-best of those is kept
+    if not worse than the DE's best under Deb's rule. `configurator`: "adaptive" (default),
+    "fixed", "random", "lamde" (the shipped learned policy, planner_core.policy) or a
+    configurator object. `init`: "seeded" (the problem's sensor-aware starts, default) or
+    "uniform" (the paper's protocol: uniform in the box).
     Defaults and valid ranges: `planner_core.defaults`.
 
     Raises ValueError with one line naming the field ("population: must be an integer >= 6,
@@ -139,11 +140,18 @@ def plan(
     polish_info = None
     t_polish = 0.0
     if polish:
-        from planner_core.polish import polish_hover_times
+        from planner_core.de.core import to_problem
+        from planner_core.model import deb_best
+        from planner_core.polish import polish_elite
 
         t1 = time.perf_counter()
-        pol = polish_hover_times(problem, best["hover_points"], best["hover_times"])
-        after = problem.breakdown(problem.encode(pol.hover_points, pol.hover_times))
+        # the LP for the final population's elite, not only its Deb-best (docs/search.md)
+        st = result.state
+        xs, pols = polish_elite(problem, to_problem(problem, st.X), st.f, st.phi)
+        fs, phis = problem.evaluate(xs)
+        c = deb_best(fs, phis)
+        pol = pols[c]
+        after = problem.breakdown(xs[c])
         accepted = _deb_not_worse(after, best)
         if accepted:
             chosen = after

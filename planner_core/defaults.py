@@ -32,6 +32,7 @@ __all__ = [
     "ETA",
     "INIT",
     "INIT_MODES",
+    "L_VIO_TOL",
     "MAP_DEFAULTS",
     "MIN_POPULATION",
     "POPULATION",
@@ -209,6 +210,15 @@ BEST_KNOWN_BUDGET: int = DEFAULTS["best_known_budget"].value
 BEST_KNOWN_RUNS: int = DEFAULTS["best_known_runs"].value
 ETA: float = DEFAULTS["eta"].value
 DELTA: float = DEFAULTS["delta"].value
+
+#: Metres. The one overlap tolerance of planner and sim (paper C5: a positive overlap is a
+#: violation). It is the float rounding scale of the geometry on maps up to 10 km (1e-13 per
+#: metre of extent, ~500 ulp of 1e4 m): the planner's kernel inflates every obstacle by at least
+#: this much (`planner_core.geometry`), so what it calls collision-free has an exact overlap of
+#: 0; an L_vio at or below it counts as no collision (only legs shorter than it can have one);
+#: the sim's C5 check (`sim.checks`) fails any overlap above it. Kept here, import-free, so the
+#: planner's model and the sim (a second opinion that may not read the model) share it.
+L_VIO_TOL: float = 1e-9
 
 
 def check(name: str, value: Any) -> Any:

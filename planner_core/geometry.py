@@ -1,8 +1,8 @@
 """Collision-risk geometry: L_vio, the length of flight legs inside obstacles (paper Eq. L_vio).
 
 L_vio = L_rec + L_cir + L_nfz is a sum over obstacles: a leg crossing two overlapping obstacles
-counts once per obstacle. Only the open interior counts, so legs that touch a circle, run along an
-edge or pass through a corner contribute 0.
+counts once per obstacle. Only the interior counts, but the rounding band at the boundary counts
+as inside (see "Boundary tolerance" below).
 
 Obstacles are circles, convex counter-clockwise polygons (rotated rectangles, convex no-fly
 zones) and *regions*: any simple polygon with holes (footprints, non-convex no-fly zones), cut into
@@ -18,15 +18,25 @@ are compacted, and they get the exact float64 answer, again branch-free: the cho
 circles, Cyrus-Beck clipping against the edge half-planes for polygons. Branch-free matters: the
 per-pair branches of a straightforward loop mispredict and cost ~100 ns per candidate pair.
 
-Boundary tolerance. Floating point cannot say whether a leg built from rounded coordinates is
-exactly tangent or exactly on an edge, and near tangency the chord length is ill-conditioned
-(a rounding error delta in the distance gives a chord of 2*sqrt(2*r*delta)). So, with
-``tol = Obstacles.tol`` (1e-9 m for coordinates up to 10 km, growing with the map's extent):
-  * a leg whose supporting line passes at distance >= r - tol from a circle's centre counts 0;
-  * a leg that stays within tol of (or outside) one edge line of a polygon counts 0 for it;
-  * a single (leg, obstacle) overlap of length <= tol counts 0 (a leg grazing a corner gives
-    exactly 0, so the feasibility test L_vio == 0 of constraint C5 is not tripped by rounding).
-Everything else is exact up to rounding.
+Boundary tolerance (conservative). Floating point cannot say whether a leg built from rounded
+coordinates is exactly tangent or exactly on an edge, and near tangency the chord length is
+ill-conditioned (a rounding error delta in the distance gives a chord of 2*sqrt(2*r*delta)).
+The paper's C5 is exact (any positive overlap is a violation), so the rounding band is resolved
+towards the violation: with ``tol = Obstacles.tol`` (the float rounding scale of the geometry,
+`_TOL_PER_METRE` times the map's extent, at least `planner_core.model.L_VIO_TOL`), every obstacle
+is inflated by tol across its boundary before the exact overlap is taken:
+  * a circle of radius r counts the chord of radius r + tol;
+  * a polygon (or piece) counts its overlap with the polygon whose boundary edge lines are moved
+    out by tol (mitred corners; diagonals between pieces stay exact); a leg at or beyond an
+    inflated boundary line all along its length counts 0 for it;
+  * a single (leg, obstacle) overlap of length <= 2 tol counts 0: the band itself (a leg leaving
+    a point on the boundary crosses tol of it) and a true overlap up to tol, which the sim's C5
+    check (`L_VIO_TOL`) passes too.
+So a tangent leg, a leg along an edge and a leg through a corner all count as touching (a small
+positive overlap, hence a violation), and a leg the kernel calls collision-free has an exact
+overlap of at most tol with any obstacle, which the sim's C5 check (same `L_VIO_TOL`) passes
+(tests/test_edge.py). Seeds and routes stand off obstacles by the clearance c, far above
+tol.
 """
 
 from __future__ import annotations
@@ -38,6 +48,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
+from planner_core.model import L_VIO_TOL
 from planner_core.polygons import EDGE_BOUNDARY, EDGE_OWNED, EDGE_SHARED, convex_pieces
 
 __all__ = [
@@ -49,7 +60,7 @@ __all__ = [
 ]
 
 _TOL_PER_METRE = 1e-13  # boundary tolerance relative to the largest coordinate magnitude
-_TOL_MIN = 1e-9  # metres: the tolerance never drops below this (maps up to 10 km)
+_TOL_MIN = L_VIO_TOL  # metres: the tolerance never drops below this (maps up to 10 km)
 _CHUNK_LEGS = 4096  # legs per kernel chunk (the per-leg work arrays stay in cache)
 _COORD_LIMIT = 1e15  # metres; legs beyond this skip the float32 first pass (slow, exact path)
 # Error bound of the float32 first pass, relative to the coordinate magnitude S: each of the
@@ -248,7 +259,7 @@ class Obstacles:
         normals = np.empty_like(verts)
         cull = np.empty((3, len(circles) + n_poly), dtype=np.float64)  # rows x, y, radius
         cull[:2, : len(circles)] = circles[:, :2].T
-        cull[2, : len(circles)] = circles[:, 2] - tol  # the exact test, tangent band removed
+        cull[2, : len(circles)] = circles[:, 2] + tol  # the inflated circle
         if n_poly:  # all polygons at once (elementwise the same as one by one)
             e = verts[nxt] - verts
             elen = np.hypot(e[:, 0], e[:, 1])
@@ -263,7 +274,7 @@ class Obstacles:
             d = np.hypot(verts[:, 0] - centre[owner, 0], verts[:, 1] - centre[owner, 1])
             radius = np.maximum.reduceat(d, starts)
             cull[:2, len(circles):] = centre.T
-            cull[2, len(circles):] = radius * (1.0 + 1e-9) + tol  # conservative
+            cull[2, len(circles):] = radius * (1.0 + 1e-9) + 4.0 * tol  # mitred inflation
         if not np.all(np.abs(cull[:2]) < _COORD_LIMIT):
             raise ValueError(f"obstacle coordinates must be below {_COORD_LIMIT:g} in magnitude")
 
@@ -373,14 +384,15 @@ def _circle_overlap(ax, ay, ux, uy, length, cx, cy, r, tol):
     fx = cx - ax
     fy = cy - ay
     h = abs(ux * fy - uy * fx)  # distance from the centre to the leg's line
-    if h >= r - tol:
+    r = r + tol  # inflated (module docstring)
+    if h >= r:
         return 0.0
     s = ux * fx + uy * fy  # arc length along the leg of the closest approach
     w = math.sqrt((r - h) * (r + h))  # half chord
     lo = max(s - w, 0.0)
     hi = min(s + w, length)
     d = hi - lo
-    return d if d > tol else 0.0
+    return d if d > 2.0 * tol else 0.0
 
 
 @njit(cache=True, fastmath=False, nogil=True)
@@ -395,15 +407,17 @@ def _polygon_overlap(ax, ay, bx, by, length, verts, normals, eflags, start, stop
         ny = normals[i, 1]
         vx = verts[i, 0]
         vy = verts[i, 1]
-        sa = nx * (ax - vx) + ny * (ay - vy)  # signed distance to the edge line, > 0 outside
-        sb = nx * (bx - vx) + ny * (by - vy)
+        # signed distance to the edge line (a boundary edge's moved out by tol), > 0 outside
+        shift = tol if eflags[i] == _EDGE_BOUNDARY else 0.0
+        sa = nx * (ax - vx) + ny * (ay - vy) - shift
+        sb = nx * (bx - vx) + ny * (by - vy) - shift
         den = sa - sb
         t = sa / (den if den != 0.0 else 1.0)  # where the leg crosses the line, if it does
         entering = (sa >= 0.0) & (sb < 0.0)
         leaving = (sa < 0.0) & (sb >= 0.0)
         if eflags[i] == _EDGE_BOUNDARY:
-            # outside this half-plane, or within tol of its boundary line all along the leg
-            off |= (sa > -tol) & (sb > -tol)
+            # at or beyond this inflated half-plane's line all along the leg
+            off |= (sa >= 0.0) & (sb >= 0.0)
         else:
             # a diagonal: a leg along it (within tol) belongs to its owner; others clip exactly
             hug = (abs(sa) < tol) & (abs(sb) < tol)
@@ -413,7 +427,7 @@ def _polygon_overlap(ax, ay, bx, by, length, verts, normals, eflags, start, stop
         t_lo = max(t_lo, t if entering else 0.0)
         t_hi = min(t_hi, t if leaving else 1.0)
     d = (t_hi - t_lo) * length
-    return d if (d > tol) & (not off) else 0.0
+    return d if (d > 2.0 * tol) & (not off) else 0.0
 
 
 @njit(cache=True, fastmath=False, nogil=True)
@@ -600,7 +614,7 @@ def _overlap_chunk(
             if j < n_circ:
                 cx64 = circles[j, 0]
                 cy64 = circles[j, 1]
-                r = circles[j, 2]
+                r = circles[j, 2] + tol  # inflated (module docstring)
                 for q in range(k):
                     i = idx[q]
                     fx = cx64 - lax[i]
@@ -610,7 +624,7 @@ def _overlap_chunk(
                     w2 = (r - h) * (r + h)
                     half = math.sqrt(w2 if w2 > 0.0 else 0.0)  # half chord
                     d = min(s + half, llen[i]) - max(s - half, 0.0)
-                    t_lo[q] = d if (d > tol) & (h < r - tol) else 0.0
+                    t_lo[q] = d if (d > 2.0 * tol) & (h < r) else 0.0
                 for q in range(k):
                     out[m0 + idx[q]] += t_lo[q]
             else:
@@ -632,11 +646,11 @@ def _overlap_chunk(
                     vy = verts[e, 1]
                     if eflags[e] == _EDGE_BOUNDARY:
                         for q in range(k):
-                            # signed distances to the edge's line, > 0 outside
-                            sa = nx * (gax[q] - vx) + ny * (gay[q] - vy)
-                            sb = nx * (gbx[q] - vx) + ny * (gby[q] - vy)
-                            # outside this half-plane, or within tol of its line all along the leg
-                            off[q] |= (sa > -tol) & (sb > -tol)
+                            # signed distances to the edge's line moved out by tol, > 0 outside
+                            sa = nx * (gax[q] - vx) + ny * (gay[q] - vy) - tol
+                            sb = nx * (gbx[q] - vx) + ny * (gby[q] - vy) - tol
+                            # at or beyond this inflated half-plane's line all along the leg
+                            off[q] |= (sa >= 0.0) & (sb >= 0.0)
                             den = sa - sb
                             t = sa / (den if den != 0.0 else 1.0)  # crossing (signs differ)
                             # entering, leaving
@@ -659,7 +673,7 @@ def _overlap_chunk(
                 for q in range(k):
                     i = idx[q]
                     d = (t_hi[q] - t_lo[q]) * llen[i]
-                    out[m0 + i] += d if (d > tol) & (not off[q]) else 0.0
+                    out[m0 + i] += d if (d > 2.0 * tol) & (not off[q]) else 0.0
 
 
 @njit(cache=True, fastmath=False, nogil=True)
@@ -752,7 +766,7 @@ def overlap_lengths(a: np.ndarray, b: np.ndarray, obstacles: Obstacles) -> np.nd
 def _circle_overlap_py(
     ax: float, ay: float, bx: float, by: float, cx: float, cy: float, r: float, tol: float
 ) -> float:
-    """Plain-Python chord of the leg's line clipped to the leg (the kernel's boundary rule)."""
+    """Plain-Python chord of the leg's line clipped to the leg, circle inflated by tol."""
     length = math.hypot(bx - ax, by - ay)
     if length <= tol:
         return 0.0
@@ -760,17 +774,18 @@ def _circle_overlap_py(
     # closest approach of the infinite line to the centre: foot at arc length s, distance h
     s = (cx - ax) * ux + (cy - ay) * uy
     h = abs((cx - ax) * uy - (cy - ay) * ux)
-    if h >= r - tol:
-        return 0.0  # misses, or tangent within tol
+    r = r + tol  # the kernel's conservative boundary rule
+    if h >= r:
+        return 0.0  # misses the inflated circle
     half = math.sqrt(r * r - h * h)
     inside = min(length, s + half) - max(0.0, s - half)
-    return inside if inside > tol else 0.0
+    return inside if inside > 2.0 * tol else 0.0
 
 
 def _hugs_an_edge_py(
     ax: float, ay: float, bx: float, by: float, poly: np.ndarray, tol: float
 ) -> bool:
-    """True if both leg ends are outside some edge's line or within tol of it (rule 2)."""
+    """True if both leg ends are at or beyond some edge's line moved out by tol (rule 2)."""
     v = poly.tolist()
     for (x0, y0), (x1, y1) in zip(v, v[1:] + v[:1], strict=True):
         ex, ey = x1 - x0, y1 - y0
@@ -778,29 +793,46 @@ def _hugs_an_edge_py(
         # signed distances to the edge's line, positive outside (to the right of a CCW edge)
         da = (ey * (ax - x0) - ex * (ay - y0)) / norm
         db = (ey * (bx - x0) - ex * (by - y0)) / norm
-        if da > -tol and db > -tol:
+        if da - tol >= 0.0 and db - tol >= 0.0:
             return True
     return False
+
+
+def _inflated_py(poly: np.ndarray, tol: float) -> list[tuple[float, float]]:
+    """Vertices of the convex CCW polygon with every edge line moved out by tol (mitred):
+    vertex i moves by tol * (n_prev + n_next) / (1 + n_prev . n_next), n the unit outward
+    normals of its two edges."""
+    v = np.asarray(poly, dtype=float)
+    e = np.roll(v, -1, axis=0) - v
+    n = np.stack([e[:, 1], -e[:, 0]], axis=1) / np.hypot(e[:, 0], e[:, 1])[:, None]
+    n_prev = np.roll(n, 1, axis=0)
+    k = tol / (1.0 + np.einsum("ij,ij->i", n, n_prev))
+    return [tuple(p) for p in (v + k[:, None] * (n + n_prev)).tolist()]
 
 
 def overlap_lengths_reference(a: np.ndarray, b: np.ndarray, obstacles: Obstacles) -> np.ndarray:
     """Slow, obviously correct twin of `overlap_lengths`, one leg and one obstacle at a time.
 
-    Polygons: shapely, length(leg & polygon) - length(leg & boundary), i.e. the open interior
-    (shapely's predicates are exact, so a leg along an edge gives 0). Circles: a plain-Python
+    Polygons: shapely on the polygon inflated by tol (edge lines moved out, mitred),
+    length(leg & polygon) - length(leg & boundary), i.e. the open interior (shapely's
+    predicates are exact). Circles: a plain-Python
     closed-form chord, because shapely only approximates circles by polygons (buffer), which is
     off by up to r * (1 - cos(pi / n_segments)) in radius. The boundary-tolerance rules of the
     module docstring are applied explicitly, so both paths implement the same definition.
     Regions (general polygons) are measured whole, as shapely polygons with holes, not piece by
-    piece: length(leg & region) - length(leg & boundary), counted when above tol.
+    piece, inflated by tol (a mitred shapely buffer): length(leg & region) - length(leg &
+    boundary), counted when above tol.
     """
     from shapely.geometry import LineString, Polygon
 
     a2, b2, lead = _legs(a, b)
     o = obstacles
     own = [p for p in range(o.n_polygons) if o.piece_region[p] < 0]
-    polys = [(p, Polygon(o.polygon(p))) for p in own]
-    regions = [Polygon(shell, list(holes)) for shell, holes in o.regions]
+    polys = [(p, Polygon(_inflated_py(o.polygon(p), o.tol))) for p in own]
+    regions = [
+        Polygon(shell, list(holes)).buffer(o.tol, join_style="mitre", mitre_limit=1e9)
+        for shell, holes in o.regions
+    ]
     out = np.zeros(a2.shape[0], dtype=np.float64)
     for m in range(a2.shape[0]):
         ax, ay = float(a2[m, 0]), float(a2[m, 1])
@@ -817,10 +849,10 @@ def overlap_lengths_reference(a: np.ndarray, b: np.ndarray, obstacles: Obstacles
                 if _hugs_an_edge_py(ax, ay, bx, by, o.polygon(p), o.tol):
                     continue
                 inside = leg.intersection(poly).length - leg.intersection(poly.exterior).length
-                total += inside if inside > o.tol else 0.0
+                total += inside if inside > 2.0 * o.tol else 0.0
             for poly in regions:
                 inside = leg.intersection(poly).length - leg.intersection(poly.boundary).length
-                total += inside if inside > o.tol else 0.0
+                total += inside if inside > 2.0 * o.tol else 0.0
         out[m] = total
     return out.reshape(lead)
 

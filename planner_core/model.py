@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
+from planner_core.defaults import L_VIO_TOL as _L_VIO_TOL
 from planner_core.defaults import SCORE_FACTOR
 
 __all__ = [
@@ -44,9 +45,8 @@ __all__ = [
 #: its value lives in the defaults table (`planner_core.defaults.SCORE_FACTOR`).
 PENALTY_FACTOR = SCORE_FACTOR
 
-#: Overlap lengths at or below this many metres count as no collision (floating-point noise of
-#: tangent legs); anything longer triggers the full penalty mu + nu * L_vio.
-L_VIO_TOL = 1e-9
+#: The overlap tolerance (metres) shared with the sim; see `planner_core.defaults.L_VIO_TOL`.
+L_VIO_TOL = _L_VIO_TOL
 
 
 # ----------------------------------------------------------------------------- flight (Eq. 1)

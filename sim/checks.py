@@ -26,16 +26,22 @@ from typing import Any
 import numpy as np
 import shapely
 
+from planner_core.defaults import L_VIO_TOL
 from sim.obstacles import obstacle_shapes, overlap_lengths
 from sim.replay import Timeline
 
-__all__ = ["Verdict", "Verdicts", "verify", "REL_TOL", "GEOM_TOL", "ENDS_TOL", "CLEAR_TOL"]
+__all__ = [
+    "Verdict", "Verdicts", "verify", "REL_TOL", "GEOM_TOL", "C5_TOL", "ENDS_TOL", "CLEAR_TOL",
+]  # fmt: skip
 
 #: relative tolerance on hover times (C2), rate sums (C3) and collected data (C4): about
 #: eight float32 steps (2**-23 ~ 1.2e-7 each), no finer than what a mission file carries
 REL_TOL = 1e-6
-#: metres: hover points on the area's edge (C1), overlap length counted as zero (C5)
+#: metres: hover points on the area's edge (C1)
 GEOM_TOL = 1e-6
+#: metres: overlap length counted as zero (C5); the planner's own tolerance, so a positive
+#: overlap beyond float rounding fails (paper C5; `planner_core.defaults.L_VIO_TOL`)
+C5_TOL = L_VIO_TOL
 #: metres: how far below the map's `safety.clearance` a stored mission may pass an obstacle (its
 #: points lie on MAVLink's 1e-7 degree grid, ~1.1 cm; the planner pads the clearance by 5 cm)
 CLEAR_TOL = 0.02
@@ -192,8 +198,8 @@ def verify(timeline: Timeline, map: Any) -> Verdicts:  # noqa: A002
     else:
         per_obstacle = over.sum(axis=0)
         l_vio = float(per_obstacle.sum())
-        if l_vio > GEOM_TOL:
-            hit = np.flatnonzero(per_obstacle > GEOM_TOL)
+        if l_vio > C5_TOL:
+            hit = np.flatnonzero(per_obstacle > C5_TOL)
             order = hit[np.argsort(-per_obstacle[hit])]
             names = ", ".join(f"{obstacles[k].label} {per_obstacle[k]:.3g} m" for k in order[:4])
             extra = " (includes the RTL return leg)" if timeline.return_leg is not None else ""
@@ -202,7 +208,7 @@ def verify(timeline: Timeline, map: Any) -> Verdicts:  # noqa: A002
         else:
             lines = shapely.multilinestrings([shapely.linestrings(p) for p in legs
                                               if len(p) >= 2])  # fmt: skip
-            dist = shapely.distance(lines, np.array([o.shape for o in obstacles], dtype=object))
+            dist = np.array([o.clearance(lines) for o in obstacles])
             k = int(np.argmin(dist))
             detail = f"clearance {float(dist[k]):.3f} m from {obstacles[k].label}"
             out.append(Verdict("C5", "L_vio = 0", True, float(dist[k]), "m", detail))

@@ -1,11 +1,14 @@
 """The map's obstacles as shapely geometry, built from the map file alone.
 
-Independent of the planner's fast evaluator (planner_core.geometry): circles are buffered
-points with `CIRCLE_QUAD_SEGS` segments per quarter (inscribed polygon: an overlap deeper
-than r * (1 - cos(pi / (4 * CIRCLE_QUAD_SEGS))), ~0.5 mm at r = 100 m, is always found),
-rectangles are rotated from their centre, length and angle, no-fly zones and polygon obstacles
-(building footprints) are shapely polygons of the given rings, holes included, whatever their
-shape (shapely measures non-convex polygons directly; the planner cuts them into convex pieces).
+Independent of the planner's fast evaluator (planner_core.geometry). Rectangles are rotated
+from their centre, length and angle; no-fly zones and polygon obstacles (building footprints)
+are shapely polygons of the given rings, holes included, whatever their shape (shapely measures
+non-convex polygons directly; the planner cuts them into convex pieces); all measured by shapely
+(exact predicates, closed shapes). Circles are measured exactly, as the roots of
+|a + t (b - a) - c|^2 = r^2 clipped to the leg (a shapely buffer is an inscribed polygon that
+would miss a leg cutting less than r * (1 - cos(pi / (4 * quad_segs))) deep, ~0.5 mm at
+r = 100 m); their `shape` (a buffer with `CIRCLE_QUAD_SEGS` segments per quarter) is for
+drawing and messages only.
 """
 
 from __future__ import annotations
@@ -32,6 +35,15 @@ class Obstacle:
     index: int
     shape: Polygon
     name: str | None = None
+    circle: tuple[float, float, float] | None = None  # (cx, cy, r) m for circles, exact
+
+    def clearance(self, lines: Any) -> float:
+        """Metres from the shapely geometry `lines` to this obstacle (negative: inside a circle
+        by that much); circles exact, not via their drawn polygon."""
+        if self.circle is None:
+            return float(shapely.distance(lines, self.shape))
+        cx, cy, r = self.circle
+        return float(shapely.distance(lines, Point(cx, cy))) - r
 
     @property
     def label(self) -> str:
@@ -56,7 +68,10 @@ def obstacle_shapes(map: Any) -> list[Obstacle]:  # noqa: A002
     shapely polygon."""
     obs = map.spec.obstacles
     out = [
-        Obstacle("circle", k, Point(c.x, c.y).buffer(c.radius, quad_segs=CIRCLE_QUAD_SEGS))
+        Obstacle(
+            "circle", k, Point(c.x, c.y).buffer(c.radius, quad_segs=CIRCLE_QUAD_SEGS),
+            circle=(float(c.x), float(c.y), float(c.radius)),
+        )  # fmt: skip
         for k, c in enumerate(obs.circles)
     ]
     out += [
@@ -78,7 +93,27 @@ def overlap_lengths(path: np.ndarray, obstacles: list[Obstacle]) -> np.ndarray:
     path = np.asarray(path, dtype=float).reshape(-1, 2)
     if len(path) < 2 or not obstacles:
         return np.zeros((max(len(path) - 1, 0), len(obstacles)))
-    legs = shapely.linestrings(np.stack([path[:-1], path[1:]], axis=1))
-    shapes = np.array([o.shape for o in obstacles], dtype=object)
-    inter = shapely.intersection(legs[:, None], shapes[None, :])
-    return np.asarray(shapely.length(inter), dtype=float)
+    out = np.zeros((len(path) - 1, len(obstacles)))
+    polys = [k for k, o in enumerate(obstacles) if o.circle is None]
+    if polys:
+        legs = shapely.linestrings(np.stack([path[:-1], path[1:]], axis=1))
+        shapes = np.array([obstacles[k].shape for k in polys], dtype=object)
+        inter = shapely.intersection(legs[:, None], shapes[None, :])
+        out[:, polys] = shapely.length(inter)
+    a, d = path[:-1], path[1:] - path[:-1]
+    qa = np.einsum("ij,ij->i", d, d)
+    for k, o in enumerate(obstacles):
+        if o.circle is None:
+            continue
+        cx, cy, r = o.circle
+        f = a - np.array([cx, cy])
+        qb = 2.0 * np.einsum("ij,ij->i", f, d)
+        qc = np.einsum("ij,ij->i", f, f) - r * r
+        disc = qb * qb - 4.0 * qa * qc
+        hit = (qa > 0.0) & (disc > 0.0)
+        root = np.sqrt(np.where(hit, disc, 0.0))
+        den = np.where(hit, 2.0 * qa, 1.0)
+        t0 = np.clip((-qb - root) / den, 0.0, 1.0)
+        t1 = np.clip((-qb + root) / den, 0.0, 1.0)
+        out[:, k] = np.where(hit, (t1 - t0) * np.sqrt(qa), 0.0)
+    return out

@@ -40,28 +40,35 @@ SQUARE = Obstacles.build([], [np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0
 
 
 def test_leg_through_circle_centre() -> None:
-    assert _one((-100, 0), (100, 0), CIRCLE) == pytest.approx(100.0, abs=1e-9)
+    assert _one((-100, 0), (100, 0), CIRCLE) == pytest.approx(100.0, abs=1e-8)
 
 
 def test_chord_at_offset() -> None:
     d = 30.0
     expect = 2 * math.sqrt(50.0**2 - d**2)  # 80
-    assert _one((-100, d), (100, d), CIRCLE) == pytest.approx(expect, abs=1e-9)
+    assert _one((-100, d), (100, d), CIRCLE) == pytest.approx(expect, abs=1e-8)
     # same chord on a slanted leg: rotate everything by 37 degrees
     th = math.radians(37.0)
     rot = np.array([[math.cos(th), -math.sin(th)], [math.sin(th), math.cos(th)]])
     a, b = rot @ [-100.0, d], rot @ [100.0, d]
-    assert _one(a, b, CIRCLE) == pytest.approx(expect, abs=1e-9)
+    assert _one(a, b, CIRCLE) == pytest.approx(expect, abs=1e-8)
 
 
-def test_tangent_leg_is_zero() -> None:
-    assert _one((-100, 50), (100, 50), CIRCLE) == 0.0
-    assert _one((50, -100), (50, 100), CIRCLE) == 0.0
-    # slanted tangent built from rounded trig: still exactly 0
+def test_tangent_leg_counts_as_touching() -> None:
+    # the rounding band is resolved towards the violation: a tangent touches the circle
+    touch = 2 * math.sqrt(2 * 50.0 * CIRCLE.tol)  # chord of the circle inflated by tol
+    assert _one((-100, 50), (100, 50), CIRCLE) == pytest.approx(touch, rel=1e-3)
+    assert _one((50, -100), (50, 100), CIRCLE) > 0.0
     th = math.radians(23.0)
     n = np.array([math.cos(th), math.sin(th)])
     u = np.array([-n[1], n[0]])
-    assert _one(50 * n - 300 * u, 50 * n + 300 * u, CIRCLE) == 0.0
+    assert _one(50 * n - 300 * u, 50 * n + 300 * u, CIRCLE) > 0.0
+    # clear of it by a micrometre: exactly 0
+    assert _one((-100, 50 + 1e-6), (100, 50 + 1e-6), CIRCLE) == 0.0
+    # a leg cutting 0.5 mm deep counts its chord (paper C5: a positive overlap is a violation)
+    assert _one((-100, 50 - 5e-4), (100, 50 - 5e-4), CIRCLE) == pytest.approx(
+        2 * math.sqrt(50.0**2 - (50 - 5e-4) ** 2), abs=1e-5
+    )
     # just inside the tangent: a short chord, not 0
     assert _one((-100, 49.0), (100, 49.0), CIRCLE) == pytest.approx(2 * math.sqrt(99.0))
 
@@ -87,15 +94,16 @@ def test_rotated_rectangle_crossed_along_its_axes() -> None:
     th = math.radians(30.0)
     u = np.array([math.cos(th), math.sin(th)])
     v = np.array([-u[1], u[0]])
-    assert _one(c - 200 * u, c + 200 * u, rect) == pytest.approx(180.0, abs=1e-9)
-    assert _one(c - 200 * v, c + 200 * v, rect) == pytest.approx(80.0, abs=1e-9)
+    assert _one(c - 200 * u, c + 200 * u, rect) == pytest.approx(180.0, abs=1e-8)
+    assert _one(c - 200 * v, c + 200 * v, rect) == pytest.approx(80.0, abs=1e-8)
     # parallel to the long axis, 30 m off centre: still the full length
     assert _one(c - 200 * u + 30 * v, c + 200 * u + 30 * v, rect) == pytest.approx(180.0)
 
 
 def test_leg_through_a_corner() -> None:
-    # touches the corner (0, 0) only, from outside
-    assert _one((-1, 1), (1, -1), SQUARE) == 0.0
+    # touches the corner (0, 0) only, from outside: counts as touching (a tiny overlap)
+    assert 0.0 < _one((-1, 1), (1, -1), SQUARE) < 1e-8
+    assert _one((-1, 1 - 1e-6), (1 - 1e-6, -1), SQUARE) == 0.0
     # the diagonal through two corners lies inside
     assert _one((-1, -1), (3, 3), SQUARE) == pytest.approx(2 * math.sqrt(2))
     # corner-to-corner on a rotated rectangle: the diagonal
@@ -106,20 +114,25 @@ def test_leg_through_a_corner() -> None:
     corner = v[1]
     bisector = (v[1] - v[3]) / np.linalg.norm(v[1] - v[3])
     perp = np.array([-bisector[1], bisector[0]])
-    assert _one(corner - 200 * perp, corner + 200 * perp, rect) == 0.0
+    assert 0.0 < _one(corner - 200 * perp, corner + 200 * perp, rect) < 1e-7
+    assert _one(corner - 200 * perp + 1e-6 * bisector, corner + 200 * perp + 1e-6 * bisector,
+                rect) == 0.0  # fmt: skip
 
 
-def test_leg_along_an_edge_is_zero() -> None:
-    assert _one((-1, 0), (3, 0), SQUARE) == 0.0
-    assert _one((2, -5), (2, 5), SQUARE) == 0.0
-    assert _one((0.5, 2), (1.5, 2), SQUARE) == 0.0
+def test_leg_along_an_edge_counts_its_length() -> None:
+    # the closed obstacle: flying along an edge touches it all the way (rounding band -> C5)
+    assert _one((-1, 0), (3, 0), SQUARE) == pytest.approx(2.0)
+    assert _one((2, -5), (2, 5), SQUARE) == pytest.approx(2.0)
+    assert _one((0.5, 2), (1.5, 2), SQUARE) == pytest.approx(1.0)
+    assert _one((-1, -1e-6), (3, -1e-6), SQUARE) == 0.0  # a micrometre off: clear
     v = rectangle_vertices(1000.0, 2000.0, 180.0, 80.0, 30.0)
     rect = Obstacles.build([], [v])
     for i in range(4):
-        assert _one(v[i], v[(i + 1) % 4], rect) == 0.0
-        # extended beyond both corners: endpoints rounded off the edge line by ~1e-13
         e = v[(i + 1) % 4] - v[i]
-        assert float(overlap_lengths(v[i] - 0.5 * e, v[i] + 1.5 * e, rect)) == 0.0
+        assert _one(v[i], v[(i + 1) % 4], rect) == pytest.approx(np.linalg.norm(e))
+        # extended beyond both corners: endpoints rounded off the edge line by ~1e-13
+        got = float(overlap_lengths(v[i] - 0.5 * e, v[i] + 1.5 * e, rect))
+        assert got == pytest.approx(np.linalg.norm(e), abs=1e-6)
 
 
 def test_triangle_no_fly_zone() -> None:
@@ -127,7 +140,7 @@ def test_triangle_no_fly_zone() -> None:
     assert _one((-1000, 1500), (5000, 1500), tri) == pytest.approx(2000.0)
     # along the hypotenuse direction, 300 m inside: parallel chord
     assert _one((-1000, 1000), (1000, 1000), tri) == pytest.approx(1000.0)
-    assert _one((0, 3000), (4000, 0), tri) == 0.0  # the hypotenuse itself
+    assert _one((0, 3000), (4000, 0), tri) == pytest.approx(5000.0)  # the hypotenuse itself
     # in through the corner (0, 0), out through the hypotenuse at (2000, 1500)
     assert _one((-1000, -750), (4000, 3000), tri) == pytest.approx(2500.0)
 
@@ -152,7 +165,8 @@ def test_shapes_broadcasting_and_special_values() -> None:
     # a shared start point broadcasts; non-contiguous views and int input are accepted
     np.testing.assert_allclose(overlap_lengths(np.zeros(2), b, obs), overlap_lengths(0 * a, b, obs))
     np.testing.assert_allclose(overlap_lengths(a[:, ::2], b[:, ::2], obs), out[:, ::2])
-    assert float(overlap_lengths(np.array([-100, 0]), np.array([50, 0]), obs)) == 100.0
+    got = float(overlap_lengths(np.array([-100, 0]), np.array([50, 0]), obs))
+    assert got == pytest.approx(100.0, abs=1e-8)
     assert overlap_lengths(np.zeros((0, 2)), np.zeros((0, 2)), obs).shape == (0,)
     res = overlap_lengths(np.array([[np.nan, 0.0], [-100, 0]]), np.array([[1, 1], [50, 0]]), obs)
     assert math.isnan(res[0]) and res[1] == pytest.approx(100.0)
@@ -232,7 +246,8 @@ def test_build_validates_and_normalises_polygons() -> None:
     # direct construction from the packed arrays gives the same object
     direct = Obstacles(np.zeros((0, 3)), sq, np.array([0, 4]))
     assert direct.n_polygons == 1 and direct.n_circles == 0
-    assert float(overlap_lengths(np.array([-1.0, 1]), np.array([3.0, 1]), direct)) == 2.0
+    got = float(overlap_lengths(np.array([-1.0, 1]), np.array([3.0, 1]), direct))
+    assert got == pytest.approx(2.0, abs=1e-8)
     assert not direct.poly_vertices.flags.writeable  # frozen means frozen ...
     assert sq.flags.writeable  # ... without freezing the caller's array
 
@@ -471,11 +486,14 @@ def test_grazing_legs_far_from_origin(offset, r, th, depth, shift) -> None:
     rect = rectangle_vertices(*(c + 3 * r * u), r, r, math.degrees(th))
     obs = Obstacles.build([(*c, r), (*(c + 2.5 * r * n), 0.3 * r)], [rect])
     base = c + (r - depth) * n + shift * u
-    corner = np.asarray(obs.polygon(0))[0] - depth * 0.1 * n
-    a = np.array([base - 5000 * u, base + 0.5 * u, corner - 400 * u, c - 5000 * n])
-    b = np.array([base + 5000 * u, base + 1.0 * u, corner + 400 * u, c + 5000 * n])
+    # along an edge inside the rounding band (counts as touching) and clearly outside it (0)
+    corner = np.asarray(obs.polygon(0))[0] - 0.5 * obs.tol * n
+    clear = np.asarray(obs.polygon(0))[0] - (depth * 0.1 + 3 * obs.tol) * n
+    a = np.array([base - 5000 * u, base + 0.5 * u, corner - 400 * u, c - 5000 * n, clear])
+    b = np.array([base + 5000 * u, base + 1.0 * u, corner + 400 * u, c + 5000 * n, clear + u])
     fast = overlap_lengths(a, b, obs)
     assert fast[0] > 0.0
+    assert fast[2] >= r and fast[4] == 0.0
     np.testing.assert_allclose(fast, overlap_lengths_reference(a, b, obs), rtol=0, atol=ATOL)
 
 

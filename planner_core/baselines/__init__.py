@@ -25,7 +25,7 @@ from planner_core.baselines.budget import (
     Trace,
     as_budgeted,
 )
-from planner_core.defaults import CONFIGURATORS, POPULATION, SCORE_FACTOR
+from planner_core.defaults import CONFIGURATOR, CONFIGURATORS, POPULATION, SCORE_FACTOR
 
 __all__ = [
     "BudgetExceeded",
@@ -62,6 +62,7 @@ class OptimiserSpec:
     description: str
     kwargs: dict[str, Any] = field(default_factory=dict)
     variable_length: bool | None = True  # None: whatever the given problem uses
+    spends_budget: bool = True  # False: a reference that deliberately stops early (seed-lp)
 
     def function(self) -> Any:
         module, func = self.target.split(":")
@@ -91,6 +92,34 @@ REGISTRY: dict[str, OptimiserSpec] = {
             "planner_core.baselines.cmaes:optimise",
             f"pycma CMA-ES on f + {SCORE_FACTOR:g} phi in the unit box (BoundTransform), "
             "sigma0 0.3, default popsize, restarts within the budget",
+        ),
+        OptimiserSpec(
+            "planner",
+            "planner_core.baselines.de:optimise",
+            f"what `plan` does: our DE ({CONFIGURATOR} configurator, population {POPULATION}) "
+            "on budget - 16, then the polish LP on the final population's 16 Deb-best",
+            kwargs={"lp": True},
+        ),
+        OptimiserSpec(
+            "planner-memetic",
+            "planner_core.baselines.de:optimise",
+            "the planner with the memetic step on the elite every 10 generations (2-opt order, "
+            "LP hover times, removals, pulls; planner_core.memetic), then the polish LP",
+            kwargs={"lp": True, "memetic": True},
+        ),
+        OptimiserSpec(
+            "seed-lp",
+            "planner_core.baselines.seed_lp:optimise",
+            "best seed + LP, no search: the Deb-best of our DE's seeded initial population, "
+            "hover times re-solved by the polish LP (the floor a search must beat)",
+            spends_budget=False,
+        ),
+        OptimiserSpec(
+            "cmaes-seeded-lp",
+            "planner_core.baselines.cmaes:optimise",
+            "pycma CMA-ES started at the best seed (sigma0 0.05 in the unit box, restarts from "
+            "the best so far), then the polish LP",
+            kwargs={"seeded": True},
         ),
         OptimiserSpec(
             "scipy-de",

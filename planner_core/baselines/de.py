@@ -21,15 +21,45 @@ POPULATION = _POPULATION
 
 
 def optimise(
-    problem: Any, budget: int, seed: int, *, configurator: str = CONFIGURATOR
+    problem: Any,
+    budget: int,
+    seed: int,
+    *,
+    configurator: str = CONFIGURATOR,
+    lp: bool = False,
+    memetic: bool = False,
 ) -> OptimiseResult:
     """Run the DE with `configurator` for exactly `budget` evaluations (initial population
-    included)."""
+    included). `lp`: what `plan` does, the DE on budget - ELITE, then the hover-time LP on the
+    final population's ELITE Deb-best (`planner_core.polish.polish_elite`, the last ELITE
+    evaluations). `memetic`: with the
+    memetic step on the elite (`planner_core.memetic.refine`, when the problem can decode)."""
+    from planner_core.baselines.seed_lp import can_lp
 
     budgeted = as_budgeted(problem, budget)
+    from planner_core.polish import ELITE
+
+    reserve = min(ELITE, int(budget) // 4) if lp and can_lp(budgeted) else 0
     population = min(POPULATION, int(budget))
     if population < MIN_POPULATION:
         raise ValueError(f"budget {budget} is below the DE's minimum population {MIN_POPULATION}")
+    refine = None
+    if memetic and can_lp(budgeted):
+        from functools import partial
+
+        from planner_core.memetic import refine as _refine
+
+        refine = partial(_refine, budgeted.problem)
     res = run(budgeted, configurator=configurator, seed=int(seed), population=population,
-              budget=int(budget))
+              budget=int(budget) - reserve, refine=refine)
+    if reserve:
+        from planner_core.de.core import to_problem
+        from planner_core.polish import polish_elite
+
+        st = res.state
+        inner = budgeted.problem
+        xs, _ = polish_elite(inner, to_problem(budgeted, st.X), st.f, st.phi, reserve)
+        budgeted.evaluate(xs)
+        x, f, phi = budgeted.best("deb")
+        return OptimiseResult(x, f, phi, budgeted.count, budgeted.trace("deb"))
     return OptimiseResult(res.x, res.f, res.phi, budgeted.count, budgeted.trace("deb"))

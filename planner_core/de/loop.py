@@ -13,6 +13,7 @@ import numpy as np
 
 from planner_core.de.configurators import make_configurator
 from planner_core.de.core import init, step, to_problem
+from planner_core.de.memetic import due, memetic_step
 from planner_core.de.rng import Streams
 from planner_core.de.types import BoxProblem, Configurator, DEState, History, Progress, Result
 from planner_core.defaults import BUDGET, CONFIGURATOR, POPULATION
@@ -39,11 +40,16 @@ def run(
     population: int = POPULATION,
     budget: int = BUDGET,
     callback: Callable[[Progress], None] | None = None,
+    refine: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> Result:
     """Optimise ``problem`` until the budget is spent; same seed -> identical result.
 
     ``configurator`` is an object or a registry name ("fixed", "random", "adaptive", "lamde");
     ``callback`` receives a :class:`Progress` after the initial population and each generation.
+    ``refine``: a memetic step, x -> (m, d) candidates, run on the elite every
+    `de.memetic.PERIOD` generations (`planner_core.de.memetic`; its evaluations count against
+    the budget). None by default: measured, it does not change the polished result
+    (docs/search.md).
     """
     if isinstance(configurator, str):
         configurator = make_configurator(configurator)
@@ -55,6 +61,8 @@ def run(
     streams = Streams(state.seed)
     while not state.done:
         state, _ = step(state, problem, configurator, streams)
+        if refine is not None and due(state):
+            state = memetic_step(state, problem, refine)
         trace.append(_progress(state))
         if callback is not None:
             callback(trace[-1])

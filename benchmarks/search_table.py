@@ -1,0 +1,79 @@
+"""Issue 14's comparison table: per-map means of the planner vs its peers, Wilcoxon, gap.
+
+Reads one or more bench results files (`lamde-mission bench ... --out DIR` writes
+DIR/results.jsonl) and prints a Markdown table: per task, each optimiser's mean penalised score
+f + 10 phi over its runs, feasible runs, and for every peer the two-sided Wilcoxon signed-rank p
+of the planner against it, paired by run seed (same seed = same seeded start); then the planner's
+gap to the best-known f of examples/maps/suite_best_known.json.
+
+    python benchmarks/search_table.py results/results.jsonl [--planner planner] [--best-known F]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+from scipy.stats import wilcoxon
+
+from planner_core.defaults import SCORE_FACTOR
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("results", nargs="+", type=Path)
+    ap.add_argument("--planner", default="planner")
+    ap.add_argument("--best-known", type=Path, default=ROOT / "examples/maps/suite_best_known.json")
+    a = ap.parse_args()
+    runs: dict[tuple[str, str], dict[int, float]] = defaultdict(dict)
+    feas: dict[tuple[str, str], int] = defaultdict(int)
+    for path in a.results:
+        for line in path.read_text().splitlines():
+            r = json.loads(line)
+            if "f" not in r or r.get("f") is None:
+                continue
+            key = (r["task"], r["optimiser"])
+            runs[key][int(r["seed"])] = float(r["f"]) + SCORE_FACTOR * float(r["phi"])
+            feas[key] += int(r["phi"] == 0.0)
+    best = json.loads(a.best_known.read_text())["tasks"]
+    tasks = sorted({t for t, _ in runs})
+    opts = [a.planner] + sorted({o for _, o in runs} - {a.planner})
+    peers = opts[1:]
+    head = ["map", *(f"{o}" for o in opts), *(f"p vs {o}" for o in peers), "gap to best-known"]
+    print("| " + " | ".join(head) + " |")
+    print("|" + "---|" * len(head))
+    wins = defaultdict(int)
+    for t in tasks:
+        cells = [t]
+        for o in opts:
+            v = list(runs[(t, o)].values())
+            cells.append(f"{np.mean(v):.2f} ({feas[(t, o)]}/{len(v)})" if v else "-")
+        mine = runs[(t, a.planner)]
+        for o in peers:
+            other = runs[(t, o)]
+            seeds = sorted(set(mine) & set(other))
+            x = np.array([mine[s] for s in seeds])
+            y = np.array([other[s] for s in seeds])
+            if len(seeds) and np.mean(x) < np.mean(y):
+                wins[o] += 1
+            if len(seeds) < 2 or np.all(x == y):
+                cells.append("-")
+                continue
+            p = wilcoxon(x, y).pvalue
+            cells.append(f"{p:.3g}{' *' if p < 0.05 and np.mean(x) < np.mean(y) else ''}")
+        bk = best.get(t, {}).get("f")
+        m = np.mean(list(mine.values())) if mine else np.nan
+        cells.append(f"{100 * (m - bk) / bk:+.2f} %" if bk else "-")
+        print("| " + " | ".join(cells) + " |")
+    print()
+    for o in peers:
+        print(f"- {a.planner} has the lower mean than {o} on {wins[o]}/{len(tasks)} maps")
+
+
+if __name__ == "__main__":
+    main()
