@@ -272,12 +272,21 @@ def test_cli_upload_errors(port, plan_files, tmp_path, capsys):
     assert rc == 1 and "MAV_MISSION_DENIED" in capsys.readouterr().err
 
 
+def _foreground_sigint() -> None:
+    """In the child: SIGINT as a terminal's foreground process has it (default action, not
+    blocked), whatever this test process inherited (e.g. a runner or a library that blocks or
+    ignores SIGINT for its own children), so the signal below is the user's Ctrl-C."""
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def test_cli_mock_vehicle_runs_until_ctrl_c(port):
     env = dict(os.environ, PYTHONUNBUFFERED="1")
     proc = subprocess.Popen(
         [sys.executable, "-m", "lamde_mission.cli", "mock-vehicle", "--connect",
          f"udpout:127.0.0.1:{port}", "--loss", "0.1", "--seed", "3"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+        preexec_fn=_foreground_sigint,
     )  # fmt: skip
     try:
         first = proc.stdout.readline()
