@@ -32,4 +32,5 @@ def optimise(
         raise ValueError(f"budget {budget} is below the DE's minimum population {MIN_POPULATION}")
     res = run(budgeted, configurator=configurator, seed=int(seed), population=population,
               budget=int(budget))
-    return OptimiseResult(res.x, res.f, res.phi, budgeted.count, budgeted.trace("deb"))
+    return OptimiseResult(res.x, res.f, res.phi, budgeted.count, budgeted.trace("deb"),
+                          float(res.history.feasible_fraction[-1]))
