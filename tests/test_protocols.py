@@ -160,3 +160,31 @@ def test_lsrtde_same_seed_same_result_and_deb_rule() -> None:
     f, phi = p.evaluate(a.x[None, :])
     assert (f[0], phi[0]) == pytest.approx((a.f, a.phi))
     assert 0.0 <= a.last_feasible_rate <= 1.0
+
+
+def test_metabox_evaluator_server_scores_batches_within_the_budget(tmp_path: Path) -> None:
+    """The optional out-of-process exchange (benchmarks/metabox/): X batches in, f/phi out,
+    the budget enforced, a record in our schema appended at "finish"."""
+    import subprocess
+    import sys
+
+    m = tmp_path / "A1.json"
+    m.write_text(json.dumps(_map("A1", 0.0)))
+    p = Problem(_map("A1", 0.0))
+    X = np.random.default_rng(0).uniform(p.lower, p.upper, (4, p.dim))
+    reqs = [{"op": "info"}, {"op": "evaluate", "X": X[:3].tolist()},
+            {"op": "evaluate", "X": X.tolist()}, {"op": "evaluate", "X": X[3:].tolist()},
+            {"op": "finish"}]
+    server = Path(__file__).parents[1] / "benchmarks" / "metabox" / "evaluator_server.py"
+    out = subprocess.run([sys.executable, str(server), "--map", str(m), "--optimiser", "ext",
+                          "--budget", "4", "--out", str(tmp_path / "res")],
+                         input="".join(json.dumps(r) + "\n" for r in reqs), text=True,
+                         capture_output=True, check=True, timeout=120)
+    info, ev1, over, ev2, fin = (json.loads(line) for line in out.stdout.splitlines())
+    assert info["dim"] == p.dim and info["budget"] == 4
+    f, phi = p.evaluate(X)
+    assert ev1["f"] == pytest.approx(f[:3].tolist()) and ev1["phi"] == pytest.approx(phi[:3])
+    assert "error" in over and ev2["used"] == 4
+    rec = read_records(tmp_path / "res" / RESULTS_FILE).records[0]
+    assert rec == fin["record"] and rec["evaluations"] == 4
+    assert rec["score"] == pytest.approx(float(np.min(f + 10 * phi)))
