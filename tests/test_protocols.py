@@ -79,7 +79,8 @@ def test_bench_both_modes_resume_keys_and_report_sections(suite: Path, tmp_path:
     md = tmp_path / "docs" / "r.md"
     assert main(["report", str(out), "-o", str(md)]) == 0
     text = md.read_text()
-    assert text.index("# Protocol: init uniform") < text.index("# Protocol: init seeded")
+    assert text.index("## Protocol: init uniform") < text.index("## Protocol: init seeded")
+    assert "runs per optimiser, task and start mode: 1." in text
     assert (tmp_path / "docs" / "r" / "convergence_A1_uniform.png").stat().st_size > 0
     assert main(["bench", "--suite", str(suite), "--i-max", "0", "--out", str(out)]) == 2
 
@@ -101,7 +102,7 @@ def test_imax_study_records_and_table(suite: Path, tmp_path: Path) -> None:
 
     md = tmp_path / "i.md"
     assert main(["report", str(out), "-o", str(md)]) == 0
-    assert "# I_max study" in md.read_text() and (tmp_path / "i" / "imax_feasible_rate.png"
+    assert "## I_max study" in md.read_text() and (tmp_path / "i" / "imax_feasible_rate.png"
                                                   ).stat().st_size > 0
     with pytest.raises(ValueError, match="i_max"):
         run_bench(suite, ["de-adaptive"], runs=1, budget=BUDGET, out=out, i_max=(0,))

@@ -288,13 +288,17 @@ def build_report(
         L.append("")
     if command:
         L += ["Report produced by:", "", f"    {command}", ""]
-    runs_per = sorted({len(by[t][o]) for t in tasks for o in opts if by[t].get(o)})
+    per_mode: dict[tuple[str, str, str], int] = defaultdict(int)
+    for r in records:
+        if r.get("i_max") is None:
+            per_mode[(r["task"], r["optimiser"], _init(r))] += 1
+    runs_per = sorted(set(per_mode.values())) or [0]
     L += [
         "## Setup",
         "",
         f"- {len(tasks)} task(s) ({', '.join(tasks)}) from `{suite_dir}`; "
         f"budget {budget:,} evaluations per run (initial population included); "
-        f"runs per optimiser and task: {', '.join(map(str, runs_per))}.",
+        f"runs per optimiser, task and start mode: {', '.join(map(str, runs_per))}.",
         f"- Score = f + {SCORE_FACTOR:g} * phi (lower is better; phi = 0 means feasible), as in "
         "the paper's Table 2. Cells: mean ± std (ddof 0) over runs; best mean per task in bold.",
         f"- Marks: Wilcoxon rank-sum test (`scipy.stats.ranksums`, two-sided, alpha {alpha}) of "
@@ -326,7 +330,7 @@ def build_report(
     modes = [m for m in INIT_ORDER if any(_init(r) == m for r in main)]
     for mode in modes:
         recs = [r for r in main if _init(r) == mode]
-        L += ["", f"# Protocol: init {mode}", "", INIT_TEXT[mode]]
+        L += ["", f"## Protocol: init {mode}", "", INIT_TEXT[mode]]
         L += _protocol_body(recs, opts, reference, alpha, suite_dir, maps, limits, figures,
                             output, path_tasks, budget, suffix="" if len(modes) == 1 else
                             f"_{mode}")
@@ -421,7 +425,7 @@ def imax_table(records: list[dict[str, Any]]) -> dict[str, dict[int, tuple[float
 def imax_section(records: list[dict[str, Any]], path: Path, output: Path) -> list[str]:
     """Markdown (table + figure) of the I_max study (paper Fig. 4): the last population's
     feasible rate against I_max, per optimiser and start mode."""
-    L = ["", "# I_max study (paper Fig. 4)", "",
+    L = ["", "## I_max study (paper Fig. 4)", "",
          "Feasible rate of the last population (share with phi = 0) against I_max "
          "(`uav.max_hover_points` overridden on every map): mean ± std over tasks and runs. "
          "The paper: LAMDE-F (fixed length) at 0 from I_max >= 70, LAMDE above 0.6 at 100."]
@@ -468,7 +472,7 @@ def cost_section(records: list[dict[str, Any]], checkpoint: str | Path | None) -
     pol = _policy_names(records)
     if checkpoint is None and not pol:
         return []
-    L = ["", "# Cost of the learned policy", ""]
+    L = ["", "## Cost of the learned policy", ""]
     if checkpoint is not None:
         import csv
 
