@@ -272,7 +272,6 @@ def build_report(
         reference = opts[0]
         opts = order_optimisers(present, reference)
     tasks = sorted({r["task"] for r in records})
-    by = _by(records)
     budgets = sorted({int(r["budget"]) for r in records})
     budget = budgets[-1]
     figures = Path(figures) if figures is not None else output.with_suffix("")
@@ -292,13 +291,14 @@ def build_report(
     for r in records:
         if r.get("i_max") is None:
             per_mode[(r["task"], r["optimiser"], _init(r))] += 1
-    runs_per = sorted(set(per_mode.values())) or [0]
+    runs_per = sorted(set(per_mode.values()))
     L += [
         "## Setup",
         "",
         f"- {len(tasks)} task(s) ({', '.join(tasks)}) from `{suite_dir}`; "
         f"budget {budget:,} evaluations per run (initial population included); "
-        f"runs per optimiser, task and start mode: {', '.join(map(str, runs_per))}.",
+        + (f"runs per optimiser, task and start mode: {', '.join(map(str, runs_per))}."
+           if runs_per else "only I_max study runs (below)."),
         f"- Score = f + {SCORE_FACTOR:g} * phi (lower is better; phi = 0 means feasible), as in "
         "the paper's Table 2. Cells: mean ± std (ddof 0) over runs; best mean per task in bold.",
         f"- Marks: Wilcoxon rank-sum test (`scipy.stats.ranksums`, two-sided, alpha {alpha}) of "
