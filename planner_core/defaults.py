@@ -175,6 +175,12 @@ _MAP: tuple[Default, ...] = (
             "a convex weight"),
     _ranged("objective.collision_offset", 1000.0, "mu", 0.0, 1e9, _WHY_PENALTY),
     _ranged("objective.collision_weight", 10.0, "nu, per metre", 0.0, 1e9, _WHY_PENALTY),
+    _ranged("safety.clearance", 10.0, "metres kept between every leg and every obstacle: "
+            "obstacles are inflated by it for planning (0: the paper's model)", 0.0, 1_000.0,
+            "a kilometre of clearance closes every urban map"),
+    _ranged("safety.data_margin", 0.02, "fraction added to every sensor's required data for "
+            "planning (0: the paper's model)", 0.0, 1.0, "a margin above 100 % is a different "
+            "requirement, not a margin"),
 )
 
 #: every run setting by name, in table order

@@ -20,3 +20,61 @@ def load_map_or_fail(path: str) -> Any:
     for note in m.notes:
         print(f"note: {path}: {note}", file=sys.stderr)
     return m
+
+
+def add_executor_args(p: Any, what: str = "jobs") -> None:
+    """--backend / --address: where batch work runs (planner_core.execution)."""
+    p.add_argument("--backend", choices=("local", "ray"), default="local",
+                   help=f"where the {what} run: local = a process pool on this machine "
+                   "(default), ray = a Ray cluster (needs the ray extra: "
+                   "pip install 'lamde-mission[ray]'); same seeds, same results on either")
+    p.add_argument("--address", metavar="ADDR", help="with --backend ray: the cluster, 'auto' "
+                   "(the one started on this machine by `ray start --head`) or ray://HOST:PORT "
+                   "(Ray Client); default: RAY_ADDRESS if set, else a Ray instance started here "
+                   "with --jobs CPUs")
+
+
+def check_executor_args(args: Any) -> None:
+    """UsageError (exit 2) for --address without --backend ray, or --backend ray without Ray
+    installed; imports Ray only to check that it is there."""
+    if args.address is not None and args.backend != "ray":
+        raise UsageError("--address: only with --backend ray")
+    if args.backend == "ray":
+        import importlib.util
+
+        if importlib.util.find_spec("ray") is None:
+            raise UsageError("--backend ray: Ray is not installed; "
+                             "pip install 'lamde-mission[ray]' (or pip install -e '.[ray]')")
+
+
+def add_origin_option(p: Any) -> None:
+    """`--origin LAT,LON[,ALT]`: place a map that has no origin (or move one that has)."""
+    p.add_argument("--origin", metavar="LAT,LON[,ALT]",
+                   help="WGS84 position of the map's (0, 0) (degrees, degrees, metres AMSL); "
+                   "needed when the map has no origin, since a mission is latitude/longitude")
+
+
+def with_origin_or_fail(m: Any, origin: str | None) -> Any:
+    """The map placed by `--origin`, or as it is if it has an origin; UsageError naming
+    `origin` when it has none and none was given (no default place is ever assumed)."""
+    if origin is not None:
+        from planner_core.mapio import MapError
+
+        try:
+            vals = [float(v) for v in origin.split(",")]
+            if len(vals) not in (2, 3):
+                raise ValueError
+        except ValueError:
+            raise UsageError(f"--origin: expected LAT,LON[,ALT] in degrees and metres, got "
+                             f"{origin!r}") from None  # fmt: skip
+        try:
+            return m.with_origin(*vals)
+        except MapError as exc:
+            raise UsageError("\n".join(f"--origin: {p}" for p in exc.problems)) from None
+    if m.spec.origin is None:
+        raise UsageError(
+            "origin: the map has no origin (the latitude/longitude of its (0, 0)), so no "
+            'mission can be written or read for it; add "origin": {"lat": ..., "lon": ..., '
+            '"alt": ...} to the map or pass --origin LAT,LON[,ALT]'
+        )
+    return m
