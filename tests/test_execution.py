@@ -3,6 +3,7 @@ the process pool, and Ray never imported unless its backend is chosen."""
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -100,18 +101,23 @@ def test_ray_init_arguments_per_address(monkeypatch) -> None:
     assert RayExecutor(num_cpus=2)._init_kwargs() == {"runtime_env": env}
 
 
-def test_pool_initializer_sets_the_thread_limits(monkeypatch) -> None:
-    import numba
-
-    from planner_core.execution import SINGLE_THREAD_ENV
-    from planner_core.execution.local import _init_worker
-
-    for k in SINGLE_THREAD_ENV:
-        monkeypatch.delenv(k, raising=False)
-    before = numba.get_num_threads()
-    try:
-        _init_worker(dict(SINGLE_THREAD_ENV))
-        assert {k: os.environ[k] for k in SINGLE_THREAD_ENV} == SINGLE_THREAD_ENV
-        assert numba.get_num_threads() == 1  # numba was loaded already: capped at run time
-    finally:
-        numba.set_num_threads(before)
+def test_pool_initializer_sets_the_thread_limits() -> None:
+    # In a fresh interpreter: numba's threading layer keeps the thread count it was launched
+    # with, so launching it here under the initializer's limit would break later parallel
+    # kernels of this test process once the environment is restored.
+    code = """
+import json, os, numba
+from planner_core.execution import SINGLE_THREAD_ENV
+from planner_core.execution.local import _init_worker
+for k in SINGLE_THREAD_ENV:
+    os.environ.pop(k, None)
+numba.get_num_threads()
+_init_worker(dict(SINGLE_THREAD_ENV))
+print(json.dumps({"env": {k: os.environ[k] for k in SINGLE_THREAD_ENV},
+                  "numba": numba.get_num_threads(), "want": SINGLE_THREAD_ENV}))
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    got = json.loads(out.stdout.strip().splitlines()[-1])
+    assert got["env"] == got["want"]
+    assert got["numba"] == 1  # numba was loaded already: capped at run time

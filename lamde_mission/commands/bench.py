@@ -59,6 +59,14 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    "(default SUITE_best_known.json beside the suite folder)")
     p.add_argument("--no-best-known-update", action="store_true",
                    help="do not touch the best-known file")
+    p.add_argument("--init", choices=("seeded", "uniform", "both"), default="seeded",
+                   help="start mode: seeded (the product's sensor-aware starts), uniform (the "
+                   "paper's protocol: every optimiser starts uniform in the box), or both; "
+                   "recorded per run, the report gives each its own section (default seeded)")
+    p.add_argument("--i-max", nargs="+", metavar="N", dest="i_max",
+                   help="the I_max study (paper Fig. 4): override every map's I_max "
+                   "(uav.max_hover_points) with each of these values, e.g. 20 40 60 80 100 or "
+                   "20,40; records the last population's feasible rate (default: the maps' own)")
     p.add_argument("--list", action="store_true", help="list the optimisers and exit")
     p.add_argument("--quiet", action="store_true", help="print only the summary")
     return p
@@ -77,7 +85,9 @@ def _command(args: argparse.Namespace, optimisers: list[str], tasks: list[str] |
         parts += ["--tasks", *tasks]
     parts += ["--optimizers", ",".join(optimisers), "--runs", str(args.runs),
               "--budget", str(args.budget), "--jobs", str(args.jobs), "--out", args.out,
-              "--seed", str(args.seed), "--backend", args.backend]
+              "--seed", str(args.seed), "--init", args.init, "--backend", args.backend]
+    if args.i_max_values:
+        parts += ["--i-max", *map(str, args.i_max_values)]
     if args.address is not None:
         parts += ["--address", args.address]
     if args.best_known_file:
@@ -106,6 +116,16 @@ def run(args: argparse.Namespace) -> int:
     optimisers = _names(args.optimizers) or (list(BEST_KNOWN_OPTIMISERS) if bk
                                              else list(REGISTRY))
     tasks = _names(args.tasks)
+    args.i_max_values = []
+    for v in _names(args.i_max) or []:
+        try:
+            k = int(v)
+        except ValueError:
+            raise UsageError(f"--i-max: {v!r} is not an integer") from None
+        if not 1 <= k <= 200:
+            raise UsageError(f"--i-max: {k} outside [1, 200]")
+        args.i_max_values.append(k)
+    inits = ("seeded", "uniform") if args.init == "both" else (args.init,)
     if args.runs < 1:
         raise UsageError(f"--runs must be >= 1 (got {args.runs})")
     if args.budget < 1:
@@ -129,7 +149,9 @@ def run(args: argparse.Namespace) -> int:
     try:
         s = run_bench(args.suite, optimisers, runs=args.runs, budget=args.budget, out=args.out,
                       tasks=tasks, jobs=args.jobs, base_seed=args.seed, best_known=best_known,
-                      command=command, log=log, backend=args.backend, address=args.address)
+                      command=command, log=log, inits=inits,
+                      i_max=tuple(args.i_max_values) or (None,), backend=args.backend,
+                      address=args.address)
     except (BenchError, FileNotFoundError) as exc:
         raise UsageError(str(exc)) from None
     print(f"bench: {s.done} run(s) done, {s.skipped} already present, {len(s.failed)} failed; "

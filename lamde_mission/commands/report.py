@@ -27,6 +27,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="folder for the PNGs (default: beside the report, e.g. docs/results/)")
     p.add_argument("--path-tasks", nargs="+", metavar="T",
                    help="tasks of the best-path figure (default: four spread over the suite)")
+    p.add_argument("--policy-checkpoint", metavar="DIR",
+                   help="policy checkpoint folder: its curve.csv gives the training cost in "
+                   "the report's cost section")
     p.add_argument("--no-limits", action="store_true",
                    help="leave out the lower-bound / best-known section")
     return p
@@ -41,6 +44,8 @@ def _command(args: argparse.Namespace, tasks: list[str] | None) -> str:
         parts += ["--figures", args.figures]
     if tasks:
         parts += ["--path-tasks", *tasks]
+    if args.policy_checkpoint:
+        parts += ["--policy-checkpoint", args.policy_checkpoint]
     if args.no_limits:
         parts.append("--no-limits")
     return shlex.join(parts)
@@ -57,7 +62,8 @@ def run(args: argparse.Namespace) -> int:
     try:
         out = build_report(args.results, args.output, reference=args.reference,
                            suite=args.suite, figures=args.figures, path_tasks=tasks,
-                           limits=not args.no_limits, command=_command(args, tasks))
+                           limits=not args.no_limits, command=_command(args, tasks),
+                           policy_checkpoint=args.policy_checkpoint)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     print(f"report: wrote {out}")

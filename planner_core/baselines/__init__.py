@@ -31,26 +31,60 @@ __all__ = [
     "BudgetExceeded",
     "BudgetedProblem",
     "Criterion",
+    "INIT_MODES",
     "OptimiseResult",
     "OptimiserSpec",
     "REGISTRY",
     "Trace",
+    "UniformStart",
     "as_budgeted",
     "get",
     "names",
     "optimise",
     "problem_for",
+    "with_start",
 ]
 
 
 class OptimiseResult(NamedTuple):
-    """Best solution found (problem space), its f and phi, evaluations spent, convergence trace."""
+    """Best solution found (problem space), its f and phi, evaluations spent, convergence trace;
+    `last_feasible_rate`: the fraction of the last population with phi = 0 (population-based
+    optimisers that report it; None otherwise; the I_max study, paper Fig. 4)."""
 
     x: np.ndarray
     f: float
     phi: float
     evaluations: int
     history: Trace
+    last_feasible_rate: float | None = None
+
+
+#: start modes of a benchmark run: the product's seeded start and the paper's uniform start
+INIT_MODES: tuple[str, ...] = ("seeded", "uniform")
+
+
+class UniformStart:
+    """A problem seen without its ``initial_population`` hook: every optimiser that asks for
+    the hook (our DE, CMA-ES's first point, scipy's DE) starts uniform in the box instead (the
+    paper's protocol, Sec. 5.1). Every other attribute is the wrapped problem's."""
+
+    def __init__(self, problem: Any) -> None:
+        self.problem = problem
+
+    def __getattr__(self, name: str) -> Any:
+        if name in ("initial_population", "problem"):
+            raise AttributeError(name)
+        return getattr(self.problem, name)
+
+
+def with_start(problem: Any, init: str) -> Any:
+    """`problem` as an optimiser should see it in start mode `init` (one of INIT_MODES);
+    ValueError names the valid modes."""
+    if init == "seeded":
+        return problem
+    if init == "uniform":
+        return UniformStart(problem)
+    raise ValueError(f"init: unknown start mode {init!r}; choose one of {', '.join(INIT_MODES)}")
 
 
 @dataclass(frozen=True)
@@ -129,6 +163,12 @@ REGISTRY: dict[str, OptimiserSpec] = {
             "within the budget",
         ),
         OptimiserSpec(
+            "lsrtde",
+            "planner_core.baselines.lsrtde:optimise",
+            "L-SRTDE (Stanovov & Semenkin 2024, CEC 2024 winner): success-rate-based F, "
+            "linear population reduction, Deb's rule for constraints",
+        ),
+        OptimiserSpec(
             "random-search",
             "planner_core.baselines.random_search:optimise",
             "uniform random sampling, best under Deb's rule (the floor)",
@@ -161,13 +201,16 @@ def problem_for(name: str, problem: Any) -> Any:
     return Problem(problem.map, variable_length=want)
 
 
-def optimise(name: str, problem: Any, budget: int, seed: int) -> OptimiseResult:
+def optimise(name: str, problem: Any, budget: int, seed: int,
+             init: str = "seeded") -> OptimiseResult:
     """Run optimiser `name` on `problem` with at most `budget` evaluations; same seed, same result.
 
-    The returned x is in the encoding of `problem_for(name, problem)` (use that problem to decode).
+    `init`: "seeded" (the problem's `initial_population` hook, when it has one) or "uniform"
+    (the hook hidden: uniform starts in the box). The returned x is in the encoding of
+    `problem_for(name, problem)` (use that problem to decode).
     """
     spec = get(name)
-    budgeted = BudgetedProblem(problem_for(name, problem), budget)
+    budgeted = BudgetedProblem(with_start(problem_for(name, problem), init), budget)
     res = spec.function()(budgeted, int(budget), int(seed), **spec.kwargs)
     if res.evaluations != budgeted.count or budgeted.count > budget:
         raise RuntimeError(

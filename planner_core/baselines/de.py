@@ -52,6 +52,7 @@ def optimise(
         refine = partial(_refine, budgeted.problem)
     res = run(budgeted, configurator=configurator, seed=int(seed), population=population,
               budget=int(budget) - reserve, refine=refine)
+    last_feasible = float(res.history.feasible_fraction[-1])  # the DE's last population
     if reserve:
         from planner_core.de.core import to_problem
         from planner_core.polish import polish_elite
@@ -61,5 +62,6 @@ def optimise(
         xs, _ = polish_elite(inner, to_problem(budgeted, st.X), st.f, st.phi, reserve)
         budgeted.evaluate(xs)
         x, f, phi = budgeted.best("deb")
-        return OptimiseResult(x, f, phi, budgeted.count, budgeted.trace("deb"))
-    return OptimiseResult(res.x, res.f, res.phi, budgeted.count, budgeted.trace("deb"))
+        return OptimiseResult(x, f, phi, budgeted.count, budgeted.trace("deb"), last_feasible)
+    return OptimiseResult(res.x, res.f, res.phi, budgeted.count, budgeted.trace("deb"),
+                          last_feasible)

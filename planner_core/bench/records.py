@@ -1,8 +1,9 @@
 """Benchmark results as JSON lines: one finished run per line, appended and flushed as it ends.
 
 A run killed mid-write leaves a truncated last line: reading skips it, and opening the file for
-appending first cuts it off, so the next record starts on a fresh line. A (optimiser, task, run)
-key already present is never written again, so an interrupted benchmark resumes where it stopped.
+appending first cuts it off, so the next record starts on a fresh line. A key (optimiser, task,
+run, init, i_max) already present is never written again, so an interrupted benchmark resumes
+where it stopped.
 """
 
 from __future__ import annotations
@@ -20,14 +21,21 @@ RESULTS_FILE = "results.jsonl"
 
 
 class Key(NamedTuple):
+    """Identity of a run: optimiser, task, run index, start mode and I_max override (None: the
+    map's own)."""
+
     optimiser: str
     task: str
     run: int
+    init: str = "seeded"
+    i_max: int | None = None
 
 
 def key_of(record: dict[str, Any]) -> Key:
-    """The identity of a run record."""
-    return Key(str(record["optimiser"]), str(record["task"]), int(record["run"]))
+    """The identity of a run record (records written before start modes existed were seeded)."""
+    i_max = record.get("i_max")
+    return Key(str(record["optimiser"]), str(record["task"]), int(record["run"]),
+               str(record.get("init", "seeded")), None if i_max is None else int(i_max))
 
 
 class ReadReport(NamedTuple):

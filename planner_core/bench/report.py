@@ -25,7 +25,21 @@ from planner_core.bench.stats import ALPHA, ScoreTable, score_table
 from planner_core.defaults import SCORE_FACTOR
 from planner_core.model import penalised_score
 
-__all__ = ["DEFAULT_REFERENCE", "build_report", "order_optimisers", "format_table", "fmt"]
+__all__ = ["DEFAULT_REFERENCE", "build_report", "cost_section", "imax_section", "imax_table",
+           "order_optimisers", "format_table", "fmt"]
+
+#: start modes in the report's order, and what each means
+INIT_ORDER = ("uniform", "seeded")
+INIT_TEXT = {
+    "uniform": "The paper's protocol (Sec. 5.1): every optimiser starts from uniform random "
+    "points in the box; no sensor-aware seeding.",
+    "seeded": "The product's protocol: optimisers that take a start (our DE, CMA-ES's first "
+    "point, scipy's DE, L-SRTDE) start from the problem's sensor-aware seeded population.",
+}
+
+
+def _init(record: dict[str, Any]) -> str:
+    return str(record.get("init", "seeded"))
 
 #: the column the Wilcoxon marks compare against unless told otherwise
 DEFAULT_REFERENCE = "de-adaptive"
@@ -228,12 +242,16 @@ def build_report(
     limits: bool = True,
     command: str = "",
     alpha: float = ALPHA,
+    policy_checkpoint: str | Path | None = None,
 ) -> Path:
     """Write the markdown report of `results_dir` to `output` (figures beside it); return it.
 
     `reference` must be one of the optimisers present when given explicitly; the default falls
     back to the first optimiser present. `figures`: folder for the PNGs (default: a folder named
-    after the report, e.g. docs/results/ for docs/results.md).
+    after the report, e.g. docs/results/ for docs/results.md). Each start mode present
+    ("init" of the records; older records without it are seeded) gets its own section; runs
+    with an I_max override go to the I_max study section; `policy_checkpoint`: a policy
+    checkpoint folder whose `curve.csv` gives the training cost.
     """
     from planner_core.baselines import REGISTRY
 
@@ -254,11 +272,8 @@ def build_report(
         reference = opts[0]
         opts = order_optimisers(present, reference)
     tasks = sorted({r["task"] for r in records})
-    by = _by(records)
     budgets = sorted({int(r["budget"]) for r in records})
     budget = budgets[-1]
-    scores = {t: {o: [r["score"] for r in by[t].get(o, [])] for o in opts} for t in tasks}
-    table = score_table(scores, tasks, opts, reference, alpha)
     figures = Path(figures) if figures is not None else output.with_suffix("")
     suite_dir = Path(suite) if suite is not None else (Path(meta["suite"]) if "suite" in meta
                                                        else None)
@@ -272,13 +287,18 @@ def build_report(
         L.append("")
     if command:
         L += ["Report produced by:", "", f"    {command}", ""]
-    runs_per = sorted({len(by[t][o]) for t in tasks for o in opts if by[t].get(o)})
+    per_mode: dict[tuple[str, str, str], int] = defaultdict(int)
+    for r in records:
+        if r.get("i_max") is None:
+            per_mode[(r["task"], r["optimiser"], _init(r))] += 1
+    runs_per = sorted(set(per_mode.values()))
     L += [
         "## Setup",
         "",
         f"- {len(tasks)} task(s) ({', '.join(tasks)}) from `{suite_dir}`; "
         f"budget {budget:,} evaluations per run (initial population included); "
-        f"runs per optimiser and task: {', '.join(map(str, runs_per))}.",
+        + (f"runs per optimiser, task and start mode: {', '.join(map(str, runs_per))}."
+           if runs_per else "only I_max study runs (below)."),
         f"- Score = f + {SCORE_FACTOR:g} * phi (lower is better; phi = 0 means feasible), as in "
         "the paper's Table 2. Cells: mean ± std (ddof 0) over runs; best mean per task in bold.",
         f"- Marks: Wilcoxon rank-sum test (`scipy.stats.ranksums`, two-sided, alpha {alpha}) of "
@@ -300,11 +320,49 @@ def build_report(
     if len(budgets) > 1:
         L += ["", f"Warning: the results mix budgets {budgets}."]
 
-    L += ["", "## Penalised score f + 10 phi", ""] + format_table(table)
+    maps: dict[str, Any] = {}
+    if suite_dir is not None and suite_dir.is_dir():
+        from planner_core.bench.limits import suite_task_files
+        from planner_core.mapio import load_map
+
+        files = suite_task_files(suite_dir)
+        maps = {t: load_map(files[t]) for t in tasks if t in files}
+    main = [r for r in records if r.get("i_max") is None]
+    modes = [m for m in INIT_ORDER if any(_init(r) == m for r in main)]
+    for mode in modes:
+        recs = [r for r in main if _init(r) == mode]
+        L += ["", f"## Protocol: init {mode}", "", INIT_TEXT[mode]]
+        L += _protocol_body(recs, opts, reference, alpha, suite_dir, maps, limits, figures,
+                            output, path_tasks, budget, suffix="" if len(modes) == 1 else
+                            f"_{mode}")
+    study = [r for r in records if r.get("i_max") is not None]
+    if study:
+        L += imax_section(study, figures / "imax_feasible_rate.png", output)
+    L += cost_section(records, policy_checkpoint)
+    write_text_atomic(output, "\n".join(L) + "\n")
+    return output
+
+
+def _protocol_body(records: list[dict[str, Any]], opts_all: list[str], reference: str,
+                   alpha: float, suite_dir: Path | None, maps: dict[str, Any], limits: bool,
+                   figures: Path, output: Path, path_tasks: Sequence[str] | None, budget: int,
+                   suffix: str) -> list[str]:
+    """The tables and figures of one protocol (one start mode): score table, per optimiser,
+    feasibility, limits, convergence, best paths. Figure names carry `suffix`."""
+    tasks = sorted({r["task"] for r in records})
+    present = {r["optimiser"] for r in records}
+    opts = [o for o in opts_all if o in present]
+    if reference not in present:
+        reference = opts[0]
+    by = _by(records)
+    scores = {t: {o: [r["score"] for r in by[t].get(o, [])] for o in opts} for t in tasks}
+    table = score_table(scores, tasks, opts, reference, alpha)
+    L: list[str] = []
+    L += ["", "### Penalised score f + 10 phi", ""] + format_table(table)
 
     # ---- per optimiser summary
     ranks = _mean_ranks(table)
-    L += ["", "## Per optimiser", "",
+    L += ["", "### Per optimiser", "",
           "| Optimiser | runs | feasible runs | mean wall time (s) | mean evaluations "
           "| mean rank | +/~/- vs ref |",
           "|---|---:|---:|---:|---:|---:|---:|"]
@@ -317,7 +375,7 @@ def build_report(
         L.append(f"| {o} | {len(rs)} | {feas} ({100 * feas / len(rs):.0f} %) | {wall:.2f} "
                  f"| {ev:,.0f} | {ranks[o]:.2f} | {cnt} |")
 
-    L += ["", "## Feasibility rate per task (runs with phi = 0)", "",
+    L += ["", "### Feasibility rate per task (runs with phi = 0)", "",
           "| Task | " + " | ".join(opts) + " |", "|---|" + "---:|" * len(opts)]
     for t in tasks:
         row = []
@@ -326,23 +384,16 @@ def build_report(
             row.append(f"{100 * np.mean([r['feasible'] for r in rs]):.0f} %" if rs else "-")
         L.append(f"| {t} | " + " | ".join(row) + " |")
 
-    maps: dict[str, Any] = {}
-    if suite_dir is not None and suite_dir.is_dir():
-        from planner_core.bench.limits import suite_task_files
-        from planner_core.mapio import load_map
-
-        files = suite_task_files(suite_dir)
-        maps = {t: load_map(files[t]) for t in tasks if t in files}
     if limits:
         L += _limits_section(tasks, opts, by, suite_dir, maps)
 
     # ---- figures
-    L += ["", "## Convergence", "",
+    L += ["", "### Convergence", "",
           "Median incumbent score (25-75 % band) against evaluations, log scale. For our DE and "
           "random search the incumbent is the Deb-best; for CMA-ES and scipy's DE the best "
           "penalised score seen.", ""]
     for t in tasks:
-        p = convergence_figure(t, by[t], opts, budget, figures / f"convergence_{t}.png")
+        p = convergence_figure(t, by[t], opts, budget, figures / f"convergence_{t}{suffix}.png")
         L.append(f"![{t} convergence]({_rel(p, output.parent)})")
     ptasks = list(path_tasks) if path_tasks else _spread([t for t in tasks if t in maps])
     ptasks = [t for t in ptasks if t in maps]
@@ -350,14 +401,99 @@ def build_report(
         best = {t: {o: min(by[t][o], key=lambda r: r["score"]) for o in opts if by[t].get(o)}
                 for t in ptasks}
         known = _known_entries(suite_dir, {t: maps[t] for t in ptasks})
-        p = paths_figure(ptasks, maps, best, opts, figures / "best_paths.png", known)
-        L += ["", "## Best paths", "",
+        p = paths_figure(ptasks, maps, best, opts, figures / f"best_paths{suffix}.png", known)
+        L += ["", "### Best paths", "",
               f"Each optimiser's best run (lowest score over its runs) on {', '.join(ptasks)}; "
               "dotted = infeasible; wide grey = the best-known plan. Circles, rectangles grey; "
               "no-fly zones red; sensors green triangles; start o, end square.", "",
               f"![best paths]({_rel(p, output.parent)})"]
-    write_text_atomic(output, "\n".join(L) + "\n")
-    return output
+    return L
+
+
+def imax_table(records: list[dict[str, Any]]) -> dict[str, dict[int, tuple[float, float, int]]]:
+    """I_max study: optimiser -> I_max -> (mean, std over runs and tasks, n) of the last
+    population's feasible rate (records without a rate are skipped)."""
+    acc: dict[str, dict[int, list[float]]] = defaultdict(lambda: defaultdict(list))
+    for r in records:
+        rate = r.get("last_feasible_rate")
+        if r.get("i_max") is None or rate is None:
+            continue
+        acc[r["optimiser"]][int(r["i_max"])].append(float(rate))
+    return {o: {k: (float(np.mean(v)), float(np.std(v)), len(v)) for k, v in sorted(d.items())}
+            for o, d in acc.items()}
+
+
+def imax_section(records: list[dict[str, Any]], path: Path, output: Path) -> list[str]:
+    """Markdown (table + figure) of the I_max study (paper Fig. 4): the last population's
+    feasible rate against I_max, per optimiser and start mode."""
+    L = ["", "## I_max study (paper Fig. 4)", "",
+         "Feasible rate of the last population (share with phi = 0) against I_max "
+         "(`uav.max_hover_points` overridden on every map): mean ± std over tasks and runs. "
+         "The paper: LAMDE-F (fixed length) at 0 from I_max >= 70, LAMDE above 0.6 at 100."]
+    tasks = sorted({r["task"] for r in records})
+    runs = sorted({int(r["run"]) for r in records})
+    budgets = sorted({int(r["budget"]) for r in records})
+    L += ["", f"{len(tasks)} task(s) ({', '.join(tasks)}), {len(runs)} run(s) each, budget "
+          f"{', '.join(f'{b:,}' for b in budgets)}."]
+    fig = _new_figure((6.4, 4.2))
+    ax = fig.add_subplot()
+    for mode in INIT_ORDER:
+        recs = [r for r in records if _init(r) == mode]
+        tab = imax_table(recs)
+        if not tab:
+            continue
+        ks = sorted({k for d in tab.values() for k in d})
+        L += ["", f"Start mode {mode}:", "", "| Optimiser | " + " | ".join(
+            f"I_max {k}" for k in ks) + " |", "|---|" + "---:|" * len(ks)]
+        for o, d in tab.items():
+            L.append(f"| {o} | " + " | ".join(
+                f"{d[k][0]:.2f} ± {d[k][1]:.2f} (n {d[k][2]})" if k in d else "-" for k in ks)
+                + " |")
+            xs = sorted(d)
+            ax.errorbar(xs, [d[k][0] for k in xs], yerr=[d[k][1] for k in xs], marker="o",
+                        capsize=3, label=f"{o} ({mode})")
+    ax.set_xlabel("I_max")
+    ax.set_ylabel("feasible rate of the last population")
+    ax.set_ylim(-0.05, 1.05)
+    ax.legend(fontsize=7)
+    p = _save(fig, path)
+    L += ["", f"![I_max study]({_rel(p, output.parent)})"]
+    return L
+
+
+def _policy_names(records: list[dict[str, Any]]) -> list[str]:
+    return sorted({r["optimiser"] for r in records if "lamde" in r["optimiser"]})
+
+
+def cost_section(records: list[dict[str, Any]], checkpoint: str | Path | None) -> list[str]:
+    """Training cost (from the checkpoint's `curve.csv`, column `seconds` per epoch) and
+    inference cost per plan (mean optimiser wall time of the policy's runs, against our
+    hand-made adaptive DE on the same runs). Empty when there is neither a checkpoint nor a
+    policy run."""
+    pol = _policy_names(records)
+    if checkpoint is None and not pol:
+        return []
+    L = ["", "## Cost of the learned policy", ""]
+    if checkpoint is not None:
+        import csv
+
+        curve = Path(checkpoint) / "curve.csv"
+        if not curve.exists():
+            raise ValueError(f"policy checkpoint {checkpoint}: no curve.csv")
+        with curve.open(newline="") as fh:
+            rows = list(csv.DictReader(fh))
+        secs = sum(float(r["seconds"]) for r in rows)
+        eps = sum(int(float(r.get("episodes", 0) or 0)) for r in rows)
+        L += [f"- Training ({checkpoint}): {len(rows)} epoch(s), {eps} episode(s), "
+              f"{secs:,.0f} s wall ({secs / 60:.1f} min) as recorded in `curve.csv`."]
+    for o in pol:
+        for ref in (o, "de-adaptive"):
+            rs = [r for r in records if r["optimiser"] == ref and r.get("i_max") is None]
+            if rs:
+                L.append(f"- Inference per plan, {ref}: mean optimiser wall time "
+                         f"{np.mean([r['wall_s'] for r in rs]):.2f} s over {len(rs)} run(s) "
+                         f"(budget {int(rs[0]['budget']):,}).")
+    return L
 
 
 def _known_entries(suite_dir: Path | None, maps: dict[str, Any]) -> dict[str, dict[str, Any]]:
@@ -415,7 +551,7 @@ def _limits_section(tasks: list[str], opts: list[str], by: Any, suite_dir: Path 
     from planner_core.bench.limits import BestKnown, best_known_path, lower_bounds
 
     if suite_dir is None or not suite_dir.is_dir():
-        return ["", "## Against the limits", "", f"(suite folder {suite_dir} not found)"]
+        return ["", "### Against the limits", "", f"(suite folder {suite_dir} not found)"]
     from planner_core.bench.limits import suite_task_files
 
     files = {t: p for t, p in suite_task_files(suite_dir).items() if t in tasks}
@@ -423,7 +559,7 @@ def _limits_section(tasks: list[str], opts: list[str], by: Any, suite_dir: Path 
     bk_all = BestKnown(best_known_path(suite_dir))
     bk_f = bk_all.f_values(files)
     bk_entries = bk_all.load()
-    L = ["", "## Against the limits", "",
+    L = ["", "### Against the limits", "",
          "LB: `planner_core.bounds` (alpha * flight time of the straight line start -> end + "
          "(1 - alpha) * the LP minimum hover time over 25 m cells, ignoring C3, C5 and flight); "
          f"best-known: `{best_known_path(suite_dir)}` (the best feasible f found by any run "

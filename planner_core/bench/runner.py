@@ -18,7 +18,7 @@ import math
 import time
 import traceback
 import zlib
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -45,6 +45,7 @@ __all__ = [
     "read_map_file",
     "run_bench",
     "run_seed",
+    "with_i_max",
     "downsample",
 ]
 
@@ -78,6 +79,8 @@ class Job:
     budget: int
     map: dict[str, Any]
     map_sha256: str
+    init: str = "seeded"
+    i_max: int | None = None  # None: the map's own I_max; else uav.max_hover_points overridden
 
 
 @dataclass
@@ -124,17 +127,20 @@ def execute(job: Job) -> dict[str, Any]:
     from planner_core.problem import Problem
 
     base = {"optimiser": job.optimiser, "task": job.task, "run": job.run, "seed": job.seed,
-            "budget": job.budget, "map_sha256": job.map_sha256}
+            "budget": job.budget, "map_sha256": job.map_sha256, "init": job.init}
+    if job.i_max is not None:
+        base["i_max"] = int(job.i_max)
     try:
         # a map's safety margins are a transformation of the map (zero on the suite maps,
         # which say so: the paper's model as it stands)
-        problem = problem_for(job.optimiser, Problem(load_map(job.map).planning_map()))
+        problem = problem_for(job.optimiser,
+                              Problem(load_map(with_i_max(job.map, job.i_max)).planning_map()))
         # warm up outside the timer: import the optimiser's module (cma, scipy) and load the
         # compiled geometry kernels, so wall time measures the optimiser alone
         get(job.optimiser).function()
         problem.evaluate(problem.lower[None, :])
         t0, c0 = time.perf_counter(), time.process_time()
-        res = optimise(job.optimiser, problem, job.budget, job.seed)
+        res = optimise(job.optimiser, problem, job.budget, job.seed, init=job.init)
         wall, cpu = time.perf_counter() - t0, time.process_time() - c0
         bd = problem.breakdown(res.x)
         h = res.history
@@ -150,6 +156,9 @@ def execute(job: Job) -> dict[str, Any]:
             "wall_s": round(wall, 4),
             "cpu_s": round(cpu, 4),  # the worker's CPU time: wall_s less the waits of a busy CPU
             "n_hover": int(bd["n_hover"]),
+            "n_points": int(problem.n_points),
+            "last_feasible_rate": (None if res.last_feasible_rate is None
+                                   else float(res.last_feasible_rate)),
             "hover_points": bd["hover_points"],
             "hover_times": bd["hover_times"],
             "x": _floats(res.x),
@@ -161,15 +170,29 @@ def execute(job: Job) -> dict[str, Any]:
                 "traceback": traceback.format_exc()}
 
 
+def with_i_max(content: dict[str, Any], i_max: int | None) -> dict[str, Any]:
+    """The map content with `uav.max_hover_points` (I_max) set to `i_max` (None: unchanged);
+    a copy, the original is not touched."""
+    if i_max is None:
+        return content
+    out = dict(content)
+    out["uav"] = {**dict(content.get("uav") or {}), "max_hover_points": int(i_max)}
+    return out
+
+
 def plan_jobs(files: dict[str, Path], optimisers: list[str], runs: int, budget: int,
-              base_seed: int = 0) -> list[Job]:
-    """All jobs, run-major (every task and optimiser gets run 0 before any gets run 1), so a
-    partial benchmark is balanced. Each map file is read once; its jobs share the content."""
+              base_seed: int = 0, inits: Sequence[str] = ("seeded",),
+              i_max: Sequence[int | None] = (None,)) -> list[Job]:
+    """All jobs, run-major (every task, optimiser, start mode and I_max gets run 0 before any
+    gets run 1), so a partial benchmark is balanced. Each map file is read once; its jobs share
+    the content. Run r of task t has the same seed in every start mode and I_max."""
     content = {t: read_map_file(p) for t, p in files.items()}
     return [
-        Job(o, t, r, run_seed(base_seed, t, r), int(budget), *content[t])
+        Job(o, t, r, run_seed(base_seed, t, r), int(budget), *content[t], init=m, i_max=k)
         for r in range(runs)
         for t in files
+        for m in inits
+        for k in i_max
         for o in optimisers
     ]
 
@@ -184,6 +207,10 @@ def read_map_file(path: str | Path) -> tuple[dict[str, Any], str]:
     if not isinstance(content, dict):
         raise BenchError(f"{path}: the top level must be a JSON object")
     return content, hashlib.sha256(data).hexdigest()
+
+
+def _imax_tag(rec: dict[str, Any]) -> str:
+    return "" if rec.get("i_max") is None else f" I_max {rec['i_max']}"
 
 
 def _now() -> str:
@@ -223,8 +250,15 @@ def run_bench(
     backend: str = "local",
     address: str | None = None,
     log: Callable[[str], None] | None = None,
+    inits: Sequence[str] = ("seeded",),
+    i_max: Sequence[int | None] = (None,),
 ) -> BenchSummary:
-    """Run every missing (optimiser, task, run) and append each result to `<out>/results.jsonl`.
+    """Run every missing (optimiser, task, run, init, I_max) and append each result to
+    `<out>/results.jsonl`.
+
+    `inits`: start modes (`planner_core.baselines.INIT_MODES`: "seeded" the product's, "uniform"
+    the paper's protocol). `i_max`: I_max values to override the maps' own with (None = the
+    map's; the I_max study, paper Fig. 4).
 
     `best_known`: True = `<suite>_best_known.json` beside the suite folder, a path = that file,
     None/False = no updates.
@@ -233,9 +267,15 @@ def run_bench(
     N = N worker processes; ray: a Ray cluster at `address`, or a local Ray instance with `jobs`
     CPUs), closed when the benchmark ends. Results are the same on every backend.
     """
-    from planner_core.baselines import REGISTRY
+    from planner_core.baselines import INIT_MODES, REGISTRY
 
     log = log or (lambda _msg: None)
+    bad = [m for m in inits if m not in INIT_MODES]
+    if bad or not inits:
+        raise BenchError(f"init: unknown start mode(s) {', '.join(bad) or '(none given)'}; "
+                         f"choose from {', '.join(INIT_MODES)}")
+    if any(k is not None and not 1 <= int(k) <= 200 for k in i_max):
+        raise BenchError(f"i_max: every value must lie in [1, 200] (got {list(i_max)})")
     unknown = [o for o in optimisers if o not in REGISTRY]
     if unknown:
         raise BenchError(f"unknown optimiser(s) {', '.join(unknown)}; choose from "
@@ -258,10 +298,11 @@ def run_bench(
         log(f"note: {results}: dropping a truncated last line (an interrupted write)")
     if existing.bad_lines:
         log(f"note: {results}: ignoring unreadable line(s) {existing.bad_lines}")
-    all_jobs = plan_jobs(files, list(optimisers), runs, budget, base_seed)
+    all_jobs = plan_jobs(files, list(optimisers), runs, budget, base_seed, inits, i_max)
     _check_existing(existing.records, budget, {j.task: j.map_sha256 for j in all_jobs}, results)
     have: set[Key] = {key_of(r) for r in existing.records}
-    todo = [j for j in all_jobs if Key(j.optimiser, j.task, j.run) not in have]
+    todo = [j for j in all_jobs
+            if Key(j.optimiser, j.task, j.run, j.init, j.i_max) not in have]
     summary = BenchSummary(planned=len(todo), skipped=len(all_jobs) - len(todo), results=results)
 
     meta_path = out / META_FILE
@@ -299,11 +340,13 @@ def run_bench(
                 writer.write(rec)
                 summary.done += 1
                 mark = "feasible" if rec["feasible"] else f"phi {rec['phi']:.4g}"
-                log(f"[{summary.done}/{len(todo)}] {rec['optimiser']} {rec['task']} run "
+                log(f"[{summary.done}/{len(todo)}] {rec['optimiser']} {rec['task']} "
+                    f"init {rec['init']}{_imax_tag(rec)} run "
                     f"{rec['run']}: score {rec['score']:.6g} ({mark}), {rec['wall_s']:.1f} s, "
                     f"elapsed {time.perf_counter() - t_start:.0f} s")
                 task = rec["task"]
-                if bk is not None and rec["feasible"] and rec["f"] < best.get(task, math.inf):
+                if (bk is not None and rec["feasible"] and rec.get("i_max") is None
+                        and rec["f"] < best.get(task, math.inf)):
                     stored = bk.offer(task, files[task], rec["hover_points"], rec["hover_times"],
                                       optimiser=rec["optimiser"], seed=rec["seed"],
                                       budget=rec["budget"], run=rec["run"], command=command)
