@@ -148,6 +148,13 @@ _WHY_PENALTY = "penalties beyond 1e9 drown every objective value in rounding"
 #: here), keyed by their JSON path; paper symbols in the meaning, the reason for each range in
 #: `why`
 _MAP: tuple[Default, ...] = (
+    _ranged("origin.lat", 22.3193, "latitude of the local (0, 0), degrees (WGS84)", -90.0, 90.0,
+            "a latitude"),
+    _ranged("origin.lon", 114.1694, "longitude of the local (0, 0), degrees (WGS84)", -180.0,
+            180.0, "a longitude"),
+    _ranged("origin.alt", 0.0, "altitude above mean sea level of the take-off ground, m",
+            -500.0, 9_000.0,
+            "ground on Earth lies between the Dead Sea shore (-430 m) and Everest (8849 m)"),
     _ranged("uav.altitude", 100.0, "H, cruise altitude above take-off, m", 0.0, 10_000.0,
             "a rotary-wing UAV flies above the ground and below 10 km", lo_open=True),
     _ranged("uav.max_speed", 20.0, "v_max, m/s", 0.1, 200.0,
@@ -224,7 +231,7 @@ def _cell(v: Any) -> str:
         return f"`{v}`"
     if isinstance(v, int) and not isinstance(v, bool) and abs(v) >= 10_000:
         return f"{v:,}"
-    return f"{v:g}" if isinstance(v, float) else str(v)
+    return f"{v:.10g}" if isinstance(v, float) else str(v)
 
 
 def render_markdown(table: dict[str, Default] | None = None) -> str:

@@ -88,12 +88,9 @@ class Origin(BaseModel):
     """WGS84 position of the local (0, 0)."""
 
     model_config = _STRICT
-    lat: float = Field(22.3193, ge=-90, le=90, description="latitude, degrees")
-    lon: float = Field(114.1694, ge=-180, le=180, description="longitude, degrees")
-    alt: float = _ranged(
-        0.0, -500.0, 9_000.0, "altitude above mean sea level of the take-off ground, m",
-        "ground on Earth lies between the Dead Sea shore (-430 m) and Everest (8849 m)",
-    )
+    lat: float = _field("origin.lat")
+    lon: float = _field("origin.lon")
+    alt: float = _field("origin.alt")
 
 
 class Area(BaseModel):
