@@ -81,7 +81,8 @@ class _ProgressBar:
         self.stream.flush()
 
 
-def _summary(plan: Any, m: Any, timeline: Any, verdicts: Any, out: str | None) -> str:
+def _summary(plan: Any, m: Any, timeline: Any, verdicts: Any,
+             out: str | list[str] | None) -> str:
     b = plan.breakdown
     t = timeline.totals
     lines = [
@@ -105,8 +106,8 @@ def _summary(plan: Any, m: Any, timeline: Any, verdicts: Any, out: str | None) -
         lines.append(f"    {sid:<12} {got[sid]:10.1f} / {req[sid]:<8.1f} {ok}")
     lines.append("  constraints (simulator):")
     lines.extend("    " + row for row in verdicts.table().splitlines())
-    if out:
-        lines.append(f"wrote {out}")
+    if out:  # every file written: the mission, then the plot and report when asked
+        lines.extend(f"wrote {path}" for path in ([out] if isinstance(out, str) else out))
     return "\n".join(lines)
 
 
@@ -188,7 +189,8 @@ def run(args: argparse.Namespace) -> int:
                   "map": args.map, "output": args.output, "format": fmt}
         write_text_atomic(args.report, json.dumps(report, indent=2))
     if not args.quiet:
-        print(_summary(plan, m, timeline, verdicts, args.output))
+        print(_summary(plan, m, timeline, verdicts,
+                       [p for p in (args.output, args.plot, args.report) if p]))
     if not feasible:
         print("lamde-mission plan: the mission is INFEASIBLE (written because of "
               "--allow-infeasible):", file=sys.stderr)
