@@ -4,6 +4,6 @@ The mission vocabulary lives in the simulator (`sim`), which the mission writer 
 module keeps the `lamde_mission.geo` import path.
 """
 
-from sim.geo import enu_to_latlon, latlon_to_enu, origin_of
+from sim.geo import MissingOriginError, enu_to_latlon, latlon_to_enu, origin_of
 
-__all__ = ["enu_to_latlon", "latlon_to_enu", "origin_of"]
+__all__ = ["MissingOriginError", "enu_to_latlon", "latlon_to_enu", "origin_of"]

@@ -148,13 +148,6 @@ _WHY_PENALTY = "penalties beyond 1e9 drown every objective value in rounding"
 #: here), keyed by their JSON path; paper symbols in the meaning, the reason for each range in
 #: `why`
 _MAP: tuple[Default, ...] = (
-    _ranged("origin.lat", 22.3193, "latitude of the local (0, 0), degrees (WGS84)", -90.0, 90.0,
-            "a latitude"),
-    _ranged("origin.lon", 114.1694, "longitude of the local (0, 0), degrees (WGS84)", -180.0,
-            180.0, "a longitude"),
-    _ranged("origin.alt", 0.0, "altitude above mean sea level of the take-off ground, m",
-            -500.0, 9_000.0,
-            "ground on Earth lies between the Dead Sea shore (-430 m) and Everest (8849 m)"),
     _ranged("uav.altitude", 100.0, "H, cruise altitude above take-off, m", 0.0, 10_000.0,
             "a rotary-wing UAV flies above the ground and below 10 km", lo_open=True),
     _ranged("uav.max_speed", 20.0, "v_max, m/s", 0.1, 200.0,
@@ -182,6 +175,12 @@ _MAP: tuple[Default, ...] = (
             "a convex weight"),
     _ranged("objective.collision_offset", 1000.0, "mu", 0.0, 1e9, _WHY_PENALTY),
     _ranged("objective.collision_weight", 10.0, "nu, per metre", 0.0, 1e9, _WHY_PENALTY),
+    _ranged("safety.clearance", 10.0, "metres kept between every leg and every obstacle: "
+            "obstacles are inflated by it for planning (0: the paper's model)", 0.0, 1_000.0,
+            "a kilometre of clearance closes every urban map"),
+    _ranged("safety.data_margin", 0.02, "fraction added to every sensor's required data for "
+            "planning (0: the paper's model)", 0.0, 1.0, "a margin above 100 % is a different "
+            "requirement, not a margin"),
 )
 
 #: every run setting by name, in table order

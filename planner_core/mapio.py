@@ -8,6 +8,7 @@ the field, so a user can fix a map in one pass.
 from __future__ import annotations
 
 import difflib
+import math
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -88,9 +89,12 @@ class Origin(BaseModel):
     """WGS84 position of the local (0, 0)."""
 
     model_config = _STRICT
-    lat: float = _field("origin.lat")
-    lon: float = _field("origin.lon")
-    alt: float = _field("origin.alt")
+    lat: float = Field(ge=-90, le=90, description="latitude, degrees")
+    lon: float = Field(ge=-180, le=180, description="longitude, degrees")
+    alt: float = _ranged(
+        0.0, -500.0, 9_000.0, "altitude above mean sea level of the take-off ground, m",
+        "ground on Earth lies between the Dead Sea shore (-430 m) and Everest (8849 m)",
+    )
 
 
 class Area(BaseModel):
@@ -195,6 +199,29 @@ class Objective(BaseModel):
     collision_weight: float = _field("objective.collision_weight")
 
 
+#: metres: obstacles and no-fly zones are inflated by this much for planning (`safety.clearance`)
+DEFAULT_CLEARANCE: float = MAP_DEFAULTS["safety.clearance"].value
+#: fraction added to every sensor's required data for planning (`safety.data_margin`)
+DEFAULT_DATA_MARGIN: float = MAP_DEFAULTS["safety.data_margin"].value
+
+
+class Safety(BaseModel):
+    """Margins applied to the map before the model sees it (the paper's model is unchanged).
+
+    `clearance` (m): every circle, rectangle and no-fly zone is inflated by it for planning, so
+    no leg comes closer to an obstacle; the geofence written to the vehicle keeps the real
+    shapes. Near the start or end point an obstacle is inflated only as far as leaves that
+    point outside it (the take-off and landing are where the map says). `data_margin`: every
+    sensor's required data is planned as (1 + data_margin) x Q_lambda. Sensors themselves may
+    lie inside an inflated obstacle: data is collected by radio from wherever the UAV hovers.
+    A map with both at 0 is planned exactly as the paper's model states it.
+    """
+
+    model_config = _STRICT
+    clearance: float = _field("safety.clearance")
+    data_margin: float = _field("safety.data_margin")
+
+
 class Witness(BaseModel):
     """A known feasible plan stored by the map generator."""
 
@@ -208,7 +235,9 @@ class MapFile(BaseModel):
 
     model_config = _STRICT
     name: str = Field("unnamed", max_length=200, pattern=_PRINTABLE)
-    origin: Origin = Origin()
+    origin: Origin | None = Field(
+        None, description="WGS84 position of (0, 0); needed to write or read a mission (no "
+        "default place is assumed)")
     area: Area
     start: Point2
     end: Point2
@@ -217,6 +246,7 @@ class MapFile(BaseModel):
     uav: Uav = Uav()
     radio: Radio = Radio()
     objective: Objective = Objective()
+    safety: Safety = Safety()
     witness: Witness | None = None
 
 
@@ -335,6 +365,87 @@ class Map:
         no-fly zones and convex polygon obstacles as polygons; the other shapes as regions."""
         return _pack(self.spec, self.shapes)
 
+    # --- safety margins (a transformation of the map; see `Safety`) ---
+    @cached_property
+    def obstacle_clearances(self) -> tuple[float, ...]:
+        """Clearance in force per obstacle (circles, rectangles, no-fly zones; metres):
+        `safety.clearance`, reduced where the start or end point is closer than that to the
+        obstacle (down to that distance less `CLEARANCE_PAD`, at least 0)."""
+        import shapely
+
+        c = float(self.spec.safety.clearance)
+        shapes = _obstacle_polygons(self)
+        if c <= 0.0 or not shapes:
+            return tuple(0.0 for _ in shapes)
+        ends = shapely.points([self.spec.start, self.spec.end])
+        out = []
+        for poly in shapes:
+            d = float(np.min(shapely.distance(ends, poly)))
+            out.append(max(min(c, d - CLEARANCE_PAD), 0.0))
+        return tuple(out)
+
+    def with_origin(self, lat: float, lon: float, alt: float = 0.0) -> Map:
+        """This map placed at (lat, lon, alt) (what `--origin LAT,LON[,ALT]` does); MapError
+        for coordinates out of range."""
+        d = self.spec.model_dump(mode="json")
+        d["origin"] = {"lat": lat, "lon": lon, "alt": alt}
+        return load_map(d)
+
+    def planning_map(self) -> Map:
+        """The map the optimiser plans on: obstacles inflated by their clearance (plus
+        `CLEARANCE_PAD`), rectangles turned into the equivalent no-fly zones, every sensor's
+        required data times (1 + data_margin), safety margins then 0. Returns `self` when both
+        margins are 0, so such a map is planned and scored exactly as before."""
+        cached = self.__dict__.get("_planning_map")
+        if cached is not None:
+            return cached
+        sf = self.spec.safety
+        if sf.clearance <= 0.0 and sf.data_margin <= 0.0:
+            return self
+        import shapely
+        from shapely.geometry.polygon import orient
+
+        d = self.spec.model_dump(mode="json")
+        d.pop("witness", None)
+        d["safety"] = {"clearance": 0.0, "data_margin": 0.0}
+        q = self.required_data * (1.0 + float(sf.data_margin))
+        for s, req in zip(d["sensors"], q, strict=True):
+            s["required_data"] = float(req)
+        cl = self.obstacle_clearances
+        obs = self.spec.obstacles
+        nc, nr, nz = len(obs.circles), len(obs.rectangles), len(obs.no_fly_zones)
+        d["obstacles"]["circles"] = [
+            {"x": c.x, "y": c.y, "radius": c.radius + (cl[k] + CLEARANCE_PAD if cl[k] > 0 else 0)}
+            for k, c in enumerate(obs.circles)
+        ]
+        shapes = _obstacle_polygons(self)
+
+        def grown(k: int, name: str | None) -> dict[str, Any]:
+            poly = shapes[k]
+            if cl[k] > 0.0:
+                r = (cl[k] + CLEARANCE_PAD) / math.cos(math.pi / (4 * _QUAD_SEGS))
+                poly = orient(poly.buffer(r, quad_segs=_QUAD_SEGS), 1.0)
+                poly = shapely.simplify(poly, 0.0)  # drop collinear vertices
+            out: dict[str, Any] = {"vertices": [list(v) for v in poly.exterior.coords[:-1]]}
+            holes = [[list(v) for v in ring.coords[:-1]] for ring in poly.interiors]
+            if holes:
+                out["holes"] = holes
+            if name is not None:
+                out["name"] = name
+            return out
+
+        # rectangles become polygon obstacles (a rounded rectangle is no rectangle), in order
+        d["obstacles"]["rectangles"] = []
+        d["obstacles"]["no_fly_zones"] = [grown(nc + nr + k, z.name)
+                                          for k, z in enumerate(obs.no_fly_zones)]
+        d["obstacles"]["polygons"] = (
+            [grown(nc + k, None) for k in range(nr)]
+            + [grown(nc + nr + nz + k, z.name) for k, z in enumerate(obs.polygons)]
+        )  # fmt: skip
+        pm = load_map(d)
+        self.__dict__["_planning_map"] = pm
+        return pm
+
     def to_dict(self) -> dict[str, Any]:
         """The map as JSON-ready data (polygons cleaned, exteriors counter-clockwise)."""
         d = self.spec.model_dump(mode="json", exclude_none=False)
@@ -359,7 +470,7 @@ class Map:
         return {
             "name": s.name,
             "area_m": [s.area.width, s.area.height],
-            "origin": s.origin.model_dump(),
+            "origin": None if s.origin is None else s.origin.model_dump(),
             "start": list(s.start),
             "end": list(s.end),
             "sensors": len(s.sensors),
@@ -372,9 +483,31 @@ class Map:
             "uav": s.uav.model_dump(),
             "radio": s.radio.model_dump(),
             "objective": s.objective.model_dump(),
+            "safety": s.safety.model_dump(),
             "total_required_data_mbit": float(self.required_data.sum()),
             "has_witness": s.witness is not None,
         }
+
+
+#: metres added to every non-zero clearance when inflating: covers where a stored mission's
+#: points may lie (MAVLink's 1e-7 degree grid is ~1.1 cm), so the real clearance is kept
+CLEARANCE_PAD = 0.05
+#: segments per quarter circle of an inflated polygon's rounded corners; the offset is divided
+#: by cos(pi / (4 * _QUAD_SEGS)) so the polygon contains the true offset (~2 % more clearance)
+_QUAD_SEGS = 4
+
+
+def _obstacle_polygons(m: Map) -> list[Any]:
+    """Circles (as exact-enough shapely buffers), rectangles, no-fly zones and polygon
+    obstacles, in that order (the sim's order, `sim.obstacles.obstacle_shapes`)."""
+    from shapely.geometry import Point, Polygon
+
+    obs = m.spec.obstacles
+    out: list[Any] = [Point(c.x, c.y).buffer(c.radius, quad_segs=64) for c in obs.circles]
+    out += [Polygon(v) for v in m.rectangle_polygons]
+    out += [Polygon(z.vertices, z.holes) for z in obs.no_fly_zones]
+    out += [Polygon(z.vertices, z.holes) for z in obs.polygons]
+    return out
 
 
 # ----------------------------------------------------------------------------- validation

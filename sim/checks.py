@@ -1,17 +1,26 @@
 """Verdicts on a replayed mission: the paper's constraints C1..C5, each with a margin.
 
 A margin is the worst slack in the constraint's unit: >= 0 when it holds, negative by how much
-it is broken. Small tolerances absorb what a mission file cannot carry exactly (latitude and
-longitude round-trips, float32 parameters): `REL_TOL` for times, rates and data, `GEOM_TOL`
-metres for positions and overlap lengths. One extra verdict, ENDS, checks that the mission takes
-off at the map's start and comes to rest at its end (the paper's fixed p_0 and p_{I+1}).
+it is broken. Tolerances: `REL_TOL` (relative, on hover times, rate sums and collected data) is
+1e-6, about eight float32 steps (float32's relative precision is 2**-23 ~ 1.2e-7): a mission
+passes through MAVLink's float32 parameters, so a finer tolerance would judge noise the file
+cannot carry. It is no safety margin: a plan on the boundary that loses more than that when
+stored fails, which is why missions are made storable before they are written
+(`lamde_mission.storage`). `GEOM_TOL` metres for positions and overlap lengths. One extra
+verdict, ENDS, checks that the mission takes off at the map's start and comes to rest at its
+end (the paper's fixed p_0 and p_{I+1}). Two more judge the map's `safety` margins on the flown
+mission: CLEAR (every leg at least `safety.clearance` from every obstacle, measured with
+shapely; near the start or end point the clearance in force is what the map leaves there) and
+MARGIN (every sensor's collected data at least (1 + `safety.data_margin`) x its requirement);
+`Verdicts.data_margins` holds the real margin per sensor and `Verdicts.clearance` the real
+clearance.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Iterator
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
@@ -20,12 +29,16 @@ import shapely
 from sim.obstacles import obstacle_shapes, overlap_lengths
 from sim.replay import Timeline
 
-__all__ = ["Verdict", "Verdicts", "verify", "REL_TOL", "GEOM_TOL", "ENDS_TOL"]
+__all__ = ["Verdict", "Verdicts", "verify", "REL_TOL", "GEOM_TOL", "ENDS_TOL", "CLEAR_TOL"]
 
-#: relative tolerance on hover times (C2), rate sums (C3) and collected data (C4)
-REL_TOL = 1e-9
+#: relative tolerance on hover times (C2), rate sums (C3) and collected data (C4): about
+#: eight float32 steps (2**-23 ~ 1.2e-7 each), no finer than what a mission file carries
+REL_TOL = 1e-6
 #: metres: hover points on the area's edge (C1), overlap length counted as zero (C5)
 GEOM_TOL = 1e-6
+#: metres: how far below the map's `safety.clearance` a stored mission may pass an obstacle (its
+#: points lie on MAVLink's 1e-7 degree grid, ~1.1 cm; the planner pads the clearance by 5 cm)
+CLEAR_TOL = 0.02
 #: metres: take-off / final stop within this of the map's start / end (float32 MAVLink
 #: parameters carry latitude to ~1 m, int32 MISSION_ITEM_INT to ~1 cm)
 ENDS_TOL = 0.05
@@ -56,6 +69,8 @@ class Verdicts:
     t_fly: float
     t_hover: float
     f: float
+    data_margins: dict[str, float] = field(default_factory=dict)
+    clearance: float = math.inf
 
     @property
     def passed(self) -> bool:
@@ -93,6 +108,8 @@ class Verdicts:
             "t_fly": self.t_fly,
             "t_hover": self.t_hover,
             "f": self.f,
+            "clearance_m": self.clearance if math.isfinite(self.clearance) else None,
+            "data_margins": dict(self.data_margins),
             "verdicts": [v.to_dict() for v in self.items],
         }
 
@@ -190,6 +207,43 @@ def verify(timeline: Timeline, map: Any) -> Verdicts:  # noqa: A002
             detail = f"clearance {float(dist[k]):.3f} m from {obstacles[k].label}"
             out.append(Verdict("C5", "L_vio = 0", True, float(dist[k]), "m", detail))
 
+    # CLEAR and MARGIN: the map's safety margins, measured on the flown mission
+    sf = getattr(spec, "safety", None)
+    want_c = float(getattr(sf, "clearance", 0.0))
+    want_q = float(getattr(sf, "data_margin", 0.0))
+    clearance = math.inf
+    if obstacles:
+        lines = shapely.multilinestrings([shapely.linestrings(p) for p in legs if len(p) >= 2])
+        shapes = np.array([o.shape for o in obstacles], dtype=object)
+        dist = np.asarray(shapely.distance(lines, shapes), dtype=float)
+        ends = shapely.points([map.start, map.end])
+        # near the start or end point the clearance is what the map leaves there
+        near = np.min(shapely.distance(ends[:, None], shapes[None, :]), axis=0)
+        force = np.minimum(want_c, near)
+        k = int(np.argmin(dist - force))
+        clearance = float(dist.min())
+        m = float(dist[k] - force[k])
+        detail = (f"closest {dist[k]:.3f} m from {obstacles[k].label} "
+                  f"(clearance in force there {force[k]:.3f} m)")  # fmt: skip
+        out.append(Verdict("CLEAR", f"clearance >= {want_c:g} m", m >= -CLEAR_TOL, m, "m",
+                           detail))  # fmt: skip
+    else:
+        out.append(Verdict("CLEAR", f"clearance >= {want_c:g} m", True, math.inf, "m",
+                           "no obstacles"))  # fmt: skip
+    served = req > 0
+    frac = np.where(served, q / np.where(served, req, 1.0) - 1.0, np.inf)
+    margins = {ids[k]: float(frac[k]) for k in range(len(ids))}
+    if np.any(served):
+        j = int(np.argmin(frac))
+        m = float(frac[j] - want_q)
+        ok = m >= -REL_TOL * (1.0 + want_q)
+        detail = f"tightest: sensor '{ids[j]}' {100 * frac[j]:+.4g} % over Q_lambda"
+        out.append(Verdict("MARGIN", f"data margin >= {100 * want_q:g} %", bool(ok), m, "",
+                           detail))  # fmt: skip
+    else:
+        out.append(Verdict("MARGIN", f"data margin >= {100 * want_q:g} %", True, math.inf, "",
+                           "no data required"))  # fmt: skip
+
     # ENDS: take off at the start, come to rest at the end
     d0 = float(np.linalg.norm(timeline.route.launch - map.start))
     d1 = float(np.linalg.norm(timeline.path[-1] - map.end))
@@ -199,4 +253,5 @@ def verify(timeline: Timeline, map: Any) -> Verdicts:  # noqa: A002
     out.append(Verdict("ENDS", "start -> end", worst <= ENDS_TOL, -worst + 0.0, "m", detail))
 
     t = timeline.totals
-    return Verdicts(items=tuple(out), t_fly=t.t_fly, t_hover=t.t_hover, f=t.f)
+    return Verdicts(items=tuple(out), t_fly=t.t_fly, t_hover=t.t_hover, f=t.f,
+                    data_margins=margins, clearance=clearance)  # fmt: skip

@@ -20,18 +20,32 @@ from typing import Any
 import numpy as np
 import pymap3d
 
-__all__ = ["enu_to_latlon", "latlon_to_enu", "origin_of"]
+__all__ = [
+    "MissingOriginError", "enu_to_latlon", "latlon_to_enu", "origin_of"]
 
 _ITERATIONS = 4
 
 
+class MissingOriginError(ValueError):
+    """A map without an `origin`: its local metres have no place on Earth, so no mission
+    (latitude/longitude) can be made from it or read onto it."""
+
+
 def origin_of(map_or_origin: Any) -> tuple[float, float, float]:
-    """(lat, lon, alt) of a Map, a MapFile, an Origin model or a 3-tuple."""
+    """(lat, lon, alt) of a Map, a MapFile, an Origin model or a 3-tuple.
+
+    Raises MissingOriginError when a map has none (no default place is ever assumed)."""
     obj = map_or_origin
     if hasattr(obj, "spec"):
         obj = obj.spec
     if hasattr(obj, "origin"):
         obj = obj.origin
+        if obj is None:
+            raise MissingOriginError(
+                "origin: the map has no origin (the latitude/longitude of its (0, 0)); add "
+                '"origin": {"lat": ..., "lon": ..., "alt": ...} to the map or pass '
+                "--origin LAT,LON[,ALT]"
+            )
     if hasattr(obj, "lat"):
         return float(obj.lat), float(obj.lon), float(getattr(obj, "alt", 0.0))
     lat, lon, *rest = obj

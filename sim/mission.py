@@ -28,6 +28,7 @@ __all__ = [
     "MissionItem",
     "Route",
     "fence_from_items",
+    "command_name",
     "items_equal",
     "items_to_route",
 ]
@@ -44,11 +45,17 @@ class CMD:
     RETURN_TO_LAUNCH = _m.MAV_CMD_NAV_RETURN_TO_LAUNCH  # 20
     LAND = _m.MAV_CMD_NAV_LAND  # 21
     TAKEOFF = _m.MAV_CMD_NAV_TAKEOFF  # 22
+    DO_JUMP = _m.MAV_CMD_DO_JUMP  # 177
     DO_CHANGE_SPEED = _m.MAV_CMD_DO_CHANGE_SPEED  # 178
+    FENCE_RETURN_POINT = _m.MAV_CMD_NAV_FENCE_RETURN_POINT  # 5000
     FENCE_POLYGON_VERTEX_INCLUSION = _m.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION  # 5001
     FENCE_POLYGON_VERTEX_EXCLUSION = _m.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_EXCLUSION  # 5002
     FENCE_CIRCLE_INCLUSION = _m.MAV_CMD_NAV_FENCE_CIRCLE_INCLUSION  # 5003
     FENCE_CIRCLE_EXCLUSION = _m.MAV_CMD_NAV_FENCE_CIRCLE_EXCLUSION  # 5004
+    RALLY_POINT = _m.MAV_CMD_NAV_RALLY_POINT  # 5100
+
+    #: commands that belong to the fence list (MAV_MISSION_TYPE_FENCE), never to a mission
+    FENCE_COMMANDS = frozenset({5000, 5001, 5002, 5003, 5004})
 
 
 class FRAME:
@@ -135,6 +142,8 @@ def fence_from_items(items: Iterable[MissionItem]) -> tuple[list[tuple], list[li
     pending: list[MissionItem] = []
     poly_cmds = (CMD.FENCE_POLYGON_VERTEX_EXCLUSION, CMD.FENCE_POLYGON_VERTEX_INCLUSION)
     for it in items:
+        if it.command == CMD.FENCE_RETURN_POINT:  # the breach-return point: not a shape
+            continue
         if it.command in (CMD.FENCE_CIRCLE_EXCLUSION, CMD.FENCE_CIRCLE_INCLUSION):
             if pending:
                 raise MissionError(f"fence item {it.seq}: polygon interrupted before its end")
@@ -164,6 +173,9 @@ def fence_from_items(items: Iterable[MissionItem]) -> tuple[list[tuple], list[li
 #: int32 1e-7 degree latitude is ~1.1 cm); avoids sqrt(d) blowing round-off up into seconds.
 SNAP_M = 1e-6
 
+#: most items one replay runs (DO_JUMP repeats included) before the mission is refused
+MAX_EXECUTED_ITEMS = 100_000
+
 _GLOBAL_FRAMES = {FRAME.GLOBAL, FRAME.GLOBAL_INT}
 _RELATIVE_FRAMES = {FRAME.GLOBAL_RELATIVE_ALT, FRAME.GLOBAL_RELATIVE_ALT_INT}
 
@@ -189,6 +201,11 @@ class Route:
     speed: float | None
     finish: Literal["land", "rtl", "none"]
     notes: tuple[str, ...] = field(default=())
+    #: per stop: the DO_CHANGE_SPEED speed in force on the leg that arrives there (m/s; None:
+    #: none set yet, the UAV's v_max); empty means `speed` for every leg
+    leg_speeds: tuple[float | None, ...] = field(default=())
+    #: the speed in force at the end of the mission (the RTL return leg flies at it)
+    final_speed: float | None = None
 
     @property
     def hover_points(self) -> np.ndarray:
@@ -217,18 +234,25 @@ def _has_position(it: MissionItem) -> bool:
     return not (it.x == 0.0 and it.y == 0.0)
 
 
-def _command_name(c: int) -> str:
+def command_name(c: int) -> str:
+    """The MAV_CMD name of command number `c` (e.g. 16 -> "MAV_CMD_NAV_WAYPOINT")."""
     entry = mavutil.mavlink.enums["MAV_CMD"].get(c)
     return entry.name if entry is not None else f"command {c}"
+
+
+_command_name = command_name
 
 
 def items_to_route(items: Sequence[MissionItem], map: Any) -> Route:  # noqa: A002
     """Read a mission back into local metres: launch, stops, hover times, speed and finish.
 
     Supported navigation commands: TAKEOFF, WAYPOINT (param1 = hold s), LOITER_TIME
-    (param1 = s), LAND, RETURN_TO_LAUNCH; DO_CHANGE_SPEED sets the speed; other DO/CONDITION
-    commands are ignored with a note. Items after LAND/RTL are ignored with a note. Raises
-    MissionError for anything else the sim cannot fly.
+    (param1 = s), LAND, RETURN_TO_LAUNCH; DO_CHANGE_SPEED sets the speed from its position on
+    (the legs after it); DO_JUMP (param1 = the target's seq in this list, param2 = repeats) is
+    flown: the items from the target on run again, `param2` more times, at most
+    `MAX_EXECUTED_ITEMS` items in all (a jump repeated forever, param2 = -1, is refused). Other
+    DO/CONDITION commands are ignored with a note. Items after LAND/RTL are ignored with a
+    note. Raises MissionError for anything else the sim cannot fly.
     """
     lat0, lon0, home_alt = origin_of(map)
     start = np.asarray(map.start, dtype=float)
@@ -254,11 +278,38 @@ def items_to_route(items: Sequence[MissionItem], map: Any) -> Route:  # noqa: A0
     def current() -> tuple[float, float]:
         return stops[-1] if stops else (float(launch[0]), float(launch[1]))
 
-    for it in mission:
+    speeds: list[float | None] = []
+    index_of_seq = {int(it.seq): k for k, it in enumerate(mission)}
+    jumps_left: dict[int, int] = {}  # DO_JUMP list index -> repeats still to fly
+    pc = 0
+    executed = 0
+    while pc < len(mission):
+        it = mission[pc]
+        pc += 1
+        executed += 1
+        if executed > MAX_EXECUTED_ITEMS:
+            raise MissionError(f"the mission runs more than {MAX_EXECUTED_ITEMS} items "
+                               "(DO_JUMP repeats): refused")  # fmt: skip
         c = it.command
         if finish != "none":
             notes.append(f"items from seq {it.seq} on come after the landing and were ignored")
             break
+        if c == CMD.DO_JUMP:
+            target, repeats = it.param1, it.param2
+            if not (math.isfinite(target) and math.isfinite(repeats)):
+                raise MissionError(f"item {it.seq}: DO_JUMP needs a target and a repeat count")
+            if int(repeats) < 0:
+                raise MissionError(f"item {it.seq}: DO_JUMP repeated forever (param2 = "
+                                   f"{int(repeats)}) has no end to fly to")  # fmt: skip
+            k = index_of_seq.get(int(target))
+            if k is None:
+                raise MissionError(f"item {it.seq}: DO_JUMP targets item {int(target)}, which "
+                                   "the mission does not have")  # fmt: skip
+            left = jumps_left.setdefault(pc - 1, int(repeats))
+            if left > 0:
+                jumps_left[pc - 1] = left - 1
+                pc = k
+            continue
         if c == CMD.TAKEOFF:
             if stops or takeoff_alt is not None:
                 raise MissionError(f"item {it.seq}: TAKEOFF in flight is not supported")
@@ -270,6 +321,7 @@ def items_to_route(items: Sequence[MissionItem], map: Any) -> Route:  # noqa: A0
                 raise MissionError(f"item {it.seq}: LOITER_TIME needs a finite time >= 0 s")
             hold = float(it.param1) if math.isfinite(it.param1) else 0.0
             stops.append(position(it) if _has_position(it) else current())
+            speeds.append(speed)
             alts.append(_relative_alt(it, home_alt))
             hover.append(max(hold, 0.0))
             is_hover.append(c == CMD.LOITER_TIME or hold > 0.0)
@@ -277,6 +329,7 @@ def items_to_route(items: Sequence[MissionItem], map: Any) -> Route:  # noqa: A0
             cmds.append(int(c))
         elif c == CMD.LAND:
             stops.append(position(it) if _has_position(it) else current())
+            speeds.append(speed)
             alts.append(0.0)
             hover.append(0.0)
             is_hover.append(False)
@@ -308,4 +361,6 @@ def items_to_route(items: Sequence[MissionItem], map: Any) -> Route:  # noqa: A0
         speed=speed,
         finish=finish,
         notes=tuple(notes),
+        leg_speeds=tuple(speeds),
+        final_speed=speed,
     )

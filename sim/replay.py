@@ -178,15 +178,27 @@ def replay_route(route: Route, map: Any, *, dt: float = 1.0) -> Timeline:  # noq
     spec = map.spec
     uav, radio = spec.uav, spec.radio
     notes = list(route.notes)
-    v = float(uav.max_speed)
-    if route.speed is not None:
-        if route.speed > v:
-            notes.append(
-                f"mission speed {route.speed:g} m/s exceeds the UAV's v_max {v:g} m/s; "
-                "flown at v_max"
-            )
-        else:
-            v = float(route.speed)
+    v_max = float(uav.max_speed)
+    warned: set[float] = set()
+
+    def flown(speed: float | None) -> float:
+        """A DO_CHANGE_SPEED speed as flown: at most the UAV's v_max."""
+        if speed is None:
+            return v_max
+        if speed > v_max and speed not in warned:
+            warned.add(speed)
+            notes.append(f"mission speed {speed:g} m/s exceeds the UAV's v_max {v_max:g} m/s; "
+                         "flown at v_max")  # fmt: skip
+        return min(float(speed), v_max)
+
+    n_stops = len(route.stops)
+    if route.leg_speeds:
+        leg_v = np.array([flown(sp) for sp in route.leg_speeds], dtype=float)
+        v_end = flown(route.final_speed)
+    else:  # a Route made by hand: one speed for every leg
+        leg_v = np.full(n_stops, flown(route.speed))
+        v_end = flown(route.speed)
+    v = float(leg_v[0]) if n_stops else v_end
     a = float(uav.acceleration)
     alpha = float(spec.objective.alpha)
     sensors = np.asarray(map.sensors, dtype=float)
@@ -198,7 +210,7 @@ def replay_route(route: Route, map: Any, *, dt: float = 1.0) -> Timeline:  # noq
     seg = np.diff(path, axis=0)
     lengths = np.sqrt((seg**2).sum(axis=1))
     lengths = np.where(lengths < SNAP_M, 0.0, lengths)
-    times = np.array([leg_time(d, v, a) for d in lengths])
+    times = np.array([leg_time(d, float(vk), a) for d, vk in zip(lengths, leg_v, strict=True)])
     hov_mask = route.is_hover
     rates_all = hover_rates(stops, route.altitudes, sensors, radio.peak_rate, radio.decay)
     rates = rates_all[hov_mask]
@@ -238,7 +250,7 @@ def replay_route(route: Route, map: Any, *, dt: float = 1.0) -> Timeline:  # noq
         target_alt = float(route.altitudes[k]) if route.commands[k] != CMD.LAND else alt_now
         if tl > 0.0:
             ts = rec.times(clock, tl)
-            s = leg_position(ts - clock, d, v, a)
+            s = leg_position(ts - clock, d, float(leg_v[k]), a)
             frac = s / d
             xy = pos[None, :] + frac[:, None] * (stops[k] - pos)[None, :]
             z = alt_now + frac * (target_alt - alt_now)
@@ -265,10 +277,10 @@ def replay_route(route: Route, map: Any, *, dt: float = 1.0) -> Timeline:  # noq
         return_leg = np.vstack([pos, route.launch])
         d = float(np.linalg.norm(route.launch - pos))
         d = 0.0 if d < SNAP_M else d
-        t_return = leg_time(d, v, a)
+        t_return = leg_time(d, v_end, a)
         if t_return > 0.0:
             ts = rec.times(clock, t_return)
-            s = leg_position(ts - clock, d, v, a)
+            s = leg_position(ts - clock, d, v_end, a)
             xy = pos[None, :] + (s / d)[:, None] * (route.launch - pos)[None, :]
             rec.add("return", ts, xy, np.full(len(ts), alt_now), np.tile(q, (len(ts), 1)))
             clock += t_return
@@ -276,10 +288,10 @@ def replay_route(route: Route, map: Any, *, dt: float = 1.0) -> Timeline:  # noq
 
     t_land = 0.0
     if route.finish in ("land", "rtl"):
-        t_land = leg_time(abs(alt_now), v, a)
+        t_land = leg_time(abs(alt_now), v_end, a)
         ts = rec.times(clock, t_land)
         xy, dq = const(len(ts))
-        z = alt_now - leg_position(ts - clock, abs(alt_now), v, a) * np.sign(alt_now)
+        z = alt_now - leg_position(ts - clock, abs(alt_now), v_end, a) * np.sign(alt_now)
         rec.add("land", ts, xy, z, dq)
         clock += t_land
     else:
@@ -296,7 +308,7 @@ def replay_route(route: Route, map: Any, *, dt: float = 1.0) -> Timeline:  # noq
         t_return=t_return,
         t_total=clock,
         distance=float(lengths.sum()),
-        speed=v,
+        speed=v_end,
         accel=a,
     )
     return Timeline(

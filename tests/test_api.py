@@ -99,3 +99,19 @@ def test_options(tmp_path) -> None:
 def test_bad_arguments_name_the_field(kwargs: dict, field: str) -> None:
     with pytest.raises(ValueError, match=f"^{field}:"):
         lamde_mission.plan(SMALL, **kwargs)
+
+
+def test_kernel_compilation_is_timed_apart_from_the_optimisation():
+    """The first plan in a process compiles (or loads) the kernels in a warm-up run reported as
+    timings['compile']; later calls have none, and both give the same plan."""
+    from lamde_mission import api
+    from tests.conftest import MAPS
+
+    api._WARM.discard("random")
+    a = lamde_mission.plan(MAPS / "tiny.json", seed=3, budget=600,
+                           configurator="random")
+    b = lamde_mission.plan(MAPS / "tiny.json", seed=3, budget=600,
+                           configurator="random")
+    assert a.timings["compile"] > 0.0 and b.timings["compile"] == 0.0
+    assert np.array_equal(a.hover_points, b.hover_points) and a.f == b.f
+    assert isinstance(api.kernels_cached(), bool)

@@ -72,8 +72,8 @@ def test_map_loader_defaults_come_from_the_table() -> None:
     schema = MapFile.model_json_schema()["$defs"]
     for path, d in D.MAP_DEFAULTS.items():
         section, field = path.split(".")
-        model = {"origin": "Origin", "uav": "Uav", "radio": "Radio",
-                 "objective": "Objective"}[section]
+        model = {"uav": "Uav", "radio": "Radio", "objective": "Objective",
+                 "safety": "Safety"}[section]
         assert schema[model]["properties"][field].get("default") == d.value, path
 
 

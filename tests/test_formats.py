@@ -20,6 +20,7 @@ from lamde_mission.formats import (
 from lamde_mission.formats.qgc_plan import parse_plan_document, plan_document
 from lamde_mission.formats.waypoints import format_waypoints, parse_waypoints
 from lamde_mission.items import MissionError, geofence_items, items_equal, plan_to_items
+from lamde_mission.storage import grid_degrees, storable_plan, stored_items
 from planner_core.mapio import load_map
 from planner_core.problem import Problem
 
@@ -43,6 +44,12 @@ MAP = {
 }
 HOVER = [[500, 420], [1500, 980], [2480, 1500]]
 TIMES = [40.0, 55.5, 47.25]
+
+
+def stored(plan, m, autopilot="generic", finish="land"):
+    """The items a file written for `autopilot` holds: the storable plan, as stored."""
+    sp = storable_plan(plan, m, autopilot, finish=finish)
+    return stored_items(plan_to_items(sp, m, finish=finish), autopilot)
 
 
 @pytest.fixture(scope="module")
@@ -71,7 +78,7 @@ def test_format_from_suffix():
 
 
 def test_qgc_plan_layout(m, plan, tmp_path):
-    path = write_mission(tmp_path / "m.plan", plan, m)
+    path = write_mission(tmp_path / "m.plan", plan, m, autopilot="px4")
     doc = json.loads(path.read_text())
     assert doc["fileType"] == "Plan" and doc["version"] == 1
     assert doc["groundStation"] == "lamde-mission"
@@ -80,7 +87,8 @@ def test_qgc_plan_layout(m, plan, tmp_path):
     assert ms["cruiseSpeed"] == 18.0 and ms["hoverSpeed"] == 18.0
     home = ms["plannedHomePosition"]
     assert len(home) == 3 and home[2] == 584.0
-    assert home == pytest.approx(list(home_of(m)))
+    assert home == pytest.approx(list(home_of(m)), abs=1e-7)
+    assert home[:2] == [grid_degrees(v) for v in home_of(m)[:2]]
     items = ms["items"]
     assert [it["doJumpId"] for it in items] == list(range(1, len(items) + 1))
     assert [it["command"] for it in items] == [22, 178, 19, 19, 19, 16, 21]
@@ -106,12 +114,13 @@ def test_qgc_plan_layout(m, plan, tmp_path):
 def test_qgc_plan_round_trip(m, plan, tmp_path):
     path = write_mission(tmp_path / "m.plan", plan, m)
     items, fence = read_mission(path)
-    assert items_equal(items, plan_to_items(plan, m))
-    assert items_equal(fence, geofence_items(m))
+    assert items_equal(items, stored(plan, m))
+    assert items_equal(fence, stored_items(geofence_items(m), "generic"))
+    assert items_equal(fence, geofence_items(m), abs_=1e-7)  # the uninflated obstacles
     # RTL finish and no fence
     path = write_mission(tmp_path / "rtl.plan", plan, m, finish="rtl", fence=False)
     items, fence = read_mission(path)
-    assert items_equal(items, plan_to_items(plan, m, finish="rtl")) and fence == []
+    assert items_equal(items, stored(plan, m, finish="rtl")) and fence == []
 
 
 def test_qgc_plan_reader_rejects_what_it_cannot_use(m, plan):
@@ -140,7 +149,7 @@ def test_waypoints_layout_and_round_trip(m, plan, tmp_path):
     assert len(home) == 12 and home[:4] == ["0", "1", "0", "16"] and float(home[10]) == 584.0
     assert all(len(ln.split("\t")) == 12 for ln in lines[1:])
     assert "nan" not in path.read_text().lower()
-    expected = [it.without_nan() for it in plan_to_items(plan, m)]
+    expected = [it.without_nan() for it in stored(plan, m)]
     items, fence = read_mission(path)
     assert fence == [] and items_equal(items, expected)
 
@@ -148,11 +157,12 @@ def test_waypoints_layout_and_round_trip(m, plan, tmp_path):
 def test_waypoints_load_in_pymavlink(m, plan, tmp_path):
     """A real client: MAVProxy's loader reads the file back to the same items."""
     path = write_mission(tmp_path / "m.waypoints", plan, m)
-    expected = [it.without_nan() for it in plan_to_items(plan, m)]
+    expected = [it.without_nan() for it in stored(plan, m)]
     loader = mavwp.MAVWPLoader()
     assert loader.load(str(path)) == len(expected) + 1
     home = loader.wp(0)
     lat, lon, alt = home_of(m)
+    lat, lon = grid_degrees(lat), grid_degrees(lon)
     assert (home.command, home.frame, home.x, home.y, home.z) == (16, 0, lat, lon, alt)
     for k, it in enumerate(expected):
         w = loader.wp(k + 1)

@@ -45,7 +45,9 @@ def test_committed_map(name: str, size: int, density: int) -> None:
     assert m.name == name and m.width == m.height == size
     assert data["uav"] == {"max_hover_points": SIZES[size]}  # the rest at defaults
     assert set(data) == {"name", "origin", "area", "start", "end", "sensors", "obstacles", "uav",
-                         "witness"}  # fmt: skip
+                         "safety", "witness"}  # fmt: skip
+    # the paper's model as it is: the suite says so explicitly
+    assert data["safety"] == {"clearance": 0, "data_margin": 0}
     lo, hi = (8, 15) if size == 5000 else (15, 30)
     assert lo <= len(m.sensors) <= hi
     assert len(m.sensors) == default_sensor_count(size, density)
@@ -186,7 +188,7 @@ def test_examples_load() -> None:
     assert _witness(p, json.loads((MAPS / "small-demo.json").read_text()))["phi"] == 0.0
     assert p.breakdown(p.encode(np.zeros((0, 2)), []))["l_vio"] > 0  # the straight line is blocked
     tiny = json.loads((MAPS / "tiny.json").read_text())
-    assert set(tiny) == {"area", "start", "end", "sensors", "obstacles"}
+    assert set(tiny) == {"origin", "area", "start", "end", "sensors", "obstacles"}
     t = load_map(tiny)
     n_obstacles = sum(len(v) for v in tiny["obstacles"].values())
     assert n_obstacles == 1 and len(t.sensors) >= 1

@@ -20,3 +20,36 @@ def load_map_or_fail(path: str) -> Any:
     for note in m.notes:
         print(f"note: {path}: {note}", file=sys.stderr)
     return m
+
+
+def add_origin_option(p: Any) -> None:
+    """`--origin LAT,LON[,ALT]`: place a map that has no origin (or move one that has)."""
+    p.add_argument("--origin", metavar="LAT,LON[,ALT]",
+                   help="WGS84 position of the map's (0, 0) (degrees, degrees, metres AMSL); "
+                   "needed when the map has no origin, since a mission is latitude/longitude")
+
+
+def with_origin_or_fail(m: Any, origin: str | None) -> Any:
+    """The map placed by `--origin`, or as it is if it has an origin; UsageError naming
+    `origin` when it has none and none was given (no default place is ever assumed)."""
+    if origin is not None:
+        from planner_core.mapio import MapError
+
+        try:
+            vals = [float(v) for v in origin.split(",")]
+            if len(vals) not in (2, 3):
+                raise ValueError
+        except ValueError:
+            raise UsageError(f"--origin: expected LAT,LON[,ALT] in degrees and metres, got "
+                             f"{origin!r}") from None  # fmt: skip
+        try:
+            return m.with_origin(*vals)
+        except MapError as exc:
+            raise UsageError("\n".join(f"--origin: {p}" for p in exc.problems)) from None
+    if m.spec.origin is None:
+        raise UsageError(
+            "origin: the map has no origin (the latitude/longitude of its (0, 0)), so no "
+            'mission can be written or read for it; add "origin": {"lat": ..., "lon": ..., '
+            '"alt": ...} to the map or pass --origin LAT,LON[,ALT]'
+        )
+    return m

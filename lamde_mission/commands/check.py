@@ -11,7 +11,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "check",
         help="validate a map file and print its summary",
         description="Validate a map file: every problem is reported on its own line naming the "
-        "field (exit status 2). On success print counts, area, I_max and the defaults in force.",
+        "field (exit status 2). On success print counts, area, I_max and the defaults in force, "
+        "then a fast feasibility diagnosis (sensors no reachable hover point can serve, data "
+        "that cannot fit within max_hover_time x max_hover_points, an end point walled off; "
+        "exit status 1 naming what cannot be met).",
     )
     p.add_argument("map", help="map file (JSON)")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
@@ -24,14 +27,22 @@ def run(args: argparse.Namespace) -> int:
     m = load_map_or_fail(args.map)
     s = m.summary()
     if args.json:
+        from planner_core.diagnose import diagnose
+
+        d = diagnose(m)
+        s["diagnosis"] = [{"kind": f.kind, "fatal": f.fatal, "sensor": f.sensor,
+                           "message": f.message} for f in d.findings]  # fmt: skip
         print(json.dumps(s, indent=2))
-        return 0
+        return 0 if d.feasible_so_far else 1
     default = " (default for this size)" if s["max_hover_points_default"] else ""
     u, r, o = s["uav"], s["radio"], s["objective"]
     print(f"map '{s['name']}': OK")
     print(f"  area            {s['area_m'][0]:g} m x {s['area_m'][1]:g} m")
-    print(f"  origin          lat {s['origin']['lat']}, lon {s['origin']['lon']}, "
-          f"alt {s['origin']['alt']} m")
+    if s["origin"] is None:
+        print("  origin          none: give one (or --origin LAT,LON[,ALT]) to write a mission")
+    else:
+        print(f"  origin          lat {s['origin']['lat']}, lon {s['origin']['lon']}, "
+              f"alt {s['origin']['alt']} m")
     print(f"  start -> end    ({s['start'][0]:g}, {s['start'][1]:g}) -> "
           f"({s['end'][0]:g}, {s['end'][1]:g})")
     print(f"  sensors         {s['sensors']} (total required {s['total_required_data_mbit']:g} "
@@ -48,4 +59,20 @@ def run(args: argparse.Namespace) -> int:
           f"nu {o['collision_weight']:g} /m")
     if s["has_witness"]:
         print("  witness         a known feasible plan is stored in the map")
+    sf = s["safety"]
+    print(f"  safety          clearance {sf['clearance']:g} m, data margin "
+          f"{100 * sf['data_margin']:g} %")
+    return _diagnosis(m)
+
+
+def _diagnosis(m: object) -> int:
+    """Print the fast feasibility diagnosis; 1 when something rules every plan out."""
+    from planner_core.diagnose import diagnose
+
+    d = diagnose(m)
+    for f in d.findings:
+        print(f"  {'CANNOT' if f.fatal else 'note':<6}  {f.message}")
+    if not d.feasible_so_far:
+        print("no plan can meet this map (see CANNOT above)")
+        return 1
     return 0

@@ -51,6 +51,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         metavar="N",
         help="refuse lists longer than N with MAV_MISSION_NO_SPACE (default: 1000)",
     )
+    p.add_argument("--autopilot", choices=("px4", "ardupilot"), default="px4",
+                   help="behave as PX4 (default) or ArduPilot (HEARTBEAT autopilot id; item 0 "
+                   "is home; LOITER_TIME hover seconds kept whole)")
     p.add_argument("-q", "--quiet", action="store_true", help="do not print transfer events")
     return p
 
@@ -66,6 +69,7 @@ def run(args: argparse.Namespace) -> int:
         vehicle = MockVehicle(
             args.connect, loss=args.loss, latency_ms=args.latency_ms, seed=args.seed,
             reject=args.reject, max_items=args.max_items, on_event=None if args.quiet else event,
+            autopilot=args.autopilot,
         )  # fmt: skip
     except ValueError as exc:
         raise UsageError(str(exc)) from None

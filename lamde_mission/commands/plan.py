@@ -21,6 +21,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "1 infeasible, 2 bad input.",
     )
     p.add_argument("map", help="map file (JSON)")
+    from lamde_mission.commands._common import add_origin_option
+
+    add_origin_option(p)
     p.add_argument("-o", "--output", required=True, metavar="OUT",
                    help="mission file to write (.plan, .waypoints or .geojson)")
     p.add_argument("--format", choices=("plan", "waypoints", "geojson"),
@@ -38,7 +41,14 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="use all I_max hover points (the paper's LAMDE-F ablation)")
     p.add_argument("--no-polish", action="store_true", help="skip the hover-time LP polish")
     p.add_argument("--finish", choices=("land", "rtl"), default="land",
-                   help="end the mission by landing at the end point or returning to launch")
+                   help="end the mission by landing at the end point or returning to launch "
+                   "(rtl: refused up front when the straight leg back to the start crosses an "
+                   "obstacle, which the planner does not route around)")
+    p.add_argument("--autopilot", choices=("px4", "ardupilot", "generic"), default="generic",
+                   help="write what this autopilot stores: lat/lon on the 1e-7 degree grid, "
+                   "float32 parameters, hover times in whole seconds (rounded up) for ardupilot "
+                   "and generic (a file either autopilot stores unchanged; default), float32 for "
+                   "px4. The summary and exit status are those of the stored mission")
     p.add_argument("--plot", metavar="PNG", help="also draw the mission (.png or .svg)")
     p.add_argument("--report", metavar="JSON", help="also write the plan and verdicts as JSON")
     p.add_argument("--allow-infeasible", action="store_true",
@@ -81,18 +91,31 @@ class _ProgressBar:
         self.stream.flush()
 
 
-def _summary(plan: Any, m: Any, timeline: Any, verdicts: Any,
-             out: str | list[str] | None) -> str:
+def _summary(
+    plan: Any, m: Any, timeline: Any, verdicts: Any, out: str | list[str] | None,
+    stored: Any = None,
+) -> str:
     b = plan.breakdown
     t = timeline.totals
+    who = "stored" if stored is not None else "sim"
+    t_compile = plan.timings.get("compile", 0.0)
+    compiling = f"; {t_compile:.1f} s compiling (or loading) the kernels" if t_compile > 0.05 \
+        else ""
     lines = [
         f"map '{m.name}': {plan.n_hover} hover points, {plan.evaluations} evaluations, "
-        f"{plan.wall_time:.2f} s (seed {plan.seed}, {plan.configurator})",
-        f"  flight time   {b['t_fly']:10.2f} s    (sim {t.t_fly:.2f} s)",
-        f"  hover time    {b['t_hover']:10.2f} s    (sim {t.t_hover:.2f} s)",
-        f"  f             {plan.f:10.2f}      (alpha {m.spec.objective.alpha:g})",
+        f"{plan.wall_time - plan.timings.get('compile', 0.0):.2f} s (seed {plan.seed}, "
+        f"{plan.configurator})" + compiling,
+        f"  flight time   {b['t_fly']:10.2f} s    ({who} {t.t_fly:.2f} s)",
+        f"  hover time    {b['t_hover']:10.2f} s    ({who} {t.t_hover:.2f} s)",
+        f"  f             {plan.f:10.2f}      ({who} {t.f:.2f}; alpha {m.spec.objective.alpha:g})",
         f"  phi           {plan.phi:10.4g}",
     ]
+    if stored is not None:
+        lines.append(
+            f"  stored as     {stored.dialect.name}: points moved <= "
+            f"{float(stored.moved_m.max(initial=0.0)) * 100:.2f} cm onto the 1e-7 degree grid, "
+            f"hover times +{float(stored.added_s.sum()):.3g} s in all"
+        )
     if plan.polish is not None:
         pol = plan.polish
         lines.append(f"  polish        f {pol['f_before']:.2f} -> {pol['f_after']:.2f}, "
@@ -103,8 +126,13 @@ def _summary(plan: Any, m: Any, timeline: Any, verdicts: Any,
     got = t.collected
     for sid in m.sensor_ids:
         ok = "ok" if got[sid] >= req[sid] else "SHORT"
-        lines.append(f"    {sid:<12} {got[sid]:10.1f} / {req[sid]:<8.1f} {ok}")
-    lines.append("  constraints (simulator):")
+        over = f"{100 * (got[sid] / req[sid] - 1):+.2f} %" if req[sid] > 0 else ""
+        lines.append(f"    {sid:<12} {got[sid]:10.1f} / {req[sid]:<8.1f} {ok:<5} {over}")
+    sf = m.spec.safety
+    lines.append(f"  safety: clearance {verdicts.clearance:.2f} m (asked {sf.clearance:g} m), "
+                 f"data margin asked {100 * sf.data_margin:g} %")
+    lines.append("  constraints (simulator) of the stored mission:" if stored is not None
+                 else "  constraints (simulator):")
     lines.extend("    " + row for row in verdicts.table().splitlines())
     if out:  # every file written: the mission, then the plot and report when asked
         lines.extend(f"wrote {path}" for path in ([out] if isinstance(out, str) else out))
@@ -129,8 +157,33 @@ def _violations(plan: Any, verdicts: Any) -> list[str]:
     return out
 
 
+def _check_return_leg(m: Any) -> None:
+    """`--finish rtl`: the vehicle flies straight back from the end point to the launch point,
+    a leg the paper's model (start -> hover points -> end) does not plan. Refuse up front, with
+    why, when that straight leg crosses an obstacle (inflated by the clearance), since no plan
+    could then make the mission safe; otherwise the leg is clear whatever the plan."""
+    import numpy as np
+
+    from lamde_mission.errors import UsageError
+    from sim.obstacles import obstacle_shapes, overlap_lengths
+
+    pm = m.planning_map()
+    shapes = obstacle_shapes(pm)
+    if not shapes:
+        return
+    over = overlap_lengths(np.array([m.end, m.start], dtype=float), shapes)[0]
+    hit = [shapes[k].label for k in np.flatnonzero(over > 1e-9)]
+    if hit:
+        raise UsageError(
+            "--finish rtl: RETURN_TO_LAUNCH flies straight from the end point back to the start, "
+            f"and that leg crosses {', '.join(hit[:4])}{' ...' if len(hit) > 4 else ''} "
+            f"(with the {m.spec.safety.clearance:g} m clearance); the planner plans start -> "
+            "hover points -> end only, so use --finish land (or move the end point)"
+        )
+
+
 def run(args: argparse.Namespace) -> int:
-    from lamde_mission.commands._common import load_map_or_fail
+    from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
     from lamde_mission.errors import UsageError
     from lamde_mission.formats import MissionFileError, format_for
 
@@ -146,12 +199,20 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:  # "population: must be ...": name the option as typed
         raise UsageError(f"--{exc}") from None
     m = load_map_or_fail(args.map)
+    m = with_origin_or_fail(m, args.origin)
+    if args.finish == "rtl":
+        _check_return_leg(m)
 
+    from lamde_mission.api import kernels_cached
     from lamde_mission.api import plan as make_plan
     from lamde_mission.formats import write_mission
     from lamde_mission.items import plan_to_items
+    from lamde_mission.storage import storable_plan, stored_items
     from sim import replay, verify
 
+    if not args.quiet and not kernels_cached():
+        print("compiling the planner's kernels (first run after install; they are cached on "
+              "disk for later runs)...", file=sys.stderr, flush=True)
     progress = None if args.quiet else _ProgressBar()
     plan = make_plan(
         m,
@@ -163,21 +224,36 @@ def run(args: argparse.Namespace) -> int:
         polish=not args.no_polish,
         progress=progress,
     )
-    items = plan_to_items(plan, m, finish=args.finish)
+    pm = m.planning_map()
+    stored = storable_plan(plan, m, args.autopilot, planning_map=pm, finish=args.finish)
+    items = stored_items(plan_to_items(stored, m, finish=args.finish), stored.dialect)
     timeline = replay(items, m)
     verdicts = verify(timeline, m)
-    feasible = plan.feasible and verdicts.passed
+    feasible = verdicts.passed
     if not feasible and not args.allow_infeasible:
         if not args.quiet:
-            print(_summary(plan, m, timeline, verdicts, None))
-        print(f"lamde-mission plan: no feasible mission found for {args.map} "
-              f"(budget {args.budget}, seed {args.seed}); nothing written:", file=sys.stderr)
+            print(_summary(plan, m, timeline, verdicts, None, stored))
+        if plan.feasible:  # the plan met the model; the mission as stored does not
+            print(f"lamde-mission plan: the plan for {args.map} is feasible, but not once stored "
+                  f"as {stored.dialect.name} stores it (1e-7 degree lat/lon, float32, hover "
+                  "time resolution); nothing written:", file=sys.stderr)  # fmt: skip
+        else:
+            print(f"lamde-mission plan: no feasible mission found for {args.map} "
+                  f"(budget {args.budget}, seed {args.seed}); nothing written:", file=sys.stderr)
         for line in _violations(plan, verdicts):
             print(f"  {line}", file=sys.stderr)
-        print("  try a larger --budget, another --seed, or --allow-infeasible to write it anyway",
-              file=sys.stderr)
+        if not plan.feasible:
+            from planner_core.diagnose import diagnose
+
+            fatal = [f.message for f in diagnose(m).findings if f.fatal]
+            for line in fatal:
+                print(f"  no plan can meet this map: {line}", file=sys.stderr)
+            if not fatal:
+                print("  try a larger --budget, another --seed, or --allow-infeasible to write "
+                      "it anyway", file=sys.stderr)  # fmt: skip
         return 1
-    write_mission(args.output, plan, m, fmt, finish=args.finish)
+    write_mission(args.output, stored, m, fmt, finish=args.finish, autopilot=args.autopilot,
+                  planning_map=pm)
     if args.plot:
         from lamde_mission.plot import plot_mission
 
@@ -186,11 +262,14 @@ def run(args: argparse.Namespace) -> int:
         from lamde_mission.atomic import write_text_atomic
 
         report = {"plan": plan.to_dict(), "verdicts": verdicts.to_dict(),
+                  "stored": {"autopilot": stored.dialect.name, "finish": args.finish,
+                             "hover_points": stored.hover_points.tolist(),
+                             "hover_times": stored.hover_times.tolist()},
                   "map": args.map, "output": args.output, "format": fmt}
         write_text_atomic(args.report, json.dumps(report, indent=2))
     if not args.quiet:
         print(_summary(plan, m, timeline, verdicts,
-                       [p for p in (args.output, args.plot, args.report) if p]))
+                       [p for p in (args.output, args.plot, args.report) if p], stored))
     if not feasible:
         print("lamde-mission plan: the mission is INFEASIBLE (written because of "
               "--allow-infeasible):", file=sys.stderr)

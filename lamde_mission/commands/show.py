@@ -15,6 +15,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "points sized by hover time and sensors coloured by the data collected.",
     )
     p.add_argument("map", help="map file (JSON)")
+    from lamde_mission.commands._common import add_origin_option
+
+    add_origin_option(p)
     p.add_argument("mission", nargs="?", help="mission file to draw on the map (optional)")
     p.add_argument("-o", "--output", required=True, help="image file to write (.png or .svg)")
     p.add_argument("--title", help="figure title (default: the map's name and f)")
@@ -23,7 +26,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
-    from lamde_mission.commands._common import load_map_or_fail
+    from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
     from lamde_mission.errors import UsageError
     from lamde_mission.plot import IMAGE_SUFFIXES
 
@@ -33,6 +36,7 @@ def run(args: argparse.Namespace) -> int:
     if args.dpi <= 0:
         raise UsageError(f"--dpi must be positive, got {args.dpi}")
     m = load_map_or_fail(args.map)
+    m = with_origin_or_fail(m, args.origin)
     timeline = None
     if args.mission:
         from lamde_mission.commands.verify import replay_mission_file

@@ -48,27 +48,35 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         metavar="N",
         help="retry a failed transfer as a whole up to N times in all (default: 3)",
     )
+    p.add_argument(
+        "--autopilot",
+        choices=("px4", "ardupilot", "generic"),
+        help="storage rules to upload and compare under (default: from the vehicle's "
+        "HEARTBEAT autopilot field). ardupilot: item 0 is a home placeholder, DO_JUMP targets "
+        "move with the items, hover times are whole seconds (rounded up)",
+    )
     p.add_argument("-v", "--verbose", action="store_true", help="print each step")
     return p
 
 
-def _read(path: str) -> tuple[list, list | None]:
-    """(mission, fence); the fence is None for a .waypoints file (it cannot hold one)."""
+def _read(path: str) -> tuple[list, list | None, list | None]:
+    """(mission, fence, rally); the fence is None for a .waypoints file (it cannot hold one),
+    the rally list None when the file has no rally points (the vehicle's are left alone)."""
     from lamde_mission.errors import UsageError
-    from lamde_mission.formats import MissionFileError, read_mission
+    from lamde_mission.formats import MissionFileError, read_mission_lists
 
     try:
-        mission, fence = read_mission(path)
+        mission, fence, rally = read_mission_lists(path)
     except MissionFileError as exc:
         raise UsageError(str(exc)) from None
     try:
-        with open(path, encoding="utf-8") as fh:
+        with open(path, encoding="utf-8-sig") as fh:
             waypoints = fh.read(64).lstrip().startswith("QGC WPL")
     except (OSError, UnicodeDecodeError):  # read_mission just read it
         waypoints = False
     if not mission:
         raise UsageError(f"{path}: the mission holds no items")
-    return mission, (None if waypoints else fence)
+    return mission, (None if waypoints else fence), (rally or None)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -86,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
             parse_endpoint(args.connect)
         except ValueError as exc:
             raise UsageError(f"--connect: {exc} (the pymavlink uploader speaks UDP only)") from None
-    mission, fence = _read(args.mission)
+    mission, fence, rally = _read(args.mission)
 
     def log(text: str) -> None:
         if args.verbose:
@@ -101,6 +109,8 @@ def run(args: argparse.Namespace) -> int:
             timeout=args.timeout,
             attempts=args.attempts,
             log=log,
+            rally=rally,
+            autopilot=args.autopilot,
         )
     except ValueError as exc:  # items MAVLink cannot carry
         raise UsageError(f"{args.mission}: {exc}") from None

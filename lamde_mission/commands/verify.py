@@ -18,6 +18,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "2 bad input.",
     )
     p.add_argument("map", help="map file (JSON)")
+    from lamde_mission.commands._common import add_origin_option
+
+    add_origin_option(p)
     p.add_argument("mission", help="mission file: .plan, .waypoints (or a plan result .json)")
     p.add_argument("--json", action="store_true", help="print verdicts and totals as JSON")
     return p
@@ -44,10 +47,11 @@ def replay_mission_file(path: str, m: Any) -> Any:
 
 
 def run(args: argparse.Namespace) -> int:
-    from lamde_mission.commands._common import load_map_or_fail
+    from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
     from sim import verify
 
     m = load_map_or_fail(args.map)
+    m = with_origin_or_fail(m, args.origin)
     timeline = replay_mission_file(args.mission, m)
     verdicts = verify(timeline, m)
     t = timeline.totals
@@ -63,6 +67,10 @@ def run(args: argparse.Namespace) -> int:
         print(f"mission {args.mission} on map '{m.name}': "
               f"{len(timeline.hover_times)} hover points")  # fmt: skip
         print(verdicts.table())
+        sf = m.spec.safety
+        margins = ", ".join(f"'{k}' {100 * v:+.3g} %" for k, v in verdicts.data_margins.items())
+        print(f"safety: clearance {verdicts.clearance:.3f} m (asked {sf.clearance:g} m); data "
+              f"margin per sensor (asked {100 * sf.data_margin:g} %): {margins}")
         print(f"f = {t.f:.6f}  (alpha {t.alpha:g}: t_fly {t.t_fly:.3f} s, "
               f"t_hover {t.t_hover:.3f} s)")  # fmt: skip
         print(f"mission time {t.t_total:.1f} s including take-off {t.t_takeoff:.1f} s, "

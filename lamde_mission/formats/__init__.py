@@ -6,11 +6,13 @@ by its content (a `.plan` JSON object or a "QGC WPL 110" text), whatever its suf
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, Literal
 
 from lamde_mission.geo import enu_to_latlon
-from lamde_mission.items import MissionError, MissionItem, geofence_items, plan_to_items
+from lamde_mission.items import CMD, MissionError, MissionItem, geofence_items, plan_to_items
+from lamde_mission.storage import DIALECTS, float32, float32_up, grid_degrees, stored_items
 from planner_core.textio import InputError, loads_json, read_json, read_text
 
 __all__ = [
@@ -19,6 +21,7 @@ __all__ = [
     "format_for",
     "write_mission",
     "read_mission",
+    "read_mission_lists",
     "load_mission_items",
     "home_of",
 ]
@@ -61,35 +64,65 @@ def write_mission(
     *,
     finish: Literal["land", "rtl"] = "land",
     fence: bool = True,
+    autopilot: str = "generic",
+    planning_map: Any = None,
 ) -> Path:
     """Write `plan` on `map` as a mission file (atomically) and return the path.
 
-    `.plan` holds the mission and (with `fence`) an exclusion geofence for every obstacle;
+    `.plan` holds the mission and (with `fence`) an exclusion geofence for every obstacle of
+    `map` (the uninflated shapes: a clearance is the planner's business, not the fence's);
     `.waypoints` holds the mission only; `.geojson` holds the map and plan for display.
+    Every number written is what `autopilot` (px4, ardupilot, generic) stores: the plan is
+    first made storable (`lamde_mission.storage.storable_plan`, on `planning_map` when the plan
+    was made on a map with safety margins; a no-op for a plan that already is), so lat/lon lie
+    on the 1e-7 degree grid, parameters are float32 values and hover times are rounded *up* to
+    whole seconds where the autopilot keeps whole seconds; storing the file changes nothing.
     """
+    from lamde_mission.storage import dialect_of, storable_plan, stored_items
+
+    dialect = dialect_of(autopilot)
     kind = format_for(path, fmt)
     if kind == "geojson":
         from lamde_mission.formats.geojson import write_geojson
 
         return write_geojson(path, plan, map)
-    items = plan_to_items(plan, map, finish=finish)
+    plan = storable_plan(plan, map, dialect, planning_map=planning_map, finish=finish)
+    items = stored_items(plan_to_items(plan, map, finish=finish), dialect)
+    home = home_of(map)
+    home = (float(grid_degrees(home[0])), float(grid_degrees(home[1])), float32(home[2]))
     if kind == "plan":
         from lamde_mission.formats.qgc_plan import write_qgc_plan
 
-        fence_items = geofence_items(map) if fence else []
-        v = float(map.spec.uav.max_speed)
-        return write_qgc_plan(path, items, fence_items, home=home_of(map), cruise_speed=v)
+        # an exclusion circle's float32 radius is rounded up, never shrinking the fence
+        fence_items = [replace(it, param1=float32_up(it.param1))
+                       if it.command == CMD.FENCE_CIRCLE_EXCLUSION else it
+                       for it in geofence_items(map)] if fence else []  # fmt: skip
+        fence_items = stored_items(fence_items, dialect)
+        v = float32(map.spec.uav.max_speed)
+        return write_qgc_plan(path, items, fence_items, home=home, cruise_speed=v,
+                              firmware_type=dialect.firmware_type)  # fmt: skip
     from lamde_mission.formats.waypoints import write_waypoints
 
-    return write_waypoints(path, items, home_of(map))
+    return write_waypoints(path, items, home)
 
 
 def read_mission(path: str | Path) -> tuple[list[MissionItem], list[MissionItem]]:
-    """(mission items, fence items) of a `.plan` or `.waypoints` file.
+    """(mission items, fence items) of a `.plan` or `.waypoints` file (`read_mission_lists`
+    also gives the rally points; an upload must use it, to leave nothing out).
 
     Raises MissionFileError, naming the file, for anything unreadable or unsupported
     (a GeoJSON file is refused: it is a display format without MAVLink commands).
     """
+    mission, fence, _rally = read_mission_lists(path)
+    return mission, fence
+
+
+def read_mission_lists(
+    path: str | Path,
+) -> tuple[list[MissionItem], list[MissionItem], list[MissionItem]]:
+    """(mission, fence, rally) items of a `.plan` or `.waypoints` file (a `.waypoints` file
+    has neither fence nor rally). A UTF-8 byte-order mark is accepted. MissionFileError naming
+    the file for anything unreadable or unsupported."""
     path = Path(path)
     try:
         text = read_text(path)
@@ -100,7 +133,7 @@ def read_mission(path: str | Path) -> tuple[list[MissionItem], list[MissionItem]
         if head.startswith("QGC WPL"):
             from lamde_mission.formats.waypoints import parse_waypoints
 
-            return parse_waypoints(text)[1], []
+            return parse_waypoints(text)[1], [], []
         if head.startswith("{"):
             try:
                 doc = loads_json(text)
@@ -111,9 +144,9 @@ def read_mission(path: str | Path) -> tuple[list[MissionItem], list[MissionItem]
                     "a GeoJSON file is a display export, not a mission; use the .plan or "
                     ".waypoints file written with it"
                 )
-            from lamde_mission.formats.qgc_plan import parse_plan_document
+            from lamde_mission.formats.qgc_plan import parse_plan_lists
 
-            return parse_plan_document(doc)
+            return parse_plan_lists(doc)
     except MissionError as exc:
         raise MissionFileError(f"{path}: {exc}") from None
     raise MissionFileError(
@@ -127,13 +160,18 @@ def load_mission_items(
     map: Any,  # noqa: A002
 ) -> tuple[list[MissionItem], list[MissionItem]]:
     """Like `read_mission`, and also accepts a saved plan result (JSON with hover_points and
-    hover_times, as `Plan.to_dict` writes), turned into items on `map` with `plan_to_items`."""
+    hover_times, as `Plan.to_dict` writes, or the report `plan --report` writes: its `stored`
+    mission), turned into items on `map` with `plan_to_items`."""
     path = Path(path)
     if path.suffix.lower() == ".json":
         try:
             doc = read_json(path)
         except InputError as exc:
             raise MissionFileError(f"{path}: {exc}") from None
+        if isinstance(doc, dict) and isinstance(doc.get("stored"), dict):
+            doc = doc["stored"]  # `plan --report`: the mission as written (storable plan)
+        elif isinstance(doc, dict) and isinstance(doc.get("plan"), dict):
+            doc = doc["plan"]  # an older report: the optimiser's plan
         if isinstance(doc, dict) and "hover_points" in doc and "hover_times" in doc:
             from types import SimpleNamespace
 
@@ -143,9 +181,12 @@ def load_mission_items(
                 plan = SimpleNamespace(hover_points=doc["hover_points"],
                                        hover_times=doc["hover_times"])  # fmt: skip
                 _check_plan_result(plan.hover_points, plan.hover_times)
-                items = plan_to_items(plan, map)
+                finish = "rtl" if doc.get("finish") == "rtl" else "land"
+                items = plan_to_items(plan, map, finish=finish)
                 for k, it in enumerate(items):
                     check_mission_item(it, lambda f, k=k: f"hover_points/hover_times: item {k} {f}")
+                if doc.get("autopilot") in DIALECTS:  # the report's stored mission, as written
+                    items = stored_items(items, doc["autopilot"])
                 return items, geofence_items(map)
             except MissionError as exc:
                 raise MissionFileError(f"{path}: {exc}") from None

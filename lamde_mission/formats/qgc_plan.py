@@ -17,6 +17,7 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -24,6 +25,7 @@ from lamde_mission.atomic import write_text_atomic
 from lamde_mission.formats.ranges import FLOAT32_MAX, check_item_count, check_mission_item
 from lamde_mission.items import (
     CMD,
+    FRAME,
     MISSION_TYPE,
     MissionError,
     MissionItem,
@@ -55,6 +57,8 @@ def _num(v: float) -> float | None:
 
 
 def _simple_item(it: MissionItem) -> dict[str, Any]:
+    if it.command == CMD.DO_JUMP:  # QGC's DO_JUMP param1 is the target's doJumpId (seq + 1)
+        it = replace(it, param1=it.param1 + 1)
     return {
         "AMSLAltAboveTerrain": None,
         "Altitude": _num(it.z),
@@ -73,7 +77,11 @@ def _fence_section(fence: Sequence[MissionItem]) -> dict[str, Any]:
         circles, polygons = fence_from_items(fence)
     except MissionError as exc:
         raise ValueError(str(exc)) from None
-    return {
+    section: dict[str, Any] = {}
+    ret = [it for it in fence if it.command == CMD.FENCE_RETURN_POINT]
+    if ret:
+        section["breachReturn"] = [float(ret[0].x), float(ret[0].y), float(ret[0].z)]
+    return section | {
         "circles": [
             {
                 "circle": {"center": [lat, lon], "radius": float(r)},
@@ -103,6 +111,7 @@ def plan_document(
     hover_speed: float | None = None,
     firmware_type: int = FIRMWARE_PX4,
     vehicle_type: int = VEHICLE_QUADROTOR,
+    rally: Sequence[MissionItem] = (),
 ) -> dict[str, Any]:
     """The `.plan` JSON object. `home` is (lat, lon, altitude AMSL) of the planned home."""
     if not items:
@@ -121,7 +130,8 @@ def plan_document(
             "vehicleType": int(vehicle_type),
             "version": 2,
         },
-        "rallyPoints": {"points": [], "version": 2},
+        "rallyPoints": {"points": [[float(r.x), float(r.y), float(r.z)] for r in rally],
+                        "version": 2},
         "version": 1,
     }
 
@@ -140,6 +150,26 @@ def _latlon_pair(v: Any, where: str) -> tuple[float, float]:
     return _float(v[0], where), _float(v[1], where)
 
 
+#: the section versions this reader understands (QGroundControl's plan format)
+VERSIONS = {"version": 1, "mission.version": 2, "geoFence.version": 2, "rallyPoints.version": 2}
+
+
+def _check_versions(doc: dict[str, Any]) -> None:
+    for path, want in VERSIONS.items():
+        node: Any = doc
+        *parents, key = path.split(".")
+        for p in parents:
+            node = node.get(p) if isinstance(node, dict) else None
+        if not isinstance(node, dict) or key not in node:
+            if parents:  # a missing optional section, or a section without a version: accepted
+                continue
+            raise MissionError(f"{path}: missing (a QGroundControl plan says its file version)")
+        got = node[key]
+        if got != want:
+            raise MissionError(f"{path}: version {got!r} is not supported (this reader knows "
+                               f"version {want})")  # fmt: skip
+
+
 def _plan_field(where: str, name: str) -> str:
     """The .plan name of a MissionItem field of item `where`."""
     params = {"param1": 0, "param2": 1, "param3": 2, "param4": 3, "x": 4, "y": 5, "z": 6}
@@ -149,14 +179,31 @@ def _plan_field(where: str, name: str) -> str:
 
 
 def parse_plan_document(doc: Any) -> tuple[list[MissionItem], list[MissionItem]]:
-    """Mission items and fence items of a `.plan` JSON object; raise MissionError if malformed."""
+    """Mission items and fence items of a `.plan` JSON object; raise MissionError if malformed.
+    (`parse_plan_lists` also gives the rally points.)"""
+    items, fence, _rally = parse_plan_lists(doc)
+    return items, fence
+
+
+def parse_plan_lists(
+    doc: Any,
+) -> tuple[list[MissionItem], list[MissionItem], list[MissionItem]]:
+    """(mission, fence, rally) items of a `.plan` JSON object; MissionError if malformed.
+
+    Unsupported file/section versions are refused naming the field. A DO_JUMP's param1 (a
+    `doJumpId` in QGC's files) becomes the target's sequence number in the mission list. The
+    geoFence's `breachReturn` becomes a FENCE_RETURN_POINT (5000) fence item, first; rally
+    points become RALLY_POINT (5100) items of MAV_MISSION_TYPE_RALLY.
+    """
     if not isinstance(doc, dict) or doc.get("fileType") != "Plan":
         raise MissionError('not a QGroundControl plan (fileType must be "Plan")')
+    _check_versions(doc)
     mission = doc.get("mission")
     if not isinstance(mission, dict) or not isinstance(mission.get("items"), list):
         raise MissionError("mission.items: missing or not a list")
     check_item_count(len(mission["items"]), "mission.items")
     items: list[MissionItem] = []
+    jump_ids: dict[int, int] = {}
     for k, raw in enumerate(mission["items"]):
         where = f"mission.items[{k}]"
         if not isinstance(raw, dict):
@@ -174,6 +221,8 @@ def parse_plan_document(doc: Any) -> tuple[list[MissionItem], list[MissionItem]]
             command, frame = raw["command"], raw["frame"]
         except KeyError as exc:
             raise MissionError(f"{where}.{exc.args[0]}: required field is missing") from None
+        if isinstance(raw.get("doJumpId"), int):
+            jump_ids[int(raw["doJumpId"])] = len(items)
         item = (
             MissionItem(
                 seq=len(items), command=command, frame=frame, current=0,
@@ -184,8 +233,37 @@ def parse_plan_document(doc: Any) -> tuple[list[MissionItem], list[MissionItem]]
         )  # fmt: skip
         check_mission_item(item, lambda f, w=where: _plan_field(w, f))
         items.append(item)
+    for k, it in enumerate(items):
+        if it.command == CMD.DO_JUMP:
+            target = jump_ids.get(int(it.param1)) if math.isfinite(it.param1) else None
+            if target is None:
+                raise MissionError(f"mission.items[{k}]: DO_JUMP targets doJumpId "
+                                   f"{it.param1!r}, which no item has")  # fmt: skip
+            items[k] = replace(it, param1=float(target))
+    from lamde_mission.formats.waypoints import check_mission_list
+
+    check_mission_list(items, "mission.items")
     fence = _parse_fence(doc.get("geoFence"))
-    return items, fence
+    rally = _parse_rally(doc.get("rallyPoints"))
+    return items, fence, rally
+
+
+def _parse_rally(rp: Any) -> list[MissionItem]:
+    if rp is None:
+        return []
+    if not isinstance(rp, dict):
+        raise MissionError("rallyPoints: not an object")
+    out = []
+    for k, p in enumerate(rp.get("points") or []):
+        where = f"rallyPoints.points[{k}]"
+        if not isinstance(p, list) or len(p) != 3:
+            raise MissionError(f"{where}: expected [lat, lon, alt]")
+        lat, lon = _latlon_pair(p, where)
+        alt = _float(p[2], where)
+        out.append(MissionItem(seq=len(out), command=CMD.RALLY_POINT,
+                               frame=FRAME.GLOBAL_RELATIVE_ALT, x=lat, y=lon, z=alt,
+                               mission_type=MISSION_TYPE.RALLY))  # fmt: skip
+    return out
 
 
 def _parse_fence(gf: Any) -> list[MissionItem]:
@@ -204,6 +282,16 @@ def _parse_fence(gf: Any) -> list[MissionItem]:
         out.append(it)
         check_item_count(len(out), "geoFence")
 
+    br = gf.get("breachReturn")
+    if br is not None:
+        if not isinstance(br, list) or len(br) != 3:
+            raise MissionError("geoFence.breachReturn: expected [lat, lon, alt]")
+        lat, lon = _latlon_pair(br, "geoFence.breachReturn")
+        alt = _float(br[2], "geoFence.breachReturn")
+        if not (math.isnan(lat) or math.isnan(lon)):
+            out.append(MissionItem(seq=0, command=CMD.FENCE_RETURN_POINT,
+                                   frame=FRAME.GLOBAL_RELATIVE_ALT, x=lat, y=lon, z=alt,
+                                   mission_type=MISSION_TYPE.FENCE))  # fmt: skip
     for k, poly in enumerate(gf.get("polygons") or []):
         where = f"geoFence.polygons[{k}]"
         verts = poly.get("polygon") if isinstance(poly, dict) else None

@@ -3,7 +3,9 @@
 One header line, then one tab-separated line per item:
 ``seq current frame command p1 p2 p3 p4 lat lon alt autocontinue``. Line 0 is the home
 position (ArduPilot convention: MAV_CMD_NAV_WAYPOINT, frame GLOBAL, altitude AMSL, current 1);
-our items follow as seq 1..N. The reader drops that home line and numbers items from 0 again.
+our items follow as seq 1..N. The reader drops that home line (only when row 0 is one) and
+numbers items from 0 again, DO_JUMP targets with them. Our own missions carry no DO_JUMP; a
+written DO_JUMP targets the row number (home = 0), as Mission Planner writes it.
 
 NaN parameters (our "keep yaw" values) are written as 0: the text format has no NaN that every
 reader accepts, and ArduPilot ignores the yaw parameter of TAKEOFF, WAYPOINT and LAND. Numbers
@@ -14,6 +16,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -22,8 +25,10 @@ from lamde_mission.atomic import write_text_atomic
 from lamde_mission.formats.ranges import check_item_count, check_mission_item
 from lamde_mission.items import CMD, FRAME, MISSION_TYPE, MissionError, MissionItem
 from planner_core.textio import InputError, limit, read_text
+from sim.mission import command_name
 
-__all__ = ["HEADER", "format_waypoints", "parse_waypoints", "write_waypoints", "read_waypoints"]
+__all__ = ["HEADER", "format_waypoints", "parse_waypoints", "write_waypoints", "read_waypoints",
+           "is_home_row", "check_mission_list"]
 
 HEADER = "QGC WPL 110"
 
@@ -51,7 +56,9 @@ def format_waypoints(items: Sequence[MissionItem], home: tuple[float, float, flo
         x=float(home[0]), y=float(home[1]), z=float(home[2]),
     )  # fmt: skip
     lines = [HEADER, _line(0, home_item)]
-    lines += [_line(k + 1, it) for k, it in enumerate(items)]
+    # DO_JUMP targets are row numbers in the file (home = row 0)
+    lines += [_line(k + 1, replace(it, param1=it.param1 + 1) if it.command == CMD.DO_JUMP else it)
+              for k, it in enumerate(items)]  # fmt: skip
     return "\n".join(lines) + "\n"
 
 
@@ -66,15 +73,21 @@ def _int(s: str) -> int:
     return int(s)
 
 
-def parse_waypoints(text: str) -> tuple[MissionItem, list[MissionItem]]:
-    """(home item, mission items numbered from 0) of `.waypoints` text; MissionError if bad."""
+def parse_waypoints(text: str) -> tuple[MissionItem | None, list[MissionItem]]:
+    """(home item, mission items numbered from 0) of `.waypoints` text; MissionError if bad.
+
+    Row 0 is dropped as the home line only when it is one (`is_home_row`), and DO_JUMP targets
+    (row numbers) are then renumbered to the list without it. The home item is None when the
+    file has no home line. A UTF-8 byte-order mark is accepted. Fence or rally commands
+    (5000-5004, 5100) in the list are refused: the file format holds a mission only.
+    """
     # a line per item, a home line, and room for blank or comment lines: refuse a huge file
     # before splitting it
     cap = limit("mission_items")
     if text.count("\n") > 2 * (cap + 1):
         raise MissionError(f"{text.count(chr(10)):,} lines, far more than the {cap:,} items "
                            "MAVLink can number (seq and count are uint16)")  # fmt: skip
-    lines = text.splitlines()
+    lines = text.removeprefix("\ufeff").splitlines()
     if not lines or lines[0].strip() != HEADER:
         found = lines[0].strip()[:40] if lines else ""
         raise MissionError(f"not a '{HEADER}' waypoint file (first line is {found!r})")
@@ -107,8 +120,30 @@ def parse_waypoints(text: str) -> tuple[MissionItem, list[MissionItem]]:
         check_item_count(len(rows) - 1, "the file")
     if not rows:
         raise MissionError("the file holds no items (not even the home line)")
+    if not is_home_row(rows[0]):
+        # no home line (a file another tool wrote): row 0 is a mission item and is kept
+        check_mission_list(rows, "row")
+        return None, [it.with_seq(k) for k, it in enumerate(rows)]
     home, items = rows[0], rows[1:]
-    return home, [it.with_seq(k) for k, it in enumerate(items)]
+    check_mission_list(items, "row")
+    out = []
+    for k, it in enumerate(items):
+        if it.command == CMD.DO_JUMP:
+            # targets count rows (home = row 0); the list without the home row starts at 0
+            target = int(it.param1) if math.isfinite(it.param1) else -1
+            if target < 1 or target > len(items):
+                raise MissionError(f"row {it.seq}: DO_JUMP targets row {target}, not a mission "
+                                   "item of this file")  # fmt: skip
+            it = replace(it, param1=float(target - 1))
+        out.append(it.with_seq(k))
+    return home, out
+
+
+def is_home_row(it: MissionItem) -> bool:
+    """Row 0 of a `.waypoints` file is the home position when it is a NAV_WAYPOINT in an
+    absolute-altitude global frame (what Mission Planner and ArduPilot write there)."""
+    return int(it.seq) == 0 and it.command == CMD.WAYPOINT and it.frame in (
+        FRAME.GLOBAL, FRAME.GLOBAL_INT)
 
 
 def write_waypoints(
@@ -125,3 +160,16 @@ def read_waypoints(path: str | Path) -> list[MissionItem]:
     except InputError as exc:
         raise MissionError(str(exc)) from None
     return parse_waypoints(text)[1]
+
+
+def check_mission_list(items: Sequence[MissionItem], what: str = "item") -> None:
+    """Refuse fence and rally commands in a mission list (MissionError naming the row): sent
+    as mission items they would replace the vehicle's mission with fence vertices."""
+    for it in items:
+        if it.command in CMD.FENCE_COMMANDS or it.command == CMD.RALLY_POINT:
+            kind = "rally" if it.command == CMD.RALLY_POINT else "fence"
+            raise MissionError(
+                f"{what} {it.seq}: {command_name(it.command)} ({it.command}) is a {kind} item, "
+                f"not a mission item; a mission list cannot carry it (put fences and rally "
+                "points in a QGroundControl .plan)"
+            )

@@ -1,6 +1,6 @@
 """A mock autopilot on pymavlink: the MAVLink mission protocol over UDP, no simulator needed.
 
-`MockVehicle` is a quadrotor (system 1, component 1, PX4 autopilot type) that speaks
+`MockVehicle` is a quadrotor (system 1, component 1) that speaks
 MAVLink 2 over UDP: HEARTBEAT at 1 Hz, AUTOPILOT_VERSION on request (MISSION_INT,
 MISSION_FENCE, MISSION_RALLY and MAVLINK2 capability bits), COMMAND_ACK, and the mission
 protocol for mission types MISSION, FENCE and RALLY:
@@ -17,6 +17,11 @@ protocol for mission types MISSION, FENCE and RALLY:
   MAV_MISSION_UNSUPPORTED (unknown mission type), MAV_MISSION_NO_SPACE (more than `max_items`),
   or the `reject` code for every MISSION_COUNT (to test how uploaders report a refusal).
 
+`autopilot="px4"` (default) stores what it is sent; `autopilot="ardupilot"` says
+MAV_AUTOPILOT_ARDUPILOTMEGA in its HEARTBEAT and stores a mission as ArduPilot does: item 0 is
+its home position (`home`), whatever was sent there, and NAV_LOITER_TIME's hover seconds are
+cut to a whole number.
+
 Every message has mission_type echoed. `loss` drops that fraction of outgoing messages (seeded),
 `latency_ms` delays them. Run it in a background thread (`with MockVehicle(...) as v:`) or in
 the foreground (`serve_forever`, what `lamde-mission mock-vehicle` does).
@@ -26,14 +31,16 @@ from __future__ import annotations
 
 import contextlib
 import heapq
+import math
 import random
 import select
 import socket
 import threading
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
+import numpy as np
 from pymavlink.dialects.v20 import common as mavlink2
 
 from lamde_mission.items import MISSION_TYPE, MissionItem
@@ -114,6 +121,8 @@ class MockVehicle:
         component_id: int = 1,
         corrupt: Callable[[WireItem], WireItem] | None = None,
         on_event: Callable[[str], None] | None = None,
+        autopilot: str = "px4",
+        home: tuple[float, float, float] = (-35.3632621, 149.1652374, 584.0),
     ) -> None:
         if not 0.0 <= loss < 1.0:
             raise ValueError(f"loss must be in [0, 1), got {loss!r}")
@@ -136,6 +145,10 @@ class MockVehicle:
         self.system_id = int(system_id)
         self.component_id = int(component_id)
         self.corrupt = corrupt
+        if autopilot not in ("px4", "ardupilot"):
+            raise ValueError(f"autopilot must be 'px4' or 'ardupilot', got {autopilot!r}")
+        self.autopilot = autopilot
+        self.home = tuple(float(v) for v in home)
         self.on_event = on_event
         self.stats = MockStats()
 
@@ -332,7 +345,9 @@ class MockVehicle:
     def _send_heartbeat(self) -> None:
         self._send(
             _m.MAVLink_heartbeat_message(
-                _m.MAV_TYPE_QUADROTOR, _m.MAV_AUTOPILOT_PX4,
+                _m.MAV_TYPE_QUADROTOR,
+                _m.MAV_AUTOPILOT_ARDUPILOTMEGA if self.autopilot == "ardupilot"
+                else _m.MAV_AUTOPILOT_PX4,
                 _m.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, 0, _m.MAV_STATE_STANDBY, 3,
             )
         )  # fmt: skip
@@ -456,6 +471,8 @@ class MockVehicle:
                             int(msg.autocontinue), msg.param1, msg.param2, msg.param3,
                             msg.param4, msg.x, msg.y, msg.z, t)
             )  # fmt: skip
+        if self.autopilot == "ardupilot" and t == MISSION_TYPE.MISSION:
+            item = self._ardupilot_stores(item)
         if self.corrupt is not None:
             item = self.corrupt(item)
         up.items.append(item)
@@ -469,6 +486,18 @@ class MockVehicle:
             self._ack(_m.MAV_MISSION_ACCEPTED, t, src)
         else:
             self._request(up, time.monotonic())
+
+    def _ardupilot_stores(self, item: WireItem) -> WireItem:
+        """What ArduPilot keeps of a mission item: item 0 is its home position (whatever was
+        sent), NAV_LOITER_TIME's hover seconds a whole number (uint16, fraction cut off)."""
+        if item.seq == 0:
+            lat, lon, alt = self.home
+            return WireItem(0, _m.MAV_FRAME_GLOBAL, _m.MAV_CMD_NAV_WAYPOINT, 0, 1, 0.0, 0.0,
+                            0.0, 0.0, int(round(lat * 1e7)), int(round(lon * 1e7)),
+                            float(np.float32(alt)), item.mission_type)  # fmt: skip
+        if item.command == _m.MAV_CMD_NAV_LOITER_TIME and math.isfinite(item.param1):
+            return replace(item, param1=float(min(max(int(item.param1), 0), 65535)))
+        return item
 
     def _on_mission_item(self, msg: object, src: tuple[int, int]) -> None:
         self._on_mission_item_int(msg, src, scaled=False)

@@ -13,18 +13,21 @@ retried: the vehicle would refuse again.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Protocol
 
 from pymavlink.dialects.v20 import common as mavlink2
 
-from lamde_mission.items import MISSION_TYPE, MissionItem
+from lamde_mission.items import CMD, FRAME, MISSION_TYPE, MissionItem
+from lamde_mission.storage import Dialect, dialect_for_autopilot, dialect_of
 from lamde_mission.vehicle.wire import (
     Difference,
     WireItem,
     compare_items,
+    from_wire,
     mission_type_name,
     wire_mission,
 )
@@ -151,6 +154,10 @@ class UploadReport:
     errors: list[str] = field(default_factory=list)  # one line per failed attempt
     notes: list[str] = field(default_factory=list)
     differences: list[Difference] = field(default_factory=list)
+    rally_items: int | None = None  # None: the rally points were left as they were
+    dialect: str | None = None  # px4 / ardupilot / generic: the storage rules compared under
+    #: the mission as last read back from the vehicle, in the file's numbering (no home item)
+    readback: list[MissionItem] = field(default_factory=list)
 
     def lines(self, max_differences: int = 20) -> list[str]:
         """The short report `lamde-mission upload` prints."""
@@ -166,6 +173,10 @@ class UploadReport:
             fence = "and cleared the fence (the file has none)"
         else:
             fence = f"and {self.fence_items} fence items"
+        if self.dialect is not None:
+            out.append(f"compared under {self.dialect}'s storage rules"
+                       + (" (item 0 is the vehicle's home position)"
+                          if self.dialect == "ardupilot" else ""))  # fmt: skip
         for k, err in enumerate(self.errors, start=1):
             out.append(f"attempt {k} of {self.max_attempts} failed: {err}")
         out.extend(f"note: {n}" for n in self.notes)
@@ -174,6 +185,10 @@ class UploadReport:
                 f"uploaded {self.mission_items} mission items {fence} in "
                 f"{self.upload_s:.2f} s (attempt {self.attempts} of {self.max_attempts})"
             )
+            if self.rally_items is None:
+                out.append("rally points left as they are (the file has none)")
+            else:
+                out.append(f"uploaded {self.rally_items} rally points")
             out.append(f"read back and compared in {self.verify_s:.2f} s: identical")
         elif self.differences:
             out.append(
@@ -182,6 +197,10 @@ class UploadReport:
             out.extend(f"  {d}" for d in self.differences[:max_differences])
             if len(self.differences) > max_differences:
                 out.append(f"  ... and {len(self.differences) - max_differences} more")
+            out.append(
+                f"on the vehicle now: the lists read back above ({len(self.readback)} mission "
+                "items), NOT the planned mission: do not fly it; upload again or clear it"
+            )
         return out
 
 
@@ -192,11 +211,63 @@ def _step(fn: Callable[[float], object], deadline: float, what: str) -> object:
     return fn(left)
 
 
+def mission_for_dialect(
+    mission: Sequence[MissionItem], dialect: Dialect
+) -> tuple[list[MissionItem], list[str]]:
+    """The mission list to send to an autopilot of `dialect`, and notes on what changed.
+
+    Whole-second dialects: a LOITER_TIME hover time with a fraction is rounded *up* (the
+    vehicle would cut it down, and the sensors would be short of data). ArduPilot: a home
+    placeholder goes first as item 0 (the vehicle overwrites it with its home position and
+    never flies it) and every DO_JUMP target moves up by one with the items.
+    """
+    out: list[MissionItem] = []
+    notes: list[str] = []
+    for it in mission:
+        if (dialect.whole_second_hover and it.command == CMD.LOITER_TIME
+                and math.isfinite(it.param1) and it.param1 != math.floor(it.param1)):
+            up = float(math.ceil(it.param1))
+            notes.append(f"item {it.seq}: hover time {it.param1:g} s rounded up to {up:g} s "
+                         f"({dialect.name} keeps whole seconds)")  # fmt: skip
+            it = replace(it, param1=up)
+        out.append(it)
+    if dialect.home_item:
+        first = next((it for it in out if it.frame != FRAME.MISSION
+                      and not (it.x == 0 and it.y == 0)), None)  # fmt: skip
+        home = MissionItem(seq=0, command=CMD.WAYPOINT, frame=FRAME.GLOBAL,
+                           x=first.x if first else 0.0, y=first.y if first else 0.0, z=0.0)
+        out = [home] + [replace(it, param1=it.param1 + 1) if it.command == CMD.DO_JUMP else it
+                        for it in out]  # fmt: skip
+        notes.append("item 0 is a home placeholder (ArduPilot keeps its home there); the "
+                     "mission follows as items 1..n, DO_JUMP targets moved with them")
+    return [it.with_seq(k) for k, it in enumerate(out)], notes
+
+
+def mission_from_dialect(items: Sequence[MissionItem], home_item: bool) -> list[MissionItem]:
+    """A read-back in the file's numbering: without the home item, DO_JUMP targets back."""
+    if not home_item:
+        return list(items)
+    out = [replace(it, param1=it.param1 - 1) if it.command == CMD.DO_JUMP else it
+           for it in items[1:]]  # fmt: skip
+    return [it.with_seq(k) for k, it in enumerate(out)]
+
+
+def check_mission_list(mission: Sequence[MissionItem]) -> None:
+    """ValueError for fence or rally commands in a mission list (they would replace the
+    vehicle's mission with fence vertices)."""
+    for it in mission:
+        if it.command in CMD.FENCE_COMMANDS or it.command == CMD.RALLY_POINT:
+            raise ValueError(f"mission item {it.seq}: command {it.command} is a fence/rally "
+                             "item, not a mission item; send it in the fence or rally list")
+
+
 def upload_and_verify(
     client: MissionClient,
     mission: Sequence[MissionItem],
     fence: Sequence[MissionItem] | None = (),
     *,
+    rally: Sequence[MissionItem] | None = None,
+    autopilot: str | None = None,
     timeout: float = 30.0,
     attempts: int = 3,
     endpoint: str = "",
@@ -204,7 +275,12 @@ def upload_and_verify(
 ) -> UploadReport:
     """Upload `mission` and `fence` through `client`, read both back and compare them.
 
-    `fence=None` leaves the vehicle's fence alone; an empty fence clears it. Connecting may
+    `fence=None` leaves the vehicle's fence alone; an empty fence clears it; `rally=None` leaves
+    the rally points alone. The storage rules (`autopilot`: px4, ardupilot, generic) come from
+    the vehicle's HEARTBEAT unless given: for ArduPilot a home placeholder goes first and DO_JUMP
+    targets move with the items (`mission_for_dialect`), and the read-back is compared under
+    those rules (item 0, the vehicle's home, is not compared); `report.readback` holds it in
+    the file's numbering. Connecting may
     take up to `timeout` s, and so may each attempt. Returns the report on success; raises
     NoVehicleError, MissionRejectedError, TransferError or ReadbackMismatchError (each with
     `.report`) on failure. ValueError for items MAVLink cannot carry.
@@ -215,10 +291,12 @@ def upload_and_verify(
         raise ValueError(f"timeout must be > 0, got {timeout}")
     if not mission:
         raise ValueError("the mission is empty")
-    up_mission = wire_mission(mission, MISSION_TYPE.MISSION)
+    check_mission_list(mission)
+    wire_mission(mission, MISSION_TYPE.MISSION)  # what MAVLink cannot carry: before connecting
     up_fence = None if fence is None else wire_mission(fence, MISSION_TYPE.FENCE)
+    up_rally = None if rally is None else wire_mission(rally, MISSION_TYPE.RALLY)
     report = UploadReport(
-        via=client.name, endpoint=endpoint, mission_items=len(up_mission),
+        via=client.name, endpoint=endpoint, mission_items=len(mission),
         fence_items=None if up_fence is None else len(up_fence), max_attempts=attempts,
     )  # fmt: skip
     say = log or (lambda _s: None)
@@ -226,6 +304,14 @@ def upload_and_verify(
     try:
         t0 = time.monotonic()
         report.vehicle = client.connect(timeout)
+        dialect = (dialect_of(autopilot) if autopilot is not None
+                   else dialect_for_autopilot(report.vehicle.autopilot))  # fmt: skip
+        report.dialect = dialect.name
+        sent, notes = mission_for_dialect(mission, dialect)
+        report.notes.extend(notes)
+        up_mission = wire_mission(sent, MISSION_TYPE.MISSION)
+        report.mission_items = len(up_mission)
+        report.rally_items = None if up_rally is None else len(up_rally)
         report.connect_s = time.monotonic() - t0
         say(f"connected to {report.vehicle.describe()} in {report.connect_s:.2f} s")
         last: VehicleError | None = None
@@ -233,7 +319,8 @@ def upload_and_verify(
             report.attempts = attempt
             report.differences = []
             try:
-                _attempt(client, up_mission, up_fence, timeout, report, say)
+                _attempt(client, up_mission, up_fence, up_rally, timeout, report, say,
+                         home_item=dialect.home_item)  # fmt: skip
                 report.ok = True
                 return report
             except MissionRejectedError as exc:
@@ -258,9 +345,12 @@ def _attempt(
     client: MissionClient,
     mission: list[WireItem],
     fence: list[WireItem] | None,
+    rally: list[WireItem] | None,
     timeout: float,
     report: UploadReport,
     say: Callable[[str], None],
+    *,
+    home_item: bool = False,
 ) -> None:
     deadline = time.monotonic() + timeout
     unconfirmed: list[str] = []
@@ -268,6 +358,8 @@ def _attempt(
     lists = [(MISSION_TYPE.MISSION, mission)]
     if fence is not None:
         lists.append((MISSION_TYPE.FENCE, fence))
+    if rally is not None:
+        lists.append((MISSION_TYPE.RALLY, rally))
     for t, items in lists:
         what = f"{mission_type_name(t)} upload"
         try:
@@ -287,7 +379,12 @@ def _attempt(
         got = _step(
             lambda left, t=t: client.download(t, left), deadline, f"{mission_type_name(t)} download"
         )
-        diffs += compare_items(items, got, mission_type_name(t))
+        found = compare_items(items, got, mission_type_name(t))
+        if t == MISSION_TYPE.MISSION:
+            if home_item:  # the vehicle writes its home position into item 0
+                found = [d for d in found if d.index != 0]
+            report.readback = mission_from_dialect([from_wire(w) for w in got], home_item)
+        diffs += found
     report.verify_s = time.monotonic() - t0
     report.differences = diffs
     if diffs and unconfirmed:

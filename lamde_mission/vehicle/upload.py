@@ -10,8 +10,10 @@ Conventions (see `wire.py`): items go up numbered 0..n-1 with item 0 marked curr
 read-back is compared item by item after MAVLink's int32/float32 conversions. `.waypoints`
 files: the home line (seq 0 of the file) is not uploaded; `read_mission` drops it and the
 mission starts at seq 0 with our first item, exactly as the `.plan` of the same plan does, so
-both formats upload and read back the same items. (ArduPilot overwrites mission item 0 with its
-home position; this uploader targets PX4-style vehicles and the mock, which keep item 0.)
+both formats upload and read back the same items. For an ArduPilot vehicle (HEARTBEAT autopilot
+MAV_AUTOPILOT_ARDUPILOTMEGA, or `autopilot="ardupilot"`) a home placeholder goes up first as
+item 0, which ArduPilot overwrites with its home and never flies, and DO_JUMP targets move up
+with the items; the read-back is compared under its storage rules.
 """
 
 from __future__ import annotations
@@ -276,11 +278,16 @@ def upload_mission(
     timeout: float = 30.0,
     attempts: int = 3,
     log: Callable[[str], None] | None = None,
+    rally: Sequence[MissionItem] | None = None,
+    autopilot: str | None = None,
 ) -> UploadReport:
     """Upload a mission and its fence to the vehicle at `connect`, read both back, compare.
 
     `fence=None` leaves the vehicle's fence alone (a `.waypoints` file has none); an empty
-    fence clears it. Waits up to `timeout` s for the vehicle and up to `timeout` s per attempt;
+    fence clears it. `rally` (MISSION_TYPE_RALLY items; None leaves the vehicle's alone) goes up
+    as the rally list. `autopilot` (px4, ardupilot, generic) overrides the storage rules read
+    from the vehicle's HEARTBEAT (`transfer.upload_and_verify`). Waits up to `timeout` s for
+    the vehicle and up to `timeout` s per attempt;
     a failed attempt (time-out, lost messages, read-back difference) is retried as a whole up
     to `attempts` times. Returns the report; raises a `VehicleError` subclass (NoVehicleError,
     MissionRejectedError, TransferError, ReadbackMismatchError; `.report` attached) on failure,
@@ -293,7 +300,8 @@ def upload_mission(
     client = make_client(via, connect)
     try:
         return upload_and_verify(
-            client, mission, fence, timeout=timeout, attempts=attempts, endpoint=connect, log=log
-        )
+            client, mission, fence, rally=rally, autopilot=autopilot, timeout=timeout,
+            attempts=attempts, endpoint=connect, log=log,
+        )  # fmt: skip
     finally:
         client.close()

@@ -286,6 +286,7 @@ def build_report(
         "significantly better, `-` significantly worse, `~` no significant difference.",
         "- Our DE variants report the raw DE result (no hover-time polish), so the comparison "
         "is on the optimiser alone.",
+        _safety_line(suite_dir, tasks),
         "",
         "| Optimiser | What it is |",
         "|---|---|",
@@ -383,6 +384,30 @@ def _mean_ranks(table: ScoreTable) -> dict[str, float]:
         for o, v in zip(present, r, strict=True):
             acc[o].append(float(v))
     return {o: float(np.mean(acc[o])) if acc[o] else math.nan for o in table.optimisers}
+
+
+def _safety_line(suite_dir: Path | None, tasks: Sequence[str]) -> str:
+    """What the task files say about safety margins (the suite's: zero, the paper's model)."""
+    from planner_core.bench.limits import suite_task_files
+    from planner_core.mapio import MapError, load_map
+
+    if suite_dir is None or not Path(suite_dir).is_dir():
+        return "- Safety margins: unknown (the suite folder is not here to read them from)."
+    files = suite_task_files(suite_dir)
+    margins = {}
+    for t in tasks:
+        if t in files:
+            try:
+                sf = load_map(files[t]).spec.safety
+            except MapError:
+                continue
+            margins[t] = (sf.clearance, sf.data_margin)
+    if margins and all(v == (0.0, 0.0) for v in margins.values()):
+        return ("- Safety margins: none. Every task file says `\"safety\": {\"clearance\": 0, "
+                "\"data_margin\": 0}`: the paper's model exactly as it stands.")
+    other = ", ".join(f"{t} clearance {c:g} m / data margin {100 * q:g} %"
+                      for t, (c, q) in margins.items() if (c, q) != (0.0, 0.0))
+    return f"- Safety margins (planned on the inflated map): {other}."
 
 
 def _limits_section(tasks: list[str], opts: list[str], by: Any, suite_dir: Path | None,

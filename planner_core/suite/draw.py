@@ -436,6 +436,8 @@ class Draw:
                 "no_fly_zones": [{"vertices": [xy(v) for v in p]} for p in self.nfz],
             },
             "uav": {"max_hover_points": self.imax},
+            # benchmark maps state the paper's model as it is: no safety margins
+            "safety": {"clearance": 0, "data_margin": 0},
             "witness": {
                 "hover_points": [xy(p) for p in self.hover],
                 "hover_times": [float(t) for t in self.times],

@@ -1,0 +1,330 @@
+"""What an autopilot stores of a mission, and a plan made storable before it is written or sent.
+
+A vehicle does not keep a mission's numbers as a planner computes them (MAVLink's
+MISSION_ITEM_INT, the common mission protocol):
+
+- latitude and longitude are int32 in 1e-7 degree (~1.1 cm north-south), in every global frame;
+- param1..param4 and the altitude z are float32 (24-bit mantissa, relative step ~6e-8);
+- ArduPilot keeps NAV_LOITER_TIME's param1 (hover seconds) in a 16-bit integer: whole seconds,
+  the fraction cut off (AP_Mission converts the float to an unsigned integer). PX4 keeps it as a
+  float. ArduPilot also uses mission item 0 as the home position and never flies it.
+
+A plan exactly on the paper's constraint boundary (the hover-time LP puts it there) breaks C4
+once stored that way. `storable_plan` moves each hover point to a point of the 1e-7 degree grid
+(choosing, among the nearest grid points, one that keeps the legs clear of obstacles, the hover
+point in the area and its bandwidth within R_lambda) and raises hover times just enough, then
+rounds them *up* to what the autopilot stores. The result is judged by the sim on the stored
+items (`stored_items`), never on the planner's own numbers.
+
+Dialects (`DIALECTS`): "px4" (item 0 flown, hover time float32), "ardupilot" (item 0 = home,
+hover time whole seconds) and "generic" (no home item, whole-second hover times: a file that
+stores unchanged on either autopilot; QGroundControl firmwareType 0).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from types import SimpleNamespace
+from typing import Any, Literal
+
+import numpy as np
+from pymavlink import mavutil
+
+from lamde_mission.geo import enu_to_latlon, latlon_to_enu
+from lamde_mission.items import CMD, MissionItem, plan_to_items
+
+__all__ = [
+    "Dialect",
+    "DIALECTS",
+    "AUTOPILOTS",
+    "dialect_of",
+    "dialect_for_autopilot",
+    "LATLON_SCALE",
+    "grid_degrees",
+    "float32",
+    "float32_up",
+    "hover_time_up",
+    "stored_item",
+    "stored_items",
+    "StorablePlan",
+    "storable_plan",
+]
+
+_m = mavutil.mavlink
+
+#: MISSION_ITEM_INT x/y: degrees x 1e7 as int32
+LATLON_SCALE = 1e7
+
+#: frames whose x/y are latitude/longitude
+_GLOBAL_FRAMES = frozenset({0, 3, 5, 6, 10, 11})
+
+
+@dataclass(frozen=True)
+class Dialect:
+    """How one autopilot family stores a mission.
+
+    `home_item`: mission item 0 is the home position (not flown) and our items start at 1.
+    `whole_second_hover`: LOITER_TIME param1 is stored as whole seconds (truncated).
+    `autopilot`: the MAV_AUTOPILOT value of its HEARTBEAT; `firmware_type`: QGroundControl's
+    `.plan` firmwareType (the same enum).
+    """
+
+    name: str
+    home_item: bool
+    whole_second_hover: bool
+    autopilot: int
+
+    @property
+    def firmware_type(self) -> int:
+        return self.autopilot
+
+
+DIALECTS: dict[str, Dialect] = {
+    "px4": Dialect("px4", False, False, _m.MAV_AUTOPILOT_PX4),
+    "ardupilot": Dialect("ardupilot", True, True, _m.MAV_AUTOPILOT_ARDUPILOTMEGA),
+    "generic": Dialect("generic", False, True, _m.MAV_AUTOPILOT_GENERIC),
+}
+AUTOPILOTS = tuple(DIALECTS)
+
+
+def dialect_of(name: str | Dialect) -> Dialect:
+    """The Dialect named `name` (px4, ardupilot, generic); ValueError naming the choices."""
+    if isinstance(name, Dialect):
+        return name
+    key = str(name).strip().lower()
+    if key not in DIALECTS:
+        raise ValueError(f"unknown autopilot {name!r} (choose {', '.join(AUTOPILOTS)})")
+    return DIALECTS[key]
+
+
+def dialect_for_autopilot(autopilot: int | str | None) -> Dialect:
+    """The dialect of a HEARTBEAT's autopilot field (a MAV_AUTOPILOT number or name such as
+    "ARDUPILOTMEGA" / "PX4"); anything else is "generic"."""
+    if autopilot is None:
+        return DIALECTS["generic"]
+    if isinstance(autopilot, str):
+        name = autopilot.upper().removeprefix("MAV_AUTOPILOT_")
+        if name in ("ARDUPILOTMEGA", "ARDUPILOT"):
+            return DIALECTS["ardupilot"]
+        if name == "PX4":
+            return DIALECTS["px4"]
+        return DIALECTS["generic"]
+    if int(autopilot) == _m.MAV_AUTOPILOT_ARDUPILOTMEGA:
+        return DIALECTS["ardupilot"]
+    if int(autopilot) == _m.MAV_AUTOPILOT_PX4:
+        return DIALECTS["px4"]
+    return DIALECTS["generic"]
+
+
+# ----------------------------------------------------------------------------- storage rules
+
+
+def grid_degrees(v: Any) -> Any:
+    """Degrees on the int32 1e-7 degree grid (round to nearest), as MISSION_ITEM_INT carries."""
+    a = np.asarray(v, dtype=float)
+    out = np.round(a * LATLON_SCALE) / LATLON_SCALE
+    return float(out) if np.ndim(out) == 0 else out
+
+
+def float32(v: float) -> float:
+    """`v` as float32 stores it (round to nearest; NaN stays NaN)."""
+    v = float(v)
+    return v if math.isnan(v) else float(np.float32(v))
+
+
+def float32_up(v: float) -> float:
+    """The smallest float32 value >= v."""
+    v = float(v)
+    f = np.float32(v)
+    if float(f) < v:
+        f = np.nextafter(f, np.float32(np.inf))
+    return float(f)
+
+
+def _float32_down(v: float) -> float:
+    f = np.float32(v)
+    if float(f) > v:
+        f = np.nextafter(f, np.float32(-np.inf))
+    return float(f)
+
+
+def hover_time_up(t: float, dialect: Dialect | str, t_max: float | None = None) -> float:
+    """The smallest hover time >= t that `dialect` stores unchanged, at most `t_max` (then the
+    largest storable value <= t_max): whole seconds for ArduPilot-style storage, else float32."""
+    d = dialect_of(dialect)
+    t = max(float(t), 0.0)
+    if d.whole_second_hover:
+        up = float(math.ceil(t - 1e-12 * max(t, 1.0)))  # 3.0000000000001 s is 3 s of noise
+        up = max(up, 0.0)
+        if t_max is not None and up > t_max:
+            up = float(math.floor(t_max))
+        return up
+    up = float32_up(t)
+    if t_max is not None and up > t_max:
+        up = _float32_down(t_max)
+    return up
+
+
+def stored_item(item: MissionItem, dialect: Dialect | str) -> MissionItem:
+    """`item` as the autopilot stores it: lat/lon on the 1e-7 degree grid (global frames),
+    params and altitude as float32, and for whole-second dialects LOITER_TIME's param1 cut to
+    whole seconds (as ArduPilot's uint16 conversion does)."""
+    d = dialect_of(dialect)
+    p1 = item.param1
+    if d.whole_second_hover and item.command == CMD.LOITER_TIME and math.isfinite(p1):
+        p1 = float(min(max(math.floor(float32(p1)), 0), 65535))
+    kw: dict[str, float] = {
+        "param1": float32(p1),
+        "param2": float32(item.param2),
+        "param3": float32(item.param3),
+        "param4": float32(item.param4),
+        "z": float32(item.z),
+    }
+    if item.frame in _GLOBAL_FRAMES:
+        for k in ("x", "y"):
+            v = getattr(item, k)
+            kw[k] = v if math.isnan(v) else grid_degrees(v)
+    return replace(item, **kw)
+
+
+def stored_items(items: Sequence[MissionItem], dialect: Dialect | str) -> list[MissionItem]:
+    """Every item as the autopilot stores it (see `stored_item`)."""
+    d = dialect_of(dialect)
+    return [stored_item(it, d) for it in items]
+
+
+# ----------------------------------------------------------------------------- storable plans
+
+
+@dataclass(frozen=True, eq=False)
+class StorablePlan:
+    """Hover points on the 1e-7 degree grid (local metres) and hover times the autopilot stores
+    unchanged; `moved_m` is how far each point moved, `added_s` the hover seconds added."""
+
+    hover_points: np.ndarray
+    hover_times: np.ndarray
+    dialect: Dialect
+    moved_m: np.ndarray
+    added_s: np.ndarray
+
+    @property
+    def n_hover(self) -> int:
+        return len(self.hover_times)
+
+
+def _grid_point(map_: Any, p: np.ndarray) -> np.ndarray:
+    """The local position of the grid point nearest to `p`."""
+    lat, lon = enu_to_latlon(p[0], p[1], map_)
+    e, n = latlon_to_enu(grid_degrees(lat), grid_degrees(lon), map_)
+    return np.array([float(e), float(n)])
+
+
+def _candidates(map_: Any, p: np.ndarray, reach: int) -> np.ndarray:
+    """Grid points around `p` (local metres), nearest first."""
+    lat, lon = enu_to_latlon(p[0], p[1], map_)
+    i0 = math.floor(float(lat) * LATLON_SCALE)
+    j0 = math.floor(float(lon) * LATLON_SCALE)
+    steps = range(-reach + 1, reach + 1)
+    la = np.array([(i0 + di) / LATLON_SCALE for di in steps for _ in steps])
+    lo = np.array([(j0 + dj) / LATLON_SCALE for _ in steps for dj in steps])
+    e, n = latlon_to_enu(la, lo, map_)
+    pts = np.column_stack([e, n])
+    order = np.argsort(np.hypot(*(pts - p).T), kind="stable")
+    return pts[order]
+
+
+def storable_plan(
+    plan: Any,
+    map: Any,  # noqa: A002 - the project's name for it
+    dialect: Dialect | str = "generic",
+    *,
+    planning_map: Any = None,
+    finish: Literal["land", "rtl"] = "land",
+) -> StorablePlan:
+    """`plan` (hover_points I x 2 m, hover_times s) made exactly storable by `dialect`.
+
+    Each hover point moves to a nearby 1e-7 degree grid point whose legs (from the previous,
+    already stored, point and to the next) stay out of the obstacles of `planning_map` (the
+    map the plan was made on: the obstacles inflated by the clearance; default `map`), that
+    lies in the area (C1) and keeps its rates within R_lambda (C3); the nearest such point of a
+    growing neighbourhood (up to 4 steps), else the nearest grid point. Hover times are then
+    raised, where the sim finds a sensor short of `planning_map`'s required data (which
+    includes the data margin), at the hover point with the best rate to it, and rounded up to
+    the dialect's storage (`hover_time_up`, never above T_max). Every check uses the sim's
+    own geometry and replay on the stored items.
+    """
+    from sim.obstacles import obstacle_shapes, overlap_lengths
+    from sim.replay import hover_rates, replay
+
+    d = dialect_of(dialect)
+    pm = map if planning_map is None else planning_map
+    hp = np.asarray(plan.hover_points, dtype=float).reshape(-1, 2)
+    ht = np.asarray(plan.hover_times, dtype=float).reshape(-1)
+    spec = pm.spec
+    W, H = spec.area.width, spec.area.height
+    alt = float32(spec.uav.altitude)
+    sensors = np.asarray(pm.sensors, dtype=float)
+    bw = float(spec.radio.bandwidth)
+    shapes = obstacle_shapes(pm)
+    start = _grid_point(map, np.asarray(map.start, dtype=float))
+    end = _grid_point(map, np.asarray(map.end, dtype=float))
+
+    def ok(prev: np.ndarray, q: np.ndarray, nxt: np.ndarray) -> bool:
+        if not (0.0 <= q[0] <= W and 0.0 <= q[1] <= H):
+            return False
+        rates = hover_rates(q[None, :], np.array([alt]), sensors, spec.radio.peak_rate,
+                            spec.radio.decay)  # fmt: skip
+        if rates.sum() > bw:
+            return False
+        if shapes:
+            over = overlap_lengths(np.array([prev, q, nxt]), shapes)
+            if float(over.sum()) > 1e-9:
+                return False
+        return True
+
+    points = np.empty_like(hp)
+    prev = start
+    for i, p in enumerate(hp):
+        nxt = hp[i + 1] if i + 1 < len(hp) else end
+        chosen = None
+        for reach in (1, 2, 4):
+            for q in _candidates(map, p, reach):
+                if ok(prev, q, nxt):
+                    chosen = q
+                    break
+            if chosen is not None:
+                break
+        points[i] = chosen if chosen is not None else _grid_point(map, p)
+        prev = points[i]
+
+    t_max = float(spec.uav.max_hover_time)
+    times = np.array([hover_time_up(t, d, t_max) for t in ht])
+    need = np.asarray(pm.required_data, dtype=float)
+    for _ in range(8):
+        items = plan_to_items(SimpleNamespace(hover_points=points, hover_times=times), map,
+                              finish=finish)  # fmt: skip
+        tl = replay(stored_items(items, d), map)
+        short = need - tl.collected
+        if len(times) == 0 or not np.any(short > 0.0):
+            break
+        R = tl.rates  # (I, J) at the stored positions and altitude
+        raw = times.copy()
+        for j in np.argsort(-short):
+            if short[j] <= 0.0:
+                continue
+            room = raw < t_max
+            if not np.any(room & (R[:, j] > 0)):
+                continue
+            i = int(np.argmax(np.where(room, R[:, j], -1.0)))
+            extra = short[j] / R[i, j] * (1.0 + 1e-9) + 1e-9
+            raw[i] = min(raw[i] + extra, t_max)
+        times = np.array([hover_time_up(t, d, t_max) for t in raw])
+    return StorablePlan(
+        hover_points=points,
+        hover_times=times,
+        dialect=d,
+        moved_m=np.hypot(*(points - hp).T) if len(hp) else np.zeros(0),
+        added_s=times - ht,
+    )

@@ -1,0 +1,135 @@
+"""Safety margins are a transformation of the map: obstacles inflated by `safety.clearance`,
+required data raised by `safety.data_margin`, the paper's model unchanged."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import shapely
+
+import lamde_mission
+from lamde_mission.items import geofence_items, plan_to_items
+from lamde_mission.storage import storable_plan, stored_items
+from planner_core.mapio import DEFAULT_CLEARANCE, DEFAULT_DATA_MARGIN, load_map
+from planner_core.problem import Problem
+from sim import replay, verify
+from sim.obstacles import obstacle_shapes
+from tests.conftest import SUITE
+
+
+def _default_margins(task: str) -> dict:
+    d = json.loads((SUITE / f"{task}.json").read_text())
+    d.pop("safety")  # the documented defaults
+    d.pop("witness")
+    return d
+
+
+def _flown_distance(m, timeline) -> np.ndarray:
+    """Per obstacle: the shortest distance (m) of the flown path, by shapely."""
+    path = shapely.linestrings(timeline.path)
+    return np.array([shapely.distance(path, o.shape) for o in obstacle_shapes(m)])
+
+
+def _check_clearance(task: str) -> None:
+    m = load_map(_default_margins(task))
+    assert m.spec.safety.clearance == DEFAULT_CLEARANCE >= 5.0
+    plan = lamde_mission.plan(m, seed=0, budget=5000)
+    sp = storable_plan(plan, m, "px4", planning_map=m.planning_map())
+    tl = replay(stored_items(plan_to_items(sp, m), "px4"), m)
+    v = verify(tl, m)
+    assert v.passed, v.table()
+    dist = _flown_distance(m, tl)
+    force = np.array(m.obstacle_clearances)
+    assert np.all(dist >= force), (task, float((dist - force).min()))
+    assert np.all(force == DEFAULT_CLEARANCE)  # no suite start/end is that close to a building
+    assert v.clearance == pytest.approx(dist.min())
+    got = np.array([v.data_margins[s] for s in m.sensor_ids])
+    assert np.all(got >= DEFAULT_DATA_MARGIN - 1e-6)
+
+
+@pytest.mark.parametrize("task", ["T01", "T08"])
+def test_default_clearance_is_kept_on_suite_maps(task):
+    _check_clearance(task)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("task", [f"T{k:02d}" for k in range(1, 17)])
+def test_default_clearance_is_kept_on_every_suite_map(task):
+    _check_clearance(task)
+
+
+def test_zero_margins_score_exactly_as_the_paper_model():
+    m = load_map(SUITE / "T03.json")
+    assert m.spec.safety.clearance == 0 and m.spec.safety.data_margin == 0
+    assert m.planning_map() is m
+    X = np.random.default_rng(0).random((50, Problem(m).dim)) * Problem(m).upper
+    f0, p0 = Problem(m).evaluate(X)
+    f1, p1 = Problem(m.planning_map()).evaluate(X)
+    assert np.array_equal(f0, f1) and np.array_equal(p0, p1)
+
+
+def test_planning_map_inflates_obstacles_and_raises_data():
+    d = _default_margins("T01")
+    d["safety"] = {"clearance": 12.0, "data_margin": 0.05}
+    m = load_map(d)
+    pm = m.planning_map()
+    assert pm.spec.safety.clearance == 0 and pm.spec.safety.data_margin == 0
+    assert np.allclose(pm.required_data, m.required_data * 1.05)
+    assert [c.radius for c in pm.spec.obstacles.circles] == pytest.approx(
+        [c.radius + 12.05 for c in m.spec.obstacles.circles])
+    # every rectangle and no-fly zone grown by at least the clearance, and not much more
+    real = [o.shape for o in obstacle_shapes(m) if o.kind != "circle"]
+    # the planning map: rectangles became polygon obstacles (first), no-fly zones stay
+    nr = len(m.spec.obstacles.rectangles)
+    planned = [o.shape for o in obstacle_shapes(pm) if o.kind != "circle"]
+    nz = len(pm.spec.obstacles.no_fly_zones)
+    grown = planned[nz:nz + nr] + planned[:nz] + planned[nz + nr:]
+    assert len(real) == len(grown)
+    for r, g in zip(real, grown, strict=True):
+        assert g.contains(r.buffer(12.0, quad_segs=32))
+        assert not r.buffer(12.6, quad_segs=32).within(g)  # tight enough: ~2 % over
+    # the fence written to the vehicle is the real shape, not the inflated one
+    assert len(geofence_items(m)) == sum(len(p) for p in m.rectangle_polygons) + len(
+        m.spec.obstacles.circles) + sum(len(p) for p in m.nfz_polygons)
+
+
+def test_clearance_near_the_start_leaves_the_start_outside():
+    d = {"name": "near", "origin": {"lat": 46.2, "lon": 7.3},
+         "area": {"width": 1000, "height": 1000}, "start": [100, 100], "end": [900, 900],
+         "sensors": [{"id": "a", "x": 500, "y": 500}],
+         "obstacles": {"circles": [{"x": 100, "y": 106, "radius": 4}]},
+         "safety": {"clearance": 10}}  # fmt: skip
+    m = load_map(d)
+    assert m.obstacle_clearances[0] == pytest.approx(2.0 - 0.05)
+    pm = m.planning_map()
+    assert pm.spec.obstacles.circles[0].radius == pytest.approx(6.0)
+    plan = lamde_mission.plan(m, seed=0, budget=1000)
+    assert plan.feasible
+    v = verify(replay(plan_to_items(storable_plan(plan, m, "px4", planning_map=pm), m), m), m)
+    assert v.passed, v.table()
+
+
+def test_non_convex_polygons_and_holes_are_inflated_too():
+    d = {"name": "campus", "origin": {"lat": 46.2, "lon": 7.3},
+         "area": {"width": 1000, "height": 1000}, "start": [50, 50], "end": [950, 950],
+         "sensors": [{"id": "a", "x": 500, "y": 800}, {"id": "b", "x": 800, "y": 300}],
+         "obstacles": {
+             "polygons": [{"vertices": [[300, 300], [600, 300], [600, 400], [400, 400],
+                                        [400, 600], [300, 600]], "name": "L"}],
+             "no_fly_zones": [{"vertices": [[650, 550], [900, 550], [900, 800], [650, 800]],
+                               "holes": [[[700, 600], [850, 600], [850, 750], [700, 750]]]}]},
+         "safety": {"clearance": 15}}  # fmt: skip
+    m = load_map(d)
+    pm = m.planning_map()
+    assert len(pm.spec.obstacles.polygons) == 1 and len(pm.spec.obstacles.no_fly_zones) == 1
+    assert pm.spec.obstacles.polygons[0].name == "L"
+    real = [o.shape for o in obstacle_shapes(m)]
+    grown = [o.shape for o in obstacle_shapes(pm)]
+    assert grown[0].contains(real[0].buffer(15.0, quad_segs=32))  # the no-fly zone, hole shrunk
+    assert grown[1].contains(real[1].buffer(15.0, quad_segs=32))  # the L
+    plan = lamde_mission.plan(m, seed=0, budget=3000)
+    sp = storable_plan(plan, m, "px4", planning_map=pm)
+    tl = replay(stored_items(plan_to_items(sp, m), "px4"), m)
+    assert np.all(_flown_distance(m, tl) >= 15.0)

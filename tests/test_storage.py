@@ -1,0 +1,157 @@
+"""What flies is what was verified: written missions, stored the way an autopilot stores them
+(int32 1e-7 degree lat/lon, float32 parameters, ArduPilot's whole-second LOITER_TIME), still pass
+the sim's checks. The vehicle's storage is re-implemented here on purpose (numpy casts), not
+taken from lamde_mission.storage."""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from lamde_mission.formats import read_mission, write_mission
+from lamde_mission.items import CMD, MissionItem, plan_to_items
+from lamde_mission.storage import (
+    dialect_for_autopilot,
+    dialect_of,
+    hover_time_up,
+    storable_plan,
+    stored_items,
+)
+from planner_core.mapio import load_map
+from sim import replay, verify
+from tests.conftest import SUITE
+
+CASES = Path(__file__).resolve().parent / "data" / "flyable"
+CASE_TINY = {
+    "name": "case-tiny",
+    "origin": {"lat": 46.2, "lon": 7.3, "alt": 500.0},
+    "area": {"width": 1200, "height": 1200},
+    "start": [60, 60],
+    "end": [1140, 1140],
+    "sensors": [{"id": "a", "x": 300, "y": 900}, {"id": "b", "x": 850, "y": 350},
+                {"id": "c", "x": 700, "y": 800}],
+    "obstacles": {"circles": [{"x": 600, "y": 600, "radius": 70}],
+                  "rectangles": [{"x": 350, "y": 500, "length": 120, "width": 90,
+                                  "angle_deg": 25}]},
+}  # fmt: skip
+
+
+def vehicle_stores(it: MissionItem, autopilot: str) -> MissionItem:
+    """MISSION_ITEM_INT as a vehicle keeps it: int32 lat/lon x 1e7, float32 params; ArduPilot
+    casts LOITER_TIME's param1 to a uint16 (the fraction is cut off)."""
+
+    def f32(v: float) -> float:
+        return float(np.float32(v))
+
+    p1 = f32(it.param1)
+    if autopilot == "ardupilot" and it.command == CMD.LOITER_TIME:
+        p1 = float(np.uint16(p1))
+    x, y = it.x, it.y
+    if it.frame in (0, 3, 5, 6):
+        x = float(np.int32(round(x * 1e7))) / 1e7
+        y = float(np.int32(round(y * 1e7))) / 1e7
+    return replace(it, param1=p1, param2=f32(it.param2), param3=f32(it.param3),
+                   param4=f32(it.param4), x=x, y=y, z=f32(it.z))  # fmt: skip
+
+
+def written_and_stored(plan, m, autopilot: str, path: Path):
+    stored = storable_plan(plan, m, autopilot)
+    write_mission(path, stored, m, autopilot=autopilot)
+    items, _fence = read_mission(path)
+    on_vehicle = [vehicle_stores(it, autopilot) for it in items]
+    return stored, items, on_vehicle
+
+
+def _check_map(m, tmp_path: Path, seed: int = 0) -> None:
+    import lamde_mission
+
+    plan = lamde_mission.plan(m, seed=seed, budget=3000)
+    assert plan.feasible, m.name
+    for autopilot in ("px4", "ardupilot"):
+        for suffix in (".plan", ".waypoints"):
+            path = tmp_path / f"{m.name}-{autopilot}{suffix}"
+            _stored, items, on_vehicle = written_and_stored(plan, m, autopilot, path)
+            # storing changes nothing the file holds: the file is what the vehicle keeps
+            assert all(a.same_as(b) for a, b in zip(items, on_vehicle, strict=True)), path.name
+            v = verify(replay(on_vehicle, m), m)
+            assert v.passed, (path.name, v.failed, v.table())
+            req = np.asarray(m.required_data, dtype=float)
+            got = replay(on_vehicle, m).collected
+            margin = float(m.spec.safety.data_margin) if hasattr(m.spec, "safety") else 0.0
+            assert np.all(got >= req * (1 + margin) * (1 - 1e-6)), path.name
+            if autopilot == "ardupilot":
+                hov = [it.param1 for it in items if it.command == CMD.LOITER_TIME]
+                assert all(t == math.floor(t) for t in hov)
+
+
+@pytest.mark.parametrize("task", ["T01", "T08", "T16"])
+def test_written_mission_stored_by_px4_and_ardupilot_passes_verify(task, tmp_path):
+    _check_map(load_map(SUITE / f"{task}.json"), tmp_path)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("task", [f"T{k:02d}" for k in range(1, 17)])
+def test_every_suite_map_stored_by_px4_and_ardupilot_passes_verify(task, tmp_path):
+    _check_map(load_map(SUITE / f"{task}.json"), tmp_path)
+
+
+def test_case_tiny_stored_mission_passes_with_the_requested_margin(tmp_path):
+    """cases/flyable tiny-map.json: after int32/float32 (and whole seconds) the stored mission
+    still serves every sensor."""
+    m = load_map(CASE_TINY)
+    _check_map(m, tmp_path)
+
+
+def test_unrepaired_plan_fails_once_stored_which_is_what_storable_plan_fixes(tmp_path):
+    """The failure the issue measured: the LP plan on the boundary, stored in whole seconds
+    (ArduPilot's truncation), is short of data; the storable plan is not."""
+    import lamde_mission
+
+    m = load_map({**CASE_TINY, "safety": {"clearance": 0, "data_margin": 0}})
+    plan = lamde_mission.plan(m, seed=0, budget=2000)
+    raw = [vehicle_stores(it, "ardupilot") for it in plan_to_items(plan, m)]
+    assert "C4" in verify(replay(raw, m), m).failed
+    stored = storable_plan(plan, m, "ardupilot")
+    fixed = [vehicle_stores(it, "ardupilot") for it in plan_to_items(stored, m)]
+    assert verify(replay(fixed, m), m).passed
+    assert np.all(stored.hover_times >= np.floor(plan.hover_times))
+
+
+def test_hover_time_rounding_rules():
+    assert hover_time_up(40.1, "ardupilot") == 41.0
+    assert hover_time_up(40.0, "ardupilot") == 40.0
+    assert hover_time_up(299.5, "ardupilot", t_max=299.7) == 299.0
+    t = hover_time_up(40.1, "px4")
+    assert t >= 40.1 and float(np.float32(t)) == t
+    assert hover_time_up(40.1, "generic") == 41.0
+
+
+def test_stored_items_and_dialects():
+    it = MissionItem(seq=0, command=CMD.LOITER_TIME, param1=12.9, x=46.123456789, y=7.98765432,
+                     z=100.1)  # fmt: skip
+    ap = stored_items([it], "ardupilot")[0]
+    assert ap.param1 == 12.0 and ap.x == 46.1234568 and ap.y == 7.9876543
+    assert ap.z == float(np.float32(100.1))
+    px = stored_items([it], "px4")[0]
+    assert px.param1 == float(np.float32(12.9))
+    assert dialect_for_autopilot("ARDUPILOTMEGA").name == "ardupilot"
+    assert dialect_for_autopilot(12).name == "px4"
+    assert dialect_for_autopilot(None).name == "generic"
+    with pytest.raises(ValueError, match="px4, ardupilot, generic"):
+        dialect_of("betaflight")
+
+
+def test_plan_file_says_its_firmware(tmp_path):
+    import lamde_mission
+
+    m = load_map(CASE_TINY)
+    plan = lamde_mission.plan(m, seed=0, budget=1000)
+    for autopilot, fw in (("px4", 12), ("ardupilot", 3), ("generic", 0)):
+        path = tmp_path / f"{autopilot}.plan"
+        write_mission(path, storable_plan(plan, m, autopilot), m, autopilot=autopilot)
+        assert json.loads(path.read_text())["mission"]["firmwareType"] == fw
