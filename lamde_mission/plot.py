@@ -166,8 +166,9 @@ def mission_figure(
     # colour bar is as tall as the map
     ax.set_aspect("equal", adjustable="datalim")
     pad = 0.03 * max(W, H)
-    ax.set_xlim(-pad, W + pad)
-    ax.set_ylim(-pad, H + pad)
+    ax.margins(0)  # the view: the area plus a pad, grown along one axis to fill the box
+    ax.update_datalim(np.array([[-pad, -pad], [W + pad, H + pad]]))
+    ax.autoscale_view()
     ax.set_xlabel("x east (m)")
     ax.set_ylabel("y north (m)")
     ax.add_patch(RectanglePatch((0, 0), W, H, fill=False, edgecolor="0.3", linewidth=1.2,
