@@ -158,3 +158,20 @@ def test_from_geojson_whole_file_layers_cli(tmp_path) -> None:
     m = json.loads((tmp_path / "campus.json").read_text())
     assert len(m["sensors"]) == 2 and m["sensors"][0]["id"] == "g1"
     assert len(m["obstacles"]["polygons"]) == 1
+
+
+def test_gallery_is_what_its_script_writes() -> None:
+    """docs/gallery.md is the script's rendering, and every picture it shows is committed."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("make_gallery", ROOT / "docs" / "make_gallery.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    assert (ROOT / "docs" / "gallery.md").read_text(encoding="utf-8") == mod.render_markdown(), \
+        "docs/gallery.md is stale: run `python docs/make_gallery.py`"  # fmt: skip
+    assert len(mod.ENTRIES) >= 4
+    for _, _, cmds in mod.ENTRIES:
+        png = ROOT / mod.picture(cmds)
+        assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", png
+        for cmd in cmds:  # repository paths only: a clone has everything the gallery needs
+            assert "../" not in cmd and "shared" not in cmd
