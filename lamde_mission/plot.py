@@ -318,13 +318,25 @@ def _data_panel(ax: Any, timeline: Any, map_: Any) -> None:
     share = 100.0 * data / np.maximum(required, 1e-300)[None, :]
     share[:, required <= 0] = 100.0
     ids = list(timeline.sensor_ids)
-    for j, sid in enumerate(ids):
+    top = max(110.0, float(np.nanmax(share)) * 1.05)
+    labelled = [j for j in range(len(ids)) if len(ids) <= 12 or share[-1, j] < 100.0 - 1e-6]
+    # end labels spread apart vertically (at least 7 % of the axis) so close lines stay legible
+    ys = {}
+    for j in sorted(labelled, key=lambda j: share[-1, j]):
+        y = float(share[-1, j])
+        if ys:
+            y = max(y, max(ys.values()) + 0.07 * top)
+        ys[j] = y
+    colors = {}
+    for j in range(len(ids)):
         (line,) = ax.plot(t, share[:, j], linewidth=1.2)
+        colors[j] = line.get_color()
+    for j, y in ys.items():
         final = share[-1, j]
-        if len(ids) <= 12 or final < 100.0 - 1e-6:
-            ax.annotate(f"{sid}" + ("" if final >= 100.0 - 1e-6 else f" {final:.0f} %"),
-                        (t[-1], final), xytext=(4, 0), textcoords="offset points",
-                        fontsize=7.5, color=line.get_color(), va="center")  # fmt: skip
+        ax.annotate(f"{ids[j]}" + ("" if final >= 100.0 - 1e-6 else f" {final:.0f} %"),
+                    (t[-1], final), xytext=(t[-1] + 0.01 * (t[-1] - t[0]), y), fontsize=7.5,
+                    color=colors[j], va="center", annotation_clip=False,
+                    ha="left")  # fmt: skip
     ax.axhline(100.0, color="k", linestyle="--", linewidth=1.0)
     ax.text(t[0], 101.0, "required", fontsize=7.5, va="bottom")
     phase = np.asarray(timeline.phase)
@@ -335,8 +347,8 @@ def _data_panel(ax: Any, timeline: Any, map_: Any) -> None:
             ax.axvspan(t[i0], t[i1 - 1], color="tab:orange", alpha=0.15, linewidth=0)
             ax.text((t[i0] + t[i1 - 1]) / 2, 3.0, str(k + 1), fontsize=7, ha="center",
                     color="saddlebrown")
-    ax.set_xlim(t[0], t[-1] + 0.08 * max(t[-1] - t[0], 1e-9))
-    ax.set_ylim(0, max(110.0, float(np.nanmax(share)) * 1.05))
+    ax.set_xlim(t[0], t[-1] + 0.1 * max(t[-1] - t[0], 1e-9))
+    ax.set_ylim(0, max(top, max(ys.values(), default=0.0) + 0.05 * top))
     ax.set_xlabel("mission time (s)")
     ax.set_ylabel("collected / required (%)")
     ax.set_title("data collected over the mission (simulator replay; shaded: hovering)",
