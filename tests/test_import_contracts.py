@@ -47,6 +47,8 @@ def test_contracts_hold_on_the_tree() -> None:
         ("planner_core/seeding.py", "import planner_core.problem", "take ModelParams"),
         ("planner_core/execution/local.py", "import planner_core.bench.runner",
          "The executor is a seam"),
+        ("planner_core/bench/runner.py", "import ray", "Ray is the executor's optional backend"),
+        ("lamde_mission/cli.py", "import ray", "Ray is the executor's optional backend"),
     ],
 )
 def test_a_back_edge_breaks_its_contract(

@@ -97,10 +97,25 @@ def _source_of(node_id: str) -> str:
     raise AssertionError(f"{node_id}: no such test")
 
 
+def _check_extras(cmd: str) -> None:
+    """The extras a README `pip install -e '.[a,b]'` line names are declared in pyproject."""
+    import tomllib
+
+    extras = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"][
+        "optional-dependencies"]  # fmt: skip
+    named = re.search(r"\.\[([\w,]+)\]", cmd)
+    assert named, cmd
+    for extra in named.group(1).split(","):
+        assert extra in extras, f"README `{cmd}`: no extra {extra!r} in pyproject.toml"
+
+
 def test_every_readme_command_is_exercised_by_a_test() -> None:
     cmds = _commands()
     assert len(cmds) >= 15, cmds  # the extraction still finds the examples
     for cmd in cmds:
+        if cmd.startswith("pip install -e "):  # an install: its extras must exist (below)
+            _check_extras(cmd)
+            continue
         keys = [k for k in COVERED_BY if cmd.startswith(k)]
         assert keys, f"README command `{cmd}` is exercised by no test listed in COVERED_BY"
         node_id, needles = COVERED_BY[max(keys, key=len)]

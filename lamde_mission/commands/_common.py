@@ -22,6 +22,31 @@ def load_map_or_fail(path: str) -> Any:
     return m
 
 
+def add_executor_args(p: Any, what: str = "jobs") -> None:
+    """--backend / --address: where batch work runs (planner_core.execution)."""
+    p.add_argument("--backend", choices=("local", "ray"), default="local",
+                   help=f"where the {what} run: local = a process pool on this machine "
+                   "(default), ray = a Ray cluster (needs the ray extra: "
+                   "pip install 'lamde-mission[ray]'); same seeds, same results on either")
+    p.add_argument("--address", metavar="ADDR", help="with --backend ray: the cluster, 'auto' "
+                   "(the one started on this machine by `ray start --head`) or ray://HOST:PORT "
+                   "(Ray Client); default: RAY_ADDRESS if set, else a Ray instance started here "
+                   "with --jobs CPUs")
+
+
+def check_executor_args(args: Any) -> None:
+    """UsageError (exit 2) for --address without --backend ray, or --backend ray without Ray
+    installed; imports Ray only to check that it is there."""
+    if args.address is not None and args.backend != "ray":
+        raise UsageError("--address: only with --backend ray")
+    if args.backend == "ray":
+        import importlib.util
+
+        if importlib.util.find_spec("ray") is None:
+            raise UsageError("--backend ray: Ray is not installed; "
+                             "pip install 'lamde-mission[ray]' (or pip install -e '.[ray]')")
+
+
 def add_origin_option(p: Any) -> None:
     """`--origin LAT,LON[,ALT]`: place a map that has no origin (or move one that has)."""
     p.add_argument("--origin", metavar="LAT,LON[,ALT]",

@@ -7,6 +7,7 @@ import os
 import shlex
 import sys
 
+from lamde_mission.commands._common import add_executor_args, check_executor_args
 from lamde_mission.errors import UsageError
 from planner_core import defaults as D
 
@@ -43,7 +44,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--budget", type=int, help=f"evaluations per run, initial population "
                    f"included (default {_DEFAULT_BUDGET:,}; {_BK_BUDGET:,} with --best-known)")
     p.add_argument("--jobs", type=int, help="worker processes (default: the CPU count; 0 = run "
-                   "in this process)")
+                   "in this process); with --backend ray and no --address: the CPUs of the Ray "
+                   "instance started here (0 = all); ignored with --address")
+    add_executor_args(p, "runs")
     p.add_argument("--out", help=f"results folder (default {_DEFAULT_OUT}/; {_BK_OUT}/ with "
                    "--best-known)")
     p.add_argument("--seed", type=int, default=0, help="base seed; run r of task t uses a "
@@ -74,7 +77,9 @@ def _command(args: argparse.Namespace, optimisers: list[str], tasks: list[str] |
         parts += ["--tasks", *tasks]
     parts += ["--optimizers", ",".join(optimisers), "--runs", str(args.runs),
               "--budget", str(args.budget), "--jobs", str(args.jobs), "--out", args.out,
-              "--seed", str(args.seed)]
+              "--seed", str(args.seed), "--backend", args.backend]
+    if args.address is not None:
+        parts += ["--address", args.address]
     if args.best_known_file:
         parts += ["--best-known-file", args.best_known_file]
     if args.no_best_known_update:
@@ -107,6 +112,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--budget must be >= 1 (got {args.budget})")
     if args.jobs < 0:
         raise UsageError(f"--jobs must be >= 0 (got {args.jobs})")
+    check_executor_args(args)
     unknown = [o for o in optimisers if o not in REGISTRY]
     if unknown:
         raise UsageError(f"--optimizers: unknown {', '.join(unknown)}; choose from "
@@ -123,7 +129,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         s = run_bench(args.suite, optimisers, runs=args.runs, budget=args.budget, out=args.out,
                       tasks=tasks, jobs=args.jobs, base_seed=args.seed, best_known=best_known,
-                      command=command, log=log)
+                      command=command, log=log, backend=args.backend, address=args.address)
     except (BenchError, FileNotFoundError) as exc:
         raise UsageError(str(exc)) from None
     print(f"bench: {s.done} run(s) done, {s.skipped} already present, {len(s.failed)} failed; "

@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from lamde_mission.commands._common import add_executor_args, check_executor_args
 from lamde_mission.errors import UsageError
 
 _FEATURES = ("learned", "ela")
@@ -93,8 +94,10 @@ def _database_options(q: argparse.ArgumentParser) -> None:
         "--jobs",
         default="0",
         metavar="N",
-        help="worker processes for the database build (default 0: this process)",
+        help="worker processes for the database build (default 0: this process); with "
+        "--backend ray and no --address: the CPUs of the Ray instance started here (0 = all)",
     )
+    add_executor_args(q, "database chunks")
     q.add_argument("--cache", metavar="DIR", help="feature cache folder "
                    "(default $LAMDE_CACHE/lam or ~/.cache/lamde-mission/lam)")  # fmt: skip
 
@@ -176,7 +179,7 @@ def _build(db: Any, args: argparse.Namespace) -> int:
     from planner_core.execution import make_executor
 
     jobs = _int(args.jobs, "--jobs")
-    executor = make_executor(jobs)
+    executor = make_executor(jobs, args.backend, args.address)
     try:
         return db.build(progress=_Bar("lam build", args.quiet), executor=executor)
     finally:
@@ -197,6 +200,7 @@ def _task_files(path: str) -> list[Path]:
 
 def run(args: argparse.Namespace) -> int:
     _int(args.jobs, "--jobs")
+    check_executor_args(args)
     if args.lam_command == "build":
         names = [s.strip() for s in args.features.split(",") if s.strip()]
         bad = [n for n in names if n not in _FEATURES]

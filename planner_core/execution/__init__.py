@@ -1,10 +1,18 @@
-"""Where batch work runs: one executor interface (`base.Executor`) and local implementations
-(`SerialExecutor` in this process, `ProcessExecutor` over worker processes). The benchmark runs
-its jobs through it; a distributed backend (Ray, Dask, ...) plugs in by implementing the same
-two methods, since every job carries its data (a map's JSON content), not a local path.
+"""Where batch work runs: one executor interface (`base.Executor`), local implementations
+(`SerialExecutor` in this process, `ProcessExecutor` over worker processes) and a Ray backend
+(`ray_executor.RayExecutor`, a cluster or a local Ray instance; Ray is imported only when it is
+used). `make_executor(jobs, backend, address)` picks one by name (the CLI's ``--backend``).
+Every job carries its data (a map's JSON content, seeds, weights), never a local path, so any
+backend can run it anywhere.
 """
 
 from planner_core.execution.base import SINGLE_THREAD_ENV, Executor
-from planner_core.execution.local import ProcessExecutor, SerialExecutor, make_executor
+from planner_core.execution.local import (
+    BACKENDS,
+    ProcessExecutor,
+    SerialExecutor,
+    make_executor,
+)
 
-__all__ = ["Executor", "ProcessExecutor", "SINGLE_THREAD_ENV", "SerialExecutor", "make_executor"]
+__all__ = ["BACKENDS", "Executor", "ProcessExecutor", "SINGLE_THREAD_ENV", "SerialExecutor",
+           "make_executor"]

@@ -1,5 +1,6 @@
 """Local executors: in this process (`SerialExecutor`) or over a pool of worker processes
-(`ProcessExecutor`, `concurrent.futures` with spawned, single-threaded workers).
+(`ProcessExecutor`, `concurrent.futures` with spawned, single-threaded workers), and
+`make_executor`, which picks a backend by name (``local`` here, ``ray`` in `ray_executor`).
 """
 
 from __future__ import annotations
@@ -12,7 +13,10 @@ from typing import Any, TypeVar
 
 from planner_core.execution.base import SINGLE_THREAD_ENV
 
-__all__ = ["SerialExecutor", "ProcessExecutor", "make_executor"]
+__all__ = ["BACKENDS", "SerialExecutor", "ProcessExecutor", "make_executor"]
+
+#: executor backends by name (`make_executor`, the CLI's --backend)
+BACKENDS = ("local", "ray")
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -35,6 +39,17 @@ class SerialExecutor:
         self.close()
 
 
+def _init_worker(env: dict[str, str]) -> None:
+    """Pool initializer: the thread limits in the worker's environment (for anything loaded or
+    started from now on) and numba's thread count capped if numba is already loaded."""
+    import sys
+
+    os.environ.update(env)
+    numba = sys.modules.get("numba")
+    if numba is not None and "NUMBA_NUM_THREADS" in env:
+        numba.set_num_threads(min(int(env["NUMBA_NUM_THREADS"]), numba.config.NUMBA_NUM_THREADS))
+
+
 class ProcessExecutor:
     """A `ProcessPoolExecutor` (spawned workers with single-threaded numerics), at most
     2 * jobs items in flight so a long item list is never submitted all at once."""
@@ -47,12 +62,17 @@ class ProcessExecutor:
 
     def _ensure_pool(self) -> ProcessPoolExecutor:
         if self._pool is None:
-            # spawned children inherit os.environ at start: set the thread limits only around it
+            # the limits must be in the environment when a child starts, not only in the
+            # initializer: a spawned child re-imports the parent's main module (which may load
+            # numpy and its BLAS, which read their limits once) before the initializer runs.
+            # So: set them around the spawn, and again in the initializer.
             saved = {k: os.environ.get(k) for k in SINGLE_THREAD_ENV}
             os.environ.update(SINGLE_THREAD_ENV)
             try:
                 ctx = multiprocessing.get_context("spawn")
-                self._pool = ProcessPoolExecutor(max_workers=self.jobs, mp_context=ctx)
+                self._pool = ProcessPoolExecutor(max_workers=self.jobs, mp_context=ctx,
+                                                 initializer=_init_worker,
+                                                 initargs=(dict(SINGLE_THREAD_ENV),))
                 # spawn every worker now, while the environment holds the limits
                 for f in [self._pool.submit(os.getpid) for _ in range(self.jobs)]:
                     f.result()
@@ -97,6 +117,23 @@ class ProcessExecutor:
         self.close()
 
 
-def make_executor(jobs: int) -> SerialExecutor | ProcessExecutor:
-    """jobs == 0: in this process; jobs >= 1: that many worker processes."""
+def make_executor(jobs: int, backend: str = "local", address: str | None = None) -> Any:
+    """An executor by backend name.
+
+    ``local``: jobs == 0 runs in this process, jobs >= 1 on that many worker processes;
+    ``address`` must be None. ``ray``: a `ray_executor.RayExecutor` connected to ``address``
+    (None / "auto" / "ray://HOST:PORT"); without an address it starts a local Ray instance with
+    ``jobs`` CPUs (all of them if jobs == 0). Ray is imported only when the executor first runs.
+    Raises ValueError for an unknown backend, a negative ``jobs`` or an address with ``local``.
+    """
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
+    if jobs < 0:
+        raise ValueError(f"jobs must be >= 0, got {jobs}")
+    if backend == "ray":
+        from planner_core.execution.ray_executor import RayExecutor
+
+        return RayExecutor(address, num_cpus=jobs or None)
+    if address is not None:
+        raise ValueError("an address is only for the ray backend")
     return SerialExecutor() if jobs == 0 else ProcessExecutor(jobs)

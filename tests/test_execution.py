@@ -1,0 +1,117 @@
+"""The executor seam without Ray running: backend choice, argument errors, bounded streaming of
+the process pool, and Ray never imported unless its backend is chosen."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from collections.abc import Iterator
+
+import pytest
+
+from planner_core.execution import ProcessExecutor, SerialExecutor, make_executor
+from tests.conftest import ROOT, SUITE
+
+
+def test_make_executor_by_backend() -> None:
+    assert isinstance(make_executor(0), SerialExecutor)
+    ex = make_executor(2)
+    assert isinstance(ex, ProcessExecutor) and ex.jobs == 2
+    from planner_core.execution.ray_executor import RayExecutor
+
+    ray_ex = make_executor(3, "ray", "ray://head:10001")
+    assert isinstance(ray_ex, RayExecutor)  # built without importing or starting Ray
+    assert (ray_ex.address, ray_ex.num_cpus) == ("ray://head:10001", 3)
+    with pytest.raises(ValueError, match="backend must be one of local, ray"):
+        make_executor(1, "dask")
+    with pytest.raises(ValueError, match="only for the ray backend"):
+        make_executor(1, "local", "auto")
+    with pytest.raises(ValueError, match="jobs must be >= 0"):
+        make_executor(-1, "ray")
+
+
+def test_ray_is_not_imported_by_the_planner_or_a_local_run() -> None:
+    code = (
+        "import sys\n"
+        "import lamde_mission.cli, lamde_mission.api, planner_core.bench, planner_core.execution\n"
+        "from planner_core.execution import make_executor\n"
+        "from planner_core.execution.ray_executor import RayExecutor\n"
+        "RayExecutor('auto'); make_executor(0, 'ray')\n"
+        "with make_executor(0) as ex: assert list(ex.map_unordered(abs, [-1])) == [1]\n"
+        "print(sorted(m for m in sys.modules if m == 'ray' or m.startswith('ray.')))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT,
+                         timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "[]"
+
+
+def test_process_executor_streams_with_a_bounded_number_in_flight() -> None:
+    pulled = 0
+
+    def items() -> Iterator[str]:
+        nonlocal pulled
+        for i in range(10):
+            pulled += 1
+            yield f"/a/b{i}"
+
+    with ProcessExecutor(1) as ex:
+        results = ex.map_unordered(os.path.basename, items())
+        first = next(results)
+        assert pulled <= 2  # 2 x jobs in flight, not the whole list
+        assert sorted([first, *results]) == sorted(f"b{i}" for i in range(10))
+
+
+def test_cli_backend_errors_exit_2(tmp_path, capsys, monkeypatch) -> None:
+    import importlib.util
+
+    from lamde_mission.cli import main
+
+    base = ["bench", "--suite", str(SUITE), "--tasks", "T01", "--optimizers", "random-search",
+            "--runs", "1", "--budget", "50", "--out", str(tmp_path / "o")]
+    assert main([*base, "--address", "auto"]) == 2
+    assert "--address: only with --backend ray" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:  # argparse's own choices check
+        main([*base, "--backend", "dask"])
+    assert exc.value.code == 2
+    # Ray not installed: one line saying how to install it, before anything is written
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *a: None if name == "ray" else real(name, *a))
+    assert main([*base, "--backend", "ray"]) == 2
+    assert "--backend ray: Ray is not installed; pip install 'lamde-mission[ray]'" in (
+        capsys.readouterr().err)
+    assert not (tmp_path / "o").exists()
+
+
+def test_ray_init_arguments_per_address(monkeypatch) -> None:
+    from planner_core.execution import SINGLE_THREAD_ENV
+    from planner_core.execution.ray_executor import RayExecutor
+
+    env = {"env_vars": SINGLE_THREAD_ENV}
+    monkeypatch.delenv("RAY_ADDRESS", raising=False)
+    assert RayExecutor(num_cpus=2)._init_kwargs() == {
+        "runtime_env": env, "include_dashboard": False, "num_cpus": 2}
+    # a cluster: its own CPUs and dashboard; the Ray Client forwards every argument given
+    assert RayExecutor("ray://head:10001", num_cpus=2)._init_kwargs() == {
+        "runtime_env": env, "address": "ray://head:10001"}
+    monkeypatch.setenv("RAY_ADDRESS", "auto")
+    assert RayExecutor(num_cpus=2)._init_kwargs() == {"runtime_env": env}
+
+
+def test_pool_initializer_sets_the_thread_limits(monkeypatch) -> None:
+    import numba
+
+    from planner_core.execution import SINGLE_THREAD_ENV
+    from planner_core.execution.local import _init_worker
+
+    for k in SINGLE_THREAD_ENV:
+        monkeypatch.delenv(k, raising=False)
+    before = numba.get_num_threads()
+    try:
+        _init_worker(dict(SINGLE_THREAD_ENV))
+        assert {k: os.environ[k] for k in SINGLE_THREAD_ENV} == SINGLE_THREAD_ENV
+        assert numba.get_num_threads() == 1  # numba was loaded already: capped at run time
+    finally:
+        numba.set_num_threads(before)
