@@ -13,11 +13,13 @@ from lamde_mission.result import Plan
 from planner_core import defaults as _defaults
 from planner_core.model import deb_not_worse
 
-__all__ = ["plan", "CONFIGURATORS"]
+__all__ = ["plan", "CONFIGURATORS", "INIT_MODES"]
 
 #: configurator names accepted by `plan` (from `planner_core.defaults`); the adaptive DE is the
 #: default until a trained policy beats it on unseen maps
 CONFIGURATORS = _defaults.CONFIGURATORS
+#: start modes accepted by `plan` (planner_core.starts), the default first
+INIT_MODES = _defaults.INIT_MODES
 
 
 class _TimedProblem:
@@ -86,6 +88,7 @@ def plan(
     budget: int = _defaults.BUDGET,
     population: int = _defaults.POPULATION,
     configurator: str | Any = _defaults.CONFIGURATOR,
+    init: str = _defaults.INIT,
     variable_length: bool = True,
     polish: bool = True,
     progress: Callable[[Any], None] | None = None,
@@ -97,7 +100,11 @@ def plan(
     obstacles inflated by the map's `safety.clearance`, required data raised by its
     `safety.data_margin` (the map itself when both are 0); `breakdown` is on that map. With
     `polish`, the final best's hover times are re-solved by the LP of `planner_core.polish`,
-    kept only if not worse under Deb's rule. Defaults and valid ranges: `planner_core.defaults`.
+    kept only if not worse under Deb's rule. `configurator`: "adaptive" (default), "fixed",
+    "random", "lamde" (the shipped learned policy, planner_core.policy) or a configurator
+    object. `init`: "seeded" (the problem's sensor-aware starts, default) or "uniform" (the
+    paper's protocol: uniform in the box).
+    Defaults and valid ranges: `planner_core.defaults`.
 
     Raises ValueError with one line naming the field ("population: must be an integer >= 6,
     got 5") for a population below the minimum, a budget below the population or an unknown
@@ -106,15 +113,17 @@ def plan(
     from planner_core.de import run
     from planner_core.mapio import load_map
     from planner_core.problem import Problem
+    from planner_core.starts import with_init
 
-    _defaults.check_run_args(population=population, budget=budget, configurator=configurator)
+    _defaults.check_run_args(population=population, budget=budget, configurator=configurator,
+                             init=init)
     t_start = time.perf_counter()
     m = load_map(map)
     # safety margins (clearance, data margin) are a transformation of the map: the model is the
     # paper's, on the inflated map (the same map when both margins are 0)
     problem = Problem(m.planning_map(), variable_length=variable_length)
     t_compile = _warm_up(problem, configurator, run)
-    timed = _TimedProblem(problem)
+    timed = _TimedProblem(with_init(problem, init))
     t0 = time.perf_counter()
     result = run(
         timed,

@@ -30,6 +30,8 @@ __all__ = [
     "DELTA",
     "Default",
     "ETA",
+    "INIT",
+    "INIT_MODES",
     "MAP_DEFAULTS",
     "MIN_POPULATION",
     "POPULATION",
@@ -87,8 +89,12 @@ def _positive_number(v: Any) -> bool:
 #: (rand/2), so a population needs at least six members (``de.operators.N_DONORS + 1``)
 MIN_POPULATION = 6
 #: configurator names, the default first (the hand-made adaptive DE until a trained policy beats
-#: it on unseen maps); ``planner_core.de.configurators`` registers exactly these
-CONFIGURATORS: tuple[str, ...] = ("adaptive", "fixed", "random")
+#: it on unseen maps; "lamde" is the shipped learned policy, planner_core.policy);
+#: ``planner_core.de.configurators`` registers exactly these
+CONFIGURATORS: tuple[str, ...] = ("adaptive", "fixed", "random", "lamde")
+#: start modes of a run (planner_core.starts), the default first: the problem's seeded starts
+#: (the product's) or uniform in the box (the paper's protocol)
+INIT_MODES: tuple[str, ...] = ("seeded", "uniform")
 
 _RUN: tuple[Default, ...] = (
     Default("population", 100, "DE population size N (individuals per generation)",
@@ -101,6 +107,9 @@ _RUN: tuple[Default, ...] = (
     Default("configurator", CONFIGURATORS[0], "how each generation's mutation, crossover, F and "
             "Cr are chosen per individual", "one of " + ", ".join(CONFIGURATORS),
             lambda v: v in CONFIGURATORS),
+    Default("init", INIT_MODES[0], "start mode: the problem's sensor-aware starts (seeded) or "
+            "uniform in the box (the paper's protocol)", "one of " + ", ".join(INIT_MODES),
+            lambda v: v in INIT_MODES),
     Default("seed", 0, "random seed of a planning run (same seed, same plan)", "an integer >= 0",
             _int_at_least(0)),
     Default("score_factor", 10.0, "penalised score f + 10 * phi that ranks optimisers "
@@ -191,6 +200,7 @@ MAP_DEFAULTS: dict[str, Default] = {d.name: d for d in _MAP}
 POPULATION: int = DEFAULTS["population"].value
 BUDGET: int = DEFAULTS["budget"].value
 CONFIGURATOR: str = DEFAULTS["configurator"].value
+INIT: str = DEFAULTS["init"].value
 SEED: int = DEFAULTS["seed"].value
 SCORE_FACTOR: float = DEFAULTS["score_factor"].value
 SUITE_SEED: int = DEFAULTS["suite_seed"].value
@@ -207,12 +217,15 @@ def check(name: str, value: Any) -> Any:
     return table[name].check(value)
 
 
-def check_run_args(*, population: Any, budget: Any, configurator: Any = None) -> None:
-    """Check a planning run's population, budget and configurator name together.
+def check_run_args(
+    *, population: Any, budget: Any, configurator: Any = None, init: Any = None
+) -> None:
+    """Check a planning run's population, budget, configurator name and start mode together.
 
     Raises ``ValueError`` with one line naming the first bad field: population must be an
     integer >= ``MIN_POPULATION``; budget an integer >= population; configurator (when a str)
-    one of ``CONFIGURATORS`` (a configurator object passes unchecked).
+    one of ``CONFIGURATORS`` (a configurator object passes unchecked); init (when given) one of
+    ``INIT_MODES``.
     """
     check("population", population)
     check("budget", budget)
@@ -221,6 +234,8 @@ def check_run_args(*, population: Any, budget: Any, configurator: Any = None) ->
                          f"got {budget!r}")
     if isinstance(configurator, str):
         check("configurator", configurator)
+    if init is not None:
+        check("init", init)
 
 
 def _cell(v: Any) -> str:

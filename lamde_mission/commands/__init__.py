@@ -18,4 +18,5 @@ COMMANDS = (
     "bench",
     "report",
     "lam",
+    "train",
 )

@@ -37,6 +37,12 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--configurator", choices=D.CONFIGURATORS, default=D.CONFIGURATOR,
                    help="how DE operators and F/Cr are chosen each generation "
                    f"(default {D.CONFIGURATOR})")
+    p.add_argument("--policy", metavar="CHECKPOINT",
+                   help="with --configurator lamde: a checkpoint folder from `lamde-mission "
+                   "train` instead of the shipped lamde-v1")
+    p.add_argument("--init", choices=D.INIT_MODES, default=D.INIT,
+                   help="initial population: seeded (sensor-aware starts) or uniform in the "
+                   f"box (the paper's protocol); default {D.INIT}")
     p.add_argument("--fixed-length", action="store_true",
                    help="use all I_max hover points (the paper's LAMDE-F ablation)")
     p.add_argument("--no-polish", action="store_true", help="skip the hover-time LP polish")
@@ -198,6 +204,16 @@ def run(args: argparse.Namespace) -> int:
         D.check_run_args(population=args.population, budget=args.budget)
     except ValueError as exc:  # "population: must be ...": name the option as typed
         raise UsageError(f"--{exc}") from None
+    configurator = args.configurator
+    if args.policy is not None:
+        if args.configurator != "lamde":
+            raise UsageError("--policy: only with --configurator lamde")
+        from planner_core.policy import CheckpointError, PolicyConfigurator
+
+        try:
+            configurator = PolicyConfigurator(checkpoint=args.policy)
+        except CheckpointError as exc:
+            raise UsageError(f"--policy: {exc}") from None
     m = load_map_or_fail(args.map)
     m = with_origin_or_fail(m, args.origin)
     if args.finish == "rtl":
@@ -219,7 +235,8 @@ def run(args: argparse.Namespace) -> int:
         seed=args.seed,
         budget=args.budget,
         population=args.population,
-        configurator=args.configurator,
+        configurator=configurator,
+        init=args.init,
         variable_length=not args.fixed_length,
         polish=not args.no_polish,
         progress=progress,

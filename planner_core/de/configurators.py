@@ -8,6 +8,7 @@ and a run is reproducible from its seed alone.
 
 from __future__ import annotations
 
+import importlib
 from dataclasses import dataclass
 from typing import Any, NamedTuple
 
@@ -289,19 +290,27 @@ def _update(  # pragma: no cover
     return improved
 
 
-_REGISTRY = {
+#: configurators by name: a class, or "module:attribute" of one that lives above the DE (the
+#: learned policy depends on the DE and the env, so the DE names it without importing it, as the
+#: baselines registry names its optimisers); planner_core.defaults.CONFIGURATORS lists the names
+_REGISTRY: dict[str, Any] = {
     "fixed": FixedConfigurator,
     "random": RandomConfigurator,
     "adaptive": AdaptiveConfigurator,
+    "lamde": "planner_core.policy:PolicyConfigurator",
 }
 
 
 def make_configurator(name: str, **kw: Any) -> Any:
-    """Build a configurator by name: "fixed", "random" or "adaptive" (keywords go to it)."""
+    """Build a configurator by name: "fixed", "random", "adaptive" or "lamde" (the shipped
+    policy checkpoint, planner_core.policy; numpy only); keywords go to it."""
     try:
         cls = _REGISTRY[name]
     except KeyError:
         raise ValueError(
             f"unknown configurator {name!r}; choose from {sorted(_REGISTRY)}"
         ) from None
+    if isinstance(cls, str):
+        module, attr = cls.split(":")
+        cls = getattr(importlib.import_module(module), attr)
     return cls(**kw)

@@ -42,7 +42,7 @@ def run(
 ) -> Result:
     """Optimise ``problem`` until the budget is spent; same seed -> identical result.
 
-    ``configurator`` is an object or a registry name ("fixed", "random", "adaptive");
+    ``configurator`` is an object or a registry name ("fixed", "random", "adaptive", "lamde");
     ``callback`` receives a :class:`Progress` after the initial population and each generation.
     """
     if isinstance(configurator, str):

@@ -1,0 +1,81 @@
+"""Cost of the learned policy (configurator "lamde") per DE generation, against the evaluation.
+
+Runs the DE with the policy on each map for a few generations and times, in the same run and
+the same generations, (a) the policy's numpy inference (observation + forward pass + drawing the
+actions: `PolicyConfigurator.configure`) and (b) the population's evaluation. Prints the
+medians per generation and their ratio (policy / evaluation; < 1 means the policy costs less
+than the evaluations it configures).
+
+    python benchmarks/bench_policy.py [MAP ...] [--checkpoint lamde-v1] [--generations 30]
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+from pathlib import Path
+from typing import Any
+
+from planner_core import Problem, load_map
+from planner_core.de import run
+from planner_core.policy import PolicyConfigurator, param_count
+
+ROOT = Path(__file__).resolve().parent.parent
+DEFAULT_MAPS = [ROOT / "examples" / "maps" / "suite" / n for n in ("T08.json", "T16.json")]
+
+
+class _Timed:
+    """Adds up the wall time of each call of `fn`, one entry per call."""
+
+    def __init__(self) -> None:
+        self.times: list[float] = []
+
+    def wrap(self, fn: Any) -> Any:
+        def timed(*a: Any) -> Any:
+            t0 = time.perf_counter()
+            out = fn(*a)
+            self.times.append(time.perf_counter() - t0)
+            return out
+
+        return timed
+
+
+class _TimedProblem:
+    def __init__(self, problem: Problem, timer: _Timed) -> None:
+        self.lower, self.upper = problem.lower, problem.upper
+        self.evaluate = timer.wrap(problem.evaluate)
+
+
+class _TimedPolicy:
+    def __init__(self, policy: PolicyConfigurator, timer: _Timed) -> None:
+        self.init, self.update = policy.init, policy.update
+        self.configure = timer.wrap(policy.configure)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("maps", nargs="*", default=[str(p) for p in DEFAULT_MAPS])
+    ap.add_argument("--checkpoint", default="lamde-v1")
+    ap.add_argument("--population", type=int, default=100)
+    ap.add_argument("--generations", type=int, default=30)
+    args = ap.parse_args()
+    policy = PolicyConfigurator(checkpoint=args.checkpoint)
+    print(f"checkpoint {args.checkpoint}: {param_count(policy.net)} parameters, "
+          f"net {policy.net.to_dict()}")
+    for path in args.maps:
+        problem = Problem(load_map(path))
+        ev, pol = _Timed(), _Timed()
+        budget = args.population * (args.generations + 1)
+        run(_TimedProblem(problem, ev), configurator=_TimedPolicy(policy, pol), seed=0,
+            population=args.population, budget=budget)
+        # drop the first generation of each (compilation, caches) and the initial population
+        t_eval = statistics.median(ev.times[2:])
+        t_pol = statistics.median(pol.times[1:])
+        print(f"{Path(path).stem}: N {args.population} x d {problem.dim}: policy "
+              f"{1e3 * t_pol:.2f} ms, evaluation {1e3 * t_eval:.2f} ms per generation "
+              f"(medians of {len(pol.times) - 1}); policy / evaluation = {t_pol / t_eval:.1f}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,119 @@
+"""Validate a policy checkpoint: lamde vs adaptive vs random vs fixed, both start modes.
+
+Runs the DE (no polish) with each configurator on each map for R seeds and reports, per map and
+start mode, the mean penalised score f + 10 phi (lower is better), the feasible runs, and the
+Wilcoxon rank-sum mark of lamde against each other configurator ("+": lamde significantly
+better, "-": significantly worse, "~": no significant difference; alpha 0.05, two-sided,
+`planner_core.bench.stats.wilcoxon_mark`).
+
+Maps: "validation" (generator seeds 8000 + k, disjoint from the suite's 2025 and the training
+maps' 7000 + k; see planner_core.policy.problems), "suite" (the 16 committed suite maps), or
+map files. Each run is appended to a JSONL file as it finishes, so an interrupted validation
+resumes where it stopped.
+
+    python benchmarks/validate_policy.py --maps validation --runs 25 -o val.jsonl
+    python benchmarks/validate_policy.py --maps suite --modes uniform --runs 25 -o suite.jsonl
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from planner_core.bench.stats import wilcoxon_mark
+from planner_core.de import make_configurator, run
+from planner_core.policy import PolicyConfigurator
+from planner_core.policy.problems import build, spec_name, validation_specs
+from planner_core.problem import Problem, penalised_score
+from planner_core.starts import with_init
+
+ROOT = Path(__file__).resolve().parent.parent
+SUITE = ROOT / "examples" / "maps" / "suite"
+
+
+def _maps(which: list[str], count: int) -> dict[str, Any]:
+    if which == ["validation"]:
+        return {spec_name(s): build(s) for s in validation_specs(count)}
+    if which == ["suite"]:
+        return {p.stem: Problem(p) for p in sorted(SUITE.glob("T*.json"))}
+    return {Path(p).stem: Problem(p) for p in which}
+
+
+def _read(path: Path) -> list[dict[str, Any]]:
+    if not path.exists():
+        return []
+    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--maps", nargs="+", default=["validation"])
+    ap.add_argument("--count", type=int, default=4, help="validation maps (with --maps validation)")
+    ap.add_argument("--runs", type=int, default=25)
+    ap.add_argument("--modes", nargs="+", default=["seeded", "uniform"])
+    ap.add_argument("--configurators", nargs="+", default=["lamde", "adaptive", "random", "fixed"])
+    ap.add_argument("--checkpoint", default="lamde-v1")
+    ap.add_argument("--budget", type=int, default=10_000)
+    ap.add_argument("--population", type=int, default=100)
+    ap.add_argument("-o", "--output", required=True, help="JSONL of runs (appended, resumable)")
+    args = ap.parse_args()
+    out = Path(args.output)
+    done = {(r["map"], r["mode"], r["configurator"], r["seed"]) for r in _read(out)}
+    maps = _maps(args.maps, args.count)
+    confs = {c: (PolicyConfigurator(checkpoint=args.checkpoint) if c == "lamde"
+                 else make_configurator(c)) for c in args.configurators}
+    with out.open("a") as fh:
+        for seed in range(args.runs):  # seeds outermost: a cut-short run has even counts
+            for name, problem in maps.items():
+                for mode in args.modes:
+                    for c, conf in confs.items():
+                        if (name, mode, c, seed) in done:
+                            continue
+                        t0 = time.perf_counter()
+                        r = run(with_init(problem, mode), configurator=conf, seed=seed,
+                                population=args.population, budget=args.budget)
+                        rec = {"map": name, "mode": mode, "configurator": c, "seed": seed,
+                               "f": r.f, "phi": r.phi,
+                               "score": float(penalised_score(r.f, r.phi)),
+                               "seconds": time.perf_counter() - t0}
+                        fh.write(json.dumps(rec) + "\n")
+                        fh.flush()
+    summarise(_read(out), args.configurators)
+
+
+def summarise(records: list[dict[str, Any]], configurators: list[str]) -> None:
+    """Print one table per start mode: mean score (feasible runs / runs) and lamde's marks."""
+    others = [c for c in configurators if c != "lamde"]
+    for mode in sorted({r["mode"] for r in records}):
+        print(f"\nstart mode {mode}: mean f + 10 phi (feasible/runs); mark = lamde vs that "
+              "configurator ('+' lamde significantly better, '-' worse, '~' no difference)")
+        print("map".ljust(26) + "".join(c.rjust(26) for c in configurators))
+        wins = {c: [0, 0, 0] for c in others}
+        for name in sorted({r["map"] for r in records if r["mode"] == mode}):
+            cells = []
+            scores: dict[str, list[float]] = {}
+            for c in configurators:
+                rs = [r for r in records if r["map"] == name and r["mode"] == mode
+                      and r["configurator"] == c]
+                scores[c] = [r["score"] for r in rs]
+                feas = sum(r["phi"] == 0 for r in rs)
+                mark = ""
+                if c != "lamde" and "lamde" in scores:
+                    mark = wilcoxon_mark(scores["lamde"], scores[c])
+                    if mark:
+                        wins[c]["+-~".index(mark)] += 1
+                cells.append(f"{np.mean(scores[c]) if rs else float('nan'):.1f} "
+                             f"({feas}/{len(rs)}) {mark}".rjust(26))
+            print(name.ljust(26) + "".join(cells))
+        for c, (better, worse, same) in wins.items():
+            print(f"lamde vs {c}: significantly better on {better}, worse on {worse}, "
+                  f"no difference on {same}")
+
+
+if __name__ == "__main__":
+    main()

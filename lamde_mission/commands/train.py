@@ -1,0 +1,114 @@
+"""`lamde-mission train -o OUT`: meta-train the LAMDE policy with PPO (needs torch).
+
+Writes a checkpoint folder OUT every epoch (weights.npz, config.json, manifest.json, curve.csv,
+state.pt; TensorBoard scalars under OUT/tb when tensorboard or tensorboardX is installed) that
+`plan --configurator lamde` can use through `PolicyConfigurator(checkpoint=OUT)`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import sys
+
+
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    p = sub.add_parser(
+        "train",
+        help="meta-train the LAMDE policy with PPO and write a checkpoint folder",
+        description="Meta-train the meta-level policy (paper Algorithm 1: n-step PPO) on UAV "
+        "maps from the suite generator (seeds disjoint from the suite and validation maps) or "
+        "on a training-set JSON with a 'problems' list. A checkpoint is written to OUT after "
+        "every epoch; --resume continues from it. Same seed, same checkpoint (same machine).",
+    )
+    p.add_argument("-o", "--output", required=True, metavar="OUT", help="checkpoint folder")
+    p.add_argument("--problems", metavar="JSON",
+                   help="training-set JSON with a 'problems' list (default: built-in UAV maps)")
+    p.add_argument("--maps", type=int, default=8,
+                   help="number of built-in training maps when --problems is not given")
+    p.add_argument("--epochs", type=int, help="passes over the training problems")
+    p.add_argument("--seed", type=int, help="training seed (default 0)")
+    p.add_argument("--envs", type=int, help="problems rolled out together")
+    p.add_argument("--population", type=int, help="DE population during training")
+    p.add_argument("--budget", type=int, help="evaluations per training episode")
+    p.add_argument("--init", choices=("uniform", "seeded", "both"), default="both",
+                   help="start modes of the training episodes (default both, alternating)")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                   help="any other PPOConfig field (JSON value), e.g. --set lr=1e-3; repeatable")
+    p.add_argument("--resume", action="store_true", help="continue from OUT's last epoch")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    return p
+
+
+def _config(args: argparse.Namespace):  # noqa: ANN202 - PPOConfig is imported lazily
+    from lamde_mission.errors import UsageError
+    from planner_core.policy.network import NetConfig
+    from planner_core.policy.ppo import PPOConfig
+
+    kw: dict = {}
+    for name in ("epochs", "seed", "envs", "population", "budget"):
+        if getattr(args, name) is not None:
+            kw[name] = getattr(args, name)
+    kw["init_modes"] = ("uniform", "seeded") if args.init == "both" else (args.init,)
+    fields = {f.name for f in dataclasses.fields(PPOConfig)}
+    net_fields = {f.name for f in dataclasses.fields(NetConfig)}
+    net_kw: dict = {}
+    for item in args.set:
+        name, sep, value = item.partition("=")
+        if not sep:
+            raise UsageError(f"--set: '{item}' is not NAME=VALUE")
+        try:
+            parsed = json.loads(value)
+        except json.JSONDecodeError:
+            parsed = value
+        if name.startswith("net.") and name[4:] in net_fields:
+            net_kw[name[4:]] = parsed
+        elif name in fields and name != "net":
+            kw[name] = parsed
+        else:
+            raise UsageError(f"--set: unknown field '{name}' (PPOConfig: "
+                             f"{', '.join(sorted(fields))}; network: "
+                             f"net.{', net.'.join(sorted(net_fields))})")
+    try:
+        cfg = PPOConfig(net=NetConfig(**net_kw), **kw)
+    except (TypeError, ValueError) as exc:
+        raise UsageError(f"--set: {exc}") from None
+    for name in ("epochs", "envs", "population", "budget", "n_steps", "update_epochs"):
+        if int(getattr(cfg, name)) < (5 if name == "population" else 1):
+            raise UsageError(f"--{name.replace('_', '-')}: must be positive "
+                             f"(population >= 5), got {getattr(cfg, name)}")
+    if cfg.budget < cfg.population:
+        raise UsageError(f"--budget: must be >= the population ({cfg.population})")
+    return cfg
+
+
+def run(args: argparse.Namespace) -> int:
+    from lamde_mission.errors import UsageError
+
+    cfg = _config(args)
+    try:
+        from planner_core.policy import ppo
+    except ModuleNotFoundError as exc:
+        if exc.name == "torch":
+            raise UsageError("train needs torch: pip install 'lamde-mission[train]'") from None
+        raise
+    from planner_core.policy.problems import default_training_specs, read_trainset
+
+    if args.problems:
+        try:
+            specs = read_trainset(args.problems)
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
+    else:
+        if args.maps < 1:
+            raise UsageError(f"--maps: must be >= 1, got {args.maps}")
+        specs = default_training_specs(args.maps)
+    progress = None if args.quiet else ppo.text_progress()
+    try:
+        ppo.train(cfg, specs, args.output, resume=args.resume,
+                  log=lambda line: print(line, file=sys.stderr), progress=progress)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    print(f"wrote {args.output} (plan with it: PolicyConfigurator(checkpoint={args.output!r}))")
+    return 0

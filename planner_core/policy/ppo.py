@@ -1,0 +1,589 @@
+"""Meta-training of the policy with PPO and n-step updates (paper Algorithm 1). Torch lives here.
+
+One readable loop (:func:`train`), in the spirit of CleanRL's ``ppo.py``:
+
+    for epoch in 1..E:                                   # Algorithm 1, line 2
+        for each chunk of `envs` training problems:      # line 3, several rolled out together
+            reset one DE per problem (start mode per env) # line 4-5
+            for g in 1..G:                               # line 6
+                one batched forward pass -> actions      # line 7 (sampled, numpy generator)
+                one DE generation per problem, reward    # lines 8-10 (planner_core.env)
+                store (s, a, log pi(a|s), V(s), r)       # line 11
+                every n generations (and at the end):    # line 12
+                    kappa epochs of PPO on the buffer    # lines 13-14
+                    clear the buffer                     # line 15
+        write the checkpoint, the CSV row, TensorBoard scalars
+
+Objective (Schulman et al. 2017, as CleanRL): the policy is factorised over individuals, so the
+probability ratio is taken per individual, ``r_i = pi(a_i|s) / pi_old(a_i|s)`` with
+``log pi(a_i|s)`` the exact sum of the mutation and crossover categorical and the F and Cr Beta
+log-densities. Every individual of a population shares its generation's advantage ``A``:
+
+    L_clip = mean over (generation, problem, individual) of max(-A r_i, -A clip(r_i, 1-e, 1+e))
+    L_V    = 0.5 mean (V(s) - R)^2                  (critic on the pooled population)
+    L      = L_clip - c_ent * entropy + c_V * L_V   (gradient norm clipped to max_grad_norm)
+
+Advantage estimation: GAE(gamma, lambda) over the n-step segment, bootstrapped with V of the
+state after the segment unless the episode ended there (the budget's end is a true terminal
+state, see planner_core.env); returns R = A + V; advantages normalised over the batch.
+
+Determinism: the epoch's rollouts draw from ``numpy.random.default_rng([seed, epoch])`` and the
+torch generator is reseeded per epoch, so the same seed gives the same checkpoint on the same
+machine, and ``resume`` continues exactly where an interrupted run would have been.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import io
+import json
+import math
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+from torch import nn
+from torch.distributions import Beta, Categorical
+
+from planner_core.atomic import write_bytes_atomic
+from planner_core.env import DEFAULT_DELTA, DEFAULT_ETA, OptimizationEnv
+from planner_core.policy import checkpoint as ckpt
+from planner_core.policy.network import (
+    N_FEATURES,
+    NetConfig,
+    PolicyOutput,
+    init_params,
+    param_shapes,
+    sample_actions,
+)
+from planner_core.policy.problems import build, spec_name
+from planner_core.problem import penalised_score
+from planner_core.starts import with_init
+
+
+@dataclass
+class PPOConfig:
+    """Every hyper-parameter of meta-training (defaults: the paper / RLDE-AFL where they give
+    one, sized down where this 2-core machine needs it)."""
+
+    seed: int = 0
+    """Seed of the weights' initialisation, the rollouts' DE seeds and action draws."""
+    epochs: int = 10
+    """E: passes over the training problems (Algorithm 1, line 2)."""
+    envs: int = 4
+    """Problems rolled out together, batched in one forward pass per generation."""
+    population: int = 50
+    """N of the DE during training (the policy is population-agnostic; planning uses 100)."""
+    budget: int = 3000
+    """Evaluations per training episode (G = budget / N - 1 generations; progress g/G spans
+    [0, 1] whatever the budget)."""
+    n_steps: int = 10
+    """n: generations between PPO updates (Algorithm 1's n-step update; RLDE-AFL: 10)."""
+    update_epochs: int = 3
+    """kappa: PPO epochs over each n-step buffer (RLDE-AFL: 3)."""
+    gamma: float = 0.99
+    """Discount factor (RLDE-AFL: 0.99)."""
+    gae_lambda: float = 0.95
+    """GAE lambda for the advantage estimate (1.0 = n-step returns)."""
+    clip: float = 0.2
+    """PPO ratio clip epsilon (RLDE-AFL: 0.2)."""
+    lr: float = 1e-3
+    """Adam learning rate."""
+    vf_coef: float = 0.5
+    """Weight of the value loss."""
+    ent_coef: float = 0.001
+    """Weight of the entropy bonus."""
+    max_grad_norm: float = 0.5
+    """Gradient-norm clip."""
+    norm_adv: bool = True
+    """Normalise advantages over each update's batch."""
+    init_modes: tuple[str, ...] = ("uniform", "seeded")
+    """Start modes the episodes cycle through (env k of chunk c in epoch e uses
+    init_modes[(e + c + k) % len])."""
+    eta: float = DEFAULT_ETA
+    """Exponent scale of the mantissa-exponent observation (planner_core.env)."""
+    delta: float = DEFAULT_DELTA
+    """Feasibility tolerance of the reward (planner_core.env)."""
+    threads: int = 1
+    """torch intra-op threads (1 keeps runs reproducible and leaves a core to the DE)."""
+    net: NetConfig = field(default_factory=NetConfig)
+    """Network sizes."""
+
+    def to_dict(self) -> dict[str, Any]:
+        d = dataclasses.asdict(self)
+        d["init_modes"] = list(self.init_modes)
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> PPOConfig:
+        d = dict(d)
+        net = NetConfig(**d.pop("net", {}))
+        if "init_modes" in d:
+            d["init_modes"] = tuple(d["init_modes"])
+        return cls(net=net, **d)
+
+
+# ---------------------------------------------------------------------------------- network
+
+
+class TorchPolicy(nn.Module):
+    """The torch twin of :func:`planner_core.policy.network.forward`, batched over problems.
+
+    Parameters are stored under the numpy names (``.`` replaced by ``__``).
+    """
+
+    def __init__(self, cfg: NetConfig) -> None:
+        super().__init__()
+        self.cfg = cfg
+        self.p = nn.ParameterDict({
+            k.replace(".", "__"): nn.Parameter(torch.zeros(s))
+            for k, s in param_shapes(cfg).items()
+        })
+
+    def load_numpy(self, params: dict[str, np.ndarray]) -> None:
+        with torch.no_grad():
+            for k, v in params.items():
+                self.p[k.replace(".", "__")].copy_(torch.as_tensor(np.asarray(v)))
+
+    def numpy_params(self) -> dict[str, np.ndarray]:
+        return {k.replace("__", "."): v.detach().cpu().numpy().astype(np.float32).copy()
+                for k, v in self.p.items()}
+
+    def _w(self, name: str) -> torch.Tensor:
+        return self.p[name.replace(".", "__")]
+
+    def _block(self, x: torch.Tensor, prefix: str, key_mask: torch.Tensor | None) -> torch.Tensor:
+        *lead, L, E = x.shape
+        h = self.cfg.heads
+        dh = E // h
+        qkv = (x @ self._w(f"{prefix}.qkv.weight") + self._w(f"{prefix}.qkv.bias"))
+        qkv = qkv.reshape(*lead, L, 3, h, dh)
+        q = qkv[..., 0, :, :].movedim(-2, -3)
+        k = qkv[..., 1, :, :].movedim(-2, -3)
+        v = qkv[..., 2, :, :].movedim(-2, -3)
+        s = (q @ k.transpose(-1, -2)) / math.sqrt(dh)
+        if key_mask is not None:  # (..., L) additive: 0 for a real key, -inf for padding
+            s = s + key_mask[..., None, None, :]
+        y = (torch.softmax(s, dim=-1) @ v).movedim(-3, -2).reshape(*lead, L, E)
+        y = y @ self._w(f"{prefix}.out.weight") + self._w(f"{prefix}.out.bias")
+        x = nn.functional.layer_norm(x + y, (E,), self._w(f"{prefix}.ln1.weight"),
+                                     self._w(f"{prefix}.ln1.bias"), eps=1e-5)
+        y = torch.relu(x @ self._w(f"{prefix}.ff1.weight") + self._w(f"{prefix}.ff1.bias"))
+        y = y @ self._w(f"{prefix}.ff2.weight") + self._w(f"{prefix}.ff2.bias")
+        return nn.functional.layer_norm(x + y, (E,), self._w(f"{prefix}.ln2.weight"),
+                                        self._w(f"{prefix}.ln2.bias"), eps=1e-5)
+
+    def forward(
+        self,
+        X: torch.Tensor,
+        f: torch.Tensor,
+        phi: torch.Tensor,
+        progress: torch.Tensor,
+        mask: torch.Tensor,
+    ) -> tuple[torch.Tensor, ...]:
+        """X (B, N, D) padded, f and phi (B, N, 2), progress (B,), mask (B, D) True = real
+        dimension -> mutation logits (B, N, 7), crossover logits (B, N, 2), F and Cr Beta
+        parameters (B, N, 2) each, value (B,)."""
+        B, N, D = X.shape
+        t = torch.cat([X[..., None], f[:, :, None, :].expand(B, N, D, 2),
+                       phi[:, :, None, :].expand(B, N, D, 2)], dim=-1)
+        assert t.shape[-1] == N_FEATURES
+        x = t @ self._w("embed.weight") + self._w("embed.bias")  # (B, N, D, E)
+        x = self._block(x.transpose(1, 2), "pop", None).transpose(1, 2)
+        km = None
+        if not bool(mask.all()):
+            km = torch.zeros(mask.shape, dtype=x.dtype).masked_fill(~mask, float("-inf"))
+            km = km[:, None, :].expand(B, N, D)
+        x = self._block(x, "dim", km)
+        m = mask[:, None, :, None].to(x.dtype)
+        pooled = (x * m).sum(dim=2) / m.sum(dim=2)  # (B, N, E)
+        g = progress[:, None, None].expand(B, N, 1).to(x.dtype)
+        h = torch.relu(torch.cat([pooled, g], dim=-1) @ self._w("join.weight")
+                       + self._w("join.bias"))
+        mut = h @ self._w("mutation.weight") + self._w("mutation.bias")
+        cx = h @ self._w("crossover.weight") + self._w("crossover.bias")
+        F_ab = 1.0 + nn.functional.softplus(h @ self._w("F.weight") + self._w("F.bias"))
+        Cr_ab = 1.0 + nn.functional.softplus(h @ self._w("Cr.weight") + self._w("Cr.bias"))
+        c = torch.relu(h.mean(dim=1) @ self._w("critic1.weight") + self._w("critic1.bias"))
+        value = (c @ self._w("critic2.weight") + self._w("critic2.bias"))[:, 0]
+        return mut, cx, F_ab, Cr_ab, value
+
+
+def log_prob_entropy(
+    out: tuple[torch.Tensor, ...], actions: torch.Tensor
+) -> tuple[torch.Tensor, torch.Tensor]:
+    """Exact per-individual log-probability and entropy (both (B, N)) of ``actions`` (B, N, 4):
+    columns mutation id, crossover id, F, Cr."""
+    mut, cx, F_ab, Cr_ab = out[:4]
+    dm, dc = Categorical(logits=mut), Categorical(logits=cx)
+    dF, dCr = Beta(F_ab[..., 0], F_ab[..., 1]), Beta(Cr_ab[..., 0], Cr_ab[..., 1])
+    lp = (dm.log_prob(actions[..., 0].long()) + dc.log_prob(actions[..., 1].long())
+          + dF.log_prob(actions[..., 2]) + dCr.log_prob(actions[..., 3]))
+    ent = dm.entropy() + dc.entropy() + dF.entropy() + dCr.entropy()
+    return lp, ent
+
+
+def batch_obs(obs: list[dict[str, np.ndarray]]) -> dict[str, torch.Tensor]:
+    """Stack env observations of problems with the same N (dimensions padded, masked)."""
+    B = len(obs)
+    N = obs[0]["X"].shape[0]
+    D = max(o["X"].shape[1] for o in obs)
+    X = np.zeros((B, N, D), dtype=np.float32)
+    mask = np.zeros((B, D), dtype=bool)
+    for b, o in enumerate(obs):
+        d = o["X"].shape[1]
+        X[b, :, :d] = o["X"]
+        mask[b, :d] = True
+    return {
+        "X": torch.from_numpy(X),
+        "f": torch.from_numpy(np.stack([o["f"] for o in obs]).astype(np.float32)),
+        "phi": torch.from_numpy(np.stack([o["phi"] for o in obs]).astype(np.float32)),
+        "progress": torch.from_numpy(
+            np.array([o["progress"][0] for o in obs], dtype=np.float32)),
+        "mask": torch.from_numpy(mask),
+    }
+
+
+def _cat_obs(batches: list[dict[str, torch.Tensor]]) -> dict[str, torch.Tensor]:
+    """Concatenate batched observations along B, padding D to the largest."""
+    D = max(b["X"].shape[2] for b in batches)
+    out: dict[str, list[torch.Tensor]] = {k: [] for k in batches[0]}
+    for b in batches:
+        pad = D - b["X"].shape[2]
+        out["X"].append(nn.functional.pad(b["X"], (0, pad)))
+        out["mask"].append(nn.functional.pad(b["mask"], (0, pad), value=False))
+        for k in ("f", "phi", "progress"):
+            out[k].append(b[k])
+    return {k: torch.cat(v) for k, v in out.items()}
+
+
+def _forward(model: TorchPolicy, o: dict[str, torch.Tensor]) -> tuple[torch.Tensor, ...]:
+    return model(o["X"], o["f"], o["phi"], o["progress"], o["mask"])
+
+
+# ---------------------------------------------------------------------------------- PPO update
+
+
+def ppo_update(
+    model: TorchPolicy,
+    optimizer: torch.optim.Optimizer,
+    cfg: PPOConfig,
+    obs: dict[str, torch.Tensor],
+    actions: torch.Tensor,
+    old_logp: torch.Tensor,
+    advantages: torch.Tensor,
+    returns: torch.Tensor,
+) -> dict[str, float]:
+    """``cfg.update_epochs`` full-batch PPO steps on one buffer (B samples of N individuals).
+
+    Returns the last epoch's policy loss, value loss, entropy, approx-KL ((r-1) - log r, as
+    CleanRL) and clip fraction.
+    """
+    adv = advantages
+    if cfg.norm_adv and adv.numel() > 1:
+        adv = (adv - adv.mean()) / (adv.std() + 1e-8)
+    stats: dict[str, float] = {}
+    for _ in range(cfg.update_epochs):
+        out = _forward(model, obs)
+        logp, ent = log_prob_entropy(out, actions)
+        log_ratio = logp - old_logp
+        ratio = log_ratio.exp()
+        a = adv[:, None]
+        pg_loss = torch.max(-a * ratio, -a * ratio.clamp(1 - cfg.clip, 1 + cfg.clip)).mean()
+        v_loss = 0.5 * ((out[4] - returns) ** 2).mean()
+        entropy = ent.mean()
+        loss = pg_loss - cfg.ent_coef * entropy + cfg.vf_coef * v_loss
+        optimizer.zero_grad()
+        loss.backward()
+        nn.utils.clip_grad_norm_(model.parameters(), cfg.max_grad_norm)
+        optimizer.step()
+        with torch.no_grad():
+            stats = {
+                "policy_loss": float(pg_loss),
+                "value_loss": float(v_loss),
+                "entropy": float(entropy),
+                "approx_kl": float(((ratio - 1) - log_ratio).mean()),
+                "clipfrac": float(((ratio - 1).abs() > cfg.clip).float().mean()),
+            }
+    return stats
+
+
+def clipped_objective(
+    model: TorchPolicy, cfg: PPOConfig, obs: dict[str, torch.Tensor], actions: torch.Tensor,
+    old_logp: torch.Tensor, advantages: torch.Tensor,
+) -> float:
+    """The clipped surrogate loss L_clip of the current weights on a fixed batch (for tests)."""
+    with torch.no_grad():
+        logp, _ = log_prob_entropy(_forward(model, obs), actions)
+        ratio = (logp - old_logp).exp()
+        a = advantages[:, None]
+        return float(torch.max(-a * ratio, -a * ratio.clamp(1 - cfg.clip, 1 + cfg.clip)).mean())
+
+
+def gae(
+    rewards: np.ndarray, values: np.ndarray, dones: np.ndarray, next_value: np.ndarray,
+    gamma: float, lam: float,
+) -> np.ndarray:
+    """GAE advantages (T, B) of one n-step segment (Schulman et al. 2016).
+
+    rewards, values, dones: (T, B), ``dones[t] = 1`` when the episode ended with step t (then
+    nothing is bootstrapped past it); ``next_value`` (B,): V of the state after the segment.
+    ``delta_t = r_t + gamma V_{t+1} (1 - done_t) - V_t``, ``A_t = delta_t + gamma lam
+    (1 - done_t) A_{t+1}``.
+    """
+    T = rewards.shape[0]
+    adv = np.zeros_like(rewards)
+    last = np.zeros(rewards.shape[1])
+    for t in reversed(range(T)):
+        nv = next_value if t == T - 1 else values[t + 1]
+        nonterminal = 1.0 - dones[t]
+        delta = rewards[t] + gamma * nv * nonterminal - values[t]
+        last = delta + gamma * lam * nonterminal * last
+        adv[t] = last
+    return adv
+
+
+# ---------------------------------------------------------------------------------- training
+
+
+CURVE_FIELDS = ("epoch", "episodes", "return", "feasible_rate", "best_score", "policy_loss",
+                "value_loss", "entropy", "approx_kl", "clipfrac", "seconds")
+
+
+def _to_output(out: tuple[torch.Tensor, ...], b: int) -> PolicyOutput:
+    mut, cx, F_ab, Cr_ab, value = (t.detach().double().numpy() for t in out)
+    return PolicyOutput(mut[b], cx[b], F_ab[b], Cr_ab[b], float(value[b]))
+
+
+def _scalar_writer(folder: Path) -> Any:
+    """A TensorBoard SummaryWriter when tensorboard (or tensorboardX) is installed, else None."""
+    try:
+        from torch.utils.tensorboard import SummaryWriter
+    except Exception:  # tensorboard is optional
+        try:
+            from tensorboardX import SummaryWriter  # type: ignore[no-redef]
+        except Exception:
+            return None
+    return SummaryWriter(str(folder / "tb"))
+
+
+def train(
+    cfg: PPOConfig,
+    specs: list[dict[str, Any]],
+    out: str | Path,
+    *,
+    resume: bool = False,
+    log: Callable[[str], None] | None = None,
+    progress: Callable[[int, int, str], None] | None = None,
+) -> Path:
+    """Meta-train a policy on the problems ``specs`` (see planner_core.policy.problems) and
+    write a checkpoint folder ``out`` every epoch (weights.npz, config.json, manifest.json,
+    curve.csv, and state.pt for ``resume``). Returns ``out``.
+
+    ``log(line)`` gets one line per epoch; ``progress(done, total, text)`` is called after each
+    generation of each chunk. Raises ValueError for bad settings.
+    """
+    out = Path(out)
+    if cfg.envs < 1 or cfg.n_steps < 1 or cfg.update_epochs < 1 or cfg.epochs < 1:
+        raise ValueError("envs, n_steps, update_epochs and epochs must be >= 1")
+    for mode in cfg.init_modes:
+        if mode not in ("seeded", "uniform"):
+            raise ValueError(f"init_modes: unknown start mode {mode!r}")
+    torch.set_num_threads(cfg.threads)
+    problems = [build(s) for s in specs]
+    model = TorchPolicy(cfg.net)
+    model.load_numpy(init_params(cfg.net, cfg.seed))
+    optimizer = torch.optim.Adam(model.parameters(), lr=cfg.lr, eps=1e-5)
+    curve: list[dict[str, Any]] = []
+    start_epoch = 0
+    state_path = out / "state.pt"
+    if resume and state_path.exists():
+        state = torch.load(state_path, weights_only=False)
+        same = {k: v for k, v in state["config"].items() if k != "epochs"} == {
+            k: v for k, v in cfg.to_dict().items() if k != "epochs"}
+        if not same or state["specs"] != specs:
+            raise ValueError(f"--resume: {out} was trained with other settings or problems "
+                             "(only --epochs may change)")
+        model.load_state_dict(state["model"])
+        optimizer.load_state_dict(state["optimizer"])
+        start_epoch = int(state["epoch"])
+        curve = list(state["curve"])
+    writer = _scalar_writer(out) if start_epoch < cfg.epochs else None
+    G = max(1, math.ceil((cfg.budget - cfg.population) / cfg.population))
+    chunks = [list(range(i, min(i + cfg.envs, len(problems))))
+              for i in range(0, len(problems), cfg.envs)]
+    total = len(chunks) * G * cfg.epochs
+
+    for epoch in range(start_epoch, cfg.epochs):
+        t0 = time.perf_counter()
+        rng = np.random.default_rng([cfg.seed, epoch])
+        torch.manual_seed(cfg.seed * 100_003 + epoch)
+        # a random order, then grouped by dimension (stable), so that a chunk mixes sizes only
+        # where the counts force it and little is padded
+        order = sorted(rng.permutation(len(problems)).tolist(),
+                       key=lambda i: len(problems[i].lower))
+        returns_ep, feasible_ep, score_ep, stats_ep = [], [], [], []
+        for c, chunk in enumerate(chunks):
+            idx = [int(order[i]) for i in chunk]
+            envs = []
+            obs = []
+            for k, i in enumerate(idx):
+                mode = cfg.init_modes[(epoch + c + k) % len(cfg.init_modes)]
+                env = OptimizationEnv(population=cfg.population, budget=cfg.budget,
+                                      eta=cfg.eta, delta=cfg.delta)
+                o, _ = env.reset(seed=int(rng.integers(2**62)),
+                                 options={"problem": with_init(problems[i], mode)})
+                envs.append(env)
+                obs.append(o)
+            ep_return = np.zeros(len(envs))
+            done = False
+            g = 0
+            while not done:
+                # ---- rollout: up to n generations (Algorithm 1, lines 6-11)
+                buf_obs, buf_act, buf_logp, buf_val, buf_rew, buf_done = [], [], [], [], [], []
+                for _ in range(cfg.n_steps):
+                    o_t = batch_obs(obs)
+                    with torch.no_grad():
+                        net_out = _forward(model, o_t)
+                    acts = np.zeros((len(envs), cfg.population, 4))
+                    for b in range(len(envs)):
+                        acts[b] = np.stack(sample_actions(_to_output(net_out, b), rng), axis=1)
+                    a_t = torch.from_numpy(acts.astype(np.float32))
+                    with torch.no_grad():
+                        logp, _ = log_prob_entropy(net_out, a_t)
+                    rew = np.zeros(len(envs))
+                    dn = np.zeros(len(envs))
+                    for b, env in enumerate(envs):
+                        action = (acts[b, :, 0].astype(np.intp), acts[b, :, 1].astype(np.intp),
+                                  a_t[b, :, 2].double().numpy(), a_t[b, :, 3].double().numpy())
+                        obs[b], rew[b], term, trunc, _ = env.step(action)
+                        dn[b] = float(term or trunc)
+                    ep_return += rew
+                    buf_obs.append(o_t)
+                    buf_act.append(a_t)
+                    buf_logp.append(logp)
+                    buf_val.append(net_out[4].numpy())
+                    buf_rew.append(rew)
+                    buf_done.append(dn)
+                    g += 1
+                    if progress is not None:
+                        progress(epoch * len(chunks) * G + c * G + min(g, G), total,
+                                 f"epoch {epoch + 1}/{cfg.epochs} chunk {c + 1}/{len(chunks)}")
+                    if dn.all():
+                        done = True
+                        break
+                # ---- n-step PPO update (Algorithm 1, lines 12-15)
+                if done:
+                    next_value = np.zeros(len(envs))
+                else:
+                    with torch.no_grad():
+                        next_value = _forward(model, batch_obs(obs))[4].numpy()
+                values = np.stack(buf_val)
+                adv = gae(np.stack(buf_rew), values, np.stack(buf_done), next_value,
+                          cfg.gamma, cfg.gae_lambda)
+                ret = adv + values
+                stats_ep.append(ppo_update(
+                    model, optimizer, cfg, _cat_obs(buf_obs), torch.cat(buf_act),
+                    torch.cat(buf_logp), torch.from_numpy(adv.reshape(-1).astype(np.float32)),
+                    torch.from_numpy(ret.reshape(-1).astype(np.float32)),
+                ))
+            for b, env in enumerate(envs):
+                s = env.state
+                returns_ep.append(float(ep_return[b]))
+                feasible_ep.append(s.best_phi == 0.0)
+                score_ep.append(float(penalised_score(s.best_f, s.best_phi)))
+        row = {
+            "epoch": epoch + 1,
+            "episodes": len(returns_ep),
+            "return": float(np.mean(returns_ep)),
+            "feasible_rate": float(np.mean(feasible_ep)),
+            "best_score": float(np.mean(score_ep)),
+            **{k: float(np.mean([s[k] for s in stats_ep])) for k in stats_ep[0]},
+            "seconds": time.perf_counter() - t0,
+        }
+        curve.append(row)
+        _save(out, model, optimizer, cfg, specs, curve, epoch + 1)
+        if writer is not None:
+            for k, v in row.items():
+                if k not in ("epoch", "episodes"):
+                    writer.add_scalar(f"train/{k}", v, epoch + 1)
+            writer.flush()
+        if log is not None:
+            log(f"epoch {epoch + 1}/{cfg.epochs}: return {row['return']:.3f}, feasible "
+                f"{row['feasible_rate']:.2f}, score {row['best_score']:.1f}, "
+                f"policy loss {row['policy_loss']:.4f}, value loss {row['value_loss']:.4f}, "
+                f"entropy {row['entropy']:.3f}, KL {row['approx_kl']:.4f}, "
+                f"{row['seconds']:.0f} s")
+    if writer is not None:
+        writer.close()
+    return out
+
+
+def curve_csv(curve: list[dict[str, Any]]) -> str:
+    """The training curve as CSV text (one row per epoch, columns CURVE_FIELDS)."""
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=list(CURVE_FIELDS), lineterminator="\n")
+    w.writeheader()
+    for row in curve:
+        w.writerow({k: (f"{row[k]:.6g}" if isinstance(row[k], float) else row[k])
+                    for k in CURVE_FIELDS})
+    return buf.getvalue()
+
+
+def _save(out: Path, model: TorchPolicy, optimizer: torch.optim.Optimizer, cfg: PPOConfig,
+          specs: list[dict[str, Any]], curve: list[dict[str, Any]], epoch: int) -> None:
+    manifest = {"problems": specs, "names": [spec_name(s) for s in specs]}
+    meta = {"ppo": cfg.to_dict(), "epochs_done": epoch, "eta": cfg.eta,
+            "seconds": float(sum(r["seconds"] for r in curve))}
+    ckpt.save(out, model.numpy_params(), cfg.net, meta, {
+        "manifest.json": json.dumps(manifest, indent=2) + "\n",
+        "curve.csv": curve_csv(curve),
+    })
+    buf = io.BytesIO()
+    torch.save({"model": model.state_dict(), "optimizer": optimizer.state_dict(),
+                "epoch": epoch, "curve": curve, "config": cfg.to_dict(), "specs": specs}, buf)
+    write_bytes_atomic(out / "state.pt", buf.getvalue())
+
+
+def text_progress(stream: Any = sys.stderr, width: int = 24) -> Callable[[int, int, str], None]:
+    """A progress bar on one updating line (TTY) or a line per 5 % otherwise."""
+    tty = bool(getattr(stream, "isatty", lambda: False)())
+    state = {"last": -1.0, "t0": time.monotonic()}
+
+    def show(done: int, total: int, text: str) -> None:
+        frac = done / max(total, 1)
+        if not tty and frac - state["last"] < 0.05 and done < total:
+            return
+        if tty and time.monotonic() - state.get("shown", 0.0) < 0.2 and done < total:
+            return
+        state["last"], state["shown"] = frac, time.monotonic()
+        fill = int(round(frac * width))
+        el = time.monotonic() - state["t0"]
+        eta = el / frac - el if frac > 0 else float("nan")
+        line = f"[{'#' * fill}{'.' * (width - fill)}] {100 * frac:5.1f}% {text}  " \
+               f"{el:6.0f} s elapsed, ~{eta:5.0f} s left"
+        stream.write(("\r" + line + ("\n" if done >= total else "")) if tty else line + "\n")
+        stream.flush()
+
+    return show
+
+
+__all__ = [
+    "CURVE_FIELDS",
+    "PPOConfig",
+    "TorchPolicy",
+    "batch_obs",
+    "clipped_objective",
+    "curve_csv",
+    "gae",
+    "log_prob_entropy",
+    "ppo_update",
+    "text_progress",
+    "train",
+]

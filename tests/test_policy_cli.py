@@ -1,0 +1,149 @@
+"""The learned meta-level through the public surfaces: `plan(..., init=, configurator=)`, the
+CLI's `plan --init/--configurator` and `train`."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from lamde_mission import plan
+from lamde_mission.cli import main
+from planner_core.de import make_configurator, run
+from planner_core.policy import PolicyConfigurator
+from planner_core.problem import Problem
+from tests.conftest import MAPS
+
+
+def test_shipped_checkpoint_is_the_lamde_configurator() -> None:
+    conf = make_configurator("lamde")
+    assert isinstance(conf, PolicyConfigurator)
+    problem = Problem(MAPS / "tiny.json")
+    a = run(problem, configurator="lamde", seed=1, population=10, budget=100)
+    b = run(problem, configurator=conf, seed=1, population=10, budget=100)
+    assert np.array_equal(a.x, b.x)
+
+
+def test_plan_init_modes_differ_and_are_checked() -> None:
+    seeded = plan(MAPS / "tiny.json", seed=0, budget=200, population=10, polish=False)
+    again = plan(MAPS / "tiny.json", seed=0, budget=200, population=10, polish=False,
+                 init="seeded")
+    uniform = plan(MAPS / "tiny.json", seed=0, budget=200, population=10, polish=False,
+                   init="uniform")
+    assert np.array_equal(seeded.history["best_f"], again.history["best_f"])
+    assert not np.array_equal(seeded.history["best_f"], uniform.history["best_f"])
+    with pytest.raises(ValueError, match="init: must be one of seeded, uniform, got 'random'"):
+        plan(MAPS / "tiny.json", init="random")
+
+
+def test_plan_with_lamde_is_deterministic() -> None:
+    a = plan(MAPS / "tiny.json", seed=3, budget=200, population=10, configurator="lamde",
+             init="uniform", polish=False)
+    b = plan(MAPS / "tiny.json", seed=3, budget=200, population=10, configurator="lamde",
+             init="uniform", polish=False)
+    assert a.configurator == "lamde"
+    assert np.array_equal(a.hover_points, b.hover_points) and a.f == b.f and a.phi == b.phi
+
+
+def test_cli_plan_accepts_lamde_and_init(tmp_path, capsys) -> None:  # noqa: ANN001
+    out = tmp_path / "m.plan"
+    rc = main(["plan", str(MAPS / "tiny.json"), "-o", str(out), "--configurator", "lamde",
+               "--init", "uniform", "--budget", "300", "--population", "10", "--quiet",
+               "--allow-infeasible", "--report", str(tmp_path / "r.json")])
+    assert rc in (0, 1) and out.exists()
+    assert json.loads((tmp_path / "r.json").read_text())["plan"]["configurator"] == "lamde"
+    with pytest.raises(SystemExit):
+        main(["plan", str(MAPS / "tiny.json"), "-o", str(out), "--init", "sideways"])
+
+
+def test_cli_train_bad_input_is_one_line_exit_2(tmp_path, capsys) -> None:  # noqa: ANN001
+    pytest.importorskip("torch")
+    assert main(["train", "-o", str(tmp_path / "ck"), "--set", "bogus=1"]) == 2
+    assert "--set: unknown field 'bogus'" in capsys.readouterr().err
+    assert main(["train", "-o", str(tmp_path / "ck"), "--problems",
+                 str(tmp_path / "none.json")]) == 2
+    assert "--problems:" in capsys.readouterr().err
+    assert main(["train", "-o", str(tmp_path / "ck"), "--budget", "3", "--population",
+                 "10"]) == 2
+    assert not (tmp_path / "ck").exists()
+
+
+def test_cli_train_runs_on_a_trainset_file(tmp_path, capsys) -> None:  # noqa: ANN001
+    pytest.importorskip("torch")
+    trainset = tmp_path / "trainset.json"
+    trainset.write_text(json.dumps({"problems": [
+        {"kind": "map", "path": str(MAPS / "tiny.json")}]}))
+    rc = main(["train", "-o", str(tmp_path / "ck"), "--problems", str(trainset), "--epochs",
+               "1", "--envs", "1", "--population", "6", "--budget", "30", "--quiet",
+               "--set", "n_steps=2", "--set", "net.embed=8"])
+    assert rc == 0
+    assert (tmp_path / "ck" / "weights.npz").exists()
+    assert json.loads((tmp_path / "ck" / "config.json").read_text())["net"]["embed"] == 8
+
+
+def test_cli_plan_with_a_trained_checkpoint_folder(tmp_path, capsys) -> None:  # noqa: ANN001
+    from planner_core.policy import NetConfig, init_params, save
+
+    save(tmp_path / "ck", init_params(NetConfig(embed=8, heads=1, ff=8, hidden=8), 1),
+         NetConfig(embed=8, heads=1, ff=8, hidden=8))
+    out = tmp_path / "m.plan"
+    args = ["plan", str(MAPS / "tiny.json"), "-o", str(out), "--budget", "200",
+            "--population", "10", "--quiet", "--allow-infeasible"]
+    assert main([*args, "--configurator", "lamde", "--policy", str(tmp_path / "ck")]) in (0, 1)
+    assert out.exists()
+    assert main([*args, "--policy", str(tmp_path / "ck")]) == 2
+    assert "--policy: only with --configurator lamde" in capsys.readouterr().err
+    assert main([*args, "--configurator", "lamde", "--policy", str(tmp_path / "none")]) == 2
+    assert "--policy: checkpoint:" in capsys.readouterr().err
+
+
+def test_shipped_checkpoint_is_small_and_documented() -> None:
+    from planner_core.policy.checkpoint import SHIPPED
+
+    folder = SHIPPED / "lamde-v1"
+    assert sum(p.stat().st_size for p in folder.iterdir()) < 5 * 2**20
+    manifest = json.loads((folder / "manifest.json").read_text())
+    assert manifest["problems"] and all(s["kind"] == "uav" for s in manifest["problems"])
+    curve = (folder / "curve.csv").read_text().splitlines()
+    config = json.loads((folder / "config.json").read_text())
+    assert len(curve) == 1 + config["training"]["epochs_done"]
+
+
+def test_bench_policy_runs_on_a_small_map() -> None:
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    r = subprocess.run([sys.executable, str(root / "benchmarks" / "bench_policy.py"),
+                        str(MAPS / "tiny.json"), "--generations", "4", "--population", "10"],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert "policy / evaluation = " in r.stdout
+
+
+def test_cli_train_reads_the_lam_trainset_format(tmp_path) -> None:  # noqa: ANN001
+    """A `lamde-mission lam select` file (format lamde-trainset/1) trains as it is."""
+    pytest.importorskip("torch")
+    pytest.importorskip("ioh")
+    from planner_core.policy.problems import build, read_trainset
+
+    pair = {"objective": {"function": 1, "dimension": 4, "instance": 1},
+            "constraint": {"function": 2, "dimension": 4, "instance": 1},
+            "threshold": 0.0, "scale": 10.0, "task": "T01", "distance_f": 0.1,
+            "distance_phi": 0.2}
+    trainset = tmp_path / "trainset.json"
+    trainset.write_text(json.dumps({"format": "lamde-trainset/1", "options": {},
+                                    "problems": [pair, {**pair, "threshold": 5.0}]}))
+    specs = read_trainset(trainset)
+    assert [s["kind"] for s in specs] == ["lam-pair", "lam-pair"]
+    problem = build(specs[0])
+    f, phi = problem.evaluate(np.full((3, 4), 0.5))
+    assert f.shape == phi.shape == (3,)
+    rc = main(["train", "-o", str(tmp_path / "ck"), "--problems", str(trainset), "--epochs",
+               "1", "--envs", "2", "--population", "6", "--budget", "30", "--quiet",
+               "--set", "n_steps=2", "--set", "net.embed=8"])
+    assert rc == 0
+    manifest = json.loads((tmp_path / "ck" / "manifest.json").read_text())
+    assert manifest["problems"] == specs
