@@ -56,6 +56,16 @@ COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
         ("test_gis.py::test_round_trip_keeps_every_vertex_within_a_centimetre", ("to-geojson",)),
     "lamde-mission plan examples/maps/small-demo.json":
         ("test_cli_plan.py::test_plan_writes_plan_plot_report_and_verifies", ("--plot",)),
+    "lamde-mission plan examples/maps/small-demo.json -o mission.plan --configurator lamde":
+        ("test_policy_cli.py::test_cli_plan_accepts_lamde_and_init", ("lamde", "--init")),
+    # `train --maps ...` runs the same CLI path on suite maps (minutes): the CLI test uses a
+    # trainset file; --resume is tested through the API
+    "lamde-mission train":
+        ("test_policy_cli.py::test_cli_train_runs_on_a_trainset_file", ('"train"',)),
+    "lamde-mission train -o my-policy --problems":
+        ("test_policy_cli.py::test_cli_train_runs_on_a_trainset_file", ('"--problems"',)),
+    "lamde-mission train -o my-policy --epochs 20 --resume":
+        ("test_policy.py::test_two_epoch_training_smoke_run_and_resume", ("resume=True",)),
     "lamde-mission verify":
         ("test_plot_cli.py::test_verify_good_mission_exits_0", ('"verify"',)),
     "lamde-mission show":
