@@ -1,10 +1,13 @@
 """A picture of a map and (optionally) a mission flown on it, saved as PNG or SVG.
 
 Draws the area, circles, rotated rectangles, polygon footprints (courtyards left open), no-fly
-zones (holes open, names on large maps left out), sensors coloured by the share of
-their required data collected, the path with hover points sized by hover time, start and end,
-a legend and a scale bar in metres. Uses matplotlib's Agg canvas directly (no pyplot state),
-imported inside the functions so importing this module stays cheap.
+zones (holes open), sensors labelled by id and coloured by the share of their required data
+collected (short ones ringed with "x of y Mbit", unreached ones crossed), the path with arrows
+and numbered hover points ("order · seconds"), the parts of legs inside obstacles in red, start
+and end, a legend below the map and a scale bar in the emptiest corner; with a replay, a panel
+of each sensor's data over the mission time against its requirement. Uses matplotlib's Agg
+canvas directly (no pyplot state), imported inside the functions so importing this module
+stays cheap.
 """
 
 from __future__ import annotations
@@ -77,15 +80,59 @@ def _shape_patch(shell: np.ndarray, holes: Any, **style: Any) -> Any:
     return PathPatch(MplPath(np.concatenate(verts), np.concatenate(codes)), **style)
 
 
+def _violation_segments(map_: Any, path: np.ndarray) -> list[np.ndarray]:
+    """The parts of the path's legs inside an obstacle or no-fly zone (C5), as (k, 2) polylines,
+    measured by the simulator's own shapely geometry."""
+    import shapely
+    from shapely.geometry import LineString
+
+    from sim.obstacles import obstacle_shapes
+
+    shapes = [o.shape for o in obstacle_shapes(map_)]
+    if not shapes or len(path) < 2:
+        return []
+    union = shapely.union_all(shapes)
+    out: list[np.ndarray] = []
+    for a, b in zip(path[:-1], path[1:], strict=True):
+        if np.allclose(a, b):
+            continue
+        inter = LineString([a, b]).intersection(union)
+        for g in getattr(inter, "geoms", [inter]):
+            if g.geom_type == "LineString" and g.length > 1e-6:
+                out.append(np.asarray(g.coords, dtype=float))
+    return out
+
+
+def _emptiest_corner(points: np.ndarray, W: float, H: float) -> str:
+    """Which corner of the area ("lower right", ...) holds the fewest of `points` within a
+    quarter of the area's size: where the scale bar covers the least data."""
+    corners = {"lower right": (W, 0.0), "lower left": (0.0, 0.0), "upper right": (W, H),
+               "upper left": (0.0, H)}  # fmt: skip
+    if not len(points):
+        return "lower right"
+    reach = np.array([0.3 * W, 0.15 * H])
+    count = {k: int(np.sum(np.all(np.abs(points - np.array(c)) < reach, axis=1)))
+             for k, c in corners.items()}  # fmt: skip
+    return min(count, key=lambda k: (count[k], list(corners).index(k)))
+
+
 def mission_figure(
     map: Any,  # noqa: A002
     *,
     timeline: Any = None,
     plan: Any = None,
     title: str | None = None,
-    figsize: tuple[float, float] = (8.0, 7.5),
+    figsize: tuple[float, float] | None = None,
 ) -> Any:
-    """A matplotlib Figure (Agg canvas) of `map` with a replayed `timeline` or a `plan`."""
+    """A matplotlib Figure (Agg canvas) of `map` with a replayed `timeline` or a `plan`.
+
+    The map panel labels sensors by id and hover points by visiting order and hover seconds
+    ("2 · 41 s"), shows the route's direction with arrows, draws the parts of legs inside an
+    obstacle (C5) in red, rings sensors short of data with "x of y Mbit" and crosses those that
+    got nothing. With a `timeline` (the simulator's replay) a second panel shows each sensor's
+    data collected over the mission time against its requirement (100 %). The figure's size
+    follows the area's shape (no wide white bands); `figsize` overrides it.
+    """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.cm import ScalarMappable
     from matplotlib.colors import Normalize
@@ -98,13 +145,30 @@ def mission_figure(
 
     spec = map.spec
     W, H = spec.area.width, spec.area.height
+    view = _mission_view(map, timeline, plan)
+    has_time = timeline is not None and len(getattr(timeline, "t", ())) > 1
+    aspect = H / W if W > 0 else 1.0
+    map_w = 7.5
+    map_h = float(np.clip(map_w * aspect, 2.5, 9.0))
+    if map_w * aspect > 9.0:  # a tall area: narrower figure rather than a taller one
+        map_w = 9.0 / aspect if aspect > 0 else map_w
+        map_w = max(map_w, 3.0)
+    time_h = 2.3 if has_time else 0.0
+    if figsize is None:
+        figsize = (map_w + 1.6, map_h + 1.4 + time_h)
     fig = Figure(figsize=figsize, layout="constrained")
     FigureCanvasAgg(fig)
-    ax = fig.add_subplot(1, 1, 1)
-    ax.set_aspect("equal")
+    if has_time:
+        ax, ax_t = fig.subplots(2, 1, height_ratios=[map_h, time_h])
+    else:
+        ax, ax_t = fig.add_subplot(1, 1, 1), None
+    # the box keeps the figure's shape and the limits grow to fill it: no white bands, and the
+    # colour bar is as tall as the map
+    ax.set_aspect("equal", adjustable="datalim")
     pad = 0.03 * max(W, H)
-    ax.set_xlim(-pad, W + pad)
-    ax.set_ylim(-pad, H + pad)
+    ax.margins(0)  # the view: the area plus a pad, grown along one axis to fill the box
+    ax.update_datalim(np.array([[-pad, -pad], [W + pad, H + pad]]))
+    ax.autoscale_view()
     ax.set_xlabel("x east (m)")
     ax.set_ylabel("y north (m)")
     ax.add_patch(RectanglePatch((0, 0), W, H, fill=False, edgecolor="0.3", linewidth=1.2,
@@ -131,32 +195,76 @@ def mission_figure(
         handles.append(Patch(facecolor="tab:red", alpha=0.3, edgecolor="tab:red", hatch="//",
                              label="no-fly zones"))  # fmt: skip
 
-    view = _mission_view(map, timeline, plan)
     sensors = np.asarray(map.sensors, dtype=float)
     required = np.asarray(map.required_data, dtype=float)
+    ids = list(map.sensor_ids)
+    many = len(ids) > 60  # label only the sensors that need attention on crowded maps
+    text_box = {"boxstyle": "round,pad=0.15", "facecolor": "white", "alpha": 0.7,
+                "edgecolor": "none"}  # fmt: skip
     if view is not None and view["collected"] is not None:
-        share = np.where(required > 0, view["collected"] / np.maximum(required, 1e-300), 1.0)
+        got = view["collected"]
+        share = np.where(required > 0, got / np.maximum(required, 1e-300), 1.0)
         norm = Normalize(0.0, 1.0)
         cmap = "RdYlGn"
         ax.scatter(sensors[:, 0], sensors[:, 1], c=np.clip(share, 0, 1), cmap=cmap, norm=norm,
-                   marker="o", s=36, edgecolors="k", linewidths=0.6, zorder=4)  # fmt: skip
+                   marker="o", s=40, edgecolors="k", linewidths=0.6, zorder=4)  # fmt: skip
         short = share < 1.0 - 1e-9
+        none = short & (got <= 1e-9)
         if short.any():
-            ax.scatter(sensors[short, 0], sensors[short, 1], marker="x", c="k", s=18, zorder=5)
-        cb = fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=ax, shrink=0.7)
-        cb.set_label("data collected / required (x: short)")
+            ax.scatter(sensors[short, 0], sensors[short, 1], marker="o", s=260,
+                       facecolors="none", edgecolors="tab:red", linewidths=2.0, zorder=5)
+            handles.append(Line2D([], [], marker="o", linestyle="", markersize=11,
+                                  markerfacecolor="none", markeredgecolor="tab:red",
+                                  markeredgewidth=2, label="sensor short of data (C4)"))
+        if none.any():
+            ax.scatter(sensors[none, 0], sensors[none, 1], marker="X", s=160, c="tab:red",
+                       edgecolors="k", linewidths=0.8, zorder=6)  # fmt: skip
+            handles.append(Line2D([], [], marker="X", linestyle="", markersize=10,
+                                  markerfacecolor="tab:red", markeredgecolor="k",
+                                  label="sensor not reached (0 Mbit)"))  # fmt: skip
+        for j, sid in enumerate(ids):
+            if short[j]:
+                ax.annotate(f"{sid}: {got[j]:.0f} of {required[j]:.0f} Mbit", sensors[j],
+                            xytext=(8, -12), textcoords="offset points", fontsize=8,
+                            color="tab:red", fontweight="bold", zorder=8, bbox=text_box)
+            elif not many:
+                ax.annotate(sid, sensors[j], xytext=(5, 5), textcoords="offset points",
+                            fontsize=7.5, zorder=8, bbox=text_box)  # fmt: skip
+        cb = fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=ax, fraction=0.04, pad=0.01)
+        cb.set_label("data collected / required")
         handles.append(Line2D([], [], marker="o", linestyle="", markerfacecolor="tab:green",
-                              markeredgecolor="k", label="sensors"))  # fmt: skip
+                              markeredgecolor="k", label="sensors (colour: share collected)"))
     else:
         ax.scatter(sensors[:, 0], sensors[:, 1], marker="o", s=30, c="tab:blue",
                    edgecolors="k", linewidths=0.5, zorder=4)  # fmt: skip
+        if not many:
+            for j, sid in enumerate(ids):
+                ax.annotate(sid, sensors[j], xytext=(5, 5), textcoords="offset points",
+                            fontsize=7.5, zorder=8, bbox=text_box)  # fmt: skip
         handles.append(Line2D([], [], marker="o", linestyle="", markerfacecolor="tab:blue",
                               markeredgecolor="k", label="sensors"))  # fmt: skip
 
+    data_points = [sensors, np.asarray([map.start, map.end], dtype=float)]
     if view is not None:
         p = view["path"]
+        data_points.append(p)
         ax.plot(p[:, 0], p[:, 1], "-", color="tab:blue", linewidth=1.6, zorder=3)
-        handles.append(Line2D([], [], color="tab:blue", linewidth=1.6, label="path"))
+        handles.append(Line2D([], [], color="tab:blue", linewidth=1.6,
+                              label="path (arrows: direction)"))  # fmt: skip
+        for a, b in zip(p[:-1], p[1:], strict=True):  # the route's order: one arrow per leg
+            if np.hypot(*(b - a)) > 0.02 * max(W, H):
+                mid = a + 0.55 * (b - a)
+                ax.annotate("", xy=mid, xytext=a + 0.45 * (b - a), zorder=3,
+                            arrowprops={"arrowstyle": "-|>", "color": "tab:blue", "lw": 1.4,
+                                        "mutation_scale": 14})  # fmt: skip
+        bad = _violation_segments(map, p)
+        for seg in bad:
+            ax.plot(seg[:, 0], seg[:, 1], "-", color="red", linewidth=4.0, zorder=7,
+                    solid_capstyle="butt")  # fmt: skip
+        if bad:
+            total = sum(float(np.sum(np.hypot(*np.diff(s, axis=0).T))) for s in bad)
+            handles.append(Line2D([], [], color="red", linewidth=4,
+                                  label=f"path inside obstacles (C5): {total:.0f} m"))
         if view["return_leg"] is not None:
             rl = np.asarray(view["return_leg"])
             ax.plot(rl[:, 0], rl[:, 1], ":", color="tab:blue", linewidth=1.2, zorder=3)
@@ -164,12 +272,16 @@ def mission_figure(
         hp, ht = view["hover_points"], view["hover_times"]
         if len(hp):
             t_max = max(float(spec.uav.max_hover_time), 1e-9)
-            size = 25.0 + 275.0 * np.clip(ht / t_max, 0.0, 1.0)
+            size = 40.0 + 260.0 * np.clip(ht / t_max, 0.0, 1.0)
             ax.scatter(hp[:, 0], hp[:, 1], s=size, facecolors="tab:orange", edgecolors="k",
                        alpha=0.85, linewidths=0.6, zorder=6)  # fmt: skip
+            for i, (xy, t) in enumerate(zip(hp, ht, strict=True)):
+                ax.annotate(f"{i + 1} · {t:.0f} s", xy, xytext=(7, -3), textcoords="offset points",
+                            fontsize=8, color="saddlebrown", fontweight="bold", zorder=8,
+                            bbox=text_box)  # fmt: skip
             handles.append(Line2D([], [], marker="o", linestyle="", markerfacecolor="tab:orange",
                                   markeredgecolor="k",
-                                  label=f"hover points ({len(hp)}, size ~ time)"))  # fmt: skip
+                                  label="hover point: order · seconds"))  # fmt: skip
 
     ax.plot(*map.start, marker="^", markersize=11, color="tab:green", markeredgecolor="k",
             zorder=7, linestyle="")  # fmt: skip
@@ -182,16 +294,65 @@ def mission_figure(
 
     bar = nice_length(W)
     label = f"{bar / 1000:g} km" if bar >= 1000 else f"{bar:g} m"
-    ax.add_artist(AnchoredSizeBar(ax.transData, bar, label, loc="lower right", pad=0.4,
+    corner = _emptiest_corner(np.vstack(data_points), W, H)
+    ax.add_artist(AnchoredSizeBar(ax.transData, bar, label, loc=corner, pad=0.4,
                                   borderpad=0.6, sep=4, frameon=True, size_vertical=0))  # fmt: skip
-    fig.legend(handles=handles, loc="outside lower center", ncol=min(len(handles), 5),
+    fig.legend(handles=handles, loc="outside lower center", ncol=min(len(handles), 4),
                fontsize=8, frameon=False)  # fmt: skip
     if title is None:
         title = f"map '{spec.name}'"
         if view is not None and view.get("f") is not None:
             title += f"  (f = {float(view['f']):.6g})"
     ax.set_title(title)
+    if ax_t is not None:
+        _data_panel(ax_t, timeline, map)
     return fig
+
+
+def _data_panel(ax: Any, timeline: Any, map_: Any) -> None:
+    """Each sensor's data collected along the mission time, as a share of its requirement
+    (the simulator's replay samples); the requirement is the 100 % line."""
+    t = np.asarray(timeline.t, dtype=float)
+    data = np.asarray(timeline.data, dtype=float)
+    required = np.asarray(map_.required_data, dtype=float)
+    share = 100.0 * data / np.maximum(required, 1e-300)[None, :]
+    share[:, required <= 0] = 100.0
+    ids = list(timeline.sensor_ids)
+    top = max(110.0, float(np.nanmax(share)) * 1.05)
+    labelled = [j for j in range(len(ids)) if len(ids) <= 12 or share[-1, j] < 100.0 - 1e-6]
+    # end labels spread apart vertically (at least 7 % of the axis) so close lines stay legible
+    ys = {}
+    for j in sorted(labelled, key=lambda j: share[-1, j]):
+        y = float(share[-1, j])
+        if ys:
+            y = max(y, max(ys.values()) + 0.07 * top)
+        ys[j] = y
+    colors = {}
+    for j in range(len(ids)):
+        (line,) = ax.plot(t, share[:, j], linewidth=1.2)
+        colors[j] = line.get_color()
+    for j, y in ys.items():
+        final = share[-1, j]
+        ax.annotate(f"{ids[j]}" + ("" if final >= 100.0 - 1e-6 else f" {final:.0f} %"),
+                    (t[-1], final), xytext=(t[-1] + 0.01 * (t[-1] - t[0]), y), fontsize=7.5,
+                    color=colors[j], va="center", annotation_clip=False,
+                    ha="left")  # fmt: skip
+    ax.axhline(100.0, color="k", linestyle="--", linewidth=1.0)
+    ax.text(t[0], 101.0, "required", fontsize=7.5, va="bottom")
+    phase = np.asarray(timeline.phase)
+    hover = phase == "hover"
+    if hover.any():  # shade the hovers, numbered like the map
+        edges = np.flatnonzero(np.diff(np.r_[0, hover.astype(int), 0]))
+        for k, (i0, i1) in enumerate(zip(edges[::2], edges[1::2], strict=True)):
+            ax.axvspan(t[i0], t[i1 - 1], color="tab:orange", alpha=0.15, linewidth=0)
+            ax.text((t[i0] + t[i1 - 1]) / 2, 3.0, str(k + 1), fontsize=7, ha="center",
+                    color="saddlebrown")
+    ax.set_xlim(t[0], t[-1] + 0.1 * max(t[-1] - t[0], 1e-9))
+    ax.set_ylim(0, max(top, max(ys.values(), default=0.0) + 0.05 * top))
+    ax.set_xlabel("mission time (s)")
+    ax.set_ylabel("collected / required (%)")
+    ax.set_title("data collected over the mission (simulator replay; shaded: hovering)",
+                 fontsize=9)
 
 
 def save_figure(fig: Any, path: str | Path, *, dpi: int = 150) -> Path:

@@ -255,7 +255,7 @@ def _cell(v: Any) -> str:
         return f"`{v}`"
     if isinstance(v, int) and not isinstance(v, bool) and abs(v) >= 10_000:
         return f"{v:,}"
-    return f"{v:g}" if isinstance(v, float) else str(v)
+    return f"{v:.10g}" if isinstance(v, float) else str(v)
 
 
 def render_markdown(table: dict[str, Default] | None = None) -> str:

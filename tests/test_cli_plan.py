@@ -20,6 +20,8 @@ def test_plan_writes_plan_plot_report_and_verifies(tmp_path: Path) -> None:
     assert r.returncode == 0, r.stderr
     assert "constraints (simulator)" in r.stdout and "C5" in r.stdout
     assert "gen" in r.stderr and "evals" in r.stderr  # progress on stderr
+    for path in (out, png, rep):  # every file written is reported
+        assert f"wrote {path}" in r.stdout.splitlines(), r.stdout
     doc = json.loads(out.read_text())
     assert doc["fileType"] == "Plan" and doc["mission"]["items"]
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -100,7 +100,8 @@ class _ProgressBar:
 
 
 def _summary(
-    plan: Any, m: Any, timeline: Any, verdicts: Any, out: str | None, stored: Any = None
+    plan: Any, m: Any, timeline: Any, verdicts: Any, out: str | list[str] | None,
+    stored: Any = None,
 ) -> str:
     from planner_core.textio import printable
 
@@ -143,8 +144,9 @@ def _summary(
     lines.append("  constraints (simulator) of the stored mission:" if stored is not None
                  else "  constraints (simulator):")
     lines.extend("    " + printable(row) for row in verdicts.table().splitlines())
-    if out:
-        lines.append(f"wrote {printable(out)}")
+    if out:  # every file written: the mission, then the plot and report when asked
+        paths = [out] if isinstance(out, str) else out
+        lines.extend(f"wrote {printable(path)}" for path in paths)
     return "\n".join(lines)
 
 
@@ -299,7 +301,8 @@ def run(args: argparse.Namespace) -> int:
                   "map": args.map, "output": args.output, "format": fmt}
         write_text_atomic(args.report, json.dumps(report, indent=2))
     if not args.quiet:
-        print(_summary(plan, m, timeline, verdicts, args.output, stored))
+        print(_summary(plan, m, timeline, verdicts,
+                       [p for p in (args.output, args.plot, args.report) if p], stored))
     if not feasible:
         print("lamde-mission plan: the mission is INFEASIBLE (written because of "
               "--allow-infeasible):", file=sys.stderr)
