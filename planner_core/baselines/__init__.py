@@ -26,6 +26,7 @@ from planner_core.baselines.budget import (
     as_budgeted,
 )
 from planner_core.defaults import CONFIGURATOR, CONFIGURATORS, POPULATION, SCORE_FACTOR
+from planner_core.starts import INIT_MODES, UniformStart, with_init
 
 __all__ = [
     "BudgetExceeded",
@@ -59,33 +60,8 @@ class OptimiseResult(NamedTuple):
     last_feasible_rate: float | None = None
 
 
-#: start modes of a benchmark run: the product's seeded start and the paper's uniform start
-INIT_MODES: tuple[str, ...] = ("seeded", "uniform")
-
-
-class UniformStart:
-    """A problem seen without its ``initial_population`` hook: every optimiser that asks for
-    the hook (our DE, CMA-ES's first point, scipy's DE) starts uniform in the box instead (the
-    paper's protocol, Sec. 5.1). Every other attribute is the wrapped problem's."""
-
-    def __init__(self, problem: Any) -> None:
-        self.problem = problem
-
-    def __getattr__(self, name: str) -> Any:
-        if name in ("initial_population", "problem"):
-            raise AttributeError(name)
-        return getattr(self.problem, name)
-
-
-def with_start(problem: Any, init: str) -> Any:
-    """`problem` as an optimiser should see it in start mode `init` (one of INIT_MODES);
-    ValueError names the valid modes."""
-    if init == "seeded":
-        return problem
-    if init == "uniform":
-        return UniformStart(problem)
-    raise ValueError(f"init: unknown start mode {init!r}; choose one of {', '.join(INIT_MODES)}")
-
+#: start modes of a benchmark run, the wrapper and the chooser: one place, planner_core.starts
+with_start = with_init
 
 @dataclass(frozen=True)
 class OptimiserSpec:
