@@ -69,3 +69,27 @@ def one_line_error(r: subprocess.CompletedProcess[str]) -> str:
     lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
     assert len(lines) == 1, r.stderr
     return lines[0]
+
+
+@pytest.fixture
+def port() -> int:
+    """A free UDP port on 127.0.0.1 for a mock vehicle (tests.vehicle_helpers.mock_on)."""
+    from tests.vehicle_helpers import free_udp_port
+
+    return free_udp_port()
+
+
+def plan_at(m, hover, times):
+    """A Plan-like record of the given hover points and times on map `m` (breakdown by the
+    model), for drawing and replay tests that need a known plan without running the DE."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from planner_core.problem import Problem
+
+    p = Problem(m)
+    b = p.breakdown(p.encode(hover, times))
+    return SimpleNamespace(hover_points=np.array(b["hover_points"]),
+                           hover_times=np.array(b["hover_times"]), f=b["f"], phi=b["phi"],
+                           feasible=b["phi"] == 0, breakdown=b)  # fmt: skip

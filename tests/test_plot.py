@@ -14,6 +14,7 @@ from lamde_mission.plot import _violation_segments, mission_figure, plot_mission
 from planner_core import Problem
 from planner_core.mapio import load_map
 from sim import replay
+from tests.conftest import plan_at
 
 MAP = {
     "name": "plot-check",
@@ -34,11 +35,7 @@ def _texts(fig) -> list[str]:
 
 
 def _plan(m):
-    p = Problem(m)
-    b = p.breakdown(p.encode(HOVER, TIMES))
-    return SimpleNamespace(hover_points=np.array(b["hover_points"]),
-                           hover_times=np.array(b["hover_times"]), f=b["f"], phi=b["phi"],
-                           feasible=b["phi"] == 0, breakdown=b)  # fmt: skip
+    return plan_at(m, HOVER, TIMES)
 
 
 def test_infeasible_plan_shows_where_and_why(tmp_path) -> None:

@@ -6,7 +6,6 @@ import json
 from dataclasses import replace
 from types import SimpleNamespace
 
-import numpy as np
 import pytest
 
 from lamde_mission.formats import write_mission
@@ -14,9 +13,8 @@ from lamde_mission.formats.waypoints import write_waypoints
 from lamde_mission.items import CMD, plan_to_items
 from lamde_mission.plot import nice_length, plot_mission
 from planner_core.mapio import load_map
-from planner_core.problem import Problem
 from sim import replay
-from tests.conftest import one_line_error, run_cli, run_cli_many
+from tests.conftest import one_line_error, plan_at, run_cli, run_cli_many
 
 MAP = {
     "name": "cli",
@@ -37,11 +35,7 @@ TIMES = [45.0, 50.0]
 
 
 def _plan(m):
-    p = Problem(m)
-    b = p.breakdown(p.encode(HOVER, TIMES))
-    return SimpleNamespace(hover_points=np.array(b["hover_points"]),
-                           hover_times=np.array(b["hover_times"]), f=b["f"], phi=b["phi"],
-                           feasible=b["phi"] == 0, breakdown=b)  # fmt: skip
+    return plan_at(m, HOVER, TIMES)
 
 
 @pytest.fixture(scope="module")

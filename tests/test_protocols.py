@@ -15,18 +15,13 @@ from planner_core.bench.records import RESULTS_FILE, key_of, read_records
 from planner_core.bench.report import imax_table
 from planner_core.execution import SerialExecutor
 from planner_core.problem import Problem
+from tests import test_bench
 from tests.test_bench import _map
 
 BUDGET = 300
 
-
-@pytest.fixture
-def suite(tmp_path: Path) -> Path:
-    folder = tmp_path / "suite"
-    folder.mkdir()
-    for name, shift in (("A1", 0.0), ("B2", 60.0)):
-        (folder / f"{name}.json").write_text(json.dumps(_map(name, shift)))
-    return folder
+#: the two-map suite fixture (A1, B2) of the bench tests
+suite = test_bench.suite
 
 
 class _Spy:

@@ -30,7 +30,7 @@ from lamde_mission.vehicle.transfer import (
 from lamde_mission.vehicle.upload import upload_mission
 from lamde_mission.vehicle.wire import compare_items
 from planner_core.mapio import load_map
-from tests.vehicle_helpers import free_udp_port, hand_fence, hand_mission
+from tests.vehicle_helpers import free_udp_port, hand_fence, hand_mission, listen_on, mock_on
 
 VIAS = ("mavsdk", "pymavlink")
 
@@ -57,20 +57,6 @@ def _no_leftover_mock_threads():
     assert not left, "a mock vehicle thread outlived its test"
 
 
-@pytest.fixture
-def port() -> int:
-    return free_udp_port()
-
-
-def _mock(port: int, **kw) -> MockVehicle:
-    """A mock sending to 127.0.0.1:port; 4 Hz heartbeats so tests connect fast."""
-    kw.setdefault("heartbeat_hz", 4.0)
-    return MockVehicle(f"udpout:127.0.0.1:{port}", **kw)
-
-
-def _listen(port: int) -> str:
-    return f"udpin://127.0.0.1:{port}"
-
 
 @pytest.fixture(scope="module")
 def plan_files(tmp_path_factory):
@@ -88,8 +74,8 @@ def plan_files(tmp_path_factory):
 @pytest.mark.parametrize("via", VIAS)
 def test_upload_and_read_back(via, port):
     mission, fence = hand_mission(3), hand_fence()
-    with _mock(port) as v:
-        report = upload_mission(mission, fence, connect=_listen(port), via=via, timeout=10)
+    with mock_on(port) as v:
+        report = upload_mission(mission, fence, connect=listen_on(port), via=via, timeout=10)
         assert compare_items(mission, v.items(MISSION_TYPE.MISSION)) == []
         assert compare_items(fence, v.items(MISSION_TYPE.FENCE), "fence") == []
     assert report.ok and report.attempts == 1 and report.via == via
@@ -103,8 +89,8 @@ def test_upload_and_read_back(via, port):
 def test_fifty_items_round_trip(via, port):
     mission = hand_mission(46)
     assert len(mission) == 50
-    with _mock(port) as v:
-        report = upload_mission(mission, [], connect=_listen(port), via=via, timeout=10)
+    with mock_on(port) as v:
+        report = upload_mission(mission, [], connect=listen_on(port), via=via, timeout=10)
         got = v.items()
     assert report.ok and report.mission_items == 50
     assert len(got) == 50 and compare_items(mission, got) == []
@@ -120,9 +106,9 @@ def test_vehicle_side_rerequests_keep_an_upload_going(via, port):
     """20% of the mock's messages lost: 2 seeded uploads each, whole-transfer retries allowed."""
     mission, fence = hand_mission(4), hand_fence()
     for seed in (1, 2):
-        with _mock(port, loss=0.2, seed=seed) as v:
+        with mock_on(port, loss=0.2, seed=seed) as v:
             t0 = time.monotonic()
-            report = upload_mission(mission, fence, connect=_listen(port), via=via, timeout=20,
+            report = upload_mission(mission, fence, connect=listen_on(port), via=via, timeout=20,
                                     attempts=5)  # fmt: skip
             assert time.monotonic() - t0 < 60
             assert report.ok
@@ -137,9 +123,9 @@ def test_twenty_seeded_uploads_with_20_percent_loss(via):
     mission, fence = hand_mission(6), hand_fence()
     for seed in range(20):
         port = free_udp_port()
-        with _mock(port, loss=0.2, seed=seed) as v:
+        with mock_on(port, loss=0.2, seed=seed) as v:
             t0 = time.monotonic()
-            report = upload_mission(mission, fence, connect=_listen(port), via=via, timeout=20,
+            report = upload_mission(mission, fence, connect=listen_on(port), via=via, timeout=20,
                                     attempts=5)  # fmt: skip
             took = time.monotonic() - t0
             assert report.ok, f"seed {seed}"
@@ -154,7 +140,7 @@ def test_twenty_seeded_uploads_with_20_percent_loss(via):
 def test_no_vehicle_times_out_within_the_timeout(via, port):
     t0 = time.monotonic()
     with pytest.raises(NoVehicleError, match="no vehicle heard at .* within 1 s") as info:
-        upload_mission(hand_mission(1), [], connect=_listen(port), via=via, timeout=1.0)
+        upload_mission(hand_mission(1), [], connect=listen_on(port), via=via, timeout=1.0)
     assert 0.9 <= time.monotonic() - t0 < 3.0
     assert info.value.report is not None and not info.value.report.ok
 
@@ -165,9 +151,9 @@ def test_no_vehicle_times_out_within_the_timeout(via, port):
      ("mavsdk", "TOO_MANY_MISSION_ITEMS", "MAV_MISSION_NO_SPACE")],
 )  # fmt: skip
 def test_rejecting_vehicle_gives_its_code_by_name(via, name, shown, port):
-    with _mock(port, reject="MAV_MISSION_NO_SPACE") as v:
+    with mock_on(port, reject="MAV_MISSION_NO_SPACE") as v:
         with pytest.raises(MissionRejectedError) as info:
-            upload_mission(hand_mission(2), [], connect=_listen(port), via=via, timeout=10)
+            upload_mission(hand_mission(2), [], connect=listen_on(port), via=via, timeout=10)
         assert v.items() == []
     exc = info.value
     assert exc.name == name and shown in str(exc)
@@ -180,8 +166,8 @@ def test_read_back_mismatch_names_item_and_field(via, port):
         return replace(w, param1=w.param1 + 1.0) if w.seq == 3 and w.mission_type == 0 else w
 
     mismatch = pytest.raises(ReadbackMismatchError, match="mission item 3: param1")
-    with _mock(port, corrupt=faulty), mismatch as info:
-        upload_mission(hand_mission(3), hand_fence(), connect=_listen(port), via=via,
+    with mock_on(port, corrupt=faulty), mismatch as info:
+        upload_mission(hand_mission(3), hand_fence(), connect=listen_on(port), via=via,
                        timeout=10, attempts=2)  # fmt: skip
     exc = info.value
     assert [(d.what, d.index, d.field) for d in exc.differences] == [("mission", 3, "param1")]
@@ -189,11 +175,11 @@ def test_read_back_mismatch_names_item_and_field(via, port):
 
 
 def test_empty_fence_clears_the_vehicles_fence_and_none_leaves_it(port):
-    with _mock(port) as v:
+    with mock_on(port) as v:
         v.set_items(hand_fence(), MISSION_TYPE.FENCE)
-        upload_mission(hand_mission(1), None, connect=_listen(port), via="pymavlink", timeout=5)
+        upload_mission(hand_mission(1), None, connect=listen_on(port), via="pymavlink", timeout=5)
         assert len(v.items(MISSION_TYPE.FENCE)) == 5
-        upload_mission(hand_mission(1), [], connect=_listen(port), via="pymavlink", timeout=5)
+        upload_mission(hand_mission(1), [], connect=listen_on(port), via="pymavlink", timeout=5)
         assert v.items(MISSION_TYPE.FENCE) == []
 
 
@@ -201,7 +187,7 @@ def test_items_mavlink_cannot_carry_are_refused_before_connecting(port):
     bad = [replace(hand_mission(1)[0], param1=1e40)]
     t0 = time.monotonic()
     with pytest.raises(ValueError, match="float32"):
-        upload_mission(bad, [], connect=_listen(port), via="pymavlink", timeout=5)
+        upload_mission(bad, [], connect=listen_on(port), via="pymavlink", timeout=5)
     assert time.monotonic() - t0 < 1.0
 
 
@@ -221,8 +207,8 @@ def test_mock_vehicle_as_udpin_and_client_as_udpout(port):
 def test_cli_upload_plan(via, port, plan_files, capsys):
     plan_path, _ = plan_files
     mission, fence = read_mission(plan_path)
-    with _mock(port) as v:
-        rc = main(["upload", str(plan_path), "--connect", _listen(port), "--via", via,
+    with mock_on(port) as v:
+        rc = main(["upload", str(plan_path), "--connect", listen_on(port), "--via", via,
                    "--timeout", "10"])  # fmt: skip
         assert compare_items(mission, v.items()) == []
         assert compare_items(fence, v.items(MISSION_TYPE.FENCE), "fence") == []
@@ -237,9 +223,9 @@ def test_cli_upload_waypoints_uploads_the_same_mission_and_leaves_the_fence(
 ):
     plan_path, wp_path = plan_files
     mission_plan, _ = read_mission(plan_path)
-    with _mock(port) as v:
+    with mock_on(port) as v:
         v.set_items(hand_fence(), MISSION_TYPE.FENCE)
-        rc = main(["upload", str(wp_path), "--connect", _listen(port), "--via", "pymavlink",
+        rc = main(["upload", str(wp_path), "--connect", listen_on(port), "--via", "pymavlink",
                    "--timeout", "10"])  # fmt: skip
         got = v.items()
         assert len(v.items(MISSION_TYPE.FENCE)) == 5
@@ -261,13 +247,13 @@ def test_cli_upload_errors(port, plan_files, tmp_path, capsys):
     capsys.readouterr()
     # no vehicle: exit 1 within the timeout
     t0 = time.monotonic()
-    rc = main(["upload", str(plan_path), "--connect", _listen(port), "--via", "pymavlink",
+    rc = main(["upload", str(plan_path), "--connect", listen_on(port), "--via", "pymavlink",
                "--timeout", "0.5"])  # fmt: skip
     assert rc == 1 and time.monotonic() - t0 < 2.0
     assert "no vehicle heard" in capsys.readouterr().err
     # a rejecting vehicle: exit 1, the code by name
-    with _mock(port, reject="DENIED"):
-        rc = main(["upload", str(plan_path), "--connect", _listen(port), "--via", "pymavlink",
+    with mock_on(port, reject="DENIED"):
+        rc = main(["upload", str(plan_path), "--connect", listen_on(port), "--via", "pymavlink",
                    "--timeout", "5"])  # fmt: skip
     assert rc == 1 and "MAV_MISSION_DENIED" in capsys.readouterr().err
 
@@ -291,7 +277,7 @@ def test_cli_mock_vehicle_runs_until_ctrl_c(port):
     try:
         first = proc.stdout.readline()
         assert "mock vehicle" in first and f"127.0.0.1:{port}" in first and "loss 0.1" in first
-        report = upload_mission(hand_mission(2), hand_fence(), connect=_listen(port),
+        report = upload_mission(hand_mission(2), hand_fence(), connect=listen_on(port),
                                 via="pymavlink", timeout=10, attempts=5)  # fmt: skip
         assert report.ok
         proc.send_signal(signal.SIGINT)

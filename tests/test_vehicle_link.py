@@ -24,23 +24,10 @@ from lamde_mission.vehicle.upload import upload_mission
 from lamde_mission.vehicle.wire import compare_items
 from planner_core.mapio import load_map
 from tests.test_vehicle import MAP
-from tests.vehicle_helpers import free_udp_port, hand_fence, hand_mission
+from tests.vehicle_helpers import free_udp_port, hand_fence, hand_mission, listen_on, mock_on
 
 VIAS = ("mavsdk", "pymavlink")
 
-
-@pytest.fixture
-def port() -> int:
-    return free_udp_port()
-
-
-def _mock(port: int, **kw) -> MockVehicle:
-    kw.setdefault("heartbeat_hz", 4.0)
-    return MockVehicle(f"udpout:127.0.0.1:{port}", **kw)
-
-
-def _listen(port: int) -> str:
-    return f"udpin://127.0.0.1:{port}"
 
 
 # ----------------------------------------------------------------------------- loss, noise
@@ -50,8 +37,8 @@ def test_pymavlink_recovers_items_one_by_one_at_40_percent_loss_both_ways(port):
     mission, fence = hand_mission(16), hand_fence()
     lines: list[str] = []
     progress: list[tuple[str, int, int]] = []
-    with _mock(port, loss=0.4, loss_in=0.4, seed=3) as v:
-        report = upload_mission(mission, fence, connect=_listen(port), via="pymavlink",
+    with mock_on(port, loss=0.4, loss_in=0.4, seed=3) as v:
+        report = upload_mission(mission, fence, connect=listen_on(port), via="pymavlink",
                                 timeout=10, attempts=1, log=lines.append,
                                 progress=lambda *a: progress.append(a))  # fmt: skip
         assert compare_items(mission, v.items()) == []
@@ -65,8 +52,8 @@ def test_pymavlink_recovers_items_one_by_one_at_40_percent_loss_both_ways(port):
 def test_second_ground_station_broadcasting_mission_messages(via, port):
     mission, fence = hand_mission(6), hand_fence()
     lines: list[str] = []
-    with _mock(port, noisy_gcs_hz=200.0, latency_ms=20.0, seed=1) as v:
-        report = upload_mission(mission, fence, connect=_listen(port), via=via, timeout=10,
+    with mock_on(port, noisy_gcs_hz=200.0, latency_ms=20.0, seed=1) as v:
+        report = upload_mission(mission, fence, connect=listen_on(port), via=via, timeout=10,
                                 attempts=1, log=lines.append)  # fmt: skip
         assert compare_items(mission, v.items()) == []
         assert v.stats.noise > 0
@@ -101,9 +88,9 @@ def test_forged_replies_from_another_address_are_ignored(port):
     mission = hand_mission(8)
     th = threading.Thread(target=forge, daemon=True)
     try:
-        with _mock(port) as v:
+        with mock_on(port) as v:
             th.start()
-            report = upload_mission(mission, hand_fence(), connect=_listen(port),
+            report = upload_mission(mission, hand_fence(), connect=listen_on(port),
                                     via="pymavlink", timeout=10, attempts=1,
                                     log=lines.append)  # fmt: skip
             assert compare_items(mission, v.items()) == []
@@ -174,21 +161,21 @@ def _plan_files(tmp_path):
 @pytest.mark.parametrize("via", VIAS)
 def test_cli_sim_check_refuses_unless_force(via, port, tmp_path, capsys):
     plan_path, map_ok, map_greedy = _plan_files(tmp_path)
-    with _mock(port) as v:
+    with mock_on(port) as v:
         # rejected by the simulator on the greedy map: exit 2, nothing sent
         rc = main(["upload", str(plan_path), "--map", str(map_greedy), "--connect",
-                   _listen(port), "--via", via, "--timeout", "5"])  # fmt: skip
+                   listen_on(port), "--via", via, "--timeout", "5"])  # fmt: skip
         err = capsys.readouterr().err
         assert rc == 2 and "simulator rejects" in err and "C4" in err and "--force" in err
         assert v.stats.uploads[MISSION_TYPE.MISSION] == 0
         # accepted on its own map
-        rc = main(["upload", str(plan_path), "--map", str(map_ok), "--connect", _listen(port),
+        rc = main(["upload", str(plan_path), "--map", str(map_ok), "--connect", listen_on(port),
                    "--via", via, "--timeout", "10"])  # fmt: skip
         assert rc == 0, capsys.readouterr().err
         # --force sends what the simulator rejects, with a warning
         v.set_items([], MISSION_TYPE.MISSION)
         rc = main(["upload", str(plan_path), "--map", str(map_greedy), "--force", "--connect",
-                   _listen(port), "--via", via, "--timeout", "10"])  # fmt: skip
+                   listen_on(port), "--via", via, "--timeout", "10"])  # fmt: skip
         assert rc == 0
         assert "sent anyway (--force)" in capsys.readouterr().err
         mission, _ = read_mission(plan_path)
@@ -339,7 +326,7 @@ def test_mavsdk_log_stays_off_stderr_unless_verbose(tmp_path):
     from tests.conftest import run_cli
 
     plan_path = _plan_files(tmp_path)[0]
-    url = _listen(free_udp_port())
+    url = listen_on(free_udp_port())
     quiet = run_cli("upload", plan_path, "--via", "mavsdk", "--timeout", "0.5", "--connect", url)
     assert quiet.returncode == 1
     assert quiet.stderr.strip().splitlines() == [

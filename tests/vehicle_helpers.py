@@ -12,6 +12,7 @@ from typing import Any
 from pymavlink.dialects.v20 import common as mavlink2
 
 from lamde_mission.items import CMD, FRAME, MISSION_TYPE, MissionItem
+from lamde_mission.vehicle.mock import MockVehicle
 
 NAN = math.nan
 
@@ -109,3 +110,14 @@ class RawGcs:
 
     def drain(self) -> None:
         self.pending.clear()
+
+
+def mock_on(port: int, **kw: Any) -> MockVehicle:
+    """A mock sending to 127.0.0.1:port; 4 Hz heartbeats so tests connect fast."""
+    kw.setdefault("heartbeat_hz", 4.0)
+    return MockVehicle(f"udpout:127.0.0.1:{port}", **kw)
+
+
+def listen_on(port: int) -> str:
+    """The ground side's connection string for a mock made by `mock_on(port)`."""
+    return f"udpin://127.0.0.1:{port}"
