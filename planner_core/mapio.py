@@ -146,24 +146,24 @@ _RING_DOC = (
 )
 
 
-class NoFlyZone(BaseModel):
+class _HoledPolygon(BaseModel):
+    """Any simple polygon (`vertices`, the exterior ring) with optional `holes`; the fields a
+    no-fly zone and a polygon footprint share."""
+
+    model_config = _STRICT
+    vertices: list[Point2] = Field(description=_RING_DOC)
+    holes: list[list[Point2]] = Field([], description="rings inside, where flight is allowed "
+                                      "(a courtyard)")  # fmt: skip
+    name: str | None = Field(None, max_length=200, pattern=_PRINTABLE,
+                             description="label shown in messages, plots and exports")
+
+
+class NoFlyZone(_HoledPolygon):
     """A no-fly zone: any simple polygon (`vertices`, the exterior ring) with optional `holes`."""
 
-    model_config = _STRICT
-    vertices: list[Point2] = Field(description=_RING_DOC)
-    holes: list[list[Point2]] = Field([], description="rings inside, where flight is allowed")
-    name: str | None = Field(None, max_length=200, pattern=_PRINTABLE,
-                             description="label shown in messages, plots and exports")
 
-
-class PolygonObstacle(BaseModel):
+class PolygonObstacle(_HoledPolygon):
     """An obstacle footprint (a building): any simple polygon with optional `holes`."""
-
-    model_config = _STRICT
-    vertices: list[Point2] = Field(description=_RING_DOC)
-    holes: list[list[Point2]] = Field([], description="rings inside (a courtyard), flyable")
-    name: str | None = Field(None, max_length=200, pattern=_PRINTABLE,
-                             description="label shown in messages, plots and exports")
 
 
 class ObstaclesSpec(BaseModel):
