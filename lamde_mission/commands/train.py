@@ -34,6 +34,11 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--budget", type=int, help="evaluations per training episode")
     p.add_argument("--init", choices=("uniform", "seeded", "both"), default="both",
                    help="start modes of the training episodes (default both, alternating)")
+    p.add_argument("--imitate", metavar="CONFIGURATOR",
+                   help="behaviour-cloning warm start: fit the policy to this hand-made "
+                   "configurator's choices before PPO (default adaptive; 'none' skips it)")
+    p.add_argument("--imitate-epochs", type=int, metavar="K",
+                   help="passes of the warm start over the demonstrations (default 8)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="any other PPOConfig field (JSON value), e.g. --set lr=1e-3; repeatable")
     p.add_argument("--resume", action="store_true", help="continue from OUT's last epoch")
@@ -51,6 +56,18 @@ def _config(args: argparse.Namespace):  # noqa: ANN202 - PPOConfig is imported l
         if getattr(args, name) is not None:
             kw[name] = getattr(args, name)
     kw["init_modes"] = ("uniform", "seeded") if args.init == "both" else (args.init,)
+    if args.imitate is not None:
+        from planner_core.defaults import CONFIGURATORS
+
+        known = sorted(set(CONFIGURATORS) - {"lamde"})
+        if args.imitate not in (*known, "none"):
+            raise UsageError(f"--imitate: unknown configurator '{args.imitate}' "
+                             f"(choose from {', '.join(known)} or none)")
+        kw["imitate"] = args.imitate
+    if args.imitate_epochs is not None:
+        if args.imitate_epochs < 0:
+            raise UsageError(f"--imitate-epochs: must be >= 0, got {args.imitate_epochs}")
+        kw["imitate_epochs"] = args.imitate_epochs
     fields = {f.name for f in dataclasses.fields(PPOConfig)}
     net_fields = {f.name for f in dataclasses.fields(NetConfig)}
     net_kw: dict = {}

@@ -1,7 +1,10 @@
 """Meta-training of the policy with PPO and n-step updates (paper Algorithm 1). Torch lives here.
 
-One readable loop (:func:`train`), in the spirit of CleanRL's ``ppo.py``:
+One readable loop (:func:`train`), in the spirit of CleanRL's ``ppo.py``, after a warm start:
 
+    behaviour cloning of a hand-made configurator     # PPOConfig.imitate ("adaptive"), see
+      (actor by maximum likelihood, critic on the     #   planner_core.policy.imitation; written
+      returns-to-go of its episodes)                  #   as the checkpoint of epoch 0
     for epoch in 1..E:                                   # Algorithm 1, line 2
         for each chunk of `envs` training problems:      # line 3, several rolled out together
             reset one DE per problem (start mode per env) # line 4-5
@@ -26,6 +29,12 @@ log-densities. Every individual of a population shares its generation's advantag
 Advantage estimation: GAE(gamma, lambda) over the n-step segment, bootstrapped with V of the
 state after the segment unless the episode ended there (the budget's end is a true terminal
 state, see planner_core.env); returns R = A + V; advantages normalised over the batch.
+
+Reward scaling (``reward_scale``, on by default): before GAE every reward is divided by the
+running std of its problem's and start mode's discounted return (CleanRL's reward
+normalisation, kept per problem: :class:`planner_core.policy.imitation.RewardScaler`; the
+warm start's demonstration episodes seed the statistics), so that large and small maps, seeded
+and uniform starts weigh alike in an update. The curve's ``return`` stays the raw env return.
 
 Determinism: the epoch's rollouts draw from ``numpy.random.default_rng([seed, epoch])`` and the
 torch generator is reseeded per epoch, so the same seed gives the same checkpoint on the same
@@ -54,6 +63,7 @@ from torch.distributions import Beta, Categorical
 from planner_core.atomic import write_bytes_atomic
 from planner_core.env import DEFAULT_DELTA, DEFAULT_ETA, OptimizationEnv
 from planner_core.policy import checkpoint as ckpt
+from planner_core.policy.imitation import RewardScaler, collect_demos, pretrain
 from planner_core.policy.network import (
     N_FEATURES,
     NetConfig,
@@ -93,8 +103,8 @@ class PPOConfig:
     """GAE lambda for the advantage estimate (1.0 = n-step returns)."""
     clip: float = 0.2
     """PPO ratio clip epsilon (RLDE-AFL: 0.2)."""
-    lr: float = 1e-3
-    """Adam learning rate."""
+    lr: float = 3e-4
+    """Adam learning rate of PPO (small: PPO refines the warm start; CleanRL uses 2.5e-4)."""
     vf_coef: float = 0.5
     """Weight of the value loss."""
     ent_coef: float = 0.001
@@ -112,6 +122,22 @@ class PPOConfig:
     """Feasibility tolerance of the reward (planner_core.env)."""
     threads: int = 1
     """torch intra-op threads (1 keeps runs reproducible and leaves a core to the DE)."""
+    imitate: str = "adaptive"
+    """Behaviour-cloning warm start (:mod:`planner_core.policy.imitation`): the hand-made
+    configurator whose choices the actor is fitted to by maximum likelihood (and the critic to
+    its returns) before PPO, on every training problem in every start mode; "none" skips it."""
+    imitate_epochs: int = 8
+    """Passes over the demonstrations (0 = no warm start)."""
+    imitate_lr: float = 1e-3
+    """Adam learning rate of the warm start."""
+    imitate_batch: int = 8
+    """Observations per warm-start mini-batch."""
+    imitate_stride: int = 3
+    """Keep every k-th generation of the demonstrations (consecutive ones are near copies)."""
+    reward_scale: bool = True
+    """Divide each reward by the running std of its problem's (and start mode's) discounted
+    return, CleanRL's reward normalisation (:class:`planner_core.policy.imitation.RewardScaler`),
+    so that big and small maps, seeded and uniform starts weigh alike in an update."""
     net: NetConfig = field(default_factory=NetConfig)
     """Network sizes."""
 
@@ -158,26 +184,41 @@ class TorchPolicy(nn.Module):
     def _w(self, name: str) -> torch.Tensor:
         return self.p[name.replace(".", "__")]
 
-    def _block(self, x: torch.Tensor, prefix: str, key_mask: torch.Tensor | None) -> torch.Tensor:
-        *lead, L, E = x.shape
+    def _lin(self, x: torch.Tensor, prefix: str) -> torch.Tensor:
+        """``x @ W + b`` with the bias fused into the matmul (weights are stored (in, out))."""
+        return nn.functional.linear(x, self._w(f"{prefix}.weight").t(), self._w(f"{prefix}.bias"))
+
+    def _mab(self, a: torch.Tensor, b: torch.Tensor, prefix: str,
+             key_mask: torch.Tensor | None) -> torch.Tensor:
+        """MAB(A, B) as written in the Set Transformer paper: a (..., La, E) attends to
+        b (..., Lb, E); post-norm."""
+        *lead, La, E = a.shape
+        Lb = b.shape[-2]
         h = self.cfg.heads
         dh = E // h
-        qkv = (x @ self._w(f"{prefix}.qkv.weight") + self._w(f"{prefix}.qkv.bias"))
-        qkv = qkv.reshape(*lead, L, 3, h, dh)
-        q = qkv[..., 0, :, :].movedim(-2, -3)
-        k = qkv[..., 1, :, :].movedim(-2, -3)
-        v = qkv[..., 2, :, :].movedim(-2, -3)
+        q = self._lin(a, f"{prefix}.q")
+        kv = self._lin(b, f"{prefix}.kv")
+        q = q.reshape(*lead, La, h, dh).movedim(-2, -3)
+        k = kv[..., :E].reshape(*lead, Lb, h, dh).movedim(-2, -3)
+        v = kv[..., E:].reshape(*lead, Lb, h, dh).movedim(-2, -3)
         s = (q @ k.transpose(-1, -2)) / math.sqrt(dh)
-        if key_mask is not None:  # (..., L) additive: 0 for a real key, -inf for padding
+        if key_mask is not None:  # (..., Lb) additive: 0 for a real key, -inf for padding
             s = s + key_mask[..., None, None, :]
-        y = (torch.softmax(s, dim=-1) @ v).movedim(-3, -2).reshape(*lead, L, E)
-        y = y @ self._w(f"{prefix}.out.weight") + self._w(f"{prefix}.out.bias")
-        x = nn.functional.layer_norm(x + y, (E,), self._w(f"{prefix}.ln1.weight"),
+        y = (torch.softmax(s, dim=-1) @ v).movedim(-3, -2).reshape(*lead, La, E)
+        y = self._lin(y, f"{prefix}.out")
+        x = nn.functional.layer_norm(a + y, (E,), self._w(f"{prefix}.ln1.weight"),
                                      self._w(f"{prefix}.ln1.bias"), eps=1e-5)
-        y = torch.relu(x @ self._w(f"{prefix}.ff1.weight") + self._w(f"{prefix}.ff1.bias"))
-        y = y @ self._w(f"{prefix}.ff2.weight") + self._w(f"{prefix}.ff2.bias")
+        y = torch.relu(self._lin(x, f"{prefix}.ff1"))
+        y = self._lin(y, f"{prefix}.ff2")
         return nn.functional.layer_norm(x + y, (E,), self._w(f"{prefix}.ln2.weight"),
                                         self._w(f"{prefix}.ln2.bias"), eps=1e-5)
+
+    def _isab(self, x: torch.Tensor, prefix: str, key_mask: torch.Tensor | None) -> torch.Tensor:
+        """ISAB(X) = MAB(X, MAB(I, X)) over the second-last axis of x (..., L, E)."""
+        ind = self._w(f"{prefix}.inducing")
+        ind = ind.expand(*x.shape[:-2], *ind.shape)
+        h = self._mab(ind, x, f"{prefix}.ind", key_mask)
+        return self._mab(x, h, f"{prefix}.set", None)
 
     def forward(
         self,
@@ -194,24 +235,24 @@ class TorchPolicy(nn.Module):
         t = torch.cat([X[..., None], f[:, :, None, :].expand(B, N, D, 2),
                        phi[:, :, None, :].expand(B, N, D, 2)], dim=-1)
         assert t.shape[-1] == N_FEATURES
-        x = t @ self._w("embed.weight") + self._w("embed.bias")  # (B, N, D, E)
-        x = self._block(x.transpose(1, 2), "pop", None).transpose(1, 2)
+        x = self._lin(t, "embed")  # (B, N, D, E)
+        x = self._isab(x.transpose(1, 2), "pop", None).transpose(1, 2)
         km = None
         if not bool(mask.all()):
             km = torch.zeros(mask.shape, dtype=x.dtype).masked_fill(~mask, float("-inf"))
             km = km[:, None, :].expand(B, N, D)
-        x = self._block(x, "dim", km)
+        x = self._isab(x, "dim", km)
         m = mask[:, None, :, None].to(x.dtype)
         pooled = (x * m).sum(dim=2) / m.sum(dim=2)  # (B, N, E)
         g = progress[:, None, None].expand(B, N, 1).to(x.dtype)
         h = torch.relu(torch.cat([pooled, g], dim=-1) @ self._w("join.weight")
                        + self._w("join.bias"))
-        mut = h @ self._w("mutation.weight") + self._w("mutation.bias")
-        cx = h @ self._w("crossover.weight") + self._w("crossover.bias")
-        F_ab = 1.0 + nn.functional.softplus(h @ self._w("F.weight") + self._w("F.bias"))
-        Cr_ab = 1.0 + nn.functional.softplus(h @ self._w("Cr.weight") + self._w("Cr.bias"))
+        mut = self._lin(h, "mutation")
+        cx = self._lin(h, "crossover")
+        F_ab = 1.0 + nn.functional.softplus(self._lin(h, "F"))
+        Cr_ab = 1.0 + nn.functional.softplus(self._lin(h, "Cr"))
         c = torch.relu(h.mean(dim=1) @ self._w("critic1.weight") + self._w("critic1.bias"))
-        value = (c @ self._w("critic2.weight") + self._w("critic2.bias"))[:, 0]
+        value = self._lin(c, "critic2")[:, 0]
         return mut, cx, F_ab, Cr_ab, value
 
 
@@ -397,13 +438,17 @@ def train(
             raise ValueError(f"init_modes: unknown start mode {mode!r}")
     torch.set_num_threads(cfg.threads)
     problems = [build(s) for s in specs]
+    names = [spec_name(s) for s in specs]
     model = TorchPolicy(cfg.net)
     model.load_numpy(init_params(cfg.net, cfg.seed))
     optimizer = torch.optim.Adam(model.parameters(), lr=cfg.lr, eps=1e-5)
+    scaler = RewardScaler(cfg.gamma)
     curve: list[dict[str, Any]] = []
+    imitation_rows: list[dict[str, float]] = []
     start_epoch = 0
     state_path = out / "state.pt"
-    if resume and state_path.exists():
+    resumed = resume and state_path.exists()
+    if resumed:
         state = torch.load(state_path, weights_only=False)
         same = {k: v for k, v in state["config"].items() if k != "epochs"} == {
             k: v for k, v in cfg.to_dict().items() if k != "epochs"}
@@ -414,7 +459,30 @@ def train(
         optimizer.load_state_dict(state["optimizer"])
         start_epoch = int(state["epoch"])
         curve = list(state["curve"])
+        scaler.load_state_dict(state.get("scaler", {}))
+        imitation_rows = list(state.get("imitation", []))
     writer = _scalar_writer(out) if start_epoch < cfg.epochs else None
+    if not resumed and cfg.imitate != "none" and cfg.imitate_epochs > 0:
+        # ---- behaviour-cloning warm start (planner_core.policy.imitation); its episodes also
+        # seed the reward scaler's statistics of every problem and start mode
+        t_bc = time.perf_counter()
+        demos = collect_demos(
+            problems, names, configurator=cfg.imitate, init_modes=cfg.init_modes,
+            seed=cfg.seed, population=cfg.population, budget=cfg.budget, gamma=cfg.gamma,
+            eta=cfg.eta, delta=cfg.delta, stride=cfg.imitate_stride,
+            scaler=scaler if cfg.reward_scale else None)
+        if log is not None:
+            log(f"imitation: {len(demos.obs)} generations of {cfg.imitate} on "
+                f"{len(problems)} problems x {len(cfg.init_modes)} start modes, "
+                f"{time.perf_counter() - t_bc:.0f} s")
+        torch.manual_seed(cfg.seed * 100_003 - 1)
+        imitation_rows = pretrain(
+            model, demos, epochs=cfg.imitate_epochs, batch=cfg.imitate_batch,
+            lr=cfg.imitate_lr, vf_coef=cfg.vf_coef, max_grad_norm=cfg.max_grad_norm,
+            seed=cfg.seed, log=log)
+        del demos
+        # the warm-started policy is a checkpoint of its own (0 PPO epochs), and resumable
+        _save(out, model, optimizer, cfg, specs, curve, 0, scaler, imitation_rows)
     G = max(1, math.ceil((cfg.budget - cfg.population) / cfg.population))
     chunks = [list(range(i, min(i + cfg.envs, len(problems))))
               for i in range(0, len(problems), cfg.envs)]
@@ -441,6 +509,9 @@ def train(
                                  options={"problem": with_init(problems[i], mode)})
                 envs.append(env)
                 obs.append(o)
+                scaler.reset(f"{names[i]}/{mode}")
+            keys = [f"{names[i]}/{cfg.init_modes[(epoch + c + k) % len(cfg.init_modes)]}"
+                    for k, i in enumerate(idx)]
             ep_return = np.zeros(len(envs))
             done = False
             g = 0
@@ -485,7 +556,11 @@ def train(
                     with torch.no_grad():
                         next_value = _forward(model, batch_obs(obs))[4].numpy()
                 values = np.stack(buf_val)
-                adv = gae(np.stack(buf_rew), values, np.stack(buf_done), next_value,
+                rewards = np.stack(buf_rew)  # (T, B)
+                if cfg.reward_scale:
+                    rewards = np.stack([scaler.scale(key, rewards[:, b])
+                                        for b, key in enumerate(keys)], axis=1)
+                adv = gae(rewards, values, np.stack(buf_done), next_value,
                           cfg.gamma, cfg.gae_lambda)
                 ret = adv + values
                 stats_ep.append(ppo_update(
@@ -508,7 +583,7 @@ def train(
             "seconds": time.perf_counter() - t0,
         }
         curve.append(row)
-        _save(out, model, optimizer, cfg, specs, curve, epoch + 1)
+        _save(out, model, optimizer, cfg, specs, curve, epoch + 1, scaler, imitation_rows)
         if writer is not None:
             for k, v in row.items():
                 if k not in ("epoch", "episodes"):
@@ -537,17 +612,21 @@ def curve_csv(curve: list[dict[str, Any]]) -> str:
 
 
 def _save(out: Path, model: TorchPolicy, optimizer: torch.optim.Optimizer, cfg: PPOConfig,
-          specs: list[dict[str, Any]], curve: list[dict[str, Any]], epoch: int) -> None:
+          specs: list[dict[str, Any]], curve: list[dict[str, Any]], epoch: int,
+          scaler: RewardScaler, imitation_rows: list[dict[str, float]]) -> None:
     manifest = {"problems": specs, "names": [spec_name(s) for s in specs]}
     meta = {"ppo": cfg.to_dict(), "epochs_done": epoch, "eta": cfg.eta,
-            "seconds": float(sum(r["seconds"] for r in curve))}
+            "seconds": float(sum(r["seconds"] for r in curve)
+                             + sum(r["seconds"] for r in imitation_rows)),
+            "imitation": imitation_rows}
     ckpt.save(out, model.numpy_params(), cfg.net, meta, {
         "manifest.json": json.dumps(manifest, indent=2) + "\n",
         "curve.csv": curve_csv(curve),
     })
     buf = io.BytesIO()
     torch.save({"model": model.state_dict(), "optimizer": optimizer.state_dict(),
-                "epoch": epoch, "curve": curve, "config": cfg.to_dict(), "specs": specs}, buf)
+                "epoch": epoch, "curve": curve, "config": cfg.to_dict(), "specs": specs,
+                "scaler": scaler.state_dict(), "imitation": imitation_rows}, buf)
     write_bytes_atomic(out / "state.pt", buf.getvalue())
 
 
