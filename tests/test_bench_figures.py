@@ -20,7 +20,7 @@ PNG = b"\x89PNG\r\n\x1a\n"
 def _texts(fig: Any) -> list[str]:
     from matplotlib.text import Text
 
-    return [t.get_text() for t in fig.findobj(Text) if t.get_text()]
+    return [t.get_text().replace("\n", " ") for t in fig.findobj(Text) if t.get_text()]
 
 
 def _has(fig: Any, *needles: str) -> None:
@@ -146,3 +146,52 @@ def test_protocol_text() -> None:
         "and task")
     assert "1 run per" in F.protocol_text(None, None, 1)
     assert "16-25 runs" in F.protocol_text("seeded", None, [16, 25])
+
+
+def test_make_figures_redraws_the_stored_runs(tmp_path: Path) -> None:
+    """`python docs/make_figures.py --out DIR` writes the committed report and every figure it
+    draws; the report equals the committed one (so the docs are what the code draws), each
+    figure is a PNG, and the reports whose runs are not stored are named, not redrawn."""
+    import importlib.util
+    import re
+    import subprocess
+    import sys
+
+    r = subprocess.run([sys.executable, "docs/make_figures.py", "--out", str(tmp_path)],
+                       cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    spec = importlib.util.spec_from_file_location("make_figures", ROOT / "docs" / "make_figures.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    md = "docs/reduced/protocol.md"
+    written = (tmp_path / md).read_text(encoding="utf-8")
+    assert written == (ROOT / md).read_text(encoding="utf-8"), \
+        f"{md} is stale: run `python docs/make_figures.py`"  # fmt: skip
+    pictures = re.findall(r"!\[[^]]*\]\(([^)]+)\)", written)
+    assert len(pictures) == 8  # per protocol: scores, 2 convergence, best paths
+    for rel in pictures:
+        png = tmp_path / "docs" / "reduced" / rel
+        assert png.read_bytes()[:8] == PNG and (ROOT / "docs" / "reduced" / rel).exists()
+    policy_md = (ROOT / "docs" / "policy.md").read_text(encoding="utf-8")
+    for _, stem, _, _ in mod.POLICY:
+        made = sorted((tmp_path / stem).parent.glob(Path(stem).name + "_*.png"))
+        assert made, stem
+        for png in made:
+            assert png.read_bytes()[:8] == PNG and png.stat().st_size > 10_000
+            rel = png.relative_to(tmp_path / "docs").as_posix()
+            assert f"]({rel})" in policy_md, f"docs/policy.md does not show {rel}"
+    for results, report, _, _ in mod.REPORTS:
+        if not (ROOT / results / "results.jsonl").exists():
+            assert f"skipped {report}" in r.stderr and results in mod.NOT_STORED
+
+
+def test_complete_seeds_drop_a_partial_last_seed() -> None:
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("make_figures", ROOT / "docs" / "make_figures.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    recs = [{"map": m, "mode": "uniform", "configurator": c, "seed": s}
+            for s in (0, 1) for m in ("T01", "T02") for c in ("lamde", "adaptive")]
+    recs += [{"map": "T01", "mode": "uniform", "configurator": "lamde", "seed": 2}]
+    assert mod.complete_seeds(recs) == [0, 1]

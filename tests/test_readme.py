@@ -91,6 +91,8 @@ COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
     "python benchmarks/bench_plan.py": ("test_benchmarks.py", ("bench_plan",)),
     "lamde-mission bench": ("test_bench.py::test_cli_bench_then_report", ('"bench"',)),
     "lamde-mission report": ("test_bench.py::test_cli_bench_then_report", ('"report"',)),
+    "python docs/make_figures.py":
+        ("test_bench_figures.py::test_make_figures_redraws_the_stored_runs", ("make_figures",)),
 }
 
 

@@ -86,9 +86,9 @@ def optimiser_style(name: str) -> dict[str, Any]:
 
 
 def protocol_text(init: str | Sequence[str] | None, budget: int | None,
-                  runs: int | Sequence[int] | None) -> str:
-    """"uniform start (paper protocol) · 10,000 evaluations per run · 2 runs per optimiser"
-    (each part left out when unknown)."""
+                  runs: int | Sequence[int] | None, per: str = "optimiser and task") -> str:
+    """"uniform start (paper protocol) · 10,000 evaluations per run · 2 runs per optimiser and
+    task" (each part left out when unknown; `per` names what the runs are counted per)."""
     parts = []
     inits = [init] if isinstance(init, str) else list(init or [])
     if inits:
@@ -98,7 +98,7 @@ def protocol_text(init: str | Sequence[str] | None, budget: int | None,
     counts = sorted({runs} if isinstance(runs, int) else set(runs or []))
     if counts:
         n = str(counts[0]) if len(counts) == 1 else f"{counts[0]}-{counts[-1]}"
-        parts.append(f"{n} run{'s' if counts[-1] != 1 else ''} per optimiser and task")
+        parts.append(f"{n} run{'s' if counts[-1] != 1 else ''} per {per}")
     return " · ".join(parts)
 
 
@@ -138,6 +138,16 @@ def _score_axis(ax: Any, values: Any) -> None:
         ax.set_ylabel(SCORE_LABEL)
     ax.grid(True, which="major", alpha=0.35)
     ax.grid(True, which="minor", alpha=0.12)
+
+
+def _suptitle(fig: Any, what: str, protocol: str) -> None:
+    """Title of the figure: what is compared, then the protocol, each line wrapped to the
+    figure's width."""
+    import textwrap
+
+    chars = max(40, int(fig.get_figwidth() * 12))
+    lines = [ln for part in (what, protocol) if part for ln in textwrap.wrap(part, chars)]
+    fig.suptitle("\n".join(lines), fontsize=10)
 
 
 def _minor_label(v: float, _: Any) -> str:
@@ -222,8 +232,8 @@ def convergence_figure(task: str, per_opt: Mapping[str, Sequence[Mapping[str, An
     ax.text((budget + x_max) / 2, 1.0, "final\nscores", transform=ax.get_xaxis_transform(),
             ha="center", va="bottom", fontsize=7.5, color="0.3")
     ax.set_xlabel(f"objective evaluations (budget {budget:,})")
-    fig.suptitle(f"{task}: best score so far against evaluations (median, 25-75 % band)\n"
-                 + protocol_text(init, budget, sorted(counts)), fontsize=10)
+    _suptitle(fig, f"{task}: best score so far against evaluations (median, 25-75 % band)",
+              protocol_text(init, budget, sorted(counts)))
     fig.legend(handles=handles + _feasibility_handles(), loc="outside right center", fontsize=8,
                title="optimiser", title_fontsize=8)
     return fig
@@ -234,23 +244,55 @@ def convergence_figure(task: str, per_opt: Mapping[str, Sequence[Mapping[str, An
 
 def scores_figure(tasks: Sequence[str],
                   runs: Mapping[str, Mapping[str, Sequence[tuple[float, bool]]]],
-                  opts: Sequence[str], *, what: str, protocol: str) -> Any:
+                  opts: Sequence[str], *, what: str, protocol: str,
+                  legend_title: str = "optimiser") -> Any:
     """Every run's final score per task (x) and optimiser (side by side), with its median (bar)
     and 25-75 % box; dots are feasible runs, crosses infeasible ones.
 
     `runs[task][optimiser]`: (score f + 10 phi, feasible) per run. `what`: the first title line
-    (what is compared), `protocol`: the second (start mode, budget, runs).
+    (what is compared), `protocol`: the second (start mode, budget, runs). Many tasks are split
+    over two rows sharing the score axis, so the figure stays readable at page width.
     """
-    from matplotlib.patches import Patch, Rectangle
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
 
     shown = [o for o in opts if any(runs.get(t, {}).get(o) for t in tasks)]
-    n_t, n_o = len(tasks), max(len(shown), 1)
-    width = float(np.clip(3.0 + n_t * (0.32 + 0.14 * n_o), 7.5, 12.5))
-    fig = _new_figure((width, 4.8))
-    ax = fig.add_subplot()
-    slot = 0.8 / n_o
-    values: list[float] = []
+    n_o = max(len(shown), 1)
+    rows = 2 if len(tasks) > 8 and len(tasks) * n_o > 24 else 1
+    per_row = math.ceil(len(tasks) / rows)
+    chunks = [list(tasks[i:i + per_row]) for i in range(0, len(tasks), per_row)] or [[]]
+    width = float(np.clip(3.4 + per_row * (0.3 + 0.16 * n_o), 7.5, 10.5))
+    fig = _new_figure((width, 1.3 + 3.4 * rows))
+    axes = fig.subplots(rows, 1, sharey=True, squeeze=False)[:, 0]
+    values = [float(r[0]) for t in tasks for o in shown for r in (runs.get(t, {}).get(o) or [])]
     rng = np.random.default_rng(0)  # jitter only; the same figure every time
+    for ax, chunk in zip(axes, chunks, strict=False):
+        _score_boxes(ax, chunk, runs, shown, rng)
+        _score_axis(ax, values)
+    if values:
+        lo, hi = min(values), max(values)
+        if axes[0].get_yscale() == "log":
+            axes[0].set_ylim(lo / 1.3, hi * 1.3)
+        else:
+            pad = 0.08 * (hi - lo if hi > lo else abs(hi) or 1.0)
+            axes[0].set_ylim(lo - pad, hi + pad)
+    _suptitle(fig, what, protocol)
+    handles: list[Any] = [Patch(facecolor=optimiser_style(o)["color"], alpha=0.6,
+                                edgecolor=optimiser_style(o)["color"], label=o) for o in shown]
+    handles += _feasibility_handles() + [
+        Line2D([], [], color="0.25", lw=2.2, label="median; box: 25-75 %")]
+    fig.legend(handles=handles, loc="outside right center", fontsize=8, title=legend_title,
+               title_fontsize=8)
+    return fig
+
+
+def _score_boxes(ax: Any, tasks: list[str],
+                 runs: Mapping[str, Mapping[str, Sequence[tuple[float, bool]]]],
+                 shown: list[str], rng: np.random.Generator) -> None:
+    """One group per task on `ax`: per optimiser a 25-75 % box, the median bar and the runs."""
+    from matplotlib.patches import Rectangle
+
+    slot = 0.8 / max(len(shown), 1)
     for j, o in enumerate(shown):
         st = optimiser_style(o)
         for k, t in enumerate(tasks):
@@ -258,7 +300,6 @@ def scores_figure(tasks: Sequence[str],
             if not rs:
                 continue
             s = np.array([r[0] for r in rs], dtype=float)
-            feas = [bool(r[1]) for r in rs]
             x0 = k - 0.4 + slot * (j + 0.5)
             q1, med, q3 = np.percentile(s, [25, 50, 75])
             ax.add_patch(Rectangle((x0 - 0.4 * slot, q1), 0.8 * slot, max(q3 - q1, 0.0),
@@ -266,34 +307,15 @@ def scores_figure(tasks: Sequence[str],
                                    lw=0.8, ls=st["ls"]))
             ax.plot([x0 - 0.42 * slot, x0 + 0.42 * slot], [med, med], color=st["color"], lw=2.2)
             jitter = rng.uniform(-0.25, 0.25, len(s)) * slot
-            _run_markers(ax, x0 + jitter, s, feas, st["color"])
-            values += list(s)
-    for k in range(1, n_t):
+            _run_markers(ax, x0 + jitter, s, [bool(r[1]) for r in rs], st["color"])
+    for k in range(1, len(tasks)):
         ax.axvline(k - 0.5, color="0.85", lw=0.8)
-    ax.set_xticks(range(n_t))
+    ax.set_xticks(range(len(tasks)))
     long_names = max((len(t) for t in tasks), default=0) > 6
-    ax.set_xticklabels(tasks, rotation=25 if long_names else 0,
+    ax.set_xticklabels(tasks, rotation=20 if long_names else 0,
                        ha="right" if long_names else "center")
-    ax.set_xlim(-0.5, n_t - 0.5)
+    ax.set_xlim(-0.5, len(tasks) - 0.5)
     ax.set_xlabel("task (map)")
-    _score_axis(ax, values)
-    if values:
-        lo, hi = min(values), max(values)
-        if ax.get_yscale() == "log":
-            ax.set_ylim(lo / 1.3, hi * 1.3)
-        else:
-            pad = 0.08 * (hi - lo if hi > lo else abs(hi) or 1.0)
-            ax.set_ylim(lo - pad, hi + pad)
-    fig.suptitle(f"{what}\n{protocol}", fontsize=10)
-    handles = [Patch(facecolor=optimiser_style(o)["color"], alpha=0.6,
-                     edgecolor=optimiser_style(o)["color"], label=o) for o in shown]
-    from matplotlib.lines import Line2D
-
-    handles += _feasibility_handles() + [
-        Line2D([], [], color="0.25", lw=2.2, label="median; box: 25-75 %")]
-    fig.legend(handles=handles, loc="outside right center", fontsize=8, title="optimiser",
-               title_fontsize=8)
-    return fig
 
 
 # ----------------------------------------------------------------------------- best paths
@@ -381,7 +403,7 @@ def paths_figure(tasks: Sequence[str], maps: Mapping[str, Any],
     lead = "Best route of each optimiser"
     if runs:
         lead += f" (lowest f + {SCORE_FACTOR:g}·φ of its {runs} run{'s' if runs != 1 else ''})"
-    fig.suptitle(f"{lead}, against the best-known route\n{protocol}", fontsize=10.5)
+    _suptitle(fig, f"{lead}, against the best-known route", protocol)
     handles = [
         Line2D([], [], color="0.55", lw=3.2, alpha=0.45, label="best-known route"),
         Line2D([], [], color="0.2", lw=1.6, marker="o", ms=3, label="route, feasible"),
@@ -429,8 +451,8 @@ def imax_figure(tables: Mapping[str, Mapping[str, Mapping[int, tuple[float, floa
     ax.set_ylabel("share of the last population with φ = 0\n(mean ± std over tasks and runs)")
     ax.set_ylim(-0.05, 1.05)
     ax.grid(True, alpha=0.35)
-    fig.suptitle("Feasible share of the last population against I_max (paper Fig. 4)\n"
-                 + protocol_text(modes, budget, runs) + f" · {n_tasks} tasks", fontsize=10)
+    _suptitle(fig, "Feasible share of the last population against I_max (paper Fig. 4)",
+              protocol_text(modes, budget, runs) + f" · {n_tasks} tasks")
     fig.legend(handles=handles, loc="outside right center", fontsize=8, title="optimiser",
                title_fontsize=8)
     return fig
