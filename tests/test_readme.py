@@ -147,6 +147,25 @@ def test_readme_names_no_path_outside_the_repository() -> None:
     assert "Learning to Optimize UAV Path Planning" in README  # the paper, cited by title
 
 
+#: the paper's authors in its order (its title page); its copy carries no year or venue
+PAPER_AUTHORS = ("Sijie Ma", "Zeyuan Ma", "Weijia Cao", "Yue-Jiao Gong", "Lingling Ma",
+                 "Zhiyang Huang", "Jun Zhang")
+
+
+def test_readme_cites_the_paper_in_full() -> None:
+    """Title, every author in the paper's order, "preprint" and no invented year, and what we
+    follow from it by section."""
+    cite = README[README.index("The method (LAMDE) is from the paper"):README.index("## Quick")]
+    text = re.sub(r"\s*\n>?\s*", " ", cite)
+    assert ("Learning to Optimize UAV Path Planning for Data Sensing in Wireless Sensor "
+            "Networks") in text
+    at = [text.index(a) for a in PAPER_AUTHORS]
+    assert at == sorted(at), "authors out of the paper's order"
+    assert "Preprint" in text and not re.search(r"\b(19|20)\d\d\b", text)
+    for part in ("What we follow from it", "Sec. 3", "Sec. 4", "Sec. 5"):
+        assert part in text
+
+
 def test_gitignore_ignores_no_tracked_file() -> None:
     r = subprocess.run(["git", "ls-files", "-ci", "--exclude-standard"], cwd=ROOT,
                        capture_output=True, text=True)
