@@ -221,3 +221,32 @@ def test_gallery_is_what_its_script_writes() -> None:
         assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", png
         for cmd in cmds:  # repository paths only: a clone has everything the gallery needs
             assert "../" not in cmd and "shared" not in cmd
+
+
+def _requirement_name(req: str) -> str:
+    return re.split(r"[<>=!~\[; ]", req, maxsplit=1)[0].lower()
+
+
+def test_readme_lists_what_the_install_and_each_extra_bring() -> None:
+    """"What the install brings" names every core dependency, and its extras table every extra
+    of pyproject.toml with exactly the packages that extra installs."""
+    import tomllib
+
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]
+    at = README.index("What the install brings")
+    brings = README[at:README.index("| extra |", at)].lower()
+    aliases = {"cma": "pycma"}  # the package's import/registry name vs the name people use
+    for req in project["dependencies"]:
+        name = _requirement_name(req)
+        assert aliases.get(name, name) in brings, f"README does not list core dependency {name}"
+    rows = {}
+    for line in README[README.index("| extra |", at):].splitlines()[2:]:
+        if not line.startswith("| `"):
+            break
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        listed = re.sub(r"\([^)]*\)", "", cells[1])  # version notes in brackets
+        rows[cells[0].strip("`")] = {p.strip().lower() for p in listed.split(",")}
+    extras = project["optional-dependencies"]
+    assert set(rows) == set(extras), (sorted(rows), sorted(extras))
+    for extra, reqs in extras.items():
+        assert rows[extra] == {_requirement_name(r) for r in reqs}, extra
