@@ -21,8 +21,9 @@ def _blocks(lang: str) -> list[str]:
 
 
 def _commands() -> list[str]:
-    """The command lines of the README's bash blocks after the quick start section (continuation
-    lines joined, comments and a trailing `&` dropped)."""
+    """The command lines of the README after the quick start section: every line of its bash
+    blocks (continuation lines joined, comments and a trailing `&` dropped) and every inline
+    `lamde-mission ...` / `python ...` example in its text (the `make` targets wrap these)."""
     body = README[README.index("\n## ", README.index("## Quick start") + 1):]
     cmds = []
     for block in re.findall(r"```bash\n(.*?)```", body, re.S):
@@ -30,6 +31,8 @@ def _commands() -> list[str]:
             cmd = re.sub(r"\s+", " ", line.split("#")[0]).strip().rstrip("&").strip()
             if cmd:
                 cmds.append(cmd)
+    prose = re.sub(r"```.*?```", "", body, flags=re.S)
+    cmds += re.findall(r"`((?:lamde-mission|python) [^`\n]+)`", prose)
     return cmds
 
 
@@ -91,6 +94,34 @@ COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
     "python benchmarks/bench_plan.py": ("test_benchmarks.py", ("bench_plan",)),
     "lamde-mission bench": ("test_bench.py::test_cli_bench_then_report", ('"bench"',)),
     "lamde-mission report": ("test_bench.py::test_cli_bench_then_report", ('"report"',)),
+    "lamde-mission schema": ("test_mapio.py::test_cli_check_and_schema", ('"schema"',)),
+    "lamde-mission check MAP": ("test_mapio.py::test_cli_check_and_schema", ('"check"',)),
+    "lamde-mission map campus": ("test_gis.py::test_cli_map_campus_writes_the_benchmark_map",
+                                 ('"campus"', '"-o"')),
+    "lamde-mission plan MAP -o x.plan --population 5":
+        ("test_defaults.py::test_cli_population_5_is_one_line_and_exit_2", ('"5"',)),
+    "python -m planner_core.defaults README.md":
+        ("test_defaults.py::test_update_readme_rewrites_only_the_table", ("update_readme",)),
+    "python -m planner_core.lam.train_encoder":
+        ("test_lam_features.py::test_train_encoder_command_writes_weights",
+         ("train_encoder", "main(")),
+    "python benchmarks/bench_plan.py campus-500":
+        ("test_benchmarks.py::test_bench_plan_on_the_campus", ("campus-500",)),
+    "python benchmarks/bench_policy.py":
+        ("test_policy_cli.py::test_bench_policy_runs_on_a_small_map", ("bench_policy",)),
+    "python benchmarks/bench_lam.py":
+        ("test_lam_query.py::test_bench_lam_runs_and_prints_the_estimates", ("bench_lam",)),
+    "python benchmarks/fuzz_inputs.py":
+        ("test_benchmarks.py::test_fuzz_inputs_runs", ("fuzz_inputs", '"--seed"')),
+    "python benchmarks/bench_upload.py":
+        ("test_benchmarks.py::test_bench_upload_end_to_end", ("bench_upload", '"--mission"',
+                                                              '"--loss"', '"--runs"')),
+    "python benchmarks/search_table.py":
+        ("test_benchmarks.py::test_search_table_prints_the_comparison", ("search_table",)),
+    "python benchmarks/bench_executor.py":
+        ("test_benchmarks.py::test_bench_executor_runs", ("bench_executor",)),
+    "python docs/make_gallery.py":
+        ("test_readme.py::test_make_gallery_regenerates_the_gallery", ("make_gallery.py",)),
     "python docs/make_figures.py":
         ("test_bench_figures.py::test_make_figures_redraws_the_stored_runs", ("make_figures",)),
 }
@@ -250,3 +281,20 @@ def test_readme_lists_what_the_install_and_each_extra_bring() -> None:
     assert set(rows) == set(extras), (sorted(rows), sorted(extras))
     for extra, reqs in extras.items():
         assert rows[extra] == {_requirement_name(r) for r in reqs}, extra
+
+
+@pytest.mark.slow
+def test_make_gallery_regenerates_the_gallery(tmp_path) -> None:
+    """`python docs/make_gallery.py` (into a scratch tree): every picture written, the page the
+    same as the committed one."""
+    r = subprocess.run([sys.executable, "docs/make_gallery.py", "--out", str(tmp_path)],
+                       cwd=ROOT, capture_output=True, text=True, timeout=900)
+    assert r.returncode == 0, r.stderr
+    pictures = re.findall(r"!\[[^]]*\]\(([^)]+)\)",
+                          (tmp_path / "docs" / "gallery.md").read_text(encoding="utf-8"))
+    assert len(pictures) >= 4
+    for rel in pictures:
+        png = tmp_path / "docs" / rel
+        assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
+    assert (tmp_path / "docs" / "gallery.md").read_text(encoding="utf-8") == (
+        ROOT / "docs" / "gallery.md").read_text(encoding="utf-8")
