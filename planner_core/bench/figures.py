@@ -196,7 +196,7 @@ def convergence_figure(task: str, per_opt: Mapping[str, Sequence[Mapping[str, An
     """
     from matplotlib.lines import Line2D
 
-    fig = _new_figure((8.6, 4.6))
+    fig = _new_figure((9.2, 4.8))
     ax = fig.add_subplot()
     grid = np.linspace(0, budget, 201)[1:]
     shown = [o for o in opts if per_opt.get(o)]
@@ -234,8 +234,8 @@ def convergence_figure(task: str, per_opt: Mapping[str, Sequence[Mapping[str, An
     ax.set_xlabel(f"objective evaluations (budget {budget:,})")
     _suptitle(fig, f"{task}: best score so far against evaluations (median, 25-75 % band)",
               protocol_text(init, budget, sorted(counts)))
-    fig.legend(handles=handles + _feasibility_handles(), loc="outside right center", fontsize=8,
-               title="optimiser", title_fontsize=8)
+    fig.legend(handles=handles + _feasibility_handles(), loc="outside right center", fontsize=9,
+               title="optimiser", title_fontsize=9)
     return fig
 
 
@@ -281,8 +281,8 @@ def scores_figure(tasks: Sequence[str],
                                 edgecolor=optimiser_style(o)["color"], label=o) for o in shown]
     handles += _feasibility_handles() + [
         Line2D([], [], color="0.25", lw=2.2, label="median; box: 25-75 %")]
-    fig.legend(handles=handles, loc="outside right center", fontsize=8, title=legend_title,
-               title_fontsize=8)
+    fig.legend(handles=handles, loc="outside right center", fontsize=9, title=legend_title,
+               title_fontsize=9)
     return fig
 
 
@@ -346,7 +346,7 @@ def _draw_map(ax: Any, m: Any) -> None:
     ax.set_xlim(-0.03 * m.width * km, 1.03 * m.width * km)
     ax.set_ylim(-0.03 * m.height * km, 1.03 * m.height * km)
     ax.set_aspect("equal")
-    ax.tick_params(labelsize=7)
+    ax.tick_params(labelsize=8)
 
 
 def _route(m: Any, hover_points: Any) -> np.ndarray:
@@ -395,10 +395,10 @@ def paths_figure(tasks: Sequence[str], maps: Mapping[str, Any],
                     ls="-" if feasible else ":", mfc=st["color"] if feasible else "white",
                     zorder=5)
             verdict = "feasible" if feasible else "INFEASIBLE"
-            ax.set_title(f"{t} · {o}\nscore {float(r['score']):,.1f}, {verdict}", fontsize=8.5,
+            ax.set_title(f"{t} · {o}\nscore {float(r['score']):,.1f}, {verdict}", fontsize=9,
                          color="0.1" if feasible else "#b2182b")
-            ax.set_xlabel("x east (km)", fontsize=7)
-            ax.set_ylabel("y north (km)", fontsize=7)
+            ax.set_xlabel("x east (km)", fontsize=8)
+            ax.set_ylabel("y north (km)", fontsize=8)
         row += n_rows
     lead = "Best route of each optimiser"
     if runs:
@@ -415,7 +415,7 @@ def paths_figure(tasks: Sequence[str], maps: Mapping[str, Any],
         Line2D([], [], ls="", marker="o", color="k", label="start"),
         Line2D([], [], ls="", marker="s", color="k", label="end"),
     ]
-    fig.legend(handles=handles, loc="outside lower center", ncols=4, fontsize=8)
+    fig.legend(handles=handles, loc="outside lower center", ncols=4, fontsize=9)
     return fig
 
 
@@ -453,6 +453,6 @@ def imax_figure(tables: Mapping[str, Mapping[str, Mapping[int, tuple[float, floa
     ax.grid(True, alpha=0.35)
     _suptitle(fig, "Feasible share of the last population against I_max (paper Fig. 4)",
               protocol_text(modes, budget, runs) + f" · {n_tasks} tasks")
-    fig.legend(handles=handles, loc="outside right center", fontsize=8, title="optimiser",
-               title_fontsize=8)
+    fig.legend(handles=handles, loc="outside right center", fontsize=9, title="optimiser",
+               title_fontsize=9)
     return fig
