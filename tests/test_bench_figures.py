@@ -120,6 +120,10 @@ def test_imax_figure(tmp_path: Path) -> None:
          "φ = 0", "de-adaptive", "de-adaptive-fixedlen")
     _legend_clear_of_axes(fig)
     _saved(fig, tmp_path / "i.png")
+    both = {**tables, "seeded": {"de-adaptive": {20: (0.9, 0.1, 48), 100: (0.7, 0.2, 48)}}}
+    fig = F.imax_figure(both, n_tasks=16, runs=3, budget=10_000)
+    _has(fig, "uniform start (paper protocol) and seeded start", "de-adaptive, uniform start",
+         "de-adaptive, seeded start")
 
 
 def test_one_colour_per_optimiser_in_every_figure() -> None:
