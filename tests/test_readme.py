@@ -298,3 +298,23 @@ def test_make_gallery_regenerates_the_gallery(tmp_path) -> None:
         assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
     assert (tmp_path / "docs" / "gallery.md").read_text(encoding="utf-8") == (
         ROOT / "docs" / "gallery.md").read_text(encoding="utf-8")
+
+
+def test_every_link_and_repository_path_resolves() -> None:
+    """Relative links of README.md and docs/**/*.md point at files of the repository, and every
+    repository path the README names (docs/..., examples/..., benchmarks/..., ...) exists."""
+    import glob
+    import os
+
+    pages = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
+    for page in pages:
+        text = page.read_text(encoding="utf-8")
+        for link in re.findall(r"\]\(([^)#\s]+)[^)]*\)", text):
+            if re.match(r"[a-z]+:", link):  # http(s), mailto: not ours to check
+                continue
+            assert (page.parent / link).exists(), f"{page.relative_to(ROOT)}: broken link {link}"
+    named = re.findall(r"(?<![\w/.-])((?:docs|examples|benchmarks|planner_core|lamde_mission|sim"
+                       r"|tests)/[\w./*-]*[\w*])", README)
+    assert len(named) > 20
+    for rel in named:
+        assert glob.glob(os.path.join(ROOT, rel)), f"README names {rel}, which does not exist"
