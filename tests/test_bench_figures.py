@@ -139,7 +139,8 @@ def test_one_colour_per_optimiser_in_every_figure() -> None:
 
 
 @pytest.mark.parametrize(("values", "log"), [([300, 40_000], True), ([295, 310], False),
-                                             ([100, 999], False), ([100, 1_000], True)])
+                                             ([100, 999], False), ([100, 1_000], True),
+                                             ([0.0, 40_000], False)])
 def test_log_scale_rule(values: list[float], log: bool) -> None:
     assert F.use_log_scale(values) is log
 

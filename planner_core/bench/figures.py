@@ -103,10 +103,11 @@ def protocol_text(init: str | Sequence[str] | None, budget: int | None,
 
 
 def use_log_scale(values: Any) -> bool:
-    """True when the positive finite `values` span a factor of 10 or more (one decade)."""
+    """True when the finite `values` are all positive and span a factor of 10 or more (one
+    decade); a zero or negative value keeps the axis linear (a log axis would hide it)."""
     v = np.asarray(values, dtype=float).ravel()
-    v = v[np.isfinite(v) & (v > 0)]
-    return v.size > 1 and float(v.max()) >= 10.0 * float(v.min())
+    v = v[np.isfinite(v)]
+    return v.size > 1 and float(v.min()) > 0 and float(v.max()) >= 10.0 * float(v.min())
 
 
 def save(fig: Any, path: str | Path) -> Path:
