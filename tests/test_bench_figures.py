@@ -109,6 +109,8 @@ def test_paths_figure_one_map_per_optimiser(tmp_path: Path) -> None:
          "route, infeasible", "no-fly zone", "sensor", "start", "end")
     _legend_clear_of_axes(fig)
     _saved(fig, tmp_path / "p.png")
+    bare = F.paths_figure(["T01"], {"T01": m}, best, ["de-adaptive"], protocol="p", runs=2)
+    assert not any("best-known" in t for t in _texts(bare))  # no route, no legend entry
 
 
 def test_imax_figure(tmp_path: Path) -> None:

@@ -404,9 +404,12 @@ def paths_figure(tasks: Sequence[str], maps: Mapping[str, Any],
     lead = "Best route of each optimiser"
     if runs:
         lead += f" (lowest f + {SCORE_FACTOR:g}·φ of its {runs} run{'s' if runs != 1 else ''})"
-    _suptitle(fig, f"{lead}, against the best-known route", protocol)
+    if any((known or {}).get(t) for t in tasks):
+        lead += ", against the best-known route"
+    _suptitle(fig, lead, protocol)
     handles = [
-        Line2D([], [], color="0.55", lw=3.2, alpha=0.45, label="best-known route"),
+        *([Line2D([], [], color="0.55", lw=3.2, alpha=0.45, label="best-known route")]
+          if any((known or {}).get(t) for t in tasks) else []),
         Line2D([], [], color="0.2", lw=1.6, marker="o", ms=3, label="route, feasible"),
         Line2D([], [], color="0.2", lw=1.6, ls=":", marker="o", ms=3, mfc="white",
                label="route, infeasible"),
