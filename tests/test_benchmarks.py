@@ -7,6 +7,8 @@ from __future__ import annotations
 import subprocess
 import sys
 
+import pytest
+
 from tests.conftest import ROOT
 
 
@@ -26,6 +28,7 @@ def test_bench_plan_runs_on_a_small_map() -> None:
     assert "neither torch nor matplotlib" in out  # the planning path stays light
 
 
+@pytest.mark.slow  # two short trainings and a process pool: about 25 s on a busy machine
 def test_bench_executor_train_mode_runs_on_local_backends() -> None:
     """`bench_executor.py --train` (tiny settings, local backends): timings, ratio, verdict."""
     r = subprocess.run(
