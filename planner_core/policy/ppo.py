@@ -4,16 +4,16 @@ One readable loop (:func:`train`), in the spirit of CleanRL's ``ppo.py``, split 
 a learner: the rollouts run behind an executor (:mod:`planner_core.policy.rollout`, numpy only:
 this process, a local process pool or Ray), the PPO update here.
 
-    for epoch in 1..E:                                   # Algorithm 1, line 2
-        for each chunk of `envs` training problems:      # line 3, several rolled out together
-            one job per problem (start mode per env)     # line 4-5 (reset in the worker)
-            until the episodes end:                      # line 6
-                the workers run up to n generations     # lines 7-11, per episode, with the
-                  per episode, each storing             #   current weights sent along
-                  (s, a, log pi(a|s), V(s), r)          #   (numpy forward, sampled actions)
-                kappa epochs of PPO on the n-step        # lines 12-14, the learner, on every
-                  segments of all episodes              #   episode's segment at once
-                send the new weights; the buffer is new  # line 15
+    for epoch in 1..E:                                  # Algorithm 1, line 2
+        for each chunk of `envs` training problems:     # line 3, several rolled out together
+            one job per problem (start mode per env)    # lines 4-5 (reset in the worker)
+            until the episodes end:                     # line 6
+                workers run up to n generations per     # lines 7-11 (numpy forward pass,
+                  episode with the weights sent along,  #   sampled actions, DE step,
+                  storing (s, a, log pi(a|s), V(s), r)  #   reward)
+                kappa epochs of PPO on the segments     # lines 12-14, the learner, on
+                  of all the chunk's episodes           #   every episode's segment at once
+                new weights out with the next jobs      # line 15 (the buffer is new)
         write the checkpoint, the CSV row, TensorBoard scalars
 
 Objective (Schulman et al. 2017, as CleanRL): the policy is factorised over individuals, so the
@@ -24,6 +24,9 @@ log-densities. Every individual of a population shares its generation's advantag
     L_clip = mean over (generation, problem, individual) of max(-A r_i, -A clip(r_i, 1-e, 1+e))
     L_V    = 0.5 mean (V(s) - R)^2                  (critic on the pooled population)
     L      = L_clip - c_ent * entropy + c_V * L_V   (gradient norm clipped to max_grad_norm)
+
+``log pi_old`` and the values V(s) are the actors' (the numpy forward pass at the weights the
+segment ran with; the torch twin agrees to about 1e-5, tests/test_policy.py).
 
 Advantage estimation: GAE(gamma, lambda) over the n-step segment, bootstrapped with V of the
 state after the segment unless the episode ended there (the budget's end is a true terminal
