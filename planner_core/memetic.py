@@ -138,15 +138,19 @@ def repair_points(problem: Any, pts: np.ndarray) -> np.ndarray:
         i = _cheapest_insertion(problem, pts, q)
         pts = np.insert(pts, i, q, axis=0)
         served |= mp.rates(q[None, :])[0] * (0.9 * mp.t_max) >= need
-    pts, _ = seeder._route(pts)
     limit = mp.n_points
-    if len(pts) > limit:
-        pts = seeder._prune(pts, limit)
-    while len(pts) > limit:
-        merged = _merge_pair(problem, pts)
+    centres = seeder._prune(pts, limit) if len(pts) > limit else pts
+    # route around obstacles; while the corners take the route past I_max, merge two of the
+    # serving points (corners are re-made for the merged route) so that it fits clear
+    pts, _ = seeder._route(centres)
+    while len(pts) > limit and len(centres) > 1:
+        merged = _merge_pair(problem, centres)
         if merged is None:
             break
-        pts = merged
+        centres = merged
+        pts, _ = seeder._route(centres)
+    if len(pts) > limit:
+        pts = seeder._prune(pts, limit)
     if len(pts) > limit:
         pts = seeder._truncate(pts, limit)
     if not problem.variable_length:
