@@ -343,3 +343,19 @@ def test_reward_scaler_makes_problem_scales_alike() -> None:
     c = RewardScaler(0.99, clip=2.0)
     c.reset("k")
     assert np.abs(c.scale("k", np.r_[np.zeros(20), 50.0])).max() == 2.0
+
+
+def test_warm_start_alone_is_a_checkpoint(tmp_path) -> None:  # noqa: ANN001
+    """epochs=0: the behaviour-cloning warm start alone, written as epoch 0 (empty curve);
+    without a warm start 0 epochs is refused."""
+    pytest.importorskip("torch")
+    from planner_core.policy.ppo import train
+
+    out = train(_tiny_cfg(epochs=0), TINY_SPECS, tmp_path / "bc")
+    _, net, config = load(out)
+    assert config["training"]["epochs_done"] == 0 and len(config["training"]["imitation"]) == 2
+    assert (out / "curve.csv").read_text().splitlines()[1:] == []
+    assert (out / "imitation.csv").read_text().splitlines()[0] == "epoch,nll,value_loss,seconds"
+    assert len((out / "imitation.csv").read_text().splitlines()) == 3
+    with pytest.raises(ValueError, match="warm start"):
+        train(_tiny_cfg(epochs=0, imitate="none"), TINY_SPECS, tmp_path / "none")

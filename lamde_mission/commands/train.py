@@ -104,9 +104,13 @@ def _config(args: argparse.Namespace):  # noqa: ANN202 - PPOConfig is imported l
     except (TypeError, ValueError) as exc:
         raise UsageError(f"--set: {exc}") from None
     for name in ("epochs", "envs", "population", "budget", "n_steps", "update_epochs"):
-        if int(getattr(cfg, name)) < (5 if name == "population" else 1):
-            raise UsageError(f"--{name.replace('_', '-')}: must be positive "
-                             f"(population >= 5), got {getattr(cfg, name)}")
+        least = {"population": 5, "epochs": 0}.get(name, 1)
+        if int(getattr(cfg, name)) < least:
+            raise UsageError(f"--{name.replace('_', '-')}: must be >= {least}, "
+                             f"got {getattr(cfg, name)}")
+    if cfg.epochs == 0 and (cfg.imitate == "none" or cfg.imitate_epochs < 1):
+        raise UsageError("--epochs: 0 (the warm start alone) needs --imitate and "
+                         "--imitate-epochs >= 1")
     if cfg.budget < cfg.population:
         raise UsageError(f"--budget: must be >= the population ({cfg.population})")
     return cfg

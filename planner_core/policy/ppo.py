@@ -87,7 +87,7 @@ class PPOConfig:
     seed: int = 0
     """Seed of the weights' initialisation, the rollouts' DE seeds and action draws."""
     epochs: int = 10
-    """E: passes over the training problems (Algorithm 1, line 2)."""
+    """E: passes over the training problems (Algorithm 1, line 2); 0 = the warm start alone."""
     envs: int = 4
     """Problems rolled out together, batched in one forward pass per generation."""
     population: int = 50
@@ -432,8 +432,11 @@ def train(
     The caller closes the executor. Raises ValueError for bad settings or problem specs.
     """
     out = Path(out)
-    if cfg.envs < 1 or cfg.n_steps < 1 or cfg.update_epochs < 1 or cfg.epochs < 1:
-        raise ValueError("envs, n_steps, update_epochs and epochs must be >= 1")
+    if cfg.envs < 1 or cfg.n_steps < 1 or cfg.update_epochs < 1 or cfg.epochs < 0:
+        raise ValueError("envs, n_steps and update_epochs must be >= 1, epochs >= 0")
+    if cfg.epochs == 0 and (cfg.imitate == "none" or cfg.imitate_epochs < 1):
+        raise ValueError("epochs: 0 PPO epochs needs the imitation warm start (imitate, "
+                         "imitate_epochs >= 1)")
     for mode in cfg.init_modes:
         if mode not in ("seeded", "uniform"):
             raise ValueError(f"init_modes: unknown start mode {mode!r}")
@@ -589,12 +592,20 @@ def train(
 
 def curve_csv(curve: list[dict[str, Any]]) -> str:
     """The training curve as CSV text (one row per epoch, columns CURVE_FIELDS)."""
+    return _rows_csv(curve, CURVE_FIELDS)
+
+
+#: columns of imitation.csv, the warm start's curve (one row per pass over the demonstrations)
+IMITATION_FIELDS = ("epoch", "nll", "value_loss", "seconds")
+
+
+def _rows_csv(rows: list[dict[str, Any]], fields: tuple[str, ...]) -> str:
     buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=list(CURVE_FIELDS), lineterminator="\n")
+    w = csv.DictWriter(buf, fieldnames=list(fields), lineterminator="\n")
     w.writeheader()
-    for row in curve:
+    for row in rows:
         w.writerow({k: (f"{row[k]:.6g}" if isinstance(row[k], float) else row[k])
-                    for k in CURVE_FIELDS})
+                    for k in fields})
     return buf.getvalue()
 
 
@@ -609,6 +620,7 @@ def _save(out: Path, model: TorchPolicy, optimizer: torch.optim.Optimizer, cfg: 
     ckpt.save(out, model.numpy_params(), cfg.net, meta, {
         "manifest.json": json.dumps(manifest, indent=2) + "\n",
         "curve.csv": curve_csv(curve),
+        "imitation.csv": _rows_csv(imitation_rows, IMITATION_FIELDS),
     })
     buf = io.BytesIO()
     torch.save({"model": model.state_dict(), "optimizer": optimizer.state_dict(),
