@@ -20,8 +20,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("results", help="benchmark folder (written by `lamde-mission bench`)")
     p.add_argument("-o", "--output", default="docs/results.md",
                    help="markdown file to write (default docs/results.md)")
-    p.add_argument("--reference", default="de-adaptive",
-                   help="the column the marks compare against (default de-adaptive)")
+    p.add_argument("--reference",
+                   help="the column the marks compare against (default de-adaptive; for an "
+                   "ablation folder written by benchmarks/ablations.py: its reference, LAMDE)")
     p.add_argument("--suite", help="map folder (default: the one recorded in RESULTS/meta.json)")
     p.add_argument("--figures", metavar="DIR",
                    help="folder for the PNGs (default: beside the report, e.g. docs/results/)")
@@ -36,8 +37,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def _command(args: argparse.Namespace, tasks: list[str] | None) -> str:
-    parts = ["lamde-mission", "report", args.results, "-o", args.output,
-             "--reference", args.reference]
+    parts = ["lamde-mission", "report", args.results, "-o", args.output]
+    if args.reference:
+        parts += ["--reference", args.reference]
     if args.suite:
         parts += ["--suite", args.suite]
     if args.figures:
@@ -54,13 +56,14 @@ def _command(args: argparse.Namespace, tasks: list[str] | None) -> str:
 def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from planner_core.bench.report import build_report
+    from planner_core.bench.report import DEFAULT_REFERENCE, build_report
 
     if not (Path(args.results) / "results.jsonl").exists():
         raise UsageError(f"{args.results}: no results.jsonl (run `lamde-mission bench` first)")
     tasks = [t for v in args.path_tasks for t in v.split(",") if t] if args.path_tasks else None
     try:
-        out = build_report(args.results, args.output, reference=args.reference,
+        out = build_report(args.results, args.output,
+                           reference=args.reference or DEFAULT_REFERENCE,
                            suite=args.suite, figures=args.figures, path_tasks=tasks,
                            limits=not args.no_limits, command=_command(args, tasks),
                            policy_checkpoint=args.policy_checkpoint)

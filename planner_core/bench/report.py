@@ -4,7 +4,8 @@ Sections: the commands that produced the results, the setup, the penalised-score
 std per task, best mean bold, Wilcoxon marks and +/~/- counts against the reference column), a
 per-optimiser summary (feasibility, wall time, mean rank), feasibility per task, the results
 against the limits (mean f of feasible runs / best-known and / LB), one convergence plot per task
-and a figure of each optimiser's best path on four tasks.
+and a figure of each optimiser's best path on four tasks; the I_max study when runs override
+I_max, and the ablation study (`planner_core.bench.ablation`) when meta.json holds its entry.
 """
 
 from __future__ import annotations
@@ -263,6 +264,11 @@ def build_report(
         raise ValueError(f"no results in {results_dir / RESULTS_FILE}")
     meta = read_json(results_dir / "meta.json")
     present = sorted({r["optimiser"] for r in records})
+    from planner_core.bench.ablation import META_KEY, ablation_section
+
+    ablation = meta.get(META_KEY)
+    if ablation and reference == DEFAULT_REFERENCE:
+        reference = str(ablation["reference"])
     if reference is not None and reference not in present:
         if reference != DEFAULT_REFERENCE:
             raise ValueError(f"reference '{reference}' has no results (have {', '.join(present)})")
@@ -271,6 +277,9 @@ def build_report(
     if reference is None:
         reference = opts[0]
         opts = order_optimisers(present, reference)
+    if ablation:  # the variants in the study's order, the reference last (as the paper's table)
+        named = [v for v in ablation.get("variants", {}) if v in present and v != reference]
+        opts = named + [o for o in opts if o not in named and o != reference] + [reference]
     tasks = sorted({r["task"] for r in records})
     budgets = sorted({int(r["budget"]) for r in records})
     budget = budgets[-1]
@@ -311,8 +320,10 @@ def build_report(
         "| Optimiser | What it is |",
         "|---|---|",
     ]
+    extra = meta.get("optimisers", {})
     for o in opts:
-        desc = REGISTRY[o].description if o in REGISTRY else "(not in the registry)"
+        desc = (REGISTRY[o].description if o in REGISTRY else
+                extra.get(o, {}).get("description", "(not in the registry)"))
         L.append(f"| {o} | {desc} |")
     if read.truncated_tail or read.bad_lines or read.duplicates:
         L += ["", f"Note: skipped in the results file: truncated tail {read.truncated_tail}, "
@@ -338,6 +349,8 @@ def build_report(
     study = [r for r in records if r.get("i_max") is not None]
     if study:
         L += imax_section(study, figures / "imax_feasible_rate.png", output)
+    if ablation:
+        L += ablation_section(main, ablation, figures, output, alpha)
     L += cost_section(records, policy_checkpoint)
     write_text_atomic(output, "\n".join(L) + "\n")
     return output

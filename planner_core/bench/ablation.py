@@ -1,0 +1,153 @@
+"""The ablation study's own numbers (paper Sec. 5.3, Table 3 and Fig. 3): normalised performance.
+
+Normalised performance of one run (the paper's footnote): the final penalised score divided by
+the initial one, ``(f + 10 phi)`` of the incumbent at the end over that of the incumbent after
+the first population (the first entry of the run's convergence trace). Lower is better; 1 means
+the run never improved on its first population. Per variant it is aggregated over every task and
+run (16 tasks x R runs in the paper's protocol): mean ± std, median, and a two-sided Wilcoxon
+rank-sum test of the pooled values against the reference variant (LAMDE).
+
+``benchmarks/ablations.py`` writes a ``"ablation"`` entry into the benchmark folder's
+``meta.json`` (:data:`META_KEY`): the reference variant, the variants in order and, per variant,
+how it was trained (``description``, ``trainset``, ``checkpoint``). ``lamde-mission report``
+adds :func:`ablation_section` whenever that entry is present.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections import defaultdict
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from planner_core.bench.stats import ALPHA, wilcoxon_mark
+from planner_core.model import penalised_score
+
+__all__ = ["META_KEY", "ablation_section", "normalised", "normalised_table", "training_seconds"]
+
+#: the key of the ablation entry in a benchmark folder's meta.json
+META_KEY = "ablation"
+
+
+def normalised(record: dict[str, Any]) -> float:
+    """final / initial penalised score of one run record (NaN when the initial score is not a
+    positive finite number, or the record has no trace)."""
+    h = record.get("history") or {}
+    if not h.get("best_f"):
+        return math.nan
+    first = float(penalised_score(float(h["best_f"][0]), float(h["best_phi"][0])))
+    if not (math.isfinite(first) and first > 0):
+        return math.nan
+    return float(record["score"]) / first
+
+
+def normalised_table(records: list[dict[str, Any]], variants: list[str], reference: str,
+                     alpha: float = ALPHA) -> dict[str, dict[str, Any]]:
+    """Per variant: n, mean, std (ddof 0), median of the normalised performance over all its
+    runs, and the Wilcoxon mark against `reference` ("" for the reference itself; "+" the
+    reference is significantly better, i.e. lower, "-" worse, "~" no difference)."""
+    acc: dict[str, list[float]] = defaultdict(list)
+    for r in records:
+        v = normalised(r)
+        if math.isfinite(v):
+            acc[r["optimiser"]].append(v)
+    ref = acc.get(reference, [])
+    out = {}
+    for o in variants:
+        vals = np.asarray(acc.get(o, []), dtype=float)
+        if vals.size == 0:
+            continue
+        out[o] = {"n": int(vals.size), "mean": float(vals.mean()), "std": float(vals.std()),
+                  "median": float(np.median(vals)),
+                  "mark": "" if o == reference else wilcoxon_mark(ref, vals, alpha),
+                  "values": vals}
+    return out
+
+
+def training_seconds(checkpoint: str | Path) -> tuple[int, float] | None:
+    """(epochs, wall seconds) recorded in a checkpoint folder's curve.csv, or None without it."""
+    curve = Path(checkpoint) / "curve.csv"
+    if not curve.exists():
+        return None
+    with curve.open(newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    return len(rows), sum(float(r["seconds"]) for r in rows)
+
+
+def _figure(table: dict[str, dict[str, Any]], title: str, path: Path) -> Path:
+    from planner_core.bench.report import _new_figure, _save
+
+    names = list(table)
+    fig = _new_figure((1.3 * len(names) + 2.4, 4.2))
+    ax = fig.add_subplot()
+    data = [table[o]["values"] for o in names]
+    ax.boxplot(data, showfliers=True)
+    ax.plot(range(1, len(names) + 1), [table[o]["mean"] for o in names], "D", color="tab:red",
+            ms=5, label="mean")
+    ax.set_xticks(range(1, len(names) + 1), names, fontsize=8)
+    positive = np.concatenate(data)
+    if positive.size and positive.min() > 0 and positive.max() / positive.min() > 50:
+        ax.set_yscale("log")
+    ax.set_ylabel("final / initial f + 10 phi (lower is better)")
+    ax.set_title(title, fontsize=9)
+    ax.grid(True, axis="y", alpha=0.3)
+    ax.legend(fontsize=7)
+    return _save(fig, path)
+
+
+def ablation_section(records: list[dict[str, Any]], entry: dict[str, Any], figures: Path,
+                     output: Path, alpha: float = ALPHA) -> list[str]:
+    """Markdown of the ablation study: how each variant was trained, then per start mode the
+    normalised-performance table (+ Wilcoxon against the reference) and its box-plot figure
+    (paper Fig. 3). The per-task score table with +/~/- counts (paper Table 3) is the report's
+    protocol section, whose reference column is the ablation's reference."""
+    from planner_core.bench.report import INIT_ORDER, _init, _rel
+
+    reference = str(entry["reference"])
+    variants_info: dict[str, Any] = entry.get("variants", {})
+    present = {r["optimiser"] for r in records}
+    order = [v for v in variants_info if v in present]
+    order += sorted(present - set(order))
+    L = ["", "## Ablations (paper Sec. 5.3, Table 3 and Fig. 3)", "",
+         "Every variant is the same policy network trained with the same PPO settings and "
+         "budget; they differ only in the training problems or the encoding. The per-task "
+         "score table with +/~/- against "
+         f"**{reference}** is the protocol section above (the paper's Table 3). Normalised "
+         "performance per run = final / initial penalised score (the incumbent after the "
+         "first population; lower is better), aggregated over every task and run (the paper's "
+         "footnote to Fig. 3).", "",
+         "| Variant | Training | Training cost |", "|---|---|---:|"]
+    for v in order:
+        info = variants_info.get(v, {})
+        cost = "-"
+        if info.get("checkpoint"):
+            ts = training_seconds(info["checkpoint"])
+            if ts is not None:
+                cost = f"{ts[0]} epoch(s), {ts[1]:,.0f} s"
+        L.append(f"| {v} | {info.get('description', '-')} | {cost} |")
+    for mode in INIT_ORDER:
+        recs = [r for r in records if _init(r) == mode and r.get("i_max") is None]
+        if not recs:
+            continue
+        table = normalised_table(recs, order, reference, alpha)
+        tasks = sorted({r["task"] for r in recs})
+        runs = sorted({int(r["run"]) for r in recs})
+        L += ["", f"### Normalised performance, init {mode}", "",
+              f"{len(tasks)} task(s) x {len(runs)} run(s) per variant. Mark: Wilcoxon "
+              f"rank-sum (two-sided, alpha {alpha}) of the pooled values against "
+              f"{reference}: `+` {reference} significantly better, `-` worse, `~` no "
+              "significant difference.", "",
+              "| Variant | runs | mean ± std | median | vs ref |", "|---|---:|---:|---:|:---:|"]
+        for o, c in table.items():
+            mark = "(reference)" if o == reference else c["mark"]
+            L.append(f"| {o} | {c['n']} | {c['mean']:.4f} ± {c['std']:.4f} | "
+                     f"{c['median']:.4f} | {mark} |")
+        if table:
+            p = _figure(table, f"Normalised performance per run (init {mode}, "
+                        f"{len(tasks)} tasks x {len(runs)} runs)",
+                        figures / f"ablation_normalised_{mode}.png")
+            L += ["", f"![normalised performance, init {mode}]({_rel(p, output.parent)})"]
+    return L
