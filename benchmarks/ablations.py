@@ -274,7 +274,8 @@ def parse(argv: list[str] | None = None) -> argparse.Namespace:
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", required=True, help="output folder (all steps write under it)")
-    ap.add_argument("--suite", default=str(ROOT / "examples" / "maps" / "suite"))
+    ap.add_argument("--suite", default="examples/maps/suite",
+                    help="map folder (default examples/maps/suite, from the repository root)")
     ap.add_argument("--tasks", nargs="+", metavar="T", help="only these tasks (default all)")
     ap.add_argument("--variants", default=",".join(VARIANTS),
                     help=f"comma-separated subset of {','.join(VARIANTS)} (LAMDE always runs)")
@@ -306,6 +307,7 @@ def parse(argv: list[str] | None = None) -> argparse.Namespace:
     g = ap.add_argument_group("report")
     g.add_argument("--report", metavar="FILE.md", help="write the report here at the end")
     g.add_argument("--no-limits", action="store_true", help="report without the limits section")
+    g.add_argument("--title", default="Ablation study", help="the report's first heading")
     ap.add_argument("--quiet", action="store_true")
     args = ap.parse_args(argv)
     names = [v for v in args.variants.split(",") if v]
@@ -353,7 +355,7 @@ def main(argv: list[str] | None = None) -> int:
     _log(args, f"steps: training sets {t1 - t0:.1f} s, trainings {t2 - t1:.1f} s, "
                f"evaluation {t3 - t2:.1f} s")
     if args.report:
-        argv_r = ["report", str(out), "-o", args.report]
+        argv_r = ["report", str(out), "-o", args.report, "--title", args.title]
         if args.no_limits:
             argv_r.append("--no-limits")
         rc = cli(argv_r)

@@ -232,8 +232,9 @@ def test_report_adds_the_ablation_section(tmp_path: Path) -> None:
     assert (tmp_path / "abl" / "ablation_normalised_uniform.png").read_bytes()[:4] == b"\x89PNG"
     assert "--reference" not in text.split("Report produced by:")[1].splitlines()[2]
     # an explicit reference still wins
-    build_report(res, tmp_path / "b.md", reference="LAMDE-O", limits=False)
-    assert "against the reference **LAMDE-O**" in (tmp_path / "b.md").read_text()
+    build_report(res, tmp_path / "b.md", reference="LAMDE-O", limits=False, title="REDUCED x")
+    text = (tmp_path / "b.md").read_text()
+    assert text.startswith("# REDUCED x\n") and "against the reference **LAMDE-O**" in text
 
 
 # ---------------------------------------------------------------- the driver, end to end

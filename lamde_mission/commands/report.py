@@ -31,6 +31,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--policy-checkpoint", metavar="DIR",
                    help="policy checkpoint folder: its curve.csv gives the training cost in "
                    "the report's cost section")
+    p.add_argument("--title", default="Benchmark results",
+                   help="the report's first heading (default 'Benchmark results')")
     p.add_argument("--no-limits", action="store_true",
                    help="leave out the lower-bound / best-known section")
     return p
@@ -50,6 +52,8 @@ def _command(args: argparse.Namespace, tasks: list[str] | None) -> str:
         parts += ["--policy-checkpoint", args.policy_checkpoint]
     if args.no_limits:
         parts.append("--no-limits")
+    if args.title != "Benchmark results":
+        parts += ["--title", args.title]
     return shlex.join(parts)
 
 
@@ -66,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
                            reference=args.reference or DEFAULT_REFERENCE,
                            suite=args.suite, figures=args.figures, path_tasks=tasks,
                            limits=not args.no_limits, command=_command(args, tasks),
-                           policy_checkpoint=args.policy_checkpoint)
+                           policy_checkpoint=args.policy_checkpoint, title=args.title)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     print(f"report: wrote {out}")

@@ -244,6 +244,7 @@ def build_report(
     command: str = "",
     alpha: float = ALPHA,
     policy_checkpoint: str | Path | None = None,
+    title: str = "Benchmark results",
 ) -> Path:
     """Write the markdown report of `results_dir` to `output` (figures beside it); return it.
 
@@ -252,7 +253,7 @@ def build_report(
     after the report, e.g. docs/results/ for docs/results.md). Each start mode present
     ("init" of the records; older records without it are seeded) gets its own section; runs
     with an I_max override go to the I_max study section; `policy_checkpoint`: a policy
-    checkpoint folder whose `curve.csv` gives the training cost.
+    checkpoint folder whose `curve.csv` gives the training cost; `title`: the first heading.
     """
     from planner_core.baselines import REGISTRY
 
@@ -287,7 +288,7 @@ def build_report(
     suite_dir = Path(suite) if suite is not None else (Path(meta["suite"]) if "suite" in meta
                                                        else None)
 
-    L: list[str] = ["# Benchmark results", ""]
+    L: list[str] = [f"# {title}", ""]
     cmds = [c.get("command", "") for c in meta.get("commands", []) if c.get("command")]
     if cmds:
         L.append("Results produced by:")
