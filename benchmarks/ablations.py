@@ -117,13 +117,6 @@ def _db_args(args: argparse.Namespace) -> list[str]:
     return a
 
 
-def _run_cli(argv: list[str], commands: list[str]) -> None:
-    commands.append(shlex.join(["lamde-mission", *argv]))
-    rc = cli(argv)
-    if rc != 0:
-        raise SystemExit(f"failed (exit {rc}): {commands[-1]}")
-
-
 def trainsets(args: argparse.Namespace, out: Path, commands: list[str]) -> dict[str, str]:
     """Step 1: one `lam select` file per distinct (selection, features); variant -> path."""
     tasks = _tasks_dir(args, out)
@@ -134,6 +127,13 @@ def trainsets(args: argparse.Namespace, out: Path, commands: list[str]) -> dict[
             continue
         path = out / "trainsets" / f"{sel}-{feat}.json"
         paths[v] = str(path)
+        argv = ["lam", "select", "--tasks", str(tasks), "--k", str(args.k), "--seed",
+                str(args.seed), "--selection", sel, "--features", feat, "-o", str(path),
+                "--jobs", str(args.jobs), "--quiet", *_db_args(args)]
+        cmd = shlex.join(["lamde-mission", *argv])
+        if cmd in commands:  # LAMDE-F shares LAMDE's set
+            continue
+        commands.append(cmd)
         if path.exists():
             o = json.loads(path.read_text()).get("options", {})
             want = {"k": args.k, "seed": args.seed, "selection": sel, "features": feat,
@@ -142,10 +142,9 @@ def trainsets(args: argparse.Namespace, out: Path, commands: list[str]) -> dict[
                 raise SystemExit(f"{path} was made with other options ({o}): use another --out")
             continue
         t0 = time.perf_counter()
-        _run_cli(["lam", "select", "--tasks", str(tasks), "--k", str(args.k),
-                  "--seed", str(args.seed), "--selection", sel, "--features", feat,
-                  "-o", str(path), "--jobs", str(args.jobs), "--quiet", *_db_args(args)],
-                 commands)
+        rc = cli(argv)
+        if rc != 0:
+            raise SystemExit(f"failed (exit {rc}): {cmd}")
         _log(args, f"trainset {path.name} for {v}: {time.perf_counter() - t0:.1f} s")
     return paths
 
@@ -189,9 +188,11 @@ def trainings(args: argparse.Namespace, out: Path, sets: dict[str, str],
         text = VARIANTS[v]["text"]
         if key in done_by:
             owner = done_by[key]
-            plans[v] = {**plans[owner], "description": f"{text} (trains exactly as {owner}: "
-                        "the set holds no UAV problems, so the encoding only differs in use)",
-                        "owner": owner}
+            why = ("; the set holds no UAV problems, so the encoding only differs in use"
+                   if fixed != VARIANTS[owner]["fixed"] else "")
+            plans[v] = {**plans[owner], "owner": owner,
+                        "description": f"{text} (the same training problems, settings and seed "
+                        f"as {owner}, so the same weights: trained once{why})"}
             continue
         done_by[key] = v
         argv = _train_argv(args, out / "train" / v, source, fixed)
@@ -260,7 +261,8 @@ def evaluate(args: argparse.Namespace, out: Path, plans: dict[str, dict[str, Any
                                  description=f"{VARIANTS[v]['text']}; policy "
                                  f"{plans[v]['checkpoint']}"
                                  + (f", {probe} probe evaluations charged" if probe else "")))
-    s = run_bench(args.suite, list(args.variants), runs=args.runs, budget=args.budget, out=out,
+    s = run_bench(args.suite, [*args.variants, *args.baselines], runs=args.runs,
+                  budget=args.budget, out=out,
                   tasks=args.tasks or None, jobs=args.jobs, base_seed=args.seed,
                   best_known=False, command=command, log=lambda m: _log(args, m),
                   inits=(args.init,), extra=specs)
@@ -302,6 +304,10 @@ def parse(argv: list[str] | None = None) -> argparse.Namespace:
     g.add_argument("--runs", type=int, default=D.RUNS)
     g.add_argument("--budget", type=int, default=D.BUDGET)
     g.add_argument("--init", choices=("uniform", "seeded"), default="uniform")
+    g.add_argument("--baselines", default="", metavar="LIST",
+                   help="registry optimisers to run alongside under the same protocol, e.g. "
+                   "de-adaptive,cmaes (the paper's Fig. 3 puts LAMDE-F among the baselines; "
+                   "default none)")
     g.add_argument("--no-probe-charge", action="store_true",
                    help="do not charge the LAM variants' N_probe task probes to their budget")
     g = ap.add_argument_group("report")
@@ -316,6 +322,12 @@ def parse(argv: list[str] | None = None) -> argparse.Namespace:
         ap.error(f"--variants: unknown {', '.join(bad)}; choose from {', '.join(VARIANTS)}")
     args.variants = [REFERENCE] + [v for v in VARIANTS if v in names and v != REFERENCE]
     args.tasks = [t for v in (args.tasks or []) for t in v.split(",") if t]
+    from planner_core.baselines import REGISTRY
+
+    args.baselines = [b for b in args.baselines.split(",") if b]
+    bad = [b for b in args.baselines if b not in REGISTRY]
+    if bad:
+        ap.error(f"--baselines: unknown {', '.join(bad)}; choose from {', '.join(REGISTRY)}")
     for name in ("k", "epochs", "envs", "runs", "budget", "n_probe"):
         if getattr(args, name) < 1:
             ap.error(f"--{name.replace('_', '-')}: must be >= 1")
@@ -336,10 +348,8 @@ def main(argv: list[str] | None = None) -> int:
     t1 = time.perf_counter()
     plans = trainings(args, out, sets, commands)
     t2 = time.perf_counter()
-    evaluate(args, out, plans, command)
-    t3 = time.perf_counter()
     meta_path = out / "meta.json"
-    meta = read_json(meta_path)
+    meta = read_json(meta_path)  # the entry goes in first: a report of a partial run knows it
     meta[META_KEY] = {
         "reference": REFERENCE,
         "variants": {v: {k: plans[v][k] for k in ("checkpoint", "description")}
@@ -348,6 +358,10 @@ def main(argv: list[str] | None = None) -> int:
         "driver": command,
         "steps": commands,
     }
+    write_json_atomic(meta_path, meta)
+    evaluate(args, out, plans, command)
+    t3 = time.perf_counter()
+    meta = read_json(meta_path)
     meta.setdefault("ablation_timings", []).append(
         {"trainsets_s": round(t1 - t0, 1), "trainings_s": round(t2 - t1, 1),
          "evaluation_s": round(t3 - t2, 1)})

@@ -206,7 +206,8 @@ def test_report_adds_the_ablation_section(tmp_path: Path) -> None:
     res = tmp_path / "res"
     res.mkdir()
     recs = [_record(o, t, k, 100.0, base + k)
-            for o, base in (("LAMDE", 10.0), ("LAMDE-F", 40.0), ("LAMDE-O", 20.0))
+            for o, base in (("LAMDE", 10.0), ("LAMDE-F", 40.0), ("LAMDE-O", 20.0),
+                            ("de-adaptive", 30.0))
             for t in ("T1", "T2") for k in range(5)]
     (res / RESULTS_FILE).write_text("".join(json.dumps(r) + "\n" for r in recs))
     ck = tmp_path / "ck"
@@ -223,8 +224,11 @@ def test_report_adds_the_ablation_section(tmp_path: Path) -> None:
     assert main(["report", str(res), "-o", str(md), "--no-limits"]) == 0
     text = md.read_text()
     assert "against the reference **LAMDE**" in text
-    assert "| Task | LAMDE-F | LAMDE-O | LAMDE (ref) |" in text
-    assert "| +/~/- | 2/0/0 | 2/0/0 | (reference) |" in text
+    assert "| Task | LAMDE-F | LAMDE-O | de-adaptive | LAMDE (ref) |" in text
+    assert "| +/~/- | 2/0/0 | 2/0/0 | 2/0/0 | (reference) |" in text
+    # a baseline run alongside is in the normalised table, not in the training table
+    assert "| de-adaptive | 10 | 0.3200 ± 0.0141 | 0.3200 | + |" in text
+    assert "| de-adaptive | the" not in text
     assert "| LAMDE-F | fixed-length variant |" in text
     assert "## Ablations (paper Sec. 5.3, Table 3 and Fig. 3)" in text
     assert "| LAMDE | the method | 2 epoch(s), 20 s |" in text
@@ -253,12 +257,12 @@ def test_ablation_driver_end_to_end_is_resumable_and_reproducible(tmp_path: Path
               "--envs", "2", "--train-population", "10", "--train-budget", "60",
               "--db-functions", "1-8", "--db-dims", "40", "--db-instances", "1",
               "--n-probe", "20", "--cache", str(tmp_path / "cache"), "--jobs", "0", "--quiet",
-              "--set", "n_steps=2"]
+              "--set", "n_steps=2", "--baselines", "random-search"]
     a, b = tmp_path / "a", tmp_path / "b"
     assert mod.main(["--out", str(a), *common, "--report", str(a / "report.md"),
                      "--no-limits"]) == 0
     recs = read_records(a / RESULTS_FILE).records
-    assert len(recs) == 6 * 2
+    assert len(recs) == 7 * 2 and {r["optimiser"] for r in recs} >= {"random-search"}
     meta = json.loads((a / "meta.json").read_text())
     entry = meta[META_KEY]
     assert list(entry["variants"]) == ["LAMDE", "LAMDE-F", "LAMDE-R", "LAMDE-E", "LAMDE-L",
@@ -277,6 +281,10 @@ def test_ablation_driver_end_to_end_is_resumable_and_reproducible(tmp_path: Path
     before = (a / RESULTS_FILE).read_bytes()
     assert mod.main(["--out", str(a), *common]) == 0
     assert (a / RESULTS_FILE).read_bytes() == before
+    steps = json.loads((a / "meta.json").read_text())[META_KEY]["steps"]
+    assert sum(c.startswith("lamde-mission lam select") for c in steps) == 4
+    distinct = {e["checkpoint"] for e in entry["variants"].values()}  # equal sets train once
+    assert sum(c.startswith("lamde-mission train") for c in steps) == len(distinct) >= 4
     # reproducible: a fresh folder gives the same scores
     assert mod.main(["--out", str(b), *common]) == 0
 

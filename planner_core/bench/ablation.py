@@ -109,8 +109,8 @@ def ablation_section(records: list[dict[str, Any]], entry: dict[str, Any], figur
     reference = str(entry["reference"])
     variants_info: dict[str, Any] = entry.get("variants", {})
     present = {r["optimiser"] for r in records}
-    order = [v for v in variants_info if v in present]
-    order += sorted(present - set(order))
+    trained = [v for v in variants_info if v in present]
+    order = trained + sorted(present - set(trained))  # then baselines run alongside, if any
     L = ["", "## Ablations (paper Sec. 5.3, Table 3 and Fig. 3)", "",
          "Every variant is the same policy network trained with the same PPO settings and "
          "budget; they differ only in the training problems or the encoding. The per-task "
@@ -120,8 +120,8 @@ def ablation_section(records: list[dict[str, Any]], entry: dict[str, Any], figur
          "first population; lower is better), aggregated over every task and run (the paper's "
          "footnote to Fig. 3).", "",
          "| Variant | Training | Training cost |", "|---|---|---:|"]
-    for v in order:
-        info = variants_info.get(v, {})
+    for v in trained:
+        info = variants_info[v]
         cost = "-"
         if info.get("checkpoint"):
             ts = training_seconds(info["checkpoint"])
