@@ -27,14 +27,15 @@ def optimise(
     *,
     configurator: str = CONFIGURATOR,
     lp: bool = False,
-    memetic: bool = False,
+    memetic: bool | str = False,
     policy: str | None = None,
 ) -> OptimiseResult:
     """Run the DE with `configurator` for exactly `budget` evaluations (initial population
     included). `lp`: what `plan` does, the DE on budget - ELITE, then the hover-time LP on the
     final population's ELITE Deb-best (`planner_core.polish.polish_elite`, the last ELITE
     evaluations). `memetic`: with the
-    memetic step on the elite (`planner_core.memetic.refine`, when the problem can decode).
+    memetic step on the elite (`planner_core.memetic.refine`, when the problem can decode);
+    a str is the defaults table's setting ("auto": on from a uniform start, as `plan` does).
     `policy`: a policy checkpoint folder (or shipped name) for `configurator="lamde"` (the
     ablation variants); None = the shipped default."""
     from planner_core.baselines.seed_lp import can_lp
@@ -53,6 +54,10 @@ def optimise(
 
         configurator = PolicyConfigurator(checkpoint=policy)  # type: ignore[assignment]
     refine = None
+    if isinstance(memetic, str):
+        from planner_core.memetic import use_memetic
+
+        memetic = use_memetic(memetic, budgeted)
     if memetic and can_lp(budgeted):
         from functools import partial
 
