@@ -23,7 +23,10 @@ from typing import Any
 
 import numpy as np
 
+from planner_core.bench._plot import new_figure, rel, save
+from planner_core.bench.records import key_of
 from planner_core.bench.stats import ALPHA, wilcoxon_mark
+from planner_core.defaults import INIT_MODES
 from planner_core.model import penalised_score
 
 __all__ = ["META_KEY", "ablation_section", "normalised", "normalised_table", "training_seconds"]
@@ -78,10 +81,8 @@ def training_seconds(checkpoint: str | Path) -> tuple[int, float] | None:
 
 
 def _figure(table: dict[str, dict[str, Any]], title: str, path: Path) -> Path:
-    from planner_core.bench.report import _new_figure, _save
-
     names = list(table)
-    fig = _new_figure((1.3 * len(names) + 2.4, 4.2))
+    fig = new_figure((1.3 * len(names) + 2.4, 4.2))
     ax = fig.add_subplot()
     data = [table[o]["values"] for o in names]
     ax.boxplot(data, showfliers=True)
@@ -95,7 +96,7 @@ def _figure(table: dict[str, dict[str, Any]], title: str, path: Path) -> Path:
     ax.set_title(title, fontsize=9)
     ax.grid(True, axis="y", alpha=0.3)
     ax.legend(fontsize=7)
-    return _save(fig, path)
+    return save(fig, path)
 
 
 def ablation_section(records: list[dict[str, Any]], entry: dict[str, Any], figures: Path,
@@ -104,8 +105,6 @@ def ablation_section(records: list[dict[str, Any]], entry: dict[str, Any], figur
     normalised-performance table (+ Wilcoxon against the reference) and its box-plot figure
     (paper Fig. 3). The per-task score table with +/~/- counts (paper Table 3) is the report's
     protocol section, whose reference column is the ablation's reference."""
-    from planner_core.bench.report import INIT_ORDER, _init, _rel
-
     reference = str(entry["reference"])
     variants_info: dict[str, Any] = entry.get("variants", {})
     present = {r["optimiser"] for r in records}
@@ -128,8 +127,8 @@ def ablation_section(records: list[dict[str, Any]], entry: dict[str, Any], figur
             if ts is not None:
                 cost = f"{ts[0]} epoch(s), {ts[1]:,.0f} s"
         L.append(f"| {v} | {info.get('description', '-')} | {cost} |")
-    for mode in INIT_ORDER:
-        recs = [r for r in records if _init(r) == mode and r.get("i_max") is None]
+    for mode in sorted(INIT_MODES, key=lambda m: m != "uniform"):  # the paper's protocol first
+        recs = [r for r in records if key_of(r).init == mode and r.get("i_max") is None]
         if not recs:
             continue
         table = normalised_table(recs, order, reference, alpha)
@@ -149,5 +148,5 @@ def ablation_section(records: list[dict[str, Any]], entry: dict[str, Any], figur
             p = _figure(table, f"Normalised performance per run (init {mode}, "
                         f"{len(tasks)} tasks x {len(runs)} runs)",
                         figures / f"ablation_normalised_{mode}.png")
-            L += ["", f"![normalised performance, init {mode}]({_rel(p, output.parent)})"]
+            L += ["", f"![normalised performance, init {mode}]({rel(p, output.parent)})"]
     return L

@@ -10,9 +10,7 @@ I_max, and the ablation study (`planner_core.bench.ablation`) when meta.json hol
 
 from __future__ import annotations
 
-import io
 import math
-import os
 from collections import defaultdict
 from collections.abc import Sequence
 from pathlib import Path
@@ -20,7 +18,10 @@ from typing import Any
 
 import numpy as np
 
-from planner_core.bench._io import read_json, write_bytes_atomic, write_text_atomic
+from planner_core.bench._io import read_json, write_text_atomic
+from planner_core.bench._plot import new_figure as _new_figure
+from planner_core.bench._plot import rel as _rel
+from planner_core.bench._plot import save as _save
 from planner_core.bench.records import RESULTS_FILE, read_records
 from planner_core.bench.stats import ALPHA, ScoreTable, score_table
 from planner_core.defaults import SCORE_FACTOR
@@ -104,10 +105,6 @@ def _by(records: list[dict[str, Any]]) -> dict[str, dict[str, list[dict[str, Any
     return out
 
 
-def _rel(path: Path, start: Path) -> str:
-    return Path(os.path.relpath(path.resolve(), start.resolve())).as_posix()
-
-
 # ----------------------------------------------------------------------------- figures
 
 
@@ -118,21 +115,6 @@ def _step_on_grid(ev: Sequence[int], values: Sequence[float], grid: np.ndarray) 
     v = np.asarray(values, dtype=float)
     out = np.where(idx >= 0, v[np.clip(idx, 0, len(v) - 1)], np.nan)
     return out
-
-
-def _save(fig: Any, path: Path) -> Path:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    return write_bytes_atomic(path, buf.getvalue())
-
-
-def _new_figure(figsize: tuple[float, float]) -> Any:
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=figsize, layout="constrained")
-    FigureCanvasAgg(fig)
-    return fig
 
 
 def convergence_figure(task: str, per_opt: dict[str, list[dict[str, Any]]], opts: list[str],
