@@ -19,7 +19,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         help="meta-train the LAMDE policy with PPO and write a checkpoint folder",
         description="Meta-train the meta-level policy (paper Algorithm 1: n-step PPO) on UAV "
         "maps from the suite generator (seeds disjoint from the suite and validation maps) or "
-        "on a training-set JSON with a 'problems' list. A checkpoint is written to OUT after "
+        "on a training-set JSON with a 'problems' list, or on K plain BBOB instances (--bbob, "
+        "the ablation LAMDE-O); --fixed-length for LAMDE-F. A checkpoint is written to OUT after "
         "every epoch; --resume continues from it. Same seed, same checkpoint (same machine).",
     )
     p.add_argument("-o", "--output", required=True, metavar="OUT", help="checkpoint folder")
