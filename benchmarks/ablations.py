@@ -38,7 +38,7 @@ finished run):
 
 The paper's protocol (16 tasks x 25 runs, 10,000 evaluations; training as the shipped policy's):
 
-    python benchmarks/ablations.py --out results-ablations --jobs 2 --report docs/ablations.md
+    python benchmarks/ablations.py --out results-ablations --jobs 2 --report ablations.md
 
 A reduced run (REDUCED, not the paper's protocol) is in ``docs/reduced/``.
 """

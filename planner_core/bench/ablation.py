@@ -18,12 +18,12 @@ from __future__ import annotations
 import csv
 import math
 from collections import defaultdict
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from planner_core.bench._plot import new_figure, rel, save
 from planner_core.bench.records import key_of
 from planner_core.bench.stats import ALPHA, wilcoxon_mark
 from planner_core.defaults import INIT_MODES
@@ -80,31 +80,15 @@ def training_seconds(checkpoint: str | Path) -> tuple[int, float] | None:
     return len(rows), sum(float(r["seconds"]) for r in rows)
 
 
-def _figure(table: dict[str, dict[str, Any]], title: str, path: Path) -> Path:
-    names = list(table)
-    fig = new_figure((1.3 * len(names) + 2.4, 4.2))
-    ax = fig.add_subplot()
-    data = [table[o]["values"] for o in names]
-    ax.boxplot(data, showfliers=True)
-    ax.plot(range(1, len(names) + 1), [table[o]["mean"] for o in names], "D", color="tab:red",
-            ms=5, label="mean")
-    ax.set_xticks(range(1, len(names) + 1), names, fontsize=8)
-    positive = np.concatenate(data)
-    if positive.size and positive.min() > 0 and positive.max() / positive.min() > 50:
-        ax.set_yscale("log")
-    ax.set_ylabel("final / initial f + 10 phi (lower is better)")
-    ax.set_title(title, fontsize=9)
-    ax.grid(True, axis="y", alpha=0.3)
-    ax.legend(fontsize=7)
-    return save(fig, path)
-
-
 def ablation_section(records: list[dict[str, Any]], entry: dict[str, Any], figures: Path,
-                     output: Path, alpha: float = ALPHA) -> list[str]:
+                     link: Callable[[Path], str], alpha: float = ALPHA) -> list[str]:
     """Markdown of the ablation study: how each variant was trained, then per start mode the
     normalised-performance table (+ Wilcoxon against the reference) and its box-plot figure
-    (paper Fig. 3). The per-task score table with +/~/- counts (paper Table 3) is the report's
-    protocol section, whose reference column is the ablation's reference."""
+    (paper Fig. 3; PNGs in folder `figures`, linked as `link(png path)`). The per-task score
+    table with +/~/- counts (paper Table 3) is the report's protocol section, whose reference
+    column is the ablation's reference."""
+    from planner_core.bench import figures as F
+
     reference = str(entry["reference"])
     variants_info: dict[str, Any] = entry.get("variants", {})
     present = {r["optimiser"] for r in records}
@@ -145,8 +129,10 @@ def ablation_section(records: list[dict[str, Any]], entry: dict[str, Any], figur
             L.append(f"| {o} | {c['n']} | {c['mean']:.4f} ± {c['std']:.4f} | "
                      f"{c['median']:.4f} | {mark} |")
         if table:
-            p = _figure(table, f"Normalised performance per run (init {mode}, "
-                        f"{len(tasks)} tasks x {len(runs)} runs)",
-                        figures / f"ablation_normalised_{mode}.png")
-            L += ["", f"![normalised performance, init {mode}]({rel(p, output.parent)})"]
+            budgets = sorted({int(r["budget"]) for r in recs})
+            protocol = F.protocol_text(mode, budgets[-1] if len(budgets) == 1 else None,
+                                       len(runs), per=f"variant and task, {len(tasks)} tasks")
+            fig = F.ablation_figure({o: c["values"] for o, c in table.items()}, protocol)
+            p = F.save(fig, figures / f"ablation_normalised_{mode}.png")
+            L += ["", f"![normalised performance, init {mode}]({link(p)})"]
     return L
