@@ -73,6 +73,9 @@ class OptimiserSpec:
     kwargs: dict[str, Any] = field(default_factory=dict)
     variable_length: bool | None = True  # None: whatever the given problem uses
     spends_budget: bool = True  # False: a reference that deliberately stops early (seed-lp)
+    #: True: builds its plans without any start population, so it is the same in both start
+    #: modes (`--init seeded|uniform`), and its seed may not change the answer on a small map
+    constructive: bool = False
 
     def function(self) -> Any:
         module, func = self.target.split(":")
@@ -131,6 +134,23 @@ REGISTRY: dict[str, OptimiserSpec] = {
             "pycma CMA-ES started at the best seed (sigma0 0.05 in the unit box, restarts from "
             "the best so far), then the polish LP",
             kwargs={"seeded": True},
+        ),
+        OptimiserSpec(
+            "engineering",
+            "planner_core.baselines.engineering:optimise",
+            "the plain engineering pipeline, no DE: hover sites by greedy set cover / a k-means "
+            "sweep, visiting order by OR-Tools' routing solver, sites slid to clear their legs, "
+            "blocked legs routed through the visibility graph, the polish LP; the Deb-best of "
+            "its candidates (one evaluation each); the same in both start modes",
+            spends_budget=False,
+            constructive=True,
+        ),
+        OptimiserSpec(
+            "pymoo-ga",
+            "planner_core.baselines.pymoo_ga:optimise",
+            f"pymoo GA (population {POPULATION}, SBX, polynomial mutation, feasibility-first "
+            "tournament and survival on G = phi <= 0) from the DE's start population of the "
+            "run's start mode, then the polish LP",
         ),
         OptimiserSpec(
             "scipy-de",
