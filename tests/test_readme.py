@@ -66,6 +66,12 @@ COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
         ("test_policy_cli.py::test_cli_train_runs_on_a_trainset_file", ('"--problems"',)),
     "lamde-mission train -o my-policy --epochs 20 --resume":
         ("test_policy.py::test_two_epoch_training_smoke_run_and_resume", ("resume=True",)),
+    "lamde-mission train -o my-policy --maps 16 --envs 4 --jobs":
+        ("test_rollout.py::test_same_seed_same_checkpoint_in_this_process_and_on_two_workers",
+         ('"--jobs"', "train_cli")),
+    "lamde-mission train -o my-policy --maps 16 --envs 16 --backend ray":
+        ("test_execution_ray.py::test_train_on_ray_gives_the_checkpoint_of_this_process",
+         ('"--backend", "ray"', "train_cli")),
     "lamde-mission verify":
         ("test_plot_cli.py::test_verify_good_mission_exits_0", ('"verify"',)),
     "lamde-mission show":
