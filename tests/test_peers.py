@@ -146,3 +146,20 @@ def test_pymoo_ga_stops_when_nothing_new_can_be_made() -> None:
 
     res = ga(BudgetedProblem(Point(), 500), 500, seed=0, population=10)
     assert 10 <= res.evaluations < 500 and res.f == pytest.approx(1.5)
+
+
+def test_planner_from_engineering_starts(walled: Problem) -> None:
+    """planner-eng-start: the engineering candidates, then the planner on the rest of the budget
+    from a population holding the best of them; never worse than `engineering` (same seed)."""
+    from planner_core.baselines.eng_start import _WithStarts
+
+    eng_res = optimise("engineering", walled, 10_000, seed=3)
+    res = optimise("planner-eng-start", walled, 1_000, seed=3)
+    assert res.evaluations == 1_000
+    assert (res.phi, res.f) <= (eng_res.phi, eng_res.f)
+    # the start population: the problem's own (seeded half kept), its last rows the given starts
+    starts = np.stack([eng_res.x, eng_res.x + 0.0])
+    X = _WithStarts(walled, starts).initial_population(np.random.default_rng(0), 8)
+    own = walled.initial_population(np.random.default_rng(0), 8)
+    np.testing.assert_array_equal(X[:6], own[:6])
+    np.testing.assert_array_equal(X[6:], starts)

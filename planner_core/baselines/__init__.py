@@ -146,6 +146,13 @@ REGISTRY: dict[str, OptimiserSpec] = {
             constructive=True,
         ),
         OptimiserSpec(
+            "planner-eng-start",
+            "planner_core.baselines.eng_start:optimise",
+            "experiment (issue 14, diverse starts): the engineering pipeline's candidates, then "
+            "the planner on the rest of the budget from its start population with the 10 best "
+            "engineering plans in place of its last 10 rows",
+        ),
+        OptimiserSpec(
             "pymoo-ga",
             "planner_core.baselines.pymoo_ga:optimise",
             f"pymoo GA (population {POPULATION}, SBX, polynomial mutation, feasibility-first "

@@ -63,6 +63,7 @@ __all__ = [
     "greedy_cover",
     "optimise",
     "order_sites",
+    "score_candidates",
     "site_sets",
 ]
 
@@ -300,13 +301,17 @@ def build_plan(problem: Any, sites: np.ndarray, rng: np.random.Generator) -> np.
     return problem.encode(pts, times)
 
 
-def optimise(problem: Any, budget: int, seed: int) -> OptimiseResult:
-    """Score the pipeline's candidate plans (one evaluation each, while the budget lasts) and
-    return the Deb-best; deterministic for a seed, identical in both start modes."""
-    budgeted = as_budgeted(problem, budget)
+def score_candidates(
+    budgeted: Any, seed: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Build the pipeline's candidate plans in order and evaluate each distinct one once through
+    `budgeted` (a `BudgetedProblem`) while its budget lasts: (X (m, d), f (m,), phi (m,))."""
     base = _base(budgeted)
     rng = np.random.default_rng(np.random.SeedSequence([int(seed), 15]))
     seen: set[bytes] = set()
+    rows: list[np.ndarray] = []
+    fs: list[float] = []
+    phis: list[float] = []
     for _label, sites in site_sets(base, int(seed)):
         if budgeted.remaining < 1:
             break
@@ -315,6 +320,18 @@ def optimise(problem: Any, budget: int, seed: int) -> OptimiseResult:
         if key in seen:
             continue
         seen.add(key)
-        budgeted.evaluate(x[None, :])
+        f, phi = budgeted.evaluate(x[None, :])
+        rows.append(x)
+        fs.append(float(f[0]))
+        phis.append(float(phi[0]))
+    d = int(np.asarray(budgeted.lower).shape[0])
+    return np.asarray(rows, dtype=float).reshape(-1, d), np.asarray(fs), np.asarray(phis)
+
+
+def optimise(problem: Any, budget: int, seed: int) -> OptimiseResult:
+    """Score the pipeline's candidate plans (one evaluation each, while the budget lasts) and
+    return the Deb-best; deterministic for a seed, identical in both start modes."""
+    budgeted = as_budgeted(problem, budget)
+    score_candidates(budgeted, seed)
     x, f, phi = budgeted.best("deb")
     return OptimiseResult(x, f, phi, budgeted.count, budgeted.trace("deb"))
