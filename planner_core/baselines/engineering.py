@@ -60,9 +60,11 @@ __all__ = [
     "FRACTIONS",
     "KMEANS_INITS",
     "candidate_sites",
+    "build_plan",
     "greedy_cover",
     "optimise",
     "order_sites",
+    "reach",
     "score_candidates",
     "site_sets",
 ]
