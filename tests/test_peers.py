@@ -163,3 +163,22 @@ def test_planner_from_engineering_starts(walled: Problem) -> None:
     own = walled.initial_population(np.random.default_rng(0), 8)
     np.testing.assert_array_equal(X[:6], own[:6])
     np.testing.assert_array_equal(X[6:], starts)
+
+
+def test_engineering_plans_fit_i_max_when_detours_overflow() -> None:
+    """With I_max = 4 the sites plus the wall's detour corners do not fit: every plan the
+    pipeline builds is cut back to I_max points (one per way `repair_points` offers)."""
+    import copy
+
+    m = copy.deepcopy(WALLED)
+    m["uav"]["max_hover_points"] = 4
+    p = Problem(m)
+    rng = np.random.default_rng(0)
+    sizes = []
+    for _label, sites in eng.site_sets(p, 0):
+        for x in eng.build_plans(p, sites, rng):
+            assert x.shape == (p.dim,)
+            sizes.append(p.breakdown(x)["n_hover"])
+    assert sizes and max(sizes) <= 4
+    res = optimise("engineering", p, 10_000, seed=0)
+    assert p.breakdown(res.x)["n_hover"] <= 4

@@ -30,10 +30,10 @@ and the best (Deb's rule: least violation phi, then least f) is kept.
    its two legs and shorten them (the seeder's slide, `Seeder._slide`: every detour corner costs
    one of the I_max hover points, so a site that sees its neighbours saves them), then
    `planner_core.memetic.repair_points`: the seeder's visibility-graph routing of every
-   still-blocked leg (corners inserted, string-pulled, as `Seeder._route`), pruned or merged
-   back to I_max points.
+   still-blocked leg (corners inserted, string-pulled, as `Seeder._route`), brought back to
+   I_max points in one or two ways (route then prune/merge; merge then re-route), each a plan.
 7. **Hover times**: the hover-time LP of `planner_core.polish` (the same LP every peer ends with),
-   then one evaluation of the plan.
+   then one evaluation of each distinct plan.
 
 Candidates are scored in the order: greedy covers, then k = 1, 2, ... (each k's inits in turn);
 the run stops when the budget is spent, so it never exceeds it, and usually uses far less
@@ -60,7 +60,7 @@ __all__ = [
     "FRACTIONS",
     "KMEANS_INITS",
     "candidate_sites",
-    "build_plan",
+    "build_plans",
     "greedy_cover",
     "optimise",
     "order_sites",
@@ -276,12 +276,12 @@ def order_sites(problem: Any, sites: np.ndarray) -> np.ndarray:
     return np.asarray(order, dtype=np.int64)
 
 
-def build_plan(problem: Any, sites: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """A decision vector from a site set: OR-Tools order, slide, visibility-graph detours and
-    I_max (`planner_core.memetic.repair_points`), LP hover times (module docstring, steps 5-7).
-    `rng` drives the slide's candidate directions only."""
+def build_plans(problem: Any, sites: np.ndarray, rng: np.random.Generator) -> list[np.ndarray]:
+    """Decision vectors from a site set: OR-Tools order, slide, visibility-graph detours and
+    I_max (`planner_core.memetic.repair_points`, which gives one or two hover-point sets: route
+    then prune/merge, or merge then re-route), LP hover times (module docstring, steps 5-7); one
+    vector per set. `rng` drives the slide's candidate directions only."""
     from planner_core.memetic import repair_points
-    from planner_core.polish import polish_hover_times
 
     sites = np.asarray(sites, dtype=float).reshape(-1, 2)
     C = sites[order_sites(problem, sites)]
@@ -290,7 +290,14 @@ def build_plan(problem: Any, sites: np.ndarray, rng: np.random.Generator) -> np.
         R = problem.model.rates(C)
         owner = np.argmax(np.where(_covers(problem, C, 0.9), R + 1e6, R), axis=0)
         C = _seeder(problem)._slide(C, owner, reach(problem, 0.9), rng)
-    pts = repair_points(problem, C)
+    return [_timed(problem, pts) for pts in repair_points(problem, C)]
+
+
+def _timed(problem: Any, pts: np.ndarray) -> np.ndarray:
+    """The decision vector of hover points pts (m, 2) with LP hover times (`planner_core.polish`);
+    when every slot must stay active (tau <= 0), filled to I_max with collinear points first."""
+    from planner_core.polish import polish_hover_times
+
     I = int(problem.n_points)
     if problem.variable_length and problem.tau <= 0.0 and len(pts) < I:
         pts = _seeder(problem)._fill(pts, I)  # every slot is active: collinear fillers
@@ -315,17 +322,17 @@ def score_candidates(
     fs: list[float] = []
     phis: list[float] = []
     for _label, sites in site_sets(base, int(seed)):
+        for x in build_plans(base, sites, rng):
+            key = x.tobytes()
+            if budgeted.remaining < 1 or key in seen:
+                continue
+            seen.add(key)
+            f, phi = budgeted.evaluate(x[None, :])
+            rows.append(x)
+            fs.append(float(f[0]))
+            phis.append(float(phi[0]))
         if budgeted.remaining < 1:
             break
-        x = build_plan(base, sites, rng)
-        key = x.tobytes()
-        if key in seen:
-            continue
-        seen.add(key)
-        f, phi = budgeted.evaluate(x[None, :])
-        rows.append(x)
-        fs.append(float(f[0]))
-        phis.append(float(phi[0]))
     d = int(np.asarray(budgeted.lower).shape[0])
     return np.asarray(rows, dtype=float).reshape(-1, d), np.asarray(fs), np.asarray(phis)
 
