@@ -77,6 +77,9 @@ class OptimiserSpec:
     #: evaluations charged before the run (the landscape-aware module's probes of the task,
     #: which the paper counts in LAMDE's budget): the optimiser gets budget - probe_evaluations
     probe_evaluations: int = 0
+    #: True: builds its plans without any start population, so it is the same in both start
+    #: modes (`--init seeded|uniform`), and its seed may not change the answer on a small map
+    constructive: bool = False
 
     def function(self) -> Any:
         module, func = self.target.split(":")
@@ -135,6 +138,30 @@ REGISTRY: dict[str, OptimiserSpec] = {
             "pycma CMA-ES started at the best seed (sigma0 0.05 in the unit box, restarts from "
             "the best so far), then the polish LP",
             kwargs={"seeded": True},
+        ),
+        OptimiserSpec(
+            "engineering",
+            "planner_core.baselines.engineering:optimise",
+            "the plain engineering pipeline, no DE: hover sites by greedy set cover / a k-means "
+            "sweep, visiting order by OR-Tools' routing solver, sites slid to clear their legs, "
+            "blocked legs routed through the visibility graph, the polish LP; the Deb-best of "
+            "its candidates (one evaluation each); the same in both start modes",
+            spends_budget=False,
+            constructive=True,
+        ),
+        OptimiserSpec(
+            "planner-eng-start",
+            "planner_core.baselines.eng_start:optimise",
+            "experiment (issue 14, diverse starts): the engineering pipeline's candidates, then "
+            "the planner on the rest of the budget from its start population with the 10 best "
+            "engineering plans in place of its last 10 rows",
+        ),
+        OptimiserSpec(
+            "pymoo-ga",
+            "planner_core.baselines.pymoo_ga:optimise",
+            f"pymoo GA (population {POPULATION}, SBX, polynomial mutation, feasibility-first "
+            "tournament and survival on G = phi <= 0) from the DE's start population of the "
+            "run's start mode, then the polish LP",
         ),
         OptimiserSpec(
             "scipy-de",
