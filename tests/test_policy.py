@@ -294,8 +294,8 @@ def test_imitation_lowers_the_loss_on_a_fixed_batch() -> None:
     """Behaviour cloning: demonstrations of `adaptive` on a tiny map, then a few maximum-
     likelihood steps lower the imitation loss (NLL of adaptive's choices + value loss)."""
     torch = pytest.importorskip("torch")
-    from planner_core.policy.imitation import collect_demos, imitation_loss, pretrain
-    from planner_core.policy.ppo import TorchPolicy, batch_obs
+    from planner_core.policy.imitation import collect_demos
+    from planner_core.policy.ppo import TorchPolicy, batch_obs, imitation_loss, pretrain
 
     problem = Problem(MAPS / "tiny.json")
     demos = collect_demos([problem], ["tiny"], configurator="adaptive",

@@ -1,4 +1,6 @@
-"""Behaviour cloning: a warm start of the policy from a hand-made configurator (training only).
+"""Behaviour cloning: a warm start of the policy from a hand-made configurator (training only;
+this module is numpy only: the demonstrations and the reward scaling; the maximum-likelihood fit
+is :func:`planner_core.policy.ppo.pretrain`).
 
 Before PPO, :func:`collect_demos` runs the DE driven by a hand-made configurator (by default
 ``adaptive``, :class:`planner_core.de.configurators.AdaptiveConfigurator`) on every training
@@ -9,9 +11,9 @@ F and Cr clipped to ``[RATE_EPS, 1 - RATE_EPS]`` where the Beta's density is fin
 discounted return-to-go of the paper's reward (:func:`planner_core.env.reward`, scaled per
 episode as PPO scales it, :class:`RewardScaler`).
 
-:func:`pretrain` then fits the actor by maximum likelihood (the mean negative exact
-log-probability of the demonstrated actions, the same factorised distribution PPO samples from)
-and the critic by least squares on the returns-to-go:
+:func:`planner_core.policy.ppo.pretrain` then fits the actor by maximum likelihood (the mean
+negative exact log-probability of the demonstrated actions, the same factorised distribution PPO
+samples from) and the critic by least squares on the returns-to-go:
 
     L_BC = -mean over (generation, individual) of log pi(a_i | s) + c_V 0.5 mean (V(s) - G)^2
 
@@ -35,8 +37,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import torch
-from torch import nn
 
 from planner_core.de import make_configurator
 from planner_core.de.core import init, step
@@ -194,66 +194,4 @@ def collect_demos(
     return Demos(obs_all, np.stack(acts_all), np.asarray(rets_all, dtype=np.float32), keys)
 
 
-def imitation_loss(
-    model: Any, obs: dict[str, torch.Tensor], actions: torch.Tensor, returns: torch.Tensor,
-    vf_coef: float,
-) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-    """(total, negative log-likelihood per individual, value loss) on one batch: ``obs`` batched
-    (:func:`planner_core.policy.ppo.batch_obs`), ``actions`` (B, N, 4), ``returns`` (B,)."""
-    from planner_core.policy.ppo import _forward, log_prob_entropy
-
-    out = _forward(model, obs)
-    logp, _ = log_prob_entropy(out, actions)
-    nll = -logp.mean()
-    v_loss = 0.5 * ((out[4] - returns) ** 2).mean()
-    return nll + vf_coef * v_loss, nll, v_loss
-
-
-def pretrain(
-    model: Any,
-    demos: Demos,
-    *,
-    epochs: int,
-    batch: int,
-    lr: float,
-    vf_coef: float,
-    max_grad_norm: float,
-    seed: int,
-    log: Callable[[str], None] | None = None,
-) -> list[dict[str, float]]:
-    """Maximum-likelihood fit of the actor (and least squares of the critic) to ``demos``;
-    returns one row per epoch: mean imitation NLL, value loss, seconds."""
-    import time
-
-    from planner_core.policy.ppo import batch_obs
-
-    optimizer = torch.optim.Adam(model.parameters(), lr=lr, eps=1e-5)
-    S = len(demos.obs)
-    rows = []
-    for epoch in range(epochs):
-        t0 = time.perf_counter()
-        order = np.random.default_rng([seed, DEMO_KEY, epoch]).permutation(S)
-        nlls, vls = [], []
-        for s in range(0, S, batch):
-            idx = order[s:s + batch]
-            o = batch_obs([demos.obs[i] for i in idx])
-            loss, nll, vl = imitation_loss(
-                model, o, torch.from_numpy(demos.actions[idx]),
-                torch.from_numpy(demos.returns[idx]), vf_coef)
-            optimizer.zero_grad()
-            loss.backward()
-            nn.utils.clip_grad_norm_(model.parameters(), max_grad_norm)
-            optimizer.step()
-            nlls.append(float(nll.detach()) * len(idx))
-            vls.append(float(vl.detach()) * len(idx))
-        row = {"epoch": epoch + 1, "nll": sum(nlls) / S, "value_loss": sum(vls) / S,
-               "seconds": time.perf_counter() - t0}
-        rows.append(row)
-        if log is not None:
-            log(f"imitation epoch {epoch + 1}/{epochs}: NLL {row['nll']:.4f}, value loss "
-                f"{row['value_loss']:.4f}, {row['seconds']:.0f} s")
-    return rows
-
-
-__all__ = ["DEMO_KEY", "Demos", "RewardScaler", "collect_demos", "demo_episode",
-           "imitation_loss", "pretrain"]
+__all__ = ["DEMO_KEY", "Demos", "RewardScaler", "collect_demos", "demo_episode"]

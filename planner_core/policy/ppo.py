@@ -73,7 +73,7 @@ from planner_core.env import DEFAULT_DELTA, DEFAULT_ETA
 from planner_core.execution import Executor, SerialExecutor
 from planner_core.policy import checkpoint as ckpt
 from planner_core.policy import rollout
-from planner_core.policy.imitation import RewardScaler, collect_demos, pretrain
+from planner_core.policy.imitation import DEMO_KEY, Demos, RewardScaler, collect_demos
 from planner_core.policy.network import N_FEATURES, NetConfig, init_params, param_shapes
 from planner_core.policy.problems import spec_name
 from planner_core.problem import penalised_score
@@ -392,6 +392,67 @@ def gae(
     return adv
 
 
+# ---------------------------------------------------------------------------------- warm start
+
+
+def imitation_loss(
+    model: TorchPolicy, obs: dict[str, torch.Tensor], actions: torch.Tensor, returns: torch.Tensor,
+    vf_coef: float,
+) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """(total, negative log-likelihood per individual, value loss) on one batch: ``obs`` batched
+    (:func:`planner_core.policy.ppo.batch_obs`), ``actions`` (B, N, 4), ``returns`` (B,)."""
+    out = _forward(model, obs)
+    logp, _ = log_prob_entropy(out, actions)
+    nll = -logp.mean()
+    v_loss = 0.5 * ((out[4] - returns) ** 2).mean()
+    return nll + vf_coef * v_loss, nll, v_loss
+
+
+def pretrain(
+    model: TorchPolicy,
+    demos: Demos,
+    *,
+    epochs: int,
+    batch: int,
+    lr: float,
+    vf_coef: float,
+    max_grad_norm: float,
+    seed: int,
+    log: Callable[[str], None] | None = None,
+) -> list[dict[str, float]]:
+    """Behaviour cloning (:mod:`planner_core.policy.imitation`): maximum-likelihood fit of the
+    actor (and least squares of the critic, weight ``vf_coef``) to ``demos`` in ``epochs``
+    passes of Adam over shuffled mini-batches of ``batch`` observations (order from
+    ``default_rng([seed, DEMO_KEY, epoch])``); returns one row per pass: mean imitation NLL,
+    value loss, seconds."""
+    optimizer = torch.optim.Adam(model.parameters(), lr=lr, eps=1e-5)
+    S = len(demos.obs)
+    rows = []
+    for epoch in range(epochs):
+        t0 = time.perf_counter()
+        order = np.random.default_rng([seed, DEMO_KEY, epoch]).permutation(S)
+        nlls, vls = [], []
+        for s in range(0, S, batch):
+            idx = order[s:s + batch]
+            o = batch_obs([demos.obs[i] for i in idx])
+            loss, nll, vl = imitation_loss(
+                model, o, torch.from_numpy(demos.actions[idx]),
+                torch.from_numpy(demos.returns[idx]), vf_coef)
+            optimizer.zero_grad()
+            loss.backward()
+            nn.utils.clip_grad_norm_(model.parameters(), max_grad_norm)
+            optimizer.step()
+            nlls.append(float(nll.detach()) * len(idx))
+            vls.append(float(vl.detach()) * len(idx))
+        row = {"epoch": epoch + 1, "nll": sum(nlls) / S, "value_loss": sum(vls) / S,
+               "seconds": time.perf_counter() - t0}
+        rows.append(row)
+        if log is not None:
+            log(f"imitation epoch {epoch + 1}/{epochs}: NLL {row['nll']:.4f}, value loss "
+                f"{row['value_loss']:.4f}, {row['seconds']:.0f} s")
+    return rows
+
+
 # ---------------------------------------------------------------------------------- training
 
 
@@ -660,8 +721,10 @@ __all__ = [
     "clipped_objective",
     "curve_csv",
     "gae",
+    "imitation_loss",
     "log_prob_entropy",
     "ppo_update",
+    "pretrain",
     "text_progress",
     "train",
 ]
