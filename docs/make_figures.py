@@ -47,7 +47,7 @@ NOT_STORED: dict[str, str] = {
 POLICY: list[tuple[str, str, str, str]] = [
     ("docs/policy/validation.jsonl", "docs/policy/validation",
      "lamde-v1 against the hand-made configurators on 4 unseen maps",
-     "python benchmarks/validate_policy.py --maps validation --count 4 --modes seeded --runs 25"),
+     "python benchmarks/validate_policy.py --maps validation --count 4 --runs 25"),
     ("docs/policy/suite-uniform.jsonl", "docs/policy/suite",
      "lamde-v1 against the hand-made configurators on the 16 suite maps",
      "python benchmarks/validate_policy.py --maps suite --modes uniform "
