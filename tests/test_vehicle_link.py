@@ -105,31 +105,39 @@ def test_forged_replies_from_another_address_are_ignored(port):
 
 # ----------------------------------------------------------------------------- validate first
 
-_BAD_FIELDS = {
-    "command": dict(command=99999),
-    "frame": dict(frame=300),
-    "current": dict(current=256),
-    "x": dict(x=91.0),
-    "y": dict(y=-181.0),
-    "z": dict(z=float("inf")),
-    "param1": dict(param1=1e40),
-    "param4": dict(param4=float("-inf")),
-}
+_NAN, _INF = float("nan"), float("inf")
+#: (field named in the refusal, changes to a good mission item): every MISSION_ITEM_INT field
+#: past what its MAVLink type carries, at both ends where it has two
+_BAD_FIELDS = [
+    ("command", dict(command=99999)), ("command", dict(command=-1)),
+    ("frame", dict(frame=300)), ("frame", dict(frame=-1)),
+    ("current", dict(current=256)), ("autocontinue", dict(autocontinue=256)),
+    ("autocontinue", dict(autocontinue=-1)),
+    ("x", dict(x=91.0)), ("x", dict(x=-90.5)), ("x", dict(x=_INF)),
+    ("y", dict(y=-181.0)), ("y", dict(y=180.5)),
+    ("z", dict(z=_INF)), ("z", dict(z=_NAN)), ("z", dict(z=1e39)),
+    ("param1", dict(param1=1e40)), ("param2", dict(param2=-1e39)),
+    ("param3", dict(param3=_INF)), ("param4", dict(param4=-_INF)),
+]  # fmt: skip
 
 
 @pytest.mark.parametrize("via", VIAS)
-@pytest.mark.parametrize("field", sorted(_BAD_FIELDS))
-def test_every_field_range_refused_before_a_byte_is_sent(via, field):
-    """Nothing reaches a listening vehicle: the check runs before the client is made."""
+@pytest.mark.parametrize("list_type", ["mission", "fence"])
+@pytest.mark.parametrize(("field", "change"), _BAD_FIELDS,
+                         ids=[f"{f}={next(iter(c.values()))}" for f, c in _BAD_FIELDS])
+def test_every_field_range_refused_before_a_byte_is_sent(via, list_type, field, change):
+    """Nothing reaches a listening vehicle: the check runs before the client is made, for
+    mission and fence items alike."""
     sink = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     sink.bind(("127.0.0.1", 0))
     try:
-        mission = hand_mission(2)
-        mission[2] = replace(mission[2], **_BAD_FIELDS[field])
+        mission, fence = hand_mission(2), hand_fence()
+        target = mission if list_type == "mission" else fence
+        target[2] = replace(target[2], **change)
         with pytest.raises(ValueError, match=rf"item 2: {field}\b"):
-            upload_mission(mission, [], connect=f"udpout://127.0.0.1:{sink.getsockname()[1]}",
+            upload_mission(mission, fence, connect=f"udpout://127.0.0.1:{sink.getsockname()[1]}",
                            via=via, timeout=1)  # fmt: skip
-        assert select.select([sink], [], [], 0.3)[0] == []
+        assert select.select([sink], [], [], 0.1)[0] == []
     finally:
         sink.close()
 
