@@ -103,6 +103,40 @@ def test_forged_replies_from_another_address_are_ignored(port):
     assert any("pinned the vehicle" in s for s in lines)
 
 
+@pytest.mark.parametrize("settable", [True, False])
+def test_mavsdk_upload_waits_out_the_vehicles_rerequest_period(port, settable):
+    """A vehicle that asks again every 0.75 s and never gets item 0: with the upload timeout
+    this client gives MAVSDK for a PX4 vehicle (1 s) no silence is counted and MAVSDK sends the
+    item its full 5 times before giving up; with MAVSDK's own 0.5 s each silence between two
+    requests costs one of its 5 counts, and it gives up after fewer sends (docs/upload.md)."""
+    from lamde_mission.vehicle.transfer import TransferError
+    from lamde_mission.vehicle.upload import MAVSDK_RETRIES, MavsdkClient
+    from lamde_mission.vehicle.wire import wire_mission
+
+    sends: list[int] = []
+
+    def lose_item_0(msg) -> bool:
+        if msg.get_type() == "MISSION_ITEM_INT" and msg.seq == 0:
+            sends.append(0)
+            return True
+        return False
+
+    with mock_on(port, rerequest_s=0.75, give_up_s=30.0, lose_in=lose_item_0), \
+            MavsdkClient(listen_on(port)) as client:  # fmt: skip
+        assert client.message_timeout_settable  # the installed MAVSDK-Python has the call
+        if not settable:
+            client._set_timeout = None
+            client.message_timeout_settable = False
+        client.connect(10.0)
+        assert client.vehicle.autopilot == "PX4" and client.upload_message_timeout() == 1.0
+        with pytest.raises(TransferError, match="TIMEOUT"):
+            client.upload(wire_mission(hand_mission(1)), MISSION_TYPE.MISSION, 10.0)
+    if settable:
+        assert len(sends) == MAVSDK_RETRIES
+    else:
+        assert 1 <= len(sends) < MAVSDK_RETRIES
+
+
 # ----------------------------------------------------------------------------- validate first
 
 _NAN, _INF = float("nan"), float("inf")
@@ -188,6 +222,29 @@ def test_cli_sim_check_refuses_unless_force(via, port, tmp_path, capsys):
         assert "sent anyway (--force)" in capsys.readouterr().err
         mission, _ = read_mission(plan_path)
         assert compare_items(mission, v.items()) == []
+
+
+@pytest.mark.parametrize("via", VIAS)
+def test_cli_says_to_use_pymavlink_when_mavsdk_gives_up(via, port, tmp_path, capsys):
+    """A link that never carries item 1: both fail (exit 1); after MAVSDK's time-out the CLI
+    says why and recommends --via pymavlink, and says nothing of the kind for pymavlink."""
+    from lamde_mission.commands.upload import MAVSDK_LOSSY_HINT
+
+    plan_path, _, _ = _plan_files(tmp_path)
+
+    def lose_item_1(msg) -> bool:
+        return msg.get_type() == "MISSION_ITEM_INT" and msg.seq == 1
+
+    with mock_on(port, lose_in=lose_item_1):
+        rc = main(["upload", str(plan_path), "--connect", listen_on(port), "--via", via,
+                   "--timeout", "2", "--attempts", "1"])  # fmt: skip
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 1
+    if via == "mavsdk":
+        assert err[-1] == MAVSDK_LOSSY_HINT and "TIMEOUT" in err[-2], err
+        assert "--via pymavlink" in MAVSDK_LOSSY_HINT and "5 times" in MAVSDK_LOSSY_HINT
+    else:
+        assert err[-1].startswith("lamde-mission upload: ") and "pymavlink" not in err[-1], err
 
 
 def test_cli_force_never_sends_what_the_wire_cannot_carry(tmp_path, capsys):

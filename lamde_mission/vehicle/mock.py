@@ -6,8 +6,11 @@ MISSION_FENCE, MISSION_RALLY and MAVLINK2 capability bits), COMMAND_ACK, and the
 protocol for mission types MISSION, FENCE and RALLY:
 
 - upload: MISSION_COUNT -> MISSION_REQUEST_INT ... MISSION_ITEM_INT -> MISSION_ACK. The vehicle
-  drives it and re-requests a missing item every `rerequest_s` (MAVSDK never resends an item by
-  itself); a client that resends the last item after the final ACK was lost gets the ACK again.
+  drives it: it re-requests a missing item `rerequest_s` after its last request and abandons
+  the upload (MISSION_ACK MAV_MISSION_OPERATION_CANCELLED) after `give_up_s` of silence, with
+  the periods of the autopilot it mimics (`UPLOAD_TIMING`; MAVSDK never resends an item by
+  itself, so these periods decide how it fares on a lossy link); a client that resends the last
+  item after the final ACK was lost gets the ACK again, as PX4 does.
   A new MISSION_COUNT or MISSION_REQUEST_LIST abandons an unfinished upload (the stored list
   stays as it was): a ground station that gave up may not say so (MAVSDK does not).
 - download: MISSION_REQUEST_LIST -> MISSION_COUNT; MISSION_REQUEST_INT / MISSION_REQUEST are
@@ -64,7 +67,7 @@ from lamde_mission.vehicle.wire import (
     to_wire,
 )
 
-__all__ = ["MockVehicle", "MockStats", "CAPABILITIES", "NOISY_GCS_SYSTEM"]
+__all__ = ["MockVehicle", "MockStats", "CAPABILITIES", "NOISY_GCS_SYSTEM", "UPLOAD_TIMING"]
 
 #: system id of the mock's second, noisy ground station
 NOISY_GCS_SYSTEM = 254
@@ -85,6 +88,16 @@ _MISSION_MSGS = frozenset({
     "MISSION_ITEM_INT", "MISSION_ITEM", "MISSION_ACK", "MISSION_CLEAR_ALL",
 })  # fmt: skip
 _TYPE_ALL = _m.MAV_MISSION_TYPE_ALL
+
+#: How a real autopilot drives a mission upload: (re-request period s, give-up s), by dialect.
+#: PX4 (src/modules/mavlink/mavlink_mission.h/.cpp, MavlinkMissionManager::send): it asks for
+#: the missing item again once MAVLINK_MISSION_RETRY_TIMEOUT_DEFAULT (250 ms) has passed since
+#: its last request, and drops the transfer MAVLINK_MISSION_PROTOCOL_TIMEOUT_DEFAULT (5 s) after
+#: the last mission message it received from the uploader. ArduPilot
+#: (libraries/GCS_MAVLink/MissionItemProtocol.cpp, update()): it asks again 1000 ms (plus the
+#: link's stream slow-down, 0 on a clear link) after its last request, and cancels
+#: `upload_timeout_ms` (8000 ms, MissionItemProtocol.h) after the last item it accepted.
+UPLOAD_TIMING = {"px4": (0.25, 5.0), "ardupilot": (1.0, 8.0)}
 
 
 @dataclass
@@ -109,7 +122,8 @@ class _Upload:
     items: list[WireItem]
     last_request: float
     src: tuple[int, int] = (0, 0)
-    tries: int = 0
+    last_heard: float = 0.0  # the last mission message of this upload from its ground station
+    last_item: float = 0.0  # the last item accepted (or the MISSION_COUNT)
 
 
 class MockVehicle:
@@ -118,6 +132,8 @@ class MockVehicle:
     `connect` is where it talks: `udpout:HOST:PORT` sends to a ground station listening there
     (MAVSDK's `udpin://`), `udpin:HOST:PORT` listens and answers whoever wrote last.
     `reject` (a MAV_MISSION_RESULT code or name) makes it refuse every upload with that code;
+    `lose_in` (a function of a received MAVLink message) loses the messages it returns True
+    for, on top of `loss_in` (a loss pattern a test can count on);
     `corrupt` (a function of a received WireItem) makes it store something else (a faulty
     vehicle, to test the read-back comparison).
     """
@@ -134,11 +150,12 @@ class MockVehicle:
         reject: int | str | None = None,
         max_items: int = 1000,
         rerequest_s: float | None = None,
-        give_up_s: float = 5.0,
+        give_up_s: float | None = None,
         heartbeat_hz: float = 1.0,
         system_id: int = 1,
         component_id: int = 1,
         corrupt: Callable[[WireItem], WireItem] | None = None,
+        lose_in: Callable[[object], bool] | None = None,
         on_event: Callable[[str], None] | None = None,
         autopilot: str = "px4",
         home: tuple[float, float, float] = (-35.3632621, 149.1652374, 584.0),
@@ -161,17 +178,20 @@ class MockVehicle:
         self.seed = seed
         self.reject = None if reject is None else mission_result_code(reject)
         self.max_items = int(max_items)
-        # well under MAVSDK's 0.5 s item timeout, and longer than a round trip at this latency
+        if autopilot not in UPLOAD_TIMING:
+            raise ValueError(f"autopilot must be 'px4' or 'ardupilot', got {autopilot!r}")
+        period, give_up = UPLOAD_TIMING[autopilot]
+        # the autopilot's period; with `latency_ms`, at least one round trip (a real one asks
+        # again regardless, and ignores the crossing duplicate)
         self.rerequest_s = (
-            float(rerequest_s) if rerequest_s is not None else max(0.1, 2 * self.latency + 0.05)
+            float(rerequest_s) if rerequest_s is not None else max(period, 2 * self.latency + 0.05)
         )
-        self.give_up_s = float(give_up_s)
+        self.give_up_s = float(give_up_s) if give_up_s is not None else give_up
         self.heartbeat_period = 1.0 / float(heartbeat_hz)
         self.system_id = int(system_id)
         self.component_id = int(component_id)
         self.corrupt = corrupt
-        if autopilot not in ("px4", "ardupilot"):
-            raise ValueError(f"autopilot must be 'px4' or 'ardupilot', got {autopilot!r}")
+        self.lose_in = lose_in
         self.autopilot = autopilot
         self.home = tuple(float(v) for v in home)
         self.on_event = on_event
@@ -333,16 +353,22 @@ class MockVehicle:
                 except Exception:  # a malformed datagram must not stop the vehicle
                     continue
                 for msg in msgs:
+                    if self.lose_in is not None and self.lose_in(msg):
+                        self.stats.dropped_in += 1
+                        continue
                     with self._lock:
                         self._handle(msg)
 
     def _tick(self, now: float) -> None:
-        """Vehicle-side re-request of a missing upload item; give up after `give_up_s`."""
+        """Vehicle-side re-request of a missing upload item `rerequest_s` after the last
+        request; give up after `give_up_s` without a mission message from the ground station
+        (PX4) or without a new item (ArduPilot)."""
         with self._lock:
             up = self._upload
-            if up is None or now - up.last_request < self.rerequest_s:
+            if up is None:
                 return
-            if up.tries * self.rerequest_s >= self.give_up_s:
+            since = up.last_heard if self.autopilot == "px4" else up.last_item
+            if now - since > self.give_up_s:
                 self._upload = None
                 self._event(
                     f"{mission_type_name(up.mission_type)} upload abandoned: no item "
@@ -350,7 +376,8 @@ class MockVehicle:
                 )
                 self._ack(_m.MAV_MISSION_OPERATION_CANCELLED, up.mission_type, up.src)
                 return
-            up.tries += 1
+            if now - up.last_request < self.rerequest_s:
+                return
             self.stats.rerequests += 1
             self._request(up, now)
 
@@ -518,8 +545,9 @@ class MockVehicle:
             self._event(f"{mission_type_name(t)} cleared (empty upload)")
             self._ack(_m.MAV_MISSION_ACCEPTED, t, src)
             return
-        self._upload = _Upload(t, count, [], 0.0, src)
-        self._request(self._upload, time.monotonic())
+        now = time.monotonic()
+        self._upload = _Upload(t, count, [], 0.0, src, last_heard=now, last_item=now)
+        self._request(self._upload, now)
 
     def _on_mission_item_int(self, msg: object, src: tuple[int, int], scaled: bool = True) -> None:
         t, seq = int(msg.mission_type), int(msg.seq)
@@ -530,6 +558,7 @@ class MockVehicle:
                 self._ack(_m.MAV_MISSION_ACCEPTED, t, src)
             return  # a stray item (an abandoned transfer): ignored, as PX4 does
         expected = len(up.items)
+        up.last_heard = time.monotonic()
         if seq < expected:
             return  # a duplicate (answer to a re-request that crossed the item)
         if seq > expected or seq >= up.count:
@@ -555,7 +584,7 @@ class MockVehicle:
         if self.corrupt is not None:
             item = self.corrupt(item)
         up.items.append(item)
-        up.tries = 0
+        up.last_item = up.last_heard
         if len(up.items) == up.count:
             self._store[t] = list(up.items)
             self._upload = None
