@@ -33,19 +33,48 @@ VIAS = ("mavsdk", "pymavlink")
 # ----------------------------------------------------------------------------- loss, noise
 
 
-def test_pymavlink_recovers_items_one_by_one_at_40_percent_loss_both_ways(port):
+@pytest.mark.parametrize("autopilot", ["px4", "ardupilot"])
+def test_pymavlink_recovers_items_one_by_one_at_40_percent_loss_both_ways(port, autopilot):
+    """Against either autopilot's way of asking again (PX4 every 0.25 s and silent about items
+    out of turn, ArduPilot every 1 s and answering them MAV_MISSION_INVALID_SEQUENCE)."""
     mission, fence = hand_mission(16), hand_fence()
     lines: list[str] = []
     progress: list[tuple[str, int, int]] = []
-    with mock_on(port, loss=0.4, loss_in=0.4, seed=3) as v:
+    with mock_on(port, loss=0.4, loss_in=0.4, seed=3, autopilot=autopilot) as v:
         report = upload_mission(mission, fence, connect=listen_on(port), via="pymavlink",
                                 timeout=10, attempts=1, log=lines.append,
                                 progress=lambda *a: progress.append(a))  # fmt: skip
-        assert compare_items(mission, v.items()) == []
+        if autopilot == "px4":  # (ArduPilot stores its home and whole-second hovers)
+            assert compare_items(mission, v.items()) == []
         assert compare_items(fence, v.items(MISSION_TYPE.FENCE), "fence") == []
         assert v.stats.dropped > 0 and v.stats.dropped_in > 0
-    assert report.ok and report.attempts == 1  # no whole-transfer retry was needed
-    assert ("mission upload", 20, 20) in progress and ("fence download", 5, 5) in progress
+    # the read-back matched under the dialect's rules, with no whole-transfer retry
+    assert report.ok and report.attempts == 1 and report.differences == []
+    n = len(mission) + (autopilot == "ardupilot")  # ArduPilot: a home placeholder first
+    assert ("mission upload", n, n) in progress and ("fence download", 5, 5) in progress
+
+
+@pytest.mark.parametrize("via", VIAS)
+def test_a_lost_final_ack_on_ardupilot_is_settled_by_the_read_back(via, port):
+    """ArduPilot's final MISSION_ACK is lost; it then answers a resent last item with
+    MAV_MISSION_ERROR (pymavlink) or hears nothing more (MAVSDK times out): either way the
+    read-back decides, in the first attempt."""
+    lost: list[int] = []
+
+    def lose_first_mission_ack(msg) -> bool:
+        if (msg.get_type() == "MISSION_ACK" and msg.mission_type == MISSION_TYPE.MISSION
+                and msg.type == mavlink2.MAV_MISSION_ACCEPTED and not lost):  # fmt: skip
+            lost.append(1)
+            return True
+        return False
+
+    mission = hand_mission(3)
+    with mock_on(port, autopilot="ardupilot", lose_out=lose_first_mission_ack) as v:
+        report = upload_mission(mission, hand_fence(), connect=listen_on(port), via=via,
+                                timeout=5, attempts=1)  # fmt: skip
+        assert v.stats.uploads[MISSION_TYPE.MISSION] == 1
+    assert lost and report.ok and report.attempts == 1
+    assert any("but the read-back matches" in n for n in report.notes), report.notes
 
 
 @pytest.mark.parametrize("via", VIAS)

@@ -9,14 +9,17 @@ protocol for mission types MISSION, FENCE and RALLY:
   drives it: it re-requests a missing item `rerequest_s` after its last request and abandons
   the upload (MISSION_ACK MAV_MISSION_OPERATION_CANCELLED) after `give_up_s` of silence, with
   the periods of the autopilot it mimics (`UPLOAD_TIMING`; MAVSDK never resends an item by
-  itself, so these periods decide how it fares on a lossy link); a client that resends the last
-  item after the final ACK was lost gets the ACK again, as PX4 does.
+  itself, so these periods decide how it fares on a lossy link).
   A new MISSION_COUNT or MISSION_REQUEST_LIST abandons an unfinished upload (the stored list
   stays as it was): a ground station that gave up may not say so (MAVSDK does not).
 - download: MISSION_REQUEST_LIST -> MISSION_COUNT; MISSION_REQUEST_INT / MISSION_REQUEST are
   answered with MISSION_ITEM_INT; the client's MISSION_ACK ends it.
 - MISSION_CLEAR_ALL (one type or MAV_MISSION_TYPE_ALL), MISSION_SET_CURRENT -> MISSION_CURRENT.
-- errors by MISSION_ACK: MAV_MISSION_INVALID_SEQUENCE (item out of order, request past the end),
+- items out of turn during an upload: PX4 ignores them, ArduPilot answers
+  MAV_MISSION_INVALID_SEQUENCE, and both keep asking for the item they miss; an item with no
+  upload in progress is answered with MAV_MISSION_ERROR, except that PX4 takes the last item of
+  the upload it just finished as a sign that its final ACK was lost and ACKs again.
+- errors by MISSION_ACK: MAV_MISSION_INVALID_SEQUENCE (request past the end),
   MAV_MISSION_UNSUPPORTED (unknown mission type), MAV_MISSION_NO_SPACE (more than `max_items`),
   or the `reject` code for every MISSION_COUNT (to test how uploaders report a refusal).
 
@@ -132,8 +135,8 @@ class MockVehicle:
     `connect` is where it talks: `udpout:HOST:PORT` sends to a ground station listening there
     (MAVSDK's `udpin://`), `udpin:HOST:PORT` listens and answers whoever wrote last.
     `reject` (a MAV_MISSION_RESULT code or name) makes it refuse every upload with that code;
-    `lose_in` (a function of a received MAVLink message) loses the messages it returns True
-    for, on top of `loss_in` (a loss pattern a test can count on);
+    `lose_in` / `lose_out` (functions of a MAVLink message) lose the received / sent messages
+    they return True for, on top of `loss_in` / `loss` (a loss pattern a test can count on);
     `corrupt` (a function of a received WireItem) makes it store something else (a faulty
     vehicle, to test the read-back comparison).
     """
@@ -156,6 +159,7 @@ class MockVehicle:
         component_id: int = 1,
         corrupt: Callable[[WireItem], WireItem] | None = None,
         lose_in: Callable[[object], bool] | None = None,
+        lose_out: Callable[[object], bool] | None = None,
         on_event: Callable[[str], None] | None = None,
         autopilot: str = "px4",
         home: tuple[float, float, float] = (-35.3632621, 149.1652374, 584.0),
@@ -192,6 +196,7 @@ class MockVehicle:
         self.component_id = int(component_id)
         self.corrupt = corrupt
         self.lose_in = lose_in
+        self.lose_out = lose_out
         self.autopilot = autopilot
         self.home = tuple(float(v) for v in home)
         self.on_event = on_event
@@ -437,6 +442,9 @@ class MockVehicle:
         cap = self._mav.file
         self._mav.send(msg)
         self.stats.sent += 1
+        if self.lose_out is not None and self.lose_out(msg):
+            self.stats.dropped += 1
+            return
         if self.loss > 0.0 and self._rng.random() < self.loss:
             self.stats.dropped += 1
             return
@@ -553,20 +561,19 @@ class MockVehicle:
         t, seq = int(msg.mission_type), int(msg.seq)
         up = self._upload
         if up is None or up.mission_type != t:
-            # the final ACK was lost and the client resent its last item: ACK again
-            if self._completed is not None and self._completed == (t, seq + 1):
+            if self.autopilot == "px4" and self._completed == (t, seq + 1):
+                # PX4: the last item again means the final ACK was lost: ACK again
                 self._ack(_m.MAV_MISSION_ACCEPTED, t, src)
-            return  # a stray item (an abandoned transfer): ignored, as PX4 does
+            else:  # no transfer of this type: PX4 and ArduPilot answer MAV_MISSION_ERROR
+                self._ack(_m.MAV_MISSION_ERROR, t, src)
+            return
         expected = len(up.items)
         up.last_heard = time.monotonic()
-        if seq < expected:
-            return  # a duplicate (answer to a re-request that crossed the item)
-        if seq > expected or seq >= up.count:
-            self._upload = None
-            self._event(
-                f"{mission_type_name(t)} upload aborted: item {seq} while expecting {expected}"
-            )
-            self._ack(_m.MAV_MISSION_INVALID_SEQUENCE, t, src)
+        if seq != expected:
+            # not the item asked for (a duplicate that crossed a re-request, or a skip): PX4
+            # ignores it; ArduPilot answers MAV_MISSION_INVALID_SEQUENCE. Both go on asking.
+            if self.autopilot == "ardupilot":
+                self._ack(_m.MAV_MISSION_INVALID_SEQUENCE, t, src)
             return
         if scaled:
             item = WireItem(seq, int(msg.frame), int(msg.command), int(msg.current),
