@@ -158,7 +158,14 @@ def main() -> None:
     ap.add_argument("--attempts", type=int, default=3)
     ap.add_argument("--autopilot", choices=("px4", "ardupilot"), default="px4",
                     help="what the mock behaves as (--mission runs)")
+    ap.add_argument("--mavsdk-default-timeout", action="store_true",
+                    help="leave MAVSDK's message timeout at its 0.5 s for uploads too (to "
+                    "measure what the longer upload timeout of our MAVSDK client buys)")
     args = ap.parse_args()
+    if args.mavsdk_default_timeout:
+        import lamde_mission.vehicle.upload as up
+
+        up._timeout_setter = lambda _sdk: None  # MavsdkClient then keeps MAVSDK's 0.5 s
     if args.mission:
         from lamde_mission.formats import read_mission
 
@@ -167,7 +174,8 @@ def main() -> None:
         loss_in = args.loss if args.loss_in is None else args.loss_in
         print(f"{path.name}: {len(m)} mission + {len(f)} fence items; mock on 127.0.0.1 losing "
               f"{args.loss:g} of its messages out and {loss_in:g} in, noisy ground station "
-              f"{args.noisy_gcs_hz:g} Hz, autopilot {args.autopilot}; --timeout "
+              f"{args.noisy_gcs_hz:g} Hz, autopilot {args.autopilot}"
+              f"{', MAVSDK timeout 0.5 s' if args.mavsdk_default_timeout else ''}; --timeout "
               f"{args.timeout:g} --attempts {args.attempts}; {args.runs} runs (seeds "
               f"0..{args.runs - 1})", flush=True)
         for via in args.via.split(","):
