@@ -56,6 +56,7 @@ def _map_files() -> list[Path]:
 def _missions(folder: Path) -> list[tuple[Path, Path]]:
     """(map, mission) pairs written by `plan` for the two small example maps."""
     pairs = []
+    folder.mkdir(parents=True, exist_ok=True)  # `plan` writes into existing folders only
     for name in ("tiny.json", "small-demo.json"):
         for suffix in (".plan", ".waypoints"):
             out = folder / f"{Path(name).stem}{suffix}"

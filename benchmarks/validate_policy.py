@@ -34,6 +34,10 @@ from planner_core.starts import with_init
 
 ROOT = Path(__file__).resolve().parent.parent
 SUITE = ROOT / "examples" / "maps" / "suite"
+#: evaluations per run and DE population unless told otherwise (docs/make_figures.py states them
+#: in the titles of the figures drawn from this script's runs)
+BUDGET = 10_000
+POPULATION = 100
 
 
 def _maps(which: list[str], count: int) -> dict[str, Any]:
@@ -58,8 +62,8 @@ def main() -> None:
     ap.add_argument("--modes", nargs="+", default=["seeded", "uniform"])
     ap.add_argument("--configurators", nargs="+", default=["lamde", "adaptive", "random", "fixed"])
     ap.add_argument("--checkpoint", default="lamde-v1")
-    ap.add_argument("--budget", type=int, default=10_000)
-    ap.add_argument("--population", type=int, default=100)
+    ap.add_argument("--budget", type=int, default=BUDGET)
+    ap.add_argument("--population", type=int, default=POPULATION)
     ap.add_argument("-o", "--output", required=True, help="JSONL of runs (appended, resumable)")
     args = ap.parse_args()
     out = Path(args.output)

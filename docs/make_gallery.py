@@ -2,10 +2,12 @@
 
 Each entry runs the `lamde-mission` commands shown under its picture (in this interpreter's
 environment); mission files go to build/gallery/ (ignored), pictures to docs/gallery/.
+`--out DIR` writes the same tree under DIR instead (build/gallery/, docs/gallery/, docs/gallery.md).
 """
 
 from __future__ import annotations
 
+import argparse
 import shlex
 import subprocess
 import sys
@@ -57,12 +59,21 @@ def picture(cmds: list[str]) -> Path:
     return Path(argv[argv.index("--plot") + 1])
 
 
-def main() -> int:
-    (ROOT / B).mkdir(parents=True, exist_ok=True)
-    (ROOT / P).mkdir(parents=True, exist_ok=True)
+def _under(arg: str, out: Path) -> str:
+    """`arg` under `out` when it names a gallery output (build/gallery/..., docs/gallery/...)."""
+    return str(out / arg) if arg.startswith((B + "/", P + "/")) else arg
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, default=ROOT,
+                    help="root of the tree to write (default: this repository)")
+    out = ap.parse_args(argv).out.resolve()
+    (out / B).mkdir(parents=True, exist_ok=True)
+    (out / P).mkdir(parents=True, exist_ok=True)
     for _, _, cmds in ENTRIES:
         for cmd in cmds:
-            argv = shlex.split(cmd)
+            argv = [_under(a, out) for a in shlex.split(cmd)]
             r = subprocess.run([sys.executable, "-m", "lamde_mission.cli", *argv[1:]], cwd=ROOT,
                                capture_output=True, text=True)  # fmt: skip
             expected = (0, 1) if "--allow-infeasible" in cmd else (0,)
@@ -70,7 +81,7 @@ def main() -> int:
                 print(f"{cmd}: exit {r.returncode}\n{r.stderr}", file=sys.stderr)
                 return 1
             print(f"ok: {cmd}", file=sys.stderr)
-    (ROOT / "docs" / "gallery.md").write_text(render_markdown(), encoding="utf-8")
+    (out / "docs" / "gallery.md").write_text(render_markdown(), encoding="utf-8")
     print("wrote docs/gallery.md", file=sys.stderr)
     return 0
 

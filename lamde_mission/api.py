@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -89,6 +90,7 @@ def plan(
     population: int = _defaults.POPULATION,
     configurator: str | Any = _defaults.CONFIGURATOR,
     init: str = _defaults.INIT,
+    memetic: str = _defaults.MEMETIC,
     variable_length: bool = True,
     polish: bool = True,
     progress: Callable[[Any], None] | None = None,
@@ -104,7 +106,11 @@ def plan(
     if not worse than the DE's best under Deb's rule. `configurator`: "adaptive" (default),
     "fixed", "random", "lamde" (the shipped learned policy, planner_core.policy) or a
     configurator object. `init`: "seeded" (the problem's sensor-aware starts, default) or
-    "uniform" (the paper's protocol: uniform in the box).
+    "uniform" (the paper's protocol: uniform in the box). `memetic`: "auto" (default: on for
+    the uniform start, off for the seeded one), "on" or "off": the memetic step on the elite
+    every 10 generations (`planner_core.memetic`: 2-opt, LP hover times, removals, and for an
+    infeasible elite a point above each unserved sensor and its blocked legs re-routed); its
+    evaluations count against the budget.
     Defaults and valid ranges: `planner_core.defaults`.
 
     Raises ValueError with one line naming the field ("population: must be an integer >= 6,
@@ -113,11 +119,13 @@ def plan(
     """
     from planner_core.de import run
     from planner_core.mapio import load_map
+    from planner_core.memetic import refine as memetic_refine
+    from planner_core.memetic import use_memetic
     from planner_core.problem import Problem
     from planner_core.starts import with_init
 
     _defaults.check_run_args(population=population, budget=budget, configurator=configurator,
-                             init=init)
+                             init=init, memetic=memetic)
     t_start = time.perf_counter()
     m = load_map(map)
     # safety margins (clearance, data margin) are a transformation of the map: the model is the
@@ -125,6 +133,9 @@ def plan(
     problem = Problem(m.planning_map(), variable_length=variable_length)
     t_compile = _warm_up(problem, configurator, run)
     timed = _TimedProblem(with_init(problem, init))
+    refine = None
+    if use_memetic(memetic, with_init(problem, init)):
+        refine = functools.partial(memetic_refine, problem)
     t0 = time.perf_counter()
     result = run(
         timed,
@@ -133,6 +144,7 @@ def plan(
         population=int(population),
         budget=int(budget),
         callback=progress,
+        refine=refine,
     )
     t_optimise = time.perf_counter() - t0
     best = problem.breakdown(result.x)

@@ -32,6 +32,8 @@ __all__ = [
     "ETA",
     "INIT",
     "INIT_MODES",
+    "MEMETIC",
+    "MEMETIC_MODES",
     "L_VIO_TOL",
     "MAP_DEFAULTS",
     "MIN_POPULATION",
@@ -96,6 +98,8 @@ CONFIGURATORS: tuple[str, ...] = ("adaptive", "fixed", "random", "lamde")
 #: start modes of a run (planner_core.starts), the default first: the problem's seeded starts
 #: (the product's) or uniform in the box (the paper's protocol)
 INIT_MODES: tuple[str, ...] = ("seeded", "uniform")
+#: when the planner runs the memetic step on the elite (`planner_core.memetic`)
+MEMETIC_MODES: tuple[str, ...] = ("auto", "on", "off")
 
 _RUN: tuple[Default, ...] = (
     Default("population", 100, "DE population size N (individuals per generation)",
@@ -111,6 +115,12 @@ _RUN: tuple[Default, ...] = (
     Default("init", INIT_MODES[0], "start mode: the problem's sensor-aware starts (seeded) or "
             "uniform in the box (the paper's protocol)", "one of " + ", ".join(INIT_MODES),
             lambda v: v in INIT_MODES),
+    Default("memetic", MEMETIC_MODES[0], "memetic step on the elite every 10 generations "
+            "(2-opt, LP hover times, removals; an infeasible elite gets a point above each "
+            "sensor no point serves and its blocked legs re-routed): auto = on from a uniform "
+            "start, where the DE alone rarely reaches every sensor, off from the seeded start, "
+            "where it measured no gain (docs/search.md)", "one of " + ", ".join(MEMETIC_MODES),
+            lambda v: v in MEMETIC_MODES),
     Default("seed", 0, "random seed of a planning run (same seed, same plan)", "an integer >= 0",
             _int_at_least(0)),
     Default("score_factor", 10.0, "penalised score f + 10 * phi that ranks optimisers "
@@ -202,6 +212,7 @@ POPULATION: int = DEFAULTS["population"].value
 BUDGET: int = DEFAULTS["budget"].value
 CONFIGURATOR: str = DEFAULTS["configurator"].value
 INIT: str = DEFAULTS["init"].value
+MEMETIC: str = DEFAULTS["memetic"].value
 SEED: int = DEFAULTS["seed"].value
 SCORE_FACTOR: float = DEFAULTS["score_factor"].value
 SUITE_SEED: int = DEFAULTS["suite_seed"].value
@@ -228,14 +239,15 @@ def check(name: str, value: Any) -> Any:
 
 
 def check_run_args(
-    *, population: Any, budget: Any, configurator: Any = None, init: Any = None
+    *, population: Any, budget: Any, configurator: Any = None, init: Any = None,
+    memetic: Any = None,
 ) -> None:
     """Check a planning run's population, budget, configurator name and start mode together.
 
     Raises ``ValueError`` with one line naming the first bad field: population must be an
     integer >= ``MIN_POPULATION``; budget an integer >= population; configurator (when a str)
     one of ``CONFIGURATORS`` (a configurator object passes unchecked); init (when given) one of
-    ``INIT_MODES``.
+    ``INIT_MODES``; memetic (when given) one of ``MEMETIC_MODES``.
     """
     check("population", population)
     check("budget", budget)
@@ -246,6 +258,8 @@ def check_run_args(
         check("configurator", configurator)
     if init is not None:
         check("init", init)
+    if memetic is not None:
+        check("memetic", memetic)
 
 
 def _cell(v: Any) -> str:

@@ -12,7 +12,13 @@ trial (every candidate counts against the budget; `planner_core.de.loop.run` cal
 2. exact hover times: the hover-time LP of `planner_core.polish` on the re-ordered points (it
    also drops points whose time is ~0 when that is safe);
 3. remove: in the variable-length encoding, the `REMOVALS` points with the smallest LP times are
-   each removed in turn, with the LP on the rest (a point the others can cover is pure cost).
+   each removed in turn, with the LP on the rest (a point the others can cover is pure cost);
+4. repair (`repair_points`), only when the solution is infeasible: a hover point is inserted
+   above each sensor no point can serve (at its cheapest place in the route), the legs that
+   still cut an obstacle are re-routed through the seeder's visibility graph, the route is
+   pruned back to I_max points when it has grown past it, then 2-opt and the LP again. From a
+   uniform start the DE alone rarely finds the sensors out of every point's radio range (the
+   data term is flat there); this move puts a point where one is missing.
 
 Used through `Problem.refine`; deterministic (no randomness).
 """
@@ -26,7 +32,7 @@ import numpy as np
 from planner_core.geometry import overlap_lengths
 from planner_core.polish import polish_hover_times
 
-__all__ = ["refine", "two_opt_order", "REMOVALS"]
+__all__ = ["refine", "repair_points", "two_opt_order", "use_memetic", "REMOVALS"]
 
 #: points tried for removal per call (each costs one LP solve)
 REMOVALS = 2
@@ -74,16 +80,133 @@ def two_opt_order(problem: Any, pts: np.ndarray, max_passes: int = 4) -> np.ndar
     return nodes[1:-1]
 
 
+def use_memetic(setting: str, problem: Any) -> bool:
+    """Whether a run on `problem` (as the optimiser sees it) uses the memetic step, for the
+    defaults table's `memetic` setting: "on", "off", or "auto" = on exactly when the run starts
+    without the problem's seeding hook (the uniform start, `planner_core.starts`).
+    Raises ValueError naming `memetic` for any other setting."""
+    from planner_core.defaults import check
+
+    check("memetic", setting)
+    if setting == "auto":
+        return not hasattr(problem, "initial_population")
+    return setting == "on"
+
+
+def _seeder(problem: Any) -> Any:
+    """The problem's seeder (`planner_core.seeding.Seeder`), built once and kept on it."""
+    from planner_core.seeding import Seeder
+
+    seeder = problem.__dict__.get("_seeder")
+    if seeder is None:
+        seeder = problem.__dict__["_seeder"] = Seeder.for_problem(problem)
+    return seeder
+
+
+def _cheapest_insertion(problem: Any, pts: np.ndarray, q: np.ndarray) -> int:
+    """Index at which q joins the route start -> pts -> end for the least added flight time,
+    with added length inside obstacles weighed first (1 m of overlap outweighs 1e6 s)."""
+    nodes = np.vstack([problem.start, pts, problem.end])
+    a, b = nodes[:-1], nodes[1:]
+    qq = np.broadcast_to(q, a.shape)
+    t0, o0 = _leg_cost(problem, a, b)
+    t1, o1 = _leg_cost(problem, a, qq)
+    t2, o2 = _leg_cost(problem, qq, b)
+    cost = (o1 + o2 - o0) * 1e6 + (t1 + t2 - t0)
+    return int(np.argmin(cost))
+
+
+def repair_points(problem: Any, pts: np.ndarray) -> np.ndarray:
+    """Hover points (k, 2) -> repaired hover points (m, 2), m <= I_max (= I_max in fixed-length
+    mode): a point above each sensor out of every point's service reach (the seeder's reach:
+    90 % of T_max serves it), inserted where it adds least; blocked legs re-routed around
+    obstacles through the visibility graph; then pruned to I_max (module docstring, step 4).
+    Deterministic."""
+    seeder = _seeder(problem)
+    mp = problem.model
+    pts = np.asarray(pts, dtype=float).reshape(-1, 2)
+    sensors = np.asarray(mp.sensors, dtype=float)
+    need = np.asarray(mp.required, dtype=float)
+    served = np.zeros(len(sensors), dtype=bool)
+    if len(pts):
+        served = (mp.rates(pts).max(axis=0) * (0.9 * mp.t_max) >= need) | (need <= 0)
+    rng = np.random.default_rng(0)  # only for a point exactly at a circle's centre
+    for j in np.flatnonzero(~served):
+        if served[j]:
+            continue  # a point inserted for an earlier sensor serves this one too
+        q = seeder._push_one(sensors[j].copy(), rng)
+        i = _cheapest_insertion(problem, pts, q)
+        pts = np.insert(pts, i, q, axis=0)
+        served |= mp.rates(q[None, :])[0] * (0.9 * mp.t_max) >= need
+    limit = mp.n_points
+    centres = seeder._prune(pts, limit) if len(pts) > limit else pts
+    # route around obstacles; while the corners take the route past I_max, merge two of the
+    # serving points (corners are re-made for the merged route) so that it fits clear
+    pts, _ = seeder._route(centres)
+    while len(pts) > limit and len(centres) > 1:
+        merged = _merge_pair(problem, centres)
+        if merged is None:
+            break
+        centres = merged
+        pts, _ = seeder._route(centres)
+    if len(pts) > limit:
+        pts = seeder._prune(pts, limit)
+    if len(pts) > limit:
+        pts = seeder._truncate(pts, limit)
+    if not problem.variable_length:
+        pts = seeder._fill(pts, limit)
+    return pts
+
+
+def _merge_pair(problem: Any, pts: np.ndarray) -> np.ndarray | None:
+    """pts (k, 2) with two points replaced by one that still serves every sensor only those two
+    serve (within the seeder's reach: 90 % of T_max), placed at their sensors' centroid or the
+    pair's midpoint, choosing the pair and place that add the least flight time; None when no
+    pair can be merged. The merged point takes the first point's place in the route."""
+    mp = problem.model
+    need = np.asarray(mp.required, dtype=float)
+    serves = mp.rates(pts) * (0.9 * mp.t_max) >= need[None, :]  # (k, J)
+    count = serves.sum(axis=0)
+    sensors = np.asarray(mp.sensors, dtype=float)
+    base = float(mp.flight_time(np.hypot(*np.diff(
+        np.vstack([problem.start, pts, problem.end]), axis=0).T)).sum())
+    best: tuple[float, np.ndarray] | None = None
+    k = len(pts)
+    for i in range(k):
+        for j in range(i + 1, k):
+            # sensors that lose their only servers when i and j go
+            own = (serves[i] | serves[j]) & (count - serves[i] - serves[j] <= 0) & (need > 0)
+            cands = [0.5 * (pts[i] + pts[j])]
+            if own.any():
+                cands.append(sensors[own].mean(axis=0))
+            for q in cands:
+                if own.any() and not np.all(mp.rates(q[None, :])[0, own] * (0.9 * mp.t_max)
+                                            >= need[own]):
+                    continue
+                trial = np.delete(pts, j, axis=0)
+                trial[i] = q
+                t = float(mp.flight_time(np.hypot(*np.diff(
+                    np.vstack([problem.start, trial, problem.end]), axis=0).T)).sum()) - base
+                if best is None or t < best[0]:
+                    best = (t, trial)
+    return None if best is None else best[1]
+
+
 def refine(problem: Any, x: np.ndarray) -> np.ndarray:
     """Candidates (m, d), problem space, from solution x: re-ordered with LP hover times, then
-    each of up to `REMOVALS` removals (module docstring). Empty (0, d) when x has no points."""
+    each of up to `REMOVALS` removals, and for an infeasible x its repair (module docstring)."""
     b = problem.breakdown(np.asarray(x, dtype=float))
     pts = np.asarray(b["hover_points"], dtype=float).reshape(-1, 2)
     d = int(np.asarray(problem.lower).shape[0])
-    if len(pts) == 0:
-        return np.zeros((0, d))
-    pts = two_opt_order(problem, pts)
     out = []
+    if b["phi"] > 0.0:
+        rp = two_opt_order(problem, repair_points(problem, pts))
+        if len(rp):
+            pr = polish_hover_times(problem, rp)
+            out.append(problem.encode(pr.hover_points, pr.hover_times))
+    if len(pts) == 0:
+        return np.asarray(out, dtype=float).reshape(-1, d)
+    pts = two_opt_order(problem, pts)
     pol = polish_hover_times(problem, pts)
     out.append(problem.encode(pol.hover_points, pol.hover_times))
     # shorten: pull every point towards the midpoint of its route neighbours, LP times

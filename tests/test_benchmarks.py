@@ -4,8 +4,12 @@ No timing is asserted here (targets belong to the benchmarks, run on a quiet mac
 
 from __future__ import annotations
 
+import json
+import re
 import subprocess
 import sys
+
+import pytest
 
 from tests.conftest import ROOT
 
@@ -24,3 +28,74 @@ def test_bench_plan_runs_on_a_small_map() -> None:
         "targets:"
     )
     assert "neither torch nor matplotlib" in out  # the planning path stays light
+
+
+def _script(*args: str, timeout: int = 600) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, *args], cwd=ROOT, capture_output=True, text=True,
+                          timeout=timeout)
+
+
+@pytest.mark.slow
+def test_bench_plan_on_the_campus() -> None:
+    """The README's `python benchmarks/bench_plan.py campus-500` (one cold and one warm plan)."""
+    r = _script("benchmarks/bench_plan.py", "campus-500", "--cold", "1", "--warm", "1")
+    assert r.returncode == 0, r.stderr
+    assert "campus-500" in r.stdout and r.stdout.rstrip().splitlines()[-1].startswith("targets:")
+
+
+def test_fuzz_inputs_runs() -> None:
+    """The README's `python benchmarks/fuzz_inputs.py --n 1000 --seed 0`, on 3 inputs."""
+    r = _script("benchmarks/fuzz_inputs.py", "--n", "3", "--seed", "0", "--hang-sample", "1")
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "fuzz_inputs: 3 mutated inputs, seed 0" in r.stdout
+    for verdict in ("tracebacks", "partial files", "unclean stderr"):
+        assert re.search(rf"{verdict}\s+0\b", r.stdout), r.stdout
+
+
+def test_bench_upload_end_to_end() -> None:
+    """The README's `python benchmarks/bench_upload.py --mission T16 --loss 0.4 --runs 5`, on
+    T01 with no loss and one run per client."""
+    r = _script("benchmarks/bench_upload.py", "--mission", "T01", "--loss", "0", "--runs", "1",
+                "--via", "pymavlink,mavsdk")
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert re.search(r"pymavlink\s+1/1 ok", r.stdout) and re.search(r"mavsdk\s+1/1 ok",
+                                                                     r.stdout), r.stdout
+
+
+def test_search_table_prints_the_comparison(tmp_path) -> None:
+    """The README's `python benchmarks/search_table.py DIR/results.jsonl` on a small file."""
+    recs = [{"task": "T01", "optimiser": o, "seed": s, "f": f + s, "phi": 0.0}
+            for s in range(3) for o, f in (("planner", 296.0), ("seed-lp", 297.0))]
+    res = tmp_path / "results.jsonl"
+    res.write_text("".join(json.dumps(r) + "\n" for r in recs))
+    r = _script("benchmarks/search_table.py", str(res))
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.splitlines()
+    assert lines[0].startswith("| map | planner | seed-lp | p vs seed-lp | gap to best-known |")
+    assert lines[2].startswith("| T01 | 297.00 (3/3) | 298.00 (3/3) |")
+    assert "- planner has the lower mean than seed-lp on 1/1 maps" in r.stdout
+
+
+def test_bench_executor_runs() -> None:
+    """The README's `python benchmarks/bench_executor.py`, one small sweep on the local pool."""
+    r = _script("benchmarks/bench_executor.py", "--runs", "1", "--budget", "200", "--workers",
+                "1", "--backends", "local")
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "same records on every backend and worker count (wall time aside): yes" in r.stdout
+
+
+@pytest.mark.slow  # two short trainings and a process pool: about 25 s on a busy machine
+def test_bench_executor_train_mode_runs_on_local_backends() -> None:
+    """`bench_executor.py --train` (tiny settings, local backends): timings, ratio, verdict."""
+    r = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "bench_executor.py"), "--train",
+         "--backends", "local", "--train-maps", "2", "--train-envs", "2", "--train-population",
+         "10", "--train-budget", "40", "--train-epochs", "1"],
+        capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert r.returncode == 0, r.stdout + r.stderr
+    out = r.stdout
+    assert "local x 1 worker(s) (this process):" in out and "local x 2 worker(s):" in out
+    assert "ratio local x 2 / local x 1: training" in out
+    assert "same checkpoint on every backend and worker count: yes" in out
+    assert "16 epochs x 3200 problems at 3000 evaluations" in out

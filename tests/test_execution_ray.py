@@ -117,3 +117,15 @@ def test_lam_build_on_ray_equals_this_process_and_resumes(ray_runtime: None,
     assert on_ray.missing() == [] and on_ray.build() == 0
     for name in ("ela", "learned"):
         np.testing.assert_array_equal(here.load(name)[1], on_ray.load(name)[1])
+
+
+def test_train_on_ray_gives_the_checkpoint_of_this_process(ray_runtime: None,
+                                                           tmp_path: Path) -> None:
+    """Meta-training's rollouts on Ray (2 CPUs): the same seed gives the same checkpoint as the
+    rollouts in this process (test_rollout.py checks two local worker processes)."""
+    pytest.importorskip("torch")
+    from tests.test_rollout import assert_same_checkpoint, train_cli
+
+    here = train_cli(tmp_path, "here")
+    on_ray = train_cli(tmp_path, "ray", "--backend", "ray", "--jobs", "2")
+    assert_same_checkpoint(here, on_ray)

@@ -362,3 +362,14 @@ def test_multipolygon_problem_names_the_part(tmp_path) -> None:
     layers = read_layers([(_write(tmp_path, "mp.geojson", doc), None)])
     with pytest.raises(GisError, match=r"features\[3\] 'pair' polygon 1: self-intersection"):
         build_map(layers)
+
+
+def test_cli_map_campus_writes_the_benchmark_map(tmp_path) -> None:
+    """The README's `lamde-mission map campus -o campus.json`: the seeded 500-footprint map."""
+    out = tmp_path / "campus.json"
+    r = subprocess.run([sys.executable, "-m", "lamde_mission.cli", "map", "campus", "-o",
+                        str(out)], capture_output=True, text=True, timeout=300)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert "500 footprints, 15 sensors" in r.stdout
+    m = load_map(out)
+    assert len(m.shapes) == 500 and len(m.sensor_ids) == 15

@@ -48,6 +48,7 @@ def test_contracts_hold_on_the_tree() -> None:
         ("planner_core/execution/local.py", "import planner_core.bench.runner",
          "The executor is a seam"),
         ("planner_core/bench/runner.py", "import ray", "Ray is the executor's optional backend"),
+        ("planner_core/policy/rollout.py", "import torch", "out of the rollout workers"),
         ("lamde_mission/cli.py", "import ray", "Ray is the executor's optional backend"),
     ],
 )

@@ -193,3 +193,14 @@ def test_learned_encoder_separates_bbob_functions():
     random = np.mean([_one_nn_accuracy(LearnedExtractor(init_params(s)), dims) for s in (1, 2)])
     assert trained > 3 / 24
     assert trained > random + 0.05
+
+
+def test_train_encoder_command_writes_weights(tmp_path):
+    """The README's `python -m planner_core.lam.train_encoder`, two steps into a scratch file."""
+    pytest.importorskip("torch")
+    from planner_core.lam import train_encoder
+
+    out = tmp_path / "encoder.npz"
+    assert train_encoder.main(["--steps", "2", "--out", str(out)]) == 0
+    with np.load(out) as z:
+        assert set(z.files) == set(train_encoder.PARAM_SHAPES)

@@ -271,3 +271,27 @@ def test_build_in_worker_processes_matches_this_process(tmp_path):
         assert parallel.build(executor=ex) == 3
     for name in ("ela", "learned"):
         np.testing.assert_array_equal(serial.load(name)[1], parallel.load(name)[1])
+
+
+def test_selection_figure_says_what_it_shows():
+    """`lam select --plot`: title with K, the tasks and the options; axes named; the legend
+    names every marker and lies outside the data."""
+    from matplotlib.text import Text
+
+    from lamde_mission.commands.lam import selection_figure
+
+    rng = np.random.default_rng(0)
+    doc = {"options": {"k": 5, "tasks": ["T01", "T09"], "selection": "two-stage",
+                       "features": "ela", "n_probe": 100, "seed": 0}}
+    arrays = {"Z": rng.random((40, 6)), "z_f": rng.random((2, 6)), "z_phi": rng.random((2, 6)),
+              "objective": np.arange(5), "constraint": np.arange(5, 10)}
+    fig = selection_figure(doc, arrays)
+    texts = " | ".join(t.get_text().replace("\n", " ") for t in fig.findobj(Text))
+    for needle in ("K = 5 training problems for 2 task(s) (T01, T09)", "selection two-stage",
+                   "ela features", "principal component 1", "database D_syn (40 instances)",
+                   "selected objective s_k", "selected constraint s'_k", "task objective z_f",
+                   "task constraint z_phi"):
+        assert needle in texts, needle
+    fig.canvas.draw()
+    r = fig.canvas.get_renderer()
+    assert not fig.legends[0].get_window_extent(r).overlaps(fig.axes[0].get_window_extent(r))

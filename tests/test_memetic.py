@@ -88,3 +88,111 @@ def test_polish_elite_includes_the_best_and_never_loses_to_it(problem: Problem) 
     f, phi = problem.evaluate(xs)
     f1, phi1 = problem.evaluate(only[None, :])
     assert (phi.min(), f[phi == phi.min()].min()) <= (phi1[0], f1[0])
+
+
+# ---------------------------------------------------------------- repair (uniform starts)
+#: 6 x 4 km: sensors far apart (the seeder's reach is ~920 m at the defaults), a pair 1.5 km
+#: apart that one point between them serves, a building on the direct route
+WIDE_MAP = {
+    "name": "wide",
+    "area": {"width": 6000, "height": 4000},
+    "start": [100, 100],
+    "end": [5900, 3900],
+    "sensors": [
+        {"id": "a", "x": 1000, "y": 3000},
+        {"id": "b", "x": 2500, "y": 3000},
+        {"id": "c", "x": 5000, "y": 800},
+    ],
+    "obstacles": {"circles": [{"x": 3000, "y": 2000, "radius": 300}]},
+    "uav": {"max_hover_points": 4},
+}
+
+
+def _served(problem: Problem, pts: np.ndarray) -> np.ndarray:
+    mp = problem.model
+    return mp.rates(pts).max(axis=0) * (0.9 * mp.t_max) >= mp.required
+
+
+def test_repair_puts_a_point_within_reach_of_every_sensor() -> None:
+    from planner_core.memetic import repair_points
+
+    problem = Problem(WIDE_MAP)
+    far = np.array([[problem.model.width * 0.5, problem.model.height * 0.5]])
+    assert not _served(problem, far).all()  # one central point serves not every sensor
+    out = repair_points(problem, far)
+    assert len(out) <= problem.n_points
+    assert _served(problem, out).all()
+    np.testing.assert_array_equal(repair_points(problem, far), out)  # deterministic
+    # with the LP hover times the repaired plan meets C4 (no data shortfall) and C5
+    from planner_core.polish import polish_hover_times
+
+    pol = polish_hover_times(problem, two_opt_order(problem, out))
+    b = problem.breakdown(problem.encode(pol.hover_points, pol.hover_times))
+    assert b["v4"] == 0.0 and b["v5"] == 0.0
+
+
+def test_repair_keeps_i_max_by_merging_points() -> None:
+    from planner_core.memetic import repair_points
+
+    p = Problem({**WIDE_MAP, "uav": {"max_hover_points": 2}})
+    # one point per sensor is 3 > I_max = 2: a and b (1.5 km apart) share one point between them
+    out = repair_points(p, np.zeros((0, 2)))
+    assert len(out) == 2
+    assert _served(p, out).all()
+
+
+def test_repair_in_fixed_length_mode_gives_exactly_i_max_points() -> None:
+    from planner_core.memetic import repair_points
+
+    p = Problem(WIDE_MAP, variable_length=False)
+    out = repair_points(p, np.array([[10.0, 10.0]]))
+    assert len(out) == p.n_points
+    x = refine(p, p.encode(out, np.zeros(len(out))))
+    assert x.shape[1] == p.dim
+
+
+def test_refine_offers_the_repair_only_for_an_infeasible_elite(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import planner_core.memetic as memetic
+
+    problem = Problem(WIDE_MAP)
+    far = problem.encode(np.array([[problem.model.width * 0.5, problem.model.height * 0.5]]),
+                         np.array([1.0]))
+    f0, phi0 = problem.evaluate(far[None, :])
+    assert phi0[0] > 0
+    cand = refine(problem, far)
+    f, phi = problem.evaluate(cand)
+    assert phi[0] == 0.0  # the repair candidate comes first and is feasible
+    calls = []
+    real = memetic.repair_points
+    monkeypatch.setattr(memetic, "repair_points", lambda p, pts: calls.append(1) or real(p, pts))
+    memetic.refine(problem, cand[0])
+    assert calls == []  # a feasible elite is not repaired
+    memetic.refine(problem, far)
+    assert calls == [1]
+
+
+def test_memetic_setting_auto_follows_the_start_mode(problem: Problem) -> None:
+    from planner_core.memetic import use_memetic
+    from planner_core.starts import with_init
+
+    assert use_memetic("auto", with_init(problem, "uniform"))
+    assert not use_memetic("auto", with_init(problem, "seeded"))
+    assert use_memetic("on", problem) and not use_memetic("off", with_init(problem, "uniform"))
+    with pytest.raises(ValueError, match="^memetic: "):
+        use_memetic("sometimes", problem)
+
+
+def test_plan_from_a_uniform_start_serves_every_sensor_with_the_memetic_step() -> None:
+    """From a uniform start the DE alone leaves sensors out of range on the large suite maps
+    (issue 12's 27 % feasible); with the memetic repair (`memetic="auto"`) T16 is feasible."""
+    from lamde_mission.api import plan
+    from planner_core.suite import suite_maps
+
+    m = suite_maps()["T16"]
+    with_step = plan(m, seed=0, init="uniform")
+    assert with_step.feasible
+    without = plan(m, seed=0, init="uniform", memetic="off")
+    assert not without.feasible
+    assert with_step.evaluations == without.evaluations == 10_000

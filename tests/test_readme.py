@@ -21,8 +21,9 @@ def _blocks(lang: str) -> list[str]:
 
 
 def _commands() -> list[str]:
-    """The command lines of the README's bash blocks after the quick start section (continuation
-    lines joined, comments and a trailing `&` dropped)."""
+    """The command lines of the README after the quick start section: every line of its bash
+    blocks (continuation lines joined, comments and a trailing `&` dropped) and every inline
+    `lamde-mission ...` / `python ...` example in its text (the `make` targets wrap these)."""
     body = README[README.index("\n## ", README.index("## Quick start") + 1):]
     cmds = []
     for block in re.findall(r"```bash\n(.*?)```", body, re.S):
@@ -30,6 +31,8 @@ def _commands() -> list[str]:
             cmd = re.sub(r"\s+", " ", line.split("#")[0]).strip().rstrip("&").strip()
             if cmd:
                 cmds.append(cmd)
+    prose = re.sub(r"```.*?```", "", body, flags=re.S)
+    cmds += re.findall(r"`((?:lamde-mission|python) [^`\n]+)`", prose)
     return cmds
 
 
@@ -66,6 +69,12 @@ COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
         ("test_policy_cli.py::test_cli_train_runs_on_a_trainset_file", ('"--problems"',)),
     "lamde-mission train -o my-policy --epochs 20 --resume":
         ("test_policy.py::test_two_epoch_training_smoke_run_and_resume", ("resume=True",)),
+    "lamde-mission train -o my-policy --maps 16 --envs 4 --jobs":
+        ("test_rollout.py::test_same_seed_same_checkpoint_in_this_process_and_on_two_workers",
+         ('"--jobs"', "train_cli")),
+    "lamde-mission train -o my-policy --maps 16 --envs 16 --backend ray":
+        ("test_execution_ray.py::test_train_on_ray_gives_the_checkpoint_of_this_process",
+         ('"--backend", "ray"', "train_cli")),
     "lamde-mission verify":
         ("test_plot_cli.py::test_verify_good_mission_exits_0", ('"verify"',)),
     "lamde-mission show":
@@ -91,6 +100,36 @@ COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
     "python benchmarks/bench_plan.py": ("test_benchmarks.py", ("bench_plan",)),
     "lamde-mission bench": ("test_bench.py::test_cli_bench_then_report", ('"bench"',)),
     "lamde-mission report": ("test_bench.py::test_cli_bench_then_report", ('"report"',)),
+    "lamde-mission schema": ("test_mapio.py::test_cli_check_and_schema", ('"schema"',)),
+    "lamde-mission check MAP": ("test_mapio.py::test_cli_check_and_schema", ('"check"',)),
+    "lamde-mission map campus": ("test_gis.py::test_cli_map_campus_writes_the_benchmark_map",
+                                 ('"campus"', '"-o"')),
+    "lamde-mission plan MAP -o x.plan --population 5":
+        ("test_defaults.py::test_cli_population_5_is_one_line_and_exit_2", ('"5"',)),
+    "python -m planner_core.defaults README.md":
+        ("test_defaults.py::test_update_readme_rewrites_only_the_table", ("update_readme",)),
+    "python -m planner_core.lam.train_encoder":
+        ("test_lam_features.py::test_train_encoder_command_writes_weights",
+         ("train_encoder", "main(")),
+    "python benchmarks/bench_plan.py campus-500":
+        ("test_benchmarks.py::test_bench_plan_on_the_campus", ("campus-500",)),
+    "python benchmarks/bench_policy.py":
+        ("test_policy_cli.py::test_bench_policy_runs_on_a_small_map", ("bench_policy",)),
+    "python benchmarks/bench_lam.py":
+        ("test_lam_query.py::test_bench_lam_runs_and_prints_the_estimates", ("bench_lam",)),
+    "python benchmarks/fuzz_inputs.py":
+        ("test_benchmarks.py::test_fuzz_inputs_runs", ("fuzz_inputs", '"--seed"')),
+    "python benchmarks/bench_upload.py":
+        ("test_benchmarks.py::test_bench_upload_end_to_end", ("bench_upload", '"--mission"',
+                                                              '"--loss"', '"--runs"')),
+    "python benchmarks/search_table.py":
+        ("test_benchmarks.py::test_search_table_prints_the_comparison", ("search_table",)),
+    "python benchmarks/bench_executor.py":
+        ("test_benchmarks.py::test_bench_executor_runs", ("bench_executor",)),
+    "python docs/make_gallery.py":
+        ("test_readme.py::test_make_gallery_regenerates_the_gallery", ("make_gallery.py",)),
+    "python docs/make_figures.py":
+        ("test_bench_figures.py::test_make_figures_redraws_the_stored_runs", ("make_figures",)),
 }
 
 
@@ -143,6 +182,25 @@ def test_upload_to_mock_example_runs() -> None:
 def test_readme_names_no_path_outside_the_repository() -> None:
     assert "../" not in README
     assert "Learning to Optimize UAV Path Planning" in README  # the paper, cited by title
+
+
+#: the paper's authors in its order (its title page); its copy carries no year or venue
+PAPER_AUTHORS = ("Sijie Ma", "Zeyuan Ma", "Weijia Cao", "Yue-Jiao Gong", "Lingling Ma",
+                 "Zhiyang Huang", "Jun Zhang")
+
+
+def test_readme_cites_the_paper_in_full() -> None:
+    """Title, every author in the paper's order, "preprint" and no invented year, and what we
+    follow from it by section."""
+    cite = README[README.index("The method (LAMDE) is from the paper"):README.index("## Quick")]
+    text = re.sub(r"\s*\n>?\s*", " ", cite)
+    assert ("Learning to Optimize UAV Path Planning for Data Sensing in Wireless Sensor "
+            "Networks") in text
+    at = [text.index(a) for a in PAPER_AUTHORS]
+    assert at == sorted(at), "authors out of the paper's order"
+    assert "Preprint" in text and not re.search(r"\b(19|20)\d\d\b", text)
+    for part in ("What we follow from it", "Sec. 3", "Sec. 4", "Sec. 5"):
+        assert part in text
 
 
 def test_gitignore_ignores_no_tracked_file() -> None:
@@ -200,3 +258,69 @@ def test_gallery_is_what_its_script_writes() -> None:
         assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", png
         for cmd in cmds:  # repository paths only: a clone has everything the gallery needs
             assert "../" not in cmd and "shared" not in cmd
+
+
+def _requirement_name(req: str) -> str:
+    return re.split(r"[<>=!~\[; ]", req, maxsplit=1)[0].lower()
+
+
+def test_readme_lists_what_the_install_and_each_extra_bring() -> None:
+    """"What the install brings" names every core dependency, and its extras table every extra
+    of pyproject.toml with exactly the packages that extra installs."""
+    import tomllib
+
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]
+    at = README.index("What the install brings")
+    brings = README[at:README.index("| extra |", at)].lower()
+    aliases = {"cma": "pycma"}  # the package's import/registry name vs the name people use
+    for req in project["dependencies"]:
+        name = _requirement_name(req)
+        assert aliases.get(name, name) in brings, f"README does not list core dependency {name}"
+    rows = {}
+    for line in README[README.index("| extra |", at):].splitlines()[2:]:
+        if not line.startswith("| `"):
+            break
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        listed = re.sub(r"\([^)]*\)", "", cells[1])  # version notes in brackets
+        rows[cells[0].strip("`")] = {p.strip().lower() for p in listed.split(",")}
+    extras = project["optional-dependencies"]
+    assert set(rows) == set(extras), (sorted(rows), sorted(extras))
+    for extra, reqs in extras.items():
+        assert rows[extra] == {_requirement_name(r) for r in reqs}, extra
+
+
+@pytest.mark.slow
+def test_make_gallery_regenerates_the_gallery(tmp_path) -> None:
+    """`python docs/make_gallery.py` (into a scratch tree): every picture written, the page the
+    same as the committed one."""
+    r = subprocess.run([sys.executable, "docs/make_gallery.py", "--out", str(tmp_path)],
+                       cwd=ROOT, capture_output=True, text=True, timeout=900)
+    assert r.returncode == 0, r.stderr
+    pictures = re.findall(r"!\[[^]]*\]\(([^)]+)\)",
+                          (tmp_path / "docs" / "gallery.md").read_text(encoding="utf-8"))
+    assert len(pictures) >= 4
+    for rel in pictures:
+        png = tmp_path / "docs" / rel
+        assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
+    assert (tmp_path / "docs" / "gallery.md").read_text(encoding="utf-8") == (
+        ROOT / "docs" / "gallery.md").read_text(encoding="utf-8")
+
+
+def test_every_link_and_repository_path_resolves() -> None:
+    """Relative links of README.md and docs/**/*.md point at files of the repository, and every
+    repository path the README names (docs/..., examples/..., benchmarks/..., ...) exists."""
+    import glob
+    import os
+
+    pages = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
+    for page in pages:
+        text = page.read_text(encoding="utf-8")
+        for link in re.findall(r"\]\(([^)#\s]+)[^)]*\)", text):
+            if re.match(r"[a-z]+:", link):  # http(s), mailto: not ours to check
+                continue
+            assert (page.parent / link).exists(), f"{page.relative_to(ROOT)}: broken link {link}"
+    named = re.findall(r"(?<![\w/.-])((?:docs|examples|benchmarks|planner_core|lamde_mission|sim"
+                       r"|tests)/[\w./*-]*[\w*])", README)
+    assert len(named) > 20
+    for rel in named:
+        assert glob.glob(os.path.join(ROOT, rel)), f"README names {rel}, which does not exist"

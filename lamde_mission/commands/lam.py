@@ -252,16 +252,24 @@ def _select(args: argparse.Namespace) -> int:
 
 
 def _plot(path: str, doc: dict[str, Any], arrays: dict[str, Any]) -> None:
-    """Tasks and selection in the first two principal components of the database's features."""
+    """Write :func:`selection_figure` as PNG to `path` (atomically)."""
     import io
 
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    import numpy as np
-
     from planner_core.atomic import write_bytes_atomic
+
+    buf = io.BytesIO()
+    selection_figure(doc, arrays).savefig(buf, format="png", dpi=110)
+    write_bytes_atomic(path, buf.getvalue())
+
+
+def selection_figure(doc: dict[str, Any], arrays: dict[str, Any]) -> Any:
+    """Tasks and the selected synthetic problems in the first two principal components of the
+    database's features (`arrays`: Z (n, k) database features, z_f / z_phi (tasks, k), the
+    selected rows `objective` / `constraint`); title with the selection's options, legend
+    outside the data."""
+    import numpy as np
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
 
     Z = arrays["Z"]
     mu = Z.mean(axis=0)
@@ -271,23 +279,29 @@ def _plot(path: str, doc: dict[str, Any], arrays: dict[str, Any]) -> None:
     def proj(A: Any) -> Any:
         return (np.asarray(A) - mu) @ W
 
-    fig, ax = plt.subplots(figsize=(7, 6))
+    fig = Figure(figsize=(8.6, 5.6), layout="constrained")
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
     P = proj(Z)
-    ax.scatter(P[:, 0], P[:, 1], s=6, c="0.8", label="D_syn")
+    ax.scatter(P[:, 0], P[:, 1], s=6, c="0.8", label=f"database D_syn ({len(Z):,} instances)")
     so = P[arrays["objective"]]
     sc = P[arrays["constraint"]]
-    ax.scatter(so[:, 0], so[:, 1], s=22, c="tab:blue", label="selected s_k (objective)")
+    ax.scatter(so[:, 0], so[:, 1], s=22, c="tab:blue", label="selected objective s_k")
     ax.scatter(sc[:, 0], sc[:, 1], s=22, marker="s", facecolors="none", edgecolors="tab:green",
-               label="selected s'_k (constraint)")  # fmt: skip
+               label="selected constraint s'_k")  # fmt: skip
     tf, tp = proj(arrays["z_f"]), proj(arrays["z_phi"])
-    ax.scatter(tf[:, 0], tf[:, 1], s=90, marker="*", c="tab:red", label="tasks z_f")
-    ax.scatter(tp[:, 0], tp[:, 1], s=60, marker="x", c="tab:orange", label="tasks z_phi")
+    ax.scatter(tf[:, 0], tf[:, 1], s=90, marker="*", c="tab:red", label="task objective z_f")
+    ax.scatter(tp[:, 0], tp[:, 1], s=60, marker="x", c="tab:orange",
+               label="task constraint z_phi")  # fmt: skip
     o = doc["options"]
-    ax.set_title(f"LAM selection: {o['selection']}, {o['features']} features, K={o['k']}")
-    ax.set_xlabel("PC 1")
-    ax.set_ylabel("PC 2")
-    ax.legend(fontsize=8)
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
-    plt.close(fig)
-    write_bytes_atomic(path, buf.getvalue())
+    tasks = list(o.get("tasks", []))
+    shown = ", ".join(tasks[:6]) + (", ..." if len(tasks) > 6 else "")
+    fig.suptitle(f"Landscape-aware selection (paper Sec. 4.3): K = {o['k']} training problems "
+                 f"for {len(tasks)} task(s) ({shown})\nselection {o['selection']}, "
+                 f"{o['features']} features, N_probe {o['n_probe']}, seed {o['seed']}",
+                 fontsize=10)  # fmt: skip
+    ax.set_xlabel("principal component 1 of the landscape features (unitless)")
+    ax.set_ylabel("principal component 2 (unitless)")
+    ax.grid(True, alpha=0.3)
+    fig.legend(*ax.get_legend_handles_labels(), loc="outside right center", fontsize=8)
+    return fig

@@ -43,6 +43,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--init", choices=D.INIT_MODES, default=D.INIT,
                    help="initial population: seeded (sensor-aware starts) or uniform in the "
                    f"box (the paper's protocol); default {D.INIT}")
+    p.add_argument("--memetic", choices=D.MEMETIC_MODES, default=D.MEMETIC,
+                   help="memetic step on the elite (2-opt, LP hover times, removals, repair of "
+                   "unserved sensors and blocked legs): auto = on with --init uniform, off with "
+                   f"seeded; default {D.MEMETIC}")
     p.add_argument("--fixed-length", action="store_true",
                    help="use all I_max hover points (the paper's LAMDE-F ablation)")
     p.add_argument("--no-polish", action="store_true", help="skip the hover-time LP polish")
@@ -255,6 +259,7 @@ def run(args: argparse.Namespace) -> int:
         population=args.population,
         configurator=configurator,
         init=args.init,
+        memetic=args.memetic,
         variable_length=not args.fixed_length,
         polish=not args.no_polish,
         progress=progress,

@@ -14,8 +14,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         help="write the markdown report of a benchmark folder (table, limits, figures)",
         description="Summarise RESULTS/results.jsonl like the paper's Table 2: mean ± std of "
         "f + 10 phi per task, best bold, Wilcoxon rank-sum marks (+ ~ -) against the reference "
-        "column, feasibility, wall time, ratios to the best-known f and the lower bound, a "
-        "convergence plot per task and the best paths on four tasks (PNGs beside the report).",
+        "column, feasibility, wall time, ratios to the best-known f and the lower bound, every "
+        "run's score per task, a convergence plot per task and the best paths on four tasks "
+        "(PNGs beside the report; titles name the protocol, log scores when they span a "
+        "decade).",
     )
     p.add_argument("results", help="benchmark folder (written by `lamde-mission bench`)")
     p.add_argument("-o", "--output", default="docs/results.md",

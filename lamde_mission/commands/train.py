@@ -2,7 +2,9 @@
 
 Writes a checkpoint folder OUT every epoch (weights.npz, config.json, manifest.json, curve.csv,
 state.pt; TensorBoard scalars under OUT/tb when tensorboard or tensorboardX is installed) that
-`plan --configurator lamde` can use through `PolicyConfigurator(checkpoint=OUT)`.
+`plan --configurator lamde` can use through `PolicyConfigurator(checkpoint=OUT)`. The rollouts
+run in this process (`--jobs 1`, the default), on a local process pool (`--jobs N`) or on Ray
+(`--backend ray [--address ...]`); the learner (torch) stays in this process.
 """
 
 from __future__ import annotations
@@ -12,6 +14,8 @@ import dataclasses
 import json
 import sys
 
+from lamde_mission.commands._common import add_executor_args, check_executor_args
+
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p = sub.add_parser(
@@ -20,7 +24,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         description="Meta-train the meta-level policy (paper Algorithm 1: n-step PPO) on UAV "
         "maps from the suite generator (seeds disjoint from the suite and validation maps) or "
         "on a training-set JSON with a 'problems' list. A checkpoint is written to OUT after "
-        "every epoch; --resume continues from it. Same seed, same checkpoint (same machine).",
+        "every epoch; --resume continues from it. The DE rollouts (numpy) can run on worker "
+        "processes or a Ray cluster (--jobs, --backend), the PPO update stays here. Same seed, "
+        "same checkpoint (same machine), whatever the backend and --jobs.",
     )
     p.add_argument("-o", "--output", required=True, metavar="OUT", help="checkpoint folder")
     p.add_argument("--problems", metavar="JSON",
@@ -36,6 +42,12 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="start modes of the training episodes (default both, alternating)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="any other PPOConfig field (JSON value), e.g. --set lr=1e-3; repeatable")
+    p.add_argument("--jobs", type=int, default=1,
+                   help="rollout workers (default 1: the rollouts run in this process; N > 1: N "
+                   "worker processes, at most --envs busy at a time); with --backend ray and no "
+                   "--address: the CPUs of the Ray instance started here (0 = all); ignored "
+                   "with --address")
+    add_executor_args(p, "rollouts")
     p.add_argument("--resume", action="store_true", help="continue from OUT's last epoch")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     return p
@@ -87,6 +99,10 @@ def run(args: argparse.Namespace) -> int:
     from lamde_mission.errors import UsageError
 
     cfg = _config(args)
+    if args.jobs < 0 or (args.jobs == 0 and args.backend == "local"):
+        raise UsageError(f"--jobs: must be >= 1 (0 = all CPUs, with --backend ray only), "
+                         f"got {args.jobs}")
+    check_executor_args(args)
     try:
         from planner_core.policy import ppo
     except ModuleNotFoundError as exc:
@@ -104,11 +120,20 @@ def run(args: argparse.Namespace) -> int:
         if args.maps < 1:
             raise UsageError(f"--maps: must be >= 1, got {args.maps}")
         specs = default_training_specs(args.maps)
+    from planner_core.execution import SerialExecutor, make_executor
+
     progress = None if args.quiet else ppo.text_progress()
+    # one local worker = this process (a pool of one would only add the transfers: the learner
+    # waits for the rollouts either way)
+    executor = (SerialExecutor() if args.backend == "local" and args.jobs == 1
+                else make_executor(args.jobs, args.backend, args.address))
     try:
         ppo.train(cfg, specs, args.output, resume=args.resume,
-                  log=lambda line: print(line, file=sys.stderr), progress=progress)
+                  log=lambda line: print(line, file=sys.stderr), progress=progress,
+                  executor=executor)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
+    finally:
+        executor.close()
     print(f"wrote {args.output} (plan with it: PolicyConfigurator(checkpoint={args.output!r}))")
     return 0

@@ -25,7 +25,7 @@ from planner_core.baselines.budget import (
     Trace,
     as_budgeted,
 )
-from planner_core.defaults import CONFIGURATOR, CONFIGURATORS, POPULATION, SCORE_FACTOR
+from planner_core.defaults import CONFIGURATOR, CONFIGURATORS, MEMETIC, POPULATION, SCORE_FACTOR
 from planner_core.starts import INIT_MODES, UniformStart, with_init
 
 __all__ = [
@@ -106,9 +106,10 @@ REGISTRY: dict[str, OptimiserSpec] = {
         OptimiserSpec(
             "planner",
             "planner_core.baselines.de:optimise",
-            f"what `plan` does: our DE ({CONFIGURATOR} configurator, population {POPULATION}) "
-            "on budget - 16, then the polish LP on the final population's 16 Deb-best",
-            kwargs={"lp": True},
+            f"what `plan` does: our DE ({CONFIGURATOR} configurator, population {POPULATION}; "
+            "from a uniform start with the memetic step) on budget - 16, then the polish LP on "
+            "the final population's 16 Deb-best",
+            kwargs={"lp": True, "memetic": MEMETIC},
         ),
         OptimiserSpec(
             "planner-memetic",

@@ -27,13 +27,14 @@ def optimise(
     *,
     configurator: str = CONFIGURATOR,
     lp: bool = False,
-    memetic: bool = False,
+    memetic: bool | str = False,
 ) -> OptimiseResult:
     """Run the DE with `configurator` for exactly `budget` evaluations (initial population
     included). `lp`: what `plan` does, the DE on budget - ELITE, then the hover-time LP on the
     final population's ELITE Deb-best (`planner_core.polish.polish_elite`, the last ELITE
     evaluations). `memetic`: with the
-    memetic step on the elite (`planner_core.memetic.refine`, when the problem can decode)."""
+    memetic step on the elite (`planner_core.memetic.refine`, when the problem can decode);
+    a str is the defaults table's setting ("auto": on from a uniform start, as `plan` does)."""
     from planner_core.baselines.seed_lp import can_lp
 
     budgeted = as_budgeted(problem, budget)
@@ -44,6 +45,10 @@ def optimise(
     if population < MIN_POPULATION:
         raise ValueError(f"budget {budget} is below the DE's minimum population {MIN_POPULATION}")
     refine = None
+    if isinstance(memetic, str):
+        from planner_core.memetic import use_memetic
+
+        memetic = use_memetic(memetic, budgeted)
     if memetic and can_lp(budgeted):
         from functools import partial
 

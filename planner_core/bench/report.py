@@ -3,13 +3,13 @@
 Sections: the commands that produced the results, the setup, the penalised-score table (mean +-
 std per task, best mean bold, Wilcoxon marks and +/~/- counts against the reference column), a
 per-optimiser summary (feasibility, wall time, mean rank), feasibility per task, the results
-against the limits (mean f of feasible runs / best-known and / LB), one convergence plot per task
-and a figure of each optimiser's best path on four tasks.
+against the limits (mean f of feasible runs / best-known and / LB), every run's score per task,
+one convergence plot per task and each optimiser's best path on four tasks (the figures are
+`planner_core.bench.figures`).
 """
 
 from __future__ import annotations
 
-import io
 import math
 import os
 from collections import defaultdict
@@ -19,11 +19,10 @@ from typing import Any
 
 import numpy as np
 
-from planner_core.bench._io import read_json, write_bytes_atomic, write_text_atomic
+from planner_core.bench._io import read_json, write_text_atomic
 from planner_core.bench.records import RESULTS_FILE, read_records
 from planner_core.bench.stats import ALPHA, ScoreTable, score_table
 from planner_core.defaults import SCORE_FACTOR
-from planner_core.model import penalised_score
 
 __all__ = ["DEFAULT_REFERENCE", "build_report", "cost_section", "imax_section", "imax_table",
            "order_optimisers", "format_table", "fmt"]
@@ -110,115 +109,12 @@ def _rel(path: Path, start: Path) -> str:
 # ----------------------------------------------------------------------------- figures
 
 
-def _step_on_grid(ev: Sequence[int], values: Sequence[float], grid: np.ndarray) -> np.ndarray:
-    """Value current at each grid point (NaN before the first entry) of a step trace."""
-    ev_a = np.asarray(ev, dtype=float)
-    idx = np.searchsorted(ev_a, grid, side="right") - 1
-    v = np.asarray(values, dtype=float)
-    out = np.where(idx >= 0, v[np.clip(idx, 0, len(v) - 1)], np.nan)
-    return out
-
-
-def _save(fig: Any, path: Path) -> Path:
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=110)
-    return write_bytes_atomic(path, buf.getvalue())
-
-
-def _new_figure(figsize: tuple[float, float]) -> Any:
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=figsize, layout="constrained")
-    FigureCanvasAgg(fig)
-    return fig
-
-
-def convergence_figure(task: str, per_opt: dict[str, list[dict[str, Any]]], opts: list[str],
-                       budget: int, path: Path) -> Path:
-    """Median (and 25-75 % band) of the incumbent's penalised score against evaluations."""
-    fig = _new_figure((6.4, 4.2))
-    ax = fig.add_subplot()
-    grid = np.linspace(0, budget, 201)[1:]
-    for i, o in enumerate(opts):
-        runs = per_opt.get(o, [])
-        if not runs:
-            continue
-        curves = []
-        for r in runs:
-            h = r["history"]
-            f, phi = np.asarray(h["best_f"], float), np.asarray(h["best_phi"], float)
-            score = penalised_score(f, phi)
-            curves.append(_step_on_grid(h["evaluations"], score, grid))
-        C = np.vstack(curves)
-        ok = ~np.all(np.isnan(C), axis=0)
-        g = grid[ok]
-        med = np.nanmedian(C[:, ok], axis=0)
-        lo, hi = np.nanpercentile(C[:, ok], [25, 75], axis=0)
-        color = f"C{i % 10}"
-        ax.plot(g, med, color=color, label=o, lw=1.4, ls="-" if i < 10 else "--")
-        ax.fill_between(g, lo, hi, color=color, alpha=0.15, lw=0)
-    ax.set_yscale("log")
-    ax.set_xlabel("evaluations")
-    ax.set_ylabel("best f + 10 phi (median, 25-75 %)")
-    ax.set_title(f"{task}: convergence")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7, ncols=2)
-    return _save(fig, path)
-
-
-def _draw_map(ax: Any, m: Any) -> None:
-    from matplotlib.patches import Circle, Polygon
-
-    ax.add_patch(Polygon([[0, 0], [m.width, 0], [m.width, m.height], [0, m.height]],
-                         closed=True, fill=False, ec="0.3", lw=0.8))
-    for c in m.spec.obstacles.circles:
-        ax.add_patch(Circle((c.x, c.y), c.radius, fc="0.55", ec="0.35", lw=0.4))
-    for poly in m.rectangle_polygons:
-        ax.add_patch(Polygon(poly, closed=True, fc="0.7", ec="0.4", lw=0.4))
-    for poly in m.nfz_polygons:
-        ax.add_patch(Polygon(poly, closed=True, fc=(0.9, 0.3, 0.3, 0.2), ec="tab:red", lw=0.8))
-    s = m.sensors
-    ax.scatter(s[:, 0], s[:, 1], s=10, marker="^", c="tab:green", zorder=4)
-    ax.plot(*m.start, marker="o", c="k", ms=6, zorder=5)
-    ax.plot(*m.end, marker="s", c="k", ms=6, zorder=5)
-    ax.set_xlim(-0.02 * m.width, 1.02 * m.width)
-    ax.set_ylim(-0.02 * m.height, 1.02 * m.height)
-    ax.set_aspect("equal")
-    ax.tick_params(labelsize=6)
-
-
-def paths_figure(tasks: list[str], maps: dict[str, Any], best: dict[str, dict[str, Any]],
-                 opts: list[str], path: Path,
-                 known: dict[str, dict[str, Any]] | None = None) -> Path:
-    """Each optimiser's best run (lowest score) drawn on each task's map, one panel per task;
-    `known[task]` (a best-known entry: hover_points, f, optimiser) is drawn in black."""
-    n = len(tasks)
-    cols = 2 if n > 1 else 1
-    rows = math.ceil(n / cols)
-    fig = _new_figure((5.2 * cols, 5.0 * rows))
-    for k, t in enumerate(tasks):
-        ax = fig.add_subplot(rows, cols, k + 1)
-        m = maps[t]
-        _draw_map(ax, m)
-        k_entry = (known or {}).get(t)
-        if k_entry is not None:
-            hp = np.asarray(k_entry["hover_points"], float).reshape(-1, 2)
-            P = np.vstack([m.start, hp, m.end])
-            ax.plot(P[:, 0], P[:, 1], color="k", lw=2.2, alpha=0.35, zorder=1,
-                    label=f"best known ({k_entry['optimiser']}): {fmt(k_entry['f'])}")
-        for i, o in enumerate(opts):
-            r = best.get(t, {}).get(o)
-            if r is None:
-                continue
-            hp = np.asarray(r["hover_points"], float).reshape(-1, 2)
-            P = np.vstack([m.start, hp, m.end])
-            tag = "" if r["feasible"] else " (infeasible)"
-            ax.plot(P[:, 0], P[:, 1], color=f"C{i % 10}", lw=1.2, marker=".", ms=4,
-                    ls="-" if r["feasible"] else ":", label=f"{o}: {fmt(r['score'])}{tag}")
-        ax.set_title(f"{t}: best path per optimiser (f + 10 phi)", fontsize=9)
-        ax.legend(fontsize=6, loc="best")
-    return _save(fig, path)
+def _runs_per(records: list[dict[str, Any]]) -> list[int]:
+    """The distinct numbers of runs per (task, optimiser) in `records`."""
+    n: dict[tuple[str, str], int] = defaultdict(int)
+    for r in records:
+        n[(r["task"], r["optimiser"])] += 1
+    return sorted(set(n.values()))
 
 
 def _spread(tasks: list[str], k: int = 4) -> list[str]:
@@ -333,8 +229,8 @@ def build_report(
         recs = [r for r in main if _init(r) == mode]
         L += ["", f"## Protocol: init {mode}", "", INIT_TEXT[mode]]
         L += _protocol_body(recs, opts, reference, alpha, suite_dir, maps, limits, figures,
-                            output, path_tasks, budget, suffix="" if len(modes) == 1 else
-                            f"_{mode}")
+                            output, path_tasks, budget, mode, suffix="" if len(modes) == 1
+                            else f"_{mode}")
     study = [r for r in records if r.get("i_max") is not None]
     if study:
         L += imax_section(study, figures / "imax_feasible_rate.png", output)
@@ -346,9 +242,10 @@ def build_report(
 def _protocol_body(records: list[dict[str, Any]], opts_all: list[str], reference: str,
                    alpha: float, suite_dir: Path | None, maps: dict[str, Any], limits: bool,
                    figures: Path, output: Path, path_tasks: Sequence[str] | None, budget: int,
-                   suffix: str) -> list[str]:
-    """The tables and figures of one protocol (one start mode): score table, per optimiser,
-    feasibility, limits, convergence, best paths. Figure names carry `suffix`."""
+                   mode: str, suffix: str) -> list[str]:
+    """The tables and figures of one protocol (start mode `mode`): score table, per
+    optimiser, feasibility, limits, scores per task, convergence, best paths. Figure names
+    carry `suffix`."""
     tasks = sorted({r["task"] for r in records})
     present = {r["optimiser"] for r in records}
     opts = [o for o in opts_all if o in present]
@@ -388,12 +285,27 @@ def _protocol_body(records: list[dict[str, Any]], opts_all: list[str], reference
         L += _limits_section(tasks, opts, by, suite_dir, maps)
 
     # ---- figures
+    from planner_core.bench import figures as F
+
+    runs = _runs_per(records)
+    protocol = F.protocol_text(mode, budget, runs)
+    grouped = {t: {o: [(float(r["score"]), bool(r["feasible"])) for r in by[t].get(o, [])]
+                   for o in opts} for t in tasks}
+    fig = F.scores_figure(tasks, grouped, opts, protocol=protocol,
+                          what=f"Final score of every run per task: {len(opts)} optimisers")
+    p = F.save(fig, figures / f"scores{suffix}.png")
+    L += ["", "### Scores per task", "",
+          "Every run's final f + 10 phi (dot: feasible, cross: infeasible), with the median "
+          "(bar) and the 25-75 % box; log scale when the scores span a decade.", "",
+          f"![scores per task]({_rel(p, output.parent)})"]
     L += ["", "### Convergence", "",
-          "Median incumbent score (25-75 % band) against evaluations, log scale. For our DE and "
+          "Median incumbent score (25-75 % band) against evaluations, each run's final score "
+          "right of the budget line (dot: feasible, cross: infeasible). For our DE and "
           "random search the incumbent is the Deb-best; for CMA-ES and scipy's DE the best "
           "penalised score seen.", ""]
     for t in tasks:
-        p = convergence_figure(t, by[t], opts, budget, figures / f"convergence_{t}{suffix}.png")
+        fig = F.convergence_figure(t, by[t], opts, budget, init=mode)
+        p = F.save(fig, figures / f"convergence_{t}{suffix}.png")
         L.append(f"![{t} convergence]({_rel(p, output.parent)})")
     ptasks = list(path_tasks) if path_tasks else _spread([t for t in tasks if t in maps])
     ptasks = [t for t in ptasks if t in maps]
@@ -401,11 +313,14 @@ def _protocol_body(records: list[dict[str, Any]], opts_all: list[str], reference
         best = {t: {o: min(by[t][o], key=lambda r: r["score"]) for o in opts if by[t].get(o)}
                 for t in ptasks}
         known = _known_entries(suite_dir, {t: maps[t] for t in ptasks})
-        p = paths_figure(ptasks, maps, best, opts, figures / f"best_paths{suffix}.png", known)
+        fig = F.paths_figure(ptasks, maps, best, opts, known=known, protocol=protocol,
+                             runs=max(runs) if len(runs) == 1 else None)
+        p = F.save(fig, figures / f"best_paths{suffix}.png")
         L += ["", "### Best paths", "",
-              f"Each optimiser's best run (lowest score over its runs) on {', '.join(ptasks)}; "
-              "dotted = infeasible; wide grey = the best-known plan. Circles, rectangles grey; "
-              "no-fly zones red; sensors green triangles; start o, end square.", "",
+              f"Each optimiser's best run (lowest score over its runs) on {', '.join(ptasks)}, "
+              "one map per optimiser: solid = feasible, dotted = infeasible; wide grey = the "
+              "best-known plan; obstacles grey, no-fly zones red; sensors green triangles; "
+              "start o, end square.", "",
               f"![best paths]({_rel(p, output.parent)})"]
     return L
 
@@ -435,13 +350,15 @@ def imax_section(records: list[dict[str, Any]], path: Path, output: Path) -> lis
     budgets = sorted({int(r["budget"]) for r in records})
     L += ["", f"{len(tasks)} task(s) ({', '.join(tasks)}), {len(runs)} run(s) each, budget "
           f"{', '.join(f'{b:,}' for b in budgets)}."]
-    fig = _new_figure((6.4, 4.2))
-    ax = fig.add_subplot()
+    from planner_core.bench import figures as F
+
+    tables: dict[str, dict[str, dict[int, tuple[float, float, int]]]] = {}
     for mode in INIT_ORDER:
         recs = [r for r in records if _init(r) == mode]
         tab = imax_table(recs)
         if not tab:
             continue
+        tables[mode] = tab
         ks = sorted({k for d in tab.values() for k in d})
         L += ["", f"Start mode {mode}:", "", "| Optimiser | " + " | ".join(
             f"I_max {k}" for k in ks) + " |", "|---|" + "---:|" * len(ks)]
@@ -449,14 +366,9 @@ def imax_section(records: list[dict[str, Any]], path: Path, output: Path) -> lis
             L.append(f"| {o} | " + " | ".join(
                 f"{d[k][0]:.2f} ± {d[k][1]:.2f} (n {d[k][2]})" if k in d else "-" for k in ks)
                 + " |")
-            xs = sorted(d)
-            ax.errorbar(xs, [d[k][0] for k in xs], yerr=[d[k][1] for k in xs], marker="o",
-                        capsize=3, label=f"{o} ({mode})")
-    ax.set_xlabel("I_max")
-    ax.set_ylabel("feasible rate of the last population")
-    ax.set_ylim(-0.05, 1.05)
-    ax.legend(fontsize=7)
-    p = _save(fig, path)
+    fig = F.imax_figure(tables, n_tasks=len(tasks), runs=len(runs),
+                        budget=budgets[-1] if len(budgets) == 1 else None)
+    p = F.save(fig, path)
     L += ["", f"![I_max study]({_rel(p, output.parent)})"]
     return L
 

@@ -1,17 +1,19 @@
 """Meta-training of the policy with PPO and n-step updates (paper Algorithm 1). Torch lives here.
 
-One readable loop (:func:`train`), in the spirit of CleanRL's ``ppo.py``:
+One readable loop (:func:`train`), in the spirit of CleanRL's ``ppo.py``, split into actors and
+a learner: the rollouts run behind an executor (:mod:`planner_core.policy.rollout`, numpy only:
+this process, a local process pool or Ray), the PPO update here.
 
-    for epoch in 1..E:                                   # Algorithm 1, line 2
-        for each chunk of `envs` training problems:      # line 3, several rolled out together
-            reset one DE per problem (start mode per env) # line 4-5
-            for g in 1..G:                               # line 6
-                one batched forward pass -> actions      # line 7 (sampled, numpy generator)
-                one DE generation per problem, reward    # lines 8-10 (planner_core.env)
-                store (s, a, log pi(a|s), V(s), r)       # line 11
-                every n generations (and at the end):    # line 12
-                    kappa epochs of PPO on the buffer    # lines 13-14
-                    clear the buffer                     # line 15
+    for epoch in 1..E:                                  # Algorithm 1, line 2
+        for each chunk of `envs` training problems:     # line 3, several rolled out together
+            one job per problem (start mode per env)    # lines 4-5 (reset in the worker)
+            until the episodes end:                     # line 6
+                workers run up to n generations per     # lines 7-11 (numpy forward pass,
+                  episode with the weights sent along,  #   sampled actions, DE step,
+                  storing (s, a, log pi(a|s), V(s), r)  #   reward)
+                kappa epochs of PPO on the segments     # lines 12-14, the learner, on
+                  of all the chunk's episodes           #   every episode's segment at once
+                new weights out with the next jobs      # line 15 (the buffer is new)
         write the checkpoint, the CSV row, TensorBoard scalars
 
 Objective (Schulman et al. 2017, as CleanRL): the policy is factorised over individuals, so the
@@ -23,13 +25,19 @@ log-densities. Every individual of a population shares its generation's advantag
     L_V    = 0.5 mean (V(s) - R)^2                  (critic on the pooled population)
     L      = L_clip - c_ent * entropy + c_V * L_V   (gradient norm clipped to max_grad_norm)
 
+``log pi_old`` and the values V(s) are the actors' (the numpy forward pass at the weights the
+segment ran with; the torch twin agrees to about 1e-5, tests/test_policy.py).
+
 Advantage estimation: GAE(gamma, lambda) over the n-step segment, bootstrapped with V of the
 state after the segment unless the episode ended there (the budget's end is a true terminal
 state, see planner_core.env); returns R = A + V; advantages normalised over the batch.
 
-Determinism: the epoch's rollouts draw from ``numpy.random.default_rng([seed, epoch])`` and the
-torch generator is reseeded per epoch, so the same seed gives the same checkpoint on the same
-machine, and ``resume`` continues exactly where an interrupted run would have been.
+Determinism: episode j of epoch e draws its DE seed and all its actions from its own
+generator (``SeedSequence(seed, spawn_key=(e, j))``, see :mod:`planner_core.policy.rollout`),
+the chunks' order from ``numpy.random.default_rng([seed, epoch])``, and the torch generator is
+reseeded per epoch; a segment's result depends only on its job. So the same seed gives the same
+checkpoint on the same machine whatever the executor and its number of workers, and ``resume``
+continues exactly where an interrupted run would have been.
 """
 
 from __future__ import annotations
@@ -52,19 +60,13 @@ from torch import nn
 from torch.distributions import Beta, Categorical
 
 from planner_core.atomic import write_bytes_atomic
-from planner_core.env import DEFAULT_DELTA, DEFAULT_ETA, OptimizationEnv
+from planner_core.env import DEFAULT_DELTA, DEFAULT_ETA
+from planner_core.execution import Executor, SerialExecutor
 from planner_core.policy import checkpoint as ckpt
-from planner_core.policy.network import (
-    N_FEATURES,
-    NetConfig,
-    PolicyOutput,
-    init_params,
-    param_shapes,
-    sample_actions,
-)
-from planner_core.policy.problems import build, spec_name
+from planner_core.policy import rollout
+from planner_core.policy.network import N_FEATURES, NetConfig, init_params, param_shapes
+from planner_core.policy.problems import spec_name
 from planner_core.problem import penalised_score
-from planner_core.starts import with_init
 
 
 @dataclass
@@ -356,11 +358,6 @@ CURVE_FIELDS = ("epoch", "episodes", "return", "feasible_rate", "best_score", "p
                 "value_loss", "entropy", "approx_kl", "clipfrac", "seconds")
 
 
-def _to_output(out: tuple[torch.Tensor, ...], b: int) -> PolicyOutput:
-    mut, cx, F_ab, Cr_ab, value = (t.detach().double().numpy() for t in out)
-    return PolicyOutput(mut[b], cx[b], F_ab[b], Cr_ab[b], float(value[b]))
-
-
 def _scalar_writer(folder: Path) -> Any:
     """A TensorBoard SummaryWriter when tensorboard (or tensorboardX) is installed, else None."""
     try:
@@ -381,13 +378,17 @@ def train(
     resume: bool = False,
     log: Callable[[str], None] | None = None,
     progress: Callable[[int, int, str], None] | None = None,
+    executor: Executor | None = None,
 ) -> Path:
     """Meta-train a policy on the problems ``specs`` (see planner_core.policy.problems) and
     write a checkpoint folder ``out`` every epoch (weights.npz, config.json, manifest.json,
     curve.csv, and state.pt for ``resume``). Returns ``out``.
 
     ``log(line)`` gets one line per epoch; ``progress(done, total, text)`` is called after each
-    generation of each chunk. Raises ValueError for bad settings.
+    n-step segment of each chunk. ``executor`` runs the rollout segments
+    (:mod:`planner_core.policy.rollout`; :func:`planner_core.execution.make_executor`: a local
+    process pool or Ray); None runs them in this process. The checkpoint does not depend on it.
+    The caller closes the executor. Raises ValueError for bad settings or problem specs.
     """
     out = Path(out)
     if cfg.envs < 1 or cfg.n_steps < 1 or cfg.update_epochs < 1 or cfg.epochs < 1:
@@ -396,7 +397,11 @@ def train(
         if mode not in ("seeded", "uniform"):
             raise ValueError(f"init_modes: unknown start mode {mode!r}")
     torch.set_num_threads(cfg.threads)
-    problems = [build(s) for s in specs]
+    # jobs carry map content, never a path; the driver builds each problem once too (its
+    # dimension orders the chunks), through the same per-process cache as the workers
+    portable = [rollout.portable_spec(s) for s in specs]
+    problems = [rollout.problem_of(s) for s in portable]
+    executor = SerialExecutor() if executor is None else executor
     model = TorchPolicy(cfg.net)
     model.load_numpy(init_params(cfg.net, cfg.seed))
     optimizer = torch.optim.Adam(model.parameters(), lr=cfg.lr, eps=1e-5)
@@ -422,80 +427,61 @@ def train(
 
     for epoch in range(start_epoch, cfg.epochs):
         t0 = time.perf_counter()
-        rng = np.random.default_rng([cfg.seed, epoch])
+        order_rng = np.random.default_rng([cfg.seed, epoch])
         torch.manual_seed(cfg.seed * 100_003 + epoch)
         # a random order, then grouped by dimension (stable), so that a chunk mixes sizes only
         # where the counts force it and little is padded
-        order = sorted(rng.permutation(len(problems)).tolist(),
+        order = sorted(order_rng.permutation(len(problems)).tolist(),
                        key=lambda i: len(problems[i].lower))
         returns_ep, feasible_ep, score_ep, stats_ep = [], [], [], []
         for c, chunk in enumerate(chunks):
             idx = [int(order[i]) for i in chunk]
-            envs = []
-            obs = []
-            for k, i in enumerate(idx):
-                mode = cfg.init_modes[(epoch + c + k) % len(cfg.init_modes)]
-                env = OptimizationEnv(population=cfg.population, budget=cfg.budget,
-                                      eta=cfg.eta, delta=cfg.delta)
-                o, _ = env.reset(seed=int(rng.integers(2**62)),
-                                 options={"problem": with_init(problems[i], mode)})
-                envs.append(env)
-                obs.append(o)
-            ep_return = np.zeros(len(envs))
-            done = False
+            # one job per episode of the chunk; the rollouts run behind the executor
+            jobs = [rollout.SegmentJob(
+                key=rollout.EpisodeKey(cfg.seed, epoch, c * cfg.envs + k),
+                spec=portable[i], init=cfg.init_modes[(epoch + c + k) % len(cfg.init_modes)],
+                population=cfg.population, budget=cfg.budget, eta=cfg.eta, delta=cfg.delta,
+                n_steps=cfg.n_steps, net=cfg.net.to_dict(), weights={})
+                for k, i in enumerate(idx)]
+            ep_return = np.zeros(len(jobs))
             g = 0
-            while not done:
-                # ---- rollout: up to n generations (Algorithm 1, lines 6-11)
-                buf_obs, buf_act, buf_logp, buf_val, buf_rew, buf_done = [], [], [], [], [], []
-                for _ in range(cfg.n_steps):
-                    o_t = batch_obs(obs)
-                    with torch.no_grad():
-                        net_out = _forward(model, o_t)
-                    acts = np.zeros((len(envs), cfg.population, 4))
-                    for b in range(len(envs)):
-                        acts[b] = np.stack(sample_actions(_to_output(net_out, b), rng), axis=1)
-                    a_t = torch.from_numpy(acts.astype(np.float32))
-                    with torch.no_grad():
-                        logp, _ = log_prob_entropy(net_out, a_t)
-                    rew = np.zeros(len(envs))
-                    dn = np.zeros(len(envs))
-                    for b, env in enumerate(envs):
-                        action = (acts[b, :, 0].astype(np.intp), acts[b, :, 1].astype(np.intp),
-                                  a_t[b, :, 2].double().numpy(), a_t[b, :, 3].double().numpy())
-                        obs[b], rew[b], term, trunc, _ = env.step(action)
-                        dn[b] = float(term or trunc)
-                    ep_return += rew
-                    buf_obs.append(o_t)
-                    buf_act.append(a_t)
-                    buf_logp.append(logp)
-                    buf_val.append(net_out[4].numpy())
-                    buf_rew.append(rew)
-                    buf_done.append(dn)
-                    g += 1
-                    if progress is not None:
-                        progress(epoch * len(chunks) * G + c * G + min(g, G), total,
-                                 f"epoch {epoch + 1}/{cfg.epochs} chunk {c + 1}/{len(chunks)}")
-                    if dn.all():
-                        done = True
-                        break
+            while True:
+                # ---- rollout: up to n generations per episode (Algorithm 1, lines 6-11)
+                weights = model.numpy_params()
+                for job in jobs:
+                    job.weights = weights
+                segs = rollout.collect(executor, jobs)
+                T = segs[0].steps
+                if any(s.steps != T for s in segs) or len({s.done for s in segs}) > 1:
+                    raise RuntimeError("episodes of one chunk ran out of step (same budget and "
+                                       "population should give the same generations)")
+                buf_obs = [batch_obs([s.obs(t) for s in segs]) for t in range(T)]
+                rew = np.stack([s.rewards for s in segs], axis=1)  # (T, B)
+                ep_return += rew.sum(axis=0)
+                g += T
+                if progress is not None:
+                    progress(epoch * len(chunks) * G + c * G + min(g, G), total,
+                             f"epoch {epoch + 1}/{cfg.epochs} chunk {c + 1}/{len(chunks)}")
                 # ---- n-step PPO update (Algorithm 1, lines 12-15)
-                if done:
-                    next_value = np.zeros(len(envs))
-                else:
-                    with torch.no_grad():
-                        next_value = _forward(model, batch_obs(obs))[4].numpy()
-                values = np.stack(buf_val)
-                adv = gae(np.stack(buf_rew), values, np.stack(buf_done), next_value,
-                          cfg.gamma, cfg.gae_lambda)
+                values = np.stack([s.values for s in segs], axis=1)
+                adv = gae(rew, values, np.stack([s.dones for s in segs], axis=1),
+                          np.array([s.next_value for s in segs]), cfg.gamma, cfg.gae_lambda)
                 ret = adv + values
+                acts = np.stack([s.actions for s in segs], axis=1)  # (T, B, N, 4)
+                logp = np.stack([s.logp for s in segs], axis=1)  # (T, B, N)
                 stats_ep.append(ppo_update(
-                    model, optimizer, cfg, _cat_obs(buf_obs), torch.cat(buf_act),
-                    torch.cat(buf_logp), torch.from_numpy(adv.reshape(-1).astype(np.float32)),
+                    model, optimizer, cfg, _cat_obs(buf_obs),
+                    torch.from_numpy(acts.reshape(-1, *acts.shape[2:])),
+                    torch.from_numpy(logp.reshape(-1, logp.shape[2])),
+                    torch.from_numpy(adv.reshape(-1).astype(np.float32)),
                     torch.from_numpy(ret.reshape(-1).astype(np.float32)),
                 ))
-            for b, env in enumerate(envs):
-                s = env.state
-                returns_ep.append(float(ep_return[b]))
+                if segs[0].done:
+                    break
+                for job, s in zip(jobs, segs, strict=True):
+                    job.carry = s.carry
+            for s, ret_b in zip(segs, ep_return, strict=True):
+                returns_ep.append(float(ret_b))
                 feasible_ep.append(s.best_phi == 0.0)
                 score_ep.append(float(penalised_score(s.best_f, s.best_phi)))
         row = {

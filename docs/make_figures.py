@@ -1,0 +1,134 @@
+"""Redraw every benchmark figure in docs/ from the runs stored in the repository:
+`python docs/make_figures.py` (from the repository root; `--out DIR` writes the same tree
+under DIR instead). No benchmark is re-run.
+
+- REPORTS: `lamde-mission report` over a stored benchmark folder (`results.jsonl`); the report
+  and its figures (scores per task, convergence per task, best paths, I_max study) are
+  rewritten. A folder that is not in the repository is skipped, and the script says so: the
+  figures it made stay as they were drawn (see NOT_STORED).
+- POLICY: the score figures of `benchmarks/validate_policy.py`'s runs (docs/policy/*.jsonl),
+  one per start mode, over the seeds every (map, mode, configurator) completed.
+
+The figures themselves are `planner_core.bench.figures`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import json
+import os
+import shlex
+import sys
+from collections import defaultdict
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parent.parent
+
+#: (benchmark folder, report it makes, reference column, extra `report` options)
+REPORTS: list[tuple[str, str, str, list[str]]] = [
+    ("docs/reduced/runs", "docs/reduced/protocol.md", "de-adaptive", []),
+    ("docs/reduced/imax-runs", "docs/reduced/imax.md", "de-adaptive", ["--no-limits"]),
+    ("results", "docs/results.md", "de-adaptive", []),
+]
+
+#: why a report's runs are not in the repository (its figures keep the style they were drawn in)
+NOT_STORED: dict[str, str] = {
+    "docs/reduced/imax-runs": "the I_max study's 720 runs are 6.9 MB of x vectors and were not "
+    "committed; its command in docs/reduced/README.md regenerates them byte for byte (~5 min "
+    "with --jobs 2), then run this script again",
+    "results": "the 3,600 runs behind docs/results.md were not committed; the command at the "
+    "top of docs/results.md re-runs them with today's code (its wall-time column adds up to "
+    "about 30 CPU-minutes), then run this script again",
+}
+
+#: (runs file, figure stem, what the runs compare, command that made them)
+POLICY: list[tuple[str, str, str, str]] = [
+    ("docs/policy/validation.jsonl", "docs/policy/validation",
+     "lamde-v1 against the hand-made configurators on 4 unseen maps",
+     "python benchmarks/validate_policy.py --maps validation --count 4 --runs 25"),
+    ("docs/policy/suite-uniform.jsonl", "docs/policy/suite",
+     "lamde-v1 against the hand-made configurators on the 16 suite maps",
+     "python benchmarks/validate_policy.py --maps suite --modes uniform "
+     "--configurators lamde random adaptive --runs 25"),
+]
+
+
+def report_command(results: str, md: str, reference: str, extra: list[str]) -> str:
+    """The `lamde-mission report` command line a report records (and that re-makes it)."""
+    return shlex.join(["lamde-mission", "report", results, "-o", md, "--reference", reference,
+                       *extra])
+
+
+def complete_seeds(records: list[dict[str, Any]]) -> list[int]:
+    """Seeds for which every (map, mode, configurator) present has a run (a validation cut
+    short leaves its last seed partial; the tables in docs/policy.md leave it out too)."""
+    cells = {(r["map"], r["mode"], r["configurator"]) for r in records}
+    have: dict[int, set[tuple[str, str, str]]] = defaultdict(set)
+    for r in records:
+        have[int(r["seed"])].add((r["map"], r["mode"], r["configurator"]))
+    return sorted(s for s, c in have.items() if c == cells)
+
+
+def _validate_policy() -> Any:
+    spec = importlib.util.spec_from_file_location(
+        "validate_policy", ROOT / "benchmarks" / "validate_policy.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def policy_figures(runs_file: Path, stem: Path, what: str) -> list[Path]:
+    """One score figure per start mode of a validate_policy.py runs file: `stem`_<mode>.png."""
+    from planner_core.bench import figures as F
+
+    vp = _validate_policy()
+    records = [json.loads(line) for line in runs_file.read_text(encoding="utf-8").splitlines()
+               if line.strip()]
+    seeds = set(complete_seeds(records))
+    records = [r for r in records if int(r["seed"]) in seeds]
+    confs = list(dict.fromkeys(r["configurator"] for r in records))
+    out = []
+    for mode in ("seeded", "uniform"):
+        recs = [r for r in records if r["mode"] == mode]
+        if not recs:
+            continue
+        maps = sorted({r["map"] for r in recs})
+        grouped: dict[str, dict[str, list[tuple[float, bool]]]] = defaultdict(
+            lambda: defaultdict(list))
+        for r in recs:
+            grouped[r["map"]][r["configurator"]].append((float(r["score"]), r["phi"] == 0))
+        protocol = (F.protocol_text(mode, vp.BUDGET, len(seeds), per="configurator and map")
+                    + f" · DE population {vp.POPULATION}, no polish")
+        fig = F.scores_figure(maps, grouped, confs, what=what + ": final score of every run",
+                              protocol=protocol, legend_title="configurator")
+        out.append(F.save(fig, stem.parent / f"{stem.name}_{mode}.png"))
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, default=ROOT,
+                    help="root of the tree to write (default: this repository)")
+    args = ap.parse_args(argv)
+    out = args.out.resolve()
+    os.chdir(ROOT)  # the stored results name their suite relative to the repository root
+    from planner_core.bench.report import build_report
+
+    for results, md, reference, extra in REPORTS:
+        if not (Path(results) / "results.jsonl").exists():
+            print(f"skipped {md}: {results}/results.jsonl is not in the repository: "
+                  f"{NOT_STORED.get(results, 'run its benchmark first')}", file=sys.stderr)
+            continue
+        build_report(results, out / md, reference=reference, limits="--no-limits" not in extra,
+                     command=report_command(results, md, reference, extra))
+        print(f"wrote {md} and its figures", file=sys.stderr)
+    for runs, stem, what, _ in POLICY:
+        for p in policy_figures(Path(runs), out / stem, what):
+            print(f"wrote {p.relative_to(out).as_posix()}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
