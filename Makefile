@@ -7,12 +7,12 @@ BIN := $(VENV)/bin
 
 setup: $(VENV)/.installed
 
-# torch first (then the dev, train and ray extras), pinned to the CPU wheel on disk, so nothing pulls a multi-GB CUDA build
+# torch first (then the dev, train, ray and baselines extras), pinned to the CPU wheel on disk, so nothing pulls a multi-GB CUDA build
 $(VENV)/.installed: pyproject.toml
 	python3 -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
 	$(PY) -m pip install -q torch==2.13.0
-	$(PY) -m pip install -q -e '.[dev,train,ray]'
+	$(PY) -m pip install -q -e '.[dev,train,ray,baselines]'
 	touch $@
 
 demo: setup

@@ -7,6 +7,10 @@ of the planner against it, paired by run seed (same seed = same seeded start); t
 gap to the best-known f of examples/maps/suite_best_known.json.
 
     python benchmarks/search_table.py results/results.jsonl [--planner planner] [--best-known F]
+        [--init seeded|uniform]
+
+`--init` keeps only the runs of that start mode (a results file of `bench --init both` holds
+both, with the same seeds).
 """
 
 from __future__ import annotations
@@ -29,6 +33,8 @@ def main() -> None:
     ap.add_argument("results", nargs="+", type=Path)
     ap.add_argument("--planner", default="planner")
     ap.add_argument("--best-known", type=Path, default=ROOT / "examples/maps/suite_best_known.json")
+    ap.add_argument("--init", choices=("seeded", "uniform"), default=None,
+                    help="only the runs of this start mode (default: all runs)")
     a = ap.parse_args()
     runs: dict[tuple[str, str], dict[int, float]] = defaultdict(dict)
     feas: dict[tuple[str, str], int] = defaultdict(int)
@@ -36,6 +42,8 @@ def main() -> None:
         for line in path.read_text().splitlines():
             r = json.loads(line)
             if "f" not in r or r.get("f") is None:
+                continue
+            if a.init is not None and r.get("init", "seeded") != a.init:
                 continue
             key = (r["task"], r["optimiser"])
             runs[key][int(r["seed"])] = float(r["f"]) + SCORE_FACTOR * float(r["phi"])

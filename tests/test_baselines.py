@@ -46,17 +46,13 @@ def test_registry_names() -> None:
 def test_budget_exact_and_deterministic(name: str, problem: Problem) -> None:
     counted = []
 
-    class Spy:  # counts every row that reaches the real problem
-        lower, upper = problem.lower, problem.upper
-        map = problem.map
-        variable_length = problem.variable_length
+    class Spy:  # counts every row that reaches the real problem; the rest is the problem's
+        def __getattr__(self, name: str) -> object:
+            return getattr(problem, name)  # model, encode, breakdown, the seeding hook, ...
 
         def evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             counted.append(len(X))
             return problem.evaluate(X)
-
-        def initial_population(self, rng: np.random.Generator, n: int) -> np.ndarray:
-            return problem.initial_population(rng, n)  # the hook does not evaluate
 
     spy = Spy()
     target = problem_for(name, problem)
@@ -79,8 +75,9 @@ def test_budget_exact_and_deterministic(name: str, problem: Problem) -> None:
     h = a.history
     assert h.evaluations[-1] == used and np.all(np.diff(h.evaluations) > 0)
     assert (h.best_f[-1], h.best_phi[-1]) == (a.f, a.phi)
-    c = optimise(name, problem, BUDGET, seed=4)
-    assert not np.array_equal(a.x, c.x)
+    if not baselines.get(name).constructive:  # a constructive peer may build the same plan
+        c = optimise(name, problem, BUDGET, seed=4)
+        assert not np.array_equal(a.x, c.x)
 
 
 def test_seed_lp_is_the_des_start_plus_the_lp(problem: Problem) -> None:

@@ -67,6 +67,13 @@ COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
         ("test_policy_cli.py::test_cli_train_runs_on_a_trainset_file", ('"train"',)),
     "lamde-mission train -o my-policy --problems":
         ("test_policy_cli.py::test_cli_train_runs_on_a_trainset_file", ('"--problems"',)),
+    "lamde-mission train -o my-policy --bbob":
+        ("test_ablations.py::test_cli_train_bbob_and_fixed_length", ('"--bbob"', '"--bbob-dims"')),
+    "lamde-mission train -o my-policy --problems trainset.json --fixed-length":
+        ("test_ablations.py::test_cli_train_bbob_and_fixed_length", ('"--fixed-length"',)),
+    "python benchmarks/ablations.py":
+        ("test_ablations.py::test_ablation_driver_end_to_end_is_resumable_and_reproducible",
+         ('"--report"', '"--jobs"')),
     "lamde-mission train -o my-policy --epochs 20 --resume":
         ("test_policy.py::test_two_epoch_training_smoke_run_and_resume", ("resume=True",)),
     "lamde-mission train -o my-policy --maps 16 --envs 4 --jobs":

@@ -22,8 +22,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("results", help="benchmark folder (written by `lamde-mission bench`)")
     p.add_argument("-o", "--output", default="docs/results.md",
                    help="markdown file to write (default docs/results.md)")
-    p.add_argument("--reference", default="de-adaptive",
-                   help="the column the marks compare against (default de-adaptive)")
+    p.add_argument("--reference",
+                   help="the column the marks compare against (default de-adaptive; for an "
+                   "ablation folder written by benchmarks/ablations.py: its reference, LAMDE)")
     p.add_argument("--suite", help="map folder (default: the one recorded in RESULTS/meta.json)")
     p.add_argument("--figures", metavar="DIR",
                    help="folder for the PNGs (default: beside the report, e.g. docs/results/)")
@@ -32,14 +33,17 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--policy-checkpoint", metavar="DIR",
                    help="policy checkpoint folder: its curve.csv gives the training cost in "
                    "the report's cost section")
+    p.add_argument("--title", default="Benchmark results",
+                   help="the report's first heading (default 'Benchmark results')")
     p.add_argument("--no-limits", action="store_true",
                    help="leave out the lower-bound / best-known section")
     return p
 
 
 def _command(args: argparse.Namespace, tasks: list[str] | None) -> str:
-    parts = ["lamde-mission", "report", args.results, "-o", args.output,
-             "--reference", args.reference]
+    parts = ["lamde-mission", "report", args.results, "-o", args.output]
+    if args.reference:
+        parts += ["--reference", args.reference]
     if args.suite:
         parts += ["--suite", args.suite]
     if args.figures:
@@ -50,22 +54,25 @@ def _command(args: argparse.Namespace, tasks: list[str] | None) -> str:
         parts += ["--policy-checkpoint", args.policy_checkpoint]
     if args.no_limits:
         parts.append("--no-limits")
+    if args.title != "Benchmark results":
+        parts += ["--title", args.title]
     return shlex.join(parts)
 
 
 def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from planner_core.bench.report import build_report
+    from planner_core.bench.report import DEFAULT_REFERENCE, build_report
 
     if not (Path(args.results) / "results.jsonl").exists():
         raise UsageError(f"{args.results}: no results.jsonl (run `lamde-mission bench` first)")
     tasks = [t for v in args.path_tasks for t in v.split(",") if t] if args.path_tasks else None
     try:
-        out = build_report(args.results, args.output, reference=args.reference,
+        out = build_report(args.results, args.output,
+                           reference=args.reference or DEFAULT_REFERENCE,
                            suite=args.suite, figures=args.figures, path_tasks=tasks,
                            limits=not args.no_limits, command=_command(args, tasks),
-                           policy_checkpoint=args.policy_checkpoint)
+                           policy_checkpoint=args.policy_checkpoint, title=args.title)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     print(f"report: wrote {out}")

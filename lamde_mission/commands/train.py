@@ -23,7 +23,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         help="meta-train the LAMDE policy with PPO and write a checkpoint folder",
         description="Meta-train the meta-level policy (paper Algorithm 1: n-step PPO) on UAV "
         "maps from the suite generator (seeds disjoint from the suite and validation maps) or "
-        "on a training-set JSON with a 'problems' list. A checkpoint is written to OUT after "
+        "on a training-set JSON with a 'problems' list, or on K plain BBOB instances (--bbob, "
+        "the ablation LAMDE-O); --fixed-length for LAMDE-F. A checkpoint is written to OUT after "
         "every epoch; --resume continues from it. The DE rollouts (numpy) can run on worker "
         "processes or a Ray cluster (--jobs, --backend), the PPO update stays here. Same seed, "
         "same checkpoint (same machine), whatever the backend and --jobs.",
@@ -32,7 +33,18 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--problems", metavar="JSON",
                    help="training-set JSON with a 'problems' list (default: built-in UAV maps)")
     p.add_argument("--maps", type=int, default=8,
-                   help="number of built-in training maps when --problems is not given")
+                   help="number of built-in training maps when neither --problems nor --bbob "
+                   "is given")
+    p.add_argument("--bbob", type=int, metavar="K",
+                   help="train on K plain BBOB instances instead (no landscape-aware module, "
+                   "no constraint: the paper's ablation LAMDE-O; functions 1..24 cycled over "
+                   "--bbob-dims)")
+    p.add_argument("--bbob-dims", default="20,40,80", metavar="LIST",
+                   help="dimensions of the --bbob problems (default 20,40,80)")
+    p.add_argument("--fixed-length", action="store_true",
+                   help="fixed-length encoding on the UAV training problems (all I_max hover "
+                   "points active; the paper's LAMDE-F; plan with `plan --fixed-length`); "
+                   "synthetic problems (lam-pair, bbob) have no hover points and are unchanged")
     p.add_argument("--epochs", type=int, help="passes over the training problems")
     p.add_argument("--seed", type=int, help="training seed (default 0)")
     p.add_argument("--envs", type=int, help="problems rolled out together")
@@ -109,17 +121,35 @@ def run(args: argparse.Namespace) -> int:
         if exc.name == "torch":
             raise UsageError("train needs torch: pip install 'lamde-mission[train]'") from None
         raise
-    from planner_core.policy.problems import default_training_specs, read_trainset
+    from planner_core.policy.problems import (
+        bbob_training_specs,
+        default_training_specs,
+        read_trainset,
+        with_encoding,
+    )
 
+    if args.problems and args.bbob is not None:
+        raise UsageError("--bbob: give either --problems or --bbob, not both")
     if args.problems:
         try:
             specs = read_trainset(args.problems)
         except ValueError as exc:
             raise UsageError(str(exc)) from None
+    elif args.bbob is not None:
+        try:
+            dims = tuple(int(v) for v in args.bbob_dims.split(",") if v.strip())
+        except ValueError:
+            raise UsageError(f"--bbob-dims: expected integers like 20,40, got "
+                             f"{args.bbob_dims!r}") from None
+        try:
+            specs = bbob_training_specs(args.bbob, dims)
+        except ValueError as exc:
+            raise UsageError(f"--bbob: {exc}") from None
     else:
         if args.maps < 1:
             raise UsageError(f"--maps: must be >= 1, got {args.maps}")
         specs = default_training_specs(args.maps)
+    specs = with_encoding(specs, variable_length=not args.fixed_length)
     from planner_core.execution import SerialExecutor, make_executor
 
     progress = None if args.quiet else ppo.text_progress()

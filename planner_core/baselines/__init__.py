@@ -42,6 +42,7 @@ __all__ = [
     "get",
     "names",
     "optimise",
+    "policy_spec",
     "problem_for",
     "with_start",
 ]
@@ -73,6 +74,12 @@ class OptimiserSpec:
     kwargs: dict[str, Any] = field(default_factory=dict)
     variable_length: bool | None = True  # None: whatever the given problem uses
     spends_budget: bool = True  # False: a reference that deliberately stops early (seed-lp)
+    #: evaluations charged before the run (the landscape-aware module's probes of the task,
+    #: which the paper counts in LAMDE's budget): the optimiser gets budget - probe_evaluations
+    probe_evaluations: int = 0
+    #: True: builds its plans without any start population, so it is the same in both start
+    #: modes (`--init seeded|uniform`), and its seed may not change the answer on a small map
+    constructive: bool = False
 
     def function(self) -> Any:
         module, func = self.target.split(":")
@@ -133,6 +140,30 @@ REGISTRY: dict[str, OptimiserSpec] = {
             kwargs={"seeded": True},
         ),
         OptimiserSpec(
+            "engineering",
+            "planner_core.baselines.engineering:optimise",
+            "the plain engineering pipeline, no DE: hover sites by greedy set cover / a k-means "
+            "sweep, visiting order by OR-Tools' routing solver, sites slid to clear their legs, "
+            "blocked legs routed through the visibility graph, the polish LP; the Deb-best of "
+            "its candidates (one evaluation each); the same in both start modes",
+            spends_budget=False,
+            constructive=True,
+        ),
+        OptimiserSpec(
+            "planner-eng-start",
+            "planner_core.baselines.eng_start:optimise",
+            "experiment (issue 14, diverse starts): the engineering pipeline's candidates, then "
+            "the planner on the rest of the budget from its start population with the 10 best "
+            "engineering plans in place of its last 10 rows",
+        ),
+        OptimiserSpec(
+            "pymoo-ga",
+            "planner_core.baselines.pymoo_ga:optimise",
+            f"pymoo GA (population {POPULATION}, SBX, polynomial mutation, feasibility-first "
+            "tournament and survival on G = phi <= 0) from the DE's start population of the "
+            "run's start mode, then the polish LP",
+        ),
+        OptimiserSpec(
             "scipy-de",
             "planner_core.baselines.scipy_de:optimise",
             f"scipy.optimize.differential_evolution on f + {SCORE_FACTOR:g} phi (best1bin, "
@@ -154,6 +185,28 @@ REGISTRY: dict[str, OptimiserSpec] = {
 }
 
 
+def policy_spec(name: str, checkpoint: str, *, variable_length: bool = True,
+                probe_evaluations: int = 0, description: str = "") -> OptimiserSpec:
+    """A benchmark entry `name` for our DE driven by the policy checkpoint folder `checkpoint`
+    (the ablation variants of paper Sec. 5.3, `benchmarks/ablations.py`): population
+    POPULATION, no polish, the given encoding; `probe_evaluations` are charged to its budget
+    (see OptimiserSpec). The entry is not in REGISTRY: pass it to `optimise(..., spec=)` or
+    `run_bench(..., extra=)`. Raises ValueError for a negative probe count."""
+    if probe_evaluations < 0:
+        raise ValueError(f"probe_evaluations: must be >= 0, got {probe_evaluations}")
+    enc = "variable-length" if variable_length else "fixed-length (all I_max points active)"
+    return OptimiserSpec(
+        name=name,
+        target="planner_core.baselines.de:optimise",
+        description=description or f"our DE driven by the policy {checkpoint}, {enc}, "
+        f"population {POPULATION}, no polish"
+        + (f", {probe_evaluations} probe evaluations charged" if probe_evaluations else ""),
+        kwargs={"configurator": "lamde", "policy": str(checkpoint)},
+        variable_length=variable_length,
+        probe_evaluations=int(probe_evaluations),
+    )
+
+
 def names() -> list[str]:
     """Registered optimiser names, in the report's column order."""
     return list(REGISTRY)
@@ -167,9 +220,10 @@ def get(name: str) -> OptimiserSpec:
         raise KeyError(f"unknown optimiser '{name}'; choose from {', '.join(REGISTRY)}") from None
 
 
-def problem_for(name: str, problem: Any) -> Any:
-    """The problem in the encoding optimiser `name` uses (a new fixed-length Problem if needed)."""
-    spec = get(name)
+def problem_for(name: str, problem: Any, spec: OptimiserSpec | None = None) -> Any:
+    """The problem in the encoding optimiser `name` (or `spec`, an entry outside the registry)
+    uses (a new fixed-length Problem if needed)."""
+    spec = spec or get(name)
     want = spec.variable_length
     if want is None or getattr(problem, "variable_length", want) == want:
         return problem
@@ -179,19 +233,30 @@ def problem_for(name: str, problem: Any) -> Any:
 
 
 def optimise(name: str, problem: Any, budget: int, seed: int,
-             init: str = "seeded") -> OptimiseResult:
+             init: str = "seeded", spec: OptimiserSpec | None = None) -> OptimiseResult:
     """Run optimiser `name` on `problem` with at most `budget` evaluations; same seed, same result.
 
     `init`: "seeded" (the problem's `initial_population` hook, when it has one) or "uniform"
     (the hook hidden: uniform starts in the box). The returned x is in the encoding of
-    `problem_for(name, problem)` (use that problem to decode).
+    `problem_for(name, problem)` (use that problem to decode). `spec`: an entry outside the
+    registry (`policy_spec`) to run under `name`. An entry's `probe_evaluations` are charged
+    first: the optimiser gets the rest of the budget, and the result's evaluation count and
+    trace include the probes (so the trace starts at probes + the first population).
     """
-    spec = get(name)
-    budgeted = BudgetedProblem(with_start(problem_for(name, problem), init), budget)
-    res = spec.function()(budgeted, int(budget), int(seed), **spec.kwargs)
-    if res.evaluations != budgeted.count or budgeted.count > budget:
+    spec = spec or get(name)
+    probe = int(spec.probe_evaluations)
+    if probe >= int(budget):
+        raise ValueError(f"{name}: budget {budget} does not exceed its {probe} probe evaluations")
+    own = int(budget) - probe
+    budgeted = BudgetedProblem(with_start(problem_for(name, problem, spec), init), own)
+    res = spec.function()(budgeted, own, int(seed), **spec.kwargs)
+    if res.evaluations != budgeted.count or budgeted.count > own:
         raise RuntimeError(
             f"{name}: reported {res.evaluations} evaluations, counted {budgeted.count} "
-            f"(budget {budget})"
+            f"(budget {own})"
         )
+    if probe:
+        h = res.history
+        res = res._replace(evaluations=res.evaluations + probe,
+                           history=Trace(h.evaluations + probe, h.best_f, h.best_phi))
     return res

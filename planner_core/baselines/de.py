@@ -28,13 +28,16 @@ def optimise(
     configurator: str = CONFIGURATOR,
     lp: bool = False,
     memetic: bool | str = False,
+    policy: str | None = None,
 ) -> OptimiseResult:
     """Run the DE with `configurator` for exactly `budget` evaluations (initial population
     included). `lp`: what `plan` does, the DE on budget - ELITE, then the hover-time LP on the
     final population's ELITE Deb-best (`planner_core.polish.polish_elite`, the last ELITE
     evaluations). `memetic`: with the
     memetic step on the elite (`planner_core.memetic.refine`, when the problem can decode);
-    a str is the defaults table's setting ("auto": on from a uniform start, as `plan` does)."""
+    a str is the defaults table's setting ("auto": on from a uniform start, as `plan` does).
+    `policy`: a policy checkpoint folder (or shipped name) for `configurator="lamde"` (the
+    ablation variants); None = the shipped default."""
     from planner_core.baselines.seed_lp import can_lp
 
     budgeted = as_budgeted(problem, budget)
@@ -44,6 +47,12 @@ def optimise(
     population = min(POPULATION, int(budget))
     if population < MIN_POPULATION:
         raise ValueError(f"budget {budget} is below the DE's minimum population {MIN_POPULATION}")
+    if policy is not None:
+        if configurator != "lamde":
+            raise ValueError(f"policy: only with configurator 'lamde', not {configurator!r}")
+        from planner_core.policy import PolicyConfigurator
+
+        configurator = PolicyConfigurator(checkpoint=policy)  # type: ignore[assignment]
     refine = None
     if isinstance(memetic, str):
         from planner_core.memetic import use_memetic

@@ -13,6 +13,8 @@ runs (filled markers, solid routes) from infeasible ones (crosses, dotted routes
 - :func:`paths_figure`: each optimiser's best route on a few tasks, one small map per optimiser,
   beside the best-known route.
 - :func:`imax_figure`: the I_max study (paper Fig. 4), last population's feasible rate.
+- :func:`ablation_figure`: the ablation study (paper Fig. 3), normalised performance per run
+  (final / initial score) per variant.
 
 Each ``*_figure`` returns the Figure; :func:`save` writes it (PNG, atomically).
 """
@@ -35,6 +37,7 @@ from planner_core.model import penalised_score
 __all__ = [
     "DPI",
     "SCORE_LABEL",
+    "ablation_figure",
     "convergence_figure",
     "imax_figure",
     "optimiser_style",
@@ -459,4 +462,30 @@ def imax_figure(tables: Mapping[str, Mapping[str, Mapping[int, tuple[float, floa
               protocol_text(modes, budget, runs) + f" · {n_tasks} tasks")
     fig.legend(handles=handles, loc="outside right center", fontsize=9, title="optimiser",
                title_fontsize=9)
+    return fig
+
+
+def ablation_figure(values: Mapping[str, Sequence[float]], protocol: str) -> Any:
+    """The ablation study (paper Fig. 3): one box per variant (median, 25-75 %, whiskers at 1.5
+    IQR, outliers) of the normalised performance of its runs, final / initial score (lower is
+    better), with the mean as a diamond; `values[variant]` in the order to draw; `protocol` is
+    the title's protocol text (:func:`protocol_text`). Log axis when the values span a decade."""
+    names = list(values)
+    fig = _new_figure((1.3 * len(names) + 2.6, 4.4))
+    ax = fig.add_subplot()
+    data = [np.asarray(values[o], dtype=float) for o in names]
+    x = np.arange(1, len(names) + 1)
+    box = ax.boxplot(data, positions=x, widths=0.55, patch_artist=True, showfliers=True)
+    for patch, o in zip(box["boxes"], names, strict=True):
+        patch.set(facecolor=optimiser_style(o)["color"], alpha=0.35)
+    for med in box["medians"]:
+        med.set(color="k", lw=1.4)
+    ax.plot(x, [float(np.mean(v)) for v in data], "D", color="k", ms=5, label="mean")
+    ax.set_xticks(x, names, fontsize=8)
+    if use_log_scale(np.concatenate(data) if data else []):
+        ax.set_yscale("log")
+    ax.set_ylabel("final / initial score per run\n(lower is better)")
+    ax.grid(True, axis="y", alpha=0.3)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+    _suptitle(fig, "Ablations: normalised performance per run", protocol)
     return fig

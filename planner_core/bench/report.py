@@ -5,7 +5,8 @@ std per task, best mean bold, Wilcoxon marks and +/~/- counts against the refere
 per-optimiser summary (feasibility, wall time, mean rank), feasibility per task, the results
 against the limits (mean f of feasible runs / best-known and / LB), every run's score per task,
 one convergence plot per task and each optimiser's best path on four tasks (the figures are
-`planner_core.bench.figures`).
+`planner_core.bench.figures`); the I_max study when runs override I_max, and the ablation study
+(`planner_core.bench.ablation`) when meta.json holds its entry.
 """
 
 from __future__ import annotations
@@ -139,6 +140,7 @@ def build_report(
     command: str = "",
     alpha: float = ALPHA,
     policy_checkpoint: str | Path | None = None,
+    title: str = "Benchmark results",
 ) -> Path:
     """Write the markdown report of `results_dir` to `output` (figures beside it); return it.
 
@@ -147,7 +149,9 @@ def build_report(
     after the report, e.g. docs/results/ for docs/results.md). Each start mode present
     ("init" of the records; older records without it are seeded) gets its own section; runs
     with an I_max override go to the I_max study section; `policy_checkpoint`: a policy
-    checkpoint folder whose `curve.csv` gives the training cost.
+    checkpoint folder whose `curve.csv` gives the training cost; `title`: the first heading. When
+    meta.json holds an ablation entry (`benchmarks/ablations.py`), its reference is the default
+    reference and the ablation section follows (`planner_core.bench.ablation`).
     """
     from planner_core.baselines import REGISTRY
 
@@ -159,6 +163,11 @@ def build_report(
         raise ValueError(f"no results in {results_dir / RESULTS_FILE}")
     meta = read_json(results_dir / "meta.json")
     present = sorted({r["optimiser"] for r in records})
+    from planner_core.bench.ablation import META_KEY, ablation_section
+
+    ablation = meta.get(META_KEY)
+    if ablation and reference == DEFAULT_REFERENCE:
+        reference = str(ablation["reference"])
     if reference is not None and reference not in present:
         if reference != DEFAULT_REFERENCE:
             raise ValueError(f"reference '{reference}' has no results (have {', '.join(present)})")
@@ -167,6 +176,9 @@ def build_report(
     if reference is None:
         reference = opts[0]
         opts = order_optimisers(present, reference)
+    if ablation:  # the variants in the study's order, the reference last (as the paper's table)
+        named = [v for v in ablation.get("variants", {}) if v in present and v != reference]
+        opts = named + [o for o in opts if o not in named and o != reference] + [reference]
     tasks = sorted({r["task"] for r in records})
     budgets = sorted({int(r["budget"]) for r in records})
     budget = budgets[-1]
@@ -174,7 +186,7 @@ def build_report(
     suite_dir = Path(suite) if suite is not None else (Path(meta["suite"]) if "suite" in meta
                                                        else None)
 
-    L: list[str] = ["# Benchmark results", ""]
+    L: list[str] = [f"# {title}", ""]
     cmds = [c.get("command", "") for c in meta.get("commands", []) if c.get("command")]
     if cmds:
         L.append("Results produced by:")
@@ -208,7 +220,8 @@ def build_report(
         "|---|---|",
     ]
     for o in opts:
-        desc = REGISTRY[o].description if o in REGISTRY else "(not in the registry)"
+        desc = (REGISTRY[o].description if o in REGISTRY else
+                meta.get("optimisers", {}).get(o, {}).get("description", "(not in the registry)"))
         L.append(f"| {o} | {desc} |")
     if read.truncated_tail or read.bad_lines or read.duplicates:
         L += ["", f"Note: skipped in the results file: truncated tail {read.truncated_tail}, "
@@ -234,6 +247,8 @@ def build_report(
     study = [r for r in records if r.get("i_max") is not None]
     if study:
         L += imax_section(study, figures / "imax_feasible_rate.png", output)
+    if ablation:
+        L += ablation_section(main, ablation, figures, lambda p: _rel(p, output.parent), alpha)
     L += cost_section(records, policy_checkpoint)
     write_text_atomic(output, "\n".join(L) + "\n")
     return output

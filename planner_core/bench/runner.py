@@ -81,6 +81,7 @@ class Job:
     map_sha256: str
     init: str = "seeded"
     i_max: int | None = None  # None: the map's own I_max; else uav.max_hover_points overridden
+    spec: Any = None  # an OptimiserSpec outside the registry (run_bench's `extra`), else None
 
 
 @dataclass
@@ -133,14 +134,17 @@ def execute(job: Job) -> dict[str, Any]:
     try:
         # a map's safety margins are a transformation of the map (zero on the suite maps,
         # which say so: the paper's model as it stands)
+        spec = job.spec or get(job.optimiser)
         problem = problem_for(job.optimiser,
-                              Problem(load_map(with_i_max(job.map, job.i_max)).planning_map()))
+                              Problem(load_map(with_i_max(job.map, job.i_max)).planning_map()),
+                              spec)
         # warm up outside the timer: import the optimiser's module (cma, scipy) and load the
         # compiled geometry kernels, so wall time measures the optimiser alone
-        get(job.optimiser).function()
+        spec.function()
         problem.evaluate(problem.lower[None, :])
         t0, c0 = time.perf_counter(), time.process_time()
-        res = optimise(job.optimiser, problem, job.budget, job.seed, init=job.init)
+        res = optimise(job.optimiser, problem, job.budget, job.seed, init=job.init,
+                       spec=job.spec)
         wall, cpu = time.perf_counter() - t0, time.process_time() - c0
         bd = problem.breakdown(res.x)
         h = res.history
@@ -182,19 +186,30 @@ def with_i_max(content: dict[str, Any], i_max: int | None) -> dict[str, Any]:
 
 def plan_jobs(files: dict[str, Path], optimisers: list[str], runs: int, budget: int,
               base_seed: int = 0, inits: Sequence[str] = ("seeded",),
-              i_max: Sequence[int | None] = (None,)) -> list[Job]:
+              i_max: Sequence[int | None] = (None,),
+              specs: dict[str, Any] | None = None) -> list[Job]:
     """All jobs, run-major (every task, optimiser, start mode and I_max gets run 0 before any
     gets run 1), so a partial benchmark is balanced. Each map file is read once; its jobs share
-    the content. Run r of task t has the same seed in every start mode and I_max."""
+    the content. Run r of task t has the same seed in every start mode and I_max. `specs`:
+    OptimiserSpecs of names outside the registry, carried by their jobs."""
     content = {t: read_map_file(p) for t, p in files.items()}
+    specs = specs or {}
     return [
-        Job(o, t, r, run_seed(base_seed, t, r), int(budget), *content[t], init=m, i_max=k)
+        Job(o, t, r, run_seed(base_seed, t, r), int(budget), *content[t], init=m, i_max=k,
+            spec=specs.get(o))
         for r in range(runs)
         for t in files
         for m in inits
         for k in i_max
         for o in optimisers
     ]
+
+
+def _spec_json(spec: Any) -> dict[str, Any]:
+    """What meta.json records of an optimiser entry outside the registry."""
+    return {"description": spec.description, "target": spec.target,
+            "kwargs": dict(spec.kwargs), "variable_length": spec.variable_length,
+            "probe_evaluations": int(spec.probe_evaluations)}
 
 
 def read_map_file(path: str | Path) -> tuple[dict[str, Any], str]:
@@ -252,6 +267,7 @@ def run_bench(
     log: Callable[[str], None] | None = None,
     inits: Sequence[str] = ("seeded",),
     i_max: Sequence[int | None] = (None,),
+    extra: Sequence[Any] = (),
 ) -> BenchSummary:
     """Run every missing (optimiser, task, run, init, I_max) and append each result to
     `<out>/results.jsonl`.
@@ -266,6 +282,11 @@ def run_bench(
     `planner_core.execution.make_executor(jobs, backend, address)` (local: 0 = in this process,
     N = N worker processes; ray: a Ray cluster at `address`, or a local Ray instance with `jobs`
     CPUs), closed when the benchmark ends. Results are the same on every backend.
+
+    `extra`: OptimiserSpecs outside the registry (`planner_core.baselines.policy_spec`: the
+    ablation variants), runnable under their names; `<out>/meta.json` records each one's
+    target, arguments, encoding and probe count, and a resumed benchmark refuses a name whose
+    entry changed.
     """
     from planner_core.baselines import INIT_MODES, REGISTRY
 
@@ -276,10 +297,14 @@ def run_bench(
                          f"choose from {', '.join(INIT_MODES)}")
     if any(k is not None and not 1 <= int(k) <= 200 for k in i_max):
         raise BenchError(f"i_max: every value must lie in [1, 200] (got {list(i_max)})")
-    unknown = [o for o in optimisers if o not in REGISTRY]
+    extras = {e.name: e for e in extra}
+    clash = [n for n in extras if n in REGISTRY]
+    if clash:
+        raise BenchError(f"extra optimiser(s) {', '.join(clash)} shadow registry names")
+    unknown = [o for o in optimisers if o not in REGISTRY and o not in extras]
     if unknown:
         raise BenchError(f"unknown optimiser(s) {', '.join(unknown)}; choose from "
-                         f"{', '.join(REGISTRY)}")
+                         f"{', '.join([*REGISTRY, *extras])}")
     if runs < 1 or budget < 1:
         raise BenchError("runs and budget must be positive")
     files = suite_task_files(suite)
@@ -298,7 +323,8 @@ def run_bench(
         log(f"note: {results}: dropping a truncated last line (an interrupted write)")
     if existing.bad_lines:
         log(f"note: {results}: ignoring unreadable line(s) {existing.bad_lines}")
-    all_jobs = plan_jobs(files, list(optimisers), runs, budget, base_seed, inits, i_max)
+    all_jobs = plan_jobs(files, list(optimisers), runs, budget, base_seed, inits, i_max,
+                         extras)
     _check_existing(existing.records, budget, {j.task: j.map_sha256 for j in all_jobs}, results)
     have: set[Key] = {key_of(r) for r in existing.records}
     todo = [j for j in all_jobs
@@ -310,6 +336,16 @@ def run_bench(
     if meta.get("budget") not in (None, int(budget)):
         raise BenchError(f"{meta_path} records budget {meta['budget']}, not {budget}: "
                          "use another --out folder")
+    entries = meta.setdefault("optimisers", {})
+    for name in optimisers:
+        if name in extras:
+            entry = _spec_json(extras[name])
+            if entries.get(name, entry) != entry:
+                raise BenchError(f"{meta_path}: optimiser {name} was run as {entries[name]}, "
+                                 f"not {entry}: use another --out folder")
+            entries[name] = entry
+    if not entries:
+        del meta["optimisers"]
     meta.update({"schema": SCHEMA, "suite": str(suite), "budget": int(budget),
                  "base_seed": int(base_seed)})
     meta.setdefault("commands", []).append({"command": command, "started": _now(),

@@ -7,6 +7,13 @@ A problem is described by a JSON-able *spec* (so a training manifest is data, no
   generator (:func:`planner_core.suite.generate_map`) built into the UAV :class:`Problem`.
 * ``{"kind": "map", "path": "file.json"}`` or ``{"kind": "map", "map": {...}}``: any map.
 
+  Both UAV kinds take an optional ``"variable_length": false``: the fixed-length encoding (every
+  one of the I_max hover points active; the paper's LAMDE-F), see :func:`with_encoding`.
+* ``{"kind": "bbob", "function": 1..24, "dimension": d, "instance": i}``: one plain
+  (unconstrained, phi = 0) BBOB instance on the unit box
+  (:class:`planner_core.lam.bbob.BBOBProblem`); the training set of the paper's LAMDE-O, "the
+  original setting of existing MetaBBO baselines", :func:`bbob_training_specs`.
+
 * ``{"kind": "lam-pair", "objective": {...}, "constraint": {...}, "threshold": t,
   "scale": s}``: a synthetic BBOB pair of the landscape-aware module
   (:class:`planner_core.lam.query.PairProblem`).
@@ -43,6 +50,40 @@ def default_training_specs(count: int = 16) -> list[dict[str, Any]]:
     ]
 
 
+def bbob_training_specs(count: int, dimensions: tuple[int, ...] = (20, 40, 80)
+                        ) -> list[dict[str, Any]]:
+    """``count`` plain BBOB instances (no LAM, no constraint; the paper's LAMDE-O): problem k is
+    function ``1 + k % 24``, dimension ``dimensions[(k // 24) % len(dimensions)]``, instance
+    ``1 + k // (24 * len(dimensions))``, so the 24 functions are covered evenly before any
+    repeats. Raises ValueError for count < 1, no dimensions or a dimension < 2."""
+    dims = tuple(int(d) for d in dimensions)
+    if count < 1:
+        raise ValueError(f"bbob: count must be >= 1, got {count}")
+    if not dims or min(dims) < 2:
+        raise ValueError(f"bbob: dimensions must be >= 2, got {list(dims)}")
+    return [
+        {"kind": "bbob", "function": 1 + k % 24, "dimension": dims[(k // 24) % len(dims)],
+         "instance": 1 + k // (24 * len(dims))}
+        for k in range(count)
+    ]
+
+
+def with_encoding(specs: list[dict[str, Any]], variable_length: bool) -> list[dict[str, Any]]:
+    """The specs with the UAV encoding set: ``variable_length=False`` adds
+    ``"variable_length": false`` to every ``uav``/``map`` spec (LAMDE-F), True removes the key.
+    Synthetic problems (``lam-pair``, ``bbob``) have no hover points and pass unchanged, so on a
+    set of synthetic problems only the encoding at use differs between LAMDE and LAMDE-F."""
+    out = []
+    for spec in specs:
+        spec = dict(spec)
+        if spec.get("kind") in ("uav", "map"):
+            spec.pop("variable_length", None)
+            if not variable_length:
+                spec["variable_length"] = False
+        out.append(spec)
+    return out
+
+
 def validation_specs(count: int = 4) -> list[dict[str, Any]]:
     """``count`` UAV maps for validation (seeds VALIDATION_SEED_BASE + k), both sizes, spread
     over the densities."""
@@ -55,10 +96,13 @@ def validation_specs(count: int = 4) -> list[dict[str, Any]]:
 
 def spec_name(spec: dict[str, Any]) -> str:
     """A short readable name for a spec."""
+    fixed = "" if spec.get("variable_length", True) else "-fixedlen"
     if spec.get("kind") == "uav":
-        return f"uav-{spec['size']}-d{spec['density']}-s{spec['seed']}"
+        return f"uav-{spec['size']}-d{spec['density']}-s{spec['seed']}{fixed}"
     if spec.get("kind") == "map":
-        return str(spec.get("path") or spec.get("map", {}).get("name", "map"))
+        return str(spec.get("path") or spec.get("map", {}).get("name", "map")) + fixed
+    if spec.get("kind") == "bbob":
+        return f"bbob-f{spec['function']}i{spec['instance']}-d{spec['dimension']}"
     if spec.get("kind") == "lam-pair":
         o, c = spec["objective"], spec["constraint"]
         return (f"bbob-f{o['function']}i{o['instance']}-c{c['function']}i{c['instance']}"
@@ -71,6 +115,9 @@ def build(spec: dict[str, Any]) -> Any:
     from planner_core.problem import Problem
 
     kind = spec.get("kind")
+    variable_length = spec.get("variable_length", True)
+    if not isinstance(variable_length, bool):
+        raise ValueError(f"problems: spec {spec}: variable_length must be true or false")
     if kind == "uav":
         from planner_core.suite import generate_map
 
@@ -79,13 +126,28 @@ def build(spec: dict[str, Any]) -> Any:
                 raise ValueError(f"problems: uav spec {spec} lacks '{key}'")
         data = generate_map(int(spec["size"]), int(spec["density"]), int(spec["seed"]),
                             name=spec_name(spec))
-        return Problem(data)
+        return Problem(data, variable_length=variable_length)
     if kind == "map":
         if "map" in spec:
-            return Problem(spec["map"])
+            return Problem(spec["map"], variable_length=variable_length)
         if "path" in spec:
-            return Problem(str(spec["path"]))
+            return Problem(str(spec["path"]), variable_length=variable_length)
         raise ValueError(f"problems: map spec {spec} needs 'path' or 'map'")
+    if kind == "bbob":
+        from planner_core.lam.bbob import BBOBProblem, DatabaseSpec
+
+        try:
+            key = tuple(int(spec[k]) for k in ("function", "dimension", "instance"))
+        except KeyError as exc:
+            raise ValueError(f"problems: bbob spec lacks {exc}") from None
+        except (TypeError, ValueError):
+            raise ValueError(f"problems: bbob spec {spec}: function, dimension and instance "
+                             "must be integers") from None
+        try:
+            DatabaseSpec(*((v,) for v in key))  # the range checks
+        except ValueError as exc:
+            raise ValueError(f"problems: bbob spec: {exc}") from None
+        return BBOBProblem(key)
     if kind == "lam-pair":
         from planner_core.lam.query import PairProblem
 
@@ -97,7 +159,8 @@ def build(spec: dict[str, Any]) -> Any:
             )
         except (KeyError, TypeError) as exc:
             raise ValueError(f"problems: lam-pair spec lacks {exc}") from None
-    raise ValueError(f"problems: unknown problem kind {kind!r} (known: uav, map, lam-pair)")
+    raise ValueError(f"problems: unknown problem kind {kind!r} (known: uav, map, lam-pair, "
+                     "bbob)")
 
 
 def read_trainset(path: str | Path) -> list[dict[str, Any]]:

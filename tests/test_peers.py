@@ -1,0 +1,184 @@
+"""The benchmark's fair peers (issue 14): the engineering pipeline and pymoo's GA, both ending
+with the hover-time LP; valid plans, budgets respected, determinism, both start modes."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from planner_core.baselines import BudgetedProblem, optimise
+from planner_core.baselines import engineering as eng
+from planner_core.defaults import POPULATION
+from planner_core.polish import polish_hover_times
+from planner_core.problem import Problem
+
+# a wall between the start and the far sensors: the straight legs are blocked, so a valid plan
+# needs the visibility-graph detour (1500 Mbit each: a hover site must be within ~430 m)
+WALLED = {
+    "name": "walled",
+    "area": {"width": 2000, "height": 1500},
+    "start": [100, 100],
+    "end": [1900, 100],
+    "sensors": [
+        {"id": "a", "x": 300, "y": 1200, "required_data": 1500},
+        {"id": "b", "x": 500, "y": 1300, "required_data": 1500},
+        {"id": "c", "x": 1500, "y": 1250, "required_data": 1500},
+        {"id": "d", "x": 1000, "y": 200, "required_data": 1500},
+    ],
+    "obstacles": {
+        "rectangles": [{"x": 700, "y": 700, "length": 1200, "width": 60, "angle_deg": 0}],
+        "circles": [{"x": 1400, "y": 600, "radius": 120}],
+    },
+    "uav": {"max_hover_points": 8},
+}
+
+
+@pytest.fixture(scope="module")
+def walled() -> Problem:
+    return Problem(WALLED)
+
+
+def test_engineering_plan_is_valid_and_routed(walled: Problem) -> None:
+    res = optimise("engineering", walled, 10_000, seed=0)
+    b = walled.breakdown(res.x)
+    assert res.phi == 0.0 and b["l_vio"] == 0.0 and b["v4"] == 0.0 and b["v3"] == 0.0
+    assert 1 <= b["n_hover"] <= walled.n_points
+    # the straight route through the hover points with time > 0 alone would cut the wall:
+    # the plan carries detour corners (zero-time points) from the visibility graph
+    times = np.asarray(b["hover_times"])
+    pts = np.asarray(b["hover_points"])
+    served = pts[times > 1e-9]
+    nodes = np.vstack([walled.start, served, walled.end])
+    assert walled._overlap(nodes[:-1], nodes[1:]).sum() > 0.0
+    # hover times are the LP's for those positions (the LP is idempotent on its own answer)
+    again = polish_hover_times(walled, pts, times)
+    np.testing.assert_allclose(again.hover_times.sum(), times.sum(), rtol=1e-6)
+
+
+def test_engineering_budget_determinism_and_start_modes(walled: Problem) -> None:
+    full = optimise("engineering", walled, 10_000, seed=1)
+    assert full.evaluations < 10_000  # constructive: scores its candidates, no search
+    # a budget below its candidate count is never exceeded; the best of what it could score
+    short = optimise("engineering", walled, 3, seed=1)
+    assert short.evaluations == 3
+    assert (short.phi, short.f) >= (full.phi, full.f)
+    again = optimise("engineering", walled, 10_000, seed=1)
+    np.testing.assert_array_equal(full.x, again.x)
+    # the same in both start modes: it never asks for the problem's initial population
+    uni = optimise("engineering", walled, 10_000, seed=1, init="uniform")
+    np.testing.assert_array_equal(full.x, uni.x)
+    assert uni.evaluations == full.evaluations
+
+
+def test_greedy_cover_covers_every_sensor(walled: Problem) -> None:
+    sites = eng.candidate_sites(walled)
+    for frac in eng.FRACTIONS:
+        chosen = sites[eng.greedy_cover(walled, sites, frac)]
+        # every sensor within frac x T_max where some candidate can do it, else within T_max
+        can = eng._covers(walled, sites, frac).any(axis=0)
+        covers = np.where(can, eng._covers(walled, chosen, frac), eng._covers(walled, chosen, 1))
+        assert covers.any(axis=0).all()
+        assert len(chosen) <= len(walled.sensors)  # each pick covers a new sensor
+    # a site is a candidate only under the bandwidth (C3), and never inside an obstacle
+    assert np.all(walled.rates(sites).sum(axis=1) <= eng.BANDWIDTH_USE * walled.bandwidth)
+    from planner_core.geometry import points_inside
+
+    assert not points_inside(sites, walled.obstacles).any()
+
+
+def test_order_sites_is_the_obvious_open_path() -> None:
+    """No obstacles, sites on the line from start to end, given shuffled: OR-Tools returns
+    them in order along the line."""
+    p = Problem({
+        "name": "line", "area": {"width": 3000, "height": 1000},
+        "start": [0, 500], "end": [3000, 500],
+        "sensors": [{"id": "a", "x": 1000, "y": 500}],
+        "uav": {"max_hover_points": 6},
+    })  # fmt: skip
+    xs = np.array([2500.0, 500.0, 1500.0, 2000.0, 1000.0])
+    sites = np.column_stack([xs, np.full(5, 500.0)])
+    order = eng.order_sites(p, sites)
+    assert sorted(order.tolist()) == list(range(5))
+    np.testing.assert_array_equal(xs[order], np.sort(xs))
+
+
+def test_pymoo_ga_budget_exact_start_and_lp(walled: Problem) -> None:
+    budget = 531  # not a multiple of the population: the last generation is truncated
+    res = optimise("pymoo-ga", walled, budget, seed=2)
+    assert res.evaluations == budget
+    assert res.history.evaluations[0] == POPULATION  # generation 0: the DE's start
+    # seeded: never worse (Deb) than the DE's seeded start population's best, nor than seed-lp
+    floor = optimise("seed-lp", walled, budget, seed=2)
+    assert (res.phi, res.f) <= (floor.phi, floor.f)
+    again = optimise("pymoo-ga", walled, budget, seed=2)
+    np.testing.assert_array_equal(res.x, again.x)
+    uni = optimise("pymoo-ga", walled, budget, seed=2, init="uniform")
+    assert uni.evaluations == budget and not np.array_equal(uni.x, res.x)
+
+
+def test_pymoo_ga_duplicate_start_spends_budget_exactly(walled: Problem) -> None:
+    """A start population of clones (pymoo keeps one of them): the GA still spends the budget
+    exactly and evaluates none of the known points twice."""
+    from planner_core.baselines.pymoo_ga import optimise as ga
+
+    class Clones:  # the seeding hook gives one point n times
+        def __getattr__(self, name: str) -> object:
+            return getattr(walled, name)
+
+        def initial_population(self, rng: np.random.Generator, n: int) -> np.ndarray:
+            return np.repeat(walled.initial_population(rng, 1)[:1], n, axis=0)
+
+    b = BudgetedProblem(Clones(), 240)
+    res = ga(b, 240, seed=0, population=20)
+    assert res.evaluations == b.count == 240
+
+
+def test_pymoo_ga_stops_when_nothing_new_can_be_made() -> None:
+    """A box of zero width: every offspring duplicates the start, mating stalls, the restart
+    finds nothing new either: the run ends within the budget instead of looping."""
+    from planner_core.baselines.pymoo_ga import optimise as ga
+
+    class Point:
+        lower = upper = np.full(3, 0.5)
+
+        def evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            return X.sum(axis=1), np.zeros(len(X))
+
+    res = ga(BudgetedProblem(Point(), 500), 500, seed=0, population=10)
+    assert 10 <= res.evaluations < 500 and res.f == pytest.approx(1.5)
+
+
+def test_planner_from_engineering_starts(walled: Problem) -> None:
+    """planner-eng-start: the engineering candidates, then the planner on the rest of the budget
+    from a population holding the best of them; never worse than `engineering` (same seed)."""
+    from planner_core.baselines.eng_start import _WithStarts
+
+    eng_res = optimise("engineering", walled, 10_000, seed=3)
+    res = optimise("planner-eng-start", walled, 1_000, seed=3)
+    assert res.evaluations == 1_000
+    assert (res.phi, res.f) <= (eng_res.phi, eng_res.f)
+    # the start population: the problem's own (seeded half kept), its last rows the given starts
+    starts = np.stack([eng_res.x, eng_res.x + 0.0])
+    X = _WithStarts(walled, starts).initial_population(np.random.default_rng(0), 8)
+    own = walled.initial_population(np.random.default_rng(0), 8)
+    np.testing.assert_array_equal(X[:6], own[:6])
+    np.testing.assert_array_equal(X[6:], starts)
+
+
+def test_engineering_plans_fit_i_max_when_detours_overflow() -> None:
+    """With I_max = 4 the sites plus the wall's detour corners do not fit: every plan the
+    pipeline builds is cut back to I_max points (one per way `repair_points` offers)."""
+    import copy
+
+    m = copy.deepcopy(WALLED)
+    m["uav"]["max_hover_points"] = 4
+    p = Problem(m)
+    rng = np.random.default_rng(0)
+    sizes = []
+    for _label, sites in eng.site_sets(p, 0):
+        for x in eng.build_plans(p, sites, rng):
+            assert x.shape == (p.dim,)
+            sizes.append(p.breakdown(x)["n_hover"])
+    assert sizes and max(sizes) <= 4
+    res = optimise("engineering", p, 10_000, seed=0)
+    assert p.breakdown(res.x)["n_hover"] <= 4
