@@ -16,7 +16,8 @@ With `--mission` (a .plan file, or T01..T16 for the golden plan of that suite ta
 tests/golden) it instead uploads that mission and its fence end to end (`upload_mission`,
 default `--timeout 30 --attempts 3`) on a mock that loses `--loss` of its messages in both
 directions (`--loss-in` to set the incoming side apart), and prints per client the success
-rate and the median time of the successful runs:
+rate and the median time of the successful runs; `--autopilot ardupilot` makes the mock
+ArduPilot (its 1 s re-request period, home in item 0) instead of PX4 (0.25 s):
 
     python benchmarks/bench_upload.py --mission T16 --loss 0.4 --runs 5
 """
@@ -117,7 +118,8 @@ def mission_file(name: str) -> Path:
 
 
 def whole_mission(via: str, path: Path, loss: float, loss_in: float, seed: int, timeout: float,
-                  attempts: int, noisy: float) -> tuple[bool, float, str]:  # fmt: skip
+                  attempts: int, noisy: float,
+                  autopilot: str = "px4") -> tuple[bool, float, str]:  # fmt: skip
     """One end-to-end upload of `path`'s mission and fence: (ok, seconds, error or note)."""
     from lamde_mission.formats import read_mission
     from lamde_mission.vehicle.transfer import VehicleError
@@ -125,7 +127,7 @@ def whole_mission(via: str, path: Path, loss: float, loss_in: float, seed: int, 
     items, fence_items = read_mission(path)
     port = free_udp_port()
     with MockVehicle(f"udpout:127.0.0.1:{port}", loss=loss, loss_in=loss_in, seed=seed,
-                     noisy_gcs_hz=noisy, heartbeat_hz=4.0):  # fmt: skip
+                     noisy_gcs_hz=noisy, heartbeat_hz=4.0, autopilot=autopilot):  # fmt: skip
         t0 = time.perf_counter()
         try:
             r = upload_mission(items, fence_items, connect=f"udpin://127.0.0.1:{port}", via=via,
@@ -154,7 +156,16 @@ def main() -> None:
                     help="a second ground station broadcasting mission messages at this rate")
     ap.add_argument("--timeout", type=float, default=30.0)
     ap.add_argument("--attempts", type=int, default=3)
+    ap.add_argument("--autopilot", choices=("px4", "ardupilot"), default="px4",
+                    help="what the mock behaves as (--mission runs)")
+    ap.add_argument("--mavsdk-default-timeout", action="store_true",
+                    help="leave MAVSDK's message timeout at its 0.5 s for uploads too (to "
+                    "measure what the longer upload timeout of our MAVSDK client buys)")
     args = ap.parse_args()
+    if args.mavsdk_default_timeout:
+        import lamde_mission.vehicle.upload as up
+
+        up._timeout_setter = lambda _sdk: None  # MavsdkClient then keeps MAVSDK's 0.5 s
     if args.mission:
         from lamde_mission.formats import read_mission
 
@@ -163,11 +174,13 @@ def main() -> None:
         loss_in = args.loss if args.loss_in is None else args.loss_in
         print(f"{path.name}: {len(m)} mission + {len(f)} fence items; mock on 127.0.0.1 losing "
               f"{args.loss:g} of its messages out and {loss_in:g} in, noisy ground station "
-              f"{args.noisy_gcs_hz:g} Hz; --timeout {args.timeout:g} --attempts "
-              f"{args.attempts}; {args.runs} runs (seeds 0..{args.runs - 1})", flush=True)
+              f"{args.noisy_gcs_hz:g} Hz, autopilot {args.autopilot}"
+              f"{', MAVSDK timeout 0.5 s' if args.mavsdk_default_timeout else ''}; --timeout "
+              f"{args.timeout:g} --attempts {args.attempts}; {args.runs} runs (seeds "
+              f"0..{args.runs - 1})", flush=True)
         for via in args.via.split(","):
             res = [whole_mission(via, path, args.loss, loss_in, seed, args.timeout,
-                                 args.attempts, args.noisy_gcs_hz)
+                                 args.attempts, args.noisy_gcs_hz, args.autopilot)
                    for seed in range(args.runs)]  # fmt: skip
             ok = [t for good, t, _ in res if good]
             med = f"median {statistics.median(ok):.1f} s" if ok else "no success"

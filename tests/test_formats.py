@@ -255,3 +255,69 @@ def test_writes_are_atomic_and_leave_no_temp_files(m, plan, tmp_path):
     # overwriting keeps a complete file
     write_mission(tmp_path / "a.plan", plan, m, finish="rtl")
     assert json.loads((tmp_path / "a.plan").read_text())["mission"]["items"][-1]["command"] == 20
+
+
+def _plan_with_circle(m, plan):
+    doc = plan_document(plan_to_items(plan, m), geofence_items(m), home=(0, 0, 0), cruise_speed=5)
+    doc["geoFence"]["circles"] = [
+        {"circle": {"center": [47.0, 8.0], "radius": 50.0}, "inclusion": False, "version": 1}]
+    return doc
+
+
+@pytest.mark.parametrize("bad", ["false", "true", 0, 1, None, [], {}])
+@pytest.mark.parametrize(("section", "field"), [
+    (("mission", "items", 2), "mission.items[2].autoContinue"),
+    (("geoFence", "polygons", 0), "geoFence.polygons[0].inclusion"),
+    (("geoFence", "circles", 0), "geoFence.circles[0].inclusion")])
+def test_plan_booleans_must_be_json_booleans(m, plan, section, field, bad):
+    """A string "false" was read as true; every true/false field now takes JSON booleans only."""
+    doc = _plan_with_circle(m, plan)
+    node = doc
+    for key in section:
+        node = node[key]
+    node[field.rsplit(".", 1)[1]] = bad
+    with pytest.raises(MissionError) as exc:
+        parse_plan_document(doc)
+    assert str(exc.value).startswith(f"{field}: expected true or false, got ")
+
+
+def test_plan_booleans_are_read_as_written(m, plan):
+    doc = _plan_with_circle(m, plan)
+    doc["mission"]["items"][2]["autoContinue"] = False
+    doc["geoFence"]["polygons"][0]["inclusion"] = True
+    doc["geoFence"]["circles"][0]["inclusion"] = True
+    items, fence = parse_plan_document(doc)
+    assert items[2].autocontinue == 0 and items[1].autocontinue == 1
+    assert fence[0].command == 5001 and fence[-1].command == 5003  # inclusion polygon, circle
+    doc["geoFence"]["circles"][0]["inclusion"] = False
+    del doc["mission"]["items"][2]["autoContinue"]  # absent: QGC's default, true
+    items, fence = parse_plan_document(doc)
+    assert items[2].autocontinue == 1 and fence[-1].command == 5004
+
+
+@pytest.mark.parametrize("bad", ["3", True, 2.5])
+def test_plan_do_jump_id_must_be_an_integer(m, plan, bad):
+    doc = plan_document(plan_to_items(plan, m), home=(0, 0, 0), cruise_speed=5)
+    doc["mission"]["items"][1]["doJumpId"] = bad
+    with pytest.raises(MissionError, match=r"^mission.items\[1\].doJumpId: expected an integer"):
+        parse_plan_document(doc)
+
+
+def test_a_string_boolean_in_a_plan_exits_2_naming_the_field(m, plan, tmp_path):
+    """`upload` (before any connection is made) and `verify` refuse it with one line naming
+    the field, exit status 2."""
+    from tests.conftest import run_cli_many
+
+    doc = plan_document(plan_to_items(plan, m), home=(0, 0, 0), cruise_speed=5)
+    doc["mission"]["items"][3]["autoContinue"] = "false"
+    f = tmp_path / "s.plan"
+    f.write_text(json.dumps(doc))
+    map_path = tmp_path / "map.json"
+    map_path.write_text(json.dumps(MAP))
+    calls = (("upload", f, "--connect", "udpin://127.0.0.1:9", "--timeout", "0.1"),
+             ("verify", map_path, f))  # fmt: skip
+    for args, r in zip(calls, run_cli_many(*calls), strict=True):
+        assert r.returncode == 2, (args, r.stderr)
+        lines = r.stderr.strip().splitlines()
+        assert len(lines) == 1, r.stderr
+        assert "mission.items[3].autoContinue: expected true or false, got 'false'" in lines[0]

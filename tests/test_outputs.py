@@ -61,6 +61,28 @@ def test_every_bad_output_exits_2_before_the_optimisation(tmp_path: Path) -> Non
     assert (tmp_path / "ro.plan").read_text() == "old"
 
 
+def test_bad_outputs_are_refused_before_the_map_is_read_or_the_planner_runs(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """In this process, with the map reader and the planner replaced by tripwires: every bad
+    output exits 2 before either is reached (so the refusal costs no optimisation, whatever the
+    budget)."""
+    import lamde_mission.api
+    import lamde_mission.commands._common
+    from lamde_mission.cli import main
+
+    def tripwire(*_a: object, **_k: object) -> None:
+        raise AssertionError("reached past the output check")
+
+    monkeypatch.setattr(lamde_mission.api, "plan", tripwire)
+    monkeypatch.setattr(lamde_mission.commands._common, "load_map_or_fail", tripwire)
+    for needle, args in _bad_outputs(tmp_path).items():
+        capsys.readouterr()
+        assert main(["plan", str(DEMO), "--budget", "1000000", *args]) == 2, args
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and needle in err[0], (args, err)
+
+
 def test_mkdir_creates_the_folder(tmp_path: Path) -> None:
     out = tmp_path / "new" / "deeper" / "m.waypoints"
     r = run_cli("plan", DEMO, "-o", out, "--budget", 600, "--quiet", "--mkdir",

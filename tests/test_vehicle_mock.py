@@ -12,7 +12,7 @@ import pytest
 from pymavlink.dialects.v20 import common as mavlink2
 
 from lamde_mission.items import CMD, FRAME, MISSION_TYPE, MissionItem
-from lamde_mission.vehicle.mock import CAPABILITIES, MockVehicle
+from lamde_mission.vehicle.mock import CAPABILITIES, UPLOAD_TIMING, MockVehicle
 from lamde_mission.vehicle.wire import (
     INT32_MAX,
     Endpoint,
@@ -122,39 +122,80 @@ def test_upload_then_download_each_mission_type(link, mission_type):
     assert [g.x for g in got] == [w.x for w in items]
 
 
-def test_vehicle_rerequests_a_missing_item(link):
-    v, gcs = link
-    gcs.send(m.MAVLink_mission_count_message(1, 1, 2, 0))
-    first = gcs.wait("MISSION_REQUEST_INT", seq=0)
-    t0 = time.monotonic()
-    again = gcs.wait("MISSION_REQUEST_INT", 1.0, seq=0)  # we "lost" item 0: asked again
-    assert first is not None and again is not None
-    assert time.monotonic() - t0 < 0.3  # well under MAVSDK's 0.5 s
-    assert v.stats.rerequests >= 1
+@pytest.mark.parametrize("autopilot", ["px4", "ardupilot"])
+def test_vehicle_rerequests_a_missing_item_as_its_autopilot_does(autopilot):
+    """PX4 asks again 250 ms after its last request, ArduPilot 1 s after (UPLOAD_TIMING)."""
+    period, give_up = UPLOAD_TIMING[autopilot]
+    port = free_udp_port()
+    with RawGcs(port) as gcs, MockVehicle(f"udpout:127.0.0.1:{port}", autopilot=autopilot) as v:
+        assert gcs.wait("HEARTBEAT", 2.0) is not None
+        assert (v.rerequest_s, v.give_up_s) == (period, give_up)
+        gcs.send(m.MAVLink_mission_count_message(1, 1, 2, 0))
+        first = gcs.wait("MISSION_REQUEST_INT", seq=0)
+        t0 = time.monotonic()
+        again = gcs.wait("MISSION_REQUEST_INT", period + 1.0, seq=0)  # item 0 "lost": again
+        assert first is not None and again is not None
+        assert time.monotonic() - t0 >= period - 0.05  # not before the autopilot's period
+        assert v.stats.rerequests >= 1
 
 
-def test_lost_final_ack_is_sent_again_for_a_resent_last_item(link):
-    v, gcs = link
-    items = wire_mission(hand_mission(0))
-    gcs.send(m.MAVLink_mission_count_message(1, 1, len(items), 0))
-    for w in items:
-        gcs.wait("MISSION_REQUEST_INT", seq=w.seq)
-        gcs.send(_item_msg(w))
-    assert gcs.wait("MISSION_ACK").type == m.MAV_MISSION_ACCEPTED
-    gcs.send(_item_msg(items[-1]))  # "the ACK never came"
-    assert gcs.wait("MISSION_ACK").type == m.MAV_MISSION_ACCEPTED
-    assert v.stats.uploads[0] == 1
+def test_vehicle_gives_up_a_silent_upload():
+    """Silence for `give_up_s`: the upload is dropped with MAV_MISSION_OPERATION_CANCELLED and
+    the stored list is left as it was."""
+    port = free_udp_port()
+    with RawGcs(port) as gcs, MockVehicle(f"udpout:127.0.0.1:{port}", give_up_s=0.6) as v:
+        assert gcs.wait("HEARTBEAT", 2.0) is not None
+        gcs.send(m.MAVLink_mission_count_message(1, 1, 2, 0))
+        ack = gcs.wait("MISSION_ACK", 5.0)
+        assert ack is not None and ack.type == m.MAV_MISSION_OPERATION_CANCELLED
+        assert v.items() == [] and v.stats.rerequests >= 1
 
 
-def test_out_of_order_item_is_an_invalid_sequence(link):
-    v, gcs = link
-    v.set_items(hand_mission(0))
-    items = wire_mission(hand_mission(2))
-    gcs.send(m.MAVLink_mission_count_message(1, 1, len(items), 0))
-    gcs.wait("MISSION_REQUEST_INT", seq=0)
-    gcs.send(_item_msg(items[2]))
-    assert gcs.wait("MISSION_ACK").type == m.MAV_MISSION_INVALID_SEQUENCE
-    assert len(v.items()) == 4  # the stored mission is untouched
+@pytest.mark.parametrize(("autopilot", "answer"), [("px4", m.MAV_MISSION_ACCEPTED),
+                                                   ("ardupilot", m.MAV_MISSION_ERROR)])
+def test_a_resent_last_item_after_the_final_ack(autopilot, answer):
+    """PX4 ACKs a repeat of the last item again (its final ACK was lost); ArduPilot, no longer
+    receiving, answers MAV_MISSION_ERROR (GCS_Common.cpp)."""
+    port = free_udp_port()
+    with RawGcs(port) as gcs, MockVehicle(f"udpout:127.0.0.1:{port}", autopilot=autopilot) as v:
+        assert gcs.wait("HEARTBEAT", 2.0) is not None
+        items = wire_mission(hand_mission(0))
+        gcs.send(m.MAVLink_mission_count_message(1, 1, len(items), 0))
+        for w in items:
+            gcs.wait("MISSION_REQUEST_INT", seq=w.seq)
+            gcs.send(_item_msg(w))
+        assert gcs.wait("MISSION_ACK").type == m.MAV_MISSION_ACCEPTED
+        gcs.send(_item_msg(items[-1]))  # "the ACK never came"
+        assert gcs.wait("MISSION_ACK").type == answer
+        assert v.stats.uploads[0] == 1
+
+
+@pytest.mark.parametrize("autopilot", ["px4", "ardupilot"])
+def test_an_item_out_of_turn_leaves_the_upload_going(autopilot):
+    """PX4 ignores an item it did not ask for, ArduPilot answers MAV_MISSION_INVALID_SEQUENCE;
+    both ask again for the item they miss, and the upload completes."""
+    port = free_udp_port()
+    with RawGcs(port) as gcs, MockVehicle(f"udpout:127.0.0.1:{port}", autopilot=autopilot) as v:
+        assert gcs.wait("HEARTBEAT", 2.0) is not None
+        items = wire_mission(hand_mission(2))
+        gcs.send(m.MAVLink_mission_count_message(1, 1, len(items), 0))
+        assert gcs.wait("MISSION_REQUEST_INT", seq=0) is not None
+        gcs.send(_item_msg(items[2]))  # a skip
+        gcs.send(_item_msg(items[0]))
+        assert gcs.wait("MISSION_REQUEST_INT", seq=1) is not None
+        gcs.send(_item_msg(items[0]))  # a duplicate
+        ack = gcs.wait("MISSION_ACK", 0.5)
+        if autopilot == "ardupilot":
+            assert ack is not None and ack.type == m.MAV_MISSION_INVALID_SEQUENCE
+        else:
+            assert ack is None
+        assert gcs.wait("MISSION_REQUEST_INT", 2.0, seq=1) is not None  # asked again
+        for w in items[1:]:
+            gcs.send(_item_msg(w))
+            if w.seq < len(items) - 1:
+                assert gcs.wait("MISSION_REQUEST_INT", 2.0, seq=w.seq + 1) is not None
+        assert gcs.wait("MISSION_ACK", 2.0).type == m.MAV_MISSION_ACCEPTED
+        assert v.stats.uploads[0] == 1 and len(v.wire_items()) == len(items)
 
 
 def test_request_past_the_end_is_an_invalid_sequence(link):

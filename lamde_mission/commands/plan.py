@@ -207,23 +207,25 @@ def run(args: argparse.Namespace) -> int:
         with_origin_or_fail,
     )
     from lamde_mission.errors import UsageError
-    from lamde_mission.formats import MissionFileError, format_for
 
-    # check every output before the (long) optimisation, so bad input fails fast
-    try:
-        fmt = format_for(args.output, args.format)
-    except MissionFileError as exc:
-        raise UsageError(f"-o/--output: {exc}") from None
+    # check every output before the (long) optimisation, so bad input fails fast: the paths
+    # first, before the mission formats (and the simulator under them) are even imported
     if args.plot and not args.plot.lower().endswith((".png", ".svg")):
         raise UsageError(f"--plot: {args.plot}: image format must be PNG or SVG (.png or .svg)")
-    try:
-        D.check_run_args(population=args.population, budget=args.budget)
-    except ValueError as exc:  # "population: must be ...": name the option as typed
-        raise UsageError(f"--{exc}") from None
     check_outputs(
         [("-o/--output", args.output), ("--plot", args.plot), ("--report", args.report)],
         mkdir=args.mkdir,
     )
+    from lamde_mission.formats import MissionFileError, format_for
+
+    try:
+        fmt = format_for(args.output, args.format)
+    except MissionFileError as exc:
+        raise UsageError(f"-o/--output: {exc}") from None
+    try:
+        D.check_run_args(population=args.population, budget=args.budget)
+    except ValueError as exc:  # "population: must be ...": name the option as typed
+        raise UsageError(f"--{exc}") from None
     configurator = args.configurator
     if args.policy is not None:
         if args.configurator != "lamde":

@@ -76,6 +76,14 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     return p
 
 
+#: printed after a MAVSDK transfer that timed out (docs/upload.md has the arithmetic)
+MAVSDK_LOSSY_HINT = (
+    "hint: MAVSDK gives up a whole list when one item goes unanswered 5 times (a constant "
+    "inside MAVSDK); on a lossy link use --via pymavlink, which asks for each item again until "
+    "--timeout passes without progress (docs/upload.md)"
+)
+
+
 def _read(path: str) -> tuple[list, list | None, list | None]:
     """(mission, fence, rally); the fence is None for a .waypoints file (it cannot hold one),
     the rally list None when the file has no rally points (the vehicle's are left alone)."""
@@ -162,7 +170,7 @@ def _sim_check(path: str, map_path: str, mission: list, *, force: bool) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from lamde_mission.errors import UsageError
-    from lamde_mission.vehicle.transfer import VehicleError
+    from lamde_mission.vehicle.transfer import TransferError, VehicleError
     from lamde_mission.vehicle.upload import upload_mission
 
     if not (math.isfinite(args.timeout) and args.timeout > 0):
@@ -216,6 +224,8 @@ def run(args: argparse.Namespace) -> int:
             for line in exc.report.lines():
                 print(line)
         print(f"lamde-mission upload: {exc}", file=sys.stderr)
+        if args.via == "mavsdk" and isinstance(exc, TransferError):
+            print(MAVSDK_LOSSY_HINT, file=sys.stderr)
         return 1
     for line in report.lines():
         print(line)

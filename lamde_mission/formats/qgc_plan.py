@@ -145,6 +145,18 @@ def _float(v: Any, where: str) -> float:
     return float(v)
 
 
+def _bool(obj: dict[str, Any], key: str, where: str, default: bool) -> bool:
+    """A JSON boolean field of `obj` (`default` when the key is absent); MissionError naming
+    `where.key` for anything else: a string "false" is not false, and 0/1 are not QGC's."""
+    if key not in obj:
+        return default
+    v = obj[key]
+    if not isinstance(v, bool):
+        shown = repr(v) if len(repr(v)) <= 40 else repr(v)[:37] + "..."
+        raise MissionError(f"{where}.{key}: expected true or false, got {shown}")
+    return v
+
+
 def _latlon_pair(v: Any, where: str) -> tuple[float, float]:
     if not isinstance(v, list) or len(v) < 2:
         raise MissionError(f"{where}: expected [lat, lon]")
@@ -222,12 +234,15 @@ def parse_plan_lists(
             command, frame = raw["command"], raw["frame"]
         except KeyError as exc:
             raise MissionError(f"{where}.{exc.args[0]}: required field is missing") from None
-        if isinstance(raw.get("doJumpId"), int):
-            jump_ids[int(raw["doJumpId"])] = len(items)
+        jump_id = raw.get("doJumpId")
+        if jump_id is not None:
+            if isinstance(jump_id, bool) or not isinstance(jump_id, int):
+                raise MissionError(f"{where}.doJumpId: expected an integer, got {jump_id!r}")
+            jump_ids[jump_id] = len(items)
         item = (
             MissionItem(
                 seq=len(items), command=command, frame=frame, current=0,
-                autocontinue=int(bool(raw.get("autoContinue", True))),
+                autocontinue=int(_bool(raw, "autoContinue", where, True)),
                 param1=p[0], param2=p[1], param3=p[2], param4=p[3], x=p[4], y=p[5], z=p[6],
                 mission_type=MISSION_TYPE.MISSION,
             )
@@ -303,7 +318,7 @@ def _parse_fence(gf: Any) -> list[MissionItem]:
         verts = poly.get("polygon") if isinstance(poly, dict) else None
         if not isinstance(verts, list) or len(verts) < 3:
             raise MissionError(f"{where}.polygon: needs at least 3 [lat, lon] vertices")
-        inclusion = bool(poly.get("inclusion", True))
+        inclusion = _bool(poly, "inclusion", where, True)
         cmd = (CMD.FENCE_POLYGON_VERTEX_INCLUSION if inclusion
                else CMD.FENCE_POLYGON_VERTEX_EXCLUSION)  # fmt: skip
         for i, v in enumerate(verts):
@@ -319,7 +334,7 @@ def _parse_fence(gf: Any) -> list[MissionItem]:
         if not (math.isfinite(r) and 0 < r <= FLOAT32_MAX):
             raise MissionError(f"{where}.circle.radius: must be a positive finite number, "
                                f"got {r:g}")  # fmt: skip
-        inclusion = bool(c.get("inclusion", True))
+        inclusion = _bool(c, "inclusion", where, True)
         cmd = CMD.FENCE_CIRCLE_INCLUSION if inclusion else CMD.FENCE_CIRCLE_EXCLUSION
         add(cmd, r, lat, lon, f"{where}.circle")
     return out

@@ -332,7 +332,7 @@ class MavlinkClient:
         # the next item (a vehicle's timer-driven re-request would overstate it, never understate)
         # MISSION_REQUEST (not _INT) is answered with MISSION_ITEM_INT too, as MAVSDK does.
         retries = 0
-        resends = 0
+        resends = resends_crossed = 0
         sent_at: float | None = time.monotonic()
         self._reset_rto()
         self._send(last)
@@ -358,12 +358,28 @@ class MavlinkClient:
                 self._send(last)  # the count again, or the last item sent
                 continue
             if msg.get_type() == "MISSION_ACK":
-                if int(msg.type) != _m.MAV_MISSION_ACCEPTED:
+                code = int(msg.type)
+                if code == _m.MAV_MISSION_INVALID_SEQUENCE and highest < n - 1:
+                    # ArduPilot's answer to an item out of turn (our resend crossed its next
+                    # request); it keeps the transfer and asks again
+                    resends_crossed += 1
+                    continue
+                if code == _m.MAV_MISSION_ERROR and highest == n - 1 and sent_at is None:
+                    # the last item resent after a silence, answered as by ArduPilot, which has
+                    # finished the transfer (its ACK was what got lost): the read-back decides
+                    raise TransferError(
+                        f"{kind} upload: the final MISSION_ACK was lost; the vehicle answered "
+                        "the resent last item with MAV_MISSION_ERROR (no transfer in progress)"
+                    )
+                if code != _m.MAV_MISSION_ACCEPTED:
                     raise self._nack(msg, t, f"upload of {n} items")
                 if highest == n - 1:
                     self._progress(f"{kind} upload", n, n)
                     if resends:
                         self.log(f"{kind} upload: {resends} messages resent after a silence")
+                    if resends_crossed:
+                        self.log(f"{kind} upload: {resends_crossed} resent items came out of "
+                                 "turn (MAV_MISSION_INVALID_SEQUENCE; the vehicle asked again)")
                     return
                 continue  # a stale ACK (an earlier transfer's): not for this one
             seq = int(msg.seq)

@@ -6,14 +6,20 @@ MISSION_FENCE, MISSION_RALLY and MAVLINK2 capability bits), COMMAND_ACK, and the
 protocol for mission types MISSION, FENCE and RALLY:
 
 - upload: MISSION_COUNT -> MISSION_REQUEST_INT ... MISSION_ITEM_INT -> MISSION_ACK. The vehicle
-  drives it and re-requests a missing item every `rerequest_s` (MAVSDK never resends an item by
-  itself); a client that resends the last item after the final ACK was lost gets the ACK again.
+  drives it: it re-requests a missing item `rerequest_s` after its last request and abandons
+  the upload (MISSION_ACK MAV_MISSION_OPERATION_CANCELLED) after `give_up_s` of silence, with
+  the periods of the autopilot it mimics (`UPLOAD_TIMING`; MAVSDK never resends an item by
+  itself, so these periods decide how it fares on a lossy link).
   A new MISSION_COUNT or MISSION_REQUEST_LIST abandons an unfinished upload (the stored list
   stays as it was): a ground station that gave up may not say so (MAVSDK does not).
 - download: MISSION_REQUEST_LIST -> MISSION_COUNT; MISSION_REQUEST_INT / MISSION_REQUEST are
   answered with MISSION_ITEM_INT; the client's MISSION_ACK ends it.
 - MISSION_CLEAR_ALL (one type or MAV_MISSION_TYPE_ALL), MISSION_SET_CURRENT -> MISSION_CURRENT.
-- errors by MISSION_ACK: MAV_MISSION_INVALID_SEQUENCE (item out of order, request past the end),
+- items out of turn during an upload: PX4 ignores them, ArduPilot answers
+  MAV_MISSION_INVALID_SEQUENCE, and both keep asking for the item they miss; an item with no
+  upload in progress is answered with MAV_MISSION_ERROR, except that PX4 takes the last item of
+  the upload it just finished as a sign that its final ACK was lost and ACKs again.
+- errors by MISSION_ACK: MAV_MISSION_INVALID_SEQUENCE (request past the end),
   MAV_MISSION_UNSUPPORTED (unknown mission type), MAV_MISSION_NO_SPACE (more than `max_items`),
   or the `reject` code for every MISSION_COUNT (to test how uploaders report a refusal).
 
@@ -64,7 +70,7 @@ from lamde_mission.vehicle.wire import (
     to_wire,
 )
 
-__all__ = ["MockVehicle", "MockStats", "CAPABILITIES", "NOISY_GCS_SYSTEM"]
+__all__ = ["MockVehicle", "MockStats", "CAPABILITIES", "NOISY_GCS_SYSTEM", "UPLOAD_TIMING"]
 
 #: system id of the mock's second, noisy ground station
 NOISY_GCS_SYSTEM = 254
@@ -85,6 +91,16 @@ _MISSION_MSGS = frozenset({
     "MISSION_ITEM_INT", "MISSION_ITEM", "MISSION_ACK", "MISSION_CLEAR_ALL",
 })  # fmt: skip
 _TYPE_ALL = _m.MAV_MISSION_TYPE_ALL
+
+#: How a real autopilot drives a mission upload: (re-request period s, give-up s), by dialect.
+#: PX4 (src/modules/mavlink/mavlink_mission.h/.cpp, MavlinkMissionManager::send): it asks for
+#: the missing item again once MAVLINK_MISSION_RETRY_TIMEOUT_DEFAULT (250 ms) has passed since
+#: its last request, and drops the transfer MAVLINK_MISSION_PROTOCOL_TIMEOUT_DEFAULT (5 s) after
+#: the last mission message it received from the uploader. ArduPilot
+#: (libraries/GCS_MAVLink/MissionItemProtocol.cpp, update()): it asks again 1000 ms (plus the
+#: link's stream slow-down, 0 on a clear link) after its last request, and cancels
+#: `upload_timeout_ms` (8000 ms, MissionItemProtocol.h) after the last item it accepted.
+UPLOAD_TIMING = {"px4": (0.25, 5.0), "ardupilot": (1.0, 8.0)}
 
 
 @dataclass
@@ -109,7 +125,8 @@ class _Upload:
     items: list[WireItem]
     last_request: float
     src: tuple[int, int] = (0, 0)
-    tries: int = 0
+    last_heard: float = 0.0  # the last mission message of this upload from its ground station
+    last_item: float = 0.0  # the last item accepted (or the MISSION_COUNT)
 
 
 class MockVehicle:
@@ -118,6 +135,8 @@ class MockVehicle:
     `connect` is where it talks: `udpout:HOST:PORT` sends to a ground station listening there
     (MAVSDK's `udpin://`), `udpin:HOST:PORT` listens and answers whoever wrote last.
     `reject` (a MAV_MISSION_RESULT code or name) makes it refuse every upload with that code;
+    `lose_in` / `lose_out` (functions of a MAVLink message) lose the received / sent messages
+    they return True for, on top of `loss_in` / `loss` (a loss pattern a test can count on);
     `corrupt` (a function of a received WireItem) makes it store something else (a faulty
     vehicle, to test the read-back comparison).
     """
@@ -134,11 +153,13 @@ class MockVehicle:
         reject: int | str | None = None,
         max_items: int = 1000,
         rerequest_s: float | None = None,
-        give_up_s: float = 5.0,
+        give_up_s: float | None = None,
         heartbeat_hz: float = 1.0,
         system_id: int = 1,
         component_id: int = 1,
         corrupt: Callable[[WireItem], WireItem] | None = None,
+        lose_in: Callable[[object], bool] | None = None,
+        lose_out: Callable[[object], bool] | None = None,
         on_event: Callable[[str], None] | None = None,
         autopilot: str = "px4",
         home: tuple[float, float, float] = (-35.3632621, 149.1652374, 584.0),
@@ -161,17 +182,21 @@ class MockVehicle:
         self.seed = seed
         self.reject = None if reject is None else mission_result_code(reject)
         self.max_items = int(max_items)
-        # well under MAVSDK's 0.5 s item timeout, and longer than a round trip at this latency
+        if autopilot not in UPLOAD_TIMING:
+            raise ValueError(f"autopilot must be 'px4' or 'ardupilot', got {autopilot!r}")
+        period, give_up = UPLOAD_TIMING[autopilot]
+        # the autopilot's period; with `latency_ms`, at least one round trip (a real one asks
+        # again regardless, and ignores the crossing duplicate)
         self.rerequest_s = (
-            float(rerequest_s) if rerequest_s is not None else max(0.1, 2 * self.latency + 0.05)
+            float(rerequest_s) if rerequest_s is not None else max(period, 2 * self.latency + 0.05)
         )
-        self.give_up_s = float(give_up_s)
+        self.give_up_s = float(give_up_s) if give_up_s is not None else give_up
         self.heartbeat_period = 1.0 / float(heartbeat_hz)
         self.system_id = int(system_id)
         self.component_id = int(component_id)
         self.corrupt = corrupt
-        if autopilot not in ("px4", "ardupilot"):
-            raise ValueError(f"autopilot must be 'px4' or 'ardupilot', got {autopilot!r}")
+        self.lose_in = lose_in
+        self.lose_out = lose_out
         self.autopilot = autopilot
         self.home = tuple(float(v) for v in home)
         self.on_event = on_event
@@ -333,16 +358,22 @@ class MockVehicle:
                 except Exception:  # a malformed datagram must not stop the vehicle
                     continue
                 for msg in msgs:
+                    if self.lose_in is not None and self.lose_in(msg):
+                        self.stats.dropped_in += 1
+                        continue
                     with self._lock:
                         self._handle(msg)
 
     def _tick(self, now: float) -> None:
-        """Vehicle-side re-request of a missing upload item; give up after `give_up_s`."""
+        """Vehicle-side re-request of a missing upload item `rerequest_s` after the last
+        request; give up after `give_up_s` without a mission message from the ground station
+        (PX4) or without a new item (ArduPilot)."""
         with self._lock:
             up = self._upload
-            if up is None or now - up.last_request < self.rerequest_s:
+            if up is None:
                 return
-            if up.tries * self.rerequest_s >= self.give_up_s:
+            since = up.last_heard if self.autopilot == "px4" else up.last_item
+            if now - since > self.give_up_s:
                 self._upload = None
                 self._event(
                     f"{mission_type_name(up.mission_type)} upload abandoned: no item "
@@ -350,7 +381,8 @@ class MockVehicle:
                 )
                 self._ack(_m.MAV_MISSION_OPERATION_CANCELLED, up.mission_type, up.src)
                 return
-            up.tries += 1
+            if now - up.last_request < self.rerequest_s:
+                return
             self.stats.rerequests += 1
             self._request(up, now)
 
@@ -410,6 +442,9 @@ class MockVehicle:
         cap = self._mav.file
         self._mav.send(msg)
         self.stats.sent += 1
+        if self.lose_out is not None and self.lose_out(msg):
+            self.stats.dropped += 1
+            return
         if self.loss > 0.0 and self._rng.random() < self.loss:
             self.stats.dropped += 1
             return
@@ -518,26 +553,27 @@ class MockVehicle:
             self._event(f"{mission_type_name(t)} cleared (empty upload)")
             self._ack(_m.MAV_MISSION_ACCEPTED, t, src)
             return
-        self._upload = _Upload(t, count, [], 0.0, src)
-        self._request(self._upload, time.monotonic())
+        now = time.monotonic()
+        self._upload = _Upload(t, count, [], 0.0, src, last_heard=now, last_item=now)
+        self._request(self._upload, now)
 
     def _on_mission_item_int(self, msg: object, src: tuple[int, int], scaled: bool = True) -> None:
         t, seq = int(msg.mission_type), int(msg.seq)
         up = self._upload
         if up is None or up.mission_type != t:
-            # the final ACK was lost and the client resent its last item: ACK again
-            if self._completed is not None and self._completed == (t, seq + 1):
+            if self.autopilot == "px4" and self._completed == (t, seq + 1):
+                # PX4: the last item again means the final ACK was lost: ACK again
                 self._ack(_m.MAV_MISSION_ACCEPTED, t, src)
-            return  # a stray item (an abandoned transfer): ignored, as PX4 does
+            else:  # no transfer of this type: PX4 and ArduPilot answer MAV_MISSION_ERROR
+                self._ack(_m.MAV_MISSION_ERROR, t, src)
+            return
         expected = len(up.items)
-        if seq < expected:
-            return  # a duplicate (answer to a re-request that crossed the item)
-        if seq > expected or seq >= up.count:
-            self._upload = None
-            self._event(
-                f"{mission_type_name(t)} upload aborted: item {seq} while expecting {expected}"
-            )
-            self._ack(_m.MAV_MISSION_INVALID_SEQUENCE, t, src)
+        up.last_heard = time.monotonic()
+        if seq != expected:
+            # not the item asked for (a duplicate that crossed a re-request, or a skip): PX4
+            # ignores it; ArduPilot answers MAV_MISSION_INVALID_SEQUENCE. Both go on asking.
+            if self.autopilot == "ardupilot":
+                self._ack(_m.MAV_MISSION_INVALID_SEQUENCE, t, src)
             return
         if scaled:
             item = WireItem(seq, int(msg.frame), int(msg.command), int(msg.current),
@@ -555,7 +591,7 @@ class MockVehicle:
         if self.corrupt is not None:
             item = self.corrupt(item)
         up.items.append(item)
-        up.tries = 0
+        up.last_item = up.last_heard
         if len(up.items) == up.count:
             self._store[t] = list(up.items)
             self._upload = None

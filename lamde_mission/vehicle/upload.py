@@ -75,11 +75,23 @@ def _route_mavsdk_log() -> None:
     log_subscribe(handler)
 
 
-#: MAVSDK's own limits on one mission message (MavlinkMissionTransferClient: its default
-#: message timeout 0.5 s, 5 retries); the Python binding does not expose them, so a list's
-#: call is given the time MAVSDK may take for each item on top of our no-progress `timeout`.
+#: MAVSDK's limits on one mission item (MAVSDK 4.1, cpp/src/mavsdk/core/
+#: mavlink_mission_transfer_client.hpp `retries = 5`, a constant; mavsdk_impl.hpp
+#: DEFAULT_TIMEOUT_S = 0.5, the message timeout). An upload item fails when MAVSDK has sent it
+#: 5 times (each send answers a vehicle's request) or counted 5 of sends and silent
+#: timeouts together and hears a sixth; a download item after 5 requests. docs/upload.md
+#: works out what that means on a lossy link.
 MAVSDK_ITEM_TIMEOUT_S = 0.5
 MAVSDK_RETRIES = 5
+
+#: MAVSDK's message timeout during an upload, by the vehicle's autopilot: the vehicle's own
+#: give-up time over MAVSDK's 5 counts (PX4 5 s, ArduPilot 8 s; see mock.UPLOAD_TIMING), so
+#: that a silence only counts once the vehicle has missed more than one of its re-requests
+#: (PX4 every 0.25 s, ArduPilot every 1 s; with MAVSDK's 0.5 s each missing ArduPilot item
+#: costs three of its five counts). Downloads keep MAVSDK's 0.5 s: there MAVSDK itself asks
+#: again after each timeout, and only the number of requests (5) limits it.
+MAVSDK_UPLOAD_TIMEOUT_S = {"PX4": 1.0, "ARDUPILOT": 1.6}
+MAVSDK_UPLOAD_TIMEOUT_DEFAULT_S = 1.6
 
 
 class MavsdkClient:
@@ -87,9 +99,13 @@ class MavsdkClient:
 
     MAVSDK owns its link: it pins nothing by address, and its mission transfer recovers lost
     messages itself (re-requesting a download item or resending the count up to
-    `MAVSDK_RETRIES` times, `MAVSDK_ITEM_TIMEOUT_S` apart; it never resends an upload item
-    unasked, the vehicle re-requests), then fails the whole list with TIMEOUT. None of this is
-    configurable from the Python binding; `upload_and_verify` then retries the whole transfer.
+    `MAVSDK_RETRIES` times, a message timeout apart; it never resends an upload item unasked,
+    the vehicle re-requests), then fails the whole list with TIMEOUT; `upload_and_verify` then
+    retries the whole transfer. The count of 5 is a constant in MAVSDK. The message timeout is
+    `Mavsdk::set_timeout_s`, which MAVSDK-Python 4.1 does not wrap; this client calls the C
+    API under it (cmavsdk's `mavsdk_set_timeout_s`, in the library the package ships) before
+    each transfer: `MAVSDK_UPLOAD_TIMEOUT_S` for uploads, MAVSDK's 0.5 s for downloads. Where
+    that function is missing, MAVSDK's 0.5 s stays (`message_timeout_settable` is False).
     """
 
     name = "mavsdk"
@@ -113,6 +129,20 @@ class MavsdkClient:
         self._system: Any = None
         self._raw: Any = None
         self.vehicle: VehicleInfo | None = None
+        self._set_timeout = _timeout_setter(self._sdk)
+        #: whether MAVSDK's message timeout can be set (cmavsdk's mavsdk_set_timeout_s found)
+        self.message_timeout_settable = self._set_timeout is not None
+
+    def _message_timeout(self, seconds: float) -> None:
+        """MAVSDK's message timeout for the transfers started from now on (it reads it when a
+        transfer starts); nothing where it cannot be set."""
+        if self._set_timeout is not None:
+            self._set_timeout(seconds)
+
+    def upload_message_timeout(self) -> float:
+        """The message timeout this client gives MAVSDK for an upload to this vehicle."""
+        ap = self.vehicle.autopilot if self.vehicle is not None else None
+        return MAVSDK_UPLOAD_TIMEOUT_S.get(ap or "", MAVSDK_UPLOAD_TIMEOUT_DEFAULT_S)
 
     # ------------------------------------------------------------------ plumbing
 
@@ -208,24 +238,33 @@ class MavsdkClient:
 
         raw_items = [RawItem(*w.fields()) for w in items]
         self._expected[int(mission_type)] = len(raw_items)
-        timeout = self._limit(timeout, len(raw_items))
+        per_message = self.upload_message_timeout() if self.message_timeout_settable else None
+        timeout = self._limit(timeout, len(raw_items), per_message)
         up = {
             MISSION_TYPE.MISSION: self._raw.upload_mission,
             MISSION_TYPE.FENCE: self._raw.upload_geofence,
             MISSION_TYPE.RALLY: self._raw.upload_rally_points,
         }[int(mission_type)]
-        self._call(
-            "upload", mission_type, timeout, lambda: up(raw_items), self._raw.cancel_mission_upload
-        )
+        if per_message is not None:
+            self._message_timeout(per_message)
+        try:
+            self._call(
+                "upload", mission_type, timeout, lambda: up(raw_items),
+                self._raw.cancel_mission_upload,
+            )  # fmt: skip
+        finally:
+            self._message_timeout(MAVSDK_ITEM_TIMEOUT_S)
 
     @staticmethod
-    def _limit(timeout: float, n: int) -> float:
+    def _limit(timeout: float, n: int, per_message: float | None = None) -> float:
         """The whole call's limit: `timeout`, plus what MAVSDK's own retries may take per item
         (MAVSDK reports no progress we could reset a no-progress timer on)."""
-        return timeout + n * MAVSDK_ITEM_TIMEOUT_S * (MAVSDK_RETRIES + 1)
+        per = MAVSDK_ITEM_TIMEOUT_S if per_message is None else per_message
+        return timeout + n * per * (MAVSDK_RETRIES + 1)
 
     def download(self, mission_type: int, timeout: float) -> list[WireItem]:
-        """Read one list back through MissionRaw."""
+        """Read one list back through MissionRaw (MAVSDK's 0.5 s message timeout)."""
+        self._message_timeout(MAVSDK_ITEM_TIMEOUT_S)
         timeout = self._limit(timeout, self._expected.get(int(mission_type), 0))
         down = {
             MISSION_TYPE.MISSION: self._raw.download_mission,
@@ -276,6 +315,29 @@ class MavsdkClient:
             [_wire_of(r) for r in data.geofence_items],
             [_wire_of(r) for r in data.rally_items],
         )
+
+
+def _timeout_setter(sdk: Any) -> Callable[[float], None] | None:
+    """`seconds -> None` setting MAVSDK's message timeout (Mavsdk::set_timeout_s) through the
+    C API under MAVSDK-Python 4.x (cmavsdk's `mavsdk_set_timeout_s(mavsdk_t, double)`, in
+    c/src/cmavsdk/mavsdk.h; the Python package ships that library but does not wrap the
+    call); None where this binding has no such function."""
+    import ctypes
+
+    inner = getattr(sdk, "_mavsdk", None)
+    lib, handle = getattr(inner, "_lib", None), getattr(inner, "_handle", None)
+    fn = getattr(lib, "mavsdk_set_timeout_s", None) if lib is not None else None
+    if fn is None or not handle:
+        _log.debug("MAVSDK's message timeout cannot be set here; it stays at its 0.5 s")
+        return None
+    fn.argtypes = [ctypes.c_void_p, ctypes.c_double]
+    fn.restype = None
+
+    def set_timeout(seconds: float) -> None:
+        if getattr(inner, "_handle", None):  # not after close()
+            fn(inner._handle, float(seconds))
+
+    return set_timeout
 
 
 def _wire_of(r: Any) -> WireItem:
