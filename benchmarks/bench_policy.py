@@ -4,7 +4,9 @@ Runs the DE with the policy on each map for a few generations and times, in the 
 the same generations, (a) the policy's numpy inference (observation + forward pass + drawing the
 actions: `PolicyConfigurator.configure`) and (b) the population's evaluation. Prints the
 medians per generation and their ratio (policy / evaluation; < 1 means the policy costs less
-than the evaluations it configures).
+than the evaluations it configures), and what the policy adds to a plan of 10,000 evaluations
+with that population (its generations x the median). The policy's CPU time (this process's)
+is printed beside its wall time: on a shared machine the wall time includes waiting for a core.
 
     python benchmarks/bench_policy.py [MAP ...] [--checkpoint lamde-v1] [--generations 30]
 """
@@ -19,6 +21,7 @@ from typing import Any
 
 from planner_core import Problem, load_map
 from planner_core.de import run
+from planner_core.de.types import max_generations
 from planner_core.policy import PolicyConfigurator, param_count
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -26,16 +29,18 @@ DEFAULT_MAPS = [ROOT / "examples" / "maps" / "suite" / n for n in ("T08.json", "
 
 
 class _Timed:
-    """Adds up the wall time of each call of `fn`, one entry per call."""
+    """Records the wall time and this process's CPU time of each call of `fn`."""
 
     def __init__(self) -> None:
         self.times: list[float] = []
+        self.cpu: list[float] = []
 
     def wrap(self, fn: Any) -> Any:
         def timed(*a: Any) -> Any:
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             out = fn(*a)
             self.times.append(time.perf_counter() - t0)
+            self.cpu.append(time.process_time() - c0)
             return out
 
         return timed
@@ -72,9 +77,13 @@ def main() -> None:
         # drop the first generation of each (compilation, caches) and the initial population
         t_eval = statistics.median(ev.times[2:])
         t_pol = statistics.median(pol.times[1:])
+        c_pol = statistics.median(pol.cpu[1:])
+        gens = max_generations(args.population, 10_000)
         print(f"{Path(path).stem}: N {args.population} x d {problem.dim}: policy "
-              f"{1e3 * t_pol:.2f} ms, evaluation {1e3 * t_eval:.2f} ms per generation "
-              f"(medians of {len(pol.times) - 1}); policy / evaluation = {t_pol / t_eval:.1f}")
+              f"{1e3 * t_pol:.2f} ms (CPU {1e3 * c_pol:.2f} ms), evaluation "
+              f"{1e3 * t_eval:.2f} ms per generation (medians of {len(pol.times) - 1}); "
+              f"policy / evaluation = {t_pol / t_eval:.1f}; policy per 10,000-evaluation plan "
+              f"({gens} generations): {gens * t_pol:.2f} s (CPU {gens * c_pol:.2f} s)")
 
 
 if __name__ == "__main__":

@@ -1,10 +1,16 @@
 """Validate a policy checkpoint: lamde vs adaptive vs random vs fixed, both start modes.
 
-Runs the DE (no polish) with each configurator on each map for R seeds and reports, per map and
-start mode, the mean penalised score f + 10 phi (lower is better), the feasible runs, and the
-Wilcoxon rank-sum mark of lamde against each other configurator ("+": lamde significantly
-better, "-": significantly worse, "~": no significant difference; alpha 0.05, two-sided,
+Runs each configurator on each map for R seeds and reports, per map and start mode, the mean
+penalised score f + 10 phi (lower is better), the feasible runs, and the Wilcoxon rank-sum mark
+of lamde against each other configurator ("+": lamde significantly better, "-": significantly
+worse, "~": no significant difference; alpha 0.05, two-sided,
 `planner_core.bench.stats.wilcoxon_mark`).
+
+Pipelines (every configurator always gets the same one): "de" (default), the DE alone, no
+memetic step, no polish: the configurators' own effect; "planner", what `plan` does
+(`planner_core.baselines.de.optimise` with lp and memetic "auto": the DE with the memetic step
+on the elite from a uniform start, on the budget minus the polish reserve, then the hover-time
+LP on the final population's elite). Records carry their pipeline; one JSONL may hold both.
 
 Maps: "validation" (generator seeds 8000 + k, disjoint from the suite's 2025 and the training
 maps' 7000 + k; see planner_core.policy.problems), "suite" (the 16 committed suite maps), or
@@ -13,6 +19,8 @@ resumes where it stopped.
 
     python benchmarks/validate_policy.py --maps validation --runs 25 -o val.jsonl
     python benchmarks/validate_policy.py --maps suite --modes uniform --runs 25 -o suite.jsonl
+    python benchmarks/validate_policy.py --maps suite --modes uniform --pipeline planner \
+        --configurators lamde random adaptive --runs 25 -o suite-planner.jsonl
 """
 
 from __future__ import annotations
@@ -25,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from planner_core.baselines.de import optimise
 from planner_core.bench.stats import wilcoxon_mark
 from planner_core.de import make_configurator, run
 from planner_core.policy import PolicyConfigurator
@@ -64,10 +73,13 @@ def main() -> None:
     ap.add_argument("--checkpoint", default="lamde-v1")
     ap.add_argument("--budget", type=int, default=BUDGET)
     ap.add_argument("--population", type=int, default=POPULATION)
+    ap.add_argument("--pipeline", choices=("de", "planner"), default="de",
+                    help="de: the DE alone; planner: what plan does (memetic step + polish)")
     ap.add_argument("-o", "--output", required=True, help="JSONL of runs (appended, resumable)")
     args = ap.parse_args()
     out = Path(args.output)
-    done = {(r["map"], r["mode"], r["configurator"], r["seed"]) for r in _read(out)}
+    done = {(r["map"], r["mode"], r["configurator"], r["seed"]) for r in _read(out)
+            if r.get("pipeline", "de") == args.pipeline}
     maps = _maps(args.maps, args.count)
     confs = {c: (PolicyConfigurator(checkpoint=args.checkpoint) if c == "lamde"
                  else make_configurator(c)) for c in args.configurators}
@@ -79,21 +91,46 @@ def main() -> None:
                         if (name, mode, c, seed) in done:
                             continue
                         t0 = time.perf_counter()
-                        r = run(with_init(problem, mode), configurator=conf, seed=seed,
-                                population=args.population, budget=args.budget)
+                        if args.pipeline == "planner":
+                            r = optimise(with_init(problem, mode), args.budget, seed,
+                                         configurator=conf, lp=True, memetic="auto")
+                        else:
+                            r = run(with_init(problem, mode), configurator=conf, seed=seed,
+                                    population=args.population, budget=args.budget)
                         rec = {"map": name, "mode": mode, "configurator": c, "seed": seed,
-                               "f": r.f, "phi": r.phi,
+                               "pipeline": args.pipeline, "f": r.f, "phi": r.phi,
                                "score": float(penalised_score(r.f, r.phi)),
                                "seconds": time.perf_counter() - t0}
                         fh.write(json.dumps(rec) + "\n")
                         fh.flush()
-    summarise(_read(out), args.configurators)
+    summarise([r for r in _read(out) if r.get("pipeline", "de") == args.pipeline],
+              args.configurators)
+
+
+def complete_seeds(records: list[dict[str, Any]], configurators: list[str]) -> list[dict[str, Any]]:
+    """The records of the seeds that every (map, mode, configurator) cell has (a validation cut
+    short keeps even counts), so that every Wilcoxon test compares the same seeds."""
+    cells = {(r["map"], r["mode"], c) for r in records for c in configurators}
+    have: dict[int, set] = {}
+    for r in records:
+        have.setdefault(r["seed"], set()).add((r["map"], r["mode"], r["configurator"]))
+    keep = {s for s, got in have.items() if cells <= got}
+    return [r for r in records if r["seed"] in keep and r["configurator"] in configurators]
 
 
 def summarise(records: list[dict[str, Any]], configurators: list[str]) -> None:
-    """Print one table per start mode: mean score (feasible runs / runs) and lamde's marks."""
+    """Print one table per start mode: mean score (feasible runs / runs) and lamde's marks,
+    on the seeds complete for every cell."""
     others = [c for c in configurators if c != "lamde"]
+    records = complete_seeds(records, configurators)
+    seeds = sorted({r["seed"] for r in records})
+    print(f"complete seeds: {len(seeds)} ({', '.join(map(str, seeds))}), {len(records)} runs")
     for mode in sorted({r["mode"] for r in records}):
+        for c in configurators:
+            rs = [r for r in records if r["mode"] == mode and r["configurator"] == c]
+            feas = sum(r["phi"] == 0 for r in rs)
+            print(f"start mode {mode}: {c} feasible in {feas}/{len(rs)} runs "
+                  f"({100 * feas / max(len(rs), 1):.1f} %)")
         print(f"\nstart mode {mode}: mean f + 10 phi (feasible/runs); mark = lamde vs that "
               "configurator ('+' lamde significantly better, '-' worse, '~' no difference)")
         print("map".ljust(26) + "".join(c.rjust(26) for c in configurators))

@@ -52,6 +52,10 @@ POLICY: list[tuple[str, str, str, str]] = [
      "lamde-v1 against the hand-made configurators on the 16 suite maps",
      "python benchmarks/validate_policy.py --maps suite --modes uniform "
      "--configurators lamde random adaptive --runs 25"),
+    ("docs/policy/suite-uniform-planner.jsonl", "docs/policy/suite_planner",
+     "lamde-v1 against the hand-made configurators in plan's pipeline, 16 suite maps",
+     "python benchmarks/validate_policy.py --maps suite --modes uniform --pipeline planner "
+     "--configurators lamde random adaptive --runs 25"),
 ]
 
 
@@ -99,8 +103,10 @@ def policy_figures(runs_file: Path, stem: Path, what: str) -> list[Path]:
             lambda: defaultdict(list))
         for r in recs:
             grouped[r["map"]][r["configurator"]].append((float(r["score"]), r["phi"] == 0))
+        planner = any(r.get("pipeline") == "planner" for r in recs)
         protocol = (F.protocol_text(mode, vp.BUDGET, len(seeds), per="configurator and map")
-                    + f" · DE population {vp.POPULATION}, no polish")
+                    + f" · DE population {vp.POPULATION}, "
+                    + ("plan's pipeline: memetic step + polish" if planner else "no polish"))
         fig = F.scores_figure(maps, grouped, confs, what=what + ": final score of every run",
                               protocol=protocol, legend_title="configurator")
         out.append(F.save(fig, stem.parent / f"{stem.name}_{mode}.png"))

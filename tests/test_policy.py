@@ -157,7 +157,9 @@ def test_one_ppo_update_lowers_the_clipped_loss() -> None:
     )
 
     torch.manual_seed(0)
-    cfg = PPOConfig(update_epochs=1, lr=1e-2, net=NET, norm_adv=False)
+    # the clipped surrogate alone (the value and entropy terms share the trunk and may pull the
+    # first step elsewhere): one small Adam step must lower it
+    cfg = PPOConfig(update_epochs=1, lr=1e-3, net=NET, norm_adv=False, vf_coef=0.0, ent_coef=0.0)
     model = TorchPolicy(NET)
     model.load_numpy(_random_params(NET, 12))
     obs = _cat_obs([batch_obs([_random_obs(8, 5, s)]) for s in range(6)])
@@ -197,7 +199,8 @@ TINY_SPECS = [{"kind": "map", "path": str(MAPS / "tiny.json")}, {"kind": "map", 
 def _tiny_cfg(**kw):  # noqa: ANN202
     from planner_core.policy.ppo import PPOConfig
 
-    base = {"epochs": 2, "envs": 2, "population": 8, "budget": 64, "n_steps": 3, "net": NET}
+    base = {"epochs": 2, "envs": 2, "population": 8, "budget": 64, "n_steps": 3, "net": NET,
+            "imitate": "adaptive", "imitate_epochs": 2, "imitate_stride": 2}
     return PPOConfig(**{**base, **kw})
 
 
@@ -207,13 +210,15 @@ def test_two_epoch_training_smoke_run_and_resume(tmp_path) -> None:  # noqa: ANN
 
     lines: list[str] = []
     out = train(_tiny_cfg(), TINY_SPECS, tmp_path / "a", log=lines.append)
-    assert len(lines) == 2
+    assert sum(line.startswith("epoch ") for line in lines) == 2
+    assert sum(line.startswith("imitation epoch ") for line in lines) == 2
     curve = (out / "curve.csv").read_text().splitlines()
     assert curve[0].split(",") == list(CURVE_FIELDS) and len(curve) == 3
     manifest = json.loads((out / "manifest.json").read_text())
     assert manifest["problems"] == TINY_SPECS
     params, net, config = load(out)
     assert net == NET and config["training"]["epochs_done"] == 2
+    assert [r["epoch"] for r in config["training"]["imitation"]] == [1, 2]
     # same seed, same checkpoint; 1 epoch + resume to 2 epochs gives the same weights too
     again = train(_tiny_cfg(), TINY_SPECS, tmp_path / "b")
     assert (again / "weights.npz").read_bytes() == (out / "weights.npz").read_bytes()
@@ -283,3 +288,74 @@ def test_problem_sets_are_disjoint(tmp_path) -> None:  # noqa: ANN001
     path.write_text(json.dumps({"problems": []}))
     with pytest.raises(ValueError, match="non-empty 'problems'"):
         read_trainset(path)
+
+
+def test_imitation_lowers_the_loss_on_a_fixed_batch() -> None:
+    """Behaviour cloning: demonstrations of `adaptive` on a tiny map, then a few maximum-
+    likelihood steps lower the imitation loss (NLL of adaptive's choices + value loss)."""
+    torch = pytest.importorskip("torch")
+    from planner_core.policy.imitation import collect_demos
+    from planner_core.policy.ppo import TorchPolicy, batch_obs, imitation_loss, pretrain
+
+    problem = Problem(MAPS / "tiny.json")
+    demos = collect_demos([problem], ["tiny"], configurator="adaptive",
+                          init_modes=("uniform", "seeded"), seed=0, population=8, budget=80,
+                          gamma=0.99, eta=10.0, delta=1e-8, stride=3)
+    assert demos.actions.shape[1:] == (8, 4) and len(demos.obs) == len(demos.returns)
+    assert {k.split("/")[1] for k in demos.names} == {"uniform", "seeded"}
+    assert 0 < demos.actions[..., 2].min() and demos.actions[..., 3].max() < 1
+    torch.manual_seed(0)
+    model = TorchPolicy(NET)
+    model.load_numpy(init_params(NET, 0))
+    batch = (batch_obs(demos.obs), torch.from_numpy(demos.actions),
+             torch.from_numpy(demos.returns))
+    with torch.no_grad():
+        before = float(imitation_loss(model, *batch, vf_coef=0.5)[0])
+    rows = pretrain(model, demos, epochs=5, batch=len(demos.obs), lr=1e-2, vf_coef=0.5,
+                    max_grad_norm=0.5, seed=0)
+    with torch.no_grad():
+        after = float(imitation_loss(model, *batch, vf_coef=0.5)[0])
+    assert after < before and len(rows) == 5 and rows[-1]["nll"] < rows[0]["nll"]
+
+
+def test_reward_scaler_makes_problem_scales_alike() -> None:
+    """Rewards divided by the running std of the discounted return: the same episode shape at
+    100x the scale gives the same scaled rewards, keys are independent, clipped at +-clip."""
+    pytest.importorskip("torch")
+    from planner_core.policy.imitation import RewardScaler
+
+    rng = np.random.default_rng(0)
+    r = rng.exponential(1e-3, 50)
+    a, b = RewardScaler(0.99), RewardScaler(0.99)
+    a.reset("small")
+    a.reset("big")
+    b.reset("small")
+    small = a.scale("small", r)
+    big = a.scale("big", 100.0 * r)
+    np.testing.assert_allclose(small, big, rtol=1e-5)  # up to the eps of the std
+    np.testing.assert_allclose(b.scale("small", r), small)  # "big" did not touch "small"
+    R = np.zeros_like(r)
+    acc = 0.0
+    for t, x in enumerate(r):
+        acc = 0.99 * acc + x
+        R[t] = acc
+    np.testing.assert_allclose(small, r / (R.std() + 1e-8), rtol=1e-9)
+    c = RewardScaler(0.99, clip=2.0)
+    c.reset("k")
+    assert np.abs(c.scale("k", np.r_[np.zeros(20), 50.0])).max() == 2.0
+
+
+def test_warm_start_alone_is_a_checkpoint(tmp_path) -> None:  # noqa: ANN001
+    """epochs=0: the behaviour-cloning warm start alone, written as epoch 0 (empty curve);
+    without a warm start 0 epochs is refused."""
+    pytest.importorskip("torch")
+    from planner_core.policy.ppo import train
+
+    out = train(_tiny_cfg(epochs=0), TINY_SPECS, tmp_path / "bc")
+    _, net, config = load(out)
+    assert config["training"]["epochs_done"] == 0 and len(config["training"]["imitation"]) == 2
+    assert (out / "curve.csv").read_text().splitlines()[1:] == []
+    assert (out / "imitation.csv").read_text().splitlines()[0] == "epoch,nll,value_loss,seconds"
+    assert len((out / "imitation.csv").read_text().splitlines()) == 3
+    with pytest.raises(ValueError, match="warm start"):
+        train(_tiny_cfg(epochs=0, imitate="none"), TINY_SPECS, tmp_path / "none")

@@ -66,6 +66,8 @@ def test_cli_train_bad_input_is_one_line_exit_2(tmp_path, capsys) -> None:  # no
     assert "--problems:" in capsys.readouterr().err
     assert main(["train", "-o", str(tmp_path / "ck"), "--budget", "3", "--population",
                  "10"]) == 2
+    assert main(["train", "-o", str(tmp_path / "ck"), "--imitate", "lamde"]) == 2
+    assert "--imitate: unknown configurator 'lamde'" in capsys.readouterr().err
     assert not (tmp_path / "ck").exists()
 
 
@@ -76,10 +78,13 @@ def test_cli_train_runs_on_a_trainset_file(tmp_path, capsys) -> None:  # noqa: A
         {"kind": "map", "path": str(MAPS / "tiny.json")}]}))
     rc = main(["train", "-o", str(tmp_path / "ck"), "--problems", str(trainset), "--epochs",
                "1", "--envs", "1", "--population", "6", "--budget", "30", "--quiet",
-               "--set", "n_steps=2", "--set", "net.embed=8"])
+               "--set", "n_steps=2", "--set", "net.embed=8", "--imitate", "fixed",
+               "--imitate-epochs", "1"])
     assert rc == 0
     assert (tmp_path / "ck" / "weights.npz").exists()
-    assert json.loads((tmp_path / "ck" / "config.json").read_text())["net"]["embed"] == 8
+    config = json.loads((tmp_path / "ck" / "config.json").read_text())
+    assert config["net"]["embed"] == 8 and config["training"]["ppo"]["imitate"] == "fixed"
+    assert len(config["training"]["imitation"]) == 1
 
 
 def test_cli_plan_with_a_trained_checkpoint_folder(tmp_path, capsys) -> None:  # noqa: ANN001

@@ -114,6 +114,9 @@ def test_cost_section_from_a_checkpoint_curve(tmp_path: Path) -> None:
     text = "\n".join(cost_section(recs, ck))
     assert "2 epoch(s), 32 episode(s), 200 s" in text
     assert "de-lamde: mean optimiser wall time 3.00 s" in text
+    assert "Warm start" not in text
+    (ck / "imitation.csv").write_text("epoch,nll,value_loss,seconds\n1,1.7,2.1,60\n2,1.2,1.8,30\n")
+    assert "2 imitation pass(es), 90 s" in "\n".join(cost_section(recs, ck))
     assert cost_section([{"optimiser": "cmaes"}], None) == []
 
 

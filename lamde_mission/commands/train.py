@@ -52,6 +52,11 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--budget", type=int, help="evaluations per training episode")
     p.add_argument("--init", choices=("uniform", "seeded", "both"), default="both",
                    help="start modes of the training episodes (default both, alternating)")
+    p.add_argument("--imitate", metavar="CONFIGURATOR",
+                   help="behaviour-cloning warm start: fit the policy to this hand-made "
+                   "configurator's choices before PPO (default adaptive; 'none' skips it)")
+    p.add_argument("--imitate-epochs", type=int, metavar="K",
+                   help="passes of the warm start over the demonstrations (default 8)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
                    help="any other PPOConfig field (JSON value), e.g. --set lr=1e-3; repeatable")
     p.add_argument("--jobs", type=int, default=1,
@@ -75,6 +80,18 @@ def _config(args: argparse.Namespace):  # noqa: ANN202 - PPOConfig is imported l
         if getattr(args, name) is not None:
             kw[name] = getattr(args, name)
     kw["init_modes"] = ("uniform", "seeded") if args.init == "both" else (args.init,)
+    if args.imitate is not None:
+        from planner_core.defaults import CONFIGURATORS
+
+        known = sorted(set(CONFIGURATORS) - {"lamde"})
+        if args.imitate not in (*known, "none"):
+            raise UsageError(f"--imitate: unknown configurator '{args.imitate}' "
+                             f"(choose from {', '.join(known)} or none)")
+        kw["imitate"] = args.imitate
+    if args.imitate_epochs is not None:
+        if args.imitate_epochs < 0:
+            raise UsageError(f"--imitate-epochs: must be >= 0, got {args.imitate_epochs}")
+        kw["imitate_epochs"] = args.imitate_epochs
     fields = {f.name for f in dataclasses.fields(PPOConfig)}
     net_fields = {f.name for f in dataclasses.fields(NetConfig)}
     net_kw: dict = {}
@@ -99,9 +116,13 @@ def _config(args: argparse.Namespace):  # noqa: ANN202 - PPOConfig is imported l
     except (TypeError, ValueError) as exc:
         raise UsageError(f"--set: {exc}") from None
     for name in ("epochs", "envs", "population", "budget", "n_steps", "update_epochs"):
-        if int(getattr(cfg, name)) < (5 if name == "population" else 1):
-            raise UsageError(f"--{name.replace('_', '-')}: must be positive "
-                             f"(population >= 5), got {getattr(cfg, name)}")
+        least = {"population": 5, "epochs": 0}.get(name, 1)
+        if int(getattr(cfg, name)) < least:
+            raise UsageError(f"--{name.replace('_', '-')}: must be >= {least}, "
+                             f"got {getattr(cfg, name)}")
+    if cfg.epochs == 0 and (cfg.imitate == "none" or cfg.imitate_epochs < 1):
+        raise UsageError("--epochs: 0 (the warm start alone) needs --imitate and "
+                         "--imitate-epochs >= 1")
     if cfg.budget < cfg.population:
         raise UsageError(f"--budget: must be >= the population ({cfg.population})")
     return cfg

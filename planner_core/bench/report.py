@@ -393,7 +393,8 @@ def _policy_names(records: list[dict[str, Any]]) -> list[str]:
 
 
 def cost_section(records: list[dict[str, Any]], checkpoint: str | Path | None) -> list[str]:
-    """Training cost (from the checkpoint's `curve.csv`, column `seconds` per epoch) and
+    """Training cost (from the checkpoint's `curve.csv`, column `seconds` per epoch, and its
+    warm start's `imitation.csv` when there is one) and
     inference cost per plan (mean optimiser wall time of the policy's runs, against our
     hand-made adaptive DE on the same runs). Empty when there is neither a checkpoint nor a
     policy run."""
@@ -413,6 +414,13 @@ def cost_section(records: list[dict[str, Any]], checkpoint: str | Path | None) -
         eps = sum(int(float(r.get("episodes", 0) or 0)) for r in rows)
         L += [f"- Training ({checkpoint}): {len(rows)} epoch(s), {eps} episode(s), "
               f"{secs:,.0f} s wall ({secs / 60:.1f} min) as recorded in `curve.csv`."]
+        warm = Path(checkpoint) / "imitation.csv"  # the behaviour-cloning warm start, if any
+        if warm.exists():
+            with warm.open(newline="") as fh:
+                wrows = list(csv.DictReader(fh))
+            wsecs = sum(float(r["seconds"]) for r in wrows)
+            L += [f"- Warm start ({checkpoint}): {len(wrows)} imitation pass(es), "
+                  f"{wsecs:,.0f} s wall ({wsecs / 60:.1f} min) as recorded in `imitation.csv`."]
     for o in pol:
         for ref in (o, "de-adaptive"):
             rs = [r for r in records if r["optimiser"] == ref and r.get("i_max") is None]

@@ -26,7 +26,9 @@ from planner_core.policy.network import NetConfig, param_shapes
 SHIPPED = Path(__file__).resolve().parent / "checkpoints"
 #: the checkpoint `configurator="lamde"` loads by default
 DEFAULT_CHECKPOINT = "lamde-v1"
-FORMAT = "lamde-policy/1"
+#: version 2: induced set attention blocks (NetConfig.inducing); version 1 (full attention) is
+#: no longer read
+FORMAT = "lamde-policy/2"
 
 
 class CheckpointError(ValueError):

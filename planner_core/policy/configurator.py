@@ -44,7 +44,7 @@ class PolicyConfigurator:
     def __post_init__(self) -> None:
         if self.params is None or self.net is None:
             params, net, config = load(self.checkpoint)
-            object.__setattr__(self, "params", {k: v.astype(np.float64) for k, v in
+            object.__setattr__(self, "params", {k: v.astype(np.float32) for k, v in
                                                 params.items()})
             object.__setattr__(self, "net", net)
             eta = config.get("training", {}).get("eta")

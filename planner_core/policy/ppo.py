@@ -2,8 +2,11 @@
 
 One readable loop (:func:`train`), in the spirit of CleanRL's ``ppo.py``, split into actors and
 a learner: the rollouts run behind an executor (:mod:`planner_core.policy.rollout`, numpy only:
-this process, a local process pool or Ray), the PPO update here.
+this process, a local process pool or Ray), the PPO update here; before it, a warm start:
 
+    behaviour cloning of a hand-made configurator       # PPOConfig.imitate ("adaptive"), see
+      (actor by maximum likelihood, critic on the       #   planner_core.policy.imitation;
+      returns-to-go of its episodes)                    #   written as the epoch-0 checkpoint
     for epoch in 1..E:                                  # Algorithm 1, line 2
         for each chunk of `envs` training problems:     # line 3, several rolled out together
             one job per problem (start mode per env)    # lines 4-5 (reset in the worker)
@@ -31,6 +34,12 @@ segment ran with; the torch twin agrees to about 1e-5, tests/test_policy.py).
 Advantage estimation: GAE(gamma, lambda) over the n-step segment, bootstrapped with V of the
 state after the segment unless the episode ended there (the budget's end is a true terminal
 state, see planner_core.env); returns R = A + V; advantages normalised over the batch.
+
+Reward scaling (``reward_scale``, on by default): before GAE every reward is divided by the
+running std of its problem's and start mode's discounted return (CleanRL's reward
+normalisation, kept per problem: :class:`planner_core.policy.imitation.RewardScaler`; the
+warm start's demonstration episodes seed the statistics), so that large and small maps, seeded
+and uniform starts weigh alike in an update. The curve's ``return`` stays the raw env return.
 
 Determinism: episode j of epoch e draws its DE seed and all its actions from its own
 generator (``SeedSequence(seed, spawn_key=(e, j))``, see :mod:`planner_core.policy.rollout`),
@@ -64,6 +73,7 @@ from planner_core.env import DEFAULT_DELTA, DEFAULT_ETA
 from planner_core.execution import Executor, SerialExecutor
 from planner_core.policy import checkpoint as ckpt
 from planner_core.policy import rollout
+from planner_core.policy.imitation import DEMO_KEY, Demos, RewardScaler, collect_demos
 from planner_core.policy.network import N_FEATURES, NetConfig, init_params, param_shapes
 from planner_core.policy.problems import spec_name
 from planner_core.problem import penalised_score
@@ -77,7 +87,7 @@ class PPOConfig:
     seed: int = 0
     """Seed of the weights' initialisation, the rollouts' DE seeds and action draws."""
     epochs: int = 10
-    """E: passes over the training problems (Algorithm 1, line 2)."""
+    """E: passes over the training problems (Algorithm 1, line 2); 0 = the warm start alone."""
     envs: int = 4
     """Problems rolled out together, batched in one forward pass per generation."""
     population: int = 50
@@ -95,8 +105,8 @@ class PPOConfig:
     """GAE lambda for the advantage estimate (1.0 = n-step returns)."""
     clip: float = 0.2
     """PPO ratio clip epsilon (RLDE-AFL: 0.2)."""
-    lr: float = 1e-3
-    """Adam learning rate."""
+    lr: float = 3e-4
+    """Adam learning rate of PPO (small: PPO refines the warm start; CleanRL uses 2.5e-4)."""
     vf_coef: float = 0.5
     """Weight of the value loss."""
     ent_coef: float = 0.001
@@ -114,6 +124,22 @@ class PPOConfig:
     """Feasibility tolerance of the reward (planner_core.env)."""
     threads: int = 1
     """torch intra-op threads (1 keeps runs reproducible and leaves a core to the DE)."""
+    imitate: str = "adaptive"
+    """Behaviour-cloning warm start (:mod:`planner_core.policy.imitation`): the hand-made
+    configurator whose choices the actor is fitted to by maximum likelihood (and the critic to
+    its returns) before PPO, on every training problem in every start mode; "none" skips it."""
+    imitate_epochs: int = 8
+    """Passes over the demonstrations (0 = no warm start)."""
+    imitate_lr: float = 1e-3
+    """Adam learning rate of the warm start."""
+    imitate_batch: int = 8
+    """Observations per warm-start mini-batch."""
+    imitate_stride: int = 3
+    """Keep every k-th generation of the demonstrations (consecutive ones are near copies)."""
+    reward_scale: bool = True
+    """Divide each reward by the running std of its problem's (and start mode's) discounted
+    return, CleanRL's reward normalisation (:class:`planner_core.policy.imitation.RewardScaler`),
+    so that big and small maps, seeded and uniform starts weigh alike in an update."""
     net: NetConfig = field(default_factory=NetConfig)
     """Network sizes."""
 
@@ -160,26 +186,41 @@ class TorchPolicy(nn.Module):
     def _w(self, name: str) -> torch.Tensor:
         return self.p[name.replace(".", "__")]
 
-    def _block(self, x: torch.Tensor, prefix: str, key_mask: torch.Tensor | None) -> torch.Tensor:
-        *lead, L, E = x.shape
+    def _lin(self, x: torch.Tensor, prefix: str) -> torch.Tensor:
+        """``x @ W + b`` with the bias fused into the matmul (weights are stored (in, out))."""
+        return nn.functional.linear(x, self._w(f"{prefix}.weight").t(), self._w(f"{prefix}.bias"))
+
+    def _mab(self, a: torch.Tensor, b: torch.Tensor, prefix: str,
+             key_mask: torch.Tensor | None) -> torch.Tensor:
+        """MAB(A, B) as written in the Set Transformer paper: a (..., La, E) attends to
+        b (..., Lb, E); post-norm."""
+        *lead, La, E = a.shape
+        Lb = b.shape[-2]
         h = self.cfg.heads
         dh = E // h
-        qkv = (x @ self._w(f"{prefix}.qkv.weight") + self._w(f"{prefix}.qkv.bias"))
-        qkv = qkv.reshape(*lead, L, 3, h, dh)
-        q = qkv[..., 0, :, :].movedim(-2, -3)
-        k = qkv[..., 1, :, :].movedim(-2, -3)
-        v = qkv[..., 2, :, :].movedim(-2, -3)
+        q = self._lin(a, f"{prefix}.q")
+        kv = self._lin(b, f"{prefix}.kv")
+        q = q.reshape(*lead, La, h, dh).movedim(-2, -3)
+        k = kv[..., :E].reshape(*lead, Lb, h, dh).movedim(-2, -3)
+        v = kv[..., E:].reshape(*lead, Lb, h, dh).movedim(-2, -3)
         s = (q @ k.transpose(-1, -2)) / math.sqrt(dh)
-        if key_mask is not None:  # (..., L) additive: 0 for a real key, -inf for padding
+        if key_mask is not None:  # (..., Lb) additive: 0 for a real key, -inf for padding
             s = s + key_mask[..., None, None, :]
-        y = (torch.softmax(s, dim=-1) @ v).movedim(-3, -2).reshape(*lead, L, E)
-        y = y @ self._w(f"{prefix}.out.weight") + self._w(f"{prefix}.out.bias")
-        x = nn.functional.layer_norm(x + y, (E,), self._w(f"{prefix}.ln1.weight"),
+        y = (torch.softmax(s, dim=-1) @ v).movedim(-3, -2).reshape(*lead, La, E)
+        y = self._lin(y, f"{prefix}.out")
+        x = nn.functional.layer_norm(a + y, (E,), self._w(f"{prefix}.ln1.weight"),
                                      self._w(f"{prefix}.ln1.bias"), eps=1e-5)
-        y = torch.relu(x @ self._w(f"{prefix}.ff1.weight") + self._w(f"{prefix}.ff1.bias"))
-        y = y @ self._w(f"{prefix}.ff2.weight") + self._w(f"{prefix}.ff2.bias")
+        y = torch.relu(self._lin(x, f"{prefix}.ff1"))
+        y = self._lin(y, f"{prefix}.ff2")
         return nn.functional.layer_norm(x + y, (E,), self._w(f"{prefix}.ln2.weight"),
                                         self._w(f"{prefix}.ln2.bias"), eps=1e-5)
+
+    def _isab(self, x: torch.Tensor, prefix: str, key_mask: torch.Tensor | None) -> torch.Tensor:
+        """ISAB(X) = MAB(X, MAB(I, X)) over the second-last axis of x (..., L, E)."""
+        ind = self._w(f"{prefix}.inducing")
+        ind = ind.expand(*x.shape[:-2], *ind.shape)
+        h = self._mab(ind, x, f"{prefix}.ind", key_mask)
+        return self._mab(x, h, f"{prefix}.set", None)
 
     def forward(
         self,
@@ -196,24 +237,24 @@ class TorchPolicy(nn.Module):
         t = torch.cat([X[..., None], f[:, :, None, :].expand(B, N, D, 2),
                        phi[:, :, None, :].expand(B, N, D, 2)], dim=-1)
         assert t.shape[-1] == N_FEATURES
-        x = t @ self._w("embed.weight") + self._w("embed.bias")  # (B, N, D, E)
-        x = self._block(x.transpose(1, 2), "pop", None).transpose(1, 2)
+        x = self._lin(t, "embed")  # (B, N, D, E)
+        x = self._isab(x.transpose(1, 2), "pop", None).transpose(1, 2)
         km = None
         if not bool(mask.all()):
             km = torch.zeros(mask.shape, dtype=x.dtype).masked_fill(~mask, float("-inf"))
             km = km[:, None, :].expand(B, N, D)
-        x = self._block(x, "dim", km)
+        x = self._isab(x, "dim", km)
         m = mask[:, None, :, None].to(x.dtype)
         pooled = (x * m).sum(dim=2) / m.sum(dim=2)  # (B, N, E)
         g = progress[:, None, None].expand(B, N, 1).to(x.dtype)
         h = torch.relu(torch.cat([pooled, g], dim=-1) @ self._w("join.weight")
                        + self._w("join.bias"))
-        mut = h @ self._w("mutation.weight") + self._w("mutation.bias")
-        cx = h @ self._w("crossover.weight") + self._w("crossover.bias")
-        F_ab = 1.0 + nn.functional.softplus(h @ self._w("F.weight") + self._w("F.bias"))
-        Cr_ab = 1.0 + nn.functional.softplus(h @ self._w("Cr.weight") + self._w("Cr.bias"))
+        mut = self._lin(h, "mutation")
+        cx = self._lin(h, "crossover")
+        F_ab = 1.0 + nn.functional.softplus(self._lin(h, "F"))
+        Cr_ab = 1.0 + nn.functional.softplus(self._lin(h, "Cr"))
         c = torch.relu(h.mean(dim=1) @ self._w("critic1.weight") + self._w("critic1.bias"))
-        value = (c @ self._w("critic2.weight") + self._w("critic2.bias"))[:, 0]
+        value = self._lin(c, "critic2")[:, 0]
         return mut, cx, F_ab, Cr_ab, value
 
 
@@ -351,6 +392,67 @@ def gae(
     return adv
 
 
+# ---------------------------------------------------------------------------------- warm start
+
+
+def imitation_loss(
+    model: TorchPolicy, obs: dict[str, torch.Tensor], actions: torch.Tensor, returns: torch.Tensor,
+    vf_coef: float,
+) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """(total, negative log-likelihood per individual, value loss) on one batch: ``obs`` batched
+    (:func:`planner_core.policy.ppo.batch_obs`), ``actions`` (B, N, 4), ``returns`` (B,)."""
+    out = _forward(model, obs)
+    logp, _ = log_prob_entropy(out, actions)
+    nll = -logp.mean()
+    v_loss = 0.5 * ((out[4] - returns) ** 2).mean()
+    return nll + vf_coef * v_loss, nll, v_loss
+
+
+def pretrain(
+    model: TorchPolicy,
+    demos: Demos,
+    *,
+    epochs: int,
+    batch: int,
+    lr: float,
+    vf_coef: float,
+    max_grad_norm: float,
+    seed: int,
+    log: Callable[[str], None] | None = None,
+) -> list[dict[str, float]]:
+    """Behaviour cloning (:mod:`planner_core.policy.imitation`): maximum-likelihood fit of the
+    actor (and least squares of the critic, weight ``vf_coef``) to ``demos`` in ``epochs``
+    passes of Adam over shuffled mini-batches of ``batch`` observations (order from
+    ``default_rng([seed, DEMO_KEY, epoch])``); returns one row per pass: mean imitation NLL,
+    value loss, seconds."""
+    optimizer = torch.optim.Adam(model.parameters(), lr=lr, eps=1e-5)
+    S = len(demos.obs)
+    rows = []
+    for epoch in range(epochs):
+        t0 = time.perf_counter()
+        order = np.random.default_rng([seed, DEMO_KEY, epoch]).permutation(S)
+        nlls, vls = [], []
+        for s in range(0, S, batch):
+            idx = order[s:s + batch]
+            o = batch_obs([demos.obs[i] for i in idx])
+            loss, nll, vl = imitation_loss(
+                model, o, torch.from_numpy(demos.actions[idx]),
+                torch.from_numpy(demos.returns[idx]), vf_coef)
+            optimizer.zero_grad()
+            loss.backward()
+            nn.utils.clip_grad_norm_(model.parameters(), max_grad_norm)
+            optimizer.step()
+            nlls.append(float(nll.detach()) * len(idx))
+            vls.append(float(vl.detach()) * len(idx))
+        row = {"epoch": epoch + 1, "nll": sum(nlls) / S, "value_loss": sum(vls) / S,
+               "seconds": time.perf_counter() - t0}
+        rows.append(row)
+        if log is not None:
+            log(f"imitation epoch {epoch + 1}/{epochs}: NLL {row['nll']:.4f}, value loss "
+                f"{row['value_loss']:.4f}, {row['seconds']:.0f} s")
+    return rows
+
+
 # ---------------------------------------------------------------------------------- training
 
 
@@ -391,8 +493,11 @@ def train(
     The caller closes the executor. Raises ValueError for bad settings or problem specs.
     """
     out = Path(out)
-    if cfg.envs < 1 or cfg.n_steps < 1 or cfg.update_epochs < 1 or cfg.epochs < 1:
-        raise ValueError("envs, n_steps, update_epochs and epochs must be >= 1")
+    if cfg.envs < 1 or cfg.n_steps < 1 or cfg.update_epochs < 1 or cfg.epochs < 0:
+        raise ValueError("envs, n_steps and update_epochs must be >= 1, epochs >= 0")
+    if cfg.epochs == 0 and (cfg.imitate == "none" or cfg.imitate_epochs < 1):
+        raise ValueError("epochs: 0 PPO epochs needs the imitation warm start (imitate, "
+                         "imitate_epochs >= 1)")
     for mode in cfg.init_modes:
         if mode not in ("seeded", "uniform"):
             raise ValueError(f"init_modes: unknown start mode {mode!r}")
@@ -401,14 +506,18 @@ def train(
     # dimension orders the chunks), through the same per-process cache as the workers
     portable = [rollout.portable_spec(s) for s in specs]
     problems = [rollout.problem_of(s) for s in portable]
+    names = [spec_name(s) for s in specs]
     executor = SerialExecutor() if executor is None else executor
     model = TorchPolicy(cfg.net)
     model.load_numpy(init_params(cfg.net, cfg.seed))
     optimizer = torch.optim.Adam(model.parameters(), lr=cfg.lr, eps=1e-5)
+    scaler = RewardScaler(cfg.gamma)
     curve: list[dict[str, Any]] = []
+    imitation_rows: list[dict[str, float]] = []
     start_epoch = 0
     state_path = out / "state.pt"
-    if resume and state_path.exists():
+    resumed = resume and state_path.exists()
+    if resumed:
         state = torch.load(state_path, weights_only=False)
         same = {k: v for k, v in state["config"].items() if k != "epochs"} == {
             k: v for k, v in cfg.to_dict().items() if k != "epochs"}
@@ -419,7 +528,30 @@ def train(
         optimizer.load_state_dict(state["optimizer"])
         start_epoch = int(state["epoch"])
         curve = list(state["curve"])
+        scaler.load_state_dict(state.get("scaler", {}))
+        imitation_rows = list(state.get("imitation", []))
     writer = _scalar_writer(out) if start_epoch < cfg.epochs else None
+    if not resumed and cfg.imitate != "none" and cfg.imitate_epochs > 0:
+        # ---- behaviour-cloning warm start (planner_core.policy.imitation); its episodes also
+        # seed the reward scaler's statistics of every problem and start mode
+        t_bc = time.perf_counter()
+        demos = collect_demos(
+            problems, names, configurator=cfg.imitate, init_modes=cfg.init_modes,
+            seed=cfg.seed, population=cfg.population, budget=cfg.budget, gamma=cfg.gamma,
+            eta=cfg.eta, delta=cfg.delta, stride=cfg.imitate_stride,
+            scaler=scaler if cfg.reward_scale else None)
+        if log is not None:
+            log(f"imitation: {len(demos.obs)} generations of {cfg.imitate} on "
+                f"{len(problems)} problems x {len(cfg.init_modes)} start modes, "
+                f"{time.perf_counter() - t_bc:.0f} s")
+        torch.manual_seed(cfg.seed * 100_003 - 1)
+        imitation_rows = pretrain(
+            model, demos, epochs=cfg.imitate_epochs, batch=cfg.imitate_batch,
+            lr=cfg.imitate_lr, vf_coef=cfg.vf_coef, max_grad_norm=cfg.max_grad_norm,
+            seed=cfg.seed, log=log)
+        del demos
+        # the warm-started policy is a checkpoint of its own (0 PPO epochs), and resumable
+        _save(out, model, optimizer, cfg, specs, curve, 0, scaler, imitation_rows)
     G = max(1, math.ceil((cfg.budget - cfg.population) / cfg.population))
     chunks = [list(range(i, min(i + cfg.envs, len(problems))))
               for i in range(0, len(problems), cfg.envs)]
@@ -443,6 +575,10 @@ def train(
                 population=cfg.population, budget=cfg.budget, eta=cfg.eta, delta=cfg.delta,
                 n_steps=cfg.n_steps, net=cfg.net.to_dict(), weights={})
                 for k, i in enumerate(idx)]
+            # reward-scaling keys: problem and start mode; a new episode restarts its return
+            keys = [f"{names[i]}/{job.init}" for i, job in zip(idx, jobs, strict=True)]
+            for key in keys:
+                scaler.reset(key)
             ep_return = np.zeros(len(jobs))
             g = 0
             while True:
@@ -464,7 +600,11 @@ def train(
                              f"epoch {epoch + 1}/{cfg.epochs} chunk {c + 1}/{len(chunks)}")
                 # ---- n-step PPO update (Algorithm 1, lines 12-15)
                 values = np.stack([s.values for s in segs], axis=1)
-                adv = gae(rew, values, np.stack([s.dones for s in segs], axis=1),
+                rewards = rew
+                if cfg.reward_scale:
+                    rewards = np.stack([scaler.scale(key, rew[:, b])
+                                        for b, key in enumerate(keys)], axis=1)
+                adv = gae(rewards, values, np.stack([s.dones for s in segs], axis=1),
                           np.array([s.next_value for s in segs]), cfg.gamma, cfg.gae_lambda)
                 ret = adv + values
                 acts = np.stack([s.actions for s in segs], axis=1)  # (T, B, N, 4)
@@ -494,7 +634,7 @@ def train(
             "seconds": time.perf_counter() - t0,
         }
         curve.append(row)
-        _save(out, model, optimizer, cfg, specs, curve, epoch + 1)
+        _save(out, model, optimizer, cfg, specs, curve, epoch + 1, scaler, imitation_rows)
         if writer is not None:
             for k, v in row.items():
                 if k not in ("epoch", "episodes"):
@@ -513,27 +653,40 @@ def train(
 
 def curve_csv(curve: list[dict[str, Any]]) -> str:
     """The training curve as CSV text (one row per epoch, columns CURVE_FIELDS)."""
+    return _rows_csv(curve, CURVE_FIELDS)
+
+
+#: columns of imitation.csv, the warm start's curve (one row per pass over the demonstrations)
+IMITATION_FIELDS = ("epoch", "nll", "value_loss", "seconds")
+
+
+def _rows_csv(rows: list[dict[str, Any]], fields: tuple[str, ...]) -> str:
     buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=list(CURVE_FIELDS), lineterminator="\n")
+    w = csv.DictWriter(buf, fieldnames=list(fields), lineterminator="\n")
     w.writeheader()
-    for row in curve:
+    for row in rows:
         w.writerow({k: (f"{row[k]:.6g}" if isinstance(row[k], float) else row[k])
-                    for k in CURVE_FIELDS})
+                    for k in fields})
     return buf.getvalue()
 
 
 def _save(out: Path, model: TorchPolicy, optimizer: torch.optim.Optimizer, cfg: PPOConfig,
-          specs: list[dict[str, Any]], curve: list[dict[str, Any]], epoch: int) -> None:
+          specs: list[dict[str, Any]], curve: list[dict[str, Any]], epoch: int,
+          scaler: RewardScaler, imitation_rows: list[dict[str, float]]) -> None:
     manifest = {"problems": specs, "names": [spec_name(s) for s in specs]}
     meta = {"ppo": cfg.to_dict(), "epochs_done": epoch, "eta": cfg.eta,
-            "seconds": float(sum(r["seconds"] for r in curve))}
+            "seconds": float(sum(r["seconds"] for r in curve)
+                             + sum(r["seconds"] for r in imitation_rows)),
+            "imitation": imitation_rows}
     ckpt.save(out, model.numpy_params(), cfg.net, meta, {
         "manifest.json": json.dumps(manifest, indent=2) + "\n",
         "curve.csv": curve_csv(curve),
+        "imitation.csv": _rows_csv(imitation_rows, IMITATION_FIELDS),
     })
     buf = io.BytesIO()
     torch.save({"model": model.state_dict(), "optimizer": optimizer.state_dict(),
-                "epoch": epoch, "curve": curve, "config": cfg.to_dict(), "specs": specs}, buf)
+                "epoch": epoch, "curve": curve, "config": cfg.to_dict(), "specs": specs,
+                "scaler": scaler.state_dict(), "imitation": imitation_rows}, buf)
     write_bytes_atomic(out / "state.pt", buf.getvalue())
 
 
@@ -568,8 +721,10 @@ __all__ = [
     "clipped_objective",
     "curve_csv",
     "gae",
+    "imitation_loss",
     "log_prob_entropy",
     "ppo_update",
+    "pretrain",
     "text_progress",
     "train",
 ]
