@@ -138,6 +138,10 @@ def test_one_colour_per_optimiser_in_every_figure() -> None:
         assert F.optimiser_style(c) == F.optimiser_style(f"de-{c}")
     assert F.optimiser_style("de-adaptive-fixedlen")["ls"] == "--"
     assert F.optimiser_style("not-registered") == F.optimiser_style("not-registered")
+    # the ablation variants: one colour each, LAMDE in de-lamde's
+    variants = ("LAMDE", "LAMDE-F", "LAMDE-R", "LAMDE-E", "LAMDE-L", "LAMDE-O")
+    assert len({F.optimiser_style(v)["color"] for v in variants}) == len(variants)
+    assert F.optimiser_style("LAMDE")["color"] == F.optimiser_style("de-lamde")["color"]
 
 
 @pytest.mark.parametrize(("values", "log"), [([300, 40_000], True), ([295, 310], False),

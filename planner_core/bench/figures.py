@@ -67,6 +67,9 @@ _COLOURS: dict[str, str] = {
     "scipy-de": "#bcbd22",
     "lsrtde": "#17becf",
     "random-search": "#7f7f7f",
+    # the ablation variants (benchmarks/ablations.py): LAMDE and LAMDE-F in de-lamde's hues
+    "LAMDE": "#9467bd", "LAMDE-F": "#c5b0d5", "LAMDE-R": "#393b79", "LAMDE-E": "#637939",
+    "LAMDE-L": "#8c6d31", "LAMDE-O": "#843c39",
 }
 _DASHED = ("-fixedlen", "-memetic", "-seeded-lp")
 #: colours for names outside the table (chosen by a stable hash of the name)
