@@ -29,18 +29,17 @@ ROOT = Path(__file__).resolve().parent.parent
 #: (benchmark folder, report it makes, reference column, extra `report` options)
 REPORTS: list[tuple[str, str, str, list[str]]] = [
     ("docs/reduced/runs", "docs/reduced/protocol.md", "de-adaptive", []),
-    ("docs/reduced/imax-runs", "docs/reduced/imax.md", "de-adaptive", ["--no-limits"]),
-    ("results", "docs/results.md", "de-adaptive", []),
+    ("docs/reduced/imax-runs", "docs/reduced/imax.md", "de-lamde", ["--no-limits"]),
+    ("results", "docs/results.md", "de-lamde",
+     ["--policy-checkpoint", "planner_core/policy/checkpoints/lamde-v1"]),
 ]
 
 #: why a report's runs are not in the repository (its figures keep the style they were drawn in)
 NOT_STORED: dict[str, str] = {
-    "docs/reduced/imax-runs": "the I_max study's 720 runs are 6.9 MB of x vectors and were not "
-    "committed; its command in docs/reduced/README.md regenerates them byte for byte (~5 min "
-    "with --jobs 2), then run this script again",
-    "results": "the 3,600 runs behind docs/results.md were not committed; the command at the "
-    "top of docs/results.md re-runs them with today's code (its wall-time column adds up to "
-    "about 30 CPU-minutes), then run this script again",
+    "results": "the 8,000 runs behind docs/results.md were not committed (tens of MB); the "
+    "commands at the top of docs/results.md re-run them, seed for seed (~40 min with --jobs 1 "
+    "on this machine), then the report command there redraws the page (its hand-written "
+    "'what this shows' section must be kept by hand)",
 }
 
 #: (runs file, figure stem, what the runs compare, command that made them)
@@ -127,8 +126,15 @@ def main(argv: list[str] | None = None) -> int:
             print(f"skipped {md}: {results}/results.jsonl is not in the repository: "
                   f"{NOT_STORED.get(results, 'run its benchmark first')}", file=sys.stderr)
             continue
+        policy = (extra[extra.index("--policy-checkpoint") + 1]
+                  if "--policy-checkpoint" in extra else None)
+        if out != ROOT and (ROOT / md).is_file():  # the hand-written part travels with the page
+            (out / md).parent.mkdir(parents=True, exist_ok=True)
+            if not (out / md).exists():
+                (out / md).write_text((ROOT / md).read_text(encoding="utf-8"), encoding="utf-8")
         build_report(results, out / md, reference=reference, limits="--no-limits" not in extra,
-                     command=report_command(results, md, reference, extra))
+                     command=report_command(results, md, reference, extra),
+                     policy_checkpoint=policy)
         print(f"wrote {md} and its figures", file=sys.stderr)
     for runs, stem, what, _ in POLICY:
         for p in policy_figures(Path(runs), out / stem, what):

@@ -206,3 +206,24 @@ def test_complete_seeds_drop_a_partial_last_seed() -> None:
             for s in (0, 1) for m in ("T01", "T02") for c in ("lamde", "adaptive")]
     recs += [{"map": "T01", "mode": "uniform", "configurator": "lamde", "seed": 2}]
     assert mod.complete_seeds(recs) == [0, 1]
+
+
+def test_a_rebuilt_report_keeps_its_hand_written_part(tmp_path: Path) -> None:
+    """The report's KEEP_START ... KEEP_END block (docs/results.md's "what this shows") survives
+    `lamde-mission report` over the same page, placed after the commands; other text does not."""
+    from planner_core.bench.report import KEEP_END, KEEP_START, build_report
+
+    runs = Path(__file__).resolve().parent.parent / "docs" / "reduced" / "runs"
+    page = tmp_path / "r.md"
+    cmd = "lamde-mission report runs -o r.md"
+    build_report(runs, page, reference="de-adaptive", figures=tmp_path / "fig", command=cmd)
+    first = page.read_text()
+    assert KEEP_START not in first
+    note = f"{KEEP_START}\n## What this shows\n\nhand-written words\n{KEEP_END}"
+    page.write_text(first.replace("## Setup", note + "\n\n## Setup", 1) + "\nstray edit\n")
+    build_report(runs, page, reference="de-adaptive", figures=tmp_path / "fig", command=cmd)
+    again = page.read_text()
+    assert again.count("hand-written words") == 1 and "stray edit" not in again
+    assert again.index("Report produced by") < again.index(KEEP_START) < again.index("## Setup")
+    build_report(runs, page, reference="de-adaptive", figures=tmp_path / "fig", command=cmd)
+    assert page.read_text() == again

@@ -195,6 +195,7 @@ def build_report(
         L.append("")
     if command:
         L += ["Report produced by:", "", f"    {command}", ""]
+    L += kept_notes(output)
     per_mode: dict[tuple[str, str, str], int] = defaultdict(int)
     for r in records:
         if r.get("i_max") is None:
@@ -252,6 +253,25 @@ def build_report(
     L += cost_section(records, policy_checkpoint)
     write_text_atomic(output, "\n".join(L) + "\n")
     return output
+
+
+#: a hand-written block of a report (e.g. "what this shows") between these two lines is carried
+#: over when the report is rebuilt over it, placed after the commands
+KEEP_START = "<!-- hand-written: kept when this report is rebuilt -->"
+KEEP_END = "<!-- end of the hand-written part -->"
+
+
+def kept_notes(output: str | Path) -> list[str]:
+    """Lines of the hand-written block (KEEP_START ... KEEP_END, markers included) of the
+    report already at `output`, with a blank line after; [] when there is none."""
+    path = Path(output)
+    if not path.is_file():
+        return []
+    text = path.read_text(encoding="utf-8")
+    i, j = text.find(KEEP_START), text.find(KEEP_END)
+    if i < 0 or j < i:
+        return []
+    return text[i : j + len(KEEP_END)].split("\n") + [""]
 
 
 def _protocol_body(records: list[dict[str, Any]], opts_all: list[str], reference: str,
