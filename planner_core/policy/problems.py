@@ -163,18 +163,24 @@ def build(spec: dict[str, Any]) -> Any:
                      "bbob)")
 
 
+def read_json_file(path: Path, field: str) -> Any:
+    """The JSON content of ``path``; ValueError "<field>: <path>: no such file" or "... bad
+    JSON (...)" otherwise (one line naming the setting that gave the path)."""
+    try:
+        return json.loads(path.read_text())
+    except FileNotFoundError:
+        raise ValueError(f"{field}: {path}: no such file") from None
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{field}: {path}: bad JSON ({exc})") from None
+
+
 def read_trainset(path: str | Path) -> list[dict[str, Any]]:
     """The ``problems`` list of a training-set JSON file; raises ValueError on bad content.
 
     Relative map paths are resolved against the file's folder.
     """
     path = Path(path)
-    try:
-        data = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise ValueError(f"--problems: {path}: no such file") from None
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"--problems: {path}: bad JSON ({exc})") from None
+    data = read_json_file(path, "--problems")
     if isinstance(data, dict) and data.get("format") == "lamde-trainset/1":
         from planner_core.lam.trainset import read_trainset as read_lam
 

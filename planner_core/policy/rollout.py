@@ -41,7 +41,7 @@ import numpy as np
 from planner_core.de.types import DEState
 from planner_core.env import OptimizationEnv, observe
 from planner_core.policy.network import NetConfig, forward, log_prob, sample_actions
-from planner_core.policy.problems import build
+from planner_core.policy.problems import build, read_json_file
 from planner_core.starts import with_init
 
 __all__ = [
@@ -68,14 +68,7 @@ def portable_spec(spec: dict[str, Any]) -> dict[str, Any]:
     """
     if spec.get("kind") != "map" or "map" in spec or "path" not in spec:
         return spec
-    path = Path(spec["path"])
-    try:
-        content = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise ValueError(f"problems: {path}: no such file") from None
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"problems: {path}: bad JSON ({exc})") from None
-    return {"kind": "map", "map": content}
+    return {"kind": "map", "map": read_json_file(Path(spec["path"]), "problems")}
 
 
 @lru_cache(maxsize=PROBLEM_CACHE)
