@@ -146,20 +146,6 @@ def test_forged_replies_from_another_address_are_ignored(port):
     assert any("pinned the vehicle" in s for s in lines)
 
 
-def test_mavsdk_takes_forged_replies_for_the_vehicles(port):
-    """MAVSDK routes by system id and pins no address (README, docs/upload.md): the same
-    forger ends its upload, and our client reports the refusal it was shown. This pins down the
-    documented limitation; if MAVSDK starts filtering by address, this fails and the docs
-    should change."""
-    from lamde_mission.vehicle.transfer import MissionRejectedError
-
-    with mock_on(port) as v, _Forger(port, gcs=(245, 190)):  # MAVSDK's ground-station ids
-        with pytest.raises(MissionRejectedError, match="DENIED"):  # the forger's, not the mock's
-            upload_mission(hand_mission(8), hand_fence(), connect=listen_on(port),
-                           via="mavsdk", timeout=10, attempts=1)  # fmt: skip
-        assert v.stats.denied_others == 0  # the vehicle itself refused nothing
-
-
 # ----------------------------------------------------------------------------- validate first
 
 _NAN, _INF = float("nan"), float("inf")
