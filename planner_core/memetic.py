@@ -30,10 +30,14 @@ from typing import Any
 import numpy as np
 
 from planner_core.geometry import overlap_lengths
-from planner_core.polish import polish_hover_times
+from planner_core.polish import _route_flight_time, polish_hover_times
 
-__all__ = ["refine", "repair_points", "two_opt_order", "use_memetic", "REMOVALS"]
+__all__ = ["covers", "refine", "repair_points", "two_opt_order", "use_memetic", "REMOVALS",
+           "SERVE_FRACTION"]
 
+#: a point serves a sensor in the repair when hovering this share of T_max collects its data
+#: (the seeder's reach uses the same share)
+SERVE_FRACTION = 0.9
 #: points tried for removal per call (each costs one LP solve)
 REMOVALS = 2
 #: fractions of the way each point is pulled towards its route neighbours' midpoint
@@ -93,14 +97,13 @@ def use_memetic(setting: str, problem: Any) -> bool:
     return setting == "on"
 
 
-def _seeder(problem: Any) -> Any:
-    """The problem's seeder (`planner_core.seeding.Seeder`), built once and kept on it."""
-    from planner_core.seeding import Seeder
-
-    seeder = problem.__dict__.get("_seeder")
-    if seeder is None:
-        seeder = problem.__dict__["_seeder"] = Seeder.for_problem(problem)
-    return seeder
+def covers(problem: Any, sites: np.ndarray, frac: float = SERVE_FRACTION) -> np.ndarray:
+    """(n, J) bool: whether hovering frac x T_max at each of the sites (n, 2) collects each
+    sensor's required data (Eq. R_ij; a sensor that needs nothing counts as covered)."""
+    mp = problem.model
+    need = np.asarray(mp.required, dtype=float)
+    sites = np.asarray(sites, dtype=float).reshape(-1, 2)
+    return (mp.rates(sites) * (frac * mp.t_max) >= need[None, :]) | (need[None, :] <= 0)
 
 
 def _cheapest_insertion(problem: Any, pts: np.ndarray, q: np.ndarray) -> int:
@@ -125,14 +128,11 @@ def repair_points(problem: Any, pts: np.ndarray) -> list[np.ndarray]:
     (2) merge serving points and re-route until the corners fit. Which fits better depends on
     the map (measured on the suite, each alone leaves other runs infeasible), so the memetic
     step evaluates both. Deterministic."""
-    seeder = _seeder(problem)
+    seeder = problem.seeder
     mp = problem.model
     pts = np.asarray(pts, dtype=float).reshape(-1, 2)
     sensors = np.asarray(mp.sensors, dtype=float)
-    need = np.asarray(mp.required, dtype=float)
-    served = np.zeros(len(sensors), dtype=bool)
-    if len(pts):
-        served = (mp.rates(pts).max(axis=0) * (0.9 * mp.t_max) >= need) | (need <= 0)
+    served = covers(problem, pts).any(axis=0)
     rng = np.random.default_rng(0)  # only for a point exactly at a circle's centre
     for j in np.flatnonzero(~served):
         if served[j]:
@@ -140,7 +140,7 @@ def repair_points(problem: Any, pts: np.ndarray) -> list[np.ndarray]:
         q = seeder._push_one(sensors[j].copy(), rng)
         i = _cheapest_insertion(problem, pts, q)
         pts = np.insert(pts, i, q, axis=0)
-        served |= mp.rates(q[None, :])[0] * (0.9 * mp.t_max) >= need
+        served |= covers(problem, q)[0]
     limit = mp.n_points
     routed, _ = seeder._route(pts)
     out = [_fit(problem, seeder, routed, merge_first=False)]
@@ -184,11 +184,10 @@ def _merge_pair(problem: Any, pts: np.ndarray) -> np.ndarray | None:
     pair can be merged. The merged point takes the first point's place in the route."""
     mp = problem.model
     need = np.asarray(mp.required, dtype=float)
-    serves = mp.rates(pts) * (0.9 * mp.t_max) >= need[None, :]  # (k, J)
+    serves = covers(problem, pts)  # (k, J)
     count = serves.sum(axis=0)
     sensors = np.asarray(mp.sensors, dtype=float)
-    base = float(mp.flight_time(np.hypot(*np.diff(
-        np.vstack([problem.start, pts, problem.end]), axis=0).T)).sum())
+    base = _route_flight_time(problem, pts)
     best: tuple[float, np.ndarray] | None = None
     k = len(pts)
     for i in range(k):
@@ -199,13 +198,11 @@ def _merge_pair(problem: Any, pts: np.ndarray) -> np.ndarray | None:
             if own.any():
                 cands.append(sensors[own].mean(axis=0))
             for q in cands:
-                if own.any() and not np.all(mp.rates(q[None, :])[0, own] * (0.9 * mp.t_max)
-                                            >= need[own]):
+                if own.any() and not covers(problem, q)[0, own].all():
                     continue
                 trial = np.delete(pts, j, axis=0)
                 trial[i] = q
-                t = float(mp.flight_time(np.hypot(*np.diff(
-                    np.vstack([problem.start, trial, problem.end]), axis=0).T)).sum()) - base
+                t = _route_flight_time(problem, trial) - base
                 if best is None or t < best[0]:
                     best = (t, trial)
     return None if best is None else best[1]

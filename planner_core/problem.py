@@ -7,6 +7,7 @@ eps_i >= tau (variable-length encoding) or always (fixed-length mode, the paper'
 
 from __future__ import annotations
 
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -187,12 +188,16 @@ class Problem:
             X[s] = self._clustered_solution(rng)
         return X
 
+    @cached_property
+    def seeder(self) -> Seeder:
+        """This problem's `planner_core.seeding.Seeder` (visibility graph, reach), built on first
+        use and kept: the sensor-aware starts, the memetic repair and the engineering peer share
+        it."""
+        return Seeder.for_problem(self)
+
     def _clustered_solution(self, rng: np.random.Generator) -> np.ndarray:
-        """One obstacle-aware sensor-serving start; the seeder is built once per problem."""
-        seeder = self.__dict__.get("_seeder")
-        if seeder is None:
-            seeder = self.__dict__["_seeder"] = Seeder.for_problem(self)
-        return seeder.solution(rng)
+        """One obstacle-aware sensor-serving start (the problem's seeder)."""
+        return self.seeder.solution(rng)
 
     # ------------------------------------------------------------------ encoding
     def encode(self, hover_points: np.ndarray, hover_times: np.ndarray) -> np.ndarray:

@@ -9,6 +9,7 @@ import pytest
 from planner_core.baselines import BudgetedProblem, optimise
 from planner_core.baselines import engineering as eng
 from planner_core.defaults import POPULATION
+from planner_core.memetic import covers
 from planner_core.polish import polish_hover_times
 from planner_core.problem import Problem
 
@@ -75,9 +76,9 @@ def test_greedy_cover_covers_every_sensor(walled: Problem) -> None:
     for frac in eng.FRACTIONS:
         chosen = sites[eng.greedy_cover(walled, sites, frac)]
         # every sensor within frac x T_max where some candidate can do it, else within T_max
-        can = eng._covers(walled, sites, frac).any(axis=0)
-        covers = np.where(can, eng._covers(walled, chosen, frac), eng._covers(walled, chosen, 1))
-        assert covers.any(axis=0).all()
+        can = covers(walled, sites, frac).any(axis=0)
+        cov = np.where(can, covers(walled, chosen, frac), covers(walled, chosen, 1))
+        assert cov.any(axis=0).all()
         assert len(chosen) <= len(walled.sensors)  # each pick covers a new sensor
     # a site is a candidate only under the bandwidth (C3), and never inside an obstacle
     assert np.all(walled.rates(sites).sum(axis=1) <= eng.BANDWIDTH_USE * walled.bandwidth)

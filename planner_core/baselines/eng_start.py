@@ -62,7 +62,7 @@ def optimise(problem: Any, budget: int, seed: int, *, starts: int = STARTS) -> O
     """The engineering pipeline's candidates, then the planner from a population holding its
     `starts` best (module docstring); exactly `budget` evaluations."""
     from planner_core.baselines.de import optimise as planner
-    from planner_core.baselines.engineering import _base, _seeder, score_candidates
+    from planner_core.baselines.engineering import score_candidates
     from planner_core.memetic import use_memetic
 
     budgeted = as_budgeted(problem, budget)
@@ -71,8 +71,7 @@ def optimise(problem: Any, budget: int, seed: int, *, starts: int = STARTS) -> O
     if budgeted.remaining > 0:
         # memetic "auto" as for `planner`: judged on the start mode, before the starts go in
         memetic = use_memetic(MEMETIC, budgeted)
-        seeded = _WithStarts(budgeted, best)
-        seeded.__dict__["_seeder"] = _seeder(_base(budgeted))  # the memetic step's, built once
+        seeded = _WithStarts(budgeted, best)  # its seeder is the problem's (attributes pass)
         planner(seeded, budgeted.remaining, seed, lp=True, memetic=memetic)
     x, fb, pb = budgeted.best("deb")
     return OptimiseResult(x, fb, pb, budgeted.count, budgeted.trace("deb"))

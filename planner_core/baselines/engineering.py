@@ -53,6 +53,7 @@ import numpy as np
 from planner_core.baselines import OptimiseResult
 from planner_core.baselines.budget import as_budgeted
 from planner_core.geometry import overlap_lengths, points_inside
+from planner_core.memetic import covers
 from planner_core.model import ground_reach
 from planner_core.routing.graph import CLEAR
 
@@ -93,12 +94,6 @@ def _base(problem: Any) -> Any:
     return p
 
 
-def _seeder(problem: Any) -> Any:
-    from planner_core.memetic import _seeder as seeder_of
-
-    return seeder_of(problem)
-
-
 def reach(problem: Any, frac: float) -> np.ndarray:
     """(J,) ground distance (m) within which hovering frac x T_max collects each sensor's data."""
     mp = problem.model
@@ -112,7 +107,7 @@ def candidate_sites(problem: Any, extra: np.ndarray | None = None) -> np.ndarray
     over `BANDWIDTH_USE` of the bandwidth dropped (but each sensor's own position kept when no
     other candidate covers it at frac = 0.9)."""
     mp = problem.model
-    seeder = _seeder(problem)
+    seeder = problem.seeder
     S = np.asarray(mp.sensors, dtype=float)
     ia, ib = np.triu_indices(len(S), 1)
     mids = 0.5 * (S[ia] + S[ib])
@@ -132,7 +127,7 @@ def candidate_sites(problem: Any, extra: np.ndarray | None = None) -> np.ndarray
     C = np.unique(np.round(C, 6), axis=0)
     ok = mp.rates(C).sum(axis=1) <= BANDWIDTH_USE * mp.bandwidth
     keep = C[ok]
-    covered = _covers(problem, keep, 0.9).any(axis=0) if len(keep) else np.zeros(len(S), bool)
+    covered = covers(problem, keep, 0.9).any(axis=0) if len(keep) else np.zeros(len(S), bool)
     if not covered.all():
         own = np.clip(S[~covered], 0.0, seeder.size)
         for m in range(len(own)):
@@ -140,13 +135,6 @@ def candidate_sites(problem: Any, extra: np.ndarray | None = None) -> np.ndarray
                 own[m] = seeder._push_one(own[m], rng)
         keep = np.vstack([keep, own])
     return keep
-
-
-def _covers(problem: Any, sites: np.ndarray, frac: float) -> np.ndarray:
-    """(n, J): whether hovering frac x T_max at each site collects each sensor's data."""
-    mp = problem.model
-    need = np.asarray(mp.required, dtype=float)
-    return (mp.rates(sites) * (frac * mp.t_max) >= need[None, :]) | (need[None, :] <= 0)
 
 
 def greedy_cover(
@@ -158,13 +146,13 @@ def greedy_cover(
     that collect its data within T_max; one no site serves even then is left uncovered."""
     mp = problem.model
     need = np.asarray(mp.required, dtype=float)
-    cov = _covers(problem, sites, frac)
-    cov = np.where(cov.any(axis=0), cov, _covers(problem, sites, 1.0))
+    cov = covers(problem, sites, frac)
+    cov = np.where(cov.any(axis=0), cov, covers(problem, sites, 1.0))
     R = mp.rates(sites)
     hover = np.where(R > 0, need[None, :] / np.maximum(R, 1e-12), np.inf)  # (n, J) s
     left = cov.any(axis=0)
     if chosen is not None and len(chosen):
-        left &= ~_covers(problem, np.asarray(chosen, dtype=float), frac).any(axis=0)
+        left &= ~covers(problem, np.asarray(chosen, dtype=float), frac).any(axis=0)
     out: list[int] = []
     while left.any():
         gain = (cov & left).sum(axis=1)
@@ -204,7 +192,7 @@ def site_sets(problem: Any, seed: int) -> Iterator[tuple[str, np.ndarray]]:
     sites = candidate_sites(problem, np.vstack(list(centres.values())))
     for frac in FRACTIONS:
         yield f"cover {frac:g}", sites[greedy_cover(problem, sites, frac)]
-    seeder = _seeder(problem)
+    seeder = problem.seeder
     pushed_rng = np.random.default_rng(0)
     for (k, r), C in centres.items():
         C = np.clip(C.copy(), 0.0, seeder.size)
@@ -227,7 +215,7 @@ def _arc_costs(problem: Any, nodes: np.ndarray) -> np.ndarray:
     inside = overlap_lengths(nodes[ia], nodes[ib], problem.obstacles)
     blocked = np.flatnonzero(inside > CLEAR)
     if len(blocked):
-        seeder = _seeder(problem)
+        seeder = problem.seeder
         g = seeder.graph
         A = seeder._connect(nodes) if g.n else None
         for e in blocked.tolist():
@@ -288,8 +276,8 @@ def build_plans(problem: Any, sites: np.ndarray, rng: np.random.Generator) -> li
     if len(C):
         # each sensor slides with the site that serves it fastest (a covering one if any)
         R = problem.model.rates(C)
-        owner = np.argmax(np.where(_covers(problem, C, 0.9), R + 1e6, R), axis=0)
-        C = _seeder(problem)._slide(C, owner, reach(problem, 0.9), rng)
+        owner = np.argmax(np.where(covers(problem, C, 0.9), R + 1e6, R), axis=0)
+        C = problem.seeder._slide(C, owner, reach(problem, 0.9), rng)
     return [_timed(problem, pts) for pts in repair_points(problem, C)]
 
 
@@ -300,7 +288,7 @@ def _timed(problem: Any, pts: np.ndarray) -> np.ndarray:
 
     I = int(problem.n_points)
     if problem.variable_length and problem.tau <= 0.0 and len(pts) < I:
-        pts = _seeder(problem)._fill(pts, I)  # every slot is active: collinear fillers
+        pts = problem.seeder._fill(pts, I)  # every slot is active: collinear fillers
     pol = polish_hover_times(problem, pts)
     if len(pol.hover_points) == len(pts) or (problem.variable_length and problem.tau > 0.0):
         return problem.encode(pol.hover_points, pol.hover_times)
