@@ -3,7 +3,6 @@ the read-back is compared under its rules and the sim verifies the mission read 
 
 from __future__ import annotations
 
-import threading
 from dataclasses import replace
 from pathlib import Path
 
@@ -18,16 +17,12 @@ from lamde_mission.vehicle.upload import VIAS, upload_mission
 from planner_core.mapio import load_map
 from sim import replay, verify
 from tests.vehicle_helpers import free_udp_port
+from tests.vehicle_helpers import no_leftover_mock_threads as _no_leftover_mock_threads  # noqa: F401 (autouse)
 
 CASES = Path(__file__).resolve().parent / "data" / "flyable"
 AUTOPILOTS = ("px4", "ardupilot")
 
 
-@pytest.fixture(autouse=True)
-def _no_leftover_mock_threads():
-    yield
-    left = [t for t in threading.enumerate() if t.name == "mock-vehicle" and t.is_alive()]
-    assert not left, "a mock vehicle thread outlived its test"
 
 
 @pytest.fixture(scope="module")

@@ -10,7 +10,6 @@ import os
 import signal
 import subprocess
 import sys
-import threading
 import time
 from dataclasses import replace
 from types import SimpleNamespace
@@ -31,6 +30,7 @@ from lamde_mission.vehicle.upload import upload_mission
 from lamde_mission.vehicle.wire import compare_items
 from planner_core.mapio import load_map
 from tests.vehicle_helpers import free_udp_port, hand_fence, hand_mission, listen_on, mock_on
+from tests.vehicle_helpers import no_leftover_mock_threads as _no_leftover_mock_threads  # noqa: F401 (autouse)
 
 VIAS = ("mavsdk", "pymavlink")
 
@@ -50,11 +50,6 @@ MAP = {
 }
 
 
-@pytest.fixture(autouse=True)
-def _no_leftover_mock_threads():
-    yield
-    left = [t for t in threading.enumerate() if t.name == "mock-vehicle" and t.is_alive()]
-    assert not left, "a mock vehicle thread outlived its test"
 
 
 

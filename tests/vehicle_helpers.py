@@ -6,15 +6,26 @@ from __future__ import annotations
 import math
 import select
 import socket
+import threading
 import time
+from collections.abc import Iterator
 from typing import Any
 
+import pytest
 from pymavlink.dialects.v20 import common as mavlink2
 
 from lamde_mission.items import CMD, FRAME, MISSION_TYPE, MissionItem
 from lamde_mission.vehicle.mock import MockVehicle
 
 NAN = math.nan
+
+
+@pytest.fixture(autouse=True)
+def no_leftover_mock_threads() -> Iterator[None]:
+    """Autouse in a module that imports it: no mock vehicle thread outlives its test."""
+    yield
+    left = [t for t in threading.enumerate() if t.name == "mock-vehicle" and t.is_alive()]
+    assert not left, "a mock vehicle thread outlived its test"
 
 
 def free_udp_port() -> int:
