@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import ast
 import copy
 import subprocess
 import sys
@@ -60,6 +61,18 @@ def run_cli_many(
             raise
         out.append(subprocess.CompletedProcess(cmd, p.returncode, stdout, stderr))
     return out
+
+
+def modules_after(code: str, package: str, timeout: float = 300) -> list[str]:
+    """The modules of `package` (it and its submodules) that a fresh interpreter has imported
+    after running `code` from the repository root; fails the test with its stderr if `code`
+    fails."""
+    probe = (f"\nimport sys as _s\nprint(sorted(m for m in _s.modules "
+             f"if m == {package!r} or m.startswith({package + '.'!r})))\n")
+    out = subprocess.run([sys.executable, "-c", code + probe], capture_output=True, text=True,
+                         cwd=ROOT, timeout=timeout)
+    assert out.returncode == 0, out.stderr
+    return ast.literal_eval(out.stdout.strip().splitlines()[-1])
 
 
 def one_line_error(r: subprocess.CompletedProcess[str]) -> str:

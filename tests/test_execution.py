@@ -12,7 +12,7 @@ from collections.abc import Iterator
 import pytest
 
 from planner_core.execution import ProcessExecutor, SerialExecutor, make_executor
-from tests.conftest import ROOT, SUITE
+from tests.conftest import SUITE, modules_after
 
 
 def test_make_executor_by_backend() -> None:
@@ -34,18 +34,13 @@ def test_make_executor_by_backend() -> None:
 
 def test_ray_is_not_imported_by_the_planner_or_a_local_run() -> None:
     code = (
-        "import sys\n"
         "import lamde_mission.cli, lamde_mission.api, planner_core.bench, planner_core.execution\n"
         "from planner_core.execution import make_executor\n"
         "from planner_core.execution.ray_executor import RayExecutor\n"
         "RayExecutor('auto'); make_executor(0, 'ray')\n"
         "with make_executor(0) as ex: assert list(ex.map_unordered(abs, [-1])) == [1]\n"
-        "print(sorted(m for m in sys.modules if m == 'ray' or m.startswith('ray.')))\n"
     )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT,
-                         timeout=120)
-    assert out.returncode == 0, out.stderr
-    assert out.stdout.strip() == "[]"
+    assert modules_after(code, "ray", timeout=120) == []
 
 
 def test_process_executor_streams_with_a_bounded_number_in_flight() -> None:

@@ -8,8 +8,6 @@ from __future__ import annotations
 
 import json
 import pickle
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -24,7 +22,7 @@ from planner_core.policy.rollout import (
     portable_spec,
     run_segment,
 )
-from tests.conftest import HAND_MAP, MAPS, ROOT
+from tests.conftest import HAND_MAP, MAPS, modules_after
 
 NET = NetConfig(embed=8, heads=2, ff=12, hidden=10)
 TINY_SPECS = [{"kind": "map", "path": str(MAPS / "tiny.json")}, {"kind": "map", "map": HAND_MAP}]
@@ -99,16 +97,11 @@ def test_collect_returns_segments_in_job_order() -> None:
 
 def test_rollout_workers_never_import_torch() -> None:
     code = (
-        "import sys\n"
         "from tests.test_rollout import _job\n"
         "from planner_core.policy.rollout import run_segment\n"
         "assert run_segment(_job(2)).steps == 2\n"
-        "print(sorted(m for m in sys.modules if m == 'torch' or m.startswith('torch.')))\n"
     )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT,
-                         timeout=300)
-    assert out.returncode == 0, out.stderr
-    assert out.stdout.strip() == "[]"
+    assert modules_after(code, "torch") == []
 
 
 #: a 2-epoch training of 2 tiny maps in chunks of 2 episodes, 3-generation segments
