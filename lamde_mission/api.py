@@ -134,7 +134,7 @@ def plan(
     t_compile = _warm_up(problem, configurator, run)
     timed = _TimedProblem(with_init(problem, init))
     refine = None
-    if use_memetic(memetic, with_init(problem, init)):
+    if use_memetic(memetic, timed):  # timed has the seeding hook exactly when init is seeded
         refine = functools.partial(memetic_refine, problem)
     t0 = time.perf_counter()
     result = run(
