@@ -74,7 +74,7 @@ def _option(extra: list[str], flag: str) -> str | None:
     return extra[extra.index(flag) + 1] if flag in extra else None
 
 
-def study_figures(md: str, extra: list[str], out: Path) -> list[str]:
+def study_figures(md: str, reference: str, extra: list[str], out: Path) -> list[str]:
     """Redraw the study figures of report `md` (under `out`) from the stored study folders its
     options name (--imax, --ablations); return the problems found: a stored folder missing, or
     the page's study sections not what the stored runs give."""
@@ -86,7 +86,7 @@ def study_figures(md: str, extra: list[str], out: Path) -> list[str]:
         return [f"{md}: stored study folder(s) {', '.join(missing)} not found"]
     if not any(folders.values()):
         return []
-    lines = study_sections(out / md, (out / md).with_suffix(""), **folders)
+    lines = study_sections(out / md, (out / md).with_suffix(""), reference=reference, **folders)
     page = (ROOT / md).read_text(encoding="utf-8") if (ROOT / md).is_file() else ""
     if "\n".join(lines) not in page:
         return [f"{md}: its study sections are not what the stored runs give: re-run its "
@@ -156,7 +156,7 @@ def main(argv: list[str] | None = None) -> int:
         if not (Path(results) / "results.jsonl").exists():
             print(f"skipped {md}: {results}/results.jsonl is not in the repository: "
                   f"{NOT_STORED.get(results, 'run its benchmark first')}", file=sys.stderr)
-            problems += study_figures(md, extra, out)
+            problems += study_figures(md, reference, extra, out)
             if "--imax" in extra or "--ablations" in extra:
                 print(f"redrew the study figures of {md} from its stored study runs",
                       file=sys.stderr)

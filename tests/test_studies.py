@@ -33,7 +33,7 @@ def _write(folder: Path, records: list[dict], meta: dict) -> Path:
 
 
 def _imax_record(opt: str, task: str, run: int, i_max: int, rate: float) -> dict:
-    return {**_record(opt, task, run, 100.0, 50.0), "i_max": i_max,
+    return {**_record(opt, task, run, 100.0, 100.0 - 50.0 * rate), "i_max": i_max,
             "last_feasible_rate": rate}
 
 
@@ -117,6 +117,10 @@ def test_report_sections_from_study_folders_and_their_slim_copies(
     assert "2 task(s) (T1, T2), 2 run(s) each" in imax
     assert "| de-lamde | 0.81 ± 0.01 (n 4) | 0.60 ± 0.01 (n 4) |" in imax
     assert "| de-lamde-fixedlen | 0.91 ± 0.01 (n 4) | 0.01 ± 0.01 (n 4) |" in imax
+    # the final scores at each I_max against the report's reference (2 runs: never significant)
+    assert "against **de-lamde**" in imax
+    assert "| de-lamde (ref) | best on 0/2 | best on 2/2 |" in imax
+    assert "| de-lamde-fixedlen | best on 2/2, +/~/- 0/2/0 | best on 0/2, +/~/- 0/2/0 |" in imax
     for png in re.findall(r"!\[[^]]*\]\(([^)]+)\)", abl + imax):
         assert (md.parent / png).read_bytes()[:4] == b"\x89PNG"
     assert text.index("## Protocol: init uniform") < text.index("## Ablations")

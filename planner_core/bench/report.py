@@ -253,10 +253,12 @@ def build_report(
                             else f"_{mode}")
     study = [r for r in records if r.get("i_max") is not None]
     if study:
-        L += imax_section(study, figures / "imax_feasible_rate.png", output)
+        L += imax_section(study, figures / "imax_feasible_rate.png", output,
+                          reference=reference, alpha=alpha)
     if ablation:
         L += ablation_section(main, ablation, figures, lambda p: _rel(p, output.parent), alpha)
-    L += study_sections(output, figures, imax=imax, ablations=ablations, alpha=alpha)
+    L += study_sections(output, figures, imax=imax, ablations=ablations, alpha=alpha,
+                        reference=reference)
     L += cost_section(records, policy_checkpoint)
     write_text_atomic(output, "\n".join(L) + "\n")
     return output
@@ -381,10 +383,13 @@ def imax_table(records: list[dict[str, Any]]) -> dict[str, dict[int, tuple[float
 
 
 def imax_section(records: list[dict[str, Any]], path: Path, output: Path,
-                 source: list[str] | None = None) -> list[str]:
+                 source: list[str] | None = None, reference: str | None = None,
+                 alpha: float = ALPHA) -> list[str]:
     """Markdown (table + figure) of the I_max study (paper Fig. 4): the last population's
-    feasible rate against I_max, per optimiser and start mode; `source`: lines saying where
-    the runs are, after the first paragraph."""
+    feasible rate against I_max, per optimiser and start mode, then the final scores at each
+    I_max summed up over the tasks (best means, Wilcoxon +/~/- against `reference`, default:
+    the first optimiser in the report's order); `source`: lines saying where the runs are,
+    after the first paragraph."""
     L = ["", "## I_max study (paper Fig. 4)", "",
          "Feasible rate of the last population (share with phi = 0) against I_max "
          "(`uav.max_hover_points` overridden on every map): mean ± std over tasks and runs. "
@@ -416,6 +421,33 @@ def imax_section(records: list[dict[str, Any]], path: Path, output: Path,
                         budget=budgets[-1] if len(budgets) == 1 else None)
     p = F.save(fig, path)
     L += ["", f"![I_max study]({_rel(p, output.parent)})"]
+    opts = order_optimisers(sorted({r["optimiser"] for r in records}), reference)
+    ref = reference if reference in opts else opts[0]
+    L += ["", f"Final score f + 10 phi at each I_max, over the {len(tasks)} task(s): on how "
+          "many tasks each optimiser has the best mean, and the per-task Wilcoxon rank-sum "
+          f"counts (two-sided, alpha {alpha}) against **{ref}** (`+` {ref} significantly "
+          "better, `~` no significant difference, `-` worse)."]
+    for mode in INIT_ORDER:
+        recs = [r for r in records if _init(r) == mode]
+        if not recs:
+            continue
+        ks = sorted({int(r["i_max"]) for r in recs})
+        cols: dict[int, ScoreTable] = {}
+        for k in ks:
+            by = _by([r for r in recs if int(r["i_max"]) == k])
+            scores = {t: {o: [r["score"] for r in by[t].get(o, [])] for o in opts}
+                      for t in by}
+            cols[k] = score_table(scores, sorted(by), opts, ref, alpha)
+        L += ["", f"Start mode {mode}:", "", "| Optimiser | " + " | ".join(
+            f"I_max {k}" for k in ks) + " |", "|---|" + "---:|" * len(ks)]
+        for o in opts:
+            cells = []
+            for k in ks:
+                tab = cols[k]
+                best = f"best on {sum(tab.cells[t][o].best for t in tab.tasks)}/{len(tab.tasks)}"
+                cells.append(best if o == ref else
+                             f"{best}, +/~/- {'/'.join(map(str, tab.counts[o]))}")
+            L.append(f"| {_col(o, ref)} | " + " | ".join(cells) + " |")
     return L
 
 
@@ -452,13 +484,15 @@ def _study_records(folder: Path, what: str) -> tuple[list[dict[str, Any]], dict[
 
 
 def study_sections(output: str | Path, figures: str | Path, *, imax: str | Path | None = None,
-                   ablations: str | Path | None = None, alpha: float = ALPHA) -> list[str]:
+                   ablations: str | Path | None = None, alpha: float = ALPHA,
+                   reference: str | None = None) -> list[str]:
     """Markdown of the ablation study and the I_max study, each from its own benchmark folder
     (`benchmarks/ablations.py --out DIR` with its meta.json ablation entry; `lamde-mission
     bench --i-max ... --out DIR`), or a slim copy of it (`benchmarks/store_runs.py`), for a
     report `output` whose PNGs go to `figures`. Only the run indices finished in every cell are
     used (`records.complete_runs`), so an unfinished study is reported on equal counts and says
-    what it left out. Raises ValueError for a folder without results or (ablations) without the
+    what it left out. `reference`: the I_max study's Wilcoxon reference (the ablations use their
+    own, LAMDE). Raises ValueError for a folder without results or (ablations) without the
     ablation entry."""
     output, figures = Path(output), Path(figures)
     L: list[str] = []
@@ -493,7 +527,8 @@ def study_sections(output: str | Path, figures: str | Path, *, imax: str | Path 
         if not study:
             raise ValueError(f"--imax {folder}: no run overrides I_max (bench --i-max)")
         L += imax_section(study, figures / "imax_feasible_rate.png", output,
-                          source=_study_source(folder, meta, left_out, study))
+                          source=_study_source(folder, meta, left_out, study),
+                          reference=reference, alpha=alpha)
     return L
 
 
