@@ -27,10 +27,10 @@ and the best (Deb's rule: least violation phi, then least f) is kept.
    `planner_core.routing`), first solution by cheapest arc, then guided local search for a fixed
    number of solutions (no time limit: the result depends on the inputs only).
 6. **Line of sight and I_max**: each site is nudged within its sensors' service reach to clear
-   its two legs and shorten them (the seeder's slide, `Seeder._slide`: every detour corner costs
+   its two legs and shorten them (the seeder's slide, `Seeder.slide`: every detour corner costs
    one of the I_max hover points, so a site that sees its neighbours saves them), then
    `planner_core.memetic.repair_points`: the seeder's visibility-graph routing of every
-   still-blocked leg (corners inserted, string-pulled, as `Seeder._route`), brought back to
+   still-blocked leg (corners inserted, string-pulled, as `Seeder.route`), brought back to
    I_max points in one or two ways (route then prune/merge; merge then re-route), each a plan.
 7. **Hover times**: the hover-time LP of `planner_core.polish` (the same LP every peer ends with),
    then one evaluation of each distinct plan.
@@ -122,7 +122,7 @@ def candidate_sites(problem: Any, extra: np.ndarray | None = None) -> np.ndarray
     inside = points_inside(np.clip(C, 0.0, seeder.size), problem.obstacles)
     C = np.clip(C, 0.0, seeder.size)
     for m in np.flatnonzero(inside):
-        C[m] = seeder._push_one(C[m], rng)
+        C[m] = seeder.push_one(C[m], rng)
     C = np.clip(C, 0.0, seeder.size)
     C = np.unique(np.round(C, 6), axis=0)
     ok = mp.rates(C).sum(axis=1) <= BANDWIDTH_USE * mp.bandwidth
@@ -132,7 +132,7 @@ def candidate_sites(problem: Any, extra: np.ndarray | None = None) -> np.ndarray
         own = np.clip(S[~covered], 0.0, seeder.size)
         for m in range(len(own)):
             if points_inside(own[m : m + 1], problem.obstacles)[0]:
-                own[m] = seeder._push_one(own[m], rng)
+                own[m] = seeder.push_one(own[m], rng)
         keep = np.vstack([keep, own])
     return keep
 
@@ -197,7 +197,7 @@ def site_sets(problem: Any, seed: int) -> Iterator[tuple[str, np.ndarray]]:
     for (k, r), C in centres.items():
         C = np.clip(C.copy(), 0.0, seeder.size)
         for m in np.flatnonzero(points_inside(C, problem.obstacles)):
-            C[m] = seeder._push_one(C[m], pushed_rng)
+            C[m] = seeder.push_one(C[m], pushed_rng)
         more = sites[greedy_cover(problem, sites, 0.9, chosen=C)]
         yield f"k-means k={k} init {r}", np.vstack([C, more])
 
@@ -217,7 +217,7 @@ def _arc_costs(problem: Any, nodes: np.ndarray) -> np.ndarray:
     if len(blocked):
         seeder = problem.seeder
         g = seeder.graph
-        A = seeder._connect(nodes) if g.n else None
+        A = seeder.connect(nodes) if g.n else None
         for e in blocked.tolist():
             a, b = int(ia[e]), int(ib[e])
             path: list[int] = []
@@ -277,7 +277,7 @@ def build_plans(problem: Any, sites: np.ndarray, rng: np.random.Generator) -> li
         # each sensor slides with the site that serves it fastest (a covering one if any)
         R = problem.model.rates(C)
         owner = np.argmax(np.where(covers(problem, C, 0.9), R + 1e6, R), axis=0)
-        C = problem.seeder._slide(C, owner, reach(problem, 0.9), rng)
+        C = problem.seeder.slide(C, owner, reach(problem, 0.9), rng)
     return [_timed(problem, pts) for pts in repair_points(problem, C)]
 
 
@@ -288,7 +288,7 @@ def _timed(problem: Any, pts: np.ndarray) -> np.ndarray:
 
     I = int(problem.n_points)
     if problem.variable_length and problem.tau <= 0.0 and len(pts) < I:
-        pts = problem.seeder._fill(pts, I)  # every slot is active: collinear fillers
+        pts = problem.seeder.fill(pts, I)  # every slot is active: collinear fillers
     pol = polish_hover_times(problem, pts)
     if len(pol.hover_points) == len(pts) or (problem.variable_length and problem.tau > 0.0):
         return problem.encode(pol.hover_points, pol.hover_times)
