@@ -167,3 +167,19 @@ def test_engineering_plans_fit_i_max_when_detours_overflow() -> None:
     assert sizes and max(sizes) <= 4
     res = optimise("engineering", p, 10_000, seed=0)
     assert p.breakdown(res.x)["n_hover"] <= 4
+
+
+def test_engineering_own_order_is_the_same_pipeline(walled: Problem) -> None:
+    """`engineering-own-order`: the same constructive plans ordered by the planner's own open
+    path (no OR-Tools); valid, deterministic, the same in both start modes; an unknown order is
+    refused naming it."""
+    own = optimise("engineering-own-order", walled, 10_000, seed=1)
+    b = walled.breakdown(own.x)
+    assert own.phi == 0.0 and b["v4"] == 0.0 and 1 <= b["n_hover"] <= walled.n_points
+    again = optimise("engineering-own-order", walled, 10_000, seed=1, init="uniform")
+    np.testing.assert_array_equal(own.x, again.x)
+    # the planner's constructive starts are exactly these plans (one code path)
+    X, _ = construct.candidate_plans(walled, 1)
+    assert any(np.array_equal(own.x, x) for x in X)
+    with pytest.raises(ValueError, match="^order: "):
+        eng.optimise(walled, 100, 0, order="lkh")
