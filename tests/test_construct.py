@@ -197,3 +197,16 @@ def test_planning_path_needs_no_ortools() -> None:
     code = ("import lamde_mission; lamde_mission.plan('examples/maps/tiny.json', seed=0, "
             "budget=400, population=20)")
     assert modules_after(code, "ortools") == []
+
+
+def test_plan_is_the_benchmark_planner_entry() -> None:
+    """`plan` and the benchmark's `planner` entry are one pipeline: the same seed and budget give
+    the same plan score and evaluation count."""
+    import lamde_mission
+    from planner_core.baselines import optimise
+    from planner_core.mapio import load_map
+
+    path = MAPS / "small-demo.json"
+    p = lamde_mission.plan(path, seed=2, budget=1500)
+    r = optimise("planner", Problem(load_map(path).planning_map()), 1500, seed=2)
+    assert (p.f, p.phi, p.evaluations) == (r.f, r.phi, r.evaluations) == (p.f, p.phi, 1500)
