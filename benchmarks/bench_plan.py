@@ -1,7 +1,9 @@
 """Planning speed and memory: `plan` on the largest suite map at 10,000 evaluations.
 
 Prints wall time split into evaluation, seeding (the sensor- and obstacle-aware initial
-population), optimiser overhead (DE ask/tell/configurator) and polish, plus peak memory
+population), starts (building the constructive plans, `planner_core.construct`; their
+evaluations are under evaluation), optimiser overhead (DE ask/tell/configurator) and polish,
+plus peak memory
 (ru_maxrss) and whether torch or matplotlib were imported on the planning path.
 
 Two measurements:
@@ -42,7 +44,7 @@ from planner_core import defaults as D
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_MAP = ROOT / "examples" / "maps" / "suite" / "T16.json"
-PHASES = ("evaluation", "seeding", "optimiser", "polish")
+PHASES = ("evaluation", "seeding", "starts", "optimiser", "polish")
 
 
 def _split(t: dict[str, float]) -> str:
