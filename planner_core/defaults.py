@@ -129,8 +129,9 @@ _RUN: tuple[Default, ...] = (
             "population in place of its last rows, the Deb-best of the `start_candidates` "
             "scored; 0: none (docs/search.md)", "an integer >= 0 (at most the population is "
             "used)", _int_at_least(0)),
-    Default("start_candidates", 30, "constructive plans built and scored (one evaluation "
-            "each, counted in the budget) to pick the `starts` from; 0: none",
+    Default("start_candidates", 64, "constructive plans built and scored (one evaluation "
+            "each, counted in the budget) to pick the `starts` from, at most: the pipeline "
+            "builds 20-51 on the suite maps, so all of them; 0: none",
             "an integer >= 0", _int_at_least(0)),
     Default("seed", 0, "random seed of a planning run (same seed, same plan)", "an integer >= 0",
             _int_at_least(0)),

@@ -99,3 +99,11 @@ def test_bench_executor_train_mode_runs_on_local_backends() -> None:
     assert "ratio local x 2 / local x 1: training" in out
     assert "same checkpoint on every backend and worker count: yes" in out
     assert "16 epochs x 3200 problems at 3000 evaluations" in out
+
+
+def test_bench_order_compares_our_order_with_ortools() -> None:
+    r = _script("benchmarks/bench_order.py", "--maps", "T01", "--seeds", "1", timeout=300)
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.strip().splitlines()
+    assert re.match(r"T01: \d+ site sets, ours longer on \d+, shorter on \d+$", lines[0])
+    assert lines[-2].startswith("total: ") and lines[-1].startswith("CPU time per set: ours ")
