@@ -6,11 +6,15 @@ f + 10 phi over its runs, feasible runs, and for every peer the two-sided Wilcox
 of the planner against it, paired by run seed (same seed = same seeded start); then the planner's
 gap to the best-known f of examples/maps/suite_best_known.json.
 
-    python benchmarks/search_table.py results/results.jsonl [--planner planner] [--best-known F]
-        [--init seeded|uniform]
+    python benchmarks/search_table.py results/results.jsonl [...] [--planner planner]
+        [--best-known F] [--init seeded|uniform] [--runs N] [--optimizers A B ...] [--gaps]
 
 `--init` keeps only the runs of that start mode (a results file of `bench --init both` holds
-both, with the same seeds).
+both, with the same seeds). Several files are merged (a run recorded twice counts once).
+`--runs N` keeps runs 0 .. N-1 of every optimiser (so entries with more runs on record are
+compared on the same seeds), `--optimizers` only these columns (the planner always),
+`--gaps` adds a row of every column's gap to the best-known below the table (mean over maps)
+and a gap column per optimiser.
 """
 
 from __future__ import annotations
@@ -35,9 +39,13 @@ def main() -> None:
     ap.add_argument("--best-known", type=Path, default=ROOT / "examples/maps/suite_best_known.json")
     ap.add_argument("--init", choices=("seeded", "uniform"), default=None,
                     help="only the runs of this start mode (default: all runs)")
+    ap.add_argument("--runs", type=int, default=None, help="only runs 0 .. N-1")
+    ap.add_argument("--optimizers", nargs="+", default=None, help="only these columns")
+    ap.add_argument("--gaps", action="store_true",
+                    help="a gap-to-best-known column per optimiser")
     a = ap.parse_args()
     runs: dict[tuple[str, str], dict[int, float]] = defaultdict(dict)
-    feas: dict[tuple[str, str], int] = defaultdict(int)
+    feasible: dict[tuple[str, str], dict[int, bool]] = defaultdict(dict)
     for path in a.results:
         for line in path.read_text().splitlines():
             r = json.loads(line)
@@ -45,17 +53,26 @@ def main() -> None:
                 continue
             if a.init is not None and r.get("init", "seeded") != a.init:
                 continue
+            if a.runs is not None and "run" in r and int(r["run"]) >= a.runs:
+                continue
+            if (a.optimizers is not None and r["optimiser"] != a.planner
+                    and r["optimiser"] not in a.optimizers):
+                continue
             key = (r["task"], r["optimiser"])
             runs[key][int(r["seed"])] = float(r["f"]) + SCORE_FACTOR * float(r["phi"])
-            feas[key] += int(r["phi"] == 0.0)
+            feasible[key][int(r["seed"])] = r["phi"] == 0.0
+    feas = {k: sum(v.values()) for k, v in feasible.items()}
     best = json.loads(a.best_known.read_text())["tasks"]
     tasks = sorted({t for t, _ in runs})
     opts = [a.planner] + sorted({o for _, o in runs} - {a.planner})
     peers = opts[1:]
-    head = ["map", *(f"{o}" for o in opts), *(f"p vs {o}" for o in peers), "gap to best-known"]
+    gap_cols = opts if a.gaps else [a.planner]
+    head = ["map", *(f"{o}" for o in opts), *(f"p vs {o}" for o in peers),
+            *(f"gap {o}" if a.gaps else "gap to best-known" for o in gap_cols)]
     print("| " + " | ".join(head) + " |")
     print("|" + "---|" * len(head))
-    wins = defaultdict(int)
+    wins: dict[str, int] = defaultdict(int)
+    within: dict[str, int] = defaultdict(int)
     for t in tasks:
         cells = [t]
         for o in opts:
@@ -75,12 +92,18 @@ def main() -> None:
             p = wilcoxon(x, y).pvalue
             cells.append(f"{p:.3g}{' *' if p < 0.05 and np.mean(x) < np.mean(y) else ''}")
         bk = best.get(t, {}).get("f")
-        m = np.mean(list(mine.values())) if mine else np.nan
-        cells.append(f"{100 * (m - bk) / bk:+.2f} %" if bk else "-")
+        for o in gap_cols:
+            v = list(runs[(t, o)].values())
+            m = np.mean(v) if v else np.nan
+            gap = 100 * (m - bk) / bk if bk else np.nan
+            within[o] += int(bool(np.isfinite(gap) and gap <= 1.0))
+            cells.append(f"{gap:+.2f} %" if np.isfinite(gap) else "-")
         print("| " + " | ".join(cells) + " |")
     print()
     for o in peers:
         print(f"- {a.planner} has the lower mean than {o} on {wins[o]}/{len(tasks)} maps")
+    for o in gap_cols:
+        print(f"- {o}'s mean is within 1 % of the best-known on {within[o]}/{len(tasks)} maps")
 
 
 if __name__ == "__main__":

@@ -74,6 +74,21 @@ def test_search_table_prints_the_comparison(tmp_path) -> None:
     assert lines[0].startswith("| map | planner | seed-lp | p vs seed-lp | gap to best-known |")
     assert lines[2].startswith("| T01 | 297.00 (3/3) | 298.00 (3/3) |")
     assert "- planner has the lower mean than seed-lp on 1/1 maps" in r.stdout
+    # --runs 2 keeps runs 0 and 1 (records without a run field are kept: none here has one)
+    recs2 = [{**rec, "run": rec["seed"], "init": "seeded"} for rec in recs]
+    res.write_text("".join(json.dumps(r) + "\n" for r in recs2 + recs2))  # twice: counted once
+    bk = tmp_path / "bk.json"
+    bk.write_text(json.dumps({"tasks": {"T01": {"f": 294.0}}}))
+    r = _script("benchmarks/search_table.py", str(res), "--runs", "2", "--gaps",
+                "--best-known", str(bk))
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.splitlines()
+    assert lines[0].startswith("| map | planner | seed-lp | p vs seed-lp | gap planner | gap "
+                               "seed-lp |")
+    assert lines[2].startswith("| T01 | 296.50 (2/2) | 297.50 (2/2) |")
+    assert lines[2].endswith("| +0.85 % | +1.19 % |")
+    assert "- planner's mean is within 1 % of the best-known on 1/1 maps" in r.stdout
+    assert "- seed-lp's mean is within 1 % of the best-known on 0/1 maps" in r.stdout
 
 
 def test_bench_executor_runs() -> None:
