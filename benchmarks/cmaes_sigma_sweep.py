@@ -4,7 +4,8 @@ Runs `cmaes-seeded-lp` with each initial step size sigma0 (in the unit box) as i
 entry `cmaes-seeded-lp-s<sigma0>` through `planner_core.bench.run_bench` (resumable, same seeds
 for every sigma0, so the runs are paired; `<out>/meta.json` records each entry's sigma0), then
 prints per map the mean penalised score f + 10 phi of each sigma0 and, per sigma0, its mean rank
-over the maps and the number of maps where its mean is lowest.
+over the maps (ties share their mean rank) and the number of maps where its mean is lowest (ties
+all count).
 
     python benchmarks/cmaes_sigma_sweep.py --out /work/runs/sigma [--sigma0 0.01 0.02 0.05 0.1 0.2]
         [--tasks T02 T05 T07 T12 T16] [--runs 5] [--budget 10000] [--jobs 1]
@@ -20,6 +21,7 @@ from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
+from scipy.stats import rankdata
 
 from planner_core.baselines import OptimiserSpec
 from planner_core.defaults import SCORE_FACTOR
@@ -52,12 +54,12 @@ def table(results: Path, names: list[str]) -> tuple[list[str], dict[str, float]]
     best_count: dict[str, int] = defaultdict(int)
     for t in tasks:
         means = [float(np.mean(score[(t, n)])) if score[(t, n)] else np.nan for n in names]
-        order = np.argsort(np.argsort(means))
-        for n, k in zip(names, order, strict=True):
-            ranks[n].append(float(k) + 1)
-        best_count[names[int(np.nanargmin(means))]] += 1
+        lowest = np.nanmin(means)
+        for n, m, k in zip(names, means, rankdata(means, nan_policy="omit"), strict=True):
+            ranks[n].append(float(k))  # ties share their mean rank
+            best_count[n] += int(m == lowest)  # ties all count
         lines.append(f"| {t} | " + " | ".join(
-            f"**{m:.2f}**" if m == np.nanmin(means) else f"{m:.2f}" for m in means) + " |")
+            f"**{m:.2f}**" if m == lowest else f"{m:.2f}" for m in means) + " |")
     mean_rank = {n: float(np.mean(ranks[n])) for n in names}
     lines.append("")
     for n in names:

@@ -184,8 +184,8 @@ def test_cmaes_sigma_sweep_runs_and_ranks(tmp_path) -> None:
     r = _script(*args)
     assert r.returncode == 0, r.stdout + r.stderr
     assert "| map | s0.02 | s0.2 |" in r.stdout
-    assert re.search(r"cmaes-seeded-lp-s0.02: mean rank [12]\.00, lowest mean on [01]/1 maps",
-                     r.stdout)
+    assert re.search(r"cmaes-seeded-lp-s0.02: mean rank (1\.00|1\.50|2\.00), lowest mean on "
+                     r"[01]/1 maps", r.stdout)
     meta = json.loads((tmp_path / "s" / "meta.json").read_text())
     assert meta["optimisers"]["cmaes-seeded-lp-s0.2"]["kwargs"] == {"seeded": True, "sigma0": 0.2}
     again = _script(*args)
