@@ -11,6 +11,9 @@ gap to the best-known f of examples/maps/suite_best_known.json.
 
 `--init` keeps only the runs of that start mode (a results file of `bench --init both` holds
 both, with the same seeds). Several files are merged (a run recorded twice counts once).
+A file given as `PATH:NAME,NAME=LABEL,...` contributes only those optimisers, each under its
+LABEL when given (e.g. `docs/search/seeded-25runs.jsonl:planner,seed-lp,cmaes-seeded-lp=cmaes-s0.05`
+keeps an older cmaes-seeded-lp as its own column).
 `--runs N` keeps runs 0 .. N-1 of every optimiser (so entries with more runs on record are
 compared on the same seeds), `--optimizers` only these columns (the planner always),
 `--gaps` adds a row of every column's gap to the best-known below the table (mean over maps)
@@ -32,9 +35,21 @@ from planner_core.defaults import SCORE_FACTOR
 ROOT = Path(__file__).resolve().parents[1]
 
 
+def _source(arg: str) -> tuple[Path, dict[str, str] | None]:
+    """(file, {optimiser: label} to keep, or None for all) of a `PATH[:NAME[=LABEL],...]`."""
+    if Path(arg).exists() or ":" not in arg:
+        return Path(arg), None
+    path, _, names = arg.rpartition(":")
+    keep = {}
+    for item in names.split(","):
+        name, _, label = item.partition("=")
+        keep[name] = label or name
+    return Path(path), keep
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("results", nargs="+", type=Path)
+    ap.add_argument("results", nargs="+", help="results JSONL, optionally PATH:NAME[=LABEL],...")
     ap.add_argument("--planner", default="planner")
     ap.add_argument("--best-known", type=Path, default=ROOT / "examples/maps/suite_best_known.json")
     ap.add_argument("--init", choices=("seeded", "uniform"), default=None,
@@ -46,11 +61,16 @@ def main() -> None:
     a = ap.parse_args()
     runs: dict[tuple[str, str], dict[int, float]] = defaultdict(dict)
     feasible: dict[tuple[str, str], dict[int, bool]] = defaultdict(dict)
-    for path in a.results:
+    for arg in a.results:
+        path, keep = _source(arg)
         for line in path.read_text().splitlines():
             r = json.loads(line)
             if "f" not in r or r.get("f") is None:
                 continue
+            if keep is not None:
+                if r["optimiser"] not in keep:
+                    continue
+                r["optimiser"] = keep[r["optimiser"]]
             if a.init is not None and r.get("init", "seeded") != a.init:
                 continue
             if a.runs is not None and "run" in r and int(r["run"]) >= a.runs:

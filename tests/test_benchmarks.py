@@ -89,6 +89,13 @@ def test_search_table_prints_the_comparison(tmp_path) -> None:
     assert lines[2].endswith("| +0.85 % | +1.19 % |")
     assert "- planner's mean is within 1 % of the best-known on 1/1 maps" in r.stdout
     assert "- seed-lp's mean is within 1 % of the best-known on 0/1 maps" in r.stdout
+    # PATH:NAME=LABEL keeps only the named optimisers of a file, relabelled
+    r = _script("benchmarks/search_table.py", f"{res}:planner,seed-lp=old-seed-lp",
+                "--runs", "2")
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.startswith("| map | planner | old-seed-lp | p vs old-seed-lp |")
+    r = _script("benchmarks/search_table.py", f"{res}:planner", "--runs", "2")
+    assert r.stdout.startswith("| map | planner | gap to best-known |")
 
 
 def test_bench_executor_runs() -> None:
