@@ -93,6 +93,8 @@ def main() -> None:
     print("|" + "---|" * len(head))
     wins: dict[str, int] = defaultdict(int)
     within: dict[str, int] = defaultdict(int)
+    sig_better: dict[str, int] = defaultdict(int)
+    sig_worse: dict[str, int] = defaultdict(int)
     for t in tasks:
         cells = [t]
         for o in opts:
@@ -110,6 +112,8 @@ def main() -> None:
                 cells.append("-")
                 continue
             p = wilcoxon(x, y).pvalue
+            if p < 0.05:
+                (sig_better if np.mean(x) < np.mean(y) else sig_worse)[o] += 1
             cells.append(f"{p:.3g}{' *' if p < 0.05 and np.mean(x) < np.mean(y) else ''}")
         bk = best.get(t, {}).get("f")
         for o in gap_cols:
@@ -121,7 +125,8 @@ def main() -> None:
         print("| " + " | ".join(cells) + " |")
     print()
     for o in peers:
-        print(f"- {a.planner} has the lower mean than {o} on {wins[o]}/{len(tasks)} maps")
+        print(f"- {a.planner} has the lower mean than {o} on {wins[o]}/{len(tasks)} maps "
+              f"(p < 0.05: better on {sig_better[o]}, worse on {sig_worse[o]})")
     for o in gap_cols:
         print(f"- {o}'s mean is within 1 % of the best-known on {within[o]}/{len(tasks)} maps")
 

@@ -73,7 +73,8 @@ def test_search_table_prints_the_comparison(tmp_path) -> None:
     lines = r.stdout.splitlines()
     assert lines[0].startswith("| map | planner | seed-lp | p vs seed-lp | gap to best-known |")
     assert lines[2].startswith("| T01 | 297.00 (3/3) | 298.00 (3/3) |")
-    assert "- planner has the lower mean than seed-lp on 1/1 maps" in r.stdout
+    assert "- planner has the lower mean than seed-lp on 1/1 maps (p < 0.05: better on 0, " \
+        "worse on 0)" in r.stdout  # 3 pairs: no p below 0.25
     # --runs 2 keeps runs 0 and 1 (records without a run field are kept: none here has one)
     recs2 = [{**rec, "run": rec["seed"], "init": "seeded"} for rec in recs]
     res.write_text("".join(json.dumps(r) + "\n" for r in recs2 + recs2))  # twice: counted once
