@@ -24,6 +24,7 @@ import argparse
 import copy
 import glob
 import json
+import os
 import subprocess
 import sys
 import time
@@ -62,9 +63,12 @@ class EvaluatorClient:
 
     def __init__(self, project_python: str | Path, server_args: list[str],
                  cwd: str | Path | None = None) -> None:
+        env = dict(os.environ)  # the server imports planner_core from this checkout
+        env["PYTHONPATH"] = os.pathsep.join(
+            [str(HERE.parents[1]), *filter(None, [env.get("PYTHONPATH")])])
         self.proc = subprocess.Popen([str(project_python), str(SERVER), *server_args],
                                      stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
-                                     cwd=cwd)
+                                     cwd=cwd, env=env)
 
     def request(self, obj: dict[str, Any]) -> dict[str, Any]:
         assert self.proc.stdin is not None and self.proc.stdout is not None
