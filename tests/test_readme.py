@@ -136,6 +136,11 @@ COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
                                                               '"--loss"', '"--runs"')),
     "python benchmarks/search_table.py":
         ("test_benchmarks.py::test_search_table_prints_the_comparison", ("search_table",)),
+    "python benchmarks/cmaes_sigma_sweep.py":
+        ("test_benchmarks.py::test_cmaes_sigma_sweep_runs_and_ranks", ("cmaes_sigma_sweep",)),
+    "python benchmarks/refresh_best_known.py":
+        ("test_benchmarks.py::test_refresh_best_known_stores_only_plans_the_sim_passes",
+         ("refresh_best_known",)),
     "python benchmarks/bench_executor.py":
         ("test_benchmarks.py::test_bench_executor_runs", ("bench_executor",)),
     "python docs/make_gallery.py":
