@@ -152,7 +152,7 @@ REGISTRY: dict[str, OptimiserSpec] = {
         OptimiserSpec(
             "cmaes-seeded-lp",
             "planner_core.baselines.cmaes:optimise",
-            "pycma CMA-ES started at the best seed (sigma0 0.05 in the unit box, restarts from "
+            "pycma CMA-ES started at the best seed (sigma0 0.002 in the unit box, restarts from "
             "the best so far), then the polish LP",
             kwargs={"seeded": True},
         ),
