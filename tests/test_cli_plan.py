@@ -64,6 +64,7 @@ def test_infeasible_map_writes_nothing_unless_allowed(tmp_path: Path) -> None:
         (["-o", "x.txt"], "-o/--output"),
         (["-o", "x.plan", "--plot", "x.jpg"], "--plot"),
         (["-o", "x.plan", "--budget", "3"], "--budget"),
+        (["-o", "x.plan", "--starts", "-1"], "--starts"),
     ],
 )
 def test_bad_input_exits_2_with_one_line(tmp_path: Path, args: list[str], needle: str) -> None:

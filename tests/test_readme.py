@@ -105,6 +105,8 @@ COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
         ("test_gis.py::test_bench_evaluate_prints_suite_and_campus_in_one_run",
          ("bench_evaluate",)),
     "python benchmarks/bench_plan.py": ("test_benchmarks.py", ("bench_plan",)),
+    "python benchmarks/bench_order.py":
+        ("test_benchmarks.py::test_bench_order_compares_our_order_with_ortools", ("bench_order",)),
     "lamde-mission bench": ("test_bench.py::test_cli_bench_then_report", ('"bench"',)),
     "lamde-mission report": ("test_bench.py::test_cli_bench_then_report", ('"report"',)),
     "lamde-mission report results -o docs/results.md --reference de-lamde --imax":
