@@ -6,11 +6,18 @@ f + 10 phi over its runs, feasible runs, and for every peer the two-sided Wilcox
 of the planner against it, paired by run seed (same seed = same seeded start); then the planner's
 gap to the best-known f of examples/maps/suite_best_known.json.
 
-    python benchmarks/search_table.py results/results.jsonl [--planner planner] [--best-known F]
-        [--init seeded|uniform]
+    python benchmarks/search_table.py results/results.jsonl [...] [--planner planner]
+        [--best-known F] [--init seeded|uniform] [--runs N] [--optimizers A B ...] [--gaps]
 
 `--init` keeps only the runs of that start mode (a results file of `bench --init both` holds
-both, with the same seeds).
+both, with the same seeds). Several files are merged (a run recorded twice counts once).
+A file given as `PATH:NAME,NAME=LABEL,...` contributes only those optimisers, each under its
+LABEL when given (e.g. `docs/search/seeded-25runs.jsonl:planner,seed-lp,cmaes-seeded-lp=cmaes-s0.05`
+keeps an older cmaes-seeded-lp as its own column).
+`--runs N` keeps runs 0 .. N-1 of every optimiser (so entries with more runs on record are
+compared on the same seeds), `--optimizers` only these columns (the planner always),
+`--gaps` adds a row of every column's gap to the best-known below the table (mean over maps)
+and a gap column per optimiser.
 """
 
 from __future__ import annotations
@@ -28,34 +35,66 @@ from planner_core.defaults import SCORE_FACTOR
 ROOT = Path(__file__).resolve().parents[1]
 
 
+def _source(arg: str) -> tuple[Path, dict[str, str] | None]:
+    """(file, {optimiser: label} to keep, or None for all) of a `PATH[:NAME[=LABEL],...]`."""
+    if Path(arg).exists() or ":" not in arg:
+        return Path(arg), None
+    path, _, names = arg.rpartition(":")
+    keep = {}
+    for item in names.split(","):
+        name, _, label = item.partition("=")
+        keep[name] = label or name
+    return Path(path), keep
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("results", nargs="+", type=Path)
+    ap.add_argument("results", nargs="+", help="results JSONL, optionally PATH:NAME[=LABEL],...")
     ap.add_argument("--planner", default="planner")
     ap.add_argument("--best-known", type=Path, default=ROOT / "examples/maps/suite_best_known.json")
     ap.add_argument("--init", choices=("seeded", "uniform"), default=None,
                     help="only the runs of this start mode (default: all runs)")
+    ap.add_argument("--runs", type=int, default=None, help="only runs 0 .. N-1")
+    ap.add_argument("--optimizers", nargs="+", default=None, help="only these columns")
+    ap.add_argument("--gaps", action="store_true",
+                    help="a gap-to-best-known column per optimiser")
     a = ap.parse_args()
     runs: dict[tuple[str, str], dict[int, float]] = defaultdict(dict)
-    feas: dict[tuple[str, str], int] = defaultdict(int)
-    for path in a.results:
+    feasible: dict[tuple[str, str], dict[int, bool]] = defaultdict(dict)
+    for arg in a.results:
+        path, keep = _source(arg)
         for line in path.read_text().splitlines():
             r = json.loads(line)
             if "f" not in r or r.get("f") is None:
                 continue
+            if keep is not None:
+                if r["optimiser"] not in keep:
+                    continue
+                r["optimiser"] = keep[r["optimiser"]]
             if a.init is not None and r.get("init", "seeded") != a.init:
+                continue
+            if a.runs is not None and "run" in r and int(r["run"]) >= a.runs:
+                continue
+            if (a.optimizers is not None and r["optimiser"] != a.planner
+                    and r["optimiser"] not in a.optimizers):
                 continue
             key = (r["task"], r["optimiser"])
             runs[key][int(r["seed"])] = float(r["f"]) + SCORE_FACTOR * float(r["phi"])
-            feas[key] += int(r["phi"] == 0.0)
+            feasible[key][int(r["seed"])] = r["phi"] == 0.0
+    feas = {k: sum(v.values()) for k, v in feasible.items()}
     best = json.loads(a.best_known.read_text())["tasks"]
     tasks = sorted({t for t, _ in runs})
     opts = [a.planner] + sorted({o for _, o in runs} - {a.planner})
     peers = opts[1:]
-    head = ["map", *(f"{o}" for o in opts), *(f"p vs {o}" for o in peers), "gap to best-known"]
+    gap_cols = opts if a.gaps else [a.planner]
+    head = ["map", *(f"{o}" for o in opts), *(f"p vs {o}" for o in peers),
+            *(f"gap {o}" if a.gaps else "gap to best-known" for o in gap_cols)]
     print("| " + " | ".join(head) + " |")
     print("|" + "---|" * len(head))
-    wins = defaultdict(int)
+    wins: dict[str, int] = defaultdict(int)
+    within: dict[str, int] = defaultdict(int)
+    sig_better: dict[str, int] = defaultdict(int)
+    sig_worse: dict[str, int] = defaultdict(int)
     for t in tasks:
         cells = [t]
         for o in opts:
@@ -73,14 +112,23 @@ def main() -> None:
                 cells.append("-")
                 continue
             p = wilcoxon(x, y).pvalue
+            if p < 0.05:
+                (sig_better if np.mean(x) < np.mean(y) else sig_worse)[o] += 1
             cells.append(f"{p:.3g}{' *' if p < 0.05 and np.mean(x) < np.mean(y) else ''}")
         bk = best.get(t, {}).get("f")
-        m = np.mean(list(mine.values())) if mine else np.nan
-        cells.append(f"{100 * (m - bk) / bk:+.2f} %" if bk else "-")
+        for o in gap_cols:
+            v = list(runs[(t, o)].values())
+            m = np.mean(v) if v else np.nan
+            gap = 100 * (m - bk) / bk if bk else np.nan
+            within[o] += int(bool(np.isfinite(gap) and gap <= 1.0))
+            cells.append(f"{gap:+.2f} %" if np.isfinite(gap) else "-")
         print("| " + " | ".join(cells) + " |")
     print()
     for o in peers:
-        print(f"- {a.planner} has the lower mean than {o} on {wins[o]}/{len(tasks)} maps")
+        print(f"- {a.planner} has the lower mean than {o} on {wins[o]}/{len(tasks)} maps "
+              f"(p < 0.05: better on {sig_better[o]}, worse on {sig_worse[o]})")
+    for o in gap_cols:
+        print(f"- {o}'s mean is within 1 % of the best-known on {within[o]}/{len(tasks)} maps")
 
 
 if __name__ == "__main__":

@@ -102,6 +102,25 @@ def test_seeded_cmaes_starts_at_the_best_seed(problem: Problem) -> None:
     assert res.f + PENALTY_FACTOR * res.phi <= floor.f + PENALTY_FACTOR * floor.phi + 1e-9
 
 
+def test_seeded_cmaes_default_step_is_the_swept_one(problem: Problem) -> None:
+    """`cmaes-seeded-lp` runs at SEEDED_SIGMA0 (issue 14's sweep, docs/search.md), its registry
+    description names that value, and another sigma0 gives another run."""
+    from planner_core.baselines import cmaes
+    from planner_core.starts import with_init
+
+    spec = baselines.get("cmaes-seeded-lp")
+    assert f"sigma0 {cmaes.SEEDED_SIGMA0:g} " in spec.description
+    reg = optimise("cmaes-seeded-lp", problem, 600, seed=3)
+
+    def run(sigma0: float):
+        return cmaes.optimise(BudgetedProblem(with_init(problem, "seeded"), 600), 600, 3,
+                              seeded=True, sigma0=sigma0)
+
+    same = run(cmaes.SEEDED_SIGMA0)
+    assert np.array_equal(reg.x, same.x) and reg.f == same.f
+    assert not np.array_equal(run(0.2).history.best_score, same.history.best_score)
+
+
 def test_fixed_length_variant_uses_every_point(problem: Problem) -> None:
     p = problem_for("de-adaptive-fixedlen", problem)
     assert not p.variable_length and p.dim == problem.dim

@@ -73,7 +73,30 @@ def test_search_table_prints_the_comparison(tmp_path) -> None:
     lines = r.stdout.splitlines()
     assert lines[0].startswith("| map | planner | seed-lp | p vs seed-lp | gap to best-known |")
     assert lines[2].startswith("| T01 | 297.00 (3/3) | 298.00 (3/3) |")
-    assert "- planner has the lower mean than seed-lp on 1/1 maps" in r.stdout
+    assert "- planner has the lower mean than seed-lp on 1/1 maps (p < 0.05: better on 0, " \
+        "worse on 0)" in r.stdout  # 3 pairs: no p below 0.25
+    # --runs 2 keeps runs 0 and 1 (records without a run field are kept: none here has one)
+    recs2 = [{**rec, "run": rec["seed"], "init": "seeded"} for rec in recs]
+    res.write_text("".join(json.dumps(r) + "\n" for r in recs2 + recs2))  # twice: counted once
+    bk = tmp_path / "bk.json"
+    bk.write_text(json.dumps({"tasks": {"T01": {"f": 294.0}}}))
+    r = _script("benchmarks/search_table.py", str(res), "--runs", "2", "--gaps",
+                "--best-known", str(bk))
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.splitlines()
+    assert lines[0].startswith("| map | planner | seed-lp | p vs seed-lp | gap planner | gap "
+                               "seed-lp |")
+    assert lines[2].startswith("| T01 | 296.50 (2/2) | 297.50 (2/2) |")
+    assert lines[2].endswith("| +0.85 % | +1.19 % |")
+    assert "- planner's mean is within 1 % of the best-known on 1/1 maps" in r.stdout
+    assert "- seed-lp's mean is within 1 % of the best-known on 0/1 maps" in r.stdout
+    # PATH:NAME=LABEL keeps only the named optimisers of a file, relabelled
+    r = _script("benchmarks/search_table.py", f"{res}:planner,seed-lp=old-seed-lp",
+                "--runs", "2")
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.startswith("| map | planner | old-seed-lp | p vs old-seed-lp |")
+    r = _script("benchmarks/search_table.py", f"{res}:planner", "--runs", "2")
+    assert r.stdout.startswith("| map | planner | gap to best-known |")
 
 
 def test_bench_executor_runs() -> None:
@@ -99,3 +122,88 @@ def test_bench_executor_train_mode_runs_on_local_backends() -> None:
     assert "ratio local x 2 / local x 1: training" in out
     assert "same checkpoint on every backend and worker count: yes" in out
     assert "16 epochs x 3200 problems at 3000 evaluations" in out
+
+
+def test_bench_order_compares_our_order_with_ortools() -> None:
+    r = _script("benchmarks/bench_order.py", "--maps", "T01", "--seeds", "1", timeout=300)
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.strip().splitlines()
+    assert re.match(r"T01: \d+ site sets, ours longer on \d+, shorter on \d+$", lines[0])
+    assert lines[-2].startswith("total: ") and lines[-1].startswith("CPU time per set: ours ")
+
+
+def _t01_plan() -> dict:
+    """One stored 10,000-evaluation planner run on T01 (docs/search/seeded-25runs.jsonl)."""
+    for line in (ROOT / "docs/search/seeded-25runs.jsonl").read_text().splitlines():
+        r = json.loads(line)
+        if r["optimiser"] == "planner" and r["task"] == "T01" and r["feasible"]:
+            return r
+    raise AssertionError("no feasible T01 planner record")
+
+
+def test_refresh_best_known_stores_only_plans_the_sim_passes(tmp_path) -> None:
+    """The README's `python benchmarks/refresh_best_known.py RESULTS`: a record that claims to
+    be feasible with a lower f but is short of data (hover times halved) is refused by the sim;
+    the real plan is stored; a second refresh changes nothing; `--check-stored` passes it."""
+    real = _t01_plan()
+    fake = {**real, "run": 99, "f": real["f"] - 10.0,
+            "hover_times": [t / 2 for t in real["hover_times"]]}
+    res = tmp_path / "results.jsonl"
+    res.write_text(json.dumps(fake) + "\n" + json.dumps(real) + "\n")
+    bk = tmp_path / "bk.json"
+    r = _script("benchmarks/refresh_best_known.py", str(res), "--best-known", str(bk))
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "run 99" in r.stdout and "sim failed C4" in r.stdout
+    assert "refresh: 1 task(s) improved: T01" in r.stdout
+    entry = json.loads(bk.read_text())["tasks"]["T01"]
+    assert entry["hover_times"] == real["hover_times"] and entry["optimiser"] == "planner"
+    assert abs(entry["f"] - real["f"]) < 1e-6
+    r = _script("benchmarks/refresh_best_known.py", str(res), "--best-known", str(bk),
+                "--check-stored")
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "refresh: 0 task(s) improved" in r.stdout
+    assert "stored entries failing the sim: none" in r.stdout
+
+
+def test_refresh_best_known_replaces_a_stored_plan_the_sim_fails(tmp_path) -> None:
+    """A stored best-known plan that fails the sim gives way to the best record that passes,
+    even with a higher f (BestKnown.offer(replace=True)); --check-stored reports it first."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("refresh_best_known",
+                                                  ROOT / "benchmarks/refresh_best_known.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    from planner_core.bench.limits import file_sha256
+
+    real = _t01_plan()
+    suite = ROOT / "examples/maps/suite"
+    bad = {"f": real["f"] - 10.0, "map_sha256": file_sha256(suite / "T01.json"),
+           "optimiser": "hand", "hover_points": real["hover_points"],
+           "hover_times": [t / 2 for t in real["hover_times"]]}
+    bk = tmp_path / "bk.json"
+    bk.write_text(json.dumps({"tasks": {"T01": bad}}))
+    assert mod.check_stored(suite, bk, log=lambda _m: None) == ["T01"]
+    res = tmp_path / "results.jsonl"
+    res.write_text(json.dumps(real) + "\n")
+    rep = mod.refresh([res], suite, bk, log=lambda _m: None)
+    assert rep["T01"]["stored"] and rep["T01"]["replaced_failing"]
+    assert json.loads(bk.read_text())["tasks"]["T01"]["hover_times"] == real["hover_times"]
+    assert mod.check_stored(suite, bk, log=lambda _m: None) == []
+
+
+def test_cmaes_sigma_sweep_runs_and_ranks(tmp_path) -> None:
+    """The README's `python benchmarks/cmaes_sigma_sweep.py`, two sigma0 on one map, tiny budget;
+    a second call resumes (runs nothing) and prints the same table."""
+    args = ("benchmarks/cmaes_sigma_sweep.py", "--out", str(tmp_path / "s"), "--tasks", "T01",
+            "--runs", "1", "--budget", "300", "--sigma0", "0.02", "0.2")
+    r = _script(*args)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "| map | s0.02 | s0.2 |" in r.stdout
+    assert re.search(r"cmaes-seeded-lp-s0.02: mean rank (1\.00|1\.50|2\.00), lowest mean on "
+                     r"[01]/1 maps", r.stdout)
+    meta = json.loads((tmp_path / "s" / "meta.json").read_text())
+    assert meta["optimisers"]["cmaes-seeded-lp-s0.2"]["kwargs"] == {"seeded": True, "sigma0": 0.2}
+    again = _script(*args)
+    assert "0 to run" in again.stdout
+    assert again.stdout.split("| map |")[1] == r.stdout.split("| map |")[1]

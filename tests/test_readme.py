@@ -107,6 +107,11 @@ COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
     "python benchmarks/bench_plan.py": ("test_benchmarks.py", ("bench_plan",)),
     "lamde-mission bench": ("test_bench.py::test_cli_bench_then_report", ('"bench"',)),
     "lamde-mission report": ("test_bench.py::test_cli_bench_then_report", ('"report"',)),
+    "lamde-mission report results -o docs/results.md --reference de-lamde --imax":
+        ("test_studies.py::test_report_sections_from_study_folders_and_their_slim_copies",
+         ('"report"', '"--imax"', '"--ablations"', '"--reference"')),
+    "python benchmarks/store_runs.py":
+        ("test_studies.py::test_store_runs_script", ("store_runs.py",)),
     "lamde-mission schema": ("test_mapio.py::test_cli_check_and_schema", ('"schema"',)),
     "lamde-mission check MAP": ("test_mapio.py::test_cli_check_and_schema", ('"check"',)),
     "lamde-mission map campus": ("test_gis.py::test_cli_map_campus_writes_the_benchmark_map",
@@ -131,6 +136,11 @@ COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
                                                               '"--loss"', '"--runs"')),
     "python benchmarks/search_table.py":
         ("test_benchmarks.py::test_search_table_prints_the_comparison", ("search_table",)),
+    "python benchmarks/cmaes_sigma_sweep.py":
+        ("test_benchmarks.py::test_cmaes_sigma_sweep_runs_and_ranks", ("cmaes_sigma_sweep",)),
+    "python benchmarks/refresh_best_known.py":
+        ("test_benchmarks.py::test_refresh_best_known_stores_only_plans_the_sim_passes",
+         ("refresh_best_known",)),
     "python benchmarks/bench_executor.py":
         ("test_benchmarks.py::test_bench_executor_runs", ("bench_executor",)),
     "python docs/make_gallery.py":

@@ -224,8 +224,13 @@ class BestKnown:
         budget: int | None,
         run: int | None = None,
         command: str = "",
+        replace: bool = False,
     ) -> bool:
-        """Store this plan if it is feasible on the map and beats the stored f; True if stored."""
+        """Store this plan if it is feasible on the map and beats the stored f; True if stored.
+
+        `replace`: store it even when the stored f is lower (for a stored plan that an outside
+        check, the simulator's, found infeasible: `benchmarks/refresh_best_known.py`); the plan
+        must still be feasible on the map."""
         f, phi = verify_plan(map_path, hover_points, hover_times)
         if phi != 0.0 or not math.isfinite(f):
             return False
@@ -234,7 +239,8 @@ class BestKnown:
             data = read_json(self.path)
             tasks = data.setdefault("tasks", {})
             e = tasks.get(task)
-            if e is not None and e.get("map_sha256") == sha and float(e["f"]) <= f:
+            if (not replace and e is not None and e.get("map_sha256") == sha
+                    and float(e["f"]) <= f):
                 return False
             tasks[task] = {
                 "f": f,
