@@ -103,10 +103,12 @@ def test_cli_plan_with_a_trained_checkpoint_folder(tmp_path, capsys) -> None:  #
     assert "--policy: checkpoint:" in capsys.readouterr().err
 
 
-def test_shipped_checkpoint_is_small_and_documented() -> None:
-    from planner_core.policy.checkpoint import SHIPPED
+@pytest.mark.parametrize("name", ["lamde-v1", "lamde-v2"])
+def test_shipped_checkpoint_is_small_and_documented(name: str) -> None:
+    from planner_core.policy.checkpoint import DEFAULT_CHECKPOINT, SHIPPED
 
-    folder = SHIPPED / "lamde-v1"
+    assert DEFAULT_CHECKPOINT == "lamde-v2"
+    folder = SHIPPED / name
     assert sum(p.stat().st_size for p in folder.iterdir()) < 5 * 2**20
     manifest = json.loads((folder / "manifest.json").read_text())
     assert manifest["problems"] and all(s["kind"] == "uav" for s in manifest["problems"])

@@ -39,7 +39,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    f"(default {D.CONFIGURATOR})")
     p.add_argument("--policy", metavar="CHECKPOINT",
                    help="with --configurator lamde: a checkpoint folder from `lamde-mission "
-                   "train` instead of the shipped lamde-v1")
+                   "train` instead of the shipped lamde-v2")
     p.add_argument("--init", choices=D.INIT_MODES, default=D.INIT,
                    help="initial population: seeded (sensor-aware starts) or uniform in the "
                    f"box (the paper's protocol); default {D.INIT}")
