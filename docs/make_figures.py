@@ -36,7 +36,7 @@ REPORTS: list[tuple[str, str, str, list[str]]] = [
     ("docs/reduced/imax-runs", "docs/reduced/imax.md", "de-lamde", ["--no-limits"]),
     ("results", "docs/results.md", "de-lamde",
      ["--policy-checkpoint", "planner_core/policy/checkpoints/lamde-v1",
-      "--imax", "docs/studies/imax"]),
+      "--ablations", "docs/studies/ablations", "--imax", "docs/studies/imax"]),
 ]
 
 #: why a report's runs are not in the repository (its figures keep the style they were drawn in)
