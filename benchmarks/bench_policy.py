@@ -8,7 +8,7 @@ than the evaluations it configures), and what the policy adds to a plan of 10,00
 with that population (its generations x the median). The policy's CPU time (this process's)
 is printed beside its wall time: on a shared machine the wall time includes waiting for a core.
 
-    python benchmarks/bench_policy.py [MAP ...] [--checkpoint lamde-v1] [--generations 30]
+    python benchmarks/bench_policy.py [MAP ...] [--checkpoint lamde-v2] [--generations 30]
 """
 
 from __future__ import annotations
@@ -61,7 +61,7 @@ class _TimedPolicy:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("maps", nargs="*", default=[str(p) for p in DEFAULT_MAPS])
-    ap.add_argument("--checkpoint", default="lamde-v1")
+    ap.add_argument("--checkpoint", default="lamde-v2")
     ap.add_argument("--population", type=int, default=100)
     ap.add_argument("--generations", type=int, default=30)
     args = ap.parse_args()

@@ -70,7 +70,7 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=25)
     ap.add_argument("--modes", nargs="+", default=["seeded", "uniform"])
     ap.add_argument("--configurators", nargs="+", default=["lamde", "adaptive", "random", "fixed"])
-    ap.add_argument("--checkpoint", default="lamde-v1")
+    ap.add_argument("--checkpoint", default="lamde-v2")
     ap.add_argument("--budget", type=int, default=BUDGET)
     ap.add_argument("--population", type=int, default=POPULATION)
     ap.add_argument("--pipeline", choices=("de", "planner"), default="de",

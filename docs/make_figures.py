@@ -6,6 +6,10 @@ under DIR instead). No benchmark is re-run.
   and its figures (scores per task, convergence per task, best paths, I_max study) are
   rewritten. A folder that is not in the repository is skipped, and the script says so: the
   figures it made stay as they were drawn (see NOT_STORED).
+- STUDIES: a report whose own runs are not stored but whose studies are (`report --imax DIR
+  --ablations DIR` over slim copies kept in the repository, `benchmarks/store_runs.py`): the
+  studies' figures are redrawn, and the script checks that the page's study sections are what
+  the stored runs give.
 - POLICY: the score figures of `benchmarks/validate_policy.py`'s runs (docs/policy/*.jsonl),
   one per start mode, over the seeds every (map, mode, configurator) completed.
 
@@ -31,15 +35,17 @@ REPORTS: list[tuple[str, str, str, list[str]]] = [
     ("docs/reduced/runs", "docs/reduced/protocol.md", "de-adaptive", []),
     ("docs/reduced/imax-runs", "docs/reduced/imax.md", "de-lamde", ["--no-limits"]),
     ("results", "docs/results.md", "de-lamde",
-     ["--policy-checkpoint", "planner_core/policy/checkpoints/lamde-v1"]),
+     ["--policy-checkpoint", "planner_core/policy/checkpoints/lamde-v1",
+      "--imax", "docs/studies/imax"]),
 ]
 
 #: why a report's runs are not in the repository (its figures keep the style they were drawn in)
 NOT_STORED: dict[str, str] = {
-    "results": "the 8,000 runs behind docs/results.md were not committed (tens of MB); the "
-    "commands at the top of docs/results.md re-run them, seed for seed (~40 min with --jobs 1 "
-    "on this machine), then the report command there redraws the page (its hand-written "
-    "'what this shows' section must be kept by hand)",
+    "results": "the 8,000 runs behind docs/results.md were not committed (42 MB); the "
+    "commands at the top of docs/results.md re-run them, seed for seed (~35 min with --jobs 1 "
+    "on this machine), then the report command there redraws the page (keeping its "
+    "hand-written 'what this shows' section); its ablation and I_max studies are stored "
+    "(docs/studies/), and their figures are redrawn from them",
 }
 
 #: (runs file, figure stem, what the runs compare, command that made them)
@@ -62,6 +68,30 @@ def report_command(results: str, md: str, reference: str, extra: list[str]) -> s
     """The `lamde-mission report` command line a report records (and that re-makes it)."""
     return shlex.join(["lamde-mission", "report", results, "-o", md, "--reference", reference,
                        *extra])
+
+
+def _option(extra: list[str], flag: str) -> str | None:
+    return extra[extra.index(flag) + 1] if flag in extra else None
+
+
+def study_figures(md: str, reference: str, extra: list[str], out: Path) -> list[str]:
+    """Redraw the study figures of report `md` (under `out`) from the stored study folders its
+    options name (--imax, --ablations); return the problems found: a stored folder missing, or
+    the page's study sections not what the stored runs give."""
+    from planner_core.bench.report import study_sections
+
+    folders = {k: _option(extra, f"--{k}") for k in ("imax", "ablations")}
+    missing = [f for f in folders.values() if f and not (Path(f) / "results.jsonl").exists()]
+    if missing:
+        return [f"{md}: stored study folder(s) {', '.join(missing)} not found"]
+    if not any(folders.values()):
+        return []
+    lines = study_sections(out / md, (out / md).with_suffix(""), reference=reference, **folders)
+    page = (ROOT / md).read_text(encoding="utf-8") if (ROOT / md).is_file() else ""
+    if "\n".join(lines) not in page:
+        return [f"{md}: its study sections are not what the stored runs give: re-run its "
+                "report command (at its top)"]
+    return []
 
 
 def complete_seeds(records: list[dict[str, Any]]) -> list[int]:
@@ -121,25 +151,32 @@ def main(argv: list[str] | None = None) -> int:
     os.chdir(ROOT)  # the stored results name their suite relative to the repository root
     from planner_core.bench.report import build_report
 
+    problems: list[str] = []
     for results, md, reference, extra in REPORTS:
         if not (Path(results) / "results.jsonl").exists():
             print(f"skipped {md}: {results}/results.jsonl is not in the repository: "
                   f"{NOT_STORED.get(results, 'run its benchmark first')}", file=sys.stderr)
+            problems += study_figures(md, reference, extra, out)
+            if "--imax" in extra or "--ablations" in extra:
+                print(f"redrew the study figures of {md} from its stored study runs",
+                      file=sys.stderr)
             continue
-        policy = (extra[extra.index("--policy-checkpoint") + 1]
-                  if "--policy-checkpoint" in extra else None)
+        policy = _option(extra, "--policy-checkpoint")
         if out != ROOT and (ROOT / md).is_file():  # the hand-written part travels with the page
             (out / md).parent.mkdir(parents=True, exist_ok=True)
             if not (out / md).exists():
                 (out / md).write_text((ROOT / md).read_text(encoding="utf-8"), encoding="utf-8")
         build_report(results, out / md, reference=reference, limits="--no-limits" not in extra,
                      command=report_command(results, md, reference, extra),
-                     policy_checkpoint=policy)
+                     policy_checkpoint=policy, imax=_option(extra, "--imax"),
+                     ablations=_option(extra, "--ablations"))
         print(f"wrote {md} and its figures", file=sys.stderr)
     for runs, stem, what, _ in POLICY:
         for p in policy_figures(Path(runs), out / stem, what):
             print(f"wrote {p.relative_to(out).as_posix()}", file=sys.stderr)
-    return 0
+    for msg in problems:
+        print(f"error: {msg}", file=sys.stderr)
+    return 1 if problems else 0
 
 
 if __name__ == "__main__":

@@ -91,6 +91,7 @@ def plan(
     configurator: str | Any = _defaults.CONFIGURATOR,
     init: str = _defaults.INIT,
     memetic: str = _defaults.MEMETIC,
+    starts: int = _defaults.STARTS,
     variable_length: bool = True,
     polish: bool = True,
     progress: Callable[[Any], None] | None = None,
@@ -110,7 +111,14 @@ def plan(
     the uniform start, off for the seeded one), "on" or "off": the memetic step on the elite
     every 10 generations (`planner_core.memetic`: 2-opt, LP hover times, removals, and for an
     infeasible elite a point above each unserved sensor and its blocked legs re-routed); its
-    evaluations count against the budget.
+    evaluations count against the budget. `starts`: how many constructive plans
+    (`planner_core.construct`: greedy set covers and a k-means sweep of hover sites, an
+    open-path order on obstacle-aware flight times, visibility-graph detours, LP hover times)
+    go into the DE's initial population, the Deb-best of the first
+    `planner_core.defaults.START_CANDIDATES` built (0: none). Every evaluation counts against
+    `budget`: the constructive plans scored, the DE, and the polish's LP plans (the DE runs on
+    what is left), so `evaluations` <= budget (budget + 1 when budget equals the population:
+    the DE has only its start population and the polish its one LP plan).
     Defaults and valid ranges: `planner_core.defaults`.
 
     Raises ValueError with one line naming the field ("population: must be an integer >= 6,
@@ -125,7 +133,7 @@ def plan(
     from planner_core.starts import with_init
 
     _defaults.check_run_args(population=population, budget=budget, configurator=configurator,
-                             init=init, memetic=memetic)
+                             init=init, memetic=memetic, starts=starts)
     t_start = time.perf_counter()
     m = load_map(map)
     # safety margins (clearance, data margin) are a transformation of the map: the model is the
@@ -136,21 +144,39 @@ def plan(
     refine = None
     if use_memetic(memetic, timed):  # timed has the seeding hook exactly when init is seeded
         refine = functools.partial(memetic_refine, problem)
+    from planner_core.construct import start_from_plans
+    from planner_core.polish import ELITE
+
+    # the budget holds everything: the constructive plans scored, the DE, the polish's plans
+    reserve = min(ELITE, int(budget) // 4, int(budget) - int(population)) if polish else 0
+    room = max(int(budget) - reserve - int(population), 0)
     t0 = time.perf_counter()
+    opt, spent = start_from_plans(problem, timed, int(seed), starts=int(starts),
+                                  candidates=min(_defaults.START_CANDIDATES, room))
+    t_starts = time.perf_counter() - t0 - timed.seconds  # construction, not its evaluations
+    callback = progress
+    if progress is not None and spent:
+        def callback(p: Any) -> None:  # the run's evaluations, the constructive plans included
+            progress(p._replace(evaluations=p.evaluations + spent, budget=int(budget)))
+
+    t0 = time.perf_counter()
+    seconds0 = timed.seconds
     result = run(
-        timed,
+        opt,
         configurator=configurator,
         seed=int(seed),
         population=int(population),
-        budget=int(budget),
-        callback=progress,
+        budget=int(budget) - reserve - spent,
+        callback=callback,
         refine=refine,
     )
     t_optimise = time.perf_counter() - t0
+    t_run_eval = timed.seconds - seconds0
     best = problem.breakdown(result.x)
     chosen = best
     polish_info = None
     t_polish = 0.0
+    polished = 0
     if polish:
         from planner_core.de.core import to_problem
         from planner_core.model import deb_best
@@ -159,7 +185,9 @@ def plan(
         t1 = time.perf_counter()
         # the LP for the final population's elite, not only its Deb-best (docs/search.md)
         st = result.state
-        xs, pols = polish_elite(problem, to_problem(problem, st.X), st.f, st.phi)
+        xs, pols = polish_elite(problem, to_problem(problem, st.X), st.f, st.phi,
+                                max(reserve, 1))
+        polished = len(xs)
         fs, phis = problem.evaluate(xs)
         c = deb_best(fs, phis)
         pol = pols[c]
@@ -191,10 +219,10 @@ def plan(
         phi=chosen["phi"],
         feasible=chosen["phi"] == 0.0,
         breakdown=chosen,
-        evaluations=int(result.evaluations),
+        evaluations=spent + int(result.evaluations) + polished,
         wall_time=wall,
         history={
-            "evaluations": h.evaluations,
+            "evaluations": h.evaluations + spent,
             "best_f": h.best_f,
             "best_phi": h.best_phi,
             "feasible_fraction": h.feasible_fraction,
@@ -206,7 +234,8 @@ def plan(
         timings={
             "evaluation": timed.seconds,
             "seeding": timed.seeding_seconds,
-            "optimiser": max(t_optimise - timed.seconds - timed.seeding_seconds, 0.0),
+            "optimiser": max(t_optimise - t_run_eval - timed.seeding_seconds, 0.0),
+            "starts": t_starts,
             "polish": t_polish,
             "compile": t_compile,
             "total": wall,

@@ -41,6 +41,8 @@ __all__ = [
     "RUNS",
     "SCORE_FACTOR",
     "SEED",
+    "STARTS",
+    "START_CANDIDATES",
     "SUITE_SEED",
     "check",
     "check_run_args",
@@ -121,6 +123,16 @@ _RUN: tuple[Default, ...] = (
             "start, where the DE alone rarely reaches every sensor, off from the seeded start, "
             "where it measured no gain (docs/search.md)", "one of " + ", ".join(MEMETIC_MODES),
             lambda v: v in MEMETIC_MODES),
+    Default("starts", 10, "constructive plans (`planner_core.construct`: greedy set covers "
+            "and a k-means sweep of hover sites, an open-path order on obstacle-aware flight "
+            "times, visibility-graph detours, LP hover times) put into the DE's initial "
+            "population in place of its last rows, the Deb-best of the `start_candidates` "
+            "scored; 0: none (docs/search.md)", "an integer >= 0 (at most the population is "
+            "used)", _int_at_least(0)),
+    Default("start_candidates", 64, "constructive plans built and scored (one evaluation "
+            "each, counted in the budget) to pick the `starts` from, at most: the pipeline "
+            "builds 20-51 on the suite maps, so all of them; 0: none",
+            "an integer >= 0", _int_at_least(0)),
     Default("seed", 0, "random seed of a planning run (same seed, same plan)", "an integer >= 0",
             _int_at_least(0)),
     Default("score_factor", 10.0, "penalised score f + 10 * phi that ranks optimisers "
@@ -213,6 +225,8 @@ BUDGET: int = DEFAULTS["budget"].value
 CONFIGURATOR: str = DEFAULTS["configurator"].value
 INIT: str = DEFAULTS["init"].value
 MEMETIC: str = DEFAULTS["memetic"].value
+STARTS: int = DEFAULTS["starts"].value
+START_CANDIDATES: int = DEFAULTS["start_candidates"].value
 SEED: int = DEFAULTS["seed"].value
 SCORE_FACTOR: float = DEFAULTS["score_factor"].value
 SUITE_SEED: int = DEFAULTS["suite_seed"].value
@@ -240,14 +254,15 @@ def check(name: str, value: Any) -> Any:
 
 def check_run_args(
     *, population: Any, budget: Any, configurator: Any = None, init: Any = None,
-    memetic: Any = None,
+    memetic: Any = None, starts: Any = None, start_candidates: Any = None,
 ) -> None:
     """Check a planning run's population, budget, configurator name and start mode together.
 
     Raises ``ValueError`` with one line naming the first bad field: population must be an
     integer >= ``MIN_POPULATION``; budget an integer >= population; configurator (when a str)
     one of ``CONFIGURATORS`` (a configurator object passes unchecked); init (when given) one of
-    ``INIT_MODES``; memetic (when given) one of ``MEMETIC_MODES``.
+    ``INIT_MODES``; memetic (when given) one of ``MEMETIC_MODES``; starts and start_candidates
+    (when given) integers >= 0.
     """
     check("population", population)
     check("budget", budget)
@@ -260,6 +275,10 @@ def check_run_args(
         check("init", init)
     if memetic is not None:
         check("memetic", memetic)
+    if starts is not None:
+        check("starts", starts)
+    if start_candidates is not None:
+        check("start_candidates", start_candidates)
 
 
 def _cell(v: Any) -> str:

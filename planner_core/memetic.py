@@ -137,22 +137,22 @@ def repair_points(problem: Any, pts: np.ndarray) -> list[np.ndarray]:
     for j in np.flatnonzero(~served):
         if served[j]:
             continue  # a point inserted for an earlier sensor serves this one too
-        q = seeder._push_one(sensors[j].copy(), rng)
+        q = seeder.push_one(sensors[j].copy(), rng)
         i = _cheapest_insertion(problem, pts, q)
         pts = np.insert(pts, i, q, axis=0)
         served |= covers(problem, q)[0]
     limit = mp.n_points
-    routed, _ = seeder._route(pts)
+    routed, _ = seeder.route(pts)
     out = [_fit(problem, seeder, routed, merge_first=False)]
     if len(routed) > limit:
-        centres = seeder._prune(pts, limit) if len(pts) > limit else pts
-        routed, _ = seeder._route(centres)
+        centres = seeder.prune(pts, limit) if len(pts) > limit else pts
+        routed, _ = seeder.route(centres)
         while len(routed) > limit and len(centres) > 1:
             merged = _merge_pair(problem, centres)
             if merged is None:
                 break
             centres = merged
-            routed, _ = seeder._route(centres)
+            routed, _ = seeder.route(centres)
         second = _fit(problem, seeder, routed, merge_first=True)
         if not np.array_equal(second, out[0]):
             out.append(second)
@@ -164,16 +164,16 @@ def _fit(problem: Any, seeder: Any, pts: np.ndarray, *, merge_first: bool) -> np
     (least overlap added); filled to I_max in fixed-length mode."""
     limit = problem.model.n_points
     if len(pts) > limit:
-        pts = seeder._prune(pts, limit)
+        pts = seeder.prune(pts, limit)
     while not merge_first and len(pts) > limit:
         merged = _merge_pair(problem, pts)
         if merged is None:
             break
         pts = merged
     if len(pts) > limit:
-        pts = seeder._truncate(pts, limit)
+        pts = seeder.truncate(pts, limit)
     if not problem.variable_length:
-        pts = seeder._fill(pts, limit)
+        pts = seeder.fill(pts, limit)
     return pts
 
 

@@ -20,7 +20,9 @@ are feasible in most cases:
    point (corners included), times a random 1.0-1.1 margin, capped at T_max.
 
 Only geometry queries run here (`overlap_lengths`, `points_inside`, `ModelParams.rates`): the DE
-counts the evaluations of the starts itself.
+counts the evaluations of the starts itself. The steps other builders reuse are public methods
+(the constructive starts of `planner_core.construct` and the memetic repair): `push_one`,
+`connect`, `slide`, `route`, `prune`, `truncate`, `fill`.
 """
 
 from __future__ import annotations
@@ -151,7 +153,7 @@ class Seeder:
         # farthest ground distance at which 90% of T_max still serves each sensor
         rate_needed = np.maximum(p.required, 1e-9) / (0.9 * p.t_max)
         self.reach = ground_reach(rate_needed, p.altitude, p.peak_rate, p.decay)
-        self._ends = self._connect(np.vstack([p.start, p.end]))  # graph links of start, end
+        self._ends = self.connect(np.vstack([p.start, p.end]))  # graph links of start, end
         ang = 2.0 * np.pi * np.arange(_SLIDE_DIRS) / _SLIDE_DIRS
         self._unit = np.column_stack([np.cos(ang), np.sin(ang)])
 
@@ -174,12 +176,14 @@ class Seeder:
             if not inside.any():
                 break
             for m in np.flatnonzero(inside):
-                pts[m] = self._push_one(pts[m], rng)
+                pts[m] = self.push_one(pts[m], rng)
             pts = np.clip(pts, 0.0, self.size)
         return pts
 
-    def _push_one(self, q: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        """q moved `margin` beyond the nearest side of the first obstacle containing it."""
+    def push_one(self, q: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """Point q (2,) moved `margin` metres beyond the nearest side of the first obstacle
+        containing it (q itself when it is in none); rng only picks a direction for a point at a
+        circle's exact centre."""
         obs = self.obstacles
         for cx, cy, r in obs.circles:
             d = math.hypot(q[0] - cx, q[1] - cy)
@@ -200,9 +204,9 @@ class Seeder:
                 return q + nrm[e] * (self.margin - sd[e])
         return q
 
-    def _connect(self, pts: np.ndarray) -> np.ndarray:
-        """(P, N) distance from each point to each graph node it sees, tangentially at the
-        node (inf elsewhere)."""
+    def connect(self, pts: np.ndarray) -> np.ndarray:
+        """(P, N) distance (m) from each point of pts (P, 2) to each graph node it sees,
+        tangentially at the node (inf elsewhere)."""
         g = self.graph
         out = np.full((len(pts), g.n), np.inf)
         if g.n == 0 or len(pts) == 0:
@@ -273,7 +277,7 @@ class Seeder:
         return t[1:-1] - 1
 
     # ------------------------------------------------------------------ sliding
-    def _slide(
+    def slide(
         self,
         C: np.ndarray,
         owner: np.ndarray,
@@ -281,9 +285,10 @@ class Seeder:
         rng: np.random.Generator,
         sweeps: int = _SWEEPS,
     ) -> np.ndarray:
-        """Move each centre (already in visiting order) within its sensors' service radius to
-        clear its two legs and lower its share of f; alternate halves, all candidates of a
-        half in one geometry call."""
+        """Centres C (K, 2), already in visiting order, each moved within its sensors' service
+        radius (owner (J,): the centre serving each sensor; lim (J,) metres) to clear its two
+        legs and lower its share of f; alternate halves, all candidates of a half in one
+        geometry call. Returns the moved centres (K, 2); rng turns the candidate directions."""
         p = self.p
         K = len(C)
         if K == 0:
@@ -319,9 +324,9 @@ class Seeder:
         return pts[1:-1]
 
     # ------------------------------------------------------------------ routing
-    def _route(self, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Path start -> centres -> end with graph corners on the still-blocked legs:
-        (interior points (M, 2), is_centre (M,))."""
+    def route(self, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Path start -> centres C (K, 2) -> end with visibility-graph corners on the legs that
+        are still blocked, string-pulled: (interior points (M, 2), is_centre (M,) bool)."""
         p = self.p
         pts = np.vstack([p.start, C, p.end])
         clear = self._clear(pts[:-1], pts[1:])
@@ -333,7 +338,7 @@ class Seeder:
             inner = ends[(ends > 0) & (ends < len(pts) - 1)]
             A = np.full((len(pts), self.graph.n), np.inf)
             A[0], A[-1] = self._ends[0], self._ends[1]
-            A[inner] = self._connect(pts[inner])
+            A[inner] = self.connect(pts[inner])
             pos = np.arange(len(C), dtype=float)  # insertion keys: corners go after centre i-1
             keys = [pos]
             for leg in blocked.tolist():
@@ -368,10 +373,11 @@ class Seeder:
             M, centre = M[keep], centre[keep]
         return M, centre
 
-    def _prune(self, M: np.ndarray, limit: int) -> np.ndarray:
-        """Remove points whose sensors the others still serve within 95% of T_max and whose
-        neighbours see each other: while more than `limit` remain, the one whose removal
-        costs least; then any whose removal lowers the estimated f."""
+    def prune(self, M: np.ndarray, limit: int) -> np.ndarray:
+        """Route points M (k, 2) with points removed whose sensors the others still serve
+        within 95% of T_max and whose neighbours see each other: while more than `limit`
+        remain, the one whose removal costs least; then any whose removal lowers the estimated
+        f. Returns the kept points in order (m, 2)."""
         p = self.p
         while len(M) > 1:
             full = np.vstack([p.start, M, p.end])
@@ -403,9 +409,9 @@ class Seeder:
             M = np.delete(M, m, axis=0)
         return M
 
-    def _truncate(self, M: np.ndarray, limit: int) -> np.ndarray:
-        """Drop points until `limit` remain, each time the one whose removal adds the least
-        length inside obstacles (the partially colliding fallback)."""
+    def truncate(self, M: np.ndarray, limit: int) -> np.ndarray:
+        """Route points M (k, 2) cut to `limit`, each time dropping the one whose removal adds
+        the least length inside obstacles (the partially colliding fallback)."""
         p = self.p
         while len(M) > limit:
             full = np.vstack([p.start, M, p.end])
@@ -414,9 +420,9 @@ class Seeder:
             M = np.delete(M, int(np.argmin(cost)), axis=0)
         return M
 
-    def _fill(self, M: np.ndarray, limit: int) -> np.ndarray:
-        """Split the longest legs with collinear points until there are `limit` points (fixed-
-        length mode: a point on a clear leg keeps it clear)."""
+    def fill(self, M: np.ndarray, limit: int) -> np.ndarray:
+        """Route points M (k, 2) with the longest legs split by collinear points until there
+        are `limit` (fixed-length mode: a point on a clear leg keeps it clear)."""
         p = self.p
         frac = np.array([0.5, 0.35, 0.65, 0.2, 0.8, 0.05, 0.95])
         while len(M) < limit:
@@ -458,9 +464,9 @@ class Seeder:
             C, owner = self._clusters(rng, k, radius)
             order = self._order(C)
             lim = np.minimum(radius, self.reach)
-            C = self._slide(C[order], np.argsort(order)[owner], lim, rng)
-            M, _ = self._route(C)
-            M = self._prune(M, I)
+            C = self.slide(C[order], np.argsort(order)[owner], lim, rng)
+            M, _ = self.route(C)
+            M = self.prune(M, I)
             full = np.vstack([p.start, M, p.end])
             n_blocked = int(np.sum(~self._clear(full[:-1], full[1:])))
             _, unserved = self._times(M)
@@ -475,9 +481,9 @@ class Seeder:
         assert best is not None
         M = best[1]
         if len(M) > I:
-            M = self._truncate(M, I)
+            M = self.truncate(M, I)
         if not self.variable_length or p.tau <= 0.0:
-            M = self._fill(M, I)
+            M = self.fill(M, I)
         times, _ = self._times(M)
         return M, np.minimum(times * rng.uniform(1.0, 1.1), p.t_max)
 

@@ -191,9 +191,18 @@ def test_make_figures_redraws_the_stored_runs(tmp_path: Path) -> None:
             assert png.read_bytes()[:8] == PNG and png.stat().st_size > 10_000
             rel = png.relative_to(tmp_path / "docs").as_posix()
             assert f"]({rel})" in policy_md, f"docs/policy.md does not show {rel}"
-    for results, report, _, _ in mod.REPORTS:
+    for results, report, _, extra in mod.REPORTS:
         if not (ROOT / results / "results.jsonl").exists():
             assert f"skipped {report}" in r.stderr and results in mod.NOT_STORED
+            if "--imax" in extra or "--ablations" in extra:  # its stored studies are redrawn
+                assert f"redrew the study figures of {report}" in r.stderr
+                page = (ROOT / report).read_text(encoding="utf-8")
+                for flag, png in (("--imax", "imax_feasible_rate.png"),
+                                  ("--ablations", "ablation_normalised_uniform.png")):
+                    if flag in extra:
+                        rel = f"{Path(report).with_suffix('').name}/{png}"
+                        made = tmp_path / Path(report).parent / rel
+                        assert made.read_bytes()[:8] == PNG and f"]({rel})" in page
 
 
 def test_complete_seeds_drop_a_partial_last_seed() -> None:

@@ -124,6 +124,14 @@ def test_bench_executor_train_mode_runs_on_local_backends() -> None:
     assert "16 epochs x 3200 problems at 3000 evaluations" in out
 
 
+def test_bench_order_compares_our_order_with_ortools() -> None:
+    r = _script("benchmarks/bench_order.py", "--maps", "T01", "--seeds", "1", timeout=300)
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.strip().splitlines()
+    assert re.match(r"T01: \d+ site sets, ours longer on \d+, shorter on \d+$", lines[0])
+    assert lines[-2].startswith("total: ") and lines[-1].startswith("CPU time per set: ours ")
+
+
 def _t01_plan() -> dict:
     """One stored 10,000-evaluation planner run on T01 (docs/search/seeded-25runs.jsonl)."""
     for line in (ROOT / "docs/search/seeded-25runs.jsonl").read_text().splitlines():

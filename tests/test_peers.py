@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from planner_core import construct
 from planner_core.baselines import BudgetedProblem, optimise
 from planner_core.baselines import engineering as eng
 from planner_core.defaults import POPULATION
-from planner_core.memetic import covers
 from planner_core.polish import polish_hover_times
 from planner_core.problem import Problem
 
@@ -71,25 +71,9 @@ def test_engineering_budget_determinism_and_start_modes(walled: Problem) -> None
     assert uni.evaluations == full.evaluations
 
 
-def test_greedy_cover_covers_every_sensor(walled: Problem) -> None:
-    sites = eng.candidate_sites(walled)
-    for frac in eng.FRACTIONS:
-        chosen = sites[eng.greedy_cover(walled, sites, frac)]
-        # every sensor within frac x T_max where some candidate can do it, else within T_max
-        can = covers(walled, sites, frac).any(axis=0)
-        cov = np.where(can, covers(walled, chosen, frac), covers(walled, chosen, 1))
-        assert cov.any(axis=0).all()
-        assert len(chosen) <= len(walled.sensors)  # each pick covers a new sensor
-    # a site is a candidate only under the bandwidth (C3), and never inside an obstacle
-    assert np.all(walled.rates(sites).sum(axis=1) <= eng.BANDWIDTH_USE * walled.bandwidth)
-    from planner_core.geometry import points_inside
-
-    assert not points_inside(sites, walled.obstacles).any()
-
-
 def test_order_sites_is_the_obvious_open_path() -> None:
-    """No obstacles, sites on the line from start to end, given shuffled: OR-Tools returns
-    them in order along the line."""
+    """No obstacles, sites on the line from start to end, given shuffled: OR-Tools and our own
+    open path both return them in order along the line."""
     p = Problem({
         "name": "line", "area": {"width": 3000, "height": 1000},
         "start": [0, 500], "end": [3000, 500],
@@ -98,9 +82,10 @@ def test_order_sites_is_the_obvious_open_path() -> None:
     })  # fmt: skip
     xs = np.array([2500.0, 500.0, 1500.0, 2000.0, 1000.0])
     sites = np.column_stack([xs, np.full(5, 500.0)])
-    order = eng.order_sites(p, sites)
-    assert sorted(order.tolist()) == list(range(5))
-    np.testing.assert_array_equal(xs[order], np.sort(xs))
+    legs = construct.LegTimes(p)
+    for order in (eng.ortools_order(p, sites, legs), construct.order_sites(p, sites, legs)):
+        assert sorted(order.tolist()) == list(range(5))
+        np.testing.assert_array_equal(xs[order], np.sort(xs))
 
 
 def test_pymoo_ga_budget_exact_start_and_lp(walled: Problem) -> None:
@@ -152,7 +137,6 @@ def test_pymoo_ga_stops_when_nothing_new_can_be_made() -> None:
 def test_planner_from_engineering_starts(walled: Problem) -> None:
     """planner-eng-start: the engineering candidates, then the planner on the rest of the budget
     from a population holding the best of them; never worse than `engineering` (same seed)."""
-    from planner_core.baselines.eng_start import _WithStarts
 
     eng_res = optimise("engineering", walled, 10_000, seed=3)
     res = optimise("planner-eng-start", walled, 1_000, seed=3)
@@ -160,7 +144,7 @@ def test_planner_from_engineering_starts(walled: Problem) -> None:
     assert (res.phi, res.f) <= (eng_res.phi, eng_res.f)
     # the start population: the problem's own (seeded half kept), its last rows the given starts
     starts = np.stack([eng_res.x, eng_res.x + 0.0])
-    X = _WithStarts(walled, starts).initial_population(np.random.default_rng(0), 8)
+    X = construct.WithStarts(walled, starts).initial_population(np.random.default_rng(0), 8)
     own = walled.initial_population(np.random.default_rng(0), 8)
     np.testing.assert_array_equal(X[:6], own[:6])
     np.testing.assert_array_equal(X[6:], starts)
@@ -176,10 +160,26 @@ def test_engineering_plans_fit_i_max_when_detours_overflow() -> None:
     p = Problem(m)
     rng = np.random.default_rng(0)
     sizes = []
-    for _label, sites in eng.site_sets(p, 0):
-        for x in eng.build_plans(p, sites, rng):
+    for _label, sites in construct.site_sets(p, 0):
+        for x in construct.build_plans(p, sites, rng):
             assert x.shape == (p.dim,)
             sizes.append(p.breakdown(x)["n_hover"])
     assert sizes and max(sizes) <= 4
     res = optimise("engineering", p, 10_000, seed=0)
     assert p.breakdown(res.x)["n_hover"] <= 4
+
+
+def test_engineering_own_order_is_the_same_pipeline(walled: Problem) -> None:
+    """`engineering-own-order`: the same constructive plans ordered by the planner's own open
+    path (no OR-Tools); valid, deterministic, the same in both start modes; an unknown order is
+    refused naming it."""
+    own = optimise("engineering-own-order", walled, 10_000, seed=1)
+    b = walled.breakdown(own.x)
+    assert own.phi == 0.0 and b["v4"] == 0.0 and 1 <= b["n_hover"] <= walled.n_points
+    again = optimise("engineering-own-order", walled, 10_000, seed=1, init="uniform")
+    np.testing.assert_array_equal(own.x, again.x)
+    # the planner's constructive starts are exactly these plans (one code path)
+    X, _ = construct.candidate_plans(walled, 1)
+    assert any(np.array_equal(own.x, x) for x in X)
+    with pytest.raises(ValueError, match="^order: "):
+        eng.optimise(walled, 100, 0, order="lkh")

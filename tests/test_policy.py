@@ -176,7 +176,72 @@ def test_one_ppo_update_lowers_the_clipped_loss() -> None:
     stats = ppo_update(model, opt, cfg, obs, acts, old_logp, adv, out[4] + adv)
     after = clipped_objective(model, cfg, obs, acts, old_logp, adv)
     assert after < before
-    assert set(stats) == {"policy_loss", "value_loss", "entropy", "approx_kl", "clipfrac"}
+    assert set(stats) == {"policy_loss", "value_loss", "entropy", "approx_kl", "clipfrac",
+                          "bc_kl"}
+
+
+def test_bc_anchor_kl_is_exact_and_holds_ppo_near_the_reference() -> None:
+    """KL(pi_ref || pi) of the factorised policy equals E_ref[log pi_ref - log pi] (checked by
+    Monte Carlo on the exact log-probabilities), is 0 against itself, and the anchor in the PPO
+    loss keeps the updated policy closer to the reference than plain PPO on the same batch."""
+    torch = pytest.importorskip("torch")
+    from planner_core.policy.ppo import (
+        PPOConfig,
+        TorchPolicy,
+        _cat_obs,
+        batch_obs,
+        kl_from_reference,
+        log_prob_entropy,
+        ppo_update,
+    )
+
+    ref, other = TorchPolicy(NET), TorchPolicy(NET)
+    ref.load_numpy(_random_params(NET, 21))
+    other.load_numpy(_random_params(NET, 22))
+    obs = _cat_obs([batch_obs([_random_obs(5, 4, s)]) for s in range(3)])
+    with torch.no_grad():
+        ro = ref(obs["X"], obs["f"], obs["phi"], obs["progress"], obs["mask"])
+        oo = other(obs["X"], obs["f"], obs["phi"], obs["progress"], obs["mask"])
+        assert float(kl_from_reference(ro, ro).abs().max()) < 1e-5
+        kl = kl_from_reference(ro, oo)  # (3, 5)
+        assert kl.shape == (3, 5) and bool((kl > 0).all())
+        # Monte Carlo: sample the reference's actions, average the log-ratio
+        torch.manual_seed(3)
+        S = 40_000
+        Fd = torch.distributions.Beta(ro[2][..., 0], ro[2][..., 1])
+        Cd = torch.distributions.Beta(ro[3][..., 0], ro[3][..., 1])
+        acts = torch.stack([torch.distributions.Categorical(logits=ro[0]).sample((S,)).float(),
+                            torch.distributions.Categorical(logits=ro[1]).sample((S,)).float(),
+                            Fd.sample((S,)).clamp(1e-6, 1 - 1e-6),
+                            Cd.sample((S,)).clamp(1e-6, 1 - 1e-6)], dim=-1)  # (S, 3, 5, 4)
+        rep = [t.expand(S, *t.shape) for t in ro]
+        orep = [t.expand(S, *t.shape) for t in oo]
+        lp_ref, _ = log_prob_entropy(rep, acts)
+        lp_oth, _ = log_prob_entropy(orep, acts)
+        mc = (lp_ref - lp_oth).mean(dim=0)
+        se = (lp_ref - lp_oth).std(dim=0) / math.sqrt(S)
+    assert bool(((mc - kl).abs() < 5 * se + 1e-3).all())
+
+    # the anchor: same batch, same start, several PPO steps with and without it
+    rng = np.random.default_rng(5)
+    acts = torch.from_numpy(np.stack([rng.integers(0, 7, (3, 5)), rng.integers(0, 2, (3, 5)),
+                                      rng.uniform(0.05, 0.95, (3, 5)),
+                                      rng.uniform(0.05, 0.95, (3, 5))], axis=-1)).float()
+    with torch.no_grad():
+        old_logp, _ = log_prob_entropy(ro, acts)
+    adv = torch.from_numpy(rng.normal(size=3).astype(np.float32))
+    cfg = PPOConfig(update_epochs=20, lr=1e-2, clip=10.0, net=NET, vf_coef=0.0, ent_coef=0.0)
+    kls = []
+    for coef in (0.0, 10.0):
+        model = TorchPolicy(NET)
+        model.load_numpy(ref.numpy_params())
+        opt = torch.optim.Adam(model.parameters(), lr=cfg.lr)
+        stats = ppo_update(model, opt, cfg, obs, acts, old_logp, adv, ro[4], ref, coef)
+        with torch.no_grad():
+            out = model(obs["X"], obs["f"], obs["phi"], obs["progress"], obs["mask"])
+            kls.append(float(kl_from_reference(ro, out).mean()))
+        assert "bc_kl" in stats
+    assert 0 < kls[1] < 0.5 * kls[0]
 
 
 def test_gae_by_hand() -> None:
@@ -227,6 +292,32 @@ def test_two_epoch_training_smoke_run_and_resume(tmp_path) -> None:  # noqa: ANN
     assert (tmp_path / "c" / "weights.npz").read_bytes() == (out / "weights.npz").read_bytes()
     with pytest.raises(ValueError, match="resume"):
         train(_tiny_cfg(lr=0.5), TINY_SPECS, tmp_path / "c", resume=True)
+
+
+def test_ppo_from_a_checkpoint_with_the_bc_anchor_resumes_exactly(tmp_path) -> None:  # noqa: ANN001
+    """init_checkpoint starts PPO from given weights (the epoch-0 checkpoint is those weights,
+    no imitation fit); the anchor's reference survives --resume (1 + 1 epochs == 2 epochs); a
+    checkpoint of another network size is refused."""
+    pytest.importorskip("torch")
+    from planner_core.policy.ppo import train
+
+    bc = train(_tiny_cfg(epochs=0), TINY_SPECS, tmp_path / "bc")
+    kw = {"init_checkpoint": str(bc), "bc_coef": 1.0, "bc_decay": 0.5, "lr": 1e-2}
+    lines: list[str] = []
+    out = train(_tiny_cfg(epochs=0 + 2, **kw), TINY_SPECS, tmp_path / "a", log=lines.append)
+    assert not any(line.startswith("imitation epoch") for line in lines)
+    params, _, config = load(out)
+    assert config["training"]["epochs_done"] == 2 and config["training"]["imitation"] == []
+    bc_params, _, _ = load(bc)
+    assert any(not np.array_equal(params[k], bc_params[k]) for k in params)
+    curve = (out / "curve.csv").read_text().splitlines()
+    assert float(curve[1].split(",")[-2]) >= 0.0  # bc_kl column
+    train(_tiny_cfg(epochs=1, **kw), TINY_SPECS, tmp_path / "c")
+    train(_tiny_cfg(epochs=2, **kw), TINY_SPECS, tmp_path / "c", resume=True)
+    assert (tmp_path / "c" / "weights.npz").read_bytes() == (out / "weights.npz").read_bytes()
+    wide = NetConfig(embed=8, heads=2, ff=12, hidden=11)
+    with pytest.raises(ValueError, match="init_checkpoint"):
+        train(_tiny_cfg(net=wide, **kw), TINY_SPECS, tmp_path / "d")
 
 
 def test_checkpoint_round_trip_and_errors(tmp_path) -> None:  # noqa: ANN001

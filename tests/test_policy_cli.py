@@ -103,10 +103,12 @@ def test_cli_plan_with_a_trained_checkpoint_folder(tmp_path, capsys) -> None:  #
     assert "--policy: checkpoint:" in capsys.readouterr().err
 
 
-def test_shipped_checkpoint_is_small_and_documented() -> None:
-    from planner_core.policy.checkpoint import SHIPPED
+@pytest.mark.parametrize("name", ["lamde-v1", "lamde-v2"])
+def test_shipped_checkpoint_is_small_and_documented(name: str) -> None:
+    from planner_core.policy.checkpoint import DEFAULT_CHECKPOINT, SHIPPED
 
-    folder = SHIPPED / "lamde-v1"
+    assert DEFAULT_CHECKPOINT == "lamde-v2"
+    folder = SHIPPED / name
     assert sum(p.stat().st_size for p in folder.iterdir()) < 5 * 2**20
     manifest = json.loads((folder / "manifest.json").read_text())
     assert manifest["problems"] and all(s["kind"] == "uav" for s in manifest["problems"])
@@ -126,6 +128,34 @@ def test_bench_policy_runs_on_a_small_map() -> None:
                        capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr
     assert "policy / evaluation = " in r.stdout
+
+
+def test_compare_checkpoints_marks_each_map(tmp_path) -> None:  # noqa: ANN001
+    """benchmarks/compare_checkpoints.py: per map, on the seeds both files share, '+' where the
+    candidate's lamde runs rank significantly lower, '~' where they do not differ."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    def rec(m: str, seed: int, score: float, conf: str = "lamde") -> str:
+        return json.dumps({"map": m, "mode": "uniform", "configurator": conf, "seed": seed,
+                           "pipeline": "de", "f": score, "phi": 0.0, "score": score})
+
+    cand = [rec("A", s, 10.0 + s * 0.01) for s in range(12)] + [
+        rec("B", s, 50.0 + s) for s in range(12)] + [rec("A", 0, 1e9, "random")]
+    base = [rec("A", s, 20.0 + s * 0.01) for s in range(12)] + [
+        rec("B", s, 50.5 + s) for s in range(14)]
+    (tmp_path / "c.jsonl").write_text("\n".join(cand) + "\n")
+    (tmp_path / "b.jsonl").write_text("\n".join(base) + "\n")
+    root = Path(__file__).resolve().parent.parent
+    r = subprocess.run([sys.executable, str(root / "benchmarks" / "compare_checkpoints.py"),
+                        str(tmp_path / "c.jsonl"), str(tmp_path / "b.jsonl")],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    rows = {line.split()[0]: line.split() for line in r.stdout.splitlines()[1:3]}
+    assert rows["A"][3] == "+" and rows["A"][4] == "12"
+    assert rows["B"][3] == "~" and rows["B"][4] == "12"
+    assert "significantly better on 1, worse on 0, no difference on 1" in r.stdout
 
 
 def test_cli_train_reads_the_lam_trainset_format(tmp_path) -> None:  # noqa: ANN001

@@ -90,6 +90,17 @@ def test_imax_study_records_and_table(suite: Path, tmp_path: Path) -> None:
     assert sorted((r["i_max"], r["n_points"]) for r in recs) == [(2, 2), (2, 2), (5, 5), (5, 5)]
     for r in recs:
         assert 0.0 <= r["last_feasible_rate"] <= 1.0
+    # resumable: a cut-short study (its last record lost) runs exactly the missing run again
+    lines = (out / RESULTS_FILE).read_text().splitlines(keepends=True)
+    (out / RESULTS_FILE).write_text("".join(lines[:-1]))
+    again = run_bench(suite, ["de-adaptive", "de-adaptive-fixedlen"], runs=1, budget=BUDGET,
+                      out=out, tasks=["A1"], i_max=(2, 5), inits=("uniform",), command="t",
+                      executor=SerialExecutor(), best_known=False)
+    assert (again.planned, again.skipped, again.done) == (1, 3, 1)
+    def same(line: str) -> dict:  # the same run, bar its timings
+        return {k: v for k, v in json.loads(line).items() if k not in ("wall_s", "cpu_s")}
+
+    assert same((out / RESULTS_FILE).read_text().splitlines()[-1]) == same(lines[-1])
     tab = imax_table(recs)
     assert set(tab) == {"de-adaptive", "de-adaptive-fixedlen"}
     assert set(tab["de-adaptive"]) == {2, 5} and tab["de-adaptive"][2][2] == 1

@@ -107,6 +107,11 @@ COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
     "python benchmarks/bench_plan.py": ("test_benchmarks.py", ("bench_plan",)),
     "lamde-mission bench": ("test_bench.py::test_cli_bench_then_report", ('"bench"',)),
     "lamde-mission report": ("test_bench.py::test_cli_bench_then_report", ('"report"',)),
+    "lamde-mission report results -o docs/results.md --reference de-lamde --imax":
+        ("test_studies.py::test_report_sections_from_study_folders_and_their_slim_copies",
+         ('"report"', '"--imax"', '"--ablations"', '"--reference"')),
+    "python benchmarks/store_runs.py":
+        ("test_studies.py::test_store_runs_script", ("store_runs.py",)),
     "lamde-mission schema": ("test_mapio.py::test_cli_check_and_schema", ('"schema"',)),
     "lamde-mission check MAP": ("test_mapio.py::test_cli_check_and_schema", ('"check"',)),
     "lamde-mission map campus": ("test_gis.py::test_cli_map_campus_writes_the_benchmark_map",

@@ -49,7 +49,7 @@ def test_graph_route_goes_around_a_wall() -> None:
     }
     p = Problem(m)
     s = Seeder.for_problem(p)
-    ends = s._connect(np.array([p.start, p.end]))
+    ends = s.connect(np.array([p.start, p.end]))
     length, path = s.graph.route(ends[0], ends[1])
     assert path and np.isfinite(length)
     pts = np.vstack([p.start, s.graph.nodes[path], p.end])

@@ -60,7 +60,8 @@ def vehicle_stores(it: MissionItem, autopilot: str) -> MissionItem:
 
 
 def written_and_stored(plan, m, autopilot: str, path: Path):
-    stored = storable_plan(plan, m, autopilot)
+    # as `plan` on the command line does: storage keeps the planning map's data (its margin)
+    stored = storable_plan(plan, m, autopilot, planning_map=m.planning_map())
     write_mission(path, stored, m, autopilot=autopilot)
     items, _fence = read_mission(path)
     on_vehicle = [vehicle_stores(it, autopilot) for it in items]

@@ -5,7 +5,7 @@ RLDE-AFL, GLEET, LDE in a venv with numpy < 2) starts it as a subprocess and tal
 stdin/stdout, one JSON object per line (README.md beside this file):
 
     -> {"op": "info"}
-    <- {"dim": d, "lower": [...], "upper": [...], "budget": B, "used": 0}
+    <- {"dim": d, "lower": [...], "upper": [...], "budget": B, "used": 0, "seed": S}
     -> {"op": "evaluate", "X": [[...], ...]}        (rows in problem space, i.e. within bounds)
     <- {"f": [...], "phi": [...], "score": [...], "used": n}   score = f + 10 phi
     -> {"op": "finish"}
@@ -15,8 +15,12 @@ Every evaluation counts against the budget (`planner_core.baselines.BudgetedProb
 past it is answered {"error": ...} and evaluates nothing. The reported result is the best
 penalised score seen (as for CMA-ES), so the record is scored exactly as our own optimisers.
 
+The seed is recorded, and told to the client in "info" so it can seed its optimiser: either
+given (--seed) or our benchmark's seed of that (task, run) (--base-seed B:
+`planner_core.bench.runner.run_seed(B, task, run)`, so the foreign runs pair with ours).
+
 Usage: python benchmarks/metabox/evaluator_server.py --map examples/maps/suite/T01.json \
-           --optimiser rlde-afl --run 0 --seed 0 --budget 10000 --init uniform --out results/
+           --optimiser rlde-afl --run 0 --base-seed 0 --budget 10000 --init uniform --out results/
 """
 
 from __future__ import annotations
@@ -31,7 +35,7 @@ import numpy as np
 
 from planner_core.baselines import BudgetedProblem
 from planner_core.bench.records import RESULTS_FILE, ResultsWriter
-from planner_core.bench.runner import SCHEMA, downsample, read_map_file
+from planner_core.bench.runner import SCHEMA, downsample, read_map_file, run_seed
 from planner_core.model import penalised_score
 from planner_core.problem import Problem
 
@@ -42,12 +46,20 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--optimiser", required=True, help="name recorded, e.g. rlde-afl")
     ap.add_argument("--task", help="task name (default: the map file's stem)")
     ap.add_argument("--run", type=int, default=0)
-    ap.add_argument("--seed", type=int, default=0)
+    seed = ap.add_mutually_exclusive_group()
+    seed.add_argument("--seed", type=int, help="the run's seed, recorded (default 0)")
+    seed.add_argument("--base-seed", type=int,
+                      help="the seed is run_seed(BASE_SEED, task, run), as `lamde-mission bench`")
     ap.add_argument("--budget", type=int, default=10_000)
     ap.add_argument("--init", choices=("uniform", "seeded"), default="uniform",
                     help="recorded only: the foreign optimiser draws its own start")
     ap.add_argument("--out", help="results folder to append the record to (optional)")
     a = ap.parse_args(argv)
+    task = a.task or Path(a.map).stem
+    if a.base_seed is not None:
+        a.seed = run_seed(a.base_seed, task, a.run)
+    elif a.seed is None:
+        a.seed = 0
     content, sha = read_map_file(a.map)
     problem = Problem(content)
     bp = BudgetedProblem(problem, a.budget)
@@ -68,7 +80,8 @@ def main(argv: list[str] | None = None) -> int:
             continue
         if op == "info":
             reply({"dim": int(problem.dim), "lower": bp.lower.tolist(),
-                   "upper": bp.upper.tolist(), "budget": bp.budget, "used": bp.count})
+                   "upper": bp.upper.tolist(), "budget": bp.budget, "used": bp.count,
+                   "seed": a.seed})
         elif op == "evaluate":
             try:
                 X = np.atleast_2d(np.asarray(req["X"], dtype=float))
@@ -85,7 +98,7 @@ def main(argv: list[str] | None = None) -> int:
             h = bp.trace("penalised")
             ev, (bf, bph) = downsample(h.evaluations, [h.best_f, h.best_phi], bp.budget)
             bd = problem.breakdown(x)
-            rec = {"optimiser": a.optimiser, "task": a.task or Path(a.map).stem, "run": a.run,
+            rec = {"optimiser": a.optimiser, "task": task, "run": a.run,
                    "seed": a.seed, "budget": a.budget, "map_sha256": sha, "init": a.init,
                    "schema": SCHEMA, "score": float(penalised_score(f, phi)), "f": float(f),
                    "phi": float(phi), "feasible": bool(phi == 0.0),

@@ -39,7 +39,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    f"(default {D.CONFIGURATOR})")
     p.add_argument("--policy", metavar="CHECKPOINT",
                    help="with --configurator lamde: a checkpoint folder from `lamde-mission "
-                   "train` instead of the shipped lamde-v1")
+                   "train` instead of the shipped lamde-v2")
     p.add_argument("--init", choices=D.INIT_MODES, default=D.INIT,
                    help="initial population: seeded (sensor-aware starts) or uniform in the "
                    f"box (the paper's protocol); default {D.INIT}")
@@ -47,6 +47,11 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="memetic step on the elite (2-opt, LP hover times, removals, repair of "
                    "unserved sensors and blocked legs): auto = on with --init uniform, off with "
                    f"seeded; default {D.MEMETIC}")
+    p.add_argument("--starts", type=int, default=D.STARTS, metavar="N",
+                   help="constructive plans (greedy set covers, k-means sweep, open-path "
+                   "order, visibility-graph detours, LP hover times) put into the initial "
+                   f"population, the best of the first {D.START_CANDIDATES} built; 0: none; "
+                   f"default {D.STARTS}")
     p.add_argument("--fixed-length", action="store_true",
                    help="use all I_max hover points (the paper's LAMDE-F ablation)")
     p.add_argument("--no-polish", action="store_true", help="skip the hover-time LP polish")
@@ -223,7 +228,7 @@ def run(args: argparse.Namespace) -> int:
     except MissionFileError as exc:
         raise UsageError(f"-o/--output: {exc}") from None
     try:
-        D.check_run_args(population=args.population, budget=args.budget)
+        D.check_run_args(population=args.population, budget=args.budget, starts=args.starts)
     except ValueError as exc:  # "population: must be ...": name the option as typed
         raise UsageError(f"--{exc}") from None
     configurator = args.configurator
@@ -260,6 +265,7 @@ def run(args: argparse.Namespace) -> int:
         configurator=configurator,
         init=args.init,
         memetic=args.memetic,
+        starts=args.starts,
         variable_length=not args.fixed_length,
         polish=not args.no_polish,
         progress=progress,

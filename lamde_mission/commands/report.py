@@ -37,6 +37,12 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="the report's first heading (default 'Benchmark results')")
     p.add_argument("--no-limits", action="store_true",
                    help="leave out the lower-bound / best-known section")
+    p.add_argument("--imax", metavar="DIR",
+                   help="add the I_max study (paper Fig. 4) from this benchmark folder (`bench "
+                   "--i-max ... --out DIR`, or its slim copy from benchmarks/store_runs.py)")
+    p.add_argument("--ablations", metavar="DIR",
+                   help="add the ablation study (paper Table 3, Fig. 3) from this folder "
+                   "(`benchmarks/ablations.py --out DIR`, or its slim copy)")
     return p
 
 
@@ -56,6 +62,10 @@ def _command(args: argparse.Namespace, tasks: list[str] | None) -> str:
         parts.append("--no-limits")
     if args.title != "Benchmark results":
         parts += ["--title", args.title]
+    if args.imax:
+        parts += ["--imax", args.imax]
+    if args.ablations:
+        parts += ["--ablations", args.ablations]
     return shlex.join(parts)
 
 
@@ -66,13 +76,17 @@ def run(args: argparse.Namespace) -> int:
 
     if not (Path(args.results) / "results.jsonl").exists():
         raise UsageError(f"{args.results}: no results.jsonl (run `lamde-mission bench` first)")
+    for flag, folder in (("--imax", args.imax), ("--ablations", args.ablations)):
+        if folder and not (Path(folder) / "results.jsonl").exists():
+            raise UsageError(f"{flag} {folder}: no results.jsonl")
     tasks = [t for v in args.path_tasks for t in v.split(",") if t] if args.path_tasks else None
     try:
         out = build_report(args.results, args.output,
                            reference=args.reference or DEFAULT_REFERENCE,
                            suite=args.suite, figures=args.figures, path_tasks=tasks,
                            limits=not args.no_limits, command=_command(args, tasks),
-                           policy_checkpoint=args.policy_checkpoint, title=args.title)
+                           policy_checkpoint=args.policy_checkpoint, title=args.title,
+                           imax=args.imax, ablations=args.ablations)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     print(f"report: wrote {out}")

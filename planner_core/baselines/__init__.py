@@ -25,7 +25,15 @@ from planner_core.baselines.budget import (
     Trace,
     as_budgeted,
 )
-from planner_core.defaults import CONFIGURATOR, CONFIGURATORS, MEMETIC, POPULATION, SCORE_FACTOR
+from planner_core.defaults import (
+    CONFIGURATOR,
+    CONFIGURATORS,
+    MEMETIC,
+    POPULATION,
+    SCORE_FACTOR,
+    START_CANDIDATES,
+    STARTS,
+)
 from planner_core.starts import INIT_MODES, UniformStart, with_init
 
 __all__ = [
@@ -113,9 +121,18 @@ REGISTRY: dict[str, OptimiserSpec] = {
         OptimiserSpec(
             "planner",
             "planner_core.baselines.de:optimise",
-            f"what `plan` does: our DE ({CONFIGURATOR} configurator, population {POPULATION}; "
-            "from a uniform start with the memetic step) on budget - 16, then the polish LP on "
-            "the final population's 16 Deb-best",
+            f"what `plan` does: {START_CANDIDATES} constructive plans scored and the {STARTS} "
+            f"best put into the initial population, our DE ({CONFIGURATOR} configurator, "
+            f"population {POPULATION}; from a uniform start with the memetic step), then the "
+            "polish LP on the final population's 16 Deb-best; budget counted exactly",
+            kwargs={"lp": True, "memetic": MEMETIC, "starts": STARTS,
+                    "candidates": START_CANDIDATES},
+        ),
+        OptimiserSpec(
+            "planner-no-starts",
+            "planner_core.baselines.de:optimise",
+            "the planner without constructive starts (`plan --starts 0`; the planner before "
+            "issue 14's constructive starts): our DE on budget - 16, then the polish LP",
             kwargs={"lp": True, "memetic": MEMETIC},
         ),
         OptimiserSpec(
@@ -150,11 +167,21 @@ REGISTRY: dict[str, OptimiserSpec] = {
             constructive=True,
         ),
         OptimiserSpec(
+            "engineering-own-order",
+            "planner_core.baselines.engineering:optimise",
+            "the engineering pipeline with the planner's own visiting order (open path: "
+            "nearest neighbour and cheapest insertion, 2-opt, Or-opt) instead of OR-Tools'",
+            kwargs={"order": "own"},
+            spends_budget=False,
+            constructive=True,
+        ),
+        OptimiserSpec(
             "planner-eng-start",
             "planner_core.baselines.eng_start:optimise",
-            "experiment (issue 14, diverse starts): the engineering pipeline's candidates, then "
-            "the planner on the rest of the budget from its start population with the 10 best "
-            "engineering plans in place of its last 10 rows",
+            "the planner started from the `engineering` entry's plans: every constructive "
+            "candidate, ordered by OR-Tools, scored, the 10 best in place of the start "
+            "population's last 10 rows (`planner` instead scores its first "
+            f"{START_CANDIDATES}, ordered by its own open path)",
         ),
         OptimiserSpec(
             "pymoo-ga",

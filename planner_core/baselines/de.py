@@ -29,6 +29,9 @@ def optimise(
     lp: bool = False,
     memetic: bool | str = False,
     policy: str | None = None,
+    starts: int = 0,
+    candidates: int = 0,
+    order: Any = None,
 ) -> OptimiseResult:
     """Run the DE with `configurator` for exactly `budget` evaluations (initial population
     included). `lp`: what `plan` does, the DE on budget - ELITE, then the hover-time LP on the
@@ -37,7 +40,10 @@ def optimise(
     memetic step on the elite (`planner_core.memetic.refine`, when the problem can decode);
     a str is the defaults table's setting ("auto": on from a uniform start, as `plan` does).
     `policy`: a policy checkpoint folder (or shipped name) for `configurator="lamde"` (the
-    ablation variants); None = the shipped default."""
+    ablation variants); None = the shipped default. `starts`, `candidates`: as `plan` does, the
+    `starts` Deb-best of up to `candidates` constructive plans (`planner_core.construct`,
+    visiting order `order`, default its own open path; one evaluation each, counted) put into
+    the DE's initial population (UAV problem only; 0: none)."""
     from planner_core.baselines.seed_lp import can_lp
 
     budgeted = as_budgeted(problem, budget)
@@ -64,8 +70,15 @@ def optimise(
         from planner_core.memetic import refine as _refine
 
         refine = partial(_refine, budgeted.problem)
-    res = run(budgeted, configurator=configurator, seed=int(seed), population=population,
-              budget=int(budget) - reserve, refine=refine)
+    opt, spent = budgeted, 0
+    if starts > 0 and candidates > 0 and can_lp(budgeted):
+        from planner_core.construct import start_from_plans
+
+        room = max(int(budget) - reserve - population, 0)
+        opt, spent = start_from_plans(budgeted.problem, budgeted, int(seed), starts=int(starts),
+                                      candidates=min(int(candidates), room), order=order)
+    res = run(opt, configurator=configurator, seed=int(seed), population=population,
+              budget=int(budget) - reserve - spent, refine=refine)
     last_feasible = float(res.history.feasible_fraction[-1])  # the DE's last population
     if reserve:
         from planner_core.de.core import to_problem

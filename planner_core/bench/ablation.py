@@ -81,12 +81,17 @@ def training_seconds(checkpoint: str | Path) -> tuple[int, float] | None:
 
 
 def ablation_section(records: list[dict[str, Any]], entry: dict[str, Any], figures: Path,
-                     link: Callable[[Path], str], alpha: float = ALPHA) -> list[str]:
+                     link: Callable[[Path], str], alpha: float = ALPHA, *,
+                     source: list[str] | None = None,
+                     scores: dict[str, list[str]] | None = None) -> list[str]:
     """Markdown of the ablation study: how each variant was trained, then per start mode the
     normalised-performance table (+ Wilcoxon against the reference) and its box-plot figure
     (paper Fig. 3; PNGs in folder `figures`, linked as `link(png path)`). The per-task score
     table with +/~/- counts (paper Table 3) is the report's protocol section, whose reference
-    column is the ablation's reference."""
+    column is the ablation's reference; or, when the study is a section of another report
+    (`lamde-mission report --ablations DIR`), `scores[mode]`: its lines, given here, placed
+    before that mode's normalised performance. `source`: lines saying where the runs are,
+    after the section's first paragraph."""
     from planner_core.bench import figures as F
 
     reference = str(entry["reference"])
@@ -98,11 +103,15 @@ def ablation_section(records: list[dict[str, Any]], entry: dict[str, Any], figur
          "Every variant is the same policy network trained with the same PPO settings and "
          "budget; they differ only in the training problems or the encoding. The per-task "
          "score table with +/~/- against "
-         f"**{reference}** is the protocol section above (the paper's Table 3). Normalised "
+         f"**{reference}** is "
+         + ("below, per start mode" if scores is not None else "the protocol section above")
+         + " (the paper's Table 3). Normalised "
          "performance per run = final / initial penalised score (the incumbent after the "
          "first population; lower is better), aggregated over every task and run (the paper's "
-         "footnote to Fig. 3).", "",
-         "| Variant | Training | Training cost |", "|---|---|---:|"]
+         "footnote to Fig. 3).", ""]
+    if source:
+        L += [*source, ""]
+    L += ["| Variant | Training | Training cost |", "|---|---|---:|"]
     for v in trained:
         info = variants_info[v]
         cost = "-"
@@ -118,6 +127,8 @@ def ablation_section(records: list[dict[str, Any]], entry: dict[str, Any], figur
         table = normalised_table(recs, order, reference, alpha)
         tasks = sorted({r["task"] for r in recs})
         runs = sorted({int(r["run"]) for r in recs})
+        if scores is not None and mode in scores:
+            L += scores[mode]
         L += ["", f"### Normalised performance, init {mode}", "",
               f"{len(tasks)} task(s) x {len(runs)} run(s) per variant. Mark: Wilcoxon "
               f"rank-sum (two-sided, alpha {alpha}) of the pooled values against "

@@ -9,12 +9,14 @@ where it stopped.
 from __future__ import annotations
 
 import json
+import math
 import os
 from collections.abc import Iterable
 from pathlib import Path
 from typing import IO, Any, NamedTuple
 
-__all__ = ["RESULTS_FILE", "Key", "key_of", "read_records", "ResultsWriter", "ReadReport"]
+__all__ = ["RESULTS_FILE", "Key", "key_of", "read_records", "ResultsWriter", "ReadReport",
+           "complete_runs", "slim_record"]
 
 #: the results file inside a benchmark output folder
 RESULTS_FILE = "results.jsonl"
@@ -84,6 +86,44 @@ def read_records(path: str | Path) -> ReadReport:
         seen.add(k)
         records.append(rec)
     return ReadReport(records, truncated, bad, dup)
+
+
+def complete_runs(records: list[dict[str, Any]]) -> tuple[list[dict[str, Any]], list[int]]:
+    """The records of the run indices every cell has finished, and the run indices left out.
+
+    The cells are every (optimiser, task, start mode, I_max) combination of the values the
+    records hold (the benchmark plans the full product); run r is complete when every cell has
+    a record of run r. The benchmark runs run-major (every cell's run 0 before any run 1), so
+    an unfinished benchmark leaves only its last run index(es) partial: leaving them out keeps
+    every cell at the same number of runs (a fair comparison)."""
+    keys = [key_of(r) for r in records]
+    n_cells = math.prod(len({k[i] for k in keys}) for i in (0, 1, 3, 4))
+    have: dict[int, set[tuple[str, str, str, int | None]]] = {}
+    for k in keys:
+        have.setdefault(k.run, set()).add((k.optimiser, k.task, k.init, k.i_max))
+    complete = {run for run, c in have.items() if len(c) == n_cells}
+    return ([r for r in records if key_of(r).run in complete],
+            sorted(run for run in have if run not in complete))
+
+
+#: the fields of a run record that the report's tables and study figures read (`slim_record`)
+SLIM_FIELDS = ("optimiser", "task", "run", "seed", "budget", "init", "i_max", "schema", "score",
+               "f", "phi", "feasible", "evaluations", "wall_s", "n_hover", "n_points",
+               "last_feasible_rate")
+
+
+def slim_record(record: dict[str, Any]) -> dict[str, Any]:
+    """A run record cut to what the tables, the I_max study and the ablations' normalised
+    performance read (:data:`SLIM_FIELDS`, and the first entry of the convergence trace: the
+    incumbent after the first population); the map's hash, the hover points, x and the rest of
+    the trace are dropped (they are what makes a record 3-6 kB). The convergence and best-path
+    figures cannot be drawn from slim records; every table can, to the same digits."""
+    out = {k: record[k] for k in SLIM_FIELDS if k in record}
+    h = record.get("history") or {}
+    if h.get("best_f"):
+        out["history"] = {k: list(h[k][:1]) for k in ("evaluations", "best_f", "best_phi")
+                          if k in h}
+    return out
 
 
 def _repair_tail(path: Path) -> None:

@@ -6,7 +6,9 @@ per-optimiser summary (feasibility, wall time, mean rank), feasibility per task,
 against the limits (mean f of feasible runs / best-known and / LB), every run's score per task,
 one convergence plot per task and each optimiser's best path on four tasks (the figures are
 `planner_core.bench.figures`); the I_max study when runs override I_max, and the ablation study
-(`planner_core.bench.ablation`) when meta.json holds its entry.
+(`planner_core.bench.ablation`) when meta.json holds its entry. Either study can also come from
+its own benchmark folder (`study_sections`: `lamde-mission report RESULTS --imax DIR
+--ablations DIR`), e.g. a slim copy kept in the repository (`planner_core.bench.store`).
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ from planner_core.bench.stats import ALPHA, ScoreTable, score_table
 from planner_core.defaults import SCORE_FACTOR
 
 __all__ = ["DEFAULT_REFERENCE", "build_report", "cost_section", "imax_section", "imax_table",
-           "order_optimisers", "format_table", "fmt"]
+           "order_optimisers", "format_table", "fmt", "study_sections"]
 
 #: start modes in the report's order, and what each means
 INIT_ORDER = ("uniform", "seeded")
@@ -141,6 +143,8 @@ def build_report(
     alpha: float = ALPHA,
     policy_checkpoint: str | Path | None = None,
     title: str = "Benchmark results",
+    imax: str | Path | None = None,
+    ablations: str | Path | None = None,
 ) -> Path:
     """Write the markdown report of `results_dir` to `output` (figures beside it); return it.
 
@@ -151,7 +155,9 @@ def build_report(
     with an I_max override go to the I_max study section; `policy_checkpoint`: a policy
     checkpoint folder whose `curve.csv` gives the training cost; `title`: the first heading. When
     meta.json holds an ablation entry (`benchmarks/ablations.py`), its reference is the default
-    reference and the ablation section follows (`planner_core.bench.ablation`).
+    reference and the ablation section follows (`planner_core.bench.ablation`). `imax`,
+    `ablations`: benchmark folders of those studies, each reported in its own section after the
+    protocols (`study_sections`).
     """
     from planner_core.baselines import REGISTRY
 
@@ -247,9 +253,12 @@ def build_report(
                             else f"_{mode}")
     study = [r for r in records if r.get("i_max") is not None]
     if study:
-        L += imax_section(study, figures / "imax_feasible_rate.png", output)
+        L += imax_section(study, figures / "imax_feasible_rate.png", output,
+                          reference=reference, alpha=alpha)
     if ablation:
         L += ablation_section(main, ablation, figures, lambda p: _rel(p, output.parent), alpha)
+    L += study_sections(output, figures, imax=imax, ablations=ablations, alpha=alpha,
+                        reference=reference)
     L += cost_section(records, policy_checkpoint)
     write_text_atomic(output, "\n".join(L) + "\n")
     return output
@@ -373,13 +382,20 @@ def imax_table(records: list[dict[str, Any]]) -> dict[str, dict[int, tuple[float
             for o, d in acc.items()}
 
 
-def imax_section(records: list[dict[str, Any]], path: Path, output: Path) -> list[str]:
+def imax_section(records: list[dict[str, Any]], path: Path, output: Path,
+                 source: list[str] | None = None, reference: str | None = None,
+                 alpha: float = ALPHA) -> list[str]:
     """Markdown (table + figure) of the I_max study (paper Fig. 4): the last population's
-    feasible rate against I_max, per optimiser and start mode."""
+    feasible rate against I_max, per optimiser and start mode, then the final scores at each
+    I_max summed up over the tasks (best means, Wilcoxon +/~/- against `reference`, default:
+    the first optimiser in the report's order); `source`: lines saying where the runs are,
+    after the first paragraph."""
     L = ["", "## I_max study (paper Fig. 4)", "",
          "Feasible rate of the last population (share with phi = 0) against I_max "
          "(`uav.max_hover_points` overridden on every map): mean ± std over tasks and runs. "
          "The paper: LAMDE-F (fixed length) at 0 from I_max >= 70, LAMDE above 0.6 at 100."]
+    if source:
+        L += ["", *source]
     tasks = sorted({r["task"] for r in records})
     runs = sorted({int(r["run"]) for r in records})
     budgets = sorted({int(r["budget"]) for r in records})
@@ -405,6 +421,138 @@ def imax_section(records: list[dict[str, Any]], path: Path, output: Path) -> lis
                         budget=budgets[-1] if len(budgets) == 1 else None)
     p = F.save(fig, path)
     L += ["", f"![I_max study]({_rel(p, output.parent)})"]
+    opts = order_optimisers(sorted({r["optimiser"] for r in records}), reference)
+    ref = reference if reference in opts else opts[0]
+    L += ["", f"Final score f + 10 phi at each I_max, over the {len(tasks)} task(s): on how "
+          "many tasks each optimiser has the best mean, and the per-task Wilcoxon rank-sum "
+          f"counts (two-sided, alpha {alpha}) against **{ref}** (`+` {ref} significantly "
+          "better, `~` no significant difference, `-` worse)."]
+    for mode in INIT_ORDER:
+        recs = [r for r in records if _init(r) == mode]
+        if not recs:
+            continue
+        ks = sorted({int(r["i_max"]) for r in recs})
+        cols: dict[int, ScoreTable] = {}
+        for k in ks:
+            by = _by([r for r in recs if int(r["i_max"]) == k])
+            scores = {t: {o: [r["score"] for r in by[t].get(o, [])] for o in opts}
+                      for t in by}
+            cols[k] = score_table(scores, sorted(by), opts, ref, alpha)
+        L += ["", f"Start mode {mode}:", "", "| Optimiser | " + " | ".join(
+            f"I_max {k}" for k in ks) + " |", "|---|" + "---:|" * len(ks)]
+        for o in opts:
+            cells = []
+            for k in ks:
+                tab = cols[k]
+                best = f"best on {sum(tab.cells[t][o].best for t in tab.tasks)}/{len(tab.tasks)}"
+                cells.append(best if o == ref else
+                             f"{best}, +/~/- {'/'.join(map(str, tab.counts[o]))}")
+            L.append(f"| {_col(o, ref)} | " + " | ".join(cells) + " |")
+    return L
+
+
+def _study_source(folder: Path, meta: dict[str, Any], left_out: list[int],
+                  kept: list[dict[str, Any]]) -> list[str]:
+    """Where a study's runs are, the commands that made them, and what an unfinished run left
+    out."""
+    runs = sorted({int(r["run"]) for r in kept})
+    L = [f"Runs: `{folder.as_posix()}`"
+         + (f" (slim copy of `{meta['stored']['from']}`, `benchmarks/store_runs.py`)"
+            if "stored" in meta else "") + ", produced by:", ""]
+    cmds = [c.get("command", "") for c in meta.get("commands", []) if c.get("command")]
+    driver = (meta.get("ablation") or {}).get("driver")
+    L += [f"    {c}" for c in dict.fromkeys([driver] if driver else cmds)]
+    if left_out:
+        L += ["", f"The benchmark had not finished: runs {', '.join(map(str, left_out))} "
+              "exist for some cells only and are left out, so every cell (optimiser, task, "
+              f"start mode, I_max) counts the same {len(runs)} run(s) (the runner runs "
+              "run-major: every cell's run r before any cell's run r + 1)."]
+    return L
+
+
+def _study_records(folder: Path, what: str) -> tuple[list[dict[str, Any]], dict[str, Any],
+                                                      list[int]]:
+    from planner_core.bench.records import complete_runs
+
+    recs = read_records(folder / RESULTS_FILE).records
+    if not recs:
+        raise ValueError(f"--{what} {folder}: no results in {folder / RESULTS_FILE}")
+    kept, left_out = complete_runs(recs)
+    if not kept:
+        raise ValueError(f"--{what} {folder}: no run index is finished in every cell yet")
+    return kept, read_json(folder / "meta.json"), left_out
+
+
+def study_sections(output: str | Path, figures: str | Path, *, imax: str | Path | None = None,
+                   ablations: str | Path | None = None, alpha: float = ALPHA,
+                   reference: str | None = None) -> list[str]:
+    """Markdown of the ablation study and the I_max study, each from its own benchmark folder
+    (`benchmarks/ablations.py --out DIR` with its meta.json ablation entry; `lamde-mission
+    bench --i-max ... --out DIR`), or a slim copy of it (`benchmarks/store_runs.py`), for a
+    report `output` whose PNGs go to `figures`. Only the run indices finished in every cell are
+    used (`records.complete_runs`), so an unfinished study is reported on equal counts and says
+    what it left out. `reference`: the I_max study's Wilcoxon reference (the ablations use their
+    own, LAMDE). Raises ValueError for a folder without results or (ablations) without the
+    ablation entry."""
+    output, figures = Path(output), Path(figures)
+    L: list[str] = []
+    if ablations is not None:
+        from planner_core.bench.ablation import META_KEY, ablation_section
+
+        folder = Path(ablations)
+        recs, meta, left_out = _study_records(folder, "ablations")
+        entry = meta.get(META_KEY)
+        if not entry:
+            raise ValueError(f"--ablations {folder}: meta.json has no '{META_KEY}' entry "
+                             "(benchmarks/ablations.py writes it)")
+        main = [r for r in recs if r.get("i_max") is None]
+        reference = str(entry["reference"])
+        present = {r["optimiser"] for r in main}
+        named = [v for v in entry.get("variants", {}) if v in present and v != reference]
+        opts = named + sorted(present - set(named) - {reference}) + [reference]
+        scores: dict[str, list[str]] = {}
+        for mode in INIT_ORDER:
+            rs = [r for r in main if _init(r) == mode]
+            if rs:
+                scores[mode] = _ablation_scores(rs, [o for o in opts if o in
+                                                     {r["optimiser"] for r in rs}],
+                                                reference, alpha, mode)
+        L += ablation_section(main, entry, figures, lambda p: _rel(p, output.parent), alpha,
+                              source=_study_source(folder, meta, left_out, main),
+                              scores=scores)
+    if imax is not None:
+        folder = Path(imax)
+        recs, meta, left_out = _study_records(folder, "imax")
+        study = [r for r in recs if r.get("i_max") is not None]
+        if not study:
+            raise ValueError(f"--imax {folder}: no run overrides I_max (bench --i-max)")
+        L += imax_section(study, figures / "imax_feasible_rate.png", output,
+                          source=_study_source(folder, meta, left_out, study),
+                          reference=reference, alpha=alpha)
+    return L
+
+
+def _ablation_scores(records: list[dict[str, Any]], opts: list[str], reference: str,
+                     alpha: float, mode: str) -> list[str]:
+    """The ablation's per-task score table (paper Table 3) of one start mode, and per variant
+    its feasible runs."""
+    tasks = sorted({r["task"] for r in records})
+    by = _by(records)
+    scores = {t: {o: [r["score"] for r in by[t].get(o, [])] for o in opts} for t in tasks}
+    table = score_table(scores, tasks, opts, reference, alpha)
+    L = ["", f"### Penalised score f + 10 phi per task, init {mode} (paper Table 3)", "",
+         f"Mean ± std over runs, best mean bold; marks: Wilcoxon rank-sum (two-sided, alpha "
+         f"{alpha}) against **{reference}** (`+` {reference} significantly better, `-` "
+         "worse, `~` no significant difference).", ""]
+    L += format_table(table)
+    L += ["", "| Variant | runs | feasible runs | best mean on | mean wall time (s) |",
+          "|---|---:|---:|---:|---:|"]
+    for o in opts:
+        rs = [r for t in tasks for r in by[t].get(o, [])]
+        feas = sum(bool(r["feasible"]) for r in rs)
+        best = sum(table.cells[t][o].best for t in tasks)
+        L.append(f"| {o} | {len(rs)} | {feas} ({100 * feas / len(rs):.0f} %) | "
+                 f"{best}/{len(tasks)} | {np.mean([r['wall_s'] for r in rs]):.2f} |")
     return L
 
 

@@ -25,7 +25,7 @@ from planner_core.policy.network import NetConfig, param_shapes
 #: folder of the checkpoints shipped inside the package
 SHIPPED = Path(__file__).resolve().parent / "checkpoints"
 #: the checkpoint `configurator="lamde"` loads by default
-DEFAULT_CHECKPOINT = "lamde-v1"
+DEFAULT_CHECKPOINT = "lamde-v2"
 #: version 2: induced set attention blocks (NetConfig.inducing); version 1 (full attention) is
 #: no longer read
 FORMAT = "lamde-policy/2"

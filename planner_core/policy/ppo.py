@@ -26,7 +26,13 @@ log-densities. Every individual of a population shares its generation's advantag
 
     L_clip = mean over (generation, problem, individual) of max(-A r_i, -A clip(r_i, 1-e, 1+e))
     L_V    = 0.5 mean (V(s) - R)^2                  (critic on the pooled population)
-    L      = L_clip - c_ent * entropy + c_V * L_V   (gradient norm clipped to max_grad_norm)
+    L_BC   = mean over (generation, problem, individual) of KL(pi_ref(.|s) || pi(.|s))
+    L      = L_clip - c_ent * entropy + c_V * L_V + c_BC(e) * L_BC
+                                                    (gradient norm clipped to max_grad_norm)
+
+``L_BC`` is the behaviour-cloning anchor (``bc_coef``, 0 by default): ``pi_ref`` is the frozen
+warm-start policy and ``c_BC(e) = bc_coef * bc_decay**e`` in epoch e, so PPO starts close to
+the warm start and is let go as it learns; every KL is closed form (categoricals and Betas).
 
 ``log pi_old`` and the values V(s) are the actors' (the numpy forward pass at the weights the
 segment ran with; the torch twin agrees to about 1e-5, tests/test_policy.py).
@@ -66,7 +72,7 @@ from typing import Any
 import numpy as np
 import torch
 from torch import nn
-from torch.distributions import Beta, Categorical
+from torch.distributions import Beta, Categorical, kl_divergence
 
 from planner_core.atomic import write_bytes_atomic
 from planner_core.env import DEFAULT_DELTA, DEFAULT_ETA
@@ -136,6 +142,19 @@ class PPOConfig:
     """Observations per warm-start mini-batch."""
     imitate_stride: int = 3
     """Keep every k-th generation of the demonstrations (consecutive ones are near copies)."""
+    bc_coef: float = 0.0
+    """Weight of the behaviour-cloning anchor in PPO's loss: ``bc_coef * KL(pi_ref || pi)``,
+    per individual, with ``pi_ref`` the frozen warm-start policy (after the imitation fit, or
+    ``init_checkpoint``). The KL from the reference is the expected cross-entropy of the warm
+    start's own actions, so it keeps PPO near what behaviour cloning learned (0 = plain PPO)."""
+    bc_decay: float = 1.0
+    """Per-epoch factor of ``bc_coef``: epoch e (0-based) uses ``bc_coef * bc_decay**e``, so
+    PPO is held close to the warm start first and let go as it learns (1 = constant)."""
+    init_checkpoint: str = ""
+    """Start PPO from this checkpoint's weights (a shipped name such as ``lamde-v1`` or a
+    folder) instead of fitting the warm start here; its network sizes must equal ``net``. The
+    demonstrations of ``imitate`` are still collected (not fitted) to seed the reward scaler.
+    Empty = no such start."""
     reward_scale: bool = True
     """Divide each reward by the running std of its problem's (and start mode's) discounted
     return, CleanRL's reward normalisation (:class:`planner_core.policy.imitation.RewardScaler`),
@@ -272,6 +291,19 @@ def log_prob_entropy(
     return lp, ent
 
 
+def kl_from_reference(
+    ref: tuple[torch.Tensor, ...], out: tuple[torch.Tensor, ...]
+) -> torch.Tensor:
+    """Exact per-individual KL(pi_ref || pi) (B, N) between two policy outputs (the factorised
+    distribution: the mutation and crossover categoricals and the F and Cr Betas, closed form
+    for each; the KL of a product is the sum of the KLs). ``ref`` is held fixed (no gradient)."""
+    def dists(o: tuple[torch.Tensor, ...]) -> tuple[Any, ...]:
+        return (Categorical(logits=o[0]), Categorical(logits=o[1]),
+                Beta(o[2][..., 0], o[2][..., 1]), Beta(o[3][..., 0], o[3][..., 1]))
+
+    return sum(kl_divergence(p, q) for p, q in zip(dists(ref), dists(out), strict=True))
+
+
 def batch_obs(obs: list[dict[str, np.ndarray]]) -> dict[str, torch.Tensor]:
     """Stack env observations of problems with the same N (dimensions padded, masked)."""
     B = len(obs)
@@ -322,15 +354,23 @@ def ppo_update(
     old_logp: torch.Tensor,
     advantages: torch.Tensor,
     returns: torch.Tensor,
+    reference: TorchPolicy | None = None,
+    bc_coef: float = 0.0,
 ) -> dict[str, float]:
     """``cfg.update_epochs`` full-batch PPO steps on one buffer (B samples of N individuals).
 
+    ``reference``: the frozen warm-start policy of the behaviour-cloning anchor, weighted by
+    ``bc_coef`` (this epoch's :attr:`PPOConfig.bc_coef`; 0 or None: no anchor).
     Returns the last epoch's policy loss, value loss, entropy, approx-KL ((r-1) - log r, as
-    CleanRL) and clip fraction.
+    CleanRL), clip fraction and the anchor's KL(pi_ref || pi) (mean per individual).
     """
     adv = advantages
     if cfg.norm_adv and adv.numel() > 1:
         adv = (adv - adv.mean()) / (adv.std() + 1e-8)
+    ref_out = None
+    if reference is not None and bc_coef > 0:
+        with torch.no_grad():
+            ref_out = _forward(reference, obs)
     stats: dict[str, float] = {}
     for _ in range(cfg.update_epochs):
         out = _forward(model, obs)
@@ -341,7 +381,9 @@ def ppo_update(
         pg_loss = torch.max(-a * ratio, -a * ratio.clamp(1 - cfg.clip, 1 + cfg.clip)).mean()
         v_loss = 0.5 * ((out[4] - returns) ** 2).mean()
         entropy = ent.mean()
-        loss = pg_loss - cfg.ent_coef * entropy + cfg.vf_coef * v_loss
+        bc_kl = (kl_from_reference(ref_out, out).mean() if ref_out is not None
+                 else torch.zeros(()))
+        loss = pg_loss - cfg.ent_coef * entropy + cfg.vf_coef * v_loss + bc_coef * bc_kl
         optimizer.zero_grad()
         loss.backward()
         nn.utils.clip_grad_norm_(model.parameters(), cfg.max_grad_norm)
@@ -353,6 +395,7 @@ def ppo_update(
                 "entropy": float(entropy),
                 "approx_kl": float(((ratio - 1) - log_ratio).mean()),
                 "clipfrac": float(((ratio - 1).abs() > cfg.clip).float().mean()),
+                "bc_kl": float(bc_kl),
             }
     return stats
 
@@ -457,7 +500,7 @@ def pretrain(
 
 
 CURVE_FIELDS = ("epoch", "episodes", "return", "feasible_rate", "best_score", "policy_loss",
-                "value_loss", "entropy", "approx_kl", "clipfrac", "seconds")
+                "value_loss", "entropy", "approx_kl", "clipfrac", "bc_kl", "seconds")
 
 
 def _scalar_writer(folder: Path) -> Any:
@@ -531,7 +574,15 @@ def train(
         scaler.load_state_dict(state.get("scaler", {}))
         imitation_rows = list(state.get("imitation", []))
     writer = _scalar_writer(out) if start_epoch < cfg.epochs else None
-    if not resumed and cfg.imitate != "none" and cfg.imitate_epochs > 0:
+    if not resumed and cfg.init_checkpoint:
+        # ---- PPO from a given checkpoint's weights (e.g. the shipped warm start)
+        params, net, _ = ckpt.load(cfg.init_checkpoint)
+        if net != cfg.net:
+            raise ValueError(f"init_checkpoint: {cfg.init_checkpoint} has network {net}, "
+                             f"not {cfg.net}")
+        model.load_numpy(params)
+    fit_bc = not cfg.init_checkpoint and cfg.imitate_epochs > 0
+    if not resumed and cfg.imitate != "none" and (fit_bc or cfg.reward_scale):
         # ---- behaviour-cloning warm start (planner_core.policy.imitation); its episodes also
         # seed the reward scaler's statistics of every problem and start mode
         t_bc = time.perf_counter()
@@ -544,14 +595,25 @@ def train(
             log(f"imitation: {len(demos.obs)} generations of {cfg.imitate} on "
                 f"{len(problems)} problems x {len(cfg.init_modes)} start modes, "
                 f"{time.perf_counter() - t_bc:.0f} s")
-        torch.manual_seed(cfg.seed * 100_003 - 1)
-        imitation_rows = pretrain(
-            model, demos, epochs=cfg.imitate_epochs, batch=cfg.imitate_batch,
-            lr=cfg.imitate_lr, vf_coef=cfg.vf_coef, max_grad_norm=cfg.max_grad_norm,
-            seed=cfg.seed, log=log)
+        if fit_bc:
+            torch.manual_seed(cfg.seed * 100_003 - 1)
+            imitation_rows = pretrain(
+                model, demos, epochs=cfg.imitate_epochs, batch=cfg.imitate_batch,
+                lr=cfg.imitate_lr, vf_coef=cfg.vf_coef, max_grad_norm=cfg.max_grad_norm,
+                seed=cfg.seed, log=log)
         del demos
+    if not resumed and (cfg.init_checkpoint or imitation_rows):
         # the warm-started policy is a checkpoint of its own (0 PPO epochs), and resumable
         _save(out, model, optimizer, cfg, specs, curve, 0, scaler, imitation_rows)
+    # the behaviour-cloning anchor's reference: the warm start, frozen (epoch 0's weights)
+    reference = None
+    if cfg.bc_coef > 0:
+        reference = TorchPolicy(cfg.net)
+        if resumed:
+            reference.load_state_dict(state["reference"])
+        else:
+            reference.load_state_dict(model.state_dict())
+        reference.requires_grad_(False)
     G = max(1, math.ceil((cfg.budget - cfg.population) / cfg.population))
     chunks = [list(range(i, min(i + cfg.envs, len(problems))))
               for i in range(0, len(problems), cfg.envs)]
@@ -615,6 +677,7 @@ def train(
                     torch.from_numpy(logp.reshape(-1, logp.shape[2])),
                     torch.from_numpy(adv.reshape(-1).astype(np.float32)),
                     torch.from_numpy(ret.reshape(-1).astype(np.float32)),
+                    reference, cfg.bc_coef * cfg.bc_decay ** epoch,
                 ))
                 if segs[0].done:
                     break
@@ -634,7 +697,8 @@ def train(
             "seconds": time.perf_counter() - t0,
         }
         curve.append(row)
-        _save(out, model, optimizer, cfg, specs, curve, epoch + 1, scaler, imitation_rows)
+        _save(out, model, optimizer, cfg, specs, curve, epoch + 1, scaler, imitation_rows,
+              reference)
         if writer is not None:
             for k, v in row.items():
                 if k not in ("epoch", "episodes"):
@@ -672,7 +736,8 @@ def _rows_csv(rows: list[dict[str, Any]], fields: tuple[str, ...]) -> str:
 
 def _save(out: Path, model: TorchPolicy, optimizer: torch.optim.Optimizer, cfg: PPOConfig,
           specs: list[dict[str, Any]], curve: list[dict[str, Any]], epoch: int,
-          scaler: RewardScaler, imitation_rows: list[dict[str, float]]) -> None:
+          scaler: RewardScaler, imitation_rows: list[dict[str, float]],
+          reference: TorchPolicy | None = None) -> None:
     manifest = {"problems": specs, "names": [spec_name(s) for s in specs]}
     meta = {"ppo": cfg.to_dict(), "epochs_done": epoch, "eta": cfg.eta,
             "seconds": float(sum(r["seconds"] for r in curve)
@@ -686,7 +751,8 @@ def _save(out: Path, model: TorchPolicy, optimizer: torch.optim.Optimizer, cfg: 
     buf = io.BytesIO()
     torch.save({"model": model.state_dict(), "optimizer": optimizer.state_dict(),
                 "epoch": epoch, "curve": curve, "config": cfg.to_dict(), "specs": specs,
-                "scaler": scaler.state_dict(), "imitation": imitation_rows}, buf)
+                "scaler": scaler.state_dict(), "imitation": imitation_rows,
+                "reference": None if reference is None else reference.state_dict()}, buf)
     write_bytes_atomic(out / "state.pt", buf.getvalue())
 
 
@@ -722,6 +788,7 @@ __all__ = [
     "curve_csv",
     "gae",
     "imitation_loss",
+    "kl_from_reference",
     "log_prob_entropy",
     "ppo_update",
     "pretrain",

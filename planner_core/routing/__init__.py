@@ -13,7 +13,7 @@ from planner_core.routing.graph import (
     shortest_paths,
 )
 from planner_core.routing.offset import CIRCLE_SIDES, obstacle_polygons, offset_convex
-from planner_core.routing.tour import open_tour
+from planner_core.routing.tour import open_path, open_tour, path_cost
 
 __all__ = [
     "CIRCLE_SIDES",
@@ -21,7 +21,9 @@ __all__ = [
     "build_visibility_graph",
     "obstacle_polygons",
     "offset_convex",
+    "open_path",
     "open_tour",
+    "path_cost",
     "path_hops",
     "shortest_paths",
 ]

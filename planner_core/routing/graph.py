@@ -49,6 +49,13 @@ class VisibilityGraph:
         return _tangent_mask(np.ascontiguousarray(pts, dtype=float), self.nodes, self.prev,
                              self.next)  # fmt: skip
 
+    def spread(self, src_dist: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
+        """(N,) least cost from a point to every node: src_dist (N,) its cost to the nodes it
+        sees (inf elsewhere), then along graph edges costing `weights` (aligned with `indices`;
+        default the edge lengths, m); inf for a node it cannot reach. Multi-source Dijkstra."""
+        w = self.weights if weights is None else np.ascontiguousarray(weights, dtype=float)
+        return _spread(self.indptr, self.indices, w, np.ascontiguousarray(src_dist, dtype=float))
+
     def route(self, src_dist: np.ndarray, dst_dist: np.ndarray) -> tuple[float, list[int]]:
         """Shortest a -> nodes -> b given a's (src_dist) and b's (dst_dist) distances to the
         nodes they see (inf elsewhere): (length, node path); (inf, []) when there is none."""
@@ -175,6 +182,49 @@ def _route(indptr, indices, weights, src_dist, dst_dist):
         path[i] = u
         u = pred[u]
     return best, path
+
+
+@njit(cache=True, nogil=True)
+def _spread(indptr, indices, weights, src_dist):
+    """Multi-source Dijkstra (binary heap, lazy deletion) from src_dist to every node."""
+    n = src_dist.shape[0]
+    d = src_dist.copy()
+    m = indices.shape[0] + n + 1
+    hk = np.empty(m)
+    hv = np.empty(m, dtype=np.int64)
+    size = 0
+    for u in range(n):
+        if d[u] < np.inf:
+            size = _heap_push(hk, hv, size, d[u], u)
+    while size > 0:
+        key = hk[0]
+        u = hv[0]
+        size -= 1
+        lk = hk[size]
+        lv = hv[size]
+        pos = 0
+        while True:  # sift the last item down from the root
+            c = 2 * pos + 1
+            if c >= size:
+                break
+            if c + 1 < size and hk[c + 1] < hk[c]:
+                c += 1
+            if hk[c] >= lk:
+                break
+            hk[pos] = hk[c]
+            hv[pos] = hv[c]
+            pos = c
+        hk[pos] = lk
+        hv[pos] = lv
+        if key > d[u]:
+            continue  # stale entry
+        for e in range(indptr[u], indptr[u + 1]):
+            w = indices[e]
+            nd = key + weights[e]
+            if nd < d[w]:
+                d[w] = nd
+                size = _heap_push(hk, hv, size, nd, w)
+    return d
 
 
 # ----------------------------------------------------------------------------- building
