@@ -34,16 +34,18 @@ ROOT = Path(__file__).resolve().parent.parent
 REPORTS: list[tuple[str, str, str, list[str]]] = [
     ("docs/reduced/runs", "docs/reduced/protocol.md", "de-adaptive", []),
     ("docs/reduced/imax-runs", "docs/reduced/imax.md", "de-lamde", ["--no-limits"]),
-    ("results", "docs/results.md", "de-lamde",
+    ("results-with-metabox", "docs/results.md", "de-lamde",
      ["--policy-checkpoint", "planner_core/policy/checkpoints/lamde-v1",
       "--ablations", "docs/studies/ablations", "--imax", "docs/studies/imax"]),
 ]
 
 #: why a report's runs are not in the repository (its figures keep the style they were drawn in)
 NOT_STORED: dict[str, str] = {
-    "results": "the 8,000 runs behind docs/results.md were not committed (42 MB); the "
-    "commands at the top of docs/results.md re-run them, seed for seed (~35 min with --jobs 1 "
-    "on this machine), then the report command there redraws the page (keeping its "
+    "results-with-metabox": "the 8,000 runs behind docs/results.md were not committed (42 MB); "
+    "the commands at the top of docs/results.md re-run them, seed for seed (~35 min with "
+    "--jobs 1 on this machine), and merge them with the committed MetaBox records "
+    "(docs/metabox/results.jsonl) into results-with-metabox; then the report command there "
+    "redraws the page (keeping its "
     "hand-written 'what this shows' section); its ablation and I_max studies are stored "
     "(docs/studies/), and their figures are redrawn from them",
 }
