@@ -122,6 +122,32 @@ def _heap_push(hk, hv, size, key, val):
 
 
 @njit(cache=True, nogil=True)
+def _heap_pop(hk, hv, size):
+    """Pop the least (key, val) off the binary min-heap (hk, hv) holding `size` items (size > 0);
+    returns (key, val, the new size)."""
+    key = hk[0]
+    val = hv[0]
+    size -= 1
+    lk = hk[size]
+    lv = hv[size]
+    pos = 0
+    while True:  # sift the last item down from the root
+        c = 2 * pos + 1
+        if c >= size:
+            break
+        if c + 1 < size and hk[c + 1] < hk[c]:
+            c += 1
+        if hk[c] >= lk:
+            break
+        hk[pos] = hk[c]
+        hv[pos] = hv[c]
+        pos = c
+    hk[pos] = lk
+    hv[pos] = lv
+    return key, val, size
+
+
+@njit(cache=True, nogil=True)
 def _route(indptr, indices, weights, src_dist, dst_dist):
     """Multi-source Dijkstra (binary heap, lazy deletion) from the nodes a sees to the nodes b
     sees, stopping once no shorter way to b can appear."""
@@ -138,25 +164,7 @@ def _route(indptr, indices, weights, src_dist, dst_dist):
     best = np.inf
     last = -1
     while size > 0:
-        key = hk[0]
-        u = hv[0]
-        size -= 1
-        lk = hk[size]
-        lv = hv[size]
-        pos = 0
-        while True:  # sift the last item down from the root
-            c = 2 * pos + 1
-            if c >= size:
-                break
-            if c + 1 < size and hk[c + 1] < hk[c]:
-                c += 1
-            if hk[c] >= lk:
-                break
-            hk[pos] = hk[c]
-            hv[pos] = hv[c]
-            pos = c
-        hk[pos] = lk
-        hv[pos] = lv
+        key, u, size = _heap_pop(hk, hv, size)
         if key >= best:
             break
         if key > d[u]:
@@ -197,25 +205,7 @@ def _spread(indptr, indices, weights, src_dist):
         if d[u] < np.inf:
             size = _heap_push(hk, hv, size, d[u], u)
     while size > 0:
-        key = hk[0]
-        u = hv[0]
-        size -= 1
-        lk = hk[size]
-        lv = hv[size]
-        pos = 0
-        while True:  # sift the last item down from the root
-            c = 2 * pos + 1
-            if c >= size:
-                break
-            if c + 1 < size and hk[c + 1] < hk[c]:
-                c += 1
-            if hk[c] >= lk:
-                break
-            hk[pos] = hk[c]
-            hv[pos] = hv[c]
-            pos = c
-        hk[pos] = lk
-        hv[pos] = lv
+        key, u, size = _heap_pop(hk, hv, size)
         if key > d[u]:
             continue  # stale entry
         for e in range(indptr[u], indptr[u + 1]):
