@@ -148,19 +148,25 @@ def _heap_pop(hk, hv, size):
 
 
 @njit(cache=True, nogil=True)
+def _heap_of(d, m):
+    """A binary min-heap of capacity m holding (d[u], u) for every finite d[u]: (hk, hv, size)."""
+    hk = np.empty(m)
+    hv = np.empty(m, dtype=np.int64)
+    size = 0
+    for u in range(d.shape[0]):
+        if d[u] < np.inf:
+            size = _heap_push(hk, hv, size, d[u], u)
+    return hk, hv, size
+
+
+@njit(cache=True, nogil=True)
 def _route(indptr, indices, weights, src_dist, dst_dist):
     """Multi-source Dijkstra (binary heap, lazy deletion) from the nodes a sees to the nodes b
     sees, stopping once no shorter way to b can appear."""
     n = src_dist.shape[0]
     d = src_dist.copy()
     pred = np.full(n, -1, dtype=np.int64)
-    m = indices.shape[0] + n + 1
-    hk = np.empty(m)
-    hv = np.empty(m, dtype=np.int64)
-    size = 0
-    for u in range(n):
-        if d[u] < np.inf:
-            size = _heap_push(hk, hv, size, d[u], u)
+    hk, hv, size = _heap_of(d, indices.shape[0] + n + 1)
     best = np.inf
     last = -1
     while size > 0:
@@ -197,13 +203,7 @@ def _spread(indptr, indices, weights, src_dist):
     """Multi-source Dijkstra (binary heap, lazy deletion) from src_dist to every node."""
     n = src_dist.shape[0]
     d = src_dist.copy()
-    m = indices.shape[0] + n + 1
-    hk = np.empty(m)
-    hv = np.empty(m, dtype=np.int64)
-    size = 0
-    for u in range(n):
-        if d[u] < np.inf:
-            size = _heap_push(hk, hv, size, d[u], u)
+    hk, hv, size = _heap_of(d, indices.shape[0] + n + 1)
     while size > 0:
         key, u, size = _heap_pop(hk, hv, size)
         if key > d[u]:

@@ -45,27 +45,18 @@ def open_tour(W: np.ndarray, first_improvement: bool = False) -> np.ndarray:  # 
         t[s] = best
         left[best] = False
     t[P - 1] = P - 1
-    rounds = 0
-    while first_improvement or rounds < 8 * P:
-        rounds += 1
-        bi = -1
-        bj = -1
-        gbest = _MIN_GAIN
+    if not first_improvement:
+        _two_opt(W, t)
+        return t
+    improved = True
+    while improved:
+        improved = False
         for i in range(P - 2):
             for j in range(i + 1, P - 1):
                 g = W[t[i], t[i + 1]] + W[t[j], t[j + 1]] - W[t[i], t[j]] - W[t[i + 1], t[j + 1]]
-                if g > gbest:
-                    if first_improvement:
-                        _reverse(t, i + 1, j)
-                        bi = i
-                    else:
-                        gbest = g
-                        bi = i
-                        bj = j
-        if bi < 0:
-            break
-        if not first_improvement:
-            _reverse(t, bi + 1, bj)
+                if g > _MIN_GAIN:
+                    _reverse(t, i + 1, j)
+                    improved = True
     return t
 
 
