@@ -12,7 +12,7 @@ import numpy as np
 
 from lamde_mission.result import Plan
 from planner_core import defaults as _defaults
-from planner_core.model import deb_not_worse
+from planner_core.model import deb_better, deb_not_worse
 
 __all__ = ["plan", "CONFIGURATORS", "INIT_MODES"]
 
@@ -92,6 +92,7 @@ def plan(
     init: str = _defaults.INIT,
     memetic: str = _defaults.MEMETIC,
     starts: int = _defaults.STARTS,
+    descent: bool = True,
     variable_length: bool = True,
     polish: bool = True,
     progress: Callable[[Any], None] | None = None,
@@ -118,7 +119,10 @@ def plan(
     `planner_core.defaults.START_CANDIDATES` built (0: none). Every evaluation counts against
     `budget`: the constructive plans scored, the DE, and the polish's LP plans (the DE runs on
     what is left), so `evaluations` <= budget (budget + 1 when budget equals the population:
-    the DE has only its start population and the polish its one LP plan).
+    the DE has only its start population and the polish its one LP plan). `descent`: the
+    hover-point descent with exact LP hover times (`planner_core.descent`) on the
+    `planner_core.defaults.DESCENTS` best constructive and seeder plans before the DE and on
+    the final plan after the polish, each at most `DESCENT_TRIALS` evaluations of the budget.
     Defaults and valid ranges: `planner_core.defaults`.
 
     Raises ValueError with one line naming the field ("population: must be an integer >= 6,
@@ -150,9 +154,13 @@ def plan(
     # the budget holds everything: the constructive plans scored, the DE, the polish's plans
     reserve = min(ELITE, int(budget) // 4, int(budget) - int(population)) if polish else 0
     room = max(int(budget) - reserve - int(population), 0)
+    final = min(_defaults.DESCENT_TRIALS, room // 10) if descent else 0
+    room -= final
     t0 = time.perf_counter()
     opt, spent = start_from_plans(problem, timed, int(seed), starts=int(starts),
-                                  candidates=min(_defaults.START_CANDIDATES, room))
+                                  candidates=min(_defaults.START_CANDIDATES, room),
+                                  descents=_defaults.DESCENTS if descent else 0,
+                                  trials=_defaults.DESCENT_TRIALS, room=room)
     t_starts = time.perf_counter() - t0 - timed.seconds  # construction, not its evaluations
     callback = progress
     if progress is not None and spent:
@@ -166,7 +174,7 @@ def plan(
         configurator=configurator,
         seed=int(seed),
         population=int(population),
-        budget=int(budget) - reserve - spent,
+        budget=int(budget) - reserve - final - spent,
         callback=callback,
         refine=refine,
     )
@@ -208,6 +216,20 @@ def plan(
             "unserved": [u["message"] for u in pol.unserved],
             "solver": pol.solver,
         }
+    t_descent = 0.0
+    descended = 0
+    if final and chosen["phi"] == 0.0:
+        from planner_core.descent import descend
+
+        t1 = time.perf_counter()
+        # the final plan's hover points, moved with exact LP hover times (planner_core.descent)
+        x = problem.encode(chosen["hover_points"], chosen["hover_times"])
+        r = descend(problem, x, problem.evaluate, trials=final)
+        if r is not None:
+            descended = r.evaluations
+            if deb_better(r.f, r.phi, chosen["f"], chosen["phi"]):
+                chosen = problem.breakdown(r.x)
+        t_descent = time.perf_counter() - t1
     wall = time.perf_counter() - t_start
     h = result.history
     name = configurator if isinstance(configurator, str) else type(configurator).__name__
@@ -219,7 +241,7 @@ def plan(
         phi=chosen["phi"],
         feasible=chosen["phi"] == 0.0,
         breakdown=chosen,
-        evaluations=spent + int(result.evaluations) + polished,
+        evaluations=spent + int(result.evaluations) + polished + descended,
         wall_time=wall,
         history={
             "evaluations": h.evaluations + spent,
@@ -237,6 +259,7 @@ def plan(
             "optimiser": max(t_optimise - t_run_eval - timed.seeding_seconds, 0.0),
             "starts": t_starts,
             "polish": t_polish,
+            "descent": t_descent,
             "compile": t_compile,
             "total": wall,
         },

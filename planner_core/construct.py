@@ -62,7 +62,9 @@ __all__ = [
     "KMEANS_INITS",
     "LegTimes",
     "WithStarts",
+    "SEEDER_PLANS",
     "best_starts",
+    "seeder_plans",
     "start_from_plans",
     "build_plans",
     "candidate_plans",
@@ -81,6 +83,8 @@ FRACTIONS = (0.9, 0.6, 0.35, 0.2)
 KMEANS_INITS = 2
 #: summed link rate a candidate site may have, as a share of the bandwidth (C3; the seeder's)
 BANDWIDTH_USE = 0.98
+#: seeder plans scored beside the constructive ones when the best starts are descended
+SEEDER_PLANS = 20
 #: flight time (s) charged per metre inside obstacles for a leg the graph cannot route around
 _UNROUTABLE = 1e6
 
@@ -333,6 +337,16 @@ def candidate_plans(
     return np.asarray(rows, dtype=float).reshape(-1, d), labels
 
 
+def seeder_plans(problem: Any, seed: int, k: int) -> np.ndarray:
+    """k (k, d) plans of the problem's seeder (`Seeder.solution`: clustered sensors, a short
+    order, visibility-graph detours; what the DE's seeded start population holds), from their
+    own generator of `seed`, so the same in both start modes."""
+    rng = np.random.default_rng(np.random.SeedSequence([int(seed), 16]))
+    d = int(np.asarray(problem.lower).shape[0])
+    return np.asarray([problem.seeder.solution(rng) for _ in range(max(k, 0))],
+                      dtype=float).reshape(-1, d)
+
+
 def best_starts(
     problem: Any,
     seed: int,
@@ -341,16 +355,50 @@ def best_starts(
     candidates: int,
     keep: int,
     order: Order | None = None,
+    descents: int = 0,
+    trials: int = 0,
+    room: int | None = None,
 ) -> tuple[np.ndarray, int]:
     """Build up to `candidates` constructive plans (`candidate_plans`), score them with one
     call of `evaluate` (X (m, d) -> f, phi; the caller counts those evaluations) and return the
-    `keep` Deb-best (k, d) with the number evaluated m."""
+    `keep` Deb-best (k, d) with the number of evaluations spent.
+
+    With `descents` > 0 and `trials` > 0 also `SEEDER_PLANS` of the seeder's plans
+    (`seeder_plans`) are scored, and the `descents` Deb-best feasible plans of each kind
+    (constructive, seeder) are improved by `planner_core.descent.descend` (at most `trials`
+    evaluations each, through `evaluate`); the kept rows are then the Deb-best of all the plans
+    scored and descended. `room`: evaluations allowed in all (None: no limit); the descents
+    stop where it ends."""
     X, _ = candidate_plans(problem, seed, candidates, order=order)
     if len(X) == 0:
         return X, 0
-    f, phi = evaluate(X)
-    best = deb_order(np.asarray(f, dtype=float), np.asarray(phi, dtype=float))[:max(keep, 0)]
-    return X[best], len(X)
+    kinds = [X]
+    if descents > 0 and trials > 0:
+        left = (room if room is not None else len(X) + SEEDER_PLANS) - len(X)
+        kinds.append(seeder_plans(problem, seed, min(SEEDER_PLANS, max(left, 0))))
+    allX = np.vstack(kinds)
+    f, phi = (np.asarray(v, dtype=float) for v in evaluate(allX))
+    spent = len(allX)
+    rows, fs, phis = [allX], [f], [phi]
+    if descents > 0 and trials > 0:
+        from planner_core.descent import descend
+
+        start = 0
+        for part in kinds:
+            sl = slice(start, start + len(part))
+            start += len(part)
+            for i in deb_order(f[sl], phi[sl])[:descents]:
+                budget = trials if room is None else min(trials, room - spent)
+                r = descend(problem, part[i], evaluate, trials=budget) if budget > 0 else None
+                if r is None:
+                    continue
+                spent += r.evaluations
+                rows.append(r.x[None, :])
+                fs.append(np.array([r.f]))
+                phis.append(np.array([r.phi]))
+    allX, f, phi = np.vstack(rows), np.concatenate(fs), np.concatenate(phis)
+    best = deb_order(f, phi)[:max(keep, 0)]
+    return allX[best], spent
 
 
 class WithStarts:
@@ -389,14 +437,18 @@ def start_from_plans(
     starts: int,
     candidates: int,
     order: Order | None = None,
+    descents: int = 0,
+    trials: int = 0,
+    room: int | None = None,
 ) -> tuple[Any, int]:
     """The DE's view `opt` of the UAV problem `problem` (its `evaluate` is the one that counts)
     with the `starts` Deb-best of up to `candidates` constructive plans in its initial
-    population (`best_starts`, scored through `opt.evaluate`; `WithStarts`): (the wrapped
-    problem, evaluations spent on scoring). With starts or candidates <= 0: (opt, 0). What
-    `plan` and the benchmark's `planner` entry do before the DE runs."""
+    population (`best_starts`, scored and, with `descents` and `trials`, the best descended,
+    through `opt.evaluate`, at most `room` evaluations; `WithStarts`): (the wrapped problem,
+    evaluations spent). With starts or candidates <= 0: (opt, 0). What `plan` and the
+    benchmark's `planner` entry do before the DE runs."""
     if starts <= 0 or candidates <= 0:
         return opt, 0
     X, n = best_starts(problem, seed, opt.evaluate, candidates=candidates, keep=starts,
-                       order=order)
+                       order=order, descents=descents, trials=trials, room=room)
     return (WithStarts(opt, X) if len(X) else opt), n

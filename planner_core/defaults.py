@@ -42,6 +42,8 @@ __all__ = [
     "SCORE_FACTOR",
     "SEED",
     "STARTS",
+    "DESCENTS",
+    "DESCENT_TRIALS",
     "START_CANDIDATES",
     "SUITE_SEED",
     "check",
@@ -133,6 +135,12 @@ _RUN: tuple[Default, ...] = (
             "each, counted in the budget) to pick the `starts` from, at most: the pipeline "
             "builds 20-51 on the suite maps, so all of them; 0: none",
             "an integer >= 0", _int_at_least(0)),
+    Default("descents", 3, "best plans of each kind (constructive, seeder) improved by the "
+            "hover-point descent with exact LP hover times (`planner_core.descent`) before "
+            "the DE; the plan after the polish is descended once more; 0: no descent "
+            "(docs/search.md)", "an integer >= 0", _int_at_least(0)),
+    Default("descent_trials", 40, "evaluations one descent may spend at most (counted in the "
+            "budget)", "an integer >= 0", _int_at_least(0)),
     Default("seed", 0, "random seed of a planning run (same seed, same plan)", "an integer >= 0",
             _int_at_least(0)),
     Default("score_factor", 10.0, "penalised score f + 10 * phi that ranks optimisers "
@@ -227,6 +235,8 @@ INIT: str = DEFAULTS["init"].value
 MEMETIC: str = DEFAULTS["memetic"].value
 STARTS: int = DEFAULTS["starts"].value
 START_CANDIDATES: int = DEFAULTS["start_candidates"].value
+DESCENTS: int = DEFAULTS["descents"].value
+DESCENT_TRIALS: int = DEFAULTS["descent_trials"].value
 SEED: int = DEFAULTS["seed"].value
 SCORE_FACTOR: float = DEFAULTS["score_factor"].value
 SUITE_SEED: int = DEFAULTS["suite_seed"].value

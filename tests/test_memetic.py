@@ -197,9 +197,9 @@ def test_plan_from_a_uniform_start_serves_every_sensor_with_the_memetic_step() -
     from planner_core.suite import suite_maps
 
     m = suite_maps()["T12"]
-    with_step = plan(m, seed=0, init="uniform", starts=0)
+    with_step = plan(m, seed=0, init="uniform", starts=0, descent=False)
     assert with_step.feasible
-    without = plan(m, seed=0, init="uniform", memetic="off", starts=0)
+    without = plan(m, seed=0, init="uniform", memetic="off", starts=0, descent=False)
     assert not without.feasible
     assert with_step.evaluations == without.evaluations == 10_000
     # the constructive starts alone (no memetic step) reach every sensor from a uniform start

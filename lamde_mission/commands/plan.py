@@ -52,6 +52,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    "order, visibility-graph detours, LP hover times) put into the initial "
                    f"population, the best of the first {D.START_CANDIDATES} built; 0: none; "
                    f"default {D.STARTS}")
+    p.add_argument("--no-descent", action="store_true",
+                   help="skip the hover-point descent with exact LP hover times on the best "
+                   f"{D.DESCENTS} constructive and seeder plans and on the final plan")
     p.add_argument("--fixed-length", action="store_true",
                    help="use all I_max hover points (the paper's LAMDE-F ablation)")
     p.add_argument("--no-polish", action="store_true", help="skip the hover-time LP polish")
@@ -266,6 +269,7 @@ def run(args: argparse.Namespace) -> int:
         init=args.init,
         memetic=args.memetic,
         starts=args.starts,
+        descent=not args.no_descent,
         variable_length=not args.fixed_length,
         polish=not args.no_polish,
         progress=progress,

@@ -28,6 +28,8 @@ from planner_core.baselines.budget import (
 from planner_core.defaults import (
     CONFIGURATOR,
     CONFIGURATORS,
+    DESCENT_TRIALS,
+    DESCENTS,
     MEMETIC,
     POPULATION,
     SCORE_FACTOR,
@@ -81,7 +83,7 @@ class OptimiserSpec:
     description: str
     kwargs: dict[str, Any] = field(default_factory=dict)
     variable_length: bool | None = True  # None: whatever the given problem uses
-    spends_budget: bool = True  # False: a reference that deliberately stops early (seed-lp)
+    spends_budget: bool = True  # False: may stop early (seed-lp; the planner's descents)
     #: evaluations charged before the run (the landscape-aware module's probes of the task,
     #: which the paper counts in LAMDE's budget): the optimiser gets budget - probe_evaluations
     probe_evaluations: int = 0
@@ -124,7 +126,21 @@ REGISTRY: dict[str, OptimiserSpec] = {
             f"what `plan` does: {START_CANDIDATES} constructive plans scored and the {STARTS} "
             f"best put into the initial population, our DE ({CONFIGURATOR} configurator, "
             f"population {POPULATION}; from a uniform start with the memetic step), then the "
-            "polish LP on the final population's 16 Deb-best; budget counted exactly",
+            "polish LP on the final population's 16 Deb-best; the hover-point descent with "
+            f"exact LP hover times on the {DESCENTS} best constructive and seeder plans before "
+            "the DE and on the polished best; budget counted exactly",
+            kwargs={"lp": True, "memetic": MEMETIC, "starts": STARTS,
+                    "candidates": START_CANDIDATES, "descents": DESCENTS,
+                    "trials": DESCENT_TRIALS},
+            # a descent stops when its step falls below 1 cm: the evaluations it leaves are
+            # not spent (`plan` too: evaluations <= budget)
+            spends_budget=False,
+        ),
+        OptimiserSpec(
+            "planner-no-descent",
+            "planner_core.baselines.de:optimise",
+            "the planner without the hover-point descent (`plan(descent=False)`, `plan "
+            "--no-descent`; the planner before it)",
             kwargs={"lp": True, "memetic": MEMETIC, "starts": STARTS,
                     "candidates": START_CANDIDATES},
         ),

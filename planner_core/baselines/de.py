@@ -32,6 +32,8 @@ def optimise(
     starts: int = 0,
     candidates: int = 0,
     order: Any = None,
+    descents: int = 0,
+    trials: int = 0,
 ) -> OptimiseResult:
     """Run the DE with `configurator` for exactly `budget` evaluations (initial population
     included). `lp`: what `plan` does, the DE on budget - ELITE, then the hover-time LP on the
@@ -43,7 +45,10 @@ def optimise(
     ablation variants); None = the shipped default. `starts`, `candidates`: as `plan` does, the
     `starts` Deb-best of up to `candidates` constructive plans (`planner_core.construct`,
     visiting order `order`, default its own open path; one evaluation each, counted) put into
-    the DE's initial population (UAV problem only; 0: none)."""
+    the DE's initial population (UAV problem only; 0: none). `descents`, `trials`: as `plan`
+    does, the hover-point descent (`planner_core.descent`) on the `descents` best plans of
+    each kind among the starts and, with `lp`, on the polished best, at most `trials`
+    evaluations each (UAV problem only; 0: none)."""
     from planner_core.baselines.seed_lp import can_lp
 
     budgeted = as_budgeted(problem, budget)
@@ -71,14 +76,17 @@ def optimise(
 
         refine = partial(_refine, budgeted.problem)
     opt, spent = budgeted, 0
+    room = max(int(budget) - reserve - population, 0)
+    final = min(int(trials), room // 10) if descents > 0 and reserve else 0
+    room -= final
     if starts > 0 and candidates > 0 and can_lp(budgeted):
         from planner_core.construct import start_from_plans
 
-        room = max(int(budget) - reserve - population, 0)
         opt, spent = start_from_plans(budgeted.problem, budgeted, int(seed), starts=int(starts),
-                                      candidates=min(int(candidates), room), order=order)
+                                      candidates=min(int(candidates), room), order=order,
+                                      descents=int(descents), trials=int(trials), room=room)
     res = run(opt, configurator=configurator, seed=int(seed), population=population,
-              budget=int(budget) - reserve - spent, refine=refine)
+              budget=int(budget) - reserve - final - spent, refine=refine)
     last_feasible = float(res.history.feasible_fraction[-1])  # the DE's last population
     if reserve:
         from planner_core.de.core import to_problem
@@ -89,6 +97,11 @@ def optimise(
         xs, _ = polish_elite(inner, to_problem(budgeted, st.X), st.f, st.phi, reserve)
         budgeted.evaluate(xs)
         x, f, phi = budgeted.best("deb")
+        if final and phi == 0.0:
+            from planner_core.descent import descend
+
+            descend(inner, x, budgeted.evaluate, trials=final)  # budgeted keeps the best
+            x, f, phi = budgeted.best("deb")
         return OptimiseResult(x, f, phi, budgeted.count, budgeted.trace("deb"), last_feasible)
     return OptimiseResult(res.x, res.f, res.phi, budgeted.count, budgeted.trace("deb"),
                           last_feasible)

@@ -1,0 +1,182 @@
+"""Hover-point descent with exact hover times: a local search on a plan's hover points (issue 14).
+
+For fixed hover points P (I, 2) the least total hover time that serves every sensor is the LP of
+`planner_core.polish` (`hover_lp`), so the best objective a plan with these points can have is
+
+    F(P) = alpha * t_fly(P) + (1 - alpha) * V(P),
+
+t_fly the Eq. 1 flight time of start -> P -> end and V the LP's value (the hover times "in the
+loop", as the issue asks, instead of searched alongside the positions as the DE does). F is
+piecewise smooth and its gradient is exact where the LP's optimum is non-degenerate:
+
+* flight: d t_leg / d len = 1 / v_max on a cruising leg (len > v_max^2 / a), 1 / sqrt(a len) on
+  a triangular one (Eq. 1 differentiated); d len / d p is the leg's unit vector;
+* hover: LP sensitivity to the constraint matrix, dV/dR_ij = -y_j T_i / Q_j (y the coverage
+  rows' duals, `hover_lp`), with dR_ij/dp_i = -xi (p_i - s_j) / sqrt(|p_i - s_j|^2 + H^2) where
+  R_ij > 0 (the link model of Sec. 3).
+
+A step moves every point against the gradient, the largest move `step` metres. A point whose new
+position breaks C3 (summed link rate over the bandwidth) or whose legs cut an obstacle (C5, the
+evaluator's `L_VIO_TOL`) is held in place for that trial; the trial is then evaluated (one
+evaluation of the caller's counted `evaluate`) and kept when it is Deb-better than the current
+plan. `step` grows 1.5x after a kept trial and halves after a rejected one (a backtracking
+line search); the descent stops at `min_step` or after `trials` evaluations. Every kept plan is
+feasible and its f is what the evaluator says, so the result is never worse than the start.
+
+The descent keeps the number of points and their visiting order; `plan` runs it on the best
+constructive and seeded starts before the DE and on the plan after the polish (docs/search.md).
+`objective` is the fast path; `objective_reference` recomputes F alone through the polish's own
+LP for the tests' finite-difference check.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from planner_core.geometry import overlap_lengths
+from planner_core.model import L_VIO_TOL, deb_better
+from planner_core.polish import hover_lp
+
+__all__ = ["Descent", "descend", "held_points", "objective", "objective_reference"]
+
+#: first step (m): the largest point move of the first trial
+STEP = 20.0
+#: the descent stops when the step falls below this (m)
+MIN_STEP = 0.01
+#: growth and shrink factors of the step after a kept / rejected trial
+GROW, SHRINK = 1.5, 0.5
+
+Evaluate = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
+
+
+@dataclass(frozen=True)
+class Descent:
+    """A descent's result: the decision vector x (d,) of the best plan found (points, LP hover
+    times topped up to meet C4 exactly), its evaluated f and phi, how many evaluations it spent,
+    and the f it started from."""
+
+    x: np.ndarray
+    f: float
+    phi: float
+    evaluations: int
+    f_start: float
+
+
+def _nodes(problem: Any, P: np.ndarray) -> np.ndarray:
+    return np.vstack([problem.start, P, problem.end])
+
+
+def objective(problem: Any, P: np.ndarray) -> tuple[float, np.ndarray, np.ndarray] | None:
+    """F(P) (s), its gradient dF/dP (I, 2) (s/m) and the LP hover times T (I,) (s) for hover
+    points P (I, 2) in metres; None when no hover times serve every sensor (the LP is
+    infeasible). Module docstring for the formulas."""
+    P = np.asarray(P, dtype=float).reshape(-1, 2)
+    m = problem.model
+    R = m.rates(P)
+    lp = hover_lp(R, m.required, m.t_max)
+    if lp is None:
+        return None
+    T, V, y = lp
+    nodes = _nodes(problem, P)
+    seg = np.diff(nodes, axis=0)
+    d = np.hypot(seg[:, 0], seg[:, 1])
+    t_fly = float(m.flight_time(d).sum())
+    # Eq. 1 differentiated: cruise 1 / v_max, triangle 1 / sqrt(a d) (zero-length legs: 0)
+    dtdd = np.where(d > m.v_max**2 / m.accel, 1.0 / m.v_max,
+                    1.0 / np.sqrt(m.accel * np.maximum(d, 1e-12)))
+    u = np.where(d[:, None] > 0, seg / np.maximum(d, 1e-300)[:, None], 0.0) * dtdd[:, None]
+    g_fly = u[:-1] - u[1:]  # point i ends leg i and starts leg i + 1
+    need = m.required > 0
+    diff = P[:, None, :] - m.sensors[None, need]
+    slant = np.sqrt((diff**2).sum(axis=-1) + m.altitude**2)
+    dR = -m.decay * diff / slant[..., None] * (R[:, need] > 0)[..., None]
+    w = y[need] / m.required[need]
+    g_hover = -(T[:, None, None] * w[None, :, None] * dR).sum(axis=1)
+    g = m.alpha * g_fly + (1.0 - m.alpha) * g_hover
+    return m.alpha * t_fly + (1.0 - m.alpha) * V, g, T
+
+
+def objective_reference(problem: Any, P: np.ndarray) -> float:
+    """F(P) alone, the obvious way: the polish's own LP for the hover times (no drop of points),
+    the flight time leg by leg; what `objective` computes with its gradient."""
+    P = np.asarray(P, dtype=float).reshape(-1, 2)
+    m = problem.model
+    from planner_core.polish import _solve_lp
+
+    T, _ = _solve_lp(m.rates(P), m.required, m.t_max, True)
+    nodes = _nodes(problem, P)
+    legs = zip(nodes[:-1], nodes[1:], strict=True)
+    t_fly = sum(float(m.flight_time(np.linalg.norm(b - a))) for a, b in legs)
+    return m.alpha * t_fly + (1.0 - m.alpha) * float(T.sum())
+
+
+def held_points(problem: Any, P: np.ndarray) -> np.ndarray:
+    """Indices of the hover points P (I, 2) that break C3 (summed link rate above the
+    bandwidth) or end or start a leg that cuts an obstacle by more than `L_VIO_TOL` (C5)."""
+    m = problem.model
+    bad = m.rates(P).sum(axis=1) > m.bandwidth
+    nodes = _nodes(problem, P)
+    cut = overlap_lengths(nodes[:-1], nodes[1:], problem.obstacles) > L_VIO_TOL
+    bad |= cut[:-1] | cut[1:]  # leg k ends at point k and leg k + 1 starts there
+    return np.flatnonzero(bad)
+
+
+def descend(
+    problem: Any,
+    x: np.ndarray,
+    evaluate: Evaluate,
+    *,
+    trials: int,
+    step: float = STEP,
+    min_step: float = MIN_STEP,
+) -> Descent | None:
+    """Descend from plan x (d,) of the UAV problem `problem` for at most `trials` evaluations.
+
+    `evaluate` (X (n, d) -> f, phi) is the caller's counted evaluation; the start itself is not
+    re-evaluated (its f is recomputed from the LP). Returns None when x is not a feasible plan
+    with at least one hover point, or when `trials` < 1. Deterministic (no random numbers).
+    """
+    b = problem.breakdown(np.asarray(x, dtype=float))
+    P = np.asarray(b["hover_points"], dtype=float).reshape(-1, 2)
+    if b["phi"] > 0 or len(P) == 0 or trials < 1 or len(held_points(problem, P)):
+        return None
+    cur = objective(problem, P)
+    if cur is None:
+        return None
+    g = cur[1]
+    f_start = float(b["f"])
+    best_x, best_f, best_phi = np.asarray(x, dtype=float), f_start, 0.0
+    box = np.array([problem.model.width, problem.model.height])
+    spent = 0
+    while spent < trials and step >= min_step:
+        free = np.ones(len(P), dtype=bool)
+        kept = False
+        for _ in range(len(P) + 1):  # hold the offending points, at most once each
+            gm = g * free[:, None]
+            scale = float(np.abs(gm).max())
+            if scale <= 0.0:
+                break
+            Pn = np.clip(P - gm / scale * step, 0.0, box)
+            held = held_points(problem, Pn)
+            held = held[free[held]]
+            if len(held):
+                free[held] = False
+                continue
+            nxt = objective(problem, Pn)
+            if nxt is None:
+                break
+            xn = problem.encode(Pn, nxt[2])
+            fn, phin = evaluate(xn[None, :])
+            spent += 1
+            fn, phin = float(np.asarray(fn).reshape(-1)[0]), float(np.asarray(phin).reshape(-1)[0])
+            if deb_better(fn, phin, best_f, best_phi):
+                P, g = Pn, nxt[1]
+                best_x, best_f, best_phi = xn, fn, phin
+                kept = True
+            break
+        step = step * GROW if kept else step * SHRINK
+    return Descent(best_x, best_f, best_phi, spent, f_start)
