@@ -154,7 +154,8 @@ def plan(
     # the budget holds everything: the constructive plans scored, the DE, the polish's plans
     reserve = min(ELITE, int(budget) // 4, int(budget) - int(population)) if polish else 0
     room = max(int(budget) - reserve - int(population), 0)
-    final = min(_defaults.DESCENT_TRIALS, room // 10) if descent else 0
+    final = _defaults.DESCENT_TRIALS + _defaults.RESTRUCTURE_TRIALS if descent else 0
+    final = min(final, room // 10)
     room -= final
     t0 = time.perf_counter()
     opt, spent = start_from_plans(problem, timed, int(seed), starts=int(starts),
@@ -219,12 +220,12 @@ def plan(
     t_descent = 0.0
     descended = 0
     if final and chosen["phi"] == 0.0:
-        from planner_core.descent import descend
+        from planner_core.descent import finish
 
         t1 = time.perf_counter()
-        # the final plan's hover points, moved with exact LP hover times (planner_core.descent)
+        # the final plan's hover points moved with exact LP hover times, then its structure
         x = problem.encode(chosen["hover_points"], chosen["hover_times"])
-        r = descend(problem, x, problem.evaluate, trials=final)
+        r = finish(problem, x, problem.evaluate, trials=final)
         if r is not None:
             descended = r.evaluations
             if deb_better(r.f, r.phi, chosen["f"], chosen["phi"]):

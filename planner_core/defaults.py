@@ -44,6 +44,7 @@ __all__ = [
     "STARTS",
     "DESCENTS",
     "DESCENT_TRIALS",
+    "RESTRUCTURE_TRIALS",
     "START_CANDIDATES",
     "SUITE_SEED",
     "check",
@@ -141,6 +142,10 @@ _RUN: tuple[Default, ...] = (
             "(docs/search.md)", "an integer >= 0", _int_at_least(0)),
     Default("descent_trials", 40, "evaluations one descent may spend at most (counted in the "
             "budget)", "an integer >= 0", _int_at_least(0)),
+    Default("restructure_trials", 300, "evaluations the structural search on the final plan "
+            "may spend (`planner_core.descent.restructure`: split a hover point in two or "
+            "merge two, each move descended; with the descent on)", "an integer >= 0",
+            _int_at_least(0)),
     Default("seed", 0, "random seed of a planning run (same seed, same plan)", "an integer >= 0",
             _int_at_least(0)),
     Default("score_factor", 10.0, "penalised score f + 10 * phi that ranks optimisers "
@@ -237,6 +242,7 @@ STARTS: int = DEFAULTS["starts"].value
 START_CANDIDATES: int = DEFAULTS["start_candidates"].value
 DESCENTS: int = DEFAULTS["descents"].value
 DESCENT_TRIALS: int = DEFAULTS["descent_trials"].value
+RESTRUCTURE_TRIALS: int = DEFAULTS["restructure_trials"].value
 SEED: int = DEFAULTS["seed"].value
 SCORE_FACTOR: float = DEFAULTS["score_factor"].value
 SUITE_SEED: int = DEFAULTS["suite_seed"].value

@@ -41,7 +41,17 @@ from planner_core.geometry import overlap_lengths
 from planner_core.model import L_VIO_TOL, deb_better
 from planner_core.polish import hover_lp
 
-__all__ = ["Descent", "descend", "held_points", "objective", "objective_reference"]
+__all__ = [
+    "Descent",
+    "descend",
+    "finish",
+    "held_points",
+    "merge_moves",
+    "objective",
+    "objective_reference",
+    "restructure",
+    "split_moves",
+]
 
 #: first step (m): the largest point move of the first trial
 STEP = 20.0
@@ -180,3 +190,116 @@ def descend(
             break
         step = step * GROW if kept else step * SHRINK
     return Descent(best_x, best_f, best_phi, spent, f_start)
+
+
+# ----------------------------------------------------------------------------- structural moves
+#: the fractions of the way from a split point towards each half of its sensors (`split_moves`)
+SPLIT_FRACTIONS = (0.3, 0.6)
+#: the share of a sensor's data Q_j a hover point must collect to count as serving it
+SERVES = 0.05
+
+
+def split_moves(problem: Any, P: np.ndarray, T: np.ndarray) -> list[np.ndarray]:
+    """Point sets (I + 1, 2) with one hover point split in two: for each point serving two or
+    more sensors (collecting >= `SERVES` of Q_j there), its sensors halved along their principal
+    axis, and the point replaced by two points `SPLIT_FRACTIONS` of the way towards each half's
+    centroid, in the order that makes the shorter path. P (I, 2) m, T (I,) s."""
+    m = problem.model
+    R = m.rates(P)
+    out = []
+    for i in range(len(P)):
+        served = np.flatnonzero(R[i] * T[i] >= SERVES * m.required)
+        if len(served) < 2:
+            continue
+        S = m.sensors[served]
+        c = S - S.mean(axis=0)
+        proj = c @ np.linalg.svd(c, full_matrices=False)[2][0]
+        cut = np.median(proj)
+        a, b = S[proj <= cut].mean(axis=0), S[proj > cut].mean(axis=0)
+        prev = P[i - 1] if i > 0 else problem.start
+        nxt = P[i + 1] if i + 1 < len(P) else problem.end
+        for frac in SPLIT_FRACTIONS:
+            pa, pb = P[i] + frac * (a - P[i]), P[i] + frac * (b - P[i])
+            if (np.linalg.norm(prev - pa) + np.linalg.norm(pb - nxt)
+                    > np.linalg.norm(prev - pb) + np.linalg.norm(pa - nxt)):
+                pa, pb = pb, pa
+            out.append(np.vstack([P[:i], pa, pb, P[i + 1:]]))
+    return out
+
+
+def merge_moves(P: np.ndarray) -> list[np.ndarray]:
+    """Point sets (I - 1, 2) with two consecutive hover points replaced by their midpoint,
+    the closest pairs first. P (I, 2) m."""
+    gaps = np.linalg.norm(np.diff(P, axis=0), axis=1)
+    out = []
+    for i in np.argsort(gaps, kind="stable"):
+        Q = np.delete(P, i + 1, axis=0)
+        Q[i] = 0.5 * (P[i] + P[i + 1])
+        out.append(Q)
+    return out
+
+
+def restructure(
+    problem: Any, x: np.ndarray, evaluate: Evaluate, *, trials: int, move_trials: int = 40
+) -> Descent | None:
+    """First-improvement local search over the plan's structure: each move (`split_moves`,
+    then `merge_moves`) that keeps every point within C3 and C5 and every sensor servable is
+    evaluated with its LP hover times and descended (`descend`, at most `move_trials`
+    evaluations); the first Deb-better result is kept and the moves are tried again from it,
+    until none improves or `trials` evaluations are spent (all through `evaluate`).
+
+    Variable-length plans only (the number of hover points changes; at most I_max): returns
+    None in the fixed-length mode, with tau <= 0 (every slot active), for an infeasible x or
+    `trials` < 1. x (d,) a decision vector; deterministic.
+    """
+    if not problem.variable_length or problem.tau <= 0.0 or trials < 1:
+        return None
+    x = np.asarray(x, dtype=float)
+    b = problem.breakdown(x)
+    if b["phi"] > 0:
+        return None
+    m = problem.model
+    best_x, best_f, best_phi, f_start = x, float(b["f"]), 0.0, float(b["f"])
+    P, T = np.asarray(b["hover_points"]).reshape(-1, 2), np.asarray(b["hover_times"])
+    spent = 0
+    improved = True
+    while improved and spent < trials:
+        improved = False
+        for Q in [*split_moves(problem, P, T), *merge_moves(P)]:
+            if spent >= trials:
+                break
+            if not 0 < len(Q) <= problem.n_points or len(held_points(problem, Q)):
+                continue
+            lp = hover_lp(m.rates(Q), m.required, m.t_max)
+            if lp is None:
+                continue
+            xq = problem.encode(Q, lp[0])
+            fq, phiq = (float(np.asarray(v).reshape(-1)[0]) for v in evaluate(xq[None, :]))
+            spent += 1
+            r = descend(problem, xq, evaluate, trials=min(move_trials, trials - spent))
+            if r is not None:
+                spent += r.evaluations
+                xq, fq, phiq = r.x, r.f, r.phi
+            if deb_better(fq, phiq, best_f, best_phi):
+                best_x, best_f, best_phi = xq, fq, phiq
+                nb = problem.breakdown(xq)
+                P, T = np.asarray(nb["hover_points"]).reshape(-1, 2), np.asarray(nb["hover_times"])
+                improved = True
+                break
+    return Descent(best_x, best_f, best_phi, spent, f_start)
+
+
+def finish(problem: Any, x: np.ndarray, evaluate: Evaluate, *, trials: int) -> Descent | None:
+    """What `plan` does to its final plan x (d,): `descend` (at most `DESCENT_TRIALS`
+    evaluations of the defaults table), then `restructure` from the result with what is left
+    of `trials`. None when x is not a feasible plan or `trials` < 1."""
+    from planner_core.defaults import DESCENT_TRIALS
+
+    first = descend(problem, x, evaluate, trials=min(DESCENT_TRIALS, trials))
+    if first is None:
+        return None
+    second = restructure(problem, first.x, evaluate, trials=trials - first.evaluations)
+    if second is None:
+        return first
+    return Descent(second.x, second.f, second.phi, first.evaluations + second.evaluations,
+                   first.f_start)

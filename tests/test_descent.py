@@ -7,7 +7,16 @@ import pytest
 from scipy.optimize import linprog
 
 from planner_core.construct import candidate_plans
-from planner_core.descent import descend, held_points, objective, objective_reference
+from planner_core.descent import (
+    descend,
+    finish,
+    held_points,
+    merge_moves,
+    objective,
+    objective_reference,
+    restructure,
+    split_moves,
+)
 from planner_core.polish import _lp_matrices, hover_lp
 from planner_core.problem import Problem
 from tests.conftest import SUITE
@@ -113,3 +122,47 @@ def test_plan_with_descent_spends_at_most_the_budget_and_is_not_worse() -> None:
     assert on.feasible and off.feasible
     assert on.evaluations <= 3000 and off.evaluations <= 3000
     assert on.f < off.f
+
+
+def test_split_and_merge_moves_change_the_point_count_by_one(t05: Problem) -> None:
+    x = _first_plans(t05, 1)[0]
+    b = t05.breakdown(x)
+    P, T = np.asarray(b["hover_points"]), np.asarray(b["hover_times"])
+    splits = split_moves(t05, P, T)
+    assert splits and all(len(Q) == len(P) + 1 for Q in splits)
+    merges = merge_moves(P)
+    assert len(merges) == len(P) - 1 and all(len(Q) == len(P) - 1 for Q in merges)
+    # the closest pair is merged first, into its midpoint
+    i = int(np.argmin(np.linalg.norm(np.diff(P, axis=0), axis=1)))
+    np.testing.assert_allclose(merges[0][i], 0.5 * (P[i] + P[i + 1]))
+
+
+def test_restructure_and_finish_are_counted_feasible_and_never_worse() -> None:
+    """On T15 the constructive plan's structure is improvable (a hover point split in two pays
+    for its extra stop); on every plan the search stays within its evaluations."""
+    problem = Problem(SUITE / "T15.json")
+    calls: list[int] = []
+
+    def counted(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        calls.append(len(X))
+        return problem.evaluate(X)
+
+    x = _first_plans(problem, 1)[0]
+    f0 = float(problem.evaluate(x[None])[0][0])
+    r = restructure(problem, x, counted, trials=150)
+    assert r is not None and r.evaluations == sum(calls) <= 150
+    f, phi = problem.evaluate(r.x[None])
+    assert phi[0] == 0.0 and f[0] == r.f < f0 - 1.0
+    calls.clear()
+    g = finish(problem, x, counted, trials=150)
+    assert g is not None and g.evaluations == sum(calls) <= 150 and g.f <= r.f + 1e-9
+    again = finish(problem, x, problem.evaluate, trials=150)
+    assert again is not None and again.x.tobytes() == g.x.tobytes()
+    fixed = Problem(SUITE / "T15.json", variable_length=False)
+    assert restructure(fixed, fixed.encode(*_full(fixed)), fixed.evaluate, trials=10) is None
+
+
+def _full(problem: Problem) -> tuple[np.ndarray, np.ndarray]:
+    """Any I_max points (fixed-length mode needs all of them)."""
+    n = problem.n_points
+    return np.linspace(problem.start, problem.end, n + 2)[1:-1], np.zeros(n)

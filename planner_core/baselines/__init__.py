@@ -32,6 +32,7 @@ from planner_core.defaults import (
     DESCENTS,
     MEMETIC,
     POPULATION,
+    RESTRUCTURE_TRIALS,
     SCORE_FACTOR,
     START_CANDIDATES,
     STARTS,
@@ -131,7 +132,7 @@ REGISTRY: dict[str, OptimiserSpec] = {
             "the DE and on the polished best; budget counted exactly",
             kwargs={"lp": True, "memetic": MEMETIC, "starts": STARTS,
                     "candidates": START_CANDIDATES, "descents": DESCENTS,
-                    "trials": DESCENT_TRIALS},
+                    "trials": DESCENT_TRIALS, "restructure": RESTRUCTURE_TRIALS},
             # a descent stops when its step falls below 1 cm: the evaluations it leaves are
             # not spent (`plan` too: evaluations <= budget)
             spends_budget=False,

@@ -34,6 +34,7 @@ def optimise(
     order: Any = None,
     descents: int = 0,
     trials: int = 0,
+    restructure: int = 0,
 ) -> OptimiseResult:
     """Run the DE with `configurator` for exactly `budget` evaluations (initial population
     included). `lp`: what `plan` does, the DE on budget - ELITE, then the hover-time LP on the
@@ -48,7 +49,8 @@ def optimise(
     the DE's initial population (UAV problem only; 0: none). `descents`, `trials`: as `plan`
     does, the hover-point descent (`planner_core.descent`) on the `descents` best plans of
     each kind among the starts and, with `lp`, on the polished best, at most `trials`
-    evaluations each (UAV problem only; 0: none)."""
+    evaluations each, then `restructure` evaluations of the structural search on it (UAV
+    problem only; 0: none)."""
     from planner_core.baselines.seed_lp import can_lp
 
     budgeted = as_budgeted(problem, budget)
@@ -77,7 +79,7 @@ def optimise(
         refine = partial(_refine, budgeted.problem)
     opt, spent = budgeted, 0
     room = max(int(budget) - reserve - population, 0)
-    final = min(int(trials), room // 10) if descents > 0 and reserve else 0
+    final = min(int(trials) + int(restructure), room // 10) if descents > 0 and reserve else 0
     room -= final
     if starts > 0 and candidates > 0 and can_lp(budgeted):
         from planner_core.construct import start_from_plans
@@ -98,9 +100,9 @@ def optimise(
         budgeted.evaluate(xs)
         x, f, phi = budgeted.best("deb")
         if final and phi == 0.0:
-            from planner_core.descent import descend
+            from planner_core.descent import finish
 
-            descend(inner, x, budgeted.evaluate, trials=final)  # budgeted keeps the best
+            finish(inner, x, budgeted.evaluate, trials=final)  # budgeted keeps the best
             x, f, phi = budgeted.best("deb")
         return OptimiseResult(x, f, phi, budgeted.count, budgeted.trace("deb"), last_feasible)
     return OptimiseResult(res.x, res.f, res.phi, budgeted.count, budgeted.trace("deb"),
