@@ -154,7 +154,8 @@ def plan(
     # the budget holds everything: the constructive plans scored, the DE, the polish's plans
     reserve = min(ELITE, int(budget) // 4, int(budget) - int(population)) if polish else 0
     room = max(int(budget) - reserve - int(population), 0)
-    final = _defaults.DESCENT_TRIALS + _defaults.RESTRUCTURE_TRIALS if descent else 0
+    final = (_defaults.DESCENT_TRIALS + _defaults.RESTRUCTURE_TRIALS + _defaults.KICK_TRIALS
+             if descent else 0)
     final = min(final, room // 10)
     room -= final
     t0 = time.perf_counter()
@@ -225,7 +226,7 @@ def plan(
         t1 = time.perf_counter()
         # the final plan's hover points moved with exact LP hover times, then its structure
         x = problem.encode(chosen["hover_points"], chosen["hover_times"])
-        r = finish(problem, x, problem.evaluate, trials=final)
+        r = finish(problem, x, problem.evaluate, trials=final, seed=int(seed))
         if r is not None:
             descended = r.evaluations
             if deb_better(r.f, r.phi, chosen["f"], chosen["phi"]):

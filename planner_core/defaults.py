@@ -45,6 +45,7 @@ __all__ = [
     "DESCENTS",
     "DESCENT_TRIALS",
     "RESTRUCTURE_TRIALS",
+    "KICK_TRIALS",
     "START_CANDIDATES",
     "SUITE_SEED",
     "check",
@@ -146,6 +147,10 @@ _RUN: tuple[Default, ...] = (
             "may spend (`planner_core.descent.restructure`: split a hover point in two or "
             "merge two, each move descended; with the descent on)", "an integer >= 0",
             _int_at_least(0)),
+    Default("kick_trials", 500, "evaluations of the iterated local search on the final plan "
+            "after the structural search (`planner_core.descent.kicks`: one hover point kicked "
+            "300 m at random, the plan descended, kept when better; with the descent on)",
+            "an integer >= 0", _int_at_least(0)),
     Default("seed", 0, "random seed of a planning run (same seed, same plan)", "an integer >= 0",
             _int_at_least(0)),
     Default("score_factor", 10.0, "penalised score f + 10 * phi that ranks optimisers "
@@ -243,6 +248,7 @@ START_CANDIDATES: int = DEFAULTS["start_candidates"].value
 DESCENTS: int = DEFAULTS["descents"].value
 DESCENT_TRIALS: int = DEFAULTS["descent_trials"].value
 RESTRUCTURE_TRIALS: int = DEFAULTS["restructure_trials"].value
+KICK_TRIALS: int = DEFAULTS["kick_trials"].value
 SEED: int = DEFAULTS["seed"].value
 SCORE_FACTOR: float = DEFAULTS["score_factor"].value
 SUITE_SEED: int = DEFAULTS["suite_seed"].value

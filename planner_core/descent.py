@@ -45,6 +45,7 @@ __all__ = [
     "Descent",
     "descend",
     "finish",
+    "kicks",
     "held_points",
     "merge_moves",
     "objective",
@@ -289,17 +290,72 @@ def restructure(
     return Descent(best_x, best_f, best_phi, spent, f_start)
 
 
-def finish(problem: Any, x: np.ndarray, evaluate: Evaluate, *, trials: int) -> Descent | None:
-    """What `plan` does to its final plan x (d,): `descend` (at most `DESCENT_TRIALS`
-    evaluations of the defaults table), then `restructure` from the result with what is left
-    of `trials`. None when x is not a feasible plan or `trials` < 1."""
-    from planner_core.defaults import DESCENT_TRIALS
+#: the spread (m) of a kick: one hover point moved by a normal step of this deviation per axis
+KICK = 300.0
 
-    first = descend(problem, x, evaluate, trials=min(DESCENT_TRIALS, trials))
-    if first is None:
+
+def kicks(
+    problem: Any, x: np.ndarray, evaluate: Evaluate, *, trials: int, seed: int,
+    move_trials: int = 40,
+) -> Descent | None:
+    """Iterated local search (Lourenco, Martin & Stuetzle, "Iterated local search", Handbook of
+    Metaheuristics, 2003) around plan x (d,): one hover point, drawn at random, moved by a
+    normal kick of `KICK` m per axis, the plan evaluated with its LP hover times and descended
+    (`descend`, at most `move_trials` evaluations), kept when Deb-better; repeated until
+    `trials` evaluations are spent (all through `evaluate`; a kick into an obstacle or past the
+    bandwidth costs one). Seeded: the same seed gives the same plan. None for an infeasible x
+    or `trials` < 1."""
+    x = np.asarray(x, dtype=float)
+    b = problem.breakdown(x)
+    if b["phi"] > 0 or trials < 1 or not b["hover_points"]:
         return None
-    second = restructure(problem, first.x, evaluate, trials=trials - first.evaluations)
-    if second is None:
-        return first
-    return Descent(second.x, second.f, second.phi, first.evaluations + second.evaluations,
-                   first.f_start)
+    m = problem.model
+    rng = np.random.default_rng(np.random.SeedSequence([int(seed), 17]))
+    box = np.array([m.width, m.height])
+    best_x, best_f, best_phi, f_start = x, float(b["f"]), 0.0, float(b["f"])
+    P = np.asarray(b["hover_points"], dtype=float).reshape(-1, 2)
+    spent = 0
+    while spent < trials:
+        Q = P.copy()
+        i = int(rng.integers(len(Q)))
+        Q[i] = np.clip(Q[i] + rng.normal(0.0, KICK, 2), 0.0, box)
+        spent += 1  # the kick's own evaluation, or its refusal
+        if len(held_points(problem, Q)):
+            continue
+        lp = hover_lp(m.rates(Q), m.required, m.t_max)
+        if lp is None:
+            continue
+        xq = problem.encode(Q, lp[0])
+        fq, phiq = (float(np.asarray(v).reshape(-1)[0]) for v in evaluate(xq[None, :]))
+        r = descend(problem, xq, evaluate, trials=min(move_trials, trials - spent))
+        if r is not None:
+            spent += r.evaluations
+            xq, fq, phiq = r.x, r.f, r.phi
+        if deb_better(fq, phiq, best_f, best_phi):
+            best_x, best_f, best_phi = xq, fq, phiq
+            P = np.asarray(problem.breakdown(xq)["hover_points"], dtype=float).reshape(-1, 2)
+    return Descent(best_x, best_f, best_phi, spent, f_start)
+
+
+def finish(
+    problem: Any, x: np.ndarray, evaluate: Evaluate, *, trials: int, seed: int = 0
+) -> Descent | None:
+    """What `plan` does to its final plan x (d,): `descend` (at most `DESCENT_TRIALS`
+    evaluations of the defaults table), `restructure` (at most `RESTRUCTURE_TRIALS`), then
+    `kicks` with what is left of `trials` (seeded by `seed`). None when x is not a feasible
+    plan or `trials` < 1."""
+    from planner_core.defaults import DESCENT_TRIALS, RESTRUCTURE_TRIALS
+
+    cur = descend(problem, x, evaluate, trials=min(DESCENT_TRIALS, trials))
+    if cur is None:
+        return None
+    spent, f_start = cur.evaluations, cur.f_start
+    nxt = restructure(problem, cur.x, evaluate, trials=min(RESTRUCTURE_TRIALS, trials - spent))
+    if nxt is not None:
+        spent += nxt.evaluations
+        cur = nxt
+    nxt = kicks(problem, cur.x, evaluate, trials=trials - spent, seed=seed)
+    if nxt is not None:
+        spent += nxt.evaluations
+        cur = nxt
+    return Descent(cur.x, cur.f, cur.phi, spent, f_start)

@@ -11,6 +11,7 @@ from planner_core.descent import (
     descend,
     finish,
     held_points,
+    kicks,
     merge_moves,
     objective,
     objective_reference,
@@ -166,3 +167,23 @@ def _full(problem: Problem) -> tuple[np.ndarray, np.ndarray]:
     """Any I_max points (fixed-length mode needs all of them)."""
     n = problem.n_points
     return np.linspace(problem.start, problem.end, n + 2)[1:-1], np.zeros(n)
+
+
+def test_kicks_are_seeded_counted_and_never_worse(t05: Problem) -> None:
+    calls: list[int] = []
+
+    def counted(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        calls.append(len(X))
+        return t05.evaluate(X)
+
+    x = _first_plans(t05, 1)[0]
+    f0 = float(t05.evaluate(x[None])[0][0])
+    r = kicks(t05, x, counted, trials=120, seed=3)
+    assert r is not None and sum(calls) <= r.evaluations <= 120
+    f, phi = t05.evaluate(r.x[None])
+    assert phi[0] == 0.0 and f[0] == r.f <= f0
+    same = kicks(t05, x, t05.evaluate, trials=120, seed=3)
+    other = kicks(t05, x, t05.evaluate, trials=120, seed=4)
+    assert same is not None and other is not None
+    assert same.x.tobytes() == r.x.tobytes() and other.x.tobytes() != r.x.tobytes()
+    assert kicks(t05, x, t05.evaluate, trials=0, seed=3) is None

@@ -30,6 +30,7 @@ from planner_core.defaults import (
     CONFIGURATORS,
     DESCENT_TRIALS,
     DESCENTS,
+    KICK_TRIALS,
     MEMETIC,
     POPULATION,
     RESTRUCTURE_TRIALS,
@@ -132,7 +133,8 @@ REGISTRY: dict[str, OptimiserSpec] = {
             "the DE and on the polished best; budget counted exactly",
             kwargs={"lp": True, "memetic": MEMETIC, "starts": STARTS,
                     "candidates": START_CANDIDATES, "descents": DESCENTS,
-                    "trials": DESCENT_TRIALS, "restructure": RESTRUCTURE_TRIALS},
+                    "trials": DESCENT_TRIALS, "restructure": RESTRUCTURE_TRIALS,
+                    "kick": KICK_TRIALS},
             # a descent stops when its step falls below 1 cm: the evaluations it leaves are
             # not spent (`plan` too: evaluations <= budget)
             spends_budget=False,

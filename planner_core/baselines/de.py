@@ -35,6 +35,7 @@ def optimise(
     descents: int = 0,
     trials: int = 0,
     restructure: int = 0,
+    kick: int = 0,
 ) -> OptimiseResult:
     """Run the DE with `configurator` for exactly `budget` evaluations (initial population
     included). `lp`: what `plan` does, the DE on budget - ELITE, then the hover-time LP on the
@@ -49,8 +50,9 @@ def optimise(
     the DE's initial population (UAV problem only; 0: none). `descents`, `trials`: as `plan`
     does, the hover-point descent (`planner_core.descent`) on the `descents` best plans of
     each kind among the starts and, with `lp`, on the polished best, at most `trials`
-    evaluations each, then `restructure` evaluations of the structural search on it (UAV
-    problem only; 0: none)."""
+    evaluations each, then `restructure` evaluations of the structural search and `kick` of
+    the iterated local search on it (`planner_core.descent.finish`; UAV problem only; 0:
+    none)."""
     from planner_core.baselines.seed_lp import can_lp
 
     budgeted = as_budgeted(problem, budget)
@@ -79,7 +81,8 @@ def optimise(
         refine = partial(_refine, budgeted.problem)
     opt, spent = budgeted, 0
     room = max(int(budget) - reserve - population, 0)
-    final = min(int(trials) + int(restructure), room // 10) if descents > 0 and reserve else 0
+    final = int(trials) + int(restructure) + int(kick)
+    final = min(final, room // 10) if descents > 0 and reserve else 0
     room -= final
     if starts > 0 and candidates > 0 and can_lp(budgeted):
         from planner_core.construct import start_from_plans
@@ -102,7 +105,8 @@ def optimise(
         if final and phi == 0.0:
             from planner_core.descent import finish
 
-            finish(inner, x, budgeted.evaluate, trials=final)  # budgeted keeps the best
+            # budgeted keeps the best
+            finish(inner, x, budgeted.evaluate, trials=final, seed=int(seed))
             x, f, phi = budgeted.best("deb")
         return OptimiseResult(x, f, phi, budgeted.count, budgeted.trace("deb"), last_feasible)
     return OptimiseResult(res.x, res.f, res.phi, budgeted.count, budgeted.trace("deb"),
