@@ -1,8 +1,10 @@
 """Planning speed and memory: `plan` on the largest suite map at 10,000 evaluations.
 
 Prints wall time split into evaluation, seeding (the sensor- and obstacle-aware initial
-population), starts (building the constructive plans, `planner_core.construct`; their
-evaluations are under evaluation), optimiser overhead (DE ask/tell/configurator) and polish,
+population), starts (building the constructive plans, `planner_core.construct`, and
+descending the best of them; their evaluations are under evaluation), optimiser overhead (DE
+ask/tell/configurator), polish, and descent (the final plan's descent, structural search and
+kicks, `planner_core.descent.finish`, its evaluations included),
 plus peak memory
 (ru_maxrss) and whether torch or matplotlib were imported on the planning path.
 
@@ -45,7 +47,7 @@ from planner_core import defaults as D
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_MAP = ROOT / "examples" / "maps" / "suite" / "T16.json"
-PHASES = ("evaluation", "seeding", "starts", "optimiser", "polish")
+PHASES = ("evaluation", "seeding", "starts", "optimiser", "polish", "descent")
 
 
 def _split(t: dict[str, float]) -> str:
