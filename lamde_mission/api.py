@@ -121,8 +121,11 @@ def plan(
     what is left), so `evaluations` <= budget (budget + 1 when budget equals the population:
     the DE has only its start population and the polish its one LP plan). `descent`: the
     hover-point descent with exact LP hover times (`planner_core.descent`) on the
-    `planner_core.defaults.DESCENTS` best constructive and seeder plans before the DE and on
-    the final plan after the polish, each at most `DESCENT_TRIALS` evaluations of the budget.
+    `planner_core.defaults.DESCENTS` best constructive and seeder plans before the DE (each at
+    most `DESCENT_TRIALS` evaluations) and, with `polish`, on the final plan after the polish
+    (`planner_core.descent.finish`: descent, structural search, kicks; at most
+    `DESCENT_TRIALS` + `RESTRUCTURE_TRIALS` + `KICK_TRIALS` evaluations), all counted in the
+    budget; an infeasible final plan is not descended and leaves that share unspent.
     Defaults and valid ranges: `planner_core.defaults`.
 
     Raises ValueError with one line naming the field ("population: must be an integer >= 6,
@@ -154,8 +157,9 @@ def plan(
     # the budget holds everything: the constructive plans scored, the DE, the polish's plans
     reserve = min(ELITE, int(budget) // 4, int(budget) - int(population)) if polish else 0
     room = max(int(budget) - reserve - int(population), 0)
+    # the final plan's descent, structural search and kicks: part of the polish
     final = (_defaults.DESCENT_TRIALS + _defaults.RESTRUCTURE_TRIALS + _defaults.KICK_TRIALS
-             if descent else 0)
+             if descent and polish else 0)
     final = min(final, room // 10)
     room -= final
     t0 = time.perf_counter()

@@ -393,6 +393,8 @@ def best_starts(
                 if r is None:
                     continue
                 spent += r.evaluations
+                if not r.f < r.f_start:  # not moved: the start is already in the pool
+                    continue
                 rows.append(r.x[None, :])
                 fs.append(np.array([r.f]))
                 phis.append(np.array([r.phi]))

@@ -139,8 +139,9 @@ _RUN: tuple[Default, ...] = (
             "an integer >= 0", _int_at_least(0)),
     Default("descents", 3, "best plans of each kind (constructive, seeder) improved by the "
             "hover-point descent with exact LP hover times (`planner_core.descent`) before "
-            "the DE; the plan after the polish is descended once more; 0: no descent "
-            "(docs/search.md)", "an integer >= 0", _int_at_least(0)),
+            "the DE; 0: none before the DE (`plan(descent=False)`, `--no-descent` turn off "
+            "this and the final plan's descent; docs/search.md)", "an integer >= 0",
+            _int_at_least(0)),
     Default("descent_trials", 40, "evaluations one descent may spend at most (counted in the "
             "budget)", "an integer >= 0", _int_at_least(0)),
     Default("restructure_trials", 300, "evaluations the structural search on the final plan "
@@ -148,8 +149,9 @@ _RUN: tuple[Default, ...] = (
             "merge two, each move descended; with the descent on)", "an integer >= 0",
             _int_at_least(0)),
     Default("kick_trials", 500, "evaluations of the iterated local search on the final plan "
-            "after the structural search (`planner_core.descent.kicks`: one hover point kicked "
-            "300 m at random, the plan descended, kept when better; with the descent on)",
+            "after the structural search (`planner_core.descent.kicks`: one hover point moved by "
+            "a normal step of 300 m standard deviation per axis, the plan descended, kept when "
+            "better; with the descent on)",
             "an integer >= 0", _int_at_least(0)),
     Default("seed", 0, "random seed of a planning run (same seed, same plan)", "an integer >= 0",
             _int_at_least(0)),

@@ -81,14 +81,17 @@ def _nodes(problem: Any, P: np.ndarray) -> np.ndarray:
     return np.vstack([problem.start, P, problem.end])
 
 
-def objective(problem: Any, P: np.ndarray) -> tuple[float, np.ndarray, np.ndarray] | None:
+def objective(
+    problem: Any, P: np.ndarray, warm: dict[Any, Any] | None = None
+) -> tuple[float, np.ndarray, np.ndarray] | None:
     """F(P) (s), its gradient dF/dP (I, 2) (s/m) and the LP hover times T (I,) (s) for hover
     points P (I, 2) in metres; None when no hover times serve every sensor (the LP is
-    infeasible). Module docstring for the formulas."""
+    infeasible). `warm`: the LP's warm-start store (`polish.hover_lp`). Module docstring for
+    the formulas."""
     P = np.asarray(P, dtype=float).reshape(-1, 2)
     m = problem.model
     R = m.rates(P)
-    lp = hover_lp(R, m.required, m.t_max)
+    lp = hover_lp(R, m.required, m.t_max, warm)
     if lp is None:
         return None
     T, V, y = lp
@@ -155,7 +158,8 @@ def descend(
     P = np.asarray(b["hover_points"], dtype=float).reshape(-1, 2)
     if b["phi"] > 0 or len(P) == 0 or trials < 1 or len(held_points(problem, P)):
         return None
-    cur = objective(problem, P)
+    warm: dict[Any, Any] = {}  # this descent's own LP warm starts: reproducible
+    cur = objective(problem, P, warm)
     if cur is None:
         return None
     g = cur[1]
@@ -177,7 +181,7 @@ def descend(
             if len(held):
                 free[held] = False
                 continue
-            nxt = objective(problem, Pn)
+            nxt = objective(problem, Pn, warm)
             if nxt is None:
                 break
             xn = problem.encode(Pn, nxt[2])
@@ -290,8 +294,12 @@ def restructure(
     return Descent(best_x, best_f, best_phi, spent, f_start)
 
 
-#: the spread (m) of a kick: one hover point moved by a normal step of this deviation per axis
+#: the spread (m) of a kick: one hover point moved by a normal step of this standard deviation
+#: per axis (a mean move of ~376 m)
 KICK = 300.0
+#: kicks drawn per evaluation allowed, at most: a kick into an obstacle, past the bandwidth or
+#: leaving a sensor unserved is refused before any evaluation
+KICK_ATTEMPTS = 4
 
 
 def kicks(
@@ -300,11 +308,12 @@ def kicks(
 ) -> Descent | None:
     """Iterated local search (Lourenco, Martin & Stuetzle, "Iterated local search", Handbook of
     Metaheuristics, 2003) around plan x (d,): one hover point, drawn at random, moved by a
-    normal kick of `KICK` m per axis, the plan evaluated with its LP hover times and descended
-    (`descend`, at most `move_trials` evaluations), kept when Deb-better; repeated until
-    `trials` evaluations are spent (all through `evaluate`; a kick into an obstacle or past the
-    bandwidth costs one). Seeded: the same seed gives the same plan. None for an infeasible x
-    or `trials` < 1."""
+    normal kick (standard deviation `KICK` m per axis), the plan evaluated with its LP hover
+    times and descended (`descend`, at most `move_trials` evaluations), kept when Deb-better;
+    repeated until `trials` evaluations are spent (all through `evaluate`; a kick refused
+    before evaluation, into an obstacle, past the bandwidth or leaving a sensor unserved, costs
+    none; at most `KICK_ATTEMPTS` x `trials` kicks are drawn). Seeded: the same seed gives the
+    same plan. None for an infeasible x or `trials` < 1."""
     x = np.asarray(x, dtype=float)
     b = problem.breakdown(x)
     if b["phi"] > 0 or trials < 1 or not b["hover_points"]:
@@ -315,11 +324,12 @@ def kicks(
     best_x, best_f, best_phi, f_start = x, float(b["f"]), 0.0, float(b["f"])
     P = np.asarray(b["hover_points"], dtype=float).reshape(-1, 2)
     spent = 0
-    while spent < trials:
+    for _ in range(KICK_ATTEMPTS * trials):  # refused kicks cost no evaluation: bounded apart
+        if spent >= trials:
+            break
         Q = P.copy()
         i = int(rng.integers(len(Q)))
         Q[i] = np.clip(Q[i] + rng.normal(0.0, KICK, 2), 0.0, box)
-        spent += 1  # the kick's own evaluation, or its refusal
         if len(held_points(problem, Q)):
             continue
         lp = hover_lp(m.rates(Q), m.required, m.t_max)
@@ -327,6 +337,7 @@ def kicks(
             continue
         xq = problem.encode(Q, lp[0])
         fq, phiq = (float(np.asarray(v).reshape(-1)[0]) for v in evaluate(xq[None, :]))
+        spent += 1
         r = descend(problem, xq, evaluate, trials=min(move_trials, trials - spent))
         if r is not None:
             spent += r.evaluations
@@ -338,19 +349,28 @@ def kicks(
 
 
 def finish(
-    problem: Any, x: np.ndarray, evaluate: Evaluate, *, trials: int, seed: int = 0
+    problem: Any,
+    x: np.ndarray,
+    evaluate: Evaluate,
+    *,
+    trials: int,
+    seed: int = 0,
+    descent_trials: int | None = None,
+    restructure_trials: int | None = None,
 ) -> Descent | None:
-    """What `plan` does to its final plan x (d,): `descend` (at most `DESCENT_TRIALS`
-    evaluations of the defaults table), `restructure` (at most `RESTRUCTURE_TRIALS`), then
-    `kicks` with what is left of `trials` (seeded by `seed`). None when x is not a feasible
-    plan or `trials` < 1."""
+    """What `plan` does to its final plan x (d,): `descend` (at most `descent_trials`
+    evaluations; None: the defaults table's `DESCENT_TRIALS`), `restructure` (at most
+    `restructure_trials`; None: `RESTRUCTURE_TRIALS`), then `kicks` with what is left of
+    `trials` (seeded by `seed`). None when x is not a feasible plan or `trials` < 1."""
     from planner_core.defaults import DESCENT_TRIALS, RESTRUCTURE_TRIALS
 
-    cur = descend(problem, x, evaluate, trials=min(DESCENT_TRIALS, trials))
+    d_trials = DESCENT_TRIALS if descent_trials is None else int(descent_trials)
+    r_trials = RESTRUCTURE_TRIALS if restructure_trials is None else int(restructure_trials)
+    cur = descend(problem, x, evaluate, trials=min(d_trials, trials))
     if cur is None:
         return None
     spent, f_start = cur.evaluations, cur.f_start
-    nxt = restructure(problem, cur.x, evaluate, trials=min(RESTRUCTURE_TRIALS, trials - spent))
+    nxt = restructure(problem, cur.x, evaluate, trials=min(r_trials, trials - spent))
     if nxt is not None:
         spent += nxt.evaluations
         cur = nxt

@@ -150,22 +150,28 @@ def _highs() -> Any:
     if h is None:
         import highspy
 
-        sys.stdout.flush()
-        saved, null = os.dup(1), os.open(os.devnull, os.O_WRONLY)
         try:
-            os.dup2(null, 1)
+            if sys.stdout is not None:
+                sys.stdout.flush()
+            saved = os.dup(1)
+        except (OSError, ValueError):  # no stdout (closed fd 1, sys.stdout None): nothing to hide
             h = highspy.Highs()
-        finally:
-            os.dup2(saved, 1)
-            os.close(saved)
-            os.close(null)
+        else:
+            null = os.open(os.devnull, os.O_WRONLY)
+            try:
+                os.dup2(null, 1)
+                h = highspy.Highs()
+            finally:
+                os.dup2(saved, 1)
+                os.close(saved)
+                os.close(null)
         h.setOptionValue("output_flag", False)
-        _HIGHS.solver, _HIGHS.basis = h, {}
+        _HIGHS.solver = h
     return h
 
 
 def hover_lp(
-    R: np.ndarray, req: np.ndarray, t_max: float
+    R: np.ndarray, req: np.ndarray, t_max: float, warm: dict[Any, Any] | None = None
 ) -> tuple[np.ndarray, float, np.ndarray] | None:
     """The feasible hover-time LP of `_lp_matrices` with its duals, for sensitivity analysis.
 
@@ -178,9 +184,12 @@ def hover_lp(
     -y_j T_i / Q_j at a non-degenerate optimum: what `planner_core.descent` uses.
 
     The fast path of the polish's LP (`_solve_lp` is its reference; tests/test_descent.py
-    holds them equal): HiGHS called through highspy directly, warm-started from the last
-    optimal basis of the same shape (this thread's), ~0.3 ms where scipy's `linprog` takes
-    ~1.3 ms on T16's 16 points and 29 sensors.
+    holds them equal): HiGHS called through highspy directly, ~0.3 ms where scipy's `linprog`
+    takes ~1.3 ms on T16's 16 points and 29 sensors. `warm`: a dict the caller keeps for one
+    sequence of related solves (a descent): the last optimal basis of each shape is kept in it
+    and the next solve starts from it. Where the LP has several optima the one returned may
+    depend on that basis, so a caller that must be reproducible passes a fresh dict per
+    sequence (None: a cold start, the same answer whatever was solved before).
     """
     import highspy
 
@@ -201,14 +210,16 @@ def hover_lp(
     lp.a_matrix_.value_ = A[nz]
     solver = _highs()
     solver.passModel(lp)
-    basis = _HIGHS.basis.get(A.shape)
+    basis = warm.get(A.shape) if warm is not None else None
     if basis is not None:
         solver.setBasis(basis)
     solver.run()
     if solver.getModelStatus() != highspy.HighsModelStatus.kOptimal:
-        _HIGHS.basis.pop(A.shape, None)
+        if warm is not None:
+            warm.pop(A.shape, None)
         return None
-    _HIGHS.basis[A.shape] = solver.getBasis()
+    if warm is not None:
+        warm[A.shape] = solver.getBasis()
     sol = solver.getSolution()
     y = np.zeros(len(req))
     y[need] = np.maximum(np.asarray(sol.row_dual, dtype=float), 0.0)

@@ -187,3 +187,32 @@ def test_kicks_are_seeded_counted_and_never_worse(t05: Problem) -> None:
     assert same is not None and other is not None
     assert same.x.tobytes() == r.x.tobytes() and other.x.tobytes() != r.x.tobytes()
     assert kicks(t05, x, t05.evaluate, trials=0, seed=3) is None
+
+
+def test_hover_lp_without_stdout_and_warm_starts_stay_local() -> None:
+    """The solver is made with fd 1 silenced, but a process without a stdout still plans; a
+    warm-start store changes nothing for a cold caller (reproducible whatever ran before)."""
+    import subprocess
+    import sys
+
+    code = ("import sys, numpy as np; sys.stdout = None\n"
+            "from planner_core.polish import hover_lp\n"
+            "r = hover_lp(np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([10.0, 10.0]), 100.0)\n"
+            "sys.stderr.write(repr(round(r[1], 6)))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         stdin=subprocess.DEVNULL, timeout=120)
+    assert out.returncode == 0 and out.stderr.strip() == "6.666667", out.stderr
+    closed = subprocess.run([sys.executable, "-c", code.replace("sys.stdout = None", "pass")],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            close_fds=True, timeout=120)
+    assert closed.returncode == 0
+    # two identical points: the LP has many optima; a cold solve is the same after any other
+    R = np.array([[1.0, 1.0], [1.0, 1.0], [0.5, 2.0]])
+    req = np.array([10.0, 10.0])
+    first = hover_lp(R, req, 50.0)
+    warm: dict = {}
+    hover_lp(R[::-1].copy(), req, 50.0, warm)
+    hover_lp(R, req, 50.0, warm)
+    again = hover_lp(R, req, 50.0)
+    assert first is not None and again is not None
+    assert first[0].tobytes() == again[0].tobytes()

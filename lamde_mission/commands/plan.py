@@ -57,7 +57,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    f"{D.DESCENTS} constructive and seeder plans and on the final plan")
     p.add_argument("--fixed-length", action="store_true",
                    help="use all I_max hover points (the paper's LAMDE-F ablation)")
-    p.add_argument("--no-polish", action="store_true", help="skip the hover-time LP polish")
+    p.add_argument("--no-polish", action="store_true",
+                   help="skip the hover-time LP polish and the final plan's descent")
     p.add_argument("--finish", choices=("land", "rtl"), default="land",
                    help="end the mission by landing at the end point or returning to launch "
                    "(rtl: refused up front when the straight leg back to the start crosses an "

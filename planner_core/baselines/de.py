@@ -106,7 +106,8 @@ def optimise(
             from planner_core.descent import finish
 
             # budgeted keeps the best
-            finish(inner, x, budgeted.evaluate, trials=final, seed=int(seed))
+            finish(inner, x, budgeted.evaluate, trials=final, seed=int(seed),
+                   descent_trials=int(trials), restructure_trials=int(restructure))
             x, f, phi = budgeted.best("deb")
         return OptimiseResult(x, f, phi, budgeted.count, budgeted.trace("deb"), last_feasible)
     return OptimiseResult(res.x, res.f, res.phi, budgeted.count, budgeted.trace("deb"),
