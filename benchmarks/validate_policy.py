@@ -7,10 +7,13 @@ worse, "~": no significant difference; alpha 0.05, two-sided,
 `planner_core.bench.stats.wilcoxon_mark`).
 
 Pipelines (every configurator always gets the same one): "de" (default), the DE alone, no
-memetic step, no polish: the configurators' own effect; "planner", what `plan` does
-(`planner_core.baselines.de.optimise` with lp and memetic "auto": the DE with the memetic step
-on the elite from a uniform start, on the budget minus the polish reserve, then the hover-time
-LP on the final population's elite). Records carry their pipeline; one JSONL may hold both.
+memetic step, no polish: the configurators' own effect; "planner", what `plan` does: the
+benchmark's `planner` entry (`planner_core.baselines.REGISTRY["planner"]`, its keyword
+arguments: constructive starts and their descents, the DE with the memetic step from a uniform
+start, the hover-time LP on the final population's elite, the final plan's descent, structural
+search and kicks) with the configurator under test. Records carry their pipeline; one JSONL
+may hold both (records written before the planner entry had starts and descents are the
+pipeline of their time).
 
 Maps: "validation" (generator seeds 8000 + k, disjoint from the suite's 2025 and the training
 maps' 7000 + k; see planner_core.policy.problems), "suite" (the 16 committed suite maps), or
@@ -33,6 +36,7 @@ from typing import Any
 
 import numpy as np
 
+from planner_core.baselines import REGISTRY
 from planner_core.baselines.de import optimise
 from planner_core.bench.stats import wilcoxon_mark
 from planner_core.de import make_configurator, run
@@ -92,8 +96,8 @@ def main() -> None:
                             continue
                         t0 = time.perf_counter()
                         if args.pipeline == "planner":
-                            r = optimise(with_init(problem, mode), args.budget, seed,
-                                         configurator=conf, lp=True, memetic="auto")
+                            kw = {**REGISTRY["planner"].kwargs, "configurator": conf}
+                            r = optimise(with_init(problem, mode), args.budget, seed, **kw)
                         else:
                             r = run(with_init(problem, mode), configurator=conf, seed=seed,
                                     population=args.population, budget=args.budget)
