@@ -244,12 +244,32 @@ def merge_moves(P: np.ndarray) -> list[np.ndarray]:
     return out
 
 
+def _move(
+    problem: Any, Q: np.ndarray, evaluate: Evaluate, trials: int
+) -> tuple[np.ndarray, float, float, int] | None:
+    """Hover points Q (I, 2) as a plan: refused (None, no evaluation) when a point breaks C3 or
+    C5 or a sensor cannot be served; else evaluated with its LP hover times (one evaluation)
+    and descended with at most `trials` - 1 more. Returns (x (d,), f, phi, evaluations)."""
+    m = problem.model
+    if len(held_points(problem, Q)):
+        return None
+    lp = hover_lp(m.rates(Q), m.required, m.t_max)
+    if lp is None:
+        return None
+    x = problem.encode(Q, lp[0])
+    f, phi = (float(np.asarray(v).reshape(-1)[0]) for v in evaluate(x[None, :]))
+    r = descend(problem, x, evaluate, trials=trials - 1)
+    if r is None:
+        return x, f, phi, 1
+    return r.x, r.f, r.phi, 1 + r.evaluations
+
+
 def restructure(
     problem: Any, x: np.ndarray, evaluate: Evaluate, *, trials: int, move_trials: int = 40
 ) -> Descent | None:
     """First-improvement local search over the plan's structure: each move (`split_moves`,
     then `merge_moves`) that keeps every point within C3 and C5 and every sensor servable is
-    evaluated with its LP hover times and descended (`descend`, at most `move_trials`
+    evaluated with its LP hover times and descended (`descend`, at most `move_trials` more
     evaluations); the first Deb-better result is kept and the moves are tried again from it,
     until none improves or `trials` evaluations are spent (all through `evaluate`).
 
@@ -263,7 +283,6 @@ def restructure(
     b = problem.breakdown(x)
     if b["phi"] > 0:
         return None
-    m = problem.model
     best_x, best_f, best_phi, f_start = x, float(b["f"]), 0.0, float(b["f"])
     P, T = np.asarray(b["hover_points"]).reshape(-1, 2), np.asarray(b["hover_times"])
     spent = 0
@@ -273,18 +292,13 @@ def restructure(
         for Q in [*split_moves(problem, P, T), *merge_moves(P)]:
             if spent >= trials:
                 break
-            if not 0 < len(Q) <= problem.n_points or len(held_points(problem, Q)):
+            if not 0 < len(Q) <= problem.n_points:
                 continue
-            lp = hover_lp(m.rates(Q), m.required, m.t_max)
-            if lp is None:
+            tried = _move(problem, Q, evaluate, min(move_trials + 1, trials - spent))
+            if tried is None:
                 continue
-            xq = problem.encode(Q, lp[0])
-            fq, phiq = (float(np.asarray(v).reshape(-1)[0]) for v in evaluate(xq[None, :]))
-            spent += 1
-            r = descend(problem, xq, evaluate, trials=min(move_trials, trials - spent))
-            if r is not None:
-                spent += r.evaluations
-                xq, fq, phiq = r.x, r.f, r.phi
+            xq, fq, phiq, n = tried
+            spent += n
             if deb_better(fq, phiq, best_f, best_phi):
                 best_x, best_f, best_phi = xq, fq, phiq
                 nb = problem.breakdown(xq)
@@ -330,18 +344,11 @@ def kicks(
         Q = P.copy()
         i = int(rng.integers(len(Q)))
         Q[i] = np.clip(Q[i] + rng.normal(0.0, KICK, 2), 0.0, box)
-        if len(held_points(problem, Q)):
+        tried = _move(problem, Q, evaluate, min(move_trials + 1, trials - spent))
+        if tried is None:
             continue
-        lp = hover_lp(m.rates(Q), m.required, m.t_max)
-        if lp is None:
-            continue
-        xq = problem.encode(Q, lp[0])
-        fq, phiq = (float(np.asarray(v).reshape(-1)[0]) for v in evaluate(xq[None, :]))
-        spent += 1
-        r = descend(problem, xq, evaluate, trials=min(move_trials, trials - spent))
-        if r is not None:
-            spent += r.evaluations
-            xq, fq, phiq = r.x, r.f, r.phi
+        xq, fq, phiq, n = tried
+        spent += n
         if deb_better(fq, phiq, best_f, best_phi):
             best_x, best_f, best_phi = xq, fq, phiq
             P = np.asarray(problem.breakdown(xq)["hover_points"], dtype=float).reshape(-1, 2)
