@@ -39,7 +39,7 @@ import numpy as np
 
 from planner_core.geometry import overlap_lengths
 from planner_core.model import L_VIO_TOL, deb_better
-from planner_core.polish import hover_lp
+from planner_core.polish import ZERO_TIME, hover_lp
 
 __all__ = [
     "Descent",
@@ -52,6 +52,7 @@ __all__ = [
     "objective_reference",
     "restructure",
     "split_moves",
+    "waypoint_moves",
 ]
 
 #: first step (m): the largest point move of the first trial
@@ -232,6 +233,14 @@ def split_moves(problem: Any, P: np.ndarray, T: np.ndarray) -> list[np.ndarray]:
     return out
 
 
+def waypoint_moves(P: np.ndarray, T: np.ndarray) -> list[np.ndarray]:
+    """The point set (I', 2) without the points that hover ~0 s (`polish.ZERO_TIME`): detour
+    corners, which `restructure` then routes afresh; none when there are no such points or
+    nothing would be left. P (I, 2) m, T (I,) s."""
+    keep = np.asarray(T) > ZERO_TIME
+    return [P[keep]] if 0 < keep.sum() < len(P) else []
+
+
 def merge_moves(P: np.ndarray) -> list[np.ndarray]:
     """Point sets (I - 1, 2) with two consecutive hover points replaced by their midpoint,
     the closest pairs first. P (I, 2) m."""
@@ -245,12 +254,18 @@ def merge_moves(P: np.ndarray) -> list[np.ndarray]:
 
 
 def _move(
-    problem: Any, Q: np.ndarray, evaluate: Evaluate, trials: int
+    problem: Any, Q: np.ndarray, evaluate: Evaluate, trials: int, *, reroute: bool = False
 ) -> tuple[np.ndarray, float, float, int] | None:
     """Hover points Q (I, 2) as a plan: refused (None, no evaluation) when a point breaks C3 or
     C5 or a sensor cannot be served; else evaluated with its LP hover times (one evaluation)
-    and descended with at most `trials` - 1 more. Returns (x (d,), f, phi, evaluations)."""
+    and descended with at most `trials` - 1 more. Returns (x (d,), f, phi, evaluations).
+    `reroute`: a Q whose legs cut an obstacle first gets the seeder's visibility-graph corners
+    on those legs (`Seeder.route`), kept when it then fits in I_max points."""
     m = problem.model
+    if reroute and len(held_points(problem, Q)):
+        Q = np.asarray(problem.seeder.route(Q)[0], dtype=float).reshape(-1, 2)
+        if not 0 < len(Q) <= problem.n_points:
+            return None
     if len(held_points(problem, Q)):
         return None
     lp = hover_lp(m.rates(Q), m.required, m.t_max)
@@ -268,9 +283,11 @@ def restructure(
     problem: Any, x: np.ndarray, evaluate: Evaluate, *, trials: int, move_trials: int = 40
 ) -> Descent | None:
     """First-improvement local search over the plan's structure: each move (`split_moves`,
-    then `merge_moves`) that keeps every point within C3 and C5 and every sensor servable is
-    evaluated with its LP hover times and descended (`descend`, at most `move_trials` more
-    evaluations); the first Deb-better result is kept and the moves are tried again from it,
+    `merge_moves`, then `waypoint_moves`; a move whose legs cut an obstacle is first re-routed
+    through the visibility graph) that keeps every point within C3 and C5 and every sensor
+    servable is evaluated with its LP hover times and descended (`descend`, at most
+    `move_trials` more evaluations); the first Deb-better result is kept and the moves are
+    tried again from it,
     until none improves or `trials` evaluations are spent (all through `evaluate`).
 
     Variable-length plans only (the number of hover points changes; at most I_max): returns
@@ -289,12 +306,13 @@ def restructure(
     improved = True
     while improved and spent < trials:
         improved = False
-        for Q in [*split_moves(problem, P, T), *merge_moves(P)]:
+        for Q in [*split_moves(problem, P, T), *merge_moves(P), *waypoint_moves(P, T)]:
             if spent >= trials:
                 break
             if not 0 < len(Q) <= problem.n_points:
                 continue
-            tried = _move(problem, Q, evaluate, min(move_trials + 1, trials - spent))
+            tried = _move(problem, Q, evaluate, min(move_trials + 1, trials - spent),
+                          reroute=True)
             if tried is None:
                 continue
             xq, fq, phiq, n = tried

@@ -8,6 +8,7 @@ from scipy.optimize import linprog
 
 from planner_core.construct import candidate_plans
 from planner_core.descent import (
+    _move,
     descend,
     finish,
     held_points,
@@ -17,6 +18,7 @@ from planner_core.descent import (
     objective_reference,
     restructure,
     split_moves,
+    waypoint_moves,
 )
 from planner_core.polish import _lp_matrices, hover_lp
 from planner_core.problem import Problem
@@ -216,3 +218,25 @@ def test_hover_lp_without_stdout_and_warm_starts_stay_local() -> None:
     again = hover_lp(R, req, 50.0)
     assert first is not None and again is not None
     assert first[0].tobytes() == again[0].tobytes()
+
+
+def test_waypoint_moves_drop_the_zero_time_points_and_blocked_moves_are_rerouted() -> None:
+    P = np.array([[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]])
+    (Q,) = waypoint_moves(P, np.array([5.0, 0.0, 3.0]))
+    np.testing.assert_array_equal(Q, P[[0, 2]])
+    assert waypoint_moves(P, np.array([5.0, 1.0, 3.0])) == []
+    assert waypoint_moves(P, np.zeros(3)) == []
+    # T06's plan: merging two service points puts legs through an obstacle; re-routed through
+    # the visibility graph, the move is evaluated instead of refused
+    from lamde_mission.api import plan
+
+    problem = Problem(SUITE / "T06.json")
+    p = plan(SUITE / "T06.json", seed=1, descent=False)
+    blocked = [Q for Q in merge_moves(p.hover_points) if len(held_points(problem, Q))]
+    assert blocked
+    tried = [_move(problem, Q, problem.evaluate, 5, reroute=True) for Q in blocked]
+    assert any(t is not None for t in tried)
+    assert all(_move(problem, Q, problem.evaluate, 5) is None for Q in blocked)
+    for t in tried:
+        if t is not None:
+            assert 1 <= t[3] <= 5
