@@ -152,6 +152,7 @@ def plan(
     if use_memetic(memetic, timed):  # timed has the seeding hook exactly when init is seeded
         refine = functools.partial(memetic_refine, problem)
     from planner_core.construct import start_from_plans
+    from planner_core.descent import final_budget
     from planner_core.polish import ELITE
 
     # the budget holds everything: the constructive plans scored, the DE, the polish's plans
@@ -160,7 +161,7 @@ def plan(
     # the final plan's descent, structural search and kicks: part of the polish
     final = (_defaults.DESCENT_TRIALS + _defaults.RESTRUCTURE_TRIALS + _defaults.KICK_TRIALS
              if descent and polish else 0)
-    final = min(final, room // 10)
+    final = final_budget(room, final)
     room -= final
     t0 = time.perf_counter()
     opt, spent = start_from_plans(problem, timed, int(seed), starts=int(starts),

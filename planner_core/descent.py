@@ -44,6 +44,7 @@ from planner_core.polish import ZERO_TIME, hover_lp
 __all__ = [
     "Descent",
     "descend",
+    "final_budget",
     "finish",
     "kicks",
     "held_points",
@@ -76,6 +77,18 @@ class Descent:
     phi: float
     evaluations: int
     f_start: float
+
+
+def _hover(b: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    """Hover points (I, 2) m and times (I,) s of a `Problem.breakdown` dict."""
+    return (np.asarray(b["hover_points"], dtype=float).reshape(-1, 2),
+            np.asarray(b["hover_times"], dtype=float))
+
+
+def final_budget(room: int, trials: int) -> int:
+    """Evaluations the final plan's `finish` gets: `trials`, at most a tenth of `room` (what
+    the DE could otherwise spend); `plan` and the benchmark's `planner` entry both use it."""
+    return min(int(trials), int(room) // 10)
 
 
 def _nodes(problem: Any, P: np.ndarray) -> np.ndarray:
@@ -156,7 +169,7 @@ def descend(
     with at least one hover point, or when `trials` < 1. Deterministic (no random numbers).
     """
     b = problem.breakdown(np.asarray(x, dtype=float))
-    P = np.asarray(b["hover_points"], dtype=float).reshape(-1, 2)
+    P = _hover(b)[0]
     if b["phi"] > 0 or len(P) == 0 or trials < 1 or len(held_points(problem, P)):
         return None
     warm: dict[Any, Any] = {}  # this descent's own LP warm starts: reproducible
@@ -301,7 +314,7 @@ def restructure(
     if b["phi"] > 0:
         return None
     best_x, best_f, best_phi, f_start = x, float(b["f"]), 0.0, float(b["f"])
-    P, T = np.asarray(b["hover_points"]).reshape(-1, 2), np.asarray(b["hover_times"])
+    P, T = _hover(b)
     spent = 0
     improved = True
     while improved and spent < trials:
@@ -319,8 +332,7 @@ def restructure(
             spent += n
             if deb_better(fq, phiq, best_f, best_phi):
                 best_x, best_f, best_phi = xq, fq, phiq
-                nb = problem.breakdown(xq)
-                P, T = np.asarray(nb["hover_points"]).reshape(-1, 2), np.asarray(nb["hover_times"])
+                P, T = _hover(problem.breakdown(xq))
                 improved = True
                 break
     return Descent(best_x, best_f, best_phi, spent, f_start)
@@ -354,7 +366,7 @@ def kicks(
     rng = np.random.default_rng(np.random.SeedSequence([int(seed), 17]))
     box = np.array([m.width, m.height])
     best_x, best_f, best_phi, f_start = x, float(b["f"]), 0.0, float(b["f"])
-    P = np.asarray(b["hover_points"], dtype=float).reshape(-1, 2)
+    P = _hover(b)[0]
     spent = 0
     for _ in range(KICK_ATTEMPTS * trials):  # refused kicks cost no evaluation: bounded apart
         if spent >= trials:
@@ -369,7 +381,7 @@ def kicks(
         spent += n
         if deb_better(fq, phiq, best_f, best_phi):
             best_x, best_f, best_phi = xq, fq, phiq
-            P = np.asarray(problem.breakdown(xq)["hover_points"], dtype=float).reshape(-1, 2)
+            P = _hover(problem.breakdown(xq))[0]
     return Descent(best_x, best_f, best_phi, spent, f_start)
 
 

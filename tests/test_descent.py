@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import pytest
 from scipy.optimize import linprog
@@ -28,6 +30,17 @@ from tests.conftest import SUITE
 @pytest.fixture(scope="module")
 def t05() -> Problem:
     return Problem(SUITE / "T05.json")
+
+
+def _counting(problem: Problem) -> tuple[Callable[[np.ndarray], tuple], list[int]]:
+    """`problem.evaluate` that records how many rows each call evaluates, and that record."""
+    calls: list[int] = []
+
+    def counted(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        calls.append(len(X))
+        return problem.evaluate(X)
+
+    return counted, calls
 
 
 def _first_plans(problem: Problem, k: int) -> np.ndarray:
@@ -84,11 +97,7 @@ def test_gradient_matches_finite_differences_of_the_reference(t05: Problem) -> N
 
 
 def test_descend_is_feasible_never_worse_counted_and_deterministic(t05: Problem) -> None:
-    calls: list[int] = []
-
-    def counted(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        calls.append(len(X))
-        return t05.evaluate(X)
+    counted, calls = _counting(t05)
 
     improved = 0
     for x in _first_plans(t05, 3):
@@ -144,11 +153,7 @@ def test_restructure_and_finish_are_counted_feasible_and_never_worse() -> None:
     """On T15 the constructive plan's structure is improvable (a hover point split in two pays
     for its extra stop); on every plan the search stays within its evaluations."""
     problem = Problem(SUITE / "T15.json")
-    calls: list[int] = []
-
-    def counted(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        calls.append(len(X))
-        return problem.evaluate(X)
+    counted, calls = _counting(problem)
 
     x = _first_plans(problem, 1)[0]
     f0 = float(problem.evaluate(x[None])[0][0])
@@ -172,11 +177,7 @@ def _full(problem: Problem) -> tuple[np.ndarray, np.ndarray]:
 
 
 def test_kicks_are_seeded_counted_and_never_worse(t05: Problem) -> None:
-    calls: list[int] = []
-
-    def counted(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        calls.append(len(X))
-        return t05.evaluate(X)
+    counted, calls = _counting(t05)
 
     x = _first_plans(t05, 1)[0]
     f0 = float(t05.evaluate(x[None])[0][0])

@@ -56,6 +56,7 @@ def optimise(
     from planner_core.baselines.seed_lp import can_lp
 
     budgeted = as_budgeted(problem, budget)
+    from planner_core.descent import final_budget
     from planner_core.polish import ELITE
 
     reserve = min(ELITE, int(budget) // 4) if lp and can_lp(budgeted) else 0
@@ -82,7 +83,7 @@ def optimise(
     opt, spent = budgeted, 0
     room = max(int(budget) - reserve - population, 0)
     final = int(trials) + int(restructure) + int(kick)
-    final = min(final, room // 10) if descents > 0 and reserve else 0
+    final = final_budget(room, final) if descents > 0 and reserve else 0
     room -= final
     if starts > 0 and candidates > 0 and can_lp(budgeted):
         from planner_core.construct import start_from_plans
