@@ -135,7 +135,7 @@ def objective_reference(problem: Any, P: np.ndarray) -> float:
     m = problem.model
     from planner_core.polish import _solve_lp
 
-    T, _ = _solve_lp(m.rates(P), m.required, m.t_max, True)
+    T, _ = _solve_lp(m.rates(P), m.required, m.t_max, True, "linprog")
     nodes = _nodes(problem, P)
     legs = zip(nodes[:-1], nodes[1:], strict=True)
     t_fly = sum(float(m.flight_time(np.linalg.norm(b - a))) for a, b in legs)
@@ -213,7 +213,7 @@ def descend(
 
 # ----------------------------------------------------------------------------- structural moves
 #: the fractions of the way from a split point towards each half of its sensors (`split_moves`)
-SPLIT_FRACTIONS = (0.3, 0.6)
+SPLIT_FRACTIONS = (0.3, 0.6, 1.0)
 #: the share of a sensor's data Q_j a hover point must collect to count as serving it
 SERVES = 0.05
 
@@ -266,14 +266,27 @@ def merge_moves(P: np.ndarray) -> list[np.ndarray]:
     return out
 
 
+#: evaluations a move's descent gets before the race decides whether it goes on (`_move`)
+RACE_SCREEN = 6
+#: a move's descent goes on past `RACE_SCREEN` only while its plan is within this share of the
+#: incumbent's f (0.3 %): most moves that end better than the incumbent are better after 2-7
+#: evaluations, most that end worse never get close (docs/search.md)
+RACE_MARGIN = 0.003
+
+
 def _move(
-    problem: Any, Q: np.ndarray, evaluate: Evaluate, trials: int, *, reroute: bool = False
+    problem: Any, Q: np.ndarray, evaluate: Evaluate, trials: int, *, reroute: bool = False,
+    incumbent: float | None = None,
 ) -> tuple[np.ndarray, float, float, int] | None:
     """Hover points Q (I, 2) as a plan: refused (None, no evaluation) when a point breaks C3 or
     C5 or a sensor cannot be served; else evaluated with its LP hover times (one evaluation)
     and descended with at most `trials` - 1 more. Returns (x (d,), f, phi, evaluations).
     `reroute`: a Q whose legs cut an obstacle first gets the seeder's visibility-graph corners
-    on those legs (`Seeder.route`), kept when it then fits in I_max points."""
+    on those legs (`Seeder.route`), kept when it then fits in I_max points. `incumbent`: the f
+    of the plan the move competes with; then the descent is raced (cf. racing in algorithm
+    configuration, Birattari et al., GECCO 2002): after `RACE_SCREEN` evaluations it goes on
+    only while its plan is feasible and within `RACE_MARGIN` of `incumbent`, so the budget
+    goes to the moves that can win."""
     m = problem.model
     if reroute and len(held_points(problem, Q)):
         Q = np.asarray(problem.seeder.route(Q)[0], dtype=float).reshape(-1, 2)
@@ -286,21 +299,30 @@ def _move(
         return None
     x = problem.encode(Q, lp[0])
     f, phi = (float(np.asarray(v).reshape(-1)[0]) for v in evaluate(x[None, :]))
-    r = descend(problem, x, evaluate, trials=trials - 1)
+    spent, left = 1, trials - 1
+    if incumbent is not None and left > RACE_SCREEN:
+        r = descend(problem, x, evaluate, trials=RACE_SCREEN)
+        if r is None:
+            return x, f, phi, spent
+        x, f, phi, spent, left = r.x, r.f, r.phi, spent + r.evaluations, left - r.evaluations
+        if r.evaluations < RACE_SCREEN or phi > 0 or f > incumbent * (1.0 + RACE_MARGIN):
+            return x, f, phi, spent  # converged, or out of the race
+    r = descend(problem, x, evaluate, trials=left)
     if r is None:
-        return x, f, phi, 1
-    return r.x, r.f, r.phi, 1 + r.evaluations
+        return x, f, phi, spent
+    return r.x, r.f, r.phi, spent + r.evaluations
 
 
 def restructure(
     problem: Any, x: np.ndarray, evaluate: Evaluate, *, trials: int, move_trials: int = 40
 ) -> Descent | None:
-    """First-improvement local search over the plan's structure: each move (`split_moves`,
-    `merge_moves`, then `waypoint_moves`; a move whose legs cut an obstacle is first re-routed
-    through the visibility graph) that keeps every point within C3 and C5 and every sensor
-    servable is evaluated with its LP hover times and descended (`descend`, at most
-    `move_trials` more evaluations); the first Deb-better result is kept and the moves are
-    tried again from it,
+    """First-improvement local search over the plan's structure: each move (`waypoint_moves`,
+    `merge_moves`, then `split_moves`: the moves that remove points first, so that on a large
+    plan the many splits do not use up the budget before any merge is tried; a move whose legs
+    cut an obstacle is first re-routed through the visibility graph) that keeps every point
+    within C3 and C5 and every sensor servable is evaluated with its LP hover times and
+    descended in a race against the incumbent (`_move`, at most `move_trials` more
+    evaluations); the first Deb-better result is kept and the moves are tried again from it,
     until none improves or `trials` evaluations are spent (all through `evaluate`).
 
     Variable-length plans only (the number of hover points changes; at most I_max): returns
@@ -319,13 +341,13 @@ def restructure(
     improved = True
     while improved and spent < trials:
         improved = False
-        for Q in [*split_moves(problem, P, T), *merge_moves(P), *waypoint_moves(P, T)]:
+        for Q in [*waypoint_moves(P, T), *merge_moves(P), *split_moves(problem, P, T)]:
             if spent >= trials:
                 break
             if not 0 < len(Q) <= problem.n_points:
                 continue
             tried = _move(problem, Q, evaluate, min(move_trials + 1, trials - spent),
-                          reroute=True)
+                          reroute=True, incumbent=best_f)
             if tried is None:
                 continue
             xq, fq, phiq, n = tried
@@ -353,7 +375,8 @@ def kicks(
     """Iterated local search (Lourenco, Martin & Stuetzle, "Iterated local search", Handbook of
     Metaheuristics, 2003) around plan x (d,): one hover point, drawn at random, moved by a
     normal kick (standard deviation `KICK` m per axis), the plan evaluated with its LP hover
-    times and descended (`descend`, at most `move_trials` evaluations), kept when Deb-better;
+    times and descended in a race against the incumbent (`_move`, at most `move_trials`
+    evaluations), kept when Deb-better;
     repeated until `trials` evaluations are spent (all through `evaluate`; a kick refused
     before evaluation, into an obstacle, past the bandwidth or leaving a sensor unserved, costs
     none; at most `KICK_ATTEMPTS` x `trials` kicks are drawn). Seeded: the same seed gives the
@@ -374,7 +397,8 @@ def kicks(
         Q = P.copy()
         i = int(rng.integers(len(Q)))
         Q[i] = np.clip(Q[i] + rng.normal(0.0, KICK, 2), 0.0, box)
-        tried = _move(problem, Q, evaluate, min(move_trials + 1, trials - spent))
+        tried = _move(problem, Q, evaluate, min(move_trials + 1, trials - spent),
+                      incumbent=best_f)
         if tried is None:
             continue
         xq, fq, phiq, n = tried

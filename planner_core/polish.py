@@ -80,9 +80,11 @@ def _unserved(problem: Problem, R: np.ndarray) -> list[dict[str, Any]]:
     return out
 
 
-#: LP back-ends: "highs" calls HiGHS through scipy (fast to import: the planner's default);
-#: "cvxpy" states the same LP in cvxpy (the modelling layer; about a second of import time).
-BACKENDS = ("highs", "cvxpy")
+#: LP back-ends: "highs" calls HiGHS directly through highspy (`hover_lp`; the planner's
+#: default), or through scipy's `linprog` for the infeasible (shortfall) LP; "linprog" always
+#: goes through scipy (the reference); "cvxpy" states the same LP in cvxpy (the modelling
+#: layer; about a second of import time).
+BACKENDS = ("highs", "linprog", "cvxpy")
 
 
 def _lp_matrices(
@@ -110,9 +112,16 @@ def _lp_matrices(
 def _solve_lp(
     R: np.ndarray, req: np.ndarray, t_max: float, feasible: bool, backend: str = "highs"
 ) -> tuple[np.ndarray, str]:
-    """Hover times (I,) solving the LP of `_lp_matrices`, and the solver's name."""
+    """Hover times (I,) solving the LP of `_lp_matrices`, and the solver's name. "highs" on a
+    feasible LP takes the fast path (`hover_lp`, HiGHS through highspy, ~4x quicker than
+    scipy's `linprog` on these small LPs); "linprog" is scipy's HiGHS, the reference the fast
+    path is tested against and what "highs" uses for the infeasible (shortfall) LP."""
+    if backend == "highs" and feasible:
+        lp = hover_lp(R, req, t_max)
+        if lp is not None:
+            return lp[0], "HiGHS (highspy)"
     c, G, h, ub = _lp_matrices(R, req, t_max, feasible)
-    if backend == "highs":
+    if backend in ("highs", "linprog"):
         from scipy.optimize import linprog
 
         bounds = list(zip(np.zeros_like(ub), np.where(np.isinf(ub), None, ub), strict=True))
@@ -248,7 +257,8 @@ def polish_hover_times(
 ) -> PolishResult:
     """Solve the hover-time LP for these positions and drop points whose time is ~0 when safe.
 
-    `backend` is "highs" (scipy's HiGHS, the default: quick to import) or "cvxpy"; same LP.
+    `backend` is "highs" (HiGHS through highspy, the default: quick), "linprog" (HiGHS
+    through scipy, the reference) or "cvxpy"; same LP (`BACKENDS`).
     """
     pts = np.asarray(hover_points, dtype=float).reshape(-1, 2)
     req = problem.required.astype(float)

@@ -10,6 +10,8 @@ from scipy.optimize import linprog
 
 from planner_core.construct import candidate_plans
 from planner_core.descent import (
+    RACE_MARGIN,
+    RACE_SCREEN,
     _move,
     descend,
     finish,
@@ -241,3 +243,48 @@ def test_waypoint_moves_drop_the_zero_time_points_and_blocked_moves_are_rerouted
     for t in tried:
         if t is not None:
             assert 1 <= t[3] <= 5
+
+
+def test_a_raced_move_stops_after_the_screen_unless_it_is_close_to_the_incumbent(
+    t05: Problem,
+) -> None:
+    """`_move` with an incumbent: out of the race after 1 + RACE_SCREEN evaluations when its
+    plan is further than RACE_MARGIN above the incumbent, on to the full budget when it is
+    within; without an incumbent the full descent as before (the same plan as a far-off
+    incumbent's race would reach only with a longer budget)."""
+    x = _first_plans(t05, 1)[0]
+    b = t05.breakdown(x)
+    (Q,) = [S for S in split_moves(t05, np.asarray(b["hover_points"]), np.asarray(b["hover_times"]))
+            if _move(t05, S, t05.evaluate, 1) is not None][:1]
+    full = _move(t05, Q, t05.evaluate, 30)
+    assert full is not None and full[3] > 1 + RACE_SCREEN
+    screened = _move(t05, Q, t05.evaluate, 1 + RACE_SCREEN)
+    assert screened is not None
+    # an incumbent far below the move's plan: out after the screen, with the screen's plan
+    out = _move(t05, Q, t05.evaluate, 30, incumbent=0.5 * screened[1])
+    assert out is not None and out[3] == 1 + RACE_SCREEN
+    assert out[0].tobytes() == screened[0].tobytes()
+    # an incumbent the screened plan is within RACE_MARGIN of: the race goes on
+    on = _move(t05, Q, t05.evaluate, 30, incumbent=screened[1] / (1.0 + 0.5 * RACE_MARGIN))
+    assert on is not None and 1 + RACE_SCREEN < on[3] <= 30 and on[1] <= screened[1]
+
+
+def test_restructure_tries_the_point_removing_moves_first(
+    t05: Problem, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Waypoint drops, then merges, then splits: on a plan with many points the splits must not
+    use up the budget before a merge is tried."""
+    import planner_core.descent as descent
+
+    x = _first_plans(t05, 1)[0]
+    n = len(t05.breakdown(x)["hover_points"])
+    sizes: list[int] = []
+
+    def record(problem, Q, evaluate, trials, **kw):  # noqa: ANN001, ANN202
+        sizes.append(len(Q))
+        return None  # every move refused: the whole list is walked once
+
+    monkeypatch.setattr(descent, "_move", record)
+    descent.restructure(t05, x, t05.evaluate, trials=50)
+    assert sizes and n + 1 in sizes and n - 1 in sizes
+    assert sizes == sorted(sizes)  # fewer points first
