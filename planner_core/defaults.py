@@ -145,13 +145,14 @@ _RUN: tuple[Default, ...] = (
     Default("descent_trials", 40, "evaluations one descent may spend at most (counted in the "
             "budget)", "an integer >= 0", _int_at_least(0)),
     Default("restructure_trials", 200, "evaluations the structural search on the final plan "
-            "may spend (`planner_core.descent.restructure`: split a hover point in two or "
-            "merge two, each move descended; with the descent on)", "an integer >= 0",
+            "may spend (`planner_core.descent.restructure`: drop the detour corners, merge two "
+            "hover points, or split one in two, each move descended in a race against the "
+            "incumbent; with the descent on)", "an integer >= 0",
             _int_at_least(0)),
     Default("kick_trials", 300, "evaluations of the iterated local search on the final plan "
             "after the structural search (`planner_core.descent.kicks`: one hover point moved by "
-            "a normal step of 300 m standard deviation per axis, the plan descended, kept when "
-            "better; with the descent on)",
+            "a normal step of 300 m standard deviation per axis, the plan descended in a race "
+            "against the incumbent, kept when better; with the descent on)",
             "an integer >= 0", _int_at_least(0)),
     Default("seed", 0, "random seed of a planning run (same seed, same plan)", "an integer >= 0",
             _int_at_least(0)),
