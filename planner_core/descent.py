@@ -161,12 +161,15 @@ def descend(
     trials: int,
     step: float = STEP,
     min_step: float = MIN_STEP,
+    race: tuple[int, float] | None = None,
 ) -> Descent | None:
     """Descend from plan x (d,) of the UAV problem `problem` for at most `trials` evaluations.
 
     `evaluate` (X (n, d) -> f, phi) is the caller's counted evaluation; the start itself is not
-    re-evaluated (its f is recomputed from the LP). Returns None when x is not a feasible plan
-    with at least one hover point, or when `trials` < 1. Deterministic (no random numbers).
+    re-evaluated (its f is recomputed from the LP). `race` (n, limit): once n evaluations are
+    spent the descent stops unless its best f is <= limit (checked once; `_move`'s race).
+    Returns None when x is not a feasible plan with at least one hover point, or when
+    `trials` < 1. Deterministic (no random numbers).
     """
     b = problem.breakdown(np.asarray(x, dtype=float))
     P = _hover(b)[0]
@@ -182,6 +185,8 @@ def descend(
     box = np.array([problem.model.width, problem.model.height])
     spent = 0
     while spent < trials and step >= min_step:
+        if race is not None and spent == race[0] and best_f > race[1]:
+            break  # out of the race
         free = np.ones(len(P), dtype=bool)
         kept = False
         for _ in range(len(P) + 1):  # hold the offending points, at most once each
@@ -268,9 +273,9 @@ def merge_moves(P: np.ndarray) -> list[np.ndarray]:
 
 #: evaluations a move's descent gets before the race decides whether it goes on (`_move`)
 RACE_SCREEN = 6
-#: a move's descent goes on past `RACE_SCREEN` only while its plan is within this share of the
+#: a move's descent goes on past `RACE_SCREEN` only if its plan is within this share of the
 #: incumbent's f (0.3 %): most moves that end better than the incumbent are better after 2-7
-#: evaluations, most that end worse never get close (docs/search.md)
+#: evaluations, most that end worse never get close (docs/search.md, "Raced structural moves")
 RACE_MARGIN = 0.003
 
 
@@ -284,9 +289,10 @@ def _move(
     `reroute`: a Q whose legs cut an obstacle first gets the seeder's visibility-graph corners
     on those legs (`Seeder.route`), kept when it then fits in I_max points. `incumbent`: the f
     of the plan the move competes with; then the descent is raced (cf. racing in algorithm
-    configuration, Birattari et al., GECCO 2002): after `RACE_SCREEN` evaluations it goes on
-    only while its plan is feasible and within `RACE_MARGIN` of `incumbent`, so the budget
-    goes to the moves that can win."""
+    configuration, Birattari et al., GECCO 2002): once it has spent `RACE_SCREEN` evaluations
+    (after the move's own one) it goes on only if its plan's f is within `RACE_MARGIN` of
+    `incumbent` (checked once; a descent that converges sooner ends there anyway), so the
+    budget goes to the moves that can win."""
     m = problem.model
     if reroute and len(held_points(problem, Q)):
         Q = np.asarray(problem.seeder.route(Q)[0], dtype=float).reshape(-1, 2)
@@ -299,18 +305,11 @@ def _move(
         return None
     x = problem.encode(Q, lp[0])
     f, phi = (float(np.asarray(v).reshape(-1)[0]) for v in evaluate(x[None, :]))
-    spent, left = 1, trials - 1
-    if incumbent is not None and left > RACE_SCREEN:
-        r = descend(problem, x, evaluate, trials=RACE_SCREEN)
-        if r is None:
-            return x, f, phi, spent
-        x, f, phi, spent, left = r.x, r.f, r.phi, spent + r.evaluations, left - r.evaluations
-        if r.evaluations < RACE_SCREEN or phi > 0 or f > incumbent * (1.0 + RACE_MARGIN):
-            return x, f, phi, spent  # converged, or out of the race
-    r = descend(problem, x, evaluate, trials=left)
+    race = None if incumbent is None else (RACE_SCREEN, incumbent * (1.0 + RACE_MARGIN))
+    r = descend(problem, x, evaluate, trials=trials - 1, race=race)
     if r is None:
-        return x, f, phi, spent
-    return r.x, r.f, r.phi, spent + r.evaluations
+        return x, f, phi, 1
+    return r.x, r.f, r.phi, 1 + r.evaluations
 
 
 def restructure(

@@ -1,7 +1,8 @@
 """Hover-time polish: for fixed hover positions, the least total hover time that meets C4 (an LP).
 
 Given the hover points of a finished plan, the rates R_ij are fixed, so the hover times solve
-(with HiGHS through scipy by default, or the same LP stated in cvxpy)
+(with HiGHS through highspy by default, `hover_lp`; HiGHS through scipy's `linprog`, the
+reference; or the same LP stated in cvxpy)
     minimise sum_i T_i   s.t.  sum_i R_ij T_i >= Q_j (all sensors j),  0 <= T_i <= T_max.
 C3 depends on positions only and is reported, not changed. Points whose polished time is ~0 are
 dropped when the path without them stays collision-free and its flight time does not grow.
@@ -115,11 +116,32 @@ def _solve_lp(
     """Hover times (I,) solving the LP of `_lp_matrices`, and the solver's name. "highs" on a
     feasible LP takes the fast path (`hover_lp`, HiGHS through highspy, ~4x quicker than
     scipy's `linprog` on these small LPs); "linprog" is scipy's HiGHS, the reference the fast
-    path is tested against and what "highs" uses for the infeasible (shortfall) LP."""
+    path is tested against and what "highs" uses for the infeasible (shortfall) LP. A
+    feasible LP that turns out infeasible at its target (a sensor served exactly at T_max: the
+    target is a hair above Q_j) is solved as the shortfall LP instead, which always has a
+    solution; the caller's C4 check then sees the hair. Raises ValueError for an unknown
+    backend, RuntimeError when the solver itself fails."""
     if backend == "highs" and feasible:
         lp = hover_lp(R, req, t_max)
         if lp is not None:
             return lp[0], "HiGHS (highspy)"
+        feasible = False
+    try:
+        return _solve_lp_with(R, req, t_max, feasible, backend)
+    except _LPInfeasible:
+        if not feasible:
+            raise RuntimeError("hover-time LP failed: the shortfall LP is infeasible") from None
+        return _solve_lp_with(R, req, t_max, False, backend)
+
+
+class _LPInfeasible(RuntimeError):
+    """The hover-time LP has no solution at its target."""
+
+
+def _solve_lp_with(
+    R: np.ndarray, req: np.ndarray, t_max: float, feasible: bool, backend: str
+) -> tuple[np.ndarray, str]:
+    """`_solve_lp` on one backend with no fallback; raises `_LPInfeasible`."""
     c, G, h, ub = _lp_matrices(R, req, t_max, feasible)
     if backend in ("highs", "linprog"):
         from scipy.optimize import linprog
@@ -128,7 +150,7 @@ def _solve_lp(
         res = linprog(c, A_ub=G if len(h) else None, b_ub=h if len(h) else None,
                       bounds=bounds, method="highs")
         if res.x is None:
-            raise RuntimeError(f"hover-time LP failed: {res.message}")
+            raise _LPInfeasible(f"hover-time LP failed: {res.message}")
         z, solver = res.x, "HiGHS (scipy)"
     elif backend == "cvxpy":
         import cvxpy as cp
@@ -140,7 +162,7 @@ def _solve_lp(
         prob = cp.Problem(cp.Minimize(c @ zv), cons)
         prob.solve(solver="HIGHS" if "HIGHS" in cp.installed_solvers() else None)
         if zv.value is None:
-            raise RuntimeError(f"hover-time LP failed: {prob.status}")
+            raise _LPInfeasible(f"hover-time LP failed: {prob.status}")
         z = np.asarray(zv.value, dtype=float)
         solver = f"cvxpy/{prob.solver_stats.solver_name}" if prob.solver_stats else "cvxpy"
     else:
@@ -192,8 +214,9 @@ def hover_lp(
     Bertsimas & Tsitsiklis, Introduction to Linear Optimization, Sec. 5.1), dV/dR_ij =
     -y_j T_i / Q_j at a non-degenerate optimum: what `planner_core.descent` uses.
 
-    The fast path of the polish's LP (`_solve_lp` is its reference; tests/test_descent.py
-    holds them equal): HiGHS called through highspy directly, ~0.3 ms where scipy's `linprog`
+    The fast path of the polish's LP (`_solve_lp(..., "linprog")` is its reference;
+    tests/test_descent.py holds them equal; `_solve_lp(..., "highs")` calls it for a feasible
+    LP): HiGHS called through highspy directly, ~0.3 ms where scipy's `linprog`
     takes ~1.3 ms on T16's 16 points and 29 sensors. `warm`: a dict the caller keeps for one
     sequence of related solves (a descent): the last optimal basis of each shape is kept in it
     and the next solve starts from it. Where the LP has several optima the one returned may
@@ -290,11 +313,14 @@ def polish_hover_times(
                 break
         # dropping a ~0 s point may leave a sliver of data uncollected: re-solve on the kept points
         if not keep.all() and keep.any():
-            times_k, solver = _solve_lp(R[keep], req, problem.t_max, feasible, backend)
+            times_k, solver_k = _solve_lp(R[keep], req, problem.t_max, feasible, backend)
             if feasible:
                 times_k = _top_up(R[keep], req, times_k, problem.t_max)
-            times = np.zeros(len(pts))
-            times[keep] = times_k
+            if feasible and np.any(R[keep].T @ times_k < req):
+                keep = np.ones(len(pts), dtype=bool)  # the kept points fall short: drop none
+            else:
+                times, solver = np.zeros(len(pts)), solver_k
+                times[keep] = times_k
     c3 = float(np.maximum(R[keep].sum(axis=1) - problem.bandwidth, 0.0).sum())
     return PolishResult(
         hover_points=pts[keep],

@@ -248,25 +248,46 @@ def test_waypoint_moves_drop_the_zero_time_points_and_blocked_moves_are_rerouted
 def test_a_raced_move_stops_after_the_screen_unless_it_is_close_to_the_incumbent(
     t05: Problem,
 ) -> None:
-    """`_move` with an incumbent: out of the race after 1 + RACE_SCREEN evaluations when its
-    plan is further than RACE_MARGIN above the incumbent, on to the full budget when it is
-    within; without an incumbent the full descent as before (the same plan as a far-off
-    incumbent's race would reach only with a longer budget)."""
+    """`_move` with an incumbent: out of the race once its descent has spent RACE_SCREEN
+    evaluations (counted through the caller's evaluate) when its plan is further than
+    RACE_MARGIN above the incumbent; on, as one continued descent, when it is within: then it
+    follows exactly the path of the unraced descent."""
     x = _first_plans(t05, 1)[0]
     b = t05.breakdown(x)
-    (Q,) = [S for S in split_moves(t05, np.asarray(b["hover_points"]), np.asarray(b["hover_times"]))
-            if _move(t05, S, t05.evaluate, 1) is not None][:1]
+    P, T = np.asarray(b["hover_points"]), np.asarray(b["hover_times"])
+    (Q,) = [S for S in split_moves(t05, P, T) if _move(t05, S, t05.evaluate, 1) is not None][:1]
     full = _move(t05, Q, t05.evaluate, 30)
     assert full is not None and full[3] > 1 + RACE_SCREEN
     screened = _move(t05, Q, t05.evaluate, 1 + RACE_SCREEN)
-    assert screened is not None
+    assert screened is not None and screened[3] == 1 + RACE_SCREEN
+    counted, calls = _counting(t05)
     # an incumbent far below the move's plan: out after the screen, with the screen's plan
-    out = _move(t05, Q, t05.evaluate, 30, incumbent=0.5 * screened[1])
-    assert out is not None and out[3] == 1 + RACE_SCREEN
+    out = _move(t05, Q, counted, 30, incumbent=0.5 * screened[1])
+    assert out is not None and out[3] == sum(calls) == 1 + RACE_SCREEN
     assert out[0].tobytes() == screened[0].tobytes()
-    # an incumbent the screened plan is within RACE_MARGIN of: the race goes on
-    on = _move(t05, Q, t05.evaluate, 30, incumbent=screened[1] / (1.0 + 0.5 * RACE_MARGIN))
-    assert on is not None and 1 + RACE_SCREEN < on[3] <= 30 and on[1] <= screened[1]
+    # an incumbent the screened plan is within RACE_MARGIN of: the same descent goes on
+    calls.clear()
+    on = _move(t05, Q, counted, 30, incumbent=screened[1] / (1.0 + 0.5 * RACE_MARGIN))
+    assert on is not None and on[3] == sum(calls) == full[3]
+    assert on[0].tobytes() == full[0].tobytes()
+
+
+def test_kicks_race_their_descents(t05: Problem, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every kick competes with the incumbent: `kicks` passes its best f to `_move`."""
+    import planner_core.descent as descent
+
+    seen: list[float | None] = []
+    real = descent._move
+
+    def spy(*a, **kw):  # noqa: ANN002, ANN003, ANN202
+        seen.append(kw.get("incumbent"))
+        return real(*a, **kw)
+
+    monkeypatch.setattr(descent, "_move", spy)
+    x = _first_plans(t05, 1)[0]
+    r = descent.kicks(t05, x, t05.evaluate, trials=60, seed=3)
+    assert r is not None and seen
+    assert all(v is not None and v >= r.f - 1e-9 for v in seen)
 
 
 def test_restructure_tries_the_point_removing_moves_first(
@@ -277,14 +298,24 @@ def test_restructure_tries_the_point_removing_moves_first(
     import planner_core.descent as descent
 
     x = _first_plans(t05, 1)[0]
-    n = len(t05.breakdown(x)["hover_points"])
-    sizes: list[int] = []
+    b = t05.breakdown(x)
+    P, T = np.asarray(b["hover_points"]), np.asarray(b["hover_times"])
+    # a detour corner (0 s) between the first two hover points
+    P = np.vstack([P[:1], 0.5 * (P[0] + P[1]) + 1.0, P[1:]])
+    T = np.concatenate([T[:1], [0.0], T[1:]])
+    y = t05.encode(P, T)
+    assert t05.breakdown(y)["phi"] == 0.0
+    moves: list[np.ndarray] = []
 
     def record(problem, Q, evaluate, trials, **kw):  # noqa: ANN001, ANN202
-        sizes.append(len(Q))
+        moves.append(Q)
         return None  # every move refused: the whole list is walked once
 
     monkeypatch.setattr(descent, "_move", record)
-    descent.restructure(t05, x, t05.evaluate, trials=50)
-    assert sizes and n + 1 in sizes and n - 1 in sizes
-    assert sizes == sorted(sizes)  # fewer points first
+    descent.restructure(t05, y, t05.evaluate, trials=50)
+    (drop,) = waypoint_moves(P, T)
+    merges, splits = merge_moves(P), split_moves(t05, P, T)
+    assert splits and len(moves) == 1 + len(merges) + len(splits)
+    np.testing.assert_array_equal(moves[0], drop)
+    for got, want in zip(moves[1:], [*merges, *splits], strict=True):
+        np.testing.assert_array_equal(got, want)

@@ -100,11 +100,43 @@ def test_backends_agree_on_suite_witnesses() -> None:
         p = Problem(m)
         w = m.spec.witness
         a = polish_hover_times(p, w.hover_points, backend="highs")
-        b = polish_hover_times(p, w.hover_points, backend="cvxpy")
-        assert a.feasible_c4 and b.feasible_c4
-        assert a.dropped == b.dropped
-        assert a.hover_times.sum() == pytest.approx(b.hover_times.sum(), rel=1e-6)
+        assert a.solver == "HiGHS (highspy)"
+        for other in BACKENDS[1:]:
+            b = polish_hover_times(p, w.hover_points, backend=other)
+            assert a.feasible_c4 and b.feasible_c4
+            assert a.dropped == b.dropped
+            assert a.hover_times.sum() == pytest.approx(b.hover_times.sum(), rel=1e-6)
         # the LP never needs more hover time than the generator's witness
         assert a.hover_times.sum() <= sum(w.hover_times) + 1e-6
         x = p.encode(a.hover_points, a.hover_times)
         assert p.breakdown(x)["v4"] == 0.0
+
+
+@pytest.mark.parametrize("required", [2700.0, 2699.9999999])
+def test_a_sensor_served_exactly_at_t_max_plans_and_flies(required: float) -> None:
+    """The boundary of C4: a sensor that needs exactly what one point collects in T_max
+    (10 Mbit/s x 300 s here, less a hair). The LP's target is a hair above Q_j, so it has no
+    solution there; the shortfall LP stands in, no ~0 s point is dropped if the rest would
+    fall short, and the plan is made and passes the simulator (it used to raise)."""
+    from lamde_mission import plan
+    from lamde_mission.items import plan_to_items
+    from planner_core.mapio import load_map
+    from sim import replay, verify
+
+    spec = {"name": "edge", "origin": {"lat": 46.2, "lon": 7.3, "alt": 500.0},
+            "area": {"width": 2000, "height": 2000}, "start": [1000, 990], "end": [1000, 1010],
+            "sensors": [{"id": "s", "x": 1000, "y": 1000, "required_data": required}],
+            "safety": {"clearance": 0, "data_margin": 0}}
+    p = plan(spec, seed=0, budget=600)
+    assert p.feasible and p.hover_times.max() == pytest.approx(300.0, abs=1e-6)
+    m = load_map(spec)
+    assert verify(replay(plan_to_items(p, m), m), m).passed
+
+
+def test_solve_lp_falls_back_to_the_shortfall_lp_at_the_boundary() -> None:
+    from planner_core.polish import _solve_lp
+
+    R, req = np.array([[10.0]]), np.array([3000.0])  # exactly T_max = 300 s
+    for backend in BACKENDS:
+        T, _ = _solve_lp(R, req, 300.0, True, backend)
+        assert T[0] == pytest.approx(300.0)
