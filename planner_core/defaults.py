@@ -144,7 +144,7 @@ _RUN: tuple[Default, ...] = (
             _int_at_least(0)),
     Default("descent_trials", 40, "evaluations one descent may spend at most (counted in the "
             "budget)", "an integer >= 0", _int_at_least(0)),
-    Default("restructure_trials", 200, "evaluations the structural search on the final plan "
+    Default("restructure_trials", 300, "evaluations the structural search on the final plan "
             "may spend (`planner_core.descent.restructure`: drop the detour corners, merge two "
             "hover points, or split one in two, each move descended in a race against the "
             "incumbent; with the descent on)", "an integer >= 0",
