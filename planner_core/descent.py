@@ -294,11 +294,13 @@ def _move(
     `incumbent` (checked once; a descent that converges sooner ends there anyway), so the
     budget goes to the moves that can win."""
     m = problem.model
-    if reroute and len(held_points(problem, Q)):
+    held = len(held_points(problem, Q))
+    if reroute and held:
         Q = np.asarray(problem.seeder.route(Q)[0], dtype=float).reshape(-1, 2)
         if not 0 < len(Q) <= problem.n_points:
             return None
-    if len(held_points(problem, Q)):
+        held = len(held_points(problem, Q))
+    if held:
         return None
     lp = hover_lp(m.rates(Q), m.required, m.t_max)
     if lp is None:

@@ -121,17 +121,16 @@ def _solve_lp(
     target is a hair above Q_j) is solved as the shortfall LP instead, which always has a
     solution; the caller's C4 check then sees the hair. Raises ValueError for an unknown
     backend, RuntimeError when the solver itself fails."""
-    if backend == "highs" and feasible:
+    if feasible and backend == "highs":
         lp = hover_lp(R, req, t_max)
         if lp is not None:
             return lp[0], "HiGHS (highspy)"
-        feasible = False
-    try:
-        return _solve_lp_with(R, req, t_max, feasible, backend)
-    except _LPInfeasible:
-        if not feasible:
-            raise RuntimeError("hover-time LP failed: the shortfall LP is infeasible") from None
-        return _solve_lp_with(R, req, t_max, False, backend)
+    elif feasible:
+        try:
+            return _solve_lp_with(R, req, t_max, True, backend)
+        except _LPInfeasible:
+            pass
+    return _solve_lp_with(R, req, t_max, False, backend)
 
 
 class _LPInfeasible(RuntimeError):
@@ -141,7 +140,7 @@ class _LPInfeasible(RuntimeError):
 def _solve_lp_with(
     R: np.ndarray, req: np.ndarray, t_max: float, feasible: bool, backend: str
 ) -> tuple[np.ndarray, str]:
-    """`_solve_lp` on one backend with no fallback; raises `_LPInfeasible`."""
+    """`_solve_lp` on one backend with no fallback; raises `_LPInfeasible` (a RuntimeError)."""
     c, G, h, ub = _lp_matrices(R, req, t_max, feasible)
     if backend in ("highs", "linprog"):
         from scipy.optimize import linprog
