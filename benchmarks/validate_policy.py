@@ -7,7 +7,11 @@ worse, "~": no significant difference; alpha 0.05, two-sided,
 `planner_core.bench.stats.wilcoxon_mark`).
 
 Pipelines (every configurator always gets the same one): "de" (default), the DE alone, no
-memetic step, no polish: the configurators' own effect; "planner", what `plan` does: the
+memetic step, no polish: the configurators' own effect; "memetic", the DE with the memetic
+step on the elite every 10 generations (from a uniform start: `memetic="auto"`, with its repair
+of unserved sensors) and the hover-time LP on the final population's elite, no constructive
+starts and no descents (`optimise(..., lp=True, memetic="auto")`: the DE still decides the
+plan's structure, the repair makes it feasible); "planner", what `plan` does: the
 benchmark's `planner` entry (`planner_core.baselines.REGISTRY["planner"]`, its keyword
 arguments: constructive starts and their descents, the DE with the memetic step from a uniform
 start, the hover-time LP on the final population's elite, the final plan's descent, structural
@@ -22,6 +26,8 @@ resumes where it stopped.
 
     python benchmarks/validate_policy.py --maps validation --runs 25 -o val.jsonl
     python benchmarks/validate_policy.py --maps suite --modes uniform --runs 25 -o suite.jsonl
+    python benchmarks/validate_policy.py --maps suite --modes uniform --pipeline memetic \
+        --configurators lamde random adaptive --runs 25 -o suite-memetic.jsonl
     python benchmarks/validate_policy.py --maps suite --modes uniform --pipeline planner \
         --configurators lamde random adaptive --runs 25 -o suite-planner.jsonl
 """
@@ -77,8 +83,9 @@ def main() -> None:
     ap.add_argument("--checkpoint", default="lamde-v2")
     ap.add_argument("--budget", type=int, default=BUDGET)
     ap.add_argument("--population", type=int, default=POPULATION)
-    ap.add_argument("--pipeline", choices=("de", "planner"), default="de",
-                    help="de: the DE alone; planner: what plan does (memetic step + polish)")
+    ap.add_argument("--pipeline", choices=("de", "memetic", "planner"), default="de",
+                    help="de: the DE alone; memetic: the DE with the memetic step and the "
+                    "polish LP, no constructive starts or descents; planner: what plan does")
     ap.add_argument("-o", "--output", required=True, help="JSONL of runs (appended, resumable)")
     args = ap.parse_args()
     out = Path(args.output)
@@ -98,6 +105,9 @@ def main() -> None:
                         if args.pipeline == "planner":
                             kw = {**REGISTRY["planner"].kwargs, "configurator": conf}
                             r = optimise(with_init(problem, mode), args.budget, seed, **kw)
+                        elif args.pipeline == "memetic":
+                            r = optimise(with_init(problem, mode), args.budget, seed,
+                                         configurator=conf, lp=True, memetic="auto")
                         else:
                             r = run(with_init(problem, mode), configurator=conf, seed=seed,
                                     population=args.population, budget=args.budget)

@@ -207,3 +207,23 @@ def test_cmaes_sigma_sweep_runs_and_ranks(tmp_path) -> None:
     again = _script(*args)
     assert "0 to run" in again.stdout
     assert again.stdout.split("| map |")[1] == r.stdout.split("| map |")[1]
+
+
+def test_validate_policy_memetic_pipeline_records_and_resumes(tmp_path) -> None:
+    """`benchmarks/validate_policy.py --pipeline memetic` (docs/policy.md): the DE with the
+    memetic step and the polish LP, one record per (map, mode, configurator, seed), tagged with
+    its pipeline; a second call resumes and adds nothing."""
+    out = tmp_path / "val.jsonl"
+    args = ("benchmarks/validate_policy.py", "--maps", "examples/maps/small-demo.json",
+            "--modes", "uniform", "--configurators", "lamde", "adaptive", "--runs", "2",
+            "--budget", "400", "--pipeline", "memetic", "-o", str(out))
+    r = _script(*args)
+    assert r.returncode == 0, r.stderr
+    recs = [json.loads(line) for line in out.read_text().splitlines()]
+    assert len(recs) == 4 and {x["pipeline"] for x in recs} == {"memetic"}
+    assert {(x["configurator"], x["seed"]) for x in recs} == {
+        (c, s) for c in ("lamde", "adaptive") for s in (0, 1)}
+    assert all(x["score"] >= x["f"] > 0 for x in recs)
+    assert "lamde vs adaptive" in r.stdout
+    again = _script(*args)
+    assert again.returncode == 0 and len(out.read_text().splitlines()) == 4
