@@ -42,7 +42,9 @@ from planner_core.model import L_VIO_TOL, deb_better
 from planner_core.polish import ZERO_TIME, hover_lp
 
 __all__ = [
+    "CORNER_SHIFTS",
     "Descent",
+    "corner_moves",
     "descend",
     "final_budget",
     "finish",
@@ -259,6 +261,43 @@ def waypoint_moves(P: np.ndarray, T: np.ndarray) -> list[np.ndarray]:
     return [P[keep]] if 0 < keep.sum() < len(P) else []
 
 
+#: how far (m) `corner_moves` moves a neighbour of a dropped detour corner, smallest first
+CORNER_SHIFTS = (25.0, 50.0, 100.0, 200.0, 400.0)
+
+
+def corner_moves(problem: Any, P: np.ndarray, T: np.ndarray) -> list[np.ndarray]:
+    """Point sets (I - 1, 2) without one detour corner (a point that hovers ~0 s,
+    `polish.ZERO_TIME`) and with one of the corner's two neighbouring hover points moved square
+    to the leg that now joins them, by the smallest of `CORNER_SHIFTS`, to either side, that
+    leaves no point held (`held_points`: every leg clear of the obstacles, C3 kept); one set per
+    neighbour that can be cleared so (the start and the end stay). Every corner costs a stop
+    (Eq. 1: a leg from rest to rest); `waypoint_moves` drops the corners but routes the legs
+    afresh, which puts corners back wherever the neighbours stay where they are. P (I, 2) m,
+    T (I,) s."""
+    P = np.asarray(P, dtype=float).reshape(-1, 2)
+    box = np.array([problem.model.width, problem.model.height])
+    out = []
+    for c in np.flatnonzero(np.asarray(T) <= ZERO_TIME):
+        Q0 = np.delete(P, c, axis=0)
+        a = P[c - 1] if c > 0 else problem.start
+        b = P[c + 1] if c + 1 < len(P) else problem.end
+        u = b - a
+        length = float(np.hypot(*u))
+        if length <= 0.0:
+            continue
+        normal = np.array([-u[1], u[0]]) / length
+        for k in (c - 1, c):  # the neighbours' indices in Q0
+            if not 0 <= k < len(Q0):
+                continue
+            for shift in (s * d for d in CORNER_SHIFTS for s in (1.0, -1.0)):
+                Q = Q0.copy()
+                Q[k] = np.clip(Q[k] + shift * normal, 0.0, box)
+                if not len(held_points(problem, Q)):
+                    out.append(Q)
+                    break
+    return out
+
+
 def merge_moves(P: np.ndarray) -> list[np.ndarray]:
     """Point sets (I - 1, 2) with two consecutive hover points replaced by their midpoint,
     the closest pairs first. P (I, 2) m."""
@@ -314,22 +353,39 @@ def _move(
     return r.x, r.f, r.phi, 1 + r.evaluations
 
 
+#: the kinds of structural move `restructure` tries by default, in this order
+MOVES = ("waypoint", "merge", "split")
+
+
 def restructure(
-    problem: Any, x: np.ndarray, evaluate: Evaluate, *, trials: int, move_trials: int = 40
+    problem: Any, x: np.ndarray, evaluate: Evaluate, *, trials: int, move_trials: int = 40,
+    moves: tuple[str, ...] = MOVES,
 ) -> Descent | None:
-    """First-improvement local search over the plan's structure: each move (`waypoint_moves`,
-    `merge_moves`, then `split_moves`: the moves that remove points first, so that on a large
-    plan the many splits do not use up the budget before any merge is tried; a move whose legs
-    cut an obstacle is first re-routed through the visibility graph) that keeps every point
+    """First-improvement local search over the plan's structure: each move of the kinds
+    `moves`, in that order (default `waypoint_moves`, `merge_moves`, then `split_moves`: the
+    moves that remove points first, so that on a large plan the many splits do not use up the
+    budget before any merge is tried; "corner" is `corner_moves`; a move whose legs cut an
+    obstacle is first re-routed through the visibility graph) that keeps every point
     within C3 and C5 and every sensor servable is evaluated with its LP hover times and
     descended in a race against the incumbent (`_move`, at most `move_trials` more
     evaluations); the first Deb-better result is kept and the moves are tried again from it,
-    until none improves or `trials` evaluations are spent (all through `evaluate`).
+    until none improves or `trials` evaluations are spent (all through `evaluate`). Raises
+    ValueError for an unknown kind of move.
 
     Variable-length plans only (the number of hover points changes; at most I_max): returns
     None in the fixed-length mode, with tau <= 0 (every slot active), for an infeasible x or
     `trials` < 1. x (d,) a decision vector; deterministic.
     """
+    kinds = {
+        "waypoint": lambda P, T: waypoint_moves(P, T),
+        "merge": lambda P, T: merge_moves(P),
+        "split": lambda P, T: split_moves(problem, P, T),
+        "corner": lambda P, T: corner_moves(problem, P, T),
+    }
+    unknown = [k for k in moves if k not in kinds]
+    if unknown:
+        raise ValueError(f"moves: unknown kind {unknown[0]!r}, expected some of "
+                         f"{', '.join(kinds)}")
     if not problem.variable_length or problem.tau <= 0.0 or trials < 1:
         return None
     x = np.asarray(x, dtype=float)
@@ -342,7 +398,7 @@ def restructure(
     improved = True
     while improved and spent < trials:
         improved = False
-        for Q in [*waypoint_moves(P, T), *merge_moves(P), *split_moves(problem, P, T)]:
+        for Q in [Q for kind in moves for Q in kinds[kind](P, T)]:
             if spent >= trials:
                 break
             if not 0 < len(Q) <= problem.n_points:
@@ -422,8 +478,10 @@ def finish(
 ) -> Descent | None:
     """What `plan` does to its final plan x (d,): `descend` (at most `descent_trials`
     evaluations; None: the defaults table's `DESCENT_TRIALS`), `restructure` (at most
-    `restructure_trials`; None: `RESTRUCTURE_TRIALS`), then `kicks` with what is left of
-    `trials` (seeded by `seed`). None when x is not a feasible plan or `trials` < 1."""
+    `restructure_trials`; None: `RESTRUCTURE_TRIALS`), `restructure` with the corner moves
+    alone (`corner_moves`; at most `restructure_trials` again, usually a few dozen: it ends
+    when no corner can go), then `kicks` with what is left of `trials` (seeded by `seed`).
+    None when x is not a feasible plan or `trials` < 1."""
     from planner_core.defaults import DESCENT_TRIALS, RESTRUCTURE_TRIALS
 
     d_trials = DESCENT_TRIALS if descent_trials is None else int(descent_trials)
@@ -432,10 +490,12 @@ def finish(
     if cur is None:
         return None
     spent, f_start = cur.evaluations, cur.f_start
-    nxt = restructure(problem, cur.x, evaluate, trials=min(r_trials, trials - spent))
-    if nxt is not None:
-        spent += nxt.evaluations
-        cur = nxt
+    for moves in (MOVES, ("corner",)):
+        nxt = restructure(problem, cur.x, evaluate, trials=min(r_trials, trials - spent),
+                          moves=moves)
+        if nxt is not None:
+            spent += nxt.evaluations
+            cur = nxt
     nxt = kicks(problem, cur.x, evaluate, trials=trials - spent, seed=seed)
     if nxt is not None:
         spent += nxt.evaluations

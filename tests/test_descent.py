@@ -245,6 +245,64 @@ def test_waypoint_moves_drop_the_zero_time_points_and_blocked_moves_are_rerouted
             assert 1 <= t[3] <= 5
 
 
+def test_corner_moves_drop_a_corner_and_clear_the_leg_by_moving_one_neighbour() -> None:
+    """T05's plan without descents (seed 2) has two detour corners: each move is the plan
+    without one corner and with one neighbour moved square to the new leg by one of
+    `CORNER_SHIFTS`; no point of a move is held (legs clear, C3 kept); no corner, no move."""
+    from lamde_mission.api import plan
+    from planner_core.descent import CORNER_SHIFTS, corner_moves
+    from planner_core.polish import ZERO_TIME
+
+    problem = Problem(SUITE / "T05.json")
+    p = plan(SUITE / "T05.json", seed=2, descent=False)
+    P, T = np.asarray(p.hover_points), np.asarray(p.hover_times)
+    corners = np.flatnonzero(T <= ZERO_TIME)
+    assert len(corners) == 2 and not len(held_points(problem, P))
+    moves = corner_moves(problem, P, T)
+    assert len(moves) >= 2
+    nodes = np.vstack([problem.start, P, problem.end])
+    for Q in moves:
+        assert Q.shape == (len(P) - 1, 2) and not len(held_points(problem, Q))
+        matches = []
+        for c in corners:
+            Q0 = np.delete(P, c, axis=0)
+            moved = np.flatnonzero(np.any(np.abs(Q - Q0) > 1e-9, axis=1))
+            if len(moved) != 1 or moved[0] not in (c - 1, c):
+                continue
+            u = nodes[c + 2] - nodes[c]  # the leg that now joins the corner's neighbours
+            step = Q[moved[0]] - Q0[moved[0]]
+            square = abs(step @ u) < 1e-6 * np.linalg.norm(u) * np.linalg.norm(step)
+            if square and min(abs(np.linalg.norm(step) - d) for d in CORNER_SHIFTS) < 1e-6:
+                matches.append(c)
+        assert len(matches) == 1
+    assert corner_moves(problem, P, np.ones(len(P))) == []
+    with pytest.raises(ValueError, match="moves: unknown kind 'swap'"):
+        restructure(problem, problem.encode(P, T), problem.evaluate, trials=5,
+                    moves=("merge", "swap"))
+
+
+def test_finish_runs_the_corner_moves_after_the_structural_search(
+    t05: Problem, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """`finish`: descent, `restructure` with waypoint, merge and split moves, then with the
+    corner moves alone, then kicks; each stage within what is left of the budget."""
+    import planner_core.descent as descent
+
+    calls: list[tuple[tuple[str, ...], int]] = []
+    real = descent.restructure
+
+    def record(problem, x, evaluate, *, trials, moves=descent.MOVES, **kw):  # noqa: ANN001, ANN202
+        calls.append((tuple(moves), trials))
+        return real(problem, x, evaluate, trials=trials, moves=moves, **kw)
+
+    monkeypatch.setattr(descent, "restructure", record)
+    x = _first_plans(t05, 1)[0]
+    r = descent.finish(t05, x, t05.evaluate, trials=400, seed=0, restructure_trials=100)
+    assert r is not None and r.evaluations <= 400
+    assert [m for m, _ in calls] == [("waypoint", "merge", "split"), ("corner",)]
+    assert all(t <= 100 for _, t in calls)
+
+
 def test_a_raced_move_stops_after_the_screen_unless_it_is_close_to_the_incumbent(
     t05: Problem,
 ) -> None:
