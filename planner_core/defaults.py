@@ -147,8 +147,9 @@ _RUN: tuple[Default, ...] = (
     Default("restructure_trials", 300, "evaluations the structural search on the final plan "
             "may spend (`planner_core.descent.restructure`: drop the detour corners, merge two "
             "hover points, or split one in two, each move descended in a race against the "
-            "incumbent), then at most as many again for the corner moves (one detour corner "
-            "dropped, a neighbour moved to clear the leg; `corner_moves`); with the descent on",
+            "incumbent), then at most as many again for the removal moves (one hover point "
+            "removed, the lightest first, a neighbour moved to clear the leg that joins its "
+            "neighbours; `removal_moves`); with the descent on",
             "an integer >= 0",
             _int_at_least(0)),
     Default("kick_trials", 300, "evaluations of the iterated local search on the final plan "

@@ -42,9 +42,8 @@ from planner_core.model import L_VIO_TOL, deb_better
 from planner_core.polish import ZERO_TIME, hover_lp
 
 __all__ = [
-    "CORNER_SHIFTS",
+    "CLEAR_SHIFTS",
     "Descent",
-    "corner_moves",
     "descend",
     "final_budget",
     "finish",
@@ -53,6 +52,7 @@ __all__ = [
     "merge_moves",
     "objective",
     "objective_reference",
+    "removal_moves",
     "restructure",
     "split_moves",
     "waypoint_moves",
@@ -261,24 +261,29 @@ def waypoint_moves(P: np.ndarray, T: np.ndarray) -> list[np.ndarray]:
     return [P[keep]] if 0 < keep.sum() < len(P) else []
 
 
-#: how far (m) `corner_moves` moves a neighbour of a dropped detour corner, smallest first
-CORNER_SHIFTS = (25.0, 50.0, 100.0, 200.0, 400.0)
+#: how far (m) `removal_moves` moves a neighbour of a removed point, smallest first
+CLEAR_SHIFTS = (25.0, 50.0, 100.0, 200.0, 400.0)
 
 
-def corner_moves(problem: Any, P: np.ndarray, T: np.ndarray) -> list[np.ndarray]:
-    """Point sets (I - 1, 2) without one detour corner (a point that hovers ~0 s,
-    `polish.ZERO_TIME`) and with one of the corner's two neighbouring hover points moved square
-    to the leg that now joins them, by the smallest of `CORNER_SHIFTS`, to either side, that
-    leaves no point held (`held_points`: every leg clear of the obstacles, C3 kept); one set per
-    neighbour that can be cleared so (the start and the end stay). Every corner costs a stop
-    (Eq. 1: a leg from rest to rest); `waypoint_moves` drops the corners but routes the legs
-    afresh, which puts corners back wherever the neighbours stay where they are. P (I, 2) m,
-    T (I,) s."""
+def removal_moves(problem: Any, P: np.ndarray, T: np.ndarray) -> list[np.ndarray]:
+    """Point sets (I - 1, 2) with one hover point removed, the points that hover least first
+    (the detour corners, 0 s, lead): when the leg that then joins its two neighbours is clear
+    and nothing is held (`held_points`: C3, C5), the set as it is; else one set per neighbouring
+    hover point that, moved square to that leg by the smallest of `CLEAR_SHIFTS` to either
+    side, leaves nothing held (the start and the end stay). Every point costs a stop (Eq. 1: a
+    leg from rest to rest), a corner for nothing but the detour; `waypoint_moves` drops the
+    corners but routes the legs afresh, which puts corners back wherever the neighbours stay
+    where they are. P (I, 2) m, T (I,) s."""
     P = np.asarray(P, dtype=float).reshape(-1, 2)
     box = np.array([problem.model.width, problem.model.height])
     out = []
-    for c in np.flatnonzero(np.asarray(T) <= ZERO_TIME):
+    for c in np.argsort(np.asarray(T, dtype=float), kind="stable"):
         Q0 = np.delete(P, c, axis=0)
+        if not len(Q0):
+            continue
+        if not len(held_points(problem, Q0)):
+            out.append(Q0)
+            continue
         a = P[c - 1] if c > 0 else problem.start
         b = P[c + 1] if c + 1 < len(P) else problem.end
         u = b - a
@@ -289,7 +294,7 @@ def corner_moves(problem: Any, P: np.ndarray, T: np.ndarray) -> list[np.ndarray]
         for k in (c - 1, c):  # the neighbours' indices in Q0
             if not 0 <= k < len(Q0):
                 continue
-            for shift in (s * d for d in CORNER_SHIFTS for s in (1.0, -1.0)):
+            for shift in (s * d for d in CLEAR_SHIFTS for s in (1.0, -1.0)):
                 Q = Q0.copy()
                 Q[k] = np.clip(Q[k] + shift * normal, 0.0, box)
                 if not len(held_points(problem, Q)):
@@ -364,7 +369,7 @@ def restructure(
     """First-improvement local search over the plan's structure: each move of the kinds
     `moves`, in that order (default `waypoint_moves`, `merge_moves`, then `split_moves`: the
     moves that remove points first, so that on a large plan the many splits do not use up the
-    budget before any merge is tried; "corner" is `corner_moves`; a move whose legs cut an
+    budget before any merge is tried; "removal" is `removal_moves`; a move whose legs cut an
     obstacle is first re-routed through the visibility graph) that keeps every point
     within C3 and C5 and every sensor servable is evaluated with its LP hover times and
     descended in a race against the incumbent (`_move`, at most `move_trials` more
@@ -380,7 +385,7 @@ def restructure(
         "waypoint": lambda P, T: waypoint_moves(P, T),
         "merge": lambda P, T: merge_moves(P),
         "split": lambda P, T: split_moves(problem, P, T),
-        "corner": lambda P, T: corner_moves(problem, P, T),
+        "removal": lambda P, T: removal_moves(problem, P, T),
     }
     unknown = [k for k in moves if k not in kinds]
     if unknown:
@@ -478,9 +483,9 @@ def finish(
 ) -> Descent | None:
     """What `plan` does to its final plan x (d,): `descend` (at most `descent_trials`
     evaluations; None: the defaults table's `DESCENT_TRIALS`), `restructure` (at most
-    `restructure_trials`; None: `RESTRUCTURE_TRIALS`), `restructure` with the corner moves
-    alone (`corner_moves`; at most `restructure_trials` again, usually a few dozen: it ends
-    when no corner can go), then `kicks` with what is left of `trials` (seeded by `seed`).
+    `restructure_trials`; None: `RESTRUCTURE_TRIALS`), `restructure` with the removal moves
+    alone (`removal_moves`, a removed point's leg cleared by moving a neighbour; at most
+    `restructure_trials` again), then `kicks` with what is left of `trials` (seeded by `seed`).
     None when x is not a feasible plan or `trials` < 1."""
     from planner_core.defaults import DESCENT_TRIALS, RESTRUCTURE_TRIALS
 
@@ -490,7 +495,7 @@ def finish(
     if cur is None:
         return None
     spent, f_start = cur.evaluations, cur.f_start
-    for moves in (MOVES, ("corner",)):
+    for moves in (MOVES, ("removal",)):
         nxt = restructure(problem, cur.x, evaluate, trials=min(r_trials, trials - spent),
                           moves=moves)
         if nxt is not None:

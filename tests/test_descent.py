@@ -245,47 +245,54 @@ def test_waypoint_moves_drop_the_zero_time_points_and_blocked_moves_are_rerouted
             assert 1 <= t[3] <= 5
 
 
-def test_corner_moves_drop_a_corner_and_clear_the_leg_by_moving_one_neighbour() -> None:
-    """T05's plan without descents (seed 2) has two detour corners: each move is the plan
-    without one corner and with one neighbour moved square to the new leg by one of
-    `CORNER_SHIFTS`; no point of a move is held (legs clear, C3 kept); no corner, no move."""
+def test_removal_moves_go_lightest_first_and_clear_the_leg_by_moving_one_neighbour() -> None:
+    """T05's plan without descents (seed 2) has two detour corners (0 s). Removal moves come
+    lightest point first (the corners lead); each is the plan without one point, either as it
+    is (when nothing is held) or with one neighbour moved square to the leg that now joins the
+    removed point's neighbours by one of `CLEAR_SHIFTS`; no point of a move is held."""
     from lamde_mission.api import plan
-    from planner_core.descent import CORNER_SHIFTS, corner_moves
+    from planner_core.descent import CLEAR_SHIFTS, removal_moves
     from planner_core.polish import ZERO_TIME
 
     problem = Problem(SUITE / "T05.json")
     p = plan(SUITE / "T05.json", seed=2, descent=False)
     P, T = np.asarray(p.hover_points), np.asarray(p.hover_times)
-    corners = np.flatnonzero(T <= ZERO_TIME)
-    assert len(corners) == 2 and not len(held_points(problem, P))
-    moves = corner_moves(problem, P, T)
-    assert len(moves) >= 2
+    assert (T <= ZERO_TIME).sum() == 2 and not len(held_points(problem, P))
+    moves = removal_moves(problem, P, T)
     nodes = np.vstack([problem.start, P, problem.end])
+    removed = []
     for Q in moves:
         assert Q.shape == (len(P) - 1, 2) and not len(held_points(problem, Q))
-        matches = []
-        for c in corners:
+        how = []
+        for c in range(len(P)):
             Q0 = np.delete(P, c, axis=0)
             moved = np.flatnonzero(np.any(np.abs(Q - Q0) > 1e-9, axis=1))
-            if len(moved) != 1 or moved[0] not in (c - 1, c):
-                continue
-            u = nodes[c + 2] - nodes[c]  # the leg that now joins the corner's neighbours
-            step = Q[moved[0]] - Q0[moved[0]]
-            square = abs(step @ u) < 1e-6 * np.linalg.norm(u) * np.linalg.norm(step)
-            if square and min(abs(np.linalg.norm(step) - d) for d in CORNER_SHIFTS) < 1e-6:
-                matches.append(c)
-        assert len(matches) == 1
-    assert corner_moves(problem, P, np.ones(len(P))) == []
+            if not len(moved):
+                how.append((c, 0.0))
+            elif len(moved) == 1 and moved[0] in (c - 1, c):
+                u = nodes[c + 2] - nodes[c]  # the leg that now joins c's neighbours
+                step = Q[moved[0]] - Q0[moved[0]]
+                if abs(step @ u) < 1e-6 * np.linalg.norm(u) * np.linalg.norm(step):
+                    how.append((c, float(np.linalg.norm(step))))
+        assert len(how) >= 1
+        c, shift = how[0]
+        assert shift == 0.0 or min(abs(shift - d) for d in CLEAR_SHIFTS) < 1e-6
+        removed.append(c)
+    # lightest first; both corners lead, at least one with a shifted neighbour
+    assert [T[c] for c in removed] == sorted(T[c] for c in removed)
+    assert set(np.flatnonzero(T <= ZERO_TIME)) <= set(removed[:4])
+    assert any(len(held_points(problem, np.delete(P, c, axis=0))) for c in removed)
+    assert removal_moves(problem, P[:1], T[:1]) == []
     with pytest.raises(ValueError, match="moves: unknown kind 'swap'"):
         restructure(problem, problem.encode(P, T), problem.evaluate, trials=5,
                     moves=("merge", "swap"))
 
 
-def test_finish_runs_the_corner_moves_after_the_structural_search(
+def test_finish_runs_the_removal_moves_after_the_structural_search(
     t05: Problem, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """`finish`: descent, `restructure` with waypoint, merge and split moves, then with the
-    corner moves alone, then kicks; each stage within what is left of the budget."""
+    removal moves alone, then kicks; each stage within what is left of the budget."""
     import planner_core.descent as descent
 
     calls: list[tuple[tuple[str, ...], int]] = []
@@ -299,7 +306,7 @@ def test_finish_runs_the_corner_moves_after_the_structural_search(
     x = _first_plans(t05, 1)[0]
     r = descent.finish(t05, x, t05.evaluate, trials=400, seed=0, restructure_trials=100)
     assert r is not None and r.evaluations <= 400
-    assert [m for m, _ in calls] == [("waypoint", "merge", "split"), ("corner",)]
+    assert [m for m, _ in calls] == [("waypoint", "merge", "split"), ("removal",)]
     assert all(t <= 100 for _, t in calls)
 
 
