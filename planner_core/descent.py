@@ -17,7 +17,10 @@ piecewise smooth and its gradient is exact where the LP's optimum is non-degener
 
 A step moves every point against the gradient, the largest move `step` metres. A point whose new
 position breaks C3 (summed link rate over the bandwidth) or whose legs cut an obstacle (C5, the
-evaluator's `L_VIO_TOL`) is held in place for that trial; the trial is then evaluated (one
+evaluator's `L_VIO_TOL`) takes its step turned by +-45 degrees and shortened to its projection
+instead (`_slide`: it slides along the obstacle, where the optimum often lies, with a leg
+tangent to it), or, where neither clears, is held in place for that trial; the trial is then
+evaluated (one
 evaluation of the caller's counted `evaluate`) and kept when it is Deb-better than the current
 plan. `step` grows 1.5x after a kept trial and halves after a rejected one (a backtracking
 line search); the descent stops at `min_step` or after `trials` evaluations. Every kept plan is
@@ -155,6 +158,41 @@ def held_points(problem: Any, P: np.ndarray) -> np.ndarray:
     return np.flatnonzero(bad)
 
 
+#: the turns (degrees) a held point's step tries, in this order, each shortened to its
+#: projection (cos 45 deg): the point slides along the obstacle or the bandwidth limit
+SLIDE_ANGLES = (45.0, -45.0)
+_SLIDE = np.array([np.cos(a) * np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+                   for a in np.radians(SLIDE_ANGLES)])  # (A, 2, 2): turn by a, scale by cos a
+
+
+def _slide(
+    problem: Any, P: np.ndarray, Pn: np.ndarray, move: np.ndarray, held: np.ndarray,
+    box: np.ndarray,
+) -> np.ndarray:
+    """The trial points Pn (I, 2) with each held point (`held`, indices) moved by its step
+    `move` (I, 2) turned by the first of `SLIDE_ANGLES` whose two legs clear the obstacles
+    (C5) and whose summed link rate stays within the bandwidth (C3), or put back at P where
+    none does. A held point's legs are checked against its previous neighbour after the
+    held points are put back and its next neighbour at its own step; `descend` then holds
+    whatever still breaks C3 or C5. One vectorised check for all held points and turns (cf.
+    Rosen's gradient projection: the step's component along the active constraint)."""
+    m = problem.model
+    k, a = len(held), len(_SLIDE)
+    ahead = _nodes(problem, Pn)  # every point at its step
+    Pn = Pn.copy()
+    Pn[held] = P[held]
+    back = _nodes(problem, Pn)  # the held points put back
+    cand = np.clip(P[held][:, None, :] + np.einsum("aij,kj->kai", _SLIDE, move[held]), 0.0, box)
+    c = cand.reshape(-1, 2)
+    prev, nxt = np.repeat(back[held], a, axis=0), np.repeat(ahead[held + 2], a, axis=0)
+    cut = overlap_lengths(np.vstack([prev, c]), np.vstack([c, nxt]), problem.obstacles) > L_VIO_TOL
+    bad = (cut[: k * a] | cut[k * a:] | (m.rates(c).sum(axis=1) > m.bandwidth)).reshape(k, a)
+    first = np.argmax(~bad, axis=1)
+    ok = ~bad[np.arange(k), first]
+    Pn[held[ok]] = cand[np.arange(k)[ok], first[ok]]
+    return Pn
+
+
 def descend(
     problem: Any,
     x: np.ndarray,
@@ -189,31 +227,32 @@ def descend(
     while spent < trials and step >= min_step:
         if race is not None and spent == race[0] and best_f > race[1]:
             break  # out of the race
-        free = np.ones(len(P), dtype=bool)
-        kept = False
-        for _ in range(len(P) + 1):  # hold the offending points, at most once each
-            gm = g * free[:, None]
-            scale = float(np.abs(gm).max())
-            if scale <= 0.0:
-                break
-            Pn = np.clip(P - gm / scale * step, 0.0, box)
-            held = held_points(problem, Pn)
-            held = held[free[held]]
-            if len(held):
-                free[held] = False
-                continue
-            nxt = objective(problem, Pn, warm)
-            if nxt is None:
-                break
-            xn = problem.encode(Pn, nxt[2])
-            fn, phin = evaluate(xn[None, :])
-            spent += 1
-            fn, phin = float(np.asarray(fn).reshape(-1)[0]), float(np.asarray(phin).reshape(-1)[0])
-            if deb_better(fn, phin, best_f, best_phi):
-                P, g = Pn, nxt[1]
-                best_x, best_f, best_phi = xn, fn, phin
-                kept = True
+        scale = float(np.abs(g).max())
+        if scale <= 0.0:
             break
+        move = -g / scale * step
+        Pn = np.clip(P + move, 0.0, box)
+        held = held_points(problem, Pn)
+        if len(held):
+            Pn = _slide(problem, P, Pn, move, held, box)
+        for _ in range(len(P)):  # what still breaks C3 or C5 stays where it was
+            held = held_points(problem, Pn)
+            if not len(held):
+                break
+            Pn[held] = P[held]
+        kept = False
+        if not len(held) and not np.array_equal(Pn, P):
+            nxt = objective(problem, Pn, warm)
+            if nxt is not None:
+                xn = problem.encode(Pn, nxt[2])
+                fn, phin = evaluate(xn[None, :])
+                spent += 1
+                fn = float(np.asarray(fn).reshape(-1)[0])
+                phin = float(np.asarray(phin).reshape(-1)[0])
+                if deb_better(fn, phin, best_f, best_phi):
+                    P, g = Pn, nxt[1]
+                    best_x, best_f, best_phi = xn, fn, phin
+                    kept = True
         step = step * GROW if kept else step * SHRINK
     return Descent(best_x, best_f, best_phi, spent, f_start)
 

@@ -120,6 +120,46 @@ def test_descend_is_feasible_never_worse_counted_and_deterministic(t05: Problem)
     assert improved >= 2  # T05's constructive plans are 2-6 % above the best known
 
 
+def test_slide_turns_a_held_step_by_45_degrees_or_puts_the_point_back() -> None:
+    """`_slide`: a point whose step cuts an obstacle takes the step turned by +-45 degrees and
+    shortened to its projection when that clears its legs (C5) and keeps C3, else goes back to
+    where it was; the other points keep their step. Both outcomes occur on T06's points."""
+    from lamde_mission.api import plan
+    from planner_core.descent import SLIDE_ANGLES, _slide
+    from planner_core.geometry import overlap_lengths
+    from planner_core.model import L_VIO_TOL
+
+    problem = Problem(SUITE / "T06.json")
+    P = np.asarray(plan(SUITE / "T06.json", seed=0, descent=False).hover_points)
+    box = np.array([problem.model.width, problem.model.height])
+    assert not len(held_points(problem, P))
+    outcomes = set()
+    for i in range(len(P)):
+        for ang in np.radians(np.arange(0, 360, 30)):
+            move = np.zeros_like(P)
+            move[i] = 150.0 * np.array([np.cos(ang), np.sin(ang)])
+            move[(i + 2) % len(P)] = [3.0, -2.0]  # a free point elsewhere keeps its step
+            Pn = np.clip(P + move, 0.0, box)
+            held = held_points(problem, Pn)
+            if i not in held or (i + 2) % len(P) in held:
+                continue
+            out = _slide(problem, P, Pn, move, held, box)
+            free = np.setdiff1d(np.arange(len(P)), held)
+            np.testing.assert_array_equal(out[free], Pn[free])
+            turned = [P[i] + np.cos(a) * np.array([[np.cos(a), -np.sin(a)],
+                                                   [np.sin(a), np.cos(a)]]) @ move[i]
+                      for a in np.radians(SLIDE_ANGLES)]
+            if np.allclose(out[i], P[i]):
+                outcomes.add("back")
+                continue
+            assert any(np.allclose(out[i], np.clip(t, 0.0, box)) for t in turned)
+            nodes = np.vstack([problem.start, out, problem.end])
+            legs = overlap_lengths(nodes[i:i + 2], nodes[i + 1:i + 3], problem.obstacles)
+            assert np.all(legs <= L_VIO_TOL)
+            outcomes.add("slid")
+    assert outcomes == {"back", "slid"}
+
+
 def test_descend_refuses_infeasible_plans_and_no_budget(t05: Problem) -> None:
     x = _first_plans(t05, 1)[0]
     assert descend(t05, x, t05.evaluate, trials=0) is None
