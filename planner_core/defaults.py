@@ -149,11 +149,13 @@ _RUN: tuple[Default, ...] = (
             "hover points, or split one in two, each move descended in a race against the "
             "incumbent), then at most as many again for the removal moves (one hover point "
             "removed, the lightest first, a neighbour moved to clear the leg that joins its "
-            "neighbours; `removal_moves`); with the descent on",
+            "neighbours; `removal_moves`), taken from the kicks' share; with the descent on",
             "an integer >= 0",
             _int_at_least(0)),
-    Default("kick_trials", 300, "evaluations of the iterated local search on the final plan "
-            "after the structural search (`planner_core.descent.kicks`: one hover point moved by "
+    Default("kick_trials", 300, "evaluations of the final stage (descent_trials + "
+            "restructure_trials + kick_trials, at most a tenth of the DE's evaluations) left for "
+            "the iterated local search on the final plan after the structural search and the "
+            "removal moves (`planner_core.descent.kicks`: one hover point moved by "
             "a normal step of 300 m standard deviation per axis, the plan descended in a race "
             "against the incumbent, kept when better; with the descent on)",
             "an integer >= 0", _int_at_least(0)),

@@ -47,6 +47,8 @@ from planner_core.polish import ZERO_TIME, hover_lp
 __all__ = [
     "CLEAR_SHIFTS",
     "Descent",
+    "MOVES",
+    "SLIDE_ANGLES",
     "descend",
     "final_budget",
     "finish",

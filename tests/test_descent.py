@@ -318,6 +318,40 @@ def test_removal_moves_go_lightest_first_and_clear_the_leg_by_moving_one_neighbo
         c, shift = how[0]
         assert shift == 0.0 or min(abs(shift - d) for d in CLEAR_SHIFTS) < 1e-6
         removed.append(c)
+    # the same list by brute force: lightest first; as it is when nothing is held, else per
+    # neighbour (previous, then next) the smallest shift, + before -, that clears
+    box = np.array([problem.model.width, problem.model.height])
+    normal_of = {}
+    want = []
+    for c in np.argsort(T, kind="stable"):
+        Q0 = np.delete(P, c, axis=0)
+        if not len(held_points(problem, Q0)):
+            want.append(Q0)
+            continue
+        u = nodes[c + 2] - nodes[c]
+        normal_of[c] = np.array([-u[1], u[0]]) / np.linalg.norm(u)
+        for k in (c - 1, c):
+            if not 0 <= k < len(Q0):
+                continue
+            for d in sorted(CLEAR_SHIFTS):
+                hit = None
+                for sign in (1.0, -1.0):
+                    Q = Q0.copy()
+                    Q[k] = np.clip(Q[k] + sign * d * normal_of[c], 0.0, box)
+                    if not len(held_points(problem, Q)):
+                        hit = Q
+                        break
+                if hit is not None:
+                    want.append(hit)
+                    break
+    assert len(want) == len(moves)
+    for got, exp in zip(moves, want, strict=True):
+        np.testing.assert_allclose(got, exp, atol=1e-9)
+    # both neighbours' branches occur on this plan
+    shifted = {int(np.flatnonzero(np.any(np.abs(Q - np.delete(P, c, axis=0)) > 1e-9, axis=1))[0])
+               - c for Q, c in zip(moves, removed, strict=True)
+               if np.any(np.abs(Q - np.delete(P, c, axis=0)) > 1e-9)}
+    assert shifted == {-1, 0}
     # lightest first; both corners lead, at least one with a shifted neighbour
     assert [T[c] for c in removed] == sorted(T[c] for c in removed)
     assert set(np.flatnonzero(T <= ZERO_TIME)) <= set(removed[:4])
@@ -336,11 +370,16 @@ def test_finish_runs_the_removal_moves_after_the_structural_search(
     import planner_core.descent as descent
 
     calls: list[tuple[tuple[str, ...], int]] = []
+    starts: list[np.ndarray] = []
+    ends: list[np.ndarray | None] = []
     real = descent.restructure
 
     def record(problem, x, evaluate, *, trials, moves=descent.MOVES, **kw):  # noqa: ANN001, ANN202
         calls.append((tuple(moves), trials))
-        return real(problem, x, evaluate, trials=trials, moves=moves, **kw)
+        starts.append(np.array(x))
+        r = real(problem, x, evaluate, trials=trials, moves=moves, **kw)
+        ends.append(None if r is None else r.x)
+        return r
 
     monkeypatch.setattr(descent, "restructure", record)
     x = _first_plans(t05, 1)[0]
@@ -348,6 +387,8 @@ def test_finish_runs_the_removal_moves_after_the_structural_search(
     assert r is not None and r.evaluations <= 400
     assert [m for m, _ in calls] == [("waypoint", "merge", "split"), ("removal",)]
     assert all(t <= 100 for _, t in calls)
+    assert ends[0] is not None  # the removal phase starts from the structural search's plan
+    np.testing.assert_array_equal(starts[1], ends[0])
 
 
 def test_a_raced_move_stops_after_the_screen_unless_it_is_close_to_the_incumbent(
