@@ -231,11 +231,16 @@ def plan(
         t1 = time.perf_counter()
         # the final plan's hover points moved with exact LP hover times, then its structure
         x = problem.encode(chosen["hover_points"], chosen["hover_times"])
+        f_before = float(chosen["f"])
         r = finish(problem, x, problem.evaluate, trials=final, seed=int(seed))
         if r is not None:
             descended = r.evaluations
             if deb_better(r.f, r.phi, chosen["f"], chosen["phi"]):
                 chosen = problem.breakdown(r.x)
+        if polish_info is not None:  # what the final stage did, for the summary
+            polish_info["final_f_before"] = f_before
+            polish_info["final_f_after"] = float(chosen["f"])
+            polish_info["final_evaluations"] = int(descended)
         t_descent = time.perf_counter() - t1
     wall = time.perf_counter() - t_start
     h = result.history

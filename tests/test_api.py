@@ -44,6 +44,12 @@ def test_plan_is_feasible_and_consistent(small_plan: Plan) -> None:
     assert set(p.history) == {"evaluations", "best_f", "best_phi", "feasible_fraction"}
     assert np.all(np.diff(p.history["evaluations"]) > 0)
     assert p.polish is not None and p.polish["f_after"] <= p.polish["f_before"] + 1e-9
+    # the final stage (descent, structural search, removal moves, kicks) starts from the
+    # polished plan and ends at the plan returned
+    polished = p.polish["f_after"] if p.polish["accepted"] else p.polish["f_before"]
+    assert p.polish["final_f_before"] == pytest.approx(polished, rel=1e-9)
+    assert p.polish["final_f_after"] == p.f <= p.polish["final_f_before"] + 1e-9
+    assert 0 < p.polish["final_evaluations"] <= p.evaluations
     assert set(p.timings) >= {"evaluation", "seeding", "optimiser", "polish", "total"}
 
 

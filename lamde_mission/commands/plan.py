@@ -144,6 +144,10 @@ def _summary(
         lines.append(f"  polish        f {pol['f_before']:.2f} -> {pol['f_after']:.2f}, "
                      f"phi {pol['phi_before']:.4g} -> {pol['phi_after']:.4g}"
                      + ("" if pol["accepted"] else " (kept the unpolished plan)"))
+        if "final_f_before" in pol:
+            lines.append(f"  final stage   f {pol['final_f_before']:.2f} -> "
+                         f"{pol['final_f_after']:.2f} (descent, structural search, removal "
+                         f"moves, kicks: {pol['final_evaluations']} evaluations)")
     lines.append("  data collected vs required (Mbit):")
     req = dict(zip(m.sensor_ids, m.required_data.tolist(), strict=True))
     got = t.collected
