@@ -176,8 +176,9 @@ def _slide(
     (C5) and whose summed link rate stays within the bandwidth (C3), or put back at P where
     none does. A held point's legs are checked against its previous neighbour after the
     held points are put back and its next neighbour at its own step; `descend` then holds
-    whatever still breaks C3 or C5. One vectorised check for all held points and turns (cf.
-    Rosen's gradient projection: the step's component along the active constraint)."""
+    whatever still breaks C3 or C5. One vectorised check for all held points and turns (a
+    crude cousin of Rosen's gradient projection, exact only when the obstacle's edge lies at
+    45 degrees to the step)."""
     m = problem.model
     k, a = len(held), len(_SLIDE)
     ahead = _nodes(problem, Pn)  # every point at its step
