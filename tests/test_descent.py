@@ -127,12 +127,12 @@ def test_slide_matches_a_point_by_point_reference() -> None:
     its own step) clear the obstacles and whose summed link rate is within the bandwidth, else
     goes back. Random steps of 50-900 m for several points at once on T06's plan, so that
     neighbours move, candidates leave the area and some break C3; every branch is counted."""
+    import json
+
     from lamde_mission.api import plan
     from planner_core.descent import SLIDE_ANGLES, _slide
     from planner_core.geometry import overlap_lengths
     from planner_core.model import L_VIO_TOL
-
-    import json
 
     P = np.asarray(plan(SUITE / "T06.json", seed=0, descent=False).hover_points)
     spec = json.loads((SUITE / "T06.json").read_text())
