@@ -20,11 +20,11 @@ position breaks C3 (summed link rate over the bandwidth) or whose legs cut an ob
 evaluator's `L_VIO_TOL`) takes its step turned by +-45 degrees and shortened to its projection
 instead (`_slide`: it slides along the obstacle, where the optimum often lies, with a leg
 tangent to it), or, where neither clears, is held in place for that trial; the trial is then
-evaluated (one
-evaluation of the caller's counted `evaluate`) and kept when it is Deb-better than the current
-plan. `step` grows 1.5x after a kept trial and halves after a rejected one (a backtracking
-line search); the descent stops at `min_step` or after `trials` evaluations. Every kept plan is
-feasible and its f is what the evaluator says, so the result is never worse than the start.
+evaluated (one evaluation of the caller's counted `evaluate`) and kept when it is Deb-better
+than the current plan. `step` grows 1.5x after a kept trial and halves after a rejected one (a
+backtracking line search); the descent stops at `min_step` or after `trials` evaluations. Every
+kept plan is feasible and its f is what the evaluator says, so the result is never worse than
+the start.
 
 The descent keeps the number of points and their visiting order; `plan` runs it on the best
 constructive and seeded starts before the DE and on the plan after the polish (docs/search.md).
