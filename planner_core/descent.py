@@ -238,11 +238,11 @@ def descend(
         held = held_points(problem, Pn)
         if len(held):
             Pn = _slide(problem, P, Pn, move, held, box)
-        for _ in range(len(P)):  # what still breaks C3 or C5 stays where it was
-            held = held_points(problem, Pn)
-            if not len(held):
-                break
-            Pn[held] = P[held]
+            for _ in range(len(P)):  # what still breaks C3 or C5 stays where it was
+                held = held_points(problem, Pn)
+                if not len(held):
+                    break
+                Pn[held] = P[held]
         kept = False
         if not len(held) and not np.array_equal(Pn, P):
             nxt = objective(problem, Pn, warm)
