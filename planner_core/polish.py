@@ -1,8 +1,9 @@
 """Hover-time polish: for fixed hover positions, the least total hover time that meets C4 (an LP).
 
 Given the hover points of a finished plan, the rates R_ij are fixed, so the hover times solve
-(with HiGHS through highspy by default, `hover_lp`; HiGHS through scipy's `linprog`, the
-reference; or the same LP stated in cvxpy)
+(by default `hover_lp`: the LP split into its independent blocks, the small ones solved by a
+compiled kernel, the rest by HiGHS through highspy; HiGHS through scipy's `linprog` on the whole
+LP, the reference; or the same LP stated in cvxpy)
     minimise sum_i T_i   s.t.  sum_i R_ij T_i >= Q_j (all sensors j),  0 <= T_i <= T_max.
 C3 depends on positions only and is reported, not changed. Points whose polished time is ~0 are
 dropped when the path without them stays collision-free and its flight time does not grow.
@@ -19,6 +20,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numba import njit
 
 from planner_core.geometry import overlap_lengths
 from planner_core.model import L_VIO_TOL
@@ -200,6 +202,11 @@ def _highs() -> Any:
     return h
 
 
+#: blocks of the hover-time LP with at most this many points are solved by enumerating their
+#: vertices (`_lp_blocks`); larger ones go to HiGHS
+BLOCK_VERTICES = 3
+
+
 def hover_lp(
     R: np.ndarray, req: np.ndarray, t_max: float, warm: dict[Any, Any] | None = None
 ) -> tuple[np.ndarray, float, np.ndarray] | None:
@@ -213,28 +220,225 @@ def hover_lp(
     Bertsimas & Tsitsiklis, Introduction to Linear Optimization, Sec. 5.1), dV/dR_ij =
     -y_j T_i / Q_j at a non-degenerate optimum: what `planner_core.descent` uses.
 
-    The fast path of the polish's LP (`_solve_lp(..., "linprog")` is its reference;
+    The LP separates into blocks, the connected parts of the graph that joins a point to the
+    sensors it reaches (R_ij > 0). `_lp_blocks` (compiled) solves a block of one point (on the
+    suite's plans most of them) in closed form, T_i = max_j Q_j / R_ij over its sensors with
+    dual 1 / A_ji on the first row that attains it, and a block of up to `BLOCK_VERTICES`
+    points by enumerating its vertices; larger blocks (and a small block whose optimum would
+    need more than t_max) go together to HiGHS through highspy. HiGHS's fixed cost (~0.1 ms a
+    call) is what the blocks save: the descent solves this LP once per trial. The fast path
+    of the polish's LP (`_solve_lp(..., "linprog")`, one LP through scipy, is its reference;
     tests/test_descent.py holds them equal; `_solve_lp(..., "highs")` calls it for a feasible
-    LP): HiGHS called through highspy directly, ~0.3 ms where scipy's `linprog`
-    takes ~1.3 ms on T16's 16 points and 29 sensors. `warm`: a dict the caller keeps for one
-    sequence of related solves (a descent): the last optimal basis of each shape is kept in it
-    and the next solve starts from it. Where the LP has several optima the one returned may
-    depend on that basis, so a caller that must be reproducible passes a fresh dict per
-    sequence (None: a cold start, the same answer whatever was solved before).
+    LP). `warm`: a dict the caller keeps for one sequence of related solves (a descent): the
+    last optimal basis of each shape of HiGHS's part is kept in it and the next solve starts
+    from it. Where the LP has several optima the one returned may depend on that basis, so a
+    caller that must be reproducible passes a fresh dict per sequence (None: a cold start,
+    the same answer whatever was solved before).
     """
-    import highspy
-
     need = req > 0
     n = R.shape[0]
-    c, G, h, ub = _lp_matrices(R, req, t_max, True)
-    if not len(h):
-        return np.zeros(n), 0.0, np.zeros(len(req))
-    A = -G  # rows: sensors; A T >= target
+    y = np.zeros(len(req))
+    if not need.any():
+        return np.zeros(n), 0.0, y
+    # rows: sensors, scaled so each needs 1 unit; cols: points
+    A = np.ascontiguousarray((R[:, need] / req[need]).T)
+    T = np.zeros(n)
+    yn = np.zeros(A.shape[0])
+    rest = np.zeros(n, dtype=np.bool_)
+    if not _lp_blocks(A, 1.0 + 1e-9, float(t_max), BLOCK_VERTICES, T, yn, rest):
+        return None  # a sensor no point reaches, or a lone point that needs more than t_max
+    if rest.any():
+        rows = (A[:, rest] > 0.0).any(axis=1)
+        sol = _highs_lp(A[np.ix_(rows, rest)], 1.0 + 1e-9, t_max, warm)
+        if sol is None:
+            return None
+        T[rest], yn[rows] = sol
+    y[need] = yn
+    T = _top_up(R, req, np.clip(T, 0.0, t_max), t_max)
+    return T, float(T.sum()), y
+
+
+@njit(cache=True, fastmath=False, nogil=True)
+def _solve_small(M, rhs, out):  # pragma: no cover - compiled
+    """Gaussian elimination with partial pivoting on a copy of M (k, k); out = M^-1 rhs.
+    False when M is singular (a pivot below 1e-12 of M's largest entry)."""
+    k = M.shape[0]
+    W = M.copy()
+    v = rhs.copy()
+    big = 0.0
+    for i in range(k):
+        for j in range(k):
+            big = max(big, abs(W[i, j]))
+    for col in range(k):
+        p = col
+        for i in range(col + 1, k):
+            if abs(W[i, col]) > abs(W[p, col]):
+                p = i
+        if abs(W[p, col]) <= 1e-12 * big:
+            return False
+        if p != col:
+            for j in range(k):
+                W[col, j], W[p, j] = W[p, j], W[col, j]
+            v[col], v[p] = v[p], v[col]
+        for i in range(col + 1, k):
+            f = W[i, col] / W[col, col]
+            for j in range(col, k):
+                W[i, j] -= f * W[col, j]
+            v[i] -= f * v[col]
+    for i in range(k - 1, -1, -1):
+        s = v[i]
+        for j in range(i + 1, k):
+            s -= W[i, j] * out[j]
+        out[i] = s / W[i, i]
+    return True
+
+
+@njit(cache=True, fastmath=False, nogil=True)
+def _lp_blocks(A, target, t_max, kmax, T, y, rest):  # pragma: no cover - compiled
+    """The blocks of min sum T s.t. A T >= target, 0 <= T <= t_max (A (rows, I) >= 0): writes
+    the hover times T (I,) and row duals y (rows,) of every block of at most `kmax` points and
+    marks the points of the others in `rest` (I,) for HiGHS. A small block's vertices are
+    enumerated: every k of its constraints (its rows, T_i >= 0) taken as equalities, the first
+    (in lexicographic order) whose T is feasible and whose multipliers z (N_S^T z = 1, the
+    constraints written as >=) are >= 0 (the KKT conditions of an optimal vertex); a block
+    with no such vertex within rounding, or whose optimum needs more than t_max, goes to
+    `rest`. Returns False when a row has no point or a lone point needs more than t_max."""
+    m, n = A.shape
+    parent = np.arange(n)
+    for j in range(m):  # union-find over the points that share a row
+        first = -1
+        for i in range(n):
+            if A[j, i] > 0.0:
+                if first < 0:
+                    first = i
+                    while parent[first] != first:
+                        first = parent[first]
+                else:
+                    r = i
+                    while parent[r] != r:
+                        r = parent[r]
+                    if r != first:
+                        parent[max(r, first)] = min(r, first)
+                        first = min(r, first)
+        if first < 0:
+            return False  # a sensor no point reaches
+    for i in range(n):
+        r = i
+        while parent[r] != r:
+            r = parent[r]
+        parent[i] = r
+    cols = np.empty(n, dtype=np.int64)
+    rows = np.empty(m, dtype=np.int64)
+    for root in range(n):
+        k = 0
+        for i in range(n):
+            if parent[i] == root:
+                cols[k] = i
+                k += 1
+        if k == 0:
+            continue
+        nr = 0
+        for j in range(m):
+            for q in range(k):
+                if A[j, cols[q]] > 0.0:
+                    rows[nr] = j
+                    nr += 1
+                    break
+        if k == 1:
+            i = cols[0]
+            best, jb = 0.0, -1
+            for q in range(nr):
+                t = target / A[rows[q], i]
+                if t > best:
+                    best, jb = t, rows[q]
+            if best > t_max:
+                return False
+            T[i] = best
+            if jb >= 0:
+                y[jb] = 1.0 / A[jb, i]
+            continue
+        if k > kmax:
+            for q in range(k):
+                rest[cols[q]] = True
+            continue
+        c = nr + k  # the block's constraints: its rows, then T_q >= 0
+        idx = np.arange(k)
+        M = np.empty((k, k))
+        Mt = np.empty((k, k))
+        b = np.empty(k)
+        ones = np.ones(k)
+        t = np.empty(k)
+        z = np.empty(k)
+        found = False
+        while True:
+            for a in range(k):
+                s = idx[a]
+                for q in range(k):
+                    M[a, q] = A[rows[s], cols[q]] if s < nr else (1.0 if s - nr == q else 0.0)
+                b[a] = target if s < nr else 0.0
+            for a in range(k):
+                for q in range(k):
+                    Mt[a, q] = M[q, a]
+            if _solve_small(M, b, t) and _solve_small(Mt, ones, z):
+                ok = True
+                for a in range(k):
+                    if z[a] < -1e-9 or t[a] < -1e-9 * (1.0 + abs(t[a])):
+                        ok = False
+                        break
+                if ok:
+                    for q in range(nr):
+                        s = 0.0
+                        scale = target
+                        for a in range(k):
+                            s += A[rows[q], cols[a]] * t[a]
+                            scale += abs(A[rows[q], cols[a]] * t[a])
+                        if s < target - 1e-9 * scale:
+                            ok = False
+                            break
+                if ok:
+                    found = True
+                    break
+            # next combination of k out of c, lexicographic
+            a = k - 1
+            while a >= 0 and idx[a] == c - k + a:
+                a -= 1
+            if a < 0:
+                break
+            idx[a] += 1
+            for q in range(a + 1, k):
+                idx[q] = idx[q - 1] + 1
+        tmax_ok = True
+        if found:
+            for a in range(k):
+                if t[a] > t_max:
+                    tmax_ok = False
+        if not found or not tmax_ok:
+            for q in range(k):
+                rest[cols[q]] = True
+            continue
+        for a in range(k):
+            T[cols[a]] = max(t[a], 0.0)
+            s = idx[a]
+            if s < nr:
+                y[rows[s]] = max(z[a], 0.0)
+    return True
+
+
+def _highs_lp(
+    A: np.ndarray, target: float, t_max: float, warm: dict[Any, Any] | None
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """min sum T s.t. A T >= target, 0 <= T <= t_max through HiGHS (highspy): (T (cols,), row
+    duals (rows,) >= 0), or None when infeasible. A (rows, cols) >= 0; `warm` as `hover_lp`'s
+    (keyed by A's shape)."""
+    import highspy
+
+    n = A.shape[1]
     nz = A != 0.0
     lp = highspy.HighsLp()
     lp.num_col_, lp.num_row_ = n, A.shape[0]
-    lp.col_cost_, lp.col_lower_, lp.col_upper_ = c, np.zeros(n), ub
-    lp.row_lower_, lp.row_upper_ = -h, np.full(A.shape[0], highspy.kHighsInf)
+    lp.col_cost_, lp.col_lower_, lp.col_upper_ = np.ones(n), np.zeros(n), np.full(n, t_max)
+    lp.row_lower_ = np.full(A.shape[0], target)
+    lp.row_upper_ = np.full(A.shape[0], highspy.kHighsInf)
     lp.a_matrix_.format_ = highspy.MatrixFormat.kRowwise
     lp.a_matrix_.start_ = np.concatenate([[0], np.cumsum(nz.sum(axis=1))]).astype(np.int32)
     lp.a_matrix_.index_ = np.nonzero(nz)[1].astype(np.int32)
@@ -252,10 +456,8 @@ def hover_lp(
     if warm is not None:
         warm[A.shape] = solver.getBasis()
     sol = solver.getSolution()
-    y = np.zeros(len(req))
-    y[need] = np.maximum(np.asarray(sol.row_dual, dtype=float), 0.0)
-    T = _top_up(R, req, np.clip(np.asarray(sol.col_value, dtype=float), 0.0, t_max), t_max)
-    return T, float(T.sum()), y
+    return (np.clip(np.asarray(sol.col_value, dtype=float), 0.0, t_max),
+            np.maximum(np.asarray(sol.row_dual, dtype=float), 0.0))
 
 
 def _top_up(R: np.ndarray, req: np.ndarray, times: np.ndarray, t_max: float) -> np.ndarray:

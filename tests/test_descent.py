@@ -80,6 +80,83 @@ def test_hover_lp_matches_scipy_linprog_on_random_instances() -> None:
     assert checked > 50 and infeasible > 5
 
 
+def _block_instance(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, float]:
+    """A sparse LP like a plan's: each sensor reached by 1 point (most), 2 or 3 (some), so the
+    LP splits into lone points, small blocks and, where blocks chain, larger ones."""
+    n, m = int(rng.integers(1, 14)), int(rng.integers(1, 30))
+    R = np.zeros((n, m))
+    for j in range(m):
+        k = min(n, int(rng.choice([1, 1, 1, 2, 2, 3])))
+        R[rng.choice(n, size=k, replace=False), j] = rng.uniform(0.5, 10.0, size=k)
+    req = rng.uniform(1.0, 150.0, size=m) * (rng.random(m) < 0.9)
+    return R, req, float(rng.choice([80.0, 300.0]))
+
+
+def test_hover_lp_blocks_satisfy_the_kkt_conditions_and_match_linprog() -> None:
+    """On sparse LPs (lone points in closed form, blocks of 2-3 points by their vertices,
+    larger blocks and over-t_max blocks through HiGHS): the same feasibility and value as
+    scipy's linprog on the whole LP, and (T, y) pass the KKT conditions on their own: T
+    feasible, y >= 0, sum_j y_j A_ji <= 1 where T_i < t_max, y_j > 0 only on
+    tight rows (so the duals the descent's gradient uses are optimal duals); = 1 where
+    0 < T_i < t_max, >= 1 where T_i = t_max."""
+    import planner_core.polish as polish
+
+    calls = []
+    real = polish._highs_lp
+
+    def counted(*a: object) -> object:
+        calls.append(1)
+        return real(*a)
+
+    rng = np.random.default_rng(11)
+    blocks_only = with_highs = infeasible = 0  # blocks_only: shared sensors, no HiGHS
+    polish._highs_lp = counted
+    try:
+        for _ in range(400):
+            R, req, t_max = _block_instance(rng)
+            calls.clear()
+            got = hover_lp(R, req, t_max)
+            c, G, h, ub = _lp_matrices(R, req, t_max, True)
+            ref = linprog(c, A_ub=G, b_ub=h, bounds=[(0.0, t_max)] * len(R), method="highs")
+            if got is None:
+                assert ref.status == 2
+                infeasible += 1
+                continue
+            assert ref.status == 0
+            with_highs += bool(calls)
+            blocks_only += not calls and bool(((R > 0).sum(axis=0) > 1).any())
+            T, V, y = got
+            assert V == pytest.approx(ref.fun, rel=1e-6, abs=1e-9)
+            need = req > 0
+            A = (R[:, need] / req[need]).T
+            yn = y[need]
+            assert np.all(y >= 0) and np.all(y[~need] == 0)
+            assert np.all((T >= 0) & (T <= t_max)) and np.all(A @ T >= 1.0 - 1e-7)
+            reduced = A.T @ yn  # sum_j y_j A_ji per point: 1 - (its bounds' multipliers)
+            below, above = T < t_max - 1e-6, T > 1e-9
+            assert np.all(reduced[below] <= 1.0 + 1e-7) and np.all(reduced[above] >= 1.0 - 1e-7)
+            assert np.all(A[yn > 1e-12] @ T <= 1.0 + 1e-6)  # complementary slackness
+    finally:
+        polish._highs_lp = real
+    assert blocks_only > 60 and with_highs > 100 and infeasible > 40
+
+
+def test_hover_lp_block_edges() -> None:
+    """A lone point that would need more than t_max: infeasible; a 2-point block whose vertex
+    needs more than t_max: solved by HiGHS with the bound; a sensor no point reaches:
+    infeasible; a point that reaches nothing hovers 0 s."""
+    assert hover_lp(np.array([[1.0, 0.0], [0.0, 1.0]]), np.array([10.0, 500.0]), 100.0) is None
+    assert hover_lp(np.array([[1.0, 0.0], [0.0, 0.0]]), np.array([10.0, 5.0]), 100.0) is None
+    # sensor 0 is reached by points 0 (1 Mbit/s) and 1 (2 Mbit/s), sensor 1 by point 0 alone
+    R = np.array([[1.0, 1.0], [2.0, 0.0], [0.0, 0.0]])
+    T, V, y = hover_lp(R, np.array([150.0, 20.0]), 100.0)  # the 2-point block's vertex
+    np.testing.assert_allclose(T, [20.0, 65.0, 0.0], rtol=1e-6)
+    assert V == pytest.approx(85.0, rel=1e-6)
+    np.testing.assert_allclose(y, [75.0, 10.0], rtol=1e-6)  # dV/dQ_j = y_j / Q_j
+    T, V, y = hover_lp(R, np.array([250.0, 20.0]), 100.0)  # the vertex needs 115 s > t_max
+    np.testing.assert_allclose(T, [50.0, 100.0, 0.0], rtol=1e-6)
+
+
 def test_gradient_matches_finite_differences_of_the_reference(t05: Problem) -> None:
     """dF/dP of `objective` against central differences of `objective_reference` (the polish's
     own LP) at the best constructive plans' points, where the LP is non-degenerate."""
