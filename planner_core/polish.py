@@ -202,9 +202,12 @@ def _highs() -> Any:
     return h
 
 
-#: blocks of the hover-time LP with at most this many points are solved by enumerating their
-#: vertices (`_lp_blocks`); larger ones go to HiGHS
-BLOCK_VERTICES = 3
+#: blocks of the hover-time LP with at most this many points, and at most `BLOCK_COMBOS` sets
+#: of constraints to try as a vertex, are solved by enumerating their vertices (`_lp_blocks`);
+#: the others go to HiGHS (on T16's descents 3 -> 4 -> 5 points took plan() from 0.97 to 0.85
+#: to 0.82 s)
+BLOCK_VERTICES = 5
+BLOCK_COMBOS = 5000
 
 
 def hover_lp(
@@ -224,9 +227,10 @@ def hover_lp(
     sensors it reaches (R_ij > 0). `_lp_blocks` (compiled) solves a block of one point (on the
     suite's plans most of them) in closed form, T_i = max_j Q_j / R_ij over its sensors with
     dual 1 / A_ji on the first row that attains it, and a block of up to `BLOCK_VERTICES`
-    points by enumerating its vertices; larger blocks (and a small block whose optimum would
-    need more than t_max) go together to HiGHS through highspy. HiGHS's fixed cost (~0.1 ms a
-    call) is what the blocks save: the descent solves this LP once per trial. The fast path
+    points by enumerating its vertices (at most `BLOCK_COMBOS` sets of constraints); larger
+    blocks (and a small block whose optimum would need more than t_max) go together to HiGHS
+    through highspy. HiGHS's fixed cost (~0.1 ms a call) is what the blocks save: the descent
+    solves this LP once per trial. The fast path
     of the polish's LP (`_solve_lp(..., "linprog")`, one LP through scipy, is its reference;
     tests/test_descent.py holds them equal; `_solve_lp(..., "highs")` calls it for a feasible
     LP). `warm`: a dict the caller keeps for one sequence of related solves (a descent): the
@@ -245,7 +249,8 @@ def hover_lp(
     T = np.zeros(n)
     yn = np.zeros(A.shape[0])
     rest = np.zeros(n, dtype=np.bool_)
-    if not _lp_blocks(A, 1.0 + 1e-9, float(t_max), BLOCK_VERTICES, T, yn, rest):
+    if not _lp_blocks(A, 1.0 + 1e-9, float(t_max), BLOCK_VERTICES, BLOCK_COMBOS, T, yn,
+                      rest):
         return None  # a sensor no point reaches, or a lone point that needs more than t_max
     if rest.any():
         rows = (A[:, rest] > 0.0).any(axis=1)
@@ -294,10 +299,11 @@ def _solve_small(M, rhs, out):  # pragma: no cover - compiled
 
 
 @njit(cache=True, fastmath=False, nogil=True)
-def _lp_blocks(A, target, t_max, kmax, T, y, rest):  # pragma: no cover - compiled
+def _lp_blocks(A, target, t_max, kmax, max_combos, T, y, rest):  # pragma: no cover - compiled
     """The blocks of min sum T s.t. A T >= target, 0 <= T <= t_max (A (rows, I) >= 0): writes
     the hover times T (I,) and row duals y (rows,) of every block of at most `kmax` points and
-    marks the points of the others in `rest` (I,) for HiGHS. A small block's vertices are
+    marks the points of the others (and of blocks with more than `max_combos` vertices to try)
+    in `rest` (I,) for HiGHS. A small block's vertices are
     enumerated: every k of its constraints (its rows, T_i >= 0) taken as equalities, the first
     (in lexicographic order) whose T is feasible and whose multipliers z (N_S^T z = 1, the
     constraints written as >=) are >= 0 (the KKT conditions of an optimal vertex); a block
@@ -357,11 +363,14 @@ def _lp_blocks(A, target, t_max, kmax, T, y, rest):  # pragma: no cover - compil
             if jb >= 0:
                 y[jb] = 1.0 / A[jb, i]
             continue
-        if k > kmax:
+        c = nr + k  # the block's constraints: its rows, then T_q >= 0
+        combos = 1.0
+        for q in range(k):  # C(c, k): the vertices to try
+            combos = combos * (c - q) / (q + 1)
+        if k > kmax or combos > max_combos:
             for q in range(k):
                 rest[cols[q]] = True
             continue
-        c = nr + k  # the block's constraints: its rows, then T_q >= 0
         idx = np.arange(k)
         M = np.empty((k, k))
         Mt = np.empty((k, k))

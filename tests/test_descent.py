@@ -7,6 +7,8 @@ from collections.abc import Callable
 import numpy as np
 import pytest
 from scipy.optimize import linprog
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import connected_components
 
 from planner_core.construct import candidate_plans
 from planner_core.descent import (
@@ -24,7 +26,7 @@ from planner_core.descent import (
     split_moves,
     waypoint_moves,
 )
-from planner_core.polish import _lp_matrices, hover_lp
+from planner_core.polish import BLOCK_VERTICES, _lp_matrices, hover_lp
 from planner_core.problem import Problem
 from tests.conftest import SUITE
 
@@ -109,7 +111,7 @@ def test_hover_lp_blocks_satisfy_the_kkt_conditions_and_match_linprog() -> None:
         return real(*a)
 
     rng = np.random.default_rng(11)
-    blocks_only = with_highs = infeasible = 0  # blocks_only: shared sensors, no HiGHS
+    blocks_only = with_highs = infeasible = largest = 0  # blocks_only: shared sensors, no HiGHS
     polish._highs_lp = counted
     try:
         for _ in range(400):
@@ -123,11 +125,15 @@ def test_hover_lp_blocks_satisfy_the_kkt_conditions_and_match_linprog() -> None:
                 infeasible += 1
                 continue
             assert ref.status == 0
+            need = req > 0
             with_highs += bool(calls)
-            blocks_only += not calls and bool(((R > 0).sum(axis=0) > 1).any())
+            blocks_only += not calls and bool(((R[:, need] > 0).sum(axis=0) > 1).any())
+            if not calls:  # the largest block solved by its vertices
+                reach = (R[:, need] > 0).astype(int)  # sensors that need nothing join nothing
+                share = csr_matrix((reach @ reach.T) > 0)
+                largest = max(largest, int(np.bincount(connected_components(share)[1]).max()))
             T, V, y = got
             assert V == pytest.approx(ref.fun, rel=1e-6, abs=1e-9)
-            need = req > 0
             A = (R[:, need] / req[need]).T
             yn = y[need]
             assert np.all(y >= 0) and np.all(y[~need] == 0)
@@ -138,7 +144,8 @@ def test_hover_lp_blocks_satisfy_the_kkt_conditions_and_match_linprog() -> None:
             assert np.all(A[yn > 1e-12] @ T <= 1.0 + 1e-6)  # complementary slackness
     finally:
         polish._highs_lp = real
-    assert blocks_only > 60 and with_highs > 100 and infeasible > 40
+    assert blocks_only > 60 and with_highs > 20 and infeasible > 40
+    assert largest == BLOCK_VERTICES
 
 
 def test_hover_lp_block_edges() -> None:
