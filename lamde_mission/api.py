@@ -124,8 +124,10 @@ def plan(
     `planner_core.defaults.DESCENTS` best constructive and seeder plans before the DE (each at
     most `DESCENT_TRIALS` evaluations) and, with `polish`, on the final plan after the polish
     (`planner_core.descent.finish`: descent, structural search, kicks; at most
-    `DESCENT_TRIALS` + `RESTRUCTURE_TRIALS` + `KICK_TRIALS` evaluations), all counted in the
-    budget; an infeasible final plan is not descended and leaves that share unspent.
+    `DESCENT_TRIALS` + `RESTRUCTURE_TRIALS` + `KICK_TRIALS` evaluations), and the same on the
+    best constructive start with another number of hover points (at most `OTHER_TRIALS`
+    more; the better plan is kept), all counted in the budget; an infeasible final plan is
+    not descended and leaves that share unspent.
     Defaults and valid ranges: `planner_core.defaults`.
 
     Raises ValueError with one line naming the field ("population: must be an integer >= 6,
@@ -159,9 +161,9 @@ def plan(
     reserve = min(ELITE, int(budget) // 4, int(budget) - int(population)) if polish else 0
     room = max(int(budget) - reserve - int(population), 0)
     # the final plan's descent, structural search and kicks: part of the polish
-    final = (_defaults.DESCENT_TRIALS + _defaults.RESTRUCTURE_TRIALS + _defaults.KICK_TRIALS
-             if descent and polish else 0)
-    final = final_budget(room, final)
+    own = (_defaults.DESCENT_TRIALS + _defaults.RESTRUCTURE_TRIALS + _defaults.KICK_TRIALS
+           if descent and polish else 0)
+    final = final_budget(room, own + _defaults.OTHER_TRIALS if own else 0)
     room -= final
     t0 = time.perf_counter()
     opt, spent = start_from_plans(problem, timed, int(seed), starts=int(starts),
@@ -226,13 +228,16 @@ def plan(
     t_descent = 0.0
     descended = 0
     if final and chosen["phi"] == 0.0:
-        from planner_core.descent import finish
+        from planner_core.descent import finish, other_structure
 
         t1 = time.perf_counter()
         # the final plan's hover points moved with exact LP hover times, then its structure
         x = problem.encode(chosen["hover_points"], chosen["hover_times"])
         f_before = float(chosen["f"])
-        r = finish(problem, x, problem.evaluate, trials=final, seed=int(seed))
+        # and the best start of another structure with what the final plan's own share leaves
+        r = finish(problem, x, problem.evaluate, trials=min(own, final), seed=int(seed),
+                   other=other_structure(problem, getattr(opt, "starts", None), x),
+                   other_trials=final - min(own, final))
         if r is not None:
             descended = r.evaluations
             if deb_better(r.f, r.phi, chosen["f"], chosen["phi"]):

@@ -46,6 +46,7 @@ __all__ = [
     "DESCENT_TRIALS",
     "RESTRUCTURE_TRIALS",
     "KICK_TRIALS",
+    "OTHER_TRIALS",
     "START_CANDIDATES",
     "SUITE_SEED",
     "check",
@@ -159,6 +160,12 @@ _RUN: tuple[Default, ...] = (
             "a normal step of 300 m standard deviation per axis, the plan descended in a race "
             "against the incumbent, kept when better; with the descent on)",
             "an integer >= 0", _int_at_least(0)),
+    Default("other_trials", 320, "evaluations of the final stage given to a second plan of "
+            "another structure: the best constructive start with another number of hover "
+            "points than the final plan, finished the same way (descent, structural search, "
+            "removal moves, kicks; `planner_core.descent.finish`), the better of the two kept; "
+            "counted in the final stage's tenth of the DE's evaluations, the final plan's own "
+            "share first; 0: none", "an integer >= 0", _int_at_least(0)),
     Default("seed", 0, "random seed of a planning run (same seed, same plan)", "an integer >= 0",
             _int_at_least(0)),
     Default("score_factor", 10.0, "penalised score f + 10 * phi that ranks optimisers "
@@ -257,6 +264,7 @@ DESCENTS: int = DEFAULTS["descents"].value
 DESCENT_TRIALS: int = DEFAULTS["descent_trials"].value
 RESTRUCTURE_TRIALS: int = DEFAULTS["restructure_trials"].value
 KICK_TRIALS: int = DEFAULTS["kick_trials"].value
+OTHER_TRIALS: int = DEFAULTS["other_trials"].value
 SEED: int = DEFAULTS["seed"].value
 SCORE_FACTOR: float = DEFAULTS["score_factor"].value
 SUITE_SEED: int = DEFAULTS["suite_seed"].value

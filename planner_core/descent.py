@@ -57,6 +57,7 @@ __all__ = [
     "merge_moves",
     "objective",
     "objective_reference",
+    "other_structure",
     "removal_moves",
     "restructure",
     "split_moves",
@@ -522,13 +523,59 @@ def finish(
     seed: int = 0,
     descent_trials: int | None = None,
     restructure_trials: int | None = None,
+    other: np.ndarray | None = None,
+    other_trials: int = 0,
 ) -> Descent | None:
     """What `plan` does to its final plan x (d,): `descend` (at most `descent_trials`
     evaluations; None: the defaults table's `DESCENT_TRIALS`), `restructure` (at most
     `restructure_trials`; None: `RESTRUCTURE_TRIALS`), `restructure` with the removal moves
     alone (`removal_moves`, a removed point's leg cleared by moving a neighbour; at most
     `restructure_trials` again), then `kicks` with what is left of `trials` (seeded by `seed`).
-    None when x is not a feasible plan or `trials` < 1."""
+
+    `other` (d,): a second plan of another structure (`other_structure`: the best start with
+    another number of hover points), finished the same way with at most `other_trials` more
+    evaluations; the Deb-better of the two results is returned, with the evaluations of both
+    and x's f as the start. The local moves cannot turn one structure into the other: on
+    T06 the final plans with 7-9 points end 1.2-1.9 % above the best-known and those with 4-6
+    points 0.1-0.4 % (docs/search.md, "A second structure"). None when x is not a feasible
+    plan or `trials` < 1."""
+    cur = _finish_one(problem, x, evaluate, trials=trials, seed=seed,
+                      descent_trials=descent_trials, restructure_trials=restructure_trials)
+    if cur is None or other is None or other_trials < 1:
+        return cur
+    alt = _finish_one(problem, other, evaluate, trials=other_trials, seed=seed,
+                      descent_trials=descent_trials, restructure_trials=restructure_trials)
+    if alt is None:
+        return cur
+    best = alt if deb_better(alt.f, alt.phi, cur.f, cur.phi) else cur
+    return Descent(best.x, best.f, best.phi, cur.evaluations + alt.evaluations, cur.f_start)
+
+
+def other_structure(problem: Any, starts: np.ndarray | None, x: np.ndarray) -> np.ndarray | None:
+    """The first row of `starts` (k, d), decision vectors best first (`construct.best_starts`'s
+    order), that is a feasible plan with another number of hover points than plan x (d,);
+    None when there is none (or no starts)."""
+    if starts is None or not len(starts):
+        return None
+    n = len(problem.breakdown(np.asarray(x, dtype=float))["hover_points"])
+    for s in np.asarray(starts, dtype=float):
+        b = problem.breakdown(s)
+        if b["phi"] == 0 and len(b["hover_points"]) not in (0, n):
+            return s
+    return None
+
+
+def _finish_one(
+    problem: Any,
+    x: np.ndarray,
+    evaluate: Evaluate,
+    *,
+    trials: int,
+    seed: int,
+    descent_trials: int | None,
+    restructure_trials: int | None,
+) -> Descent | None:
+    """`finish` on one plan (its docstring)."""
     from planner_core.defaults import DESCENT_TRIALS, RESTRUCTURE_TRIALS
 
     d_trials = DESCENT_TRIALS if descent_trials is None else int(descent_trials)

@@ -22,6 +22,7 @@ from planner_core.descent import (
     merge_moves,
     objective,
     objective_reference,
+    other_structure,
     restructure,
     split_moves,
     waypoint_moves,
@@ -568,3 +569,61 @@ def test_restructure_tries_the_point_removing_moves_first(
     np.testing.assert_array_equal(moves[0], drop)
     for got, want in zip(moves[1:], [*merges, *splits], strict=True):
         np.testing.assert_array_equal(got, want)
+
+
+def test_other_structure_is_the_best_feasible_start_of_another_size() -> None:
+    problem = Problem(SUITE / "T06.json")
+    X = _first_plans(problem, 12)
+    sizes = [len(problem.breakdown(x)["hover_points"]) for x in X]
+    o = other_structure(problem, X, X[0])
+    first = next(i for i, n in enumerate(sizes) if n != sizes[0])  # all 12 are feasible
+    assert all(problem.breakdown(x)["phi"] == 0 for x in X)
+    assert o is not None and o.tobytes() == X[first].tobytes()
+    same = X[[i for i, n in enumerate(sizes) if n == sizes[0]]]
+    assert other_structure(problem, same, X[0]) is None
+    assert other_structure(problem, None, X[0]) is None
+    bad = X[first].copy()
+    bad[0::4] = 0.0  # every hover point into the corner: sensors unserved
+    assert problem.breakdown(bad)["phi"] > 0
+    rows = np.vstack([bad, X[first]])
+    assert other_structure(problem, rows, X[0]).tobytes() == X[first].tobytes()
+
+
+def test_finish_with_another_structure_keeps_the_better_and_counts_both() -> None:
+    """`finish(..., other=...)`: the final plan's own finish, then the other plan's with at most
+    `other_trials` more evaluations; the Deb-better result, both counted, x's f as the start."""
+    problem = Problem(SUITE / "T06.json")
+    counted, calls = _counting(problem)
+    X = _first_plans(problem, 12)
+    x, o = X[0], other_structure(problem, X, X[0])
+    assert o is not None
+    own = finish(problem, x, problem.evaluate, trials=120, seed=2)
+    theirs = finish(problem, o, problem.evaluate, trials=80, seed=2)
+    both = finish(problem, x, counted, trials=120, seed=2, other=o, other_trials=80)
+    assert own is not None and theirs is not None and both is not None
+    assert both.evaluations == sum(calls) == own.evaluations + theirs.evaluations <= 200
+    assert both.f == min(own.f, theirs.f) and both.f_start == own.f_start
+    assert both.x.tobytes() == (own.x if own.f <= theirs.f else theirs.x).tobytes()
+    calls.clear()
+    none = finish(problem, x, counted, trials=120, seed=2, other=o, other_trials=0)
+    assert none is not None and none.x.tobytes() == own.x.tobytes()
+    assert sum(calls) == own.evaluations
+
+
+def test_plan_finishes_a_second_structure_where_the_first_cannot_reach_it(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """T06, seed 1: the final plan has 7 hover points and its finish ends ~1.5 % above the
+    best-known; the best start with another number of points, finished too, serves the two
+    sensor groups of the map's west from one point and wins (docs/search.md, "A second
+    structure"). Without the second structure (other_trials 0) the plan is worse."""
+    import planner_core.defaults as defaults
+    from lamde_mission.api import plan
+
+    with_other = plan(SUITE / "T06.json", seed=1)
+    monkeypatch.setattr(defaults, "OTHER_TRIALS", 0)
+    without = plan(SUITE / "T06.json", seed=1)
+    assert with_other.evaluations <= 10_000 and without.evaluations <= 10_000
+    assert without.polish["final_evaluations"] < with_other.polish["final_evaluations"]
+    assert with_other.f < without.f * (1 - 0.005)
+    assert len(with_other.hover_points) < len(without.hover_points)

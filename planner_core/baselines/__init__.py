@@ -32,6 +32,7 @@ from planner_core.defaults import (
     DESCENTS,
     KICK_TRIALS,
     MEMETIC,
+    OTHER_TRIALS,
     POPULATION,
     RESTRUCTURE_TRIALS,
     SCORE_FACTOR,
@@ -130,11 +131,12 @@ REGISTRY: dict[str, OptimiserSpec] = {
             f"population {POPULATION}; from a uniform start with the memetic step), then the "
             "polish LP on the final population's 16 Deb-best; the hover-point descent with "
             f"exact LP hover times on the {DESCENTS} best constructive and seeder plans before "
-            "the DE and on the polished best; budget counted exactly",
+            "the DE and on the polished best with the structural search and kicks, the same "
+            "on the best start with another number of hover points; budget counted exactly",
             kwargs={"lp": True, "memetic": MEMETIC, "starts": STARTS,
                     "candidates": START_CANDIDATES, "descents": DESCENTS,
                     "trials": DESCENT_TRIALS, "restructure": RESTRUCTURE_TRIALS,
-                    "kick": KICK_TRIALS},
+                    "kick": KICK_TRIALS, "other": OTHER_TRIALS},
             # a descent stops when its step falls below 1 cm: the evaluations it leaves are
             # not spent (`plan` too: evaluations <= budget)
             spends_budget=False,

@@ -36,6 +36,7 @@ def optimise(
     trials: int = 0,
     restructure: int = 0,
     kick: int = 0,
+    other: int = 0,
 ) -> OptimiseResult:
     """Run the DE with `configurator` for exactly `budget` evaluations (initial population
     included). `lp`: what `plan` does, the DE on budget - ELITE, then the hover-time LP on the
@@ -51,8 +52,9 @@ def optimise(
     does, the hover-point descent (`planner_core.descent`) on the `descents` best plans of
     each kind among the starts and, with `lp`, on the polished best, at most `trials`
     evaluations each, then `restructure` evaluations of the structural search and `kick` of
-    the iterated local search on it (`planner_core.descent.finish`; UAV problem only; 0:
-    none)."""
+    the iterated local search on it, and at most `other` evaluations of the same on the best
+    start with another number of hover points (`planner_core.descent.finish`; UAV problem
+    only; 0: none)."""
     from planner_core.baselines.seed_lp import can_lp
 
     budgeted = as_budgeted(problem, budget)
@@ -82,8 +84,8 @@ def optimise(
         refine = partial(_refine, budgeted.problem)
     opt, spent = budgeted, 0
     room = max(int(budget) - reserve - population, 0)
-    final = int(trials) + int(restructure) + int(kick)
-    final = final_budget(room, final) if descents > 0 and reserve else 0
+    own = int(trials) + int(restructure) + int(kick)
+    final = final_budget(room, own + int(other)) if descents > 0 and reserve else 0
     room -= final
     if starts > 0 and candidates > 0 and can_lp(budgeted):
         from planner_core.construct import start_from_plans
@@ -104,11 +106,13 @@ def optimise(
         budgeted.evaluate(xs)
         x, f, phi = budgeted.best("deb")
         if final and phi == 0.0:
-            from planner_core.descent import finish
+            from planner_core.descent import finish, other_structure
 
             # budgeted keeps the best
-            finish(inner, x, budgeted.evaluate, trials=final, seed=int(seed),
-                   descent_trials=int(trials), restructure_trials=int(restructure))
+            finish(inner, x, budgeted.evaluate, trials=min(own, final), seed=int(seed),
+                   descent_trials=int(trials), restructure_trials=int(restructure),
+                   other=other_structure(inner, getattr(opt, "starts", None), x),
+                   other_trials=final - min(own, final))
             x, f, phi = budgeted.best("deb")
         return OptimiseResult(x, f, phi, budgeted.count, budgeted.trace("deb"), last_feasible)
     return OptimiseResult(res.x, res.f, res.phi, budgeted.count, budgeted.trace("deb"),
