@@ -571,22 +571,25 @@ def test_restructure_tries_the_point_removing_moves_first(
         np.testing.assert_array_equal(got, want)
 
 
-def test_other_structure_is_the_best_feasible_start_of_another_size() -> None:
+def test_other_structure_is_the_best_feasible_start_with_fewer_points_else_more() -> None:
     problem = Problem(SUITE / "T06.json")
     X = _first_plans(problem, 12)
-    sizes = [len(problem.breakdown(x)["hover_points"]) for x in X]
-    o = other_structure(problem, X, X[0])
-    first = next(i for i, n in enumerate(sizes) if n != sizes[0])  # all 12 are feasible
     assert all(problem.breakdown(x)["phi"] == 0 for x in X)
-    assert o is not None and o.tobytes() == X[first].tobytes()
-    same = X[[i for i, n in enumerate(sizes) if n == sizes[0]]]
-    assert other_structure(problem, same, X[0]) is None
-    assert other_structure(problem, None, X[0]) is None
-    bad = X[first].copy()
+    sizes = np.array([len(problem.breakdown(x)["hover_points"]) for x in X])
+    assert len(set(sizes)) >= 3
+    mid = sorted(set(sizes))[1]  # a size with fewer and more among the starts
+    x = X[int(np.flatnonzero(sizes == mid)[0])]
+    fewer = int(np.flatnonzero(sizes < mid)[0])  # the first with fewer, whatever comes before
+    assert other_structure(problem, X, x).tobytes() == X[fewer].tobytes()
+    more = X[sizes > mid]
+    assert other_structure(problem, more, x).tobytes() == more[0].tobytes()
+    assert other_structure(problem, X[sizes == mid], x) is None
+    assert other_structure(problem, None, x) is None
+    bad = X[fewer].copy()
     bad[0::4] = 0.0  # every hover point into the corner: sensors unserved
     assert problem.breakdown(bad)["phi"] > 0
-    rows = np.vstack([bad, X[first]])
-    assert other_structure(problem, rows, X[0]).tobytes() == X[first].tobytes()
+    rows = np.vstack([bad, X[fewer]])
+    assert other_structure(problem, rows, x).tobytes() == X[fewer].tobytes()
 
 
 def test_finish_with_another_structure_keeps_the_better_and_counts_both() -> None:
