@@ -125,9 +125,10 @@ def plan(
     most `DESCENT_TRIALS` evaluations) and, with `polish`, on the final plan after the polish
     (`planner_core.descent.finish`: descent, structural search, kicks; at most
     `DESCENT_TRIALS` + `RESTRUCTURE_TRIALS` + `KICK_TRIALS` evaluations), and the same on the
-    best constructive start with another number of hover points (at most `OTHER_TRIALS`
-    more; the better plan is kept), all counted in the budget; an infeasible final plan is
-    not descended and leaves that share unspent.
+    best of the starts kept for the DE with fewer (else more) hover points (at most
+    `OTHER_TRIALS` more, which the final plan gets when there is none; the better plan is
+    kept), the final stage at most a tenth of the DE's evaluations, all counted in the
+    budget; an infeasible final plan is not descended and leaves that share unspent.
     Defaults and valid ranges: `planner_core.defaults`.
 
     Raises ValueError with one line naming the field ("population: must be an integer >= 6,
@@ -234,10 +235,12 @@ def plan(
         # the final plan's hover points moved with exact LP hover times, then its structure
         x = problem.encode(chosen["hover_points"], chosen["hover_times"])
         f_before = float(chosen["f"])
-        # and the best start of another structure with what the final plan's own share leaves
-        r = finish(problem, x, problem.evaluate, trials=min(own, final), seed=int(seed),
-                   other=other_structure(problem, getattr(opt, "starts", None), x),
-                   other_trials=final - min(own, final))
+        # and the best start of another structure with what the final plan's own share
+        # leaves (all of it for the final plan when the starts hold no other structure)
+        other = other_structure(problem, getattr(opt, "starts", None), x)
+        mine = final if other is None else min(own, final)
+        r = finish(problem, x, problem.evaluate, trials=mine, seed=int(seed), other=other,
+                   other_trials=final - mine)
         if r is not None:
             descended = r.evaluations
             if deb_better(r.f, r.phi, chosen["f"], chosen["phi"]):
@@ -246,6 +249,8 @@ def plan(
             polish_info["final_f_before"] = f_before
             polish_info["final_f_after"] = float(chosen["f"])
             polish_info["final_evaluations"] = int(descended)
+            polish_info["final_other_points"] = 0 if r is None else int(r.other_points)
+            polish_info["final_other_won"] = r is not None and bool(r.other_won)
         t_descent = time.perf_counter() - t1
     wall = time.perf_counter() - t_start
     h = result.history

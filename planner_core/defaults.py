@@ -161,11 +161,13 @@ _RUN: tuple[Default, ...] = (
             "against the incumbent, kept when better; with the descent on)",
             "an integer >= 0", _int_at_least(0)),
     Default("other_trials", 320, "evaluations of the final stage given to a second plan of "
-            "another structure: the best constructive start with another number of hover "
-            "points than the final plan, finished the same way (descent, structural search, "
-            "removal moves, kicks; `planner_core.descent.finish`), the better of the two kept; "
-            "counted in the final stage's tenth of the DE's evaluations, the final plan's own "
-            "share first; 0: none", "an integer >= 0", _int_at_least(0)),
+            "another structure: the best of the starts kept for the DE with fewer (else more) "
+            "hover points than the final plan, finished the same way (descent, structural "
+            "search, removal moves, kicks; `planner_core.descent.finish`), the better of the "
+            "two kept; counted in the final stage's tenth of the DE's evaluations, the final "
+            "plan's own share first (so below a budget of about 6,500 none is left for it); "
+            "the final plan gets it when the starts hold no other structure; 0: none",
+            "an integer >= 0", _int_at_least(0)),
     Default("seed", 0, "random seed of a planning run (same seed, same plan)", "an integer >= 0",
             _int_at_least(0)),
     Default("score_factor", 10.0, "penalised score f + 10 * phi that ranks optimisers "

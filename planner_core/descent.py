@@ -78,13 +78,16 @@ Evaluate = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 class Descent:
     """A descent's result: the decision vector x (d,) of the best plan found (points, LP hover
     times topped up to meet C4 exactly), its evaluated f and phi, how many evaluations it spent,
-    and the f it started from."""
+    and the f it started from; for `finish` with a second plan also that plan's number of
+    hover points (0: none was finished) and whether its result was kept."""
 
     x: np.ndarray
     f: float
     phi: float
     evaluations: int
     f_start: float
+    other_points: int = 0
+    other_won: bool = False
 
 
 def _hover(b: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
@@ -535,10 +538,11 @@ def finish(
     `other` (d,): a second plan of another structure (`other_structure`: the best start with
     another number of hover points), finished the same way with at most `other_trials` more
     evaluations; the Deb-better of the two results is returned, with the evaluations of both
-    and x's f as the start. The local moves cannot turn one structure into the other: on
-    T06 the final plans with 7-9 points end 1.2-1.9 % above the best-known and those with 4-6
-    points 0.1-0.4 % (docs/search.md, "A second structure"). None when x is not a feasible
-    plan or `trials` < 1."""
+    and x's f as the start. The local moves rarely turn one structure into the other (merges
+    and removals take one point at a time, each raced against the incumbent): on T06 the
+    final plans with 7-9 points end 1.2-1.9 % above the best-known and those with 4-6 points
+    0.1-0.4 % (docs/search.md, "A second structure"). None when x is not a feasible plan or
+    `trials` < 1."""
     cur = _finish_one(problem, x, evaluate, trials=trials, seed=seed,
                       descent_trials=descent_trials, restructure_trials=restructure_trials)
     if cur is None or other is None or other_trials < 1:
@@ -547,8 +551,11 @@ def finish(
                       descent_trials=descent_trials, restructure_trials=restructure_trials)
     if alt is None:
         return cur
-    best = alt if deb_better(alt.f, alt.phi, cur.f, cur.phi) else cur
-    return Descent(best.x, best.f, best.phi, cur.evaluations + alt.evaluations, cur.f_start)
+    won = deb_better(alt.f, alt.phi, cur.f, cur.phi)
+    best = alt if won else cur
+    n = len(problem.breakdown(np.asarray(other, dtype=float))["hover_points"])
+    return Descent(best.x, best.f, best.phi, cur.evaluations + alt.evaluations, cur.f_start,
+                   other_points=n, other_won=won)
 
 
 def other_structure(problem: Any, starts: np.ndarray | None, x: np.ndarray) -> np.ndarray | None:

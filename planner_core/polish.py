@@ -116,8 +116,9 @@ def _solve_lp(
     R: np.ndarray, req: np.ndarray, t_max: float, feasible: bool, backend: str = "highs"
 ) -> tuple[np.ndarray, str]:
     """Hover times (I,) solving the LP of `_lp_matrices`, and the solver's name. "highs" on a
-    feasible LP takes the fast path (`hover_lp`, HiGHS through highspy, ~4x quicker than
-    scipy's `linprog` on these small LPs); "linprog" is scipy's HiGHS, the reference the fast
+    feasible LP takes the fast path (`hover_lp`: the LP by blocks, small ones in a compiled
+    kernel, the rest through highspy; ~0.02-0.05 ms on the suite's final plans where scipy's
+    `linprog` takes ~1.3 ms); "linprog" is scipy's HiGHS, the reference the fast
     path is tested against and what "highs" uses for the infeasible (shortfall) LP. A
     feasible LP that turns out infeasible at its target (a sensor served exactly at T_max: the
     target is a hair above Q_j) is solved as the shortfall LP instead, which always has a
@@ -126,7 +127,7 @@ def _solve_lp(
     if feasible and backend == "highs":
         lp = hover_lp(R, req, t_max)
         if lp is not None:
-            return lp[0], "HiGHS (highspy)"
+            return lp[0], "blocks + HiGHS (highspy)"
     elif feasible:
         try:
             return _solve_lp_with(R, req, t_max, True, backend)
@@ -204,8 +205,8 @@ def _highs() -> Any:
 
 #: blocks of the hover-time LP with at most this many points, and at most `BLOCK_COMBOS` sets
 #: of constraints to try as a vertex, are solved by enumerating their vertices (`_lp_blocks`);
-#: the others go to HiGHS (on T16's descents 3 -> 4 -> 5 points took plan() from 0.97 to 0.85
-#: to 0.82 s)
+#: the others go to HiGHS (with the final stage's second structure, 3 -> 4 -> 5 points took
+#: T16's warm plan() from 0.97 to 0.85 to 0.82 s; bench_plan.py)
 BLOCK_VERTICES = 5
 BLOCK_COMBOS = 5000
 
@@ -371,6 +372,17 @@ def _lp_blocks(A, target, t_max, kmax, max_combos, T, y, rest):  # pragma: no co
             for q in range(k):
                 rest[cols[q]] = True
             continue
+        # the largest entry of each of the block's constraints (rows; a bound's is 1) and of
+        # each of its points: the tolerances below are relative to them (unit-free)
+        cmax = np.ones(c)
+        tmax_a = np.zeros(k)
+        for q in range(nr):
+            m_row = 0.0
+            for a in range(k):
+                v = A[rows[q], cols[a]]
+                m_row = max(m_row, v)
+                tmax_a[a] = max(tmax_a[a], v)
+            cmax[q] = m_row
         idx = np.arange(k)
         M = np.empty((k, k))
         Mt = np.empty((k, k))
@@ -390,8 +402,8 @@ def _lp_blocks(A, target, t_max, kmax, max_combos, T, y, rest):  # pragma: no co
                     Mt[a, q] = M[q, a]
             if _solve_small(M, b, t) and _solve_small(Mt, ones, z):
                 ok = True
-                for a in range(k):
-                    if z[a] < -1e-9 or t[a] < -1e-9 * (1.0 + abs(t[a])):
+                for a in range(k):  # multiplier x its constraint's scale; time x data rate
+                    if z[a] * cmax[idx[a]] < -1e-9 or t[a] * tmax_a[a] < -1e-9:
                         ok = False
                         break
                 if ok:
@@ -490,8 +502,9 @@ def polish_hover_times(
 ) -> PolishResult:
     """Solve the hover-time LP for these positions and drop points whose time is ~0 when safe.
 
-    `backend` is "highs" (HiGHS through highspy, the default: quick), "linprog" (HiGHS
-    through scipy, the reference) or "cvxpy"; same LP (`BACKENDS`).
+    `backend` is "highs" (the default, quick: `hover_lp`, the LP by blocks, small ones in a
+    compiled kernel, larger ones through highspy), "linprog" (HiGHS through scipy on the whole
+    LP, the reference) or "cvxpy"; same LP (`BACKENDS`).
     """
     pts = np.asarray(hover_points, dtype=float).reshape(-1, 2)
     req = problem.required.astype(float)

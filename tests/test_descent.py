@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -95,6 +96,55 @@ def _block_instance(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, f
     return R, req, float(rng.choice([80.0, 300.0]))
 
 
+def _kkt(R: np.ndarray, req: np.ndarray, t_max: float, got: tuple) -> None:
+    """(T, V, y) of `hover_lp` pass the KKT conditions of the scaled LP on their own."""
+    T, V, y = got
+    need = req > 0
+    A = (R[:, need] / req[need]).T
+    yn = y[need]
+    assert np.all(y >= 0) and np.all(y[~need] == 0)
+    assert np.all((T >= 0) & (T <= t_max)) and np.all(A @ T >= 1.0 - 1e-7)
+    reduced = A.T @ yn  # sum_j y_j A_ji per point: 1 - (its bounds' multipliers)
+    below, above = T < t_max - 1e-6, T * A.max(axis=0, initial=0.0) > 1e-9
+    assert np.all(reduced[below] <= 1.0 + 1e-7) and np.all(reduced[above] >= 1.0 - 1e-7)
+    assert np.all(A[yn > 0] @ T <= 1.0 + 1e-6)  # complementary slackness
+
+
+def test_hover_lp_blocks_satisfy_the_kkt_conditions_at_any_scale() -> None:
+    """Rates spread over 10 decades (10^-12..10^-2 Mbit/s for a quarter of the links) and
+    requirements over 8 (10^-6..10^2.5 Mbit): the vertex kernel's checks are relative to each
+    constraint's scale, so a block it solves is optimal whatever the units (an absolute
+    tolerance on the multipliers passed non-optimal vertices here)."""
+    import planner_core.polish as polish
+
+    calls = []
+    real = polish._highs_lp
+
+    def counted(*a: object) -> object:
+        calls.append(1)
+        return real(*a)
+
+    rng = np.random.default_rng(5)
+    solved = 0
+    polish._highs_lp = counted
+    try:
+        for _ in range(400):
+            R, req, _ = _block_instance(rng)
+            small = rng.random(R.shape) < 0.25
+            R = np.where(small & (R > 0), 10.0 ** rng.uniform(-12, -2, R.shape), R)
+            req = np.where(req > 0, 10.0 ** rng.uniform(-6, 2.5, req.shape), 0.0)
+            t_max = 1e15  # never binding: the kernel's own vertices decide
+            calls.clear()
+            got = hover_lp(R, req, t_max)
+            if got is None or calls or not ((R[:, req > 0] > 0).sum(axis=0) > 1).any():
+                continue
+            _kkt(R, req, t_max, got)
+            solved += 1
+    finally:
+        polish._highs_lp = real
+    assert solved > 100
+
+
 def test_hover_lp_blocks_satisfy_the_kkt_conditions_and_match_linprog() -> None:
     """On sparse LPs (lone points in closed form, blocks of 2-3 points by their vertices,
     larger blocks and over-t_max blocks through HiGHS): the same feasibility and value as
@@ -135,14 +185,7 @@ def test_hover_lp_blocks_satisfy_the_kkt_conditions_and_match_linprog() -> None:
                 largest = max(largest, int(np.bincount(connected_components(share)[1]).max()))
             T, V, y = got
             assert V == pytest.approx(ref.fun, rel=1e-6, abs=1e-9)
-            A = (R[:, need] / req[need]).T
-            yn = y[need]
-            assert np.all(y >= 0) and np.all(y[~need] == 0)
-            assert np.all((T >= 0) & (T <= t_max)) and np.all(A @ T >= 1.0 - 1e-7)
-            reduced = A.T @ yn  # sum_j y_j A_ji per point: 1 - (its bounds' multipliers)
-            below, above = T < t_max - 1e-6, T > 1e-9
-            assert np.all(reduced[below] <= 1.0 + 1e-7) and np.all(reduced[above] >= 1.0 - 1e-7)
-            assert np.all(A[yn > 1e-12] @ T <= 1.0 + 1e-6)  # complementary slackness
+            _kkt(R, req, t_max, got)
     finally:
         polish._highs_lp = real
     assert blocks_only > 60 and with_highs > 20 and infeasible > 40
@@ -630,3 +673,52 @@ def test_plan_finishes_a_second_structure_where_the_first_cannot_reach_it(
     assert without.polish["final_evaluations"] < with_other.polish["final_evaluations"]
     assert with_other.f < without.f * (1 - 0.005)
     assert len(with_other.hover_points) < len(without.hover_points)
+    pol = with_other.polish
+    assert pol is not None and pol["final_other_won"] and 0 < pol["final_other_points"]
+    assert without.polish is not None and without.polish["final_other_points"] == 0
+
+
+def test_the_plan_summary_says_whether_a_second_structure_ran_and_won(tmp_path: Path) -> None:
+    from tests.conftest import run_cli
+
+    r = run_cli("plan", SUITE / "T06.json", "-o", tmp_path / "m.plan", "--seed", 1)
+    assert r.returncode == 0, r.stderr
+    line = next(s for s in (r.stdout + r.stderr).splitlines() if "final stage" in s)
+    assert "a second start of" in line and "its plan kept" in line, line
+
+
+def test_plan_gives_the_second_share_to_the_final_plan_when_no_start_differs() -> None:
+    """T03, seed 0: every start kept for the DE has 4 hover points, so there is no second
+    structure and the final plan's finish gets the whole final stage (640 + 320), not 640
+    with 320 left unspent."""
+    from lamde_mission.api import plan
+
+    p = plan(SUITE / "T03.json", seed=0)
+    assert p.polish is not None and p.polish["final_other_points"] == 0
+    assert not p.polish["final_other_won"]
+    assert 640 < p.polish["final_evaluations"] <= 960 and p.evaluations <= 10_000
+
+
+def test_the_benchmark_planner_runs_the_second_structure_within_its_budget(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The benchmark's `planner` entry finishes a second structure as `plan` does: on T06 at
+    8,000 evaluations a second start is finished with what the final plan's 640 leave of the
+    final stage (a tenth of the DE's room), and the count stays within the budget."""
+    import planner_core.descent as descent
+    from planner_core import baselines
+
+    seen: list[tuple[int, int, bool]] = []
+    real = descent.finish
+
+    def record(problem, x, evaluate, *, trials, other=None, other_trials=0, **kw):  # noqa: ANN001, ANN202
+        seen.append((trials, other_trials, other is not None))
+        return real(problem, x, evaluate, trials=trials, other=other, other_trials=other_trials,
+                    **kw)
+
+    monkeypatch.setattr(descent, "finish", record)
+    problem = Problem(SUITE / "T06.json")
+    res = baselines.optimise("planner", problem, 8_000, 1)
+    assert res.evaluations <= 8_000
+    (trials, other_trials, has_other), = seen
+    assert has_other and trials == 640 and 0 < other_trials <= 320

@@ -100,7 +100,7 @@ def test_backends_agree_on_suite_witnesses() -> None:
         p = Problem(m)
         w = m.spec.witness
         a = polish_hover_times(p, w.hover_points, backend="highs")
-        assert a.solver == "HiGHS (highspy)"
+        assert a.solver == "blocks + HiGHS (highspy)"
         for other in BACKENDS[1:]:
             b = polish_hover_times(p, w.hover_points, backend=other)
             assert a.feasible_c4 and b.feasible_c4

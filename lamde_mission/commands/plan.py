@@ -145,9 +145,13 @@ def _summary(
                      f"phi {pol['phi_before']:.4g} -> {pol['phi_after']:.4g}"
                      + ("" if pol["accepted"] else " (kept the unpolished plan)"))
         if "final_f_before" in pol:
+            other = pol.get("final_other_points", 0)
+            second = ("" if not other else
+                      f"; a second start of {other} hover points finished too, "
+                      + ("its plan kept" if pol.get("final_other_won") else "not better"))
             lines.append(f"  final stage   f {pol['final_f_before']:.2f} -> "
                          f"{pol['final_f_after']:.2f} (descent, structural search, removal "
-                         f"moves, kicks: {pol['final_evaluations']} evaluations)")
+                         f"moves, kicks: {pol['final_evaluations']} evaluations{second})")
     lines.append("  data collected vs required (Mbit):")
     req = dict(zip(m.sensor_ids, m.required_data.tolist(), strict=True))
     got = t.collected

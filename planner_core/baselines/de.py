@@ -53,8 +53,8 @@ def optimise(
     each kind among the starts and, with `lp`, on the polished best, at most `trials`
     evaluations each, then `restructure` evaluations of the structural search and `kick` of
     the iterated local search on it, and at most `other` evaluations of the same on the best
-    start with another number of hover points (`planner_core.descent.finish`; UAV problem
-    only; 0: none)."""
+    start with fewer (else more) hover points (the polished best gets them when there is
+    none; `planner_core.descent.finish`; UAV problem only; 0: none)."""
     from planner_core.baselines.seed_lp import can_lp
 
     budgeted = as_budgeted(problem, budget)
@@ -85,7 +85,7 @@ def optimise(
     opt, spent = budgeted, 0
     room = max(int(budget) - reserve - population, 0)
     own = int(trials) + int(restructure) + int(kick)
-    final = final_budget(room, own + int(other)) if descents > 0 and reserve else 0
+    final = final_budget(room, own + int(other)) if own and descents > 0 and reserve else 0
     room -= final
     if starts > 0 and candidates > 0 and can_lp(budgeted):
         from planner_core.construct import start_from_plans
@@ -109,10 +109,11 @@ def optimise(
             from planner_core.descent import finish, other_structure
 
             # budgeted keeps the best
-            finish(inner, x, budgeted.evaluate, trials=min(own, final), seed=int(seed),
+            second = other_structure(inner, getattr(opt, "starts", None), x)
+            mine = final if second is None else min(own, final)
+            finish(inner, x, budgeted.evaluate, trials=mine, seed=int(seed),
                    descent_trials=int(trials), restructure_trials=int(restructure),
-                   other=other_structure(inner, getattr(opt, "starts", None), x),
-                   other_trials=final - min(own, final))
+                   other=second, other_trials=final - mine)
             x, f, phi = budgeted.best("deb")
         return OptimiseResult(x, f, phi, budgeted.count, budgeted.trace("deb"), last_feasible)
     return OptimiseResult(res.x, res.f, res.phi, budgeted.count, budgeted.trace("deb"),
