@@ -110,84 +110,77 @@ def _kkt(R: np.ndarray, req: np.ndarray, t_max: float, got: tuple) -> None:
     assert np.all(A[yn > 0] @ T <= 1.0 + 1e-6)  # complementary slackness
 
 
-def test_hover_lp_blocks_satisfy_the_kkt_conditions_at_any_scale() -> None:
-    """Rates spread over 10 decades (10^-12..10^-2 Mbit/s for a quarter of the links) and
-    requirements over 8 (10^-6..10^2.5 Mbit): the vertex kernel's checks are relative to each
-    constraint's scale, so a block it solves is optimal whatever the units (an absolute
-    tolerance on the multipliers passed non-optimal vertices here)."""
+@pytest.fixture
+def highs_calls(monkeypatch: pytest.MonkeyPatch) -> list[int]:
+    """A list that grows by one at each call `hover_lp` hands to HiGHS (`polish._highs_lp`)."""
     import planner_core.polish as polish
 
-    calls = []
+    calls: list[int] = []
     real = polish._highs_lp
 
     def counted(*a: object) -> object:
         calls.append(1)
         return real(*a)
 
+    monkeypatch.setattr(polish, "_highs_lp", counted)
+    return calls
+
+
+def test_hover_lp_blocks_satisfy_the_kkt_conditions_at_any_scale(highs_calls: list[int]) -> None:
+    """Rates spread over 10 decades (10^-12..10^-2 Mbit/s for a quarter of the links) and
+    requirements over 8 (10^-6..10^2.5 Mbit): the vertex kernel's checks are relative to each
+    constraint's scale, so a block it solves is optimal whatever the units (an absolute
+    tolerance on the multipliers passed non-optimal vertices here)."""
+    calls = highs_calls
     rng = np.random.default_rng(5)
     solved = 0
-    polish._highs_lp = counted
-    try:
-        for _ in range(400):
-            R, req, _ = _block_instance(rng)
-            small = rng.random(R.shape) < 0.25
-            R = np.where(small & (R > 0), 10.0 ** rng.uniform(-12, -2, R.shape), R)
-            req = np.where(req > 0, 10.0 ** rng.uniform(-6, 2.5, req.shape), 0.0)
-            t_max = 1e15  # never binding: the kernel's own vertices decide
-            calls.clear()
-            got = hover_lp(R, req, t_max)
-            if got is None or calls or not ((R[:, req > 0] > 0).sum(axis=0) > 1).any():
-                continue
-            _kkt(R, req, t_max, got)
-            solved += 1
-    finally:
-        polish._highs_lp = real
+    for _ in range(400):
+        R, req, _ = _block_instance(rng)
+        small = rng.random(R.shape) < 0.25
+        R = np.where(small & (R > 0), 10.0 ** rng.uniform(-12, -2, R.shape), R)
+        req = np.where(req > 0, 10.0 ** rng.uniform(-6, 2.5, req.shape), 0.0)
+        t_max = 1e15  # never binding: the kernel's own vertices decide
+        calls.clear()
+        got = hover_lp(R, req, t_max)
+        if got is None or calls or not ((R[:, req > 0] > 0).sum(axis=0) > 1).any():
+            continue
+        _kkt(R, req, t_max, got)
+        solved += 1
     assert solved > 100
 
 
-def test_hover_lp_blocks_satisfy_the_kkt_conditions_and_match_linprog() -> None:
-    """On sparse LPs (lone points in closed form, blocks of 2-3 points by their vertices,
+def test_hover_lp_blocks_satisfy_the_kkt_conditions_and_match_linprog(
+    highs_calls: list[int],
+) -> None:
+    """On sparse LPs (lone points in closed form, blocks of 2-5 points by their vertices,
     larger blocks and over-t_max blocks through HiGHS): the same feasibility and value as
     scipy's linprog on the whole LP, and (T, y) pass the KKT conditions on their own: T
     feasible, y >= 0, sum_j y_j A_ji <= 1 where T_i < t_max, y_j > 0 only on
     tight rows (so the duals the descent's gradient uses are optimal duals); = 1 where
     0 < T_i < t_max, >= 1 where T_i = t_max."""
-    import planner_core.polish as polish
-
-    calls = []
-    real = polish._highs_lp
-
-    def counted(*a: object) -> object:
-        calls.append(1)
-        return real(*a)
-
+    calls = highs_calls
     rng = np.random.default_rng(11)
     blocks_only = with_highs = infeasible = largest = 0  # blocks_only: shared sensors, no HiGHS
-    polish._highs_lp = counted
-    try:
-        for _ in range(400):
-            R, req, t_max = _block_instance(rng)
-            calls.clear()
-            got = hover_lp(R, req, t_max)
-            c, G, h, ub = _lp_matrices(R, req, t_max, True)
-            ref = linprog(c, A_ub=G, b_ub=h, bounds=[(0.0, t_max)] * len(R), method="highs")
-            if got is None:
-                assert ref.status == 2
-                infeasible += 1
-                continue
-            assert ref.status == 0
-            need = req > 0
-            with_highs += bool(calls)
-            blocks_only += not calls and bool(((R[:, need] > 0).sum(axis=0) > 1).any())
-            if not calls:  # the largest block solved by its vertices
-                reach = (R[:, need] > 0).astype(int)  # sensors that need nothing join nothing
-                share = csr_matrix((reach @ reach.T) > 0)
-                largest = max(largest, int(np.bincount(connected_components(share)[1]).max()))
-            T, V, y = got
-            assert V == pytest.approx(ref.fun, rel=1e-6, abs=1e-9)
-            _kkt(R, req, t_max, got)
-    finally:
-        polish._highs_lp = real
+    for _ in range(400):
+        R, req, t_max = _block_instance(rng)
+        calls.clear()
+        got = hover_lp(R, req, t_max)
+        c, G, h, ub = _lp_matrices(R, req, t_max, True)
+        ref = linprog(c, A_ub=G, b_ub=h, bounds=[(0.0, t_max)] * len(R), method="highs")
+        if got is None:
+            assert ref.status == 2
+            infeasible += 1
+            continue
+        assert ref.status == 0
+        need = req > 0
+        with_highs += bool(calls)
+        blocks_only += not calls and bool(((R[:, need] > 0).sum(axis=0) > 1).any())
+        if not calls:  # the largest block solved by its vertices
+            reach = (R[:, need] > 0).astype(int)  # sensors that need nothing join nothing
+            share = csr_matrix((reach @ reach.T) > 0)
+            largest = max(largest, int(np.bincount(connected_components(share)[1]).max()))
+        assert got[1] == pytest.approx(ref.fun, rel=1e-6, abs=1e-9)
+        _kkt(R, req, t_max, got)
     assert blocks_only > 60 and with_highs > 20 and infeasible > 40
     assert largest == BLOCK_VERTICES
 
