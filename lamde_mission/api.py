@@ -127,7 +127,8 @@ def plan(
     `DESCENT_TRIALS` + `RESTRUCTURE_TRIALS` + `KICK_TRIALS` evaluations), and the same on the
     best of the starts kept for the DE with fewer (else more) hover points (at most
     `OTHER_TRIALS` more, which the final plan gets when there is none; the better plan is
-    kept), the final stage at most a tenth of the DE's evaluations, all counted in the
+    kept; it runs only when at least `DESCENT_TRIALS` are left for it), the final stage at
+    most a tenth of the budget less the population and the polish's plans, all counted in the
     budget; an infeasible final plan is not descended and leaves that share unspent.
     Defaults and valid ranges: `planner_core.defaults`.
 
@@ -229,7 +230,7 @@ def plan(
     t_descent = 0.0
     descended = 0
     if final and chosen["phi"] == 0.0:
-        from planner_core.descent import finish, other_structure
+        from planner_core.descent import final_shares, finish, other_structure
 
         t1 = time.perf_counter()
         # the final plan's hover points moved with exact LP hover times, then its structure
@@ -238,9 +239,9 @@ def plan(
         # and the best start of another structure with what the final plan's own share
         # leaves (all of it for the final plan when the starts hold no other structure)
         other = other_structure(problem, getattr(opt, "starts", None), x)
-        mine = final if other is None else min(own, final)
-        r = finish(problem, x, problem.evaluate, trials=mine, seed=int(seed), other=other,
-                   other_trials=final - mine)
+        mine, theirs = final_shares(final, own, other is not None, _defaults.DESCENT_TRIALS)
+        r = finish(problem, x, problem.evaluate, trials=mine, seed=int(seed),
+                   other=other if theirs else None, other_trials=theirs)
         if r is not None:
             descended = r.evaluations
             if deb_better(r.f, r.phi, chosen["f"], chosen["phi"]):
@@ -251,6 +252,7 @@ def plan(
             polish_info["final_evaluations"] = int(descended)
             polish_info["final_other_points"] = 0 if r is None else int(r.other_points)
             polish_info["final_other_won"] = r is not None and bool(r.other_won)
+            polish_info["final_other_evaluations"] = 0 if r is None else int(r.other_evaluations)
         t_descent = time.perf_counter() - t1
     wall = time.perf_counter() - t_start
     h = result.history

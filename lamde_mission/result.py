@@ -29,7 +29,10 @@ class Plan:
 
     `breakdown` is `Problem.breakdown` of the final solution; `history` holds per-generation
     arrays (`evaluations`, `best_f`, `best_phi`, `feasible_fraction`); `polish` records f and
-    phi before and after the hover-time LP (None when polishing was off).
+    phi before and after the hover-time LP (None when polishing was off) and, when the final
+    stage ran, `final_f_before`/`final_f_after`, `final_evaluations` (both plans together),
+    `final_other_points` (the second plan's hover points, 0: none ran), `final_other_won`
+    and `final_other_evaluations` (`planner_core.descent.finish`).
     """
 
     map_name: str

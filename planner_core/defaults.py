@@ -154,7 +154,8 @@ _RUN: tuple[Default, ...] = (
             "an integer >= 0",
             _int_at_least(0)),
     Default("kick_trials", 300, "evaluations of the final stage (descent_trials + "
-            "restructure_trials + kick_trials, at most a tenth of the DE's evaluations) left for "
+            "restructure_trials + kick_trials, at most a tenth of the budget less the population "
+            "and the polish's plans) left for "
             "the iterated local search on the final plan after the structural search and the "
             "removal moves (`planner_core.descent.kicks`: one hover point moved by "
             "a normal step of 300 m standard deviation per axis, the plan descended in a race "
@@ -164,9 +165,11 @@ _RUN: tuple[Default, ...] = (
             "another structure: the best of the starts kept for the DE with fewer (else more) "
             "hover points than the final plan, finished the same way (descent, structural "
             "search, removal moves, kicks; `planner_core.descent.finish`), the better of the "
-            "two kept; counted in the final stage's tenth of the DE's evaluations, the final "
-            "plan's own share first (so below a budget of about 6,500 none is left for it); "
-            "the final plan gets it when the starts hold no other structure; 0: none",
+            "two kept; counted in the final stage's tenth of the budget less the population and "
+            "the polish's plans, the final plan's own share first (the full 320 from a budget "
+            "of about 9,700); it runs only when at least descent_trials are left for it, and "
+            "the final plan gets them otherwise or when the starts hold no other structure; "
+            "0: none",
             "an integer >= 0", _int_at_least(0)),
     Default("seed", 0, "random seed of a planning run (same seed, same plan)", "an integer >= 0",
             _int_at_least(0)),

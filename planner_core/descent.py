@@ -51,6 +51,7 @@ __all__ = [
     "SLIDE_ANGLES",
     "descend",
     "final_budget",
+    "final_shares",
     "finish",
     "kicks",
     "held_points",
@@ -88,6 +89,7 @@ class Descent:
     f_start: float
     other_points: int = 0
     other_won: bool = False
+    other_evaluations: int = 0
 
 
 def _hover(b: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
@@ -97,9 +99,22 @@ def _hover(b: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
 
 
 def final_budget(room: int, trials: int) -> int:
-    """Evaluations the final plan's `finish` gets: `trials`, at most a tenth of `room` (what
-    the DE could otherwise spend); `plan` and the benchmark's `planner` entry both use it."""
+    """Evaluations the final plan's `finish` gets: `trials`, at most a tenth of `room` (the
+    budget less the population and the polish's plans, before the starts and the final stage
+    are taken off the DE); `plan` and the benchmark's `planner` entry both use it."""
     return min(int(trials), int(room) // 10)
+
+
+def final_shares(final: int, own: int, other: bool, least: int) -> tuple[int, int]:
+    """How `plan` and the benchmark's `planner` entry split the final stage's `final`
+    evaluations: (the final plan's, the second plan's). The final plan's own share `own`
+    first; the second plan (`other`: whether `other_structure` found one) gets the rest only
+    when that is at least `least` (a descent's trials: less would not even descend it), else
+    the final plan gets all of it."""
+    mine = min(int(own), int(final))
+    if not other or final - mine < least:
+        return int(final), 0
+    return mine, int(final) - mine
 
 
 def _nodes(problem: Any, P: np.ndarray) -> np.ndarray:
@@ -535,12 +550,14 @@ def finish(
     alone (`removal_moves`, a removed point's leg cleared by moving a neighbour; at most
     `restructure_trials` again), then `kicks` with what is left of `trials` (seeded by `seed`).
 
-    `other` (d,): a second plan of another structure (`other_structure`: the best start with
-    another number of hover points), finished the same way with at most `other_trials` more
-    evaluations; the Deb-better of the two results is returned, with the evaluations of both
-    and x's f as the start. The local moves rarely turn one structure into the other (merges
-    and removals take one point at a time, each raced against the incumbent): on T06 the
-    final plans with 7-9 points end 1.2-1.9 % above the best-known and those with 4-6 points
+    `other` (d,): a second plan of another structure (`other_structure`: the best kept start
+    with fewer, else more, hover points than x), finished the same way with at most
+    `other_trials` more evaluations; the Deb-better of the two results is returned, with the
+    evaluations of both and x's f as the start (`other_points`, `other_won` and
+    `other_evaluations` say what the second plan was, whether it won and what it spent). The
+    local moves rarely turn one structure into the other (merges and removals take one point
+    at a time, each raced against the incumbent): on T06 the final plans with 7-9 points end
+    1.2-1.9 % above the best-known and those with 4-6 points
     0.1-0.4 % (docs/search.md, "A second structure"). None when x is not a feasible plan or
     `trials` < 1."""
     cur = _finish_one(problem, x, evaluate, trials=trials, seed=seed,
@@ -555,7 +572,7 @@ def finish(
     best = alt if won else cur
     n = len(problem.breakdown(np.asarray(other, dtype=float))["hover_points"])
     return Descent(best.x, best.f, best.phi, cur.evaluations + alt.evaluations, cur.f_start,
-                   other_points=n, other_won=won)
+                   other_points=n, other_won=won, other_evaluations=alt.evaluations)
 
 
 def other_structure(problem: Any, starts: np.ndarray | None, x: np.ndarray) -> np.ndarray | None:

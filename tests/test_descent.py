@@ -715,3 +715,24 @@ def test_the_benchmark_planner_runs_the_second_structure_within_its_budget(
     assert res.evaluations <= 8_000
     (trials, other_trials, has_other), = seen
     assert has_other and trials == 640 and 0 < other_trials <= 320
+
+
+def test_final_shares_give_the_second_plan_the_rest_only_when_it_can_descend() -> None:
+    from planner_core.descent import final_shares
+
+    assert final_shares(960, 640, True, 40) == (640, 320)
+    assert final_shares(960, 640, False, 40) == (960, 0)  # no other structure: all of it
+    assert final_shares(680, 640, True, 40) == (640, 40)
+    assert final_shares(679, 640, True, 40) == (679, 0)  # 39 would not even descend it
+    assert final_shares(300, 640, True, 40) == (300, 0)  # a small budget: the final plan's
+
+
+def test_plan_runs_no_second_plan_on_a_sliver_of_a_budget() -> None:
+    """T06 at 6,526 evaluations: the final stage is (6,526 - 16 - 100) // 10 = 641, one more
+    than the final plan's 640; one evaluation would not even descend a second plan, so the
+    final plan gets it (a reviewer found a 'second start finished' that had spent 1)."""
+    from lamde_mission.api import plan
+
+    p = plan(SUITE / "T06.json", seed=1, budget=6_526)
+    assert p.polish is not None and p.polish["final_other_points"] == 0
+    assert p.polish["final_other_evaluations"] == 0 and p.evaluations <= 6_526

@@ -146,12 +146,14 @@ def _summary(
                      + ("" if pol["accepted"] else " (kept the unpolished plan)"))
         if "final_f_before" in pol:
             other = pol.get("final_other_points", 0)
-            second = ("" if not other else
-                      f"; a second start of {other} hover points finished too, "
-                      + ("its plan kept" if pol.get("final_other_won") else "not better"))
+            theirs = pol.get("final_other_evaluations", 0)
+            spent = (f"{pol['final_evaluations']} evaluations" if not other else
+                     f"{pol['final_evaluations'] - theirs} + {theirs} evaluations; a second "
+                     f"start of {other} hover points finished too, "
+                     + ("its plan kept" if pol.get("final_other_won") else "not better"))
             lines.append(f"  final stage   f {pol['final_f_before']:.2f} -> "
                          f"{pol['final_f_after']:.2f} (descent, structural search, removal "
-                         f"moves, kicks: {pol['final_evaluations']} evaluations{second})")
+                         f"moves, kicks: {spent})")
     lines.append("  data collected vs required (Mbit):")
     req = dict(zip(m.sensor_ids, m.required_data.tolist(), strict=True))
     got = t.collected

@@ -132,7 +132,8 @@ REGISTRY: dict[str, OptimiserSpec] = {
             "polish LP on the final population's 16 Deb-best; the hover-point descent with "
             f"exact LP hover times on the {DESCENTS} best constructive and seeder plans before "
             "the DE and on the polished best with the structural search and kicks, the same "
-            "on the best start with another number of hover points; budget counted exactly",
+            "on the best kept start with fewer (else more) hover points; budget counted "
+            "exactly",
             kwargs={"lp": True, "memetic": MEMETIC, "starts": STARTS,
                     "candidates": START_CANDIDATES, "descents": DESCENTS,
                     "trials": DESCENT_TRIALS, "restructure": RESTRUCTURE_TRIALS,
