@@ -80,7 +80,8 @@ class Descent:
     """A descent's result: the decision vector x (d,) of the best plan found (points, LP hover
     times topped up to meet C4 exactly), its evaluated f and phi, how many evaluations it spent,
     and the f it started from; for `finish` with a second plan also that plan's number of
-    hover points (0: none was finished) and whether its result was kept."""
+    hover points (0: none was finished), whether its result was kept and the evaluations it
+    spent (counted in `evaluations` too)."""
 
     x: np.ndarray
     f: float
@@ -557,9 +558,8 @@ def finish(
     `other_evaluations` say what the second plan was, whether it won and what it spent). The
     local moves rarely turn one structure into the other (merges and removals take one point
     at a time, each raced against the incumbent): on T06 the final plans with 7-9 points end
-    1.2-1.9 % above the best-known and those with 4-6 points
-    0.1-0.4 % (docs/search.md, "A second structure"). None when x is not a feasible plan or
-    `trials` < 1."""
+    1.2-1.9 % above the best-known and those with 4-6 points 0.1-0.4 % (docs/search.md, "A
+    second structure"). None when x is not a feasible plan or `trials` < 1."""
     cur = _finish_one(problem, x, evaluate, trials=trials, seed=seed,
                       descent_trials=descent_trials, restructure_trials=restructure_trials)
     if cur is None or other is None or other_trials < 1:
