@@ -90,6 +90,11 @@ def _unserved(problem: Problem, R: np.ndarray) -> list[dict[str, Any]]:
 BACKENDS = ("highs", "linprog", "cvxpy")
 
 
+#: the coverage rows' right-hand side (each sensor's data scaled to 1): a hair above the
+#: requirement, so solver tolerance cannot leave a tiny shortfall
+_TARGET = 1.0 + 1e-9
+
+
 def _lp_matrices(
     R: np.ndarray, req: np.ndarray, t_max: float, feasible: bool
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -102,8 +107,7 @@ def _lp_matrices(
     need = req > 0
     A = (R[:, need] / req[need]).T  # rows: sensors, scaled so each needs 1 unit
     m = A.shape[0]
-    # a hair above the requirement, so solver tolerance cannot leave a tiny shortfall
-    target = np.full(m, 1.0 + 1e-9)
+    target = np.full(m, _TARGET)
     if feasible or m == 0:
         return np.ones(n), -A, -target, np.full(n, t_max)
     c = np.concatenate([np.full(n, 1.0 / (n * t_max)), np.full(m, 1e3)])
@@ -250,12 +254,11 @@ def hover_lp(
     T = np.zeros(n)
     yn = np.zeros(A.shape[0])
     rest = np.zeros(n, dtype=np.bool_)
-    if not _lp_blocks(A, 1.0 + 1e-9, float(t_max), BLOCK_VERTICES, BLOCK_COMBOS, T, yn,
-                      rest):
+    if not _lp_blocks(A, _TARGET, float(t_max), BLOCK_VERTICES, BLOCK_COMBOS, T, yn, rest):
         return None  # a sensor no point reaches, or a lone point that needs more than t_max
     if rest.any():
         rows = (A[:, rest] > 0.0).any(axis=1)
-        sol = _highs_lp(A[np.ix_(rows, rest)], 1.0 + 1e-9, t_max, warm)
+        sol = _highs_lp(A[np.ix_(rows, rest)], _TARGET, t_max, warm)
         if sol is None:
             return None
         T[rest], yn[rows] = sol
