@@ -230,7 +230,7 @@ def plan(
     t_descent = 0.0
     descended = 0
     if final and chosen["phi"] == 0.0:
-        from planner_core.descent import final_shares, finish, other_structure
+        from planner_core.descent import final_stage
 
         t1 = time.perf_counter()
         # the final plan's hover points moved with exact LP hover times, then its structure
@@ -238,10 +238,8 @@ def plan(
         f_before = float(chosen["f"])
         # and the best start of another structure with what the final plan's own share
         # leaves (all of it for the final plan when the starts hold no other structure)
-        other = other_structure(problem, getattr(opt, "starts", None), x)
-        mine, theirs = final_shares(final, own, other is not None, _defaults.DESCENT_TRIALS)
-        r = finish(problem, x, problem.evaluate, trials=mine, seed=int(seed),
-                   other=other if theirs else None, other_trials=theirs)
+        r = final_stage(problem, x, problem.evaluate, final=final, own=own,
+                        starts=getattr(opt, "starts", None), seed=int(seed))
         if r is not None:
             descended = r.evaluations
             if deb_better(r.f, r.phi, chosen["f"], chosen["phi"]):

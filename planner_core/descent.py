@@ -52,6 +52,7 @@ __all__ = [
     "descend",
     "final_budget",
     "final_shares",
+    "final_stage",
     "finish",
     "kicks",
     "held_points",
@@ -598,6 +599,33 @@ def other_structure(problem: Any, starts: np.ndarray | None, x: np.ndarray) -> n
         if more is None:
             more = s
     return more
+
+
+def final_stage(
+    problem: Any,
+    x: np.ndarray,
+    evaluate: Evaluate,
+    *,
+    final: int,
+    own: int,
+    starts: np.ndarray | None,
+    seed: int,
+    descent_trials: int | None = None,
+    restructure_trials: int | None = None,
+) -> Descent | None:
+    """The final stage of `plan` and of the benchmark's `planner` entry on the polished plan x
+    (d,): the second structure from `starts` (`other_structure`), the `final` evaluations split
+    between the two plans (`final_shares`: x's own share `own` first; the second plan only when
+    a descent's trials are left for it), then `finish`. `descent_trials`,
+    `restructure_trials`: as `finish` (None: the defaults table's)."""
+    from planner_core.defaults import DESCENT_TRIALS
+
+    least = DESCENT_TRIALS if descent_trials is None else int(descent_trials)
+    other = other_structure(problem, starts, x)
+    mine, theirs = final_shares(final, own, other is not None, least)
+    return finish(problem, x, evaluate, trials=mine, seed=seed, descent_trials=descent_trials,
+                  restructure_trials=restructure_trials, other=other if theirs else None,
+                  other_trials=theirs)
 
 
 def _finish_one(

@@ -106,14 +106,12 @@ def optimise(
         budgeted.evaluate(xs)
         x, f, phi = budgeted.best("deb")
         if final and phi == 0.0:
-            from planner_core.descent import final_shares, finish, other_structure
+            from planner_core.descent import final_stage
 
             # budgeted keeps the best
-            second = other_structure(inner, getattr(opt, "starts", None), x)
-            mine, theirs = final_shares(final, own, second is not None, int(trials))
-            finish(inner, x, budgeted.evaluate, trials=mine, seed=int(seed),
-                   descent_trials=int(trials), restructure_trials=int(restructure),
-                   other=second if theirs else None, other_trials=theirs)
+            final_stage(inner, x, budgeted.evaluate, final=final, own=own,
+                        starts=getattr(opt, "starts", None), seed=int(seed),
+                        descent_trials=int(trials), restructure_trials=int(restructure))
             x, f, phi = budgeted.best("deb")
         return OptimiseResult(x, f, phi, budgeted.count, budgeted.trace("deb"), last_feasible)
     return OptimiseResult(res.x, res.f, res.phi, budgeted.count, budgeted.trace("deb"),
