@@ -2,8 +2,8 @@
 
 Runs each configurator on each map for R seeds and reports, per map and start mode, the mean
 penalised score f + 10 phi (lower is better), the feasible runs, and the Wilcoxon rank-sum mark
-of lamde against each other configurator ("+": lamde significantly better, "-": significantly
-worse, "~": no significant difference; alpha 0.05, two-sided,
+of lamde (or `--reference`) against each other configurator ("+": lamde significantly better,
+"-": significantly worse, "~": no significant difference; alpha 0.05, two-sided,
 `planner_core.bench.stats.wilcoxon_mark`).
 
 Pipelines (every configurator always gets the same one): "de" (default), the DE alone, no
@@ -15,14 +15,23 @@ plan's structure, the repair makes it feasible); "planner", what `plan` does: th
 benchmark's `planner` entry (`planner_core.baselines.REGISTRY["planner"]`, its keyword
 arguments: constructive starts and their descents, the DE with the memetic step from a uniform
 start, the hover-time LP on the final population's elite, the final plan's descent, structural
-search and kicks) with the configurator under test. Records carry their pipeline; one JSONL
-may hold both (records written before the planner entry had starts and descents are the
-pipeline of their time).
+search and kicks) with the configurator under test; "repair", the DE with only the memetic
+step's repair of an infeasible elite (`planner_core.memetic.repair`: a hover point for each
+unserved sensor, blocked legs re-routed; no 2-opt, LP or removal moves on feasible plans, no
+polish). Records carry their pipeline; one JSONL may hold several (records written before the
+planner entry had starts and descents are the pipeline of their time).
+
+Configurators: "lamde" (the policy `--checkpoint`), "adaptive", "random", "fixed" (DE/rand/1/bin,
+0.5, 0.9), any static "fixed:<mutation>:<crossover>:<F>:<Cr>", or "grid" for the 42 of `GRID`.
+`--reference` names the one whose Wilcoxon marks are printed (default lamde); with more than 6
+configurators the summary is one line per configurator (`compact`). `--jobs N` runs on N worker
+processes (`planner_core.execution`); the records do not depend on it.
 
 Maps: "validation" (generator seeds 8000 + k, disjoint from the suite's 2025 and the training
-maps' 7000 + k; see planner_core.policy.problems), "suite" (the 16 committed suite maps), or
-map files. Each run is appended to a JSONL file as it finishes, so an interrupted validation
-resumes where it stopped.
+maps' 7000 + k; see planner_core.policy.problems), "training" (the first `--count` training
+maps, `default_training_specs`), "suite" (the 16 committed suite maps), or map files. Each run
+is appended to a JSONL file as it finishes, so an interrupted validation resumes where it
+stopped.
 
     python benchmarks/validate_policy.py --maps validation --runs 25 -o val.jsonl
     python benchmarks/validate_policy.py --maps suite --modes uniform --runs 25 -o suite.jsonl
@@ -30,6 +39,9 @@ resumes where it stopped.
         --configurators lamde random adaptive --runs 25 -o suite-memetic.jsonl
     python benchmarks/validate_policy.py --maps suite --modes uniform --pipeline planner \
         --configurators lamde random adaptive --runs 25 -o suite-planner.jsonl
+    python benchmarks/validate_policy.py --maps suite --modes uniform --pipeline memetic \
+        --configurators random adaptive lamde grid --reference random --runs 8 --jobs 2 \
+        -o scan-memetic.jsonl
 """
 
 from __future__ import annotations
@@ -46,9 +58,11 @@ from planner_core.baselines import REGISTRY
 from planner_core.baselines.de import optimise
 from planner_core.bench.stats import wilcoxon_mark
 from planner_core.de import make_configurator, run
+from planner_core.de.operators import MUTATIONS
+from planner_core.execution import make_executor
 from planner_core.policy import PolicyConfigurator
 from planner_core.policy.problems import build, spec_name, validation_specs
-from planner_core.problem import Problem, penalised_score
+from planner_core.problem import penalised_score
 from planner_core.starts import with_init
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -57,14 +71,81 @@ SUITE = ROOT / "examples" / "maps" / "suite"
 #: in the titles of the figures drawn from this script's runs)
 BUDGET = 10_000
 POPULATION = 100
+PIPELINES = ("de", "memetic", "repair", "planner")
+#: `--configurators grid`: static configurations, every mutation x (binomial Cr 0.9, binomial
+#: Cr 0.2, exponential Cr 0.75: a block of ~4 genes, one hover point) x F 0.4, 0.8
+GRID = tuple(f"fixed:{m}:{cx}:{F}:{cr}" for m in MUTATIONS
+             for cx, cr in (("bin", 0.9), ("bin", 0.2), ("exp", 0.75)) for F in (0.4, 0.8))
 
 
-def _maps(which: list[str], count: int) -> dict[str, Any]:
+def _specs(which: list[str], count: int) -> dict[str, dict[str, Any]]:
+    """Problem specs (JSON-able, `planner_core.policy.problems`) by map name."""
     if which == ["validation"]:
-        return {spec_name(s): build(s) for s in validation_specs(count)}
-    if which == ["suite"]:
-        return {p.stem: Problem(p) for p in sorted(SUITE.glob("T*.json"))}
-    return {Path(p).stem: Problem(p) for p in which}
+        return {spec_name(s): s for s in validation_specs(count)}
+    if which == ["training"]:
+        from planner_core.policy.problems import default_training_specs
+
+        return {spec_name(s): s for s in default_training_specs(count)}
+    paths = sorted(SUITE.glob("T*.json")) if which == ["suite"] else [Path(p) for p in which]
+    return {p.stem: {"kind": "map", "map": json.loads(p.read_text(encoding="utf-8"))}
+            for p in paths}
+
+
+def configurator(label: str, checkpoint: str) -> Any:
+    """A configurator from its label: "lamde" (the policy `checkpoint`), a registry name
+    ("adaptive", "random", "fixed"), or "fixed:<mutation>:<crossover>:<F>:<Cr>". Raises
+    ValueError naming the label when it is none of these."""
+    if label == "lamde":
+        return PolicyConfigurator(checkpoint=checkpoint)
+    if label.startswith("fixed:"):
+        try:
+            _, mutation, crossover, F, Cr = label.split(":")
+            return make_configurator("fixed", mutation=mutation, crossover=crossover,
+                                     F=float(F), Cr=float(Cr))
+        except (ValueError, KeyError) as e:
+            raise ValueError(f"configurator {label!r}: expected "
+                             f"fixed:<mutation>:<crossover>:<F>:<Cr> ({e})") from None
+    return make_configurator(label)
+
+
+def run_pipeline(problem: Any, mode: str, pipeline: str, conf: Any, seed: int, budget: int,
+                 population: int) -> Any:
+    """One run of `conf` in `pipeline` (module docstring) from start `mode`; returns the
+    optimiser's result (.f, .phi)."""
+    if pipeline == "planner":
+        kw = {**REGISTRY["planner"].kwargs, "configurator": conf}
+        return optimise(with_init(problem, mode), budget, seed, **kw)
+    if pipeline == "memetic":
+        return optimise(with_init(problem, mode), budget, seed, configurator=conf, lp=True,
+                        memetic="auto")
+    refine = None
+    if pipeline == "repair":
+        from functools import partial
+
+        from planner_core.memetic import repair
+
+        refine = partial(repair, problem)
+    return run(with_init(problem, mode), configurator=conf, seed=seed, population=population,
+               budget=budget, refine=refine)
+
+
+_CACHE: dict[Any, Any] = {}
+
+
+def _job(item: tuple[Any, ...]) -> dict[str, Any]:
+    """Executor job: one run, as its JSONL record. The problem and the configurator are built
+    once per worker process."""
+    name, spec, mode, label, seed, pipeline, budget, population, checkpoint = item
+    if ("p", name) not in _CACHE:
+        _CACHE[("p", name)] = build(spec)
+    if ("c", label) not in _CACHE:
+        _CACHE[("c", label)] = configurator(label, checkpoint)
+    t0 = time.perf_counter()
+    r = run_pipeline(_CACHE[("p", name)], mode, pipeline, _CACHE[("c", label)], seed, budget,
+                     population)
+    return {"map": name, "mode": mode, "configurator": label, "seed": seed,
+            "pipeline": pipeline, "f": r.f, "phi": r.phi,
+            "score": float(penalised_score(r.f, r.phi)), "seconds": time.perf_counter() - t0}
 
 
 def _read(path: Path) -> list[dict[str, Any]]:
@@ -75,50 +156,52 @@ def _read(path: Path) -> list[dict[str, Any]]:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--maps", nargs="+", default=["validation"])
-    ap.add_argument("--count", type=int, default=4, help="validation maps (with --maps validation)")
+    ap.add_argument("--maps", nargs="+", default=["validation"],
+                    help="validation, training, suite, or map files")
+    ap.add_argument("--count", type=int, default=4,
+                    help="maps (with --maps validation or training)")
     ap.add_argument("--runs", type=int, default=25)
     ap.add_argument("--modes", nargs="+", default=["seeded", "uniform"])
-    ap.add_argument("--configurators", nargs="+", default=["lamde", "adaptive", "random", "fixed"])
+    ap.add_argument("--configurators", nargs="+", default=["lamde", "adaptive", "random", "fixed"],
+                    help="lamde, adaptive, random, fixed, fixed:<mutation>:<crossover>:<F>:<Cr>, "
+                    "or grid (the 42 static configurations of GRID)")
+    ap.add_argument("--reference", default="lamde",
+                    help="the configurator the Wilcoxon marks compare with every other one")
     ap.add_argument("--checkpoint", default="lamde-v2")
     ap.add_argument("--budget", type=int, default=BUDGET)
     ap.add_argument("--population", type=int, default=POPULATION)
-    ap.add_argument("--pipeline", choices=("de", "memetic", "planner"), default="de",
+    ap.add_argument("--pipeline", choices=PIPELINES, default="de",
                     help="de: the DE alone; memetic: the DE with the memetic step and the "
-                    "polish LP, no constructive starts or descents; planner: what plan does")
+                    "polish LP, no constructive starts or descents; repair: the DE with the "
+                    "memetic step's repair of an infeasible elite only; planner: what plan does")
+    ap.add_argument("--jobs", type=int, default=0,
+                    help="worker processes (0: runs in this process)")
     ap.add_argument("-o", "--output", required=True, help="JSONL of runs (appended, resumable)")
     args = ap.parse_args()
+    labels = list(dict.fromkeys(c for name in args.configurators
+                                for c in (GRID if name == "grid" else (name,))))
+    if args.reference not in labels:
+        ap.error(f"--reference: {args.reference!r} is not among --configurators")
+    for label in labels:
+        try:
+            configurator(label, args.checkpoint)
+        except ValueError as e:
+            ap.error(str(e))
     out = Path(args.output)
     done = {(r["map"], r["mode"], r["configurator"], r["seed"]) for r in _read(out)
             if r.get("pipeline", "de") == args.pipeline}
-    maps = _maps(args.maps, args.count)
-    confs = {c: (PolicyConfigurator(checkpoint=args.checkpoint) if c == "lamde"
-                 else make_configurator(c)) for c in args.configurators}
-    with out.open("a") as fh:
-        for seed in range(args.runs):  # seeds outermost: a cut-short run has even counts
-            for name, problem in maps.items():
-                for mode in args.modes:
-                    for c, conf in confs.items():
-                        if (name, mode, c, seed) in done:
-                            continue
-                        t0 = time.perf_counter()
-                        if args.pipeline == "planner":
-                            kw = {**REGISTRY["planner"].kwargs, "configurator": conf}
-                            r = optimise(with_init(problem, mode), args.budget, seed, **kw)
-                        elif args.pipeline == "memetic":
-                            r = optimise(with_init(problem, mode), args.budget, seed,
-                                         configurator=conf, lp=True, memetic="auto")
-                        else:
-                            r = run(with_init(problem, mode), configurator=conf, seed=seed,
-                                    population=args.population, budget=args.budget)
-                        rec = {"map": name, "mode": mode, "configurator": c, "seed": seed,
-                               "pipeline": args.pipeline, "f": r.f, "phi": r.phi,
-                               "score": float(penalised_score(r.f, r.phi)),
-                               "seconds": time.perf_counter() - t0}
-                        fh.write(json.dumps(rec) + "\n")
-                        fh.flush()
+    specs = _specs(args.maps, args.count)
+    items = [(name, spec, mode, c, seed, args.pipeline, args.budget, args.population,
+              args.checkpoint)
+             for seed in range(args.runs)  # seeds outermost: a cut-short run has even counts
+             for name, spec in specs.items() for mode in args.modes for c in labels
+             if (name, mode, c, seed) not in done]
+    with out.open("a") as fh, make_executor(args.jobs) as ex:
+        for rec in ex.map_unordered(_job, items):
+            fh.write(json.dumps(rec) + "\n")
+            fh.flush()
     summarise([r for r in _read(out) if r.get("pipeline", "de") == args.pipeline],
-              args.configurators)
+              labels, args.reference)
 
 
 def complete_seeds(records: list[dict[str, Any]], configurators: list[str]) -> list[dict[str, Any]]:
@@ -132,42 +215,83 @@ def complete_seeds(records: list[dict[str, Any]], configurators: list[str]) -> l
     return [r for r in records if r["seed"] in keep and r["configurator"] in configurators]
 
 
-def summarise(records: list[dict[str, Any]], configurators: list[str]) -> None:
-    """Print one table per start mode: mean score (feasible runs / runs) and lamde's marks,
-    on the seeds complete for every cell."""
-    others = [c for c in configurators if c != "lamde"]
+def summarise(records: list[dict[str, Any]], configurators: list[str],
+              reference: str = "lamde") -> None:
+    """Print one table per start mode: mean score (feasible runs / runs) and the reference's
+    marks against every other configurator, on the seeds complete for every cell. With more
+    than `WIDE` configurators, one line per configurator instead (`compact`)."""
+    others = [c for c in configurators if c != reference]
     records = complete_seeds(records, configurators)
     seeds = sorted({r["seed"] for r in records})
     print(f"complete seeds: {len(seeds)} ({', '.join(map(str, seeds))}), {len(records)} runs")
+    if len(configurators) > WIDE:
+        compact(records, configurators, reference)
+        return
     for mode in sorted({r["mode"] for r in records}):
         for c in configurators:
             rs = [r for r in records if r["mode"] == mode and r["configurator"] == c]
             feas = sum(r["phi"] == 0 for r in rs)
             print(f"start mode {mode}: {c} feasible in {feas}/{len(rs)} runs "
                   f"({100 * feas / max(len(rs), 1):.1f} %)")
-        print(f"\nstart mode {mode}: mean f + 10 phi (feasible/runs); mark = lamde vs that "
-              "configurator ('+' lamde significantly better, '-' worse, '~' no difference)")
+        print(f"\nstart mode {mode}: mean f + 10 phi (feasible/runs); mark = {reference} vs that "
+              f"configurator ('+' {reference} significantly better, '-' worse, '~' no difference)")
         print("map".ljust(26) + "".join(c.rjust(26) for c in configurators))
         wins = {c: [0, 0, 0] for c in others}
         for name in sorted({r["map"] for r in records if r["mode"] == mode}):
             cells = []
             scores: dict[str, list[float]] = {}
+            for c in [reference] + others:
+                scores[c] = [r["score"] for r in records if r["map"] == name
+                             and r["mode"] == mode and r["configurator"] == c]
             for c in configurators:
                 rs = [r for r in records if r["map"] == name and r["mode"] == mode
                       and r["configurator"] == c]
-                scores[c] = [r["score"] for r in rs]
                 feas = sum(r["phi"] == 0 for r in rs)
                 mark = ""
-                if c != "lamde" and "lamde" in scores:
-                    mark = wilcoxon_mark(scores["lamde"], scores[c])
+                if c != reference:
+                    mark = wilcoxon_mark(scores[reference], scores[c])
                     if mark:
                         wins[c]["+-~".index(mark)] += 1
                 cells.append(f"{np.mean(scores[c]) if rs else float('nan'):.1f} "
                              f"({feas}/{len(rs)}) {mark}".rjust(26))
             print(name.ljust(26) + "".join(cells))
         for c, (better, worse, same) in wins.items():
-            print(f"lamde vs {c}: significantly better on {better}, worse on {worse}, "
+            print(f"{reference} vs {c}: significantly better on {better}, worse on {worse}, "
                   f"no difference on {same}")
+
+
+#: above this many configurators `summarise` prints the compact form
+WIDE = 6
+
+
+def compact(records: list[dict[str, Any]], configurators: list[str], reference: str) -> None:
+    """One line per configurator and start mode, best first: the geometric mean over the maps
+    of its mean score over the reference's (below 1: better), its feasible runs, and on how
+    many maps it is significantly better / worse than the reference / no different
+    (`wilcoxon_mark`, the other configurator's side)."""
+    for mode in sorted({r["mode"] for r in records}):
+        recs = [r for r in records if r["mode"] == mode]
+        maps = sorted({r["map"] for r in recs})
+        cell: dict[tuple[str, str], list[dict[str, Any]]] = {}
+        for r in recs:
+            cell.setdefault((r["map"], r["configurator"]), []).append(r)
+        rows = []
+        for c in configurators:
+            ratio = np.exp(np.mean([np.log(np.mean([r["score"] for r in cell[m, c]])
+                                           / np.mean([r["score"] for r in cell[m, reference]]))
+                                    for m in maps]))
+            marks = [wilcoxon_mark([r["score"] for r in cell[m, c]],
+                                   [r["score"] for r in cell[m, reference]]) for m in maps]
+            feas = sum(r["phi"] == 0 for m in maps for r in cell[m, c])
+            runs = sum(len(cell[m, c]) for m in maps)
+            rows.append((ratio, c, feas, runs, marks))
+        print(f"\nstart mode {mode}, {len(maps)} maps: geometric mean of mean f + 10 phi over "
+              f"{reference}'s (< 1 better); feasible runs; maps significantly better / worse "
+              f"than {reference} / no different")
+        for ratio, c, feas, runs, marks in sorted(rows):
+            print(f"{c:36s} {ratio:6.3f}  feasible {feas:4d}/{runs:<4d} "
+                  f"({100 * feas / max(runs, 1):5.1f} %)  {marks.count('+'):2d} / "
+                  f"{marks.count('-'):2d} / {marks.count('~'):2d}")
 
 
 if __name__ == "__main__":

@@ -32,8 +32,8 @@ import numpy as np
 from planner_core.geometry import overlap_lengths
 from planner_core.polish import _route_flight_time, polish_hover_times
 
-__all__ = ["covers", "refine", "repair_points", "two_opt_order", "use_memetic", "REMOVALS",
-           "SERVE_FRACTION"]
+__all__ = ["covers", "refine", "repair", "repair_points", "two_opt_order", "use_memetic",
+           "REMOVALS", "SERVE_FRACTION"]
 
 #: a point serves a sensor in the repair when hovering this share of T_max collects its data
 #: (the seeder's reach uses the same share)
@@ -208,18 +208,36 @@ def _merge_pair(problem: Any, pts: np.ndarray) -> np.ndarray | None:
     return None if best is None else best[1]
 
 
+def _repairs(problem: Any, b: dict[str, Any]) -> list[np.ndarray]:
+    """Encoded repairs (step 4) of the solution whose breakdown is b: none when it is
+    feasible; else each of `repair_points`' sets, 2-opt ordered, with LP hover times."""
+    out = []
+    if b["phi"] > 0.0:
+        pts = np.asarray(b["hover_points"], dtype=float).reshape(-1, 2)
+        for rp in repair_points(problem, pts):
+            if len(rp):
+                pr = polish_hover_times(problem, two_opt_order(problem, rp))
+                out.append(problem.encode(pr.hover_points, pr.hover_times))
+    return out
+
+
+def repair(problem: Any, x: np.ndarray) -> np.ndarray:
+    """The repair alone (step 4) as a refine function: candidates (m, d), problem space, for an
+    infeasible x; (0, d) for a feasible one. The memetic step without its improving moves
+    (steps 1-3), for measuring what the repair of unserved sensors does on its own
+    (`benchmarks/validate_policy.py --pipeline repair`)."""
+    b = problem.breakdown(np.asarray(x, dtype=float))
+    d = int(np.asarray(problem.lower).shape[0])
+    return np.asarray(_repairs(problem, b), dtype=float).reshape(-1, d)
+
+
 def refine(problem: Any, x: np.ndarray) -> np.ndarray:
     """Candidates (m, d), problem space, from solution x: re-ordered with LP hover times, then
     each of up to `REMOVALS` removals, and for an infeasible x its repair (module docstring)."""
     b = problem.breakdown(np.asarray(x, dtype=float))
     pts = np.asarray(b["hover_points"], dtype=float).reshape(-1, 2)
     d = int(np.asarray(problem.lower).shape[0])
-    out = []
-    if b["phi"] > 0.0:
-        for rp in repair_points(problem, pts):
-            if len(rp):
-                pr = polish_hover_times(problem, two_opt_order(problem, rp))
-                out.append(problem.encode(pr.hover_points, pr.hover_times))
+    out = _repairs(problem, b)
     if len(pts) == 0:
         return np.asarray(out, dtype=float).reshape(-1, d)
     pts = two_opt_order(problem, pts)

@@ -227,3 +227,44 @@ def test_validate_policy_memetic_pipeline_records_and_resumes(tmp_path) -> None:
     assert "lamde vs adaptive" in r.stdout
     again = _script(*args)
     assert again.returncode == 0 and len(out.read_text().splitlines()) == 4
+
+
+def test_validate_policy_scan_of_static_configurations(tmp_path) -> None:
+    """`validate_policy.py` as docs/policy.md's configuration scan: static "fixed:..." labels
+    and "grid", another reference, the "repair" pipeline, worker processes that give the same
+    records as one process, the one-line-per-configurator summary, and a bad label refused."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("vp", ROOT / "benchmarks" / "validate_policy.py")
+    vp = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(vp)
+    assert len(vp.GRID) == 42 == len(set(vp.GRID))
+    conf = vp.configurator("fixed:best/1:exp:0.4:0.75", "lamde-v2")
+    assert (conf.mutation, conf.crossover, conf.F, conf.Cr) == ("best/1", "exp", 0.4, 0.75)
+    with pytest.raises(ValueError, match="fixed:<mutation>"):
+        vp.configurator("fixed:best/1:exp", "lamde-v2")
+    base = ("benchmarks/validate_policy.py", "--maps", "examples/maps/small-demo.json",
+            "--modes", "uniform", "--runs", "2", "--budget", "400", "--pipeline", "repair",
+            "--reference", "random")
+    recs = {}
+    for jobs in ("0", "2"):
+        out = tmp_path / f"scan{jobs}.jsonl"
+        r = _script(*base, "--configurators", "random", "fixed:best/1:exp:0.4:0.75",
+                    "fixed:rand/1:bin:0.8:0.2", "--jobs", jobs, "-o", str(out))
+        assert r.returncode == 0, r.stderr
+        recs[jobs] = sorted((x["configurator"], x["seed"], x["f"], x["phi"], x["pipeline"])
+                            for x in map(json.loads, out.read_text().splitlines()))
+    assert recs["0"] == recs["2"] and len(recs["0"]) == 6
+    assert {x[4] for x in recs["0"]} == {"repair"}
+    assert "random vs fixed:rand/1:bin:0.8:0.2" in r.stdout
+    out = tmp_path / "grid.jsonl"
+    r = _script("benchmarks/validate_policy.py", "--maps", "examples/maps/small-demo.json",
+                "--modes", "uniform", "--runs", "1", "--budget", "300", "--configurators",
+                "random", "grid", "--reference", "random", "--jobs", "2", "-o", str(out))
+    assert r.returncode == 0, r.stderr
+    assert len(out.read_text().splitlines()) == 43
+    lines = [ln for ln in r.stdout.splitlines() if ln.startswith(("random ", "fixed:"))]
+    assert len(lines) == 43 and re.search(r"^random\s+1\.000\s+feasible", r.stdout, re.M)
+    bad = _script(*base, "--configurators", "random", "fixed:nope:bin:0.5:0.5", "-o",
+                  str(tmp_path / "bad.jsonl"))
+    assert bad.returncode == 2 and "fixed:nope:bin:0.5:0.5" in bad.stderr

@@ -177,6 +177,28 @@ def test_refine_offers_the_repair_only_for_an_infeasible_elite(
     assert calls == [1]
 
 
+def test_repair_alone_is_refines_repair_and_nothing_for_a_feasible_solution() -> None:
+    """`memetic.repair` (validate_policy's "repair" pipeline): exactly the repair candidates
+    `refine` puts first for an infeasible solution, and no candidate for a feasible one."""
+    from planner_core.memetic import repair
+
+    problem = Problem(WIDE_MAP)
+    far = problem.encode(np.array([[problem.model.width * 0.5, problem.model.height * 0.5]]),
+                         np.array([1.0]))
+    fixed = repair(problem, far)
+    assert fixed.shape[0] >= 1 and fixed.shape[1] == problem.dim
+    np.testing.assert_array_equal(fixed, refine(problem, far)[: len(fixed)])
+    assert problem.evaluate(fixed)[1][0] == 0.0
+    assert repair(problem, fixed[0]).shape == (0, problem.dim)
+    from planner_core.starts import with_init
+
+    uniform = with_init(problem, "uniform")  # this seed's DE alone ends infeasible
+    assert run(uniform, configurator="random", seed=0, population=20, budget=600).phi > 0
+    res = run(uniform, configurator="random", seed=0, population=20, budget=600,
+              refine=partial(repair, problem))
+    assert res.phi == 0.0
+
+
 def test_memetic_setting_auto_follows_the_start_mode(problem: Problem) -> None:
     from planner_core.memetic import use_memetic
     from planner_core.starts import with_init
