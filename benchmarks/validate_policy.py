@@ -264,31 +264,39 @@ def summarise(records: list[dict[str, Any]], configurators: list[str],
 WIDE = 6
 
 
+def scan_rows(records: list[dict[str, Any]], configurators: list[str], reference: str,
+              mode: str) -> list[tuple[float, str, int, int, list[str]]]:
+    """Per configurator, best first, for start `mode`: (the geometric mean over the maps of its
+    median score over the reference's: below 1 is better; medians, because one infeasible
+    run's f + 10 phi would outweigh the rest of a mean; label; feasible runs; runs; the
+    per-map `wilcoxon_mark` of it against the reference, "+" = it is significantly better)."""
+    recs = [r for r in records if r["mode"] == mode]
+    maps = sorted({r["map"] for r in recs})
+    cell: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    for r in recs:
+        cell.setdefault((r["map"], r["configurator"]), []).append(r)
+    rows = []
+    for c in configurators:
+        ratio = np.exp(np.mean([np.log(np.median([r["score"] for r in cell[m, c]])
+                                       / np.median([r["score"] for r in cell[m, reference]]))
+                                for m in maps]))
+        marks = [wilcoxon_mark([r["score"] for r in cell[m, c]],
+                               [r["score"] for r in cell[m, reference]]) for m in maps]
+        feas = sum(r["phi"] == 0 for m in maps for r in cell[m, c])
+        rows.append((float(ratio), c, feas, sum(len(cell[m, c]) for m in maps), marks))
+    return sorted(rows)
+
+
 def compact(records: list[dict[str, Any]], configurators: list[str], reference: str) -> None:
-    """One line per configurator and start mode, best first: the geometric mean over the maps
-    of its mean score over the reference's (below 1: better), its feasible runs, and on how
-    many maps it is significantly better / worse than the reference / no different
-    (`wilcoxon_mark`, the other configurator's side)."""
+    """One line per configurator and start mode, best first (`scan_rows`): the geometric mean
+    of its median score over the reference's, its feasible runs, and on how many maps it is
+    significantly better / worse than the reference / no different."""
     for mode in sorted({r["mode"] for r in records}):
-        recs = [r for r in records if r["mode"] == mode]
-        maps = sorted({r["map"] for r in recs})
-        cell: dict[tuple[str, str], list[dict[str, Any]]] = {}
-        for r in recs:
-            cell.setdefault((r["map"], r["configurator"]), []).append(r)
-        rows = []
-        for c in configurators:
-            ratio = np.exp(np.mean([np.log(np.mean([r["score"] for r in cell[m, c]])
-                                           / np.mean([r["score"] for r in cell[m, reference]]))
-                                    for m in maps]))
-            marks = [wilcoxon_mark([r["score"] for r in cell[m, c]],
-                                   [r["score"] for r in cell[m, reference]]) for m in maps]
-            feas = sum(r["phi"] == 0 for m in maps for r in cell[m, c])
-            runs = sum(len(cell[m, c]) for m in maps)
-            rows.append((ratio, c, feas, runs, marks))
-        print(f"\nstart mode {mode}, {len(maps)} maps: geometric mean of mean f + 10 phi over "
-              f"{reference}'s (< 1 better); feasible runs; maps significantly better / worse "
-              f"than {reference} / no different")
-        for ratio, c, feas, runs, marks in sorted(rows):
+        maps = {r["map"] for r in records if r["mode"] == mode}
+        print(f"\nstart mode {mode}, {len(maps)} maps: geometric mean of median f + 10 phi "
+              f"over {reference}'s (< 1 better); feasible runs; maps significantly better / "
+              f"worse than {reference} / no different")
+        for ratio, c, feas, runs, marks in scan_rows(records, configurators, reference, mode):
             print(f"{c:36s} {ratio:6.3f}  feasible {feas:4d}/{runs:<4d} "
                   f"({100 * feas / max(runs, 1):5.1f} %)  {marks.count('+'):2d} / "
                   f"{marks.count('-'):2d} / {marks.count('~'):2d}")

@@ -12,6 +12,8 @@ under DIR instead). No benchmark is re-run.
   the stored runs give.
 - POLICY: the score figures of `benchmarks/validate_policy.py`'s runs (docs/policy/*.jsonl),
   one per start mode, over the seeds every (map, mode, configurator) completed.
+- SCANS: the figure of a configuration scan (`validate_policy.py --configurators grid`), one
+  panel per pipeline.
 
 The figures themselves are `planner_core.bench.figures`.
 """
@@ -63,6 +65,15 @@ POLICY: list[tuple[str, str, str, str]] = [
      "lamde-v1 against the hand-made configurators in plan's pipeline, 16 suite maps",
      "python benchmarks/validate_policy.py --maps suite --modes uniform --pipeline planner "
      "--configurators lamde random adaptive --runs 25"),
+]
+
+#: (runs file of a configuration scan, figure, what it shows, command that made it; one figure
+#: with a panel per pipeline the file holds, against `random`)
+SCANS: list[tuple[str, str, str, str]] = [
+    ("docs/policy/scan-suite-uniform.jsonl", "docs/policy/scan_suite_uniform.png",
+     "How far any DE configuration gets from the untrained random one, 16 suite maps",
+     "python benchmarks/validate_policy.py --maps suite --modes uniform --pipeline PIPELINE "
+     "--configurators random adaptive lamde grid --reference random --runs 8"),
 ]
 
 
@@ -144,6 +155,27 @@ def policy_figures(runs_file: Path, stem: Path, what: str) -> list[Path]:
     return out
 
 
+def scan_figures(runs_file: Path, out: Path, what: str) -> Path:
+    """The figure of a configuration scan's runs file (one panel per pipeline, `SCANS`)."""
+    from planner_core.bench import figures as F
+
+    vp = _validate_policy()
+    records = [json.loads(line) for line in runs_file.read_text(encoding="utf-8").splitlines()
+               if line.strip()]
+    panels, runs = {}, set()
+    for pipeline in ("de", "repair", "memetic", "planner"):
+        recs = [r for r in records if r.get("pipeline", "de") == pipeline]
+        if not recs:
+            continue
+        labels = list(dict.fromkeys(r["configurator"] for r in recs))
+        recs = vp.complete_seeds(recs, labels)
+        runs.add(len({r["seed"] for r in recs}))
+        panels[pipeline] = vp.scan_rows(recs, labels, "random", "uniform")
+    protocol = (F.protocol_text("uniform", vp.BUDGET, sorted(runs), per="configurator and map")
+                + f" · DE population {vp.POPULATION}")
+    return F.save(F.scan_figure(panels, "random", what, protocol), out)
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=ROOT,
@@ -176,6 +208,9 @@ def main(argv: list[str] | None = None) -> int:
     for runs, stem, what, _ in POLICY:
         for p in policy_figures(Path(runs), out / stem, what):
             print(f"wrote {p.relative_to(out).as_posix()}", file=sys.stderr)
+    for runs, fig, what, _ in SCANS:
+        p = scan_figures(Path(runs), out / fig, what)
+        print(f"wrote {p.relative_to(out).as_posix()}", file=sys.stderr)
     for msg in problems:
         print(f"error: {msg}", file=sys.stderr)
     return 1 if problems else 0

@@ -128,6 +128,25 @@ def test_imax_figure(tmp_path: Path) -> None:
          "de-adaptive, seeded start")
 
 
+def test_scan_figure(tmp_path: Path) -> None:
+    """The configuration scan (docs/policy.md): a panel per pipeline on one score axis, the
+    named configurators in the legend, static ones grey, a ring only for a configurator better
+    than the reference on >= 12 maps."""
+    plus, tie = ["+"] * 12 + ["~"] * 4, ["~"] * 16
+    panels = {"de": [(0.8, "adaptive", 30, 128, tie), (1.0, "random", 25, 128, tie),
+                     (1.2, "fixed:rand/1:bin:0.5:0.9", 10, 128, tie)],
+              "memetic": [(0.9, "lamde", 125, 128, plus), (1.0, "random", 124, 128, tie)]}
+    fig = F.scan_figure(panels, "random", "A scan", F.protocol_text("uniform", 10_000, 8))
+    axes = fig.get_axes()
+    assert len(axes) == 2 and axes[0].get_ylim() == axes[1].get_ylim()
+    _has(fig, "A scan", "pipeline: de", "pipeline: memetic", "adaptive", "lamde",
+         "static (fixed:...)", "95 % feasible")
+    rings = [ln for ax in axes for ln in ax.get_lines() if ln.get_markerfacecolor() == "none"]
+    assert len(rings) == 1 and tuple(rings[0].get_xydata()[0]) == (100 * 125 / 128, 0.9)
+    _legend_clear_of_axes(fig)
+    _saved(fig, tmp_path / "scan.png")
+
+
 def test_one_colour_per_optimiser_in_every_figure() -> None:
     from planner_core.baselines import REGISTRY
 
@@ -191,6 +210,11 @@ def test_make_figures_redraws_the_stored_runs(tmp_path: Path) -> None:
             assert png.read_bytes()[:8] == PNG and png.stat().st_size > 10_000
             rel = png.relative_to(tmp_path / "docs").as_posix()
             assert f"]({rel})" in policy_md, f"docs/policy.md does not show {rel}"
+    for _, fig, _, _ in mod.SCANS:
+        png = tmp_path / fig
+        assert png.read_bytes()[:8] == PNG and png.stat().st_size > 10_000
+        rel = Path(fig).relative_to("docs").as_posix()
+        assert f"]({rel})" in policy_md, f"docs/policy.md does not show {rel}"
     for results, report, _, extra in mod.REPORTS:
         if not (ROOT / results / "results.jsonl").exists():
             assert f"skipped {report}" in r.stderr and results in mod.NOT_STORED

@@ -41,6 +41,7 @@ __all__ = [
     "convergence_figure",
     "imax_figure",
     "optimiser_style",
+    "scan_figure",
     "paths_figure",
     "protocol_text",
     "save",
@@ -492,4 +493,47 @@ def ablation_figure(values: Mapping[str, Sequence[float]], protocol: str) -> Any
     ax.grid(True, axis="y", alpha=0.3)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
     _suptitle(fig, "Ablations: normalised performance per run", protocol)
+    return fig
+
+
+def scan_figure(panels: Mapping[str, Sequence[tuple[float, str, int, int, Sequence[str]]]],
+                reference: str, what: str, protocol: str) -> Any:
+    """A configuration scan (`benchmarks/validate_policy.py --configurators grid`): one panel
+    per pipeline, one point per configurator at (share of feasible runs, geometric mean over
+    the maps of its median score over the reference's; below 1 is better), the static
+    configurations grey, named configurators in their colours; a ring marks a configurator
+    significantly better than the reference on at least 12 of the maps (`rows[i][4]` are its
+    per-map Wilcoxon marks). `panels[pipeline]` are `validate_policy.scan_rows` rows."""
+    names = list(panels)
+    fig = _new_figure((4.2 * len(names) + 0.6, 4.4))
+    axes = fig.subplots(1, len(names), squeeze=False, sharey=True)[0]
+    for ax, name in zip(axes, names, strict=True):
+        rows = panels[name]
+        for ratio, label, feas, runs, marks in rows:
+            x, named = 100.0 * feas / max(runs, 1), not label.startswith("fixed:")
+            style = optimiser_style(label) if named else {"color": "0.6"}
+            ax.plot([x], [ratio], "o", color=style["color"], ms=7 if named else 4,
+                    zorder=3 if named else 2)
+            if list(marks).count("+") >= 12:
+                ax.plot([x], [ratio], "o", mfc="none", mec="k", ms=12, zorder=4)
+        ax.axhline(1.0, color="k", lw=0.8, alpha=0.5)
+        ax.axvline(95.0, color="k", lw=0.8, ls=":", alpha=0.7)
+        ax.set_xlim(-3, 103)
+        ax.set_xlabel("feasible runs (%)")
+        ax.set_title(f"pipeline: {name}", fontsize=9)
+        ax.grid(True, alpha=0.3)
+    axes[0].set_ylabel(f"median score / {reference}'s\n(geometric mean over maps; lower is "
+                       "better)")
+    from matplotlib.lines import Line2D
+
+    named = dict.fromkeys(label for rows in panels.values() for _, label, *_ in rows
+                          if not label.startswith("fixed:"))
+    handles = [Line2D([], [], ls="", marker="o", ms=7, color=optimiser_style(n)["color"],
+                      label=n) for n in named]
+    handles += [Line2D([], [], ls="", marker="o", ms=4, color="0.6", label="static (fixed:...)"),
+                Line2D([], [], ls="", marker="o", ms=12, mfc="none", mec="k",
+                       label=f"better than {reference}\non >= 12 maps"),
+                Line2D([], [], ls=":", color="k", lw=0.8, label="95 % feasible")]
+    fig.legend(handles=handles, loc="outside right center", fontsize=9, title="configurator")
+    _suptitle(fig, what, protocol)
     return fig
