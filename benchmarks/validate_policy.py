@@ -24,8 +24,11 @@ planner entry had starts and descents are the pipeline of their time).
 Configurators: "lamde" (the policy `--checkpoint`), "adaptive", "random", "fixed" (DE/rand/1/bin,
 0.5, 0.9), any static "fixed:<mutation>:<crossover>:<F>:<Cr>", or "grid" for the 42 of `GRID`.
 `--reference` names the one whose Wilcoxon marks are printed (default lamde); with more than 6
-configurators the summary is one line per configurator (`compact`). `--jobs N` runs on N worker
-processes (`planner_core.execution`); the records do not depend on it.
+configurators the summary is one line per configurator (`compact`). `--best-of SCAN` adds
+"best-of-scan": on each map, the configurator with the lowest median score in the runs file SCAN
+(`best_of`; its records name the one it ran as "chosen"); with `--first-seed` after the scan's
+seeds it validates that per-map choice on held-out runs. `--jobs N` runs on N worker processes
+(`planner_core.execution`); the records do not depend on it.
 
 Maps: "validation" (generator seeds 8000 + k, disjoint from the suite's 2025 and the training
 maps' 7000 + k; see planner_core.policy.problems), "training" (the first `--count` training
@@ -42,6 +45,9 @@ stopped.
     python benchmarks/validate_policy.py --maps suite --modes uniform --pipeline memetic \
         --configurators random adaptive lamde grid --reference random --runs 8 --jobs 2 \
         -o scan-memetic.jsonl
+    python benchmarks/validate_policy.py --maps suite --modes uniform --pipeline memetic \
+        --configurators random --best-of scan-memetic.jsonl --reference random \
+        --first-seed 8 --runs 25 --jobs 2 -o heldout-memetic.jsonl
 """
 
 from __future__ import annotations
@@ -72,6 +78,8 @@ SUITE = ROOT / "examples" / "maps" / "suite"
 BUDGET = 10_000
 POPULATION = 100
 PIPELINES = ("de", "memetic", "repair", "planner")
+#: the label of `--best-of`'s configurator: per map, the best of a scan's configurators
+BEST_OF = "best-of-scan"
 #: `--configurators grid`: static configurations, every mutation x (binomial Cr 0.9, binomial
 #: Cr 0.2, exponential Cr 0.75: a block of ~4 genes, one hover point) x F 0.4, 0.8
 GRID = tuple(f"fixed:{m}:{cx}:{F}:{cr}" for m in MUTATIONS
@@ -135,17 +143,39 @@ _CACHE: dict[Any, Any] = {}
 def _job(item: tuple[Any, ...]) -> dict[str, Any]:
     """Executor job: one run, as its JSONL record. The problem and the configurator are built
     once per worker process."""
-    name, spec, mode, label, seed, pipeline, budget, population, checkpoint = item
+    name, spec, mode, label, seed, pipeline, budget, population, checkpoint, chosen = item
+    runs = chosen or label  # BEST_OF runs the configurator chosen for this map
     if ("p", name) not in _CACHE:
         _CACHE[("p", name)] = build(spec)
-    if ("c", label) not in _CACHE:
-        _CACHE[("c", label)] = configurator(label, checkpoint)
+    if ("c", runs) not in _CACHE:
+        _CACHE[("c", runs)] = configurator(runs, checkpoint)
     t0 = time.perf_counter()
-    r = run_pipeline(_CACHE[("p", name)], mode, pipeline, _CACHE[("c", label)], seed, budget,
+    r = run_pipeline(_CACHE[("p", name)], mode, pipeline, _CACHE[("c", runs)], seed, budget,
                      population)
-    return {"map": name, "mode": mode, "configurator": label, "seed": seed,
-            "pipeline": pipeline, "f": r.f, "phi": r.phi,
-            "score": float(penalised_score(r.f, r.phi)), "seconds": time.perf_counter() - t0}
+    rec = {"map": name, "mode": mode, "configurator": label, "seed": seed,
+           "pipeline": pipeline, "f": r.f, "phi": r.phi,
+           "score": float(penalised_score(r.f, r.phi)), "seconds": time.perf_counter() - t0}
+    if chosen:
+        rec["chosen"] = chosen
+    return rec
+
+
+def best_of(records: list[dict[str, Any]], mode: str) -> dict[str, str]:
+    """Per map, the configurator with the lowest median score among `records` of start `mode`
+    (one pipeline's runs of a scan), on the seeds every configurator completed; ties go to the
+    first label in sorted order. For `--best-of`: the per-map choice made on these runs, to be
+    validated on other seeds."""
+    recs = [r for r in records if r["mode"] == mode and r["configurator"] != BEST_OF]
+    recs = complete_seeds(recs, sorted({r["configurator"] for r in recs}))
+    scores: dict[tuple[str, str], list[float]] = {}
+    for r in recs:
+        scores.setdefault((r["map"], r["configurator"]), []).append(r["score"])
+    best: dict[str, tuple[float, str]] = {}
+    for (name, label), xs in sorted(scores.items()):
+        med = float(np.median(xs))
+        if name not in best or med < best[name][0]:
+            best[name] = (med, label)
+    return {name: label for name, (_, label) in best.items()}
 
 
 def _read(path: Path) -> list[dict[str, Any]]:
@@ -176,24 +206,45 @@ def main() -> None:
                     "memetic step's repair of an infeasible elite only; planner: what plan does")
     ap.add_argument("--jobs", type=int, default=0,
                     help="worker processes (0: runs in this process)")
+    ap.add_argument("--first-seed", type=int, default=0,
+                    help="the runs' seeds are FIRST_SEED .. FIRST_SEED + RUNS - 1")
+    ap.add_argument("--best-of", metavar="SCAN",
+                    help=f"add the configurator {BEST_OF!r}: on each map, the one with the "
+                    "lowest median score in the runs file SCAN (same pipeline and start mode)")
     ap.add_argument("-o", "--output", required=True, help="JSONL of runs (appended, resumable)")
     args = ap.parse_args()
+    if args.jobs < 0 or args.first_seed < 0 or args.runs < 1:
+        ap.error("--jobs and --first-seed must be >= 0 and --runs >= 1")
     labels = list(dict.fromkeys(c for name in args.configurators
                                 for c in (GRID if name == "grid" else (name,))))
+    chosen: dict[tuple[str, str], str] = {}
+    if args.best_of:
+        scan = [r for r in _read(Path(args.best_of)) if r.get("pipeline", "de") == args.pipeline]
+        for mode in args.modes:
+            for name, label in best_of(scan, mode).items():
+                chosen[name, mode] = label
+        labels.append(BEST_OF)
     if args.reference not in labels:
         ap.error(f"--reference: {args.reference!r} is not among --configurators")
-    for label in labels:
+    for label in labels + list(chosen.values()):
         try:
-            configurator(label, args.checkpoint)
+            if label != BEST_OF:
+                configurator(label, args.checkpoint)
         except ValueError as e:
             ap.error(str(e))
     out = Path(args.output)
     done = {(r["map"], r["mode"], r["configurator"], r["seed"]) for r in _read(out)
             if r.get("pipeline", "de") == args.pipeline}
     specs = _specs(args.maps, args.count)
+    missing = sorted({f"{name} ({mode})" for name in specs for mode in args.modes
+                      if BEST_OF in labels and (name, mode) not in chosen})
+    if missing:
+        ap.error(f"--best-of: {args.best_of} has no {args.pipeline} runs of "
+                 f"{', '.join(missing)}")
+    seeds = range(args.first_seed, args.first_seed + args.runs)
     items = [(name, spec, mode, c, seed, args.pipeline, args.budget, args.population,
-              args.checkpoint)
-             for seed in range(args.runs)  # seeds outermost: a cut-short run has even counts
+              args.checkpoint, chosen.get((name, mode)) if c == BEST_OF else None)
+             for seed in seeds  # seeds outermost: a cut-short run has even counts
              for name, spec in specs.items() for mode in args.modes for c in labels
              if (name, mode, c, seed) not in done]
     with out.open("a") as fh, make_executor(args.jobs) as ex:
@@ -296,10 +347,16 @@ def compact(records: list[dict[str, Any]], configurators: list[str], reference: 
         print(f"\nstart mode {mode}, {len(maps)} maps: geometric mean of median f + 10 phi "
               f"over {reference}'s (< 1 better); feasible runs; maps significantly better / "
               f"worse than {reference} / no different")
-        for ratio, c, feas, runs, marks in scan_rows(records, configurators, reference, mode):
-            print(f"{c:36s} {ratio:6.3f}  feasible {feas:4d}/{runs:<4d} "
-                  f"({100 * feas / max(runs, 1):5.1f} %)  {marks.count('+'):2d} / "
-                  f"{marks.count('-'):2d} / {marks.count('~'):2d}")
+        for row in scan_rows(records, configurators, reference, mode):
+            print(scan_line(row))
+
+
+def scan_line(row: tuple[float, str, int, int, list[str]]) -> str:
+    """One `scan_rows` row as `compact` prints it (docs/policy.md quotes these lines)."""
+    ratio, c, feas, runs, marks = row
+    return (f"{c:36s} {ratio:6.3f}  feasible {feas:4d}/{runs:<4d} "
+            f"({100 * feas / max(runs, 1):5.1f} %)  {marks.count('+'):2d} / "
+            f"{marks.count('-'):2d} / {marks.count('~'):2d}")
 
 
 if __name__ == "__main__":

@@ -133,8 +133,9 @@ def test_scan_figure(tmp_path: Path) -> None:
     named configurators in the legend, static ones grey, a ring only for a configurator better
     than the reference on >= 12 maps."""
     plus, tie = ["+"] * 12 + ["~"] * 4, ["~"] * 16
-    panels = {"de": [(0.8, "adaptive", 30, 128, tie), (1.0, "random", 25, 128, tie),
-                     (1.2, "fixed:rand/1:bin:0.5:0.9", 10, 128, tie)],
+    eleven = ["+"] * 11 + ["-"] * 5
+    panels = {"de": [(0.8, "adaptive", 30, 128, eleven), (1.0, "random", 25, 128, tie),
+                     (1.2, "fixed:rand/1:bin:0.5:0.9", 10, 128, ["-"] * 16)],
               "memetic": [(0.9, "lamde", 125, 128, plus), (1.0, "random", 124, 128, tie)]}
     fig = F.scan_figure(panels, "random", "A scan", F.protocol_text("uniform", 10_000, 8))
     axes = fig.get_axes()

@@ -9,6 +9,7 @@ import re
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from tests.conftest import ROOT
@@ -229,42 +230,142 @@ def test_validate_policy_memetic_pipeline_records_and_resumes(tmp_path) -> None:
     assert again.returncode == 0 and len(out.read_text().splitlines()) == 4
 
 
-def test_validate_policy_scan_of_static_configurations(tmp_path) -> None:
-    """`validate_policy.py` as docs/policy.md's configuration scan: static "fixed:..." labels
-    and "grid", another reference, the "repair" pipeline, worker processes that give the same
-    records as one process, the one-line-per-configurator summary, and a bad label refused."""
+def _validate_policy():  # noqa: ANN202
     import importlib.util
 
     spec = importlib.util.spec_from_file_location("vp", ROOT / "benchmarks" / "validate_policy.py")
     vp = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(vp)
+    return vp
+
+
+def _rec(name: str, conf: str, seed: int, score: float, phi: float = 0.0,
+         pipeline: str = "memetic") -> dict:
+    return {"map": name, "mode": "uniform", "configurator": conf, "seed": seed,
+            "pipeline": pipeline, "f": score, "phi": phi, "score": score}
+
+
+def test_scan_rows_by_hand() -> None:
+    """`scan_rows` (docs/policy.md's scan tables and figure): the geometric mean over maps of
+    median ratios (an infeasible outlier moves a mean, not the median), feasible counts, the
+    marks from the configurator's side, best first; `best_of` picks each map's lowest median
+    on complete seeds; `summarise` switches to one line per configurator above `WIDE`."""
+    vp = _validate_policy()
+    recs = []
+    for seed in range(8):
+        recs += [_rec("A", "random", seed, 100.0 + seed), _rec("B", "random", seed, 200.0 + seed)]
+        # "good": 20 % lower on A (every run), 1 infeasible outlier on B, median as random's
+        recs += [_rec("A", "good", seed, 80.0 + seed)]
+        recs += [_rec("B", "good", seed, 1e6 if seed == 0 else 200.0 + seed,
+                      phi=5.0 if seed == 0 else 0.0)]
+        recs += [_rec("A", "bad", seed, 150.0 + seed), _rec("B", "bad", seed, 300.0 + seed)]
+    rows = vp.scan_rows(recs, ["random", "good", "bad"], "random", "uniform")
+    assert [r[1] for r in rows] == ["good", "random", "bad"]
+    good = rows[0]
+    med_b = float(np.median([1e6] + [200.0 + s for s in range(1, 8)]))  # 204.5 vs 203.5
+    assert good[0] == pytest.approx(np.sqrt(83.5 / 103.5 * med_b / 203.5))
+    assert good[2:4] == (15, 16) and good[4] == ["+", "~"]
+    assert rows[2][4] == ["-", "-"] and rows[1][0] == 1.0
+    line = vp.scan_line(good)
+    assert line.startswith("good ") and "feasible   15/16" in line and line.endswith(" 1 /  0 /  1")
+    assert vp.best_of(recs, "uniform") == {"A": "good", "B": "random"}
+    # a seed some configurator lacks is not used to choose
+    assert vp.best_of(recs + [_rec("B", "bad", 9, 1.0)], "uniform")["B"] == "random"
     assert len(vp.GRID) == 42 == len(set(vp.GRID))
+    assert {"fixed:best/1:exp:0.4:0.75", "fixed:rand/1:bin:0.8:0.2",
+            "fixed:rand-to-best/1:bin:0.4:0.9"} <= set(vp.GRID)
+    assert all(g.endswith(("bin:0.4:0.9", "bin:0.8:0.9", "bin:0.4:0.2", "bin:0.8:0.2",
+                           "exp:0.4:0.75", "exp:0.8:0.75")) for g in vp.GRID)
     conf = vp.configurator("fixed:best/1:exp:0.4:0.75", "lamde-v2")
     assert (conf.mutation, conf.crossover, conf.F, conf.Cr) == ("best/1", "exp", 0.4, 0.75)
     with pytest.raises(ValueError, match="fixed:<mutation>"):
         vp.configurator("fixed:best/1:exp", "lamde-v2")
-    base = ("benchmarks/validate_policy.py", "--maps", "examples/maps/small-demo.json",
-            "--modes", "uniform", "--runs", "2", "--budget", "400", "--pipeline", "repair",
-            "--reference", "random")
-    recs = {}
-    for jobs in ("0", "2"):
-        out = tmp_path / f"scan{jobs}.jsonl"
-        r = _script(*base, "--configurators", "random", "fixed:best/1:exp:0.4:0.75",
-                    "fixed:rand/1:bin:0.8:0.2", "--jobs", jobs, "-o", str(out))
+
+
+def test_summary_is_a_table_up_to_wide_configurators(capsys) -> None:  # noqa: ANN001
+    vp = _validate_policy()
+    labels = ["random"] + [f"c{i}" for i in range(vp.WIDE)]
+    recs = [_rec("A", c, s, 100.0 + i + s) for s in range(3) for i, c in enumerate(labels)]
+    vp.summarise(recs, labels[: vp.WIDE], "random")
+    assert "random vs c0: significantly" in capsys.readouterr().out
+    vp.summarise(recs, labels, "random")
+    out = capsys.readouterr().out
+    assert "random vs c0" not in out and "geometric mean of median" in out
+    assert sum(ln.startswith(tuple(labels)) for ln in out.splitlines()) == len(labels)
+
+
+def test_docs_scan_tables_are_what_the_stored_runs_give() -> None:
+    """Every line of docs/policy.md's scan block is the summary line the stored runs give."""
+    vp = _validate_policy()
+    page = (ROOT / "docs" / "policy.md").read_text(encoding="utf-8")
+    block = page.split("```\npipeline de\n", 1)[1].split("```", 1)[0]
+    quoted: dict[str, list[str]] = {"de": []}
+    current = "de"
+    for line in block.splitlines():
+        if line.startswith("pipeline "):
+            current = line.split()[1]
+            quoted[current] = []
+        elif line.strip():
+            quoted[current].append(line)
+    assert set(quoted) == {"de", "repair", "memetic"}
+    records = [json.loads(x) for x in
+               (ROOT / "docs" / "policy" / "scan-suite-uniform.jsonl").read_text().splitlines()]
+    for pipeline, lines in quoted.items():
+        recs = [r for r in records if r["pipeline"] == pipeline]
+        labels = list(dict.fromkeys(r["configurator"] for r in recs))
+        assert len(labels) == 45 and len(recs) == 45 * 16 * 8
+        made = {vp.scan_line(r) for r in vp.scan_rows(vp.complete_seeds(recs, labels), labels,
+                                                      "random", "uniform")}
+        assert lines and set(lines) <= made, (pipeline, set(lines) - made)
+
+
+def test_validate_policy_scan_pipelines_jobs_resume_and_best_of(tmp_path) -> None:  # noqa: ANN001
+    """`validate_policy.py` as docs/policy.md's scan runs it, on two maps: worker processes give
+    the records of direct `run_pipeline` calls (each map its own problem); the "repair"
+    pipeline makes a run feasible that the DE alone leaves infeasible; one file holds both
+    pipelines and each resumes on its own; `--best-of` with `--first-seed` runs each map's
+    choice on new seeds; bad input is one line and exit 2."""
+    from planner_core.policy.problems import build
+    from tests.test_memetic import WIDE_MAP
+
+    vp = _validate_policy()
+    wide = tmp_path / "wide.json"
+    wide.write_text(json.dumps(WIDE_MAP))
+    maps = [str(wide), "examples/maps/small-demo.json"]
+    out = tmp_path / "scan.jsonl"
+    common = ("benchmarks/validate_policy.py", "--maps", *maps, "--modes", "uniform",
+              "--population", "20", "--budget", "600", "--reference", "random", "-o", str(out))
+    confs = ("random", "fixed:best/1:exp:0.4:0.75")
+    for pipeline in ("de", "repair"):
+        r = _script(*common, "--pipeline", pipeline, "--runs", "2", "--jobs", "2",
+                    "--configurators", *confs)
         assert r.returncode == 0, r.stderr
-        recs[jobs] = sorted((x["configurator"], x["seed"], x["f"], x["phi"], x["pipeline"])
-                            for x in map(json.loads, out.read_text().splitlines()))
-    assert recs["0"] == recs["2"] and len(recs["0"]) == 6
-    assert {x[4] for x in recs["0"]} == {"repair"}
-    assert "random vs fixed:rand/1:bin:0.8:0.2" in r.stdout
-    out = tmp_path / "grid.jsonl"
-    r = _script("benchmarks/validate_policy.py", "--maps", "examples/maps/small-demo.json",
-                "--modes", "uniform", "--runs", "1", "--budget", "300", "--configurators",
-                "random", "grid", "--reference", "random", "--jobs", "2", "-o", str(out))
+    recs = [json.loads(x) for x in out.read_text().splitlines()]
+    assert len(recs) == 2 * 2 * 2 * 2
+    for rec in recs:
+        name = rec["map"]
+        problem = build({"kind": "map", "map": json.loads(
+            (wide if name == "wide" else ROOT / maps[1]).read_text())})
+        res = vp.run_pipeline(problem, "uniform", rec["pipeline"],
+                              vp.configurator(rec["configurator"], "lamde-v2"), rec["seed"],
+                              600, 20)
+        assert (res.f, res.phi) == (rec["f"], rec["phi"]), rec
+    key = {(x["map"], x["configurator"], x["seed"], x["pipeline"]): x for x in recs}
+    assert key["wide", "random", 0, "de"]["phi"] > 0 == key["wide", "random", 0, "repair"]["phi"]
+    again = _script(*common, "--pipeline", "de", "--runs", "2", "--configurators", *confs)
+    assert again.returncode == 0 and len(out.read_text().splitlines()) == 16
+    held = tmp_path / "held.jsonl"
+    r = _script(*common[:-1], str(held), "--pipeline", "repair", "--configurators", "random",
+                "--best-of", str(out), "--first-seed", "2", "--runs", "1")
     assert r.returncode == 0, r.stderr
-    assert len(out.read_text().splitlines()) == 43
-    lines = [ln for ln in r.stdout.splitlines() if ln.startswith(("random ", "fixed:"))]
-    assert len(lines) == 43 and re.search(r"^random\s+1\.000\s+feasible", r.stdout, re.M)
-    bad = _script(*base, "--configurators", "random", "fixed:nope:bin:0.5:0.5", "-o",
-                  str(tmp_path / "bad.jsonl"))
-    assert bad.returncode == 2 and "fixed:nope:bin:0.5:0.5" in bad.stderr
+    chosen = vp.best_of([x for x in recs if x["pipeline"] == "repair"], "uniform")
+    got = [json.loads(x) for x in held.read_text().splitlines()]
+    assert {x["seed"] for x in got} == {2} and len(got) == 4
+    assert {x["map"]: x["chosen"] for x in got if x["configurator"] == vp.BEST_OF} == chosen
+    for bad, needle in ((("--configurators", "random", "fixed:nope:bin:0.5:0.5"), "fixed:nope"),
+                        (("--configurators", "adaptive"), "--reference"),
+                        (("--configurators", "random", "--jobs", "-1"), "--jobs"),
+                        (("--configurators", "random", "--best-of", str(held), "--pipeline",
+                          "memetic"), "--best-of")):
+        r = _script(*common[:-1], str(tmp_path / "bad.jsonl"), *bad)
+        assert r.returncode == 2 and needle in r.stderr.strip().splitlines()[-1], r.stderr
