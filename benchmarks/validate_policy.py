@@ -157,19 +157,22 @@ def _job(item: tuple[Any, ...]) -> dict[str, Any]:
            "score": float(penalised_score(r.f, r.phi)), "seconds": time.perf_counter() - t0}
     if chosen:
         rec["chosen"] = chosen
+    if runs == "lamde":
+        rec["checkpoint"] = checkpoint
     return rec
 
 
 def best_of(records: list[dict[str, Any]], mode: str) -> dict[str, str]:
     """Per map, the configurator with the lowest median score among `records` of start `mode`
-    (one pipeline's runs of a scan), on the seeds every configurator completed; ties go to the
-    first label in sorted order. For `--best-of`: the per-map choice made on these runs, to be
-    validated on other seeds."""
+    (one pipeline's runs of a scan; earlier `BEST_OF` records are left out), on the seeds every
+    configurator run on that map completed; ties go to the first label in sorted order. For
+    `--best-of`: the per-map choice made on these runs, to be validated on other seeds."""
     recs = [r for r in records if r["mode"] == mode and r["configurator"] != BEST_OF]
-    recs = complete_seeds(recs, sorted({r["configurator"] for r in recs}))
     scores: dict[tuple[str, str], list[float]] = {}
-    for r in recs:
-        scores.setdefault((r["map"], r["configurator"]), []).append(r["score"])
+    for name in sorted({r["map"] for r in recs}):
+        own = [r for r in recs if r["map"] == name]
+        for r in complete_seeds(own, sorted({r["configurator"] for r in own})):
+            scores.setdefault((name, r["configurator"]), []).append(r["score"])
     best: dict[str, tuple[float, str]] = {}
     for (name, label), xs in sorted(scores.items()):
         med = float(np.median(xs))
@@ -213,17 +216,32 @@ def main() -> None:
                     "lowest median score in the runs file SCAN (same pipeline and start mode)")
     ap.add_argument("-o", "--output", required=True, help="JSONL of runs (appended, resumable)")
     args = ap.parse_args()
-    if args.jobs < 0 or args.first_seed < 0 or args.runs < 1:
-        ap.error("--jobs and --first-seed must be >= 0 and --runs >= 1")
+    if min(args.jobs, args.first_seed) < 0 or min(args.runs, args.count, args.budget,
+                                                  args.population) < 1:
+        ap.error("--jobs and --first-seed must be >= 0; --runs, --count, --budget and "
+                 "--population >= 1")
     labels = list(dict.fromkeys(c for name in args.configurators
                                 for c in (GRID if name == "grid" else (name,))))
+    if BEST_OF in labels:
+        ap.error(f"--configurators: {BEST_OF!r} is added by --best-of SCAN, not named")
+    out = Path(args.output)
     chosen: dict[tuple[str, str], str] = {}
     if args.best_of:
+        if Path(args.best_of).resolve() == out.resolve():
+            ap.error("--best-of: the scan must not be the output file (its held-out runs would "
+                     "change the choice)")
         scan = [r for r in _read(Path(args.best_of)) if r.get("pipeline", "de") == args.pipeline]
         for mode in args.modes:
             for name, label in best_of(scan, mode).items():
                 chosen[name, mode] = label
         labels.append(BEST_OF)
+        for r in _read(out):
+            if (r.get("pipeline", "de") == args.pipeline and r["configurator"] == BEST_OF
+                    and r.get("chosen") != chosen.get((r["map"], r["mode"]))):
+                ap.error(f"--best-of: {out} holds {BEST_OF} runs of {r['map']} with "
+                         f"{r.get('chosen')!r}; {args.best_of} now chooses "
+                         f"{chosen.get((r['map'], r['mode']))!r} (a changed scan: write to a "
+                         "new file)")
     if args.reference not in labels:
         ap.error(f"--reference: {args.reference!r} is not among --configurators")
     for label in labels + list(chosen.values()):
@@ -232,7 +250,6 @@ def main() -> None:
                 configurator(label, args.checkpoint)
         except ValueError as e:
             ap.error(str(e))
-    out = Path(args.output)
     done = {(r["map"], r["mode"], r["configurator"], r["seed"]) for r in _read(out)
             if r.get("pipeline", "de") == args.pipeline}
     specs = _specs(args.maps, args.count)

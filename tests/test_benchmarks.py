@@ -269,8 +269,27 @@ def test_scan_rows_by_hand() -> None:
     line = vp.scan_line(good)
     assert line.startswith("good ") and "feasible   15/16" in line and line.endswith(" 1 /  0 /  1")
     assert vp.best_of(recs, "uniform") == {"A": "good", "B": "random"}
-    # a seed some configurator lacks is not used to choose
-    assert vp.best_of(recs + [_rec("B", "bad", 9, 1.0)], "uniform")["B"] == "random"
+
+
+def test_best_of_by_hand() -> None:
+    """`best_of`: lowest median (not mean), ties to the first label in sorted order, only the
+    seeds every configurator on that map completed (per map), earlier best-of-scan records and
+    other start modes left out."""
+    vp = _validate_policy()
+    recs = []
+    for seed in range(5):
+        recs += [_rec("A", "random", seed, 100.0), _rec("A", "zeta", seed, 100.0),
+                 _rec("A", "alpha", seed, 100.0)]  # a three-way tie on A
+        # B: "spiky" has the lower mean (one run far below) but the higher median
+        recs += [_rec("B", "random", seed, 200.0),
+                 _rec("B", "spiky", seed, 1.0 if seed == 0 else 210.0)]
+    recs += [_rec("A", vp.BEST_OF, 0, 0.0), {**_rec("A", "zeta", 0, 0.0), "mode": "seeded"}]
+    # seeds 5-9 of "spiky" alone on B would flip its median; they are not complete on B
+    recs += [_rec("B", "spiky", seed, 0.0) for seed in range(5, 10)]
+    # map C has a configurator of its own, which does not empty the other maps' choice
+    recs += [_rec("C", "other", seed, 5.0) for seed in range(2)]
+    assert vp.best_of(recs, "uniform") == {"A": "alpha", "B": "random", "C": "other"}
+    assert vp.best_of(recs, "seeded") == {"A": "zeta"}
     assert len(vp.GRID) == 42 == len(set(vp.GRID))
     assert {"fixed:best/1:exp:0.4:0.75", "fixed:rand/1:bin:0.8:0.2",
             "fixed:rand-to-best/1:bin:0.4:0.9"} <= set(vp.GRID)
@@ -323,8 +342,8 @@ def test_validate_policy_scan_pipelines_jobs_resume_and_best_of(tmp_path) -> Non
     """`validate_policy.py` as docs/policy.md's scan runs it, on two maps: worker processes give
     the records of direct `run_pipeline` calls (each map its own problem); the "repair"
     pipeline makes a run feasible that the DE alone leaves infeasible; one file holds both
-    pipelines and each resumes on its own; `--best-of` with `--first-seed` runs each map's
-    choice on new seeds; bad input is one line and exit 2."""
+    pipelines and each resumes on its own; `--best-of` with `--first-seed` runs each map's own
+    choice on new seeds; bad input is one error line and exit 2."""
     from planner_core.policy.problems import build
     from tests.test_memetic import WIDE_MAP
 
@@ -332,40 +351,92 @@ def test_validate_policy_scan_pipelines_jobs_resume_and_best_of(tmp_path) -> Non
     wide = tmp_path / "wide.json"
     wide.write_text(json.dumps(WIDE_MAP))
     maps = [str(wide), "examples/maps/small-demo.json"]
+    problems = {"wide": build({"kind": "map", "map": WIDE_MAP}),
+                "small-demo": build({"kind": "map", "map": json.loads(
+                    (ROOT / maps[1]).read_text())})}
+
+    def direct(rec: dict, label: str) -> tuple[float, float]:
+        res = vp.run_pipeline(problems[rec["map"]], "uniform", rec["pipeline"],
+                              vp.configurator(label, "lamde-v2"), rec["seed"], 600, 20)
+        return res.f, res.phi
+
     out = tmp_path / "scan.jsonl"
     common = ("benchmarks/validate_policy.py", "--maps", *maps, "--modes", "uniform",
-              "--population", "20", "--budget", "600", "--reference", "random", "-o", str(out))
+              "--population", "20", "--budget", "600", "--reference", "random")
     confs = ("random", "fixed:best/1:exp:0.4:0.75")
     for pipeline in ("de", "repair"):
         r = _script(*common, "--pipeline", pipeline, "--runs", "2", "--jobs", "2",
-                    "--configurators", *confs)
+                    "--configurators", *confs, "-o", str(out))
         assert r.returncode == 0, r.stderr
     recs = [json.loads(x) for x in out.read_text().splitlines()]
     assert len(recs) == 2 * 2 * 2 * 2
     for rec in recs:
-        name = rec["map"]
-        problem = build({"kind": "map", "map": json.loads(
-            (wide if name == "wide" else ROOT / maps[1]).read_text())})
-        res = vp.run_pipeline(problem, "uniform", rec["pipeline"],
-                              vp.configurator(rec["configurator"], "lamde-v2"), rec["seed"],
-                              600, 20)
-        assert (res.f, res.phi) == (rec["f"], rec["phi"]), rec
+        assert direct(rec, rec["configurator"]) == (rec["f"], rec["phi"]), rec
     key = {(x["map"], x["configurator"], x["seed"], x["pipeline"]): x for x in recs}
     assert key["wide", "random", 0, "de"]["phi"] > 0 == key["wide", "random", 0, "repair"]["phi"]
-    again = _script(*common, "--pipeline", "de", "--runs", "2", "--configurators", *confs)
+    again = _script(*common, "--pipeline", "de", "--runs", "2", "--configurators", *confs,
+                    "-o", str(out))
     assert again.returncode == 0 and len(out.read_text().splitlines()) == 16
+
+    # --best-of on a written scan whose winners differ per map
+    scan = tmp_path / "chosen-scan.jsonl"
+    want = {"wide": "fixed:best/1:exp:0.4:0.75", "small-demo": "random"}
+    scan.write_text("".join(json.dumps(_rec(name, c, seed, 1.0 if c == want[name] else 2.0,
+                                            pipeline="repair")) + "\n"
+                            for name in want for c in confs for seed in (0, 1)))
     held = tmp_path / "held.jsonl"
-    r = _script(*common[:-1], str(held), "--pipeline", "repair", "--configurators", "random",
-                "--best-of", str(out), "--first-seed", "2", "--runs", "1")
+    best = ("--pipeline", "repair", "--configurators", "random", "--best-of", str(scan))
+    r = _script(*common, *best, "--first-seed", "2", "--runs", "1", "-o", str(held))
     assert r.returncode == 0, r.stderr
-    chosen = vp.best_of([x for x in recs if x["pipeline"] == "repair"], "uniform")
     got = [json.loads(x) for x in held.read_text().splitlines()]
     assert {x["seed"] for x in got} == {2} and len(got) == 4
-    assert {x["map"]: x["chosen"] for x in got if x["configurator"] == vp.BEST_OF} == chosen
-    for bad, needle in ((("--configurators", "random", "fixed:nope:bin:0.5:0.5"), "fixed:nope"),
+    picked = {x["map"]: x for x in got if x["configurator"] == vp.BEST_OF}
+    assert {m: x["chosen"] for m, x in picked.items()} == want
+    for rec in picked.values():
+        assert direct(rec, rec["chosen"]) == (rec["f"], rec["phi"])
+    # a changed scan on resume, the scan as the output, the label named by hand: refused
+    scan.write_text(scan.read_text().replace('"score": 1.0', '"score": 3.0'))
+    for bad, needle in ((("-o", str(held), *best), "now chooses"),
+                        (("-o", str(scan), *best), "must not be the output"),
+                        (("-o", str(held), "--configurators", "random", vp.BEST_OF),
+                         "--configurators"),
+                        (("--configurators", "random", "fixed:nope:bin:0.5:0.5"), "fixed:nope"),
                         (("--configurators", "adaptive"), "--reference"),
                         (("--configurators", "random", "--jobs", "-1"), "--jobs"),
+                        (("--configurators", "random", "--first-seed", "-1"), "--first-seed"),
+                        (("--configurators", "random", "--runs", "0"), "--runs"),
                         (("--configurators", "random", "--best-of", str(held), "--pipeline",
                           "memetic"), "--best-of")):
-        r = _script(*common[:-1], str(tmp_path / "bad.jsonl"), *bad)
-        assert r.returncode == 2 and needle in r.stderr.strip().splitlines()[-1], r.stderr
+        args = bad if "-o" in bad else (*bad, "-o", str(tmp_path / "bad.jsonl"))
+        r = _script(*common, "--runs", "1", *args)
+        assert r.returncode == 2 and needle in r.stderr.strip().splitlines()[-1], (bad, r.stderr)
+    assert len(held.read_text().splitlines()) == 4 and not (tmp_path / "bad.jsonl").exists()
+
+
+def test_docs_heldout_and_25_run_figures_are_what_the_stored_runs_give() -> None:
+    """docs/policy.md's held-out and 25-run figures, recomputed from the stored runs."""
+    vp = _validate_policy()
+    page = " ".join((ROOT / "docs" / "policy.md").read_text(encoding="utf-8").split())
+
+    def better(rows: list, label: str) -> list[str]:
+        return [m for m, mark in zip(maps, next(r[4] for r in rows if r[1] == label),
+                                     strict=True) if mark == "+"]
+
+    held = [json.loads(x) for x in
+            (ROOT / "docs" / "policy" / "scan-heldout.jsonl").read_text().splitlines()]
+    for pipeline, maps_better in (("memetic", "T01-T03, T09"), ("repair", "T01-T04")):
+        recs = [r for r in held if r["pipeline"] == pipeline]
+        maps = sorted({r["map"] for r in recs})
+        rows = vp.scan_rows(recs, ["random", vp.BEST_OF], "random", "uniform")
+        ratio, _, feas, runs, _ = next(r for r in rows if r[1] == vp.BEST_OF)
+        assert f"{feas}/{runs}" in page and f"{ratio:.3f}" in page
+        assert len(better(rows, vp.BEST_OF)) == 4 and f"({maps_better})" in page
+    top = [json.loads(x) for x in
+           (ROOT / "docs" / "policy" / "scan-top-25runs.jsonl").read_text().splitlines()]
+    recs = [r for r in top if r["pipeline"] == "memetic"]
+    maps = sorted({r["map"] for r in recs})
+    labels = list(dict.fromkeys(r["configurator"] for r in recs))
+    rows = vp.scan_rows(recs, labels, "random", "uniform")
+    assert better(rows, "fixed:rand-to-best/1:bin:0.4:0.9") == ["T01", "T02", "T03", "T09", "T10"]
+    assert better(rows, "adaptive") == ["T01", "T02", "T03", "T04"]
+    assert "on 5 maps (T01-T03, T09, T10; 97.0 % feasible)" in page
