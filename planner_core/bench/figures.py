@@ -41,10 +41,10 @@ __all__ = [
     "convergence_figure",
     "imax_figure",
     "optimiser_style",
-    "scan_figure",
     "paths_figure",
     "protocol_text",
     "save",
+    "scan_figure",
     "scores_figure",
     "use_log_scale",
 ]
