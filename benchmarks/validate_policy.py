@@ -244,10 +244,9 @@ def main() -> None:
                          "new file)")
     if args.reference not in labels:
         ap.error(f"--reference: {args.reference!r} is not among --configurators")
-    for label in labels + list(chosen.values()):
+    for label in dict.fromkeys([c for c in labels if c != BEST_OF] + list(chosen.values())):
         try:
-            if label != BEST_OF:
-                configurator(label, args.checkpoint)
+            configurator(label, args.checkpoint)
         except ValueError as e:
             ap.error(str(e))
     done = {(r["map"], r["mode"], r["configurator"], r["seed"]) for r in _read(out)
@@ -307,13 +306,11 @@ def summarise(records: list[dict[str, Any]], configurators: list[str],
         wins = {c: [0, 0, 0] for c in others}
         for name in sorted({r["map"] for r in records if r["mode"] == mode}):
             cells = []
-            scores: dict[str, list[float]] = {}
-            for c in [reference] + others:
-                scores[c] = [r["score"] for r in records if r["map"] == name
-                             and r["mode"] == mode and r["configurator"] == c]
+            runs = {c: [r for r in records if r["map"] == name and r["mode"] == mode
+                        and r["configurator"] == c] for c in configurators}
+            scores = {c: [r["score"] for r in rs] for c, rs in runs.items()}
             for c in configurators:
-                rs = [r for r in records if r["map"] == name and r["mode"] == mode
-                      and r["configurator"] == c]
+                rs = runs[c]
                 feas = sum(r["phi"] == 0 for r in rs)
                 mark = ""
                 if c != reference:

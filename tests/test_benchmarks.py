@@ -31,6 +31,16 @@ def test_bench_plan_runs_on_a_small_map() -> None:
     assert "neither torch nor matplotlib" in out  # the planning path stays light
 
 
+def _script_module(name: str):  # noqa: ANN202
+    """benchmarks/<name>.py imported as a module (the scripts are not a package)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(name, ROOT / "benchmarks" / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
 def _script(*args: str, timeout: int = 600) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, *args], cwd=ROOT, capture_output=True, text=True,
                           timeout=timeout)
@@ -169,12 +179,7 @@ def test_refresh_best_known_stores_only_plans_the_sim_passes(tmp_path) -> None:
 def test_refresh_best_known_replaces_a_stored_plan_the_sim_fails(tmp_path) -> None:
     """A stored best-known plan that fails the sim gives way to the best record that passes,
     even with a higher f (BestKnown.offer(replace=True)); --check-stored reports it first."""
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("refresh_best_known",
-                                                  ROOT / "benchmarks/refresh_best_known.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
+    mod = _script_module("refresh_best_known")
     from planner_core.bench.limits import file_sha256
 
     real = _t01_plan()
@@ -231,12 +236,7 @@ def test_validate_policy_memetic_pipeline_records_and_resumes(tmp_path) -> None:
 
 
 def _validate_policy():  # noqa: ANN202
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("vp", ROOT / "benchmarks" / "validate_policy.py")
-    vp = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(vp)
-    return vp
+    return _script_module("validate_policy")
 
 
 def _rec(name: str, conf: str, seed: int, score: float, phi: float = 0.0,

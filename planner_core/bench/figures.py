@@ -510,10 +510,10 @@ def scan_figure(panels: Mapping[str, Sequence[tuple[float, str, int, int, Sequen
     for ax, name in zip(axes, names, strict=True):
         rows = panels[name]
         for ratio, label, feas, runs, marks in rows:
-            x, named = 100.0 * feas / max(runs, 1), not label.startswith("fixed:")
-            style = optimiser_style(label) if named else {"color": "0.6"}
-            ax.plot([x], [ratio], "o", color=style["color"], ms=7 if named else 4,
-                    zorder=3 if named else 2)
+            x, static = 100.0 * feas / max(runs, 1), label.startswith("fixed:")
+            colour = "0.6" if static else optimiser_style(label)["color"]
+            ax.plot([x], [ratio], "o", color=colour, ms=4 if static else 7,
+                    zorder=2 if static else 3)
             if list(marks).count("+") >= 12:
                 ax.plot([x], [ratio], "o", mfc="none", mec="k", ms=12, zorder=4)
         ax.axhline(1.0, color="k", lw=0.8, alpha=0.5)
