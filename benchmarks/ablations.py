@@ -161,7 +161,11 @@ def _train_argv(args: argparse.Namespace, out_dir: Path, source: list[str],
 
 
 def _effective_specs(source: list[str], fixed: bool, dims: str) -> list[dict[str, Any]]:
-    from planner_core.policy.problems import bbob_training_specs, read_trainset, with_encoding
+    from planner_core.learning.policy.problems import (
+        bbob_training_specs,
+        read_trainset,
+        with_encoding,
+    )
 
     if source[0] == "--bbob":
         specs = bbob_training_specs(int(source[1]), tuple(int(d) for d in dims.split(",")))
@@ -240,7 +244,7 @@ def _trained(plan: dict[str, Any], args: argparse.Namespace) -> bool:
 
 def _bbob_dims(args: argparse.Namespace) -> str:
     if args.full_db:
-        from planner_core.lam import FULL
+        from planner_core.learning.lam import FULL
 
         return ",".join(str(d) for d in FULL.dimensions)
     return args.db_dims
@@ -249,7 +253,7 @@ def _bbob_dims(args: argparse.Namespace) -> str:
 def evaluate(args: argparse.Namespace, out: Path, plans: dict[str, dict[str, Any]],
              command: str) -> None:
     """Step 3: every variant on the suite through the benchmark runner (resumable)."""
-    from planner_core.baselines import policy_spec
+    from planner_core.bench.baselines import policy_spec
     from planner_core.bench.runner import run_bench
 
     specs = []
@@ -322,7 +326,7 @@ def parse(argv: list[str] | None = None) -> argparse.Namespace:
         ap.error(f"--variants: unknown {', '.join(bad)}; choose from {', '.join(VARIANTS)}")
     args.variants = [REFERENCE] + [v for v in VARIANTS if v in names and v != REFERENCE]
     args.tasks = [t for v in (args.tasks or []) for t in v.split(",") if t]
-    from planner_core.baselines import REGISTRY
+    from planner_core.bench.baselines import REGISTRY
 
     args.baselines = [b for b in args.baselines.split(",") if b]
     bad = [b for b in args.baselines if b not in REGISTRY]

@@ -23,7 +23,7 @@ import numpy as np
 
 from planner_core import Problem, load_map
 from planner_core import defaults as D
-from planner_core.geometry import overlap_lengths_reference
+from planner_core.model.geometry import overlap_lengths_reference
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_MAPS = [str(ROOT / "examples" / "maps" / "suite" / "T16.json"), "campus-500"]

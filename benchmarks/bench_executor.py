@@ -261,15 +261,15 @@ class TimedExecutor:
 
 def _load_rollout(_: int) -> int:
     """Start-up task: the worker imports the rollout code (the planner, numba's cached kernels)."""
-    import planner_core.policy.rollout  # noqa: F401
+    import planner_core.learning.policy.rollout  # noqa: F401
 
     return os.getpid()
 
 
 def train_run(backend: str, workers: int, args: argparse.Namespace, out: Path) -> dict[str, Any]:
     """One timed short training; returns the timings and the weights' bytes."""
-    from planner_core.policy import ppo, rollout
-    from planner_core.policy.problems import default_training_specs
+    from planner_core.learning.policy import ppo, rollout
+    from planner_core.learning.policy.problems import default_training_specs
 
     cfg = ppo.PPOConfig(epochs=args.train_epochs, envs=args.train_envs,
                         population=args.train_population, budget=args.train_budget, seed=0)
@@ -323,8 +323,8 @@ def train_run(backend: str, workers: int, args: argparse.Namespace, out: Path) -
 
 def warm_up(args: argparse.Namespace) -> None:
     """A tiny untimed training in this process: torch's and numba's first-call costs."""
-    from planner_core.policy import ppo
-    from planner_core.policy.problems import default_training_specs
+    from planner_core.learning.policy import ppo
+    from planner_core.learning.policy.problems import default_training_specs
 
     cfg = ppo.PPOConfig(epochs=1, envs=1, population=args.train_population,
                         budget=2 * args.train_population, n_steps=1)

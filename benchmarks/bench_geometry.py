@@ -13,7 +13,7 @@ import time
 
 import numpy as np
 
-from planner_core.geometry import (
+from planner_core.model.geometry import (
     Obstacles,
     overlap_lengths,
     overlap_lengths_reference,

@@ -18,11 +18,11 @@ from pathlib import Path
 
 import numpy as np
 
-from planner_core.lam import DEFAULT, FULL, BBOBProblem, probe
-from planner_core.lam.ela import ela_features
-from planner_core.lam.encoder import LearnedExtractor
-from planner_core.lam.probe import N_PROBE, blas_single_thread
-from planner_core.problem import Problem
+from planner_core.learning.lam import DEFAULT, FULL, BBOBProblem, probe
+from planner_core.learning.lam.ela import ela_features
+from planner_core.learning.lam.encoder import LearnedExtractor
+from planner_core.learning.lam.probe import N_PROBE, blas_single_thread
+from planner_core.model.problem import Problem
 
 ROOT = Path(__file__).resolve().parent.parent
 

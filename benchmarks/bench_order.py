@@ -1,6 +1,7 @@
 """The constructive starts' visiting order against OR-Tools' (issue 14): path time and CPU time.
 
-For every site set the constructive pipeline builds (`planner_core.construct.site_sets`) on the
+For every site set the constructive pipeline builds (`planner_core.search.construct.site_sets`) on
+the
 given suite maps and seeds, the open path start -> sites -> end is ordered twice on the same
 obstacle-aware Eq. 1 leg-time matrix (`construct.LegTimes`): by our own `routing.open_path`
 (`construct.order_sites`, the planning path's) and by OR-Tools' routing solver
@@ -25,10 +26,10 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=3, help="seeds 0 .. N-1 (k-means inits)")
     args = ap.parse_args()
 
-    from planner_core import construct
-    from planner_core.baselines.engineering import ortools_order
-    from planner_core.problem import Problem
-    from planner_core.routing import path_cost
+    from planner_core.bench.baselines.engineering import ortools_order
+    from planner_core.model.problem import Problem
+    from planner_core.model.routing import path_cost
+    from planner_core.search import construct
     from planner_core.suite import suite_maps
 
     maps = suite_maps()

@@ -1,10 +1,10 @@
 """Planning speed and memory: `plan` on the largest suite map at 10,000 evaluations.
 
 Prints wall time split into evaluation, seeding (the sensor- and obstacle-aware initial
-population), starts (building the constructive plans, `planner_core.construct`, and
+population), starts (building the constructive plans, `planner_core.search.construct`, and
 descending the best of them; their evaluations are under evaluation), optimiser overhead (DE
 ask/tell/configurator), polish, and descent (the final plan's descent, structural search and
-kicks, `planner_core.descent.finish`, its evaluations included),
+kicks, `planner_core.search.final.finish`, its evaluations included),
 plus peak memory
 (ru_maxrss) and whether torch or matplotlib were imported on the planning path.
 

@@ -20,9 +20,9 @@ from pathlib import Path
 from typing import Any
 
 from planner_core import Problem, load_map
-from planner_core.de import run
-from planner_core.de.types import max_generations
-from planner_core.policy import PolicyConfigurator, param_count
+from planner_core.learning.policy import PolicyConfigurator, param_count
+from planner_core.search.de import run
+from planner_core.search.de.types import max_generations
 
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_MAPS = [ROOT / "examples" / "maps" / "suite" / n for n in ("T08.json", "T16.json")]

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 from scipy.stats import rankdata
 
-from planner_core.baselines import OptimiserSpec
+from planner_core.bench.baselines import OptimiserSpec
 from planner_core.defaults import SCORE_FACTOR
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -33,7 +33,7 @@ def entry(sigma0: float) -> OptimiserSpec:
     """The benchmark entry of `cmaes-seeded-lp` with this sigma0."""
     return OptimiserSpec(
         f"cmaes-seeded-lp-s{sigma0:g}",
-        "planner_core.baselines.cmaes:optimise",
+        "planner_core.bench.baselines.cmaes:optimise",
         f"cmaes-seeded-lp with sigma0 {sigma0:g} in the unit box (issue 14's sweep)",
         kwargs={"seeded": True, "sigma0": float(sigma0)},
     )

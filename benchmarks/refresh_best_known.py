@@ -44,7 +44,7 @@ ROOT = Path(__file__).resolve().parents[1]
 def sim_check(map_path: Path, hover_points: Any, hover_times: Any) -> tuple[bool, float, str]:
     """(passed, the sim's f, failed verdicts) of a plan flown as its mission in the simulator."""
     from lamde_mission.items import plan_to_items
-    from planner_core.mapio import load_map
+    from planner_core.model.mapio import load_map
     from sim import replay, verify
 
     m = load_map(map_path)

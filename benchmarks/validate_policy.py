@@ -12,11 +12,11 @@ step on the elite every 10 generations (from a uniform start: `memetic="auto"`, 
 of unserved sensors) and the hover-time LP on the final population's elite, no constructive
 starts and no descents (`optimise(..., lp=True, memetic="auto")`: the DE still decides the
 plan's structure, the repair makes it feasible); "planner", what `plan` does: the
-benchmark's `planner` entry (`planner_core.baselines.REGISTRY["planner"]`, its keyword
+benchmark's `planner` entry (`planner_core.bench.baselines.REGISTRY["planner"]`, its keyword
 arguments: constructive starts and their descents, the DE with the memetic step from a uniform
 start, the hover-time LP on the final population's elite, the final plan's descent, structural
 search and kicks) with the configurator under test; "repair", the DE with only the memetic
-step's repair of an infeasible elite (`planner_core.memetic.repair`: a hover point for each
+step's repair of an infeasible elite (`planner_core.search.refine.repair`: a hover point for each
 unserved sensor, blocked legs re-routed; no 2-opt, LP or removal moves on feasible plans, no
 polish). Records carry their pipeline; one JSONL may hold several (records written before the
 planner entry had starts and descents are the pipeline of their time).
@@ -31,7 +31,7 @@ seeds it validates that per-map choice on held-out runs. `--jobs N` runs on N wo
 (`planner_core.execution`); the records do not depend on it.
 
 Maps: "validation" (generator seeds 8000 + k, disjoint from the suite's 2025 and the training
-maps' 7000 + k; see planner_core.policy.problems), "training" (the first `--count` training
+maps' 7000 + k; see planner_core.learning.policy.problems), "training" (the first `--count` training
 maps, `default_training_specs`), "suite" (the 16 committed suite maps), or map files. Each run
 is appended to a JSONL file as it finishes, so an interrupted validation resumes where it
 stopped.
@@ -60,16 +60,16 @@ from typing import Any
 
 import numpy as np
 
-from planner_core.baselines import REGISTRY
-from planner_core.baselines.de import optimise
+from planner_core.bench.baselines import REGISTRY
+from planner_core.bench.baselines.de import optimise
 from planner_core.bench.stats import wilcoxon_mark
-from planner_core.de import make_configurator, run
-from planner_core.de.operators import MUTATIONS
 from planner_core.execution import make_executor
-from planner_core.policy import PolicyConfigurator
-from planner_core.policy.problems import build, spec_name, validation_specs
-from planner_core.problem import penalised_score
-from planner_core.starts import with_init
+from planner_core.learning.policy import PolicyConfigurator
+from planner_core.learning.policy.problems import build, spec_name, validation_specs
+from planner_core.model.problem import penalised_score
+from planner_core.search.de import make_configurator, run
+from planner_core.search.de.operators import MUTATIONS
+from planner_core.search.init_modes import with_init
 
 ROOT = Path(__file__).resolve().parent.parent
 SUITE = ROOT / "examples" / "maps" / "suite"
@@ -87,11 +87,11 @@ GRID = tuple(f"fixed:{m}:{cx}:{F}:{cr}" for m in MUTATIONS
 
 
 def _specs(which: list[str], count: int) -> dict[str, dict[str, Any]]:
-    """Problem specs (JSON-able, `planner_core.policy.problems`) by map name."""
+    """Problem specs (JSON-able, `planner_core.learning.policy.problems`) by map name."""
     if which == ["validation"]:
         return {spec_name(s): s for s in validation_specs(count)}
     if which == ["training"]:
-        from planner_core.policy.problems import default_training_specs
+        from planner_core.learning.policy.problems import default_training_specs
 
         return {spec_name(s): s for s in default_training_specs(count)}
     paths = sorted(SUITE.glob("T*.json")) if which == ["suite"] else [Path(p) for p in which]
@@ -130,7 +130,7 @@ def run_pipeline(problem: Any, mode: str, pipeline: str, conf: Any, seed: int, b
     if pipeline == "repair":
         from functools import partial
 
-        from planner_core.memetic import repair
+        from planner_core.search.refine import repair
 
         refine = partial(repair, problem)
     return run(with_init(problem, mode), configurator=conf, seed=seed, population=population,

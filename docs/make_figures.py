@@ -37,7 +37,7 @@ REPORTS: list[tuple[str, str, str, list[str]]] = [
     ("docs/reduced/runs", "docs/reduced/protocol.md", "de-adaptive", []),
     ("docs/reduced/imax-runs", "docs/reduced/imax.md", "de-lamde", ["--no-limits"]),
     ("results-with-metabox", "docs/results.md", "de-lamde",
-     ["--policy-checkpoint", "planner_core/policy/checkpoints/lamde-v2",
+     ["--policy-checkpoint", "planner_core/learning/policy/checkpoints/lamde-v2",
       "--ablations", "docs/studies/ablations", "--imax", "docs/studies/imax"]),
 ]
 

@@ -25,7 +25,7 @@ from pathlib import Path
 import lamde_mission
 from lamde_mission.formats import read_mission, write_mission
 from lamde_mission.vehicle import MockVehicle, VehicleError, upload_mission
-from planner_core.mapio import load_map
+from planner_core.model.mapio import load_map
 
 ROOT = Path(__file__).resolve().parent
 DEMO = ROOT / "maps" / "small-demo.json"

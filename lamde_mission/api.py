@@ -12,14 +12,14 @@ import numpy as np
 
 from lamde_mission.result import Plan
 from planner_core import defaults as _defaults
-from planner_core.model import deb_better, deb_not_worse
+from planner_core.model.formulas import deb_better, deb_not_worse
 
 __all__ = ["plan", "CONFIGURATORS", "INIT_MODES"]
 
 #: configurator names accepted by `plan` (from `planner_core.defaults`); the adaptive DE is the
 #: default until a trained policy beats it on unseen maps
 CONFIGURATORS = _defaults.CONFIGURATORS
-#: start modes accepted by `plan` (planner_core.starts), the default first
+#: start modes accepted by `plan` (planner_core.search.init_modes), the default first
 INIT_MODES = _defaults.INIT_MODES
 
 
@@ -103,27 +103,28 @@ def plan(
     budget, best_f, best_phi and feasible_fraction. The plan is made on `Map.planning_map()`:
     obstacles inflated by the map's `safety.clearance`, required data raised by its
     `safety.data_margin` (the map itself when both are 0); `breakdown` is on that map. With
-    `polish`, the hover times of the final population's `planner_core.polish.ELITE` Deb-best
-    individuals are re-solved by the LP of `planner_core.polish`; the Deb-best of those is kept
+    `polish`, the hover times of the final population's `planner_core.search.polish.ELITE` Deb-best
+    individuals are re-solved by the LP of `planner_core.search.polish`; the Deb-best of those is
+    kept
     if not worse than the DE's best under Deb's rule. `configurator`: "adaptive" (default),
-    "fixed", "random", "lamde" (the shipped learned policy, planner_core.policy) or a
+    "fixed", "random", "lamde" (the shipped learned policy, planner_core.learning.policy) or a
     configurator object. `init`: "seeded" (the problem's sensor-aware starts, default) or
     "uniform" (the paper's protocol: uniform in the box). `memetic`: "auto" (default: on for
     the uniform start, off for the seeded one), "on" or "off": the memetic step on the elite
-    every 10 generations (`planner_core.memetic`: 2-opt, LP hover times, removals, and for an
+    every 10 generations (`planner_core.search.refine`: 2-opt, LP hover times, removals, and for an
     infeasible elite a point above each unserved sensor and its blocked legs re-routed); its
     evaluations count against the budget. `starts`: how many constructive plans
-    (`planner_core.construct`: greedy set covers and a k-means sweep of hover sites, an
+    (`planner_core.search.construct`: greedy set covers and a k-means sweep of hover sites, an
     open-path order on obstacle-aware flight times, visibility-graph detours, LP hover times)
     go into the DE's initial population, the Deb-best of the first
     `planner_core.defaults.START_CANDIDATES` built (0: none). Every evaluation counts against
     `budget`: the constructive plans scored, the DE, and the polish's LP plans (the DE runs on
     what is left), so `evaluations` <= budget (budget + 1 when budget equals the population:
     the DE has only its start population and the polish its one LP plan). `descent`: the
-    hover-point descent with exact LP hover times (`planner_core.descent`) on the
+    hover-point descent with exact LP hover times (`planner_core.search.descent`) on the
     `planner_core.defaults.DESCENTS` best constructive and seeder plans before the DE (each at
     most `DESCENT_TRIALS` evaluations) and, with `polish`, on the final plan after the polish
-    (`planner_core.descent.finish`: descent, structural search, kicks; at most
+    (`planner_core.search.final.finish`: descent, structural search, kicks; at most
     `DESCENT_TRIALS` + `RESTRUCTURE_TRIALS` + `KICK_TRIALS` evaluations), and the same on the
     best of the starts kept for the DE with fewer (else more) hover points (at most
     `OTHER_TRIALS` more, which the final plan gets when there is none; the better plan is
@@ -136,12 +137,12 @@ def plan(
     got 5") for a population below the minimum, a budget below the population or an unknown
     configurator name; `planner_core.MapError` for a bad map.
     """
-    from planner_core.de import run
-    from planner_core.mapio import load_map
-    from planner_core.memetic import refine as memetic_refine
-    from planner_core.memetic import use_memetic
-    from planner_core.problem import Problem
-    from planner_core.starts import with_init
+    from planner_core.model.mapio import load_map
+    from planner_core.model.problem import Problem
+    from planner_core.search.de import run
+    from planner_core.search.init_modes import with_init
+    from planner_core.search.refine import refine as memetic_refine
+    from planner_core.search.refine import use_memetic
 
     _defaults.check_run_args(population=population, budget=budget, configurator=configurator,
                              init=init, memetic=memetic, starts=starts)
@@ -155,9 +156,9 @@ def plan(
     refine = None
     if use_memetic(memetic, timed):  # timed has the seeding hook exactly when init is seeded
         refine = functools.partial(memetic_refine, problem)
-    from planner_core.construct import start_from_plans
-    from planner_core.descent import final_budget
-    from planner_core.polish import ELITE
+    from planner_core.search.construct import start_from_plans
+    from planner_core.search.final import final_budget
+    from planner_core.search.polish import ELITE
 
     # the budget holds everything: the constructive plans scored, the DE, the polish's plans
     reserve = min(ELITE, int(budget) // 4, int(budget) - int(population)) if polish else 0
@@ -197,9 +198,9 @@ def plan(
     t_polish = 0.0
     polished = 0
     if polish:
-        from planner_core.de.core import to_problem
-        from planner_core.model import deb_best
-        from planner_core.polish import polish_elite
+        from planner_core.model.formulas import deb_best
+        from planner_core.search.de.core import to_problem
+        from planner_core.search.polish import polish_elite
 
         t1 = time.perf_counter()
         # the LP for the final population's elite, not only its Deb-best (docs/search.md)
@@ -230,7 +231,7 @@ def plan(
     t_descent = 0.0
     descended = 0
     if final and chosen["phi"] == 0.0:
-        from planner_core.descent import final_stage
+        from planner_core.search.final import final_stage
 
         t1 = time.perf_counter()
         # the final plan's hover points moved with exact LP hover times, then its structure

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from planner_core.defaults import CONFIGURATOR
-from planner_core.model import penalised_score
+from planner_core.model.formulas import penalised_score
 
 __all__ = ["Plan", "PLAN_FORMAT_VERSION"]
 
@@ -32,7 +32,7 @@ class Plan:
     phi before and after the hover-time LP (None when polishing was off) and, when the final
     stage ran, `final_f_before`/`final_f_after`, `final_evaluations` (both plans together),
     `final_other_points` (the second plan's hover points, 0: none ran), `final_other_won`
-    and `final_other_evaluations` (`planner_core.descent.finish`).
+    and `final_other_evaluations` (`planner_core.search.final.finish`).
     """
 
     map_name: str
@@ -66,7 +66,7 @@ class Plan:
 
     @property
     def score(self) -> float:
-        """f + 10 * phi (paper Sec. 5.2; `planner_core.model.penalised_score`)."""
+        """f + 10 * phi (paper Sec. 5.2; `planner_core.model.formulas.penalised_score`)."""
         return float(penalised_score(self.f, self.phi))
 
     def to_dict(self) -> dict[str, Any]:

@@ -22,15 +22,15 @@ __all__ = [
 ]
 
 _WHERE = {
-    "Map": "planner_core.mapio",
-    "MapError": "planner_core.mapio",
-    "load_map": "planner_core.mapio",
-    "map_json_schema": "planner_core.mapio",
-    "ModelParams": "planner_core.model",
-    "PENALTY_FACTOR": "planner_core.model",
-    "Problem": "planner_core.problem",
-    "flight_time": "planner_core.model",
-    "penalised_score": "planner_core.model",
+    "Map": "planner_core.model.mapio",
+    "MapError": "planner_core.model.mapio",
+    "load_map": "planner_core.model.mapio",
+    "map_json_schema": "planner_core.model.mapio",
+    "ModelParams": "planner_core.model.formulas",
+    "PENALTY_FACTOR": "planner_core.model.formulas",
+    "Problem": "planner_core.model.problem",
+    "flight_time": "planner_core.model.formulas",
+    "penalised_score": "planner_core.model.formulas",
 }
 
 

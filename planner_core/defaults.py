@@ -68,7 +68,7 @@ class Default:
     meaning: str
     valid: str
     ok: Callable[[Any], bool] | None = None
-    #: a map number's physical range (lo, hi, lo_open, hi_open), applied by planner_core.mapio
+    #: a map number's physical range (lo, hi, lo_open, hi_open), applied by planner_core.model.mapio
     bounds: tuple[float, float, bool, bool] | None = None
     #: why the range is what it is (shown in the map's JSON Schema and its error lines)
     why: str = ""
@@ -99,13 +99,14 @@ def _positive_number(v: Any) -> bool:
 #: (rand/2), so a population needs at least six members (``de.operators.N_DONORS + 1``)
 MIN_POPULATION = 6
 #: configurator names, the default first (the hand-made adaptive DE until a trained policy beats
-#: it on unseen maps; "lamde" is the shipped learned policy, planner_core.policy);
-#: ``planner_core.de.configurators`` registers exactly these
+#: it on unseen maps; "lamde" is the shipped learned policy, planner_core.learning.policy);
+#: ``planner_core.search.de.configurators`` registers exactly these
 CONFIGURATORS: tuple[str, ...] = ("adaptive", "fixed", "random", "lamde")
-#: start modes of a run (planner_core.starts), the default first: the problem's seeded starts
+#: start modes of a run (planner_core.search.init_modes), the default first: the problem's seeded
+#: starts
 #: (the product's) or uniform in the box (the paper's protocol)
 INIT_MODES: tuple[str, ...] = ("seeded", "uniform")
-#: when the planner runs the memetic step on the elite (`planner_core.memetic`)
+#: when the planner runs the memetic step on the elite (`planner_core.search.refine`)
 MEMETIC_MODES: tuple[str, ...] = ("auto", "on", "off")
 
 _RUN: tuple[Default, ...] = (
@@ -128,7 +129,7 @@ _RUN: tuple[Default, ...] = (
             "start, where the DE alone rarely reaches every sensor, off from the seeded start, "
             "where it measured no gain (docs/search.md)", "one of " + ", ".join(MEMETIC_MODES),
             lambda v: v in MEMETIC_MODES),
-    Default("starts", 10, "constructive plans (`planner_core.construct`: greedy set covers "
+    Default("starts", 10, "constructive plans (`planner_core.search.construct`: greedy set covers "
             "and a k-means sweep of hover sites, an open-path order on obstacle-aware flight "
             "times, visibility-graph detours, LP hover times) put into the DE's initial "
             "population in place of its last rows, the Deb-best of the `start_candidates` "
@@ -139,14 +140,15 @@ _RUN: tuple[Default, ...] = (
             "builds 20-51 on the suite maps, so all of them; 0: none",
             "an integer >= 0", _int_at_least(0)),
     Default("descents", 3, "best plans of each kind (constructive, seeder) improved by the "
-            "hover-point descent with exact LP hover times (`planner_core.descent`) before "
+            "hover-point descent with exact LP hover times (`planner_core.search.descent`) before "
             "the DE; 0: none before the DE (`plan(descent=False)`, `--no-descent` turn off "
             "this and the final plan's descent; docs/search.md)", "an integer >= 0",
             _int_at_least(0)),
     Default("descent_trials", 40, "evaluations one descent may spend at most (counted in the "
             "budget)", "an integer >= 0", _int_at_least(0)),
     Default("restructure_trials", 300, "evaluations the structural search on the final plan "
-            "may spend (`planner_core.descent.restructure`: drop the detour corners, merge two "
+            "may spend (`planner_core.search.structure.restructure`: drop the detour corners, "
+            "merge two "
             "hover points, or split one in two, each move descended in a race against the "
             "incumbent), then at most as many again for the removal moves (one hover point "
             "removed, the lightest first, a neighbour moved to clear the leg that joins its "
@@ -157,14 +159,14 @@ _RUN: tuple[Default, ...] = (
             "restructure_trials + kick_trials, at most a tenth of the budget less the population "
             "and the polish's plans) left for "
             "the iterated local search on the final plan after the structural search and the "
-            "removal moves (`planner_core.descent.kicks`: one hover point moved by "
+            "removal moves (`planner_core.search.structure.kicks`: one hover point moved by "
             "a normal step of 300 m standard deviation per axis, the plan descended in a race "
             "against the incumbent, kept when better; with the descent on)",
             "an integer >= 0", _int_at_least(0)),
     Default("other_trials", 320, "evaluations of the final stage given to a second plan of "
             "another structure: the best of the starts kept for the DE with fewer (else more) "
             "hover points than the final plan, finished the same way (descent, structural "
-            "search, removal moves, kicks; `planner_core.descent.finish`), the better of the "
+            "search, removal moves, kicks; `planner_core.search.final.finish`), the better of the "
             "two kept; counted in the final stage's tenth of the budget less the population and "
             "the polish's plans, the final plan's own share first (the full 320 from a budget "
             "of about 9,700); it runs only when at least descent_trials are left for it, and "
@@ -214,7 +216,7 @@ _WHY_RATE = "100 Gbit/s is beyond any UAV radio link"
 _WHY_DATA = "1e7 Mbit (1.25 TB) takes days at any radio rate: no single flight collects more"
 _WHY_PENALTY = "penalties beyond 1e9 drown every objective value in rounding"
 
-#: the map file's optional fields (``planner_core.mapio`` takes its defaults and ranges from
+#: the map file's optional fields (``planner_core.model.mapio`` takes its defaults and ranges from
 #: here), keyed by their JSON path; paper symbols in the meaning, the reason for each range in
 #: `why`
 _MAP: tuple[Default, ...] = (
@@ -282,7 +284,8 @@ DELTA: float = DEFAULTS["delta"].value
 #: Metres. The one overlap tolerance of planner and sim (paper C5: a positive overlap is a
 #: violation). It is the float rounding scale of the geometry on maps up to 10 km (1e-13 per
 #: metre of extent, ~500 ulp of 1e4 m): the planner's kernel inflates every obstacle by at least
-#: this much (`planner_core.geometry`), so what it calls collision-free has an exact overlap of
+#: this much (`planner_core.model.geometry`), so what it calls collision-free has an exact overlap
+#: of
 #: 0; an L_vio at or below it counts as no collision (only legs shorter than it can have one);
 #: the sim's C5 check (`sim.checks`) fails any overlap above it. Kept here, import-free, so the
 #: planner's model and the sim (a second opinion that may not read the model) share it.

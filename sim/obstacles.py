@@ -1,6 +1,6 @@
 """The map's obstacles as shapely geometry, built from the map file alone.
 
-Independent of the planner's fast evaluator (planner_core.geometry). Rectangles are rotated
+Independent of the planner's fast evaluator (planner_core.model.geometry). Rectangles are rotated
 from their centre, length and angle; no-fly zones and polygon obstacles (building footprints)
 are shapely polygons of the given rings, holes included, whatever their shape (shapely measures
 non-convex polygons directly; the planner cuts them into convex pieces); all measured by shapely

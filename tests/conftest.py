@@ -99,7 +99,7 @@ def plan_at(m, hover, times):
 
     import numpy as np
 
-    from planner_core.problem import Problem
+    from planner_core.model.problem import Problem
 
     p = Problem(m)
     b = p.breakdown(p.encode(hover, times))

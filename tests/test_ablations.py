@@ -13,20 +13,20 @@ import numpy as np
 import pytest
 
 from lamde_mission.cli import main
-from planner_core.baselines import optimise, policy_spec
 from planner_core.bench import BenchError, run_bench
 from planner_core.bench.ablation import META_KEY, normalised, normalised_table
+from planner_core.bench.baselines import optimise, policy_spec
 from planner_core.bench.records import RESULTS_FILE, read_records
 from planner_core.bench.report import build_report
 from planner_core.execution import SerialExecutor
-from planner_core.policy.problems import (
+from planner_core.learning.policy.problems import (
     bbob_training_specs,
     build,
     read_trainset,
     spec_name,
     with_encoding,
 )
-from planner_core.problem import Problem
+from planner_core.model.problem import Problem
 from tests import test_bench
 from tests.conftest import MAPS, ROOT
 
@@ -121,7 +121,7 @@ def test_cli_lam_select_strategies_and_features(tmp_path: Path) -> None:
 # ---------------------------------------------------------------- policy entries in the bench
 @pytest.fixture
 def checkpoint(tmp_path: Path) -> Path:
-    from planner_core.policy import NetConfig, init_params, save
+    from planner_core.learning.policy import NetConfig, init_params, save
 
     net = NetConfig(embed=8, heads=1, ff=8, hidden=8)
     save(tmp_path / "ck", init_params(net, 1), net)
@@ -129,15 +129,15 @@ def checkpoint(tmp_path: Path) -> Path:
 
 
 def test_policy_spec_charges_the_probes_and_uses_its_checkpoint(checkpoint: Path) -> None:
-    from planner_core.baselines.de import optimise as de_optimise
-    from planner_core.policy import PolicyConfigurator
+    from planner_core.bench.baselines.de import optimise as de_optimise
+    from planner_core.learning.policy import PolicyConfigurator
 
     problem = Problem(MAPS / "tiny.json")
     spec = policy_spec("LAMDE-X", str(checkpoint), probe_evaluations=30)
     res = optimise("LAMDE-X", problem, 200, 3, init="uniform", spec=spec)
     assert res.evaluations == 200
     assert res.history.evaluations[0] == 30 + 100  # the probes, then the first population
-    from planner_core.starts import with_init
+    from planner_core.search.init_modes import with_init
 
     direct = de_optimise(with_init(problem, "uniform"), 170, 3,
                          configurator=PolicyConfigurator(checkpoint=checkpoint))

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from planner_core import baselines
-from planner_core.baselines import BudgetedProblem, BudgetExceeded, optimise, problem_for
-from planner_core.model import PENALTY_FACTOR
-from planner_core.problem import Problem
+from planner_core.bench import baselines
+from planner_core.bench.baselines import BudgetedProblem, BudgetExceeded, optimise, problem_for
+from planner_core.model.formulas import PENALTY_FACTOR
+from planner_core.model.problem import Problem
 
 SMALL_MAP = {
     "name": "small",
@@ -83,8 +83,8 @@ def test_budget_exact_and_deterministic(name: str, problem: Problem) -> None:
 def test_seed_lp_is_the_des_start_plus_the_lp(problem: Problem) -> None:
     """seed-lp: exactly our DE's initial population, then one LP-polished point; never worse
     than that population's Deb-best."""
-    from planner_core.de.core import init
     from planner_core.defaults import POPULATION
+    from planner_core.search.de.core import init
 
     res = optimise("seed-lp", problem, 1000, seed=5)
     assert res.evaluations == POPULATION + 1
@@ -105,8 +105,8 @@ def test_seeded_cmaes_starts_at_the_best_seed(problem: Problem) -> None:
 def test_seeded_cmaes_default_step_is_the_swept_one(problem: Problem) -> None:
     """`cmaes-seeded-lp` runs at SEEDED_SIGMA0 (issue 14's sweep, docs/search.md), its registry
     description names that value, and another sigma0 gives another run."""
-    from planner_core.baselines import cmaes
-    from planner_core.starts import with_init
+    from planner_core.bench.baselines import cmaes
+    from planner_core.search.init_modes import with_init
 
     spec = baselines.get("cmaes-seeded-lp")
     assert f"sigma0 {cmaes.SEEDED_SIGMA0:g} " in spec.description

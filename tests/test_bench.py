@@ -26,7 +26,7 @@ from planner_core.bench.report import format_table
 from planner_core.bench.runner import downsample, execute, plan_jobs, run_seed
 from planner_core.bench.stats import score_table, wilcoxon_mark
 from planner_core.execution import ProcessExecutor, SerialExecutor
-from planner_core.problem import Problem
+from planner_core.model.problem import Problem
 
 OPTS = ["de-adaptive", "random-search"]
 BUDGET = 300

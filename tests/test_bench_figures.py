@@ -93,7 +93,7 @@ def test_scores_figure_log_scale_when_scores_span_decades(tmp_path: Path) -> Non
 
 
 def test_paths_figure_one_map_per_optimiser(tmp_path: Path) -> None:
-    from planner_core.mapio import load_map
+    from planner_core.model.mapio import load_map
 
     m = load_map(ROOT / "examples" / "maps" / "suite" / "T01.json")
     hp = [[1_000.0, 1_000.0], [3_000.0, 2_000.0]]
@@ -149,7 +149,7 @@ def test_scan_figure(tmp_path: Path) -> None:
 
 
 def test_one_colour_per_optimiser_in_every_figure() -> None:
-    from planner_core.baselines import REGISTRY
+    from planner_core.bench.baselines import REGISTRY
 
     colours = [F.optimiser_style(o)["color"] for o in REGISTRY]
     assert len(set(colours)) == len(colours)

@@ -344,7 +344,7 @@ def test_validate_policy_scan_pipelines_jobs_resume_and_best_of(tmp_path) -> Non
     pipeline makes a run feasible that the DE alone leaves infeasible; one file holds both
     pipelines and each resumes on its own; `--best-of` with `--first-seed` runs each map's own
     choice on new seeds; bad input is one error line and exit 2."""
-    from planner_core.policy.problems import build
+    from planner_core.learning.policy.problems import build
     from tests.test_memetic import WIDE_MAP
 
     vp = _validate_policy()

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from planner_core.bench.limits import file_sha256, lower_bounds_path, suite_task_files
-from planner_core.bounds import lower_bound
-from planner_core.model import flight_time
-from planner_core.problem import Problem
+from planner_core.model.bounds import lower_bound
+from planner_core.model.formulas import flight_time
+from planner_core.model.problem import Problem
 from tests.conftest import SUITE
 
 CACHE = lower_bounds_path(SUITE)

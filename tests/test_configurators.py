@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from planner_core.de import (
+from planner_core.search.de import (
     AdaptiveConfigurator,
     Config,
     DEState,
@@ -16,7 +16,7 @@ from planner_core.de import (
     make_configurator,
     run,
 )
-from planner_core.de.configurators import ARMS, AdaptiveMemory, rank_credit
+from planner_core.search.de.configurators import ARMS, AdaptiveMemory, rank_credit
 
 
 class ConstrainedRastrigin:

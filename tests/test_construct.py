@@ -1,4 +1,4 @@
-"""The constructive starts (`planner_core.construct`, issue 14): every sensor covered, I_max
+"""The constructive starts (`planner_core.search.construct`, issue 14): every sensor covered, I_max
 kept, deterministic for a seed, our open-path order against naive orders, the obstacle-aware leg
 times, and `plan` starting its DE from them with the budget counted exactly."""
 
@@ -10,12 +10,12 @@ import itertools
 import numpy as np
 import pytest
 
-from planner_core import construct
-from planner_core.baselines import BudgetedProblem
-from planner_core.memetic import covers
-from planner_core.model import deb_best
-from planner_core.problem import Problem
-from planner_core.routing import open_path, open_tour, path_cost
+from planner_core.bench.baselines import BudgetedProblem
+from planner_core.model.formulas import deb_best
+from planner_core.model.problem import Problem
+from planner_core.model.routing import open_path, open_tour, path_cost
+from planner_core.search import construct
+from planner_core.search.refine import covers
 from tests.conftest import MAPS, SUITE, modules_after
 from tests.test_peers import WALLED
 
@@ -37,7 +37,7 @@ def test_greedy_cover_covers_every_sensor(walled: Problem) -> None:
     # a site is a candidate only under the bandwidth (C3), and never inside an obstacle
     assert np.all(walled.rates(sites).sum(axis=1)
                   <= construct.BANDWIDTH_USE * walled.bandwidth)  # fmt: skip
-    from planner_core.geometry import points_inside
+    from planner_core.model.geometry import points_inside
 
     assert not points_inside(sites, walled.obstacles).any()
 
@@ -46,7 +46,7 @@ def test_greedy_cover_covers_every_sensor(walled: Problem) -> None:
 def test_every_candidate_serves_every_sensor_within_i_max(task: str) -> None:
     """Each constructive plan of a suite map collects every sensor's data (C4: no shortfall),
     within I_max hover points, and its hover times are the LP's (never above T_max)."""
-    from planner_core.mapio import load_map
+    from planner_core.model.mapio import load_map
 
     p = Problem(load_map(SUITE / f"{task}.json").planning_map())
     X, labels = construct.candidate_plans(p, 0, 12)
@@ -144,7 +144,7 @@ def test_with_starts_replaces_the_last_rows(walled: Problem) -> None:
     np.testing.assert_array_equal(X[:6], own[:6])
     np.testing.assert_array_equal(X[6:], starts)
     # the uniform start mode (no hook): uniform rows in the box, then the starts
-    from planner_core.starts import UniformStart
+    from planner_core.search.init_modes import UniformStart
 
     U = construct.WithStarts(UniformStart(walled), starts).initial_population(
         np.random.default_rng(0), 8)
@@ -178,7 +178,7 @@ def test_plan_starts_from_the_constructive_plans() -> None:
     assert exact.evaluations == 1200
     assert p.history["evaluations"][0] > 40  # the constructive plans were scored first
     from planner_core.defaults import START_CANDIDATES
-    from planner_core.mapio import load_map
+    from planner_core.model.mapio import load_map
 
     prob = Problem(load_map(path).planning_map())
     X, _ = construct.candidate_plans(prob, 1, START_CANDIDATES)
@@ -207,8 +207,8 @@ def test_plan_is_the_benchmark_planner_entry() -> None:
     """`plan` and the benchmark's `planner` entry are one pipeline: the same seed and budget give
     the same plan score and evaluation count (at most the budget: a descent may stop early)."""
     import lamde_mission
-    from planner_core.baselines import optimise
-    from planner_core.mapio import load_map
+    from planner_core.bench.baselines import optimise
+    from planner_core.model.mapio import load_map
 
     path = MAPS / "small-demo.json"
     p = lamde_mission.plan(path, seed=2, budget=1500)

@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from planner_core.de import (
+from planner_core.search.de import (
     Config,
     DEState,
     FixedConfigurator,
@@ -232,7 +232,7 @@ def test_initial_population_hook_is_used_and_clamped() -> None:
 
 def test_step_gives_the_trials_of_configure_then_ask() -> None:
     """ask's words come first in a generation's stream, so step == configure + ask."""
-    from planner_core.de import AdaptiveConfigurator, generation_rng, step
+    from planner_core.search.de import AdaptiveConfigurator, generation_rng, step
 
     p = ConstrainedSphere(5)
     conf = AdaptiveConfigurator()
@@ -247,7 +247,7 @@ def test_step_gives_the_trials_of_configure_then_ask() -> None:
 
 def test_reused_streams_change_nothing() -> None:
     """run() reuses one Streams per run; a loop of plain step() calls gives the same run."""
-    from planner_core.de import AdaptiveConfigurator, step
+    from planner_core.search.de import AdaptiveConfigurator, step
 
     p = ConstrainedSphere(4)
     conf = AdaptiveConfigurator()

@@ -7,8 +7,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from planner_core.de import fast, to_problem
-from planner_core.de import operators as op
+from planner_core.search.de import fast, to_problem
+from planner_core.search.de import operators as op
 
 
 @pytest.mark.parametrize("seed", range(40))

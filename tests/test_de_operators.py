@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from planner_core.de.operators import (
+from planner_core.search.de.operators import (
     MUTATIONS,
     crossover,
     crossover_index,

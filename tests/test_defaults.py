@@ -14,11 +14,11 @@ import pytest
 
 import lamde_mission
 from planner_core import defaults as D
-from planner_core.de import loop as de_loop
-from planner_core.de.configurators import _REGISTRY as CONFIGURATOR_REGISTRY
-from planner_core.de.operators import N_DONORS
-from planner_core.env import OptimizationEnv
-from planner_core.mapio import MapFile
+from planner_core.learning.env import OptimizationEnv
+from planner_core.model.mapio import MapFile
+from planner_core.search.de import loop as de_loop
+from planner_core.search.de.configurators import _REGISTRY as CONFIGURATOR_REGISTRY
+from planner_core.search.de.operators import N_DONORS
 from tests.conftest import MAPS, ROOT, one_line_error, run_cli
 
 
@@ -56,8 +56,8 @@ def test_the_readers_use_the_table() -> None:
     env = OptimizationEnv()
     assert (env.population, env.budget, env.eta, env.delta) == (D.POPULATION, D.BUDGET, D.ETA,
                                                                   D.DELTA)
-    from planner_core.baselines import REGISTRY
-    from planner_core.model import PENALTY_FACTOR
+    from planner_core.bench.baselines import REGISTRY
+    from planner_core.model.formulas import PENALTY_FACTOR
     from planner_core.suite import SUITE_SEED
 
     assert PENALTY_FACTOR == D.SCORE_FACTOR == 10.0 and SUITE_SEED == D.SUITE_SEED == 2025

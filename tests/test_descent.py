@@ -1,4 +1,6 @@
-"""The hover-point descent with exact LP hover times (planner_core.descent) and its LP fast path."""
+"""The hover-point descent with exact LP hover times (planner_core.search.descent), its LP fast
+path, the structural moves (planner_core.search.structure) and the final stage
+(planner_core.search.final)."""
 
 from __future__ import annotations
 
@@ -11,25 +13,21 @@ from scipy.optimize import linprog
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components
 
-from planner_core.construct import candidate_plans
-from planner_core.descent import (
+from planner_core.model.problem import Problem
+from planner_core.search.construct import candidate_plans
+from planner_core.search.descent import descend, held_points, objective, objective_reference
+from planner_core.search.final import finish, other_structure
+from planner_core.search.polish import BLOCK_VERTICES, _lp_matrices, hover_lp
+from planner_core.search.structure import (
     RACE_MARGIN,
     RACE_SCREEN,
     _move,
-    descend,
-    finish,
-    held_points,
     kicks,
     merge_moves,
-    objective,
-    objective_reference,
-    other_structure,
     restructure,
     split_moves,
     waypoint_moves,
 )
-from planner_core.polish import BLOCK_VERTICES, _lp_matrices, hover_lp
-from planner_core.problem import Problem
 from tests.conftest import SUITE
 
 
@@ -113,7 +111,7 @@ def _kkt(R: np.ndarray, req: np.ndarray, t_max: float, got: tuple) -> None:
 @pytest.fixture
 def highs_calls(monkeypatch: pytest.MonkeyPatch) -> list[int]:
     """A list that grows by one at each call `hover_lp` hands to HiGHS (`polish._highs_lp`)."""
-    import planner_core.polish as polish
+    import planner_core.search.polish as polish
 
     calls: list[int] = []
     real = polish._highs_lp
@@ -251,9 +249,9 @@ def test_slide_matches_a_point_by_point_reference() -> None:
     import json
 
     from lamde_mission.api import plan
-    from planner_core.descent import SLIDE_ANGLES, _slide
-    from planner_core.geometry import overlap_lengths
-    from planner_core.model import L_VIO_TOL
+    from planner_core.model.formulas import L_VIO_TOL
+    from planner_core.model.geometry import overlap_lengths
+    from planner_core.search.descent import SLIDE_ANGLES, _slide
 
     P = np.asarray(plan(SUITE / "T06.json", seed=0, descent=False).hover_points)
     spec = json.loads((SUITE / "T06.json").read_text())
@@ -381,7 +379,7 @@ def test_hover_lp_without_stdout_and_warm_starts_stay_local() -> None:
     import sys
 
     code = ("import sys, numpy as np; sys.stdout = None\n"
-            "from planner_core.polish import hover_lp\n"
+            "from planner_core.search.polish import hover_lp\n"
             "r = hover_lp(np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([10.0, 10.0]), 100.0)\n"
             "sys.stderr.write(repr(round(r[1], 6)))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
@@ -431,8 +429,8 @@ def test_removal_moves_go_lightest_first_and_clear_the_leg_by_moving_one_neighbo
     is (when nothing is held) or with one neighbour moved square to the leg that now joins the
     removed point's neighbours by one of `CLEAR_SHIFTS`; no point of a move is held."""
     from lamde_mission.api import plan
-    from planner_core.descent import CLEAR_SHIFTS, removal_moves
-    from planner_core.polish import ZERO_TIME
+    from planner_core.search.polish import ZERO_TIME
+    from planner_core.search.structure import CLEAR_SHIFTS, removal_moves
 
     problem = Problem(SUITE / "T05.json")
     p = plan(SUITE / "T05.json", seed=2, descent=False)
@@ -507,23 +505,24 @@ def test_finish_runs_the_removal_moves_after_the_structural_search(
 ) -> None:
     """`finish`: descent, `restructure` with waypoint, merge and split moves, then with the
     removal moves alone, then kicks; each stage within what is left of the budget."""
-    import planner_core.descent as descent
+    import planner_core.search.final as final
+    import planner_core.search.structure as structure
 
     calls: list[tuple[tuple[str, ...], int]] = []
     starts: list[np.ndarray] = []
     ends: list[np.ndarray | None] = []
-    real = descent.restructure
+    real = structure.restructure
 
-    def record(problem, x, evaluate, *, trials, moves=descent.MOVES, **kw):  # noqa: ANN001, ANN202
+    def record(problem, x, evaluate, *, trials, moves=structure.MOVES, **kw):  # noqa: ANN001, ANN202
         calls.append((tuple(moves), trials))
         starts.append(np.array(x))
         r = real(problem, x, evaluate, trials=trials, moves=moves, **kw)
         ends.append(None if r is None else r.x)
         return r
 
-    monkeypatch.setattr(descent, "restructure", record)
+    monkeypatch.setattr(final, "restructure", record)
     x = _first_plans(t05, 1)[0]
-    r = descent.finish(t05, x, t05.evaluate, trials=400, seed=0, restructure_trials=100)
+    r = final.finish(t05, x, t05.evaluate, trials=400, seed=0, restructure_trials=100)
     assert r is not None and r.evaluations <= 400
     assert [m for m, _ in calls] == [("waypoint", "merge", "split"), ("removal",)]
     assert all(t <= 100 for _, t in calls)
@@ -560,7 +559,7 @@ def test_a_raced_move_stops_after_the_screen_unless_it_is_close_to_the_incumbent
 
 def test_kicks_race_their_descents(t05: Problem, monkeypatch: pytest.MonkeyPatch) -> None:
     """Every kick competes with the incumbent: `kicks` passes its best f to `_move`."""
-    import planner_core.descent as descent
+    import planner_core.search.structure as descent
 
     seen: list[float | None] = []
     real = descent._move
@@ -581,7 +580,7 @@ def test_restructure_tries_the_point_removing_moves_first(
 ) -> None:
     """Waypoint drops, then merges, then splits: on a plan with many points the splits must not
     use up the budget before a merge is tried."""
-    import planner_core.descent as descent
+    import planner_core.search.structure as descent
 
     x = _first_plans(t05, 1)[0]
     b = t05.breakdown(x)
@@ -698,8 +697,8 @@ def test_the_benchmark_planner_runs_the_second_structure_within_its_budget(
     """The benchmark's `planner` entry finishes a second structure as `plan` does: on T06 at
     8,000 evaluations a second start is finished with what the final plan's 640 leave of the
     final stage (a tenth of the DE's room), and the count stays within the budget."""
-    import planner_core.descent as descent
-    from planner_core import baselines
+    import planner_core.search.final as descent
+    from planner_core.bench import baselines
 
     seen: list[tuple[int, int, bool]] = []
     real = descent.finish
@@ -718,7 +717,7 @@ def test_the_benchmark_planner_runs_the_second_structure_within_its_budget(
 
 
 def test_final_shares_give_the_second_plan_the_rest_only_when_it_can_descend() -> None:
-    from planner_core.descent import final_shares
+    from planner_core.search.final import final_shares
 
     assert final_shares(960, 640, True, 40) == (640, 320)
     assert final_shares(960, 640, False, 40) == (960, 0)  # no other structure: all of it

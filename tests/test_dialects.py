@@ -14,7 +14,7 @@ from lamde_mission.items import CMD, MISSION_TYPE
 from lamde_mission.vehicle.mock import MockVehicle
 from lamde_mission.vehicle.transfer import ReadbackMismatchError
 from lamde_mission.vehicle.upload import VIAS, upload_mission
-from planner_core.mapio import load_map
+from planner_core.model.mapio import load_map
 from sim import replay, verify
 from tests.vehicle_helpers import free_udp_port
 from tests.vehicle_helpers import no_leftover_mock_threads as _no_leftover_mock_threads  # noqa: F401 (autouse)

@@ -11,8 +11,8 @@ from hypothesis import strategies as st
 from shapely.geometry import Point, Polygon
 
 from planner_core.defaults import L_VIO_TOL
-from planner_core.geometry import Obstacles, overlap_lengths, rectangle_vertices
-from planner_core.model import L_VIO_TOL as MODEL_TOL
+from planner_core.model.formulas import L_VIO_TOL as MODEL_TOL
+from planner_core.model.geometry import Obstacles, overlap_lengths, rectangle_vertices
 from sim.checks import C5_TOL
 from sim.obstacles import Obstacle
 from sim.obstacles import overlap_lengths as sim_overlaps

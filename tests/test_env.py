@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from planner_core.de import Config
-from planner_core.env import OptimizationEnv, mantissa_exponent, observe, reward
+from planner_core.learning.env import OptimizationEnv, mantissa_exponent, observe, reward
+from planner_core.search.de import Config
 
 
 class ShiftedBall:
@@ -146,7 +146,7 @@ def test_reset_needs_a_problem_and_valid_actions() -> None:
 
 @pytest.fixture(scope="module")
 def suite_problem():
-    from planner_core.problem import Problem
+    from planner_core.model.problem import Problem
     from tests.conftest import SUITE
 
     return Problem(SUITE / "T01.json")
@@ -158,7 +158,7 @@ def test_check_env_passes_on_a_suite_map(suite_problem) -> None:
     import gymnasium
     from gymnasium.utils.env_checker import check_env
 
-    from planner_core.env import ENV_ID
+    from planner_core.learning.env import ENV_ID
 
     assert isinstance(OptimizationEnv(suite_problem), gymnasium.Env)
     env = gymnasium.make(ENV_ID, problem=suite_problem, population=8, budget=8 * 6).unwrapped
@@ -208,7 +208,7 @@ def test_reset_names_a_bad_population() -> None:
 def test_vector_env_steps_every_copy() -> None:
     import gymnasium
 
-    from planner_core.env import ENV_ID
+    from planner_core.learning.env import ENV_ID
 
     vec = gymnasium.make_vec(ENV_ID, num_envs=2, vectorization_mode="sync",
                              problem=ShiftedBall(3), population=10, budget=60)

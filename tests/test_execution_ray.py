@@ -102,8 +102,8 @@ def test_lam_build_on_ray_equals_this_process_and_resumes(ray_runtime: None,
     import numpy as np
 
     from lamde_mission.cli import main
-    from planner_core.lam.bbob import DatabaseSpec
-    from planner_core.lam.database import Database
+    from planner_core.learning.lam.bbob import DatabaseSpec
+    from planner_core.learning.lam.database import Database
 
     spec = DatabaseSpec.make((1, 6, 21), (10,), 2)
     here = Database(spec=spec, cache_dir=tmp_path / "here")

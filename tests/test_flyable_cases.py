@@ -12,7 +12,7 @@ import pytest
 from lamde_mission.formats import MissionFileError, read_mission, read_mission_lists
 from lamde_mission.formats.qgc_plan import plan_document
 from lamde_mission.items import CMD, MISSION_TYPE, MissionItem
-from planner_core.mapio import load_map
+from planner_core.model.mapio import load_map
 from sim import replay
 
 CASES = Path(__file__).resolve().parent / "data" / "flyable"

@@ -21,8 +21,8 @@ from lamde_mission.formats.qgc_plan import parse_plan_document, plan_document
 from lamde_mission.formats.waypoints import format_waypoints, parse_waypoints
 from lamde_mission.items import MissionError, geofence_items, items_equal, plan_to_items
 from lamde_mission.storage import grid_degrees, storable_plan, stored_items
-from planner_core.mapio import load_map
-from planner_core.problem import Problem
+from planner_core.model.mapio import load_map
+from planner_core.model.problem import Problem
 
 MAP = {
     "name": "formats",

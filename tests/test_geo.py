@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from lamde_mission.geo import enu_to_latlon, latlon_to_enu, origin_of
-from planner_core.mapio import load_map
+from planner_core.model.mapio import load_map
 
 ORIGINS = [
     (22.3193, 114.1694, 0.0),  # the default origin (Hong Kong)

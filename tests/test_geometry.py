@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from shapely.geometry import LineString, MultiPoint, Point
 from shapely.geometry import Polygon as ShapelyPolygon
 
-from planner_core.geometry import (
+from planner_core.model.geometry import (
     Obstacles,
     overlap_lengths,
     overlap_lengths_reference,

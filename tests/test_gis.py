@@ -17,8 +17,8 @@ import pytest
 from shapely.geometry import LineString, Polygon
 
 from lamde_mission.gis import GisError, build_map, map_to_geojson, read_layers
-from planner_core.geometry import overlap_lengths
-from planner_core.mapio import load_map
+from planner_core.model.geometry import overlap_lengths
+from planner_core.model.mapio import load_map
 from sim.geo import latlon_to_enu
 from tests.conftest import ROOT
 
@@ -64,7 +64,7 @@ def test_campus_imports_exactly(campus) -> None:
     assert m.width - xy[:, 0].max() == pytest.approx(100.0, abs=0.05)
     assert m.height - xy[:, 1].max() == pytest.approx(100.0, abs=0.05)
     # the corridor between the halls stays open: a sensor in it is outside every footprint
-    from planner_core.geometry import points_inside
+    from planner_core.model.geometry import points_inside
     assert not points_inside(m.sensors, m.obstacles).any()
 
 

@@ -22,7 +22,7 @@ from hypothesis import strategies as st
 from lamde_mission.formats import read_mission
 from lamde_mission.fuzz import mutate, run_cli
 from planner_core import textio
-from planner_core.mapio import MapError, load_map
+from planner_core.model.mapio import MapError, load_map
 
 DATA = Path(__file__).resolve().parent / "data" / "hostile"
 TINY = DATA / "tiny-map.json"
@@ -186,7 +186,7 @@ def test_plan_result_json_is_range_checked(tmp_path: Path) -> None:
 
 
 def test_schema_gives_the_reason_for_each_range() -> None:
-    from planner_core.mapio import map_json_schema
+    from planner_core.model.mapio import map_json_schema
 
     uav = map_json_schema()["$defs"]["Uav"]["properties"]
     assert "range [0.1, 200]" in uav["max_speed"]["description"]

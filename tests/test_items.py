@@ -22,7 +22,7 @@ from lamde_mission.items import (
     items_to_route,
     plan_to_items,
 )
-from planner_core.mapio import load_map
+from planner_core.model.mapio import load_map
 
 M = mavutil.mavlink
 

@@ -8,9 +8,9 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from planner_core.lam.bbob import BBOBProblem, DatabaseSpec, InstanceKey, bbob_values
-from planner_core.lam.ela import ELA_NAMES, ela_features
-from planner_core.lam.encoder import (
+from planner_core.learning.lam.bbob import BBOBProblem, DatabaseSpec, InstanceKey, bbob_values
+from planner_core.learning.lam.ela import ELA_NAMES, ela_features
+from planner_core.learning.lam.encoder import (
     PARAM_SHAPES,
     LearnedExtractor,
     encode,
@@ -18,7 +18,7 @@ from planner_core.lam.encoder import (
     load_params,
     n_params,
 )
-from planner_core.lam.probe import blas_single_thread, finite_values, lhs, probe
+from planner_core.learning.lam.probe import blas_single_thread, finite_values, lhs, probe
 
 
 @pytest.fixture(autouse=True)
@@ -52,7 +52,7 @@ def test_bbob_unit_box_maps_to_minus5_5_and_optimum_is_zero():
 
 
 def test_database_spec_sizes_and_validation():
-    from planner_core.lam.bbob import DEFAULT, FULL
+    from planner_core.learning.lam.bbob import DEFAULT, FULL
 
     assert len(FULL) == 14_400 and len(FULL.keys()) == 14_400
     assert len(DEFAULT) == 360
@@ -148,8 +148,8 @@ def test_encoder_shape_and_param_count():
 
 def test_numpy_encoder_matches_torch_training_module():
     torch = pytest.importorskip("torch")
-    from planner_core.lam.ela import scale_y
-    from planner_core.lam.train_encoder import TorchEncoder
+    from planner_core.learning.lam.ela import scale_y
+    from planner_core.learning.lam.train_encoder import TorchEncoder
 
     P = init_params(5)
     rng = np.random.default_rng(2)
@@ -161,7 +161,7 @@ def test_numpy_encoder_matches_torch_training_module():
 def test_shipped_weights_load_and_are_small():
     from importlib import resources
 
-    path = resources.files("planner_core.lam") / "data" / "encoder.npz"
+    path = resources.files("planner_core.learning.lam") / "data" / "encoder.npz"
     assert path.is_file() and len(path.read_bytes()) < 1_000_000
     P = load_params()
     assert set(P) == set(PARAM_SHAPES)
@@ -196,9 +196,10 @@ def test_learned_encoder_separates_bbob_functions():
 
 
 def test_train_encoder_command_writes_weights(tmp_path):
-    """The README's `python -m planner_core.lam.train_encoder`, two steps into a scratch file."""
+    """The README's `python -m planner_core.learning.lam.train_encoder`, two steps into a
+    scratch file."""
     pytest.importorskip("torch")
-    from planner_core.lam import train_encoder
+    from planner_core.learning.lam import train_encoder
 
     out = tmp_path / "encoder.npz"
     assert train_encoder.main(["--steps", "2", "--out", str(out)]) == 0

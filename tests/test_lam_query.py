@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from planner_core.lam import (
+from planner_core.learning.lam import (
     BBOBProblem,
     Database,
     DatabaseSpec,
@@ -21,8 +21,8 @@ from planner_core.lam import (
     select,
     threshold_for,
 )
-from planner_core.lam.probe import blas_single_thread
-from planner_core.lam.trainset import dumps_trainset, read_trainset, write_trainset
+from planner_core.learning.lam.probe import blas_single_thread
+from planner_core.learning.lam.trainset import dumps_trainset, read_trainset, write_trainset
 
 
 @pytest.fixture(autouse=True)
@@ -77,7 +77,7 @@ def test_query_finds_the_function_of_bbob_tasks(bbob_db, features):
     often than chance (3 of 72 database instances belong to any one function)."""
     keys, Z = bbob_db.load(features)
     ext = bbob_db.extractors[features]
-    from planner_core.lam.query import standardiser, task_features
+    from planner_core.learning.lam.query import standardiser, task_features
 
     mu, sd = standardiser(Z) if ext.standardise else (0.0, 1.0)
     hits = total = 0
@@ -136,8 +136,8 @@ def test_pair_problem_feasible_region_neither_empty_nor_everything():
 
 
 def test_training_problems_run_through_de_and_env(tmp_path, bbob_db):
-    from planner_core.de import Config, run
-    from planner_core.env import OptimizationEnv
+    from planner_core.learning.env import OptimizationEnv
+    from planner_core.search.de import Config, run
 
     tasks = [BBOBProblem((3, 20, 60)), BBOBProblem((12, 20, 61))]
     doc, _ = select(bbob_db, tasks, ["x", "y"], k=4, features="ela")

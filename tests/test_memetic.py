@@ -7,12 +7,12 @@ from functools import partial
 import numpy as np
 import pytest
 
-from planner_core.baselines import BudgetedProblem
-from planner_core.de import run
-from planner_core.de.core import init, to_problem
-from planner_core.de.memetic import memetic_step
-from planner_core.memetic import refine, two_opt_order
-from planner_core.problem import Problem
+from planner_core.bench.baselines import BudgetedProblem
+from planner_core.model.problem import Problem
+from planner_core.search.de import run
+from planner_core.search.de.core import init, to_problem
+from planner_core.search.de.refine_step import memetic_step
+from planner_core.search.refine import refine, two_opt_order
 from tests.test_baselines import SMALL_MAP
 
 
@@ -74,7 +74,7 @@ def test_run_with_memetic_spends_exactly_the_budget(problem: Problem) -> None:
 
 
 def test_polish_elite_includes_the_best_and_never_loses_to_it(problem: Problem) -> None:
-    from planner_core.polish import polish_elite, polish_hover_times
+    from planner_core.search.polish import polish_elite, polish_hover_times
 
     res = run(BudgetedProblem(problem, 300), seed=2, population=12, budget=300)
     st = res.state
@@ -114,7 +114,7 @@ def _served(problem: Problem, pts: np.ndarray) -> np.ndarray:
 
 
 def test_repair_puts_a_point_within_reach_of_every_sensor() -> None:
-    from planner_core.memetic import repair_points
+    from planner_core.search.refine import repair_points
 
     problem = Problem(WIDE_MAP)
     far = np.array([[problem.model.width * 0.5, problem.model.height * 0.5]])
@@ -126,7 +126,7 @@ def test_repair_puts_a_point_within_reach_of_every_sensor() -> None:
     assert _served(problem, out).all()
     np.testing.assert_array_equal(repair_points(problem, far)[0], out)  # deterministic
     # with the LP hover times the repaired plan meets C4 (no data shortfall) and C5
-    from planner_core.polish import polish_hover_times
+    from planner_core.search.polish import polish_hover_times
 
     pol = polish_hover_times(problem, two_opt_order(problem, out))
     b = problem.breakdown(problem.encode(pol.hover_points, pol.hover_times))
@@ -134,7 +134,7 @@ def test_repair_puts_a_point_within_reach_of_every_sensor() -> None:
 
 
 def test_repair_keeps_i_max_by_merging_points() -> None:
-    from planner_core.memetic import repair_points
+    from planner_core.search.refine import repair_points
 
     p = Problem({**WIDE_MAP, "obstacles": {}, "uav": {"max_hover_points": 2}})
     # one point per sensor is 3 > I_max = 2: a and b (1.5 km apart) share one point between them
@@ -146,7 +146,7 @@ def test_repair_keeps_i_max_by_merging_points() -> None:
 
 
 def test_repair_in_fixed_length_mode_gives_exactly_i_max_points() -> None:
-    from planner_core.memetic import repair_points
+    from planner_core.search.refine import repair_points
 
     p = Problem(WIDE_MAP, variable_length=False)
     (out, *_) = repair_points(p, np.array([[10.0, 10.0]]))
@@ -158,7 +158,7 @@ def test_repair_in_fixed_length_mode_gives_exactly_i_max_points() -> None:
 def test_refine_offers_the_repair_only_for_an_infeasible_elite(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    import planner_core.memetic as memetic
+    import planner_core.search.refine as memetic
 
     problem = Problem(WIDE_MAP)
     far = problem.encode(np.array([[problem.model.width * 0.5, problem.model.height * 0.5]]),
@@ -180,7 +180,7 @@ def test_refine_offers_the_repair_only_for_an_infeasible_elite(
 def test_repair_alone_is_refines_repair_and_nothing_for_a_feasible_solution() -> None:
     """`memetic.repair` (validate_policy's "repair" pipeline): exactly the repair candidates
     `refine` puts first for an infeasible solution, and no candidate for a feasible one."""
-    from planner_core.memetic import repair
+    from planner_core.search.refine import repair
 
     problem = Problem(WIDE_MAP)
     far = problem.encode(np.array([[problem.model.width * 0.5, problem.model.height * 0.5]]),
@@ -190,7 +190,7 @@ def test_repair_alone_is_refines_repair_and_nothing_for_a_feasible_solution() ->
     np.testing.assert_array_equal(fixed, refine(problem, far)[: len(fixed)])
     assert problem.evaluate(fixed)[1][0] == 0.0
     assert repair(problem, fixed[0]).shape == (0, problem.dim)
-    from planner_core.starts import with_init
+    from planner_core.search.init_modes import with_init
 
     uniform = with_init(problem, "uniform")  # this seed's DE alone ends infeasible
     assert run(uniform, configurator="random", seed=0, population=20, budget=600).phi > 0
@@ -200,8 +200,8 @@ def test_repair_alone_is_refines_repair_and_nothing_for_a_feasible_solution() ->
 
 
 def test_memetic_setting_auto_follows_the_start_mode(problem: Problem) -> None:
-    from planner_core.memetic import use_memetic
-    from planner_core.starts import with_init
+    from planner_core.search.init_modes import with_init
+    from planner_core.search.refine import use_memetic
 
     assert use_memetic("auto", with_init(problem, "uniform"))
     assert not use_memetic("auto", with_init(problem, "seeded"))

@@ -16,8 +16,8 @@ import pytest
 
 from planner_core.bench.records import RESULTS_FILE, key_of, read_records
 from planner_core.bench.runner import run_seed
-from planner_core.model import penalised_score
-from planner_core.problem import Problem
+from planner_core.model.formulas import penalised_score
+from planner_core.model.problem import Problem
 from tests.test_bench import _map
 
 DIR = Path(__file__).parents[1] / "benchmarks" / "metabox"

@@ -1,12 +1,12 @@
-"""planner_core.model: the paper's formulas once; the compiled scalars equal the numpy forms."""
+"""planner_core.model.formulas: the paper's formulas once; the compiled scalars equal the
+numpy forms."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from planner_core.mapio import load_map
-from planner_core.model import (
+from planner_core.model.formulas import (
     ModelParams,
     deb_best,
     deb_better,
@@ -19,8 +19,9 @@ from planner_core.model import (
     slant_rate,
     slant_rates,
 )
-from planner_core.problem import Problem
-from planner_core.routing import open_tour
+from planner_core.model.mapio import load_map
+from planner_core.model.problem import Problem
+from planner_core.model.routing import open_tour
 from tests.conftest import SUITE
 
 

@@ -6,12 +6,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from planner_core import construct
-from planner_core.baselines import BudgetedProblem, optimise
-from planner_core.baselines import engineering as eng
+from planner_core.bench.baselines import BudgetedProblem, optimise
+from planner_core.bench.baselines import engineering as eng
 from planner_core.defaults import POPULATION
-from planner_core.polish import polish_hover_times
-from planner_core.problem import Problem
+from planner_core.model.problem import Problem
+from planner_core.search import construct
+from planner_core.search.polish import polish_hover_times
 
 # a wall between the start and the far sensors: the straight legs are blocked, so a valid plan
 # needs the visibility-graph detour (1500 Mbit each: a hover site must be within ~430 m)
@@ -105,7 +105,7 @@ def test_pymoo_ga_budget_exact_start_and_lp(walled: Problem) -> None:
 def test_pymoo_ga_duplicate_start_spends_budget_exactly(walled: Problem) -> None:
     """A start population of clones (pymoo keeps one of them): the GA still spends the budget
     exactly and evaluates none of the known points twice."""
-    from planner_core.baselines.pymoo_ga import optimise as ga
+    from planner_core.bench.baselines.pymoo_ga import optimise as ga
 
     class Clones:  # the seeding hook gives one point n times
         def __getattr__(self, name: str) -> object:
@@ -122,7 +122,7 @@ def test_pymoo_ga_duplicate_start_spends_budget_exactly(walled: Problem) -> None
 def test_pymoo_ga_stops_when_nothing_new_can_be_made() -> None:
     """A box of zero width: every offspring duplicates the start, mating stalls, the restart
     finds nothing new either: the run ends within the budget instead of looping."""
-    from planner_core.baselines.pymoo_ga import optimise as ga
+    from planner_core.bench.baselines.pymoo_ga import optimise as ga
 
     class Point:
         lower = upper = np.full(3, 0.5)

@@ -12,7 +12,7 @@ from matplotlib.text import Text
 from lamde_mission.items import plan_to_items
 from lamde_mission.plot import _violation_segments, mission_figure, plot_mission
 from planner_core import Problem
-from planner_core.mapio import load_map
+from planner_core.model.mapio import load_map
 from sim import replay
 from tests.conftest import plan_at
 

@@ -12,7 +12,7 @@ from lamde_mission.formats import write_mission
 from lamde_mission.formats.waypoints import write_waypoints
 from lamde_mission.items import CMD, plan_to_items
 from lamde_mission.plot import nice_length, plot_mission
-from planner_core.mapio import load_map
+from planner_core.model.mapio import load_map
 from sim import replay
 from tests.conftest import one_line_error, plan_at, run_cli, run_cli_many
 

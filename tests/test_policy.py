@@ -10,9 +10,8 @@ import numpy as np
 import pytest
 from scipy.special import betaln, log_softmax
 
-from planner_core.de import run
-from planner_core.env import mantissa_exponent
-from planner_core.policy import (
+from planner_core.learning.env import mantissa_exponent
+from planner_core.learning.policy import (
     CheckpointError,
     NetConfig,
     PolicyConfigurator,
@@ -25,16 +24,17 @@ from planner_core.policy import (
     sample_actions,
     save,
 )
-from planner_core.policy.network import param_shapes
-from planner_core.policy.problems import (
+from planner_core.learning.policy.network import param_shapes
+from planner_core.learning.policy.problems import (
     TRAIN_SEED_BASE,
     VALIDATION_SEED_BASE,
     default_training_specs,
     read_trainset,
     validation_specs,
 )
-from planner_core.problem import Problem
-from planner_core.starts import UniformStart, with_init
+from planner_core.model.problem import Problem
+from planner_core.search.de import run
+from planner_core.search.init_modes import UniformStart, with_init
 from planner_core.suite import SUITE_SEED
 from tests.conftest import HAND_MAP, MAPS
 
@@ -79,7 +79,7 @@ def test_action_shapes_and_exact_log_prob(n: int, d: int) -> None:
                + beta_lp(F, out.F_ab) + beta_lp(Cr, out.Cr_ab))
     np.testing.assert_allclose(log_prob(out, mut, cx, F, Cr), by_hand, rtol=1e-12)
     torch = pytest.importorskip("torch")
-    from planner_core.policy.ppo import TorchPolicy, batch_obs, log_prob_entropy
+    from planner_core.learning.policy.ppo import TorchPolicy, batch_obs, log_prob_entropy
 
     model = TorchPolicy(NET).double()
     model.load_numpy(params)
@@ -107,7 +107,7 @@ def test_mode_actions_are_the_distributions_modes() -> None:
 @pytest.mark.parametrize("n,d", [(7, 4), (30, 40)])
 def test_numpy_forward_equals_torch(n: int, d: int) -> None:
     torch = pytest.importorskip("torch")
-    from planner_core.policy.ppo import TorchPolicy, batch_obs
+    from planner_core.learning.policy.ppo import TorchPolicy, batch_obs
 
     cfg = NetConfig()
     params = _random_params(cfg, 7)
@@ -127,7 +127,7 @@ def test_numpy_forward_equals_torch(n: int, d: int) -> None:
 def test_padded_batch_equals_each_problem_alone() -> None:
     """Problems of different dimension share one forward pass (padding is masked)."""
     torch = pytest.importorskip("torch")
-    from planner_core.policy.ppo import TorchPolicy, batch_obs
+    from planner_core.learning.policy.ppo import TorchPolicy, batch_obs
 
     cfg = NetConfig()
     params = _random_params(cfg, 9)
@@ -146,7 +146,7 @@ def test_padded_batch_equals_each_problem_alone() -> None:
 
 def test_one_ppo_update_lowers_the_clipped_loss() -> None:
     torch = pytest.importorskip("torch")
-    from planner_core.policy.ppo import (
+    from planner_core.learning.policy.ppo import (
         PPOConfig,
         TorchPolicy,
         _cat_obs,
@@ -185,7 +185,7 @@ def test_bc_anchor_kl_is_exact_and_holds_ppo_near_the_reference() -> None:
     Monte Carlo on the exact log-probabilities), is 0 against itself, and the anchor in the PPO
     loss keeps the updated policy closer to the reference than plain PPO on the same batch."""
     torch = pytest.importorskip("torch")
-    from planner_core.policy.ppo import (
+    from planner_core.learning.policy.ppo import (
         PPOConfig,
         TorchPolicy,
         _cat_obs,
@@ -246,7 +246,7 @@ def test_bc_anchor_kl_is_exact_and_holds_ppo_near_the_reference() -> None:
 
 def test_gae_by_hand() -> None:
     pytest.importorskip("torch")
-    from planner_core.policy.ppo import gae
+    from planner_core.learning.policy.ppo import gae
 
     r = np.array([[1.0], [2.0]])
     v = np.array([[0.5], [0.25]])
@@ -262,7 +262,7 @@ TINY_SPECS = [{"kind": "map", "path": str(MAPS / "tiny.json")}, {"kind": "map", 
 
 
 def _tiny_cfg(**kw):  # noqa: ANN202
-    from planner_core.policy.ppo import PPOConfig
+    from planner_core.learning.policy.ppo import PPOConfig
 
     base = {"epochs": 2, "envs": 2, "population": 8, "budget": 64, "n_steps": 3, "net": NET,
             "imitate": "adaptive", "imitate_epochs": 2, "imitate_stride": 2}
@@ -271,7 +271,7 @@ def _tiny_cfg(**kw):  # noqa: ANN202
 
 def test_two_epoch_training_smoke_run_and_resume(tmp_path) -> None:  # noqa: ANN001
     pytest.importorskip("torch")
-    from planner_core.policy.ppo import CURVE_FIELDS, train
+    from planner_core.learning.policy.ppo import CURVE_FIELDS, train
 
     lines: list[str] = []
     out = train(_tiny_cfg(), TINY_SPECS, tmp_path / "a", log=lines.append)
@@ -299,7 +299,7 @@ def test_ppo_from_a_checkpoint_with_the_bc_anchor_resumes_exactly(tmp_path) -> N
     no imitation fit); the anchor's reference survives --resume (1 + 1 epochs == 2 epochs); a
     checkpoint of another network size is refused."""
     pytest.importorskip("torch")
-    from planner_core.policy.ppo import train
+    from planner_core.learning.policy.ppo import train
 
     bc = train(_tiny_cfg(epochs=0), TINY_SPECS, tmp_path / "bc")
     kw = {"init_checkpoint": str(bc), "bc_coef": 1.0, "bc_decay": 0.5, "lr": 1e-2}
@@ -385,8 +385,8 @@ def test_imitation_lowers_the_loss_on_a_fixed_batch() -> None:
     """Behaviour cloning: demonstrations of `adaptive` on a tiny map, then a few maximum-
     likelihood steps lower the imitation loss (NLL of adaptive's choices + value loss)."""
     torch = pytest.importorskip("torch")
-    from planner_core.policy.imitation import collect_demos
-    from planner_core.policy.ppo import TorchPolicy, batch_obs, imitation_loss, pretrain
+    from planner_core.learning.policy.imitation import collect_demos
+    from planner_core.learning.policy.ppo import TorchPolicy, batch_obs, imitation_loss, pretrain
 
     problem = Problem(MAPS / "tiny.json")
     demos = collect_demos([problem], ["tiny"], configurator="adaptive",
@@ -413,7 +413,7 @@ def test_reward_scaler_makes_problem_scales_alike() -> None:
     """Rewards divided by the running std of the discounted return: the same episode shape at
     100x the scale gives the same scaled rewards, keys are independent, clipped at +-clip."""
     pytest.importorskip("torch")
-    from planner_core.policy.imitation import RewardScaler
+    from planner_core.learning.policy.imitation import RewardScaler
 
     rng = np.random.default_rng(0)
     r = rng.exponential(1e-3, 50)
@@ -440,7 +440,7 @@ def test_warm_start_alone_is_a_checkpoint(tmp_path) -> None:  # noqa: ANN001
     """epochs=0: the behaviour-cloning warm start alone, written as epoch 0 (empty curve);
     without a warm start 0 epochs is refused."""
     pytest.importorskip("torch")
-    from planner_core.policy.ppo import train
+    from planner_core.learning.policy.ppo import train
 
     out = train(_tiny_cfg(epochs=0), TINY_SPECS, tmp_path / "bc")
     _, net, config = load(out)

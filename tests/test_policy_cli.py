@@ -10,9 +10,9 @@ import pytest
 
 from lamde_mission import plan
 from lamde_mission.cli import main
-from planner_core.de import make_configurator, run
-from planner_core.policy import PolicyConfigurator
-from planner_core.problem import Problem
+from planner_core.learning.policy import PolicyConfigurator
+from planner_core.model.problem import Problem
+from planner_core.search.de import make_configurator, run
 from tests.conftest import MAPS
 
 
@@ -88,7 +88,7 @@ def test_cli_train_runs_on_a_trainset_file(tmp_path, capsys) -> None:  # noqa: A
 
 
 def test_cli_plan_with_a_trained_checkpoint_folder(tmp_path, capsys) -> None:  # noqa: ANN001
-    from planner_core.policy import NetConfig, init_params, save
+    from planner_core.learning.policy import NetConfig, init_params, save
 
     save(tmp_path / "ck", init_params(NetConfig(embed=8, heads=1, ff=8, hidden=8), 1),
          NetConfig(embed=8, heads=1, ff=8, hidden=8))
@@ -105,7 +105,7 @@ def test_cli_plan_with_a_trained_checkpoint_folder(tmp_path, capsys) -> None:  #
 
 @pytest.mark.parametrize("name", ["lamde-v1", "lamde-v2"])
 def test_shipped_checkpoint_is_small_and_documented(name: str) -> None:
-    from planner_core.policy.checkpoint import DEFAULT_CHECKPOINT, SHIPPED
+    from planner_core.learning.policy.checkpoint import DEFAULT_CHECKPOINT, SHIPPED
 
     assert DEFAULT_CHECKPOINT == "lamde-v2"
     folder = SHIPPED / name
@@ -162,7 +162,7 @@ def test_cli_train_reads_the_lam_trainset_format(tmp_path) -> None:  # noqa: ANN
     """A `lamde-mission lam select` file (format lamde-trainset/1) trains as it is."""
     pytest.importorskip("torch")
     pytest.importorskip("ioh")
-    from planner_core.policy.problems import build, read_trainset
+    from planner_core.learning.policy.problems import build, read_trainset
 
     pair = {"objective": {"function": 1, "dimension": 4, "instance": 1},
             "constraint": {"function": 2, "dimension": 4, "instance": 1},

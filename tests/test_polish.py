@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from planner_core import Problem
-from planner_core.polish import BACKENDS, polish_hover_times
+from planner_core.search.polish import BACKENDS, polish_hover_times
 
 BASE = {
     "area": {"width": 2000, "height": 2000},
@@ -120,7 +120,7 @@ def test_a_sensor_served_exactly_at_t_max_plans_and_flies(required: float) -> No
     fall short, and the plan is made and passes the simulator (it used to raise)."""
     from lamde_mission import plan
     from lamde_mission.items import plan_to_items
-    from planner_core.mapio import load_map
+    from planner_core.model.mapio import load_map
     from sim import replay, verify
 
     spec = {"name": "edge", "origin": {"lat": 46.2, "lon": 7.3, "alt": 500.0},
@@ -134,7 +134,7 @@ def test_a_sensor_served_exactly_at_t_max_plans_and_flies(required: float) -> No
 
 
 def test_solve_lp_falls_back_to_the_shortfall_lp_at_the_boundary() -> None:
-    from planner_core.polish import _solve_lp
+    from planner_core.search.polish import _solve_lp
 
     R, req = np.array([[10.0]]), np.array([3000.0])  # exactly T_max = 300 s
     for backend in BACKENDS:

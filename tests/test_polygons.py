@@ -17,13 +17,13 @@ from hypothesis import strategies as st
 from shapely.geometry import LineString
 from shapely.geometry import Polygon as ShapelyPolygon
 
-from planner_core.geometry import (
+from planner_core.model.geometry import (
     Obstacles,
     overlap_lengths,
     overlap_lengths_reference,
     points_inside,
 )
-from planner_core.polygons import (
+from planner_core.model.polygons import (
     EDGE_BOUNDARY,
     EDGE_OWNED,
     EDGE_SHARED,
@@ -126,7 +126,8 @@ def test_leg_along_internal_diagonal_counted_once() -> None:
 
 
 def test_boundary_contacts_touch_and_holes_are_free() -> None:
-    # C5 is exact and the rounding band counts as inside (planner_core.geometry): a leg along a
+    # C5 is exact and the rounding band counts as inside (planner_core.model.geometry): a leg along
+    # a
     # wall touches it for its whole length; a courtyard's inside is free
     obs = Obstacles.build([], [], [(L_SHAPE, []), (BLOCK + 200.0, [COURT + 200.0])])
     legs = [
@@ -237,7 +238,7 @@ def test_rectilinear_footprints_with_grid_legs(cells, seed) -> None:
 
 def test_many_obstacles_tiled_kernel_matches_reference() -> None:
     """From 256 obstacles on, the kernel culls by tiles first: same answers as the reference."""
-    from planner_core.geometry import _TILE_MIN
+    from planner_core.model.geometry import _TILE_MIN
 
     rng = np.random.default_rng(3)
     circles = [(x, y, r) for x, y, r in zip(rng.uniform(0, 3000, 150), rng.uniform(0, 3000, 150),
@@ -261,7 +262,7 @@ def test_seeder_routes_around_non_convex_footprints() -> None:
     """A U-shaped hall and an L between start and the sensors: the graph's edges and the
     seeded routes stay clear of the real shapes (never through a building along a cut)."""
     from planner_core import Problem, load_map
-    from planner_core.seeding import Seeder
+    from planner_core.model.seeding import Seeder
 
     u = [[1000, 1000], [3000, 1000], [3000, 3000], [2600, 3000], [2600, 1400], [1400, 1400],
          [1400, 3000], [1000, 3000]]  # fmt: skip

@@ -9,12 +9,12 @@ from typing import Any
 import numpy as np
 import pytest
 
-from planner_core.baselines import INIT_MODES, optimise, with_start
 from planner_core.bench import run_bench
+from planner_core.bench.baselines import INIT_MODES, optimise, with_start
 from planner_core.bench.records import RESULTS_FILE, key_of, read_records
 from planner_core.bench.report import imax_table
 from planner_core.execution import SerialExecutor
-from planner_core.problem import Problem
+from planner_core.model.problem import Problem
 from tests import test_bench
 from tests.test_bench import _map
 

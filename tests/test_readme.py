@@ -122,7 +122,7 @@ COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
         ("test_defaults.py::test_cli_population_5_is_one_line_and_exit_2", ('"5"',)),
     "python -m planner_core.defaults README.md":
         ("test_defaults.py::test_update_readme_rewrites_only_the_table", ("update_readme",)),
-    "python -m planner_core.lam.train_encoder":
+    "python -m planner_core.learning.lam.train_encoder":
         ("test_lam_features.py::test_train_encoder_command_writes_weights",
          ("train_encoder", "main(")),
     "python benchmarks/bench_plan.py campus-500":

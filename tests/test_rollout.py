@@ -1,4 +1,5 @@
-"""Meta-training's rollouts behind the executor (planner_core.policy.rollout): a segment is a
+"""Meta-training's rollouts behind the executor (planner_core.learning.policy.rollout): a segment
+is a
 function of its job alone (continuing an episode from a carry equals running it in one go; the
 logged log-probabilities are the network's), jobs carry no paths, the workers never import torch,
 and the same seed gives the same checkpoint in this process and on two worker processes. The
@@ -13,9 +14,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from planner_core.policy import NetConfig, init_params, log_prob
-from planner_core.policy.network import forward, param_shapes
-from planner_core.policy.rollout import (
+from planner_core.learning.policy import NetConfig, init_params, log_prob
+from planner_core.learning.policy.network import forward, param_shapes
+from planner_core.learning.policy.rollout import (
     EpisodeKey,
     SegmentJob,
     collect,
@@ -98,7 +99,7 @@ def test_collect_returns_segments_in_job_order() -> None:
 def test_rollout_workers_never_import_torch() -> None:
     code = (
         "from tests.test_rollout import _job\n"
-        "from planner_core.policy.rollout import run_segment\n"
+        "from planner_core.learning.policy.rollout import run_segment\n"
         "assert run_segment(_job(2)).steps == 2\n"
     )
     assert modules_after(code, "torch") == []

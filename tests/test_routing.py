@@ -1,12 +1,12 @@
-"""planner_core.routing: polygon offsets, all-pairs shortest paths, the visibility graph."""
+"""planner_core.model.routing: polygon offsets, all-pairs shortest paths, the visibility graph."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from planner_core.problem import Problem
-from planner_core.routing import (
+from planner_core.model.problem import Problem
+from planner_core.model.routing import (
     build_visibility_graph,
     offset_convex,
     path_hops,

@@ -12,8 +12,8 @@ import shapely
 import lamde_mission
 from lamde_mission.items import geofence_items, plan_to_items
 from lamde_mission.storage import storable_plan, stored_items
-from planner_core.mapio import DEFAULT_CLEARANCE, DEFAULT_DATA_MARGIN, load_map
-from planner_core.problem import Problem
+from planner_core.model.mapio import DEFAULT_CLEARANCE, DEFAULT_DATA_MARGIN, load_map
+from planner_core.model.problem import Problem
 from sim import replay, verify
 from sim.obstacles import obstacle_shapes
 from tests.conftest import SUITE

@@ -1,4 +1,5 @@
-"""Obstacle-aware starts (planner_core.seeding): clear graph edges, collision-free sensor-serving
+"""Obstacle-aware starts (planner_core.model.seeding): clear graph edges, collision-free
+sensor-serving
 starts on dense suite maps, determinism, small maps, no obstacles, fixed-length mode."""
 
 from __future__ import annotations
@@ -10,9 +11,9 @@ import numpy as np
 import pytest
 
 from planner_core import Problem
-from planner_core.geometry import overlap_lengths_reference, points_inside
-from planner_core.routing import build_visibility_graph
-from planner_core.seeding import MARGIN, Seeder
+from planner_core.model.geometry import overlap_lengths_reference, points_inside
+from planner_core.model.routing import build_visibility_graph
+from planner_core.model.seeding import MARGIN, Seeder
 from tests.conftest import MAPS, SUITE
 
 

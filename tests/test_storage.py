@@ -22,7 +22,7 @@ from lamde_mission.storage import (
     storable_plan,
     stored_items,
 )
-from planner_core.mapio import load_map
+from planner_core.model.mapio import load_map
 from sim import replay, verify
 from tests.conftest import SUITE
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from planner_core import Problem, load_map
-from planner_core.geometry import points_inside
+from planner_core.model.geometry import points_inside
 from planner_core.suite import (
     SIZES,
     SUITE_SEED,

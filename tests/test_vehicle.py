@@ -28,7 +28,7 @@ from lamde_mission.vehicle.transfer import (
 )
 from lamde_mission.vehicle.upload import upload_mission
 from lamde_mission.vehicle.wire import compare_items
-from planner_core.mapio import load_map
+from planner_core.model.mapio import load_map
 from tests.vehicle_helpers import free_udp_port, hand_fence, hand_mission, listen_on, mock_on
 from tests.vehicle_helpers import no_leftover_mock_threads as _no_leftover_mock_threads  # noqa: F401 (autouse)
 

@@ -22,8 +22,8 @@ import pytest
 from lamde_mission.formats import read_mission, write_mission
 from lamde_mission.vehicle.mock import MockVehicle
 from lamde_mission.vehicle.wire import WireItem, compare_items, wire_mission
-from planner_core.mapio import load_map
-from planner_core.problem import Problem
+from planner_core.model.mapio import load_map
+from planner_core.model.problem import Problem
 from tests.conftest import MAPS, SUITE
 from tests.vehicle_helpers import free_udp_port
 

@@ -22,7 +22,7 @@ from lamde_mission.vehicle.connection import Connection, parse_connection
 from lamde_mission.vehicle.mock import NOISY_GCS_SYSTEM, MockVehicle
 from lamde_mission.vehicle.upload import upload_mission
 from lamde_mission.vehicle.wire import compare_items
-from planner_core.mapio import load_map
+from planner_core.model.mapio import load_map
 from tests.test_vehicle import MAP
 from tests.vehicle_helpers import free_udp_port, hand_fence, hand_mission, listen_on, mock_on
 

@@ -11,7 +11,7 @@ from lamde_mission.errors import UsageError
 
 def load_map_or_fail(path: str) -> Any:
     """Load and validate a map; turn every problem into a UsageError naming the field."""
-    from planner_core.mapio import MapError, load_map
+    from planner_core.model.mapio import MapError, load_map
 
     try:
         m = load_map(path)
@@ -81,7 +81,7 @@ def with_origin_or_fail(m: Any, origin: str | None) -> Any:
     """The map placed by `--origin`, or as it is if it has an origin; UsageError naming
     `origin` when it has none and none was given (no default place is ever assumed)."""
     if origin is not None:
-        from planner_core.mapio import MapError
+        from planner_core.model.mapio import MapError
 
         try:
             vals = [float(v) for v in origin.split(",")]

@@ -98,7 +98,7 @@ def _command(args: argparse.Namespace, optimisers: list[str], tasks: list[str] |
 
 
 def run(args: argparse.Namespace) -> int:
-    from planner_core.baselines import REGISTRY
+    from planner_core.bench.baselines import REGISTRY
     from planner_core.bench.runner import BEST_KNOWN_OPTIMISERS, BenchError, run_bench
 
     if args.list:

@@ -27,7 +27,7 @@ def run(args: argparse.Namespace) -> int:
     m = load_map_or_fail(args.map)
     s = m.summary()
     if args.json:
-        from planner_core.diagnose import diagnose
+        from planner_core.model.diagnose import diagnose
 
         d = diagnose(m)
         s["diagnosis"] = [{"kind": f.kind, "fatal": f.fatal, "sensor": f.sensor,
@@ -67,7 +67,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _diagnosis(m: object) -> int:
     """Print the fast feasibility diagnosis; 1 when something rules every plan out."""
-    from planner_core.diagnose import diagnose
+    from planner_core.model.diagnose import diagnose
 
     d = diagnose(m)
     for f in d.findings:

@@ -3,7 +3,7 @@
 ``lam build``  probes every BBOB instance of the database once and caches its features
                (resumable: chunks already on disk are skipped).
 ``lam select`` probes the target tasks (map files), runs the two-stage query and writes the
-               training-set JSON that ``planner_core.lam.load_trainset`` reads.
+               training-set JSON that ``planner_core.learning.lam.load_trainset`` reads.
 """
 
 from __future__ import annotations
@@ -129,7 +129,7 @@ def _int_list(value: str, option: str) -> list[int]:
 
 
 def _database(args: argparse.Namespace, features: list[str]) -> Any:
-    from planner_core.lam import FULL, Database, DatabaseSpec, make_extractors
+    from planner_core.learning.lam import FULL, Database, DatabaseSpec, make_extractors
 
     base = FULL if args.full else None
     try:
@@ -230,9 +230,9 @@ def _select(args: argparse.Namespace) -> int:
             raise UsageError(f"database features missing in {db.cache_dir}: run `lam build`")
         _build(db, args)
 
-    from planner_core.lam import select
-    from planner_core.lam.trainset import write_trainset
-    from planner_core.problem import Problem
+    from planner_core.learning.lam import select
+    from planner_core.learning.lam.trainset import write_trainset
+    from planner_core.model.problem import Problem
 
     maps = [load_map_or_fail(str(f)) for f in files]
     tasks = [Problem(m) for m in maps]

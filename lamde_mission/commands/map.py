@@ -83,7 +83,7 @@ def _from_geojson(args: argparse.Namespace) -> int:
 
     from lamde_mission.atomic import write_text_atomic
     from lamde_mission.gis import GisError, build_map, read_layers
-    from planner_core.mapio import MapError, load_map
+    from planner_core.model.mapio import MapError, load_map
 
     inputs = [(f, None) for f in args.files]
     inputs += [(f, "obstacle") for f in args.obstacles]

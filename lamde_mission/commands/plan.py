@@ -249,7 +249,7 @@ def run(args: argparse.Namespace) -> int:
     if args.policy is not None:
         if args.configurator != "lamde":
             raise UsageError("--policy: only with --configurator lamde")
-        from planner_core.policy import CheckpointError, PolicyConfigurator
+        from planner_core.learning.policy import CheckpointError, PolicyConfigurator
 
         try:
             configurator = PolicyConfigurator(checkpoint=args.policy)
@@ -304,7 +304,7 @@ def run(args: argparse.Namespace) -> int:
         for line in _violations(plan, verdicts):
             print(f"  {line}", file=sys.stderr)
         if not plan.feasible:
-            from planner_core.diagnose import diagnose
+            from planner_core.model.diagnose import diagnose
 
             fatal = [f.message for f in diagnose(m).findings if f.fatal]
             for line in fatal:

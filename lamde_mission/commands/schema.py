@@ -15,7 +15,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
-    from planner_core.mapio import map_json_schema
+    from planner_core.model.mapio import map_json_schema
 
     print(json.dumps(map_json_schema(), indent=2))
     return 0

@@ -72,8 +72,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 def _config(args: argparse.Namespace):  # noqa: ANN202 - PPOConfig is imported lazily
     from lamde_mission.errors import UsageError
-    from planner_core.policy.network import NetConfig
-    from planner_core.policy.ppo import PPOConfig
+    from planner_core.learning.policy.network import NetConfig
+    from planner_core.learning.policy.ppo import PPOConfig
 
     kw: dict = {}
     for name in ("epochs", "seed", "envs", "population", "budget"):
@@ -137,12 +137,12 @@ def run(args: argparse.Namespace) -> int:
                          f"got {args.jobs}")
     check_executor_args(args)
     try:
-        from planner_core.policy import ppo
+        from planner_core.learning.policy import ppo
     except ModuleNotFoundError as exc:
         if exc.name == "torch":
             raise UsageError("train needs torch: pip install 'lamde-mission[train]'") from None
         raise
-    from planner_core.policy.problems import (
+    from planner_core.learning.policy.problems import (
         bbob_training_specs,
         default_training_specs,
         read_trainset,

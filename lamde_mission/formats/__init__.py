@@ -201,7 +201,7 @@ def _check_plan_result(hover_points: Any, hover_times: Any) -> None:
     import math
 
     from lamde_mission.formats.ranges import FLOAT32_MAX, check_item_count
-    from planner_core.mapio import MAX_COORD
+    from planner_core.model.mapio import MAX_COORD
 
     def number(v: Any, where: str, lo: float, hi: float) -> None:
         if isinstance(v, bool) or not isinstance(v, int | float):

@@ -403,9 +403,10 @@ def _frame(layers: GisLayers, origin: tuple[float, float, float] | None,
 
 def _clean_shape(rings_xy: list[np.ndarray], where: str, notes: list[str],
                  locate: Any) -> tuple[np.ndarray, list[np.ndarray]] | str:
-    """The feature's rings cleaned and oriented (`planner_core.polygons.clean_polygon`), or the
+    """The feature's rings cleaned and oriented (`planner_core.model.polygons.clean_polygon`), or
+    the
     problem as one line naming the feature."""
-    from planner_core.polygons import clean_polygon
+    from planner_core.model.polygons import clean_polygon
 
     try:
         shell, holes, said = clean_polygon(rings_xy, locate=locate)

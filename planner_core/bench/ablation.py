@@ -27,7 +27,7 @@ import numpy as np
 from planner_core.bench.records import key_of
 from planner_core.bench.stats import ALPHA, wilcoxon_mark
 from planner_core.defaults import INIT_MODES
-from planner_core.model import penalised_score
+from planner_core.model.formulas import penalised_score
 
 __all__ = ["META_KEY", "ablation_section", "normalised", "normalised_table", "training_seconds"]
 

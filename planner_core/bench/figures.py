@@ -32,7 +32,7 @@ import numpy as np
 
 from planner_core.atomic import write_bytes_atomic
 from planner_core.defaults import SCORE_FACTOR
-from planner_core.model import penalised_score
+from planner_core.model.formulas import penalised_score
 
 __all__ = [
     "DPI",

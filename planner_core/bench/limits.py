@@ -2,7 +2,7 @@
 
 Both files sit beside the suite folder, not in it (the folder holds exactly the maps):
 for `examples/maps/suite/` they are `examples/maps/suite_lower_bounds.json` and
-`examples/maps/suite_best_known.json`. The first caches `planner_core.bounds.lower_bound` per
+`examples/maps/suite_best_known.json`. The first caches `planner_core.model.bounds.lower_bound` per
 map, keyed by the map file's SHA-256 (a changed map is recomputed). The second holds, per task,
 the best feasible f
 found so far, its hover points/times, and who found it (optimiser, seed, budget, command); the
@@ -102,7 +102,7 @@ def lower_bounds(
 ) -> dict[str, dict[str, Any]]:
     """LB per task from the cache beside the suite; missing or stale entries are computed and
     stored (unless `compute_missing` is False, then they are left out)."""
-    from planner_core.bounds import DEFAULT_SPACING, lower_bound
+    from planner_core.model.bounds import DEFAULT_SPACING, lower_bound
 
     files = suite_task_files(suite)
     names = list(files) if tasks is None else [t for t in tasks if t in files]
@@ -126,7 +126,7 @@ def lower_bounds(
             data = read_json(path)
             tasks_all = {**data.get("tasks", {}), **fresh}
             write_json_atomic(path, {
-                "description": "Lower bound on f per map (planner_core.bounds.lower_bound), "
+                "description": "Lower bound on f per map (planner_core.model.bounds.lower_bound), "
                 "keyed by the map file's SHA-256: LB = alpha * T_fly(|end - start|) + "
                 "(1 - alpha) * H_LB (LP over <= 25 m cells; C3, C5 and flight relaxed).",
                 "tasks": dict(sorted(tasks_all.items())),
@@ -142,7 +142,7 @@ def verify_plan(
     map_path: str | Path, hover_points: Any, hover_times: Any
 ) -> tuple[float, float]:
     """(f, phi) of a decoded plan (hover points and times in order) on the map."""
-    from planner_core.problem import Problem
+    from planner_core.model.problem import Problem
 
     problem = Problem(map_path, variable_length=True)
     hp = np.asarray(hover_points, dtype=float).reshape(-1, 2)
@@ -178,7 +178,7 @@ class BestKnown:
     def ensure(self, files: dict[str, Path], command: str = "") -> dict[str, float]:
         """Seed missing or stale entries (the map file changed) from each map's witness plan;
         return the best-known f per task (tasks without a witness or entry are left out)."""
-        from planner_core.mapio import load_map
+        from planner_core.model.mapio import load_map
 
         with _locked(self.path):
             data = read_json(self.path)

@@ -56,7 +56,7 @@ def fmt(v: float) -> str:
 
 def order_optimisers(present: Sequence[str], reference: str | None) -> list[str]:
     """Reference first, then the registry's order, then any other names alphabetically."""
-    from planner_core.baselines import REGISTRY
+    from planner_core.bench.baselines import REGISTRY
 
     known = [o for o in REGISTRY if o in present and o != reference]
     other = sorted(o for o in present if o not in REGISTRY and o != reference)
@@ -159,7 +159,7 @@ def build_report(
     `ablations`: benchmark folders of those studies, each reported in its own section after the
     protocols (`study_sections`).
     """
-    from planner_core.baselines import REGISTRY
+    from planner_core.bench.baselines import REGISTRY
 
     results_dir = Path(results_dir)
     output = Path(output)
@@ -239,7 +239,7 @@ def build_report(
     maps: dict[str, Any] = {}
     if suite_dir is not None and suite_dir.is_dir():
         from planner_core.bench.limits import suite_task_files
-        from planner_core.mapio import load_map
+        from planner_core.model.mapio import load_map
 
         files = suite_task_files(suite_dir)
         maps = {t: load_map(files[t]) for t in tasks if t in files}
@@ -628,7 +628,7 @@ def _mean_ranks(table: ScoreTable) -> dict[str, float]:
 def _safety_line(suite_dir: Path | None, tasks: Sequence[str]) -> str:
     """What the task files say about safety margins (the suite's: zero, the paper's model)."""
     from planner_core.bench.limits import suite_task_files
-    from planner_core.mapio import MapError, load_map
+    from planner_core.model.mapio import MapError, load_map
 
     if suite_dir is None or not Path(suite_dir).is_dir():
         return "- Safety margins: unknown (the suite folder is not here to read them from)."
@@ -663,7 +663,7 @@ def _limits_section(tasks: list[str], opts: list[str], by: Any, suite_dir: Path 
     bk_f = bk_all.f_values(files)
     bk_entries = bk_all.load()
     L = ["", "### Against the limits", "",
-         "LB: `planner_core.bounds` (alpha * flight time of the straight line start -> end + "
+         "LB: `planner_core.model.bounds` (alpha * flight time of the straight line start -> end + "
          "(1 - alpha) * the LP minimum hover time over 25 m cells, ignoring C3, C5 and flight); "
          f"best-known: `{best_known_path(suite_dir)}` (the best feasible f found by any run "
          "so far; initially the map's witness). Ratios: mean f over an optimiser's feasible "

@@ -122,10 +122,10 @@ def _floats(a: Any) -> list[Any]:
 def execute(job: Job) -> dict[str, Any]:
     """Run one job and return its record (or an error record with the traceback); top-level,
     so worker processes can unpickle it."""
-    from planner_core.baselines import get, optimise, problem_for
-    from planner_core.mapio import load_map
-    from planner_core.model import penalised_score
-    from planner_core.problem import Problem
+    from planner_core.bench.baselines import get, optimise, problem_for
+    from planner_core.model.formulas import penalised_score
+    from planner_core.model.mapio import load_map
+    from planner_core.model.problem import Problem
 
     base = {"optimiser": job.optimiser, "task": job.task, "run": job.run, "seed": job.seed,
             "budget": job.budget, "map_sha256": job.map_sha256, "init": job.init}
@@ -272,7 +272,8 @@ def run_bench(
     """Run every missing (optimiser, task, run, init, I_max) and append each result to
     `<out>/results.jsonl`.
 
-    `inits`: start modes (`planner_core.baselines.INIT_MODES`: "seeded" the product's, "uniform"
+    `inits`: start modes (`planner_core.bench.baselines.INIT_MODES`: "seeded" the product's,
+    "uniform"
     the paper's protocol). `i_max`: I_max values to override the maps' own with (None = the
     map's; the I_max study, paper Fig. 4).
 
@@ -283,12 +284,12 @@ def run_bench(
     N = N worker processes; ray: a Ray cluster at `address`, or a local Ray instance with `jobs`
     CPUs), closed when the benchmark ends. Results are the same on every backend.
 
-    `extra`: OptimiserSpecs outside the registry (`planner_core.baselines.policy_spec`: the
+    `extra`: OptimiserSpecs outside the registry (`planner_core.bench.baselines.policy_spec`: the
     ablation variants), runnable under their names; `<out>/meta.json` records each one's
     target, arguments, encoding and probe count, and a resumed benchmark refuses a name whose
     entry changed.
     """
-    from planner_core.baselines import INIT_MODES, REGISTRY
+    from planner_core.bench.baselines import INIT_MODES, REGISTRY
 
     log = log or (lambda _msg: None)
     bad = [m for m in inits if m not in INIT_MODES]

@@ -23,8 +23,8 @@ from typing import Any
 
 import numpy as np
 
-from planner_core.mapio import load_map
-from planner_core.problem import Problem
+from planner_core.model.mapio import load_map
+from planner_core.model.problem import Problem
 from planner_core.suite.draw import Draw, Retry
 from planner_core.suite.tables import (
     N_DENSITIES,

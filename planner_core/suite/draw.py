@@ -12,10 +12,10 @@ from typing import Any
 import numpy as np
 import shapely
 
-from planner_core.geometry import rectangle_vertices
-from planner_core.mapio import Objective, Radio, Uav
-from planner_core.model import ModelParams
-from planner_core.routing import offset_convex, open_tour, path_hops, shortest_paths
+from planner_core.model.formulas import ModelParams
+from planner_core.model.geometry import rectangle_vertices
+from planner_core.model.mapio import Objective, Radio, Uav
+from planner_core.model.routing import offset_convex, open_tour, path_hops, shortest_paths
 from planner_core.suite.tables import BENDS, SIZES, obstacle_counts
 
 __all__ = ["Draw", "Retry"]

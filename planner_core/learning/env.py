@@ -1,0 +1,266 @@
+"""The optimisation MDP of the paper (Sec. 4.2) as a :class:`gymnasium.Env`.
+
+One step = one DE generation. Action = the per-individual configuration (a
+:class:`~planner_core.search.de.core.Config`, a 4-tuple ``(mutation, crossover, F, Cr)`` or a dict
+with
+those keys). Observation (dict of numpy arrays, N = population, d = dimension):
+
+=============  =========  ===========================================================
+key            shape      meaning
+=============  =========  ===========================================================
+``"X"``        (N, d)     population normalised to the unit box
+``"f"``        (N, 2)     (mantissa omega, scaled exponent b / eta) of each f
+``"phi"``      (N, 2)     (mantissa omega, scaled exponent b / eta) of each phi
+``"progress"`` (1,)       g / G (G = generations the budget allows)
+=============  =========  ===========================================================
+
+Mantissa-exponent encoding: ``y = omega * 10**b`` with ``b = floor(log10|y|) + 1`` so
+``0.1 <= |omega| < 1``; ``y == 0 -> (0, 0)``; +-inf is encoded as (+-1, 400 / eta), one past
+the largest finite double's exponent. ``eta = 10`` by default: objective and violation values
+of interest span roughly 1e-10 .. 1e10 (flight times of 1e3..1e4 s, violations from 1e-8 up to
+the collision offset mu + nu * metres), which then map to scaled exponents in [-1, 1].
+
+Reward: :func:`reward` (the paper's Eq. reward) on the Deb-best (phi, f) before and after the
+step, with feasibility tolerance ``delta = 1e-8`` by default (violations below it count as
+feasible for the reward only; the DE's selection still compares phi exactly).
+
+Episode end: ``terminated`` is True once the evaluation budget is spent. Time is part of the
+observation (g / G), so the budget's end is a true terminal state of this MDP, not a time
+limit imposed from outside; ``truncated`` is always False (Gymnasium's semantics).
+
+Spaces (Gymnasium): ``observation_space`` is a ``Dict`` of ``Box`` es with the shapes above
+(X in [0, 1]; mantissa in [-1, 1]; scaled exponent in [-324 / eta, 400 / eta], the range of
+finite doubles and the +-inf code; progress in [0, 1]); ``action_space`` is a ``Dict`` with
+``mutation`` ``MultiDiscrete([7] * N)``, ``crossover`` ``MultiDiscrete([2] * N)``, ``F`` and
+``Cr`` ``Box(0, 1, (N,))``. Both depend on the problem's dimension d and the population N, so
+they are declared for the current problem and population: at construction when a problem is
+given, and again at every ``reset`` (a vector env needs every sub-env to keep the same d and N).
+The env is registered as ``"lamde/Optimization-v0"`` (``gymnasium.make(ENV_ID, problem=p)``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import gymnasium
+import numpy as np
+from gymnasium import spaces
+
+from planner_core import defaults as _defaults
+from planner_core.search.de.core import ask, evaluate, init, tell
+from planner_core.search.de.operators import N_CROSSOVERS, N_MUTATIONS
+from planner_core.search.de.types import BoxProblem, Config, DEState
+
+DEFAULT_ETA = _defaults.ETA
+DEFAULT_DELTA = _defaults.DELTA
+_INF_EXPONENT = 400.0  # beyond the largest finite double exponent (309)
+_MIN_EXPONENT = -324.0  # b of the smallest subnormal double (4.9e-324), after rounding fix-ups
+#: the id under which :class:`OptimizationEnv` is registered with Gymnasium
+ENV_ID = "lamde/Optimization-v0"
+_BELOW_ONE = float(np.nextafter(1.0, 0.0))
+
+
+def mantissa_exponent(y: np.ndarray, eta: float = DEFAULT_ETA) -> np.ndarray:
+    """Encode values as (omega, b / eta) pairs, shape ``y.shape + (2,)`` (see module doc)."""
+    y = np.asarray(y, dtype=float)
+    out = np.zeros(y.shape + (2,))
+    a = np.abs(y)
+    finite = np.isfinite(y) & (a > 0)
+    if finite.any():
+        af = a[finite]
+        b = np.floor(np.log10(af)) + 1.0
+        omega = af / 10.0**b
+        # log10 and 10**b round near powers of ten: move one decade if needed, then clip the
+        # last-ulp leftovers so that 0.1 <= |omega| < 1 holds exactly.
+        hi = omega >= 1.0
+        omega[hi] /= 10.0
+        b[hi] += 1.0
+        lo = omega < 0.1
+        omega[lo] *= 10.0
+        b[lo] -= 1.0
+        omega = np.clip(omega, 0.1, _BELOW_ONE)
+        out[finite, 0] = np.sign(y[finite]) * omega
+        out[finite, 1] = b / eta
+    inf = np.isinf(y)
+    out[inf, 0] = np.sign(y[inf])
+    out[inf, 1] = _INF_EXPONENT / eta
+    return out
+
+
+def observe(state: DEState, eta: float = DEFAULT_ETA) -> dict[str, np.ndarray]:
+    """The paper's state s_g for a DE state (pure; also usable by a policy configurator)."""
+    G = state.max_generations
+    return {
+        "X": np.array(state.X),
+        "f": mantissa_exponent(state.f, eta),
+        "phi": mantissa_exponent(state.phi, eta),
+        "progress": np.array([state.generation / G if G > 0 else 1.0]),
+    }
+
+
+def reward(
+    phi_prev: float,
+    f_prev: float,
+    phi_cur: float,
+    f_cur: float,
+    progress: float,
+    delta: float = DEFAULT_DELTA,
+) -> float:
+    """The paper's three-case reward (Eq. reward) from the best (phi, f) at g-1 and g.
+
+    1. ``phi_cur > delta``: relative violation decrease (phi_prev - phi_cur) / phi_prev.
+    2. ``phi_prev > delta >= phi_cur``: bonus 1 + exp(-g/G) for entering the feasible region.
+    3. both <= delta: relative objective decrease (f_prev - f_cur) / |f_prev| (|.| so that a
+       decrease is positive when f < 0). A zero or infinite denominator gives 0.
+    """
+    if phi_cur > delta:
+        if phi_prev == 0 or not math.isfinite(phi_prev):
+            return 0.0
+        return float((phi_prev - phi_cur) / phi_prev)
+    if phi_prev > delta:
+        return 1.0 + math.exp(-progress)
+    denom = abs(f_prev)
+    if denom == 0 or not math.isfinite(denom):
+        return 0.0
+    return float((f_prev - f_cur) / denom)
+
+
+def as_config(action: Any) -> Config:
+    """Accept a Config, a (mutation, crossover, F, Cr) sequence or a dict with those keys."""
+    if isinstance(action, Config):
+        return action
+    if isinstance(action, Mapping):
+        return Config(action["mutation"], action["crossover"], action["F"], action["Cr"])
+    mutation, crossover, F, Cr = action
+    return Config(mutation, crossover, F, Cr)
+
+
+class OptimizationEnv(gymnasium.Env):
+    """The paper's optimisation MDP over the DE core, a :class:`gymnasium.Env`.
+
+    ``reset(seed, options={"problem": p, "population": N, "budget": B})`` starts a run;
+    options override the constructor's defaults (``planner_core.defaults``) and re-declare the
+    spaces. ``step(action)`` runs one generation. Seeding is Gymnasium's: ``reset(seed=s)``
+    re-seeds :attr:`np_random`, from which each episode draws its DE run seed, so one seed
+    fixes this and every later episode (same streams as ``np.random.default_rng(s)``).
+
+    Attributes: ``problem``, ``population``, ``budget``, ``eta``, ``delta``, ``state`` (the
+    current :class:`~planner_core.search.de.core.DEState`, None before the first reset),
+    ``observation_space`` and ``action_space`` (absent until a problem is known).
+    """
+
+    metadata: dict[str, Any] = {"render_modes": []}
+
+    def __init__(
+        self,
+        problem: BoxProblem | None = None,
+        *,
+        population: int = _defaults.POPULATION,
+        budget: int = _defaults.BUDGET,
+        eta: float = DEFAULT_ETA,
+        delta: float = DEFAULT_DELTA,
+        render_mode: str | None = None,
+    ) -> None:
+        if render_mode is not None:
+            raise ValueError(f"render_mode: this env draws nothing, got {render_mode!r}")
+        self.render_mode = render_mode
+        self.problem = problem
+        self.population = population
+        self.budget = budget
+        self.eta = eta
+        self.delta = delta
+        self.state: DEState | None = None
+        if problem is not None:
+            self._declare_spaces()
+
+    @property
+    def _seeder(self) -> np.random.Generator:
+        """The generator episode seeds are drawn from (Gymnasium's :attr:`np_random`)."""
+        return self.np_random
+
+    def _declare_spaces(self) -> None:
+        """Observation and action spaces for the current problem's dimension and population."""
+        n, d = int(self.population), int(np.asarray(self.problem.lower).shape[0])
+        code = spaces.Box(
+            low=np.tile([-1.0, _MIN_EXPONENT / self.eta], (n, 1)),
+            high=np.tile([1.0, _INF_EXPONENT / self.eta], (n, 1)),
+            dtype=np.float64,
+        )
+        self.observation_space = spaces.Dict(
+            {
+                "X": spaces.Box(0.0, 1.0, (n, d), dtype=np.float64),
+                "f": code,
+                "phi": code,
+                "progress": spaces.Box(0.0, 1.0, (1,), dtype=np.float64),
+            }
+        )
+        self.action_space = spaces.Dict(
+            {
+                "mutation": spaces.MultiDiscrete(np.full(n, N_MUTATIONS)),
+                "crossover": spaces.MultiDiscrete(np.full(n, N_CROSSOVERS)),
+                "F": spaces.Box(0.0, 1.0, (n,), dtype=np.float64),
+                "Cr": spaces.Box(0.0, 1.0, (n,), dtype=np.float64),
+            }
+        )
+
+    def reset(
+        self, *, seed: int | None = None, options: Mapping[str, Any] | None = None
+    ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
+        """Start a new run; a given seed makes this and every later episode reproducible.
+
+        Raises ValueError for a missing problem, an unknown option, or a population/budget
+        outside ``planner_core.defaults``' ranges (the message names the field).
+        """
+        super().reset(seed=seed)
+        options = dict(options or {})
+        problem = options.pop("problem", self.problem)
+        if problem is None:
+            raise ValueError("no problem: pass options={'problem': ...} or give one to the env")
+        population = options.pop("population", self.population)
+        budget = options.pop("budget", self.budget)
+        if options:
+            raise ValueError(f"unknown reset options {sorted(options)}")
+        _defaults.check_run_args(population=population, budget=budget)
+        self.problem, self.population, self.budget = problem, int(population), int(budget)
+        self._declare_spaces()
+        run_seed = int(self.np_random.integers(0, 2**63 - 1))
+        self.state = init(self.problem, run_seed, self.population, self.budget)
+        return observe(self.state, self.eta), self._info(self.state)
+
+    def step(self, action: Any) -> tuple[dict[str, np.ndarray], float, bool, bool, dict[str, Any]]:
+        """One DE generation under ``action`` -> (obs, reward, terminated, truncated, info)."""
+        state = self.state
+        if state is None:
+            raise RuntimeError("call reset() before step()")
+        if state.done:
+            raise RuntimeError("episode is over (budget spent); call reset()")
+        trials = ask(state, as_config(action))
+        f, phi = evaluate(self.problem, trials)
+        new = tell(state, trials, f, phi)
+        self.state = dataclasses.replace(new, memory=state.memory)
+        r = reward(
+            state.best_phi,
+            state.best_f,
+            new.best_phi,
+            new.best_f,
+            new.generation / max(new.max_generations, 1),
+            self.delta,
+        )
+        return observe(new, self.eta), r, bool(new.done), False, self._info(new)
+
+    @staticmethod
+    def _info(state: DEState) -> dict[str, Any]:
+        return {
+            "generation": state.generation,
+            "evaluations": state.evaluations,
+            "best_f": state.best_f,
+            "best_phi": state.best_phi,
+            "feasible_fraction": state.feasible_fraction,
+        }
+
+
+if ENV_ID not in gymnasium.registry:
+    gymnasium.register(id=ENV_ID, entry_point="planner_core.learning.env:OptimizationEnv")

@@ -1,0 +1,66 @@
+"""`PolicyConfigurator`: the trained meta-level policy as a DE configurator ("lamde").
+
+Each generation it builds the env's observation of the DE state
+(:func:`planner_core.learning.env.observe`),
+runs the numpy network (:mod:`planner_core.learning.policy.network`) and returns one (mutation,
+crossover,
+F, Cr) per individual.
+
+Determinism: by default the action is *sampled* from the policy's distributions with the
+generator the DE core hands to ``configure`` (generation g's stream of the run's seed, after the
+words ask uses), in the fixed order of
+:func:`~planner_core.learning.policy.network.sample_actions`; so the
+same seed gives the same plan, and the policy runs as it was trained (stochastic). With
+``mode=True`` it takes the most likely action instead (argmax operators, Beta modes), which uses
+no randomness at all.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from planner_core.learning.env import DEFAULT_ETA, observe
+from planner_core.learning.policy.checkpoint import DEFAULT_CHECKPOINT, load
+from planner_core.learning.policy.network import NetConfig, forward, mode_actions, sample_actions
+from planner_core.search.de.core import Config, DEState, Outcome
+
+
+@dataclass(frozen=True, eq=False)
+class PolicyConfigurator:
+    """Configurator driven by a policy checkpoint (shipped name or folder path).
+
+    ``mode``: take each distribution's mode instead of sampling (see module doc).
+    ``eta``: the exponent scale of the observation (must match training; stored in the
+    checkpoint's training metadata when present).
+    """
+
+    checkpoint: str | os.PathLike[str] = DEFAULT_CHECKPOINT
+    mode: bool = False
+    params: dict[str, np.ndarray] = field(default=None, repr=False)  # type: ignore[assignment]
+    net: NetConfig = field(default=None, repr=False)  # type: ignore[assignment]
+    eta: float = DEFAULT_ETA
+
+    def __post_init__(self) -> None:
+        if self.params is None or self.net is None:
+            params, net, config = load(self.checkpoint)
+            object.__setattr__(self, "params", {k: v.astype(np.float32) for k, v in
+                                                params.items()})
+            object.__setattr__(self, "net", net)
+            eta = config.get("training", {}).get("eta")
+            if eta is not None:
+                object.__setattr__(self, "eta", float(eta))
+
+    def init(self, state: DEState) -> None:
+        return None
+
+    def configure(self, state: DEState, rng: np.random.Generator) -> Config:
+        out = forward(self.params, self.net, observe(state, self.eta))
+        mut, cx, F, Cr = mode_actions(out) if self.mode else sample_actions(out, rng)
+        return Config(mut, cx, F, Cr)
+
+    def update(self, memory: Any, outcome: Outcome) -> None:
+        return None

@@ -1,0 +1,244 @@
+"""The paper's model, once: flight time (Eq. 1), link rate, Deb's rule, the penalised score, and
+the frozen parameter record everything else reads them from (paper Sec. 3, Sec. 4.1, Sec. 5.2).
+
+A leaf module: it imports nothing of the project but the import-free defaults table, so the
+problem, the seeder, the map generator, the lower bound, the polish LP, the compiled kernels and
+the baselines all take their formulas from here. Each formula comes in the form its callers
+need: numpy over arrays and, where a compiled (numba) kernel needs it per element, an ``@njit``
+scalar defined right next to it and held equal to it by a test. The sim (`sim.replay`) keeps
+its own deliberate second implementation.
+
+Units: metres, seconds, Mbit and Mbit/s; positions in the map's local ENU frame.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numba import njit
+
+from planner_core.defaults import L_VIO_TOL as _L_VIO_TOL
+from planner_core.defaults import SCORE_FACTOR
+
+__all__ = [
+    "PENALTY_FACTOR",
+    "L_VIO_TOL",
+    "ModelParams",
+    "flight_time",
+    "leg_time",
+    "link_rates",
+    "ground_reach",
+    "slant_rate",
+    "slant_rates",
+    "collision_penalty",
+    "penalised_score",
+    "deb_better",
+    "deb_not_worse",
+    "deb_best",
+    "deb_order",
+]
+
+#: The factor of the penalised score f + 10 * phi used to compare optimisers (paper Sec. 5.2);
+#: its value lives in the defaults table (`planner_core.defaults.SCORE_FACTOR`).
+PENALTY_FACTOR = SCORE_FACTOR
+
+#: The overlap tolerance (metres) shared with the sim; see `planner_core.defaults.L_VIO_TOL`.
+L_VIO_TOL = _L_VIO_TOL
+
+
+# ----------------------------------------------------------------------------- flight (Eq. 1)
+
+
+def flight_time(d: np.ndarray, v_max: float, accel: float) -> np.ndarray:
+    """Eq. 1: time (s) to fly distance d (m, any shape) from rest to rest: a trapezoid speed
+    profile above d = v_max^2 / a (cruise at v_max), a triangle below; d <= 0 takes 0 s."""
+    d = np.asarray(d, dtype=float)
+    cruise = d > v_max * v_max / accel
+    return np.where(cruise, d / v_max + v_max / accel, 2.0 * np.sqrt(np.maximum(d, 0.0) / accel))
+
+
+@njit(cache=True, nogil=True)
+def leg_time(d: float, v_max: float, accel: float) -> float:  # pragma: no cover - compiled
+    """`flight_time` for one leg, for compiled kernels (bit-equal; tests/test_model.py)."""
+    if d > v_max * v_max / accel:
+        return d / v_max + v_max / accel
+    return 2.0 * math.sqrt(max(d, 0.0) / accel)
+
+
+# ----------------------------------------------------------------------------- link rate
+
+
+def slant_rates(d2: np.ndarray, altitude: float, peak_rate: float, decay: float) -> np.ndarray:
+    """R_c - xi * sqrt(d^2 + H^2) (Mbit/s, not clipped at 0) for squared ground distances d2
+    (m^2, any shape); the link model of Sec. 3."""
+    return peak_rate - decay * np.sqrt(d2 + altitude**2)
+
+
+@njit(cache=True, nogil=True)
+def slant_rate(d2: float, h2: float, peak_rate: float, decay: float) -> float:  # pragma: no cover
+    """`slant_rates` for one pair, for compiled kernels; h2 = H^2 (bit-equal; tests)."""
+    return peak_rate - decay * math.sqrt(d2 + h2)
+
+
+def ground_reach(
+    rate: np.ndarray | float, altitude: float, peak_rate: float, decay: float
+) -> np.ndarray:
+    """The link rate read backwards: the largest ground distance (m) at which the rate is still
+    at least `rate` (Mbit/s, any shape), sqrt(((R_c - rate) / xi)^2 - H^2), and 0 where not even
+    the point overhead reaches it; xi = 0 counts as 1e-12 (a reach of ~1e13 m)."""
+    slant = np.maximum(peak_rate - rate, 0.0) / max(decay, 1e-12)
+    return np.sqrt(np.maximum(slant * slant - altitude**2, 0.0))
+
+
+def link_rates(
+    pts: np.ndarray, sensors: np.ndarray, altitude: float, peak_rate: float, decay: float
+) -> np.ndarray:
+    """R_ij = max(R_c - xi * sqrt(|p_i - s_j|^2 + H^2), 0): points (..., I, 2) and sensors
+    (J, 2) in metres -> rates (..., I, J) in Mbit/s."""
+    dx = pts[..., :, None, 0] - sensors[:, 0]
+    dy = pts[..., :, None, 1] - sensors[:, 1]
+    rate = slant_rates(dx * dx + dy * dy, altitude, peak_rate, decay)
+    return np.maximum(rate, 0.0, out=rate)
+
+
+# ----------------------------------------------------------------------------- constraints, score
+
+
+def collision_penalty(l_vio: np.ndarray, mu: float, nu: float) -> np.ndarray:
+    """V5 = mu + nu * L_vio where the path's length inside obstacles L_vio (m) exceeds
+    `L_VIO_TOL`, else 0 (Sec. 4.1)."""
+    return np.where(l_vio > L_VIO_TOL, mu + nu * l_vio, 0.0)
+
+
+def penalised_score(f: np.ndarray | float, phi: np.ndarray | float) -> np.ndarray | float:
+    """f + 10 * phi, the single number the paper ranks optimisers by (Sec. 5.2)."""
+    return f + PENALTY_FACTOR * phi
+
+
+def deb_better(
+    f_a: np.ndarray, phi_a: np.ndarray, f_b: np.ndarray, phi_b: np.ndarray
+) -> np.ndarray:
+    """Deb's feasibility rule: a beats b iff phi_a < phi_b, or phi_a == phi_b and f_a < f_b."""
+    return (phi_a < phi_b) | ((phi_a == phi_b) & (f_a < f_b))
+
+
+def deb_not_worse(f_a: Any, phi_a: Any, f_b: Any, phi_b: Any) -> Any:
+    """Deb's rule, ties kept: a is at least as good as b (phi_a < phi_b, or equal, f_a <= f_b)."""
+    return (phi_a < phi_b) | ((phi_a == phi_b) & (f_a <= f_b))
+
+
+def deb_order(f: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    """Indices sorted by Deb's ranking: smaller phi first, ties broken by smaller f (stable)."""
+    return np.lexsort((f, phi))
+
+
+def deb_best(f: np.ndarray, phi: np.ndarray) -> int:
+    """Index of the Deb-best individual (lowest phi, then lowest f; first index on full ties)."""
+    cand = np.flatnonzero(phi == phi.min())
+    return int(cand[np.argmin(f[cand])])
+
+
+# ----------------------------------------------------------------------------- parameters
+
+
+def _points(a: Any) -> np.ndarray:
+    return np.ascontiguousarray(np.asarray(a, dtype=float).reshape(-1, 2))
+
+
+@dataclass(frozen=True, eq=False)
+class ModelParams:
+    """The model's parameters for one map (paper Table 1 symbols in brackets), read-only.
+
+    UAV: `altitude` [H] m, `v_max` m/s, `accel` [a] m/s^2, `t_max` [T_max] s, `tau` activation
+    threshold, `n_points` [I_max]. Radio: `peak_rate` [R_c] and `bandwidth` [R_lambda] Mbit/s,
+    `decay` [xi] Mbit/s per m. Objective: `alpha`, collision penalty `mu` + `nu` * L_vio. Map:
+    `width`, `height` m, `start`, `end` (2,), `sensors` (J, 2) m, `required` (J,) Mbit.
+    Build with :meth:`from_map` (a loaded map) or :meth:`from_settings` (settings, no map yet).
+    """
+
+    altitude: float
+    v_max: float
+    accel: float
+    t_max: float
+    tau: float
+    n_points: int
+    peak_rate: float
+    decay: float
+    bandwidth: float
+    alpha: float
+    mu: float
+    nu: float
+    width: float
+    height: float
+    start: np.ndarray
+    end: np.ndarray
+    sensors: np.ndarray
+    required: np.ndarray
+
+    def __post_init__(self) -> None:
+        for name in ("start", "end", "sensors", "required"):
+            a = getattr(self, name)
+            a = np.ascontiguousarray(a, dtype=float)
+            a.flags.writeable = False
+            object.__setattr__(self, name, a)
+
+    @classmethod
+    def from_settings(
+        cls,
+        uav: Any,
+        radio: Any,
+        objective: Any,
+        *,
+        width: float = 0.0,
+        height: float = 0.0,
+        start: Any = (0.0, 0.0),
+        end: Any = (0.0, 0.0),
+        sensors: Any = (),
+        required: Any = (),
+        n_points: int | None = None,
+    ) -> ModelParams:
+        """From the map file's `uav`, `radio` and `objective` settings (objects with the
+        schema's field names, `planner_core.model.mapio.Uav` etc.) and the map's geometry."""
+        return cls(
+            altitude=float(uav.altitude),
+            v_max=float(uav.max_speed),
+            accel=float(uav.acceleration),
+            t_max=float(uav.max_hover_time),
+            tau=float(uav.activation_threshold),
+            n_points=int(n_points if n_points is not None else (uav.max_hover_points or 0)),
+            peak_rate=float(radio.peak_rate),
+            decay=float(radio.decay),
+            bandwidth=float(radio.bandwidth),
+            alpha=float(objective.alpha),
+            mu=float(objective.collision_offset),
+            nu=float(objective.collision_weight),
+            width=float(width),
+            height=float(height),
+            start=np.asarray(start, dtype=float).reshape(2),
+            end=np.asarray(end, dtype=float).reshape(2),
+            sensors=_points(sensors),
+            required=np.asarray(required, dtype=float).reshape(-1),
+        )
+
+    @classmethod
+    def from_map(cls, m: Any) -> ModelParams:
+        """From a loaded map (`planner_core.model.mapio.Map`: `spec`, `width`, `height`, `start`,
+        `end`, `sensors`, `required_data`, `max_hover_points`)."""
+        spec = m.spec
+        return cls.from_settings(
+            spec.uav, spec.radio, spec.objective, width=m.width, height=m.height,
+            start=m.start, end=m.end, sensors=m.sensors, required=m.required_data,
+            n_points=m.max_hover_points,
+        )  # fmt: skip
+
+    def rates(self, pts: np.ndarray, sensors: np.ndarray | None = None) -> np.ndarray:
+        """`link_rates` of points (..., I, 2) to this map's sensors (or `sensors`): (..., I, J)."""
+        s = self.sensors if sensors is None else sensors
+        return link_rates(pts, s, self.altitude, self.peak_rate, self.decay)
+
+    def flight_time(self, d: np.ndarray) -> np.ndarray:
+        """`flight_time` with this UAV's v_max and a."""
+        return flight_time(d, self.v_max, self.accel)

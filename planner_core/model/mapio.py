@@ -1,0 +1,770 @@
+"""The map file users write: pydantic v2 models for validation, and `Map`, the frozen value inside.
+
+The JSON field names are fixed (other tools already write them). Local frame: metres, x east,
+y north, from the geographic `origin`. Every problem found is reported on its own line, naming
+the field, so a user can fix a map in one pass.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+from typing import Annotated, Any
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from planner_core import textio
+from planner_core.defaults import MAP_DEFAULTS
+from planner_core.model.geometry import Obstacles, points_inside, rectangle_vertices
+from planner_core.model.polygons import clean_polygon, convex_pieces, is_convex
+
+__all__ = [
+    "Map",
+    "MapError",
+    "PolygonShape",
+    "MapFile",
+    "load_map",
+    "map_json_schema",
+    "default_max_hover_points",
+]
+
+_STRICT = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
+
+# ----------------------------------------------------------------------------- physical ranges
+# Every number of a map has a documented range; the reason is part of the field's description
+# (so `lamde-mission schema` shows it) and of the error line. `check` and `plan` both validate
+# here, so they agree. The bounds keep the model away from degenerate arithmetic (1e308 sizes,
+# flight times that overflow, grids of ~1e12 cells) and inside what MAVLink carries.
+
+#: largest side of the area, m: the local flat frame from one origin and the paper's maps (<=10 km)
+MAX_SIDE = 100_000.0
+#: largest |coordinate| of any point, m (points must also lie in the area where the model says so)
+MAX_COORD = 1_000_000.0
+_WHY_COORD = "10x the largest area; beyond it the local flat frame means nothing"
+_WHY_SIDE = (
+    "the paper's maps are at most 10 km a side; one flat local frame from the origin stays "
+    "accurate to 100 km"
+)
+_WHY_SIZE = "no obstacle is larger than 1000 km; larger sizes overflow the geometry's arithmetic"
+
+
+def _ranged(
+    default: Any, lo: float | None, hi: float | None, what: str, why: str, *,
+    lo_open: bool = False, hi_open: bool = False,
+) -> Any:  # fmt: skip
+    """A Field with bounds [lo, hi] (open ends where asked), `why` kept in the description."""
+    kw: dict[str, Any] = {}
+    if lo is not None:
+        kw["gt" if lo_open else "ge"] = lo
+    if hi is not None:
+        kw["lt" if hi_open else "le"] = hi
+    lb = "" if lo is None else ("(" if lo_open else "[") + f"{lo:g}"
+    ub = "" if hi is None else f"{hi:g}" + (")" if hi_open else "]")
+    desc = f"{what}; range {lb or '(-inf'}, {ub or 'inf)'}: {why}"
+    return Field(default, description=desc, json_schema_extra={"x-range-reason": why}, **kw)
+
+
+#: text without control characters (names and ids are printed in one-line messages)
+_PRINTABLE = r"^[^\x00-\x1f\x7f]*$"
+
+Coord = Annotated[float, Field(ge=-MAX_COORD, le=MAX_COORD, description=f"metres; {_WHY_COORD}")]
+Point2 = tuple[Coord, Coord]
+
+
+def _field(path: str) -> Any:
+    """The Field of an optional map field: default, bounds and their reason from the table
+    `planner_core.defaults.MAP_DEFAULTS` (one place for README, `check` and `plan`)."""
+    d = MAP_DEFAULTS[path]
+    lo, hi, lo_open, hi_open = d.bounds
+    return _ranged(d.value, lo, hi, d.meaning, d.why, lo_open=lo_open, hi_open=hi_open)
+
+
+class Origin(BaseModel):
+    """WGS84 position of the local (0, 0)."""
+
+    model_config = _STRICT
+    lat: float = Field(ge=-90, le=90, description="latitude, degrees")
+    lon: float = Field(ge=-180, le=180, description="longitude, degrees")
+    alt: float = _ranged(
+        0.0, -500.0, 9_000.0, "altitude above mean sea level of the take-off ground, m",
+        "ground on Earth lies between the Dead Sea shore (-430 m) and Everest (8849 m)",
+    )
+
+
+class Area(BaseModel):
+    """The rectangle [0, width] x [0, height] the hover points must lie in (C1)."""
+
+    model_config = _STRICT
+    width: float = _ranged(..., 0.0, MAX_SIDE, "metres along x (east)", _WHY_SIDE, lo_open=True)
+    height: float = _ranged(..., 0.0, MAX_SIDE, "metres along y (north)", _WHY_SIDE, lo_open=True)
+
+
+class Sensor(BaseModel):
+    """A ground sensor; `required_data` overrides `radio.required_data` for this sensor."""
+
+    model_config = _STRICT
+    id: str = Field(min_length=1, max_length=100, pattern=_PRINTABLE,
+                    description="printable text (it is quoted in messages, one line each)")
+    x: Coord
+    y: Coord
+    required_data: float | None = _ranged(
+        None, *MAP_DEFAULTS["radio.required_data"].bounds[:2], "Mbit (Q_lambda for this sensor)",
+        MAP_DEFAULTS["radio.required_data"].why
+    )
+
+
+class Circle(BaseModel):
+    model_config = _STRICT
+    x: Coord
+    y: Coord
+    radius: float = _ranged(..., 0.0, MAX_COORD, "metres", _WHY_SIZE, lo_open=True)
+
+
+class Rectangle(BaseModel):
+    """A building; `length` lies along its axis rotated `angle_deg` counter-clockwise from east."""
+
+    model_config = _STRICT
+    x: Coord
+    y: Coord
+    length: float = _ranged(..., 0.0, MAX_COORD, "metres", _WHY_SIZE, lo_open=True)
+    width: float = _ranged(..., 0.0, MAX_COORD, "metres", _WHY_SIZE, lo_open=True)
+    angle_deg: float = _ranged(
+        0.0, -360.0, 360.0, "degrees", "one turn either way says every direction"
+    )
+
+
+_RING_DOC = (
+    "any simple polygon, convex or not: either orientation (reordered), a closing vertex equal "
+    "to the first is accepted, vertices closer than 5 mm to the previous one or to the segment "
+    "joining their neighbours are removed (noted)"
+)
+
+
+class _HoledPolygon(BaseModel):
+    """Any simple polygon (`vertices`, the exterior ring) with optional `holes`; the fields a
+    no-fly zone and a polygon footprint share."""
+
+    model_config = _STRICT
+    vertices: list[Point2] = Field(description=_RING_DOC)
+    holes: list[list[Point2]] = Field([], description="rings inside, where flight is allowed "
+                                      "(a courtyard)")  # fmt: skip
+    name: str | None = Field(None, max_length=200, pattern=_PRINTABLE,
+                             description="label shown in messages, plots and exports")
+
+
+class NoFlyZone(_HoledPolygon):
+    """A no-fly zone: any simple polygon (`vertices`, the exterior ring) with optional `holes`."""
+
+
+class PolygonObstacle(_HoledPolygon):
+    """An obstacle footprint (a building): any simple polygon with optional `holes`."""
+
+
+class ObstaclesSpec(BaseModel):
+    model_config = _STRICT
+    circles: list[Circle] = []
+    rectangles: list[Rectangle] = []
+    no_fly_zones: list[NoFlyZone] = []
+    polygons: list[PolygonObstacle] = Field(
+        [], description="obstacle footprints of any polygonal shape (buildings)"
+    )
+
+
+class Uav(BaseModel):
+    model_config = _STRICT
+    altitude: float = _field("uav.altitude")
+    max_speed: float = _field("uav.max_speed")
+    acceleration: float = _field("uav.acceleration")
+    max_hover_time: float = _field("uav.max_hover_time")
+    max_hover_points: int | None = _field("uav.max_hover_points")
+    activation_threshold: float = _field("uav.activation_threshold")
+
+
+class Radio(BaseModel):
+    model_config = _STRICT
+    peak_rate: float = _field("radio.peak_rate")
+    decay: float = _field("radio.decay")
+    bandwidth: float = _field("radio.bandwidth")
+    required_data: float = _field("radio.required_data")
+
+
+class Objective(BaseModel):
+    model_config = _STRICT
+    alpha: float = _field("objective.alpha")
+    collision_offset: float = _field("objective.collision_offset")
+    collision_weight: float = _field("objective.collision_weight")
+
+
+#: metres: obstacles and no-fly zones are inflated by this much for planning (`safety.clearance`)
+DEFAULT_CLEARANCE: float = MAP_DEFAULTS["safety.clearance"].value
+#: fraction added to every sensor's required data for planning (`safety.data_margin`)
+DEFAULT_DATA_MARGIN: float = MAP_DEFAULTS["safety.data_margin"].value
+
+
+class Safety(BaseModel):
+    """Margins applied to the map before the model sees it (the paper's model is unchanged).
+
+    `clearance` (m): every circle, rectangle and no-fly zone is inflated by it for planning, so
+    no leg comes closer to an obstacle; the geofence written to the vehicle keeps the real
+    shapes. Near the start or end point an obstacle is inflated only as far as leaves that
+    point outside it (the take-off and landing are where the map says). `data_margin`: every
+    sensor's required data is planned as (1 + data_margin) x Q_lambda. Sensors themselves may
+    lie inside an inflated obstacle: data is collected by radio from wherever the UAV hovers.
+    A map with both at 0 is planned exactly as the paper's model states it.
+    """
+
+    model_config = _STRICT
+    clearance: float = _field("safety.clearance")
+    data_margin: float = _field("safety.data_margin")
+
+
+class Witness(BaseModel):
+    """A known feasible plan stored by the map generator."""
+
+    model_config = _STRICT
+    hover_points: list[Point2] = Field(max_length=200)
+    hover_times: list[Annotated[float, Field(ge=0.0, le=86_400.0)]] = Field(max_length=200)
+
+
+class MapFile(BaseModel):
+    """The whole map file (JSON)."""
+
+    model_config = _STRICT
+    name: str = Field("unnamed", max_length=200, pattern=_PRINTABLE)
+    origin: Origin | None = Field(
+        None, description="WGS84 position of (0, 0); needed to write or read a mission (no "
+        "default place is assumed)")
+    area: Area
+    start: Point2
+    end: Point2
+    sensors: list[Sensor] = Field(min_length=1)
+    obstacles: ObstaclesSpec = ObstaclesSpec()
+    uav: Uav = Uav()
+    radio: Radio = Radio()
+    objective: Objective = Objective()
+    safety: Safety = Safety()
+    witness: Witness | None = None
+
+
+class MapError(ValueError):
+    """A map that cannot be used; `problems` holds one line per problem, each naming the field."""
+
+    def __init__(self, problems: list[str], notes: list[str] | None = None):
+        self.problems = list(problems)
+        self.notes = list(notes or [])
+        super().__init__("\n".join(self.problems))
+
+
+def default_max_hover_points(width: float, height: float) -> int:
+    """The paper's heuristic: I_max = 10 on maps up to 5 km a side, else 20."""
+    return 10 if max(width, height) <= 5000 else 20
+
+
+def map_json_schema() -> dict[str, Any]:
+    """JSON Schema of the map file."""
+    return MapFile.model_json_schema()
+
+
+@dataclass(frozen=True, eq=False)
+class PolygonShape:
+    """One no-fly zone or polygon obstacle as used: cleaned rings, exterior counter-clockwise,
+    holes clockwise (RFC 7946's orientation), in local metres."""
+
+    kind: str  # "no_fly_zone" or "polygon"
+    index: int  # position in its list of the map file
+    name: str | None
+    shell: np.ndarray  # (V, 2)
+    holes: tuple[np.ndarray, ...] = ()
+
+    @property
+    def convex(self) -> bool:
+        """Convex and without holes: the kernel takes it as one polygon."""
+        return not self.holes and is_convex(self.shell)
+
+    @property
+    def label(self) -> str:
+        base = f"{self.kind.replace('_', '-')} {self.index}"
+        return f"{base} '{self.name}'" if self.name else base
+
+    def pieces(self) -> list[np.ndarray]:
+        """Convex pieces (V, 2) counter-clockwise, disjoint interiors, union = the shape."""
+        return [v for v, _ in convex_pieces(self.shell, self.holes)]
+
+
+@dataclass(frozen=True, eq=False)
+class Map:
+    """A validated map: the file as given (`spec`) plus the arrays the model uses.
+
+    `shapes` holds every no-fly zone then every polygon obstacle, cleaned; `nfz_polygons` the
+    no-fly zones' exterior rings (counter-clockwise).
+    """
+
+    spec: MapFile
+    nfz_polygons: tuple[np.ndarray, ...]
+    notes: tuple[str, ...] = field(default=())
+    shapes: tuple[PolygonShape, ...] = field(default=())
+
+    # --- scalars in the paper's symbols ---
+    @property
+    def name(self) -> str:
+        return self.spec.name
+
+    @property
+    def width(self) -> float:
+        return self.spec.area.width
+
+    @property
+    def height(self) -> float:
+        return self.spec.area.height
+
+    @property
+    def max_hover_points(self) -> int:
+        """I_max in force (the file's value or the default)."""
+        u = self.spec.uav.max_hover_points
+        return u if u is not None else default_max_hover_points(self.width, self.height)
+
+    @cached_property
+    def start(self) -> np.ndarray:
+        return np.array(self.spec.start, dtype=float)
+
+    @cached_property
+    def end(self) -> np.ndarray:
+        return np.array(self.spec.end, dtype=float)
+
+    @cached_property
+    def sensor_ids(self) -> tuple[str, ...]:
+        return tuple(s.id for s in self.spec.sensors)
+
+    @cached_property
+    def sensors(self) -> np.ndarray:
+        """(J, 2) sensor positions."""
+        return np.array([[s.x, s.y] for s in self.spec.sensors], dtype=float)
+
+    @cached_property
+    def required_data(self) -> np.ndarray:
+        """(J,) Q_lambda per sensor, Mbit."""
+        q = self.spec.radio.required_data
+        return np.array(
+            [s.required_data if s.required_data is not None else q for s in self.spec.sensors]
+        )
+
+    @cached_property
+    def rectangle_polygons(self) -> tuple[np.ndarray, ...]:
+        return tuple(
+            rectangle_vertices(r.x, r.y, r.length, r.width, r.angle_deg)
+            for r in self.spec.obstacles.rectangles
+        )
+
+    @cached_property
+    def obstacles(self) -> Obstacles:
+        """All obstacles in the geometry kernel's packed form: circles; rectangles, convex
+        no-fly zones and convex polygon obstacles as polygons; the other shapes as regions."""
+        return _pack(self.spec, self.shapes)
+
+    # --- safety margins (a transformation of the map; see `Safety`) ---
+    @cached_property
+    def obstacle_clearances(self) -> tuple[float, ...]:
+        """Clearance in force per obstacle (circles, rectangles, no-fly zones; metres):
+        `safety.clearance`, reduced where the start or end point is closer than that to the
+        obstacle (down to that distance less `CLEARANCE_PAD`, at least 0)."""
+        import shapely
+
+        c = float(self.spec.safety.clearance)
+        shapes = _obstacle_polygons(self)
+        if c <= 0.0 or not shapes:
+            return tuple(0.0 for _ in shapes)
+        ends = shapely.points([self.spec.start, self.spec.end])
+        out = []
+        for poly in shapes:
+            d = float(np.min(shapely.distance(ends, poly)))
+            out.append(max(min(c, d - CLEARANCE_PAD), 0.0))
+        return tuple(out)
+
+    def with_origin(self, lat: float, lon: float, alt: float = 0.0) -> Map:
+        """This map placed at (lat, lon, alt) (what `--origin LAT,LON[,ALT]` does); MapError
+        for coordinates out of range."""
+        d = self.spec.model_dump(mode="json")
+        d["origin"] = {"lat": lat, "lon": lon, "alt": alt}
+        return load_map(d)
+
+    def planning_map(self) -> Map:
+        """The map the optimiser plans on: obstacles inflated by their clearance (plus
+        `CLEARANCE_PAD`), rectangles turned into the equivalent no-fly zones, every sensor's
+        required data times (1 + data_margin), safety margins then 0. Returns `self` when both
+        margins are 0, so such a map is planned and scored exactly as before."""
+        cached = self.__dict__.get("_planning_map")
+        if cached is not None:
+            return cached
+        sf = self.spec.safety
+        if sf.clearance <= 0.0 and sf.data_margin <= 0.0:
+            return self
+        import shapely
+        from shapely.geometry.polygon import orient
+
+        d = self.spec.model_dump(mode="json")
+        d.pop("witness", None)
+        d["safety"] = {"clearance": 0.0, "data_margin": 0.0}
+        q = self.required_data * (1.0 + float(sf.data_margin))
+        for s, req in zip(d["sensors"], q, strict=True):
+            s["required_data"] = float(req)
+        cl = self.obstacle_clearances
+        obs = self.spec.obstacles
+        nc, nr, nz = len(obs.circles), len(obs.rectangles), len(obs.no_fly_zones)
+        d["obstacles"]["circles"] = [
+            {"x": c.x, "y": c.y, "radius": c.radius + (cl[k] + CLEARANCE_PAD if cl[k] > 0 else 0)}
+            for k, c in enumerate(obs.circles)
+        ]
+        shapes = _obstacle_polygons(self)
+
+        def grown(k: int, name: str | None) -> dict[str, Any]:
+            poly = shapes[k]
+            if cl[k] > 0.0:
+                r = (cl[k] + CLEARANCE_PAD) / math.cos(math.pi / (4 * _QUAD_SEGS))
+                poly = orient(poly.buffer(r, quad_segs=_QUAD_SEGS), 1.0)
+                poly = shapely.simplify(poly, 0.0)  # drop collinear vertices
+            out: dict[str, Any] = {"vertices": [list(v) for v in poly.exterior.coords[:-1]]}
+            holes = [[list(v) for v in ring.coords[:-1]] for ring in poly.interiors]
+            if holes:
+                out["holes"] = holes
+            if name is not None:
+                out["name"] = name
+            return out
+
+        # rectangles become polygon obstacles (a rounded rectangle is no rectangle), in order
+        d["obstacles"]["rectangles"] = []
+        d["obstacles"]["no_fly_zones"] = [grown(nc + nr + k, z.name)
+                                          for k, z in enumerate(obs.no_fly_zones)]
+        d["obstacles"]["polygons"] = (
+            [grown(nc + k, None) for k in range(nr)]
+            + [grown(nc + nr + nz + k, z.name) for k, z in enumerate(obs.polygons)]
+        )  # fmt: skip
+        pm = load_map(d)
+        self.__dict__["_planning_map"] = pm
+        return pm
+
+    def to_dict(self) -> dict[str, Any]:
+        """The map as JSON-ready data (polygons cleaned, exteriors counter-clockwise)."""
+        d = self.spec.model_dump(mode="json", exclude_none=False)
+        obs = d["obstacles"]
+        for sh in self.shapes:
+            entry: dict[str, Any] = {"vertices": sh.shell.tolist()}
+            if sh.holes:
+                entry["holes"] = [h.tolist() for h in sh.holes]
+            if sh.name is not None:
+                entry["name"] = sh.name
+            key = "no_fly_zones" if sh.kind == "no_fly_zone" else "polygons"
+            obs[key][sh.index] = entry
+        if not obs["polygons"]:
+            del obs["polygons"]
+        if d.get("witness") is None:
+            d.pop("witness", None)
+        return d
+
+    def summary(self) -> dict[str, Any]:
+        """Counts, area, I_max and the defaults in force, for `lamde-mission check`."""
+        s = self.spec
+        return {
+            "name": s.name,
+            "area_m": [s.area.width, s.area.height],
+            "origin": None if s.origin is None else s.origin.model_dump(),
+            "start": list(s.start),
+            "end": list(s.end),
+            "sensors": len(s.sensors),
+            "circles": len(s.obstacles.circles),
+            "rectangles": len(s.obstacles.rectangles),
+            "no_fly_zones": len(s.obstacles.no_fly_zones),
+            "polygons": len(s.obstacles.polygons),
+            "max_hover_points": self.max_hover_points,
+            "max_hover_points_default": s.uav.max_hover_points is None,
+            "uav": s.uav.model_dump(),
+            "radio": s.radio.model_dump(),
+            "objective": s.objective.model_dump(),
+            "safety": s.safety.model_dump(),
+            "total_required_data_mbit": float(self.required_data.sum()),
+            "has_witness": s.witness is not None,
+        }
+
+
+#: metres added to every non-zero clearance when inflating: covers where a stored mission's
+#: points may lie (MAVLink's 1e-7 degree grid is ~1.1 cm), so the real clearance is kept
+CLEARANCE_PAD = 0.05
+#: segments per quarter circle of an inflated polygon's rounded corners; the offset is divided
+#: by cos(pi / (4 * _QUAD_SEGS)) so the polygon contains the true offset (~2 % more clearance)
+_QUAD_SEGS = 4
+
+
+def _obstacle_polygons(m: Map) -> list[Any]:
+    """Circles (as exact-enough shapely buffers), rectangles, no-fly zones and polygon
+    obstacles, in that order (the sim's order, `sim.obstacles.obstacle_shapes`)."""
+    from shapely.geometry import Point, Polygon
+
+    obs = m.spec.obstacles
+    out: list[Any] = [Point(c.x, c.y).buffer(c.radius, quad_segs=64) for c in obs.circles]
+    out += [Polygon(v) for v in m.rectangle_polygons]
+    out += [Polygon(z.vertices, z.holes) for z in obs.no_fly_zones]
+    out += [Polygon(z.vertices, z.holes) for z in obs.polygons]
+    return out
+
+
+# ----------------------------------------------------------------------------- validation
+
+
+def _loc(loc: tuple[Any, ...]) -> str:
+    return textio.json_path(loc) or "(map)"
+
+
+def _model_at(loc: tuple[Any, ...]) -> type[BaseModel] | None:
+    """The pydantic model that owns the parent of `loc`, to suggest valid field names."""
+    model: Any = MapFile
+    for part in loc[:-1]:
+        if isinstance(part, int):
+            continue
+        if model is None or not hasattr(model, "model_fields") or part not in model.model_fields:
+            return None
+        ann = model.model_fields[part].annotation
+        model = _unwrap(ann)
+    return model if isinstance(model, type) and issubclass(model, BaseModel) else None
+
+
+def _unwrap(ann: Any) -> Any:
+    for arg in getattr(ann, "__args__", ()) or ():
+        u = _unwrap(arg)
+        if isinstance(u, type) and issubclass(u, BaseModel):
+            return u
+    return ann
+
+
+_RANGE_KINDS = frozenset({"greater_than", "greater_than_equal", "less_than", "less_than_equal"})
+#: reasons for bounds on values inside lists and pairs (which have no field of their own)
+_ITEM_REASONS = {
+    "start": _WHY_COORD, "end": _WHY_COORD, "vertices": _WHY_COORD, "hover_points": _WHY_COORD,
+    "hover_times": "a witness hover time lies in [0, 86400] s, as T_max",
+}  # fmt: skip
+
+
+def _range_reason(loc: tuple[Any, ...]) -> str:
+    """The documented reason for the bound that the value at `loc` broke."""
+    names = [i for i, part in enumerate(loc) if isinstance(part, str)]
+    if not names:
+        return "out of the documented range"
+    i = names[-1]
+    if i < len(loc) - 1 or loc[i] in _ITEM_REASONS:
+        return _ITEM_REASONS.get(str(loc[i]), "out of the documented range")
+    model = _model_at(loc[: i + 1])
+    info = model.model_fields.get(str(loc[i])) if model is not None else None
+    extra = getattr(info, "json_schema_extra", None)
+    if isinstance(extra, dict) and "x-range-reason" in extra:
+        return str(extra["x-range-reason"])
+    if info is not None and info.description and "; " in info.description:
+        return info.description.split("; ", 1)[1]
+    return "out of the documented range"
+
+
+def _pydantic_problems(err: ValidationError) -> list[str]:
+    lines = []
+    for e in err.errors():
+        loc = tuple(e["loc"])
+        where = _loc(loc)
+        kind = e["type"]
+        if kind == "extra_forbidden":
+            model = _model_at(loc)
+            hint = ""
+            if model is not None:
+                close = difflib.get_close_matches(str(loc[-1]), list(model.model_fields), n=1)
+                hint = f" (did you mean '{close[0]}'?)" if close else ""
+            lines.append(f"{where}: unknown field{hint}")
+        elif kind == "missing":
+            lines.append(f"{where}: required field is missing")
+        elif kind == "finite_number":
+            lines.append(f"{where}: must be a finite number (got NaN or infinity)")
+        elif kind == "too_short" and loc and loc[-1] == "sensors":
+            lines.append(f"{where}: at least one sensor is required")
+        elif kind == "string_pattern_mismatch":
+            lines.append(f"{where}: must be printable text (no control characters such as "
+                         "newlines or tabs)")  # fmt: skip
+        elif kind in _RANGE_KINDS:
+            got = e.get("input")
+            shown = f"{got:g}" if isinstance(got, float) else repr(got)
+            msg = e["msg"].replace("Input should be", "must be")
+            lines.append(f"{where}: {msg} (got {shown}); {_range_reason(loc)}")
+        else:
+            lines.append(f"{where}: {e['msg']}")
+    return lines
+
+
+def _semantic_problems(
+    spec: MapFile,
+) -> tuple[list[str], list[str], list[PolygonShape], Obstacles | None]:
+    problems: list[str] = []
+    notes: list[str] = []
+    W, H = spec.area.width, spec.area.height
+
+    def inside_area(x: float, y: float) -> bool:
+        return 0.0 <= x <= W and 0.0 <= y <= H
+
+    for name in ("start", "end"):
+        x, y = getattr(spec, name)
+        if not inside_area(x, y):
+            problems.append(f"{name}: ({x:g}, {y:g}) is outside the area [0, {W:g}] x [0, {H:g}]")
+    seen: set[str] = set()
+    for j, s in enumerate(spec.sensors):
+        if not inside_area(s.x, s.y):
+            problems.append(
+                f"sensors[{j}]: sensor '{s.id}' at ({s.x:g}, {s.y:g}) is outside the area "
+                f"[0, {W:g}] x [0, {H:g}]"
+            )
+        if s.id in seen:
+            problems.append(f"sensors[{j}].id: duplicate sensor id '{s.id}'")
+        seen.add(s.id)
+    obs = spec.obstacles
+    for k, c in enumerate(obs.circles):
+        if not inside_area(c.x, c.y):
+            problems.append(
+                f"obstacles.circles[{k}]: centre ({c.x:g}, {c.y:g}) is outside the area"
+            )
+    for k, r in enumerate(obs.rectangles):
+        if not inside_area(r.x, r.y):
+            problems.append(
+                f"obstacles.rectangles[{k}]: centre ({r.x:g}, {r.y:g}) is outside the area"
+            )
+    shapes: list[PolygonShape] = []
+    for kind, key, items in (("no_fly_zone", "no_fly_zones", obs.no_fly_zones),
+                             ("polygon", "polygons", obs.polygons)):  # fmt: skip
+        for k, z in enumerate(items):
+            shape = _polygon_shape(kind, f"obstacles.{key}[{k}]", k, z, problems, notes)
+            if shape is not None:
+                shapes.append(shape)
+    u = spec.uav
+    if u.max_hover_points is not None and u.max_hover_points > 200:
+        problems.append(f"uav.max_hover_points: {u.max_hover_points} is too large (at most 200)")
+    if spec.witness is not None and len(spec.witness.hover_points) != len(spec.witness.hover_times):
+        problems.append("witness: hover_points and hover_times differ in length")
+    if not problems:
+        try:
+            obstacles = _pack(spec, tuple(shapes))
+        except ValueError as exc:  # a degenerate polygon the triangulation cannot cut
+            problems.append(f"obstacles: {exc}")
+            return problems, notes, shapes, None
+        ends = np.array([spec.start, spec.end], dtype=float)
+        inside = points_inside(ends, obstacles)
+        for name, flag in zip(("start", "end"), inside, strict=True):
+            if flag:
+                x, y = getattr(spec, name)
+                problems.append(f"{name}: ({x:g}, {y:g}) lies inside an obstacle")
+        return problems, notes, shapes, obstacles
+    return problems, notes, shapes, None
+
+
+def _polygon_shape(
+    kind: str, where: str, index: int, z: NoFlyZone | PolygonObstacle,
+    problems: list[str], notes: list[str],
+) -> PolygonShape | None:
+    """Clean, orient and check one polygon of the map file; None (and a problem) if unusable."""
+    label = f"{where} '{z.name}'" if z.name else where
+    try:
+        shell, holes, said = clean_polygon([z.vertices, *z.holes])
+    except ValueError as exc:
+        # name the ring as the file does: ...vertices / ...holes[k]
+        msg = str(exc)
+        ring = re.match(r"(exterior ring|hole (\d+)) (.*)", msg)
+        if ring:
+            at = ".vertices" if ring.group(2) is None else f".holes[{ring.group(2)}]"
+            problems.append(f"{label}{at}: {ring.group(3)}")
+        else:
+            problems.append(f"{label}: {msg}")
+        return None
+    notes += [f"{label}.vertices: {n}" if n.startswith("given clockwise") else f"{label}: {n}"
+              for n in said]  # fmt: skip
+    return PolygonShape(kind, index, z.name, shell, tuple(holes))
+
+
+def _pack(spec: MapFile, shapes: tuple[PolygonShape, ...]) -> Obstacles:
+    """The kernel's obstacles: rectangles, then convex shapes, then the others as regions."""
+    obs = spec.obstacles
+    circles = [(c.x, c.y, c.radius) for c in obs.circles]
+    rects = [rectangle_vertices(r.x, r.y, r.length, r.width, r.angle_deg) for r in obs.rectangles]
+    convex = [sh.shell for sh in shapes if sh.convex]
+    regions = [(sh.shell, sh.holes) for sh in shapes if not sh.convex]
+    return Obstacles.build(circles, rects + convex, regions)
+
+
+def _size_problems(data: Mapping[str, Any]) -> list[str]:
+    """Counts over the limits of `planner_core.textio.LIMITS`, checked on the raw data before
+    validation (so a 100,000-sensor file costs no validation time); one line per problem."""
+    try:
+        caps = {k: textio.limit(k) for k in ("sensors", "obstacles", "zone_vertices", "vertices")}
+    except textio.InputError as exc:
+        return [f"(environment) {exc}"]
+
+    def over(where: str, n: int, key: str, what: str) -> str:
+        lim = textio.LIMITS[key]
+        return (f"{where}: {n:,} {what}, more than the limit of {caps[key]:,} "
+                f"({lim.why}; raise it with {lim.env})")  # fmt: skip
+
+    problems = []
+    sensors = data.get("sensors")
+    if isinstance(sensors, list) and len(sensors) > caps["sensors"]:
+        problems.append(over("sensors", len(sensors), "sensors", "sensors"))
+    obs = data.get("obstacles")
+    if isinstance(obs, Mapping):
+        kinds = ("circles", "rectangles", "no_fly_zones", "polygons")
+        n = sum(len(v) for k in kinds if isinstance(v := obs.get(k), list))
+        if n > caps["obstacles"]:
+            problems.append(over("obstacles", n, "obstacles", "obstacles"))
+        total = 0
+        for key in ("no_fly_zones", "polygons"):
+            zones = obs.get(key)
+            for k, z in enumerate(zones if isinstance(zones, list) and not problems else []):
+                if not isinstance(z, Mapping):
+                    continue
+                holes = z.get("holes") if isinstance(z.get("holes"), list) else []
+                for r, v in enumerate([z.get("vertices"), *holes]):
+                    if isinstance(v, list):
+                        total += max(len(v), 1)  # an empty ring still costs validation
+                        if len(v) > caps["zone_vertices"]:
+                            where = f"obstacles.{key}[{k}]." + (
+                                "vertices" if r == 0 else f"holes[{r - 1}]")  # fmt: skip
+                            problems.append(over(where, len(v), "zone_vertices", "vertices"))
+                            break
+        if not problems and total > caps["vertices"]:
+            where = "obstacles.no_fly_zones" if not obs.get("polygons") else "obstacles"
+            problems.append(over(where, total, "vertices", "vertices in all"))
+    return problems
+
+
+def load_map(source: str | Path | Mapping[str, Any] | Map) -> Map:
+    """Read and validate a map from a path, a JSON string's dict, or a Map; raise MapError."""
+    if isinstance(source, Map):
+        return source
+    if isinstance(source, str | Path):
+        path = Path(source)
+        try:
+            data = textio.read_json(path)
+        except textio.InputError as exc:
+            raise MapError([f"{path}: {exc}"]) from None
+    elif isinstance(source, Mapping):
+        data = dict(source)
+    else:
+        raise TypeError(f"load_map expects a path, a dict or a Map, got {type(source).__name__}")
+    if not isinstance(data, dict):
+        raise MapError(["(map): the top level must be a JSON object"])
+    sizes = _size_problems(data)
+    if sizes:
+        raise MapError(sizes)
+    try:
+        spec = MapFile.model_validate(data)
+    except ValidationError as err:
+        raise MapError(_pydantic_problems(err)) from None
+    problems, notes, shapes, obstacles = _semantic_problems(spec)
+    if problems:
+        raise MapError(problems, notes)
+    nfz = tuple(sh.shell for sh in shapes if sh.kind == "no_fly_zone")
+    m = Map(spec=spec, nfz_polygons=nfz, notes=tuple(notes), shapes=tuple(shapes))
+    m.__dict__["obstacles"] = obstacles  # the cached_property, already built while checking
+    return m

@@ -1,0 +1,313 @@
+"""Any simple polygon (convex or not, with holes) made fit for the convex overlap kernel.
+
+Real obstacle footprints and no-fly zones are L-shaped, notched, have courtyards. The geometry
+kernel (`planner_core.model.geometry`) measures legs against *convex* pieces; here a polygon with
+holes
+is cut into convex pieces whose interiors are disjoint and whose union is the polygon, so the
+length of a leg inside the polygon is the sum of its lengths inside the pieces:
+
+1. ``clean_ring``: a ring as a digitiser or GIS writes it is made a plain vertex cycle: a closing
+   vertex equal (within ``VERTEX_TOL``) to the first is dropped, consecutive vertices closer than
+   ``VERTEX_TOL`` are merged, and a vertex within ``VERTEX_TOL`` of the segment joining its
+   neighbours (a vertex in the middle of an edge) is removed. ``VERTEX_TOL`` = 5 mm: above the
+   rounding of coordinates stored with 8 decimals of a degree (1.1 mm), below any real feature.
+2. ``polygon_problem``: the cleaned polygon must be simple (shapely/GEOS validity: no
+   self-intersection, holes inside the shell and apart) with positive area.
+3. ``convex_pieces``: GEOS's constrained Delaunay triangulation (vertices are the polygon's own,
+   no new points), then Hertel-Mehlhorn: a diagonal is removed whenever the two pieces it
+   separates stay strictly convex after merging (at most 4x the minimum number of convex pieces; an
+   L-shape becomes 2 pieces, a block with a square courtyard 4).
+
+Diagonals are the one place where the decomposition could change the answer: a leg running
+exactly along a diagonal lies on the boundary of both neighbouring pieces, so the kernel's rule
+"a leg along an edge counts 0" would miss it, although it is inside the polygon. Each edge of a
+piece therefore carries a flag (`EDGE_BOUNDARY`, `EDGE_OWNED`, `EDGE_SHARED`): of the two pieces
+along a diagonal exactly one *owns* it and treats its half-plane as closed (the kernel shifts that
+edge's line outward by twice its boundary tolerance), the other treats it as open, so such a leg
+is counted exactly once. The price is that a leg crossing a diagonal at an angle theta may be
+counted twice over a stretch of 2 * tol / sin(theta) (tol ~ 1e-9 m: below 1e-6 m for any theta
+above 0.1 degree); legs touching the polygon's real boundary are unaffected.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+__all__ = [
+    "EDGE_BOUNDARY",
+    "EDGE_OWNED",
+    "EDGE_SHARED",
+    "VERTEX_TOL",
+    "clean_ring",
+    "clean_polygon",
+    "convex_pieces",
+    "is_convex",
+    "polygon_problem",
+    "ring_area",
+]
+
+#: metres: closing, duplicate and collinear vertices closer than this are merged (see above)
+VERTEX_TOL = 0.005
+
+#: edge flag: the edge lies on the polygon's boundary (exterior or a hole)
+EDGE_BOUNDARY = 0
+#: edge flag: an internal diagonal this piece owns (a leg along it counts here)
+EDGE_OWNED = 1
+#: edge flag: an internal diagonal the neighbouring piece owns
+EDGE_SHARED = 2
+
+
+def ring_area(ring: np.ndarray) -> float:
+    """Signed area (m^2) of a vertex cycle (V, 2), positive when counter-clockwise."""
+    x, y = ring[:, 0], ring[:, 1]
+    xn, yn = np.concatenate((x[1:], x[:1])), np.concatenate((y[1:], y[:1]))
+    return 0.5 * float(np.dot(x, yn) - np.dot(xn, y))
+
+
+def _seg_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
+    d = b - a
+    L2 = float(d @ d)
+    t = 0.0 if L2 == 0.0 else min(1.0, max(0.0, float((p - a) @ d) / L2))
+    q = a + t * d
+    return math.hypot(p[0] - q[0], p[1] - q[1])
+
+
+def clean_ring(points: Sequence[Sequence[float]] | np.ndarray,
+               tol: float = VERTEX_TOL) -> tuple[np.ndarray, dict[str, int]]:
+    """One ring made a plain vertex cycle: (V, 2) float64 without the closing vertex.
+
+    Drops a closing vertex within `tol` of the first, merges consecutive vertices closer than
+    `tol` and removes vertices within `tol` of the segment joining their neighbours. Returns the
+    cycle and counts of what was changed: {"closing": 0|1, "duplicate": n, "collinear": n}.
+    Orientation is kept. Raises ValueError for a non-finite coordinate; the caller checks that
+    at least 3 vertices remain.
+    """
+    v = np.array(points, dtype=np.float64).reshape(-1, 2)
+    if not np.all(np.isfinite(v)):
+        raise ValueError("has a non-finite coordinate")
+    counts = {"closing": 0, "duplicate": 0, "collinear": 0}
+    if len(v) >= 2 and math.hypot(*(v[0] - v[-1])) <= tol:
+        v = v[:-1]
+        counts["closing"] = 1
+    pts = [p for p in v]
+    # consecutive near-duplicates (cyclically), keeping the first of a run
+    out: list[np.ndarray] = []
+    for p in pts:
+        if out and math.hypot(*(p - out[-1])) <= tol:
+            counts["duplicate"] += 1
+            continue
+        out.append(p)
+    while len(out) > 1 and math.hypot(*(out[-1] - out[0])) <= tol:
+        out.pop()
+        counts["duplicate"] += 1
+    # vertices in the middle of an edge, until none is left
+    changed = True
+    while changed and len(out) > 3:
+        changed = False
+        i = 0
+        while i < len(out) and len(out) > 3:
+            a, p, b = out[i - 1], out[i], out[(i + 1) % len(out)]
+            if _seg_distance(p, a, b) <= tol:
+                del out[i]
+                counts["collinear"] += 1
+                changed = True
+            else:
+                i += 1
+    return np.array(out, dtype=np.float64).reshape(-1, 2), counts
+
+
+def is_convex(ring: np.ndarray) -> bool:
+    """Whether a counter-clockwise cycle (V, 2) turns left (or straight) at every vertex."""
+    e = np.concatenate((ring[1:], ring[:1])) - ring
+    e2 = np.concatenate((e[1:], e[:1]))
+    cross = e[:, 0] * e2[:, 1] - e[:, 1] * e2[:, 0]
+    return bool(np.all(cross > 0.0))
+
+
+def polygon_problem(
+    shell: np.ndarray,
+    holes: Sequence[np.ndarray] = (),
+    locate: Callable[[float, float], str] | None = None,
+) -> str | None:
+    """Why the polygon (rings as vertex cycles) is not a simple polygon with area, or None.
+
+    Uses GEOS's validity test; the answer names the problem and where, e.g.
+    "self-intersection at (12.5, 40)"; `locate(x, y)` may word the place instead (e.g. as
+    longitude and latitude).
+    """
+    import shapely
+    from shapely.geometry import Polygon
+
+    if len(shell) < 3:
+        return f"needs at least 3 distinct vertices, got {len(shell)}"
+    for k, h in enumerate(holes):
+        if len(h) < 3:
+            return f"hole {k} needs at least 3 distinct vertices, got {len(h)}"
+    poly = Polygon(shell, [h for h in holes])
+    if not poly.is_valid:
+        why = shapely.is_valid_reason(poly)
+        # GEOS says e.g. "Self-intersection[12.5 40]"; make it a sentence
+        if "[" in why and why.endswith("]"):
+            what, _, where = why[:-1].partition("[")
+            xy = where.split()
+            if len(xy) >= 2:
+                x, y = float(xy[0]), float(xy[1])
+                place = locate(x, y) if locate is not None else f"{x:.6g}, {y:.6g}"
+                return f"{what.lower()} at ({place})"
+        return why.lower()
+    if not poly.area > 0.0:
+        return "has zero area"
+    return None
+
+
+def clean_polygon(
+    rings: Sequence[Sequence[Sequence[float]] | np.ndarray],
+    locate: Callable[[float, float], str] | None = None,
+) -> tuple[np.ndarray, list[np.ndarray], list[str]]:
+    """A polygon's rings (exterior first, then holes) made ready for `convex_pieces`.
+
+    Each ring is cleaned (`clean_ring`), the polygon checked (`polygon_problem`), the exterior
+    made counter-clockwise and the holes clockwise (RFC 7946). Returns (shell, holes, notes):
+    notes say what was changed ("given clockwise; ...", "merged 1 near-duplicate vertex(es)
+    ..."). Raises ValueError with one line naming the problem (and the ring, or where).
+    """
+    out: list[np.ndarray] = []
+    merged = {"duplicate": 0, "collinear": 0}
+    for r, ring in enumerate(rings):
+        what = "exterior ring" if r == 0 else f"hole {r - 1}"
+        try:
+            v, counts = clean_ring(ring)
+        except ValueError as exc:
+            raise ValueError(f"{what} {exc}") from None
+        if len(v) < 3:
+            got = len(np.asarray(ring, dtype=float).reshape(-1, 2))
+            distinct = f" ({len(v)} distinct)" if len(v) != got else ""
+            raise ValueError(f"{what} needs at least 3 vertices, got {got}{distinct}")
+        merged["duplicate"] += counts["duplicate"]
+        merged["collinear"] += counts["collinear"]
+        out.append(v)
+    if not out:
+        raise ValueError("has no exterior ring")
+    problem = polygon_problem(out[0], out[1:], locate=locate)
+    if problem:
+        raise ValueError(problem)
+    notes = []
+    shell = out[0]
+    if ring_area(shell) < 0.0:
+        shell = shell[::-1].copy()
+        notes.append("given clockwise; reordered counter-clockwise")
+    holes = [h if ring_area(h) < 0.0 else h[::-1].copy() for h in out[1:]]
+    done = []
+    if merged["duplicate"]:
+        done.append(f"merged {merged['duplicate']} near-duplicate vertex(es)")
+    if merged["collinear"]:
+        done.append(f"removed {merged['collinear']} vertex(es) in the middle of an edge")
+    if done:
+        notes.append(f"{' and '.join(done)} (tolerance {VERTEX_TOL * 1000:g} mm)")
+    return shell, holes, notes
+
+
+def _cross(o: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
+    return float((a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]))
+
+
+def convex_pieces(
+    shell: np.ndarray, holes: Sequence[np.ndarray] = ()
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Convex pieces with disjoint interiors whose union is the polygon (shell minus holes).
+
+    `shell` and `holes` are cleaned vertex cycles (any orientation) of a valid polygon (see
+    `polygon_problem`). Returns [(vertices (V, 2) counter-clockwise, flags (V,) int8)], where
+    flags[i] describes the edge from vertex i to vertex i + 1 (`EDGE_BOUNDARY`, `EDGE_OWNED`,
+    `EDGE_SHARED`; see the module docstring). A convex polygon without holes is one piece, its
+    vertices unchanged (made counter-clockwise). Raises ValueError if the triangulation does not
+    reproduce the polygon's own vertices (a degenerate input).
+    """
+    shell = np.asarray(shell, dtype=np.float64).reshape(-1, 2)
+    if ring_area(shell) < 0.0:
+        shell = shell[::-1].copy()
+    holes = [np.asarray(h, dtype=np.float64).reshape(-1, 2) for h in holes]
+    if not holes and is_convex(shell):
+        return [(shell, np.zeros(len(shell), dtype=np.int8))]
+
+    import shapely
+    from shapely.geometry import Polygon
+
+    rings = [shell] + holes
+    coords = np.concatenate(rings)
+    index: dict[tuple[float, float], int] = {}
+    for i, (x, y) in enumerate(coords.tolist()):
+        index.setdefault((x, y), i)
+    boundary: set[tuple[int, int]] = set()
+    for r in rings:
+        ids = [index[(float(x), float(y))] for x, y in r.tolist()]
+        for a, b in zip(ids, ids[1:] + ids[:1], strict=True):
+            boundary.add((min(a, b), max(a, b)))
+
+    tris = shapely.get_parts(shapely.constrained_delaunay_triangles(Polygon(shell, holes)))
+    pieces: list[list[int]] = []
+    for t in tris:
+        ring = np.asarray(t.exterior.coords)[:-1]
+        try:
+            ids = [index[(float(x), float(y))] for x, y in ring.tolist()]
+        except KeyError:
+            raise ValueError("the triangulation introduced a vertex (degenerate polygon)") from None
+        if _cross(coords[ids[0]], coords[ids[1]], coords[ids[2]]) < 0.0:
+            ids.reverse()
+        if _cross(coords[ids[0]], coords[ids[1]], coords[ids[2]]) == 0.0:
+            raise ValueError("the triangulation has a zero-area triangle (degenerate polygon)")
+        pieces.append(ids)
+
+    # Hertel-Mehlhorn: drop every diagonal whose removal leaves a convex piece
+    owner: dict[tuple[int, int], int] = {}  # directed edge -> piece id
+    for k, ids in enumerate(pieces):
+        for a, b in zip(ids, ids[1:] + ids[:1], strict=True):
+            owner[(a, b)] = k
+    alive = [True] * len(pieces)
+    diagonals = sorted({(min(a, b), max(a, b)) for (a, b) in owner} - boundary)
+    for u, v in diagonals:
+        ka, kb = owner.get((u, v)), owner.get((v, u))
+        if ka is None or kb is None or ka == kb:
+            raise ValueError("the triangulation does not tile the polygon (degenerate polygon)")
+        A, B = pieces[ka], pieces[kb]
+        ia, ib = A.index(v), B.index(u)
+        a_rot = A[ia:] + A[:ia]  # v ... u
+        b_rot = B[ib:] + B[:ib]  # u ... v
+        merged = a_rot + b_rot[1:-1]
+        n = len(merged)
+        pos_u = len(a_rot) - 1
+        ok = True
+        for pos in (0, pos_u):  # the only corners that change: v and u
+            p = coords[merged[pos - 1]]
+            q = coords[merged[pos]]
+            r = coords[merged[(pos + 1) % n]]
+            # strictly convex: at a straight corner an edge's line would run along its
+            # neighbour edge, and a boundary edge must not share its line with a diagonal
+            if not _cross(p, q, r) > 0.0:
+                ok = False
+        if not ok:
+            continue
+        pieces[ka] = merged
+        alive[kb] = False
+        pieces[kb] = []
+        for a, b in zip(merged, merged[1:] + merged[:1], strict=True):
+            owner[(a, b)] = ka
+        owner.pop((u, v), None)
+        owner.pop((v, u), None)
+
+    out: list[tuple[np.ndarray, np.ndarray]] = []
+    for k, ids in enumerate(pieces):
+        if not alive[k]:
+            continue
+        flags = np.empty(len(ids), dtype=np.int8)
+        for i, (a, b) in enumerate(zip(ids, ids[1:] + ids[:1], strict=True)):
+            if (min(a, b), max(a, b)) in boundary:
+                flags[i] = EDGE_BOUNDARY
+            else:
+                # of the two pieces along a diagonal, the one holding it as (low id -> high id)
+                flags[i] = EDGE_OWNED if a < b else EDGE_SHARED
+        out.append((coords[ids].copy(), flags))
+    return out

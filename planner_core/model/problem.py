@@ -1,0 +1,222 @@
+"""The paper's optimisation model (Sec. 3 and the constraint handling of Sec. 4.1), vectorised.
+
+A decision vector is x = [x_i, y_i, t_i, eps_i] for i = 1..I_max; hover point i is active when
+eps_i >= tau (variable-length encoding) or always (fixed-length mode, the paper's LAMDE-F).
+`Problem.evaluate` scores a whole population at once; `Problem.breakdown` explains one solution.
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+
+from planner_core.model.formulas import ModelParams, collision_penalty, penalised_score
+from planner_core.model.geometry import overlap_lengths
+from planner_core.model.kernels import model_terms
+from planner_core.model.mapio import Map, load_map
+from planner_core.model.seeding import Seeder
+
+__all__ = ["Problem"]
+
+
+class Problem:
+    """The UAV data-collection problem on one map: bounds, `evaluate(X) -> (f, phi)`, breakdown."""
+
+    def __init__(self, map: Map | str | dict, *, variable_length: bool = True):  # noqa: A002
+        self.map = load_map(map)
+        self.variable_length = bool(variable_length)
+        #: the model's parameters (`planner_core.model.formulas.ModelParams`), shared with the
+        #: seeder,
+        #: the polish LP and the compiled kernels; the attributes below are its fields
+        self.model = mp = ModelParams.from_map(self.map)
+        self.n_points = mp.n_points
+        self.dim = 4 * self.n_points
+        block = np.array([mp.width, mp.height, mp.t_max, 1.0])
+        self.lower = np.zeros(self.dim)
+        self.upper = np.tile(block, self.n_points)
+        self.tau = mp.tau
+        self.altitude = mp.altitude
+        self.v_max = mp.v_max
+        self.accel = mp.accel
+        self.t_max = mp.t_max
+        self.peak_rate = mp.peak_rate
+        self.decay = mp.decay
+        self.bandwidth = mp.bandwidth
+        self.alpha = mp.alpha
+        self.mu = mp.mu
+        self.nu = mp.nu
+        self.start = mp.start
+        self.end = mp.end
+        self.sensors = mp.sensors
+        self.required = mp.required
+        self.obstacles = self.map.obstacles
+
+    def __repr__(self) -> str:
+        mode = "variable" if self.variable_length else "fixed"
+        return f"Problem({self.map.name!r}, dim={self.dim}, {mode}-length)"
+
+    # ------------------------------------------------------------------ decoding
+    def _split(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        X = np.clip(np.asarray(X, dtype=float), self.lower, self.upper)
+        n = X.shape[0]
+        blocks = X.reshape(n, self.n_points, 4)
+        pts = blocks[:, :, :2]
+        times = blocks[:, :, 2]
+        if self.variable_length:
+            active = blocks[:, :, 3] >= self.tau
+        else:
+            active = np.ones((n, self.n_points), dtype=bool)
+        return pts, times, active
+
+    def _legs(self, pts: np.ndarray, active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Leg start and end points (n, I_max + 1, 2): start, active points in order, end;
+        the unused tail is padded with zero-length legs at the end point."""
+        n, m = active.shape
+        order = np.argsort(~active, axis=1, kind="stable")
+        compact = np.take_along_axis(pts, order[:, :, None], axis=1)
+        count = active.sum(axis=1)
+        pad = np.arange(m)[None, :] >= count[:, None]
+        compact = np.where(pad[:, :, None], self.end, compact)
+        nodes = np.empty((n, m + 2, 2))
+        nodes[:, 0] = self.start
+        nodes[:, 1:-1] = compact
+        nodes[:, -1] = self.end
+        return nodes[:, :-1], nodes[:, 1:]
+
+    def rates(self, pts: np.ndarray) -> np.ndarray:
+        """R_ij = max(R_c - xi * sqrt(|p_i - s_j|^2 + H^2), 0), shape (..., I, J) in Mbit/s."""
+        return self.model.rates(pts)
+
+    # ------------------------------------------------------------------ evaluation
+    def _overlap(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Length of each leg a -> b inside obstacles (the compiled kernel; see geometry.py)."""
+        return overlap_lengths(a, b, self.obstacles)
+
+    def _evaluate_parts(self, X: np.ndarray) -> dict[str, np.ndarray]:
+        X = np.atleast_2d(X)
+        pts, times, active = self._split(X)
+        a, b = self._legs(pts, active)
+        seg = b - a
+        dist = np.hypot(seg[..., 0], seg[..., 1])
+        leg_times = self.model.flight_time(dist)
+        t_fly = leg_times.sum(axis=1)
+        hov = np.where(active, times, 0.0)
+        t_hover = hov.sum(axis=1)
+        f = self.alpha * t_fly + (1.0 - self.alpha) * t_hover
+        R = self.rates(pts) * active[:, :, None]
+        v3_each = np.maximum(R.sum(axis=2) - self.bandwidth, 0.0)
+        Q = np.matmul(hov[:, None, :], R)[:, 0, :]
+        v4_each = np.maximum(self.required - Q, 0.0)
+        l_vio = self._overlap(a, b).sum(axis=1)
+        v5 = collision_penalty(l_vio, self.mu, self.nu)
+        v3 = v3_each.sum(axis=1)
+        v4 = v4_each.sum(axis=1)
+        phi = v3 + v4 + v5
+        return {
+            "f": f, "phi": phi, "t_fly": t_fly, "t_hover": t_hover, "l_vio": l_vio,
+            "v3": v3, "v4": v4, "v5": v5, "v3_each": v3_each, "v4_each": v4_each,
+            "collected": Q, "leg_times": leg_times, "leg_lengths": dist,
+            "active": active, "points": pts, "times": times,
+        }  # fmt: skip
+
+    def evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Objective f and total violation phi for a population X of shape (n, dim).
+
+        The compiled fast path (`planner_core.model.kernels`); `_evaluate_parts` is its numpy twin.
+        """
+        X = np.ascontiguousarray(np.atleast_2d(X), dtype=float)
+        if X.ndim != 2 or X.shape[1] != self.dim:
+            raise ValueError(f"X: expected shape (n, {self.dim}), got {X.shape}")
+        n = X.shape[0]
+        legs = self.n_points + 1
+        A = np.empty((n, legs, 2))
+        B = np.empty((n, legs, 2))
+        f = np.empty(n)
+        v3 = np.empty(n)
+        v4 = np.empty(n)
+        model_terms(
+            X, self.n_points, self.variable_length, self.tau, self.upper, self.start, self.end,
+            self.sensors, self.required, self.altitude, self.peak_rate, self.decay,
+            self.bandwidth, self.v_max, self.accel, self.alpha, A, B, f, v3, v4,
+        )  # fmt: skip
+        l_vio = self._overlap(A, B).sum(axis=1)
+        v5 = collision_penalty(l_vio, self.mu, self.nu)
+        return f, v3 + v4 + v5
+
+    def breakdown(self, x: np.ndarray) -> dict[str, Any]:
+        """Every term of the model for one solution, as plain Python values (JSON-ready)."""
+        p = self._evaluate_parts(np.asarray(x, dtype=float)[None, :])
+        act = p["active"][0]
+        hp = p["points"][0][act]
+        ht = p["times"][0][act]
+        n_legs = int(act.sum()) + 1
+        return {
+            "f": float(p["f"][0]),
+            "phi": float(p["phi"][0]),
+            "score": float(penalised_score(p["f"][0], p["phi"][0])),
+            "t_fly": float(p["t_fly"][0]),
+            "t_hover": float(p["t_hover"][0]),
+            "l_vio": float(p["l_vio"][0]),
+            "v3": float(p["v3"][0]),
+            "v4": float(p["v4"][0]),
+            "v5": float(p["v5"][0]),
+            "n_hover": int(act.sum()),
+            "hover_points": hp.tolist(),
+            "hover_times": ht.tolist(),
+            "leg_times": p["leg_times"][0][:n_legs].tolist(),
+            "leg_lengths": p["leg_lengths"][0][:n_legs].tolist(),
+            "v3_per_point": p["v3_each"][0][act].tolist(),
+            "collected": dict(zip(self.map.sensor_ids, p["collected"][0].tolist(), strict=True)),
+            "required": dict(zip(self.map.sensor_ids, self.required.tolist(), strict=True)),
+            "shortfall": dict(zip(self.map.sensor_ids, p["v4_each"][0].tolist(), strict=True)),
+        }
+
+    # ------------------------------------------------------------------ initial population
+    def initial_population(self, rng: np.random.Generator, n: int) -> np.ndarray:
+        """n starting solutions: the first half obstacle-aware sensor routes, the rest uniform.
+
+        A sensor-aware start (`planner_core.model.seeding`) clusters the sensors, visits the cluster
+        centres in a short order, routes blocked legs around obstacles through a visibility
+        graph and hovers long enough to serve every sensor, so most starts are feasible.
+        Uniform ones keep the population diverse. The DE uses this hook when a problem has it
+        (synthetic problems do not), and its draws come from the DE's own seeded generator.
+        """
+        span = self.upper - self.lower
+        X = self.lower + rng.random((n, self.dim)) * span
+        for s in range(n // 2):
+            X[s] = self._clustered_solution(rng)
+        return X
+
+    @cached_property
+    def seeder(self) -> Seeder:
+        """This problem's `planner_core.model.seeding.Seeder` (visibility graph, reach), built on
+        first
+        use and kept: the sensor-aware starts, the memetic repair and the engineering peer share
+        it."""
+        return Seeder.for_problem(self)
+
+    def _clustered_solution(self, rng: np.random.Generator) -> np.ndarray:
+        """One obstacle-aware sensor-serving start (the problem's seeder)."""
+        return self.seeder.solution(rng)
+
+    # ------------------------------------------------------------------ encoding
+    def encode(self, hover_points: np.ndarray, hover_times: np.ndarray) -> np.ndarray:
+        """A decision vector whose decoded plan is exactly these hover points and times."""
+        hp = np.asarray(hover_points, dtype=float).reshape(-1, 2)
+        ht = np.asarray(hover_times, dtype=float).reshape(-1)
+        k = len(hp)
+        if k > self.n_points:
+            raise ValueError(f"{k} hover points exceed I_max = {self.n_points}")
+        if not self.variable_length and k != self.n_points:
+            raise ValueError(f"fixed-length mode needs exactly {self.n_points} hover points")
+        x = np.zeros((self.n_points, 4))
+        x[:k, :2] = hp
+        x[:k, 2] = ht
+        x[:k, 3] = 1.0
+        # inactive slots: placed at the end point, zero hover time, eps = 0 (< tau unless tau = 0)
+        x[k:, :2] = self.end
+        if self.variable_length and self.tau <= 0.0 and k < self.n_points:
+            raise ValueError("with activation_threshold 0 every slot is active; give I_max points")
+        return x.reshape(-1)

@@ -1,0 +1,290 @@
+"""Shortest paths around obstacles: the reduced visibility graph (compiled Dijkstra on demand)
+and all-pairs shortest paths with next hops (Floyd-Warshall) for small dense graphs.
+
+The reduced visibility graph's nodes are obstacle corners pushed out by a margin
+(`offset.obstacle_polygons`); its edges join mutually visible nodes whose line is tangent to
+both nodes' polygons, the only edges a shortest path uses.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numba import njit
+
+from planner_core.model.geometry import overlap_lengths, points_inside
+from planner_core.model.routing.offset import obstacle_polygons
+
+__all__ = ["CLEAR", "VisibilityGraph", "build_visibility_graph", "shortest_paths", "path_hops"]
+
+#: overlap lengths (m) at or below this count as a clear line of sight
+CLEAR = 1e-9
+
+
+@dataclass(frozen=True, eq=False)
+class VisibilityGraph:
+    """Reduced visibility graph over pushed-out obstacle corners (undirected, CSR adjacency).
+
+    ``nodes`` (N, 2); ``prev``/``next`` (N, 2): the neighbouring corners on each node's own
+    polygon, for the tangency test; ``indptr``/``indices``/``weights``: both directions of every
+    edge; ``edges`` (E, 2): node index pairs i < j.
+    """
+
+    nodes: np.ndarray
+    prev: np.ndarray
+    next: np.ndarray
+    indptr: np.ndarray
+    indices: np.ndarray
+    weights: np.ndarray
+    edges: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return int(self.nodes.shape[0])
+
+    def tangent_mask(self, pts: np.ndarray) -> np.ndarray:
+        """(P, N): whether the line from each point to each node is tangent at the node."""
+        return _tangent_mask(np.ascontiguousarray(pts, dtype=float), self.nodes, self.prev,
+                             self.next)  # fmt: skip
+
+    def spread(self, src_dist: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
+        """(N,) least cost from a point to every node: src_dist (N,) its cost to the nodes it
+        sees (inf elsewhere), then along graph edges costing `weights` (aligned with `indices`;
+        default the edge lengths, m); inf for a node it cannot reach. Multi-source Dijkstra."""
+        w = self.weights if weights is None else np.ascontiguousarray(weights, dtype=float)
+        return _spread(self.indptr, self.indices, w, np.ascontiguousarray(src_dist, dtype=float))
+
+    def route(self, src_dist: np.ndarray, dst_dist: np.ndarray) -> tuple[float, list[int]]:
+        """Shortest a -> nodes -> b given a's (src_dist) and b's (dst_dist) distances to the
+        nodes they see (inf elsewhere): (length, node path); (inf, []) when there is none."""
+        length, path = _route(self.indptr, self.indices, self.weights, src_dist, dst_dist)
+        return float(length), path.tolist()
+
+
+# ----------------------------------------------------------------------------- kernels
+
+
+@njit(cache=True, nogil=True)
+def _tangent(u, fx, fy, nodes, prev, nxt):
+    """Whether the line from (fx, fy) to node u only touches u's (pushed-out) polygon: both
+    polygon neighbours of u on one side. Shortest paths bend only at such nodes."""
+    dx = nodes[u, 0] - fx
+    dy = nodes[u, 1] - fy
+    s1 = dx * (prev[u, 1] - nodes[u, 1]) - dy * (prev[u, 0] - nodes[u, 0])
+    s2 = dx * (nxt[u, 1] - nodes[u, 1]) - dy * (nxt[u, 0] - nodes[u, 0])
+    tol = 1e-9 * (abs(dx) + abs(dy) + 1.0) * 20.0
+    return s1 * s2 >= -tol * tol
+
+
+@njit(cache=True, nogil=True)
+def _tangent_pairs(nodes, prev, nxt):
+    """All node pairs (i < j) whose line is tangent at both nodes."""
+    n = nodes.shape[0]
+    out_i = np.empty(n * (n - 1) // 2, dtype=np.int64)
+    out_j = np.empty(n * (n - 1) // 2, dtype=np.int64)
+    k = 0
+    for i in range(n):
+        for j in range(i + 1, n):
+            if _tangent(i, nodes[j, 0], nodes[j, 1], nodes, prev, nxt) and _tangent(
+                j, nodes[i, 0], nodes[i, 1], nodes, prev, nxt
+            ):
+                out_i[k] = i
+                out_j[k] = j
+                k += 1
+    return out_i[:k], out_j[:k]
+
+
+@njit(cache=True, nogil=True)
+def _tangent_mask(pts, nodes, prev, nxt):
+    out = np.empty((pts.shape[0], nodes.shape[0]), dtype=np.bool_)
+    for a in range(pts.shape[0]):
+        for u in range(nodes.shape[0]):
+            out[a, u] = _tangent(u, pts[a, 0], pts[a, 1], nodes, prev, nxt)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _heap_push(hk, hv, size, key, val):
+    """Push (key, val) onto the binary min-heap (hk, hv) holding `size` items; the new size."""
+    pos = size
+    while pos > 0:
+        par = (pos - 1) // 2
+        if hk[par] <= key:
+            break
+        hk[pos] = hk[par]
+        hv[pos] = hv[par]
+        pos = par
+    hk[pos] = key
+    hv[pos] = val
+    return size + 1
+
+
+@njit(cache=True, nogil=True)
+def _heap_pop(hk, hv, size):
+    """Pop the least (key, val) off the binary min-heap (hk, hv) holding `size` items (size > 0);
+    returns (key, val, the new size)."""
+    key = hk[0]
+    val = hv[0]
+    size -= 1
+    lk = hk[size]
+    lv = hv[size]
+    pos = 0
+    while True:  # sift the last item down from the root
+        c = 2 * pos + 1
+        if c >= size:
+            break
+        if c + 1 < size and hk[c + 1] < hk[c]:
+            c += 1
+        if hk[c] >= lk:
+            break
+        hk[pos] = hk[c]
+        hv[pos] = hv[c]
+        pos = c
+    hk[pos] = lk
+    hv[pos] = lv
+    return key, val, size
+
+
+@njit(cache=True, nogil=True)
+def _heap_of(d, m):
+    """A binary min-heap of capacity m holding (d[u], u) for every finite d[u]: (hk, hv, size)."""
+    hk = np.empty(m)
+    hv = np.empty(m, dtype=np.int64)
+    size = 0
+    for u in range(d.shape[0]):
+        if d[u] < np.inf:
+            size = _heap_push(hk, hv, size, d[u], u)
+    return hk, hv, size
+
+
+@njit(cache=True, nogil=True)
+def _route(indptr, indices, weights, src_dist, dst_dist):
+    """Multi-source Dijkstra (binary heap, lazy deletion) from the nodes a sees to the nodes b
+    sees, stopping once no shorter way to b can appear."""
+    n = src_dist.shape[0]
+    d = src_dist.copy()
+    pred = np.full(n, -1, dtype=np.int64)
+    hk, hv, size = _heap_of(d, indices.shape[0] + n + 1)
+    best = np.inf
+    last = -1
+    while size > 0:
+        key, u, size = _heap_pop(hk, hv, size)
+        if key >= best:
+            break
+        if key > d[u]:
+            continue  # stale entry
+        if key + dst_dist[u] < best:
+            best = key + dst_dist[u]
+            last = u
+        for e in range(indptr[u], indptr[u + 1]):
+            w = indices[e]
+            nd = key + weights[e]
+            if nd < d[w]:
+                d[w] = nd
+                pred[w] = u
+                size = _heap_push(hk, hv, size, nd, w)
+    count = 0
+    u = last
+    while u >= 0:
+        count += 1
+        u = pred[u]
+    path = np.empty(count, dtype=np.int64)
+    u = last
+    for i in range(count - 1, -1, -1):
+        path[i] = u
+        u = pred[u]
+    return best, path
+
+
+@njit(cache=True, nogil=True)
+def _spread(indptr, indices, weights, src_dist):
+    """Multi-source Dijkstra (binary heap, lazy deletion) from src_dist to every node."""
+    n = src_dist.shape[0]
+    d = src_dist.copy()
+    hk, hv, size = _heap_of(d, indices.shape[0] + n + 1)
+    while size > 0:
+        key, u, size = _heap_pop(hk, hv, size)
+        if key > d[u]:
+            continue  # stale entry
+        for e in range(indptr[u], indptr[u + 1]):
+            w = indices[e]
+            nd = key + weights[e]
+            if nd < d[w]:
+                d[w] = nd
+                size = _heap_push(hk, hv, size, nd, w)
+    return d
+
+
+# ----------------------------------------------------------------------------- building
+
+
+def build_visibility_graph(
+    obstacles: Any, width: float, height: float, margin: float
+) -> VisibilityGraph:
+    """The reduced visibility graph of `obstacles` (a `geometry.Obstacles`) pushed out by
+    `margin` metres (see `VisibilityGraph`); nodes inside an obstacle or outside the area
+    [0, width] x [0, height] are left out."""
+    polys = obstacle_polygons(obstacles, margin)
+    if polys:
+        nodes = np.concatenate(polys)
+        prev = np.concatenate([np.roll(q, 1, axis=0) for q in polys])
+        nxt = np.concatenate([np.roll(q, -1, axis=0) for q in polys])
+    else:
+        nodes = prev = nxt = np.zeros((0, 2))
+    w, h = width, height
+    keep = (nodes[:, 0] >= 0.0) & (nodes[:, 1] >= 0.0) & (nodes[:, 0] <= w) & (nodes[:, 1] <= h)
+    if len(nodes):
+        keep &= ~points_inside(nodes, obstacles)
+    nodes = np.ascontiguousarray(nodes[keep])
+    prev = np.ascontiguousarray(prev[keep])
+    nxt = np.ascontiguousarray(nxt[keep])
+    n = len(nodes)
+    if n:
+        i, j = _tangent_pairs(nodes, prev, nxt)
+        clear = overlap_lengths(nodes[i], nodes[j], obstacles) <= CLEAR
+        i, j = i[clear], j[clear]
+    else:
+        i = j = np.zeros(0, dtype=np.int64)
+    length = np.hypot(nodes[i, 0] - nodes[j, 0], nodes[i, 1] - nodes[j, 1])
+    src = np.concatenate([i, j])
+    dst = np.concatenate([j, i])
+    wts = np.concatenate([length, length])
+    order = np.lexsort((dst, src))
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(np.bincount(src, minlength=n), out=indptr[1:])
+    return VisibilityGraph(
+        nodes, prev, nxt, indptr, np.ascontiguousarray(dst[order]),
+        np.ascontiguousarray(wts[order]), np.column_stack([i, j]),
+    )  # fmt: skip
+
+
+# ----------------------------------------------------------------------------- all pairs
+
+
+def shortest_paths(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """All-pairs shortest paths (Floyd-Warshall) of a weight matrix w (n, n) with inf for no
+    edge: (distances (n, n), next hop (n, n), -1 where there is no path)."""
+    n = len(w)
+    w = np.array(w, dtype=float)
+    np.fill_diagonal(w, 0.0)
+    nxt = np.where(np.isfinite(w), np.arange(n)[None, :], -1)
+    for k in range(n):
+        alt = w[:, k : k + 1] + w[k : k + 1, :]
+        better = alt < w
+        w = np.where(better, alt, w)
+        nxt = np.where(better, nxt[:, k : k + 1], nxt)
+    return w, nxt
+
+
+def path_hops(nxt: np.ndarray, a: int, b: int) -> list[int]:
+    """The nodes strictly between a and b on the shortest path (from `shortest_paths`)."""
+    out: list[int] = []
+    u = a
+    while u != b:
+        u = int(nxt[u, b])
+        if u == b:
+            break
+        out.append(u)
+    return out

@@ -1,0 +1,505 @@
+"""Obstacle-aware starting solutions: routes that serve every sensor and avoid every obstacle.
+
+Deb's rule never accepts a detour that crosses an obstacle (V5 >= mu) to save a few hundred
+Mbit of shortfall (V4), so on dense maps a population that starts from colliding
+sensor-serving routes ends collision-free with sensors unserved. `Seeder` builds starts that
+are feasible in most cases:
+
+1. once per map, a *reduced visibility graph* (`planner_core.model.routing`): obstacle corners
+   pushed out by a margin (circles as circumscribed hexagons), edges between mutually visible
+   nodes whose line is tangent to both nodes' polygons (the only edges a shortest path uses);
+2. per start (every random draw from the caller's generator): k-means++-seeded sensor clusters
+   grown until every sensor lies within a random service radius of a centre; centres pushed out
+   of obstacles; an order by nearest neighbour + 2-opt on lengths that charge for crossing
+   obstacles; each centre *slid* within its sensors' service radius to clear its legs and
+   shorten the tour (red-black sweeps, all candidates in one geometry call); legs still blocked
+   (large no-fly zones) routed through the graph (Dijkstra on demand); corners whose neighbours
+   see each other dropped; points whose sensors others serve pruned while there are more than
+   I_max or while that lowers our estimate of f; still too many -> fewer, larger clusters next
+   attempt, finally the least-colliding truncation. Hover times: each sensor from its best
+   point (corners included), times a random 1.0-1.1 margin, capped at T_max.
+
+Only geometry queries run here (`overlap_lengths`, `points_inside`, `ModelParams.rates`): the DE
+counts the evaluations of the starts itself. The steps other builders reuse are public methods
+(the constructive starts of `planner_core.search.construct` and the memetic repair): `push_one`,
+`connect`, `slide`, `route`, `prune`, `truncate`, `fill`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numba import njit
+
+from planner_core.model.formulas import ModelParams, flight_time, ground_reach, leg_time, slant_rate
+from planner_core.model.geometry import Obstacles, overlap_lengths, points_inside
+from planner_core.model.routing import build_visibility_graph, open_tour
+from planner_core.model.routing.graph import CLEAR as _CLEAR
+
+__all__ = ["MARGIN", "Seeder"]
+
+#: metres by which graph nodes (and pushed-out points) stand off the obstacles
+MARGIN = 20.0
+_ORDER_DETOUR = 2.0  # ordering: a blocked leg costs its length + this x its length inside
+_BLOCKED = 1e6  # slide objective: cost of one blocked leg (V5 >= mu)
+_OVER_BANDWIDTH = 1e4  # slide objective: cost of exceeding the bandwidth (V3), per (1 + Mbit/s)
+_BANDWIDTH_USE = 0.98  # points keep their summed rate below this share of the bandwidth
+_SLIDE_RINGS = (60.0, 150.0, 300.0, 500.0)  # candidate offsets (m) around a centre
+_SLIDE_DIRS = 8
+_ATTEMPTS = 4
+_RADIUS = (350.0, 800.0)  # range of the random service radius (m)
+_SHRINK = 0.6  # the candidate rings shrink by this factor after each full sweep
+_SWEEPS = 3
+
+
+# ----------------------------------------------------------------------------- kernels
+
+
+@njit(cache=True, nogil=True)
+def _slide_costs(cand, prv, nxt, member, S, lim, req, H, peak, decay, bw, v_max, accel, alpha):
+    """(n, Q) local cost of moving centre r to candidate q: alpha * flight time of its two
+    legs + (1 - alpha) * hover time of its slowest member, + `_OVER_BANDWIDTH` (1 + excess)
+    where the summed rate exceeds the bandwidth bw (V3); inf where a member would be out of its
+    service radius (candidate 0, the current position, always allowed)."""
+    n, Q = cand.shape[0], cand.shape[1]
+    out = np.empty((n, Q))
+    for r in range(n):
+        for q in range(Q):
+            x = cand[r, q, 0]
+            y = cand[r, q, 1]
+            hover = 0.0
+            total = 0.0
+            ok = True
+            for j in range(S.shape[0]):
+                d2 = (x - S[j, 0]) ** 2 + (y - S[j, 1]) ** 2
+                rate = slant_rate(d2, H * H, peak, decay)
+                total += max(rate, 0.0)
+                if member[r, j]:
+                    if d2 > lim[j] * lim[j]:
+                        ok = False
+                    hover = max(hover, req[j] / max(rate, 1e-9))
+            if not ok and q > 0:
+                out[r, q] = np.inf
+                continue
+            l1 = math.hypot(x - prv[r, 0], y - prv[r, 1])
+            l2 = math.hypot(nxt[r, 0] - x, nxt[r, 1] - y)
+            fly = leg_time(l1, v_max, accel) + leg_time(l2, v_max, accel)
+            out[r, q] = alpha * fly + (1.0 - alpha) * hover
+            if total > bw:
+                out[r, q] += _OVER_BANDWIDTH * (1.0 + total - bw)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _slide_candidates(cur, prv, nxt, rings, frac, w, h):
+    """Candidates (n, Q, 2) for each centre: itself, itself + rings, and fractions of the way to
+    the closest point of the chord prev -> next (clipped to the area); with the legs from prev
+    to each candidate and from each candidate to next, packed as (n, 2Q, 2) starts and ends."""
+    n = cur.shape[0]
+    Q = 1 + rings.shape[0] + frac.shape[0]
+    cand = np.empty((n, Q, 2))
+    a = np.empty((n, 2 * Q, 2))
+    b = np.empty((n, 2 * Q, 2))
+    for r in range(n):
+        cx, cy = cur[r, 0], cur[r, 1]
+        ex, ey = nxt[r, 0] - prv[r, 0], nxt[r, 1] - prv[r, 1]
+        t = ((cx - prv[r, 0]) * ex + (cy - prv[r, 1]) * ey) / max(ex * ex + ey * ey, 1e-12)
+        t = min(max(t, 0.0), 1.0)
+        fx, fy = prv[r, 0] + t * ex - cx, prv[r, 1] + t * ey - cy
+        cand[r, 0, 0], cand[r, 0, 1] = cx, cy
+        for q in range(rings.shape[0]):
+            cand[r, 1 + q, 0] = cx + rings[q, 0]
+            cand[r, 1 + q, 1] = cy + rings[q, 1]
+        for q in range(frac.shape[0]):
+            cand[r, 1 + rings.shape[0] + q, 0] = cx + frac[q] * fx
+            cand[r, 1 + rings.shape[0] + q, 1] = cy + frac[q] * fy
+        for q in range(Q):
+            x = min(max(cand[r, q, 0], 0.0), w)
+            y = min(max(cand[r, q, 1], 0.0), h)
+            cand[r, q, 0], cand[r, q, 1] = x, y
+            a[r, q, 0], a[r, q, 1] = prv[r, 0], prv[r, 1]
+            b[r, q, 0], b[r, q, 1] = x, y
+            a[r, Q + q, 0], a[r, Q + q, 1] = x, y
+            b[r, Q + q, 0], b[r, Q + q, 1] = nxt[r, 0], nxt[r, 1]
+    return cand, a, b
+
+
+# ----------------------------------------------------------------------------- seeder
+
+
+class Seeder:
+    """Builds obstacle-aware, sensor-serving starting solutions for one map (reusable).
+
+    `model`: the map's `ModelParams`; `obstacles`: its `geometry.Obstacles`;
+    `variable_length`: False for the fixed-length encoding (every start then has I_max points).
+    """
+
+    def __init__(
+        self,
+        model: ModelParams,
+        obstacles: Obstacles,
+        *,
+        variable_length: bool = True,
+        margin: float = MARGIN,
+    ):
+        p = self.p = model
+        self.obstacles = obstacles
+        self.variable_length = bool(variable_length)
+        self.margin = float(margin)
+        self.graph = build_visibility_graph(obstacles, p.width, p.height, self.margin)
+        self.size = np.array([p.width, p.height], dtype=float)
+        # farthest ground distance at which 90% of T_max still serves each sensor
+        rate_needed = np.maximum(p.required, 1e-9) / (0.9 * p.t_max)
+        self.reach = ground_reach(rate_needed, p.altitude, p.peak_rate, p.decay)
+        self._ends = self.connect(np.vstack([p.start, p.end]))  # graph links of start, end
+        ang = 2.0 * np.pi * np.arange(_SLIDE_DIRS) / _SLIDE_DIRS
+        self._unit = np.column_stack([np.cos(ang), np.sin(ang)])
+
+    @classmethod
+    def for_problem(cls, problem: Any, margin: float = MARGIN) -> Seeder:
+        """The seeder of a `planner_core.model.problem.Problem` (its model, obstacles and
+        encoding)."""
+        return cls(problem.model, problem.obstacles, variable_length=problem.variable_length,
+                   margin=margin)  # fmt: skip
+
+    # ------------------------------------------------------------------ geometry helpers
+    def _clear(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Whether each leg a -> b is collision-free."""
+        return overlap_lengths(a, b, self.obstacles) <= _CLEAR
+
+    def _push_out(self, pts: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """Points clipped to the area and moved out of any obstacle they are in."""
+        pts = np.clip(pts, 0.0, self.size)
+        for _ in range(4):
+            inside = points_inside(pts, self.obstacles)
+            if not inside.any():
+                break
+            for m in np.flatnonzero(inside):
+                pts[m] = self.push_one(pts[m], rng)
+            pts = np.clip(pts, 0.0, self.size)
+        return pts
+
+    def push_one(self, q: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """Point q (2,) moved `margin` metres beyond the nearest side of the first obstacle
+        containing it (q itself when it is in none); rng only picks a direction for a point at a
+        circle's exact centre."""
+        obs = self.obstacles
+        for cx, cy, r in obs.circles:
+            d = math.hypot(q[0] - cx, q[1] - cy)
+            if d < r:
+                a = rng.random() * 2.0 * math.pi
+                u = (q - (cx, cy)) / d if d > 1e-9 else np.array([math.cos(a), math.sin(a)])
+                return np.array([cx, cy]) + u * (r + self.margin)
+        box = obs.poly_boxes
+        near = (box[:, 0] <= q[0]) & (q[0] <= box[:, 2]) & (box[:, 1] <= q[1]) & (q[1] <= box[:, 3])
+        for p in np.flatnonzero(near):  # only polygons whose bounding box holds q
+            lo, hi = obs.poly_offsets[p], obs.poly_offsets[p + 1]
+            nrm = obs.edge_normals[lo:hi]
+            sd = np.sum(nrm * (q - obs.poly_vertices[lo:hi]), axis=1)  # < 0 inside
+            if np.all(sd < 0.0):
+                # out through the nearest real side (a piece's diagonals lead into its region)
+                outer = obs.edge_flags[lo:hi] == 0
+                e = int(np.argmax(np.where(outer, sd, -np.inf) if outer.any() else sd))
+                return q + nrm[e] * (self.margin - sd[e])
+        return q
+
+    def connect(self, pts: np.ndarray) -> np.ndarray:
+        """(P, N) distance (m) from each point of pts (P, 2) to each graph node it sees,
+        tangentially at the node (inf elsewhere)."""
+        g = self.graph
+        out = np.full((len(pts), g.n), np.inf)
+        if g.n == 0 or len(pts) == 0:
+            return out
+        pi, ni = np.nonzero(g.tangent_mask(pts))
+        ok = self._clear(pts[pi], g.nodes[ni])
+        pi, ni = pi[ok], ni[ok]
+        out[pi, ni] = np.hypot(pts[pi, 0] - g.nodes[ni, 0], pts[pi, 1] - g.nodes[ni, 1])
+        return out
+
+    # ------------------------------------------------------------------ clustering
+    def _clusters(
+        self, rng: np.random.Generator, k: int, radius: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """k-means++-seeded centres, grown until every sensor is within min(radius, reach) of
+        one, kept out of obstacles: (centres (K, 2), owner (J,) the centre serving each)."""
+        S = self.p.sensors
+        J = len(S)
+        k = max(1, min(k, J))
+        first = int(rng.integers(J))
+        idx = [first]
+        d2 = np.sum((S - S[first]) ** 2, axis=1)
+        for _ in range(1, k):
+            # k-means++: the next seed drawn with probability proportional to d2
+            cum = np.cumsum(d2)
+            j = min(int(np.searchsorted(cum, rng.random() * cum[-1], side="right")), J - 1)
+            idx.append(j)
+            d2 = np.minimum(d2, np.sum((S - S[j]) ** 2, axis=1))
+        C = S[idx].astype(float)
+        lim = np.minimum(radius, self.reach)
+        for _ in range(J + 1):
+            owner = np.argmin(np.sum((S[:, None, :] - C[None]) ** 2, axis=2), axis=1)
+            cnt = np.bincount(owner, minlength=len(C))
+            sx = np.bincount(owner, weights=S[:, 0], minlength=len(C))
+            sy = np.bincount(owner, weights=S[:, 1], minlength=len(C))
+            has = cnt > 0
+            C[has] = np.column_stack([sx[has], sy[has]]) / cnt[has, None]
+            C = C[has]  # an empty cluster serves nobody
+            C = self._push_out(C + rng.normal(0.0, 20.0, C.shape), rng)
+            dist = np.sqrt(np.sum((S[:, None, :] - C[None]) ** 2, axis=2))
+            gap = dist.min(axis=1) - lim
+            if gap.max() <= 0.0 or len(C) >= 2 * J:
+                break
+            # new centres at uncovered sensors, worst first, mutually farther than lim apart
+            new: list[int] = []
+            for j in np.argsort(-gap).tolist():
+                if gap[j] <= 0.0:
+                    break
+                if all(math.hypot(*(S[j] - S[q])) > lim[j] for q in new):
+                    new.append(j)
+            C = np.vstack([C, self._push_out(S[new].astype(float), rng)])
+        owner = np.argmin(np.sum((S[:, None, :] - C[None]) ** 2, axis=2), axis=1)
+        return C, owner
+
+    # ------------------------------------------------------------------ ordering
+    def _order(self, C: np.ndarray) -> np.ndarray:
+        """Visiting order of the centres: nearest neighbour, then 2-opt, start and end fixed;
+        a blocked leg counts its length plus `_ORDER_DETOUR` times its length inside."""
+        p = self.p
+        pts = np.vstack([p.start, C, p.end])
+        P = len(pts)
+        W = np.hypot(*(pts[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))
+        ia, ib = np.triu_indices(P, 1)
+        inside = overlap_lengths(pts[ia], pts[ib], self.obstacles)
+        W[ia, ib] += _ORDER_DETOUR * inside
+        W[ib, ia] = W[ia, ib]
+        t = open_tour(W)
+        return t[1:-1] - 1
+
+    # ------------------------------------------------------------------ sliding
+    def slide(
+        self,
+        C: np.ndarray,
+        owner: np.ndarray,
+        lim: np.ndarray,
+        rng: np.random.Generator,
+        sweeps: int = _SWEEPS,
+    ) -> np.ndarray:
+        """Centres C (K, 2), already in visiting order, each moved within its sensors' service
+        radius (owner (J,): the centre serving each sensor; lim (J,) metres) to clear its two
+        legs and lower its share of f; alternate halves, all candidates of a half in one
+        geometry call. Returns the moved centres (K, 2); rng turns the candidate directions."""
+        p = self.p
+        K = len(C)
+        if K == 0:
+            return C
+        S = p.sensors
+        member = owner[None, :] == np.arange(K)[:, None]  # (K, J)
+        pts = np.vstack([p.start, C, p.end])
+        rot = rng.random() * 2.0 * math.pi
+        c, s = math.cos(rot), math.sin(rot)
+        dirs = self._unit @ np.array([[c, s], [-s, c]])
+        rings = (np.array(_SLIDE_RINGS)[:, None, None] * dirs[None]).reshape(-1, 2)
+        frac = np.array([0.25, 0.5, 0.75, 1.0])
+        for sweep in range(2 * sweeps):
+            idx = np.arange(1 + sweep % 2, K + 1, 2)
+            if len(idx) == 0:
+                continue
+            cur, prv, nxt = pts[idx], pts[idx - 1], pts[idx + 1]
+            # candidates: stay, rings around, and toward the chord prev -> next
+            scale = _SHRINK ** (sweep // 2)
+            cand, a, b = _slide_candidates(cur, prv, nxt, rings * scale, frac, *self.size)
+            n, Q = cand.shape[:2]
+            cost = _slide_costs(
+                cand, prv, nxt, member[idx - 1], S, lim, p.required, p.altitude, p.peak_rate,
+                p.decay, _BANDWIDTH_USE * p.bandwidth, p.v_max, p.accel, p.alpha,
+            )  # fmt: skip
+            inside = overlap_lengths(a, b, self.obstacles)
+            blocked = (inside[:, :Q] > _CLEAR).astype(float) + (inside[:, Q:] > _CLEAR)
+            cost = cost + _BLOCKED * blocked + inside[:, :Q] + inside[:, Q:]
+            # a point inside an obstacle has blocked legs, so it only wins when every
+            # candidate is blocked; keep the old position then
+            pick = cand[np.arange(n), np.argmin(cost, axis=1)]
+            pts[idx] = np.where(points_inside(pick, self.obstacles)[:, None], cur, pick)
+        return pts[1:-1]
+
+    # ------------------------------------------------------------------ routing
+    def route(self, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Path start -> centres C (K, 2) -> end with visibility-graph corners on the legs that
+        are still blocked, string-pulled: (interior points (M, 2), is_centre (M,) bool)."""
+        p = self.p
+        pts = np.vstack([p.start, C, p.end])
+        clear = self._clear(pts[:-1], pts[1:])
+        out: list[np.ndarray] = [pts[1:-1]]
+        is_centre: list[np.ndarray] = [np.ones(len(C), dtype=bool)]
+        blocked = np.flatnonzero(~clear)
+        if len(blocked) and self.graph.n:
+            ends = np.unique(np.concatenate([blocked, blocked + 1]))
+            inner = ends[(ends > 0) & (ends < len(pts) - 1)]
+            A = np.full((len(pts), self.graph.n), np.inf)
+            A[0], A[-1] = self._ends[0], self._ends[1]
+            A[inner] = self.connect(pts[inner])
+            pos = np.arange(len(C), dtype=float)  # insertion keys: corners go after centre i-1
+            keys = [pos]
+            for leg in blocked.tolist():
+                length, path = self.graph.route(A[leg], A[leg + 1])
+                if path:
+                    out.append(self.graph.nodes[path])
+                    is_centre.append(np.zeros(len(path), dtype=bool))
+                    keys.append(leg - 1 + (np.arange(len(path)) + 1.0) / (len(path) + 1.0))
+            order = np.argsort(np.concatenate(keys), kind="stable")
+            M = np.concatenate(out)[order]
+            centre = np.concatenate(is_centre)[order]
+            return self._pull(M, centre)
+        return pts[1:-1].copy(), np.ones(len(C), dtype=bool)
+
+    def _pull(self, M: np.ndarray, centre: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Drop corners whose neighbours see each other (string pulling), a few passes."""
+        p = self.p
+        for _ in range(4):
+            corners = np.flatnonzero(~centre)
+            if len(corners) == 0:
+                break
+            full = np.vstack([p.start, M, p.end])
+            ok = self._clear(full[corners], full[corners + 2])
+            drop: list[int] = []
+            for m, good in zip(corners.tolist(), ok.tolist(), strict=True):
+                if good and (not drop or drop[-1] != m - 1):  # never two neighbours at once
+                    drop.append(m)
+            if not drop:
+                break
+            keep = np.ones(len(M), dtype=bool)
+            keep[drop] = False
+            M, centre = M[keep], centre[keep]
+        return M, centre
+
+    def prune(self, M: np.ndarray, limit: int) -> np.ndarray:
+        """Route points M (k, 2) with points removed whose sensors the others still serve
+        within 95% of T_max and whose neighbours see each other: while more than `limit`
+        remain, the one whose removal costs least; then any whose removal lowers the estimated
+        f. Returns the kept points in order (m, 2)."""
+        p = self.p
+        while len(M) > 1:
+            full = np.vstack([p.start, M, p.end])
+            n = len(M)
+            m_idx = np.arange(n)
+            ok = self._clear(full[m_idx], full[m_idx + 2])
+            R = p.rates(M)  # (n, J)
+            # greedy hover times once point m is gone: each sensor from its best other point
+            R3 = np.where(np.eye(n, dtype=bool)[:, :, None], -1.0, R[None, :, :])  # (n, n, J)
+            best = np.argmax(R3, axis=1)  # (n, J)
+            r = np.take_along_axis(R3, best[:, None, :], axis=1)[:, 0, :]
+            # no sensor served now may go unserved (one out of reach anyway does not block)
+            now = R.max(axis=0) * (0.95 * p.t_max) >= p.required
+            served = np.all((r * (0.95 * p.t_max) >= p.required) | ~now, axis=1)
+            cand = np.flatnonzero(ok & served)
+            if len(cand) == 0:
+                break
+            need = p.required / np.maximum(r, 1e-12)
+            # times[m, i]: the longest need among the sensors point i then serves
+            mine = best[:, None, :] == m_idx[None, :, None]  # (n, n, J)
+            times = np.max(np.where(mine, need[:, None, :], 0.0), axis=2)
+            legs = flight_time(np.hypot(*np.diff(full, axis=0).T), p.v_max, p.accel)
+            short = flight_time(np.hypot(*(full[m_idx + 2] - full[m_idx]).T), p.v_max, p.accel)
+            d_fly = short - legs[m_idx] - legs[m_idx + 1]
+            cost = p.alpha * d_fly + (1.0 - p.alpha) * times.sum(axis=1)
+            m = int(cand[np.argmin(cost[cand])])
+            if len(M) <= limit and cost[m] >= (1.0 - p.alpha) * self._times(M)[0].sum():
+                break
+            M = np.delete(M, m, axis=0)
+        return M
+
+    def truncate(self, M: np.ndarray, limit: int) -> np.ndarray:
+        """Route points M (k, 2) cut to `limit`, each time dropping the one whose removal adds
+        the least length inside obstacles (the partially colliding fallback)."""
+        p = self.p
+        while len(M) > limit:
+            full = np.vstack([p.start, M, p.end])
+            m_idx = np.arange(len(M))
+            cost = overlap_lengths(full[m_idx], full[m_idx + 2], self.obstacles)
+            M = np.delete(M, int(np.argmin(cost)), axis=0)
+        return M
+
+    def fill(self, M: np.ndarray, limit: int) -> np.ndarray:
+        """Route points M (k, 2) with the longest legs split by collinear points until there
+        are `limit` (fixed-length mode: a point on a clear leg keeps it clear)."""
+        p = self.p
+        frac = np.array([0.5, 0.35, 0.65, 0.2, 0.8, 0.05, 0.95])
+        while len(M) < limit:
+            full = np.vstack([p.start, M, p.end])
+            seg = np.hypot(*np.diff(full, axis=0).T)
+            m = int(np.argmax(seg))
+            cand = full[m] + frac[:, None] * (full[m + 1] - full[m])
+            over = p.rates(cand).sum(axis=1) - _BANDWIDTH_USE * p.bandwidth
+            pick = int(np.argmax(over <= 0.0)) if np.any(over <= 0.0) else int(np.argmin(over))
+            M = np.insert(M, m, cand[pick], axis=0)
+        return M
+
+    def _times(self, M: np.ndarray) -> tuple[np.ndarray, int]:
+        """Greedy hover times, each sensor served from its best point (capped at T_max):
+        (times, how many sensors that leaves short)."""
+        p = self.p
+        times = np.zeros(len(M))
+        if len(M) == 0:
+            return times, len(p.sensors)
+        R = p.rates(M)
+        best = np.argmax(R, axis=0)
+        r = R[best, np.arange(R.shape[1])]
+        need = np.where(r > 0, p.required / np.maximum(r, 1e-12), np.inf)
+        np.maximum.at(times, best, np.minimum(need, p.t_max))
+        return times, int(np.sum(need > p.t_max * (1 + 1e-9)))
+
+    # ------------------------------------------------------------------ public
+    def hover_plan(self, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+        """One start as (hover points (M, 2), hover times (M,)); M <= I_max, and M = I_max when
+        every slot is active (fixed-length mode)."""
+        p = self.p
+        I, J = p.n_points, len(p.sensors)
+        hi = min(I, J)
+        lo = min(hi, max(1, math.ceil(J / 3)))
+        k = int(rng.integers(lo, hi + 1))
+        radius = float(rng.uniform(*_RADIUS))
+        best: tuple[tuple[int, int, int], np.ndarray] | None = None
+        for _ in range(_ATTEMPTS):
+            C, owner = self._clusters(rng, k, radius)
+            order = self._order(C)
+            lim = np.minimum(radius, self.reach)
+            C = self.slide(C[order], np.argsort(order)[owner], lim, rng)
+            M, _ = self.route(C)
+            M = self.prune(M, I)
+            full = np.vstack([p.start, M, p.end])
+            n_blocked = int(np.sum(~self._clear(full[:-1], full[1:])))
+            _, unserved = self._times(M)
+            key = (max(len(M) - I, 0), n_blocked, unserved)
+            if best is None or key < best[0]:
+                best = (key, M)
+            if key == (0, 0, 0):
+                break
+            # too many points (or blocked): fewer, larger clusters next time
+            k = max(1, min(len(C), k) - max(1, len(M) - I))
+            radius = min(radius * 1.25, float(np.max(self.reach)))
+        assert best is not None
+        M = best[1]
+        if len(M) > I:
+            M = self.truncate(M, I)
+        if not self.variable_length or p.tau <= 0.0:
+            M = self.fill(M, I)
+        times, _ = self._times(M)
+        return M, np.minimum(times * rng.uniform(1.0, 1.1), p.t_max)
+
+    def solution(self, rng: np.random.Generator) -> np.ndarray:
+        """One decision vector: the hover plan at sorted random slots, random inactive rest."""
+        p = self.p
+        I = p.n_points
+        M, times = self.hover_plan(rng)
+        k = len(M)
+        slots = np.sort(rng.choice(I, size=k, replace=False))
+        x = np.empty((I, 4))
+        x[:, :2] = rng.random((I, 2)) * self.size
+        x[:, 2] = rng.random(I) * p.t_max
+        x[:, 3] = rng.random(I) * p.tau  # inactive
+        x[slots, :2] = M
+        x[slots, 2] = times
+        x[slots, 3] = p.tau + rng.random(k) * (1.0 - p.tau)
+        return x.reshape(-1)

@@ -1,0 +1,459 @@
+"""Constructive starts (issue 14): whole plans built from the sensors, no search.
+
+What a UAV/WSN engineer builds by hand, as a pipeline of well-known steps; `plan` puts the best
+of these plans into the DE's initial population (`WithStarts`), and the `engineering` benchmark
+peer (`planner_core.bench.baselines.engineering`) is this pipeline alone.
+
+1. **Service reach.** A hover site *covers* sensor j when hovering `frac` x T_max there collects
+   its data Q_j, i.e. it lies within `ground_reach(Q_j / (frac T_max))` of the sensor (the link
+   model of Sec. 3 read backwards; frac = 0.9 is the seeder's reach).
+2. **Candidate sites**: the sensor positions, the midpoints of sensor pairs, and every k-means
+   centre of step 4; each moved out of any obstacle (the seeder's `push_one`) and dropped when
+   its summed link rate exceeds 98 % of the bandwidth (C3). A sensor no candidate covers keeps
+   its own (pushed-out) position as a candidate, so every cover exists.
+3. **Greedy set cover** (Chvatal 1979, "A greedy heuristic for the set-covering problem",
+   Math. Oper. Res. 4(3)): repeatedly the site covering the most still-uncovered sensors (ties:
+   the shortest hover time those sensors need there, max_j Q_j / R_ij; then the lowest index).
+   One cover per reach fraction in `FRACTIONS` (a tight reach: more sites, shorter hovers); a
+   sensor no site covers at that fraction is covered at T_max.
+4. **k-means sweep** over k = 1 .. min(I_max, J) (`scipy.cluster.vq.kmeans2`, k-means++ init,
+   Arthur & Vassilvitskii 2007; `KMEANS_INITS` inits per k from the run's seed): the centres,
+   completed to a cover at frac = 0.9 by the greedy of step 3 when some sensor is out of reach.
+5. **Visiting order** of each site set on the open path start -> sites -> end (`order_sites`):
+   arc costs the Eq. 1 flight time of the fastest obstacle-free way between the two points
+   (`LegTimes`: straight when the leg is clear, else through the reduced visibility graph of
+   `planner_core.model.routing`, every corner a stop), ordered by
+   `planner_core.model.routing.open_path`
+   (nearest neighbour and cheapest insertion, each improved by 2-opt and Or-opt; no OR-Tools on
+   the planning path; the `engineering` peer can order with OR-Tools' routing solver instead).
+6. **Line of sight and I_max**: each site is nudged within its sensors' service reach to clear
+   its two legs and shorten them (`Seeder.slide`: every detour corner costs one of the I_max
+   hover points, so a site that sees its neighbours saves them), then
+   `planner_core.search.refine.repair_points`: every still-blocked leg routed through the visibility
+   graph (`Seeder.route`), brought back to I_max points in one or two ways (route then
+   prune/merge; merge then re-route), each a plan.
+7. **Hover times**: the hover-time LP of `planner_core.search.polish` (the same LP every peer ends
+   with); the plan as a decision vector of the problem's encoding.
+
+`candidate_plans` gives the distinct plans in a fixed order (greedy covers, then k = 1, 2, ...
+with the first k-means init, then with the next) up to a limit; the seed drives only the k-means
+inits and the slide's candidate directions (one generator per site set), so the plans are the
+same in both start modes and a limit takes a prefix of the full list. Needs the UAV problem
+(`planner_core.model.problem.Problem`: model, obstacles, seeder, encode).
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import numpy as np
+
+from planner_core.model.formulas import deb_order, ground_reach
+from planner_core.model.geometry import overlap_lengths, points_inside
+from planner_core.model.routing import open_path
+from planner_core.model.routing.graph import CLEAR
+from planner_core.search.polish import polish_hover_times
+from planner_core.search.refine import covers, repair_points
+
+__all__ = [
+    "BANDWIDTH_USE",
+    "FRACTIONS",
+    "KMEANS_INITS",
+    "LegTimes",
+    "WithStarts",
+    "SEEDER_PLANS",
+    "best_starts",
+    "seeder_plans",
+    "start_from_plans",
+    "build_plans",
+    "candidate_plans",
+    "candidate_sites",
+    "greedy_cover",
+    "order_sites",
+    "reach",
+    "site_sets",
+    "timed_plan",
+]
+
+#: reach fractions of the greedy covers: a site covers a sensor when hovering this share of
+#: T_max there collects its data (0.9: the seeder's reach)
+FRACTIONS = (0.9, 0.6, 0.35, 0.2)
+#: k-means inits per k of the sweep
+KMEANS_INITS = 2
+#: summed link rate a candidate site may have, as a share of the bandwidth (C3; the seeder's)
+BANDWIDTH_USE = 0.98
+#: seeder plans scored beside the constructive ones when the best starts are descended
+SEEDER_PLANS = 20
+#: flight time (s) charged per metre inside obstacles for a leg the graph cannot route around
+_UNROUTABLE = 1e6
+
+#: a visiting order: (problem, sites (m, 2), leg times) -> permutation (m,)
+Order = Callable[[Any, np.ndarray, "LegTimes"], np.ndarray]
+
+
+def reach(problem: Any, frac: float) -> np.ndarray:
+    """(J,) ground distance (m) within which hovering frac x T_max collects each sensor's data
+    (Sec. 3's link rate read backwards; `planner_core.model.formulas.ground_reach`)."""
+    mp = problem.model
+    need = np.maximum(np.asarray(mp.required, dtype=float), 1e-9) / (frac * mp.t_max)
+    return ground_reach(need, mp.altitude, mp.peak_rate, mp.decay)
+
+
+def _pushed(problem: Any, pts: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Points (n, 2) clipped to the area, those inside an obstacle moved out of it (once)."""
+    seeder = problem.seeder
+    C = np.clip(np.asarray(pts, dtype=float).reshape(-1, 2), 0.0, seeder.size)
+    for m in np.flatnonzero(points_inside(C, problem.obstacles)):
+        C[m] = seeder.push_one(C[m], rng)
+    return C
+
+
+def candidate_sites(problem: Any, extra: np.ndarray | None = None) -> np.ndarray:
+    """Candidate hover sites (n, 2), metres: sensor positions, midpoints of sensor pairs, and
+    `extra` (e.g. k-means centres), clipped to the area, pushed out of obstacles, deduplicated,
+    those over `BANDWIDTH_USE` of the bandwidth dropped (but each sensor's own position kept
+    when no other candidate covers it at frac = 0.9). Module docstring, step 2."""
+    mp = problem.model
+    seeder = problem.seeder
+    S = np.asarray(mp.sensors, dtype=float)
+    ia, ib = np.triu_indices(len(S), 1)
+    mids = 0.5 * (S[ia] + S[ib])
+    lim = reach(problem, 0.9)
+    # a midpoint is useful only when it can serve both of its sensors
+    near = np.hypot(*(S[ia] - S[ib]).T) <= 2.0 * np.minimum(lim[ia], lim[ib])
+    parts = [S, mids[near]]
+    if extra is not None and len(extra):
+        parts.append(np.asarray(extra, dtype=float).reshape(-1, 2))
+    rng = np.random.default_rng(0)  # only for a point exactly at a circle's centre
+    C = np.clip(_pushed(problem, np.vstack(parts), rng), 0.0, seeder.size)
+    C = np.unique(np.round(C, 6), axis=0)
+    ok = mp.rates(C).sum(axis=1) <= BANDWIDTH_USE * mp.bandwidth
+    keep = C[ok]
+    covered = covers(problem, keep, 0.9).any(axis=0) if len(keep) else np.zeros(len(S), bool)
+    if not covered.all():
+        keep = np.vstack([keep, _pushed(problem, S[~covered], rng)])
+    return keep
+
+
+def greedy_cover(
+    problem: Any, sites: np.ndarray, frac: float, chosen: np.ndarray | None = None
+) -> np.ndarray:
+    """Indices into `sites` (n, 2) of a greedy set cover of the sensors at reach fraction
+    `frac` (module docstring, step 3), after the sites `chosen` (points (m, 2), already in the
+    plan; they are not returned). A sensor no site covers at `frac` counts as covered by the
+    sites that collect its data within T_max; one no site serves even then is left uncovered."""
+    mp = problem.model
+    need = np.asarray(mp.required, dtype=float)
+    cov = covers(problem, sites, frac)
+    cov = np.where(cov.any(axis=0), cov, covers(problem, sites, 1.0))
+    R = mp.rates(sites)
+    hover = np.where(R > 0, need[None, :] / np.maximum(R, 1e-12), np.inf)  # (n, J) s
+    left = cov.any(axis=0)
+    if chosen is not None and len(chosen):
+        left &= ~covers(problem, np.asarray(chosen, dtype=float), frac).any(axis=0)
+    out: list[int] = []
+    while left.any():
+        gain = (cov & left).sum(axis=1)
+        if gain.max() == 0:
+            break
+        t = np.max(np.where(cov & left, hover, 0.0), axis=1)
+        best = np.flatnonzero(gain == gain.max())
+        i = int(best[np.argmin(t[best])])  # first of the ties
+        out.append(i)
+        left &= ~cov[i]
+    return np.asarray(out, dtype=np.int64)
+
+
+def _kmeans(S: np.ndarray, k: int, rng: np.random.Generator) -> np.ndarray:
+    """k-means centres (<= k, 2) of the sensors, k-means++ init from rng (empty clusters
+    dropped)."""
+    from scipy.cluster.vq import kmeans2
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # scipy warns when a cluster ends empty
+        C, label = kmeans2(S, k, minit="++", rng=rng)
+    return C[np.unique(label)]
+
+
+def site_sets(problem: Any, seed: int) -> Iterator[tuple[str, np.ndarray]]:
+    """The candidate site sets in scoring order, each as (label, sites (m, 2)): one greedy
+    cover per reach fraction, then the k-means sweep, k = 1 .. min(I_max, J) for the first
+    init, then again for the next (module docstring, steps 2-4)."""
+    mp = problem.model
+    S = np.asarray(mp.sensors, dtype=float)
+    J = len(S)
+    if J == 0:
+        yield "no sensors", np.zeros((0, 2))
+        return
+    rng = np.random.default_rng(np.random.SeedSequence([int(seed), 14]))
+    ks = list(range(1, min(int(mp.n_points), J) + 1))
+    centres = {(k, r): _kmeans(S, k, rng) for k in ks for r in range(KMEANS_INITS)}
+    sites = candidate_sites(problem, np.vstack(list(centres.values())))
+    for frac in FRACTIONS:
+        yield f"cover {frac:g}", sites[greedy_cover(problem, sites, frac)]
+    pushed_rng = np.random.default_rng(0)
+    # one init of every k before the next init: a limited prefix still spans every k
+    for r in range(KMEANS_INITS):
+        for k in ks:
+            C = _pushed(problem, centres[k, r], pushed_rng)
+            more = sites[greedy_cover(problem, sites, 0.9, chosen=C)]
+            yield f"k-means k={k} init {r}", np.vstack([C, more])
+
+
+class LegTimes:
+    """Eq. 1 flight time (s) of the fastest obstacle-free way between two points of one map:
+    the straight leg when it is clear, else start -> visibility-graph corners -> end, each hop a
+    leg from rest to rest (a corner is a hover point of the plan). A pair the graph cannot join
+    keeps its straight leg plus `_UNROUTABLE` s per metre inside obstacles.
+
+    Built once per problem and reused for every site set: each point's times to the corners,
+    straight and over the graph (a multi-source Dijkstra with Eq. 1 hop times), are cached by
+    its coordinates, so a point shared by several site sets is connected to the graph once.
+    """
+
+    def __init__(self, problem: Any) -> None:
+        self.problem = problem
+        self.graph = problem.seeder.graph
+        #: Eq. 1 time (s) of each graph edge as a hop from rest to rest (aligned with indices)
+        self.hop_times = problem.model.flight_time(self.graph.weights)
+        self._rows: dict[bytes, np.ndarray] = {}  # point -> its (first, far) rows
+
+    def _to_corners(self, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """For points pts (P, 2): (first, far), each (P, N) flight times (s): `first` to each
+        graph corner the point sees tangentially (one straight hop; inf elsewhere), `far` to
+        each corner over the graph via those (inf where it sees none)."""
+        keys = [p.tobytes() for p in pts]
+        new = [i for i, k in enumerate(keys) if k not in self._rows]
+        if new:
+            seen = self.problem.seeder.connect(pts[new])  # (n, N) metres, inf where unseen
+            first = self.problem.model.flight_time(seen)
+            for i, row in zip(new, first, strict=True):
+                self._rows[keys[i]] = np.stack([row, self.graph.spread(row, self.hop_times)])
+        both = np.array([self._rows[k] for k in keys]).reshape(len(pts), 2, self.graph.n)
+        return both[:, 0], both[:, 1]
+
+    def matrix(self, nodes: np.ndarray) -> np.ndarray:
+        """(P, P) symmetric leg times (s) between the points nodes (P, 2), zero diagonal."""
+        nodes = np.asarray(nodes, dtype=float).reshape(-1, 2)
+        mp = self.problem.model
+        P = len(nodes)
+        ia, ib = np.triu_indices(P, 1)
+        cost = mp.flight_time(np.hypot(*(nodes[ia] - nodes[ib]).T))
+        inside = overlap_lengths(nodes[ia], nodes[ib], self.problem.obstacles)
+        blocked = np.flatnonzero(inside > CLEAR)
+        if len(blocked):
+            via = np.full(len(blocked), np.inf)
+            if self.graph.n:
+                ends = np.unique(np.concatenate([ia[blocked], ib[blocked]]))
+                first = np.full((P, self.graph.n), np.inf)
+                far = np.full((P, self.graph.n), np.inf)
+                first[ends], far[ends] = self._to_corners(nodes[ends])
+                # a -> (over the graph) -> corner v -> b, where b sees v
+                via = (far[ia[blocked]] + first[ib[blocked]]).min(axis=1)
+            cost[blocked] = np.where(np.isfinite(via), via,
+                                     cost[blocked] + _UNROUTABLE * inside[blocked])
+        W = np.zeros((P, P))
+        W[ia, ib] = W[ib, ia] = cost
+        return W
+
+
+def order_sites(problem: Any, sites: np.ndarray, legs: LegTimes | None = None) -> np.ndarray:
+    """Visiting order (m,) of the sites (m, 2) on the open path start -> sites -> end: our own
+    open path (`planner_core.model.routing.open_path`: nearest neighbour and cheapest insertion,
+    2-opt,
+    Or-opt) on the obstacle-aware Eq. 1 leg times of `legs` (module docstring, step 5)."""
+    sites = np.asarray(sites, dtype=float).reshape(-1, 2)
+    if len(sites) <= 1:
+        return np.arange(len(sites))
+    legs = legs if legs is not None else LegTimes(problem)
+    W = legs.matrix(np.vstack([problem.start, sites, problem.end]))
+    return np.asarray(open_path(W)[1:-1] - 1, dtype=np.int64)
+
+
+def timed_plan(problem: Any, pts: np.ndarray) -> np.ndarray:
+    """The decision vector (d,) of hover points pts (m, 2) with LP hover times
+    (`planner_core.search.polish`); when every slot must stay active (tau <= 0), filled to I_max
+    with
+    collinear points first."""
+    I = int(problem.n_points)
+    if problem.variable_length and problem.tau <= 0.0 and len(pts) < I:
+        pts = problem.seeder.fill(pts, I)  # every slot is active: collinear fillers
+    pol = polish_hover_times(problem, pts)
+    if len(pol.hover_points) == len(pts) or (problem.variable_length and problem.tau > 0.0):
+        return problem.encode(pol.hover_points, pol.hover_times)
+    # all I_max slots must stay: the dropped (~0 s) points keep time 0
+    times = np.zeros(len(pts))
+    times[np.setdiff1d(np.arange(len(pts)), pol.dropped)] = pol.hover_times
+    return problem.encode(pts, times)
+
+
+def build_plans(
+    problem: Any,
+    sites: np.ndarray,
+    rng: np.random.Generator,
+    *,
+    order: Order | None = None,
+    legs: LegTimes | None = None,
+) -> list[np.ndarray]:
+    """Decision vectors (d,) from a site set (m, 2): visiting order (`order`, default
+    `order_sites`), slide, visibility-graph detours and I_max (`memetic.repair_points`, one or
+    two hover-point sets), LP hover times (module docstring, steps 5-7); one vector per set.
+    `rng` drives the slide's candidate directions only."""
+    sites = np.asarray(sites, dtype=float).reshape(-1, 2)
+    legs = legs if legs is not None else LegTimes(problem)
+    C = sites[(order or order_sites)(problem, sites, legs)]
+    if len(C):
+        # each sensor slides with the site that serves it fastest (a covering one if any)
+        R = problem.model.rates(C)
+        owner = np.argmax(np.where(covers(problem, C, 0.9), R + 1e6, R), axis=0)
+        C = problem.seeder.slide(C, owner, reach(problem, 0.9), rng)
+    return [timed_plan(problem, pts) for pts in repair_points(problem, C)]
+
+
+def candidate_plans(
+    problem: Any, seed: int, limit: int | None = None, *, order: Order | None = None
+) -> tuple[np.ndarray, list[str]]:
+    """The pipeline's distinct plans in scoring order, at most `limit` (None: all): (X (m, d)
+    decision vectors, labels (m,) naming the site set each came from). Deterministic for a
+    seed; nothing is evaluated."""
+    d = int(np.asarray(problem.lower).shape[0])
+    rows: list[np.ndarray] = []
+    labels: list[str] = []
+    if limit is not None and limit <= 0:
+        return np.zeros((0, d)), labels
+    legs = LegTimes(problem)
+    seen: set[bytes] = set()
+    for i, (label, sites) in enumerate(site_sets(problem, int(seed))):
+        # each set's own slide directions: a set's plans do not depend on those built before
+        rng = np.random.default_rng(np.random.SeedSequence([int(seed), 15, i]))
+        for x in build_plans(problem, sites, rng, order=order, legs=legs):
+            key = x.tobytes()
+            if key in seen:
+                continue
+            seen.add(key)
+            rows.append(x)
+            labels.append(label)
+            if limit is not None and len(rows) >= limit:
+                return np.asarray(rows, dtype=float).reshape(-1, d), labels
+    return np.asarray(rows, dtype=float).reshape(-1, d), labels
+
+
+def seeder_plans(problem: Any, seed: int, k: int) -> np.ndarray:
+    """k (k, d) plans of the problem's seeder (`Seeder.solution`: clustered sensors, a short
+    order, visibility-graph detours; what the DE's seeded start population holds), from their
+    own generator of `seed`, so the same in both start modes."""
+    rng = np.random.default_rng(np.random.SeedSequence([int(seed), 16]))
+    d = int(np.asarray(problem.lower).shape[0])
+    return np.asarray([problem.seeder.solution(rng) for _ in range(max(k, 0))],
+                      dtype=float).reshape(-1, d)
+
+
+def best_starts(
+    problem: Any,
+    seed: int,
+    evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
+    *,
+    candidates: int,
+    keep: int,
+    order: Order | None = None,
+    descents: int = 0,
+    trials: int = 0,
+    room: int | None = None,
+) -> tuple[np.ndarray, int]:
+    """Build up to `candidates` constructive plans (`candidate_plans`), score them with one
+    call of `evaluate` (X (m, d) -> f, phi; the caller counts those evaluations) and return the
+    `keep` Deb-best (k, d) with the number of evaluations spent.
+
+    With `descents` > 0 and `trials` > 0 also `SEEDER_PLANS` of the seeder's plans
+    (`seeder_plans`) are scored, and the `descents` Deb-best feasible plans of each kind
+    (constructive, seeder) are improved by `planner_core.search.descent.descend` (at most `trials`
+    evaluations each, through `evaluate`); the kept rows are then the Deb-best of all the plans
+    scored and descended. `room`: evaluations allowed in all (None: no limit); the descents
+    stop where it ends."""
+    X, _ = candidate_plans(problem, seed, candidates, order=order)
+    if len(X) == 0:
+        return X, 0
+    kinds = [X]
+    if descents > 0 and trials > 0:
+        left = (room if room is not None else len(X) + SEEDER_PLANS) - len(X)
+        kinds.append(seeder_plans(problem, seed, min(SEEDER_PLANS, max(left, 0))))
+    allX = np.vstack(kinds)
+    f, phi = (np.asarray(v, dtype=float) for v in evaluate(allX))
+    spent = len(allX)
+    rows, fs, phis = [allX], [f], [phi]
+    if descents > 0 and trials > 0:
+        from planner_core.search.descent import descend
+
+        start = 0
+        for part in kinds:
+            sl = slice(start, start + len(part))
+            start += len(part)
+            for i in deb_order(f[sl], phi[sl])[:descents]:
+                budget = trials if room is None else min(trials, room - spent)
+                r = descend(problem, part[i], evaluate, trials=budget) if budget > 0 else None
+                if r is None:
+                    continue
+                spent += r.evaluations
+                if not r.f < r.f_start:  # not moved: the start is already in the pool
+                    continue
+                rows.append(r.x[None, :])
+                fs.append(np.array([r.f]))
+                phis.append(np.array([r.phi]))
+    allX, f, phi = np.vstack(rows), np.concatenate(fs), np.concatenate(phis)
+    best = deb_order(f, phi)[:max(keep, 0)]
+    return allX[best], spent
+
+
+class WithStarts:
+    """A problem whose `initial_population(rng, n)` is its own (uniform in the box when it has
+    none: what the DE itself would draw) with the last rows replaced by `starts` (k, d), problem
+    space; every other attribute is the wrapped problem's (also `problem`)."""
+
+    def __init__(self, problem: Any, starts: np.ndarray) -> None:
+        self.problem = problem
+        self.starts = np.asarray(starts, dtype=float)
+
+    def __getattr__(self, name: str) -> Any:
+        if name in ("problem", "starts"):  # safe before __init__ ran
+            raise AttributeError(name)
+        return getattr(self.problem, name)
+
+    def initial_population(self, rng: np.random.Generator, n: int) -> np.ndarray:
+        """(n, d) problem-space starts: the wrapped problem's (or uniform), last rows replaced."""
+        hook = getattr(self.problem, "initial_population", None)
+        if hook is not None:
+            X = np.array(hook(rng, n), dtype=float)
+        else:
+            lo, hi = np.asarray(self.lower, dtype=float), np.asarray(self.upper, dtype=float)
+            X = lo + rng.random((n, lo.shape[0])) * (hi - lo)
+        k = min(len(self.starts), n)
+        if k:
+            X[n - k :] = self.starts[:k]
+        return X
+
+
+def start_from_plans(
+    problem: Any,
+    opt: Any,
+    seed: int,
+    *,
+    starts: int,
+    candidates: int,
+    order: Order | None = None,
+    descents: int = 0,
+    trials: int = 0,
+    room: int | None = None,
+) -> tuple[Any, int]:
+    """The DE's view `opt` of the UAV problem `problem` (its `evaluate` is the one that counts)
+    with the `starts` Deb-best of up to `candidates` constructive plans in its initial
+    population (`best_starts`, scored and, with `descents` and `trials`, the best descended,
+    through `opt.evaluate`, at most `room` evaluations; `WithStarts`): (the wrapped problem,
+    evaluations spent). With starts or candidates <= 0: (opt, 0). What `plan` and the
+    benchmark's `planner` entry do before the DE runs."""
+    if starts <= 0 or candidates <= 0:
+        return opt, 0
+    X, n = best_starts(problem, seed, opt.evaluate, candidates=candidates, keep=starts,
+                       order=order, descents=descents, trials=trials, room=room)
+    return (WithStarts(opt, X) if len(X) else opt), n
