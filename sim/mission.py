@@ -17,17 +17,20 @@ from typing import Any, Literal
 import numpy as np
 from pymavlink import mavutil
 
+from planner_core.defaults import MAP_DEFAULTS
 from sim.geo import latlon_to_enu, origin_of
 
 __all__ = [
     "CMD",
     "FRAME",
     "MISSION_TYPE",
+    "MAX_FLIGHT_ALTITUDE",
     "SNAP_M",
     "MissionError",
     "MissionItem",
     "Route",
     "fence_from_items",
+    "check_items",
     "command_name",
     "items_equal",
     "items_to_route",
@@ -176,6 +179,12 @@ SNAP_M = 1e-6
 #: most items one replay runs (DO_JUMP repeats included) before the mission is refused
 MAX_EXECUTED_ITEMS = 100_000
 
+#: highest altitude above or below home (m) the sim flies: the map's own `uav.altitude` bound
+#: (planner_core.defaults: "a rotary-wing UAV flies above the ground and below 10 km"), so a
+#: mission file cannot ask for more than a map may; DJI's and the common multirotors' service
+#: ceilings lie below 7 km AMSL
+MAX_FLIGHT_ALTITUDE: float = float(MAP_DEFAULTS["uav.altitude"].bounds[1])
+
 _GLOBAL_FRAMES = {FRAME.GLOBAL, FRAME.GLOBAL_INT}
 _RELATIVE_FRAMES = {FRAME.GLOBAL_RELATIVE_ALT, FRAME.GLOBAL_RELATIVE_ALT_INT}
 
@@ -216,15 +225,30 @@ class Route:
         return self.hover_times[self.is_hover]
 
 
-def _relative_alt(it: MissionItem, home_alt: float) -> float:
+def _relative_alt(it: MissionItem, home_alt: float | None) -> float:
+    """The altitude of `it` above home (m); MissionError for a frame the sim cannot fly or an
+    altitude beyond +-MAX_FLIGHT_ALTITUDE. `home_alt` None (no map yet): an absolute altitude
+    is returned as it is, unchecked (`check_items` knows no home)."""
     if it.frame in _RELATIVE_FRAMES:
-        return float(it.z)
-    if it.frame in _GLOBAL_FRAMES:
-        return float(it.z) - home_alt
-    raise MissionError(
-        f"item {it.seq}: frame {it.frame} is not supported (use a global frame, absolute or "
-        "relative altitude)"
-    )
+        rel = float(it.z)
+        what = "above home"
+    elif it.frame in _GLOBAL_FRAMES:
+        if home_alt is None:
+            return float(it.z)
+        rel = float(it.z) - home_alt
+        what = f"AMSL, {rel:.10g} m above home at {home_alt:g} m"
+    else:
+        raise MissionError(
+            f"item {it.seq}: frame {it.frame} is not supported (use a global frame, absolute or "
+            "relative altitude)"
+        )
+    if not abs(rel) <= MAX_FLIGHT_ALTITUDE:
+        raise MissionError(
+            f"item {it.seq}: altitude {float(it.z):.10g} m ({what}) is outside "
+            f"[-{MAX_FLIGHT_ALTITUDE:g}, {MAX_FLIGHT_ALTITUDE:g}] m of home: no rotary-wing UAV "
+            "flies 10 km (the map's uav.altitude bound)"
+        )
+    return rel
 
 
 def _has_position(it: MissionItem) -> bool:
@@ -243,6 +267,21 @@ def command_name(c: int) -> str:
 _command_name = command_name
 
 
+def check_items(items: Sequence[MissionItem]) -> None:
+    """The checks of `items_to_route` that need no map, with the same messages: frames,
+    altitudes above home, LOITER_TIME, a second TAKEOFF, DO_JUMP, unsupported navigation
+    commands, a mission with nothing to fly. `upload` runs them before sending (absolute
+    altitudes are checked against home only by `items_to_route`: home is the map's).
+
+    Args:
+        items: the mission items, in seq order (fence and rally items are skipped).
+
+    Raises:
+        MissionError: the first problem, naming the item, as `items_to_route` words it.
+    """
+    _walk(items, (0.0, 0.0, None), np.zeros(2))
+
+
 def items_to_route(items: Sequence[MissionItem], map: Any) -> Route:  # noqa: A002
     """Read a mission back into local metres: launch, stops, hover times, speed and finish.
 
@@ -252,10 +291,29 @@ def items_to_route(items: Sequence[MissionItem], map: Any) -> Route:  # noqa: A0
     flown: the items from the target on run again, `param2` more times, at most
     `MAX_EXECUTED_ITEMS` items in all (a jump repeated forever, param2 = -1, is refused). Other
     DO/CONDITION commands are ignored with a note. Items after LAND/RTL are ignored with a
-    note. Raises MissionError for anything else the sim cannot fly.
+    note. Altitudes more than `MAX_FLIGHT_ALTITUDE` above or below home are refused.
+
+    Args:
+        items: the mission items, in seq order (fence and rally items are ignored, noted).
+        map: the map (its origin places the items, its start is the default launch).
+
+    Returns:
+        The Route the mission flies.
+
+    Raises:
+        MissionError: anything the sim cannot fly, naming the item.
     """
     lat0, lon0, home_alt = origin_of(map)
-    start = np.asarray(map.start, dtype=float)
+    return _walk(items, (lat0, lon0, home_alt), np.asarray(map.start, dtype=float))
+
+
+def _walk(
+    items: Sequence[MissionItem],
+    origin: tuple[float, float, float | None],
+    start: np.ndarray,
+) -> Route:
+    """`items_to_route` from an origin (lat, lon, home altitude or None) and a start point."""
+    lat0, lon0, home_alt = origin
     launch = start.copy()
     takeoff_alt: float | None = None
     stops: list[tuple[float, float]] = []
@@ -272,6 +330,8 @@ def items_to_route(items: Sequence[MissionItem], map: Any) -> Route:  # noqa: A0
         notes.append("non-mission items (fence/rally) were ignored")
 
     def position(it: MissionItem) -> tuple[float, float]:
+        if home_alt is None:  # check_items: no map, the positions do not matter
+            return 0.0, 0.0
         e, n = latlon_to_enu(it.x, it.y, (lat0, lon0, home_alt))
         return float(e), float(n)
 

@@ -137,8 +137,13 @@ _MAX_CELLS = 20_000_000
 
 
 class _Recorder:
-    def __init__(self, n_sensors: int, dt: float):
+    """The samples of one replay; at most `cap` of them (a guard: `replay_route` sizes `dt` so
+    that the phases fit, and a sample count beyond it is a bug, not a long mission)."""
+
+    def __init__(self, n_sensors: int, dt: float, cap: int | None = None):
         self.dt = dt
+        self.cap = cap
+        self.count = 0
         self.t: list[np.ndarray] = []
         self.xy: list[np.ndarray] = []
         self.z: list[np.ndarray] = []
@@ -148,6 +153,9 @@ class _Recorder:
 
     def times(self, t0: float, duration: float) -> np.ndarray:
         n = max(int(math.ceil(duration / self.dt)), 1) if duration > 0 else 1
+        self.count += n + 1
+        if self.cap is not None and self.count > self.cap:
+            raise RuntimeError(f"replay: {self.count} samples exceed the bound {self.cap}")
         return np.linspace(t0, t0 + duration, n + 1)
 
     def add(self, phase: str, t: np.ndarray, xy: np.ndarray, z: np.ndarray, data: np.ndarray):
@@ -215,17 +223,24 @@ def replay_route(route: Route, map: Any, *, dt: float = 1.0) -> Timeline:  # noq
     rates_all = hover_rates(stops, route.altitudes, sensors, radio.peak_rate, radio.decay)
     rates = rates_all[hov_mask]
 
-    # bounded cost: a long mission (hours of hovering, or a file's 1e38 s) is sampled more
-    # coarsely so that `data` (N x J) holds at most _MAX_CELLS numbers; totals stay exact
+    # bounded cost: a long mission (hours of hovering, a file's 1e38 s, a 10 km take-off) is
+    # sampled more coarsely so that `data` (N x J) holds at most _MAX_CELLS numbers plus two
+    # per phase segment (a number set by the mission's size, not its values); totals stay
+    # exact. `span` bounds every phase from above: the take-off (the TAKEOFF altitude is part
+    # of alt_max), each leg and hover, the return (at most the whole path) and the landing.
     alt_max = float(np.max(np.abs(route.altitudes), initial=abs(float(uav.altitude))))
+    if route.takeoff_altitude is not None:
+        alt_max = max(alt_max, abs(float(route.takeoff_altitude)))
+    v_slow = min(v, v_end, float(np.min(leg_v, initial=v)))
     span = (float(times.sum()) + float(np.nansum(route.hover_times[hov_mask]))
-            + 2.0 * leg_time(alt_max, v, a) + leg_time(float(np.abs(seg).sum()), v, a))  # fmt: skip
+            + 2.0 * leg_time(alt_max, v_slow, a)
+            + leg_time(float(np.abs(seg).sum()), v_slow, a))  # fmt: skip
     n_max = max(_MAX_CELLS // (J + 4), 1000)
     if not math.isfinite(span):
         raise MissionError(f"the mission's duration is not finite ({span} s)")
     if span / dt > n_max:
         dt = span / n_max
-    rec = _Recorder(J, dt)
+    rec = _Recorder(J, dt, cap=n_max + 2 * (2 * n_stops + 4))
     clock = 0.0
     pos = route.launch.astype(float).copy()
     alt_now = 0.0

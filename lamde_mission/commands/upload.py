@@ -17,8 +17,11 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "they match; 1 when no vehicle answers, the vehicle refuses the mission or the "
         "read-back differs; 2 for a bad file or option. Items go up numbered from 0; "
         "a .waypoints file's home line is not uploaded (the mission starts with its first "
-        "item, as from a .plan). Try it with `lamde-mission mock-vehicle` running in another "
-        "terminal.",
+        "item, as from a .plan). Every mission first passes the simulator's checks that need "
+        "no map (what verify refuses for the mission itself: a negative hover time, a second "
+        "take-off, a frame or command the simulator cannot fly, an altitude beyond 10 km of "
+        "home), exit status 2 unless --force. Try it with `lamde-mission mock-vehicle` running "
+        "in another terminal.",
     )
     p.add_argument("mission", help="mission file (.plan or .waypoints)")
     p.add_argument(
@@ -68,7 +71,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument(
         "--force",
         action="store_true",
-        help="send a mission the simulator rejects (never one whose fields MAVLink cannot carry)",
+        help="send a mission the simulator rejects, with or without --map (never one whose "
+        "fields MAVLink cannot carry)",
     )
     p.add_argument("-v", "--verbose", action="store_true",
                    help="print each step, what was ignored (traffic not from the vehicle or not "
@@ -142,6 +146,32 @@ def _wire_check(path: str, mission: list, fence: list | None, rally: list | None
             raise UsageError(f"{path}: {what} {exc}") from None
 
 
+def _flight_check(path: str, mission: list, *, force: bool) -> None:
+    """The simulator's checks that need no map (`sim.mission.check_items`), before every
+    upload: what `verify` refuses for the mission itself (a negative LOITER_TIME, a second
+    TAKEOFF, a frame the sim cannot fly, an altitude beyond 10 km of home, nothing to fly) is
+    refused here with the same line, exit status 2, unless `force` (then a warning).
+
+    Args:
+        path: the mission file, for the message.
+        mission: its mission items.
+        force: warn and go on instead of refusing.
+
+    Raises:
+        UsageError: the mission fails a check and `force` is off.
+    """
+    from lamde_mission.errors import UsageError
+    from planner_core.textio import printable
+    from sim.mission import MissionError, check_items
+
+    try:
+        check_items(mission)
+    except MissionError as exc:
+        if not force:
+            raise UsageError(f"{path}: {exc}") from None
+        print(f"warning: {path}: {printable(str(exc))}; sent anyway (--force)", file=sys.stderr)
+
+
 def _sim_check(path: str, map_path: str, mission: list, *, force: bool) -> None:
     """Replay `mission` on the map and judge it (as `verify` does); UsageError unless `force`."""
     from lamde_mission.commands._common import load_map_or_fail
@@ -155,7 +185,9 @@ def _sim_check(path: str, map_path: str, mission: list, *, force: bool) -> None:
         problems = [f for f in verify(replay(mission, m), m) if not f.passed]
         lines = [printable(f"{v.name} {v.title}: FAIL, margin {v.margin:.4g} {v.unit}; "
                            f"{v.detail}") for v in problems]  # fmt: skip
-    except MissionError as exc:
+    except MissionError as exc:  # a mission the sim cannot fly: verify's line, word for word
+        if not force:
+            raise UsageError(f"{path}: {exc}") from None
         lines = [printable(str(exc))]
     if not lines:
         return
@@ -185,6 +217,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--connect: {exc}") from None
     mission, fence, rally = _read(args.mission)
     _wire_check(args.mission, mission, fence, rally)
+    _flight_check(args.mission, mission, force=args.force)
     if args.map:
         _sim_check(args.mission, args.map, mission, force=args.force)
 

@@ -10,7 +10,12 @@ see only items the wire can carry; the uploader (`lamde_mission.vehicle`) may ca
 
 NaN is allowed where MAVLink gives it a meaning: param1..4 ("unset / keep the current value"),
 x/y (sent as INT32_MAX, "unset") and z outside global frames. Latitudes lie in [-90, 90] and
-longitudes in [-180, 180]; a global altitude must be finite.
+longitudes in [-180, 180]; a global altitude must be finite. An altitude (z of any frame but
+MAV_FRAME_MISSION, whose z is no position) must lie within +-`MAX_ALTITUDE` m, the most an
+autopilot stores: ArduPilot's AP_Mission refuses |z| >= 83,000 m with MAV_MISSION_INVALID_PARAM7
+(`LOCATION_ALT_MAX_M` in AP_Common/Location.h: its mission storage keeps altitudes in 24 bits
+of centimetres); PX4 stores a float32 and sets no bound, so the tighter of the two applies to
+every file. What the sim flies is tighter still (`sim.mission.MAX_FLIGHT_ALTITUDE`, 10 km).
 """
 
 from __future__ import annotations
@@ -25,6 +30,7 @@ from planner_core.textio import limit
 
 __all__ = [
     "FLOAT32_MAX",
+    "MAX_ALTITUDE",
     "GLOBAL_FRAMES",
     "check_mission_item",
     "check_item_count",
@@ -33,6 +39,8 @@ __all__ = [
 #: largest finite float32 (MAVLink's `float` fields)
 FLOAT32_MAX = 3.4028234663852886e38
 _INT32_MIN, _INT32_MAX = -(2**31), 2**31 - 1
+#: |altitude| (m) an autopilot stores: ArduPilot refuses |z| >= this (LOCATION_ALT_MAX_M)
+MAX_ALTITUDE = 83_000.0
 _UINT = {"command": 0xFFFF, "frame": 0xFF, "current": 0xFF, "autocontinue": 0xFF}
 
 #: frames whose x/y are latitude/longitude in degrees (int32 degrees x 1e7 on the wire)
@@ -76,6 +84,10 @@ def check_mission_item(item: MissionItem, name: Callable[[str], str]) -> None:
     z = float(item.z)
     if math.isinf(z) or (glob and math.isnan(z)) or abs(z) > FLOAT32_MAX:
         raise MissionError(f"{name('z')}: altitude {_shown(z)} must be a finite float32 number")
+    if frame != _mav.MAV_FRAME_MISSION and abs(z) >= MAX_ALTITUDE:
+        raise MissionError(f"{name('z')}: {_shown(z)} m is not within +-{MAX_ALTITUDE:,.0f} "
+                           "m, the most an autopilot stores as an altitude (ArduPilot's "
+                           "LOCATION_ALT_MAX_M)")  # fmt: skip
     for key, bound in (("x", 90.0), ("y", 180.0)):
         v = float(getattr(item, key))
         if math.isnan(v):
