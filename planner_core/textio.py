@@ -358,7 +358,8 @@ def loads_json(text: str, *, max_depth: int | None = None) -> Any:
     """Parse JSON text under the module's rules; InputError naming the field otherwise.
 
     `max_depth` defaults to `limit("depth")`. Integers longer than `MAX_INT_DIGITS` digits,
-    numbers beyond a double's range, NaN/Infinity literals and unpaired surrogates are refused.
+    numbers beyond a double's range, NaN/Infinity literals, unpaired surrogates and a key
+    repeated within one object (Python's json keeps the last silently) are refused.
     """
     depth = limit("depth") if max_depth is None else int(max_depth)
     if _may_exceed_depth(text, depth):
@@ -389,14 +390,34 @@ def loads_json(text: str, *, max_depth: int | None = None) -> Any:
         bad.append(b)
         return b
 
+    dups: list[tuple[dict, str]] = []
+
+    def pairs(items: list[tuple[str, Any]]) -> dict:
+        obj = dict(items)
+        if len(obj) != len(items) and not dups:  # RFC 8259: names SHOULD be unique
+            seen: set[str] = set()
+            for k, _ in items:
+                if k in seen:
+                    dups.append((obj, k))
+                    break
+                seen.add(k)
+        return obj
+
     try:
         data = json.loads(text, parse_int=parse_int, parse_float=parse_float,
-                          parse_constant=parse_constant)  # fmt: skip
+                          parse_constant=parse_constant, object_pairs_hook=pairs)  # fmt: skip
     except json.JSONDecodeError as exc:
         raise InputError(f"not valid JSON ({exc.msg} at line {exc.lineno}, column {exc.colno})"
                          ) from None  # fmt: skip
     except RecursionError:  # only when strings full of "]" hid the depth from the screen
         raise InputError(f"nested too deeply to parse (limit {LIMITS['depth'].env})") from None
+    if dups:
+        obj, key = dups[0]
+        for path, v, _is_key in _walk(data):
+            if v is obj:
+                raise InputError("this key appears more than once in its object (JSON leaves "
+                                 "open which one counts; keep one)",
+                                 json_path((*path, key)))  # fmt: skip
     if bad:
         first = bad[0]
         for path, v, _is_key in _walk(data):

@@ -170,7 +170,18 @@ def test_waypoints_fields_named_by_line(tmp_path: Path) -> None:
         "1\t0\t3\t19\t1\t0\t0\t0\t46.2\t1e308\t100\t1\n": "line 3: longitude: longitude 1e+308",
         "1\t0\t3\t70000\t1\t0\t0\t0\t46.2\t7.3\t100\t1\n": "line 3: command: 70000",
         "1\t0\t3\t16\t1\t0\t0\t0\t46.2\t7.3\tnan\t1\n": "line 3: altitude: altitude nan",
-        "1\t0\t3\t16\t1\t0\t0\t0\t46.2\t7.3\t100\t" + "9" * 5000 + "\n": "line 3: not a number",
+        "1\t0\t3\t16\t1\t0\t0\t0\t46.2\t7.3\t100\t" + "9" * 5000 + "\n":
+            "line 3: autocontinue: '99999999999999999999'... is not an integer",
+        # Python's float() and int() read these; no autopilot does (issue 32, item 5)
+        "1\t0\t3\t16\t1\t0\t0\t0\t46.2\t7.3\t1_00.0\t1\n":
+            "line 3: altitude: '1_00.0' is not a number (ASCII digits, no underscores)",
+        "1\t0\t3\t16\t1\t0\t0\t0\t46.2\t7.3\t\u0661\u0660\u0660\t1\n":
+            "line 3: altitude: '\\u0661\\u0660\\u0660' is not a number",
+        "1\t0\t3\t1\u0666\t1\t0\t0\t0\t46.2\t7.3\t100\t1\n":
+            "line 3: command: '1\\u0666' is not an integer",
+        "\u0661\t0\t3\t16\t1\t0\t0\t0\t46.2\t7.3\t100\t1\n": "line 3: seq: '\\u0661'",
+        "1\t0\t3\t16\t1_0\t0\t0\t0\t46.2\t7.3\t100\t1\n": "line 3: param1: '1_0'",
+        "1\t0\t3\t16\t1\t0\t0\t0\t46.2\t7.3\t0x10\t1\n": "line 3: altitude: '0x10'",
     }
     for k, (row, field) in enumerate(cases.items()):
         _refused(["verify", str(TINY), _write(tmp_path, f"w{k}.waypoints", head + row)], field)

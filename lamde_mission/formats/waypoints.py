@@ -15,6 +15,7 @@ are written in the shortest form that reads back to the same float. The format h
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
@@ -66,11 +67,45 @@ def format_waypoints(items: Sequence[MissionItem], home: tuple[float, float, flo
 _WPL_NAMES = {"x": "latitude", "y": "longitude", "z": "altitude"}
 
 
+#: the 12 columns of an item line, for messages
+_COLUMNS = ("seq", "current", "frame", "command", "param1", "param2", "param3", "param4",
+            "latitude", "longitude", "altitude", "autocontinue")  # fmt: skip
+#: ASCII only: Python's int() and float() also read "1_00", "١٠٠" (Arabic-Indic digits) and
+#: other Unicode digits, which no autopilot's parser does
+_INT_RE = re.compile(r"[+-]?[0-9]{1,20}")
+_FLOAT_RE = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?"
+                       r"|[+-]?(?:nan|inf|infinity)", re.IGNORECASE)  # fmt: skip
+
+
 def _int(s: str) -> int:
-    """An integer field: at most 20 digits (Python refuses long ones slowly or not at all)."""
-    if len(s.lstrip("+-")) > 20:
+    """An integer field: ASCII digits, at most 20 (Python refuses long ones slowly or not at
+    all); ValueError otherwise."""
+    if not _INT_RE.fullmatch(s):
         raise ValueError(s)
     return int(s)
+
+
+def _float(s: str) -> float:
+    """A number field: an ASCII decimal number (or nan/inf, which the range checks judge);
+    ValueError otherwise."""
+    if len(s) > 400 or not _FLOAT_RE.fullmatch(s):
+        raise ValueError(s)
+    return float(s)
+
+
+def _numbers(a: list[str], lineno: int) -> tuple[list[int], list[float]]:
+    """The integer and number columns of one item line; MissionError naming the column."""
+    ints, floats = [], []
+    for i, v in enumerate(a):
+        is_int = i in (0, 1, 2, 3, 11)
+        try:
+            (ints if is_int else floats).append(_int(v) if is_int else _float(v))
+        except ValueError:
+            shown = ascii(v[:20]) + ("..." if len(v) > 20 else "")
+            want = ("an integer (at most 20 ASCII digits)" if is_int
+                    else "a number (ASCII digits, no underscores)")  # fmt: skip
+            raise MissionError(f"line {lineno}: {_COLUMNS[i]}: {shown} is not {want}") from None
+    return ints, floats  # ints: seq, current, frame, command, autocontinue
 
 
 def parse_waypoints(text: str) -> tuple[MissionItem | None, list[MissionItem]]:
@@ -99,11 +134,7 @@ def parse_waypoints(text: str) -> tuple[MissionItem | None, list[MissionItem]]:
         a = s.split()
         if len(a) != 12:
             raise MissionError(f"line {lineno}: expected 12 values, got {len(a)}")
-        try:
-            ints = [_int(a[i]) for i in (0, 1, 2, 3, 11)]
-            floats = [float(v) for v in a[4:11]]
-        except ValueError:
-            raise MissionError(f"line {lineno}: not a number where one is expected") from None
+        ints, floats = _numbers(a, lineno)
         if not -(2**31) <= ints[0] < 2**31:
             raise MissionError(f"line {lineno}: seq {ints[0]} is not a sequence number")
         seq, current, frame, command, autocontinue = ints

@@ -138,8 +138,13 @@ def _rings(coords: Any, where: str) -> list[list[tuple[float, float]]]:
     return out
 
 
+#: the property keys a feature's label is read from, in order (shapefile and many GIS exports
+#: write upper-case field names: a building's ``NAME``)
+_NAME_KEYS = ("name", "NAME", "Name")
+
+
 def _label(where: str, props: dict[str, Any]) -> tuple[str, str | None]:
-    name = props.get("name")
+    name = next((props[k] for k in _NAME_KEYS if props.get(k) is not None), None)
     name = str(name) if name is not None else None
     return (f"{where} '{name}'" if name else where), name
 
@@ -252,7 +257,26 @@ def _read_geojson(layers: GisLayers, doc: Any, src: str, layer: str | None) -> N
                          "Feature or a geometry)")  # fmt: skip
 
 
+def _number(v: Any, where: str) -> float:
+    """A JSON number (not a string, not a boolean), finite; ValueError naming `where`."""
+    if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+        shown = repr(v) if len(repr(v)) <= 40 else repr(v)[:37] + "..."
+        raise ValueError(f"{where}: must be a finite JSON number, got {shown}")
+    return float(v)
+
+
 def _read_qgc_plan(layers: GisLayers, doc: dict[str, Any], src: str) -> None:
+    from lamde_mission.formats.qgc_plan import _bool, _check_versions
+    from lamde_mission.items import MissionError
+
+    try:  # the versions `verify` and `upload` accept, and strict booleans, as they read them
+        _check_versions(doc)
+        for key in ("polygons", "circles"):
+            for k, shape in enumerate((doc.get("geoFence") or {}).get(key) or []):
+                if isinstance(shape, dict):
+                    _bool(shape, "inclusion", f"geoFence.{key}[{k}]", True)
+    except MissionError as exc:
+        raise ValueError(f"{src}: {exc}") from None
     gf = doc.get("geoFence") or {}
     if not isinstance(gf, dict):
         raise ValueError(f"{src}: geoFence is not an object")
@@ -317,10 +341,12 @@ def read_layers(files: list[tuple[str | Path, str | None]]) -> GisLayers:
 
 
 def _parse_origin(value: Any, where: str) -> tuple[float, float, float]:
+    if not isinstance(value, list | tuple) or len(value) not in (2, 3):
+        raise GisError([f"{where}: origin must be [lat, lon] or [lat, lon, alt]"])
     try:
-        lat, lon, *rest = (float(v) for v in value)
-    except (TypeError, ValueError):
-        raise GisError([f"{where}: origin must be [lat, lon] or [lat, lon, alt]"]) from None
+        lat, lon, *rest = (_number(v, f"{where}: origin[{k}]") for k, v in enumerate(value))
+    except ValueError as exc:
+        raise GisError([str(exc)]) from None
     alt = rest[0] if rest else 0.0
     if not (-90 <= lat <= 90 and -180 <= lon <= 180 and all(map(math.isfinite, (lat, lon, alt)))):
         raise GisError([f"{where}: origin ({lat:g}, {lon:g}) is not a latitude, longitude"])
@@ -362,9 +388,10 @@ def _frame(layers: GisLayers, origin: tuple[float, float, float] | None,
         f = layers.area_frame
         o = _parse_origin(f["origin"], f["where"])
         try:
-            w, h = float(f["width"]), float(f["height"])
-        except (TypeError, ValueError):
-            raise GisError([f"{f['where']}: width_m and height_m must be numbers"]) from None
+            w = _number(f["width"], f"{f['where']}: width_m")
+            h = _number(f["height"], f"{f['where']}: height_m")
+        except ValueError as exc:
+            raise GisError([str(exc)]) from None
         notes.append(f"origin and area from {f['where']}")
         return o, w, h, True, notes
     data = _all_lonlat(layers)

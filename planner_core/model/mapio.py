@@ -67,13 +67,16 @@ def _ranged(
     lb = "" if lo is None else ("(" if lo_open else "[") + f"{lo:g}"
     ub = "" if hi is None else f"{hi:g}" + (")" if hi_open else "]")
     desc = f"{what}; range {lb or '(-inf'}, {ub or 'inf)'}: {why}"
-    return Field(default, description=desc, json_schema_extra={"x-range-reason": why}, **kw)
+    # strict: a JSON number only (no "2000", no true read as 1), an integer where one is asked
+    return Field(default, description=desc, json_schema_extra={"x-range-reason": why},
+                 strict=True, **kw)  # fmt: skip
 
 
 #: text without control characters (names and ids are printed in one-line messages)
 _PRINTABLE = r"^[^\x00-\x1f\x7f]*$"
 
-Coord = Annotated[float, Field(ge=-MAX_COORD, le=MAX_COORD, description=f"metres; {_WHY_COORD}")]
+Coord = Annotated[float, Field(ge=-MAX_COORD, le=MAX_COORD, strict=True,
+                               description=f"metres; {_WHY_COORD}")]  # fmt: skip
 Point2 = tuple[Coord, Coord]
 
 
@@ -89,8 +92,8 @@ class Origin(BaseModel):
     """WGS84 position of the local (0, 0)."""
 
     model_config = _STRICT
-    lat: float = Field(ge=-90, le=90, description="latitude, degrees")
-    lon: float = Field(ge=-180, le=180, description="longitude, degrees")
+    lat: float = Field(ge=-90, le=90, strict=True, description="latitude, degrees")
+    lon: float = Field(ge=-180, le=180, strict=True, description="longitude, degrees")
     alt: float = _ranged(
         0.0, -500.0, 9_000.0, "altitude above mean sea level of the take-off ground, m",
         "ground on Earth lies between the Dead Sea shore (-430 m) and Everest (8849 m)",
@@ -229,7 +232,8 @@ class Witness(BaseModel):
 
     model_config = _STRICT
     hover_points: list[Point2] = Field(max_length=200)
-    hover_times: list[Annotated[float, Field(ge=0.0, le=86_400.0)]] = Field(max_length=200)
+    hover_times: list[Annotated[float, Field(ge=0.0, le=86_400.0, strict=True)]] = Field(
+        max_length=200)
 
 
 class MapFile(BaseModel):
@@ -444,7 +448,8 @@ class Map:
             [grown(nc + k, None) for k in range(nr)]
             + [grown(nc + nr + nz + k, z.name) for k, z in enumerate(obs.polygons)]
         )  # fmt: skip
-        pm = load_map(d)
+        # the start and end may lie on an inflated edge: inflation stops there (obstacle_clearances)
+        pm = _load_map(d, end_gap=0.0)
         self.__dict__["_planning_map"] = pm
         return pm
 
@@ -566,6 +571,29 @@ def _range_reason(loc: tuple[Any, ...]) -> str:
     return "out of the documented range"
 
 
+#: pydantic's strict type errors -> what the field must be, in JSON's words
+_TYPE_KINDS = {
+    "float_type": "a JSON number",
+    "int_type": "a JSON integer (no fraction, no quotes)",
+    "int_from_float": "a JSON integer (no fraction, no quotes)",
+    "string_type": "a JSON string",
+    "bool_type": "true or false",
+}
+
+
+def _json_shown(v: Any) -> str:
+    """A value as the map file spelled it, cut to 40 characters ("2000" is a string)."""
+    import json
+
+    try:
+        text = json.dumps(v, ensure_ascii=True)
+    except (TypeError, ValueError):
+        text = repr(v)
+    kind = {bool: "a boolean", str: "a string", type(None): "null", list: "an array",
+            dict: "an object", int: "an integer", float: "a number"}.get(type(v), "a value")
+    return f"{text[:37] + '...' if len(text) > 40 else text} ({kind})"
+
+
 def _pydantic_problems(err: ValidationError) -> list[str]:
     lines = []
     for e in err.errors():
@@ -581,6 +609,8 @@ def _pydantic_problems(err: ValidationError) -> list[str]:
             lines.append(f"{where}: unknown field{hint}")
         elif kind == "missing":
             lines.append(f"{where}: required field is missing")
+        elif kind in _TYPE_KINDS:
+            lines.append(f"{where}: must be {_TYPE_KINDS[kind]}, got {_json_shown(e.get('input'))}")
         elif kind == "finite_number":
             lines.append(f"{where}: must be a finite number (got NaN or infinity)")
         elif kind == "too_short" and loc and loc[-1] == "sensors":
@@ -599,7 +629,7 @@ def _pydantic_problems(err: ValidationError) -> list[str]:
 
 
 def _semantic_problems(
-    spec: MapFile,
+    spec: MapFile, end_gap: float = 0.0,
 ) -> tuple[list[str], list[str], list[PolygonShape], Obstacles | None]:
     problems: list[str] = []
     notes: list[str] = []
@@ -645,6 +675,10 @@ def _semantic_problems(
         problems.append(f"uav.max_hover_points: {u.max_hover_points} is too large (at most 200)")
     if spec.witness is not None and len(spec.witness.hover_points) != len(spec.witness.hover_times):
         problems.append("witness: hover_points and hover_times differ in length")
+    for k, (x, y) in enumerate(spec.witness.hover_points if spec.witness is not None else ()):
+        if not inside_area(x, y):
+            problems.append(f"witness.hover_points[{k}]: ({x:g}, {y:g}) is outside the area "
+                            f"[0, {W:g}] x [0, {H:g}]: a plan through it is not feasible (C1)")
     if not problems:
         try:
             obstacles = _pack(spec, tuple(shapes))
@@ -653,10 +687,17 @@ def _semantic_problems(
             return problems, notes, shapes, None
         ends = np.array([spec.start, spec.end], dtype=float)
         inside = points_inside(ends, obstacles)
-        for name, flag in zip(("start", "end"), inside, strict=True):
+        gaps = _edge_distances(ends, spec, tuple(shapes)) if end_gap > 0 else np.full(2, np.inf)
+        for name, flag, gap in zip(("start", "end"), inside, gaps, strict=True):
+            x, y = getattr(spec, name)
             if flag:
-                x, y = getattr(spec, name)
                 problems.append(f"{name}: ({x:g}, {y:g}) lies inside an obstacle")
+            elif gap < end_gap:
+                problems.append(
+                    f"{name}: ({x:g}, {y:g}) lies {1000 * gap:.3g} mm from an obstacle's edge, "
+                    f"closer than {100 * end_gap:g} cm: a mission file keeps positions on a 1e-7 "
+                    "degree grid, which may move it up to 8 mm, into the obstacle"
+                )
         return problems, notes, shapes, obstacles
     return problems, notes, shapes, None
 
@@ -682,6 +723,37 @@ def _polygon_shape(
     notes += [f"{label}.vertices: {n}" if n.startswith("given clockwise") else f"{label}: {n}"
               for n in said]  # fmt: skip
     return PolygonShape(kind, index, z.name, shell, tuple(holes))
+
+
+#: metres the start and end keep from every obstacle's edge: a mission file stores latitude
+#: and longitude on a 1e-7 degree grid (MAVLink's int32 degrees x 1e7; 1e-7 degree is at most
+#: 1.11 cm), so a stored point moves by up to half a step each way, < 7.9 mm in all
+END_GAP = 0.01
+
+
+def _edge_distances(
+    points: np.ndarray, spec: MapFile, shapes: tuple[PolygonShape, ...]
+) -> np.ndarray:
+    """(N,) metres from each point to the nearest obstacle (0 inside one): circles exactly,
+    rectangles, no-fly zones and polygon obstacles with shapely."""
+    import shapely
+
+    pts = np.asarray(points, dtype=float).reshape(-1, 2)
+    out = np.full(len(pts), np.inf)
+    obs = spec.obstacles
+    if obs.circles:
+        c = np.array([(o.x, o.y, o.radius) for o in obs.circles], dtype=float)
+        d = np.hypot(pts[:, None, 0] - c[None, :, 0], pts[:, None, 1] - c[None, :, 1])
+        out = np.minimum(out, np.maximum(d - c[None, :, 2], 0.0).min(axis=1))
+    polys = [shapely.Polygon(rectangle_vertices(r.x, r.y, r.length, r.width, r.angle_deg))
+             for r in obs.rectangles]  # fmt: skip
+    polys += [shapely.Polygon(sh.shell, list(sh.holes)) for sh in shapes]
+    if polys:
+        geom = shapely.STRtree(polys)
+        spts = shapely.points(pts)
+        nearest = geom.nearest(spts)
+        out = np.minimum(out, shapely.distance(spts, np.asarray(polys, dtype=object)[nearest]))
+    return out
 
 
 def _pack(spec: MapFile, shapes: tuple[PolygonShape, ...]) -> Obstacles:
@@ -739,7 +811,25 @@ def _size_problems(data: Mapping[str, Any]) -> list[str]:
 
 
 def load_map(source: str | Path | Mapping[str, Any] | Map) -> Map:
-    """Read and validate a map from a path, a JSON string's dict, or a Map; raise MapError."""
+    """Read and validate a map from a path, a JSON string's dict, or a Map.
+
+    Args:
+        source: a map file's path, its parsed JSON (a dict), or a Map (returned as it is).
+
+    Returns:
+        The validated Map.
+
+    Raises:
+        MapError: every problem found, one line each naming the field (the start or end
+            closer than `END_GAP` to an obstacle's edge among them).
+        TypeError: `source` is none of the above.
+    """
+    return _load_map(source, end_gap=END_GAP)
+
+
+def _load_map(source: str | Path | Mapping[str, Any] | Map, *, end_gap: float) -> Map:
+    """`load_map` with the start's and end's least distance to an obstacle (0: the planning
+    map, whose inflated obstacles may touch them)."""
     if isinstance(source, Map):
         return source
     if isinstance(source, str | Path):
@@ -761,7 +851,7 @@ def load_map(source: str | Path | Mapping[str, Any] | Map) -> Map:
         spec = MapFile.model_validate(data)
     except ValidationError as err:
         raise MapError(_pydantic_problems(err)) from None
-    problems, notes, shapes, obstacles = _semantic_problems(spec)
+    problems, notes, shapes, obstacles = _semantic_problems(spec, end_gap)
     if problems:
         raise MapError(problems, notes)
     nfz = tuple(sh.shell for sh in shapes if sh.kind == "no_fly_zone")
