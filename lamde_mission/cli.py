@@ -2,19 +2,32 @@
 
 from __future__ import annotations
 
-import argparse
-import importlib
+# only `sys` (loaded with the interpreter) at the top: everything else is imported inside
+# `main`'s handler, so a Ctrl-C while the program is still starting gives one line, status 130
 import sys
-from collections.abc import Sequence
 
-from lamde_mission.commands import COMMANDS
-from lamde_mission.errors import UsageError
+TYPE_CHECKING = False  # typing.TYPE_CHECKING without importing typing (~15 ms)
+if TYPE_CHECKING:
+    import argparse
+    from collections.abc import Sequence
 
 __all__ = ["main", "build_parser"]
 
+#: what a Ctrl-C prints (stderr) before exit status 130 (128 + SIGINT, the shell's convention)
+INTERRUPTED = "lamde-mission: interrupted"
+
 
 def build_parser() -> argparse.ArgumentParser:
-    """The top-level parser with one sub-parser per available command."""
+    """The top-level parser with one sub-parser per available command.
+
+    Returns:
+        The parser; each sub-parser's defaults carry `_run`, its command's `run`.
+    """
+    import argparse
+    import importlib
+
+    from lamde_mission.commands import COMMANDS
+
     parser = argparse.ArgumentParser(
         prog="lamde-mission",
         description="Plan UAV data-collection missions over wireless sensor networks (LAMDE) "
@@ -44,7 +57,64 @@ def _version() -> str:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point; returns the exit status (0 ok, 1 failed/infeasible, 2 bad input)."""
+    """Entry point: parse `argv` and run its command.
+
+    A Ctrl-C (KeyboardInterrupt) at any point from here on, the imports and the parsing
+    included, prints `INTERRUPTED` and returns 130, without a traceback.
+
+    Args:
+        argv: the arguments (default: `sys.argv[1:]`).
+
+    Returns:
+        The exit status: 0 ok, 1 failed/infeasible, 2 bad input, 130 interrupted.
+    """
+    hook = sys.unraisablehook
+    sys.unraisablehook = lambda u: _unraisable(u, hook)
+    try:
+        _sigint_as_keyboard_interrupt()
+        return _main(argv)
+    except KeyboardInterrupt:
+        return _interrupted()
+    finally:
+        sys.unraisablehook = hook
+
+
+def _sigint_as_keyboard_interrupt() -> None:
+    """From here on a Ctrl-C raises KeyboardInterrupt again (so atomic writers clean up and
+    `main` prints one line): the script's start-up handler (`lamde_mission._quit_on_sigint`)
+    is replaced by Python's default."""
+    import signal
+
+    from lamde_mission import _quit_on_sigint
+
+    if signal.getsignal(signal.SIGINT) is _quit_on_sigint:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
+def _unraisable(u: object, hook: object) -> None:
+    """A Ctrl-C that lands where Python cannot raise it (an import lock's weakref callback,
+    a `__del__`) would be printed as "Exception ignored ..." and lost: stop there as for any
+    Ctrl-C (nothing is being written at such a point). Anything else goes to `hook`."""
+    if isinstance(getattr(u, "exc_value", None), KeyboardInterrupt):
+        import os
+
+        _interrupted()
+        sys.stderr.flush()
+        os._exit(130)
+    hook(u)  # type: ignore[operator]
+
+
+def _interrupted() -> int:
+    import contextlib
+
+    with contextlib.suppress(KeyboardInterrupt):  # a second Ctrl-C while saying so
+        print(INTERRUPTED, file=sys.stderr)
+    return 130
+
+
+def _main(argv: Sequence[str] | None) -> int:
+    from lamde_mission.errors import UsageError
+
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
@@ -58,9 +128,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         for line in str(exc).splitlines():
             print(f"lamde-mission {args.command}: {line}", file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
-        return 130
 
 
 def _reader_went_away() -> int:

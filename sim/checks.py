@@ -255,8 +255,10 @@ def verify(timeline: Timeline, map: Any) -> Verdicts:  # noqa: A002
     d1 = float(np.linalg.norm(timeline.path[-1] - map.end))
     worst = max(d0, d1)
     worst = 0.0 if worst < GEOM_TOL else worst  # round-off of the lat/lon round trip
-    detail = f"take-off {d0:.3f} m from start, last stop {d1:.3f} m from end"
-    out.append(Verdict("ENDS", "start -> end", worst <= ENDS_TOL, -worst + 0.0, "m", detail))
+    detail = (f"take-off {d0:.3f} m from start, last stop {d1:.3f} m from end (within "
+              f"{ENDS_TOL:g} m)")  # fmt: skip
+    # the margin is the slack, as for every check: >= 0 exactly when it holds
+    out.append(Verdict("ENDS", "start -> end", worst <= ENDS_TOL, ENDS_TOL - worst, "m", detail))
 
     t = timeline.totals
     return Verdicts(items=tuple(out), t_fly=t.t_fly, t_hover=t.t_hover, f=t.f,

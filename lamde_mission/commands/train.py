@@ -128,9 +128,23 @@ def _config(args: argparse.Namespace):  # noqa: ANN202 - PPOConfig is imported l
     return cfg
 
 
+def _need_torch() -> None:
+    """UsageError (one line, exit 2) when torch cannot be imported: before anything that
+    imports it (the PPO configuration does)."""
+    from lamde_mission.errors import UsageError
+
+    try:
+        import torch  # noqa: F401
+    except ImportError as exc:  # missing, or a broken install (a library it cannot load)
+        why = "" if getattr(exc, "name", None) == "torch" else f" ({exc})"
+        raise UsageError(f"train needs torch{why}: pip install 'lamde-mission[train]'"[:300]
+                         ) from None  # fmt: skip
+
+
 def run(args: argparse.Namespace) -> int:
     from lamde_mission.errors import UsageError
 
+    _need_torch()
     cfg = _config(args)
     if args.jobs < 0 or (args.jobs == 0 and args.backend == "local"):
         raise UsageError(f"--jobs: must be >= 1 (0 = all CPUs, with --backend ray only), "

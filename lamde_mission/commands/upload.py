@@ -190,6 +190,8 @@ def _sim_check(path: str, map_path: str, mission: list, *, force: bool) -> None:
             raise UsageError(f"{path}: {exc}") from None
         lines = [printable(str(exc))]
     if not lines:
+        print(f"simulator: all constraints hold on {printable(map_path)} (C1..C5, CLEAR, "
+              "MARGIN, ENDS, as verify judges them)", flush=True)  # fmt: skip
         return
     if force:
         for line in lines:

@@ -1,0 +1,107 @@
+"""Messages that say what happened (issue 32, items 6 and 7): `train` without torch, `upload
+--map` saying the simulator's check passed, and Ctrl-C while a command is still starting.
+
+(The ENDS margin as a slack: tests/test_sim.py; a building's NAME kept by `map from-geojson`:
+tests/test_strict_inputs.py.)
+"""
+
+from __future__ import annotations
+
+import json
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from lamde_mission.cli import INTERRUPTED
+from lamde_mission.fuzz import run_cli
+
+ROOT = Path(__file__).resolve().parent.parent
+TINY = ROOT / "tests" / "data" / "hostile" / "tiny-map.json"
+
+
+def test_train_without_torch_is_one_line(monkeypatch, tmp_path) -> None:
+    monkeypatch.setitem(sys.modules, "torch", None)  # `import torch` now fails, as uninstalled
+    out = run_cli(["train", "-o", str(tmp_path / "p.pt")])
+    assert out.error is None, out.error
+    assert out.status == 2 and out.stderr.splitlines() == [
+        "lamde-mission train: train needs torch: pip install 'lamde-mission[train]'"]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_upload_with_map_says_the_simulators_check_passed(tmp_path, port) -> None:
+    from tests.test_altitudes import good_items, write
+    from tests.vehicle_helpers import listen_on, mock_on
+
+    path = write(tmp_path, good_items(), ".plan")
+    with mock_on(port):
+        out = run_cli(["upload", str(path), "--map", str(TINY), "--via", "pymavlink",
+                       "--connect", listen_on(port), "--timeout", "10"])  # fmt: skip
+    assert out.status == 0, out.stderr
+    first = out.stdout.splitlines()[0]
+    assert first.startswith("simulator: all constraints hold on ") and str(TINY) in first
+
+
+def test_a_ctrl_c_inside_main_is_one_line_in_process(monkeypatch) -> None:
+    import lamde_mission.cli as cli
+
+    def boom(argv):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "_main", boom)
+    out = run_cli(["check", str(TINY)])
+    assert out.status == 130 and out.stderr.splitlines() == [INTERRUPTED]
+
+
+def test_importing_the_package_leaves_sigint_alone() -> None:
+    """Only the console script gets the start-up handler; a program importing the package
+    keeps Python's own."""
+    code = ("import signal, lamde_mission, lamde_mission.cli; "
+            "print(signal.getsignal(signal.SIGINT) is signal.default_int_handler)")  # fmt: skip
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       timeout=60, cwd=ROOT)  # fmt: skip
+    assert r.stdout.strip() == "True", r.stderr
+
+
+def test_the_cli_module_imports_nothing_heavy_at_the_top() -> None:
+    """What runs before `main`'s handler is `lamde_mission` and `lamde_mission.cli` alone."""
+    code = ("import sys; before = set(sys.modules); import lamde_mission.cli; "
+            "print(sorted(set(sys.modules) - before))")  # fmt: skip
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       timeout=60, cwd=ROOT)  # fmt: skip
+    assert sorted(json.loads(r.stdout.replace("'", '"'))) == ["lamde_mission", "lamde_mission.cli"]
+
+
+#: `check` as the console script runs it (`sys.argv[0]` is "lamde-mission"), started without
+#: the `site` module (-S, its paths given by hand); it says "ready" on stdout once the package's
+#: first lines have run (they set the script's SIGINT handler). Before them, a Ctrl-C is the
+#: interpreter's own (its start-up takes 10-40 ms here, the installed script's `site` with
+#: setuptools' editable finder 30-70 ms more) and no code of the project can answer it.
+_CHECK = ("import sys; sys.path[:0] = {paths!r}; sys.argv[0] = 'lamde-mission'; "
+          "import lamde_mission; sys.stdout.write('ready\\n'); sys.stdout.flush(); "
+          "from lamde_mission.cli import main; sys.exit(main(['check', {tiny!r}]))")  # fmt: skip
+
+
+@pytest.mark.parametrize("delay", [0.0, 0.01, 0.02, 0.03, 0.05, 0.07, 0.1])
+def test_sigint_while_starting_gives_one_line_and_130(delay: float) -> None:
+    """SIGINT 0-0.1 s after the package's first lines ran (`check` then imports the CLI, numpy,
+    pydantic, shapely, numba-compiled code...): one line and status 130; never a traceback. A
+    command that finished first is judged as usual."""
+    import sysconfig
+
+    paths = [str(ROOT), sysconfig.get_paths()["purelib"], sysconfig.get_paths()["platlib"]]
+    code = _CHECK.format(paths=paths, tiny=str(TINY))
+    p = subprocess.Popen([sys.executable, "-S", "-c", code], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True, cwd=ROOT)  # fmt: skip
+    assert p.stdout is not None and p.stdout.readline() == "ready\n"
+    time.sleep(delay)
+    p.send_signal(signal.SIGINT)
+    out, err = p.communicate(timeout=120)
+    assert "Traceback" not in err and "Exception ignored" not in err, (delay, err)
+    if p.returncode == 130:
+        assert err.splitlines() == [INTERRUPTED]
+    else:
+        assert p.returncode == 0 and "map 'case-tiny'" in out, (p.returncode, err)
