@@ -25,10 +25,12 @@ _argv0 = (getattr(sys, "argv", None) or [""])[0]
 if _argv0.replace("\\", "/").rsplit("/", 1)[-1] in ("lamde-mission", "lamde-mission.exe"):
     import _signal  # the builtin module: `signal` imports enum first, a window of its own
 
-    try:  # noqa: SIM105 - contextlib is one more import before the handler
-        _signal.signal(_signal.SIGINT, _quit_on_sigint)
-    except ValueError:  # not the main thread: leave the handler alone
-        pass
+    # only over Python's own handler: a SIGINT ignored by whoever started us stays ignored
+    if _signal.getsignal(_signal.SIGINT) is _signal.default_int_handler:
+        try:  # noqa: SIM105 - contextlib is one more import before the handler
+            _signal.signal(_signal.SIGINT, _quit_on_sigint)
+        except ValueError:  # not the main thread: leave the handler alone
+            pass
 
 
 def __getattr__(name: str) -> object:  # no `typing` import: the CLI starts ~15 ms sooner

@@ -79,21 +79,52 @@ def _tangent(u, fx, fy, nodes, prev, nxt):
 
 
 @njit(cache=True, nogil=True)
-def _tangent_pairs(nodes, prev, nxt):
-    """All node pairs (i < j) whose line is tangent at both nodes."""
+def _tangent_pairs(nodes, prev, nxt, i0, i1):
+    """The node pairs (i, j), i0 <= i < i1, i < j, whose line is tangent at both nodes; the
+    output grows as pairs are found (doubling), so memory follows what is kept, not n^2."""
     n = nodes.shape[0]
-    out_i = np.empty(n * (n - 1) // 2, dtype=np.int64)
-    out_j = np.empty(n * (n - 1) // 2, dtype=np.int64)
+    cap = 1024
+    out_i = np.empty(cap, dtype=np.int64)
+    out_j = np.empty(cap, dtype=np.int64)
     k = 0
-    for i in range(n):
+    for i in range(i0, i1):
         for j in range(i + 1, n):
             if _tangent(i, nodes[j, 0], nodes[j, 1], nodes, prev, nxt) and _tangent(
                 j, nodes[i, 0], nodes[i, 1], nodes, prev, nxt
             ):
+                if k == cap:
+                    cap *= 2
+                    grown_i = np.empty(cap, dtype=np.int64)
+                    grown_j = np.empty(cap, dtype=np.int64)
+                    grown_i[:k] = out_i[:k]
+                    grown_j[:k] = out_j[:k]
+                    out_i, out_j = grown_i, grown_j
                 out_i[k] = i
                 out_j[k] = j
                 k += 1
-    return out_i[:k], out_j[:k]
+    return out_i[:k].copy(), out_j[:k].copy()
+
+
+#: node pairs tested per block of rows of `_tangent_pairs` (the tangent ones are then tested
+#: for a clear line block by block): what the visibility graph's build holds at once is this
+#: block's candidates plus the edges kept, never n(n-1)/2 pairs (~20 GB of int64 at 50,000
+#: nodes, the documented vertex limit)
+PAIR_BLOCK = 4_000_000
+
+
+def _row_blocks(n: int, block: int = PAIR_BLOCK) -> list[tuple[int, int]]:
+    """[i0, i1) row ranges of the upper triangle of an n x n pair matrix, each holding about
+    `block` pairs (at least one row)."""
+    out = []
+    i0 = 0
+    while i0 < n:
+        i1, pairs = i0, 0
+        while i1 < n and (pairs == 0 or pairs + (n - i1 - 1) <= block):
+            pairs += n - i1 - 1
+            i1 += 1
+        out.append((i0, i1))
+        i0 = i1
+    return out
 
 
 @njit(cache=True, nogil=True)
@@ -242,9 +273,13 @@ def build_visibility_graph(
     nxt = np.ascontiguousarray(nxt[keep])
     n = len(nodes)
     if n:
-        i, j = _tangent_pairs(nodes, prev, nxt)
-        clear = overlap_lengths(nodes[i], nodes[j], obstacles) <= CLEAR
-        i, j = i[clear], j[clear]
+        kept_i, kept_j = [], []
+        for i0, i1 in _row_blocks(n):
+            bi, bj = _tangent_pairs(nodes, prev, nxt, i0, i1)
+            clear = overlap_lengths(nodes[bi], nodes[bj], obstacles) <= CLEAR
+            kept_i.append(bi[clear])
+            kept_j.append(bj[clear])
+        i, j = np.concatenate(kept_i), np.concatenate(kept_j)
     else:
         i = j = np.zeros(0, dtype=np.int64)
     length = np.hypot(nodes[i, 0] - nodes[j, 0], nodes[i, 1] - nodes[j, 1])
