@@ -409,3 +409,79 @@ def test_mavsdk_log_stays_off_stderr_unless_verbose(tmp_path):
     loud = run_cli("upload", plan_path, "--via", "mavsdk", "--timeout", "0.5", "--connect", url,
                    "--verbose")  # fmt: skip
     assert loud.returncode == 1 and "mavsdk: " in loud.stderr
+
+
+class _FakeAutopilot:
+    """Another socket sending only autopilot HEARTBEATs with the vehicle's ids (system 1,
+    component 1, PX4) to the ground station at `port`, 4 a second, until closed."""
+
+    def __init__(self, port: int) -> None:
+        self.mav = mavlink2.MAVLink(None, srcSystem=1, srcComponent=1)
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.sock.bind(("127.0.0.1", 0))
+        self.port = port
+        self.stop = threading.Event()
+        self.thread = threading.Thread(target=self._run, daemon=True)
+
+    def _run(self) -> None:
+        hb = mavlink2.MAVLink_heartbeat_message(mavlink2.MAV_TYPE_QUADROTOR,
+                                                mavlink2.MAV_AUTOPILOT_PX4, 0, 0,
+                                                mavlink2.MAV_STATE_STANDBY, 3)  # fmt: skip
+        while not self.stop.is_set():
+            self.sock.sendto(hb.pack(self.mav), ("127.0.0.1", self.port))
+            self.stop.wait(0.25)
+
+    def __enter__(self) -> _FakeAutopilot:
+        self.thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop.set()
+        self.thread.join(2)
+        self.sock.close()
+
+
+def test_a_forged_heartbeat_that_captured_the_link_is_refused(port):
+    """Issue 32 item 2: the ground station listens; a fake sending only HEARTBEATs (system 1,
+    component 1) is heard first and pinned; the real vehicle's HEARTBEAT 1.5 s later from
+    another address ends the upload naming both addresses (before: the real vehicle got
+    nothing and the upload timed out on the fake)."""
+    from lamde_mission.vehicle.transfer import DuplicateVehicleError
+
+    outcome: list[BaseException | object] = []
+
+    def upload() -> None:
+        try:
+            outcome.append(upload_mission(hand_mission(3), [], connect=listen_on(port),
+                                          via="pymavlink", timeout=10, attempts=3))  # fmt: skip
+        except BaseException as exc:  # noqa: BLE001 - handed to the test's thread
+            outcome.append(exc)
+
+    ground = threading.Thread(target=upload)
+    ground.start()
+    time.sleep(0.3)  # the ground station is listening
+    with _FakeAutopilot(port) as fake:
+        fake_port = fake.sock.getsockname()[1]
+        time.sleep(1.5)
+        with mock_on(port) as v:
+            ground.join(10)
+            assert not ground.is_alive()
+            assert v.stats.uploads[MISSION_TYPE.MISSION] == 0
+    assert len(outcome) == 1 and isinstance(outcome[0], DuplicateVehicleError), outcome
+    msg = str(outcome[0])
+    assert "two autopilots claim system 1 component 1" in msg
+    assert f"pinned at 127.0.0.1:{fake_port} and another at 127.0.0.1:" in msg
+
+
+def test_a_second_autopilot_with_the_same_id_during_an_upload_is_named(port, tmp_path, capsys):
+    """The vehicle is pinned first; a second autopilot with its ids starts during the upload:
+    the CLI stops with one line naming both (exit 1), never 'identical'."""
+    plan_path, _map_ok, _ = _plan_files(tmp_path)
+    with mock_on(port, latency_ms=40.0), _FakeAutopilot(port):
+        rc = main(["upload", str(plan_path), "--via", "pymavlink", "--connect",
+                   listen_on(port), "--timeout", "10"])  # fmt: skip
+    out = capsys.readouterr()
+    assert rc == 1, out
+    lines = [ln for ln in out.err.splitlines() if ln.startswith("lamde-mission upload:")]
+    assert len(lines) == 1 and "two autopilots claim system 1 component 1" in lines[0]
+    assert "identical" not in out.out

@@ -31,7 +31,12 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         help="udpin://HOST:PORT listens for the vehicle on UDP, udpout://HOST:PORT sends to "
         "it, tcpout://HOST:PORT connects to its TCP server, tcpin://HOST:PORT waits for a TCP "
         "connection, serial:///dev/DEVICE:BAUD opens a serial port; the same for both "
-        "uploaders (default: %(default)s)",
+        "uploaders (default: %(default)s, QGroundControl's convention for a radio link). "
+        "0.0.0.0 listens on every network interface: anyone on those networks can send the "
+        "first HEARTBEAT and be taken for the vehicle, or read the mission (MAVLink without "
+        "signing has no authentication; the pymavlink client stops when a second autopilot "
+        "claims the vehicle's id, MAVSDK does not). On a shared LAN listen on the radio's "
+        "address or 127.0.0.1, or send to the vehicle's own address with udpout://",
     )
     p.add_argument(
         "--via",

@@ -18,7 +18,11 @@ lossy link is not cut off by a total time limit.
 Talks only to the vehicle: after the first autopilot HEARTBEAT the vehicle's address (UDP/TCP
 peer) and system/component ids are pinned; messages from another address, from other
 system/component ids, or addressed to another system or component (a second ground station's
-traffic, forged replies) are ignored and counted, and said under `log` (`--verbose`).
+traffic, forged replies) are ignored and counted, and said under `log` (`--verbose`). An
+autopilot HEARTBEAT with the pinned ids from another address ends the session with
+`DuplicateVehicleError` naming both addresses: a fake that sent its HEARTBEATs first has
+captured the link, or two vehicles share a system id, and nothing on an unsigned link tells
+which is the vehicle.
 """
 
 from __future__ import annotations
@@ -33,6 +37,7 @@ from pymavlink.dialects.v20 import common as mavlink2
 from lamde_mission.vehicle.connection import Connection, Link, parse_connection
 from lamde_mission.vehicle.transfer import (
     RETRYABLE_ACKS,
+    DuplicateVehicleError,
     MissionRejectedError,
     NoVehicleError,
     TransferError,
@@ -226,7 +231,26 @@ class MavlinkClient:
                     if msg.get_type() == "BAD_DATA":
                         continue
                     msg._lamde_addr = addr
+                    self._check_claim(msg)
                     self._pending.append(msg)
+
+    def _check_claim(self, msg: Any) -> None:
+        """DuplicateVehicleError for an autopilot HEARTBEAT with the pinned vehicle's ids from
+        another address than the pinned one."""
+        v, pinned, addr = self.vehicle, self._vehicle_addr, getattr(msg, "_lamde_addr", None)
+        if v is None or pinned is None or addr is None or addr == pinned:
+            return
+        if msg.get_type() != "HEARTBEAT" or msg.autopilot == _m.MAV_AUTOPILOT_INVALID:
+            return
+        if (msg.get_srcSystem(), msg.get_srcComponent()) != (v.system_id, v.component_id):
+            return
+        raise DuplicateVehicleError(
+            f"two autopilots claim system {v.system_id} component {v.component_id}: the one "
+            f"pinned at {pinned[0]}:{pinned[1]} and another at {addr[0]}:{addr[1]}; stopped, "
+            "since nothing on this link says which is the vehicle (a second vehicle with the "
+            "same MAV_SYS_ID, or someone playing the vehicle: give each vehicle its own id, or "
+            "connect to the vehicle's own address with udpout:// or tcpout://)"
+        )
 
     # ------------------------------------------------------------------ connect
 

@@ -44,6 +44,7 @@ __all__ = [
     "MissionClient",
     "UploadReport",
     "upload_and_verify",
+    "DuplicateVehicleError",
 ]
 
 
@@ -55,6 +56,12 @@ class VehicleError(Exception):
 
 class NoVehicleError(VehicleError):
     """Nothing answered at the address within the timeout."""
+
+
+class DuplicateVehicleError(VehicleError):
+    """A second autopilot claims the pinned vehicle's system and component ids from another
+    address: a second vehicle with the same MAV_SYS_ID, or someone playing the vehicle. Not
+    retried: the link cannot tell which is the vehicle."""
 
 
 class TransferError(VehicleError):
