@@ -13,8 +13,9 @@ run again in a subprocess under ``--timeout`` to catch hangs.
 
 Prints counts: clean refusals (exit 2, every stderr line prefixed by the command; how many were
 a single line), successes (exit 0, or 1 for a mission that fails a constraint / an infeasible
-plan), tracebacks (must be 0), hangs over the timeout (0), partial files (0). Exit status 1 if
-any of the last three is not 0; ``--keep DIR`` saves the offending inputs there.
+plan), tracebacks (must be 0), hangs over the timeout (0), partial files (0), runs whose peak
+resident set exceeds ``--rss-limit`` MiB (0; sampled every 5 ms). Exit status 1 if any of
+the last four is not 0; ``--keep DIR`` saves the offending inputs there.
 
     python benchmarks/fuzz_inputs.py --n 1000 --seed 0 [--hang-sample 20] [--timeout 30]
 """
@@ -30,6 +31,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
@@ -40,6 +42,44 @@ sys.path.insert(0, str(ROOT))
 
 from lamde_mission.formats import read_mission  # noqa: E402
 from lamde_mission.fuzz import CliOutcome, mutate, run_cli  # noqa: E402
+
+
+class _PeakRss:
+    """The largest resident set size (MiB) of this process while a block runs, sampled from
+    /proc/self/statm every 5 ms by a thread (in-process runs share the process, so a run's
+    peak includes what the earlier runs left loaded: an upper bound on the run's own)."""
+
+    PAGE = os.sysconf("SC_PAGE_SIZE") if hasattr(os, "sysconf") else 4096
+
+    def __init__(self) -> None:
+        self.peak = 0.0
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    @classmethod
+    def now(cls) -> float:
+        try:
+            with open("/proc/self/statm") as fh:
+                return int(fh.read().split()[1]) * cls.PAGE / 2**20
+        except (OSError, ValueError, IndexError):
+            return 0.0
+
+    def _watch(self) -> None:
+        while not self._stop.wait(0.005):
+            self.peak = max(self.peak, self.now())
+
+    def start(self) -> _PeakRss:
+        self.peak = self.now()
+        self._stop.clear()
+        self._thread = threading.Thread(target=self._watch, daemon=True)
+        self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
+        self.peak = max(self.peak, self.now())
 
 
 def _map_files() -> list[Path]:
@@ -93,6 +133,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--plan-budget", type=int, default=200,
                     help="evaluations when planning an accepted mutated map (default 200)")
     ap.add_argument("--keep", metavar="DIR", help="save inputs that broke the contract here")
+    ap.add_argument("--rss-limit", type=float, default=1024.0, metavar="MIB",
+                    help="a run whose peak resident set exceeds this (MiB) counts as broken "
+                    "(default 1024)")
     args = ap.parse_args(argv)
 
     t0 = time.perf_counter()
@@ -101,6 +144,8 @@ def main(argv: list[str] | None = None) -> int:
     kinds: collections.Counter[str] = collections.Counter()
     bad: list[tuple[str, str, Path]] = []
     slowest = (0.0, "")
+    biggest = (0.0, "")
+    child_rss = 0.0
     hang_cases: list[tuple[str, list[str], Path]] = []
     try:
         maps = _map_files()
@@ -133,6 +178,7 @@ def main(argv: list[str] | None = None) -> int:
             if kind == "geojson":
                 keep.add("map.json")
             t = time.perf_counter()
+            watch = _PeakRss().start()
             res = run_cli(argv_first)
             problem = ""
             if res.error is not None or "Traceback" in res.stderr:
@@ -190,6 +236,12 @@ def main(argv: list[str] | None = None) -> int:
                     counts["partial files"] += 1
                     problem = f"left behind: {left}"
             dt = time.perf_counter() - t
+            watch.stop()
+            if watch.peak > biggest[0]:
+                biggest = (watch.peak, f"case {i} ({kind})")
+            if watch.peak > args.rss_limit:
+                counts["over the RSS limit"] += 1
+                problem = problem or f"peak RSS {watch.peak:.0f} MiB"
             if dt > slowest[0]:
                 slowest = (dt, f"case {i} ({kind})")
             if dt > args.timeout:
@@ -214,6 +266,9 @@ def main(argv: list[str] | None = None) -> int:
                 if "Traceback" in r.stderr:
                     counts["tracebacks"] += 1
                     bad.append((label, "traceback in a subprocess", Path(argv_[-1])))
+                import resource
+
+                child_rss = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
             except subprocess.TimeoutExpired:
                 counts["hangs"] += 1
                 bad.append((label, f"no answer within {args.timeout:g} s", Path(argv_[-1])))
@@ -238,11 +293,14 @@ def main(argv: list[str] | None = None) -> int:
     print(f"  partial files        {counts['partial files']:6d}")
     print(f"  unclean stderr       {counts['unclean stderr']:6d}")
     print(f"  check/plan disagree  {counts['check/plan disagree']:6d}")
+    print(f"  peak RSS             {biggest[0]:6.0f} MiB  (in-process, the largest of any run: "
+          f"{biggest[1]}; {counts['over the RSS limit']} over {args.rss_limit:g} MiB; the "
+          f"subprocess re-runs at most {child_rss:.0f} MiB)")
     print(f"  wall time            {total:6.1f} s")
     for label, problem, _p in bad[:20]:
         print(f"  ! {label}: {problem}")
     broken = sum(counts[k] for k in ("tracebacks", "hangs", "partial files", "unclean stderr",
-                                     "check/plan disagree"))  # fmt: skip
+                                     "check/plan disagree", "over the RSS limit"))  # fmt: skip
     return 1 if broken else 0
 
 

@@ -61,6 +61,7 @@ def test_fuzz_inputs_runs() -> None:
     assert "fuzz_inputs: 3 mutated inputs, seed 0" in r.stdout
     for verdict in ("tracebacks", "partial files", "unclean stderr"):
         assert re.search(rf"{verdict}\s+0\b", r.stdout), r.stdout
+    assert re.search(r"peak RSS\s+\d+ MiB .* 0 over 1024 MiB", r.stdout), r.stdout
 
 
 def test_bench_upload_end_to_end() -> None:
