@@ -1,30 +1,30 @@
 """Planning speed and memory: `plan` on the largest suite map at 10,000 evaluations.
 
-Prints wall time split into evaluation, seeding (the sensor- and obstacle-aware initial
-population), starts (building the constructive plans, `planner_core.search.construct`, and
-descending the best of them; their evaluations are under evaluation), optimiser overhead (DE
-ask/tell/configurator), polish, and descent (the final plan's descent, structural search and
-kicks, `planner_core.search.final.finish`, its evaluations included),
-plus peak memory
-(ru_maxrss) and whether torch or matplotlib were imported on the planning path.
+Prints the wall time of `plan()` split by the pipeline's stages (`Plan.stages`: constructive
+plans, their descents, the DE, the polish, the final stage, the second structure, the
+improving rounds), the kernel compile apart, peak memory (ru_maxrss) and whether torch or
+matplotlib were imported on the planning path.
 
 Two measurements:
 
 * cold: a fresh process making one `plan` call, as `lamde-mission plan` does (median over
-  ``--cold`` processes). It includes one-off costs: numba loads each compiled kernel from its
-  on-disk cache at first use (a few ms per kernel), which lands in whichever phase calls the
-  kernel first (evaluation, seeding, optimiser).
+  ``--cold`` processes). It includes loading the compiled kernels from numba's disk cache
+  (reported as `compile`, apart from planning).
 * warm: repeated `plan` calls in one process after a first one (medians), the per-plan cost
   a notebook, a benchmark run or a batch of maps pays.
 
-All calls plan the same map with the same seed (the same work); cold processes and warm calls
-are interleaved so that a drifting machine speed affects both alike.
+``--compare CHECKOUT`` also times warm `plan` calls of another checkout of this project (its
+`lamde_mission` first on the path, e.g. a `git worktree` of an earlier commit), interleaved
+with ours in the same run, and prints the ratio of the medians (wall and process CPU time),
+with the f each reaches: how a change moves speed and quality on one machine at one time.
 
-It also prints plan()'s process CPU time (what a quiet machine's wall time would be) and the
-load average. Targets on a 2-core machine: cold plan() <= 2 s; optimiser overhead below
-evaluation time per plan (warm medians; the cold ratio is printed too); peak memory <= 300 MB.
+All calls plan the same map with seeds 0, 1, ... (the same work on both sides); cold
+processes and warm calls are interleaved so that a drifting machine speed affects both alike.
+Targets on a 2-core machine: cold plan() <= 2 s; <= 300 MB without torch/matplotlib; with
+--compare, warm time <= 1.2x the other checkout's.
 
     python benchmarks/bench_plan.py [MAP] [--seed 0] [--budget 10000] [--cold 3] [--warm 5]
+        [--compare CHECKOUT]
 
 MAP may be `campus-N`: the generated campus of N non-convex footprints (seed 0, see
 `lamde_mission.gis.synthetic`), written to a temporary file first. Real scale (issue 15):
@@ -34,7 +34,9 @@ MAP may be `campus-N`: the generated campus of N non-convex footprints (seed 0, 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
+import os
 import resource
 import statistics
 import subprocess
@@ -43,57 +45,74 @@ import time
 from pathlib import Path
 from typing import Any
 
-from planner_core import defaults as D
-
 ROOT = Path(__file__).resolve().parent.parent
 DEFAULT_MAP = ROOT / "examples" / "maps" / "suite" / "T16.json"
-PHASES = ("evaluation", "seeding", "starts", "optimiser", "polish", "descent")
 
 
-def _split(t: dict[str, float]) -> str:
-    other = t["total"] - sum(t[k] for k in PHASES)
-    return (f"plan() {t['total']:.3f} s = " + " + ".join(f"{k} {t[k]:.3f} s" for k in PHASES)
-            + f" + other (map, set-up) {other:.3f} s")  # fmt: skip
+def _stages(p: Any) -> dict[str, float]:
+    """Seconds per stage of a plan (an older checkout without `stages`: its timings)."""
+    stages = getattr(p, "stages", ())
+    if stages:
+        return {s.name: s.seconds for s in stages}
+    return {k: v for k, v in p.timings.items() if k not in ("total", "compile")}
 
 
-def _median(runs: list[dict[str, float]]) -> dict[str, float]:
-    return {k: statistics.median(r[k] for r in runs) for k in (*PHASES, "total")}
+def _plan(map_: str, seed: int, budget: int) -> dict[str, Any]:
+    import lamde_mission
 
-
-def _ratios(runs: list[dict[str, float]]) -> str:
-    return ", ".join(f"{r['optimiser'] / r['evaluation']:.2f}" for r in runs)
+    c0, t0 = time.process_time(), time.perf_counter()
+    p = lamde_mission.plan(map_, seed=seed, budget=budget)
+    return {"wall": time.perf_counter() - t0, "cpu": time.process_time() - c0,
+            "compile": p.timings.get("compile", 0.0), "stages": _stages(p), "f": p.f,
+            "feasible": bool(p.feasible), "evaluations": p.evaluations,
+            "summary": f"map {p.map_name}: f {p.f:.2f}, phi {p.phi:.3g}, feasible "
+                       f"{p.feasible}, {p.n_hover} hover points, {p.evaluations} evaluations"}
 
 
 def child(args: argparse.Namespace) -> None:
     """One cold plan() in this fresh process; prints a JSON line for the parent."""
     t0 = time.perf_counter()
-    import lamde_mission
+    r = _plan(args.map, args.seed, args.budget)
+    r["process_wall"] = time.perf_counter() - t0
+    r["rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    r["heavy"] = [m for m in ("torch", "matplotlib") if m in sys.modules]
+    print(json.dumps(r))
 
-    c0 = time.process_time()
-    p = lamde_mission.plan(args.map, seed=args.seed, budget=args.budget)
-    print(json.dumps({
-        "timings": p.timings,
-        "cpu": time.process_time() - c0,
-        "wall": time.perf_counter() - t0,
-        "rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
-        "heavy": [m for m in ("torch", "matplotlib") if m in sys.modules],
-        "summary": f"map {p.map_name}: f {p.f:.2f}, phi {p.phi:.3g}, feasible {p.feasible}, "
-                   f"{p.n_hover} hover points, {p.evaluations} evaluations",
-    }))  # fmt: skip
+
+def warm_child(args: argparse.Namespace) -> None:
+    """Warm plan() calls in this process (after one to load the kernels), one JSON line each:
+    what `--compare` runs with the other checkout first on the path."""
+    _plan(args.map, args.seed, args.budget)
+    for i in range(args.warm):
+        print(json.dumps(_plan(args.map, args.seed + i, args.budget)), flush=True)
+
+
+def _median_stages(runs: list[dict[str, Any]]) -> str:
+    names = list(runs[0]["stages"])
+    return ", ".join(f"{k} {statistics.median(r['stages'].get(k, 0.0) for r in runs):.3f} s"
+                     for k in names)
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("map", nargs="?", default=str(DEFAULT_MAP))
-    ap.add_argument("--seed", type=int, default=D.SEED)
-    ap.add_argument("--budget", type=int, default=D.BUDGET)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--budget", type=int, default=10_000)
     ap.add_argument("--cold", type=int, default=3, help="fresh processes, one plan() each")
     ap.add_argument("--warm", type=int, default=5, help="warm plan() calls in this process")
+    ap.add_argument("--compare", metavar="CHECKOUT",
+                    help="another checkout of this project to time warm plan() calls of")
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--warm-child", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
         child(args)
         return
+    if args.warm_child:
+        warm_child(args)
+        return
+    if args.cold < 1 or args.warm < 1:
+        ap.error("--cold and --warm must be >= 1")
     cold_limit = 2.0
     if args.map.startswith("campus-") and args.map[7:].isdigit():
         cold_limit = 5.0  # issue 15: a campus of hundreds of footprints plans in seconds
@@ -105,57 +124,67 @@ def main() -> None:
         tmp = Path(tempfile.mkdtemp()) / f"{args.map}.json"
         tmp.write_text(dumps_map(campus_map(int(args.map[7:]), seed=0)))
         args.map = str(tmp)
-    cmd = [sys.executable, __file__, args.map, "--seed", str(args.seed),
-           "--budget", str(args.budget), "--child"]  # fmt: skip
-    import lamde_mission
-
-    lamde_mission.plan(args.map, seed=args.seed, budget=args.budget)  # loads the kernels here
-    # cold processes and warm calls interleaved, all on the same seed (the same work), so that
-    # a machine whose speed drifts affects both alike
+    args.map = str(Path(args.map).resolve())
+    base = [sys.executable, str(Path(__file__).resolve()), args.map, "--seed", str(args.seed),
+            "--budget", str(args.budget)]
+    theirs: list[dict[str, Any]] = []
+    other_env = None
+    if args.compare:
+        other = Path(args.compare).resolve()
+        if not (other / "lamde_mission").is_dir():
+            ap.error(f"--compare: {other} holds no lamde_mission package")
+        other_env = {**os.environ, "PYTHONPATH": str(other)}
+    _plan(args.map, args.seed, args.budget)  # loads the kernels here
     colds: list[dict[str, Any]] = []
-    runs: list[dict[str, float]] = []
-    cpus: list[float] = []  # process CPU time of each warm plan()
-    for i in range(max(args.cold, 1, args.warm)):
-        if i < max(args.cold, 1):
-            out = subprocess.run(cmd, capture_output=True, text=True, check=True).stdout
+    warms: list[dict[str, Any]] = []
+    for i in range(max(args.cold, args.warm)):
+        if i < args.cold:
+            out = subprocess.run([*base, "--child"], capture_output=True, text=True,
+                                 check=True).stdout
             colds.append(json.loads(out.strip().splitlines()[-1]))
         if i < args.warm:
-            c0 = time.process_time()
-            runs.append(lamde_mission.plan(args.map, seed=args.seed, budget=args.budget).timings)
-            cpus.append(time.process_time() - c0)
+            warms.append(_plan(args.map, args.seed + i, args.budget))
+            if other_env is not None:  # one warm call of theirs beside each of ours
+                out = subprocess.run([*base, "--warm-child", "--warm", "1", "--seed",
+                                      str(args.seed + i)], capture_output=True, text=True,
+                                     check=True, env=other_env, cwd=args.compare).stdout
+                theirs.append(json.loads(out.strip().splitlines()[-1]))
     print(colds[0]["summary"])
-    cold = _median([c["timings"] for c in colds])
-    cold_ratio = cold["optimiser"] / cold["evaluation"]
+    cold_wall = statistics.median(c["wall"] - c["compile"] for c in colds)
+    print(f"cold (median of {len(colds)} fresh processes): plan() {cold_wall:.3f} s planning "
+          f"+ {statistics.median(c['compile'] for c in colds):.3f} s loading the kernels; "
+          f"process wall incl. imports {statistics.median(c['process_wall'] for c in colds):.3f}"
+          " s")
+    print(f"cold stages: {_median_stages(colds)}")
     rss_mb = max(c["rss_mb"] for c in colds)
     heavy = sorted({m for c in colds for m in c["heavy"]})
-    print(f"cold (median of {len(colds)} fresh processes): {_split(cold)}; wall time incl. "
-          f"imports {statistics.median(c['wall'] for c in colds):.3f} s")
-    print(f"cold: optimiser/evaluation ratio {cold_ratio:.2f} (per process: "
-          f"{_ratios([c['timings'] for c in colds])}; each phase includes loading its "
-          "compiled kernels)")
     print(f"peak memory {rss_mb:.0f} MB; imported on the planning path: "
           f"{', '.join(heavy) if heavy else 'neither torch nor matplotlib'}")
-    warm_ratio = None
-    if runs:
-        warm = _median(runs)
-        warm_ratio = warm["optimiser"] / warm["evaluation"]
-        print(f"warm (median of {len(runs)} calls in one process): {_split(warm)}")
-        print(f"warm: optimiser/evaluation ratio {warm_ratio:.2f} (per run: {_ratios(runs)})")
-    print(f"CPU time of plan() (process, all threads; on a loaded machine the wall time a quiet "
-          f"one would see): cold median {statistics.median(c['cpu'] for c in colds):.3f} s"
-          + (f", warm median {statistics.median(cpus):.3f} s" if cpus else ""))
-    try:
-        import os
-
+    w_wall = statistics.median(w["wall"] for w in warms)
+    w_cpu = statistics.median(w["cpu"] for w in warms)
+    print(f"warm (median of {len(warms)} calls, seeds {args.seed}..{args.seed + len(warms) - 1})"
+          f": plan() {w_wall:.3f} s wall, {w_cpu:.3f} s CPU; mean f "
+          f"{statistics.fmean(w['f'] for w in warms):.3f}")
+    print(f"warm stages: {_median_stages(warms)}")
+    ratio = None
+    if theirs:
+        t_wall = statistics.median(t["wall"] for t in theirs)
+        t_cpu = statistics.median(t["cpu"] for t in theirs)
+        ratio = w_wall / t_wall
+        print(f"{args.compare} warm (median of {len(theirs)}, the same seeds, interleaved): "
+              f"plan() {t_wall:.3f} s wall, {t_cpu:.3f} s CPU; mean f "
+              f"{statistics.fmean(t['f'] for t in theirs):.3f}")
+        print(f"ratio ours / theirs: wall {ratio:.2f}, CPU {w_cpu / t_cpu:.2f}")
+    with contextlib.suppress(OSError):
         print(f"load average while measuring: {os.getloadavg()[0]:.2f} (1 min) on "
               f"{os.cpu_count()} CPUs")
-    except OSError:
-        pass
-    ok = (cold["total"] <= cold_limit, warm_ratio is not None and warm_ratio < 1.0,
-          rss_mb <= 300 and not heavy)  # fmt: skip
-    verdict = ["met" if x else "NOT met" for x in ok]
-    print(f"targets: cold plan() <= {cold_limit:g} s [{verdict[0]}], optimiser < evaluation per "
-          f"plan (warm) [{verdict[1]}], <= 300 MB without torch/matplotlib [{verdict[2]}]")
+    ok = [cold_wall <= cold_limit, rss_mb <= 300 and not heavy]
+    text = [f"cold plan() <= {cold_limit:g} s", "<= 300 MB without torch/matplotlib"]
+    if ratio is not None:
+        ok.append(ratio <= 1.2)
+        text.append("warm <= 1.2x the other checkout")
+    print("targets: " + ", ".join(f"{t} [{'met' if x else 'NOT met'}]"
+                                  for t, x in zip(text, ok, strict=True)))
 
 
 if __name__ == "__main__":

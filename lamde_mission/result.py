@@ -9,6 +9,7 @@ import numpy as np
 
 from planner_core.defaults import CONFIGURATOR
 from planner_core.model.formulas import penalised_score
+from planner_core.pipeline.evaluator import StageRecord
 
 __all__ = ["Plan", "PLAN_FORMAT_VERSION"]
 
@@ -27,12 +28,13 @@ def _frozen(a: Any, shape: tuple[int, ...] | None = None) -> np.ndarray:
 class Plan:
     """Hover points (I x 2, local metres) with hover times (s), their scores and provenance.
 
-    `breakdown` is `Problem.breakdown` of the final solution; `history` holds per-generation
-    arrays (`evaluations`, `best_f`, `best_phi`, `feasible_fraction`); `polish` records f and
-    phi before and after the hover-time LP (None when polishing was off) and, when the final
-    stage ran, `final_f_before`/`final_f_after`, `final_evaluations` (both plans together),
-    `final_other_points` (the second plan's hover points, 0: none ran), `final_other_won`
-    and `final_other_evaluations` (`planner_core.search.final.finish`).
+    `breakdown` is `Problem.breakdown` of the final solution; `history` holds the incumbent
+    after each improvement (`evaluations`, `best_f`, `best_phi` arrays); `polish` records f
+    and phi before and after the hover-time LP (None when the polish did not run); `stages`
+    has one `planner_core.pipeline.StageRecord` per stage that ran (evaluations, seconds, f
+    and phi before and after); `config` the run's `PlanConfig` as a dict; `stopped` is
+    "time limit" when the clock ended the run, else ""; `timings` (s): compile (the kernels,
+    once per process), planning (the pipeline), evaluation (inside it), total.
     """
 
     map_name: str
@@ -50,8 +52,12 @@ class Plan:
     variable_length: bool = True
     polish: dict[str, Any] | None = None
     timings: dict[str, float] = field(default_factory=dict)
+    stages: tuple[StageRecord, ...] = ()
+    config: dict[str, Any] = field(default_factory=dict)
+    stopped: str = ""
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "stages", tuple(self.stages))
         object.__setattr__(self, "hover_points", _frozen(self.hover_points, (-1, 2)))
         object.__setattr__(self, "hover_times", _frozen(self.hover_times, (-1,)))
         object.__setattr__(
@@ -88,6 +94,9 @@ class Plan:
             "variable_length": self.variable_length,
             "polish": self.polish,
             "timings": dict(self.timings),
+            "stages": [s.to_dict() for s in self.stages],
+            "config": dict(self.config),
+            "stopped": self.stopped,
         }
 
     @classmethod
@@ -112,6 +121,9 @@ class Plan:
             variable_length=bool(d.get("variable_length", True)),
             polish=d.get("polish"),
             timings=d.get("timings", {}),
+            stages=tuple(_stage(s) for s in d.get("stages", [])),
+            config=d.get("config", {}),
+            stopped=d.get("stopped", ""),
         )
 
     def same_as(self, other: Plan) -> bool:
@@ -122,3 +134,8 @@ class Plan:
             and self.f == other.f
             and self.phi == other.phi
         )
+
+
+def _stage(d: dict[str, Any]) -> StageRecord:
+    """A `StageRecord` from its `to_dict` (None read back as inf: no incumbent yet)."""
+    return StageRecord(**{k: float("inf") if v is None else v for k, v in d.items()})

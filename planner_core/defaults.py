@@ -43,6 +43,7 @@ __all__ = [
     "SEED",
     "STARTS",
     "DESCENTS",
+    "DE_SHARE",
     "DESCENT_TRIALS",
     "RESTRUCTURE_TRIALS",
     "KICK_TRIALS",
@@ -88,6 +89,11 @@ def _is_int(v: Any) -> bool:
 
 def _int_at_least(lo: int) -> Callable[[Any], bool]:
     return lambda v: _is_int(v) and int(v) >= lo
+
+
+def _share(v: Any) -> bool:
+    return (not isinstance(v, bool) and isinstance(v, int | float) and math.isfinite(v)
+            and 0 <= v <= 1)
 
 
 def _positive_number(v: Any) -> bool:
@@ -142,7 +148,7 @@ _RUN: tuple[Default, ...] = (
     Default("descents", 3, "best plans of each kind (constructive, seeder) improved by the "
             "hover-point descent with exact LP hover times (`planner_core.search.descent`) before "
             "the DE; 0: none before the DE (`plan(descent=False)`, `--no-descent` turn off "
-            "this and the final plan's descent; docs/search.md)", "an integer >= 0",
+            "this and every stage after the polish; docs/search.md)", "an integer >= 0",
             _int_at_least(0)),
     Default("descent_trials", 40, "evaluations one descent may spend at most (counted in the "
             "budget)", "an integer >= 0", _int_at_least(0)),
@@ -155,24 +161,30 @@ _RUN: tuple[Default, ...] = (
             "neighbours; `removal_moves`), taken from the kicks' share; with the descent on",
             "an integer >= 0",
             _int_at_least(0)),
-    Default("kick_trials", 300, "evaluations of the final stage (descent_trials + "
-            "restructure_trials + kick_trials, at most a tenth of the budget less the population "
-            "and the polish's plans) left for "
-            "the iterated local search on the final plan after the structural search and the "
-            "removal moves (`planner_core.search.structure.kicks`: one hover point moved by "
-            "a normal step of 300 m standard deviation per axis, the plan descended in a race "
-            "against the incumbent, kept when better; with the descent on)",
+    Default("kick_trials", 300, "evaluations of the final stage's kicks (its share is "
+            "descent_trials + restructure_trials + kick_trials) on the incumbent after the "
+            "structural search and the removal moves (`planner_core.search.structure.kicks`: "
+            "one hover point moved by a normal step of 300 m standard deviation per axis, the "
+            "plan descended in a race against the incumbent, kept when better; with the descent "
+            "on); the same share is one round of the improving stage",
             "an integer >= 0", _int_at_least(0)),
-    Default("other_trials", 320, "evaluations of the final stage given to a second plan of "
-            "another structure: the best of the starts kept for the DE with fewer (else more) "
-            "hover points than the final plan, finished the same way (descent, structural "
-            "search, removal moves, kicks; `planner_core.search.final.finish`), the better of the "
-            "two kept; counted in the final stage's tenth of the budget less the population and "
-            "the polish's plans, the final plan's own share first (the full 320 from a budget "
-            "of about 9,700); it runs only when at least descent_trials are left for it, and "
-            "the final plan gets them otherwise or when the starts hold no other structure; "
-            "0: none",
+    Default("other_trials", 320, "evaluations of the pipeline's `other structure` stage: the "
+            "best plan of the pool (constructive, seeder, descended) with fewer (else more) "
+            "hover points than the incumbent, finished the same way (descent, structural "
+            "search, removal moves, kicks; `planner_core.search.final.finish`); it runs only "
+            "when at least descent_trials are left for it; 0: none",
             "an integer >= 0", _int_at_least(0)),
+    Default("de_share", 0.8, "share of the budget the DE gets, of the default budget at most "
+            "(and at least its population; `planner_core.pipeline`): the rest and any budget "
+            "beyond the default go to the constructive plans, the descents, the polish, the "
+            "final stage and the improving rounds (kicks, structural search, restarts from "
+            "other structures and fresh constructive plans), the stages that turn budget into "
+            "a better plan (docs/architecture.md, 'Where the budget goes')",
+            "a number in [0, 1]", _share),
+    Default("time_limit", None, "seconds after which the pipeline stops its improving stages "
+            "and returns the best plan found (null: none; the kernel compile is not counted); "
+            "a time limit trades determinism for a deadline", "null or a number > 0",
+            lambda v: v is None or _positive_number(v)),
     Default("seed", 0, "random seed of a planning run (same seed, same plan)", "an integer >= 0",
             _int_at_least(0)),
     Default("score_factor", 10.0, "penalised score f + 10 * phi that ranks optimisers "
@@ -272,6 +284,7 @@ DESCENT_TRIALS: int = DEFAULTS["descent_trials"].value
 RESTRUCTURE_TRIALS: int = DEFAULTS["restructure_trials"].value
 KICK_TRIALS: int = DEFAULTS["kick_trials"].value
 OTHER_TRIALS: int = DEFAULTS["other_trials"].value
+DE_SHARE: float = DEFAULTS["de_share"].value
 SEED: int = DEFAULTS["seed"].value
 SCORE_FACTOR: float = DEFAULTS["score_factor"].value
 SUITE_SEED: int = DEFAULTS["suite_seed"].value

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from planner_core.bench import baselines
-from planner_core.bench.baselines import BudgetedProblem, BudgetExceeded, optimise, problem_for
+from planner_core.bench.baselines import BudgetExceeded, Evaluator, optimise, problem_for
 from planner_core.model.formulas import PENALTY_FACTOR
 from planner_core.model.problem import Problem
 
@@ -88,7 +88,7 @@ def test_seed_lp_is_the_des_start_plus_the_lp(problem: Problem) -> None:
 
     res = optimise("seed-lp", problem, 1000, seed=5)
     assert res.evaluations == POPULATION + 1
-    state = init(BudgetedProblem(problem, 1000), 5, POPULATION, 1000)
+    state = init(Evaluator(problem, 1000), 5, POPULATION, 1000)
     assert (res.phi, res.f) <= (state.best_phi, state.best_f)
     # the DE (with the same start) counts the same initial population
     de = optimise("de-adaptive", problem, 1000, seed=5)
@@ -113,7 +113,7 @@ def test_seeded_cmaes_default_step_is_the_swept_one(problem: Problem) -> None:
     reg = optimise("cmaes-seeded-lp", problem, 600, seed=3)
 
     def run(sigma0: float):
-        return cmaes.optimise(BudgetedProblem(with_init(problem, "seeded"), 600), 600, 3,
+        return cmaes.optimise(Evaluator(with_init(problem, "seeded"), 600), 600, 3,
                               seeded=True, sigma0=sigma0)
 
     same = run(cmaes.SEEDED_SIGMA0)
@@ -129,7 +129,7 @@ def test_fixed_length_variant_uses_every_point(problem: Problem) -> None:
 
 
 def test_penalised_optimisers_return_best_score_seen(problem: Problem) -> None:
-    budgeted = BudgetedProblem(problem, 400)
+    budgeted = Evaluator(problem, 400)
     res = baselines.get("cmaes").function()(budgeted, 400, 1)
     tr = budgeted.trace("penalised")
     assert res.f + PENALTY_FACTOR * res.phi == pytest.approx(tr.best_score.min())
@@ -137,7 +137,7 @@ def test_penalised_optimisers_return_best_score_seen(problem: Problem) -> None:
 
 
 def test_budgeted_problem_refuses_to_overspend(problem: Problem) -> None:
-    b = BudgetedProblem(problem, 10)
+    b = Evaluator(problem, 10)
     rng = np.random.default_rng(0)
     X = problem.lower + rng.random((10, problem.dim)) * (problem.upper - problem.lower)
     b.evaluate(X[:6])

@@ -19,7 +19,9 @@ def test_plan_writes_plan_plot_report_and_verifies(tmp_path: Path) -> None:
     r = run_cli("plan", DEMO, "-o", out, "--plot", png, "--report", rep, "--budget", 3000)
     assert r.returncode == 0, r.stderr
     assert "constraints (simulator)" in r.stdout and "C5" in r.stdout
-    assert "gen" in r.stderr and "evals" in r.stderr  # progress on stderr
+    # progress on stderr, naming the stage running; the summary starts on its own line
+    assert "constructive" in r.stderr and "finish" in r.stderr and "evals" in r.stderr
+    assert r.stdout.startswith("map 'small-demo'")
     for path in (out, png, rep):  # every file written is reported
         assert f"wrote {path}" in r.stdout.splitlines(), r.stdout
     doc = json.loads(out.read_text())
@@ -104,3 +106,30 @@ def test_example_script_plans_and_verifies(tmp_path: Path) -> None:
                        text=True, timeout=300)
     assert r.returncode == 0, r.stdout + r.stderr
     assert out.exists() and "C5" in r.stdout
+
+
+def test_plan_time_limit_and_bad_budgets_exit_2_with_one_line(tmp_path: Path) -> None:
+    """A budget below the population and a non-positive time limit are refused up front (one
+    line naming the option, exit 2, nothing written)."""
+    out = tmp_path / "m.plan"
+    for args, needle in ((["--budget", "50"], "--budget: must be an integer >= population"),
+                         (["--time-limit", "0"], "--time-limit: must be null or a number > 0"),
+                         (["--time-limit", "-3"], "--time-limit: must be"),
+                         (["--time-limit", "nan"], "--time-limit: must be")):
+        r = run_cli("plan", DEMO, "-o", out, *args)
+        lines = r.stderr.strip().splitlines()
+        assert r.returncode == 2 and len(lines) == 1 and needle in lines[0], (args, r.stderr)
+        assert not out.exists()
+
+
+def test_plan_time_limit_stops_the_improving_stages(tmp_path: Path) -> None:
+    """With a budget no machine spends in 1.5 s the clock ends the run: the plan is written,
+    its summary says so and the last stage is marked."""
+    out, rep = tmp_path / "m.plan", tmp_path / "r.json"
+    r = run_cli("plan", DEMO, "-o", out, "--budget", 10_000_000, "--time-limit", 1.5,
+                "--report", rep)
+    assert r.returncode == 0, r.stderr
+    assert "stopped by the time limit" in r.stdout
+    plan = json.loads(rep.read_text())["plan"]
+    assert plan["stopped"] == "time limit" and plan["evaluations"] < 10_000_000
+    assert plan["timings"]["planning"] < 1.5 + 1.0  # a stage stops at its next evaluation

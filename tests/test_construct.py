@@ -10,7 +10,6 @@ import itertools
 import numpy as np
 import pytest
 
-from planner_core.bench.baselines import BudgetedProblem
 from planner_core.model.formulas import deb_best
 from planner_core.model.problem import Problem
 from planner_core.model.routing import open_path, open_tour, path_cost
@@ -137,32 +136,39 @@ def test_leg_times_route_blocked_legs_through_the_graph(walled: Problem) -> None
     assert straight < W[0, 1] <= detour + 1e-9
 
 
-def test_with_starts_replaces_the_last_rows(walled: Problem) -> None:
+def test_injected_population_replaces_the_last_rows(walled: Problem) -> None:
     starts = np.stack([walled.lower, walled.upper])
-    X = construct.WithStarts(walled, starts).initial_population(np.random.default_rng(0), 8)
+    X = construct.InjectedPopulation(walled, starts).initial_population(
+        np.random.default_rng(0), 8)
     own = walled.initial_population(np.random.default_rng(0), 8)
     np.testing.assert_array_equal(X[:6], own[:6])
     np.testing.assert_array_equal(X[6:], starts)
     # the uniform start mode (no hook): uniform rows in the box, then the starts
     from planner_core.search.init_modes import UniformStart
 
-    U = construct.WithStarts(UniformStart(walled), starts).initial_population(
+    U = construct.InjectedPopulation(UniformStart(walled), starts).initial_population(
         np.random.default_rng(0), 8)
     assert np.all((U[:6] >= walled.lower) & (U[:6] <= walled.upper))
     np.testing.assert_array_equal(U[6:], starts)
 
 
-def test_start_from_plans_counts_its_evaluations(walled: Problem) -> None:
-    b = BudgetedProblem(walled, 1000)
-    opt, n = construct.start_from_plans(walled, b, 0, starts=3, candidates=5)
-    assert n == b.count == 5
-    assert isinstance(opt, construct.WithStarts) and len(opt.starts) == 3
-    # the starts are the Deb-best of the candidates
+def test_the_constructive_stage_scores_its_plans_in_one_call(walled: Problem) -> None:
+    """The pipeline's first stage: the first `start_candidates` plans (and the seeder's when
+    the descents run) scored once each, through the evaluator, into the pool."""
+    from planner_core.pipeline import Evaluator, PlanConfig
+    from planner_core.pipeline.stages import ConstructivePlans, PlanState, Pool
+
+    cfg = PlanConfig(budget=1000, population=10, start_candidates=5, descent=False)
+    ev = Evaluator(walled, 1000)
+    d = walled.lower.shape[0]
+    state = PlanState(walled, cfg, Pool.empty(d), np.zeros((0, d)))
+    with ev.stage("constructive", ConstructivePlans().share(cfg)):
+        out = ConstructivePlans().run(state, ev)
     X, _ = construct.candidate_plans(walled, 0, 5)
+    assert ev.count == len(out.pool) == len(X) == 5 and ev.records[0].evaluations == 5
+    np.testing.assert_array_equal(out.pool.X, X)
     f, phi = walled.evaluate(X)
-    np.testing.assert_array_equal(opt.starts[0], X[deb_best(f, phi)])
-    same, none = construct.start_from_plans(walled, b, 0, starts=0, candidates=5)
-    assert same is b and none == 0
+    np.testing.assert_array_equal(out.pool.X[out.pool.ordered()[0]], X[deb_best(f, phi)])
 
 
 def test_plan_starts_from_the_constructive_plans() -> None:
@@ -176,7 +182,8 @@ def test_plan_starts_from_the_constructive_plans() -> None:
     assert p.evaluations <= 1200
     exact = lamde_mission.plan(path, seed=1, budget=1200, population=40, descent=False)
     assert exact.evaluations == 1200
-    assert p.history["evaluations"][0] > 40  # the constructive plans were scored first
+    assert p.stages[0].name == "constructive"  # the constructive plans were scored first
+    assert p.history["evaluations"][0] == p.stages[0].evaluations > 1
     from planner_core.defaults import START_CANDIDATES
     from planner_core.model.mapio import load_map
 
@@ -190,7 +197,8 @@ def test_plan_starts_from_the_constructive_plans() -> None:
     np.testing.assert_array_equal(p.hover_times, again.hover_times)
     plain = lamde_mission.plan(path, seed=1, budget=1200, population=40, starts=0,
                                descent=False)
-    assert plain.evaluations == 1200 and plain.history["evaluations"][0] == 40
+    assert plain.evaluations == 1200 and [s.name for s in plain.stages] == ["de", "polish"]
+    assert plain.history["evaluations"][0] == 40  # the DE's first population
     with pytest.raises(ValueError, match="^starts: "):
         lamde_mission.plan(path, starts=-1)
 

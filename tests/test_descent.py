@@ -648,90 +648,100 @@ def test_finish_with_another_structure_keeps_the_better_and_counts_both() -> Non
     assert sum(calls) == own.evaluations
 
 
-def test_plan_finishes_a_second_structure_where_the_first_cannot_reach_it(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    """T06, seed 1: the final plan has 7 hover points and its finish ends ~1.5 % above the
-    best-known; the best start with another number of points, finished too, serves the two
-    sensor groups of the map's west from one point and wins (docs/search.md, "A second
-    structure"). Without the second structure (other_trials 0) the plan is worse."""
-    import planner_core.defaults as defaults
+def test_plan_finishes_a_second_structure_where_the_first_cannot_reach_it() -> None:
+    """T06, seed 2: the incumbent after the final stage has 7 hover points; the pool's best
+    plan with fewer points, finished too (the pipeline's `other structure` stage), serves the
+    sensor groups of the map's west from fewer points and wins (docs/search.md, "A second
+    structure"). Without that stage (other_trials 0) the plan is worse."""
     from lamde_mission.api import plan
+    from planner_core.pipeline import PlanConfig
 
-    with_other = plan(SUITE / "T06.json", seed=1)
-    monkeypatch.setattr(defaults, "OTHER_TRIALS", 0)
-    without = plan(SUITE / "T06.json", seed=1)
+    with_other = plan(SUITE / "T06.json", config=PlanConfig(seed=2))
+    without = plan(SUITE / "T06.json", config=PlanConfig(seed=2, other_trials=0))
     assert with_other.evaluations <= 10_000 and without.evaluations <= 10_000
-    assert without.polish["final_evaluations"] < with_other.polish["final_evaluations"]
+    other = [s for s in with_other.stages if s.name == "other structure"]
+    assert len(other) == 1 and other[0].evaluations <= 320
+    assert other[0].f_after < other[0].f_before  # the second structure won
+    assert "other structure" not in [s.name for s in without.stages]
     assert with_other.f < without.f * (1 - 0.005)
     assert len(with_other.hover_points) < len(without.hover_points)
-    pol = with_other.polish
-    assert pol is not None and pol["final_other_won"] and 0 < pol["final_other_points"]
-    assert without.polish is not None and without.polish["final_other_points"] == 0
 
 
-def test_the_plan_summary_says_whether_a_second_structure_ran_and_won(tmp_path: Path) -> None:
+def test_the_plan_summary_tables_the_stages(tmp_path: Path) -> None:
+    """The summary starts on its own line and lists every stage that ran with its
+    evaluations, seconds and f before -> after."""
     from tests.conftest import run_cli
 
-    r = run_cli("plan", SUITE / "T06.json", "-o", tmp_path / "m.plan", "--seed", 1)
+    r = run_cli("plan", SUITE / "T06.json", "-o", tmp_path / "m.plan", "--seed", 2)
     assert r.returncode == 0, r.stderr
-    line = next(s for s in (r.stdout + r.stderr).splitlines() if "final stage" in s)
-    assert "a second start of" in line and "its plan kept" in line, line
+    out = r.stdout.splitlines()
+    assert out[0].startswith("map 'T06'"), out[0]
+    head = out.index(next(s for s in out if s.strip().startswith("stages")))
+    rows = [s.split() for s in out[head + 1:head + 9]]
+    names = [" ".join(r[:2]) if r[1].isalpha() else r[0] for r in rows]
+    assert names[:5] == ["constructive", "start descents", "de", "polish", "finish"]
+    assert "other structure" in names and "->" in out[head + 1]
 
 
-def test_plan_gives_the_second_share_to_the_final_plan_when_no_start_differs() -> None:
-    """T03, seed 0: every start kept for the DE has 4 hover points, so there is no second
-    structure and the final plan's finish gets the whole final stage (640 + 320), not 640
-    with 320 left unspent."""
+def test_plan_and_the_benchmark_entry_run_the_same_pipeline() -> None:
+    """One pipeline, declared once: `plan` and the benchmark's `planner` entry give the same
+    plan for the same map, seed and budget, also at budgets just above the population."""
     from lamde_mission.api import plan
-
-    p = plan(SUITE / "T03.json", seed=0)
-    assert p.polish is not None and p.polish["final_other_points"] == 0
-    assert not p.polish["final_other_won"]
-    assert 640 < p.polish["final_evaluations"] <= 960 and p.evaluations <= 10_000
-
-
-def test_the_benchmark_planner_runs_the_second_structure_within_its_budget(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    """The benchmark's `planner` entry finishes a second structure as `plan` does: on T06 at
-    8,000 evaluations a second start is finished with what the final plan's 640 leave of the
-    final stage (a tenth of the DE's room), and the count stays within the budget."""
-    import planner_core.search.final as descent
     from planner_core.bench import baselines
 
-    seen: list[tuple[int, int, bool]] = []
-    real = descent.finish
-
-    def record(problem, x, evaluate, *, trials, other=None, other_trials=0, **kw):  # noqa: ANN001, ANN202
-        seen.append((trials, other_trials, other is not None))
-        return real(problem, x, evaluate, trials=trials, other=other, other_trials=other_trials,
-                    **kw)
-
-    monkeypatch.setattr(descent, "finish", record)
     problem = Problem(SUITE / "T06.json")
-    res = baselines.optimise("planner", problem, 8_000, 1)
-    assert res.evaluations <= 8_000
-    (trials, other_trials, has_other), = seen
-    assert has_other and trials == 640 and 0 < other_trials <= 320
+    for budget in (110, 300, 2_500):
+        p = plan(SUITE / "T06.json", seed=4, budget=budget)
+        r = baselines.optimise("planner", problem, budget, 4)
+        assert r.evaluations == p.evaluations <= budget
+        b = problem.breakdown(r.x)  # what `plan` reports of the same x
+        assert b["f"] == p.f and b["phi"] == p.phi and r.phi == p.phi
+        np.testing.assert_array_equal(np.asarray(b["hover_points"]).reshape(-1, 2),
+                                      p.hover_points)
+        np.testing.assert_array_equal(b["hover_times"], p.hover_times)
 
 
-def test_final_shares_give_the_second_plan_the_rest_only_when_it_can_descend() -> None:
-    from planner_core.search.final import final_shares
+def test_shares_follow_the_declared_rules_and_leave_what_later_stages_reserve() -> None:
+    """`allotment`: a stage gets its share, never what later stages reserve (the DE's
+    population, the polish's LP plans); None takes the rest; the DE's share is of the default
+    budget at most, so budget beyond it goes to the improving rounds."""
+    from planner_core.pipeline import DEFAULT_PIPELINE, PlanConfig
+    from planner_core.pipeline.pipeline import allotment
 
-    assert final_shares(960, 640, True, 40) == (640, 320)
-    assert final_shares(960, 640, False, 40) == (960, 0)  # no other structure: all of it
-    assert final_shares(680, 640, True, 40) == (640, 40)
-    assert final_shares(679, 640, True, 40) == (679, 0)  # 39 would not even descend it
-    assert final_shares(300, 640, True, 40) == (300, 0)  # a small budget: the final plan's
+    stages = {s.name: (i, s) for i, s in enumerate(DEFAULT_PIPELINE)}
+
+    def share(name: str, cfg: PlanConfig, left: int) -> int:
+        i, s = stages[name]
+        return allotment(s, DEFAULT_PIPELINE[i + 1:], cfg, left)
+
+    cfg = PlanConfig()
+    assert share("constructive", cfg, 10_000) == 64 + 20
+    assert share("start descents", cfg, 9_916) == 2 * 3 * 40
+    assert share("de", cfg, 9_676) == 8_000
+    assert share("polish", cfg, 1_676) == 16
+    assert share("finish", cfg, 1_660) == 640 and share("other structure", cfg, 1_020) == 320
+    assert share("improve", cfg, 700) == 700
+    big = PlanConfig(budget=100_000)
+    assert share("de", big, 99_676) == 8_000  # not 80,000: the rest goes to `improve`
+    # below the default budget the DE yields to the final stage's shares (16 + 640 + 320)
+    small = PlanConfig(budget=3_000)
+    assert share("de", small, 2_676) == 2_676 - 16 - 640 - 320
+    # a budget just above the population: the DE keeps its population, the polish its plans
+    tiny = PlanConfig(budget=110)
+    assert share("constructive", tiny, 110) == 0 and share("de", tiny, 110) == 100
+    assert share("polish", tiny, 10) == 10
+    # with the descent off nothing runs after the polish: the DE takes the rest
+    off = PlanConfig(descent=False)
+    assert share("de", off, 9_916) == 9_900 and share("improve", off, 0) == 0
 
 
-def test_plan_runs_no_second_plan_on_a_sliver_of_a_budget() -> None:
-    """T06 at 6,526 evaluations: the final stage is (6,526 - 16 - 100) // 10 = 641, one more
-    than the final plan's 640; one evaluation would not even descend a second plan, so the
-    final plan gets it (a reviewer found a 'second start finished' that had spent 1)."""
+def test_a_stage_runs_only_with_its_allotment_and_a_descent_fits() -> None:
+    """Small budgets on T06: every stage spends at most its allotment, the total at most the
+    budget, and the second structure runs only with a descent's 40 evaluations for it."""
     from lamde_mission.api import plan
 
-    p = plan(SUITE / "T06.json", seed=1, budget=6_526)
-    assert p.polish is not None and p.polish["final_other_points"] == 0
-    assert p.polish["final_other_evaluations"] == 0 and p.evaluations <= 6_526
+    for budget in (1_100, 1_400, 3_000):
+        p = plan(SUITE / "T06.json", seed=1, budget=budget)
+        assert p.evaluations <= budget
+        assert all(s.evaluations <= s.allotted for s in p.stages)
+        assert all(s.allotted >= 40 for s in p.stages if s.name == "other structure")

@@ -7,7 +7,7 @@ from functools import partial
 import numpy as np
 import pytest
 
-from planner_core.bench.baselines import BudgetedProblem
+from planner_core.bench.baselines import Evaluator
 from planner_core.model.problem import Problem
 from planner_core.search.de import run
 from planner_core.search.de.core import init, to_problem
@@ -50,7 +50,7 @@ def test_refine_candidates_are_valid_and_the_lp_one_not_worse(problem: Problem) 
 
 
 def test_memetic_step_counts_its_evaluations_and_keeps_the_elite(problem: Problem) -> None:
-    b = BudgetedProblem(problem, 200)
+    b = Evaluator(problem, 200)
     st = init(b, 1, 12, 200)
     nxt = memetic_step(st, b, partial(refine, problem))
     assert (
@@ -60,11 +60,11 @@ def test_memetic_step_counts_its_evaluations_and_keeps_the_elite(problem: Proble
 
 
 def test_run_with_memetic_spends_exactly_the_budget(problem: Problem) -> None:
-    b = BudgetedProblem(problem, 517)
+    b = Evaluator(problem, 517)
     res = run(b, seed=3, population=12, budget=517, refine=partial(refine, problem))
     assert res.evaluations == b.count == 517
     again = run(
-        BudgetedProblem(problem, 517),
+        Evaluator(problem, 517),
         seed=3,
         population=12,
         budget=517,
@@ -76,7 +76,7 @@ def test_run_with_memetic_spends_exactly_the_budget(problem: Problem) -> None:
 def test_polish_elite_includes_the_best_and_never_loses_to_it(problem: Problem) -> None:
     from planner_core.search.polish import polish_elite, polish_hover_times
 
-    res = run(BudgetedProblem(problem, 300), seed=2, population=12, budget=300)
+    res = run(Evaluator(problem, 300), seed=2, population=12, budget=300)
     st = res.state
     X = to_problem(problem, st.X)
     xs, pols = polish_elite(problem, X, st.f, st.phi, 5)

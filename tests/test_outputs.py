@@ -54,7 +54,7 @@ def test_every_bad_output_exits_2_before_the_optimisation(tmp_path: Path) -> Non
         assert r.returncode == 2, (args, r.stderr)
         lines = r.stderr.strip().splitlines()
         assert len(lines) == 1 and needle in lines[0], (args, r.stderr)
-        assert "gen " not in r.stderr and "Traceback" not in r.stderr
+        assert "evals" not in r.stderr and "Traceback" not in r.stderr
         assert r.stdout == ""
     assert not (tmp_path / "missing").exists()  # no silent folder creation
     assert not (tmp_path / "ok.plan").exists()

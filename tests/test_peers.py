@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from planner_core.bench.baselines import BudgetedProblem, optimise
+from planner_core.bench.baselines import Evaluator, optimise
 from planner_core.bench.baselines import engineering as eng
 from planner_core.defaults import POPULATION
 from planner_core.model.problem import Problem
@@ -114,7 +114,7 @@ def test_pymoo_ga_duplicate_start_spends_budget_exactly(walled: Problem) -> None
         def initial_population(self, rng: np.random.Generator, n: int) -> np.ndarray:
             return np.repeat(walled.initial_population(rng, 1)[:1], n, axis=0)
 
-    b = BudgetedProblem(Clones(), 240)
+    b = Evaluator(Clones(), 240)
     res = ga(b, 240, seed=0, population=20)
     assert res.evaluations == b.count == 240
 
@@ -130,7 +130,7 @@ def test_pymoo_ga_stops_when_nothing_new_can_be_made() -> None:
         def evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             return X.sum(axis=1), np.zeros(len(X))
 
-    res = ga(BudgetedProblem(Point(), 500), 500, seed=0, population=10)
+    res = ga(Evaluator(Point(), 500), 500, seed=0, population=10)
     assert 10 <= res.evaluations < 500 and res.f == pytest.approx(1.5)
 
 

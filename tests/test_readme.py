@@ -104,7 +104,12 @@ COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
     "python benchmarks/bench_evaluate.py":
         ("test_gis.py::test_bench_evaluate_prints_suite_and_campus_in_one_run",
          ("bench_evaluate",)),
+    "python benchmarks/bench_plan.py --compare":
+        ("test_benchmarks.py::test_bench_plan_compares_with_another_checkout", ('"--compare"',)),
     "python benchmarks/bench_plan.py": ("test_benchmarks.py", ("bench_plan",)),
+    "python benchmarks/bench_anytime.py":
+        ("test_benchmarks.py::test_bench_anytime_tables_the_gap_per_budget_multiple",
+         ("bench_anytime", '"--jobs"')),
     "python benchmarks/bench_order.py":
         ("test_benchmarks.py::test_bench_order_compares_our_order_with_ortools", ("bench_order",)),
     "lamde-mission bench": ("test_bench.py::test_cli_bench_then_report", ('"bench"',)),

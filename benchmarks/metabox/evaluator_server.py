@@ -11,7 +11,7 @@ stdin/stdout, one JSON object per line (README.md beside this file):
     -> {"op": "finish"}
     <- {"record": {...}}   the run's record, also appended to OUT/results.jsonl
 
-Every evaluation counts against the budget (`planner_core.bench.baselines.BudgetedProblem`); a batch
+Every evaluation counts against the budget (`planner_core.bench.baselines.Evaluator`); a batch
 past it is answered {"error": ...} and evaluates nothing. The reported result is the best
 penalised score seen (as for CMA-ES), so the record is scored exactly as our own optimisers.
 
@@ -33,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-from planner_core.bench.baselines import BudgetedProblem
+from planner_core.bench.baselines import Evaluator
 from planner_core.bench.records import RESULTS_FILE, ResultsWriter
 from planner_core.bench.runner import SCHEMA, downsample, read_map_file, run_seed
 from planner_core.model.formulas import penalised_score
@@ -62,7 +62,7 @@ def main(argv: list[str] | None = None) -> int:
         a.seed = 0
     content, sha = read_map_file(a.map)
     problem = Problem(content)
-    bp = BudgetedProblem(problem, a.budget)
+    bp = Evaluator(problem, a.budget)
     t0 = time.perf_counter()
 
     def reply(obj: dict) -> None:

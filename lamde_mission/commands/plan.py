@@ -31,7 +31,14 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=D.SEED,
                    help=f"random seed (same seed, same plan; default {D.SEED})")
     p.add_argument("--budget", type=int, default=D.BUDGET,
-                   help=f"evaluations (default {D.BUDGET}; must be >= the population)")
+                   help=f"evaluations in all stages (default {D.BUDGET:,}; must be >= the "
+                   "population); what the default pipeline does not need for its fixed stages "
+                   "goes to the improving rounds, so a larger budget buys a better plan")
+    p.add_argument("--time-limit", type=float, metavar="SECONDS",
+                   help="stop the improving stages after SECONDS and write the best plan found "
+                   "(the one-time kernel compile is not counted; default: none, the budget "
+                   "alone ends the run). Combine with a large --budget to plan for a deadline; "
+                   "a time limit trades the same-seed-same-plan guarantee for the deadline")
     p.add_argument("--population", type=int, default=D.POPULATION,
                    help=f"DE population (default {D.POPULATION}, at least {D.MIN_POPULATION})")
     p.add_argument("--configurator", choices=D.CONFIGURATORS, default=D.CONFIGURATOR,
@@ -79,7 +86,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 class _ProgressBar:
-    """One updating line on stderr (a TTY), or a line per quarter of the budget otherwise."""
+    """The stage running and the budget spent: one updating line on stderr (a TTY), or a line
+    per stage and per quarter of the budget otherwise; `close` ends the line, so what is
+    printed next starts on its own."""
 
     def __init__(self, stream: Any = sys.stderr, width: int = 24):
         self.stream = stream
@@ -87,15 +96,20 @@ class _ProgressBar:
         self.tty = bool(getattr(stream, "isatty", lambda: False)())
         self.last = 0.0
         self.next_quarter = 0.25
+        self.stage = ""
+        self.open = False  # a TTY line is written and not yet ended
+        self.wide = 0
 
     def __call__(self, p: Any) -> None:
         frac = p.evaluations / max(p.budget, 1)
         done = frac >= 1.0
         now = time.monotonic()
+        new_stage = p.stage != self.stage
+        self.stage = p.stage
         if self.tty:
-            if not done and now - self.last < 0.1:
+            if not (done or new_stage) and now - self.last < 0.1:
                 return
-        elif not done and frac < self.next_quarter:
+        elif not (done or new_stage) and frac < self.next_quarter:
             return
         self.last = now
         while self.next_quarter <= frac:
@@ -103,13 +117,41 @@ class _ProgressBar:
         fill = int(round(frac * self.width))
         bar = "#" * fill + "." * (self.width - fill)
         state = "feasible" if p.best_phi == 0 else "infeasible"
-        line = (f"gen {p.generation:4d} [{bar}] {p.evaluations}/{p.budget} evals  "
+        line = (f"{p.stage:<15} [{bar}] {p.evaluations}/{p.budget} evals  "
                 f"best f {p.best_f:10.2f}  phi {p.best_phi:10.4g}  {state}")
         if self.tty:
-            self.stream.write("\r" + line + ("\n" if done else ""))
+            self.stream.write("\r" + line.ljust(self.wide))
+            self.wide = max(self.wide, len(line))
+            self.open = True
         else:
             self.stream.write(line + "\n")
         self.stream.flush()
+
+    def close(self) -> None:
+        """End an open TTY line (idempotent)."""
+        if self.open:
+            self.stream.write("\n")
+            self.stream.flush()
+            self.open = False
+
+
+def _stage_table(plan: Any) -> list[str]:
+    """The summary's per-stage lines: evaluations, seconds and the incumbent's f before and
+    after each stage that ran."""
+    if not plan.stages:
+        return []
+
+    def fmt(f: float, phi: float) -> str:
+        if f != f or f == float("inf"):
+            return "-"
+        return f"{f:.2f}" if phi == 0 else f"{f:.2f} (phi {phi:.3g})"
+
+    out = ["  stages          evaluations   seconds   f before -> after"]
+    for s in plan.stages:
+        stop = f"  [{s.stopped}]" if s.stopped else ""
+        out.append(f"    {s.name:<15} {s.evaluations:>8}  {s.seconds:8.3f}   "
+                   f"{fmt(s.f_before, s.phi_before)} -> {fmt(s.f_after, s.phi_after)}{stop}")
+    return out
 
 
 def _summary(
@@ -124,10 +166,11 @@ def _summary(
     t_compile = plan.timings.get("compile", 0.0)
     compiling = f"; {t_compile:.1f} s compiling (or loading) the kernels" if t_compile > 0.05 \
         else ""
+    stopped = f", stopped by the {plan.stopped}" if plan.stopped else ""
     lines = [
         f"map '{printable(m.name)}': {plan.n_hover} hover points, {plan.evaluations} evaluations, "
-        f"{plan.wall_time - plan.timings.get('compile', 0.0):.2f} s (seed {plan.seed}, "
-        f"{plan.configurator})" + compiling,
+        f"{plan.timings.get('planning', plan.wall_time - t_compile):.2f} s planning (seed "
+        f"{plan.seed}, {plan.configurator}{stopped})" + compiling,
         f"  flight time   {b['t_fly']:10.2f} s    ({who} {t.t_fly:.2f} s)",
         f"  hover time    {b['t_hover']:10.2f} s    ({who} {t.t_hover:.2f} s)",
         f"  f             {plan.f:10.2f}      ({who} {t.f:.2f}; alpha {m.spec.objective.alpha:g})",
@@ -144,16 +187,7 @@ def _summary(
         lines.append(f"  polish        f {pol['f_before']:.2f} -> {pol['f_after']:.2f}, "
                      f"phi {pol['phi_before']:.4g} -> {pol['phi_after']:.4g}"
                      + ("" if pol["accepted"] else " (kept the unpolished plan)"))
-        if "final_f_before" in pol:
-            other = pol.get("final_other_points", 0)
-            theirs = pol.get("final_other_evaluations", 0)
-            spent = (f"{pol['final_evaluations']} evaluations" if not other else
-                     f"{pol['final_evaluations'] - theirs} + {theirs} evaluations; a second "
-                     f"start of {other} hover points finished too, "
-                     + ("its plan kept" if pol.get("final_other_won") else "not better"))
-            lines.append(f"  final stage   f {pol['final_f_before']:.2f} -> "
-                         f"{pol['final_f_after']:.2f} (descent, structural search, removal "
-                         f"moves, kicks: {spent})")
+    lines.extend(_stage_table(plan))
     lines.append("  data collected vs required (Mbit):")
     req = dict(zip(m.sensor_ids, m.required_data.tolist(), strict=True))
     got = t.collected
@@ -243,8 +277,10 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"-o/--output: {exc}") from None
     try:
         D.check_run_args(population=args.population, budget=args.budget, starts=args.starts)
+        if args.time_limit is not None:
+            D.check("time_limit", args.time_limit)
     except ValueError as exc:  # "population: must be ...": name the option as typed
-        raise UsageError(f"--{exc}") from None
+        raise UsageError("--" + str(exc).replace("_", "-", 1)) from None
     configurator = args.configurator
     if args.policy is not None:
         if args.configurator != "lamde":
@@ -267,24 +303,36 @@ def run(args: argparse.Namespace) -> int:
     from lamde_mission.storage import storable_plan, stored_items
     from sim import replay, verify
 
-    if not args.quiet and not kernels_cached():
+    cached = kernels_cached()
+
+    def announce() -> None:
+        if args.quiet:
+            return
         print("compiling the planner's kernels (first run after install; they are cached on "
-              "disk for later runs)...", file=sys.stderr, flush=True)
+              "disk for later runs)..." if not cached else "loading the planner's compiled "
+              "kernels...", file=sys.stderr, flush=True)
+
     progress = None if args.quiet else _ProgressBar()
-    plan = make_plan(
-        m,
-        seed=args.seed,
-        budget=args.budget,
-        population=args.population,
-        configurator=configurator,
-        init=args.init,
-        memetic=args.memetic,
-        starts=args.starts,
-        descent=not args.no_descent,
-        variable_length=not args.fixed_length,
-        polish=not args.no_polish,
-        progress=progress,
-    )
+    try:
+        plan = make_plan(
+            m,
+            seed=args.seed,
+            budget=args.budget,
+            population=args.population,
+            configurator=configurator,
+            init=args.init,
+            memetic=args.memetic,
+            starts=args.starts,
+            descent=not args.no_descent,
+            variable_length=not args.fixed_length,
+            polish=not args.no_polish,
+            time_limit=args.time_limit,
+            progress=progress,
+            on_compile=announce,
+        )
+    finally:
+        if progress is not None:
+            progress.close()
     pm = m.planning_map()
     stored = storable_plan(plan, m, args.autopilot, planning_map=pm, finish=args.finish)
     items = stored_items(plan_to_items(stored, m, finish=args.finish), stored.dialect)

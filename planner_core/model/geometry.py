@@ -738,6 +738,9 @@ def _points_inside_kernel(pts, circles, verts, offs, normals, eflags, boxes, tol
 def _legs(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]]:
     a = np.asarray(a, dtype=np.float64)
     b = np.asarray(b, dtype=np.float64)
+    if (a.ndim == 2 and a.shape == b.shape and a.shape[1] == 2 and a.flags.c_contiguous
+            and b.flags.c_contiguous):  # the common (n, 2) call: nothing to broadcast
+        return a, b, a.shape[:1]
     if a.shape[-1:] != (2,) or b.shape[-1:] != (2,):
         raise ValueError(f"leg endpoints need a trailing axis of 2, got {a.shape} and {b.shape}")
     a, b = np.broadcast_arrays(a, b)

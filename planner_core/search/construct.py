@@ -50,7 +50,7 @@ from typing import Any
 
 import numpy as np
 
-from planner_core.model.formulas import deb_order, ground_reach
+from planner_core.model.formulas import ground_reach
 from planner_core.model.geometry import overlap_lengths, points_inside
 from planner_core.model.routing import open_path
 from planner_core.model.routing.graph import CLEAR
@@ -62,11 +62,9 @@ __all__ = [
     "FRACTIONS",
     "KMEANS_INITS",
     "LegTimes",
-    "WithStarts",
+    "InjectedPopulation",
     "SEEDER_PLANS",
-    "best_starts",
     "seeder_plans",
-    "start_from_plans",
     "build_plans",
     "candidate_plans",
     "candidate_sites",
@@ -350,66 +348,11 @@ def seeder_plans(problem: Any, seed: int, k: int) -> np.ndarray:
                       dtype=float).reshape(-1, d)
 
 
-def best_starts(
-    problem: Any,
-    seed: int,
-    evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
-    *,
-    candidates: int,
-    keep: int,
-    order: Order | None = None,
-    descents: int = 0,
-    trials: int = 0,
-    room: int | None = None,
-) -> tuple[np.ndarray, int]:
-    """Build up to `candidates` constructive plans (`candidate_plans`), score them with one
-    call of `evaluate` (X (m, d) -> f, phi; the caller counts those evaluations) and return the
-    `keep` Deb-best (k, d) with the number of evaluations spent.
-
-    With `descents` > 0 and `trials` > 0 also `SEEDER_PLANS` of the seeder's plans
-    (`seeder_plans`) are scored, and the `descents` Deb-best feasible plans of each kind
-    (constructive, seeder) are improved by `planner_core.search.descent.descend` (at most `trials`
-    evaluations each, through `evaluate`); the kept rows are then the Deb-best of all the plans
-    scored and descended. `room`: evaluations allowed in all (None: no limit); the descents
-    stop where it ends."""
-    X, _ = candidate_plans(problem, seed, candidates, order=order)
-    if len(X) == 0:
-        return X, 0
-    kinds = [X]
-    if descents > 0 and trials > 0:
-        left = (room if room is not None else len(X) + SEEDER_PLANS) - len(X)
-        kinds.append(seeder_plans(problem, seed, min(SEEDER_PLANS, max(left, 0))))
-    allX = np.vstack(kinds)
-    f, phi = (np.asarray(v, dtype=float) for v in evaluate(allX))
-    spent = len(allX)
-    rows, fs, phis = [allX], [f], [phi]
-    if descents > 0 and trials > 0:
-        from planner_core.search.descent import descend
-
-        start = 0
-        for part in kinds:
-            sl = slice(start, start + len(part))
-            start += len(part)
-            for i in deb_order(f[sl], phi[sl])[:descents]:
-                budget = trials if room is None else min(trials, room - spent)
-                r = descend(problem, part[i], evaluate, trials=budget) if budget > 0 else None
-                if r is None:
-                    continue
-                spent += r.evaluations
-                if not r.f < r.f_start:  # not moved: the start is already in the pool
-                    continue
-                rows.append(r.x[None, :])
-                fs.append(np.array([r.f]))
-                phis.append(np.array([r.phi]))
-    allX, f, phi = np.vstack(rows), np.concatenate(fs), np.concatenate(phis)
-    best = deb_order(f, phi)[:max(keep, 0)]
-    return allX[best], spent
-
-
-class WithStarts:
+class InjectedPopulation:
     """A problem whose `initial_population(rng, n)` is its own (uniform in the box when it has
-    none: what the DE itself would draw) with the last rows replaced by `starts` (k, d), problem
-    space; every other attribute is the wrapped problem's (also `problem`)."""
+    none: what the DE itself would draw) with the last rows replaced by the plans `starts`
+    (k, d), problem space (the pipeline's injected constructive plans); every other attribute
+    is the wrapped problem's (also `problem`)."""
 
     def __init__(self, problem: Any, starts: np.ndarray) -> None:
         self.problem = problem
@@ -432,28 +375,3 @@ class WithStarts:
         if k:
             X[n - k :] = self.starts[:k]
         return X
-
-
-def start_from_plans(
-    problem: Any,
-    opt: Any,
-    seed: int,
-    *,
-    starts: int,
-    candidates: int,
-    order: Order | None = None,
-    descents: int = 0,
-    trials: int = 0,
-    room: int | None = None,
-) -> tuple[Any, int]:
-    """The DE's view `opt` of the UAV problem `problem` (its `evaluate` is the one that counts)
-    with the `starts` Deb-best of up to `candidates` constructive plans in its initial
-    population (`best_starts`, scored and, with `descents` and `trials`, the best descended,
-    through `opt.evaluate`, at most `room` evaluations; `WithStarts`): (the wrapped problem,
-    evaluations spent). With starts or candidates <= 0: (opt, 0). What `plan` and the
-    benchmark's `planner` entry do before the DE runs."""
-    if starts <= 0 or candidates <= 0:
-        return opt, 0
-    X, n = best_starts(problem, seed, opt.evaluate, candidates=candidates, keep=starts,
-                       order=order, descents=descents, trials=trials, room=room)
-    return (WithStarts(opt, X) if len(X) else opt), n

@@ -38,13 +38,15 @@ LP for the tests' finite-difference check.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numba import njit
 
-from planner_core.model.formulas import L_VIO_TOL, deb_better
+from planner_core.model.formulas import L_VIO_TOL, deb_better, leg_time
 from planner_core.model.geometry import overlap_lengths
 from planner_core.search.polish import hover_lp
 
@@ -56,6 +58,7 @@ __all__ = [
     "held_points",
     "hover_of",
     "objective",
+    "gradient_reference",
     "objective_reference",
 ]
 
@@ -94,23 +97,43 @@ def hover_of(b: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _nodes(problem: Any, P: np.ndarray) -> np.ndarray:
-    return np.vstack([problem.start, P, problem.end])
+    """start -> P (I, 2) -> end as one (I + 2, 2) array."""
+    out = np.empty((len(P) + 2, 2))
+    out[0] = problem.start
+    out[1:-1] = P
+    out[-1] = problem.end
+    return out
 
 
 def objective(
-    problem: Any, P: np.ndarray, warm: dict[Any, Any] | None = None
+    problem: Any, P: np.ndarray, warm: dict[Any, Any] | None = None,
+    R: np.ndarray | None = None,
 ) -> tuple[float, np.ndarray, np.ndarray] | None:
     """F(P) (s), its gradient dF/dP (I, 2) (s/m) and the LP hover times T (I,) (s) for hover
     points P (I, 2) in metres; None when no hover times serve every sensor (the LP is
     infeasible). `warm`: the LP's warm-start store (`polish.hover_lp`). Module docstring for
-    the formulas."""
+    the formulas. `R`: the points' link rates (I, J), when the caller has them."""
     P = np.asarray(P, dtype=float).reshape(-1, 2)
     m = problem.model
-    R = m.rates(P)
+    if R is None:
+        R = m.rates(P)
     lp = hover_lp(R, m.required, m.t_max, warm)
     if lp is None:
         return None
     T, V, y = lp
+    t_fly, g = _flight_and_gradient(P, problem.start, problem.end, m.sensors, m.required, R,
+                                    T, y, m.altitude, m.decay, m.v_max, m.accel, m.alpha)
+    return m.alpha * t_fly + (1.0 - m.alpha) * V, g, T
+
+
+def gradient_reference(
+    problem: Any, P: np.ndarray, R: np.ndarray, T: np.ndarray, y: np.ndarray
+) -> tuple[float, np.ndarray]:
+    """The flight time t_fly (s) of start -> P -> end and dF/dP (I, 2) (s/m) with numpy, term
+    by term as in the module docstring: what `_flight_and_gradient` compiles (tests hold the
+    two equal). R (I, J) the points' link rates, T (I,) the LP's hover times, y (J,) its
+    coverage duals."""
+    m = problem.model
     nodes = _nodes(problem, P)
     seg = np.diff(nodes, axis=0)
     d = np.hypot(seg[:, 0], seg[:, 1])
@@ -126,8 +149,44 @@ def objective(
     dR = -m.decay * diff / slant[..., None] * (R[:, need] > 0)[..., None]
     w = y[need] / m.required[need]
     g_hover = -(T[:, None, None] * w[None, :, None] * dR).sum(axis=1)
-    g = m.alpha * g_fly + (1.0 - m.alpha) * g_hover
-    return m.alpha * t_fly + (1.0 - m.alpha) * V, g, T
+    return t_fly, m.alpha * g_fly + (1.0 - m.alpha) * g_hover
+
+
+@njit(cache=True, nogil=True)
+def _flight_and_gradient(P, start, end, sensors, required, R, T, y, H, decay, v_max, accel,
+                         alpha):  # pragma: no cover - compiled
+    """`gradient_reference` in one pass (its docstring): (t_fly, g (I, 2))."""
+    n = P.shape[0]
+    g = np.zeros((n, 2))
+    t_fly = 0.0
+    cruise = v_max * v_max / accel
+    px, py = start[0], start[1]
+    ux_prev, uy_prev = 0.0, 0.0
+    for k in range(n + 1):
+        qx, qy = (P[k, 0], P[k, 1]) if k < n else (end[0], end[1])
+        sx, sy = qx - px, qy - py
+        d = math.hypot(sx, sy)
+        t_fly += leg_time(d, v_max, accel)
+        dt = 1.0 / v_max if d > cruise else 1.0 / math.sqrt(accel * max(d, 1e-12))
+        ux, uy = (sx / d * dt, sy / d * dt) if d > 0 else (0.0, 0.0)
+        if k > 0:  # point k - 1 ends leg k - 1 and starts leg k
+            g[k - 1, 0] = alpha * (ux_prev - ux)
+            g[k - 1, 1] = alpha * (uy_prev - uy)
+        ux_prev, uy_prev = ux, uy
+        px, py = qx, qy
+    for i in range(n):
+        hx, hy = 0.0, 0.0
+        for j in range(sensors.shape[0]):
+            if required[j] <= 0 or R[i, j] <= 0:
+                continue
+            dx, dy = P[i, 0] - sensors[j, 0], P[i, 1] - sensors[j, 1]
+            slant = math.sqrt(dx * dx + dy * dy + H * H)
+            w = y[j] / required[j]
+            hx += T[i] * w * decay * dx / slant
+            hy += T[i] * w * decay * dy / slant
+        g[i, 0] += (1.0 - alpha) * hx
+        g[i, 1] += (1.0 - alpha) * hy
+    return t_fly, g
 
 
 def objective_reference(problem: Any, P: np.ndarray) -> float:
@@ -144,11 +203,12 @@ def objective_reference(problem: Any, P: np.ndarray) -> float:
     return m.alpha * t_fly + (1.0 - m.alpha) * float(T.sum())
 
 
-def held_points(problem: Any, P: np.ndarray) -> np.ndarray:
+def held_points(problem: Any, P: np.ndarray, R: np.ndarray | None = None) -> np.ndarray:
     """Indices of the hover points P (I, 2) that break C3 (summed link rate above the
-    bandwidth) or end or start a leg that cuts an obstacle by more than `L_VIO_TOL` (C5)."""
+    bandwidth) or end or start a leg that cuts an obstacle by more than `L_VIO_TOL` (C5).
+    `R`: the points' link rates (I, J), when the caller has them."""
     m = problem.model
-    bad = m.rates(P).sum(axis=1) > m.bandwidth
+    bad = (m.rates(P) if R is None else R).sum(axis=1) > m.bandwidth
     nodes = _nodes(problem, P)
     cut = overlap_lengths(nodes[:-1], nodes[1:], problem.obstacles) > L_VIO_TOL
     bad |= cut[:-1] | cut[1:]  # leg k ends at point k and leg k + 1 starts there
@@ -230,8 +290,10 @@ def descend(
             break
         move = -g / scale * step
         Pn = np.clip(P + move, 0.0, box)
-        held = held_points(problem, Pn)
+        Rn = problem.model.rates(Pn)
+        held = held_points(problem, Pn, Rn)
         if len(held):
+            Rn = None  # the held points move again
             Pn = _slide(problem, P, Pn, move, held, box)
             for _ in range(len(P)):  # what still breaks C3 or C5 stays where it was
                 held = held_points(problem, Pn)
@@ -240,7 +302,7 @@ def descend(
                 Pn[held] = P[held]
         kept = False
         if not len(held) and not np.array_equal(Pn, P):
-            nxt = objective(problem, Pn, warm)
+            nxt = objective(problem, Pn, warm, Rn)
             if nxt is not None:
                 xn = problem.encode(Pn, nxt[2])
                 fn, phin = evaluate(xn[None, :])

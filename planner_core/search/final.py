@@ -17,26 +17,7 @@ from planner_core.model.formulas import deb_better
 from planner_core.search.descent import Descent, Evaluate, descend
 from planner_core.search.structure import MOVES, kicks, restructure
 
-__all__ = ["finish", "other_structure", "final_budget", "final_shares", "final_stage"]
-
-def final_budget(room: int, trials: int) -> int:
-    """Evaluations the final plan's `finish` gets: `trials`, at most a tenth of `room` (the
-    budget less the population and the polish's plans, before the starts and the final stage
-    are taken off the DE); `plan` and the benchmark's `planner` entry both use it."""
-    return min(int(trials), int(room) // 10)
-
-
-def final_shares(final: int, own: int, other: bool, least: int) -> tuple[int, int]:
-    """How `plan` and the benchmark's `planner` entry split the final stage's `final`
-    evaluations: (the final plan's, the second plan's). The final plan's own share `own`
-    first; the second plan (`other`: whether `other_structure` found one) gets the rest only
-    when that is at least `least` (a descent's trials: less would not even descend it), else
-    the final plan gets all of it."""
-    mine = min(int(own), int(final))
-    if not other or final - mine < least:
-        return int(final), 0
-    return mine, int(final) - mine
-
+__all__ = ["finish", "other_structure"]
 
 def finish(
     problem: Any,
@@ -81,10 +62,11 @@ def finish(
 
 
 def other_structure(problem: Any, starts: np.ndarray | None, x: np.ndarray) -> np.ndarray | None:
-    """The first row of `starts` (k, d), decision vectors best first (`construct.best_starts`'s
-    order), that is a feasible plan with fewer hover points than plan x (d,), else the first
-    with more; None when there is none (or no starts). Fewer first: every point costs a stop,
-    the structural search splits a point more easily than it removes one, and on T06 and T07
+    """The first row of `starts` (k, d), decision vectors best first (the pipeline passes its
+    pool in Deb order), that is a feasible plan with fewer hover points than plan x (d,), else
+    the first with more; None when there is none (or no starts). Fewer first: every point
+    costs a stop, the structural search splits a point more easily than it removes one, and on
+    T06 and T07
     the final plans that end well above the best-known are those with more points (on
     `plan`'s seeds 0-24 of T06 fewer-first gave +0.52 % against +0.68 % for the best start of
     any other size; 8 seeds x 16 maps: T11 0.19 -> 0.16 %, T15 0.42 -> 0.44 %, the rest
@@ -103,33 +85,6 @@ def other_structure(problem: Any, starts: np.ndarray | None, x: np.ndarray) -> n
         if more is None:
             more = s
     return more
-
-
-def final_stage(
-    problem: Any,
-    x: np.ndarray,
-    evaluate: Evaluate,
-    *,
-    final: int,
-    own: int,
-    starts: np.ndarray | None,
-    seed: int,
-    descent_trials: int | None = None,
-    restructure_trials: int | None = None,
-) -> Descent | None:
-    """The final stage of `plan` and of the benchmark's `planner` entry on the polished plan x
-    (d,): the second structure from `starts` (`other_structure`), the `final` evaluations split
-    between the two plans (`final_shares`: x's own share `own` first; the second plan only when
-    a descent's trials are left for it), then `finish`. `descent_trials`,
-    `restructure_trials`: as `finish` (None: the defaults table's)."""
-    from planner_core.defaults import DESCENT_TRIALS
-
-    least = DESCENT_TRIALS if descent_trials is None else int(descent_trials)
-    other = other_structure(problem, starts, x)
-    mine, theirs = final_shares(final, own, other is not None, least)
-    return finish(problem, x, evaluate, trials=mine, seed=seed, descent_trials=descent_trials,
-                  restructure_trials=restructure_trials, other=other if theirs else None,
-                  other_trials=theirs)
 
 
 def _finish_one(

@@ -4,7 +4,7 @@ Each optimiser lives in its own module with ``optimise(problem, budget, seed) ->
 (x, f, phi, evaluations, history). The registry below maps names to those functions (imported
 lazily, so listing names never imports cma or scipy). `optimise(name, problem, budget, seed)`
 builds the problem in the variant's encoding (variable- or fixed-length), wraps it in a
-`BudgetedProblem` so nothing can be evaluated past the budget, and checks the count.
+`Evaluator` so nothing can be evaluated past the budget, and checks the count.
 
 Our DE variants report the raw DE result (no cvxpy hover polish), so the comparison is on the
 optimiser alone; `lamde_mission.api.plan` adds the polish for users.
@@ -18,32 +18,25 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from planner_core.bench.baselines.budget import (
-    BudgetedProblem,
-    BudgetExceeded,
-    Criterion,
-    Trace,
-    as_budgeted,
-)
 from planner_core.defaults import (
     CONFIGURATOR,
     CONFIGURATORS,
-    DESCENT_TRIALS,
-    DESCENTS,
-    KICK_TRIALS,
-    MEMETIC,
-    OTHER_TRIALS,
     POPULATION,
-    RESTRUCTURE_TRIALS,
     SCORE_FACTOR,
     START_CANDIDATES,
-    STARTS,
+)
+from planner_core.pipeline.evaluator import (
+    BudgetExceeded,
+    Criterion,
+    Evaluator,
+    Trace,
+    as_evaluator,
 )
 from planner_core.search.init_modes import INIT_MODES, UniformStart, with_init
 
 __all__ = [
     "BudgetExceeded",
-    "BudgetedProblem",
+    "Evaluator",
     "Criterion",
     "INIT_MODES",
     "OptimiseResult",
@@ -51,7 +44,7 @@ __all__ = [
     "REGISTRY",
     "Trace",
     "UniformStart",
-    "as_budgeted",
+    "as_evaluator",
     "get",
     "names",
     "optimise",
@@ -126,44 +119,39 @@ REGISTRY: dict[str, OptimiserSpec] = {
         ),
         OptimiserSpec(
             "planner",
-            "planner_core.bench.baselines.de:optimise",
-            f"what `plan` does: {START_CANDIDATES} constructive plans scored and the {STARTS} "
-            f"best put into the initial population, our DE ({CONFIGURATOR} configurator, "
-            f"population {POPULATION}; from a uniform start with the memetic step), then the "
-            "polish LP on the final population's 16 Deb-best; the hover-point descent with "
-            f"exact LP hover times on the {DESCENTS} best constructive and seeder plans before "
-            "the DE and on the polished best with the structural search and kicks, the same "
-            "on the best kept start with fewer (else more) hover points; budget counted "
-            "exactly",
-            kwargs={"lp": True, "memetic": MEMETIC, "starts": STARTS,
-                    "candidates": START_CANDIDATES, "descents": DESCENTS,
-                    "trials": DESCENT_TRIALS, "restructure": RESTRUCTURE_TRIALS,
-                    "kick": KICK_TRIALS, "other": OTHER_TRIALS},
-            # a descent stops when its step falls below 1 cm: the evaluations it leaves are
-            # not spent (`plan` too: evaluations <= budget)
+            "planner_core.bench.baselines.de:planner",
+            "what `plan` does: the declared pipeline (planner_core.pipeline: constructive "
+            f"plans, their descents, our DE ({CONFIGURATOR} configurator, population "
+            f"{POPULATION}, de_share of the budget; from a uniform start with the memetic "
+            "step), the polish LP, the final stage on the incumbent and a second structure, "
+            "then improving rounds, or the repair while infeasible); budget counted exactly",
+            # the improving rounds stop when they find nothing to spend on (`plan` too:
+            # evaluations <= budget)
             spends_budget=False,
         ),
         OptimiserSpec(
             "planner-no-descent",
-            "planner_core.bench.baselines.de:optimise",
-            "the planner without the hover-point descent (`plan(descent=False)`, `plan "
-            "--no-descent`; the planner before it)",
-            kwargs={"lp": True, "memetic": MEMETIC, "starts": STARTS,
-                    "candidates": START_CANDIDATES},
+            "planner_core.bench.baselines.de:planner",
+            "the planner without the hover-point descent and the stages after the polish "
+            "(`plan(descent=False)`, `plan --no-descent`): constructive plans, the DE on the "
+            "rest, the polish LP",
+            kwargs={"descent": False},
         ),
         OptimiserSpec(
             "planner-no-starts",
-            "planner_core.bench.baselines.de:optimise",
-            "the planner without constructive starts (`plan --starts 0`; the planner before "
-            "issue 14's constructive starts): our DE on budget - 16, then the polish LP",
-            kwargs={"lp": True, "memetic": MEMETIC},
+            "planner_core.bench.baselines.de:planner",
+            "the planner without constructive plans and descents (`plan --starts 0 "
+            "--no-descent`; the planner before issue 14): our DE on budget - 16, then the "
+            "polish LP",
+            kwargs={"starts": 0, "descent": False},
         ),
         OptimiserSpec(
             "planner-memetic",
-            "planner_core.bench.baselines.de:optimise",
-            "the planner with the memetic step on the elite every 10 generations (2-opt order, "
-            "LP hover times, removals, pulls; planner_core.search.refine), then the polish LP",
-            kwargs={"lp": True, "memetic": True},
+            "planner_core.bench.baselines.de:planner",
+            "the planner-no-starts pipeline with the memetic step on the elite every 10 "
+            "generations in both start modes (2-opt order, LP hover times, removals, pulls; "
+            "planner_core.search.refine), then the polish LP",
+            kwargs={"starts": 0, "descent": False, "memetic": "on"},
         ),
         OptimiserSpec(
             "seed-lp",
@@ -298,7 +286,7 @@ def optimise(name: str, problem: Any, budget: int, seed: int,
     if probe >= int(budget):
         raise ValueError(f"{name}: budget {budget} does not exceed its {probe} probe evaluations")
     own = int(budget) - probe
-    budgeted = BudgetedProblem(with_start(problem_for(name, problem, spec), init), own)
+    budgeted = Evaluator(with_start(problem_for(name, problem, spec), init), own)
     res = spec.function()(budgeted, own, int(seed), **spec.kwargs)
     if res.evaluations != budgeted.count or budgeted.count > own:
         raise RuntimeError(

@@ -24,8 +24,8 @@ import cma
 import numpy as np
 
 from planner_core.bench.baselines import OptimiseResult
-from planner_core.bench.baselines.budget import as_budgeted
 from planner_core.model.formulas import penalised_score
+from planner_core.pipeline.evaluator import as_evaluator
 
 __all__ = ["optimise", "SIGMA0", "SEEDED_SIGMA0"]
 
@@ -55,7 +55,7 @@ def optimise(
 
     if sigma0 is None:
         sigma0 = SEEDED_SIGMA0 if seeded else SIGMA0
-    budgeted = as_budgeted(problem, budget)
+    budgeted = as_evaluator(problem, budget)
     lo, hi = budgeted.lower, budgeted.upper
     span = hi - lo
     d = lo.shape[0]

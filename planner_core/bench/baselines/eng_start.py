@@ -16,7 +16,6 @@ from __future__ import annotations
 from typing import Any
 
 from planner_core.bench.baselines import OptimiseResult
-from planner_core.defaults import MEMETIC
 
 __all__ = ["STARTS", "optimise"]
 
@@ -27,8 +26,8 @@ STARTS = 10
 def optimise(problem: Any, budget: int, seed: int, *, starts: int = STARTS) -> OptimiseResult:
     """The engineering pipeline's candidates (all, OR-Tools order), then the planner from a
     population holding its `starts` best (module docstring); exactly `budget` evaluations."""
-    from planner_core.bench.baselines.de import optimise as planner
+    from planner_core.bench.baselines.de import planner
     from planner_core.bench.baselines.engineering import ortools_order
 
-    return planner(problem, budget, seed, lp=True, memetic=MEMETIC, starts=starts,
-                   candidates=int(budget), order=ortools_order)
+    return planner(problem, budget, seed, starts=starts, start_candidates=int(budget),
+                   order=ortools_order)

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from planner_core.bench.baselines import OptimiseResult
-from planner_core.bench.baselines.budget import as_budgeted
+from planner_core.pipeline.evaluator import as_evaluator
 from planner_core.search.construct import LegTimes, candidate_plans
 
 __all__ = ["ORDERS", "ROUTING_SOLUTIONS", "optimise", "ortools_order", "score_candidates"]
@@ -92,7 +92,7 @@ def score_candidates(
     budgeted: Any, seed: int, order: str = "ortools"
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Build the pipeline's distinct candidate plans in order, as many as `budgeted` (a
-    `BudgetedProblem`) has evaluations left, and evaluate them through it: (X (m, d), f (m,),
+    `Evaluator`) has evaluations left, and evaluate them through it: (X (m, d), f (m,),
     phi (m,)). ValueError for an unknown `order`."""
     if order not in ORDERS:
         raise ValueError(f"order: unknown '{order}', choose one of {', '.join(ORDERS)}")
@@ -109,7 +109,7 @@ def optimise(problem: Any, budget: int, seed: int, *, order: str = "ortools") ->
     """Score the pipeline's candidate plans (one evaluation each, while the budget lasts) and
     return the Deb-best; deterministic for a seed, identical in both start modes. `order`: one
     of `ORDERS` (module docstring)."""
-    budgeted = as_budgeted(problem, budget)
+    budgeted = as_evaluator(problem, budget)
     score_candidates(budgeted, seed, order)
     x, f, phi = budgeted.best("deb")
     return OptimiseResult(x, f, phi, budgeted.count, budgeted.trace("deb"))

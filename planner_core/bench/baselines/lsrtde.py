@@ -35,8 +35,8 @@ from typing import Any
 import numpy as np
 
 from planner_core.bench.baselines import OptimiseResult
-from planner_core.bench.baselines.budget import as_budgeted
 from planner_core.model.formulas import deb_not_worse, deb_order
+from planner_core.pipeline.evaluator import as_evaluator
 
 __all__ = ["optimise", "NP_MIN", "MEMORY"]
 
@@ -62,7 +62,7 @@ def optimise(problem: Any, budget: int, seed: int) -> OptimiseResult:
     Works in the unit box (x = lower + u (upper - lower)); `problem` has `lower`, `upper` (d,)
     and `evaluate(X) -> (f, phi)` for X (n, d). ValueError when the budget is below NP_MIN.
     """
-    budgeted = as_budgeted(problem, budget)
+    budgeted = as_evaluator(problem, budget)
     lo, hi = budgeted.lower, budgeted.upper
     span = hi - lo
     d = lo.shape[0]

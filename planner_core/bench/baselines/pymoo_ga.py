@@ -10,7 +10,7 @@ and `FitnessSurvival` (sorted by violation, then f: feasibility first). Populati
 inequality constraint G = phi <= 0 (phi = V3 + V4 + V5 >= 0, so pymoo's violation is phi itself),
 in the problem's own box.
 
-Budget (ask/tell, every evaluation through the shared `BudgetedProblem`): the first generation is
+Budget (ask/tell, every evaluation through the shared `Evaluator`): the first generation is
 exactly our DE's initial population for this seed (`planner_core.search.de.core.init`: the problem's
 `initial_population` hook in the seeded start mode, uniform in the unit box in the uniform mode;
 POPULATION evaluations, as for `planner` and `cmaes-seeded-lp`, so runs of one seed are paired);
@@ -31,8 +31,8 @@ from typing import Any
 import numpy as np
 
 from planner_core.bench.baselines import OptimiseResult
-from planner_core.bench.baselines.budget import as_budgeted
 from planner_core.defaults import MIN_POPULATION, POPULATION
+from planner_core.pipeline.evaluator import as_evaluator
 
 __all__ = ["optimise"]
 
@@ -56,7 +56,7 @@ def optimise(
     from planner_core.bench.baselines.seed_lp import can_lp, lp_finish
     from planner_core.search.de.core import init, to_problem
 
-    budgeted = as_budgeted(problem, budget)
+    budgeted = as_evaluator(problem, budget)
     reserve = 1 if can_lp(budgeted) else 0
     population = min(int(population), int(budget) - reserve)
     if population < MIN_POPULATION:

@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 
 from planner_core.bench.baselines import OptimiseResult
-from planner_core.bench.baselines.budget import as_budgeted
+from planner_core.pipeline.evaluator import as_evaluator
 
 __all__ = ["optimise", "BATCH"]
 
@@ -17,7 +17,7 @@ BATCH = 100
 
 def optimise(problem: Any, budget: int, seed: int) -> OptimiseResult:
     """Evaluate `budget` uniform samples in batches; return the Deb-best."""
-    budgeted = as_budgeted(problem, budget)
+    budgeted = as_evaluator(problem, budget)
     rng = np.random.default_rng(np.random.SeedSequence(int(seed)))
     lo, hi = budgeted.lower, budgeted.upper
     while budgeted.remaining > 0:

@@ -22,9 +22,9 @@ from scipy.optimize import differential_evolution
 from scipy.stats import qmc
 
 from planner_core.bench.baselines import OptimiseResult
-from planner_core.bench.baselines.budget import as_budgeted
 from planner_core.defaults import POPULATION as _POPULATION
 from planner_core.model.formulas import penalised_score
+from planner_core.pipeline.evaluator import as_evaluator
 
 __all__ = ["optimise", "POPULATION"]
 
@@ -37,7 +37,7 @@ def optimise(
 ) -> OptimiseResult:
     """Scipy's DE with restarts until exactly `budget` evaluations; best under f + 10 * phi."""
 
-    budgeted = as_budgeted(problem, budget)
+    budgeted = as_evaluator(problem, budget)
     lo, hi = budgeted.lower, budgeted.upper
     span = hi - lo
     d = lo.shape[0]

@@ -19,19 +19,19 @@ from typing import Any
 import numpy as np
 
 from planner_core.bench.baselines import OptimiseResult
-from planner_core.bench.baselines.budget import BudgetedProblem, Criterion, as_budgeted
 from planner_core.defaults import MIN_POPULATION, POPULATION
+from planner_core.pipeline.evaluator import Criterion, Evaluator, as_evaluator
 
 __all__ = ["optimise", "lp_finish", "can_lp"]
 
 
-def can_lp(budgeted: BudgetedProblem) -> bool:
+def can_lp(budgeted: Evaluator) -> bool:
     """True when the wrapped problem can decode and encode plans (the LP step applies)."""
     inner = budgeted.problem
     return hasattr(inner, "encode") and hasattr(inner, "breakdown")
 
 
-def lp_finish(budgeted: BudgetedProblem, x: np.ndarray, criterion: Criterion = "deb") -> None:
+def lp_finish(budgeted: Evaluator, x: np.ndarray, criterion: Criterion = "deb") -> None:
     """Re-solve the hover times of `x` (problem space) by the polish LP and evaluate the result
     (one evaluation, when the budget has one left and the problem can encode plans); the
     budgeted problem's best then includes it. Problems without `breakdown`/`encode` are left
@@ -50,7 +50,7 @@ def optimise(problem: Any, budget: int, seed: int) -> OptimiseResult:
     """The DE's seeded initial population for `seed`, its Deb-best, the LP on it; no search."""
     from planner_core.search.de.core import init, to_problem
 
-    budgeted = as_budgeted(problem, budget)
+    budgeted = as_evaluator(problem, budget)
     population = min(POPULATION, int(budget) - 1)
     if population < MIN_POPULATION:
         raise ValueError(f"budget {budget} is below the seeded population + 1")

@@ -1,0 +1,126 @@
+"""Does more budget buy a better plan? The pipeline at 1x, 3x and 10x the default budget.
+
+For every suite map and seed, `plan`'s pipeline (`planner_core.pipeline.run_pipeline`, the
+defaults table's settings, start mode `--init`) runs at each budget multiple; prints per map
+the mean gap to the best-known f (`examples/maps/suite_best_known.json`) and the mean wall time
+at each multiple, then the verdict of issue 30's targets: the gap falls at each step on at
+least 14 of the 16 maps, and at 10x it is at most half the 1x gap (means over maps). Runs go
+through the project's executor (`--jobs`), each job a (map, seed, multiple).
+
+    python benchmarks/bench_anytime.py [--seeds 5] [--multiples 1 3 10] [--jobs 2]
+        [--init seeded] [--tasks T01 ...] [--base 10000] [-o runs.jsonl]
+
+Gap = (f - f_best) / f_best in percent (an infeasible run counts as +inf and is reported).
+A time is a run's wall time in its worker process, after a warm-up there (no compiling).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import statistics
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parent.parent
+SUITE = ROOT / "examples" / "maps" / "suite"
+
+_PROBLEMS: dict[str, Any] = {}
+
+
+def _job(item: tuple[str, str, int, int, str, int]) -> dict[str, Any]:
+    """Executor job: one pipeline run as a record; the item carries the map's JSON text."""
+    from planner_core.model.problem import Problem
+    from planner_core.pipeline import PlanConfig, run_pipeline
+    from planner_core.pipeline.warmup import warm_up
+
+    task, text, seed, mult, init, base = item
+    warm_up()
+    if task not in _PROBLEMS:
+        _PROBLEMS[task] = Problem(json.loads(text))
+    problem = _PROBLEMS[task]
+    t0 = time.perf_counter()
+    r = run_pipeline(problem, PlanConfig(seed=seed, budget=mult * base, init=init))
+    return {"task": task, "seed": seed, "multiple": mult, "init": init,
+            "f": r.f, "phi": r.phi, "evaluations": r.evaluations,
+            "seconds": time.perf_counter() - t0,
+            "stages": [[s.name, s.evaluations, round(s.seconds, 4)] for s in r.stages]}
+
+
+def summarise(records: list[dict[str, Any]], best: dict[str, float],
+              multiples: list[int]) -> tuple[list[str], bool]:
+    """Table lines and whether both targets hold (module docstring)."""
+    tasks = sorted({r["task"] for r in records})
+    lines = ["task   " + "".join(f"  gap {m:>2}x %  time {m:>2}x s" for m in multiples)
+             + "  falls"]
+    falls = 0
+    means = {m: [] for m in multiples}
+    for t in tasks:
+        row, gaps = f"{t:<6} ", []
+        for m in multiples:
+            rs = [r for r in records if r["task"] == t and r["multiple"] == m]
+            g = [math.inf if r["phi"] > 0 else 100.0 * (r["f"] - best[t]) / best[t] for r in rs]
+            gap = statistics.fmean(g) if g else math.nan
+            gaps.append(gap)
+            means[m].append(gap)
+            sec = statistics.fmean(r["seconds"] for r in rs) if rs else math.nan
+            row += f"  {gap:10.4f}  {sec:10.2f}"
+        ok = all(b < a for a, b in zip(gaps, gaps[1:], strict=False))
+        falls += ok
+        lines.append(row + f"  {'yes' if ok else 'no'}")
+    mean = {m: statistics.fmean(v) for m, v in means.items()}
+    lines.append("mean   " + "".join(f"  {mean[m]:10.4f}  {'':10}" for m in multiples))
+    half = mean[multiples[-1]] <= 0.5 * mean[multiples[0]]
+    lines.append(f"gap falls at each step on {falls}/{len(tasks)} maps (target >= 14/16); "
+                 f"{multiples[-1]}x mean gap {mean[multiples[-1]]:.4f} % vs {multiples[0]}x "
+                 f"{mean[multiples[0]]:.4f} % (target <= half: "
+                 f"{'met' if half else 'NOT met'})")
+    return lines, falls >= 14 and half
+
+
+def main(argv: list[str] | None = None) -> int:
+    from planner_core.bench.limits import BestKnown, best_known_path, suite_task_files
+    from planner_core.execution import make_executor
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", type=int, default=5, help="seeds 0..N-1 per map (default 5)")
+    ap.add_argument("--multiples", type=int, nargs="+", default=[1, 3, 10],
+                    help="budget multiples of the default 10,000 (default 1 3 10)")
+    ap.add_argument("--init", choices=("seeded", "uniform"), default="seeded")
+    ap.add_argument("--base", type=int, default=10_000,
+                    help="the 1x budget (default 10,000, the defaults table's)")
+    ap.add_argument("--tasks", nargs="+", help="only these suite maps (default all 16)")
+    ap.add_argument("--jobs", type=int, default=2, help="worker processes (0: this one)")
+    ap.add_argument("-o", "--output", help="also write every run as JSON lines")
+    args = ap.parse_args(argv)
+    if args.seeds < 1 or any(m < 1 for m in args.multiples) or args.base < 100:
+        ap.error("--seeds and --multiples must be >= 1, --base >= 100 (the population)")
+    files = suite_task_files(SUITE)
+    if args.tasks:
+        unknown = [t for t in args.tasks if t not in files]
+        if unknown:
+            ap.error(f"--tasks: unknown map {unknown[0]!r}")
+        files = {t: files[t] for t in args.tasks}
+    best = BestKnown(best_known_path(SUITE)).f_values(files)
+    # the largest multiples first, so the pool's last jobs are short
+    texts = {t: p.read_text() for t, p in files.items()}
+    items = [(t, texts[t], s, m, args.init, args.base)
+             for m in sorted(args.multiples, reverse=True)
+             for t in files for s in range(args.seeds)]
+    t0 = time.perf_counter()
+    with make_executor(args.jobs, "local") as ex:
+        records = list(ex.map_unordered(_job, items))
+    if args.output:
+        Path(args.output).write_text("".join(json.dumps(r) + "\n" for r in records))
+    lines, ok = summarise(records, best, sorted(args.multiples))
+    print("\n".join(lines))
+    print(f"{len(records)} runs in {time.perf_counter() - t0:.0f} s ({args.jobs} jobs, "
+          f"init {args.init})")
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,176 @@
+"""The planning pipeline, declared once: the stages in order with their budget rules, and the
+loop that runs them over one state and one counted evaluator.
+
+```
+stage            share of the budget (config names; planner_core.defaults)
+constructive     start_candidates + SEEDER_PLANS      one evaluation per plan
+start descents   2 x descents x descent_trials        the best of each kind descended
+de               de_share x min(budget, 10,000)       reserved: its population; yields
+polish           ELITE (16)                           reserved
+finish           descent + restructure + kick trials  on the incumbent
+other structure  other_trials                         a plan of another number of points
+improve          the rest, while feasible             kicks, structural search, restarts
+repair           the rest, while infeasible           the DE again with the memetic repair
+```
+
+Each stage gets its share, never what a later stage reserves (the DE's population, the
+polish's LP plans), so a small budget shrinks the constructive plans and descents first; the
+DE also yields to the later stages' shares (the final stage's), down to its population; what
+a stage leaves unspent flows to `improve` (or `repair`), the stages that turn budget into a
+better plan. The answer is the evaluator's incumbent: the Deb-best of everything evaluated.
+
+With a time limit the evaluator refuses evaluations once it has passed: the stage running
+stops there, no later stage starts, and the incumbent is returned. The same budget and seed
+give the same plan; a time limit trades that determinism for a deadline (where the clock
+stops the run depends on the machine).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from planner_core.pipeline.config import PlanConfig
+from planner_core.pipeline.evaluator import Evaluator, Progress, StageRecord, TimeLimitReached
+from planner_core.pipeline.stages import (
+    ConstructivePlans,
+    DifferentialEvolution,
+    FinishIncumbent,
+    Improve,
+    OtherStructure,
+    PlanState,
+    Polish,
+    Pool,
+    Repair,
+    Stage,
+    StartDescents,
+)
+
+__all__ = ["DEFAULT_PIPELINE", "PipelineResult", "allotment", "run_pipeline"]
+
+#: the default pipeline, in the order it runs (the module docstring's table)
+DEFAULT_PIPELINE: tuple[Stage, ...] = (
+    ConstructivePlans(),
+    StartDescents(),
+    DifferentialEvolution(),
+    Polish(),
+    FinishIncumbent(),
+    OtherStructure(),
+    Improve(),
+    Repair(),
+)
+
+
+@dataclass(frozen=True)
+class PipelineResult:
+    """A run's answer and its record.
+
+    Attributes:
+        x: (d,) the incumbent's decision vector (problem space); f, phi its scores.
+        evaluations: evaluations spent in all (the evaluator's count).
+        stages: one `StageRecord` per stage that ran, in order.
+        trace: the Deb incumbent after every improvement, as (evaluations, best_f, best_phi)
+            arrays.
+        state: the final `PlanState` (pool, DE result, polish record, notes).
+        stopped: "time limit" when the clock ended the run, else "".
+        seconds: wall time of the run (s).
+    """
+
+    x: np.ndarray
+    f: float
+    phi: float
+    evaluations: int
+    stages: tuple[StageRecord, ...]
+    trace: dict[str, np.ndarray]
+    state: PlanState
+    stopped: str
+    seconds: float
+
+
+def allotment(stage: Stage, later: Sequence[Stage], config: PlanConfig, left: int) -> int:
+    """Evaluations `stage` gets with `left` of the budget unspent: its share (all of `left`
+    for None), never what the `later` stages reserve; a stage that `yields` (the DE) also
+    leaves the later stages' own shares, down to its reserve."""
+    free = left - sum(s.reserve(config) for s in later)
+    want = stage.share(config)
+    n = free if want is None else min(int(want), free)
+    if getattr(stage, "yields", False):
+        rest = left - sum(s.share(config) or 0 for s in later)
+        n = max(min(n, rest), min(stage.reserve(config), free))
+    return max(0, n)
+
+
+def _thin(ev: Evaluator) -> dict[str, np.ndarray]:
+    """The Deb trace at each change of the incumbent and at its end."""
+    t = ev.trace("deb")
+    if not len(t.evaluations):
+        return {"evaluations": t.evaluations, "best_f": t.best_f, "best_phi": t.best_phi}
+    change = np.ones(len(t.evaluations), dtype=bool)
+    change[1:] = (np.diff(t.best_f) != 0) | (np.diff(t.best_phi) != 0)
+    change[-1] = True
+    return {"evaluations": t.evaluations[change], "best_f": t.best_f[change],
+            "best_phi": t.best_phi[change]}
+
+
+def run_pipeline(
+    problem: Any,
+    config: PlanConfig,
+    *,
+    pipeline: Sequence[Stage] = DEFAULT_PIPELINE,
+    evaluator: Evaluator | None = None,
+    progress: Callable[[Progress], None] | None = None,
+) -> PipelineResult:
+    """Run `pipeline` on the UAV problem `problem` (`planner_core.model.problem.Problem`) with
+    `config`.
+
+    Args:
+        problem: the problem the stages decode and encode with.
+        config: every setting of the run (budget, seed, shares, time limit).
+        pipeline: the stages in order (default `DEFAULT_PIPELINE`).
+        evaluator: a fresh `Evaluator` with `config.budget` to count through (the benchmark
+            passes its own); None: one over `problem` in `config.init`'s start mode, with
+            `config.time_limit` and `progress`.
+        progress: called after every evaluate call with a `Progress` (stage, evaluations,
+            budget, incumbent f and phi, seconds).
+
+    Returns:
+        The `PipelineResult`; its x is the Deb-best of everything evaluated.
+
+    Raises:
+        ValueError: an evaluator that is not fresh or carries another budget.
+    """
+    from planner_core.search.init_modes import with_init
+
+    if evaluator is None:
+        evaluator = Evaluator(with_init(problem, config.init), config.budget,
+                              time_limit=config.time_limit, progress=progress)
+    elif evaluator.count != 0 or evaluator.budget != config.budget:
+        raise ValueError("evaluator: must be fresh and carry the config's budget")
+    ev = evaluator
+    t0 = time.perf_counter()
+    d = int(np.asarray(problem.lower).shape[0])
+    state = PlanState(problem=problem, config=config, pool=Pool.empty(d),
+                      injected=np.zeros((0, d)))
+    stopped = ""
+    stages = list(pipeline)
+    for i, stage in enumerate(stages):
+        if ev.expired and ev.has_best:
+            stopped = "time limit"
+            break
+        n = allotment(stage, stages[i + 1:], config, ev.budget - ev.count)
+        if n <= 0 or not stage.applies(state, ev):
+            continue
+        try:
+            with ev.stage(stage.name, n):
+                state = stage.run(state, ev)
+        except TimeLimitReached:
+            stopped = "time limit"
+            break
+    x, f, phi = ev.best("deb")
+    return PipelineResult(x=x, f=float(f), phi=float(phi), evaluations=ev.count,
+                          stages=tuple(ev.records), trace=_thin(ev), state=state,
+                          stopped=stopped, seconds=time.perf_counter() - t0)

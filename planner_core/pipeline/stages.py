@@ -1,0 +1,517 @@
+"""The stages of a plan, each a small object with a name, a budget rule and `run(state,
+evaluator) -> state` (the `Stage` protocol); `planner_core.pipeline.pipeline` declares their
+order and shares.
+
+A stage reads the run's `PlanState`, evaluates only through the `Evaluator` (which refuses
+anything beyond the stage's allotment and keeps the incumbent: the best of everything
+evaluated), and returns a new state. No stage calls another stage. J sensors, I hover points
+(<= I_max), V obstacle vertices; each stage's docstring says how its cost grows.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+
+from planner_core.model.formulas import deb_order
+from planner_core.pipeline.config import PlanConfig
+from planner_core.pipeline.evaluator import Evaluator
+
+__all__ = [
+    "ConstructivePlans",
+    "DifferentialEvolution",
+    "FinishIncumbent",
+    "Improve",
+    "OtherStructure",
+    "PlanState",
+    "Polish",
+    "Pool",
+    "Repair",
+    "Stage",
+    "StartDescents",
+]
+
+
+@dataclass(frozen=True)
+class Pool:
+    """Plans scored so far outside the DE (constructive, seeder, descended): X (m, d) problem
+    space, f (m,), phi (m,), and each row's kind ("constructive", "seeder", "descended",
+    "fresh")."""
+
+    X: np.ndarray
+    f: np.ndarray
+    phi: np.ndarray
+    kinds: tuple[str, ...] = ()
+
+    @classmethod
+    def empty(cls, d: int) -> Pool:
+        return cls(np.zeros((0, d)), np.zeros(0), np.zeros(0), ())
+
+    def add(self, X: np.ndarray, f: np.ndarray, phi: np.ndarray, kind: str) -> Pool:
+        X = np.asarray(X, dtype=float).reshape(-1, self.X.shape[1])
+        return Pool(np.vstack([self.X, X]), np.concatenate([self.f, np.asarray(f, float)]),
+                    np.concatenate([self.phi, np.asarray(phi, float)]),
+                    self.kinds + (kind,) * len(X))
+
+    def ordered(self) -> np.ndarray:
+        """Row indices, Deb-best first."""
+        return deb_order(self.f, self.phi) if len(self.f) else np.zeros(0, dtype=np.int64)
+
+    def __len__(self) -> int:
+        return len(self.f)
+
+
+@dataclass(frozen=True)
+class PlanState:
+    """What the stages hand on: the UAV problem (`planner_core.model.problem.Problem`: decode,
+    encode, breakdown), the run's config, the pool of scored plans, the rows injected into the
+    DE's initial population, the DE's result, the polish's record, the point counts whose best
+    plan was already finished, and per-stage notes for the summary."""
+
+    problem: Any
+    config: PlanConfig
+    pool: Pool
+    injected: np.ndarray
+    de: Any = None
+    polish: dict[str, Any] | None = None
+    finished: frozenset[int] = frozenset()
+    notes: dict[str, Any] = field(default_factory=dict)
+
+    def replace(self, **changes: Any) -> PlanState:
+        return dataclasses.replace(self, **changes)
+
+    def note(self, **items: Any) -> PlanState:
+        return dataclasses.replace(self, notes={**self.notes, **items})
+
+
+class Stage(Protocol):
+    """One stage: `name`; `share(config)` its evaluations (None: whatever is left when it
+    runs); `reserve(config)` what earlier stages must leave for it; `applies(state,
+    evaluator)` whether it runs; `run(state, evaluator) -> state`. A stage with a true
+    `yields` attribute also leaves the later stages' shares (`pipeline.allotment`)."""
+
+    name: str
+
+    def share(self, config: PlanConfig) -> int | None: ...
+
+    def reserve(self, config: PlanConfig) -> int: ...
+
+    def applies(self, state: PlanState, evaluator: Evaluator) -> bool: ...
+
+    def run(self, state: PlanState, evaluator: Evaluator) -> PlanState: ...
+
+
+class _Base:
+    """Defaults of the protocol: no reserve, runs whenever it has evaluations."""
+
+    name = ""
+
+    def share(self, config: PlanConfig) -> int | None:
+        return 0
+
+    def reserve(self, config: PlanConfig) -> int:
+        return 0
+
+    def applies(self, state: PlanState, evaluator: Evaluator) -> bool:
+        return True
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}()"
+
+
+def _points(problem: Any, x: np.ndarray) -> int:
+    return len(problem.breakdown(np.asarray(x, dtype=float))["hover_points"])
+
+
+def _incumbent_feasible(ev: Evaluator) -> bool:
+    return ev.has_best and ev.best()[2] == 0.0
+
+
+# --------------------------------------------------------------------------------- the stages
+class ConstructivePlans(_Base):
+    """Whole plans built from the sensors (`planner_core.search.construct.candidate_plans`:
+    greedy set covers and a k-means sweep of hover sites, an open-path order on obstacle-aware
+    flight times, visibility-graph detours, LP hover times), plus `SEEDER_PLANS` of the
+    seeder's plans when the start descents run; all scored in one evaluate call. Cost: the
+    k-means sweep (I_max x J), one LP per plan, the leg-time matrix over the graph (V^2 log V
+    for its build, once per map)."""
+
+    name = "constructive"
+
+    def share(self, config: PlanConfig) -> int:
+        from planner_core.search.construct import SEEDER_PLANS
+
+        if config.starts <= 0 or config.start_candidates <= 0:
+            return 0
+        seeder = SEEDER_PLANS if config.descent and config.descents > 0 else 0
+        return config.start_candidates + seeder
+
+    def run(self, state: PlanState, ev: Evaluator) -> PlanState:
+        from planner_core.search.construct import candidate_plans, seeder_plans
+
+        cfg, problem = state.config, state.problem
+        room = ev.remaining
+        X, _ = candidate_plans(problem, cfg.seed, min(cfg.start_candidates, room),
+                               order=cfg.order)
+        if not len(X):
+            return state
+        parts = [(X, "constructive")]
+        if cfg.descent and cfg.descents > 0:
+            parts.append((seeder_plans(problem, cfg.seed, room - len(X)), "seeder"))
+        allX = np.vstack([p for p, _ in parts])
+        f, phi = ev.evaluate(allX)
+        pool, k = state.pool, 0
+        for p, kind in parts:
+            pool = pool.add(p, f[k:k + len(p)], phi[k:k + len(p)], kind)
+            k += len(p)
+        return state.replace(pool=pool)
+
+
+class StartDescents(_Base):
+    """The hover-point descent with exact LP hover times (`planner_core.search.descent`) on
+    the `descents` Deb-best feasible plans of each kind (constructive, seeder), at most
+    `descent_trials` evaluations each; every moved result joins the pool. Then the `starts`
+    Deb-best of the pool become the rows injected into the DE's population. Cost per trial:
+    one LP (I x J) and the C3/C5 checks (I x J, I x V)."""
+
+    name = "start descents"
+
+    def share(self, config: PlanConfig) -> int:
+        if not config.descent or config.starts <= 0:
+            return 0
+        return 2 * config.descents * config.descent_trials
+
+    def applies(self, state: PlanState, ev: Evaluator) -> bool:
+        return len(state.pool) > 0
+
+    def run(self, state: PlanState, ev: Evaluator) -> PlanState:
+        from planner_core.search.descent import descend
+
+        cfg, problem, pool = state.config, state.problem, state.pool
+        rows = []
+        for kind in ("constructive", "seeder"):
+            idx = np.flatnonzero(np.array(pool.kinds) == kind)
+            for i in idx[deb_order(pool.f[idx], pool.phi[idx])][:cfg.descents]:
+                trials = min(cfg.descent_trials, ev.remaining)
+                r = descend(problem, pool.X[i], ev.evaluate, trials=trials) if trials else None
+                if r is not None and r.f < r.f_start:  # not moved: already in the pool
+                    rows.append((r.x, r.f, r.phi))
+        for x, f, phi in rows:
+            pool = pool.add(x[None, :], [f], [phi], "descended")
+        return state.replace(pool=pool)
+
+
+def _inject(state: PlanState) -> np.ndarray:
+    """The `starts` Deb-best rows of the pool (k, d)."""
+    k = max(int(state.config.starts), 0)
+    return state.pool.X[state.pool.ordered()[:k]]
+
+
+class DifferentialEvolution(_Base):
+    """LAMDE's variable-length DE (`planner_core.search.de.run`) with the run's configurator,
+    the pool's `starts` best plans in place of its initial population's last rows and, when
+    `memetic` says so, the memetic step on the elite every 10 generations. Its share is
+    `de_share` of the budget, of the default budget at most (and at least the population):
+    in the default pipeline the DE rarely improves on its best injected plan (docs/search.md),
+    so budget beyond the default goes to the improving rounds, and below the default it
+    yields to the final stage's shares; with the descent or the polish off it gets
+    everything the later stages do not reserve. Cost per generation: N
+    evaluations (compiled kernels, N x I x (J + V)) and the configurator."""
+
+    name = "de"
+    #: its share never takes what the later stages' shares need (down to its population)
+    yields = True
+
+    def share(self, config: PlanConfig) -> int | None:
+        if not (config.descent and config.polish):
+            return None  # nothing after the polish: the DE gets the rest
+        from planner_core.defaults import BUDGET
+
+        # a share of the default budget at most: budget beyond it goes to the improving rounds
+        return max(config.population, round(config.de_share * min(config.budget, BUDGET)))
+
+    def reserve(self, config: PlanConfig) -> int:
+        return config.population
+
+    def run(self, state: PlanState, ev: Evaluator) -> PlanState:
+        from planner_core.search.construct import InjectedPopulation
+        from planner_core.search.de import run
+        from planner_core.search.refine import refine, use_memetic
+
+        cfg = state.config
+        injected = _inject(state)
+        opt = InjectedPopulation(ev, injected) if len(injected) else ev
+        hook = functools.partial(refine, state.problem) if use_memetic(cfg.memetic, ev) else None
+        result = run(opt, configurator=cfg.configurator, seed=cfg.seed,
+                     population=cfg.population, budget=ev.remaining, refine=hook)
+        return state.replace(de=result, injected=injected)
+
+
+def _polish_reserve(config: PlanConfig) -> int:
+    from planner_core.search.polish import ELITE
+
+    if not config.polish:
+        return 0
+    return max(min(ELITE, config.budget // 4, config.budget - config.population), 0)
+
+
+class Polish(_Base):
+    """The hover-time LP (`planner_core.search.polish.polish_elite`) for the DE's final
+    population's `ELITE` Deb-best distinct rows, each evaluated once. Cost: ELITE LPs (I x J)."""
+
+    name = "polish"
+
+    def share(self, config: PlanConfig) -> int:
+        return _polish_reserve(config)
+
+    def reserve(self, config: PlanConfig) -> int:
+        return _polish_reserve(config)
+
+    def applies(self, state: PlanState, ev: Evaluator) -> bool:
+        return state.config.polish and state.de is not None
+
+    def run(self, state: PlanState, ev: Evaluator) -> PlanState:
+        from planner_core.model.formulas import deb_best, deb_not_worse
+        from planner_core.search.de.core import to_problem
+        from planner_core.search.polish import polish_elite
+
+        problem, st = state.problem, state.de.state
+        before = problem.breakdown(state.de.x)
+        xs, pols = polish_elite(problem, to_problem(ev, st.X), st.f, st.phi, ev.remaining)
+        if not len(xs):
+            return state
+        fs, phis = ev.evaluate(xs)
+        c = deb_best(fs, phis)
+        after = problem.breakdown(xs[c])
+        pol = pols[c]
+        info = {
+            "f_before": before["f"],
+            "phi_before": before["phi"],
+            "f_after": after["f"],
+            "phi_after": after["phi"],
+            "accepted": bool(deb_not_worse(after["f"], after["phi"], before["f"],
+                                           before["phi"])),
+            "dropped_points": list(pol.dropped),
+            "c3_violation": pol.c3_violation,
+            "c4_achievable": pol.feasible_c4,
+            "unserved": [u["message"] for u in pol.unserved],
+            "solver": pol.solver,
+        }
+        return state.replace(polish=info)
+
+
+class FinishIncumbent(_Base):
+    """The final stage on the incumbent (`planner_core.search.final.finish`): its descent,
+    the structural search, the removal moves and kicks, at most `descent_trials` +
+    `restructure_trials` + `kick_trials` evaluations. Cost: that many evaluations, each with
+    an LP (I x J)."""
+
+    name = "finish"
+
+    def share(self, config: PlanConfig) -> int:
+        return config.final_trials if config.polish else 0
+
+    def applies(self, state: PlanState, ev: Evaluator) -> bool:
+        return _incumbent_feasible(ev)
+
+    def run(self, state: PlanState, ev: Evaluator) -> PlanState:
+        from planner_core.search.final import finish
+
+        cfg, problem = state.config, state.problem
+        x, f, _ = ev.best()
+        finish(problem, x, ev.evaluate, trials=ev.remaining, seed=cfg.seed,
+               descent_trials=cfg.descent_trials, restructure_trials=cfg.restructure_trials)
+        return state.replace(finished=state.finished | {_points(problem, x)}).note(
+            finish_f_before=float(f), finish_f_after=float(ev.best()[1]))
+
+
+class OtherStructure(_Base):
+    """The same finish on a second structure: the Deb-best feasible pool plan with fewer
+    hover points than the incumbent, else with more (`planner_core.search.final.
+    other_structure`); local moves rarely turn one structure into the other (docs/search.md,
+    "A second structure"). At most `other_trials` evaluations; runs only when a descent's
+    trials fit. Cost: as `FinishIncumbent`."""
+
+    name = "other structure"
+
+    def share(self, config: PlanConfig) -> int:
+        return config.other_trials if config.polish and config.final_trials else 0
+
+    def applies(self, state: PlanState, ev: Evaluator) -> bool:
+        return (_incumbent_feasible(ev) and ev.remaining >= state.config.descent_trials
+                and self._other(state, ev) is not None)
+
+    @staticmethod
+    def _other(state: PlanState, ev: Evaluator) -> np.ndarray | None:
+        from planner_core.search.final import other_structure
+
+        pool = state.pool
+        return other_structure(state.problem, pool.X[pool.ordered()], ev.best()[0])
+
+    def run(self, state: PlanState, ev: Evaluator) -> PlanState:
+        from planner_core.search.final import finish
+
+        cfg, problem = state.config, state.problem
+        y = self._other(state, ev)
+        before = ev.best()[1]
+        r = finish(problem, y, ev.evaluate, trials=ev.remaining, seed=cfg.seed,
+                   descent_trials=cfg.descent_trials, restructure_trials=cfg.restructure_trials)
+        n = _points(problem, y)
+        won = r is not None and ev.best()[1] < before
+        return state.replace(finished=state.finished | {n}).note(
+            other_points=n, other_won=bool(won))
+
+
+#: kick spreads (m) the improving rounds cycle through: the final stage's, finer, coarser
+SPREADS = (300.0, 120.0, 700.0)
+#: a fresh constructive sweep runs only with at least this many rounds' evaluations left
+FRESH_ROOM = 3
+#: improving rounds in a row that may spend nothing before the stage gives up
+IDLE_ROUNDS = 3
+
+
+class Improve(_Base):
+    """What budget is left after the final stage, while the incumbent is feasible: rounds of
+    at most one finish's evaluations (`final_trials`), alternating
+
+    * intensification: the structural search and removal moves on the incumbent when it
+      changed since they last ran, else kicks on it (an iterated local search, Lourenco,
+      Martin & Stuetzle 2003) with the spread cycling through `SPREADS`, each round its own
+      random stream;
+    * diversification: a restart, the whole finish on the Deb-best pool plan of a number of
+      hover points not finished yet, else on the best of fresh constructive plans (the
+      k-means sweep under another seed, `construct.candidate_plans`, only with `FRESH_ROOM`
+      rounds' evaluations left), scored into the pool.
+
+    The incumbent is the evaluator's, so a restart that ends worse changes nothing. Stops
+    when fewer than a descent's trials are left or `IDLE_ROUNDS` rounds in a row spent
+    nothing. Cost: that of its rounds; a fresh sweep costs what `ConstructivePlans` costs."""
+
+    name = "improve"
+
+    def share(self, config: PlanConfig) -> int | None:
+        return None if config.polish and config.final_trials else 0
+
+    def applies(self, state: PlanState, ev: Evaluator) -> bool:
+        return _incumbent_feasible(ev)
+
+    def run(self, state: PlanState, ev: Evaluator) -> PlanState:
+        from planner_core.search.final import finish
+        from planner_core.search.structure import MOVES, kicks, restructure
+
+        cfg, problem = state.config, state.problem
+        quantum = max(cfg.final_trials, cfg.descent_trials)
+        searched = ev.best()[0].tobytes()  # the finish ran its structural search on it
+        restarted: set[bytes] = set()
+        fresh = 0
+        idle = rounds = 0
+        while ev.remaining >= cfg.descent_trials and idle < IDLE_ROUNDS:
+            c0 = ev.count
+            x = ev.best()[0]
+            trials = min(quantum, ev.remaining)
+            if rounds % 2 == 0:
+                if x.tobytes() != searched:
+                    searched = x.tobytes()
+                    for moves in (MOVES, ("removal",)):
+                        restructure(problem, ev.best()[0], ev.evaluate,
+                                    trials=min(cfg.restructure_trials, ev.remaining),
+                                    moves=moves)
+                spread = SPREADS[(rounds // 2) % len(SPREADS)]
+                left = trials - (ev.count - c0)
+                if left > 0:
+                    kicks(problem, ev.best()[0], ev.evaluate, trials=left, seed=cfg.seed,
+                          spread=spread, stream=rounds + 1)
+            else:
+                y, state, fresh = self._restart(state, ev, restarted, fresh)
+                if y is not None:
+                    restarted.add(y.tobytes())
+                    finish(problem, y, ev.evaluate, trials=min(trials, ev.remaining),
+                           seed=cfg.seed + rounds, descent_trials=cfg.descent_trials,
+                           restructure_trials=cfg.restructure_trials)
+                    state = state.replace(finished=state.finished | {_points(problem, y)})
+            idle = idle + 1 if ev.count == c0 else 0
+            rounds += 1
+        return state.note(improve_rounds=rounds, improve_fresh=fresh)
+
+    @staticmethod
+    def _restart(state: PlanState, ev: Evaluator, restarted: set[bytes],
+                 fresh: int) -> tuple[np.ndarray | None, PlanState, int]:
+        """The next restart: the Deb-best feasible pool plan of an unfinished number of hover
+        points, else the Deb-best unrestarted one after a fresh constructive sweep."""
+        problem, pool = state.problem, state.pool
+        counts = {}
+        for i in pool.ordered():
+            if pool.phi[i] > 0 or pool.X[i].tobytes() in restarted:
+                continue
+            n = _points(problem, pool.X[i])
+            if n not in state.finished and n not in counts and n > 0:
+                return pool.X[i], state, fresh
+            counts[n] = i
+        # a fresh sweep costs what the constructive stage costs: only with room for several
+        # rounds after it
+        if ev.remaining < FRESH_ROOM * max(state.config.final_trials, 1):
+            return None, state, fresh
+        from planner_core.search.construct import candidate_plans
+
+        fresh += 1
+        seed = int(np.random.SeedSequence([state.config.seed, 31, fresh]).generate_state(1)[0])
+        X, _ = candidate_plans(problem, seed, state.config.start_candidates,
+                               order=state.config.order)
+        seen = {r.tobytes() for r in pool.X}
+        X = np.asarray([r for r in X if r.tobytes() not in seen]).reshape(-1, pool.X.shape[1])
+        X = X[:max(min(len(X), ev.remaining - state.config.descent_trials), 0)]
+        if not len(X):
+            return None, state, fresh
+        f, phi = ev.evaluate(X)
+        state = state.replace(pool=pool.add(X, f, phi, "fresh"))
+        order = deb_order(f, phi)
+        best = order[0]
+        if phi[best] > 0:
+            return None, state, fresh
+        return X[best], state, fresh
+
+
+class Repair(_Base):
+    """What budget is left while the incumbent is infeasible: the DE again from its final
+    population (Deb order) or the pool, with the memetic step on (its repair of unserved
+    sensors and blocked legs, `planner_core.search.refine`), so an infeasible run spends all
+    of its budget on becoming feasible; with less than a population left, the repair's
+    candidates for the incumbent. Cost: as `DifferentialEvolution`."""
+
+    name = "repair"
+
+    def share(self, config: PlanConfig) -> int | None:
+        return None
+
+    def applies(self, state: PlanState, ev: Evaluator) -> bool:
+        return ev.has_best and ev.best()[2] > 0.0
+
+    def run(self, state: PlanState, ev: Evaluator) -> PlanState:
+        from planner_core.search.construct import InjectedPopulation
+        from planner_core.search.de import run
+        from planner_core.search.de.core import to_problem
+        from planner_core.search.refine import refine, repair
+
+        cfg, problem = state.config, state.problem
+        n = cfg.population
+        if ev.remaining < n:
+            cand = repair(problem, ev.best()[0])[:ev.remaining]
+            if len(cand):
+                ev.evaluate(cand)
+            return state
+        if state.de is not None:
+            st = state.de.state
+            rows = to_problem(ev, st.X[deb_order(st.f, st.phi)])
+        else:
+            rows = state.pool.X[state.pool.ordered()]
+        rows = np.vstack([ev.best()[0][None, :], rows])[:n]
+        seed = int(np.random.SeedSequence([cfg.seed, 37]).generate_state(1)[0])
+        run(InjectedPopulation(ev, rows), configurator=cfg.configurator, seed=seed,
+            population=n, budget=ev.remaining, refine=functools.partial(refine, problem))
+        return state
+
+

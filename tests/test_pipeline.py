@@ -1,0 +1,109 @@
+"""The declared pipeline (planner_core.pipeline): the one counted evaluator, the config checked
+once, determinism, the time limit, and an infeasible run spending its whole budget on repair."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+import lamde_mission
+from lamde_mission.result import Plan
+from planner_core.model.problem import Problem
+from planner_core.pipeline import (
+    DEFAULT_PIPELINE,
+    BudgetExceeded,
+    Evaluator,
+    PlanConfig,
+    TimeLimitReached,
+    run_pipeline,
+)
+from tests.conftest import MAPS
+
+
+@pytest.fixture(scope="module")
+def tiny() -> Problem:
+    return Problem(MAPS / "tiny.json")
+
+
+def test_the_evaluator_refuses_beyond_the_budget_and_the_stage_allotment(tiny: Problem) -> None:
+    ev = Evaluator(tiny, 10)
+    X = np.tile(tiny.lower, (4, 1))
+    with ev.stage("a", 5):
+        ev.evaluate(X)
+        assert ev.remaining == 1
+        with pytest.raises(BudgetExceeded, match="in stage 'a' with 1 of 10 left"):
+            ev.evaluate(X[:2])
+    assert ev.remaining == 6 and ev.count == 4
+    with pytest.raises(BudgetExceeded):
+        ev.evaluate(np.tile(tiny.lower, (7, 1)))
+    (rec,) = ev.records
+    assert (rec.name, rec.allotted, rec.evaluations) == ("a", 5, 4)
+    assert rec.f_before == np.inf and rec.f_after == ev.best()[1]
+    # the trace: one row per evaluate call, the incumbent never worse
+    t = ev.trace()
+    assert list(t.evaluations) == [4]
+
+
+def test_the_evaluator_stops_at_its_time_limit_after_a_first_evaluation(tiny: Problem) -> None:
+    ev = Evaluator(tiny, 100, time_limit=0.05)
+    time.sleep(0.06)
+    ev.evaluate(tiny.lower[None, :])  # the first call always runs: there is an incumbent
+    with pytest.raises(TimeLimitReached), ev.stage("late", 10):
+        ev.evaluate(tiny.lower[None, :])
+    assert ev.count == 1 and ev.records[-1].stopped == "time limit"
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "field"),
+    [({"budget": 50}, "budget"), ({"de_share": 1.5}, "de_share"), ({"time_limit": 0}, "time_limit"),
+     ({"time_limit": float("nan")}, "time_limit"), ({"population": 5}, "population"),
+     ({"descent_trials": -1}, "descent_trials"), ({"seed": -2}, "seed")],
+)
+def test_a_config_is_checked_once_naming_the_field(kwargs: dict, field: str) -> None:
+    with pytest.raises(ValueError, match=f"^{field}:"):
+        PlanConfig(**kwargs)
+
+
+def test_the_default_pipeline_is_declared_once_in_order() -> None:
+    assert [s.name for s in DEFAULT_PIPELINE] == [
+        "constructive", "start descents", "de", "polish", "finish", "other structure",
+        "improve", "repair"]
+
+
+def test_same_seed_and_budget_same_plan_and_stage_counts(tiny: Problem) -> None:
+    cfg = PlanConfig(seed=5, budget=1_500, population=20)
+    a, b = run_pipeline(tiny, cfg), run_pipeline(tiny, cfg)
+    assert a.x.tobytes() == b.x.tobytes() and a.f == b.f
+    assert [(s.name, s.evaluations) for s in a.stages] == [
+        (s.name, s.evaluations) for s in b.stages]
+    assert sum(s.evaluations for s in a.stages) == a.evaluations <= 1_500
+
+
+def test_an_infeasible_run_spends_its_whole_budget_on_the_repair() -> None:
+    """A map no plan can serve (a sensor beyond every point's reach): the incumbent stays
+    infeasible, the stages after the polish do not apply, and `repair` takes all that is left,
+    so the run ends at exactly its budget."""
+    p = lamde_mission.plan(MAPS / "infeasible-demo.json", seed=0, budget=1_200, population=20)
+    assert not p.feasible
+    assert p.evaluations == 1_200
+    assert p.stages[-1].name == "repair" and p.stages[-1].evaluations > 0
+
+
+def test_a_time_limit_returns_the_best_plan_found_in_time() -> None:
+    t0 = time.perf_counter()
+    p = lamde_mission.plan(MAPS / "small-demo.json", seed=0, budget=10_000_000, time_limit=0.8)
+    wall = time.perf_counter() - t0 - p.timings["compile"]
+    assert p.stopped == "time limit" and p.feasible and p.evaluations < 10_000_000
+    assert wall < 0.8 + 2.0  # generous: a stage stops at its next evaluation
+    # the clock stopped a stage at an evaluation, or the run between two stages
+    assert all(s.stopped in ("", "time limit") for s in p.stages)
+
+
+def test_a_plan_with_its_stages_round_trips_through_json(tiny: Problem) -> None:
+    p = lamde_mission.plan(MAPS / "tiny.json", seed=1, budget=800, population=20)
+    q = Plan.from_dict(p.to_dict())
+    assert q.same_as(p) and [s.name for s in q.stages] == [s.name for s in p.stages]
+    assert q.stages == p.stages  # the first stage's f before is inf: None in JSON, inf back
+    assert q.config == p.config and q.stopped == p.stopped
