@@ -745,3 +745,29 @@ def test_a_stage_runs_only_with_its_allotment_and_a_descent_fits() -> None:
         assert p.evaluations <= budget
         assert all(s.evaluations <= s.allotted for s in p.stages)
         assert all(s.allotted >= 40 for s in p.stages if s.name == "other structure")
+
+
+def test_the_compiled_gradient_equals_its_numpy_reference() -> None:
+    """`_flight_and_gradient` (one compiled pass) against `gradient_reference` (numpy, term by
+    term) on constructive plans of three maps: the same flight time and gradient to rounding."""
+    from planner_core.search.construct import candidate_plans
+    from planner_core.search.descent import _flight_and_gradient, gradient_reference
+
+    checked = 0
+    for task in ("T03", "T09", "T16"):
+        p = Problem(SUITE / f"{task}.json")
+        m = p.model
+        for x in candidate_plans(p, 0, 4)[0]:
+            P = np.asarray(p.breakdown(x)["hover_points"]).reshape(-1, 2)
+            R = m.rates(P)
+            lp = hover_lp(R, m.required, m.t_max)
+            if lp is None:
+                continue
+            T, _, y = lp
+            t_ref, g_ref = gradient_reference(p, P, R, T, y)
+            t, g = _flight_and_gradient(P, p.start, p.end, m.sensors, m.required, R, T, y,
+                                        m.altitude, m.decay, m.v_max, m.accel, m.alpha)
+            assert t == pytest.approx(t_ref, rel=1e-13)
+            np.testing.assert_allclose(g, g_ref, rtol=1e-12, atol=1e-15 * np.abs(g_ref).max())
+            checked += 1
+    assert checked >= 8

@@ -82,3 +82,20 @@ def test_ground_reach_inverts_the_link_rate() -> None:
     assert slant_rates(reach[:3] ** 2, 100.0, 10.0, 0.01) == pytest.approx(need[:3])
     assert reach[3] == 0.0
     assert ground_reach(0.0, 100.0, 10.0, 0.0) > 1e12  # no decay: everywhere in range
+
+
+def test_the_compiled_link_rates_of_one_point_set_are_bit_equal_to_numpy() -> None:
+    """`link_rates` takes a compiled loop for one (I, 2) point set; it is bit-equal to the
+    broadcast numpy form (the same operations in the same order), which stacked sets use."""
+    from planner_core.model.formulas import slant_rates
+
+    rng = np.random.default_rng(7)
+    for n, J in ((1, 1), (6, 29), (40, 3)):
+        P, S = rng.random((n, 2)) * 1e4, rng.random((J, 2)) * 1e4
+        dx = P[:, None, 0] - S[:, 0]
+        dy = P[:, None, 1] - S[:, 1]
+        want = np.maximum(slant_rates(dx * dx + dy * dy, 100.0, 10.0, 0.01), 0.0)
+        assert np.array_equal(link_rates(P, S, 100.0, 10.0, 0.01), want)
+        # a stack of point sets (numpy path) row for row the same
+        stack = link_rates(np.stack([P, P]), S, 100.0, 10.0, 0.01)
+        assert np.array_equal(stack[1], want)
