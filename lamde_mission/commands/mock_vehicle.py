@@ -69,6 +69,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--autopilot", choices=("px4", "ardupilot"), default="px4",
                    help="behave as PX4 (default) or ArduPilot (HEARTBEAT autopilot id; item 0 "
                    "is home; LOITER_TIME hover seconds kept whole)")
+    p.add_argument("--signing-key", metavar="KEY",
+                   help="sign with MAVLink 2 message signing and hear only messages signed "
+                   "with this key: 64 hex digits or a passphrase (its SHA-256), as for upload")
     p.add_argument("-q", "--quiet", action="store_true", help="do not print transfer events")
     return p
 
@@ -80,12 +83,20 @@ def run(args: argparse.Namespace) -> int:
     def event(text: str) -> None:
         print(text, flush=True)
 
+    key = None
+    if args.signing_key is not None:
+        from lamde_mission.vehicle.signing import signing_key
+
+        try:
+            key = signing_key(args.signing_key)
+        except ValueError as exc:
+            raise UsageError(f"--signing-key: {exc}") from None
     try:
         vehicle = MockVehicle(
             args.connect, loss=args.loss, loss_in=args.loss_in, noisy_gcs_hz=args.noisy_gcs_hz,
             latency_ms=args.latency_ms, seed=args.seed,
             reject=args.reject, max_items=args.max_items, on_event=None if args.quiet else event,
-            autopilot=args.autopilot,
+            autopilot=args.autopilot, signing_key=key,
         )  # fmt: skip
     except ValueError as exc:
         raise UsageError(str(exc)) from None
@@ -103,6 +114,8 @@ def run(args: argparse.Namespace) -> int:
         extras.append(f"noisy ground station at {args.noisy_gcs_hz:g} Hz")
     if args.latency_ms:
         extras.append(f"latency {args.latency_ms:g} ms")
+    if key is not None:
+        extras.append("MAVLink 2 signing")
     if vehicle.reject is not None:
         from lamde_mission.vehicle.wire import mission_result_name
 

@@ -79,6 +79,16 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         help="send a mission the simulator rejects, with or without --map (never one whose "
         "fields MAVLink cannot carry)",
     )
+    p.add_argument(
+        "--signing-key",
+        metavar="KEY",
+        help="sign the link with MAVLink 2 message signing, the vehicle holding the same key: "
+        "64 hex digits (the key) or a passphrase (its SHA-256, as MAVProxy and QGroundControl "
+        "derive it); the vehicle's unsigned or wrongly signed messages are then ignored. "
+        "Both uploaders (MAVSDK, which cannot sign, through a local signing relay). Default: "
+        "the environment variable LAMDE_MAVLINK_SIGNING_KEY "
+        "(an option is visible to other users of this machine in the process list)",
+    )
     p.add_argument("-v", "--verbose", action="store_true",
                    help="print each step, what was ignored (traffic not from the vehicle or not "
                    "addressed to us) and MAVSDK's own log lines")
@@ -149,6 +159,27 @@ def _wire_check(path: str, mission: list, fence: list | None, rally: list | None
             wire_mission(items, t)
         except ValueError as exc:
             raise UsageError(f"{path}: {what} {exc}") from None
+
+
+#: where `--signing-key` is read from when the option is not given
+SIGNING_KEY_ENV = "LAMDE_MAVLINK_SIGNING_KEY"
+
+
+def _signing_key(args: argparse.Namespace) -> bytes | None:
+    """The signing key of `--signing-key` (else of $LAMDE_MAVLINK_SIGNING_KEY), or None;
+    UsageError for an empty key."""
+    import os
+
+    from lamde_mission.errors import UsageError
+    from lamde_mission.vehicle.signing import signing_key
+
+    text = args.signing_key if args.signing_key is not None else os.environ.get(SIGNING_KEY_ENV)
+    if text is None:
+        return None
+    try:
+        return signing_key(text)
+    except ValueError as exc:
+        raise UsageError(f"--signing-key: {exc}") from None
 
 
 def _flight_check(path: str, mission: list, *, force: bool) -> None:
@@ -222,6 +253,7 @@ def run(args: argparse.Namespace) -> int:
         parse_connection(args.connect)
     except ValueError as exc:
         raise UsageError(f"--connect: {exc}") from None
+    key = _signing_key(args)
     mission, fence, rally = _read(args.mission)
     _wire_check(args.mission, mission, fence, rally)
     _flight_check(args.mission, mission, force=args.force)
@@ -256,6 +288,7 @@ def run(args: argparse.Namespace) -> int:
             progress=_Progress(verbose=args.verbose),
             rally=rally,
             autopilot=args.autopilot,
+            signing_key=key,
         )
     except ValueError as exc:  # items MAVLink cannot carry
         raise UsageError(f"{args.mission}: {exc}") from None

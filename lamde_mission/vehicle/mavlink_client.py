@@ -81,6 +81,7 @@ class MavlinkClient:
         component_id: int = _m.MAV_COMP_ID_MISSIONPLANNER,
         log: Callable[[str], None] | None = None,
         progress: Callable[[str, int, int], None] | None = None,
+        signing_key: bytes | None = None,
     ) -> None:
         try:
             self.endpoint: Connection = (
@@ -106,6 +107,13 @@ class MavlinkClient:
             PacketCapture(), srcSystem=self.system_id, srcComponent=self.component_id
         )
         self._mav.robust_parsing = True
+        #: MAVLink 2 signing (`signing.enable_signing`): everything sent is signed, and an
+        #: unsigned or wrongly signed message is dropped by the parser and counted
+        self.signed = signing_key is not None
+        if signing_key is not None:
+            from lamde_mission.vehicle.signing import enable_signing
+
+            enable_signing(self._mav, signing_key)
         self._pending: collections.deque[Any] = collections.deque()
         self._vehicle_addr: tuple[str, int] | None = None
         self._next_heartbeat = 0.0
@@ -229,6 +237,12 @@ class MavlinkClient:
                     continue
                 for msg in msgs:
                     if msg.get_type() == "BAD_DATA":
+                        if self.signed and "signature" in str(getattr(msg, "reason", "")):
+                            key = ("unsigned or wrongly signed (--signing-key)",
+                                   f"a message at {addr[0]}:{addr[1]}" if addr else "the link")
+                            if key not in self.ignored:
+                                self.log(f"ignored {key[1]}: {key[0]}")
+                            self.ignored[key] += 1
                         continue
                     msg._lamde_addr = addr
                     self._check_claim(msg)

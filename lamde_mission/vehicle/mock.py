@@ -163,6 +163,7 @@ class MockVehicle:
         on_event: Callable[[str], None] | None = None,
         autopilot: str = "px4",
         home: tuple[float, float, float] = (-35.3632621, 149.1652374, 584.0),
+        signing_key: bytes | None = None,
     ) -> None:
         if not 0.0 <= loss < 1.0:
             raise ValueError(f"loss must be in [0, 1), got {loss!r}")
@@ -213,6 +214,10 @@ class MockVehicle:
             PacketCapture(), srcSystem=self.system_id, srcComponent=self.component_id
         )
         self._mav.robust_parsing = True
+        if signing_key is not None:  # MAVLink 2 signing: sign all, hear only the signed
+            from lamde_mission.vehicle.signing import enable_signing
+
+            enable_signing(self._mav, signing_key, link_id=1)
         self._lock = threading.Lock()
         self._store: dict[int, list[WireItem]] = {t: [] for t in _TYPES}
         self._upload: _Upload | None = None

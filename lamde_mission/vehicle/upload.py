@@ -111,13 +111,26 @@ class MavsdkClient:
     name = "mavsdk"
 
     def __init__(
-        self, connect: str | Connection = "udpin://0.0.0.0:14540", *, quiet: bool = True
+        self, connect: str | Connection = "udpin://0.0.0.0:14540", *, quiet: bool = True,
+        signing_key: bytes | None = None,
     ) -> None:
         try:
             conn = connect if isinstance(connect, Connection) else parse_connection(connect)
         except ValueError as exc:
             raise VehicleError(str(exc)) from None
         self.url = conn.url()
+        #: MAVSDK-Python 4 cannot sign: with a key, MAVSDK talks to a local `SigningRelay`
+        #: that holds the vehicle's link, passes on only correctly signed messages and signs
+        #: what MAVSDK sends
+        self._relay: Any = None
+        if signing_key is not None:
+            from lamde_mission.vehicle.signing import SigningRelay
+
+            try:
+                self._relay = SigningRelay(conn, signing_key)
+            except OSError as exc:
+                raise VehicleError(f"cannot open {conn}: {exc.strerror or exc}") from None
+            self.url = self._relay.url
         self._expected: dict[int, int] = {}
         from mavsdk.asyncio import ComponentType, Configuration, Mavsdk
 
@@ -156,6 +169,9 @@ class MavsdkClient:
             self._raw = None
             self._system = None
             sdk.destroy()
+        if self._relay is not None:
+            self._relay.close()
+            self._relay = None
         if not self._loop.is_closed():
             self._loop.run_until_complete(self._loop.shutdown_default_executor())
             self._loop.close()
@@ -354,15 +370,17 @@ def make_client(
     *,
     log: Callable[[str], None] | None = None,
     progress: Callable[[str, int, int], None] | None = None,
+    signing_key: bytes | None = None,
 ) -> Any:
     """A MissionClient: "mavsdk" (MAVSDK's MissionRaw) or "pymavlink" (ours). `log` gets what
-    the client ignored and recovered (pymavlink), `progress(what, done, total)` the items."""
+    the client ignored and recovered (pymavlink), `progress(what, done, total)` the items,
+    `signing_key` signs the link (MAVSDK through a local `signing.SigningRelay`)."""
     if via == "mavsdk":
-        return MavsdkClient(connect)
+        return MavsdkClient(connect, signing_key=signing_key)
     if via == "pymavlink":
         from lamde_mission.vehicle.mavlink_client import MavlinkClient
 
-        return MavlinkClient(connect, log=log, progress=progress)
+        return MavlinkClient(connect, log=log, progress=progress, signing_key=signing_key)
     raise ValueError(f"via must be one of {', '.join(VIAS)}, got {via!r}")
 
 
@@ -378,6 +396,7 @@ def upload_mission(
     progress: Callable[[str, int, int], None] | None = None,
     rally: Sequence[MissionItem] | None = None,
     autopilot: str | None = None,
+    signing_key: bytes | None = None,
 ) -> UploadReport:
     """Upload a mission and its fence to the vehicle at `connect`, read both back, compare.
 
@@ -392,7 +411,9 @@ def upload_mission(
     client is made: nothing is sent that the wire cannot carry. Returns the report; raises a
     `VehicleError` subclass (NoVehicleError, MissionRejectedError, TransferError,
     ReadbackMismatchError; `.report` attached) on failure, ValueError for bad arguments or
-    items MAVLink cannot carry.
+    items MAVLink cannot carry. `signing_key` (32 bytes, `signing.signing_key`) signs the link
+    with MAVLink 2 signing: the vehicle's unsigned or wrongly signed messages are ignored
+    (MAVSDK, which cannot sign, talks through a local `signing.SigningRelay`).
     """
     if not (isinstance(timeout, int | float) and math.isfinite(timeout) and timeout > 0):
         raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
@@ -406,7 +427,7 @@ def upload_mission(
         wire_mission(fence, MISSION_TYPE.FENCE)
     if rally:
         wire_mission(rally, MISSION_TYPE.RALLY)
-    client = make_client(via, conn, log=log, progress=progress)
+    client = make_client(via, conn, log=log, progress=progress, signing_key=signing_key)
     try:
         report = upload_and_verify(
             client, mission, fence, rally=rally, autopilot=autopilot, timeout=timeout,
