@@ -82,6 +82,18 @@ class _PeakRss:
         self.peak = max(self.peak, self.now())
 
 
+#: the CLI in a fresh process that says its own peak RSS (KiB) on stderr as it exits
+_RSS_WRAPPER = (
+    "import resource, runpy, sys\n"
+    "sys.argv[0] = 'lamde-mission'\n"
+    "try:\n"
+    "    runpy.run_module('lamde_mission.cli', run_name='__main__')\n"
+    "finally:\n"
+    "    print('fuzz-rss-kib', resource.getrusage(resource.RUSAGE_SELF).ru_maxrss,\n"
+    "          file=sys.stderr)\n"
+)
+
+
 def _map_files() -> list[Path]:
     out = []
     for p in sorted(MAPS.rglob("*.json")):
@@ -261,15 +273,19 @@ def main(argv: list[str] | None = None) -> int:
             hang_cases.append(("named pipe as the map", ["check", str(fifo)], work))
         for label, argv_, _case in hang_cases:
             try:
-                r = subprocess.run([sys.executable, "-m", "lamde_mission.cli", *argv_],
+                r = subprocess.run([sys.executable, "-c", _RSS_WRAPPER, *argv_],
                                    capture_output=True, text=True, timeout=args.timeout,
                                    cwd=ROOT)  # fmt: skip
                 if "Traceback" in r.stderr:
                     counts["tracebacks"] += 1
                     bad.append((label, "traceback in a subprocess", Path(argv_[-1])))
-                import resource
-
-                child_rss = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+                rss = [ln for ln in r.stderr.splitlines() if ln.startswith("fuzz-rss-kib ")]
+                peak = int(rss[-1].split()[1]) / 1024 if rss else 0.0
+                child_rss = max(child_rss, peak)
+                if peak > args.rss_limit:
+                    counts["over the RSS limit"] += 1
+                    bad.append((label, f"peak RSS {peak:.0f} MiB in a subprocess",
+                                Path(argv_[-1])))  # fmt: skip
             except subprocess.TimeoutExpired:
                 counts["hangs"] += 1
                 bad.append((label, f"no answer within {args.timeout:g} s", Path(argv_[-1])))
