@@ -471,3 +471,26 @@ def test_docs_heldout_and_25_run_figures_are_what_the_stored_runs_give() -> None
     assert better(rows, "fixed:rand-to-best/1:bin:0.4:0.9") == ["T01", "T02", "T03", "T09", "T10"]
     assert better(rows, "adaptive") == ["T01", "T02", "T03", "T04"]
     assert "on 5 maps (T01-T03, T09, T10; 97.0 % feasible)" in page
+
+
+def test_compare_runs_marks_maps_by_rank_sum_and_by_seed(tmp_path: Path) -> None:
+    """`benchmarks/compare_runs.py OLD NEW`: per map and start mode the mean gaps, the paper's
+    rank-sum mark and the paired count; a new file clearly better on one map only does not
+    meet the 12-of-16 target (exit 1)."""
+    best = json.loads((ROOT / "examples" / "maps" / "suite_best_known.json").read_text())
+    fb = best["tasks"]["T01"]["f"]
+
+    def records(shift: float) -> str:
+        return "".join(json.dumps({"optimiser": "planner", "task": "T01", "init": "seeded",
+                                   "seed": s, "score": fb * (1.0 + shift + 1e-4 * s)}) + "\n"
+                       for s in range(10))
+
+    old, new = tmp_path / "old.jsonl", tmp_path / "new.jsonl"
+    old.write_text(records(0.01))
+    new.write_text(records(0.0))
+    r = _script("benchmarks/compare_runs.py", str(old), str(new))
+    assert r.returncode == 1, r.stderr
+    row = next(s for s in r.stdout.splitlines() if s.startswith("seeded   T01"))
+    assert row.split()[2:] == ["10", "1.0450", "0.0450", "+", "10/10"], row
+    assert "new significantly better on 1 maps, lower mean gap on 1" in r.stdout
+    assert r.stdout.rstrip().endswith("NOT met")

@@ -107,6 +107,9 @@ COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
     "python benchmarks/bench_plan.py --compare":
         ("test_benchmarks.py::test_bench_plan_compares_with_another_checkout", ('"--compare"',)),
     "python benchmarks/bench_plan.py": ("test_benchmarks.py", ("bench_plan",)),
+    "python benchmarks/compare_runs.py":
+        ("test_benchmarks.py::test_compare_runs_marks_maps_by_rank_sum_and_by_seed",
+         ("compare_runs",)),
     "python benchmarks/bench_anytime.py":
         ("test_benchmarks.py::test_bench_anytime_tables_the_gap_per_budget_multiple",
          ("bench_anytime", '"--jobs"')),

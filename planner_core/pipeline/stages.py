@@ -156,11 +156,11 @@ class ConstructivePlans(_Base):
         cfg, problem = state.config, state.problem
         room = ev.remaining
         X, _ = candidate_plans(problem, cfg.seed, min(cfg.start_candidates, room),
-                               order=cfg.order)
+                               order=cfg.order, stop=lambda: ev.expired)
         if not len(X):
             return state
         parts = [(X, "constructive")]
-        if cfg.descent and cfg.descents > 0:
+        if cfg.descent and cfg.descents > 0 and not ev.expired:
             parts.append((seeder_plans(problem, cfg.seed, room - len(X)), "seeder"))
         allX = np.vstack([p for p, _ in parts])
         f, phi = ev.evaluate(allX)
@@ -460,7 +460,7 @@ class Improve(_Base):
         fresh += 1
         seed = int(np.random.SeedSequence([state.config.seed, 31, fresh]).generate_state(1)[0])
         X, _ = candidate_plans(problem, seed, state.config.start_candidates,
-                               order=state.config.order)
+                               order=state.config.order, stop=lambda: ev.expired)
         seen = {r.tobytes() for r in pool.X}
         X = np.asarray([r for r in X if r.tobytes() not in seen]).reshape(-1, pool.X.shape[1])
         X = X[:max(min(len(X), ev.remaining - state.config.descent_trials), 0)]

@@ -311,11 +311,13 @@ def build_plans(
 
 
 def candidate_plans(
-    problem: Any, seed: int, limit: int | None = None, *, order: Order | None = None
+    problem: Any, seed: int, limit: int | None = None, *, order: Order | None = None,
+    stop: Callable[[], bool] | None = None,
 ) -> tuple[np.ndarray, list[str]]:
     """The pipeline's distinct plans in scoring order, at most `limit` (None: all): (X (m, d)
     decision vectors, labels (m,) naming the site set each came from). Deterministic for a
-    seed; nothing is evaluated."""
+    seed; nothing is evaluated. `stop`: asked after each site set once a plan exists; True
+    ends the list there (the pipeline's time limit)."""
     d = int(np.asarray(problem.lower).shape[0])
     rows: list[np.ndarray] = []
     labels: list[str] = []
@@ -335,6 +337,8 @@ def candidate_plans(
             labels.append(label)
             if limit is not None and len(rows) >= limit:
                 return np.asarray(rows, dtype=float).reshape(-1, d), labels
+        if rows and stop is not None and stop():
+            break
     return np.asarray(rows, dtype=float).reshape(-1, d), labels
 
 

@@ -1,0 +1,89 @@
+"""Two benchmark record files of one optimiser, map by map: is the new one better?
+
+Reads two `results.jsonl` of `lamde-mission bench` (e.g. the `planner` entry run by two
+checkouts of this project with the same command, so with the same seeds) and prints, per map
+and start mode, the mean gap to the best-known f (`examples/maps/suite_best_known.json`; an
+infeasible run scores f + 10 phi), the paper's two-sided Wilcoxon rank-sum mark on the scores
+(`planner_core.bench.stats.wilcoxon_mark`, alpha 0.05: "+" new significantly better, "-"
+significantly worse, "~" neither) and the paired comparison (runs with the same seed where
+new < old). Then the verdict against issue 30's target: lower mean gap on at least 12 of the
+16 maps (significantly, rank-sum) and significantly worse on none, in every start mode.
+
+    python benchmarks/compare_runs.py OLD/results.jsonl NEW/results.jsonl [--optimiser planner]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import sys
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def load(path: str, optimiser: str) -> list[dict[str, Any]]:
+    """The records of `optimiser` in a results file."""
+    rows = [json.loads(s) for s in Path(path).read_text().splitlines() if s.strip()]
+    return [r for r in rows if r.get("optimiser") == optimiser]
+
+
+def compare(old: list[dict[str, Any]], new: list[dict[str, Any]], best: dict[str, float],
+            ) -> tuple[list[str], dict[str, tuple[int, int, int]]]:
+    """Table lines and, per start mode, (maps significantly better, maps with a lower mean
+    gap, maps significantly worse)."""
+    from planner_core.bench.stats import wilcoxon_mark
+
+    lines = ["mode     task  runs  gap old %  gap new %  rank-sum  paired better"]
+    counts: dict[str, tuple[int, int, int]] = {}
+    for mode in sorted({r["init"] for r in old} & {r["init"] for r in new}):
+        sig = lower = worse = 0
+        for task in sorted({r["task"] for r in old if r["init"] == mode}):
+            a = {r["seed"]: r for r in old if r["init"] == mode and r["task"] == task}
+            b = {r["seed"]: r for r in new if r["init"] == mode and r["task"] == task}
+            seeds = sorted(a.keys() & b.keys())
+            if not seeds:
+                continue
+            fb = best[task]
+            ga = [100.0 * (a[s]["score"] - fb) / fb for s in seeds]
+            gb = [100.0 * (b[s]["score"] - fb) / fb for s in seeds]
+            mark = wilcoxon_mark(gb, ga)  # "+": new (the reference here) better than old
+            paired = sum(b[s]["score"] < a[s]["score"] for s in seeds)
+            ma, mb = statistics.fmean(ga), statistics.fmean(gb)
+            sig += mark == "+"
+            lower += mb < ma
+            worse += mark == "-"
+            lines.append(f"{mode:<8} {task:<5} {len(seeds):>4}  {ma:9.4f}  {mb:9.4f}  "
+                         f"{mark:>8}  {paired:>5}/{len(seeds)}")
+        counts[mode] = (sig, lower, worse)
+        lines.append(f"{mode}: new significantly better on {sig} maps, lower mean gap on "
+                     f"{lower}, significantly worse on {worse}")
+    return lines, counts
+
+
+def main(argv: list[str] | None = None) -> int:
+    from planner_core.bench.limits import BestKnown, best_known_path, suite_task_files
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("old", help="results.jsonl of the reference (e.g. an earlier checkout)")
+    ap.add_argument("new", help="results.jsonl to compare with it")
+    ap.add_argument("--optimiser", default="planner")
+    ap.add_argument("--suite", default=str(ROOT / "examples" / "maps" / "suite"))
+    args = ap.parse_args(argv)
+    old, new = load(args.old, args.optimiser), load(args.new, args.optimiser)
+    if not old or not new:
+        ap.error(f"--optimiser: no {args.optimiser!r} records in "
+                 f"{args.old if not old else args.new}")
+    best = BestKnown(best_known_path(args.suite)).f_values(suite_task_files(args.suite))
+    lines, counts = compare(old, new, best)
+    print("\n".join(lines))
+    ok = all(s >= 12 and w == 0 for s, _, w in counts.values())
+    print(f"target (significantly better on >= 12/16 maps and worse on none, every mode): "
+          f"{'met' if ok else 'NOT met'}")
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
