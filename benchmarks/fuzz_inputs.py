@@ -14,8 +14,8 @@ run again in a subprocess under ``--timeout`` to catch hangs.
 Prints counts: clean refusals (exit 2, every stderr line prefixed by the command; how many were
 a single line), successes (exit 0, or 1 for a mission that fails a constraint / an infeasible
 plan), tracebacks (must be 0), hangs over the timeout (0), partial files (0), runs whose peak
-resident set exceeds ``--rss-limit`` MiB (0; sampled every 5 ms). Exit status 1 if any of
-the last four is not 0; ``--keep DIR`` saves the offending inputs there.
+resident set exceeds ``--rss-limit`` MiB (0; Linux's high-water mark per run). Exit status 1
+if any of the last four is not 0; ``--keep DIR`` saves the offending inputs there.
 
     python benchmarks/fuzz_inputs.py --n 1000 --seed 0 [--hang-sample 20] [--timeout 30]
 """
@@ -45,9 +45,11 @@ from lamde_mission.fuzz import CliOutcome, mutate, run_cli  # noqa: E402
 
 
 class _PeakRss:
-    """The largest resident set size (MiB) of this process while a block runs, sampled from
-    /proc/self/statm every 5 ms by a thread (in-process runs share the process, so a run's
-    peak includes what the earlier runs left loaded: an upper bound on the run's own)."""
+    """The largest resident set size (MiB) of this process while a block runs: Linux's own
+    high-water mark (VmHWM in /proc/self/status), reset at the start by writing 5 to
+    /proc/self/clear_refs, so it is exact; where that cannot be done, /proc/self/statm sampled
+    every 5 ms by a thread. In-process runs share the process, so a run's peak includes what
+    is loaded already (the libraries, the compiled kernels): an upper bound on its own."""
 
     PAGE = os.sysconf("SC_PAGE_SIZE") if hasattr(os, "sysconf") else 4096
 
@@ -55,6 +57,7 @@ class _PeakRss:
         self.peak = 0.0
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
+        self._exact = False
 
     @classmethod
     def now(cls) -> float:
@@ -64,33 +67,57 @@ class _PeakRss:
         except (OSError, ValueError, IndexError):
             return 0.0
 
+    @staticmethod
+    def high_water() -> float:
+        """VmHWM (MiB), 0 where /proc/self/status has none."""
+        try:
+            with open("/proc/self/status") as fh:
+                for line in fh:
+                    if line.startswith("VmHWM:"):
+                        return int(line.split()[1]) / 1024
+        except (OSError, ValueError, IndexError):
+            pass
+        return 0.0
+
     def _watch(self) -> None:
         while not self._stop.wait(0.005):
             self.peak = max(self.peak, self.now())
 
     def start(self) -> _PeakRss:
         self.peak = self.now()
-        self._stop.clear()
-        self._thread = threading.Thread(target=self._watch, daemon=True)
-        self._thread.start()
+        try:
+            with open("/proc/self/clear_refs", "w") as fh:
+                fh.write("5")  # reset the high-water mark to the current RSS
+            self._exact = self.high_water() > 0
+        except OSError:
+            self._exact = False
+        if not self._exact:
+            self._stop.clear()
+            self._thread = threading.Thread(target=self._watch, daemon=True)
+            self._thread.start()
         return self
 
     def stop(self) -> None:
+        if self._exact:
+            self.peak = max(self.peak, self.high_water())
+            return
         self._stop.set()
         if self._thread is not None:
             self._thread.join()
         self.peak = max(self.peak, self.now())
 
 
-#: the CLI in a fresh process that says its own peak RSS (KiB) on stderr as it exits
+#: the CLI in a fresh process that says its own peak RSS (KiB) on stderr as it exits: VmHWM,
+#: the high-water mark of its own address space (ru_maxrss is not: after a vfork it starts
+#: from the parent's high-water mark)
 _RSS_WRAPPER = (
-    "import resource, runpy, sys\n"
+    "import runpy, sys\n"
     "sys.argv[0] = 'lamde-mission'\n"
     "try:\n"
     "    runpy.run_module('lamde_mission.cli', run_name='__main__')\n"
     "finally:\n"
-    "    print('fuzz-rss-kib', resource.getrusage(resource.RUSAGE_SELF).ru_maxrss,\n"
-    "          file=sys.stderr)\n"
+    "    hwm = [ln.split()[1] for ln in open('/proc/self/status') if ln.startswith('VmHWM:')]\n"
+    "    print('fuzz-rss-kib', hwm[0] if hwm else 0, file=sys.stderr)\n"
 )
 
 
