@@ -10,7 +10,7 @@ Pipelines (every configurator always gets the same one): "de" (default), the DE 
 memetic step, no polish: the configurators' own effect; "memetic", the DE with the memetic
 step on the elite every 10 generations (from a uniform start: `memetic="auto"`, with its repair
 of unserved sensors) and the hover-time LP on the final population's elite, no constructive
-starts and no descents (`optimise(..., lp=True, memetic="auto")`: the DE still decides the
+starts and no descents (`baselines.de.planner(..., starts=0, descent=False)`: the DE decides the
 plan's structure, the repair makes it feasible); "planner", what `plan` does: the
 benchmark's `planner` entry (`planner_core.bench.baselines.REGISTRY["planner"]`, its keyword
 arguments: constructive starts and their descents, the DE with the memetic step from a uniform
@@ -60,8 +60,7 @@ from typing import Any
 
 import numpy as np
 
-from planner_core.bench.baselines import REGISTRY
-from planner_core.bench.baselines.de import optimise
+from planner_core.bench.baselines.de import planner
 from planner_core.bench.stats import wilcoxon_mark
 from planner_core.execution import make_executor
 from planner_core.learning.policy import PolicyConfigurator
@@ -121,11 +120,10 @@ def run_pipeline(problem: Any, mode: str, pipeline: str, conf: Any, seed: int, b
     """One run of `conf` in `pipeline` (module docstring) from start `mode`; returns the
     optimiser's result (.f, .phi)."""
     if pipeline == "planner":
-        kw = {**REGISTRY["planner"].kwargs, "configurator": conf}
-        return optimise(with_init(problem, mode), budget, seed, **kw)
+        return planner(with_init(problem, mode), budget, seed, configurator=conf)
     if pipeline == "memetic":
-        return optimise(with_init(problem, mode), budget, seed, configurator=conf, lp=True,
-                        memetic="auto")
+        return planner(with_init(problem, mode), budget, seed, configurator=conf, starts=0,
+                       descent=False)
     refine = None
     if pipeline == "repair":
         from functools import partial

@@ -97,8 +97,8 @@ def planner(
     uav = getattr(inner, "problem", inner)  # under the uniform start's wrapper
     if "configurator" in settings or policy is not None:
         settings["configurator"] = _configurator(settings.get("configurator", "lamde"), policy)
-    config = PlanConfig(budget=int(budget), seed=int(seed),
-                        population=min(POPULATION, int(budget)), **settings)
+    settings.setdefault("population", min(POPULATION, int(budget)))
+    config = PlanConfig(budget=int(budget), seed=int(seed), **settings)
     r = run_pipeline(uav, config, evaluator=ev)
     de = r.state.de
     last = None if de is None else float(de.history.feasible_fraction[-1])
