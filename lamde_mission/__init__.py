@@ -13,10 +13,13 @@ __all__ = ["plan", "Plan"]
 def _quit_on_sigint(signum: int, frame: object) -> None:
     """The `lamde-mission` script's SIGINT handler until `cli.main` takes over: nothing has
     been read or written yet, so stop at once, one line, status 130 (128 + SIGINT)."""
-    import posix  # os without its import (the builtin module beneath it)
+    try:
+        import posix as _os  # os without its import (the builtin module beneath it)
+    except ImportError:  # Windows: no posix module
+        import os as _os
 
-    posix.write(2, b"lamde-mission: interrupted\n")
-    posix._exit(130)
+    _os.write(2, b"lamde-mission: interrupted\n")
+    _os._exit(130)
 
 
 # the console script only (never `import lamde_mission` in a program or a notebook): a Ctrl-C
