@@ -140,11 +140,12 @@ def test_planner_from_engineering_starts(walled: Problem) -> None:
 
     eng_res = optimise("engineering", walled, 10_000, seed=3)
     res = optimise("planner-eng-start", walled, 1_000, seed=3)
-    assert res.evaluations == 1_000
+    assert res.evaluations <= 1_000
     assert (res.phi, res.f) <= (eng_res.phi, eng_res.f)
     # the start population: the problem's own (seeded half kept), its last rows the given starts
     starts = np.stack([eng_res.x, eng_res.x + 0.0])
-    X = construct.WithStarts(walled, starts).initial_population(np.random.default_rng(0), 8)
+    X = construct.InjectedPopulation(walled, starts).initial_population(
+        np.random.default_rng(0), 8)
     own = walled.initial_population(np.random.default_rng(0), 8)
     np.testing.assert_array_equal(X[:6], own[:6])
     np.testing.assert_array_equal(X[6:], starts)

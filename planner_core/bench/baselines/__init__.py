@@ -193,6 +193,7 @@ REGISTRY: dict[str, OptimiserSpec] = {
             "candidate, ordered by OR-Tools, scored, the 10 best in place of the start "
             "population's last 10 rows (`planner` instead scores its first "
             f"{START_CANDIDATES}, ordered by its own open path)",
+            spends_budget=False,  # the planner's improving rounds may stop early
         ),
         OptimiserSpec(
             "pymoo-ga",

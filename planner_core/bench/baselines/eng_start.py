@@ -8,7 +8,8 @@ pipeline builds is scored (typically 20-51; `planner` scores the first `START_CA
 the site sets are ordered by OR-Tools' routing solver (the `engineering` entry's order) instead
 of the planner's own open path. The `STARTS` Deb-best go into the DE's initial population in
 place of its last rows; the answer is the Deb-best of everything evaluated, so it is never worse
-than `engineering` for the same seed; the budget is spent exactly. Needs the `baselines` extra.
+than `engineering` for the same seed; at most the budget is spent (the improving rounds may
+stop early). Needs the `baselines` extra.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ STARTS = 10
 
 def optimise(problem: Any, budget: int, seed: int, *, starts: int = STARTS) -> OptimiseResult:
     """The engineering pipeline's candidates (all, OR-Tools order), then the planner from a
-    population holding its `starts` best (module docstring); exactly `budget` evaluations."""
+    population holding its `starts` best (module docstring); at most `budget` evaluations."""
     from planner_core.bench.baselines.de import planner
     from planner_core.bench.baselines.engineering import ortools_order
 
