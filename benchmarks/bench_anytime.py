@@ -111,10 +111,18 @@ def main(argv: list[str] | None = None) -> int:
              for m in sorted(args.multiples, reverse=True)
              for t in files for s in range(args.seeds)]
     t0 = time.perf_counter()
-    with make_executor(args.jobs, "local") as ex:
-        records = list(ex.map_unordered(_job, items))
-    if args.output:
-        Path(args.output).write_text("".join(json.dumps(r) + "\n" for r in records))
+    records = []
+    out = open(args.output, "w") if args.output else None  # noqa: SIM115 - one line per run
+    try:
+        with make_executor(args.jobs, "local") as ex:
+            for r in ex.map_unordered(_job, items):
+                records.append(r)
+                if out is not None:  # each run as it finishes: an interrupted run keeps them
+                    out.write(json.dumps(r) + "\n")
+                    out.flush()
+    finally:
+        if out is not None:
+            out.close()
     lines, ok = summarise(records, best, sorted(args.multiples))
     print("\n".join(lines))
     print(f"{len(records)} runs in {time.perf_counter() - t0:.0f} s ({args.jobs} jobs, "

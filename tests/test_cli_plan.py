@@ -133,3 +133,26 @@ def test_plan_time_limit_stops_the_improving_stages(tmp_path: Path) -> None:
     plan = json.loads(rep.read_text())["plan"]
     assert plan["stopped"] == "time limit" and plan["evaluations"] < 10_000_000
     assert plan["timings"]["planning"] < 1.5 + 1.0  # a stage stops at its next evaluation
+
+
+def test_plan_names_the_obstacles_rtl_crosses_by_the_maps_own_kinds(tmp_path: Path) -> None:
+    """small-demo has a circle and a rectangle on the straight leg back: the refusal names
+    them as the map does ('circle 0', 'rectangle 0'), not as the planning map orders them."""
+    r = run_cli("plan", DEMO, "-o", tmp_path / "m.plan", "--finish", "rtl", "--budget", 500)
+    assert r.returncode == 2
+    assert "crosses circle 0, rectangle 0 (with the 10 m clearance)" in r.stderr, r.stderr
+    assert "polygon 0" not in r.stderr
+
+
+def test_the_report_names_the_mission_it_belongs_to(tmp_path: Path) -> None:
+    """The mission is renamed last, after the plot and the report, and the report carries the
+    mission file's SHA-256: a run killed between the renames is told apart; nothing pending
+    is left beside the outputs."""
+    import hashlib
+
+    out, rep = tmp_path / "m.waypoints", tmp_path / "r.json"
+    r = run_cli("plan", DEMO, "-o", out, "--report", rep, "--budget", 1500, "--quiet")
+    assert r.returncode == 0, r.stderr
+    report = json.loads(rep.read_text())
+    assert report["mission_sha256"] == hashlib.sha256(out.read_bytes()).hexdigest()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.waypoints", "r.json"]

@@ -243,7 +243,15 @@ def _check_return_leg(m: Any) -> None:
     if not shapes:
         return
     over = overlap_lengths(np.array([m.end, m.start], dtype=float), shapes)[0]
-    hit = [shapes[k].label for k in np.flatnonzero(over > 1e-9)]
+    # the planning map lists circles, no-fly zones, then the rectangles (as polygons) and
+    # the polygons: name each obstacle by the map's own kind and number
+    own = obstacle_shapes(m)
+    obs = m.spec.obstacles
+    nc, nr, nz = len(obs.circles), len(obs.rectangles), len(obs.no_fly_zones)
+    order = (list(range(len(own))) if pm is m else
+             [*range(nc), *range(nc + nr, nc + nr + nz), *range(nc, nc + nr),
+              *range(nc + nr + nz, len(own))])
+    hit = [own[order[k]].label for k in np.flatnonzero(over > 1e-9)]
     if hit:
         raise UsageError(
             "--finish rtl: RETURN_TO_LAUNCH flies straight from the end point back to the start, "
@@ -361,21 +369,35 @@ def run(args: argparse.Namespace) -> int:
                 print("  try a larger --budget, another --seed, or --allow-infeasible to write "
                       "it anyway", file=sys.stderr)  # fmt: skip
         return 1
-    write_mission(args.output, stored, m, fmt, finish=args.finish, autopilot=args.autopilot,
-                  planning_map=pm)
-    if args.plot:
-        from lamde_mission.plot import plot_mission
+    # the mission goes to a hidden file beside its target first and is renamed last: a run
+    # killed between the renames leaves the new plot and report with an older mission, which
+    # the report's mission_sha256 tells apart, never a new mission beside an older report
+    import hashlib
+    import os
+    from pathlib import Path
 
-        plot_mission(m, args.plot, timeline=timeline, plan=plan)
-    if args.report:
-        from lamde_mission.atomic import write_text_atomic
+    target = Path(args.output)
+    pending = target.with_name(f".{target.stem}.lamde-pending-{os.getpid()}{target.suffix}")
+    try:
+        write_mission(pending, stored, m, fmt, finish=args.finish, autopilot=args.autopilot,
+                      planning_map=pm)
+        if args.plot:
+            from lamde_mission.plot import plot_mission
 
-        report = {"plan": plan.to_dict(), "verdicts": verdicts.to_dict(),
-                  "stored": {"autopilot": stored.dialect.name, "finish": args.finish,
-                             "hover_points": stored.hover_points.tolist(),
-                             "hover_times": stored.hover_times.tolist()},
-                  "map": args.map, "output": args.output, "format": fmt}
-        write_text_atomic(args.report, json.dumps(report, indent=2))
+            plot_mission(m, args.plot, timeline=timeline, plan=plan)
+        if args.report:
+            from lamde_mission.atomic import write_text_atomic
+
+            report = {"plan": plan.to_dict(), "verdicts": verdicts.to_dict(),
+                      "stored": {"autopilot": stored.dialect.name, "finish": args.finish,
+                                 "hover_points": stored.hover_points.tolist(),
+                                 "hover_times": stored.hover_times.tolist()},
+                      "map": args.map, "output": args.output, "format": fmt,
+                      "mission_sha256": hashlib.sha256(pending.read_bytes()).hexdigest()}
+            write_text_atomic(args.report, json.dumps(report, indent=2))
+        os.replace(pending, target)
+    finally:
+        pending.unlink(missing_ok=True)
     if not args.quiet:
         print(_summary(plan, m, timeline, verdicts,
                        [p for p in (args.output, args.plot, args.report) if p], stored))
