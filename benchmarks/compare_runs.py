@@ -10,6 +10,8 @@ new < old). Then the verdict against issue 30's target: lower mean gap on at lea
 16 maps (significantly, rank-sum) and significantly worse on none, in every start mode.
 
     python benchmarks/compare_runs.py OLD/results.jsonl NEW/results.jsonl [--optimiser planner]
+
+(either file may be gzip-compressed, `.jsonl.gz`, as the records kept in docs/search/ are).
 """
 
 from __future__ import annotations
@@ -26,7 +28,13 @@ ROOT = Path(__file__).resolve().parent.parent
 
 def load(path: str, optimiser: str) -> list[dict[str, Any]]:
     """The records of `optimiser` in a results file."""
-    rows = [json.loads(s) for s in Path(path).read_text().splitlines() if s.strip()]
+    if str(path).endswith(".gz"):  # the records docs/ keeps, compressed
+        import gzip
+
+        text = gzip.decompress(Path(path).read_bytes()).decode("utf-8")
+    else:
+        text = Path(path).read_text(encoding="utf-8")
+    rows = [json.loads(s) for s in text.splitlines() if s.strip()]
     return [r for r in rows if r.get("optimiser") == optimiser]
 
 
