@@ -98,7 +98,7 @@ def allotment(stage: Stage, later: Sequence[Stage], config: PlanConfig, left: in
     free = left - sum(s.reserve(config) for s in later)
     want = stage.share(config)
     n = free if want is None else min(int(want), free)
-    if getattr(stage, "yields", False):
+    if stage.yields:
         rest = left - sum(s.share(config) or 0 for s in later)
         n = max(min(n, rest), min(stage.reserve(config), free))
     return max(0, n)

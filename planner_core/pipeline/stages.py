@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Protocol
 
 import numpy as np
@@ -69,8 +69,8 @@ class Pool:
 class PlanState:
     """What the stages hand on: the UAV problem (`planner_core.model.problem.Problem`: decode,
     encode, breakdown), the run's config, the pool of scored plans, the rows injected into the
-    DE's initial population, the DE's result, the polish's record, the point counts whose best
-    plan was already finished, and per-stage notes for the summary."""
+    DE's initial population, the DE's result, the polish's record, and the point counts whose
+    best plan was already finished."""
 
     problem: Any
     config: PlanConfig
@@ -79,13 +79,9 @@ class PlanState:
     de: Any = None
     polish: dict[str, Any] | None = None
     finished: frozenset[int] = frozenset()
-    notes: dict[str, Any] = field(default_factory=dict)
 
     def replace(self, **changes: Any) -> PlanState:
         return dataclasses.replace(self, **changes)
-
-    def note(self, **items: Any) -> PlanState:
-        return dataclasses.replace(self, notes={**self.notes, **items})
 
 
 class Stage(Protocol):
@@ -95,6 +91,7 @@ class Stage(Protocol):
     `yields` attribute also leaves the later stages' shares (`pipeline.allotment`)."""
 
     name: str
+    yields: bool
 
     def share(self, config: PlanConfig) -> int | None: ...
 
@@ -109,6 +106,7 @@ class _Base:
     """Defaults of the protocol: no reserve, runs whenever it has evaluations."""
 
     name = ""
+    yields = False
 
     def share(self, config: PlanConfig) -> int | None:
         return 0
@@ -322,11 +320,10 @@ class FinishIncumbent(_Base):
         from planner_core.search.final import finish
 
         cfg, problem = state.config, state.problem
-        x, f, _ = ev.best()
+        x = ev.best()[0]
         finish(problem, x, ev.evaluate, trials=ev.remaining, seed=cfg.seed,
                descent_trials=cfg.descent_trials, restructure_trials=cfg.restructure_trials)
-        return state.replace(finished=state.finished | {_points(problem, x)}).note(
-            finish_f_before=float(f), finish_f_after=float(ev.best()[1]))
+        return state.replace(finished=state.finished | {_points(problem, x)})
 
 
 class OtherStructure(_Base):
@@ -357,13 +354,9 @@ class OtherStructure(_Base):
 
         cfg, problem = state.config, state.problem
         y = self._other(state, ev)
-        before = ev.best()[1]
-        r = finish(problem, y, ev.evaluate, trials=ev.remaining, seed=cfg.seed,
-                   descent_trials=cfg.descent_trials, restructure_trials=cfg.restructure_trials)
-        n = _points(problem, y)
-        won = r is not None and ev.best()[1] < before
-        return state.replace(finished=state.finished | {n}).note(
-            other_points=n, other_won=bool(won))
+        finish(problem, y, ev.evaluate, trials=ev.remaining, seed=cfg.seed,
+               descent_trials=cfg.descent_trials, restructure_trials=cfg.restructure_trials)
+        return state.replace(finished=state.finished | {_points(problem, y)})
 
 
 #: kick spreads (m) the improving rounds cycle through: the final stage's, finer, coarser
@@ -435,7 +428,7 @@ class Improve(_Base):
                     state = state.replace(finished=state.finished | {_points(problem, y)})
             idle = idle + 1 if ev.count == c0 else 0
             rounds += 1
-        return state.note(improve_rounds=rounds, improve_fresh=fresh)
+        return state
 
     @staticmethod
     def _restart(state: PlanState, ev: Evaluator, restarted: set[bytes],
@@ -443,14 +436,12 @@ class Improve(_Base):
         """The next restart: the Deb-best feasible pool plan of an unfinished number of hover
         points, else the Deb-best unrestarted one after a fresh constructive sweep."""
         problem, pool = state.problem, state.pool
-        counts = {}
         for i in pool.ordered():
             if pool.phi[i] > 0 or pool.X[i].tobytes() in restarted:
                 continue
             n = _points(problem, pool.X[i])
-            if n not in state.finished and n not in counts and n > 0:
+            if n > 0 and n not in state.finished:
                 return pool.X[i], state, fresh
-            counts[n] = i
         # a fresh sweep costs what the constructive stage costs: only with room for several
         # rounds after it
         if ev.remaining < FRESH_ROOM * max(state.config.final_trials, 1):
