@@ -8,18 +8,25 @@ least 14 of the 16 maps, and at 10x it is at most half the 1x gap (means over ma
 through the project's executor (`--jobs`), each job a (map, seed, multiple).
 
     python benchmarks/bench_anytime.py [--seeds 5] [--multiples 1 3 10] [--jobs 2]
-        [--init seeded] [--tasks T01 ...] [--base 10000] [-o runs.jsonl]
+        [--init seeded] [--tasks T01 ...] [--base 10000] [-o runs.jsonl [--resume]]
 
 Gap = (f - f_best) / f_best in percent (an infeasible run counts as +inf and is reported).
 A time is a run's wall time in its worker process, after a warm-up there (no compiling).
+`--resume` keeps the runs already in `-o` (plain or .gz JSON lines) that this command would make
+(same map, seed, multiple, start mode and base; a record without `base` is one of 10,000) and
+makes only the others, appending them: an interrupted or extended run (more seeds) finishes in
+one table. The runs are deterministic for a given budget, so a kept run is the run this
+checkout would make; each new record carries the checkout's commit (`commit`) to tell.
 """
 
 from __future__ import annotations
 
 import argparse
+import gzip
 import json
 import math
 import statistics
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -44,10 +51,31 @@ def _job(item: tuple[str, str, int, int, str, int]) -> dict[str, Any]:
     problem = _PROBLEMS[task]
     t0 = time.perf_counter()
     r = run_pipeline(problem, PlanConfig(seed=seed, budget=mult * base, init=init))
-    return {"task": task, "seed": seed, "multiple": mult, "init": init,
+    return {"task": task, "seed": seed, "multiple": mult, "init": init, "base": base,
             "f": r.f, "phi": r.phi, "evaluations": r.evaluations,
             "seconds": time.perf_counter() - t0,
             "stages": [[s.name, s.evaluations, round(s.seconds, 4)] for s in r.stages]}
+
+
+def _commit() -> str | None:
+    """The checkout's git commit, or None outside a git checkout."""
+    try:
+        out = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True,
+                             text=True, timeout=10, check=True)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return out.stdout.strip() or None
+
+
+def read_runs(path: Path) -> list[dict[str, Any]]:
+    """The records of a JSON-lines file, gzip-compressed when its name ends in .gz."""
+    opener = gzip.open if path.suffix == ".gz" else open
+    with opener(path, "rt") as fh:
+        return [json.loads(line) for line in fh if line.strip()]
+
+
+def _key(task: str, seed: int, mult: int, init: str, base: int) -> tuple[str, int, int, str, int]:
+    return task, seed, mult, init, base
 
 
 def summarise(records: list[dict[str, Any]], best: dict[str, float],
@@ -95,7 +123,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--tasks", nargs="+", help="only these suite maps (default all 16)")
     ap.add_argument("--jobs", type=int, default=2, help="worker processes (0: this one)")
     ap.add_argument("-o", "--output", help="also write every run as JSON lines")
+    ap.add_argument("--resume", action="store_true",
+                    help="keep the runs already in -o and make only the missing ones")
     args = ap.parse_args(argv)
+    if args.resume and not args.output:
+        ap.error("--resume needs -o, the file of runs to keep")
     if args.seeds < 1 or any(m < 1 for m in args.multiples) or args.base < 100:
         ap.error("--seeds and --multiples must be >= 1, --base >= 100 (the population)")
     files = suite_task_files(SUITE)
@@ -110,12 +142,26 @@ def main(argv: list[str] | None = None) -> int:
     items = [(t, texts[t], s, m, args.init, args.base)
              for m in sorted(args.multiples, reverse=True)
              for t in files for s in range(args.seeds)]
+    wanted = {_key(t, s, m, i, b) for t, _, s, m, i, b in items}
+    records: list[dict[str, Any]] = []
+    if args.resume and Path(args.output).exists():
+        for r in read_runs(Path(args.output)):
+            k = _key(r["task"], r["seed"], r["multiple"], r["init"], r.get("base", 10_000))
+            if k in wanted:
+                records.append(r)
+                wanted.discard(k)
+        items = [it for it in items if _key(it[0], *it[2:]) in wanted]
+        print(f"resuming: {len(records)} runs kept from {args.output}, {len(items)} to make",
+              flush=True)
+    commit = _commit()
     t0 = time.perf_counter()
-    records = []
-    out = open(args.output, "w") if args.output else None  # noqa: SIM115 - one line per run
+    mode = "a" if args.resume else "w"
+    opener = gzip.open if args.output and args.output.endswith(".gz") else open
+    out = opener(args.output, mode + "t") if args.output else None  # one line per run
     try:
         with make_executor(args.jobs, "local") as ex:
             for r in ex.map_unordered(_job, items):
+                r["commit"] = commit
                 records.append(r)
                 if out is not None:  # each run as it finishes: an interrupted run keeps them
                     out.write(json.dumps(r) + "\n")
@@ -125,8 +171,8 @@ def main(argv: list[str] | None = None) -> int:
             out.close()
     lines, ok = summarise(records, best, sorted(args.multiples))
     print("\n".join(lines))
-    print(f"{len(records)} runs in {time.perf_counter() - t0:.0f} s ({args.jobs} jobs, "
-          f"init {args.init})")
+    print(f"{len(records)} runs, {len(items)} made in {time.perf_counter() - t0:.0f} s "
+          f"({args.jobs} jobs, init {args.init})")
     return 0 if ok else 1
 
 

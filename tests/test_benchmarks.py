@@ -59,6 +59,14 @@ def test_bench_anytime_tables_the_gap_per_budget_multiple(tmp_path: Path) -> Non
     runs = [json.loads(s) for s in out.read_text().splitlines()]
     assert sorted(x["evaluations"] <= 1500 * x["multiple"] for x in runs) == [True, True]
     assert {x["multiple"] for x in runs} == {1, 2}
+    # --resume keeps those two runs and makes only the new seed's, appending them
+    r = _script("benchmarks/bench_anytime.py", "--tasks", "T01", "--seeds", "2",
+                "--multiples", "1", "2", "--base", "1500", "--jobs", "0", "-o", str(out),
+                "--resume")
+    assert r.returncode in (0, 1), r.stderr
+    assert "resuming: 2 runs kept" in r.stdout and "4 runs, 2 made" in r.stdout
+    again = [json.loads(s) for s in out.read_text().splitlines()]
+    assert again[:2] == runs and sorted(x["seed"] for x in again[2:]) == [1, 1]
 
 
 def _script_module(name: str):  # noqa: ANN202
