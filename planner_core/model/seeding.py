@@ -378,7 +378,75 @@ class Seeder:
         """Route points M (k, 2) with points removed whose sensors the others still serve
         within 95% of T_max and whose neighbours see each other: while more than `limit`
         remain, the one whose removal costs least; then any whose removal lowers the estimated
-        f. Returns the kept points in order (m, 2)."""
+        f. Returns the kept points in order (m, 2).
+
+        The cost of removing point m: alpha x the flight time it saves (its two legs replaced
+        by one) + (1 - alpha) x the greedy hover times of the rest, each sensor served from
+        its best remaining point. Once m is gone a sensor's best point changes only when m was
+        its best (it moves to its second best), so each iteration needs every sensor's best
+        and second-best point, (n, J), and the (n, n) matrix of the largest need point m hands
+        to point i: O(n^2 + n J) per removal, O(n^3 + n^2 J) for a prune of n points, where
+        `prune_reference` takes O(n^3 J); the link rates and the legs' clearance are kept and
+        updated, not recomputed (one leg check per removal). Same result as
+        `prune_reference` to the bit (tests)."""
+        p = self.p
+        M = np.asarray(M, dtype=float).reshape(-1, 2)
+        if len(M) <= 1:
+            return M
+        R = p.rates(M)  # (n, J), row i the link rates of point i: kept as points go
+        full = np.vstack([p.start, M, p.end])
+        n = len(M)
+        ok = self._clear(full[:n], full[2:])  # ok[m]: m's neighbours see each other
+        c = 0.95 * p.t_max
+        cols = np.arange(R.shape[1])
+        while n > 1:
+            full = np.vstack([p.start, M, p.end])
+            m_idx = np.arange(n)
+            b1 = np.argmax(R, axis=0)  # each sensor's best point (the first of equals)
+            r1 = R[b1, cols]
+            R2 = R.copy()
+            R2[b1, cols] = -1.0
+            b2 = np.argmax(R2, axis=0)  # ... and its best once b1 is gone
+            r2 = R[b2, cols]
+            now = r1 * c >= p.required
+            # removing b1[j] leaves sensor j unserved: that point cannot go
+            blocks = now & (r2 * c < p.required)
+            served = np.ones(n, dtype=bool)
+            served[b1[blocks]] = False
+            cand = np.flatnonzero(ok & served)
+            if len(cand) == 0:
+                break
+            need1 = p.required / np.maximum(r1, 1e-12)
+            need2 = p.required / np.maximum(r2, 1e-12)
+            own = np.zeros(n)  # point i's greedy time: the longest need of the sensors it serves
+            np.maximum.at(own, b1, need1)
+            gain = np.zeros((n, n))  # [m, i]: the longest need m's sensors hand to i
+            np.maximum.at(gain, (b1, b2), need2)
+            times = np.maximum(own[None, :], gain)
+            times[m_idx, m_idx] = 0.0
+            legs = flight_time(np.hypot(*np.diff(full, axis=0).T), p.v_max, p.accel)
+            short = flight_time(np.hypot(*(full[m_idx + 2] - full[m_idx]).T), p.v_max, p.accel)
+            d_fly = short - legs[m_idx] - legs[m_idx + 1]
+            cost = p.alpha * d_fly + (1.0 - p.alpha) * times.sum(axis=1)
+            m = int(cand[np.argmin(cost[cand])])
+            if n <= limit and cost[m] >= (1.0 - p.alpha) * self._times(M, R)[0].sum():
+                break
+            M = np.delete(M, m, axis=0)
+            R = np.delete(R, m, axis=0)
+            ok = np.delete(ok, m)
+            n -= 1
+            # the legs that skip point m - 1 and point m (as numbered now) changed
+            fix = np.array([i for i in (m - 1, m) if 0 <= i < n], dtype=int)
+            if len(fix):
+                full = np.vstack([p.start, M, p.end])
+                ok[fix] = self._clear(full[fix], full[fix + 2])
+        return M
+
+    def prune_reference(self, M: np.ndarray, limit: int) -> np.ndarray:
+        """`prune` the obvious way: every iteration recomputes, for each point m, the greedy
+        hover times of the others from an (n, n, J) array, O(n^3 J) over a prune of n points;
+        what `prune` computes from each sensor's best and second-best point (tests hold the
+        two equal)."""
         p = self.p
         while len(M) > 1:
             full = np.vstack([p.start, M, p.end])
@@ -436,14 +504,15 @@ class Seeder:
             M = np.insert(M, m, cand[pick], axis=0)
         return M
 
-    def _times(self, M: np.ndarray) -> tuple[np.ndarray, int]:
+    def _times(self, M: np.ndarray, R: np.ndarray | None = None) -> tuple[np.ndarray, int]:
         """Greedy hover times, each sensor served from its best point (capped at T_max):
-        (times, how many sensors that leaves short)."""
+        (times, how many sensors that leaves short). `R`: the points' link rates (k, J), when
+        the caller has them."""
         p = self.p
         times = np.zeros(len(M))
         if len(M) == 0:
             return times, len(p.sensors)
-        R = p.rates(M)
+        R = p.rates(M) if R is None else R
         best = np.argmax(R, axis=0)
         r = R[best, np.arange(R.shape[1])]
         need = np.where(r > 0, p.required / np.maximum(r, 1e-12), np.inf)

@@ -177,11 +177,87 @@ def _fit(problem: Any, seeder: Any, pts: np.ndarray, *, merge_first: bool) -> np
     return pts
 
 
+#: pairs whose trial routes `_merge_pair` builds at once (bounds its memory: a block holds
+#: two trial routes of k + 1 legs per pair and two rate rows of J sensors)
+_MERGE_BLOCK = 1 << 20
+
+
 def _merge_pair(problem: Any, pts: np.ndarray) -> np.ndarray | None:
     """pts (k, 2) with two points replaced by one that still serves every sensor only those two
     serve (within the seeder's reach: 90 % of T_max), placed at their sensors' centroid or the
-    pair's midpoint, choosing the pair and place that add the least flight time; None when no
-    pair can be merged. The merged point takes the first point's place in the route."""
+    pair's midpoint, choosing the pair and place that add the least flight time (the first in
+    pair order, midpoint before centroid, among equals); None when no pair can be merged. The
+    merged point takes the first point's place in the route.
+
+    All k (k - 1) / 2 pairs are scored in blocks: per pair the sensors only it serves (J), both
+    places' coverage (2 J rates) and both trial routes' flight times (2 (k + 1) legs), so one
+    call costs O(k^2 (k + J)) in `_MERGE_BLOCK`-bounded memory; `merge_pair_reference` is the
+    loop it replaces (same result to the bit, tests)."""
+    mp = problem.model
+    pts = np.asarray(pts, dtype=float).reshape(-1, 2)
+    k = len(pts)
+    if k < 2:
+        return None
+    need = np.asarray(mp.required, dtype=float)
+    serves = covers(problem, pts)  # (k, J)
+    count = serves.sum(axis=0)
+    sensors = np.asarray(mp.sensors, dtype=float)
+    base = _route_flight_time(problem, pts)
+    full = np.vstack([problem.start, pts, problem.end])
+    ii, jj = np.triu_indices(k, 1)  # the reference's loop order: i, then j > i
+    block = max(1, _MERGE_BLOCK // (k + 1 + len(need) + 1))
+    best: tuple[float, int, int] | None = None  # (added time, pair, place)
+    for lo in range(0, len(ii), block):
+        i, j = ii[lo : lo + block], jj[lo : lo + block]
+        own = (serves[i] | serves[j]) & (count[None, :] - serves[i] - serves[j] <= 0) \
+            & (need > 0)[None, :]
+        has = own.any(axis=1)
+        places = np.empty((len(i), 2, 2))
+        places[:, 0] = 0.5 * (pts[i] + pts[j])
+        # the centroid of the pair's own sensors, summed in sensor order (as mean() does)
+        acc = np.zeros((len(i), 2))
+        for s in np.flatnonzero(own.any(axis=0)):
+            acc[own[:, s]] += sensors[s]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            places[:, 1] = acc / own.sum(axis=1)[:, None]
+        valid = np.stack([np.ones(len(i), dtype=bool), has], axis=1)
+        q = places.reshape(-1, 2)
+        flat_own = np.repeat(own, 2, axis=0)
+        fits = (covers(problem, np.where(valid.reshape(-1, 1), q, 0.0)) | ~flat_own).all(axis=1)
+        valid &= fits.reshape(-1, 2) | ~has[:, None]
+        # the trial routes: start -> pts without j, i at the new place -> end
+        cols = np.arange(k + 1)[None, :]
+        idx = cols + (cols >= (j + 1)[:, None])
+        t = np.full((len(i), 2), np.inf)
+        for c in range(2):
+            rows = np.flatnonzero(valid[:, c])
+            if not len(rows):
+                continue
+            nodes = full[idx[rows]]
+            nodes[np.arange(len(rows)), i[rows] + 1] = places[rows, c]
+            d = np.linalg.norm(np.diff(nodes, axis=1), axis=2)
+            t[rows, c] = mp.flight_time(d).sum(axis=1) - base
+        flat = t.reshape(-1)
+        m = int(np.argmin(flat))
+        if np.isfinite(flat[m]) and (best is None or flat[m] < best[0]):
+            best = (float(flat[m]), lo + m // 2, m % 2)
+    if best is None:
+        return None
+    _, pair, place = best
+    i, j = int(ii[pair]), int(jj[pair])
+    trial = np.delete(pts, j, axis=0)
+    if place == 0:
+        trial[i] = 0.5 * (pts[i] + pts[j])
+    else:
+        own = (serves[i] | serves[j]) & (count - serves[i] - serves[j] <= 0) & (need > 0)
+        trial[i] = sensors[own].mean(axis=0)
+    return trial
+
+
+def merge_pair_reference(problem: Any, pts: np.ndarray) -> np.ndarray | None:
+    """`_merge_pair` the obvious way, pair by pair and place by place (one rate row and one
+    route sum each): what `_merge_pair` computes in blocks of pairs (tests hold the two
+    equal)."""
     mp = problem.model
     need = np.asarray(mp.required, dtype=float)
     serves = covers(problem, pts)  # (k, J)

@@ -1,0 +1,81 @@
+"""The planner's fast paths for many sensors equal their slow references to the bit (issue 31):
+the seeder's prune (`Seeder.prune` vs `Seeder.prune_reference`) and the repair's merge of two
+hover points (`refine._merge_pair` vs `refine.merge_pair_reference`), on suite maps and on
+random small maps with random point sets."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from planner_core.model.problem import Problem
+from planner_core.search import refine
+
+SUITE = Path(__file__).resolve().parent.parent / "examples" / "maps" / "suite"
+
+
+def _random_map(rng: np.random.Generator, n_sensors: int, size: float = 3000.0) -> dict:
+    sensors = rng.uniform(100, size - 100, (n_sensors, 2))
+    circles = [{"x": float(x), "y": float(y), "radius": float(r)}
+               for x, y, r in zip(*rng.uniform(200, size - 200, (2, 6)),
+                                  rng.uniform(30, 90, 6), strict=True)]
+    return {"name": "random", "area": {"width": size, "height": size},
+            "start": [50.0, 50.0], "end": [size - 50.0, size - 50.0],
+            "sensors": [{"id": f"S{i}", "x": float(x), "y": float(y)}
+                        for i, (x, y) in enumerate(sensors)],
+            "obstacles": {"circles": circles},
+            "uav": {"max_hover_points": max(2, n_sensors // 3)}}
+
+
+def _cases() -> list[tuple[str, Problem, np.ndarray]]:
+    rng = np.random.default_rng(31)
+    out = []
+    for task in ("T03", "T09", "T16"):
+        p = Problem(json.loads((SUITE / f"{task}.json").read_text()))
+        for n in (3, 12, 30):
+            pts = rng.uniform(0, p.model.width, (n, 2))
+            out.append((f"{task}-{n}", p, pts))
+            # points near the sensors: most of them serve someone
+            near = p.model.sensors[rng.integers(0, len(p.model.sensors), n)]
+            out.append((f"{task}-near-{n}", p, near + rng.normal(0, 150, (n, 2))))
+    for case in range(6):
+        p = Problem(_random_map(rng, int(rng.integers(4, 25))))
+        near = p.model.sensors[rng.integers(0, len(p.model.sensors), 2 * len(p.model.sensors))]
+        out.append((f"random-{case}", p, near + rng.normal(0, 200, near.shape)))
+    return out
+
+
+CASES = _cases()
+
+
+@pytest.mark.parametrize("name,problem,pts", CASES, ids=[c[0] for c in CASES])
+def test_prune_equals_its_reference(name: str, problem: Problem, pts: np.ndarray) -> None:
+    seeder = problem.seeder
+    for limit in (1, max(1, len(pts) // 2), len(pts)):
+        fast = seeder.prune(pts.copy(), limit)
+        slow = seeder.prune_reference(pts.copy(), limit)
+        assert fast.shape == slow.shape and np.array_equal(fast, slow), (name, limit)
+
+
+@pytest.mark.parametrize("name,problem,pts", CASES, ids=[c[0] for c in CASES])
+def test_merge_pair_equals_its_reference(name: str, problem: Problem, pts: np.ndarray) -> None:
+    cur = pts.copy()
+    for _ in range(3):  # a few merges in a row, as the repair does
+        fast = refine._merge_pair(problem, cur)
+        slow = refine.merge_pair_reference(problem, cur)
+        assert (fast is None) == (slow is None), name
+        if fast is None:
+            break
+        assert np.array_equal(fast, slow), name
+        cur = fast
+
+
+def test_merge_pair_blocks_give_the_same_answer(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Tiny blocks (a few pairs each) choose the same pair and place as one block."""
+    name, problem, pts = CASES[-1]
+    whole = refine._merge_pair(problem, pts)
+    monkeypatch.setattr(refine, "_MERGE_BLOCK", 50)
+    assert np.array_equal(refine._merge_pair(problem, pts), whole)
