@@ -474,14 +474,16 @@ def test_a_forged_heartbeat_that_captured_the_link_is_refused(port):
 
 
 def test_a_second_autopilot_with_the_same_id_during_an_upload_is_named(port, tmp_path, capsys):
-    """The vehicle is pinned first; a second autopilot with its ids starts during the upload:
-    the CLI stops with one line naming both (exit 1), never 'identical'."""
+    """The vehicle is pinned first; a second autopilot with its ids starts beating at the same
+    time: the CLI stops before sending (the heartbeat watch) with one line naming both, exit
+    status 2 (the link as given cannot work), never 'identical'."""
     plan_path, _map_ok, _ = _plan_files(tmp_path)
     with mock_on(port, latency_ms=40.0), _FakeAutopilot(port):
         rc = main(["upload", str(plan_path), "--via", "pymavlink", "--connect",
                    listen_on(port), "--timeout", "10"])  # fmt: skip
     out = capsys.readouterr()
-    assert rc == 1, out
+    assert rc == 2, out
     lines = [ln for ln in out.err.splitlines() if ln.startswith("lamde-mission upload:")]
     assert len(lines) == 1 and "two autopilots claim system 1 component 1" in lines[0]
+    assert "nothing was sent" in lines[0]
     assert "identical" not in out.out

@@ -14,22 +14,49 @@ _SIZES = (5000, 10000)
 _DEFAULT_SEED = D.SUITE_SEED
 
 
+# the large generator's ranges, spelled here so that `--help` loads no numpy; equal to
+# planner_core.suite.large's LAYOUTS, MIN_SIZE, MAX_SIZE, MAX_SENSORS, CLUSTER_SIZE (a test
+# holds them equal)
+_LAYOUTS = ("uniform", "clustered", "corridor")
+_LARGE_SIZES = (5000, 30000)
+_LARGE_SENSORS = 500
+_CLUSTER_SIZE = 12
+
+
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    lo, hi = _LARGE_SIZES
     p = sub.add_parser(
         "generate",
-        help="generate benchmark maps (one map, or the 16-task suite)",
-        description="Generate maps following the paper's Sec. 3.2, each with a stored witness "
-        "(a known feasible plan, checked phi == 0). Either write one map: "
+        help="generate benchmark maps (one map, the 16-task suite, or large deployments)",
+        description="Generate maps, each with a stored witness (a known feasible plan, checked "
+        "phi == 0) and an origin. The paper's maps (Sec. 3.2): "
         "`generate OUT.json --size 5000|10000 --density 0-7`, or the whole suite: "
-        "`generate --suite OUTDIR` (T01..T08 on 5 km, T09..T16 on 10 km). "
+        "`generate --suite OUTDIR` (T01..T16). Large deployments: "
+        f"`generate OUT.json --layout {'|'.join(_LAYOUTS)} --size {lo}..{hi} "
+        f"--sensors 1..{_LARGE_SENSORS} [--density 0-7]`: uniform (sensors spread over the area, "
+        "500 m apart at least), clustered (fields of --cluster-size sensors, each served from "
+        "points at the field's edge, where C3 holds), corridor (sensors along a pipeline or "
+        "road crossing the area, served from beside it); I_max = max(20, min(200, "
+        "ceil(sensors / 2))); obstacle counts are the paper's 10 km ones scaled by the area. "
+        "`generate --large-suite OUTDIR` writes the large suite L01..L08 (docs/scaling.md). "
         "Same seed, same bytes.",
     )
     p.add_argument("out", nargs="?", metavar="OUT.json", help="map file to write")
     p.add_argument("--suite", metavar="OUTDIR", help="write T01.json..T16.json into OUTDIR")
-    p.add_argument("--size", metavar="M", help="map side in metres: 5000 or 10000")
-    p.add_argument("--density", metavar="D", help="obstacle density 0 (sparse) .. 7 (dense)")
+    p.add_argument("--large-suite", metavar="OUTDIR",
+                   help="write the large suite L01.json..L08.json into OUTDIR")
+    p.add_argument("--size", metavar="M", help="map side in metres: 5000 or 10000; with --layout "
+                   f"{lo}..{hi}")
+    p.add_argument("--density", metavar="D", help="obstacle density 0 (sparse) .. 7 (dense); "
+                   "with --layout default 0")
+    p.add_argument("--layout", metavar="L",
+                   help=f"a large-deployment map: {' | '.join(_LAYOUTS)} (default: the paper's "
+                   "generator)")
+    p.add_argument("--cluster-size", metavar="K",
+                   help=f"sensors per field, --layout clustered only (default {_CLUSTER_SIZE})")
     p.add_argument("--seed", metavar="S", help=f"random seed, >= 0 (default {_DEFAULT_SEED})")
-    p.add_argument("--sensors", metavar="N", help="number of sensors (default: by size, density)")
+    p.add_argument("--sensors", metavar="N", help="number of sensors (default: by size and "
+                   "density; with --layout 0.4 per km^2, within 20..500)")
     p.add_argument("--name", help="map name stored in the file (default: from the arguments)")
     return p
 
@@ -48,21 +75,33 @@ def run(args: argparse.Namespace) -> int:
     assert seed is not None
     if seed < 0:
         raise UsageError(f"--seed must be >= 0 (got {seed})")
-    if args.suite is not None:
+    for option, folder in (("--suite", args.suite), ("--large-suite", args.large_suite)):
+        if folder is None:
+            continue
         extra = [o for o, v in (("OUT.json", args.out), ("--size", args.size),
                                 ("--density", args.density), ("--sensors", args.sensors),
-                                ("--name", args.name)) if v is not None]  # fmt: skip
+                                ("--layout", args.layout), ("--cluster-size", args.cluster_size),
+                                ("--name", args.name),
+                                ("--large-suite" if option == "--suite" else "--suite",
+                                 args.large_suite if option == "--suite" else args.suite))
+                 if v is not None]  # fmt: skip
         if extra:
-            raise UsageError(f"--suite writes the fixed 16 tasks; drop {', '.join(extra)}")
-        return _run_suite(Path(args.suite), seed)
+            what = "16 tasks" if option == "--suite" else "8 large maps"
+            raise UsageError(f"{option} writes the fixed {what}; drop {', '.join(extra)}")
+        return _run_suite(Path(folder), seed, large=option == "--large-suite")
     if args.out is None:
-        raise UsageError("give OUT.json (with --size and --density) or --suite OUTDIR")
+        raise UsageError("give OUT.json (with --size and --density, or --layout), --suite OUTDIR "
+                         "or --large-suite OUTDIR")
+    if args.layout is not None:
+        return _run_large(args, seed)
+    if args.cluster_size is not None:
+        raise UsageError("--cluster-size is for --layout clustered")
     size = _int(args.size, "--size")
     density = _int(args.density, "--density")
     if size is None or density is None:
         raise UsageError("one map needs --size (5000 or 10000) and --density (0..7)")
     if size not in _SIZES:
-        raise UsageError(f"--size must be 5000 or 10000 (got {size})")
+        raise UsageError(f"--size must be 5000 or 10000 (got {size}; other sizes need --layout)")
     if not 0 <= density <= 7:
         raise UsageError(f"--density must be 0..7 (got {density})")
     sensors = _int(args.sensors, "--sensors")
@@ -95,27 +134,110 @@ def _run_one(
     return 0
 
 
-def _run_suite(folder: Path, seed: int) -> int:
-    import json
+def _default_large_sensors(size: int) -> int:
+    """0.4 sensors per km^2 (the issue's measured maps), within 20..500."""
+    return max(20, min(500, round(0.4 * (size / 1000.0) ** 2)))
 
+
+def _run_large(args: argparse.Namespace, seed: int) -> int:
     from lamde_mission.atomic import write_text_atomic
-    from planner_core.suite import generate_suite
+    from planner_core.suite import GenerationError, dumps_map
+    from planner_core.suite import large as L
 
-    if folder.exists() and not folder.is_dir():
-        raise UsageError(f"--suite {folder}: exists and is not a folder")
+    if args.layout not in L.LAYOUTS:
+        raise UsageError(f"--layout must be {', '.join(L.LAYOUTS)} (got {args.layout!r})")
+    size = _int(args.size, "--size")
+    if size is None:
+        raise UsageError(f"--layout needs --size ({L.MIN_SIZE}..{L.MAX_SIZE} m)")
+    if not L.MIN_SIZE <= size <= L.MAX_SIZE:
+        raise UsageError(f"--size must be {L.MIN_SIZE}..{L.MAX_SIZE} with --layout (got {size})")
+    density = _int(args.density, "--density", 0)
+    assert density is not None
+    if not 0 <= density <= 7:
+        raise UsageError(f"--density must be 0..7 (got {density})")
+    sensors = _int(args.sensors, "--sensors", _default_large_sensors(size))
+    assert sensors is not None
+    if not 1 <= sensors <= L.MAX_SENSORS:
+        raise UsageError(f"--sensors must be 1..{L.MAX_SENSORS} with --layout (got {sensors})")
+    if args.cluster_size is not None and args.layout != "clustered":
+        raise UsageError("--cluster-size is for --layout clustered")
+    cluster = _int(args.cluster_size, "--cluster-size", L.CLUSTER_SIZE)
+    assert cluster is not None
+    if not 1 <= cluster <= 50:
+        raise UsageError(f"--cluster-size must be 1..50 (got {cluster})")
+    out = Path(args.out)
+    if out.is_dir():
+        raise UsageError(f"{out} is a folder; give a file name (or use --large-suite {out})")
     t0 = time.perf_counter()
-    paths = generate_suite(folder, seed, write=write_text_atomic)
-    for path in paths:
-        print(f"wrote {path}: {_line(json.loads(path.read_text()))}")
-    print(f"{len(paths)} maps in {time.perf_counter() - t0:.1f} s (seed {seed})")
+    try:
+        data = L.generate_large_map(size, sensors, args.layout, density, seed,
+                                    cluster_size=cluster, name=args.name)  # fmt: skip
+    except GenerationError as exc:
+        print(f"lamde-mission generate: {exc}", file=sys.stderr)
+        return 1
+    write_text_atomic(out, dumps_map(data))
+    print(f"wrote {out}: {_line(data, witness_f=True)} ({time.perf_counter() - t0:.1f} s)")
+    _note_sensor_limit([data])
     return 0
 
 
-def _line(d: dict) -> str:
+def _note_sensor_limit(maps: list[dict]) -> None:
+    """Say on stderr how to read maps with more sensors than LAMDE_MAX_SENSORS allows."""
+    from planner_core import textio
+
+    most = max(len(d["sensors"]) for d in maps)
+    try:
+        cap = textio.limit("sensors")
+    except textio.InputError:
+        return
+    if most > cap:
+        print(f"note: {most} sensors is more than LAMDE_MAX_SENSORS ({cap}); check, plan and "
+              f"bench read such maps with LAMDE_MAX_SENSORS={most} (or more) set",
+              file=sys.stderr)  # fmt: skip
+
+
+def _run_suite(folder: Path, seed: int, *, large: bool = False) -> int:
+    import json
+
+    from lamde_mission.atomic import write_text_atomic
+    from planner_core.suite import dumps_map, generate_suite
+
+    option = "--large-suite" if large else "--suite"
+    if folder.exists() and not folder.is_dir():
+        raise UsageError(f"{option} {folder}: exists and is not a folder")
+    t0 = time.perf_counter()
+    if large:
+        from planner_core.suite.large import large_suite_maps
+
+        folder.mkdir(parents=True, exist_ok=True)
+        maps = large_suite_maps(seed)
+        for name, data in maps.items():
+            path = folder / f"{name}.json"
+            write_text_atomic(path, dumps_map(data))
+            print(f"wrote {path}: {_line(data, witness_f=True)}")
+        n = len(maps)
+    else:
+        paths = generate_suite(folder, seed, write=write_text_atomic)
+        for path in paths:
+            print(f"wrote {path}: {_line(json.loads(path.read_text()))}")
+        n = len(paths)
+    print(f"{n} maps in {time.perf_counter() - t0:.1f} s (seed {seed})", flush=True)
+    if large:
+        _note_sensor_limit(list(maps.values()))
+    return 0
+
+
+def _line(d: dict, *, witness_f: bool = False) -> str:
     o = d["obstacles"]
-    return (
+    text = (
         f"'{d['name']}', {d['area']['width']} m, sensors {len(d['sensors'])}, "
         f"circles {len(o['circles'])}, rectangles {len(o['rectangles'])}, "
         f"no-fly zones {len(o['no_fly_zones'])}, "
         f"witness hover points {len(d['witness']['hover_points'])}"
     )
+    if witness_f:
+        from planner_core.suite.large import witness_score
+
+        f, _ = witness_score(d)
+        text += f" (I_max {d['uav']['max_hover_points']}, witness f {f:.2f})"
+    return text

@@ -55,11 +55,16 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         help="write a generated campus of non-convex footprints (a benchmark at real scale)",
         description="A seeded campus: N footprints (L, U, T shapes, blocks with a courtyard) on "
         "a grid of lots over a 5 km area, sensors in empty lots, start and end in the corners. "
-        "The benchmarks use campus-500 at seed 0. Same seed, same bytes.",
+        "The benchmarks use campus-500 at seed 0. The map is placed at --origin (default: the "
+        "generated maps' fixed origin) so `plan` can write its missions in WGS84. "
+        "Same seed, same bytes.",
     )
     cg.add_argument("--footprints", type=int, default=500, metavar="N", help="default 500")
     cg.add_argument("--sensors", type=int, default=15, metavar="N", help="default 15")
     cg.add_argument("--seed", type=int, default=0, help="default 0")
+    cg.add_argument("--origin", metavar="LAT,LON[,ALT]",
+                    help="WGS84 origin of the local frame (default 23.0493,113.3975,10, the "
+                    "origin of every generated map)")
     cg.add_argument("-o", "--output", required=True, help="map file to write (JSON)")
     return p
 
@@ -141,19 +146,25 @@ def _to_geojson(args: argparse.Namespace) -> int:
 def _campus(args: argparse.Namespace) -> int:
     from lamde_mission.atomic import write_text_atomic
     from lamde_mission.gis.synthetic import campus_map
-    from planner_core.suite import dumps_map
+    from planner_core.suite import SUITE_ORIGIN, dumps_map
 
     if args.seed < 0:
         raise UsageError(f"--seed must be >= 0 (got {args.seed})")
+    given = _origin(args.origin)
+    origin = (dict(SUITE_ORIGIN) if given is None
+              else {"lat": given[0], "lon": given[1], "alt": given[2]})  # fmt: skip
     try:
         doc = campus_map(args.footprints, seed=args.seed, n_sensors=args.sensors)
     except ValueError as exc:
         raise UsageError(f"--footprints/--sensors: {exc}") from None
+    # every generated map carries an origin (plan writes WGS84 missions from it): name first
+    doc = {"name": doc.pop("name"), "origin": origin, **doc}
     try:
         path = write_text_atomic(args.output, dumps_map(doc))
     except OSError as exc:
         raise UsageError(f"{args.output}: cannot write ({exc.strerror or exc})") from None
-    print(f"wrote {path}: {args.footprints} footprints, {args.sensors} sensors")
+    print(f"wrote {path}: {args.footprints} footprints, {args.sensors} sensors, origin "
+          f"({origin['lat']}, {origin['lon']})")
     return 0
 
 

@@ -15,7 +15,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "mission of a .waypoints file; the vehicle's fence is then left alone) to a vehicle over "
         "MAVLink, download both back and compare them item by item. Exit status 0 only when "
         "they match; 1 when no vehicle answers, the vehicle refuses the mission or the "
-        "read-back differs; 2 for a bad file or option. Items go up numbered from 0; "
+        "read-back differs; 2 for a bad file or option, or when two autopilots claim the "
+        "vehicle's system id from two addresses. Items go up numbered from 0; "
         "a .waypoints file's home line is not uploaded (the mission starts with its first "
         "item, as from a .plan). Every mission first passes the simulator's checks that need "
         "no map (what verify refuses for the mission itself: a negative hover time, a second "
@@ -34,9 +35,11 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "uploaders (default: %(default)s, QGroundControl's convention for a radio link). "
         "0.0.0.0 listens on every network interface: anyone on those networks can send the "
         "first HEARTBEAT and be taken for the vehicle, or read the mission (MAVLink without "
-        "signing has no authentication; the pymavlink client stops when a second autopilot "
-        "claims the vehicle's id, MAVSDK does not). On a shared LAN listen on the radio's "
-        "address or 127.0.0.1, or send to the vehicle's own address with udpout://",
+        "signing has no authentication). Both uploaders listen to HEARTBEATs for 1.2 s before "
+        "sending anything and stop (exit status 2, both addresses named) when a second "
+        "address claims the vehicle's system and component id, then or later. On a shared "
+        "LAN listen on the radio's address or 127.0.0.1, send to the vehicle's own address "
+        "with udpout://, or sign the link (--signing-key)",
     )
     p.add_argument(
         "--via",
@@ -240,7 +243,11 @@ def _sim_check(path: str, map_path: str, mission: list, *, force: bool) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from lamde_mission.errors import UsageError
-    from lamde_mission.vehicle.transfer import TransferError, VehicleError
+    from lamde_mission.vehicle.transfer import (
+        DuplicateVehicleError,
+        TransferError,
+        VehicleError,
+    )
     from lamde_mission.vehicle.upload import upload_mission
 
     if not (math.isfinite(args.timeout) and args.timeout > 0):
@@ -299,7 +306,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"lamde-mission upload: {exc}", file=sys.stderr)
         if args.via == "mavsdk" and isinstance(exc, TransferError):
             print(MAVSDK_LOSSY_HINT, file=sys.stderr)
-        return 1
+        # two autopilots on one id: the link as given cannot work, a retry would not help
+        return 2 if isinstance(exc, DuplicateVehicleError) else 1
     for line in report.lines():
         print(line)
     return 0

@@ -191,14 +191,16 @@ class Link:
         s = self._sock or self._listen
         return s.getsockname()[:2] if s is not None else None
 
-    def _waitable(self) -> list:
+    def waitables(self) -> list:
+        """What `select` can wait on for this link's input right now (a file descriptor or
+        sockets; empty once closed)."""
         if self._fd is not None:
             return [self._fd]
         return [s for s in (self._sock, self._listen) if s is not None]
 
     def recv(self, wait: float) -> list[tuple[bytes, tuple[str, int] | None]]:
         """What arrived within `wait` s (empty list if nothing)."""
-        waitable = self._waitable()
+        waitable = self.waitables()
         if not waitable:
             return []
         try:

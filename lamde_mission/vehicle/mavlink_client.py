@@ -18,11 +18,13 @@ lossy link is not cut off by a total time limit.
 Talks only to the vehicle: after the first autopilot HEARTBEAT the vehicle's address (UDP/TCP
 peer) and system/component ids are pinned; messages from another address, from other
 system/component ids, or addressed to another system or component (a second ground station's
-traffic, forged replies) are ignored and counted, and said under `log` (`--verbose`). An
-autopilot HEARTBEAT with the pinned ids from another address ends the session with
-`DuplicateVehicleError` naming both addresses: a fake that sent its HEARTBEATs first has
+traffic, forged replies) are ignored and counted, and said under `log` (`--verbose`). Every
+autopilot HEARTBEAT's source address is noted from the moment the link opens
+(`claims.ClaimWatch`), and `connect` listens for `claims.HEARTBEAT_WATCH_S` in all before it
+returns: the pinned ids heard from a second address, then or later in the session, end it with
+`DuplicateVehicleError` naming both addresses (a fake that sent its HEARTBEATs first has
 captured the link, or two vehicles share a system id, and nothing on an unsigned link tells
-which is the vehicle.
+which is the vehicle).
 """
 
 from __future__ import annotations
@@ -34,10 +36,15 @@ from typing import Any
 
 from pymavlink.dialects.v20 import common as mavlink2
 
+from lamde_mission.vehicle.claims import (
+    HEARTBEAT_WATCH_S,
+    ClaimWatch,
+    duplicate_error,
+    is_vehicle_heartbeat,
+)
 from lamde_mission.vehicle.connection import Connection, Link, parse_connection
 from lamde_mission.vehicle.transfer import (
     RETRYABLE_ACKS,
-    DuplicateVehicleError,
     MissionRejectedError,
     NoVehicleError,
     TransferError,
@@ -82,6 +89,7 @@ class MavlinkClient:
         log: Callable[[str], None] | None = None,
         progress: Callable[[str, int, int], None] | None = None,
         signing_key: bytes | None = None,
+        heartbeat_watch: float = HEARTBEAT_WATCH_S,
     ) -> None:
         try:
             self.endpoint: Connection = (
@@ -117,10 +125,14 @@ class MavlinkClient:
         self._pending: collections.deque[Any] = collections.deque()
         self._vehicle_addr: tuple[str, int] | None = None
         self._next_heartbeat = 0.0
+        #: whether a message that changes the vehicle (a count, a clear) has been sent
+        self.sent = False
         try:
             self._link: Link | None = Link(self.endpoint)
         except OSError as exc:
             raise VehicleError(f"cannot open {self.endpoint}: {exc.strerror or exc}") from None
+        #: every autopilot HEARTBEAT's source address, from the moment the link is open
+        self.watch = ClaimWatch(heartbeat_watch)
 
     # ------------------------------------------------------------------ life cycle
 
@@ -245,26 +257,20 @@ class MavlinkClient:
                             self.ignored[key] += 1
                         continue
                     msg._lamde_addr = addr
-                    self._check_claim(msg)
+                    if self.watch.note(msg, addr):
+                        self._check_claim()
                     self._pending.append(msg)
 
-    def _check_claim(self, msg: Any) -> None:
-        """DuplicateVehicleError for an autopilot HEARTBEAT with the pinned vehicle's ids from
-        another address than the pinned one."""
-        v, pinned, addr = self.vehicle, self._vehicle_addr, getattr(msg, "_lamde_addr", None)
-        if v is None or pinned is None or addr is None or addr == pinned:
+    def _check_claim(self) -> None:
+        """DuplicateVehicleError when an autopilot HEARTBEAT with the pinned vehicle's ids has
+        come from another address than the pinned one (before the pin or after)."""
+        v, pinned = self.vehicle, self._vehicle_addr
+        if v is None or pinned is None:
             return
-        if msg.get_type() != "HEARTBEAT" or msg.autopilot == _m.MAV_AUTOPILOT_INVALID:
-            return
-        if (msg.get_srcSystem(), msg.get_srcComponent()) != (v.system_id, v.component_id):
-            return
-        raise DuplicateVehicleError(
-            f"two autopilots claim system {v.system_id} component {v.component_id}: the one "
-            f"pinned at {pinned[0]}:{pinned[1]} and another at {addr[0]}:{addr[1]}; stopped, "
-            "since nothing on this link says which is the vehicle (a second vehicle with the "
-            "same MAV_SYS_ID, or someone playing the vehicle: give each vehicle its own id, or "
-            "connect to the vehicle's own address with udpout:// or tcpout://)"
-        )
+        ids = (v.system_id, v.component_id)
+        other = self.watch.conflict(ids, pinned)
+        if other is not None:
+            raise duplicate_error(ids, pinned, other, sent=self.sent)
 
     # ------------------------------------------------------------------ connect
 
@@ -274,13 +280,7 @@ class MavlinkClient:
         Pins the vehicle: its address and its system/component ids; from here on nothing else
         is listened to or answered."""
         deadline = time.monotonic() + timeout
-
-        def autopilot(msg: Any) -> bool:
-            return (msg.get_type() == "HEARTBEAT"
-                    and msg.get_srcComponent() == _m.MAV_COMP_ID_AUTOPILOT1
-                    and msg.autopilot != _m.MAV_AUTOPILOT_INVALID)  # fmt: skip
-
-        hb = self._recv(deadline, autopilot)
+        hb = self._recv(deadline, is_vehicle_heartbeat)
         if hb is None:
             raise NoVehicleError(f"no vehicle heard at {self.endpoint} within {timeout:g} s")
         addr = getattr(hb, "_lamde_addr", None)
@@ -293,6 +293,9 @@ class MavlinkClient:
             self.log(f"pinned the vehicle: system {self.vehicle.system_id} component "
                      f"{self.vehicle.component_id} at {addr[0]}:{addr[1]}")  # fmt: skip
         self._heartbeat_if_due()
+        self._check_claim()  # heard before the pin
+        # the rest of the watch: a second autopilot with these ids raises in `_recv`
+        self._recv(self.watch.ends_at(), lambda _msg: False)
         return self.vehicle
 
     def _target(self) -> tuple[int, int]:
@@ -360,6 +363,7 @@ class MavlinkClient:
         deadline = time.monotonic() + timeout
         highest = -1  # highest seq sent so far
         last: Any = _m.MAVLink_mission_count_message(ts, tc, n, t)
+        self.sent = True
 
         def mine(msg: Any) -> bool:
             return (msg.get_type() in ("MISSION_REQUEST_INT", "MISSION_REQUEST", "MISSION_ACK")
@@ -488,6 +492,7 @@ class MavlinkClient:
             return (msg.get_type() == "MISSION_ACK" and self._from_vehicle(msg)
                     and int(msg.mission_type) == t)  # fmt: skip
 
+        self.sent = True
         msg = self._exchange(
             lambda: self._send(_m.MAVLink_mission_clear_all_message(ts, tc, t)),
             ack, timeout, f"the {mission_type_name(t)} clear",

@@ -6,7 +6,8 @@ units since 2015-01-01 that never goes back per (link id, system, component); a 
 the key drops an unsigned message, a wrong signature or a replayed timestamp. pymavlink does
 the arithmetic (`MAVLink.signing`: `secret_key`, `sign_outgoing`, `link_id`, `timestamp`,
 `allow_unsigned_callback`, as `mavutil.mavfile.setup_signing` sets them); this module gives
-both ends (our pymavlink client and the mock vehicle) one way to set it up.
+both ends (our pymavlink client and the mock vehicle) one way to set it up. MAVSDK-Python 4,
+which cannot sign, talks through `relay.VehicleRelay`, which signs for it.
 
 The key: 64 hexadecimal digits are the 32-byte key itself; any other text is a passphrase whose
 SHA-256 is the key (MAVProxy's `signing setup PASSPHRASE` and QGroundControl derive it so).
@@ -14,13 +15,12 @@ SHA-256 is the key (MAVProxy's `signing setup PASSPHRASE` and QGroundControl der
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import re
 import time
 from typing import Any
 
-__all__ = ["KEY_BYTES", "SigningRelay", "enable_signing", "is_signature_failure", "signing_key"]
+__all__ = ["KEY_BYTES", "enable_signing", "is_signature_failure", "signing_key"]
 
 #: bytes of a MAVLink 2 signing key
 KEY_BYTES = 32
@@ -75,90 +75,3 @@ def enable_signing(mav: Any, key: bytes, *, link_id: int = 0) -> None:
 def is_signature_failure(msg: Any) -> bool:
     """Whether a parsed message is pymavlink's BAD_DATA for a missing or wrong signature."""
     return msg.get_type() == "BAD_DATA" and "signature" in str(getattr(msg, "reason", "")).lower()
-
-
-class SigningRelay:
-    """A signing proxy for a ground station without signing (MAVSDK-Python 4): it holds the
-    vehicle's link (`connection.Link`, any scheme) and a UDP socket on 127.0.0.1 for the
-    ground station (`url`, e.g. MAVSDK's `udpout://127.0.0.1:PORT`). From the vehicle it
-    passes on only messages signed with `key` (checked by pymavlink; the rest are dropped and
-    counted in `dropped`); what the ground station sends goes to the vehicle re-packed and
-    signed, with the ground station's own system/component ids and sequence numbers. A `udpin`
-    link is pinned to the first address that sends a correctly signed message.
-    """
-
-    def __init__(self, conn: Any, key: bytes) -> None:
-        import socket
-        import threading
-
-        from pymavlink.dialects.v20 import common as mavlink2
-
-        from lamde_mission.vehicle.connection import Link
-
-        self._check = mavlink2.MAVLink(None)  # checks the vehicle's signatures
-        self._check.robust_parsing = True
-        enable_signing(self._check, key)
-        self._sign = mavlink2.MAVLink(None)  # signs the ground station's messages
-        enable_signing(self._sign, key, link_id=2)
-        self._plain = mavlink2.MAVLink(None)  # reads the ground station's (unsigned) bytes
-        self._plain.robust_parsing = True
-        self.link = Link(conn)
-        self._gcs = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self._gcs.bind(("127.0.0.1", 0))
-        self._gcs.setblocking(False)
-        self._gcs_addr: tuple[str, int] | None = None
-        self.url = f"udpout://127.0.0.1:{self._gcs.getsockname()[1]}"
-        self.dropped = 0
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, name="signing-relay", daemon=True)
-        self._thread.start()
-
-    def _run(self) -> None:
-        import select
-
-        while not self._stop.is_set():
-            for data, addr in self.link.recv(0.02):
-                self._from_vehicle(data, addr)
-            try:
-                ready, _, _ = select.select([self._gcs], [], [], 0.0)
-            except (OSError, ValueError):
-                return
-            while ready:
-                try:
-                    data, addr = self._gcs.recvfrom(65536)
-                except (BlockingIOError, InterruptedError, OSError):
-                    break
-                self._gcs_addr = addr
-                self._from_gcs(data)
-
-    def _from_vehicle(self, data: bytes, addr: tuple[str, int] | None) -> None:
-        for msg in self._check.parse_buffer(data) or []:
-            if msg.get_type() == "BAD_DATA":
-                self.dropped += is_signature_failure(msg)
-                continue
-            if self.link.conn.scheme == "udpin" and self.link.peer is None and addr is not None:
-                self.link.peer = addr
-            if self._gcs_addr is not None:
-                with contextlib.suppress(OSError):
-                    self._gcs.sendto(bytes(msg.get_msgbuf()), self._gcs_addr)
-
-    def _from_gcs(self, data: bytes) -> None:
-        for msg in self._plain.parse_buffer(data) or []:
-            if msg.get_type() == "BAD_DATA":
-                continue
-            self._sign.srcSystem = msg.get_srcSystem()
-            self._sign.srcComponent = msg.get_srcComponent()
-            self._sign.seq = msg.get_seq()
-            buf = msg.pack(self._sign)
-            if self.link.peer is None and self.link.conn.scheme in ("udpin", "tcpin"):
-                continue  # nobody to send to yet
-            with contextlib.suppress(OSError, ValueError):
-                self.link.send(buf)
-
-    def close(self) -> None:
-        """Stop the relay and close both sockets (idempotent)."""
-        self._stop.set()
-        if self._thread.is_alive():
-            self._thread.join(2.0)
-        self.link.close()
-        self._gcs.close()

@@ -22,11 +22,13 @@ import asyncio
 import contextlib
 import logging
 import math
+import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
 from lamde_mission.items import MISSION_TYPE, MissionItem
+from lamde_mission.vehicle.claims import HEARTBEAT_WATCH_S, duplicate_error
 from lamde_mission.vehicle.connection import Connection, parse_connection
 from lamde_mission.vehicle.transfer import (
     MissionRejectedError,
@@ -112,25 +114,24 @@ class MavsdkClient:
 
     def __init__(
         self, connect: str | Connection = "udpin://0.0.0.0:14540", *, quiet: bool = True,
-        signing_key: bytes | None = None,
+        signing_key: bytes | None = None, heartbeat_watch: float = HEARTBEAT_WATCH_S,
     ) -> None:
         try:
             conn = connect if isinstance(connect, Connection) else parse_connection(connect)
         except ValueError as exc:
             raise VehicleError(str(exc)) from None
-        self.url = conn.url()
-        #: MAVSDK-Python 4 cannot sign: with a key, MAVSDK talks to a local `SigningRelay`
-        #: that holds the vehicle's link, passes on only correctly signed messages and signs
-        #: what MAVSDK sends
-        self._relay: Any = None
-        if signing_key is not None:
-            from lamde_mission.vehicle.signing import SigningRelay
+        #: MAVSDK talks to a local `relay.VehicleRelay` holding the vehicle's link: it pins
+        #: the vehicle's address, watches for a second autopilot claiming its ids, and signs
+        #: for MAVSDK (MAVSDK-Python 4 cannot) on a signed link
+        from lamde_mission.vehicle.relay import VehicleRelay
 
-            try:
-                self._relay = SigningRelay(conn, signing_key)
-            except OSError as exc:
-                raise VehicleError(f"cannot open {conn}: {exc.strerror or exc}") from None
-            self.url = self._relay.url
+        try:
+            self._relay: Any = VehicleRelay(conn, signing_key, heartbeat_watch=heartbeat_watch)
+        except OSError as exc:
+            raise VehicleError(f"cannot open {conn}: {exc.strerror or exc}") from None
+        self.url = self._relay.url
+        #: whether a message that changes the vehicle (an upload, a clear) has been started
+        self.sent = False
         self._expected: dict[int, int] = {}
         from mavsdk.asyncio import ComponentType, Configuration, Mavsdk
 
@@ -160,7 +161,38 @@ class MavsdkClient:
     # ------------------------------------------------------------------ plumbing
 
     def _run(self, coro: Any, timeout: float) -> Any:
-        return self._loop.run_until_complete(asyncio.wait_for(coro, timeout))
+        """Run `coro` on the private loop for at most `timeout` s (TimeoutError); stopped
+        with `DuplicateVehicleError` as soon as the relay hears a second autopilot with the
+        vehicle's ids."""
+
+        async def guarded() -> Any:
+            task = asyncio.ensure_future(coro)
+            try:
+                while True:
+                    self._raise_if_claimed()
+                    done, _ = await asyncio.wait({task}, timeout=0.05)
+                    if done:
+                        return task.result()
+            finally:
+                if not task.done():
+                    task.cancel()
+                    with contextlib.suppress(BaseException):
+                        await task
+
+        return self._loop.run_until_complete(asyncio.wait_for(guarded(), timeout))
+
+    def _raise_if_claimed(self) -> None:
+        """DuplicateVehicleError once the relay has heard the vehicle's ids from a second
+        address."""
+        relay = self._relay
+        if relay is not None and relay.conflict is not None:
+            assert relay.vehicle_ids is not None and relay.vehicle_addr is not None
+            raise duplicate_error(relay.vehicle_ids, relay.vehicle_addr, relay.conflict,
+                                  sent=self.sent)  # fmt: skip
+
+    def ignored_lines(self) -> list[str]:
+        """What the relay kept from MAVSDK (wrongly signed, from other addresses), counted."""
+        return self._relay.ignored_lines() if self._relay is not None else []
 
     def close(self) -> None:
         """Release MAVSDK (its threads and sockets) and the event loop (idempotent)."""
@@ -211,6 +243,11 @@ class MavsdkClient:
             )  # fmt: skip
 
         self.vehicle = self._run(info(), 5.0)
+        # the rest of the watch before anything is sent (`claims.HEARTBEAT_WATCH_S`)
+        left = self._relay.watch.ends_at() - time.monotonic()
+        if left > 0:
+            self._run(asyncio.sleep(left), left + 5.0)
+        self._raise_if_claimed()
         return self.vehicle
 
     # ------------------------------------------------------------------ transfers
@@ -263,6 +300,7 @@ class MavsdkClient:
         }[int(mission_type)]
         if per_message is not None:
             self._message_timeout(per_message)
+        self.sent = True
         try:
             self._call(
                 "upload", mission_type, timeout, lambda: up(raw_items),
@@ -293,6 +331,7 @@ class MavsdkClient:
     def clear(self, mission_type: int, timeout: float) -> None:
         """Clear the mission (MissionRaw) or the geofence (Geofence plugin) on the vehicle."""
         t = int(mission_type)
+        self.sent = True
         if t == MISSION_TYPE.MISSION:
             self._call("clear", t, timeout, self._raw.clear_mission)
         elif t == MISSION_TYPE.FENCE:
@@ -371,16 +410,33 @@ def make_client(
     log: Callable[[str], None] | None = None,
     progress: Callable[[str, int, int], None] | None = None,
     signing_key: bytes | None = None,
+    heartbeat_watch: float = HEARTBEAT_WATCH_S,
 ) -> Any:
-    """A MissionClient: "mavsdk" (MAVSDK's MissionRaw) or "pymavlink" (ours). `log` gets what
-    the client ignored and recovered (pymavlink), `progress(what, done, total)` the items,
-    `signing_key` signs the link (MAVSDK through a local `signing.SigningRelay`)."""
+    """A MissionClient: "mavsdk" (MAVSDK's MissionRaw) or "pymavlink" (ours).
+
+    Args:
+        via: "mavsdk" or "pymavlink".
+        connect: the vehicle's connection.
+        log: gets what the client ignored and recovered (pymavlink).
+        progress: `progress(what, done, total)` per item (pymavlink).
+        signing_key: signs the link (MAVSDK through its `relay.VehicleRelay`).
+        heartbeat_watch: seconds of HEARTBEATs listened to before the first send
+            (`claims.HEARTBEAT_WATCH_S`).
+
+    Returns:
+        The client, its link open.
+
+    Raises:
+        ValueError: `via` is neither.
+        VehicleError: the link cannot be opened.
+    """
     if via == "mavsdk":
-        return MavsdkClient(connect, signing_key=signing_key)
+        return MavsdkClient(connect, signing_key=signing_key, heartbeat_watch=heartbeat_watch)
     if via == "pymavlink":
         from lamde_mission.vehicle.mavlink_client import MavlinkClient
 
-        return MavlinkClient(connect, log=log, progress=progress, signing_key=signing_key)
+        return MavlinkClient(connect, log=log, progress=progress, signing_key=signing_key,
+                             heartbeat_watch=heartbeat_watch)  # fmt: skip
     raise ValueError(f"via must be one of {', '.join(VIAS)}, got {via!r}")
 
 
@@ -397,6 +453,7 @@ def upload_mission(
     rally: Sequence[MissionItem] | None = None,
     autopilot: str | None = None,
     signing_key: bytes | None = None,
+    heartbeat_watch: float = HEARTBEAT_WATCH_S,
 ) -> UploadReport:
     """Upload a mission and its fence to the vehicle at `connect`, read both back, compare.
 
@@ -413,7 +470,10 @@ def upload_mission(
     ReadbackMismatchError; `.report` attached) on failure, ValueError for bad arguments or
     items MAVLink cannot carry. `signing_key` (32 bytes, `signing.signing_key`) signs the link
     with MAVLink 2 signing: the vehicle's unsigned or wrongly signed messages are ignored
-    (MAVSDK, which cannot sign, talks through a local `signing.SigningRelay`).
+    (MAVSDK, which cannot sign, talks through its local `relay.VehicleRelay`, which signs).
+    Both clients listen to HEARTBEATs for `heartbeat_watch` s from opening the link before
+    anything is sent, and raise `DuplicateVehicleError` (naming both addresses) when a second
+    address claims the vehicle's system and component ids, then or later (`claims`).
     """
     if not (isinstance(timeout, int | float) and math.isfinite(timeout) and timeout > 0):
         raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
@@ -427,7 +487,8 @@ def upload_mission(
         wire_mission(fence, MISSION_TYPE.FENCE)
     if rally:
         wire_mission(rally, MISSION_TYPE.RALLY)
-    client = make_client(via, conn, log=log, progress=progress, signing_key=signing_key)
+    client = make_client(via, conn, log=log, progress=progress, signing_key=signing_key,
+                         heartbeat_watch=heartbeat_watch)  # fmt: skip
     try:
         report = upload_and_verify(
             client, mission, fence, rally=rally, autopilot=autopilot, timeout=timeout,

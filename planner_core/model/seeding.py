@@ -253,11 +253,13 @@ class Seeder:
                 break
             # new centres at uncovered sensors, worst first, mutually farther than lim apart
             new: list[int] = []
+            near = np.full(J, np.inf)  # each sensor's distance to the nearest new centre
             for j in np.argsort(-gap).tolist():
                 if gap[j] <= 0.0:
                     break
-                if all(math.hypot(*(S[j] - S[q])) > lim[j] for q in new):
+                if near[j] > lim[j]:
                     new.append(j)
+                    near = np.minimum(near, np.hypot(S[:, 0] - S[j, 0], S[:, 1] - S[j, 1]))
             C = np.vstack([C, self._push_out(S[new].astype(float), rng)])
         owner = np.argmin(np.sum((S[:, None, :] - C[None]) ** 2, axis=2), axis=1)
         return C, owner
