@@ -1,0 +1,201 @@
+"""Large deployments (issue 31): `generate --layout`, the large suite, `map campus`'s origin.
+
+Every generated map carries a witness plan that the project's evaluator finds feasible (phi == 0)
+and an origin; same seed, same bytes; bad arguments are one line naming the option, exit 2.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from planner_core.model.formulas import ModelParams
+from planner_core.model.mapio import load_map
+from planner_core.suite import dumps_map, generate_map
+from planner_core.suite import large as L
+from tests.conftest import ROOT, run_cli, run_cli_many
+
+LARGE = ROOT / "examples" / "maps" / "large"
+
+
+def _c3_loads(data: dict) -> tuple[np.ndarray, float]:
+    """Summed link rate (Mbit/s) at each witness hover point (the paper's C3 quantity) and the
+    bandwidth R_lambda."""
+    with L._sensor_limit(len(data["sensors"])):
+        mp = ModelParams.from_map(load_map(data))
+    hp = np.asarray(data["witness"]["hover_points"], dtype=float).reshape(-1, 2)
+    return mp.rates(hp, mp.sensors).sum(axis=1), mp.bandwidth
+
+
+@pytest.mark.parametrize("layout", L.LAYOUTS)
+@pytest.mark.parametrize(("size", "n", "density"), [(10000, 40, 0), (20000, 150, 7)])
+def test_witness_is_feasible(layout: str, size: int, n: int, density: int) -> None:
+    data = L.generate_large_map(size, n, layout, density, seed=3)
+    f, phi = L.witness_score(data)
+    assert phi == 0.0 and np.isfinite(f) and f > 0
+    assert len(data["sensors"]) == n
+    assert data["origin"] == {"lat": 23.0493, "lon": 113.3975, "alt": 10.0}
+    imax = data["uav"]["max_hover_points"]
+    assert imax == L.large_max_hover_points(n) == max(20, min(200, -(-n // 2)))
+    w = data["witness"]
+    assert 1 <= len(w["hover_points"]) <= imax
+    assert all(0 <= t <= 300 for t in w["hover_times"])
+    load, bandwidth = _c3_loads(data)
+    assert np.all(load <= bandwidth)
+    pts = np.array([[s["x"], s["y"]] for s in data["sensors"]])
+    d = np.hypot(*(pts[:, None, :] - pts[None, :, :]).transpose(2, 0, 1))
+    np.fill_diagonal(d, np.inf)
+    if layout == "uniform":
+        assert d.min() >= L.UNIFORM_SPACING
+    elif layout == "clustered":  # fields: most sensors have neighbours within the field
+        close = (d <= 2 * L.FIELD_RADIUS).sum(axis=1)
+        assert np.median(close) >= L.CLUSTER_SIZE // 2
+    else:
+        assert d.min() >= L.CORRIDOR_SPACING
+
+
+def test_obstacles_scale_with_the_area() -> None:
+    assert L.large_obstacle_counts(10000, 7) == (56, 55, 4, 6)  # the paper's 10 km table
+    assert L.large_obstacle_counts(20000, 7) == (224, 220, 16, 24)
+    assert L.large_obstacle_counts(30000, 0) == (54, 45, 0, 0)
+
+
+def test_same_seed_same_bytes() -> None:
+    a = dumps_map(L.generate_large_map(10000, 60, "clustered", 3, seed=11))
+    assert dumps_map(L.generate_large_map(10000, 60, "clustered", 3, seed=11)) == a
+    assert dumps_map(L.generate_large_map(10000, 60, "clustered", 3, seed=12)) != a
+    c = L.generate_large_map(10000, 60, "clustered", 3, seed=11, cluster_size=6)
+    assert dumps_map(c) != a
+
+
+def test_paper_generator_unchanged_and_has_an_origin() -> None:
+    """The paper's generator still writes the committed T01 byte for byte (with its origin)."""
+    t01 = (ROOT / "examples" / "maps" / "suite" / "T01.json").read_text()
+    assert dumps_map(generate_map(5000, 0, name="T01")) == t01
+    assert "origin" in json.loads(t01)
+
+
+@pytest.mark.parametrize("name", ["L01", "L04", "L07"])
+def test_committed_large_maps_reproduce(name: str) -> None:
+    """`generate --large-suite` writes these bytes (the small ones here; all 8 in 20 s)."""
+    size, n, layout, density = L.LARGE_SUITE[name]
+    data = L.generate_large_map(size, n, layout, density, name=name)
+    assert dumps_map(data) == (LARGE / f"{name}.json").read_text()
+
+
+def test_committed_large_suite() -> None:
+    """8 maps, 80-400 sensors, all three layouts, sparse and dense, 10-30 km; each has an
+    origin and a witness; the best-known file beside the folder holds each witness's f."""
+    files = sorted(LARGE.glob("*.json"))
+    assert [p.stem for p in files] == list(L.LARGE_SUITE)
+    bk = json.loads((LARGE.parent / "large_best_known.json").read_text())["tasks"]
+    import hashlib
+
+    for p in files:
+        d = json.loads(p.read_text())
+        size, n, layout, density = L.LARGE_SUITE[p.stem]
+        assert d["area"]["width"] == size and len(d["sensors"]) == n
+        assert d["origin"] and d["witness"]["hover_points"]
+        assert bk[p.stem]["map_sha256"] == hashlib.sha256(p.read_bytes()).hexdigest()
+    spec = L.LARGE_SUITE.values()
+    assert {s[2] for s in spec} == set(L.LAYOUTS) and {s[3] for s in spec} == {0, 7}
+    assert min(s[1] for s in spec) == 80 and max(s[1] for s in spec) == 400
+    assert min(s[0] for s in spec) == 10000 and max(s[0] for s in spec) == 30000
+
+
+def test_cli_one_map_and_its_bytes(tmp_path: Path) -> None:
+    a, b = tmp_path / "a.json", tmp_path / "b.json"
+    args = ("--layout", "corridor", "--size", "8000", "--sensors", "44", "--seed", "4")
+    ra, rb = run_cli_many(("generate", a, *args), ("generate", b, *args, "--name", "x"))
+    assert ra.returncode == 0 and rb.returncode == 0, ra.stderr + rb.stderr
+    assert "I_max 22, witness f" in ra.stdout
+    assert a.read_bytes() == dumps_map(L.generate_large_map(8000, 44, "corridor", 0, 4,
+                                                           name=json.loads(a.read_text())["name"])
+                                       ).encode()  # fmt: skip
+    assert json.loads(b.read_text())["name"] == "x"
+    r = run_cli("check", a)
+    assert r.returncode == 0 and "OK" in r.stdout, r.stdout + r.stderr
+
+
+@pytest.mark.parametrize(
+    ("args", "option"),
+    [
+        (["x.json", "--layout", "grid", "--size", "10000"], "--layout"),
+        (["x.json", "--layout", "uniform"], "--size"),
+        (["x.json", "--layout", "uniform", "--size", "40000"], "--size"),
+        (["x.json", "--layout", "uniform", "--size", "ten"], "--size"),
+        (["x.json", "--layout", "uniform", "--size", "10000", "--sensors", "501"], "--sensors"),
+        (["x.json", "--layout", "uniform", "--size", "10000", "--sensors", "0"], "--sensors"),
+        (["x.json", "--layout", "corridor", "--size", "10000", "--density", "8"], "--density"),
+        (["x.json", "--layout", "clustered", "--size", "10000", "--cluster-size", "0"],
+         "--cluster-size"),
+        (["x.json", "--layout", "uniform", "--size", "10000", "--cluster-size", "6"],
+         "--cluster-size"),
+        (["x.json", "--size", "10000", "--density", "1", "--cluster-size", "6"],
+         "--cluster-size"),
+        (["x.json", "--layout", "uniform", "--size", "10000", "--seed", "-1"], "--seed"),
+        (["--large-suite", "out", "--size", "10000"], "--large-suite"),
+        (["--large-suite", "out", "--suite", "out2"], "--suite"),
+    ],
+)
+def test_cli_bad_arguments(args: list[str], option: str, tmp_path: Path) -> None:
+    out = run_cli("generate", *args, cwd=tmp_path)
+    assert out.returncode == 2, out.stderr
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("lamde-mission generate: "), out.stderr
+    assert option in lines[0]
+    assert not list(tmp_path.iterdir())  # nothing written
+
+
+def test_impossible_layout_says_why(tmp_path: Path) -> None:
+    """Too many fields for the area: one clear line, exit 1, nothing written."""
+    out = run_cli("generate", "x.json", "--layout", "clustered", "--size", "5000",
+                  "--sensors", "200", cwd=tmp_path)  # fmt: skip
+    assert out.returncode == 1
+    lines = out.stderr.strip().splitlines()
+    assert len(lines) == 1 and "fields fit on a 5000 m map" in lines[0], out.stderr
+    assert not list(tmp_path.iterdir())
+
+
+def test_help_matches_the_generator() -> None:
+    from lamde_mission.commands import generate as G
+
+    assert G._LAYOUTS == L.LAYOUTS and G._LARGE_SENSORS == L.MAX_SENSORS
+    assert G._LARGE_SIZES == (L.MIN_SIZE, L.MAX_SIZE) and G._CLUSTER_SIZE == L.CLUSTER_SIZE
+    r = run_cli("generate", "--help")
+    text = " ".join(r.stdout.split())
+    assert "--layout uniform|clustered|corridor --size 5000..30000" in text
+    assert "(default 12)" in text and "--large-suite OUTDIR" in text
+
+
+def test_campus_has_an_origin_and_passes_check(tmp_path: Path) -> None:
+    a, b = tmp_path / "campus.json", tmp_path / "here.json"
+    ra, rb = run_cli_many(
+        ("map", "campus", "--footprints", "60", "--sensors", "6", "-o", a),
+        ("map", "campus", "--footprints", "60", "--sensors", "6", "--origin", "48.1,11.5",
+         "-o", b),
+    )  # fmt: skip
+    assert ra.returncode == 0 and rb.returncode == 0, ra.stderr + rb.stderr
+    assert json.loads(a.read_text())["origin"] == {"lat": 23.0493, "lon": 113.3975, "alt": 10.0}
+    assert json.loads(b.read_text())["origin"] == {"lat": 48.1, "lon": 11.5, "alt": 0.0}
+    assert load_map(a).spec.origin is not None
+    r = run_cli("check", a)
+    assert r.returncode == 0 and "OK" in r.stdout and "origin" in r.stdout, r.stdout + r.stderr
+
+
+def test_campus_bad_origin(tmp_path: Path) -> None:
+    r = run_cli("map", "campus", "--origin", "north", "-o", tmp_path / "c.json")
+    assert r.returncode == 2 and "--origin" in r.stderr
+
+
+def test_bench_runs_the_large_suite(tmp_path: Path) -> None:
+    """`bench --suite examples/maps/large` accepts the folder (one small map, a tiny budget)."""
+    r = run_cli("bench", "--suite", LARGE, "--tasks", "L04", "--optimizers", "random-search",
+                "--runs", "1", "--budget", "150", "--jobs", "0", "--out", tmp_path / "out",
+                "--no-best-known-update", "--quiet")  # fmt: skip
+    assert r.returncode == 0, r.stdout + r.stderr
+    rec = json.loads((tmp_path / "out" / "results.jsonl").read_text().splitlines()[-1])
+    assert rec["task"] == "L04"
