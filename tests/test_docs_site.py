@@ -22,9 +22,19 @@ pytest.importorskip("mkdocstrings")
 pytest.importorskip("mkdocstrings_handlers.python")
 
 
+def _sources_mtime() -> float:
+    paths = [ROOT / "mkdocs.yml", *(ROOT / "docs").rglob("*.md"), ROOT / "docs" / "hooks.py"]
+    return max(p.stat().st_mtime for p in paths)
+
+
 @pytest.fixture(scope="module")
 def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The site, built once by `mkdocs build --strict` into a scratch folder."""
+    """The site, built once by `mkdocs build --strict` into a scratch folder; or the one `make
+    test` has just built strictly (LAMDE_DOCS_SITE), when it is newer than every source page."""
+    prebuilt = os.environ.get("LAMDE_DOCS_SITE")
+    if prebuilt and (Path(prebuilt) / "index.html").exists() and (
+            (Path(prebuilt) / "index.html").stat().st_mtime >= _sources_mtime()):
+        return Path(prebuilt)
     out = tmp_path_factory.mktemp("site")
     env = {**os.environ, "NO_MKDOCS_2_WARNING": "1"}
     r = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "-f",
