@@ -152,6 +152,41 @@ def test_injected_population_replaces_the_last_rows(walled: Problem) -> None:
     np.testing.assert_array_equal(U[6:], starts)
 
 
+def test_injected_population_takes_seeded_rows_for_the_hook(walled: Problem) -> None:
+    """`seeded` rows stand in for the problem's own (seeder) hook, which is not called: the
+    population is uniform with those rows first and the starts last; with the uniform start
+    mode (no hook) the seeded rows are not used; starts that fill the population are it."""
+    from planner_core.search.init_modes import UniformStart
+
+    class Counting:
+        def __init__(self, problem: Problem) -> None:
+            self.problem, self.calls = problem, 0
+
+        def __getattr__(self, name: str):  # noqa: ANN204
+            return getattr(self.problem, name)
+
+        def initial_population(self, rng: np.random.Generator, n: int) -> np.ndarray:
+            self.calls += 1
+            return self.problem.initial_population(rng, n)
+
+    seeded = np.stack([walled.lower + 1.0, walled.lower + 2.0, walled.lower + 3.0])
+    starts = np.stack([walled.lower, walled.upper])
+    c = Counting(walled)
+    X = construct.InjectedPopulation(c, starts, seeded).initial_population(
+        np.random.default_rng(0), 8)
+    assert c.calls == 0
+    np.testing.assert_array_equal(X[:3], seeded)
+    np.testing.assert_array_equal(X[6:], starts)
+    assert np.all((X[3:6] >= walled.lower) & (X[3:6] <= walled.upper))
+    U = construct.InjectedPopulation(UniformStart(walled), starts, seeded).initial_population(
+        np.random.default_rng(0), 8)
+    assert not any(np.array_equal(row, s) for row in U for s in seeded)
+    full = np.repeat(starts, 4, axis=0)
+    F = construct.InjectedPopulation(c, full).initial_population(np.random.default_rng(0), 8)
+    assert c.calls == 0
+    np.testing.assert_array_equal(F, full)
+
+
 def test_the_constructive_stage_scores_its_plans_in_one_call(walled: Problem) -> None:
     """The pipeline's first stage: the first `start_candidates` plans (and the seeder's when
     the descents run) scored once each, through the evaluator, into the pool."""

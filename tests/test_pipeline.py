@@ -107,3 +107,24 @@ def test_a_plan_with_its_stages_round_trips_through_json(tiny: Problem) -> None:
     assert q.same_as(p) and [s.name for s in q.stages] == [s.name for s in p.stages]
     assert q.stages == p.stages  # the first stage's f before is inf: None in JSON, inf back
     assert q.config == p.config and q.stopped == p.stopped
+
+
+def test_the_constructive_stage_reports_its_plans_between_evaluations(tiny: Problem) -> None:
+    """A stage that builds for seconds before it evaluates tells the progress callback what it
+    has built (`Evaluator.report`): the constructive plans and the seeder plans, in order, before
+    the stage's one evaluate call; the plan's progress bar prints them."""
+    import io
+
+    from lamde_mission.commands.plan import _ProgressBar
+
+    seen = []
+    run_pipeline(tiny, PlanConfig(seed=0, budget=1500), progress=seen.append)
+    details = [p.detail for p in seen if p.stage == "constructive" and p.detail]
+    assert details and details[0].endswith(" plans") and "seeder plans" in details[-1]
+    first_eval = next(i for i, p in enumerate(seen) if p.evaluations > 0)
+    assert all(not p.detail for p in seen[first_eval:] if p.stage != "constructive")
+    assert seen[0].evaluations == 0 and seen[0].best_f == float("inf")
+    out = io.StringIO()
+    bar = _ProgressBar(out)
+    bar(seen[0])
+    assert "no plan scored yet" in out.getvalue() and f"({seen[0].detail})" in out.getvalue()

@@ -90,6 +90,9 @@ class _ProgressBar:
     per stage and per quarter of the budget otherwise; `close` ends the line, so what is
     printed next starts on its own."""
 
+    #: seconds between two lines of a long stage's own progress (`Progress.detail`) off a TTY
+    DETAIL_EVERY = 5.0
+
     def __init__(self, stream: Any = sys.stderr, width: int = 24):
         self.stream = stream
         self.width = width
@@ -106,8 +109,12 @@ class _ProgressBar:
         now = time.monotonic()
         new_stage = p.stage != self.stage
         self.stage = p.stage
+        detail = getattr(p, "detail", "")
         if self.tty:
             if not (done or new_stage) and now - self.last < 0.1:
+                return
+        elif detail:  # a long stage between evaluations: a line every DETAIL_EVERY s at most
+            if now - self.last < self.DETAIL_EVERY:
                 return
         elif not (done or new_stage) and frac < self.next_quarter:
             return
@@ -116,9 +123,14 @@ class _ProgressBar:
             self.next_quarter += 0.25
         fill = int(round(frac * self.width))
         bar = "#" * fill + "." * (self.width - fill)
-        state = "feasible" if p.best_phi == 0 else "infeasible"
-        line = (f"{p.stage:<15} [{bar}] {p.evaluations}/{p.budget} evals  "
-                f"best f {p.best_f:10.2f}  phi {p.best_phi:10.4g}  {state}")
+        if p.best_f == float("inf") and p.best_phi == float("inf"):
+            best = "no plan scored yet"
+        else:
+            state = "feasible" if p.best_phi == 0 else "infeasible"
+            best = f"best f {p.best_f:10.2f}  phi {p.best_phi:10.4g}  {state}"
+        line = f"{p.stage:<15} [{bar}] {p.evaluations}/{p.budget} evals  {best}"
+        if detail:
+            line += f"  ({detail})"
         if self.tty:
             self.stream.write("\r" + line.ljust(self.wide))
             self.wide = max(self.wide, len(line))

@@ -21,6 +21,7 @@ problem's. Cost: one Deb comparison per evaluated row on top of the problem's ow
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -70,7 +71,9 @@ class Trace(NamedTuple):
 
 class Progress(NamedTuple):
     """What a progress callback receives after every evaluate call: the stage running, the
-    evaluations spent of the budget, the Deb incumbent's f and phi, seconds since the start."""
+    evaluations spent of the budget, the Deb incumbent's f and phi (inf before the first
+    evaluation), seconds since the start; `detail`: what a stage that works long between
+    evaluations has done so far (`Evaluator.report`, e.g. "12/64 plans"), else ""."""
 
     stage: str
     evaluations: int
@@ -78,6 +81,7 @@ class Progress(NamedTuple):
     best_f: float
     best_phi: float
     seconds: float
+    detail: str = ""
 
 
 @dataclass(frozen=True)
@@ -245,6 +249,16 @@ class Evaluator:
             self._trace[key].append((self.count, bf, bp))
 
     # ------------------------------------------------------------------ incumbents
+    def report(self, detail: str) -> None:
+        """Tell the progress callback (if any) what the running stage has done so far, between
+        evaluations: a stage that builds for seconds before it evaluates (the constructive
+        plans on hundreds of sensors) calls this after each step. Counts nothing."""
+        if self.progress is not None:
+            _, bf, bp = self._best["deb"]
+            bf, bp = (bf, bp) if self.has_best else (math.inf, math.inf)
+            self.progress(Progress(self._stage, self.count, self.budget, bf, bp, self.elapsed,
+                                   detail))
+
     @property
     def has_best(self) -> bool:
         """Whether anything has been evaluated."""

@@ -154,12 +154,12 @@ class ConstructivePlans(_Base):
         cfg, problem = state.config, state.problem
         room = ev.remaining
         X, _ = candidate_plans(problem, cfg.seed, min(cfg.start_candidates, room),
-                               order=cfg.order, stop=lambda: ev.expired)
+                               order=cfg.order, stop=lambda: ev.expired, progress=ev.report)
         if not len(X):
             return state
         parts = [(X, "constructive")]
         if cfg.descent and cfg.descents > 0 and not ev.expired:
-            parts.append((seeder_plans(problem, cfg.seed, room - len(X)), "seeder"))
+            parts.append((seeder_plans(problem, cfg.seed, room - len(X), ev.report), "seeder"))
         allX = np.vstack([p for p, _ in parts])
         f, phi = ev.evaluate(allX)
         pool, k = state.pool, 0
@@ -211,14 +211,15 @@ def _inject(state: PlanState) -> np.ndarray:
 
 class DifferentialEvolution(_Base):
     """LAMDE's variable-length DE (`planner_core.search.de.run`) with the run's configurator,
-    the pool's `starts` best plans in place of its initial population's last rows and, when
-    `memetic` says so, the memetic step on the elite every 10 generations. Its share is
-    `de_share` of the budget, of the default budget at most (and at least the population):
-    in the default pipeline the DE rarely improves on its best injected plan (docs/search.md),
-    so budget beyond the default goes to the improving rounds, and below the default it
-    yields to the final stage's shares; with the descent or the polish off it gets
-    everything the later stages do not reserve. Cost per generation: N
-    evaluations (compiled kernels, N x I x (J + V)) and the configurator."""
+    the pool's `starts` best plans in place of its initial population's last rows (in the
+    seeded start its sensor-aware rows are the pool's seeder plans, built once by the
+    constructive stage, the rest uniform) and, when `memetic` says so, the memetic step on
+    the elite every 10 generations. Its share is `de_share` of the budget, of the default
+    budget at most (and at least the population): in the default pipeline the DE rarely
+    improves on its best injected plan (docs/search.md), so budget beyond the default goes to
+    the improving rounds, and below the default it yields to the final stage's shares; with
+    the descent or the polish off it gets everything the later stages do not reserve. Cost
+    per generation: N evaluations (compiled kernels, N x I x (J + V)) and the configurator."""
 
     name = "de"
     #: its share never takes what the later stages' shares need (down to its population)
@@ -242,7 +243,10 @@ class DifferentialEvolution(_Base):
 
         cfg = state.config
         injected = _inject(state)
-        opt = InjectedPopulation(ev, injected) if len(injected) else ev
+        pool = state.pool
+        # the seeded start's sensor-aware half: the pool's seeder plans, not the seeder again
+        seeded = pool.X[np.flatnonzero(np.array(pool.kinds) == "seeder")] if len(pool) else None
+        opt = InjectedPopulation(ev, injected, seeded) if len(injected) else ev
         hook = functools.partial(refine, state.problem) if use_memetic(cfg.memetic, ev) else None
         result = run(opt, configurator=cfg.configurator, seed=cfg.seed,
                      population=cfg.population, budget=ev.remaining, refine=hook)
