@@ -29,6 +29,15 @@ Targets on a 2-core machine: cold plan() <= 2 s; <= 300 MB without torch/matplot
 MAP may be `campus-N`: the generated campus of N non-convex footprints (seed 0, see
 `lamde_mission.gis.synthetic`), written to a temporary file first. Real scale (issue 15):
 `python benchmarks/bench_plan.py campus-500`; target there: cold plan() under 5 s.
+
+``--large [DIR]`` (issue 31) plans every map of the large suite (`examples/maps/large/`, or
+DIR) and T16, each in a fresh process (``--cold`` processes per map, medians), and prints per
+map the sensors, I_max, the plan time (process CPU of `plan()`, compile apart; wall beside
+it), its ratio to T16's in the same run (T16 measured first and last), f, feasibility and the
+peak RSS. Targets: <= 5x T16 up to 160 sensors, <= 20x up to 400, peak RSS <= 2 GB.
+`LAMDE_MAX_SENSORS` is raised for the children to the suite's largest map when needed.
+
+    python benchmarks/bench_plan.py --large [DIR] [--cold 1] [--maps L01 L02] [-o runs.jsonl]
 """
 
 from __future__ import annotations
@@ -93,6 +102,83 @@ def _median_stages(runs: list[dict[str, Any]]) -> str:
                      for k in names)
 
 
+LARGE = ROOT / "examples" / "maps" / "large"
+
+
+def _cold(path: str, seed: int, budget: int, env: dict[str, str] | None = None
+          ) -> dict[str, Any]:
+    """One plan() in a fresh process of this script (`child`), its JSON record."""
+    cmd = [sys.executable, str(Path(__file__).resolve()), path, "--seed", str(seed),
+           "--budget", str(budget), "--child"]
+    out = subprocess.run(cmd, capture_output=True, text=True, check=True, env=env).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def large(folder: Path, names: list[str] | None, seed: int, budget: int, runs: int,
+          output: str | None) -> int:
+    """`--large`: the large suite's plan times as ratios to T16's (module docstring). Returns
+    0 when every target is met, else 1."""
+    maps = sorted(folder.glob("*.json"))
+    if names:
+        maps = [m for m in maps if m.stem in names]
+    if not maps:
+        print(f"no maps in {folder}", file=sys.stderr)
+        return 2
+    info = {}
+    for m in maps:
+        doc = json.loads(m.read_text())
+        info[m.stem] = (len(doc["sensors"]), doc.get("uav", {}).get("max_hover_points"))
+    most = max(n for n, _ in info.values())
+    env = dict(os.environ)
+    from planner_core.textio import LIMITS
+
+    if most > LIMITS["sensors"].default:
+        env["LAMDE_MAX_SENSORS"] = str(most)
+    records: list[dict[str, Any]] = []
+
+    def measure(path: Path) -> list[dict[str, Any]]:
+        out = []
+        for i in range(runs):
+            r = _cold(str(path), seed + i, budget, env)
+            r.update(map=path.stem, seed=seed + i, budget=budget)
+            out.append(r)
+            records.append(r)
+        return out
+
+    t16 = measure(DEFAULT_MAP)
+    rows = {m.stem: measure(m) for m in maps}
+    t16 += measure(DEFAULT_MAP)  # first and last: a drifting machine shows in both
+    base = statistics.median(r["cpu"] - r["compile"] for r in t16)
+    print(f"T16: plan() {base:.2f} s CPU (median of {len(t16)} fresh processes, "
+          f"first and last), wall {statistics.median(r['wall'] - r['compile'] for r in t16):.2f}"
+          " s")
+    print("map    sensors  I_max   plan CPU s  wall s   x T16   target   feasible   f"
+          "            peak RSS MB")
+    ok = True
+    for name, rs in rows.items():
+        n, imax = info[name]
+        cpu = statistics.median(r["cpu"] - r["compile"] for r in rs)
+        wall = statistics.median(r["wall"] - r["compile"] for r in rs)
+        ratio = cpu / base
+        target = 5.0 if n <= 160 else 20.0 if n <= 400 else None
+        feas = sum(r["feasible"] for r in rs)
+        rss = max(r["rss_mb"] for r in rs)
+        met = (target is None or ratio <= target) and rss <= 2048
+        ok &= met and feas == len(rs)
+        tgt = f"<= {target:g}x" if target else "-"
+        print(f"{name:<6} {n:>7}  {imax!s:>5}  {cpu:>11.2f}  {wall:>6.2f}  {ratio:>6.1f}  "
+              f"{tgt:>7}  {feas}/{len(rs):<8} {statistics.fmean(r['f'] for r in rs):<12.2f} "
+              f"{rss:>8.0f}  {'met' if met else 'NOT met'}")
+    with contextlib.suppress(OSError):
+        print(f"load average while measuring: {os.getloadavg()[0]:.2f} (1 min) on "
+              f"{os.cpu_count()} CPUs")
+    if output:
+        with open(output, "w") as fh:
+            for r in records:
+                fh.write(json.dumps({k: v for k, v in r.items() if k != "summary"}) + "\n")
+    return 0 if ok else 1
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("map", nargs="?", default=str(DEFAULT_MAP))
@@ -102,6 +188,10 @@ def main() -> None:
     ap.add_argument("--warm", type=int, default=5, help="warm plan() calls in this process")
     ap.add_argument("--compare", metavar="CHECKOUT",
                     help="another checkout of this project to time warm plan() calls of")
+    ap.add_argument("--large", nargs="?", const=str(LARGE), metavar="DIR",
+                    help="plan the large suite (default examples/maps/large) against T16")
+    ap.add_argument("--maps", nargs="+", help="with --large: only these maps (e.g. L01 L02)")
+    ap.add_argument("-o", "--output", help="with --large: write every run as JSON lines")
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--warm-child", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
@@ -113,6 +203,9 @@ def main() -> None:
         return
     if args.cold < 1 or args.warm < 1:
         ap.error("--cold and --warm must be >= 1")
+    if args.large is not None:
+        sys.exit(large(Path(args.large), args.maps, args.seed, args.budget, args.cold,
+                       args.output))
     cold_limit = 2.0
     if args.map.startswith("campus-") and args.map[7:].isdigit():
         cold_limit = 5.0  # issue 15: a campus of hundreds of footprints plans in seconds

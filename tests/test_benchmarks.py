@@ -519,3 +519,24 @@ def test_the_pipeline_comparison_in_docs_is_what_its_stored_runs_give() -> None:
     doc = (ROOT / "docs" / "search.md").read_text(encoding="utf-8")
     assert "| seeded | 0.237 -> 0.190 % | 13/16 | 4 (T04, T05, T14, T16) | 0 |" in doc
     assert "| uniform | 0.242 -> 0.216 % | 12/16 | 3 (T04, T05, T14) | 0 |" in doc
+
+
+def test_bench_plan_large_tables_each_map_against_t16(tmp_path: Path) -> None:
+    """`bench_plan.py --large DIR`: one row per map with its plan time as a ratio to T16's in
+    the same run, feasibility and peak RSS; the runs as JSON lines."""
+    import shutil
+
+    folder = tmp_path / "large"
+    folder.mkdir()
+    shutil.copy(ROOT / "examples" / "maps" / "small-demo.json", folder / "X01.json")
+    out = tmp_path / "runs.jsonl"
+    r = _script("benchmarks/bench_plan.py", "--large", str(folder), "--cold", "1",
+                "--budget", "300", "-o", str(out))
+    assert r.returncode in (0, 1), r.stderr
+    lines = r.stdout.splitlines()
+    assert lines[0].startswith("T16: plan()")
+    row = next(s for s in lines if s.startswith("X01"))
+    assert "x T16" in lines[1] and row.split()[1] == "4"  # small-demo's sensors
+    runs = [json.loads(s) for s in out.read_text().splitlines()]
+    assert [x["map"] for x in runs] == ["T16", "X01", "T16"]
+    assert all(x["rss_mb"] > 0 and x["evaluations"] <= 300 for x in runs)
