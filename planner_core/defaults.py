@@ -243,7 +243,8 @@ _MAP: tuple[Default, ...] = (
             "no battery hovers for more than a day; T_max bounds the decision space",
             lo_open=True),
     _ranged("uav.max_hover_points", None, "I_max; null: 10 when the larger side <= 5000 m, "
-            "else 20", 1, 200,
+            "else 20 (the paper's), or ceil(J / 2) for J sensors when that is more (at most "
+            "200)", 1, 200,
             "the decision vector holds 4 x I_max numbers; the paper uses 10 or 20",
             integer=True),
     _ranged("uav.activation_threshold", 0.5, "tau: hover point i is active when eps_i >= tau",

@@ -112,3 +112,16 @@ def test_cli_check_and_schema(tmp_path, hand_map: dict) -> None:
     assert r.returncode == 2 and "file not found" in r.stderr
     r = run_cli("schema")
     assert r.returncode == 0 and json.loads(r.stdout)["title"] == "MapFile"
+
+
+def test_a_null_i_max_keeps_the_papers_values_and_grows_with_the_sensors() -> None:
+    """uav.max_hover_points null: 10 on 5 km and 20 on 10 km for the paper's sensor counts
+    (<= 20 and <= 40), ceil(J / 2) beyond them, at most 200 (issue 31)."""
+    from planner_core.model.mapio import MAX_HOVER_POINTS, default_max_hover_points
+
+    assert default_max_hover_points(5000, 5000, 20) == 10
+    assert default_max_hover_points(10000, 10000, 40) == 20
+    assert default_max_hover_points(10000, 10000, 41) == 21
+    assert default_max_hover_points(20000, 20000, 160) == 80
+    assert default_max_hover_points(30000, 30000, 1000) == MAX_HOVER_POINTS == 200
+    assert default_max_hover_points(30000, 30000, 3) == 20

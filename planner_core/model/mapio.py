@@ -265,9 +265,25 @@ class MapError(ValueError):
         super().__init__("\n".join(self.problems))
 
 
-def default_max_hover_points(width: float, height: float) -> int:
-    """The paper's heuristic: I_max = 10 on maps up to 5 km a side, else 20."""
-    return 10 if max(width, height) <= 5000 else 20
+#: the most hover points a map may ask for (uav.max_hover_points' upper bound)
+MAX_HOVER_POINTS = 200
+
+
+def default_max_hover_points(width: float, height: float, sensors: int = 0) -> int:
+    """I_max for a map that leaves it null: the paper's heuristic (10 on maps up to 5 km a
+    side, else 20; Sec. 5.1), raised to one point per two sensors for larger deployments,
+    ceil(J / 2), at most `MAX_HOVER_POINTS`. The paper's maps (at most 20 sensors on 5 km, 40
+    on 10 km) keep 10 and 20; 160 sensors get 80 (a point in the middle of two or more sensors
+    serves them at once; the large generator's witnesses use as many).
+
+    Args:
+        width, height: the area's sides (m).
+        sensors: J, the map's number of sensors.
+
+    Returns:
+        I_max (int, 10..200)."""
+    paper = 10 if max(width, height) <= 5000 else 20
+    return max(paper, min(MAX_HOVER_POINTS, -(-int(sensors) // 2)))
 
 
 def map_json_schema() -> dict[str, Any]:
@@ -331,7 +347,9 @@ class Map:
     def max_hover_points(self) -> int:
         """I_max in force (the file's value or the default)."""
         u = self.spec.uav.max_hover_points
-        return u if u is not None else default_max_hover_points(self.width, self.height)
+        if u is not None:
+            return u
+        return default_max_hover_points(self.width, self.height, len(self.spec.sensors))
 
     @cached_property
     def start(self) -> np.ndarray:
@@ -673,8 +691,9 @@ def _semantic_problems(
             if shape is not None:
                 shapes.append(shape)
     u = spec.uav
-    if u.max_hover_points is not None and u.max_hover_points > 200:
-        problems.append(f"uav.max_hover_points: {u.max_hover_points} is too large (at most 200)")
+    if u.max_hover_points is not None and u.max_hover_points > MAX_HOVER_POINTS:
+        problems.append(f"uav.max_hover_points: {u.max_hover_points} is too large "
+                        f"(at most {MAX_HOVER_POINTS})")
     if spec.witness is not None and len(spec.witness.hover_points) != len(spec.witness.hover_times):
         problems.append("witness: hover_points and hover_times differ in length")
     for k, (x, y) in enumerate(spec.witness.hover_points if spec.witness is not None else ()):
