@@ -79,3 +79,16 @@ def test_merge_pair_blocks_give_the_same_answer(monkeypatch: pytest.MonkeyPatch)
     whole = refine._merge_pair(problem, pts)
     monkeypatch.setattr(refine, "_MERGE_BLOCK", 50)
     assert np.array_equal(refine._merge_pair(problem, pts), whole)
+
+
+@pytest.mark.parametrize("name,problem,pts", CASES, ids=[c[0] for c in CASES])
+def test_greedy_cover_equals_its_reference(name: str, problem: Problem, pts: np.ndarray) -> None:
+    from planner_core.search import construct
+
+    sites = construct.candidate_sites(problem, pts)
+    table = construct.CoverTable(problem, sites)
+    for frac in construct.FRACTIONS:
+        for chosen in (None, pts[: len(pts) // 3]):
+            fast = construct.greedy_cover(problem, sites, frac, chosen=chosen, table=table)
+            slow = construct.greedy_cover_reference(problem, sites, frac, chosen=chosen)
+            assert np.array_equal(fast, slow), (name, frac)
