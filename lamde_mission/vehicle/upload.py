@@ -31,6 +31,7 @@ from lamde_mission.items import MISSION_TYPE, MissionItem
 from lamde_mission.vehicle.claims import HEARTBEAT_WATCH_S, duplicate_error
 from lamde_mission.vehicle.connection import Connection, parse_connection
 from lamde_mission.vehicle.transfer import (
+    DuplicateVehicleError,
     MissionRejectedError,
     NoVehicleError,
     TransferError,
@@ -195,7 +196,13 @@ class MavsdkClient:
         return self._relay.ignored_lines() if self._relay is not None else []
 
     def close(self) -> None:
-        """Release MAVSDK (its threads and sockets) and the event loop (idempotent)."""
+        """Release MAVSDK (its threads and sockets) and the event loop (idempotent).
+
+        The loop's executor is shut down first: a MAVSDK call still running there (one given
+        up by a time-out or a second autopilot) returns before MAVSDK is destroyed under it,
+        which would never return."""
+        if not self._loop.is_closed():
+            self._loop.run_until_complete(self._loop.shutdown_default_executor())
         if self._sdk is not None:
             sdk, self._sdk = self._sdk, None
             self._raw = None
@@ -205,7 +212,6 @@ class MavsdkClient:
             self._relay.close()
             self._relay = None
         if not self._loop.is_closed():
-            self._loop.run_until_complete(self._loop.shutdown_default_executor())
             self._loop.close()
 
     def __enter__(self) -> MavsdkClient:
@@ -268,6 +274,13 @@ class MavsdkClient:
         kind = mission_type_name(mission_type)
         try:
             return self._run(fn(), timeout)
+        except DuplicateVehicleError:
+            # MAVSDK's blocking call still runs in the loop's executor: cancel the transfer
+            # (not through `_run`, which would stop at once) so that it returns before close()
+            if cancel is not None:
+                with contextlib.suppress(Exception):
+                    self._loop.run_until_complete(asyncio.wait_for(cancel(), 5.0))
+            raise
         except TimeoutError:
             if cancel is not None:
                 with contextlib.suppress(Exception):  # nothing left to cancel
