@@ -9,7 +9,7 @@ import sys
 TYPE_CHECKING = False  # typing.TYPE_CHECKING without importing typing (~15 ms)
 if TYPE_CHECKING:
     import argparse
-    from collections.abc import Sequence
+    from collections.abc import Callable, Sequence
 
 __all__ = ["main", "build_parser"]
 
@@ -60,7 +60,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point: parse `argv` and run its command.
 
     A Ctrl-C (KeyboardInterrupt) at any point from here on, the imports and the parsing
-    included, prints `INTERRUPTED` and returns 130, without a traceback.
+    included, prints `INTERRUPTED` and returns 130, without a traceback. In the console script
+    the start-up handler (`lamde_mission._quit_on_sigint`: one line, status 130) comes back as
+    `main` returns, so a Ctrl-C while the interpreter shuts down (atexit, threads, module
+    teardown) is one line too.
 
     Args:
         argv: the arguments (default: `sys.argv[1:]`).
@@ -70,25 +73,36 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     hook = sys.unraisablehook
     sys.unraisablehook = lambda u: _unraisable(u, hook)
+    restore = None
     try:
-        _sigint_as_keyboard_interrupt()
+        restore = _sigint_as_keyboard_interrupt()
         return _main(argv)
     except KeyboardInterrupt:
         return _interrupted()
     finally:
+        if restore is not None:  # first: one C call, no window for a KeyboardInterrupt after
+            restore()
         sys.unraisablehook = hook
 
 
-def _sigint_as_keyboard_interrupt() -> None:
+def _sigint_as_keyboard_interrupt() -> Callable[[], object] | None:
     """From here on a Ctrl-C raises KeyboardInterrupt again (so atomic writers clean up and
     `main` prints one line): the script's start-up handler (`lamde_mission._quit_on_sigint`)
-    is replaced by Python's default."""
+    is replaced by Python's default.
+
+    Returns:
+        A call that puts the start-up handler back (for the interpreter's shutdown), or None
+        where it was not installed (the package imported by a program, a test).
+    """
+    import functools
     import signal
 
     from lamde_mission import _quit_on_sigint
 
-    if signal.getsignal(signal.SIGINT) is _quit_on_sigint:
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+    if signal.getsignal(signal.SIGINT) is not _quit_on_sigint:
+        return None
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    return functools.partial(signal.signal, signal.SIGINT, _quit_on_sigint)
 
 
 def _unraisable(u: object, hook: object) -> None:
