@@ -130,7 +130,9 @@ class MavsdkClient:
             self._relay: Any = VehicleRelay(conn, signing_key, heartbeat_watch=heartbeat_watch)
         except OSError as exc:
             raise VehicleError(f"cannot open {conn}: {exc.strerror or exc}") from None
+        #: where MAVSDK connects (the relay's local socket); `endpoint`: the vehicle's link
         self.url = self._relay.url
+        self.endpoint = conn.url()
         #: whether a message that changes the vehicle (an upload, a clear) has been started
         self.sent = False
         self._expected: dict[int, int] = {}
@@ -231,12 +233,13 @@ class MavsdkClient:
             try:
                 await self._sdk.add_any_connection(self.url)
             except MavsdkConnectionError as exc:
-                raise VehicleError(f"cannot open {self.url}: {exc}") from None
+                raise VehicleError(f"cannot open MAVSDK's link to the relay at {self.url}: "
+                                   f"{exc}") from None  # fmt: skip
             return await self._sdk.first_autopilot(timeout_s=float(timeout))
 
         system = self._run(go(), timeout + 5.0)
         if system is None:
-            raise NoVehicleError(f"no vehicle heard at {self.url} within {timeout:g} s")
+            raise NoVehicleError(f"no vehicle heard at {self.endpoint} within {timeout:g} s")
         self._system = system
         self._raw = MissionRawAsync(system)
 
