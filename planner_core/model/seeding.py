@@ -44,7 +44,11 @@ __all__ = ["MARGIN", "Seeder"]
 MARGIN = 20.0
 _ORDER_DETOUR = 2.0  # ordering: a blocked leg costs its length + this x its length inside
 _BLOCKED = 1e6  # slide objective: cost of one blocked leg (V5 >= mu)
-_OVER_BANDWIDTH = 1e4  # slide objective: cost of exceeding the bandwidth (V3), per (1 + Mbit/s)
+# slide objective: cost of exceeding the bandwidth (V3), per (1 + Mbit/s); above two blocked
+# legs, since a blocked leg can still be routed around (visibility-graph corners) while no
+# hover time repairs a point that hears too many sensors at once (dense fields, issue 31)
+_OVER_BANDWIDTH = 1e7
+_OVER_BANDWIDTH_NODE = 1e7  # routing: metres charged to enter a graph corner breaking C3
 _BANDWIDTH_USE = 0.98  # points keep their summed rate below this share of the bandwidth
 _SLIDE_RINGS = (60.0, 150.0, 300.0, 500.0)  # candidate offsets (m) around a centre
 _SLIDE_DIRS = 8
@@ -154,6 +158,14 @@ class Seeder:
         rate_needed = np.maximum(p.required, 1e-9) / (0.9 * p.t_max)
         self.reach = ground_reach(rate_needed, p.altitude, p.peak_rate, p.decay)
         self._ends = self.connect(np.vstack([p.start, p.end]))  # graph links of start, end
+        # corners that hear more than the bandwidth (C3) in a dense field: a route through
+        # one makes a hover point no hover time repairs, so routes pay `_OVER_BANDWIDTH_NODE`
+        # metres to enter one and take it only when nothing else joins the leg's ends
+        g = self.graph
+        self._c3_bad = (p.rates(g.nodes).sum(axis=1) > p.bandwidth if g.n
+                        else np.zeros(0, dtype=bool))
+        self._route_weights = (g.weights + _OVER_BANDWIDTH_NODE * self._c3_bad[g.indices]
+                               if self._c3_bad.any() else None)
         ang = 2.0 * np.pi * np.arange(_SLIDE_DIRS) / _SLIDE_DIRS
         self._unit = np.column_stack([np.cos(ang), np.sin(ang)])
 
@@ -344,8 +356,10 @@ class Seeder:
             A[inner] = self.connect(pts[inner])
             pos = np.arange(len(C), dtype=float)  # insertion keys: corners go after centre i-1
             keys = [pos]
+            if self._route_weights is not None:  # enter a C3-breaking corner last of all
+                A = A + _OVER_BANDWIDTH_NODE * self._c3_bad[None, :]
             for leg in blocked.tolist():
-                length, path = self.graph.route(A[leg], A[leg + 1])
+                _, path = self.graph.route(A[leg], A[leg + 1], self._route_weights)
                 if path:
                     out.append(self.graph.nodes[path])
                     is_centre.append(np.zeros(len(path), dtype=bool))

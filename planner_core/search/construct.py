@@ -127,12 +127,45 @@ def candidate_sites(problem: Any, extra: np.ndarray | None = None) -> np.ndarray
     rng = np.random.default_rng(0)  # only for a point exactly at a circle's centre
     C = np.clip(_pushed(problem, np.vstack(parts), rng), 0.0, seeder.size)
     C = np.unique(np.round(C, 6), axis=0)
-    ok = mp.rates(C).sum(axis=1) <= BANDWIDTH_USE * mp.bandwidth
-    keep = C[ok]
+    keep = C[_within_bandwidth(problem, C)]
     covered = covers(problem, keep, 0.9).any(axis=0) if len(keep) else np.zeros(len(S), bool)
+    if not covered.all():
+        # dense fields: every site near the sensor hears too many others (C3); try rings
+        # around it out to its reach, where fewer of its neighbours are heard
+        ring = _pushed(problem, ring_sites(S[~covered], lim[~covered]), rng)
+        ring = np.clip(ring, 0.0, seeder.size)
+        keep = np.vstack([keep, ring[_within_bandwidth(problem, ring)]])
+        covered = covers(problem, keep, 0.9).any(axis=0)
     if not covered.all():
         keep = np.vstack([keep, _pushed(problem, S[~covered], rng)])
     return keep
+
+
+def _within_bandwidth(problem: Any, pts: np.ndarray) -> np.ndarray:
+    """(n,) bool: the points' summed link rate stays within `BANDWIDTH_USE` of R_lambda (C3)."""
+    mp = problem.model
+    if not len(pts):
+        return np.zeros(0, dtype=bool)
+    return mp.rates(pts).sum(axis=1) <= BANDWIDTH_USE * mp.bandwidth
+
+
+#: ring sites around a sensor no C3-respecting candidate covers: these shares of its reach ...
+RING_RADII = (0.55, 0.7, 0.85, 0.97)
+#: ... in this many directions
+RING_DIRECTIONS = 16
+
+
+def ring_sites(sensors: np.ndarray, lim: np.ndarray) -> np.ndarray:
+    """Candidate sites (len(sensors) x |RING_RADII| x RING_DIRECTIONS, 2) m on rings around
+    each sensor (k, 2) at `RING_RADII` of its reach lim (k,) m: in a dense field the points
+    that keep C3 (the summed rate of every sensor heard within R_lambda) lie towards the
+    field's edge, still within the sensor's reach (issue 31)."""
+    ang = 2.0 * np.pi * np.arange(RING_DIRECTIONS) / RING_DIRECTIONS
+    unit = np.column_stack([np.cos(ang), np.sin(ang)])  # (D, 2)
+    radii = np.asarray(lim, dtype=float)[:, None] * np.asarray(RING_RADII)[None, :]  # (k, R)
+    pts = (np.asarray(sensors, dtype=float)[:, None, None, :]
+           + radii[:, :, None, None] * unit[None, None, :, :])
+    return pts.reshape(-1, 2)
 
 
 class CoverTable:
@@ -275,6 +308,7 @@ def site_sets(problem: Any, seed: int) -> Iterator[tuple[str, np.ndarray]]:
     for r in range(KMEANS_INITS):
         for k in ks:
             C = _pushed(problem, centres[k, r], pushed_rng)
+            C = C[_within_bandwidth(problem, C)]  # a centre in a dense field breaks C3
             more = sites[greedy_cover(problem, sites, 0.9, chosen=C, table=table)]
             yield f"k-means k={k} init {r}", np.vstack([C, more])
 

@@ -56,10 +56,13 @@ class VisibilityGraph:
         w = self.weights if weights is None else np.ascontiguousarray(weights, dtype=float)
         return _spread(self.indptr, self.indices, w, np.ascontiguousarray(src_dist, dtype=float))
 
-    def route(self, src_dist: np.ndarray, dst_dist: np.ndarray) -> tuple[float, list[int]]:
+    def route(self, src_dist: np.ndarray, dst_dist: np.ndarray,
+              weights: np.ndarray | None = None) -> tuple[float, list[int]]:
         """Shortest a -> nodes -> b given a's (src_dist) and b's (dst_dist) distances to the
-        nodes they see (inf elsewhere): (length, node path); (inf, []) when there is none."""
-        length, path = _route(self.indptr, self.indices, self.weights, src_dist, dst_dist)
+        nodes they see (inf elsewhere): (length, node path); (inf, []) when there is none.
+        `weights`: edge costs aligned with `indices` (default the edge lengths, m)."""
+        w = self.weights if weights is None else np.ascontiguousarray(weights, dtype=float)
+        length, path = _route(self.indptr, self.indices, w, src_dist, dst_dist)
         return float(length), path.tolist()
 
 
