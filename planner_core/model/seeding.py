@@ -133,6 +133,15 @@ def _slide_candidates(cur, prv, nxt, rings, frac, w, h):
 # ----------------------------------------------------------------------------- seeder
 
 
+def _best_two(R: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per column of R (n, k), n >= 2: the row of its largest entry and the row of its largest
+    once that one is gone, each the first of equals (np.argmax's rule)."""
+    b1 = np.argmax(R, axis=0)
+    R2 = R.copy()
+    R2[b1, cols] = -1.0  # rates are >= 0
+    return b1, np.argmax(R2, axis=0)
+
+
 class Seeder:
     """Builds obstacle-aware, sensor-serving starting solutions for one map (reusable).
 
@@ -400,9 +409,10 @@ class Seeder:
         by one) + (1 - alpha) x the greedy hover times of the rest, each sensor served from
         its best remaining point. Once m is gone a sensor's best point changes only when m was
         its best (it moves to its second best), so each iteration needs every sensor's best
-        and second-best point, (n, J), and the (n, n) matrix of the largest need point m hands
-        to point i: O(n^2 + n J) per removal, O(n^3 + n^2 J) for a prune of n points, where
-        `prune_reference` takes O(n^3 J); the link rates and the legs' clearance are kept and
+        and second-best point (kept across removals, recomputed only for the sensors whose
+        best two lost a point) and the (n, n) matrix of the largest need point m hands to
+        point i: O(n^2 + J) per removal plus O(n) per sensor re-ranked, where
+        `prune_reference` takes O(n^2 J); the link rates and the legs' clearance are kept and
         updated, not recomputed (one leg check per removal). Same result as
         `prune_reference` to the bit (tests)."""
         p = self.p
@@ -415,15 +425,11 @@ class Seeder:
         ok = self._clear(full[:n], full[2:])  # ok[m]: m's neighbours see each other
         c = 0.95 * p.t_max
         cols = np.arange(R.shape[1])
+        b1, b2 = _best_two(R, cols)
         while n > 1:
             full = np.vstack([p.start, M, p.end])
             m_idx = np.arange(n)
-            b1 = np.argmax(R, axis=0)  # each sensor's best point (the first of equals)
-            r1 = R[b1, cols]
-            R2 = R.copy()
-            R2[b1, cols] = -1.0
-            b2 = np.argmax(R2, axis=0)  # ... and its best once b1 is gone
-            r2 = R[b2, cols]
+            r1, r2 = R[b1, cols], R[b2, cols]
             now = r1 * c >= p.required
             # removing b1[j] leaves sensor j unserved: that point cannot go
             blocks = now & (r2 * c < p.required)
@@ -451,6 +457,12 @@ class Seeder:
             R = np.delete(R, m, axis=0)
             ok = np.delete(ok, m)
             n -= 1
+            # a sensor's best two change only where m was one of them; the rest renumber
+            hit = np.flatnonzero((b1 == m) | (b2 == m))
+            b1 = b1 - (b1 > m)
+            b2 = b2 - (b2 > m)
+            if len(hit) and n > 1:
+                b1[hit], b2[hit] = _best_two(R[:, hit], np.arange(len(hit)))
             # the legs that skip point m - 1 and point m (as numbered now) changed
             fix = np.array([i for i in (m - 1, m) if 0 <= i < n], dtype=int)
             if len(fix):
