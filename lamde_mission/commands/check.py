@@ -13,8 +13,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         description="Validate a map file: every problem is reported on its own line naming the "
         "field (exit status 2). On success print counts, area, I_max and the defaults in force, "
         "then a fast feasibility diagnosis (sensors no reachable hover point can serve, data "
-        "that cannot fit within max_hover_time x max_hover_points, an end point walled off; "
-        "exit status 1 naming what cannot be met).",
+        "that cannot fit within max_hover_time x max_hover_points, an end point walled off, "
+        "sensors that no hover point keeping C3 (the bandwidth R_lambda under the paper's "
+        "simultaneous uplink) can serve; exit status 1 naming what cannot be met).",
     )
     p.add_argument("map", help="map file (JSON)")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
@@ -72,6 +73,9 @@ def _diagnosis(m: object) -> int:
     d = diagnose(m)
     for f in d.findings:
         print(f"  {'CANNOT' if f.fatal else 'note':<6}  {f.message}")
+    if any(f.kind.startswith("C3_") for f in d.findings):
+        print("  hint    C3 is the paper's simultaneous uplink; \"radio\": {\"access\": "
+              "\"scheduled\"} lets the sensors in range share the bandwidth by time slots")
     if not d.feasible_so_far:
         print("no plan can meet this map (see CANNOT above)")
         return 1

@@ -11,10 +11,19 @@ required data raised by the data margin) and with shapely:
 - one hover point collects at most T_max * R_j from it, so the plan needs at least
   ceil(Q_j / (T_max * R_j)) hover points for it; more than I_max: no plan (TOO_MUCH_DATA).
 
+- C3 (the paper's simultaneous uplink, `radio.access` "simultaneous"): a hover point receives
+  from every sensor in range at once and their summed rate must stay within R_lambda; in a
+  dense field of sensors every point near enough to collect may break it. `bandwidth_bound`
+  proves over the whole area (cells bounding the rates from both sides, and the hover-time
+  LP over them) which sensors no C3-respecting point receives from (C3_NO_POINT) or that no
+  plan can serve within I_max x T_max of hover time at such points (C3_HOVER_TIME). In
+  scheduled access C3 does not apply and the test is skipped.
+
 Findings that are no proof of infeasibility are notes: a sensor inside an obstacle or a no-fly
 zone (served by radio from outside it: the best rate says how well), a sensor needing more than
-one hover point. The checks are necessary conditions, not sufficient: a map that passes may
-still be infeasible (hover points shared between sensors, C3).
+one hover point, a bandwidth test that found no plan on its grid but could not prove it
+(C3_GRID). The checks are necessary conditions, not sufficient: a map that passes may still be
+infeasible (obstacles between the C3-respecting points, the flight between them).
 """
 
 from __future__ import annotations
@@ -27,7 +36,7 @@ import numpy as np
 
 from planner_core.model.formulas import link_rates
 
-__all__ = ["Finding", "Diagnosis", "diagnose"]
+__all__ = ["BandwidthBound", "Finding", "Diagnosis", "bandwidth_bound", "diagnose"]
 
 
 @dataclass(frozen=True)
@@ -47,6 +56,8 @@ class Diagnosis:
     findings: tuple[Finding, ...]
     best_rate: dict[str, float] = field(default_factory=dict)
     points_needed: dict[str, int] = field(default_factory=dict)
+    #: what the bandwidth test (`bandwidth_bound`) found; None in scheduled access (no C3)
+    bandwidth: BandwidthBound | None = None
 
     @property
     def feasible_so_far(self) -> bool:
@@ -55,7 +66,10 @@ class Diagnosis:
 
 
 def diagnose(m: Any) -> Diagnosis:
-    """Diagnose `m` (a Map; its planning map is what is judged)."""
+    """Diagnose `m` (a Map; its planning map is what is judged).
+
+    Args: m a `planner_core.model.mapio.Map`. Returns: the `Diagnosis` (findings in order:
+    the end point, per sensor, then the bandwidth test's)."""
     import shapely
     from shapely.geometry import Point, box
 
@@ -122,4 +136,270 @@ def diagnose(m: Any) -> Diagnosis:
                 "SEVERAL_POINTS", False, f"sensor '{sid}' needs {q:g} Mbit: one hover point "
                 f"collects at most {one:.4g} Mbit (T_max {t_max:g} s x {r:.3g} Mbit/s), so at "
                 f"least {k} of the {i_max} hover points must serve it", sid))
-    return Diagnosis(findings=tuple(findings), best_rate=best, points_needed=need)
+    access = getattr(radio, "access", "simultaneous")
+    bound = None
+    if access == "simultaneous":
+        fatal = {f.sensor for f in findings if f.fatal}
+        req = np.array([0.0 if sid in fatal else q for sid, q in
+                        zip(pm.sensor_ids, pm.required_data, strict=True)])  # fmt: skip
+        bound = bandwidth_bound(
+            pm.sensors, req, list(pm.sensor_ids), width=pm.width, height=pm.height,
+            altitude=uav.altitude, peak_rate=radio.peak_rate, decay=radio.decay,
+            bandwidth=radio.bandwidth, t_max=t_max, i_max=i_max,
+        )  # fmt: skip
+        findings.extend(_bandwidth_findings(bound, float(radio.bandwidth), t_max, i_max))
+    return Diagnosis(findings=tuple(findings), best_rate=best, points_needed=need,
+                     bandwidth=bound)  # fmt: skip
+
+
+def _bandwidth_findings(b: BandwidthBound, bw: float, t_max: float, i_max: int) -> list[Finding]:
+    """One line per sensor the bandwidth test proves unservable; a note when inconclusive."""
+    out = []
+    how = f"proven over the whole area on cells down to {b.cell:.3g} m"
+    for sid in b.no_point:
+        out.append(Finding(
+            "C3_NO_POINT", True, f"sensor '{sid}': every hover point that receives from it "
+            f"breaks C3: the sensors in range there send more than R_lambda = {bw:g} Mbit/s "
+            f"at once ({how})", sid))  # fmt: skip
+    for sid in b.short:
+        others = len(b.short) - 1
+        out.append(Finding(
+            "C3_HOVER_TIME", True, f"sensor '{sid}': with {others} other sensor(s) named here "
+            f"it needs at least {b.v_low:.6g} s of hover time at hover points that keep C3 "
+            f"(sum of rates <= R_lambda = {bw:g} Mbit/s), more than I_max x T_max = "
+            f"{i_max} x {t_max:g} s = {b.cap:g} s ({how})", sid))
+    if not b.proven and b.v_grid > b.cap:
+        need = "no plan at all" if not math.isfinite(b.v_grid) else f"{b.v_grid:.6g} s"
+        out.append(Finding(
+            "C3_GRID", False, f"no hover points of a {b.cell:.3g} m grid that keep C3 (sum of "
+            f"rates <= R_lambda = {bw:g} Mbit/s) serve every sensor within I_max x T_max = "
+            f"{b.cap:g} s (they need {need}; at least {b.v_low:.6g} s is proven): the map is "
+            "likely infeasible"))
+    return out
+
+
+# ----------------------------------------------------------------------------- C3: bandwidth
+
+#: the bandwidth test's first cells: the radio reach / `C3_CELLS_PER_REACH` a side, coarser
+#: when the area would need more than `C3_GRID` cells along its larger side (bounded time and
+#: memory for any map: at most ~C3_GRID^2 cells, each paired with the sensors within reach)
+C3_CELLS_PER_REACH = 8
+C3_GRID = 256
+#: refinement rounds (each splits the cells the relaxation uses in four) and the most cells
+C3_ROUNDS = 10
+C3_MAX_CELLS = 200_000
+#: relative slack: a cell breaks C3 only when its least rate sum exceeds R_lambda by more, and
+#: CANNOT needs the least hover time to exceed I_max x T_max by more (the sim's REL_TOL)
+C3_TOL = 1e-6
+#: refinement stops when a round raised the proven least hover time by less than this share
+#: of what it still lacks to the cap (the proof is not coming)
+C3_STALL = 0.01
+
+
+@dataclass(frozen=True)
+class BandwidthBound:
+    """What the bandwidth test (`bandwidth_bound`) proved or measured.
+
+    `no_point`: ids of sensors no hover point that keeps C3 receives from (proven over the
+    whole area); `short`: ids of sensors that together need more hover time at C3-respecting
+    points than I_max x T_max allows (proven), `v_low` s that least time (a lower bound);
+    `v_grid` s: the least hover time using only the test's grid points (an upper estimate of
+    what the continuum needs; inf when the grid serves no plan), `cell` m the finest cell
+    side, `cap` s = I_max x T_max, `proven` whether a CANNOT is proven (`no_point` or `short`;
+    False with v_grid > cap: the test stopped with v_low <= cap < v_grid, inconclusive),
+    `rounds` the refinement rounds run (0: the points overhead the sensors sufficed)."""
+
+    no_point: tuple[str, ...] = ()
+    short: tuple[str, ...] = ()
+    v_low: float = 0.0
+    v_grid: float = 0.0
+    cell: float = 0.0
+    cap: float = 0.0
+    proven: bool = True
+    rounds: int = 0
+
+
+def _pairs(
+    box: np.ndarray, sensors: np.ndarray, reach: float, tree: Any
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Cell-sensor pairs within radio reach: cell index, sensor index, and the squared ground
+    distances (m^2) from the sensor to the nearest and the farthest point of the cell.
+    `box` (n, 4) holds x0, y0, x1, y1 per cell (m)."""
+    cx, cy = 0.5 * (box[:, 0] + box[:, 2]), 0.5 * (box[:, 1] + box[:, 3])
+    half = 0.5 * np.hypot(box[:, 2] - box[:, 0], box[:, 3] - box[:, 1])
+    lists = tree.query_ball_point(np.column_stack([cx, cy]), reach + half + 1e-9)
+    counts = np.fromiter((len(v) for v in lists), dtype=np.int64, count=len(lists))
+    ci = np.repeat(np.arange(len(box)), counts)
+    sj = (np.concatenate([np.asarray(v, dtype=np.int64) for v in lists])
+          if counts.sum() else np.zeros(0, dtype=np.int64))  # fmt: skip
+    sx, sy = sensors[sj, 0], sensors[sj, 1]
+    x0, y0, x1, y1 = box[ci, 0], box[ci, 1], box[ci, 2], box[ci, 3]
+    dx = np.maximum.reduce([x0 - sx, np.zeros_like(sx), sx - x1])
+    dy = np.maximum.reduce([y0 - sy, np.zeros_like(sy), sy - y1])
+    fx = np.maximum(np.abs(sx - x0), np.abs(sx - x1))
+    fy = np.maximum(np.abs(sy - y0), np.abs(sy - y1))
+    return ci, sj, dx * dx + dy * dy, fx * fx + fy * fy
+
+
+def bandwidth_bound(
+    sensors: np.ndarray,
+    required: np.ndarray,
+    ids: tuple[str, ...] | list[str],
+    *,
+    width: float,
+    height: float,
+    altitude: float,
+    peak_rate: float,
+    decay: float,
+    bandwidth: float,
+    t_max: float,
+    i_max: int,
+) -> BandwidthBound:
+    """Prove, over every point of the area, what C3 leaves of the sensors' data (paper C3, C4).
+
+    Under the paper's simultaneous uplink a hover point p receives from every sensor in range
+    at once, R_pj = max(R_c - xi sqrt(|p - s_j|^2 + H^2), 0), and C3 asks sum_j R_pj <=
+    R_lambda. The area is cut into cells; R_pj is monotone in the distance, so over a cell it
+    lies between its values at the cell's farthest and nearest points. A cell whose least rate
+    sum exceeds R_lambda holds no point that keeps C3; in the others a C3-respecting point gets
+    at most UB_cj = min(max_cell R_pj, R_lambda - sum_{k != j} min_cell R_pk) from sensor j.
+    Any plan's hover points lie in cells; with tau_c the plan's hover time in cell c and D_cj
+    the data its points there take from sensor j, D_cj <= UB_cj tau_c and, by C3 itself,
+    sum_j D_cj <= R_lambda tau_c. So the scheduled-access hover-time LP over the cells
+    (`planner_core.model.hoverlp.scheduled_lp`, rates UB, T_max unbounded)
+        min sum_c tau_c  s.t.  D_cj <= UB_cj tau_c, sum_j D_cj <= R_lambda tau_c,
+                               sum_c D_cj >= Q_j (all j),  tau_c, D_cj >= 0
+    is a lower bound V_low on every plan's total hover time, which is at most I_max x T_max.
+    V_low above that (or a sensor no kept cell reaches) proves that no plan exists; the
+    sensors with positive duals are a set that alone needs it. The simultaneous hover-time LP
+    (`hover_lp_sparse`) over the cells' centres (real points, C3 checked exactly) gives
+    V_grid >= what the relaxation can ever reach (a plan of more points, perhaps): at
+    most I_max x T_max and nothing can be proven. In between, the cells the relaxation uses
+    are split in four and both are solved again (`C3_ROUNDS` at most).
+
+    Args: sensors (J, 2) m, required (J,) Mbit (Q_j, the planning map's), ids (J,) sensor ids;
+    width, height m (the area, C1); altitude m (H); peak_rate, bandwidth Mbit/s (R_c,
+    R_lambda); decay Mbit/s per m (xi); t_max s (T_max); i_max (I_max).
+
+    Returns: a `BandwidthBound`.
+    """
+    from planner_core.model.formulas import ground_reach, link_rates, slant_rates
+    from planner_core.model.hoverlp import hover_lp
+
+    sensors = np.ascontiguousarray(sensors, dtype=float).reshape(-1, 2)
+    req = np.asarray(required, dtype=float).reshape(-1)
+    J = len(sensors)
+    cap = float(i_max) * float(t_max)
+    reach = float(ground_reach(0.0, altitude, peak_rate, decay))
+    if J == 0 or not np.any(req > 0) or peak_rate - decay * altitude <= 0.0:
+        return BandwidthBound(cap=cap)  # nothing to serve, or no link at all (UNREACHABLE)
+    # round 0, dense and light (no scipy: `check` stays quick): the points overhead each
+    # sensor that keep C3; a plan within the cap there ends the test
+    inside = ((sensors[:, 0] >= 0) & (sensors[:, 0] <= width) & (sensors[:, 1] >= 0)
+              & (sensors[:, 1] <= height))  # fmt: skip
+    R0 = link_rates(sensors[inside], sensors, altitude, peak_rate, decay)
+    R0 = R0[R0.sum(axis=1) <= bandwidth]
+    lp0 = hover_lp(R0, req, math.inf) if len(R0) else None
+    v0 = math.inf if lp0 is None else lp0[1]
+    if v0 <= cap:
+        return BandwidthBound(cap=cap, v_grid=v0)
+
+    import scipy.sparse as sp
+    from scipy.spatial import cKDTree
+
+    from planner_core.model.hoverlp import hover_lp_sparse, scheduled_lp
+
+    bw = float(bandwidth) * (1.0 + C3_TOL)
+    tree = cKDTree(sensors)
+
+    def rate(d2: np.ndarray) -> np.ndarray:
+        return np.maximum(slant_rates(d2, altitude, peak_rate, decay), 0.0)
+
+    def grid_value(box: np.ndarray) -> float:
+        """V_grid: the hover-time LP over the cells' centres that keep C3 (exact rates)."""
+        c = np.column_stack([0.5 * (box[:, 0] + box[:, 2]), 0.5 * (box[:, 1] + box[:, 3])])
+        pt = np.zeros((len(c), 4))
+        pt[:, 0], pt[:, 1], pt[:, 2], pt[:, 3] = c[:, 0], c[:, 1], c[:, 0], c[:, 1]
+        ci, sj, d2, _ = _pairs(pt, sensors, reach, tree)
+        r = rate(d2)
+        ok = np.bincount(ci, r, len(c)) <= bandwidth  # exactly C3 at the point
+        keep = ok[ci] & (r > 0)
+        R = sp.csr_matrix((r[keep], (ci[keep], sj[keep])), shape=(len(c), J))
+        sol = hover_lp_sparse(R, req, math.inf)
+        return math.inf if sol is None else sol[1]
+
+    side = max(reach / C3_CELLS_PER_REACH, max(width, height) / C3_GRID, 1e-3)
+    nx, ny = max(math.ceil(width / side), 1), max(math.ceil(height / side), 1)
+    gx, gy = np.meshgrid(np.arange(nx), np.arange(ny), indexing="ij")
+    gx, gy = gx.ravel().astype(float), gy.ravel().astype(float)
+    box = np.column_stack([gx * side, gy * side, np.minimum((gx + 1) * side, width),
+                           np.minimum((gy + 1) * side, height)])  # fmt: skip
+    near, _ = tree.query(np.column_stack([0.5 * (box[:, 0] + box[:, 2]),
+                                          0.5 * (box[:, 1] + box[:, 3])]),
+                         distance_upper_bound=reach + side)  # fmt: skip
+    box = box[np.isfinite(near)]
+    cell = side
+    v_low, v_grid, short, no_point = 0.0, v0, (), ()
+    rounds = 0
+    for rounds in range(1, C3_ROUNDS + 1):  # noqa: B007 - reported
+        # the cells' centres first (cheap): a plan within the cap there ends the test
+        v_grid = min(v_grid, grid_value(box))
+        if v_grid <= cap:
+            break
+        ci, sj, dmin2, dmax2 = _pairs(box, sensors, reach, tree)
+        hi, lo = rate(dmin2), rate(dmax2)
+        least = np.bincount(ci, lo, len(box))
+        ok = least <= bw
+        ub = np.minimum(hi, bw - (least[ci] - lo))
+        keep = ok[ci] & (ub > 0) & (req[sj] > 0)
+        R = sp.csr_matrix((ub[keep], (ci[keep], sj[keep])), shape=(len(box), J))
+        linked = np.zeros(J, dtype=bool)
+        linked[sj[keep]] = True
+        lost = np.flatnonzero((req > 0) & ~linked)
+        if len(lost):
+            no_point = tuple(ids[j] for j in lost)
+            break
+        sol = scheduled_lp(R, req, bw, math.inf)
+        if sol is None:  # every sensor that needs data has a link: HiGHS itself failed
+            break
+        tau, _, v, y = sol
+        if v > cap * (1.0 + C3_TOL):
+            v_low = v
+            short = _binding(R, req, bw, y, cap, ids)
+            break
+        stalled = rounds > 2 and v - v_low < C3_STALL * (cap - v_low)
+        v_low = max(v_low, v)
+        if stalled or len(box) >= C3_MAX_CELLS:
+            break
+        used = tau > 0.0
+        if not used.any():
+            break
+        split = box[used]
+        mx, my = 0.5 * (split[:, 0] + split[:, 2]), 0.5 * (split[:, 1] + split[:, 3])
+        kids = np.vstack([
+            np.column_stack([split[:, 0], split[:, 1], mx, my]),
+            np.column_stack([mx, split[:, 1], split[:, 2], my]),
+            np.column_stack([split[:, 0], my, mx, split[:, 3]]),
+            np.column_stack([mx, my, split[:, 2], split[:, 3]]),
+        ])  # fmt: skip
+        box = np.vstack([box[~used], kids])
+        cell = min(cell, float(np.max(split[:, 2] - split[:, 0])) / 2)
+    proven = bool(no_point or short)
+    return BandwidthBound(no_point=no_point, short=short, v_low=v_low, v_grid=v_grid,
+                          cell=cell, cap=cap, proven=proven, rounds=rounds)  # fmt: skip
+
+
+def _binding(
+    R: Any, req: np.ndarray, bw: float, y: np.ndarray, cap: float,
+    ids: tuple[str, ...] | list[str],
+) -> tuple[str, ...]:
+    """The sensors with positive duals, when alone they need more than `cap` s (an LP's
+    binding rows carry its optimum); else every sensor that needs data."""
+    from planner_core.model.hoverlp import scheduled_lp
+
+    tight = y > 1e-12
+    if tight.any():
+        sol = scheduled_lp(R, np.where(tight, req, 0.0), bw, math.inf)
+        if sol is None or sol[2] > cap * (1.0 + C3_TOL):
+            return tuple(ids[j] for j in np.flatnonzero(tight))
+    return tuple(ids[j] for j in np.flatnonzero(req > 0))

@@ -13,17 +13,24 @@ every T_i = T_max: an infeasible plan is always explained sensor by sensor.
 
 from __future__ import annotations
 
-import os
-import sys
-import threading
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from numba import njit
 
 from planner_core.model.formulas import L_VIO_TOL
 from planner_core.model.geometry import overlap_lengths
+from planner_core.model.hoverlp import (  # noqa: F401 - re-exported: the LP's home is the model
+    BLOCK_COMBOS,
+    BLOCK_VERTICES,
+    _highs,
+    _highs_lp,
+    _lp_blocks,
+    _solve_small,
+)
+from planner_core.model.hoverlp import TARGET as _TARGET
+from planner_core.model.hoverlp import hover_lp as _hover_lp
+from planner_core.model.hoverlp import top_up as _top_up
 from planner_core.model.problem import Problem
 
 __all__ = ["BACKENDS", "PolishResult", "hover_lp", "polish_hover_times", "ZERO_TIME"]
@@ -88,11 +95,6 @@ def _unserved(problem: Problem, R: np.ndarray) -> list[dict[str, Any]]:
 #: goes through scipy (the reference); "cvxpy" states the same LP in cvxpy (the modelling
 #: layer; about a second of import time).
 BACKENDS = ("highs", "linprog", "cvxpy")
-
-
-#: the coverage rows' right-hand side (each sensor's data scaled to 1): a hair above the
-#: requirement, so solver tolerance cannot leave a tiny shortfall
-_TARGET = 1.0 + 1e-9
 
 
 def _lp_matrices(
@@ -176,324 +178,15 @@ def _solve_lp_with(
     return np.clip(z[: R.shape[0]], 0.0, t_max), solver
 
 
-_HIGHS = threading.local()
-
-
-def _highs() -> Any:
-    """This thread's HiGHS solver (highspy), made quiet. highspy prints a banner to file
-    descriptor 1 when a process constructs its first solver, so fd 1 points at the null
-    device for that moment (the planner's stdout may be a mission file)."""
-    h = getattr(_HIGHS, "solver", None)
-    if h is None:
-        import highspy
-
-        try:
-            if sys.stdout is not None:
-                sys.stdout.flush()
-            saved = os.dup(1)
-        except (OSError, ValueError):  # no stdout (closed fd 1, sys.stdout None): nothing to hide
-            h = highspy.Highs()
-        else:
-            null = os.open(os.devnull, os.O_WRONLY)
-            try:
-                os.dup2(null, 1)
-                h = highspy.Highs()
-            finally:
-                os.dup2(saved, 1)
-                os.close(saved)
-                os.close(null)
-        h.setOptionValue("output_flag", False)
-        _HIGHS.solver = h
-    return h
-
-
-#: blocks of the hover-time LP with at most this many points, and at most `BLOCK_COMBOS` sets
-#: of constraints to try as a vertex, are solved by enumerating their vertices (`_lp_blocks`);
-#: the others go to HiGHS (with the final stage's second structure, 3 -> 4 -> 5 points took
-#: T16's warm plan() from 0.97 to 0.85 to 0.82 s; bench_plan.py)
-BLOCK_VERTICES = 5
-BLOCK_COMBOS = 5000
-
-
 def hover_lp(
     R: np.ndarray, req: np.ndarray, t_max: float, warm: dict[Any, Any] | None = None
 ) -> tuple[np.ndarray, float, np.ndarray] | None:
-    """The feasible hover-time LP of `_lp_matrices` with its duals, for sensitivity analysis.
+    """`planner_core.model.hoverlp.hover_lp` (the hover-time LP's one home), its HiGHS step
+    looked up here at call time (`_highs_lp`), so that a test may count the calls.
 
-    R (I, J) link rates (Mbit/s) of the hover points to every sensor, req (J,) required data
-    Q_j (Mbit), t_max (s). Returns (T (I,) hover times in s, topped up so that C4 holds
-    exactly (`_top_up`), V = sum T in s, y (J,) >= 0 the duals of the coverage rows
-    (R^T T)_j / Q_j >= 1, zero for sensors that need nothing), or None when the LP is
-    infeasible (some sensor not served even at T_max everywhere). By LP sensitivity (e.g.
-    Bertsimas & Tsitsiklis, Introduction to Linear Optimization, Sec. 5.1), dV/dR_ij =
-    -y_j T_i / Q_j at a non-degenerate optimum: what `planner_core.search.descent` uses.
-
-    The LP separates into blocks, the connected parts of the graph that joins a point to the
-    sensors it reaches (R_ij > 0). `_lp_blocks` (compiled) solves a block of one point (on the
-    suite's plans most of them) in closed form, T_i = max_j Q_j / R_ij over its sensors with
-    dual 1 / A_ji on the first row that attains it, and a block of up to `BLOCK_VERTICES`
-    points by enumerating its vertices (at most `BLOCK_COMBOS` sets of constraints); larger
-    blocks (and a small block whose optimum would need more than t_max) go together to HiGHS
-    through highspy. HiGHS's fixed cost (~0.1 ms a call) is what the blocks save: the descent
-    solves this LP once per trial. The fast path
-    of the polish's LP (`_solve_lp(..., "linprog")`, one LP through scipy, is its reference;
-    tests/test_descent.py holds them equal; `_solve_lp(..., "highs")` calls it for a feasible
-    LP). `warm`: a dict the caller keeps for one sequence of related solves (a descent): the
-    last optimal basis of each shape of HiGHS's part is kept in it and the next solve starts
-    from it. Where the LP has several optima the one returned may depend on that basis, so a
-    caller that must be reproducible passes a fresh dict per sequence (None: a cold start,
-    the same answer whatever was solved before).
-    """
-    need = req > 0
-    n = R.shape[0]
-    y = np.zeros(len(req))
-    if not need.any():
-        return np.zeros(n), 0.0, y
-    # rows: sensors, scaled so each needs 1 unit; cols: points
-    A = np.ascontiguousarray((R[:, need] / req[need]).T)
-    T = np.zeros(n)
-    yn = np.zeros(A.shape[0])
-    rest = np.zeros(n, dtype=np.bool_)
-    if not _lp_blocks(A, _TARGET, float(t_max), BLOCK_VERTICES, BLOCK_COMBOS, T, yn, rest):
-        return None  # a sensor no point reaches, or a lone point that needs more than t_max
-    if rest.any():
-        rows = (A[:, rest] > 0.0).any(axis=1)
-        sol = _highs_lp(A[np.ix_(rows, rest)], _TARGET, t_max, warm)
-        if sol is None:
-            return None
-        T[rest], yn[rows] = sol
-    y[need] = yn
-    T = _top_up(R, req, np.clip(T, 0.0, t_max), t_max)
-    return T, float(T.sum()), y
-
-
-@njit(cache=True, fastmath=False, nogil=True)
-def _solve_small(M, rhs, out):  # pragma: no cover - compiled
-    """Gaussian elimination with partial pivoting on a copy of M (k, k); out = M^-1 rhs.
-    False when M is singular (a pivot below 1e-12 of M's largest entry)."""
-    k = M.shape[0]
-    W = M.copy()
-    v = rhs.copy()
-    big = 0.0
-    for i in range(k):
-        for j in range(k):
-            big = max(big, abs(W[i, j]))
-    for col in range(k):
-        p = col
-        for i in range(col + 1, k):
-            if abs(W[i, col]) > abs(W[p, col]):
-                p = i
-        if abs(W[p, col]) <= 1e-12 * big:
-            return False
-        if p != col:
-            for j in range(k):
-                W[col, j], W[p, j] = W[p, j], W[col, j]
-            v[col], v[p] = v[p], v[col]
-        for i in range(col + 1, k):
-            f = W[i, col] / W[col, col]
-            for j in range(col, k):
-                W[i, j] -= f * W[col, j]
-            v[i] -= f * v[col]
-    for i in range(k - 1, -1, -1):
-        s = v[i]
-        for j in range(i + 1, k):
-            s -= W[i, j] * out[j]
-        out[i] = s / W[i, i]
-    return True
-
-
-@njit(cache=True, fastmath=False, nogil=True)
-def _lp_blocks(A, target, t_max, kmax, max_combos, T, y, rest):  # pragma: no cover - compiled
-    """The blocks of min sum T s.t. A T >= target, 0 <= T <= t_max (A (rows, I) >= 0): writes
-    the hover times T (I,) and row duals y (rows,) of every block of at most `kmax` points and
-    marks the points of the others (and of blocks with more than `max_combos` vertices to try)
-    in `rest` (I,) for HiGHS. A small block's vertices are
-    enumerated: every k of its constraints (its rows, T_i >= 0) taken as equalities, the first
-    (in lexicographic order) whose T is feasible and whose multipliers z (N_S^T z = 1, the
-    constraints written as >=) are >= 0 (the KKT conditions of an optimal vertex); a block
-    with no such vertex within rounding, or whose optimum needs more than t_max, goes to
-    `rest`. Returns False when a row has no point or a lone point needs more than t_max."""
-    m, n = A.shape
-    parent = np.arange(n)
-    for j in range(m):  # union-find over the points that share a row
-        first = -1
-        for i in range(n):
-            if A[j, i] > 0.0:
-                if first < 0:
-                    first = i
-                    while parent[first] != first:
-                        first = parent[first]
-                else:
-                    r = i
-                    while parent[r] != r:
-                        r = parent[r]
-                    if r != first:
-                        parent[max(r, first)] = min(r, first)
-                        first = min(r, first)
-        if first < 0:
-            return False  # a sensor no point reaches
-    for i in range(n):
-        r = i
-        while parent[r] != r:
-            r = parent[r]
-        parent[i] = r
-    cols = np.empty(n, dtype=np.int64)
-    rows = np.empty(m, dtype=np.int64)
-    for root in range(n):
-        k = 0
-        for i in range(n):
-            if parent[i] == root:
-                cols[k] = i
-                k += 1
-        if k == 0:
-            continue
-        nr = 0
-        for j in range(m):
-            for q in range(k):
-                if A[j, cols[q]] > 0.0:
-                    rows[nr] = j
-                    nr += 1
-                    break
-        if k == 1:
-            i = cols[0]
-            best, jb = 0.0, -1
-            for q in range(nr):
-                t = target / A[rows[q], i]
-                if t > best:
-                    best, jb = t, rows[q]
-            if best > t_max:
-                return False
-            T[i] = best
-            if jb >= 0:
-                y[jb] = 1.0 / A[jb, i]
-            continue
-        c = nr + k  # the block's constraints: its rows, then T_q >= 0
-        combos = 1.0
-        for q in range(k):  # C(c, k): the vertices to try
-            combos = combos * (c - q) / (q + 1)
-        if k > kmax or combos > max_combos:
-            for q in range(k):
-                rest[cols[q]] = True
-            continue
-        # the largest entry of each of the block's constraints (rows; a bound's is 1) and of
-        # each of its points: the tolerances below are relative to them (unit-free)
-        cmax = np.ones(c)
-        tmax_a = np.zeros(k)
-        for q in range(nr):
-            m_row = 0.0
-            for a in range(k):
-                v = A[rows[q], cols[a]]
-                m_row = max(m_row, v)
-                tmax_a[a] = max(tmax_a[a], v)
-            cmax[q] = m_row
-        idx = np.arange(k)
-        M = np.empty((k, k))
-        Mt = np.empty((k, k))
-        b = np.empty(k)
-        ones = np.ones(k)
-        t = np.empty(k)
-        z = np.empty(k)
-        found = False
-        while True:
-            for a in range(k):
-                s = idx[a]
-                for q in range(k):
-                    M[a, q] = A[rows[s], cols[q]] if s < nr else (1.0 if s - nr == q else 0.0)
-                b[a] = target if s < nr else 0.0
-            for a in range(k):
-                for q in range(k):
-                    Mt[a, q] = M[q, a]
-            if _solve_small(M, b, t) and _solve_small(Mt, ones, z):
-                ok = True
-                for a in range(k):  # multiplier x its constraint's scale; time x data rate
-                    if z[a] * cmax[idx[a]] < -1e-9 or t[a] * tmax_a[a] < -1e-9:
-                        ok = False
-                        break
-                if ok:
-                    for q in range(nr):
-                        s = 0.0
-                        scale = target
-                        for a in range(k):
-                            s += A[rows[q], cols[a]] * t[a]
-                            scale += abs(A[rows[q], cols[a]] * t[a])
-                        if s < target - 1e-9 * scale:
-                            ok = False
-                            break
-                if ok:
-                    found = True
-                    break
-            # next combination of k out of c, lexicographic
-            a = k - 1
-            while a >= 0 and idx[a] == c - k + a:
-                a -= 1
-            if a < 0:
-                break
-            idx[a] += 1
-            for q in range(a + 1, k):
-                idx[q] = idx[q - 1] + 1
-        tmax_ok = True
-        if found:
-            for a in range(k):
-                if t[a] > t_max:
-                    tmax_ok = False
-        if not found or not tmax_ok:
-            for q in range(k):
-                rest[cols[q]] = True
-            continue
-        for a in range(k):
-            T[cols[a]] = max(t[a], 0.0)
-            s = idx[a]
-            if s < nr:
-                y[rows[s]] = max(z[a], 0.0)
-    return True
-
-
-def _highs_lp(
-    A: np.ndarray, target: float, t_max: float, warm: dict[Any, Any] | None
-) -> tuple[np.ndarray, np.ndarray] | None:
-    """min sum T s.t. A T >= target, 0 <= T <= t_max through HiGHS (highspy): (T (cols,), row
-    duals (rows,) >= 0), or None when infeasible. A (rows, cols) >= 0; `warm` as `hover_lp`'s
-    (keyed by A's shape)."""
-    import highspy
-
-    n = A.shape[1]
-    nz = A != 0.0
-    lp = highspy.HighsLp()
-    lp.num_col_, lp.num_row_ = n, A.shape[0]
-    lp.col_cost_, lp.col_lower_, lp.col_upper_ = np.ones(n), np.zeros(n), np.full(n, t_max)
-    lp.row_lower_ = np.full(A.shape[0], target)
-    lp.row_upper_ = np.full(A.shape[0], highspy.kHighsInf)
-    lp.a_matrix_.format_ = highspy.MatrixFormat.kRowwise
-    lp.a_matrix_.start_ = np.concatenate([[0], np.cumsum(nz.sum(axis=1))]).astype(np.int32)
-    lp.a_matrix_.index_ = np.nonzero(nz)[1].astype(np.int32)
-    lp.a_matrix_.value_ = A[nz]
-    solver = _highs()
-    solver.passModel(lp)
-    basis = warm.get(A.shape) if warm is not None else None
-    if basis is not None:
-        solver.setBasis(basis)
-    solver.run()
-    if solver.getModelStatus() != highspy.HighsModelStatus.kOptimal:
-        if warm is not None:
-            warm.pop(A.shape, None)
-        return None
-    if warm is not None:
-        warm[A.shape] = solver.getBasis()
-    sol = solver.getSolution()
-    return (np.clip(np.asarray(sol.col_value, dtype=float), 0.0, t_max),
-            np.maximum(np.asarray(sol.row_dual, dtype=float), 0.0))
-
-
-def _top_up(R: np.ndarray, req: np.ndarray, times: np.ndarray, t_max: float) -> np.ndarray:
-    """Scale times up by the worst remaining ratio (tiny) so Q_j >= req_j holds exactly."""
-    for _ in range(5):
-        Q = R.T @ times
-        short = (req > 0) & (Q < req)
-        if not short.any():
-            break
-        ratio = float(np.max(req[short] / np.maximum(Q[short], 1e-300)))
-        times = np.minimum(times * min(ratio * (1 + 1e-12), 1.0 + 1e-6) + 1e-12, t_max)
-    return times
+    Args: R (I, J) Mbit/s, req (J,) Mbit, t_max s, warm as there. Returns (T s, sum T s,
+    duals) or None when infeasible."""
+    return _hover_lp(R, req, t_max, warm, highs=_highs_lp)
 
 
 def polish_hover_times(
