@@ -10,7 +10,7 @@ EDITABLE := --config-settings editable_mode=compat
 # MkDocs' banner about its successor, printed on every build
 export NO_MKDOCS_2_WARNING := 1
 
-.PHONY: setup demo test test-slow lint docs docs-build bench clean
+.PHONY: setup demo test test-slow lint docs docs-build figures bench clean
 
 # everything: what `make test` needs
 setup: $(VENV)/.installed
@@ -62,6 +62,11 @@ docs: $(VENV)/.docs
 # the manual into build/site, warnings as errors
 docs-build: $(VENV)/.docs
 	$(BIN)/mkdocs build --strict
+
+# every benchmark figure the manual shows, redrawn from the runs stored under docs/ (no benchmark
+# is re-run; a report whose runs are not stored is named, its stored studies redrawn)
+figures: setup
+	$(PY) docs/make_figures.py
 
 bench: setup
 	$(PY) benchmarks/bench_evaluate.py

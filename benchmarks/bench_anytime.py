@@ -69,9 +69,9 @@ def _commit() -> str | None:
 
 def read_runs(path: Path) -> list[dict[str, Any]]:
     """The records of a JSON-lines file, gzip-compressed when its name ends in .gz."""
-    opener = gzip.open if path.suffix == ".gz" else open
-    with opener(path, "rt") as fh:
-        return [json.loads(line) for line in fh if line.strip()]
+    from planner_core.bench._io import read_jsonl
+
+    return read_jsonl(path)
 
 
 def _key(task: str, seed: int, mult: int, init: str, base: int) -> tuple[str, int, int, str, int]:

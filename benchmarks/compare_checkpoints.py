@@ -6,7 +6,7 @@ and prints per map both means, the mark of the candidate against the baseline ('
 significantly better, '-' worse, '~' no difference; alpha 0.05, two-sided,
 `planner_core.bench.stats.wilcoxon_mark`) on the seeds both files have, and the totals.
 
-    python benchmarks/compare_checkpoints.py candidate.jsonl docs/policy/suite-uniform.jsonl
+    python benchmarks/compare_checkpoints.py candidate.jsonl docs/policy/suite-uniform.jsonl.gz
 """
 
 from __future__ import annotations
@@ -17,13 +17,14 @@ from pathlib import Path
 
 import numpy as np
 
+from planner_core.bench._io import read_maybe_gz
 from planner_core.bench.stats import wilcoxon_mark
 
 
 def lamde_scores(path: Path, mode: str, pipeline: str) -> dict[str, dict[int, float]]:
     """map -> seed -> score of the ``lamde`` records of ``mode`` and ``pipeline`` in ``path``."""
     out: dict[str, dict[int, float]] = {}
-    for line in path.read_text().splitlines():
+    for line in read_maybe_gz(path).decode("utf-8").splitlines():  # .gz: compressed
         if not line.strip():
             continue
         r = json.loads(line)

@@ -17,7 +17,6 @@ new < old). Then the verdict against issue 30's target: lower mean gap on at lea
 from __future__ import annotations
 
 import argparse
-import json
 import statistics
 import sys
 from pathlib import Path
@@ -28,13 +27,9 @@ ROOT = Path(__file__).resolve().parent.parent
 
 def load(path: str, optimiser: str) -> list[dict[str, Any]]:
     """The records of `optimiser` in a results file."""
-    if str(path).endswith(".gz"):  # the records docs/ keeps, compressed
-        import gzip
+    from planner_core.bench._io import read_jsonl
 
-        text = gzip.decompress(Path(path).read_bytes()).decode("utf-8")
-    else:
-        text = Path(path).read_text(encoding="utf-8")
-    rows = [json.loads(s) for s in text.splitlines() if s.strip()]
+    rows = read_jsonl(path)  # a .gz name: gzip-compressed, as the records docs/ keeps are
     return [r for r in rows if r.get("optimiser") == optimiser]
 
 

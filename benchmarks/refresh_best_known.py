@@ -38,6 +38,8 @@ from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
+from planner_core.bench._io import read_maybe_gz
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -57,7 +59,7 @@ def candidates(paths: list[Path]) -> dict[str, list[dict[str, Any]]]:
     """Feasible records (no I_max override) per task, lowest f first."""
     out: dict[str, list[dict[str, Any]]] = {}
     for path in paths:
-        for line in path.read_text().splitlines():
+        for line in read_maybe_gz(path).decode("utf-8").splitlines():  # .gz: compressed
             if not line.strip():
                 continue
             r = json.loads(line)

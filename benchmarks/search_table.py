@@ -9,10 +9,11 @@ gap to the best-known f of examples/maps/suite_best_known.json.
     python benchmarks/search_table.py results/results.jsonl [...] [--planner planner]
         [--best-known F] [--init seeded|uniform] [--runs N] [--optimizers A B ...] [--gaps]
 
+A name ending in .gz is read gzip-compressed (the records kept under docs/ are).
 `--init` keeps only the runs of that start mode (a results file of `bench --init both` holds
 both, with the same seeds). Several files are merged (a run recorded twice counts once).
 A file given as `PATH:NAME,NAME=LABEL,...` contributes only those optimisers, each under its
-LABEL when given (e.g. `docs/search/seeded-25runs.jsonl:planner,seed-lp,cmaes-seeded-lp=cmaes-s0.05`
+LABEL when given (e.g. `docs/search/seeded-25runs.jsonl.gz:planner,seed-lp,cmaes-seeded-lp=cmaes-s0.05`
 keeps an older cmaes-seeded-lp as its own column).
 `--runs N` keeps runs 0 .. N-1 of every optimiser (so entries with more runs on record are
 compared on the same seeds), `--optimizers` only these columns (the planner always),
@@ -30,6 +31,7 @@ from pathlib import Path
 import numpy as np
 from scipy.stats import wilcoxon
 
+from planner_core.bench._io import read_maybe_gz
 from planner_core.defaults import SCORE_FACTOR
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -63,7 +65,9 @@ def main() -> None:
     feasible: dict[tuple[str, str], dict[int, bool]] = defaultdict(dict)
     for arg in a.results:
         path, keep = _source(arg)
-        for line in path.read_text().splitlines():
+        for line in read_maybe_gz(path).decode("utf-8").splitlines():  # .gz: compressed
+            if not line.strip():
+                continue
             r = json.loads(line)
             if "f" not in r or r.get("f") is None:
                 continue

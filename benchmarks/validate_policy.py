@@ -60,6 +60,7 @@ from typing import Any
 
 import numpy as np
 
+from planner_core.bench._io import read_jsonl
 from planner_core.bench.baselines.de import planner
 from planner_core.bench.stats import wilcoxon_mark
 from planner_core.execution import make_executor
@@ -182,7 +183,7 @@ def best_of(records: list[dict[str, Any]], mode: str) -> dict[str, str]:
 def _read(path: Path) -> list[dict[str, Any]]:
     if not path.exists():
         return []
-    return [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+    return read_jsonl(path)  # a .gz name: gzip-compressed
 
 
 def main() -> None:

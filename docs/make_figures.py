@@ -2,6 +2,9 @@
 `python docs/make_figures.py` (from the repository root; `--out DIR` writes the same tree
 under DIR instead). No benchmark is re-run.
 
+The stored runs are gzip-compressed (`results.jsonl.gz`, `docs/policy/*.jsonl.gz`) and read as
+such (`planner_core.bench._io`); an uncompressed `results.jsonl` beside them is read first.
+
 - REPORTS: `lamde-mission report` over a stored benchmark folder (`results.jsonl`); the report
   and its figures (scores per task, convergence per task, best paths, I_max study) are
   rewritten. A folder that is not in the repository is skipped, and the script says so: the
@@ -15,14 +18,15 @@ under DIR instead). No benchmark is re-run.
 - SCANS: the figure of a configuration scan (`validate_policy.py --configurators grid`), one
   panel per pipeline.
 
-The figures themselves are `planner_core.bench.figures`.
+The figures themselves are `planner_core.bench.figures`; each one written here is then stored
+as a 256-colour palette PNG (`compact_png`: a quarter of the bytes, the same picture to the eye),
+so the figures the pages show stay small in the repository. `make figures` runs this script.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib.util
-import json
 import os
 import shlex
 import sys
@@ -36,6 +40,9 @@ ROOT = Path(__file__).resolve().parent.parent
 REPORTS: list[tuple[str, str, str, list[str]]] = [
     ("docs/reduced/runs", "docs/reduced/protocol.md", "de-adaptive", []),
     ("docs/reduced/imax-runs", "docs/reduced/imax.md", "de-lamde", ["--no-limits"]),
+    ("docs/reduced/ablation-runs", "docs/reduced/ablations.md", "",  # reference: meta.json's
+     ["--no-limits", "--title", "REDUCED ablation run (2 tasks x 2 runs, K = 4, 1-epoch "
+      "trainings), not the paper protocol"]),
     ("results-with-metabox", "docs/results.md", "de-lamde",
      ["--policy-checkpoint", "planner_core/learning/policy/checkpoints/lamde-v2",
       "--ablations", "docs/studies/ablations", "--imax", "docs/studies/imax"]),
@@ -46,7 +53,7 @@ NOT_STORED: dict[str, str] = {
     "results-with-metabox": "the 8,000 runs behind docs/results.md were not committed (42 MB); "
     "the commands at the top of docs/results.md re-run them, seed for seed (~35 min with "
     "--jobs 1 on this machine), and merge them with the committed MetaBox records "
-    "(docs/metabox/results.jsonl) into results-with-metabox; then the report command there "
+    "(docs/metabox/results.jsonl.gz) into results-with-metabox; then the report command there "
     "redraws the page (keeping its "
     "hand-written 'what this shows' section); its ablation and I_max studies are stored "
     "(docs/studies/), and their figures are redrawn from them",
@@ -54,14 +61,14 @@ NOT_STORED: dict[str, str] = {
 
 #: (runs file, figure stem, what the runs compare, command that made them)
 POLICY: list[tuple[str, str, str, str]] = [
-    ("docs/policy/validation.jsonl", "docs/policy/validation",
+    ("docs/policy/validation.jsonl.gz", "docs/policy/validation",
      "lamde-v1 against the hand-made configurators on 4 unseen maps",
      "python benchmarks/validate_policy.py --maps validation --count 4 --runs 25"),
-    ("docs/policy/suite-uniform.jsonl", "docs/policy/suite",
+    ("docs/policy/suite-uniform.jsonl.gz", "docs/policy/suite",
      "lamde-v1 against the hand-made configurators on the 16 suite maps",
      "python benchmarks/validate_policy.py --maps suite --modes uniform "
      "--configurators lamde random adaptive --runs 25"),
-    ("docs/policy/suite-uniform-planner.jsonl", "docs/policy/suite_planner",
+    ("docs/policy/suite-uniform-planner.jsonl.gz", "docs/policy/suite_planner",
      "lamde-v1 against the hand-made configurators in plan's pipeline, 16 suite maps",
      "python benchmarks/validate_policy.py --maps suite --modes uniform --pipeline planner "
      "--configurators lamde random adaptive --runs 25"),
@@ -70,17 +77,39 @@ POLICY: list[tuple[str, str, str, str]] = [
 #: (runs file of a configuration scan, figure, what it shows, command that made it; one figure
 #: with a panel per pipeline the file holds, against `random`)
 SCANS: list[tuple[str, str, str, str]] = [
-    ("docs/policy/scan-suite-uniform.jsonl", "docs/policy/scan_suite_uniform.png",
+    ("docs/policy/scan-suite-uniform.jsonl.gz", "docs/policy/scan_suite_uniform.png",
      "How far any DE configuration gets from the untrained random one, 16 suite maps",
      "python benchmarks/validate_policy.py --maps suite --modes uniform --pipeline PIPELINE "
      "--configurators random adaptive lamde grid --reference random --runs 8"),
 ]
 
 
+def compact_png(path: Path) -> Path:
+    """Rewrite a PNG as a 256-colour palette image (no dithering: plots have few colours, so
+    lines and text keep their edges); one already in palette mode is left as it is."""
+    from PIL import Image
+
+    with Image.open(path) as im:
+        if im.mode == "P":
+            return path
+        im.load()
+    rgb = im if im.mode in ("RGB", "RGBA") else im.convert("RGBA")
+    q = rgb.quantize(256, method=Image.Quantize.FASTOCTREE, dither=Image.Dither.NONE)
+    q.save(path, format="PNG", optimize=True)
+    return path
+
+
+def compact_folder(folder: Path) -> None:
+    """`compact_png` on every PNG of a report's figure folder."""
+    for png in sorted(folder.glob("*.png")) if folder.is_dir() else []:
+        compact_png(png)
+
+
 def report_command(results: str, md: str, reference: str, extra: list[str]) -> str:
-    """The `lamde-mission report` command line a report records (and that re-makes it)."""
-    return shlex.join(["lamde-mission", "report", results, "-o", md, "--reference", reference,
-                       *extra])
+    """The `lamde-mission report` command line a report records (and that re-makes it); no
+    --reference when `reference` is empty (the report's default: meta.json's, else its own)."""
+    return shlex.join(["lamde-mission", "report", results, "-o", md,
+                       *(["--reference", reference] if reference else []), *extra])
 
 
 def _option(extra: list[str], flag: str) -> str | None:
@@ -94,7 +123,7 @@ def study_figures(md: str, reference: str, extra: list[str], out: Path) -> list[
     from planner_core.bench.report import study_sections
 
     folders = {k: _option(extra, f"--{k}") for k in ("imax", "ablations")}
-    missing = [f for f in folders.values() if f and not (Path(f) / "results.jsonl").exists()]
+    missing = [f for f in folders.values() if f and not stored(f)]
     if missing:
         return [f"{md}: stored study folder(s) {', '.join(missing)} not found"]
     if not any(folders.values()):
@@ -105,6 +134,13 @@ def study_figures(md: str, reference: str, extra: list[str], out: Path) -> list[
         return [f"{md}: its study sections are not what the stored runs give: re-run its "
                 "report command (at its top)"]
     return []
+
+
+def stored(folder: str | Path) -> bool:
+    """Whether a benchmark folder holds its runs (`results.jsonl`, or compressed `.gz`)."""
+    from planner_core.bench._io import stored_path
+
+    return stored_path(Path(folder) / "results.jsonl").exists()
 
 
 def complete_seeds(records: list[dict[str, Any]]) -> list[int]:
@@ -128,10 +164,10 @@ def _validate_policy() -> Any:
 def policy_figures(runs_file: Path, stem: Path, what: str) -> list[Path]:
     """One score figure per start mode of a validate_policy.py runs file: `stem`_<mode>.png."""
     from planner_core.bench import figures as F
+    from planner_core.bench._io import read_jsonl
 
     vp = _validate_policy()
-    records = [json.loads(line) for line in runs_file.read_text(encoding="utf-8").splitlines()
-               if line.strip()]
+    records = read_jsonl(runs_file)  # a .gz name: gzip-compressed
     seeds = set(complete_seeds(records))
     records = [r for r in records if int(r["seed"]) in seeds]
     confs = list(dict.fromkeys(r["configurator"] for r in records))
@@ -158,10 +194,10 @@ def policy_figures(runs_file: Path, stem: Path, what: str) -> list[Path]:
 def scan_figures(runs_file: Path, out: Path, what: str) -> Path:
     """The figure of a configuration scan's runs file (one panel per pipeline, `SCANS`)."""
     from planner_core.bench import figures as F
+    from planner_core.bench._io import read_jsonl
 
     vp = _validate_policy()
-    records = [json.loads(line) for line in runs_file.read_text(encoding="utf-8").splitlines()
-               if line.strip()]
+    records = read_jsonl(runs_file)  # a .gz name: gzip-compressed
     panels, runs = {}, set()
     for pipeline in ("de", "repair", "memetic", "planner"):
         recs = [r for r in records if r.get("pipeline", "de") == pipeline]
@@ -183,14 +219,15 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     out = args.out.resolve()
     os.chdir(ROOT)  # the stored results name their suite relative to the repository root
-    from planner_core.bench.report import build_report
+    from planner_core.bench.report import DEFAULT_REFERENCE, build_report
 
     problems: list[str] = []
     for results, md, reference, extra in REPORTS:
-        if not (Path(results) / "results.jsonl").exists():
+        if not stored(results):
             print(f"skipped {md}: {results}/results.jsonl is not in the repository: "
                   f"{NOT_STORED.get(results, 'run its benchmark first')}", file=sys.stderr)
             problems += study_figures(md, reference, extra, out)
+            compact_folder((out / md).with_suffix(""))
             if "--imax" in extra or "--ablations" in extra:
                 print(f"redrew the study figures of {md} from its stored study runs",
                       file=sys.stderr)
@@ -200,16 +237,19 @@ def main(argv: list[str] | None = None) -> int:
             (out / md).parent.mkdir(parents=True, exist_ok=True)
             if not (out / md).exists():
                 (out / md).write_text((ROOT / md).read_text(encoding="utf-8"), encoding="utf-8")
-        build_report(results, out / md, reference=reference, limits="--no-limits" not in extra,
+        title = {"title": _option(extra, "--title")} if "--title" in extra else {}
+        build_report(results, out / md, reference=reference or DEFAULT_REFERENCE,
+                     limits="--no-limits" not in extra, **title,
                      command=report_command(results, md, reference, extra),
                      policy_checkpoint=policy, imax=_option(extra, "--imax"),
                      ablations=_option(extra, "--ablations"))
+        compact_folder((out / md).with_suffix(""))
         print(f"wrote {md} and its figures", file=sys.stderr)
     for runs, stem, what, _ in POLICY:
-        for p in policy_figures(Path(runs), out / stem, what):
+        for p in map(compact_png, policy_figures(Path(runs), out / stem, what)):
             print(f"wrote {p.relative_to(out).as_posix()}", file=sys.stderr)
     for runs, fig, what, _ in SCANS:
-        p = scan_figures(Path(runs), out / fig, what)
+        p = compact_png(scan_figures(Path(runs), out / fig, what))
         print(f"wrote {p.relative_to(out).as_posix()}", file=sys.stderr)
     for msg in problems:
         print(f"error: {msg}", file=sys.stderr)

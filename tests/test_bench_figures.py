@@ -217,7 +217,7 @@ def test_make_figures_redraws_the_stored_runs(tmp_path: Path) -> None:
         rel = Path(fig).relative_to("docs").as_posix()
         assert f"]({rel})" in policy_md, f"docs/policy.md does not show {rel}"
     for results, report, _, extra in mod.REPORTS:
-        if not (ROOT / results / "results.jsonl").exists():
+        if not mod.stored(ROOT / results):  # results.jsonl, or compressed .gz
             assert f"skipped {report}" in r.stderr and results in mod.NOT_STORED
             if "--imax" in extra or "--ablations" in extra:  # its stored studies are redrawn
                 assert f"redrew the study figures of {report}" in r.stderr

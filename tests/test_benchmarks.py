@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from planner_core.bench._io import read_jsonl, read_maybe_gz
 from tests.conftest import ROOT
 
 
@@ -183,8 +184,8 @@ def test_bench_order_compares_our_order_with_ortools() -> None:
 
 
 def _t01_plan() -> dict:
-    """One stored 10,000-evaluation planner run on T01 (docs/search/seeded-25runs.jsonl)."""
-    for line in (ROOT / "docs/search/seeded-25runs.jsonl").read_text().splitlines():
+    """One stored 10,000-evaluation planner run on T01 (docs/search/seeded-25runs.jsonl.gz)."""
+    for line in read_maybe_gz(ROOT / "docs/search/seeded-25runs.jsonl.gz").decode().splitlines():
         r = json.loads(line)
         if r["optimiser"] == "planner" and r["task"] == "T01" and r["feasible"]:
             return r
@@ -366,8 +367,7 @@ def test_docs_scan_tables_are_what_the_stored_runs_give() -> None:
         elif line.strip():
             quoted[current].append(line)
     assert set(quoted) == {"de", "repair", "memetic"}
-    records = [json.loads(x) for x in
-               (ROOT / "docs" / "policy" / "scan-suite-uniform.jsonl").read_text().splitlines()]
+    records = read_jsonl(ROOT / "docs" / "policy" / "scan-suite-uniform.jsonl.gz")
     for pipeline, lines in quoted.items():
         recs = [r for r in records if r["pipeline"] == pipeline]
         labels = list(dict.fromkeys(r["configurator"] for r in recs))
@@ -462,7 +462,7 @@ def test_docs_heldout_and_25_run_figures_are_what_the_stored_runs_give() -> None
                                      strict=True) if mark == "+"]
 
     held = [json.loads(x) for x in
-            (ROOT / "docs" / "policy" / "scan-heldout.jsonl").read_text().splitlines()]
+            read_maybe_gz(ROOT / "docs" / "policy" / "scan-heldout.jsonl.gz").decode().splitlines()]
     for pipeline, maps_better in (("memetic", "T01-T03, T09"), ("repair", "T01-T04")):
         recs = [r for r in held if r["pipeline"] == pipeline]
         maps = sorted({r["map"] for r in recs})
@@ -470,8 +470,7 @@ def test_docs_heldout_and_25_run_figures_are_what_the_stored_runs_give() -> None
         ratio, _, feas, runs, _ = next(r for r in rows if r[1] == vp.BEST_OF)
         assert f"{feas}/{runs}" in page and f"{ratio:.3f}" in page
         assert len(better(rows, vp.BEST_OF)) == 4 and f"({maps_better})" in page
-    top = [json.loads(x) for x in
-           (ROOT / "docs" / "policy" / "scan-top-25runs.jsonl").read_text().splitlines()]
+    top = read_jsonl(ROOT / "docs" / "policy" / "scan-top-25runs.jsonl.gz")
     recs = [r for r in top if r["pipeline"] == "memetic"]
     maps = sorted({r["map"] for r in recs})
     labels = list(dict.fromkeys(r["configurator"] for r in recs))

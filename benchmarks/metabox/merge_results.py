@@ -7,7 +7,7 @@ agent (the report's "What it is" column) + this command. Neither input is modifi
 exist yet. Then:
 
     python benchmarks/metabox/merge_results.py --results results \\
-        --metabox docs/metabox/results.jsonl --out results-with-metabox
+        --metabox docs/metabox/results.jsonl.gz --out results-with-metabox
     lamde-mission report results-with-metabox -o docs/results.md --reference de-lamde
 
 Bad input: one line naming the problem, exit status 2, nothing written.
@@ -70,7 +70,7 @@ def merge(results: Path, metabox: Path, out: Path, command: str = "") -> tuple[i
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--results", required=True, help="benchmark folder (results.jsonl, meta.json)")
-    ap.add_argument("--metabox", required=True, help="run_metabox.py's results.jsonl")
+    ap.add_argument("--metabox", required=True, help="run_metabox.py's results.jsonl (.gz: compressed)")
     ap.add_argument("--out", required=True, help="new folder for the merged benchmark")
     a = ap.parse_args(argv)
     argv_used = sys.argv[1:] if argv is None else argv

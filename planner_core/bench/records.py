@@ -15,6 +15,8 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import IO, Any, NamedTuple
 
+from planner_core.bench._io import read_maybe_gz
+
 __all__ = ["RESULTS_FILE", "Key", "key_of", "read_records", "ResultsWriter", "ReadReport",
            "complete_runs", "slim_record"]
 
@@ -53,11 +55,12 @@ _REQUIRED = ("optimiser", "task", "run", "f", "phi", "score", "evaluations")
 
 
 def read_records(path: str | Path) -> ReadReport:
-    """All valid records of a results file (missing file: none), first occurrence per key."""
+    """All valid records of a results file (missing file: none), first occurrence per key; a
+    name ending in .gz is read gzip-compressed (the records kept under docs/ are)."""
     path = Path(path)
     if not path.exists():
         return ReadReport([], False, [], 0)
-    data = path.read_bytes()
+    data = read_maybe_gz(path)
     lines = data.split(b"\n")
     tail_open = not data.endswith(b"\n") and data != b""
     records: list[dict[str, Any]] = []
