@@ -11,6 +11,24 @@ Read a value with ``DEFAULTS["population"].value`` or the module constants (``PO
 message starts with the entry's name (``"population: must be an integer >= 6, got 5"``).
 :func:`render_markdown` renders the table (the README's "Defaults" section is generated from it
 and a test keeps the two equal).
+
+Memory at the input limits (the limits themselves live in ``planner_core.textio.LIMITS``; each
+bound is held by a slow test that runs ``check`` and ``plan`` in a child under ``ulimit -v``
+4 GB, RLIMIT_AS, and asks for a peak RSS under 2 GB):
+
+- ``LAMDE_MAX_SENSORS`` (200 sensors): within 4 GB of address space; peak RSS ~185 MiB for
+  ``check``, ~290 MiB for ``plan`` at a small budget (tests/test_limits_memory.py, a 20 km
+  uniform map from ``generate --layout uniform``);
+- ``LAMDE_MAX_OBSTACLES`` (5,000 circles, rectangles, zones and polygons): within 4 GB; peak RSS
+  ~390 MiB for ``check``, ~715 MiB for ``plan`` (tests/test_limits_memory.py, 2,500 circles and
+  2,500 rectangles on a 16 km grid); the plan's time, not its memory, is what grows (~140-150 s
+  of CPU, most of it the visibility graph's clearance tests of every tangent pair against every
+  obstacle);
+- ``LAMDE_MAX_VERTICES`` (50,000 zone vertices; ``LAMDE_MAX_ZONE_VERTICES``, 5,000 per zone,
+  lies within it): within 4 GB; peak RSS ~340 MiB for ``plan`` (tests/test_graph_memory.py:
+  the graph's candidate pairs are built one block at a time);
+- the file limits (``LAMDE_MAX_INPUT_BYTES``, 64 MiB; ``LAMDE_MAX_JSON_DEPTH``, 64) bound what
+  is read before any of the above is built.
 """
 
 from __future__ import annotations
