@@ -39,6 +39,7 @@ from dataclasses import dataclass
 from typing import Any
 
 __all__ = [
+    "ACCESS_MODES",
     "BEST_KNOWN_BUDGET",
     "BEST_KNOWN_RUNS",
     "BUDGET",
@@ -53,6 +54,7 @@ __all__ = [
     "MEMETIC",
     "MEMETIC_MODES",
     "L_VIO_TOL",
+    "MAP_CHOICES",
     "MAP_DEFAULTS",
     "MIN_POPULATION",
     "POPULATION",
@@ -286,6 +288,22 @@ _MAP: tuple[Default, ...] = (
             "requirement, not a margin"),
 )
 
+#: how the sensors in range of a hover point share its radio (`radio.access`), the default
+#: first: "simultaneous" is the paper's model (every sensor in range sends at once at R_ij, and
+#: C3 bounds their summed rate by R_lambda); "scheduled" shares R_lambda by time slots (the
+#: data taken from each sensor a variable, at most R_ij T_i, their sum at most R_lambda T_i;
+#: no C3), how dense fields are served in practice
+ACCESS_MODES: tuple[str, ...] = ("simultaneous", "scheduled")
+
+#: the map file's optional fields that are a choice, not a number (JSON path -> entry)
+MAP_CHOICES: dict[str, Default] = {
+    "radio.access": Default(
+        "radio.access", ACCESS_MODES[0], "uplink at a hover point: simultaneous (every sensor "
+        "in range sends at once at R_ij; C3: their sum <= R_lambda; the paper's) or scheduled "
+        "(R_lambda shared by time slots: data D_ij <= R_ij T_i, sum_j D_ij <= R_lambda T_i, "
+        "no C3)", "one of " + ", ".join(ACCESS_MODES), lambda v: v in ACCESS_MODES),
+}
+
 #: every run setting by name, in table order
 DEFAULTS: dict[str, Default] = {d.name: d for d in _RUN}
 #: every optional map field by its JSON path (``"uav.altitude"``), in table order
@@ -326,7 +344,7 @@ L_VIO_TOL: float = 1e-9
 
 def check(name: str, value: Any) -> Any:
     """Return ``value`` if it is valid for setting ``name``; else ``ValueError`` naming it."""
-    table = DEFAULTS if name in DEFAULTS else MAP_DEFAULTS
+    table = DEFAULTS if name in DEFAULTS else MAP_CHOICES if name in MAP_CHOICES else MAP_DEFAULTS
     return table[name].check(value)
 
 
@@ -372,7 +390,7 @@ def _cell(v: Any) -> str:
 def render_markdown(table: dict[str, Default] | None = None) -> str:
     """The table as GitHub Markdown (name, default, meaning, valid range), one row per entry,
     ending with a newline. ``table`` defaults to the run settings followed by the map fields."""
-    rows = list((table or {**DEFAULTS, **MAP_DEFAULTS}).values())
+    rows = list((table or {**DEFAULTS, **MAP_DEFAULTS, **MAP_CHOICES}).values())
     lines = ["| name | default | meaning | valid |", "| --- | --- | --- | --- |"]
     lines += [f"| `{d.name}` | {_cell(d.value)} | {d.meaning} | {d.valid} |" for d in rows]
     return "\n".join(lines) + "\n"

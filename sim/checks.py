@@ -1,5 +1,8 @@
 """Verdicts on a replayed mission: the paper's constraints C1..C5, each with a margin.
 
+With `radio.access` "scheduled" C3 judges the replay's allocation of the shared bandwidth
+(sum_j D_ij <= R_lambda T_i, D_ij <= R_ij T_i) and C4 the data it allocates.
+
 A margin is the worst slack in the constraint's unit: >= 0 when it holds, negative by how much
 it is broken. Tolerances: `REL_TOL` (relative, on hover times, rate sums and collected data) is
 1e-6, about eight float32 steps (float32's relative precision is 2**-23 ~ 1.2e-7): a mission
@@ -156,9 +159,22 @@ def verify(timeline: Timeline, map: Any) -> Verdicts:  # noqa: A002
     else:
         out.append(Verdict("C2", "0 <= T <= T_max", True, math.inf, "s", "no hover points"))
 
-    # C3: sum_j R_ij <= R_lambda at each hover point
+    # C3: sum_j R_ij <= R_lambda at each hover point; in scheduled access (`radio.access`)
+    # the sensors share R_lambda by time slots instead: the allocation's sum_j D_ij <=
+    # R_lambda T_i and D_ij <= R_ij T_i (the sim's own LP, `sim.replay.scheduled_allocation`)
     bw = spec.radio.bandwidth
-    if n:
+    if timeline.allocation is not None and n:
+        D = timeline.allocation
+        used = D.sum(axis=1)
+        slack = np.where(ht > 0, bw - used / np.where(ht > 0, ht, 1.0), bw)
+        over = float(np.max(D - timeline.rates * ht[:, None], initial=0.0))
+        i = int(np.argmin(slack))
+        m = float(slack[i])
+        ok = m >= -REL_TOL * bw and over <= REL_TOL * max(float(D.max(initial=0.0)), 1.0)
+        detail = (f"scheduled: tightest {_hover_label(i, seqs)}, {bw - m:.6g} of {bw:g} "
+                  "Mbit/s shared by time slots")  # fmt: skip
+        out.append(Verdict("C3", "sum_j D_ij <= R_lambda T_i", bool(ok), m, "Mbit/s", detail))
+    elif n:
         slack = bw - timeline.rates.sum(axis=1)
         i = int(np.argmin(slack))
         m = float(slack[i])

@@ -3,7 +3,10 @@
 The replay reads mission items (what a vehicle would receive), not the optimiser's arrays, and
 flies them with the paper's model (Sec. 3): every navigation item is a full stop; each leg
 between stops is flown with the trapezoid (or triangle) speed profile of Eq. 1; data flows
-only while hovering, sensor j receiving R_ij * T_i at hover point i.
+only while hovering, sensor j receiving R_ij * T_i at hover point i. With `radio.access`
+"scheduled" the sensors in range share R_lambda by time slots instead: sensor j receives the
+share D_ij of the sim's own allocation LP (`scheduled_allocation`), D_ij <= R_ij * T_i and
+sum_j D_ij <= R_lambda * T_i.
 
 What counts in f: exactly the paper's terms. t_fly sums the horizontal legs from the take-off
 position through every stop to the landing position; t_hover sums the hover times. The
@@ -31,6 +34,7 @@ __all__ = [
     "leg_time",
     "leg_position",
     "hover_rates",
+    "scheduled_allocation",
 ]
 
 PHASES = ("takeoff", "fly", "hover", "return", "land")
@@ -79,6 +83,52 @@ def hover_rates(
     return np.maximum(peak - decay * dist, 0.0)
 
 
+def scheduled_allocation(
+    rates: np.ndarray, times: np.ndarray, required: np.ndarray, bandwidth: float
+) -> np.ndarray:
+    """Scheduled access (`radio.access` "scheduled"): the data D_ij (Mbit) each hover point
+    takes from each sensor when the sensors in range share R_lambda by time slots.
+
+    The sim's own LP (scipy's HiGHS), not the planner's: maximise s, the share of its
+    requirement the worst sensor gets, subject to D_ij <= R_ij T_i (the link), sum_j D_ij <=
+    R_lambda T_i (the point's bandwidth) and sum_i D_ij >= s Q_j (every j with Q_j > 0),
+    D_ij >= 0. C4 holds exactly when some allocation meets every Q_j, i.e. s >= 1; the
+    data margin is s - 1 for every sensor.
+
+    Args: rates (I, J) Mbit/s, times (I,) s, required (J,) Mbit, bandwidth Mbit/s.
+    Returns: D (I, J) Mbit (zero where R_ij = 0 or Q_j = 0).
+    """
+    from scipy.optimize import linprog
+    from scipy.sparse import coo_matrix
+
+    rates = np.asarray(rates, dtype=float).reshape(len(times), -1)
+    times = np.maximum(np.asarray(times, dtype=float), 0.0)
+    req = np.asarray(required, dtype=float)
+    D = np.zeros_like(rates)
+    ii, jj = np.nonzero((rates > 0) & (req[None, :] > 0) & (times[:, None] > 0))
+    need = np.flatnonzero(req > 0)
+    if len(ii) == 0 or len(need) == 0:
+        return D
+    n = len(ii)
+    # variables: D_k (k over the links, in Mbit / Q_j), then s
+    scale = req[jj]
+    row_of = np.full(len(req), -1)
+    row_of[need] = np.arange(len(need))
+    # point rows: sum_j Q_j d_ij <= R_lambda T_i; sensor rows: s - sum_i d_ij <= 0
+    r = np.concatenate([ii, len(times) + row_of[jj], len(times) + np.arange(len(need))])
+    c = np.concatenate([np.arange(n), np.arange(n), np.full(len(need), n)])
+    v = np.concatenate([scale, -np.ones(n), np.ones(len(need))])
+    A = coo_matrix((v, (r, c)), shape=(len(times) + len(need), n + 1)).tocsr()
+    b = np.concatenate([bandwidth * times, np.zeros(len(need))])
+    bounds = [(0.0, float(rates[i, j] * times[i] / req[j])) for i, j in zip(ii, jj, strict=True)]
+    res = linprog(np.concatenate([np.zeros(n), [-1.0]]), A_ub=A, b_ub=b,
+                  bounds=[*bounds, (0.0, None)], method="highs")  # fmt: skip
+    if res.x is None:  # cannot happen (D = 0, s = 0 is feasible); report no data
+        return D
+    D[ii, jj] = np.maximum(res.x[:n], 0.0) * scale
+    return D
+
+
 @dataclass(frozen=True)
 class Totals:
     """The paper's terms for the flown mission, plus the vertical and return parts outside f."""
@@ -125,6 +175,9 @@ class Timeline:
     return_leg: np.ndarray | None
     totals: Totals
     notes: tuple[str, ...] = field(default=())
+    #: scheduled access only: the data D_ij (Mbit) each hover point takes from each sensor
+    #: (`scheduled_allocation`); None in simultaneous access (every sensor at R_ij)
+    allocation: np.ndarray | None = None
 
     @property
     def collected(self) -> np.ndarray:
@@ -222,6 +275,19 @@ def replay_route(route: Route, map: Any, *, dt: float = 1.0) -> Timeline:  # noq
     hov_mask = route.is_hover
     rates_all = hover_rates(stops, route.altitudes, sensors, radio.peak_rate, radio.decay)
     rates = rates_all[hov_mask]
+    # scheduled access: each sensor sends its share D_ij over the hover, at D_ij / T_i
+    allocation = None
+    flow_rates = rates_all
+    if getattr(radio, "access", "simultaneous") == "scheduled":
+        req = np.asarray(map.required_data, dtype=float)
+        margin = float(getattr(getattr(spec, "safety", None), "data_margin", 0.0))
+        allocation = scheduled_allocation(rates, route.hover_times[hov_mask],
+                                          req * (1.0 + margin), float(radio.bandwidth))
+        th_h = route.hover_times[hov_mask]
+        flow_rates = np.zeros_like(rates_all)
+        flow_rates[hov_mask] = np.divide(allocation, th_h[:, None],
+                                         out=np.zeros_like(allocation),
+                                         where=th_h[:, None] > 0)  # fmt: skip
 
     # bounded cost: a long mission (hours of hovering, a file's 1e38 s, a 10 km take-off) is
     # sampled more coarsely so that `data` (N x J) holds at most _MAX_CELLS numbers plus two
@@ -275,7 +341,7 @@ def replay_route(route: Route, map: Any, *, dt: float = 1.0) -> Timeline:  # noq
         alt_now = target_alt
         if hov_mask[k]:
             th = float(route.hover_times[k])
-            r = rates_all[k]
+            r = flow_rates[k]
             ts = rec.times(clock, th)
             data = q[None, :] + (ts - clock)[:, None] * r[None, :]
             xy, _ = const(len(ts))
@@ -345,4 +411,5 @@ def replay_route(route: Route, map: Any, *, dt: float = 1.0) -> Timeline:  # noq
         return_leg=return_leg,
         totals=totals,
         notes=tuple(notes),
+        allocation=allocation,
     )

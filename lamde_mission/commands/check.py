@@ -55,7 +55,8 @@ def run(args: argparse.Namespace) -> int:
           f"a {u['acceleration']:g} m/s^2, T_max {u['max_hover_time']:g} s, "
           f"tau {u['activation_threshold']:g}")
     print(f"  radio           R_c {r['peak_rate']:g} Mbit/s, xi {r['decay']:g} Mbit/s/m, "
-          f"R_lambda {r['bandwidth']:g} Mbit/s, Q_lambda {r['required_data']:g} Mbit")
+          f"R_lambda {r['bandwidth']:g} Mbit/s, Q_lambda {r['required_data']:g} Mbit, "
+          f"access {r.get('access', 'simultaneous')}")
     print(f"  objective       alpha {o['alpha']:g}, mu {o['collision_offset']:g}, "
           f"nu {o['collision_weight']:g} /m")
     if s["has_witness"]:

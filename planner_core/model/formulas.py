@@ -170,7 +170,8 @@ class ModelParams:
 
     UAV: `altitude` [H] m, `v_max` m/s, `accel` [a] m/s^2, `t_max` [T_max] s, `tau` activation
     threshold, `n_points` [I_max]. Radio: `peak_rate` [R_c] and `bandwidth` [R_lambda] Mbit/s,
-    `decay` [xi] Mbit/s per m. Objective: `alpha`, collision penalty `mu` + `nu` * L_vio. Map:
+    `decay` [xi] Mbit/s per m, `access` ("simultaneous", the paper's C3, or "scheduled").
+    Objective: `alpha`, collision penalty `mu` + `nu` * L_vio. Map:
     `width`, `height` m, `start`, `end` (2,), `sensors` (J, 2) m, `required` (J,) Mbit.
     Build with :meth:`from_map` (a loaded map) or :meth:`from_settings` (settings, no map yet).
     """
@@ -193,6 +194,9 @@ class ModelParams:
     end: np.ndarray
     sensors: np.ndarray
     required: np.ndarray
+    #: `radio.access`: "simultaneous" (the paper's C3) or "scheduled" (R_lambda shared by time
+    #: slots; `planner_core.model.kernels.scheduled_flow`)
+    access: str = "simultaneous"
 
     def __post_init__(self) -> None:
         for name in ("start", "end", "sensors", "required"):
@@ -237,6 +241,7 @@ class ModelParams:
             end=np.asarray(end, dtype=float).reshape(2),
             sensors=_points(sensors),
             required=np.asarray(required, dtype=float).reshape(-1),
+            access=str(getattr(radio, "access", "simultaneous")),
         )
 
     @classmethod

@@ -18,19 +18,110 @@ from numba import njit
 
 from planner_core.model.formulas import leg_time, slant_rate
 
-__all__ = ["model_terms"]
+__all__ = ["model_terms", "scheduled_flow"]
+
+
+@njit(cache=True, fastmath=False, nogil=True)
+def scheduled_flow(R, t, Q, bandwidth):  # pragma: no cover - compiled
+    """Scheduled access (`radio.access` "scheduled"): the most data the hover times can take
+    toward the requirements, per sensor (J,) Mbit. R (k, J) link rates Mbit/s of k hover
+    points, t (k,) hover times s, Q (J,) required Mbit, bandwidth R_lambda Mbit/s.
+
+    The allocation D_ij <= R_ij t_i, sum_j D_ij <= R_lambda t_i is a flow from the points to
+    the sensors (capacities R_lambda t_i, R_ij t_i, Q_j); its maximum (Edmonds-Karp, BFS
+    augmenting paths) leaves the least total shortfall sum_j (Q_j - F_j), F_j = sum_i D_ij
+    <= Q_j. A point within its bandwidth (sum_j R_ij <= R_lambda) sends every link in full
+    first (what any allocation may do); the saturated ones are then augmented. The paths are
+    capped (k J + k + J of them): stopping early only under-counts, never over-counts."""
+    k, J = R.shape
+    F = np.zeros(J)
+    cap_pt = np.empty(k)  # residual bandwidth per point, Mbit
+    D = np.zeros((k, J))
+    for i in range(k):
+        total = 0.0
+        for j in range(J):
+            total += R[i, j]
+        cap_pt[i] = bandwidth * t[i]
+        if total <= bandwidth:  # within its bandwidth: every link in full, up to the need
+            for j in range(J):
+                d = min(R[i, j] * t[i], max(Q[j] - F[j], 0.0))
+                if d > 0.0:
+                    D[i, j] = d
+                    F[j] += d
+                    cap_pt[i] -= d
+    eps = 1e-12 * max(np.max(Q) if J else 0.0, 1.0)
+    # BFS over nodes: 0..k-1 points, k..k+J-1 sensors; parent arrays for the path
+    par = np.empty(k + J, dtype=np.int64)
+    queue = np.empty(k + J, dtype=np.int64)
+    for _ in range(k * J + k + J):
+        for v in range(k + J):
+            par[v] = -2
+        head, tail = 0, 0
+        for i in range(k):
+            if cap_pt[i] > eps:
+                par[i] = -1
+                queue[tail] = i
+                tail += 1
+        end = -1
+        while head < tail and end < 0:
+            v = queue[head]
+            head += 1
+            if v < k:
+                for j in range(J):
+                    w = k + j
+                    if par[w] == -2 and R[v, j] * t[v] - D[v, j] > eps:
+                        par[w] = v
+                        if Q[j] - F[j] > eps:
+                            end = w
+                            break
+                        queue[tail] = w
+                        tail += 1
+            else:
+                j = v - k
+                for i in range(k):
+                    if par[i] == -2 and D[i, j] > eps:
+                        par[i] = v
+                        queue[tail] = i
+                        tail += 1
+        if end < 0:
+            break
+        # bottleneck along end <- ... <- a source point
+        b = Q[end - k] - F[end - k]
+        w = end
+        while par[w] != -1:
+            p = par[w]
+            # p point -> w sensor (forward), or p sensor -> w point (a reverse edge)
+            b = min(b, R[p, w - k] * t[p] - D[p, w - k] if w >= k else D[w, p - k])
+            w = p
+        b = min(b, cap_pt[w])
+        if b <= eps:
+            break
+        cap_pt[w] -= b
+        F[end - k] += b
+        w = end
+        while par[w] != -1:
+            p = par[w]
+            if w >= k:
+                D[p, w - k] += b
+            else:
+                D[w, p - k] -= b
+            w = p
+    return F
 
 
 @njit(cache=True, fastmath=False)
 def model_terms(
     X, n_points, variable, tau, upper, start, end, sensors, required, altitude,
-    peak_rate, decay, bandwidth, v_max, accel, alpha, A, B, f, v3, v4,
+    peak_rate, decay, bandwidth, v_max, accel, alpha, A, B, f, v3, v4, scheduled=False,
 ):  # fmt: skip
-    """Fill f, v3, v4 (n,) and leg endpoints A, B (n, I_max + 1, 2) for population X (n, 4 I)."""
+    """Fill f, v3, v4 (n,) and leg endpoints A, B (n, I_max + 1, 2) for population X (n, 4 I).
+    `scheduled`: radio.access "scheduled" (no C3; collected data from `scheduled_flow`)."""
     n = X.shape[0]
     J = sensors.shape[0]
     h2 = altitude * altitude
     Q = np.empty(J)
+    Rk = np.empty((n_points, J)) if scheduled else np.empty((0, J))
+    Tk = np.empty(n_points) if scheduled else np.empty(0)
     for s in range(n):
         for j in range(J):
             Q[j] = 0.0
@@ -60,10 +151,14 @@ def model_terms(
                 dx = x - sensors[j, 0]
                 dy = y - sensors[j, 1]
                 r = slant_rate(dx * dx + dy * dy, h2, peak_rate, decay)
+                if scheduled:
+                    Rk[k - 1, j] = max(r, 0.0)
                 if r > 0.0:
                     total += r
                     Q[j] += r * t
-            if total > bandwidth:
+            if scheduled:
+                Tk[k - 1] = t
+            elif total > bandwidth:
                 c3 += total - bandwidth
             px = x
             py = y
@@ -77,6 +172,10 @@ def model_terms(
             A[s, m, 1] = end[1]
             B[s, m, 0] = end[0]
             B[s, m, 1] = end[1]
+        if scheduled:
+            F = scheduled_flow(Rk[:k], Tk[:k], required, bandwidth)
+            for j in range(J):
+                Q[j] = F[j]
         short = 0.0
         for j in range(J):
             if required[j] > Q[j]:

@@ -14,13 +14,13 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from planner_core import textio
-from planner_core.defaults import MAP_DEFAULTS
+from planner_core.defaults import MAP_CHOICES, MAP_DEFAULTS
 from planner_core.model.geometry import Obstacles, points_inside, rectangle_vertices
 from planner_core.model.polygons import clean_polygon, convex_pieces, is_convex
 
@@ -195,6 +195,8 @@ class Radio(BaseModel):
     decay: float = _field("radio.decay")
     bandwidth: float = _field("radio.bandwidth")
     required_data: float = _field("radio.required_data")
+    access: Literal["simultaneous", "scheduled"] = Field(
+        MAP_CHOICES["radio.access"].value, description=MAP_CHOICES["radio.access"].meaning)
 
 
 class Objective(BaseModel):

@@ -14,7 +14,7 @@ import numpy as np
 
 from planner_core.model.formulas import ModelParams, collision_penalty, penalised_score
 from planner_core.model.geometry import overlap_lengths
-from planner_core.model.kernels import model_terms
+from planner_core.model.kernels import model_terms, scheduled_flow
 from planner_core.model.mapio import Map, load_map
 from planner_core.model.seeding import Seeder
 
@@ -44,6 +44,9 @@ class Problem:
         self.peak_rate = mp.peak_rate
         self.decay = mp.decay
         self.bandwidth = mp.bandwidth
+        #: `radio.access` "scheduled": R_lambda shared by time slots, no C3, each sensor's data
+        #: the most the hover times can take (`planner_core.model.kernels.scheduled_flow`)
+        self.scheduled = mp.access == "scheduled"
         self.alpha = mp.alpha
         self.mu = mp.mu
         self.nu = mp.nu
@@ -106,8 +109,13 @@ class Problem:
         t_hover = hov.sum(axis=1)
         f = self.alpha * t_fly + (1.0 - self.alpha) * t_hover
         R = self.rates(pts) * active[:, :, None]
-        v3_each = np.maximum(R.sum(axis=2) - self.bandwidth, 0.0)
-        Q = np.matmul(hov[:, None, :], R)[:, 0, :]
+        if self.scheduled:  # no C3; the most data the hover times can take (a max flow)
+            v3_each = np.zeros(R.shape[:2])
+            Q = np.stack([scheduled_flow(R[s][active[s]], hov[s][active[s]], self.required,
+                                         self.bandwidth) for s in range(len(R))])  # fmt: skip
+        else:
+            v3_each = np.maximum(R.sum(axis=2) - self.bandwidth, 0.0)
+            Q = np.matmul(hov[:, None, :], R)[:, 0, :]
         v4_each = np.maximum(self.required - Q, 0.0)
         l_vio = self._overlap(a, b).sum(axis=1)
         v5 = collision_penalty(l_vio, self.mu, self.nu)
@@ -140,6 +148,7 @@ class Problem:
             X, self.n_points, self.variable_length, self.tau, self.upper, self.start, self.end,
             self.sensors, self.required, self.altitude, self.peak_rate, self.decay,
             self.bandwidth, self.v_max, self.accel, self.alpha, A, B, f, v3, v4,
+            self.scheduled,
         )  # fmt: skip
         l_vio = self._overlap(A, B).sum(axis=1)
         v5 = collision_penalty(l_vio, self.mu, self.nu)

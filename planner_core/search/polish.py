@@ -189,6 +189,68 @@ def hover_lp(
     return _hover_lp(R, req, t_max, warm, highs=_highs_lp)
 
 
+def _collected(problem: Problem, R: np.ndarray, times: np.ndarray) -> np.ndarray:
+    """Data (J,) Mbit the hover times collect: R^T T (the paper's Q_j), or in scheduled access
+    the most toward the requirements (`planner_core.model.kernels.scheduled_flow`)."""
+    if getattr(problem, "scheduled", False):
+        from planner_core.model.kernels import scheduled_flow
+
+        return scheduled_flow(np.ascontiguousarray(R, dtype=float), np.asarray(times, float),
+                              problem.required.astype(float), float(problem.bandwidth))
+    return R.T @ times
+
+
+def _hover_times(
+    problem: Problem, R: np.ndarray, req: np.ndarray, feasible: bool, backend: str
+) -> tuple[np.ndarray, str]:
+    """Hover times (s) for rates R (I, J) Mbit/s: the hover-time LP (`_solve_lp`, topped up),
+    or in scheduled access `planner_core.model.hoverlp.scheduled_lp` (T_i and the data D_ij
+    taken from each sensor; HiGHS), raised by a hair until the max-flow allocation the
+    evaluation uses meets every requirement; T_max everywhere when no times can."""
+    if not getattr(problem, "scheduled", False):
+        times, solver = _solve_lp(R, req, problem.t_max, feasible, backend)
+        if feasible:
+            times = _top_up(R, req, times, problem.t_max)
+        return times, solver
+    from planner_core.model.hoverlp import scheduled_lp
+
+    t_max = float(problem.t_max)
+    sol = scheduled_lp(R, req, float(problem.bandwidth), t_max) if feasible else None
+    if sol is None:
+        return np.full(R.shape[0], t_max), "scheduled: T_max everywhere (infeasible)"
+    times = sol[0]
+    for _ in range(5):  # the LP's solution within solver tolerance: raise it by a hair
+        got = _collected(problem, R, times)
+        short = (req > 0) & (got < req)
+        if not short.any():
+            break
+        ratio = float(np.max(req[short] / np.maximum(got[short], 1e-300)))
+        times = np.minimum(times * min(ratio * (1 + 1e-12), 1.0 + 1e-6) + 1e-12, t_max)
+    return times, "scheduled LP (HiGHS, highspy)"
+
+
+def _unserved_scheduled(problem: Problem, R: np.ndarray) -> list[dict[str, Any]]:
+    """`_unserved` in scheduled access: the sensors short even at T_max everywhere, the
+    bandwidth shared by the max-flow allocation (`_collected`)."""
+    req = problem.required.astype(float)
+    got = (_collected(problem, R, np.full(len(R), float(problem.t_max))) if len(R)
+           else np.zeros(len(req)))  # fmt: skip
+    out = []
+    for j, sid in enumerate(problem.map.sensor_ids):
+        need = float(req[j])
+        if need <= 0 or got[j] >= need * (1 - 1e-12):
+            continue
+        if len(R) == 0 or not np.any(R[:, j] > 0):
+            reason = "out of radio range of every hover point"
+        else:
+            reason = "T_max too small for the shared bandwidth"
+        msg = (f"sensor '{sid}': {reason}: hovering T_max = {problem.t_max:g} s at every "
+               f"point collects {got[j]:.6g} of {need:g} Mbit (scheduled access)")
+        out.append({"sensor": sid, "reason": reason, "required": need,
+                    "max_collectable": float(got[j]), "message": msg})  # fmt: skip
+    return out
+
+
 def polish_hover_times(
     problem: Problem,
     hover_points: np.ndarray,
@@ -200,18 +262,19 @@ def polish_hover_times(
 
     `backend` is "highs" (the default, quick: `hover_lp`, the LP by blocks, small ones in a
     compiled kernel, larger ones through highspy), "linprog" (HiGHS through scipy on the whole
-    LP, the reference) or "cvxpy"; same LP (`BACKENDS`).
+    LP, the reference) or "cvxpy"; same LP (`BACKENDS`). In scheduled access (`radio.access`)
+    the LP is `planner_core.model.hoverlp.scheduled_lp` (the data from each sensor a variable,
+    the point's total within R_lambda T_i; HiGHS whatever the backend) and C3 is not reported.
     """
     pts = np.asarray(hover_points, dtype=float).reshape(-1, 2)
     req = problem.required.astype(float)
     R = problem.rates(pts) if len(pts) else np.zeros((0, len(req)))
-    unserved = _unserved(problem, R)
+    scheduled = bool(getattr(problem, "scheduled", False))
+    unserved = _unserved_scheduled(problem, R) if scheduled else _unserved(problem, R)
     feasible = not unserved
     solver = ""
     if len(pts):
-        times, solver = _solve_lp(R, req, problem.t_max, feasible, backend)
-        if feasible:
-            times = _top_up(R, req, times, problem.t_max)
+        times, solver = _hover_times(problem, R, req, feasible, backend)
     else:
         times = np.zeros(0)
     keep = np.ones(len(pts), dtype=bool)
@@ -232,15 +295,14 @@ def polish_hover_times(
                 break
         # dropping a ~0 s point may leave a sliver of data uncollected: re-solve on the kept points
         if not keep.all() and keep.any():
-            times_k, solver_k = _solve_lp(R[keep], req, problem.t_max, feasible, backend)
-            if feasible:
-                times_k = _top_up(R[keep], req, times_k, problem.t_max)
-            if feasible and np.any(R[keep].T @ times_k < req):
+            times_k, solver_k = _hover_times(problem, R[keep], req, feasible, backend)
+            if feasible and np.any(_collected(problem, R[keep], times_k) < req):
                 keep = np.ones(len(pts), dtype=bool)  # the kept points fall short: drop none
             else:
                 times, solver = np.zeros(len(pts)), solver_k
                 times[keep] = times_k
-    c3 = float(np.maximum(R[keep].sum(axis=1) - problem.bandwidth, 0.0).sum())
+    c3 = 0.0 if scheduled else float(np.maximum(R[keep].sum(axis=1) - problem.bandwidth,
+                                                0.0).sum())  # fmt: skip
     return PolishResult(
         hover_points=pts[keep],
         hover_times=times[keep],
