@@ -92,3 +92,31 @@ def test_greedy_cover_equals_its_reference(name: str, problem: Problem, pts: np.
             fast = construct.greedy_cover(problem, sites, frac, chosen=chosen, table=table)
             slow = construct.greedy_cover_reference(problem, sites, frac, chosen=chosen)
             assert np.array_equal(fast, slow), (name, frac)
+
+
+def test_via_corners_equals_the_dense_minimum() -> None:
+    """The blocked legs' detour times: the compiled minimum over each point's seen corners
+    equals the dense (K, N) minimum, infinities included."""
+    from planner_core.search.construct import via_corners
+
+    rng = np.random.default_rng(3)
+    P, N = 30, 200
+    first = np.where(rng.random((P, N)) < 0.05, rng.uniform(1, 100, (P, N)), np.inf)
+    first[4] = np.inf  # a point that sees no corner
+    far = np.where(rng.random((P, N)) < 0.9, rng.uniform(1, 500, (P, N)), np.inf)
+    ia, ib = np.triu_indices(P, 1)
+    dense = (far[ia] + first[ib]).min(axis=1)
+    assert np.array_equal(via_corners(far, first, ia, ib), dense)
+    assert np.isinf(dense).any()
+
+
+def test_the_leg_time_matrix_is_unchanged_on_a_walled_map(monkeypatch: pytest.MonkeyPatch
+                                                          ) -> None:
+    from planner_core.search import construct
+
+    p = Problem(json.loads((SUITE / "T16.json").read_text()))
+    pts = np.random.default_rng(4).uniform(0, 10000, (25, 2))
+    fast = construct.LegTimes(p).matrix(pts)
+    monkeypatch.setattr(construct, "via_corners",
+                        lambda far, first, ia, ib: (far[ia] + first[ib]).min(axis=1))
+    assert np.array_equal(construct.LegTimes(p).matrix(pts), fast)
