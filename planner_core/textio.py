@@ -84,10 +84,11 @@ LIMITS: dict[str, Limit] = {
         "parser's recursion",
     ),
     "sensors": Limit(
-        200,
+        500,
         "LAMDE_MAX_SENSORS",
-        "sensors in one map; planning time grows steeply with them (the starting routes: 60 "
-        "sensors ~10 s, 120 sensors ~66 s of CPU for 20 starts; the paper's maps have <= 29)",
+        "sensors in one map; planning time grows with them (default budget, 2 cores: 160 "
+        "sensors ~13 s, 400 ~50 s, 500 ~60 s of CPU, peak RSS < 1 GB; the paper's maps have "
+        "<= 29; the large suite, `bench_plan.py --large`, has up to 400)",
     ),
     "obstacles": Limit(
         5_000,
