@@ -67,6 +67,7 @@ def test_fixed_length_reaches_uav_problems_only() -> None:
         build({**specs[0], "variable_length": "no"})
 
 
+@pytest.mark.slow  # measured 91 s (issue 35: default suite <= 5 min)
 def test_cli_train_bbob_and_fixed_length(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     pytest.importorskip("torch")
     pytest.importorskip("ioh")
@@ -92,6 +93,7 @@ def test_cli_train_bbob_and_fixed_length(tmp_path: Path, capsys: pytest.CaptureF
     assert not (tmp_path / "x").exists()
 
 
+@pytest.mark.slow  # measured 5 s (issue 35: default suite <= 5 min)
 def test_cli_lam_select_strategies_and_features(tmp_path: Path) -> None:
     """The retrieval ablations as `lam select` options: global/random/local x learned/ela."""
     pytest.importorskip("ioh")
@@ -202,6 +204,7 @@ def test_normalised_performance_by_hand() -> None:
     assert tab["LAMDE-R"]["n"] == 8
 
 
+@pytest.mark.slow  # measured 12 s (issue 35: default suite <= 5 min)
 def test_report_adds_the_ablation_section(tmp_path: Path) -> None:
     res = tmp_path / "res"
     res.mkdir()

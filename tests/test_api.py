@@ -67,6 +67,7 @@ def test_plan_is_immutable(small_plan: Plan) -> None:
         small_plan.f = 0.0  # type: ignore[misc]
 
 
+@pytest.mark.slow  # measured 8 s (issue 35: default suite <= 5 min)
 def test_same_seed_same_plan_bit_for_bit(small_plan: Plan) -> None:
     again = lamde_mission.plan(SMALL, seed=3, budget=3000, population=50)
     assert again.same_as(small_plan)
@@ -74,6 +75,7 @@ def test_same_seed_same_plan_bit_for_bit(small_plan: Plan) -> None:
     assert not other.same_as(small_plan)
 
 
+@pytest.mark.slow  # measured 18 s (issue 35: default suite <= 5 min)
 def test_same_seed_same_plan_in_a_fresh_process(small_plan: Plan) -> None:
     """No hidden process state (caches, reused generators) changes a plan."""
     code = (
@@ -94,6 +96,7 @@ def test_to_dict_from_dict_round_trip(small_plan: Plan) -> None:
     assert back.to_dict() == d
 
 
+@pytest.mark.slow  # measured 7 s (issue 35: default suite <= 5 min)
 def test_options(tmp_path) -> None:
     path = tmp_path / "m.json"
     path.write_text(json.dumps(SMALL))
@@ -114,6 +117,7 @@ def test_bad_arguments_name_the_field(kwargs: dict, field: str) -> None:
         lamde_mission.plan(SMALL, **kwargs)
 
 
+@pytest.mark.slow  # measured 6 s (issue 35: default suite <= 5 min)
 def test_kernel_compilation_is_timed_apart_from_the_optimisation():
     """The first plan in a process compiles (or loads) the kernels in a warm-up run on a tiny
     built-in map, reported as timings['compile'] and announced through `on_compile`; later

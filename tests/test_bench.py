@@ -190,6 +190,7 @@ def test_downsample_keeps_a_step_function() -> None:
     assert np.all(v == -(e // 10 - 1))
 
 
+@pytest.mark.slow  # measured 7 s (issue 35: default suite <= 5 min)
 def test_jobs_carry_the_map_content_not_its_path(suite: Path, tmp_path: Path) -> None:
     files = suite_task_files(suite)
     jobs = plan_jobs(files, ["random-search"], runs=1, budget=50)
@@ -285,6 +286,7 @@ def test_wilcoxon_marks_on_a_hand_made_table() -> None:
 # ----------------------------------------------------------------------------- CLI + report
 
 
+@pytest.mark.slow  # measured 20 s (issue 35: default suite <= 5 min)
 def test_cli_bench_then_report(suite: Path, tmp_path: Path) -> None:
     from lamde_mission.cli import main
 

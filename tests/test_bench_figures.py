@@ -179,6 +179,7 @@ def test_protocol_text() -> None:
     assert "16-25 runs" in F.protocol_text("seeded", None, [16, 25])
 
 
+@pytest.mark.slow  # measured 54 s (issue 35: default suite <= 5 min)
 def test_make_figures_redraws_the_stored_runs(tmp_path: Path) -> None:
     """`python docs/make_figures.py --out DIR` writes the committed report and every figure it
     draws; the report equals the committed one (so the docs are what the code draws), each
@@ -242,6 +243,7 @@ def test_complete_seeds_drop_a_partial_last_seed() -> None:
     assert mod.complete_seeds(recs) == [0, 1]
 
 
+@pytest.mark.slow  # measured 71 s (issue 35: default suite <= 5 min)
 def test_a_rebuilt_report_keeps_its_hand_written_part(tmp_path: Path) -> None:
     """The report's KEEP_START ... KEEP_END block (docs/results.md's "what this shows") survives
     `lamde-mission report` over the same page, placed after the commands; other text does not."""

@@ -17,6 +17,7 @@ from planner_core.bench._io import read_jsonl, read_maybe_gz
 from tests.conftest import ROOT
 
 
+@pytest.mark.slow  # measured 17 s (issue 35: default suite <= 5 min)
 def test_bench_plan_runs_on_a_small_map() -> None:
     r = subprocess.run(
         [sys.executable, str(ROOT / "benchmarks" / "bench_plan.py"),
@@ -33,6 +34,7 @@ def test_bench_plan_runs_on_a_small_map() -> None:
     assert "neither torch nor matplotlib" in out  # the planning path stays light
 
 
+@pytest.mark.slow  # measured 26 s (issue 35: default suite <= 5 min)
 def test_bench_plan_compares_with_another_checkout() -> None:
     """`--compare CHECKOUT` times the other checkout's warm plans beside ours (here the same
     tree, so the same f) and prints the ratio and its target."""
@@ -47,6 +49,7 @@ def test_bench_plan_compares_with_another_checkout() -> None:
     assert "warm <= 1.2x the other checkout" in lines[-1]
 
 
+@pytest.mark.slow  # measured 27 s (issue 35: default suite <= 5 min)
 def test_bench_anytime_tables_the_gap_per_budget_multiple(tmp_path: Path) -> None:
     """`benchmarks/bench_anytime.py` on one map and seed at two budget multiples of a small
     base: a gap per multiple, the verdict line, and the runs as JSON lines."""
@@ -93,6 +96,7 @@ def test_bench_plan_on_the_campus() -> None:
     assert "campus-500" in r.stdout and r.stdout.rstrip().splitlines()[-1].startswith("targets:")
 
 
+@pytest.mark.slow  # measured 32 s (issue 35: default suite <= 5 min)
 def test_fuzz_inputs_runs() -> None:
     """The README's `python benchmarks/fuzz_inputs.py --n 1000 --seed 0`, on 3 inputs."""
     r = _script("benchmarks/fuzz_inputs.py", "--n", "3", "--seed", "0", "--hang-sample", "1")
@@ -103,6 +107,7 @@ def test_fuzz_inputs_runs() -> None:
     assert re.search(r"peak RSS\s+\d+ MiB .* 0 over 1024 MiB", r.stdout), r.stdout
 
 
+@pytest.mark.slow  # measured 5 s (issue 35: default suite <= 5 min)
 def test_bench_upload_end_to_end() -> None:
     """The README's `python benchmarks/bench_upload.py --mission T16 --loss 0.4 --runs 5`, on
     T01 with no loss and one run per client."""
@@ -113,6 +118,7 @@ def test_bench_upload_end_to_end() -> None:
                                                                      r.stdout), r.stdout
 
 
+@pytest.mark.slow  # measured 24 s (issue 35: default suite <= 5 min)
 def test_search_table_prints_the_comparison(tmp_path) -> None:
     """The README's `python benchmarks/search_table.py DIR/results.jsonl` on a small file."""
     recs = [{"task": "T01", "optimiser": o, "seed": s, "f": f + s, "phi": 0.0}
@@ -150,6 +156,7 @@ def test_search_table_prints_the_comparison(tmp_path) -> None:
     assert r.stdout.startswith("| map | planner | gap to best-known |")
 
 
+@pytest.mark.slow  # measured 22 s (issue 35: default suite <= 5 min)
 def test_bench_executor_runs() -> None:
     """The README's `python benchmarks/bench_executor.py`, one small sweep on the local pool."""
     r = _script("benchmarks/bench_executor.py", "--runs", "1", "--budget", "200", "--workers",
@@ -175,7 +182,9 @@ def test_bench_executor_train_mode_runs_on_local_backends() -> None:
     assert "16 epochs x 3200 problems at 3000 evaluations" in out
 
 
+@pytest.mark.slow  # measured 17 s (issue 35: default suite <= 5 min)
 def test_bench_order_compares_our_order_with_ortools() -> None:
+    pytest.importorskip("ortools")  # the `baselines` extra
     r = _script("benchmarks/bench_order.py", "--maps", "T01", "--seeds", "1", timeout=300)
     assert r.returncode == 0, r.stderr
     lines = r.stdout.strip().splitlines()
@@ -192,6 +201,7 @@ def _t01_plan() -> dict:
     raise AssertionError("no feasible T01 planner record")
 
 
+@pytest.mark.slow  # measured 15 s (issue 35: default suite <= 5 min)
 def test_refresh_best_known_stores_only_plans_the_sim_passes(tmp_path) -> None:
     """The README's `python benchmarks/refresh_best_known.py RESULTS`: a record that claims to
     be feasible with a lower f but is short of data (hover times halved) is refused by the sim;
@@ -238,6 +248,7 @@ def test_refresh_best_known_replaces_a_stored_plan_the_sim_fails(tmp_path) -> No
     assert mod.check_stored(suite, bk, log=lambda _m: None) == []
 
 
+@pytest.mark.slow  # measured 29 s (issue 35: default suite <= 5 min)
 def test_cmaes_sigma_sweep_runs_and_ranks(tmp_path) -> None:
     """The README's `python benchmarks/cmaes_sigma_sweep.py`, two sigma0 on one map, tiny budget;
     a second call resumes (runs nothing) and prints the same table."""
@@ -255,6 +266,7 @@ def test_cmaes_sigma_sweep_runs_and_ranks(tmp_path) -> None:
     assert again.stdout.split("| map |")[1] == r.stdout.split("| map |")[1]
 
 
+@pytest.mark.slow  # measured 20 s (issue 35: default suite <= 5 min)
 def test_validate_policy_memetic_pipeline_records_and_resumes(tmp_path) -> None:
     """`benchmarks/validate_policy.py --pipeline memetic` (docs/policy.md): the DE with the
     memetic step and the polish LP, one record per (map, mode, configurator, seed), tagged with
@@ -353,6 +365,7 @@ def test_summary_is_a_table_up_to_wide_configurators(capsys) -> None:  # noqa: A
     assert sum(ln.startswith(tuple(labels)) for ln in out.splitlines()) == len(labels)
 
 
+@pytest.mark.slow  # measured 6 s (issue 35: default suite <= 5 min)
 def test_docs_scan_tables_are_what_the_stored_runs_give() -> None:
     """Every line of docs/policy.md's scan block is the summary line the stored runs give."""
     vp = _validate_policy()
@@ -377,6 +390,7 @@ def test_docs_scan_tables_are_what_the_stored_runs_give() -> None:
         assert lines and set(lines) <= made, (pipeline, set(lines) - made)
 
 
+@pytest.mark.slow  # measured 70 s (issue 35: default suite <= 5 min)
 def test_validate_policy_scan_pipelines_jobs_resume_and_best_of(tmp_path) -> None:  # noqa: ANN001
     """`validate_policy.py` as docs/policy.md's scan runs it, on two maps: worker processes give
     the records of direct `run_pipeline` calls (each map its own problem); the "repair"
@@ -480,6 +494,7 @@ def test_docs_heldout_and_25_run_figures_are_what_the_stored_runs_give() -> None
     assert "on 5 maps (T01-T03, T09, T10; 97.0 % feasible)" in page
 
 
+@pytest.mark.slow  # measured 4 s (issue 35: default suite <= 5 min)
 def test_compare_runs_marks_maps_by_rank_sum_and_by_seed(tmp_path: Path) -> None:
     """`benchmarks/compare_runs.py OLD NEW`: per map and start mode the mean gaps, the paper's
     rank-sum mark and the paired count; a new file clearly better on one map only does not
@@ -520,6 +535,7 @@ def test_the_pipeline_comparison_in_docs_is_what_its_stored_runs_give() -> None:
     assert "| uniform | 0.242 -> 0.216 % | 12/16 | 3 (T04, T05, T14) | 0 |" in doc
 
 
+@pytest.mark.slow  # measured 27 s (issue 35: default suite <= 5 min)
 def test_bench_plan_large_tables_each_map_against_t16(tmp_path: Path) -> None:
     """`bench_plan.py --large DIR`: one row per map with its plan time as a ratio to T16's in
     the same run, feasibility and peak RSS; the runs as JSON lines."""

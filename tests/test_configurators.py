@@ -115,6 +115,7 @@ def test_rank_credit_by_hand() -> None:
     np.testing.assert_allclose(rank_credit(failed), [0.0, 2 / 3, 0.0])
 
 
+@pytest.mark.slow  # measured 5 s (issue 35: default suite <= 5 min)
 def test_adaptive_learns_which_arm_and_f_succeed() -> None:
     conf = AdaptiveConfigurator(intensify=0.0)
     mem = conf.init(_state())

@@ -206,6 +206,7 @@ def test_the_constructive_stage_scores_its_plans_in_one_call(walled: Problem) ->
     np.testing.assert_array_equal(out.pool.X[out.pool.ordered()[0]], X[deb_best(f, phi)])
 
 
+@pytest.mark.slow  # measured 4 s (issue 35: default suite <= 5 min)
 def test_plan_starts_from_the_constructive_plans() -> None:
     """`plan` with starts: at most the budget (exactly without the descents, which may stop
     early), never worse (Deb) than its best constructive plan, deterministic; starts=0 is the
@@ -238,6 +239,7 @@ def test_plan_starts_from_the_constructive_plans() -> None:
         lamde_mission.plan(path, starts=-1)
 
 
+@pytest.mark.slow  # measured 10 s (issue 35: default suite <= 5 min)
 def test_planning_path_needs_no_ortools() -> None:
     """OR-Tools is in the `baselines` extra only: a `plan` (constructive starts included) never
     imports it."""
@@ -246,6 +248,7 @@ def test_planning_path_needs_no_ortools() -> None:
     assert modules_after(code, "ortools") == []
 
 
+@pytest.mark.slow  # measured 4 s (issue 35: default suite <= 5 min)
 def test_plan_is_the_benchmark_planner_entry() -> None:
     """`plan` and the benchmark's `planner` entry are one pipeline: the same seed and budget give
     the same plan score and evaluation count (at most the budget: a descent may stop early)."""

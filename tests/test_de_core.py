@@ -105,6 +105,7 @@ def test_tell_applies_deb_rule_and_keeps_state_immutable() -> None:
 # ---------------------------------------------------------------- ask: clamping, purity
 
 
+@pytest.mark.slow  # measured 15 s (issue 35: default suite <= 5 min)
 def test_trials_are_clamped_to_unit_box() -> None:
     rng = np.random.default_rng(0)
     X = rng.choice([0.0, 1.0], size=(10, 6))

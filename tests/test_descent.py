@@ -147,6 +147,7 @@ def test_hover_lp_blocks_satisfy_the_kkt_conditions_at_any_scale(highs_calls: li
     assert solved > 100
 
 
+@pytest.mark.slow  # measured 9 s (issue 35: default suite <= 5 min)
 def test_hover_lp_blocks_satisfy_the_kkt_conditions_and_match_linprog(
     highs_calls: list[int],
 ) -> None:
@@ -306,6 +307,7 @@ def test_descend_refuses_infeasible_plans_and_no_budget(t05: Problem) -> None:
     assert descend(t05, bad, t05.evaluate, trials=10) is None
 
 
+@pytest.mark.slow  # measured 6 s (issue 35: default suite <= 5 min)
 def test_plan_with_descent_spends_at_most_the_budget_and_is_not_worse() -> None:
     from lamde_mission.api import plan
 
@@ -372,6 +374,7 @@ def test_kicks_are_seeded_counted_and_never_worse(t05: Problem) -> None:
     assert kicks(t05, x, t05.evaluate, trials=0, seed=3) is None
 
 
+@pytest.mark.slow  # measured 14 s (issue 35: default suite <= 5 min)
 def test_hover_lp_without_stdout_and_warm_starts_stay_local() -> None:
     """The solver is made with fd 1 silenced, but a process without a stdout still plans; a
     warm-start store changes nothing for a cold caller (reproducible whatever ran before)."""
@@ -648,6 +651,7 @@ def test_finish_with_another_structure_keeps_the_better_and_counts_both() -> Non
     assert sum(calls) == own.evaluations
 
 
+@pytest.mark.slow  # measured 11 s (issue 35: default suite <= 5 min)
 def test_plan_finishes_a_second_structure_where_the_first_cannot_reach_it() -> None:
     """T06, seed 2: the incumbent after the final stage has 7 hover points; the pool's best
     plan with fewer points, finished too (the pipeline's `other structure` stage), serves the
@@ -667,6 +671,7 @@ def test_plan_finishes_a_second_structure_where_the_first_cannot_reach_it() -> N
     assert len(with_other.hover_points) < len(without.hover_points)
 
 
+@pytest.mark.slow  # measured 15 s (issue 35: default suite <= 5 min)
 def test_the_plan_summary_tables_the_stages(tmp_path: Path) -> None:
     """The summary starts on its own line and lists every stage that ran with its
     evaluations, seconds and f before -> after."""
@@ -683,6 +688,7 @@ def test_the_plan_summary_tables_the_stages(tmp_path: Path) -> None:
     assert "other structure" in names and "->" in out[head + 1]
 
 
+@pytest.mark.slow  # measured 10 s (issue 35: default suite <= 5 min)
 def test_plan_and_the_benchmark_entry_run_the_same_pipeline() -> None:
     """One pipeline, declared once: `plan` and the benchmark's `planner` entry give the same
     plan for the same map, seed and budget, also at budgets just above the population."""
@@ -735,6 +741,7 @@ def test_shares_follow_the_declared_rules_and_leave_what_later_stages_reserve() 
     assert share("de", off, 9_916) == 9_900 and share("improve", off, 0) == 0
 
 
+@pytest.mark.slow  # measured 10 s (issue 35: default suite <= 5 min)
 def test_a_stage_runs_only_with_its_allotment_and_a_descent_fits() -> None:
     """Small budgets on T06: every stage spends at most its allotment, the total at most the
     budget, and the second structure runs only with a descent's 40 evaluations for it."""

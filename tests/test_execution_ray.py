@@ -41,6 +41,7 @@ def _records(out: Path) -> dict[Any, dict[str, Any]]:
             for r in read_records(out / RESULTS_FILE).records}
 
 
+@pytest.mark.slow  # measured 23 s (issue 35: default suite <= 5 min)
 def test_ray_workers_run_single_threaded(ray_runtime: None) -> None:
     names = list(SINGLE_THREAD_ENV) * 2
     ex = RayExecutor()
@@ -50,6 +51,7 @@ def test_ray_workers_run_single_threaded(ray_runtime: None) -> None:
     assert got == ["1"] * len(names)
 
 
+@pytest.mark.slow  # measured 0 s (issue 35: default suite <= 5 min)
 def test_ray_streams_with_a_bounded_number_in_flight(ray_runtime: None) -> None:
     pulled = 0
 
@@ -67,6 +69,7 @@ def test_ray_streams_with_a_bounded_number_in_flight(ray_runtime: None) -> None:
     assert sorted([first, *rest]) == sorted(f"b{i}" for i in range(12))
 
 
+@pytest.mark.slow  # measured 7 s (issue 35: default suite <= 5 min)
 def test_same_seeds_same_results_on_ray_and_local(ray_runtime: None, tmp_path: Path) -> None:
     from lamde_mission.cli import main
 
@@ -97,6 +100,7 @@ def test_make_executor_ray_uses_a_running_instance(ray_runtime: None) -> None:
     assert ray.is_initialized()
 
 
+@pytest.mark.slow  # measured 3 s (issue 35: default suite <= 5 min)
 def test_lam_build_on_ray_equals_this_process_and_resumes(ray_runtime: None,
                                                           tmp_path: Path) -> None:
     import numpy as np
@@ -119,6 +123,7 @@ def test_lam_build_on_ray_equals_this_process_and_resumes(ray_runtime: None,
         np.testing.assert_array_equal(here.load(name)[1], on_ray.load(name)[1])
 
 
+@pytest.mark.slow  # measured 6 s (issue 35: default suite <= 5 min)
 def test_train_on_ray_gives_the_checkpoint_of_this_process(ray_runtime: None,
                                                            tmp_path: Path) -> None:
     """Meta-training's rollouts on Ray (2 CPUs): the same seed gives the same checkpoint as the

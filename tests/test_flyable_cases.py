@@ -147,6 +147,7 @@ def test_no_origin_map_is_refused_when_a_mission_is_written(tmp_path):
     assert r.returncode == 2 and "--origin" in r.stderr
 
 
+@pytest.mark.slow  # measured 6 s (issue 35: default suite <= 5 min)
 def test_check_names_the_sensors_no_single_point_serves(tmp_path):
     """cases/flyable unreachable-map.json: check names 'b' (inside a no-fly zone) and 'greedy'
     (more data than one hover point collects in T_max). The README calls both unservable, but

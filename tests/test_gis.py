@@ -41,6 +41,7 @@ def _by_name(m) -> dict:
     return {sh.name: sh for sh in m.shapes}
 
 
+@pytest.mark.slow  # measured 7 s (issue 35: default suite <= 5 min)
 def test_campus_imports_exactly(campus) -> None:
     path, r = campus
     assert r.returncode == 0, r.stderr
@@ -110,6 +111,7 @@ def test_campus_plans_and_serves_every_sensor(campus) -> None:
     assert float(overlap_lengths(nodes[:-1], nodes[1:], m.obstacles).sum()) == 0.0
 
 
+@pytest.mark.slow  # measured 16 s (issue 35: default suite <= 5 min)
 def test_campus_plan_cli_verifies(campus, tmp_path) -> None:
     path, _ = campus
     out = tmp_path / "campus.plan"
@@ -128,6 +130,7 @@ def _metres(lonlat_a, lonlat_b, origin) -> float:
     return np.hypot(xa[:, None] - xb[None, :], ya[:, None] - yb[None, :])
 
 
+@pytest.mark.slow  # measured 10 s (issue 35: default suite <= 5 min)
 def test_round_trip_keeps_every_vertex_within_a_centimetre(campus, tmp_path) -> None:
     path, _ = campus
     m = load_map(path)
@@ -207,6 +210,7 @@ def _write(tmp_path, name, doc) -> Path:
     return p
 
 
+@pytest.mark.slow  # measured 7 s (issue 35: default suite <= 5 min)
 def test_errors_name_file_and_feature(tmp_path) -> None:
     bow = [[_pt(2, 2), _pt(4, 4), _pt(4, 2), _pt(2, 4), _pt(2, 2)]]
     doc = _fc(*_basics(), _feat("building", "Polygon", bow, name="bowtie"),
@@ -272,6 +276,7 @@ def test_given_origin_clips_obstacles_and_refuses_sensors_outside(tmp_path) -> N
         build_map(layers, origin=origin)
 
 
+@pytest.mark.slow  # measured 6 s (issue 35: default suite <= 5 min)
 def test_qgroundcontrol_geofence(tmp_path) -> None:
     def ll(i, j):
         lon, lat = _pt(i, j)
@@ -330,6 +335,7 @@ def test_campus_generator_is_seeded_and_non_convex() -> None:
     assert m.obstacles.n_regions == 40
 
 
+@pytest.mark.slow  # measured 6 s (issue 35: default suite <= 5 min)
 def test_bench_evaluate_prints_suite_and_campus_in_one_run() -> None:
     r = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "bench_evaluate.py"),
                         str(ROOT / "examples" / "maps" / "tiny.json"), "campus-30",
@@ -341,6 +347,7 @@ def test_bench_evaluate_prints_suite_and_campus_in_one_run() -> None:
     assert r.stdout.count("(results agree: True)") == 2
 
 
+@pytest.mark.slow  # measured 19 s (issue 35: default suite <= 5 min)
 def test_show_draws_footprints_and_bad_options_exit_2(campus, tmp_path) -> None:
     path, _ = campus
     png = tmp_path / "campus.png"
@@ -364,6 +371,7 @@ def test_multipolygon_problem_names_the_part(tmp_path) -> None:
         build_map(layers)
 
 
+@pytest.mark.slow  # measured 5 s (issue 35: default suite <= 5 min)
 def test_cli_map_campus_writes_the_benchmark_map(tmp_path) -> None:
     """The README's `lamde-mission map campus -o campus.json`: the seeded 500-footprint map."""
     out = tmp_path / "campus.json"

@@ -103,6 +103,7 @@ def _write(tmp_path: Path, name: str, data: str | bytes) -> str:
     return str(p)
 
 
+@pytest.mark.slow  # measured 5 s (issue 35: default suite <= 5 min)
 def test_too_many_sensors_obstacles_and_vertices(tmp_path: Path) -> None:
     d = _tiny()
     d["sensors"] = [{"id": f"s{i}", "x": 10.0, "y": 10.0} for i in range(100_000)]
@@ -151,6 +152,7 @@ def test_encodings(tmp_path: Path) -> None:
     _refused(["check", _write(tmp_path, "inf.json", json.dumps(d))], "sensors[1].x: Infinity")
 
 
+@pytest.mark.slow  # measured 12 s (issue 35: default suite <= 5 min)
 def test_big_missions_are_refused_by_count(tmp_path: Path) -> None:
     line = "1\t0\t3\t16\t0\t0\t0\t0\t46.2\t7.3\t100\t1\n"
     wpl = "QGC WPL 110\n" + line * 1_000_000
@@ -255,6 +257,7 @@ def test_fuzz_map(rng: random.Random, tmp_path_factory) -> None:
 @pytest.mark.parametrize("suffix", [".plan", ".waypoints"])
 @given(rng=st.randoms(use_true_random=False))
 @_FUZZ
+@pytest.mark.slow  # measured 10 s over 2 cases (issue 35: default suite <= 5 min)
 def test_fuzz_missions(suffix: str, rng: random.Random, missions, tmp_path_factory) -> None:
     d = tmp_path_factory.mktemp("fuzzmission")
     path = d / f"m{suffix}"
@@ -269,6 +272,7 @@ CAMPUS = Path(__file__).resolve().parent / "data" / "campus.geojson"
 
 @given(rng=st.randoms(use_true_random=False))
 @_FUZZ
+@pytest.mark.slow  # measured 16 s (issue 35: default suite <= 5 min)
 def test_fuzz_geojson(rng: random.Random, tmp_path_factory) -> None:
     """`map from-geojson` on mutated GeoJSON: a map is written or nothing at all."""
     d = tmp_path_factory.mktemp("fuzzgeojson")

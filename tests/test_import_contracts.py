@@ -57,6 +57,7 @@ def test_contracts_hold_on_the_tree() -> None:
         ("lamde_mission/cli.py", "import ray", "Ray is the executor's optional backend"),
     ],
 )
+@pytest.mark.slow  # measured 20 s over 10 cases (issue 35: default suite <= 5 min)
 def test_a_back_edge_breaks_its_contract(
     copy: Path, module: str, back_edge: str, contract: str
 ) -> None:

@@ -182,6 +182,7 @@ def _one_nn_accuracy(extract, dims=(20,), functions=range(1, 25), instances=(1, 
     return float(np.mean(lab[np.argmin(D, axis=1)] == lab))
 
 
+@pytest.mark.slow  # measured 38 s (issue 35: default suite <= 5 min)
 def test_learned_encoder_separates_bbob_functions():
     """Shipped weights beat chance (1/24) and random weights at naming the function.
 
@@ -195,6 +196,7 @@ def test_learned_encoder_separates_bbob_functions():
     assert trained > random + 0.05
 
 
+@pytest.mark.slow  # measured 8 s (issue 35: default suite <= 5 min)
 def test_train_encoder_command_writes_weights(tmp_path):
     """The README's `python -m planner_core.learning.lam.train_encoder`, two steps into a
     scratch file."""

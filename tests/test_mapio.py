@@ -92,6 +92,7 @@ def test_to_dict_round_trip(hand_map: dict) -> None:
     assert load_map(m.to_dict()).to_dict() == m.to_dict()
 
 
+@pytest.mark.slow  # measured 13 s (issue 35: default suite <= 5 min)
 def test_cli_check_and_schema(tmp_path, hand_map: dict) -> None:
     good = tmp_path / "good.json"
     good.write_text(json.dumps(hand_map))

@@ -46,6 +46,7 @@ def test_runner_imports_without_metaevobox_and_checks_its_arguments(tmp_path: Pa
     assert a.agents == ["gleet"] and [m.stem for m in a.map_files][:2] == ["T01", "T02"]
 
 
+@pytest.mark.slow  # measured 4 s (issue 35: default suite <= 5 min)
 def test_runner_problem_scores_through_the_server_with_our_seed(tmp_path: Path) -> None:
     """ServerProblem (MetaBox's problem duck type) evaluates rows and single points through a
     real evaluator_server.py; the server derives the run's seed as our bench does and records

@@ -46,6 +46,7 @@ def _bad_outputs(tmp: Path) -> dict[str, list[str]]:
     }
 
 
+@pytest.mark.slow  # measured 5 s (issue 35: default suite <= 5 min)
 def test_every_bad_output_exits_2_before_the_optimisation(tmp_path: Path) -> None:
     cases = _bad_outputs(tmp_path)
     # the default budget: an optimisation that started would show progress lines on stderr
@@ -83,6 +84,7 @@ def test_bad_outputs_are_refused_before_the_map_is_read_or_the_planner_runs(
         assert len(err) == 1 and needle in err[0], (args, err)
 
 
+@pytest.mark.slow  # measured 8 s (issue 35: default suite <= 5 min)
 def test_mkdir_creates_the_folder(tmp_path: Path) -> None:
     out = tmp_path / "new" / "deeper" / "m.waypoints"
     r = run_cli("plan", DEMO, "-o", out, "--budget", 600, "--quiet", "--mkdir",
@@ -151,6 +153,7 @@ def test_printable_escapes_controls() -> None:
 
 
 @pytest.mark.parametrize("field", ["name", "id"])
+@pytest.mark.slow  # measured 11 s over 2 cases (issue 35: default suite <= 5 min)
 def test_plan_never_prints_a_maps_control_characters(field: str, tmp_path: Path) -> None:
     """The map reader refuses C0 controls in names and ids; whatever it lets through (format
     characters such as a bidi override) is printed escaped, and a refusal prints no raw bytes."""

@@ -6,6 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+# the `baselines` extra: OR-Tools orders the engineering peer's sites, pymoo is the GA peer
+pytest.importorskip("ortools")
+pytest.importorskip("pymoo")
+
 from planner_core.bench.baselines import Evaluator, optimise
 from planner_core.bench.baselines import engineering as eng
 from planner_core.defaults import POPULATION

@@ -84,6 +84,7 @@ def test_plot_png_svg_and_bad_suffix(files, tmp_path):
 # ----------------------------------------------------------------------------- verify
 
 
+@pytest.mark.slow  # measured 6 s (issue 35: default suite <= 5 min)
 def test_verify_good_mission_exits_0(files):
     r, rj = run_cli_many(("verify", files.map, files.good),
                          ("verify", files.map, files.good, "--json"))
@@ -107,6 +108,7 @@ def test_verify_cut_mission_exits_1_naming_c4(files):
     assert "FAILED C4" in r.stdout
 
 
+@pytest.mark.slow  # measured 6 s (issue 35: default suite <= 5 min)
 def test_verify_bad_input_exits_2_with_one_line(files, tmp_path):
     junk = tmp_path / "junk.plan"
     junk.write_text("{not json")
@@ -125,6 +127,7 @@ def test_verify_bad_input_exits_2_with_one_line(files, tmp_path):
 # ----------------------------------------------------------------------------- show
 
 
+@pytest.mark.slow  # measured 7 s (issue 35: default suite <= 5 min)
 def test_show_writes_png(files, tmp_path):
     out, out2 = tmp_path / "fig.png", tmp_path / "map.svg"
     r, r2 = run_cli_many(("show", files.map, files.good, "-o", out),

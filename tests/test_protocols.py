@@ -51,6 +51,7 @@ def test_uniform_start_hides_the_seeding_hook(name: str) -> None:
         with_start(p, "random")
 
 
+@pytest.mark.slow  # measured 4 s (issue 35: default suite <= 5 min)
 def test_bench_both_modes_resume_keys_and_report_sections(suite: Path, tmp_path: Path) -> None:
     out = tmp_path / "res"
     kw = dict(runs=1, budget=BUDGET, out=out, command="test", executor=SerialExecutor())

@@ -96,6 +96,7 @@ def test_collect_returns_segments_in_job_order() -> None:
         collect(Reversed(), [jobs[0], jobs[0]])
 
 
+@pytest.mark.slow  # measured 4 s (issue 35: default suite <= 5 min)
 def test_rollout_workers_never_import_torch() -> None:
     code = (
         "from tests.test_rollout import _job\n"
@@ -133,6 +134,7 @@ def assert_same_checkpoint(a: Path, b: Path) -> None:
     assert curve(a) == curve(b)
 
 
+@pytest.mark.slow  # measured 11 s (issue 35: default suite <= 5 min)
 def test_same_seed_same_checkpoint_in_this_process_and_on_two_workers(tmp_path: Path) -> None:
     pytest.importorskip("torch")
     here = train_cli(tmp_path, "here")  # --jobs 1 (the default): rollouts in this process

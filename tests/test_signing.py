@@ -65,6 +65,7 @@ def test_a_signed_round_trip_through_each_client_and_the_mock(port, via) -> None
 
 @pytest.mark.parametrize("via", ["pymavlink", "mavsdk"])
 @pytest.mark.parametrize(("vehicle_key", "why"), [(None, "unsigned"), (OTHER, "wrongly signed")])
+@pytest.mark.slow  # measured 6 s over 3 cases (issue 35: default suite <= 5 min)
 def test_a_vehicle_without_the_key_is_not_heard(port, via, vehicle_key, why) -> None:
     """Signing on, the vehicle unsigned or with another key: none of its messages is taken
     (no vehicle within the timeout); the pymavlink client says why under --verbose."""
@@ -79,6 +80,7 @@ def test_a_vehicle_without_the_key_is_not_heard(port, via, vehicle_key, why) -> 
         assert any("unsigned or wrongly signed (--signing-key)" in s for s in lines), lines
 
 
+@pytest.mark.slow  # measured 6 s (issue 35: default suite <= 5 min)
 def test_a_signed_vehicle_ignores_an_unsigned_ground_station(port) -> None:
     """The ground station hears the signed vehicle (it checks no signatures) but its unsigned
     MISSION_COUNT is dropped: the transfer times out and nothing is stored."""
@@ -134,6 +136,7 @@ def test_forged_unsigned_heartbeats_and_acks_are_ignored_when_signed(port, via) 
         assert any("unsigned or wrongly signed" in n for n in report.notes), report.notes
 
 
+@pytest.mark.slow  # measured 4 s (issue 35: default suite <= 5 min)
 def test_cli_signing_key_and_mavsdk(port, tmp_path, capsys, monkeypatch) -> None:
     from tests.test_altitudes import good_items, write
 

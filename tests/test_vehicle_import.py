@@ -81,6 +81,7 @@ def _as_uploaded(fence: list[WireItem]) -> list[WireItem]:
 
 
 @pytest.mark.parametrize("map_source", _cases())
+@pytest.mark.slow  # measured 5 s over 18 cases (issue 35: default suite <= 5 min)
 def test_mavsdk_importer_reads_our_plan_as_we_do(map_source, mavsdk_client, tmp_path):
     m = load_map(map_source)
     path = write_mission(tmp_path / "mission.plan", _plan_of(m), m)
