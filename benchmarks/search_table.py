@@ -13,8 +13,9 @@ A name ending in .gz is read gzip-compressed (the records kept under docs/ are).
 `--init` keeps only the runs of that start mode (a results file of `bench --init both` holds
 both, with the same seeds). Several files are merged (a run recorded twice counts once).
 A file given as `PATH:NAME,NAME=LABEL,...` contributes only those optimisers, each under its
-LABEL when given (e.g. `docs/search/seeded-25runs.jsonl.gz:planner,seed-lp,cmaes-seeded-lp=cmaes-s0.05`
-keeps an older cmaes-seeded-lp as its own column).
+LABEL when given (e.g.
+`docs/search/seeded-25runs.jsonl.gz:planner,seed-lp,cmaes-seeded-lp=cmaes-s0.05` keeps an older
+cmaes-seeded-lp as its own column).
 `--runs N` keeps runs 0 .. N-1 of every optimiser (so entries with more runs on record are
 compared on the same seeds), `--optimizers` only these columns (the planner always),
 `--gaps` adds a row of every column's gap to the best-known below the table (mean over maps)

@@ -56,7 +56,8 @@ def _names(path: Path) -> list[str]:
 
 def _cited(name: str, text: str) -> bool:
     """Whether `name` occurs in `text` as a whole path (not as part of a longer name)."""
-    return re.search(r"(?<![\w.-])" + re.escape(name) + r"(?![\w.-]*\w)", text) is not None
+    return name in text and re.search(r"(?<![\w.-])" + re.escape(name) + r"(?![\w.-]*\w)",
+                                      text) is not None
 
 
 def _benchmark_folder(path: Path) -> Path | None:

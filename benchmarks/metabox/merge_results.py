@@ -70,7 +70,8 @@ def merge(results: Path, metabox: Path, out: Path, command: str = "") -> tuple[i
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--results", required=True, help="benchmark folder (results.jsonl, meta.json)")
-    ap.add_argument("--metabox", required=True, help="run_metabox.py's results.jsonl (.gz: compressed)")
+    ap.add_argument("--metabox", required=True,
+                    help="run_metabox.py's results.jsonl (a .gz name: compressed)")
     ap.add_argument("--out", required=True, help="new folder for the merged benchmark")
     a = ap.parse_args(argv)
     argv_used = sys.argv[1:] if argv is None else argv
