@@ -72,12 +72,16 @@ def _command(args: argparse.Namespace, tasks: list[str] | None) -> str:
 def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
+    from planner_core.bench._io import stored_path
     from planner_core.bench.report import DEFAULT_REFERENCE, build_report
 
-    if not (Path(args.results) / "results.jsonl").exists():
+    def has_results(folder: str) -> bool:  # plain, or gzip-compressed as docs/ keeps them
+        return stored_path(Path(folder) / "results.jsonl").exists()
+
+    if not has_results(args.results):
         raise UsageError(f"{args.results}: no results.jsonl (run `lamde-mission bench` first)")
     for flag, folder in (("--imax", args.imax), ("--ablations", args.ablations)):
-        if folder and not (Path(folder) / "results.jsonl").exists():
+        if folder and not has_results(folder):
             raise UsageError(f"{flag} {folder}: no results.jsonl")
     tasks = [t for v in args.path_tasks for t in v.split(",") if t] if args.path_tasks else None
     try:
