@@ -330,21 +330,28 @@ class LegTimes:
         self.graph = problem.seeder.graph
         #: Eq. 1 time (s) of each graph edge as a hop from rest to rest (aligned with indices)
         self.hop_times = problem.model.flight_time(self.graph.weights)
-        self._rows: dict[bytes, np.ndarray] = {}  # point -> its (first, far) rows
+        self._first: dict[bytes, np.ndarray] = {}  # point -> its times to the corners it sees
+        self._far: dict[bytes, np.ndarray] = {}  # point -> its times to every corner
 
-    def _to_corners(self, pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _to_corners(self, pts: np.ndarray, far: bool = True
+                    ) -> tuple[np.ndarray, np.ndarray | None]:
         """For points pts (P, 2): (first, far), each (P, N) flight times (s): `first` to each
         graph corner the point sees tangentially (one straight hop; inf elsewhere), `far` to
-        each corner over the graph via those (inf where it sees none)."""
+        each corner over the graph via those (inf where it sees none; a Dijkstra over the
+        graph per point, so only when asked: None otherwise)."""
         keys = [p.tobytes() for p in pts]
-        new = [i for i, k in enumerate(keys) if k not in self._rows]
+        new = [i for i, k in enumerate(keys) if k not in self._first]
         if new:
             seen = self.problem.seeder.connect(pts[new])  # (n, N) metres, inf where unseen
-            first = self.problem.model.flight_time(seen)
-            for i, row in zip(new, first, strict=True):
-                self._rows[keys[i]] = np.stack([row, self.graph.spread(row, self.hop_times)])
-        both = np.array([self._rows[k] for k in keys]).reshape(len(pts), 2, self.graph.n)
-        return both[:, 0], both[:, 1]
+            for i, row in zip(new, self.problem.model.flight_time(seen), strict=True):
+                self._first[keys[i]] = row
+        first = np.array([self._first[k] for k in keys]).reshape(len(pts), self.graph.n)
+        if not far:
+            return first, None
+        for k, row in zip(keys, first, strict=True):
+            if k not in self._far:
+                self._far[k] = self.graph.spread(row, self.hop_times)
+        return first, np.array([self._far[k] for k in keys]).reshape(len(pts), self.graph.n)
 
     def matrix(self, nodes: np.ndarray) -> np.ndarray:
         """(P, P) symmetric leg times (s) between the points nodes (P, 2), zero diagonal."""
@@ -358,10 +365,14 @@ class LegTimes:
         if len(blocked):
             via = np.full(len(blocked), np.inf)
             if self.graph.n:
-                ends = np.unique(np.concatenate([ia[blocked], ib[blocked]]))
+                # a -> over the graph -> b: the graph's times from a (one Dijkstra per a end),
+                # the straight hops into b
+                src = np.unique(ia[blocked])
+                dst = np.unique(ib[blocked])
                 first = np.full((P, self.graph.n), np.inf)
                 far = np.full((P, self.graph.n), np.inf)
-                first[ends], far[ends] = self._to_corners(nodes[ends])
+                first[dst] = self._to_corners(nodes[dst], far=False)[0]
+                far[src] = self._to_corners(nodes[src])[1]
                 # a -> (over the graph) -> corner v -> b, where b sees v
                 via = via_corners(far, first, ia[blocked], ib[blocked])
             cost[blocked] = np.where(np.isfinite(via), via,
