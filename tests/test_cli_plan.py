@@ -166,3 +166,12 @@ def test_the_report_names_the_mission_it_belongs_to(tmp_path: Path) -> None:
     report = json.loads(rep.read_text())
     assert report["mission_sha256"] == hashlib.sha256(out.read_bytes()).hexdigest()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m.waypoints", "r.json"]
+
+
+def test_plan_negative_seed_is_one_line_and_exit_2(tmp_path: Path) -> None:
+    out = tmp_path / "m.plan"
+    r = run_cli("plan", DEMO, "-o", out, "--seed", -1, "--budget", 500)
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    assert r.stderr.strip().splitlines() == ["lamde-mission plan: --seed: must be an integer "
+                                             ">= 0, got -1"]
+    assert not out.exists()

@@ -297,6 +297,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"-o/--output: {exc}") from None
     try:
         D.check_run_args(population=args.population, budget=args.budget, starts=args.starts)
+        D.check("seed", args.seed)
         if args.time_limit is not None:
             D.check("time_limit", args.time_limit)
     except ValueError as exc:  # "population: must be ...": name the option as typed

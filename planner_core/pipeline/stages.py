@@ -475,7 +475,10 @@ class Repair(_Base):
     population (Deb order) or the pool, with the memetic step on (its repair of unserved
     sensors and blocked legs, `planner_core.search.refine`), so an infeasible run spends all
     of its budget on becoming feasible; with less than a population left, the repair's
-    candidates for the incumbent. Cost: as `DifferentialEvolution`."""
+    candidates for the incumbent. Also when the incumbent is feasible but the improving
+    stages left a population or more unspent (their moves cannot act: e.g. scheduled access,
+    where the descent's C3 and hover-time LP are the simultaneous uplink's), so no run ends
+    with budget a DE could still use. Cost: as `DifferentialEvolution`."""
 
     name = "repair"
 
@@ -483,7 +486,9 @@ class Repair(_Base):
         return None
 
     def applies(self, state: PlanState, ev: Evaluator) -> bool:
-        return ev.has_best and ev.best()[2] > 0.0
+        if not ev.has_best:
+            return False
+        return ev.best()[2] > 0.0 or ev.remaining >= state.config.population
 
     def run(self, state: PlanState, ev: Evaluator) -> PlanState:
         from planner_core.search.construct import InjectedPopulation
