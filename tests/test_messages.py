@@ -19,6 +19,14 @@ import pytest
 from lamde_mission.cli import INTERRUPTED
 from lamde_mission.fuzz import run_cli
 
+
+def _default_sigint() -> None:
+    """In the child before exec: SIGINT at its default, as a terminal gives it; a runner
+    started in the background (`&`, CI without job control) hands its children SIGINT
+    ignored, and Python then installs no handler of its own."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 ROOT = Path(__file__).resolve().parent.parent
 TINY = ROOT / "tests" / "data" / "hostile" / "tiny-map.json"
 
@@ -59,8 +67,11 @@ def test_a_ctrl_c_inside_main_is_one_line_in_process(monkeypatch) -> None:
 def test_importing_the_package_leaves_sigint_alone() -> None:
     """Only the console script gets the start-up handler; a program importing the package
     keeps Python's own."""
-    code = ("import signal, lamde_mission, lamde_mission.cli; "
-            "print(signal.getsignal(signal.SIGINT) is signal.default_int_handler)")  # fmt: skip
+    # compared with what the child started with: a runner started in the background (`&`)
+    # hands its children SIGINT ignored, not Python's default handler
+    code = ("import signal; before = signal.getsignal(signal.SIGINT); "
+            "import lamde_mission, lamde_mission.cli; "
+            "print(signal.getsignal(signal.SIGINT) is before)")  # fmt: skip
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                        timeout=60, cwd=ROOT)  # fmt: skip
     assert r.stdout.strip() == "True", r.stderr
@@ -95,7 +106,8 @@ def test_sigint_while_starting_gives_one_line_and_130(delay: float) -> None:
     paths = [str(ROOT), sysconfig.get_paths()["purelib"], sysconfig.get_paths()["platlib"]]
     code = _CHECK.format(paths=paths, tiny=str(TINY))
     p = subprocess.Popen([sys.executable, "-S", "-c", code], stdout=subprocess.PIPE,
-                         stderr=subprocess.PIPE, text=True, cwd=ROOT)  # fmt: skip
+                         stderr=subprocess.PIPE, text=True, cwd=ROOT,
+                         preexec_fn=_default_sigint)  # fmt: skip
     assert p.stdout is not None and p.stdout.readline() == "ready\n"
     time.sleep(delay)
     p.send_signal(signal.SIGINT)

@@ -25,6 +25,14 @@ import pytest
 
 from lamde_mission.cli import INTERRUPTED
 
+
+def _default_sigint() -> None:
+    """In the child before exec: SIGINT at its default, as a terminal gives it; a runner
+    started in the background (`&`, CI without job control) hands its children SIGINT
+    ignored, and Python then installs no handler of its own."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 ROOT = Path(__file__).resolve().parent.parent
 SMALL = ROOT / "examples" / "maps" / "small-demo.json"
 SCRIPT = Path(sys.executable).with_name("lamde-mission")
@@ -42,7 +50,7 @@ def _outcome(cmd: list[str], delay: float, cwd: Path) -> tuple[str, int, str, st
     """Start `cmd`, send SIGINT after `delay` s, and say what happened: ("interrupted" | "done"
     | "startup" | "bad", status, stdout, stderr)."""
     p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                         cwd=cwd)  # fmt: skip
+                         cwd=cwd, preexec_fn=_default_sigint)  # fmt: skip
     time.sleep(delay)
     if p.poll() is None:
         p.send_signal(signal.SIGINT)
@@ -92,6 +100,6 @@ def test_sigint_while_shutting_down_is_one_line() -> None:
             "atexit.register(lambda: (os.kill(os.getpid(), signal.SIGINT), time.sleep(5))); "
             f"sys.exit(main(['check', {str(SMALL)!r}]))")  # fmt: skip
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                       timeout=120, cwd=ROOT)  # fmt: skip
+                       timeout=120, cwd=ROOT, preexec_fn=_default_sigint)  # fmt: skip
     assert r.returncode == 130 and r.stderr.splitlines() == [INTERRUPTED], r.stderr
     assert "map 'small-demo': OK" in r.stdout
