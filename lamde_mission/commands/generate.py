@@ -39,7 +39,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "road crossing the area, served from beside it); I_max = max(20, min(200, "
         "ceil(sensors / 2))); obstacle counts are the paper's 10 km ones scaled by the area. "
         "`generate --large-suite OUTDIR` writes the large suite L01..L08 (docs/scaling.md). "
-        "Same seed, same bytes.",
+        "Every generated map keeps the paper's model: safety clearance 0 m and data margin "
+        "0 % (a map file without `safety` gets 10 m and 2 %); set `safety` before a real "
+        "flight. Same seed, same bytes.",
     )
     p.add_argument("out", nargs="?", metavar="OUT.json", help="map file to write")
     p.add_argument("--suite", metavar="OUTDIR", help="write T01.json..T16.json into OUTDIR")
