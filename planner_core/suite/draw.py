@@ -224,6 +224,11 @@ class Draw:
         self.tour_stops = targets[seq]  # start, stops in tour order, end
 
     # ---------------------------------------------------------------- 4. bends
+    def bend_allowed(self, bend: np.ndarray) -> bool:
+        """Whether a bend point (2,) m may be placed (inside the area is checked apart): always
+        on the paper's maps; a layout that keeps zones free of hover points overrides it."""
+        return True
+
     def bends(self) -> None:
         """Bend some long legs sideways; the shortcut they avoid gets an obstacle later."""
         rng = self.rng
@@ -241,7 +246,7 @@ class Draw:
                 perp = np.array([-d[1], d[0]]) / np.hypot(*d)
                 off = rng.uniform(250.0, 500.0) * rng.choice([-1.0, 1.0])
                 bend = _r1(a + rng.uniform(0.35, 0.65) * d + off * perp)
-                if not self.inside(bend, 100.0):
+                if not self.inside(bend, 100.0) or not self.bend_allowed(bend):
                     continue
                 if self.nfz:
                     lines = shapely.linestrings([[a, bend], [bend, b]])

@@ -42,7 +42,6 @@ from planner_core.suite.draw import (
     _C3_MARGIN,
     _NFZ_DIAMETER,
     _NFZ_ENDPOINT_CLEARANCE,
-    _NFZ_LEG_CLEARANCE,
     _NFZ_VERTICES,
     _SENSOR_NFZ_CLEARANCE,
     Draw,
@@ -394,34 +393,9 @@ class LargeDraw(Draw):
                         >= CORRIDOR_OFFSET[0] - 50.0)  # fmt: skip
         return True
 
-    def bends(self) -> None:
-        """The paper's bends (long legs bent sideways, an obstacle later on the shortcut they
-        avoid), none inside a field or over the corridor."""
-        rng = self.rng
-        budget = min(self.n_bends, self.imax - len(self.hover))
-        self.chords: list[tuple[np.ndarray, np.ndarray]] = []
-        for _ in range(budget):
-            nodes = [self.start, *self.hover, self.end]
-            legs = [k for k in range(len(nodes) - 1) if np.hypot(*(nodes[k + 1] - nodes[k])) > 1000]
-            if not legs:
-                return
-            for _ in range(40):
-                k = int(rng.choice(legs))
-                a, b = nodes[k], nodes[k + 1]
-                d = b - a
-                perp = np.array([-d[1], d[0]]) / np.hypot(*d)
-                off = rng.uniform(250.0, 500.0) * rng.choice([-1.0, 1.0])
-                bend = _r1(a + rng.uniform(0.35, 0.65) * d + off * perp)
-                if not self.inside(bend, 100.0) or not self._off_sensor_zone(bend):
-                    continue
-                if self.nfz:
-                    lines = shapely.linestrings([[a, bend], [bend, b]])
-                    if np.min(self.nfz_distance(lines)) < _NFZ_LEG_CLEARANCE:
-                        continue
-                self.hover.insert(k, bend)
-                self.kinds.insert(k, "bend")
-                self.chords.append((a, b))
-                break
+    def bend_allowed(self, bend: np.ndarray) -> bool:
+        """The paper's bends (`Draw.bends`), none inside a field or over the corridor."""
+        return self._off_sensor_zone(bend)
 
     # ---------------------------------------------------------------- 5. sensors
     def _propose(self) -> np.ndarray:
