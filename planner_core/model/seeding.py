@@ -426,8 +426,7 @@ class Seeder:
         c = 0.95 * p.t_max
         cols = np.arange(R.shape[1])
         b1, b2 = _best_two(R, cols)
-        while n > 1:
-            full = np.vstack([p.start, M, p.end])
+        while n > 1:  # `full`: start -> M -> end, rebuilt after each removal
             m_idx = np.arange(n)
             r1, r2 = R[b1, cols], R[b2, cols]
             now = r1 * c >= p.required
@@ -465,8 +464,8 @@ class Seeder:
                 b1[hit], b2[hit] = _best_two(R[:, hit], np.arange(len(hit)))
             # the legs that skip point m - 1 and point m (as numbered now) changed
             fix = np.array([i for i in (m - 1, m) if 0 <= i < n], dtype=int)
+            full = np.vstack([p.start, M, p.end])
             if len(fix):
-                full = np.vstack([p.start, M, p.end])
                 ok[fix] = self._clear(full[fix], full[fix + 2])
         return M
 

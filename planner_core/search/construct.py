@@ -177,23 +177,19 @@ class CoverTable:
     per fraction used."""
 
     def __init__(self, problem: Any, sites: np.ndarray) -> None:
-        mp = problem.model
+        self.problem = problem
         self.sites = np.asarray(sites, dtype=float).reshape(-1, 2)
-        self.need = np.asarray(mp.required, dtype=float)
-        self.t_max = float(mp.t_max)
-        self.R = mp.rates(self.sites)
+        self.need = np.asarray(problem.model.required, dtype=float)
+        self.R = problem.model.rates(self.sites)
         self._cov: dict[float, np.ndarray] = {}
-
-    def _covers(self, frac: float) -> np.ndarray:
-        # `covers` on the stored rates: the same expression, so the same bits
-        return (self.R * (frac * self.t_max) >= self.need[None, :]) | (self.need[None, :] <= 0)
 
     def cover(self, frac: float) -> np.ndarray:
         """(n, J) bool: site i covers sensor j at reach fraction frac; a sensor no site covers
         at frac counts as covered by the sites that collect its data within T_max."""
         if frac not in self._cov:
-            cov = self._covers(frac)
-            self._cov[frac] = np.where(cov.any(axis=0), cov, self._covers(1.0))
+            cov = covers(self.problem, self.sites, frac, self.R)
+            full = covers(self.problem, self.sites, 1.0, self.R)
+            self._cov[frac] = np.where(cov.any(axis=0), cov, full)
         return self._cov[frac]
 
     def hover(self, rows: np.ndarray) -> np.ndarray:

@@ -97,13 +97,16 @@ def use_memetic(setting: str, problem: Any) -> bool:
     return setting == "on"
 
 
-def covers(problem: Any, sites: np.ndarray, frac: float = SERVE_FRACTION) -> np.ndarray:
+def covers(problem: Any, sites: np.ndarray, frac: float = SERVE_FRACTION,
+           rates: np.ndarray | None = None) -> np.ndarray:
     """(n, J) bool: whether hovering frac x T_max at each of the sites (n, 2) collects each
-    sensor's required data (Eq. R_ij; a sensor that needs nothing counts as covered)."""
+    sensor's required data (Eq. R_ij; a sensor that needs nothing counts as covered).
+    `rates`: the sites' link rates (n, J), when the caller keeps them."""
     mp = problem.model
     need = np.asarray(mp.required, dtype=float)
-    sites = np.asarray(sites, dtype=float).reshape(-1, 2)
-    return (mp.rates(sites) * (frac * mp.t_max) >= need[None, :]) | (need[None, :] <= 0)
+    if rates is None:
+        rates = mp.rates(np.asarray(sites, dtype=float).reshape(-1, 2))
+    return (rates * (frac * mp.t_max) >= need[None, :]) | (need[None, :] <= 0)
 
 
 def _cheapest_insertion(problem: Any, pts: np.ndarray, q: np.ndarray) -> int:
