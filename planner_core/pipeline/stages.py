@@ -57,6 +57,10 @@ class Pool:
                     np.concatenate([self.phi, np.asarray(phi, float)]),
                     self.kinds + (kind,) * len(X))
 
+    def of_kind(self, kind: str) -> np.ndarray:
+        """Row indices of the plans of one kind (constructive, seeder, descended), in order."""
+        return np.flatnonzero(np.array(self.kinds) == kind)
+
     def ordered(self) -> np.ndarray:
         """Row indices, Deb-best first."""
         return deb_order(self.f, self.phi) if len(self.f) else np.zeros(0, dtype=np.int64)
@@ -192,7 +196,7 @@ class StartDescents(_Base):
         cfg, problem, pool = state.config, state.problem, state.pool
         rows = []
         for kind in ("constructive", "seeder"):
-            idx = np.flatnonzero(np.array(pool.kinds) == kind)
+            idx = pool.of_kind(kind)
             for i in idx[deb_order(pool.f[idx], pool.phi[idx])][:cfg.descents]:
                 trials = min(cfg.descent_trials, ev.remaining)
                 r = descend(problem, pool.X[i], ev.evaluate, trials=trials) if trials else None
@@ -245,7 +249,7 @@ class DifferentialEvolution(_Base):
         injected = _inject(state)
         pool = state.pool
         # the seeded start's sensor-aware half: the pool's seeder plans, not the seeder again
-        seeded = pool.X[np.flatnonzero(np.array(pool.kinds) == "seeder")] if len(pool) else None
+        seeded = pool.X[pool.of_kind("seeder")] if len(pool) else None
         opt = InjectedPopulation(ev, injected, seeded) if len(injected) else ev
         hook = functools.partial(refine, state.problem) if use_memetic(cfg.memetic, ev) else None
         result = run(opt, configurator=cfg.configurator, seed=cfg.seed,
