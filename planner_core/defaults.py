@@ -50,6 +50,7 @@ __all__ = [
     "DELTA",
     "Default",
     "ETA",
+    "GOALS",
     "INIT",
     "INIT_MODES",
     "MEMETIC",
@@ -57,6 +58,8 @@ __all__ = [
     "L_VIO_TOL",
     "MAP_CHOICES",
     "MAP_DEFAULTS",
+    "MAP_LISTS",
+    "MAX_DEPOTS",
     "MIN_POPULATION",
     "POPULATION",
     "RUNS",
@@ -228,14 +231,17 @@ _RUN: tuple[Default, ...] = (
 
 def _ranged(name: str, value: Any, meaning: str, lo: float, hi: float, why: str, *,
             lo_open: bool = False, hi_open: bool = False, integer: bool = False) -> Default:
-    """A map number with a physical range [lo, hi] (open ends where asked) and its reason."""
+    """A map number with a physical range [lo, hi] (open ends where asked) and its reason;
+    null is valid where the default is null (the field is optional, with no value of its own)."""
     interval = f"{'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'}"
-    valid = f"null or an integer in {interval}" if integer else f"a number in {interval}"
+    nullable = value is None
+    kind = "an integer" if integer else "a number"
+    valid = f"{'null or ' if nullable else ''}{kind} in {interval}"
 
     def ok(v: Any) -> bool:
+        if v is None:
+            return nullable
         if integer:
-            if v is None:
-                return True
             if not _is_int(v):
                 return False
         elif isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
@@ -248,6 +254,7 @@ def _ranged(name: str, value: Any, meaning: str, lo: float, hi: float, why: str,
 _WHY_RATE = "100 Gbit/s is beyond any UAV radio link"
 _WHY_DATA = "1e7 Mbit (1.25 TB) takes days at any radio rate: no single flight collects more"
 _WHY_PENALTY = "penalties beyond 1e9 drown every objective value in rounding"
+_WHY_POWER = "a multirotor draws 0.1-10 kW; 100 kW is a helicopter's"
 
 #: the map file's optional fields (``planner_core.model.mapio`` takes its defaults and ranges from
 #: here), keyed by their JSON path; paper symbols in the meaning, the reason for each range in
@@ -287,6 +294,38 @@ _MAP: tuple[Default, ...] = (
     _ranged("safety.data_margin", 0.02, "fraction added to every sensor's required data for "
             "planning (0: the paper's model)", 0.0, 1.0, "a margin above 100 % is a different "
             "requirement, not a margin"),
+    # --- batteries and fleets (issue 33; docs/energy.md). A map without them plans as before.
+    _ranged("uav.battery.energy_wh", None, "energy of one full battery, Wh (null: no battery, "
+            "one flight as before; or give uav.endurance_s instead, not both)", 0.0, 1e5,
+            "multirotor batteries hold 10-1000 Wh; 100 kWh is an electric car's", lo_open=True),
+    _ranged("uav.battery.reserve", 0.2, "fraction of the battery left unused at landing: usable "
+            "energy = battery x (1 - reserve)", 0.0, 0.9,
+            "above 90 % almost nothing is left to fly; 20 % is common practice"),
+    _ranged("uav.endurance_s", None, "hover seconds one full battery lasts, the battery's "
+            "energy given as endurance_s x P(0) (null: no battery, or uav.battery.energy_wh)",
+            0.0, 86_400.0, "no battery hovers for more than a day", lo_open=True),
+    _ranged("uav.power.blade_profile_w", 79.86, "P0, blade profile power in hover, W (Zeng, Xu "
+            "and Zhang 2019, Table I)", 0.0, 1e5, _WHY_POWER, lo_open=True),
+    _ranged("uav.power.induced_w", 88.63, "P_i, induced power in hover, W (Zeng et al. 2019); "
+            "hover power P(0) = P0 + P_i", 0.0, 1e5, _WHY_POWER, lo_open=True),
+    _ranged("uav.power.tip_speed", 120.0, "U_tip, rotor blade tip speed, m/s (Zeng et al. "
+            "2019)", 0.0, 400.0, "a blade tip beyond ~340 m/s is supersonic", lo_open=True),
+    _ranged("uav.power.induced_velocity", 4.03, "v0, mean rotor induced velocity in hover, m/s "
+            "(Zeng et al. 2019)", 0.0, 100.0, "rotor downwash of a UAV is a few m/s",
+            lo_open=True),
+    _ranged("uav.power.fuselage_drag_ratio", 0.6, "d0, fuselage drag ratio (Zeng et al. 2019)",
+            0.0, 10.0, "a drag ratio is of order 1; 0 ignores the fuselage's drag"),
+    _ranged("uav.power.air_density", 1.225, "rho, air density, kg/m^3 (Zeng et al. 2019: sea "
+            "level, 15 C)", 0.0, 2.0, "air at sea level is ~1.2 kg/m^3, at -50 C ~1.6",
+            lo_open=True),
+    _ranged("uav.power.rotor_solidity", 0.05, "s, rotor solidity: blade area over disc area "
+            "(Zeng et al. 2019)", 0.0, 1.0, "blades cover at most the whole disc", lo_open=True),
+    _ranged("uav.power.rotor_disc_area", 0.503, "A, rotor disc area, m^2 (Zeng et al. 2019)",
+            0.0, 1_000.0, "1000 m^2 is a heavy helicopter's disc", lo_open=True),
+    _ranged("fleet.uavs", 1, "UAVs flying at once (each with its own batteries)", 1, 100,
+            "a crew flies tens of UAVs; 100 bounds the planner's split", integer=True),
+    _ranged("fleet.swap_s", 300.0, "seconds a battery swap takes at a depot between sorties",
+            0.0, 86_400.0, "a swap longer than a day is no swap"),
 )
 
 #: how the sensors in range of a hover point share its radio (`radio.access`), the default
@@ -303,6 +342,27 @@ MAP_CHOICES: dict[str, Default] = {
         "in range sends at once at R_ij; C3: their sum <= R_lambda; the paper's) or scheduled "
         "(R_lambda shared by time slots: data D_ij <= R_ij T_i, sum_j D_ij <= R_lambda T_i, "
         "no C3)", "one of " + ", ".join(ACCESS_MODES), lambda v: v in ACCESS_MODES),
+}
+
+#: how sorties are scored (`objective.goal`), the default first: "total" is the paper's f
+#: summed over the sorties plus the swaps (one UAV), "makespan" the time until the last UAV
+#: lands (fleets); `plan --objective` overrides the map's
+GOALS: tuple[str, ...] = ("total", "makespan")
+MAP_CHOICES["objective.goal"] = Default(
+    "objective.goal", GOALS[0], "what several sorties minimise: total (the paper's f summed over "
+    "the sorties, plus the swaps) or makespan (the time until the last UAV lands; fleets)",
+    "one of " + ", ".join(GOALS), lambda v: v in GOALS)
+
+#: the most depots a map may give (`fleet.depots`)
+MAX_DEPOTS = 100
+#: the map file's optional fields that are lists of objects (JSON path -> entry)
+MAP_LISTS: dict[str, Default] = {
+    "fleet.depots": Default(
+        "fleet.depots", None, "take-off, landing and battery-swap sites, [{name, x, y}] in "
+        "local metres (null: one depot `home` at the map's start; a sortie may land at the "
+        "map's end)", f"null or 1-{MAX_DEPOTS} depots, names unique, each inside the area and "
+        "outside every obstacle and no-fly zone",
+        lambda v: v is None or (isinstance(v, list) and 1 <= len(v) <= MAX_DEPOTS)),
 }
 
 #: every run setting by name, in table order
@@ -345,7 +405,8 @@ L_VIO_TOL: float = 1e-9
 
 def check(name: str, value: Any) -> Any:
     """Return ``value`` if it is valid for setting ``name``; else ``ValueError`` naming it."""
-    table = DEFAULTS if name in DEFAULTS else MAP_CHOICES if name in MAP_CHOICES else MAP_DEFAULTS
+    tables = (DEFAULTS, MAP_CHOICES, MAP_LISTS)
+    table = next((t for t in tables if name in t), MAP_DEFAULTS)
     return table[name].check(value)
 
 
@@ -391,7 +452,7 @@ def _cell(v: Any) -> str:
 def render_markdown(table: dict[str, Default] | None = None) -> str:
     """The table as GitHub Markdown (name, default, meaning, valid range), one row per entry,
     ending with a newline. ``table`` defaults to the run settings followed by the map fields."""
-    rows = list((table or {**DEFAULTS, **MAP_DEFAULTS, **MAP_CHOICES}).values())
+    rows = list((table or {**DEFAULTS, **MAP_DEFAULTS, **MAP_CHOICES, **MAP_LISTS}).values())
     lines = ["| name | default | meaning | valid |", "| --- | --- | --- | --- |"]
     lines += [f"| `{d.name}` | {_cell(d.value)} | {d.meaning} | {d.valid} |" for d in rows]
     return "\n".join(lines) + "\n"

@@ -36,7 +36,7 @@ def test_module_imports_only_the_standard_library() -> None:
 
 
 def test_every_entry_is_complete_and_its_default_is_valid() -> None:
-    for table in (D.DEFAULTS, D.MAP_DEFAULTS):
+    for table in (D.DEFAULTS, D.MAP_DEFAULTS, D.MAP_CHOICES, D.MAP_LISTS):
         for name, d in table.items():
             assert d.name == name and d.meaning and d.valid
             assert d.check(d.value) == d.value  # a default lies in its own valid range
@@ -71,9 +71,14 @@ def test_the_readers_use_the_table() -> None:
 def test_map_loader_defaults_come_from_the_table() -> None:
     schema = MapFile.model_json_schema()["$defs"]
     for path, d in D.MAP_DEFAULTS.items():
-        section, field = path.split(".")
+        section, field = path.rsplit(".", 1)
         model = {"uav": "Uav", "radio": "Radio", "objective": "Objective",
-                 "safety": "Safety"}[section]
+                 "safety": "Safety", "uav.battery": "Battery", "uav.power": "Power",
+                 "fleet": "Fleet"}[section]
+        assert schema[model]["properties"][field].get("default") == d.value, path
+    for path, d in {**D.MAP_CHOICES, **D.MAP_LISTS}.items():
+        section, field = path.split(".")
+        model = {"radio": "Radio", "objective": "Objective", "fleet": "Fleet"}[section]
         assert schema[model]["properties"][field].get("default") == d.value, path
 
 

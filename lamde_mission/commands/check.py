@@ -64,7 +64,25 @@ def run(args: argparse.Namespace) -> int:
     sf = s["safety"]
     print(f"  safety          clearance {sf['clearance']:g} m, data margin "
           f"{100 * sf['data_margin']:g} %")
+    _energy_lines(s)
     return _diagnosis(m)
+
+
+def _energy_lines(s: dict) -> None:
+    """The battery and fleet lines of the summary (issue 33), when the map gives them."""
+    b, f = s.get("battery"), s.get("fleet")
+    if b is not None:
+        hover_w = s["power"]["hover_w"]
+        given = (f"{b['endurance_s']:g} s of hover" if b["endurance_s"] is not None
+                 else f"{b['energy_wh']:g} Wh")  # fmt: skip
+        print(f"  battery         {given} = {b['energy_wh']:.4g} Wh, reserve "
+              f"{100 * b['reserve']:g} %: {b['usable_wh']:.4g} Wh usable per sortie "
+              f"({60 * b['usable_wh'] / hover_w:.3g} min of hover at P(0) {hover_w:g} W)")
+    if f is not None:
+        where = ("the start (default)" if f["depots_default"] else ", ".join(
+            f"{d['name']} ({d['x']:g}, {d['y']:g})" for d in f["depots"]))  # fmt: skip
+        print(f"  fleet           {f['uavs']} UAV{'s' if f['uavs'] != 1 else ''}, depots "
+              f"{where}, swap {f['swap_s']:g} s, goal {s['goal']}")
 
 
 def _diagnosis(m: object) -> int:

@@ -20,13 +20,15 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from planner_core import textio
-from planner_core.defaults import MAP_CHOICES, MAP_DEFAULTS
+from planner_core.defaults import MAP_CHOICES, MAP_DEFAULTS, MAP_LISTS, MAX_DEPOTS
+from planner_core.model import energy as _energy
 from planner_core.model.geometry import Obstacles, points_inside, rectangle_vertices
 from planner_core.model.polygons import clean_polygon, convex_pieces, is_convex
 
 __all__ = [
     "Map",
     "MapError",
+    "Depot",
     "PolygonShape",
     "MapFile",
     "load_map",
@@ -179,6 +181,30 @@ class ObstaclesSpec(BaseModel):
     )
 
 
+class Battery(BaseModel):
+    """One battery (issue 33): its energy and the reserve kept at landing. The energy may
+    instead be given as `uav.endurance_s` (hover seconds), with the reserve still here."""
+
+    model_config = _STRICT
+    energy_wh: float | None = _field("uav.battery.energy_wh")
+    reserve: float = _field("uav.battery.reserve")
+
+
+class Power(BaseModel):
+    """Propulsion power model of Zeng, Xu and Zhang, IEEE Trans. Wireless Commun. 18(4), 2019,
+    Eq. (12), with its Table I as defaults (`planner_core.model.energy`, docs/energy.md)."""
+
+    model_config = _STRICT
+    blade_profile_w: float = _field("uav.power.blade_profile_w")
+    induced_w: float = _field("uav.power.induced_w")
+    tip_speed: float = _field("uav.power.tip_speed")
+    induced_velocity: float = _field("uav.power.induced_velocity")
+    fuselage_drag_ratio: float = _field("uav.power.fuselage_drag_ratio")
+    air_density: float = _field("uav.power.air_density")
+    rotor_solidity: float = _field("uav.power.rotor_solidity")
+    rotor_disc_area: float = _field("uav.power.rotor_disc_area")
+
+
 class Uav(BaseModel):
     model_config = _STRICT
     altitude: float = _field("uav.altitude")
@@ -187,6 +213,15 @@ class Uav(BaseModel):
     max_hover_time: float = _field("uav.max_hover_time")
     max_hover_points: int | None = _field("uav.max_hover_points")
     activation_threshold: float = _field("uav.activation_threshold")
+    battery: Battery | None = Field(None, description="one battery's energy and reserve (null: "
+                                    "no battery, one flight as before)")  # fmt: skip
+    endurance_s: float | None = _field("uav.endurance_s")
+    power: Power = Field(Power(), description="propulsion power model (Zeng et al. 2019)")
+
+
+#: the fields of the map file added for batteries and fleets (issue 33): left out of
+#: `Map.to_dict` and `Map.summary` unless the file gives them, so older maps read back as before
+_UAV_ENERGY_FIELDS = ("battery", "endurance_s", "power")
 
 
 class Radio(BaseModel):
@@ -204,6 +239,28 @@ class Objective(BaseModel):
     alpha: float = _field("objective.alpha")
     collision_offset: float = _field("objective.collision_offset")
     collision_weight: float = _field("objective.collision_weight")
+    goal: Literal["total", "makespan"] = Field(
+        MAP_CHOICES["objective.goal"].value, description=MAP_CHOICES["objective.goal"].meaning)
+
+
+class Depot(BaseModel):
+    """A take-off, landing and battery-swap site (local metres)."""
+
+    model_config = _STRICT
+    name: str = Field(min_length=1, max_length=100, pattern=_PRINTABLE,
+                      description="printable text, unique among the depots (quoted in messages)")
+    x: Coord
+    y: Coord
+
+
+class Fleet(BaseModel):
+    """UAVs flying at once, their depots and the battery swap time (issue 33)."""
+
+    model_config = _STRICT
+    uavs: int = _field("fleet.uavs")
+    depots: list[Depot] | None = Field(None, min_length=1, max_length=MAX_DEPOTS,
+                                       description=MAP_LISTS["fleet.depots"].meaning)
+    swap_s: float = _field("fleet.swap_s")
 
 
 #: metres: obstacles and no-fly zones are inflated by this much for planning (`safety.clearance`)
@@ -255,6 +312,8 @@ class MapFile(BaseModel):
     radio: Radio = Radio()
     objective: Objective = Objective()
     safety: Safety = Safety()
+    fleet: Fleet | None = Field(None, description="UAVs, depots and battery swaps (null: one "
+                                "UAV taking off at the start)")  # fmt: skip
     witness: Witness | None = None
 
 
@@ -391,6 +450,79 @@ class Map:
         no-fly zones and convex polygon obstacles as polygons; the other shapes as regions."""
         return _pack(self.spec, self.shapes)
 
+    # --- batteries, power and fleets (issue 33; docs/energy.md) ---
+    @property
+    def has_battery(self) -> bool:
+        """The map gives a battery (`uav.battery.energy_wh` or `uav.endurance_s`)."""
+        u = self.spec.uav
+        return u.endurance_s is not None or (u.battery is not None
+                                             and u.battery.energy_wh is not None)  # fmt: skip
+
+    @property
+    def has_fleet(self) -> bool:
+        """The map gives a `fleet` section (UAVs, depots, swap time)."""
+        return self.spec.fleet is not None
+
+    @cached_property
+    def power(self) -> _energy.PowerParams:
+        """The propulsion power model's parameters in force (`uav.power`, defaults: Zeng et
+        al. 2019 Table I), for `planner_core.model.energy`."""
+        return _energy.PowerParams.from_spec(self.spec.uav.power)
+
+    @property
+    def battery_wh(self) -> float | None:
+        """A full battery's energy (Wh): `uav.battery.energy_wh`, or `uav.endurance_s` x P(0);
+        None without a battery."""
+        u = self.spec.uav
+        e = u.battery.energy_wh if u.battery is not None else None
+        return _energy.battery_energy_wh(e, u.endurance_s, self.power)
+
+    @property
+    def battery_reserve(self) -> float:
+        """Fraction of the battery kept at landing (`uav.battery.reserve`, default 0.2)."""
+        b = self.spec.uav.battery
+        return float(b.reserve if b is not None else MAP_DEFAULTS["uav.battery.reserve"].value)
+
+    @property
+    def usable_energy_wh(self) -> float | None:
+        """Energy one sortie may spend (Wh): battery x (1 - reserve); None without a battery."""
+        full = self.battery_wh
+        return None if full is None else _energy.usable_energy_wh(full, self.battery_reserve)
+
+    @property
+    def uavs(self) -> int:
+        """UAVs flying at once (`fleet.uavs`, default 1)."""
+        f = self.spec.fleet
+        return int(f.uavs if f is not None else MAP_DEFAULTS["fleet.uavs"].value)
+
+    @property
+    def swap_s(self) -> float:
+        """Seconds a battery swap takes (`fleet.swap_s`, default 300)."""
+        f = self.spec.fleet
+        return float(f.swap_s if f is not None else MAP_DEFAULTS["fleet.swap_s"].value)
+
+    @cached_property
+    def depots(self) -> tuple[Depot, ...]:
+        """The take-off, landing and swap sites in force: `fleet.depots`, or one depot named
+        `DEFAULT_DEPOT` at the map's start (a sortie may then land at the map's end)."""
+        f = self.spec.fleet
+        if f is not None and f.depots:
+            return tuple(f.depots)
+        x, y = self.spec.start
+        return (Depot(name=DEFAULT_DEPOT, x=x, y=y),)
+
+    @cached_property
+    def depot_xy(self) -> np.ndarray:
+        """(D, 2) depot positions, metres, in `depots` order (read-only)."""
+        a = np.array([[d.x, d.y] for d in self.depots], dtype=float)
+        a.flags.writeable = False
+        return a
+
+    @property
+    def goal(self) -> str:
+        """What several sorties minimise (`objective.goal`): "total" or "makespan"."""
+        return self.spec.objective.goal
+
     # --- safety margins (a transformation of the map; see `Safety`) ---
     @cached_property
     def obstacle_clearances(self) -> tuple[float, ...]:
@@ -403,7 +535,10 @@ class Map:
         shapes = _obstacle_polygons(self)
         if c <= 0.0 or not shapes:
             return tuple(0.0 for _ in shapes)
-        ends = shapely.points([self.spec.start, self.spec.end])
+        # the map's depots take off and land too: inflation stops short of them as well
+        given = self.spec.fleet.depots if self.spec.fleet is not None else None
+        depots = [(d.x, d.y) for d in given or ()]
+        ends = shapely.points([self.spec.start, self.spec.end, *depots])
         out = []
         for poly in shapes:
             d = float(np.min(shapely.distance(ends, poly)))
@@ -491,6 +626,7 @@ class Map:
             del obs["polygons"]
         if d.get("witness") is None:
             d.pop("witness", None)
+        _drop_unset_energy_fields(self.spec, d)
         return d
 
     def summary(self) -> dict[str, Any]:
@@ -509,13 +645,48 @@ class Map:
             "polygons": len(s.obstacles.polygons),
             "max_hover_points": self.max_hover_points,
             "max_hover_points_default": s.uav.max_hover_points is None,
-            "uav": s.uav.model_dump(),
+            "uav": s.uav.model_dump(exclude=set(_UAV_ENERGY_FIELDS)),
             "radio": s.radio.model_dump(),
-            "objective": s.objective.model_dump(),
+            "objective": s.objective.model_dump(exclude={"goal"}),
             "safety": s.safety.model_dump(),
             "total_required_data_mbit": float(self.required_data.sum()),
             "has_witness": s.witness is not None,
+            **self._energy_summary(),
         }
+
+    def _energy_summary(self) -> dict[str, Any]:
+        """`summary`'s battery, power and fleet entries, present only when the map gives a
+        battery or a fleet (older maps summarise as before)."""
+        if not (self.has_battery or self.has_fleet):
+            return {}
+        u = self.spec.uav
+        return {
+            "battery": None if not self.has_battery else {
+                "energy_wh": self.battery_wh, "reserve": self.battery_reserve,
+                "usable_wh": self.usable_energy_wh, "endurance_s": u.endurance_s,
+            },
+            "power": {**u.power.model_dump(), "hover_w": self.power.hover_w},
+            "fleet": {"uavs": self.uavs, "swap_s": self.swap_s,
+                      "depots": [d.model_dump() for d in self.depots],
+                      "depots_default": not (self.has_fleet and self.spec.fleet.depots)},
+            "goal": self.goal,
+        }  # fmt: skip
+
+
+#: the name of the one depot a map without `fleet.depots` has, at its start
+DEFAULT_DEPOT = "home"
+
+
+def _drop_unset_energy_fields(spec: MapFile, d: dict[str, Any]) -> None:
+    """Remove from the dumped map `d` the battery, power, fleet and goal fields the file did
+    not give (so `Map.to_dict` of a map without them is what it was before issue 33)."""
+    for key in _UAV_ENERGY_FIELDS:
+        if key not in spec.uav.model_fields_set or d["uav"].get(key) is None:
+            d["uav"].pop(key, None)
+    if "goal" not in spec.objective.model_fields_set:
+        d["objective"].pop("goal", None)
+    if spec.fleet is None:
+        d.pop("fleet", None)
 
 
 #: metres added to every non-zero clearance when inflating: covers where a stored mission's
@@ -637,6 +808,9 @@ def _pydantic_problems(err: ValidationError) -> list[str]:
             lines.append(f"{where}: must be a finite number (got NaN or infinity)")
         elif kind == "too_short" and loc and loc[-1] == "sensors":
             lines.append(f"{where}: at least one sensor is required")
+        elif kind == "too_short" and loc == ("fleet", "depots"):
+            lines.append(f"{where}: give at least one depot, or leave the field out (one depot "
+                         f"'{DEFAULT_DEPOT}' at the map's start)")  # fmt: skip
         elif kind == "string_pattern_mismatch":
             lines.append(f"{where}: must be printable text (no control characters such as "
                          "newlines or tabs)")  # fmt: skip
@@ -696,6 +870,16 @@ def _semantic_problems(
     if u.max_hover_points is not None and u.max_hover_points > MAX_HOVER_POINTS:
         problems.append(f"uav.max_hover_points: {u.max_hover_points} is too large "
                         f"(at most {MAX_HOVER_POINTS})")
+    problems += _energy_problems(spec)
+    depots = spec.fleet.depots if spec.fleet is not None and spec.fleet.depots else []
+    names: set[str] = set()
+    for k, dp in enumerate(depots):
+        if not inside_area(dp.x, dp.y):
+            problems.append(f"fleet.depots[{k}]: depot '{dp.name}' at ({dp.x:g}, {dp.y:g}) is "
+                            f"outside the area [0, {W:g}] x [0, {H:g}]")  # fmt: skip
+        if dp.name in names:
+            problems.append(f"fleet.depots[{k}].name: duplicate depot name '{dp.name}'")
+        names.add(dp.name)
     if spec.witness is not None and len(spec.witness.hover_points) != len(spec.witness.hover_times):
         problems.append("witness: hover_points and hover_times differ in length")
     for k, (x, y) in enumerate(spec.witness.hover_points if spec.witness is not None else ()):
@@ -721,8 +905,37 @@ def _semantic_problems(
                     f"closer than {100 * end_gap:g} cm: a mission file keeps positions on a 1e-7 "
                     "degree grid, which may move it up to 8 mm, into the obstacle"
                 )
+        if depots:
+            where = np.array([(dp.x, dp.y) for dp in depots], dtype=float)
+            inside = points_inside(where, obstacles)
+            gaps = (_edge_distances(where, spec, tuple(shapes)) if end_gap > 0
+                    else np.full(len(depots), np.inf))  # fmt: skip
+            for k, (dp, flag, gap) in enumerate(zip(depots, inside, gaps, strict=True)):
+                at = f"fleet.depots[{k}]: depot '{dp.name}' at ({dp.x:g}, {dp.y:g})"
+                if flag:
+                    problems.append(f"{at} lies inside an obstacle or no-fly zone: no sortie "
+                                    "can take off or land there")  # fmt: skip
+                elif gap < end_gap:
+                    problems.append(f"{at} lies {1000 * gap:.3g} mm from an obstacle's edge, "
+                                    f"closer than {100 * end_gap:g} cm: a mission file keeps "
+                                    "positions on a 1e-7 degree grid, which may move it up to "
+                                    "8 mm, into the obstacle")  # fmt: skip
         return problems, notes, shapes, obstacles
     return problems, notes, shapes, None
+
+
+def _energy_problems(spec: MapFile) -> list[str]:
+    """The battery's fields together: its energy given once (`uav.battery.energy_wh` or
+    `uav.endurance_s`), never twice, and a `uav.battery` section that gives an energy."""
+    u = spec.uav
+    given = u.battery is not None and u.battery.energy_wh is not None
+    if given and u.endurance_s is not None:
+        return ["uav.endurance_s: the battery is given twice (uav.battery.energy_wh and "
+                "uav.endurance_s): give one of them"]  # fmt: skip
+    if u.battery is not None and not given and u.endurance_s is None:
+        return ["uav.battery.energy_wh: required field is missing (the battery's energy in "
+                "Wh; or give uav.endurance_s, the hover seconds on one battery)"]  # fmt: skip
+    return []
 
 
 def _polygon_shape(
