@@ -16,7 +16,10 @@ mission: CLEAR (every leg at least `safety.clearance` from every obstacle, measu
 shapely; near the start or end point the clearance in force is what the map leaves there) and
 MARGIN (every sensor's collected data at least (1 + `safety.data_margin`) x its requirement);
 `Verdicts.data_margins` holds the real margin per sensor and `Verdicts.clearance` the real
-clearance.
+clearance. On a map with a battery (`uav.battery` or `uav.endurance_s`; issue 33) one more,
+ENERGY, judges the mission as one sortie: the energy the sim computes on its own
+(`sim.energy.mission_energy`) at most the usable energy, battery x (1 - reserve); a map
+without a battery gets exactly the verdicts it got before.
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ import numpy as np
 import shapely
 
 from planner_core.defaults import L_VIO_TOL
+from sim import energy as sim_energy
 from sim.obstacles import obstacle_shapes, overlap_lengths
 from sim.replay import Timeline
 
@@ -80,6 +84,18 @@ class Verdicts:
     f: float
     data_margins: dict[str, float] = field(default_factory=dict)
     clearance: float = math.inf
+    #: maps with a battery only (else None): the mission's energy (Wh, the sim's own), the
+    #: full battery (Wh) and what the mission may spend, battery x (1 - reserve)
+    energy_wh: float | None = None
+    battery_wh: float | None = None
+    usable_wh: float | None = None
+
+    @property
+    def reserve_left_wh(self) -> float | None:
+        """Energy left in the battery at landing (Wh): battery - energy; None without one."""
+        if self.energy_wh is None or self.battery_wh is None:
+            return None
+        return self.battery_wh - self.energy_wh
 
     @property
     def passed(self) -> bool:
@@ -111,7 +127,7 @@ class Verdicts:
         return "\n".join(lines)
 
     def to_dict(self) -> dict[str, Any]:
-        return {
+        out = {
             "passed": self.passed,
             "failed": self.failed,
             "t_fly": self.t_fly,
@@ -121,6 +137,10 @@ class Verdicts:
             "data_margins": dict(self.data_margins),
             "verdicts": [v.to_dict() for v in self.items],
         }
+        if self.energy_wh is not None:  # maps with a battery only: older reports unchanged
+            out.update(energy_wh=self.energy_wh, battery_wh=self.battery_wh,
+                       usable_wh=self.usable_wh, reserve_left_wh=self.reserve_left_wh)
+        return out
 
 
 def _hover_label(i: int, seqs: tuple[int, ...]) -> str:
@@ -276,6 +296,29 @@ def verify(timeline: Timeline, map: Any) -> Verdicts:  # noqa: A002
     # the margin is the slack, as for every check: >= 0 exactly when it holds
     out.append(Verdict("ENDS", "start -> end", worst <= ENDS_TOL, ENDS_TOL - worst, "m", detail))
 
+    energy = _energy_verdict(timeline, map)
+    if energy is not None:
+        out.append(energy[0])
     t = timeline.totals
     return Verdicts(items=tuple(out), t_fly=t.t_fly, t_hover=t.t_hover, f=t.f,
-                    data_margins=margins, clearance=clearance)  # fmt: skip
+                    data_margins=margins, clearance=clearance,
+                    **(energy[1] if energy is not None else {}))  # fmt: skip
+
+
+def _energy_verdict(timeline: Timeline, map: Any) -> tuple[Verdict, dict[str, float]] | None:  # noqa: A002
+    """ENERGY for a map with a battery (None without one): the mission's energy, the sim's
+    own (`sim.energy`), at most battery x (1 - reserve); the margin is the usable energy left
+    (Wh). Tolerance `REL_TOL` of the usable energy (float32 parameters), so 1 % over fails."""
+    bat = sim_energy.battery(map)
+    if bat is None:
+        return None
+    full, reserve = bat
+    usable = full * (1.0 - reserve)
+    used = sim_energy.mission_energy(timeline, map).total
+    m = usable - used
+    left = full - used
+    detail = (f"{used:.5g} Wh of {usable:.5g} Wh usable (battery {full:.5g} Wh, reserve "
+              f"{100 * reserve:g} %): {left:.4g} Wh ({100 * left / full:.3g} %) left at "
+              "landing")  # fmt: skip
+    v = Verdict("ENERGY", "energy <= usable", m >= -REL_TOL * usable, m, "Wh", detail)
+    return v, {"energy_wh": used, "battery_wh": full, "usable_wh": usable}

@@ -178,6 +178,9 @@ class Timeline:
     #: scheduled access only: the data D_ij (Mbit) each hover point takes from each sensor
     #: (`scheduled_allocation`); None in simultaneous access (every sensor at R_ij)
     allocation: np.ndarray | None = None
+    #: (N,) m/s: the cruise speed each leg is flown at (the mission's DO_CHANGE_SPEED, at most
+    #: v_max), for the energy of the flight (`sim.energy`)
+    leg_speeds: np.ndarray | None = None
 
     @property
     def collected(self) -> np.ndarray:
@@ -412,4 +415,5 @@ def replay_route(route: Route, map: Any, *, dt: float = 1.0) -> Timeline:  # noq
         totals=totals,
         notes=tuple(notes),
         allocation=allocation,
+        leg_speeds=leg_v,
     )
