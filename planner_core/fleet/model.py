@@ -1,0 +1,274 @@
+"""Sorties and fleet plans: what a battery-limited crew flies (issue 33), and how it is scored.
+
+A `Sortie` is one flight on one battery: take-off at a depot, straight legs through its points
+(hover points, and detour corners with hover time 0, as the planner's single-flight plans hold
+them), landing at a depot. A `FleetPlan` holds each vehicle's sorties in flying order; a vehicle
+takes off for its next sortie where its last one landed, after a battery swap of `swap_s`.
+
+Scores (paper Sec. 3 per sortie):
+
+* f of a sortie: alpha x t_fly + (1 - alpha) x t_hover (the paper's f; t_fly the Eq. 1 legs);
+* duration of a sortie: t_fly + t_hover + the vertical take-off and landing (the sim's clock);
+* energy of a sortie: `planner_core.model.energy.sortie_energy_wh` (the one planner-side
+  formula), linear in the hover times: E = E_flight(route) + P(0) / 3600 x sum t;
+* "total" = sum of f over sorties + swap_s per swap (swaps = sorties - vehicles flying);
+  "makespan" = max over vehicles of (sum of its durations + swap_s per swap), ties by total.
+
+Cost: O(points) per sortie score (the energy module's legs); nothing here grows with sensors
+except `shares` (O(points x sensors): the link rates).
+
+Units: m, s, Wh, Mbit.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+
+from planner_core.model import energy as E
+from planner_core.model.formulas import flight_time
+
+__all__ = [
+    "ENERGY_SLACK",
+    "HOVER_ROUND_S",
+    "FleetSettings",
+    "FleetPlan",
+    "Sortie",
+    "END_DEPOT",
+]
+
+#: fraction of the usable energy the planner leaves unplanned: the sim integrates its own
+#: replayed speed profile (`sim.energy`), which may differ from the planner's by rounding
+ENERGY_SLACK = 0.002
+#: seconds per hover point the planner keeps in hand for storage: a mission file stores hover
+#: times rounded up to whole seconds (`lamde_mission.storage`), which costs up to P(0) x 1 s
+HOVER_ROUND_S = 1.0
+#: name of the landing site at the map's end, when the map gives no `fleet.depots` and its end
+#: is not its start (a sortie may land there: the map's start and end remain the default depots)
+END_DEPOT = "end"
+
+
+@dataclass(frozen=True, eq=False)
+class FleetSettings:
+    """Everything a fleet plan is scored with, read once from a map.
+
+    Attributes:
+        depot_names: (D,) depot names; depots (D, 2) their positions, m.
+        start_depots: indices of the depots a vehicle's first sortie may leave (all, or the
+            map's start alone when the map gives no depots).
+        uavs: vehicles flying at once; swap_s: seconds per battery swap.
+        usable_wh: energy one sortie may spend (battery x (1 - reserve)), Wh.
+        power: the propulsion model's parameters (`planner_core.model.energy.PowerParams`).
+        uav: the map's `uav` settings (speed, acceleration, altitude, T_max).
+        alpha: the paper's weight of flight against hover time.
+        goal: "total" or "makespan".
+    """
+
+    depot_names: tuple[str, ...]
+    depots: np.ndarray
+    start_depots: tuple[int, ...]
+    uavs: int
+    swap_s: float
+    usable_wh: float
+    power: Any
+    uav: Any
+    alpha: float
+    goal: str
+
+    @classmethod
+    def from_map(cls, m: Any, goal: str | None = None) -> FleetSettings:
+        """From a loaded map with a battery (`Map.usable_energy_wh`, `depots`, `uavs`,
+        `swap_s`, `goal`); `goal` overrides the map's. Without `fleet.depots` the depots are
+        the map's start ("home", where every vehicle starts) and, when it differs, its end.
+
+        Raises:
+            ValueError: the map has no battery, or an unknown goal.
+        """
+        usable = m.usable_energy_wh
+        if usable is None:
+            raise ValueError(
+                "uav.battery: a fleet plan needs a battery (uav.battery.energy_wh "
+                "or uav.endurance_s)"
+            )
+        goal = goal or m.goal
+        if goal not in ("total", "makespan"):
+            raise ValueError(f"goal: must be 'total' or 'makespan', got {goal!r}")
+        names = [d.name for d in m.depots]
+        xy = [[d.x, d.y] for d in m.depots]
+        given = m.spec.fleet is not None and bool(m.spec.fleet.depots)
+        if not given and not np.allclose(m.start, m.end) and END_DEPOT not in names:
+            names.append(END_DEPOT)
+            xy.append([float(m.end[0]), float(m.end[1])])
+        starts = tuple(range(len(names))) if given else (0,)
+        dep = np.asarray(xy, dtype=float).reshape(-1, 2)
+        dep.flags.writeable = False
+        return cls(depot_names=tuple(names), depots=dep, start_depots=starts,
+                   uavs=int(m.uavs), swap_s=float(m.swap_s), usable_wh=float(usable),
+                   power=m.power, uav=m.spec.uav, alpha=float(m.spec.objective.alpha),
+                   goal=goal)  # fmt: skip
+
+    @cached_property
+    def hover_w(self) -> float:
+        """P(0), W."""
+        return float(E.hover_power_w(self.power))
+
+    @cached_property
+    def vertical_wh(self) -> float:
+        """Energy of one sortie's take-off and landing, Wh (`energy.vertical_energy_wh`)."""
+        u = self.uav
+        return E.vertical_energy_wh(float(u.altitude), float(u.max_speed),
+                                    float(u.acceleration), self.power)  # fmt: skip
+
+    @cached_property
+    def vertical_s(self) -> float:
+        """Seconds of one sortie's take-off and landing (Eq. 1 over the altitude, twice)."""
+        u = self.uav
+        return 2.0 * float(flight_time(abs(float(u.altitude)), float(u.max_speed),
+                                       float(u.acceleration)))  # fmt: skip
+
+    def leg_times(self, d: np.ndarray) -> np.ndarray:
+        """Eq. 1 time (s) of legs of length d (m)."""
+        return flight_time(d, float(self.uav.max_speed), float(self.uav.acceleration))
+
+    def leg_energies(self, d: np.ndarray) -> np.ndarray:
+        """Energy (Wh) of rest-to-rest legs of length d (m) (`energy.leg_energy_wh`)."""
+        return E.leg_energy_wh(d, float(self.uav.max_speed), float(self.uav.acceleration),
+                               self.power)  # fmt: skip
+
+    def budget_wh(self, n_points: int) -> float:
+        """Energy a sortie with n_points points may plan to spend (Wh): the usable energy
+        less `ENERGY_SLACK` of it and `HOVER_ROUND_S` of hover per point (kept for storage)."""
+        return (
+            self.usable_wh * (1.0 - ENERGY_SLACK)
+            - self.hover_w * HOVER_ROUND_S * n_points / E.J_PER_WH
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class Sortie:
+    """One flight on one battery: depot `start` -> `points` (k, 2) -> depot `end`, hovering
+    `times` (k,) s at the points (0 at detour corners). Depots are indices into
+    `FleetSettings.depots`."""
+
+    start: int
+    end: int
+    points: np.ndarray
+    times: np.ndarray
+
+    def __post_init__(self) -> None:
+        p = np.asarray(self.points, dtype=float).reshape(-1, 2).copy()
+        t = np.asarray(self.times, dtype=float).reshape(-1).copy()
+        if len(p) != len(t):
+            raise ValueError(f"times: {len(t)} hover times for {len(p)} points")
+        p.flags.writeable = False
+        t.flags.writeable = False
+        object.__setattr__(self, "points", p)
+        object.__setattr__(self, "times", t)
+
+    def path(self, s: FleetSettings) -> np.ndarray:
+        """(k + 2, 2) the flown route: depot, points, depot (m)."""
+        return np.vstack([s.depots[self.start], self.points, s.depots[self.end]])
+
+    def leg_lengths(self, s: FleetSettings) -> np.ndarray:
+        """(k + 1,) lengths of the straight legs, m."""
+        return np.hypot(*np.diff(self.path(s), axis=0).T)
+
+    def t_fly(self, s: FleetSettings) -> float:
+        """Horizontal flight time (s), Eq. 1 per leg."""
+        return float(s.leg_times(self.leg_lengths(s)).sum())
+
+    @property
+    def t_hover(self) -> float:
+        """Sum of the hover times, s."""
+        return float(self.times.sum())
+
+    def f(self, s: FleetSettings) -> float:
+        """The paper's f of this sortie: alpha t_fly + (1 - alpha) t_hover."""
+        return s.alpha * self.t_fly(s) + (1.0 - s.alpha) * self.t_hover
+
+    def duration(self, s: FleetSettings) -> float:
+        """Seconds from take-off to landing: flight, hovers, vertical take-off and landing."""
+        return self.t_fly(s) + self.t_hover + s.vertical_s
+
+    def flight_wh(self, s: FleetSettings) -> float:
+        """Energy of everything but the hovers (Wh): `sortie_energy_wh` with zero hover."""
+        return E.sortie_energy_wh(self.path(s), np.zeros(len(self.points)), s.uav, s.power)
+
+    def energy(self, s: FleetSettings) -> float:
+        """Energy of the sortie, Wh (`planner_core.model.energy.sortie_energy_wh`)."""
+        return E.sortie_energy_wh(self.path(s), self.times, s.uav, s.power)
+
+    def with_times(self, times: np.ndarray) -> Sortie:
+        """The same route with other hover times (s)."""
+        return Sortie(self.start, self.end, self.points, times)
+
+
+@dataclass(frozen=True, eq=False)
+class FleetPlan:
+    """Each vehicle's sorties in flying order (`vehicles[v][k]`), scored with `settings`.
+
+    `evaluations`: plans the pipeline and the fleet search evaluated to make it (counted);
+    `notes`: what the search did (JSON-ready lines)."""
+
+    settings: FleetSettings
+    vehicles: tuple[tuple[Sortie, ...], ...]
+    evaluations: int = 0
+    notes: tuple[str, ...] = field(default=())
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "vehicles", tuple(tuple(v) for v in self.vehicles if v))
+
+    @property
+    def sorties(self) -> list[Sortie]:
+        """Every sortie, vehicle by vehicle."""
+        return [s for v in self.vehicles for s in v]
+
+    @property
+    def swaps(self) -> int:
+        """Battery swaps: sorties after each vehicle's first."""
+        return sum(len(v) - 1 for v in self.vehicles)
+
+    def vehicle_span(self, v: int) -> float:
+        """Seconds vehicle v flies from its first take-off to its last landing, swaps
+        included."""
+        s = self.settings
+        return sum(x.duration(s) for x in self.vehicles[v]) + s.swap_s * (len(self.vehicles[v]) - 1)
+
+    @property
+    def makespan(self) -> float:
+        """The longest vehicle's span, s."""
+        return max((self.vehicle_span(v) for v in range(len(self.vehicles))), default=0.0)
+
+    @property
+    def total(self) -> float:
+        """Sum of the paper's f over sorties + swap_s per swap (the "total" objective)."""
+        s = self.settings
+        return sum(x.f(s) for x in self.sorties) + s.swap_s * self.swaps
+
+    @property
+    def total_time(self) -> float:
+        """Seconds of flight, hover, take-off and landing over all sorties, plus the swaps."""
+        s = self.settings
+        return sum(x.duration(s) for x in self.sorties) + s.swap_s * self.swaps
+
+    def objective(self, goal: str | None = None) -> tuple[float, float]:
+        """What the search minimises, compared as a tuple: (total, makespan) for "total",
+        (makespan, total) for "makespan" (default: the settings' goal)."""
+        g = goal or self.settings.goal
+        return (self.total, self.makespan) if g == "total" else (self.makespan, self.total)
+
+    def energy_ok(self) -> bool:
+        """Every sortie within the usable energy (the planner's model)."""
+        u = self.settings.usable_wh
+        return all(x.energy(self.settings) <= u for x in self.sorties)
+
+    def replace(
+        self, vehicles: Any, *, evaluations: int | None = None, notes: tuple[str, ...] | None = None
+    ) -> FleetPlan:
+        """This plan with other vehicles (and evaluation count / notes)."""
+        return FleetPlan(self.settings, vehicles,
+                         self.evaluations if evaluations is None else evaluations,
+                         self.notes if notes is None else notes)  # fmt: skip

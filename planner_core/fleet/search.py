@@ -1,0 +1,571 @@
+"""The sortie planner (issue 33): a battery-limited plan of sorties and vehicles, the split
+optimised, each sortie planned by the declared pipeline.
+
+`plan_fleet` (ours):
+
+1. **Single flight.** The declared pipeline (`planner_core.pipeline.run_pipeline`: constructive
+   plans, descents, DE, LP polish, final stage) on the planning map, as for a map without a
+   battery: its hover points in flying order are a giant tour.
+2. **Route first, cluster second** (`route_first`, also the benchmark's peer): the giant tour
+   cut into battery-sized sorties by the optimal split with depot choice
+   (`planner_core.fleet.split`), shared among the vehicles, hover times re-solved by the LP
+   across sorties (`planner_core.fleet.lp`).
+3. **Cluster first**: every sensor to its nearest depot; each depot's sensors planned by the
+   pipeline as one flight from that depot back to it; the depots' tours joined in
+   nearest-neighbour order from the first depot and split as in 2. The better of 2 and 3
+   (`FleetPlan.objective`) is kept.
+4. **Improving rounds** (at most `rounds`, while one improves the objective):
+   * *re-plan sorties*: each sortie planned again by the pipeline from its depot to its depot,
+     for the data it collects (the LP's shares; sensors it no longer serves left to the
+     others), kept when its f falls within the battery and C3 holds with every sensor;
+   * *transfer*: every hover point of a sortie tried at its cheapest insertion into each of
+     the 3 nearest other sorties (a sensor's data then comes from the receiving sortie, or
+     from several), kept when the LP across sorties finds a better objective;
+   * *re-split*: each vehicle's sorties joined back into a tour and split again (sorties
+     merged or split, depots chosen again, the vehicles' shares moved).
+   Every change is scored by the LP across sorties on the whole plan.
+
+Everything the pipeline evaluates goes through its counted `Evaluator` (budget `budget` for
+the single flight, `sortie_budget` per sortie or depot plan); `FleetPlan.evaluations` is their
+sum, and the LPs across sorties are counted in the notes. Same seed, same plan (the pipeline
+runs' seeds derive from it).
+
+Cost: the single flight's pipeline, plus D + rounds x S pipeline runs on J / S sensors each
+(S sorties, D depots), plus the splits (O(n x L x D^2) each, n hover points, L per sortie),
+plus rounds x n x 3 LPs of N ~ n variables and J + S rows (O(N x J) each to build): about
+linear in the sensors for the pipeline runs and quadratic for the transfer LPs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from planner_core.fleet.lp import collected_by_sortie, fleet_hover_lp
+from planner_core.fleet.model import FleetPlan, FleetSettings, Sortie
+from planner_core.fleet.split import Links, split_vehicles
+
+__all__ = ["SORTIE_BUDGET", "ROUNDS", "TRANSFER_NEIGHBOURS", "FleetResult", "plan_fleet",
+           "route_first", "sortie_map_dict"]  # fmt: skip
+
+#: evaluations of each pipeline run on one sortie's or one depot's sensors
+SORTIE_BUDGET = 2000
+#: improving rounds at most
+ROUNDS = 3
+#: other sorties a hover point is offered to in a transfer (the nearest by depot)
+TRANSFER_NEIGHBOURS = 3
+
+
+class FleetResult:
+    """A fleet plan with what made it: `plan` (the `FleetPlan`, planning-map coordinates),
+    `single` (the single-flight plan's hover points and times), `peer` (the route-first
+    cluster-second plan it started from, or None), `lps` (LPs across sorties solved)."""
+
+    def __init__(
+        self,
+        plan: FleetPlan,
+        single: tuple[np.ndarray, np.ndarray],
+        peer: FleetPlan | None,
+        lps: int,
+    ) -> None:
+        self.plan = plan
+        self.single = single
+        self.peer = peer
+        self.lps = lps
+
+
+def _seed(seed: int, *tags: int) -> int:
+    """A derived pipeline seed (>= 0) for one sub-run: same seed and tags, same value."""
+    return int(np.random.SeedSequence([int(seed), 33, *tags]).generate_state(1)[0] >> 1)
+
+
+def sortie_map_dict(
+    m: Any,
+    start: np.ndarray,
+    end: np.ndarray,
+    required: np.ndarray,
+    *,
+    keep: np.ndarray | None = None,
+    name: str | None = None,
+) -> dict[str, Any]:
+    """The map file of one sortie: map m with its start and end at the sortie's depots and
+    each sensor's required data set to the sortie's share (user units, before the data
+    margin; 0: the sortie need not serve it), its witness and fleet left out.
+
+    Args:
+        m: the loaded map; start, end (2,) depot positions, m.
+        required: (J,) Mbit per sensor.
+        keep: sensors (J,) bool to keep in the map (default all: what storage and the sim need
+            for C3 over every sensor in range).
+        name: the map's name (default m's).
+
+    Returns:
+        A map dict (`planner_core.model.mapio.load_map` reads it).
+    """
+    d = m.to_dict()
+    d.pop("witness", None)
+    d.pop("fleet", None)
+    d["start"] = [float(start[0]), float(start[1])]
+    d["end"] = [float(end[0]), float(end[1])]
+    sensors = []
+    for j, s in enumerate(d["sensors"]):
+        if keep is not None and not keep[j]:
+            continue
+        s = dict(s)
+        s["required_data"] = float(max(required[j], 0.0))
+        sensors.append(s)
+    d["sensors"] = sensors
+    if name is not None:
+        d["name"] = name
+    return d
+
+
+class _Planner:
+    """One fleet planning run: the map, its planning map's problem, settings, counters."""
+
+    def __init__(self, m: Any, config: Any, goal: str | None, sortie_budget: int) -> None:
+        from planner_core.model.problem import Problem
+
+        self.m = m
+        self.pm = m.planning_map()
+        self.problem = Problem(self.pm, variable_length=config.variable_length)
+        self.model = self.problem.model
+        self.st = FleetSettings.from_map(m, goal)
+        self.config = config
+        self.sortie_budget = int(sortie_budget)
+        self.links = Links(self.problem)
+        self.evaluations = 0
+        self.lps = 0
+        self.margin = 1.0 + float(m.spec.safety.data_margin)
+
+    # ------------------------------------------------------------------ pipeline runs
+    def _run(self, problem: Any, seed: int, budget: int) -> tuple[np.ndarray, np.ndarray] | None:
+        """The pipeline on `problem`: its hover points and times, None when infeasible."""
+        from planner_core.pipeline import run_pipeline
+
+        cfg = replace(self.config, seed=int(seed), budget=int(budget), time_limit=None)
+        res = run_pipeline(problem, cfg)
+        self.evaluations += res.evaluations
+        b = problem.breakdown(res.x)
+        if b["phi"] > 0.0:
+            return None
+        return (
+            np.asarray(b["hover_points"], dtype=float).reshape(-1, 2),
+            np.asarray(b["hover_times"], dtype=float),
+        )
+
+    def single(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """Step 1: the single flight on the planning map."""
+        return self._run(self.problem, self.config.seed, self.config.budget)
+
+    def sub(
+        self, a: np.ndarray, b: np.ndarray, req: np.ndarray, seed: int
+    ) -> tuple[np.ndarray, np.ndarray] | None:
+        """The pipeline from a to b (2,) for the data req (J,) Mbit of the planning map
+        (with its margin): only the sensors that need data are put in the sub-map (the
+        plan is then checked for C3 over every sensor)."""
+        from planner_core.model.mapio import load_map
+        from planner_core.model.problem import Problem
+
+        keep = req > 0
+        if not keep.any():
+            return None
+        d = sortie_map_dict(self.m, a, b, req / self.margin, keep=keep)
+        n = int(keep.sum())
+        d["uav"]["max_hover_points"] = int(min(200, max(10, (n + 1) // 2 + 8)))
+        sub = Problem(load_map(d).planning_map(), variable_length=self.config.variable_length)
+        out = self._run(sub, seed, self.sortie_budget)
+        if out is None or not self.c3_ok(out[0]):
+            return None
+        return out
+
+    def c3_ok(self, pts: np.ndarray) -> bool:
+        """C3 at every point with every sensor of the map (sum_j R_ij <= R_lambda)."""
+        if not len(pts) or self.model.access != "simultaneous":
+            return True
+        return bool(np.all(self.model.rates(pts).sum(axis=1) <= self.model.bandwidth))
+
+    # ------------------------------------------------------------------ plans
+    def lp(self, plan: FleetPlan | None) -> FleetPlan | None:
+        """The LP across sorties on `plan` (None passes through)."""
+        if plan is None:
+            return None
+        self.lps += 1
+        out = fleet_hover_lp(plan, self.model)
+        if out is None or not out.energy_ok():
+            return None
+        return out
+
+    def split(self, P: np.ndarray, T: np.ndarray) -> FleetPlan | None:
+        """A tour (corners joined into its blocked legs) split among the vehicles, LP'd."""
+        joined = self.links.join(P, T)
+        if joined is None:
+            return None
+        return self.lp(split_vehicles(self.st, self.links, *joined))
+
+    def cluster_first(self) -> FleetPlan | None:
+        """Step 3: per depot a tour of its nearest sensors, the tours joined and split."""
+        st = self.st
+        S = self.model.sensors
+        req = self.model.required
+        dist = np.hypot(
+            S[:, None, 0] - st.depots[None, :, 0], S[:, None, 1] - st.depots[None, :, 1]
+        )
+        owner = np.argmin(dist, axis=1)
+        used = [d for d in range(len(st.depots)) if np.any((owner == d) & (req > 0))]
+        if not used:
+            return None
+        # depots in nearest-neighbour order from the first start depot with sensors, else the
+        # first start depot's nearest
+        first = next((d for d in st.start_depots if d in used), None)
+        if first is None:
+            s0 = st.depots[st.start_depots[0]]
+            first = min(used, key=lambda d: float(np.hypot(*(st.depots[d] - s0))))
+        order = [first]
+        left = [d for d in used if d != first]
+        while left:
+            here = st.depots[order[-1]]
+            nxt = min(left, key=lambda d: float(np.hypot(*(st.depots[d] - here))))
+            order.append(nxt)
+            left.remove(nxt)
+        P, T = [], []
+        for k, d in enumerate(order):
+            r = np.where(owner == d, req, 0.0)
+            got = self.sub(st.depots[d], st.depots[d], r, _seed(self.config.seed, 1, k))
+            if got is None:
+                return None
+            P.append(got[0])
+            T.append(got[1])
+        return self.split(np.vstack(P), np.concatenate(T))
+
+    def replan(self, plan: FleetPlan, rnd: int) -> FleetPlan | None:
+        """Each sortie planned again for its share of the data (module docstring, 4)."""
+        st = self.st
+        shares = collected_by_sortie(plan, self.model)
+        req = self.model.required
+        vs: list[list[Sortie]] = []
+        k = 0
+        changed = False
+        for vsort in plan.vehicles:
+            row = []
+            for s in vsort:
+                share = np.where(shares[k] > 1e-9 * np.maximum(req, 1.0), shares[k], 0.0)
+                share = np.minimum(share, req)
+                got = self.sub(
+                    st.depots[s.start], st.depots[s.end], share, _seed(self.config.seed, 2, rnd, k)
+                )
+                k += 1
+                if got is not None:
+                    joined = self.links.join(*got)
+                    cand = None
+                    if joined is not None:
+                        cand = Sortie(s.start, s.end, *joined)
+                        ok = cand.f(st) < s.f(st) - 1e-9 and cand.energy(st) <= st.budget_wh(
+                            len(cand.points)
+                        )
+                        if not ok:
+                            cand = None
+                    if cand is not None:
+                        row.append(cand)
+                        changed = True
+                        continue
+                row.append(s)
+            vs.append(row)
+        return self.lp(plan.replace(vs)) if changed else None
+
+    def resplit(self, plan: FleetPlan) -> FleetPlan | None:
+        """The vehicles' sorties joined into one tour (hover points only, vehicle by vehicle)
+        and split again, in both directions: the better split."""
+        pts = [s.points[s.times > 0] for s in plan.sorties]
+        tms = [s.times[s.times > 0] for s in plan.sorties]
+        if not pts:
+            return None
+        P, T = np.vstack(pts), np.concatenate(tms)
+        out = [p for p in (self.split(P, T), self.split(P[::-1], T[::-1])) if p is not None]
+        return min(out, key=lambda p: p.objective()) if out else None
+
+    def merge(self, plan: FleetPlan, rnd: int) -> FleetPlan | None:
+        """Two consecutive sorties of a vehicle planned again by the pipeline as one, from
+        the first's depot to the second's, for both shares of the data (a swap and a landing
+        saved when it fits the battery); the best such merge by the objective, or None."""
+        st = self.st
+        shares = collected_by_sortie(plan, self.model)
+        req = self.model.required
+        best = None
+        k0 = 0
+        for v, vs in enumerate(plan.vehicles):
+            for k in range(len(vs) - 1):
+                a, b = vs[k], vs[k + 1]
+                share = np.minimum(shares[k0 + k] + shares[k0 + k + 1], req)
+                share = np.where(share > 1e-9 * np.maximum(req, 1.0), share, 0.0)
+                got = self.sub(
+                    st.depots[a.start],
+                    st.depots[b.end],
+                    share,
+                    _seed(self.config.seed, 3, rnd, k0 + k),
+                )
+                if got is None:
+                    continue
+                joined = self.links.join(*got)
+                if joined is None:
+                    continue
+                one = Sortie(a.start, b.end, *joined)
+                if one.energy(st) > st.budget_wh(len(one.points)):
+                    continue
+                rows = [list(x) for x in plan.vehicles]
+                rows[v][k : k + 2] = [one]
+                trial = self.lp(plan.replace(rows))
+                if trial is not None and (best is None or trial.objective() < best.objective()):
+                    best = trial
+            k0 += len(vs)
+        return best if best is not None and best.objective() < plan.objective() else None
+
+    def eliminate(self, plan: FleetPlan) -> FleetPlan | None:
+        """The sorties of least energy, one at a time (at most 3), removed: each of their hover
+        points put at its cheapest insertion into the sortie that still fits it (with the
+        current hover times; else the cheapest of all), the LP across sorties then deciding;
+        the first removal that improves the objective (a swap saved), else None."""
+        st = self.st
+        flat = [(v, k) for v in range(len(plan.vehicles)) for k in range(len(plan.vehicles[v]))]
+        if len(flat) < 2:
+            return None
+        order = sorted(flat, key=lambda vk: plan.vehicles[vk[0]][vk[1]].energy(st))
+        for va, ka in order[:3]:
+            gone = plan.vehicles[va][ka]
+            vs = [list(v) for v in plan.vehicles]
+            vs[va].pop(ka)
+            ok = True
+            for i in np.flatnonzero(gone.times > 0):
+                p, t = gone.points[i], gone.times[i]
+                best_fit, best_any = None, None
+                for vb in range(len(vs)):
+                    for kb, dst in enumerate(vs[vb]):
+                        path = dst.path(st)
+                        gain = (
+                            np.hypot(*(path[:-1] - p).T)
+                            + np.hypot(*(path[1:] - p).T)
+                            - np.hypot(*np.diff(path, axis=0).T)
+                        )
+                        pos = int(np.argmin(gain))
+                        if not bool(
+                            np.all(
+                                self.links.clear(
+                                    np.vstack([path[pos], p]), np.vstack([p, path[pos + 1]])
+                                )
+                            )
+                        ):
+                            continue
+                        new = Sortie(
+                            dst.start,
+                            dst.end,
+                            np.insert(dst.points, pos, p, axis=0),
+                            np.insert(dst.times, pos, t),
+                        )
+                        key = (float(gain[pos]), vb, kb)
+                        if best_any is None or key < best_any[0]:
+                            best_any = (key, new)
+                        if new.energy(st) <= st.budget_wh(len(new.points)) and (
+                            best_fit is None or key < best_fit[0]
+                        ):
+                            best_fit = (key, new)
+                pick = best_fit or best_any
+                if pick is None:
+                    ok = False
+                    break
+                (_, vb, kb), new = pick
+                vs[vb][kb] = new
+            if not ok:
+                continue
+            trial = self.lp(plan.replace([v for v in vs if v]))
+            if trial is not None and trial.objective() < plan.objective():
+                return trial
+        return None
+
+    def transfer(self, plan: FleetPlan) -> FleetPlan:
+        """Hover points moved one at a time to their cheapest insertion in a nearby sortie
+        (module docstring, 4): a move is kept when the LP across sorties improves the
+        objective."""
+        st = self.st
+        best = plan
+        score = best.objective()
+        flat = [(v, k) for v in range(len(best.vehicles)) for k in range(len(best.vehicles[v]))]
+        for a in range(len(flat)):
+            va, ka = flat[a]
+            if va >= len(best.vehicles) or ka >= len(best.vehicles[va]):
+                continue
+            src = best.vehicles[va][ka]
+            centre = src.points.mean(axis=0) if len(src.points) else st.depots[src.start]
+            others = []
+            for vb, kb in flat:
+                if (vb, kb) == (va, ka) or vb >= len(best.vehicles) or kb >= len(best.vehicles[vb]):
+                    continue
+                o = best.vehicles[vb][kb]
+                c = o.points.mean(axis=0) if len(o.points) else st.depots[o.start]
+                others.append((float(np.hypot(*(c - centre))), vb, kb))
+            others.sort()
+            for i in np.flatnonzero(src.times > 0):
+                src = best.vehicles[va][ka]
+                if i >= len(src.points) or src.times[i] <= 0:
+                    continue
+                p = src.points[i]
+                for _, vb, kb in others[:TRANSFER_NEIGHBOURS]:
+                    dst = best.vehicles[vb][kb]
+                    path = dst.path(st)
+                    gain = (
+                        np.hypot(*(path[:-1] - p).T)
+                        + np.hypot(*(path[1:] - p).T)
+                        - np.hypot(*np.diff(path, axis=0).T)
+                    )
+                    pos = int(np.argmin(gain))
+                    if not bool(
+                        np.all(
+                            self.links.clear(
+                                np.vstack([path[pos], p]), np.vstack([p, path[pos + 1]])
+                            )
+                        )
+                    ):
+                        continue
+                    keep = np.ones(len(src.points), dtype=bool)
+                    keep[i] = False
+                    new_src = Sortie(src.start, src.end, src.points[keep], src.times[keep])
+                    if len(new_src.points) and not bool(
+                        np.all(self.links.clear(new_src.path(st)[:-1], new_src.path(st)[1:]))
+                    ):
+                        continue
+                    new_dst = Sortie(
+                        dst.start,
+                        dst.end,
+                        np.insert(dst.points, pos, p, axis=0),
+                        np.insert(dst.times, pos, src.times[i]),
+                    )
+                    vs = [list(v) for v in best.vehicles]
+                    vs[va][ka] = new_src
+                    vs[vb][kb] = new_dst
+                    if not np.any(new_src.times > 0):
+                        vs[va].pop(ka)  # an empty sortie is no sortie (its swap saved)
+                    trial = self.lp(best.replace([v for v in vs if v]))
+                    if trial is not None and trial.objective() < score:
+                        best, score = trial, trial.objective()
+                        flat = [
+                            (v, k)
+                            for v in range(len(best.vehicles))
+                            for k in range(len(best.vehicles[v]))
+                        ]
+                        break
+        return best
+
+
+def _finish(pl: _Planner, plan: FleetPlan, notes: list[str]) -> FleetPlan:
+    return plan.replace(
+        plan.vehicles,
+        evaluations=pl.evaluations,
+        notes=tuple(notes + [f"{pl.lps} LPs across sorties"]),
+    )
+
+
+def route_first(
+    m: Any, config: Any, *, goal: str | None = None, sortie_budget: int = SORTIE_BUDGET
+) -> FleetResult:
+    """Route first, cluster second (the benchmark's peer; module docstring, steps 1-2): the
+    single-flight plan's tour cut into battery-sized sorties with returns to the depots,
+    shared among the vehicles, hover times re-solved by the LP across sorties.
+
+    Args:
+        m: a loaded map with a battery (`planner_core.model.mapio.Map`).
+        config: the single flight's `planner_core.pipeline.PlanConfig` (seed, budget, ...).
+        goal: "total" or "makespan" (default the map's `objective.goal`).
+        sortie_budget: unused here (the peer plans no sortie on its own); kept so both
+            planners take the same arguments.
+
+    Returns:
+        The `FleetResult` (its `peer` is None).
+
+    Raises:
+        ValueError: the map has no battery; or no split fits the battery (a point no depot
+            reaches and returns from with its hover time), naming the problem.
+    """
+    pl = _Planner(m, config, goal, sortie_budget)
+    single = pl.single()
+    if single is None:
+        raise ValueError("plan: the single flight found no feasible plan to cut into sorties")
+    plan = pl.split(*single)
+    if plan is None:
+        raise ValueError(
+            "uav.battery: the single flight cannot be cut into sorties that fit "
+            "the battery from the depots (run `lamde-mission check`)"
+        )
+    return FleetResult(_finish(pl, plan, ["route first, cluster second"]), single, None, pl.lps)
+
+
+def plan_fleet(
+    m: Any,
+    config: Any,
+    *,
+    goal: str | None = None,
+    sortie_budget: int = SORTIE_BUDGET,
+    rounds: int = ROUNDS,
+) -> FleetResult:
+    """The sortie planner (module docstring): sorties and vehicles for a map with a battery.
+
+    Args:
+        m: a loaded map with a battery (`planner_core.model.mapio.Map`).
+        config: the single flight's `planner_core.pipeline.PlanConfig` (seed, budget, ...);
+            the sub-runs use its settings with their own seeds and `sortie_budget`.
+        goal: "total" or "makespan" (default the map's `objective.goal`).
+        sortie_budget: evaluations of each pipeline run on one sortie's or depot's sensors.
+        rounds: improving rounds at most (0: the better start only).
+
+    Returns:
+        The `FleetResult`: the plan (planning-map coordinates; hover times from the LP across
+        sorties), the single flight, the route-first peer it started from.
+
+    Raises:
+        ValueError: the map has no battery, or no plan of sorties fits the battery from its
+            depots (a sensor out of one battery's reach: `lamde-mission check` names it).
+    """
+    pl = _Planner(m, config, goal, sortie_budget)
+    single = pl.single()
+    notes: list[str] = []
+    peer = pl.split(*single) if single is not None else None
+    best = peer
+    cf = pl.cluster_first()
+    if cf is not None and (best is None or cf.objective() < best.objective()):
+        best = cf
+        notes.append("start: cluster first")
+    elif best is not None:
+        notes.append("start: route first, cluster second")
+    if best is None:
+        raise ValueError(
+            "uav.battery: no plan of sorties fits the battery from the depots "
+            "(run `lamde-mission check`)"
+        )
+    peer_plan = _finish(pl, peer, ["route first, cluster second"]) if peer is not None else None
+    for rnd in range(int(rounds)):
+        before = best.objective()
+        for step in ("replan", "merge", "eliminate", "transfer", "resplit"):
+            if step == "replan":
+                cand = pl.replan(best, rnd)
+            elif step == "merge":
+                cand = pl.merge(best, rnd)
+            elif step == "eliminate":
+                cand = pl.eliminate(best)
+            elif step == "transfer":
+                cand = pl.transfer(best)
+            else:
+                cand = pl.resplit(best)
+            if cand is not None and cand.objective() < best.objective():
+                notes.append(
+                    f"round {rnd + 1} {step}: {best.objective()[0]:.2f} -> "
+                    f"{cand.objective()[0]:.2f}"
+                )
+                best = cand
+        if not best.objective() < before:
+            break
+    return FleetResult(
+        _finish(pl, best, notes),
+        single if single is not None else (np.zeros((0, 2)), np.zeros(0)),
+        peer_plan,
+        pl.lps,
+    )

@@ -1,0 +1,289 @@
+"""Cutting a route into battery-sized sorties: the optimal split of a giant tour (Beasley 1983).
+
+Route-first, cluster-second (J. E. Beasley, "Route first - cluster second methods for vehicle
+routing", Omega 11(4), 1983; the split of C. Prins, "A simple and effective evolutionary
+algorithm for the vehicle routing problem", Comput. Oper. Res. 31(12), 2004): given a visiting
+order of hover points (a giant tour, e.g. the single-flight plan) with their hover times, the
+best way to cut it into consecutive pieces, each flown depot -> its points -> depot on one
+battery, is a shortest path over the cut positions. Here the path's states also carry the depot
+the vehicle stands at (it takes off where it last landed), so the split also chooses the
+depots:
+
+    best[j, d'] = min over i < j, d of best[i, d] + swap_s [i > 0] + cost(d, P_i..P_{j-1}, d')
+    subject to  energy(d, P_i..P_{j-1}, d') <= FleetSettings.budget_wh(points)
+
+A piece's cost is the paper's f of the sortie (alpha t_fly + (1 - alpha) t_hover; "total") or
+its duration (t_fly + t_hover + take-off and landing; "makespan"); its energy the energy
+module's (`planner_core.model.energy`). Legs between a depot and a point that cross an obstacle
+go through visibility-graph corners (`Links`: the seeder's reduced visibility graph, the same
+corners the single-flight plans use), flown as hover points with hover time 0.
+
+`split_vehicles` cuts the tour into one consecutive chunk per vehicle first (balanced by work,
+then each cut moved while the objective improves) and splits each chunk.
+
+Cost: O(n x L x D^2) for n points, pieces of at most L points (the battery's reach) and D
+depots, plus one visibility-graph route per blocked depot-point pair; nothing grows with the
+sensors.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from planner_core.fleet.model import FleetPlan, FleetSettings, Sortie
+from planner_core.model.geometry import overlap_lengths
+from planner_core.model.routing.graph import CLEAR
+
+__all__ = ["Links", "split_tour", "split_vehicles"]
+
+
+class Links:
+    """Obstacle-free ways between two points of a planning map: the straight leg when it is
+    clear, else the shortest way through the seeder's visibility-graph corners (cached).
+
+    Args:
+        problem: the planning map's `planner_core.model.problem.Problem` (obstacles, seeder).
+    """
+
+    def __init__(self, problem: Any) -> None:
+        self.problem = problem
+        self.obstacles = problem.obstacles
+        self._cache: dict[bytes, np.ndarray | None] = {}
+
+    def clear(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        """Whether each leg a -> b ((n, 2) each) is collision-free."""
+        return overlap_lengths(np.asarray(a, dtype=float), np.asarray(b, dtype=float),
+                               self.obstacles) <= CLEAR  # fmt: skip
+
+    def way(self, a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
+        """Corners (k, 2) to fly through from a to b (k = 0 when the leg is clear), in order;
+        None when the graph joins them by no way."""
+        a = np.asarray(a, dtype=float).reshape(2)
+        b = np.asarray(b, dtype=float).reshape(2)
+        key = a.tobytes() + b.tobytes()
+        if key in self._cache:
+            return self._cache[key]
+        back = b.tobytes() + a.tobytes()
+        if back in self._cache:
+            w = self._cache[back]
+            return None if w is None else w[::-1].copy()
+        if bool(self.clear(a[None], b[None])[0]):
+            out: np.ndarray | None = np.zeros((0, 2))
+        else:
+            seeder = self.problem.seeder
+            g = seeder.graph
+            out = None
+            if g.n:
+                src, dst = seeder.connect(np.vstack([a, b]))
+                length, path = g.route(src, dst)
+                if path and np.isfinite(length):
+                    out = g.nodes[path].copy()
+        self._cache[key] = out
+        return out
+
+    def join(self, pts: np.ndarray, times: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """A tour through pts (n, 2) with corners (hover time 0) put into its blocked legs:
+        (points, times), or None when some leg cannot be routed."""
+        pts = np.asarray(pts, dtype=float).reshape(-1, 2)
+        times = np.asarray(times, dtype=float).reshape(-1)
+        if len(pts) < 2:
+            return pts.copy(), times.copy()
+        ok = self.clear(pts[:-1], pts[1:])
+        if ok.all():
+            return pts.copy(), times.copy()
+        P, T = [pts[:1]], [times[:1]]
+        for i in range(1, len(pts)):
+            if not ok[i - 1]:
+                w = self.way(pts[i - 1], pts[i])
+                if w is None:
+                    return None
+                P.append(w)
+                T.append(np.zeros(len(w)))
+            P.append(pts[i : i + 1])
+            T.append(times[i : i + 1])
+        return np.vstack(P), np.concatenate(T)
+
+
+def _connections(
+    st: FleetSettings, links: Links, P: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[list[Any]]]:
+    """Per depot d and point i: time (s), energy (Wh, no vertical) and corner count of the
+    way d -> P_i, and the corners; inf where there is none."""
+    D, n = len(st.depots), len(P)
+    ct = np.full((D, n), np.inf)
+    ce = np.full((D, n), np.inf)
+    nc = np.zeros((D, n), dtype=int)
+    ways: list[list[Any]] = [[None] * n for _ in range(D)]
+    for d in range(D):
+        clear = links.clear(np.repeat(st.depots[d][None], n, axis=0), P)
+        for i in range(n):
+            w = np.zeros((0, 2)) if clear[i] else links.way(st.depots[d], P[i])
+            if w is None:
+                continue
+            path = np.vstack([st.depots[d], w, P[i]])
+            seg = np.hypot(*np.diff(path, axis=0).T)
+            ct[d, i] = float(st.leg_times(seg).sum())
+            ce[d, i] = float(st.leg_energies(seg).sum())
+            nc[d, i] = len(w)
+            ways[d][i] = w
+    return ct, ce, nc, ways
+
+
+def split_tour(
+    st: FleetSettings,
+    links: Links,
+    P: np.ndarray,
+    T: np.ndarray,
+    *,
+    starts: tuple[int, ...] | None = None,
+    goal: str | None = None,
+) -> list[Sortie] | None:
+    """The best cut of the tour P (n, 2) with hover times T (n,) s into sorties (module
+    docstring): consecutive pieces, each depot -> its points -> depot within the battery; the
+    first leaves one of `starts` (default `st.start_depots`), each later one the depot the
+    last landed at.
+
+    Args:
+        st: the fleet's settings (depots, battery, swap time, weights).
+        links: obstacle-free ways on the planning map.
+        P, T: the tour's points (m) and hover times (s); its own legs must be clear.
+        starts: depots the first sortie may leave.
+        goal: "total" (pieces cost their f) or "makespan" (their duration); default st's.
+
+    Returns:
+        The sorties in flying order, or None when some point cannot be flown on one battery
+        from any depot (with its hover time) or the tour is empty.
+    """
+    P = np.asarray(P, dtype=float).reshape(-1, 2)
+    T = np.asarray(T, dtype=float).reshape(-1)
+    n, D = len(P), len(st.depots)
+    if n == 0:
+        return None
+    goal = goal or st.goal
+    wf, wh, per = (st.alpha, 1.0 - st.alpha, 0.0) if goal == "total" else (1.0, 1.0, st.vertical_s)
+    starts = st.start_depots if starts is None else starts
+    ct, ce, nc, ways = _connections(st, links, P)
+    seg = np.hypot(*np.diff(P, axis=0).T) if n > 1 else np.zeros(0)
+    CT = np.concatenate([[0.0], np.cumsum(st.leg_times(seg))])  # (n,) flight to P_i from P_0
+    CE = np.concatenate([[0.0], np.cumsum(st.leg_energies(seg))])
+    CH = np.concatenate([[0.0], np.cumsum(T)])  # (n + 1,)
+    h = st.hover_w / 3600.0
+    cap = st.usable_wh
+    best = np.full((n + 1, D), np.inf)
+    prev = np.full((n + 1, D, 2), -1, dtype=int)
+    best[0, list(starts)] = 0.0
+    for i in range(n):
+        if not np.isfinite(best[i]).any():
+            continue
+        # the longest piece from P_i: its interior energy alone (no way in or out) fits
+        inner = st.vertical_wh + (CE[i:n] - CE[i]) + h * (CH[i + 1 : n + 1] - CH[i])
+        L = int(np.searchsorted(inner, cap, side="right"))
+        if L == 0:
+            continue
+        j = np.arange(i + 1, i + L + 1)  # piece P_i .. P_{j-1}
+        fly = (
+            ct[:, i][:, None, None]
+            + (CT[j - 1] - CT[i])[None, :, None]
+            + ct[:, j - 1].T[None, :, :]
+        )  # (D, L, D')
+        hov = (CH[j] - CH[i])[None, :, None]
+        en = (
+            st.vertical_wh
+            + ce[:, i][:, None, None]
+            + (CE[j - 1] - CE[i])[None, :, None]
+            + ce[:, j - 1].T[None, :, :]
+            + h * hov
+        )
+        count = (j - i)[None, :, None] + nc[:, i][:, None, None] + nc[:, j - 1].T[None, :, :]
+        budget = st.budget_wh(count)
+        cost = best[i][:, None, None] + (st.swap_s if i > 0 else 0.0) + wf * fly + wh * hov + per
+        cost = np.where(en <= budget, cost, np.inf)
+        dbest = np.argmin(cost, axis=0)  # (L, D')
+        cmin = np.take_along_axis(cost, dbest[None], axis=0)[0]
+        better = cmin < best[j]
+        if better.any():
+            rows, cols = np.nonzero(better)
+            best[j[rows], cols] = cmin[rows, cols]
+            prev[j[rows], cols, 0] = i
+            prev[j[rows], cols, 1] = dbest[rows, cols]
+    if not np.isfinite(best[n]).any():
+        return None
+    d_end = int(np.argmin(best[n]))
+    out: list[Sortie] = []
+    j = n
+    while j > 0:
+        i, d = int(prev[j, d_end, 0]), int(prev[j, d_end, 1])
+        w_out = ways[d][i]
+        w_in = ways[d_end][j - 1][::-1]
+        pts = np.vstack([w_out, P[i:j], w_in])
+        times = np.concatenate([np.zeros(len(w_out)), T[i:j], np.zeros(len(w_in))])
+        out.append(Sortie(d, d_end, pts, times))
+        j, d_end = i, d
+    return out[::-1]
+
+
+def split_vehicles(
+    st: FleetSettings,
+    links: Links,
+    P: np.ndarray,
+    T: np.ndarray,
+    *,
+    vehicles: int | None = None,
+    goal: str | None = None,
+) -> FleetPlan | None:
+    """The tour P (n, 2), T (n,) shared out among `vehicles` (default `st.uavs`) as
+    consecutive chunks, each cut into sorties by `split_tour`: the chunks first balanced by
+    their work (flight along the tour plus hover), then each cut moved by 8, 4, 2, 1 points
+    while the plan's objective (`FleetPlan.objective`) improves.
+
+    Returns:
+        The plan (no LP run on it yet), or None when some chunk cannot be split.
+    """
+    P = np.asarray(P, dtype=float).reshape(-1, 2)
+    T = np.asarray(T, dtype=float).reshape(-1)
+    n = len(P)
+    k = max(1, min(int(vehicles or st.uavs), n))
+    cache: dict[tuple[int, int], list[Sortie] | None] = {}
+
+    def chunk(lo: int, hi: int) -> list[Sortie] | None:
+        if (lo, hi) not in cache:
+            cache[(lo, hi)] = split_tour(st, links, P[lo:hi], T[lo:hi], goal=goal)
+        return cache[(lo, hi)]
+
+    def plan_of(cuts: list[int]) -> FleetPlan | None:
+        bounds = [0, *cuts, n]
+        vs = []
+        for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
+            s = chunk(lo, hi)
+            if s is None:
+                return None
+            vs.append(s)
+        return FleetPlan(st, vs)
+
+    if k == 1:
+        s = chunk(0, n)
+        return None if s is None else FleetPlan(st, [s])
+    seg = np.hypot(*np.diff(P, axis=0).T)
+    work = np.concatenate([[0.0], np.cumsum(st.leg_times(seg))]) + np.cumsum(T)
+    cuts = [int(np.clip(np.searchsorted(work, work[-1] * q / k), 1, n - 1)) for q in range(1, k)]
+    cuts = sorted(set(cuts))
+    best = plan_of(cuts)
+    score = best.objective(goal) if best is not None else (np.inf, np.inf)
+    for step in (8, 4, 2, 1):
+        improved = True
+        while improved:
+            improved = False
+            for c in range(len(cuts)):
+                for sgn in (-1, 1):
+                    trial = list(cuts)
+                    trial[c] += sgn * step
+                    lo = trial[c - 1] if c > 0 else 0
+                    hi = trial[c + 1] if c + 1 < len(trial) else n
+                    if not lo < trial[c] < hi:
+                        continue
+                    p = plan_of(trial)
+                    if p is not None and p.objective(goal) < score:
+                        best, score, cuts, improved = p, p.objective(goal), trial, True
+    return best
