@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import io
 import math
+from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -21,7 +23,8 @@ import numpy as np
 
 from lamde_mission.atomic import write_bytes_atomic
 
-__all__ = ["mission_figure", "save_figure", "plot_mission", "IMAGE_SUFFIXES", "nice_length"]
+__all__ = ["mission_figure", "save_figure", "plot_mission", "IMAGE_SUFFIXES", "nice_length",
+           "SortieView", "fleet_figure", "plot_fleet", "SORTIE_STYLES"]  # fmt: skip
 
 IMAGE_SUFFIXES = (".png", ".svg")
 
@@ -116,37 +119,19 @@ def _emptiest_corner(points: np.ndarray, W: float, H: float) -> str:
     return min(count, key=lambda k: (count[k], list(corners).index(k)))
 
 
-def mission_figure(
-    map: Any,  # noqa: A002
-    *,
-    timeline: Any = None,
-    plan: Any = None,
-    title: str | None = None,
-    figsize: tuple[float, float] | None = None,
-) -> Any:
-    """A matplotlib Figure (Agg canvas) of `map` with a replayed `timeline` or a `plan`.
+#: the white box behind labels
+_TEXT_BOX = {"boxstyle": "round,pad=0.15", "facecolor": "white", "alpha": 0.7, "edgecolor": "none"}
 
-    The map panel labels sensors by id and hover points by visiting order and hover seconds
-    ("2 · 41 s"), shows the route's direction with arrows, draws the parts of legs inside an
-    obstacle (C5) in red, rings sensors short of data with "x of y Mbit" and crosses those that
-    got nothing. With a `timeline` (the simulator's replay) a second panel shows each sensor's
-    data collected over the mission time against its requirement (100 %). The figure's size
-    follows the area's shape (no wide white bands); `figsize` overrides it.
-    """
+
+def _map_axes(map_: Any, *, has_time: bool, figsize: tuple[float, float] | None) -> Any:
+    """(figure, map axes, time axes or None, legend handles): the area drawn, sized to its
+    shape (no wide white bands); `figsize` overrides the size."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.cm import ScalarMappable
-    from matplotlib.colors import Normalize
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
-    from matplotlib.patches import Circle, Patch
-    from matplotlib.patches import Polygon as PolygonPatch
     from matplotlib.patches import Rectangle as RectanglePatch
-    from mpl_toolkits.axes_grid1.anchored_artists import AnchoredSizeBar
 
-    spec = map.spec
-    W, H = spec.area.width, spec.area.height
-    view = _mission_view(map, timeline, plan)
-    has_time = timeline is not None and len(getattr(timeline, "t", ())) > 1
+    W, H = map_.spec.area.width, map_.spec.area.height
     aspect = H / W if W > 0 else 1.0
     map_w = 7.5
     map_h = float(np.clip(map_w * aspect, 2.5, 9.0))
@@ -174,7 +159,16 @@ def mission_figure(
     ax.add_patch(RectanglePatch((0, 0), W, H, fill=False, edgecolor="0.3", linewidth=1.2,
                                 linestyle="--"))  # fmt: skip
     handles: list[Any] = [Line2D([], [], color="0.3", linestyle="--", label="area")]
+    return fig, ax, ax_t, handles
 
+
+def _draw_obstacles(ax: Any, map: Any, handles: list[Any]) -> None:  # noqa: A002
+    """Circles, rotated rectangles, footprints and no-fly zones (holes open), with their
+    legend entries."""
+    from matplotlib.patches import Circle, Patch
+    from matplotlib.patches import Polygon as PolygonPatch
+
+    spec = map.spec
     shapes = list(getattr(map, "shapes", ()))
     n_footprints = sum(sh.kind != "no_fly_zone" for sh in shapes)
     # thin outlines when there are many footprints (a campus), so neighbours stay apart
@@ -195,14 +189,28 @@ def mission_figure(
         handles.append(Patch(facecolor="tab:red", alpha=0.3, edgecolor="tab:red", hatch="//",
                              label="no-fly zones"))  # fmt: skip
 
+
+def _draw_sensors(
+    fig: Any,
+    ax: Any,
+    map: Any,  # noqa: A002
+    collected: np.ndarray | None,
+    handles: list[Any],
+) -> np.ndarray:
+    """The sensors, labelled by id; with `collected` (Mbit per sensor) coloured by the share of
+    their requirement, short ones ringed with "x of y Mbit", unreached ones crossed, and a
+    colour bar. Returns the sensor positions (J x 2, m)."""
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import Normalize
+    from matplotlib.lines import Line2D
+
+    text_box = _TEXT_BOX
     sensors = np.asarray(map.sensors, dtype=float)
     required = np.asarray(map.required_data, dtype=float)
     ids = list(map.sensor_ids)
     many = len(ids) > 60  # label only the sensors that need attention on crowded maps
-    text_box = {"boxstyle": "round,pad=0.15", "facecolor": "white", "alpha": 0.7,
-                "edgecolor": "none"}  # fmt: skip
-    if view is not None and view["collected"] is not None:
-        got = view["collected"]
+    if collected is not None:
+        got = collected
         share = np.where(required > 0, got / np.maximum(required, 1e-300), 1.0)
         norm = Normalize(0.0, 1.0)
         cmap = "RdYlGn"
@@ -243,6 +251,51 @@ def mission_figure(
                             fontsize=7.5, zorder=8, bbox=text_box)  # fmt: skip
         handles.append(Line2D([], [], marker="o", linestyle="", markerfacecolor="tab:blue",
                               markeredgecolor="k", label="sensors"))  # fmt: skip
+    return sensors
+
+
+def _scale_bar_and_legend(
+    fig: Any, ax: Any, W: float, H: float, data_points: list[np.ndarray], handles: list[Any]
+) -> None:
+    """A scale bar in the corner with the fewest of `data_points`, the legend below."""
+    from mpl_toolkits.axes_grid1.anchored_artists import AnchoredSizeBar
+
+    bar = nice_length(W)
+    label = f"{bar / 1000:g} km" if bar >= 1000 else f"{bar:g} m"
+    corner = _emptiest_corner(np.vstack(data_points), W, H)
+    ax.add_artist(AnchoredSizeBar(ax.transData, bar, label, loc=corner, pad=0.4,
+                                  borderpad=0.6, sep=4, frameon=True, size_vertical=0))  # fmt: skip
+    fig.legend(handles=handles, loc="outside lower center", ncol=min(len(handles), 4),
+               fontsize=8, frameon=False)  # fmt: skip
+
+
+def mission_figure(
+    map: Any,  # noqa: A002
+    *,
+    timeline: Any = None,
+    plan: Any = None,
+    title: str | None = None,
+    figsize: tuple[float, float] | None = None,
+) -> Any:
+    """A matplotlib Figure (Agg canvas) of `map` with a replayed `timeline` or a `plan`.
+
+    The map panel labels sensors by id and hover points by visiting order and hover seconds
+    ("2 · 41 s"), shows the route's direction with arrows, draws the parts of legs inside an
+    obstacle (C5) in red, rings sensors short of data with "x of y Mbit" and crosses those that
+    got nothing. With a `timeline` (the simulator's replay) a second panel shows each sensor's
+    data collected over the mission time against its requirement (100 %). The figure's size
+    follows the area's shape (no wide white bands); `figsize` overrides it.
+    """
+    from matplotlib.lines import Line2D
+
+    spec = map.spec
+    W, H = spec.area.width, spec.area.height
+    view = _mission_view(map, timeline, plan)
+    has_time = timeline is not None and len(getattr(timeline, "t", ())) > 1
+    fig, ax, ax_t, handles = _map_axes(map, has_time=has_time, figsize=figsize)
+    _draw_obstacles(ax, map, handles)
+    sensors = _draw_sensors(fig, ax, map, None if view is None else view["collected"], handles)
+    text_box = _TEXT_BOX
 
     data_points = [sensors, np.asarray([map.start, map.end], dtype=float)]
     if view is not None:
@@ -292,13 +345,7 @@ def mission_figure(
     handles.append(Line2D([], [], marker="s", linestyle="", markerfacecolor="tab:purple",
                           markeredgecolor="k", label="end"))  # fmt: skip
 
-    bar = nice_length(W)
-    label = f"{bar / 1000:g} km" if bar >= 1000 else f"{bar:g} m"
-    corner = _emptiest_corner(np.vstack(data_points), W, H)
-    ax.add_artist(AnchoredSizeBar(ax.transData, bar, label, loc=corner, pad=0.4,
-                                  borderpad=0.6, sep=4, frameon=True, size_vertical=0))  # fmt: skip
-    fig.legend(handles=handles, loc="outside lower center", ncol=min(len(handles), 4),
-               fontsize=8, frameon=False)  # fmt: skip
+    _scale_bar_and_legend(fig, ax, W, H, data_points, handles)
     if title is None:
         title = f"map '{spec.name}'"
         if view is not None and view.get("f") is not None:
@@ -380,3 +427,185 @@ def plot_mission(
         raise ValueError(f"{out}: image format must be PNG or SVG (suffix .png or .svg)")
     fig = mission_figure(map, timeline=timeline, plan=plan, title=title)
     return save_figure(fig, out, dpi=dpi)
+
+
+# ----------------------------------------------------------------------------- fleets
+
+
+#: the line style of sortie j (1-based) of a vehicle: SORTIE_STYLES[(j - 1) % 4]
+SORTIE_STYLES = ("-", "--", "-.", ":")
+
+
+@dataclass(frozen=True)
+class SortieView:
+    """One sortie to draw: vehicle and sortie numbers (1-based), the simulator's replay of its
+    mission on the whole map, and the names of the depots it leaves and lands at (None:
+    unnamed)."""
+
+    vehicle: int
+    sortie: int
+    timeline: Any
+    depot_start: str | None = None
+    depot_end: str | None = None
+
+
+def _vehicle_colour(vehicle: int) -> Any:
+    from matplotlib import colormaps
+
+    return colormaps["tab10"]((vehicle - 1) % 10)
+
+
+def fleet_figure(
+    map: Any,  # noqa: A002
+    sorties: Sequence[SortieView],
+    *,
+    title: str | None = None,
+    figsize: tuple[float, float] | None = None,
+) -> Any:
+    """A matplotlib Figure of `map` with every sortie of a fleet, each replayed by the sim.
+
+    One colour per vehicle (tab10), one line style per sortie of a vehicle (`SORTIE_STYLES`:
+    solid, dashed, dash-dot, dotted), arrows along each leg, hover points in the vehicle's
+    colour labelled "sortie.order · seconds" (up to 40 hover points in all), the parts of legs
+    inside obstacles (C5) in red; depots (where sorties take off and land) as black-edged
+    hexagons with their names, and each battery swap (a vehicle landing from sortie j and
+    leaving on sortie j + 1) as a star in the vehicle's colour with "v1 swap 1". Sensors are
+    coloured by the data collected over all sorties together (C4 over the whole plan).
+    Cost: O(sorties x samples) for the drawing.
+    """
+    from matplotlib.lines import Line2D
+
+    if not sorties:
+        raise ValueError("no sorties to draw")
+    spec = map.spec
+    W, H = spec.area.width, spec.area.height
+    fig, ax, _ax_t, handles = _map_axes(map, has_time=False, figsize=figsize)
+    _draw_obstacles(ax, map, handles)
+    collected = np.sum([np.asarray(sv.timeline.collected, dtype=float) for sv in sorties], axis=0)
+    sensors = _draw_sensors(fig, ax, map, collected, handles)
+    data_points = [sensors]
+    n_hover = sum(len(sv.timeline.hover_points) for sv in sorties)
+    t_max = max(float(spec.uav.max_hover_time), 1e-9)
+    bad_total = 0.0
+    vehicles = sorted({sv.vehicle for sv in sorties})
+    for sv in sorties:
+        colour = _vehicle_colour(sv.vehicle)
+        style = SORTIE_STYLES[(sv.sortie - 1) % len(SORTIE_STYLES)]
+        p = np.asarray(sv.timeline.path, dtype=float)
+        data_points.append(p)
+        ax.plot(p[:, 0], p[:, 1], linestyle=style, color=colour, linewidth=1.6, zorder=3)
+        for a, b in zip(p[:-1], p[1:], strict=True):
+            if np.hypot(*(b - a)) > 0.02 * max(W, H):
+                ax.annotate("", xy=a + 0.55 * (b - a), xytext=a + 0.45 * (b - a), zorder=3,
+                            arrowprops={"arrowstyle": "-|>", "color": colour, "lw": 1.4,
+                                        "mutation_scale": 12})  # fmt: skip
+        for seg in _violation_segments(map, p):
+            ax.plot(seg[:, 0], seg[:, 1], "-", color="red", linewidth=4.0, zorder=7,
+                    solid_capstyle="butt")  # fmt: skip
+            bad_total += float(np.sum(np.hypot(*np.diff(seg, axis=0).T)))
+        rl = sv.timeline.return_leg
+        if rl is not None:
+            rl = np.asarray(rl, dtype=float)
+            ax.plot(rl[:, 0], rl[:, 1], ":", color=colour, linewidth=1.0, zorder=3)
+        hp = np.asarray(sv.timeline.hover_points, dtype=float).reshape(-1, 2)
+        ht = np.asarray(sv.timeline.hover_times, dtype=float).reshape(-1)
+        if len(hp):
+            size = 40.0 + 260.0 * np.clip(ht / t_max, 0.0, 1.0)
+            ax.scatter(hp[:, 0], hp[:, 1], s=size, facecolors=[colour], edgecolors="k",
+                       alpha=0.8, linewidths=0.6, zorder=6)  # fmt: skip
+            if n_hover <= 40:
+                for i, (xy, t) in enumerate(zip(hp, ht, strict=True)):
+                    ax.annotate(f"{sv.sortie}.{i + 1} · {t:.0f} s", xy, xytext=(7, -3),
+                                textcoords="offset points", fontsize=7.5, color=colour,
+                                fontweight="bold", zorder=8, bbox=_TEXT_BOX)  # fmt: skip
+    if bad_total > 0:
+        handles.append(Line2D([], [], color="red", linewidth=4,
+                              label=f"path inside obstacles (C5): {bad_total:.0f} m"))
+    # depots: every take-off and landing position, named as fleet.json names them
+    depots: dict[tuple[float, float], set[str]] = {}
+    for sv in sorties:
+        p = np.asarray(sv.timeline.path, dtype=float)
+        for xy, name in ((p[0], sv.depot_start), (p[-1], sv.depot_end)):
+            key = (round(float(xy[0]), 1), round(float(xy[1]), 1))
+            depots.setdefault(key, set())
+            if name:
+                depots[key].add(name)
+    for (x, y), names in depots.items():
+        ax.plot(x, y, marker="h", markersize=14, color="white", markeredgecolor="k",
+                markeredgewidth=1.6, zorder=7, linestyle="")  # fmt: skip
+        if names:
+            ax.annotate(" / ".join(sorted(names)), (x, y), xytext=(9, 8),
+                        textcoords="offset points", fontsize=8, fontweight="bold", zorder=9,
+                        bbox=_TEXT_BOX)  # fmt: skip
+    data_points.append(np.asarray(list(depots), dtype=float).reshape(-1, 2))
+    # swaps: a vehicle lands from sortie j and leaves on sortie j + 1
+    swaps = 0
+    by_vehicle: dict[int, list[SortieView]] = {}
+    for sv in sorties:
+        by_vehicle.setdefault(sv.vehicle, []).append(sv)
+    for v, svs in by_vehicle.items():
+        svs = sorted(svs, key=lambda s: s.sortie)
+        for j, (a, b) in enumerate(zip(svs[:-1], svs[1:], strict=True), start=1):
+            at = np.asarray(a.timeline.path, dtype=float)[-1]
+            swaps += 1
+            ax.plot(*at, marker="*", markersize=15, color=_vehicle_colour(v),
+                    markeredgecolor="k", zorder=8, linestyle="")  # fmt: skip
+            ax.annotate(f"v{v} swap {j}", at, xytext=(9, -14 - 9 * (j - 1)),
+                        textcoords="offset points", fontsize=7.5, color=_vehicle_colour(v),
+                        zorder=9, bbox=_TEXT_BOX)  # fmt: skip
+            if not np.allclose(at, np.asarray(b.timeline.path, dtype=float)[0], atol=1.0):
+                ax.annotate(f"v{v} swap {j} (takes off here)",
+                            np.asarray(b.timeline.path, dtype=float)[0], xytext=(9, -14),
+                            textcoords="offset points", fontsize=7.5,
+                            color=_vehicle_colour(v), zorder=9, bbox=_TEXT_BOX)  # fmt: skip
+    for v in vehicles:
+        n = len(by_vehicle[v])
+        handles.append(Line2D([], [], color=_vehicle_colour(v), linewidth=2.2,
+                              label=f"vehicle {v}: {n} sortie{'s' if n > 1 else ''}"))
+    most = max(len(svs) for svs in by_vehicle.values())
+    for j in range(1, min(most, len(SORTIE_STYLES)) + 1):
+        handles.append(Line2D([], [], color="0.2", linewidth=1.6,
+                              linestyle=SORTIE_STYLES[j - 1], label=f"sortie {j}"))
+    handles.append(Line2D([], [], marker="h", linestyle="", markersize=11,
+                          markerfacecolor="white", markeredgecolor="k", label="depot"))
+    if swaps:
+        handles.append(Line2D([], [], marker="*", linestyle="", markersize=13,
+                              markerfacecolor="0.6", markeredgecolor="k",
+                              label="battery swap"))  # fmt: skip
+    handles.append(Line2D([], [], marker="o", linestyle="", markerfacecolor="0.6",
+                          markeredgecolor="k", label="hover point: sortie.order · seconds"))
+    _scale_bar_and_legend(fig, ax, W, H, data_points, handles)
+    if title is None:
+        nv = len(vehicles)
+        title = (f"map '{spec.name}': {nv} vehicle{'s' if nv > 1 else ''}, "
+                 f"{len(sorties)} sorties, {swaps} swap{'' if swaps == 1 else 's'}")  # fmt: skip
+    ax.set_title(title)
+    return fig
+
+
+def plot_fleet(
+    map: Any,  # noqa: A002
+    out: str | Path,
+    sorties: Sequence[SortieView],
+    *,
+    title: str | None = None,
+    dpi: int = 150,
+) -> Path:
+    """Draw every sortie of a fleet on `map` (`fleet_figure`) and save it to `out` (.png/.svg).
+
+    Args:
+        map: the map the sorties fly on.
+        out: the image file (written atomically).
+        sorties: the replayed sorties.
+        title: the figure's title (default: map, vehicles, sorties, swaps).
+        dpi: PNG resolution.
+
+    Returns:
+        The path written.
+
+    Raises:
+        ValueError: a suffix other than .png/.svg, or no sorties.
+    """
+    if Path(out).suffix.lower() not in IMAGE_SUFFIXES:
+        raise ValueError(f"{out}: image format must be PNG or SVG (suffix .png or .svg)")
+    return save_figure(fleet_figure(map, sorties, title=title), out, dpi=dpi)

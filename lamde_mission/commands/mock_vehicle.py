@@ -13,7 +13,12 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         description="Run a mock quadrotor autopilot (MAVLink 2 over UDP, system 1, component 1) "
         "that accepts mission, geofence and rally uploads and hands them back on download. "
         "Pair it with `lamde-mission upload`: by default it sends to 127.0.0.1:14540, where "
-        "`upload` listens.",
+        "`upload` listens. With --vehicles N (or --sysids) it runs N vehicles, system ids 1..N: "
+        "all on the one link of --connect, told apart by system id only (as a multi-vehicle "
+        "radio or a MAVLink router delivers them, and as PX4 SITL instances all reach "
+        "QGroundControl's port 14550), or with --ports one link each, on --connect's port + 0, "
+        "1, ... (PX4 SITL's offboard ports 14540 + i), or one --connect each, comma-separated; "
+        "pair it with `lamde-mission upload DIR/ --fleet`.",
     )
     p.add_argument(
         "--connect",
@@ -22,6 +27,14 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         help="udpout:HOST:PORT sends to a ground station listening there; "
         "udpin:HOST:PORT listens (default: %(default)s)",
     )
+    p.add_argument("--vehicles", type=int, metavar="N",
+                   help="run N mock vehicles, system ids 1..N (default: 1, system 1)")
+    p.add_argument("--sysids", metavar="ID[,ID...]",
+                   help="the vehicles' system ids, comma-separated, distinct, 1..253 (sets the "
+                   "number of vehicles; default 1..N)")
+    p.add_argument("--ports", action="store_true",
+                   help="one link per vehicle: vehicle i on --connect's port + i (default: all "
+                   "on the one link, told apart by system id)")
     p.add_argument(
         "--loss",
         type=float,
@@ -72,8 +85,32 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--signing-key", metavar="KEY",
                    help="sign with MAVLink 2 message signing and hear only messages signed "
                    "with this key: 64 hex digits or a passphrase (its SHA-256), as for upload")
+    p.add_argument("--heartbeat-hz", type=float, default=1.0, metavar="HZ",
+                   help="HEARTBEATs per second (default: 1, as PX4 and ArduPilot send them)")
     p.add_argument("-q", "--quiet", action="store_true", help="do not print transfer events")
     return p
+
+
+def _fleet_ids(args: argparse.Namespace) -> list[int] | None:
+    """The system ids of --vehicles / --sysids (None: one vehicle, system 1, as always)."""
+    from lamde_mission.errors import UsageError
+    from lamde_mission.vehicle.mock_fleet import fleet_system_ids
+
+    if args.vehicles is None and args.sysids is None:
+        if args.ports or "," in args.connect:
+            raise UsageError("--ports and several --connect need --vehicles N or --sysids")
+        return None
+    ids = None
+    if args.sysids is not None:
+        ids = []
+        for part in args.sysids.split(","):
+            if not part.strip().isdigit():
+                raise UsageError(f"--sysids: {part.strip()!r} is not a system id (1..253)")
+            ids.append(int(part))
+    try:
+        return fleet_system_ids(args.vehicles, ids)
+    except ValueError as exc:
+        raise UsageError(f"--vehicles/--sysids: {exc}") from None
 
 
 def run(args: argparse.Namespace) -> int:
@@ -91,17 +128,38 @@ def run(args: argparse.Namespace) -> int:
             key = signing_key(args.signing_key)
         except ValueError as exc:
             raise UsageError(f"--signing-key: {exc}") from None
+    ids = _fleet_ids(args)
+    options = dict(
+        loss=args.loss, loss_in=args.loss_in, noisy_gcs_hz=args.noisy_gcs_hz,
+        latency_ms=args.latency_ms, reject=args.reject, max_items=args.max_items,
+        autopilot=args.autopilot, signing_key=key,
+    )  # fmt: skip
+    if not (0.0 < args.heartbeat_hz <= 100.0):
+        raise UsageError(f"--heartbeat-hz must be in (0, 100], got {args.heartbeat_hz:g}")
+    if args.heartbeat_hz != 1.0:
+        options["heartbeat_hz"] = args.heartbeat_hz
     try:
-        vehicle = MockVehicle(
-            args.connect, loss=args.loss, loss_in=args.loss_in, noisy_gcs_hz=args.noisy_gcs_hz,
-            latency_ms=args.latency_ms, seed=args.seed,
-            reject=args.reject, max_items=args.max_items, on_event=None if args.quiet else event,
-            autopilot=args.autopilot, signing_key=key,
-        )  # fmt: skip
+        if ids is None:
+            vehicle = MockVehicle(args.connect, seed=args.seed,
+                                  on_event=None if args.quiet else event, **options)
+        else:
+            from lamde_mission.vehicle.mock_fleet import MockFleet, vehicle_connections
+
+            conns: str | list[str] = args.connect
+            if "," in args.connect:
+                conns = [c.strip() for c in args.connect.split(",")]
+                if args.ports:
+                    raise UsageError("--ports with several --connect: give one or the other")
+            elif args.ports:
+                conns = vehicle_connections(args.connect, len(ids))
+            vehicle = MockFleet(conns, system_ids=ids, seed=args.seed,
+                                on_event=None if args.quiet else event, **options)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     except OSError as exc:
         raise UsageError(f"--connect {args.connect}: {exc.strerror or exc}") from None
+    if ids is not None:
+        return _serve_fleet(vehicle, args)
     ep = vehicle.endpoint
     where = (f"sending to {ep.host}:{ep.port}" if ep.mode == "udpout"
              else f"listening on {ep.host}:{ep.port}")  # fmt: skip
@@ -139,4 +197,39 @@ def run(args: argparse.Namespace) -> int:
         f"{sum(s.uploads.values())} uploads, {sum(s.downloads.values())} downloads",
         file=sys.stderr,
     )
+    return 0
+
+
+def _where(mode: str, host: str, port: int) -> str:
+    return f"sending to {host}:{port}" if mode == "udpout" else f"listening on {host}:{port}"
+
+
+def _serve_fleet(fleet: object, args: argparse.Namespace) -> int:
+    """The foreground loop of `mock-vehicle --vehicles N`: one line per link, then until Ctrl-C."""
+    from lamde_mission.vehicle.mock_fleet import MockFleet
+
+    assert isinstance(fleet, MockFleet)
+    ids = ", ".join(str(s) for s in fleet.system_ids)
+    n = len(fleet.vehicles)
+    if fleet.shared:
+        ep = fleet.vehicles[0].endpoint
+        print(f"mock fleet: {n} vehicles (systems {ids}, component 1, quadrotors) on one link, "
+              f"{_where(ep.mode, ep.host, ep.port)}; Ctrl-C to stop", flush=True)  # fmt: skip
+    else:
+        print(f"mock fleet: {n} vehicles (systems {ids}, component 1, quadrotors), one link "
+              "each; Ctrl-C to stop", flush=True)  # fmt: skip
+        for v in fleet.vehicles:
+            ep = v.endpoint
+            print(f"  system {v.system_id}: {_where(ep.mode, ep.host, ep.port)}", flush=True)
+    try:
+        fleet.serve_forever()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        fleet.stop()
+    for v in fleet.vehicles:
+        s = v.stats
+        print(f"stopped system {v.system_id}: {s.received} messages in ({s.dropped_in} dropped), "
+              f"{s.sent} out ({s.dropped} dropped), {sum(s.uploads.values())} uploads, "
+              f"{sum(s.downloads.values())} downloads", file=sys.stderr)  # fmt: skip
     return 0

@@ -1,9 +1,11 @@
-"""`lamde-mission show MAP [MISSION] -o OUT`: draw a map, and a mission flown on it, to PNG/SVG."""
+"""`lamde-mission show MAP [MISSION | DIR/] -o OUT`: draw a map, and a mission (or every sortie
+of a sortie directory) flown on it, to PNG/SVG."""
 
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import Any
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -12,17 +14,83 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         help="draw a map (and a mission on it) to a PNG or SVG file",
         description="Draw MAP: area, obstacles, no-fly zones and sensors; with MISSION (.plan, "
         ".waypoints or a plan result .json) also the path replayed by the simulator, hover "
-        "points sized by hover time and sensors coloured by the data collected.",
+        "points sized by hover time and sensors coloured by the data collected. MISSION may be "
+        "a sortie directory (`lamde-mission plan MAP -o DIR/` for a battery or a fleet: "
+        "fleet.json and mission-v{k}-s{j}.plan): every sortie replayed and drawn, one colour "
+        "per vehicle, one line style per sortie (solid, dashed, dash-dot, dotted), depots as "
+        "hexagons, battery swaps as stars, sensors coloured by the data of all sorties "
+        "together.",
     )
     p.add_argument("map", help="map file (JSON)")
     from lamde_mission.commands._common import add_origin_option
 
     add_origin_option(p)
-    p.add_argument("mission", nargs="?", help="mission file to draw on the map (optional)")
+    p.add_argument("mission", nargs="?",
+                   help="mission file or sortie directory to draw on the map (optional)")
     p.add_argument("-o", "--output", required=True, help="image file to write (.png or .svg)")
     p.add_argument("--title", help="figure title (default: the map's name and f)")
     p.add_argument("--dpi", type=int, default=150, help="PNG resolution (default 150)")
     return p
+
+
+def fleet_views(directory: str | Path, m: Any) -> list[Any]:
+    """Every sortie of a sortie directory, replayed by the simulator on map `m`.
+
+    Args:
+        directory: the sortie directory (fleet.json and its .plan files).
+        m: the map.
+
+    Returns:
+        `plot.SortieView`s in vehicle, then sortie order.
+
+    Raises:
+        UsageError: a bad directory, file or mission (one line naming it).
+    """
+    from lamde_mission.commands.verify import replay_mission_file
+    from lamde_mission.errors import UsageError
+    from lamde_mission.formats.fleet import FleetDirError, read_fleet_dir
+    from lamde_mission.plot import SortieView
+
+    try:
+        fleet = read_fleet_dir(directory)
+    except FleetDirError as exc:
+        raise UsageError(str(exc)) from None
+    views = [
+        SortieView(v.vehicle, s.sortie, replay_mission_file(str(s.path), m), s.depot_start,
+                   s.depot_end)
+        for v in fleet.vehicles for s in v.sorties
+    ]  # fmt: skip
+    if not views:
+        raise UsageError(f"{fleet.path}: fleet.json lists no sorties to draw")
+    return views
+
+
+def plot_fleet_dir(
+    m: Any, directory: str | Path, out: str | Path, *, title: str | None = None, dpi: int = 150
+) -> Path:
+    """Replay every sortie of `directory` on `m` and draw them (`plot.fleet_figure`) to `out`.
+
+    Args:
+        m: the map.
+        directory: the sortie directory.
+        out: the .png or .svg file (written atomically).
+        title: the figure's title (default: map, vehicles, sorties, swaps).
+        dpi: PNG resolution.
+
+    Returns:
+        The path written.
+
+    Raises:
+        UsageError: a bad directory, mission or output file.
+    """
+    from lamde_mission.errors import UsageError
+    from lamde_mission.plot import plot_fleet
+
+    views = fleet_views(directory, m)
+    try:
+        return plot_fleet(m, out, views, title=title, dpi=dpi)
+    except OSError as exc:
+        raise UsageError(f"{out}: cannot write ({exc.strerror or exc})") from None
 
 
 def run(args: argparse.Namespace) -> int:
@@ -42,6 +110,10 @@ def run(args: argparse.Namespace) -> int:
     check_outputs([("-o/--output", args.output)], mkdir=True)
     m = load_map_or_fail(args.map)
     m = with_origin_or_fail(m, args.origin)
+    if args.mission and Path(args.mission).is_dir():
+        path = plot_fleet_dir(m, args.mission, out, title=args.title, dpi=args.dpi)
+        print(f"wrote {path}")
+        return 0
     timeline = None
     if args.mission:
         from lamde_mission.commands.verify import replay_mission_file

@@ -22,9 +22,17 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "no map (what verify refuses for the mission itself: a negative hover time, a second "
         "take-off, a frame or command the simulator cannot fly, an altitude beyond 10 km of "
         "home), exit status 2 unless --force. Try it with `lamde-mission mock-vehicle` running "
-        "in another terminal.",
+        "in another terminal. With --fleet, MISSION is a sortie directory (`lamde-mission plan "
+        "MAP -o DIR/` for a map with a fleet or a battery: DIR/fleet.json and "
+        "DIR/mission-v{k}-s{j}.plan) and vehicle k gets its first sortie, mission-v{k}-s1.plan: "
+        "the vehicles are addressed by MAVLink system id on one connection (--sysid, or the "
+        "system ids heard there in ascending order) or one --connect each; all are heard "
+        "before anything is sent (a vehicle missing or a count differing from fleet.json: "
+        "exit status 2), then each is uploaded, read back and compared in turn (docs/upload.md, "
+        "'Uploading a fleet').",
     )
-    p.add_argument("mission", help="mission file (.plan or .waypoints)")
+    p.add_argument("mission", help="mission file (.plan or .waypoints); with --fleet a sortie "
+                   "directory")
     p.add_argument(
         "--connect",
         default="udpin://0.0.0.0:14540",
@@ -92,6 +100,15 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "the environment variable LAMDE_MAVLINK_SIGNING_KEY "
         "(an option is visible to other users of this machine in the process list)",
     )
+    p.add_argument("--fleet", action="store_true",
+                   help="MISSION is a sortie directory: each vehicle k of its fleet.json gets "
+                   "its first sortie, mission-v{k}-s1.plan; --connect may then list one "
+                   "connection per vehicle, comma-separated (default: one for all)")
+    p.add_argument("--sysid", metavar="ID[,ID...]",
+                   help="the vehicles' MAVLink system ids: with --fleet one per vehicle in "
+                   "vehicle order (default: the ids heard, ascending, on one connection; the "
+                   "one vehicle heard on each connection); without, the vehicle to upload to "
+                   "on a link several vehicles share (default: the first heard)")
     p.add_argument("-v", "--verbose", action="store_true",
                    help="print each step, what was ignored (traffic not from the vehicle or not "
                    "addressed to us) and MAVSDK's own log lines")
@@ -241,31 +258,23 @@ def _sim_check(path: str, map_path: str, mission: list, *, force: bool) -> None:
                      "(--force sends it anyway)")
 
 
-def run(args: argparse.Namespace) -> int:
+def _sysids(text: str | None) -> list[int] | None:
+    """`--sysid 1,2,3` as ints (1..255); UsageError naming the bad entry."""
     from lamde_mission.errors import UsageError
-    from lamde_mission.vehicle.transfer import (
-        DuplicateVehicleError,
-        TransferError,
-        VehicleError,
-    )
-    from lamde_mission.vehicle.upload import upload_mission
 
-    if not (math.isfinite(args.timeout) and args.timeout > 0):
-        raise UsageError(f"--timeout must be a positive number of seconds, got {args.timeout:g}")
-    if args.attempts < 1:
-        raise UsageError(f"--attempts must be at least 1, got {args.attempts}")
-    from lamde_mission.vehicle.connection import parse_connection
+    if text is None:
+        return None
+    out = []
+    for part in text.split(","):
+        part = part.strip()
+        if not part.isdigit() or not 1 <= int(part) <= 255:
+            raise UsageError(f"--sysid: {part!r} is not a MAVLink system id (1..255)")
+        out.append(int(part))
+    return out
 
-    try:
-        parse_connection(args.connect)
-    except ValueError as exc:
-        raise UsageError(f"--connect: {exc}") from None
-    key = _signing_key(args)
-    mission, fence, rally = _read(args.mission)
-    _wire_check(args.mission, mission, fence, rally)
-    _flight_check(args.mission, mission, force=args.force)
-    if args.map:
-        _sim_check(args.mission, args.map, mission, force=args.force)
+
+def _verbose_log(args: argparse.Namespace):
+    """The `log` of the uploaders: each step on stderr with --verbose, and MAVSDK's own lines."""
 
     def log(text: str) -> None:
         if args.verbose:
@@ -282,7 +291,111 @@ def run(args: argparse.Namespace) -> int:
         lg.addHandler(h)
         lg.setLevel(logging.DEBUG)
         lg.propagate = False
+    return log
 
+
+def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
+    """`upload DIR/ --fleet`: every vehicle's first sortie (see `vehicle.fleet`)."""
+    from lamde_mission.errors import UsageError
+    from lamde_mission.formats.fleet import FleetDirError, read_fleet_dir
+    from lamde_mission.vehicle.connection import parse_connection
+    from lamde_mission.vehicle.fleet import FleetMission, FleetSetupError, upload_fleet
+    from lamde_mission.vehicle.transfer import DuplicateVehicleError, TransferError, VehicleError
+
+    if args.map:
+        raise UsageError("--map with --fleet: replay the sorties together with "
+                         f"`lamde-mission verify {args.mission} --map {args.map}` first "
+                         "(one sortie alone need not serve every sensor)")  # fmt: skip
+    conns = [c.strip() for c in args.connect.split(",")]
+    for c in conns:
+        try:
+            parse_connection(c)
+        except ValueError as exc:
+            raise UsageError(f"--connect: {exc}") from None
+    ids = _sysids(args.sysid)
+    try:
+        fleet = read_fleet_dir(args.mission)
+    except FleetDirError as exc:
+        raise UsageError(str(exc)) from None
+    missions = []
+    for v, first in zip(fleet.vehicles, fleet.first_sorties(), strict=True):
+        if first is None:
+            missions.append(FleetMission(v.vehicle, [], source="no sortie"))
+            continue
+        path = str(first.path)
+        mission, fence, rally = _read(path)
+        _wire_check(path, mission, fence, rally)
+        _flight_check(path, mission, force=args.force)
+        missions.append(FleetMission(v.vehicle, mission, fence, rally, source=first.path.name))
+    n = len(missions)
+    print(f"{args.mission}: {n} vehicle{'s' if n > 1 else ''}, first sorties "
+          + ", ".join(m.source for m in missions), flush=True)  # fmt: skip
+
+    def done(result: object) -> None:  # each vehicle's lines as soon as it is done
+        for line in result.lines():  # type: ignore[attr-defined]
+            print(line, flush=True)
+
+    try:
+        report = upload_fleet(
+            missions, connect=conns, system_ids=ids, via=args.via, timeout=args.timeout,
+            attempts=args.attempts, autopilot=args.autopilot, signing_key=key,
+            log=_verbose_log(args), progress=_Progress(verbose=args.verbose), on_vehicle=done,
+        )  # fmt: skip
+    except FleetSetupError as exc:
+        raise UsageError(f"{args.mission}: {exc}") from None
+    except ValueError as exc:
+        raise UsageError(f"{args.mission}: {exc}") from None
+    except DuplicateVehicleError as exc:
+        print(f"lamde-mission upload: {exc}", file=sys.stderr)
+        return 2
+    except VehicleError as exc:  # a link that cannot be opened
+        print(f"lamde-mission upload: {exc}", file=sys.stderr)
+        return 1
+    print(report.summary())
+    if not report.ok:
+        bad = [str(r.vehicle) for r in report.results if not r.ok]
+        print(f"lamde-mission upload: vehicle {', '.join(bad)} failed (see above)",
+              file=sys.stderr)  # fmt: skip
+        if args.via == "mavsdk" and any(isinstance(r.error, TransferError)
+                                        for r in report.results):  # fmt: skip
+            print(MAVSDK_LOSSY_HINT, file=sys.stderr)
+        return 1
+    return 0
+
+
+def run(args: argparse.Namespace) -> int:
+    from lamde_mission.errors import UsageError
+    from lamde_mission.vehicle.transfer import (
+        DuplicateVehicleError,
+        TransferError,
+        VehicleError,
+    )
+    from lamde_mission.vehicle.upload import upload_mission
+
+    if not (math.isfinite(args.timeout) and args.timeout > 0):
+        raise UsageError(f"--timeout must be a positive number of seconds, got {args.timeout:g}")
+    if args.attempts < 1:
+        raise UsageError(f"--attempts must be at least 1, got {args.attempts}")
+    from lamde_mission.vehicle.connection import parse_connection
+
+    if args.fleet:
+        return _run_fleet(args, _signing_key(args))
+    ids = _sysids(args.sysid)
+    if ids is not None and len(ids) > 1:
+        raise UsageError(f"--sysid: {len(ids)} system ids for one mission (several vehicles: "
+                         "--fleet with a sortie directory)")  # fmt: skip
+    try:
+        parse_connection(args.connect)
+    except ValueError as exc:
+        raise UsageError(f"--connect: {exc}") from None
+    key = _signing_key(args)
+    mission, fence, rally = _read(args.mission)
+    _wire_check(args.mission, mission, fence, rally)
+    _flight_check(args.mission, mission, force=args.force)
+    if args.map:
+        _sim_check(args.mission, args.map, mission, force=args.force)
+
+    log = _verbose_log(args)
     try:
         report = upload_mission(
             mission,
@@ -296,6 +409,7 @@ def run(args: argparse.Namespace) -> int:
             rally=rally,
             autopilot=args.autopilot,
             signing_key=key,
+            system_id=None if ids is None else ids[0],
         )
     except ValueError as exc:  # items MAVLink cannot carry
         raise UsageError(f"{args.mission}: {exc}") from None

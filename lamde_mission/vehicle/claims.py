@@ -137,6 +137,14 @@ class ClaimWatch:
         seen.append(addr)
         return True
 
+    def heard_systems(self) -> list[int]:
+        """The system ids of every vehicle (component 1) whose HEARTBEAT was noted, sorted.
+
+        Returns:
+            Distinct MAVLink system ids, ascending.
+        """
+        return sorted({s for (s, c) in self._seen if c == _COMP_AUTOPILOT1})
+
     def conflict(self, ids: tuple[int, int], pinned: Address | None) -> Address | None:
         """A second address claiming `ids`, other than `pinned`, if one was heard.
 

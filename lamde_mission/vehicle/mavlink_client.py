@@ -50,6 +50,7 @@ from lamde_mission.vehicle.transfer import (
     TransferError,
     VehicleError,
     VehicleInfo,
+    no_vehicle_message,
 )
 from lamde_mission.vehicle.wire import (
     PacketCapture,
@@ -90,7 +91,10 @@ class MavlinkClient:
         progress: Callable[[str, int, int], None] | None = None,
         signing_key: bytes | None = None,
         heartbeat_watch: float = HEARTBEAT_WATCH_S,
+        target_system: int | None = None,
     ) -> None:
+        #: the vehicle's MAVLink system id to talk to (None: the first vehicle heard)
+        self.target_system = None if target_system is None else int(target_system)
         try:
             self.endpoint: Connection = (
                 connect if isinstance(connect, Connection) else parse_connection(connect)
@@ -280,9 +284,15 @@ class MavlinkClient:
         Pins the vehicle: its address and its system/component ids; from here on nothing else
         is listened to or answered."""
         deadline = time.monotonic() + timeout
-        hb = self._recv(deadline, is_vehicle_heartbeat)
+        want = self.target_system
+
+        def wanted(msg: Any) -> bool:
+            return is_vehicle_heartbeat(msg) and (want is None or msg.get_srcSystem() == want)
+
+        hb = self._recv(deadline, wanted)
         if hb is None:
-            raise NoVehicleError(f"no vehicle heard at {self.endpoint} within {timeout:g} s")
+            heard = self.watch.heard_systems()
+            raise NoVehicleError(no_vehicle_message(self.endpoint, timeout, want, heard))
         addr = getattr(hb, "_lamde_addr", None)
         if self._link is not None and self.endpoint.scheme == "udpin" and addr is not None:
             self._link.peer = addr

@@ -138,7 +138,9 @@ class MockVehicle:
     `lose_in` / `lose_out` (functions of a MAVLink message) lose the received / sent messages
     they return True for, on top of `loss_in` / `loss` (a loss pattern a test can count on);
     `corrupt` (a function of a received WireItem) makes it store something else (a faulty
-    vehicle, to test the read-back comparison).
+    vehicle, to test the read-back comparison). `sock` (for `mock_fleet.MockFleet`) is a UDP
+    socket shared with other mock vehicles, opened for `connect` by the caller, who runs the
+    loop and closes it.
     """
 
     def __init__(
@@ -164,6 +166,7 @@ class MockVehicle:
         autopilot: str = "px4",
         home: tuple[float, float, float] = (-35.3632621, 149.1652374, 584.0),
         signing_key: bytes | None = None,
+        sock: socket.socket | None = None,
     ) -> None:
         if not 0.0 <= loss < 1.0:
             raise ValueError(f"loss must be in [0, 1), got {loss!r}")
@@ -230,7 +233,14 @@ class MockVehicle:
         self._sock: socket.socket | None = None
         self._peer: tuple[str, int] | None = None
         self._next_heartbeat = 0.0
-        self._open()
+        #: whether the socket is this vehicle's own (closed by `stop`), not a fleet's
+        self._owns_sock = sock is None
+        if sock is None:
+            self._open()
+        else:  # a socket shared with other vehicles (`mock_fleet.MockFleet` runs the loop)
+            self._sock = sock
+            if self.endpoint.mode == "udpout":
+                self._peer = (socket.gethostbyname(self.endpoint.host), self.endpoint.port)
 
     # ------------------------------------------------------------------ life cycle
 
@@ -253,6 +263,8 @@ class MockVehicle:
             raise RuntimeError("the mock vehicle is already running")
         if self._sock is None:
             raise RuntimeError("the mock vehicle is closed")
+        if not self._owns_sock:
+            raise RuntimeError("the mock vehicle shares its socket: its fleet runs it")
         self._stop.clear()
         self._thread = threading.Thread(target=self._loop, name="mock-vehicle", daemon=True)
         self._thread.start()
@@ -265,7 +277,8 @@ class MockVehicle:
             self._thread.join(timeout)
             self._thread = None
         if self._sock is not None:
-            self._sock.close()
+            if self._owns_sock:
+                self._sock.close()
             self._sock = None
 
     close = stop
@@ -322,23 +335,7 @@ class MockVehicle:
         sock = self._sock
         assert sock is not None
         while not self._stop.is_set():
-            now = time.monotonic()
-            if self._peer is not None and now >= self._next_heartbeat:
-                self._send_heartbeat()
-                self._next_heartbeat = now + self.heartbeat_period
-            self._tick(now)
-            if self.noisy_gcs_hz > 0 and self._peer is not None and now >= self._next_noise:
-                self._next_noise = now + 1.0 / self.noisy_gcs_hz
-                self._noise()
-            self._flush(now)
-            wait = 0.02 if self._upload is not None else 0.1
-            if self.noisy_gcs_hz > 0:
-                wait = min(wait, max(self._next_noise - now, 0.0))
-            if self._outbox:
-                wait = min(wait, self._outbox[0][0] - now)
-            if self._peer is not None:
-                wait = min(wait, self._next_heartbeat - now)
-            wait = max(wait, 0.0)
+            wait = self._timers(time.monotonic())
             try:
                 ready, _, _ = select.select([sock], [], [], wait)
             except (OSError, ValueError):
@@ -352,22 +349,46 @@ class MockVehicle:
                     break
                 except OSError:  # e.g. ICMP port unreachable reported on some systems
                     break
-                if self.loss_in > 0.0 and self._rng_in.random() < self.loss_in:
-                    self.stats.dropped_in += 1
-                    continue
-                if self.endpoint.mode == "udpin" and addr != self._peer:
-                    self._peer = addr
-                    self._next_heartbeat = 0.0
-                try:
-                    msgs = self._mav.parse_buffer(data) or []
-                except Exception:  # a malformed datagram must not stop the vehicle
-                    continue
-                for msg in msgs:
-                    if self.lose_in is not None and self.lose_in(msg):
-                        self.stats.dropped_in += 1
-                        continue
-                    with self._lock:
-                        self._handle(msg)
+                self._datagram(data, addr)
+
+    def _timers(self, now: float) -> float:
+        """What is due at `now` (heartbeat, re-request or give-up, noise, delayed sends);
+        returns how long the loop may wait for input (s)."""
+        if self._peer is not None and now >= self._next_heartbeat:
+            self._send_heartbeat()
+            self._next_heartbeat = now + self.heartbeat_period
+        self._tick(now)
+        if self.noisy_gcs_hz > 0 and self._peer is not None and now >= self._next_noise:
+            self._next_noise = now + 1.0 / self.noisy_gcs_hz
+            self._noise()
+        self._flush(now)
+        wait = 0.02 if self._upload is not None else 0.1
+        if self.noisy_gcs_hz > 0:
+            wait = min(wait, max(self._next_noise - now, 0.0))
+        if self._outbox:
+            wait = min(wait, self._outbox[0][0] - now)
+        if self._peer is not None:
+            wait = min(wait, self._next_heartbeat - now)
+        return max(wait, 0.0)
+
+    def _datagram(self, data: bytes, addr: tuple[str, int]) -> None:
+        """One received datagram: incoming loss, the udpin peer, then each message handled."""
+        if self.loss_in > 0.0 and self._rng_in.random() < self.loss_in:
+            self.stats.dropped_in += 1
+            return
+        if self.endpoint.mode == "udpin" and addr != self._peer:
+            self._peer = addr
+            self._next_heartbeat = 0.0
+        try:
+            msgs = self._mav.parse_buffer(data) or []
+        except Exception:  # a malformed datagram must not stop the vehicle
+            return
+        for msg in msgs:
+            if self.lose_in is not None and self.lose_in(msg):
+                self.stats.dropped_in += 1
+                continue
+            with self._lock:
+                self._handle(msg)
 
     def _tick(self, now: float) -> None:
         """Vehicle-side re-request of a missing upload item `rerequest_s` after the last

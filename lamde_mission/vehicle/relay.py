@@ -7,8 +7,10 @@ API. So `MavsdkClient` never opens the vehicle's link itself: `VehicleRelay` hol
 scheme of `connection.Link`) and gives MAVSDK a UDP socket on 127.0.0.1 (`url`, MAVSDK's
 `udpout://127.0.0.1:PORT`). The relay
 
-- pins the vehicle at the address of the first autopilot HEARTBEAT (component 1), as the
-  pymavlink client does, and passes MAVSDK only that address's messages (the rest are counted);
+- pins the vehicle at the address of the first autopilot HEARTBEAT (component 1; of system
+  `system_id` when given), as the pymavlink client does, and passes MAVSDK only that
+  address's messages (and only that system's, with `system_id`: several vehicles on one
+  link); the rest are counted;
 - notes every autopilot HEARTBEAT's source (`claims.ClaimWatch`): once the vehicle's ids are
   heard from a second address it passes nothing more either way and sets `conflict`, which
   `MavsdkClient` turns into `DuplicateVehicleError`;
@@ -55,7 +57,14 @@ class VehicleRelay:
         signing_key: bytes | None = None,
         *,
         heartbeat_watch: float = HEARTBEAT_WATCH_S,
+        system_id: int | None = None,
     ) -> None:
+        #: the vehicle's system id (None: the first vehicle heard); on a link several vehicles
+        #: share, MAVSDK is passed this system's messages only (one MAVSDK per vehicle, the
+        #: demultiplexing MAVSDK's maintainers advise: mavlink/MAVSDK-Python issue 685)
+        self.system_id = None if system_id is None else int(system_id)
+        #: messages dropped because they came from another system than `system_id`
+        self.other_systems = 0
         #: parses the vehicle's bytes (and checks their signatures on a signed link)
         self._check = mavlink2.MAVLink(None)
         self._check.robust_parsing = True
@@ -123,7 +132,11 @@ class VehicleRelay:
                 self.dropped += is_signature_failure(msg)
                 continue
             new_claim = self.watch.note(msg, addr)
-            if not self._pinned and is_vehicle_heartbeat(msg):
+            if (
+                not self._pinned
+                and is_vehicle_heartbeat(msg)
+                and (self.system_id is None or msg.get_srcSystem() == self.system_id)
+            ):
                 self._pinned = True
                 self.vehicle_ids = (msg.get_srcSystem(), msg.get_srcComponent())
                 self.vehicle_addr = addr
@@ -136,6 +149,9 @@ class VehicleRelay:
                 continue
             if addr != self.vehicle_addr:
                 self.foreign += 1
+                continue
+            if self.system_id is not None and msg.get_srcSystem() != self.system_id:
+                self.other_systems += 1
                 continue
             if self._gcs_addr is not None:
                 with contextlib.suppress(OSError):
@@ -169,6 +185,9 @@ class VehicleRelay:
             a = self.vehicle_addr
             out.append(f"ignored {self.foreign} x a message from another address than the "
                        f"vehicle's {a[0]}:{a[1]}")  # fmt: skip
+        if self.other_systems:
+            out.append(f"ignored {self.other_systems} x a message from another system than the "
+                       f"vehicle's (system {self.system_id}) on its link")  # fmt: skip
         return out
 
     def close(self) -> None:

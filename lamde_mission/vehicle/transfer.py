@@ -45,6 +45,7 @@ __all__ = [
     "UploadReport",
     "upload_and_verify",
     "DuplicateVehicleError",
+    "no_vehicle_message",
 ]
 
 
@@ -56,6 +57,29 @@ class VehicleError(Exception):
 
 class NoVehicleError(VehicleError):
     """Nothing answered at the address within the timeout."""
+
+
+def no_vehicle_message(
+    endpoint: object, timeout: float, system_id: int | None, heard: Sequence[int]
+) -> str:
+    """The line of a NoVehicleError: nothing heard, or not the system asked for.
+
+    Args:
+        endpoint: the connection (printed).
+        timeout: how long it listened (s).
+        system_id: the system id asked for (None: any vehicle).
+        heard: the system ids of the vehicles that were heard.
+
+    Returns:
+        One line naming the connection, the wait and, for a system id, what answered instead.
+    """
+    if system_id is None:
+        return f"no vehicle heard at {endpoint} within {timeout:g} s"
+    many = "s" if len(heard) > 1 else ""
+    others = (f"heard only system{many} {', '.join(str(s) for s in heard)}" if heard
+              else "no vehicle heard at all")  # fmt: skip
+    wait = f"heard at {endpoint} within {timeout:g} s"
+    return f"no vehicle with system id {system_id} {wait} ({others})"
 
 
 class DuplicateVehicleError(VehicleError):

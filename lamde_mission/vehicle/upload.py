@@ -38,6 +38,7 @@ from lamde_mission.vehicle.transfer import (
     UploadReport,
     VehicleError,
     VehicleInfo,
+    no_vehicle_message,
     upload_and_verify,
 )
 from lamde_mission.vehicle.wire import WireItem, mission_type_name
@@ -116,7 +117,10 @@ class MavsdkClient:
     def __init__(
         self, connect: str | Connection = "udpin://0.0.0.0:14540", *, quiet: bool = True,
         signing_key: bytes | None = None, heartbeat_watch: float = HEARTBEAT_WATCH_S,
+        system_id: int | None = None,
     ) -> None:
+        #: the vehicle's MAVLink system id to talk to (None: the first vehicle heard)
+        self.target_system = None if system_id is None else int(system_id)
         try:
             conn = connect if isinstance(connect, Connection) else parse_connection(connect)
         except ValueError as exc:
@@ -127,7 +131,9 @@ class MavsdkClient:
         from lamde_mission.vehicle.relay import VehicleRelay
 
         try:
-            self._relay: Any = VehicleRelay(conn, signing_key, heartbeat_watch=heartbeat_watch)
+            self._relay: Any = VehicleRelay(
+                conn, signing_key, heartbeat_watch=heartbeat_watch, system_id=self.target_system
+            )
         except OSError as exc:
             raise VehicleError(f"cannot open {conn}: {exc.strerror or exc}") from None
         #: where MAVSDK connects (the relay's local socket); `endpoint`: the vehicle's link
@@ -239,7 +245,10 @@ class MavsdkClient:
 
         system = self._run(go(), timeout + 5.0)
         if system is None:
-            raise NoVehicleError(f"no vehicle heard at {self.endpoint} within {timeout:g} s")
+            heard = self._relay.watch.heard_systems()
+            raise NoVehicleError(
+                no_vehicle_message(self.endpoint, timeout, self.target_system, heard)
+            )
         self._system = system
         self._raw = MissionRawAsync(system)
 
@@ -427,6 +436,7 @@ def make_client(
     progress: Callable[[str, int, int], None] | None = None,
     signing_key: bytes | None = None,
     heartbeat_watch: float = HEARTBEAT_WATCH_S,
+    system_id: int | None = None,
 ) -> Any:
     """A MissionClient: "mavsdk" (MAVSDK's MissionRaw) or "pymavlink" (ours).
 
@@ -438,6 +448,8 @@ def make_client(
         signing_key: signs the link (MAVSDK through its `relay.VehicleRelay`).
         heartbeat_watch: seconds of HEARTBEATs listened to before the first send
             (`claims.HEARTBEAT_WATCH_S`).
+        system_id: the vehicle's MAVLink system id, on a link several vehicles share (None:
+            the first vehicle heard).
 
     Returns:
         The client, its link open.
@@ -447,12 +459,14 @@ def make_client(
         VehicleError: the link cannot be opened.
     """
     if via == "mavsdk":
-        return MavsdkClient(connect, signing_key=signing_key, heartbeat_watch=heartbeat_watch)
+        return MavsdkClient(connect, signing_key=signing_key, heartbeat_watch=heartbeat_watch,
+                            system_id=system_id)  # fmt: skip
     if via == "pymavlink":
         from lamde_mission.vehicle.mavlink_client import MavlinkClient
 
         return MavlinkClient(connect, log=log, progress=progress, signing_key=signing_key,
-                             heartbeat_watch=heartbeat_watch)  # fmt: skip
+                             heartbeat_watch=heartbeat_watch,
+                             target_system=system_id)  # fmt: skip
     raise ValueError(f"via must be one of {', '.join(VIAS)}, got {via!r}")
 
 
@@ -470,6 +484,7 @@ def upload_mission(
     autopilot: str | None = None,
     signing_key: bytes | None = None,
     heartbeat_watch: float = HEARTBEAT_WATCH_S,
+    system_id: int | None = None,
 ) -> UploadReport:
     """Upload a mission and its fence to the vehicle at `connect`, read both back, compare.
 
@@ -490,6 +505,9 @@ def upload_mission(
     Both clients listen to HEARTBEATs for `heartbeat_watch` s from opening the link before
     anything is sent, and raise `DuplicateVehicleError` (naming both addresses) when a second
     address claims the vehicle's system and component ids, then or later (`claims`).
+    `system_id` picks the vehicle by its MAVLink system id on a link several vehicles share
+    (a multi-vehicle radio or router; `upload_fleet`): its HEARTBEAT is waited for, and only
+    its messages are listened to; None takes the first vehicle heard.
     """
     if not (isinstance(timeout, int | float) and math.isfinite(timeout) and timeout > 0):
         raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
@@ -503,8 +521,10 @@ def upload_mission(
         wire_mission(fence, MISSION_TYPE.FENCE)
     if rally:
         wire_mission(rally, MISSION_TYPE.RALLY)
+    if system_id is not None and not 1 <= int(system_id) <= 255:
+        raise ValueError(f"system_id must be a MAVLink system id 1..255, got {system_id!r}")
     client = make_client(via, conn, log=log, progress=progress, signing_key=signing_key,
-                         heartbeat_watch=heartbeat_watch)  # fmt: skip
+                         heartbeat_watch=heartbeat_watch, system_id=system_id)  # fmt: skip
     try:
         report = upload_and_verify(
             client, mission, fence, rally=rally, autopilot=autopilot, timeout=timeout,

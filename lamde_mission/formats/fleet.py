@@ -1,0 +1,202 @@
+"""A sortie directory, as `lamde-mission plan MAP -o DIR/` writes it for a battery or a fleet:
+`DIR/fleet.json` and one QGroundControl `.plan` per vehicle and sortie.
+
+`read_fleet_dir` reads and checks what the readers need (`upload --fleet`, `show MAP DIR/`):
+
+    {"map": name, "objective": "total" | "makespan",
+     "vehicles": [{"vehicle": 1, "makespan_s": s,
+                   "sorties": [{"sortie": 1, "file": "mission-v1-s1.plan",
+                                "depot_start": "home", "depot_end": "home",
+                                "duration_s": s, "energy_wh": Wh, "reserve_left_wh": Wh,
+                                "sensors": ["s01", ...]}, ...]}, ...],
+     "total_s": s, "swaps": n}
+
+Vehicles are numbered 1..V and sorties 1..S_k in order (1-based, as in the file names
+`mission-v{vehicle}-s{sortie}.plan`); every sortie's file is a plain name inside DIR and exists.
+Figures (durations, energies) are kept when present and finite, else None; fields this reader
+does not know are left alone. Reading costs O(vehicles + sorties).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from planner_core.textio import InputError, read_json
+
+__all__ = ["FLEET_FILE", "FleetDirError", "FleetSortie", "FleetVehicle", "FleetDir",
+           "read_fleet_dir", "sortie_file_name"]  # fmt: skip
+
+#: the summary file of a sortie directory
+FLEET_FILE = "fleet.json"
+
+
+class FleetDirError(ValueError):
+    """A sortie directory that cannot be read: one line naming the file and the field."""
+
+
+def sortie_file_name(vehicle: int, sortie: int) -> str:
+    """The file of vehicle `vehicle`'s sortie `sortie` (both 1-based): mission-v1-s2.plan.
+
+    Args:
+        vehicle: the vehicle's number, 1-based.
+        sortie: the sortie's number on that vehicle, 1-based.
+
+    Returns:
+        The file name inside the directory.
+    """
+    return f"mission-v{int(vehicle)}-s{int(sortie)}.plan"
+
+
+@dataclass(frozen=True)
+class FleetSortie:
+    """One sortie: its number, file (a path inside the directory) and summary figures."""
+
+    sortie: int
+    path: Path
+    depot_start: str | None = None
+    depot_end: str | None = None
+    duration_s: float | None = None
+    energy_wh: float | None = None
+    reserve_left_wh: float | None = None
+    sensors: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class FleetVehicle:
+    """One vehicle: its number and sorties in flying order (possibly none)."""
+
+    vehicle: int
+    sorties: tuple[FleetSortie, ...]
+    makespan_s: float | None = None
+
+
+@dataclass(frozen=True)
+class FleetDir:
+    """A sortie directory read by `read_fleet_dir`."""
+
+    path: Path
+    vehicles: tuple[FleetVehicle, ...]
+    map_name: str | None = None
+    objective: str | None = None
+    total_s: float | None = None
+    swaps: int | None = None
+    raw: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
+
+    def first_sorties(self) -> list[FleetSortie | None]:
+        """Each vehicle's first sortie (None for a vehicle with none), in vehicle order."""
+        return [v.sorties[0] if v.sorties else None for v in self.vehicles]
+
+
+def _number(v: Any, where: str) -> float | None:
+    if v is None:
+        return None
+    if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+        raise FleetDirError(f"{where}: expected a finite number, got {v!r}")
+    return float(v)
+
+
+def _index(v: Any, where: str, expected: int) -> int:
+    if isinstance(v, bool) or not isinstance(v, int):
+        raise FleetDirError(f"{where}: expected the whole number {expected}, got {v!r}")
+    if v != expected:
+        raise FleetDirError(f"{where}: expected {expected} (numbered 1, 2, ... in order), got {v}")
+    return v
+
+
+def _name(v: Any, where: str) -> str | None:
+    if v is None:
+        return None
+    if not isinstance(v, str):
+        raise FleetDirError(f"{where}: expected a name (string), got {v!r}")
+    return v
+
+
+def read_fleet_dir(path: str | Path) -> FleetDir:
+    """Read and check a sortie directory (`DIR/fleet.json` and the `.plan` files it names).
+
+    Args:
+        path: the directory (or its fleet.json).
+
+    Returns:
+        The vehicles and their sorties, files resolved inside the directory.
+
+    Raises:
+        FleetDirError: one line naming the file and field: no such directory, no fleet.json,
+            bad JSON, vehicles or sorties out of order, a file outside the directory or
+            missing.
+    """
+    path = Path(path)
+    if path.name == FLEET_FILE and path.is_file():
+        path = path.parent
+    if not path.is_dir():
+        what = "no such directory" if not path.exists() else "not a directory"
+        raise FleetDirError(f"{path}: {what} (expected a sortie directory written by "
+                            "`lamde-mission plan MAP -o DIR/`)")  # fmt: skip
+    summary = path / FLEET_FILE
+    if not summary.is_file():
+        raise FleetDirError(f"{summary}: no such file (a sortie directory holds {FLEET_FILE} "
+                            "and mission-v{k}-s{j}.plan, as `lamde-mission plan MAP -o DIR/` "
+                            "writes for a map with a battery or a fleet)")  # fmt: skip
+    try:
+        doc = read_json(summary)
+    except InputError as exc:
+        raise FleetDirError(f"{summary}: {exc}") from None
+    if not isinstance(doc, dict):
+        raise FleetDirError(f"{summary}: expected a JSON object")
+    vs = doc.get("vehicles")
+    if not isinstance(vs, list) or not vs:
+        raise FleetDirError(f"{summary}: vehicles: expected a non-empty list")
+    vehicles = []
+    for k, v in enumerate(vs):
+        wv = f"{summary}: vehicles[{k}]"
+        if not isinstance(v, dict):
+            raise FleetDirError(f"{wv}: expected an object")
+        number = _index(v.get("vehicle"), f"{wv}.vehicle", k + 1)
+        ss = v.get("sorties", [])
+        if not isinstance(ss, list):
+            raise FleetDirError(f"{wv}.sorties: expected a list")
+        sorties = []
+        for j, s in enumerate(ss):
+            ws = f"{wv}.sorties[{j}]"
+            if not isinstance(s, dict):
+                raise FleetDirError(f"{ws}: expected an object")
+            sortie = _index(s.get("sortie"), f"{ws}.sortie", j + 1)
+            name = s.get("file", sortie_file_name(number, sortie))
+            if (
+                not isinstance(name, str)
+                or not name
+                or Path(name).name != name
+                or name in (".", "..")
+            ):
+                raise FleetDirError(f"{ws}.file: expected a file name inside {path}, got "
+                                    f"{name!r}")  # fmt: skip
+            fp = path / name
+            if not fp.is_file():
+                raise FleetDirError(f"{fp}: no such file (vehicle {number}, sortie {sortie} "
+                                    f"in {summary})")  # fmt: skip
+            sensors = s.get("sensors", [])
+            if not isinstance(sensors, list) or not all(isinstance(x, str) for x in sensors):
+                raise FleetDirError(f"{ws}.sensors: expected a list of sensor ids")
+            sorties.append(FleetSortie(
+                sortie=sortie, path=fp,
+                depot_start=_name(s.get("depot_start"), f"{ws}.depot_start"),
+                depot_end=_name(s.get("depot_end"), f"{ws}.depot_end"),
+                duration_s=_number(s.get("duration_s"), f"{ws}.duration_s"),
+                energy_wh=_number(s.get("energy_wh"), f"{ws}.energy_wh"),
+                reserve_left_wh=_number(s.get("reserve_left_wh"), f"{ws}.reserve_left_wh"),
+                sensors=tuple(sensors),
+            ))  # fmt: skip
+        vehicles.append(
+            FleetVehicle(number, tuple(sorties), _number(v.get("makespan_s"), f"{wv}.makespan_s"))
+        )
+    swaps = doc.get("swaps")
+    if swaps is not None and (isinstance(swaps, bool) or not isinstance(swaps, int)):
+        raise FleetDirError(f"{summary}: swaps: expected a whole number, got {swaps!r}")
+    return FleetDir(
+        path=path, vehicles=tuple(vehicles), map_name=_name(doc.get("map"), f"{summary}: map"),
+        objective=_name(doc.get("objective"), f"{summary}: objective"),
+        total_s=_number(doc.get("total_s"), f"{summary}: total_s"), swaps=swaps, raw=doc,
+    )  # fmt: skip

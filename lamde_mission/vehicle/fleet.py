@@ -1,0 +1,387 @@
+"""Upload a fleet: each vehicle its own mission, addressed by its MAVLink system id.
+
+`upload_fleet` sends mission k to vehicle k and reads it back, as `upload_mission` does for one
+vehicle, over one connection several vehicles share (a multi-vehicle radio, a MAVLink router,
+every PX4 SITL instance on QGroundControl's port) or one connection per vehicle (PX4 SITL's
+offboard ports 14540 + i, a radio each). Vehicle k is the vehicle with system id
+`system_ids[k]`; without them, on one connection the vehicles heard there in ascending system
+id, on one connection each the vehicle heard on it.
+
+Before anything is sent, `survey` listens to every connection at once for the vehicles'
+HEARTBEATs (at least `claims.HEARTBEAT_WATCH_S`, at most `timeout`): a vehicle that does not
+answer, a count that differs from the missions', or two autopilots claiming one system id from
+two addresses stop it with nothing sent (`FleetSetupError`, `DuplicateVehicleError`). The
+uploads then run one vehicle after the other, each through its own client pinned to its system
+id (MAVSDK through a relay that passes it that system only: one MAVSDK per vehicle, as MAVSDK's
+maintainers advise for several vehicles on one stream, mavlink/MAVSDK-Python issue 685); each
+client starts sending once it hears its vehicle, the survey having done the listening. A failed
+vehicle does not stop the others; the report says which went up. Cost: O(vehicles) transfers,
+each as `upload_mission`'s.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+from lamde_mission.items import MissionItem
+from lamde_mission.vehicle.claims import HEARTBEAT_WATCH_S, ClaimWatch, duplicate_error
+from lamde_mission.vehicle.connection import Connection, Link, parse_connection
+from lamde_mission.vehicle.transfer import (
+    DuplicateVehicleError,
+    UploadReport,
+    VehicleError,
+)
+
+__all__ = ["FleetSetupError", "FleetMission", "VehicleResult", "FleetReport", "survey",
+           "assign_system_ids", "upload_fleet"]  # fmt: skip
+
+
+class FleetSetupError(ValueError):
+    """The vehicles do not match the missions (a vehicle missing, a count that differs, a
+    connection or id list of the wrong length): nothing was sent. One line."""
+
+
+@dataclass(frozen=True)
+class FleetMission:
+    """What vehicle `vehicle` (1-based) gets: its mission, fence (None: left alone) and rally
+    points (None: left alone), and the file they came from (for the report). An empty mission
+    sends nothing to that vehicle (a vehicle the plan gives no sortie), though it is still
+    surveyed and counted."""
+
+    vehicle: int
+    mission: Sequence[MissionItem]
+    fence: Sequence[MissionItem] | None = ()
+    rally: Sequence[MissionItem] | None = None
+    source: str = ""
+
+
+@dataclass
+class VehicleResult:
+    """One vehicle's upload: where, which system id, and the report or the error."""
+
+    vehicle: int
+    system_id: int
+    connect: str
+    source: str
+    report: UploadReport | None = None
+    error: VehicleError | None = None
+    #: nothing to send (the plan gives this vehicle no sortie)
+    skipped: bool = False
+
+    @property
+    def ok(self) -> bool:
+        """Whether the vehicle holds its mission, read back identical (or had none to get)."""
+        if self.skipped:
+            return self.error is None
+        return self.report is not None and self.report.ok and self.error is None
+
+    def lines(self) -> list[str]:
+        """This vehicle's part of the report: a head line, the upload's lines indented."""
+        head = f"vehicle {self.vehicle} (system {self.system_id} at {self.connect}, {self.source})"
+        if self.skipped:
+            return [f"{head}: no sortie planned, nothing sent"]
+        out = [f"{head}:"]
+        rep = self.report if self.report is not None else getattr(self.error, "report", None)
+        if rep is not None:
+            out.extend(f"  {line}" for line in rep.lines())
+        if self.error is not None:
+            out.append(f"  FAILED: {self.error}")
+        return out
+
+
+@dataclass
+class FleetReport:
+    """Every vehicle's result, the survey's time (s) and the whole time (s)."""
+
+    results: list[VehicleResult] = field(default_factory=list)
+    survey_s: float = 0.0
+    total_s: float = 0.0
+
+    @property
+    def ok(self) -> bool:
+        return bool(self.results) and all(r.ok for r in self.results)
+
+    def lines(self) -> list[str]:
+        """The report `lamde-mission upload --fleet` prints: each vehicle's lines, then one
+        summary line."""
+        return [line for r in self.results for line in r.lines()] + [self.summary()]
+
+    def summary(self) -> str:
+        """The last line: how many vehicles hold their mission, and the times."""
+        good = sum(r.ok for r in self.results)
+        n = len(self.results)
+        return (
+            f"fleet: {good} of {n} vehicles hold their mission, read back identical "
+            f"(survey {self.survey_s:.2f} s, all {self.total_s:.2f} s)"
+            + ("" if good == n else "; the others: see FAILED above")
+        )
+
+
+def _heard_line(heard: Sequence[int]) -> str:
+    if not heard:
+        return "no vehicle heard"
+    s = "s" if len(heard) > 1 else ""
+    return f"heard system{s} {', '.join(str(x) for x in heard)}"
+
+
+def survey(
+    connections: Sequence[str | Connection],
+    *,
+    timeout: float,
+    want: Callable[[list[list[int]]], bool],
+    window: float = HEARTBEAT_WATCH_S,
+    signing_key: bytes | None = None,
+) -> list[list[int]]:
+    """Listen to every connection at once for vehicles' HEARTBEATs (component 1, an
+    autopilot's); nothing is sent.
+
+    Args:
+        connections: the links (`connection.parse_connection` strings or Connections).
+        timeout: the most seconds to listen.
+        want: `want(heard)` True once enough is heard (heard: per connection, the system ids
+            in ascending order); listening stops then, but not before `window` s.
+        window: the least seconds to listen (`claims.HEARTBEAT_WATCH_S`: one HEARTBEAT from
+            every autopilot at 1 Hz).
+        signing_key: hear only messages signed with this key.
+
+    Returns:
+        Per connection, the system ids heard there, ascending.
+
+    Raises:
+        DuplicateVehicleError: one system id claimed from two addresses on one link.
+        VehicleError: a link cannot be opened.
+    """
+    from pymavlink.dialects.v20 import common as mavlink2
+
+    from lamde_mission.vehicle.claims import is_vehicle_heartbeat
+
+    conns = [c if isinstance(c, Connection) else parse_connection(c) for c in connections]
+    links: list[Link] = []
+    try:
+        for c in conns:
+            try:
+                links.append(Link(c))
+            except OSError as exc:
+                raise VehicleError(f"cannot open {c}: {exc.strerror or exc}") from None
+        parsers = []
+        for _ in links:
+            mav = mavlink2.MAVLink(None)
+            mav.robust_parsing = True
+            if signing_key is not None:
+                from lamde_mission.vehicle.signing import enable_signing
+
+                enable_signing(mav, signing_key)
+            parsers.append(mav)
+        watches = [ClaimWatch(window) for _ in links]
+        first: list[dict[int, tuple[str, int] | None]] = [{} for _ in links]
+        t0 = time.monotonic()
+        while True:
+            heard = [sorted(f) for f in first]
+            now = time.monotonic()
+            if now - t0 >= timeout or (now - t0 >= window and want(heard)):
+                return heard
+            for k, link in enumerate(links):
+                for data, addr in link.recv(0.02):
+                    for msg in parsers[k].parse_buffer(data) or []:
+                        if msg.get_type() == "BAD_DATA" or not is_vehicle_heartbeat(msg):
+                            continue
+                        watches[k].note(msg, addr)
+                        sid = msg.get_srcSystem()
+                        pinned = first[k].setdefault(sid, addr)
+                        other = watches[k].conflict((sid, 1), pinned)
+                        if other is not None and pinned is not None:
+                            raise duplicate_error((sid, 1), pinned, other, sent=False)
+    finally:
+        for link in links:
+            link.close()
+
+
+def assign_system_ids(
+    n: int,
+    connections: Sequence[str],
+    system_ids: Sequence[int] | None,
+    *,
+    timeout: float,
+    window: float = HEARTBEAT_WATCH_S,
+    signing_key: bytes | None = None,
+) -> tuple[list[str], list[int], float]:
+    """Which connection and system id each of `n` vehicles has, checked by listening.
+
+    Args:
+        n: the number of vehicles (missions).
+        connections: one for all, or one per vehicle.
+        system_ids: one per vehicle, or None (from the HEARTBEATs: on one connection the
+            vehicles heard in ascending system id, on one each the one vehicle heard there).
+        timeout: the most seconds to listen for the vehicles.
+        window: the least seconds to listen.
+        signing_key: hear only messages signed with it.
+
+    Returns:
+        (connection per vehicle, system id per vehicle, seconds listened).
+
+    Raises:
+        FleetSetupError: a list of the wrong length, an id twice on one link, a vehicle
+            missing, more or fewer vehicles than missions, two vehicles on a one-vehicle link.
+        DuplicateVehicleError: one system id from two addresses.
+    """
+    conns = list(connections)
+    if len(conns) not in (1, n):
+        raise FleetSetupError(f"--connect: {len(conns)} connections for {n} vehicles (give one "
+                              "connection for all, or one per vehicle)")  # fmt: skip
+    shared = len(conns) == 1 and n > 1
+    if system_ids is not None:
+        ids = [int(s) for s in system_ids]
+        if len(ids) != n:
+            raise FleetSetupError(f"--sysid: {len(ids)} system ids for {n} vehicles (give one "
+                                  "per vehicle, in vehicle order)")  # fmt: skip
+        for s in ids:
+            if not 1 <= s <= 255:
+                raise FleetSetupError(f"--sysid: {s} is not a MAVLink system id (1..255)")
+        if shared and len(set(ids)) != n:
+            dup = sorted({s for s in ids if ids.count(s) > 1})
+            raise FleetSetupError(f"--sysid: system id {dup[0]} given twice for one connection "
+                                  "(each vehicle on it needs its own)")  # fmt: skip
+    else:
+        ids = None
+
+    def want(heard: list[list[int]]) -> bool:
+        if ids is not None:
+            if shared:
+                return set(ids) <= set(heard[0])
+            return all(ids[k] in heard[k] for k in range(n))
+        if shared:
+            return len(heard[0]) >= n
+        return all(len(h) >= 1 for h in heard)
+
+    t0 = time.monotonic()
+    heard = survey(conns, timeout=timeout, want=want, window=window, signing_key=signing_key)
+    listened = time.monotonic() - t0
+    if shared:
+        got = heard[0]
+        if ids is not None:
+            missing = [s for s in ids if s not in got]
+            if missing:
+                k = ids.index(missing[0]) + 1
+                raise FleetSetupError(
+                    f"vehicle {k}: no HEARTBEAT from system {missing[0]} at {conns[0]} within "
+                    f"{timeout:g} s ({_heard_line(got)}); nothing was sent"
+                )
+            return [conns[0]] * n, ids, listened
+        if len(got) != n:
+            raise FleetSetupError(
+                f"{n} missions but {len(got)} vehicles answer at {conns[0]} "
+                f"({_heard_line(got)}, listened {listened:.1f} s); nothing was sent (--sysid "
+                "names the vehicles to use)"
+            )
+        return [conns[0]] * n, list(got), listened
+    out = []
+    for k in range(n):
+        got = heard[k]
+        if ids is not None:
+            if ids[k] not in got:
+                raise FleetSetupError(
+                    f"vehicle {k + 1}: no HEARTBEAT from system {ids[k]} at {conns[k]} within "
+                    f"{timeout:g} s ({_heard_line(got)}); nothing was sent"
+                )
+            out.append(ids[k])
+        elif not got:
+            raise FleetSetupError(f"vehicle {k + 1}: no vehicle heard at {conns[k]} within "
+                                  f"{timeout:g} s; nothing was sent")  # fmt: skip
+        elif len(got) > 1:
+            raise FleetSetupError(
+                f"vehicle {k + 1}: {len(got)} vehicles answer at {conns[k]} "
+                f"({_heard_line(got)}); nothing was sent (--sysid says which is vehicle {k + 1})"
+            )
+        else:
+            out.append(got[0])
+    return conns, out, listened
+
+
+def upload_fleet(
+    missions: Sequence[FleetMission],
+    *,
+    connect: Sequence[str] = ("udpin://0.0.0.0:14540",),
+    system_ids: Sequence[int] | None = None,
+    via: str = "mavsdk",
+    timeout: float = 30.0,
+    attempts: int = 3,
+    autopilot: str | None = None,
+    signing_key: bytes | None = None,
+    log: Callable[[str], None] | None = None,
+    progress: Callable[[str, int, int], None] | None = None,
+    on_vehicle: Callable[[VehicleResult], None] | None = None,
+    window: float = HEARTBEAT_WATCH_S,
+) -> FleetReport:
+    """Upload mission k to vehicle k, read each back and compare (see the module docstring).
+
+    Args:
+        missions: one per vehicle, in vehicle order (`FleetMission.vehicle` 1..n).
+        connect: one connection for all vehicles, or one per vehicle.
+        system_ids: the vehicles' MAVLink system ids, in vehicle order (None: from their
+            HEARTBEATs).
+        via: "mavsdk" or "pymavlink" (`upload.make_client`).
+        timeout: seconds to wait for the vehicles, and without progress in a transfer.
+        attempts: whole-transfer retries per vehicle (`transfer.upload_and_verify`).
+        autopilot: storage rules (px4, ardupilot, generic; None: each vehicle's HEARTBEAT).
+        signing_key: MAVLink 2 signing key for every link.
+        log, progress: as for `upload_mission`.
+        on_vehicle: called with each vehicle's result as soon as it is done.
+        window: the least seconds the survey listens (`claims.HEARTBEAT_WATCH_S`).
+
+    Returns:
+        The report; `report.ok` only if every vehicle holds its mission, read back identical.
+
+    Raises:
+        FleetSetupError: vehicles and missions do not match (nothing sent).
+        DuplicateVehicleError: one system id claimed from two addresses (nothing sent, or the
+            vehicles before it only).
+        ValueError: bad arguments or items MAVLink cannot carry (before anything is sent).
+    """
+    from lamde_mission.items import MISSION_TYPE
+    from lamde_mission.vehicle.upload import VIAS, upload_mission
+    from lamde_mission.vehicle.wire import wire_mission
+
+    if not any(fm.mission for fm in missions):
+        raise ValueError("no missions to upload")
+    if via not in VIAS:
+        raise ValueError(f"via must be one of {', '.join(VIAS)}, got {via!r}")
+    for k, fm in enumerate(missions):
+        if fm.vehicle != k + 1:
+            raise ValueError(f"missions[{k}] is for vehicle {fm.vehicle}, expected {k + 1}")
+        if fm.mission:
+            wire_mission(fm.mission, MISSION_TYPE.MISSION)
+        if fm.fence:
+            wire_mission(fm.fence, MISSION_TYPE.FENCE)
+        if fm.rally:
+            wire_mission(fm.rally, MISSION_TYPE.RALLY)
+    for c in connect:
+        parse_connection(c)
+    t0 = time.monotonic()
+    conns, ids, listened = assign_system_ids(
+        len(missions), list(connect), system_ids, timeout=timeout, window=window,
+        signing_key=signing_key,
+    )  # fmt: skip
+    report = FleetReport(survey_s=listened)
+    for fm, conn, sid in zip(missions, conns, ids, strict=True):
+        result = VehicleResult(fm.vehicle, sid, conn, fm.source, skipped=not fm.mission)
+        if result.skipped:
+            report.results.append(result)
+            continue
+        try:
+            result.report = upload_mission(
+                fm.mission, fm.fence, connect=conn, via=via, timeout=timeout, attempts=attempts,
+                log=log, progress=progress, rally=fm.rally, autopilot=autopilot,
+                signing_key=signing_key, heartbeat_watch=0.0, system_id=sid,
+            )  # fmt: skip
+        except DuplicateVehicleError as exc:
+            exc.fleet_report = report  # the vehicles done before it
+            raise
+        except VehicleError as exc:
+            result.error = exc
+        report.results.append(result)
+        if on_vehicle is not None:
+            on_vehicle(result)
+    report.total_s = time.monotonic() - t0
+    return report

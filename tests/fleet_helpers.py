@@ -1,0 +1,86 @@
+"""Sortie directories made by hand for the fleet tests (upload --fleet, show DIR/): each sortie
+a complete mission written by the existing writer (`formats.write_mission`) for a hand-made
+route, and a fleet.json as `plan -o DIR/` writes it (no tests here, so not named test_*)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
+
+from lamde_mission.formats import write_mission
+from lamde_mission.formats.fleet import sortie_file_name
+from lamde_mission.items import plan_to_items
+from planner_core.model.mapio import load_map
+from sim import replay
+
+ROOT = Path(__file__).resolve().parents[1]
+DEMO_MAP = ROOT / "examples" / "maps" / "small-demo.json"
+
+
+def write_fleet_dir(
+    directory: Path,
+    routes: list[list[list[str]]],
+    *,
+    map_path: Path = DEMO_MAP,
+    depots: dict[str, tuple[float, float]] | None = None,
+    sortie_depots: list[list[tuple[str, str]]] | None = None,
+) -> Path:
+    """Write DIR/mission-v{k}-s{j}.plan and DIR/fleet.json for hand-made routes.
+
+    Args:
+        directory: where (created).
+        routes: routes[k][j] = the sensor ids vehicle k + 1 hovers over (at each sensor) on
+            sortie j + 1.
+        map_path: the map.
+        depots: name -> (x, y) m; default {"home": the map's start}.
+        sortie_depots: (take-off depot, landing depot) per sortie; default the first depot.
+
+    Returns:
+        The directory.
+    """
+    directory.mkdir(parents=True, exist_ok=True)
+    doc = json.loads(Path(map_path).read_text())
+    depots = depots or {"home": tuple(doc["start"])}
+    first = next(iter(depots))
+    by_id = {s["id"]: s for s in doc["sensors"]}
+    vehicles = []
+    for k, sorties in enumerate(routes):
+        out = []
+        for j, ids in enumerate(sorties):
+            a, b = sortie_depots[k][j] if sortie_depots else (first, first)
+            sub = dict(
+                doc, sensors=[by_id[i] for i in ids], start=list(depots[a]), end=list(depots[b])
+            )
+            sub.pop("witness", None)
+            m = load_map(sub)
+            plan = SimpleNamespace(
+                hover_points=[[by_id[i]["x"], by_id[i]["y"]] for i in ids],
+                hover_times=[1.0] * len(ids),
+            )
+            name = sortie_file_name(k + 1, j + 1)
+            write_mission(directory / name, plan, m)
+            t = replay(plan_to_items(plan, m), m).totals
+            out.append(
+                {
+                    "sortie": j + 1,
+                    "file": name,
+                    "depot_start": a,
+                    "depot_end": b,
+                    "duration_s": t.t_total,
+                    "sensors": list(ids),
+                }
+            )
+        vehicles.append(
+            {"vehicle": k + 1, "sorties": out, "makespan_s": sum(s["duration_s"] for s in out)}
+        )
+    summary: dict[str, Any] = {
+        "map": doc["name"],
+        "objective": "makespan",
+        "vehicles": vehicles,
+        "total_s": sum(v["makespan_s"] for v in vehicles),
+        "swaps": sum(max(len(v["sorties"]) - 1, 0) for v in vehicles),
+    }
+    (directory / "fleet.json").write_text(json.dumps(summary, indent=2))
+    return directory

@@ -1,0 +1,393 @@
+"""Fleets (issue 33): the multi-vehicle mock, `upload DIR/ --fleet` through both uploaders on
+one shared link and on one link per vehicle, its one-line errors, and `show MAP DIR/`.
+
+Sortie directories are made by hand (`tests.fleet_helpers`: the existing .plan writer on
+hand-made routes). Mocks send 10 HEARTBEATs a second and the API's survey listens 0.3 s, so
+that a three-vehicle upload takes well under a second; the CLI keeps its 1.2 s survey.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+from matplotlib.text import Text
+
+from lamde_mission.cli import main
+from lamde_mission.formats import read_mission
+from lamde_mission.formats.fleet import FleetDirError, read_fleet_dir, sortie_file_name
+from lamde_mission.vehicle.fleet import FleetMission, FleetSetupError, upload_fleet
+from lamde_mission.vehicle.mock_fleet import MockFleet, fleet_system_ids, vehicle_connections
+from lamde_mission.vehicle.transfer import NoVehicleError
+from lamde_mission.vehicle.upload import upload_mission
+from lamde_mission.vehicle.wire import compare_items, wire_mission
+from tests.fleet_helpers import DEMO_MAP, write_fleet_dir
+from tests.vehicle_helpers import RawGcs, free_udp_port, hand_mission
+from tests.vehicle_helpers import no_leftover_mock_threads as _no_leftover_mock_threads  # noqa: F401 (autouse)
+
+VIAS = ("mavsdk", "pymavlink")
+HZ = 10.0  # mock HEARTBEAT rate in these tests
+
+
+def _missions(n: int) -> list[FleetMission]:
+    """n different missions (vehicle k: k + 2 hovers), so a mix-up shows in the read-back."""
+    return [FleetMission(k + 1, hand_mission(k + 2), [], source=f"m{k + 1}") for k in range(n)]
+
+
+def _holds(vehicle, mission) -> bool:
+    from lamde_mission.items import MISSION_TYPE
+
+    return not compare_items(wire_mission(mission, MISSION_TYPE.MISSION), vehicle.wire_items())
+
+
+@pytest.fixture(scope="module")
+def fleet_dir(tmp_path_factory):
+    """Three vehicles on small-demo: vehicle 1 flies two sorties (a swap at 'home'), vehicle 2
+    leaves and lands at 'north', vehicle 3 one sortie from 'home'."""
+    return write_fleet_dir(
+        tmp_path_factory.mktemp("fleet") / "sorties",
+        [[["S1", "S2"], ["S3"]], [["S4"]], [["S3", "S2"]]],
+        depots={"home": (100.0, 100.0), "north": (1900.0, 1800.0)},
+        sortie_depots=[[("home", "home"), ("home", "home")], [("north", "north")],
+                       [("home", "home")]],
+    )  # fmt: skip
+
+
+# ----------------------------------------------------------------------------- the mock
+
+
+def test_one_link_carries_three_system_ids_from_one_address():
+    port = free_udp_port()
+    with RawGcs(port) as gcs, MockFleet(f"udpout:127.0.0.1:{port}", vehicles=3,
+                                        heartbeat_hz=HZ) as fleet:  # fmt: skip
+        seen: dict[int, set] = {}
+        until = time.monotonic() + 1.0
+        while time.monotonic() < until and len(seen) < 3:
+            hb = gcs.wait("HEARTBEAT", 0.5)
+            if hb is not None:
+                seen.setdefault(hb.get_srcSystem(), set()).add(gcs.peer)
+    assert sorted(seen) == [1, 2, 3] == fleet.system_ids
+    assert len(set.union(*seen.values())) == 1  # one socket: one source address
+
+
+def test_each_vehicle_answers_only_what_is_addressed_to_it():
+    from pymavlink.dialects.v20 import common as m
+
+    port = free_udp_port()
+    with RawGcs(port) as gcs, MockFleet(f"udpout:127.0.0.1:{port}", system_ids=[4, 7],
+                                        heartbeat_hz=HZ) as fleet:  # fmt: skip
+        assert gcs.wait("HEARTBEAT", 1.0) is not None
+        fleet.vehicle(7).set_items(hand_mission(1))
+        gcs.drain()
+        gcs.send(m.MAVLink_mission_request_list_message(7, 1, 0))
+        count = gcs.wait("MISSION_COUNT", 1.0)
+        assert count is not None and count.get_srcSystem() == 7 and count.count == 5
+        assert gcs.wait("MISSION_COUNT", 0.3) is None  # system 4 kept quiet
+        gcs.send(m.MAVLink_mission_request_list_message(4, 1, 0))
+        count = gcs.wait("MISSION_COUNT", 1.0)
+        assert count.get_srcSystem() == 4 and count.count == 0
+
+
+def test_one_link_per_vehicle_on_consecutive_ports():
+    base = free_udp_port()
+    conns = vehicle_connections(f"udpout:127.0.0.1:{base}", 3)
+    assert conns == [f"udpout:127.0.0.1:{base + k}" for k in range(3)]
+    with MockFleet(conns[:2], heartbeat_hz=HZ) as fleet:
+        assert not fleet.shared and fleet.connections() == conns[:2]
+        assert [v.system_id for v in fleet.vehicles] == [1, 2]
+
+
+@pytest.mark.parametrize(
+    ("vehicles", "ids", "shown"),
+    [(0, None, "at least 1"), (2, [1, 2, 3], "2 vehicles but 3 system ids"),
+     (None, [1, 1], "given twice"), (None, [255], "255"), (None, [0], "0 is not")],
+)  # fmt: skip
+def test_bad_fleet_ids(vehicles, ids, shown):
+    with pytest.raises(ValueError, match=shown):
+        fleet_system_ids(vehicles, ids)
+
+
+# ----------------------------------------------------------------------------- upload_fleet
+
+
+@pytest.mark.parametrize("via", VIAS)
+def test_fleet_upload_on_one_shared_link(via):
+    port = free_udp_port()
+    missions = _missions(3)
+    with MockFleet(f"udpout:127.0.0.1:{port}", system_ids=[5, 3, 9], heartbeat_hz=HZ) as fleet:
+        report = upload_fleet(missions, connect=[f"udpin://127.0.0.1:{port}"], via=via,
+                              timeout=5, window=0.3)  # fmt: skip
+        assert report.ok, report.lines()
+        # no --sysid: vehicles in ascending system id
+        assert [(r.vehicle, r.system_id) for r in report.results] == [(1, 3), (2, 5), (3, 9)]
+        for mission, sid in zip(missions, (3, 5, 9), strict=True):
+            assert _holds(fleet.vehicle(sid), mission.mission)
+    assert report.summary().startswith("fleet: 3 of 3 vehicles hold their mission")
+
+
+@pytest.mark.parametrize("via", VIAS)
+def test_fleet_upload_one_link_per_vehicle_with_sysids(via):
+    ports = [free_udp_port() for _ in range(3)]
+    missions = _missions(3)
+    with MockFleet([f"udpout:127.0.0.1:{p}" for p in ports], system_ids=[1, 2, 3],
+                   heartbeat_hz=HZ) as fleet:  # fmt: skip
+        report = upload_fleet(
+            missions,
+            connect=[f"udpin://127.0.0.1:{p}" for p in ports],
+            system_ids=[1, 2, 3],
+            via=via,
+            timeout=5,
+            window=0.3,
+        )
+        assert report.ok, report.lines()
+        for mission, v in zip(missions, fleet.vehicles, strict=True):
+            assert _holds(v, mission.mission)
+
+
+def test_sysid_order_maps_vehicles_to_ids():
+    port = free_udp_port()
+    missions = _missions(3)
+    with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=3, heartbeat_hz=HZ) as fleet:
+        report = upload_fleet(
+            missions,
+            connect=[f"udpin://127.0.0.1:{port}"],
+            system_ids=[3, 1, 2],
+            via="pymavlink",
+            timeout=5,
+            window=0.3,
+        )
+        assert report.ok
+        for mission, sid in zip(missions, (3, 1, 2), strict=True):
+            assert _holds(fleet.vehicle(sid), mission.mission)
+
+
+@pytest.mark.parametrize(
+    ("n", "connect", "ids", "shown"),
+    [(2, 1, None, "2 missions but 3 vehicles answer"),
+     (3, 1, [1, 2, 7], "vehicle 3: no HEARTBEAT from system 7"),
+     (3, 2, None, "2 connections for 3 vehicles"),
+     (3, 1, [1, 2], "2 system ids for 3 vehicles"),
+     (3, 1, [1, 2, 2], "system id 2 given twice")],
+)  # fmt: skip
+def test_fleet_mismatch_sends_nothing(n, connect, ids, shown):
+    port = free_udp_port()
+    with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=3, heartbeat_hz=HZ) as fleet:
+        with pytest.raises(FleetSetupError, match=shown):
+            upload_fleet(_missions(n), connect=[f"udpin://127.0.0.1:{port}"] * connect,
+                         system_ids=ids, via="pymavlink", timeout=0.6, window=0.3)  # fmt: skip
+        assert all(sum(v.stats.uploads.values()) == 0 for v in fleet.vehicles)
+
+
+def test_single_upload_picks_a_vehicle_by_system_id():
+    port = free_udp_port()
+    with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=3, heartbeat_hz=HZ) as fleet:
+        report = upload_mission(hand_mission(2), [], connect=f"udpin://127.0.0.1:{port}",
+                                via="pymavlink", timeout=5, system_id=2)  # fmt: skip
+        assert report.vehicle.system_id == 2
+        assert [len(v.items()) for v in fleet.vehicles] == [0, 6, 0]
+        with pytest.raises(NoVehicleError, match=r"system id 8 .*\(heard only systems 1, 2, 3\)"):
+            upload_mission(hand_mission(2), [], connect=f"udpin://127.0.0.1:{port}",
+                           via="pymavlink", timeout=0.5, system_id=8)  # fmt: skip
+
+
+# ----------------------------------------------------------------------------- the CLI
+
+
+@pytest.mark.parametrize("via", VIAS)
+def test_cli_upload_fleet_dir(via, fleet_dir, capsys):
+    port = free_udp_port()
+    with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=3, heartbeat_hz=HZ) as fleet:
+        rc = main(["upload", str(fleet_dir), "--fleet", "--connect",
+                   f"udpin://127.0.0.1:{port}", "--via", via, "--timeout", "5"])  # fmt: skip
+        out = capsys.readouterr().out
+        assert rc == 0, out
+        for k, v in enumerate(fleet.vehicles, start=1):  # each vehicle: its first sortie
+            mission, _fence = read_mission(fleet_dir / sortie_file_name(k, 1))
+            assert _holds(v, mission)
+    assert "fleet: 3 of 3 vehicles hold their mission" in out
+    assert "vehicle 2 (system 2" in out and "mission-v2-s1.plan" in out
+
+
+def test_cli_upload_fleet_one_connection_each(fleet_dir, capsys):
+    ports = [free_udp_port() for _ in range(3)]
+    with MockFleet([f"udpout:127.0.0.1:{p}" for p in ports], system_ids=[11, 12, 13],
+                   heartbeat_hz=HZ) as fleet:  # fmt: skip
+        rc = main(
+            [
+                "upload",
+                str(fleet_dir),
+                "--fleet",
+                "--via",
+                "pymavlink",
+                "--connect",
+                ",".join(f"udpin://127.0.0.1:{p}" for p in ports),
+                "--timeout",
+                "5",
+            ]
+        )
+        out = capsys.readouterr().out
+        assert rc == 0, out
+        assert [len(v.items()) for v in fleet.vehicles] == [
+            len(read_mission(fleet_dir / sortie_file_name(k, 1))[0]) for k in (1, 2, 3)
+        ]
+    assert "vehicle 3 (system 13" in out
+
+
+def _one_line_exit_2(capsys, argv) -> str:
+    rc = main(argv)
+    err = capsys.readouterr().err.strip()
+    assert rc == 2 and len(err.splitlines()) == 1, err
+    return err
+
+
+def test_cli_upload_fleet_errors(fleet_dir, tmp_path, capsys):
+    port = free_udp_port()
+    conn = ["--connect", f"udpin://127.0.0.1:{port}", "--via", "pymavlink", "--timeout", "1"]
+    # a directory without fleet.json
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert "fleet.json: no such file" in _one_line_exit_2(
+        capsys, ["upload", str(empty), "--fleet", *conn]
+    )
+    # fleet.json naming a sortie file that is not there
+    broken = tmp_path / "broken"
+    shutil.copytree(fleet_dir, broken)
+    (broken / "mission-v2-s1.plan").unlink()
+    assert "mission-v2-s1.plan: no such file (vehicle 2, sortie 1" in _one_line_exit_2(
+        capsys, ["upload", str(broken), "--fleet", *conn]
+    )
+    with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=2, heartbeat_hz=HZ) as fleet:
+        # fleet.json plans 3 vehicles, 2 answer
+        err = _one_line_exit_2(capsys, ["upload", str(fleet_dir), "--fleet", *conn])
+        assert "3 missions but 2 vehicles answer" in err and "nothing was sent" in err
+        # a vehicle missing
+        err = _one_line_exit_2(capsys, ["upload", str(fleet_dir), "--fleet", *conn,
+                                        "--sysid", "1,2,3"])  # fmt: skip
+        assert "vehicle 3: no HEARTBEAT from system 3" in err
+        assert all(sum(v.stats.uploads.values()) == 0 for v in fleet.vehicles)
+    assert "--sysid: 'x' is not" in _one_line_exit_2(
+        capsys, ["upload", str(fleet_dir), "--fleet", *conn, "--sysid", "1,x,3"]
+    )
+    assert "--map with --fleet" in _one_line_exit_2(
+        capsys, ["upload", str(fleet_dir), "--fleet", *conn, "--map", str(DEMO_MAP)]
+    )
+    one = str(fleet_dir / "mission-v1-s1.plan")
+    assert "2 system ids for one mission" in _one_line_exit_2(
+        capsys, ["upload", one, *conn, "--sysid", "1,2"]
+    )
+
+
+@pytest.mark.parametrize(
+    ("doc", "shown"),
+    [({"vehicles": []}, "vehicles: expected a non-empty list"),
+     ({"vehicles": [{"vehicle": 2, "sorties": []}]}, "vehicles[0].vehicle: expected 1"),
+     ({"vehicles": [{"vehicle": 1, "sorties": [{"sortie": 1, "file": "../x.plan"}]}]},
+      "sorties[0].file: expected a file name inside"),
+     ({"vehicles": [{"vehicle": 1, "sorties": [{"sortie": 2}]}]}, "sorties[0].sortie"),
+     ({"vehicles": [{"vehicle": 1, "sorties": [{"sortie": 1, "duration_s": "long"}]}]},
+      "duration_s: expected a finite number")],
+)  # fmt: skip
+def test_bad_fleet_json_names_the_field(tmp_path, fleet_dir, doc, shown):
+    d = tmp_path / "d"
+    shutil.copytree(fleet_dir, d)
+    (d / "fleet.json").write_text(json.dumps(doc))
+    with pytest.raises(FleetDirError) as exc:
+        read_fleet_dir(d)
+    assert shown in str(exc.value) and "\n" not in str(exc.value)
+
+
+def test_fleet_dir_reads_back(fleet_dir):
+    fleet = read_fleet_dir(fleet_dir)
+    assert [len(v.sorties) for v in fleet.vehicles] == [2, 1, 1]
+    assert [s.path.name for s in fleet.first_sorties()] == [
+        "mission-v1-s1.plan",
+        "mission-v2-s1.plan",
+        "mission-v3-s1.plan",
+    ]
+    assert fleet.vehicles[1].sorties[0].depot_start == "north" and fleet.swaps == 1
+
+
+def _foreground_sigint() -> None:
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+def test_cli_mock_vehicle_fleet_runs_until_ctrl_c():
+    port = free_udp_port()
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "lamde_mission.cli", "mock-vehicle", "--vehicles", "3",
+         "--connect", f"udpout:127.0.0.1:{port}", "--heartbeat-hz", "10"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+        preexec_fn=_foreground_sigint,
+    )  # fmt: skip
+    try:
+        first = proc.stdout.readline()
+        assert "3 vehicles (systems 1, 2, 3" in first and f"127.0.0.1:{port}" in first
+        report = upload_fleet(_missions(3), connect=[f"udpin://127.0.0.1:{port}"],
+                              via="pymavlink", timeout=5, window=0.3)  # fmt: skip
+        assert report.ok
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=10)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert proc.returncode == 0
+    for sid, n in ((1, 6), (2, 7), (3, 8)):
+        assert f"system {sid}: mission received: {n} items" in out
+        assert f"stopped system {sid}:" in err
+
+
+@pytest.mark.parametrize(
+    ("argv", "shown"),
+    [(["--vehicles", "0"], "at least 1"), (["--sysids", "1,1"], "given twice"),
+     (["--ports"], "need --vehicles"), (["--vehicles", "2", "--sysids", "1,2,3"], "3 system"),
+     (["--vehicles", "2", "--heartbeat-hz", "0"], "--heartbeat-hz")],
+)  # fmt: skip
+def test_cli_mock_vehicle_fleet_bad_options(argv, shown, capsys):
+    assert main(["mock-vehicle", *argv]) == 2
+    assert shown in capsys.readouterr().err
+
+
+# ----------------------------------------------------------------------------- show DIR/
+
+
+def test_fleet_figure_marks_vehicles_sorties_depots_and_swaps(fleet_dir):
+    from lamde_mission.commands.show import fleet_views
+    from lamde_mission.plot import fleet_figure
+    from planner_core.model.mapio import load_map
+
+    m = load_map(DEMO_MAP)
+    views = fleet_views(fleet_dir, m)
+    assert [(v.vehicle, v.sortie) for v in views] == [(1, 1), (1, 2), (2, 1), (3, 1)]
+    fig = fleet_figure(m, views)
+    texts = [t.get_text() for t in fig.findobj(Text) if t.get_text()]
+    assert "map 'small-demo': 3 vehicles, 4 sorties, 1 swap" in texts
+    assert "v1 swap 1" in texts and "home" in texts and "north" in texts
+    assert "vehicle 1: 2 sorties" in texts and "sortie 2" in texts and "battery swap" in texts
+    assert "2.1 · " in " ".join(texts)  # vehicle 1's second sortie, first hover point
+    # one colour per vehicle: the three route colours differ
+    colours = {
+        tuple(line.get_color())
+        for line in fig.axes[0].get_lines()
+        if line.get_linestyle() in ("-", "--") and line.get_linewidth() == 1.6
+    }
+    assert len(colours) == 3
+
+
+def test_cli_show_fleet_dir(fleet_dir, tmp_path, capsys):
+    out = tmp_path / "fleet.png"
+    assert main(["show", str(DEMO_MAP), str(fleet_dir), "-o", str(out)]) == 0
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    bad = tmp_path / "nofleet"
+    bad.mkdir()
+    rc = main(["show", str(DEMO_MAP), str(bad), "-o", str(tmp_path / "x.png")])
+    assert rc == 2 and "fleet.json: no such file" in capsys.readouterr().err
+    assert not (tmp_path / "x.png").exists()
