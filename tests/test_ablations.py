@@ -130,6 +130,7 @@ def checkpoint(tmp_path: Path) -> Path:
     return tmp_path / "ck"
 
 
+@pytest.mark.slow  # 14 s measured in the default suite
 def test_policy_spec_charges_the_probes_and_uses_its_checkpoint(checkpoint: Path) -> None:
     from planner_core.bench.baselines.de import optimise as de_optimise
     from planner_core.learning.policy import PolicyConfigurator

@@ -144,6 +144,7 @@ def test_padded_batch_equals_each_problem_alone() -> None:
         assert abs(float(batched[4][b]) - ref.value) < 1e-5
 
 
+@pytest.mark.slow  # 4.5 s measured in the default suite
 def test_one_ppo_update_lowers_the_clipped_loss() -> None:
     torch = pytest.importorskip("torch")
     from planner_core.learning.policy.ppo import (
@@ -180,6 +181,7 @@ def test_one_ppo_update_lowers_the_clipped_loss() -> None:
                           "bc_kl"}
 
 
+@pytest.mark.slow  # 4.2 s measured in the default suite
 def test_bc_anchor_kl_is_exact_and_holds_ppo_near_the_reference() -> None:
     """KL(pi_ref || pi) of the factorised policy equals E_ref[log pi_ref - log pi] (checked by
     Monte Carlo on the exact log-probabilities), is 0 against itself, and the anchor in the PPO

@@ -6,9 +6,12 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
+import pytest
+
 from tests.conftest import ROOT, run_cli
 
 
+@pytest.mark.slow  # 7.7 s measured in the default suite
 def test_report_reads_a_compressed_results_folder(tmp_path: Path) -> None:
     runs = tmp_path / "runs"
     shutil.copytree(ROOT / "docs" / "reduced" / "runs", runs)

@@ -79,6 +79,7 @@ def test_kernel_and_numpy_twin_agree_in_scheduled_access() -> None:
     assert np.all(parts["v3"] == 0.0)
 
 
+@pytest.mark.slow  # 8.4 s measured in the default suite
 def test_a_field_only_c3_rules_out_is_planned_with_scheduled_access(tmp_path) -> None:
     """12 sensors within 40 m: under the paper's C3 no point serves them (check: CANNOT);
     scheduled, check passes, the plan is feasible, the sim verifies the mission, and the same
