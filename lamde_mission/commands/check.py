@@ -32,7 +32,8 @@ def run(args: argparse.Namespace) -> int:
 
         d = diagnose(m)
         s["diagnosis"] = [{"kind": f.kind, "fatal": f.fatal, "sensor": f.sensor,
-                           "message": f.message} for f in d.findings]  # fmt: skip
+                           "message": f.message, **({"depot": f.depot} if f.depot else {})}
+                          for f in d.findings]  # fmt: skip
         print(json.dumps(s, indent=2))
         return 0 if d.feasible_so_far else 1
     default = " (default for this size)" if s["max_hover_points_default"] else ""

@@ -19,6 +19,25 @@ required data raised by the data margin) and with shapely:
   plan can serve within I_max x T_max of hover time at such points (C3_HOVER_TIME). In
   scheduled access C3 does not apply and the test is skipped.
 
+Batteries and fleets (issue 33; only on maps that give `uav.battery` / `uav.endurance_s` or
+`fleet`, so other maps are diagnosed exactly as before). A sortie takes off and lands at a
+depot (`fleet.depots`; without them the map's start or end) in the same free piece of
+airspace, flies at most v_max and spends at least `energy.least_energy_per_metre_wh` per
+metre, the vertical take-off and landing, and P(0) per hover second; a sensor is heard only
+within `ground_reach` of it. Straight-line distances bound the flight from below, so:
+
+- a sensor that no sortie from any depot can reach (its radio range and back within the usable
+  energy, battery x (1 - reserve)) can get no data at all (ENERGY_RANGE, naming the sensor,
+  the energy needed and the usable energy);
+- a depot from which no sortie can leave: no sensor is heard from its piece of airspace (it is
+  walled in), or every sensor is out of a battery's reach from it (DEPOT, naming the depot);
+- a sensor's data may be split across sorties (C4 sums them), so a sensor one sortie cannot
+  serve alone from its best depot is a note (ENERGY_SPLIT: the energy serving it alone needs,
+  the usable energy, and how many sorties at least must share it); with several sorties the
+  per-flight limits I_max and I_max x T_max (TOO_MUCH_DATA, C3_HOVER_TIME) bound each sortie,
+  not the plan: fatal only beyond what `fleet.uavs` flights without a battery can hold, notes
+  with a battery (as many sorties as needed).
+
 Findings that are no proof of infeasibility are notes: a sensor inside an obstacle or a no-fly
 zone (served by radio from outside it: the best rate says how well), a sensor needing more than
 one hover point, a bandwidth test that found no plan on its grid but could not prove it
@@ -47,6 +66,8 @@ class Finding:
     fatal: bool
     message: str
     sensor: str | None = None
+    #: the depot a DEPOT finding names (issue 33)
+    depot: str | None = None
 
 
 @dataclass(frozen=True)
@@ -96,6 +117,9 @@ def diagnose(m: Any) -> Diagnosis:
         findings.append(Finding("ENCLOSED", True, "end: the end point cannot be reached from "
                                 "the start (obstacles wall one of them in)"))  # fmt: skip
     t_max, i_max = float(uav.max_hover_time), int(pm.max_hover_points)
+    # flights the plan may use (issue 33): one (the paper's), fleet.uavs without a battery,
+    # as many as needed with one; the per-flight limits below bound the plan by that many
+    flights = math.inf if m.has_battery else float(m.uavs)
     best: dict[str, float] = {}
     need: dict[str, int] = {}
     for sid, s, q, q_real in zip(pm.sensor_ids, pm.sensors, pm.required_data, m.required_data,
@@ -125,7 +149,19 @@ def diagnose(m: Any) -> Diagnosis:
         k = math.ceil(q / (t_max * r) - 1e-12)
         need[sid] = k
         one = t_max * r
-        if k > i_max:
+        if k > i_max and flights > 1:  # several flights (issue 33)
+            why = (f"sensor '{sid}' needs {q:g} Mbit (required {q_real:g} plus the data "
+                   f"margin); one hover point collects at most {one:.4g} Mbit (T_max "
+                   f"{t_max:g} s x {r:.3g} Mbit/s), so {k} hover points are needed")  # fmt: skip
+            if k > i_max * flights:
+                findings.append(Finding(
+                    "TOO_MUCH_DATA", True, f"{why}, more than I_max = {i_max} in each of "
+                    f"the {m.uavs} flights (fleet.uavs, no battery: one flight each)", sid))
+            else:
+                findings.append(Finding(
+                    "SEVERAL_SORTIES", False, f"{why}, more than one flight's I_max = "
+                    f"{i_max}: at least {math.ceil(k / i_max)} sorties must share it", sid))
+        elif k > i_max:
             findings.append(Finding(
                 "TOO_MUCH_DATA", True, f"sensor '{sid}' needs {q:g} Mbit (required "
                 f"{q_real:g} plus the data margin); one hover point collects at most "
@@ -142,14 +178,165 @@ def diagnose(m: Any) -> Diagnosis:
         fatal = {f.sensor for f in findings if f.fatal}
         req = np.array([0.0 if sid in fatal else q for sid, q in
                         zip(pm.sensor_ids, pm.required_data, strict=True)])  # fmt: skip
+        # fleet.uavs flights without a battery hold that many flights' hover time
+        i_plan = i_max * int(flights) if math.isfinite(flights) else i_max
         bound = bandwidth_bound(
             pm.sensors, req, list(pm.sensor_ids), width=pm.width, height=pm.height,
             altitude=uav.altitude, peak_rate=radio.peak_rate, decay=radio.decay,
-            bandwidth=radio.bandwidth, t_max=t_max, i_max=i_max,
+            bandwidth=radio.bandwidth, t_max=t_max, i_max=i_plan,
         )  # fmt: skip
-        findings.extend(_bandwidth_findings(bound, float(radio.bandwidth), t_max, i_max))
+        found = _bandwidth_findings(bound, float(radio.bandwidth), t_max, i_plan)
+        if not math.isfinite(flights):  # a battery: sorties share the hover time
+            more = "; that bounds one sortie, and with a battery sorties share the hover time"
+            found = [f if f.kind != "C3_HOVER_TIME" else Finding(
+                "C3_HOVER_TIME", False, f.message + more, f.sensor) for f in found]  # fmt: skip
+        findings.extend(found)
+    if m.has_battery or m.has_fleet:
+        findings.extend(_energy_findings(m, pm, pieces))
     return Diagnosis(findings=tuple(findings), best_rate=best, points_needed=need,
                      bandwidth=bound)  # fmt: skip
+
+
+def _energy_findings(m: Any, pm: Any, pieces: list[Any]) -> list[Finding]:
+    """Batteries and depots (issue 33; the module docstring): ENERGY_RANGE and DEPOT (fatal),
+    ENERGY_SPLIT (a note), from straight-line lower bounds on each sortie's flight.
+
+    Cost: O(J x D) distances for J sensors and D depots, plus 400 radii per sensor for the
+    note."""
+    from shapely.geometry import Point
+
+    from planner_core.model import energy as en
+    from planner_core.model.formulas import ground_reach, slant_rates
+
+    uav, radio = pm.spec.uav, pm.spec.radio
+    v_max, acc, h = float(uav.max_speed), float(uav.acceleration), float(uav.altitude)
+    power = m.power
+    usable = m.usable_energy_wh
+    cap = math.inf if usable is None else float(usable)
+    vertical = en.vertical_energy_wh(h, v_max, acc, power)
+    per_m = en.least_energy_per_metre_wh(v_max, power)
+    hover_wh = en.hover_power_w(power) / en.J_PER_WH  # Wh per hover second
+    hear = float(ground_reach(0.0, h, radio.peak_rate, radio.decay))
+    given = bool(m.has_fleet and m.spec.fleet.depots)
+    # (label in messages, name, position)
+    if given:
+        sites = [(f"depot '{d.name}'", d.name, np.array([d.x, d.y], dtype=float))
+                 for d in m.depots]  # fmt: skip
+    else:  # the first sortie leaves the start; a sortie may land at the map's end
+        sites = [(f"depot '{m.depots[0].name}' (the start)", m.depots[0].name, pm.start),
+                 ("the map's end", None, pm.end)]  # fmt: skip
+
+    def piece_of(xy: np.ndarray) -> int:
+        if not pieces:
+            return -1
+        d = [g.distance(Point(*xy)) for g in pieces]
+        k = int(np.argmin(d))
+        return k if d[k] <= 1e-6 else -1
+
+    where = [piece_of(xy) for _, _, xy in sites]
+    groups: dict[int, list[int]] = {}
+    for i, k in enumerate(where):
+        if k >= 0:
+            groups.setdefault(k, []).append(i)
+    sensors, req, ids = pm.sensors, pm.required_data, pm.sensor_ids
+    # per sensor and piece: how close the piece comes to it (hover points lie in the piece)
+    near = {k: np.array([pieces[k].distance(Point(*s)) for s in sensors]) for k in groups}
+    dist = np.array([[float(np.hypot(*(s - xy))) for _, _, xy in sites] for s in sensors])
+    out: list[Finding] = []
+    if math.isfinite(cap):
+        for j, sid in enumerate(ids):
+            if req[j] <= 0:
+                continue
+            # the cheapest sortie that hears it at all: to the edge of its radio range and back
+            best = (math.inf, "", 0.0)
+            for k, members in groups.items():
+                if near[k][j] >= hear:
+                    continue
+                i = min(members, key=lambda i: dist[j, i])
+                e = vertical + 2.0 * per_m * max(dist[j, i] - hear, 0.0)
+                best = min(best, (e, sites[i][0], dist[j, i]))
+            e_any, name, d_site = best
+            if e_any >= cap:
+                how = ("no depot's airspace comes within its radio range" if not name else
+                       f"from the nearest, {name}, {d_site:.0f} m away, a sortie needs at "
+                       f"least {e_any:.4g} Wh to come within its radio range ({hear:.0f} m) "
+                       "and back")  # fmt: skip
+                out.append(Finding(
+                    "ENERGY_RANGE", True, f"sensor '{sid}': no sortie can collect any of its "
+                    f"data: {how}, more than the {cap:.4g} Wh usable (battery "
+                    f"{m.battery_wh:.4g} Wh less the {100 * m.battery_reserve:g} % reserve)",
+                    sid))  # fmt: skip
+                continue
+            note = _split_note(j, sid, groups, near, dist, sites, hear, req[j], cap, vertical,
+                               per_m, hover_wh, pm, slant_rates)  # fmt: skip
+            if note is not None:
+                out.append(note)
+    for i, (label, name, xy) in enumerate(sites if given else ()):
+        k = where[i]
+        label = f"{label} at ({xy[0]:g}, {xy[1]:g})"
+        if k < 0:
+            out.append(Finding("DEPOT", True, f"fleet.depots: {label}: no sortie can leave it: "
+                               "it lies inside an obstacle's clearance", depot=name))  # fmt: skip
+            continue
+        heard = [j for j in range(len(ids)) if req[j] > 0 and near[k][j] < hear]
+        if not heard:
+            out.append(Finding(
+                "DEPOT", True, f"fleet.depots: {label}: no sortie can leave it: no sensor is "
+                f"heard from the airspace around it (obstacles wall it in; the radio range is "
+                f"{hear:.0f} m)", depot=name))  # fmt: skip
+            continue
+        if not math.isfinite(cap):
+            continue
+        back = {j: min(dist[j, b] for b in groups[k]) for j in heard}
+        costs = [(vertical + per_m * (max(dist[j, i] - hear, 0.0) + max(back[j] - hear, 0.0)),
+                  j) for j in heard]  # fmt: skip
+        e, j = min(costs)
+        if e >= cap:
+            out.append(Finding(
+                "DEPOT", True, f"fleet.depots: {label}: no sortie can leave it: the cheapest, "
+                f"to sensor '{ids[j]}' ({dist[j, i]:.0f} m away) and on to a depot, needs at "
+                f"least {e:.4g} Wh, more than the {cap:.4g} Wh usable", depot=name))  # fmt: skip
+    return out
+
+
+def _split_note(j: int, sid: str, groups: dict[int, list[int]], near: dict[int, np.ndarray],
+                dist: np.ndarray, sites: list, hear: float, q: float, cap: float,
+                vertical: float, per_m: float, hover_wh: float, pm: Any,
+                slant_rates: Any) -> Finding | None:  # fmt: skip
+    """ENERGY_SPLIT: serving sensor j alone in one sortie (fly to a point rho metres from it,
+    hover Q_j / R(rho), fly back) needs more than the usable energy, a lower bound minimised
+    over rho on 400 intervals (flight falls and hover grows with rho, so on [rho_k, rho_k+1]
+    flight(rho_k+1) + hover(rho_k) bounds it); and how many sorties at least must share it
+    (the most data one sortie can take: R(rho) x its energy left for hover / P(0), at most
+    I_max x T_max of hover)."""
+    radio, uav = pm.spec.radio, pm.spec.uav
+    t_cap = float(uav.max_hover_time) * int(pm.max_hover_points)
+    need, most, at = math.inf, 0.0, ""
+    for k, members in groups.items():
+        lo = float(near[k][j])
+        if lo >= hear:
+            continue
+        i = min(members, key=lambda i: dist[j, i])
+        rho = np.linspace(lo, hear, 401)
+        rate = np.minimum(np.maximum(slant_rates(rho * rho, uav.altitude, radio.peak_rate,
+                                                 radio.decay), 0.0), radio.bandwidth)  # fmt: skip
+        fly = vertical + 2.0 * per_m * np.maximum(dist[j, i] - rho, 0.0)
+        r_hi, fly_lo = rate[:-1], fly[1:]  # the bounds on each interval
+        with np.errstate(divide="ignore"):
+            e = fly_lo + np.where(r_hi > 0, hover_wh * q / np.where(r_hi > 0, r_hi, 1.0),
+                                  np.inf)  # fmt: skip
+        if float(e.min()) < need:
+            need, at = float(e.min()), sites[i][0]
+        left = np.minimum(np.maximum(cap - fly_lo, 0.0) / hover_wh, t_cap)
+        most = max(most, float(np.max(r_hi * left)))
+    if need <= cap or most <= 0.0:
+        return None
+    sorties = math.ceil(q / most - 1e-12)
+    return Finding(
+        "ENERGY_SPLIT", False, f"sensor '{sid}': one sortie cannot serve it alone: from the "
+        f"best site, {at}, that needs at least {need:.4g} Wh (the flight and {q:g} Mbit of "
+        f"hover), more than the {cap:.4g} Wh usable; its data must be shared by at least "
+        f"{sorties} sorties", sid)  # fmt: skip
 
 
 def _bandwidth_findings(b: BandwidthBound, bw: float, t_max: float, i_max: int) -> list[Finding]:

@@ -54,6 +54,7 @@ __all__ = [
     "sortie_energy_wh",
     "battery_energy_wh",
     "usable_energy_wh",
+    "least_energy_per_metre_wh",
 ]
 
 #: joules in one watt-hour
@@ -133,13 +134,19 @@ def power_w(v: Any, power: PowerParams | None = None) -> np.ndarray:
     Returns:
         P(V) in W, v's shape (a 0-d array for a scalar).
     """
-    p = _power(power)
+    profile, induced, parasite = _power_terms(v, _power(power))
+    return profile + induced + parasite
+
+
+def _power_terms(v: Any, p: PowerParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The three terms of P(V) (W): blade profile (rising in V), induced (falling), parasite
+    (rising); `power_w` is their sum."""
     v = np.abs(np.asarray(v, dtype=float))
     v2 = v * v
     x = v2 / (2.0 * p.v0 * p.v0)
-    induced = np.sqrt(1.0 / (np.sqrt(1.0 + x * x) + x))
-    return (p.p0 * (1.0 + 3.0 * v2 / (p.u_tip * p.u_tip)) + p.pi * induced
-            + 0.5 * p.d0 * p.rho * p.s * p.area * v2 * v)  # fmt: skip
+    induced = p.pi * np.sqrt(1.0 / (np.sqrt(1.0 + x * x) + x))
+    return (p.p0 * (1.0 + 3.0 * v2 / (p.u_tip * p.u_tip)), induced,
+            0.5 * p.d0 * p.rho * p.s * p.area * v2 * v)  # fmt: skip
 
 
 def hover_power_w(power: PowerParams | None = None) -> float:
@@ -338,3 +345,25 @@ def usable_energy_wh(battery_wh: float, reserve: float) -> float:
         Wh.
     """
     return float(battery_wh) * (1.0 - float(reserve))
+
+
+def least_energy_per_metre_wh(v_max: float, power: PowerParams | None = None) -> float:
+    """A lower bound (Wh per metre) on the energy of any horizontal flight at speeds up to
+    v_max: E = int P(v) dt = int P(v) / v ds >= L x min_{0 < u <= v_max} P(u) / u, whatever the
+    legs and their profiles. Proven on 20,000 geometric intervals [u_k, u_k+1] of (0, v_max]:
+    there P(u) / u >= (profile(u_k) + induced(u_k+1) + parasite(u_k)) / u_k+1 (each term is
+    monotone). Used by `check` (`planner_core.model.diagnose`) to prove a sensor or a depot out
+    of a battery's reach.
+
+    Args:
+        v_max: the UAV's top speed (m/s), > 0.
+        power: the model's parameters (default `DEFAULT_POWER`).
+
+    Returns:
+        Wh per metre (> 0).
+    """
+    p = _power(power)
+    u = float(v_max) * np.geomspace(1e-6, 1.0, 20_001)
+    lo_prof, _, lo_par = _power_terms(u[:-1], p)
+    _, hi_ind, _ = _power_terms(u[1:], p)
+    return float(np.min((lo_prof + hi_ind + lo_par) / u[1:])) / J_PER_WH
