@@ -296,10 +296,13 @@ def _verbose_log(args: argparse.Namespace):
 
 def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
     """`upload DIR/ --fleet`: every vehicle's first sortie (see `vehicle.fleet`)."""
+    from pathlib import Path
+
     from lamde_mission.errors import UsageError
-    from lamde_mission.formats.fleet import FleetDirError, read_fleet_dir
+    from lamde_mission.formats import MissionFileError
+    from lamde_mission.formats.fleet import FleetDirError
     from lamde_mission.vehicle.connection import parse_connection
-    from lamde_mission.vehicle.fleet import FleetMission, FleetSetupError, upload_fleet
+    from lamde_mission.vehicle.fleet import FleetSetupError, first_sortie_missions, upload_fleet
     from lamde_mission.vehicle.transfer import DuplicateVehicleError, TransferError, VehicleError
 
     if args.map:
@@ -314,19 +317,14 @@ def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
             raise UsageError(f"--connect: {exc}") from None
     ids = _sysids(args.sysid)
     try:
-        fleet = read_fleet_dir(args.mission)
-    except FleetDirError as exc:
+        missions = first_sortie_missions(args.mission)
+    except (FleetDirError, MissionFileError) as exc:
         raise UsageError(str(exc)) from None
-    missions = []
-    for v, first in zip(fleet.vehicles, fleet.first_sorties(), strict=True):
-        if first is None:
-            missions.append(FleetMission(v.vehicle, [], source="no sortie"))
-            continue
-        path = str(first.path)
-        mission, fence, rally = _read(path)
-        _wire_check(path, mission, fence, rally)
-        _flight_check(path, mission, force=args.force)
-        missions.append(FleetMission(v.vehicle, mission, fence, rally, source=first.path.name))
+    for fm in missions:
+        if fm.mission:
+            path = str(Path(args.mission) / fm.source)
+            _wire_check(path, fm.mission, fm.fence, fm.rally)
+            _flight_check(path, fm.mission, force=args.force)
     n = len(missions)
     print(f"{args.mission}: {n} vehicle{'s' if n > 1 else ''}, first sorties "
           + ", ".join(m.source for m in missions), flush=True)  # fmt: skip

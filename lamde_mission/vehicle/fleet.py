@@ -24,6 +24,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from lamde_mission.items import MissionItem
 from lamde_mission.vehicle.claims import HEARTBEAT_WATCH_S, ClaimWatch, duplicate_error
@@ -34,8 +35,8 @@ from lamde_mission.vehicle.transfer import (
     VehicleError,
 )
 
-__all__ = ["FleetSetupError", "FleetMission", "VehicleResult", "FleetReport", "survey",
-           "assign_system_ids", "upload_fleet"]  # fmt: skip
+__all__ = ["first_sortie_missions", "FleetSetupError", "FleetMission", "VehicleResult",
+           "FleetReport", "survey", "assign_system_ids", "upload_fleet"]  # fmt: skip
 
 
 class FleetSetupError(ValueError):
@@ -117,6 +118,36 @@ class FleetReport:
             f"(survey {self.survey_s:.2f} s, all {self.total_s:.2f} s)"
             + ("" if good == n else "; the others: see FAILED above")
         )
+
+
+def first_sortie_missions(directory: str | Path) -> list[FleetMission]:
+    """Each vehicle's first sortie of a sortie directory, read as `upload_fleet` takes them.
+
+    Args:
+        directory: a sortie directory (`formats.fleet.read_fleet_dir`).
+
+    Returns:
+        One FleetMission per vehicle of fleet.json, in vehicle order (an empty mission for a
+        vehicle without sorties); `source` is the file's name.
+
+    Raises:
+        FleetDirError: a bad directory or fleet.json (one line naming the field).
+        MissionFileError: a sortie file that cannot be read, or holds no mission item.
+    """
+    from lamde_mission.formats import MissionFileError, read_mission_lists
+    from lamde_mission.formats.fleet import read_fleet_dir
+
+    fleet = read_fleet_dir(directory)
+    out = []
+    for v, first in zip(fleet.vehicles, fleet.first_sorties(), strict=True):
+        if first is None:
+            out.append(FleetMission(v.vehicle, [], source="no sortie"))
+            continue
+        mission, fence, rally = read_mission_lists(first.path)
+        if not mission:
+            raise MissionFileError(f"{first.path}: the mission holds no items")
+        out.append(FleetMission(v.vehicle, mission, fence, rally or None, first.path.name))
+    return out
 
 
 def _heard_line(heard: Sequence[int]) -> str:
