@@ -192,6 +192,13 @@ COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
         ("test_vehicle.py::test_cli_mock_vehicle_runs_until_ctrl_c", ("mock-vehicle",)),
     "lamde-mission upload":
         ("test_vehicle.py::test_cli_upload_plan", ('"upload"', "--connect")),
+    "lamde-mission upload DIR/ --fleet":
+        ("test_vehicle_fleet.py::test_cli_upload_fleet_dir", ('"upload"', '"--fleet"')),
+    "lamde-mission mock-vehicle --vehicles":
+        ("test_vehicle_fleet.py::test_cli_mock_vehicle_fleet_runs_until_ctrl_c",
+         ('"mock-vehicle"', '"--vehicles"')),
+    "lamde-mission show MAP DIR/":
+        ("test_vehicle_fleet.py::test_cli_show_fleet_dir", ('"show"',)),
     "python examples/upload_to_mock.py":
         ("test_readme.py::test_upload_to_mock_example_runs", ("upload_to_mock.py",)),
     "lamde-mission lam build":
