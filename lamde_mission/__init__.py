@@ -7,7 +7,7 @@ Heavy modules load lazily, so `import lamde_mission` and `lamde-mission --help` 
 # console script's SIGINT handler below; the annotations need none
 import sys
 
-__all__ = ["plan", "Plan"]
+__all__ = ["plan", "plan_fleet", "Plan"]
 
 
 def _quit_on_sigint(signum: int, frame: object) -> None:
@@ -41,6 +41,10 @@ def __getattr__(name: str) -> object:  # no `typing` import: the CLI starts ~15 
         from lamde_mission.api import plan
 
         return plan
+    if name == "plan_fleet":
+        from lamde_mission.api import plan_fleet
+
+        return plan_fleet
     if name == "Plan":
         from lamde_mission.result import Plan
 

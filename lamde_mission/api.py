@@ -12,7 +12,7 @@ import numpy as np
 from lamde_mission.result import Plan
 from planner_core import defaults as _defaults
 
-__all__ = ["plan", "CONFIGURATORS", "INIT_MODES", "kernels_cached"]
+__all__ = ["plan", "plan_fleet", "CONFIGURATORS", "INIT_MODES", "kernels_cached"]
 
 #: configurator names accepted by `plan` (from `planner_core.defaults`); the adaptive DE is the
 #: default until a trained policy beats it on unseen maps
@@ -48,6 +48,9 @@ def plan(
     on_compile: Callable[[], None] | None = None,
 ) -> Plan:
     """Plan hover points and hover times for `map`; same seed and budget, same plan.
+
+    One flight, whatever the map's battery: for a map with `uav.battery` (or
+    `uav.endurance_s`) or a `fleet`, `plan_fleet` plans the sorties a battery can fly.
 
     Runs the declared pipeline (`planner_core.pipeline.DEFAULT_PIPELINE`: constructive plans,
     their descents, the DE, the LP polish, the final stage on the incumbent and on a second
@@ -137,3 +140,71 @@ def plan(
         config=config.to_dict(),
         stopped=result.stopped,
     )
+
+
+def plan_fleet(
+    map: str | Path | dict | Any,  # noqa: A002 - as `plan`
+    *,
+    seed: int = _defaults.SEED,
+    budget: int = _defaults.BUDGET,
+    goal: str | None = None,
+    sortie_budget: int | None = None,
+    rounds: int | None = None,
+    config: Any = None,
+) -> Any:
+    """Plan the sorties and vehicles for a map with a battery or a fleet (issue 33); same
+    seed, same plan.
+
+    `planner_core.fleet.plan_fleet`: the single flight by the declared pipeline, cut into
+    battery-sized sorties with depot choice (route first, cluster second) and a cluster-first
+    start, then rounds of sortie re-plans by the pipeline, merges, transfers and re-splits,
+    every change scored by the hover-time LP across sorties (docs/sorties.md). Write the result
+    with `lamde_mission.sorties.write_sortie_dir` (what `lamde-mission plan MAP -o DIR/` does).
+
+    Args:
+        map: a map file path, its JSON as a dict, or a `planner_core.Map`, with a battery
+            (`uav.battery` or `uav.endurance_s`) or a `fleet`.
+        seed: random seed, >= 0.
+        budget: evaluations of the single flight's pipeline (>= the population).
+        goal: "total" (the paper's f summed over sorties + swap_s per swap) or "makespan"
+            (the longest vehicle's time); None: the map's `objective.goal`.
+        sortie_budget: evaluations of each pipeline run on one sortie's or depot's sensors
+            (default `planner_core.fleet.search.SORTIE_BUDGET`).
+        rounds: improving rounds at most (default `planner_core.fleet.search.ROUNDS`).
+        config: a `planner_core.pipeline.PlanConfig` for the pipeline runs (then seed and
+            budget are its own).
+
+    Returns:
+        A `planner_core.fleet.FleetResult`: `plan` (the `FleetPlan`: vehicles x sorties, on
+        the planning map), `peer` (the route-first cluster-second plan of the same single
+        flight), `single` (that flight's hover points and times).
+
+    Raises:
+        ValueError: one line naming the field: a setting out of range, a map with neither
+            battery nor fleet, an unknown goal, or no sorties that fit the battery.
+        planner_core.MapError: a bad map.
+    """
+    from planner_core.fleet import search
+    from planner_core.model.mapio import load_map
+    from planner_core.pipeline import PlanConfig
+    from planner_core.pipeline.warmup import warm_up
+
+    m = load_map(map)
+    if not (m.has_battery or m.has_fleet):
+        raise ValueError("uav.battery: the map has no battery and no fleet; plan() plans its "
+                         "one flight")
+    if goal is not None and goal not in _defaults.GOALS:
+        raise ValueError(f"goal: must be one of {', '.join(_defaults.GOALS)}, got {goal!r}")
+    if config is None:
+        config = PlanConfig(seed=seed, budget=budget)
+    elif not isinstance(config, PlanConfig):
+        raise ValueError(f"config: must be a PlanConfig, got {type(config).__name__}")
+    sb = search.SORTIE_BUDGET if sortie_budget is None else int(sortie_budget)
+    if sb < config.population:
+        raise ValueError(f"sortie_budget: must be >= the population {config.population}, "
+                         f"got {sb}")
+    r = search.ROUNDS if rounds is None else int(rounds)
+    if r < 0:
+        raise ValueError(f"rounds: must be >= 0, got {r}")
+    warm_up(config.configurator)
+    return search.plan_fleet(m, config, goal=goal, sortie_budget=sb, rounds=r)

@@ -18,14 +18,31 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         description="Optimise hover points and hover times for MAP with LAMDE's variable-length "
         "DE, replay the mission in the simulator, print a summary and write the mission file. "
         "An infeasible mission is not written unless --allow-infeasible. Exit status: 0 ok, "
-        "1 infeasible, 2 bad input.",
+        "1 infeasible, 2 bad input. A map with a battery (uav.battery or uav.endurance_s) or a "
+        "fleet is planned as sorties (docs/sorties.md): OUT is then a directory, written whole "
+        "or not at all, holding mission-v{vehicle}-s{sortie}.plan (both 1-based: "
+        "mission-v1-s2.plan is vehicle 1's second sortie, each a complete mission from "
+        "take-off at its depot to landing at its depot) and fleet.json (per sortie: depots, "
+        "duration, energy, reserve left, sensors served; per vehicle: makespan).",
     )
     p.add_argument("map", help="map file (JSON)")
     from lamde_mission.commands._common import add_origin_option
 
     add_origin_option(p)
     p.add_argument("-o", "--output", required=True, metavar="OUT",
-                   help="mission file to write (.plan, .waypoints or .geojson)")
+                   help="mission file to write (.plan, .waypoints or .geojson); for a map with "
+                   "a battery or fleet, the sortie directory DIR/ (mission-v1-s1.plan, ..., "
+                   "fleet.json)")
+    p.add_argument("--objective", choices=D.GOALS, default=None,
+                   help="maps with a battery or fleet: minimise the total (the paper's f "
+                   "summed over sorties + swap_s per battery swap) or the makespan (the "
+                   "longest vehicle's time); default the map's objective.goal")
+    p.add_argument("--sortie-budget", type=int, default=None, metavar="N",
+                   help="maps with a battery or fleet: evaluations of each pipeline run on one "
+                   "sortie's or depot's sensors (default 2,000)")
+    p.add_argument("--rounds", type=int, default=None, metavar="N",
+                   help="maps with a battery or fleet: improving rounds of the sortie planner "
+                   "at most (default 3; 0: the better of its two starts)")
     p.add_argument("--format", choices=("plan", "waypoints", "geojson"),
                    help="output format (default: from OUT's suffix)")
     p.add_argument("--seed", type=int, default=D.SEED,
@@ -273,7 +290,127 @@ def _check_return_leg(m: Any) -> None:
         )
 
 
+def _wants_sorties(path: str) -> bool:
+    """Whether the map at `path` gives a battery or a fleet (False when it does not load: the
+    single-flight path then reports why)."""
+    from planner_core.model.mapio import MapError, load_map
+
+    try:
+        m = load_map(path)
+    except (MapError, TypeError, ValueError, OSError):
+        return False
+    return bool(m.has_battery or m.has_fleet)
+
+
+def _sortie_lines(check: Any, plan: Any) -> list[str]:
+    """Per sortie: depots, duration, energy, reserve left, sensors served; per vehicle its
+    makespan; then the plan's totals (the sim's figures on the stored missions)."""
+    from planner_core.textio import printable
+
+    lines = []
+    for v, ss in check.vehicles().items():
+        for s in ss:
+            vd = s.verdicts
+            energy = (f"energy {vd.energy_wh:7.2f} Wh of {vd.usable_wh:.2f} usable, reserve "
+                      f"left {vd.reserve_left_wh:6.2f} Wh") if vd.energy_wh is not None \
+                else "no battery"
+            lines.append(f"  {s.file:<18} {printable(s.depot_start)} -> "
+                         f"{printable(s.depot_end)}: {s.duration_s:8.1f} s, {energy}, "
+                         f"{len(s.sensors)} sensors served")
+        lines.append(f"  vehicle {v}: {len(ss)} sorties, makespan {check.makespan(v):.1f} s")
+    lines.append(f"  total {check.total_s:.1f} s over {len(check.sorties)} sorties with "
+                 f"{check.swaps} battery swaps; f summed + swaps {plan.total:.2f}")
+    for v in check.combined:
+        lines.append(f"  whole plan {v.name}: {'PASS' if v.passed else 'FAIL'} ({v.detail})")
+    return lines
+
+
+def _run_sorties(args: argparse.Namespace) -> int:
+    """`plan` for a map with a battery or fleet: sorties written as a directory."""
+    from pathlib import Path
+
+    from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
+    from lamde_mission.errors import UsageError
+    from planner_core.textio import printable
+
+    for opt, bad in (("--format", args.format not in (None, "plan")), ("--plot", args.plot),
+                     ("--report", args.report), ("--finish", args.finish != "land"),
+                     ("--policy", args.policy), ("--time-limit", args.time_limit is not None)):
+        if bad:
+            raise UsageError(f"{opt}: not available for a map with a battery or fleet (its "
+                             "sorties are written as .plan files in a directory)")
+    out = Path(args.output)
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"-o/--output: {printable(args.output)} is a file; a map with a "
+                         "battery or fleet is written as a directory of sorties (DIR/)")
+    if not out.resolve().parent.is_dir():
+        if not args.mkdir:
+            raise UsageError(f"-o/--output: folder {printable(str(out.resolve().parent))} "
+                             "does not exist (--mkdir creates it)")
+        out.resolve().parent.mkdir(parents=True, exist_ok=True)
+    try:
+        D.check_run_args(population=args.population, budget=args.budget, starts=args.starts)
+        D.check("seed", args.seed)
+    except ValueError as exc:
+        raise UsageError("--" + str(exc).replace("_", "-", 1)) from None
+    m = load_map_or_fail(args.map)
+    m = with_origin_or_fail(m, args.origin)
+    if m.spec.origin is None:
+        raise UsageError(f"{args.map}: origin: the map has no origin (WGS84 position of (0, 0)) "
+                         "to write missions with; give --origin LAT,LON[,ALT]")
+    from lamde_mission.api import plan_fleet
+    from lamde_mission.sorties import write_sortie_dir
+    from planner_core.pipeline import PlanConfig
+
+    config = PlanConfig(seed=args.seed, budget=args.budget, population=args.population,
+                        configurator=args.configurator, init=args.init, memetic=args.memetic,
+                        starts=args.starts, descent=not args.no_descent,
+                        variable_length=not args.fixed_length, polish=not args.no_polish)
+    goal = args.objective or m.goal
+    if args.sortie_budget is not None and args.sortie_budget < args.population:
+        raise UsageError(f"--sortie-budget: must be >= the population {args.population}, got "
+                         f"{args.sortie_budget}")
+    if args.rounds is not None and args.rounds < 0:
+        raise UsageError(f"--rounds: must be >= 0, got {args.rounds}")
+    if not args.quiet:
+        print(f"planning sorties for '{printable(m.name)}' (objective {goal}, seed "
+              f"{args.seed})...", file=sys.stderr, flush=True)
+    try:
+        result = plan_fleet(m, config=config, goal=goal, sortie_budget=args.sortie_budget,
+                            rounds=args.rounds)
+    except ValueError as exc:
+        print(f"lamde-mission plan: {args.map}: {exc}", file=sys.stderr)
+        return 1
+    plan = result.plan
+    check, written = write_sortie_dir(plan, m, out, autopilot=args.autopilot, goal=goal,
+                                      allow_infeasible=args.allow_infeasible)
+    if not args.quiet:
+        print(f"map '{printable(m.name)}': {len(plan.sorties)} sorties on "
+              f"{len(plan.vehicles)} vehicle(s), objective {goal}, {plan.evaluations} "
+              f"evaluations (seed {args.seed})")
+        print("\n".join(_sortie_lines(check, plan)))
+        if written:
+            print(f"wrote {printable(str(out))}/ ({len(check.sorties)} missions and fleet.json)")
+    if not check.passed:
+        print("lamde-mission plan: the sorties are INFEASIBLE"
+              + (" (written because of --allow-infeasible):" if written else
+                 "; nothing written:"), file=sys.stderr)
+        for line in check.failed():
+            print(f"  {printable(line)}", file=sys.stderr)
+        return 1
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
+    if _wants_sorties(args.map):
+        return _run_sorties(args)
+    for opt, given in (("--objective", args.objective), ("--sortie-budget", args.sortie_budget),
+                       ("--rounds", args.rounds)):
+        if given is not None:
+            from lamde_mission.errors import UsageError
+
+            raise UsageError(f"{opt}: the map has no battery and no fleet (one flight, the "
+                             "paper's f)")
     from lamde_mission.commands._common import (
         check_outputs,
         load_map_or_fail,

@@ -15,13 +15,17 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         description="Fly a mission file (QGroundControl .plan, ArduPilot .waypoints, or a saved "
         "plan result .json) over MAP with the paper's model, independently of the optimiser, and "
         "print a verdict per constraint with its margin. Exit status: 0 all pass, 1 any fails, "
-        "2 bad input.",
+        "2 bad input. MISSION may be a sortie directory (`plan MAP -o DIR/` for a map with a "
+        "battery or fleet): each mission-v{vehicle}-s{sortie}.plan is replayed from its depot "
+        "to its depot (fleet.json names them), with C1-C3, C5, ENDS, CLEAR and ENERGY per "
+        "sortie and C4 and MARGIN over the data of all sorties together.",
     )
     p.add_argument("map", help="map file (JSON)")
     from lamde_mission.commands._common import add_origin_option
 
     add_origin_option(p)
-    p.add_argument("mission", help="mission file: .plan, .waypoints (or a plan result .json)")
+    p.add_argument("mission", help="mission file: .plan, .waypoints (or a plan result .json), "
+                   "or a sortie directory DIR/ holding fleet.json")
     p.add_argument("--json", action="store_true", help="print verdicts and totals as JSON")
     return p
 
@@ -46,12 +50,58 @@ def replay_mission_file(path: str, m: Any) -> Any:
     return timeline
 
 
+def _run_sorties(args: argparse.Namespace, m: Any) -> int:
+    """`verify MAP DIR/`: every sortie of a sortie directory, and the whole plan."""
+    from lamde_mission.errors import UsageError
+    from lamde_mission.sorties import verify_sortie_dir
+    from planner_core.textio import printable
+
+    try:
+        check = verify_sortie_dir(m, args.mission)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    if args.json:
+        out = {"sorties": [{"vehicle": s.vehicle, "sortie": s.sortie, "file": s.file,
+                            "depot_start": s.depot_start, "depot_end": s.depot_end,
+                            "duration_s": s.duration_s, "sensors": list(s.sensors),
+                            **s.verdicts.to_dict()} for s in check.sorties],
+               "combined": [v.to_dict() for v in check.combined],
+               "makespan_s": {str(v): check.makespan(v) for v in check.vehicles()},
+               "total_s": check.total_s, "swaps": check.swaps, "passed": check.passed}
+        print(json.dumps(out, indent=2))
+    else:
+        print(f"sortie directory {printable(args.mission)} on map '{printable(m.name)}': "
+              f"{len(check.sorties)} sorties on {len(check.vehicles())} vehicle(s)")
+        for s in check.sorties:
+            vd = s.verdicts
+            energy = (f", energy {vd.energy_wh:.3f} Wh of {vd.usable_wh:.3f} usable, "
+                      f"reserve left {vd.reserve_left_wh:.3f} Wh") if vd.energy_wh is not None \
+                else ""
+            print(f"{printable(s.file)}: {printable(s.depot_start)} -> "
+                  f"{printable(s.depot_end)}, {s.duration_s:.1f} s{energy}, "
+                  f"{len(s.sensors)} sensors served (its C4 and MARGIN: its share only)")
+            print("\n".join("  " + printable(r) for r in vd.table().splitlines()))
+        for v in check.vehicles():
+            print(f"vehicle {v}: makespan {check.makespan(v):.1f} s")
+        for v in check.combined:
+            print(f"whole plan {v.name} {v.title}: {'PASS' if v.passed else 'FAIL'}, margin "
+                  f"{v.margin:.6g} {v.unit}; {printable(v.detail)}")
+        print(f"total {check.total_s:.1f} s with {check.swaps} battery swaps")
+        print("result: " + ("all constraints hold" if check.passed
+                            else "FAILED " + "; ".join(printable(x) for x in check.failed())))
+    return 0 if check.passed else 1
+
+
 def run(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
     from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
     from sim import verify
 
     m = load_map_or_fail(args.map)
     m = with_origin_or_fail(m, args.origin)
+    if Path(args.mission).is_dir():
+        return _run_sorties(args, m)
     timeline = replay_mission_file(args.mission, m)
     verdicts = verify(timeline, m)
     t = timeline.totals

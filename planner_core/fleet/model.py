@@ -84,15 +84,14 @@ class FleetSettings:
         `swap_s`, `goal`); `goal` overrides the map's. Without `fleet.depots` the depots are
         the map's start ("home", where every vehicle starts) and, when it differs, its end.
 
+        Without a battery the usable energy is infinite (a fleet flies one sortie a vehicle).
+
         Raises:
-            ValueError: the map has no battery, or an unknown goal.
+            ValueError: an unknown goal.
         """
         usable = m.usable_energy_wh
-        if usable is None:
-            raise ValueError(
-                "uav.battery: a fleet plan needs a battery (uav.battery.energy_wh "
-                "or uav.endurance_s)"
-            )
+        if usable is None:  # a fleet without a battery: sorties of any length
+            usable = float("inf")
         goal = goal or m.goal
         if goal not in ("total", "makespan"):
             raise ValueError(f"goal: must be 'total' or 'makespan', got {goal!r}")
@@ -259,6 +258,17 @@ class FleetPlan:
         (makespan, total) for "makespan" (default: the settings' goal)."""
         g = goal or self.settings.goal
         return (self.total, self.makespan) if g == "total" else (self.makespan, self.total)
+
+    def chained(self) -> bool:
+        """Every vehicle's first sortie leaves a start depot and each later one the depot the
+        one before it landed at (a vehicle takes off where it stands)."""
+        st = self.settings
+        for vs in self.vehicles:
+            if vs[0].start not in st.start_depots:
+                return False
+            if any(a.end != b.start for a, b in zip(vs[:-1], vs[1:], strict=True)):
+                return False
+        return True
 
     def energy_ok(self) -> bool:
         """Every sortie within the usable energy (the planner's model)."""

@@ -190,7 +190,7 @@ class _Planner:
     # ------------------------------------------------------------------ plans
     def lp(self, plan: FleetPlan | None) -> FleetPlan | None:
         """The LP across sorties on `plan` (None passes through)."""
-        if plan is None:
+        if plan is None or not plan.chained():
             return None
         self.lps += 1
         out = fleet_hover_lp(plan, self.model)

@@ -12,6 +12,9 @@ depots:
     best[j, d'] = min over i < j, d of best[i, d] + swap_s [i > 0] + cost(d, P_i..P_{j-1}, d')
     subject to  energy(d, P_i..P_{j-1}, d') <= FleetSettings.budget_wh(points)
 
+and between two pieces the vehicle may fly ferry sorties (no hover point) from depot to depot,
+the least-cost chain of them (Floyd-Warshall over the depots) relaxing best[i, .].
+
 A piece's cost is the paper's f of the sortie (alpha t_fly + (1 - alpha) t_hover; "total") or
 its duration (t_fly + t_hover + take-off and landing; "makespan"); its energy the energy
 module's (`planner_core.model.energy`). Legs between a depot and a point that cross an obstacle
@@ -171,12 +174,21 @@ def split_tour(
     CH = np.concatenate([[0.0], np.cumsum(T)])  # (n + 1,)
     h = st.hover_w / 3600.0
     cap = st.usable_wh
-    best = np.full((n + 1, D), np.inf)
+    fc, fnext, fways = _ferries(st, links, wf, per)
+    best = np.full((n + 1, D), np.inf)  # reached by a piece (or the start)
     prev = np.full((n + 1, D, 2), -1, dtype=int)
+    ferry = np.full((n + 1, D), -1, dtype=int)  # the depot a ferry chain left, else -1
     best[0, list(starts)] = 0.0
     for i in range(n):
         if not np.isfinite(best[i]).any():
             continue
+        # ferry flights from where a piece landed to another depot, before the next piece
+        via = best[i][:, None] + fc  # (D, D')
+        src = np.argmin(via, axis=0)
+        here = best[i].copy()
+        moved = via[src, np.arange(D)] < best[i]
+        here[moved] = via[src[moved], np.flatnonzero(moved)]
+        ferry[i, moved] = src[moved]
         # the longest piece from P_i: its interior energy alone (no way in or out) fits
         inner = st.vertical_wh + (CE[i:n] - CE[i]) + h * (CH[i + 1 : n + 1] - CH[i])
         L = int(np.searchsorted(inner, cap, side="right"))
@@ -198,7 +210,7 @@ def split_tour(
         )
         count = (j - i)[None, :, None] + nc[:, i][:, None, None] + nc[:, j - 1].T[None, :, :]
         budget = st.budget_wh(count)
-        cost = best[i][:, None, None] + (st.swap_s if i > 0 else 0.0) + wf * fly + wh * hov + per
+        cost = here[:, None, None] + (st.swap_s if i > 0 else 0.0) + wf * fly + wh * hov + per
         cost = np.where(en <= budget, cost, np.inf)
         dbest = np.argmin(cost, axis=0)  # (L, D')
         cmin = np.take_along_axis(cost, dbest[None], axis=0)[0]
@@ -220,8 +232,56 @@ def split_tour(
         pts = np.vstack([w_out, P[i:j], w_in])
         times = np.concatenate([np.zeros(len(w_out)), T[i:j], np.zeros(len(w_in))])
         out.append(Sortie(d, d_end, pts, times))
+        if ferry[i, d] >= 0:  # the ferry flights that brought the vehicle to d, last first
+            hops = _hops(fnext, int(ferry[i, d]), d)
+            for a, b in reversed(list(zip(hops[:-1], hops[1:], strict=True))):
+                w = fways[a][b]
+                out.append(Sortie(a, b, w, np.zeros(len(w))))
+            d = int(ferry[i, d])
         j, d_end = i, d
     return out[::-1]
+
+
+def _ferries(
+    st: FleetSettings, links: Links, wf: float, per: float
+) -> tuple[np.ndarray, np.ndarray, list[list[Any]]]:
+    """Ferry flights: sorties with no hover point that move a vehicle from one depot to
+    another (its next sortie then leaves there). Returns the least cost (D, D) of a chain of
+    them (each wf x its flight time + per + swap_s; inf where no chain fits the battery, 0 on
+    the diagonal), the chains' next hops (D, D) and each direct ferry's corners."""
+    D = len(st.depots)
+    cost = np.full((D, D), np.inf)
+    ways: list[list[Any]] = [[None] * D for _ in range(D)]
+    for a in range(D):
+        for b in range(D):
+            if a == b:
+                continue
+            w = links.way(st.depots[a], st.depots[b])
+            if w is None:
+                continue
+            path = np.vstack([st.depots[a], w, st.depots[b]])
+            seg = np.hypot(*np.diff(path, axis=0).T)
+            energy = st.vertical_wh + float(st.leg_energies(seg).sum())
+            if energy <= st.budget_wh(len(w)):
+                cost[a, b] = wf * float(st.leg_times(seg).sum()) + per + st.swap_s
+                ways[a][b] = w
+    nxt = np.where(np.isfinite(cost), np.arange(D)[None, :], -1)
+    np.fill_diagonal(cost, 0.0)
+    np.fill_diagonal(nxt, np.arange(D))
+    for k in range(D):  # Floyd-Warshall
+        alt = cost[:, k][:, None] + cost[k, :][None, :]
+        better = alt < cost
+        cost = np.where(better, alt, cost)
+        nxt = np.where(better, nxt[:, k][:, None], nxt)
+    return cost, nxt, ways
+
+
+def _hops(nxt: np.ndarray, a: int, b: int) -> list[int]:
+    """The depots of the ferry chain a -> b (Floyd-Warshall next hops), a and b included."""
+    out = [a]
+    while out[-1] != b:
+        out.append(int(nxt[out[-1], b]))
+    return out
 
 
 def split_vehicles(

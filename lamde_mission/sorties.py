@@ -1,0 +1,321 @@
+"""Sortie directories (issue 33): a fleet plan written as one mission per vehicle and sortie,
+stored as the autopilot stores it, replayed by the simulator, and a `fleet.json` summary.
+
+`write_sortie_dir` makes each sortie storable (`lamde_mission.storage.storable_plan` on the
+sortie's own map: the plan's map with the sortie's depots as start and end and each sensor's
+required data set to the sortie's share, so storage raises hover times where the grid or the
+rounding would leave a share short), writes `mission-v{vehicle}-s{sortie}.plan` (1-based,
+QGroundControl, take-off at the sortie's depot, landing at its depot) and `fleet.json` into a
+hidden folder beside DIR, verifies everything with `verify_sortie_dir`'s replay and renames the
+folder to DIR last (a DIR already there is replaced only then): nothing half-written.
+
+`verify_sortie_dir` replays each mission file of a directory with the simulator on its sortie's
+map (start and end at the depots `fleet.json` names) and judges per sortie C1-C3, C5, ENDS,
+CLEAR and ENERGY (`sim.checks.verify`) and over the whole plan C4 and MARGIN on the data summed
+over the sorties (`sim.sorties.combined_data_verdicts`).
+
+fleet.json (the contract of docs/sorties.md):
+
+    {"map": name, "objective": "total" | "makespan",
+     "vehicles": [{"vehicle": 1, "makespan_s": s, "sorties": [{"sortie": 1,
+        "file": "mission-v1-s1.plan", "depot_start": "home", "depot_end": "home",
+        "duration_s": s, "energy_wh": Wh, "reserve_left_wh": Wh, "sensors": ["s01", ...]}]}],
+     "total_s": s, "swaps": n, "f_total": sum of f + swap_s per swap}
+
+Durations and energies are the simulator's, on the stored missions. Cost: one storage pass and
+one replay per sortie (O(points x J) each).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
+
+__all__ = ["FLEET_FILE", "SortieCheck", "FleetCheck", "sortie_file", "sortie_map",
+           "write_sortie_dir", "verify_sortie_dir"]  # fmt: skip
+
+#: the summary file of a sortie directory
+FLEET_FILE = "fleet.json"
+
+
+def sortie_file(vehicle: int, sortie: int) -> str:
+    """`mission-v{vehicle}-s{sortie}.plan` (both 1-based)."""
+    return f"mission-v{int(vehicle)}-s{int(sortie)}.plan"
+
+
+def sortie_map(
+    m: Any, start: str, end: str, required: np.ndarray | None = None, name: str | None = None
+) -> Any:
+    """The map one sortie is stored and replayed on: `m` with start and end at the depots
+    named `start` and `end` (`planner_core.fleet.FleetSettings` names: the map's depots, or
+    "home" and "end"), sensors' required data `required` (J,) Mbit (default 0: the whole
+    plan's C4 is judged over all sorties), the battery kept (ENERGY), the fleet left out.
+
+    Raises:
+        ValueError: an unknown depot name.
+    """
+    from planner_core.fleet import FleetSettings, sortie_map_dict
+    from planner_core.model.mapio import load_map
+
+    st = FleetSettings.from_map(m)
+    names, xy = list(st.depot_names), np.asarray(st.depots)
+    for d in (start, end):
+        if d not in names:
+            raise ValueError(f"depot: unknown depot '{d}' (the map's are "
+                             f"{', '.join(names)})")  # fmt: skip
+    req = np.zeros(len(m.sensor_ids)) if required is None else np.asarray(required, float)
+    return load_map(sortie_map_dict(m, xy[names.index(start)], xy[names.index(end)], req,
+                                    name=name))  # fmt: skip
+
+
+@dataclass(frozen=True)
+class SortieCheck:
+    """One sortie's replay: vehicle, sortie (1-based), file name, depots, the simulator's
+    timeline and verdicts, the sensors it collects data from."""
+
+    vehicle: int
+    sortie: int
+    file: str
+    depot_start: str
+    depot_end: str
+    timeline: Any
+    verdicts: Any
+    sensors: tuple[str, ...]
+
+    @property
+    def duration_s(self) -> float:
+        """Take-off to landing, s (the sim's)."""
+        return float(self.timeline.totals.t_total)
+
+
+@dataclass(frozen=True)
+class FleetCheck:
+    """A whole plan's verdicts: per sortie (`sorties`), and `combined` (C4, MARGIN over the
+    sum of the sorties' data); `swap_s` for the spans."""
+
+    sorties: tuple[SortieCheck, ...]
+    combined: tuple[Any, ...]
+    swap_s: float
+
+    @property
+    def passed(self) -> bool:
+        """Every sortie's verdicts except its own C4/MARGIN (a share) and the combined ones."""
+        own = all(v.passed for s in self.sorties for v in s.verdicts
+                  if v.name not in ("C4", "MARGIN"))  # fmt: skip
+        return own and all(v.passed for v in self.combined)
+
+    def failed(self) -> list[str]:
+        """Lines naming each failed verdict (sortie and check)."""
+        out = [
+            f"v{s.vehicle} s{s.sortie} {v.name}: {v.detail}"
+            for s in self.sorties
+            for v in s.verdicts
+            if not v.passed and v.name not in ("C4", "MARGIN")
+        ]
+        out += [f"whole plan {v.name}: {v.detail}" for v in self.combined if not v.passed]
+        return out
+
+    def vehicles(self) -> dict[int, list[SortieCheck]]:
+        """Sorties by vehicle, in order."""
+        out: dict[int, list[SortieCheck]] = {}
+        for s in self.sorties:
+            out.setdefault(s.vehicle, []).append(s)
+        return out
+
+    def makespan(self, vehicle: int) -> float:
+        """Vehicle's first take-off to last landing, swaps included (s)."""
+        ss = self.vehicles()[vehicle]
+        return sum(s.duration_s for s in ss) + self.swap_s * (len(ss) - 1)
+
+    @property
+    def total_s(self) -> float:
+        """All sorties' durations plus swap_s per swap (s)."""
+        vs = self.vehicles()
+        return sum(self.makespan(v) for v in vs)
+
+    @property
+    def swaps(self) -> int:
+        """Battery swaps: each vehicle's sorties after its first."""
+        return sum(len(ss) - 1 for ss in self.vehicles().values())
+
+
+def _served(tl: Any, req: np.ndarray) -> tuple[str, ...]:
+    """Sensors a replay collects at least 0.1 % of their requirement from."""
+    q = tl.collected
+    ids = tl.sensor_ids
+    return tuple(ids[j] for j in range(len(ids)) if q[j] > 1e-3 * max(float(req[j]), 1e-9))
+
+
+def _check(m: Any, rows: list[tuple[int, int, str, str, str, list[Any]]]) -> FleetCheck:
+    """Replay each (vehicle, sortie, file, depot_start, depot_end, items) on its sortie map."""
+    from sim import replay, verify
+    from sim.sorties import combined_data_verdicts
+
+    out = []
+    req = np.asarray(m.required_data, dtype=float)
+    for v, k, f, a, b, items in rows:
+        sm = sortie_map(m, a, b, name=f"{m.name} v{v} s{k}")
+        tl = replay(items, sm)
+        out.append(SortieCheck(v, k, f, a, b, tl, verify(tl, sm), _served(tl, req)))
+    combined = combined_data_verdicts([s.timeline for s in out], m)
+    return FleetCheck(tuple(out), tuple(combined), float(m.swap_s))
+
+
+def verify_sortie_dir(m: Any, path: str | Path) -> FleetCheck:
+    """Replay and judge the sortie directory `path` on map `m` (module docstring).
+
+    Args:
+        m: the map the plan was made for (with its origin).
+        path: the directory holding fleet.json and the mission files.
+
+    Returns:
+        The `FleetCheck`.
+
+    Raises:
+        ValueError: one line naming the file and the problem (no fleet.json, a missing or
+            unreadable mission file, an unknown depot).
+    """
+    from lamde_mission.formats import MissionFileError, load_mission_items
+
+    path = Path(path)
+    summary = path / FLEET_FILE
+    try:
+        data = json.loads(summary.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise ValueError(f"{summary}: cannot read the sortie summary ({exc})") from None
+    rows = []
+    try:
+        for vi, veh in enumerate(data["vehicles"]):
+            for si, s in enumerate(veh["sorties"]):
+                f = str(s["file"])
+                if Path(f).name != f:
+                    raise ValueError(
+                        f"{summary}: vehicles[{vi}].sorties[{si}].file: {f!r} is "
+                        "not a plain file name inside the directory"
+                    )
+                try:
+                    items, _ = load_mission_items(str(path / f), m)
+                except MissionFileError as exc:
+                    raise ValueError(f"{path / f}: {exc}") from None
+                rows.append((int(veh["vehicle"]), int(s["sortie"]), f, str(s["depot_start"]),
+                             str(s["depot_end"]), items))  # fmt: skip
+    except (KeyError, TypeError) as exc:
+        raise ValueError(f"{summary}: missing or malformed field {exc}") from None
+    return _check(m, rows)
+
+
+def summary_dict(
+    m: Any, check: FleetCheck, goal: str, f_total: float | None = None
+) -> dict[str, Any]:
+    """fleet.json's content for a checked plan (module docstring)."""
+    vehicles = []
+    for v, ss in check.vehicles().items():
+        vehicles.append({
+            "vehicle": v,
+            "sorties": [{
+                "sortie": s.sortie, "file": s.file, "depot_start": s.depot_start,
+                "depot_end": s.depot_end, "duration_s": s.duration_s,
+                "energy_wh": s.verdicts.energy_wh, "reserve_left_wh": s.verdicts.reserve_left_wh,
+                "sensors": list(s.sensors),
+            } for s in ss],
+            "makespan_s": check.makespan(v),
+        })  # fmt: skip
+    out: dict[str, Any] = {
+        "map": m.name,
+        "objective": goal,
+        "vehicles": vehicles,
+        "total_s": check.total_s,
+        "swaps": check.swaps,
+    }
+    if f_total is not None:
+        out["f_total"] = f_total
+    return out
+
+
+def write_sortie_dir(
+    plan: Any,
+    m: Any,
+    out_dir: str | Path,
+    *,
+    autopilot: str = "generic",
+    goal: str = "total",
+    allow_infeasible: bool = False,
+) -> tuple[FleetCheck, bool]:
+    """Store, write and verify the fleet plan `plan` (`planner_core.fleet.FleetPlan`, made on
+    `m.planning_map()`) as the sortie directory `out_dir` (module docstring).
+
+    Args:
+        plan: the fleet plan.
+        m: the map (with its origin).
+        out_dir: the directory to create or replace.
+        autopilot: "generic", "px4" or "ardupilot" (`lamde_mission.storage`).
+        goal: the objective named in fleet.json.
+        allow_infeasible: write it even when a verdict fails.
+
+    Returns:
+        (the `FleetCheck` of the stored missions, whether the directory was written).
+
+    Raises:
+        OSError: the directory cannot be written (nothing is left half-written).
+    """
+    from lamde_mission.formats import write_mission
+    from lamde_mission.items import plan_to_items
+    from lamde_mission.storage import storable_plan, stored_items
+    from planner_core.fleet import collected_by_sortie
+    from planner_core.model.formulas import ModelParams
+
+    st = plan.settings
+    shares = collected_by_sortie(plan, ModelParams.from_map(m.planning_map()))  # Mbit, margin in
+    margin = 1.0 + float(m.spec.safety.data_margin)
+    target = Path(out_dir)
+    pending = target.with_name(f".{target.name}.lamde-pending-{os.getpid()}")
+    if pending.exists():
+        shutil.rmtree(pending)
+    pending.mkdir(parents=False)
+    try:
+        rows = []
+        k = 0
+        for v, vs in enumerate(plan.vehicles, start=1):
+            for n, s in enumerate(vs, start=1):
+                a, b = st.depot_names[s.start], st.depot_names[s.end]
+                sm = sortie_map(m, a, b, shares[k] / margin, name=f"{m.name} v{v} s{n}")
+                k += 1
+                spm = sm.planning_map()
+                p = SimpleNamespace(hover_points=s.points, hover_times=s.times)
+                stored = storable_plan(p, sm, autopilot, planning_map=spm, finish="land")
+                items = stored_items(plan_to_items(stored, sm, finish="land"), stored.dialect)
+                f = sortie_file(v, n)
+                write_mission(
+                    pending / f,
+                    stored,
+                    sm,
+                    "plan",
+                    finish="land",
+                    autopilot=autopilot,
+                    planning_map=spm,
+                )
+                rows.append((v, n, f, a, b, items))
+        check = _check(m, rows)
+        if not check.passed and not allow_infeasible:
+            return check, False
+        (pending / FLEET_FILE).write_text(
+            json.dumps(summary_dict(m, check, goal, plan.total), indent=2) + "\n", encoding="utf-8"
+        )
+        old = None
+        if target.exists():
+            old = target.with_name(f".{target.name}.lamde-old-{os.getpid()}")
+            os.replace(target, old)
+        os.replace(pending, target)
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
+        return check, True
+    finally:
+        if pending.exists():
+            shutil.rmtree(pending, ignore_errors=True)

@@ -1,0 +1,71 @@
+"""Verdicts over a whole plan of sorties (issue 33): C4 and MARGIN on the data summed over
+every sortie's replay (a sensor may be served by several sorties), beside each sortie's own
+verdicts (`sim.checks.verify`: C1-C3, C5, ENDS, CLEAR, ENERGY).
+
+Each sortie is replayed on its own map (the plan's map with the sortie's depots as start and
+end); the whole plan is judged against the plan's map. Like the rest of the sim it imports of
+`planner_core` only the defaults table. Cost: O(sorties x J).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from sim.checks import REL_TOL, Verdict
+from sim.replay import Timeline
+
+__all__ = ["combined_data_verdicts"]
+
+
+def combined_data_verdicts(timelines: Sequence[Timeline], map: Any) -> list[Verdict]:  # noqa: A002
+    """C4 (Q_j >= Q_lambda) and MARGIN (at least (1 + safety.data_margin) x Q_lambda) on the
+    data the replays collect together.
+
+    Args:
+        timelines: every sortie's replay, their sensors in the map's order.
+        map: the plan's map (`sensor_ids`, `required_data`, `spec.safety`).
+
+    Returns:
+        [C4, MARGIN] verdicts; the margins as `sim.checks.verify`'s (Mbit; a fraction).
+
+    Raises:
+        ValueError: a replay whose sensors are not the map's.
+    """
+    ids = tuple(map.sensor_ids)
+    req = np.asarray(map.required_data, dtype=float)
+    q = np.zeros(len(ids))
+    for tl in timelines:
+        if tuple(tl.sensor_ids) != ids:
+            raise ValueError("timelines: a sortie's replay has other sensors than the map")
+        q = q + tl.collected
+    slack = q - req
+    tol = REL_TOL * np.maximum(req, 1.0)
+    short = np.flatnonzero(slack < -tol)
+    j = int(np.argmin(slack)) if len(slack) else 0
+    n = len(timelines)
+    if len(short):
+        names = ", ".join(f"'{ids[k]}'" for k in short[:5]) + (" ..." if len(short) > 5 else "")
+        detail = (f"over {n} sorties: {len(short)} sensor(s) short: {names}; worst "
+                  f"'{ids[j]}' {q[j]:.6g} of {req[j]:g} Mbit")  # fmt: skip
+    else:
+        detail = f"over {n} sorties: tightest '{ids[j]}' {q[j]:.6g} of {req[j]:g} Mbit"
+    out = [Verdict("C4", "Q_j >= Q_lambda (all sorties)", not len(short), float(slack[j]),
+                   "Mbit", detail)]  # fmt: skip
+    want = float(getattr(getattr(map.spec, "safety", None), "data_margin", 0.0))
+    served = req > 0
+    if np.any(served):
+        frac = np.where(served, q / np.where(served, req, 1.0) - 1.0, np.inf)
+        k = int(np.argmin(frac))
+        m = float(frac[k] - want)
+        out.append(Verdict("MARGIN", f"data margin >= {100 * want:g} % (all sorties)",
+                           bool(m >= -REL_TOL * (1.0 + want)), m, "",
+                           f"tightest: sensor '{ids[k]}' {100 * frac[k]:+.4g} % over "
+                           "Q_lambda"))  # fmt: skip
+    else:
+        out.append(Verdict("MARGIN", f"data margin >= {100 * want:g} % (all sorties)", True,
+                           math.inf, "", "no data required"))  # fmt: skip
+    return out
