@@ -222,7 +222,7 @@ def test_trapezoid_leg_by_hand() -> None:
     got = float(E.leg_energy_wh(d, v, a))
     assert got == pytest.approx(by_hand, rel=1e-10)
     assert got == pytest.approx(_fine_profile_energy_wh(d, v, a), rel=1e-8)
-    # 55 s at 169-178 W (P(20) = 177.8 W): 2.63 Wh
+    # 55 s at 126-178 W (P(20) = 178.3 W): 2.63 Wh
     assert got == pytest.approx(2.6296, abs=1e-4)
 
 

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import copy
+import json
 import math
 from types import SimpleNamespace
 
@@ -114,3 +115,28 @@ def test_maps_without_a_battery_get_the_verdicts_of_before() -> None:
     assert [x.name for x in v] == BEFORE
     assert v.energy_wh is None and v.reserve_left_wh is None
     assert not {"energy_wh", "battery_wh", "usable_wh", "reserve_left_wh"} & set(v.to_dict())
+
+
+def test_verify_prints_the_energy_and_the_reserve_left(tmp_path) -> None:
+    from lamde_mission.formats import write_mission
+    from tests.conftest import run_cli
+
+    data = copy.deepcopy(MAP)
+    data["uav"]["battery"] = {"energy_wh": 20.0}
+    path = tmp_path / "map.json"
+    path.write_text(json.dumps(data))
+    m = load_map(data)
+    plan = SimpleNamespace(hover_points=np.array(HOVER, float), hover_times=np.array(TIMES))
+    mission = write_mission(tmp_path / "m.plan", plan, m)
+    r = run_cli("verify", path, mission)
+    assert r.returncode == 0, r.stdout + r.stderr
+    rows = r.stdout.splitlines()
+    (row,) = [x for x in rows if x.startswith("ENERGY ")]
+    assert row.split()[4] == "PASS", row
+    (line,) = [x for x in rows if x.startswith("energy ")]
+    # the stored mission (hover times whole seconds, points on the 1e-7 degree grid) needs
+    # a little more than the planned route's 13.074 Wh
+    used = float(line.split()[1])
+    assert 13.07 < used < 13.2, line
+    assert "of 16.000 Wh usable (battery 20.000 Wh less its reserve)" in line
+    assert f"left at landing {20 - used:.3f} Wh" in line

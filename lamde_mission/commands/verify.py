@@ -129,6 +129,11 @@ def run(args: argparse.Namespace) -> int:
         print(f"mission time {t.t_total:.1f} s including take-off {t.t_takeoff:.1f} s, "
               f"landing {t.t_land:.1f} s" + (f", return {t.t_return:.1f} s" if t.t_return else "")
               + f"; distance {t.distance:.1f} m")  # fmt: skip
+        if verdicts.energy_wh is not None:  # a map with a battery (docs/energy.md)
+            left = verdicts.reserve_left_wh
+            print(f"energy {verdicts.energy_wh:.3f} Wh of {verdicts.usable_wh:.3f} Wh usable "
+                  f"(battery {verdicts.battery_wh:.3f} Wh less its reserve); left at landing "
+                  f"{left:.3f} Wh, {100 * left / verdicts.battery_wh:.1f} % of the battery")
         print("result: " + ("all constraints hold" if verdicts.passed
                             else "FAILED " + ", ".join(verdicts.failed)))  # fmt: skip
     return 0 if verdicts.passed else 1
