@@ -288,3 +288,10 @@ def test_sortie_energy_is_linear_in_hover_times(hand_map: dict) -> None:
         E.sortie_energy_wh(path, [1.0], u, m.power)
     with pytest.raises(ValueError, match="path_xy"):
         E.sortie_energy_wh(path[:1], [], u, m.power)
+
+
+def test_endurance_refuses_a_string_and_a_boolean(hand_map: dict) -> None:
+    for bad, kind in (("1500", "a string"), (True, "a boolean")):
+        hand_map["uav"]["endurance_s"] = bad
+        (line,) = _problems(hand_map)
+        assert line.startswith("uav.endurance_s: must be a JSON number") and kind in line

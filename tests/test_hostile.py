@@ -333,13 +333,18 @@ def test_every_map_number_is_refused_just_outside_its_range() -> None:
     for name, d in MAP_DEFAULTS.items():
         assert d.bounds is not None and d.why, name
         lo, hi, lo_open, hi_open = d.bounds
-        section, key = name.split(".")
+        *sections, key = name.split(".")
         for bound, is_open, outside in ((lo, lo_open, -1), (hi, hi_open, 1)):
             step = 1 if isinstance(bound, int) else max(abs(bound), 1.0) * 1e-9
             cases = [(bound + outside * step, False), (bound, not is_open)]
             for value, ok in cases:
                 data = _tiny()
-                data.setdefault(section, {})[key] = value
+                node = data
+                for section in sections:
+                    node = node.setdefault(section, {})
+                if sections == ["uav", "battery"]:  # a battery section gives its energy
+                    node.setdefault("energy_wh", 100.0)
+                node[key] = value
                 if ok:
                     load_map(data)
                     continue

@@ -25,12 +25,19 @@ TINY = DATA / "tiny-map.json"
 def full_map() -> dict[str, Any]:
     """The tiny map with every kind of number present: each optional section at its default,
     a sensor's required_data, a rectangle's angle, a no-fly zone with a hole, a polygon
-    obstacle and a witness."""
+    obstacle, a witness, a battery (its energy_wh: the battery is given once, so
+    uav.endurance_s is left out) and a depot."""
     d = json.loads(TINY.read_text())
     for name, default in MAP_DEFAULTS.items():
-        section, key = name.split(".")
-        value = 10 if key == "max_hover_points" else default.value
-        d.setdefault(section, {})[key] = value
+        *sections, key = name.split(".")
+        value = {"max_hover_points": 10, "energy_wh": 100.0}.get(key, default.value)
+        if value is None:  # uav.endurance_s (tests/test_energy.py refuses its strings)
+            continue
+        node = d
+        for section in sections:
+            node = node.setdefault(section, {})
+        node[key] = value
+    d["fleet"]["depots"] = [{"name": "pad", "x": 100.0, "y": 60.0}]
     d["sensors"][0]["required_data"] = 150.0
     d["obstacles"]["no_fly_zones"] = [{"vertices": [[900, 100], [1100, 100], [1100, 300],
                                                     [900, 300]],
@@ -74,7 +81,8 @@ def test_the_full_map_loads_and_covers_every_kind_of_number() -> None:
     assert {"area.width", "origin.lat", "start[0]", "sensors[0].required_data",
             "obstacles.rectangles[0].angle_deg", "obstacles.no_fly_zones[0].holes[0][0][1]",
             "witness.hover_times[0]", "uav.max_hover_points"} <= names  # fmt: skip
-    assert {f"{n}" for n in MAP_DEFAULTS} <= names
+    assert {f"{n}" for n in MAP_DEFAULTS} - {"uav.endurance_s"} <= names
+    assert {"fleet.depots[0].x", "fleet.depots[0].y"} <= names
     assert len(PATHS) > 60
 
 
