@@ -49,7 +49,9 @@ def test_map_without_the_fields_is_unchanged(hand_map: dict) -> None:
     assert [(dp.name, dp.x, dp.y) for dp in m.depots] == [("home", *m.spec.start)]
     assert m.power.hover_w == pytest.approx(P0 + PI, abs=1e-12)
     # the planning map (obstacles inflated) of a map without them dumps without them too
-    assert "fleet" not in m.planning_map().to_dict()
+    pd = m.planning_map().to_dict()
+    assert "fleet" not in pd and not {"battery", "endurance_s", "power"} & set(pd["uav"])
+    assert "goal" not in pd["objective"]
 
 
 def test_battery_and_fleet_read_and_round_trip(hand_map: dict) -> None:

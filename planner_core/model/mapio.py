@@ -549,6 +549,7 @@ class Map:
         """This map placed at (lat, lon, alt) (what `--origin LAT,LON[,ALT]` does); MapError
         for coordinates out of range."""
         d = self.spec.model_dump(mode="json")
+        _drop_unset_energy_fields(self.spec, d)
         d["origin"] = {"lat": lat, "lon": lon, "alt": alt}
         return load_map(d)
 
@@ -567,6 +568,7 @@ class Map:
         from shapely.geometry.polygon import orient
 
         d = self.spec.model_dump(mode="json")
+        _drop_unset_energy_fields(self.spec, d)  # the planning map gives what the map gives
         d.pop("witness", None)
         d["safety"] = {"clearance": 0.0, "data_margin": 0.0}
         q = self.required_data * (1.0 + float(sf.data_margin))
