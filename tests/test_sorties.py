@@ -1,0 +1,264 @@
+"""Issue 33 (sorties and fleets): the split against an exhaustive reference, the LP across
+sorties, the sortie planner's determinism, and `plan MAP -o DIR/` + `verify MAP DIR/` with the
+simulator's ENERGY per sortie and C4 over all sorties."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from planner_core.fleet import (
+    FleetPlan,
+    FleetSettings,
+    Links,
+    Sortie,
+    collected_by_sortie,
+    fleet_hover_lp,
+    split_tour,
+)
+from planner_core.model.mapio import load_map
+from planner_core.model.problem import Problem
+from tests.conftest import run_cli
+
+ROOT = Path(__file__).resolve().parents[1]
+DEMO = ROOT / "examples" / "maps" / "fleet-demo.json"
+
+
+def _open_map(endurance: float, depots: list[tuple[str, float, float]],
+              sensors: list[tuple[float, float]], uavs: int = 1) -> dict:
+    """A map without obstacles, a battery of `endurance` hover seconds, the given depots."""
+    return {
+        "name": "open", "origin": {"lat": 46.2, "lon": 7.3, "alt": 500.0},
+        "area": {"width": 4000, "height": 4000}, "start": [depots[0][1], depots[0][2]],
+        "end": [depots[0][1], depots[0][2]],
+        "sensors": [{"id": f"s{k}", "x": x, "y": y} for k, (x, y) in enumerate(sensors)],
+        "uav": {"endurance_s": endurance},
+        "safety": {"clearance": 0, "data_margin": 0},
+        "fleet": {"uavs": uavs, "swap_s": 100.0,
+                  "depots": [{"name": n, "x": x, "y": y} for n, x, y in depots]},
+    }  # fmt: skip
+
+
+def _cost(st: FleetSettings, sorties: list[Sortie]) -> float:
+    return sum(s.f(st) for s in sorties) + st.swap_s * (len(sorties) - 1)
+
+
+def _reference(st: FleetSettings, P: np.ndarray, T: np.ndarray) -> float:
+    """Every sequence of consecutive pieces and single ferry flights, each sortie within its
+    energy budget: the least sum of f + swap_s per swap (slow, obviously correct)."""
+    n, D = len(P), len(st.depots)
+    best = math.inf
+
+    def go(i: int, d: int, cost: float, count: int, ferried: bool) -> None:
+        nonlocal best
+        if i == n:
+            best = min(best, cost)
+            return
+        swap = st.swap_s if count else 0.0
+        for j in range(i + 1, n + 1):
+            for e in range(D):
+                s = Sortie(d, e, P[i:j], T[i:j])
+                if s.energy(st) <= st.budget_wh(len(s.points)):
+                    go(j, e, cost + swap + s.f(st), count + 1, False)
+        if not ferried:
+            for e in range(D):
+                f = Sortie(d, e, np.zeros((0, 2)), np.zeros(0))
+                if e != d and f.energy(st) <= st.budget_wh(0):
+                    go(i, e, cost + swap + f.f(st), count + 1, True)
+
+    for d in st.start_depots:
+        go(0, d, 0.0, 0, False)
+    return best
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_split_is_the_exhaustive_optimum(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    pts = rng.uniform(300, 3700, size=(5, 2))
+    m = load_map(_open_map(600.0, [("a", 200.0, 200.0), ("b", 3800.0, 3800.0)],
+                           [tuple(p) for p in pts]))  # fmt: skip
+    st = FleetSettings.from_map(m)
+    links = Links(Problem(m.planning_map()))
+    T = rng.uniform(10.0, 40.0, size=5)
+    got = split_tour(st, links, pts, T)
+    ref = _reference(st, pts, T)
+    assert got is not None and math.isfinite(ref)
+    assert _cost(st, got) == pytest.approx(ref, rel=1e-12, abs=1e-9)
+    assert all(s.energy(st) <= st.usable_wh for s in got)
+    assert FleetPlan(st, [got]).chained()
+    # every point flown once, in the tour's order
+    flown = np.vstack([s.points for s in got])
+    assert np.array_equal(flown, pts)
+
+
+def test_lp_shares_a_sensor_between_two_sorties_within_each_battery() -> None:
+    # one sensor needs more data than either sortie's battery can hover for: the LP takes it
+    # from both, each within its energy row, and C4 holds over the two together
+    m = load_map(_open_map(200.0, [("a", 1000.0, 2000.0), ("b", 3000.0, 2000.0)],
+                           [(2000.0, 2000.0)]))  # fmt: skip
+    d = m.to_dict()
+    d["sensors"][0]["required_data"] = 300.0
+    d["uav"]["max_hover_time"] = 1000.0
+    m = load_map(d)
+    st = FleetSettings.from_map(m)
+    model = Problem(m.planning_map()).model
+    p = np.array([[2000.0, 2000.0]])
+    plan = FleetPlan(st, [[Sortie(0, 0, p, [1.0])], [Sortie(1, 1, p, [1.0])]])
+    out = fleet_hover_lp(plan, model)
+    assert out is not None
+    q = collected_by_sortie(out, model)
+    assert q.sum(axis=0)[0] >= 300.0 * (1 - 1e-9)
+    assert np.all(q[:, 0] > 50.0)  # both sorties collect from it
+    for s in out.sorties:
+        assert s.energy(st) <= st.budget_wh(len(s.points)) * (1 + 1e-9)
+    # one sortie alone cannot: its energy row caps its hover time below the need
+    alone = fleet_hover_lp(FleetPlan(st, [[Sortie(0, 0, p, [1.0])]]), model)
+    assert alone is None
+
+
+def _plan_cli(*args: str) -> subprocess.CompletedProcess:
+    return run_cli("plan", *args)
+
+
+def _verify_cli(*args: str) -> subprocess.CompletedProcess:
+    return run_cli("verify", *args)
+
+
+FAST = ("--budget", "600", "--sortie-budget", "300", "--rounds", "1")
+
+
+def test_sortie_dir_is_replayed_by_the_sim_and_energy_is_caught(tmp_path) -> None:
+    # a route over the demo's sensors (blocked legs routed round the obstacles), split into
+    # sorties by the battery, LP hover times: written, replayed, then one hover made too long
+    from lamde_mission.sorties import FLEET_FILE, verify_sortie_dir, write_sortie_dir
+    from planner_core.fleet import split_vehicles
+
+    m = load_map(DEMO)
+    pm = m.planning_map()
+    problem = Problem(pm)
+    st = FleetSettings.from_map(m)
+    links = Links(problem)
+    P, T = links.join(pm.sensors, np.full(len(pm.sensors), 25.0))
+    plan = fleet_hover_lp(split_vehicles(st, links, P, T), problem.model)
+    assert plan is not None and plan.chained() and len(plan.sorties) >= 2
+    check, written = write_sortie_dir(plan, m, tmp_path / "d")
+    assert written and check.passed, check.failed()
+    assert [v.name for v in check.combined] == ["C4", "MARGIN"]
+    for s in check.sorties:
+        e = s.verdicts["ENERGY"]
+        assert e.passed and s.verdicts.energy_wh <= m.usable_energy_wh
+        assert s.verdicts.energy_wh == pytest.approx(plan.sorties[len(
+            [x for x in check.sorties if (x.vehicle, x.sortie) < (s.vehicle, s.sortie)])]
+            .energy(st), rel=0.02)  # fmt: skip
+    summary = json.loads((tmp_path / "d" / FLEET_FILE).read_text())
+    assert summary["swaps"] == len(plan.sorties) - len(plan.vehicles)
+    f = tmp_path / "d" / summary["vehicles"][0]["sorties"][0]["file"]
+    doc = json.loads(f.read_text())
+    loiter = [it for it in doc["mission"]["items"] if it.get("command") == 19]
+    loiter[0]["params"][0] += 250.0
+    f.write_text(json.dumps(doc))
+    bad = verify_sortie_dir(m, tmp_path / "d")
+    assert not bad.passed and any("ENERGY" in line for line in bad.failed())
+
+
+@pytest.mark.slow
+def test_plan_dir_writes_sorties_the_sim_passes_and_verify_catches_energy(tmp_path) -> None:
+    out = tmp_path / "demo"
+    r = _plan_cli(str(DEMO), "-o", str(out), *FAST)
+    assert r.returncode == 0, r.stderr
+    summary = json.loads((out / "fleet.json").read_text())
+    files = sorted(p.name for p in out.iterdir())
+    listed = [s["file"] for v in summary["vehicles"] for s in v["sorties"]]
+    assert files == sorted([*listed, "fleet.json"])
+    assert listed[0] == "mission-v1-s1.plan"
+    m = load_map(DEMO)
+    usable = m.usable_energy_wh
+    for v in summary["vehicles"]:
+        for s in v["sorties"]:
+            assert 0 < s["energy_wh"] <= usable
+            assert s["reserve_left_wh"] >= m.battery_wh * m.battery_reserve
+            assert s["duration_s"] > 0
+        assert v["makespan_s"] == pytest.approx(
+            sum(s["duration_s"] for s in v["sorties"]) + m.swap_s * (len(v["sorties"]) - 1))
+    served = {sid for v in summary["vehicles"] for s in v["sorties"] for sid in s["sensors"]}
+    assert served == set(m.sensor_ids)
+    assert "makespan" in r.stdout and "reserve left" in r.stdout
+    ok = _verify_cli(str(DEMO), str(out), "--json")
+    assert ok.returncode == 0, ok.stdout + ok.stderr
+    rep = json.loads(ok.stdout)
+    assert rep["passed"] and [v["name"] for v in rep["combined"]] == ["C4", "MARGIN"]
+    assert all(any(v["name"] == "ENERGY" and v["passed"] for v in s["verdicts"])
+               for s in rep["sorties"])  # fmt: skip
+    # a hover made 250 s longer than planned: that sortie's battery cannot give it
+    f = out / listed[0]
+    doc = json.loads(f.read_text())
+    loiter = [it for it in doc["mission"]["items"] if it.get("command") == 19]
+    loiter[0]["params"][0] += 250.0
+    f.write_text(json.dumps(doc))
+    bad = _verify_cli(str(DEMO), str(out))
+    assert bad.returncode == 1
+    assert "ENERGY" in bad.stdout and "FAILED" in bad.stdout
+
+
+@pytest.mark.slow
+def test_plan_dir_replaces_an_old_directory_whole(tmp_path) -> None:
+    out = tmp_path / "demo"
+    out.mkdir()
+    (out / "stale.txt").write_text("old")
+    r = _plan_cli(str(DEMO), "-o", str(out), *FAST, "--quiet")
+    assert r.returncode == 0, r.stderr
+    assert not (out / "stale.txt").exists() and (out / "fleet.json").exists()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
+
+
+def test_sortie_options_refused_without_battery(tmp_path) -> None:
+    r = _plan_cli(str(ROOT / "examples" / "maps" / "tiny.json"), "-o",
+                  str(tmp_path / "m.plan"), "--objective", "makespan")  # fmt: skip
+    assert r.returncode == 2
+    assert r.stderr.strip().splitlines()[-1].count("--objective") == 1
+    assert not (tmp_path / "m.plan").exists()
+
+
+def test_plan_dir_refuses_a_file_target(tmp_path) -> None:
+    f = tmp_path / "x.plan"
+    f.write_text("keep")
+    r = _plan_cli(str(DEMO), "-o", str(f), *FAST)
+    assert r.returncode == 2 and "directory" in r.stderr
+    assert f.read_text() == "keep"
+
+
+@pytest.mark.slow
+def test_sorties_are_deterministic_for_a_seed_and_fit_the_battery() -> None:
+    from lamde_mission.api import plan_fleet
+
+    def run(seed: int) -> FleetPlan:
+        return plan_fleet(DEMO, seed=seed, budget=600, sortie_budget=300, rounds=1).plan
+
+    a, b = run(3), run(3)
+    assert len(a.vehicles) == len(b.vehicles)
+    for sa, sb in zip(a.sorties, b.sorties, strict=True):
+        assert (sa.start, sa.end) == (sb.start, sb.end)
+        assert sa.points.tobytes() == sb.points.tobytes()
+        assert sa.times.tobytes() == sb.times.tobytes()
+    assert a.chained() and a.energy_ok()
+
+
+@pytest.mark.slow
+def test_three_uavs_share_the_work(tmp_path) -> None:
+    from lamde_mission.api import plan_fleet
+    from lamde_mission.sorties import write_sortie_dir
+
+    d = json.loads(DEMO.read_text())
+    d["fleet"]["uavs"] = 3
+    one = plan_fleet(DEMO, seed=0, budget=600, sortie_budget=300, rounds=1).plan
+    three = plan_fleet(d, seed=0, budget=600, sortie_budget=300, rounds=1,
+                       goal="makespan").plan  # fmt: skip
+    assert 1 <= len(three.vehicles) <= 3 and three.chained()
+    assert three.makespan <= one.makespan + 1e-9
+    check, written = write_sortie_dir(three, load_map(d), tmp_path / "fleet", goal="makespan")
+    assert written and check.passed, check.failed()
