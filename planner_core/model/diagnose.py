@@ -203,6 +203,7 @@ def _energy_findings(m: Any, pm: Any, pieces: list[Any]) -> list[Finding]:
 
     Cost: O(J x D) distances for J sensors and D depots, plus 400 radii per sensor for the
     note."""
+    import shapely
     from shapely.geometry import Point
 
     from planner_core.model import energy as en
@@ -240,7 +241,8 @@ def _energy_findings(m: Any, pm: Any, pieces: list[Any]) -> list[Finding]:
             groups.setdefault(k, []).append(i)
     sensors, req, ids = pm.sensors, pm.required_data, pm.sensor_ids
     # per sensor and piece: how close the piece comes to it (hover points lie in the piece)
-    near = {k: np.array([pieces[k].distance(Point(*s)) for s in sensors]) for k in groups}
+    pts = shapely.points(np.asarray(sensors, dtype=float))
+    near = {k: np.asarray(shapely.distance(pieces[k], pts), dtype=float) for k in groups}
     dist = np.array([[float(np.hypot(*(s - xy))) for _, _, xy in sites] for s in sensors])
     out: list[Finding] = []
     if math.isfinite(cap):
