@@ -45,7 +45,7 @@ import numpy as np
 
 from planner_core.fleet.lp import collected_by_sortie, fleet_hover_lp
 from planner_core.fleet.model import FleetPlan, FleetSettings, Sortie
-from planner_core.fleet.split import Links, split_vehicles
+from planner_core.fleet.split import Links, split_tour, split_vehicles
 
 __all__ = ["SORTIE_BUDGET", "ROUNDS", "TRANSFER_NEIGHBOURS", "FleetResult", "plan_fleet",
            "route_first", "sortie_map_dict"]  # fmt: skip
@@ -56,6 +56,10 @@ SORTIE_BUDGET = 2000
 ROUNDS = 3
 #: other sorties a hover point is offered to in a transfer (the nearest by depot)
 TRANSFER_NEIGHBOURS = 3
+#: tour moves (a segment of 1-3 hover points moved up to `TOUR_WINDOW` places, either way
+#: round) tried per vehicle and round, each scored by a split of the vehicle's tour
+TOUR_TRIALS = 300
+TOUR_WINDOW = 10
 
 
 class FleetResult:
@@ -322,6 +326,54 @@ class _Planner:
             k0 += len(vs)
         return best if best is not None and best.objective() < plan.objective() else None
 
+    def _tour_cost(
+        self, P: np.ndarray, T: np.ndarray, starts: tuple[int, ...]
+    ) -> tuple[float, list[Sortie] | None]:
+        """A vehicle's tour (hover points P, times T) joined and split: (its cost, sorties)."""
+        st = self.st
+        joined = self.links.join(P, T)
+        if joined is None:
+            return np.inf, None
+        ss = split_tour(st, self.links, *joined, starts=starts)
+        if ss is None:
+            return np.inf, None
+        each = [s.f(st) if st.goal == "total" else s.duration(st) for s in ss]
+        return sum(each) + st.swap_s * (len(ss) - 1), ss
+
+    def retour(self, plan: FleetPlan, rnd: int) -> FleetPlan | None:
+        """Each vehicle's tour of hover points improved by seeded or-opt moves (a segment of
+        1-3 points moved up to `TOUR_WINDOW` places, as it is or reversed), each scored by the
+        optimal split of the changed tour (route first, cluster second with the tour itself
+        searched: Prins 2004's evaluation of a giant tour by its split); at most
+        `TOUR_TRIALS` moves per vehicle. The new plan, LP'd, or None when nothing improved."""
+        rng = np.random.default_rng(np.random.SeedSequence([int(self.config.seed), 33, 4,
+                                                            int(rnd)]))  # fmt: skip
+        rows = []
+        changed = False
+        for vs in plan.vehicles:
+            P = np.vstack([s.points[s.times > 0] for s in vs])
+            T = np.concatenate([s.times[s.times > 0] for s in vs])
+            n = len(P)
+            starts = (vs[0].start,) if len(plan.vehicles) > 1 else self.st.start_depots
+            cost, best = self._tour_cost(P, T, starts)
+            order = np.arange(n)
+            for _ in range(TOUR_TRIALS if n >= 3 else 0):
+                k = int(rng.integers(1, 4))
+                i = int(rng.integers(0, max(n - k + 1, 1)))
+                seg = order[i : i + k]
+                rest = np.concatenate([order[:i], order[i + k :]])
+                j = int(np.clip(i + rng.integers(-TOUR_WINDOW, TOUR_WINDOW + 1), 0, len(rest)))
+                if j == i:
+                    continue
+                if rng.random() < 0.5:
+                    seg = seg[::-1]
+                trial = np.concatenate([rest[:j], seg, rest[j:]])
+                c, ss = self._tour_cost(P[trial], T[trial], starts)
+                if c < cost - 1e-9:
+                    cost, best, order, changed = c, ss, trial, True
+            rows.append(best if best is not None else list(vs))
+        return self.lp(plan.replace(rows)) if changed else None
+
     def eliminate(self, plan: FleetPlan) -> FleetPlan | None:
         """The sorties of least energy, one at a time (at most 3), removed: each of their hover
         points put at its cheapest insertion into the sortie that still fits it (with the
@@ -544,9 +596,11 @@ def plan_fleet(
     peer_plan = _finish(pl, peer, ["route first, cluster second"]) if peer is not None else None
     for rnd in range(int(rounds)):
         before = best.objective()
-        for step in ("replan", "merge", "eliminate", "transfer", "resplit"):
+        for step in ("replan", "merge", "eliminate", "transfer", "resplit", "retour"):
             if step == "replan":
                 cand = pl.replan(best, rnd)
+            elif step == "retour":
+                cand = pl.retour(best, rnd)
             elif step == "merge":
                 cand = pl.merge(best, rnd)
             elif step == "eliminate":

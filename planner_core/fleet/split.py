@@ -113,24 +113,36 @@ def _connections(
     st: FleetSettings, links: Links, P: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[list[Any]]]:
     """Per depot d and point i: time (s), energy (Wh, no vertical) and corner count of the
-    way d -> P_i, and the corners; inf where there is none."""
+    way d -> P_i, and the corners; inf where there is none. Each point's column is kept on
+    `links` (keyed by its coordinates), so splits of re-ordered tours reuse it."""
     D, n = len(st.depots), len(P)
-    ct = np.full((D, n), np.inf)
-    ce = np.full((D, n), np.inf)
-    nc = np.zeros((D, n), dtype=int)
-    ways: list[list[Any]] = [[None] * n for _ in range(D)]
-    for d in range(D):
-        clear = links.clear(np.repeat(st.depots[d][None], n, axis=0), P)
-        for i in range(n):
-            w = np.zeros((0, 2)) if clear[i] else links.way(st.depots[d], P[i])
-            if w is None:
-                continue
-            path = np.vstack([st.depots[d], w, P[i]])
-            seg = np.hypot(*np.diff(path, axis=0).T)
-            ct[d, i] = float(st.leg_times(seg).sum())
-            ce[d, i] = float(st.leg_energies(seg).sum())
-            nc[d, i] = len(w)
-            ways[d][i] = w
+    cache: dict[bytes, tuple[np.ndarray, np.ndarray, np.ndarray, list[Any]]]
+    cache = links.__dict__.setdefault("_columns", {})
+    new = [i for i in range(n) if P[i].tobytes() not in cache]
+    if new:
+        Q = P[new]
+        clear = np.array([links.clear(np.repeat(st.depots[d][None], len(Q), axis=0), Q)
+                          for d in range(D)]).reshape(D, len(Q))  # fmt: skip
+        for q, i in enumerate(new):
+            col_t, col_e = np.full(D, np.inf), np.full(D, np.inf)
+            col_n = np.zeros(D, dtype=int)
+            col_w: list[Any] = [None] * D
+            for d in range(D):
+                w = np.zeros((0, 2)) if clear[d, q] else links.way(st.depots[d], P[i])
+                if w is None:
+                    continue
+                path = np.vstack([st.depots[d], w, P[i]])
+                seg = np.hypot(*np.diff(path, axis=0).T)
+                col_t[d] = float(st.leg_times(seg).sum())
+                col_e[d] = float(st.leg_energies(seg).sum())
+                col_n[d] = len(w)
+                col_w[d] = w
+            cache[P[i].tobytes()] = (col_t, col_e, col_n, col_w)
+    cols = [cache[P[i].tobytes()] for i in range(n)]
+    ct = np.array([c[0] for c in cols]).T.reshape(D, n)
+    ce = np.array([c[1] for c in cols]).T.reshape(D, n)
+    nc = np.array([c[2] for c in cols]).T.reshape(D, n)
+    ways = [[cols[i][3][d] for i in range(n)] for d in range(D)]
     return ct, ce, nc, ways
 
 
@@ -174,7 +186,10 @@ def split_tour(
     CH = np.concatenate([[0.0], np.cumsum(T)])  # (n + 1,)
     h = st.hover_w / 3600.0
     cap = st.usable_wh
-    fc, fnext, fways = _ferries(st, links, wf, per)
+    fkey = ("_ferries", wf, per)
+    if fkey not in links.__dict__:
+        links.__dict__[fkey] = _ferries(st, links, wf, per)
+    fc, fnext, fways = links.__dict__[fkey]
     best = np.full((n + 1, D), np.inf)  # reached by a piece (or the start)
     prev = np.full((n + 1, D, 2), -1, dtype=int)
     ferry = np.full((n + 1, D), -1, dtype=int)  # the depot a ferry chain left, else -1
