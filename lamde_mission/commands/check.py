@@ -15,7 +15,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "then a fast feasibility diagnosis (sensors no reachable hover point can serve, data "
         "that cannot fit within max_hover_time x max_hover_points, an end point walled off, "
         "sensors that no hover point keeping C3 (the bandwidth R_lambda under the paper's "
-        "simultaneous uplink) can serve; exit status 1 naming what cannot be met).",
+        "simultaneous uplink) can serve; on a map with a battery or fleet, a sensor no sortie "
+        "can reach and come back from within the usable energy and a depot no sortie can "
+        "leave; exit status 1 naming what cannot be met; docs/energy.md).",
     )
     p.add_argument("map", help="map file (JSON)")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
