@@ -199,6 +199,8 @@ COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
          ('"mock-vehicle"', '"--vehicles"')),
     "lamde-mission show MAP DIR/":
         ("test_vehicle_fleet.py::test_cli_show_fleet_dir", ('"show"',)),
+    "python examples/fleet_to_mock.py":
+        ("test_vehicle_fleet.py::test_fleet_to_mock_example_runs", ("fleet_to_mock.py",)),
     "python examples/upload_to_mock.py":
         ("test_readme.py::test_upload_to_mock_example_runs", ("upload_to_mock.py",)),
     "lamde-mission lam build":

@@ -27,7 +27,7 @@ from lamde_mission.vehicle.mock_fleet import MockFleet, fleet_system_ids, vehicl
 from lamde_mission.vehicle.transfer import NoVehicleError
 from lamde_mission.vehicle.upload import upload_mission
 from lamde_mission.vehicle.wire import compare_items, wire_mission
-from tests.fleet_helpers import DEMO_MAP, write_fleet_dir
+from tests.fleet_helpers import DEMO_MAP, ROOT, write_fleet_dir
 from tests.vehicle_helpers import RawGcs, free_udp_port, hand_mission
 from tests.vehicle_helpers import no_leftover_mock_threads as _no_leftover_mock_threads  # noqa: F401 (autouse)
 
@@ -395,3 +395,35 @@ def test_cli_show_fleet_dir(fleet_dir, tmp_path, capsys):
     rc = main(["show", str(DEMO_MAP), str(bad), "-o", str(tmp_path / "x.png")])
     assert rc == 2 and "fleet.json: no such file" in capsys.readouterr().err
     assert not (tmp_path / "x.png").exists()
+
+
+# ----------------------------------------------------------------------------- the example
+
+
+@pytest.mark.slow  # measured 18 s (the fleet plan dominates), per case
+@pytest.mark.parametrize("argv", [[], ["--via", "mavsdk", "--ports"]])
+def test_fleet_to_mock_example_runs(argv):
+    r = subprocess.run(
+        [sys.executable, str(ROOT / "examples" / "fleet_to_mock.py"), *argv],
+        capture_output=True, text=True, timeout=600, cwd=ROOT,
+    )  # fmt: skip
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    assert "fleet: 3 of 3 vehicles hold their mission, read back identical" in r.stdout
+    for k in (1, 2, 3):
+        assert f"equal to mission-v{k}-s1.plan" in r.stdout
+
+
+@pytest.mark.slow  # measured 5-7 s (a short fleet plan)
+def test_cli_plan_plot_draws_the_sortie_directory(tmp_path, capsys):
+    fleet_map = ROOT / "examples" / "maps" / "fleet-demo.json"
+    out, png = tmp_path / "sorties", tmp_path / "sorties.png"
+    rc = main(["plan", str(fleet_map), "-o", str(out), "--plot", str(png), "--budget", "200",
+               "--population", "20", "--sortie-budget", "100", "--rounds", "1"])  # fmt: skip
+    assert rc == 0 and (out / "fleet.json").is_file()
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert f"wrote {png}" in capsys.readouterr().out
+    # the output checks come before any planning: a missing folder, a bad suffix
+    for bad, shown in ((tmp_path / "no" / "x.png", "does not exist"), (tmp_path / "x.gif", "PNG")):
+        assert main(["plan", str(fleet_map), "-o", str(tmp_path / "d2"), "--plot", str(bad)]) == 2
+        assert shown in capsys.readouterr().err
+    assert not (tmp_path / "d2").exists()

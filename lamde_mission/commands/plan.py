@@ -92,7 +92,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    "float32 parameters, hover times in whole seconds (rounded up) for ardupilot "
                    "and generic (a file either autopilot stores unchanged; default), float32 for "
                    "px4. The summary and exit status are those of the stored mission")
-    p.add_argument("--plot", metavar="PNG", help="also draw the mission (.png or .svg)")
+    p.add_argument("--plot", metavar="PNG", help="also draw the mission (.png or .svg); for a "
+                   "sortie directory every sortie, a colour per vehicle, a line style per "
+                   "sortie, depots and battery swaps marked (as `show MAP DIR/`)")
     p.add_argument("--report", metavar="JSON", help="also write the plan and verdicts as JSON")
     p.add_argument("--allow-infeasible", action="store_true",
                    help="write the mission even if constraints are violated (exit status 1)")
@@ -333,12 +335,19 @@ def _run_sorties(args: argparse.Namespace) -> int:
     from lamde_mission.errors import UsageError
     from planner_core.textio import printable
 
-    for opt, bad in (("--format", args.format not in (None, "plan")), ("--plot", args.plot),
+    for opt, bad in (("--format", args.format not in (None, "plan")),
                      ("--report", args.report), ("--finish", args.finish != "land"),
                      ("--policy", args.policy), ("--time-limit", args.time_limit is not None)):
         if bad:
             raise UsageError(f"{opt}: not available for a map with a battery or fleet (its "
                              "sorties are written as .plan files in a directory)")
+    if args.plot:  # before any work, as for one flight
+        if not args.plot.lower().endswith((".png", ".svg")):
+            raise UsageError(f"--plot: {args.plot}: image format must be PNG or SVG "
+                             "(.png or .svg)")  # fmt: skip
+        from lamde_mission.commands._common import check_outputs
+
+        check_outputs([("--plot", args.plot)], mkdir=args.mkdir)
     out = Path(args.output)
     if out.exists() and not out.is_dir():
         raise UsageError(f"-o/--output: {printable(args.output)} is a file; a map with a "
@@ -391,6 +400,12 @@ def _run_sorties(args: argparse.Namespace) -> int:
         print("\n".join(_sortie_lines(check, plan)))
         if written:
             print(f"wrote {printable(str(out))}/ ({len(check.sorties)} missions and fleet.json)")
+    if written and args.plot:  # every sortie as the simulator replays it (`show MAP DIR/`)
+        from lamde_mission.commands.show import plot_fleet_dir
+
+        drawn = plot_fleet_dir(m, out, args.plot)
+        if not args.quiet:
+            print(f"wrote {printable(str(drawn))}")
     if not check.passed:
         print("lamde-mission plan: the sorties are INFEASIBLE"
               + (" (written because of --allow-infeasible):" if written else
