@@ -192,6 +192,9 @@ COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
         ("test_vehicle.py::test_cli_mock_vehicle_runs_until_ctrl_c", ("mock-vehicle",)),
     "lamde-mission upload":
         ("test_vehicle.py::test_cli_upload_plan", ('"upload"', "--connect")),
+    "lamde-mission plan examples/maps/fleet-demo.json -o demo/":
+        ("test_sorties.py::test_plan_dir_writes_sorties_the_sim_passes_and_verify_catches_energy",
+         ('"-o"', "_verify_cli")),
     "lamde-mission upload DIR/ --fleet":
         ("test_vehicle_fleet.py::test_cli_upload_fleet_dir", ('"upload"', '"--fleet"')),
     "lamde-mission mock-vehicle --vehicles":

@@ -18,11 +18,16 @@ optimised, each sortie planned by the declared pipeline.
    * *re-plan sorties*: each sortie planned again by the pipeline from its depot to its depot,
      for the data it collects (the LP's shares; sensors it no longer serves left to the
      others), kept when its f falls within the battery and C3 holds with every sensor;
+   * *merge*: two consecutive sorties of a vehicle planned by the pipeline as one;
+   * *eliminate*: the sortie of least energy removed, its hover points inserted into the
+     others (a swap saved when the LP finds hover times that fit every battery);
    * *transfer*: every hover point of a sortie tried at its cheapest insertion into each of
      the 3 nearest other sorties (a sensor's data then comes from the receiving sortie, or
      from several), kept when the LP across sorties finds a better objective;
-   * *re-split*: each vehicle's sorties joined back into a tour and split again (sorties
-     merged or split, depots chosen again, the vehicles' shares moved).
+   * *re-split*: each vehicle's sorties joined back into a tour and split again, both ways
+     round (sorties merged or split, depots chosen again, the vehicles' shares moved);
+   * *retour*: seeded or-opt moves on each vehicle's tour, each scored by its optimal split
+     (Prins 2004: a giant tour evaluated by its split), `TOUR_TRIALS` per vehicle.
    Every change is scored by the LP across sorties on the whole plan.
 
 Everything the pipeline evaluates goes through its counted `Evaluator` (budget `budget` for
@@ -30,10 +35,11 @@ the single flight, `sortie_budget` per sortie or depot plan); `FleetPlan.evaluat
 sum, and the LPs across sorties are counted in the notes. Same seed, same plan (the pipeline
 runs' seeds derive from it).
 
-Cost: the single flight's pipeline, plus D + rounds x S pipeline runs on J / S sensors each
-(S sorties, D depots), plus the splits (O(n x L x D^2) each, n hover points, L per sortie),
-plus rounds x n x 3 LPs of N ~ n variables and J + S rows (O(N x J) each to build): about
-linear in the sensors for the pipeline runs and quadratic for the transfer LPs.
+Cost: the single flight's pipeline, plus D + rounds x 2S pipeline runs on about J / S sensors
+each (S sorties, D depots: re-plans and merges), plus rounds x (TOUR_TRIALS x vehicles + 2)
+splits (O(n x L x D^2) each, n hover points, L per sortie), plus rounds x n x 3 LPs of
+N ~ n variables and J + S rows (O(N x J) each to build): about linear in the sensors for the
+pipeline runs and quadratic for the transfer LPs.
 """
 
 from __future__ import annotations
