@@ -262,3 +262,22 @@ def test_three_uavs_share_the_work(tmp_path) -> None:
     assert three.makespan <= one.makespan + 1e-9
     check, written = write_sortie_dir(three, load_map(d), tmp_path / "fleet", goal="makespan")
     assert written and check.passed, check.failed()
+
+
+def test_a_fleet_without_battery_flies_one_sortie_a_vehicle() -> None:
+    from planner_core.fleet import split_vehicles
+
+    d = json.loads(DEMO.read_text())
+    del d["uav"]["endurance_s"], d["uav"]["battery"]
+    d["fleet"]["uavs"] = 2
+    m = load_map(d)
+    problem = Problem(m.planning_map())
+    st = FleetSettings.from_map(m, "makespan")
+    assert st.usable_wh == math.inf
+    links = Links(problem)
+    P, T = links.join(m.planning_map().sensors, np.full(len(m.sensor_ids), 25.0))
+    plan = fleet_hover_lp(split_vehicles(st, links, P, T), problem.model)
+    assert plan is not None and len(plan.vehicles) == 2
+    assert all(len(v) == 1 for v in plan.vehicles) and plan.swaps == 0
+    q = collected_by_sortie(plan, problem.model).sum(axis=0)
+    assert np.all(q >= problem.model.required * (1 - 1e-9))

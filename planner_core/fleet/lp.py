@@ -78,6 +78,10 @@ def fleet_hover_lp(plan: FleetPlan, model: Any, goal: str | None = None) -> Flee
     h = st.hover_w / 3600.0
     A_en = sparse.csr_matrix((np.full(N, h), (sid, np.arange(N))), shape=(S, N))
     b_en = np.array([st.budget_wh(len(s.points)) - s.flight_wh(st) for s in sorties])
+    if not np.all(np.isfinite(b_en)):  # no battery: no energy rows
+        A_en = sparse.csr_matrix((0, N))
+        b_en = np.zeros(0)
+    S = len(b_en)
     t_max = float(model.t_max)
     if goal == "makespan":
         base = np.zeros(V)
