@@ -280,6 +280,7 @@ def test_cli_upload_fleet_errors(fleet_dir, tmp_path, capsys):
     assert "--map with --fleet" in _one_line_exit_2(
         capsys, ["upload", str(fleet_dir), "--fleet", *conn, "--map", str(DEMO_MAP)]
     )
+    assert "add --fleet" in _one_line_exit_2(capsys, ["upload", str(fleet_dir), *conn])
     one = str(fleet_dir / "mission-v1-s1.plan")
     assert "2 system ids for one mission" in _one_line_exit_2(
         capsys, ["upload", one, *conn, "--sysid", "1,2"]

@@ -4,6 +4,7 @@ of a sortie directory) flown on it, to PNG/SVG."""
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -55,6 +56,11 @@ def fleet_views(directory: str | Path, m: Any) -> list[Any]:
         fleet = read_fleet_dir(directory)
     except FleetDirError as exc:
         raise UsageError(str(exc)) from None
+    if fleet.map_name is not None and fleet.map_name != m.name:
+        from planner_core.textio import printable
+
+        print(f"note: {printable(str(fleet.path))}: planned on map '{printable(fleet.map_name)}'"
+              f", drawn on '{printable(m.name)}'", file=sys.stderr)  # fmt: skip
     views = [
         SortieView(v.vehicle, s.sortie, replay_mission_file(str(s.path), m), s.depot_start,
                    s.depot_end)

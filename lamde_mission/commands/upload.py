@@ -378,6 +378,11 @@ def run(args: argparse.Namespace) -> int:
 
     if args.fleet:
         return _run_fleet(args, _signing_key(args))
+    from pathlib import Path
+
+    if Path(args.mission).is_dir():
+        raise UsageError(f"{args.mission}: a directory; to send each vehicle its first sortie "
+                         "of a sortie directory, add --fleet")  # fmt: skip
     ids = _sysids(args.sysid)
     if ids is not None and len(ids) > 1:
         raise UsageError(f"--sysid: {len(ids)} system ids for one mission (several vehicles: "

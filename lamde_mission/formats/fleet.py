@@ -24,13 +24,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from lamde_mission.sorties import FLEET_FILE, sortie_file  # the writer's names, one place
 from planner_core.textio import InputError, read_json
 
 __all__ = ["FLEET_FILE", "FleetDirError", "FleetSortie", "FleetVehicle", "FleetDir",
            "read_fleet_dir", "sortie_file_name"]  # fmt: skip
-
-#: the summary file of a sortie directory
-FLEET_FILE = "fleet.json"
 
 
 class FleetDirError(ValueError):
@@ -38,7 +36,8 @@ class FleetDirError(ValueError):
 
 
 def sortie_file_name(vehicle: int, sortie: int) -> str:
-    """The file of vehicle `vehicle`'s sortie `sortie` (both 1-based): mission-v1-s2.plan.
+    """The file of vehicle `vehicle`'s sortie `sortie` (both 1-based), as the writer
+    (`lamde_mission.sorties.sortie_file`) names it: mission-v1-s2.plan.
 
     Args:
         vehicle: the vehicle's number, 1-based.
@@ -47,7 +46,7 @@ def sortie_file_name(vehicle: int, sortie: int) -> str:
     Returns:
         The file name inside the directory.
     """
-    return f"mission-v{int(vehicle)}-s{int(sortie)}.plan"
+    return sortie_file(vehicle, sortie)
 
 
 @dataclass(frozen=True)
