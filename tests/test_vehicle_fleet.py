@@ -150,6 +150,20 @@ def test_fleet_upload_one_link_per_vehicle_with_sysids(via):
             assert _holds(v, mission.mission)
 
 
+@pytest.mark.parametrize("via", VIAS)
+def test_fleet_upload_to_vehicles_that_listen(via):
+    """Mocks on udpin answer whoever wrote last: the survey's ground-station HEARTBEAT is what
+    makes them talk (as the single upload's does)."""
+    port = free_udp_port()
+    missions = _missions(3)
+    with MockFleet(f"udpin:127.0.0.1:{port}", vehicles=3, heartbeat_hz=HZ) as fleet:
+        report = upload_fleet(missions, connect=[f"udpout://127.0.0.1:{port}"], via=via,
+                              timeout=5, window=0.3)  # fmt: skip
+        assert report.ok, report.lines()
+        for mission, v in zip(missions, fleet.vehicles, strict=True):
+            assert _holds(v, mission.mission)
+
+
 def test_sysid_order_maps_vehicles_to_ids():
     port = free_udp_port()
     missions = _missions(3)
@@ -268,7 +282,7 @@ def test_cli_upload_fleet_errors(fleet_dir, tmp_path, capsys):
     with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=2, heartbeat_hz=HZ) as fleet:
         # fleet.json plans 3 vehicles, 2 answer
         err = _one_line_exit_2(capsys, ["upload", str(fleet_dir), "--fleet", *conn])
-        assert "3 missions but 2 vehicles answer" in err and "nothing was sent" in err
+        assert "3 missions but 2 vehicles answer" in err and "nothing was uploaded" in err
         # a vehicle missing
         err = _one_line_exit_2(capsys, ["upload", str(fleet_dir), "--fleet", *conn,
                                         "--sysid", "1,2,3"])  # fmt: skip

@@ -21,6 +21,7 @@ each as `upload_mission`'s.
 
 from __future__ import annotations
 
+import contextlib
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -41,7 +42,7 @@ __all__ = ["first_sortie_missions", "FleetSetupError", "FleetMission", "VehicleR
 
 class FleetSetupError(ValueError):
     """The vehicles do not match the missions (a vehicle missing, a count that differs, a
-    connection or id list of the wrong length): nothing was sent. One line."""
+    connection or id list of the wrong length): nothing was uploaded. One line."""
 
 
 @dataclass(frozen=True)
@@ -166,7 +167,9 @@ def survey(
     signing_key: bytes | None = None,
 ) -> list[list[int]]:
     """Listen to every connection at once for vehicles' HEARTBEATs (component 1, an
-    autopilot's); nothing is sent.
+    autopilot's). Only the ground station's own HEARTBEAT goes out, once a second on each link
+    that has somewhere to send (a vehicle listening with udpin answers whoever wrote to it,
+    as for `upload_mission`); nothing that changes a vehicle.
 
     Args:
         connections: the links (`connection.parse_connection` strings or Connections).
@@ -198,7 +201,9 @@ def survey(
                 raise VehicleError(f"cannot open {c}: {exc.strerror or exc}") from None
         parsers = []
         for _ in links:
-            mav = mavlink2.MAVLink(None)
+            mav = mavlink2.MAVLink(
+                None, srcSystem=255, srcComponent=mavlink2.MAV_COMP_ID_MISSIONPLANNER
+            )
             mav.robust_parsing = True
             if signing_key is not None:
                 from lamde_mission.vehicle.signing import enable_signing
@@ -208,11 +213,26 @@ def survey(
         watches = [ClaimWatch(window) for _ in links]
         first: list[dict[int, tuple[str, int] | None]] = [{} for _ in links]
         t0 = time.monotonic()
+        next_beat = t0
+        beat = mavlink2.MAVLink_heartbeat_message(
+            mavlink2.MAV_TYPE_GCS,
+            mavlink2.MAV_AUTOPILOT_INVALID,
+            0,
+            0,
+            mavlink2.MAV_STATE_ACTIVE,
+            3,
+        )
         while True:
             heard = [sorted(f) for f in first]
             now = time.monotonic()
             if now - t0 >= timeout or (now - t0 >= window and want(heard)):
                 return heard
+            if now >= next_beat:  # the ground station's HEARTBEAT, as both uploaders send it
+                next_beat = now + 1.0
+                for k, link in enumerate(links):
+                    with contextlib.suppress(OSError):
+                        link.send(beat.pack(parsers[k]))
+                    parsers[k].seq = (parsers[k].seq + 1) % 256
             for k, link in enumerate(links):
                 for data, addr in link.recv(0.02):
                     for msg in parsers[k].parse_buffer(data) or []:
@@ -297,13 +317,13 @@ def assign_system_ids(
                 k = ids.index(missing[0]) + 1
                 raise FleetSetupError(
                     f"vehicle {k}: no HEARTBEAT from system {missing[0]} at {conns[0]} within "
-                    f"{timeout:g} s ({_heard_line(got)}); nothing was sent"
+                    f"{timeout:g} s ({_heard_line(got)}); nothing was uploaded"
                 )
             return [conns[0]] * n, ids, listened
         if len(got) != n:
             raise FleetSetupError(
                 f"{n} missions but {len(got)} vehicles answer at {conns[0]} "
-                f"({_heard_line(got)}, listened {listened:.1f} s); nothing was sent (--sysid "
+                f"({_heard_line(got)}, listened {listened:.1f} s); nothing was uploaded (--sysid "
                 "names the vehicles to use)"
             )
         return [conns[0]] * n, list(got), listened
@@ -314,16 +334,17 @@ def assign_system_ids(
             if ids[k] not in got:
                 raise FleetSetupError(
                     f"vehicle {k + 1}: no HEARTBEAT from system {ids[k]} at {conns[k]} within "
-                    f"{timeout:g} s ({_heard_line(got)}); nothing was sent"
+                    f"{timeout:g} s ({_heard_line(got)}); nothing was uploaded"
                 )
             out.append(ids[k])
         elif not got:
             raise FleetSetupError(f"vehicle {k + 1}: no vehicle heard at {conns[k]} within "
-                                  f"{timeout:g} s; nothing was sent")  # fmt: skip
+                                  f"{timeout:g} s; nothing was uploaded")  # fmt: skip
         elif len(got) > 1:
             raise FleetSetupError(
                 f"vehicle {k + 1}: {len(got)} vehicles answer at {conns[k]} "
-                f"({_heard_line(got)}); nothing was sent (--sysid says which is vehicle {k + 1})"
+                f"({_heard_line(got)}); nothing was uploaded (--sysid says which is "
+                f"vehicle {k + 1})"
             )
         else:
             out.append(got[0])
