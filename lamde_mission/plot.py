@@ -472,6 +472,18 @@ def fleet_figure(
     leaving on sortie j + 1) as a star in the vehicle's colour with "v1 swap 1". Sensors are
     coloured by the data collected over all sorties together (C4 over the whole plan).
     Cost: O(sorties x samples) for the drawing.
+
+    Args:
+        map: the map the sorties fly on.
+        sorties: the sorties, each with its replay (`SortieView`).
+        title: the figure's title (default: map, vehicles, sorties, swaps).
+        figsize: inches (default: from the area's shape).
+
+    Returns:
+        The Figure (Agg canvas).
+
+    Raises:
+        ValueError: no sorties.
     """
     from matplotlib.lines import Line2D
 
