@@ -60,8 +60,9 @@ class VehicleRelay:
         system_id: int | None = None,
     ) -> None:
         #: the vehicle's system id (None: the first vehicle heard); on a link several vehicles
-        #: share, MAVSDK is passed this system's messages only (one MAVSDK per vehicle, the
-        #: demultiplexing MAVSDK's maintainers advise: mavlink/MAVSDK-Python issue 685)
+        #: share, MAVSDK is passed this system's messages only: one MAVSDK per vehicle (MAVSDK
+        #: 4.1 itself would list every system of the link; the older mavsdk_server serves
+        #: one, and its maintainers advise demultiplexing: mavlink/MAVSDK-Python issue 685)
         self.system_id = None if system_id is None else int(system_id)
         #: messages dropped because they came from another system than `system_id`
         self.other_systems = 0
