@@ -256,6 +256,23 @@ def test_cli_upload_fleet_one_connection_each(fleet_dir, capsys):
     assert "vehicle 3 (system 13" in out
 
 
+def test_cli_upload_fleet_second_sortie_after_the_swap(fleet_dir, capsys):
+    port = free_udp_port()
+    conn = ["--connect", f"udpin://127.0.0.1:{port}", "--via", "pymavlink", "--timeout", "5"]
+    with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=3, heartbeat_hz=HZ) as fleet:
+        rc = main(["upload", str(fleet_dir), "--fleet", "--sortie", "2", *conn])
+        out = capsys.readouterr().out
+        assert rc == 0, out
+        second, _fence = read_mission(fleet_dir / "mission-v1-s2.plan")
+        assert _holds(fleet.vehicle(1), second)  # vehicle 1 flies two sorties
+        assert [len(v.items()) for v in fleet.vehicles[1:]] == [0, 0]  # the others one
+    assert "no sortie 2): no sortie planned, nothing sent" in out
+    assert "fleet: 1 of 1 vehicles hold their mission" in out
+    assert "2 without this sortie, nothing sent" in out
+    rc = main(["upload", str(fleet_dir), "--fleet", "--sortie", "3", *conn])
+    assert rc == 2 and "no vehicle flies a sortie 3" in capsys.readouterr().err
+
+
 def _one_line_exit_2(capsys, argv) -> str:
     rc = main(argv)
     err = capsys.readouterr().err.strip()

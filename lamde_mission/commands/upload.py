@@ -104,6 +104,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="MISSION is a sortie directory: each vehicle k of its fleet.json gets "
                    "its first sortie, mission-v{k}-s1.plan; --connect may then list one "
                    "connection per vehicle, comma-separated (default: one for all)")
+    p.add_argument("--sortie", type=int, default=1, metavar="J",
+                   help="with --fleet: send each vehicle its sortie J, mission-v{k}-sJ.plan "
+                   "(after J - 1 battery swaps; a vehicle with fewer sorties gets nothing but "
+                   "must still answer; default: 1, the first)")
     p.add_argument("--sysid", metavar="ID[,ID...]",
                    help="the vehicles' MAVLink system ids: with --fleet one per vehicle in "
                    "vehicle order (default: the ids heard, ascending, on one connection; the "
@@ -302,7 +306,7 @@ def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
     from lamde_mission.formats import MissionFileError
     from lamde_mission.formats.fleet import FleetDirError
     from lamde_mission.vehicle.connection import parse_connection
-    from lamde_mission.vehicle.fleet import FleetSetupError, first_sortie_missions, upload_fleet
+    from lamde_mission.vehicle.fleet import FleetSetupError, sortie_missions, upload_fleet
     from lamde_mission.vehicle.transfer import DuplicateVehicleError, TransferError, VehicleError
 
     if args.map:
@@ -316,9 +320,11 @@ def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
         except ValueError as exc:
             raise UsageError(f"--connect: {exc}") from None
     ids = _sysids(args.sysid)
+    if args.sortie < 1:
+        raise UsageError(f"--sortie must be 1 or more, got {args.sortie}")
     try:
-        missions = first_sortie_missions(args.mission)
-    except (FleetDirError, MissionFileError) as exc:
+        missions = sortie_missions(args.mission, args.sortie)
+    except (FleetDirError, MissionFileError, ValueError) as exc:
         raise UsageError(str(exc)) from None
     for fm in missions:
         if fm.mission:
@@ -326,7 +332,8 @@ def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
             _wire_check(path, fm.mission, fm.fence, fm.rally)
             _flight_check(path, fm.mission, force=args.force)
     n = len(missions)
-    print(f"{args.mission}: {n} vehicle{'s' if n > 1 else ''}, first sorties "
+    which = "first sorties" if args.sortie == 1 else f"sortie {args.sortie}"
+    print(f"{args.mission}: {n} vehicle{'s' if n > 1 else ''}, {which}: "
           + ", ".join(m.source for m in missions), flush=True)  # fmt: skip
 
     def done(result: object) -> None:  # each vehicle's lines as soon as it is done
@@ -383,6 +390,8 @@ def run(args: argparse.Namespace) -> int:
     if Path(args.mission).is_dir():
         raise UsageError(f"{args.mission}: a directory; to send each vehicle its first sortie "
                          "of a sortie directory, add --fleet")  # fmt: skip
+    if args.sortie != 1:
+        raise UsageError("--sortie: only with --fleet (a sortie directory)")
     ids = _sysids(args.sysid)
     if ids is not None and len(ids) > 1:
         raise UsageError(f"--sysid: {len(ids)} system ids for one mission (several vehicles: "

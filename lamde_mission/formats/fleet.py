@@ -86,7 +86,13 @@ class FleetDir:
 
     def first_sorties(self) -> list[FleetSortie | None]:
         """Each vehicle's first sortie (None for a vehicle with none), in vehicle order."""
-        return [v.sorties[0] if v.sorties else None for v in self.vehicles]
+        return self.sorties_numbered(1)
+
+    def sorties_numbered(self, sortie: int) -> list[FleetSortie | None]:
+        """Each vehicle's sortie `sortie` (1-based; None for a vehicle with fewer), in vehicle
+        order."""
+        return [v.sorties[sortie - 1] if len(v.sorties) >= sortie >= 1 else None
+                for v in self.vehicles]  # fmt: skip
 
 
 def _number(v: Any, where: str) -> float | None:

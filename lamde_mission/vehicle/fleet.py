@@ -36,8 +36,9 @@ from lamde_mission.vehicle.transfer import (
     VehicleError,
 )
 
-__all__ = ["first_sortie_missions", "FleetSetupError", "FleetMission", "VehicleResult",
-           "FleetReport", "survey", "assign_system_ids", "upload_fleet"]  # fmt: skip
+__all__ = ["first_sortie_missions", "sortie_missions", "FleetSetupError", "FleetMission",
+           "VehicleResult", "FleetReport", "survey", "assign_system_ids",
+           "upload_fleet"]  # fmt: skip
 
 
 class FleetSetupError(ValueError):
@@ -112,17 +113,21 @@ class FleetReport:
 
     def summary(self) -> str:
         """The last line: how many vehicles hold their mission, and the times."""
-        good = sum(r.ok for r in self.results)
-        n = len(self.results)
+        sent = [r for r in self.results if not r.skipped]
+        good = sum(r.ok for r in sent)
+        n = len(sent)
+        idle = len(self.results) - n
         return (
             f"fleet: {good} of {n} vehicles hold their mission, read back identical "
             f"(survey {self.survey_s:.2f} s, all {self.total_s:.2f} s)"
+            + (f"; {idle} without this sortie, nothing sent" if idle else "")
             + ("" if good == n else "; the others: see FAILED above")
         )
 
 
 def first_sortie_missions(directory: str | Path) -> list[FleetMission]:
-    """Each vehicle's first sortie of a sortie directory, read as `upload_fleet` takes them.
+    """Each vehicle's first sortie of a sortie directory, read as `upload_fleet` takes them
+    (`sortie_missions(directory, 1)`).
 
     Args:
         directory: a sortie directory (`formats.fleet.read_fleet_dir`).
@@ -135,14 +140,41 @@ def first_sortie_missions(directory: str | Path) -> list[FleetMission]:
         FleetDirError: a bad directory or fleet.json (one line naming the field).
         MissionFileError: a sortie file that cannot be read, or holds no mission item.
     """
+    return sortie_missions(directory, 1)
+
+
+def sortie_missions(directory: str | Path, sortie: int) -> list[FleetMission]:
+    """Each vehicle's sortie number `sortie` of a sortie directory (after `sortie` - 1 battery
+    swaps), read as `upload_fleet` takes them.
+
+    Args:
+        directory: a sortie directory (`formats.fleet.read_fleet_dir`).
+        sortie: the sortie's number, 1-based.
+
+    Returns:
+        One FleetMission per vehicle of fleet.json, in vehicle order (an empty mission, sent to
+        no one, for a vehicle with fewer sorties); `source` is the file's name.
+
+    Raises:
+        ValueError: `sortie` below 1, or no vehicle flies that many sorties.
+        FleetDirError: a bad directory or fleet.json (one line naming the field).
+        MissionFileError: a sortie file that cannot be read, or holds no mission item.
+    """
     from lamde_mission.formats import MissionFileError, read_mission_lists
     from lamde_mission.formats.fleet import read_fleet_dir
 
+    if int(sortie) < 1:
+        raise ValueError(f"sortie must be 1 or more, got {sortie}")
     fleet = read_fleet_dir(directory)
+    chosen = fleet.sorties_numbered(int(sortie))
+    if all(s is None for s in chosen):
+        most = max(len(v.sorties) for v in fleet.vehicles)
+        raise ValueError(f"{fleet.path}: no vehicle flies a sortie {sortie} (the most sorties "
+                         f"of a vehicle: {most})")  # fmt: skip
     out = []
-    for v, first in zip(fleet.vehicles, fleet.first_sorties(), strict=True):
+    for v, first in zip(fleet.vehicles, chosen, strict=True):
         if first is None:
-            out.append(FleetMission(v.vehicle, [], source="no sortie"))
+            out.append(FleetMission(v.vehicle, [], source=f"no sortie {sortie}"))
             continue
         mission, fence, rally = read_mission_lists(first.path)
         if not mission:
@@ -420,6 +452,8 @@ def upload_fleet(
         result = VehicleResult(fm.vehicle, sid, conn, fm.source, skipped=not fm.mission)
         if result.skipped:
             report.results.append(result)
+            if on_vehicle is not None:
+                on_vehicle(result)
             continue
         try:
             result.report = upload_mission(
