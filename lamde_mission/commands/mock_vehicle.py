@@ -211,13 +211,14 @@ def _serve_fleet(fleet: object, args: argparse.Namespace) -> int:
     assert isinstance(fleet, MockFleet)
     ids = ", ".join(str(s) for s in fleet.system_ids)
     n = len(fleet.vehicles)
+    many = "s" if n > 1 else ""
+    what = f"{n} vehicle{many} (system{many} {ids}, component 1, quadrotor{many})"
     if fleet.shared:
         ep = fleet.vehicles[0].endpoint
-        print(f"mock fleet: {n} vehicles (systems {ids}, component 1, quadrotors) on one link, "
-              f"{_where(ep.mode, ep.host, ep.port)}; Ctrl-C to stop", flush=True)  # fmt: skip
+        print(f"mock fleet: {what} on one link, {_where(ep.mode, ep.host, ep.port)}; Ctrl-C to "
+              "stop", flush=True)  # fmt: skip
     else:
-        print(f"mock fleet: {n} vehicles (systems {ids}, component 1, quadrotors), one link "
-              "each; Ctrl-C to stop", flush=True)  # fmt: skip
+        print(f"mock fleet: {what}, one link each; Ctrl-C to stop", flush=True)
         for v in fleet.vehicles:
             ep = v.endpoint
             print(f"  system {v.system_id}: {_where(ep.mode, ep.host, ep.port)}", flush=True)
