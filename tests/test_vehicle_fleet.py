@@ -202,12 +202,14 @@ def test_single_upload_picks_a_vehicle_by_system_id():
     port = free_udp_port()
     with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=3, heartbeat_hz=HZ) as fleet:
         report = upload_mission(hand_mission(2), [], connect=f"udpin://127.0.0.1:{port}",
-                                via="pymavlink", timeout=5, system_id=2)  # fmt: skip
+                                via="pymavlink", timeout=5, system_id=2,
+                                heartbeat_watch=0.3)  # fmt: skip
         assert report.vehicle.system_id == 2
         assert [len(v.items()) for v in fleet.vehicles] == [0, 6, 0]
         with pytest.raises(NoVehicleError, match=r"system id 8 .*\(heard only systems 1, 2, 3\)"):
             upload_mission(hand_mission(2), [], connect=f"udpin://127.0.0.1:{port}",
-                           via="pymavlink", timeout=0.5, system_id=8)  # fmt: skip
+                           via="pymavlink", timeout=0.5, system_id=8,
+                           heartbeat_watch=0.3)  # fmt: skip
 
 
 # ----------------------------------------------------------------------------- the CLI
@@ -282,7 +284,7 @@ def _one_line_exit_2(capsys, argv) -> str:
 
 def test_cli_upload_fleet_errors(fleet_dir, tmp_path, capsys):
     port = free_udp_port()
-    conn = ["--connect", f"udpin://127.0.0.1:{port}", "--via", "pymavlink", "--timeout", "1"]
+    conn = ["--connect", f"udpin://127.0.0.1:{port}", "--via", "pymavlink", "--timeout", "0.5"]
     # a directory without fleet.json
     empty = tmp_path / "empty"
     empty.mkdir()
