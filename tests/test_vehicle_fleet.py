@@ -198,6 +198,24 @@ def test_fleet_mismatch_sends_nothing(n, connect, ids, shown):
         assert all(sum(v.stats.uploads.values()) == 0 for v in fleet.vehicles)
 
 
+def test_two_autopilots_with_one_id_stop_the_survey(fleet_dir, capsys):
+    """Systems 1, 2 on one socket and a second system 2 from another address: exit 2 naming
+    both addresses, nothing uploaded to anyone."""
+    from lamde_mission.vehicle.mock import MockVehicle
+
+    port = free_udp_port()
+    with (
+        MockFleet(f"udpout:127.0.0.1:{port}", vehicles=2, heartbeat_hz=HZ) as fleet,
+        MockVehicle(f"udpout:127.0.0.1:{port}", system_id=2, heartbeat_hz=HZ) as impostor,
+    ):
+        link = ["--connect", f"udpin://127.0.0.1:{port}", "--via", "pymavlink", "--timeout", "2"]
+        rc = main(["upload", str(fleet_dir), "--fleet", "--sysid", "1,2,3", *link])
+        err = capsys.readouterr().err
+        assert rc == 2 and "two autopilots claim system 2 component 1" in err
+        assert f"127.0.0.1:{impostor.address[1]}" in err
+        assert all(sum(v.stats.uploads.values()) == 0 for v in [*fleet.vehicles, impostor])
+
+
 def test_single_upload_picks_a_vehicle_by_system_id():
     port = free_udp_port()
     with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=3, heartbeat_hz=HZ) as fleet:
