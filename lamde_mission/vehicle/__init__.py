@@ -1,9 +1,11 @@
 """Talking to vehicles over MAVLink: a mock autopilot and two mission uploaders.
 
-- `MockVehicle` (`mock.py`): a pymavlink autopilot on UDP that stores what it is sent.
+- `MockVehicle` (`mock.py`): a pymavlink autopilot on UDP that stores what it is sent;
+  `MockFleet` (`mock_fleet.py`): several, on one link (told apart by system id) or one each.
 - `upload_mission` (`upload.py`): mission + geofence up, read back, compared item by item,
   through MAVSDK (`via="mavsdk"`, the only module importing it) or our pymavlink client
-  (`via="pymavlink"`, `mavlink_client.py`).
+  (`via="pymavlink"`, `mavlink_client.py`); `upload_fleet` (`fleet.py`): each vehicle of a
+  fleet its own mission, addressed by system id, every vehicle heard before any upload.
 - `wire.py`: items as MAVLink carries them and the comparison; `transfer.py`: errors, report,
   and the retry loop both uploaders share; `connection.py`: the one connection syntax (UDP,
   TCP, serial), validated, and the byte links of the pymavlink client.
@@ -17,7 +19,10 @@ from typing import Any
 
 __all__ = [
     "MockVehicle",
+    "MockFleet",
     "upload_mission",
+    "upload_fleet",
+    "FleetSetupError",
     "UploadReport",
     "VehicleError",
     "NoVehicleError",
@@ -28,7 +33,10 @@ __all__ = [
 
 _WHERE = {
     "MockVehicle": "lamde_mission.vehicle.mock",
+    "MockFleet": "lamde_mission.vehicle.mock_fleet",
     "upload_mission": "lamde_mission.vehicle.upload",
+    "upload_fleet": "lamde_mission.vehicle.fleet",
+    "FleetSetupError": "lamde_mission.vehicle.fleet",
     "UploadReport": "lamde_mission.vehicle.transfer",
     "VehicleError": "lamde_mission.vehicle.transfer",
     "NoVehicleError": "lamde_mission.vehicle.transfer",
