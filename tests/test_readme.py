@@ -23,7 +23,7 @@ README = (ROOT / "README.md").read_text(encoding="utf-8")
 #: examples are held as the README's were (the reference pages are generated, see
 #: tests/test_docs_site.py; the study pages are reports with tests of their own)
 MANUAL = ("getting-started.md", "maps.md", "planning.md", "missions.md", "flying.md",
-          "benchmarks.md", "learning.md", "ray.md", "layout.md")
+          "benchmarks.md", "learning.md", "ray.md", "layout.md", "fleet.md")
 
 
 def _page(name: str) -> str:
@@ -199,7 +199,16 @@ COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
         ("test_vehicle_fleet.py::test_cli_upload_fleet_dir", ('"upload"', '"--fleet"')),
     "lamde-mission mock-vehicle --vehicles":
         ("test_vehicle_fleet.py::test_cli_mock_vehicle_fleet_runs_until_ctrl_c",
-         ('"mock-vehicle"', '"--vehicles"')),
+         ('"mock-vehicle"', '"--vehicles"', '"--ports"')),
+    "lamde-mission mock-vehicle --sysids":
+        ("test_vehicle_fleet.py::test_cli_mock_vehicle_fleet_runs_until_ctrl_c",
+         ('"mock-vehicle"', '"--sysids"')),
+    "lamde-mission upload mission.plan --sysid":
+        ("test_vehicle_fleet.py::test_single_upload_picks_a_vehicle_by_system_id",
+         ('"upload"', '"--sysid"')),
+    "lamde-mission plan MAP -o DIR/ --plot":
+        ("test_vehicle_fleet.py::test_cli_plan_plot_draws_the_sortie_directory",
+         ('"plan"', '"--plot"')),
     "lamde-mission show MAP DIR/":
         ("test_vehicle_fleet.py::test_cli_show_fleet_dir", ('"show"',)),
     "python examples/fleet_to_mock.py":

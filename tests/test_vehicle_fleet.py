@@ -216,14 +216,15 @@ def test_two_autopilots_with_one_id_stop_the_survey(fleet_dir, capsys):
         assert all(sum(v.stats.uploads.values()) == 0 for v in [*fleet.vehicles, impostor])
 
 
-def test_single_upload_picks_a_vehicle_by_system_id():
+def test_single_upload_picks_a_vehicle_by_system_id(fleet_dir, capsys):
     port = free_udp_port()
+    one = fleet_dir / "mission-v2-s1.plan"
     with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=3, heartbeat_hz=HZ) as fleet:
-        report = upload_mission(hand_mission(2), [], connect=f"udpin://127.0.0.1:{port}",
-                                via="pymavlink", timeout=5, system_id=2,
-                                heartbeat_watch=0.3)  # fmt: skip
-        assert report.vehicle.system_id == 2
-        assert [len(v.items()) for v in fleet.vehicles] == [0, 6, 0]
+        rc = main(["upload", str(one), "--sysid", "2", "--connect", f"udpin://127.0.0.1:{port}",
+                   "--via", "pymavlink", "--timeout", "5"])  # fmt: skip
+        assert rc == 0 and "connected to system 2" in capsys.readouterr().out
+        assert _holds(fleet.vehicle(2), read_mission(one)[0])
+        assert [len(v.items()) for v in (fleet.vehicle(1), fleet.vehicle(3))] == [0, 0]
         with pytest.raises(NoVehicleError, match=r"system id 8 .*\(heard only systems 1, 2, 3\)"):
             upload_mission(hand_mission(2), [], connect=f"udpin://127.0.0.1:{port}",
                            via="pymavlink", timeout=0.5, system_id=8,
@@ -368,25 +369,55 @@ def test_fleet_dir_reads_back(fleet_dir):
     assert fleet.vehicles[1].sorties[0].depot_start == "north" and fleet.swaps == 1
 
 
+def _free_consecutive_ports(n: int) -> int:
+    """The first of n consecutive UDP ports on 127.0.0.1 that are free right now."""
+    import socket
+
+    for _ in range(50):
+        base = free_udp_port()
+        socks = []
+        try:
+            for k in range(n):
+                s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+                socks.append(s)
+                s.bind(("127.0.0.1", base + k))
+            return base
+        except OSError:
+            continue
+        finally:
+            for s in socks:
+                s.close()
+    raise RuntimeError(f"no {n} consecutive free UDP ports")
+
+
 def _foreground_sigint() -> None:
     signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
     signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
 @pytest.mark.slow  # measured 1.8 s (a subprocess); MockFleet itself runs in the default suite
-def test_cli_mock_vehicle_fleet_runs_until_ctrl_c():
-    port = free_udp_port()
+@pytest.mark.parametrize("ports", [False, True])
+def test_cli_mock_vehicle_fleet_runs_until_ctrl_c(ports):
+    """`--vehicles 3` on one link; `--sysids 1,2,3 --ports` one link each (port + i)."""
+    port = free_udp_port() if not ports else _free_consecutive_ports(3)
+    how = ["--vehicles", "3"] if not ports else ["--sysids", "1,2,3", "--ports"]
     env = dict(os.environ, PYTHONUNBUFFERED="1")
     proc = subprocess.Popen(
-        [sys.executable, "-m", "lamde_mission.cli", "mock-vehicle", "--vehicles", "3",
+        [sys.executable, "-m", "lamde_mission.cli", "mock-vehicle", *how,
          "--connect", f"udpout:127.0.0.1:{port}", "--heartbeat-hz", "10"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
         preexec_fn=_foreground_sigint,
     )  # fmt: skip
     try:
         first = proc.stdout.readline()
-        assert "3 vehicles (systems 1, 2, 3" in first and f"127.0.0.1:{port}" in first
-        report = upload_fleet(_missions(3), connect=[f"udpin://127.0.0.1:{port}"],
+        assert "3 vehicles (systems 1, 2, 3" in first
+        links = [port + k for k in range(3)] if ports else [port]
+        if ports:  # then one line per link
+            for k, p in enumerate(links, start=1):
+                assert f"system {k}: sending to 127.0.0.1:{p}" in proc.stdout.readline()
+        else:
+            assert f"127.0.0.1:{port}" in first
+        report = upload_fleet(_missions(3), connect=[f"udpin://127.0.0.1:{p}" for p in links],
                               via="pymavlink", timeout=5, window=0.3)  # fmt: skip
         assert report.ok
         proc.send_signal(signal.SIGINT)
