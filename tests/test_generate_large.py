@@ -89,7 +89,8 @@ def test_committed_large_maps_reproduce(name: str) -> None:
 
 def test_committed_large_suite() -> None:
     """8 maps, 80-400 sensors, all three layouts, sparse and dense, 10-30 km; each has an
-    origin and a witness; the best-known file beside the folder holds each witness's f."""
+    origin and a witness; the best-known file beside the folder has an entry for each map (its
+    best run, or its witness until a run beats it)."""
     files = sorted(LARGE.glob("*.json"))
     assert [p.stem for p in files] == list(L.LARGE_SUITE)
     bk = json.loads((LARGE.parent / "large_best_known.json").read_text())["tasks"]
