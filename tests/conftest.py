@@ -106,3 +106,18 @@ def plan_at(m, hover, times):
     return SimpleNamespace(hover_points=np.array(b["hover_points"]),
                            hover_times=np.array(b["hover_times"]), f=b["f"], phi=b["phi"],
                            feasible=b["phi"] == 0, breakdown=b)  # fmt: skip
+
+
+#: the heartbeat watch (`claims.HEARTBEAT_WATCH_S`, 1.2 s in the product) of an in-process
+#: upload in a test: the mocks send their first HEARTBEAT as they start, so a transfer test need
+#: not wait for a second one; tests of the watch itself carry `@pytest.mark.full_watch`
+TEST_HEARTBEAT_WATCH_S = 0.3
+
+
+@pytest.fixture(autouse=True)
+def _short_heartbeat_watch(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch):
+    if request.node.get_closest_marker("full_watch") is None:
+        from lamde_mission.vehicle import claims
+
+        monkeypatch.setattr(claims, "HEARTBEAT_WATCH_S", TEST_HEARTBEAT_WATCH_S)
+    yield

@@ -28,6 +28,9 @@ from tests.vehicle_helpers import (  # noqa: F401 - the autouse fixture
     no_leftover_mock_threads,
 )
 
+#: these tests exercise and time the watch itself (`claims.HEARTBEAT_WATCH_S`)
+pytestmark = pytest.mark.full_watch
+
 HAS_MAVSDK = importlib.util.find_spec("mavsdk") is not None
 NO_MAVSDK = pytest.mark.skipif(not HAS_MAVSDK, reason="mavsdk is not installed")
 VIAS = ["pymavlink", pytest.param("mavsdk", marks=NO_MAVSDK)]

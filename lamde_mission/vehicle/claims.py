@@ -102,13 +102,16 @@ class ClaimWatch:
     component), in the order first heard; opened when the link is.
 
     Args:
-        window_s: how long to listen before sending (`HEARTBEAT_WATCH_S`).
+        window_s: how long to listen before sending (s); None: `HEARTBEAT_WATCH_S`, read when
+            the watch opens.
         clock: the clock (seconds, monotonic).
     """
 
     def __init__(
-        self, window_s: float = HEARTBEAT_WATCH_S, *, clock: Callable[[], float] = time.monotonic
+        self, window_s: float | None = None, *, clock: Callable[[], float] = time.monotonic
     ) -> None:
+        if window_s is None:
+            window_s = HEARTBEAT_WATCH_S
         if not window_s >= 0:
             raise ValueError(f"the heartbeat watch must be >= 0 s, got {window_s!r}")
         self.window_s = float(window_s)

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from lamde_mission.items import MissionItem
-from lamde_mission.vehicle.claims import HEARTBEAT_WATCH_S, ClaimWatch, duplicate_error
+from lamde_mission.vehicle.claims import ClaimWatch, duplicate_error
 from lamde_mission.vehicle.connection import Connection, Link, parse_connection
 from lamde_mission.vehicle.transfer import (
     DuplicateVehicleError,
@@ -195,7 +195,7 @@ def survey(
     *,
     timeout: float,
     want: Callable[[list[list[int]]], bool],
-    window: float = HEARTBEAT_WATCH_S,
+    window: float | None = None,
     signing_key: bytes | None = None,
 ) -> list[list[int]]:
     """Listen to every connection at once for vehicles' HEARTBEATs (component 1, an
@@ -208,8 +208,8 @@ def survey(
         timeout: the most seconds to listen.
         want: `want(heard)` True once enough is heard (heard: per connection, the system ids
             in ascending order); listening stops then, but not before `window` s.
-        window: the least seconds to listen (`claims.HEARTBEAT_WATCH_S`: one HEARTBEAT from
-            every autopilot at 1 Hz).
+        window: the least seconds to listen (None: `claims.HEARTBEAT_WATCH_S`, one HEARTBEAT
+            from every autopilot at 1 Hz).
         signing_key: hear only messages signed with this key.
 
     Returns:
@@ -243,6 +243,7 @@ def survey(
                 enable_signing(mav, signing_key)
             parsers.append(mav)
         watches = [ClaimWatch(window) for _ in links]
+        window = watches[0].window_s if watches else 0.0  # None: the watch's default
         first: list[dict[int, tuple[str, int] | None]] = [{} for _ in links]
         t0 = time.monotonic()
         next_beat = t0
@@ -287,7 +288,7 @@ def assign_system_ids(
     system_ids: Sequence[int] | None,
     *,
     timeout: float,
-    window: float = HEARTBEAT_WATCH_S,
+    window: float | None = None,
     signing_key: bytes | None = None,
 ) -> tuple[list[str], list[int], float]:
     """Which connection and system id each of `n` vehicles has, checked by listening.
@@ -396,7 +397,7 @@ def upload_fleet(
     log: Callable[[str], None] | None = None,
     progress: Callable[[str, int, int], None] | None = None,
     on_vehicle: Callable[[VehicleResult], None] | None = None,
-    window: float = HEARTBEAT_WATCH_S,
+    window: float | None = None,
 ) -> FleetReport:
     """Upload mission k to vehicle k, read each back and compare (see the module docstring).
 
@@ -412,7 +413,7 @@ def upload_fleet(
         signing_key: MAVLink 2 signing key for every link.
         log, progress: as for `upload_mission`.
         on_vehicle: called with each vehicle's result as soon as it is done.
-        window: the least seconds the survey listens (`claims.HEARTBEAT_WATCH_S`).
+        window: the least seconds the survey listens (None: `claims.HEARTBEAT_WATCH_S`).
 
     Returns:
         The report; `report.ok` only if every vehicle holds its mission, read back identical.

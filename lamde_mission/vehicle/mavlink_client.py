@@ -37,7 +37,6 @@ from typing import Any
 from pymavlink.dialects.v20 import common as mavlink2
 
 from lamde_mission.vehicle.claims import (
-    HEARTBEAT_WATCH_S,
     ClaimWatch,
     duplicate_error,
     is_vehicle_heartbeat,
@@ -90,7 +89,7 @@ class MavlinkClient:
         log: Callable[[str], None] | None = None,
         progress: Callable[[str, int, int], None] | None = None,
         signing_key: bytes | None = None,
-        heartbeat_watch: float = HEARTBEAT_WATCH_S,
+        heartbeat_watch: float | None = None,
         target_system: int | None = None,
     ) -> None:
         #: the vehicle's MAVLink system id to talk to (None: the first vehicle heard)

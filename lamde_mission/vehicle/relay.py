@@ -30,7 +30,7 @@ from typing import Any
 
 from pymavlink.dialects.v20 import common as mavlink2
 
-from lamde_mission.vehicle.claims import HEARTBEAT_WATCH_S, ClaimWatch, is_vehicle_heartbeat
+from lamde_mission.vehicle.claims import ClaimWatch, is_vehicle_heartbeat
 from lamde_mission.vehicle.connection import Connection, Link
 from lamde_mission.vehicle.signing import enable_signing, is_signature_failure
 
@@ -45,7 +45,8 @@ class VehicleRelay:
     Args:
         conn: the vehicle's connection (`connection.parse_connection`).
         signing_key: the 32-byte MAVLink 2 signing key, or None for an unsigned link.
-        heartbeat_watch: seconds of the watch before the first send (`claims.ClaimWatch`).
+        heartbeat_watch: seconds of the watch before the first send (`claims.ClaimWatch`;
+            None: `claims.HEARTBEAT_WATCH_S`).
 
     Raises:
         OSError: the vehicle's link or the local socket cannot be opened (nothing left open).
@@ -56,7 +57,7 @@ class VehicleRelay:
         conn: Connection,
         signing_key: bytes | None = None,
         *,
-        heartbeat_watch: float = HEARTBEAT_WATCH_S,
+        heartbeat_watch: float | None = None,
         system_id: int | None = None,
     ) -> None:
         #: the vehicle's system id (None: the first vehicle heard); on a link several vehicles

@@ -28,7 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from lamde_mission.items import MISSION_TYPE, MissionItem
-from lamde_mission.vehicle.claims import HEARTBEAT_WATCH_S, duplicate_error
+from lamde_mission.vehicle.claims import duplicate_error
 from lamde_mission.vehicle.connection import Connection, parse_connection
 from lamde_mission.vehicle.transfer import (
     DuplicateVehicleError,
@@ -116,7 +116,7 @@ class MavsdkClient:
 
     def __init__(
         self, connect: str | Connection = "udpin://0.0.0.0:14540", *, quiet: bool = True,
-        signing_key: bytes | None = None, heartbeat_watch: float = HEARTBEAT_WATCH_S,
+        signing_key: bytes | None = None, heartbeat_watch: float | None = None,
         system_id: int | None = None,
     ) -> None:
         #: the vehicle's MAVLink system id to talk to (None: the first vehicle heard)
@@ -435,7 +435,7 @@ def make_client(
     log: Callable[[str], None] | None = None,
     progress: Callable[[str, int, int], None] | None = None,
     signing_key: bytes | None = None,
-    heartbeat_watch: float = HEARTBEAT_WATCH_S,
+    heartbeat_watch: float | None = None,
     system_id: int | None = None,
 ) -> Any:
     """A MissionClient: "mavsdk" (MAVSDK's MissionRaw) or "pymavlink" (ours).
@@ -446,8 +446,8 @@ def make_client(
         log: gets what the client ignored and recovered (pymavlink).
         progress: `progress(what, done, total)` per item (pymavlink).
         signing_key: signs the link (MAVSDK through its `relay.VehicleRelay`).
-        heartbeat_watch: seconds of HEARTBEATs listened to before the first send
-            (`claims.HEARTBEAT_WATCH_S`).
+        heartbeat_watch: seconds of HEARTBEATs listened to before the first send (None:
+            `claims.HEARTBEAT_WATCH_S`, read at the call).
         system_id: the vehicle's MAVLink system id, on a link several vehicles share (None:
             the first vehicle heard).
 
@@ -483,7 +483,7 @@ def upload_mission(
     rally: Sequence[MissionItem] | None = None,
     autopilot: str | None = None,
     signing_key: bytes | None = None,
-    heartbeat_watch: float = HEARTBEAT_WATCH_S,
+    heartbeat_watch: float | None = None,
     system_id: int | None = None,
 ) -> UploadReport:
     """Upload a mission and its fence to the vehicle at `connect`, read both back, compare.
@@ -502,7 +502,8 @@ def upload_mission(
     items MAVLink cannot carry. `signing_key` (32 bytes, `signing.signing_key`) signs the link
     with MAVLink 2 signing: the vehicle's unsigned or wrongly signed messages are ignored
     (MAVSDK, which cannot sign, talks through its local `relay.VehicleRelay`, which signs).
-    Both clients listen to HEARTBEATs for `heartbeat_watch` s from opening the link before
+    Both clients listen to HEARTBEATs for `heartbeat_watch` s (None:
+    `claims.HEARTBEAT_WATCH_S`, read at the call) from opening the link before
     anything is sent, and raise `DuplicateVehicleError` (naming both addresses) when a second
     address claims the vehicle's system and component ids, then or later (`claims`).
     `system_id` picks the vehicle by its MAVLink system id on a link several vehicles share
