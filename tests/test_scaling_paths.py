@@ -120,3 +120,28 @@ def test_the_leg_time_matrix_is_unchanged_on_a_walled_map(monkeypatch: pytest.Mo
     monkeypatch.setattr(construct, "via_corners",
                         lambda far, first, ia, ib: (far[ia] + first[ib]).min(axis=1))
     assert np.array_equal(construct.LegTimes(p).matrix(pts), fast)
+
+
+@pytest.mark.parametrize("size", [3000.0, 12000.0])
+def test_slide_costs_equal_their_reference(size: float) -> None:
+    """The slide's local costs: visiting only each centre's members and the sensors its
+    candidates can hear gives the every-sensor reference's costs to the bit (inf included),
+    on random small maps where most sensors are out of radio range (size 12 km) or not."""
+    from planner_core.model import seeding
+
+    rng = np.random.default_rng(int(size))
+    for _ in range(4):
+        p = Problem(_random_map(rng, int(rng.integers(5, 40)), size))
+        m, S = p.model, p.model.sensors
+        n, Q = int(rng.integers(1, 8)), 37
+        cur = S[rng.integers(0, len(S), n)] + rng.normal(0, 300, (n, 2))
+        cand = cur[:, None, :] + rng.normal(0, 400, (n, Q, 2))
+        prv, nxt = rng.uniform(0, size, (n, 2)), rng.uniform(0, size, (n, 2))
+        member = rng.integers(0, n + 2, len(S))[None, :] == np.arange(n)[:, None]
+        lim = rng.uniform(100, 900, len(S))
+        model = (m.required, m.altitude, m.peak_rate, m.decay, 0.98 * m.bandwidth, m.v_max)
+        args = (cand, prv, nxt, member, S, lim, *model, m.accel, m.alpha)
+        fast = seeding._slide_costs(*args)
+        slow = seeding._slide_costs_reference(*args)
+        assert np.array_equal(fast, slow)
+        assert fast.shape == (n, Q)

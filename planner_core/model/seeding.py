@@ -66,7 +66,71 @@ def _slide_costs(cand, prv, nxt, member, S, lim, req, H, peak, decay, bw, v_max,
     """(n, Q) local cost of moving centre r to candidate q: alpha * flight time of its two
     legs + (1 - alpha) * hover time of its slowest member, + `_OVER_BANDWIDTH` (1 + excess)
     where the summed rate exceeds the bandwidth bw (V3); inf where a member would be out of its
-    service radius (candidate 0, the current position, always allowed)."""
+    service radius (candidate 0, the current position, always allowed).
+
+    Per centre only its members and the sensors some candidate can hear (rate > 0 at the
+    least distance from the candidates' bounding box) are visited, in sensor order: the others
+    add exactly 0 to the summed rate, so the costs equal `_slide_costs_reference` to the bit
+    (tests). O(n x (J + Q x sensors in radio range)) instead of O(n x Q x J).
+    """
+    n, Q = cand.shape[0], cand.shape[1]
+    J = S.shape[0]
+    out = np.empty((n, Q))
+    near = np.empty(J, dtype=np.int64)
+    h2 = H * H
+    for r in range(n):
+        x0 = x1 = cand[r, 0, 0]
+        y0 = y1 = cand[r, 0, 1]
+        for q in range(1, Q):
+            x0 = min(x0, cand[r, q, 0])
+            x1 = max(x1, cand[r, q, 0])
+            y0 = min(y0, cand[r, q, 1])
+            y1 = max(y1, cand[r, q, 1])
+        m = 0
+        for j in range(J):
+            if member[r, j]:
+                near[m] = j
+                m += 1
+                continue
+            # the least squared distance of any candidate; the rate falls with the distance
+            # (also in floating point), so rate <= 0 there means rate <= 0 at every candidate
+            dx = max(max(x0 - S[j, 0], S[j, 0] - x1), 0.0)
+            dy = max(max(y0 - S[j, 1], S[j, 1] - y1), 0.0)
+            if slant_rate(dx * dx + dy * dy, h2, peak, decay) > 0.0:
+                near[m] = j
+                m += 1
+        for q in range(Q):
+            x = cand[r, q, 0]
+            y = cand[r, q, 1]
+            hover = 0.0
+            total = 0.0
+            ok = True
+            for t in range(m):
+                j = near[t]
+                d2 = (x - S[j, 0]) ** 2 + (y - S[j, 1]) ** 2
+                rate = slant_rate(d2, h2, peak, decay)
+                total += max(rate, 0.0)
+                if member[r, j]:
+                    if d2 > lim[j] * lim[j]:
+                        ok = False
+                    hover = max(hover, req[j] / max(rate, 1e-9))
+            if not ok and q > 0:
+                out[r, q] = np.inf
+                continue
+            l1 = math.hypot(x - prv[r, 0], y - prv[r, 1])
+            l2 = math.hypot(nxt[r, 0] - x, nxt[r, 1] - y)
+            fly = leg_time(l1, v_max, accel) + leg_time(l2, v_max, accel)
+            out[r, q] = alpha * fly + (1.0 - alpha) * hover
+            if total > bw:
+                out[r, q] += _OVER_BANDWIDTH * (1.0 + total - bw)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _slide_costs_reference(
+    cand, prv, nxt, member, S, lim, req, H, peak, decay, bw, v_max, accel, alpha
+):
+    """The slow reference of `_slide_costs`: every candidate against every sensor."""
     n, Q = cand.shape[0], cand.shape[1]
     out = np.empty((n, Q))
     for r in range(n):
