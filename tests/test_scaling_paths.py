@@ -145,3 +145,21 @@ def test_slide_costs_equal_their_reference(size: float) -> None:
         slow = seeding._slide_costs_reference(*args)
         assert np.array_equal(fast, slow)
         assert fast.shape == (n, Q)
+
+
+@pytest.mark.parametrize("name,problem,pts", CASES, ids=[c[0] for c in CASES])
+def test_push_one_equals_its_reference(name: str, problem: Problem, pts: np.ndarray) -> None:
+    """Moving a point out of the first obstacle holding it: testing only the circles whose box
+    holds the point gives the every-circle reference's point (circle centres included)."""
+    seeder = problem.seeder
+    circles = problem.obstacles.circles
+    rng = np.random.default_rng(len(pts))
+    at_circles = circles[:, :2] + rng.normal(0, 1, (len(circles), 1)) * circles[:, 2:]
+    moved = 0
+    for q in np.vstack([pts, circles[:, :2], at_circles]):
+        fast = seeder.push_one(q.copy(), np.random.default_rng(7))
+        slow = seeder.push_one_reference(q.copy(), np.random.default_rng(7))
+        assert np.array_equal(fast, slow), (name, q)
+        moved += not np.array_equal(fast, q)
+    assert moved or not len(circles), name
+

@@ -271,12 +271,32 @@ class Seeder:
         containing it (q itself when it is in none); rng only picks a direction for a point at a
         circle's exact centre."""
         obs = self.obstacles
+        circ = obs.circles
+        # only circles whose box holds q can hold it (hypot >= each |coordinate difference|);
+        # those are tested exactly, in order, as in `push_one_reference`
+        dx, dy = np.abs(q[0] - circ[:, 0]), np.abs(q[1] - circ[:, 1])
+        for cx, cy, r in circ[(dx < circ[:, 2]) & (dy < circ[:, 2])]:
+            d = math.hypot(q[0] - cx, q[1] - cy)
+            if d < r:
+                a = rng.random() * 2.0 * math.pi
+                u = (q - (cx, cy)) / d if d > 1e-9 else np.array([math.cos(a), math.sin(a)])
+                return np.array([cx, cy]) + u * (r + self.margin)
+        return self._push_out_of_polygon(q)
+
+    def push_one_reference(self, q: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """The slow reference of `push_one`: every circle tested with `math.hypot`."""
+        obs = self.obstacles
         for cx, cy, r in obs.circles:
             d = math.hypot(q[0] - cx, q[1] - cy)
             if d < r:
                 a = rng.random() * 2.0 * math.pi
                 u = (q - (cx, cy)) / d if d > 1e-9 else np.array([math.cos(a), math.sin(a)])
                 return np.array([cx, cy]) + u * (r + self.margin)
+        return self._push_out_of_polygon(q)
+
+    def _push_out_of_polygon(self, q: np.ndarray) -> np.ndarray:
+        """`push_one`'s polygon part: q (2,) moved out of the first polygon holding it."""
+        obs = self.obstacles
         box = obs.poly_boxes
         near = (box[:, 0] <= q[0]) & (q[0] <= box[:, 2]) & (box[:, 1] <= q[1]) & (q[1] <= box[:, 3])
         for p in np.flatnonzero(near):  # only polygons whose bounding box holds q
