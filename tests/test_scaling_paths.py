@@ -163,3 +163,24 @@ def test_push_one_equals_its_reference(name: str, problem: Problem, pts: np.ndar
         moved += not np.array_equal(fast, q)
     assert moved or not len(circles), name
 
+
+@pytest.mark.parametrize("name,problem,pts", CASES, ids=[c[0] for c in CASES])
+def test_points_inside_equals_its_reference(name: str, problem: Problem, pts: np.ndarray) -> None:
+    """Which points lie inside an obstacle: skipping circles whose box misses the point gives
+    the every-circle reference's answer, also for points on and near the circles' rims."""
+    from planner_core.model import geometry
+
+    o = problem.obstacles
+    rng = np.random.default_rng(len(pts) + 1)
+    ang = rng.uniform(0, 2 * np.pi, (len(o.circles), 3))
+    rad = o.circles[:, 2:] * np.array([1.0 - 1e-12, 1.0, 1.0 + 1e-12]) - o.tol
+    rims = o.circles[:, None, :2] + rad[..., None] * np.stack([np.cos(ang), np.sin(ang)], -1)
+    q = np.ascontiguousarray(np.vstack([pts, rims.reshape(-1, 2)]))
+    args = (q, o.circles, o.poly_vertices, o.poly_offsets, o.edge_normals, o.edge_flags,
+            o.poly_boxes, o.tol)
+    fast, slow = np.zeros(len(q), dtype=bool), np.zeros(len(q), dtype=bool)
+    geometry._points_inside_kernel(*args, fast)
+    geometry._points_inside_reference(*args, slow)
+    assert np.array_equal(fast, slow), name
+    assert np.array_equal(geometry.points_inside(q, o), slow), name
+    assert slow.any() or not len(o.circles), name

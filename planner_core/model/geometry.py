@@ -703,6 +703,54 @@ def _points_inside_kernel(pts, circles, verts, offs, normals, eflags, boxes, tol
         y = pts[m, 1]
         inside = False
         for j in range(n_circ):
+            # hypot >= each |coordinate difference|: a circle whose box misses the point is
+            # skipped without the hypot (the same answer as `_points_inside_reference`)
+            rr = circles[j, 2] - tol
+            dx = x - circles[j, 0]
+            if abs(dx) >= rr:
+                continue
+            dy = y - circles[j, 1]
+            if abs(dy) >= rr:
+                continue
+            if math.hypot(dx, dy) < rr:
+                inside = True
+                break
+        if not inside:
+            for p in range(n_poly):
+                if (x < boxes[p, 0] - tol) | (x > boxes[p, 2] + tol) | (
+                    y < boxes[p, 1] - tol) | (y > boxes[p, 3] + tol):  # fmt: skip
+                    continue
+                ok = True
+                for i in range(offs[p], offs[p + 1]):
+                    s = normals[i, 0] * (x - verts[i, 0]) + normals[i, 1] * (y - verts[i, 1])
+                    if s < -tol:
+                        continue
+                    # a point on (within tol of) an owned diagonal is inside its owner, unless
+                    # it is at one of the diagonal's ends: those are the polygon's vertices
+                    if eflags[i] == _EDGE_OWNED and s < tol:
+                        j = i + 1 if i + 1 < offs[p + 1] else offs[p]
+                        d0 = math.hypot(x - verts[i, 0], y - verts[i, 1])
+                        d1 = math.hypot(x - verts[j, 0], y - verts[j, 1])
+                        if d0 > tol and d1 > tol:
+                            continue
+                    ok = False
+                    break
+                if ok:
+                    inside = True
+                    break
+        out[m] = inside
+
+
+@njit(cache=True, fastmath=False, nogil=True)
+def _points_inside_reference(pts, circles, verts, offs, normals, eflags, boxes, tol, out):
+    """The slow reference of `_points_inside_kernel`: every circle by its hypot (tests)."""
+    n_circ = circles.shape[0]
+    n_poly = offs.shape[0] - 1
+    for m in range(pts.shape[0]):
+        x = pts[m, 0]
+        y = pts[m, 1]
+        inside = False
+        for j in range(n_circ):
             if math.hypot(x - circles[j, 0], y - circles[j, 1]) < circles[j, 2] - tol:
                 inside = True
                 break
