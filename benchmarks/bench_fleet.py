@@ -17,8 +17,8 @@ on the stored missions). `--summary` prints the table of docs/sorties.md from th
 with a one-sided Wilcoxon signed-rank test (scipy) of ours < peer per map.
 
     nice python benchmarks/bench_fleet.py --maps L01,L04,L07,L02 --seeds 0-4 \\
-        --out /work/runs/S/bench.jsonl --dirs /work/runs/S/out
-    python benchmarks/bench_fleet.py --summary /work/runs/S/bench.jsonl
+        --out runs/fleet.jsonl --dirs runs/fleet-dirs
+    python benchmarks/bench_fleet.py --summary docs/sorties/bench-25min.jsonl.gz
 
 Cost: per run the single flight's pipeline (seconds to a minute on 80-160 sensors), the sortie
 planner's D + rounds x S pipeline runs on a sortie's sensors, and the LPs across sorties.
@@ -117,14 +117,19 @@ def run(maps: list[str], seeds: list[int], out: Path, dirs: Path, endurance: flo
 
 def summary(path: Path) -> str:
     """The docs table from the records at `path` (module docstring)."""
+    import gzip
+
     from scipy.stats import wilcoxon
 
-    recs = [json.loads(x) for x in Path(path).read_text().splitlines() if x.strip()]
+    raw = Path(path).read_bytes()
+    text = gzip.decompress(raw).decode() if raw[:2] == b"\x1f\x8b" else raw.decode()
+    recs = [json.loads(x) for x in text.splitlines() if x.strip()]
     one = [r for r in recs if r["uavs"] == 1]
     three = {(r["map"], r["seed"]): r for r in recs if r["uavs"] == 3}
     lines = ["| map | runs | ours total (s) | route-first total (s) | ours vs route-first | "
-             "Wilcoxon p (ours < peer) | 3-UAV makespan / 1-UAV total | sim verdicts |",
-             "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+             "Wilcoxon p (ours < peer) | objective (sum f + swaps) | sorties ours / peer | "
+             "3-UAV makespan / 1-UAV total | sim verdicts |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for name in sorted({r["map"] for r in one}):
         rs = sorted((r for r in one if r["map"] == name), key=lambda r: r["seed"])
         a = np.array([r["ours"]["sim_total_s"] for r in rs])
@@ -139,9 +144,13 @@ def summary(path: Path) -> str:
         rt = (f"{np.mean(ratios):.3f} (max {np.max(ratios):.3f}, {len(ratios)} runs)" if ratios
               else "-")
         rel = 100 * (a / b - 1)
+        fo = np.array([r["ours"]["total"] / r["peer"]["total"] - 1 for r in rs]) * 100
+        so = np.mean([r["ours"]["sorties"] for r in rs])
+        sp = np.mean([r["peer"]["sorties"] for r in rs])
         lines.append(f"| {name} | {len(rs)} | {a.mean():.0f} | {b.mean():.0f} | "
                      f"{100 * (a.mean() / b.mean() - 1):+.2f} % (per run {rel.min():+.2f} to "
-                     f"{rel.max():+.2f} %) | {p:.3g} | {rt} | "
+                     f"{rel.max():+.2f} %) | {p:.3g} | {fo.mean():+.2f} % | {so:.1f} / {sp:.1f} | "
+                     f"{rt} | "
                      f"{ok}/{len(rs)} pairs, {ok3}/{len(ratios)} 3-UAV |")
     return "\n".join(lines)
 

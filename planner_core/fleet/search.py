@@ -58,6 +58,12 @@ __all__ = ["SORTIE_BUDGET", "ROUNDS", "TRANSFER_NEIGHBOURS", "FleetResult", "pla
 
 #: evaluations of each pipeline run on one sortie's or one depot's sensors
 SORTIE_BUDGET = 2000
+#: metres: the least clearance a sub-run plans with (the map's own when larger). A sub-run's
+#: legs to its depots end at a fixed point, which a mission stores on the 1e-7 degree grid
+#: (up to ~1 cm off); a leg planned tangent to an obstacle there (clearance 0) would then cut
+#: it (measured: L01, 25-min battery, seed 3, 1.1 m inside a circle), and storage cannot turn
+#: a leg about a fixed end by moving the other
+SUB_CLEARANCE = 0.1
 #: improving rounds at most
 ROUNDS = 3
 #: other sorties a hover point is offered to in a transfer (the nearest by depot)
@@ -183,6 +189,8 @@ class _Planner:
         if not keep.any():
             return None
         d = sortie_map_dict(self.m, a, b, req / self.margin, keep=keep)
+        d["safety"] = dict(d.get("safety") or {})
+        d["safety"]["clearance"] = max(float(d["safety"].get("clearance", 0.0)), SUB_CLEARANCE)
         n = int(keep.sum())
         d["uav"]["max_hover_points"] = int(min(200, max(10, (n + 1) // 2 + 8)))
         sub = Problem(load_map(d).planning_map(), variable_length=self.config.variable_length)
