@@ -192,11 +192,14 @@ class CoverTable:
             self._cov[frac] = np.where(cov.any(axis=0), cov, full)
         return self._cov[frac]
 
-    def hover(self, rows: np.ndarray) -> np.ndarray:
-        """(len(rows), J) s: the hover time each of those sites needs for each sensor's data,
-        Q_j / R_ij (inf out of range)."""
-        R = self.R[rows]
-        return np.where(R > 0, self.need[None, :] / np.maximum(R, 1e-12), np.inf)
+    def hover(self, rows: np.ndarray, cols: np.ndarray | None = None) -> np.ndarray:
+        """(len(rows), len(cols)) s: the hover time each of those sites needs for the data of
+        each of those sensors (cols: indices, None: all J), Q_j / R_ij (inf out of range)."""
+        if cols is None:
+            R, need = self.R[rows], self.need
+        else:
+            R, need = self.R[np.ix_(rows, cols)], self.need[cols]
+        return np.where(R > 0, need[None, :] / np.maximum(R, 1e-12), np.inf)
 
 
 def greedy_cover(
@@ -214,7 +217,8 @@ def greedy_cover(
     until one of them still has it; the ties of the step-3 rule (the most sensors, then the
     shortest hover, then the lowest index) are then all among them. The same picks as
     recounting every site at every pick (`greedy_cover_reference`), at O(n J) for the first
-    count and a few rows per pick instead of O(n J) per pick."""
+    count and a few rows per pick instead of O(n J) per pick; a pick reads only the columns of
+    the sensors still uncovered."""
     table = table if table is not None else CoverTable(problem, sites)
     cov = table.cover(frac)
     left = cov.any(axis=0)
@@ -223,10 +227,12 @@ def greedy_cover(
     out: list[int] = []
     gain = (cov & left).sum(axis=1)  # upper bounds from here on, exact where recounted
     while left.any():
+        # only the sensors still uncovered count (the others add 0 to a gain and a hover max)
+        cols = np.flatnonzero(left)
         top = int(gain.max())
         while top > 0:
             rows = np.flatnonzero(gain == top)
-            true = (cov[rows] & left).sum(axis=1)
+            true = cov[np.ix_(rows, cols)].sum(axis=1)
             gain[rows] = true
             if (true == top).any():
                 break
@@ -234,7 +240,7 @@ def greedy_cover(
         if top == 0:
             break
         ties = rows[true == top]  # ascending, as flatnonzero gives them
-        t = np.max(np.where(cov[ties] & left, table.hover(ties), 0.0), axis=1)
+        t = np.max(np.where(cov[np.ix_(ties, cols)], table.hover(ties, cols), 0.0), axis=1)
         i = int(ties[np.argmin(t)])  # first of the ties
         out.append(i)
         left &= ~cov[i]
