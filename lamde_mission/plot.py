@@ -4,10 +4,13 @@ Draws the area, circles, rotated rectangles, polygon footprints (courtyards left
 zones (holes open), sensors labelled by id and coloured by the share of their required data
 collected (short ones ringed with "x of y Mbit", unreached ones crossed), the path with arrows
 and numbered hover points ("order · seconds"), the parts of legs inside obstacles in red, start
-and end, a legend below the map and a scale bar in the emptiest corner; with a replay, a panel
-of each sensor's data over the mission time against its requirement. Uses matplotlib's Agg
-canvas directly (no pyplot state), imported inside the functions so importing this module
-stays cheap.
+and end, a legend below the map and a scale bar in the corner where it covers the fewest
+markers; every label placed where it covers no other label (`_place_labels`, sensor ids left out
+where crowded and counted in the legend); with a replay, a panel of each sensor's data over the
+mission time against its requirement (the ten tightest named, in distinct colours) and, beyond
+ten sensors, a panel of sorted bars naming every sensor (up to `BARS`; the rest summarised).
+Uses matplotlib's Agg canvas directly (no pyplot state), imported inside the functions so
+importing this module stays cheap.
 """
 
 from __future__ import annotations
@@ -106,26 +109,177 @@ def _violation_segments(map_: Any, path: np.ndarray) -> list[np.ndarray]:
     return out
 
 
-def _emptiest_corner(points: np.ndarray, W: float, H: float) -> str:
-    """Which corner of the area ("lower right", ...) holds the fewest of `points` within a
-    quarter of the area's size: where the scale bar covers the least data."""
-    corners = {"lower right": (W, 0.0), "lower left": (0.0, 0.0), "upper right": (W, H),
-               "upper left": (0.0, H)}  # fmt: skip
-    if not len(points):
-        return "lower right"
-    reach = np.array([0.3 * W, 0.15 * H])
-    count = {k: int(np.sum(np.all(np.abs(points - np.array(c)) < reach, axis=1)))
-             for k, c in corners.items()}  # fmt: skip
-    return min(count, key=lambda k: (count[k], list(corners).index(k)))
-
-
 #: the white box behind labels
 _TEXT_BOX = {"boxstyle": "round,pad=0.15", "facecolor": "white", "alpha": 0.7, "edgecolor": "none"}
 
+#: where a label may go around its marker, in order of preference: (dx, dy, ha, va)
+_DIRECTIONS = ((1, 1, "left", "bottom"), (1, -1, "left", "top"), (-1, 1, "right", "bottom"),
+               (-1, -1, "right", "top"), (1, 0, "left", "center"), (-1, 0, "right", "center"),
+               (0, 1, "center", "bottom"), (0, -1, "center", "top"))  # fmt: skip
+#: extra distances (points) tried beyond the marker's edge; past the first, a leader line
+_RINGS = (2.0, 12.0, 24.0, 38.0)
+#: sensors the data panels name one by one: coloured lines over time, bars at the end
+TIME_LINES = 10
+BARS = 60
 
-def _map_axes(map_: Any, *, has_time: bool, figsize: tuple[float, float] | None) -> Any:
-    """(figure, map axes, time axes or None, legend handles): the area drawn, sized to its
-    shape (no wide white bands); `figsize` overrides the size."""
+
+@dataclass
+class _Label:
+    """A label to place beside a marker: its text, anchor (x, y, m), text style, the marker's
+    radius there (points), and whether it may be left out when no place is free (sensor ids)."""
+
+    text: str
+    xy: tuple[float, float]
+    style: dict[str, Any]
+    radius: float
+    optional: bool = False
+    short: str | None = None  # a shorter text to try when the full one finds no free place
+
+
+@dataclass
+class _Scene:
+    """What the map panel's labels and scale bar must not cover: markers (x, y, m; radius in
+    points), the route's vertices (m), and the labels to place."""
+
+    points: list[np.ndarray]
+    radii: list[np.ndarray]
+    route: list[np.ndarray]
+    labels: list[_Label]
+
+    def marker(self, xy: Any, radius: Any) -> None:
+        xy = np.asarray(xy, dtype=float).reshape(-1, 2)
+        self.points.append(xy)
+        self.radii.append(np.broadcast_to(np.asarray(radius, dtype=float), (len(xy),)).copy())
+
+
+def _new_scene() -> _Scene:
+    return _Scene([], [], [], [])
+
+
+def _marker_boxes(ax: Any, scene: _Scene) -> np.ndarray:
+    """Every marker's square box in display pixels, (k, 4): x0, y0, x1, y1."""
+    if not scene.points:
+        return np.zeros((0, 4))
+    xy = ax.transData.transform(np.vstack(scene.points))
+    r = np.concatenate(scene.radii)[:, None] * ax.figure.dpi / 72.0
+    return np.hstack([xy - r, xy + r])
+
+
+def _overlaps(box: np.ndarray, boxes: np.ndarray) -> np.ndarray:
+    """Which of `boxes` (k, 4) overlap `box` (4,) (touching edges do not)."""
+    if not len(boxes):
+        return np.zeros(0, dtype=bool)
+    return ((box[0] < boxes[:, 2]) & (box[2] > boxes[:, 0]) & (box[1] < boxes[:, 3])
+            & (box[3] > boxes[:, 1]))  # fmt: skip
+
+
+def _route_points(ax: Any, scene: _Scene) -> np.ndarray:
+    """The route sampled every ~4 pixels along each leg, in display pixels (m, 2)."""
+    out = []
+    for p in scene.route:
+        px = ax.transData.transform(np.asarray(p, dtype=float).reshape(-1, 2))
+        for a, b in zip(px[:-1], px[1:], strict=False):
+            n = max(int(np.hypot(*(b - a)) / 4.0), 1)
+            out.append(a + np.linspace(0.0, 1.0, n + 1)[:, None] * (b - a))
+    return np.vstack(out) if out else np.zeros((0, 2))
+
+
+def _place_scale_bar(ax: Any, W: float, renderer: Any, markers: np.ndarray,
+                     route: np.ndarray) -> np.ndarray:  # fmt: skip
+    """Add the scale bar in the axes corner whose box covers the fewest markers, then the
+    fewest route samples (ties: lower right, lower left, upper right, upper left). Returns the
+    bar's box in display pixels (4,). Cost: O(markers + route samples)."""
+    from mpl_toolkits.axes_grid1.anchored_artists import AnchoredSizeBar
+
+    bar = nice_length(W)
+    label = f"{bar / 1000:g} km" if bar >= 1000 else f"{bar:g} m"
+    best = None
+    for k, loc in enumerate(("lower right", "lower left", "upper right", "upper left")):
+        artist = AnchoredSizeBar(ax.transData, bar, label, loc=loc, pad=0.4, borderpad=0.6,
+                                 sep=4, frameon=True, size_vertical=0)  # fmt: skip
+        ax.add_artist(artist)
+        e = artist.get_window_extent(renderer)
+        box = np.array([e.x0, e.y0, e.x1, e.y1])
+        inside = (np.sum((route[:, 0] > box[0]) & (route[:, 0] < box[2]) & (route[:, 1] > box[1])
+                         & (route[:, 1] < box[3])) if len(route) else 0)  # fmt: skip
+        score = (int(_overlaps(box, markers).sum()), int(inside), k)
+        if best is None or score < best[0]:
+            if best is not None:
+                best[1].remove()
+            best = (score, artist, box)
+        else:
+            artist.remove()
+    assert best is not None
+    return best[2]
+
+
+def _place_labels(ax: Any, renderer: Any, labels: Sequence[_Label],
+                  avoid: np.ndarray) -> tuple[int, int]:  # fmt: skip
+    """Place each label beside its marker, greedily in the given order: the first candidate
+    position (`_DIRECTIONS` x `_RINGS`, inside the axes) whose box overlaps no label placed
+    before and no box of `avoid` (markers, the scale bar); past the first ring a thin leader
+    line joins label and marker. A label that is not optional, finding no free place, may cover
+    a marker, never another label: failing that, its shorter text is tried, then it is left
+    out; an optional one (a sensor id) is tried on the first two rings only, so long leader
+    lines do not crowd the map, and is left out when no place is free. Returns how many
+    optional and how many other labels were left out. Deterministic; cost O(labels^2 + labels
+    x markers)."""
+    dpi_px = ax.figure.dpi / 72.0
+    e = ax.get_window_extent(renderer)
+    frame = (e.x0, e.y0, e.x1, e.y1)
+    placed = np.zeros((0, 4))
+    dropped = [0, 0]
+
+    def search(text: str, lab: _Label) -> Any:
+        probe = ax.annotate(text, lab.xy, xytext=(0, 0), textcoords="offset points",
+                            **lab.style)  # fmt: skip
+        t = probe.get_window_extent(renderer)
+        probe.remove()
+        pad = 0.2 * float(lab.style.get("fontsize", 8)) * dpi_px
+        w, h = t.width + 2 * pad, t.height + 2 * pad
+        anchor = ax.transData.transform(lab.xy)
+        best = None
+        for ring, extra in enumerate(_RINGS[:2] if lab.optional else _RINGS):
+            d = lab.radius + extra
+            for k, (dx, dy, ha, va) in enumerate(_DIRECTIONS):
+                ox, oy = dx * d, dy * d
+                x0 = anchor[0] + ox * dpi_px - {"left": 0.0, "right": w, "center": w / 2}[ha]
+                y0 = anchor[1] + oy * dpi_px - {"bottom": 0.0, "top": h, "center": h / 2}[va]
+                box = np.array([x0, y0, x0 + w, y0 + h])
+                if box[0] < frame[0] or box[1] < frame[1] or box[2] > frame[2] \
+                        or box[3] > frame[3]:  # fmt: skip
+                    continue
+                if _overlaps(box, placed).any():
+                    continue
+                score = (bool(_overlaps(box, avoid).any()), ring, k)
+                if best is None or score < best[0]:
+                    best = (score, text, ox, oy, ha, va, ring, box)
+            if best is not None and not best[0][0]:
+                break
+        if best is not None and lab.optional and best[0][0]:
+            return None  # a sensor id does not cover a marker
+        return best
+
+    for lab in labels:
+        best = search(lab.text, lab)
+        if best is None and lab.short:
+            best = search(lab.short, lab)
+        if best is None:
+            dropped[0 if lab.optional else 1] += 1
+            continue
+        _, text, ox, oy, ha, va, ring, box = best
+        leader = ({"arrowstyle": "-", "color": "0.35", "lw": 0.6, "shrinkA": 0,
+                   "shrinkB": lab.radius} if ring > 0 else None)  # fmt: skip
+        ax.annotate(text, lab.xy, xytext=(ox, oy), textcoords="offset points", ha=ha, va=va,
+                    arrowprops=leader, **lab.style)  # fmt: skip
+        placed = np.vstack([placed, box])
+    return dropped[0], dropped[1]
+
+
+def _map_axes(map_: Any, *, has_time: bool, has_bars: bool = False,
+              figsize: tuple[float, float] | None) -> Any:  # fmt: skip
+    """(figure, map axes, time axes or None, bar axes or None, legend handles): the area
+    drawn, sized to its shape (no wide white bands); `figsize` overrides the size."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
@@ -139,11 +293,15 @@ def _map_axes(map_: Any, *, has_time: bool, figsize: tuple[float, float] | None)
         map_w = 9.0 / aspect if aspect > 0 else map_w
         map_w = max(map_w, 3.0)
     time_h = 2.3 if has_time else 0.0
+    bars_h = 2.0 if has_time and has_bars else 0.0
     if figsize is None:
-        figsize = (map_w + 1.6, map_h + 1.4 + time_h)
+        figsize = (map_w + 1.6, map_h + 1.4 + time_h + bars_h)
     fig = Figure(figsize=figsize, layout="constrained")
     FigureCanvasAgg(fig)
-    if has_time:
+    ax_b = None
+    if has_time and has_bars:
+        ax, ax_t, ax_b = fig.subplots(3, 1, height_ratios=[map_h, time_h, bars_h])
+    elif has_time:
         ax, ax_t = fig.subplots(2, 1, height_ratios=[map_h, time_h])
     else:
         ax, ax_t = fig.add_subplot(1, 1, 1), None
@@ -159,7 +317,7 @@ def _map_axes(map_: Any, *, has_time: bool, figsize: tuple[float, float] | None)
     ax.add_patch(RectanglePatch((0, 0), W, H, fill=False, edgecolor="0.3", linewidth=1.2,
                                 linestyle="--"))  # fmt: skip
     handles: list[Any] = [Line2D([], [], color="0.3", linestyle="--", label="area")]
-    return fig, ax, ax_t, handles
+    return fig, ax, ax_t, ax_b, handles
 
 
 def _draw_obstacles(ax: Any, map: Any, handles: list[Any]) -> None:  # noqa: A002
@@ -190,25 +348,33 @@ def _draw_obstacles(ax: Any, map: Any, handles: list[Any]) -> None:  # noqa: A00
                              label="no-fly zones"))  # fmt: skip
 
 
+#: the style of sensor-id labels, and of the labels of sensors short of data
+_ID_STYLE = {"fontsize": 7.5, "zorder": 8, "bbox": _TEXT_BOX}
+_SHORT_STYLE = {"fontsize": 8, "color": "tab:red", "fontweight": "bold", "zorder": 8,
+                "bbox": _TEXT_BOX}  # fmt: skip
+
+
 def _draw_sensors(
     fig: Any,
     ax: Any,
     map: Any,  # noqa: A002
     collected: np.ndarray | None,
     handles: list[Any],
+    scene: _Scene,
 ) -> np.ndarray:
-    """The sensors, labelled by id; with `collected` (Mbit per sensor) coloured by the share of
-    their requirement, short ones ringed with "x of y Mbit", unreached ones crossed, and a
-    colour bar. Returns the sensor positions (J x 2, m)."""
+    """The sensors; with `collected` (Mbit per sensor) coloured by the share of their
+    requirement, short ones ringed, unreached ones crossed, and a colour bar. Their labels go
+    to `scene` (placed later, `_place_labels`): "x of y Mbit" on short sensors (always shown),
+    the id on the others (left out where crowded; the tightest first). Returns the sensor
+    positions (J x 2, m)."""
     from matplotlib.cm import ScalarMappable
     from matplotlib.colors import Normalize
     from matplotlib.lines import Line2D
 
-    text_box = _TEXT_BOX
     sensors = np.asarray(map.sensors, dtype=float)
     required = np.asarray(map.required_data, dtype=float)
     ids = list(map.sensor_ids)
-    many = len(ids) > 60  # label only the sensors that need attention on crowded maps
+    scene.marker(sensors, 3.6)
     if collected is not None:
         got = collected
         share = np.where(required > 0, got / np.maximum(required, 1e-300), 1.0)
@@ -219,54 +385,141 @@ def _draw_sensors(
         short = share < 1.0 - 1e-9
         none = short & (got <= 1e-9)
         if short.any():
-            ax.scatter(sensors[short, 0], sensors[short, 1], marker="o", s=260,
-                       facecolors="none", edgecolors="tab:red", linewidths=2.0, zorder=5)
-            handles.append(Line2D([], [], marker="o", linestyle="", markersize=11,
-                                  markerfacecolor="none", markeredgecolor="tab:red",
-                                  markeredgewidth=2, label="sensor short of data (C4)"))
+            ax.scatter(
+                sensors[short, 0],
+                sensors[short, 1],
+                marker="o",
+                s=260,
+                facecolors="none",
+                edgecolors="tab:red",
+                linewidths=2.0,
+                zorder=5,
+            )
+            scene.marker(sensors[short], 9.0)
+            handles.append(
+                Line2D(
+                    [],
+                    [],
+                    marker="o",
+                    linestyle="",
+                    markersize=11,
+                    markerfacecolor="none",
+                    markeredgecolor="tab:red",
+                    markeredgewidth=2,
+                    label="sensor short of data (C4)",
+                )
+            )
         if none.any():
             ax.scatter(sensors[none, 0], sensors[none, 1], marker="X", s=160, c="tab:red",
                        edgecolors="k", linewidths=0.8, zorder=6)  # fmt: skip
             handles.append(Line2D([], [], marker="X", linestyle="", markersize=10,
                                   markerfacecolor="tab:red", markeredgecolor="k",
                                   label="sensor not reached (0 Mbit)"))  # fmt: skip
-        for j, sid in enumerate(ids):
-            if short[j]:
-                ax.annotate(f"{sid}: {got[j]:.0f} of {required[j]:.0f} Mbit", sensors[j],
-                            xytext=(8, -12), textcoords="offset points", fontsize=8,
-                            color="tab:red", fontweight="bold", zorder=8, bbox=text_box)
-            elif not many:
-                ax.annotate(sid, sensors[j], xytext=(5, 5), textcoords="offset points",
-                            fontsize=7.5, zorder=8, bbox=text_box)  # fmt: skip
+        for j in np.flatnonzero(short):
+            scene.labels.append(_Label(f"{ids[j]}: {got[j]:.0f} of {required[j]:.0f} Mbit",
+                                       tuple(sensors[j]), _SHORT_STYLE, 9.0,
+                                       short=ids[j]))  # fmt: skip
+        for j in sorted(np.flatnonzero(~short), key=lambda j: (share[j], j)):
+            scene.labels.append(_Label(ids[j], tuple(sensors[j]), _ID_STYLE, 3.6, True))
         cb = fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=ax, fraction=0.04, pad=0.01)
         cb.set_label("data collected / required")
-        handles.append(Line2D([], [], marker="o", linestyle="", markerfacecolor="tab:green",
-                              markeredgecolor="k", label="sensors (colour: share collected)"))
+        handles.append(
+            Line2D(
+                [],
+                [],
+                marker="o",
+                linestyle="",
+                markerfacecolor="tab:green",
+                markeredgecolor="k",
+                label="sensors (colour: share collected)",
+            )
+        )
     else:
         ax.scatter(sensors[:, 0], sensors[:, 1], marker="o", s=30, c="tab:blue",
                    edgecolors="k", linewidths=0.5, zorder=4)  # fmt: skip
-        if not many:
-            for j, sid in enumerate(ids):
-                ax.annotate(sid, sensors[j], xytext=(5, 5), textcoords="offset points",
-                            fontsize=7.5, zorder=8, bbox=text_box)  # fmt: skip
+        for j, sid in enumerate(ids):
+            scene.labels.append(_Label(sid, tuple(sensors[j]), _ID_STYLE, 3.6, True))
         handles.append(Line2D([], [], marker="o", linestyle="", markerfacecolor="tab:blue",
                               markeredgecolor="k", label="sensors"))  # fmt: skip
     return sensors
 
 
-def _scale_bar_and_legend(
-    fig: Any, ax: Any, W: float, H: float, data_points: list[np.ndarray], handles: list[Any]
-) -> None:
-    """A scale bar in the corner with the fewest of `data_points`, the legend below."""
-    from mpl_toolkits.axes_grid1.anchored_artists import AnchoredSizeBar
+def _draw_ends(ax: Any, map: Any, hover_points: np.ndarray, hover_radii: np.ndarray,  # noqa: A002
+               scene: _Scene, handles: list[Any]) -> None:  # fmt: skip
+    """Start (triangle) and end (square). Where a hover point lies at the same place (within
+    its marker), the start or end is drawn hollow and larger, around the hover point, so
+    neither hides the other."""
+    from matplotlib.lines import Line2D
 
-    bar = nice_length(W)
-    label = f"{bar / 1000:g} km" if bar >= 1000 else f"{bar:g} m"
-    corner = _emptiest_corner(np.vstack(data_points), W, H)
-    ax.add_artist(AnchoredSizeBar(ax.transData, bar, label, loc=corner, pad=0.4,
-                                  borderpad=0.6, sep=4, frameon=True, size_vertical=0))  # fmt: skip
-    fig.legend(handles=handles, loc="outside lower center", ncol=min(len(handles), 4),
-               fontsize=8, frameon=False)  # fmt: skip
+    W, H = map.spec.area.width, map.spec.area.height
+    near = 0.015 * max(W, H)
+    for xy, marker, size, colour, name in ((map.start, "^", 11.0, "tab:green", "start"),
+                                           (map.end, "s", 10.0, "tab:purple", "end")):  # fmt: skip
+        xy = np.asarray(xy, dtype=float)
+        d = np.hypot(*(hover_points - xy).T) if len(hover_points) else np.zeros(0)
+        if len(d) and d.min() < near:
+            around = 2.0 * float(hover_radii[int(np.argmin(d))]) + 6.0
+            size = around * (1.9 if marker == "^" else 1.0)
+            ax.plot(
+                *xy,
+                marker=marker,
+                markersize=size,
+                markerfacecolor="none",
+                markeredgecolor=colour,
+                markeredgewidth=2.2,
+                zorder=7,
+                linestyle="",
+            )
+        else:
+            ax.plot(*xy, marker=marker, markersize=size, color=colour, markeredgecolor="k",
+                    zorder=7, linestyle="")  # fmt: skip
+        scene.marker(xy, size / 2.0)
+        handles.append(Line2D([], [], marker=marker, linestyle="", markerfacecolor=colour,
+                              markeredgecolor="k", label=name))  # fmt: skip
+
+
+def _finish_map(fig: Any, ax: Any, W: float, handles: list[Any], scene: _Scene,
+                n_sensors: int, named_below: bool) -> tuple[int, int]:  # fmt: skip
+    """The legend below, the layout fixed, the scale bar in the emptiest corner, then every
+    label placed (`_place_labels`: the ones always shown first, then sensor ids). When labels
+    were left out, the legend says how many (the layout redone once to make room; the note's
+    counts are the final ones). Returns how many sensor ids and other labels were left out."""
+    from matplotlib.lines import Line2D
+
+    labels = sorted(scene.labels, key=lambda lab: lab.optional)  # stable: order kept within
+
+    def attempt(extra: list[Any]) -> tuple[tuple[int, int], Any, list[Any]]:
+        legend = fig.legend(handles=handles + extra, loc="outside lower center",
+                            ncol=min(len(handles) + len(extra), 4), fontsize=8,
+                            frameon=False)  # fmt: skip
+        fig.set_layout_engine("constrained")
+        fig.draw_without_rendering()
+        fig.set_layout_engine("none")  # positions fixed: the pixels the labels are fitted in
+        renderer = fig.canvas.get_renderer()
+        markers = _marker_boxes(ax, scene)
+        n_texts, n_artists = len(ax.texts), len(ax.artists)
+        bar = _place_scale_bar(ax, W, renderer, markers, _route_points(ax, scene))
+        dropped = _place_labels(ax, renderer, labels, np.vstack([markers, bar[None, :]]))
+        added = list(ax.texts[n_texts:]) + list(ax.artists[n_artists:])
+        return dropped, legend, added
+
+    def note(k: tuple[int, int]) -> str:
+        parts = []
+        if k[0]:
+            parts.append(f"{k[0]} of {n_sensors} sensor ids")
+        if k[1]:
+            parts.append(f"{k[1]} other labels")
+        where = "; the panels below name every sensor" if named_below else ""
+        return " and ".join(parts or ["no labels"]) + f" left out where crowded{where}"
+
+    dropped, legend, added = attempt([])
+    if any(dropped):
+        for artist in [legend, *added]:
+            artist.remove()
+        dropped2, legend, _ = attempt([Line2D([], [], linestyle="none", label=note(dropped))])
+        legend.get_texts()[-1].set_text(note(dropped2))
+        dropped = dropped2
+    return dropped
 
 
 def mission_figure(
@@ -279,12 +532,29 @@ def mission_figure(
 ) -> Any:
     """A matplotlib Figure (Agg canvas) of `map` with a replayed `timeline` or a `plan`.
 
-    The map panel labels sensors by id and hover points by visiting order and hover seconds
-    ("2 · 41 s"), shows the route's direction with arrows, draws the parts of legs inside an
+    The map panel labels hover points by visiting order and hover seconds ("2 · 41 s") and
+    sensors by id, each label placed where it covers no other label, marker or the scale bar
+    (`_place_labels`; sensor ids that find no free place are left out and counted in the
+    legend); shows the route's direction with arrows, draws the parts of legs inside an
     obstacle (C5) in red, rings sensors short of data with "x of y Mbit" and crosses those that
-    got nothing. With a `timeline` (the simulator's replay) a second panel shows each sensor's
-    data collected over the mission time against its requirement (100 %). The figure's size
-    follows the area's shape (no wide white bands); `figsize` overrides it.
+    got nothing; the scale bar goes to the corner where it covers the fewest markers. With a
+    `timeline` (the simulator's replay) a second panel shows each sensor's data over the
+    mission time against its requirement (the `TIME_LINES` tightest sensors in distinct
+    colours, named; the others grey), and with more than `TIME_LINES` sensors a third panel
+    names every sensor with its final share as sorted bars (the `BARS` tightest; the rest
+    summarised as min / median / max). The figure's size follows the area's shape (no wide
+    white bands); `figsize` overrides it. Cost: O(J^2) for the label placement (J sensors plus
+    hover points), O(J x samples) for the panels.
+
+    Args:
+        map: the map (`planner_core.model.mapio.load_map`).
+        timeline: the simulator's replay of the stored mission (`sim.replay`), or None.
+        plan: a plan (hover points, m; hover times, s), used when there is no timeline.
+        title: the title (default: the map's name and f).
+        figsize: inches (default: from the area's shape).
+
+    Returns:
+        The Figure (Agg canvas; its layout fixed).
     """
     from matplotlib.lines import Line2D
 
@@ -292,15 +562,19 @@ def mission_figure(
     W, H = spec.area.width, spec.area.height
     view = _mission_view(map, timeline, plan)
     has_time = timeline is not None and len(getattr(timeline, "t", ())) > 1
-    fig, ax, ax_t, handles = _map_axes(map, has_time=has_time, figsize=figsize)
+    has_bars = has_time and len(map.sensor_ids) > TIME_LINES
+    fig, ax, ax_t, ax_b, handles = _map_axes(map, has_time=has_time, has_bars=has_bars,
+                                             figsize=figsize)  # fmt: skip
+    scene = _new_scene()
     _draw_obstacles(ax, map, handles)
-    sensors = _draw_sensors(fig, ax, map, None if view is None else view["collected"], handles)
-    text_box = _TEXT_BOX
-
-    data_points = [sensors, np.asarray([map.start, map.end], dtype=float)]
+    sensors = _draw_sensors(fig, ax, map, None if view is None else view["collected"], handles,
+                            scene)  # fmt: skip
+    hover_labels: list[_Label] = []
+    hp = np.zeros((0, 2))
+    hover_r = np.zeros(0)
     if view is not None:
         p = view["path"]
-        data_points.append(p)
+        scene.route.append(p)
         ax.plot(p[:, 0], p[:, 1], "-", color="tab:blue", linewidth=1.6, zorder=3)
         handles.append(Line2D([], [], color="tab:blue", linewidth=1.6,
                               label="path (arrows: direction)"))  # fmt: skip
@@ -316,36 +590,40 @@ def mission_figure(
                     solid_capstyle="butt")  # fmt: skip
         if bad:
             total = sum(float(np.sum(np.hypot(*np.diff(s, axis=0).T))) for s in bad)
-            handles.append(Line2D([], [], color="red", linewidth=4,
-                                  label=f"path inside obstacles (C5): {total:.0f} m"))
+            handles.append(
+                Line2D(
+                    [],
+                    [],
+                    color="red",
+                    linewidth=4,
+                    label=f"path inside obstacles (C5): {total:.0f} m",
+                )
+            )
         if view["return_leg"] is not None:
             rl = np.asarray(view["return_leg"])
+            scene.route.append(rl)
             ax.plot(rl[:, 0], rl[:, 1], ":", color="tab:blue", linewidth=1.2, zorder=3)
             handles.append(Line2D([], [], color="tab:blue", linestyle=":", label="return (RTL)"))
         hp, ht = view["hover_points"], view["hover_times"]
         if len(hp):
             t_max = max(float(spec.uav.max_hover_time), 1e-9)
             size = 40.0 + 260.0 * np.clip(ht / t_max, 0.0, 1.0)
+            hover_r = np.sqrt(size) / 2.0 + 0.5
+            scene.marker(hp, hover_r)
             ax.scatter(hp[:, 0], hp[:, 1], s=size, facecolors="tab:orange", edgecolors="k",
                        alpha=0.85, linewidths=0.6, zorder=6)  # fmt: skip
+            style = {"fontsize": 8, "color": "saddlebrown", "fontweight": "bold", "zorder": 8,
+                     "bbox": _TEXT_BOX}  # fmt: skip
             for i, (xy, t) in enumerate(zip(hp, ht, strict=True)):
-                ax.annotate(f"{i + 1} · {t:.0f} s", xy, xytext=(7, -3), textcoords="offset points",
-                            fontsize=8, color="saddlebrown", fontweight="bold", zorder=8,
-                            bbox=text_box)  # fmt: skip
+                hover_labels.append(_Label(f"{i + 1} · {t:.0f} s", tuple(xy), style,
+                                           float(hover_r[i]), short=str(i + 1)))  # fmt: skip
             handles.append(Line2D([], [], marker="o", linestyle="", markerfacecolor="tab:orange",
                                   markeredgecolor="k",
                                   label="hover point: order · seconds"))  # fmt: skip
-
-    ax.plot(*map.start, marker="^", markersize=11, color="tab:green", markeredgecolor="k",
-            zorder=7, linestyle="")  # fmt: skip
-    ax.plot(*map.end, marker="s", markersize=10, color="tab:purple", markeredgecolor="k",
-            zorder=7, linestyle="")  # fmt: skip
-    handles.append(Line2D([], [], marker="^", linestyle="", markerfacecolor="tab:green",
-                          markeredgecolor="k", label="start"))  # fmt: skip
-    handles.append(Line2D([], [], marker="s", linestyle="", markerfacecolor="tab:purple",
-                          markeredgecolor="k", label="end"))  # fmt: skip
-
-    _scale_bar_and_legend(fig, ax, W, H, data_points, handles)
+    # placing order: short sensors' "x of y Mbit", hover points, then sensor ids
+    n_short = sum(not lab.optional for lab in scene.labels)
+    scene.labels[n_short:n_short] = hover_labels
+    _draw_ends(ax, map, hp, hover_r, scene, handles)
     if title is None:
         title = f"map '{spec.name}'"
         if view is not None and view.get("f") is not None:
@@ -353,53 +631,126 @@ def mission_figure(
     ax.set_title(title)
     if ax_t is not None:
         _data_panel(ax_t, timeline, map)
+    if ax_b is not None:
+        _bars_panel(ax_b, timeline, map)
+    _finish_map(fig, ax, W, handles, scene, len(sensors), named_below=ax_b is not None
+                and len(sensors) <= BARS)  # fmt: skip
     return fig
 
 
-def _data_panel(ax: Any, timeline: Any, map_: Any) -> None:
-    """Each sensor's data collected along the mission time, as a share of its requirement
-    (the simulator's replay samples); the requirement is the 100 % line."""
-    t = np.asarray(timeline.t, dtype=float)
+def _final_share(timeline: Any, map_: Any) -> tuple[np.ndarray, np.ndarray]:
+    """(share over time (samples x J, %), final share (J,, %)) of each sensor's requirement."""
     data = np.asarray(timeline.data, dtype=float)
     required = np.asarray(map_.required_data, dtype=float)
     share = 100.0 * data / np.maximum(required, 1e-300)[None, :]
     share[:, required <= 0] = 100.0
+    return share, share[-1]
+
+
+def _tightest(final: np.ndarray, k: int) -> list[int]:
+    """The indices of the `k` smallest final shares (ties: map order), smallest first."""
+    return sorted(range(len(final)), key=lambda j: (float(final[j]), j))[:k]
+
+
+def _series_colour(k: int) -> Any:
+    """The k-th named series' colour (tab10; beyond 10 the cycle repeats, see `_series_dash`)."""
+    from matplotlib import colormaps
+
+    return colormaps["tab10"](k % 10)
+
+
+def _series_dash(k: int) -> str:
+    """The k-th named series' line style: solid for the first 10, then dashed, dotted, ..."""
+    return ("-", "--", ":", "-.")[(k // 10) % 4]
+
+
+def _data_panel(ax: Any, timeline: Any, map_: Any) -> None:
+    """Each sensor's data collected along the mission time, as a share of its requirement
+    (the simulator's replay samples); the requirement is the 100 % line. The `TIME_LINES`
+    sensors with the smallest final share are drawn in distinct colours and named at the
+    end; the others are thin grey lines, counted in the panel."""
+    t = np.asarray(timeline.t, dtype=float)
+    share, final = _final_share(timeline, map_)
     ids = list(timeline.sensor_ids)
     top = max(110.0, float(np.nanmax(share)) * 1.05)
-    labelled = [j for j in range(len(ids)) if len(ids) <= 12 or share[-1, j] < 100.0 - 1e-6]
+    named = _tightest(final, TIME_LINES)
+    others = [j for j in range(len(ids)) if j not in set(named)]
+    for j in others:
+        ax.plot(t, share[:, j], linewidth=0.7, color="0.7", zorder=1)
     # end labels spread apart vertically (at least 7 % of the axis) so close lines stay legible
-    ys = {}
-    for j in sorted(labelled, key=lambda j: share[-1, j]):
-        y = float(share[-1, j])
+    ys: dict[int, float] = {}
+    for j in named:  # smallest final share first
+        y = float(final[j])
         if ys:
             y = max(y, max(ys.values()) + 0.07 * top)
         ys[j] = y
-    colors = {}
-    for j in range(len(ids)):
-        (line,) = ax.plot(t, share[:, j], linewidth=1.2)
-        colors[j] = line.get_color()
-    for j, y in ys.items():
-        final = share[-1, j]
-        ax.annotate(f"{ids[j]}" + ("" if final >= 100.0 - 1e-6 else f" {final:.0f} %"),
-                    (t[-1], final), xytext=(t[-1] + 0.01 * (t[-1] - t[0]), y), fontsize=7.5,
-                    color=colors[j], va="center", annotation_clip=False,
-                    ha="left")  # fmt: skip
+    for k, j in enumerate(named):
+        colour = _series_colour(k)
+        ax.plot(t, share[:, j], linewidth=1.2, color=colour, linestyle=_series_dash(k),
+                zorder=2)  # fmt: skip
+        ax.annotate(f"{ids[j]} {final[j]:.0f} %", (t[-1], final[j]),
+                    xytext=(t[-1] + 0.01 * (t[-1] - t[0]), ys[j]), fontsize=7.5, color=colour,
+                    va="center", annotation_clip=False, ha="left")  # fmt: skip
+    title = "data collected over the mission (simulator replay; shaded: hovering)"
+    if others:
+        lo, hi = float(final[others].min()), float(final[others].max())
+        title += (f"\ngrey: {len(others)} more sensors, each {lo:.0f}-{hi:.0f} % at the end"
+                  + (" (all named below)" if len(ids) <= BARS else ""))  # fmt: skip
     ax.axhline(100.0, color="k", linestyle="--", linewidth=1.0)
     ax.text(t[0], 101.0, "required", fontsize=7.5, va="bottom")
     phase = np.asarray(timeline.phase)
     hover = phase == "hover"
-    if hover.any():  # shade the hovers, numbered like the map
+    if hover.any():  # shade the hovers, numbered like the map (numbers thinned where they touch)
         edges = np.flatnonzero(np.diff(np.r_[0, hover.astype(int), 0]))
+        span = max(float(t[-1] - t[0]), 1e-9) * 1.1
+        width_in = ax.figure.get_size_inches()[0] - 1.6
+        last = -np.inf
         for k, (i0, i1) in enumerate(zip(edges[::2], edges[1::2], strict=True)):
             ax.axvspan(t[i0], t[i1 - 1], color="tab:orange", alpha=0.15, linewidth=0)
-            ax.text((t[i0] + t[i1 - 1]) / 2, 3.0, str(k + 1), fontsize=7, ha="center",
-                    color="saddlebrown")
+            x = (t[i0] + t[i1 - 1]) / 2
+            gap = (len(str(k + 1)) + 1.5) * 7 * 0.6 / 72.0 * span / width_in  # in seconds
+            if x - last >= gap or k == 0:
+                ax.text(x, 3.0, str(k + 1), fontsize=7, ha="center", color="saddlebrown")
+                last = x
     ax.set_xlim(t[0], t[-1] + 0.1 * max(t[-1] - t[0], 1e-9))
     ax.set_ylim(0, max(top, max(ys.values(), default=0.0) + 0.05 * top))
     ax.set_xlabel("mission time (s)")
     ax.set_ylabel("collected / required (%)")
-    ax.set_title("data collected over the mission (simulator replay; shaded: hovering)",
-                 fontsize=9)
+    ax.set_title(title, fontsize=9)
+
+
+def _bars_panel(ax: Any, timeline: Any, map_: Any) -> None:
+    """Every sensor named with its final share of its requirement, as bars sorted from the
+    smallest share (coloured as on the map); the `TIME_LINES` named in the panel above carry
+    their line's colour. Past `BARS` sensors the rest (the largest shares) are summarised as
+    count, min, median and max."""
+    from matplotlib import colormaps
+
+    _, final = _final_share(timeline, map_)
+    ids = list(timeline.sensor_ids)
+    order = _tightest(final, len(ids))
+    shown, rest = order[:BARS], order[BARS:]
+    cmap = colormaps["RdYlGn"]
+    x = np.arange(len(shown))
+    vals = final[shown]
+    ax.bar(x, vals, color=[cmap(float(np.clip(v / 100.0, 0, 1))) for v in vals],
+           edgecolor="0.3", linewidth=0.4, width=0.8)  # fmt: skip
+    ax.axhline(100.0, color="k", linestyle="--", linewidth=1.0)
+    ax.set_xticks(x, [ids[j] for j in shown], rotation=90, fontsize=6.5 if len(shown) > 30 else 7.5)
+    colours = {j: _series_colour(k) for k, j in enumerate(_tightest(final, TIME_LINES))}
+    for tick, j in zip(ax.get_xticklabels(), shown, strict=True):
+        if j in colours:
+            tick.set_color(colours[j])
+            tick.set_fontweight("bold")
+    ax.set_xlim(-0.7, max(len(shown), 10) - 0.3)
+    ax.set_ylim(0, max(110.0, float(vals.max()) * 1.08))
+    ax.set_ylabel("at the end (%)")
+    title = "data collected / required at the end, by sensor (smallest share first)"
+    if rest:
+        r = final[rest]
+        title += (f"; {len(rest)} more: min {r.min():.0f} %, median {np.median(r):.0f} %, "
+                  f"max {r.max():.0f} %")  # fmt: skip
+    ax.set_title(title, fontsize=9)
 
 
 def save_figure(fig: Any, path: str | Path, *, dpi: int = 150) -> Path:
@@ -491,11 +842,11 @@ def fleet_figure(
         raise ValueError("no sorties to draw")
     spec = map.spec
     W, H = spec.area.width, spec.area.height
-    fig, ax, _ax_t, handles = _map_axes(map, has_time=False, figsize=figsize)
+    fig, ax, _ax_t, _ax_b, handles = _map_axes(map, has_time=False, figsize=figsize)
+    scene = _new_scene()
     _draw_obstacles(ax, map, handles)
     collected = np.sum([np.asarray(sv.timeline.collected, dtype=float) for sv in sorties], axis=0)
-    sensors = _draw_sensors(fig, ax, map, collected, handles)
-    data_points = [sensors]
+    sensors = _draw_sensors(fig, ax, map, collected, handles, scene)
     n_hover = sum(len(sv.timeline.hover_points) for sv in sorties)
     t_max = max(float(spec.uav.max_hover_time), 1e-9)
     bad_total = 0.0
@@ -504,7 +855,7 @@ def fleet_figure(
         colour = _vehicle_colour(sv.vehicle)
         style = SORTIE_STYLES[(sv.sortie - 1) % len(SORTIE_STYLES)]
         p = np.asarray(sv.timeline.path, dtype=float)
-        data_points.append(p)
+        scene.route.append(p)
         ax.plot(p[:, 0], p[:, 1], linestyle=style, color=colour, linewidth=1.6, zorder=3)
         for a, b in zip(p[:-1], p[1:], strict=True):
             if np.hypot(*(b - a)) > 0.02 * max(W, H):
@@ -518,21 +869,33 @@ def fleet_figure(
         rl = sv.timeline.return_leg
         if rl is not None:
             rl = np.asarray(rl, dtype=float)
+            scene.route.append(rl)
             ax.plot(rl[:, 0], rl[:, 1], ":", color=colour, linewidth=1.0, zorder=3)
         hp = np.asarray(sv.timeline.hover_points, dtype=float).reshape(-1, 2)
         ht = np.asarray(sv.timeline.hover_times, dtype=float).reshape(-1)
         if len(hp):
             size = 40.0 + 260.0 * np.clip(ht / t_max, 0.0, 1.0)
+            radius = np.sqrt(size) / 2.0 + 0.5
+            scene.marker(hp, radius)
             ax.scatter(hp[:, 0], hp[:, 1], s=size, facecolors=[colour], edgecolors="k",
                        alpha=0.8, linewidths=0.6, zorder=6)  # fmt: skip
-            if n_hover <= 40:
-                for i, (xy, t) in enumerate(zip(hp, ht, strict=True)):
-                    ax.annotate(f"{sv.sortie}.{i + 1} · {t:.0f} s", xy, xytext=(7, -3),
-                                textcoords="offset points", fontsize=7.5, color=colour,
-                                fontweight="bold", zorder=8, bbox=_TEXT_BOX)  # fmt: skip
+            style = {"fontsize": 7.5, "color": colour, "fontweight": "bold", "zorder": 8,
+                     "bbox": _TEXT_BOX}  # fmt: skip
+            for i, (xy, t) in enumerate(zip(hp, ht, strict=True)):
+                # past 40 hover points in all, a hover label may be left out where crowded
+                scene.labels.append(_Label(f"{sv.sortie}.{i + 1} · {t:.0f} s", tuple(xy), style,
+                                           float(radius[i]), n_hover > 40,
+                                           f"{sv.sortie}.{i + 1}"))  # fmt: skip
     if bad_total > 0:
-        handles.append(Line2D([], [], color="red", linewidth=4,
-                              label=f"path inside obstacles (C5): {bad_total:.0f} m"))
+        handles.append(
+            Line2D(
+                [],
+                [],
+                color="red",
+                linewidth=4,
+                label=f"path inside obstacles (C5): {bad_total:.0f} m",
+            )
+        )
     # depots: every take-off and landing position, named as fleet.json names them
     depots: dict[tuple[float, float], set[str]] = {}
     for sv in sorties:
@@ -545,11 +908,11 @@ def fleet_figure(
     for (x, y), names in depots.items():
         ax.plot(x, y, marker="h", markersize=14, color="white", markeredgecolor="k",
                 markeredgewidth=1.6, zorder=7, linestyle="")  # fmt: skip
+        scene.marker((x, y), 7.5)
         if names:
-            ax.annotate(" / ".join(sorted(names)), (x, y), xytext=(9, 8),
-                        textcoords="offset points", fontsize=8, fontweight="bold", zorder=9,
-                        bbox=_TEXT_BOX)  # fmt: skip
-    data_points.append(np.asarray(list(depots), dtype=float).reshape(-1, 2))
+            scene.labels.append(_Label(" / ".join(sorted(names)), (x, y),
+                                       {"fontsize": 8, "fontweight": "bold", "zorder": 9,
+                                        "bbox": _TEXT_BOX}, 7.5))  # fmt: skip
     # swaps: a vehicle lands from sortie j and leaves on sortie j + 1
     swaps = 0
     by_vehicle: dict[int, list[SortieView]] = {}
@@ -562,36 +925,70 @@ def fleet_figure(
             swaps += 1
             ax.plot(*at, marker="*", markersize=15, color=_vehicle_colour(v),
                     markeredgecolor="k", zorder=8, linestyle="")  # fmt: skip
-            ax.annotate(f"v{v} swap {j}", at, xytext=(9, -14 - 9 * (j - 1)),
-                        textcoords="offset points", fontsize=7.5, color=_vehicle_colour(v),
-                        zorder=9, bbox=_TEXT_BOX)  # fmt: skip
-            if not np.allclose(at, np.asarray(b.timeline.path, dtype=float)[0], atol=1.0):
-                ax.annotate(f"v{v} swap {j} (takes off here)",
-                            np.asarray(b.timeline.path, dtype=float)[0], xytext=(9, -14),
-                            textcoords="offset points", fontsize=7.5,
-                            color=_vehicle_colour(v), zorder=9, bbox=_TEXT_BOX)  # fmt: skip
+            scene.marker(at, 7.5)
+            style = {"fontsize": 7.5, "color": _vehicle_colour(v), "zorder": 9,
+                     "bbox": _TEXT_BOX}  # fmt: skip
+            scene.labels.append(_Label(f"v{v} swap {j}", tuple(at), style, 7.5))
+            off = np.asarray(b.timeline.path, dtype=float)[0]
+            if not np.allclose(at, off, atol=1.0):
+                scene.labels.append(_Label(f"v{v} swap {j} (takes off here)", tuple(off), style,
+                                           7.5))  # fmt: skip
     for v in vehicles:
         n = len(by_vehicle[v])
-        handles.append(Line2D([], [], color=_vehicle_colour(v), linewidth=2.2,
-                              label=f"vehicle {v}: {n} sortie{'s' if n > 1 else ''}"))
+        handles.append(
+            Line2D(
+                [],
+                [],
+                color=_vehicle_colour(v),
+                linewidth=2.2,
+                label=f"vehicle {v}: {n} sortie{'s' if n > 1 else ''}",
+            )
+        )
     most = max(len(svs) for svs in by_vehicle.values())
     for j in range(1, min(most, len(SORTIE_STYLES)) + 1):
-        handles.append(Line2D([], [], color="0.2", linewidth=1.6,
-                              linestyle=SORTIE_STYLES[j - 1], label=f"sortie {j}"))
-    handles.append(Line2D([], [], marker="h", linestyle="", markersize=11,
-                          markerfacecolor="white", markeredgecolor="k", label="depot"))
+        handles.append(
+            Line2D(
+                [],
+                [],
+                color="0.2",
+                linewidth=1.6,
+                linestyle=SORTIE_STYLES[j - 1],
+                label=f"sortie {j}",
+            )
+        )
+    handles.append(
+        Line2D(
+            [],
+            [],
+            marker="h",
+            linestyle="",
+            markersize=11,
+            markerfacecolor="white",
+            markeredgecolor="k",
+            label="depot",
+        )
+    )
     if swaps:
         handles.append(Line2D([], [], marker="*", linestyle="", markersize=13,
                               markerfacecolor="0.6", markeredgecolor="k",
                               label="battery swap"))  # fmt: skip
-    handles.append(Line2D([], [], marker="o", linestyle="", markerfacecolor="0.6",
-                          markeredgecolor="k", label="hover point: sortie.order · seconds"))
-    _scale_bar_and_legend(fig, ax, W, H, data_points, handles)
+    handles.append(
+        Line2D(
+            [],
+            [],
+            marker="o",
+            linestyle="",
+            markerfacecolor="0.6",
+            markeredgecolor="k",
+            label="hover point: sortie.order · seconds",
+        )
+    )
     if title is None:
         nv = len(vehicles)
         title = (f"map '{spec.name}': {nv} vehicle{'s' if nv > 1 else ''}, "
                  f"{len(sorties)} sorties, {swaps} swap{'' if swaps == 1 else 's'}")  # fmt: skip
     ax.set_title(title)
+    _finish_map(fig, ax, W, handles, scene, len(sensors), named_below=False)
     return fig
 
 
