@@ -63,10 +63,12 @@ docs: $(VENV)/.docs
 docs-build: $(VENV)/.docs
 	$(BIN)/mkdocs build --strict
 
-# every benchmark figure the manual shows, redrawn from the runs stored under docs/ (no benchmark
-# is re-run; a report whose runs are not stored is named, its stored studies redrawn)
+# every figure the manual and the README show: the benchmark figures redrawn from the runs stored
+# under docs/ (no benchmark is re-run; a report whose runs are not stored is named, its stored
+# studies redrawn), then the gallery (docs/gallery/, the README's picture) planned and drawn anew
 figures: setup
 	$(PY) docs/make_figures.py
+	$(PY) docs/make_gallery.py
 
 bench: setup
 	$(PY) benchmarks/bench_evaluate.py

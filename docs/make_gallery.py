@@ -1,8 +1,12 @@
 """Regenerate docs/gallery.md and its pictures: `python docs/make_gallery.py` (from the repo root).
 
 Each entry runs the `lamde-mission` commands shown under its picture (in this interpreter's
-environment); mission files go to build/gallery/ (ignored), pictures to docs/gallery/.
-`--out DIR` writes the same tree under DIR instead (build/gallery/, docs/gallery/, docs/gallery.md).
+environment); mission files go to build/gallery/ (ignored), pictures to docs/gallery/, each
+stored as a 256-colour palette PNG (`make_figures.compact_png`: a third of the bytes, the same
+picture to the eye). Same code, same pictures, byte for byte: the slow test
+`test_make_gallery_regenerates_the_gallery` redraws them and compares them with the committed
+ones. `--out DIR` writes the same tree under DIR instead (build/gallery/, docs/gallery/,
+docs/gallery.md). `make figures` runs this script after `docs/make_figures.py`.
 """
 
 from __future__ import annotations
@@ -19,26 +23,41 @@ P = "docs/gallery"
 
 #: (title, what it shows, commands; the last one draws the picture named by --plot)
 ENTRIES: list[tuple[str, str, list[str]]] = [
-    ("The demo map (the quick start's `make demo`)",
-     "Four sensors, a circular and a rotated rectangular obstacle and a no-fly zone. Hover "
-     "points are numbered in flying order with their hover seconds; the lower panel is the "
-     "simulator's replay: each sensor's data against its requirement over the mission.",
-     [f"lamde-mission plan examples/maps/small-demo.json -o {B}/demo.plan --plot {P}/demo.png"]),
-    ("A dense 10 km suite map (T16)",
-     "The largest benchmark map: 29 sensors among many obstacles, I_max = 20.",
-     [f"lamde-mission plan examples/maps/suite/T16.json -o {B}/T16.plan --plot {P}/T16.png"]),
-    ("An infeasible map, written anyway",
-     "Sensor B asks for 12,000 Mbit, more than three hover points of at most 300 s can collect, "
-     "so no plan meets C4: the picture rings the short sensor with what it got, crosses a "
-     "sensor that got nothing, and draws any part of a leg inside an obstacle in red. Exit "
-     "status 1.",
-     [f"lamde-mission plan examples/maps/infeasible-demo.json -o {B}/infeasible.plan "
-      f"--plot {P}/infeasible.png --allow-infeasible --budget 3000"]),
-    ("A GeoJSON map (building footprints with a courtyard)",
-     "Imported from examples/gis/campus.geojson: two L-shaped halls, a block with a courtyard "
-     "(flyable), an annex and a no-fly zone.",
-     [f"lamde-mission map from-geojson examples/gis/campus.geojson -o {B}/campus.json",
-      f"lamde-mission plan {B}/campus.json -o {B}/campus.plan --plot {P}/campus.png"]),
+    (
+        "The demo map (the quick start's `make demo`)",
+        "Four sensors, a circular and a rotated rectangular obstacle and a no-fly zone. Hover "
+        "points are numbered in flying order with their hover seconds; the lower panel is the "
+        "simulator's replay: each sensor's data against its requirement over the mission.",
+        [f"lamde-mission plan examples/maps/small-demo.json -o {B}/demo.plan --plot {P}/demo.png"],
+    ),
+    (
+        "A dense 10 km suite map (T16)",
+        "The largest benchmark map: 29 sensors among many obstacles, I_max = 20. Labels are placed "
+        "where they cover no other label, marker or the scale bar; past ten sensors the ten tightest "
+        "are coloured lines over time and a third panel names every sensor with its final share, "
+        "smallest first.",
+        [f"lamde-mission plan examples/maps/suite/T16.json -o {B}/T16.plan --plot {P}/T16.png"],
+    ),
+    (
+        "An infeasible map, written anyway",
+        "Sensor B asks for 12,000 Mbit, more than three hover points of at most 300 s can collect, "
+        "so no plan meets C4: the picture rings the short sensor with what it got, crosses a "
+        "sensor that got nothing, and draws any part of a leg inside an obstacle in red. Exit "
+        "status 1.",
+        [
+            f"lamde-mission plan examples/maps/infeasible-demo.json -o {B}/infeasible.plan "
+            f"--plot {P}/infeasible.png --allow-infeasible --budget 3000"
+        ],
+    ),
+    (
+        "A GeoJSON map (building footprints with a courtyard)",
+        "Imported from examples/gis/campus.geojson: two L-shaped halls, a block with a courtyard "
+        "(flyable), an annex and a no-fly zone.",
+        [
+            f"lamde-mission map from-geojson examples/gis/campus.geojson -o {B}/campus.json",
+            f"lamde-mission plan {B}/campus.json -o {B}/campus.plan --plot {P}/campus.png",
+        ],
+    ),
 ]
 
 
@@ -64,10 +83,24 @@ def _under(arg: str, out: Path) -> str:
     return str(out / arg) if arg.startswith((B + "/", P + "/")) else arg
 
 
+def _compact_png(path: Path) -> None:
+    """The gallery's pictures are stored as the benchmark figures are (`compact_png`)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("make_figures", ROOT / "docs" / "make_figures.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    mod.compact_png(path)
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", type=Path, default=ROOT,
-                    help="root of the tree to write (default: this repository)")
+    ap.add_argument(
+        "--out",
+        type=Path,
+        default=ROOT,
+        help="root of the tree to write (default: this repository)",
+    )
     out = ap.parse_args(argv).out.resolve()
     (out / B).mkdir(parents=True, exist_ok=True)
     (out / P).mkdir(parents=True, exist_ok=True)
@@ -81,6 +114,7 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"{cmd}: exit {r.returncode}\n{r.stderr}", file=sys.stderr)
                 return 1
             print(f"ok: {cmd}", file=sys.stderr)
+        _compact_png(out / picture(cmds))
     (out / "docs" / "gallery.md").write_text(render_markdown(), encoding="utf-8")
     print("wrote docs/gallery.md", file=sys.stderr)
     return 0

@@ -441,7 +441,10 @@ def test_getting_started_lists_what_the_install_and_each_extra_bring() -> None:
 @pytest.mark.slow
 def test_make_gallery_regenerates_the_gallery(tmp_path) -> None:
     """`python docs/make_gallery.py` (into a scratch tree): every picture written, the page the
-    same as the committed one."""
+    same as the committed one, and every picture the same pixels as the committed one (what
+    the code draws today; the README's first picture is the gallery's demo.png)."""
+    from PIL import Image
+
     r = subprocess.run([sys.executable, "docs/make_gallery.py", "--out", str(tmp_path)],
                        cwd=ROOT, capture_output=True, text=True, timeout=900)
     assert r.returncode == 0, r.stderr
@@ -451,6 +454,9 @@ def test_make_gallery_regenerates_the_gallery(tmp_path) -> None:
     for rel in pictures:
         png = tmp_path / "docs" / rel
         assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
+        with Image.open(png) as new, Image.open(ROOT / "docs" / rel) as old:
+            assert new.size == old.size and new.convert("RGB").tobytes() == old.convert(
+                "RGB").tobytes(), f"docs/{rel} is not what the code draws: run `make figures`"
     assert (tmp_path / "docs" / "gallery.md").read_text(encoding="utf-8") == (
         ROOT / "docs" / "gallery.md").read_text(encoding="utf-8")
 
