@@ -184,3 +184,23 @@ def test_points_inside_equals_its_reference(name: str, problem: Problem, pts: np
     assert np.array_equal(fast, slow), name
     assert np.array_equal(geometry.points_inside(q, o), slow), name
     assert slow.any() or not len(o.circles), name
+
+
+@pytest.mark.parametrize("name,problem,pts", CASES, ids=[c[0] for c in CASES])
+def test_held_check_equals_held_points(name: str, problem: Problem, pts: np.ndarray) -> None:
+    """The descent's incremental C3/C5 flags: after each move of a few points, `HeldCheck`
+    holds the points `held_points` holds on the moved set (computed afresh)."""
+    from planner_core.search.descent import HeldCheck, held_points
+
+    rng = np.random.default_rng(len(pts) + 2)
+    P = pts.copy()
+    check = HeldCheck(problem, P)
+    held_any = False
+    for _ in range(6):
+        assert np.array_equal(check.held(), held_points(problem, P)), name
+        held_any |= bool(len(check.held()))
+        idx = np.unique(rng.integers(0, len(P), max(1, len(P) // 4)))
+        P[idx] = problem.model.sensors[rng.integers(0, len(problem.model.sensors), len(idx))]
+        check.moved(P, idx)
+    assert np.array_equal(check.held(), held_points(problem, P)), name
+    assert held_any or len(pts) < 12 or name.startswith("random"), name
