@@ -123,7 +123,12 @@ def summary(path: Path) -> str:
 
     raw = Path(path).read_bytes()
     text = gzip.decompress(raw).decode() if raw[:2] == b"\x1f\x8b" else raw.decode()
-    recs = [json.loads(x) for x in text.splitlines() if x.strip()]
+    recs, seen = [], set()
+    for x in text.splitlines():  # one record per map, seed and fleet (the first kept)
+        r = json.loads(x) if x.strip() else None
+        if r is not None and (r["map"], r["seed"], r["uavs"]) not in seen:
+            seen.add((r["map"], r["seed"], r["uavs"]))
+            recs.append(r)
     one = [r for r in recs if r["uavs"] == 1]
     three = {(r["map"], r["seed"]): r for r in recs if r["uavs"] == 3}
     lines = ["| map | runs | ours total (s) | route-first total (s) | ours vs route-first | "
