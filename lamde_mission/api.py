@@ -142,6 +142,28 @@ def plan(
     )
 
 
+def check_fleet_map(m: Any) -> None:
+    """Refuse a map the sortie planner cannot plan (`plan_fleet` and `plan MAP -o DIR/` call it
+    before any work).
+
+    Args:
+        m: a loaded map (`planner_core.model.mapio.Map`).
+
+    Raises:
+        ValueError: one line naming the field: neither `uav.battery` nor `fleet` given, or
+            `radio.access` "scheduled" (the LP across sorties, `planner_core.fleet.lp`, bounds
+            each point's rates by C3, the paper's simultaneous uplink; the scheduled model's
+            per-sensor data variables are not in it).
+    """
+    if not (m.has_battery or m.has_fleet):
+        raise ValueError("uav.battery: the map has no battery and no fleet; plan() plans its "
+                         "one flight")
+    if m.spec.radio.access != "simultaneous":
+        raise ValueError(f"radio.access: {m.spec.radio.access!r} is not planned as sorties yet "
+                         "(the sortie planner models the paper's simultaneous access); give "
+                         "'simultaneous' or plan one flight without uav.battery and fleet")
+
+
 def plan_fleet(
     map: str | Path | dict | Any,  # noqa: A002 - as `plan`
     *,
@@ -181,7 +203,8 @@ def plan_fleet(
 
     Raises:
         ValueError: one line naming the field: a setting out of range, a map with neither
-            battery nor fleet, an unknown goal, or no sorties that fit the battery.
+            battery nor fleet, `radio.access` "scheduled" (not planned as sorties), an unknown
+            goal, or no sorties that fit the battery.
         planner_core.MapError: a bad map.
     """
     from planner_core.fleet import search
@@ -190,9 +213,7 @@ def plan_fleet(
     from planner_core.pipeline.warmup import warm_up
 
     m = load_map(map)
-    if not (m.has_battery or m.has_fleet):
-        raise ValueError("uav.battery: the map has no battery and no fleet; plan() plans its "
-                         "one flight")
+    check_fleet_map(m)
     if goal is not None and goal not in _defaults.GOALS:
         raise ValueError(f"goal: must be one of {', '.join(_defaults.GOALS)}, got {goal!r}")
     if config is None:

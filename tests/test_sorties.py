@@ -232,6 +232,20 @@ def test_plan_dir_refuses_a_file_target(tmp_path) -> None:
     assert f.read_text() == "keep"
 
 
+def test_scheduled_access_is_refused_as_sorties(tmp_path) -> None:
+    """The LP across sorties models the paper's simultaneous uplink (C3): a scheduled-access map
+    with a battery is refused with one line naming radio.access, nothing written."""
+    d = json.loads(DEMO.read_text())
+    d.setdefault("radio", {})["access"] = "scheduled"
+    m = tmp_path / "scheduled.json"
+    m.write_text(json.dumps(d))
+    out = tmp_path / "dir"
+    r = _plan_cli(str(m), "-o", str(out), *FAST)
+    assert r.returncode == 2, r.stderr
+    assert r.stderr.strip().splitlines()[-1].count("radio.access") == 1
+    assert not out.exists() and not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
+
+
 @pytest.mark.slow
 def test_sorties_are_deterministic_for_a_seed_and_fit_the_battery() -> None:
     from lamde_mission.api import plan_fleet

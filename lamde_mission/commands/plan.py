@@ -367,8 +367,13 @@ def _run_sorties(args: argparse.Namespace) -> int:
     if m.spec.origin is None:
         raise UsageError(f"{args.map}: origin: the map has no origin (WGS84 position of (0, 0)) "
                          "to write missions with; give --origin LAT,LON[,ALT]")
-    from lamde_mission.api import plan_fleet
+    from lamde_mission.api import check_fleet_map, plan_fleet
     from lamde_mission.sorties import write_sortie_dir
+
+    try:
+        check_fleet_map(m)
+    except ValueError as exc:
+        raise UsageError(f"{args.map}: {exc}") from None
     from planner_core.pipeline import PlanConfig
 
     config = PlanConfig(seed=args.seed, budget=args.budget, population=args.population,
