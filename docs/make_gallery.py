@@ -33,8 +33,9 @@ ENTRIES: list[tuple[str, str, list[str]]] = [
     (
         "A dense 10 km suite map (T16)",
         "The largest benchmark map: 29 sensors among many obstacles, I_max = 20. Labels are placed "
-        "where they cover no other label, marker or the scale bar; past ten sensors the ten tightest "
-        "are coloured lines over time and a third panel names every sensor with its final share, "
+        "where they cover no other label, marker or the scale bar; past ten sensors the ten "
+        "tightest are coloured lines over time and a third panel names every sensor with its "
+        "final share, "
         "smallest first.",
         [f"lamde-mission plan examples/maps/suite/T16.json -o {B}/T16.plan --plot {P}/T16.png"],
     ),
