@@ -695,9 +695,35 @@ def _overlap_serial(
 
 
 @njit(cache=True, fastmath=False, nogil=True)
+def _inside_a_polygon(x, y, verts, offs, normals, eflags, boxes, tol):
+    """True if (x, y) is inside some convex piece (its box first, then every edge's side)."""
+    for p in range(offs.shape[0] - 1):
+        if (x < boxes[p, 0] - tol) | (x > boxes[p, 2] + tol) | (
+            y < boxes[p, 1] - tol) | (y > boxes[p, 3] + tol):  # fmt: skip
+            continue
+        ok = True
+        for i in range(offs[p], offs[p + 1]):
+            s = normals[i, 0] * (x - verts[i, 0]) + normals[i, 1] * (y - verts[i, 1])
+            if s < -tol:
+                continue
+            # a point on (within tol of) an owned diagonal is inside its owner, unless it is at
+            # one of the diagonal's ends: those are the polygon's vertices
+            if eflags[i] == _EDGE_OWNED and s < tol:
+                j = i + 1 if i + 1 < offs[p + 1] else offs[p]
+                d0 = math.hypot(x - verts[i, 0], y - verts[i, 1])
+                d1 = math.hypot(x - verts[j, 0], y - verts[j, 1])
+                if d0 > tol and d1 > tol:
+                    continue
+            ok = False
+            break
+        if ok:
+            return True
+    return False
+
+
+@njit(cache=True, fastmath=False, nogil=True)
 def _points_inside_kernel(pts, circles, verts, offs, normals, eflags, boxes, tol, out):
     n_circ = circles.shape[0]
-    n_poly = offs.shape[0] - 1
     for m in range(pts.shape[0]):
         x = pts[m, 0]
         y = pts[m, 1]
@@ -716,28 +742,7 @@ def _points_inside_kernel(pts, circles, verts, offs, normals, eflags, boxes, tol
                 inside = True
                 break
         if not inside:
-            for p in range(n_poly):
-                if (x < boxes[p, 0] - tol) | (x > boxes[p, 2] + tol) | (
-                    y < boxes[p, 1] - tol) | (y > boxes[p, 3] + tol):  # fmt: skip
-                    continue
-                ok = True
-                for i in range(offs[p], offs[p + 1]):
-                    s = normals[i, 0] * (x - verts[i, 0]) + normals[i, 1] * (y - verts[i, 1])
-                    if s < -tol:
-                        continue
-                    # a point on (within tol of) an owned diagonal is inside its owner, unless
-                    # it is at one of the diagonal's ends: those are the polygon's vertices
-                    if eflags[i] == _EDGE_OWNED and s < tol:
-                        j = i + 1 if i + 1 < offs[p + 1] else offs[p]
-                        d0 = math.hypot(x - verts[i, 0], y - verts[i, 1])
-                        d1 = math.hypot(x - verts[j, 0], y - verts[j, 1])
-                        if d0 > tol and d1 > tol:
-                            continue
-                    ok = False
-                    break
-                if ok:
-                    inside = True
-                    break
+            inside = _inside_a_polygon(x, y, verts, offs, normals, eflags, boxes, tol)
         out[m] = inside
 
 
@@ -745,7 +750,6 @@ def _points_inside_kernel(pts, circles, verts, offs, normals, eflags, boxes, tol
 def _points_inside_reference(pts, circles, verts, offs, normals, eflags, boxes, tol, out):
     """The slow reference of `_points_inside_kernel`: every circle by its hypot (tests)."""
     n_circ = circles.shape[0]
-    n_poly = offs.shape[0] - 1
     for m in range(pts.shape[0]):
         x = pts[m, 0]
         y = pts[m, 1]
@@ -755,28 +759,7 @@ def _points_inside_reference(pts, circles, verts, offs, normals, eflags, boxes, 
                 inside = True
                 break
         if not inside:
-            for p in range(n_poly):
-                if (x < boxes[p, 0] - tol) | (x > boxes[p, 2] + tol) | (
-                    y < boxes[p, 1] - tol) | (y > boxes[p, 3] + tol):  # fmt: skip
-                    continue
-                ok = True
-                for i in range(offs[p], offs[p + 1]):
-                    s = normals[i, 0] * (x - verts[i, 0]) + normals[i, 1] * (y - verts[i, 1])
-                    if s < -tol:
-                        continue
-                    # a point on (within tol of) an owned diagonal is inside its owner, unless
-                    # it is at one of the diagonal's ends: those are the polygon's vertices
-                    if eflags[i] == _EDGE_OWNED and s < tol:
-                        j = i + 1 if i + 1 < offs[p + 1] else offs[p]
-                        d0 = math.hypot(x - verts[i, 0], y - verts[i, 1])
-                        d1 = math.hypot(x - verts[j, 0], y - verts[j, 1])
-                        if d0 > tol and d1 > tol:
-                            continue
-                    ok = False
-                    break
-                if ok:
-                    inside = True
-                    break
+            inside = _inside_a_polygon(x, y, verts, offs, normals, eflags, boxes, tol)
         out[m] = inside
 
 

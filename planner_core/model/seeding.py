@@ -99,30 +99,8 @@ def _slide_costs(cand, prv, nxt, member, S, lim, req, H, peak, decay, bw, v_max,
             if slant_rate(dx * dx + dy * dy, h2, peak, decay) > 0.0:
                 near[m] = j
                 m += 1
-        for q in range(Q):
-            x = cand[r, q, 0]
-            y = cand[r, q, 1]
-            hover = 0.0
-            total = 0.0
-            ok = True
-            for t in range(m):
-                j = near[t]
-                d2 = (x - S[j, 0]) ** 2 + (y - S[j, 1]) ** 2
-                rate = slant_rate(d2, h2, peak, decay)
-                total += max(rate, 0.0)
-                if member[r, j]:
-                    if d2 > lim[j] * lim[j]:
-                        ok = False
-                    hover = max(hover, req[j] / max(rate, 1e-9))
-            if not ok and q > 0:
-                out[r, q] = np.inf
-                continue
-            l1 = math.hypot(x - prv[r, 0], y - prv[r, 1])
-            l2 = math.hypot(nxt[r, 0] - x, nxt[r, 1] - y)
-            fly = leg_time(l1, v_max, accel) + leg_time(l2, v_max, accel)
-            out[r, q] = alpha * fly + (1.0 - alpha) * hover
-            if total > bw:
-                out[r, q] += _OVER_BANDWIDTH * (1.0 + total - bw)
+        _centre_costs(r, near[:m], cand, prv, nxt, member, S, lim, req, h2, peak, decay, bw,
+                      v_max, accel, alpha, out)  # fmt: skip
     return out
 
 
@@ -131,33 +109,43 @@ def _slide_costs_reference(
     cand, prv, nxt, member, S, lim, req, H, peak, decay, bw, v_max, accel, alpha
 ):
     """The slow reference of `_slide_costs`: every candidate against every sensor."""
-    n, Q = cand.shape[0], cand.shape[1]
-    out = np.empty((n, Q))
+    n = cand.shape[0]
+    out = np.empty((n, cand.shape[1]))
+    every = np.arange(S.shape[0])
     for r in range(n):
-        for q in range(Q):
-            x = cand[r, q, 0]
-            y = cand[r, q, 1]
-            hover = 0.0
-            total = 0.0
-            ok = True
-            for j in range(S.shape[0]):
-                d2 = (x - S[j, 0]) ** 2 + (y - S[j, 1]) ** 2
-                rate = slant_rate(d2, H * H, peak, decay)
-                total += max(rate, 0.0)
-                if member[r, j]:
-                    if d2 > lim[j] * lim[j]:
-                        ok = False
-                    hover = max(hover, req[j] / max(rate, 1e-9))
-            if not ok and q > 0:
-                out[r, q] = np.inf
-                continue
-            l1 = math.hypot(x - prv[r, 0], y - prv[r, 1])
-            l2 = math.hypot(nxt[r, 0] - x, nxt[r, 1] - y)
-            fly = leg_time(l1, v_max, accel) + leg_time(l2, v_max, accel)
-            out[r, q] = alpha * fly + (1.0 - alpha) * hover
-            if total > bw:
-                out[r, q] += _OVER_BANDWIDTH * (1.0 + total - bw)
+        _centre_costs(r, every, cand, prv, nxt, member, S, lim, req, H * H, peak, decay, bw,
+                      v_max, accel, alpha, out)  # fmt: skip
     return out
+
+
+@njit(cache=True, nogil=True)
+def _centre_costs(r, sensors, cand, prv, nxt, member, S, lim, req, h2, peak, decay, bw, v_max,
+                  accel, alpha, out):  # fmt: skip
+    """Row r of `_slide_costs`: every candidate of centre r against `sensors` (in that order;
+    the members among them)."""
+    for q in range(cand.shape[1]):
+        x = cand[r, q, 0]
+        y = cand[r, q, 1]
+        hover = 0.0
+        total = 0.0
+        ok = True
+        for j in sensors:
+            d2 = (x - S[j, 0]) ** 2 + (y - S[j, 1]) ** 2
+            rate = slant_rate(d2, h2, peak, decay)
+            total += max(rate, 0.0)
+            if member[r, j]:
+                if d2 > lim[j] * lim[j]:
+                    ok = False
+                hover = max(hover, req[j] / max(rate, 1e-9))
+        if not ok and q > 0:
+            out[r, q] = np.inf
+            continue
+        l1 = math.hypot(x - prv[r, 0], y - prv[r, 1])
+        l2 = math.hypot(nxt[r, 0] - x, nxt[r, 1] - y)
+        fly = leg_time(l1, v_max, accel) + leg_time(l2, v_max, accel)
+        out[r, q] = alpha * fly + (1.0 - alpha) * hover
+        if total > bw:
+            out[r, q] += _OVER_BANDWIDTH * (1.0 + total - bw)
 
 
 @njit(cache=True, nogil=True)
