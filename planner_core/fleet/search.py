@@ -408,28 +408,11 @@ class _Planner:
                 best_fit, best_any = None, None
                 for vb in range(len(vs)):
                     for kb, dst in enumerate(vs[vb]):
-                        path = dst.path(st)
-                        gain = (
-                            np.hypot(*(path[:-1] - p).T)
-                            + np.hypot(*(path[1:] - p).T)
-                            - np.hypot(*np.diff(path, axis=0).T)
-                        )
-                        pos = int(np.argmin(gain))
-                        if not bool(
-                            np.all(
-                                self.links.clear(
-                                    np.vstack([path[pos], p]), np.vstack([p, path[pos + 1]])
-                                )
-                            )
-                        ):
+                        inserted = self._insert(dst, p, t)
+                        if inserted is None:
                             continue
-                        new = Sortie(
-                            dst.start,
-                            dst.end,
-                            np.insert(dst.points, pos, p, axis=0),
-                            np.insert(dst.times, pos, t),
-                        )
-                        key = (float(gain[pos]), vb, kb)
+                        added, new = inserted
+                        key = (added, vb, kb)
                         if best_any is None or key < best_any[0]:
                             best_any = (key, new)
                         if new.energy(st) <= st.budget_wh(len(new.points)) and (
@@ -448,6 +431,24 @@ class _Planner:
             if trial is not None and trial.objective() < plan.objective():
                 return trial
         return None
+
+    def _insert(self, dst: Sortie, p: np.ndarray, t: float) -> tuple[float, Sortie] | None:
+        """`dst` with hover point `p` (`t` s) at its cheapest place (the least added length of
+        its depot-to-depot path) and that added length (m); None when either new leg is
+        blocked. O(points of dst) plus two leg checks."""
+        path = dst.path(self.st)
+        gain = (
+            np.hypot(*(path[:-1] - p).T)
+            + np.hypot(*(path[1:] - p).T)
+            - np.hypot(*np.diff(path, axis=0).T)
+        )
+        pos = int(np.argmin(gain))
+        legs = self.links.clear(np.vstack([path[pos], p]), np.vstack([p, path[pos + 1]]))
+        if not bool(np.all(legs)):
+            return None
+        new = Sortie(dst.start, dst.end, np.insert(dst.points, pos, p, axis=0),
+                     np.insert(dst.times, pos, t))  # fmt: skip
+        return float(gain[pos]), new
 
     def transfer(self, plan: FleetPlan) -> FleetPlan:
         """Hover points moved one at a time to their cheapest insertion in a nearby sortie
@@ -477,22 +478,10 @@ class _Planner:
                     continue
                 p = src.points[i]
                 for _, vb, kb in others[:TRANSFER_NEIGHBOURS]:
-                    dst = best.vehicles[vb][kb]
-                    path = dst.path(st)
-                    gain = (
-                        np.hypot(*(path[:-1] - p).T)
-                        + np.hypot(*(path[1:] - p).T)
-                        - np.hypot(*np.diff(path, axis=0).T)
-                    )
-                    pos = int(np.argmin(gain))
-                    if not bool(
-                        np.all(
-                            self.links.clear(
-                                np.vstack([path[pos], p]), np.vstack([p, path[pos + 1]])
-                            )
-                        )
-                    ):
+                    inserted = self._insert(best.vehicles[vb][kb], p, src.times[i])
+                    if inserted is None:
                         continue
+                    new_dst = inserted[1]
                     keep = np.ones(len(src.points), dtype=bool)
                     keep[i] = False
                     new_src = Sortie(src.start, src.end, src.points[keep], src.times[keep])
@@ -500,12 +489,6 @@ class _Planner:
                         np.all(self.links.clear(new_src.path(st)[:-1], new_src.path(st)[1:]))
                     ):
                         continue
-                    new_dst = Sortie(
-                        dst.start,
-                        dst.end,
-                        np.insert(dst.points, pos, p, axis=0),
-                        np.insert(dst.times, pos, src.times[i]),
-                    )
                     vs = [list(v) for v in best.vehicles]
                     vs[va][ka] = new_src
                     vs[vb][kb] = new_dst
