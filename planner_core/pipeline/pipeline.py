@@ -50,7 +50,8 @@ from planner_core.pipeline.stages import (
     StartDescents,
 )
 
-__all__ = ["DEFAULT_PIPELINE", "PipelineResult", "allotment", "run_pipeline"]
+__all__ = ["DEFAULT_PIPELINE", "PipelineResult", "PipelineRun", "allotment", "run_pipeline",
+           "with_scheduler"]
 
 #: the default pipeline, in the order it runs (the module docstring's table)
 DEFAULT_PIPELINE: tuple[Stage, ...] = (
@@ -116,6 +117,106 @@ def _thin(ev: Evaluator) -> dict[str, np.ndarray]:
             "best_phi": t.best_phi[change]}
 
 
+def with_scheduler(pipeline: Sequence[Stage], scheduler: Any) -> tuple[Stage, ...]:
+    """`pipeline` with its `improve` stage choosing macro-actions by `scheduler` (a registry
+    name, a `schedule.Scheduler`, or None: the pipeline unchanged).
+
+    Raises:
+        ValueError: one line naming `scheduler` for an unknown name.
+    """
+    if scheduler is None:
+        return tuple(pipeline)
+    from planner_core.pipeline.schedule import make_scheduler
+
+    make_scheduler(scheduler)  # checked before any work
+    return tuple(Improve(scheduler) if isinstance(s, Improve) else s for s in pipeline)
+
+
+class PipelineRun:
+    """One run of a pipeline, stage by stage: `run_pipeline` runs it through; the scheduling
+    env (`planner_core.learning.schedule_env`) stops it before a stage (`advance(until)`),
+    opens that stage's allotment (`enter`), steps it from outside, then closes it (`leave`)
+    and runs the rest. Args as `run_pipeline`'s."""
+
+    def __init__(self, problem: Any, config: PlanConfig, *, pipeline: Sequence[Stage],
+                 evaluator: Evaluator | None,
+                 progress: Callable[[Progress], None] | None) -> None:
+        from planner_core.search.init_modes import with_init
+
+        if evaluator is None:
+            evaluator = Evaluator(with_init(problem, config.init), config.budget,
+                                  time_limit=config.time_limit, progress=progress)
+        elif evaluator.count != 0 or evaluator.budget != config.budget:
+            raise ValueError("evaluator: must be fresh and carry the config's budget")
+        self.ev, self.config, self.problem = evaluator, config, problem
+        self.t0 = time.perf_counter()
+        d = int(np.asarray(problem.lower).shape[0])
+        self.state = PlanState(problem=problem, config=config, pool=Pool.empty(d),
+                               injected=np.zeros((0, d)))
+        self.stopped = ""
+        self.stages = list(pipeline)
+        self.i = 0  # the next stage to run
+        self._open: Any = None
+
+    def _allot(self) -> int:
+        """The next stage's allotment, 0 when it does not apply; marks a passed time limit."""
+        ev, stage = self.ev, self.stages[self.i]
+        if ev.expired and ev.has_best:
+            self.stopped = "time limit"
+            return 0
+        n = allotment(stage, self.stages[self.i + 1:], self.config, ev.budget - ev.count)
+        return n if n > 0 and stage.applies(self.state, ev) else 0
+
+    def advance(self, until: str | None = None) -> None:
+        """Run the stages in order up to (not including) the first named `until` (None: all)."""
+        while self.i < len(self.stages) and not self.stopped:
+            stage = self.stages[self.i]
+            if until is not None and stage.name == until:
+                return
+            n = self._allot()
+            if self.stopped:
+                return
+            self.i += 1
+            if n <= 0:
+                continue
+            try:
+                with self.ev.stage(stage.name, n):
+                    self.state = stage.run(self.state, self.ev)
+            except TimeLimitReached:
+                self.stopped = "time limit"
+
+    def enter(self) -> bool:
+        """Open the next stage's allotment without running it (False, and the stage passed,
+        when it gets nothing or does not apply)."""
+        n = self._allot()
+        if self.stopped:
+            return False
+        self.i += 1
+        if n <= 0:
+            return False
+        self._open = self.ev.stage(self.stages[self.i - 1].name, n)
+        self._open.__enter__()
+        return True
+
+    def leave(self, state: PlanState, stopped: str = "") -> None:
+        """Close the stage `enter` opened, with its final `state` (`stopped`: "time limit"
+        when the clock ended it)."""
+        self.state = state
+        if self._open is not None:
+            self._open.__exit__(None, None, None)
+            self._open = None
+        if stopped:
+            self.stopped = stopped
+
+    def result(self) -> PipelineResult:
+        """The run's `PipelineResult` (the evaluator's Deb-best)."""
+        ev = self.ev
+        x, f, phi = ev.best("deb")
+        return PipelineResult(x=x, f=float(f), phi=float(phi), evaluations=ev.count,
+                              stages=tuple(ev.records), trace=_thin(ev), state=self.state,
+                              stopped=self.stopped, seconds=time.perf_counter() - self.t0)
+
+
 def run_pipeline(
     problem: Any,
     config: PlanConfig,
@@ -123,6 +224,7 @@ def run_pipeline(
     pipeline: Sequence[Stage] = DEFAULT_PIPELINE,
     evaluator: Evaluator | None = None,
     progress: Callable[[Progress], None] | None = None,
+    scheduler: Any = None,
 ) -> PipelineResult:
     """Run `pipeline` on the UAV problem `problem` (`planner_core.model.problem.Problem`) with
     `config`.
@@ -136,41 +238,17 @@ def run_pipeline(
             `config.time_limit` and `progress`.
         progress: called after every evaluate call with a `Progress` (stage, evaluations,
             budget, incumbent f and phi, seconds).
+        scheduler: the improving stage's scheduler (`planner_core.pipeline.schedule`: a
+            registry name or a `Scheduler`); None: the pipeline's own (the default).
 
     Returns:
         The `PipelineResult`; its x is the Deb-best of everything evaluated.
 
     Raises:
-        ValueError: an evaluator that is not fresh or carries another budget.
+        ValueError: an evaluator that is not fresh or carries another budget; an unknown
+            scheduler.
     """
-    from planner_core.search.init_modes import with_init
-
-    if evaluator is None:
-        evaluator = Evaluator(with_init(problem, config.init), config.budget,
-                              time_limit=config.time_limit, progress=progress)
-    elif evaluator.count != 0 or evaluator.budget != config.budget:
-        raise ValueError("evaluator: must be fresh and carry the config's budget")
-    ev = evaluator
-    t0 = time.perf_counter()
-    d = int(np.asarray(problem.lower).shape[0])
-    state = PlanState(problem=problem, config=config, pool=Pool.empty(d),
-                      injected=np.zeros((0, d)))
-    stopped = ""
-    stages = list(pipeline)
-    for i, stage in enumerate(stages):
-        if ev.expired and ev.has_best:
-            stopped = "time limit"
-            break
-        n = allotment(stage, stages[i + 1:], config, ev.budget - ev.count)
-        if n <= 0 or not stage.applies(state, ev):
-            continue
-        try:
-            with ev.stage(stage.name, n):
-                state = stage.run(state, ev)
-        except TimeLimitReached:
-            stopped = "time limit"
-            break
-    x, f, phi = ev.best("deb")
-    return PipelineResult(x=x, f=float(f), phi=float(phi), evaluations=ev.count,
-                          stages=tuple(ev.records), trace=_thin(ev), state=state,
-                          stopped=stopped, seconds=time.perf_counter() - t0)
+    run = PipelineRun(problem, config, pipeline=with_scheduler(pipeline, scheduler),
+                      evaluator=evaluator, progress=progress)
+    run.advance()
+    return run.result()

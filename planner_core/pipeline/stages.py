@@ -367,32 +367,36 @@ class OtherStructure(_Base):
         return state.replace(finished=state.finished | {_points(problem, y)})
 
 
-#: kick spreads (m) the improving rounds cycle through: the final stage's, finer, coarser
-SPREADS = (300.0, 120.0, 700.0)
-#: a fresh constructive sweep runs only with at least this many rounds' evaluations left
-FRESH_ROOM = 3
-#: improving rounds in a row that may spend nothing before the stage gives up
-IDLE_ROUNDS = 3
-
-
 class Improve(_Base):
-    """What budget is left after the final stage, while the incumbent is feasible: rounds of
-    at most one finish's evaluations (`final_trials`), alternating
+    """What budget is left after the final stage, while the incumbent is feasible: macro-actions
+    of at most one finish's evaluations (`final_trials`) each, chosen one at a time by a
+    scheduler (`planner_core.pipeline.schedule`: the actions, `Scheduler`, the registry).
+
+    The default scheduler alternates
 
     * intensification: the structural search and removal moves on the incumbent when it
       changed since they last ran, else kicks on it (an iterated local search, Lourenco,
-      Martin & Stuetzle 2003) with the spread cycling through `SPREADS`, each round its own
-      random stream;
+      Martin & Stuetzle 2003) with the spread cycling through `schedule.SPREADS`, each action
+      its own random stream;
     * diversification: a restart, the whole finish on the Deb-best pool plan of a number of
       hover points not finished yet, else on the best of fresh constructive plans (the
-      k-means sweep under another seed, `construct.candidate_plans`, only with `FRESH_ROOM`
-      rounds' evaluations left), scored into the pool.
+      k-means sweep under another seed, `construct.candidate_plans`, only with
+      `schedule.FRESH_ROOM` quanta left), scored into the pool.
 
     The incumbent is the evaluator's, so a restart that ends worse changes nothing. Stops
-    when fewer than a descent's trials are left or `IDLE_ROUNDS` rounds in a row spent
-    nothing. Cost: that of its rounds; a fresh sweep costs what `ConstructivePlans` costs."""
+    when fewer than a descent's trials are left or the scheduler says so (the default: after
+    `schedule.IDLE_ROUNDS` actions in a row spent nothing). Cost: that of its actions; a fresh
+    sweep costs what `ConstructivePlans` costs.
+
+    Args:
+        scheduler: a registry name (`schedule.scheduler_names()`), a `Scheduler`, or None
+            (the default).
+    """
 
     name = "improve"
+
+    def __init__(self, scheduler: Any = None) -> None:
+        self.scheduler = scheduler
 
     def share(self, config: PlanConfig) -> int | None:
         return None if config.polish and config.final_trials else 0
@@ -401,77 +405,12 @@ class Improve(_Base):
         return _incumbent_feasible(ev)
 
     def run(self, state: PlanState, ev: Evaluator) -> PlanState:
-        from planner_core.search.final import finish
-        from planner_core.search.structure import MOVES, kicks, restructure
+        from planner_core.pipeline.schedule import ImproveRun, make_scheduler
 
-        cfg, problem = state.config, state.problem
-        quantum = max(cfg.final_trials, cfg.descent_trials)
-        searched = ev.best()[0].tobytes()  # the finish ran its structural search on it
-        restarted: set[bytes] = set()
-        fresh = 0
-        idle = rounds = 0
-        while ev.remaining >= cfg.descent_trials and idle < IDLE_ROUNDS:
-            c0 = ev.count
-            x = ev.best()[0]
-            trials = min(quantum, ev.remaining)
-            if rounds % 2 == 0:
-                if x.tobytes() != searched:
-                    searched = x.tobytes()
-                    for moves in (MOVES, ("removal",)):
-                        restructure(problem, ev.best()[0], ev.evaluate,
-                                    trials=min(cfg.restructure_trials, ev.remaining),
-                                    moves=moves)
-                spread = SPREADS[(rounds // 2) % len(SPREADS)]
-                left = trials - (ev.count - c0)
-                if left > 0:
-                    kicks(problem, ev.best()[0], ev.evaluate, trials=left, seed=cfg.seed,
-                          spread=spread, stream=rounds + 1)
-            else:
-                y, state, fresh = self._restart(state, ev, restarted, fresh)
-                if y is not None:
-                    restarted.add(y.tobytes())
-                    finish(problem, y, ev.evaluate, trials=min(trials, ev.remaining),
-                           seed=cfg.seed + rounds, descent_trials=cfg.descent_trials,
-                           restructure_trials=cfg.restructure_trials)
-                    state = state.replace(finished=state.finished | {_points(problem, y)})
-            idle = idle + 1 if ev.count == c0 else 0
-            rounds += 1
-        return state
+        return ImproveRun(state, ev).run(make_scheduler(self.scheduler))
 
-    @staticmethod
-    def _restart(state: PlanState, ev: Evaluator, restarted: set[bytes],
-                 fresh: int) -> tuple[np.ndarray | None, PlanState, int]:
-        """The next restart: the Deb-best feasible pool plan of an unfinished number of hover
-        points, else the Deb-best unrestarted one after a fresh constructive sweep."""
-        problem, pool = state.problem, state.pool
-        for i in pool.ordered():
-            if pool.phi[i] > 0 or pool.X[i].tobytes() in restarted:
-                continue
-            n = _points(problem, pool.X[i])
-            if n > 0 and n not in state.finished:
-                return pool.X[i], state, fresh
-        # a fresh sweep costs what the constructive stage costs: only with room for several
-        # rounds after it
-        if ev.remaining < FRESH_ROOM * max(state.config.final_trials, 1):
-            return None, state, fresh
-        from planner_core.search.construct import candidate_plans
-
-        fresh += 1
-        seed = int(np.random.SeedSequence([state.config.seed, 31, fresh]).generate_state(1)[0])
-        X, _ = candidate_plans(problem, seed, state.config.start_candidates,
-                               order=state.config.order, stop=lambda: ev.expired)
-        seen = {r.tobytes() for r in pool.X}
-        X = np.asarray([r for r in X if r.tobytes() not in seen]).reshape(-1, pool.X.shape[1])
-        X = X[:max(min(len(X), ev.remaining - state.config.descent_trials), 0)]
-        if not len(X):
-            return None, state, fresh
-        f, phi = ev.evaluate(X)
-        state = state.replace(pool=pool.add(X, f, phi, "fresh"))
-        order = deb_order(f, phi)
-        best = order[0]
-        if phi[best] > 0:
-            return None, state, fresh
-        return X[best], state, fresh
+    def __repr__(self) -> str:
+        return "Improve()" if self.scheduler is None else f"Improve({self.scheduler!r})"
 
 
 class Repair(_Base):

@@ -1,0 +1,424 @@
+"""LAMDE-S's seam (issue 34, part 1): the improving phase as named macro-actions, each spending
+at most one evaluation quantum through the run's `Evaluator`, chosen one at a time by a
+`Scheduler`.
+
+The `improve` stage (`planner_core.pipeline.stages.Improve`) runs an `ImproveRun`: after each
+macro-action its scheduler sees an `Observation` (budget left, the incumbent, what each
+action spent and gained) and names the next action. The quantum is one finish's evaluations
+(`PlanConfig.final_trials`, at least a descent's), capped by what is left. The actions:
+
+* `kicks-300`, `kicks-120`, `kicks-700`: the structural search and removal moves on the
+  incumbent when it changed since they last ran, then kicks on it (iterated local search,
+  Lourenco, Martin & Stuetzle 2003) with that spread (m) for the rest of the quantum;
+* `restructure`: the structural search and the removal moves on the incumbent, no kicks;
+* `restart`: `restart-other` when the pool has such a plan, else `fresh`;
+* `restart-other`: the whole finish on the Deb-best feasible pool plan of a number of hover
+  points not finished yet;
+* `fresh`: a fresh constructive sweep (another seed; only with `FRESH_ROOM` quanta left),
+  scored into the pool, then the finish on its best plan;
+* `de-block`: a block of DE generations (one quantum, at least a population) from the last
+  block's population, else the DE's final one, else the pool, with the memetic repair (as
+  `Repair`);
+* `stop`: end the stage (what is left flows to `repair` when it is a population or more).
+
+The `DefaultScheduler` alternates `kicks-*` (spreads cycling through `SPREADS`) with `restart`
+and stops after `IDLE_ROUNDS` actions in a row that spent nothing: today's improving rounds,
+the same evaluations and random streams (each action's stream is its index in the stage), so
+the same plan to the bit (tests/test_schedule.py against digests recorded before the
+refactor; tests/test_golden.py). A `StaticScheduler` cycles a fixed sequence (`SCHEDULES`,
+the registry `lamde-mission plan --scheduler NAME` reads).
+
+Cost: that of the actions; a kick or structural trial one LP (I x J) and the C3/C5 checks
+(I x J, I x V); a fresh sweep what `ConstructivePlans` costs (k-means I_max x J, one LP a
+plan); a DE block N x I x (J + V) a generation.
+"""
+
+from __future__ import annotations
+
+import functools
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+
+from planner_core.model.formulas import deb_order
+from planner_core.pipeline.config import PlanConfig
+from planner_core.pipeline.evaluator import Evaluator
+from planner_core.pipeline.stages import PlanState, _points
+
+__all__ = [
+    "ACTIONS",
+    "FRESH_ROOM",
+    "IDLE_ROUNDS",
+    "SCHEDULES",
+    "SPREADS",
+    "DefaultScheduler",
+    "ImproveRun",
+    "Observation",
+    "Scheduler",
+    "StaticScheduler",
+    "StepRecord",
+    "make_scheduler",
+]
+
+#: kick spreads (m) the default cycles through: the final stage's, finer, coarser
+SPREADS = (300.0, 120.0, 700.0)
+#: a fresh constructive sweep runs only with at least this many quanta left
+FRESH_ROOM = 3
+#: actions in a row that spent nothing before a scheduler gives up
+IDLE_ROUNDS = 3
+#: a hard stop for any scheduler: this many actions in a row that spent nothing
+MAX_IDLE = 4 * IDLE_ROUNDS
+
+KICKS = {f"kicks-{int(s)}": s for s in SPREADS}
+#: every macro-action's name, in a fixed order (the env's discrete action index)
+ACTIONS: tuple[str, ...] = (*KICKS, "restructure", "restart", "restart-other", "fresh",
+                            "de-block", "stop")
+
+
+@dataclass(frozen=True)
+class StepRecord:
+    """One macro-action taken: its name, evaluations spent, seconds, and the incumbent's f
+    and phi before and after."""
+
+    action: str
+    evaluations: int
+    seconds: float
+    f_before: float
+    phi_before: float
+    f_after: float
+    phi_after: float
+
+
+@dataclass(frozen=True)
+class Observation:
+    """What a scheduler sees before each macro-action.
+
+    Attributes:
+        step: actions taken so far in this stage.
+        remaining: evaluations left in the stage; budget: the run's budget.
+        quantum: evaluations one action may spend (before the cap by `remaining`).
+        idle: actions in a row that spent nothing.
+        f, phi: the incumbent's scores.
+        elapsed: seconds since the run's evaluator was created.
+        history: every `StepRecord` of the stage, in order.
+        state: the run's `PlanState` (pool, DE result, finished point counts).
+    """
+
+    step: int
+    remaining: int
+    budget: int
+    quantum: int
+    idle: int
+    f: float
+    phi: float
+    elapsed: float
+    history: tuple[StepRecord, ...]
+    state: PlanState
+
+
+@runtime_checkable
+class Scheduler(Protocol):
+    """Chooses the improving phase's macro-actions: `reset(problem, config)` before a run,
+    then `choose(observation) -> action name` (one of `ACTIONS`) until it says "stop" or the
+    stage runs out of evaluations."""
+
+    name: str
+
+    def reset(self, problem: Any, config: PlanConfig) -> None: ...
+
+    def choose(self, observation: Observation) -> str: ...
+
+
+class DefaultScheduler:
+    """Today's improving rounds: `kicks-<s>` on even steps (s cycling through `SPREADS`),
+    `restart` on odd ones, stop after `IDLE_ROUNDS` idle actions."""
+
+    name = "default"
+
+    def reset(self, problem: Any, config: PlanConfig) -> None:
+        """Nothing to reset (stateless)."""
+
+    def choose(self, observation: Observation) -> str:
+        """The next action (see the class docstring)."""
+        if observation.idle >= IDLE_ROUNDS:
+            return "stop"
+        k = observation.step
+        if k % 2:
+            return "restart"
+        return f"kicks-{int(SPREADS[(k // 2) % len(SPREADS)])}"
+
+
+class StaticScheduler:
+    """A fixed cyclic sequence of macro-actions; stops after `IDLE_ROUNDS` idle actions.
+
+    Args:
+        name: the schedule's registry name.
+        sequence: action names (each in `ACTIONS`, not "stop"), cycled.
+
+    Raises:
+        ValueError: an unknown or empty sequence.
+    """
+
+    def __init__(self, name: str, sequence: Sequence[str]) -> None:
+        seq = tuple(sequence)
+        bad = [a for a in seq if a not in ACTIONS or a == "stop"]
+        if not seq or bad:
+            raise ValueError(f"scheduler: a static schedule needs actions from {ACTIONS[:-1]}, "
+                             f"got {bad or 'none'}")
+        self.name, self.sequence = name, seq
+
+    def reset(self, problem: Any, config: PlanConfig) -> None:
+        """Nothing to reset (stateless)."""
+
+    def choose(self, observation: Observation) -> str:
+        """The sequence's next action, or "stop" after `IDLE_ROUNDS` idle actions."""
+        if observation.idle >= IDLE_ROUNDS:
+            return "stop"
+        return self.sequence[observation.step % len(self.sequence)]
+
+    def __repr__(self) -> str:
+        return f"StaticScheduler({self.name!r}, {self.sequence!r})"
+
+
+#: static schedules by name ("default" is `DefaultScheduler`, the same as "alternate")
+SCHEDULES: dict[str, tuple[str, ...]] = {
+    "alternate": ("kicks-300", "restart", "kicks-120", "restart", "kicks-700", "restart"),
+    "kicks-heavy": ("kicks-300", "kicks-120", "kicks-700", "restart"),
+    "kicks-only": ("kicks-300", "kicks-120", "kicks-700"),
+    "fine-kicks": ("kicks-120", "restart", "kicks-300", "restart"),
+    "coarse-kicks": ("kicks-700", "restart", "kicks-300", "restart"),
+    "restructure-heavy": ("restructure", "kicks-300", "restart", "restructure", "kicks-120",
+                          "restart"),
+    "restarts-heavy": ("kicks-300", "restart", "restart", "kicks-120", "restart", "restart"),
+    "fresh-heavy": ("kicks-300", "fresh", "kicks-120", "restart-other"),
+    "de-block-heavy": ("kicks-300", "de-block", "kicks-120", "restart"),
+}
+
+
+def scheduler_names() -> tuple[str, ...]:
+    """Every registry name: "default" then the static schedules."""
+    return ("default", *SCHEDULES)
+
+
+def make_scheduler(spec: str | Scheduler | None) -> Scheduler:
+    """A scheduler from a registry name (`scheduler_names()`), an object, or None (default).
+
+    Raises:
+        ValueError: one line naming `scheduler` for an unknown name or a non-scheduler.
+    """
+    if spec is None or spec == "default":
+        return DefaultScheduler()
+    if isinstance(spec, str):
+        if spec not in SCHEDULES:
+            raise ValueError(f"scheduler: must be one of {', '.join(scheduler_names())}, "
+                             f"got {spec!r}")
+        return StaticScheduler(spec, SCHEDULES[spec])
+    if not isinstance(spec, Scheduler):
+        raise ValueError(f"scheduler: must be a name or have reset() and choose(), got "
+                         f"{type(spec).__name__}")
+    return spec
+
+
+def scheduler_name(spec: str | Scheduler | None) -> str:
+    """The registry name of `spec` (its `name` for an object)."""
+    if spec is None:
+        return "default"
+    return spec if isinstance(spec, str) else str(getattr(spec, "name", type(spec).__name__))
+
+
+@dataclass
+class ImproveRun:
+    """The improving phase of one run, one macro-action at a time (`act`), over the run's
+    `PlanState` and `Evaluator` (inside the `improve` stage's allotment).
+
+    Args:
+        state: the run's state when the stage starts (updated by the actions: fresh plans join
+            the pool, finished point counts).
+        ev: the run's evaluator.
+    """
+
+    state: PlanState
+    ev: Evaluator
+    step: int = 0
+    idle: int = 0
+    history: list[StepRecord] = field(default_factory=list)
+    _searched: bytes = b""
+    _restarted: set[bytes] = field(default_factory=set)
+    _fresh: int = 0
+    _de_state: Any = None
+
+    def __post_init__(self) -> None:
+        # the finish ran its structural search on the incumbent
+        self._searched = self.ev.best()[0].tobytes()
+
+    @property
+    def quantum(self) -> int:
+        """Evaluations one action may spend: one finish's, at least a descent's."""
+        cfg = self.state.config
+        return max(cfg.final_trials, cfg.descent_trials)
+
+    @property
+    def can_continue(self) -> bool:
+        """Whether another action may run: at least a descent's trials left and fewer than
+        `MAX_IDLE` idle actions in a row."""
+        return self.ev.remaining >= self.state.config.descent_trials and self.idle < MAX_IDLE
+
+    def observe(self) -> Observation:
+        """The `Observation` before the next action."""
+        _, f, phi = self.ev.best()
+        return Observation(step=self.step, remaining=self.ev.remaining,
+                           budget=self.ev.budget, quantum=self.quantum, idle=self.idle,
+                           f=float(f), phi=float(phi), elapsed=self.ev.elapsed,
+                           history=tuple(self.history), state=self.state)
+
+    def act(self, action: str) -> StepRecord:
+        """Run one macro-action (`ACTIONS`, not "stop").
+
+        Returns:
+            Its `StepRecord`.
+
+        Raises:
+            ValueError: an unknown action.
+            planner_core.pipeline.TimeLimitReached: the run's clock ran out (propagates).
+        """
+        run = {"restructure": self._restructure, "restart": self._restart,
+               "restart-other": self._restart_other, "fresh": self._fresh_restart,
+               "de-block": self._de_block}.get(action)
+        if action in KICKS:
+            run = functools.partial(self._kicks, KICKS[action])
+        if run is None:
+            raise ValueError(f"action: must be one of {', '.join(ACTIONS[:-1])}, got {action!r}")
+        ev = self.ev
+        c0, t0 = ev.count, time.perf_counter()
+        _, f0, p0 = ev.best()
+        run(min(self.quantum, ev.remaining))
+        _, f1, p1 = ev.best()
+        rec = StepRecord(action, ev.count - c0, time.perf_counter() - t0, float(f0), float(p0),
+                         float(f1), float(p1))
+        self.history.append(rec)
+        self.idle = self.idle + 1 if ev.count == c0 else 0
+        self.step += 1
+        return rec
+
+    # ------------------------------------------------------------------ the actions
+    def _structural(self) -> None:
+        from planner_core.search.structure import MOVES, restructure
+
+        ev, cfg = self.ev, self.state.config
+        self._searched = ev.best()[0].tobytes()
+        for moves in (MOVES, ("removal",)):
+            restructure(self.state.problem, ev.best()[0], ev.evaluate,
+                        trials=min(cfg.restructure_trials, ev.remaining), moves=moves)
+
+    def _kicks(self, spread: float, trials: int) -> None:
+        from planner_core.search.structure import kicks
+
+        ev, c0 = self.ev, self.ev.count
+        if ev.best()[0].tobytes() != self._searched:
+            self._structural()
+        left = trials - (ev.count - c0)
+        if left > 0:
+            kicks(self.state.problem, ev.best()[0], ev.evaluate, trials=left,
+                  seed=self.state.config.seed, spread=spread, stream=self.step + 1)
+
+    def _restructure(self, trials: int) -> None:
+        self._structural()
+
+    def _finish(self, y: np.ndarray | None, trials: int) -> None:
+        from planner_core.search.final import finish
+
+        if y is None:
+            return
+        cfg, problem = self.state.config, self.state.problem
+        self._restarted.add(y.tobytes())
+        finish(problem, y, self.ev.evaluate, trials=min(trials, self.ev.remaining),
+               seed=cfg.seed + self.step, descent_trials=cfg.descent_trials,
+               restructure_trials=cfg.restructure_trials)
+        self.state = self.state.replace(finished=self.state.finished | {_points(problem, y)})
+
+    def _other(self) -> np.ndarray | None:
+        """The Deb-best feasible unrestarted pool plan of an unfinished number of points."""
+        state, pool = self.state, self.state.pool
+        for i in pool.ordered():
+            if pool.phi[i] > 0 or pool.X[i].tobytes() in self._restarted:
+                continue
+            n = _points(state.problem, pool.X[i])
+            if n > 0 and n not in state.finished:
+                return pool.X[i]
+        return None
+
+    def _sweep(self) -> np.ndarray | None:
+        """A fresh constructive sweep scored into the pool (with `FRESH_ROOM` quanta left);
+        its Deb-best plan when feasible."""
+        from planner_core.search.construct import candidate_plans
+
+        state, ev, cfg = self.state, self.ev, self.state.config
+        pool, problem = state.pool, state.problem
+        # a fresh sweep costs what the constructive stage costs: only with room for several
+        # rounds after it
+        if ev.remaining < FRESH_ROOM * max(cfg.final_trials, 1):
+            return None
+        self._fresh += 1
+        seed = int(np.random.SeedSequence([cfg.seed, 31, self._fresh]).generate_state(1)[0])
+        X, _ = candidate_plans(problem, seed, cfg.start_candidates, order=cfg.order,
+                               stop=lambda: ev.expired)
+        seen = {r.tobytes() for r in pool.X}
+        X = np.asarray([r for r in X if r.tobytes() not in seen]).reshape(-1, pool.X.shape[1])
+        X = X[:max(min(len(X), ev.remaining - cfg.descent_trials), 0)]
+        if not len(X):
+            return None
+        f, phi = ev.evaluate(X)
+        self.state = state.replace(pool=pool.add(X, f, phi, "fresh"))
+        best = deb_order(f, phi)[0]
+        return None if phi[best] > 0 else X[best]
+
+    def _restart(self, trials: int) -> None:
+        y = self._other()
+        self._finish(self._sweep() if y is None else y, trials)
+
+    def _restart_other(self, trials: int) -> None:
+        self._finish(self._other(), trials)
+
+    def _fresh_restart(self, trials: int) -> None:
+        self._finish(self._sweep(), trials)
+
+    def _de_block(self, trials: int) -> None:
+        from planner_core.search.construct import InjectedPopulation
+        from planner_core.search.de import run
+        from planner_core.search.de.core import to_problem
+        from planner_core.search.refine import refine
+
+        state, ev, cfg = self.state, self.ev, self.state.config
+        n = cfg.population
+        if trials < n:
+            return
+        st = self._de_state if self._de_state is not None else (
+            state.de.state if state.de is not None else None)
+        if st is not None:
+            rows = to_problem(ev, st.X[deb_order(st.f, st.phi)])
+        else:
+            rows = state.pool.X[state.pool.ordered()]
+        rows = np.vstack([ev.best()[0][None, :], rows])[:n]
+        seed = int(np.random.SeedSequence([cfg.seed, 41, self.step]).generate_state(1)[0])
+        result = run(InjectedPopulation(ev, rows), configurator=cfg.configurator, seed=seed,
+                     population=n, budget=trials,
+                     refine=functools.partial(refine, state.problem))
+        self._de_state = result.state
+
+    # ------------------------------------------------------------------ the loop
+    def run(self, scheduler: Scheduler) -> PlanState:
+        """Ask `scheduler` for actions until it says "stop" or `can_continue` is false.
+
+        Returns:
+            The final `PlanState`.
+        """
+        scheduler.reset(self.state.problem, self.state.config)
+        while self.can_continue:
+            action = scheduler.choose(self.observe())
+            if action == "stop":
+                break
+            self.act(action)
+        return self.state
