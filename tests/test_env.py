@@ -51,7 +51,7 @@ def test_mantissa_exponent_by_hand() -> None:
 def test_observation_shapes(n: int, d: int) -> None:
     env = OptimizationEnv(population=n, budget=5 * n)
     obs, info = env.reset(seed=0, options={"problem": ShiftedBall(d)})
-    assert set(obs) == {"X", "f", "phi", "progress"}
+    assert set(obs) == {"X", "f", "phi", "progress", "context"}
     assert obs["X"].shape == (n, d) and obs["f"].shape == (n, 2) and obs["phi"].shape == (n, 2)
     assert obs["progress"].shape == (1,) and obs["progress"][0] == 0.0
     assert 0.0 <= obs["X"].min() and obs["X"].max() <= 1.0

@@ -12,7 +12,19 @@ key            shape      meaning
 ``"f"``        (N, 2)     (mantissa omega, scaled exponent b / eta) of each f
 ``"phi"``      (N, 2)     (mantissa omega, scaled exponent b / eta) of each phi
 ``"progress"`` (1,)       g / G (G = generations the budget allows)
+``"context"``  (K,)       the run's memory (:func:`context`, K = :data:`N_CONTEXT`): each
+                          (mutation, crossover) arm's recent success rate, stagnation,
+                          feasible share of the population
 =============  =========  ===========================================================
+
+The context is what the ``adaptive`` configurator keeps in its memory, as features: per arm
+(the 14 (mutation, crossover) pairs) an exponential moving average (rate
+:data:`FEATURE_RATE`) of the share of its trials that replaced their parent, the generations
+since a trial last Deb-beat the best parent (as ``s / (s + STALL_SCALE)``), and the feasible
+share of the population. The env keeps it in the DE state's ``memory``
+(:class:`FeatureMemory`); a policy configurator keeps the same memory through the
+configurator protocol (``init`` / ``update``). A network trained without it (``NetConfig.
+context == 0``, e.g. ``lamde-v2``) ignores it.
 
 Mantissa-exponent encoding: ``y = omega * 10**b`` with ``b = floor(log10|y|) + 1`` so
 ``0.1 <= |omega| < 1``; ``y == 0 -> (0, 0)``; +-inf is encoded as (+-1, 400 / eta), one past
@@ -23,6 +35,15 @@ the collision offset mu + nu * metres), which then map to scaled exponents in [-
 Reward: :func:`reward` (the paper's Eq. reward) on the Deb-best (phi, f) before and after the
 step, with feasibility tolerance ``delta = 1e-8`` by default (violations below it count as
 feasible for the reward only; the DE's selection still compares phi exactly).
+
+Per-individual credit (``info["credit"]``, (N,)): each trial's own outcome against its
+parent, :func:`trial_credit` (scale-free: relative violation or objective decrease, a
+feasibility gain ranked above any objective gain; 0 for a trial that did not replace its
+parent); ``info["parent_feasible"]`` (N,) says which parents were feasible, and
+``info["population_credit"]`` is the same credit of the generation's Deb-best change (best
+before -> best after). The PPO learner's per-individual mode
+(:class:`planner_core.learning.policy.ppo.PPOConfig` ``credit``) uses them; ``reward`` stays
+the paper's.
 
 Episode end: ``terminated`` is True once the evaluation budget is spent. Time is part of the
 observation (g / G), so the budget's end is a true terminal state of this MDP, not a time
@@ -43,16 +64,17 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, NamedTuple
 
 import gymnasium
 import numpy as np
 from gymnasium import spaces
 
 from planner_core import defaults as _defaults
-from planner_core.search.de.core import ask, evaluate, init, tell
+from planner_core.model.formulas import deb_best, deb_better
+from planner_core.search.de.core import ask, evaluate, init, outcome, tell
 from planner_core.search.de.operators import N_CROSSOVERS, N_MUTATIONS
-from planner_core.search.de.types import BoxProblem, Config, DEState
+from planner_core.search.de.types import BoxProblem, Config, DEState, Outcome
 
 DEFAULT_ETA = _defaults.ETA
 DEFAULT_DELTA = _defaults.DELTA
@@ -90,15 +112,138 @@ def mantissa_exponent(y: np.ndarray, eta: float = DEFAULT_ETA) -> np.ndarray:
     return out
 
 
+#: arms of the context features: the (mutation, crossover) pairs, arm = N_CROSSOVERS * m + c
+N_ARMS = N_MUTATIONS * N_CROSSOVERS
+#: length of the observation's "context" vector: per-arm success, stagnation, feasible share
+N_CONTEXT = N_ARMS + 2
+#: moving-average rate of the per-arm success features (adaptive's ``rate``)
+FEATURE_RATE = 0.2
+#: stagnation s enters the context as s / (s + STALL_SCALE) (0 when improving, -> 1)
+STALL_SCALE = 10.0
+#: per-arm success before an arm has been tried (no evidence either way)
+SUCCESS_PRIOR = 0.5
+
+
+class FeatureMemory(NamedTuple):
+    """The run's memory behind the observation's context (arrays are never mutated)."""
+
+    arm_success: np.ndarray  # (N_ARMS,) moving average of each arm's trial success share
+    stall: int = 0  # generations since a trial last Deb-beat the best parent
+
+
+def initial_features() -> FeatureMemory:
+    """The context memory of a run before its first generation."""
+    return FeatureMemory(np.full(N_ARMS, SUCCESS_PRIOR), 0)
+
+
+def update_features(
+    memory: FeatureMemory,
+    mutation: np.ndarray,
+    crossover: np.ndarray,
+    success: np.ndarray,
+    improved: bool,
+) -> FeatureMemory:
+    """The memory after one generation (the rule of ``adaptive``'s memory, on success shares).
+
+    Args:
+        memory: the memory before the generation.
+        mutation, crossover: (k,) operator ids of the k trials.
+        success: (k,) bool, the trial replaced its parent (Deb's rule).
+        improved: some trial Deb-beat the best parent.
+
+    Returns:
+        The next memory: each arm used this generation moves its success share by
+        ``FEATURE_RATE`` towards this generation's; ``stall`` is reset or counts up.
+    """
+    arm = np.asarray(mutation, dtype=np.intp) * N_CROSSOVERS + np.asarray(crossover, np.intp)
+    used = np.bincount(arm, minlength=N_ARMS)
+    won = np.bincount(arm, weights=np.asarray(success, dtype=float), minlength=N_ARMS)
+    seen = used > 0
+    rate = memory.arm_success.copy()
+    rate[seen] += FEATURE_RATE * (won[seen] / used[seen] - rate[seen])
+    return FeatureMemory(rate, 0 if improved else memory.stall + 1)
+
+
+def next_features(memory: FeatureMemory, out: Outcome) -> FeatureMemory:
+    """:func:`update_features` from a generation's :class:`Outcome` (the env's step and the
+    policy configurator's ``update`` both call this; "improved" is adaptive's rule: some trial
+    Deb-beats the best of the generation's parents)."""
+    k = len(out.success)
+    if k == 0:
+        return memory
+    b = deb_best(out.f_parent, out.phi_parent)
+    improved = bool(deb_better(out.f_trial, out.phi_trial, out.f_parent[b],
+                               out.phi_parent[b]).any())
+    return update_features(memory, np.asarray(out.config.mutation)[:k],
+                           np.asarray(out.config.crossover)[:k], out.success, improved)
+
+
+def context(state: DEState, memory: FeatureMemory | None = None) -> np.ndarray:
+    """The observation's context vector (N_CONTEXT,), all entries in [0, 1].
+
+    Args:
+        state: the DE state (its feasible share is read).
+        memory: the context memory; None reads ``state.memory`` when it is a
+            :class:`FeatureMemory` and otherwise uses :func:`initial_features`.
+
+    Returns:
+        ``[arm_success (N_ARMS), stall / (stall + STALL_SCALE), feasible_fraction]``.
+    """
+    if memory is None:
+        memory = state.memory if isinstance(state.memory, FeatureMemory) else initial_features()
+    stall = float(memory.stall)
+    return np.concatenate([memory.arm_success, [stall / (stall + STALL_SCALE),
+                                                state.feasible_fraction]])
+
+
 def observe(state: DEState, eta: float = DEFAULT_ETA) -> dict[str, np.ndarray]:
-    """The paper's state s_g for a DE state (pure; also usable by a policy configurator)."""
+    """The paper's state s_g for a DE state (pure; also usable by a policy configurator),
+    with the context of :func:`context` (from ``state.memory`` when it is a FeatureMemory)."""
     G = state.max_generations
     return {
         "X": np.array(state.X),
         "f": mantissa_exponent(state.f, eta),
         "phi": mantissa_exponent(state.phi, eta),
         "progress": np.array([state.generation / G if G > 0 else 1.0]),
+        "context": context(state),
     }
+
+
+def trial_credit(
+    f_parent: np.ndarray,
+    phi_parent: np.ndarray,
+    f_trial: np.ndarray,
+    phi_trial: np.ndarray,
+    delta: float = DEFAULT_DELTA,
+) -> np.ndarray:
+    """Per-individual credit of each trial against its parent, scale-free, in [0, 2].
+
+    * the trial does not Deb-beat its parent: 0 (the parent stays);
+    * infeasible parent (phi_p > delta): ``1 + (phi_p - phi_t) / phi_p`` (in (1, 2]; 2 when the
+      trial is feasible), so any violation gain ranks above any objective gain;
+    * feasible parent: the relative objective decrease ``(f_p - f_t) / |f_p|``, at most 1.
+
+    Args:
+        f_parent, phi_parent, f_trial, phi_trial: (k,) arrays (objective, total violation).
+        delta: feasibility tolerance (as :func:`reward`).
+
+    Returns:
+        (k,) float credits. Source: the per-individual credit of issue 34 (the paper's Eq.
+        reward's cases, per trial instead of per population best).
+    """
+    fp, pp = np.asarray(f_parent, float), np.asarray(phi_parent, float)
+    ft, pt = np.asarray(f_trial, float), np.asarray(phi_trial, float)
+    win = deb_better(ft, pt, fp, pp)
+    out = np.zeros(fp.shape)
+    infeasible = pp > delta
+    with np.errstate(divide="ignore", invalid="ignore"):
+        gain_phi = np.where(pt <= delta, 1.0, (pp - pt) / pp)
+        gain_f = (fp - ft) / np.abs(fp)
+    gain_phi = np.where(np.isfinite(gain_phi), np.clip(gain_phi, 0.0, 1.0), 1.0)
+    gain_f = np.where(np.isfinite(gain_f), np.clip(gain_f, 0.0, 1.0), 0.0)
+    out[win & infeasible] = 1.0 + gain_phi[win & infeasible]
+    out[win & ~infeasible] = gain_f[win & ~infeasible]
+    return out
 
 
 def reward(
@@ -195,6 +340,7 @@ class OptimizationEnv(gymnasium.Env):
                 "f": code,
                 "phi": code,
                 "progress": spaces.Box(0.0, 1.0, (1,), dtype=np.float64),
+                "context": spaces.Box(0.0, 1.0, (N_CONTEXT,), dtype=np.float64),
             }
         )
         self.action_space = spaces.Dict(
@@ -227,7 +373,8 @@ class OptimizationEnv(gymnasium.Env):
         self.problem, self.population, self.budget = problem, int(population), int(budget)
         self._declare_spaces()
         run_seed = int(self.np_random.integers(0, 2**63 - 1))
-        self.state = init(self.problem, run_seed, self.population, self.budget)
+        state = init(self.problem, run_seed, self.population, self.budget)
+        self.state = dataclasses.replace(state, memory=initial_features())
         return observe(self.state, self.eta), self._info(self.state)
 
     def step(self, action: Any) -> tuple[dict[str, np.ndarray], float, bool, bool, dict[str, Any]]:
@@ -237,10 +384,17 @@ class OptimizationEnv(gymnasium.Env):
             raise RuntimeError("call reset() before step()")
         if state.done:
             raise RuntimeError("episode is over (budget spent); call reset()")
-        trials = ask(state, as_config(action))
+        config = as_config(action)
+        trials = ask(state, config)
         f, phi = evaluate(self.problem, trials)
         new = tell(state, trials, f, phi)
-        self.state = dataclasses.replace(new, memory=state.memory)
+        out = outcome(state, config, trials, f, phi)
+        k = len(out.success)
+        memory = state.memory if isinstance(state.memory, FeatureMemory) else initial_features()
+        self.state = dataclasses.replace(new, memory=next_features(memory, out))
+        credit = np.zeros(state.population)
+        credit[:k] = trial_credit(out.f_parent, out.phi_parent, out.f_trial, out.phi_trial,
+                                  self.delta)
         r = reward(
             state.best_phi,
             state.best_f,
@@ -249,7 +403,12 @@ class OptimizationEnv(gymnasium.Env):
             new.generation / max(new.max_generations, 1),
             self.delta,
         )
-        return observe(new, self.eta), r, bool(new.done), False, self._info(new)
+        info = self._info(new)
+        info["credit"] = credit
+        info["parent_feasible"] = state.phi <= self.delta
+        info["population_credit"] = float(trial_credit(
+            [state.best_f], [state.best_phi], [new.best_f], [new.best_phi], self.delta)[0])
+        return observe(self.state, self.eta), r, bool(new.done), False, info
 
     @staticmethod
     def _info(state: DEState) -> dict[str, Any]:

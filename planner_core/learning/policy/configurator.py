@@ -4,7 +4,8 @@ Each generation it builds the env's observation of the DE state
 (:func:`planner_core.learning.env.observe`),
 runs the numpy network (:mod:`planner_core.learning.policy.network`) and returns one (mutation,
 crossover,
-F, Cr) per individual.
+F, Cr) per individual. A network with context (``NetConfig.context``, issue 34) also keeps the
+env's context memory (per-arm success, stagnation) through ``init``/``update``.
 
 Determinism: by default the action is *sampled* from the policy's distributions with the
 generator the DE core hands to ``configure`` (generation g's stream of the run's seed, after the
@@ -23,7 +24,13 @@ from typing import Any
 
 import numpy as np
 
-from planner_core.learning.env import DEFAULT_ETA, observe
+from planner_core.learning.env import (
+    DEFAULT_ETA,
+    FeatureMemory,
+    initial_features,
+    next_features,
+    observe,
+)
 from planner_core.learning.policy.checkpoint import DEFAULT_CHECKPOINT, load
 from planner_core.learning.policy.network import NetConfig, forward, mode_actions, sample_actions
 from planner_core.search.de.core import Config, DEState, Outcome
@@ -54,13 +61,18 @@ class PolicyConfigurator:
             if eta is not None:
                 object.__setattr__(self, "eta", float(eta))
 
-    def init(self, state: DEState) -> None:
-        return None
+    def init(self, state: DEState) -> FeatureMemory | None:
+        """The run's context memory when the network reads it (``net.context``), else None."""
+        return initial_features() if self.net.context else None
 
     def configure(self, state: DEState, rng: np.random.Generator) -> Config:
         out = forward(self.params, self.net, observe(state, self.eta))
         mut, cx, F, Cr = mode_actions(out) if self.mode else sample_actions(out, rng)
         return Config(mut, cx, F, Cr)
 
-    def update(self, memory: Any, outcome: Outcome) -> None:
-        return None
+    def update(self, memory: Any, outcome: Outcome) -> FeatureMemory | None:
+        """The next context memory (:func:`planner_core.learning.env.next_features`), or None
+        for a network without context."""
+        if not isinstance(memory, FeatureMemory):
+            return None
+        return next_features(memory, outcome)

@@ -17,8 +17,10 @@ with population N and dimension d:
    entries: d * 2 m N instead of d N^2.
 3. Dimension attention: within each individual i, the same kind of block across its d dimensions
    (padded dimensions are masked out as keys when problems of several sizes share a batch).
-4. Mean over dimensions -> (N, E); concatenated with the progress g/G and passed through one
-   hidden layer (ReLU) -> h, one vector of size H per individual.
+4. Mean over dimensions -> (N, E); concatenated with the progress g/G (and, when
+   ``NetConfig.context`` is set, the run's context vector of
+   :func:`planner_core.learning.env.context`, the same for every individual) and passed
+   through one hidden layer (ReLU) -> h, one vector of size H per individual.
 5. Actor heads on h: mutation logits (7, the paper's operators), crossover logits (2), and
    ``(alpha, beta) = 1 + softplus(.)`` of a Beta distribution for F and for Cr (both > 1, so the
    Beta is unimodal with mode ``(alpha - 1) / (alpha + beta - 2)`` and its log-probability is
@@ -43,6 +45,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from planner_core.learning.env import N_CONTEXT
 from planner_core.search.de.operators import N_CROSSOVERS, N_MUTATIONS
 
 #: per-token input features: x, omega_f, eps_f, omega_phi, eps_phi
@@ -64,11 +67,18 @@ class NetConfig:
     """H: width of the per-individual vector after the progress is joined."""
     inducing: int = 8
     """m: inducing points of each induced set attention block (population and dimensions)."""
+    context: int = 0
+    """Context features joined with the progress: 0 (none; every checkpoint before issue 34,
+    e.g. ``lamde-v1``/``lamde-v2``, whose config.json has no such field) or
+    :data:`planner_core.learning.env.N_CONTEXT` (the observation's ``"context"``)."""
 
     def __post_init__(self) -> None:
         for name in ("embed", "heads", "ff", "hidden", "inducing"):
             if int(getattr(self, name)) < 1:
                 raise ValueError(f"{name}: must be a positive integer")
+        if self.context not in (0, N_CONTEXT):
+            raise ValueError(f"context: must be 0 or {N_CONTEXT} (the env's context length), "
+                             f"got {self.context}")
         if self.embed % self.heads:
             raise ValueError(f"embed ({self.embed}) must be divisible by heads ({self.heads})")
 
@@ -116,7 +126,7 @@ def param_shapes(cfg: NetConfig) -> dict[str, tuple[int, ...]]:
     shapes.update(_isab_shapes("pop", cfg))
     shapes.update(_isab_shapes("dim", cfg))
     shapes.update({
-        "join.weight": (E + 1, H),
+        "join.weight": (E + 1 + cfg.context, H),
         "join.bias": (H,),
         "mutation.weight": (H, N_MUTATIONS),
         "mutation.bias": (N_MUTATIONS,),
@@ -359,7 +369,8 @@ def forward(
 ) -> PolicyOutput:
     """The policy on one observation (:func:`planner_core.learning.env.observe`): X (N, d), f (N,
     2),
-    phi (N, 2), progress (1,). ``dtype``: the arithmetic precision (float32 by default, as
+    phi (N, 2), progress (1,), and context (K,) when ``cfg.context`` is K > 0. ``dtype``: the
+    arithmetic precision (float32 by default, as
     the weights and the torch twin; the outputs are returned as float64). BLAS runs on one
     thread inside (threadpoolctl).
 
@@ -368,6 +379,9 @@ def forward(
     X = np.asarray(obs["X"])
     if X.ndim != 2 or obs["f"].shape != (X.shape[0], 2) or obs["phi"].shape != (X.shape[0], 2):
         raise ValueError("observation: X must be (N, d) and f, phi (N, 2)")
+    if cfg.context and np.shape(obs.get("context")) != (cfg.context,):
+        raise ValueError(f"observation: context must have shape ({cfg.context},), got "
+                         f"{np.shape(obs.get('context'))}")
     with _one_blas_thread():
         return _forward(_as_dtype(params, np.dtype(dtype)), cfg, X, obs, dtype)
 
@@ -388,7 +402,11 @@ def _forward(p: dict[str, np.ndarray], cfg: NetConfig, X: np.ndarray, obs: dict[
     x = _isab(x, p, "dim", cfg.heads)  # across dimensions, within each individual
     pooled = x.mean(axis=2).T  # (N, E)
     g = np.full((pooled.shape[0], 1), float(np.asarray(obs["progress"]).reshape(-1)[0]), dtype)
-    h = _linear(np.concatenate([pooled, g], axis=1), p, "join")
+    parts = [pooled, g]
+    if cfg.context:
+        ctx = np.asarray(obs["context"], dtype=dtype)
+        parts.append(np.broadcast_to(ctx, (pooled.shape[0], cfg.context)))
+    h = _linear(np.concatenate(parts, axis=1), p, "join")
     np.maximum(h, 0.0, out=h)
     mut = _linear(h, p, "mutation")
     cx = _linear(h, p, "crossover")

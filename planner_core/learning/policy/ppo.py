@@ -23,9 +23,11 @@ this process, a local process pool or Ray), the PPO update here; before it, a wa
 Objective (Schulman et al. 2017, as CleanRL): the policy is factorised over individuals, so the
 probability ratio is taken per individual, ``r_i = pi(a_i|s) / pi_old(a_i|s)`` with
 ``log pi(a_i|s)`` the exact sum of the mutation and crossover categorical and the F and Cr Beta
-log-densities. Every individual of a population shares its generation's advantage ``A``:
+log-densities. Each individual i has its own advantage ``A_i`` (``credit="individual"``, the
+default since issue 34) or shares its generation's (``credit="shared"``, the paper's and
+``lamde-v2``'s):
 
-    L_clip = mean over (generation, problem, individual) of max(-A r_i, -A clip(r_i, 1-e, 1+e))
+    L_clip = mean over (generation, problem, individual) of max(-A_i r_i, -A_i clip(r_i, 1-e, 1+e))
     L_V    = 0.5 mean (V(s) - R)^2                  (critic on the pooled population)
     L_BC   = mean over (generation, problem, individual) of KL(pi_ref(.|s) || pi(.|s))
     L      = L_clip - c_ent * entropy + c_V * L_V + c_BC(e) * L_BC
@@ -38,9 +40,20 @@ the warm start and is let go as it learns; every KL is closed form (categoricals
 ``log pi_old`` and the values V(s) are the actors' (the numpy forward pass at the weights the
 segment ran with; the torch twin agrees to about 1e-5, tests/test_policy.py).
 
-Advantage estimation: GAE(gamma, lambda) over the n-step segment, bootstrapped with V of the
-state after the segment unless the episode ended there (the budget's end is a true terminal
-state, see planner_core.learning.env); returns R = A + V; advantages normalised over the batch.
+Per-individual credit (:func:`planner_core.learning.policy.credit.individual_advantages`):
+individual i's trial outcome against its parent (:func:`planner_core.learning.env.
+trial_credit`: scale-free, a feasibility gain ranked above any objective gain), centred and
+scaled within its generation and parent class (feasible or infeasible parent), so that the
+advantage is what this individual's action did against what the others' did from a like
+start; plus ``pop_weight`` times the normalised GAE advantage of the population credit (the
+same credit of the generation's Deb-best change, scale-free, which the critic learns to
+predict). Shared mode: every individual gets the generation's GAE advantage of the env's
+reward (below).
+
+Advantage estimation (shared mode, and the population term): GAE(gamma, lambda) over the
+n-step segment, bootstrapped with V of the state after the segment unless the episode ended
+there (the budget's end is a true terminal state, see planner_core.learning.env); returns
+R = A + V; advantages normalised over the batch.
 
 Reward scaling (``reward_scale``, on by default): before GAE every reward is divided by the
 running std of its problem's and start mode's discounted return (CleanRL's reward
@@ -78,9 +91,10 @@ from torch.distributions import Beta, Categorical, kl_divergence
 
 from planner_core.atomic import write_bytes_atomic
 from planner_core.execution import Executor, SerialExecutor
-from planner_core.learning.env import DEFAULT_DELTA, DEFAULT_ETA
+from planner_core.learning.env import DEFAULT_DELTA, DEFAULT_ETA, N_CONTEXT, initial_features
 from planner_core.learning.policy import checkpoint as ckpt
 from planner_core.learning.policy import rollout
+from planner_core.learning.policy.credit import individual_advantages
 from planner_core.learning.policy.imitation import DEMO_KEY, Demos, RewardScaler, collect_demos
 from planner_core.learning.policy.network import N_FEATURES, NetConfig, init_params, param_shapes
 from planner_core.learning.policy.problems import spec_name
@@ -157,13 +171,22 @@ class PPOConfig:
     folder) instead of fitting the warm start here; its network sizes must equal ``net``. The
     demonstrations of ``imitate`` are still collected (not fitted) to seed the reward scaler.
     Empty = no such start."""
+    credit: str = "individual"
+    """``"individual"``: each individual's advantage from its own trial outcome plus
+    ``pop_weight`` times the population term (:func:`individual_advantages`; the default for
+    new trainings); ``"shared"``: every individual shares its generation's advantage of the
+    env's reward (the paper's PPO, how ``lamde-v1``/``lamde-v2`` were trained)."""
+    pop_weight: float = 0.1
+    """Weight of the population term (the normalised GAE advantage of the Deb-best's credit)
+    in per-individual credit."""
     reward_scale: bool = True
     """Divide each reward by the running std of its problem's (and start mode's) discounted
     return, CleanRL's reward normalisation
     (:class:`planner_core.learning.policy.imitation.RewardScaler`),
     so that big and small maps, seeded and uniform starts weigh alike in an update."""
-    net: NetConfig = field(default_factory=NetConfig)
-    """Network sizes."""
+    net: NetConfig = field(default_factory=lambda: NetConfig(context=N_CONTEXT))
+    """Network sizes (new trainings read the observation's context; a stored config without
+    ``context`` reads as 0, the network of ``lamde-v1``/``lamde-v2``)."""
 
     def to_dict(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -172,7 +195,10 @@ class PPOConfig:
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> PPOConfig:
+        """The config of :meth:`to_dict`; a stored config from before issue 34 (no ``credit``)
+        reads as the shared credit it was trained with."""
         d = dict(d)
+        d.setdefault("credit", "shared")
         net = NetConfig(**d.pop("net", {}))
         if "init_modes" in d:
             d["init_modes"] = tuple(d["init_modes"])
@@ -252,9 +278,11 @@ class TorchPolicy(nn.Module):
         phi: torch.Tensor,
         progress: torch.Tensor,
         mask: torch.Tensor,
+        context: torch.Tensor | None = None,
     ) -> tuple[torch.Tensor, ...]:
         """X (B, N, D) padded, f and phi (B, N, 2), progress (B,), mask (B, D) True = real
-        dimension -> mutation logits (B, N, 7), crossover logits (B, N, 2), F and Cr Beta
+        dimension, context (B, K) (used when ``cfg.context`` is K > 0) -> mutation logits
+        (B, N, 7), crossover logits (B, N, 2), F and Cr Beta
         parameters (B, N, 2) each, value (B,)."""
         B, N, D = X.shape
         t = torch.cat([X[..., None], f[:, :, None, :].expand(B, N, D, 2),
@@ -270,7 +298,10 @@ class TorchPolicy(nn.Module):
         m = mask[:, None, :, None].to(x.dtype)
         pooled = (x * m).sum(dim=2) / m.sum(dim=2)  # (B, N, E)
         g = progress[:, None, None].expand(B, N, 1).to(x.dtype)
-        h = torch.relu(torch.cat([pooled, g], dim=-1) @ self._w("join.weight")
+        parts = [pooled, g]
+        if self.cfg.context:
+            parts.append(context[:, None, :].expand(B, N, self.cfg.context).to(x.dtype))
+        h = torch.relu(torch.cat(parts, dim=-1) @ self._w("join.weight")
                        + self._w("join.bias"))
         mut = self._lin(h, "mutation")
         cx = self._lin(h, "crossover")
@@ -326,7 +357,17 @@ def batch_obs(obs: list[dict[str, np.ndarray]]) -> dict[str, torch.Tensor]:
         "progress": torch.from_numpy(
             np.array([o["progress"][0] for o in obs], dtype=np.float32)),
         "mask": torch.from_numpy(mask),
+        # an observation without a context (written by hand, or before issue 34) reads as a
+        # run's first one; a network without context ignores it
+        "context": torch.from_numpy(np.stack([
+            np.asarray(o["context"]) if "context" in o else _FIRST_CONTEXT
+            for o in obs]).astype(np.float32)),
     }
+
+
+#: the context of a run before its first generation (all arms at the prior, no stall, none
+#: feasible)
+_FIRST_CONTEXT = np.concatenate([initial_features().arm_success, [0.0, 0.0]])
 
 
 def _cat_obs(batches: list[dict[str, torch.Tensor]]) -> dict[str, torch.Tensor]:
@@ -337,13 +378,33 @@ def _cat_obs(batches: list[dict[str, torch.Tensor]]) -> dict[str, torch.Tensor]:
         pad = D - b["X"].shape[2]
         out["X"].append(nn.functional.pad(b["X"], (0, pad)))
         out["mask"].append(nn.functional.pad(b["mask"], (0, pad), value=False))
-        for k in ("f", "phi", "progress"):
+        for k in ("f", "phi", "progress", "context"):
             out[k].append(b[k])
     return {k: torch.cat(v) for k, v in out.items()}
 
 
 def _forward(model: TorchPolicy, o: dict[str, torch.Tensor]) -> tuple[torch.Tensor, ...]:
-    return model(o["X"], o["f"], o["phi"], o["progress"], o["mask"])
+    return model(o["X"], o["f"], o["phi"], o["progress"], o["mask"], o.get("context"))
+
+
+def with_context(params: dict[str, np.ndarray], net: NetConfig, wider: NetConfig
+                 ) -> dict[str, np.ndarray]:
+    """Weights of a network without context (``net.context == 0``) as weights of ``wider``
+    (the same sizes with ``context`` K): zero rows for the context in ``join.weight``, so the
+    wider network computes exactly what the given one does until training moves them (how a
+    new training starts from ``lamde-v2``). Raises ValueError for other size differences."""
+    if net.context or dataclasses.replace(net, context=wider.context) != wider:
+        raise ValueError(f"init_checkpoint: network {net} cannot be widened to {wider}")
+    out = dict(params)
+    w = np.asarray(params["join.weight"], dtype=np.float32)
+    out["join.weight"] = np.concatenate([w, np.zeros((wider.context, w.shape[1]), np.float32)])
+    return out
+
+
+def _normalised(a: np.ndarray) -> np.ndarray:
+    """(a - mean) / std over all entries (a copy; 0 when a has no spread)."""
+    sd = float(a.std())
+    return (a - a.mean()) / sd if sd > 1e-12 else np.zeros_like(a)
 
 
 # ---------------------------------------------------------------------------------- PPO update
@@ -363,14 +424,17 @@ def ppo_update(
 ) -> dict[str, float]:
     """``cfg.update_epochs`` full-batch PPO steps on one buffer (B samples of N individuals).
 
+    ``advantages``: (B,) one per sample (shared credit; normalised here when ``norm_adv``) or
+    (B, N) one per individual (per-individual credit, already scale-free).
     ``reference``: the frozen warm-start policy of the behaviour-cloning anchor, weighted by
     ``bc_coef`` (this epoch's :attr:`PPOConfig.bc_coef`; 0 or None: no anchor).
     Returns the last epoch's policy loss, value loss, entropy, approx-KL ((r-1) - log r, as
     CleanRL), clip fraction and the anchor's KL(pi_ref || pi) (mean per individual).
     """
     adv = advantages
-    if cfg.norm_adv and adv.numel() > 1:
+    if cfg.norm_adv and adv.numel() > 1 and adv.dim() == 1:
         adv = (adv - adv.mean()) / (adv.std() + 1e-8)
+    a = adv[:, None] if adv.dim() == 1 else adv
     ref_out = None
     if reference is not None and bc_coef > 0:
         with torch.no_grad():
@@ -381,7 +445,6 @@ def ppo_update(
         logp, ent = log_prob_entropy(out, actions)
         log_ratio = logp - old_logp
         ratio = log_ratio.exp()
-        a = adv[:, None]
         pg_loss = torch.max(-a * ratio, -a * ratio.clamp(1 - cfg.clip, 1 + cfg.clip)).mean()
         v_loss = 0.5 * ((out[4] - returns) ** 2).mean()
         entropy = ent.mean()
@@ -543,6 +606,8 @@ def train(
     The caller closes the executor. Raises ValueError for bad settings or problem specs.
     """
     out = Path(out)
+    if cfg.credit not in ("individual", "shared"):
+        raise ValueError(f"credit: must be 'individual' or 'shared', got {cfg.credit!r}")
     if cfg.envs < 1 or cfg.n_steps < 1 or cfg.update_epochs < 1 or cfg.epochs < 0:
         raise ValueError("envs, n_steps and update_epochs must be >= 1, epochs >= 0")
     if cfg.epochs == 0 and (cfg.imitate == "none" or cfg.imitate_epochs < 1):
@@ -584,7 +649,10 @@ def train(
     if not resumed and cfg.init_checkpoint:
         # ---- PPO from a given checkpoint's weights (e.g. the shipped warm start)
         params, net, _ = ckpt.load(cfg.init_checkpoint)
-        if net != cfg.net:
+        if net != cfg.net and dataclasses.replace(net, context=cfg.net.context) == cfg.net \
+                and net.context == 0:
+            params = with_context(params, net, cfg.net)
+        elif net != cfg.net:
             raise ValueError(f"init_checkpoint: {cfg.init_checkpoint} has network {net}, "
                              f"not {cfg.net}")
         model.load_numpy(params)
@@ -670,20 +738,32 @@ def train(
                              f"epoch {epoch + 1}/{cfg.epochs} chunk {c + 1}/{len(chunks)}")
                 # ---- n-step PPO update (Algorithm 1, lines 12-15)
                 values = np.stack([s.values for s in segs], axis=1)
-                rewards = rew
-                if cfg.reward_scale:
-                    rewards = np.stack([scaler.scale(key, rew[:, b])
-                                        for b, key in enumerate(keys)], axis=1)
-                adv = gae(rewards, values, np.stack([s.dones for s in segs], axis=1),
-                          np.array([s.next_value for s in segs]), cfg.gamma, cfg.gae_lambda)
-                ret = adv + values
+                dones = np.stack([s.dones for s in segs], axis=1)
+                next_values = np.array([s.next_value for s in segs])
+                if cfg.credit == "individual":
+                    # the critic learns the population credit's return; each individual's
+                    # advantage is its own trial's credit plus a small population term
+                    pop = np.stack([s.population_credit for s in segs], axis=1)  # (T, B)
+                    adv_pop = gae(pop, values, dones, next_values, cfg.gamma, cfg.gae_lambda)
+                    ret = adv_pop + values
+                    ind = individual_advantages(
+                        np.stack([s.credits for s in segs], axis=1),
+                        np.stack([s.parent_feasible for s in segs], axis=1))  # (T, B, N)
+                    adv = ind + cfg.pop_weight * _normalised(adv_pop)[:, :, None]
+                else:
+                    rewards = rew
+                    if cfg.reward_scale:
+                        rewards = np.stack([scaler.scale(key, rew[:, b])
+                                            for b, key in enumerate(keys)], axis=1)
+                    adv = gae(rewards, values, dones, next_values, cfg.gamma, cfg.gae_lambda)
+                    ret = adv + values
                 acts = np.stack([s.actions for s in segs], axis=1)  # (T, B, N, 4)
                 logp = np.stack([s.logp for s in segs], axis=1)  # (T, B, N)
                 stats_ep.append(ppo_update(
                     model, optimizer, cfg, _cat_obs(buf_obs),
                     torch.from_numpy(acts.reshape(-1, *acts.shape[2:])),
                     torch.from_numpy(logp.reshape(-1, logp.shape[2])),
-                    torch.from_numpy(adv.reshape(-1).astype(np.float32)),
+                    torch.from_numpy(adv.reshape(-1, *adv.shape[2:]).astype(np.float32)),
                     torch.from_numpy(ret.reshape(-1).astype(np.float32)),
                     reference, cfg.bc_coef * cfg.bc_decay ** epoch,
                 ))
@@ -802,4 +882,5 @@ __all__ = [
     "pretrain",
     "text_progress",
     "train",
+    "with_context",
 ]

@@ -133,13 +133,16 @@ class SegmentJob:
 class Segment:
     """T <= n generations of one episode (N = population, d = dimension).
 
-    Observations as the learner batches them (float32): ``X`` (T, N, d), ``f`` and ``phi``
-    (T, N, 2), ``progress`` (T,); ``actions`` (T, N, 4) float32 (mutation id, crossover id, F,
-    Cr: exactly what the DE ran); ``logp`` (T, N) log pi(a_i|s) per individual and ``values``
-    (T,) V(s), both under the job's weights; ``rewards`` and ``dones`` (T,); ``next_value``:
-    V of the state after the segment (0.0 when the episode ended); ``carry``: None when the
-    episode ended; ``best_f``, ``best_phi``: the Deb-best after the segment; ``cpu_s`` and
-    ``wall_s``: the worker's time for the segment (problem build included on a cache miss).
+    Observations as the learner batches them (float32): ``X`` (T, N, d), ``f`` and ``phi`` (T,
+    N, 2), ``progress`` (T,), ``context`` (T, K); ``actions`` (T, N, 4) float32 (mutation id,
+    crossover id, F, Cr: exactly what the DE ran); ``logp`` (T, N) log pi(a_i|s) per individual
+    and ``values`` (T,) V(s), both under the job's weights; ``rewards`` and ``dones`` (T,);
+    ``next_value``: V of the state after the segment (0.0 when the episode ended); ``carry``:
+    None when the episode ended; ``best_f``, ``best_phi``: the Deb-best after the segment;
+    ``cpu_s`` and ``wall_s``: the worker's time for the segment (problem build included on a
+    cache miss).
+    Per-individual credit (the env's info, :func:`planner_core.learning.env.trial_credit`):
+    ``credits`` (T, N), ``parent_feasible`` (T, N) bool and ``population_credit`` (T,).
     """
 
     key: EpisodeKey
@@ -152,6 +155,10 @@ class Segment:
     values: np.ndarray
     rewards: np.ndarray
     dones: np.ndarray
+    context: np.ndarray
+    credits: np.ndarray
+    parent_feasible: np.ndarray
+    population_credit: np.ndarray
     next_value: float
     carry: Carry | None
     best_f: float
@@ -171,7 +178,7 @@ class Segment:
         """The observation of step ``t`` in the env's layout
         (:func:`planner_core.learning.env.observe`)."""
         return {"X": self.X[t], "f": self.f[t], "phi": self.phi[t],
-                "progress": self.progress[t:t + 1]}
+                "progress": self.progress[t:t + 1], "context": self.context[t]}
 
 
 def run_segment(job: SegmentJob) -> Segment:
@@ -193,8 +200,9 @@ def run_segment(job: SegmentJob) -> Segment:
                               eta=job.eta, delta=job.delta)
         env.state = job.carry.state
         obs = observe(env.state, job.eta)
-    buf: dict[str, list[Any]] = {k: [] for k in ("X", "f", "phi", "progress", "actions",
-                                                 "logp", "values", "rewards", "dones")}
+    buf: dict[str, list[Any]] = {k: [] for k in (
+        "X", "f", "phi", "progress", "actions", "logp", "values", "rewards", "dones",
+        "context", "credits", "parent_feasible", "population_credit")}
     done = False
     for _ in range(job.n_steps):
         out = forward(job.weights, cfg, obs)
@@ -206,19 +214,24 @@ def run_segment(job: SegmentJob) -> Segment:
         buf["f"].append(np.asarray(obs["f"], dtype=np.float32))
         buf["phi"].append(np.asarray(obs["phi"], dtype=np.float32))
         buf["progress"].append(np.float32(obs["progress"][0]))
+        buf["context"].append(np.asarray(obs["context"], dtype=np.float32))
         buf["actions"].append(a)
         buf["logp"].append(log_prob(out, mutation, crossover, F, Cr).astype(np.float32))
         buf["values"].append(out.value)
-        obs, r, term, trunc, _ = env.step((mutation, crossover, F, Cr))
+        obs, r, term, trunc, info = env.step((mutation, crossover, F, Cr))
         done = bool(term or trunc)
         buf["rewards"].append(r)
+        buf["credits"].append(info["credit"])
+        buf["parent_feasible"].append(info["parent_feasible"])
+        buf["population_credit"].append(info["population_credit"])
         buf["dones"].append(float(done))
         if done:
             break
     next_value = 0.0 if done else forward(job.weights, cfg, obs).value
     state = env.state
-    arrays = {k: np.asarray(v, dtype=np.float64 if k in ("values", "rewards", "dones")
-                            else np.float32) for k, v in buf.items()}
+    wide = ("values", "rewards", "dones", "credits", "population_credit")
+    arrays = {k: np.asarray(v, dtype=bool if k == "parent_feasible" else
+                            np.float64 if k in wide else np.float32) for k, v in buf.items()}
     return Segment(key=job.key, **arrays, next_value=float(next_value),
                    carry=None if done else Carry(state, rng),
                    best_f=float(state.best_f), best_phi=float(state.best_phi),
