@@ -46,7 +46,6 @@ import numpy as np
 from planner_core.model.formulas import deb_order
 from planner_core.pipeline.config import PlanConfig
 from planner_core.pipeline.evaluator import Evaluator
-from planner_core.pipeline.stages import PlanState, _points
 
 __all__ = [
     "ACTIONS",
@@ -76,6 +75,11 @@ KICKS = {f"kicks-{int(s)}": s for s in SPREADS}
 #: every macro-action's name, in a fixed order (the env's discrete action index)
 ACTIONS: tuple[str, ...] = (*KICKS, "restructure", "restart", "restart-other", "fresh",
                             "de-block", "stop")
+
+
+def _points(problem: Any, x: np.ndarray) -> int:
+    """Hover points flown by plan x (d,)."""
+    return len(problem.breakdown(np.asarray(x, dtype=float))["hover_points"])
 
 
 @dataclass(frozen=True)
@@ -116,7 +120,7 @@ class Observation:
     phi: float
     elapsed: float
     history: tuple[StepRecord, ...]
-    state: PlanState
+    state: Any  # the stages' PlanState
 
 
 @runtime_checkable
@@ -240,7 +244,7 @@ class ImproveRun:
         ev: the run's evaluator.
     """
 
-    state: PlanState
+    state: Any  # the stages' PlanState
     ev: Evaluator
     step: int = 0
     idle: int = 0
@@ -409,7 +413,7 @@ class ImproveRun:
         self._de_state = result.state
 
     # ------------------------------------------------------------------ the loop
-    def run(self, scheduler: Scheduler) -> PlanState:
+    def run(self, scheduler: Scheduler) -> Any:
         """Ask `scheduler` for actions until it says "stop" or `can_continue` is false.
 
         Returns:

@@ -20,6 +20,7 @@ import numpy as np
 from planner_core.model.formulas import deb_order
 from planner_core.pipeline.config import PlanConfig
 from planner_core.pipeline.evaluator import Evaluator
+from planner_core.pipeline.schedule import _points
 
 __all__ = [
     "ConstructivePlans",
@@ -125,8 +126,6 @@ class _Base:
         return f"{type(self).__name__}()"
 
 
-def _points(problem: Any, x: np.ndarray) -> int:
-    return len(problem.breakdown(np.asarray(x, dtype=float))["hover_points"])
 
 
 def _incumbent_feasible(ev: Evaluator) -> bool:
