@@ -46,6 +46,7 @@ def plan(
     config: Any = None,
     progress: Callable[[Any], None] | None = None,
     on_compile: Callable[[], None] | None = None,
+    scheduler: str | Any = "default",
 ) -> Plan:
     """Plan hover points and hover times for `map`; same seed and budget, same plan.
 
@@ -81,6 +82,10 @@ def plan(
             `planner_core.pipeline.Progress` (stage, evaluations, budget, best_f, best_phi,
             seconds).
         on_compile: called once before the kernels are compiled or loaded (the CLI's notice).
+        scheduler: the improving stage's scheduler (issue 34's LAMDE-S seam,
+            `planner_core.pipeline.schedule`): "default" (today's rounds), a static schedule's
+            name (`schedule.SCHEDULES`: a fixed cycle of macro-actions) or a `Scheduler`
+            object; a non-default one is recorded as `config["scheduler"]`.
 
     Returns:
         The `Plan`, with `stages` (per stage: evaluations, seconds, f before and after) and
@@ -94,6 +99,7 @@ def plan(
     from planner_core.model.mapio import load_map
     from planner_core.model.problem import Problem
     from planner_core.pipeline import PlanConfig, run_pipeline
+    from planner_core.pipeline.schedule import make_scheduler, scheduler_name
     from planner_core.pipeline.warmup import warm_up, warmed
 
     if config is None:
@@ -103,6 +109,8 @@ def plan(
                             polish=polish, time_limit=time_limit)
     elif not isinstance(config, PlanConfig):
         raise ValueError(f"config: must be a PlanConfig, got {type(config).__name__}")
+    make_scheduler(scheduler)  # "scheduler: must be one of ...", before any work
+    default_schedule = isinstance(scheduler, str) and scheduler == "default"
     t_start = time.perf_counter()
     m = load_map(map)
     # safety margins (clearance, data margin) are a transformation of the map: the model is the
@@ -111,8 +119,12 @@ def plan(
     if on_compile is not None and not warmed(config.configurator):
         on_compile()
     t_compile = warm_up(config.configurator)
-    result = run_pipeline(problem, config, progress=progress)
+    result = run_pipeline(problem, config, progress=progress,
+                          scheduler=None if default_schedule else scheduler)
     best = problem.breakdown(result.x)
+    settings = config.to_dict()
+    if not default_schedule:
+        settings["scheduler"] = scheduler_name(scheduler)
     wall = time.perf_counter() - t_start
     ev_seconds = sum(s.evaluate_seconds for s in result.stages)
     return Plan(
@@ -137,7 +149,7 @@ def plan(
             "total": wall,
         },
         stages=result.stages,
-        config=config.to_dict(),
+        config=settings,
         stopped=result.stopped,
     )
 

@@ -92,3 +92,40 @@ def test_the_default_scheduler_reproduces_the_pre_refactor_plans() -> None:
         r = run_pipeline(p, PlanConfig(seed=int(seed), budget=int(budget)))
         assert (_digest(r), r.f, r.evaluations) == (want["digest"], want["f"],
                                                     want["evaluations"]), key
+
+
+def test_plan_takes_a_scheduler_by_name_and_records_a_non_default_one() -> None:
+    import lamde_mission
+
+    kw = {"seed": 0, "budget": 2_000, "population": 20}
+    a = lamde_mission.plan(MAPS / "tiny.json", scheduler="kicks-heavy", **kw)
+    b = lamde_mission.plan(MAPS / "tiny.json", **kw)
+    assert a.config["scheduler"] == "kicks-heavy" and "scheduler" not in b.config
+    with pytest.raises(ValueError, match="^scheduler: must be one of"):
+        lamde_mission.plan(MAPS / "tiny.json", scheduler="bogus", **kw)
+
+
+def test_the_cli_refuses_an_unknown_scheduler_in_one_line(tmp_path) -> None:
+    import subprocess
+    import sys
+
+    r = subprocess.run([sys.executable, "-m", "lamde_mission.cli", "plan", str(MAPS / "tiny.json"),
+                        "-o", str(tmp_path / "x.plan"), "--scheduler", "bogus"],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and not (tmp_path / "x.plan").exists()
+    assert r.stderr.strip().count("\n") == 0 and "--scheduler: must be one of" in r.stderr
+
+
+def test_a_fork_before_improve_gives_each_schedule_its_whole_run_plan(tiny: Problem) -> None:
+    from planner_core.pipeline import DEFAULT_PIPELINE
+    from planner_core.pipeline.pipeline import PipelineRun
+
+    cfg = PlanConfig(seed=4, budget=2_500, population=20)
+    run = PipelineRun(tiny, cfg, pipeline=DEFAULT_PIPELINE, evaluator=None, progress=None)
+    run.advance(until="improve")
+    for name in ("default", "kicks-heavy", "fresh-heavy"):
+        twin = run.fork(name)
+        twin.advance()
+        want = run_pipeline(tiny, cfg, scheduler=name)
+        assert twin.result().x.tobytes() == want.x.tobytes(), name
+    assert run.i < len(run.stages) and run.ev.count < cfg.budget  # the original is untouched

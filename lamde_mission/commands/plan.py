@@ -61,6 +61,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--configurator", choices=D.CONFIGURATORS, default=D.CONFIGURATOR,
                    help="how DE operators and F/Cr are chosen each generation "
                    f"(default {D.CONFIGURATOR})")
+    p.add_argument("--scheduler", default="default", metavar="NAME",
+                   help="how the improving stage chooses its macro-actions (kicks, structural "
+                   "search, restarts, fresh sweeps, DE blocks): default (today's rounds) or a "
+                   "static schedule (docs/scheduler.md lists them)")
     p.add_argument("--policy", metavar="CHECKPOINT",
                    help="with --configurator lamde: a checkpoint folder from `lamde-mission "
                    "train` instead of the shipped lamde-v2")
@@ -198,8 +202,14 @@ def _summary(
     compiling = f"; {t_compile:.1f} s compiling (or loading) the kernels" if t_compile > 0.05 \
         else ""
     stopped = f", stopped by the {plan.stopped}" if plan.stopped else ""
+    # a point of 0 s is written as a corner (NAV_WAYPOINT, flown through), not a hover point
+    times = (stored if stored is not None else plan).hover_times
+    n_corner = sum(1 for t in times if float(t) == 0.0)
+    corners = (f" + {n_corner} corner{'s' if n_corner != 1 else ''} (0 s, NAV_WAYPOINT)"
+               if n_corner else "")  # fmt: skip
     lines = [
-        f"map '{printable(m.name)}': {plan.n_hover} hover points, {plan.evaluations} evaluations, "
+        f"map '{printable(m.name)}': {plan.n_hover - n_corner} hover points{corners}, "
+        f"{plan.evaluations} evaluations, "
         f"{plan.timings.get('planning', plan.wall_time - t_compile):.2f} s planning (seed "
         f"{plan.seed}, {plan.configurator}{stopped})" + compiling,
         f"  flight time   {b['t_fly']:10.2f} s    ({who} {t.t_fly:.2f} s)",
@@ -337,7 +347,8 @@ def _run_sorties(args: argparse.Namespace) -> int:
 
     for opt, bad in (("--format", args.format not in (None, "plan")),
                      ("--report", args.report), ("--finish", args.finish != "land"),
-                     ("--policy", args.policy), ("--time-limit", args.time_limit is not None)):
+                     ("--policy", args.policy), ("--time-limit", args.time_limit is not None),
+                     ("--scheduler", args.scheduler != "default")):
         if bad:
             raise UsageError(f"{opt}: not available for a map with a battery or fleet (its "
                              "sorties are written as .plan files in a directory)")
@@ -459,6 +470,12 @@ def run(args: argparse.Namespace) -> int:
             D.check("time_limit", args.time_limit)
     except ValueError as exc:  # "population: must be ...": name the option as typed
         raise UsageError("--" + str(exc).replace("_", "-", 1)) from None
+    from planner_core.pipeline.schedule import make_scheduler
+
+    try:
+        make_scheduler(args.scheduler)
+    except ValueError as exc:
+        raise UsageError(f"--{exc}") from None
     configurator = args.configurator
     if args.policy is not None:
         if args.configurator != "lamde":
@@ -507,6 +524,7 @@ def run(args: argparse.Namespace) -> int:
             time_limit=args.time_limit,
             progress=progress,
             on_compile=announce,
+            scheduler=args.scheduler,
         )
     finally:
         if progress is not None:

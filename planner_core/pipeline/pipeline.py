@@ -208,6 +208,26 @@ class PipelineRun:
         if stopped:
             self.stopped = stopped
 
+    def fork(self, scheduler: Any = None) -> PipelineRun:
+        """An independent copy of this run between stages (the evaluator, state and stages
+        copied, the problem shared), its `improve` stage choosing by `scheduler` (None: as
+        it was): the schedule benchmark runs the stages before `improve` once per map and
+        seed, then each schedule from there. Same as running the whole pipeline with that
+        scheduler, to the bit (tests/test_schedule.py).
+
+        Raises:
+            RuntimeError: a stage is open (`enter` without `leave`).
+        """
+        import copy
+
+        if self._open is not None:
+            raise RuntimeError("fork: a stage is open")
+        memo = {id(self.problem): self.problem}
+        twin = copy.deepcopy(self, memo)
+        twin.stages = list(with_scheduler(twin.stages, scheduler))
+        twin.t0 = time.perf_counter()
+        return twin
+
     def result(self) -> PipelineResult:
         """The run's `PipelineResult` (the evaluator's Deb-best)."""
         ev = self.ev

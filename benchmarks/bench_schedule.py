@@ -1,0 +1,211 @@
+"""Issue 34's first baseline: the best static schedule of the improving stage, found by a grid.
+
+For each training map (generated paper-size maps, `planner_core.suite.generate_map`: 5,000 m
+and 10,000 m a side alternating, densities 0-7 in turn, map seeds from `--map-seed`; or the
+suite's maps with `--suite`) and plan seed, the default pipeline runs once up to its `improve`
+stage, then each schedule template (`planner_core.pipeline.schedule`: "default" and the
+static `SCHEDULES`) runs the rest from a copy (`PipelineRun.fork`, the same plan as a whole
+run with that scheduler, to the bit). Prints per template the mean gap to the per-(map, seed)
+best over all templates, how often it is that best, the paired comparison with the default
+(mean difference of the gaps, maps better/worse, Wilcoxon signed-rank p, two-sided) and the
+improving stage's mean evaluations and seconds; writes one JSON line per run to `-o`.
+
+    python benchmarks/bench_schedule.py [--maps 24] [--seeds 2] [--budget 10000]
+        [--templates default kicks-heavy ...] [--map-seed 3400] [--suite [T01 ...]]
+        [-o runs.jsonl] [--summary runs.jsonl ...]
+
+Gap = (f - f_best) / f_best in percent, f_best the best feasible f of any template on that map
+and seed (an infeasible run is reported and left out of the means). `--summary` prints the
+table of earlier records instead of running. Runs one process (the grid is CPU-bound; run it
+under `nice`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import gzip
+import json
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+SUITE = ROOT / "examples" / "maps" / "suite"
+
+
+def _commit() -> str:
+    try:
+        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT,
+                              capture_output=True, text=True, timeout=10).stdout.strip()
+    except OSError:
+        return ""
+
+
+def training_maps(n: int, map_seed: int) -> list[tuple[str, dict[str, Any]]]:
+    """`n` generated maps: (name, map data), 5,000 m and 10,000 m alternating, densities
+    0-7 in turn, map seeds `map_seed`, `map_seed` + 1, ..."""
+    from planner_core.suite import generate_map
+
+    out = []
+    for k in range(n):
+        size, density, seed = (5000, 10000)[k % 2], (k // 2) % 8, map_seed + k
+        out.append((f"gen-{size}-d{density}-s{seed}", generate_map(size, density, seed)))
+    return out
+
+
+def suite_maps(tasks: list[str]) -> list[tuple[str, Any]]:
+    """The suite's maps named `tasks` (all 16 when empty): (name, path)."""
+    names = tasks or sorted(p.stem for p in SUITE.glob("T*.json"))
+    return [(t, SUITE / f"{t}.json") for t in names]
+
+
+def run_grid(maps: list[tuple[str, Any]], seeds: list[int], budget: int,
+             templates: list[str], out: Any) -> list[dict[str, Any]]:
+    """Every template on every map and seed (the prefix up to `improve` run once each)."""
+    from planner_core.model.mapio import load_map
+    from planner_core.model.problem import Problem
+    from planner_core.pipeline import DEFAULT_PIPELINE, PlanConfig
+    from planner_core.pipeline.pipeline import PipelineRun
+
+    records, commit = [], _commit()
+    for name, src in maps:
+        problem = Problem(load_map(src).planning_map())
+        for seed in seeds:
+            cfg = PlanConfig(seed=seed, budget=budget)
+            t0 = time.perf_counter()
+            base = PipelineRun(problem, cfg, pipeline=DEFAULT_PIPELINE, evaluator=None,
+                               progress=None)
+            base.advance(until="improve")
+            prefix_s = time.perf_counter() - t0
+            f_start = float(base.ev.best()[1]) if base.ev.has_best else float("inf")
+            for tpl in templates:
+                run = base.fork(tpl)
+                t1 = time.perf_counter()
+                run.advance()
+                r = run.result()
+                imp = [s for s in r.stages if s.name == "improve"]
+                rec = {"map": name, "seed": seed, "budget": budget, "template": tpl,
+                       "f": r.f, "phi": r.phi, "f_start": f_start,
+                       "evaluations": r.evaluations,
+                       "improve_evaluations": imp[0].evaluations if imp else 0,
+                       "improve_seconds": round(time.perf_counter() - t1, 3),
+                       "prefix_seconds": round(prefix_s, 3), "commit": commit}
+                records.append(rec)
+                if out is not None:
+                    out.write(json.dumps(rec) + "\n")
+                    out.flush()
+            print(f"{name} seed {seed}: f_start {f_start:.3f}, " + ", ".join(
+                f"{r['template']} {r['f']:.3f}" for r in records[-len(templates):]),
+                file=sys.stderr, flush=True)
+    return records
+
+
+def _read(paths: list[str]) -> list[dict[str, Any]]:
+    out = []
+    for p in paths:
+        opener = gzip.open if p.endswith(".gz") else open
+        with opener(p, "rt") as fh:
+            out.extend(json.loads(line) for line in fh if line.strip())
+    return out
+
+
+def summarise(records: list[dict[str, Any]]) -> str:
+    """The markdown table of the module docstring."""
+    from scipy.stats import wilcoxon
+
+    by_case: dict[tuple[str, int, int], dict[str, dict[str, Any]]] = {}
+    for r in records:
+        by_case.setdefault((r["map"], r["seed"], r["budget"]), {})[r["template"]] = r
+    templates = list(dict.fromkeys(r["template"] for r in records))
+    gaps: dict[str, list[float]] = {t: [] for t in templates}
+    wins = dict.fromkeys(templates, 0)
+    infeasible = dict.fromkeys(templates, 0)
+    paired: dict[str, list[float]] = {t: [] for t in templates}
+    cases = 0
+    for case in by_case.values():
+        if set(case) != set(templates):
+            continue
+        feas = [r["f"] for r in case.values() if r["phi"] == 0]
+        if not feas:
+            continue
+        cases += 1
+        best = min(feas)
+        for t, r in case.items():
+            if r["phi"] > 0:
+                infeasible[t] += 1
+                continue
+            g = (r["f"] - best) / best * 100.0
+            gaps[t].append(g)
+            wins[t] += r["f"] == best
+        if "default" in case and case["default"]["phi"] == 0:
+            gd = (case["default"]["f"] - best) / best * 100.0
+            for t, r in case.items():
+                if r["phi"] == 0:
+                    paired[t].append((r["f"] - best) / best * 100.0 - gd)
+    ev = {t: statistics.fmean(r["improve_evaluations"] for r in records if r["template"] == t)
+          for t in templates}
+    sec = {t: statistics.fmean(r["improve_seconds"] for r in records if r["template"] == t)
+           for t in templates}
+    lines = [f"{cases} (map, seed) cases, budget {sorted({k[2] for k in by_case})}", "",
+             "| template | mean gap % | best in | vs default: mean diff % | better / worse "
+             "| Wilcoxon p | improve evals | improve s | infeasible |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+    order = sorted(templates, key=lambda t: statistics.fmean(gaps[t]) if gaps[t] else 1e9)
+    for t in order:
+        d = paired[t]
+        better, worse = sum(x < 0 for x in d), sum(x > 0 for x in d)
+        p = "-"
+        if t != "default" and any(x != 0 for x in d):
+            p = f"{wilcoxon(d).pvalue:.3g}"
+        mean = statistics.fmean(gaps[t]) if gaps[t] else float("nan")
+        diff = statistics.fmean(d) if d else float("nan")
+        lines.append(f"| {t} | {mean:.4f} | {wins[t]} | {diff:+.4f} | {better} / {worse} | "
+                     f"{p} | {ev[t]:.0f} | {sec[t]:.2f} | {infeasible[t]} |")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """The command line (module docstring). Returns the exit status (2: bad arguments)."""
+    from planner_core.pipeline.schedule import scheduler_names
+
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--maps", type=int, default=24, help="generated training maps (24)")
+    ap.add_argument("--map-seed", type=int, default=3400, help="first generated map's seed")
+    ap.add_argument("--suite", nargs="*", metavar="TASK",
+                    help="the suite's maps (all 16 without names) instead of generated ones")
+    ap.add_argument("--seeds", type=int, default=2, help="plan seeds 0..N-1 (2)")
+    ap.add_argument("--budget", type=int, default=10_000, help="evaluations a plan (10,000)")
+    ap.add_argument("--templates", nargs="+",
+                    default=[t for t in scheduler_names() if t != "alternate"],
+                    help="schedules to compare (default: all registered but 'alternate', "
+                    "which is the default's cycle written out)")
+    ap.add_argument("-o", "--output", help="JSON lines file to write the runs to")
+    ap.add_argument("--summary", nargs="+", metavar="JSONL",
+                    help="print the table of earlier records (plain or .gz) and exit")
+    args = ap.parse_args(argv)
+    if args.summary:
+        print(summarise(_read(args.summary)))
+        return 0
+    bad = [t for t in args.templates if t not in scheduler_names()]
+    if bad or args.maps < 1 or args.seeds < 1:
+        print(f"bench_schedule: --templates: unknown {bad}" if bad else
+              "bench_schedule: --maps and --seeds: must be >= 1", file=sys.stderr)
+        return 2
+    maps = suite_maps(args.suite) if args.suite is not None else training_maps(
+        args.maps, args.map_seed)
+    out = open(args.output, "w") if args.output else None  # noqa: SIM115
+    try:
+        records = run_grid(maps, list(range(args.seeds)), args.budget, args.templates, out)
+    finally:
+        if out is not None:
+            out.close()
+    print(summarise(records))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
