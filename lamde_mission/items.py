@@ -4,7 +4,9 @@ Pure functions over frozen values: no I/O and no vehicle. The mission flown is
 
     TAKEOFF (at the start, to the map's altitude H)
     DO_CHANGE_SPEED (ground speed = v_max)
-    LOITER_TIME x I (one per hover point; param1 = hover seconds; each is a full stop)
+    LOITER_TIME x I (one per hover point; param1 = hover seconds; each is a full stop), and a
+        WAYPOINT (param1 hold 0, param2 `corner_radius`) for each point whose hover time is
+        0 s: a detour corner around an obstacle, flown through, not a hover point
     WAYPOINT (at the end point)
     LAND (at the end point)  |  RETURN_TO_LAUNCH
 
@@ -51,9 +53,51 @@ __all__ = [
     "FRAME",
     "MISSION_TYPE",
     "SNAP_M",
+    "CORNER_RADIUS_MIN_M",
+    "corner_radius",
+    "corner_stops",
 ]
 
 _NAN = float("nan")
+
+#: metres: the least acceptance radius written in a corner's param2 (PX4 multicopters switch to
+#: the next item inside it; 0 there would mean NAV_ACC_RAD, 10 m by default)
+CORNER_RADIUS_MIN_M = 0.5
+
+
+def corner_radius(map_: Any) -> float:
+    """The acceptance radius (m) written in a corner WAYPOINT's param2: the map's obstacle
+    clearance (`safety.clearance`), at least `CORNER_RADIUS_MIN_M`.
+
+    A pass-through waypoint is cut on the inside of the turn, towards the obstacle the corner
+    goes around, by at most about the acceptance radius (PX4 multicopter: param2 when > 0, else
+    NAV_ACC_RAD; ArduPilot Copter ignores param2 and blends the corner within WPNAV_RADIUS,
+    2 m by default, under WPNAV_ACCEL_C). A cut of at most the clearance stays outside the true
+    obstacle: see docs/missions.md.
+
+    Args:
+        map_: the map (its `spec.safety.clearance`, m).
+
+    Returns:
+        The radius in metres.
+    """
+    return max(float(map_.spec.safety.clearance), CORNER_RADIUS_MIN_M)
+
+
+def corner_stops(route: Route) -> np.ndarray:
+    """The stops of `route` that are corners: WAYPOINT items without a hold (not hover points),
+    except the last WAYPOINT (the end point). (K, 2) local metres, in flying order.
+
+    Args:
+        route: a mission read back by `items_to_route`.
+
+    Returns:
+        The corners' positions (K x 2, m); empty (0 x 2) when there are none.
+    """
+    ks = [k for k, (c, h) in enumerate(zip(route.commands, route.is_hover, strict=True))
+          if c == CMD.WAYPOINT and not h]  # fmt: skip
+    ks = ks[:-1]  # the end point's WAYPOINT
+    return np.asarray(route.stops, dtype=float).reshape(-1, 2)[ks].reshape(-1, 2)
 
 
 # ----------------------------------------------------------------------------- plan -> items
@@ -77,6 +121,12 @@ def plan_to_items(
     `plan` is anything with `hover_points` (I x 2, local metres) and `hover_times` (s).
     `speed` overrides the cruise speed (default the map's v_max). With finish="rtl" the last
     item is RETURN_TO_LAUNCH: the vehicle flies back to the start, a leg outside the paper's f.
+    A point whose hover time is exactly 0 s (a detour corner: the search puts obstacle
+    corners there, the LP gives them no time) is written as NAV_WAYPOINT with hold 0 and
+    param2 = `corner_radius(map)`, not as a 0-second LOITER_TIME: it is a turn, not a hover
+    point (the sim reads it as a stop that is not a hover point, and still as a full stop of
+    Eq. 1's trapezoid: its time and energy are those of a stop, an upper bound on a blended
+    turn).
     """
     if finish not in ("land", "rtl"):
         raise ValueError(f"finish must be 'land' or 'rtl', got {finish!r}")
@@ -106,7 +156,12 @@ def plan_to_items(
     add(CMD.TAKEOFF, rel, 0.0, 0.0, 0.0, _NAN, pos=(*start, alt))
     # DO_CHANGE_SPEED: p1 speed type 1 = ground speed, p2 speed m/s, p3 throttle -1 = no change
     add(CMD.DO_CHANGE_SPEED, FRAME.MISSION, 1.0, v, -1.0, 0.0)
+    r_corner = corner_radius(map)
     for (lat, lon), t in zip(hover_ll, ht, strict=True):
+        if float(t) == 0.0:
+            # a corner: WAYPOINT p1 hold 0 s, p2 acceptance radius, p3 pass 0, p4 yaw NaN
+            add(CMD.WAYPOINT, rel, 0.0, r_corner, 0.0, _NAN, pos=(lat, lon, alt))
+            continue
         # LOITER_TIME: p1 seconds, p2 heading required 0, p3 radius 0 (hover on the spot),
         # p4 xtrack 0 (leave from the centre)
         add(CMD.LOITER_TIME, rel, float(t), 0.0, 0.0, 0.0, pos=(lat, lon, alt))

@@ -43,13 +43,17 @@ def nice_length(span: float) -> float:
 
 
 def _mission_view(map_: Any, timeline: Any, plan: Any) -> dict[str, Any] | None:
-    """Path, hover points/times and data collected, from a sim Timeline or a Plan."""
+    """Path, hover points/times, corners (0-s points, written as NAV_WAYPOINT) and data
+    collected, from a sim Timeline or a Plan."""
     if timeline is not None:
+        from lamde_mission.items import corner_stops
+
         return {
             "path": np.asarray(timeline.path, dtype=float),
             "return_leg": timeline.return_leg,
             "hover_points": np.asarray(timeline.hover_points, dtype=float).reshape(-1, 2),
             "hover_times": np.asarray(timeline.hover_times, dtype=float).reshape(-1),
+            "corners": corner_stops(timeline.route),
             "collected": np.asarray(timeline.collected, dtype=float),
             "f": timeline.totals.f,
         }
@@ -59,11 +63,14 @@ def _mission_view(map_: Any, timeline: Any, plan: Any) -> dict[str, Any] | None:
         got = bd.get("collected") if isinstance(bd, dict) else None
         collected = (np.array([float(got.get(i, np.nan)) for i in map_.sensor_ids])
                      if isinstance(got, dict) else None)  # fmt: skip
+        ht = np.asarray(plan.hover_times, dtype=float).reshape(-1)
+        corner = ht == 0.0  # written as NAV_WAYPOINT corners, not hover points
         return {
             "path": np.vstack([map_.start, hp, map_.end]),
             "return_leg": None,
-            "hover_points": hp,
-            "hover_times": np.asarray(plan.hover_times, dtype=float).reshape(-1),
+            "hover_points": hp[~corner],
+            "hover_times": ht[~corner],
+            "corners": hp[corner],
             "collected": collected,
             "f": getattr(plan, "f", None),
         }
@@ -605,6 +612,14 @@ def mission_figure(
             ax.plot(rl[:, 0], rl[:, 1], ":", color="tab:blue", linewidth=1.2, zorder=3)
             handles.append(Line2D([], [], color="tab:blue", linestyle=":", label="return (RTL)"))
         hp, ht = view["hover_points"], view["hover_times"]
+        cp = view.get("corners", np.zeros((0, 2)))
+        if len(cp):
+            scene.marker(cp, 3.0)
+            ax.scatter(cp[:, 0], cp[:, 1], s=14, marker="D", facecolors="white",
+                       edgecolors="tab:blue", linewidths=0.8, zorder=7)  # fmt: skip
+            handles.append(Line2D([], [], marker="D", linestyle="", markerfacecolor="white",
+                                  markeredgecolor="tab:blue",
+                                  label=f"corner, flown through ({len(cp)})"))  # fmt: skip
         if len(hp):
             t_max = max(float(spec.uav.max_hover_time), 1e-9)
             size = 40.0 + 260.0 * np.clip(ht / t_max, 0.0, 1.0)

@@ -114,10 +114,14 @@ def run(args: argparse.Namespace) -> int:
         }  # fmt: skip
         print(json.dumps(out, indent=2))
     else:
+        from lamde_mission.items import corner_stops
         from planner_core.textio import printable
 
+        n_corner = len(corner_stops(timeline.route))
+        corners = (f" + {n_corner} corner{'s' if n_corner != 1 else ''} (NAV_WAYPOINT, flown "
+                   "through; not hover points)" if n_corner else "")  # fmt: skip
         print(f"mission {args.mission} on map '{printable(m.name)}': "
-              f"{len(timeline.hover_times)} hover points")  # fmt: skip
+              f"{len(timeline.hover_times)} hover points{corners}")  # fmt: skip
         print("\n".join(printable(r) for r in verdicts.table().splitlines()))
         sf = m.spec.safety
         margins = ", ".join(f"'{printable(k)}' {100 * v:+.3g} %"

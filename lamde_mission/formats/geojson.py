@@ -5,7 +5,9 @@ A FeatureCollection in WGS84 with [longitude, latitude] positions. Every feature
 (Polygons: closed rings, exterior counter-clockwise, holes clockwise; circles approximated by a
 regular polygon through the circle,
 with `centre` and `radius` kept as properties), "sensor" (Point: id, required, collected),
-"path" (LineString start -> hover points -> end), "hover" (Point: index, hover_time),
+"path" (LineString start -> hover points and corners -> end), "hover" (Point: index,
+hover_time), "corner" (Point: index; a point of 0 s, written as a NAV_WAYPOINT flown through,
+not a hover point; `index` counts hover points and corners together, in flying order),
 "start" and "end" (Points). Export only: a GeoJSON file is not read back as a mission.
 """
 
@@ -102,14 +104,18 @@ def geojson_document(plan: Any, map: Any) -> dict[str, Any]:  # noqa: A002
     nodes = np.vstack([map.start, hp, map.end])
     feats.append(_feature(
         {"type": "LineString", "coordinates": _lonlat(map, nodes)},
-        kind="path", n_hover=len(hp),
+        kind="path", n_hover=int(np.count_nonzero(ht != 0.0)),
+        n_corner=int(np.count_nonzero(ht == 0.0)),
         f=_clean(float(getattr(plan, "f", math.nan))),
         t_fly=_clean(bd.get("t_fly")), t_hover=_clean(bd.get("t_hover")),
         feasible=getattr(plan, "feasible", None),
     ))  # fmt: skip
     for i, (p, t) in enumerate(zip(hp, ht, strict=True)):
-        feats.append(_feature({"type": "Point", "coordinates": _lonlat(map, p)[0]},
-                              kind="hover", index=i, hover_time=float(t)))  # fmt: skip
+        point = {"type": "Point", "coordinates": _lonlat(map, p)[0]}
+        if float(t) == 0.0:  # a corner (items.plan_to_items writes it as NAV_WAYPOINT)
+            feats.append(_feature(point, kind="corner", index=i))
+        else:
+            feats.append(_feature(point, kind="hover", index=i, hover_time=float(t)))
     for kind, p in (("start", map.start), ("end", map.end)):
         feats.append(_feature({"type": "Point", "coordinates": _lonlat(map, p)[0]}, kind=kind))
     return {"type": "FeatureCollection", "features": feats}

@@ -1,0 +1,146 @@
+"""Detour corners (issue 31): a point of 0 s is written as NAV_WAYPOINT (hold 0, param2 the
+corner's acceptance radius), never as a 0-second LOITER_TIME; the sim replays it as a stop
+that is not a hover point, and `verify` passes on what is written."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from lamde_mission.formats import read_mission, write_mission
+from lamde_mission.formats.geojson import geojson_document
+from lamde_mission.items import (
+    CMD,
+    CORNER_RADIUS_MIN_M,
+    corner_radius,
+    corner_stops,
+    items_to_route,
+    plan_to_items,
+)
+from lamde_mission.storage import storable_plan
+from planner_core.model.mapio import load_map
+from sim import replay, verify
+
+#: a wall from the bottom edge up to y = 900 between the start and sensor 'a': the leg from
+#: the west to the east must go over its top end
+WALL_MAP = {
+    "name": "wall",
+    "origin": {"lat": 23.0493, "lon": 113.3975, "alt": 10.0},
+    "area": {"width": 2000, "height": 1200},
+    "start": [100, 500],
+    "end": [1900, 500],
+    "sensors": [{"id": "a", "x": 1500, "y": 500}, {"id": "b", "x": 300, "y": 300}],
+    "obstacles": {"rectangles": [{"x": 1000, "y": 450, "length": 40, "width": 900,
+                                  "angle_deg": 0}]},  # fmt: skip
+    "uav": {"altitude": 80, "max_speed": 15, "acceleration": 3, "max_hover_points": 4},
+    "safety": {"clearance": 5, "data_margin": 0},
+}
+
+#: hover point near 'b', a corner over the wall's top end, hover point near 'a'
+PLAN = SimpleNamespace(hover_points=[[300, 420], [1000, 960], [1500, 560]],
+                       hover_times=[30.0, 0.0, 30.0])  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def m():
+    return load_map(WALL_MAP)
+
+
+def _navigation(items):
+    return [it for it in items if it.command in (CMD.WAYPOINT, CMD.LOITER_TIME)]
+
+
+def test_the_straight_leg_is_blocked_and_the_corner_clears_it(m):
+    """The fixture is what the test says: without the corner the leg crosses the wall."""
+    from sim.obstacles import obstacle_shapes, overlap_lengths
+
+    shapes = obstacle_shapes(m.planning_map())
+    hp = np.asarray(PLAN.hover_points, dtype=float)
+    straight = np.array([hp[0], hp[2]])
+    assert overlap_lengths(straight, shapes).sum() > 40.0  # the wall is 40 m thick
+    assert overlap_lengths(np.vstack([m.start, hp, m.end]), shapes).sum() == 0.0
+
+
+def test_a_zero_second_point_is_a_nav_waypoint_corner(m):
+    items = plan_to_items(PLAN, m)
+    nav = _navigation(items)
+    assert [it.command for it in nav] == [CMD.LOITER_TIME, CMD.WAYPOINT, CMD.LOITER_TIME,
+                                          CMD.WAYPOINT]  # fmt: skip
+    corner = nav[1]
+    assert corner.param1 == 0.0 and corner.param2 == corner_radius(m) == 5.0
+    assert not any(it.command == CMD.LOITER_TIME and it.param1 == 0.0 for it in items)
+    route = items_to_route(items, m)
+    assert list(route.is_hover) == [True, False, True, False, False]  # + LAND
+    np.testing.assert_allclose(corner_stops(route), [[1000.0, 960.0]], atol=0.05)
+
+
+def test_the_corner_radius_is_the_clearance_and_never_zero(m):
+    """param2 = 0 would mean the autopilot's default (PX4 NAV_ACC_RAD, 10 m)."""
+    assert corner_radius(m) == 5.0
+    bare = load_map({**WALL_MAP, "safety": {"clearance": 0, "data_margin": 0}})
+    assert corner_radius(bare) == CORNER_RADIUS_MIN_M > 0.0
+
+
+@pytest.mark.parametrize("autopilot", ["px4", "ardupilot", "generic"])
+@pytest.mark.parametrize("suffix", [".plan", ".waypoints"])
+def test_written_corners_replay_and_pass_verify(m, tmp_path: Path, autopilot, suffix):
+    stored = storable_plan(PLAN, m, autopilot, planning_map=m.planning_map())
+    path = write_mission(tmp_path / f"wall{suffix}", stored, m, autopilot=autopilot)
+    items, _fence = read_mission(path)
+    nav = _navigation(items)
+    corners = [it for it in nav[:-1] if it.command == CMD.WAYPOINT]
+    assert len(corners) == 1 and corners[0].param1 == 0.0
+    assert all(it.param1 > 0.0 for it in nav if it.command == CMD.LOITER_TIME)
+    tl = replay(items, m)
+    assert len(tl.hover_times) == 2  # the corner is not a hover point
+    v = verify(tl, m)
+    assert v.passed, (v.failed, v.table())
+
+
+def test_the_corner_is_charged_as_a_full_stop(m):
+    """The sim keeps Eq. 1's full stop at a corner: the same flight time as a 0-s hover point
+    had (conservative for a blended turn)."""
+    from dataclasses import replace
+
+    items = plan_to_items(PLAN, m)
+    as_loiter = [replace(it, command=CMD.LOITER_TIME, param2=0.0, param4=0.0)
+                 if it.command == CMD.WAYPOINT and it.param1 == 0.0 and k < len(items) - 2
+                 else it for k, it in enumerate(items)]  # fmt: skip
+    a, b = replay(items, m).totals, replay(as_loiter, m).totals
+    assert a.t_fly == pytest.approx(b.t_fly, rel=1e-12)
+    assert a.t_hover == b.t_hover
+
+
+def test_geojson_names_the_corner(m):
+    doc = geojson_document(PLAN, m)
+    kinds = [f["properties"]["kind"] for f in doc["features"]]
+    assert kinds.count("hover") == 2 and kinds.count("corner") == 1
+    path = next(f for f in doc["features"] if f["properties"]["kind"] == "path")
+    assert path["properties"]["n_hover"] == 2 and path["properties"]["n_corner"] == 1
+    json.dumps(doc, allow_nan=False)
+
+
+@pytest.mark.slow  # measured 3.5 s (one plan at 2,000 evaluations)
+def test_a_planned_detour_is_written_with_corners_and_verifies(m, tmp_path: Path, capsys):
+    """End to end: `plan` on the walled map routes over the wall through a 0-s point; the
+    written mission holds it as NAV_WAYPOINT, no 0-s LOITER_TIME, and `verify` passes."""
+    from lamde_mission.cli import main
+
+    map_path = tmp_path / "wall.json"
+    map_path.write_text(json.dumps(WALL_MAP))
+    out = tmp_path / "wall.plan"
+    assert main(["plan", str(map_path), "-o", str(out), "--seed", "0", "--budget", "2000"]) == 0
+    text = capsys.readouterr().out
+    items, _fence = read_mission(out)
+    nav = _navigation(items)
+    assert not any(it.command == CMD.LOITER_TIME and it.param1 == 0.0 for it in items)
+    corners = [it for it in nav[:-1] if it.command == CMD.WAYPOINT]
+    assert corners, "the planned detour has a corner"
+    assert f"+ {len(corners)} corner" in text
+    assert verify(replay(items, m), m).passed
+    assert main(["verify", str(map_path), str(out)]) == 0
+    assert "corner" in capsys.readouterr().out
