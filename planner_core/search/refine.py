@@ -28,7 +28,9 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from numba import njit
 
+from planner_core.model.formulas import slant_rate
 from planner_core.model.geometry import overlap_lengths
 from planner_core.search.polish import _route_flight_time, polish_hover_times
 
@@ -180,9 +182,103 @@ def _fit(problem: Any, seeder: Any, pts: np.ndarray, *, merge_first: bool) -> np
     return pts
 
 
-#: pairs whose trial routes `_merge_pair` builds at once (bounds its memory: a block holds
-#: two trial routes of k + 1 legs per pair and two rate rows of J sensors)
+#: pairs whose trial routes `_merge_pair` builds at once when it scores its shortlist exactly
+#: (bounds its memory: a block holds one trial route of k + 1 legs per pair)
 _MERGE_BLOCK = 1 << 20
+#: `_merge_pair`'s shortlist margin, in units of (k + 2) x the route's flight time: a pair's
+#: added time from its changed legs alone differs from the whole trial route's sum minus the
+#: base by rounding only (~(k + 2) x 1.1e-16 of the route time), so every pair within this
+#: margin of the least is scored exactly and the rest cannot be the least
+_MERGE_SLACK = 1e-12
+
+
+def _sole_servers(serves: np.ndarray, need: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The sensors (needing data) that one point or exactly two points serve, as sorted lists
+    per point and per pair: (u1_ptr (k + 1,), u1_idx, u2_ptr (k (k - 1) / 2 + 1,), u2_idx),
+    CSR form, sensors ascending within each list; pairs (i < j) in `np.triu_indices` order."""
+    k = serves.shape[0]
+    count = serves.sum(axis=0)
+    first = np.argmax(serves, axis=0)
+    last = k - 1 - np.argmax(serves[::-1], axis=0)
+    one = np.flatnonzero((count == 1) & (need > 0))
+    order = np.argsort(first[one], kind="stable")
+    u1_idx = one[order]
+    u1_ptr = np.zeros(k + 1, dtype=np.int64)
+    np.cumsum(np.bincount(first[one], minlength=k), out=u1_ptr[1:])
+    two = np.flatnonzero((count == 2) & (need > 0))
+    p, q = first[two], last[two]
+    pair = p * k - p * (p + 1) // 2 + (q - p - 1)
+    order = np.argsort(pair, kind="stable")
+    u2_idx = two[order]
+    n_pairs = k * (k - 1) // 2
+    u2_ptr = np.zeros(n_pairs + 1, dtype=np.int64)
+    np.cumsum(np.bincount(pair, minlength=n_pairs), out=u2_ptr[1:])
+    return u1_ptr, u1_idx.astype(np.int64), u2_ptr, u2_idx.astype(np.int64)
+
+
+@njit(cache=True, nogil=True)
+def _merge_places(pts, sensors, need, ii, jj, u1_ptr, u1_idx, u2_ptr, u2_idx, h2, peak_rate,
+                  decay, serve_t):  # pragma: no cover - compiled
+    """Per pair (ii[p], jj[p]): both places (midpoint, centroid of the sensors only the pair
+    serves, summed in sensor order) and whether each still serves all of those sensors
+    (`covers`' test, the rates as `_link_rates_2d` computes them). Returns places (P, 2, 2),
+    valid (P, 2)."""
+    n_pairs = ii.shape[0]
+    places = np.full((n_pairs, 2, 2), np.nan)
+    valid = np.zeros((n_pairs, 2), dtype=np.bool_)
+    buf = np.empty(sensors.shape[0], dtype=np.int64)
+    big = sensors.shape[0] + 1
+    for p in range(n_pairs):
+        i, j = ii[p], jj[p]
+        mx = 0.5 * (pts[i, 0] + pts[j, 0])
+        my = 0.5 * (pts[i, 1] + pts[j, 1])
+        places[p, 0, 0] = mx
+        places[p, 0, 1] = my
+        # the pair's own sensors: i's alone, j's alone and the two's together, merged ascending
+        a, a_end = u1_ptr[i], u1_ptr[i + 1]
+        b, b_end = u1_ptr[j], u1_ptr[j + 1]
+        c, c_end = u2_ptr[p], u2_ptr[p + 1]
+        n = 0
+        while a < a_end or b < b_end or c < c_end:
+            sa = u1_idx[a] if a < a_end else big
+            sb = u1_idx[b] if b < b_end else big
+            sc = u2_idx[c] if c < c_end else big
+            if sa <= sb and sa <= sc:
+                buf[n] = sa
+                a += 1
+            elif sb <= sc:
+                buf[n] = sb
+                b += 1
+            else:
+                buf[n] = sc
+                c += 1
+            n += 1
+        if n == 0:
+            valid[p, 0] = True
+            continue
+        sx = 0.0
+        sy = 0.0
+        for t in range(n):
+            sx += sensors[buf[t], 0]
+            sy += sensors[buf[t], 1]
+        cx = sx / n
+        cy = sy / n
+        places[p, 1, 0] = cx
+        places[p, 1, 1] = cy
+        for c2 in range(2):
+            qx = mx if c2 == 0 else cx
+            qy = my if c2 == 0 else cy
+            ok = True
+            for t in range(n):
+                s = buf[t]
+                dx = qx - sensors[s, 0]
+                dy = qy - sensors[s, 1]
+                rate = max(slant_rate(dx * dx + dy * dy, h2, peak_rate, decay), 0.0)
+                if not rate * serve_t >= need[s]:
+                    ok = False
+                    break
+            valid[p, c2] = ok
+    return places, valid
 
 
 def _merge_pair(problem: Any, pts: np.ndarray) -> np.ndarray | None:
@@ -192,10 +288,15 @@ def _merge_pair(problem: Any, pts: np.ndarray) -> np.ndarray | None:
     pair order, midpoint before centroid, among equals); None when no pair can be merged. The
     merged point takes the first point's place in the route.
 
-    All k (k - 1) / 2 pairs are scored in blocks: per pair the sensors only it serves (J), both
-    places' coverage (2 J rates) and both trial routes' flight times (2 (k + 1) legs), so one
-    call costs O(k^2 (k + J)) in `_MERGE_BLOCK`-bounded memory; `merge_pair_reference` is the
-    loop it replaces (same result to the bit, tests)."""
+    A sensor is the pair's own when every point serving it is one of the two, so only the
+    sensors one point or exactly two points serve can be (`_sole_servers`): each pair checks
+    its own few (compiled, `_merge_places`) instead of all J. Each pair's added time is first
+    taken from the legs it changes (O(1)); the pairs within `_MERGE_SLACK` of the least are
+    then scored as the reference does, on the whole trial route (blocks of `_MERGE_BLOCK`), so
+    the choice is the reference's to the bit. One call costs O(k J) for the coverage, O(k^2)
+    for the pairs plus O(k) per sensor a single point serves (k pairs hold it), and O(k) per
+    shortlisted pair; `merge_pair_reference` is the loop it replaces (tests hold the two
+    equal)."""
     mp = problem.model
     pts = np.asarray(pts, dtype=float).reshape(-1, 2)
     k = len(pts)
@@ -203,55 +304,58 @@ def _merge_pair(problem: Any, pts: np.ndarray) -> np.ndarray | None:
         return None
     need = np.asarray(mp.required, dtype=float)
     serves = covers(problem, pts)  # (k, J)
-    count = serves.sum(axis=0)
-    sensors = np.asarray(mp.sensors, dtype=float)
+    sensors = np.ascontiguousarray(mp.sensors, dtype=float)
+    ii, jj = np.triu_indices(k, 1)  # the reference's loop order: i, then j > i
+    u1_ptr, u1_idx, u2_ptr, u2_idx = _sole_servers(serves, need)
+    places, valid = _merge_places(pts, sensors, need, ii.astype(np.int64), jj.astype(np.int64),
+                                  u1_ptr, u1_idx, u2_ptr, u2_idx, float(mp.altitude) ** 2,
+                                  float(mp.peak_rate), float(mp.decay),
+                                  SERVE_FRACTION * mp.t_max)
+    if not valid.any():
+        return None
     base = _route_flight_time(problem, pts)
     full = np.vstack([problem.start, pts, problem.end])
-    ii, jj = np.triu_indices(k, 1)  # the reference's loop order: i, then j > i
-    block = max(1, _MERGE_BLOCK // (k + 1 + len(need) + 1))
-    best: tuple[float, int, int] | None = None  # (added time, pair, place)
-    for lo in range(0, len(ii), block):
-        i, j = ii[lo : lo + block], jj[lo : lo + block]
-        own = (serves[i] | serves[j]) & (count[None, :] - serves[i] - serves[j] <= 0) \
-            & (need > 0)[None, :]
-        has = own.any(axis=1)
-        places = np.empty((len(i), 2, 2))
-        places[:, 0] = 0.5 * (pts[i] + pts[j])
-        # the centroid of the pair's own sensors, summed in sensor order (as mean() does)
-        acc = np.zeros((len(i), 2))
-        for s in np.flatnonzero(own.any(axis=0)):
-            acc[own[:, s]] += sensors[s]
-        with np.errstate(invalid="ignore", divide="ignore"):
-            places[:, 1] = acc / own.sum(axis=1)[:, None]
-        valid = np.stack([np.ones(len(i), dtype=bool), has], axis=1)
-        q = places.reshape(-1, 2)
-        flat_own = np.repeat(own, 2, axis=0)
-        fits = (covers(problem, np.where(valid.reshape(-1, 1), q, 0.0)) | ~flat_own).all(axis=1)
-        valid &= fits.reshape(-1, 2) | ~has[:, None]
-        # the trial routes: start -> pts without j, i at the new place -> end
-        cols = np.arange(k + 1)[None, :]
-        idx = cols + (cols >= (j + 1)[:, None])
-        t = np.full((len(i), 2), np.inf)
-        for c in range(2):
-            rows = np.flatnonzero(valid[:, c])
-            if not len(rows):
-                continue
-            nodes = full[idx[rows]]
-            nodes[np.arange(len(rows)), i[rows] + 1] = places[rows, c]
-            d = np.linalg.norm(np.diff(nodes, axis=1), axis=2)
-            t[rows, c] = mp.flight_time(d).sum(axis=1) - base
-        flat = t.reshape(-1)
-        m = int(np.argmin(flat))
-        if np.isfinite(flat[m]) and (best is None or flat[m] < best[0]):
-            best = (float(flat[m]), lo + m // 2, m % 2)
-    if best is None:
-        return None
-    _, pair, place = best
+    leg = mp.flight_time(np.linalg.norm(np.diff(full, axis=0), axis=1))  # (k + 1,)
+
+    def ft(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        return mp.flight_time(np.hypot(b[..., 0] - a[..., 0], b[..., 1] - a[..., 1]))
+
+    # added time from the changed legs: i's two legs to the new place, j's two legs closed up
+    # (the four legs i-1 -> i -> j -> j+1 become i-1 -> q -> j+1 for neighbours)
+    adj = jj == ii + 1
+    q = places  # (P, 2, 2)
+    after_i = np.where(adj, jj + 2, ii + 2)  # the node the new place flies on to
+    new = ft(full[ii][:, None, :], q) + ft(q, full[after_i][:, None, :])
+    old = leg[ii] + leg[ii + 1] + np.where(adj, leg[jj + 1], leg[jj] + leg[jj + 1])
+    closed = np.where(adj, 0.0, ft(full[jj], full[jj + 2]))
+    with np.errstate(invalid="ignore"):
+        delta = np.where(valid, new - old[:, None] + closed[:, None], np.inf).reshape(-1)
+    least = float(np.min(delta))
+    slack = _MERGE_SLACK * (k + 2) * (abs(base) + abs(least) + 1.0)
+    short = np.flatnonzero(delta <= least + 2.0 * slack)  # ascending: pair, then place
+    # the shortlist scored as the reference scores a trial: the whole route's flight time
+    cols = np.arange(k + 1)[None, :]
+    block = max(1, _MERGE_BLOCK // (k + 2))
+    best: tuple[float, int] | None = None  # (added time, flat index)
+    for lo in range(0, len(short), block):
+        flat = short[lo : lo + block]
+        pair, place = flat // 2, flat % 2
+        i, j = ii[pair], jj[pair]
+        nodes = full[cols + (cols >= (j + 1)[:, None])]
+        nodes[np.arange(len(flat)), i + 1] = places[pair, place]
+        d = np.linalg.norm(np.diff(nodes, axis=1), axis=2)
+        t = mp.flight_time(d).sum(axis=1) - base
+        m = int(np.argmin(t))
+        if best is None or t[m] < best[0]:
+            best = (float(t[m]), int(flat[m]))
+    assert best is not None
+    pair, place = best[1] // 2, best[1] % 2
     i, j = int(ii[pair]), int(jj[pair])
     trial = np.delete(pts, j, axis=0)
     if place == 0:
         trial[i] = 0.5 * (pts[i] + pts[j])
     else:
+        count = serves.sum(axis=0)
         own = (serves[i] | serves[j]) & (count - serves[i] - serves[j] <= 0) & (need > 0)
         trial[i] = sensors[own].mean(axis=0)
     return trial
