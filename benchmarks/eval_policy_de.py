@@ -90,7 +90,7 @@ def report(res: dict[str, dict[str, dict[int, float]]], name: str) -> str:
         row = [f"{np.mean(list(mine.values())):.1f}"]
         marks = []
         for o in others:
-            theirs = res[o].get(t, {})
+            theirs = {r: v for r, v in res[o].get(t, {}).items() if r in mine}
             row.append(f"{np.mean(list(theirs.values())):.1f}" if theirs else "")
             runs = sorted(set(mine) & set(theirs))
             a = np.array([mine[r] for r in runs])

@@ -85,6 +85,11 @@ def test_cli_train_runs_on_a_trainset_file(tmp_path, capsys) -> None:  # noqa: A
     config = json.loads((tmp_path / "ck" / "config.json").read_text())
     assert config["net"]["embed"] == 8 and config["training"]["ppo"]["imitate"] == "fixed"
     assert len(config["training"]["imitation"]) == 1
+    # a new training reads the observation's context and uses per-individual credit
+    from planner_core.learning.env import N_CONTEXT
+
+    assert config["net"]["context"] == N_CONTEXT
+    assert config["training"]["ppo"]["credit"] == "individual"
 
 
 def test_cli_plan_with_a_trained_checkpoint_folder(tmp_path, capsys) -> None:  # noqa: ANN001

@@ -112,7 +112,8 @@ def _config(args: argparse.Namespace):  # noqa: ANN202 - PPOConfig is imported l
                              f"{', '.join(sorted(fields))}; network: "
                              f"net.{', net.'.join(sorted(net_fields))})")
     try:
-        cfg = PPOConfig(net=NetConfig(**net_kw), **kw)
+        # the network's defaults are PPOConfig's (new trainings read the context)
+        cfg = PPOConfig(net=NetConfig(**{**PPOConfig().net.to_dict(), **net_kw}), **kw)
     except (TypeError, ValueError) as exc:
         raise UsageError(f"--set: {exc}") from None
     for name in ("epochs", "envs", "population", "budget", "n_steps", "update_epochs"):
