@@ -218,6 +218,14 @@ REGISTRY: dict[str, OptimiserSpec] = {
             "linear population reduction, Deb's rule for constraints",
         ),
         OptimiserSpec(
+            "cmocso",
+            "planner_core.bench.baselines.cmocso:optimise",
+            "CMOCSO (Ming et al. 2023, IEEE TEVC): competitive swarm (losers learn from "
+            "winners, epsilon-constrained SPEA2 fitness) and cooperative swarm (SBX, "
+            f"constraints ignored), population {POPULATION} each; objective f, constraint phi "
+            "(no penalty)",
+        ),
+        OptimiserSpec(
             "random-search",
             "planner_core.bench.baselines.random_search:optimise",
             "uniform random sampling, best under Deb's rule (the floor)",
