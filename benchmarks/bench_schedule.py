@@ -12,11 +12,13 @@ improving stage's mean evaluations and seconds; writes one JSON line per run to 
 
     python benchmarks/bench_schedule.py [--maps 24] [--seeds 2] [--budget 10000]
         [--templates default kicks-heavy ...] [--map-seed 3400] [--suite [T01 ...]]
-        [-o runs.jsonl] [--summary runs.jsonl ...]
+        [-o runs.jsonl] [--summary runs.jsonl ...] [--select runs.jsonl ...]
 
 Gap = (f - f_best) / f_best in percent, f_best the best feasible f of any template on that map
 and seed (an infeasible run is reported and left out of the means). `--summary` prints the
-table of earlier records instead of running. Runs one process (the grid is CPU-bound; run it
+table of earlier records instead of running; `--select` evaluates a contextual selector (map
+and early-run features -> a template, k nearest training cases, `select`) leaving one map out
+at a time. Runs one process (the grid is CPU-bound; run it
 under `nice`).
 """
 
@@ -63,6 +65,40 @@ def suite_maps(tasks: list[str]) -> list[tuple[str, Any]]:
     return [(t, SUITE / f"{t}.json") for t in names]
 
 
+def case_features(problem: Any, run: Any) -> dict[str, float]:
+    """Map and early-run features of a run stopped before `improve` (the selector's input):
+    sensors, obstacles, area (km^2), I_max; the incumbent against the best constructive plan
+    (per cent), its hover points / I_max, the pool's distinct feasible structures and the
+    next one's gap (per cent), the share of the budget left for `improve`."""
+    import numpy as np
+
+    from planner_core.pipeline.schedule import _points
+
+    spec = problem.map.spec.obstacles
+    x, f, _ = run.ev.best()
+    pool = run.state.pool
+    cons = pool.f[(pool.phi == 0) & (np.array(pool.kinds) == "constructive")] if len(
+        pool) else np.zeros(0)
+    by_n: dict[int, float] = {}
+    for i in pool.ordered() if len(pool) else []:
+        if pool.phi[i] == 0:
+            by_n.setdefault(_points(problem, pool.X[i]), float(pool.f[i]))
+    n_inc = _points(problem, x)
+    others = sorted(v for k, v in by_n.items() if k != n_inc)
+    return {
+        "sensors": float(len(problem.map.spec.sensors)),
+        "obstacles": float(len(spec.circles) + len(spec.rectangles) + len(spec.no_fly_zones)
+                           + len(spec.polygons)),
+        "area_km2": problem.map.width * problem.map.height / 1e6,
+        "imax": float(problem.n_points),
+        "f_vs_constructive": (float(f) / float(cons.min()) - 1) * 100 if len(cons) else 0.0,
+        "points_over_imax": n_inc / max(problem.n_points, 1),
+        "structures": float(len(by_n)),
+        "next_structure_gap": (others[0] / float(f) - 1) * 100 if others else 0.0,
+        "improve_share": run.ev.remaining / run.ev.budget,
+    }
+
+
 def run_grid(maps: list[tuple[str, Any]], seeds: list[int], budget: int,
              templates: list[str], out: Any) -> list[dict[str, Any]]:
     """Every template on every map and seed (the prefix up to `improve` run once each)."""
@@ -82,6 +118,7 @@ def run_grid(maps: list[tuple[str, Any]], seeds: list[int], budget: int,
             base.advance(until="improve")
             prefix_s = time.perf_counter() - t0
             f_start = float(base.ev.best()[1]) if base.ev.has_best else float("inf")
+            feats = case_features(problem, base) if base.ev.has_best else {}
             for tpl in templates:
                 run = base.fork(tpl)
                 t1 = time.perf_counter()
@@ -93,7 +130,8 @@ def run_grid(maps: list[tuple[str, Any]], seeds: list[int], budget: int,
                        "evaluations": r.evaluations,
                        "improve_evaluations": imp[0].evaluations if imp else 0,
                        "improve_seconds": round(time.perf_counter() - t1, 3),
-                       "prefix_seconds": round(prefix_s, 3), "commit": commit}
+                       "prefix_seconds": round(prefix_s, 3), "features": feats,
+                       "commit": commit}
                 records.append(rec)
                 if out is not None:
                     out.write(json.dumps(rec) + "\n")
@@ -168,6 +206,84 @@ def summarise(records: list[dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
+def _map_source(name: str) -> Any:
+    """A record's map from its name: a generated map's arguments, or a suite task."""
+    if name.startswith("gen-"):
+        from planner_core.suite import generate_map
+
+        size, density, seed = name[4:].split("-")
+        return generate_map(int(size), int(density[1:]), int(seed[1:]))
+    return SUITE / f"{name}.json"
+
+
+def _fill_features(records: list[dict[str, Any]]) -> None:
+    """Recompute the features of records written without them (runs each case's prefix)."""
+    from planner_core.model.mapio import load_map
+    from planner_core.model.problem import Problem
+    from planner_core.pipeline import DEFAULT_PIPELINE, PlanConfig
+    from planner_core.pipeline.pipeline import PipelineRun
+
+    cache: dict[tuple[str, int, int], dict[str, float]] = {}
+    problems: dict[str, Any] = {}
+    for r in records:
+        if r.get("features"):
+            continue
+        key = (r["map"], r["seed"], r["budget"])
+        if key not in cache:
+            if r["map"] not in problems:
+                problems[r["map"]] = Problem(load_map(_map_source(r["map"])).planning_map())
+            problem = problems[r["map"]]
+            run = PipelineRun(problem, PlanConfig(seed=r["seed"], budget=r["budget"]),
+                              pipeline=DEFAULT_PIPELINE, evaluator=None, progress=None)
+            run.advance(until="improve")
+            cache[key] = case_features(problem, run)
+        r["features"] = cache[key]
+
+
+def select(records: list[dict[str, Any]], k: int = 5) -> str:
+    """A contextual selector evaluated leave-one-map-out: for a held-out map, each template's
+    gap predicted as its mean gap on the `k` nearest training cases (features standardised on
+    the training cases, log1p of the counts), the least predicted chosen; against the best
+    static template of the training maps and the default (the per-case oracle is 0)."""
+    import numpy as np
+
+    _fill_features(records)
+    by_case: dict[tuple[str, int], dict[str, dict[str, Any]]] = {}
+    for r in records:
+        by_case.setdefault((r["map"], r["seed"]), {})[r["template"]] = r
+    templates = sorted({r["template"] for r in records})
+    cases = [(key, c) for key, c in by_case.items() if set(c) == set(templates)
+             and all(r["phi"] == 0 for r in c.values())]
+    names = sorted(cases[0][1][templates[0]]["features"])
+    F = np.array([[c[templates[0]]["features"][n] for n in names] for _, c in cases])
+    F = np.where(np.isin(names, ["sensors", "obstacles", "area_km2", "imax", "structures"]),
+                 np.log1p(np.abs(F)), F)
+    best = np.array([min(r["f"] for r in c.values()) for _, c in cases])
+    G = np.array([[(c[t]["f"] - b) / b * 100 for t in templates]
+                  for (_, c), b in zip(cases, best, strict=True)])
+    maps = np.array([key[0] for key, _ in cases])
+    chosen, static, default = [], [], []
+    d = templates.index("default")
+    for m in np.unique(maps):
+        test, train = maps == m, maps != m
+        mu, sd = F[train].mean(0), F[train].std(0) + 1e-9
+        Z = (F - mu) / sd
+        s = int(np.argmin(G[train].mean(0)))
+        for i in np.flatnonzero(test):
+            near = np.argsort(((Z[train] - Z[i]) ** 2).sum(1))[:k]
+            pick = int(np.argmin(G[train][near].mean(0)))
+            chosen.append(G[i, pick])
+            static.append(G[i, s])
+            default.append(G[i, d])
+    chosen, static, default = map(np.asarray, (chosen, static, default))
+    return (f"leave-one-map-out over {len(np.unique(maps))} maps, {len(chosen)} cases, "
+            f"k = {k}, features {names}\n"
+            f"mean gap to the per-case best (%): selector {chosen.mean():.4f}, best static "
+            f"(chosen on the training maps) {static.mean():.4f}, default {default.mean():.4f}, "
+            f"oracle 0; selector better / worse than the best static on "
+            f"{int((chosen < static).sum())} / {int((chosen > static).sum())} cases")
+
+
 def main(argv: list[str] | None = None) -> int:
     """The command line (module docstring). Returns the exit status (2: bad arguments)."""
     from planner_core.pipeline.schedule import scheduler_names
@@ -186,9 +302,19 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("-o", "--output", help="JSON lines file to write the runs to")
     ap.add_argument("--summary", nargs="+", metavar="JSONL",
                     help="print the table of earlier records (plain or .gz) and exit")
+    ap.add_argument("--select", nargs="+", metavar="JSONL",
+                    help="evaluate the contextual selector on earlier records (leave one map "
+                    "out) and exit")
     args = ap.parse_args(argv)
     if args.summary:
         print(summarise(_read(args.summary)))
+        return 0
+    if args.select:
+        records = _read(args.select)
+        print(select(records))
+        if args.output:  # the records with their features, for the next --select
+            with open(args.output, "w") as fh:
+                fh.writelines(json.dumps(r) + "\n" for r in records)
         return 0
     bad = [t for t in args.templates if t not in scheduler_names()]
     if bad or args.maps < 1 or args.seeds < 1:

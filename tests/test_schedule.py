@@ -129,3 +129,55 @@ def test_a_fork_before_improve_gives_each_schedule_its_whole_run_plan(tiny: Prob
         want = run_pipeline(tiny, cfg, scheduler=name)
         assert twin.result().x.tobytes() == want.x.tobytes(), name
     assert run.i < len(run.stages) and run.ev.count < cfg.budget  # the original is untouched
+
+
+def _bench():
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("bench_schedule",
+                                                  ROOT / "benchmarks" / "bench_schedule.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_the_schedule_grid_summary_by_hand() -> None:
+    rec = [{"map": m, "seed": 0, "budget": 10, "template": t, "f": f, "phi": 0.0,
+            "improve_evaluations": 5, "improve_seconds": 0.1}
+           for m, fs in (("a", (100.0, 99.0)), ("b", (50.0, 50.0)), ("c", (10.0, 10.1)))
+           for t, f in zip(("default", "kicks-heavy"), fs, strict=True)]
+    table = _bench().summarise(rec).splitlines()
+    # gaps: default (1.0101 + 0 + 0) / 3, kicks-heavy (0 + 0 + 1) / 3; wins 2 and 2
+    row = {r.split("|")[1].strip(): r.split("|")[2:] for r in table if r.startswith("| ")}
+    assert float(row["default"][0]) == pytest.approx(100 / 99 / 3, abs=1e-4)
+    assert float(row["kicks-heavy"][0]) == pytest.approx(1 / 3, abs=1e-4)
+    assert row["kicks-heavy"][3].strip() == "1 / 1" and row["default"][1].strip() == "2"
+
+
+@pytest.mark.slow  # measured ~25 s: two suite maps at 2,000 evaluations, two templates
+def test_bench_schedule_runs_summarises_and_selects(tmp_path) -> None:
+    bench, out = _bench(), tmp_path / "grid.jsonl"
+    assert bench.main(["--suite", "T01", "T02", "--seeds", "1", "--budget", "4000",
+                       "--templates", "default", "kicks-heavy", "-o", str(out)]) == 0
+    rows = [json.loads(x) for x in out.read_text().splitlines()]
+    assert len(rows) == 4 and all(r["features"]["sensors"] > 0 for r in rows)
+    assert bench.main(["--select", str(out)]) == 0
+    assert bench.main(["--templates", "nope"]) == 2
+
+
+def test_docs_grid_table_is_what_the_stored_records_give() -> None:
+    bench = _bench()
+    runs = ROOT / "docs" / "scheduler-runs"
+    table = bench.summarise(bench._read([str(runs / "grid10k.jsonl.gz")]))
+    got = {r.split("|")[1].strip(): [c.strip() for c in r.split("|")[2:7]]
+           for r in table.splitlines() if r.startswith("| ") and "template" not in r}
+    doc = (ROOT / "docs" / "scheduler.md").read_text()
+    section = doc[doc.index("### Measured: the grid at the default budget"):]
+    rows = [r for r in section.splitlines() if r.startswith("| ") and "template" not in r
+            and "---" not in r]
+    assert len(rows) >= 7
+    for r in rows:
+        cells = [c.strip() for c in r.split("|")[1:-1]]
+        name = cells[0].split(",")[0].split(" (")[0]
+        assert cells[1] == got[name][0] and cells[2] == got[name][1], name
+        assert cells[4] == got[name][3] or name == "default", name
