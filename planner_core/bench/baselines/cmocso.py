@@ -252,7 +252,7 @@ def optimise(problem: Any, budget: int, seed: int, population: int = POPULATION)
         rf = float(np.count_nonzero(cp <= FEASIBLE_TOL)) / cp.size
         eps = _epsilon(eps, cv_max, rf, g, tc)
         cfit = fitness(cf, cp, eps)
-        # competitive: random pairs, the lower fitness wins (ties: the second of the pair)
+        # competitive: random pairs, the lower fitness wins (ties: the one drawn first)
         perm = rng.permutation(n)
         lose, win = perm[: n // 2], perm[n // 2:]
         swap = cfit[lose] <= cfit[win]
