@@ -19,6 +19,8 @@ missing runs run (``<out>/results.jsonl``).
     python benchmarks/eval_policy_de.py --checkpoint CKPT --runs 5 --out RUNS/suite
     python benchmarks/eval_policy_de.py --checkpoint CKPT --generate 12 --runs 3 \\
         --out RUNS/heldout
+    python benchmarks/eval_policy_de.py --name de-lamde-v3 \\
+        --records docs/policy/issue34-suite-uniform.jsonl.gz     # the stored report
 
 Cost: runs x tasks x 4 DE runs of ``--budget`` evaluations (about 0.4-1 s each at 10,000 on
 this machine's maps), linear in sensors and obstacles as the model's evaluation is.
@@ -61,9 +63,16 @@ def write_heldout(folder: Path, count: int, seed: int) -> Path:
 
 
 def scores(out: Path) -> dict[str, dict[str, dict[int, float]]]:
-    """optimiser -> task -> run -> penalised score, from ``<out>/results.jsonl``."""
+    """optimiser -> task -> run -> penalised score, from ``<out>/results.jsonl`` (``out`` a
+    folder) or from a records file (``.jsonl`` or ``.jsonl.gz``, e.g. the stored
+    ``docs/policy/issue34-*.jsonl.gz``)."""
+    import gzip
+
     res: dict[str, dict[str, dict[int, float]]] = {}
-    for line in (out / "results.jsonl").read_text().splitlines():
+    path = out / "results.jsonl" if out.is_dir() else out
+    raw = path.read_bytes()
+    text = gzip.decompress(raw).decode() if path.suffix == ".gz" else raw.decode()
+    for line in text.splitlines():
         r = json.loads(line)
         if r.get("error"):
             continue
@@ -72,13 +81,15 @@ def scores(out: Path) -> dict[str, dict[str, dict[int, float]]]:
     return res
 
 
-def report(res: dict[str, dict[str, dict[int, float]]], name: str) -> str:
-    """The table and tests of the module doc as text."""
+def report(res: dict[str, dict[str, dict[int, float]]], name: str,
+           baselines: tuple[str, ...] = BASELINES) -> str:
+    """The table and tests of the module doc as text (``name`` against each of ``baselines``
+    present in ``res``)."""
     from scipy.stats import wilcoxon
 
     from planner_core.bench.stats import wilcoxon_mark
 
-    others = [o for o in BASELINES if o in res]
+    others = [o for o in baselines if o in res and o != name]
     tasks = sorted(res[name])
     lines = ["| task | " + " | ".join([name, *others]) + " | " + " | ".join(
         f"vs {o} (rank-sum / paired)" for o in others) + " |",
@@ -124,7 +135,7 @@ def main(argv: list[str] | None = None) -> None:
     from planner_core.bench.runner import run_bench
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--checkpoint", required=True, help="policy checkpoint (name or folder)")
+    ap.add_argument("--checkpoint", help="policy checkpoint (name or folder)")
     ap.add_argument("--name", default="de-lamde-new", help="benchmark name of the checkpoint")
     ap.add_argument("--suite", default="examples/maps/suite", help="map folder")
     ap.add_argument("--generate", type=int, default=0, metavar="K",
@@ -136,8 +147,16 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--seed", type=int, default=0, help="base run seed")
     ap.add_argument("--baselines", default=",".join(BASELINES),
                     help="comma-separated registry entries to compare with")
-    ap.add_argument("--out", required=True, help="results folder (resumable)")
+    ap.add_argument("--out", help="results folder (resumable)")
+    ap.add_argument("--records", help="only print the report of a stored records file")
     args = ap.parse_args(argv)
+    if args.records:
+        print(report(scores(Path(args.records)), args.name, tuple(args.baselines.split(","))))
+        return
+    if not args.out:
+        ap.error("--out is required (or --records)")
+    if not args.checkpoint:
+        ap.error("--checkpoint is required (or --records)")
     if args.runs < 1 or args.generate < 0:
         ap.error("--runs must be >= 1 and --generate >= 0")
     out = Path(args.out)
@@ -150,7 +169,7 @@ def main(argv: list[str] | None = None) -> None:
                   command="python benchmarks/eval_policy_de.py " + " ".join(argv or []))
     if s.failed:
         raise SystemExit(f"{len(s.failed)} run(s) failed, first: {s.failed[0]['error']}")
-    print(report(scores(out), args.name))
+    print(report(scores(out), args.name, tuple(args.baselines.split(","))))
 
 
 if __name__ == "__main__":
