@@ -47,6 +47,7 @@ def plan(
     progress: Callable[[Any], None] | None = None,
     on_compile: Callable[[], None] | None = None,
     scheduler: str | Any = "default",
+    corner_slots: int = 0,
 ) -> Plan:
     """Plan hover points and hover times for `map`; same seed and budget, same plan.
 
@@ -86,6 +87,10 @@ def plan(
             `planner_core.pipeline.schedule`): "default" (today's rounds), a static schedule's
             name (`schedule.SCHEDULES`: a fixed cycle of macro-actions) or a `Scheduler`
             object; a non-default one is recorded as `config["scheduler"]`.
+        corner_slots: K > 0: detour corners do not count against I_max (issue 31; docs/
+            missions.md): the encoding gets K extra slots and at most I_max points with t > 0
+            are feasible, the others (0 s) are corners, written as NAV_WAYPOINT; recorded as
+            `config["corner_slots"]`. 0 (default): the paper's model, every point a slot.
 
     Returns:
         The `Plan`, with `stages` (per stage: evaluations, seconds, f before and after) and
@@ -115,7 +120,8 @@ def plan(
     m = load_map(map)
     # safety margins (clearance, data margin) are a transformation of the map: the model is the
     # paper's, on the inflated map (the same map when both margins are 0)
-    problem = Problem(m.planning_map(), variable_length=config.variable_length)
+    problem = Problem(m.planning_map(), variable_length=config.variable_length,
+                      corner_slots=corner_slots)
     if on_compile is not None and not warmed(config.configurator):
         on_compile()
     t_compile = warm_up(config.configurator)
@@ -125,6 +131,8 @@ def plan(
     settings = config.to_dict()
     if not default_schedule:
         settings["scheduler"] = scheduler_name(scheduler)
+    if corner_slots:
+        settings["corner_slots"] = int(corner_slots)
     wall = time.perf_counter() - t_start
     ev_seconds = sum(s.evaluate_seconds for s in result.stages)
     return Plan(

@@ -252,7 +252,9 @@ def storable_plan(
     growing neighbourhood (up to 4 steps), else the nearest grid point. Hover times are then
     raised, where the sim finds a sensor short of `planning_map`'s required data (which
     includes the data margin), at the hover point with the best rate to it, and rounded up to
-    the dialect's storage (`hover_time_up`, never above T_max). Every check uses the sim's
+    the dialect's storage (`hover_time_up`, never above T_max). A point of 0 s (a corner,
+    written as NAV_WAYPOINT) is raised only while fewer than I_max points hover, so a plan
+    with corner slots keeps at most I_max hover points. Every check uses the sim's
     own geometry and replay on the stored items.
     """
     from sim.obstacles import obstacle_shapes, overlap_lengths
@@ -300,6 +302,7 @@ def storable_plan(
         prev = points[i]
 
     t_max = float(spec.uav.max_hover_time)
+    i_max = int(pm.max_hover_points or 0)  # 0: no limit known
     times = np.array([hover_time_up(t, d, t_max) for t in ht])
     need = np.asarray(pm.required_data, dtype=float)
     for _ in range(8):
@@ -309,12 +312,19 @@ def storable_plan(
         short = need - tl.collected
         if len(times) == 0 or not np.any(short > 0.0):
             break
-        R = tl.rates  # (I, J) at the stored positions and altitude
+        # (I, J) rates at the stored positions and altitude: the replay's at hover points, and
+        # at a corner (not a hover point in the replay) what it would get if it hovered
+        hov = np.asarray(tl.route.is_hover[: len(points)], dtype=bool)
+        R = hover_rates(points, np.full(len(points), alt), sensors, spec.radio.peak_rate,
+                        spec.radio.decay)  # fmt: skip
+        R[hov] = tl.rates
         raw = times.copy()
         for j in np.argsort(-short):
             if short[j] <= 0.0:
                 continue
             room = raw < t_max
+            if i_max and np.count_nonzero(raw > 0.0) >= i_max:
+                room &= raw > 0.0  # a corner (0 s) stays one once I_max points hover
             if not np.any(room & (R[:, j] > 0)):
                 continue
             i = int(np.argmax(np.where(room, R[:, j], -1.0)))

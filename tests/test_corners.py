@@ -144,3 +144,99 @@ def test_a_planned_detour_is_written_with_corners_and_verifies(m, tmp_path: Path
     assert verify(replay(items, m), m).passed
     assert main(["verify", str(map_path), str(out)]) == 0
     assert "corner" in capsys.readouterr().out
+
+
+# ----------------------------------------------------------------------------- corner slots
+
+
+def _problem(m, k=0):
+    from planner_core.model.problem import Problem
+
+    return Problem(m.planning_map(), corner_slots=k)
+
+
+def test_the_paper_problem_is_unchanged_and_corner_slots_only_add_v6(m):
+    """corner_slots 0 is the paper's Problem; with K slots a plan that fits I_max scores the
+    same f and phi as in the paper's model (the extra slots inactive), so v6 is the only new
+    term."""
+    from planner_core.model.problem import Problem
+
+    paper, zero, k3 = Problem(m.planning_map()), _problem(m, 0), _problem(m, 3)
+    assert paper.dim == zero.dim == 4 * m.max_hover_points and k3.dim == paper.dim + 12
+    assert paper.hover_limit == k3.hover_limit == m.max_hover_points
+    rng = np.random.default_rng(7)
+    X = paper.lower + rng.random((64, paper.dim)) * (paper.upper - paper.lower)
+    for a, b in zip(paper.evaluate(X), zero.evaluate(X), strict=True):
+        np.testing.assert_array_equal(a, b)
+    hp, ht = np.array(PLAN.hover_points), np.array(PLAN.hover_times)
+    fa, pa = paper.evaluate(paper.encode(hp, ht)[None, :])
+    fb, pb = k3.evaluate(k3.encode(hp, ht)[None, :])
+    assert fa[0] == pytest.approx(fb[0], rel=1e-12) and pa[0] == pytest.approx(pb[0], abs=1e-9)
+
+
+def test_v6_counts_hover_points_beyond_imax_and_never_corners(m):
+    lim = load_map({**WALL_MAP, "uav": {**WALL_MAP["uav"], "max_hover_points": 2}})
+    k1 = _problem(lim, 1)
+    hp, ht = np.array(PLAN.hover_points), np.array(PLAN.hover_times)  # 2 hover + 1 corner
+    with pytest.raises(ValueError, match="exceed I_max"):
+        _problem(lim, 0).encode(hp, ht)
+    x_ok = k1.encode(hp, ht)
+    x_bad = k1.encode(hp, np.where(ht == 0.0, 5.0, ht))  # the corner hovers: 3 > I_max 2
+    f, phi = k1.evaluate(np.vstack([x_ok, x_bad]))
+    parts = k1._evaluate_parts(np.vstack([x_ok, x_bad]))
+    np.testing.assert_array_equal(parts["v6"], [0.0, 1.0])
+    np.testing.assert_allclose(phi, parts["phi"], rtol=1e-9, atol=1e-9)
+    assert phi[1] >= phi[0] + 1.0
+    b = k1.breakdown(x_ok)
+    assert b["v6"] == 0.0 and b["n_corner"] == 1
+    with pytest.raises(ValueError, match="corner_slots"):
+        _problem(lim, -1)
+
+
+def test_a_written_mission_hovers_at_most_imax_points_while_corners_may_exceed_it(tmp_path):
+    lim = load_map({**WALL_MAP, "uav": {**WALL_MAP["uav"], "max_hover_points": 2}})
+    stored = storable_plan(PLAN, lim, "ardupilot", planning_map=lim.planning_map())
+    path = write_mission(tmp_path / "wall.plan", stored, lim, autopilot="ardupilot")
+    items, _fence = read_mission(path)
+    nav = _navigation(items)
+    assert sum(it.command == CMD.LOITER_TIME for it in nav) <= lim.max_hover_points
+    assert len(nav) - 1 > lim.max_hover_points  # the corner is one more point
+    assert verify(replay(items, lim), lim).passed
+
+
+def test_corner_slots_bad_input_is_one_line_and_exit_2(tmp_path: Path, capsys):
+    from lamde_mission.cli import main
+
+    map_path = tmp_path / "wall.json"
+    map_path.write_text(json.dumps(WALL_MAP))
+    out = tmp_path / "x.plan"
+    assert main(["plan", str(map_path), "-o", str(out), "--corner-slots", "-1"]) == 2
+    assert "--corner-slots" in capsys.readouterr().err
+    assert not out.exists()
+
+
+@pytest.mark.slow  # measured ~4 s (one plan at 2,000 evaluations)
+def test_planning_with_corner_slots_keeps_imax_hover_points(tmp_path: Path):
+    """I_max 2 on the walled map: the corner over the wall does not take a slot of the two."""
+    import lamde_mission
+
+    spec = {**WALL_MAP, "uav": {**WALL_MAP["uav"], "max_hover_points": 2}}
+    lim = load_map(spec)
+    plan = lamde_mission.plan(lim, seed=0, budget=2000, corner_slots=2)
+    assert plan.feasible and plan.config["corner_slots"] == 2
+    assert np.count_nonzero(np.asarray(plan.hover_times) > 0.0) <= 2
+    stored = storable_plan(plan, lim, "generic", planning_map=lim.planning_map())
+    items, _fence = read_mission(write_mission(tmp_path / "w.plan", stored, lim))
+    assert sum(it.command == CMD.LOITER_TIME for it in items) <= 2
+    assert verify(replay(items, lim), lim).passed
+
+
+def test_storage_raises_hover_times_beside_a_corner(m):
+    """The storage step raises short hover times where the replay's hover points (the corner is
+    not one) are fewer than the plan's points: rows stay aligned (it failed with a shape error
+    on T16 at 3,000 evaluations)."""
+    short = SimpleNamespace(hover_points=PLAN.hover_points, hover_times=[1.0, 0.0, 1.0])
+    stored = storable_plan(short, m, "generic", planning_map=m.planning_map())
+    assert stored.hover_times[1] == 0.0 and np.all(stored.hover_times[[0, 2]] > 1.0)
+    items = plan_to_items(stored, m)
+    assert verify(replay(items, m), m).passed

@@ -65,6 +65,11 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="how the improving stage chooses its macro-actions (kicks, structural "
                    "search, restarts, fresh sweeps, DE blocks): default (today's rounds) or a "
                    "static schedule (docs/scheduler.md lists them)")
+    p.add_argument("--corner-slots", type=int, default=0, metavar="K",
+                   help="detour corners do not count against I_max: K extra slots for points "
+                   "of 0 s, written as NAV_WAYPOINT (at most I_max hover points stay "
+                   "feasible; docs/missions.md). Default 0: the paper's model, every point "
+                   "takes one of the I_max slots")
     p.add_argument("--policy", metavar="CHECKPOINT",
                    help="with --configurator lamde: a checkpoint folder from `lamde-mission "
                    "train` instead of the shipped lamde-v2")
@@ -348,7 +353,8 @@ def _run_sorties(args: argparse.Namespace) -> int:
     for opt, bad in (("--format", args.format not in (None, "plan")),
                      ("--report", args.report), ("--finish", args.finish != "land"),
                      ("--policy", args.policy), ("--time-limit", args.time_limit is not None),
-                     ("--scheduler", args.scheduler != "default")):
+                     ("--scheduler", args.scheduler != "default"),
+                     ("--corner-slots", args.corner_slots != 0)):
         if bad:
             raise UsageError(f"{opt}: not available for a map with a battery or fleet (its "
                              "sorties are written as .plan files in a directory)")
@@ -476,6 +482,10 @@ def run(args: argparse.Namespace) -> int:
         make_scheduler(args.scheduler)
     except ValueError as exc:
         raise UsageError(f"--{exc}") from None
+    if args.corner_slots < 0:
+        raise UsageError(f"--corner-slots: must be an integer >= 0, got {args.corner_slots}")
+    if args.corner_slots and args.fixed_length:
+        raise UsageError("--corner-slots: not with --fixed-length (it flies every slot)")
     configurator = args.configurator
     if args.policy is not None:
         if args.configurator != "lamde":
@@ -525,6 +535,7 @@ def run(args: argparse.Namespace) -> int:
             progress=progress,
             on_compile=announce,
             scheduler=args.scheduler,
+            corner_slots=args.corner_slots,
         )
     finally:
         if progress is not None:

@@ -7,6 +7,7 @@ eps_i >= tau (variable-length encoding) or always (fixed-length mode, the paper'
 
 from __future__ import annotations
 
+from dataclasses import replace
 from functools import cached_property
 from typing import Any
 
@@ -24,13 +25,45 @@ __all__ = ["Problem"]
 class Problem:
     """The UAV data-collection problem on one map: bounds, `evaluate(X) -> (f, phi)`, breakdown."""
 
-    def __init__(self, map: Map | str | dict, *, variable_length: bool = True):  # noqa: A002
+    def __init__(
+        self,
+        map: Map | str | dict,  # noqa: A002
+        *,
+        variable_length: bool = True,
+        corner_slots: int = 0,
+    ):
+        """The problem on `map`.
+
+        Args:
+            map: a loaded map, a map file path or its dict.
+            variable_length: False: every slot is flown (the paper's LAMDE-F).
+            corner_slots: K >= 0 extra slots for detour corners (the product's mode, issue 31;
+                0, the default, is the paper's model unchanged): the encoding holds
+                I_max + K slots, and phi gains v6 = the number of active points with t > 0
+                beyond I_max, so at most I_max hover points are feasible while points of
+                exactly 0 s (corners, written as NAV_WAYPOINT) use the rest.
+
+        Raises:
+            ValueError: corner_slots not an integer >= 0, or > 0 in fixed-length mode.
+        """
         self.map = load_map(map)
         self.variable_length = bool(variable_length)
+        if isinstance(corner_slots, bool) or not isinstance(corner_slots, (int, np.integer)) \
+                or corner_slots < 0:
+            raise ValueError(f"corner_slots: must be an integer >= 0, got {corner_slots!r}")
+        if corner_slots and not self.variable_length:
+            raise ValueError("corner_slots: fixed-length mode flies every slot; use 0")
+        self.corner_slots = int(corner_slots)
         #: the model's parameters (`planner_core.model.formulas.ModelParams`), shared with the
         #: seeder,
         #: the polish LP and the compiled kernels; the attributes below are its fields
-        self.model = mp = ModelParams.from_map(self.map)
+        mp = ModelParams.from_map(self.map)
+        #: I_max, the most hover points (t > 0) a feasible plan holds
+        self.hover_limit = mp.n_points
+        if self.corner_slots:
+            mp = replace(mp, n_points=mp.n_points + self.corner_slots)
+        self.model = mp
+        #: slots of the encoding: I_max, plus `corner_slots` in the product's corner mode
         self.n_points = mp.n_points
         self.dim = 4 * self.n_points
         block = np.array([mp.width, mp.height, mp.t_max, 1.0])
@@ -58,7 +91,17 @@ class Problem:
 
     def __repr__(self) -> str:
         mode = "variable" if self.variable_length else "fixed"
-        return f"Problem({self.map.name!r}, dim={self.dim}, {mode}-length)"
+        corners = f", {self.corner_slots} corner slots" if self.corner_slots else ""
+        return f"Problem({self.map.name!r}, dim={self.dim}, {mode}-length{corners})"
+
+    def _excess_hover(self, X: np.ndarray) -> np.ndarray:
+        """v6 (n,): active points with t > 0 beyond I_max (0 without corner slots). A point of
+        exactly 0 s is a corner: the writer flies it through as NAV_WAYPOINT."""
+        if not self.corner_slots:
+            return np.zeros(len(X))
+        _pts, times, active = self._split(X)
+        n_hover = (active & (times > 0.0)).sum(axis=1)
+        return np.maximum(n_hover - self.hover_limit, 0).astype(float)
 
     # ------------------------------------------------------------------ decoding
     def _split(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -121,10 +164,11 @@ class Problem:
         v5 = collision_penalty(l_vio, self.mu, self.nu)
         v3 = v3_each.sum(axis=1)
         v4 = v4_each.sum(axis=1)
-        phi = v3 + v4 + v5
+        v6 = self._excess_hover(X)
+        phi = v3 + v4 + v5 + v6
         return {
             "f": f, "phi": phi, "t_fly": t_fly, "t_hover": t_hover, "l_vio": l_vio,
-            "v3": v3, "v4": v4, "v5": v5, "v3_each": v3_each, "v4_each": v4_each,
+            "v3": v3, "v4": v4, "v5": v5, "v6": v6, "v3_each": v3_each, "v4_each": v4_each,
             "collected": Q, "leg_times": leg_times, "leg_lengths": dist,
             "active": active, "points": pts, "times": times,
         }  # fmt: skip
@@ -152,6 +196,8 @@ class Problem:
         )  # fmt: skip
         l_vio = self._overlap(A, B).sum(axis=1)
         v5 = collision_penalty(l_vio, self.mu, self.nu)
+        if self.corner_slots:
+            return f, v3 + v4 + v5 + self._excess_hover(X)
         return f, v3 + v4 + v5
 
     def breakdown(self, x: np.ndarray) -> dict[str, Any]:
@@ -180,7 +226,8 @@ class Problem:
             "collected": dict(zip(self.map.sensor_ids, p["collected"][0].tolist(), strict=True)),
             "required": dict(zip(self.map.sensor_ids, self.required.tolist(), strict=True)),
             "shortfall": dict(zip(self.map.sensor_ids, p["v4_each"][0].tolist(), strict=True)),
-        }
+        } | ({"v6": float(p["v6"][0]), "n_corner": int((act & (p["times"][0] == 0.0)).sum())}
+             if self.corner_slots else {})  # fmt: skip
 
     # ------------------------------------------------------------------ initial population
     def initial_population(self, rng: np.random.Generator, n: int) -> np.ndarray:
