@@ -181,3 +181,14 @@ def test_docs_grid_table_is_what_the_stored_records_give() -> None:
         name = cells[0].split(",")[0].split(" (")[0]
         assert cells[1] == got[name][0] and cells[2] == got[name][1], name
         assert cells[4] == got[name][3] or name == "default", name
+
+
+def test_a_sortie_plan_refuses_a_non_default_scheduler_in_one_line(tmp_path) -> None:
+    import subprocess
+    import sys
+
+    r = subprocess.run([sys.executable, "-m", "lamde_mission.cli", "plan",
+                        str(MAPS / "fleet-demo.json"), "-o", str(tmp_path / "out") + "/",
+                        "--scheduler", "kicks-heavy"], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and not (tmp_path / "out").exists()
+    assert r.stderr.strip().count("\n") == 0 and "--scheduler: not available" in r.stderr
