@@ -16,10 +16,10 @@ Memory at the input limits (the limits themselves live in ``planner_core.textio.
 bound is held by a slow test that runs ``check`` and ``plan`` in a child under ``ulimit -v``
 4 GB, RLIMIT_AS, and asks for a peak RSS under 2 GB):
 
-- ``LAMDE_MAX_SENSORS`` (500 sensors): within 4 GB of address space; peak RSS ~190 MiB for
-  ``check``, ~500 MiB for ``plan`` at a small budget (tests/test_limits_memory.py, a 30 km
-  uniform map from ``generate --layout uniform``), 354 MiB at the default budget on a 30 km
-  clustered map of 500 sensors;
+- ``LAMDE_MAX_SENSORS`` (1,000 sensors): within 4 GB of address space; peak RSS ~210 MiB for
+  ``check``, ~710 MiB for ``plan`` at a small budget (tests/test_limits_memory.py, a 30 km
+  uniform map from ``generate --layout uniform``), 684 MiB at the default budget on a 30 km
+  uniform map of 1,000 sensors (207 s of CPU; docs/scaling.md, "A thousand sensors");
 - ``LAMDE_MAX_OBSTACLES`` (5,000 circles, rectangles, zones and polygons): within 4 GB; peak RSS
   ~390 MiB for ``check``, ~715 MiB for ``plan`` (tests/test_limits_memory.py, 2,500 circles and
   2,500 rectangles on a 16 km grid); the plan's time, not its memory, is what grows (~140-150 s

@@ -84,11 +84,11 @@ LIMITS: dict[str, Limit] = {
         "parser's recursion",
     ),
     "sensors": Limit(
-        500,
+        1_000,
         "LAMDE_MAX_SENSORS",
         "sensors in one map; planning time grows with them (default budget, 2 cores: 160 "
-        "sensors ~13 s, 400 ~50 s, 500 ~60 s of CPU, peak RSS < 1 GB; the paper's maps have "
-        "<= 29; the large suite, `bench_plan.py --large`, has up to 400)",
+        "sensors ~13 s, 400 ~50 s, 500 ~60 s, 1,000 ~100-210 s of CPU, peak RSS < 1 GB; the "
+        "paper's maps have <= 29; the large suite, `bench_plan.py --large`, has up to 400)",
     ),
     "obstacles": Limit(
         5_000,

@@ -108,7 +108,7 @@ def test_too_many_sensors_obstacles_and_vertices(tmp_path: Path) -> None:
     d = _tiny()
     d["sensors"] = [{"id": f"s{i}", "x": 10.0, "y": 10.0} for i in range(100_000)]
     _refused(["check", _write(tmp_path, "s.json", json.dumps(d))],
-             "sensors: 100,000 sensors, more than the limit of 500")  # fmt: skip
+             "sensors: 100,000 sensors, more than the limit of 1,000")  # fmt: skip
     d = _tiny()
     d["obstacles"]["circles"] = [{"x": 5.0, "y": 5.0, "radius": 1.0}] * 100_000
     _refused(["check", _write(tmp_path, "o.json", json.dumps(d))], "obstacles: 100,001 obstacles")

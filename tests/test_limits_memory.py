@@ -1,5 +1,5 @@
 """Memory at the documented input limits (issue 32, item 4): a map at the sensor limit
-(LAMDE_MAX_SENSORS, 500) and one at the obstacle limit (LAMDE_MAX_OBSTACLES, 5,000) pass `check`
+(LAMDE_MAX_SENSORS, 1,000) and one at the obstacle limit (LAMDE_MAX_OBSTACLES, 5,000) pass `check`
 and `plan` (small budgets) under `ulimit -v` of 4 GB (RLIMIT_AS, set in the child), each child's
 peak RSS under 2 GB. The vertex limit has the same test in tests/test_graph_memory.py.
 
@@ -43,7 +43,7 @@ def _run_capped(args: list[str], timeout: float) -> tuple[subprocess.CompletedPr
 
 
 def sensor_limit_map(path: Path) -> Path:
-    """`generate --layout uniform`: 500 sensors (the default limit) on a 30 km map with its
+    """`generate --layout uniform`: 1,000 sensors (the default limit) on a 30 km map with its
     witness plan (feasible by construction, I_max 200)."""
     n = limit("sensors")
     r = subprocess.run([sys.executable, "-m", "lamde_mission.cli", "generate", str(path),
@@ -51,7 +51,7 @@ def sensor_limit_map(path: Path) -> Path:
                         "--seed", "1"], capture_output=True, text=True, timeout=600,
                        cwd=ROOT)  # fmt: skip
     assert r.returncode == 0, r.stderr
-    assert len(json.loads(path.read_text())["sensors"]) == n == 500
+    assert len(json.loads(path.read_text())["sensors"]) == n == 1000
     return path
 
 
@@ -79,26 +79,32 @@ def obstacle_limit_map(path: Path) -> Path:
     return path
 
 
-def _check_and_plan(src: Path, out: Path, plan_args: list[str]) -> tuple[int, int]:
-    """`check` then `plan` on `src`, each capped; their peak RSS (bytes)."""
+def _check_and_plan(src: Path, out: Path, plan_args: list[str],
+                    plan_codes: tuple[int, ...] = (0,)) -> tuple[int, int]:
+    """`check` then `plan` on `src`, each capped; their peak RSS (bytes). `plan_codes`: the
+    exit statuses the plan may end with (1: infeasible, written with --allow-infeasible)."""
     r, rss_check = _run_capped(["check", str(src)], timeout=600)
     assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
     r, rss_plan = _run_capped(["plan", str(src), "-o", str(out), "--quiet", *plan_args],
                               timeout=900)  # fmt: skip
-    assert r.returncode == 0, r.stderr[-3000:]
+    assert r.returncode in plan_codes, r.stderr[-3000:]
     assert out.stat().st_size > 0
     mib = 2**20
     print(f"{src.name}: peak RSS check {rss_check / mib:.0f} MiB, plan {rss_plan / mib:.0f} MiB")
     return rss_check, rss_plan
 
 
-@pytest.mark.slow(reason="measured 72 s wall on 2 loaded cores (the map's generation "
-                  "included); peak RSS 188 MiB check, 503 MiB plan")  # fmt: skip
+@pytest.mark.slow(reason="measured 365 s wall on 2 cores under a load of 4 (the map's "
+                  "generation included); peak RSS 213 MiB check, 706 MiB plan")  # fmt: skip
 def test_a_map_at_the_sensor_limit_plans_under_4_gb(tmp_path: Path) -> None:
-    src = sensor_limit_map(tmp_path / "s500.json")
+    src = sensor_limit_map(tmp_path / "s1000.json")
+    # 200 evaluations leave some of 1,000 sensors unserved (exit 1): memory is what is held
+    # here, so the plan is written anyway; the default budget plans it feasibly
+    # (docs/scaling.md, "A thousand sensors")
     rss_check, rss_plan = _check_and_plan(
-        src, tmp_path / "s500.plan", ["--budget", "200", "--population", "20", "--starts", "1",
-                                      "--no-descent"])  # fmt: skip
+        src, tmp_path / "s1000.plan", ["--budget", "200", "--population", "20", "--starts", "1",
+                                       "--no-descent", "--allow-infeasible"],
+        plan_codes=(0, 1))  # fmt: skip
     assert rss_check < 2 * GIB and rss_plan < 2 * GIB, (rss_check, rss_plan)
 
 

@@ -19,7 +19,7 @@ _DEFAULT_SEED = D.SUITE_SEED
 # holds them equal)
 _LAYOUTS = ("uniform", "clustered", "corridor")
 _LARGE_SIZES = (5000, 30000)
-_LARGE_SENSORS = 500
+_LARGE_SENSORS = 1000
 _CLUSTER_SIZE = 12
 
 

@@ -76,7 +76,7 @@ LAYOUTS = ("uniform", "clustered", "corridor")
 MIN_SIZE = 5000
 MAX_SIZE = 30000
 #: the most sensors one large map may ask for
-MAX_SENSORS = 500
+MAX_SENSORS = 1000
 #: sensors per field in the clustered layout (the default of `cluster_size`)
 CLUSTER_SIZE = 12
 #: metres: the least distance between two sensors, per layout
