@@ -5,8 +5,9 @@ Pure functions over frozen values: no I/O and no vehicle. The mission flown is
     TAKEOFF (at the start, to the map's altitude H)
     DO_CHANGE_SPEED (ground speed = v_max)
     LOITER_TIME x I (one per hover point; param1 = hover seconds; each is a full stop), and a
-        WAYPOINT (param1 hold 0, param2 `corner_radius`) for each point whose hover time is
-        0 s: a detour corner around an obstacle, flown through, not a hover point
+        WAYPOINT (param1 hold 0, param2 `corner_radius`, 0 once stored for ArduPilot-style
+        dialects: `lamde_mission.storage.Dialect.waypoint_radius`) for each point whose hover
+        time is 0 s: a detour corner around an obstacle, flown through, not a hover point
     WAYPOINT (at the end point)
     LAND (at the end point)  |  RETURN_TO_LAUNCH
 

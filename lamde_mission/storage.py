@@ -67,6 +67,9 @@ class Dialect:
 
     `home_item`: mission item 0 is the home position (not flown) and our items start at 1.
     `whole_second_hover`: LOITER_TIME param1 is stored as whole seconds (truncated).
+    `waypoint_radius`: NAV_WAYPOINT's param2 (acceptance radius) is stored; ArduPilot's
+    AP_Mission keeps only param1 (the delay) of a WAYPOINT on Copter builds, so it reads back
+    as 0 there, and a file that stores unchanged on either autopilot writes 0.
     `autopilot`: the MAV_AUTOPILOT value of its HEARTBEAT; `firmware_type`: QGroundControl's
     `.plan` firmwareType (the same enum).
     """
@@ -75,6 +78,7 @@ class Dialect:
     home_item: bool
     whole_second_hover: bool
     autopilot: int
+    waypoint_radius: bool = False
 
     @property
     def firmware_type(self) -> int:
@@ -82,7 +86,7 @@ class Dialect:
 
 
 DIALECTS: dict[str, Dialect] = {
-    "px4": Dialect("px4", False, False, _m.MAV_AUTOPILOT_PX4),
+    "px4": Dialect("px4", False, False, _m.MAV_AUTOPILOT_PX4, waypoint_radius=True),
     "ardupilot": Dialect("ardupilot", True, True, _m.MAV_AUTOPILOT_ARDUPILOTMEGA),
     "generic": Dialect("generic", False, True, _m.MAV_AUTOPILOT_GENERIC),
 }
@@ -169,15 +173,18 @@ def hover_time_up(t: float, dialect: Dialect | str, t_max: float | None = None) 
 
 def stored_item(item: MissionItem, dialect: Dialect | str) -> MissionItem:
     """`item` as the autopilot stores it: lat/lon on the 1e-7 degree grid (global frames),
-    params and altitude as float32, and for whole-second dialects LOITER_TIME's param1 cut to
-    whole seconds (as ArduPilot's uint16 conversion does)."""
+    params and altitude as float32, for whole-second dialects LOITER_TIME's param1 cut to
+    whole seconds (as ArduPilot's uint16 conversion does), and a WAYPOINT's param2 (a corner's
+    acceptance radius) 0 where the dialect does not store it (`Dialect.waypoint_radius`)."""
     d = dialect_of(dialect)
-    p1 = item.param1
+    p1, p2 = item.param1, item.param2
     if d.whole_second_hover and item.command == CMD.LOITER_TIME and math.isfinite(p1):
         p1 = float(min(max(math.floor(float32(p1)), 0), 65535))
+    if not d.waypoint_radius and item.command == CMD.WAYPOINT:
+        p2 = 0.0
     kw: dict[str, float] = {
         "param1": float32(p1),
-        "param2": float32(item.param2),
+        "param2": float32(p2),
         "param3": float32(item.param3),
         "param4": float32(item.param4),
         "z": float32(item.z),

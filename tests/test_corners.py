@@ -21,7 +21,7 @@ from lamde_mission.items import (
     items_to_route,
     plan_to_items,
 )
-from lamde_mission.storage import storable_plan
+from lamde_mission.storage import storable_plan, stored_items
 from planner_core.model.mapio import load_map
 from sim import replay, verify
 
@@ -83,6 +83,20 @@ def test_the_corner_radius_is_the_clearance_and_never_zero(m):
     assert corner_radius(m) == 5.0
     bare = load_map({**WALL_MAP, "safety": {"clearance": 0, "data_margin": 0}})
     assert corner_radius(bare) == CORNER_RADIUS_MIN_M > 0.0
+
+
+@pytest.mark.parametrize("autopilot,radius", [("px4", 5.0), ("ardupilot", 0.0),
+                                              ("generic", 0.0)])
+def test_a_corner_keeps_its_radius_only_where_the_autopilot_stores_it(m, tmp_path: Path,
+                                                                      autopilot, radius):
+    """ArduPilot's AP_Mission keeps only a WAYPOINT's param1 on Copter builds (param2 reads
+    back 0), so the ardupilot and generic files write 0 and an upload's read-back matches."""
+    stored = storable_plan(PLAN, m, autopilot, planning_map=m.planning_map())
+    path = write_mission(tmp_path / "wall.plan", stored, m, autopilot=autopilot)
+    items, _fence = read_mission(path)
+    corners = [it for it in _navigation(items)[:-1] if it.command == CMD.WAYPOINT]
+    assert [it.param2 for it in corners] == [radius]
+    assert stored_items(items, autopilot) == items  # what is written is what is stored
 
 
 @pytest.mark.parametrize("autopilot", ["px4", "ardupilot", "generic"])
