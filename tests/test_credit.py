@@ -192,3 +192,16 @@ def test_individual_credit_training_smoke(tmp_path) -> None:  # noqa: ANN001
         "credit"] == "shared"
     with pytest.raises(ValueError, match="credit"):
         train(PPOConfig(**{**cfg.__dict__, "credit": "mine"}), specs, tmp_path / "d")
+
+
+@pytest.mark.slow  # measured 10.6 s under a load of 4 (a DE run recorded, its regressions)
+def test_the_credit_diagnostic_cli_prints_both_signals(capsys) -> None:  # noqa: ANN001
+    """`python -m planner_core.learning.policy.credit` (docs/learning.md): one line per effect
+    with its t under per-individual credit and under the shared reward; a small run."""
+    from planner_core.learning.policy import credit
+
+    credit.main(["--budget", "2000", "--population", "40"])
+    out = capsys.readouterr().out
+    assert out.splitlines()[0].endswith("generations x 40 individuals")
+    rows = [ln for ln in out.splitlines() if "t individual" in ln and "t shared" in ln]
+    assert any(ln.split()[0] == "F" for ln in rows), out

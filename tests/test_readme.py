@@ -169,6 +169,8 @@ COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
         ("test_ablations.py::test_cli_train_bbob_and_fixed_length", ('"--bbob"', '"--bbob-dims"')),
     "lamde-mission train -o my-policy --problems trainset.json --fixed-length":
         ("test_ablations.py::test_cli_train_bbob_and_fixed_length", ('"--fixed-length"',)),
+    "python -m planner_core.learning.policy.credit":
+        ("test_credit.py::test_the_credit_diagnostic_cli_prints_both_signals", ("credit.main",)),
     "python benchmarks/ablations.py":
         ("test_ablations.py::test_ablation_driver_end_to_end_is_resumable_and_reproducible",
          ('"--report"', '"--jobs"')),
