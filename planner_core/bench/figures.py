@@ -68,6 +68,7 @@ _COLOURS: dict[str, str] = {
     "seed-lp": "#e377c2",
     "scipy-de": "#bcbd22",
     "lsrtde": "#17becf",
+    "cmocso": "#dbdb8d",
     "random-search": "#7f7f7f",
     # the ablation variants (benchmarks/ablations.py): LAMDE and LAMDE-F in de-lamde's hues
     "LAMDE": "#9467bd", "LAMDE-F": "#c5b0d5", "LAMDE-R": "#393b79", "LAMDE-E": "#637939",
