@@ -58,6 +58,7 @@ from typing import Any
 import numpy as np
 
 from planner_core.bench.baselines import OptimiseResult
+from planner_core.bench.baselines.unit_start import unit_initial_population
 from planner_core.defaults import POPULATION
 from planner_core.pipeline.evaluator import as_evaluator
 
@@ -186,15 +187,6 @@ def _sbx(P1: np.ndarray, P2: np.ndarray, rng: np.random.Generator) -> np.ndarray
     return np.vstack([mid + beta * half, mid - beta * half])
 
 
-def _initial(problem: Any, rng: np.random.Generator, n: int, d: int) -> np.ndarray:
-    sampler = getattr(problem, "initial_population", None)
-    if sampler is not None:
-        X = np.asarray(sampler(rng, n), dtype=float)
-        lo, hi = problem.lower, problem.upper
-        return np.clip((X - lo) / (hi - lo), 0.0, 1.0)
-    return rng.random((n, d))
-
-
 def _epsilon(eps: float, eps0: float, rf: float, g: float, tc: float) -> float:
     if g > tc:
         return 0.0
@@ -231,7 +223,7 @@ def optimise(problem: Any, budget: int, seed: int, population: int = POPULATION)
     d = lo.shape[0]
     rng = np.random.default_rng(np.random.SeedSequence([int(seed), 0xC5005]))
 
-    U = _initial(problem, rng, n, d)
+    U = unit_initial_population(problem, rng, n, d)
     f, phi = budgeted.evaluate(lo + U * span)
     V = np.zeros_like(U)
     # competitive swarm (cU, cV, cf, cp), cooperative swarm (kU, kf, kp) and its fitness

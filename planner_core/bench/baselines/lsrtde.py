@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from planner_core.bench.baselines import OptimiseResult
+from planner_core.bench.baselines.unit_start import unit_initial_population
 from planner_core.model.formulas import deb_not_worse, deb_order
 from planner_core.pipeline.evaluator import as_evaluator
 
@@ -45,15 +46,6 @@ MEMORY = 5
 #: population per dimension at the start (paper: 20 D) and the cap relative to the budget
 NP_PER_DIM = 20
 BUDGET_PER_IND = 25
-
-
-def _initial(problem: Any, rng: np.random.Generator, n: int, d: int) -> np.ndarray:
-    sampler = getattr(problem, "initial_population", None)
-    if sampler is not None:
-        X = np.asarray(sampler(rng, n), dtype=float)
-        lo, hi = problem.lower, problem.upper
-        return np.clip((X - lo) / (hi - lo), 0.0, 1.0)
-    return rng.random((n, d))
 
 
 def optimise(problem: Any, budget: int, seed: int) -> OptimiseResult:
@@ -70,7 +62,7 @@ def optimise(problem: Any, budget: int, seed: int) -> OptimiseResult:
         raise ValueError(f"budget {budget} is below L-SRTDE's minimum population {NP_MIN}")
     rng = np.random.default_rng(np.random.SeedSequence([int(seed), 0x5A7DE]))
     np_max = int(max(NP_MIN, min(NP_PER_DIM * d, budget // BUDGET_PER_IND)))
-    U = _initial(problem, rng, np_max, d)
+    U = unit_initial_population(problem, rng, np_max, d)
     f, phi = budgeted.evaluate(lo + U * span)
     mem = np.ones(MEMORY)
     k_mem = 0
