@@ -130,7 +130,7 @@ def test_cli_one_map_and_its_bytes(tmp_path: Path) -> None:
         (["x.json", "--layout", "uniform"], "--size"),
         (["x.json", "--layout", "uniform", "--size", "40000"], "--size"),
         (["x.json", "--layout", "uniform", "--size", "ten"], "--size"),
-        (["x.json", "--layout", "uniform", "--size", "10000", "--sensors", "501"], "--sensors"),
+        (["x.json", "--layout", "uniform", "--size", "10000", "--sensors", "1001"], "--sensors"),
         (["x.json", "--layout", "uniform", "--size", "10000", "--sensors", "0"], "--sensors"),
         (["x.json", "--layout", "corridor", "--size", "10000", "--density", "8"], "--density"),
         (["x.json", "--layout", "clustered", "--size", "10000", "--cluster-size", "0"],
