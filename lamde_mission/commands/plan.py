@@ -121,7 +121,10 @@ class _ProgressBar:
     #: seconds between two lines of a long stage's own progress (`Progress.detail`) off a TTY
     DETAIL_EVERY = 5.0
 
-    def __init__(self, stream: Any = sys.stderr, width: int = 24):
+    def __init__(self, stream: Any = None, width: int = 24):
+        # None: the sys.stderr of the moment (a default bound at import would keep a stream
+        # that a caller, or pytest's capture, has since replaced and closed)
+        stream = sys.stderr if stream is None else stream
         self.stream = stream
         self.width = width
         self.tty = bool(getattr(stream, "isatty", lambda: False)())

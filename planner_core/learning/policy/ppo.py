@@ -844,8 +844,10 @@ def _save(out: Path, model: TorchPolicy, optimizer: torch.optim.Optimizer, cfg: 
     write_bytes_atomic(out / "state.pt", buf.getvalue())
 
 
-def text_progress(stream: Any = sys.stderr, width: int = 24) -> Callable[[int, int, str], None]:
-    """A progress bar on one updating line (TTY) or a line per 5 % otherwise."""
+def text_progress(stream: Any = None, width: int = 24) -> Callable[[int, int, str], None]:
+    """A progress bar on one updating line (TTY) or a line per 5 % otherwise, on `stream`
+    (None: the sys.stderr of the call, not of the import)."""
+    stream = sys.stderr if stream is None else stream
     tty = bool(getattr(stream, "isatty", lambda: False)())
     state = {"last": -1.0, "t0": time.monotonic()}
 
