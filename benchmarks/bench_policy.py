@@ -9,6 +9,13 @@ with that population (its generations x the median). The policy's CPU time (this
 is printed beside its wall time: on a shared machine the wall time includes waiting for a core.
 
     python benchmarks/bench_policy.py [MAP ...] [--checkpoint lamde-v2] [--generations 30]
+
+With `--scheduler lamde-s` it times instead, in each of `--plans` whole plans per map (after one
+warm-up plan), the learned scheduler's decisions (`SelectorScheduler.choose`: the features at
+the improving stage's first decision, the neighbours in the shipped table, then the chosen
+template's choices) against the plan's own time, and prints their ratio (issue 34's "<= 5 %").
+
+    python benchmarks/bench_policy.py --scheduler lamde-s [MAP ...] [--plans 3]
 """
 
 from __future__ import annotations
@@ -58,13 +65,44 @@ class _TimedPolicy:
         self.configure = timer.wrap(policy.configure)
 
 
+def scheduler_cost(maps: list[str], name: str, plans: int) -> None:
+    """Print, per map, the scheduler's decision time per plan and its ratio to the plan's
+    time (wall and this process's CPU), medians over `plans` plans (seeds 0..plans-1)."""
+    import lamde_mission
+    from planner_core.pipeline.schedule import make_scheduler
+
+    lamde_mission.plan(maps[0], seed=0, scheduler=name)  # compile the kernels, load the table
+    for path in maps:
+        rows = []
+        for seed in range(plans):
+            sched, timer = make_scheduler(name), _Timed()
+            sched.choose = timer.wrap(sched.choose)
+            t0, c0 = time.perf_counter(), time.process_time()
+            lamde_mission.plan(path, seed=seed, scheduler=sched)
+            wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+            rows.append((sum(timer.times), sum(timer.cpu), wall, cpu, len(timer.times),
+                         getattr(sched, "template", None)))
+        t_s, c_s, wall, cpu = (statistics.median(r[k] for r in rows) for k in range(4))
+        print(f"{Path(path).stem}: {name} {1e3 * t_s:.2f} ms (CPU {1e3 * c_s:.2f} ms) per plan "
+              f"in {statistics.median(r[4] for r in rows):.0f} decisions; plan {wall:.2f} s "
+              f"(CPU {cpu:.2f} s); scheduler / plan = {100 * t_s / wall:.2f} % (CPU "
+              f"{100 * c_s / cpu:.2f} %); templates {[r[5] for r in rows]} "
+              f"(medians of {plans} plans)")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("maps", nargs="*", default=[str(p) for p in DEFAULT_MAPS])
     ap.add_argument("--checkpoint", default="lamde-v2")
     ap.add_argument("--population", type=int, default=100)
     ap.add_argument("--generations", type=int, default=30)
+    ap.add_argument("--scheduler", default=None, metavar="NAME",
+                    help="time a learned scheduler (lamde-s) in whole plans instead")
+    ap.add_argument("--plans", type=int, default=3, help="plans per map with --scheduler (3)")
     args = ap.parse_args()
+    if args.scheduler:
+        scheduler_cost(args.maps, args.scheduler, args.plans)
+        return
     policy = PolicyConfigurator(checkpoint=args.checkpoint)
     print(f"checkpoint {args.checkpoint}: {param_count(policy.net)} parameters, "
           f"net {policy.net.to_dict()}")

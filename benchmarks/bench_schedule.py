@@ -66,37 +66,12 @@ def suite_maps(tasks: list[str]) -> list[tuple[str, Any]]:
 
 
 def case_features(problem: Any, run: Any) -> dict[str, float]:
-    """Map and early-run features of a run stopped before `improve` (the selector's input):
-    sensors, obstacles, area (km^2), I_max; the incumbent against the best constructive plan
-    (per cent), its hover points / I_max, the pool's distinct feasible structures and the
-    next one's gap (per cent), the share of the budget left for `improve`."""
-    import numpy as np
+    """The selector's features (`planner_core.learning.schedule_select.run_features`) of a
+    run stopped before `improve`."""
+    from planner_core.learning.schedule_select import run_features
 
-    from planner_core.pipeline.schedule import _points
-
-    spec = problem.map.spec.obstacles
     x, f, _ = run.ev.best()
-    pool = run.state.pool
-    cons = pool.f[(pool.phi == 0) & (np.array(pool.kinds) == "constructive")] if len(
-        pool) else np.zeros(0)
-    by_n: dict[int, float] = {}
-    for i in pool.ordered() if len(pool) else []:
-        if pool.phi[i] == 0:
-            by_n.setdefault(_points(problem, pool.X[i]), float(pool.f[i]))
-    n_inc = _points(problem, x)
-    others = sorted(v for k, v in by_n.items() if k != n_inc)
-    return {
-        "sensors": float(len(problem.map.spec.sensors)),
-        "obstacles": float(len(spec.circles) + len(spec.rectangles) + len(spec.no_fly_zones)
-                           + len(spec.polygons)),
-        "area_km2": problem.map.width * problem.map.height / 1e6,
-        "imax": float(problem.n_points),
-        "f_vs_constructive": (float(f) / float(cons.min()) - 1) * 100 if len(cons) else 0.0,
-        "points_over_imax": n_inc / max(problem.n_points, 1),
-        "structures": float(len(by_n)),
-        "next_structure_gap": (others[0] / float(f) - 1) * 100 if others else 0.0,
-        "improve_share": run.ev.remaining / run.ev.budget,
-    }
+    return run_features(problem, x, f, run.state.pool, run.ev.remaining, run.ev.budget)
 
 
 def run_grid(maps: list[tuple[str, Any]], seeds: list[int], budget: int,
@@ -241,52 +216,84 @@ def _fill_features(records: list[dict[str, Any]]) -> None:
 
 
 def select(records: list[dict[str, Any]], k: int = 5) -> str:
-    """A contextual selector evaluated leave-one-map-out: for a held-out map, each template's
-    gap predicted as its mean gap on the `k` nearest training cases (features standardised on
-    the training cases, log1p of the counts), the least predicted chosen; against the best
-    static template of the training maps and the default (the per-case oracle is 0)."""
+    """The contextual selector (`planner_core.learning.schedule_select`) evaluated
+    leave-one-map-out on `records`: for each held-out map, the template predicted from the
+    `k` nearest cases of the other maps, against the best static template of those maps and
+    the default (the per-case oracle is 0)."""
     import numpy as np
 
+    from planner_core.learning.schedule_select import fit
+
     _fill_features(records)
-    by_case: dict[tuple[str, int], dict[str, dict[str, Any]]] = {}
+    table = fit(records, k=k)
+    cv = table.meta["cross_validation"][str(k)]
+    d = table.templates.index("default")
+    return (f"leave-one-map-out over {len(set(table.maps))} maps, {cv['cases']} cases, "
+            f"k = {k}\n"
+            f"mean gap to the per-case best (%): selector {cv['selector']:.4f}, best static "
+            f"(chosen on the training maps) {cv['static']:.4f}, default "
+            f"{float(np.mean(table.gaps[:, d])):.4f}, oracle 0; selector better / worse than "
+            f"the best static on {cv['better']} / {cv['worse']} cases")
+
+
+def evaluate(table_dir: str, records: list[dict[str, Any]], seed: int = 0) -> str:
+    """A fitted selector table (`python -m planner_core.learning.schedule_select fit`) on
+    held-out grid records: per case the template the table picks from the case's features
+    (what `--scheduler lamde-s` follows), against the table's best static template, the
+    default and the per-case oracle. Prints mean gaps, the paired Wilcoxon signed-rank test
+    selector vs best static (two-sided, zero differences dropped), a bootstrap 95 % CI of the
+    mean difference (10,000 resamples of the cases, `seed`), the share of maps whose mean gap
+    over their seeds is lower than the static one's (of the maps where they differ), and the
+    improving stage's seconds against the default's."""
+    import numpy as np
+    from scipy.stats import wilcoxon
+
+    from planner_core.learning.schedule_select import SelectorTable, cases_from_records
+
+    table = SelectorTable.load(table_dir)
+    keys, F, G, templates = cases_from_records(records)
+    idx = {t: i for i, t in enumerate(templates)}
+    picks = [table.predict(v) for v in F]
+    sel = np.array([G[i, idx[p]] for i, p in enumerate(picks)])
+    static = G[:, idx[table.templates[0]]]
+    default = G[:, idx["default"]]
+    diff = sel - static
+    p = wilcoxon(sel, static).pvalue if np.any(diff) else 1.0
+    rng = np.random.default_rng(seed)
+    boot = diff[rng.integers(0, len(diff), size=(10_000, len(diff)))].mean(1)
+    lo, hi = np.percentile(boot, [2.5, 97.5])
+    maps = np.array([m for m, _ in keys])
+    per_map = [(diff[maps == m].mean()) for m in np.unique(maps)]
+    n_diff = sum(1 for v in per_map if v != 0)
+    secs: dict[tuple[str, int], dict[str, float]] = {}
     for r in records:
-        by_case.setdefault((r["map"], r["seed"]), {})[r["template"]] = r
-    templates = sorted({r["template"] for r in records})
-    cases = [(key, c) for key, c in by_case.items() if set(c) == set(templates)
-             and all(r["phi"] == 0 for r in c.values())]
-    names = sorted(cases[0][1][templates[0]]["features"])
-    F = np.array([[c[templates[0]]["features"][n] for n in names] for _, c in cases])
-    F = np.where(np.isin(names, ["sensors", "obstacles", "area_km2", "imax", "structures"]),
-                 np.log1p(np.abs(F)), F)
-    best = np.array([min(r["f"] for r in c.values()) for _, c in cases])
-    G = np.array([[(c[t]["f"] - b) / b * 100 for t in templates]
-                  for (_, c), b in zip(cases, best, strict=True)])
-    maps = np.array([key[0] for key, _ in cases])
-    chosen, static, default = [], [], []
-    d = templates.index("default")
-    for m in np.unique(maps):
-        test, train = maps == m, maps != m
-        mu, sd = F[train].mean(0), F[train].std(0) + 1e-9
-        Z = (F - mu) / sd
-        s = int(np.argmin(G[train].mean(0)))
-        for i in np.flatnonzero(test):
-            near = np.argsort(((Z[train] - Z[i]) ** 2).sum(1))[:k]
-            pick = int(np.argmin(G[train][near].mean(0)))
-            chosen.append(G[i, pick])
-            static.append(G[i, s])
-            default.append(G[i, d])
-    chosen, static, default = map(np.asarray, (chosen, static, default))
-    return (f"leave-one-map-out over {len(np.unique(maps))} maps, {len(chosen)} cases, "
-            f"k = {k}, features {names}\n"
-            f"mean gap to the per-case best (%): selector {chosen.mean():.4f}, best static "
-            f"(chosen on the training maps) {static.mean():.4f}, default {default.mean():.4f}, "
-            f"oracle 0; selector better / worse than the best static on "
-            f"{int((chosen < static).sum())} / {int((chosen > static).sum())} cases")
+        secs.setdefault((r["map"], r["seed"]), {})[r["template"]] = r["improve_seconds"]
+    t_sel = sum(secs[k_][pk] for k_, pk in zip(keys, picks, strict=True))
+    t_def = sum(secs[k_]["default"] for k_ in keys)
+    n_cases = len({(r["map"], r["seed"]) for r in records})
+    rel = (sel.mean() / static.mean() - 1) * 100 if static.mean() else 0.0
+    counts = {t: picks.count(t) for t in table.templates if picks.count(t)}
+    return "\n".join([
+        f"{len(keys)} held-out cases on {len(np.unique(maps))} maps ({n_cases - len(keys)} "
+        f"left out: a template infeasible or missing); table {table_dir}: "
+        f"{len(table.gaps)} training cases, k = {table.k}",
+        f"mean gap to the per-case best (%): lamde-s {sel.mean():.4f}, best static "
+        f"({table.templates[0]}) {static.mean():.4f}, default {default.mean():.4f}, oracle 0",
+        f"lamde-s vs best static: {rel:+.1f} % "
+        f"of its mean gap; better / worse on {int((diff < 0).sum())} / {int((diff > 0).sum())} "
+        f"cases, Wilcoxon p = {p:.3g}; mean difference {diff.mean():+.4f} points, 95 % CI "
+        f"[{lo:+.4f}, {hi:+.4f}]",
+        f"maps where lamde-s's mean is lower: {sum(v < 0 for v in per_map)} of {n_diff} that "
+        f"differ ({len(per_map)} maps)",
+        f"improving stage: lamde-s {t_sel:.1f} s against the default's {t_def:.1f} s "
+        f"({t_sel / t_def if t_def else 0:.2f}x)",
+        "picks: " + ", ".join(f"{t} {c}" for t, c in counts.items()),
+    ])
 
 
 def main(argv: list[str] | None = None) -> int:
     """The command line (module docstring). Returns the exit status (2: bad arguments)."""
-    from planner_core.pipeline.schedule import scheduler_names
+    from planner_core.pipeline.schedule import LEARNED, scheduler_names
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--maps", type=int, default=24, help="generated training maps (24)")
@@ -296,18 +303,28 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seeds", type=int, default=2, help="plan seeds 0..N-1 (2)")
     ap.add_argument("--budget", type=int, default=10_000, help="evaluations a plan (10,000)")
     ap.add_argument("--templates", nargs="+",
-                    default=[t for t in scheduler_names() if t != "alternate"],
+                    default=[t for t in scheduler_names() if t not in ("alternate", *LEARNED)],
                     help="schedules to compare (default: all registered but 'alternate', "
                     "which is the default's cycle written out)")
     ap.add_argument("-o", "--output", help="JSON lines file to write the runs to")
     ap.add_argument("--summary", nargs="+", metavar="JSONL",
                     help="print the table of earlier records (plain or .gz) and exit")
+    ap.add_argument("--evaluate", nargs="+", metavar=("TABLE", "JSONL"),
+                    help="a fitted selector table directory, then held-out records: print "
+                    "the selector against the best static schedule and exit")
     ap.add_argument("--select", nargs="+", metavar="JSONL",
                     help="evaluate the contextual selector on earlier records (leave one map "
                     "out) and exit")
     args = ap.parse_args(argv)
     if args.summary:
         print(summarise(_read(args.summary)))
+        return 0
+    if args.evaluate:
+        if len(args.evaluate) < 2:
+            print("bench_schedule: --evaluate: needs TABLE and at least one JSONL",
+                  file=sys.stderr)
+            return 2
+        print(evaluate(args.evaluate[0], _read(args.evaluate[1:])))
         return 0
     if args.select:
         records = _read(args.select)

@@ -51,6 +51,7 @@ __all__ = [
     "ACTIONS",
     "FRESH_ROOM",
     "IDLE_ROUNDS",
+    "LEARNED",
     "SCHEDULES",
     "SPREADS",
     "DefaultScheduler",
@@ -109,6 +110,7 @@ class Observation:
         elapsed: seconds since the run's evaluator was created.
         history: every `StepRecord` of the stage, in order.
         state: the run's `PlanState` (pool, DE result, finished point counts).
+        x: the incumbent (d,), problem space (None where a caller builds one by hand).
     """
 
     step: int
@@ -121,6 +123,7 @@ class Observation:
     elapsed: float
     history: tuple[StepRecord, ...]
     state: Any  # the stages' PlanState
+    x: np.ndarray | None = None
 
 
 @runtime_checkable
@@ -202,9 +205,13 @@ SCHEDULES: dict[str, tuple[str, ...]] = {
 }
 
 
+#: learned schedulers by name -> "module:class" (imported when asked for)
+LEARNED: dict[str, str] = {"lamde-s": "planner_core.learning.schedule_select:SelectorScheduler"}
+
+
 def scheduler_names() -> tuple[str, ...]:
-    """Every registry name: "default" then the static schedules."""
-    return ("default", *SCHEDULES)
+    """Every registry name: "default", the static schedules, then the learned ones."""
+    return ("default", *SCHEDULES, *LEARNED)
 
 
 def make_scheduler(spec: str | Scheduler | None) -> Scheduler:
@@ -215,6 +222,11 @@ def make_scheduler(spec: str | Scheduler | None) -> Scheduler:
     """
     if spec is None or spec == "default":
         return DefaultScheduler()
+    if isinstance(spec, str) and spec in LEARNED:
+        import importlib
+
+        module, cls = LEARNED[spec].split(":")
+        return getattr(importlib.import_module(module), cls)()
     if isinstance(spec, str):
         if spec not in SCHEDULES:
             raise ValueError(f"scheduler: must be one of {', '.join(scheduler_names())}, "
@@ -272,11 +284,11 @@ class ImproveRun:
 
     def observe(self) -> Observation:
         """The `Observation` before the next action."""
-        _, f, phi = self.ev.best()
+        x, f, phi = self.ev.best()
         return Observation(step=self.step, remaining=self.ev.remaining,
                            budget=self.ev.budget, quantum=self.quantum, idle=self.idle,
                            f=float(f), phi=float(phi), elapsed=self.ev.elapsed,
-                           history=tuple(self.history), state=self.state)
+                           history=tuple(self.history), state=self.state, x=x)
 
     def act(self, action: str) -> StepRecord:
         """Run one macro-action (`ACTIONS`, not "stop").

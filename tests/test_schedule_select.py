@@ -1,0 +1,165 @@
+"""LAMDE-S's contextual selector (planner_core.learning.schedule_select): the table's
+neighbours and ties, leave-one-map-out by hand, the shipped table, the CLI, and the live
+scheduler choosing what the offline table predicts from the same run's features."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from planner_core.learning.schedule_select import (
+    DEFAULT_TABLE,
+    FEATURES,
+    SelectorScheduler,
+    SelectorTable,
+    cases_from_records,
+    cross_validate,
+    fit,
+    main,
+    run_features,
+)
+from planner_core.model.problem import Problem
+from planner_core.pipeline import DEFAULT_PIPELINE, PlanConfig, run_pipeline
+from planner_core.pipeline.pipeline import PipelineRun
+from planner_core.pipeline.schedule import make_scheduler, scheduler_names
+from tests.conftest import MAPS
+
+
+def _feats(sensors: float, gap: float = 0.0) -> dict[str, float]:
+    return {"sensors": sensors, "obstacles": 5.0, "area_km2": 25.0, "imax": 10.0,
+            "f_vs_constructive": gap, "points_over_imax": 0.5, "structures": 3.0,
+            "next_structure_gap": 1.0, "improve_share": 0.07}
+
+
+def _records(cases: list[tuple[str, int, dict[str, float], dict[str, float]]]) -> list[dict]:
+    """Grid records: (map, seed, features, template -> f)."""
+    return [{"map": m, "seed": s, "budget": 10_000, "template": t, "f": f, "phi": 0.0,
+             "features": feats, "improve_seconds": 0.1}
+            for m, s, feats, fs in cases for t, f in fs.items()]
+
+
+# small maps want fine kicks, large maps the default; the default is best on the whole table
+GRID = _records(
+    [(f"small{i}", 0, _feats(8 + i), {"default": 101.0, "fine-kicks": 100.0})
+     for i in range(3)]
+    + [(f"large{i}", 0, _feats(80 + i), {"default": 100.0, "fine-kicks": 103.0})
+       for i in range(3)])
+
+
+def test_cases_are_the_complete_feasible_ones_with_gaps_in_per_cent() -> None:
+    recs = GRID + _records([("bad", 0, _feats(9), {"default": 100.0, "fine-kicks": 99.0})])
+    recs[-1]["phi"] = 2.0  # an infeasible template drops its case
+    recs += [dict(GRID[0], template="kicks-only", f=1.0)]  # a template one case lacks: dropped
+    keys, F, G, templates = cases_from_records(recs)
+    assert templates == ["default", "fine-kicks"] and len(keys) == 6
+    assert ("bad", 0) not in keys and F.shape == (6, len(FEATURES))
+    assert G[0] == pytest.approx([1.0, 0.0]) and G[3] == pytest.approx([0.0, 3.0])
+
+
+def test_the_nearest_cases_pick_the_template_and_ties_go_to_the_best_static() -> None:
+    table = fit(GRID, k=1)
+    assert table.templates[0] == "default"  # mean gaps: default 0.5 %, fine-kicks 1.5 %
+    assert table.predict(_feats(9)) == "fine-kicks"
+    assert table.predict(_feats(81)) == "default"
+    tied = SelectorTable(table.features, np.zeros_like(table.gaps), table.templates,
+                         table.maps, 1, {})
+    assert tied.predict(_feats(9)) == "default"
+
+
+def test_leave_one_map_out_by_hand() -> None:
+    # each held-out small map's nearest other map is small: fine-kicks (gap 0 against the
+    # static default's 1 %); each large one's is large: the default (gap 0 either way)
+    cv = cross_validate(fit(GRID, k=1))
+    assert cv == {"selector": 0.0, "static": pytest.approx(0.5), "cases": 6, "better": 3,
+                  "worse": 0}
+    table = fit(GRID)  # k chosen by leave-one-map-out: the least k of the best
+    assert table.k == 1 and set(table.meta["cross_validation"]) == {"1", "3", "5", "10",
+                                                                    "20", "40"}
+
+
+def test_a_table_round_trips_and_a_missing_one_is_one_line(tmp_path) -> None:
+    table = fit(GRID, k=1, meta={"command": "test"})
+    back = SelectorTable.load(table.save(tmp_path / "t"))
+    assert back.templates == table.templates and back.k == 1
+    assert np.array_equal(back.features, table.features) and back.meta["command"] == "test"
+    with pytest.raises(ValueError, match=r"^scheduler: no selector table in .*nowhere"):
+        SelectorTable.load(tmp_path / "nowhere")
+
+
+def test_the_shipped_table_loads_and_is_registered() -> None:
+    table = SelectorTable.load(DEFAULT_TABLE)
+    assert "default" in table.templates and len(table.gaps) >= 100
+    assert table.meta["command"].startswith("python -m planner_core.learning.schedule_select")
+    assert "lamde-s" in scheduler_names()
+    assert isinstance(make_scheduler("lamde-s"), SelectorScheduler)
+
+
+def test_the_cli_fits_and_refuses_a_bad_k(tmp_path, capsys) -> None:
+    path = tmp_path / "grid.jsonl"
+    path.write_text("".join(json.dumps(r) + "\n" for r in GRID))
+    assert main(["fit", str(path), "-o", str(tmp_path / "out"), "--k", "1"]) == 0
+    assert "k = 1: leave-one-map-out mean gap 0.0000 % (best static 0.5000 %)" in (
+        capsys.readouterr().out)
+    assert SelectorTable.load(tmp_path / "out").k == 1
+    assert main(["fit", str(path), "-o", str(tmp_path / "x"), "--k", "0"]) == 2
+    assert capsys.readouterr().err.strip() == "schedule_select: --k: must be >= 1, got 0"
+    assert main(["fit", str(tmp_path / "missing.jsonl"), "-o", str(tmp_path / "y")]) == 2
+    assert capsys.readouterr().err.startswith("schedule_select: records: ")
+
+
+def test_the_live_scheduler_follows_the_template_the_table_predicts_from_the_run() -> None:
+    """The features the scheduler reads at the stage's first decision are the ones
+    bench_schedule.py records before `improve`, and the plan is that template's, to the bit."""
+    problem = Problem(MAPS / "tiny.json")
+    cfg = PlanConfig(seed=3, budget=3_000, population=20, de_share=0.2)
+    base = PipelineRun(problem, cfg, pipeline=DEFAULT_PIPELINE, evaluator=None, progress=None)
+    base.advance(until="improve")
+    x, f, _ = base.ev.best()
+    feats = run_features(problem, x, f, base.state.pool, base.ev.remaining, base.ev.budget)
+    # a table whose only neighbour of this run says "fine-kicks", the default best overall
+    far = dict(feats, sensors=feats["sensors"] * 50)
+    table = fit(_records([("near", 0, feats, {"default": 101.0, "fine-kicks": 100.0}),
+                          ("far", 0, far, {"default": 100.0, "fine-kicks": 110.0})]), k=1)
+    assert table.templates[0] == "default" and table.predict(feats) == "fine-kicks"
+    sched = SelectorScheduler(table)
+    live = run_pipeline(problem, cfg, scheduler=sched)
+    assert sched.template == "fine-kicks"
+    fork = base.fork("fine-kicks")
+    fork.advance()
+    want = fork.result()
+    assert live.x.tobytes() == want.x.tobytes() and live.f == want.f
+
+
+def test_bench_schedule_evaluates_a_table_on_held_out_records(tmp_path, capsys) -> None:
+    from tests.test_schedule import _bench
+
+    table = fit(GRID, k=1).save(tmp_path / "table")
+    held = tmp_path / "held.jsonl"
+    held.write_text("".join(json.dumps(r) + "\n" for r in _records([
+        ("hs", 0, _feats(9), {"default": 101.0, "fine-kicks": 100.0}),
+        ("hl", 0, _feats(81), {"default": 100.0, "fine-kicks": 102.0})])))
+    assert _bench().main(["--evaluate", str(table), str(held)]) == 0
+    out = capsys.readouterr().out
+    # hs: lamde-s picks fine-kicks (gap 0), the static default has 1 %; hl: both the default
+    assert "mean gap to the per-case best (%): lamde-s 0.0000, best static (default) " \
+           "0.5000, default 0.5000, oracle 0" in out
+    assert "-100.0 % of its mean gap; better / worse on 1 / 0 cases" in out
+    assert "maps where lamde-s's mean is lower: 1 of 1 that differ (2 maps)" in out
+    assert "picks: default 1, fine-kicks 1" in out
+    assert _bench().main(["--evaluate", str(table)]) == 2
+
+
+@pytest.mark.slow  # measured ~5 s: two plans in a subprocess
+def test_bench_policy_times_the_scheduler_in_whole_plans() -> None:
+    import subprocess
+    import sys
+
+    from tests.conftest import ROOT
+
+    r = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "bench_policy.py"),
+                        str(MAPS / "tiny.json"), "--scheduler", "lamde-s", "--plans", "1"],
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert "tiny: lamde-s " in r.stdout and "scheduler / plan = " in r.stdout
