@@ -204,3 +204,55 @@ def test_held_check_equals_held_points(name: str, problem: Problem, pts: np.ndar
         check.moved(P, idx)
     assert np.array_equal(check.held(), held_points(problem, P)), name
     assert held_any or len(pts) < 12 or name.startswith("random"), name
+
+
+def _leg_cases() -> list[tuple[str, object]]:
+    """Obstacle sets for `overlap_first`: suite maps (one "tile" of all obstacles) and L02
+    (460 obstacles: the tiled kernel, whose cut legs are dropped between tiles)."""
+    large = SUITE.parent / "large" / "L02.json"
+    out = [(t, Problem(json.loads((SUITE / f"{t}.json").read_text())).obstacles)
+           for t in ("T03", "T16")]
+    from planner_core.model.mapio import load_map
+    from planner_core.model.problem import Problem as _P
+
+    out.append(("L02", _P(load_map(large).planning_map()).obstacles))
+    return out
+
+
+@pytest.mark.parametrize("name,obstacles", _leg_cases(), ids=lambda c: c if isinstance(c, str)
+                         else "")
+def test_overlap_first_gives_overlap_lengths_answers(name: str, obstacles: object) -> None:
+    """`overlap_first` (a leg leaves the tests at its first cut) answers every clear / cut
+    question as `overlap_lengths` does: 0 exactly where the sum is 0, positive and at most
+    the sum elsewhere, NaN where it is NaN; on long and short random legs, legs from and to
+    obstacle corners and circle rims (the boundary band), zero-length and NaN legs, and more
+    legs than one kernel chunk."""
+    from planner_core.model import geometry
+    from planner_core.model.formulas import L_VIO_TOL
+    from planner_core.model.routing.graph import CLEAR
+
+    o = obstacles
+    rng = np.random.default_rng(5)
+    size = float(np.max(np.abs(o.poly_vertices))) if len(o.poly_vertices) else 3000.0
+    size = max(size, float(np.max(o.circles[:, :2])) if len(o.circles) else 0.0)
+    a = rng.uniform(0, size, (5000, 2))
+    b = np.where(rng.random((5000, 1)) < 0.5, rng.uniform(0, size, (5000, 2)),
+                 a + rng.normal(0, 300, (5000, 2)))
+    ends = [o.poly_vertices] if len(o.poly_vertices) else []
+    if len(o.circles):
+        ang = rng.uniform(0, 2 * np.pi, len(o.circles))
+        ends.append(o.circles[:, :2] + (o.circles[:, 2] + o.tol)[:, None]
+                    * np.column_stack([np.cos(ang), np.sin(ang)]))
+    corners = np.vstack(ends)
+    i, j = rng.integers(0, len(corners), (2, 3000))
+    a = np.vstack([a, corners[i], corners[:50], [[np.nan, 1.0]]])
+    b = np.vstack([b, corners[j], corners[:50], [[5.0, 5.0]]])
+    full = geometry.overlap_lengths(a, b, o)
+    first = geometry.overlap_first(a, b, o)
+    assert np.array_equal(np.isnan(first), np.isnan(full)), name
+    ok = ~np.isnan(full)
+    assert np.array_equal(first[ok] == 0.0, full[ok] == 0.0), name
+    assert np.all(first[ok] <= full[ok]) and np.all(first[ok] >= 0.0), name
+    for t in (CLEAR, L_VIO_TOL):
+        assert np.array_equal(first <= t, full <= t) and np.array_equal(first > t, full > t)
+    assert 0.2 < np.mean(full[ok] > 0) < 0.98, name  # both answers well represented

@@ -55,6 +55,7 @@ from planner_core.model.polygons import EDGE_BOUNDARY, EDGE_OWNED, EDGE_SHARED, 
 
 __all__ = [
     "Obstacles",
+    "overlap_first",
     "overlap_lengths",
     "overlap_lengths_reference",
     "points_inside",
@@ -455,15 +456,49 @@ def _leg_overlap_scalar(ax, ay, bx, by, circles, verts, offs, normals, eflags, t
 
 
 @njit(cache=True, fastmath=False, nogil=True)
+def _drop_cut(fax, fay, fux, fuy, flen, lmap, n_act):
+    """`overlap_first`: once a quarter of the float32 slots 0..n_act hold cut legs (length
+    -inf), the live ones moved to the front in order (lmap with them) and padded to a multiple
+    of 8 with slots that fail every test; returns the new slot count."""
+    alive = 0
+    for i in range(n_act):
+        alive += flen[i] > -np.inf
+    if 4 * alive > 3 * n_act:
+        return n_act
+    w = 0
+    for i in range(n_act):
+        if flen[i] > -np.inf:
+            fax[w] = fax[i]
+            fay[w] = fay[i]
+            fux[w] = fux[i]
+            fuy[w] = fuy[i]
+            flen[w] = flen[i]
+            lmap[w] = lmap[i]
+            w += 1
+    n_new = 8 * ((w + 7) // 8)
+    for i in range(w, n_new):
+        fax[i] = 0.0
+        fay[i] = 0.0
+        fux[i] = 0.0
+        fuy[i] = 0.0
+        flen[i] = -np.inf
+        lmap[i] = 0
+    return n_new
+
+
+@njit(cache=True, fastmath=False, nogil=True)
 def _overlap_chunk(
     a, b, circles, verts, offs, normals, eflags, tol, cull_r, cull_c32, origin, extent, tile_c32,
-    tile_r, tile_offs, tile_members, out, m0, m1,
+    tile_r, tile_offs, tile_members, out, m0, m1, first,
 ):
     """Legs m0..m1 against all obstacles, obstacle by obstacle (inner loops run over legs).
 
     Per obstacle: (1) a branch-free float32 capsule test over all legs (vectorises 8 wide),
     (2) compaction of the hits, (3) the exact overlap for the hits, again branch-free and
     vectorisable (the sign patterns are unpredictable, so branches would mispredict).
+    `first`: a leg leaves the tests once one obstacle's overlap is positive (its float32
+    length set to -inf, which fails every capsule test), so out holds that overlap alone
+    (`overlap_first`); otherwise the sum over all obstacles.
     """
     n = m1 - m0
     n_pad = 8 * ((n + 7) // 8)
@@ -527,6 +562,7 @@ def _overlap_chunk(
     flags = np.zeros(n_pad, dtype=np.uint8)
     words = flags.view(np.uint64)  # scan 8 flags at a time: almost all are 0
     idx = np.empty(n_pad, dtype=np.int64)
+    pos = np.empty(n_pad, dtype=np.int64)  # idx's places in the tile's (sub)list
     gax = np.empty(n_pad)
     gay = np.empty(n_pad)
     gbx = np.empty(n_pad)
@@ -535,6 +571,10 @@ def _overlap_chunk(
     t_hi = np.empty(n_pad)
     off = np.empty(n_pad, dtype=np.bool_)
     ident = np.arange(n_pad)
+    # lmap: each float32 slot's leg (chunk index); identity unless `first` drops cut legs
+    lmap = np.arange(n_pad)
+    fp = np.empty(n_pad, dtype=np.int64)  # idx's float32 slots
+    n_act = n_pad
     # many obstacles (tile_offs holds tiles): first a disc around each tile's obstacles, then
     # the tile's obstacles against only the legs that come near it; otherwise one "tile" of all
     # obstacles in order against all legs
@@ -557,14 +597,14 @@ def _overlap_chunk(
             tx = tile_c32[0, t]
             ty = tile_c32[1, t]
             trad = np.float32(tile_r[t] + pad)
-            for i in range(n_pad):
+            for i in range(n_act):
                 fx = tx - fax[i]
                 fy = ty - fay[i]
                 h = abs(fux[i] * fy - fuy[i] * fx)
                 s = fux[i] * fx + fuy[i] * fy
                 flags[i] = np.uint8((h < trad) & (s > -trad) & (s < flen[i] + trad))
             k = 0
-            for w in range(n_pad // 8):
+            for w in range(n_act // 8):
                 if words[w] != 0:
                     for i in range(8 * w, 8 * w + 8):
                         sub[k] = i
@@ -573,7 +613,7 @@ def _overlap_chunk(
                 continue
             n_sub = 8 * ((k + 7) // 8)
             for q in range(n_sub):
-                i = sub[q] if q < k else n_pad - 1  # past k: a slot that fails every test
+                i = sub[q] if q < k else n_act - 1  # past k: a slot that fails every test
                 sfax[q] = fax[i]
                 sfay[q] = fay[i]
                 sfux[q] = fux[i]
@@ -608,7 +648,9 @@ def _overlap_chunk(
             for w in range(n_sub // 8):
                 if words[w] != 0:
                     for i in range(8 * w, 8 * w + 8):
-                        idx[k] = csub[i]
+                        idx[k] = lmap[csub[i]]
+                        fp[k] = csub[i]
+                        pos[k] = i
                         k += flags[i]
             if k == 0:
                 continue
@@ -629,6 +671,11 @@ def _overlap_chunk(
                     t_lo[q] = d if (d > 2.0 * tol) & (h < r) else 0.0
                 for q in range(k):
                     out[m0 + idx[q]] += t_lo[q]
+                if first:
+                    for q in range(k):
+                        if t_lo[q] > 0.0:  # cut: out of every later test
+                            flen[fp[q]] = -np.inf
+                            cflen[pos[q]] = -np.inf
             else:
                 p = j - n_circ
                 for q in range(k):
@@ -675,13 +722,21 @@ def _overlap_chunk(
                 for q in range(k):
                     i = idx[q]
                     d = (t_hi[q] - t_lo[q]) * llen[i]
-                    out[m0 + i] += d if (d > 2.0 * tol) & (not off[q]) else 0.0
+                    t_lo[q] = d if (d > 2.0 * tol) & (not off[q]) else 0.0
+                    out[m0 + i] += t_lo[q]
+                if first:
+                    for q in range(k):
+                        if t_lo[q] > 0.0:  # cut: out of every later test
+                            flen[fp[q]] = -np.inf
+                            cflen[pos[q]] = -np.inf
+        if first and not flat:
+            n_act = _drop_cut(fax, fay, fux, fuy, flen, lmap, n_act)
 
 
 @njit(cache=True, fastmath=False, nogil=True)
 def _overlap_serial(
     a, b, circles, verts, offs, normals, eflags, tol, cull_r, cull_c32, origin, extent, tile_c32,
-    tile_r, tile_offs, tile_members, out,
+    tile_r, tile_offs, tile_members, out, first=False,
 ):
     # chunks of legs small enough that the per-leg arrays stay in the L1/L2 cache
     m = a.shape[0]
@@ -690,7 +745,7 @@ def _overlap_serial(
         _overlap_chunk(
             a, b, circles, verts, offs, normals, eflags, tol, cull_r, cull_c32, origin, extent,
             tile_c32, tile_r, tile_offs, tile_members, out, (m * c) // n_chunks,
-            (m * (c + 1)) // n_chunks,
+            (m * (c + 1)) // n_chunks, first,
         )  # fmt: skip
 
 
@@ -794,7 +849,32 @@ def overlap_lengths(a: np.ndarray, b: np.ndarray, obstacles: Obstacles) -> np.nd
         _overlap_serial(
             a2, b2, o.circles, o.poly_vertices, o.poly_offsets, o.edge_normals, o.edge_flags,
             o.tol, o.cull_radii, o.cull_centres32, o.origin, o.extent, o.tile_centres32,
-            o.tile_radii, o.tile_offsets, o.tile_members, out,
+            o.tile_radii, o.tile_offsets, o.tile_members, out, False,
+        )  # fmt: skip
+    return out.reshape(lead)
+
+
+def overlap_first(a: np.ndarray, b: np.ndarray, obstacles: Obstacles) -> np.ndarray:
+    """Per leg a->b (as `overlap_lengths`): 0 where `overlap_lengths` is 0, else the overlap
+    with the first obstacle the kernel finds cutting the leg (> 2 tol, at most the sum), NaN
+    where `overlap_lengths` is NaN.
+
+    Every obstacle's overlap is 0 or above 2 tol and the sum of non-negative floats is at
+    least each term, so for any threshold t < 2 tol (`routing.graph.CLEAR`, `L_VIO_TOL`)
+    ``overlap_first(...) > t`` equals ``overlap_lengths(...) > t`` leg by leg (tests): the
+    clear / blocked questions of the seeder, the visibility graph and the descent. A cut leg
+    leaves the kernel's tests at its first cut, so on a map with many obstacles (most long
+    legs cut) it costs the tiles and obstacles up to that cut, not all of them: the same
+    O(legs x tiles + candidate pairs) bound as `overlap_lengths`, much less in practice.
+    """
+    a2, b2, lead = _legs(a, b)
+    out = np.empty(a2.shape[0], dtype=np.float64)
+    if a2.shape[0]:
+        o = obstacles
+        _overlap_serial(
+            a2, b2, o.circles, o.poly_vertices, o.poly_offsets, o.edge_normals, o.edge_flags,
+            o.tol, o.cull_radii, o.cull_centres32, o.origin, o.extent, o.tile_centres32,
+            o.tile_radii, o.tile_offsets, o.tile_members, out, True,
         )  # fmt: skip
     return out.reshape(lead)
 

@@ -34,7 +34,7 @@ import numpy as np
 from numba import njit
 
 from planner_core.model.formulas import ModelParams, flight_time, ground_reach, leg_time, slant_rate
-from planner_core.model.geometry import Obstacles, overlap_lengths, points_inside
+from planner_core.model.geometry import Obstacles, overlap_first, overlap_lengths, points_inside
 from planner_core.model.routing import build_visibility_graph, open_tour
 from planner_core.model.routing.graph import CLEAR as _CLEAR
 
@@ -239,8 +239,9 @@ class Seeder:
 
     # ------------------------------------------------------------------ geometry helpers
     def _clear(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        """Whether each leg a -> b is collision-free."""
-        return overlap_lengths(a, b, self.obstacles) <= _CLEAR
+        """Whether each leg a -> b is collision-free (`overlap_first`: a cut leg leaves the
+        obstacle tests at its first cut; the same answer as ``overlap_lengths <= CLEAR``)."""
+        return overlap_first(a, b, self.obstacles) <= _CLEAR
 
     def _push_out(self, pts: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """Points clipped to the area and moved out of any obstacle they are in."""

@@ -47,7 +47,7 @@ import numpy as np
 from numba import njit
 
 from planner_core.model.formulas import L_VIO_TOL, deb_better, leg_time
-from planner_core.model.geometry import overlap_lengths
+from planner_core.model.geometry import overlap_first
 from planner_core.search.polish import hover_lp
 
 __all__ = [
@@ -211,7 +211,7 @@ def held_points(problem: Any, P: np.ndarray, R: np.ndarray | None = None) -> np.
     m = problem.model
     bad = (m.rates(P) if R is None else R).sum(axis=1) > m.bandwidth
     nodes = _nodes(problem, P)
-    cut = overlap_lengths(nodes[:-1], nodes[1:], problem.obstacles) > L_VIO_TOL
+    cut = overlap_first(nodes[:-1], nodes[1:], problem.obstacles) > L_VIO_TOL
     bad |= cut[:-1] | cut[1:]  # leg k ends at point k and leg k + 1 starts there
     return np.flatnonzero(bad)
 
@@ -230,7 +230,7 @@ class HeldCheck:
         m = problem.model
         self.rate_bad = m.rates(P).sum(axis=1) > m.bandwidth
         nodes = _nodes(problem, P)
-        self.cut = overlap_lengths(nodes[:-1], nodes[1:], problem.obstacles) > L_VIO_TOL
+        self.cut = overlap_first(nodes[:-1], nodes[1:], problem.obstacles) > L_VIO_TOL
 
     def held(self) -> np.ndarray:
         """Indices of the points that break C3 or end or start a leg that breaks C5."""
@@ -243,7 +243,7 @@ class HeldCheck:
         self.rate_bad[idx] = m.rates(P[idx]).sum(axis=1) > m.bandwidth
         legs = np.unique(np.concatenate([idx, idx + 1]))  # leg k runs node k -> node k + 1
         nodes = _nodes(self.problem, P)
-        self.cut[legs] = overlap_lengths(nodes[legs], nodes[legs + 1],
+        self.cut[legs] = overlap_first(nodes[legs], nodes[legs + 1],
                                          self.problem.obstacles) > L_VIO_TOL
 
 
@@ -275,7 +275,7 @@ def _slide(
     cand = np.clip(P[held][:, None, :] + np.einsum("aij,kj->kai", _SLIDE, move[held]), 0.0, box)
     c = cand.reshape(-1, 2)
     prev, nxt = np.repeat(back[held], a, axis=0), np.repeat(ahead[held + 2], a, axis=0)
-    cut = overlap_lengths(np.vstack([prev, c]), np.vstack([c, nxt]), problem.obstacles) > L_VIO_TOL
+    cut = overlap_first(np.vstack([prev, c]), np.vstack([c, nxt]), problem.obstacles) > L_VIO_TOL
     bad = (cut[: k * a] | cut[k * a:] | (m.rates(c).sum(axis=1) > m.bandwidth)).reshape(k, a)
     first = np.argmax(~bad, axis=1)
     ok = ~bad[np.arange(k), first]

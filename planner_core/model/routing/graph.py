@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from planner_core.model.geometry import overlap_lengths, points_inside
+from planner_core.model.geometry import overlap_first, points_inside
 from planner_core.model.routing.offset import obstacle_polygons
 
 __all__ = ["CLEAR", "VisibilityGraph", "build_visibility_graph", "shortest_paths", "path_hops"]
@@ -279,7 +279,7 @@ def build_visibility_graph(
         kept_i, kept_j = [], []
         for i0, i1 in _row_blocks(n):
             bi, bj = _tangent_pairs(nodes, prev, nxt, i0, i1)
-            clear = overlap_lengths(nodes[bi], nodes[bj], obstacles) <= CLEAR
+            clear = overlap_first(nodes[bi], nodes[bj], obstacles) <= CLEAR  # = overlap_lengths
             kept_i.append(bi[clear])
             kept_j.append(bj[clear])
         i, j = np.concatenate(kept_i), np.concatenate(kept_j)
