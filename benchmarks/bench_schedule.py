@@ -236,6 +236,36 @@ def select(records: list[dict[str, Any]], k: int = 5) -> str:
             f"the best static on {cv['better']} / {cv['worse']} cases")
 
 
+def other_seed_choice(records: list[dict[str, Any]]) -> str:
+    """The per-map oracle validated on held-out seeds: for each case, the template that was
+    best on the same map's other seeds (least mean gap), against the best static template of
+    all cases, and the mean correlation of the templates' gaps between two seeds of a map.
+    Where this choice is no better than the static one, what a template gains on a map is
+    its seed's noise, and no map feature can predict it."""
+    import numpy as np
+
+    from planner_core.learning.schedule_select import cases_from_records
+
+    keys, _, G, templates = cases_from_records(records)
+    maps = np.array([m for m, _ in keys])
+    s = int(np.argmin(G.mean(0)))
+    chosen, static, corr = [], [], []
+    for m in np.unique(maps):
+        idx = np.flatnonzero(maps == m)
+        for i in idx if len(idx) > 1 else []:
+            others = idx[idx != i]
+            chosen.append(G[i, int(np.argmin(G[others].mean(0)))])
+            static.append(G[i, s])
+        if len(idx) > 1 and G[idx[0]].std() > 0 and G[idx[1]].std() > 0:
+            corr.append(np.corrcoef(G[idx[0]], G[idx[1]])[0, 1])
+    c, st = np.array(chosen), np.array(static)
+    return (f"per-map choice from the map's other seeds: mean gap {c.mean():.4f} % against the "
+            f"best static ({templates[s]}) {st.mean():.4f} % on {len(c)} cases; better / worse "
+            f"on {int((c < st).sum())} / {int((c > st).sum())}; mean correlation of the "
+            f"templates' gaps between a map's first two seeds {np.mean(corr):.3f} "
+            f"({len(corr)} maps)")
+
+
 def evaluate(table_dir: str, records: list[dict[str, Any]], seed: int = 0) -> str:
     """A fitted selector table (`python -m planner_core.learning.schedule_select fit`) on
     held-out grid records: per case the template the table picks from the case's features
@@ -329,6 +359,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.select:
         records = _read(args.select)
         print(select(records))
+        print(other_seed_choice(records))
         if args.output:  # the records with their features, for the next --select
             with open(args.output, "w") as fh:
                 fh.writelines(json.dumps(r) + "\n" for r in records)

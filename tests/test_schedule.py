@@ -172,7 +172,9 @@ def test_docs_grid_table_is_what_the_stored_records_give() -> None:
     got = {r.split("|")[1].strip(): [c.strip() for c in r.split("|")[2:7]]
            for r in table.splitlines() if r.startswith("| ") and "template" not in r}
     doc = (ROOT / "docs" / "scheduler.md").read_text()
-    section = doc[doc.index("### Measured: the grid at the default budget"):]
+    start = doc.index("### Measured: the grid at the default budget")
+    end = doc.find("\n## ", start)
+    section = doc[start:end if end > 0 else None]
     rows = [r for r in section.splitlines() if r.startswith("| ") and "template" not in r
             and "---" not in r]
     assert len(rows) >= 7
