@@ -47,7 +47,7 @@ def plan(
     progress: Callable[[Any], None] | None = None,
     on_compile: Callable[[], None] | None = None,
     scheduler: str | Any = "default",
-    corner_slots: int = 0,
+    corner_slots: int | str = "auto",
 ) -> Plan:
     """Plan hover points and hover times for `map`; same seed and budget, same plan.
 
@@ -85,12 +85,17 @@ def plan(
         on_compile: called once before the kernels are compiled or loaded (the CLI's notice).
         scheduler: the improving stage's scheduler (issue 34's LAMDE-S seam,
             `planner_core.pipeline.schedule`): "default" (today's rounds), a static schedule's
-            name (`schedule.SCHEDULES`: a fixed cycle of macro-actions) or a `Scheduler`
-            object; a non-default one is recorded as `config["scheduler"]`.
+            name (`schedule.SCHEDULES`: a fixed cycle of macro-actions), "lamde-s" (the
+            learned selector of a schedule, `planner_core.learning.schedule_select`) or a
+            `Scheduler` object; a non-default one is recorded as `config["scheduler"]`.
         corner_slots: K > 0: detour corners do not count against I_max (issue 31; docs/
             missions.md): the encoding gets K extra slots and at most I_max points with t > 0
-            are feasible, the others (0 s) are corners, written as NAV_WAYPOINT; recorded as
-            `config["corner_slots"]`. 0 (default): the paper's model, every point a slot.
+            are feasible, the others (0 s) are corners, written as NAV_WAYPOINT. 0: the
+            paper's model, every point a slot. "auto" (default): K from the map
+            (`planner_core.model.corner_slots.auto_corner_slots`: the blocked legs of the
+            seeder's plans within I_max; 0 on the paper's suite maps, 3 on campus-500).
+            The K planned with is recorded as `config["corner_slots"]` (and
+            `config["corner_slots_rule"]` = "auto" when the rule chose it).
 
     Returns:
         The `Plan`, with `stages` (per stage: evaluations, seconds, f before and after) and
@@ -98,11 +103,12 @@ def plan(
 
     Raises:
         ValueError: one line naming the field ("population: must be an integer >= 6, got 5")
-            for any setting outside its range (`planner_core.defaults`).
+            for any setting outside its range (`planner_core.defaults`), or corner_slots
+            neither "auto" nor an integer >= 0 (or > 0 with variable_length False).
         planner_core.MapError: a bad map.
     """
+    from planner_core.model.corner_slots import AUTO, check_corner_slots, problem_for
     from planner_core.model.mapio import load_map
-    from planner_core.model.problem import Problem
     from planner_core.pipeline import PlanConfig, run_pipeline
     from planner_core.pipeline.schedule import make_scheduler, scheduler_name
     from planner_core.pipeline.warmup import warm_up, warmed
@@ -115,24 +121,33 @@ def plan(
     elif not isinstance(config, PlanConfig):
         raise ValueError(f"config: must be a PlanConfig, got {type(config).__name__}")
     make_scheduler(scheduler)  # "scheduler: must be one of ...", before any work
+    # "corner_slots: must be 'auto' or ...", before any work
+    if check_corner_slots(corner_slots) != AUTO and corner_slots and not config.variable_length:
+        raise ValueError("corner_slots: fixed-length mode flies every slot; use 0 or 'auto'")
     default_schedule = isinstance(scheduler, str) and scheduler == "default"
     t_start = time.perf_counter()
     m = load_map(map)
     # safety margins (clearance, data margin) are a transformation of the map: the model is the
     # paper's, on the inflated map (the same map when both margins are 0)
-    problem = Problem(m.planning_map(), variable_length=config.variable_length,
-                      corner_slots=corner_slots)
+    planning_map = m.planning_map()
     if on_compile is not None and not warmed(config.configurator):
         on_compile()
     t_compile = warm_up(config.configurator)
+    # "auto" corner slots are resolved from the planning map (after the kernels load: the rule
+    # draws seeder plans) before the problem is built (K = 0: the paper's Problem)
+    problem, k_corner = problem_for(planning_map, variable_length=config.variable_length,
+                                    corner_slots=corner_slots)
     result = run_pipeline(problem, config, progress=progress,
                           scheduler=None if default_schedule else scheduler)
     best = problem.breakdown(result.x)
     settings = config.to_dict()
     if not default_schedule:
         settings["scheduler"] = scheduler_name(scheduler)
-    if corner_slots:
-        settings["corner_slots"] = int(corner_slots)
+    if isinstance(corner_slots, str):  # "auto" (checked above): the K it resolved to
+        settings["corner_slots"] = k_corner
+        settings["corner_slots_rule"] = AUTO
+    elif k_corner:
+        settings["corner_slots"] = k_corner
     wall = time.perf_counter() - t_start
     ev_seconds = sum(s.evaluate_seconds for s in result.stages)
     return Plan(

@@ -821,6 +821,16 @@ def _vehicle_colour(vehicle: int) -> Any:
     return colormaps["tab10"]((vehicle - 1) % 10)
 
 
+def _corners_of(timeline: Any) -> np.ndarray:
+    """The corners (NAV_WAYPOINT stops that are not hover points) of a sim replay, (n, 2)."""
+    from lamde_mission.items import corner_stops
+
+    route = getattr(timeline, "route", None)
+    if route is None:
+        return np.zeros((0, 2))
+    return np.asarray(corner_stops(route), dtype=float).reshape(-1, 2)
+
+
 def fleet_figure(
     map: Any,  # noqa: A002
     sorties: Sequence[SortieView],
@@ -832,7 +842,8 @@ def fleet_figure(
 
     One colour per vehicle (tab10), one line style per sortie of a vehicle (`SORTIE_STYLES`:
     solid, dashed, dash-dot, dotted), arrows along each leg, hover points in the vehicle's
-    colour labelled "sortie.order · seconds" (up to 40 hover points in all), the parts of legs
+    colour labelled "sortie.order · seconds" (up to 40 hover points in all), detour corners
+    (NAV_WAYPOINT, flown through) as white diamonds edged in it, the parts of legs
     inside obstacles (C5) in red; depots (where sorties take off and land) as black-edged
     hexagons with their names, and each battery swap (a vehicle landing from sortie j and
     leaving on sortie j + 1) as a star in the vehicle's colour with "v1 swap 1". Sensors are
@@ -865,6 +876,7 @@ def fleet_figure(
     n_hover = sum(len(sv.timeline.hover_points) for sv in sorties)
     t_max = max(float(spec.uav.max_hover_time), 1e-9)
     bad_total = 0.0
+    n_corner = 0
     vehicles = sorted({sv.vehicle for sv in sorties})
     for sv in sorties:
         colour = _vehicle_colour(sv.vehicle)
@@ -886,6 +898,13 @@ def fleet_figure(
             rl = np.asarray(rl, dtype=float)
             scene.route.append(rl)
             ax.plot(rl[:, 0], rl[:, 1], ":", color=colour, linewidth=1.0, zorder=3)
+        # corners (NAV_WAYPOINT, flown through) as in the single-plan figure: white diamonds
+        cp = _corners_of(sv.timeline)
+        if len(cp):
+            n_corner += len(cp)
+            scene.marker(cp, 3.0)
+            ax.scatter(cp[:, 0], cp[:, 1], s=14, marker="D", facecolors="white",
+                       edgecolors=[colour], linewidths=0.8, zorder=7)  # fmt: skip
         hp = np.asarray(sv.timeline.hover_points, dtype=float).reshape(-1, 2)
         ht = np.asarray(sv.timeline.hover_times, dtype=float).reshape(-1)
         if len(hp):
@@ -998,6 +1017,10 @@ def fleet_figure(
             label="hover point: sortie.order · seconds",
         )
     )
+    if n_corner:
+        handles.append(Line2D([], [], marker="D", linestyle="", markerfacecolor="white",
+                              markeredgecolor="0.2",
+                              label=f"corner, flown through ({n_corner})"))  # fmt: skip
     if title is None:
         nv = len(vehicles)
         title = (f"map '{spec.name}': {nv} vehicle{'s' if nv > 1 else ''}, "

@@ -63,13 +63,17 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    f"(default {D.CONFIGURATOR})")
     p.add_argument("--scheduler", default="default", metavar="NAME",
                    help="how the improving stage chooses its macro-actions (kicks, structural "
-                   "search, restarts, fresh sweeps, DE blocks): default (today's rounds) or a "
-                   "static schedule (docs/scheduler.md lists them)")
-    p.add_argument("--corner-slots", type=int, default=0, metavar="K",
-                   help="detour corners do not count against I_max: K extra slots for points "
-                   "of 0 s, written as NAV_WAYPOINT (at most I_max hover points stay "
-                   "feasible; docs/missions.md). Default 0: the paper's model, every point "
-                   "takes one of the I_max slots")
+                   "search, restarts, fresh sweeps, DE blocks): default (today's rounds), a "
+                   "static schedule, or lamde-s (the learned selector of a schedule; "
+                   "docs/scheduler.md lists them)")
+    p.add_argument("--corner-slots", default="auto", metavar="auto|K",
+                   help="detour corners (points of 0 s, written as NAV_WAYPOINT) do not count "
+                   "against I_max: K extra slots for them, at most I_max hover points stay "
+                   "feasible (docs/missions.md). Default auto: K from the map, the blocked "
+                   "legs left in the seeder's plans when I_max slots cannot hold their "
+                   "corners (0 on the paper's suite maps, 3 on campus-500; docs/scaling.md). "
+                   "0: the paper's model, every point takes one of the I_max slots. A map "
+                   "with a battery or fleet (sorties) plans with 0")
     p.add_argument("--policy", metavar="CHECKPOINT",
                    help="with --configurator lamde: a checkpoint folder from `lamde-mission "
                    "train` instead of the shipped lamde-v2")
@@ -213,8 +217,14 @@ def _summary(
     # a point of 0 s is written as a corner (NAV_WAYPOINT, flown through), not a hover point
     times = (stored if stored is not None else plan).hover_times
     n_corner = sum(1 for t in times if float(t) == 0.0)
-    corners = (f" + {n_corner} corner{'s' if n_corner != 1 else ''} (0 s, NAV_WAYPOINT)"
-               if n_corner else "")  # fmt: skip
+    # corner slots (issue 31): K slots beyond I_max that only corners may use
+    k_slots = int(plan.config.get("corner_slots", 0))
+    slots = (f"{k_slots} corner slot{'s' if k_slots != 1 else ''} beyond I_max"
+             + (", auto" if plan.config.get("corner_slots_rule") == "auto" else "")
+             if k_slots else "")  # fmt: skip
+    corners = (f" + {n_corner} corner{'s' if n_corner != 1 else ''} (0 s, NAV_WAYPOINT"
+               + (f"; {slots})" if slots else ")") if n_corner
+               else f" ({slots})" if slots else "")  # fmt: skip
     lines = [
         f"map '{printable(m.name)}': {plan.n_hover - n_corner} hover points{corners}, "
         f"{plan.evaluations} evaluations, "
@@ -357,7 +367,7 @@ def _run_sorties(args: argparse.Namespace) -> int:
                      ("--report", args.report), ("--finish", args.finish != "land"),
                      ("--policy", args.policy), ("--time-limit", args.time_limit is not None),
                      ("--scheduler", args.scheduler != "default"),
-                     ("--corner-slots", args.corner_slots != 0)):
+                     ("--corner-slots", _corner_slots(args) not in ("auto", 0))):
         if bad:
             raise UsageError(f"{opt}: not available for a map with a battery or fleet (its "
                              "sorties are written as .plan files in a directory)")
@@ -441,6 +451,29 @@ def _run_sorties(args: argparse.Namespace) -> int:
     return 0
 
 
+def _corner_slots(args: argparse.Namespace) -> int | str:
+    """`--corner-slots` as "auto" or an integer >= 0.
+
+    Raises:
+        UsageError: anything else, one line.
+    """
+    from lamde_mission.errors import UsageError
+
+    text = str(args.corner_slots).strip()
+    if text == "auto":
+        return "auto"
+    try:
+        k = int(text)
+    except ValueError:
+        k = -1
+    if k < 0:
+        from planner_core.textio import printable
+
+        raise UsageError(f"--corner-slots: must be 'auto' or an integer >= 0, got "
+                         f"{printable(str(args.corner_slots))!r}")
+    return k
+
+
 def run(args: argparse.Namespace) -> int:
     if _wants_sorties(args.map):
         return _run_sorties(args)
@@ -485,9 +518,8 @@ def run(args: argparse.Namespace) -> int:
         make_scheduler(args.scheduler)
     except ValueError as exc:
         raise UsageError(f"--{exc}") from None
-    if args.corner_slots < 0:
-        raise UsageError(f"--corner-slots: must be an integer >= 0, got {args.corner_slots}")
-    if args.corner_slots and args.fixed_length:
+    corner_slots = _corner_slots(args)
+    if corner_slots != "auto" and corner_slots and args.fixed_length:
         raise UsageError("--corner-slots: not with --fixed-length (it flies every slot)")
     configurator = args.configurator
     if args.policy is not None:
@@ -538,7 +570,7 @@ def run(args: argparse.Namespace) -> int:
             progress=progress,
             on_compile=announce,
             scheduler=args.scheduler,
-            corner_slots=args.corner_slots,
+            corner_slots=corner_slots,
         )
     finally:
         if progress is not None:

@@ -105,8 +105,14 @@ def run(args: argparse.Namespace) -> int:
     timeline = replay_mission_file(args.mission, m)
     verdicts = verify(timeline, m)
     t = timeline.totals
+    from lamde_mission.items import corner_stops
+
+    n_corner = len(corner_stops(timeline.route))
     if args.json:
         out = verdicts.to_dict()
+        # corners (NAV_WAYPOINT, flown through) are counted apart from the hover points
+        out["hover_points"] = len(timeline.hover_times)
+        out["corners"] = n_corner
         out["totals"] = {
             "t_fly": t.t_fly, "t_hover": t.t_hover, "f": t.f, "t_takeoff": t.t_takeoff,
             "t_land": t.t_land, "t_return": t.t_return, "t_total": t.t_total,
@@ -114,10 +120,8 @@ def run(args: argparse.Namespace) -> int:
         }  # fmt: skip
         print(json.dumps(out, indent=2))
     else:
-        from lamde_mission.items import corner_stops
         from planner_core.textio import printable
 
-        n_corner = len(corner_stops(timeline.route))
         corners = (f" + {n_corner} corner{'s' if n_corner != 1 else ''} (NAV_WAYPOINT, flown "
                    "through; not hover points)" if n_corner else "")  # fmt: skip
         print(f"mission {args.mission} on map '{printable(m.name)}': "
