@@ -842,6 +842,11 @@ def overlap_lengths(a: np.ndarray, b: np.ndarray, obstacles: Obstacles) -> np.nd
     Exact analytic answer up to the boundary tolerance in the module docstring; NaN legs give NaN.
     Single-threaded and releases the GIL, so callers may split a batch over threads.
     """
+    return _overlap(a, b, obstacles, False)
+
+
+def _overlap(a: np.ndarray, b: np.ndarray, obstacles: Obstacles, first: bool) -> np.ndarray:
+    """The kernel's call behind `overlap_lengths` (first False) and `overlap_first` (True)."""
     a2, b2, lead = _legs(a, b)
     out = np.empty(a2.shape[0], dtype=np.float64)
     if a2.shape[0]:
@@ -849,7 +854,7 @@ def overlap_lengths(a: np.ndarray, b: np.ndarray, obstacles: Obstacles) -> np.nd
         _overlap_serial(
             a2, b2, o.circles, o.poly_vertices, o.poly_offsets, o.edge_normals, o.edge_flags,
             o.tol, o.cull_radii, o.cull_centres32, o.origin, o.extent, o.tile_centres32,
-            o.tile_radii, o.tile_offsets, o.tile_members, out, False,
+            o.tile_radii, o.tile_offsets, o.tile_members, out, first,
         )  # fmt: skip
     return out.reshape(lead)
 
@@ -867,16 +872,7 @@ def overlap_first(a: np.ndarray, b: np.ndarray, obstacles: Obstacles) -> np.ndar
     legs cut) it costs the tiles and obstacles up to that cut, not all of them: the same
     O(legs x tiles + candidate pairs) bound as `overlap_lengths`, much less in practice.
     """
-    a2, b2, lead = _legs(a, b)
-    out = np.empty(a2.shape[0], dtype=np.float64)
-    if a2.shape[0]:
-        o = obstacles
-        _overlap_serial(
-            a2, b2, o.circles, o.poly_vertices, o.poly_offsets, o.edge_normals, o.edge_flags,
-            o.tol, o.cull_radii, o.cull_centres32, o.origin, o.extent, o.tile_centres32,
-            o.tile_radii, o.tile_offsets, o.tile_members, out, True,
-        )  # fmt: skip
-    return out.reshape(lead)
+    return _overlap(a, b, obstacles, True)
 
 
 def _circle_overlap_py(
