@@ -254,7 +254,7 @@ class ScheduleEnv(gymnasium.Env):
         return self.improve.observe()
 
     def _features(self) -> np.ndarray:
-        from planner_core.pipeline.schedule import IDLE_ROUNDS, _points
+        from planner_core.pipeline.schedule import IDLE_ROUNDS, pool_structures
 
         ir, ev, problem = self.improve, self.run.ev, self.problem
         x, f, phi = ev.best()
@@ -262,26 +262,13 @@ class ScheduleEnv(gymnasium.Env):
         imax = max(problem.n_points, 1)
         short = sum(1 for v in b["shortfall"].values() if v > 0)
         n_sensors = max(len(b["shortfall"]), 1)
-        pool = ir.state.pool
-        best_by_n: dict[int, float] = {}
-        if len(pool):
-            for i in pool.ordered():
-                if pool.phi[i] > 0:
-                    continue
-                if i not in self._npoints:
-                    self._npoints[i] = _points(problem, pool.X[i])
-                n = self._npoints[i]
-                best_by_n.setdefault(n, float(pool.f[i]))
-                if len(best_by_n) >= 12:
-                    break
+        best_by_n = pool_structures(problem, ir.state.pool, limit=12, cache=self._npoints)
         gaps = sorted(v for k, v in best_by_n.items() if k != b["n_hover"])
         gaps = [(g - float(f)) / max(abs(float(f)), 1e-9) * 100.0 for g in gaps] + [0.0, 0.0]
         finished = len(set(best_by_n) & set(ir.state.finished)) / max(len(best_by_n), 1)
         tl = self.cfg.time_limit
         time_left = 1.0 if tl is None else max(1.0 - ev.elapsed / tl, 0.0)
-        spec = problem.map.spec.obstacles
-        n_obst = (len(spec.circles) + len(spec.rectangles) + len(spec.no_fly_zones)
-                  + len(spec.polygons))
+        n_obst = problem.map.spec.obstacles.count
         steps = max(ir.step, 1)
         v = [
             ev.remaining / max(ev.budget, 1),

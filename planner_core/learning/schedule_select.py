@@ -40,6 +40,8 @@ from typing import Any
 
 import numpy as np
 
+from planner_core.pipeline.schedule import _points, pool_structures
+
 __all__ = [
     "DEFAULT_TABLE",
     "FEATURES",
@@ -80,20 +82,15 @@ def run_features(problem: Any, x: np.ndarray, f: float, pool: Any, remaining: in
         counts among the pool's feasible plans and the gap of the best plan of another count
         (per cent, 0 without one); remaining / budget.
     """
-    spec = problem.map.spec.obstacles
     kinds = np.array(pool.kinds) if len(pool) else np.zeros(0, dtype=str)
     feasible = pool.phi == 0 if len(pool) else np.zeros(0, dtype=bool)
     cons = pool.f[feasible & (kinds == "constructive")] if len(pool) else np.zeros(0)
-    by_n: dict[int, float] = {}
-    for i in pool.ordered() if len(pool) else []:
-        if pool.phi[i] == 0:
-            by_n.setdefault(_points(problem, pool.X[i]), float(pool.f[i]))
+    by_n = pool_structures(problem, pool)
     n_inc = _points(problem, x)
     others = sorted(v for n, v in by_n.items() if n != n_inc)
     return {
         "sensors": float(len(problem.map.spec.sensors)),
-        "obstacles": float(len(spec.circles) + len(spec.rectangles) + len(spec.no_fly_zones)
-                           + len(spec.polygons)),
+        "obstacles": float(problem.map.spec.obstacles.count),
         "area_km2": problem.map.width * problem.map.height / 1e6,
         "imax": float(problem.n_points),
         "f_vs_constructive": (float(f) / float(cons.min()) - 1) * 100 if len(cons) else 0.0,
@@ -102,12 +99,6 @@ def run_features(problem: Any, x: np.ndarray, f: float, pool: Any, remaining: in
         "next_structure_gap": (others[0] / float(f) - 1) * 100 if others else 0.0,
         "improve_share": remaining / budget,
     }
-
-
-def _points(problem: Any, x: np.ndarray) -> int:
-    from planner_core.pipeline.schedule import _points as points
-
-    return points(problem, x)
 
 
 def _transform(F: np.ndarray) -> np.ndarray:

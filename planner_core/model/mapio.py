@@ -180,6 +180,12 @@ class ObstaclesSpec(BaseModel):
         [], description="obstacle footprints of any polygonal shape (buildings)"
     )
 
+    @property
+    def count(self) -> int:
+        """Obstacles of every kind: circles, rectangles, no-fly zones and polygons."""
+        return (len(self.circles) + len(self.rectangles) + len(self.no_fly_zones)
+                + len(self.polygons))
+
 
 class Battery(BaseModel):
     """One battery (issue 33): its energy and the reserve kept at landing. The energy may

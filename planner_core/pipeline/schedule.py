@@ -61,6 +61,7 @@ __all__ = [
     "StaticScheduler",
     "StepRecord",
     "make_scheduler",
+    "pool_structures",
 ]
 
 #: kick spreads (m) the default cycles through: the final stage's, finer, coarser
@@ -81,6 +82,36 @@ ACTIONS: tuple[str, ...] = (*KICKS, "restructure", "restart", "restart-other", "
 def _points(problem: Any, x: np.ndarray) -> int:
     """Hover points flown by plan x (d,)."""
     return len(problem.breakdown(np.asarray(x, dtype=float))["hover_points"])
+
+
+def pool_structures(problem: Any, pool: Any, *, limit: int | None = None,
+                    cache: dict[int, int] | None = None) -> dict[int, float]:
+    """The pool's structures: number of hover points -> the best f among its feasible plans of
+    that number, the counts in the order their best plans come in Deb order.
+
+    Args:
+        problem: the run's `Problem`; pool: its `Pool` (plans X (m, d), f, phi).
+        limit: stop after this many distinct counts (None: all).
+        cache: pool row -> its number of hover points, read and filled (the pool only grows,
+            so a row's count never changes).
+
+    Returns:
+        {points: f}; one `Problem.breakdown` (O(I x J)) per feasible plan read.
+    """
+    out: dict[int, float] = {}
+    for i in pool.ordered() if len(pool) else []:
+        if pool.phi[i] > 0:
+            continue
+        if cache is None:
+            n = _points(problem, pool.X[i])
+        else:
+            if i not in cache:
+                cache[i] = _points(problem, pool.X[i])
+            n = cache[i]
+        out.setdefault(n, float(pool.f[i]))
+        if limit is not None and len(out) >= limit:
+            break
+    return out
 
 
 @dataclass(frozen=True)
