@@ -116,7 +116,7 @@ def auto_corner_slots(problem: Problem, draws: int = RULE_DRAWS) -> int:
         raise ValueError("problem: the rule reads the paper's encoding (corner_slots 0)")
     obs = problem.obstacles
     if not problem.variable_length or problem.tau <= 0.0 \
-            or len(obs.circles) + len(obs.poly_offsets) - 1 == 0:
+            or obs.n_circles + obs.n_polygons == 0:
         return 0
     need: list[int] = []
     for d in range(draws):
