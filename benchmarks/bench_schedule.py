@@ -12,6 +12,7 @@ improving stage's mean evaluations and seconds; writes one JSON line per run to 
 
     python benchmarks/bench_schedule.py [--maps 24] [--seeds 2] [--budget 10000]
         [--templates default kicks-heavy ...] [--map-seed 3400] [--suite [T01 ...]]
+        [--large [L01 ...]]
         [-o runs.jsonl] [--summary runs.jsonl ...] [--select runs.jsonl ...]
 
 Gap = (f - f_best) / f_best in percent, f_best the best feasible f of any template on that map
@@ -37,6 +38,7 @@ from typing import Any
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 SUITE = ROOT / "examples" / "maps" / "suite"
+LARGE = ROOT / "examples" / "maps" / "large"
 
 
 def _commit() -> str:
@@ -59,10 +61,11 @@ def training_maps(n: int, map_seed: int) -> list[tuple[str, dict[str, Any]]]:
     return out
 
 
-def suite_maps(tasks: list[str]) -> list[tuple[str, Any]]:
-    """The suite's maps named `tasks` (all 16 when empty): (name, path)."""
-    names = tasks or sorted(p.stem for p in SUITE.glob("T*.json"))
-    return [(t, SUITE / f"{t}.json") for t in names]
+def suite_maps(tasks: list[str], folder: Path = SUITE) -> list[tuple[str, Any]]:
+    """The maps of a suite folder named `tasks` (all of them when empty): (name, path). The
+    paper-size suite (T01-T16) by default, the large suite (L01-L08) with `folder=LARGE`."""
+    names = tasks or sorted(p.stem for p in folder.glob("*.json"))
+    return [(t, folder / f"{t}.json") for t in names]
 
 
 def case_features(problem: Any, run: Any) -> dict[str, float]:
@@ -188,7 +191,7 @@ def _map_source(name: str) -> Any:
 
         size, density, seed = name[4:].split("-")
         return generate_map(int(size), int(density[1:]), int(seed[1:]))
-    return SUITE / f"{name}.json"
+    return (LARGE if (LARGE / f"{name}.json").exists() else SUITE) / f"{name}.json"
 
 
 def _fill_features(records: list[dict[str, Any]]) -> None:
@@ -330,6 +333,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--map-seed", type=int, default=3400, help="first generated map's seed")
     ap.add_argument("--suite", nargs="*", metavar="TASK",
                     help="the suite's maps (all 16 without names) instead of generated ones")
+    ap.add_argument("--large", nargs="*", metavar="TASK",
+                    help="the large suite's maps (examples/maps/large, all 8 without names) "
+                    "instead of generated ones")
     ap.add_argument("--seeds", type=int, default=2, help="plan seeds 0..N-1 (2)")
     ap.add_argument("--budget", type=int, default=10_000, help="evaluations a plan (10,000)")
     ap.add_argument("--templates", nargs="+",
@@ -369,8 +375,12 @@ def main(argv: list[str] | None = None) -> int:
         print(f"bench_schedule: --templates: unknown {bad}" if bad else
               "bench_schedule: --maps and --seeds: must be >= 1", file=sys.stderr)
         return 2
-    maps = suite_maps(args.suite) if args.suite is not None else training_maps(
-        args.maps, args.map_seed)
+    if args.suite is not None and args.large is not None:
+        print("bench_schedule: --suite and --large: choose one", file=sys.stderr)
+        return 2
+    maps = (suite_maps(args.suite) if args.suite is not None
+            else suite_maps(args.large, LARGE) if args.large is not None
+            else training_maps(args.maps, args.map_seed))
     out = open(args.output, "w") if args.output else None  # noqa: SIM115
     try:
         records = run_grid(maps, list(range(args.seeds)), args.budget, args.templates, out)

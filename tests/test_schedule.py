@@ -165,6 +165,18 @@ def test_bench_schedule_runs_summarises_and_selects(tmp_path) -> None:
     assert bench.main(["--templates", "nope"]) == 2
 
 
+def test_bench_schedule_large_names_the_large_suite() -> None:
+    bench = _bench()
+    large = bench.suite_maps([], bench.LARGE)
+    assert [n for n, _ in large] == [f"L0{k}" for k in range(1, 9)]
+    assert bench.suite_maps(["L04"], bench.LARGE) == [("L04", bench.LARGE / "L04.json")]
+    assert [n for n, _ in bench.suite_maps([])] == [f"T{k:02d}" for k in range(1, 17)]
+    # a record's map name finds its file in either suite
+    assert bench._map_source("L04") == bench.LARGE / "L04.json"
+    assert bench._map_source("T04") == bench.SUITE / "T04.json"
+    assert bench.main(["--suite", "T01", "--large", "L01"]) == 2
+
+
 def test_docs_grid_table_is_what_the_stored_records_give() -> None:
     bench = _bench()
     runs = ROOT / "docs" / "scheduler-runs"
