@@ -256,3 +256,104 @@ def test_overlap_first_gives_overlap_lengths_answers(name: str, obstacles: objec
     for t in (CLEAR, L_VIO_TOL):
         assert np.array_equal(first <= t, full <= t) and np.array_equal(first > t, full > t)
     assert 0.2 < np.mean(full[ok] > 0) < 0.98, name  # both answers well represented
+
+
+def _graph_cases() -> list[tuple[str, object, np.ndarray]]:
+    """Visibility graphs with their Eq. 1 hop times: T03, T16 and L02 (2,230 corners)."""
+    from planner_core.model.mapio import load_map
+
+    out = []
+    for t in ("T03", "T16"):
+        p = Problem(json.loads((SUITE / f"{t}.json").read_text()))
+        out.append((t, p))
+    out.append(("L02", Problem(load_map(SUITE.parent / "large" / "L02.json").planning_map())))
+    return [(name, p.seeder.graph, p.model.flight_time(p.seeder.graph.weights))
+            for name, p in out]
+
+
+@pytest.mark.parametrize("name,graph,hops", _graph_cases(),
+                         ids=lambda c: c if isinstance(c, str) else "")
+def test_spread_equals_its_reference(name: str, graph: object, hops: np.ndarray) -> None:
+    """The corners' Dijkstra (`graph._spread`, indexed heap with decrease-key) gives the lazy
+    deletion reference's costs to the bit, inf included, from one source, many sources, tied
+    sources, no source, with the edge lengths and with Eq. 1 hop times (as `LegTimes`)."""
+    from planner_core.model.routing import graph as g
+
+    rng = np.random.default_rng(9)
+    n = graph.n
+    srcs = [np.full(n, np.inf)]
+    for k in (1, 3, 40, n):
+        s = np.full(n, np.inf)
+        s[rng.choice(n, min(k, n), replace=False)] = rng.uniform(0, 300, min(k, n))
+        srcs.append(s)
+    tied = np.full(n, np.inf)
+    tied[rng.choice(n, min(10, n), replace=False)] = 17.0
+    srcs.append(tied)
+    for w in (graph.weights, np.ascontiguousarray(hops, dtype=float)):
+        for s in srcs:
+            fast = g._spread(graph.indptr, graph.indices, w, s)
+            slow = g._spread_reference(graph.indptr, graph.indices, w, s)
+            assert np.array_equal(fast, slow), name
+            assert np.array_equal(graph.spread(s, w), slow), name
+    assert n > 2
+
+
+def test_spread_equals_its_reference_with_ties() -> None:
+    """Random sparse graphs with small integer weights (many equal costs, so the two heaps
+    settle tied nodes in different orders): the same costs."""
+    from planner_core.model.routing import graph as g
+
+    rng = np.random.default_rng(10)
+    for _ in range(20):
+        n = int(rng.integers(2, 300))
+        i, j = rng.integers(0, n, (2, 4 * n))
+        keep = i != j
+        i, j = i[keep], j[keep]
+        w = rng.integers(1, 4, len(i)).astype(float)
+        src, dst, wts = np.concatenate([i, j]), np.concatenate([j, i]), np.concatenate([w, w])
+        order = np.lexsort((dst, src))
+        indptr = np.zeros(n + 1, dtype=np.int64)
+        np.cumsum(np.bincount(src, minlength=n), out=indptr[1:])
+        indices, wts = np.ascontiguousarray(dst[order]), np.ascontiguousarray(wts[order])
+        s = np.where(rng.random(n) < 0.1, rng.integers(0, 3, n).astype(float), np.inf)
+        assert np.array_equal(g._spread(indptr, indices, wts, s),
+                              g._spread_reference(indptr, indices, wts, s))
+
+
+def test_kmeans_equals_its_reference() -> None:
+    """The sweep's k-means (k-means++ init keeping each sensor's least distance across picks)
+    gives scipy's centres to the bit and leaves the generator where scipy leaves it: random
+    fields of 1-400 sensors (numpy's pairwise sum above 128 and 256), clustered and duplicated
+    sensors, every k up to J on small fields, and L02's 160 sensors for k = 1 .. 80."""
+    from planner_core.model.mapio import load_map
+    from planner_core.search import construct
+
+    rng = np.random.default_rng(11)
+    fields = [rng.uniform(0, 5000, (n, 2)) for n in (1, 2, 7, 8, 9, 40, 129, 257, 400)]
+    fields.append(np.repeat(rng.uniform(0, 900, (6, 2)), 3, axis=0))  # duplicates
+    fields.append(rng.normal(0, 1, (50, 2)) + rng.integers(0, 3, (50, 1)) * 4000.0)
+    large = Problem(load_map(SUITE.parent / "large" / "L02.json").planning_map())
+    fields.append(np.asarray(large.model.sensors, dtype=float))
+    for f, S in enumerate(fields):
+        ks = range(1, len(S) + 1) if len(S) <= 20 else sorted({1, 2, 3, len(S) // 4,
+                                                               len(S) // 2, len(S)})
+        if f == len(fields) - 1:
+            ks = range(1, 81)
+        for k in ks:
+            for seed in (0, 1):
+                r1, r2 = np.random.default_rng([f, k, seed]), np.random.default_rng([f, k, seed])
+                fast = construct._kmeans(S, k, r1)
+                slow = construct._kmeans_reference(S, k, r2)
+                assert np.array_equal(fast, slow), (f, k, seed)
+                assert r1.random() == r2.random(), (f, k, seed)
+
+
+def test_pairwise_sum_is_numpys() -> None:
+    from planner_core.search.construct import _pairwise_sum
+
+    rng = np.random.default_rng(12)
+    for n in [*range(0, 700), 1000, 4099, 100_003]:
+        x = rng.random(n) ** 3 * 10.0 ** rng.integers(-3, 8)
+        assert _pairwise_sum(x, 0, n) == x.sum(), n
+        if n > 5:
+            assert _pairwise_sum(x, 3, n - 5) == x[3:n - 2].sum(), n

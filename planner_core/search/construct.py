@@ -279,14 +279,144 @@ def greedy_cover_reference(
 
 
 def _kmeans(S: np.ndarray, k: int, rng: np.random.Generator) -> np.ndarray:
-    """k-means centres (<= k, 2) of the sensors, k-means++ init from rng (empty clusters
-    dropped)."""
+    """k-means centres (<= k, 2) of the sensors S (J, 2), k-means++ init from rng (empty
+    clusters dropped): `_kmeans_reference` to the bit, rng left in the same state (tests).
+
+    scipy's k-means++ init (`scipy.cluster.vq._kpp`) recomputes every chosen centre's
+    distances to the J sensors for each new centre, O(k^2 J) per call; the sweep asks
+    k = 1 .. I_max twice, ~I_max^3 J in all (I_max ~ J / 2 on the large maps: ~0.25 s of
+    L02's plan). `_kpp_indices` keeps each sensor's least squared distance across picks,
+    O(k J) per call, with the same draws (one integer, then k - 1 uniforms) and the same
+    arithmetic (`cdist`'s squared distances, numpy's pairwise sum, a sequential cumulative
+    sum, a left search); the k-means iterations are scipy's, from that init."""
+    from scipy.cluster.vq import kmeans2
+
+    S = np.ascontiguousarray(S, dtype=np.float64)
+    if S.ndim != 2 or S.shape[1] != 2 or not 1 <= k <= len(S):
+        return _kmeans_reference(S, k, rng)
+    first = int(rng.integers(len(S), high=None, size=None, dtype="int64", endpoint=False))
+    u = rng.uniform(size=k - 1)
+    idx = _kpp_indices(S, first, u)
+    if (idx < 0).any():  # a draw past the last cumulative share: scipy raises there
+        raise IndexError("k-means++ draw past the last sensor")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # scipy warns when a cluster ends empty
+        C, label = kmeans2(S, S[idx], minit="matrix")
+    return C[np.unique(label)]
+
+
+def _kmeans_reference(S: np.ndarray, k: int, rng: np.random.Generator) -> np.ndarray:
+    """k-means centres (<= k, 2) of the sensors, scipy's k-means++ init from rng (empty
+    clusters dropped): the slow reference of `_kmeans`."""
     from scipy.cluster.vq import kmeans2
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # scipy warns when a cluster ends empty
         C, label = kmeans2(S, k, minit="++", rng=rng)
     return C[np.unique(label)]
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _pairwise_block(a, lo, n):  # pragma: no cover - compiled
+    """numpy's float64 sum of a[lo:lo + n] for n <= 128: eight accumulators, then the rest."""
+    if n < 8:
+        res = 0.0
+        for i in range(lo, lo + n):
+            res += a[i]
+        return res
+    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
+    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
+    i = 8
+    m = n - (n % 8)
+    while i < m:
+        r0 += a[lo + i]
+        r1 += a[lo + i + 1]
+        r2 += a[lo + i + 2]
+        r3 += a[lo + i + 3]
+        r4 += a[lo + i + 4]
+        r5 += a[lo + i + 5]
+        r6 += a[lo + i + 6]
+        r7 += a[lo + i + 7]
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        res += a[lo + i]
+        i += 1
+    return res
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _pairwise_sum(a, lo, n):  # pragma: no cover - compiled
+    """numpy's float64 sum of a[lo:lo + n] (its pairwise summation: blocks of at most 128,
+    halves of a multiple of 8 above), so the same bits as ``a[lo:lo + n].sum()`` (tests).
+    numpy's recursion is walked with an explicit stack: numba's disk cache does not load a
+    recursive kernel safely."""
+    if n <= 128:
+        return _pairwise_block(a, lo, n)
+    s_lo = np.empty(64, dtype=np.int64)
+    s_n = np.empty(64, dtype=np.int64)
+    s_state = np.empty(64, dtype=np.int64)  # 0: left half next, 1: right half, 2: add
+    vals = np.empty(64)
+    top = 1
+    s_lo[0], s_n[0], s_state[0] = lo, n, 0
+    nv = 0
+    while top > 0:
+        t = top - 1
+        m = s_n[t]
+        if m <= 128:
+            vals[nv] = _pairwise_block(a, s_lo[t], m)
+            nv += 1
+            top -= 1
+            continue
+        n2 = m // 2
+        n2 -= n2 % 8
+        if s_state[t] == 0:
+            s_state[t] = 1
+            s_lo[top], s_n[top], s_state[top] = s_lo[t], n2, 0
+            top += 1
+        elif s_state[t] == 1:
+            s_state[t] = 2
+            s_lo[top], s_n[top], s_state[top] = s_lo[t] + n2, m - n2, 0
+            top += 1
+        else:
+            vals[nv - 2] = vals[nv - 2] + vals[nv - 1]
+            nv -= 1
+            top -= 1
+    return vals[0]
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _kpp_indices(data, first, u):  # pragma: no cover - compiled
+    """Rows of data (J, 2) that scipy's k-means++ picks (k = len(u) + 1): first, then for
+    each uniform u[i] the first row whose cumulative share of the least squared distance to
+    the centres so far reaches u[i]; -1 where none does (scipy raises there)."""
+    J = data.shape[0]
+    k = u.shape[0] + 1
+    out = np.empty(k, dtype=np.int64)
+    out[0] = first
+    D2 = np.full(J, np.inf)
+    for i in range(1, k):
+        c = out[i - 1]
+        cx, cy = data[c, 0], data[c, 1]
+        for j in range(J):
+            dx = cx - data[j, 0]
+            dy = cy - data[j, 1]
+            s = dx * dx + dy * dy
+            if s < D2[j]:
+                D2[j] = s
+        tot = _pairwise_sum(D2, 0, J)
+        r = u[i - 1]
+        cum = 0.0
+        pick = -1
+        for j in range(J):
+            cum += D2[j] / tot
+            if not cum < r:  # numpy's left search (NaN shares: the first row)
+                pick = j
+                break
+        out[i] = pick
+        if pick < 0:
+            break
+    return out
 
 
 def site_sets(problem: Any, seed: int) -> Iterator[tuple[str, np.ndarray]]:

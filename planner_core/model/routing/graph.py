@@ -233,8 +233,83 @@ def _route(indptr, indices, weights, src_dist, dst_dist):
 
 
 @njit(cache=True, nogil=True)
+def _sift_up(heap, pos, d, i, u, key):
+    """Move node u (cost key = d[u]) up from slot i of the indexed binary min-heap (heap: node
+    ids, ordered by d; pos: each node's slot) to its place."""
+    while i > 0:
+        p = (i - 1) >> 1
+        hp = heap[p]
+        if d[hp] <= key:
+            break
+        heap[i] = hp
+        pos[hp] = i
+        i = p
+    heap[i] = u
+    pos[u] = i
+
+
+@njit(cache=True, nogil=True)
 def _spread(indptr, indices, weights, src_dist):
-    """Multi-source Dijkstra (binary heap, lazy deletion) from src_dist to every node."""
+    """Multi-source Dijkstra from src_dist to every node, on an indexed binary heap with
+    decrease-key: each node enters the heap once and is moved up when its cost falls, so the
+    heap holds at most N nodes (lazy deletion, `_spread_reference`, pushes a node per
+    improvement: up to E + N entries). O(E log N) per call, ~2x faster than the reference on
+    L02's graph (2,230 corners, 48,040 arcs), where it runs ~700 times a plan.
+
+    The same costs to the bit as `_spread_reference` (tests): with non-negative weights a node's
+    cost is final when it leaves the heap (a later relaxation adds >= 0 to a key >= its own,
+    and rounding is monotone), so both compute the unique fixed point
+    d[u] = min(src[u], min over arcs p->u of fl(d[p] + w)), whatever the heap's tie order."""
+    n = src_dist.shape[0]
+    d = src_dist.copy()
+    heap = np.empty(n, dtype=np.int64)
+    pos = np.full(n, -1, dtype=np.int64)  # -1: never in the heap, -2: settled
+    size = 0
+    for u in range(n):
+        if d[u] < np.inf:
+            size += 1
+            _sift_up(heap, pos, d, size - 1, u, d[u])
+    while size > 0:
+        u = heap[0]
+        pos[u] = -2
+        size -= 1
+        if size > 0:  # the last node into the root's slot, sifted down
+            last = heap[size]
+            lk = d[last]
+            i = 0
+            while True:
+                c = 2 * i + 1
+                if c >= size:
+                    break
+                hc = heap[c]
+                if c + 1 < size and d[heap[c + 1]] < d[hc]:
+                    c += 1
+                    hc = heap[c]
+                if d[hc] >= lk:
+                    break
+                heap[i] = hc
+                pos[hc] = i
+                i = c
+            heap[i] = last
+            pos[last] = i
+        key = d[u]
+        for e in range(indptr[u], indptr[u + 1]):
+            w = indices[e]
+            nd = key + weights[e]
+            if nd < d[w]:  # never true for a settled w (nd >= key >= d[w])
+                d[w] = nd
+                i = pos[w]
+                if i == -1:
+                    size += 1
+                    i = size - 1
+                _sift_up(heap, pos, d, i, w, nd)
+    return d
+
+
+@njit(cache=True, nogil=True)
+def _spread_reference(indptr, indices, weights, src_dist):
+    """Multi-source Dijkstra (binary heap, lazy deletion) from src_dist to every node: the slow
+    reference of `_spread` (tests hold the two equal)."""
     n = src_dist.shape[0]
     d = src_dist.copy()
     hk, hv, size = _heap_of(d, indices.shape[0] + n + 1)
