@@ -357,3 +357,95 @@ def test_pairwise_sum_is_numpys() -> None:
         assert _pairwise_sum(x, 0, n) == x.sum(), n
         if n > 5:
             assert _pairwise_sum(x, 3, n - 5) == x[3:n - 2].sum(), n
+
+
+def _radio_cases() -> list[tuple[str, Problem]]:
+    """Problems for the link rate's range cut: suite maps, L02 (160 sensors on 20 km), a dense
+    field in scheduled access, and random maps with odd radios (no decay: no cut; a peak rate
+    the overhead link never reaches: every rate 0; a long range)."""
+    from planner_core.model.mapio import load_map
+    from tests.test_cannot import dense_field
+
+    out = [(t, Problem(json.loads((SUITE / f"{t}.json").read_text()))) for t in ("T03", "T16")]
+    out.append(("L02", Problem(load_map(SUITE.parent / "large" / "L02.json").planning_map())))
+    out.append(("scheduled", Problem(dense_field(radio={"access": "scheduled"}))))
+    rng = np.random.default_rng(13)
+    for name, radio in (("no-decay", {"decay": 0.0}), ("none-heard", {"peak_rate": 0.5}),
+                        ("long-range", {"decay": 0.0005})):
+        m = _random_map(rng, 30)
+        m["radio"] = radio
+        out.append((name, Problem(m)))
+    return out
+
+
+RADIO_CASES = _radio_cases()
+
+
+def _probe_points(p: Problem, rng: np.random.Generator, n: int) -> np.ndarray:
+    """Points near the sensors, on and a hair either side of the radio range in x, in y and
+    diagonally, far away, outside the area and non-finite."""
+    m = p.model
+    S = m.sensors
+    ratio = m.peak_rate / max(m.decay, 1e-6)
+    reach = min(float(np.sqrt(max(ratio * ratio - m.altitude ** 2, 0.0))), 1e6)
+    near = S[rng.integers(0, len(S), n)] + rng.normal(0, max(reach, 1.0), (n, 2))
+    j = rng.integers(0, len(S), n)
+    ang = rng.choice([0.0, np.pi / 2, np.pi / 4, np.pi, rng.uniform(0, 2 * np.pi)], n)
+    eps = rng.choice([-1e-9, -1e-12, 0.0, 1e-12, 1e-9, 1e-6], n)
+    rim = S[j] + (reach * (1 + eps))[:, None] * np.column_stack([np.cos(ang), np.sin(ang)])
+    odd = np.array([[np.nan, 5.0], [5.0, np.nan], [np.inf, 0.0], [-np.inf, 3.0], [0.0, np.inf],
+                    [-5e6, 1e6], [m.width * 3, -m.height]])
+    return np.ascontiguousarray(np.vstack([near, rim, odd]))
+
+
+@pytest.mark.parametrize("name,problem", RADIO_CASES, ids=[c[0] for c in RADIO_CASES])
+def test_link_rates_window_equals_every_sensor(name: str, problem: Problem) -> None:
+    """The link rates with the range cut (`formulas._link_rates_window`, what
+    `ModelParams.rates` takes) equal the every-sensor loop to the bit (NaN included), on
+    points at and a hair either side of the range, far away and non-finite."""
+    from planner_core.model import formulas
+
+    m = problem.model
+    rng = np.random.default_rng(len(name))
+    pts = _probe_points(problem, rng, 400)
+    slow = formulas._link_rates_2d(pts, m.sensors, m.altitude ** 2, m.peak_rate, m.decay)
+    fast = m.rates(pts)
+    assert np.array_equal(fast, slow, equal_nan=True), name
+    assert np.array_equal(np.signbit(fast), np.signbit(slow)), name
+    if name in ("T03", "T16", "L02"):
+        assert np.isfinite(m.window.half) and (slow[:400] > 0).any()
+    if name == "no-decay":
+        assert m.window.half == np.inf
+
+
+@pytest.mark.parametrize("name,problem", RADIO_CASES, ids=[c[0] for c in RADIO_CASES])
+def test_model_terms_window_equals_every_sensor(name: str, problem: Problem) -> None:
+    """`Problem.evaluate`'s kernel with the range cut gives f, v3, v4 and the legs of the
+    every-sensor loop (half = inf) to the bit: random populations, points on the range's rim
+    and plans over the sensors (C3 and the scheduled flow active)."""
+    from planner_core.model.kernels import model_terms
+
+    p = problem
+    rng = np.random.default_rng(len(name) + 1)
+    n = 48
+    X = p.lower + rng.random((n, p.dim)) * (p.upper - p.lower)
+    probe = _probe_points(p, rng, n * p.n_points)[: n * p.n_points].reshape(n, p.n_points, 2)
+    X[: n // 2, 0::4] = probe[: n // 2, :, 0]
+    X[: n // 2, 1::4] = probe[: n // 2, :, 1]
+    X[0, :2] = np.nan
+    X = np.ascontiguousarray(X)
+
+    def run(order: np.ndarray, xs: np.ndarray, half: float) -> list[np.ndarray]:
+        legs = p.n_points + 1
+        out = [np.empty((n, legs, 2)), np.empty((n, legs, 2)), np.empty(n), np.empty(n),
+               np.empty(n)]
+        model_terms(X, p.n_points, p.variable_length, p.tau, p.upper, p.start, p.end,
+                    p.sensors, p.required, p.altitude, p.peak_rate, p.decay, order, xs, half,
+                    p.bandwidth, p.v_max, p.accel, p.alpha, *out, p.scheduled)
+        return out
+
+    w = p.model.window
+    fast, slow = run(*w), run(w.order, w.xs, np.inf)
+    for a, b in zip(fast, slow, strict=True):
+        assert np.array_equal(a, b, equal_nan=True), name
+    assert np.array_equal(p.evaluate(X)[0], fast[2], equal_nan=True)

@@ -15,7 +15,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from functools import cached_property
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
@@ -30,6 +31,9 @@ __all__ = [
     "flight_time",
     "leg_time",
     "link_rates",
+    "SensorWindow",
+    "sensor_window",
+    "window_range",
     "ground_reach",
     "slant_rate",
     "slant_rates",
@@ -94,13 +98,20 @@ def ground_reach(
 
 
 def link_rates(
-    pts: np.ndarray, sensors: np.ndarray, altitude: float, peak_rate: float, decay: float
+    pts: np.ndarray, sensors: np.ndarray, altitude: float, peak_rate: float, decay: float,
+    window: SensorWindow | None = None,
 ) -> np.ndarray:
     """R_ij = max(R_c - xi * sqrt(|p_i - s_j|^2 + H^2), 0): points (..., I, 2) and sensors
     (J, 2) in metres -> rates (..., I, J) in Mbit/s. One (I, 2) set of points takes the
-    compiled `_link_rates_2d` (bit-equal: the same operations in the same order; tests)."""
+    compiled `_link_rates_2d` (bit-equal: the same operations in the same order; tests), or
+    with `window` (`sensor_window` of these sensors and radio) `_link_rates_window`: only the
+    sensors within radio range in x of each point are computed, O(I x sensors in range) plus
+    O(I J) to zero the array, instead of O(I J) square roots (the same array; tests)."""
     pts = np.asarray(pts)
     if pts.ndim == 2 and pts.dtype == np.float64 and sensors.dtype == np.float64:
+        if window is not None and math.isfinite(window.half):
+            return _link_rates_window(pts, sensors, window.order, window.xs, window.half,
+                                      altitude**2, peak_rate, decay)
         return _link_rates_2d(pts, sensors, altitude**2, peak_rate, decay)
     dx = pts[..., :, None, 0] - sensors[:, 0]
     dy = pts[..., :, None, 1] - sensors[:, 1]
@@ -116,6 +127,74 @@ def _link_rates_2d(pts, sensors, h2, peak_rate, decay):  # pragma: no cover - co
         for j in range(sensors.shape[0]):
             dx = pts[i, 0] - sensors[j, 0]
             dy = pts[i, 1] - sensors[j, 1]
+            out[i, j] = max(slant_rate(dx * dx + dy * dy, h2, peak_rate, decay), 0.0)
+    return out
+
+
+class SensorWindow(NamedTuple):
+    """The sensors sorted by x, for the link rate's range cut (`sensor_window`): `order` (J,)
+    their indices by x, `xs` (J,) their x in that order, `half` (m): a point whose computed
+    |dx| or |dy| to a sensor is at least `half` gets a rate <= 0 from `slant_rate` (inf: no
+    cut, e.g. xi = 0)."""
+
+    order: np.ndarray
+    xs: np.ndarray
+    half: float
+
+
+def sensor_window(sensors: np.ndarray, altitude: float, peak_rate: float, decay: float
+                  ) -> SensorWindow:
+    """The `SensorWindow` of sensors (J, 2) under this radio. The cut is exact, not a
+    tolerance: `slant_rate` is non-increasing in its computed d2 (each operation is monotone
+    and rounding is monotone), c is a d2 a hair beyond the zero of the rate at which
+    `slant_rate` itself gives <= 0 (checked), and |dx| >= half = sqrt(c) (1 + 1e-9) makes the
+    computed d2 >= dx^2 (1 - 2^-53) > c. A kernel may therefore skip every pair with
+    |dx| or |dy| >= half, and only those, and write the rate 0 (or add nothing) there."""
+    S = np.asarray(sensors, dtype=float).reshape(-1, 2)
+    order = np.argsort(S[:, 0], kind="stable").astype(np.int64)
+    xs = np.ascontiguousarray(S[order, 0])
+    half = math.inf
+    h2 = altitude * altitude
+    if decay > 0.0 and math.isfinite(peak_rate) and math.isfinite(h2):
+        ratio = peak_rate / decay
+        if math.isfinite(ratio):
+            c = max(ratio * ratio - h2, 0.0) * (1.0 + 1e-6) + 1e-6
+            if math.isfinite(c) and slant_rate(c, h2, peak_rate, decay) <= 0.0:
+                half = math.sqrt(c) * (1.0 + 1e-9)
+    return SensorWindow(order, xs, half)
+
+
+@njit(cache=True, nogil=True)
+def window_range(xs, half, px):  # pragma: no cover - compiled
+    """[lo, hi) of the x-sorted sensors xs that may lie within `half` of x = px: every sensor
+    outside has |fl(px - x)| >= half (margin 1e-9 of half and of |px| for the rounding of
+    px -/+ the width). px must be finite."""
+    w = half * (1.0 + 1e-9) + 1e-9 * abs(px)
+    return np.searchsorted(xs, px - w, side="left"), np.searchsorted(xs, px + w, side="right")
+
+
+@njit(cache=True, nogil=True)
+def _link_rates_window(pts, sensors, order, xs, half, h2, peak_rate, decay):  # pragma: no cover
+    """`_link_rates_2d` with the range cut of `sensor_window`: (I, J) Mbit/s, zeros written
+    where |dx| or |dy| >= half (the rate there is <= 0, clipped to 0), each other pair as
+    `_link_rates_2d` computes it; a point with a non-finite coordinate takes every sensor."""
+    n, J = pts.shape[0], sensors.shape[0]
+    out = np.zeros((n, J))
+    for i in range(n):
+        px, py = pts[i, 0], pts[i, 1]
+        if not (math.isfinite(px) and math.isfinite(py)):
+            for j in range(J):
+                dx = px - sensors[j, 0]
+                dy = py - sensors[j, 1]
+                out[i, j] = max(slant_rate(dx * dx + dy * dy, h2, peak_rate, decay), 0.0)
+            continue
+        lo, hi = window_range(xs, half, px)
+        for q in range(lo, hi):
+            j = order[q]
+            dy = py - sensors[j, 1]
+            if abs(dy) >= half:
+                continue
+            dx = px - sensors[j, 0]
             out[i, j] = max(slant_rate(dx * dx + dy * dy, h2, peak_rate, decay), 0.0)
     return out
 
@@ -255,10 +334,19 @@ class ModelParams:
             n_points=m.max_hover_points,
         )  # fmt: skip
 
+    @cached_property
+    def window(self) -> SensorWindow:
+        """This map's sensors sorted by x with the radio's range cut (`sensor_window`): the
+        compiled rate loops visit only the sensors in range of a point."""
+        return sensor_window(self.sensors, self.altitude, self.peak_rate, self.decay)
+
     def rates(self, pts: np.ndarray, sensors: np.ndarray | None = None) -> np.ndarray:
-        """`link_rates` of points (..., I, 2) to this map's sensors (or `sensors`): (..., I, J)."""
-        s = self.sensors if sensors is None else sensors
-        return link_rates(pts, s, self.altitude, self.peak_rate, self.decay)
+        """`link_rates` of points (..., I, 2) to this map's sensors (or `sensors`): (..., I, J).
+        This map's sensors take the range cut (`window`): O(I x sensors in range)."""
+        if sensors is None:
+            return link_rates(pts, self.sensors, self.altitude, self.peak_rate, self.decay,
+                              self.window)
+        return link_rates(pts, sensors, self.altitude, self.peak_rate, self.decay)
 
     def flight_time(self, d: np.ndarray) -> np.ndarray:
         """`flight_time` with this UAV's v_max and a."""

@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from planner_core.model.formulas import leg_time, slant_rate
+from planner_core.model.formulas import leg_time, slant_rate, window_range
 
 __all__ = ["model_terms", "scheduled_flow"]
 
@@ -112,14 +112,22 @@ def scheduled_flow(R, t, Q, bandwidth):  # pragma: no cover - compiled
 @njit(cache=True, fastmath=False)
 def model_terms(
     X, n_points, variable, tau, upper, start, end, sensors, required, altitude,
-    peak_rate, decay, bandwidth, v_max, accel, alpha, A, B, f, v3, v4, scheduled=False,
+    peak_rate, decay, order, xs, half, bandwidth, v_max, accel, alpha, A, B, f, v3, v4,
+    scheduled=False,
 ):  # fmt: skip
     """Fill f, v3, v4 (n,) and leg endpoints A, B (n, I_max + 1, 2) for population X (n, 4 I).
-    `scheduled`: radio.access "scheduled" (no C3; collected data from `scheduled_flow`)."""
+    `scheduled`: radio.access "scheduled" (no C3; collected data from `scheduled_flow`).
+
+    order, xs, half: the sensors' `formulas.SensorWindow` (the range cut): each hover point
+    visits only the sensors within `half` of it in x and y (found by a binary search of xs),
+    in index order, so O(n I_max x sensors in range) instead of O(n I_max J) square roots;
+    the pairs skipped have a rate <= 0, which adds nothing, so the same sums in the same order
+    as every sensor visited (half = inf, the reference; tests)."""
     n = X.shape[0]
     J = sensors.shape[0]
     h2 = altitude * altitude
     Q = np.empty(J)
+    near = np.empty(J, dtype=np.int64)
     Rk = np.empty((n_points, J)) if scheduled else np.empty((0, J))
     Tk = np.empty(n_points) if scheduled else np.empty(0)
     for s in range(n):
@@ -147,15 +155,41 @@ def model_terms(
             t_fly += leg_time(math.hypot(x - px, y - py), v_max, accel)
             t_hover += t
             total = 0.0
-            for j in range(J):
-                dx = x - sensors[j, 0]
-                dy = y - sensors[j, 1]
-                r = slant_rate(dx * dx + dy * dy, h2, peak_rate, decay)
+            if half < np.inf and math.isfinite(x) and math.isfinite(y):
+                lo, hi = window_range(xs, half, x)
+                m = 0
+                for q in range(lo, hi):  # the sensors in range, then in index order
+                    j = order[q]
+                    if abs(y - sensors[j, 1]) < half:
+                        u = m
+                        while u > 0 and near[u - 1] > j:
+                            near[u] = near[u - 1]
+                            u -= 1
+                        near[u] = j
+                        m += 1
                 if scheduled:
-                    Rk[k - 1, j] = max(r, 0.0)
-                if r > 0.0:
-                    total += r
-                    Q[j] += r * t
+                    for j in range(J):
+                        Rk[k - 1, j] = 0.0
+                for u in range(m):
+                    j = near[u]
+                    dx = x - sensors[j, 0]
+                    dy = y - sensors[j, 1]
+                    r = slant_rate(dx * dx + dy * dy, h2, peak_rate, decay)
+                    if scheduled:
+                        Rk[k - 1, j] = max(r, 0.0)
+                    if r > 0.0:
+                        total += r
+                        Q[j] += r * t
+            else:
+                for j in range(J):
+                    dx = x - sensors[j, 0]
+                    dy = y - sensors[j, 1]
+                    r = slant_rate(dx * dx + dy * dy, h2, peak_rate, decay)
+                    if scheduled:
+                        Rk[k - 1, j] = max(r, 0.0)
+                    if r > 0.0:
+                        total += r
+                        Q[j] += r * t
             if scheduled:
                 Tk[k - 1] = t
             elif total > bandwidth:

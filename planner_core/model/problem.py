@@ -191,8 +191,8 @@ class Problem:
         model_terms(
             X, self.n_points, self.variable_length, self.tau, self.upper, self.start, self.end,
             self.sensors, self.required, self.altitude, self.peak_rate, self.decay,
-            self.bandwidth, self.v_max, self.accel, self.alpha, A, B, f, v3, v4,
-            self.scheduled,
+            *self.model.window, self.bandwidth, self.v_max, self.accel, self.alpha, A, B, f,
+            v3, v4, self.scheduled,
         )  # fmt: skip
         l_vio = self._overlap(A, B).sum(axis=1)
         v5 = collision_penalty(l_vio, self.mu, self.nu)
