@@ -449,3 +449,24 @@ def test_model_terms_window_equals_every_sensor(name: str, problem: Problem) -> 
     for a, b in zip(fast, slow, strict=True):
         assert np.array_equal(a, b, equal_nan=True), name
     assert np.array_equal(p.evaluate(X)[0], fast[2], equal_nan=True)
+
+
+def test_greedy_cover_equals_its_reference_on_a_large_map() -> None:
+    """L02 (160 sensors, ~1,000 candidate sites with the sweep's k-means centres: large tie
+    sets at every pick): the compiled lazy greedy picks the reference's sites, with and without
+    sites already chosen."""
+    from planner_core.model.mapio import load_map
+    from planner_core.search import construct
+
+    p = Problem(load_map(SUITE.parent / "large" / "L02.json").planning_map())
+    rng = np.random.default_rng(14)
+    S = p.model.sensors
+    centres = np.vstack([construct._kmeans(S, k, rng) for k in range(1, 81)])
+    sites = construct.candidate_sites(p, centres)
+    table = construct.CoverTable(p, sites)
+    assert len(sites) > 500
+    for frac in (0.9, 0.35):
+        for chosen in (None, construct._kmeans(S, 30, rng), S[::3] + 400.0):
+            fast = construct.greedy_cover(p, sites, frac, chosen=chosen, table=table)
+            slow = construct.greedy_cover_reference(p, sites, frac, chosen=chosen)
+            assert np.array_equal(fast, slow), frac

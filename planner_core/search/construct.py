@@ -172,9 +172,9 @@ def ring_sites(sensors: np.ndarray, lim: np.ndarray) -> np.ndarray:
 class CoverTable:
     """What every greedy cover of one candidate site set (n, 2) reads, computed once: the
     sites' link rates R (n, J) and, per reach fraction, which sites cover which sensors (with
-    the T_max fallback of `greedy_cover`). `site_sets` builds one for all its covers (n grows
-    with the k-means sweep: ~I_max^2 sites). Memory: R, n J floats, and one n J bool array
-    per fraction used."""
+    the T_max fallback of `greedy_cover`), also as a sparse row list (`covered`). `site_sets`
+    builds one for all its covers (n grows with the k-means sweep: ~I_max^2 sites). Memory: R,
+    n J floats, and one n J bool array per fraction used (plus its non-zeros)."""
 
     def __init__(self, problem: Any, sites: np.ndarray) -> None:
         self.problem = problem
@@ -182,6 +182,7 @@ class CoverTable:
         self.need = np.asarray(problem.model.required, dtype=float)
         self.R = problem.model.rates(self.sites)
         self._cov: dict[float, np.ndarray] = {}
+        self._csr: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
 
     def cover(self, frac: float) -> np.ndarray:
         """(n, J) bool: site i covers sensor j at reach fraction frac; a sensor no site covers
@@ -192,14 +193,18 @@ class CoverTable:
             self._cov[frac] = np.where(cov.any(axis=0), cov, full)
         return self._cov[frac]
 
-    def hover(self, rows: np.ndarray, cols: np.ndarray | None = None) -> np.ndarray:
-        """(len(rows), len(cols)) s: the hover time each of those sites needs for the data of
-        each of those sensors (cols: indices, None: all J), Q_j / R_ij (inf out of range)."""
-        if cols is None:
-            R, need = self.R[rows], self.need
-        else:
-            R, need = self.R[np.ix_(rows, cols)], self.need[cols]
-        return np.where(R > 0, need[None, :] / np.maximum(R, 1e-12), np.inf)
+    def covered(self, frac: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """`cover(frac)` as rows of non-zeros: (indptr (n + 1,), sensors (nnz,) ascending per
+        site, hover (nnz,) s, the hover time each site needs for each sensor it covers,
+        Q_j / R_ij, inf where R_ij = 0)."""
+        if frac not in self._csr:
+            rows, cols = np.nonzero(self.cover(frac))
+            indptr = np.searchsorted(rows, np.arange(len(self.sites) + 1)).astype(np.int64)
+            R = self.R[rows, cols]
+            need = self.need[cols]
+            hov = np.where(R > 0, need / np.maximum(R, 1e-12), np.inf)
+            self._csr[frac] = (indptr, cols.astype(np.int64), np.ascontiguousarray(hov))
+        return self._csr[frac]
 
 
 def greedy_cover(
@@ -212,39 +217,88 @@ def greedy_cover(
     sites that collect its data within T_max; one no site serves even then is left uncovered.
     `table`: the sites' `CoverTable` when the caller keeps one (else built here).
 
-    Lazy greedy (Minoux 1978): a site's gain (sensors it covers still uncovered) only falls as
-    the cover grows, so each pick recounts only the sites whose last count ties the largest,
-    until one of them still has it; the ties of the step-3 rule (the most sensors, then the
-    shortest hover, then the lowest index) are then all among them. The same picks as
-    recounting every site at every pick (`greedy_cover_reference`), at O(n J) for the first
-    count and a few rows per pick instead of O(n J) per pick; a pick reads only the columns of
-    the sensors still uncovered."""
+    Lazy greedy (Minoux 1978, compiled: `_lazy_greedy`): a site's gain (sensors it covers
+    still uncovered) only falls as the cover grows, so each pick recounts only the sites whose
+    last count ties the largest, until one of them still has it; the ties of the step-3 rule
+    (the most sensors, then the shortest hover, then the lowest index) are then all among
+    them. Counts and hover maxima read each site's covered sensors (`CoverTable.covered`, a
+    few per site on a large map), not the J columns. The same picks as recounting every site
+    at every pick (`greedy_cover_reference`), at O(nnz) for the first count and O(n + the
+    recounted sites' sensors) per pick instead of O(n J) per pick."""
     table = table if table is not None else CoverTable(problem, sites)
     cov = table.cover(frac)
     left = cov.any(axis=0)
     if chosen is not None and len(chosen):
         left &= ~covers(problem, np.asarray(chosen, dtype=float), frac).any(axis=0)
-    out: list[int] = []
-    gain = (cov & left).sum(axis=1)  # upper bounds from here on, exact where recounted
-    while left.any():
-        # only the sensors still uncovered count (the others add 0 to a gain and a hover max)
-        cols = np.flatnonzero(left)
-        top = int(gain.max())
+    indptr, cols, hov = table.covered(frac)
+    return _lazy_greedy(indptr, cols, hov, np.ascontiguousarray(left))
+
+
+@njit(cache=True, nogil=True)
+def _lazy_greedy(indptr, cols, hov, left):  # pragma: no cover - compiled
+    """The picks of `greedy_cover` (site indices, in order) over the covered sensors of each
+    site (indptr, cols, hov: `CoverTable.covered`); left (J,) bool, the sensors to cover
+    (modified). Ties: the most sensors still uncovered, then the least of the largest hover
+    time over them, then the lowest index (strict comparisons, ascending rows: numpy's
+    flatnonzero and argmin)."""
+    n = indptr.shape[0] - 1
+    gain = np.zeros(n, dtype=np.int64)
+    for i in range(n):
+        c = 0
+        for q in range(indptr[i], indptr[i + 1]):
+            c += left[cols[q]]
+        gain[i] = c
+    n_left = 0
+    for j in range(left.shape[0]):
+        n_left += left[j]
+    out = np.empty(n, dtype=np.int64)
+    n_out = 0
+    rows = np.empty(n, dtype=np.int64)
+    true = np.empty(n, dtype=np.int64)
+    while n_left > 0:
+        top = 0
+        for i in range(n):
+            top = max(top, gain[i])
+        nr = 0
         while top > 0:
-            rows = np.flatnonzero(gain == top)
-            true = cov[np.ix_(rows, cols)].sum(axis=1)
-            gain[rows] = true
-            if (true == top).any():
+            nr = 0
+            hit = False
+            for i in range(n):
+                if gain[i] == top:
+                    c = 0
+                    for q in range(indptr[i], indptr[i + 1]):
+                        c += left[cols[q]]
+                    gain[i] = c
+                    rows[nr] = i
+                    true[nr] = c
+                    nr += 1
+                    hit |= c == top
+            if hit:
                 break
-            top = int(gain.max())
+            top = 0
+            for i in range(n):
+                top = max(top, gain[i])
         if top == 0:
             break
-        ties = rows[true == top]  # ascending, as flatnonzero gives them
-        t = np.max(np.where(cov[np.ix_(ties, cols)], table.hover(ties, cols), 0.0), axis=1)
-        i = int(ties[np.argmin(t)])  # first of the ties
-        out.append(i)
-        left &= ~cov[i]
-    return np.asarray(out, dtype=np.int64)
+        best = -1
+        best_t = np.inf
+        for r in range(nr):
+            if true[r] != top:
+                continue
+            i = rows[r]
+            t = 0.0
+            for q in range(indptr[i], indptr[i + 1]):
+                if left[cols[q]]:
+                    t = max(t, hov[q])
+            if best < 0 or t < best_t:
+                best, best_t = i, t
+        out[n_out] = best
+        n_out += 1
+        for q in range(indptr[best], indptr[best + 1]):
+            if left[cols[q]]:
+                left[cols[q]] = False
+                n_left -= 1
+    return out[:n_out].copy()
 
 
 def greedy_cover_reference(
