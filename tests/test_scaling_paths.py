@@ -470,3 +470,18 @@ def test_greedy_cover_equals_its_reference_on_a_large_map() -> None:
             fast = construct.greedy_cover(p, sites, frac, chosen=chosen, table=table)
             slow = construct.greedy_cover_reference(p, sites, frac, chosen=chosen)
             assert np.array_equal(fast, slow), frac
+
+
+@pytest.mark.parametrize("name,problem", RADIO_CASES[:3], ids=[c[0] for c in RADIO_CASES[:3]])
+def test_clusters_equal_their_reference(name: str, problem: Problem) -> None:
+    """The seeder's clusters with compiled seeding and distances: the reference's centres,
+    owners and generator state, for k from 1 to J and several service radii."""
+    seeder = problem.seeder
+    J = len(problem.model.sensors)
+    for k in sorted({1, 2, 3, J // 3, J // 2, J}):
+        for seed, radius in ((0, 350.0), (1, 800.0), (2, 60.0)):
+            r1, r2 = np.random.default_rng([seed, k]), np.random.default_rng([seed, k])
+            C1, o1 = seeder._clusters(r1, k, radius)
+            C2, o2 = seeder._clusters_reference(r2, k, radius)
+            assert np.array_equal(C1, C2) and np.array_equal(o1, o2), (name, k, seed)
+            assert r1.random() == r2.random(), (name, k, seed)

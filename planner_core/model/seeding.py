@@ -182,6 +182,66 @@ def _slide_candidates(cur, prv, nxt, rings, frac, w, h):
     return cand, a, b
 
 
+@njit(cache=True, nogil=True)
+def _kpp_seeds(S, first, u):  # pragma: no cover - compiled
+    """The seeder's k-means++ seeds (k = len(u) + 1 sensor indices): first, then for each
+    uniform u[i] the first sensor whose cumulative least squared distance to the seeds so far
+    exceeds u[i] times the total (numpy's right search), at most J - 1. Each squared distance
+    is dx * dx + dy * dy and the cumulative sum runs in index order, as numpy's."""
+    J = S.shape[0]
+    out = np.empty(u.shape[0] + 1, dtype=np.int64)
+    out[0] = first
+    d2 = np.empty(J)
+    for j in range(J):
+        dx = S[j, 0] - S[first, 0]
+        dy = S[j, 1] - S[first, 1]
+        d2[j] = dx * dx + dy * dy
+    cum = np.empty(J)
+    for i in range(u.shape[0]):
+        c = 0.0
+        for j in range(J):
+            c += d2[j]
+            cum[j] = c
+        v = u[i] * cum[J - 1]
+        pick = J
+        for j in range(J):
+            if cum[j] > v:
+                pick = j
+                break
+        pick = min(pick, J - 1)
+        out[i + 1] = pick
+        for j in range(J):
+            dx = S[j, 0] - S[pick, 0]
+            dy = S[j, 1] - S[pick, 1]
+            d = dx * dx + dy * dy
+            if d < d2[j]:
+                d2[j] = d
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _nearest_centres(S, C):  # pragma: no cover - compiled
+    """For sensors S (J, 2) and centres C (K, 2), K >= 1: (the index of each sensor's nearest
+    centre (the first of equals, np.argmin's rule), its squared distance dx * dx + dy * dy).
+    O(J K)."""
+    J, K = S.shape[0], C.shape[0]
+    owner = np.zeros(J, dtype=np.int64)
+    best = np.empty(J)
+    for j in range(J):
+        b = np.inf
+        o = 0
+        for q in range(K):
+            dx = S[j, 0] - C[q, 0]
+            dy = S[j, 1] - C[q, 1]
+            d = dx * dx + dy * dy
+            if d < b:
+                b = d
+                o = q
+        owner[j] = o
+        best[j] = b
+    return owner, best
+
+
 # ----------------------------------------------------------------------------- seeder
 
 
@@ -317,7 +377,48 @@ class Seeder:
         self, rng: np.random.Generator, k: int, radius: float
     ) -> tuple[np.ndarray, np.ndarray]:
         """k-means++-seeded centres, grown until every sensor is within min(radius, reach) of
-        one, kept out of obstacles: (centres (K, 2), owner (J,) the centre serving each)."""
+        one, kept out of obstacles: (centres (K, 2), owner (J,) the centre serving each).
+
+        The seeding and the sensor-to-centre distances are compiled (`_kpp_seeds`,
+        `_nearest_centres`): O(k J) and O(J K) per round without the (J, K, 2) arrays, the
+        same draws (one integer, then the k - 1 uniforms in one call) and the same arithmetic,
+        so the same centres, owners and generator state as `_clusters_reference` (tests)."""
+        S = self.p.sensors
+        J = len(S)
+        k = max(1, min(k, J))
+        first = int(rng.integers(J))
+        C = S[_kpp_seeds(S, first, rng.random(k - 1))].astype(float)
+        lim = np.minimum(radius, self.reach)
+        for _ in range(J + 1):
+            owner = _nearest_centres(S, C)[0]
+            cnt = np.bincount(owner, minlength=len(C))
+            sx = np.bincount(owner, weights=S[:, 0], minlength=len(C))
+            sy = np.bincount(owner, weights=S[:, 1], minlength=len(C))
+            has = cnt > 0
+            C[has] = np.column_stack([sx[has], sy[has]]) / cnt[has, None]
+            C = C[has]  # an empty cluster serves nobody
+            C = self._push_out(C + rng.normal(0.0, 20.0, C.shape), rng)
+            gap = np.sqrt(_nearest_centres(S, C)[1]) - lim  # sqrt is monotone: min of sqrt
+            if gap.max() <= 0.0 or len(C) >= 2 * J:
+                break
+            # new centres at uncovered sensors, worst first, mutually farther than lim apart
+            new: list[int] = []
+            near = np.full(J, np.inf)  # each sensor's distance to the nearest new centre
+            for j in np.argsort(-gap).tolist():
+                if gap[j] <= 0.0:
+                    break
+                if near[j] > lim[j]:
+                    new.append(j)
+                    near = np.minimum(near, np.hypot(S[:, 0] - S[j, 0], S[:, 1] - S[j, 1]))
+            C = np.vstack([C, self._push_out(S[new].astype(float), rng)])
+        owner = _nearest_centres(S, C)[0]
+        return C, owner
+
+    def _clusters_reference(
+        self, rng: np.random.Generator, k: int, radius: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """`_clusters` with numpy's (J, K, 2) distance arrays and one draw per k-means++ seed:
+        its slow reference (tests hold the two equal)."""
         S = self.p.sensors
         J = len(S)
         k = max(1, min(k, J))
