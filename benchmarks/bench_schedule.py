@@ -12,7 +12,7 @@ improving stage's mean evaluations and seconds; writes one JSON line per run to 
 
     python benchmarks/bench_schedule.py [--maps 24] [--seeds 2] [--budget 10000]
         [--templates default kicks-heavy ...] [--map-seed 3400] [--suite [T01 ...]]
-        [--large [L01 ...]]
+        [--large [L01 ...] [--large-seed S]]
         [-o runs.jsonl] [--summary runs.jsonl ...] [--select runs.jsonl ...]
 
 Gap = (f - f_best) / f_best in percent, f_best the best feasible f of any template on that map
@@ -66,6 +66,21 @@ def suite_maps(tasks: list[str], folder: Path = SUITE) -> list[tuple[str, Any]]:
     paper-size suite (T01-T16) by default, the large suite (L01-L08) with `folder=LARGE`."""
     names = tasks or sorted(p.stem for p in folder.glob("*.json"))
     return [(t, folder / f"{t}.json") for t in names]
+
+
+def large_maps(tasks: list[str], seed: int) -> list[tuple[str, Any]]:
+    """The large suite's maps named `tasks` (all 8 when empty) drawn from another generator
+    seed: (name, map data), named like ``L04-s3001`` (held-out maps of the same specs as the
+    committed suite, `planner_core.suite.large.LARGE_SUITE`)."""
+    from planner_core.suite.large import LARGE_SUITE, generate_large_map
+
+    names = tasks or sorted(LARGE_SUITE)
+    out = []
+    for name in names:
+        size, n, layout, density = LARGE_SUITE[name]
+        out.append((f"{name}-s{seed}",
+                    generate_large_map(size, n, layout, density, seed, name=f"{name}-s{seed}")))
+    return out
 
 
 def case_features(problem: Any, run: Any) -> dict[str, float]:
@@ -191,6 +206,9 @@ def _map_source(name: str) -> Any:
 
         size, density, seed = name[4:].split("-")
         return generate_map(int(size), int(density[1:]), int(seed[1:]))
+    if "-s" in name:  # a large suite map from another seed
+        task, seed = name.split("-s")
+        return large_maps([task], int(seed))[0][1]
     return (LARGE if (LARGE / f"{name}.json").exists() else SUITE) / f"{name}.json"
 
 
@@ -336,6 +354,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--large", nargs="*", metavar="TASK",
                     help="the large suite's maps (examples/maps/large, all 8 without names) "
                     "instead of generated ones")
+    ap.add_argument("--large-seed", type=int, metavar="S",
+                    help="with --large: the large suite's specs drawn from generator seed S "
+                    "(held-out maps named L01-sS ...) instead of the committed maps")
     ap.add_argument("--seeds", type=int, default=2, help="plan seeds 0..N-1 (2)")
     ap.add_argument("--budget", type=int, default=10_000, help="evaluations a plan (10,000)")
     ap.add_argument("--templates", nargs="+",
@@ -378,7 +399,12 @@ def main(argv: list[str] | None = None) -> int:
     if args.suite is not None and args.large is not None:
         print("bench_schedule: --suite and --large: choose one", file=sys.stderr)
         return 2
+    if args.large_seed is not None and (args.large is None or args.large_seed < 0):
+        print("bench_schedule: --large-seed: needs --large and a seed >= 0", file=sys.stderr)
+        return 2
     maps = (suite_maps(args.suite) if args.suite is not None
+            else large_maps(args.large, args.large_seed) if args.large is not None
+            and args.large_seed is not None
             else suite_maps(args.large, LARGE) if args.large is not None
             else training_maps(args.maps, args.map_seed))
     out = open(args.output, "w") if args.output else None  # noqa: SIM115

@@ -175,6 +175,15 @@ def test_bench_schedule_large_names_the_large_suite() -> None:
     assert bench._map_source("L04") == bench.LARGE / "L04.json"
     assert bench._map_source("T04") == bench.SUITE / "T04.json"
     assert bench.main(["--suite", "T01", "--large", "L01"]) == 2
+    assert bench.main(["--large-seed", "3"]) == 2
+    assert bench.main(["--large", "L04", "--large-seed", "-1"]) == 2
+
+
+def test_bench_schedule_held_out_large_maps_are_the_suite_specs_from_another_seed() -> None:
+    bench = _bench()
+    (name, data), = bench.large_maps(["L04"], 7)
+    assert name == "L04-s7" and len(data["sensors"]) == 80
+    assert bench._map_source(name) == data  # a record's name regenerates its map
 
 
 def test_docs_grid_table_is_what_the_stored_records_give() -> None:
