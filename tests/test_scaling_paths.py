@@ -485,3 +485,55 @@ def test_clusters_equal_their_reference(name: str, problem: Problem) -> None:
             C2, o2 = seeder._clusters_reference(r2, k, radius)
             assert np.array_equal(C1, C2) and np.array_equal(o1, o2), (name, k, seed)
             assert r1.random() == r2.random(), (name, k, seed)
+
+
+def _lp_cases() -> list[tuple[np.ndarray, float]]:
+    """Coverage matrices A (rows, points) >= 0 for the hover-time LP's blocks: random sparse
+    ones (blocks of 1 to ~8 points, repeated rows and columns for degenerate vertices, a row no
+    point reaches, tight t_max) and the scaled rates of random hover points on L02."""
+    from planner_core.model.mapio import load_map
+
+    rng = np.random.default_rng(15)
+    out = []
+    for case in range(300):
+        m, n = int(rng.integers(1, 40)), int(rng.integers(1, 25))
+        A = np.zeros((m, n))
+        for j in range(m):
+            c = int(rng.integers(0, n))
+            w = int(rng.integers(1, 4))
+            A[j, c:c + w] = rng.uniform(0.001, 0.05, len(range(c, min(c + w, n))))
+        if case % 7 == 0 and m > 2:
+            A[1] = A[0]  # a repeated row
+        if case % 11 == 0 and n > 2:
+            A[:, 1] = A[:, 0]  # a repeated point
+        if case % 13 == 0:
+            A[int(rng.integers(0, m))] = 0.0  # a sensor no point reaches
+        out.append((A, float(rng.choice([1e6, 400.0, 60.0]))))
+    p = Problem(load_map(SUITE.parent / "large" / "L02.json").planning_map())
+    need = p.model.required
+    for n in (5, 30, 65):
+        pts = p.model.sensors[rng.integers(0, len(need), n)] + rng.normal(0, 300, (n, 2))
+        R = p.model.rates(pts)
+        served = R.sum(axis=0) > 0
+        out.append((np.ascontiguousarray((R[:, served] / need[served]).T), p.model.t_max))
+    return out
+
+
+def test_lp_blocks_equal_their_reference() -> None:
+    """The hover-time LP's small blocks (`hoverlp._lp_blocks`: blocks listed by a counting
+    sort, multipliers solved only at feasible vertices) give the reference's hover times,
+    duals, HiGHS points and verdict to the bit."""
+    from planner_core.model import hoverlp
+
+    for A, t_max in _lp_cases():
+        m, n = A.shape
+        res = []
+        for f in (hoverlp._lp_blocks, hoverlp._lp_blocks_reference):
+            T, y, rest = np.zeros(n), np.zeros(m), np.zeros(n, dtype=np.bool_)
+            ok = f(A, hoverlp.TARGET, t_max, hoverlp.BLOCK_VERTICES, hoverlp.BLOCK_COMBOS,
+                   T, y, rest)
+            res.append((ok, T, y, rest))
+        (ok1, T1, y1, r1), (ok2, T2, y2, r2) = res
+        assert ok1 == ok2
+        if ok1:
+            assert np.array_equal(T1, T2) and np.array_equal(y1, y2) and np.array_equal(r1, r2)

@@ -165,7 +165,178 @@ def _lp_blocks(A, target, t_max, kmax, max_combos, T, y, rest):  # pragma: no co
     (in lexicographic order) whose T is feasible and whose multipliers z (N_S^T z = 1, the
     constraints written as >=) are >= 0 (the KKT conditions of an optimal vertex); a block
     with no such vertex within rounding, or whose optimum needs more than t_max, goes to
-    `rest`. Returns False when a row has no point or a lone point needs more than t_max."""
+    `rest`. Returns False when a row has no point or a lone point needs more than t_max.
+
+    Cost: one O(rows x I) scan of A (the union-find), then O(rows + I) to list every block's
+    points and rows (a counting sort by block), plus the vertex enumeration of the small
+    blocks, which solves for the multipliers only at a feasible vertex. The reference
+    (`_lp_blocks_reference`) scans all rows x the block's points per block and solves both
+    systems at every vertex tried; the same tests in the same order of vertices, so the same
+    answer to the bit (tests)."""
+    m, n = A.shape
+    parent = np.arange(n)
+    rfirst = np.empty(m, dtype=np.int64)  # each row's first point
+    for j in range(m):  # union-find over the points that share a row
+        first = -1
+        for i in range(n):
+            if A[j, i] > 0.0:
+                if first < 0:
+                    first = i
+                    rfirst[j] = i
+                    while parent[first] != first:
+                        first = parent[first]
+                else:
+                    r = i
+                    while parent[r] != r:
+                        r = parent[r]
+                    if r != first:
+                        parent[max(r, first)] = min(r, first)
+                        first = min(r, first)
+        if first < 0:
+            return False  # a sensor no point reaches
+    for i in range(n):
+        r = i
+        while parent[r] != r:
+            r = parent[r]
+        parent[i] = r
+    # each block's points and rows, ascending (a stable counting sort by root: a row's points
+    # all share its first point's root)
+    cstart = np.zeros(n + 1, dtype=np.int64)
+    rstart = np.zeros(n + 1, dtype=np.int64)
+    for i in range(n):
+        cstart[parent[i] + 1] += 1
+    for j in range(m):
+        rstart[parent[rfirst[j]] + 1] += 1
+    for r in range(n):
+        cstart[r + 1] += cstart[r]
+        rstart[r + 1] += rstart[r]
+    all_cols = np.empty(n, dtype=np.int64)
+    all_rows = np.empty(m, dtype=np.int64)
+    fill = cstart[:n].copy()
+    for i in range(n):
+        all_cols[fill[parent[i]]] = i
+        fill[parent[i]] += 1
+    fill = rstart[:n].copy()
+    for j in range(m):
+        r = parent[rfirst[j]]
+        all_rows[fill[r]] = j
+        fill[r] += 1
+    for root in range(n):
+        k = cstart[root + 1] - cstart[root]
+        if k == 0:
+            continue
+        cols = all_cols[cstart[root]:cstart[root + 1]]
+        rows = all_rows[rstart[root]:rstart[root + 1]]
+        nr = rows.shape[0]
+        if k == 1:
+            i = cols[0]
+            best, jb = 0.0, -1
+            for q in range(nr):
+                t = target / A[rows[q], i]
+                if t > best:
+                    best, jb = t, rows[q]
+            if best > t_max:
+                return False
+            T[i] = best
+            if jb >= 0:
+                y[jb] = 1.0 / A[jb, i]
+            continue
+        c = nr + k  # the block's constraints: its rows, then T_q >= 0
+        combos = 1.0
+        for q in range(k):  # C(c, k): the vertices to try
+            combos = combos * (c - q) / (q + 1)
+        if k > kmax or combos > max_combos:
+            for q in range(k):
+                rest[cols[q]] = True
+            continue
+        # the largest entry of each of the block's constraints (rows; a bound's is 1) and of
+        # each of its points: the tolerances below are relative to them (unit-free)
+        cmax = np.ones(c)
+        tmax_a = np.zeros(k)
+        for q in range(nr):
+            m_row = 0.0
+            for a in range(k):
+                v = A[rows[q], cols[a]]
+                m_row = max(m_row, v)
+                tmax_a[a] = max(tmax_a[a], v)
+            cmax[q] = m_row
+        idx = np.arange(k)
+        M = np.empty((k, k))
+        Mt = np.empty((k, k))
+        b = np.empty(k)
+        ones = np.ones(k)
+        t = np.empty(k)
+        z = np.empty(k)
+        found = False
+        while True:
+            for a in range(k):
+                s = idx[a]
+                for q in range(k):
+                    M[a, q] = A[rows[s], cols[q]] if s < nr else (1.0 if s - nr == q else 0.0)
+                b[a] = target if s < nr else 0.0
+            # the same tests as the reference's, cheapest first: the multipliers (a second
+            # solve) only for a feasible vertex
+            if _solve_small(M, b, t):
+                ok = True
+                for a in range(k):  # time x data rate
+                    if t[a] * tmax_a[a] < -1e-9:
+                        ok = False
+                        break
+                if ok:
+                    for q in range(nr):
+                        s = 0.0
+                        scale = target
+                        for a in range(k):
+                            s += A[rows[q], cols[a]] * t[a]
+                            scale += abs(A[rows[q], cols[a]] * t[a])
+                        if s < target - 1e-9 * scale:
+                            ok = False
+                            break
+                if ok:
+                    for a in range(k):
+                        for q in range(k):
+                            Mt[a, q] = M[q, a]
+                    ok = _solve_small(Mt, ones, z)
+                    if ok:
+                        for a in range(k):  # multiplier x its constraint's scale
+                            if z[a] * cmax[idx[a]] < -1e-9:
+                                ok = False
+                                break
+                if ok:
+                    found = True
+                    break
+            # next combination of k out of c, lexicographic
+            a = k - 1
+            while a >= 0 and idx[a] == c - k + a:
+                a -= 1
+            if a < 0:
+                break
+            idx[a] += 1
+            for q in range(a + 1, k):
+                idx[q] = idx[q - 1] + 1
+        tmax_ok = True
+        if found:
+            for a in range(k):
+                if t[a] > t_max:
+                    tmax_ok = False
+        if not found or not tmax_ok:
+            for q in range(k):
+                rest[cols[q]] = True
+            continue
+        for a in range(k):
+            T[cols[a]] = max(t[a], 0.0)
+            s = idx[a]
+            if s < nr:
+                y[rows[s]] = max(z[a], 0.0)
+    return True
+
+
+@njit(cache=True, fastmath=False, nogil=True)
+def _lp_blocks_reference(A, target, t_max, kmax, max_combos, T, y, rest):  # pragma: no cover
+    """The slow reference of `_lp_blocks` (tests hold the two equal): the same blocks, the
+    same vertices in the same order and the same tests, but each block's points and rows found
+    by scanning every (row, point) of the block (O(I^2 + rows x I) in all) and both systems
+    solved at every vertex tried."""
     m, n = A.shape
     parent = np.arange(n)
     for j in range(m):  # union-find over the points that share a row
