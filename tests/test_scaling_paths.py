@@ -53,11 +53,31 @@ CASES = _cases()
 
 @pytest.mark.parametrize("name,problem,pts", CASES, ids=[c[0] for c in CASES])
 def test_prune_equals_its_reference(name: str, problem: Problem, pts: np.ndarray) -> None:
+    """The prune compiled (`prune`), in numpy (`prune_numpy`) and the O(n^2 J) reference keep
+    the same points."""
     seeder = problem.seeder
     for limit in (1, max(1, len(pts) // 2), len(pts)):
         fast = seeder.prune(pts.copy(), limit)
         slow = seeder.prune_reference(pts.copy(), limit)
         assert fast.shape == slow.shape and np.array_equal(fast, slow), (name, limit)
+        assert np.array_equal(seeder.prune_numpy(pts.copy(), limit), slow), (name, limit)
+
+
+def test_prune_equals_its_reference_on_a_large_map() -> None:
+    """L02 (460 obstacles: the tiled overlap kernel inside the compiled loop): routes of 20-120
+    points near the sensors and anywhere, every limit kind."""
+    from planner_core.model.mapio import load_map
+
+    p = Problem(load_map(SUITE.parent / "large" / "L02.json").planning_map())
+    rng = np.random.default_rng(16)
+    S = p.model.sensors
+    for n in (20, 60, 120):
+        for pts in (S[rng.integers(0, len(S), n)] + rng.normal(0, 200, (n, 2)),
+                    rng.uniform(0, p.model.width, (n, 2))):
+            for limit in (1, n // 3, n):
+                fast = p.seeder.prune(pts.copy(), limit)
+                slow = p.seeder.prune_numpy(pts.copy(), limit)
+                assert np.array_equal(fast, slow), (n, limit)
 
 
 @pytest.mark.parametrize("name,problem,pts", CASES, ids=[c[0] for c in CASES])
@@ -348,15 +368,22 @@ def test_kmeans_equals_its_reference() -> None:
                 assert r1.random() == r2.random(), (f, k, seed)
 
 
-def test_pairwise_sum_is_numpys() -> None:
-    from planner_core.search.construct import _pairwise_sum
+def test_numpy_sum_is_numpys() -> None:
+    """`formulas.numpy_sum` (for compiled twins of numpy code) gives numpy's sums to the bit:
+    1-D slices of every length to 700 and a few long ones, and the rows of a square matrix's
+    ``sum(axis=1)``."""
+    from planner_core.model.formulas import numpy_sum
 
     rng = np.random.default_rng(12)
     for n in [*range(0, 700), 1000, 4099, 100_003]:
         x = rng.random(n) ** 3 * 10.0 ** rng.integers(-3, 8)
-        assert _pairwise_sum(x, 0, n) == x.sum(), n
+        assert numpy_sum(x, 0, n) == x.sum(), n
         if n > 5:
-            assert _pairwise_sum(x, 3, n - 5) == x[3:n - 2].sum(), n
+            assert numpy_sum(x, 3, n - 5) == x[3:n - 2].sum(), n
+    for n in (1, 7, 9, 100, 129, 300):
+        T = rng.random((n, n)) ** 3 * 1e3
+        rows = T.sum(axis=1)
+        assert all(numpy_sum(T[i], 0, n) == rows[i] for i in range(n)), n
 
 
 def _radio_cases() -> list[tuple[str, Problem]]:

@@ -34,6 +34,7 @@ __all__ = [
     "SensorWindow",
     "sensor_window",
     "window_range",
+    "numpy_sum",
     "ground_reach",
     "slant_rate",
     "slant_rates",
@@ -197,6 +198,80 @@ def _link_rates_window(pts, sensors, order, xs, half, h2, peak_rate, decay):  # 
             dx = px - sensors[j, 0]
             out[i, j] = max(slant_rate(dx * dx + dy * dy, h2, peak_rate, decay), 0.0)
     return out
+
+
+# ----------------------------------------------------------------------------- sums
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _pairwise_block(a, lo, n):  # pragma: no cover - compiled
+    """numpy's float64 sum of a[lo:lo + n] for n <= 128: eight accumulators, then the rest."""
+    if n < 8:
+        res = 0.0
+        for i in range(lo, lo + n):
+            res += a[i]
+        return res
+    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
+    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
+    i = 8
+    m = n - (n % 8)
+    while i < m:
+        r0 += a[lo + i]
+        r1 += a[lo + i + 1]
+        r2 += a[lo + i + 2]
+        r3 += a[lo + i + 3]
+        r4 += a[lo + i + 4]
+        r5 += a[lo + i + 5]
+        r6 += a[lo + i + 6]
+        r7 += a[lo + i + 7]
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        res += a[lo + i]
+        i += 1
+    return res
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def numpy_sum(a, lo, n):  # pragma: no cover - compiled
+    """numpy's float64 sum of a[lo:lo + n] (its pairwise summation: blocks of at most 128,
+    halves of a multiple of 8 above), so the same bits as ``a[lo:lo + n].sum()`` and as a row
+    of ``A.sum(axis=1)`` for a C-contiguous A (tests): for compiled kernels that must give
+    what a numpy twin gives. O(n).
+    numpy's recursion is walked with an explicit stack: numba's disk cache does not load a
+    recursive kernel safely."""
+    if n <= 128:
+        return _pairwise_block(a, lo, n)
+    s_lo = np.empty(64, dtype=np.int64)
+    s_n = np.empty(64, dtype=np.int64)
+    s_state = np.empty(64, dtype=np.int64)  # 0: left half next, 1: right half, 2: add
+    vals = np.empty(64)
+    top = 1
+    s_lo[0], s_n[0], s_state[0] = lo, n, 0
+    nv = 0
+    while top > 0:
+        t = top - 1
+        m = s_n[t]
+        if m <= 128:
+            vals[nv] = _pairwise_block(a, s_lo[t], m)
+            nv += 1
+            top -= 1
+            continue
+        n2 = m // 2
+        n2 -= n2 % 8
+        if s_state[t] == 0:
+            s_state[t] = 1
+            s_lo[top], s_n[top], s_state[top] = s_lo[t], n2, 0
+            top += 1
+        elif s_state[t] == 1:
+            s_state[t] = 2
+            s_lo[top], s_n[top], s_state[top] = s_lo[t] + n2, m - n2, 0
+            top += 1
+        else:
+            vals[nv - 2] = vals[nv - 2] + vals[nv - 1]
+            nv -= 1
+            top -= 1
+    return vals[0]
 
 
 # ----------------------------------------------------------------------------- constraints, score

@@ -51,7 +51,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from planner_core.model.formulas import ground_reach
+from planner_core.model.formulas import ground_reach, numpy_sum
 from planner_core.model.geometry import overlap_lengths, points_inside
 from planner_core.model.routing import open_path
 from planner_core.model.routing.graph import CLEAR
@@ -341,8 +341,9 @@ def _kmeans(S: np.ndarray, k: int, rng: np.random.Generator) -> np.ndarray:
     k = 1 .. I_max twice, ~I_max^3 J in all (I_max ~ J / 2 on the large maps: ~0.25 s of
     L02's plan). `_kpp_indices` keeps each sensor's least squared distance across picks,
     O(k J) per call, with the same draws (one integer, then k - 1 uniforms) and the same
-    arithmetic (`cdist`'s squared distances, numpy's pairwise sum, a sequential cumulative
-    sum, a left search); the k-means iterations are scipy's, from that init."""
+    arithmetic (`cdist`'s squared distances, numpy's pairwise sum (`formulas.numpy_sum`), a
+    sequential cumulative sum, a left search); the k-means iterations are scipy's, from that
+    init."""
     from scipy.cluster.vq import kmeans2
 
     S = np.ascontiguousarray(S, dtype=np.float64)
@@ -371,75 +372,6 @@ def _kmeans_reference(S: np.ndarray, k: int, rng: np.random.Generator) -> np.nda
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _pairwise_block(a, lo, n):  # pragma: no cover - compiled
-    """numpy's float64 sum of a[lo:lo + n] for n <= 128: eight accumulators, then the rest."""
-    if n < 8:
-        res = 0.0
-        for i in range(lo, lo + n):
-            res += a[i]
-        return res
-    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
-    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
-    i = 8
-    m = n - (n % 8)
-    while i < m:
-        r0 += a[lo + i]
-        r1 += a[lo + i + 1]
-        r2 += a[lo + i + 2]
-        r3 += a[lo + i + 3]
-        r4 += a[lo + i + 4]
-        r5 += a[lo + i + 5]
-        r6 += a[lo + i + 6]
-        r7 += a[lo + i + 7]
-        i += 8
-    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-    while i < n:
-        res += a[lo + i]
-        i += 1
-    return res
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
-def _pairwise_sum(a, lo, n):  # pragma: no cover - compiled
-    """numpy's float64 sum of a[lo:lo + n] (its pairwise summation: blocks of at most 128,
-    halves of a multiple of 8 above), so the same bits as ``a[lo:lo + n].sum()`` (tests).
-    numpy's recursion is walked with an explicit stack: numba's disk cache does not load a
-    recursive kernel safely."""
-    if n <= 128:
-        return _pairwise_block(a, lo, n)
-    s_lo = np.empty(64, dtype=np.int64)
-    s_n = np.empty(64, dtype=np.int64)
-    s_state = np.empty(64, dtype=np.int64)  # 0: left half next, 1: right half, 2: add
-    vals = np.empty(64)
-    top = 1
-    s_lo[0], s_n[0], s_state[0] = lo, n, 0
-    nv = 0
-    while top > 0:
-        t = top - 1
-        m = s_n[t]
-        if m <= 128:
-            vals[nv] = _pairwise_block(a, s_lo[t], m)
-            nv += 1
-            top -= 1
-            continue
-        n2 = m // 2
-        n2 -= n2 % 8
-        if s_state[t] == 0:
-            s_state[t] = 1
-            s_lo[top], s_n[top], s_state[top] = s_lo[t], n2, 0
-            top += 1
-        elif s_state[t] == 1:
-            s_state[t] = 2
-            s_lo[top], s_n[top], s_state[top] = s_lo[t] + n2, m - n2, 0
-            top += 1
-        else:
-            vals[nv - 2] = vals[nv - 2] + vals[nv - 1]
-            nv -= 1
-            top -= 1
-    return vals[0]
-
-
-@njit(cache=True, nogil=True, error_model="numpy")
 def _kpp_indices(data, first, u):  # pragma: no cover - compiled
     """Rows of data (J, 2) that scipy's k-means++ picks (k = len(u) + 1): first, then for
     each uniform u[i] the first row whose cumulative share of the least squared distance to
@@ -458,7 +390,7 @@ def _kpp_indices(data, first, u):  # pragma: no cover - compiled
             s = dx * dx + dy * dy
             if s < D2[j]:
                 D2[j] = s
-        tot = _pairwise_sum(D2, 0, J)
+        tot = numpy_sum(D2, 0, J)
         r = u[i - 1]
         cum = 0.0
         pick = -1
