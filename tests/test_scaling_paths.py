@@ -294,9 +294,10 @@ def _graph_cases() -> list[tuple[str, object, np.ndarray]]:
 @pytest.mark.parametrize("name,graph,hops", _graph_cases(),
                          ids=lambda c: c if isinstance(c, str) else "")
 def test_spread_equals_its_reference(name: str, graph: object, hops: np.ndarray) -> None:
-    """The corners' Dijkstra (`graph._spread`, indexed heap with decrease-key) gives the lazy
-    deletion reference's costs to the bit, inf included, from one source, many sources, tied
-    sources, no source, with the edge lengths and with Eq. 1 hop times (as `LegTimes`)."""
+    """The corners' Dijkstra (`graph._spread`, a bucket queue, and `_spread_heap`, an indexed
+    heap with decrease-key) gives the lazy deletion reference's costs to the bit, inf
+    included, from one source, many sources, tied sources, no source, with the edge lengths
+    and with Eq. 1 hop times (as `LegTimes`)."""
     from planner_core.model.routing import graph as g
 
     rng = np.random.default_rng(9)
@@ -311,16 +312,18 @@ def test_spread_equals_its_reference(name: str, graph: object, hops: np.ndarray)
     srcs.append(tied)
     for w in (graph.weights, np.ascontiguousarray(hops, dtype=float)):
         for s in srcs:
-            fast = g._spread(graph.indptr, graph.indices, w, s)
+            fast = g._spread(graph.indptr, graph.indices, w, s, *g.weight_bounds(w))
+            heap = g._spread_heap(graph.indptr, graph.indices, w, s)
             slow = g._spread_reference(graph.indptr, graph.indices, w, s)
-            assert np.array_equal(fast, slow), name
+            assert np.array_equal(fast, slow) and np.array_equal(heap, slow), name
             assert np.array_equal(graph.spread(s, w), slow), name
     assert n > 2
 
 
 def test_spread_equals_its_reference_with_ties() -> None:
-    """Random sparse graphs with small integer weights (many equal costs, so the two heaps
-    settle tied nodes in different orders): the same costs."""
+    """Random sparse graphs with small integer weights (many equal costs, so the heaps and the
+    buckets settle tied nodes in different orders): the same costs; with a zero or a huge
+    weight (`_spread` then takes the heap) too."""
     from planner_core.model.routing import graph as g
 
     rng = np.random.default_rng(10)
@@ -336,8 +339,16 @@ def test_spread_equals_its_reference_with_ties() -> None:
         np.cumsum(np.bincount(src, minlength=n), out=indptr[1:])
         indices, wts = np.ascontiguousarray(dst[order]), np.ascontiguousarray(wts[order])
         s = np.where(rng.random(n) < 0.1, rng.integers(0, 3, n).astype(float), np.inf)
-        assert np.array_equal(g._spread(indptr, indices, wts, s),
-                              g._spread_reference(indptr, indices, wts, s))
+        slow = g._spread_reference(indptr, indices, wts, s)
+        assert np.array_equal(g._spread(indptr, indices, wts, s, *g.weight_bounds(wts)), slow)
+        assert np.array_equal(g._spread_heap(indptr, indices, wts, s), slow)
+        # a zero weight, a huge one: the heap, with the same costs
+        for odd in (0.0, 1e15):
+            w2 = wts.copy()
+            w2[: len(w2) // 7] = odd
+            w2 = np.ascontiguousarray(w2)
+            assert np.array_equal(g._spread(indptr, indices, w2, s, *g.weight_bounds(w2)),
+                                  g._spread_reference(indptr, indices, w2, s))
 
 
 def test_kmeans_equals_its_reference() -> None:

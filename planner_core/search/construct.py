@@ -54,7 +54,7 @@ from numba import njit
 from planner_core.model.formulas import ground_reach, numpy_sum
 from planner_core.model.geometry import overlap_lengths, points_inside
 from planner_core.model.routing import open_path
-from planner_core.model.routing.graph import CLEAR
+from planner_core.model.routing.graph import CLEAR, weight_bounds
 from planner_core.search.polish import polish_hover_times
 from planner_core.search.refine import covers, repair_points
 
@@ -448,6 +448,7 @@ class LegTimes:
         self.graph = problem.seeder.graph
         #: Eq. 1 time (s) of each graph edge as a hop from rest to rest (aligned with indices)
         self.hop_times = problem.model.flight_time(self.graph.weights)
+        self._bounds = weight_bounds(self.hop_times)  # for the Dijkstra's bucket queue
         self._first: dict[bytes, np.ndarray] = {}  # point -> its times to the corners it sees
         self._far: dict[bytes, np.ndarray] = {}  # point -> its times to every corner
 
@@ -468,7 +469,7 @@ class LegTimes:
             return first, None
         for k, row in zip(keys, first, strict=True):
             if k not in self._far:
-                self._far[k] = self.graph.spread(row, self.hop_times)
+                self._far[k] = self.graph.spread(row, self.hop_times, self._bounds)
         return first, np.array([self._far[k] for k in keys]).reshape(len(pts), self.graph.n)
 
     def matrix(self, nodes: np.ndarray) -> np.ndarray:
