@@ -575,3 +575,24 @@ def test_lp_blocks_equal_their_reference() -> None:
         assert ok1 == ok2
         if ok1:
             assert np.array_equal(T1, T2) and np.array_equal(y1, y2) and np.array_equal(r1, r2)
+
+
+@pytest.mark.parametrize("name,problem,pts", CASES[::3], ids=[c[0] for c in CASES[::3]])
+def test_connect_equals_its_reference(name: str, problem: Problem, pts: np.ndarray) -> None:
+    """The seeder's graph links kept by point (`Seeder.connect`) equal links computed afresh,
+    for points met once, met again, in new company and as a single point."""
+    seeder = problem.seeder
+    again = np.vstack([pts[::2], pts, pts[:1]])
+    for batch in (pts, again, pts[1:2], np.vstack([pts[::-1], problem.model.sensors])):
+        assert np.array_equal(seeder.connect(batch), seeder.connect_reference(batch)), name
+
+
+def test_connect_equals_its_reference_on_a_large_map() -> None:
+    from planner_core.model.mapio import load_map
+
+    p = Problem(load_map(SUITE.parent / "large" / "L02.json").planning_map())
+    rng = np.random.default_rng(17)
+    pts = rng.uniform(0, p.model.width, (40, 2))
+    for batch in (pts[:25], pts, pts[::-1], p.model.sensors[:30]):
+        assert np.array_equal(p.seeder.connect(batch), p.seeder.connect_reference(batch))
+    assert np.isfinite(p.seeder.connect(pts)).any()

@@ -509,7 +509,33 @@ class Seeder:
 
     def connect(self, pts: np.ndarray) -> np.ndarray:
         """(P, N) distance (m) from each point of pts (P, 2) to each graph node it sees,
-        tangentially at the node (inf elsewhere)."""
+        tangentially at the node (inf elsewhere).
+
+        A point's row depends on that point alone, so each is kept (the nodes it sees and
+        their distances, by the point's coordinates) and a point met again, by the seeder's
+        routes or the constructive leg times (a third of L02's points), is not tested again
+        against the ~1,000 corners it is tangent to: the new points of a call are tested in
+        one `connect_reference` call. The same rows as `connect_reference` (tests)."""
+        g = self.graph
+        pts = np.asarray(pts)
+        if g.n == 0 or len(pts) == 0 or pts.dtype != np.float64 or pts.ndim != 2:
+            return self.connect_reference(pts)
+        links = self.__dict__.setdefault("_links", {})
+        keys = [q.tobytes() for q in pts]
+        new = [i for i, k in enumerate(keys) if k not in links]
+        if new:
+            rows = self.connect_reference(pts[new])
+            for i, row in zip(new, rows, strict=True):
+                seen = np.flatnonzero(row != np.inf)
+                links[keys[i]] = (seen, row[seen])
+        out = np.full((len(pts), g.n), np.inf)
+        for i, k in enumerate(keys):
+            seen, dist = links[k]
+            out[i, seen] = dist
+        return out
+
+    def connect_reference(self, pts: np.ndarray) -> np.ndarray:
+        """`connect` computed afresh for every point: its slow reference."""
         g = self.graph
         out = np.full((len(pts), g.n), np.inf)
         if g.n == 0 or len(pts) == 0:
