@@ -171,14 +171,14 @@ def test_the_docs_lamde_s_figures_are_what_the_shipped_table_gives_on_the_stored
 
     bench, runs = _bench(), ROOT / "docs" / "scheduler-runs"
     doc = (ROOT / "docs" / "scheduler.md").read_text()
-    row = {r.split("|")[1].strip(): [c.strip() for c in r.split("|")[2:4]]
+    row = {r.split("|")[1].strip(): [c.strip() for c in r.split("|")[2:5]]
            for r in doc[doc.index("## LAMDE-S: the contextual selector"):].splitlines()
            if r.startswith("| ")}
-    for col, name in enumerate(("heldout200x5", "suite10x10")):
+    for col, name in enumerate(("heldout200x5", "suite10x10", "large-heldout3x3")):
         out = bench.evaluate(str(DEFAULT_TABLE), bench._read([str(runs / f"{name}.jsonl.gz")]))
         sel, static, default = (row[k][col].split()[0] for k in (
-            "lamde-s", "best static of the training grid (`restructure-heavy`)", "default"))
-        assert (f"lamde-s {sel}, best static (restructure-heavy) {static}, default {default}"
+            "lamde-s", "best static of the training grid (`fresh-heavy`)", "default"))
+        assert (f"lamde-s {sel}, best static (fresh-heavy) {static}, default {default}"
                 in out), (name, out)
         share = row["lamde-s against that static: share of its mean gap"][col]
         assert f"lamde-s vs best static: {share}" in out
