@@ -859,17 +859,6 @@ def _overlap(a: np.ndarray, b: np.ndarray, obstacles: Obstacles, first: bool) ->
     return out.reshape(lead)
 
 
-def kernel_args(obstacles: Obstacles) -> tuple:
-    """The obstacle arrays the compiled overlap kernel takes after the legs, in its order:
-    ``_overlap_serial(a, b, *kernel_args(o), out, first)`` is what `overlap_lengths` (first
-    False) and `overlap_first` (True) run on contiguous (k, 2) legs a, b, for a compiled
-    caller that tests legs itself (`seeding._prune_loop`)."""
-    o = obstacles
-    return (o.circles, o.poly_vertices, o.poly_offsets, o.edge_normals, o.edge_flags, o.tol,
-            o.cull_radii, o.cull_centres32, o.origin, o.extent, o.tile_centres32, o.tile_radii,
-            o.tile_offsets, o.tile_members)
-
-
 def overlap_first(a: np.ndarray, b: np.ndarray, obstacles: Obstacles) -> np.ndarray:
     """Per leg a->b (as `overlap_lengths`): 0 where `overlap_lengths` is 0, else the overlap
     with the first obstacle the kernel finds cutting the leg (> 2 tol, at most the sum), NaN

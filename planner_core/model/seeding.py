@@ -41,14 +41,7 @@ from planner_core.model.formulas import (
     numpy_sum,
     slant_rate,
 )
-from planner_core.model.geometry import (
-    Obstacles,
-    _overlap_serial,
-    kernel_args,
-    overlap_first,
-    overlap_lengths,
-    points_inside,
-)
+from planner_core.model.geometry import Obstacles, overlap_first, overlap_lengths, points_inside
 from planner_core.model.routing import build_visibility_graph, open_tour
 from planner_core.model.routing.graph import CLEAR as _CLEAR
 
@@ -257,137 +250,97 @@ def _nearest_centres(S, C):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
-def _prune_loop(
-    full, R, ok, b1, b2, req, c, t_max, alpha, v_max, accel, limit, clear, circles, verts,
-    offs, normals, eflags, tol, cull_r, cull_c32, origin, extent, tile_c32, tile_r, tile_offs,
-    tile_members,
-):  # pragma: no cover - compiled
-    """`Seeder.prune_numpy`'s removals, compiled: full (n + 2, 2) start, points, end; R (n, J)
-    the points' rates; ok (n,) whether each point's neighbours see each other; b1, b2 (J,)
-    each sensor's best and second-best point; c = 0.95 T_max; the obstacle arrays of
-    `geometry.kernel_args`. Returns the indices (ascending) of the points kept. Every
-    quantity as numpy computes it: the greedy times' row sums by `numpy_sum`, leg lengths by
-    hypot, Eq. 1 by `leg_time`, first-of-equals minima and maxima; a removal's two changed
-    legs tested in one overlap call (`first`), as `Seeder._clear` does."""
-    n, J = R.shape
-    full = full.copy()
-    R = R.copy()
-    ok = ok.copy()
-    idx = np.arange(n)
-    served = np.empty(n, dtype=np.bool_)
-    own = np.empty(n)
-    gain = np.empty((n, n))
-    row = np.empty(n)
-    legs = np.empty(n + 1)
-    times = np.empty(n)
-    fa = np.empty((2, 2))
-    fb = np.empty((2, 2))
-    out = np.empty(2)
-    while n > 1:
-        for i in range(n):
-            served[i] = True
-        for j in range(J):
-            r1 = R[b1[j], j]
-            if r1 * c >= req[j] and R[b2[j], j] * c < req[j]:
-                served[b1[j]] = False  # removing b1[j] leaves sensor j unserved
-        any_cand = False
-        for i in range(n):
-            if ok[i] and served[i]:
-                any_cand = True
-                break
-        if not any_cand:
+def _prune_step(full, R, ok, b1, b2, idx, n, req, c, t_max, alpha, v_max, accel, limit
+                ):  # pragma: no cover - compiled
+    """One removal of `Seeder.prune_numpy`, compiled, on its state for n points: full (>= n + 2,
+    2) start, points, end; R (>= n, J) the points' rates; ok (>= n,) whether each point's
+    neighbours see each other; b1, b2 (J,) each sensor's best and second-best point; idx the
+    points' indices in the prune's input; c = 0.95 T_max. Returns the point m removed (the
+    arrays updated in place for n - 1 points; the caller then renews ok[m - 1], ok[m]) or -1
+    when the prune stops. Every quantity as numpy computes it: the greedy times' row sums by
+    `numpy_sum`, leg lengths by hypot, Eq. 1 by `leg_time`, first-of-equals extrema. O(n^2 + J)
+    (+ O(n J) for the rows moved up)."""
+    J = R.shape[1]
+    served = np.ones(n, dtype=np.bool_)
+    for j in range(J):
+        if R[b1[j], j] * c >= req[j] and R[b2[j], j] * c < req[j]:
+            served[b1[j]] = False  # removing b1[j] leaves sensor j unserved
+    any_cand = False
+    for i in range(n):
+        if ok[i] and served[i]:
+            any_cand = True
             break
-        for i in range(n):
-            own[i] = 0.0
-            for q in range(n):
-                gain[i, q] = 0.0
+    if not any_cand:
+        return -1
+    own = np.zeros(n)
+    gain = np.zeros((n, n))
+    for j in range(J):
+        need1 = req[j] / max(R[b1[j], j], 1e-12)
+        need2 = req[j] / max(R[b2[j], j], 1e-12)
+        own[b1[j]] = max(own[b1[j]], need1)
+        gain[b1[j], b2[j]] = max(gain[b1[j], b2[j]], need2)
+    legs = np.empty(n + 1)
+    for i in range(n + 1):
+        legs[i] = leg_time(np.hypot(full[i + 1, 0] - full[i, 0], full[i + 1, 1] - full[i, 1]),
+                           v_max, accel)
+    row = np.empty(n)
+    m = -1
+    best = 0.0
+    for i in range(n):
+        if not (ok[i] and served[i]):
+            continue
+        for q in range(n):
+            row[q] = max(own[q], gain[i, q])
+        row[i] = 0.0
+        short = leg_time(np.hypot(full[i + 2, 0] - full[i, 0], full[i + 2, 1] - full[i, 1]),
+                         v_max, accel)
+        d_fly = short - legs[i] - legs[i + 1]
+        cost = alpha * d_fly + (1.0 - alpha) * numpy_sum(row, 0, n)
+        if m < 0 or cost < best:
+            m = i
+            best = cost
+    if n <= limit:
+        # `Seeder._times`: each sensor from its best point (the first of equals)
+        times = np.zeros(n)
         for j in range(J):
-            need1 = req[j] / max(R[b1[j], j], 1e-12)
-            need2 = req[j] / max(R[b2[j], j], 1e-12)
-            own[b1[j]] = max(own[b1[j]], need1)
-            gain[b1[j], b2[j]] = max(gain[b1[j], b2[j]], need2)
-        for i in range(n + 1):
-            legs[i] = leg_time(np.hypot(full[i + 1, 0] - full[i, 0],
-                                        full[i + 1, 1] - full[i, 1]), v_max, accel)
-        m = -1
-        best = 0.0
-        for i in range(n):
-            if not (ok[i] and served[i]):
-                continue
-            for q in range(n):
-                row[q] = max(own[q], gain[i, q])
-            row[i] = 0.0
-            short = leg_time(np.hypot(full[i + 2, 0] - full[i, 0],
-                                      full[i + 2, 1] - full[i, 1]), v_max, accel)
-            d_fly = short - legs[i] - legs[i + 1]
-            cost = alpha * d_fly + (1.0 - alpha) * numpy_sum(row, 0, n)
-            if m < 0 or cost < best:
-                m = i
-                best = cost
-        if n <= limit:
-            # `Seeder._times`: each sensor from its best point (the first of equals)
+            bi = 0
+            for i in range(1, n):
+                if R[i, j] > R[bi, j]:
+                    bi = i
+            r = R[bi, j]
+            need = req[j] / max(r, 1e-12) if r > 0 else np.inf
+            times[bi] = max(times[bi], min(need, t_max))
+        if best >= (1.0 - alpha) * numpy_sum(times, 0, n):
+            return -1
+    # remove point m (full's row m + 1)
+    for i in range(m + 1, n + 1):
+        full[i, 0] = full[i + 1, 0]
+        full[i, 1] = full[i + 1, 1]
+    for i in range(m, n - 1):
+        for j in range(J):
+            R[i, j] = R[i + 1, j]
+        ok[i] = ok[i + 1]
+        idx[i] = idx[i + 1]
+    n -= 1
+    # a sensor's best two change only where m was one of them; the rest renumber
+    for j in range(J):
+        hit = b1[j] == m or b2[j] == m
+        if b1[j] > m:
+            b1[j] -= 1
+        if b2[j] > m:
+            b2[j] -= 1
+        if hit and n > 1:
+            bi = 0
+            for i in range(1, n):
+                if R[i, j] > R[bi, j]:
+                    bi = i
+            bs = -1
             for i in range(n):
-                times[i] = 0.0
-            for j in range(J):
-                bi = 0
-                for i in range(1, n):
-                    if R[i, j] > R[bi, j]:
-                        bi = i
-                r = R[bi, j]
-                need = req[j] / max(r, 1e-12) if r > 0 else np.inf
-                times[bi] = max(times[bi], min(need, t_max))
-            if best >= (1.0 - alpha) * numpy_sum(times, 0, n):
-                break
-        # remove point m (full row m + 1)
-        for i in range(m + 1, n + 1):
-            full[i, 0] = full[i + 1, 0]
-            full[i, 1] = full[i + 1, 1]
-        for i in range(m, n - 1):
-            for j in range(J):
-                R[i, j] = R[i + 1, j]
-            ok[i] = ok[i + 1]
-            idx[i] = idx[i + 1]
-        n -= 1
-        # a sensor's best two change only where m was one of them; the rest renumber
-        for j in range(J):
-            hit = b1[j] == m or b2[j] == m
-            if b1[j] > m:
-                b1[j] -= 1
-            if b2[j] > m:
-                b2[j] -= 1
-            if hit and n > 1:
-                bi = 0
-                for i in range(1, n):
-                    if R[i, j] > R[bi, j]:
-                        bi = i
-                bs = -1
-                for i in range(n):
-                    if i != bi and (bs < 0 or R[i, j] > R[bs, j]):
-                        bs = i
-                b1[j] = bi
-                b2[j] = bs
-        # the legs that skip point m - 1 and point m (as numbered now) changed
-        k = 0
-        for i in (m - 1, m):
-            if 0 <= i < n:
-                fa[k, 0] = full[i, 0]
-                fa[k, 1] = full[i, 1]
-                fb[k, 0] = full[i + 2, 0]
-                fb[k, 1] = full[i + 2, 1]
-                k += 1
-        if k:
-            a2 = fa[:k].copy()
-            bb = fb[:k].copy()
-            res = out[:k]
-            _overlap_serial(a2, bb, circles, verts, offs, normals, eflags, tol, cull_r,
-                            cull_c32, origin, extent, tile_c32, tile_r, tile_offs,
-                            tile_members, res, True)
-            k = 0
-            for i in (m - 1, m):
-                if 0 <= i < n:
-                    ok[i] = res[k] <= clear
-                    k += 1
-    return idx[:n].copy()
+                if i != bi and (bs < 0 or R[i, j] > R[bs, j]):
+                    bs = i
+            b1[j] = bi
+            b2[j] = bs
+    return m
 
 
 # ----------------------------------------------------------------------------- seeder
@@ -756,11 +709,10 @@ class Seeder:
         The cost of removing point m: alpha x the flight time it saves (its two legs replaced
         by one) + (1 - alpha) x the greedy hover times of the rest, each sensor served from
         its best remaining point, from every sensor's best and second-best point kept across
-        removals (`prune_numpy` explains the bookkeeping). The removals run in one compiled
-        loop (`_prune_loop`: O(n^2 + J) per removal, the leg checks through the overlap
-        kernel) with numpy's arithmetic (its sums, `hypot`, Eq. 1's `leg_time`), so the same
-        points as `prune_numpy` and `prune_reference` (O(n^2 J) per removal) to the bit
-        (tests)."""
+        removals (`prune_numpy` explains the bookkeeping). Each removal is one compiled step
+        (`_prune_step`: O(n^2 + J)) and one check of the two legs it changed; numpy's
+        arithmetic is kept (its sums, `hypot`, Eq. 1's `leg_time`), so the same points as
+        `prune_numpy` and `prune_reference` (O(n^2 J) per removal) to the bit (tests)."""
         p = self.p
         M = np.asarray(M, dtype=float).reshape(-1, 2)
         if len(M) <= 1:
@@ -770,16 +722,25 @@ class Seeder:
         n = len(M)
         ok = self._clear(full[:n], full[2:])
         b1, b2 = _best_two(R, np.arange(R.shape[1]))
-        keep = _prune_loop(
-            np.ascontiguousarray(full), np.ascontiguousarray(R), ok.astype(np.bool_),
-            b1.astype(np.int64), b2.astype(np.int64), p.required, 0.95 * p.t_max,
-            float(p.t_max), float(p.alpha), float(p.v_max), float(p.accel), int(limit),
-            _CLEAR, *kernel_args(self.obstacles),
-        )  # fmt: skip
-        return M[keep]
+        b1, b2 = b1.astype(np.int64), b2.astype(np.int64)
+        R = np.ascontiguousarray(R)
+        ok = ok.astype(np.bool_)
+        idx = np.arange(n)
+        while n > 1:
+            m = _prune_step(full, R, ok, b1, b2, idx, n, p.required, 0.95 * p.t_max,
+                            float(p.t_max), float(p.alpha), float(p.v_max), float(p.accel),
+                            int(limit))  # fmt: skip
+            if m < 0:
+                break
+            n -= 1
+            # the legs that skip point m - 1 and point m (as numbered now) changed
+            fix = np.array([i for i in (m - 1, m) if 0 <= i < n], dtype=int)
+            if len(fix):
+                ok[fix] = self._clear(full[fix], full[fix + 2])
+        return M[idx[:n]]
 
     def prune_numpy(self, M: np.ndarray, limit: int) -> np.ndarray:
-        """`prune` in numpy, one removal per Python iteration (what `_prune_loop` compiles;
+        """`prune` in numpy, one removal per Python iteration (what `_prune_step` compiles;
         tests hold the two equal). Route points M (k, 2) with points removed whose sensors
         the others still serve within 95% of T_max and whose neighbours see each other:
         while more than `limit` remain, the one whose removal costs least; then any whose
