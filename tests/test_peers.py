@@ -75,6 +75,24 @@ def test_engineering_budget_determinism_and_start_modes(walled: Problem) -> None
     assert uni.evaluations == full.evaluations
 
 
+def test_engineering_given_a_wall_time_scores_more_rounds_never_worse(walled: Problem) -> None:
+    one = eng.optimise(walled, 10_000, seed=1)
+    # a limit the first round already passes: the first round whole, nothing more
+    tiny = eng.optimise(walled, 10_000, seed=1, time_limit=1e-9)
+    np.testing.assert_array_equal(one.x, tiny.x)
+    assert tiny.evaluations == one.evaluations
+    # more time: further rounds from new seeds, each plan scored once, the best never worse
+    more = eng.optimise(walled, 10_000, seed=1, time_limit=2.0)
+    assert more.evaluations > one.evaluations
+    assert (more.phi, more.f) <= (one.phi, one.f)
+    # the budget still caps it
+    capped = eng.optimise(walled, one.evaluations + 2, seed=1, time_limit=30.0)
+    assert capped.evaluations == one.evaluations + 2
+    for bad in (0.0, -1.0, float("nan")):
+        with pytest.raises(ValueError, match=r"^time_limit: must be a number of seconds > 0"):
+            eng.optimise(walled, 10_000, seed=1, time_limit=bad)
+
+
 def test_order_sites_is_the_obvious_open_path() -> None:
     """No obstacles, sites on the line from start to end, given shuffled: OR-Tools and our own
     open path both return them in order along the line."""
@@ -188,3 +206,34 @@ def test_engineering_own_order_is_the_same_pipeline(walled: Problem) -> None:
     assert any(np.array_equal(own.x, x) for x in X)
     with pytest.raises(ValueError, match="^order: "):
         eng.optimise(walled, 100, 0, order="lkh")
+
+
+def _large_peer() -> object:
+    import importlib.util
+
+    from tests.conftest import ROOT
+
+    spec = importlib.util.spec_from_file_location(
+        "bench_large_peer", ROOT / "benchmarks" / "bench_large_peer.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_bench_large_peer_summary_by_hand_and_bad_arguments(capsys) -> None:
+    bench = _large_peer()
+    recs = []
+    for run, (mine, theirs) in enumerate([(100.0, 110.0), (101.0, 111.0), (99.0, 112.0),
+                                          (102.0, 109.0), (98.0, 113.0)]):
+        for opt, f in (("planner", mine), (bench.PEER, theirs)):
+            recs.append({"task": "L09", "run": run, "optimiser": opt, "score": f, "f": f,
+                         "feasible": True, "wall_s": 2.0})
+    table, ok = bench.summarise(recs)
+    # means 100 and 111: 9.91 % below; 5 against 5 all lower: rank-sum p = 1/252, paired 1/32
+    assert "| L09 | 5 | 5/5 | 5/5 | 100.0 | 111.0 | 9.91 | 2.0 | 2.0 | 0.004 | 0.031 |" in table
+    assert ok
+    recs[0]["score"] = 130.0  # the planner worse in one run, by most: not significant paired
+    assert not bench.summarise(recs)[1]
+    assert bench.main(["--maps", "L99"]) == 2
+    assert bench.main(["--runs", "1"]) == 2
+    assert "no such large map ['L99']" in capsys.readouterr().err

@@ -27,6 +27,7 @@ and, for the OR-Tools order, the `baselines` extra.
 
 from __future__ import annotations
 
+import time
 from typing import Any
 
 import numpy as np
@@ -89,27 +90,70 @@ def ortools_order(problem: Any, sites: np.ndarray, legs: LegTimes) -> np.ndarray
 
 
 def score_candidates(
-    budgeted: Any, seed: int, order: str = "ortools"
+    budgeted: Any, seed: int, order: str = "ortools", *, stop: Any = None,
+    skip: set[bytes] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Build the pipeline's distinct candidate plans in order, as many as `budgeted` (a
     `Evaluator`) has evaluations left, and evaluate them through it: (X (m, d), f (m,),
-    phi (m,)). ValueError for an unknown `order`."""
+    phi (m,)). `stop` (a callable, None: never): asked after each site set, True ends the list
+    there (`candidate_plans`). `skip`: byte strings of decision vectors already scored, left
+    out and extended with the new ones. ValueError for an unknown `order`."""
     if order not in ORDERS:
         raise ValueError(f"order: unknown '{order}', choose one of {', '.join(ORDERS)}")
     base = _base(budgeted)
-    X, _ = candidate_plans(base, int(seed), int(budgeted.remaining),
-                           order=ortools_order if order == "ortools" else None)
+    # with `skip`, room for every plan scored before to come again: `remaining` new ones fit
+    limit = int(budgeted.remaining) + (len(skip) if skip is not None else 0)
+    X, _ = candidate_plans(base, int(seed), limit,
+                           order=ortools_order if order == "ortools" else None, stop=stop)
+    if skip is not None and len(X):
+        X = X[[i for i, x in enumerate(X) if x.tobytes() not in skip]][:budgeted.remaining]
+        skip.update(x.tobytes() for x in X)
     if len(X) == 0:
         return X, np.zeros(0), np.zeros(0)
     f, phi = budgeted.evaluate(X)
     return X, np.asarray(f, dtype=float), np.asarray(phi, dtype=float)
 
 
-def optimise(problem: Any, budget: int, seed: int, *, order: str = "ortools") -> OptimiseResult:
+def optimise(problem: Any, budget: int, seed: int, *, order: str = "ortools",
+             time_limit: float | None = None) -> OptimiseResult:
     """Score the pipeline's candidate plans (one evaluation each, while the budget lasts) and
-    return the Deb-best; deterministic for a seed, identical in both start modes. `order`: one
-    of `ORDERS` (module docstring)."""
+    return the Deb-best; deterministic for a seed, identical in both start modes.
+
+    Args:
+        problem: the UAV problem (or an `Evaluator` of it).
+        budget: evaluations at most.
+        seed: drives the k-means inits and the slide's directions.
+        order: one of `ORDERS` (module docstring).
+        time_limit: None (default): one round of candidates, the peer as a practitioner runs
+            it. Seconds of wall clock: the peer given that time (issue 31's comparison at the
+            planner's wall time): after the first round it builds further rounds from new
+            seeds (round r from `SeedSequence([seed, 31, r])`: other k-means inits and slide
+            directions), scoring only plans not scored before, while the clock and the budget
+            last; a round past the limit ends at its next site set. Not deterministic: how
+            many rounds fit depends on the machine.
+
+    Returns:
+        The Deb-best plan, its f and phi, the evaluations used and the trace.
+
+    Raises:
+        ValueError: an unknown `order` or a non-positive `time_limit`.
+    """
+    if time_limit is not None and not float(time_limit) > 0.0:
+        raise ValueError(f"time_limit: must be a number of seconds > 0, got {time_limit!r}")
+    t0 = time.perf_counter()
     budgeted = as_evaluator(problem, budget)
-    score_candidates(budgeted, seed, order)
+    if time_limit is None:
+        score_candidates(budgeted, seed, order)
+    else:
+        def late() -> bool:
+            return time.perf_counter() - t0 >= float(time_limit)
+
+        seen: set[bytes] = set()
+        r = 0
+        while budgeted.remaining > 0 and (r == 0 or not late()):
+            seed_r = seed if r == 0 else int(
+                np.random.SeedSequence([int(seed), 31, r]).generate_state(1)[0])
+            score_candidates(budgeted, seed_r, order, stop=late if r else None, skip=seen)
+            r += 1
     x, f, phi = budgeted.best("deb")
     return OptimiseResult(x, f, phi, budgeted.count, budgeted.trace("deb"))
