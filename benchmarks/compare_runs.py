@@ -5,9 +5,12 @@ checkouts of this project with the same command, so with the same seeds) and pri
 and start mode, the mean gap to the best-known f (`examples/maps/suite_best_known.json`; an
 infeasible run scores f + 10 phi), the paper's two-sided Wilcoxon rank-sum mark on the scores
 (`planner_core.bench.stats.wilcoxon_mark`, alpha 0.05: "+" new significantly better, "-"
-significantly worse, "~" neither) and the paired comparison (runs with the same seed where
-new < old). Then the verdict against issue 30's target: lower mean gap on at least 12 of the
-16 maps (significantly, rank-sum) and significantly worse on none, in every start mode.
+significantly worse, "~" neither), the paired comparison (runs with the same seed where
+new < old) and the paired Wilcoxon signed-rank mark on the same-seed differences (two-sided,
+alpha 0.05; zero differences dropped, `scipy.stats.wilcoxon`): the two files run the same seeds,
+so the signed-rank test pairs each run with its own. Then the verdict against issue 30's target
+(lower mean gap on at least 12 of the 16 maps, significantly, and significantly worse on none,
+in every start mode) by each test; the exit status follows the paired test.
 
     python benchmarks/compare_runs.py OLD/results.jsonl NEW/results.jsonl [--optimiser planner]
 
@@ -33,16 +36,35 @@ def load(path: str, optimiser: str) -> list[dict[str, Any]]:
     return [r for r in rows if r.get("optimiser") == optimiser]
 
 
+def signed_rank_mark(new: list[float], old: list[float], alpha: float = 0.05) -> str:
+    """"+" / "-" / "~": are the paired scores `new` significantly lower / higher than `old`?
+    The two-sided Wilcoxon signed-rank test at `alpha` on new - old (zero differences
+    dropped), its direction from the one-sided test that rejects at alpha / 2; "~" also when
+    every difference is zero."""
+    from scipy.stats import wilcoxon
+
+    if not any(b != a for a, b in zip(old, new, strict=True)):
+        return "~"
+    if wilcoxon(new, old, alternative="less").pvalue < alpha / 2:
+        return "+"
+    if wilcoxon(new, old, alternative="greater").pvalue < alpha / 2:
+        return "-"
+    return "~"
+
+
 def compare(old: list[dict[str, Any]], new: list[dict[str, Any]], best: dict[str, float],
-            ) -> tuple[list[str], dict[str, tuple[int, int, int]]]:
-    """Table lines and, per start mode, (maps significantly better, maps with a lower mean
-    gap, maps significantly worse)."""
+            ) -> tuple[list[str], dict[str, tuple[int, int, int]],
+                       dict[str, tuple[int, int]]]:
+    """Table lines; per start mode (maps significantly better by rank-sum, maps with a lower
+    mean gap, maps significantly worse by rank-sum); per start mode (maps significantly better,
+    significantly worse) by the paired signed-rank test."""
     from planner_core.bench.stats import wilcoxon_mark
 
-    lines = ["mode     task  runs  gap old %  gap new %  rank-sum  paired better"]
+    lines = ["mode     task  runs  gap old %  gap new %  rank-sum  paired better  signed-rank"]
     counts: dict[str, tuple[int, int, int]] = {}
+    paired_counts: dict[str, tuple[int, int]] = {}
     for mode in sorted({r["init"] for r in old} & {r["init"] for r in new}):
-        sig = lower = worse = 0
+        sig = lower = worse = psig = pworse = 0
         for task in sorted({r["task"] for r in old if r["init"] == mode}):
             a = {r["seed"]: r for r in old if r["init"] == mode and r["task"] == task}
             b = {r["seed"]: r for r in new if r["init"] == mode and r["task"] == task}
@@ -54,16 +76,22 @@ def compare(old: list[dict[str, Any]], new: list[dict[str, Any]], best: dict[str
             gb = [100.0 * (b[s]["score"] - fb) / fb for s in seeds]
             mark = wilcoxon_mark(gb, ga)  # "+": new (the reference here) better than old
             paired = sum(b[s]["score"] < a[s]["score"] for s in seeds)
+            pmark = signed_rank_mark(gb, ga)
+            psig += pmark == "+"
+            pworse += pmark == "-"
             ma, mb = statistics.fmean(ga), statistics.fmean(gb)
             sig += mark == "+"
             lower += mb < ma
             worse += mark == "-"
             lines.append(f"{mode:<8} {task:<5} {len(seeds):>4}  {ma:9.4f}  {mb:9.4f}  "
-                         f"{mark:>8}  {paired:>5}/{len(seeds)}")
+                         f"{mark:>8}  {paired:>5}/{len(seeds)}  {pmark:>11}")
         counts[mode] = (sig, lower, worse)
+        paired_counts[mode] = (psig, pworse)
         lines.append(f"{mode}: new significantly better on {sig} maps, lower mean gap on "
                      f"{lower}, significantly worse on {worse}")
-    return lines, counts
+        lines.append(f"{mode}: paired signed-rank: new significantly better on {psig} maps, "
+                     f"significantly worse on {pworse}")
+    return lines, counts, paired_counts
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -80,10 +108,12 @@ def main(argv: list[str] | None = None) -> int:
         ap.error(f"--optimiser: no {args.optimiser!r} records in "
                  f"{args.old if not old else args.new}")
     best = BestKnown(best_known_path(args.suite)).f_values(suite_task_files(args.suite))
-    lines, counts = compare(old, new, best)
+    lines, counts, paired = compare(old, new, best)
     print("\n".join(lines))
-    ok = all(s >= 12 and w == 0 for s, _, w in counts.values())
+    ok_rank = all(s >= 12 and w == 0 for s, _, w in counts.values())
+    ok = all(s >= 12 and w == 0 for s, w in paired.values())
     print(f"target (significantly better on >= 12/16 maps and worse on none, every mode): "
+          f"by rank-sum {'met' if ok_rank else 'NOT met'}; by the paired signed-rank test "
           f"{'met' if ok else 'NOT met'}")
     return 0 if ok else 1
 

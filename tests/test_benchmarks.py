@@ -513,9 +513,18 @@ def test_compare_runs_marks_maps_by_rank_sum_and_by_seed(tmp_path: Path) -> None
     r = _script("benchmarks/compare_runs.py", str(old), str(new))
     assert r.returncode == 1, r.stderr
     row = next(s for s in r.stdout.splitlines() if s.startswith("seeded   T01"))
-    assert row.split()[2:] == ["10", "1.0450", "0.0450", "+", "10/10"], row
+    # 10 of 10 pairs lower: the signed-rank test's least two-sided p, 2 / 1024, marks it too
+    assert row.split()[2:] == ["10", "1.0450", "0.0450", "+", "10/10", "+"], row
     assert "new significantly better on 1 maps, lower mean gap on 1" in r.stdout
-    assert r.stdout.rstrip().endswith("NOT met")
+    assert "seeded: paired signed-rank: new significantly better on 1 maps, significantly " \
+        "worse on 0" in r.stdout
+    assert r.stdout.rstrip().endswith("by the paired signed-rank test NOT met")
+    compare_runs = _script_module("compare_runs")
+    assert compare_runs.signed_rank_mark([1.0] * 5, [1.0] * 5) == "~"  # all ties
+    assert compare_runs.signed_rank_mark([2.0, 3.0, 4.0, 5.0, 6.0, 7.0],
+                                         [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]) == "-"
+    # 5 pairs lower: one-sided p 1/32 > 0.025, not significant two-sided
+    assert compare_runs.signed_rank_mark([0.0] * 5, [1.0, 2.0, 3.0, 4.0, 5.0]) == "~"
 
 
 def test_the_pipeline_comparison_in_docs_is_what_its_stored_runs_give() -> None:
