@@ -87,7 +87,8 @@ def plan(
             `planner_core.pipeline.schedule`): "default" (today's rounds), a static schedule's
             name (`schedule.SCHEDULES`: a fixed cycle of macro-actions), "lamde-s" (the
             learned selector of a schedule, `planner_core.learning.schedule_select`) or a
-            `Scheduler` object; a non-default one is recorded as `config["scheduler"]`.
+            `Scheduler` object; a non-default one is recorded as `config["scheduler"]`,
+            and the schedule a learned one chose (lamde-s) as `config["scheduler_choice"]`.
         corner_slots: K > 0: detour corners do not count against I_max (issue 31; docs/
             missions.md): the encoding gets K extra slots and at most I_max points with t > 0
             are feasible, the others (0 s) are corners, written as NAV_WAYPOINT. 0: the
@@ -143,6 +144,8 @@ def plan(
     settings = config.to_dict()
     if not default_schedule:
         settings["scheduler"] = scheduler_name(scheduler)
+        if result.state.schedule is not None:  # the template a learned scheduler chose
+            settings["scheduler_choice"] = result.state.schedule
     if isinstance(corner_slots, str):  # "auto" (checked above): the K it resolved to
         settings["corner_slots"] = k_corner
         settings["corner_slots_rule"] = AUTO

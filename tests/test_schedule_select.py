@@ -182,3 +182,30 @@ def test_the_docs_lamde_s_figures_are_what_the_shipped_table_gives_on_the_stored
                 in out), (name, out)
         share = row["lamde-s against that static: share of its mean gap"][col]
         assert f"lamde-s vs best static: {share}" in out
+
+
+def test_plan_records_and_prints_the_template_lamde_s_chose(tmp_path) -> None:
+    """`plan(scheduler="lamde-s")` records the template the selector followed
+    (`config["scheduler_choice"]`), the CLI's summary prints it, and a static schedule has no
+    choice to record."""
+    import lamde_mission
+
+    cfg = PlanConfig(seed=3, budget=3_000, population=20, de_share=0.2)
+    p = lamde_mission.plan(MAPS / "tiny.json", config=cfg, scheduler="lamde-s")
+    table = SelectorTable.load(DEFAULT_TABLE)
+    assert p.config["scheduler"] == "lamde-s"
+    assert p.config["scheduler_choice"] in table.templates
+    q = lamde_mission.plan(MAPS / "tiny.json", config=cfg, scheduler="kicks-heavy")
+    assert q.config["scheduler"] == "kicks-heavy" and "scheduler_choice" not in q.config
+
+
+def test_the_cli_summary_names_the_chosen_schedule(tmp_path) -> None:
+    import subprocess
+    import sys
+
+    r = subprocess.run([sys.executable, "-m", "lamde_mission.cli", "plan", str(MAPS / "tiny.json"),
+                        "-o", str(tmp_path / "t.plan"), "--scheduler", "lamde-s", "--budget",
+                        "12000", "--seed", "3"], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    line = next(s for s in r.stdout.splitlines() if s.startswith("map '"))
+    assert "scheduler lamde-s -> " in line, line

@@ -214,6 +214,9 @@ def _summary(
     compiling = f"; {t_compile:.1f} s compiling (or loading) the kernels" if t_compile > 0.05 \
         else ""
     stopped = f", stopped by the {plan.stopped}" if plan.stopped else ""
+    sched = plan.config.get("scheduler")
+    choice = plan.config.get("scheduler_choice")
+    sched = (f", scheduler {sched}" + (f" -> {choice}" if choice else "")) if sched else ""
     # a point of 0 s is written as a corner (NAV_WAYPOINT, flown through), not a hover point
     times = (stored if stored is not None else plan).hover_times
     n_corner = sum(1 for t in times if float(t) == 0.0)
@@ -229,7 +232,7 @@ def _summary(
         f"map '{printable(m.name)}': {plan.n_hover - n_corner} hover points{corners}, "
         f"{plan.evaluations} evaluations, "
         f"{plan.timings.get('planning', plan.wall_time - t_compile):.2f} s planning (seed "
-        f"{plan.seed}, {plan.configurator}{stopped})" + compiling,
+        f"{plan.seed}, {plan.configurator}{sched}{stopped})" + compiling,
         f"  flight time   {b['t_fly']:10.2f} s    ({who} {t.t_fly:.2f} s)",
         f"  hover time    {b['t_hover']:10.2f} s    ({who} {t.t_hover:.2f} s)",
         f"  f             {plan.f:10.2f}      ({who} {t.f:.2f}; alpha {m.spec.objective.alpha:g})",

@@ -468,4 +468,7 @@ class ImproveRun:
             if action == "stop":
                 break
             self.act(action)
+        chosen = getattr(scheduler, "template", None)  # a selector's pick (lamde-s)
+        if chosen is not None:
+            self.state = self.state.replace(schedule=str(chosen))
         return self.state

@@ -74,8 +74,9 @@ class Pool:
 class PlanState:
     """What the stages hand on: the UAV problem (`planner_core.model.problem.Problem`: decode,
     encode, breakdown), the run's config, the pool of scored plans, the rows injected into the
-    DE's initial population, the DE's result, the polish's record, and the point counts whose
-    best plan was already finished."""
+    DE's initial population, the DE's result, the polish's record, the point counts whose
+    best plan was already finished, and the schedule a learned scheduler chose for the
+    improving stage (`--scheduler lamde-s`: the template it follows; None otherwise)."""
 
     problem: Any
     config: PlanConfig
@@ -84,6 +85,7 @@ class PlanState:
     de: Any = None
     polish: dict[str, Any] | None = None
     finished: frozenset[int] = frozenset()
+    schedule: str | None = None
 
     def replace(self, **changes: Any) -> PlanState:
         return dataclasses.replace(self, **changes)
