@@ -1,28 +1,55 @@
-"""docs/scaling.md's large-suite quality table is what its stored runs give (issue 31)."""
+"""docs/scaling.md's large-suite quality tables are what their stored runs give (issue 31)."""
 
 from __future__ import annotations
 
+import importlib.util
 import re
 import statistics
 
 from planner_core.bench._io import read_jsonl
 from tests.conftest import ROOT
 
-RECORDS = ROOT / "docs" / "scaling" / "large-suite-seeded.jsonl.gz"
-#: one row: map, planner feasible, mean f, gap %, s, engineering feasible, mean f, s, p
-ROW = re.compile(r"^\| (L\d\d) \| (\d+)/(\d+) \| ([\d.]+) \| [\d.]+ \| ([\d.]+) \| (\d+)/(\d+) \| "
-                 r"([\d.]+) \| ([\d.]+) \| [\d.]+ \|$", re.M)  # fmt: skip
+RECORDS = ROOT / "docs" / "scaling" / "large-suite-25.jsonl.gz"
+SAME_TIME = ROOT / "docs" / "scaling" / "large-peer-same-time.jsonl.gz"
+#: one row: map, planner feasible, mean f, gap %, sd %, s, engineering feasible, mean f, s, p
+ROW = re.compile(r"^\| (L\d\d) \| (\d+)/(\d+) \| ([\d.]+) \| [\d.]+ \| ([\d.]+) \| ([\d.]+) \| "
+                 r"(\d+)/(\d+) \| ([\d.]+) \| ([\d.]+) \| [\d.e-]+ \|$", re.M)  # fmt: skip
+
+
+def _doc() -> str:
+    return (ROOT / "docs" / "scaling.md").read_text(encoding="utf-8")
 
 
 def test_large_suite_table_is_what_the_stored_runs_give() -> None:
-    text = (ROOT / "docs" / "scaling.md").read_text(encoding="utf-8")
-    rows = ROW.findall(text)
+    import json
+
+    rows = ROW.findall(_doc())
     assert len(rows) == 8
     runs = read_jsonl(RECORDS)
-    for task, pf, pn, pmean, pwall, ef, en, emean, ewall in rows:
+    best = json.loads((ROOT / "examples" / "maps" / "large_best_known.json").read_text())
+    gaps = dict(re.findall(r"^\| (L\d\d) \| \d+/\d+ \| [\d.]+ \| ([\d.]+) \|", _doc(), re.M))
+    for task, pf, pn, pmean, sd, pwall, ef, en, emean, ewall in rows:
+        gap = 100 * (float(pmean) / best["tasks"][task]["f"] - 1)
+        assert abs(gap - float(gaps[task])) < 0.006, (task, gap)
         for opt, feas, n, mean, wall in (("planner", pf, pn, pmean, pwall),
                                          ("engineering", ef, en, emean, ewall)):  # fmt: skip
             rs = [r for r in runs if r["optimiser"] == opt and r["task"] == task]
             assert len(rs) == int(n) and sum(r["feasible"] for r in rs) == int(feas)
             assert f"{statistics.mean(r['f'] for r in rs):.1f}" == mean, (task, opt)
             assert f"{statistics.mean(r['wall_s'] for r in rs):.1f}" == wall, (task, opt)
+        fs = [r["f"] for r in runs if r["optimiser"] == "planner" and r["task"] == task]
+        assert f"{100 * statistics.pstdev(fs) / statistics.mean(fs):.2f}" == sd, task
+
+
+def test_same_time_table_is_what_bench_large_peer_prints_on_its_records() -> None:
+    spec = importlib.util.spec_from_file_location(
+        "bench_large_peer", ROOT / "benchmarks" / "bench_large_peer.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    table, ok = bench.summarise(read_jsonl(SAME_TIME))
+    assert ok
+    rows = [r for r in table.splitlines() if r.startswith("| L")]
+    assert len(rows) == 8
+    doc = _doc()
+    for r in rows:
+        assert r in doc, r
