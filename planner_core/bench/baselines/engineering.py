@@ -18,11 +18,12 @@ for a fixed number of solutions (no time limit: the result depends on the inputs
 
 Candidates are scored in the order of `construct.candidate_plans` (greedy covers, then
 k = 1, 2, ...); the run stops when the budget is spent, so it never exceeds it, and usually uses
-far less (`spends_budget=False` in the registry). It is the same in both start modes (`--init
-seeded|uniform`): it never asks for the problem's initial population; the seed only drives the
-k-means inits and the slide's directions. Needs the UAV problem
-(`planner_core.model.problem.Problem`)
-and, for the OR-Tools order, the `baselines` extra.
+far less (`spends_budget=False` in the registry); `optimise(time_limit=)` gives it a wall-clock
+time instead, spent on further rounds of candidates from new seeds (issue 31's comparison at
+the planner's wall time, `benchmarks/bench_large_peer.py`). It is the same in both start
+modes (`--init seeded|uniform`): it never asks for the problem's initial population; the seed
+only drives the k-means inits and the slide's directions. Needs the UAV problem
+(`planner_core.model.problem.Problem`) and, for the OR-Tools order, the `baselines` extra.
 """
 
 from __future__ import annotations
