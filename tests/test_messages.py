@@ -121,3 +121,16 @@ def test_sigint_while_starting_gives_one_line_and_130(delay: float) -> None:
         assert err.splitlines() == [INTERRUPTED]
     else:
         assert p.returncode == 0 and "map 'case-tiny'" in out, (p.returncode, err)
+
+
+def test_verify_lists_every_margin_of_a_small_map_and_the_least_of_a_large_one() -> None:
+    from lamde_mission.commands.verify import MARGINS_LISTED, _margins
+
+    few = {"a": 0.05, "b": 0.031}
+    assert _margins(few) == "'a' +5 %, 'b' +3.1 %"
+    many = {f"s{i:02d}": 0.01 * i for i in range(80)}
+    text = _margins(many)
+    assert text.startswith("'s00' +0 %, 's01' +1 %") and "'s09' +9 %" in text
+    assert "'s10'" not in text and text.count("'") == 20
+    assert text.endswith("(the 10 least of 80 sensors; median +40 %, most +79 %)")
+    assert "least" not in _margins({f"s{i}": 0.0 for i in range(MARGINS_LISTED)})

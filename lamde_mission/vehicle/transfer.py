@@ -206,7 +206,7 @@ class UploadReport:
         elif self.fence_items == 0:
             fence = "and cleared the fence (the file has none)"
         else:
-            fence = f"and {self.fence_items} fence items"
+            fence = f"and {self.fence_items} fence item{'s' if self.fence_items != 1 else ''}"
         if self.dialect is not None:
             out.append(f"compared under {self.dialect}'s storage rules"
                        + (" (item 0 is the vehicle's home position)"
