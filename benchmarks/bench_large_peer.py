@@ -25,7 +25,6 @@ file that already holds a (map, run) pair skips it, so an interrupted run resume
 from __future__ import annotations
 
 import argparse
-import gzip
 import json
 import statistics
 import sys
@@ -39,12 +38,10 @@ PEER = "engineering-same-time"
 
 
 def _read(paths: list[str]) -> list[dict[str, Any]]:
-    out = []
-    for p in paths:
-        opener = gzip.open if p.endswith(".gz") else open
-        with opener(p, "rt") as fh:
-            out += [json.loads(line) for line in fh if line.strip()]
-    return out
+    """The records of bench JSON lines files (plain or .gz), in order."""
+    from planner_core.bench._io import read_jsonl
+
+    return [r for p in paths for r in read_jsonl(p)]
 
 
 def run_pairs(maps: list[str], runs: int, seed: int, out: str | None) -> list[dict[str, Any]]:
