@@ -167,29 +167,23 @@ def model_terms(
                             u -= 1
                         near[u] = j
                         m += 1
-                if scheduled:
+                if scheduled:  # the sensors out of range keep a rate of 0
                     for j in range(J):
                         Rk[k - 1, j] = 0.0
-                for u in range(m):
-                    j = near[u]
-                    dx = x - sensors[j, 0]
-                    dy = y - sensors[j, 1]
-                    r = slant_rate(dx * dx + dy * dy, h2, peak_rate, decay)
-                    if scheduled:
-                        Rk[k - 1, j] = max(r, 0.0)
-                    if r > 0.0:
-                        total += r
-                        Q[j] += r * t
-            else:
+            else:  # every sensor (the reference, or a non-finite point)
                 for j in range(J):
-                    dx = x - sensors[j, 0]
-                    dy = y - sensors[j, 1]
-                    r = slant_rate(dx * dx + dy * dy, h2, peak_rate, decay)
-                    if scheduled:
-                        Rk[k - 1, j] = max(r, 0.0)
-                    if r > 0.0:
-                        total += r
-                        Q[j] += r * t
+                    near[j] = j
+                m = J
+            for u in range(m):
+                j = near[u]
+                dx = x - sensors[j, 0]
+                dy = y - sensors[j, 1]
+                r = slant_rate(dx * dx + dy * dy, h2, peak_rate, decay)
+                if scheduled:
+                    Rk[k - 1, j] = max(r, 0.0)
+                if r > 0.0:
+                    total += r
+                    Q[j] += r * t
             if scheduled:
                 Tk[k - 1] = t
             elif total > bandwidth:
