@@ -308,15 +308,7 @@ def _spread(indptr, indices, weights, src_dist, w_min, w_max):  # pragma: no cov
     count = 0
     for u in range(n):
         if d[u] < np.inf:
-            b = np.int64(d[u] * inv)
-            s = b & mask
-            h = head[s]
-            nxt[u] = h
-            prv[u] = -1
-            if h >= 0:
-                prv[h] = u
-            head[s] = u
-            bkt[u] = b
+            _bucket_push(u, np.int64(d[u] * inv), mask, head, nxt, prv, bkt)
             count += 1
     cur = np.int64(lo * inv)
     while count > 0:
@@ -349,16 +341,21 @@ def _spread(indptr, indices, weights, src_dist, w_min, w_max):  # pragma: no cov
                         prv[q] = p
                 else:
                     count += 1
-                b = np.int64(nd * inv)
-                s2 = b & mask
-                h = head[s2]
-                nxt[w] = h
-                prv[w] = -1
-                if h >= 0:
-                    prv[h] = w
-                head[s2] = w
-                bkt[w] = b
+                _bucket_push(w, np.int64(nd * inv), mask, head, nxt, prv, bkt)
     return d
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _bucket_push(u, b, mask, head, nxt, prv, bkt):  # pragma: no cover - compiled
+    """Put node u at the front of bucket b's doubly linked list (`_spread`'s queue)."""
+    s = b & mask
+    h = head[s]
+    nxt[u] = h
+    prv[u] = -1
+    if h >= 0:
+        prv[h] = u
+    head[s] = u
+    bkt[u] = b
 
 
 @njit(cache=True, nogil=True)
