@@ -355,6 +355,33 @@ def _best_two(R: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return b1, np.argmax(R2, axis=0)
 
 
+def _recentred(S: np.ndarray, C: np.ndarray, owner: np.ndarray) -> np.ndarray:
+    """The centres C (K, 2) moved to the mean of the sensors S (J, 2) each owns (owner (J,)),
+    the empty ones dropped (an empty cluster serves nobody): one k-means step of
+    `Seeder._clusters` and its reference."""
+    cnt = np.bincount(owner, minlength=len(C))
+    sx = np.bincount(owner, weights=S[:, 0], minlength=len(C))
+    sy = np.bincount(owner, weights=S[:, 1], minlength=len(C))
+    has = cnt > 0
+    C[has] = np.column_stack([sx[has], sy[has]]) / cnt[has, None]
+    return C[has]
+
+
+def _uncovered_seeds(S: np.ndarray, gap: np.ndarray, lim: np.ndarray) -> np.ndarray:
+    """Sensors (m, 2) to seed new centres at: those out of reach (gap (J,) m > 0), worst
+    first, each kept only when farther than its lim (J,) m from the new ones before it
+    (`Seeder._clusters` and its reference). O(m J)."""
+    new: list[int] = []
+    near = np.full(len(S), np.inf)  # each sensor's distance to the nearest new centre
+    for j in np.argsort(-gap).tolist():
+        if gap[j] <= 0.0:
+            break
+        if near[j] > lim[j]:
+            new.append(j)
+            near = np.minimum(near, np.hypot(S[:, 0] - S[j, 0], S[:, 1] - S[j, 1]))
+    return S[new].astype(float)
+
+
 class Seeder:
     """Builds obstacle-aware, sensor-serving starting solutions for one map (reusable).
 
@@ -518,26 +545,12 @@ class Seeder:
         lim = np.minimum(radius, self.reach)
         for _ in range(J + 1):
             owner = _nearest_centres(S, C)[0]
-            cnt = np.bincount(owner, minlength=len(C))
-            sx = np.bincount(owner, weights=S[:, 0], minlength=len(C))
-            sy = np.bincount(owner, weights=S[:, 1], minlength=len(C))
-            has = cnt > 0
-            C[has] = np.column_stack([sx[has], sy[has]]) / cnt[has, None]
-            C = C[has]  # an empty cluster serves nobody
+            C = _recentred(S, C, owner)
             C = self._push_out(C + rng.normal(0.0, 20.0, C.shape), rng)
             gap = np.sqrt(_nearest_centres(S, C)[1]) - lim  # sqrt is monotone: min of sqrt
             if gap.max() <= 0.0 or len(C) >= 2 * J:
                 break
-            # new centres at uncovered sensors, worst first, mutually farther than lim apart
-            new: list[int] = []
-            near = np.full(J, np.inf)  # each sensor's distance to the nearest new centre
-            for j in np.argsort(-gap).tolist():
-                if gap[j] <= 0.0:
-                    break
-                if near[j] > lim[j]:
-                    new.append(j)
-                    near = np.minimum(near, np.hypot(S[:, 0] - S[j, 0], S[:, 1] - S[j, 1]))
-            C = np.vstack([C, self._push_out(S[new].astype(float), rng)])
+            C = np.vstack([C, self._push_out(_uncovered_seeds(S, gap, lim), rng)])
         owner = _nearest_centres(S, C)[0]
         return C, owner
 
@@ -562,27 +575,13 @@ class Seeder:
         lim = np.minimum(radius, self.reach)
         for _ in range(J + 1):
             owner = np.argmin(np.sum((S[:, None, :] - C[None]) ** 2, axis=2), axis=1)
-            cnt = np.bincount(owner, minlength=len(C))
-            sx = np.bincount(owner, weights=S[:, 0], minlength=len(C))
-            sy = np.bincount(owner, weights=S[:, 1], minlength=len(C))
-            has = cnt > 0
-            C[has] = np.column_stack([sx[has], sy[has]]) / cnt[has, None]
-            C = C[has]  # an empty cluster serves nobody
+            C = _recentred(S, C, owner)
             C = self._push_out(C + rng.normal(0.0, 20.0, C.shape), rng)
             dist = np.sqrt(np.sum((S[:, None, :] - C[None]) ** 2, axis=2))
             gap = dist.min(axis=1) - lim
             if gap.max() <= 0.0 or len(C) >= 2 * J:
                 break
-            # new centres at uncovered sensors, worst first, mutually farther than lim apart
-            new: list[int] = []
-            near = np.full(J, np.inf)  # each sensor's distance to the nearest new centre
-            for j in np.argsort(-gap).tolist():
-                if gap[j] <= 0.0:
-                    break
-                if near[j] > lim[j]:
-                    new.append(j)
-                    near = np.minimum(near, np.hypot(S[:, 0] - S[j, 0], S[:, 1] - S[j, 1]))
-            C = np.vstack([C, self._push_out(S[new].astype(float), rng)])
+            C = np.vstack([C, self._push_out(_uncovered_seeds(S, gap, lim), rng)])
         owner = np.argmin(np.sum((S[:, None, :] - C[None]) ** 2, axis=2), axis=1)
         return C, owner
 
