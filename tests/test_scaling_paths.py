@@ -5,6 +5,7 @@ random small maps with random point sets."""
 
 from __future__ import annotations
 
+import copy
 import json
 from pathlib import Path
 
@@ -224,6 +225,80 @@ def test_held_check_equals_held_points(name: str, problem: Problem, pts: np.ndar
         check.moved(P, idx)
     assert np.array_equal(check.held(), held_points(problem, P)), name
     assert held_any or len(pts) < 12 or name.startswith("random"), name
+
+
+def _trial_steps(problem: Problem, pts: np.ndarray, rng: np.random.Generator, tries: int
+                 ) -> dict[int, int]:
+    """`trial_points` against `trial_points_reference` from points pts (I, 2) for random
+    gradients and steps of 0.5-3000 m (some points held, some sliding, some put back): the
+    same points to the bit, verdict and rates; returns how often each verdict came."""
+    from planner_core.search.descent import TRIAL_OK, trial_points, trial_points_reference
+
+    m = problem.model
+    box = np.array([m.width, m.height])
+    seen = {0: 0, 1: 0, 2: 0}
+    for _ in range(tries):
+        P = np.clip(pts + rng.normal(0, 30, pts.shape), 0.0, box)
+        g = rng.normal(size=P.shape) * (rng.random((len(P), 1)) < 0.8)
+        scale = float(np.abs(g).max()) or 1.0
+        step = float(rng.choice([0.5, 20.0, 200.0, 3000.0]))
+        fast = trial_points(problem, P, g, scale, step, box)
+        slow = trial_points_reference(problem, P, g, scale, step, box)
+        assert fast[2] == slow[2]
+        assert np.array_equal(fast[0].view(np.int64), slow[0].view(np.int64))
+        if fast[2] == TRIAL_OK:
+            want = slow[1] if slow[1] is not None else m.rates(slow[0])
+            assert np.array_equal(fast[1], want)
+        seen[fast[2]] += 1
+    return seen
+
+
+@pytest.mark.parametrize("name,problem,pts", CASES, ids=[c[0] for c in CASES])
+def test_trial_points_equal_their_reference(name: str, problem: Problem, pts: np.ndarray
+                                            ) -> None:
+    """The descent's compiled trial step (`trial_points`: step, C3/C5 flags, slides, points
+    put back) against the numpy sequence it replaces (`trial_points_reference`), to the bit,
+    with the map's bandwidth and with one that most points break (C3 binds)."""
+    import dataclasses
+
+    rng = np.random.default_rng(len(pts) + 7)
+    seen = _trial_steps(problem, pts, rng, 12)
+    tight = dataclasses.replace(problem.model, bandwidth=float(
+        np.median(problem.model.rates(pts).sum(axis=1))))
+    narrow = copy.copy(problem)
+    narrow.model = tight
+    for k, v in _trial_steps(narrow, pts, rng, 8).items():
+        seen[k] += v
+    assert seen[0] + seen[1] > 0, (name, seen)
+
+
+def test_trial_points_equal_their_reference_on_a_large_map() -> None:
+    """As above on L02 (460 obstacles: the tiled kernel, cut legs dropped between tiles)."""
+    from planner_core.model.mapio import load_map
+
+    p = Problem(load_map(SUITE.parent / "large" / "L02.json").planning_map())
+    rng = np.random.default_rng(17)
+    near = p.model.sensors[rng.integers(0, len(p.model.sensors), 40)]
+    seen = _trial_steps(p, near + rng.normal(0, 100, near.shape), rng, 10)
+    assert seen[0] + seen[1] > 0, seen
+
+
+def test_clip1_is_numpys_clip() -> None:
+    """The compiled trial step's scalar clip against np.clip of (n, 2) and (k, 2, 2) arrays to
+    [0, box (2,)] (the reference's calls; numpy's loop for a broadcast box), signed zeros and
+    NaN included."""
+    from planner_core.search.descent import _clip1
+
+    rng = np.random.default_rng(3)
+    box = np.array([50.0, 80.0])
+    for shape in [(n, 2) for n in (1, 2, 5, 17, 40)] + [(k, 2, 2) for k in (1, 3, 9)]:
+        x = rng.normal(0, 100, shape)
+        x[rng.random(shape) < 0.2] = -0.0
+        x[rng.random(shape) < 0.05] = np.nan
+        want = np.clip(x, 0.0, box)
+        got = np.array([[_clip1(a, 0.0, box[0]), _clip1(b, 0.0, box[1])]
+                        for a, b in x.reshape(-1, 2)]).reshape(shape)
+        assert np.array_equal(got.view(np.int64), want.view(np.int64)), shape
 
 
 def _leg_cases() -> list[tuple[str, object]]:

@@ -46,6 +46,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 from numba import njit
@@ -55,6 +56,7 @@ from planner_core.model.polygons import EDGE_BOUNDARY, EDGE_OWNED, EDGE_SHARED, 
 
 __all__ = [
     "Obstacles",
+    "cut_legs",
     "overlap_first",
     "overlap_lengths",
     "overlap_lengths_reference",
@@ -215,6 +217,15 @@ class Obstacles:
     tile_offsets: np.ndarray = field(init=False, repr=False)  # (T + 1,) int64; [0]: no tiles
     tile_members: np.ndarray = field(init=False, repr=False)  # (K + P,) obstacle indices
     extent: float = field(init=False, repr=False)  # max |culling centre - origin|
+
+    @cached_property
+    def kernel_arrays(self) -> tuple:
+        """What the kernel (`_overlap_serial`) takes after the legs, in its order (circles ...
+        tile_members, 14 items): one tuple for compiled callers of `cut_legs`."""
+        return (self.circles, self.poly_vertices, self.poly_offsets, self.edge_normals,
+                self.edge_flags, self.tol, self.cull_radii, self.cull_centres32, self.origin,
+                self.extent, self.tile_centres32, self.tile_radii, self.tile_offsets,
+                self.tile_members)
 
     def __post_init__(self) -> None:
         # own copies: they are made read-only below, which must not touch the caller's arrays
@@ -873,6 +884,21 @@ def overlap_first(a: np.ndarray, b: np.ndarray, obstacles: Obstacles) -> np.ndar
     O(legs x tiles + candidate pairs) bound as `overlap_lengths`, much less in practice.
     """
     return _overlap(a, b, obstacles, True)
+
+
+@njit(cache=True, nogil=True)
+def cut_legs(a, b, obst, limit):  # pragma: no cover - compiled
+    """``overlap_first(a, b, obstacles) > limit`` for compiled callers: legs a -> b (n, 2) each,
+    C-contiguous float64, `obst` the obstacles' `Obstacles.kernel_arrays`; (n,) bool. The same
+    kernel call on the same legs as `overlap_first`, so the same flags (tests); O(`overlap_first`)
+    without its Python wrapper (~10 us a call)."""
+    (circles, verts, offs, normals, eflags, tol, cull_r, cull_c32, origin, extent, tile_c32,
+     tile_r, tile_offs, tile_members) = obst
+    out = np.empty(a.shape[0], dtype=np.float64)
+    if a.shape[0]:
+        _overlap_serial(a, b, circles, verts, offs, normals, eflags, tol, cull_r, cull_c32, origin,
+                        extent, tile_c32, tile_r, tile_offs, tile_members, out, True)
+    return out > limit
 
 
 def _circle_overlap_py(
