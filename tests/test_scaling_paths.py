@@ -210,8 +210,9 @@ def test_points_inside_equals_its_reference(name: str, problem: Problem, pts: np
 @pytest.mark.parametrize("name,problem,pts", CASES, ids=[c[0] for c in CASES])
 def test_held_check_equals_held_points(name: str, problem: Problem, pts: np.ndarray) -> None:
     """The descent's incremental C3/C5 flags: after each move of a few points, `HeldCheck`
-    holds the points `held_points` holds on the moved set (computed afresh)."""
-    from planner_core.search.descent import HeldCheck, held_points
+    holds the points `held_points` holds on the moved set (computed afresh), and the compiled
+    `held_points` holds what its numpy reference holds."""
+    from planner_core.search.descent import HeldCheck, held_points, held_points_reference
 
     rng = np.random.default_rng(len(pts) + 2)
     P = pts.copy()
@@ -219,6 +220,7 @@ def test_held_check_equals_held_points(name: str, problem: Problem, pts: np.ndar
     held_any = False
     for _ in range(6):
         assert np.array_equal(check.held(), held_points(problem, P)), name
+        assert np.array_equal(held_points_reference(problem, P), held_points(problem, P)), name
         held_any |= bool(len(check.held()))
         idx = np.unique(rng.integers(0, len(P), max(1, len(P) // 4)))
         P[idx] = problem.model.sensors[rng.integers(0, len(problem.model.sensors), len(idx))]
@@ -279,8 +281,13 @@ def test_trial_points_equal_their_reference_on_a_large_map() -> None:
     p = Problem(load_map(SUITE.parent / "large" / "L02.json").planning_map())
     rng = np.random.default_rng(17)
     near = p.model.sensors[rng.integers(0, len(p.model.sensors), 40)]
-    seen = _trial_steps(p, near + rng.normal(0, 100, near.shape), rng, 10)
+    pts = near + rng.normal(0, 100, near.shape)
+    seen = _trial_steps(p, pts, rng, 10)
     assert seen[0] + seen[1] > 0, seen
+    from planner_core.search.descent import held_points, held_points_reference
+
+    for P in (pts, pts[:7], near):
+        assert np.array_equal(held_points(p, P), held_points_reference(p, P))
 
 
 def test_clip1_is_numpys_clip() -> None:

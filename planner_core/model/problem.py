@@ -176,7 +176,9 @@ class Problem:
     def evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Objective f and total violation phi for a population X of shape (n, dim).
 
-        The compiled fast path (`planner_core.model.kernels`); `_evaluate_parts` is its numpy twin.
+        The compiled fast path (`planner_core.model.kernels`, then the obstacle kernel on all
+        n (I_max + 1) legs in one batch); `_evaluate_parts` is its numpy twin. Cost: O(n I_max
+        x sensors in range) for the terms plus the legs' obstacle tests.
         """
         X = np.ascontiguousarray(np.atleast_2d(X), dtype=float)
         if X.ndim != 2 or X.shape[1] != self.dim:
@@ -194,7 +196,8 @@ class Problem:
             *self.model.window, self.bandwidth, self.v_max, self.accel, self.alpha, A, B, f,
             v3, v4, self.scheduled,
         )  # fmt: skip
-        l_vio = self._overlap(A, B).sum(axis=1)
+        # the legs as one (n (I_max + 1), 2) batch: the kernel's fast call, no broadcasting
+        l_vio = self._overlap(A.reshape(-1, 2), B.reshape(-1, 2)).reshape(n, legs).sum(axis=1)
         v5 = collision_penalty(l_vio, self.mu, self.nu)
         if self.corner_slots:
             return f, v3 + v4 + v5 + self._excess_hover(X)

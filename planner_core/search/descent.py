@@ -64,6 +64,7 @@ __all__ = [
     "descend",
     "HeldCheck",
     "held_points",
+    "held_points_reference",
     "hover_of",
     "objective",
     "gradient_reference",
@@ -214,15 +215,34 @@ def objective_reference(problem: Any, P: np.ndarray) -> float:
 
 
 def held_points(problem: Any, P: np.ndarray, R: np.ndarray | None = None) -> np.ndarray:
-    """Indices of the hover points P (I, 2) that break C3 (summed link rate above the
+    """Indices of the hover points P (I, 2) m that break C3 (summed link rate above the
     bandwidth) or end or start a leg that cuts an obstacle by more than `L_VIO_TOL` (C5).
-    `R`: the points' link rates (I, J), when the caller has them."""
+    `R`: the points' link rates (I, J) Mbit/s, when the caller has them. The flags come from
+    one compiled call (`_held_mask`); `held_points_reference` is the numpy twin (tests).
+    Cost: O(I x sensors in range) rates (unless given), O(I J) sums and I + 1 legs."""
+    m = problem.model
+    P = _writable(P)
+    R = m.rates(P) if R is None else _writable(R)
+    return np.flatnonzero(_held_mask(P, R, m.start, m.end, m.bandwidth,
+                                     problem.obstacles.kernel_arrays, L_VIO_TOL))
+
+
+def held_points_reference(problem: Any, P: np.ndarray, R: np.ndarray | None = None
+                          ) -> np.ndarray:
+    """`held_points` in numpy, step by step (tests hold the two equal)."""
     m = problem.model
     bad = (m.rates(P) if R is None else R).sum(axis=1) > m.bandwidth
     nodes = _nodes(problem, P)
     cut = overlap_first(nodes[:-1], nodes[1:], problem.obstacles) > L_VIO_TOL
     bad |= cut[:-1] | cut[1:]  # leg k ends at point k and leg k + 1 starts there
     return np.flatnonzero(bad)
+
+
+def _writable(a: np.ndarray) -> np.ndarray:
+    """a as a C-contiguous, writable float64 array (a itself when it is one): the one array
+    type the compiled calls see, so none compiles twice."""
+    a = np.ascontiguousarray(a, dtype=float)
+    return a if a.flags.writeable else a.copy()
 
 
 class HeldCheck:
@@ -311,7 +331,7 @@ def trial_points_reference(
     move = -g / scale * step
     Pn = np.clip(P + move, 0.0, box)
     Rn = problem.model.rates(Pn)
-    held = held_points(problem, Pn, Rn)
+    held = held_points_reference(problem, Pn, Rn)
     if len(held):
         Rn = None  # the held points move again
         Pn = _slide(problem, P, Pn, move, held, box)
@@ -339,8 +359,7 @@ def trial_points(
     m = problem.model
     win = m.window
     return _trial_kernel(
-        np.ascontiguousarray(P, dtype=float), np.ascontiguousarray(g, dtype=float),
-        float(scale), float(step), np.ascontiguousarray(box, dtype=float), m.start, m.end,
+        _writable(P), _writable(g), float(scale), float(step), _writable(box), m.start, m.end,
         _SLIDE, m.sensors, win.order, win.xs, float(win.half), m.altitude**2, m.peak_rate,
         m.decay, math.isfinite(win.half), m.bandwidth, problem.obstacles.kernel_arrays,
         L_VIO_TOL,
@@ -378,6 +397,19 @@ def _over_bw(R, bandwidth):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
+def _held_mask(P, R, start, end, bandwidth, obst, limit):  # pragma: no cover - compiled
+    """`held_points_reference` as a mask (I,): points P (I, 2) whose rates R (I, J) sum
+    (numpy's pairwise sum) above `bandwidth`, or that end or start a leg cut by more than
+    `limit` (`cut_legs` on the I + 1 legs in path order, as `overlap_first` sees them)."""
+    bad = _over_bw(R, bandwidth)
+    a, b = _path_legs(P, start, end)
+    cut = cut_legs(a, b, obst, limit)
+    for i in range(P.shape[0]):
+        bad[i] = bad[i] | cut[i] | cut[i + 1]
+    return bad
+
+
+@njit(cache=True, nogil=True)
 def _path_legs(P, start, end):  # pragma: no cover - compiled
     """The legs start -> P (I, 2) -> end as two (I + 1, 2) arrays of leg starts and ends."""
     n = P.shape[0]
@@ -406,12 +438,9 @@ def _trial_kernel(P, g, scale, step, box, start, end, slide, sensors, order, xs,
             move[i, d] = mv
             Pn[i, d] = _clip1(P[i, d] + mv, 0.0, box[d])
     R = _rates_k(Pn, sensors, order, xs, half, h2, peak, decay, windowed)
-    bad = _over_bw(R, bandwidth)
-    a, b = _path_legs(Pn, start, end)
-    cut = cut_legs(a, b, obst, limit)
+    bad = _held_mask(Pn, R, start, end, bandwidth, obst, limit)
     k = 0
     for i in range(n):
-        bad[i] = bad[i] | cut[i] | cut[i + 1]
         k += bad[i]
     if k == 0:
         same = True
