@@ -184,6 +184,24 @@ def test_hover_lp_blocks_satisfy_the_kkt_conditions_and_match_linprog(
     assert largest == BLOCK_VERTICES
 
 
+def test_scaled_rows_equal_their_reference() -> None:
+    """The LP's matrix built compiled (`_scaled_rows`) and in numpy, to the bit: random rates
+    with zeros, requirements with zeros (and none needed)."""
+    from planner_core.model.hoverlp import _scaled_rows, scaled_rows_reference
+
+    rng = np.random.default_rng(11)
+    for _ in range(200):
+        n, J = int(rng.integers(1, 9)), int(rng.integers(1, 30))
+        R = rng.uniform(0, 20, (n, J)) * (rng.random((n, J)) < 0.5)
+        req = rng.uniform(0, 400, J) * (rng.random(J) < rng.random())
+        A, need, T, yn, rest = _scaled_rows(R, req)
+        A_ref, need_ref = scaled_rows_reference(R, req)
+        assert np.array_equal(A.view(np.int64), A_ref.view(np.int64)) and A.shape == A_ref.shape
+        assert np.array_equal(need, need_ref)
+        assert not T.any() and not yn.any() and not rest.any()
+        assert T.shape == (n,) and yn.shape == (len(need),) and rest.shape == (n,)
+
+
 def test_hover_lp_block_edges() -> None:
     """A lone point that would need more than t_max: infeasible; a 2-point block whose vertex
     needs more than t_max: solved by HiGHS with the bound; a sensor no point reaches:

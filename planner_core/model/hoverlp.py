@@ -79,6 +79,8 @@ def hover_lp(
     Bertsimas & Tsitsiklis, Introduction to Linear Optimization, Sec. 5.1), dV/dR_ij =
     -y_j T_i / Q_j at a non-degenerate optimum: what `planner_core.search.descent` uses.
 
+    Its matrix (the needed sensors' rows of R^T, each over its Q_j) and work arrays come from
+    one compiled call (`_scaled_rows`, O(I J); `scaled_rows_reference` its numpy twin).
     The LP separates into blocks, the connected parts of the graph that joins a point to the
     sensors it reaches (R_ij > 0). `_lp_blocks` (compiled) solves a block of one point (on the
     suite's plans most of them) in closed form, T_i = max_j Q_j / R_ij over its sensors with
@@ -97,16 +99,13 @@ def hover_lp(
     caller that must be reproducible passes a fresh dict per sequence (None: a cold start,
     the same answer whatever was solved before).
     """
-    need = req > 0
     n = R.shape[0]
     y = np.zeros(len(req))
-    if not need.any():
+    # rows: sensors that need data, scaled so each needs 1 unit; cols: points (compiled)
+    A, need, T, yn, rest = _scaled_rows(np.ascontiguousarray(R, dtype=float),
+                                        np.ascontiguousarray(req, dtype=float))
+    if not len(need):
         return np.zeros(n), 0.0, y
-    # rows: sensors, scaled so each needs 1 unit; cols: points
-    A = np.ascontiguousarray((R[:, need] / req[need]).T)
-    T = np.zeros(n)
-    yn = np.zeros(A.shape[0])
-    rest = np.zeros(n, dtype=np.bool_)
     if not _lp_blocks(A, _TARGET, float(t_max), BLOCK_VERTICES, BLOCK_COMBOS, T, yn, rest):
         return None  # a sensor no point reaches, or a lone point that needs more than t_max
     if rest.any():
@@ -118,6 +117,37 @@ def hover_lp(
     y[need] = yn
     T = top_up(R, req, np.clip(T, 0.0, t_max), t_max)
     return T, float(T.sum()), y
+
+
+@njit(cache=True, fastmath=False, nogil=True)
+def _scaled_rows(R, req):  # pragma: no cover - compiled
+    """The LP's matrix and work arrays in one call, for `hover_lp`: A (rows, I) with
+    A[r, i] = R[i, j_r] / req[j_r] for the sensors j_r with req > 0 in index order (`need`,
+    their indices), and zeroed T (I,), duals (rows,) and the HiGHS mask (I,) bool. R (I, J)
+    Mbit/s, req (J,) Mbit. The same divisions as `scaled_rows_reference` (tests). O(I J)."""
+    n, J = R.shape
+    m = 0
+    for j in range(J):
+        m += req[j] > 0
+    need = np.empty(m, dtype=np.int64)
+    r = 0
+    for j in range(J):
+        if req[j] > 0:
+            need[r] = j
+            r += 1
+    A = np.empty((m, n))
+    for r in range(m):
+        j = need[r]
+        for i in range(n):
+            A[r, i] = R[i, j] / req[j]
+    return A, need, np.zeros(n), np.zeros(m), np.zeros(n, dtype=np.bool_)
+
+
+def scaled_rows_reference(R: np.ndarray, req: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """`_scaled_rows`' A and `need` in numpy: (R[:, req > 0] / req[req > 0]).T (rows, I) and
+    the indices of the sensors with req > 0."""
+    need = req > 0
+    return np.ascontiguousarray((R[:, need] / req[need]).T), np.flatnonzero(need)
 
 
 @njit(cache=True, fastmath=False, nogil=True)
