@@ -198,7 +198,7 @@ _RUN: tuple[Default, ...] = (
             "search, removal moves, kicks; `planner_core.search.final.finish`); it runs only "
             "when at least descent_trials are left for it; 0: none",
             "an integer >= 0", _int_at_least(0)),
-    Default("de_share", 0.8, "share of the budget the DE gets, of the default budget at most "
+    Default("de_share", 0.6, "share of the budget the DE gets, of the default budget at most "
             "(and at least its population; `planner_core.pipeline`): the rest and any budget "
             "beyond the default go to the constructive plans, the descents, the polish, the "
             "final stage and the improving rounds (kicks, structural search, restarts from "

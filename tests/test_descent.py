@@ -741,12 +741,12 @@ def test_shares_follow_the_declared_rules_and_leave_what_later_stages_reserve() 
     cfg = PlanConfig()
     assert share("constructive", cfg, 10_000) == 64 + 20
     assert share("start descents", cfg, 9_916) == 2 * 3 * 40
-    assert share("de", cfg, 9_676) == 8_000
-    assert share("polish", cfg, 1_676) == 16
-    assert share("finish", cfg, 1_660) == 640 and share("other structure", cfg, 1_020) == 320
-    assert share("improve", cfg, 700) == 700
+    assert share("de", cfg, 9_676) == 6_000
+    assert share("polish", cfg, 3_676) == 16
+    assert share("finish", cfg, 3_660) == 640 and share("other structure", cfg, 3_020) == 320
+    assert share("improve", cfg, 2_700) == 2_700
     big = PlanConfig(budget=100_000)
-    assert share("de", big, 99_676) == 8_000  # not 80,000: the rest goes to `improve`
+    assert share("de", big, 99_676) == 6_000  # not 60,000: the rest goes to `improve`
     # below the default budget the DE yields to the final stage's shares (16 + 640 + 320)
     small = PlanConfig(budget=3_000)
     assert share("de", small, 2_676) == 2_676 - 16 - 640 - 320
