@@ -15,7 +15,7 @@ from scipy.sparse.csgraph import connected_components
 
 from planner_core.model.problem import Problem
 from planner_core.search.construct import candidate_plans
-from planner_core.search.descent import descend, held_points, objective, objective_reference
+from planner_core.search.descent import descend, objective, objective_reference
 from planner_core.search.final import finish, other_structure
 from planner_core.search.polish import BLOCK_VERTICES, _lp_matrices, hover_lp
 from planner_core.search.structure import (
@@ -28,6 +28,7 @@ from planner_core.search.structure import (
     split_moves,
     waypoint_moves,
 )
+from planner_core.search.trial import held_points
 from tests.conftest import SUITE
 
 
@@ -270,7 +271,7 @@ def test_slide_matches_a_point_by_point_reference() -> None:
     from lamde_mission.api import plan
     from planner_core.model.formulas import L_VIO_TOL
     from planner_core.model.geometry import overlap_lengths
-    from planner_core.search.descent import SLIDE_ANGLES, _slide
+    from planner_core.search.trial import SLIDE_ANGLES, _slide
 
     P = np.asarray(plan(SUITE / "T06.json", seed=0, descent=False).hover_points)
     spec = json.loads((SUITE / "T06.json").read_text())

@@ -212,7 +212,7 @@ def test_held_check_equals_held_points(name: str, problem: Problem, pts: np.ndar
     """The descent's incremental C3/C5 flags: after each move of a few points, `HeldCheck`
     holds the points `held_points` holds on the moved set (computed afresh), and the compiled
     `held_points` holds what its numpy reference holds."""
-    from planner_core.search.descent import HeldCheck, held_points, held_points_reference
+    from planner_core.search.trial import HeldCheck, held_points, held_points_reference
 
     rng = np.random.default_rng(len(pts) + 2)
     P = pts.copy()
@@ -234,7 +234,7 @@ def _trial_steps(problem: Problem, pts: np.ndarray, rng: np.random.Generator, tr
     """`trial_points` against `trial_points_reference` from points pts (I, 2) for random
     gradients and steps of 0.5-3000 m (some points held, some sliding, some put back): the
     same points to the bit, verdict and rates; returns how often each verdict came."""
-    from planner_core.search.descent import TRIAL_OK, trial_points, trial_points_reference
+    from planner_core.search.trial import TRIAL_OK, trial_points, trial_points_reference
 
     m = problem.model
     box = np.array([m.width, m.height])
@@ -284,7 +284,7 @@ def test_trial_points_equal_their_reference_on_a_large_map() -> None:
     pts = near + rng.normal(0, 100, near.shape)
     seen = _trial_steps(p, pts, rng, 10)
     assert seen[0] + seen[1] > 0, seen
-    from planner_core.search.descent import held_points, held_points_reference
+    from planner_core.search.trial import held_points, held_points_reference
 
     for P in (pts, pts[:7], near):
         assert np.array_equal(held_points(p, P), held_points_reference(p, P))
@@ -294,7 +294,7 @@ def test_clip1_is_numpys_clip() -> None:
     """The compiled trial step's scalar clip against np.clip of (n, 2) and (k, 2, 2) arrays to
     [0, box (2,)] (the reference's calls; numpy's loop for a broadcast box), signed zeros and
     NaN included."""
-    from planner_core.search.descent import _clip1
+    from planner_core.search.trial import _clip1
 
     rng = np.random.default_rng(3)
     box = np.array([50.0, 80.0])

@@ -17,8 +17,9 @@ from typing import Any
 import numpy as np
 
 from planner_core.model.formulas import deb_better
-from planner_core.search.descent import Descent, Evaluate, descend, held_points, hover_of
+from planner_core.search.descent import Descent, Evaluate, descend, hover_of
 from planner_core.search.polish import ZERO_TIME, hover_lp
+from planner_core.search.trial import held_points
 
 __all__ = [
     "CLEAR_SHIFTS",

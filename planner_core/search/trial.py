@@ -1,0 +1,363 @@
+"""One descent trial's points (`planner_core.search.descent`): every hover point moved against
+the gradient, the points that break C3 (summed link rate over the bandwidth) or whose legs cut
+an obstacle (C5) slid along the limit by +-45 degrees, and what still breaks either put back.
+
+`trial_points` does it in one compiled call (`_trial_kernel`); `trial_points_reference` is
+the same sequence in numpy, step by step, and tests hold the two equal to the bit
+(tests/test_scaling_paths.py). `held_points` / `HeldCheck` answer "which points break C3 or
+C5" for a whole point set or for one that changes a few points at a time; `held_points`
+is also one compiled call (`_held_mask`, its twin `held_points_reference`).
+
+Cost per trial: O(I x sensors in range) link rates, O(I J) sums and I + 1 legs against the
+obstacles (tiled, `planner_core.model.geometry`); with k held points 2 k turns (their rates
+and 4 k legs) and at most I rounds putting points back.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numba import njit
+
+from planner_core.model.formulas import L_VIO_TOL, _link_rates_2d, _link_rates_window, numpy_sum
+from planner_core.model.geometry import cut_legs, overlap_first
+
+__all__ = [
+    "SLIDE_ANGLES",
+    "TRIAL_HELD",
+    "TRIAL_OK",
+    "TRIAL_SAME",
+    "HeldCheck",
+    "held_points",
+    "held_points_reference",
+    "path_nodes",
+    "trial_points",
+    "trial_points_reference",
+]
+
+
+def path_nodes(problem: Any, P: np.ndarray) -> np.ndarray:
+    """start -> P (I, 2) -> end as one (I + 2, 2) array."""
+    out = np.empty((len(P) + 2, 2))
+    out[0] = problem.start
+    out[1:-1] = P
+    out[-1] = problem.end
+    return out
+
+
+
+def held_points(problem: Any, P: np.ndarray, R: np.ndarray | None = None) -> np.ndarray:
+    """Indices of the hover points P (I, 2) m that break C3 (summed link rate above the
+    bandwidth) or end or start a leg that cuts an obstacle by more than `L_VIO_TOL` (C5).
+    `R`: the points' link rates (I, J) Mbit/s, when the caller has them. The flags come from
+    one compiled call (`_held_mask`); `held_points_reference` is the numpy twin (tests).
+    Cost: O(I x sensors in range) rates (unless given), O(I J) sums and I + 1 legs."""
+    m = problem.model
+    P = _writable(P)
+    R = m.rates(P) if R is None else _writable(R)
+    return np.flatnonzero(_held_mask(P, R, m.start, m.end, m.bandwidth,
+                                     problem.obstacles.kernel_arrays, L_VIO_TOL))
+
+
+def held_points_reference(problem: Any, P: np.ndarray, R: np.ndarray | None = None
+                          ) -> np.ndarray:
+    """`held_points` in numpy, step by step (tests hold the two equal)."""
+    m = problem.model
+    bad = (m.rates(P) if R is None else R).sum(axis=1) > m.bandwidth
+    nodes = path_nodes(problem, P)
+    cut = overlap_first(nodes[:-1], nodes[1:], problem.obstacles) > L_VIO_TOL
+    bad |= cut[:-1] | cut[1:]  # leg k ends at point k and leg k + 1 starts there
+    return np.flatnonzero(bad)
+
+
+def _writable(a: np.ndarray) -> np.ndarray:
+    """a as a C-contiguous, writable float64 array (a itself when it is one): the one array
+    type the compiled calls see, so none compiles twice."""
+    a = np.ascontiguousarray(a, dtype=float)
+    return a if a.flags.writeable else a.copy()
+
+
+class HeldCheck:
+    """`held_points` of a point set that changes a few points at a time: the C3 flag of each
+    point and the C5 flag of each leg are kept, and `moved` recomputes only the moved points'
+    rates and the legs they end or start. Each flag is computed as `held_points` computes it
+    (a point's rates and a leg's overlap do not depend on the others), so `held` equals
+    `held_points` on the current points (tests). Cost per `moved`: O(k J) rates and 2k legs
+    for k moved points instead of O(I J) and I + 1 legs."""
+
+    def __init__(self, problem: Any, P: np.ndarray) -> None:
+        """P (I, 2): the hover points now (m)."""
+        self.problem = problem
+        m = problem.model
+        self.rate_bad = m.rates(P).sum(axis=1) > m.bandwidth
+        nodes = path_nodes(problem, P)
+        self.cut = overlap_first(nodes[:-1], nodes[1:], problem.obstacles) > L_VIO_TOL
+
+    def held(self) -> np.ndarray:
+        """Indices of the points that break C3 or end or start a leg that breaks C5."""
+        return np.flatnonzero(self.rate_bad | self.cut[:-1] | self.cut[1:])
+
+    def moved(self, P: np.ndarray, idx: np.ndarray) -> None:
+        """The points P (I, 2) after the points idx (indices) moved: their flags renewed."""
+        m = self.problem.model
+        idx = np.asarray(idx, dtype=np.int64)
+        self.rate_bad[idx] = m.rates(P[idx]).sum(axis=1) > m.bandwidth
+        legs = np.unique(np.concatenate([idx, idx + 1]))  # leg k runs node k -> node k + 1
+        nodes = path_nodes(self.problem, P)
+        self.cut[legs] = overlap_first(nodes[legs], nodes[legs + 1],
+                                         self.problem.obstacles) > L_VIO_TOL
+
+
+#: the turns (degrees) a held point's step tries, in this order, each shortened to its
+#: projection (cos 45 deg): the point slides along the obstacle or the bandwidth limit
+SLIDE_ANGLES = (45.0, -45.0)
+_SLIDE = np.array([np.cos(a) * np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+                   for a in np.radians(SLIDE_ANGLES)])  # (A, 2, 2): turn by a, scale by cos a
+
+
+def _slide(
+    problem: Any, P: np.ndarray, Pn: np.ndarray, move: np.ndarray, held: np.ndarray,
+    box: np.ndarray,
+) -> np.ndarray:
+    """The trial points Pn (I, 2) with each held point (`held`, indices) moved by its step
+    `move` (I, 2) turned by the first of `SLIDE_ANGLES` whose two legs clear the obstacles
+    (C5) and whose summed link rate stays within the bandwidth (C3), or put back at P where
+    none does. A held point's legs are checked against its previous neighbour after the
+    held points are put back and its next neighbour at its own step; `descend` then holds
+    whatever still breaks C3 or C5. One vectorised check for all held points and turns (a
+    crude cousin of Rosen's gradient projection, exact only when the obstacle's edge lies at
+    45 degrees to the step)."""
+    m = problem.model
+    k, a = len(held), len(_SLIDE)
+    ahead = path_nodes(problem, Pn)  # every point at its step
+    Pn = Pn.copy()
+    Pn[held] = P[held]
+    back = path_nodes(problem, Pn)  # the held points put back
+    cand = np.clip(P[held][:, None, :] + np.einsum("aij,kj->kai", _SLIDE, move[held]), 0.0, box)
+    c = cand.reshape(-1, 2)
+    prev, nxt = np.repeat(back[held], a, axis=0), np.repeat(ahead[held + 2], a, axis=0)
+    cut = overlap_first(np.vstack([prev, c]), np.vstack([c, nxt]), problem.obstacles) > L_VIO_TOL
+    bad = (cut[: k * a] | cut[k * a:] | (m.rates(c).sum(axis=1) > m.bandwidth)).reshape(k, a)
+    first = np.argmax(~bad, axis=1)
+    ok = ~bad[np.arange(k), first]
+    Pn[held[ok]] = cand[np.arange(k)[ok], first[ok]]
+    return Pn
+
+
+#: `trial_points`' verdicts: evaluate the trial; a point still breaks C3 or C5 (no
+#: evaluation); the trial points equal the current ones (no evaluation)
+TRIAL_OK, TRIAL_HELD, TRIAL_SAME = 0, 1, 2
+
+
+def trial_points_reference(
+    problem: Any, P: np.ndarray, g: np.ndarray, scale: float, step: float, box: np.ndarray
+) -> tuple[np.ndarray, np.ndarray | None, int]:
+    """One trial's points, the readable way (what `trial_points` compiles; tests hold the two
+    equal): every point P (I, 2) m moved by move = -g / scale * step (g (I, 2) the gradient,
+    scale its largest |entry|, step m) and clipped to the area `box` (2,) m; when some point
+    then breaks C3 or C5 (`held_points`), the held points slide (`_slide`) and whatever still
+    breaks C3 or C5 is put back at P until nothing does (at most I rounds, `HeldCheck`).
+    Returns (Pn (I, 2), Pn's link rates (I, J) or None where they were not computed, verdict
+    `TRIAL_OK`, `TRIAL_HELD` or `TRIAL_SAME`). Cost: O(I J) rates and I + 1 legs, plus, with
+    k held points, 2 k turns (rates and 4 k legs) and a few rounds of the held ones."""
+    move = -g / scale * step
+    Pn = np.clip(P + move, 0.0, box)
+    Rn = problem.model.rates(Pn)
+    held = held_points_reference(problem, Pn, Rn)
+    if len(held):
+        Rn = None  # the held points move again
+        Pn = _slide(problem, P, Pn, move, held, box)
+        check = HeldCheck(problem, Pn)
+        for _ in range(len(P)):  # what still breaks C3 or C5 stays where it was
+            held = check.held()
+            if not len(held):
+                break
+            Pn[held] = P[held]
+            check.moved(Pn, held)
+    if len(held):
+        return Pn, Rn, TRIAL_HELD
+    return Pn, Rn, TRIAL_SAME if np.array_equal(Pn, P) else TRIAL_OK
+
+
+def trial_points(
+    problem: Any, P: np.ndarray, g: np.ndarray, scale: float, step: float, box: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """`trial_points_reference` in one compiled call (`_trial_kernel`): the same points, flags
+    and verdict, to the bit (the same operations in the same order, the same batches of legs
+    for the obstacle kernel, numpy's pairwise sum for the summed rates; tests), and Pn's link
+    rates (I, J) Mbit/s always (for `objective`). P, g (I, 2); scale, step floats; box (2,).
+    Cost as the reference's in arithmetic, without its ~40 numpy and wrapper calls (~0.2 ms)
+    per trial."""
+    m = problem.model
+    win = m.window
+    return _trial_kernel(
+        _writable(P), _writable(g), float(scale), float(step), _writable(box), m.start, m.end,
+        _SLIDE, m.sensors, win.order, win.xs, float(win.half), m.altitude**2, m.peak_rate,
+        m.decay, math.isfinite(win.half), m.bandwidth, problem.obstacles.kernel_arrays,
+        L_VIO_TOL,
+    )  # fmt: skip
+
+
+@njit(cache=True, nogil=True)
+def _clip1(x, lo, hi):  # pragma: no cover - compiled
+    """One float64 of ``np.clip(X, lo, box)`` for X (n, 2) or (k, 2, 2) and box (2,), as
+    numpy's loop for that broadcast computes it: NaN stays, then x > lo ? x : lo, then
+    x < hi ? x : hi (so -0.0 becomes lo = 0.0; tests). O(1)."""
+    if not math.isnan(x):
+        x = x if x > lo else lo
+    if not math.isnan(x):
+        x = x if x < hi else hi
+    return x
+
+
+@njit(cache=True, nogil=True)
+def _rates_k(pts, sensors, order, xs, half, h2, peak, decay, windowed):  # pragma: no cover
+    """`ModelParams.rates` of points (n, 2): the windowed kernel where the cut is finite."""
+    if windowed:
+        return _link_rates_window(pts, sensors, order, xs, half, h2, peak, decay)
+    return _link_rates_2d(pts, sensors, h2, peak, decay)
+
+
+@njit(cache=True, nogil=True)
+def _over_bw(R, bandwidth):  # pragma: no cover - compiled
+    """Per row of R (n, J): numpy's ``R.sum(axis=1) > bandwidth`` (its pairwise sum)."""
+    n, J = R.shape
+    out = np.empty(n, dtype=np.bool_)
+    for i in range(n):
+        out[i] = numpy_sum(R[i], 0, J) > bandwidth
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _held_mask(P, R, start, end, bandwidth, obst, limit):  # pragma: no cover - compiled
+    """`held_points_reference` as a mask (I,): points P (I, 2) whose rates R (I, J) sum
+    (numpy's pairwise sum) above `bandwidth`, or that end or start a leg cut by more than
+    `limit` (`cut_legs` on the I + 1 legs in path order, as `overlap_first` sees them)."""
+    bad = _over_bw(R, bandwidth)
+    a, b = _path_legs(P, start, end)
+    cut = cut_legs(a, b, obst, limit)
+    for i in range(P.shape[0]):
+        bad[i] = bad[i] | cut[i] | cut[i + 1]
+    return bad
+
+
+@njit(cache=True, nogil=True)
+def _path_legs(P, start, end):  # pragma: no cover - compiled
+    """The legs start -> P (I, 2) -> end as two (I + 1, 2) arrays of leg starts and ends."""
+    n = P.shape[0]
+    a = np.empty((n + 1, 2))
+    b = np.empty((n + 1, 2))
+    a[0, 0], a[0, 1] = start[0], start[1]
+    for i in range(n):
+        a[i + 1, 0], a[i + 1, 1] = P[i, 0], P[i, 1]
+        b[i, 0], b[i, 1] = P[i, 0], P[i, 1]
+    b[n, 0], b[n, 1] = end[0], end[1]
+    return a, b
+
+
+@njit(cache=True, nogil=True)
+def _trial_kernel(P, g, scale, step, box, start, end, slide, sensors, order, xs, half, h2, peak,
+                  decay, windowed, bandwidth, obst, limit):  # pragma: no cover - compiled
+    """`trial_points` (its docstring): `trial_points_reference` step by step, each numpy call
+    as a loop with the same arithmetic, each rate matrix and obstacle batch as the reference
+    forms it (`held_points`, `_slide`, `HeldCheck`)."""
+    n = P.shape[0]
+    move = np.empty((n, 2))
+    Pn = np.empty((n, 2))
+    for i in range(n):
+        for d in range(2):
+            mv = -g[i, d] / scale * step
+            move[i, d] = mv
+            Pn[i, d] = _clip1(P[i, d] + mv, 0.0, box[d])
+    R = _rates_k(Pn, sensors, order, xs, half, h2, peak, decay, windowed)
+    bad = _held_mask(Pn, R, start, end, bandwidth, obst, limit)
+    k = 0
+    for i in range(n):
+        k += bad[i]
+    if k == 0:
+        same = True
+        for i in range(n):
+            same = same and Pn[i, 0] == P[i, 0] and Pn[i, 1] == P[i, 1]
+        return Pn, R, 2 if same else 0
+    # `_slide`: each held point's turned steps, checked against its previous node (held points
+    # back at P) and its next node (at its step), in one batch of legs
+    held = np.flatnonzero(bad)
+    na = slide.shape[0]
+    back = Pn.copy()
+    for q in range(k):
+        back[held[q], 0], back[held[q], 1] = P[held[q], 0], P[held[q], 1]
+    ka = k * na
+    cand = np.empty((ka, 2))
+    la = np.empty((2 * ka, 2))
+    lb = np.empty((2 * ka, 2))
+    for q in range(k):
+        h = held[q]
+        for t in range(na):
+            r = q * na + t
+            for d in range(2):
+                e = slide[t, d, 0] * move[h, 0] + slide[t, d, 1] * move[h, 1]
+                cand[r, d] = _clip1(P[h, d] + e, 0.0, box[d])
+                la[r, d] = start[d] if h == 0 else back[h - 1, d]
+                lb[ka + r, d] = end[d] if h + 1 == n else Pn[h + 1, d]
+                la[ka + r, d] = cand[r, d]
+                lb[r, d] = cand[r, d]
+    cutc = cut_legs(la, lb, obst, limit)
+    badc = _over_bw(_rates_k(cand, sensors, order, xs, half, h2, peak, decay, windowed),
+                    bandwidth)
+    for q in range(k):
+        for t in range(na):
+            r = q * na + t
+            if not (cutc[r] | cutc[ka + r] | badc[r]):
+                back[held[q], 0], back[held[q], 1] = cand[r, 0], cand[r, 1]
+                break
+    # `HeldCheck`: put back what still breaks C3 or C5, renewing the moved points' flags
+    Pn = back
+    rate_bad = _over_bw(_rates_k(Pn, sensors, order, xs, half, h2, peak, decay, windowed),
+                        bandwidth)
+    a, b = _path_legs(Pn, start, end)
+    cut = cut_legs(a, b, obst, limit)
+    still = True
+    for _ in range(n):
+        k = 0
+        for i in range(n):
+            bad[i] = rate_bad[i] | cut[i] | cut[i + 1]
+            k += bad[i]
+        if k == 0:
+            still = False
+            break
+        held = np.flatnonzero(bad)
+        for q in range(k):
+            Pn[held[q], 0], Pn[held[q], 1] = P[held[q], 0], P[held[q], 1]
+        moved = np.empty((k, 2))
+        for q in range(k):
+            moved[q, 0], moved[q, 1] = Pn[held[q], 0], Pn[held[q], 1]
+        fl = _over_bw(_rates_k(moved, sensors, order, xs, half, h2, peak, decay, windowed),
+                      bandwidth)
+        for q in range(k):
+            rate_bad[held[q]] = fl[q]
+        leg = np.zeros(n + 1, dtype=np.bool_)  # np.unique(held, held + 1): sorted, once each
+        for q in range(k):
+            leg[held[q]] = True
+            leg[held[q] + 1] = True
+        legs = np.flatnonzero(leg)
+        nl = legs.shape[0]
+        a = np.empty((nl, 2))
+        b = np.empty((nl, 2))
+        for q in range(nl):
+            j = legs[q]  # leg j runs node j -> node j + 1 (node 0 the start, n + 1 the end)
+            for d in range(2):
+                a[q, d] = start[d] if j == 0 else Pn[j - 1, d]
+                b[q, d] = end[d] if j == n else Pn[j, d]
+        cl = cut_legs(a, b, obst, limit)
+        for q in range(nl):
+            cut[legs[q]] = cl[q]
+    if still:
+        return Pn, R, 1
+    same = True
+    for i in range(n):
+        same = same and Pn[i, 0] == P[i, 0] and Pn[i, 1] == P[i, 1]
+    if same:
+        return Pn, R, 2
+    return Pn, _rates_k(Pn, sensors, order, xs, half, h2, peak, decay, windowed), 0
