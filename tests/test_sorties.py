@@ -121,6 +121,31 @@ def test_lp_shares_a_sensor_between_two_sorties_within_each_battery() -> None:
     assert alone is None
 
 
+def test_lp_gives_no_hover_time_to_a_point_that_breaks_c3() -> None:
+    # four sensors 10 m apart: a point above them receives 36 Mbit/s in all, over the 25 of
+    # the bandwidth (C3), and serves them fastest; the LP across sorties must leave it at 0 s
+    # (a detour corner may fly through it) and serve them from the point 400 m off (23.5)
+    # (L07, seed 4, 3 UAVs at the 0.6 split: a joined corner given 47 s, C3 failed in the sim)
+    m = load_map(_open_map(1500.0, [("a", 500.0, 2000.0)],
+                           [(2000.0, 2000.0), (2010.0, 2000.0), (2000.0, 2010.0),
+                            (1990.0, 2000.0)]))  # fmt: skip
+    st = FleetSettings.from_map(m)
+    model = Problem(m.planning_map()).model
+    p = np.array([[2000.0, 2000.0], [1600.0, 2000.0]])
+    sums = model.rates(p).sum(axis=1)
+    assert sums[0] > model.bandwidth >= sums[1] and model.rates(p[1:]).min() > 0
+    for goal in ("total", "makespan"):
+        out = fleet_hover_lp(FleetPlan(st, [[Sortie(0, 0, p, [1.0, 1.0])]]), model, goal)
+        assert out is not None, goal
+        t = out.sorties[0].times
+        assert t[0] == 0.0 and t[1] > 0.0, (goal, t)
+        q = collected_by_sortie(out, model).sum(axis=0)
+        assert np.all(q >= model.required * (1 - 1e-9)), goal
+    # a point alone that breaks C3 serves nothing: no plan
+    alone = FleetPlan(st, [[Sortie(0, 0, p[:1], [1.0])]])
+    assert fleet_hover_lp(alone, model) is None
+
+
 def _plan_cli(*args: str) -> subprocess.CompletedProcess:
     return run_cli("plan", *args)
 

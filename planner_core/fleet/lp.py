@@ -10,7 +10,12 @@ hover-time LP (`planner_core.model.hoverlp`) extends to a fleet plan by one row 
                                           a sensor's data may come from several sorties)
                P(0)/3600 sum_{i in s} t_i <= budget_s - E_flight_s          every sortie s
                sum_{i in v} t_i - z <= -(flight, take-offs, landings, swaps of vehicle v)
-               0 <= t_i <= T_max
+               0 <= t_i <= T_max,   t_i = 0 where point i breaks C3
+
+Under the paper's simultaneous uplink (`radio.access` "simultaneous") a point whose summed
+link rate exceeds the bandwidth R_lambda may be flown through (a detour corner, 0 s) but not
+hovered at: its time is held at 0, so every hover point of the result keeps C3 (the sortie
+planner's moves join detour corners and insert points that its sub-runs never checked).
 
 `budget_s` is the usable energy less the planner's allowance for storage
 (`FleetSettings.budget_wh`). Solved whole by HiGHS (`scipy.optimize.linprog`), then topped up
@@ -59,7 +64,8 @@ def fleet_hover_lp(plan: FleetPlan, model: Any, goal: str | None = None) -> Flee
         goal: "total" or "makespan" (default: the plan's settings').
 
     Returns:
-        The re-timed plan, or None when no hover times meet C4 within every sortie's energy.
+        The re-timed plan, or None when no hover times meet C4 within every sortie's energy
+        at points that keep C3.
     """
     from scipy import sparse
     from scipy.optimize import linprog
@@ -74,6 +80,9 @@ def fleet_hover_lp(plan: FleetPlan, model: Any, goal: str | None = None) -> Flee
     if N == 0:
         return plan if not len(need) else None
     R = model.rates(P)  # (N, J) Mbit/s
+    # C3: no hover time where the summed rate exceeds the bandwidth (module docstring)
+    c3_bad = (R.sum(axis=1) > model.bandwidth) if model.access == "simultaneous" else \
+        np.zeros(N, dtype=bool)
     A_cov = -(R[:, need] / req[need]).T  # (J', N)
     h = st.hover_w / 3600.0
     A_en = sparse.csr_matrix((np.full(N, h), (sid, np.arange(N))), shape=(S, N))
@@ -83,6 +92,7 @@ def fleet_hover_lp(plan: FleetPlan, model: Any, goal: str | None = None) -> Flee
         b_en = np.zeros(0)
     S = len(b_en)
     t_max = float(model.t_max)
+    caps = [(0.0, 0.0) if bad else (0.0, t_max) for bad in c3_bad]
     if goal == "makespan":
         base = np.zeros(V)
         for v, vs in enumerate(plan.vehicles):
@@ -102,17 +112,18 @@ def fleet_hover_lp(plan: FleetPlan, model: Any, goal: str | None = None) -> Flee
         ).tocsr()
         b = np.concatenate([np.full(len(need), -TARGET), b_en, -base])
         c = np.concatenate([np.full(N, EPS), [1.0]])
-        bounds = [(0.0, t_max)] * N + [(0.0, None)]
+        bounds = caps + [(0.0, None)]
     else:
         A = sparse.vstack([sparse.csr_matrix(A_cov), A_en]).tocsr()
         b = np.concatenate([np.full(len(need), -TARGET), b_en])
         c = np.ones(N)
-        bounds = [(0.0, t_max)] * N
+        bounds = caps
     res = linprog(c, A_ub=A, b_ub=b, bounds=bounds, method="highs")
     if res.status != 0:
         return None
     T = np.clip(np.asarray(res.x[:N], dtype=float), 0.0, t_max)
-    T = top_up(R, req, T, t_max)
+    T = top_up(np.where(c3_bad[:, None], 0.0, R), req, T, t_max)
+    T[c3_bad] = 0.0  # the top-up's 1e-12 s floor stays off them
     out: list[list[Any]] = []
     k = 0
     for vs in plan.vehicles:
