@@ -256,7 +256,10 @@ def storable_plan(
     already stored, point and to the next) stay out of the obstacles of `planning_map` (the
     map the plan was made on: the obstacles inflated by the clearance; default `map`), that
     lies in the area (C1) and keeps its rates within R_lambda (C3); the nearest such point of a
-    growing neighbourhood (up to 4 steps), else the nearest grid point. Hover times are then
+    growing neighbourhood (1, 2, 4, 8 then 16 steps of the grid, ~1 cm each: a detour corner
+    whose legs graze two obstacle edges may need a few centimetres), else the nearest grid
+    point. Cost: at most 32 x 32 candidates a point, each two legs against the obstacles, the
+    larger neighbourhoods only where the smaller hold none. Hover times are then
     raised, where the sim finds a sensor short of `planning_map`'s required data (which
     includes the data margin), at the hover point with the best rate to it, and rounded up to
     the dialect's storage (`hover_time_up`, never above T_max). A point of 0 s (a corner,
@@ -298,7 +301,7 @@ def storable_plan(
     for i, p in enumerate(hp):
         nxt = hp[i + 1] if i + 1 < len(hp) else end
         chosen = None
-        for reach in (1, 2, 4):
+        for reach in (1, 2, 4, 8, 16):
             for q in _candidates(map, p, reach):
                 if ok(prev, q, nxt):
                     chosen = q

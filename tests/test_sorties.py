@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import math
 import subprocess
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -144,6 +145,31 @@ def test_lp_gives_no_hover_time_to_a_point_that_breaks_c3() -> None:
     # a point alone that breaks C3 serves nothing: no plan
     alone = FleetPlan(st, [[Sortie(0, 0, p[:1], [1.0])]])
     assert fleet_hover_lp(alone, model) is None
+
+
+def test_a_corner_grazing_two_obstacle_edges_is_stored_clear_of_them() -> None:
+    # route-first's sortie 3 on L02 with a 25-min battery (seed 4, the 0.6 split): a detour
+    # corner whose legs graze a rectangle; no grid point within 4 steps kept both legs clear,
+    # so storage fell back to the nearest one and the stored mission cut the rectangle by
+    # 0.47 mm (C5). The storage now looks up to 16 steps away.
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("bench_fleet",
+                                                  ROOT / "benchmarks" / "bench_fleet.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    d = json.loads((ROOT / "tests" / "data" / "fleet-tangent-sortie.json").read_text())
+    m = load_map(bench.battery_map(ROOT / d["map"], d["endurance_s"]))
+    s = d["sortie"]
+    plan = FleetPlan(FleetSettings.from_map(m), [[Sortie(s["start"], s["end"],
+                                                         np.array(s["points"]),
+                                                         np.array(s["times"]))]])
+    from lamde_mission.sorties import write_sortie_dir
+
+    with tempfile.TemporaryDirectory() as tmp:
+        chk, _ = write_sortie_dir(plan, m, Path(tmp) / "out", allow_infeasible=True)
+    verdicts = {v.name: v for v in chk.sorties[0].verdicts.items}
+    assert verdicts["C5"].passed and verdicts["CLEAR"].passed, verdicts["C5"].detail
 
 
 def _plan_cli(*args: str) -> subprocess.CompletedProcess:
