@@ -81,8 +81,9 @@ def fleet_hover_lp(plan: FleetPlan, model: Any, goal: str | None = None) -> Flee
         return plan if not len(need) else None
     R = model.rates(P)  # (N, J) Mbit/s
     # C3: no hover time where the summed rate exceeds the bandwidth (module docstring)
-    c3_bad = (R.sum(axis=1) > model.bandwidth) if model.access == "simultaneous" else \
-        np.zeros(N, dtype=bool)
+    c3_bad = R.sum(axis=1) > model.bandwidth
+    if model.access != "simultaneous":
+        c3_bad[:] = False
     A_cov = -(R[:, need] / req[need]).T  # (J', N)
     h = st.hover_w / 3600.0
     A_en = sparse.csr_matrix((np.full(N, h), (sid, np.arange(N))), shape=(S, N))

@@ -861,12 +861,7 @@ def _overlap(a: np.ndarray, b: np.ndarray, obstacles: Obstacles, first: bool) ->
     a2, b2, lead = _legs(a, b)
     out = np.empty(a2.shape[0], dtype=np.float64)
     if a2.shape[0]:
-        o = obstacles
-        _overlap_serial(
-            a2, b2, o.circles, o.poly_vertices, o.poly_offsets, o.edge_normals, o.edge_flags,
-            o.tol, o.cull_radii, o.cull_centres32, o.origin, o.extent, o.tile_centres32,
-            o.tile_radii, o.tile_offsets, o.tile_members, out, first,
-        )  # fmt: skip
+        _overlap_serial(a2, b2, *obstacles.kernel_arrays, out, first)
     return out.reshape(lead)
 
 

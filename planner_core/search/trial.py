@@ -47,7 +47,6 @@ def path_nodes(problem: Any, P: np.ndarray) -> np.ndarray:
     return out
 
 
-
 def held_points(problem: Any, P: np.ndarray, R: np.ndarray | None = None) -> np.ndarray:
     """Indices of the hover points P (I, 2) m that break C3 (summed link rate above the
     bandwidth) or end or start a leg that cuts an obstacle by more than `L_VIO_TOL` (C5).
@@ -244,6 +243,15 @@ def _held_mask(P, R, start, end, bandwidth, obst, limit):  # pragma: no cover - 
 
 
 @njit(cache=True, nogil=True)
+def _same_points(A, B):  # pragma: no cover - compiled
+    """``np.array_equal(A, B)`` for two (n, 2) point arrays of one shape. O(n)."""
+    for i in range(A.shape[0]):  # noqa: SIM110 - a compiled loop, not a generator
+        if A[i, 0] != B[i, 0] or A[i, 1] != B[i, 1]:
+            return False
+    return True
+
+
+@njit(cache=True, nogil=True)
 def _path_legs(P, start, end):  # pragma: no cover - compiled
     """The legs start -> P (I, 2) -> end as two (I + 1, 2) arrays of leg starts and ends."""
     n = P.shape[0]
@@ -277,10 +285,7 @@ def _trial_kernel(P, g, scale, step, box, start, end, slide, sensors, order, xs,
     for i in range(n):
         k += bad[i]
     if k == 0:
-        same = True
-        for i in range(n):
-            same = same and Pn[i, 0] == P[i, 0] and Pn[i, 1] == P[i, 1]
-        return Pn, R, 2 if same else 0
+        return Pn, R, 2 if _same_points(Pn, P) else 0
     # `_slide`: each held point's turned steps, checked against its previous node (held points
     # back at P) and its next node (at its step), in one batch of legs
     held = np.flatnonzero(bad)
@@ -355,9 +360,6 @@ def _trial_kernel(P, g, scale, step, box, start, end, slide, sensors, order, xs,
             cut[legs[q]] = cl[q]
     if still:
         return Pn, R, 1
-    same = True
-    for i in range(n):
-        same = same and Pn[i, 0] == P[i, 0] and Pn[i, 1] == P[i, 1]
-    if same:
+    if _same_points(Pn, P):
         return Pn, R, 2
     return Pn, _rates_k(Pn, sensors, order, xs, half, h2, peak, decay, windowed), 0
