@@ -17,6 +17,8 @@ from planner_core.model.problem import Problem
 from planner_core.pipeline import PlanConfig, run_pipeline
 from planner_core.pipeline.schedule import (
     ACTIONS,
+    LARGE_CYCLE,
+    PAPER_POINTS,
     SCHEDULES,
     DefaultScheduler,
     Observation,
@@ -46,6 +48,20 @@ def test_the_default_scheduler_alternates_kicks_and_restarts_then_stops_when_idl
     assert [s.choose(o) for o in obs] == [
         "kicks-300", "restart", "kicks-120", "restart", "kicks-700", "restart", "kicks-300"]
     assert s.choose(dataclasses.replace(obs[0], idle=3)) == "stop"
+
+
+def test_beyond_the_papers_sizes_the_default_alternates_kicks_and_rebuilds(tiny: Problem) -> None:
+    s = DefaultScheduler()
+    s.reset(tiny, PlanConfig())
+    assert not s.large and tiny.model.n_points <= PAPER_POINTS
+    big = Problem(ROOT / "examples" / "maps" / "large" / "L04.json")
+    s.reset(big, PlanConfig())
+    assert s.large
+    obs = [Observation(step=k, remaining=10, budget=10, quantum=5, idle=0, f=1.0, phi=0.0,
+                       elapsed=0.0, history=(), state=None) for k in range(7)]
+    assert [s.choose(o) for o in obs] == [*LARGE_CYCLE, LARGE_CYCLE[0]]
+    assert "rebuild" in LARGE_CYCLE and "restart" not in LARGE_CYCLE
+    assert SCHEDULES["kicks-rebuild"] == LARGE_CYCLE
 
 
 def test_default_alternate_and_an_explicit_default_give_the_same_plan(tiny: Problem) -> None:

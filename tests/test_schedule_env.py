@@ -19,6 +19,8 @@ from tests.conftest import MAPS, SUITE
 def _follow_default(env: ScheduleEnv, **reset: object) -> tuple[float, dict]:
     env.reset(**reset)
     s, total, done, info = DefaultScheduler(), 0.0, False, {}
+    st = env.observation().state
+    s.reset(st.problem, st.config)  # the default's rounds depend on the problem's size
     while not done:
         a = ACTIONS.index(s.choose(env.observation()))
         obs, r, done, _, info = env.step(a)

@@ -1,0 +1,160 @@
+"""Destroy-and-repair moves on a feasible plan: a large neighbourhood search (Shaw, "Using
+constraint programming and local search methods to solve vehicle routing problems", CP 1998;
+Ropke & Pisinger, Transportation Science 40(4), 2006) over the hover points.
+
+`rebuild` removes a window of consecutive hover points, gives the sensors they served new
+sites (k-means centres of those sensors, each snapped to the nearest candidate site that keeps
+C3, `planner_core.search.construct.candidate_sites`), puts them in the window's gap in the order
+of the shortest open path between its ends (`planner_core.model.routing.open_path`), re-routes
+legs that cut an obstacle, and evaluates and descends the
+plan in a race against the incumbent (`planner_core.search.structure._move`), keeping it when
+Deb-better. Kicks (`structure.kicks`) move one point at a time, so a plan whose points serve a
+stretch of sensors in a poor grouping stays there: on the large map L07 (120 sensors on a
+corridor) two seeds' final plans stayed at f 1950.6 and 1952.2 after 4,000 more kick
+evaluations, where rebuilding reached 1940.0 and 1911.3 (docs/search.md, "Rebuilding
+windows").
+
+Cost per move: k-means over the window's sensors (O(k x J_w)), the snap (k x candidate sites),
+the open path over the k new sites (O(k^2)), then
+`_move`'s LP (I x J) and up to `move_trials` evaluations. `Rebuilder` builds the candidate
+sites once per problem: O(J^2) sensor-pair midpoints filtered by reach, their rates
+O(sites x J) and their obstacle tests O(sites x obstacles).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from planner_core.model.formulas import deb_better
+from planner_core.search.descent import Descent, Evaluate, hover_of
+
+__all__ = ["OWNS", "REBUILD_ATTEMPTS", "WINDOWS", "Rebuilder", "rebuild"]
+
+#: window sizes (consecutive hover points removed), drawn uniformly
+WINDOWS = (2, 3, 4, 5)
+#: a sensor is re-served when the window's points collect more than this share of its data
+OWNS = 0.5
+#: draws per evaluation allowed: a draw refused before evaluation (a site set that breaks C3 or
+#: C5 or leaves a sensor unserved, or more points than I_max) costs no evaluation
+REBUILD_ATTEMPTS = 20
+
+
+class Rebuilder:
+    """The per-problem table a rebuild needs, built on first use and kept: the candidate
+    sites (n, 2) m (`construct.candidate_sites`).
+
+    Args:
+        problem: the run's `Problem`.
+    """
+
+    def __init__(self, problem: Any) -> None:
+        self.problem = problem
+        self._sites: np.ndarray | None = None
+
+    @property
+    def sites(self) -> np.ndarray:
+        """Candidate sites (n, 2), metres, within the bandwidth."""
+        if self._sites is None:
+            from planner_core.search.construct import candidate_sites
+
+            self._sites = candidate_sites(self.problem)
+        return self._sites
+
+    def draw(self, P: np.ndarray, T: np.ndarray, rng: np.random.Generator) -> np.ndarray | None:
+        """One rebuilt point set (I', 2) m in visiting order from hover points P (I, 2) m with
+        hover times T (I,) s, or None when the draw has nothing to rebuild.
+
+        A window of w consecutive points (w from `WINDOWS`, at most I) is drawn; the sensors
+        whose data those points collect more than `OWNS` of (data at point i from sensor j:
+        T_i R_ij, the simultaneous-access model of paper Sec. 3; under scheduled access an
+        upper bound, used only to group sensors) get k = w - 1, w or w + 1 new sites (k-means
+        centres, `construct._kmeans`, each snapped to the nearest candidate site; duplicates
+        merged); the other points stay. None when no sensor is the window's or the plan would
+        exceed I_max points."""
+        from planner_core.model.routing import open_path
+        from planner_core.search.construct import _kmeans
+
+        problem = self.problem
+        n = len(P)
+        if n == 0:
+            return None
+        w = min(int(rng.choice(WINDOWS)), n)
+        i = int(rng.integers(0, n - w + 1))
+        D = problem.rates(P) * T[:, None]  # (I, J) Mbit
+        total = D.sum(axis=0)
+        share = D[i:i + w].sum(axis=0) / np.maximum(total, 1e-12)
+        owned = np.flatnonzero(share > OWNS)
+        k = min(max(1, w + int(rng.integers(-1, 2))), len(owned))
+        if k < 1:
+            return None
+        S = np.asarray(problem.sensors, dtype=float)[owned]
+        centres = _kmeans(S, k, rng)
+        sites = self.sites
+        d2 = ((centres[:, None, :] - sites[None, :, :]) ** 2).sum(axis=-1)
+        new = np.unique(sites[d2.argmin(axis=1)], axis=0)
+        if n - w + len(new) > problem.n_points:
+            return None
+        # the new sites fill the window's gap, in the order of the shortest open path from the
+        # point before it to the point after it (Eq. 1 times of straight legs)
+        prev = P[i - 1] if i > 0 else problem.start
+        nxt = P[i + w] if i + w < n else problem.end
+        nodes = np.vstack([prev, new, nxt])
+        W = problem.model.flight_time(np.hypot(*(nodes[:, None, :] - nodes[None, :, :]).T))
+        order = open_path(np.ascontiguousarray(W))[1:-1] - 1
+        return np.vstack([P[:i], new[order], P[i + w:]])
+
+
+def rebuild(
+    problem: Any, x: np.ndarray, evaluate: Evaluate, *, trials: int, seed: int,
+    stream: int = 0, move_trials: int = 40, rebuilder: Rebuilder | None = None,
+) -> Descent | None:
+    """Large neighbourhood search around plan x (d,): `Rebuilder.draw` destroys a window of
+    hover points and repairs it with new sites; each drawn plan is evaluated with its LP hover
+    times and descended in a race against the incumbent (`structure._move`, at most
+    `move_trials` more evaluations, legs through obstacles re-routed first), and kept when
+    Deb-better; repeated until `trials` evaluations are spent (at most `REBUILD_ATTEMPTS` x
+    `trials` draws). Zero-time points (detour corners, points the LP left idle) are dropped
+    before each draw: the re-routing puts back the corners a leg needs.
+
+    Args:
+        problem: the run's `Problem`; x (d,): a plan; evaluate: the run's counted evaluator.
+        trials: evaluations to spend; seed, stream: the random stream (same seed and stream,
+            same plan; the pipeline's improving rounds pass their step).
+        move_trials: a move's descent cap; rebuilder: the tables to reuse (None: built here).
+
+    Returns:
+        The best plan found (`Descent`), or None in the fixed-length mode or with tau <= 0
+        (the number of points is fixed), for an infeasible x or `trials` < 1.
+    """
+    from planner_core.search.structure import _move
+
+    if not problem.variable_length or problem.tau <= 0.0 or trials < 1:
+        return None
+    x = np.asarray(x, dtype=float)
+    b = problem.breakdown(x)
+    if b["phi"] > 0 or not b["hover_points"]:
+        return None
+    rb = rebuilder if rebuilder is not None else Rebuilder(problem)
+    rng = np.random.default_rng(np.random.SeedSequence([int(seed), 43, int(stream)]))
+    best_x, best_f, best_phi, f_start = x, float(b["f"]), 0.0, float(b["f"])
+    P, T = hover_of(b)
+    spent = 0
+    for _ in range(REBUILD_ATTEMPTS * trials):  # refused draws cost no evaluation: bounded apart
+        if spent >= trials:
+            break
+        keep = T > 0.0
+        Q = rb.draw(P[keep], T[keep], rng)
+        if Q is None:
+            continue
+        tried = _move(problem, Q, evaluate, min(move_trials + 1, trials - spent), reroute=True,
+                      incumbent=best_f)
+        if tried is None:
+            continue
+        xq, fq, phiq, n = tried
+        spent += n
+        if deb_better(fq, phiq, best_f, best_phi):
+            best_x, best_f, best_phi = xq, fq, phiq
+            P, T = hover_of(problem.breakdown(xq))
+    return Descent(best_x, best_f, best_phi, spent, f_start)
