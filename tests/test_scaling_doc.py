@@ -12,7 +12,9 @@ from tests.conftest import ROOT
 RECORDS = ROOT / "docs" / "scaling" / "large-suite-25.jsonl.gz"
 SAME_TIME = ROOT / "docs" / "scaling" / "large-peer-same-time.jsonl.gz"
 SPLIT06 = ROOT / "docs" / "scaling" / "large-suite-25-split06.jsonl.gz"
-#: the 0.6 split's table: map, feasible, runs, mean f, gap %, sd %, CPU s, lower, runs, p
+REBUILD = ROOT / "docs" / "scaling" / "large-suite-25-rebuild.jsonl.gz"
+#: the 0.6 split's and the rebuilding windows' tables: map, feasible, runs, mean f, gap %,
+#: sd %, CPU s, lower, runs, p
 SPLIT_ROW = re.compile(r"^\| (L\d\d) \| (\d+)/(\d+) \| ([\d.]+) \| ([\d.]+) \| ([\d.]+) \| "
                        r"([\d.]+) \| (\d+)/(\d+) \| ([\d.e-]+) \|$", re.M)  # fmt: skip
 #: one row: map, planner feasible, mean f, gap %, sd %, s, engineering feasible, mean f, s, p
@@ -58,16 +60,21 @@ def test_same_time_table_is_what_bench_large_peer_prints_on_its_records() -> Non
         assert r in doc, r
 
 
-def test_split06_table_is_what_its_runs_give_against_the_08_split() -> None:
-    """The 0.6 split's table: feasible runs, mean f, gap to the stored best-known, sd, mean CPU
-    seconds, and how many runs are lower than the 0.8 split's run of the same seed."""
+def _section(start: str, end: str) -> str:
+    doc = _doc()
+    return doc[doc.index(start):doc.index(end)]
+
+
+def _paired_table(text: str, records: object, baseline: object) -> None:
+    """A table of `SPLIT_ROW` rows: feasible runs, mean f, gap to the stored best-known, sd,
+    mean CPU seconds, and how many runs are lower than the baseline's run of the same seed."""
     import json
 
     from scipy.stats import wilcoxon
 
-    rows = SPLIT_ROW.findall(_doc())
+    rows = SPLIT_ROW.findall(text)
     assert len(rows) == 8
-    new, old = read_jsonl(SPLIT06), read_jsonl(RECORDS)
+    new, old = read_jsonl(records), read_jsonl(baseline)
     best = json.loads((ROOT / "examples" / "maps" / "large_best_known.json").read_text())
     for task, feas, n, mean, gap, sd, cpu, lower, m, p in rows:
         rs = sorted((r for r in new if r["task"] == task), key=lambda r: r["run"])
@@ -82,3 +89,13 @@ def test_split06_table_is_what_its_runs_give_against_the_08_split() -> None:
         olds = [before[r["run"]] for r in rs]
         assert sum(a < b for a, b in zip(fs, olds, strict=True)) == int(lower), task
         assert f"{wilcoxon(fs, olds, alternative='less').pvalue:.2g}" == p, task
+
+
+def test_split06_table_is_what_its_runs_give_against_the_08_split() -> None:
+    _paired_table(_section("**With the 0.6 split**", "**With rebuilding windows**"), SPLIT06,
+                  RECORDS)
+
+
+def test_rebuild_table_is_what_its_runs_give_against_the_06_split() -> None:
+    _paired_table(_section("**With rebuilding windows**", "**The peer given the same wall"),
+                  REBUILD, SPLIT06)
