@@ -152,6 +152,9 @@ def summarise(records: list[dict[str, Any]]) -> str:
     for r in records:
         by_case.setdefault((r["map"], r["seed"], r["budget"]), {})[r["template"]] = r
     templates = list(dict.fromkeys(r["template"] for r in records))
+    # the paired columns compare with the default, or with the first template when the
+    # records have no default's runs (`--templates alternate kicks-rebuild`)
+    ref = "default" if "default" in templates else templates[0]
     gaps: dict[str, list[float]] = {t: [] for t in templates}
     wins = dict.fromkeys(templates, 0)
     infeasible = dict.fromkeys(templates, 0)
@@ -172,8 +175,8 @@ def summarise(records: list[dict[str, Any]]) -> str:
             g = (r["f"] - best) / best * 100.0
             gaps[t].append(g)
             wins[t] += r["f"] == best
-        if "default" in case and case["default"]["phi"] == 0:
-            gd = (case["default"]["f"] - best) / best * 100.0
+        if case[ref]["phi"] == 0:
+            gd = (case[ref]["f"] - best) / best * 100.0
             for t, r in case.items():
                 if r["phi"] == 0:
                     paired[t].append((r["f"] - best) / best * 100.0 - gd)
@@ -182,7 +185,7 @@ def summarise(records: list[dict[str, Any]]) -> str:
     sec = {t: statistics.fmean(r["improve_seconds"] for r in records if r["template"] == t)
            for t in templates}
     lines = [f"{cases} (map, seed) cases, budget {sorted({k[2] for k in by_case})}", "",
-             "| template | mean gap % | best in | vs default: mean diff % | better / worse "
+             f"| template | mean gap % | best in | vs {ref}: mean diff % | better / worse "
              "| Wilcoxon p | improve evals | improve s | infeasible |",
              "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     order = sorted(templates, key=lambda t: statistics.fmean(gaps[t]) if gaps[t] else 1e9)
@@ -190,7 +193,7 @@ def summarise(records: list[dict[str, Any]]) -> str:
         d = paired[t]
         better, worse = sum(x < 0 for x in d), sum(x > 0 for x in d)
         p = "-"
-        if t != "default" and any(x != 0 for x in d):
+        if t != ref and any(x != 0 for x in d):
             p = f"{wilcoxon(d).pvalue:.3g}"
         mean = statistics.fmean(gaps[t]) if gaps[t] else float("nan")
         diff = statistics.fmean(d) if d else float("nan")

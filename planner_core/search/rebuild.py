@@ -11,8 +11,8 @@ plan in a race against the incumbent (`planner_core.search.structure._move`), ke
 Deb-better. Kicks (`structure.kicks`) move one point at a time, so a plan whose points serve a
 stretch of sensors in a poor grouping stays there: on the large map L07 (120 sensors on a
 corridor) two seeds' final plans stayed at f 1950.6 and 1952.2 after 4,000 more kick
-evaluations, where rebuilding reached 1940.0 and 1911.3 (docs/search.md, "Rebuilding
-windows").
+evaluations, where 4,000 evaluations of rebuilds reached 1907.0 and 1924.1 (docs/search.md,
+"Rebuilding windows").
 
 Cost per move: k-means over the window's sensors (O(k x J_w)), the snap (k x candidate sites),
 the open path over the k new sites (O(k^2)), then
