@@ -202,7 +202,8 @@ _RUN: tuple[Default, ...] = (
             "(and at least its population; `planner_core.pipeline`): the rest and any budget "
             "beyond the default go to the constructive plans, the descents, the polish, the "
             "final stage and the improving rounds (kicks, structural search, restarts from "
-            "other structures and fresh constructive plans), the stages that turn budget into "
+            "other structures and fresh constructive plans; beyond the paper's sizes, rebuilt "
+            "windows of hover points instead of the restarts), the stages that turn budget into "
             "a better plan (docs/architecture.md, 'Where the budget goes')",
             "a number in [0, 1]", _share),
     Default("time_limit", None, "seconds after which the pipeline stops its improving stages "

@@ -382,7 +382,9 @@ class Improve(_Base):
     * diversification: a restart, the whole finish on the Deb-best pool plan of a number of
       hover points not finished yet, else on the best of fresh constructive plans (the
       k-means sweep under another seed, `construct.candidate_plans`, only with
-      `schedule.FRESH_ROOM` quanta left), scored into the pool.
+      `schedule.FRESH_ROOM` quanta left), scored into the pool; beyond the paper's sizes
+      (I_max > `schedule.PAPER_POINTS`) a rebuild instead: windows of 2-5 hover points
+      destroyed and repaired (`planner_core.search.rebuild`).
 
     The incumbent is the evaluator's, so a restart that ends worse changes nothing. Stops
     when fewer than a descent's trials are left or the scheduler says so (the default: after
