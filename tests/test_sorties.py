@@ -147,6 +147,26 @@ def test_lp_gives_no_hover_time_to_a_point_that_breaks_c3() -> None:
     assert fleet_hover_lp(alone, model) is None
 
 
+def test_transfer_goes_on_after_a_move_empties_a_sortie() -> None:
+    # a transfer that empties a sortie removes it, and the list of sorties still to try got
+    # shorter than the loop over it (L07, seed 2, 3 UAVs of bench_fleet with rebuilding windows:
+    # IndexError in `transfer`); three one-point sorties near one depot: moving a point saves
+    # a swap, so the search empties sorties and must end with every sensor still served
+    from planner_core.fleet.search import _Planner
+    from planner_core.pipeline import PlanConfig
+
+    m = load_map(_open_map(1500.0, [("a", 1000.0, 2000.0)],
+                           [(1500.0, 2000.0), (2500.0, 2000.0), (3500.0, 2000.0)]))
+    pl = _Planner(m, PlanConfig(seed=0), None, 200)
+    pts = np.array([[1500.0, 2000.0], [2500.0, 2000.0], [3500.0, 2000.0]])
+    start = pl.lp(FleetPlan(pl.st, [[Sortie(0, 0, p[None, :], [1.0]) for p in pts]]))
+    assert start is not None and len(start.sorties) == 3
+    out = pl.transfer(start)
+    assert len(out.sorties) < 3 and out.objective() < start.objective()
+    q = collected_by_sortie(out, pl.model).sum(axis=0)
+    assert np.all(q >= pl.model.required * (1 - 1e-9))
+
+
 def test_a_corner_grazing_two_obstacle_edges_is_stored_clear_of_them() -> None:
     # route-first's sortie 3 on L02 with a 25-min battery (seed 4, the 0.6 split): a detour
     # corner whose legs graze a rectangle; no grid point within 4 steps kept both legs clear,

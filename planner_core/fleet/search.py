@@ -458,7 +458,9 @@ class _Planner:
         best = plan
         score = best.objective()
         flat = [(v, k) for v in range(len(best.vehicles)) for k in range(len(best.vehicles[v]))]
-        for a in range(len(flat)):
+        a = -1
+        while a + 1 < len(flat):  # `flat` is rebuilt, shorter, when a move empties a sortie
+            a += 1
             va, ka = flat[a]
             if va >= len(best.vehicles) or ka >= len(best.vehicles[va]):
                 continue
