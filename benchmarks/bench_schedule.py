@@ -293,7 +293,8 @@ def other_seed_choice(records: list[dict[str, Any]]) -> str:
 def evaluate(table_dir: str, records: list[dict[str, Any]], seed: int = 0) -> str:
     """A fitted selector table (`python -m planner_core.learning.schedule_select fit`) on
     held-out grid records: per case the template the table picks from the case's features
-    (what `--scheduler lamde-s` follows), against the table's best static template, the
+    (what `--scheduler lamde-s` follows on maps of the paper's sizes; beyond them it follows
+    the default), against the table's best static template, the
     default and the per-case oracle. Prints mean gaps, the paired Wilcoxon signed-rank test
     selector vs best static (two-sided, zero differences dropped), a bootstrap 95 % CI of the
     mean difference (10,000 resamples of the cases, `seed`), the share of maps whose mean gap

@@ -24,7 +24,7 @@ from planner_core.model.problem import Problem
 from planner_core.pipeline import DEFAULT_PIPELINE, PlanConfig, run_pipeline
 from planner_core.pipeline.pipeline import PipelineRun
 from planner_core.pipeline.schedule import make_scheduler, scheduler_names
-from tests.conftest import MAPS
+from tests.conftest import MAPS, ROOT
 
 
 def _feats(sensors: float, gap: float = 0.0) -> dict[str, float]:
@@ -130,6 +130,22 @@ def test_the_live_scheduler_follows_the_template_the_table_predicts_from_the_run
     fork.advance()
     want = fork.result()
     assert live.x.tobytes() == want.x.tobytes() and live.f == want.f
+
+
+def test_beyond_the_papers_sizes_the_selector_follows_the_default() -> None:
+    """The shipped table has no template with rebuilds: on a map with I_max > 20 lamde-s
+    follows the default (whose rounds there rebuild windows), without reading features."""
+    from types import SimpleNamespace
+
+    from planner_core.pipeline.schedule import LARGE_CYCLE, Observation
+
+    big = Problem(ROOT / "examples" / "maps" / "large" / "L04.json")
+    sched = SelectorScheduler()
+    sched.reset(big, PlanConfig())
+    obs = Observation(step=0, remaining=10, budget=10, quantum=5, idle=0, f=1.0, phi=0.0,
+                      elapsed=0.0, history=(), state=SimpleNamespace(problem=big, pool=None,
+                                                                     config=PlanConfig()))
+    assert sched.choose(obs) == LARGE_CYCLE[0] and sched.template == "default"
 
 
 def test_bench_schedule_evaluates_a_table_on_held_out_records(tmp_path, capsys) -> None:

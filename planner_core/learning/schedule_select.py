@@ -278,7 +278,9 @@ def fit(records: Iterable[dict[str, Any]], k: int | None = None,
 
 class SelectorScheduler:
     """`--scheduler lamde-s`: at the stage's first decision, the template the selector table
-    predicts from `run_features`; then that template's choices (`make_scheduler`).
+    predicts from `run_features`; then that template's choices (`make_scheduler`). Beyond the
+    paper's sizes (I_max > `schedule.PAPER_POINTS`) the default's, whose rebuilds no template
+    of the shipped table has.
 
     Args:
         table: a `SelectorTable` (None: the shipped one, `DEFAULT_TABLE`).
@@ -299,12 +301,18 @@ class SelectorScheduler:
     def choose(self, observation: Any) -> str:
         """The chosen template's next action (the template picked at the first call)."""
         if self._inner is None:
-            from planner_core.pipeline.schedule import make_scheduler
+            from planner_core.pipeline.schedule import PAPER_POINTS, make_scheduler
 
             st = observation.state
-            feats = run_features(st.problem, observation.x, observation.f, st.pool,
-                                 observation.remaining, observation.budget)
-            self.template = self.table.predict(feats)
+            if int(st.problem.model.n_points) > PAPER_POINTS:
+                # beyond the paper's sizes the default rebuilds windows, which no template of
+                # the table has; there it beats the table's pick (`fresh-heavy`) by 1.1 % of
+                # f (docs/scheduler.md, "With the rebuild action"), so it is followed
+                self.template = "default"
+            else:
+                feats = run_features(st.problem, observation.x, observation.f, st.pool,
+                                     observation.remaining, observation.budget)
+                self.template = self.table.predict(feats)
             self._inner = make_scheduler(self.template)
             self._inner.reset(st.problem, st.config)
         return self._inner.choose(observation)
