@@ -232,3 +232,18 @@ def test_a_sortie_plan_refuses_a_non_default_scheduler_in_one_line(tmp_path) -> 
                         "--scheduler", "kicks-heavy"], capture_output=True, text=True, timeout=120)
     assert r.returncode == 2 and not (tmp_path / "out").exists()
     assert r.stderr.strip().count("\n") == 0 and "--scheduler: not available" in r.stderr
+
+
+def test_the_large_rounds_need_i_max_above_20_without_counting_corner_slots() -> None:
+    """Corner slots do not make a paper-size map large; fixed-length, tau <= 0 and scheduled
+    access keep the paper-size rounds (a rebuild could not change or score their plans)."""
+    from planner_core.pipeline.schedule import large_rounds
+
+    t12 = load_map(SUITE / "T12.json")
+    assert not large_rounds(Problem(t12, corner_slots=4))
+    large = load_map(ROOT / "examples" / "maps" / "large" / "L04.json")
+    assert large_rounds(Problem(large)) and large_rounds(Problem(large, corner_slots=2))
+    assert not large_rounds(Problem(large, variable_length=False))
+    doc = json.loads((ROOT / "examples" / "maps" / "large" / "L04.json").read_text())
+    doc.setdefault("radio", {})["access"] = "scheduled"
+    assert not large_rounds(Problem(load_map(doc)))

@@ -33,7 +33,7 @@ def _follow_default(env: ScheduleEnv, **reset: object) -> tuple[float, dict]:
 def test_the_env_passes_gymnasiums_checker_and_is_registered() -> None:
     env = ScheduleEnv([MAPS / "tiny.json"], budget=1_500, population=20, reference="percent")
     check_env(env, skip_render_check=True)
-    assert len(FEATURES) == N_FEATURES and 30 <= N_FEATURES <= 40
+    assert len(FEATURES) == N_FEATURES and 30 <= N_FEATURES <= 41
     made = gymnasium.make(ENV_ID, maps=[MAPS / "tiny.json"], budget=1_500, population=20)
     assert isinstance(made.unwrapped, ScheduleEnv)
 

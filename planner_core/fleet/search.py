@@ -475,6 +475,8 @@ class _Planner:
                 others.append((float(np.hypot(*(c - centre))), vb, kb))
             others.sort()
             for i in np.flatnonzero(src.times > 0):
+                if va >= len(best.vehicles) or ka >= len(best.vehicles[va]):
+                    break  # a kept move removed this sortie (or the one before it)
                 src = best.vehicles[va][ka]
                 if i >= len(src.points) or src.times[i] <= 0:
                     continue

@@ -21,7 +21,8 @@ Reward: the share of the initial gap closed, (f_before - f_after) / gap per step
 f at the stage's start minus the reference f: with `reference="default"` the default
 scheduler's f on the same map, seed and budget (run once and cached), so following the default
 sums to 1; with "percent" the gap is 1 % of the starting f. At the end -`INFEASIBLE_PENALTY`
-when the plan is infeasible. Following `DefaultScheduler`'s choices reproduces the default
+when the plan is infeasible. Following `DefaultScheduler`'s choices (after its
+`reset(problem, config)`, which picks its rounds by the problem's size) reproduces the default
 plan to the bit (tests/test_schedule_env.py).
 
 Cost: a reset costs the pipeline up to `improve` (constructive plans, descents, the DE, the

@@ -279,8 +279,8 @@ def fit(records: Iterable[dict[str, Any]], k: int | None = None,
 class SelectorScheduler:
     """`--scheduler lamde-s`: at the stage's first decision, the template the selector table
     predicts from `run_features`; then that template's choices (`make_scheduler`). Beyond the
-    paper's sizes (I_max > `schedule.PAPER_POINTS`) the default's, whose rebuilds no template
-    of the shipped table has.
+    paper's sizes (`schedule.large_rounds`) the default's, whose rebuilds no template of the
+    shipped table has.
 
     Args:
         table: a `SelectorTable` (None: the shipped one, `DEFAULT_TABLE`).
@@ -301,10 +301,10 @@ class SelectorScheduler:
     def choose(self, observation: Any) -> str:
         """The chosen template's next action (the template picked at the first call)."""
         if self._inner is None:
-            from planner_core.pipeline.schedule import PAPER_POINTS, make_scheduler
+            from planner_core.pipeline.schedule import large_rounds, make_scheduler
 
             st = observation.state
-            if int(st.problem.model.n_points) > PAPER_POINTS:
+            if large_rounds(st.problem):
                 # beyond the paper's sizes the default rebuilds windows, which no template of
                 # the table has; there it beats the table's pick (`fresh-heavy`) by 1.1 % of
                 # f (docs/scheduler.md, "With the rebuild action"), so it is followed

@@ -57,6 +57,7 @@ __all__ = [
     "IDLE_ROUNDS",
     "LARGE_CYCLE",
     "PAPER_POINTS",
+    "large_rounds",
     "LEARNED",
     "SCHEDULES",
     "SPREADS",
@@ -182,24 +183,36 @@ class Scheduler(Protocol):
     def choose(self, observation: Observation) -> str: ...
 
 
+def large_rounds(problem: Any) -> bool:
+    """Whether the default improving rounds of `problem` are `LARGE_CYCLE`: its I_max (hover
+    points, `Problem.hover_limit`; corner slots not counted) exceeds `PAPER_POINTS`, and a
+    rebuild can change its number of points (variable length, tau > 0) and be scored by the
+    simultaneous-access LP (not `radio.access` "scheduled", where the moves' C3 checks and LP
+    refuse every draw, as they refuse kicks)."""
+    return (int(problem.hover_limit) > PAPER_POINTS and bool(problem.variable_length)
+            and float(problem.tau) > 0.0 and not bool(getattr(problem, "scheduled", False)))
+
+
 class DefaultScheduler:
-    """The default improving rounds, by the problem's size. Up to the paper's sizes (I_max <=
-    `PAPER_POINTS`): `kicks-<s>` on even steps (s cycling through `SPREADS`), `restart` on odd
-    ones (the rounds before the seam, to the bit). Larger problems: `LARGE_CYCLE`, kicks
-    alternating with `rebuild` (destroy-and-repair windows, `planner_core.search.rebuild`), no
-    restarts. Either way it stops after `IDLE_ROUNDS` idle actions.
+    """The default improving rounds, by the problem's size (`large_rounds`). Up to the paper's
+    sizes (I_max <= `PAPER_POINTS`): `kicks-<s>` on even steps (s cycling through `SPREADS`),
+    `restart` on odd ones (the rounds before the seam, to the bit). Larger problems:
+    `LARGE_CYCLE`, kicks alternating with `rebuild` (destroy-and-repair windows,
+    `planner_core.search.rebuild`), no restarts. Either way it stops after `IDLE_ROUNDS` idle
+    actions.
 
     Why by size (docs/search.md, "Rebuilding windows"): on the 8 large maps x 3 seeds,
-    `LARGE_CYCLE` ends 1.14 % lower than the paper-size rounds (20 of 24 runs lower) in 1.05x
-    the improving stage's time; on the 16 suite maps x 3 seeds it changes the mean by +0.005 %
-    in 1.5x that time (a window of 2-5 points is most of a 5-15-point plan)."""
+    `LARGE_CYCLE` ends 1.17 % lower than the paper-size rounds (20 of 24 runs lower, 3
+    higher) in 1.08x the improving stage's time; on the 16 suite maps x 3 seeds it changes
+    the mean by +0.005 % in 1.56x that time (a window of 2-5 points is most of a 5-15-point
+    plan). `large_rounds` says which rounds a problem gets."""
 
     name = "default"
     large = False
 
     def reset(self, problem: Any, config: PlanConfig) -> None:
-        """Read the problem's size: `large` when its I_max exceeds `PAPER_POINTS`."""
-        self.large = int(problem.model.n_points) > PAPER_POINTS
+        """Read the problem: `large_rounds(problem)`."""
+        self.large = large_rounds(problem)
 
     def choose(self, observation: Observation) -> str:
         """The next action (see the class docstring)."""

@@ -14,7 +14,8 @@ corridor) two seeds' final plans stayed at f 1950.6 and 1952.2 after 4,000 more 
 evaluations, where 4,000 evaluations of rebuilds reached 1907.0 and 1924.1 (docs/search.md,
 "Rebuilding windows").
 
-Cost per move: k-means over the window's sensors (O(k x J_w)), the snap (k x candidate sites),
+Cost per move: the data each point collects (the points' rates, I x J), k-means over the
+window's sensors (O(k x J_w)), the snap (k x candidate sites),
 the open path over the k new sites (O(k^2)), then
 `_move`'s LP (I x J) and up to `move_trials` evaluations. `Rebuilder` builds the candidate
 sites once per problem: O(J^2) sensor-pair midpoints filtered by reach, their rates
@@ -72,7 +73,8 @@ class Rebuilder:
         upper bound, used only to group sensors) get k = w - 1, w or w + 1 new sites (k-means
         centres, `construct._kmeans`, each snapped to the nearest candidate site; duplicates
         merged); the other points stay. None when no sensor is the window's or the plan would
-        exceed I_max points."""
+        exceed I_max hover points (`Problem.hover_limit`; the re-routing's corners may use
+        corner slots)."""
         from planner_core.model.routing import open_path
         from planner_core.search.construct import _kmeans
 
@@ -94,7 +96,7 @@ class Rebuilder:
         sites = self.sites
         d2 = ((centres[:, None, :] - sites[None, :, :]) ** 2).sum(axis=-1)
         new = np.unique(sites[d2.argmin(axis=1)], axis=0)
-        if n - w + len(new) > problem.n_points:
+        if n - w + len(new) > problem.hover_limit:
             return None
         # the new sites fill the window's gap, in the order of the shortest open path from the
         # point before it to the point after it (Eq. 1 times of straight legs)
