@@ -49,18 +49,6 @@ def _commit() -> str:
         return ""
 
 
-def training_maps(n: int, map_seed: int) -> list[tuple[str, dict[str, Any]]]:
-    """`n` generated maps: (name, map data), 5,000 m and 10,000 m alternating, densities
-    0-7 in turn, map seeds `map_seed`, `map_seed` + 1, ..."""
-    from planner_core.suite import generate_map
-
-    out = []
-    for k in range(n):
-        size, density, seed = (5000, 10000)[k % 2], (k // 2) % 8, map_seed + k
-        out.append((f"gen-{size}-d{density}-s{seed}", generate_map(size, density, seed)))
-    return out
-
-
 def suite_maps(tasks: list[str], folder: Path = SUITE) -> list[tuple[str, Any]]:
     """The maps of a suite folder named `tasks` (all of them when empty): (name, path). The
     paper-size suite (T01-T16) by default, the large suite (L01-L08) with `folder=LARGE`."""
@@ -366,7 +354,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--templates", nargs="+",
                     default=[t for t in scheduler_names() if t not in ("alternate", *LEARNED)],
                     help="schedules to compare (default: all registered but 'alternate', "
-                    "which is the default's cycle written out)")
+                    "which is the default's cycle written out, and the learned ones); a "
+                    "learned one may name its checkpoint folder: lamde-s-ppo:DIR")
     ap.add_argument("-o", "--output", help="JSON lines file to write the runs to")
     ap.add_argument("--summary", nargs="+", metavar="JSONL",
                     help="print the table of earlier records (plain or .gz) and exit")
@@ -395,7 +384,8 @@ def main(argv: list[str] | None = None) -> int:
             with open(args.output, "w") as fh:
                 fh.writelines(json.dumps(r) + "\n" for r in records)
         return 0
-    bad = [t for t in args.templates if t not in scheduler_names()]
+    bad = [t for t in args.templates if t not in scheduler_names()
+           and t.partition(":")[0] not in LEARNED]
     if bad or args.maps < 1 or args.seeds < 1:
         print(f"bench_schedule: --templates: unknown {bad}" if bad else
               "bench_schedule: --maps and --seeds: must be >= 1", file=sys.stderr)
@@ -406,11 +396,13 @@ def main(argv: list[str] | None = None) -> int:
     if args.large_seed is not None and (args.large is None or args.large_seed < 0):
         print("bench_schedule: --large-seed: needs --large and a seed >= 0", file=sys.stderr)
         return 2
+    from planner_core.suite import generated_maps
+
     maps = (suite_maps(args.suite) if args.suite is not None
             else large_maps(args.large, args.large_seed) if args.large is not None
             and args.large_seed is not None
             else suite_maps(args.large, LARGE) if args.large is not None
-            else training_maps(args.maps, args.map_seed))
+            else generated_maps(args.maps, args.map_seed))
     out = open(args.output, "w") if args.output else None  # noqa: SIM115
     try:
         records = run_grid(maps, list(range(args.seeds)), args.budget, args.templates, out)

@@ -25,9 +25,14 @@ when the plan is infeasible. Following `DefaultScheduler`'s choices (after its
 `reset(problem, config)`, which picks its rounds by the problem's size) reproduces the default
 plan to the bit (tests/test_schedule_env.py).
 
+The features are `ScheduleFeatures`'s, computed from the `schedule.Observation` a scheduler
+sees, so that a learned scheduler (`planner_core.learning.schedule_policy`) reads in `plan` what
+it was trained on here.
+
 Cost: a reset costs the pipeline up to `improve` (constructive plans, descents, the DE, the
-polish, the finishes; plus a whole default plan per new map and seed with the default
-reference); a step costs its action (`planner_core.pipeline.schedule`) and one breakdown.
+polish, the finishes; once per map and seed with `cache`), plus, with the default reference,
+the rest of a default plan from a copy of that prefix once per map and seed; a step costs its
+action (`planner_core.pipeline.schedule`) and one breakdown.
 """
 
 from __future__ import annotations
@@ -40,7 +45,8 @@ import gymnasium
 import numpy as np
 from gymnasium import spaces
 
-__all__ = ["ENV_ID", "FEATURES", "INFEASIBLE_PENALTY", "N_FEATURES", "ScheduleEnv"]
+__all__ = ["ENV_ID", "FEATURES", "INFEASIBLE_PENALTY", "N_FEATURES", "ScheduleEnv",
+           "ScheduleFeatures"]
 
 #: the id under which `ScheduleEnv` is registered with Gymnasium
 ENV_ID = "lamde/Schedule-v0"
@@ -87,6 +93,9 @@ class ScheduleEnv(gymnasium.Env):
             budget and population replaced); None: the defaults.
         reference: "default" (the default scheduler's f on the same map and seed) or
             "percent" (1 % of the stage's starting f).
+        cache: keep each (map, plan seed)'s pipeline up to `improve` and start its episodes
+            from copies (`PipelineRun.fork`, the same episode to the bit): a trainer that
+            revisits its cases pays the prefix once (memory: one run's state per case).
 
     Raises:
         ValueError: one line naming the field for a bad reference or budget.
@@ -96,7 +105,7 @@ class ScheduleEnv(gymnasium.Env):
 
     def __init__(self, maps: Sequence[Any] | None = None, *, budget: int = 10_000,
                  population: int | None = None, reference: str = "default",
-                 config: Any = None) -> None:
+                 config: Any = None, cache: bool = False) -> None:
         from planner_core import defaults as D
         from planner_core.pipeline import PlanConfig
 
@@ -113,6 +122,8 @@ class ScheduleEnv(gymnasium.Env):
         self.observation_space = spaces.Box(-np.inf, np.inf, (N_FEATURES,), np.float32)
         self._problems: dict[Any, Any] = {}
         self._refs: dict[tuple[Any, int], float] = {}
+        self.cache = bool(cache)
+        self._prefixes: dict[tuple[Any, int], Any] = {}
         self.run: Any = None
         self.improve: Any = None
         self.result: Any = None
@@ -129,7 +140,8 @@ class ScheduleEnv(gymnasium.Env):
     def _draw(self, rng: np.random.Generator, options: dict[str, Any]) -> tuple[Any, Any]:
         if "map" in options:
             src = options["map"]
-            return (str(src) if isinstance(src, str | Path) else id(src)), src
+            key = options.get("key") or (str(src) if isinstance(src, str | Path) else id(src))
+            return key, src
         if self.maps is not None:
             i = int(rng.integers(len(self.maps)))
             src = self.maps[i]
@@ -145,7 +157,8 @@ class ScheduleEnv(gymnasium.Env):
 
         Args:
             seed: the episode's seed (map and plan seed drawn from it).
-            options: "map" (a map to use), "plan_seed" (the plan's seed, >= 0).
+            options: "map" (a map to use), "key" (its name in the caches; default: its path,
+                else the object's id), "plan_seed" (the plan's seed, >= 0).
 
         Returns:
             (observation (N_FEATURES,) float32, info with "map", "plan_seed", "f_start",
@@ -165,11 +178,22 @@ class ScheduleEnv(gymnasium.Env):
             plan_seed = int(options.get("plan_seed", rng.integers(2**31 - 1)))
             problem = self._problem(key, src)
             cfg = self._base.replace(seed=plan_seed)
-            run = PipelineRun(problem, cfg, pipeline=DEFAULT_PIPELINE, evaluator=None,
-                              progress=None)
-            run.advance(until="improve")
-            if run.i < len(run.stages) and run.enter():
-                break
+            prefix = self._prefixes.get((key, plan_seed))
+            if prefix is None:
+                prefix = PipelineRun(problem, cfg, pipeline=DEFAULT_PIPELINE, evaluator=None,
+                                     progress=None)
+                prefix.advance(until="improve")
+                if self.cache:
+                    self._prefixes[(key, plan_seed)] = prefix
+            if prefix.i < len(prefix.stages):
+                if self.reference == "default" and (key, plan_seed) not in self._refs:
+                    # the default's f from this prefix: the same as a whole default plan
+                    twin = prefix.fork()
+                    twin.advance()
+                    self._refs[(key, plan_seed)] = float(twin.result().f)
+                run = prefix.fork() if self.cache else prefix
+                if run.enter():
+                    break
             if "map" in options:
                 raise RuntimeError("map: its improving stage does not run (the incumbent is "
                                    "infeasible or no budget is left for it)")
@@ -178,34 +202,21 @@ class ScheduleEnv(gymnasium.Env):
         self.run, self.problem, self.key, self.cfg = run, problem, key, cfg
         self.improve = ImproveRun(run.state, run.ev)
         self.result = None
-        _, f0, _ = run.ev.best()
-        self.f_start = float(f0)
-        self.stage_budget = run.ev.remaining
-        pool = run.state.pool
-        feas = pool.f[pool.phi == 0] if len(pool) else np.zeros(0)
-        self.f_scale = float(feas.min()) if len(feas) else self.f_start
+        self._tracker = ScheduleFeatures(problem, cfg)
+        obs = self._tracker(self.improve.observe())
+        self.f_start = float(self._tracker.f_start)
+        self.stage_budget = self._tracker.stage_budget
+        self.f_scale = self._tracker.f_scale
         if self.reference == "default":
-            ref = self._default_f(key, problem, cfg)
+            ref = self._refs[(key, plan_seed)]
             self.gap = max(self.f_start - ref, 1e-9 * max(abs(self.f_start), 1.0))
         else:
             ref = self.f_start
             self.gap = 0.01 * max(abs(self.f_start), 1e-9)
         self.f_reference = ref
-        self._gain = dict.fromkeys(_MOVES, 0.0)
-        self._uses = dict.fromkeys(_MOVES, 0)
-        self._since = 0
-        self._npoints: dict[int, int] = {}
         info = {"map": key, "plan_seed": plan_seed, "f_start": self.f_start,
                 "f_reference": ref}
-        return self._features(), info
-
-    def _default_f(self, key: Any, problem: Any, cfg: Any) -> float:
-        from planner_core.pipeline import run_pipeline
-
-        k = (key, cfg.seed)
-        if k not in self._refs:
-            self._refs[k] = float(run_pipeline(problem, cfg).f)
-        return self._refs[k]
+        return obs, info
 
     def step(self, action: int | np.integer) -> tuple[np.ndarray, float, bool, bool,
                                                        dict[str, Any]]:
@@ -233,12 +244,7 @@ class ScheduleEnv(gymnasium.Env):
                 stopped, rec = "time limit", None
             if rec is not None:
                 info["evaluations"] = rec.evaluations
-                gain = rec.f_before - rec.f_after
-                reward = gain / self.gap
-                per = gain / self.f_start * 100.0 / max(rec.evaluations, 1) * 1000.0
-                self._gain[name] = EMA * per + (1 - EMA) * self._gain[name]
-                self._uses[name] += 1
-                self._since = 0 if gain > 0 else self._since + 1
+                reward = (rec.f_before - rec.f_after) / self.gap
         done = name == "stop" or bool(stopped) or not self.improve.can_continue
         if done:
             self.run.leave(self.improve.state, stopped)
@@ -255,37 +261,83 @@ class ScheduleEnv(gymnasium.Env):
         return self.improve.observe()
 
     def _features(self) -> np.ndarray:
+        return self._tracker(self.improve.observe())
+
+
+class ScheduleFeatures:
+    """The observation vector (`FEATURES`, (N_FEATURES,) float32) from what a `Scheduler`
+    sees (`schedule.Observation`): the env's observation and a learned scheduler's input, one
+    definition for both.
+
+    Call it on each observation of one improving stage, in order: the first fixes the stage's
+    start (f, evaluations left, the best feasible pool f as the per-map scale); each call reads
+    the step records added since the last one (each action's gain per 1,000 evaluations in
+    percent of the starting f, as a running mean with weight `EMA`, its uses, the actions since
+    the last gain).
+
+    Args:
+        problem: the run's `Problem`; config: its `PlanConfig` (for the time limit).
+
+    Cost: one `Problem.breakdown` (O(I x J)) of the incumbent and of each pool plan not read
+    before (up to 12 structures) per call.
+    """
+
+    def __init__(self, problem: Any, config: Any) -> None:
+        self.problem, self.config = problem, config
+        self.f_start: float | None = None
+        self._gain = dict.fromkeys(_MOVES, 0.0)
+        self._uses = dict.fromkeys(_MOVES, 0)
+        self._since = 0
+        self._seen = 0
+        self._npoints: dict[int, int] = {}
+
+    def __call__(self, obs: Any) -> np.ndarray:
         from planner_core.pipeline.schedule import IDLE_ROUNDS, pool_structures
 
-        ir, ev, problem = self.improve, self.run.ev, self.problem
-        x, f, phi = ev.best()
+        problem, state = self.problem, obs.state
+        pool = state.pool
+        if self.f_start is None:
+            self.f_start, self.stage_budget = float(obs.f), max(int(obs.remaining), 1)
+            feas = pool.f[pool.phi == 0] if len(pool) else np.zeros(0)
+            self.f_scale = float(feas.min()) if len(feas) else self.f_start
+        for rec in obs.history[self._seen:]:
+            if rec.action in self._gain:
+                gain = rec.f_before - rec.f_after
+                per = gain / self.f_start * 100.0 / max(rec.evaluations, 1) * 1000.0
+                self._gain[rec.action] = EMA * per + (1 - EMA) * self._gain[rec.action]
+                self._uses[rec.action] += 1
+                self._since = 0 if gain > 0 else self._since + 1
+        self._seen = len(obs.history)
+        f = float(obs.f)
+        x = obs.x if obs.x is not None else np.zeros(problem.dim)
         b = problem.breakdown(np.asarray(x, dtype=float))
         imax = max(problem.n_points, 1)
         short = sum(1 for v in b["shortfall"].values() if v > 0)
         n_sensors = max(len(b["shortfall"]), 1)
-        best_by_n = pool_structures(problem, ir.state.pool, limit=12, cache=self._npoints)
+        best_by_n = pool_structures(problem, pool, limit=12, cache=self._npoints)
         gaps = sorted(v for k, v in best_by_n.items() if k != b["n_hover"])
-        gaps = [(g - float(f)) / max(abs(float(f)), 1e-9) * 100.0 for g in gaps] + [0.0, 0.0]
-        finished = len(set(best_by_n) & set(ir.state.finished)) / max(len(best_by_n), 1)
-        tl = self.cfg.time_limit
-        time_left = 1.0 if tl is None else max(1.0 - ev.elapsed / tl, 0.0)
+        gaps = [(g - f) / max(abs(f), 1e-9) * 100.0 for g in gaps] + [0.0, 0.0]
+        finished = len(set(best_by_n) & set(state.finished)) / max(len(best_by_n), 1)
+        other = any(n > 0 and n not in state.finished for n in best_by_n)
+        tl = getattr(self.config, "time_limit", None)
+        time_left = 1.0 if tl is None else max(1.0 - obs.elapsed / tl, 0.0)
         n_obst = problem.map.spec.obstacles.count
-        steps = max(ir.step, 1)
+        steps = max(obs.step, 1)
         v = [
-            ev.remaining / max(ev.budget, 1),
-            ev.remaining / max(self.stage_budget, 1),
+            obs.remaining / max(obs.budget, 1),
+            obs.remaining / self.stage_budget,
             time_left,
-            (float(f) / max(self.f_scale, 1e-9) - 1.0) * 100.0,
-            (float(f) / max(self.f_start, 1e-9) - 1.0) * 100.0,
-            _log(phi), _log(b["v3"]), _log(b["v4"]), _log(b["v5"]),
+            (f / max(self.f_scale, 1e-9) - 1.0) * 100.0,
+            (f / max(self.f_start, 1e-9) - 1.0) * 100.0,
+            _log(obs.phi), _log(b["v3"]), _log(b["v4"]), _log(b["v5"]),
             short / n_sensors,
             b["n_hover"] / imax,
             len(best_by_n) / 12.0,
             gaps[0], gaps[1],
             finished,
-            float(ir._other() is not None),
-            ir.step / 100.0,
-            ir.idle / IDLE_ROUNDS,
+            float(other),
+            obs.step / 100.0,
+            obs.idle / IDLE_ROUNDS,
             self._since / 10.0,
             *(self._gain[a] for a in _MOVES),
             *(self._uses[a] / steps for a in _MOVES),

@@ -49,6 +49,8 @@ __all__ = [
     "obstacle_counts",
     "generate_map",
     "suite_maps",
+    "generated_maps",
+    "generated_spec",
     "generate_suite",
     "dumps_map",
     "GenerationError",
@@ -122,6 +124,26 @@ def generate_map(
 def suite_maps(seed: int = SUITE_SEED) -> dict[str, dict[str, Any]]:
     """The 16 suite maps by name (T01..T16); each task uses `seed` with its own size/density."""
     return {name: generate_map(size, d, seed, name=name) for name, size, d in suite_tasks()}
+
+
+def generated_maps(n: int, map_seed: int) -> list[tuple[str, dict[str, Any]]]:
+    """`n` generated paper-size maps for training and held-out sets (the schedule benchmark,
+    LAMDE-S's training): 5,000 m and 10,000 m a side alternating, densities 0-7 in turn, map
+    seeds `map_seed`, `map_seed` + 1, ...
+
+    Returns:
+        [(name "gen-<size>-d<density>-s<seed>", map data)], in that order.
+    """
+    out = []
+    for k in range(n):
+        size, density, seed = generated_spec(k, map_seed)
+        out.append((f"gen-{size}-d{density}-s{seed}", generate_map(size, density, seed)))
+    return out
+
+
+def generated_spec(k: int, map_seed: int) -> tuple[int, int, int]:
+    """The k-th map of `generated_maps(n, map_seed)`: (size in m, density, map seed)."""
+    return (5000, 10000)[k % 2], (k // 2) % 8, map_seed + k
 
 
 def generate_suite(

@@ -50,6 +50,7 @@ __all__ = [
     "Selected",
     "TaskFeatures",
     "match",
+    "stage_one",
     "standardiser",
     "task_features",
     "threshold_for",
@@ -129,7 +130,6 @@ def match(
     dims = np.array([key.dimension for key in keys])
     Df = np.linalg.norm(z_f[:, None, :] - Z[None, :, :], axis=-1)  # (M, S)
     Dp = np.linalg.norm(z_phi[:, None, :] - Z[None, :, :], axis=-1)  # (M, S)
-    M = Df.shape[0]
     rng = np.random.default_rng(seed)
 
     if selection == "random":
@@ -142,6 +142,31 @@ def match(
             out.append(Selected(int(s), c, m, float(Df[:, s].mean()), float(Dp[m, c])))
         return out
 
+    objs, tasks, scores = stage_one(Df, k, selection)
+
+    out = []
+    for s, m, sc in zip(objs, tasks, scores, strict=True):
+        cand = np.flatnonzero((dims == dims[s]) & (np.arange(S) != s))
+        if cand.size == 0:
+            cand = np.array([s])
+        c = int(cand[np.argmin(Dp[m, cand])])
+        out.append(Selected(int(s), c, int(m), float(sc), float(Dp[m, c])))
+    return out
+
+
+def stage_one(Df: np.ndarray, k: int, selection: str = "global"
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Stage 1 of the query (module doc) from the task-to-instance distances.
+
+    Args:
+        Df: ||z_f[m] - z_s|| (M tasks, S instances); k: instances to take (1..S);
+        selection: "global" (the k smallest mean distances) or "local" (each task's nearest
+            in turn, ceil(k / M) each, no repeats).
+
+    Returns:
+        (instances (k,), their tasks m(k) (k,), their scores (k,)), instances in order taken.
+    """
+    M, S = Df.shape
     if selection == "global":
         score = Df.mean(axis=0)
         objs = np.argsort(score, kind="stable")[:k]
@@ -174,14 +199,7 @@ def match(
                 per += 1
         objs, tasks, scores = np.array(objs_l), np.array(tasks_l), np.array(scores_l)
 
-    out = []
-    for s, m, sc in zip(objs, tasks, scores, strict=True):
-        cand = np.flatnonzero((dims == dims[s]) & (np.arange(S) != s))
-        if cand.size == 0:
-            cand = np.array([s])
-        c = int(cand[np.argmin(Dp[m, cand])])
-        out.append(Selected(int(s), c, int(m), float(sc), float(Dp[m, c])))
-    return out
+    return objs, tasks, scores
 
 
 def threshold_for(
