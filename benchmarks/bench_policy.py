@@ -10,12 +10,14 @@ is printed beside its wall time: on a shared machine the wall time includes wait
 
     python benchmarks/bench_policy.py [MAP ...] [--checkpoint lamde-v2] [--generations 30]
 
-With `--scheduler lamde-s` it times instead, in each of `--plans` whole plans per map (after one
-warm-up plan), the learned scheduler's decisions (`SelectorScheduler.choose`: the features at
-the improving stage's first decision, the neighbours in the shipped table, then the chosen
-template's choices) against the plan's own time, and prints their ratio (issue 34's "<= 5 %").
+With `--scheduler lamde-s` (or `lamde-s-ppo`) it times instead, in each of `--plans` whole
+plans per map (after one warm-up plan), the learned scheduler's decisions (`choose`: for
+lamde-s the features at the improving stage's first decision, the neighbours in the shipped
+table, then the chosen template's choices; for lamde-s-ppo the features and the network's
+forward pass at every decision) against the plan's own time, and prints their ratio (issue
+34's "<= 5 %").
 
-    python benchmarks/bench_policy.py --scheduler lamde-s [MAP ...] [--plans 3]
+    python benchmarks/bench_policy.py --scheduler lamde-s|lamde-s-ppo [MAP ...] [--plans 3]
 """
 
 from __future__ import annotations
@@ -97,7 +99,8 @@ def main() -> None:
     ap.add_argument("--population", type=int, default=100)
     ap.add_argument("--generations", type=int, default=30)
     ap.add_argument("--scheduler", default=None, metavar="NAME",
-                    help="time a learned scheduler (lamde-s) in whole plans instead")
+                    help="time a learned scheduler (lamde-s, lamde-s-ppo) in whole plans "
+                    "instead")
     ap.add_argument("--plans", type=int, default=3, help="plans per map with --scheduler (3)")
     args = ap.parse_args()
     if args.scheduler:

@@ -110,6 +110,7 @@ def run_grid(maps: list[tuple[str, Any]], seeds: list[int], budget: int,
                        "f": r.f, "phi": r.phi, "f_start": f_start,
                        "evaluations": r.evaluations,
                        "improve_evaluations": imp[0].evaluations if imp else 0,
+                       "actions": list(r.state.actions),
                        "improve_seconds": round(time.perf_counter() - t1, 3),
                        "prefix_seconds": round(prefix_s, 3), "features": feats,
                        "commit": commit}

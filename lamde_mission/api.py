@@ -86,8 +86,9 @@ def plan(
         scheduler: the improving stage's scheduler (issue 34's LAMDE-S seam,
             `planner_core.pipeline.schedule`): "default" (today's rounds), a static schedule's
             name (`schedule.SCHEDULES`: a fixed cycle of macro-actions), "lamde-s" (the
-            learned selector of a schedule, `planner_core.learning.schedule_select`) or a
-            `Scheduler` object; a non-default one is recorded as `config["scheduler"]`,
+            learned selector of a schedule, `planner_core.learning.schedule_select`),
+            "lamde-s-ppo" (the policy trained by PPO, `planner_core.learning.schedule_policy`)
+            or a `Scheduler` object; a non-default one is recorded as `config["scheduler"]`,
             and the schedule a learned one chose (lamde-s) as `config["scheduler_choice"]`.
         corner_slots: K > 0: detour corners do not count against I_max (issue 31; docs/
             missions.md): the encoding gets K extra slots and at most I_max points with t > 0

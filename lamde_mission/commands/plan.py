@@ -64,8 +64,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--scheduler", default="default", metavar="NAME",
                    help="how the improving stage chooses its macro-actions (kicks, structural "
                    "search, restarts, fresh sweeps, DE blocks): default (today's rounds), a "
-                   "static schedule, or lamde-s (the learned selector of a schedule; "
-                   "docs/scheduler.md lists them)")
+                   "static schedule, lamde-s (the learned selector of a schedule) or "
+                   "lamde-s-ppo (the policy trained by PPO; docs/scheduler.md lists them)")
     p.add_argument("--corner-slots", default="auto", metavar="auto|K",
                    help="detour corners (points of 0 s, written as NAV_WAYPOINT) do not count "
                    "against I_max: K extra slots for them, at most I_max hover points stay "

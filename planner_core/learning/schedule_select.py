@@ -294,6 +294,11 @@ class SelectorScheduler:
         self._inner: Any = None
         self._problem: Any = None
 
+    @classmethod
+    def from_checkpoint(cls, folder: str) -> SelectorScheduler:
+        """The selector of a table folder (`--scheduler lamde-s:DIR`; `SelectorTable.load`)."""
+        return cls(SelectorTable.load(folder))
+
     def reset(self, problem: Any, config: Any) -> None:
         """Forget the last run's choice."""
         self._problem, self.template, self._inner = problem, None, None

@@ -275,7 +275,10 @@ SCHEDULES: dict[str, tuple[str, ...]] = {
 
 
 #: learned schedulers by name -> "module:class" (imported when asked for)
-LEARNED: dict[str, str] = {"lamde-s": "planner_core.learning.schedule_select:SelectorScheduler"}
+LEARNED: dict[str, str] = {
+    "lamde-s": "planner_core.learning.schedule_select:SelectorScheduler",
+    "lamde-s-ppo": "planner_core.learning.schedule_policy:PolicyScheduler",
+}
 
 
 def scheduler_names() -> tuple[str, ...]:
@@ -284,18 +287,23 @@ def scheduler_names() -> tuple[str, ...]:
 
 
 def make_scheduler(spec: str | Scheduler | None) -> Scheduler:
-    """A scheduler from a registry name (`scheduler_names()`), an object, or None (default).
+    """A scheduler from a registry name (`scheduler_names()`), a learned one's name with its
+    checkpoint folder ("lamde-s-ppo:DIR", "lamde-s:DIR"; the shipped one without), an object,
+    or None (default).
 
     Raises:
-        ValueError: one line naming `scheduler` for an unknown name or a non-scheduler.
+        ValueError: one line naming `scheduler` for an unknown name or a non-scheduler, or
+            `checkpoint` for a folder that does not load.
     """
     if spec is None or spec == "default":
         return DefaultScheduler()
-    if isinstance(spec, str) and spec in LEARNED:
+    name, _, folder = spec.partition(":") if isinstance(spec, str) else ("", "", "")
+    if name in LEARNED:
         import importlib
 
-        module, cls = LEARNED[spec].split(":")
-        return getattr(importlib.import_module(module), cls)()
+        module, cls = LEARNED[name].split(":")
+        learned = getattr(importlib.import_module(module), cls)
+        return learned.from_checkpoint(folder) if folder else learned()
     if isinstance(spec, str):
         if spec not in SCHEDULES:
             raise ValueError(f"scheduler: must be one of {', '.join(scheduler_names())}, "
@@ -518,4 +526,4 @@ class ImproveRun:
         chosen = getattr(scheduler, "template", None)  # a selector's pick (lamde-s)
         if chosen is not None:
             self.state = self.state.replace(schedule=str(chosen))
-        return self.state
+        return self.state.replace(actions=tuple(r.action for r in self.history))

@@ -75,8 +75,9 @@ class PlanState:
     """What the stages hand on: the UAV problem (`planner_core.model.problem.Problem`: decode,
     encode, breakdown), the run's config, the pool of scored plans, the rows injected into the
     DE's initial population, the DE's result, the polish's record, the point counts whose
-    best plan was already finished, and the schedule a learned scheduler chose for the
-    improving stage (`--scheduler lamde-s`: the template it follows; None otherwise)."""
+    best plan was already finished, the schedule a learned scheduler chose for the
+    improving stage (`--scheduler lamde-s`: the template it follows; None otherwise) and the
+    macro-actions the improving stage took, in order."""
 
     problem: Any
     config: PlanConfig
@@ -86,6 +87,7 @@ class PlanState:
     polish: dict[str, Any] | None = None
     finished: frozenset[int] = frozenset()
     schedule: str | None = None
+    actions: tuple[str, ...] = ()
 
     def replace(self, **changes: Any) -> PlanState:
         return dataclasses.replace(self, **changes)
