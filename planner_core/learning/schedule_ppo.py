@@ -70,6 +70,7 @@ class Args:
     plan_seed: int = 100
     budget: int = 10_000
     hidden: int = 64
+    #: full-batch Adam steps of behaviour cloning (at 10 x `lr`)
     bc_epochs: int = 400
     #: label smoothing of the cloning's cross-entropy: the warm start keeps about this much
     #: probability off the default's choice, so PPO's sampled episodes explore
@@ -154,7 +155,7 @@ def advantages(episode: dict[str, Any], demo: dict[str, Any], args: Args
         (advantages (T,), returns for the critic (T,)).
     """
     r, v = episode["rewards"], episode["values"]
-    g = gae(r, np.zeros(len(r)), args.gamma, 1.0)  # returns-to-go
+    g = _returns_to_go(r, args.gamma)
     adv = gae(r, v, args.gamma, args.gae_lambda)
     if args.paired:
         a, d = episode["actions"], demo["actions"]
@@ -162,8 +163,7 @@ def advantages(episode: dict[str, Any], demo: dict[str, Any], args: Args
         while same < min(len(a), len(d)) and a[same] == d[same]:
             same += 1
         k = min(same + 1, len(a), len(d))  # through the first departure
-        gd = gae(demo["rewards"], np.zeros(len(demo["rewards"])), args.gamma, 1.0)
-        adv[:k] = g[:k] - gd[:k]
+        adv[:k] = g[:k] - _returns_to_go(demo["rewards"], args.gamma)[:k]
     return adv, g
 
 
@@ -193,6 +193,7 @@ def _run(executor: Any, jobs: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 
 def _returns_to_go(rewards: np.ndarray, gamma: float) -> np.ndarray:
+    """G_t = sum_k gamma^k r_(t+k) of one episode (GAE with lambda 1 and no values)."""
     return gae(rewards, np.zeros(len(rewards)), gamma, 1.0)
 
 
