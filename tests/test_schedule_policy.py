@@ -260,3 +260,28 @@ def test_the_cli_plans_with_the_policy_and_refuses_a_missing_checkpoint(tmp_path
     assert r.returncode == 2 and not (tmp_path / "x.plan").exists()
     assert r.stderr.strip().count("\n") == 0
     assert "--scheduler: checkpoint: cannot read" in r.stderr
+
+
+def test_the_docs_lamde_s_ppo_figures_are_the_stored_records() -> None:
+    from tests.conftest import ROOT
+    from tests.test_schedule import _bench
+
+    bench, runs = _bench(), ROOT / "docs" / "scheduler-runs"
+    doc = (ROOT / "docs" / "scheduler.md").read_text()
+    doc = doc[doc.index("## LAMDE-S-PPO"):]
+
+    def summary(name: str) -> dict[str, list[str]]:
+        out = bench.summarise(bench._read([str(runs / name)]))
+        return {r.split("|")[1].strip(): [c.strip() for c in r.split("|")[2:7]]
+                for r in out.splitlines() if r.startswith("| ") and "---" not in r}
+
+    held = summary("ppo-heldout100x2.jsonl.gz")
+    for t in ("fresh-heavy", "lamde-s-ppo"):
+        gap, _, diff, bw, _ = held[t]
+        assert f"| `{t}` | {gap} | {diff} | {bw} |" in doc, t
+    suite25, held200 = summary("ppo-suite25.jsonl.gz"), summary("ppo-held200.jsonl.gz")
+    assert f"default {suite25['default'][0]} %" in doc
+    assert f"default {held200['default'][0]} %" in doc
+    for t in ("fresh-heavy", "lamde-s-ppo"):
+        assert f"`{t}` {suite25[t][0]} % ({suite25[t][2]} points" in doc, t
+        assert f"`{t}` {held200[t][0]} % ({held200[t][2]}" in doc, t
