@@ -337,7 +337,7 @@ def evaluate(table_dir: str, records: list[dict[str, Any]], seed: int = 0) -> st
 
 def main(argv: list[str] | None = None) -> int:
     """The command line (module docstring). Returns the exit status (2: bad arguments)."""
-    from planner_core.pipeline.schedule import LEARNED, scheduler_names
+    from planner_core.pipeline.schedule import LEARNED, make_scheduler, scheduler_names
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--maps", type=int, default=24, help="generated training maps (24)")
@@ -387,6 +387,13 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     bad = [t for t in args.templates if t not in scheduler_names()
            and t.partition(":")[0] not in LEARNED]
+    for t in args.templates:  # a learned one's checkpoint loads before any run
+        if t not in bad:
+            try:
+                make_scheduler(t)
+            except ValueError as exc:
+                print(f"bench_schedule: --templates: {exc}", file=sys.stderr)
+                return 2
     if bad or args.maps < 1 or args.seeds < 1:
         print(f"bench_schedule: --templates: unknown {bad}" if bad else
               "bench_schedule: --maps and --seeds: must be >= 1", file=sys.stderr)

@@ -57,5 +57,9 @@ def test_the_cli_writes_maps_the_trainer_regenerates(tmp_path) -> None:
     for m in doc["maps"]:
         assert generate_map(m["size"], m["density"], m["seed"]) == pool[m["name"]]
     assert generated_spec(3, 40) == (10000, 1, 43)
-    assert main(["--pool", "6", "--k", "7", "-o", str(tmp_path / "x.json")]) == 2
+    assert doc["seed"] == 0
+    for bad in (["--k", "7"], ["--k", "2", "--seed", "-1"], ["--k", "2", "--pool-seed", "-5"]):
+        assert main(["--pool", "6", *bad, "-o", str(tmp_path / "x.json")]) == 2
+    (tmp_path / "afile").write_text("")
+    assert main(["--pool", "6", "--k", "2", "-o", str(tmp_path / "afile" / "x.json")]) == 2
     assert not (tmp_path / "x.json").exists()

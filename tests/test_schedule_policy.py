@@ -285,3 +285,84 @@ def test_the_docs_lamde_s_ppo_figures_are_the_stored_records() -> None:
     for t in ("fresh-heavy", "lamde-s-ppo"):
         assert f"`{t}` {suite25[t][0]} % ({suite25[t][2]} points" in doc, t
         assert f"`{t}` {held200[t][0]} % ({held200[t][2]}" in doc, t
+
+
+def test_damaged_or_mismatched_checkpoints_are_refused_in_one_line(tmp_path) -> None:
+    p = init_params(N_FEATURES, A, hidden=8, seed=1)
+    save(tmp_path / "ck", p, _manifest())
+    raw = (tmp_path / "ck" / "weights.npz").read_bytes()
+    (tmp_path / "ck" / "weights.npz").write_bytes(raw[: len(raw) // 2])
+    with pytest.raises(ValueError, match="^checkpoint: cannot read"):
+        load(tmp_path / "ck")
+    save(tmp_path / "ck", p, _manifest())
+    save(tmp_path / "other", init_params(N_FEATURES, A, hidden=8, seed=2), _manifest())
+    (tmp_path / "ck" / "weights.npz").write_bytes((tmp_path / "other" / "weights.npz")
+                                                  .read_bytes())
+    with pytest.raises(ValueError, match="weights_sha256 differs"):
+        load(tmp_path / "ck")
+    save(tmp_path / "list", p, _manifest())
+    (tmp_path / "list" / "manifest.json").write_text("[1, 2]")
+    with pytest.raises(ValueError, match="must be a JSON object"):
+        load(tmp_path / "list")
+    save(tmp_path / "mp", p, _manifest(max_points="abc"))
+    with pytest.raises(ValueError, match="max_points must be a whole number"):
+        load(tmp_path / "mp")
+    with pytest.raises(ValueError, match="^scheduler: 'lamde-s-ppo:' names no checkpoint"):
+        make_scheduler("lamde-s-ppo:")
+
+
+def test_a_deadline_that_does_not_bind_leaves_the_policys_plan_unchanged() -> None:
+    problem = Problem(load_map(MAPS / "tiny.json").planning_map())
+    base = dict(seed=1, budget=3_000, population=20)
+    a = run_pipeline(problem, PlanConfig(**base), scheduler="lamde-s-ppo")
+    b = run_pipeline(problem, PlanConfig(**base, time_limit=600.0), scheduler="lamde-s-ppo")
+    assert a.x.tobytes() == b.x.tobytes() and a.state.actions == b.state.actions
+
+
+@pytest.mark.parametrize(("flag", "value", "want"), [
+    ("--lr", "-1", "lr: must be > 0.0"), ("--bc-smoothing", "1", "bc_smoothing: must be"),
+    ("--gamma", "0", "gamma: must be > 0.0 and <= 1.0"), ("--seed", "-1", "seed: must be >= 0"),
+    ("--eval-every", "-2", "eval_every: must be >= 0"), ("--maps", "0", "maps: must be >= 1"),
+    ("--reference", "gap", "reference: must be 'default' or 'percent'"),
+    ("--paired", "maybe", "must be true or false")])
+def test_the_trainer_refuses_bad_settings_before_any_work(tmp_path, capsys, flag, value,
+                                                           want) -> None:
+    pytest.importorskip("torch")
+    from planner_core.learning.schedule_ppo import main
+
+    try:
+        rc = main(["-o", str(tmp_path / "ck"), flag, value])
+    except SystemExit as exc:  # argparse's own refusal (a bad boolean)
+        rc = exc.code
+    assert rc == 2 and want in capsys.readouterr().err
+    assert not (tmp_path / "ck").exists()
+
+
+def test_the_trainer_refuses_a_bad_maps_file_or_output_before_any_work(tmp_path,
+                                                                        capsys) -> None:
+    pytest.importorskip("torch")
+    from planner_core.learning.schedule_ppo import main
+
+    bad = tmp_path / "picks.json"
+    bad.write_text('{"maps": [{"name": "a", "size": "abc", "density": 1, "seed": 3}]}')
+    assert main(["-o", str(tmp_path / "ck"), "--maps-file", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert "maps_file: " in err and "entry 0: " in err and err.count("\n") == 1
+    bad.write_text('{"maps": []}')
+    assert main(["-o", str(tmp_path / "ck"), "--maps-file", str(bad)]) == 2
+    assert "'maps' must be a non-empty list" in capsys.readouterr().err
+    (tmp_path / "afile").write_text("")
+    assert main(["-o", str(tmp_path / "afile" / "ck"), "--maps", "1"]) == 2
+    assert "output: " in capsys.readouterr().err
+    assert not (tmp_path / "ck").exists()
+
+
+def test_the_schedule_benchmark_refuses_a_bad_checkpoint_before_any_run(tmp_path,
+                                                                          capsys) -> None:
+    from tests.test_schedule import _bench
+
+    out = tmp_path / "runs.jsonl"
+    rc = _bench().main(["--suite", "T01", "--seeds", "1", "--templates", "default",
+                        f"lamde-s-ppo:{tmp_path / 'none'}", "-o", str(out)])
+    assert rc == 2 and not out.exists()
+    assert "--templates: scheduler: checkpoint: cannot read" in capsys.readouterr().err

@@ -65,7 +65,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="how the improving stage chooses its macro-actions (kicks, structural "
                    "search, restarts, fresh sweeps, DE blocks): default (today's rounds), a "
                    "static schedule, lamde-s (the learned selector of a schedule) or "
-                   "lamde-s-ppo (the policy trained by PPO; docs/scheduler.md lists them)")
+                   "lamde-s-ppo (the policy trained by PPO); lamde-s-ppo:DIR or lamde-s:DIR "
+                   "for a checkpoint of your own (docs/scheduler.md lists them)")
     p.add_argument("--corner-slots", default="auto", metavar="auto|K",
                    help="detour corners (points of 0 s, written as NAV_WAYPOINT) do not count "
                    "against I_max: K extra slots for them, at most I_max hover points stay "

@@ -19,6 +19,7 @@ and H x H products (microseconds).
 
 from __future__ import annotations
 
+import io
 import json
 from pathlib import Path
 from typing import Any
@@ -77,18 +78,21 @@ def forward(params: dict[str, np.ndarray], x: np.ndarray) -> tuple[np.ndarray, n
 
 def save(folder: str | Path, params: dict[str, np.ndarray], manifest: dict[str, Any]) -> None:
     """Write `weights.npz` and `manifest.json` into `folder` (created), each through a
-    temporary file and a rename.
+    temporary file and a rename; the manifest records the weights' sha256 (`load` checks it).
 
     Raises:
         OSError: the folder cannot be written.
     """
-    import io
+    import hashlib
 
     from planner_core.atomic import write_bytes_atomic, write_text_atomic
 
     buf = io.BytesIO()
     np.savez(buf, **{k: np.asarray(params[k], dtype=np.float64) for k in _NAMES})
-    write_bytes_atomic(Path(folder) / "weights.npz", buf.getvalue())
+    raw = buf.getvalue()
+    # the manifest names its weights, so a crash between the two writes is caught at `load`
+    manifest = dict(manifest, weights_sha256=hashlib.sha256(raw).hexdigest())
+    write_bytes_atomic(Path(folder) / "weights.npz", raw)
     write_text_atomic(Path(folder) / "manifest.json",
                       json.dumps(manifest, indent=1, sort_keys=True) + "\n")
 
@@ -100,19 +104,35 @@ def load(folder: str | Path) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         (params, manifest).
 
     Raises:
-        ValueError: one line naming the checkpoint when a file is missing, an array is
-            missing or misshaped, or it was trained on other actions or features than today's.
+        ValueError: one line naming the checkpoint when a file is missing or damaged, an
+            array is missing or misshaped, the weights are not those the manifest names, its
+            max_points is not a whole number, or it was trained on other actions or features
+            than today's.
     """
+    import hashlib
+    import zipfile
+
     from planner_core.learning.schedule_env import FEATURES
     from planner_core.pipeline.schedule import ACTIONS
 
     folder = Path(folder)
     try:
         manifest = json.loads((folder / "manifest.json").read_text())
-        with np.load(folder / "weights.npz") as z:
+        raw = (folder / "weights.npz").read_bytes()
+        with np.load(io.BytesIO(raw), allow_pickle=False) as z:
             params = {k: np.asarray(z[k], dtype=float) for k in _NAMES}
-    except (OSError, KeyError, json.JSONDecodeError) as exc:
+    except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile) as exc:
         raise ValueError(f"checkpoint: cannot read {folder}: {exc}") from None
+    if not isinstance(manifest, dict):
+        raise ValueError(f"checkpoint: {folder}/manifest.json: must be a JSON object")
+    digest = manifest.get("weights_sha256")
+    if digest is not None and digest != hashlib.sha256(raw).hexdigest():
+        raise ValueError(f"checkpoint: {folder}: weights.npz is not the one its manifest "
+                         "describes (weights_sha256 differs)")
+    mp = manifest.get("max_points")
+    if mp is not None and (not isinstance(mp, int) or isinstance(mp, bool) or mp < 1):
+        raise ValueError(f"checkpoint: {folder}: max_points must be a whole number >= 1, "
+                         f"got {mp!r}")
     if tuple(manifest.get("actions", ())) != ACTIONS:
         raise ValueError(f"checkpoint: {folder} was trained on actions "
                          f"{manifest.get('actions')}, not today's {list(ACTIONS)}")
@@ -129,7 +149,7 @@ def load(folder: str | Path) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     return params, manifest
 
 
-_SHIPPED: dict[str, tuple[dict[str, np.ndarray], dict[str, Any]]] = {}
+_SHIPPED: dict[tuple[str, int | None], tuple[dict[str, np.ndarray], dict[str, Any]]] = {}
 
 
 class PolicyScheduler:
@@ -146,6 +166,9 @@ class PolicyScheduler:
         params: weights to use instead of a checkpoint (training's own evaluation).
         max_points: the largest I_max it acts on (with `params`; a checkpoint's manifest
             says its own); None: every size.
+        deadline: whether it was trained with time limits (a checkpoint's manifest says,
+            "time_limits", default False); if not, its time-left feature reads 1 whatever
+            the run's `--time-limit`.
 
     Raises:
         ValueError: the checkpoint cannot be read (see `load`).
@@ -155,15 +178,22 @@ class PolicyScheduler:
 
     def __init__(self, checkpoint: str | Path | None = None,
                  params: dict[str, np.ndarray] | None = None,
-                 max_points: int | None = None) -> None:
+                 max_points: int | None = None, deadline: bool = False) -> None:
         if params is None:
-            key = str(checkpoint or DEFAULT_CHECKPOINT)
+            folder = Path(checkpoint or DEFAULT_CHECKPOINT)
+            try:  # a folder written again in this process is read again
+                stamp = (folder / "weights.npz").stat().st_mtime_ns
+            except OSError:
+                stamp = None
+            key = (str(folder), stamp)
             if key not in _SHIPPED:
-                _SHIPPED[key] = load(key)
+                _SHIPPED[key] = load(folder)
             params, manifest = _SHIPPED[key]
             max_points = manifest.get("max_points", max_points)
+            deadline = bool(manifest.get("time_limits", False))
         self.params = params
         self.max_points = max_points
+        self.deadline = deadline
         self._features: Any = None
         self._default: Any = None
 
@@ -184,6 +214,11 @@ class PolicyScheduler:
         from planner_core.learning.schedule_env import ScheduleFeatures
         from planner_core.pipeline.schedule import DefaultScheduler
 
+        if not self.deadline and getattr(config, "time_limit", None) is not None:
+            # trained without a deadline: the policy reads the run as it was trained (time
+            # left 1), so a --time-limit that does not bind leaves the plan unchanged; the
+            # deadline still ends the stage
+            config = config.replace(time_limit=None)
         self._features = ScheduleFeatures(problem, config)
         self._default = None
         if self.max_points is not None and int(problem.hover_limit) > int(self.max_points):
@@ -223,7 +258,7 @@ def rollout(job: dict[str, Any]) -> dict[str, Any]:
     Returns:
         {"key", "plan_seed", "obs" (T, F) float32, "actions" (T,) int, "logp" (T,), "values"
         (T,), "rewards" (T,), "imax" (the map's I_max), "f", "phi", "f_start", "f_reference",
-        "seconds"}; T counts the
+        "seconds" (wall), "cpu" (this process's CPU seconds)}; T counts the
         decisions (a stop forced after `IDLE_ROUNDS` idle actions is not one).
     """
     import time
@@ -231,7 +266,7 @@ def rollout(job: dict[str, Any]) -> dict[str, Any]:
     from planner_core.learning.schedule_env import ScheduleEnv
     from planner_core.pipeline.schedule import ACTIONS, IDLE_ROUNDS, DefaultScheduler
 
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     budget, reference = int(job["budget"]), job.get("reference", "default")
     where = (budget, job.get("population"), reference)
     env = _ENVS.get(where)
@@ -278,4 +313,5 @@ def rollout(job: dict[str, Any]) -> dict[str, Any]:
             "values": np.asarray(vals), "rewards": np.asarray(rews),
             "imax": int(env.problem.hover_limit),
             "f": float(step["f"]), "phi": float(step["phi"]), "f_start": info["f_start"],
-            "f_reference": info["f_reference"], "seconds": time.perf_counter() - t0}
+            "f_reference": info["f_reference"], "seconds": time.perf_counter() - t0,
+            "cpu": time.process_time() - c0}

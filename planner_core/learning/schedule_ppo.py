@@ -18,7 +18,8 @@ One readable loop (:func:`train`), CleanRL's discrete PPO with one `Args` object
           actions, then GAE(gamma, lambda)               #   end is terminal
         `update_epochs` of PPO on minibatches            # clipped ratio, value loss, entropy,
                                                          #   plus `bc_coef` x the demos' CE
-        log the mean return (the default's is 1) and the mean f against the default's
+        log the mean return beside the default's on the same cases, and the mean f
+          against the default's
 
 Reward (the env's; `Args.reference`): by default "percent", each action's gain in f in percent
 of the stage's starting f (bounded; the env's "default" unit, the share of the gap the default
@@ -27,8 +28,10 @@ baseline is reported: each iteration's episodes against the default's f and retu
 same cases (the demonstrations).
 
     python -m planner_core.learning.schedule_ppo -o DIR [--maps 48 | --maps-file picks.json]
-        [--seeds 2]
-        [--iterations 20] [--episodes 32] [--jobs 2] [--seed 0]
+        [--seeds 2] [--iterations 20] [--episodes 32] [--jobs 1] [--seed 0] ...
+
+(every `Args` field is an option; the shipped checkpoint's command, which differs from these
+defaults, is in its manifest.json and in docs/scheduler.md)
 
 writes DIR/weights.npz and DIR/manifest.json (`schedule_policy.save`; the arguments, the
 command, the training's CPU seconds and its curve per iteration).
@@ -72,6 +75,11 @@ class Args:
     hidden: int = 64
     #: full-batch Adam steps of behaviour cloning (at 10 x `lr`)
     bc_epochs: int = 400
+    #: the least standard deviation the features are scaled by: a feature that never varies
+    #: in the demonstrations (the gain of an action the default never takes) would otherwise
+    #: reach the first layer at hundreds of its units once it varies (the shipped checkpoint
+    #: was trained with 0.001)
+    sd_floor: float = 0.1
     #: label smoothing of the cloning's cross-entropy: the warm start keeps about this much
     #: probability off the default's choice, so PPO's sampled episodes explore
     bc_smoothing: float = 0.2
@@ -175,10 +183,17 @@ def _cases(args: Args) -> list[dict[str, Any]]:
     if args.maps_file:
         try:
             picks = json.loads(Path(args.maps_file).read_text())["maps"]
-            maps = [(p["name"], generate_map(int(p["size"]), int(p["density"]), int(p["seed"])))
-                    for p in picks]
         except (OSError, KeyError, TypeError, json.JSONDecodeError) as exc:
             raise ValueError(f"maps_file: cannot read {args.maps_file}: {exc}") from None
+        if not isinstance(picks, list) or not picks:
+            raise ValueError(f"maps_file: {args.maps_file}: 'maps' must be a non-empty list")
+        maps = []
+        for i, p in enumerate(picks):
+            try:
+                maps.append((str(p["name"]), generate_map(int(p["size"]), int(p["density"]),
+                                                          int(p["seed"]))))
+            except (KeyError, TypeError, ValueError) as exc:
+                raise ValueError(f"maps_file: {args.maps_file}: entry {i}: {exc}") from None
     else:
         maps = generated_maps(args.maps, args.map_seed)
     return [{"map": data, "key": name, "plan_seed": args.plan_seed + s, "budget": args.budget,
@@ -195,6 +210,57 @@ def _run(executor: Any, jobs: list[dict[str, Any]]) -> list[dict[str, Any]]:
 def _returns_to_go(rewards: np.ndarray, gamma: float) -> np.ndarray:
     """G_t = sum_k gamma^k r_(t+k) of one episode (GAE with lambda 1 and no values)."""
     return gae(rewards, np.zeros(len(rewards)), gamma, 1.0)
+
+
+#: (field, least, greatest, least included, greatest included) of the numeric settings
+_RANGES = (
+    ("maps", 1, None, True, True), ("seeds", 1, None, True, True),
+    ("plan_seed", 0, None, True, True), ("map_seed", 0, None, True, True),
+    ("budget", 1, None, True, True), ("hidden", 1, None, True, True),
+    ("bc_epochs", 0, None, True, True), ("bc_smoothing", 0.0, 1.0, True, False),
+    ("iterations", 0, None, True, True), ("episodes", 1, None, True, True),
+    ("update_epochs", 1, None, True, True), ("minibatch", 1, None, True, True),
+    ("lr", 0.0, None, False, True), ("clip", 0.0, None, False, True),
+    ("gamma", 0.0, 1.0, False, True), ("gae_lambda", 0.0, 1.0, True, True),
+    ("ent_coef", 0.0, None, True, True), ("vf_coef", 0.0, None, True, True),
+    ("bc_coef", 0.0, None, True, True), ("max_grad_norm", 0.0, None, False, True),
+    ("sd_floor", 0.0, None, False, True), ("eval_every", 0, None, True, True),
+    ("jobs", 0, None, True, True), ("seed", 0, None, True, True),
+)
+
+
+def check(args: Args) -> None:
+    """Every setting in its range, the reference known, the output writable (its folder is
+    created by `save` at the end).
+
+    Raises:
+        ValueError: one line naming the field ("lr: must be > 0, got -1.0"); an unwritable
+            output folder as "output: ...".
+    """
+    import math
+    import os
+
+    from planner_core.atomic import check_writable
+
+    for name, lo, hi, lo_in, hi_in in _RANGES:
+        v = getattr(args, name)
+        bad = not math.isfinite(v) or (v < lo if lo_in else v <= lo) or (
+            hi is not None and (v > hi if hi_in else v >= hi))
+        if bad:
+            span = f"{'>=' if lo_in else '>'} {lo}" + (
+                "" if hi is None else f" and {'<=' if hi_in else '<'} {hi}")
+            raise ValueError(f"{name}: must be {span}, got {v}")
+    if args.reference not in ("default", "percent"):
+        raise ValueError(f"reference: must be 'default' or 'percent', got {args.reference!r}")
+    out = Path(args.output)
+    if out.is_dir():
+        check_writable(out / "weights.npz", what="output")
+        return
+    probe = out
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
+    if not probe.is_dir() or not os.access(probe, os.W_OK | os.X_OK):
+        raise ValueError(f"output: {out}: {probe} is not a folder this process can write in")
 
 
 def train(args: Args, progress: Any = None) -> dict[str, Any]:
@@ -215,13 +281,7 @@ def train(args: Args, progress: Any = None) -> dict[str, Any]:
     from planner_core.learning.schedule_policy import init_params, save
     from planner_core.pipeline.schedule import ACTIONS
 
-    for name in ("maps", "seeds", "iterations", "episodes", "update_epochs", "minibatch",
-                 "hidden"):
-        if int(getattr(args, name)) < 1 and not (name == "iterations"
-                                                 and getattr(args, name) == 0):
-            raise ValueError(f"{name}: must be >= 1, got {getattr(args, name)}")
-    if args.reference not in ("default", "percent"):
-        raise ValueError(f"reference: must be 'default' or 'percent', got {args.reference!r}")
+    check(args)
     say = progress or (lambda line: None)
     torch.manual_seed(args.seed)
     rng = np.random.default_rng(args.seed)
@@ -231,7 +291,7 @@ def train(args: Args, progress: Any = None) -> dict[str, Any]:
     with make_executor(args.jobs) as ex:
         # ---- demonstrations: the default scheduler on every case
         demos = _run(ex, [dict(c, params=None, sample_seed=None) for c in cases])
-        actor_seconds += sum(d["seconds"] for d in demos)
+        actor_seconds += sum(d["cpu"] for d in demos)
         d_obs = np.concatenate([d["obs"] for d in demos])
         d_act = np.concatenate([d["actions"] for d in demos])
         d_ret = np.concatenate([_returns_to_go(d["rewards"], args.gamma) for d in demos])
@@ -242,7 +302,7 @@ def train(args: Args, progress: Any = None) -> dict[str, Any]:
             f"{time.perf_counter() - t0:.0f} s")
         params = init_params(len(FEATURES), len(ACTIONS), args.hidden, args.seed)
         params["mu"] = d_obs.mean(axis=0).astype(float)
-        params["sd"] = np.maximum(d_obs.std(axis=0).astype(float), 1e-3)
+        params["sd"] = np.maximum(d_obs.std(axis=0).astype(float), args.sd_floor)
         agent = Agent(params)
         opt = torch.optim.Adam(agent.parameters(), lr=args.lr * 10, eps=1e-5)
         Xd = torch.tensor(d_obs, dtype=torch.float64)
@@ -269,7 +329,7 @@ def train(args: Args, progress: Any = None) -> dict[str, Any]:
             jobs = [dict(cases[i], params=weights, sample_seed=int(rng.integers(2**31 - 1)))
                     for i in pick]
             eps = [e for e in _run(ex, jobs) if len(e["actions"])]
-            actor_seconds += sum(e["seconds"] for e in eps)
+            actor_seconds += sum(e["cpu"] for e in eps)
             adv, ret = [], []
             for e in eps:
                 a, g = advantages(e, demo_by_case[e["key"], e["plan_seed"]], args)
@@ -323,7 +383,7 @@ def train(args: Args, progress: Any = None) -> dict[str, Any]:
                 # the greedy policy (what `PolicyScheduler` does) on every training case
                 weights = agent.numpy_params()
                 greedy = _run(ex, [dict(c, params=weights, sample_seed=None) for c in cases])
-                actor_seconds += sum(e["seconds"] for e in greedy)
+                actor_seconds += sum(e["cpu"] for e in greedy)
                 rel = np.array([(e["f"] / f_default[e["key"], e["plan_seed"]] - 1.0) * 100.0
                                 for e in greedy])
                 row.update(greedy_f_vs_default_pct=float(rel.mean()),
@@ -338,7 +398,7 @@ def train(args: Args, progress: Any = None) -> dict[str, Any]:
                     f"{row['greedy_departures']} leave the default's actions")
     cpu = time.process_time() - cpu0 + actor_seconds * (args.jobs > 0)
     manifest = {
-        "max_points": max(int(r["imax"]) for r in demos),
+        "max_points": max(int(r["imax"]) for r in demos), "time_limits": False,
         "cases": len(cases), "maps": sorted({c["key"] for c in cases}),
         "hidden": args.hidden, "actions": list(ACTIONS), "features": list(FEATURES),
         "args": dataclasses.asdict(args), "curve": curve,

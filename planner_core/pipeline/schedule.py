@@ -297,7 +297,10 @@ def make_scheduler(spec: str | Scheduler | None) -> Scheduler:
     """
     if spec is None or spec == "default":
         return DefaultScheduler()
-    name, _, folder = spec.partition(":") if isinstance(spec, str) else ("", "", "")
+    name, colon, folder = spec.partition(":") if isinstance(spec, str) else ("", "", "")
+    if name in LEARNED and colon and not folder.strip():
+        raise ValueError(f"scheduler: {spec!r} names no checkpoint folder after the colon "
+                         f"(the shipped one is plain {name!r})")
     if name in LEARNED:
         import importlib
 

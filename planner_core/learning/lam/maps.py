@@ -114,9 +114,18 @@ def main(argv: list[str] | None = None) -> int:
     root = Path(__file__).resolve().parents[3]
     targets = args.targets or sorted(str(p) for p in (root / "examples/maps/suite").glob(
         "T*.json"))
+    from planner_core.atomic import check_writable
+
     try:
         if args.pool < 1:
             raise ValueError(f"pool: must be >= 1, got {args.pool}")
+        if not 1 <= args.k <= args.pool:
+            raise ValueError(f"k: {args.k} must be in 1..{args.pool} (the pool's size)")
+        for name in ("pool_seed", "seed"):
+            if getattr(args, name) < 0:
+                raise ValueError(f"{name.replace('_', '-')}: must be >= 0, got "
+                                 f"{getattr(args, name)}")
+        check_writable(args.output, mkdir=True, what="output")
         pool = generated_maps(args.pool, args.pool_seed)
         zp = map_features([d for _, d in pool], features=args.features, seed=args.seed)
         zt = map_features(targets, features=args.features, seed=args.seed + 1)
@@ -128,7 +137,7 @@ def main(argv: list[str] | None = None) -> int:
     picks = [dict(zip(("size", "density", "seed"), generated_spec(int(i), args.pool_seed),
                       strict=True), name=pool[i][0], distance=float(dist[i])) for i in idx]
     doc = {"pool": args.pool, "pool_seed": args.pool_seed, "k": args.k,
-           "selection": args.selection, "features": args.features,
+           "selection": args.selection, "features": args.features, "seed": args.seed,
            "targets": [Path(t).name for t in targets], "maps": picks,
            "mean_distance_chosen": float(dist[idx].mean()),
            "mean_distance_pool": float(dist.mean())}
