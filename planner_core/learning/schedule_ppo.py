@@ -132,15 +132,15 @@ class Agent(nn.Module):
 
 def gae(rewards: np.ndarray, values: np.ndarray, gamma: float, lam: float) -> np.ndarray:
     """Generalised advantage estimates of one episode that ends in a terminal state
-    (Schulman et al. 2016, Eq. 16). rewards, values: (T,). Returns (T,)."""
-    adv = np.zeros(len(rewards))
-    last = 0.0
-    for t in range(len(rewards) - 1, -1, -1):
-        nxt = values[t + 1] if t + 1 < len(values) else 0.0
-        delta = rewards[t] + gamma * nxt - values[t]
-        last = delta + gamma * lam * last
-        adv[t] = last
-    return adv
+    (`planner_core.learning.policy.ppo.gae` on a single column, done at the last step).
+    rewards, values: (T,). Returns (T,)."""
+    from planner_core.learning.policy.ppo import gae as segment_gae
+
+    r = np.asarray(rewards, dtype=float)[:, None]
+    done = np.zeros_like(r)
+    done[-1:] = 1.0
+    return segment_gae(r, np.asarray(values, dtype=float)[:, None], done, np.zeros(1), gamma,
+                       lam)[:, 0]
 
 
 def advantages(episode: dict[str, Any], demo: dict[str, Any], args: Args

@@ -28,8 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from planner_core.model.formulas import deb_better
-from planner_core.search.descent import Descent, Evaluate, hover_of
+from planner_core.search.descent import Descent, Evaluate
 
 __all__ = ["OWNS", "REBUILD_ATTEMPTS", "WINDOWS", "Rebuilder", "rebuild"]
 
@@ -114,7 +113,8 @@ def rebuild(
 ) -> Descent | None:
     """Large neighbourhood search around plan x (d,): `Rebuilder.draw` destroys a window of
     hover points and repairs it with new sites; each drawn plan is evaluated with its LP hover
-    times and descended in a race against the incumbent (`structure._move`, at most
+    times and descended in a race against the incumbent (`structure.perturbation_search`, the
+    loop `kicks` shares, through `structure._move`: at most
     `move_trials` more evaluations, legs through obstacles re-routed first), and kept when
     Deb-better; repeated until `trials` evaluations are spent (at most `REBUILD_ATTEMPTS` x
     `trials` draws). Zero-time points (detour corners, points the LP left idle) are dropped
@@ -130,33 +130,20 @@ def rebuild(
         The best plan found (`Descent`), or None in the fixed-length mode or with tau <= 0
         (the number of points is fixed), for an infeasible x or `trials` < 1.
     """
-    from planner_core.search.structure import _move
+    from planner_core.search.structure import perturbation_search
 
     if not problem.variable_length or problem.tau <= 0.0 or trials < 1:
         return None
-    x = np.asarray(x, dtype=float)
-    b = problem.breakdown(x)
-    if b["phi"] > 0 or not b["hover_points"]:
-        return None
-    rb = rebuilder if rebuilder is not None else Rebuilder(problem)
     rng = np.random.default_rng(np.random.SeedSequence([int(seed), 43, int(stream)]))
-    best_x, best_f, best_phi, f_start = x, float(b["f"]), 0.0, float(b["f"])
-    P, T = hover_of(b)
-    spent = 0
-    for _ in range(REBUILD_ATTEMPTS * trials):  # refused draws cost no evaluation: bounded apart
-        if spent >= trials:
-            break
+    rb = rebuilder
+
+    def destroy_and_repair(P: np.ndarray, T: np.ndarray) -> np.ndarray | None:
+        nonlocal rb
+        if rb is None:  # built on the first draw: not for an infeasible x
+            rb = Rebuilder(problem)
         keep = T > 0.0
-        Q = rb.draw(P[keep], T[keep], rng)
-        if Q is None:
-            continue
-        tried = _move(problem, Q, evaluate, min(move_trials + 1, trials - spent), reroute=True,
-                      incumbent=best_f)
-        if tried is None:
-            continue
-        xq, fq, phiq, n = tried
-        spent += n
-        if deb_better(fq, phiq, best_f, best_phi):
-            best_x, best_f, best_phi = xq, fq, phiq
-            P, T = hover_of(problem.breakdown(xq))
-    return Descent(best_x, best_f, best_phi, spent, f_start)
+        return rb.draw(P[keep], T[keep], rng)
+
+    return perturbation_search(problem, x, evaluate, destroy_and_repair, trials=trials,
+                               attempts=REBUILD_ATTEMPTS, move_trials=move_trials,
+                               reroute=True)

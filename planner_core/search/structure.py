@@ -259,32 +259,60 @@ def kicks(
     standard deviation per axis. Seeded: the same seed and `stream` (0: the final stage's own;
     the pipeline's later rounds pass their round) give the same plan. None for an infeasible
     x or `trials` < 1."""
-    x = np.asarray(x, dtype=float)
-    b = problem.breakdown(x)
-    if b["phi"] > 0 or trials < 1 or not b["hover_points"]:
-        return None
     m = problem.model
     key = [int(seed), 17] if not stream else [int(seed), 17, int(stream)]
     rng = np.random.default_rng(np.random.SeedSequence(key))
     box = np.array([m.width, m.height])
-    best_x, best_f, best_phi, f_start = x, float(b["f"]), 0.0, float(b["f"])
-    P = hover_of(b)[0]
-    spent = 0
-    for _ in range(KICK_ATTEMPTS * trials):  # refused kicks cost no evaluation: bounded apart
-        if spent >= trials:
-            break
+
+    def kick(P: np.ndarray, T: np.ndarray) -> np.ndarray:
         Q = P.copy()
         i = int(rng.integers(len(Q)))
         Q[i] = np.clip(Q[i] + rng.normal(0.0, float(spread), 2), 0.0, box)
+        return Q
+
+    return perturbation_search(problem, x, evaluate, kick, trials=trials,
+                               attempts=KICK_ATTEMPTS, move_trials=move_trials)
+
+
+def perturbation_search(
+    problem: Any, x: np.ndarray, evaluate: Evaluate, draw: Any, *, trials: int,
+    attempts: int, move_trials: int = 40, reroute: bool = False,
+) -> Descent | None:
+    """The loop `kicks` and `rebuild` (`planner_core.search.rebuild`) share: `draw(P, T)`
+    perturbs the incumbent's hover points P (I, 2) (T (I,) their hover times) into new points
+    Q, or returns None; Q is evaluated with its LP hover times and descended in a race against
+    the incumbent (`_move`, at most `move_trials` more evaluations; `reroute`: legs through
+    obstacles re-routed first) and kept when Deb-better; until `trials` evaluations are spent
+    or `attempts` x `trials` draws made (a draw refused before evaluation costs none).
+
+    Returns:
+        The best plan found (`Descent`); None for an infeasible x (d,), a plan without hover
+        points or `trials` < 1.
+
+    Cost: per draw, what `draw` costs plus a move's (one LP, O(I x J), and its descent).
+    """
+    x = np.asarray(x, dtype=float)
+    b = problem.breakdown(x)
+    if b["phi"] > 0 or trials < 1 or not b["hover_points"]:
+        return None
+    best_x, best_f, best_phi, f_start = x, float(b["f"]), 0.0, float(b["f"])
+    P, T = hover_of(b)
+    spent = 0
+    for _ in range(attempts * trials):  # refused draws cost no evaluation: bounded apart
+        if spent >= trials:
+            break
+        Q = draw(P, T)
+        if Q is None:
+            continue
         tried = _move(problem, Q, evaluate, min(move_trials + 1, trials - spent),
-                      incumbent=best_f)
+                      reroute=reroute, incumbent=best_f)
         if tried is None:
             continue
         xq, fq, phiq, n = tried
         spent += n
         if deb_better(fq, phiq, best_f, best_phi):
             best_x, best_f, best_phi = xq, fq, phiq
-            P = hover_of(problem.breakdown(xq))[0]
+            P, T = hover_of(problem.breakdown(xq))
     return Descent(best_x, best_f, best_phi, spent, f_start)
 
 
