@@ -81,46 +81,70 @@ def case_features(problem: Any, run: Any) -> dict[str, float]:
 
 
 def run_grid(maps: list[tuple[str, Any]], seeds: list[int], budget: int,
-             templates: list[str], out: Any) -> list[dict[str, Any]]:
-    """Every template on every map and seed (the prefix up to `improve` run once each)."""
+             templates: list[str], out: Any, splits: list[float] | None = None
+             ) -> list[dict[str, Any]]:
+    """Every template on every map and seed (the prefix up to `improve` run once each).
+
+    With `splits` (DE shares) the prefix stops before the DE instead, and each template
+    runs the rest once per split (`PipelineRun.fork(config=)`: the same plan as a whole run
+    with that `de_share`), except a scheduler with `configure` (lamde-s with its split
+    table), which runs once with the share it picks. Every record holds its `de_share`, the
+    whole plan's CPU seconds (`cpu_seconds`: the prefix's and the fork's, process time) and
+    the map's features (`map_features`: the split table's inputs)."""
+    from planner_core.learning.schedule_select import map_features
     from planner_core.model.mapio import load_map
     from planner_core.model.problem import Problem
     from planner_core.pipeline import DEFAULT_PIPELINE, PlanConfig
     from planner_core.pipeline.pipeline import PipelineRun
+    from planner_core.pipeline.schedule import configured, make_scheduler
 
     records, commit = [], _commit()
     for name, src in maps:
         problem = Problem(load_map(src).planning_map())
+        mfeats = map_features(problem)
         for seed in seeds:
             cfg = PlanConfig(seed=seed, budget=budget)
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             base = PipelineRun(problem, cfg, pipeline=DEFAULT_PIPELINE, evaluator=None,
                                progress=None)
-            base.advance(until="improve")
-            prefix_s = time.perf_counter() - t0
+            base.advance(until="de" if splits else "improve")
+            prefix_s, prefix_cpu = time.perf_counter() - t0, time.process_time() - c0
             f_start = float(base.ev.best()[1]) if base.ev.has_best else float("inf")
-            feats = case_features(problem, base) if base.ev.has_best else {}
+            feats = case_features(problem, base) if base.ev.has_best and not splits else {}
+            n0 = len(records)
             for tpl in templates:
-                run = base.fork(tpl)
-                t1 = time.perf_counter()
-                run.advance()
-                r = run.result()
-                imp = [s for s in r.stages if s.name == "improve"]
-                rec = {"map": name, "seed": seed, "budget": budget, "template": tpl,
-                       "f": r.f, "phi": r.phi, "f_start": f_start,
-                       "evaluations": r.evaluations,
-                       "improve_evaluations": imp[0].evaluations if imp else 0,
-                       "actions": list(r.state.actions),
-                       "improve_seconds": round(time.perf_counter() - t1, 3),
-                       "prefix_seconds": round(prefix_s, 3), "features": feats,
-                       "commit": commit}
-                records.append(rec)
-                if out is not None:
-                    out.write(json.dumps(rec) + "\n")
-                    out.flush()
+                learned_split = bool(splits) and hasattr(make_scheduler(tpl), "configure")
+                if not splits:
+                    configs = [None]
+                elif learned_split:
+                    configs = [configured(tpl, problem, cfg)]
+                else:
+                    configs = [cfg.replace(de_share=x) for x in splits]
+                for c in configs:
+                    run = base.fork(tpl, config=c)
+                    t1, c1 = time.perf_counter(), time.process_time()
+                    run.advance()
+                    r = run.result()
+                    imp = [s for s in r.stages if s.name == "improve"]
+                    rec = {"map": name, "seed": seed, "budget": budget, "template": tpl,
+                           "arm": tpl if not splits or learned_split
+                           else f"{tpl}@{run.config.de_share:g}",
+                           "de_share": run.config.de_share,
+                           "f": r.f, "phi": r.phi, "f_start": f_start,
+                           "evaluations": r.evaluations,
+                           "improve_evaluations": imp[0].evaluations if imp else 0,
+                           "actions": list(r.state.actions),
+                           "improve_seconds": round(time.perf_counter() - t1, 3),
+                           "prefix_seconds": round(prefix_s, 3),
+                           "cpu_seconds": round(prefix_cpu + time.process_time() - c1, 3),
+                           "features": feats,
+                           "map_features": mfeats, "commit": commit}
+                    records.append(rec)
+                    if out is not None:
+                        out.write(json.dumps(rec) + "\n")
+                        out.flush()
             print(f"{name} seed {seed}: f_start {f_start:.3f}, " + ", ".join(
-                f"{r['template']} {r['f']:.3f}" for r in records[-len(templates):]),
-                file=sys.stderr, flush=True)
+                f"{r['arm']} {r['f']:.3f}" for r in records[n0:]), file=sys.stderr, flush=True)
     return records
 
 
@@ -133,17 +157,28 @@ def _read(paths: list[str]) -> list[dict[str, Any]]:
     return out
 
 
+def _arm(r: dict[str, Any]) -> str:
+    """A record's arm: its template, or "template@share" for a split run (`--splits`)."""
+    return str(r.get("arm", r["template"]))
+
+
 def summarise(records: list[dict[str, Any]]) -> str:
-    """The markdown table of the module docstring."""
+    """The markdown table of the module docstring (an arm is a template, or with `--splits`
+    a template at a DE share, "default@0.6"; "x CPU" is the mean of each case's whole-plan
+    CPU over the reference arm's, where the records hold it)."""
     from scipy.stats import wilcoxon
+
+    from planner_core.defaults import DE_SHARE
 
     by_case: dict[tuple[str, int, int], dict[str, dict[str, Any]]] = {}
     for r in records:
-        by_case.setdefault((r["map"], r["seed"], r["budget"]), {})[r["template"]] = r
-    templates = list(dict.fromkeys(r["template"] for r in records))
-    # the paired columns compare with the default, or with the first template when the
-    # records have no default's runs (`--templates alternate kicks-rebuild`)
-    ref = "default" if "default" in templates else templates[0]
+        by_case.setdefault((r["map"], r["seed"], r["budget"]), {})[_arm(r)] = r
+    templates = list(dict.fromkeys(_arm(r) for r in records))
+    # the paired columns compare with the default (at the default split), or with the first
+    # template when the records have no default's runs (`--templates alternate kicks-rebuild`)
+    ref = next((t for t in ("default", f"default@{DE_SHARE:g}") if t in templates),
+               templates[0])
+    cpu: dict[str, list[float]] = {t: [] for t in templates}
     gaps: dict[str, list[float]] = {t: [] for t in templates}
     wins = dict.fromkeys(templates, 0)
     infeasible = dict.fromkeys(templates, 0)
@@ -169,14 +204,18 @@ def summarise(records: list[dict[str, Any]]) -> str:
             for t, r in case.items():
                 if r["phi"] == 0:
                     paired[t].append((r["f"] - best) / best * 100.0 - gd)
-    ev = {t: statistics.fmean(r["improve_evaluations"] for r in records if r["template"] == t)
+        if case[ref].get("cpu_seconds"):
+            for t, r in case.items():
+                if "cpu_seconds" in r:
+                    cpu[t].append(r["cpu_seconds"] / case[ref]["cpu_seconds"])
+    ev = {t: statistics.fmean(r["improve_evaluations"] for r in records if _arm(r) == t)
           for t in templates}
-    sec = {t: statistics.fmean(r["improve_seconds"] for r in records if r["template"] == t)
+    sec = {t: statistics.fmean(r["improve_seconds"] for r in records if _arm(r) == t)
            for t in templates}
     lines = [f"{cases} (map, seed) cases, budget {sorted({k[2] for k in by_case})}", "",
              f"| template | mean gap % | best in | vs {ref}: mean diff % | better / worse "
-             "| Wilcoxon p | improve evals | improve s | infeasible |",
-             "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+             "| Wilcoxon p | improve evals | improve s | x CPU | infeasible |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     order = sorted(templates, key=lambda t: statistics.fmean(gaps[t]) if gaps[t] else 1e9)
     for t in order:
         d = paired[t]
@@ -186,8 +225,9 @@ def summarise(records: list[dict[str, Any]]) -> str:
             p = f"{wilcoxon(d).pvalue:.3g}"
         mean = statistics.fmean(gaps[t]) if gaps[t] else float("nan")
         diff = statistics.fmean(d) if d else float("nan")
+        x_cpu = f"{statistics.fmean(cpu[t]):.2f}" if cpu[t] else "-"
         lines.append(f"| {t} | {mean:.4f} | {wins[t]} | {diff:+.4f} | {better} / {worse} | "
-                     f"{p} | {ev[t]:.0f} | {sec[t]:.2f} | {infeasible[t]} |")
+                     f"{p} | {ev[t]:.0f} | {sec[t]:.2f} | {x_cpu} | {infeasible[t]} |")
     return "\n".join(lines)
 
 
@@ -357,6 +397,10 @@ def main(argv: list[str] | None = None) -> int:
                     help="schedules to compare (default: all registered but 'alternate', "
                     "which is the default's cycle written out, and the learned ones); a "
                     "learned one may name its checkpoint folder: lamde-s-ppo:DIR")
+    ap.add_argument("--splits", nargs="+", type=float, metavar="SHARE",
+                    help="DE shares to run each template at (e.g. 0.6 0.4 0.3): the prefix "
+                    "stops before the DE; a learned scheduler with a split table (lamde-s) "
+                    "runs once at the share it picks; records for the split table's fit")
     ap.add_argument("-o", "--output", help="JSON lines file to write the runs to")
     ap.add_argument("--summary", nargs="+", metavar="JSONL",
                     help="print the table of earlier records (plain or .gz) and exit")
@@ -398,6 +442,10 @@ def main(argv: list[str] | None = None) -> int:
         print(f"bench_schedule: --templates: unknown {bad}" if bad else
               "bench_schedule: --maps and --seeds: must be >= 1", file=sys.stderr)
         return 2
+    if args.splits is not None and not all(0.0 <= x <= 1.0 for x in args.splits):
+        print(f"bench_schedule: --splits: each must be in [0, 1], got {args.splits}",
+              file=sys.stderr)
+        return 2
     if args.suite is not None and args.large is not None:
         print("bench_schedule: --suite and --large: choose one", file=sys.stderr)
         return 2
@@ -413,7 +461,8 @@ def main(argv: list[str] | None = None) -> int:
             else generated_maps(args.maps, args.map_seed))
     out = open(args.output, "w") if args.output else None  # noqa: SIM115
     try:
-        records = run_grid(maps, list(range(args.seeds)), args.budget, args.templates, out)
+        records = run_grid(maps, list(range(args.seeds)), args.budget, args.templates, out,
+                           splits=args.splits)
     finally:
         if out is not None:
             out.close()

@@ -142,7 +142,7 @@ def plan(
     result = run_pipeline(problem, config, progress=progress,
                           scheduler=None if default_schedule else scheduler)
     best = problem.breakdown(result.x)
-    settings = config.to_dict()
+    settings = result.state.config.to_dict()  # as run: a scheduler may set the DE's share
     if not default_schedule:
         settings["scheduler"] = scheduler_name(scheduler)
         if result.state.schedule is not None:  # the template a learned scheduler chose

@@ -21,6 +21,16 @@ the JSON lines of `benchmarks/bench_schedule.py` (one line per case and template
 case's features) and keeps the cases where every template ran and was feasible; `k` is chosen
 by leave-one-map-out on the training records themselves (`cross_validate`).
 
+The DE's share of the budget (the split, `PlanConfig.de_share`) is chosen too, before the
+run's first stage (`SelectorScheduler.configure`), by a second table (`SplitTable`, fitted on
+`bench_schedule.py --splits` records): from the map alone (`SPLIT_FEATURES`: sensors,
+obstacles, area, I_max and the Clark-Evans ratio of the sensors' layout) the k nearest
+training cases give each split's mean gap to the per-case best split and its mean CPU time
+against the default split's; the split of least mean gap among those within the CPU cap
+(`SplitTable.cap`, 1.5x: issue 34's) is run. Where the DE improves nothing (beyond the paper's
+sizes, docs/scheduler.md) a smaller share leaves more of the budget to the improving rounds,
+at the cost of their time.
+
 Cost: the features are one `Problem.breakdown` per feasible pool plan (the pool holds the
 constructive, seeder and descended plans: ~100 at the default; O(I x J) each) plus O(n x 9)
 for the neighbours over a table of n cases, once per plan; the schedule it picks costs what
@@ -45,8 +55,10 @@ from planner_core.pipeline.schedule import _points, pool_structures
 __all__ = [
     "DEFAULT_TABLE",
     "FEATURES",
+    "SPLIT_FEATURES",
     "SelectorScheduler",
     "SelectorTable",
+    "SplitTable",
     "cases_from_records",
     "cross_validate",
     "fit",
@@ -59,6 +71,11 @@ FEATURES: tuple[str, ...] = ("sensors", "obstacles", "area_km2", "imax", "f_vs_c
                              "improve_share")
 #: features taken as log1p (counts and sizes spanning decades)
 _LOG = frozenset({"sensors", "obstacles", "area_km2", "imax", "structures"})
+#: the split table's inputs (`map_features`), in its column order
+SPLIT_FEATURES: tuple[str, ...] = ("sensors", "obstacles", "area_km2", "imax", "clark_evans")
+#: the split table's CPU cap: a split is chosen only where its mean CPU time over the
+#: neighbours is at most this times the default split's (issue 34: 1.5x the default plan)
+CPU_CAP = 1.5
 #: the shipped table
 DEFAULT_TABLE = Path(__file__).resolve().parent / "checkpoints" / "lamde-s"
 #: k values `fit` tries by leave-one-map-out
@@ -101,11 +118,51 @@ def run_features(problem: Any, x: np.ndarray, f: float, pool: Any, remaining: in
     }
 
 
-def _transform(F: np.ndarray) -> np.ndarray:
-    """log1p of the count columns (`_LOG`), the rest as they are; F (n, 9)."""
+def map_features(problem: Any) -> dict[str, float]:
+    """The split table's features of a problem, before any stage runs (O(J log J)).
+
+    Args:
+        problem: the run's `Problem`.
+
+    Returns:
+        `SPLIT_FEATURES` -> value: sensors J, obstacles (circles, rectangles, no-fly zones,
+        polygons), area (km^2), I_max, and the Clark-Evans ratio of the sensors (their mean
+        nearest-neighbour distance over 0.5 sqrt(area / J), the mean for points drawn
+        uniformly: about 1 for a uniform layout, below for clustered fields, above for a
+        regular one; Clark & Evans, Ecology 35(4), 1954; 1 for fewer than 2 sensors).
+    """
+    from scipy.spatial import cKDTree
+
+    xy = np.asarray(problem.sensors, dtype=float).reshape(-1, 2)
+    area = problem.map.width * problem.map.height
+    ce = 1.0
+    if len(xy) >= 2 and area > 0:
+        d, _ = cKDTree(xy).query(xy, k=2)
+        ce = float(d[:, 1].mean() / (0.5 * np.sqrt(area / len(xy))))
+    return {
+        "sensors": float(len(xy)),
+        "obstacles": float(problem.map.spec.obstacles.count),
+        "area_km2": area / 1e6,
+        "imax": float(problem.n_points),
+        "clark_evans": ce,
+    }
+
+
+def _transform(F: np.ndarray, names: Sequence[str] = FEATURES) -> np.ndarray:
+    """log1p of the count columns (`_LOG`), the rest as they are; F (n, len(names))."""
     F = np.asarray(F, dtype=float)
-    logs = np.array([n in _LOG for n in FEATURES])
+    logs = np.array([n in _LOG for n in names])
     return np.where(logs, np.log1p(np.abs(F)), F)
+
+
+def _nearest(F: np.ndarray, v: np.ndarray, k: int, names: Sequence[str]) -> np.ndarray:
+    """Indices of the k rows of F (n, m) nearest to v (m,): features transformed
+    (`_transform`), standardised on F, Euclidean distance, ties by row order."""
+    Z = _transform(F, names)
+    mu, sd = Z.mean(0), Z.std(0) + 1e-9
+    z = (_transform(v[None], names)[0] - mu) / sd
+    d = (((Z - mu) / sd - z) ** 2).sum(1)
+    return np.argsort(d, kind="stable")[:k]
 
 
 @dataclass(frozen=True)
@@ -146,11 +203,7 @@ class SelectorTable:
                      else features, dtype=float)
         idx = np.arange(len(self.gaps)) if rows is None else np.flatnonzero(
             rows) if np.asarray(rows).dtype == bool else np.asarray(rows)
-        Z = _transform(self.features[idx])
-        mu, sd = Z.mean(0), Z.std(0) + 1e-9
-        z = (_transform(v[None])[0] - mu) / sd
-        d = (((Z - mu) / sd - z) ** 2).sum(1)
-        near = np.argsort(d, kind="stable")[: (k or self.k)]
+        near = _nearest(self.features[idx], v, k or self.k, FEATURES)
         return self.templates[int(np.argmin(self.gaps[idx][near].mean(0)))]
 
     def save(self, directory: str | Path) -> Path:
@@ -276,6 +329,189 @@ def fit(records: Iterable[dict[str, Any]], k: int | None = None,
     return SelectorTable(F, G, tuple(templates), maps, int(best_k), info)
 
 
+@dataclass(frozen=True)
+class SplitTable:
+    """The training cases of the split choice (`bench_schedule.py --splits` records).
+
+    Attributes:
+        features: (n, 5) raw `SPLIT_FEATURES` of the n training cases (map, seed).
+        gaps: (n, S) per cent gap of each split's plan to the case's best split.
+        cpu: (n, S) each split's whole-plan CPU time over the default split's on that case.
+        splits: the S DE shares, the default (`planner_core.defaults.DE_SHARE`) first.
+        maps: (n,) the map of each case; k: neighbours; cap: the CPU cap (`CPU_CAP`).
+        meta: what it was fitted on and its leave-one-map-out figures.
+    """
+
+    features: np.ndarray
+    gaps: np.ndarray
+    cpu: np.ndarray
+    splits: tuple[float, ...]
+    maps: tuple[str, ...]
+    k: int
+    cap: float
+    meta: dict[str, Any]
+
+    def predict(self, features: dict[str, float] | Sequence[float],
+                rows: np.ndarray | None = None, k: int | None = None) -> float:
+        """The DE share for one map.
+
+        Args:
+            features: `SPLIT_FEATURES` -> value (`map_features`), or the 5 values in order.
+            rows: the training rows to use (boolean (n,) or indices; None: all).
+            k: neighbours (None: the table's).
+
+        Returns:
+            The split of least mean gap over the k nearest rows among those whose mean CPU
+            ratio there is at most `cap` (the default split always qualifies; ties to the
+            earlier in `splits`, the default first).
+        """
+        v = np.array([features[n] for n in SPLIT_FEATURES] if isinstance(features, dict)
+                     else features, dtype=float)
+        idx = np.arange(len(self.gaps)) if rows is None else np.flatnonzero(
+            rows) if np.asarray(rows).dtype == bool else np.asarray(rows)
+        near = idx[_nearest(self.features[idx], v, k or self.k, SPLIT_FEATURES)]
+        return self.splits[_capped_best(self.gaps[near], self.cpu[near], self.cap)]
+
+    def save(self, directory: str | Path) -> Path:
+        """Write `split.npz` and `split.json` into `directory` (created). Returns it."""
+        out = Path(directory)
+        out.mkdir(parents=True, exist_ok=True)
+        np.savez_compressed(out / "split.npz", features=self.features, gaps=self.gaps,
+                            cpu=self.cpu, splits=np.array(self.splits),
+                            maps=np.array(self.maps))
+        meta = dict(self.meta, k=self.k, cap=self.cap, features=list(SPLIT_FEATURES),
+                    splits=list(self.splits), cases=len(self.gaps), maps=len(set(self.maps)))
+        (out / "split.json").write_text(json.dumps(meta, indent=1, sort_keys=True) + "\n")
+        return out
+
+    @classmethod
+    def load(cls, directory: str | Path = DEFAULT_TABLE) -> SplitTable | None:
+        """Read a table written by `save`; None when the folder has none (`split.npz`).
+
+        Raises:
+            ValueError: one line naming the folder when its split table does not load.
+        """
+        d = Path(directory)
+        if not (d / "split.npz").exists():
+            return None
+        try:
+            with np.load(d / "split.npz") as z:
+                arrays = {n: z[n] for n in ("features", "gaps", "cpu", "splits", "maps")}
+            meta = json.loads((d / "split.json").read_text())
+            table = cls(arrays["features"].astype(float), arrays["gaps"].astype(float),
+                        arrays["cpu"].astype(float),
+                        tuple(float(x) for x in arrays["splits"]),
+                        tuple(str(m) for m in arrays["maps"]), int(meta["k"]),
+                        float(meta["cap"]), meta)
+        except (OSError, KeyError, ValueError, TypeError) as exc:
+            raise ValueError(f"scheduler: the split table in {d} does not load ({exc})"
+                             ) from None
+        if list(meta.get("features", [])) != list(SPLIT_FEATURES):
+            raise ValueError(f"scheduler: the split table in {d} was fitted on other "
+                             f"features {meta.get('features')}")
+        n, S = table.gaps.shape
+        if table.features.shape != (n, len(SPLIT_FEATURES)) or table.cpu.shape != (n, S) \
+                or len(table.splits) != S or len(table.maps) != n or n == 0:
+            raise ValueError(f"scheduler: the split table in {d} has inconsistent shapes")
+        return table
+
+
+def _capped_best(gaps: np.ndarray, cpu: np.ndarray, cap: float) -> int:
+    """The column of least mean gap over the rows of gaps (n, S) among those whose mean CPU
+    ratio (cpu (n, S)) is at most `cap`; column 0 (the default split) always qualifies."""
+    g = gaps.mean(0)
+    over = cpu.mean(0) > cap
+    over[0] = False
+    return int(np.argmin(np.where(over, np.inf, g)))
+
+
+def split_cases(records: Iterable[dict[str, Any]]) -> tuple[
+        list[tuple[str, int]], np.ndarray, np.ndarray, np.ndarray, list[float]]:
+    """The complete cases of split records (`bench_schedule.py --splits`, template
+    "default").
+
+    Returns:
+        (keys, F, G, C, splits): the splits every case ran (the default first, then
+        descending); (map, seed) of each case where all were feasible; F (n, 5) map
+        features; G (n, S) per cent gaps to the case's best split; C (n, S) CPU time over
+        the default split's.
+
+    Raises:
+        ValueError: no case ran the default split.
+    """
+    from planner_core.defaults import DE_SHARE
+
+    by_case: dict[tuple[str, int], dict[float, dict[str, Any]]] = {}
+    for r in records:
+        if r.get("template") == "default" and "de_share" in r:
+            by_case.setdefault((r["map"], r["seed"]), {})[float(r["de_share"])] = r
+    common = set.intersection(*(set(c) for c in by_case.values())) if by_case else set()
+    if DE_SHARE not in common:
+        raise ValueError(f"records: need split runs where every case ran the default split "
+                         f"{DE_SHARE} (template 'default', bench_schedule.py --splits)")
+    splits = [DE_SHARE, *sorted(common - {DE_SHARE}, reverse=True)]
+    keys, F, G, C = [], [], [], []
+    for key, c in by_case.items():
+        rows = [c[x] for x in splits]
+        feats = rows[0].get("map_features") or {}
+        if any(r["phi"] != 0 for r in rows) or set(SPLIT_FEATURES) - set(feats):
+            continue
+        best = min(r["f"] for r in rows)
+        keys.append(key)
+        F.append([feats[n] for n in SPLIT_FEATURES])
+        G.append([(r["f"] - best) / best * 100 for r in rows])
+        C.append([r["cpu_seconds"] / rows[0]["cpu_seconds"] for r in rows])
+    S = len(splits)
+    return (keys, np.array(F, dtype=float).reshape(-1, len(SPLIT_FEATURES)),
+            np.array(G, dtype=float).reshape(-1, S), np.array(C, dtype=float).reshape(-1, S),
+            splits)
+
+
+def cross_validate_split(table: SplitTable, k: int | None = None) -> dict[str, float]:
+    """Leave one map out over the split table's cases: each held-out case's split chosen from
+    the other maps' cases, against the best static split of those maps within the cap (the
+    least mean gap among the splits whose mean CPU ratio is at most `cap`).
+
+    Returns:
+        mean gaps (per cent) and mean CPU ratios of the choice and of the static split, and
+        the cases where the choice is better / worse.
+    """
+    maps = np.array(table.maps)
+    chosen, static, c_cpu, s_cpu = [], [], [], []
+    for m in np.unique(maps):
+        train = maps != m
+        s = _capped_best(table.gaps[train], table.cpu[train], table.cap)
+        for i in np.flatnonzero(~train):
+            pick = table.splits.index(table.predict(table.features[i], rows=train, k=k))
+            chosen.append(table.gaps[i, pick])
+            static.append(table.gaps[i, s])
+            c_cpu.append(table.cpu[i, pick])
+            s_cpu.append(table.cpu[i, s])
+    c, st = np.array(chosen), np.array(static)
+    return {"selector": float(c.mean()), "static": float(st.mean()), "cases": len(c),
+            "better": int((c < st).sum()), "worse": int((c > st).sum()),
+            "selector_cpu": float(np.mean(c_cpu)), "static_cpu": float(np.mean(s_cpu))}
+
+
+def fit_split(records: Iterable[dict[str, Any]], k: int | None = None, cap: float = CPU_CAP,
+              meta: dict[str, Any] | None = None) -> SplitTable:
+    """A split table from split records (`split_cases`); k by leave-one-map-out when None.
+
+    Raises:
+        ValueError: no complete, feasible case.
+    """
+    keys, F, G, C, splits = split_cases(records)
+    if not len(keys):
+        raise ValueError("records: no case where every split ran and was feasible")
+    maps = tuple(m for m, _ in keys)
+    table = SplitTable(F, G, C, tuple(splits), maps, k or K_GRID[0], float(cap),
+                       dict(meta or {}))
+    cv = {kk: cross_validate_split(table, kk) for kk in ((k,) if k else K_GRID)}
+    best_k = min(cv, key=lambda kk: (cv[kk]["selector"], kk))
+    info = dict(meta or {}, cross_validation={str(kk): v for kk, v in cv.items()})
+    return SplitTable(F, G, C, tuple(splits), maps, int(best_k), float(cap), info)
+
+
 class SelectorScheduler:
     """`--scheduler lamde-s`: at the stage's first decision, the template the selector table
     predicts from `run_features`; then that template's choices (`make_scheduler`). Beyond the
@@ -288,16 +524,38 @@ class SelectorScheduler:
 
     name = "lamde-s"
 
-    def __init__(self, table: SelectorTable | None = None) -> None:
+    def __init__(self, table: SelectorTable | None = None,
+                 split: SplitTable | None | bool = True) -> None:
         self.table = table if table is not None else _shipped()
+        #: the split table (`configure`); True: the shipped one; None or False: none
+        self.split: SplitTable | None = _shipped_split() if split is True else split or None
         self.template: str | None = None
         self._inner: Any = None
         self._problem: Any = None
 
     @classmethod
     def from_checkpoint(cls, folder: str) -> SelectorScheduler:
-        """The selector of a table folder (`--scheduler lamde-s:DIR`; `SelectorTable.load`)."""
-        return cls(SelectorTable.load(folder))
+        """The selector of a table folder (`--scheduler lamde-s:DIR`; `SelectorTable.load`,
+        and its split table when the folder has one, `SplitTable.load`)."""
+        return cls(SelectorTable.load(folder), SplitTable.load(folder))
+
+    def configure(self, problem: Any, config: Any) -> Any:
+        """The run's config with the DE share the split table picks for `problem`
+        (`map_features`; `SplitTable.predict`), before any stage runs. A config whose
+        `de_share` is not the default's keeps it, as does a selector without a split table.
+
+        Args:
+            problem: the run's `Problem`; config: its `PlanConfig`.
+
+        Returns:
+            A `PlanConfig` (`config` itself when nothing changes).
+        """
+        from planner_core.defaults import DE_SHARE
+
+        if self.split is None or config.de_share != DE_SHARE:
+            return config
+        share = self.split.predict(map_features(problem))
+        return config if share == config.de_share else config.replace(de_share=share)
 
     def reset(self, problem: Any, config: Any) -> None:
         """Forget the last run's choice."""
@@ -324,12 +582,19 @@ class SelectorScheduler:
 
 
 _SHIPPED: list[SelectorTable] = []
+_SHIPPED_SPLIT: list[SplitTable | None] = []
 
 
 def _shipped() -> SelectorTable:
     if not _SHIPPED:
         _SHIPPED.append(SelectorTable.load(DEFAULT_TABLE))
     return _SHIPPED[0]
+
+
+def _shipped_split() -> SplitTable | None:
+    if not _SHIPPED_SPLIT:
+        _SHIPPED_SPLIT.append(SplitTable.load(DEFAULT_TABLE))
+    return _SHIPPED_SPLIT[0]
 
 
 def _read(paths: Sequence[str]) -> list[dict[str, Any]]:

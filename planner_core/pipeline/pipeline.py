@@ -136,13 +136,19 @@ class PipelineRun:
     """One run of a pipeline, stage by stage: `run_pipeline` runs it through; the scheduling
     env (`planner_core.learning.schedule_env`) stops it before a stage (`advance(until)`),
     opens that stage's allotment (`enter`), steps it from outside, then closes it (`leave`)
-    and runs the rest. Args as `run_pipeline`'s."""
+    and runs the rest. Args as `run_pipeline`'s. A stage with `configure(problem, config)`
+    (the improving stage, for its scheduler: `schedule.configured`) may change the config
+    before the first stage; the run keeps the one it ran with (`state.config`)."""
 
     def __init__(self, problem: Any, config: PlanConfig, *, pipeline: Sequence[Stage],
                  evaluator: Evaluator | None,
                  progress: Callable[[Progress], None] | None) -> None:
         from planner_core.search.init_modes import with_init
 
+        for stage in pipeline:
+            hook = getattr(stage, "configure", None)
+            if hook is not None:
+                config = hook(problem, config)
         if evaluator is None:
             evaluator = Evaluator(with_init(problem, config.init), config.budget,
                                   time_limit=config.time_limit, progress=progress)
@@ -208,23 +214,33 @@ class PipelineRun:
         if stopped:
             self.stopped = stopped
 
-    def fork(self, scheduler: Any = None) -> PipelineRun:
+    def fork(self, scheduler: Any = None, config: PlanConfig | None = None) -> PipelineRun:
         """An independent copy of this run between stages (the evaluator, state and stages
         copied, the problem shared), its `improve` stage choosing by `scheduler` (None: as
         it was): the schedule benchmark runs the stages before `improve` once per map and
         seed, then each schedule from there. Same as running the whole pipeline with that
-        scheduler, to the bit (tests/test_schedule.py).
+        scheduler, to the bit (tests/test_schedule.py). `config`: the copy's config from
+        here on (None: this run's); with the budget and seed unchanged and only settings
+        of stages not yet run changed (the DE's `de_share` before the DE), the same plan as
+        a whole run with that config (the split benchmark forks before the DE). A
+        scheduler's `configure` is not asked here: the caller passes what it returns.
 
         Raises:
             RuntimeError: a stage is open (`enter` without `leave`).
+            ValueError: `config` with another budget than the run's evaluator.
         """
         import copy
 
         if self._open is not None:
             raise RuntimeError("fork: a stage is open")
+        if config is not None and config.budget != self.ev.budget:
+            raise ValueError("config: a fork keeps the run's budget")
         memo = {id(self.problem): self.problem}
         twin = copy.deepcopy(self, memo)
         twin.stages = list(with_scheduler(twin.stages, scheduler))
+        if config is not None:
+            twin.config = config
+            twin.state = twin.state.replace(config=config)
         twin.t0 = time.perf_counter()
         return twin
 

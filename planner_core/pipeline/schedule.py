@@ -174,7 +174,9 @@ class Observation:
 class Scheduler(Protocol):
     """Chooses the improving phase's macro-actions: `reset(problem, config)` before a run,
     then `choose(observation) -> action name` (one of `ACTIONS`) until it says "stop" or the
-    stage runs out of evaluations."""
+    stage runs out of evaluations. A scheduler may also have `configure(problem, config) ->
+    PlanConfig`, asked once before the run's first stage (`configured`): the budget split it
+    wants (LAMDE-S's `de_share`); the run keeps and records the config it returns."""
 
     name: str
 
@@ -316,6 +318,24 @@ def make_scheduler(spec: str | Scheduler | None) -> Scheduler:
         raise ValueError(f"scheduler: must be a name or have reset() and choose(), got "
                          f"{type(spec).__name__}")
     return spec
+
+
+def configured(spec: str | Scheduler | None, problem: Any, config: PlanConfig) -> PlanConfig:
+    """The config a run with scheduler `spec` runs with: `config`, or what the scheduler's
+    optional `configure(problem, config)` returns (a `PlanConfig`; LAMDE-S's DE share, chosen
+    from the map before any stage runs).
+
+    Raises:
+        ValueError: as `make_scheduler`; or `configure` returned no `PlanConfig`.
+    """
+    hook = getattr(make_scheduler(spec), "configure", None)
+    if hook is None:
+        return config
+    out = hook(problem, config)
+    if not isinstance(out, PlanConfig):
+        raise ValueError(f"scheduler: configure() must return a PlanConfig, got "
+                         f"{type(out).__name__}")
+    return out
 
 
 def scheduler_name(spec: str | Scheduler | None) -> str:

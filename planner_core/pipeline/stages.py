@@ -409,6 +409,15 @@ class Improve(_Base):
     def applies(self, state: PlanState, ev: Evaluator) -> bool:
         return _incumbent_feasible(ev)
 
+    def configure(self, problem: Any, config: PlanConfig) -> PlanConfig:
+        """The run's config as its scheduler wants it (`schedule.configured`; the default
+        scheduler leaves it as it is)."""
+        if self.scheduler is None:
+            return config
+        from planner_core.pipeline.schedule import configured
+
+        return configured(self.scheduler, problem, config)
+
     def run(self, state: PlanState, ev: Evaluator) -> PlanState:
         from planner_core.pipeline.schedule import ImproveRun, make_scheduler
 
