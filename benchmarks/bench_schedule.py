@@ -13,13 +13,17 @@ improving stage's mean evaluations and seconds; writes one JSON line per run to 
     python benchmarks/bench_schedule.py [--maps 24] [--seeds 2] [--budget 10000]
         [--templates default kicks-heavy ...] [--map-seed 3400] [--suite [T01 ...]]
         [--large [L01 ...] [--large-seed S]]
-        [-o runs.jsonl] [--summary runs.jsonl ...] [--select runs.jsonl ...]
+        [--splits 0.6 0.4 ...] [-o runs.jsonl] [--summary runs.jsonl ...]
+        [--select runs.jsonl ...] [--evaluate TABLE runs.jsonl ...]
+        [--evaluate-split TABLE runs.jsonl ...]
 
 Gap = (f - f_best) / f_best in percent, f_best the best feasible f of any template on that map
 and seed (an infeasible run is reported and left out of the means). `--summary` prints the
 table of earlier records instead of running; `--select` evaluates a contextual selector (map
 and early-run features -> a template, k nearest training cases, `select`) leaving one map out
-at a time. Runs one process (the grid is CPU-bound; run it
+at a time. `--splits` runs each template at several DE shares from a fork before the DE
+(records for LAMDE-S's split table, `schedule_select fit-split`), and `--evaluate-split`
+scores a split table on held-out ones. Runs one process (the grid is CPU-bound; run it
 under `nice`).
 """
 
@@ -375,6 +379,77 @@ def evaluate(table_dir: str, records: list[dict[str, Any]], seed: int = 0) -> st
     ])
 
 
+def evaluate_split(table_dir: str, records: list[dict[str, Any]], seed: int = 0) -> str:
+    """A fitted split table (`python -m planner_core.learning.schedule_select fit-split`) on
+    held-out `--splits` records: per case the DE share the table picks from the map's
+    features (what `--scheduler lamde-s` runs with), against the table's best static share
+    (the least mean gap on its training cases among the shares within its CPU cap) and the
+    default share. Prints the mean gap to the per-case best share, the mean f difference in
+    per cent of f, the paired Wilcoxon signed-rank test (two-sided, zero differences
+    dropped) and a bootstrap 95 % CI of the mean difference (10,000 resamples, `seed`), the
+    maps whose mean over their seeds is lower, and the mean CPU of the whole plan over the
+    default share's; where the records hold lamde-s's own runs (arm "lamde-s"), how often
+    they equal the picked share's plan."""
+    import numpy as np
+    from scipy.stats import wilcoxon
+
+    from planner_core.learning.schedule_select import (
+        SPLIT_FEATURES,
+        SplitTable,
+        capped_best,
+        split_cases,
+    )
+
+    table = SplitTable.load(table_dir)
+    if table is None:
+        raise ValueError(f"{table_dir}: no split table (split.npz)")
+    keys, F, G, C, splits = split_cases(records)
+    if not len(keys):
+        raise ValueError("records: no case where every split ran and was feasible")
+    col = {x: i for i, x in enumerate(splits)}
+    picks = [table.predict(v) for v in F]
+    static_share = table.splits[capped_best(table.gaps, table.cpu, table.cap)]
+    f = {(r["map"], r["seed"], float(r["de_share"])): r["f"] for r in records
+         if r.get("template") == "default" and "de_share" in r}
+    i_pick = np.array([col[x] for x in picks])
+    rows = np.arange(len(keys))
+    sel, static, default = G[rows, i_pick], G[:, col[static_share]], G[:, 0]
+    f_sel = np.array([f[(m, sd, x)] for (m, sd), x in zip(keys, picks, strict=True)])
+    f_static = np.array([f[(m, sd, static_share)] for m, sd in keys])
+    f_def = np.array([f[(m, sd, splits[0])] for m, sd in keys])
+    d_static = (f_sel / f_static - 1) * 100
+    d_def = (f_sel / f_def - 1) * 100
+    out = [f"{len(keys)} held-out cases on {len({m for m, _ in keys})} maps; split table "
+           f"{table_dir}: {len(table.gaps)} training cases, k = {table.k}, cap "
+           f"{table.cap:g}x CPU, features {', '.join(SPLIT_FEATURES)}",
+           f"mean gap to the per-case best share (%): lamde-s {sel.mean():.4f}, best static "
+           f"({static_share:g}) {static.mean():.4f}, default ({splits[0]:g}) "
+           f"{default.mean():.4f}, oracle 0"]
+    rng = np.random.default_rng(seed)
+    maps = np.array([m for m, _ in keys])
+    for name, d in (("best static", d_static), ("default", d_def)):
+        p = wilcoxon(d).pvalue if np.any(d) else 1.0
+        boot = d[rng.integers(0, len(d), size=(10_000, len(d)))].mean(1)
+        lo, hi = np.percentile(boot, [2.5, 97.5])
+        per_map = [d[maps == m].mean() for m in np.unique(maps)]
+        out.append(f"lamde-s vs {name}: f {d.mean():+.3f} % on average, 95 % CI "
+                   f"[{lo:+.3f}, {hi:+.3f}]; lower / higher on {int((d < 0).sum())} / "
+                   f"{int((d > 0).sum())} cases, Wilcoxon p = {p:.3g}; maps with a lower "
+                   f"mean {sum(v < 0 for v in per_map)} of {len(per_map)}")
+    out.append(f"whole-plan CPU over the default share's: lamde-s {C[rows, i_pick].mean():.2f}x "
+               f"(max {C[rows, i_pick].max():.2f}x), best static "
+               f"{C[:, col[static_share]].mean():.2f}x")
+    out.append("picks: " + ", ".join(f"{x:g} {picks.count(x)}" for x in splits
+                                     if picks.count(x)))
+    own = {(r["map"], r["seed"]): r for r in records if r.get("arm") == "lamde-s"}
+    if own:
+        same = sum(1 for k_, x in zip(keys, picks, strict=True) if k_ in own
+                   and own[k_]["de_share"] == x and own[k_]["f"] == f[(*k_, x)])
+        out.append(f"lamde-s's own runs: {len(own)}; the picked share's plan in {same} of "
+                   f"{sum(1 for k_ in keys if k_ in own)} complete cases")
+    return "\n".join(out)
+
+
 def main(argv: list[str] | None = None) -> int:
     """The command line (module docstring). Returns the exit status (2: bad arguments)."""
     from planner_core.pipeline.schedule import LEARNED, make_scheduler, scheduler_names
@@ -407,6 +482,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--evaluate", nargs="+", metavar=("TABLE", "JSONL"),
                     help="a fitted selector table directory, then held-out records: print "
                     "the selector against the best static schedule and exit")
+    ap.add_argument("--evaluate-split", nargs="+", metavar=("TABLE", "JSONL"),
+                    help="a fitted split table directory, then held-out --splits records: "
+                    "print the share it picks against the best static share and exit")
     ap.add_argument("--select", nargs="+", metavar="JSONL",
                     help="evaluate the contextual selector on earlier records (leave one map "
                     "out) and exit")
@@ -420,6 +498,15 @@ def main(argv: list[str] | None = None) -> int:
                   file=sys.stderr)
             return 2
         print(evaluate(args.evaluate[0], _read(args.evaluate[1:])))
+        return 0
+    if args.evaluate_split:
+        try:
+            if len(args.evaluate_split) < 2:
+                raise ValueError("needs TABLE and at least one JSONL")
+            print(evaluate_split(args.evaluate_split[0], _read(args.evaluate_split[1:])))
+        except (OSError, ValueError, KeyError) as exc:
+            print(f"bench_schedule: --evaluate-split: {exc}", file=sys.stderr)
+            return 2
         return 0
     if args.select:
         records = _read(args.select)

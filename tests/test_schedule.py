@@ -247,3 +247,66 @@ def test_the_large_rounds_need_i_max_above_20_without_counting_corner_slots() ->
     doc = json.loads((ROOT / "examples" / "maps" / "large" / "L04.json").read_text())
     doc.setdefault("radio", {})["access"] = "scheduled"
     assert not large_rounds(Problem(load_map(doc)))
+
+
+def test_a_fork_before_the_de_with_another_share_gives_that_shares_whole_run(
+        tiny: Problem) -> None:
+    """`PipelineRun.fork(config=)` before the DE: the stages before it do not read
+    `de_share`, so each share's fork is that share's whole run, to the bit (what
+    `bench_schedule.py --splits` relies on); a fork may not change the budget."""
+    from planner_core.pipeline import DEFAULT_PIPELINE
+    from planner_core.pipeline.pipeline import PipelineRun
+
+    cfg = PlanConfig(seed=2, budget=2_500, population=20)
+    run = PipelineRun(tiny, cfg, pipeline=DEFAULT_PIPELINE, evaluator=None, progress=None)
+    run.advance(until="de")
+    plans = set()
+    for share in (0.6, 0.3, 0.1):
+        twin = run.fork(None, config=cfg.replace(de_share=share))
+        twin.advance()
+        got = twin.result()
+        want = run_pipeline(tiny, cfg.replace(de_share=share))
+        assert got.x.tobytes() == want.x.tobytes() and got.f == want.f, share
+        assert got.state.config.de_share == share
+        plans.add(got.x.tobytes())
+    assert len(plans) > 1  # the share changes the plan here, so the test can fail
+    with pytest.raises(ValueError, match="budget"):
+        run.fork(None, config=cfg.replace(budget=3_000))
+
+
+class _Halving:
+    """A scheduler that halves the DE's share (the `configure` hook) and plays the default."""
+
+    name = "halving"
+
+    def __init__(self, out: object = None) -> None:
+        self.out = out
+        self.inner = DefaultScheduler()
+
+    def configure(self, problem: Problem, config: PlanConfig) -> PlanConfig:
+        return self.out if self.out is not None else config.replace(
+            de_share=config.de_share / 2)
+
+    def reset(self, problem: Problem, config: PlanConfig) -> None:
+        self.inner.reset(problem, config)
+
+    def choose(self, observation: Observation) -> str:
+        return self.inner.choose(observation)
+
+
+def test_a_schedulers_configure_sets_the_runs_config_and_the_plan_records_it(
+        tiny: Problem) -> None:
+    import lamde_mission
+
+    cfg = PlanConfig(seed=1, budget=2_500, population=20, de_share=0.6)
+    got = run_pipeline(tiny, cfg, scheduler=_Halving())
+    want = run_pipeline(tiny, cfg.replace(de_share=0.3))
+    assert got.x.tobytes() == want.x.tobytes() and got.state.config.de_share == 0.3
+    de = [s for s in got.stages if s.name == "de"][0]
+    assert de.allotted == [s for s in want.stages if s.name == "de"][0].allotted
+    p = lamde_mission.plan(MAPS / "tiny.json", config=cfg, scheduler=_Halving())
+    assert p.config["de_share"] == 0.3 and p.config["scheduler"] == "halving"
+    # the default scheduler leaves the config as it is
+    assert lamde_mission.plan(MAPS / "tiny.json", config=cfg).config["de_share"] == 0.6
+    with pytest.raises(ValueError, match="configure\\(\\) must return a PlanConfig"):
+        run_pipeline(tiny, cfg, scheduler=_Halving(out={"de_share": 0.1}))

@@ -12,13 +12,19 @@ import pytest
 from planner_core.learning.schedule_select import (
     DEFAULT_TABLE,
     FEATURES,
+    SPLIT_FEATURES,
     SelectorScheduler,
     SelectorTable,
+    SplitTable,
     cases_from_records,
     cross_validate,
+    cross_validate_split,
     fit,
+    fit_split,
     main,
+    map_features,
     run_features,
+    split_cases,
 )
 from planner_core.model.problem import Problem
 from planner_core.pipeline import DEFAULT_PIPELINE, PlanConfig, run_pipeline
@@ -226,3 +232,166 @@ def test_the_cli_summary_names_the_chosen_schedule(tmp_path) -> None:
     assert r.returncode == 0, r.stderr
     line = next(s for s in r.stdout.splitlines() if s.startswith("map '"))
     assert "scheduler lamde-s -> " in line, line
+
+
+# --- the split table (the DE's share, chosen from the map before the first stage) ---------
+
+
+def _mfeats(sensors: float, ce: float = 1.0) -> dict[str, float]:
+    return {"sensors": sensors, "obstacles": 5.0, "area_km2": 25.0, "imax": sensors / 2,
+            "clark_evans": ce}
+
+
+def _split_records(cases: list[tuple[str, int, dict[str, float],
+                                     dict[float, tuple[float, float]]]]) -> list[dict]:
+    """Split records: (map, seed, map features, share -> (f, cpu seconds))."""
+    return [{"map": m, "seed": s, "budget": 10_000, "template": "default",
+             "arm": f"default@{x:g}", "de_share": x, "f": f, "phi": 0.0, "cpu_seconds": c,
+             "map_features": feats, "features": {}}
+            for m, s, feats, fc in cases for x, (f, c) in fc.items()]
+
+
+# small maps: the split changes nothing but time (2x); large maps: 0.4 is 1 % better at
+# 1.3x, 0.3 is 1.5 % better at 1.8x (over the cap); no static share but 0.6 is within the cap
+SPLITS = _split_records(
+    [(f"small{i}", 0, _mfeats(10 + i), {0.6: (100.0, 1.0), 0.4: (100.0, 2.0),
+                                        0.3: (100.0, 2.4)}) for i in range(3)]
+    + [(f"large{i}", 0, _mfeats(200 + i), {0.6: (101.5, 4.0), 0.4: (100.5, 5.2),
+                                           0.3: (100.0, 7.2)}) for i in range(3)])
+
+
+def test_split_cases_are_complete_feasible_default_template_cases() -> None:
+    recs = SPLITS + _split_records([("bad", 0, _mfeats(9), {0.6: (1.0, 1.0), 0.4: (1.0, 1.0),
+                                                            0.3: (1.0, 1.0)})])
+    recs[-1]["phi"] = 1.0  # an infeasible split drops its case
+    recs += [dict(SPLITS[0], template="kicks-heavy", f=0.5)]  # not the default's: ignored
+    keys, F, G, C, splits = split_cases(recs)
+    assert splits == [0.6, 0.4, 0.3] and len(keys) == 6 and ("bad", 0) not in keys
+    assert F.shape == (6, len(SPLIT_FEATURES)) and G.shape == C.shape == (6, 3)
+    assert G[3] == pytest.approx([1.5, 0.5, 0.0]) and C[3] == pytest.approx([1.0, 1.3, 1.8])
+    with pytest.raises(ValueError, match="default split"):
+        split_cases([r for r in SPLITS if r["de_share"] != 0.6])
+
+
+def test_the_split_of_least_gap_within_the_cpu_cap_is_chosen() -> None:
+    table = fit_split(SPLITS, k=3)
+    assert table.splits == (0.6, 0.4, 0.3) and table.cap == 1.5
+    # large maps: 0.3 is best but 1.8x over the cap, so 0.4; small maps: a tie, the default
+    assert table.predict(_mfeats(201)) == 0.4 and table.predict(_mfeats(11)) == 0.6
+    assert dataclass_replace(table, cap=2.0).predict(_mfeats(201)) == 0.3
+    # leave one map out: the large maps get 0.4 (gap 0.5 against the static 0.6's 1.5)
+    cv = cross_validate_split(table, k=2)
+    assert cv["cases"] == 6 and cv["better"] == 3 and cv["worse"] == 0
+    assert cv["selector"] == pytest.approx(0.25) and cv["static"] == pytest.approx(0.75)
+    assert cv["selector_cpu"] == pytest.approx((3 * 1.0 + 3 * 1.3) / 6)
+
+
+def dataclass_replace(table: SplitTable, **kw: object) -> SplitTable:
+    import dataclasses
+
+    return dataclasses.replace(table, **kw)
+
+
+def test_a_split_table_round_trips_and_a_damaged_one_is_one_line(tmp_path) -> None:
+    table = fit_split(SPLITS, k=3, meta={"command": "x"})
+    table.save(tmp_path)
+    back = SplitTable.load(tmp_path)
+    assert back.splits == table.splits and back.k == 3 and back.cap == 1.5
+    assert np.array_equal(back.gaps, table.gaps) and back.maps == table.maps
+    assert back.predict(_mfeats(201)) == 0.4
+    assert SplitTable.load(tmp_path / "none") is None  # no split table: none
+    (tmp_path / "split.json").write_text("{")
+    with pytest.raises(ValueError, match="split table in .* does not load"):
+        SplitTable.load(tmp_path)
+
+
+def test_the_selector_configures_the_share_only_over_the_default(tmp_path) -> None:
+    from planner_core.defaults import DE_SHARE
+
+    problem = Problem(MAPS / "tiny.json")
+    feats = map_features(problem)
+    near = dict(feats)
+    far = dict(feats, sensors=feats["sensors"] * 50)
+    split = fit_split(_split_records([
+        ("near", 0, near, {DE_SHARE: (101.0, 1.0), 0.3: (100.0, 1.2)}),
+        ("far", 0, far, {DE_SHARE: (100.0, 1.0), 0.3: (103.0, 1.2)})]), k=1)
+    sched = SelectorScheduler(SelectorTable.load(DEFAULT_TABLE), split)
+    assert sched.configure(problem, PlanConfig()).de_share == 0.3
+    mine = PlanConfig(de_share=0.5)  # a share of one's own is kept
+    assert sched.configure(problem, mine) is mine
+    assert SelectorScheduler(split=None).configure(problem, PlanConfig()) == PlanConfig()
+    cfg = PlanConfig(seed=3, budget=3_000, population=20)
+    got = run_pipeline(problem, cfg, scheduler=sched)
+    assert got.state.config.de_share == 0.3
+    # the folder form reads both tables
+    fit(GRID, k=1).save(tmp_path)
+    split.save(tmp_path)
+    assert SelectorScheduler.from_checkpoint(str(tmp_path)).split.splits == split.splits
+
+
+def test_map_features_clark_evans_tells_a_lattice_from_clustered_fields() -> None:
+    from types import SimpleNamespace
+
+    def fake(xy: np.ndarray) -> SimpleNamespace:
+        m = SimpleNamespace(width=1000.0, height=1000.0,
+                            spec=SimpleNamespace(obstacles=SimpleNamespace(count=0)))
+        return SimpleNamespace(sensors=xy, map=m, n_points=10)
+
+    g = (np.arange(10) + 0.5) * 100.0
+    lattice = np.array([(x, y) for x in g for y in g])  # spacing 100 m, 100 sensors
+    assert map_features(fake(lattice))["clark_evans"] == pytest.approx(2.0)
+    rng = np.random.default_rng(0)
+    fields = np.vstack([c + rng.normal(0, 10, (25, 2)) for c in
+                        ((200, 200), (800, 200), (200, 800), (800, 800))])
+    assert map_features(fake(fields))["clark_evans"] < 0.3
+    assert map_features(fake(lattice[:1]))["clark_evans"] == 1.0
+    f = map_features(Problem(MAPS / "tiny.json"))
+    assert list(f) == list(SPLIT_FEATURES) and f["sensors"] >= 1
+
+
+def test_the_cli_fits_a_split_table_and_bench_schedule_evaluates_it(tmp_path, capsys) -> None:
+    from tests.test_schedule import _bench
+
+    train = tmp_path / "train.jsonl"
+    train.write_text("".join(json.dumps(r) + "\n" for r in SPLITS))
+    out = tmp_path / "table"
+    assert main(["fit-split", str(train), "-o", str(out), "--k", "3"]) == 0
+    printed = capsys.readouterr().out
+    assert "shares 0.6, 0.4, 0.3" in printed and "k = 3" in printed
+    assert json.loads((out / "split.json").read_text())["cap"] == 1.5
+    assert main(["fit-split", str(train), "-o", str(out), "--cap", "0.5"]) == 2
+    assert main(["fit-split", str(tmp_path / "none.jsonl"), "-o", str(out)]) == 2
+    held = tmp_path / "held.jsonl"
+    held.write_text("".join(json.dumps(r) + "\n" for r in _split_records([
+        ("hs", 0, _mfeats(11), {0.6: (100.0, 1.0), 0.4: (100.0, 2.0), 0.3: (99.0, 2.4)}),
+        ("hl", 0, _mfeats(201), {0.6: (102.0, 4.0), 0.4: (100.0, 5.0), 0.3: (101.0, 7.0)})])))
+    capsys.readouterr()
+    assert _bench().main(["--evaluate-split", str(out), str(held)]) == 0
+    printed = capsys.readouterr().out
+    # hs: the table keeps 0.6 (gap 1.0101 % to 0.3's 99); hl: it picks 0.4, the best
+    assert "lamde-s 0.5051, best static (0.6) 1.5051, default (0.6) 1.5051" in printed
+    assert "lamde-s vs default: f -0.980 % on average" in printed
+    assert "lower / higher on 1 / 0 cases" in printed and "picks: 0.6 1, 0.4 1" in printed
+    assert "lamde-s 1.12x (max 1.25x), best static 1.00x" in printed
+    assert _bench().main(["--evaluate-split", str(out)]) == 2
+    assert _bench().main(["--evaluate-split", str(tmp_path), str(held)]) == 2
+
+
+@pytest.mark.slow  # measured ~15 s: one suite map, two shares, and lamde-s
+def test_bench_schedule_splits_fork_before_the_de_and_record_each_share(tmp_path) -> None:
+    import lamde_mission
+    from tests.test_schedule import _bench
+
+    out = tmp_path / "splits.jsonl"
+    assert _bench().main(["--suite", "T01", "--seeds", "1", "--budget", "4000", "--templates",
+                          "default", "lamde-s", "--splits", "0.6", "0.3", "-o", str(out)]) == 0
+    rows = {r["arm"]: r for r in map(json.loads, out.read_text().splitlines())}
+    assert set(rows) == {"default@0.6", "default@0.3", "lamde-s"}
+    for arm in ("default@0.6", "default@0.3"):
+        r = rows[arm]
+        assert r["cpu_seconds"] > 0 and r["map_features"]["sensors"] > 0
+        whole = lamde_mission.plan(ROOT / "examples" / "maps" / "suite" / "T01.json",
+                                   config=PlanConfig(seed=0, budget=4000,
+                                                     de_share=r["de_share"]))
+        assert whole.breakdown["f"] == pytest.approx(r["f"], rel=1e-12)
+    assert _bench().main(["--splits", "1.5"]) == 2

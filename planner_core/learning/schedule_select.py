@@ -59,6 +59,7 @@ __all__ = [
     "SelectorScheduler",
     "SelectorTable",
     "SplitTable",
+    "capped_best",
     "cases_from_records",
     "cross_validate",
     "fit",
@@ -370,7 +371,7 @@ class SplitTable:
         idx = np.arange(len(self.gaps)) if rows is None else np.flatnonzero(
             rows) if np.asarray(rows).dtype == bool else np.asarray(rows)
         near = idx[_nearest(self.features[idx], v, k or self.k, SPLIT_FEATURES)]
-        return self.splits[_capped_best(self.gaps[near], self.cpu[near], self.cap)]
+        return self.splits[capped_best(self.gaps[near], self.cpu[near], self.cap)]
 
     def save(self, directory: str | Path) -> Path:
         """Write `split.npz` and `split.json` into `directory` (created). Returns it."""
@@ -416,7 +417,7 @@ class SplitTable:
         return table
 
 
-def _capped_best(gaps: np.ndarray, cpu: np.ndarray, cap: float) -> int:
+def capped_best(gaps: np.ndarray, cpu: np.ndarray, cap: float) -> int:
     """The column of least mean gap over the rows of gaps (n, S) among those whose mean CPU
     ratio (cpu (n, S)) is at most `cap`; column 0 (the default split) always qualifies."""
     g = gaps.mean(0)
@@ -431,8 +432,8 @@ def split_cases(records: Iterable[dict[str, Any]]) -> tuple[
     "default").
 
     Returns:
-        (keys, F, G, C, splits): the splits every case ran (the default first, then
-        descending); (map, seed) of each case where all were feasible; F (n, 5) map
+        (keys, F, G, C, splits): the splits at least half the cases ran (the default first,
+        then descending); (map, seed) of each case that ran them all, all feasible; F (n, 5) map
         features; G (n, S) per cent gaps to the case's best split; C (n, S) CPU time over
         the default split's.
 
@@ -445,13 +446,21 @@ def split_cases(records: Iterable[dict[str, Any]]) -> tuple[
     for r in records:
         if r.get("template") == "default" and "de_share" in r:
             by_case.setdefault((r["map"], r["seed"]), {})[float(r["de_share"])] = r
-    common = set.intersection(*(set(c) for c in by_case.values())) if by_case else set()
+    # the shares at least half the cases ran (a case cut short by a stopped run, or a stray
+    # share, does not shrink the table); cases without all of them are left out
+    count: dict[float, int] = {}
+    for c in by_case.values():
+        for x in c:
+            count[x] = count.get(x, 0) + 1
+    common = {x for x, n in count.items() if 2 * n >= len(by_case)}
     if DE_SHARE not in common:
-        raise ValueError(f"records: need split runs where every case ran the default split "
+        raise ValueError(f"records: need split runs where the cases ran the default split "
                          f"{DE_SHARE} (template 'default', bench_schedule.py --splits)")
     splits = [DE_SHARE, *sorted(common - {DE_SHARE}, reverse=True)]
     keys, F, G, C = [], [], [], []
     for key, c in by_case.items():
+        if any(x not in c for x in splits):
+            continue
         rows = [c[x] for x in splits]
         feats = rows[0].get("map_features") or {}
         if any(r["phi"] != 0 for r in rows) or set(SPLIT_FEATURES) - set(feats):
@@ -480,7 +489,7 @@ def cross_validate_split(table: SplitTable, k: int | None = None) -> dict[str, f
     chosen, static, c_cpu, s_cpu = [], [], [], []
     for m in np.unique(maps):
         train = maps != m
-        s = _capped_best(table.gaps[train], table.cpu[train], table.cap)
+        s = capped_best(table.gaps[train], table.cpu[train], table.cap)
         for i in np.flatnonzero(~train):
             pick = table.splits.index(table.predict(table.features[i], rows=train, k=k))
             chosen.append(table.gaps[i, pick])
@@ -610,35 +619,64 @@ def _read(paths: Sequence[str]) -> list[dict[str, Any]]:
 
 def main(argv: list[str] | None = None) -> int:
     """`python -m planner_core.learning.schedule_select fit RECORDS ... -o DIR [--k K]`: fit a
-    table on grid records, print its leave-one-map-out figures, write it. Returns the exit
-    status (2: bad arguments or records)."""
+    table on grid records, print its leave-one-map-out figures, write it; `fit-split ...
+    [--cap 1.5]` the same for the DE-share table on `--splits` records (into the same folder:
+    the two tables sit side by side). Returns the exit status (2: bad arguments or
+    records)."""
     ap = argparse.ArgumentParser(prog="python -m planner_core.learning.schedule_select",
                                  description="fit the LAMDE-S selector table on "
                                  "bench_schedule.py records")
     sub = ap.add_subparsers(dest="command", required=True)
-    f = sub.add_parser("fit")
-    f.add_argument("records", nargs="+", help="JSON lines (plain or .gz) of bench_schedule.py")
-    f.add_argument("-o", "--output", required=True, help="directory to write the table to")
-    f.add_argument("--k", type=int, default=None, help="neighbours (default: chosen by "
-                   "leave-one-map-out among 1, 3, 5, 10, 20, 40)")
+    for name, what in (("fit", "the template table (table.npz)"),
+                       ("fit-split", "the DE-share table (split.npz; bench_schedule.py "
+                        "--splits records)")):
+        f = sub.add_parser(name, help=f"fit {what}")
+        f.add_argument("records", nargs="+",
+                       help="JSON lines (plain or .gz) of bench_schedule.py")
+        f.add_argument("-o", "--output", required=True,
+                       help="directory to write the table to")
+        f.add_argument("--k", type=int, default=None, help="neighbours (default: chosen by "
+                       "leave-one-map-out among 1, 3, 5, 10, 20, 40)")
+    sub.choices["fit-split"].add_argument(
+        "--cap", type=float, default=CPU_CAP,
+        help=f"CPU cap over the default share's ({CPU_CAP:g})")
     args = ap.parse_args(argv)
     if args.k is not None and args.k < 1:
         print(f"schedule_select: --k: must be >= 1, got {args.k}", file=sys.stderr)
+        return 2
+    split = args.command == "fit-split"
+    if split and not args.cap >= 1.0:
+        print(f"schedule_select: --cap: must be >= 1, got {args.cap}", file=sys.stderr)
         return 2
     try:
         records = _read(args.records)
         commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
                                 text=True, timeout=10).stdout.strip()
-        table = fit(records, k=args.k, meta={
+        meta = {
             "records": list(args.records),
             "record_commits": sorted({r.get("commit", "") for r in records}),
             "fitted_at": commit, "budget": sorted({r["budget"] for r in records}),
-            "command": "python -m planner_core.learning.schedule_select fit "
+            "command": f"python -m planner_core.learning.schedule_select {args.command} "
                        + " ".join(args.records) + f" -o {args.output}"
-                       + (f" --k {args.k}" if args.k else "")})
+                       + (f" --k {args.k}" if args.k else "")
+                       + (f" --cap {args.cap:g}" if split and args.cap != CPU_CAP else "")}
+        if split:
+            stable = fit_split(records, k=args.k, cap=args.cap, meta=meta)
+        else:
+            table = fit(records, k=args.k, meta=meta)
     except (OSError, ValueError, KeyError) as exc:
         print(f"schedule_select: records: {exc}", file=sys.stderr)
         return 2
+    if split:
+        stable.save(args.output)
+        for kk, v in stable.meta["cross_validation"].items():
+            print(f"k = {kk}: leave-one-map-out mean gap {v['selector']:.4f} % at "
+                  f"{v['selector_cpu']:.2f}x CPU (best static share {v['static']:.4f} % at "
+                  f"{v['static_cpu']:.2f}x), better / worse on {v['better']} / {v['worse']} "
+                  f"of {v['cases']} cases")
+        print(f"wrote {args.output}: {len(stable.gaps)} cases on {len(set(stable.maps))} "
+              f"maps, k = {stable.k}, shares {', '.join(f'{x:g}' for x in stable.splits)}")
+        return 0
     table.save(args.output)
     for kk, v in table.meta["cross_validation"].items():
         print(f"k = {kk}: leave-one-map-out mean gap {v['selector']:.4f} % (best static "
