@@ -226,6 +226,15 @@ def test_beyond_the_trained_sizes_the_policy_follows_the_default() -> None:
     within = _Recording(PolicyScheduler(params=p, max_points=problem.hover_limit))
     run_pipeline(problem, cfg, scheduler=within)
     assert set(within.chosen) <= {"de-block", "stop"}
+    # the plan says when the policy handed the stage to the default
+    import lamde_mission
+
+    handed = lamde_mission.plan(MAPS / "tiny.json", config=cfg,
+                                scheduler=PolicyScheduler(params=p, max_points=small))
+    assert handed.config["scheduler_choice"] == "default"
+    own = lamde_mission.plan(MAPS / "tiny.json", config=cfg,
+                             scheduler=PolicyScheduler(params=p, max_points=problem.hover_limit))
+    assert "scheduler_choice" not in own.config
 
 
 def test_a_learned_scheduler_is_named_with_its_checkpoint_folder(tmp_path) -> None:

@@ -217,7 +217,11 @@ def _summary(
     stopped = f", stopped by the {plan.stopped}" if plan.stopped else ""
     sched = plan.config.get("scheduler")
     choice = plan.config.get("scheduler_choice")
-    sched = (f", scheduler {sched}" + (f" -> {choice}" if choice else "")) if sched else ""
+    share = plan.config.get("de_share")
+    share = (f", DE share {share:g}" if sched and isinstance(share, float)
+             and share != D.DE_SHARE else "")  # a learned scheduler's split (lamde-s)
+    sched = (f", scheduler {sched}" + (f" -> {choice}" if choice else "") + share
+             if sched else "")
     # a point of 0 s is written as a corner (NAV_WAYPOINT, flown through), not a hover point
     times = (stored if stored is not None else plan).hover_times
     n_corner = sum(1 for t in times if float(t) == 0.0)

@@ -221,10 +221,14 @@ class PolicyScheduler:
             config = config.replace(time_limit=None)
         self._features = ScheduleFeatures(problem, config)
         self._default = None
+        #: "default" when it hands the stage to the default's rounds (recorded in the plan as
+        #: `config["scheduler_choice"]`, printed by `plan`), else None
+        self.template: str | None = None
         if self.max_points is not None and int(problem.hover_limit) > int(self.max_points):
             # beyond the sizes it was trained on: the default's rounds
             self._default = DefaultScheduler()
             self._default.reset(problem, config)
+            self.template = "default"
 
     def choose(self, observation: Any) -> str:
         """The most probable action of the observation's features."""
