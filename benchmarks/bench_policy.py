@@ -14,7 +14,8 @@ With `--scheduler lamde-s` (or `lamde-s-ppo`) it times instead, in each of `--pl
 plans per map (after one warm-up plan), the learned scheduler's decisions (`choose`: for
 lamde-s the features at the improving stage's first decision, the neighbours in the shipped
 table, then the chosen template's choices; for lamde-s-ppo the features and the network's
-forward pass at every decision) against the plan's own time, and prints their ratio (issue
+forward pass at every decision; lamde-s's `configure` too, its DE share from the map's
+features before the first stage) against the plan's own time, and prints their ratio (issue
 34's "<= 5 %").
 
     python benchmarks/bench_policy.py --scheduler lamde-s|lamde-s-ppo [MAP ...] [--plans 3]
@@ -79,17 +80,19 @@ def scheduler_cost(maps: list[str], name: str, plans: int) -> None:
         for seed in range(plans):
             sched, timer = make_scheduler(name), _Timed()
             sched.choose = timer.wrap(sched.choose)
+            if hasattr(sched, "configure"):  # lamde-s's DE share, before the first stage
+                sched.configure = timer.wrap(sched.configure)
             t0, c0 = time.perf_counter(), time.process_time()
-            lamde_mission.plan(path, seed=seed, scheduler=sched)
+            p = lamde_mission.plan(path, seed=seed, scheduler=sched)
             wall, cpu = time.perf_counter() - t0, time.process_time() - c0
             rows.append((sum(timer.times), sum(timer.cpu), wall, cpu, len(timer.times),
-                         getattr(sched, "template", None)))
+                         getattr(sched, "template", None), p.config["de_share"]))
         t_s, c_s, wall, cpu = (statistics.median(r[k] for r in rows) for k in range(4))
         print(f"{Path(path).stem}: {name} {1e3 * t_s:.2f} ms (CPU {1e3 * c_s:.2f} ms) per plan "
               f"in {statistics.median(r[4] for r in rows):.0f} decisions; plan {wall:.2f} s "
               f"(CPU {cpu:.2f} s); scheduler / plan = {100 * t_s / wall:.2f} % (CPU "
-              f"{100 * c_s / cpu:.2f} %); templates {[r[5] for r in rows]} "
-              f"(medians of {plans} plans)")
+              f"{100 * c_s / cpu:.2f} %); templates {[r[5] for r in rows]}, DE shares "
+              f"{sorted({r[6] for r in rows})} (medians of {plans} plans)")
 
 
 def main() -> None:

@@ -188,9 +188,9 @@ def test_replay_cost_is_set_by_the_missions_size_not_its_numbers():
     for big in (replace(route, takeoff_altitude=1e30),
                 replace(route, altitudes=np.array([1e30, 1e30, 0.0])),
                 replace(route, hover_times=np.array([1e30, 0.0, 0.0]))):  # fmt: skip
-        t0 = time.perf_counter()
+        t0 = time.process_time()  # CPU, not wall: a loaded machine must not fail it
         tl = replay_route(big, m)
-        assert time.perf_counter() - t0 < 5.0
+        assert time.process_time() - t0 < 5.0
         assert len(tl.t) <= n_max + 2 * (2 * len(route.stops) + 4)
     tl = replay_route(replace(route, takeoff_altitude=1e30), m)
     assert tl.totals.t_takeoff == pytest.approx(1e30 / 20 + 5)

@@ -395,3 +395,35 @@ def test_bench_schedule_splits_fork_before_the_de_and_record_each_share(tmp_path
                                                      de_share=r["de_share"]))
         assert whole.breakdown["f"] == pytest.approx(r["f"], rel=1e-12)
     assert _bench().main(["--splits", "1.5"]) == 2
+
+
+def test_the_docs_split_figures_are_what_the_shipped_table_gives_on_the_stored_records() -> None:
+    """docs/scheduler.md's held-out split table: each column's figures are what
+    `bench_schedule.py --evaluate-split` prints for the shipped table on the stored records."""
+    from tests.test_schedule import _bench
+
+    bench, runs = _bench(), ROOT / "docs" / "scheduler-runs"
+    doc = (ROOT / "docs" / "scheduler.md").read_text()
+    section = doc[doc.index("### The DE's share: LAMDE-S's split table"):]
+    section = section[:section.index("\n## ")]
+    row = {r.split("|")[1].strip(): [c.strip() for c in r.split("|")[2:5]]
+           for r in section.splitlines() if r.startswith("| ")}
+    for col, name in enumerate(("split-heldout-large", "split-heldout100x2", "split-suite5")):
+        out = bench.evaluate_split(str(DEFAULT_TABLE),
+                                   bench._read([str(runs / f"{name}.jsonl.gz")]))
+        vs_default = row["lamde-s's share against the default's (0.6): mean f"][col]
+        mean, ci = vs_default.split(" % ", 1)
+        assert f"lamde-s vs default: f {mean} % on average, 95 % CI {ci};" in out, (name, out)
+        cases = row["lower / higher cases, Wilcoxon p"][col].split(",")[0]
+        assert f"lower / higher on {cases} cases" in out.split("lamde-s vs default")[1]
+        cpu = row["whole-plan CPU over the default's: lamde-s (max) / static 0.4"][col]
+        lam, static = cpu.split(" / ")
+        lam_mean, lam_max = lam.split(" ")
+        assert (f"lamde-s {lam_mean} {lam_max.replace('(', '(max ')}, best static {static}"
+                in out), (name, out)
+        picks = row["picks"][col].replace(":", "").replace(", ", ", ")
+        assert f"picks: {picks}" in out, (name, out)
+    large = bench.evaluate_split(str(DEFAULT_TABLE),
+                                 bench._read([str(runs / "split-heldout-large.jsonl.gz")]))
+    assert "lamde-s vs best static: f +0.016 % on average, 95 % CI [-0.041, +0.098]" in large
+    assert "the picked share's plan in 48 of 48 complete cases" in large
