@@ -116,3 +116,58 @@ print(json.dumps({"env": {k: os.environ[k] for k in SINGLE_THREAD_ENV},
     got = json.loads(out.stdout.strip().splitlines()[-1])
     assert got["env"] == got["want"]
     assert got["numba"] == 1  # numba was loaded already: capped at run time
+
+
+@pytest.mark.skipif(os.name != "posix", reason="POSIX re-parents orphans; Windows does not")
+def test_pool_workers_end_when_their_parent_is_killed(tmp_path) -> None:
+    """A parent killed outright (SIGKILL: no shutdown) leaves no worker running on: each
+    watches its parent and ends within `PARENT_POLL_S` (before the fix they ran on with
+    their item, here a 300 s sleep)."""
+    import signal
+    import time
+
+    pids = tmp_path / "pids.txt"
+    code = f"""
+import os, time
+from planner_core.execution import ProcessExecutor
+ex = ProcessExecutor(2)
+pool = ex._ensure_pool()
+workers = [pool.submit(os.getpid).result() for _ in range(4)]
+futs = [pool.submit(time.sleep, 300) for _ in range(2)]
+time.sleep(0.5)
+open({str(pids)!r}, "w").write(" ".join(map(str, sorted(set(workers)))))
+time.sleep(300)
+"""
+    parent = subprocess.Popen([sys.executable, "-c", code])
+    try:
+        deadline = time.monotonic() + 120
+        while not (pids.exists() and pids.read_text().strip()):
+            assert time.monotonic() < deadline and parent.poll() is None, "no workers"
+            time.sleep(0.2)
+        workers = [int(p) for p in pids.read_text().split()]
+        assert workers and all(_alive(p) for p in workers)
+    finally:
+        parent.send_signal(signal.SIGKILL)
+        parent.wait()
+    deadline = time.monotonic() + 30
+    while any(_alive(p) for p in workers) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    left = [p for p in workers if _alive(p)]
+    for p in left:  # do not leave them behind if the test fails
+        os.kill(p, signal.SIGKILL)
+    assert not left, f"workers still running after their parent was killed: {left}"
+
+
+def _alive(pid: int) -> bool:
+    """Whether process `pid` runs (a zombie, dead but not reaped, counts as ended)."""
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            return fh.read().split(")")[-1].split()[0] != "Z"
+    except FileNotFoundError:
+        return False
+    except OSError:
+        try:
+            os.kill(pid, 0)
+        except OSError:
+            return False
+        return True

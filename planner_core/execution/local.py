@@ -39,20 +39,46 @@ class SerialExecutor:
         self.close()
 
 
-def _init_worker(env: dict[str, str]) -> None:
+#: seconds between a worker's checks that the process that started it is alive
+PARENT_POLL_S = 1.0
+
+
+def _exit_with_parent(parent: int, poll: float = PARENT_POLL_S) -> None:
+    """Watch, from a daemon thread, that the worker's parent is still `parent`, and end the
+    worker (`os._exit`) once it is not: a parent killed outright (SIGKILL, an OOM kill, a
+    closed terminal) cannot shut its pool down, and its workers would run on as orphans
+    until their current item ends, or forever if they wait on it. POSIX re-parents an
+    orphan, so `os.getppid()` changes; on Windows the pool's own broken-pipe handling stays."""
+    import threading
+    import time
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(poll)
+        os._exit(1)
+
+    if os.name == "posix":
+        threading.Thread(target=watch, name="exit-with-parent", daemon=True).start()
+
+
+def _init_worker(env: dict[str, str], parent: int | None = None) -> None:
     """Pool initializer: the thread limits in the worker's environment (for anything loaded or
-    started from now on) and numba's thread count capped if numba is already loaded."""
+    started from now on), numba's thread count capped if numba is already loaded, and the
+    worker set to end with its parent (`_exit_with_parent`)."""
     import sys
 
     os.environ.update(env)
     numba = sys.modules.get("numba")
     if numba is not None and "NUMBA_NUM_THREADS" in env:
         numba.set_num_threads(min(int(env["NUMBA_NUM_THREADS"]), numba.config.NUMBA_NUM_THREADS))
+    if parent is not None:
+        _exit_with_parent(parent)
 
 
 class ProcessExecutor:
     """A `ProcessPoolExecutor` (spawned workers with single-threaded numerics), at most
-    2 * jobs items in flight so a long item list is never submitted all at once."""
+    2 * jobs items in flight so a long item list is never submitted all at once. Its workers
+    end within `PARENT_POLL_S` of their parent's death, however it died."""
 
     def __init__(self, jobs: int):
         if jobs < 1:
@@ -72,7 +98,8 @@ class ProcessExecutor:
                 ctx = multiprocessing.get_context("spawn")
                 self._pool = ProcessPoolExecutor(max_workers=self.jobs, mp_context=ctx,
                                                  initializer=_init_worker,
-                                                 initargs=(dict(SINGLE_THREAD_ENV),))
+                                                 initargs=(dict(SINGLE_THREAD_ENV),
+                                                           os.getpid()))
                 # spawn every worker now, while the environment holds the limits
                 for f in [self._pool.submit(os.getpid) for _ in range(self.jobs)]:
                     f.result()
