@@ -13,7 +13,8 @@ improving stage's mean evaluations and seconds; writes one JSON line per run to 
     python benchmarks/bench_schedule.py [--maps 24] [--seeds 2] [--budget 10000]
         [--templates default kicks-heavy ...] [--map-seed 3400] [--suite [T01 ...]]
         [--large [L01 ...] [--large-seed S]]
-        [--splits 0.6 0.4 ...] [-o runs.jsonl] [--summary runs.jsonl ...]
+        [--splits 0.6 0.4 ...] [--jobs N [--backend local|ray]] [-o runs.jsonl]
+        [--summary runs.jsonl ...]
         [--select runs.jsonl ...] [--evaluate TABLE runs.jsonl ...]
         [--evaluate-split TABLE runs.jsonl ...]
 
@@ -23,8 +24,9 @@ table of earlier records instead of running; `--select` evaluates a contextual s
 and early-run features -> a template, k nearest training cases, `select`) leaving one map out
 at a time. `--splits` runs each template at several DE shares from a fork before the DE
 (records for LAMDE-S's split table, `schedule_select fit-split`), and `--evaluate-split`
-scores a split table on held-out ones. Runs one process (the grid is CPU-bound; run it
-under `nice`).
+scores a split table on held-out ones. Runs in this process, or with `--jobs N` on N
+workers of the executor (one (map, seed) case an item; the grid is CPU-bound: run it under
+`nice`).
 """
 
 from __future__ import annotations
@@ -84,17 +86,11 @@ def case_features(problem: Any, run: Any) -> dict[str, float]:
     return run_features(problem, x, f, run.state.pool, run.ev.remaining, run.ev.budget)
 
 
-def run_grid(maps: list[tuple[str, Any]], seeds: list[int], budget: int,
-             templates: list[str], out: Any, splits: list[float] | None = None
+def run_case(case: tuple[str, Any, int, int, list[str], list[float] | None, str]
              ) -> list[dict[str, Any]]:
-    """Every template on every map and seed (the prefix up to `improve` run once each).
-
-    With `splits` (DE shares) the prefix stops before the DE instead, and each template
-    runs the rest once per split (`PipelineRun.fork(config=)`: the same plan as a whole run
-    with that `de_share`), except a scheduler with `configure` (lamde-s with its split
-    table), which runs once with the share it picks. Every record holds its `de_share`, the
-    whole plan's CPU seconds (`cpu_seconds`: the prefix's and the fork's, process time) and
-    the map's features (`map_features`: the split table's inputs)."""
+    """One (map, seed) case of the grid: the prefix once, then every template (and share)
+    from a copy; its records. `case` = (map name, map source, seed, budget, templates,
+    splits, commit). A top-level function, so that `--jobs` workers can run it."""
     from planner_core.learning.schedule_select import map_features
     from planner_core.model.mapio import load_map
     from planner_core.model.problem import Problem
@@ -102,53 +98,77 @@ def run_grid(maps: list[tuple[str, Any]], seeds: list[int], budget: int,
     from planner_core.pipeline.pipeline import PipelineRun
     from planner_core.pipeline.schedule import configured, make_scheduler
 
-    records, commit = [], _commit()
-    for name, src in maps:
-        problem = Problem(load_map(src).planning_map())
-        mfeats = map_features(problem)
-        for seed in seeds:
-            cfg = PlanConfig(seed=seed, budget=budget)
-            t0, c0 = time.perf_counter(), time.process_time()
-            base = PipelineRun(problem, cfg, pipeline=DEFAULT_PIPELINE, evaluator=None,
-                               progress=None)
-            base.advance(until="de" if splits else "improve")
-            prefix_s, prefix_cpu = time.perf_counter() - t0, time.process_time() - c0
-            f_start = float(base.ev.best()[1]) if base.ev.has_best else float("inf")
-            feats = case_features(problem, base) if base.ev.has_best and not splits else {}
-            n0 = len(records)
-            for tpl in templates:
-                learned_split = bool(splits) and hasattr(make_scheduler(tpl), "configure")
-                if not splits:
-                    configs = [None]
-                elif learned_split:
-                    configs = [configured(tpl, problem, cfg)]
-                else:
-                    configs = [cfg.replace(de_share=x) for x in splits]
-                for c in configs:
-                    run = base.fork(tpl, config=c)
-                    t1, c1 = time.perf_counter(), time.process_time()
-                    run.advance()
-                    r = run.result()
-                    imp = [s for s in r.stages if s.name == "improve"]
-                    rec = {"map": name, "seed": seed, "budget": budget, "template": tpl,
-                           "arm": tpl if not splits or learned_split
-                           else f"{tpl}@{run.config.de_share:g}",
-                           "de_share": run.config.de_share,
-                           "f": r.f, "phi": r.phi, "f_start": f_start,
-                           "evaluations": r.evaluations,
-                           "improve_evaluations": imp[0].evaluations if imp else 0,
-                           "actions": list(r.state.actions),
-                           "improve_seconds": round(time.perf_counter() - t1, 3),
-                           "prefix_seconds": round(prefix_s, 3),
-                           "cpu_seconds": round(prefix_cpu + time.process_time() - c1, 3),
-                           "features": feats,
-                           "map_features": mfeats, "commit": commit}
-                    records.append(rec)
-                    if out is not None:
-                        out.write(json.dumps(rec) + "\n")
-                        out.flush()
-            print(f"{name} seed {seed}: f_start {f_start:.3f}, " + ", ".join(
-                f"{r['arm']} {r['f']:.3f}" for r in records[n0:]), file=sys.stderr, flush=True)
+    name, src, seed, budget, templates, splits, commit = case
+    problem = Problem(load_map(src).planning_map())
+    mfeats = map_features(problem)
+    cfg = PlanConfig(seed=seed, budget=budget)
+    t0, c0 = time.perf_counter(), time.process_time()
+    base = PipelineRun(problem, cfg, pipeline=DEFAULT_PIPELINE, evaluator=None, progress=None)
+    base.advance(until="de" if splits else "improve")
+    prefix_s, prefix_cpu = time.perf_counter() - t0, time.process_time() - c0
+    f_start = float(base.ev.best()[1]) if base.ev.has_best else float("inf")
+    feats = case_features(problem, base) if base.ev.has_best and not splits else {}
+    records = []
+    for tpl in templates:
+        learned_split = bool(splits) and hasattr(make_scheduler(tpl), "configure")
+        if not splits:
+            configs = [None]
+        elif learned_split:
+            configs = [configured(tpl, problem, cfg)]
+        else:
+            configs = [cfg.replace(de_share=x) for x in splits]
+        for c in configs:
+            run = base.fork(tpl, config=c)
+            t1, c1 = time.perf_counter(), time.process_time()
+            run.advance()
+            r = run.result()
+            imp = [s for s in r.stages if s.name == "improve"]
+            records.append({
+                "map": name, "seed": seed, "budget": budget, "template": tpl,
+                "arm": tpl if not splits or learned_split
+                else f"{tpl}@{run.config.de_share:g}",
+                "de_share": run.config.de_share,
+                "f": r.f, "phi": r.phi, "f_start": f_start,
+                "evaluations": r.evaluations,
+                "improve_evaluations": imp[0].evaluations if imp else 0,
+                "actions": list(r.state.actions),
+                "improve_seconds": round(time.perf_counter() - t1, 3),
+                "prefix_seconds": round(prefix_s, 3),
+                "cpu_seconds": round(prefix_cpu + time.process_time() - c1, 3),
+                "features": feats, "map_features": mfeats, "commit": commit})
+    return records
+
+
+def run_grid(maps: list[tuple[str, Any]], seeds: list[int], budget: int,
+             templates: list[str], out: Any, splits: list[float] | None = None,
+             jobs: int = 0, backend: str = "local") -> list[dict[str, Any]]:
+    """Every template on every map and seed (the prefix up to `improve` run once each).
+
+    With `splits` (DE shares) the prefix stops before the DE instead, and each template
+    runs the rest once per split (`PipelineRun.fork(config=)`: the same plan as a whole run
+    with that `de_share`), except a scheduler with `configure` (lamde-s with its split
+    table), which runs once with the share it picks. Every record holds its `de_share`, the
+    whole plan's CPU seconds (`cpu_seconds`: the prefix's and the fork's, process time) and
+    the map's features (`map_features`: the split table's inputs).
+
+    `jobs` >= 1 runs the cases on that many workers of the executor (`backend` "local" or
+    "ray", `planner_core.execution.make_executor`); the records are the same, written in the
+    order the cases end. CPU seconds are each worker's own, so they stay comparable."""
+    from planner_core.execution import make_executor
+
+    commit = _commit()
+    cases = [(name, src, seed, budget, list(templates), splits, commit)
+             for name, src in maps for seed in seeds]
+    records: list[dict[str, Any]] = []
+    with make_executor(jobs, backend) as ex:
+        for recs in ex.map_unordered(run_case, cases):
+            records.extend(recs)
+            if out is not None:
+                out.writelines(json.dumps(r) + "\n" for r in recs)
+                out.flush()
+            r0 = recs[0]
+            print(f"{r0['map']} seed {r0['seed']}: f_start {r0['f_start']:.3f}, " + ", ".join(
+                f"{r['arm']} {r['f']:.3f}" for r in recs), file=sys.stderr, flush=True)
     return records
 
 
@@ -476,6 +496,10 @@ def main(argv: list[str] | None = None) -> int:
                     help="DE shares to run each template at (e.g. 0.6 0.4 0.3): the prefix "
                     "stops before the DE; a learned scheduler with a split table (lamde-s) "
                     "runs once at the share it picks; records for the split table's fit")
+    ap.add_argument("--jobs", type=int, default=0,
+                    help="run the cases on N worker processes (0: in this process)")
+    ap.add_argument("--backend", choices=("local", "ray"), default="local",
+                    help="executor for --jobs (local processes or a Ray cluster)")
     ap.add_argument("-o", "--output", help="JSON lines file to write the runs to")
     ap.add_argument("--summary", nargs="+", metavar="JSONL",
                     help="print the table of earlier records (plain or .gz) and exit")
@@ -529,6 +553,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"bench_schedule: --templates: unknown {bad}" if bad else
               "bench_schedule: --maps and --seeds: must be >= 1", file=sys.stderr)
         return 2
+    if args.jobs < 0:
+        print(f"bench_schedule: --jobs: must be >= 0, got {args.jobs}", file=sys.stderr)
+        return 2
     if args.splits is not None and not all(0.0 <= x <= 1.0 for x in args.splits):
         print(f"bench_schedule: --splits: each must be in [0, 1], got {args.splits}",
               file=sys.stderr)
@@ -549,7 +576,7 @@ def main(argv: list[str] | None = None) -> int:
     out = open(args.output, "w") if args.output else None  # noqa: SIM115
     try:
         records = run_grid(maps, list(range(args.seeds)), args.budget, args.templates, out,
-                           splits=args.splits)
+                           splits=args.splits, jobs=args.jobs, backend=args.backend)
     finally:
         if out is not None:
             out.close()

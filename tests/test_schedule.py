@@ -310,3 +310,26 @@ def test_a_schedulers_configure_sets_the_runs_config_and_the_plan_records_it(
     assert lamde_mission.plan(MAPS / "tiny.json", config=cfg).config["de_share"] == 0.6
     with pytest.raises(ValueError, match="configure\\(\\) must return a PlanConfig"):
         run_pipeline(tiny, cfg, scheduler=_Halving(out={"de_share": 0.1}))
+
+
+@pytest.mark.slow  # measured ~15 s: two suite maps, two seeds, twice (serial and 2 workers)
+def test_bench_schedule_on_workers_writes_the_serial_records(tmp_path) -> None:
+    """`--jobs 2` runs the cases on the executor's workers: the same records as in one
+    process (order aside), CPU seconds each worker's own."""
+    import subprocess
+    import sys
+
+    rows = {}
+    for jobs in ("0", "2"):
+        out = tmp_path / f"j{jobs}.jsonl"
+        r = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "bench_schedule.py"),
+                            "--suite", "T01", "T02", "--seeds", "2", "--budget", "3000",
+                            "--templates", "default", "kicks-heavy", "--splits", "0.6", "0.4",
+                            "--jobs", jobs, "-o", str(out)],
+                           capture_output=True, text=True, timeout=600)
+        assert r.returncode == 0, r.stderr
+        recs = [json.loads(x) for x in out.read_text().splitlines()]
+        assert all(x["cpu_seconds"] > 0 for x in recs)
+        rows[jobs] = sorted((x["map"], x["seed"], x["arm"], x["f"], x["phi"]) for x in recs)
+    assert len(rows["0"]) == 16 and rows["0"] == rows["2"]
+    assert _bench().main(["--jobs", "-1"]) == 2
