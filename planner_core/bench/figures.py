@@ -64,6 +64,7 @@ _COLOURS: dict[str, str] = {
     "de-fixed": "#8c564b", "de-fixed-fixedlen": "#c49c94",
     "cmaes": "#d62728", "cmaes-seeded-lp": "#ff9896",
     "planner": "#2ca02c", "planner-memetic": "#98df8a", "planner-no-starts": "#c7e9c0",
+    "planner-lamde-s": "#31a354",
     "engineering-own-order": "#9edae5",
     "seed-lp": "#e377c2",
     "scipy-de": "#bcbd22",

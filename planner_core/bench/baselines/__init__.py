@@ -132,6 +132,16 @@ REGISTRY: dict[str, OptimiserSpec] = {
             spends_budget=False,
         ),
         OptimiserSpec(
+            "planner-lamde-s",
+            "planner_core.bench.baselines.de:planner",
+            "the planner with `--scheduler lamde-s`: the learned selector picks the DE's "
+            "share of the budget from the map (more evaluations for the improving rounds, "
+            "within 1.5x the default's CPU) and the improving stage's schedule from the run "
+            "(docs/scheduler.md)",
+            kwargs={"scheduler": "lamde-s"},
+            spends_budget=False,
+        ),
+        OptimiserSpec(
             "planner-no-descent",
             "planner_core.bench.baselines.de:planner",
             "the planner without the hover-point descent and the stages after the polish "

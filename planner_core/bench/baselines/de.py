@@ -71,7 +71,8 @@ def optimise(
 
 
 def planner(
-    problem: Any, budget: int, seed: int, *, policy: str | None = None, **settings: Any
+    problem: Any, budget: int, seed: int, *, policy: str | None = None,
+    scheduler: str | None = None, **settings: Any
 ) -> OptimiseResult:
     """What `plan` does, on the benchmark's problem and counter: the default pipeline with
     `PlanConfig(budget=budget, seed=seed, **settings)` (`policy` as `optimise`; the start mode
@@ -82,6 +83,8 @@ def planner(
         budget: evaluations in all (>= the population).
         seed: the run's seed.
         policy: see `optimise`.
+        scheduler: the improving stage's scheduler (`plan --scheduler`; None: the default),
+            e.g. "lamde-s", which also sets the DE's share from the map.
         settings: any other `PlanConfig` field (configurator, starts, descent, memetic, ...).
 
     Returns:
@@ -99,7 +102,7 @@ def planner(
         settings["configurator"] = _configurator(settings.get("configurator", "lamde"), policy)
     settings.setdefault("population", min(POPULATION, int(budget)))
     config = PlanConfig(budget=int(budget), seed=int(seed), **settings)
-    r = run_pipeline(uav, config, evaluator=ev)
+    r = run_pipeline(uav, config, evaluator=ev, scheduler=scheduler)
     de = r.state.de
     last = None if de is None else float(de.history.feasible_fraction[-1])
     return OptimiseResult(r.x, r.f, r.phi, ev.count, ev.trace("deb"), last)
