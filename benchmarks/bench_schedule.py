@@ -90,12 +90,14 @@ def run_case(case: tuple[str, Any, int, int, list[str], list[float] | None, str]
              ) -> list[dict[str, Any]]:
     """One (map, seed) case of the grid: the prefix once, then every template (and share)
     from a copy; its records. `case` = (map name, map source, seed, budget, templates,
-    splits, commit). A top-level function, so that `--jobs` workers can run it."""
+    splits, commit). Without `splits` a scheduler that changes the run's config (lamde-s's
+    DE share) runs its own whole plan instead, as `plan` would; its CPU seconds are that
+    run's. A top-level function, so that `--jobs` workers can run it."""
     from planner_core.learning.schedule_select import map_features
     from planner_core.model.mapio import load_map
     from planner_core.model.problem import Problem
     from planner_core.pipeline import DEFAULT_PIPELINE, PlanConfig
-    from planner_core.pipeline.pipeline import PipelineRun
+    from planner_core.pipeline.pipeline import PipelineRun, with_scheduler
     from planner_core.pipeline.schedule import configured, make_scheduler
 
     name, src, seed, budget, templates, splits, commit = case
@@ -110,16 +112,25 @@ def run_case(case: tuple[str, Any, int, int, list[str], list[float] | None, str]
     feats = case_features(problem, base) if base.ev.has_best and not splits else {}
     records = []
     for tpl in templates:
+        own = configured(tpl, problem, cfg)  # the config the scheduler itself would run
         learned_split = bool(splits) and hasattr(make_scheduler(tpl), "configure")
         if not splits:
             configs = [None]
         elif learned_split:
-            configs = [configured(tpl, problem, cfg)]
+            configs = [own]
         else:
             configs = [cfg.replace(de_share=x) for x in splits]
         for c in configs:
-            run = base.fork(tpl, config=c)
-            t1, c1 = time.perf_counter(), time.process_time()
+            if not splits and own != cfg:
+                # a scheduler that changes the config before the DE (lamde-s's share): the
+                # prefix has run the DE already, so its own whole run, as `plan` runs it
+                t1, c1 = time.perf_counter(), time.process_time()
+                run = PipelineRun(problem, own, pipeline=with_scheduler(DEFAULT_PIPELINE, tpl),
+                                  evaluator=None, progress=None)
+                c1 += prefix_cpu  # its CPU seconds: its own whole run only
+            else:
+                run = base.fork(tpl, config=c)
+                t1, c1 = time.perf_counter(), time.process_time()
             run.advance()
             r = run.result()
             imp = [s for s in r.stages if s.name == "improve"]
@@ -426,6 +437,10 @@ def evaluate_split(table_dir: str, records: list[dict[str, Any]], seed: int = 0)
     keys, F, G, C, splits = split_cases(records)
     if not len(keys):
         raise ValueError("records: no case where every split ran and was feasible")
+    missing = [x for x in table.splits if x not in splits]
+    if missing:
+        raise ValueError(f"records: no runs at the table's shares {missing} (run "
+                         f"--splits {' '.join(f'{x:g}' for x in table.splits)})")
     col = {x: i for i, x in enumerate(splits)}
     picks = [table.predict(v) for v in F]
     static_share = table.splits[capped_best(table.gaps, table.cpu, table.cap)]

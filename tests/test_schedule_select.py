@@ -335,7 +335,7 @@ def test_map_features_clark_evans_tells_a_lattice_from_clustered_fields() -> Non
     def fake(xy: np.ndarray) -> SimpleNamespace:
         m = SimpleNamespace(width=1000.0, height=1000.0,
                             spec=SimpleNamespace(obstacles=SimpleNamespace(count=0)))
-        return SimpleNamespace(sensors=xy, map=m, n_points=10)
+        return SimpleNamespace(sensors=xy, map=m, hover_limit=10)
 
     g = (np.arange(10) + 0.5) * 100.0
     lattice = np.array([(x, y) for x in g for y in g])  # spacing 100 m, 100 sensors
@@ -427,3 +427,82 @@ def test_the_docs_split_figures_are_what_the_shipped_table_gives_on_the_stored_r
                                  bench._read([str(runs / "split-heldout-large.jsonl.gz")]))
     assert "lamde-s vs best static: f +0.016 % on average, 95 % CI [-0.041, +0.098]" in large
     assert "the picked share's plan in 48 of 48 complete cases" in large
+
+
+def test_split_records_and_tables_are_checked_in_one_line(tmp_path) -> None:
+    from planner_core.learning.schedule_select import map_spec
+
+    mixed = SPLITS + [dict(SPLITS[0], budget=5_000, map="other")]
+    with pytest.raises(ValueError, match=r"budgets \[5000, 10000\] mixed"):
+        split_cases(mixed)
+    lacking = [dict(r) for r in SPLITS]
+    del lacking[0]["cpu_seconds"]
+    with pytest.raises(ValueError, match="lacks cpu_seconds"):
+        split_cases(lacking)
+    one_spec = [dict(r, map=f"L04-s{3000 + sorted({x['map'] for x in SPLITS}).index(r['map'])}")
+                for r in SPLITS]  # six maps of one spec
+    with pytest.raises(ValueError, match="at least 2 map specs"):
+        fit_split(one_spec, k=1)
+    assert map_spec("L04-s3001") == "L04" and map_spec("gen-5000-d0-s3400") == "gen-5000-d0"
+    assert map_spec("T06") == "T06"
+    table = fit_split(SPLITS, k=3)
+    for change, match in (({"k": 0}, "k must be 1..6"), ({"cap": 0.5}, "cap must be"),
+                          ({"splits": [0.4, 0.6, 0.3]}, "first share must be the default")):
+        d = tmp_path / str(len(change) * 10 + len(str(change)))
+        table.save(d)
+        meta = json.loads((d / "split.json").read_text())
+        meta.update(change)
+        (d / "split.json").write_text(json.dumps(meta))
+        if "splits" in change:
+            with np.load(d / "split.npz") as z:
+                arrays = dict(z)
+            arrays["splits"] = np.array(change["splits"])
+            np.savez(d / "split.npz", **arrays)
+        with pytest.raises(ValueError, match=match):
+            SplitTable.load(d)
+
+
+def test_leave_one_spec_out_holds_a_specs_seeds_out_together() -> None:
+    """Twin maps of one spec (other generator seeds) are held out together: a table whose
+    only twin says 0.3 cannot pick 0.3 for its held-out sibling."""
+    recs = _split_records(
+        [("L09", 0, _mfeats(300), {0.6: (101.0, 1.0), 0.3: (100.0, 1.2)}),
+         ("L09-s3001", 0, _mfeats(300), {0.6: (101.0, 1.0), 0.3: (100.0, 1.2)})]
+        + [(f"small{i}", 0, _mfeats(10 + i), {0.6: (100.0, 1.0), 0.3: (100.5, 1.2)})
+           for i in range(2)])
+    cv = cross_validate_split(fit_split(recs, k=1), k=1)
+    # by map, each L09 twin would learn 0.3 from the other (gap 0); by spec, its nearest
+    # cases are the small maps, whose best share is 0.6 (gap 1 % on both twins); the small
+    # maps get 0.6 from each other (gap 0): mean 2 / 4
+    assert cv["cases"] == 4 and cv["selector"] == pytest.approx(0.5, rel=1e-3)
+
+
+def test_a_fork_after_the_de_may_not_change_its_share() -> None:
+    problem = Problem(MAPS / "tiny.json")
+    cfg = PlanConfig(seed=1, budget=2_500, population=20)
+    run = PipelineRun(problem, cfg, pipeline=DEFAULT_PIPELINE, evaluator=None, progress=None)
+    run.advance(until="improve")
+    with pytest.raises(ValueError, match="once the DE has run"):
+        run.fork(None, config=cfg.replace(de_share=0.3))
+    run.fork(None, config=cfg.replace(kick_trials=cfg.kick_trials))  # the same share: fine
+
+
+def test_bench_schedule_without_splits_runs_lamde_s_as_plan_does(tmp_path) -> None:
+    """Without --splits the prefix has run the DE: lamde-s, whose share differs from the
+    default's, runs its own whole plan, the one `plan --scheduler lamde-s` gives."""
+    import lamde_mission
+    from tests.test_schedule import _bench
+
+    out = tmp_path / "grid.jsonl"
+    assert _bench().main(["--suite", "T01", "--seeds", "1", "--budget", "3000", "--templates",
+                          "default", "lamde-s", "-o", str(out)]) == 0
+    rows = {r["arm"]: r for r in map(json.loads, out.read_text().splitlines())}
+    want = lamde_mission.plan(ROOT / "examples" / "maps" / "suite" / "T01.json", budget=3000,
+                              seed=0, scheduler="lamde-s")
+    assert rows["lamde-s"]["de_share"] == want.config["de_share"] != rows["default"]["de_share"]
+    assert rows["lamde-s"]["f"] == pytest.approx(want.breakdown["f"], rel=1e-12)
+    # a split table asked for shares the records lack: one line
+    held = tmp_path / "held.jsonl"
+    held.write_text("".join(json.dumps(r) + "\n" for r in SPLITS if r["de_share"] != 0.4))
+    table = fit_split(SPLITS, k=3).save(tmp_path / "t")
+    assert _bench().main(["--evaluate-split", str(table), str(held)]) == 2

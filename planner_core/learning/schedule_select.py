@@ -41,6 +41,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
+import re
 import subprocess
 import sys
 from collections.abc import Iterable, Sequence
@@ -127,7 +129,8 @@ def map_features(problem: Any) -> dict[str, float]:
 
     Returns:
         `SPLIT_FEATURES` -> value: sensors J, obstacles (circles, rectangles, no-fly zones,
-        polygons), area (km^2), I_max, and the Clark-Evans ratio of the sensors (their mean
+        polygons), area (km^2), I_max (hover points; corner slots not counted), and the
+        Clark-Evans ratio of the sensors (their mean
         nearest-neighbour distance over 0.5 sqrt(area / J), the mean for points drawn
         uniformly: about 1 for a uniform layout, below for clustered fields, above for a
         regular one; Clark & Evans, Ecology 35(4), 1954; 1 for fewer than 2 sensors).
@@ -144,7 +147,7 @@ def map_features(problem: Any) -> dict[str, float]:
         "sensors": float(len(xy)),
         "obstacles": float(problem.map.spec.obstacles.count),
         "area_km2": area / 1e6,
-        "imax": float(problem.n_points),
+        "imax": float(problem.hover_limit),  # I_max, corner slots not counted
         "clark_evans": ce,
     }
 
@@ -410,10 +413,23 @@ class SplitTable:
         if list(meta.get("features", [])) != list(SPLIT_FEATURES):
             raise ValueError(f"scheduler: the split table in {d} was fitted on other "
                              f"features {meta.get('features')}")
+        from planner_core.defaults import DE_SHARE
+
         n, S = table.gaps.shape
         if table.features.shape != (n, len(SPLIT_FEATURES)) or table.cpu.shape != (n, S) \
                 or len(table.splits) != S or len(table.maps) != n or n == 0:
             raise ValueError(f"scheduler: the split table in {d} has inconsistent shapes")
+        if not all(np.isfinite(a).all() for a in (table.features, table.gaps, table.cpu)):
+            raise ValueError(f"scheduler: the split table in {d} holds non-finite values")
+        if not 1 <= table.k <= n:
+            raise ValueError(f"scheduler: the split table in {d}: k must be 1..{n}, got "
+                             f"{table.k}")
+        if not (math.isfinite(table.cap) and table.cap >= 1.0):
+            raise ValueError(f"scheduler: the split table in {d}: cap must be a finite number "
+                             f">= 1, got {table.cap}")
+        if table.splits[0] != DE_SHARE:
+            raise ValueError(f"scheduler: the split table in {d}: its first share must be "
+                             f"the default {DE_SHARE}, got {table.splits[0]}")
         return table
 
 
@@ -438,14 +454,25 @@ def split_cases(records: Iterable[dict[str, Any]]) -> tuple[
         the default split's.
 
     Raises:
-        ValueError: no case ran the default split.
+        ValueError: no case ran the default split; a record without the fields the table
+            needs; records of several budgets.
     """
     from planner_core.defaults import DE_SHARE
 
     by_case: dict[tuple[str, int], dict[float, dict[str, Any]]] = {}
+    budgets = set()
     for r in records:
         if r.get("template") == "default" and "de_share" in r:
+            missing = [k for k in ("map", "seed", "budget", "f", "phi", "cpu_seconds",
+                                   "map_features") if k not in r]
+            if missing:
+                raise ValueError(f"records: a split record lacks {', '.join(missing)} "
+                                 f"(bench_schedule.py --splits writes them)")
+            budgets.add(r["budget"])
             by_case.setdefault((r["map"], r["seed"]), {})[float(r["de_share"])] = r
+    if len(budgets) > 1:
+        raise ValueError(f"records: budgets {sorted(budgets)} mixed; a split table is fitted "
+                         f"and scored at one budget")
     # the shares at least half the cases ran (a case cut short by a stopped run, or a stray
     # share, does not shrink the table); cases without all of them are left out
     count: dict[float, int] = {}
@@ -476,16 +503,25 @@ def split_cases(records: Iterable[dict[str, Any]]) -> tuple[
             splits)
 
 
+def map_spec(name: str) -> str:
+    """A map's spec: its name without a generator-seed suffix ("L04-s3001" -> "L04",
+    "gen-5000-d0-s3400" -> "gen-5000-d0"); maps of one spec from other generator seeds share
+    their size, sensor count, layout and density, so a check that holds one out must hold
+    them all out."""
+    return re.sub(r"-s\d+$", "", name)
+
+
 def cross_validate_split(table: SplitTable, k: int | None = None) -> dict[str, float]:
-    """Leave one map out over the split table's cases: each held-out case's split chosen from
-    the other maps' cases, against the best static split of those maps within the cap (the
-    least mean gap among the splits whose mean CPU ratio is at most `cap`).
+    """Leave one map spec out (`map_spec`: a spec's maps from every generator seed at once)
+    over the split table's cases: each held-out case's split chosen from the other specs'
+    cases, against the best static split of those cases within the cap (the least mean gap
+    among the splits whose mean CPU ratio is at most `cap`).
 
     Returns:
         mean gaps (per cent) and mean CPU ratios of the choice and of the static split, and
         the cases where the choice is better / worse.
     """
-    maps = np.array(table.maps)
+    maps = np.array([map_spec(m) for m in table.maps])
     chosen, static, c_cpu, s_cpu = [], [], [], []
     for m in np.unique(maps):
         train = maps != m
@@ -504,7 +540,8 @@ def cross_validate_split(table: SplitTable, k: int | None = None) -> dict[str, f
 
 def fit_split(records: Iterable[dict[str, Any]], k: int | None = None, cap: float = CPU_CAP,
               meta: dict[str, Any] | None = None) -> SplitTable:
-    """A split table from split records (`split_cases`); k by leave-one-map-out when None.
+    """A split table from split records (`split_cases`); k by leave-one-spec-out
+    (`cross_validate_split`) when None: the least mean gap.
 
     Raises:
         ValueError: no complete, feasible case.
@@ -513,6 +550,9 @@ def fit_split(records: Iterable[dict[str, Any]], k: int | None = None, cap: floa
     if not len(keys):
         raise ValueError("records: no case where every split ran and was feasible")
     maps = tuple(m for m, _ in keys)
+    if len({map_spec(m) for m in maps}) < 2:
+        raise ValueError("records: the cases of at least 2 map specs are needed (the fit "
+                         "leaves one out at a time)")
     table = SplitTable(F, G, C, tuple(splits), maps, k or K_GRID[0], float(cap),
                        dict(meta or {}))
     cv = {kk: cross_validate_split(table, kk) for kk in ((k,) if k else K_GRID)}
@@ -529,6 +569,9 @@ class SelectorScheduler:
 
     Args:
         table: a `SelectorTable` (None: the shipped one, `DEFAULT_TABLE`).
+        split: a `SplitTable` for the DE's share (`configure`); True (default): the shipped
+            one, whatever `table` is; None: no split choice. `from_checkpoint` uses the
+            folder's `split.npz` when it has one, else none.
     """
 
     name = "lamde-s"
@@ -551,7 +594,9 @@ class SelectorScheduler:
     def configure(self, problem: Any, config: Any) -> Any:
         """The run's config with the DE share the split table picks for `problem`
         (`map_features`; `SplitTable.predict`), before any stage runs. A config whose
-        `de_share` is not the default's keeps it, as does a selector without a split table.
+        `de_share` differs from the default (`planner_core.defaults.DE_SHARE`) keeps it, as
+        does a selector without a split table (`SelectorScheduler(split=None)`: the
+        template choice alone, at the config's share, whatever it is).
 
         Args:
             problem: the run's `Problem`; config: its `PlanConfig`.
@@ -630,13 +675,15 @@ def main(argv: list[str] | None = None) -> int:
     for name, what in (("fit", "the template table (table.npz)"),
                        ("fit-split", "the DE-share table (split.npz; bench_schedule.py "
                         "--splits records)")):
-        f = sub.add_parser(name, help=f"fit {what}")
+        f = sub.add_parser(name, help=f"fit {what}", description=f"Fit {what} and write it "
+                           "into the output folder, beside the other table.")
         f.add_argument("records", nargs="+",
                        help="JSON lines (plain or .gz) of bench_schedule.py")
         f.add_argument("-o", "--output", required=True,
                        help="directory to write the table to")
         f.add_argument("--k", type=int, default=None, help="neighbours (default: chosen by "
-                       "leave-one-map-out among 1, 3, 5, 10, 20, 40)")
+                       "leaving one map out (fit) or one map spec out (fit-split) among "
+                       "1, 3, 5, 10, 20, 40)")
     sub.choices["fit-split"].add_argument(
         "--cap", type=float, default=CPU_CAP,
         help=f"CPU cap over the default share's ({CPU_CAP:g})")
@@ -665,12 +712,14 @@ def main(argv: list[str] | None = None) -> int:
         else:
             table = fit(records, k=args.k, meta=meta)
     except (OSError, ValueError, KeyError) as exc:
-        print(f"schedule_select: records: {exc}", file=sys.stderr)
+        msg = str(exc)
+        print(f"schedule_select: {msg if msg.startswith('records:') else 'records: ' + msg}",
+              file=sys.stderr)
         return 2
     if split:
         stable.save(args.output)
         for kk, v in stable.meta["cross_validation"].items():
-            print(f"k = {kk}: leave-one-map-out mean gap {v['selector']:.4f} % at "
+            print(f"k = {kk}: leave-one-spec-out mean gap {v['selector']:.4f} % at "
                   f"{v['selector_cpu']:.2f}x CPU (best static share {v['static']:.4f} % at "
                   f"{v['static_cpu']:.2f}x), better / worse on {v['better']} / {v['worse']} "
                   f"of {v['cases']} cases")

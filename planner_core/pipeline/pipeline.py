@@ -235,6 +235,10 @@ class PipelineRun:
             raise RuntimeError("fork: a stage is open")
         if config is not None and config.budget != self.ev.budget:
             raise ValueError("config: a fork keeps the run's budget")
+        ran = {s.name for s in self.stages[:self.i]}
+        if config is not None and "de" in ran and config.de_share != self.config.de_share:
+            raise ValueError("config: de_share changes nothing once the DE has run; fork "
+                             "before it (advance(until='de'))")
         memo = {id(self.problem): self.problem}
         twin = copy.deepcopy(self, memo)
         twin.stages = list(with_scheduler(twin.stages, scheduler))
