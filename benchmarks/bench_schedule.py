@@ -200,7 +200,8 @@ def _arm(r: dict[str, Any]) -> str:
 def summarise(records: list[dict[str, Any]]) -> str:
     """The markdown table of the module docstring (an arm is a template, or with `--splits`
     a template at a DE share, "default@0.6"; "x CPU" is the mean of each case's whole-plan
-    CPU over the reference arm's, where the records hold it)."""
+    CPU over the reference arm's, where the records hold it; with `--splits` "improve s" is
+    the seconds of everything from the DE on, the part a fork runs)."""
     from scipy.stats import wilcoxon
 
     from planner_core.defaults import DE_SHARE

@@ -65,7 +65,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="how the improving stage chooses its macro-actions (kicks, structural "
                    "search, restarts, fresh sweeps, DE blocks): default (today's rounds), a "
                    "static schedule, lamde-s (the learned selector of a schedule and of the "
-                   "DE's share of the budget, within 1.5x the default's CPU) or "
+                   "DE's share of the budget, within 1.5x the default's CPU on average) or "
                    "lamde-s-ppo (the policy trained by PPO); lamde-s-ppo:DIR or lamde-s:DIR "
                    "for a checkpoint of your own (docs/scheduler.md lists them)")
     p.add_argument("--corner-slots", default="auto", metavar="auto|K",
