@@ -99,3 +99,10 @@ def test_split06_table_is_what_its_runs_give_against_the_08_split() -> None:
 def test_rebuild_table_is_what_its_runs_give_against_the_06_split() -> None:
     _paired_table(_section("**With rebuilding windows**", "**The peer given the same wall"),
                   REBUILD, SPLIT06)
+
+
+def test_lamde_s_table_is_what_its_runs_give_against_the_default() -> None:
+    doc = _doc()
+    start = doc.index("**With `--scheduler lamde-s`**")
+    _paired_table(doc[start:], ROOT / "docs" / "scaling" / "large-suite-25-lamde-s.jsonl.gz",
+                  REBUILD)
