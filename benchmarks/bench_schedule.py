@@ -537,7 +537,13 @@ def main(argv: list[str] | None = None) -> int:
             print("bench_schedule: --evaluate: needs TABLE and at least one JSONL",
                   file=sys.stderr)
             return 2
-        print(evaluate(args.evaluate[0], _read(args.evaluate[1:])))
+        try:
+            print(evaluate(args.evaluate[0], _read(args.evaluate[1:])))
+        except (OSError, ValueError, KeyError) as exc:  # e.g. --splits records, other arms
+            print(f"bench_schedule: --evaluate: records lack a template the table needs "
+                  f"({exc}); --evaluate-split scores --splits records" if isinstance(
+                      exc, KeyError) else f"bench_schedule: --evaluate: {exc}", file=sys.stderr)
+            return 2
         return 0
     if args.evaluate_split:
         try:

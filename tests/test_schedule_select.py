@@ -506,3 +506,8 @@ def test_bench_schedule_without_splits_runs_lamde_s_as_plan_does(tmp_path) -> No
     held.write_text("".join(json.dumps(r) + "\n" for r in SPLITS if r["de_share"] != 0.4))
     table = fit_split(SPLITS, k=3).save(tmp_path / "t")
     assert _bench().main(["--evaluate-split", str(table), str(held)]) == 2
+    # the template table's --evaluate on split records: one line, not a traceback
+    split_recs = tmp_path / "split.jsonl"
+    split_recs.write_text("".join(json.dumps(dict(r, features=_feats(9))) + "\n"
+                                  for r in SPLITS))
+    assert _bench().main(["--evaluate", str(DEFAULT_TABLE), str(split_recs)]) == 2
