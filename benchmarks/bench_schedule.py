@@ -121,16 +121,15 @@ def run_case(case: tuple[str, Any, int, int, list[str], list[float] | None, str]
         else:
             configs = [cfg.replace(de_share=x) for x in splits]
         for c in configs:
-            if not splits and own != cfg:
+            whole = not splits and own != cfg
+            if whole:
                 # a scheduler that changes the config before the DE (lamde-s's share): the
                 # prefix has run the DE already, so its own whole run, as `plan` runs it
-                t1, c1 = time.perf_counter(), time.process_time()
                 run = PipelineRun(problem, own, pipeline=with_scheduler(DEFAULT_PIPELINE, tpl),
                                   evaluator=None, progress=None)
-                c1 += prefix_cpu  # its CPU seconds: its own whole run only
             else:
                 run = base.fork(tpl, config=c)
-                t1, c1 = time.perf_counter(), time.process_time()
+            t1, c1 = time.perf_counter(), time.process_time()
             run.advance()
             r = run.result()
             imp = [s for s in r.stages if s.name == "improve"]
@@ -145,7 +144,9 @@ def run_case(case: tuple[str, Any, int, int, list[str], list[float] | None, str]
                 "actions": list(r.state.actions),
                 "improve_seconds": round(time.perf_counter() - t1, 3),
                 "prefix_seconds": round(prefix_s, 3),
-                "cpu_seconds": round(prefix_cpu + time.process_time() - c1, 3),
+                # the whole plan's: the prefix's and the fork's, or a whole run's own
+                "cpu_seconds": round((0.0 if whole else prefix_cpu)
+                                     + time.process_time() - c1, 3),
                 "features": feats, "map_features": mfeats, "commit": commit})
     return records
 
@@ -355,6 +356,20 @@ def other_seed_choice(records: list[dict[str, Any]]) -> str:
             f"({len(corr)} maps)")
 
 
+def _paired(d: Any, maps: Any, rng: Any) -> tuple[float, float, float, list[float]]:
+    """The paired statistics of per-case differences d (n,) on cases of maps (n,): the
+    Wilcoxon signed-rank p (two-sided, zero differences dropped; 1 when all are 0), a
+    bootstrap 95 % CI of the mean (10,000 resamples of the cases drawn from `rng`), and the
+    mean difference of each map (sorted by map)."""
+    import numpy as np
+    from scipy.stats import wilcoxon
+
+    p = wilcoxon(d).pvalue if np.any(d) else 1.0
+    boot = d[rng.integers(0, len(d), size=(10_000, len(d)))].mean(1)
+    lo, hi = np.percentile(boot, [2.5, 97.5])
+    return float(p), float(lo), float(hi), [d[maps == m].mean() for m in np.unique(maps)]
+
+
 def evaluate(table_dir: str, records: list[dict[str, Any]], seed: int = 0) -> str:
     """A fitted selector table (`python -m planner_core.learning.schedule_select fit`) on
     held-out grid records: per case the template the table picks from the case's features
@@ -366,7 +381,6 @@ def evaluate(table_dir: str, records: list[dict[str, Any]], seed: int = 0) -> st
     over their seeds is lower than the static one's (of the maps where they differ), and the
     improving stage's seconds against the default's."""
     import numpy as np
-    from scipy.stats import wilcoxon
 
     from planner_core.learning.schedule_select import SelectorTable, cases_from_records
 
@@ -378,12 +392,8 @@ def evaluate(table_dir: str, records: list[dict[str, Any]], seed: int = 0) -> st
     static = G[:, idx[table.templates[0]]]
     default = G[:, idx["default"]]
     diff = sel - static
-    p = wilcoxon(sel, static).pvalue if np.any(diff) else 1.0
-    rng = np.random.default_rng(seed)
-    boot = diff[rng.integers(0, len(diff), size=(10_000, len(diff)))].mean(1)
-    lo, hi = np.percentile(boot, [2.5, 97.5])
     maps = np.array([m for m, _ in keys])
-    per_map = [(diff[maps == m].mean()) for m in np.unique(maps)]
+    p, lo, hi, per_map = _paired(diff, maps, np.random.default_rng(seed))
     n_diff = sum(1 for v in per_map if v != 0)
     secs: dict[tuple[str, int], dict[str, float]] = {}
     for r in records:
@@ -423,7 +433,6 @@ def evaluate_split(table_dir: str, records: list[dict[str, Any]], seed: int = 0)
     default share's; where the records hold lamde-s's own runs (arm "lamde-s"), how often
     they equal the picked share's plan."""
     import numpy as np
-    from scipy.stats import wilcoxon
 
     from planner_core.learning.schedule_select import (
         SPLIT_FEATURES,
@@ -464,10 +473,7 @@ def evaluate_split(table_dir: str, records: list[dict[str, Any]], seed: int = 0)
     rng = np.random.default_rng(seed)
     maps = np.array([m for m, _ in keys])
     for name, d in (("best static", d_static), ("default", d_def)):
-        p = wilcoxon(d).pvalue if np.any(d) else 1.0
-        boot = d[rng.integers(0, len(d), size=(10_000, len(d)))].mean(1)
-        lo, hi = np.percentile(boot, [2.5, 97.5])
-        per_map = [d[maps == m].mean() for m in np.unique(maps)]
+        p, lo, hi, per_map = _paired(d, maps, rng)
         out.append(f"lamde-s vs {name}: f {d.mean():+.3f} % on average, 95 % CI "
                    f"[{lo:+.3f}, {hi:+.3f}]; lower / higher on {int((d < 0).sum())} / "
                    f"{int((d > 0).sum())} cases, Wilcoxon p = {p:.3g}; maps with a lower "

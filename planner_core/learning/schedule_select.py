@@ -159,6 +159,17 @@ def _transform(F: np.ndarray, names: Sequence[str] = FEATURES) -> np.ndarray:
     return np.where(logs, np.log1p(np.abs(F)), F)
 
 
+def _query(features: dict[str, float] | Sequence[float], names: Sequence[str],
+           rows: np.ndarray | None, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """A `predict` call's feature vector (`names` order; a dict or the values in order) and
+    its training rows as indices (rows None: all n; boolean (n,) or indices)."""
+    v = np.array([features[m] for m in names] if isinstance(features, dict) else features,
+                 dtype=float)
+    idx = np.arange(n) if rows is None else np.flatnonzero(
+        rows) if np.asarray(rows).dtype == bool else np.asarray(rows)
+    return v, idx
+
+
 def _nearest(F: np.ndarray, v: np.ndarray, k: int, names: Sequence[str]) -> np.ndarray:
     """Indices of the k rows of F (n, m) nearest to v (m,): features transformed
     (`_transform`), standardised on F, Euclidean distance, ties by row order."""
@@ -203,10 +214,7 @@ class SelectorTable:
             A template name: the least mean gap over the k nearest rows; ties to the first in
             `templates` (the best static one).
         """
-        v = np.array([features[n] for n in FEATURES] if isinstance(features, dict)
-                     else features, dtype=float)
-        idx = np.arange(len(self.gaps)) if rows is None else np.flatnonzero(
-            rows) if np.asarray(rows).dtype == bool else np.asarray(rows)
+        v, idx = _query(features, FEATURES, rows, len(self.gaps))
         near = _nearest(self.features[idx], v, k or self.k, FEATURES)
         return self.templates[int(np.argmin(self.gaps[idx][near].mean(0)))]
 
@@ -369,10 +377,7 @@ class SplitTable:
             ratio there is at most `cap` (the default split always qualifies; ties to the
             earlier in `splits`, the default first).
         """
-        v = np.array([features[n] for n in SPLIT_FEATURES] if isinstance(features, dict)
-                     else features, dtype=float)
-        idx = np.arange(len(self.gaps)) if rows is None else np.flatnonzero(
-            rows) if np.asarray(rows).dtype == bool else np.asarray(rows)
+        v, idx = _query(features, SPLIT_FEATURES, rows, len(self.gaps))
         near = idx[_nearest(self.features[idx], v, k or self.k, SPLIT_FEATURES)]
         return self.splits[capped_best(self.gaps[near], self.cpu[near], self.cap)]
 
