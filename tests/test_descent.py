@@ -125,6 +125,23 @@ def highs_calls(monkeypatch: pytest.MonkeyPatch) -> list[int]:
     return calls
 
 
+@pytest.fixture
+def simplex_calls(monkeypatch: pytest.MonkeyPatch) -> list[bool]:
+    """A list that grows at each call `hover_lp` hands to its compiled simplex
+    (`hoverlp._rest_simplex`), by what the simplex returned (False: HiGHS then decides)."""
+    import planner_core.model.hoverlp as hoverlp
+
+    calls: list[bool] = []
+    real = hoverlp._rest_simplex
+
+    def counted(*a: object) -> bool:
+        calls.append(bool(real(*a)))
+        return calls[-1]
+
+    monkeypatch.setattr(hoverlp, "_rest_simplex", counted)
+    return calls
+
+
 def test_hover_lp_blocks_satisfy_the_kkt_conditions_at_any_scale(highs_calls: list[int]) -> None:
     """Rates spread over 10 decades (10^-12..10^-2 Mbit/s for a quarter of the links) and
     requirements over 8 (10^-6..10^2.5 Mbit): the vertex kernel's checks are relative to each
@@ -150,20 +167,21 @@ def test_hover_lp_blocks_satisfy_the_kkt_conditions_at_any_scale(highs_calls: li
 
 @pytest.mark.slow  # measured 9 s (issue 35: default suite <= 5 min)
 def test_hover_lp_blocks_satisfy_the_kkt_conditions_and_match_linprog(
-    highs_calls: list[int],
+    highs_calls: list[int], simplex_calls: list[bool],
 ) -> None:
     """On sparse LPs (lone points in closed form, blocks of 2-5 points by their vertices,
-    larger blocks and over-t_max blocks through HiGHS): the same feasibility and value as
-    scipy's linprog on the whole LP, and (T, y) pass the KKT conditions on their own: T
-    feasible, y >= 0, sum_j y_j A_ji <= 1 where T_i < t_max, y_j > 0 only on
-    tight rows (so the duals the descent's gradient uses are optimal duals); = 1 where
-    0 < T_i < t_max, >= 1 where T_i = t_max."""
-    calls = highs_calls
+    larger blocks by the compiled simplex, blocks whose T_max binds through HiGHS): the same
+    feasibility and value as scipy's linprog on the whole LP, and (T, y) pass the KKT
+    conditions on their own: T feasible, y >= 0, sum_j y_j A_ji <= 1 where T_i < t_max,
+    y_j > 0 only on tight rows (so the duals the descent's gradient uses are optimal duals);
+    = 1 where 0 < T_i < t_max, >= 1 where T_i = t_max."""
     rng = np.random.default_rng(11)
-    blocks_only = with_highs = infeasible = largest = 0  # blocks_only: shared sensors, no HiGHS
+    blocks_only = by_simplex = with_highs = infeasible = largest = 0
     for _ in range(400):
-        R, req, t_max = _block_instance(rng)
-        calls.clear()
+        R, req, _ = _block_instance(rng)
+        t_max = float(rng.choice([20.0, 80.0, 300.0]))
+        highs_calls.clear()
+        simplex_calls.clear()
         got = hover_lp(R, req, t_max)
         c, G, h, ub = _lp_matrices(R, req, t_max, True)
         ref = linprog(c, A_ub=G, b_ub=h, bounds=[(0.0, t_max)] * len(R), method="highs")
@@ -173,16 +191,49 @@ def test_hover_lp_blocks_satisfy_the_kkt_conditions_and_match_linprog(
             continue
         assert ref.status == 0
         need = req > 0
-        with_highs += bool(calls)
-        blocks_only += not calls and bool(((R[:, need] > 0).sum(axis=0) > 1).any())
-        if not calls:  # the largest block solved by its vertices
+        with_highs += bool(highs_calls)
+        by_simplex += bool(simplex_calls) and all(simplex_calls) and not highs_calls
+        blocks_only += (not simplex_calls and not highs_calls
+                        and bool(((R[:, need] > 0).sum(axis=0) > 1).any()))
+        if not simplex_calls and not highs_calls:  # the largest block solved by its vertices
             reach = (R[:, need] > 0).astype(int)  # sensors that need nothing join nothing
             share = csr_matrix((reach @ reach.T) > 0)
             largest = max(largest, int(np.bincount(connected_components(share)[1]).max()))
         assert got[1] == pytest.approx(ref.fun, rel=1e-6, abs=1e-9)
         _kkt(R, req, t_max, got)
-    assert blocks_only > 60 and with_highs > 20 and infeasible > 40
+    assert blocks_only > 40 and by_simplex > 100 and with_highs > 5 and infeasible > 40
     assert largest == BLOCK_VERTICES
+
+
+def test_rest_simplex_is_optimal_where_it_answers() -> None:
+    """The compiled simplex (`hoverlp._rest_simplex`, no T_max) on dense and sparse LPs with
+    rates over 10 decades: where it answers True, the value is linprog's (rel 1e-7, HiGHS's
+    tolerance) and (T, y) pass the KKT conditions; it answers on all but a few (False hands
+    the LP to HiGHS)."""
+    from planner_core.model.hoverlp import TARGET, _rest_simplex
+
+    rng = np.random.default_rng(3)
+    answered = total = 0
+    for trial in range(300):
+        k, m = int(rng.integers(1, 16)), int(rng.integers(1, 40))
+        A = rng.uniform(0.0, 1.0, (m, k)) * (rng.random((m, k)) < rng.uniform(0.2, 1.0))
+        if trial % 3 == 0:  # rates over 10 decades
+            A = np.where(A > 0, 10.0 ** rng.uniform(-10, 0, A.shape), 0.0)
+        A[np.arange(m), rng.integers(0, k, m)] += rng.uniform(0.01, 1.0, m)  # every row served
+        T, y = np.empty(k), np.zeros(m)
+        total += 1
+        if not _rest_simplex(A, TARGET, np.inf, T, y):
+            continue
+        answered += 1
+        ref = linprog(np.ones(k), A_ub=-A, b_ub=-np.full(m, TARGET), bounds=[(0, None)] * k,
+                      method="highs")
+        assert ref.status == 0
+        assert T.sum() == pytest.approx(ref.fun, rel=1e-7)  # HiGHS: feasible to ~1e-7
+        assert np.all(T >= 0) and np.all(y >= 0)
+        assert np.all(A @ T >= TARGET * (1 - 1e-9))
+        assert np.all(A.T @ y <= 1.0 + 1e-7)  # dual feasible
+        assert y.sum() * TARGET == pytest.approx(T.sum(), rel=1e-7)  # strong duality
+    assert answered >= 0.95 * total
 
 
 def test_scaled_rows_equal_their_reference() -> None:

@@ -59,10 +59,13 @@ def _highs() -> Any:
 
 #: blocks of the hover-time LP with at most this many points, and at most `BLOCK_COMBOS` sets
 #: of constraints to try as a vertex, are solved by enumerating their vertices (`_lp_blocks`);
-#: the others go to HiGHS (with the final stage's second structure, 3 -> 4 -> 5 points took
-#: T16's warm plan() from 0.97 to 0.85 to 0.82 s; bench_plan.py)
+#: the others by the compiled simplex (`_rest_simplex`), HiGHS where a T_max bound binds
+#: (with the final stage's second structure, 3 -> 4 -> 5 points took T16's warm plan() from
+#: 0.97 to 0.85 to 0.82 s when the others went to HiGHS; a block of 3-5 points with many
+#: sensors, as on the clustered large maps, has thousands of vertices to try, where the
+#: simplex takes a few pivots: 200 measured best on L02, L05 and T16's LPs, docs/scaling.md)
 BLOCK_VERTICES = 5
-BLOCK_COMBOS = 5000
+BLOCK_COMBOS = 200
 
 
 def hover_lp(
@@ -86,9 +89,10 @@ def hover_lp(
     suite's plans most of them) in closed form, T_i = max_j Q_j / R_ij over its sensors with
     dual 1 / A_ji on the first row that attains it, and a block of up to `BLOCK_VERTICES`
     points by enumerating its vertices (at most `BLOCK_COMBOS` sets of constraints); larger
-    blocks (and a small block whose optimum would need more than t_max) go together to HiGHS
-    through highspy. HiGHS's fixed cost (~0.1 ms a call) is what the blocks save: the descent
-    solves this LP once per trial. The fast path
+    blocks (and a small block whose optimum would need more than t_max) go together to a
+    compiled simplex (`_rest_simplex`), and to HiGHS through highspy when its vertex needs
+    more than t_max somewhere or fails a test. HiGHS's fixed cost (~0.1-0.4 ms a call) is what
+    the blocks and the simplex save: the descent solves this LP once per trial. The fast path
     of the polish's LP (`planner_core.search.polish._solve_lp(..., "linprog")`, one LP through
     scipy, is its reference; tests/test_descent.py holds them equal; `_solve_lp(..., "highs")`
     calls it for a feasible LP). `highs`: the HiGHS step (default `_highs_lp`; the polish
@@ -110,10 +114,15 @@ def hover_lp(
         return None  # a sensor no point reaches, or a lone point that needs more than t_max
     if rest.any():
         rows = (A[:, rest] > 0.0).any(axis=1)
-        sol = (highs or _highs_lp)(A[np.ix_(rows, rest)], _TARGET, t_max, warm)
-        if sol is None:
-            return None
-        T[rest], yn[rows] = sol
+        sub = np.ascontiguousarray(A[np.ix_(rows, rest)])
+        t_rest, y_rest = np.empty(sub.shape[1]), np.zeros(sub.shape[0])
+        if _rest_simplex(sub, _TARGET, float(t_max), t_rest, y_rest):
+            T[rest], yn[rows] = t_rest, y_rest
+        else:  # a bound T_max binds, or the simplex's vertex failed a test: HiGHS decides
+            sol = (highs or _highs_lp)(sub, _TARGET, t_max, warm)
+            if sol is None:
+                return None
+            T[rest], yn[rows] = sol
     y[need] = yn
     T = top_up(R, req, np.clip(T, 0.0, t_max), t_max)
     return T, float(T.sum()), y
@@ -499,6 +508,131 @@ def _lp_blocks_reference(A, target, t_max, kmax, max_combos, T, y, rest):  # pra
             s = idx[a]
             if s < nr:
                 y[rows[s]] = max(z[a], 0.0)
+    return True
+
+
+@njit(cache=True, fastmath=False, nogil=True)
+def _rest_simplex(A, target, t_max, T, y):  # pragma: no cover - compiled
+    """min sum T s.t. A T >= target, T >= 0 (A (rows, k) >= 0, every row with a positive
+    entry) by the primal simplex on its dual, max sum w s.t. A^T w <= 1, w >= 0, whose slack
+    basis is feasible (Dantzig's rule, then Bland's after 5 (rows + k + 1) pivots, so it ends;
+    Chvatal, Linear Programming, 1983, ch. 2-3). The optimal basis names k tight constraints
+    of the primal (row j where w_j is basic, T_i >= 0 where slack u_i is), and T and the row
+    multipliers are solved from them (`_solve_small`) and put to `_lp_blocks`' own relative
+    tests (T >= 0, every row met within 1e-9 of its scale, multipliers >= 0, T <= t_max).
+    Writes T (k,) s and y (rows,) and returns True when they pass, else False (then HiGHS
+    decides, with the t_max bounds). Cost: O(k (rows + k)) a pivot, a few pivots per
+    point in practice, and O(k^3) for the two solves: on the large maps' blocks of 5-11
+    points and 6-24 rows ~5 us against HiGHS's ~0.4 ms a call (docs/scaling.md)."""
+    m, k = A.shape
+    ncol = m + k
+    D = np.zeros((k, ncol + 1))
+    for i in range(k):
+        for j in range(m):
+            D[i, j] = A[j, i]
+        D[i, m + i] = 1.0
+        D[i, ncol] = 1.0
+    red = np.zeros(ncol)
+    for j in range(m):
+        red[j] = -1.0
+    basis = np.empty(k, dtype=np.int64)
+    for i in range(k):
+        basis[i] = m + i
+    cap = 50 * (ncol + 1)
+    bland_after = 5 * (ncol + 1)
+    it = 0
+    while True:
+        col = -1
+        if it < bland_after:
+            best = -1e-12
+            for j in range(ncol):
+                if red[j] < best:
+                    best, col = red[j], j
+        else:
+            for j in range(ncol):
+                if red[j] < -1e-12:
+                    col = j
+                    break
+        if col < 0:
+            break
+        it += 1
+        if it > cap:
+            return False
+        cmax_ = 0.0
+        for i in range(k):
+            cmax_ = max(cmax_, abs(D[i, col]))
+        row = -1
+        ratio = np.inf
+        for i in range(k):
+            if D[i, col] > 1e-12 * cmax_:
+                r = D[i, ncol] / D[i, col]
+                if r < ratio or (r == ratio and basis[i] < basis[row]):
+                    ratio, row = r, i
+        if row < 0:
+            return False  # unbounded dual: cannot happen with nonzero rows
+        p = D[row, col]
+        for j in range(ncol + 1):
+            D[row, j] /= p
+        for i in range(k):
+            if i != row:
+                f = D[i, col]
+                if f != 0.0:
+                    for j in range(ncol + 1):
+                        D[i, j] -= f * D[row, j]
+        f = red[col]
+        for j in range(ncol):
+            red[j] -= f * D[row, j]
+        basis[row] = col
+    # the primal vertex of this basis: rows j with w_j basic tight, T_i = 0 for u_i basic
+    srt = np.sort(basis)
+    M = np.zeros((k, k))
+    b = np.zeros(k)
+    for a in range(k):
+        s = srt[a]
+        if s < m:
+            for q in range(k):
+                M[a, q] = A[s, q]
+            b[a] = target
+        else:
+            M[a, s - m] = 1.0
+    t = np.empty(k)
+    z = np.empty(k)
+    if not _solve_small(M, b, t):
+        return False
+    Mt = M.T.copy()
+    if not _solve_small(Mt, np.ones(k), z):
+        return False
+    tmax_a = np.zeros(k)
+    for j in range(m):
+        for q in range(k):
+            tmax_a[q] = max(tmax_a[q], A[j, q])
+    for a in range(k):
+        s = srt[a]
+        scale = 1.0
+        if s < m:
+            scale = 0.0
+            for q in range(k):
+                scale = max(scale, A[s, q])
+        if z[a] * scale < -1e-9:
+            return False
+    for q in range(k):
+        if t[q] * tmax_a[q] < -1e-9 or t[q] > t_max:
+            return False
+    for j in range(m):
+        s = 0.0
+        sc = target
+        for q in range(k):
+            s += A[j, q] * t[q]
+            sc += abs(A[j, q] * t[q])
+        if s < target - 1e-9 * sc:
+            return False
+    for q in range(k):
+        T[q] = max(t[q], 0.0)
+    for j in range(m):
+        y[j] = 0.0
+    for a in range(k):
+        if srt[a] < m:
+            y[srt[a]] = max(z[a], 0.0)
     return True
 
 
