@@ -204,7 +204,10 @@ _RUN: tuple[Default, ...] = (
             "final stage and the improving rounds (kicks, structural search, restarts from "
             "other structures and fresh constructive plans; beyond the paper's sizes, rebuilt "
             "windows of hover points instead of the restarts), the stages that turn budget into "
-            "a better plan (docs/architecture.md, 'Where the budget goes')",
+            "a better plan (docs/architecture.md, 'Where the budget goes'); on maps of more "
+            "than 160 sensors the default scheduler makes the default 0.4 "
+            "(`planner_core.pipeline.schedule.LARGE_DE_SHARE`; docs/scaling.md, 'The DE's "
+            "share beyond 160 sensors')",
             "a number in [0, 1]", _share),
     Default("time_limit", None, "seconds after which the pipeline stops its improving stages "
             "and returns the best plan found (null: none; the kernel compile is not counted); "

@@ -102,7 +102,54 @@ def test_rebuild_table_is_what_its_runs_give_against_the_06_split() -> None:
 
 
 def test_lamde_s_table_is_what_its_runs_give_against_the_default() -> None:
-    doc = _doc()
-    start = doc.index("**With `--scheduler lamde-s`**")
-    _paired_table(doc[start:], ROOT / "docs" / "scaling" / "large-suite-25-lamde-s.jsonl.gz",
-                  REBUILD)
+    _paired_table(_section("**With `--scheduler lamde-s`**", "## The DE's share beyond 160"),
+                  ROOT / "docs" / "scaling" / "large-suite-25-lamde-s.jsonl.gz", REBUILD)
+
+
+#: the default's table beyond 160 sensors: map, sensors, DE share, feasible, runs, mean f,
+#: gap %, sd %, CPU s, lower / same / higher than the 0.6 share's runs, p ("-": all the same)
+SHARE_ROW = re.compile(r"^\| (L\d\d) \| (\d+) \| ([\d.]+) \| (\d+)/(\d+) \| ([\d.]+) \| "
+                       r"([\d.]+) \| ([\d.]+) \| ([\d.]+) \| (\d+) / (\d+) / (\d+) \| "
+                       r"([\d.e-]+|-) \|$", re.M)  # fmt: skip
+
+
+def test_default_share_table_is_what_its_runs_give_against_the_06_share() -> None:
+    """The default's runs (0.4 beyond 160 sensors): the share each map gets from
+    `DefaultScheduler.configure`, and every figure from the stored records, paired with the
+    0.6 share's (rebuilding windows) run by run."""
+    import json
+
+    from scipy.stats import wilcoxon
+
+    from planner_core.model.mapio import load_map
+    from planner_core.model.problem import Problem
+    from planner_core.pipeline import PlanConfig
+    from planner_core.pipeline.schedule import configured
+
+    text = _doc()[_doc().index("## The DE's share beyond 160"):]
+    rows = SHARE_ROW.findall(text)
+    assert len(rows) == 8
+    new = read_jsonl(ROOT / "docs" / "scaling" / "large-suite-25-default.jsonl.gz")
+    old = read_jsonl(REBUILD)
+    best = json.loads((ROOT / "examples" / "maps" / "large_best_known.json").read_text())
+    for task, sensors, share, feas, n, mean, gap, sd, cpu, lo, same, hi, p in rows:
+        m = load_map(ROOT / "examples" / "maps" / "large" / f"{task}.json")
+        assert len(m.sensors) == int(sensors)
+        assert configured("default", Problem(m), PlanConfig(seed=0)).de_share == float(share)
+        rs = sorted((r for r in new if r["task"] == task), key=lambda r: r["run"])
+        before = {r["run"]: r["f"] for r in old
+                  if r["optimiser"] == "planner" and r["task"] == task}
+        fs = [r["f"] for r in rs]
+        olds = [before[r["run"]] for r in rs]
+        assert len(rs) == int(n) == 25 and sum(r["feasible"] for r in rs) == int(feas)
+        assert f"{statistics.mean(fs):.1f}" == mean, task
+        assert f"{100 * (statistics.mean(fs) / best['tasks'][task]['f'] - 1):.2f}" == gap, task
+        assert f"{100 * statistics.pstdev(fs) / statistics.mean(fs):.2f}" == sd, task
+        assert f"{statistics.mean(r['cpu_s'] for r in rs):.1f}" == cpu, task
+        pairs = list(zip(fs, olds, strict=True))
+        assert (sum(a < b for a, b in pairs), sum(a == b for a, b in pairs),
+                sum(a > b for a, b in pairs)) == (int(lo), int(same), int(hi)), task
+        if int(same) < len(pairs):
+            assert f"{wilcoxon(fs, olds, alternative='less').pvalue:.2g}" == p, task
+        else:
+            assert p == "-"

@@ -333,3 +333,32 @@ def test_bench_schedule_on_workers_writes_the_serial_records(tmp_path) -> None:
         rows[jobs] = sorted((x["map"], x["seed"], x["arm"], x["f"], x["phi"]) for x in recs)
     assert len(rows["0"]) == 16 and rows["0"] == rows["2"]
     assert _bench().main(["--jobs", "-1"]) == 2
+
+
+def test_the_default_gives_the_de_a_smaller_share_beyond_160_sensors() -> None:
+    """`DefaultScheduler.configure`: a map of more than `LARGE_SENSORS` sensors with the large
+    rounds runs with `LARGE_DE_SHARE` (recorded in the run's config before any stage); 160
+    sensors, a share the caller set, a run without the descent, fixed-length or scheduled
+    access keep the config as it is."""
+    from planner_core.defaults import DE_SHARE
+    from planner_core.pipeline.pipeline import DEFAULT_PIPELINE, PipelineRun
+    from planner_core.pipeline.schedule import LARGE_DE_SHARE, LARGE_SENSORS, configured
+
+    large = ROOT / "examples" / "maps" / "large"
+    l05, l02 = load_map(large / "L05.json"), load_map(large / "L02.json")
+    assert len(l05.sensors) > LARGE_SENSORS == len(l02.sensors)
+    cfg = PlanConfig(seed=0)
+    assert cfg.de_share == DE_SHARE != LARGE_DE_SHARE
+    p05 = Problem(l05)
+    assert configured("default", p05, cfg).de_share == LARGE_DE_SHARE
+    run = PipelineRun(p05, cfg, pipeline=DEFAULT_PIPELINE, evaluator=None, progress=None)
+    assert run.config.de_share == LARGE_DE_SHARE == run.state.config.de_share
+    assert configured("default", Problem(l02), cfg) is cfg
+    for kept in (cfg.replace(de_share=0.5), cfg.replace(descent=False)):
+        assert configured("default", p05, kept) is kept
+    assert configured("default", Problem(l05, variable_length=False), cfg) is cfg
+    doc = json.loads((large / "L05.json").read_text())
+    doc.setdefault("radio", {})["access"] = "scheduled"
+    assert configured("default", Problem(load_map(doc)), cfg) is cfg
+    # a learned or static scheduler configures its own runs
+    assert configured("kicks-rebuild", p05, cfg) is cfg

@@ -29,8 +29,9 @@ actions in a row that spent nothing: the improving rounds before the seam, the s
 evaluations and random streams (each action's stream is its index in the stage), so the same
 plan to the bit (tests/test_schedule.py against digests recorded before the
 refactor; tests/test_golden.py). Larger problems alternate kicks with `rebuild`
-(`LARGE_CYCLE`). A `StaticScheduler` cycles a fixed sequence (`SCHEDULES`,
-the registry `lamde-mission plan --scheduler NAME` reads).
+(`LARGE_CYCLE`), and beyond `LARGE_SENSORS` sensors it also gives the DE `LARGE_DE_SHARE` of
+the budget before the run starts (`DefaultScheduler.configure`). A `StaticScheduler` cycles
+a fixed sequence (`SCHEDULES`, the registry `lamde-mission plan --scheduler NAME` reads).
 
 Cost: that of the actions; a kick or structural trial one LP (I x J) and the C3/C5 checks
 (I x J, I x V); a fresh sweep what `ConstructivePlans` costs (k-means I_max x J, one LP a
@@ -56,6 +57,8 @@ __all__ = [
     "FRESH_ROOM",
     "IDLE_ROUNDS",
     "LARGE_CYCLE",
+    "LARGE_DE_SHARE",
+    "LARGE_SENSORS",
     "PAPER_POINTS",
     "large_rounds",
     "LEARNED",
@@ -85,6 +88,13 @@ MAX_IDLE = 4 * IDLE_ROUNDS
 PAPER_POINTS = 20
 #: the default improving rounds beyond the paper's sizes: kicks alternating with rebuilds
 LARGE_CYCLE = ("kicks-300", "rebuild", "kicks-120", "rebuild", "kicks-700", "rebuild")
+#: sensors beyond which the default scheduler gives the DE `LARGE_DE_SHARE` of the budget:
+#: issue 31's size classes (a plan within 5x T16's time up to 160 sensors, 20x up to 400)
+LARGE_SENSORS = 160
+#: the DE's share of the budget on maps of more than `LARGE_SENSORS` sensors (in place of the
+#: default `de_share`, 0.6): the DE improves nothing there and the improving rounds do
+#: (docs/scaling.md, "The DE's share beyond 160 sensors")
+LARGE_DE_SHARE = 0.4
 
 KICKS = {f"kicks-{int(s)}": s for s in SPREADS}
 #: every macro-action's name, in a fixed order (the env's discrete action index)
@@ -211,6 +221,35 @@ class DefaultScheduler:
 
     name = "default"
     large = False
+
+    def configure(self, problem: Any, config: PlanConfig) -> PlanConfig:
+        """The run's config: on a map of more than `LARGE_SENSORS` sensors whose rounds are
+        `LARGE_CYCLE` (`large_rounds`), the DE's share `LARGE_DE_SHARE` in place of the default
+        `de_share`; any other config as it is (a `de_share` other than the default is kept,
+        as is a run without the descent or the polish, where the DE gets the rest).
+
+        Why: on the large maps the DE's evaluations improve nothing and the improving rounds'
+        do. On each large map beyond 160 sensors and its specs from generator seeds 3001-3003,
+        3 seeds each (12 cases a map, `bench_schedule.py --splits`, docs/scheduler.md's
+        records) 0.4 in place of 0.6 lowers f by
+        0.14 (L03), 1.50 (L05), 1.12 (L06) and 0.79 % (L08) for 1.2-1.45x the CPU, which the
+        maps beyond 160 sensors can afford (issue 31: 20x T16's time; 0.3 gains a little more
+        but took L06 to 16-18x) and those up to 160 cannot (L02 at 160 sensors: 5.4x T16's
+        against 5x at 0.4). docs/scaling.md, "The DE's share beyond 160 sensors".
+
+        Args:
+            problem: the run's `Problem`; config: its `PlanConfig`.
+
+        Returns:
+            A `PlanConfig` (`config` itself when nothing changes).
+        """
+        from planner_core.defaults import DE_SHARE
+
+        sensors = len(np.asarray(problem.model.sensors).reshape(-1, 2))
+        if (config.de_share != DE_SHARE or not (config.descent and config.polish)
+                or sensors <= LARGE_SENSORS or not large_rounds(problem)):
+            return config
+        return config.replace(de_share=LARGE_DE_SHARE)
 
     def reset(self, problem: Any, config: PlanConfig) -> None:
         """Read the problem: `large_rounds(problem)`."""

@@ -411,12 +411,11 @@ class Improve(_Base):
 
     def configure(self, problem: Any, config: PlanConfig) -> PlanConfig:
         """The run's config as its scheduler wants it (`schedule.configured`; the default
-        scheduler leaves it as it is)."""
-        if self.scheduler is None:
-            return config
+        scheduler's `DefaultScheduler.configure`: the DE's share beyond 160 sensors)."""
         from planner_core.pipeline.schedule import configured
 
-        return configured(self.scheduler, problem, config)
+        return configured("default" if self.scheduler is None else self.scheduler, problem,
+                          config)
 
     def run(self, state: PlanState, ev: Evaluator) -> PlanState:
         from planner_core.pipeline.schedule import ImproveRun, make_scheduler
