@@ -98,7 +98,7 @@ def run_case(case: tuple[str, Any, int, int, list[str], list[float] | None, str]
     from planner_core.model.problem import Problem
     from planner_core.pipeline import DEFAULT_PIPELINE, PlanConfig
     from planner_core.pipeline.pipeline import PipelineRun, with_scheduler
-    from planner_core.pipeline.schedule import configured, make_scheduler
+    from planner_core.pipeline.schedule import DefaultScheduler, configured, make_scheduler
 
     name, src, seed, budget, templates, splits, commit = case
     problem = Problem(load_map(src).planning_map())
@@ -113,7 +113,11 @@ def run_case(case: tuple[str, Any, int, int, list[str], list[float] | None, str]
     records = []
     for tpl in templates:
         own = configured(tpl, problem, cfg)  # the config the scheduler itself would run
-        learned_split = bool(splits) and hasattr(make_scheduler(tpl), "configure")
+        # a grid sweeps the default's share (its own rule beyond 160 sensors aside); a learned
+        # split (lamde-s) runs the share it picks
+        sched = make_scheduler(tpl)
+        learned_split = (bool(splits) and hasattr(sched, "configure")
+                         and not isinstance(sched, DefaultScheduler))
         if not splits:
             configs = [None]
         elif learned_split:
@@ -121,10 +125,11 @@ def run_case(case: tuple[str, Any, int, int, list[str], list[float] | None, str]
         else:
             configs = [cfg.replace(de_share=x) for x in splits]
         for c in configs:
-            whole = not splits and own != cfg
+            whole = not splits and own != base.config
             if whole:
-                # a scheduler that changes the config before the DE (lamde-s's share): the
-                # prefix has run the DE already, so its own whole run, as `plan` runs it
+                # a scheduler whose config differs from the default's before the DE (lamde-s's
+                # share): the prefix has run the DE already, so its own whole run, as `plan`
+                # runs it
                 run = PipelineRun(problem, own, pipeline=with_scheduler(DEFAULT_PIPELINE, tpl),
                                   evaluator=None, progress=None)
             else:
@@ -158,8 +163,9 @@ def run_grid(maps: list[tuple[str, Any]], seeds: list[int], budget: int,
 
     With `splits` (DE shares) the prefix stops before the DE instead, and each template
     runs the rest once per split (`PipelineRun.fork(config=)`: the same plan as a whole run
-    with that `de_share`), except a scheduler with `configure` (lamde-s with its split
-    table), which runs once with the share it picks. Every record holds its `de_share`, the
+    with that `de_share`; the default's own share beyond 160 sensors is one of the grid's
+    points, not a rule here), except a learned split (lamde-s with its split table), which
+    runs once with the share it picks. Every record holds its `de_share`, the
     whole plan's CPU seconds (`cpu_seconds`: the prefix's and the fork's, process time) and
     the map's features (`map_features`: the split table's inputs).
 
