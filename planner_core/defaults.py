@@ -205,7 +205,8 @@ _RUN: tuple[Default, ...] = (
             "other structures and fresh constructive plans; beyond the paper's sizes, rebuilt "
             "windows of hover points instead of the restarts), the stages that turn budget into "
             "a better plan (docs/architecture.md, 'Where the budget goes'); on maps of more "
-            "than 160 sensors the default scheduler makes the default 0.4 "
+            "than 160 sensors (with the large rounds: I_max above 20, variable length, "
+            "simultaneous access) the default scheduler makes the default 0.4 "
             "(`planner_core.pipeline.schedule.LARGE_DE_SHARE`; docs/scaling.md, 'The DE's "
             "share beyond 160 sensors')",
             "a number in [0, 1]", _share),

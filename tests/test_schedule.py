@@ -339,7 +339,8 @@ def test_the_default_gives_the_de_a_smaller_share_beyond_160_sensors() -> None:
     """`DefaultScheduler.configure`: a map of more than `LARGE_SENSORS` sensors with the large
     rounds runs with `LARGE_DE_SHARE` (recorded in the run's config before any stage); 160
     sensors, a share the caller set, a run without the descent, fixed-length or scheduled
-    access keep the config as it is."""
+    access keep the config as it is; a scheduler without its own `configure` gets the
+    default's."""
     from planner_core.defaults import DE_SHARE
     from planner_core.pipeline.pipeline import DEFAULT_PIPELINE, PipelineRun
     from planner_core.pipeline.schedule import LARGE_DE_SHARE, LARGE_SENSORS, configured
@@ -360,5 +361,5 @@ def test_the_default_gives_the_de_a_smaller_share_beyond_160_sensors() -> None:
     doc = json.loads((large / "L05.json").read_text())
     doc.setdefault("radio", {})["access"] = "scheduled"
     assert configured("default", Problem(load_map(doc)), cfg) is cfg
-    # a learned or static scheduler configures its own runs
-    assert configured("kicks-rebuild", p05, cfg) is cfg
+    # a scheduler without a configure of its own (a static schedule) follows the default's
+    assert configured("kicks-rebuild", p05, cfg).de_share == LARGE_DE_SHARE

@@ -203,6 +203,21 @@ def _stage_table(plan: Any) -> list[str]:
     return out
 
 
+def _run_settings(config: dict[str, Any]) -> str:
+    """The summary's words for a plan's scheduler and budget split, from its recorded
+    `config`: ", scheduler lamde-s -> default, DE share 0.4", ", DE share 0.4" (a split other
+    than the default `de_share`: the default's own beyond 160 sensors, a learned one's, a
+    caller's) or "" (the default scheduler at the default split)."""
+    sched = config.get("scheduler")
+    choice = config.get("scheduler_choice")
+    share = config.get("de_share")
+    share = (f", DE share {share:g}" if isinstance(share, float) and share != D.DE_SHARE
+             else "")
+    if not sched:
+        return share
+    return f", scheduler {sched}" + (f" -> {choice}" if choice else "") + share
+
+
 def _summary(
     plan: Any, m: Any, timeline: Any, verdicts: Any, out: str | list[str] | None,
     stored: Any = None,
@@ -216,13 +231,7 @@ def _summary(
     compiling = f"; {t_compile:.1f} s compiling (or loading) the kernels" if t_compile > 0.05 \
         else ""
     stopped = f", stopped by the {plan.stopped}" if plan.stopped else ""
-    sched = plan.config.get("scheduler")
-    choice = plan.config.get("scheduler_choice")
-    share = plan.config.get("de_share")
-    share = (f", DE share {share:g}" if sched and isinstance(share, float)
-             and share != D.DE_SHARE else "")  # a learned scheduler's split (lamde-s)
-    sched = (f", scheduler {sched}" + (f" -> {choice}" if choice else "") + share
-             if sched else "")
+    sched = _run_settings(plan.config)
     # a point of 0 s is written as a corner (NAV_WAYPOINT, flown through), not a hover point
     times = (stored if stored is not None else plan).hover_times
     n_corner = sum(1 for t in times if float(t) == 0.0)

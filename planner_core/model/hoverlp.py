@@ -3,7 +3,8 @@
     minimise sum_i T_i   s.t.  sum_i R_ij T_i >= Q_j (every sensor j that needs data),
                                0 <= T_i <= T_max
 (the paper's Q_j = sum_i R_ij T_hov,i of Sec. 3 and C2, C4; the rates R_ij fixed by the points).
-`hover_lp` solves it by blocks (small ones in a compiled kernel, the rest through HiGHS); the
+`hover_lp` solves it by blocks (small ones in a compiled kernel, the rest by a compiled simplex,
+HiGHS where a T_max bound binds); the
 polish (`planner_core.search.polish`), the descent, the structural moves and the feasibility
 diagnosis (`planner_core.model.diagnose`) all take it from here. Units: s, Mbit, Mbit/s.
 """
@@ -199,7 +200,7 @@ def _lp_blocks(A, target, t_max, kmax, max_combos, T, y, rest):  # pragma: no co
     """The blocks of min sum T s.t. A T >= target, 0 <= T <= t_max (A (rows, I) >= 0): writes
     the hover times T (I,) and row duals y (rows,) of every block of at most `kmax` points and
     marks the points of the others (and of blocks with more than `max_combos` vertices to try)
-    in `rest` (I,) for HiGHS. A small block's vertices are
+    in `rest` (I,) for `_rest_simplex` (then HiGHS). A small block's vertices are
     enumerated: every k of its constraints (its rows, T_i >= 0) taken as equalities, the first
     (in lexicographic order) whose T is feasible and whose multipliers z (N_S^T z = 1, the
     constraints written as >=) are >= 0 (the KKT conditions of an optimal vertex); a block
@@ -613,10 +614,10 @@ def _rest_simplex(A, target, t_max, T, y):  # pragma: no cover - compiled
             scale = 0.0
             for q in range(k):
                 scale = max(scale, A[s, q])
-        if z[a] * scale < -1e-9:
+        if not z[a] * scale >= -1e-9:  # written so that NaN fails too
             return False
     for q in range(k):
-        if t[q] * tmax_a[q] < -1e-9 or t[q] > t_max:
+        if not (t[q] * tmax_a[q] >= -1e-9 and t[q] <= t_max):
             return False
     for j in range(m):
         s = 0.0
@@ -624,7 +625,7 @@ def _rest_simplex(A, target, t_max, T, y):  # pragma: no cover - compiled
         for q in range(k):
             s += A[j, q] * t[q]
             sc += abs(A[j, q] * t[q])
-        if s < target - 1e-9 * sc:
+        if not s >= target - 1e-9 * sc:
             return False
     for q in range(k):
         T[q] = max(t[q], 0.0)

@@ -360,16 +360,18 @@ def make_scheduler(spec: str | Scheduler | None) -> Scheduler:
 
 
 def configured(spec: str | Scheduler | None, problem: Any, config: PlanConfig) -> PlanConfig:
-    """The config a run with scheduler `spec` runs with: `config`, or what the scheduler's
-    optional `configure(problem, config)` returns (a `PlanConfig`; LAMDE-S's DE share, chosen
-    from the map before any stage runs).
+    """The config a run with scheduler `spec` runs with: what the scheduler's optional
+    `configure(problem, config)` returns (a `PlanConfig`; LAMDE-S's DE share, chosen from the
+    map before any stage runs), or for a scheduler without one (a static schedule,
+    lamde-s-ppo) the default's (`DefaultScheduler.configure`: the DE's share beyond
+    `LARGE_SENSORS` sensors), so that only a scheduler that chooses the split changes it.
 
     Raises:
         ValueError: as `make_scheduler`; or `configure` returned no `PlanConfig`.
     """
     hook = getattr(make_scheduler(spec), "configure", None)
     if hook is None:
-        return config
+        hook = DefaultScheduler().configure
     out = hook(problem, config)
     if not isinstance(out, PlanConfig):
         raise ValueError(f"scheduler: configure() must return a PlanConfig, got "
