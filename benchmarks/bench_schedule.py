@@ -112,10 +112,10 @@ def run_case(case: tuple[str, Any, int, int, list[str], list[float] | None, str]
     feats = case_features(problem, base) if base.ev.has_best and not splits else {}
     records = []
     for tpl in templates:
-        own = configured(tpl, problem, cfg)  # the config the scheduler itself would run
         # a grid sweeps the default's share (its own rule beyond 160 sensors aside); a learned
         # split (lamde-s) runs the share it picks
-        sched = make_scheduler(tpl)
+        sched = make_scheduler(tpl)  # built (a learned one's tables read) once per template
+        own = configured(sched, problem, cfg)  # the config the scheduler itself would run
         learned_split = (bool(splits) and hasattr(sched, "configure")
                          and not isinstance(sched, DefaultScheduler))
         if not splits:

@@ -414,8 +414,7 @@ class Improve(_Base):
         scheduler's `DefaultScheduler.configure`: the DE's share beyond 160 sensors)."""
         from planner_core.pipeline.schedule import configured
 
-        return configured("default" if self.scheduler is None else self.scheduler, problem,
-                          config)
+        return configured(self.scheduler, problem, config)  # None: the default's
 
     def run(self, state: PlanState, ev: Evaluator) -> PlanState:
         from planner_core.pipeline.schedule import ImproveRun, make_scheduler
