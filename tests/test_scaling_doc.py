@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib.util
+import json
 import re
 import statistics
 
@@ -27,12 +28,11 @@ def _doc() -> str:
 
 
 def test_large_suite_table_is_what_the_stored_runs_give() -> None:
-    import json
 
     rows = ROW.findall(_doc())
     assert len(rows) == 8
     runs = read_jsonl(RECORDS)
-    best = json.loads((ROOT / "examples" / "maps" / "large_best_known.json").read_text())
+    best = _best_known()
     for task, pf, pn, pmean, doc_gap, sd, pwall, ef, en, emean, ewall in rows:
         gap = 100 * (float(pmean) / best["tasks"][task]["f"] - 1)
         assert abs(gap - float(doc_gap)) < 0.006, (task, gap)
@@ -65,28 +65,38 @@ def _section(start: str, end: str) -> str:
     return doc[doc.index(start):doc.index(end)]
 
 
+def _paired_runs(task: str, new: list, old: list, best: dict, feas: str, n: str, mean: str,
+                 gap: str, sd: str, cpu: str) -> tuple[list[float], list[float]]:
+    """One row's checks against its records: feasible runs, mean f, gap to the stored
+    best-known, sd and mean CPU seconds of `new`'s runs of `task`; returns their f and the f of
+    the `old` planner run of the same run index, paired."""
+    rs = sorted((r for r in new if r["task"] == task), key=lambda r: r["run"])
+    before = {r["run"]: r["f"] for r in old if r["optimiser"] == "planner" and r["task"] == task}
+    fs = [r["f"] for r in rs]
+    assert len(rs) == int(n) and sum(r["feasible"] for r in rs) == int(feas), task
+    assert f"{statistics.mean(fs):.1f}" == mean, task
+    assert f"{100 * (statistics.mean(fs) / best['tasks'][task]['f'] - 1):.2f}" == gap, task
+    assert f"{100 * statistics.pstdev(fs) / statistics.mean(fs):.2f}" == sd, task
+    assert f"{statistics.mean(r['cpu_s'] for r in rs):.1f}" == cpu, task
+    return fs, [before[r["run"]] for r in rs]
+
+
+def _best_known() -> dict:
+    """The large suite's stored best-known file."""
+    return json.loads((ROOT / "examples" / "maps" / "large_best_known.json").read_text())
+
+
 def _paired_table(text: str, records: object, baseline: object) -> None:
     """A table of `SPLIT_ROW` rows: feasible runs, mean f, gap to the stored best-known, sd,
     mean CPU seconds, and how many runs are lower than the baseline's run of the same seed."""
-    import json
-
     from scipy.stats import wilcoxon
 
     rows = SPLIT_ROW.findall(text)
     assert len(rows) == 8
-    new, old = read_jsonl(records), read_jsonl(baseline)
-    best = json.loads((ROOT / "examples" / "maps" / "large_best_known.json").read_text())
+    new, old, best = read_jsonl(records), read_jsonl(baseline), _best_known()
     for task, feas, n, mean, gap, sd, cpu, lower, m, p in rows:
-        rs = sorted((r for r in new if r["task"] == task), key=lambda r: r["run"])
-        before = {r["run"]: r["f"] for r in old
-                  if r["optimiser"] == "planner" and r["task"] == task}
-        fs = [r["f"] for r in rs]
-        assert len(rs) == int(n) == int(m) and sum(r["feasible"] for r in rs) == int(feas)
-        assert f"{statistics.mean(fs):.1f}" == mean, task
-        assert f"{100 * (statistics.mean(fs) / best['tasks'][task]['f'] - 1):.2f}" == gap, task
-        assert f"{100 * statistics.pstdev(fs) / statistics.mean(fs):.2f}" == sd, task
-        assert f"{statistics.mean(r['cpu_s'] for r in rs):.1f}" == cpu, task
-        olds = [before[r["run"]] for r in rs]
+        assert n == m, task
+        fs, olds = _paired_runs(task, new, old, best, feas, n, mean, gap, sd, cpu)
         assert sum(a < b for a, b in zip(fs, olds, strict=True)) == int(lower), task
         assert f"{wilcoxon(fs, olds, alternative='less').pvalue:.2g}" == p, task
 
@@ -117,8 +127,6 @@ def test_default_share_table_is_what_its_runs_give_against_the_06_share() -> Non
     """The default's runs (0.4 beyond 160 sensors): the share each map gets from
     `DefaultScheduler.configure`, and every figure from the stored records, paired with the
     0.6 share's (rebuilding windows) run by run."""
-    import json
-
     from scipy.stats import wilcoxon
 
     from planner_core.model.mapio import load_map
@@ -130,22 +138,13 @@ def test_default_share_table_is_what_its_runs_give_against_the_06_share() -> Non
     rows = SHARE_ROW.findall(text)
     assert len(rows) == 8
     new = read_jsonl(ROOT / "docs" / "scaling" / "large-suite-25-default.jsonl.gz")
-    old = read_jsonl(REBUILD)
-    best = json.loads((ROOT / "examples" / "maps" / "large_best_known.json").read_text())
+    old, best = read_jsonl(REBUILD), _best_known()
     for task, sensors, share, feas, n, mean, gap, sd, cpu, lo, same, hi, p in rows:
         m = load_map(ROOT / "examples" / "maps" / "large" / f"{task}.json")
         assert len(m.sensors) == int(sensors)
         assert configured("default", Problem(m), PlanConfig(seed=0)).de_share == float(share)
-        rs = sorted((r for r in new if r["task"] == task), key=lambda r: r["run"])
-        before = {r["run"]: r["f"] for r in old
-                  if r["optimiser"] == "planner" and r["task"] == task}
-        fs = [r["f"] for r in rs]
-        olds = [before[r["run"]] for r in rs]
-        assert len(rs) == int(n) == 25 and sum(r["feasible"] for r in rs) == int(feas)
-        assert f"{statistics.mean(fs):.1f}" == mean, task
-        assert f"{100 * (statistics.mean(fs) / best['tasks'][task]['f'] - 1):.2f}" == gap, task
-        assert f"{100 * statistics.pstdev(fs) / statistics.mean(fs):.2f}" == sd, task
-        assert f"{statistics.mean(r['cpu_s'] for r in rs):.1f}" == cpu, task
+        assert int(n) == 25, task
+        fs, olds = _paired_runs(task, new, old, best, feas, n, mean, gap, sd, cpu)
         pairs = list(zip(fs, olds, strict=True))
         assert (sum(a < b for a, b in pairs), sum(a == b for a, b in pairs),
                 sum(a > b for a, b in pairs)) == (int(lo), int(same), int(hi)), task
@@ -158,10 +157,9 @@ def test_default_share_table_is_what_its_runs_give_against_the_06_share() -> Non
 def test_the_large_best_known_is_at_least_as_good_as_the_long_runs() -> None:
     """The best-known values come from long runs (issue 31): each map's stored f is at most
     the least f of its stored 100,000-evaluation runs, and those runs are what the page says."""
-    import json
 
     runs = read_jsonl(ROOT / "docs" / "scaling" / "large-long-100k.jsonl.gz")
-    best = json.loads((ROOT / "examples" / "maps" / "large_best_known.json").read_text())
+    best = _best_known()
     assert {r["budget"] for r in runs} == {100_000} and all(r["feasible"] for r in runs)
     for task in {r["task"] for r in runs}:
         fs = sorted(r["f"] for r in runs if r["task"] == task)
