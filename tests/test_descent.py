@@ -109,40 +109,37 @@ def _kkt(R: np.ndarray, req: np.ndarray, t_max: float, got: tuple) -> None:
     assert np.all(A[yn > 0] @ T <= 1.0 + 1e-6)  # complementary slackness
 
 
-@pytest.fixture
-def highs_calls(monkeypatch: pytest.MonkeyPatch) -> list[int]:
-    """A list that grows by one at each call `hover_lp` hands to HiGHS (`polish._highs_lp`)."""
-    import planner_core.search.polish as polish
-
-    calls: list[int] = []
-    real = polish._highs_lp
+def _counted(monkeypatch: pytest.MonkeyPatch, module: object, name: str) -> list[object]:
+    """A list that grows by what `module.name` returns at each call (patched for the test)."""
+    calls: list[object] = []
+    real = getattr(module, name)
 
     def counted(*a: object) -> object:
-        calls.append(1)
-        return real(*a)
+        calls.append(real(*a))
+        return calls[-1]
 
-    monkeypatch.setattr(polish, "_highs_lp", counted)
+    monkeypatch.setattr(module, name, counted)
     return calls
 
 
 @pytest.fixture
-def simplex_calls(monkeypatch: pytest.MonkeyPatch) -> list[bool]:
+def highs_calls(monkeypatch: pytest.MonkeyPatch) -> list[object]:
+    """A list that grows by one at each call `hover_lp` hands to HiGHS (`polish._highs_lp`)."""
+    import planner_core.search.polish as polish
+
+    return _counted(monkeypatch, polish, "_highs_lp")
+
+
+@pytest.fixture
+def simplex_calls(monkeypatch: pytest.MonkeyPatch) -> list[object]:
     """A list that grows at each call `hover_lp` hands to its compiled simplex
     (`hoverlp._rest_simplex`), by what the simplex returned (False: HiGHS then decides)."""
     import planner_core.model.hoverlp as hoverlp
 
-    calls: list[bool] = []
-    real = hoverlp._rest_simplex
-
-    def counted(*a: object) -> bool:
-        calls.append(bool(real(*a)))
-        return calls[-1]
-
-    monkeypatch.setattr(hoverlp, "_rest_simplex", counted)
-    return calls
+    return _counted(monkeypatch, hoverlp, "_rest_simplex")
 
 
-def test_hover_lp_blocks_satisfy_the_kkt_conditions_at_any_scale(highs_calls: list[int]) -> None:
+def test_hover_lp_blocks_satisfy_the_kkt_conditions_at_any_scale(highs_calls: list[object]) -> None:
     """Rates spread over 10 decades (10^-12..10^-2 Mbit/s for a quarter of the links) and
     requirements over 8 (10^-6..10^2.5 Mbit): the vertex kernel's checks are relative to each
     constraint's scale, so a block it solves is optimal whatever the units (an absolute
@@ -167,7 +164,7 @@ def test_hover_lp_blocks_satisfy_the_kkt_conditions_at_any_scale(highs_calls: li
 
 @pytest.mark.slow  # measured 9 s (issue 35: default suite <= 5 min)
 def test_hover_lp_blocks_satisfy_the_kkt_conditions_and_match_linprog(
-    highs_calls: list[int], simplex_calls: list[bool],
+    highs_calls: list[object], simplex_calls: list[object],
 ) -> None:
     """On sparse LPs (lone points in closed form, blocks of 2-5 points by their vertices,
     larger blocks by the compiled simplex, blocks whose T_max binds through HiGHS): the same
