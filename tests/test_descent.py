@@ -4,6 +4,7 @@ path, the structural moves (planner_core.search.structure) and the final stage
 
 from __future__ import annotations
 
+import json
 from collections.abc import Callable
 from pathlib import Path
 
@@ -13,12 +14,24 @@ from scipy.optimize import linprog
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components
 
+from planner_core.model.mapio import load_map
 from planner_core.model.problem import Problem
 from planner_core.search.construct import candidate_plans
-from planner_core.search.descent import descend, objective, objective_reference
+from planner_core.search.descent import (
+    GLOBAL,
+    PER_POINT,
+    RPROP_DOWN,
+    RPROP_UP,
+    STEP,
+    descend,
+    large_problem,
+    objective,
+    objective_reference,
+)
 from planner_core.search.final import finish, other_structure
 from planner_core.search.polish import BLOCK_VERTICES, _lp_matrices, hover_lp
 from planner_core.search.structure import (
+    RACE_FIRST,
     RACE_MARGIN,
     RACE_SCREEN,
     _move,
@@ -35,6 +48,15 @@ from tests.conftest import SUITE
 @pytest.fixture(scope="module")
 def t05() -> Problem:
     return Problem(SUITE / "T05.json")
+
+
+@pytest.fixture(scope="module")
+def t05_large() -> Problem:
+    """T05 allowed 30 hover points: a large problem (more than the paper's 20), whose descents
+    take per-point steps and whose moves the first screen."""
+    data = json.loads((SUITE / "T05.json").read_text())
+    data["uav"]["max_hover_points"] = 30
+    return Problem(load_map(data))
 
 
 def _counting(problem: Problem) -> tuple[Callable[[np.ndarray], tuple], list[int]]:
@@ -285,14 +307,17 @@ def test_gradient_matches_finite_differences_of_the_reference(t05: Problem) -> N
         assert np.allclose(g, fd, rtol=1e-3, atol=1e-4), np.abs(g - fd).max()
 
 
-def test_descend_is_feasible_never_worse_counted_and_deterministic(t05: Problem) -> None:
+@pytest.mark.parametrize("steps", [GLOBAL, PER_POINT])
+def test_descend_is_feasible_never_worse_counted_and_deterministic(
+    t05: Problem, steps: str
+) -> None:
     counted, calls = _counting(t05)
 
     improved = 0
     for x in _first_plans(t05, 3):
         f0 = float(t05.evaluate(x[None])[0][0])
         calls.clear()
-        r = descend(t05, x, counted, trials=25)
+        r = descend(t05, x, counted, trials=25, steps=steps)
         assert r is not None
         assert r.evaluations == sum(calls) <= 25
         f, phi = t05.evaluate(r.x[None])
@@ -302,9 +327,65 @@ def test_descend_is_feasible_never_worse_counted_and_deterministic(t05: Problem)
         improved += r.f < f0 - 1e-6
         P = np.asarray(t05.breakdown(r.x)["hover_points"])
         assert len(held_points(t05, P)) == 0
-        again = descend(t05, x, t05.evaluate, trials=25)
+        again = descend(t05, x, t05.evaluate, trials=25, steps=steps)
         assert again is not None and again.x.tobytes() == r.x.tobytes()
     assert improved >= 2  # T05's constructive plans are 2-6 % above the best known
+
+
+def test_the_step_rule_follows_the_problem_size(t05: Problem, t05_large: Problem) -> None:
+    """Per-point steps on a problem of more than the paper's 20 hover slots, one step for all
+    points up to it (the paper's maps keep their plans); either rule on demand; another
+    refused in one line."""
+    assert not large_problem(t05) and large_problem(t05_large)
+    differs = 0
+    for problem, rule in ((t05, GLOBAL), (t05_large, PER_POINT)):
+        for x in _first_plans(problem, 2):
+            default = descend(problem, x, problem.evaluate, trials=15)
+            chosen = descend(problem, x, problem.evaluate, trials=15, steps=rule)
+            assert default is not None and chosen is not None
+            assert default.x.tobytes() == chosen.x.tobytes()
+            other = descend(problem, x, problem.evaluate, trials=15,
+                            steps=GLOBAL if rule == PER_POINT else PER_POINT)
+            differs += other is not None and other.x.tobytes() != default.x.tobytes()
+    assert differs >= 2
+    with pytest.raises(ValueError, match="steps: must be one of global, per-point"):
+        descend(t05, _first_plans(t05, 1)[0], t05.evaluate, trials=5, steps="newton")
+
+
+def test_per_point_steps_adapt_as_rprop(t05: Problem, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Each point moves its own step against its own gradient, STEP metres at first; after a
+    kept trial a point's step grows by RPROP_UP where its gradient kept its direction and
+    shrinks by RPROP_DOWN where it turned; after a rejected one every step halves."""
+    import planner_core.search.descent as descent
+
+    moves: list[np.ndarray] = []
+    real = descent.trial_points
+
+    def spy(problem, P, g, scale, step, box):  # noqa: ANN001, ANN202
+        assert scale == 1.0 and step == 1.0  # the move is g itself
+        moves.append(np.array(g))
+        return real(problem, P, g, scale, step, box)
+
+    monkeypatch.setattr(descent, "trial_points", spy)
+    kept = []
+    counted, calls = _counting(t05)
+    for x in _first_plans(t05, 3):
+        moves.clear()
+        r = descend(t05, x, counted, trials=20, steps=PER_POINT)
+        assert r is not None and len(moves) >= 3
+        n0 = np.hypot(*moves[0].T)
+        np.testing.assert_allclose(n0[n0 > 0], STEP)
+        for a, b in zip(moves[:-1], moves[1:], strict=True):
+            na, nb = np.hypot(*a.T), np.hypot(*b.T)
+            live = (na > 0) & (nb > 0)
+            ratio = nb[live] / na[live]
+            if np.allclose(b, 0.5 * a):  # rejected: same directions, every step halved
+                continue
+            turn = (a * b).sum(axis=1)[live]
+            kept.append(True)
+            np.testing.assert_allclose(ratio[turn > 0], RPROP_UP)
+            np.testing.assert_allclose(ratio[turn < 0], RPROP_DOWN)
+    assert len(kept) >= 3
 
 
 def test_slide_matches_a_point_by_point_reference() -> None:
@@ -625,6 +706,31 @@ def test_a_raced_move_stops_after_the_screen_unless_it_is_close_to_the_incumbent
     on = _move(t05, Q, counted, 30, incumbent=screened[1] / (1.0 + 0.5 * RACE_MARGIN))
     assert on is not None and on[3] == sum(calls) == full[3]
     assert on[0].tobytes() == full[0].tobytes()
+
+
+def test_a_large_problems_move_far_above_the_incumbent_is_not_descended(
+    t05_large: Problem,
+) -> None:
+    """On a large problem `_move` stops after the move's own evaluation when its plan is more
+    than RACE_FIRST above the incumbent (returning that plan), and races its descent as before
+    when it is within; on a paper-size problem the first screen does not apply (the test
+    above)."""
+    problem = t05_large
+    x = _first_plans(problem, 1)[0]
+    b = problem.breakdown(x)
+    P, T = np.asarray(b["hover_points"]), np.asarray(b["hover_times"])
+    (Q,) = [S for S in split_moves(problem, P, T)
+            if _move(problem, S, problem.evaluate, 1) is not None][:1]
+    own = _move(problem, Q, problem.evaluate, 1)
+    assert own is not None and own[3] == 1
+    counted, calls = _counting(problem)
+    out = _move(problem, Q, counted, 30, incumbent=own[1] / (1.0 + 2.0 * RACE_FIRST))
+    assert out is not None and out[3] == sum(calls) == 1
+    assert out[0].tobytes() == own[0].tobytes()
+    calls.clear()
+    unraced = _move(problem, Q, problem.evaluate, 30)
+    on = _move(problem, Q, counted, 30, incumbent=own[1] / (1.0 + 0.5 * RACE_FIRST))
+    assert on is not None and 1 < on[3] == sum(calls) <= unraced[3]
 
 
 def test_kicks_race_their_descents(t05: Problem, monkeypatch: pytest.MonkeyPatch) -> None:

@@ -51,6 +51,7 @@ import numpy as np
 from planner_core.model.formulas import deb_order
 from planner_core.pipeline.config import PlanConfig
 from planner_core.pipeline.evaluator import Evaluator
+from planner_core.search.descent import PAPER_POINTS, large_problem
 
 __all__ = [
     "ACTIONS",
@@ -83,9 +84,6 @@ IDLE_ROUNDS = 3
 #: a hard stop for any scheduler: this many actions in a row that spent nothing
 MAX_IDLE = 4 * IDLE_ROUNDS
 
-#: the paper's largest I_max (Sec. 5: 10 hover points on the 5 km maps, 20 on the 10 km ones);
-#: the default scheduler's rounds for larger problems are `LARGE_CYCLE`
-PAPER_POINTS = 20
 #: the default improving rounds beyond the paper's sizes: kicks alternating with rebuilds
 LARGE_CYCLE = ("kicks-300", "rebuild", "kicks-120", "rebuild", "kicks-700", "rebuild")
 #: sensors beyond which the default scheduler gives the DE `LARGE_DE_SHARE` of the budget:
@@ -197,11 +195,12 @@ class Scheduler(Protocol):
 
 def large_rounds(problem: Any) -> bool:
     """Whether the default improving rounds of `problem` are `LARGE_CYCLE`: its I_max (hover
-    points, `Problem.hover_limit`; corner slots not counted) exceeds `PAPER_POINTS`, and a
+    points, `Problem.hover_limit`; corner slots not counted) exceeds `PAPER_POINTS` (the
+    paper's largest, `planner_core.search.descent.large_problem`), and a
     rebuild can change its number of points (variable length, tau > 0) and be scored by the
     simultaneous-access LP (not `radio.access` "scheduled", where the moves' C3 checks and LP
     refuse every draw, as they refuse kicks)."""
-    return (int(problem.hover_limit) > PAPER_POINTS and bool(problem.variable_length)
+    return (large_problem(problem) and bool(problem.variable_length)
             and float(problem.tau) > 0.0 and not bool(getattr(problem, "scheduled", False)))
 
 

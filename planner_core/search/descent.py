@@ -27,6 +27,18 @@ a rejected one (a backtracking line search); the descent stops at `min_step` or 
 evaluations. Every kept plan is feasible and its f is what the evaluator says, so the result
 is never worse than the start.
 
+Per-point steps (`PER_POINT`, the default on problems of more than `PAPER_POINTS` hover slots,
+`large_problem`): one step length per point instead of one for all, adapted as Rprop adapts
+its per-weight steps (Riedmiller & Braun, "A direct adaptive method for faster
+backpropagation learning: the RPROP algorithm", ICNN 1993): point i moves `s_i` metres against
+its own gradient; after a kept trial s_i grows by `RPROP_UP` (1.2) where the point's gradient
+kept its direction (positive dot product with the last one) and shrinks by `RPROP_DOWN` (0.5)
+where it turned; a rejected trial halves every s_i; the descent stops when the largest s_i
+falls below `min_step`. With one step for all, the point with the steepest gradient sets
+every point's move, so on a plan of 40-200 points most points creep while one settles: from
+constructive starts of the 300-400-sensor maps L06 and L08, 120 trials of the global step
+stalled 0.6-1.8 % above where the per-point steps went (docs/search.md, "Per-point steps").
+
 The descent keeps the number of points and their visiting order; the pipeline
 (`planner_core.pipeline`) runs it on the best constructive and seeder plans before the DE and,
 inside the final stage (`planner_core.search.final`), on the incumbent (docs/search.md).
@@ -51,10 +63,15 @@ from planner_core.search.polish import hover_lp
 from planner_core.search.trial import TRIAL_OK, held_points, path_nodes, trial_points
 
 __all__ = [
+    "GLOBAL",
+    "PAPER_POINTS",
+    "PER_POINT",
+    "STEP_RULES",
     "Descent",
     "Evaluate",
     "descend",
     "hover_of",
+    "large_problem",
     "objective",
     "gradient_reference",
     "objective_reference",
@@ -66,6 +83,23 @@ STEP = 20.0
 MIN_STEP = 0.01
 #: growth and shrink factors of the step after a kept / rejected trial
 GROW, SHRINK = 1.5, 0.5
+#: the paper's largest I_max (Sec. 5: 10 hover points on the 5 km maps, 20 on the 10 km ones):
+#: a problem with more hover slots is large (`large_problem`)
+PAPER_POINTS = 20
+#: the step rules of `descend`: one step for every point, or one per point (module docstring)
+GLOBAL, PER_POINT = "global", "per-point"
+STEP_RULES = (GLOBAL, PER_POINT)
+#: per-point steps: growth where a point's gradient keeps its direction after a kept trial,
+#: shrink where it turns (Rprop's eta+ and eta-)
+RPROP_UP, RPROP_DOWN = 1.2, 0.5
+
+
+def large_problem(problem: Any) -> bool:
+    """Whether `problem` allows more hover points than the paper's maps (`Problem.hover_limit`
+    > `PAPER_POINTS`; corner slots not counted): its descents take per-point steps, its moves
+    a first screen (`planner_core.search.structure._move`), and its default improving rounds
+    are the large ones (`planner_core.pipeline.schedule.large_rounds`)."""
+    return int(problem.hover_limit) > PAPER_POINTS
 
 Evaluate = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 
@@ -201,15 +235,22 @@ def descend(
     step: float = STEP,
     min_step: float = MIN_STEP,
     race: tuple[int, float] | None = None,
+    steps: str | None = None,
 ) -> Descent | None:
     """Descend from plan x (d,) of the UAV problem `problem` for at most `trials` evaluations.
 
     `evaluate` (X (n, d) -> f, phi) is the caller's counted evaluation; the start itself is not
     re-evaluated (its f is recomputed from the LP). `race` (n, limit): once n evaluations are
     spent the descent stops unless its best f is <= limit (checked once; `_move`'s race).
+    `steps`: the step rule, `GLOBAL` or `PER_POINT` (module docstring; `step` m is then every
+    point's first step); None: `PER_POINT` on a `large_problem`, else `GLOBAL`.
     Returns None when x is not a feasible plan with at least one hover point, or when
-    `trials` < 1. Deterministic (no random numbers).
+    `trials` < 1. Deterministic (no random numbers). Raises ValueError for another `steps`.
     """
+    if steps is None:
+        steps = PER_POINT if large_problem(problem) else GLOBAL
+    if steps not in STEP_RULES:
+        raise ValueError(f"steps: must be one of {', '.join(STEP_RULES)}, got {steps!r}")
     b = problem.breakdown(np.asarray(x, dtype=float))
     P = hover_of(b)[0]
     if b["phi"] > 0 or len(P) == 0 or trials < 1 or len(held_points(problem, P)):
@@ -222,14 +263,23 @@ def descend(
     f_start = float(b["f"])
     best_x, best_f, best_phi = np.asarray(x, dtype=float), f_start, 0.0
     box = np.array([problem.model.width, problem.model.height])
+    per_point = steps == PER_POINT
+    s = np.full(len(P), float(step))  # the per-point steps (m)
     spent = 0
-    while spent < trials and step >= min_step:
+    while spent < trials and (float(s.max()) if per_point else step) >= min_step:
         if race is not None and spent == race[0] and best_f > race[1]:
             break  # out of the race
-        scale = float(np.abs(g).max())
-        if scale <= 0.0:
-            break
-        Pn, Rn, verdict = trial_points(problem, P, g, scale, step, box)
+        if per_point:  # point i moves s_i against its own gradient
+            norm = np.hypot(g[:, 0], g[:, 1])
+            if float(norm.max()) <= 0.0:
+                break
+            move = g / np.where(norm > 0.0, norm, 1.0)[:, None] * s[:, None]
+            Pn, Rn, verdict = trial_points(problem, P, move, 1.0, 1.0, box)
+        else:
+            scale = float(np.abs(g).max())
+            if scale <= 0.0:
+                break
+            Pn, Rn, verdict = trial_points(problem, P, g, scale, step, box)
         kept = False
         if verdict == TRIAL_OK:
             nxt = objective(problem, Pn, warm, Rn)
@@ -240,10 +290,16 @@ def descend(
                 fn = float(np.asarray(fn).reshape(-1)[0])
                 phin = float(np.asarray(phin).reshape(-1)[0])
                 if deb_better(fn, phin, best_f, best_phi):
+                    if per_point:  # Rprop: on where the gradient kept its direction
+                        turn = (nxt[1] * g).sum(axis=1)
+                        s = np.where(turn > 0.0, s * RPROP_UP,
+                                     np.where(turn < 0.0, s * RPROP_DOWN, s))
                     P, g = Pn, nxt[1]
                     best_x, best_f, best_phi = xn, fn, phin
                     kept = True
         step = step * GROW if kept else step * SHRINK
+        if not kept:
+            s = s * SHRINK
     return Descent(best_x, best_f, best_phi, spent, f_start)
 
 

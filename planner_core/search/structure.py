@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from planner_core.model.formulas import deb_better
-from planner_core.search.descent import Descent, Evaluate, descend, hover_of
+from planner_core.search.descent import Descent, Evaluate, descend, hover_of, large_problem
 from planner_core.search.polish import ZERO_TIME, hover_lp
 from planner_core.search.trial import held_points
 
@@ -25,6 +25,7 @@ __all__ = [
     "CLEAR_SHIFTS",
     "KICK",
     "MOVES",
+    "RACE_FIRST",
     "kicks",
     "merge_moves",
     "removal_moves",
@@ -135,6 +136,11 @@ RACE_SCREEN = 6
 #: incumbent's f (0.3 %): most moves that end better than the incumbent are better after 2-7
 #: evaluations, most that end worse never get close (docs/search.md, "Raced structural moves")
 RACE_MARGIN = 0.003
+#: on a large problem (`descent.large_problem`) a move whose own plan (its LP hover times, the
+#: move's first evaluation) is more than this share above the incumbent's f (1 %) is not
+#: descended: on L06, 155 of the 298 moves that lost were that far above and spent 1,123 of
+#: the run's 5,730 move evaluations, 4 of the 44 that won (docs/search.md, "Per-point steps")
+RACE_FIRST = 0.01
 
 
 def _move(
@@ -150,7 +156,8 @@ def _move(
     configuration, Birattari et al., GECCO 2002): once it has spent `RACE_SCREEN` evaluations
     (after the move's own one) it goes on only if its plan's f is within `RACE_MARGIN` of
     `incumbent` (checked once; a descent that converges sooner ends there anyway), so the
-    budget goes to the moves that can win."""
+    budget goes to the moves that can win; on a large problem (`descent.large_problem`) a move
+    whose own evaluation is more than `RACE_FIRST` above `incumbent` is not descended at all."""
     m = problem.model
     held = len(held_points(problem, Q))
     if reroute and held:
@@ -165,6 +172,8 @@ def _move(
         return None
     x = problem.encode(Q, lp[0])
     f, phi = (float(np.asarray(v).reshape(-1)[0]) for v in evaluate(x[None, :]))
+    if incumbent is not None and large_problem(problem) and f > incumbent * (1.0 + RACE_FIRST):
+        return x, f, phi, 1  # out of the race at the first evaluation
     race = None if incumbent is None else (RACE_SCREEN, incumbent * (1.0 + RACE_MARGIN))
     r = descend(problem, x, evaluate, trials=trials - 1, race=race)
     if r is None:
