@@ -115,3 +115,36 @@ def test_fixed_length_fills_every_slot_collision_free(task: str) -> None:
     bd = _seeded(p, n=20)
     assert all(b["n_hover"] == p.n_points for b in bd)
     assert np.mean([b["phi"] == 0.0 for b in bd]) >= 0.8
+
+
+def test_route_keeps_each_blocked_legs_corners_and_gives_a_fresh_searchs_path(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """`Seeder.route` routes a blocked leg once: a path that meets it again (the improving
+    rounds' moves keep the incumbent's legs) reuses its corners, and every answer equals a
+    fresh seeder's, whose table is empty."""
+    p = Problem(_suite("T16"))
+    rng = np.random.default_rng(4)
+    paths = [rng.uniform(0.0, p.model.width, (12, 2)) for _ in range(3)]
+    paths.append(np.vstack([paths[0][:6], rng.uniform(0.0, p.model.width, (3, 2)),
+                            paths[0][9:]]))  # a window of paths[0] changed
+    seeder = Seeder.for_problem(p)
+    searched: list[int] = []
+    graph = type(seeder.graph)
+    real = graph.route
+
+    def counted(self, *a, **kw):  # noqa: ANN001, ANN002, ANN003, ANN202
+        searched.append(self is seeder.graph)
+        return real(self, *a, **kw)
+
+    monkeypatch.setattr(graph, "route", counted)
+    for C in paths:
+        fresh = Seeder.for_problem(p).route(C)
+        again = seeder.route(C)
+        np.testing.assert_array_equal(again[0], fresh[0])
+        np.testing.assert_array_equal(again[1], fresh[1])
+    first = sum(searched)
+    assert first > 0
+    for C in paths:  # every leg met before: no search at all
+        seeder.route(C)
+    assert sum(searched) == first

@@ -56,6 +56,9 @@ _BLOCKED = 1e6  # slide objective: cost of one blocked leg (V5 >= mu)
 # hover time repairs a point that hears too many sensors at once (dense fields, issue 31)
 _OVER_BANDWIDTH = 1e7
 _OVER_BANDWIDTH_NODE = 1e7  # routing: metres charged to enter a graph corner breaking C3
+#: blocked legs whose corners `Seeder.route` keeps (a bound on that table: it starts afresh
+#: beyond it; a leg is two points' coordinates and a few corner indices)
+ROUTE_LEGS = 100_000
 _BANDWIDTH_USE = 0.98  # points keep their summed rate below this share of the bandwidth
 _SLIDE_RINGS = (60.0, 150.0, 300.0, 500.0)  # candidate offsets (m) around a centre
 _SLIDE_DIRS = 8
@@ -415,6 +418,8 @@ class Seeder:
                         else np.zeros(0, dtype=bool))
         self._route_weights = (g.weights + _OVER_BANDWIDTH_NODE * self._c3_bad[g.indices]
                                if self._c3_bad.any() else None)
+        # each blocked leg's corners by its ends (`route`; valid for these route weights)
+        self._legs: dict[tuple[bytes, bytes, bool, bool], list[int]] = {}
         ang = 2.0 * np.pi * np.arange(_SLIDE_DIRS) / _SLIDE_DIRS
         self._unit = np.column_stack([np.cos(ang), np.sin(ang)])
 
@@ -650,7 +655,14 @@ class Seeder:
     # ------------------------------------------------------------------ routing
     def route(self, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Path start -> centres C (K, 2) -> end with visibility-graph corners on the legs that
-        are still blocked, string-pulled: (interior points (M, 2), is_centre (M,) bool)."""
+        are still blocked, string-pulled: (interior points (M, 2), is_centre (M,) bool).
+
+        A blocked leg's corners depend on its two ends alone, so each is kept (by the ends'
+        coordinates, `ROUTE_LEGS` at most) and a leg met again, as the improving rounds' moves
+        meet the incumbent's legs outside what they change, is not routed again: the same
+        corners as a fresh search (tests). Cost: the legs' obstacle tests, O((K + 1) x the
+        obstacles' vertices), and a shortest path over the visibility graph per new blocked
+        leg."""
         p = self.p
         pts = np.vstack([p.start, C, p.end])
         clear = self._clear(pts[:-1], pts[1:])
@@ -658,8 +670,15 @@ class Seeder:
         is_centre: list[np.ndarray] = [np.ones(len(C), dtype=bool)]
         blocked = np.flatnonzero(~clear)
         if len(blocked) and self.graph.n:
-            ends = np.unique(np.concatenate([blocked, blocked + 1]))
-            inner = ends[(ends > 0) & (ends < len(pts) - 1)]
+            known = self._legs
+            if len(known) > ROUTE_LEGS:
+                known.clear()
+            last = len(pts) - 1
+            key = {leg: (pts[leg].tobytes(), pts[leg + 1].tobytes(), leg == 0, leg + 1 == last)
+                   for leg in blocked.tolist()}
+            new = np.array([leg for leg, k in key.items() if k not in known], dtype=np.int64)
+            ends = np.unique(np.concatenate([new, new + 1]))
+            inner = ends[(ends > 0) & (ends < last)]
             A = np.full((len(pts), self.graph.n), np.inf)
             A[0], A[-1] = self._ends[0], self._ends[1]
             A[inner] = self.connect(pts[inner])
@@ -668,7 +687,10 @@ class Seeder:
             if self._route_weights is not None:  # enter a C3-breaking corner last of all
                 A = A + _OVER_BANDWIDTH_NODE * self._c3_bad[None, :]
             for leg in blocked.tolist():
-                _, path = self.graph.route(A[leg], A[leg + 1], self._route_weights)
+                path = known.get(key[leg])
+                if path is None:
+                    _, path = self.graph.route(A[leg], A[leg + 1], self._route_weights)
+                    known[key[leg]] = path
                 if path:
                     out.append(self.graph.nodes[path])
                     is_centre.append(np.zeros(len(path), dtype=bool))
