@@ -586,3 +586,22 @@ def test_bench_plan_large_tables_each_map_against_t16(tmp_path: Path) -> None:
     runs = [json.loads(s) for s in out.read_text().splitlines()]
     assert [x["map"] for x in runs] == ["T16", "X01", "T16"]
     assert all(x["rss_mb"] > 0 and x["evaluations"] <= 300 for x in runs)
+
+
+def test_bench_descent_compares_the_step_rules_start_by_start() -> None:
+    """`benchmarks/bench_descent.py`: a line per kicked start with each rule's f, a summary per
+    map, the same lines on a second run (deterministic), constructive starts on demand, and a
+    bad map refused in one line."""
+    args = ("benchmarks/bench_descent.py", "--maps", "T05", "--starts", "2", "--trials", "10",
+            "--budget", "300")
+    r = _script(*args)
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.splitlines()
+    starts = [s for s in lines if s.startswith("T05 start ")]
+    assert len(starts) == 2 and all("global " in s and "per-point " in s for s in starts)
+    assert re.match(r"T05: per-point lower on \d, higher on \d of 2 starts", lines[-1])
+    assert _script(*args).stdout == r.stdout
+    starts = _script(*args, "--from", "starts")
+    assert starts.returncode == 0 and "best constructive starts" in starts.stdout
+    bad = _script("benchmarks/bench_descent.py", "--maps", "T99")
+    assert bad.returncode == 2 and bad.stderr.strip().count("\n") == 0 and "T99" in bad.stderr

@@ -134,7 +134,7 @@ def test_default_share_table_is_what_its_runs_give_against_the_06_share() -> Non
     from planner_core.pipeline import PlanConfig
     from planner_core.pipeline.schedule import configured
 
-    text = _doc()[_doc().index("## The DE's share beyond 160"):]
+    text = _section("## The DE's share beyond 160", "## Per-point steps and the first screen")
     rows = SHARE_ROW.findall(text)
     assert len(rows) == 8
     new = read_jsonl(ROOT / "docs" / "scaling" / "large-suite-25-default.jsonl.gz")
@@ -169,3 +169,72 @@ def test_the_large_best_known_is_at_least_as_good_as_the_long_runs() -> None:
                        ("L08", "4576.8", "4509.1")):
         fs = sorted((r["f"] for r in runs if r["task"] == task), reverse=True)
         assert [f"{f:.1f}" for f in fs] == [a, b] and f"{a} and {b}" in text, task
+
+
+#: a row of docs/search.md's variants table: variant, then per map (L05, L06, L08) the mean
+#: paired difference in % and (lower / higher), then the CPU ratio range
+VARIANT_ROW = re.compile(r"^\| ([a-zA-Z0-9 .()-]+?) \| " + r" \| ".join(
+    [r"([+-][\d.]+) % \((\d+) / (\d+)\)"] * 3) + r" \| ([\d.]+)-([\d.]+)x \|$", re.M)
+#: the variants table's names for the records' variant tags
+VARIANTS = {"per-point steps": "per-point steps", "first screen": "first screen",
+            "both (shipped)": "both", "DE share 0.2 instead of 0.4": "DE share 0.2",
+            "race screen after 3 evaluations instead of 6": "race screen 3"}
+
+
+def test_the_per_point_variants_table_is_what_its_records_give() -> None:
+    """docs/search.md, 'Per-point steps and the first screen': each variant's paired mean
+    difference, lower / higher runs and CPU ratios (mean CPU over the default's) on L05, L06
+    and L08, from docs/scaling/large-perpoint-variants.jsonl.gz."""
+    text = (ROOT / "docs" / "search.md").read_text()
+    text = text[text.index("## Per-point steps and the first screen"):]
+    text = text[:text.index("\n## ")]
+    rows = VARIANT_ROW.findall(text)
+    assert [r[0] for r in rows] == list(VARIANTS)
+    recs = read_jsonl(ROOT / "docs" / "scaling" / "large-perpoint-variants.jsonl.gz")
+    base = {(r["map"], r["seed"]): r for r in recs if r["variant"] == "before"}
+    for name, *cells in rows:
+        ratios = []
+        for k, task in enumerate(("L05", "L06", "L08")):
+            diff, lower, higher = cells[3 * k: 3 * k + 3]
+            runs = [r for r in recs if r["variant"] == VARIANTS[name] and r["map"] == task]
+            assert len(runs) == 10, (name, task)
+            d = [100 * (r["f"] / base[(task, r["seed"])]["f"] - 1) for r in runs]
+            assert f"{statistics.mean(d):+.2f}" == diff, (name, task)
+            assert (sum(x < 0 for x in d), sum(x > 0 for x in d)) == (int(lower), int(higher))
+            ratios.append(statistics.mean(r["cpu_s"] for r in runs)
+                          / statistics.mean(base[(task, r["seed"])]["cpu_s"] for r in runs))
+        assert (f"{min(ratios):.2f}", f"{max(ratios):.2f}") == tuple(cells[9:]), name
+
+
+#: the per-point table: map, sensors, feasible, runs, mean f, gap %, the earlier gap %, sd %,
+#: median CPU s, the earlier runs' median CPU s, lower / higher than the earlier runs, p
+PER_POINT_ROW = re.compile(r"^\| (L\d\d) \| (\d+) \| (\d+)/(\d+) \| ([\d.]+) \| ([\d.]+) "
+                           r"\(([\d.]+)\) \| ([\d.]+) \| ([\d.]+) \(([\d.]+)\) \| (\d+) / "
+                           r"(\d+) \| ([\d.e-]+) \|$", re.M)  # fmt: skip
+
+
+def test_the_per_point_table_is_what_its_runs_give_against_the_default_before() -> None:
+    """docs/scaling.md, 'Per-point steps and the first screen': every figure from the stored
+    runs, paired run by run with the default's runs before the change."""
+    from scipy.stats import wilcoxon
+
+    text = _doc()[_doc().index("## Per-point steps and the first screen"):]
+    rows = PER_POINT_ROW.findall(text)
+    assert len(rows) == 8
+    new = read_jsonl(ROOT / "docs" / "scaling" / "large-suite-25-perpoint.jsonl.gz")
+    old = read_jsonl(ROOT / "docs" / "scaling" / "large-suite-25-default.jsonl.gz")
+    best = _best_known()["tasks"]
+    for task, _, feas, n, mean, gap, gap0, sd, cpu, cpu0, lower, higher, p in rows:
+        rs = sorted((r for r in new if r["task"] == task), key=lambda r: r["run"])
+        before = {r["run"]: r for r in old if r["task"] == task}
+        fs, f0 = [r["f"] for r in rs], [before[r["run"]]["f"] for r in rs]
+        assert len(rs) == int(n) == 25 and sum(r["feasible"] for r in rs) == int(feas), task
+        assert f"{statistics.mean(fs):.1f}" == mean, task
+        for f, want in ((fs, gap), (f0, gap0)):
+            assert f"{100 * (statistics.mean(f) / best[task]['f'] - 1):.2f}" == want, task
+        assert f"{100 * statistics.pstdev(fs) / statistics.mean(fs):.2f}" == sd, task
+        assert f"{statistics.median(r['cpu_s'] for r in rs):.1f}" == cpu, task
+        assert f"{statistics.median(before[r['run']]['cpu_s'] for r in rs):.1f}" == cpu0, task
+        assert (sum(a < b for a, b in zip(fs, f0, strict=True)),
+                sum(a > b for a, b in zip(fs, f0, strict=True))) == (int(lower), int(higher))
+        assert f"{wilcoxon(fs, f0, alternative='less').pvalue:.2g}" == p, task
