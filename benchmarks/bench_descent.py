@@ -10,9 +10,11 @@ Two kinds of start (`--from`):
   times a move.
 Each start is descended twice for at most `--trials` evaluations, once with `GLOBAL` and once
 with `PER_POINT` steps (`planner_core.search.descent.descend`, module docstring). Prints one
-line per start (its f, each rule's f and evaluations; "stalled" where the global rule stopped
-before `--trials`, its step below `MIN_STEP`), then per map how many starts each rule ended
-lower, the mean difference and each rule's mean evaluations. Deterministic: the same command
+line per start (its f, each rule's f and evaluations; "stopped early" where the global rule
+spent fewer than `--trials`: its step fell below `MIN_STEP` first), then per map on how many
+starts the per-point rule ended lower and higher than the global one, the mean difference
+(per-point over global: negative where per-point did better) and each rule's mean
+evaluations. Deterministic: the same command
 prints the same lines.
 
     python benchmarks/bench_descent.py [--maps L06 L08] [--from kicks|starts] [--starts 25]
@@ -21,7 +23,8 @@ prints the same lines.
 A map is a suite name (T01-T16), a large-suite name (L01-L08) or a path to a map file.
 Cost: per start and rule, `--trials` evaluations with their LPs (I points x J sensors) and
 C3/C5 checks, plus the short run for `kicks`: a few seconds a map on the 300-400-sensor maps.
-Exit status 2 with one line for a bad argument or map.
+Exit status 2 for a bad argument (argparse's usage and error for a malformed option, one
+line for a bad value or map).
 """
 
 from __future__ import annotations
@@ -93,19 +96,23 @@ def compare(problem: object, kind: str, n: int, trials: int, budget: int,
                         steps=rule)
             row[rule] = r.f if r is not None else f0
             row[rule + " evaluations"] = r.evaluations if r is not None else 0
-        row["stalled"] = row[GLOBAL + " evaluations"] < trials  # stopped: step < MIN_STEP
+        row["stalled"] = row[GLOBAL + " evaluations"] < trials  # its step below MIN_STEP
         rows.append(row)
     return rows
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--maps", nargs="+", default=["L06", "L08"])
-    ap.add_argument("--from", dest="kind", choices=("kicks", "starts"), default="kicks")
-    ap.add_argument("--starts", type=int, default=25)
-    ap.add_argument("--trials", type=int, default=40)
-    ap.add_argument("--budget", type=int, default=2000)
-    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--maps", nargs="+", default=["L06", "L08"],
+                    help="suite names (T01-T16, L01-L08) or map files (default: L06 L08)")
+    ap.add_argument("--from", dest="kind", choices=("kicks", "starts"), default="kicks",
+                    help="kicked plans of a short run (default) or constructive starts")
+    ap.add_argument("--starts", type=int, default=25, help="starts per map (default 25)")
+    ap.add_argument("--trials", type=int, default=40,
+                    help="evaluations each descent may spend (default 40)")
+    ap.add_argument("--budget", type=int, default=2000,
+                    help="the short run's evaluations, for --from kicks (default 2000)")
+    ap.add_argument("--seed", type=int, default=0, help="the run's and the kicks' seed")
     a = ap.parse_args(argv)
     try:
         if a.starts < 1 or a.trials < 1 or a.seed < 0 or a.budget < 200:
@@ -128,21 +135,22 @@ def main(argv: list[str] | None = None) -> int:
         try:
             problem = Problem(path)
         except (MapError, OSError, ValueError) as e:
-            print(f"bench_descent: {name}: {e}", file=sys.stderr)
+            print(f"bench_descent: {e}" if str(name) in str(e) else f"bench_descent: {name}: {e}",
+                  file=sys.stderr)
             return 2
         rows = compare(problem, a.kind, a.starts, a.trials, a.budget, a.seed)
         for i, r in enumerate(rows):
             print(f"{name} start {i}: f {r['f0']:.1f}; global {r[GLOBAL]:.1f} "
-                  f"({r[GLOBAL + ' evaluations']} ev{', stalled' if r['stalled'] else ''}); "
+                  f"({r[GLOBAL + ' evaluations']} ev{', stopped early' if r['stalled'] else ''}); "
                   f"per-point {r[PER_POINT]:.1f} ({r[PER_POINT + ' evaluations']} ev)")
         diff = [100.0 * (r[PER_POINT] / r[GLOBAL] - 1.0) for r in rows]
         n = max(len(rows), 1)
-        print(f"{name}: per-point lower on {sum(d < 0 for d in diff)}, higher on "
+        print(f"{name}: per-point vs global: lower on {sum(d < 0 for d in diff)}, higher on "
               f"{sum(d > 0 for d in diff)} of {len(rows)} starts (mean {sum(diff) / n:+.2f} %, "
               f"range {min(diff, default=0):+.2f} to {max(diff, default=0):+.2f} %); "
               f"evaluations global {sum(r[GLOBAL + ' evaluations'] for r in rows) / n:.1f}, "
               f"per-point {sum(r[PER_POINT + ' evaluations'] for r in rows) / n:.1f} a start; "
-              f"the global step stalled on {sum(r['stalled'] for r in rows)}")
+              f"the global rule stopped early on {sum(r['stalled'] for r in rows)}")
     return 0
 
 

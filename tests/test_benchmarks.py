@@ -599,7 +599,7 @@ def test_bench_descent_compares_the_step_rules_start_by_start() -> None:
     lines = r.stdout.splitlines()
     starts = [s for s in lines if s.startswith("T05 start ")]
     assert len(starts) == 2 and all("global " in s and "per-point " in s for s in starts)
-    assert re.match(r"T05: per-point lower on \d, higher on \d of 2 starts", lines[-1])
+    assert re.match(r"T05: per-point vs global: lower on \d, higher on \d of 2 starts", lines[-1])
     assert _script(*args).stdout == r.stdout
     starts = _script(*args, "--from", "starts")
     assert starts.returncode == 0 and "best constructive starts" in starts.stdout

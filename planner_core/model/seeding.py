@@ -56,8 +56,9 @@ _BLOCKED = 1e6  # slide objective: cost of one blocked leg (V5 >= mu)
 # hover time repairs a point that hears too many sensors at once (dense fields, issue 31)
 _OVER_BANDWIDTH = 1e7
 _OVER_BANDWIDTH_NODE = 1e7  # routing: metres charged to enter a graph corner breaking C3
-#: blocked legs whose corners `Seeder.route` keeps (a bound on that table: it starts afresh
-#: beyond it; a leg is two points' coordinates and a few corner indices)
+#: blocked legs whose corners `Seeder.route` keeps (a bound on that table: a call that finds
+#: it fuller starts it afresh, so it holds at most this many plus one path's legs; ~400 bytes
+#: a leg)
 ROUTE_LEGS = 100_000
 _BANDWIDTH_USE = 0.98  # points keep their summed rate below this share of the bandwidth
 _SLIDE_RINGS = (60.0, 150.0, 300.0, 500.0)  # candidate offsets (m) around a centre
@@ -418,7 +419,8 @@ class Seeder:
                         else np.zeros(0, dtype=bool))
         self._route_weights = (g.weights + _OVER_BANDWIDTH_NODE * self._c3_bad[g.indices]
                                if self._c3_bad.any() else None)
-        # each blocked leg's corners by its ends (`route`; valid for these route weights)
+        # each blocked leg's corners by its ends (`route`): valid while the graph, its route
+        # weights and `_c3_bad` stay as built here (whoever changes them clears it)
         self._legs: dict[tuple[bytes, bytes, bool, bool], list[int]] = {}
         ang = 2.0 * np.pi * np.arange(_SLIDE_DIRS) / _SLIDE_DIRS
         self._unit = np.column_stack([np.cos(ang), np.sin(ang)])
@@ -658,7 +660,7 @@ class Seeder:
         are still blocked, string-pulled: (interior points (M, 2), is_centre (M,) bool).
 
         A blocked leg's corners depend on its two ends alone, so each is kept (by the ends'
-        coordinates, `ROUTE_LEGS` at most) and a leg met again, as the improving rounds' moves
+        coordinates, about `ROUTE_LEGS` at most) and a leg met again, as the improving rounds' moves
         meet the incumbent's legs outside what they change, is not routed again: the same
         corners as a fresh search (tests). Cost: the legs' obstacle tests, O((K + 1) x the
         obstacles' vertices), and a shortest path over the visibility graph per new blocked

@@ -345,8 +345,8 @@ def _kmeans(S: np.ndarray, k: int, rng: np.random.Generator) -> np.ndarray:
     sequential cumulative sum, a left search); the k-means iterations are scipy's
     `kmeans2(..., minit="matrix")` from that init, compiled (`_lloyd`: its 10 rounds of
     nearest centre by squared distance, first on ties, and member means summed in sensor
-    order, an empty cluster kept where it was), which spares the ~0.4 ms of scipy's wrappers
-    a call that the improving rounds' rebuilds paid once a draw."""
+    order, an empty cluster kept where it was). Compiled because the improving rounds'
+    rebuilds call it once a draw, and scipy's wrappers cost ~0.4 ms a call."""
     S = np.ascontiguousarray(S, dtype=np.float64)
     if S.ndim != 2 or S.shape[1] != 2 or not 1 <= k <= len(S):
         return _kmeans_reference(S, k, rng)

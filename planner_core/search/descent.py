@@ -34,10 +34,13 @@ backpropagation learning: the RPROP algorithm", ICNN 1993): point i moves `s_i` 
 its own gradient; after a kept trial s_i grows by `RPROP_UP` (1.2) where the point's gradient
 kept its direction (positive dot product with the last one) and shrinks by `RPROP_DOWN` (0.5)
 where it turned; a rejected trial halves every s_i; the descent stops when the largest s_i
-falls below `min_step`. With one step for all, the point with the steepest gradient sets
-every point's move, so on a plan of 40-200 points most points creep while one settles: from
-constructive starts of the 300-400-sensor maps L06 and L08, 120 trials of the global step
-stalled 0.6-1.8 % above where the per-point steps went (docs/search.md, "Per-point steps").
+falls below `min_step`. A point a trial holds in place (C3 or C5) keeps its gradient's
+direction, so its step grows with the kept trials and it tries further the next time. With
+one step for all, the point with the steepest gradient sets every point's move. Descent by
+descent the two rules are about even (`benchmarks/bench_descent.py`: from kicked plans and
+from constructive starts of L06 and L08 each ends lower about half the time); over whole
+runs of the 240-400-sensor maps the per-point steps ended lower on 8 of 10 seeds of each
+(docs/search.md, "Per-point steps and the first screen").
 
 The descent keeps the number of points and their visiting order; the pipeline
 (`planner_core.pipeline`) runs it on the best constructive and seeder plans before the DE and,

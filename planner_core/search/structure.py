@@ -4,10 +4,11 @@
 hover ~0 s), merges of two consecutive points, splits of one point in two and removals of one
 point with a neighbour moved to clear the joining leg; `kicks` is an iterated local search that
 moves one point at random. Every move is evaluated with its LP hover times and descended
-(`planner_core.search.descent.descend`) in a race against the incumbent (`_move`), all through
-the caller's counted `evaluate`. Cost per move: its LP (I points x J sensors) and up to
-`move_trials` evaluations; the move lists grow with I (merges, removals) and with the sensors a
-point serves (splits).
+(`planner_core.search.descent.descend`) in a race against the incumbent (`_move`; on a large
+problem a move whose own evaluation is more than `RACE_FIRST` above the incumbent is not
+descended), all through the caller's counted `evaluate`. Cost per move: its LP (I points x J
+sensors) and up to `move_trials` evaluations; the move lists grow with I (merges, removals)
+and with the sensors a point serves (splits).
 """
 
 from __future__ import annotations
@@ -139,7 +140,8 @@ RACE_MARGIN = 0.003
 #: on a large problem (`descent.large_problem`) a move whose own plan (its LP hover times, the
 #: move's first evaluation) is more than this share above the incumbent's f (1 %) is not
 #: descended: on L06, 155 of the 298 moves that lost were that far above and spent 1,123 of
-#: the run's 5,730 move evaluations, 4 of the 44 that won (docs/search.md, "Per-point steps")
+#: the run's 5,730 move evaluations, 4 of the 44 that won (docs/search.md, "Per-point steps
+#: and the first screen")
 RACE_FIRST = 0.01
 
 
