@@ -236,6 +236,9 @@ COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
          ("bench_anytime", '"--jobs"')),
     "python benchmarks/bench_order.py":
         ("test_benchmarks.py::test_bench_order_compares_our_order_with_ortools", ("bench_order",)),
+    "python benchmarks/bench_descent.py":
+        ("test_benchmarks.py::test_bench_descent_compares_the_step_rules_start_by_start",
+         ("bench_descent",)),
     "lamde-mission bench": ("test_bench.py::test_cli_bench_then_report", ('"bench"',)),
     "lamde-mission report": ("test_bench.py::test_cli_bench_then_report", ('"report"',)),
     "lamde-mission report results -o docs/results.md --reference de-lamde --imax":
