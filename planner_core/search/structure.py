@@ -13,6 +13,8 @@ and with the sensors a point serves (splits).
 
 from __future__ import annotations
 
+import itertools
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -46,9 +48,13 @@ def split_moves(problem: Any, P: np.ndarray, T: np.ndarray) -> list[np.ndarray]:
     more sensors (collecting >= `SERVES` of Q_j there), its sensors halved along their principal
     axis, and the point replaced by two points `SPLIT_FRACTIONS` of the way towards each half's
     centroid, in the order that makes the shorter path. P (I, 2) m, T (I,) s."""
+    return list(_splits(problem, P, T))
+
+
+def _splits(problem: Any, P: np.ndarray, T: np.ndarray) -> Iterator[np.ndarray]:
+    """`split_moves` one at a time, in its order."""
     m = problem.model
     R = m.rates(P)
-    out = []
     for i in range(len(P)):
         served = np.flatnonzero(R[i] * T[i] >= SERVES * m.required)
         if len(served) < 2:
@@ -65,8 +71,7 @@ def split_moves(problem: Any, P: np.ndarray, T: np.ndarray) -> list[np.ndarray]:
             if (np.linalg.norm(prev - pa) + np.linalg.norm(pb - nxt)
                     > np.linalg.norm(prev - pb) + np.linalg.norm(pa - nxt)):
                 pa, pb = pb, pa
-            out.append(np.vstack([P[:i], pa, pb, P[i + 1:]]))
-    return out
+            yield np.vstack([P[:i], pa, pb, P[i + 1:]])
 
 
 def waypoint_moves(P: np.ndarray, T: np.ndarray) -> list[np.ndarray]:
@@ -90,15 +95,20 @@ def removal_moves(problem: Any, P: np.ndarray, T: np.ndarray) -> list[np.ndarray
     leg from rest to rest), a corner for nothing but the detour; `waypoint_moves` drops the
     corners but routes the legs afresh, which puts corners back wherever the neighbours stay
     where they are. P (I, 2) m, T (I,) s."""
+    return list(_removals(problem, P, T))
+
+
+def _removals(problem: Any, P: np.ndarray, T: np.ndarray) -> Iterator[np.ndarray]:
+    """`removal_moves` one at a time, in its order: a first-improvement search that stops at
+    the first better move checks the clearance (C3, C5) of no later one."""
     P = np.asarray(P, dtype=float).reshape(-1, 2)
     box = np.array([problem.model.width, problem.model.height])
-    out = []
     for c in np.argsort(np.asarray(T, dtype=float), kind="stable"):
         Q0 = np.delete(P, c, axis=0)
         if not len(Q0):
             continue
         if not len(held_points(problem, Q0)):
-            out.append(Q0)
+            yield Q0
             continue
         a = P[c - 1] if c > 0 else problem.start
         b = P[c + 1] if c + 1 < len(P) else problem.end
@@ -114,9 +124,8 @@ def removal_moves(problem: Any, P: np.ndarray, T: np.ndarray) -> list[np.ndarray
                 Q = Q0.copy()
                 Q[k] = np.clip(Q[k] + shift * normal, 0.0, box)
                 if not len(held_points(problem, Q)):
-                    out.append(Q)
+                    yield Q
                     break
-    return out
 
 
 def merge_moves(P: np.ndarray) -> list[np.ndarray]:
@@ -206,11 +215,11 @@ def restructure(
     None in the fixed-length mode, with tau <= 0 (every slot active), for an infeasible x or
     `trials` < 1. x (d,) a decision vector; deterministic.
     """
-    kinds = {
+    kinds = {  # each kind's moves drawn one at a time: the search stops at the first better
         "waypoint": lambda P, T: waypoint_moves(P, T),
         "merge": lambda P, T: merge_moves(P),
-        "split": lambda P, T: split_moves(problem, P, T),
-        "removal": lambda P, T: removal_moves(problem, P, T),
+        "split": lambda P, T: _splits(problem, P, T),
+        "removal": lambda P, T: _removals(problem, P, T),
     }
     unknown = [k for k in moves if k not in kinds]
     if unknown:
@@ -228,7 +237,7 @@ def restructure(
     improved = True
     while improved and spent < trials:
         improved = False
-        for Q in [Q for kind in moves for Q in kinds[kind](P, T)]:
+        for Q in itertools.chain.from_iterable(kinds[kind](P, T) for kind in moves):
             if spent >= trials:
                 break
             if not 0 < len(Q) <= problem.n_points:
