@@ -206,9 +206,9 @@ _RUN: tuple[Default, ...] = (
             "windows of hover points instead of the restarts), the stages that turn budget into "
             "a better plan (docs/architecture.md, 'Where the budget goes'); on maps of more "
             "than 160 sensors (with the large rounds: I_max above 20, variable length, "
-            "simultaneous access) the default scheduler makes the default 0.4 "
-            "(`planner_core.pipeline.schedule.LARGE_DE_SHARE`; docs/scaling.md, 'The DE's "
-            "share beyond 160 sensors')",
+            "simultaneous access) the default scheduler makes the default 0: the DE runs its "
+            "population, one generation (`planner_core.pipeline.schedule.LARGE_DE_SHARE`; "
+            "docs/scaling.md, 'One DE generation beyond 160 sensors')",
             "a number in [0, 1]", _share),
     Default("time_limit", None, "seconds after which the pipeline stops its improving stages "
             "and returns the best plan found (null: none; the kernel compile is not counted); "

@@ -179,14 +179,14 @@ def test_plan_negative_seed_is_one_line_and_exit_2(tmp_path: Path) -> None:
 
 def test_the_summary_names_a_scheduler_and_a_split_other_than_the_default() -> None:
     """`plan`'s summary line: nothing for the default scheduler at the default split, the DE's
-    share whenever it differs (the default's own 0.4 beyond 160 sensors included), the
+    share whenever it differs (the default's own 0 beyond 160 sensors included), the
     scheduler and its choice when not the default."""
     from lamde_mission.commands.plan import _run_settings
     from planner_core.defaults import DE_SHARE
     from planner_core.pipeline.schedule import LARGE_DE_SHARE
 
     assert _run_settings({"de_share": DE_SHARE}) == ""
-    assert _run_settings({"de_share": LARGE_DE_SHARE}) == ", DE share 0.4"
+    assert _run_settings({"de_share": LARGE_DE_SHARE}) == ", DE share 0"
     assert _run_settings({"de_share": 0.4, "scheduler": "lamde-s",
                           "scheduler_choice": "default"}) == (
         ", scheduler lamde-s -> default, DE share 0.4")

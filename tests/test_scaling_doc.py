@@ -124,15 +124,14 @@ SHARE_ROW = re.compile(r"^\| (L\d\d) \| (\d+) \| ([\d.]+) \| (\d+)/(\d+) \| ([\d
 
 
 def test_default_share_table_is_what_its_runs_give_against_the_06_share() -> None:
-    """The default's runs (0.4 beyond 160 sensors): the share each map gets from
-    `DefaultScheduler.configure`, and every figure from the stored records, paired with the
-    0.6 share's (rebuilding windows) run by run."""
+    """The default's runs then (0.4 beyond 160 sensors, `LARGE_SENSORS`; today's rule is in
+    'One DE generation beyond 160 sensors'), and every figure from the stored records, paired
+    with the 0.6 share's (rebuilding windows) run by run."""
     from scipy.stats import wilcoxon
 
+    from planner_core.defaults import DE_SHARE
     from planner_core.model.mapio import load_map
-    from planner_core.model.problem import Problem
-    from planner_core.pipeline import PlanConfig
-    from planner_core.pipeline.schedule import configured
+    from planner_core.pipeline.schedule import LARGE_SENSORS
 
     text = _section("## The DE's share beyond 160", "## Per-point steps and the first screen")
     rows = SHARE_ROW.findall(text)
@@ -142,7 +141,7 @@ def test_default_share_table_is_what_its_runs_give_against_the_06_share() -> Non
     for task, sensors, share, feas, n, mean, gap, sd, cpu, lo, same, hi, p in rows:
         m = load_map(ROOT / "examples" / "maps" / "large" / f"{task}.json")
         assert len(m.sensors) == int(sensors)
-        assert configured("default", Problem(m), PlanConfig(seed=0)).de_share == float(share)
+        assert float(share) == (0.4 if len(m.sensors) > LARGE_SENSORS else DE_SHARE), task
         assert int(n) == 25, task
         fs, olds = _paired_runs(task, new, old, best, feas, n, mean, gap, sd, cpu)
         pairs = list(zip(fs, olds, strict=True))
@@ -213,16 +212,17 @@ PER_POINT_ROW = re.compile(r"^\| (L\d\d) \| (\d+) \| (\d+)/(\d+) \| ([\d.]+) \| 
                            r"(\d+) \| ([\d.e-]+) \|$", re.M)  # fmt: skip
 
 
-def test_the_per_point_table_is_what_its_runs_give_against_the_default_before() -> None:
-    """docs/scaling.md, 'Per-point steps and the first screen': every figure from the stored
-    runs, paired run by run with the default's runs before the change."""
+def _table_against_before(section: str, records: str, baseline: str, maps: int) -> None:
+    """A `PER_POINT_ROW` table of docs/scaling.md's `section` (its first `maps` rows): every
+    figure from the stored runs `records`, paired run by run with the runs `baseline` (both
+    file names under docs/scaling/)."""
     from scipy.stats import wilcoxon
 
-    text = _doc()[_doc().index("## Per-point steps and the first screen"):]
-    rows = PER_POINT_ROW.findall(text)
-    assert len(rows) == 8
-    new = read_jsonl(ROOT / "docs" / "scaling" / "large-suite-25-perpoint.jsonl.gz")
-    old = read_jsonl(ROOT / "docs" / "scaling" / "large-suite-25-default.jsonl.gz")
+    text = _doc()[_doc().index(section):]
+    rows = PER_POINT_ROW.findall(text)[:maps]
+    assert len(rows) == maps
+    new = read_jsonl(ROOT / "docs" / "scaling" / records)
+    old = read_jsonl(ROOT / "docs" / "scaling" / baseline)
     best = _best_known()["tasks"]
     for task, _, feas, n, mean, gap, gap0, sd, cpu, cpu0, lower, higher, p in rows:
         rs = sorted((r for r in new if r["task"] == task), key=lambda r: r["run"])
@@ -238,3 +238,31 @@ def test_the_per_point_table_is_what_its_runs_give_against_the_default_before() 
         assert (sum(a < b for a, b in zip(fs, f0, strict=True)),
                 sum(a > b for a, b in zip(fs, f0, strict=True))) == (int(lower), int(higher))
         assert f"{wilcoxon(fs, f0, alternative='less').pvalue:.2g}" == p, task
+
+
+def test_the_per_point_table_is_what_its_runs_give_against_the_default_before() -> None:
+    """docs/scaling.md, 'Per-point steps and the first screen': every figure from the stored
+    runs, paired run by run with the default's runs before the change."""
+    _table_against_before("## Per-point steps and the first screen",
+                          "large-suite-25-perpoint.jsonl.gz", "large-suite-25-default.jsonl.gz", 8)
+
+
+def test_the_one_generation_table_is_what_its_runs_give_against_the_share_04() -> None:
+    """docs/scaling.md, 'One DE generation beyond 160 sensors': the share each map of the
+    plan-time table gets from `DefaultScheduler.configure`, and the four maps beyond 160
+    sensors, paired run by run with the per-point runs (the DE's share 0.4)."""
+    from planner_core.model.mapio import load_map
+    from planner_core.model.problem import Problem
+    from planner_core.pipeline import PlanConfig
+    from planner_core.pipeline.schedule import configured
+
+    text = _doc()[_doc().index("## One DE generation beyond 160 sensors"):]
+    rows = re.findall(r"^\| (L\d\d) \| (\d+) \| (0|0\.6) \| [\d.]+ \| [\d.]+ \| <= \d+x \|",
+                      text, re.M)
+    assert len(rows) == 8
+    for task, sensors, share in rows:
+        m = load_map(ROOT / "examples" / "maps" / "large" / f"{task}.json")
+        assert len(m.sensors) == int(sensors)
+        assert configured("default", Problem(m), PlanConfig(seed=0)).de_share == float(share)
+    _table_against_before("## One DE generation beyond 160 sensors",
+                          "large-suite-25-share0.jsonl.gz", "large-suite-25-perpoint.jsonl.gz", 4)

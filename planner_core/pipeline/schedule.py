@@ -90,9 +90,10 @@ LARGE_CYCLE = ("kicks-300", "rebuild", "kicks-120", "rebuild", "kicks-700", "reb
 #: issue 31's size classes (a plan within 5x T16's time up to 160 sensors, 20x up to 400)
 LARGE_SENSORS = 160
 #: the DE's share of the budget on maps of more than `LARGE_SENSORS` sensors (in place of the
-#: default `de_share`, 0.6): the DE improves nothing there and the improving rounds do
-#: (docs/scaling.md, "The DE's share beyond 160 sensors")
-LARGE_DE_SHARE = 0.4
+#: default `de_share`, 0.6): 0, so the DE runs its population (one generation, at least what
+#: the DE gets) and the rest goes to the improving rounds; the DE improves nothing there and
+#: the improving rounds do (docs/scaling.md, "One DE generation beyond 160 sensors")
+LARGE_DE_SHARE = 0.0
 
 KICKS = {f"kicks-{int(s)}": s for s in SPREADS}
 #: every macro-action's name, in a fixed order (the env's discrete action index)
@@ -230,11 +231,13 @@ class DefaultScheduler:
         Why: on the large maps the DE's evaluations improve nothing and the improving rounds'
         do. On each large map beyond 160 sensors and its specs from generator seeds 3001-3003,
         3 seeds each (12 cases a map, `bench_schedule.py --splits`, docs/scheduler.md's
-        records) 0.4 in place of 0.6 lowers f by
-        0.14 (L03), 1.50 (L05), 1.12 (L06) and 0.79 % (L08) for 1.2-1.45x the CPU, which the
-        maps beyond 160 sensors can afford (issue 31: 20x T16's time; 0.3 gains a little more
-        but took L06 to 16-18x) and those up to 160 cannot (L02 at 160 sensors: 5.4x T16's
-        against 5x at 0.4). docs/scaling.md, "The DE's share beyond 160 sensors".
+        records) 0.4 in place of 0.6 lowered f by
+        0.14 (L03), 1.50 (L05), 1.12 (L06) and 0.79 % (L08) for 1.2-1.45x the CPU; once the
+        structural search drew its moves one at a time, 0 in place of 0.4 lowered it by
+        0.13-1.26 % more (L03, L05, L06, L08 x seeds 0-4, 5 of 5 lower on L05, L06, L08) for
+        1.3-1.6x the CPU, which the maps beyond 160 sensors can afford (issue 31: 20x T16's
+        time; L06 18x) and those up to 160 cannot (L02 at 160 sensors: 5.4x T16's against 5x
+        at 0.4). docs/scaling.md, "One DE generation beyond 160 sensors".
 
         Args:
             problem: the run's `Problem`; config: its `PlanConfig`.
