@@ -208,7 +208,8 @@ _RUN: tuple[Default, ...] = (
             "than 160 sensors (with the large rounds: I_max above 20, variable length, "
             "simultaneous access) the default scheduler makes the default 0: the DE runs its "
             "population, one generation (`planner_core.pipeline.schedule.LARGE_DE_SHARE`; "
-            "docs/scaling.md, 'One DE generation beyond 160 sensors')",
+            "docs/scaling.md, 'One DE generation beyond 160 sensors'), and on such maps of at "
+            "most 120 sensors 0.2 (`MID_DE_SHARE`)",
             "a number in [0, 1]", _share),
     Default("time_limit", None, "seconds after which the pipeline stops its improving stages "
             "and returns the best plan found (null: none; the kernel compile is not counted); "

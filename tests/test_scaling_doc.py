@@ -247,22 +247,43 @@ def test_the_per_point_table_is_what_its_runs_give_against_the_default_before() 
                           "large-suite-25-perpoint.jsonl.gz", "large-suite-25-default.jsonl.gz", 8)
 
 
-def test_the_one_generation_table_is_what_its_runs_give_against_the_share_04() -> None:
-    """docs/scaling.md, 'One DE generation beyond 160 sensors': the share each map of the
-    plan-time table gets from `DefaultScheduler.configure`, and the four maps beyond 160
-    sensors, paired run by run with the per-point runs (the DE's share 0.4)."""
+def _configured_shares(section: str, n: int, then: dict[str, str] | None = None) -> None:
+    """The plan-time table of docs/scaling.md's `section` (its first `n` rows): each map's
+    sensors and the DE share `DefaultScheduler.configure` gives it, or, for the maps in
+    `then`, the share it had when the table was measured."""
     from planner_core.model.mapio import load_map
     from planner_core.model.problem import Problem
     from planner_core.pipeline import PlanConfig
     from planner_core.pipeline.schedule import configured
 
-    text = _doc()[_doc().index("## One DE generation beyond 160 sensors"):]
-    rows = re.findall(r"^\| (L\d\d) \| (\d+) \| (0|0\.6) \| [\d.]+ \| [\d.]+ \| <= \d+x \|",
-                      text, re.M)
-    assert len(rows) == 8
+    text = _doc()[_doc().index(section):]
+    rows = re.findall(r"^\| (L\d\d) \| (\d+) \| (0|0\.\d) \| [\d.]+ \| [\d.]+ \| <= \d+x \|",
+                      text, re.M)[:n]
+    assert len(rows) == n
     for task, sensors, share in rows:
         m = load_map(ROOT / "examples" / "maps" / "large" / f"{task}.json")
         assert len(m.sensors) == int(sensors)
-        assert configured("default", Problem(m), PlanConfig(seed=0)).de_share == float(share)
+        if then and task in then:
+            assert share == then[task], task
+        else:
+            got = configured("default", Problem(m), PlanConfig(seed=0)).de_share
+            assert got == float(share), task
+
+
+def test_the_one_generation_table_is_what_its_runs_give_against_the_share_04() -> None:
+    """docs/scaling.md, 'One DE generation beyond 160 sensors': the share each map of the
+    plan-time table gets (L01, L04 and L07 at 0.6, measured before the rule up to 120
+    sensors), and the four maps beyond 160 sensors, paired run by run with the per-point runs
+    (the DE's share 0.4)."""
+    _configured_shares("## One DE generation beyond 160 sensors", 8,
+                       then={"L01": "0.6", "L04": "0.6", "L07": "0.6"})
     _table_against_before("## One DE generation beyond 160 sensors",
                           "large-suite-25-share0.jsonl.gz", "large-suite-25-perpoint.jsonl.gz", 4)
+
+
+def test_the_share_02_table_is_what_its_runs_give_against_the_share_06() -> None:
+    """docs/scaling.md, 'Up to 120 sensors: 0.2': the maps' configured share, and L01, L04,
+    L07 paired run by run with the per-point runs (the DE's share 0.6)."""
+    _configured_shares("### Up to 120 sensors: 0.2", 3)
+    _table_against_before("### Up to 120 sensors: 0.2",
+                          "large-suite-25-share02.jsonl.gz", "large-suite-25-perpoint.jsonl.gz", 3)

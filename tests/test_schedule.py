@@ -337,13 +337,19 @@ def test_bench_schedule_on_workers_writes_the_serial_records(tmp_path) -> None:
 
 def test_the_default_gives_the_de_a_smaller_share_beyond_160_sensors() -> None:
     """`DefaultScheduler.configure`: a map of more than `LARGE_SENSORS` sensors with the large
-    rounds runs with `LARGE_DE_SHARE` (recorded in the run's config before any stage); 160
-    sensors, a share the caller set, a run without the descent, fixed-length or scheduled
-    access keep the config as it is; a scheduler without its own `configure` gets the
-    default's."""
+    rounds runs with `LARGE_DE_SHARE` (recorded in the run's config before any stage), one of
+    at most `MID_SENSORS` with `MID_DE_SHARE`; 160 sensors, a share the caller set, a run
+    without the descent, fixed-length or scheduled access keep the config as it is; a
+    scheduler without its own `configure` gets the default's."""
     from planner_core.defaults import DE_SHARE
     from planner_core.pipeline.pipeline import DEFAULT_PIPELINE, PipelineRun
-    from planner_core.pipeline.schedule import LARGE_DE_SHARE, LARGE_SENSORS, configured
+    from planner_core.pipeline.schedule import (
+        LARGE_DE_SHARE,
+        LARGE_SENSORS,
+        MID_DE_SHARE,
+        MID_SENSORS,
+        configured,
+    )
 
     large = ROOT / "examples" / "maps" / "large"
     l05, l02 = load_map(large / "L05.json"), load_map(large / "L02.json")
@@ -355,6 +361,9 @@ def test_the_default_gives_the_de_a_smaller_share_beyond_160_sensors() -> None:
     run = PipelineRun(p05, cfg, pipeline=DEFAULT_PIPELINE, evaluator=None, progress=None)
     assert run.config.de_share == LARGE_DE_SHARE == run.state.config.de_share
     assert configured("default", Problem(l02), cfg) is cfg
+    l01 = load_map(large / "L01.json")  # 80 sensors: up to MID_SENSORS
+    assert len(l01.sensors) <= MID_SENSORS < LARGE_SENSORS
+    assert configured("default", Problem(l01), cfg).de_share == MID_DE_SHARE
     for kept in (cfg.replace(de_share=0.5), cfg.replace(descent=False)):
         assert configured("default", p05, kept) is kept
     assert configured("default", Problem(l05, variable_length=False), cfg) is cfg

@@ -30,7 +30,8 @@ evaluations and random streams (each action's stream is its index in the stage),
 plan to the bit (tests/test_schedule.py against digests recorded before the
 refactor; tests/test_golden.py). Larger problems alternate kicks with `rebuild`
 (`LARGE_CYCLE`), and beyond `LARGE_SENSORS` sensors it also gives the DE `LARGE_DE_SHARE` of
-the budget before the run starts (`DefaultScheduler.configure`). A `StaticScheduler` cycles
+the budget before the run starts, up to `MID_SENSORS` `MID_DE_SHARE`
+(`DefaultScheduler.configure`). A `StaticScheduler` cycles
 a fixed sequence (`SCHEDULES`, the registry `lamde-mission plan --scheduler NAME` reads).
 
 Cost: that of the actions; a kick or structural trial one LP (I x J) and the C3/C5 checks
@@ -60,6 +61,8 @@ __all__ = [
     "LARGE_CYCLE",
     "LARGE_DE_SHARE",
     "LARGE_SENSORS",
+    "MID_DE_SHARE",
+    "MID_SENSORS",
     "PAPER_POINTS",
     "large_rounds",
     "LEARNED",
@@ -94,6 +97,11 @@ LARGE_SENSORS = 160
 #: the DE gets) and the rest goes to the improving rounds; the DE improves nothing there and
 #: the improving rounds do (docs/scaling.md, "One DE generation beyond 160 sensors")
 LARGE_DE_SHARE = 0.0
+#: sensors up to which a map with the large rounds gets `MID_DE_SHARE` from the default
+#: scheduler; from there to `LARGE_SENSORS` the default `de_share` stays
+MID_SENSORS = 120
+#: the DE's share on maps of at most `MID_SENSORS` sensors with the large rounds
+MID_DE_SHARE = 0.2
 
 KICKS = {f"kicks-{int(s)}": s for s in SPREADS}
 #: every macro-action's name, in a fixed order (the env's discrete action index)
@@ -223,10 +231,11 @@ class DefaultScheduler:
     large = False
 
     def configure(self, problem: Any, config: PlanConfig) -> PlanConfig:
-        """The run's config: on a map of more than `LARGE_SENSORS` sensors whose rounds are
-        `LARGE_CYCLE` (`large_rounds`), the DE's share `LARGE_DE_SHARE` in place of the default
-        `de_share`; any other config as it is (a `de_share` other than the default is kept,
-        as is a run without the descent or the polish, where the DE gets the rest).
+        """The run's config: on a map whose rounds are `LARGE_CYCLE` (`large_rounds`), the
+        DE's share `LARGE_DE_SHARE` in place of the default `de_share` beyond `LARGE_SENSORS`
+        sensors and `MID_DE_SHARE` up to `MID_SENSORS`; any other config as it is (a
+        `de_share` other than the default is kept, as is a run without the descent or the
+        polish, where the DE gets the rest).
 
         Why: on the large maps the DE's evaluations improve nothing and the improving rounds'
         do. On each large map beyond 160 sensors and its specs from generator seeds 3001-3003,
@@ -236,8 +245,11 @@ class DefaultScheduler:
         structural search drew its moves one at a time, 0 in place of 0.4 lowered it by
         0.13-1.26 % more (L03, L05, L06, L08 x seeds 0-4, 5 of 5 lower on L05, L06, L08) for
         1.3-1.6x the CPU, which the maps beyond 160 sensors can afford (issue 31: 20x T16's
-        time; L06 18x) and those up to 160 cannot (L02 at 160 sensors: 5.4x T16's against 5x
-        at 0.4). docs/scaling.md, "One DE generation beyond 160 sensors".
+        time; L06 18x). Up to 160 sensors the target is 5x: L02 (160 sensors) takes 4.2x at
+        0.6 and keeps it; on maps of at most `MID_SENSORS` sensors `MID_DE_SHARE` (0.2)
+        lowered f by 0.15 (L01), 0.37 (L04) and 0.48 % (L07) at seeds 0-9 for 1.7-2.1x the
+        CPU (2.3-3.8x T16). docs/scaling.md, "One DE generation beyond 160 sensors" and "Up
+        to 120 sensors: 0.2".
 
         Args:
             problem: the run's `Problem`; config: its `PlanConfig`.
@@ -249,9 +261,13 @@ class DefaultScheduler:
 
         sensors = len(np.asarray(problem.model.sensors).reshape(-1, 2))
         if (config.de_share != DE_SHARE or not (config.descent and config.polish)
-                or sensors <= LARGE_SENSORS or not large_rounds(problem)):
+                or not large_rounds(problem)):
             return config
-        return config.replace(de_share=LARGE_DE_SHARE)
+        if sensors > LARGE_SENSORS:
+            return config.replace(de_share=LARGE_DE_SHARE)
+        if sensors <= MID_SENSORS:
+            return config.replace(de_share=MID_DE_SHARE)
+        return config
 
     def reset(self, problem: Any, config: PlanConfig) -> None:
         """Read the problem: `large_rounds(problem)`."""
