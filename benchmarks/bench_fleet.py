@@ -18,7 +18,7 @@ with a one-sided Wilcoxon signed-rank test (scipy) of ours < peer per map.
 
     nice python benchmarks/bench_fleet.py --maps L01,L04,L07,L02 --seeds 0-4 \\
         --out runs/fleet.jsonl --dirs runs/fleet-dirs
-    python benchmarks/bench_fleet.py --summary docs/sorties/bench-25min.jsonl.gz
+    python benchmarks/bench_fleet.py --summary docs/sorties-runs/bench-25min.jsonl.gz
 
 Cost: per run the single flight's pipeline (seconds to a minute on 80-160 sensors), the sortie
 planner's D + rounds x S pipeline runs on a sortie's sensors, and the LPs across sorties.

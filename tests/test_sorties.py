@@ -366,3 +366,24 @@ def test_a_fleet_without_battery_flies_one_sortie_a_vehicle() -> None:
     assert all(len(v) == 1 for v in plan.vehicles) and plan.swaps == 0
     q = collected_by_sortie(plan, problem.model).sum(axis=0)
     assert np.all(q >= problem.model.required * (1 - 1e-9))
+
+
+def test_the_fleet_tables_are_what_bench_fleet_summary_prints() -> None:
+    """docs/sorties.md's measured tables: every row `bench_fleet.py --summary` prints for each
+    stored run (docs/sorties-runs/bench-25min*.jsonl.gz) is in the page, and each such file is
+    named there."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("bench_fleet",
+                                                  ROOT / "benchmarks" / "bench_fleet.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    doc = (ROOT / "docs" / "sorties.md").read_text(encoding="utf-8")
+    files = sorted((ROOT / "docs" / "sorties-runs").glob("bench-25min*.jsonl.gz"))
+    assert len(files) >= 5
+    for path in files:
+        assert f"docs/sorties-runs/{path.name}" in doc, path.name
+        rows = [line for line in bench.summary(path).splitlines() if line.startswith("| L")]
+        assert rows, path.name
+        for row in rows:
+            assert row in doc, (path.name, row)
