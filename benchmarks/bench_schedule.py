@@ -112,7 +112,7 @@ def run_case(case: tuple[str, Any, int, int, list[str], list[float] | None, str]
     feats = case_features(problem, base) if base.ev.has_best and not splits else {}
     records = []
     for tpl in templates:
-        # a grid sweeps the default's share (its own rule beyond 160 sensors aside); a learned
+        # a grid sweeps the default's share (its own rules by sensor count aside); a learned
         # split (lamde-s) runs the share it picks
         sched = make_scheduler(tpl)  # built (a learned one's tables read) once per template
         own = configured(sched, problem, cfg)  # the config the scheduler itself would run
@@ -163,8 +163,8 @@ def run_grid(maps: list[tuple[str, Any]], seeds: list[int], budget: int,
 
     With `splits` (DE shares) the prefix stops before the DE instead, and each template
     runs the rest once per split (`PipelineRun.fork(config=)`: the same plan as a whole run
-    with that `de_share`; the default's own share beyond 160 sensors is one of the grid's
-    points, not a rule here), except a learned split (lamde-s with its split table), which
+    with that `de_share`; the default's own shares by sensor count are points of the grid,
+    not a rule here), except a learned split (lamde-s with its split table), which
     runs once with the share it picks. Every record holds its `de_share`, the
     whole plan's CPU seconds (`cpu_seconds`: the prefix's and the fork's, process time) and
     the map's features (`map_features`: the split table's inputs).

@@ -364,6 +364,16 @@ def test_the_default_gives_the_de_a_smaller_share_beyond_160_sensors() -> None:
     l01 = load_map(large / "L01.json")  # 80 sensors: up to MID_SENSORS
     assert len(l01.sensors) <= MID_SENSORS < LARGE_SENSORS
     assert configured("default", Problem(l01), cfg).de_share == MID_DE_SHARE
+    # the bounds: L02's sensors cut to 120 and 121, and one more sensor (161)
+    src = json.loads((large / "L02.json").read_text())
+    extra = {"id": "S999", "x": src["sensors"][0]["x"] + 50.0, "y": src["sensors"][0]["y"]}
+    for sensors, share in ((src["sensors"][:MID_SENSORS], MID_DE_SHARE),
+                           (src["sensors"][:MID_SENSORS + 1], DE_SHARE),
+                           (src["sensors"] + [extra], LARGE_DE_SHARE)):
+        doc = {**src, "sensors": sensors}
+        doc.pop("witness")
+        got = configured("default", Problem(load_map(doc)), cfg).de_share
+        assert got == share, len(sensors)
     for kept in (cfg.replace(de_share=0.5), cfg.replace(descent=False)):
         assert configured("default", p05, kept) is kept
     assert configured("default", Problem(l05, variable_length=False), cfg) is cfg

@@ -205,9 +205,10 @@ def _stage_table(plan: Any) -> list[str]:
 
 def _run_settings(config: dict[str, Any]) -> str:
     """The summary's words for a plan's scheduler and budget split, from its recorded
-    `config`: ", scheduler lamde-s -> default, DE share 0.4", ", DE share 0.4" (a split other
-    than the default `de_share`: the default's own beyond 160 sensors, a learned one's, a
-    caller's) or "" (the default scheduler at the default split)."""
+    `config`: ", scheduler lamde-s -> default, DE share 0.4", ", DE share 0" (a split other
+    than the default `de_share`: the default's own beyond 160 sensors or up to 120 with the
+    large rounds, a learned one's, a caller's) or "" (the default scheduler at the default
+    split)."""
     sched = config.get("scheduler")
     choice = config.get("scheduler_choice")
     share = config.get("de_share")

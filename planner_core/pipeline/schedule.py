@@ -245,7 +245,7 @@ class DefaultScheduler:
         structural search drew its moves one at a time, 0 in place of 0.4 lowered it by
         0.13-1.26 % more (L03, L05, L06, L08 x seeds 0-4, 5 of 5 lower on L05, L06, L08) for
         1.3-1.6x the CPU, which the maps beyond 160 sensors can afford (issue 31: 20x T16's
-        time; L06 18x). Up to 160 sensors the target is 5x: L02 (160 sensors) takes 4.2x at
+        time; L06 18.8x). Up to 160 sensors the target is 5x: L02 (160 sensors) takes 4.2x at
         0.6 and keeps it; on maps of at most `MID_SENSORS` sensors `MID_DE_SHARE` (0.2)
         lowered f by 0.15 (L01), 0.37 (L04) and 0.48 % (L07) at seeds 0-9 for 1.7-2.1x the
         CPU (2.3-3.8x T16). docs/scaling.md, "One DE generation beyond 160 sensors" and "Up
@@ -382,7 +382,8 @@ def configured(spec: str | Scheduler | None, problem: Any, config: PlanConfig) -
     `configure(problem, config)` returns (a `PlanConfig`; LAMDE-S's DE share, chosen from the
     map before any stage runs), or for a scheduler without one (a static schedule,
     lamde-s-ppo) the default's (`DefaultScheduler.configure`: the DE's share beyond
-    `LARGE_SENSORS` sensors), so that only a scheduler that chooses the split changes it.
+    `LARGE_SENSORS` sensors and up to `MID_SENSORS`), so that only a scheduler that chooses
+    the split changes it.
 
     Raises:
         ValueError: as `make_scheduler`; or `configure` returned no `PlanConfig`.

@@ -411,7 +411,8 @@ class Improve(_Base):
 
     def configure(self, problem: Any, config: PlanConfig) -> PlanConfig:
         """The run's config as its scheduler wants it (`schedule.configured`; the default
-        scheduler's `DefaultScheduler.configure`: the DE's share beyond 160 sensors)."""
+        scheduler's `DefaultScheduler.configure`: the DE's share beyond 160 sensors and up to
+        120)."""
         from planner_core.pipeline.schedule import configured
 
         return configured(self.scheduler, problem, config)  # None: the default's
