@@ -669,6 +669,25 @@ def test_connect_equals_its_reference(name: str, problem: Problem, pts: np.ndarr
         assert np.array_equal(seeder.connect(batch), seeder.connect_reference(batch)), name
 
 
+def test_connect_keeps_at_most_its_bound_and_the_same_links(monkeypatch) -> None:
+    """`Seeder.connect`'s table of points starts afresh once it holds more than
+    `CONNECT_POINTS`, so it never holds more than that plus one call's points, and the links
+    stay those computed afresh."""
+    from planner_core.model import seeding
+
+    monkeypatch.setattr(seeding, "CONNECT_POINTS", 5)
+    name, problem, pts = next(c for c in CASES if len(c[2]) >= 30 and c[1].seeder.graph.n)
+    seeder = problem.seeder
+    seeder.__dict__.pop("_links", None)
+    held = []
+    for k in range(0, len(pts), 3):
+        batch = pts[k:k + 3]
+        assert np.array_equal(seeder.connect(batch), seeder.connect_reference(batch)), name
+        held.append(len(seeder.__dict__["_links"]))
+        assert held[-1] <= 5 + len(batch), name
+    assert any(b < a for a, b in zip(held, held[1:], strict=False)), held  # started afresh
+
+
 def test_connect_equals_its_reference_on_a_large_map() -> None:
     from planner_core.model.mapio import load_map
 

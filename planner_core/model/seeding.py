@@ -60,6 +60,10 @@ _OVER_BANDWIDTH_NODE = 1e7  # routing: metres charged to enter a graph corner br
 #: it fuller starts it afresh, so it holds at most this many plus one path's legs; ~400 bytes
 #: a leg)
 ROUTE_LEGS = 100_000
+#: points whose graph links `Seeder.connect` keeps (the same kind of bound: a call that finds
+#: the table fuller starts it afresh; a point keeps the corners it sees, ~50-130 on the large
+#: maps, ~1 kB; a default L06 plan meets ~4,000 points)
+CONNECT_POINTS = 50_000
 _BANDWIDTH_USE = 0.98  # points keep their summed rate below this share of the bandwidth
 _SLIDE_RINGS = (60.0, 150.0, 300.0, 500.0)  # candidate offsets (m) around a centre
 _SLIDE_DIRS = 8
@@ -499,7 +503,8 @@ class Seeder:
         tangentially at the node (inf elsewhere).
 
         A point's row depends on that point alone, so each is kept (the nodes it sees and
-        their distances, by the point's coordinates) and a point met again, by the seeder's
+        their distances, by the point's coordinates; `CONNECT_POINTS` at most, plus one call's
+        points) and a point met again, by the seeder's
         routes or the constructive leg times (a third of L02's points), is not tested again
         against the ~1,000 corners it is tangent to: the new points of a call are tested in
         one `connect_reference` call. The same rows as `connect_reference` (tests)."""
@@ -508,6 +513,8 @@ class Seeder:
         if g.n == 0 or len(pts) == 0 or pts.dtype != np.float64 or pts.ndim != 2:
             return self.connect_reference(pts)
         links = self.__dict__.setdefault("_links", {})
+        if len(links) > CONNECT_POINTS:
+            links.clear()
         keys = [q.tobytes() for q in pts]
         new = [i for i, k in enumerate(keys) if k not in links]
         if new:
