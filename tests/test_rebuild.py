@@ -97,3 +97,26 @@ def test_the_candidate_sites_are_built_once(t05: Problem,
     rebuild(t05, x, t05.evaluate, trials=60, seed=1, rebuilder=rb)
     rebuild(t05, x, t05.evaluate, trials=60, seed=2, rebuilder=rb)
     assert built == [1]
+
+
+def test_the_snap_to_the_nearest_site_equals_the_reference(t05: Problem) -> None:
+    """`Rebuilder.nearest` (a k-d tree, then the exact squared distances near the nearest)
+    picks the reference's site, the first index of least squared distance over all sites:
+    on random points, on the sites themselves, and on exact ties (points halfway between
+    sites of an integer grid, where the first index must win)."""
+    from planner_core.search.rebuild import nearest_reference
+
+    rb = Rebuilder(t05)
+    sites = rb.sites
+    rng = np.random.default_rng(7)
+    pts = np.vstack([rng.uniform(sites.min(), sites.max(), (400, 2)), sites,
+                     0.5 * (sites[:-1] + sites[1:])])
+    assert np.array_equal(rb.nearest(pts), nearest_reference(sites, pts))
+
+    grid = Rebuilder(t05)
+    xs, ys = np.meshgrid(np.arange(6.0) * 100.0, np.arange(5.0) * 100.0)
+    grid._sites = np.column_stack([xs.ravel(), ys.ravel()])[::-1].copy()  # ties: order matters
+    ties = np.array([[50.0, 50.0], [150.0, 200.0], [250.0, 350.0], [0.0, 50.0], [500.0, 450.0]])
+    far = np.array([[-1e4, -1e4], [2e4, 7e3]])
+    q = np.vstack([ties, far, grid._sites])
+    assert np.array_equal(grid.nearest(q), nearest_reference(grid._sites, q))

@@ -234,8 +234,6 @@ def _trial_steps(problem: Problem, pts: np.ndarray, rng: np.random.Generator, tr
     """`trial_points` against `trial_points_reference` from points pts (I, 2) for random
     gradients and steps of 0.5-3000 m (some points held, some sliding, some put back): the
     same points to the bit, verdict and rates; returns how often each verdict came."""
-    from planner_core.search.trial import TRIAL_OK, trial_points, trial_points_reference
-
     m = problem.model
     box = np.array([m.width, m.height])
     seen = {0: 0, 1: 0, 2: 0}
@@ -244,15 +242,24 @@ def _trial_steps(problem: Problem, pts: np.ndarray, rng: np.random.Generator, tr
         g = rng.normal(size=P.shape) * (rng.random((len(P), 1)) < 0.8)
         scale = float(np.abs(g).max()) or 1.0
         step = float(rng.choice([0.5, 20.0, 200.0, 3000.0]))
-        fast = trial_points(problem, P, g, scale, step, box)
-        slow = trial_points_reference(problem, P, g, scale, step, box)
-        assert fast[2] == slow[2]
-        assert np.array_equal(fast[0].view(np.int64), slow[0].view(np.int64))
-        if fast[2] == TRIAL_OK:
-            want = slow[1] if slow[1] is not None else m.rates(slow[0])
-            assert np.array_equal(fast[1], want)
-        seen[fast[2]] += 1
+        seen[_same_trial(problem, P, g, scale, step, box)] += 1
     return seen
+
+
+def _same_trial(problem: Problem, P: np.ndarray, g: np.ndarray, scale: float, step: float,
+                box: np.ndarray) -> int:
+    """`trial_points` against `trial_points_reference` for one step: the same verdict and
+    points to the bit, and for a plan (TRIAL_OK) the same link rates; returns the verdict."""
+    from planner_core.search.trial import TRIAL_OK, trial_points, trial_points_reference
+
+    fast = trial_points(problem, P, g, scale, step, box)
+    slow = trial_points_reference(problem, P, g, scale, step, box)
+    assert fast[2] == slow[2]
+    assert np.array_equal(fast[0].view(np.int64), slow[0].view(np.int64))
+    if fast[2] == TRIAL_OK:
+        want = slow[1] if slow[1] is not None else problem.model.rates(slow[0])
+        assert np.array_equal(fast[1], want)
+    return int(fast[2])
 
 
 @pytest.mark.parametrize("name,problem,pts", CASES, ids=[c[0] for c in CASES])
@@ -288,6 +295,33 @@ def test_trial_points_equal_their_reference_on_a_large_map() -> None:
 
     for P in (pts, pts[:7], near):
         assert np.array_equal(held_points(p, P), held_points_reference(p, P))
+
+
+def test_trial_points_slide_and_put_back_to_a_plan_as_the_reference_does() -> None:
+    """From a feasible plan of L02 (its stored best-known, whose detour corners touch the
+    obstacles), steps that some points cannot take: the trial slides or puts those back and
+    the rest is a plan (TRIAL_OK); its points and link rates equal the reference's (to the
+    bit). The random steps above, from jittered points, end held on this map."""
+    import json
+
+    from planner_core.model.mapio import load_map
+    from planner_core.search.trial import TRIAL_OK, held_points_reference
+
+    p = Problem(load_map(SUITE.parent / "large" / "L02.json").planning_map())
+    bk = json.loads((SUITE.parent / "large_best_known.json").read_text())["tasks"]["L02"]
+    P = np.asarray(bk["hover_points"], dtype=float)
+    assert not len(held_points_reference(p, P))
+    m = p.model
+    box = np.array([m.width, m.height])
+    rng = np.random.default_rng(5)
+    slid = 0
+    for _ in range(30):
+        g = rng.normal(size=P.shape)
+        scale = float(np.abs(g).max())
+        step = float(rng.choice([20.0, 80.0, 300.0]))
+        if _same_trial(p, P, g, scale, step, box) == TRIAL_OK:
+            slid += len(held_points_reference(p, np.clip(P + (-g / scale * step), 0.0, box))) > 0
+    assert slid > 0
 
 
 def test_clip1_is_numpys_clip() -> None:

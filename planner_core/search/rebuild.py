@@ -15,11 +15,11 @@ evaluations, where 4,000 evaluations of rebuilds reached 1907.0 and 1924.1 (docs
 "Rebuilding windows").
 
 Cost per move: the data each point collects (the points' rates, I x J), k-means over the
-window's sensors (O(k x J_w)), the snap (k x candidate sites),
-the open path over the k new sites (O(k^2)), then
-`_move`'s LP (I x J) and up to `move_trials` evaluations. `Rebuilder` builds the candidate
-sites once per problem: O(J^2) sensor-pair midpoints filtered by reach, their rates
-O(sites x J) and their obstacle tests O(sites x obstacles).
+window's sensors (O(k x J_w)), the snap (O(k log n) over the n candidate sites,
+`Rebuilder.nearest`), the open path over the k new sites (O(k^2)), then `_move`'s LP
+(I x J) and up to `move_trials` evaluations. `Rebuilder` builds the candidate sites once
+per problem: O(J^2) sensor-pair midpoints filtered by reach, their rates O(sites x J) and
+their obstacle tests O(sites x obstacles).
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ import numpy as np
 
 from planner_core.search.descent import Descent, Evaluate
 
-__all__ = ["OWNS", "REBUILD_ATTEMPTS", "WINDOWS", "Rebuilder", "rebuild"]
+__all__ = ["OWNS", "REBUILD_ATTEMPTS", "WINDOWS", "Rebuilder", "nearest_reference", "rebuild"]
 
 #: window sizes (consecutive hover points removed), drawn uniformly
 WINDOWS = (2, 3, 4, 5)
@@ -52,6 +52,7 @@ class Rebuilder:
     def __init__(self, problem: Any) -> None:
         self.problem = problem
         self._sites: np.ndarray | None = None
+        self._tree: Any = None
 
     @property
     def sites(self) -> np.ndarray:
@@ -61,6 +62,34 @@ class Rebuilder:
 
             self._sites = candidate_sites(self.problem)
         return self._sites
+
+    def nearest(self, pts: np.ndarray) -> np.ndarray:
+        """Index (k,) of the candidate site nearest to each point of pts (k, 2) m: the first
+        index of least squared distance, as `nearest_reference`'s argmin over every site
+        (tests hold them equal). A k-d tree of the sites (scipy's cKDTree, built on first use)
+        finds each point's nearest distance; the exact squared distances are then taken, as
+        the reference takes them, over the sites within a hair of it only, and the first of
+        least value wins. Cost: O(k log n) instead of the reference's O(k n) (n sites; on L06
+        9,629 sites made the snap 0.8 of a draw's 0.95 ms)."""
+        from scipy.spatial import cKDTree
+
+        sites = self.sites
+        pts = np.asarray(pts, dtype=float).reshape(-1, 2)
+        if self._tree is None:
+            self._tree = cKDTree(sites)
+        near, _ = self._tree.query(pts)
+        out = np.empty(len(pts), dtype=np.int64)
+        for q, (p, r) in enumerate(zip(pts, near, strict=True)):
+            # every site the exact formula could rank first: within the tree's distance plus
+            # a margin far above the rounding of either computation
+            idx = np.sort(np.asarray(self._tree.query_ball_point(p, r * (1 + 1e-9) + 1e-6),
+                                     dtype=np.int64))
+            if not len(idx):  # not expected (r itself is within the ball): the reference
+                out[q] = nearest_reference(sites, p[None, :])[0]
+                continue
+            d2 = ((p[None, :] - sites[idx]) ** 2).sum(axis=-1)
+            out[q] = idx[int(d2.argmin())]
+        return out
 
     def draw(self, P: np.ndarray, T: np.ndarray, rng: np.random.Generator) -> np.ndarray | None:
         """One rebuilt point set (I', 2) m in visiting order from hover points P (I, 2) m with
@@ -92,9 +121,7 @@ class Rebuilder:
             return None
         S = np.asarray(problem.sensors, dtype=float)[owned]
         centres = _kmeans(S, k, rng)
-        sites = self.sites
-        d2 = ((centres[:, None, :] - sites[None, :, :]) ** 2).sum(axis=-1)
-        new = np.unique(sites[d2.argmin(axis=1)], axis=0)
+        new = np.unique(self.sites[self.nearest(centres)], axis=0)
         if n - w + len(new) > problem.hover_limit:
             return None
         # the new sites fill the window's gap, in the order of the shortest open path from the
@@ -105,6 +132,14 @@ class Rebuilder:
         W = problem.model.flight_time(np.hypot(*(nodes[:, None, :] - nodes[None, :, :]).T))
         order = open_path(np.ascontiguousarray(W))[1:-1] - 1
         return np.vstack([P[:i], new[order], P[i + w:]])
+
+
+def nearest_reference(sites: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """Index (k,) of the site of sites (n, 2) nearest to each point of pts (k, 2): the first
+    index of least squared distance over every site (`Rebuilder.nearest`'s reference). O(k n).
+    """
+    d2 = ((pts[:, None, :] - sites[None, :, :]) ** 2).sum(axis=-1)
+    return d2.argmin(axis=1)
 
 
 def rebuild(
