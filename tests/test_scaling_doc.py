@@ -212,19 +212,21 @@ PER_POINT_ROW = re.compile(r"^\| (L\d\d) \| (\d+) \| (\d+)/(\d+) \| ([\d.]+) \| 
                            r"(\d+) \| ([\d.e-]+) \|$", re.M)  # fmt: skip
 
 
-def _table_against_before(section: str, records: str, baseline: str, maps: int) -> None:
+def _table_against_before(section: str, records: str, baseline: str | dict[str, str],
+                          maps: int) -> None:
     """A `PER_POINT_ROW` table of docs/scaling.md's `section` (its first `maps` rows): every
-    figure from the stored runs `records`, paired run by run with the runs `baseline` (both
-    file names under docs/scaling/)."""
+    figure from the stored runs `records`, paired run by run with the runs `baseline` (file
+    names under docs/scaling/; a dict: each map's own)."""
     from scipy.stats import wilcoxon
 
     text = _doc()[_doc().index(section):]
     rows = PER_POINT_ROW.findall(text)[:maps]
     assert len(rows) == maps
     new = read_jsonl(ROOT / "docs" / "scaling" / records)
-    old = read_jsonl(ROOT / "docs" / "scaling" / baseline)
     best = _best_known()["tasks"]
     for task, _, feas, n, mean, gap, gap0, sd, cpu, cpu0, lower, higher, p in rows:
+        old = read_jsonl(ROOT / "docs" / "scaling" / (
+            baseline if isinstance(baseline, str) else baseline[task]))
         rs = sorted((r for r in new if r["task"] == task), key=lambda r: r["run"])
         before = {r["run"]: r for r in old if r["task"] == task}
         fs, f0 = [r["f"] for r in rs], [before[r["run"]]["f"] for r in rs]
@@ -287,3 +289,14 @@ def test_the_share_02_table_is_what_its_runs_give_against_the_share_06() -> None
     _configured_shares("### Up to 120 sensors: 0.2", 3)
     _table_against_before("### Up to 120 sensors: 0.2",
                           "large-suite-25-share02.jsonl.gz", "large-suite-25-perpoint.jsonl.gz", 3)
+
+
+def test_the_windows_table_is_what_its_runs_give_against_the_runs_before() -> None:
+    """docs/scaling.md, 'Windows planned again': L01, L02 and L03 (the uniform layouts, where
+    the default plans windows), paired run by run with each map's runs of the default before
+    (L01 at the DE's share 0.2, L02 per-point, L03 at the share 0); the layout rule as the
+    section states it."""
+    _table_against_before("## Windows planned again", "large-suite-25-windows.jsonl.gz",
+                          {"L01": "large-suite-25-share02.jsonl.gz",
+                           "L02": "large-suite-25-perpoint.jsonl.gz",
+                           "L03": "large-suite-25-share0.jsonl.gz"}, 3)

@@ -52,6 +52,7 @@ import numpy as np
 from planner_core.fleet.lp import collected_by_sortie, fleet_hover_lp
 from planner_core.fleet.model import FleetPlan, FleetSettings, Sortie
 from planner_core.fleet.split import Links, split_tour, split_vehicles
+from planner_core.model.mapio import sub_map_dict
 
 __all__ = ["SORTIE_BUDGET", "ROUNDS", "TRANSFER_NEIGHBOURS", "FleetResult", "plan_fleet",
            "route_first", "sortie_map_dict"]  # fmt: skip
@@ -97,45 +98,8 @@ def _seed(seed: int, *tags: int) -> int:
     return int(np.random.SeedSequence([int(seed), 33, *tags]).generate_state(1)[0] >> 1)
 
 
-def sortie_map_dict(
-    m: Any,
-    start: np.ndarray,
-    end: np.ndarray,
-    required: np.ndarray,
-    *,
-    keep: np.ndarray | None = None,
-    name: str | None = None,
-) -> dict[str, Any]:
-    """The map file of one sortie: map m with its start and end at the sortie's depots and
-    each sensor's required data set to the sortie's share (user units, before the data
-    margin; 0: the sortie need not serve it), its witness and fleet left out.
-
-    Args:
-        m: the loaded map; start, end (2,) depot positions, m.
-        required: (J,) Mbit per sensor.
-        keep: sensors (J,) bool to keep in the map (default all: what storage and the sim need
-            for C3 over every sensor in range).
-        name: the map's name (default m's).
-
-    Returns:
-        A map dict (`planner_core.model.mapio.load_map` reads it).
-    """
-    d = m.to_dict()
-    d.pop("witness", None)
-    d.pop("fleet", None)
-    d["start"] = [float(start[0]), float(start[1])]
-    d["end"] = [float(end[0]), float(end[1])]
-    sensors = []
-    for j, s in enumerate(d["sensors"]):
-        if keep is not None and not keep[j]:
-            continue
-        s = dict(s)
-        s["required_data"] = float(max(required[j], 0.0))
-        sensors.append(s)
-    d["sensors"] = sensors
-    if name is not None:
-        d["name"] = name
-    return d
+#: the map file of one sortie (`planner_core.model.mapio.sub_map_dict`, its one home)
+sortie_map_dict = sub_map_dict
 
 
 class _Planner:

@@ -135,14 +135,11 @@ def map_features(problem: Any) -> dict[str, float]:
         uniformly: about 1 for a uniform layout, below for clustered fields, above for a
         regular one; Clark & Evans, Ecology 35(4), 1954; 1 for fewer than 2 sensors).
     """
-    from scipy.spatial import cKDTree
+    from planner_core.model.layout import clark_evans
 
     xy = np.asarray(problem.sensors, dtype=float).reshape(-1, 2)
     area = problem.map.width * problem.map.height
-    ce = 1.0
-    if len(xy) >= 2 and area > 0:
-        d, _ = cKDTree(xy).query(xy, k=2)
-        ce = float(d[:, 1].mean() / (0.5 * np.sqrt(area / len(xy))))
+    ce = clark_evans(xy, area)
     return {
         "sensors": float(len(xy)),
         "obstacles": float(problem.map.spec.obstacles.count),

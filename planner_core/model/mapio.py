@@ -34,6 +34,7 @@ __all__ = [
     "load_map",
     "map_json_schema",
     "default_max_hover_points",
+    "sub_map_dict",
 ]
 
 _STRICT = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
@@ -683,6 +684,75 @@ class Map:
 
 #: the name of the one depot a map without `fleet.depots` has, at its start
 DEFAULT_DEPOT = "home"
+
+
+def sub_map_dict(
+    m: Any,
+    start: np.ndarray,
+    end: np.ndarray,
+    required: np.ndarray,
+    *,
+    keep: np.ndarray | None = None,
+    name: str | None = None,
+    box: tuple[np.ndarray, np.ndarray] | None = None,
+) -> dict[str, Any]:
+    """The map file of a part of map m's work: its start and end moved to `start` and `end`
+    and each sensor's required data set to `required` (user units, before the data margin; 0:
+    the part need not serve it), its witness and fleet left out. A fleet's sortie
+    (`planner_core.fleet`, there `sortie_map_dict`) and a window of a plan
+    (`planner_core.pipeline.windows`) are planned on such maps.
+
+    Args:
+        m: the loaded map; start, end (2,) m.
+        required: (J,) Mbit per sensor.
+        keep: sensors (J,) bool to keep in the map (default all: what storage and the sim need
+            for C3 over every sensor in range).
+        name: the map's name (default m's).
+        box: (lo (2,), hi (2,)) m: only the obstacles whose bounding box meets this box are
+            kept (a circle's by its radius, a rectangle's by a circle of its diagonal about
+            its centre, a polygon's by its vertices); None: every obstacle.
+
+    Returns:
+        A map dict (`load_map` reads it). Cost: O(J + obstacles).
+    """
+    d = m.to_dict()
+    d.pop("witness", None)
+    d.pop("fleet", None)
+    d["start"] = [float(start[0]), float(start[1])]
+    d["end"] = [float(end[0]), float(end[1])]
+    sensors = []
+    for j, s in enumerate(d["sensors"]):
+        if keep is not None and not keep[j]:
+            continue
+        s = dict(s)
+        s["required_data"] = float(max(required[j], 0.0))
+        sensors.append(s)
+    d["sensors"] = sensors
+    if box is not None:
+        lo, hi = (np.asarray(b, dtype=float).reshape(2) for b in box)
+
+        def meets(x0: float, y0: float, x1: float, y1: float) -> bool:
+            return bool(x1 >= lo[0] and x0 <= hi[0] and y1 >= lo[1] and y0 <= hi[1])
+
+        def ring(o: dict[str, Any]) -> bool:
+            v = np.asarray(o["vertices"], dtype=float).reshape(-1, 2)
+            return meets(*v.min(axis=0), *v.max(axis=0))
+
+        obs = d["obstacles"]
+        obs["circles"] = [c for c in obs.get("circles", [])
+                          if meets(c["x"] - c["radius"], c["y"] - c["radius"],
+                                   c["x"] + c["radius"], c["y"] + c["radius"])]
+        obs["rectangles"] = [r for r in obs.get("rectangles", [])
+                             if meets(r["x"] - math.hypot(r["length"], r["width"]),
+                                      r["y"] - math.hypot(r["length"], r["width"]),
+                                      r["x"] + math.hypot(r["length"], r["width"]),
+                                      r["y"] + math.hypot(r["length"], r["width"]))]
+        for key in ("no_fly_zones", "polygons"):
+            if key in obs:
+                obs[key] = [z for z in obs[key] if ring(z)]
+    if name is not None:
+        d["name"] = name
+    return d
 
 
 def _drop_unset_energy_fields(spec: MapFile, d: dict[str, Any]) -> None:

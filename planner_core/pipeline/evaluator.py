@@ -222,6 +222,21 @@ class Evaluator:
             self.progress(Progress(self._stage, self.count, self.budget, bf, bp, self.elapsed))
         return f, phi
 
+    def charge(self, n: int) -> None:
+        """Count n evaluations made on the run's behalf of another problem: a part of the map
+        planned by its own pipeline run (`planner_core.pipeline.windows`), whose plans are not
+        this problem's; nothing else changes (incumbents, trace).
+
+        Raises:
+            BudgetExceeded: n exceeds `remaining`.
+        """
+        n = int(n)
+        if n > self.remaining:
+            where = f" in stage {self._stage!r}" if self._stage else ""
+            raise BudgetExceeded(f"{n} evaluations charged{where} with {self.remaining} of "
+                                 f"{self.budget} left")
+        self.count += max(n, 0)
+
     def _update(self, X: np.ndarray, f: np.ndarray, phi: np.ndarray) -> None:
         if len(f) == 1:  # the descents' one-row calls: the same rules on scalars
             self._update_one(X[0], float(f[0]), float(phi[0]))

@@ -21,7 +21,10 @@ action spent and gained) and names the next action. The quantum is one finish's 
 * `de-block`: a block of DE generations (one quantum, at least a population) from the last
   block's population, else the DE's final one, else the pool, with the memetic repair (as
   `Repair`);
-* `stop`: end the stage (what is left flows to `repair` when it is a population or more).
+* `stop`: end the stage (what is left flows to `repair` when it is a population or more);
+* `windows` (outside `ACTIONS`, the action space the shipped learned schedulers were trained
+  on): one window of the incumbent's hover points planned again as a map of its own
+  (`planner_core.pipeline.windows`), the next window on the next call.
 
 The `DefaultScheduler`, up to the paper's sizes (I_max <= `PAPER_POINTS`), alternates
 `kicks-*` (spreads cycling through `SPREADS`) with `restart` and stops after `IDLE_ROUNDS`
@@ -29,9 +32,10 @@ actions in a row that spent nothing: the improving rounds before the seam, the s
 evaluations and random streams (each action's stream is its index in the stage), so the same
 plan to the bit (tests/test_schedule.py against digests recorded before the
 refactor; tests/test_golden.py). Larger problems alternate kicks with `rebuild`
-(`LARGE_CYCLE`), and beyond `LARGE_SENSORS` sensors it also gives the DE `LARGE_DE_SHARE` of
-the budget before the run starts, up to `MID_SENSORS` `MID_DE_SHARE`
-(`DefaultScheduler.configure`). A `StaticScheduler` cycles
+(`LARGE_CYCLE`) until the cycle stalls on a uniform layout (`WINDOWS_STALL`,
+`WINDOWS_LAYOUT`), then plan windows (`windows`), and beyond `LARGE_SENSORS` sensors it also
+gives the DE `LARGE_DE_SHARE` of the budget before the run starts, up to `MID_SENSORS`
+`MID_DE_SHARE` (`DefaultScheduler.configure`). A `StaticScheduler` cycles
 a fixed sequence (`SCHEDULES`, the registry `lamde-mission plan --scheduler NAME` reads).
 
 Cost: that of the actions; a kick or structural trial one LP (I x J) and the C3/C5 checks
@@ -74,6 +78,10 @@ __all__ = [
     "Scheduler",
     "StaticScheduler",
     "StepRecord",
+    "STALL_ACTIONS",
+    "WINDOWS_LAYOUT",
+    "WINDOWS_STALL",
+    "WINDOW_TRIES",
     "make_scheduler",
     "pool_structures",
 ]
@@ -102,6 +110,21 @@ LARGE_DE_SHARE = 0.0
 MID_SENSORS = 120
 #: the DE's share on maps of at most `MID_SENSORS` sensors with the large rounds
 MID_DE_SHARE = 0.2
+
+#: on problems with the large rounds the default scheduler turns to `windows` for the rest of
+#: the stage once its last `STALL_ACTIONS` actions of `LARGE_CYCLE` lowered f by less than this
+#: share per 1,000 evaluations (0.25 %: about what a sweep of windows gained on L02's final
+#: plan; docs/scaling.md, "Windows planned again")
+WINDOWS_STALL = 0.0025
+#: the actions `WINDOWS_STALL` looks back over (a kick, a rebuild, a kick)
+STALL_ACTIONS = 3
+#: windows only on maps whose sensors' Clark-Evans ratio (`planner_core.model.layout`) is at
+#: least this: uniform layouts (L01-L03 0.97-1.13); on clustered fields and corridors (L04-L08
+#: 0.12-0.20) windows were worse than the rounds they replaced (docs/scaling.md, "Windows
+#: planned again")
+WINDOWS_LAYOUT = 0.5
+#: windows tried in a row by one `windows` action while none spends an evaluation
+WINDOW_TRIES = 8
 
 KICKS = {f"kicks-{int(s)}": s for s in SPREADS}
 #: every macro-action's name, in a fixed order (the env's discrete action index)
@@ -218,8 +241,11 @@ class DefaultScheduler:
     sizes (I_max <= `PAPER_POINTS`): `kicks-<s>` on even steps (s cycling through `SPREADS`),
     `restart` on odd ones (the rounds before the seam, to the bit). Larger problems:
     `LARGE_CYCLE`, kicks alternating with `rebuild` (destroy-and-repair windows,
-    `planner_core.search.rebuild`), no restarts. Either way it stops after `IDLE_ROUNDS` idle
-    actions.
+    `planner_core.search.rebuild`), no restarts, until its last `STALL_ACTIONS` actions lowered
+    f by less than `WINDOWS_STALL` per 1,000 evaluations on a uniform layout
+    (`WINDOWS_LAYOUT`); the rest of the stage then goes to `windows` (stretches of ~8 hover
+    points planned again by the pipeline, `planner_core.pipeline.windows`). Either way it
+    stops after `IDLE_ROUNDS` idle actions.
 
     Why by size (docs/search.md, "Rebuilding windows"): on the 8 large maps x 3 seeds,
     `LARGE_CYCLE` ends 1.17 % lower than the paper-size rounds (20 of 24 runs lower, 3
@@ -229,6 +255,8 @@ class DefaultScheduler:
 
     name = "default"
     large = False
+    windows = False
+    uniform = False
 
     def configure(self, problem: Any, config: PlanConfig) -> PlanConfig:
         """The run's config: on a map whose rounds are `LARGE_CYCLE` (`large_rounds`), the
@@ -271,7 +299,12 @@ class DefaultScheduler:
 
     def reset(self, problem: Any, config: PlanConfig) -> None:
         """Read the problem: `large_rounds(problem)`."""
+        from planner_core.model.layout import clark_evans
+
         self.large = large_rounds(problem)
+        self.windows = False
+        self.uniform = self.large and clark_evans(
+            problem.model.sensors, problem.map.width * problem.map.height) >= WINDOWS_LAYOUT
 
     def choose(self, observation: Observation) -> str:
         """The next action (see the class docstring)."""
@@ -279,10 +312,24 @@ class DefaultScheduler:
             return "stop"
         k = observation.step
         if self.large:
-            return LARGE_CYCLE[k % len(LARGE_CYCLE)]
+            self.windows = self.windows or (self.uniform and _stalled(observation.history))
+            return "windows" if self.windows else LARGE_CYCLE[k % len(LARGE_CYCLE)]
         if k % 2:
             return "restart"
         return f"kicks-{int(SPREADS[(k // 2) % len(SPREADS)])}"
+
+
+def _stalled(history: Sequence[StepRecord]) -> bool:
+    """Whether the last `STALL_ACTIONS` actions (feasible before and after) lowered f by less
+    than `WINDOWS_STALL` of it per 1,000 evaluations they spent."""
+    last = history[-STALL_ACTIONS:]
+    if len(last) < STALL_ACTIONS or last[0].phi_before > 0 or last[-1].phi_after > 0:
+        return False
+    spent = sum(r.evaluations for r in last)
+    if spent <= 0:
+        return False
+    gain = (last[0].f_before - last[-1].f_after) / max(abs(last[-1].f_after), 1e-12)
+    return gain * 1000.0 / spent < WINDOWS_STALL
 
 
 class StaticScheduler:
@@ -426,6 +473,7 @@ class ImproveRun:
     _fresh: int = 0
     _de_state: Any = None
     _rebuilder: Any = None
+    _window: int = 0
 
     def __post_init__(self) -> None:
         # the finish ran its structural search on the incumbent
@@ -463,7 +511,8 @@ class ImproveRun:
         """
         run = {"restructure": self._restructure, "restart": self._restart,
                "restart-other": self._restart_other, "fresh": self._fresh_restart,
-               "de-block": self._de_block, "rebuild": self._rebuild}.get(action)
+               "de-block": self._de_block, "rebuild": self._rebuild,
+               "windows": self._windows}.get(action)
         if action in KICKS:
             run = functools.partial(self._kicks, KICKS[action])
         if run is None:
@@ -508,6 +557,18 @@ class ImproveRun:
             self._rebuilder = Rebuilder(self.state.problem)
         rebuild(self.state.problem, self.ev.best()[0], self.ev.evaluate, trials=trials,
                 seed=self.state.config.seed, stream=self.step + 1, rebuilder=self._rebuilder)
+
+    def _windows(self, trials: int) -> None:
+        from planner_core.pipeline.windows import replan_window
+
+        cfg, ev = self.state.config, self.ev
+        c0 = ev.count
+        for t in range(WINDOW_TRIES):  # windows with nothing to do spend nothing: the next
+            if ev.count != c0 or ev.expired:
+                break
+            seed = int(np.random.SeedSequence([cfg.seed, 47, self.step, t]).generate_state(1)[0])
+            self._window, _ = replan_window(self.state.problem, ev, index=self._window,
+                                            trials=trials, seed=seed >> 1)
 
     def _restructure(self, trials: int) -> None:
         self._structural()

@@ -1,0 +1,153 @@
+"""Window re-planning: a stretch of a large plan planned again as a map of its own, by the
+pipeline that is strong at the paper's sizes (POPMUSIC, Taillard & Voss, "POPMUSIC: Partial
+Optimization Metaheuristic under Special Intensification Conditions", Essays and Surveys in
+Metaheuristics, 2002: a large solution improved one part at a time, each part solved as a
+small problem).
+
+`replan_window` takes `width` consecutive hover points of the incumbent that hover (detour
+corners are left to the re-routing), and makes a sub-map (`planner_core.model.mapio.sub_map_dict`):
+start and end at the points before and after the window (the map's start or end at the plan's
+ends), each sensor's required data what the window must collect given what the other points
+collect now at their LP hover times (paper Sec. 3, simultaneous access: data at point i from
+sensor j is T_i R_ij), the sensors and obstacles within `MARGIN` of the window's points, ends
+and those sensors (the others' obstacles cannot be reached by a window's legs and its C3 is
+checked on the whole map afterwards), I_max `SUB_POINTS`. The sub-map is planned by the
+default pipeline with `sub_budget` evaluations (`SUB_CANDIDATES` constructive plans); its
+hover points replace the window's, and the plan is evaluated with its LP hover times and
+descended in a race against the incumbent (`planner_core.search.structure._move`: legs that
+cut an obstacle re-routed first), kept when Deb-better. The sub-run's evaluations are charged
+to the run's evaluator (`Evaluator.charge`), one for one.
+
+Why: the improving rounds move one point or rebuild 2-5 points at a time; on the large maps
+their plans stay 1-3 % above the long runs' best-known, while the pipeline on a map of ~20
+sensors is at its best-known within a fraction of a second. On L02's final plan (seed 2),
+eight windows of 8 points at 600 evaluations each took f from 4872.7 to 4816.8 (-1.15 %);
+docs/scaling.md, "Windows planned again".
+
+Cost per window: the sub-map's problem (its visibility graph over the window's obstacles),
+the sub-run (constructive plans over ~`width` x 3 sensors, LPs of ~`width` points), the whole
+plan's rates (I x J) and `_move`'s LP and race; independent of the sensors outside the window
+but for those O(I J) terms.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from planner_core.model.formulas import deb_better
+
+__all__ = ["MARGIN", "SUB_BUDGET", "SUB_CANDIDATES", "SUB_POINTS", "WIDTH", "replan_window",
+           "window_map"]
+
+#: hover points with hover time that one window replaces
+WIDTH = 8
+#: evaluations of one window's pipeline run (at most; the action's quantum less the race)
+SUB_BUDGET = 600
+#: constructive plans of a window's run (the default's 64 cost most of a 600-evaluation run)
+SUB_CANDIDATES = 24
+#: I_max of a window's map: at most the paper's sizes (its run takes the paper's rounds, so
+#: windows never nest)
+SUB_POINTS = 20
+#: metres around the window's points, ends and sensors within which the sub-map keeps the
+#: sensors (C3 with them) and the obstacles: beyond the radio reach (995 m on the large maps)
+MARGIN = 1200.0
+#: the race of the spliced plan: at most this many evaluations after its own
+RACE_TRIALS = 40
+
+
+def window_map(problem: Any, P: np.ndarray, T: np.ndarray, i: int, w: int
+               ) -> dict[str, Any] | None:
+    """The sub-map of the window P[i:i + w] of hover points P (n, 2) m with hover times T (n,)
+    s (module docstring), or None when the other points already collect every sensor's data.
+
+    Returns:
+        A map dict (`planner_core.model.mapio.load_map` reads it).
+    """
+    from planner_core.model.mapio import sub_map_dict
+
+    m = problem.model
+    n = len(P)
+    D = m.rates(P) * T[:, None]  # (n, J) Mbit collected at each point from each sensor
+    out = np.r_[0:i, i + w:n]
+    got = D[out].sum(axis=0)
+    req = np.maximum(m.required - got, 0.0)
+    req = np.where(req > 1e-6 * np.maximum(m.required, 1e-12), req, 0.0)
+    need = req > 0.0
+    if not need.any():
+        return None
+    a = P[i - 1] if i > 0 else np.asarray(problem.start, dtype=float)
+    e = P[i + w] if i + w < n else np.asarray(problem.end, dtype=float)
+    S = np.asarray(m.sensors, dtype=float)
+    pts = np.vstack([P[i:i + w], a, e, S[need]])
+    lo, hi = pts.min(axis=0) - MARGIN, pts.max(axis=0) + MARGIN
+    near = np.all((S >= lo) & (S <= hi), axis=1)
+    d = sub_map_dict(problem.map, a, e, req, keep=near | need, box=(lo, hi),
+                     name=f"{problem.map.name}-window-{i}")
+    d["uav"] = dict(d.get("uav") or {})
+    d["uav"]["max_hover_points"] = int(SUB_POINTS)
+    return d
+
+
+def replan_window(
+    problem: Any, ev: Any, *, index: int, trials: int, seed: int, width: int = WIDTH,
+) -> tuple[int, bool]:
+    """Plan the window of `width` hovering points starting at `index` (modulo their number)
+    of the run's incumbent again (module docstring), through the run's evaluator `ev`: the
+    sub-run's evaluations charged, the spliced plan evaluated and raced.
+
+    Args:
+        problem: the run's `Problem`; ev: its `Evaluator` (the incumbent is `ev.best()`).
+        index: the window's first point among the hovering points; trials: evaluations it
+            may spend (the sub-run gets trials - 1 - `RACE_TRIALS`, at most `SUB_BUDGET`);
+            seed: the sub-run's seed; width: hovering points in a window.
+
+    Returns:
+        (the next window's index, whether the incumbent improved). A window whose sensors
+        the other points already serve, a sub-map the map reader refuses, an infeasible
+        sub-plan or one past I_max spends only the sub-run (or nothing).
+    """
+    from planner_core.model.mapio import MapError, load_map
+    from planner_core.model.problem import Problem
+    from planner_core.pipeline import PlanConfig, run_pipeline
+    from planner_core.search.descent import hover_of
+    from planner_core.search.structure import _move
+
+    x, f0, phi0 = ev.best()
+    b = problem.breakdown(x)
+    P, T = hover_of(b)
+    keep = T > 0.0
+    P, T = P[keep], T[keep]
+    n = len(P)
+    sub_budget = min(SUB_BUDGET, int(trials) - 1 - RACE_TRIALS)
+    if phi0 > 0 or n < 2 or sub_budget < 100:
+        return index, False
+    w = min(int(width), n)
+    i = int(index) % n
+    i = min(i, n - w)
+    nxt = i + w if i + w < n else 0
+    d = window_map(problem, P, T, i, w)
+    if d is None:
+        return nxt, False
+    try:
+        sub = Problem(load_map(d), variable_length=problem.variable_length)
+    except (MapError, ValueError):
+        return nxt, False
+    res = run_pipeline(sub, PlanConfig(seed=int(seed), budget=sub_budget,
+                                       start_candidates=SUB_CANDIDATES))
+    ev.charge(res.evaluations)
+    sb = sub.breakdown(res.x)
+    if sb["phi"] > 0:
+        return nxt, False
+    Ps = np.asarray(sb["hover_points"], dtype=float).reshape(-1, 2)
+    Q = np.vstack([P[:i], Ps, P[i + w:]])
+    if not 0 < len(Q) <= problem.hover_limit:
+        return nxt, False
+    left = min(RACE_TRIALS + 1, ev.remaining)
+    if left < 1:
+        return nxt, False
+    r = _move(problem, Q, ev.evaluate, left, reroute=True, incumbent=float(f0))
+    if r is None or not deb_better(r[1], r[2], float(f0), float(phi0)):
+        return nxt, False
+    return (i + len(Ps)) % max(len(Ps) + n - w, 1), True

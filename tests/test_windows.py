@@ -1,0 +1,152 @@
+"""Window re-planning (planner_core.pipeline.windows): a stretch of a large plan planned again
+as a map of its own, its evaluations charged to the run's evaluator, raced against the
+incumbent; the sub-map it plans on; the default scheduler's switch to it."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from planner_core.model.mapio import load_map, sub_map_dict
+from planner_core.model.problem import Problem
+from planner_core.pipeline.evaluator import BudgetExceeded, Evaluator
+from planner_core.search.descent import hover_of
+from tests.conftest import SUITE
+
+LARGE = SUITE.parent / "large"
+
+
+@pytest.fixture(scope="module")
+def l02() -> tuple[Problem, np.ndarray]:
+    """L02's planning problem and its stored best-known plan (d,)."""
+    p = Problem(load_map(LARGE / "L02.json").planning_map())
+    bk = json.loads((SUITE.parent / "large_best_known.json").read_text())["tasks"]["L02"]
+    x = p.encode(np.asarray(bk["hover_points"], float), np.asarray(bk["hover_times"], float))
+    return p, x
+
+
+def test_charge_counts_evaluations_made_elsewhere_and_keeps_the_budget() -> None:
+    p = Problem(SUITE / "T05.json")
+    ev = Evaluator(p, 100)
+    ev.charge(60)
+    assert ev.count == 60 and ev.remaining == 40 and not ev.has_best
+    with pytest.raises(BudgetExceeded, match="41 evaluations charged"):
+        ev.charge(41)
+    assert ev.count == 60
+
+
+def test_sub_map_keeps_the_obstacles_that_meet_its_box() -> None:
+    m = load_map(LARGE / "L02.json")
+    J = len(m.sensor_ids)
+    lo, hi = np.array([4000.0, 4000.0]), np.array([9000.0, 8000.0])
+    full = m.to_dict()
+    a, b = full["start"], full["end"]
+    d = sub_map_dict(m, a, b, np.ones(J), box=(lo, hi))
+    full = full["obstacles"]
+    for c in full["circles"]:
+        inside = (c["x"] + c["radius"] >= lo[0] and c["x"] - c["radius"] <= hi[0]
+                  and c["y"] + c["radius"] >= lo[1] and c["y"] - c["radius"] <= hi[1])
+        assert (c in d["obstacles"]["circles"]) == inside
+    kept = sum(len(v) for v in d["obstacles"].values())
+    assert 0 < kept < sum(len(v) for v in full.values())
+    assert d["start"] == [float(v) for v in a] and len(d["sensors"]) == J
+    load_map(d)  # a map the reader takes
+
+
+def test_a_window_map_asks_what_the_other_points_leave(l02: tuple[Problem, np.ndarray]) -> None:
+    """The sub-map's requirement of each sensor plus what the plan's other points collect
+    covers its Q_j; its ends are the window's neighbours; its I_max is the paper's sizes."""
+    from planner_core.pipeline.windows import SUB_POINTS, window_map
+
+    p, x = l02
+    P, T = hover_of(p.breakdown(x))
+    keep = T > 0
+    P, T = P[keep], T[keep]
+    i, w = 10, 8
+    d = window_map(p, P, T, i, w)
+    assert d is not None
+    assert d["start"] == [float(v) for v in P[i - 1]]
+    assert d["end"] == [float(v) for v in P[i + w]]
+    assert d["uav"]["max_hover_points"] == SUB_POINTS
+    ids = list(p.map.sensor_ids)
+    req = {s["id"]: s["required_data"] for s in d["sensors"]}
+    D = p.model.rates(P) * T[:, None]
+    others = D.sum(axis=0) - D[i:i + w].sum(axis=0)
+    need = p.model.required - others
+    for j, sid in enumerate(ids):
+        if need[j] > 1e-6 * p.model.required[j]:
+            assert req[sid] == pytest.approx(need[j], rel=1e-9)
+    assert 0 < sum(r > 0 for r in req.values()) < len(ids) / 3
+
+
+def test_a_window_charges_its_run_and_never_worsens_the_incumbent(
+        l02: tuple[Problem, np.ndarray]) -> None:
+    """From L02's best-known plan: the sub-run's evaluations are counted in the run's
+    evaluator, the incumbent is never worse, and the same seed gives the same plan."""
+    from planner_core.pipeline.windows import SUB_BUDGET, replan_window
+
+    p, x = l02
+    outs = []
+    for _ in range(2):
+        ev = Evaluator(p, 5000)
+        f0 = float(ev.evaluate(x[None, :])[0][0])
+        nxt, better = replan_window(p, ev, index=20, trials=640, seed=3)
+        assert ev.count > 1 + SUB_BUDGET // 2  # the sub-run was charged
+        assert ev.count <= 1 + 640
+        assert ev.best()[1] <= f0 and ev.best()[2] == 0.0
+        assert better == (ev.best()[1] < f0)
+        assert nxt != 20
+        outs.append((ev.count, ev.best()[0].tobytes()))
+    assert outs[0] == outs[1]
+
+
+def test_the_default_scheduler_turns_to_windows_when_the_cycle_stalls() -> None:
+    """On a problem with the large rounds and a uniform layout the default runs
+    `LARGE_CYCLE` while its last `STALL_ACTIONS` actions gain at least `WINDOWS_STALL` of f
+    per 1,000 evaluations, then `windows` for the rest of the stage; on clustered fields
+    and corridors never (`WINDOWS_LAYOUT`)."""
+    from types import SimpleNamespace
+
+    from planner_core.pipeline.schedule import (
+        LARGE_CYCLE,
+        STALL_ACTIONS,
+        WINDOWS_STALL,
+        DefaultScheduler,
+        StepRecord,
+    )
+
+    def history(rel_gain_per_1000: float) -> tuple[StepRecord, ...]:
+        f, out = 5000.0, []
+        for k in range(STALL_ACTIONS):
+            g = rel_gain_per_1000 * 0.64 * 5000.0  # 640 evaluations an action
+            out.append(StepRecord(LARGE_CYCLE[k], 640, 0.3, f, 0.0, f - g, 0.0))
+            f -= g
+        return tuple(out)
+
+    s = DefaultScheduler()
+    s.large, s.windows, s.uniform = True, False, True
+    obs = SimpleNamespace(idle=0, step=STALL_ACTIONS, history=history(2 * WINDOWS_STALL))
+    assert s.choose(obs) == LARGE_CYCLE[STALL_ACTIONS]
+    obs.history = obs.history[:-1]  # fewer actions than the look-back: the cycle goes on
+    assert s.choose(obs) == LARGE_CYCLE[STALL_ACTIONS]
+    obs.history = history(0.5 * WINDOWS_STALL)
+    assert s.choose(obs) == "windows"
+    obs.history = history(2 * WINDOWS_STALL)  # once stalled, windows for the rest
+    assert s.choose(obs) == "windows"
+    s.windows, s.uniform = False, False  # clustered fields: the cycle whatever it gains
+    obs.history = history(0.0)
+    assert s.choose(obs) == LARGE_CYCLE[STALL_ACTIONS]
+
+
+def test_the_layout_rule_reads_the_suite_as_documented() -> None:
+    """Windows on L01-L03 (uniform), not on L04-L08 (clustered fields, corridors)."""
+    from planner_core.pipeline.config import PlanConfig
+    from planner_core.pipeline.schedule import DefaultScheduler
+
+    for task, uniform in (("L01", True), ("L03", True), ("L04", False), ("L06", False),
+                          ("L07", False)):
+        s = DefaultScheduler()
+        s.reset(Problem(load_map(LARGE / f"{task}.json").planning_map()), PlanConfig())
+        assert s.large and s.uniform == uniform, task
