@@ -294,8 +294,8 @@ def test_the_share_02_table_is_what_its_runs_give_against_the_share_06() -> None
 def test_the_windows_table_is_what_its_runs_give_against_the_runs_before() -> None:
     """docs/scaling.md, 'Windows planned again': L01, L02 and L03 (the uniform layouts, where
     the default plans windows), paired run by run with each map's runs of the default before
-    (L01 at the DE's share 0.2, L02 per-point, L03 at the share 0); the layout rule as the
-    section states it."""
+    (L01 at the DE's share 0.2, L02 per-point, L03 at the share 0). The layout rule's
+    reading of the suite is tests/test_windows.py's."""
     _table_against_before("## Windows planned again", "large-suite-25-windows.jsonl.gz",
                           {"L01": "large-suite-25-share02.jsonl.gz",
                            "L02": "large-suite-25-perpoint.jsonl.gz",

@@ -18,7 +18,7 @@ from tests.conftest import MAPS, SUITE
 
 def _follow_default(env: ScheduleEnv, **reset: object) -> tuple[float, dict]:
     env.reset(**reset)
-    s, total, done, info = DefaultScheduler(), 0.0, False, {}
+    s, total, done, info = DefaultScheduler(plan_windows=False), 0.0, False, {}
     st = env.observation().state
     s.reset(st.problem, st.config)  # the default's rounds depend on the problem's size
     while not done:

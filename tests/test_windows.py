@@ -70,6 +70,7 @@ def test_a_window_map_asks_what_the_other_points_leave(l02: tuple[Problem, np.nd
     assert d["start"] == [float(v) for v in P[i - 1]]
     assert d["end"] == [float(v) for v in P[i + w]]
     assert d["uav"]["max_hover_points"] == SUB_POINTS
+    assert d["name"] == f"window-{i}"  # not the map's name, which may be at its length limit
     ids = list(p.map.sensor_ids)
     req = {s["id"]: s["required_data"] for s in d["sensors"]}
     D = p.model.rates(P) * T[:, None]
@@ -100,6 +101,29 @@ def test_a_window_charges_its_run_and_never_worsens_the_incumbent(
         assert nxt != 20
         outs.append((ev.count, ev.best()[0].tobytes()))
     assert outs[0] == outs[1]
+
+
+def test_a_window_needs_seconds_left_and_a_variable_length_problem(
+        l02: tuple[Problem, np.ndarray]) -> None:
+    """With less than `MIN_SECONDS` of the run's time limit left, or a fixed-length problem,
+    a window spends nothing."""
+    import copy
+    import time
+
+    from planner_core.pipeline.windows import replan_window
+
+    p, x = l02
+    ev = Evaluator(p, 5000, time_limit=0.03)
+    ev.evaluate(x[None, :])
+    time.sleep(0.05)
+    assert replan_window(p, ev, index=4, trials=640, seed=1) == (4, False)
+    assert ev.count == 1
+    fixed = copy.copy(p)
+    fixed.variable_length = False
+    ev = Evaluator(p, 5000)
+    ev.evaluate(x[None, :])
+    assert replan_window(fixed, ev, index=4, trials=640, seed=1) == (4, False)
+    assert ev.count == 1
 
 
 def test_the_default_scheduler_turns_to_windows_when_the_cycle_stalls() -> None:
@@ -138,6 +162,11 @@ def test_the_default_scheduler_turns_to_windows_when_the_cycle_stalls() -> None:
     s.windows, s.uniform = False, False  # clustered fields: the cycle whatever it gains
     obs.history = history(0.0)
     assert s.choose(obs) == LARGE_CYCLE[STALL_ACTIONS]
+    # a windows action that found nothing to plan: the cycle takes the rest
+    s.windows, s.uniform = True, True
+    obs.history = (*history(0.0), StepRecord("windows", 0, 0.01, 5000.0, 0.0, 5000.0, 0.0))
+    assert s.choose(obs) == LARGE_CYCLE[STALL_ACTIONS]
+    assert s.choose(obs) == LARGE_CYCLE[STALL_ACTIONS]
 
 
 def test_the_layout_rule_reads_the_suite_as_documented() -> None:
@@ -147,6 +176,10 @@ def test_the_layout_rule_reads_the_suite_as_documented() -> None:
 
     for task, uniform in (("L01", True), ("L03", True), ("L04", False), ("L06", False),
                           ("L07", False)):
+        problem = Problem(load_map(LARGE / f"{task}.json").planning_map())
         s = DefaultScheduler()
-        s.reset(Problem(load_map(LARGE / f"{task}.json").planning_map()), PlanConfig())
+        s.reset(problem, PlanConfig())
         assert s.large and s.uniform == uniform, task
+        s = DefaultScheduler(plan_windows=False)  # the learned schedulers' action space
+        s.reset(problem, PlanConfig())
+        assert s.large and not s.uniform, task

@@ -23,7 +23,10 @@ scheduler's f on the same map, seed and budget (run once and cached), so followi
 sums to 1; with "percent" the gap is 1 % of the starting f. At the end -`INFEASIBLE_PENALTY`
 when the plan is infeasible. Following `DefaultScheduler`'s choices (after its
 `reset(problem, config)`, which picks its rounds by the problem's size) reproduces the default
-plan to the bit (tests/test_schedule_env.py).
+plan to the bit (tests/test_schedule_env.py), except where the default plans windows (a
+uniform layout with the large rounds once they stall; `windows` is outside the env's actions):
+there `DefaultScheduler(plan_windows=False)` is what the env can follow, the large rounds to
+the end.
 
 The features are `ScheduleFeatures`'s, computed from the `schedule.Observation` a scheduler
 sees, so that a learned scheduler (`planner_core.learning.schedule_policy`) reads in `plan` what

@@ -284,7 +284,7 @@ def rollout(job: dict[str, Any]) -> dict[str, Any]:
     rng = np.random.default_rng(seed) if seed is not None else None
     default = None
     if params is None:
-        default = DefaultScheduler()
+        default = DefaultScheduler(plan_windows=False)  # the env's actions only
         default.reset(env.problem, env.cfg)
     obs, acts, logps, vals, rews = [], [], [], [], []
     done, stop = False, ACTIONS.index("stop")

@@ -258,6 +258,12 @@ class DefaultScheduler:
     windows = False
     uniform = False
 
+    def __init__(self, *, plan_windows: bool = True) -> None:
+        """plan_windows: False keeps to `ACTIONS` (the learned schedulers' action space, e.g.
+        their environment's demonstrations): no `windows`, so the rounds run on where the
+        default would plan windows."""
+        self.plan_windows = bool(plan_windows)
+
     def configure(self, problem: Any, config: PlanConfig) -> PlanConfig:
         """The run's config: on a map whose rounds are `LARGE_CYCLE` (`large_rounds`), the
         DE's share `LARGE_DE_SHARE` in place of the default `de_share` beyond `LARGE_SENSORS`
@@ -303,7 +309,7 @@ class DefaultScheduler:
 
         self.large = large_rounds(problem)
         self.windows = False
-        self.uniform = self.large and clark_evans(
+        self.uniform = self.plan_windows and self.large and clark_evans(
             problem.model.sensors, problem.map.width * problem.map.height) >= WINDOWS_LAYOUT
 
     def choose(self, observation: Observation) -> str:
@@ -312,6 +318,11 @@ class DefaultScheduler:
             return "stop"
         k = observation.step
         if self.large:
+            last = observation.history[-1] if observation.history else None
+            if self.windows and last is not None and last.evaluations == 0:
+                # a windows action found nothing to plan (every window refused, or too few
+                # evaluations or seconds left for one): the rounds take the rest
+                self.windows = self.uniform = False
             self.windows = self.windows or (self.uniform and _stalled(observation.history))
             return "windows" if self.windows else LARGE_CYCLE[k % len(LARGE_CYCLE)]
         if k % 2:
@@ -321,8 +332,9 @@ class DefaultScheduler:
 
 def _stalled(history: Sequence[StepRecord]) -> bool:
     """Whether the last `STALL_ACTIONS` actions (feasible before and after) lowered f by less
-    than `WINDOWS_STALL` of it per 1,000 evaluations they spent."""
-    last = history[-STALL_ACTIONS:]
+    than `WINDOWS_STALL` of it per 1,000 evaluations they spent (`windows` actions left
+    out)."""
+    last = [r for r in history if r.action != "windows"][-STALL_ACTIONS:]
     if len(last) < STALL_ACTIONS or last[0].phi_before > 0 or last[-1].phi_after > 0:
         return False
     spent = sum(r.evaluations for r in last)
@@ -500,7 +512,7 @@ class ImproveRun:
                            history=tuple(self.history), state=self.state, x=x)
 
     def act(self, action: str) -> StepRecord:
-        """Run one macro-action (`ACTIONS`, not "stop").
+        """Run one macro-action (`ACTIONS`, not "stop", or "windows").
 
         Returns:
             Its `StepRecord`.
@@ -516,7 +528,8 @@ class ImproveRun:
         if action in KICKS:
             run = functools.partial(self._kicks, KICKS[action])
         if run is None:
-            raise ValueError(f"action: must be one of {', '.join(ACTIONS[:-1])}, got {action!r}")
+            raise ValueError(f"action: must be one of {', '.join(ACTIONS[:-1])}, windows, got "
+                             f"{action!r}")
         ev = self.ev
         c0, t0 = ev.count, time.perf_counter()
         _, f0, p0 = ev.best()

@@ -9,10 +9,12 @@ corners are left to the re-routing), and makes a sub-map (`planner_core.model.ma
 start and end at the points before and after the window (the map's start or end at the plan's
 ends), each sensor's required data what the window must collect given what the other points
 collect now at their LP hover times (paper Sec. 3, simultaneous access: data at point i from
-sensor j is T_i R_ij), the sensors and obstacles within `MARGIN` of the window's points, ends
-and those sensors (the others' obstacles cannot be reached by a window's legs and its C3 is
-checked on the whole map afterwards), I_max `SUB_POINTS`. The sub-map is planned by the
-default pipeline with `sub_budget` evaluations (`SUB_CANDIDATES` constructive plans); its
+sensor j is T_i R_ij), the sensors and obstacles that meet the box of the window's points,
+ends and those sensors widened by `MARGIN` (a sub-plan's leg that crosses a dropped obstacle
+is re-routed when spliced, and the spliced plan is evaluated, C3 and C5 included, on the whole
+map), I_max `SUB_POINTS`. The sub-map is planned by the default pipeline with up to
+`SUB_BUDGET` evaluations (599 at the default quantum of 640: the race's 41 come off;
+`SUB_CANDIDATES` constructive plans) and what is left of the run's time limit; its
 hover points replace the window's, and the plan is evaluated with its LP hover times and
 descended in a race against the incumbent (`planner_core.search.structure._move`: legs that
 cut an obstacle re-routed first), kept when Deb-better. The sub-run's evaluations are charged
@@ -38,8 +40,8 @@ import numpy as np
 
 from planner_core.model.formulas import deb_better
 
-__all__ = ["MARGIN", "SUB_BUDGET", "SUB_CANDIDATES", "SUB_POINTS", "WIDTH", "replan_window",
-           "window_map"]
+__all__ = ["MARGIN", "MIN_SECONDS", "RACE_TRIALS", "SUB_BUDGET", "SUB_CANDIDATES", "SUB_POINTS",
+           "WIDTH", "replan_window", "window_map"]
 
 #: hover points with hover time that one window replaces
 WIDTH = 8
@@ -50,11 +52,14 @@ SUB_CANDIDATES = 24
 #: I_max of a window's map: at most the paper's sizes (its run takes the paper's rounds, so
 #: windows never nest)
 SUB_POINTS = 20
-#: metres around the window's points, ends and sensors within which the sub-map keeps the
-#: sensors (C3 with them) and the obstacles: beyond the radio reach (995 m on the large maps)
+#: metres added on each side of the box of the window's points, ends and needing sensors: the
+#: sub-map keeps the sensors (C3 with them) and the obstacles that meet the larger box; beyond
+#: the radio reach (995 m on the large maps; 1.2 x the link's range cut where that is more)
 MARGIN = 1200.0
 #: the race of the spliced plan: at most this many evaluations after its own
 RACE_TRIALS = 40
+#: seconds of the run's time limit a window needs left to start
+MIN_SECONDS = 0.05
 
 
 def window_map(problem: Any, P: np.ndarray, T: np.ndarray, i: int, w: int
@@ -81,10 +86,12 @@ def window_map(problem: Any, P: np.ndarray, T: np.ndarray, i: int, w: int
     e = P[i + w] if i + w < n else np.asarray(problem.end, dtype=float)
     S = np.asarray(m.sensors, dtype=float)
     pts = np.vstack([P[i:i + w], a, e, S[need]])
-    lo, hi = pts.min(axis=0) - MARGIN, pts.max(axis=0) + MARGIN
+    half = float(m.window.half)  # the link's range cut (m): no rate beyond it
+    margin = max(MARGIN, 1.2 * half) if np.isfinite(half) else MARGIN
+    lo, hi = pts.min(axis=0) - margin, pts.max(axis=0) + margin
     near = np.all((S >= lo) & (S <= hi), axis=1)
     d = sub_map_dict(problem.map, a, e, req, keep=near | need, box=(lo, hi),
-                     name=f"{problem.map.name}-window-{i}")
+                     name=f"window-{i}")  # not the map's name: that may be at its length limit
     d["uav"] = dict(d.get("uav") or {})
     d["uav"]["max_hover_points"] = int(SUB_POINTS)
     return d
@@ -104,9 +111,13 @@ def replan_window(
             seed: the sub-run's seed; width: hovering points in a window.
 
     Returns:
-        (the next window's index, whether the incumbent improved). A window whose sensors
-        the other points already serve, a sub-map the map reader refuses, an infeasible
-        sub-plan or one past I_max spends only the sub-run (or nothing).
+        (the next window's index: after the window, or after the spliced points when the
+        incumbent improved, counted as if every spliced point hovers, so approximately;
+        whether the incumbent improved). A window whose sensors the other points already
+        serve, a sub-map the map reader refuses, an infeasible sub-plan or one past I_max
+        spends only the sub-run (or nothing); so does a fixed-length problem (variable
+        length only: a window changes the number of points) and a run with less than
+        `MIN_SECONDS` of its time limit left.
     """
     from planner_core.model.mapio import MapError, load_map
     from planner_core.model.problem import Problem
@@ -121,7 +132,9 @@ def replan_window(
     P, T = P[keep], T[keep]
     n = len(P)
     sub_budget = min(SUB_BUDGET, int(trials) - 1 - RACE_TRIALS)
-    if phi0 > 0 or n < 2 or sub_budget < 100:
+    left_s = None if ev.time_limit is None else ev.time_limit - ev.elapsed
+    if (phi0 > 0 or n < 2 or sub_budget < 100 or not problem.variable_length
+            or (left_s is not None and left_s < MIN_SECONDS)):
         return index, False
     w = min(int(width), n)
     i = int(index) % n
@@ -135,7 +148,7 @@ def replan_window(
     except (MapError, ValueError):
         return nxt, False
     res = run_pipeline(sub, PlanConfig(seed=int(seed), budget=sub_budget,
-                                       start_candidates=SUB_CANDIDATES))
+                                       start_candidates=SUB_CANDIDATES, time_limit=left_s))
     ev.charge(res.evaluations)
     sb = sub.breakdown(res.x)
     if sb["phi"] > 0:
