@@ -734,19 +734,18 @@ def sub_map_dict(
         def meets(x0: float, y0: float, x1: float, y1: float) -> bool:
             return bool(x1 >= lo[0] and x0 <= hi[0] and y1 >= lo[1] and y0 <= hi[1])
 
+        def around(x: float, y: float, r: float) -> bool:  # the box of a disc
+            return meets(x - r, y - r, x + r, y + r)
+
         def ring(o: dict[str, Any]) -> bool:
             v = np.asarray(o["vertices"], dtype=float).reshape(-1, 2)
             return meets(*v.min(axis=0), *v.max(axis=0))
 
         obs = d["obstacles"]
         obs["circles"] = [c for c in obs.get("circles", [])
-                          if meets(c["x"] - c["radius"], c["y"] - c["radius"],
-                                   c["x"] + c["radius"], c["y"] + c["radius"])]
+                          if around(c["x"], c["y"], c["radius"])]
         obs["rectangles"] = [r for r in obs.get("rectangles", [])
-                             if meets(r["x"] - math.hypot(r["length"], r["width"]),
-                                      r["y"] - math.hypot(r["length"], r["width"]),
-                                      r["x"] + math.hypot(r["length"], r["width"]),
-                                      r["y"] + math.hypot(r["length"], r["width"]))]
+                             if around(r["x"], r["y"], math.hypot(r["length"], r["width"]))]
         for key in ("no_fly_zones", "polygons"):
             if key in obs:
                 obs[key] = [z for z in obs[key] if ring(z)]

@@ -203,10 +203,7 @@ class Evaluator:
         """
         X = np.atleast_2d(np.asarray(X, dtype=float))
         n = X.shape[0]
-        if n > self.remaining:
-            where = f" in stage {self._stage!r}" if self._stage else ""
-            raise BudgetExceeded(f"{n} evaluations requested{where} with {self.remaining} of "
-                                 f"{self.budget} left")
+        self._check_room(n, "requested")
         if n == 0:
             return np.empty(0), np.empty(0)
         if self.count and self.expired:
@@ -231,11 +228,15 @@ class Evaluator:
             BudgetExceeded: n exceeds `remaining`.
         """
         n = int(n)
+        self._check_room(n, "charged")
+        self.count += max(n, 0)
+
+    def _check_room(self, n: int, verb: str) -> None:
+        """Raise `BudgetExceeded` ("{n} evaluations {verb} ...") when n exceeds `remaining`."""
         if n > self.remaining:
             where = f" in stage {self._stage!r}" if self._stage else ""
-            raise BudgetExceeded(f"{n} evaluations charged{where} with {self.remaining} of "
+            raise BudgetExceeded(f"{n} evaluations {verb}{where} with {self.remaining} of "
                                  f"{self.budget} left")
-        self.count += max(n, 0)
 
     def _update(self, X: np.ndarray, f: np.ndarray, phi: np.ndarray) -> None:
         if len(f) == 1:  # the descents' one-row calls: the same rules on scalars

@@ -81,11 +81,12 @@ class Rebuilder:
 
         sites = self.sites
         pts = np.asarray(pts, dtype=float).reshape(-1, 2)
-        if not (np.isfinite(pts).all() and np.abs(pts).max(initial=0.0) < _TREE_LIMIT
-                and np.abs(sites).max(initial=0.0) < _TREE_LIMIT):
+        if self._tree_of is not sites:  # first use, or new sites: a tree where one can serve
+            ok = bool(np.abs(sites).max(initial=0.0) < _TREE_LIMIT)
+            self._tree, self._tree_of = (cKDTree(sites) if ok else None), sites
+        if self._tree is None or not (np.isfinite(pts).all()
+                                      and np.abs(pts).max(initial=0.0) < _TREE_LIMIT):
             return nearest_reference(sites, pts)  # beyond any map: squares would overflow
-        if self._tree is None or self._tree_of is not sites:
-            self._tree, self._tree_of = cKDTree(sites), sites
         near, _ = self._tree.query(pts)
         out = np.empty(len(pts), dtype=np.int64)
         for q, (p, r) in enumerate(zip(pts, near, strict=True)):
