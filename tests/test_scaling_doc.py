@@ -300,3 +300,12 @@ def test_the_windows_table_is_what_its_runs_give_against_the_runs_before() -> No
                           {"L01": "large-suite-25-share02.jsonl.gz",
                            "L02": "large-suite-25-perpoint.jsonl.gz",
                            "L03": "large-suite-25-share0.jsonl.gz"}, 3)
+
+
+def test_the_sweep_share_table_is_what_its_runs_give_against_the_windows_before() -> None:
+    """docs/scaling.md, "A sweep's share": L01, L02 and L03 x 25 with a window's evaluations
+    the stage's left shared over the sweep (`windows.sub_budget`), paired run by run with the
+    runs of 'Windows planned again'."""
+    _table_against_before("### A sweep's share", "large-suite-25-sweep.jsonl.gz",
+                          "large-suite-25-windows.jsonl.gz", 3)
+

@@ -103,6 +103,24 @@ def test_a_window_charges_its_run_and_never_worsens_the_incumbent(
     assert outs[0] == outs[1]
 
 
+def test_a_sweep_shares_the_evaluations_left_among_its_windows() -> None:
+    """A window's sub-run gets the stage's evaluations left over the windows to the sweep's
+    end (less each race), between SUB_MIN and SUB_BUDGET, within the action's trials."""
+    from planner_core.pipeline.windows import RACE_TRIALS, SUB_BUDGET, SUB_MIN, sub_budget
+
+    # 176 hovering points, windows of 8: 22 to the end from the first, 1 from the last
+    assert sub_budget(10_000, 640, 176, 0, 8) == 10_000 // 22 - 1 - RACE_TRIALS
+    cap = min(SUB_BUDGET, 640 - 1 - RACE_TRIALS)  # 599 at the default quantum
+    assert sub_budget(10_000, 640, 176, 168, 8) == cap
+    assert sub_budget(600, 640, 20, 12, 8) == 600 - 1 - RACE_TRIALS  # one window to go
+    assert sub_budget(600, 640, 20, 11, 8) == 300 - 1 - RACE_TRIALS  # a part-window counts
+    assert sub_budget(1_000, 640, 176, 0, 8) == SUB_MIN  # the floor
+    assert sub_budget(10_000, 120, 176, 168, 8) == 120 - 1 - RACE_TRIALS  # the action's cap
+    # L01-like: 35 points, 5 windows a sweep; 4,000 left: the cap; 2,000 left: 359 each
+    assert sub_budget(4_000, 640, 35, 0, 8) == cap
+    assert sub_budget(2_000, 640, 35, 0, 8) == 2_000 // 5 - 1 - RACE_TRIALS
+
+
 def test_a_window_needs_seconds_left_and_a_variable_length_problem(
         l02: tuple[Problem, np.ndarray]) -> None:
     """With less than `MIN_SECONDS` of the run's time limit left, or a fixed-length problem,

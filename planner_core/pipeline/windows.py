@@ -24,7 +24,11 @@ Why: the improving rounds move one point or rebuild 2-5 points at a time; on the
 their plans stay 1-3 % above the long runs' best-known, while the pipeline on a map of ~20
 sensors is at its best-known within a fraction of a second. On L02's final plan (seed 2),
 eight windows of 8 points at 600 evaluations each took f from 4872.7 to 4816.8 (-1.15 %);
-docs/scaling.md, "Windows planned again".
+docs/scaling.md, "Windows planned again". Why a sweep's share: on L03 (~180 hovering points,
+~22 windows a sweep) 600 evaluations a window covered a third of the plan before the budget
+ended, and the share lowered f by 0.45 % (10 seeds, each lower); on L01 (~5 windows a sweep)
+a fixed 200 or 300 raised it by 0.2-0.3 %, the share left it as it was (docs/scaling.md,
+"A sweep's share").
 
 Cost per window: the sub-map's problem (its visibility graph over the window's obstacles),
 the sub-run (constructive plans over ~`width` x 3 sensors, LPs of ~`width` points), the whole
@@ -40,13 +44,15 @@ import numpy as np
 
 from planner_core.model.formulas import deb_better
 
-__all__ = ["MARGIN", "MIN_SECONDS", "RACE_TRIALS", "SUB_BUDGET", "SUB_CANDIDATES", "SUB_POINTS",
-           "WIDTH", "replan_window", "window_map"]
+__all__ = ["MARGIN", "MIN_SECONDS", "RACE_TRIALS", "SUB_BUDGET", "SUB_CANDIDATES", "SUB_MIN",
+           "SUB_POINTS", "WIDTH", "replan_window", "sub_budget", "window_map"]
 
 #: hover points with hover time that one window replaces
 WIDTH = 8
 #: evaluations of one window's pipeline run (at most; the action's quantum less the race)
 SUB_BUDGET = 600
+#: evaluations of one window's pipeline run at least, where the action's trials allow
+SUB_MIN = 150
 #: constructive plans of a window's run (the default's 64 cost most of a 600-evaluation run)
 SUB_CANDIDATES = 24
 #: I_max of a window's map: at most the paper's sizes (its run takes the paper's rounds, so
@@ -60,6 +66,20 @@ MARGIN = 1200.0
 RACE_TRIALS = 40
 #: seconds of the run's time limit a window needs left to start
 MIN_SECONDS = 0.05
+
+
+def sub_budget(remaining: int, trials: int, n: int, i: int, w: int) -> int:
+    """Evaluations of the sub-run of the window P[i:i + w] of n hovering points: `remaining`
+    (the improving stage's evaluations left) shared among the windows from i to the sweep's
+    end, less each one's race, between `SUB_MIN` and `SUB_BUDGET`, and at most what the
+    action's `trials` leave after the race (below 100: no window, `replan_window`'s rule).
+
+    Returns:
+        The sub-run's budget (evaluations).
+    """
+    left = max(-(-(int(n) - int(i)) // max(int(w), 1)), 1)  # windows to the sweep's end
+    share = int(remaining) // left - 1 - RACE_TRIALS
+    return min(SUB_BUDGET, int(trials) - 1 - RACE_TRIALS, max(SUB_MIN, share))
 
 
 def window_map(problem: Any, P: np.ndarray, T: np.ndarray, i: int, w: int
@@ -107,8 +127,9 @@ def replan_window(
     Args:
         problem: the run's `Problem`; ev: its `Evaluator` (the incumbent is `ev.best()`).
         index: the window's first point among the hovering points; trials: evaluations it
-            may spend (the sub-run gets trials - 1 - `RACE_TRIALS`, at most `SUB_BUDGET`);
-            seed: the sub-run's seed; width: hovering points in a window.
+            may spend (the sub-run gets `sub_budget`'s share of `ev.remaining`, at most
+            trials - 1 - `RACE_TRIALS`); seed: the sub-run's seed; width: hovering points
+            in a window.
 
     Returns:
         (the next window's index: after the window, or after the spliced points when the
@@ -131,14 +152,16 @@ def replan_window(
     keep = T > 0.0
     P, T = P[keep], T[keep]
     n = len(P)
-    sub_budget = min(SUB_BUDGET, int(trials) - 1 - RACE_TRIALS)
     left_s = None if ev.time_limit is None else ev.time_limit - ev.elapsed
-    if (phi0 > 0 or n < 2 or sub_budget < 100 or not problem.variable_length
+    if (phi0 > 0 or n < 2 or not problem.variable_length
             or (left_s is not None and left_s < MIN_SECONDS)):
         return index, False
     w = min(int(width), n)
     i = int(index) % n
     i = min(i, n - w)
+    budget = sub_budget(ev.remaining, trials, n, i, w)
+    if budget < 100:  # the action's last evaluations: too few for a pipeline run
+        return index, False
     nxt = i + w if i + w < n else 0
     d = window_map(problem, P, T, i, w)
     if d is None:
@@ -147,7 +170,7 @@ def replan_window(
         sub = Problem(load_map(d), variable_length=problem.variable_length)
     except (MapError, ValueError):
         return nxt, False
-    res = run_pipeline(sub, PlanConfig(seed=int(seed), budget=sub_budget,
+    res = run_pipeline(sub, PlanConfig(seed=int(seed), budget=budget,
                                        start_candidates=SUB_CANDIDATES, time_limit=left_s))
     ev.charge(res.evaluations)
     sb = sub.breakdown(res.x)
