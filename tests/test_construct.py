@@ -206,6 +206,26 @@ def test_the_constructive_stage_scores_its_plans_in_one_call(walled: Problem) ->
     np.testing.assert_array_equal(out.pool.X[out.pool.ordered()[0]], X[deb_best(f, phi)])
 
 
+def test_the_constructive_stage_builds_the_seeder_plans_it_is_given(walled: Problem) -> None:
+    """With the descents on, `SEEDER_PLANS` seeder plans beside the constructive ones by
+    default; `ConstructivePlans(seeder=k)` k of them (a window's run: none); a bad k refused."""
+    from planner_core.pipeline import Evaluator, PlanConfig
+    from planner_core.pipeline.stages import ConstructivePlans, PlanState, Pool
+
+    cfg = PlanConfig(budget=1000, population=10, start_candidates=5)
+    d = walled.lower.shape[0]
+    for stage, k in ((ConstructivePlans(), construct.SEEDER_PLANS),
+                     (ConstructivePlans(seeder=3), 3), (ConstructivePlans(seeder=0), 0)):
+        assert stage.share(cfg) == 5 + k
+        ev = Evaluator(walled, 1000)
+        with ev.stage("constructive", stage.share(cfg)):
+            out = stage.run(PlanState(walled, cfg, Pool.empty(d), np.zeros((0, d))), ev)
+        assert len(out.pool.of_kind("seeder")) == k and len(out.pool) == ev.count == 5 + k
+    assert repr(ConstructivePlans()) == "ConstructivePlans()"
+    with pytest.raises(ValueError, match="seeder: must be an integer >= 0"):
+        ConstructivePlans(seeder=-1)
+
+
 @pytest.mark.slow  # measured 4 s (issue 35: default suite <= 5 min)
 def test_plan_starts_from_the_constructive_plans() -> None:
     """`plan` with starts: at most the budget (exactly without the descents, which may stop

@@ -309,3 +309,10 @@ def test_the_sweep_share_table_is_what_its_runs_give_against_the_windows_before(
     _table_against_before("### A sweep's share", "large-suite-25-sweep.jsonl.gz",
                           "large-suite-25-windows.jsonl.gz", 3)
 
+
+def test_the_window_run_table_is_what_its_runs_give_against_the_sweep_share() -> None:
+    """docs/scaling.md, "A window's run without seeder plans": paired run by run with the
+    sweep share's runs."""
+    _table_against_before("**A window's run without seeder plans**",
+                          "large-suite-25-window-run.jsonl.gz", "large-suite-25-sweep.jsonl.gz", 3)
+

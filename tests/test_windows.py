@@ -121,6 +121,16 @@ def test_a_sweep_shares_the_evaluations_left_among_its_windows() -> None:
     assert sub_budget(2_000, 640, 35, 0, 8) == 2_000 // 5 - 1 - RACE_TRIALS
 
 
+def test_a_windows_run_is_the_default_pipeline_without_seeder_plans() -> None:
+    from planner_core.pipeline import DEFAULT_PIPELINE, WINDOW_PIPELINE
+    from planner_core.pipeline.stages import ConstructivePlans
+
+    assert [s.name for s in WINDOW_PIPELINE] == [s.name for s in DEFAULT_PIPELINE]
+    assert [s.seeder for s in WINDOW_PIPELINE if isinstance(s, ConstructivePlans)] == [0]
+    assert all(a is b for a, b in zip(WINDOW_PIPELINE, DEFAULT_PIPELINE, strict=True)
+               if not isinstance(a, ConstructivePlans))
+
+
 def test_a_window_needs_seconds_left_and_a_variable_length_problem(
         l02: tuple[Problem, np.ndarray]) -> None:
     """With less than `MIN_SECONDS` of the run's time limit left, or a fixed-length problem,

@@ -50,8 +50,8 @@ from planner_core.pipeline.stages import (
     StartDescents,
 )
 
-__all__ = ["DEFAULT_PIPELINE", "PipelineResult", "PipelineRun", "allotment", "run_pipeline",
-           "with_scheduler"]
+__all__ = ["DEFAULT_PIPELINE", "WINDOW_PIPELINE", "PipelineResult", "PipelineRun", "allotment",
+           "run_pipeline", "with_scheduler"]
 
 #: the default pipeline, in the order it runs (the module docstring's table)
 DEFAULT_PIPELINE: tuple[Stage, ...] = (
@@ -64,6 +64,12 @@ DEFAULT_PIPELINE: tuple[Stage, ...] = (
     Improve(),
     Repair(),
 )
+
+#: a window's run (`planner_core.pipeline.windows`): the default pipeline whose constructive
+#: stage builds no seeder plans
+WINDOW_PIPELINE: tuple[Stage, ...] = tuple(
+    ConstructivePlans(seeder=0) if isinstance(s, ConstructivePlans) else s
+    for s in DEFAULT_PIPELINE)
 
 
 @dataclass(frozen=True)

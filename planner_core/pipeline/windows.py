@@ -12,10 +12,12 @@ collect now at their LP hover times (paper Sec. 3, simultaneous access: data at 
 sensor j is T_i R_ij), the sensors and obstacles that meet the box of the window's points,
 ends and those sensors widened by `MARGIN` (a sub-plan's leg that crosses a dropped obstacle
 is re-routed when spliced, and the spliced plan is evaluated, C3 and C5 included, on the whole
-map), I_max `SUB_POINTS`. The sub-map is planned by the default pipeline with up to
-`SUB_BUDGET` evaluations (599 at the default quantum of 640: the race's 41 come off;
-`SUB_CANDIDATES` constructive plans) and what is left of the run's time limit; its
-hover points replace the window's, and the plan is evaluated with its LP hover times and
+map), I_max `SUB_POINTS`. The sub-map is planned by `WINDOW_PIPELINE` (the default pipeline
+without seeder plans; `SUB_CANDIDATES` constructive plans, the DE's start uniform) with what
+is left of the run's time limit and `sub_budget`'s evaluations: the improving stage's left,
+shared among the windows to the end of the sweep (a sweep covers the plan once), at least
+`SUB_MIN` and at most `SUB_BUDGET` (599 at the default quantum of 640: the race's 41 come
+off); its hover points replace the window's, and the plan is evaluated with its LP hover times and
 descended in a race against the incumbent (`planner_core.search.structure._move`: legs that
 cut an obstacle re-routed first), kept when Deb-better. The sub-run's evaluations are charged
 to the run's evaluator (`Evaluator.charge`), one for one.
@@ -142,7 +144,7 @@ def replan_window(
     """
     from planner_core.model.mapio import MapError, load_map
     from planner_core.model.problem import Problem
-    from planner_core.pipeline import PlanConfig, run_pipeline
+    from planner_core.pipeline import WINDOW_PIPELINE, PlanConfig, run_pipeline
     from planner_core.search.descent import hover_of
     from planner_core.search.structure import _move
 
@@ -170,8 +172,9 @@ def replan_window(
         sub = Problem(load_map(d), variable_length=problem.variable_length)
     except (MapError, ValueError):
         return nxt, False
-    res = run_pipeline(sub, PlanConfig(seed=int(seed), budget=budget,
-                                       start_candidates=SUB_CANDIDATES, time_limit=left_s))
+    res = run_pipeline(sub, PlanConfig(seed=int(seed), budget=budget, init="uniform",
+                                       start_candidates=SUB_CANDIDATES, time_limit=left_s),
+                       pipeline=WINDOW_PIPELINE)
     ev.charge(res.evaluations)
     sb = sub.breakdown(res.x)
     if sb["phi"] > 0:
