@@ -144,7 +144,7 @@ class ConstructivePlans(_Base):
     plans (`SEEDER_PLANS` by default) when the start descents run; all scored in one evaluate
     call. Cost: the k-means sweep (I_max x J), one LP per plan, the leg-time matrix over the
     graph (V^2 log V for its build, once per map), and per seeder plan its clustering and
-    slides (~8 ms at 20 sensors, ~0.3 s at 160)."""
+    slides (L02, 160 sensors: 20 seeder plans 0.43 s CPU)."""
 
     name = "constructive"
 

@@ -17,10 +17,10 @@ without seeder plans; `SUB_CANDIDATES` constructive plans, the DE's start unifor
 is left of the run's time limit and `sub_budget`'s evaluations: the improving stage's left,
 shared among the windows to the end of the sweep (a sweep covers the plan once), at least
 `SUB_MIN` and at most `SUB_BUDGET` (599 at the default quantum of 640: the race's 41 come
-off); its hover points replace the window's, and the plan is evaluated with its LP hover times and
-descended in a race against the incumbent (`planner_core.search.structure._move`: legs that
-cut an obstacle re-routed first), kept when Deb-better. The sub-run's evaluations are charged
-to the run's evaluator (`Evaluator.charge`), one for one.
+off); its hover points replace the window's, and the plan is evaluated with its LP hover
+times and descended in a race against the incumbent (`planner_core.search.structure._move`:
+legs that cut an obstacle re-routed first), kept when Deb-better. The sub-run's evaluations
+are charged to the run's evaluator (`Evaluator.charge`), one for one.
 
 Why: the improving rounds move one point or rebuild 2-5 points at a time; on the large maps
 their plans stay 1-3 % above the long runs' best-known, while the pipeline on a map of ~20
