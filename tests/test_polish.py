@@ -140,3 +140,27 @@ def test_solve_lp_falls_back_to_the_shortfall_lp_at_the_boundary() -> None:
     for backend in BACKENDS:
         T, _ = _solve_lp(R, req, 300.0, True, backend)
         assert T[0] == pytest.approx(300.0)
+
+
+def test_the_shortfall_lp_through_highspy_agrees_with_scipys_linprog() -> None:
+    """The infeasible (shortfall) hover-time LP: "highs" solves it through highspy (no
+    scipy.optimize import on the planning path), "linprog" through scipy's HiGHS, the
+    reference; the same least shortfall and the same hover time on random LPs where some
+    sensors cannot be served in full."""
+    from planner_core.search.polish import _lp_matrices, _solve_lp_with
+
+    rng = np.random.default_rng(7)
+    for _ in range(25):
+        n, m = int(rng.integers(1, 9)), int(rng.integers(1, 15))
+        R = rng.uniform(0.0, 10.0, (n, m)) * (rng.random((n, m)) < 0.6)
+        req = rng.uniform(100.0, 5000.0, m)
+        c, G, h, _ = _lp_matrices(R, req, 300.0, False)
+        out = {}
+        for backend in ("highs", "linprog"):
+            T, solver = _solve_lp_with(R, req, 300.0, False, backend)
+            assert np.all((T >= 0) & (T <= 300.0 + 1e-9))
+            got = (R[:, req > 0] / req[req > 0]).T @ T  # units of each sensor's need
+            short = np.maximum(-h - got, 0.0)  # the slack the LP pays 1e3 a unit for
+            out[backend] = (T.sum(), short.sum())
+        assert out["highs"][1] == pytest.approx(out["linprog"][1], rel=1e-6, abs=1e-7)
+        assert out["highs"][0] == pytest.approx(out["linprog"][0], rel=1e-6, abs=1e-6)

@@ -124,8 +124,9 @@ def _solve_lp(
     """Hover times (I,) solving the LP of `_lp_matrices`, and the solver's name. "highs" on a
     feasible LP takes the fast path (`hover_lp`: the LP by blocks, small ones in a compiled
     kernel, the rest through highspy; ~0.02-0.05 ms on the suite's final plans where scipy's
-    `linprog` takes ~1.3 ms); "linprog" is scipy's HiGHS, the reference the fast
-    path is tested against and what "highs" uses for the infeasible (shortfall) LP. A
+    `linprog` takes ~1.3 ms) and the infeasible (shortfall) LP whole through highspy (no
+    scipy.optimize import: 0.27 s the first time, once per large plan); "linprog" is scipy's
+    HiGHS, the reference both are tested against. A
     feasible LP that turns out infeasible at its target (a sensor served exactly at T_max: the
     target is a hair above Q_j) is solved as the shortfall LP instead, which always has a
     solution; the caller's C4 check then sees the hair. Raises ValueError for an unknown
@@ -151,7 +152,17 @@ def _solve_lp_with(
 ) -> tuple[np.ndarray, str]:
     """`_solve_lp` on one backend with no fallback; raises `_LPInfeasible` (a RuntimeError)."""
     c, G, h, ub = _lp_matrices(R, req, t_max, feasible)
-    if backend in ("highs", "linprog"):
+    if backend == "highs":  # through highspy, as the fast path: no scipy.optimize to import
+        from scipy.sparse import csr_matrix
+
+        from planner_core.model.hoverlp import _highs_general
+
+        out = _highs_general(c, np.zeros_like(ub), ub, csr_matrix(G.reshape(len(h), len(c))),
+                             np.full(len(h), -np.inf), h)
+        if out is None:
+            raise _LPInfeasible("hover-time LP failed: HiGHS found no optimum")
+        z, solver = out[0], "HiGHS (highspy)"
+    elif backend == "linprog":
         from scipy.optimize import linprog
 
         bounds = list(zip(np.zeros_like(ub), np.where(np.isinf(ub), None, ub), strict=True))
