@@ -157,8 +157,8 @@ def _solve_lp_with(
 
         from planner_core.model.hoverlp import _highs_general
 
-        out = _highs_general(c, np.zeros_like(ub), ub, csr_matrix(G.reshape(len(h), len(c))),
-                             np.full(len(h), -np.inf), h)
+        out = _highs_general(c, np.zeros_like(ub), ub, csr_matrix(G), np.full(len(h), -np.inf),
+                             h)
         if out is None:
             raise _LPInfeasible("hover-time LP failed: HiGHS found no optimum")
         z, solver = out[0], "HiGHS (highspy)"
