@@ -53,6 +53,7 @@ from planner_core.fleet.lp import collected_by_sortie, fleet_hover_lp
 from planner_core.fleet.model import FleetPlan, FleetSettings, Sortie
 from planner_core.fleet.split import Links, split_tour, split_vehicles
 from planner_core.model.mapio import sub_map_dict
+from planner_core.streams import stream_rng, stream_seed
 
 __all__ = ["SORTIE_BUDGET", "ROUNDS", "TRANSFER_NEIGHBOURS", "FleetResult", "plan_fleet",
            "route_first", "sortie_map_dict"]  # fmt: skip
@@ -95,7 +96,7 @@ class FleetResult:
 
 def _seed(seed: int, *tags: int) -> int:
     """A derived pipeline seed (>= 0) for one sub-run: same seed and tags, same value."""
-    return int(np.random.SeedSequence([int(seed), 33, *tags]).generate_state(1)[0] >> 1)
+    return stream_seed(seed, "fleet", *tags) >> 1
 
 
 #: the map file of one sortie (`planner_core.model.mapio.sub_map_dict`, its one home)
@@ -324,8 +325,7 @@ class _Planner:
         optimal split of the changed tour (route first, cluster second with the tour itself
         searched: Prins 2004's evaluation of a giant tour by its split); at most
         `TOUR_TRIALS` moves per vehicle. The new plan, LP'd, or None when nothing improved."""
-        rng = np.random.default_rng(np.random.SeedSequence([int(self.config.seed), 33, 4,
-                                                            int(rnd)]))  # fmt: skip
+        rng = stream_rng(self.config.seed, "fleet", 4, rnd)
         rows = []
         changed = False
         for vs in plan.vehicles:

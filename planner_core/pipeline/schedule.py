@@ -57,6 +57,7 @@ from planner_core.model.formulas import deb_order
 from planner_core.pipeline.config import PlanConfig
 from planner_core.pipeline.evaluator import Evaluator
 from planner_core.search.descent import PAPER_POINTS, large_problem
+from planner_core.streams import stream_seed
 
 __all__ = [
     "ACTIONS",
@@ -579,7 +580,7 @@ class ImproveRun:
         for t in range(WINDOW_TRIES):  # windows with nothing to do spend nothing: the next
             if ev.count != c0 or ev.expired:
                 break
-            seed = int(np.random.SeedSequence([cfg.seed, 47, self.step, t]).generate_state(1)[0])
+            seed = stream_seed(cfg.seed, "window", self.step, t)
             self._window, _ = replan_window(self.state.problem, ev, index=self._window,
                                             trials=trials, seed=seed >> 1)
 
@@ -621,7 +622,7 @@ class ImproveRun:
         if ev.remaining < FRESH_ROOM * max(cfg.final_trials, 1):
             return None
         self._fresh += 1
-        seed = int(np.random.SeedSequence([cfg.seed, 31, self._fresh]).generate_state(1)[0])
+        seed = stream_seed(cfg.seed, "fresh", self._fresh)
         X, _ = candidate_plans(problem, seed, cfg.start_candidates, order=cfg.order,
                                stop=lambda: ev.expired)
         seen = {r.tobytes() for r in pool.X}
@@ -661,7 +662,7 @@ class ImproveRun:
         else:
             rows = state.pool.X[state.pool.ordered()]
         rows = np.vstack([ev.best()[0][None, :], rows])[:n]
-        seed = int(np.random.SeedSequence([cfg.seed, 41, self.step]).generate_state(1)[0])
+        seed = stream_seed(cfg.seed, "de-block", self.step)
         result = run(InjectedPopulation(ev, rows), configurator=cfg.configurator, seed=seed,
                      population=n, budget=trials,
                      refine=functools.partial(refine, state.problem))

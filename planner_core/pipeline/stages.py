@@ -21,6 +21,7 @@ from planner_core.model.formulas import deb_order
 from planner_core.pipeline.config import PlanConfig
 from planner_core.pipeline.evaluator import Evaluator
 from planner_core.pipeline.schedule import _points
+from planner_core.streams import stream_seed
 
 __all__ = [
     "ConstructivePlans",
@@ -479,7 +480,7 @@ class Repair(_Base):
         else:
             rows = state.pool.X[state.pool.ordered()]
         rows = np.vstack([ev.best()[0][None, :], rows])[:n]
-        seed = int(np.random.SeedSequence([cfg.seed, 37]).generate_state(1)[0])
+        seed = stream_seed(cfg.seed, "other-structure")
         run(InjectedPopulation(ev, rows), configurator=cfg.configurator, seed=seed,
             population=n, budget=ev.remaining, refine=functools.partial(refine, problem))
         return state

@@ -57,6 +57,7 @@ from planner_core.model.routing import open_path
 from planner_core.model.routing.graph import CLEAR, weight_bounds
 from planner_core.search.polish import polish_hover_times
 from planner_core.search.refine import covers, repair_points
+from planner_core.streams import stream_rng
 
 __all__ = [
     "BANDWIDTH_USE",
@@ -456,7 +457,7 @@ def site_sets(problem: Any, seed: int) -> Iterator[tuple[str, np.ndarray]]:
     if J == 0:
         yield "no sensors", np.zeros((0, 2))
         return
-    rng = np.random.default_rng(np.random.SeedSequence([int(seed), 14]))
+    rng = stream_rng(seed, "kmeans")
     ks = list(range(1, min(int(mp.n_points), J) + 1))
     centres = {(k, r): _kmeans(S, k, rng) for k in ks for r in range(KMEANS_INITS)}
     sites = candidate_sites(problem, np.vstack(list(centres.values())))
@@ -645,7 +646,7 @@ def candidate_plans(
     seen: set[bytes] = set()
     for i, (label, sites) in enumerate(site_sets(problem, int(seed))):
         # each set's own slide directions: a set's plans do not depend on those built before
-        rng = np.random.default_rng(np.random.SeedSequence([int(seed), 15, i]))
+        rng = stream_rng(seed, "site-slide", i)
         for x in build_plans(problem, sites, rng, order=order, legs=legs):
             key = x.tobytes()
             if key in seen:
@@ -668,7 +669,7 @@ def seeder_plans(problem: Any, seed: int, k: int,
     order, visibility-graph detours; what the DE's seeded start population holds), from their
     own generator of `seed`, so the same in both start modes. `progress`: told after each
     plan ("3/20 seeder plans")."""
-    rng = np.random.default_rng(np.random.SeedSequence([int(seed), 16]))
+    rng = stream_rng(seed, "seeder-plans")
     d = int(np.asarray(problem.lower).shape[0])
     rows = []
     for i in range(max(k, 0)):

@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from planner_core.search.descent import Descent, Evaluate
+from planner_core.streams import stream_rng
 
 __all__ = ["OWNS", "REBUILD_ATTEMPTS", "WINDOWS", "Rebuilder", "nearest_reference", "rebuild"]
 
@@ -179,7 +180,7 @@ def rebuild(
 
     if not problem.variable_length or problem.tau <= 0.0 or trials < 1:
         return None
-    rng = np.random.default_rng(np.random.SeedSequence([int(seed), 43, int(stream)]))
+    rng = stream_rng(seed, "rebuild", stream)
     rb = rebuilder
 
     def destroy_and_repair(P: np.ndarray, T: np.ndarray) -> np.ndarray | None:

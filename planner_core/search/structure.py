@@ -23,6 +23,7 @@ from planner_core.model.formulas import deb_better
 from planner_core.search.descent import Descent, Evaluate, descend, hover_of, large_problem
 from planner_core.search.polish import ZERO_TIME, hover_lp
 from planner_core.search.trial import held_points
+from planner_core.streams import stream_rng
 
 __all__ = [
     "CLEAR_SHIFTS",
@@ -280,8 +281,7 @@ def kicks(
     the pipeline's later rounds pass their round) give the same plan. None for an infeasible
     x or `trials` < 1."""
     m = problem.model
-    key = [int(seed), 17] if not stream else [int(seed), 17, int(stream)]
-    rng = np.random.default_rng(np.random.SeedSequence(key))
+    rng = stream_rng(seed, "kicks", *((stream,) if stream else ()))
     box = np.array([m.width, m.height])
 
     def kick(P: np.ndarray, T: np.ndarray) -> np.ndarray:

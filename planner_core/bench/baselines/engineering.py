@@ -36,6 +36,7 @@ import numpy as np
 from planner_core.bench.baselines import OptimiseResult
 from planner_core.pipeline.evaluator import as_evaluator
 from planner_core.search.construct import LegTimes, candidate_plans
+from planner_core.streams import stream_seed
 
 __all__ = ["ORDERS", "ROUTING_SOLUTIONS", "optimise", "ortools_order", "score_candidates"]
 
@@ -128,10 +129,10 @@ def optimise(problem: Any, budget: int, seed: int, *, order: str = "ortools",
         time_limit: None (default): one round of candidates, the peer as a practitioner runs
             it. Seconds of wall clock: the peer given that time (issue 31's comparison at the
             planner's wall time): after the first round it builds further rounds from new
-            seeds (round r from `SeedSequence([seed, 31, r])`: other k-means inits and slide
-            directions), scoring only plans not scored before, while the clock and the budget
-            last; a round past the limit ends at its next site set. Not deterministic: how
-            many rounds fit depends on the machine.
+            seeds (round r from `stream_seed(seed, "fresh", r)`, as the planner's fresh
+            sweeps: other k-means inits and slide directions), scoring only plans not scored
+            before, while the clock and the budget last; a round past the limit ends at its
+            next site set. Not deterministic: how many rounds fit depends on the machine.
 
     Returns:
         The Deb-best plan, its f and phi, the evaluations used and the trace.
@@ -152,8 +153,7 @@ def optimise(problem: Any, budget: int, seed: int, *, order: str = "ortools",
         seen: set[bytes] = set()
         r = 0
         while budgeted.remaining > 0 and (r == 0 or not late()):
-            seed_r = seed if r == 0 else int(
-                np.random.SeedSequence([int(seed), 31, r]).generate_state(1)[0])
+            seed_r = seed if r == 0 else stream_seed(seed, "fresh", r)
             score_candidates(budgeted, seed_r, order, stop=late if r else None, skip=seen)
             r += 1
     x, f, phi = budgeted.best("deb")
