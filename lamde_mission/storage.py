@@ -255,17 +255,19 @@ def storable_plan(
     Each hover point moves to a nearby 1e-7 degree grid point whose legs (from the previous,
     already stored, point and to the next) stay out of the obstacles of `planning_map` (the
     map the plan was made on: the obstacles inflated by the clearance; default `map`), that
-    lies in the area (C1) and keeps its rates within R_lambda (C3); the nearest such point of a
-    growing neighbourhood (1, 2, 4, 8 then 16 steps of the grid, ~1 cm each: a detour corner
-    whose legs graze two obstacle edges may need a few centimetres), else the nearest grid
-    point. Cost: at most 32 x 32 candidates a point, each two legs against the obstacles, the
-    larger neighbourhoods only where the smaller hold none. Hover times are then
-    raised, where the sim finds a sensor short of `planning_map`'s required data (which
-    includes the data margin), at the hover point with the best rate to it, and rounded up to
-    the dialect's storage (`hover_time_up`, never above T_max). A point of 0 s (a corner,
-    written as NAV_WAYPOINT) is raised only while fewer than I_max points hover, so a plan
-    with corner slots keeps at most I_max hover points. Every check uses the sim's
-    own geometry and replay on the stored items.
+    lies in the area (C1) and, in simultaneous access, keeps its rates within R_lambda (C3);
+    the nearest such point of a growing neighbourhood (1, 2, 4, 8 then 16 steps of the grid,
+    ~1 cm each: a detour corner whose legs graze two obstacle edges may need a few
+    centimetres), else the nearest grid point. Cost: at most 32 x 32 candidates a point,
+    each two legs against the obstacles, the larger neighbourhoods only where the smaller
+    hold none. Hover times are then raised, where the sim finds a sensor short of
+    `planning_map`'s required data (which includes the data margin), at the point with the
+    best rate to it, and rounded up to the dialect's storage (`hover_time_up`, never above
+    T_max); in simultaneous access never at a point whose summed rates exceed R_lambda
+    (hovering there would break C3). A point of 0 s (a corner, written as NAV_WAYPOINT) is
+    raised only while fewer than I_max points hover, so a plan with corner slots keeps at
+    most I_max hover points. Every check uses the sim's own geometry and replay on the
+    stored items.
     """
     from sim.obstacles import obstacle_shapes, overlap_lengths
     from sim.replay import hover_rates, replay
@@ -279,6 +281,9 @@ def storable_plan(
     alt = float32(spec.uav.altitude)
     sensors = np.asarray(pm.sensors, dtype=float)
     bw = float(spec.radio.bandwidth)
+    # C3 on a point's summed rates is the simultaneous access's (the paper's); in scheduled
+    # access the sensors share R_lambda by time slots and the sim checks the allocation
+    simultaneous = spec.radio.access != "scheduled"
     shapes = obstacle_shapes(pm)
     start = _grid_point(map, np.asarray(map.start, dtype=float))
     end = _grid_point(map, np.asarray(map.end, dtype=float))
@@ -288,7 +293,7 @@ def storable_plan(
             return False
         rates = hover_rates(q[None, :], np.array([alt]), sensors, spec.radio.peak_rate,
                             spec.radio.decay)  # fmt: skip
-        if rates.sum() > bw:
+        if simultaneous and rates.sum() > bw:
             return False
         if shapes:
             over = overlap_lengths(np.array([prev, q, nxt]), shapes)
@@ -328,11 +333,15 @@ def storable_plan(
         R = hover_rates(points, np.full(len(points), alt), sensors, spec.radio.peak_rate,
                         spec.radio.decay)  # fmt: skip
         R[hov] = tl.rates
+        # a point may hover longer only where hovering keeps C3: a corner in a dense field
+        # hears more than R_lambda in all, so raising it would make a hover point that fails
+        # C3 (L08's 25-min battery map, seed 3, sortie 7: 49.7 of 25 Mbit/s)
+        keeps_c3 = R.sum(axis=1) <= bw if simultaneous else np.ones(len(R), dtype=bool)
         raw = times.copy()
         for j in np.argsort(-short):
             if short[j] <= 0.0:
                 continue
-            room = raw < t_max
+            room = (raw < t_max) & keeps_c3
             if i_max and np.count_nonzero(raw > 0.0) >= i_max:
                 room &= raw > 0.0  # a corner (0 s) stays one once I_max points hover
             if not np.any(room & (R[:, j] > 0)):
