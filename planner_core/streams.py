@@ -27,7 +27,7 @@ STREAMS: dict[str, int] = {
     "kicks": 17,  # structure.kicks (index: the improving round, none for the final stage's)
     "fresh": 31,  # schedule's fresh sweep (index: the sweep); the engineering peer's rounds
     "fleet": 33,  # fleet.search: the sortie planner's sub-runs and tour moves
-    "other-structure": 37,  # stages: the repair stage's DE on the pool's other structure
+    "repair": 37,  # stages.Repair: the DE again from the final population, memetic repair
     "de-block": 41,  # schedule's DE blocks (index: the step)
     "rebuild": 43,  # rebuild.rebuild (index: the improving round)
     "window": 47,  # schedule's windows (indices: the step, the try)

@@ -256,29 +256,34 @@ def test_storage_raises_hover_times_beside_a_corner(m):
     assert verify(replay(items, m), m).passed
 
 
+#: four sensors within 60 m: a point amid them hears 35.5 of 25 Mbit/s, one 500 m north
+#: 20.1 Mbit/s (altitude 100 m, the default radio)
+DENSE_FIELD = {
+    "name": "field",
+    "origin": {"lat": 46.2, "lon": 7.3, "alt": 500.0},
+    "area": {"width": 2000, "height": 2000},
+    "start": [100, 1000],
+    "end": [1900, 1500],
+    "sensors": [{"id": "a", "x": 1000, "y": 1000}, {"id": "b", "x": 1000, "y": 1060},
+                {"id": "c", "x": 1060, "y": 1000}, {"id": "d", "x": 940, "y": 1000}],
+    "uav": {"altitude": 100},
+    "safety": {"clearance": 0, "data_margin": 0},
+}  # fmt: skip
+
+
 def test_storage_never_raises_a_point_that_would_break_c3():
     """A corner (0 s) amid a dense field hears 35.5 of 25 Mbit/s: a sensor short once stored
     gets its data from the hover point that keeps C3, not from the corner with the better
     rate (L08's 25-min battery map, seed 3: the corner of sortie 7 was raised to 1 s and the
     stored sortie failed C3 at 49.7 of 25 Mbit/s)."""
-    field = {
-        "name": "field",
-        "origin": {"lat": 46.2, "lon": 7.3, "alt": 500.0},
-        "area": {"width": 2000, "height": 2000},
-        "start": [100, 1000],
-        "end": [1900, 1500],
-        "sensors": [{"id": "a", "x": 1000, "y": 1000}, {"id": "b", "x": 1000, "y": 1060},
-                    {"id": "c", "x": 1060, "y": 1000}, {"id": "d", "x": 940, "y": 1000}],
-        "uav": {"altitude": 100},
-        "safety": {"clearance": 0, "data_margin": 0},
-    }  # fmt: skip
-    fm = load_map(field)
-    # the corner's rates sum above R_lambda: hovering there breaks C3
     from sim.replay import hover_rates
 
+    fm = load_map(DENSE_FIELD)
+    radio = fm.spec.radio
+    # the corner's rates sum above R_lambda: hovering there breaks C3
     rates = hover_rates(np.array([[1000.0, 1000.0], [1000.0, 1500.0]]), np.array([100.0, 100.0]),
-                        np.asarray(fm.sensors, dtype=float), 10.0, 0.01)  # fmt: skip
-    assert rates[0].sum() > 25.0 >= rates[1].sum()
+                        np.asarray(fm.sensors, dtype=float), radio.peak_rate, radio.decay)
+    assert rates[0].sum() > radio.bandwidth >= rates[1].sum()
     # 41 s at the hover point leaves c and d short (200 Mbit at 4.87 Mbit/s needs 41.07 s)
     short = SimpleNamespace(hover_points=[[1000, 1000], [1000, 1500]], hover_times=[0.0, 41.0])
     stored = storable_plan(short, fm, "generic", planning_map=fm.planning_map())
@@ -292,19 +297,7 @@ def test_storage_in_scheduled_access_keeps_the_dense_point():
     rates exceed R_lambda may hover, and may be raised: 31 s there leaves the field short
     (800 Mbit at 25 Mbit/s takes 32 s), and the stored plan serves it and passes the sim's
     allocation check."""
-    field = {
-        "name": "field-scheduled",
-        "origin": {"lat": 46.2, "lon": 7.3, "alt": 500.0},
-        "area": {"width": 2000, "height": 2000},
-        "start": [100, 1000],
-        "end": [1900, 1500],
-        "sensors": [{"id": "a", "x": 1000, "y": 1000}, {"id": "b", "x": 1000, "y": 1060},
-                    {"id": "c", "x": 1060, "y": 1000}, {"id": "d", "x": 940, "y": 1000}],
-        "uav": {"altitude": 100},
-        "radio": {"access": "scheduled"},
-        "safety": {"clearance": 0, "data_margin": 0},
-    }  # fmt: skip
-    fm = load_map(field)
+    fm = load_map({**DENSE_FIELD, "name": "field-scheduled", "radio": {"access": "scheduled"}})
     plan = SimpleNamespace(hover_points=[[1000, 1000]], hover_times=[31.0])
     stored = storable_plan(plan, fm, "generic", planning_map=fm.planning_map())
     assert np.hypot(*(stored.hover_points[0] - [1000.0, 1000.0])) < 0.05

@@ -480,7 +480,7 @@ class Repair(_Base):
         else:
             rows = state.pool.X[state.pool.ordered()]
         rows = np.vstack([ev.best()[0][None, :], rows])[:n]
-        seed = stream_seed(cfg.seed, "other-structure")
+        seed = stream_seed(cfg.seed, "repair")
         run(InjectedPopulation(ev, rows), configurator=cfg.configurator, seed=seed,
             population=n, budget=ev.remaining, refine=functools.partial(refine, problem))
         return state
