@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 from dataclasses import dataclass
 from pathlib import Path
@@ -38,8 +39,8 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["FLEET_FILE", "SortieCheck", "FleetCheck", "sortie_file", "sortie_map",
-           "write_sortie_dir", "verify_sortie_dir"]  # fmt: skip
+__all__ = ["FLEET_FILE", "SortieCheck", "FleetCheck", "sortie_dir_refusal", "sortie_file",
+           "sortie_map", "write_sortie_dir", "verify_sortie_dir"]  # fmt: skip
 
 #: the summary file of a sortie directory
 FLEET_FILE = "fleet.json"
@@ -48,6 +49,45 @@ FLEET_FILE = "fleet.json"
 def sortie_file(vehicle: int, sortie: int) -> str:
     """`mission-v{vehicle}-s{sortie}.plan` (both 1-based)."""
     return f"mission-v{int(vehicle)}-s{int(sortie)}.plan"
+
+
+#: the names a sortie directory holds (`sortie_file`, `FLEET_FILE`): nothing else is replaced
+_SORTIE_NAME = re.compile(r"mission-v[0-9]+-s[0-9]+\.plan")
+
+
+def sortie_dir_refusal(out_dir: str | Path) -> str | None:
+    """Why `out_dir` may not be written (created or replaced) as a sortie directory, or None.
+
+    A sortie directory replaces the folder at its path whole, so only a path that does not
+    exist yet, an empty folder or an earlier sortie directory (nothing but `FLEET_FILE` and
+    `mission-v{vehicle}-s{sortie}.plan` files) may be written; never a file, the working
+    folder or one above it, nor a folder holding anything else (it would be deleted).
+
+    Args:
+        out_dir: the directory's path.
+
+    Returns:
+        None when it may be written, else the reason in a few words (names the first few
+        foreign entries).
+    """
+    target = Path(out_dir)
+    if target.exists() and not target.is_dir():
+        return "is a file; a map with a battery or fleet is written as a directory of sorties"
+    resolved = target.resolve()
+    if resolved == Path.cwd().resolve() or resolved in Path.cwd().resolve().parents:
+        return ("is the working folder or one above it; name a new folder for the sorties "
+                "(e.g. -o sorties/)")
+    if not target.exists():
+        return None
+    ours = (FLEET_FILE,)
+    foreign = sorted(e.name for e in target.iterdir()
+                     if not (e.is_file() and (e.name in ours or _SORTIE_NAME.fullmatch(e.name))))
+    if foreign:
+        more = f" and {len(foreign) - 3} more" if len(foreign) > 3 else ""
+        shown = ", ".join(foreign[:3]) + more
+        return (f"holds {shown}, which a sortie directory does not (writing it replaces the "
+                "folder whole); name a new or empty folder, or an earlier sortie directory")
+    return None
 
 
 def sortie_map(
@@ -254,7 +294,8 @@ def write_sortie_dir(
     Args:
         plan: the fleet plan.
         m: the map (with its origin).
-        out_dir: the directory to create or replace.
+        out_dir: the directory to create, or to replace when it is empty or an earlier sortie
+            directory (`sortie_dir_refusal`).
         autopilot: "generic", "px4" or "ardupilot" (`lamde_mission.storage`).
         goal: the objective named in fleet.json.
         allow_infeasible: write it even when a verdict fails.
@@ -263,6 +304,9 @@ def write_sortie_dir(
         (the `FleetCheck` of the stored missions, whether the directory was written).
 
     Raises:
+        FileExistsError: `out_dir` is a file, the working folder (or above it) or a folder
+            holding anything but a sortie directory's files (`sortie_dir_refusal`); checked
+            before anything is written.
         OSError: the directory cannot be written (nothing is left half-written).
     """
     from lamde_mission.formats import write_mission
@@ -274,7 +318,10 @@ def write_sortie_dir(
     st = plan.settings
     shares = collected_by_sortie(plan, ModelParams.from_map(m.planning_map()))  # Mbit, margin in
     margin = 1.0 + float(m.spec.safety.data_margin)
-    target = Path(out_dir)
+    refusal = sortie_dir_refusal(out_dir)
+    if refusal is not None:
+        raise FileExistsError(f"{out_dir}: {refusal}")
+    target = Path(out_dir).resolve()
     pending = target.with_name(f".{target.name}.lamde-pending-{os.getpid()}")
     if pending.exists():
         shutil.rmtree(pending)

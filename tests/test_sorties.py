@@ -387,3 +387,43 @@ def test_the_fleet_tables_are_what_bench_fleet_summary_prints() -> None:
         assert rows, path.name
         for row in rows:
             assert row in doc, (path.name, row)
+
+
+def test_a_sortie_dir_never_replaces_a_folder_of_other_files(tmp_path) -> None:
+    # writing a sortie directory replaces the folder whole: a folder holding the user's own
+    # files (the map, notes, a subfolder), the working folder and a file are refused before any
+    # planning (exit 2, one line, nothing touched); an empty folder or an earlier sortie
+    # directory may be written
+    from lamde_mission.sorties import FLEET_FILE, sortie_dir_refusal, sortie_file
+    from tests.conftest import run_cli_many
+
+    work = tmp_path / "work"
+    work.mkdir()
+    (work / "mymap.json").write_text(DEMO.read_text())
+    (work / "notes.txt").write_text("x")
+    (work / "photos").mkdir()
+    here, up, full, foreign, a_file = run_cli_many(
+        ("plan", "mymap.json", "-o", ".", "--quiet"),
+        ("plan", "mymap.json", "-o", "..", "--quiet"),
+        ("plan", "mymap.json", "-o", str(work) + "/", "--quiet"),
+        cwd=work) + run_cli_many(
+        ("plan", "work/mymap.json", "-o", "work/", "--quiet"),
+        ("plan", "work/mymap.json", "-o", "work/notes.txt", "--quiet"), cwd=tmp_path)
+    for r in (here, up, full, foreign, a_file):
+        assert r.returncode == 2 and len(r.stderr.splitlines()) == 1, r.stderr
+        assert "Traceback" not in r.stderr and not r.stdout
+    assert all("working folder" in r.stderr for r in (here, up, full))
+    assert "holds mymap.json, notes.txt, photos" in foreign.stderr
+    assert "is a file" in a_file.stderr
+    assert sorted(p.name for p in work.iterdir()) == ["mymap.json", "notes.txt", "photos"]
+    # what may be written
+    assert sortie_dir_refusal(tmp_path / "new") is None
+    (tmp_path / "empty").mkdir()
+    assert sortie_dir_refusal(tmp_path / "empty") is None
+    old = tmp_path / "old"
+    old.mkdir()
+    for name in (FLEET_FILE, sortie_file(1, 1), sortie_file(2, 12)):
+        (old / name).write_text("{}")
+    assert sortie_dir_refusal(old) is None
+    (old / "mission-v1-s1.plan.bak").write_text("{}")
+    assert "mission-v1-s1.plan.bak" in sortie_dir_refusal(old)

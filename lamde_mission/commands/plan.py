@@ -19,8 +19,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "DE, replay the mission in the simulator, print a summary and write the mission file. "
         "An infeasible mission is not written unless --allow-infeasible. Exit status: 0 ok, "
         "1 infeasible, 2 bad input. A map with a battery (uav.battery or uav.endurance_s) or a "
-        "fleet is planned as sorties (docs/sorties.md): OUT is then a directory, written whole "
-        "or not at all, holding mission-v{vehicle}-s{sortie}.plan (both 1-based: "
+        "fleet is planned as sorties (docs/sorties.md): OUT is then a directory (new, empty or an "
+        "earlier sortie directory: it is replaced whole), written whole or not at all, holding "
+        "mission-v{vehicle}-s{sortie}.plan (both 1-based: "
         "mission-v1-s2.plan is vehicle 1's second sortie, each a complete mission from "
         "take-off at its depot to landing at its depot) and fleet.json (per sortie: depots, "
         "duration, energy, reserve left, sensors served; per vehicle: makespan).",
@@ -397,10 +398,12 @@ def _run_sorties(args: argparse.Namespace) -> int:
         from lamde_mission.commands._common import check_outputs
 
         check_outputs([("--plot", args.plot)], mkdir=args.mkdir)
+    from lamde_mission.sorties import sortie_dir_refusal
+
     out = Path(args.output)
-    if out.exists() and not out.is_dir():
-        raise UsageError(f"-o/--output: {printable(args.output)} is a file; a map with a "
-                         "battery or fleet is written as a directory of sorties (DIR/)")
+    refusal = sortie_dir_refusal(out)  # before any work: writing replaces the folder whole
+    if refusal is not None:
+        raise UsageError(f"-o/--output: {printable(args.output)} {refusal}")
     if not out.resolve().parent.is_dir():
         if not args.mkdir:
             raise UsageError(f"-o/--output: folder {printable(str(out.resolve().parent))} "
@@ -445,8 +448,11 @@ def _run_sorties(args: argparse.Namespace) -> int:
         print(f"lamde-mission plan: {args.map}: {exc}", file=sys.stderr)
         return 1
     plan = result.plan
-    check, written = write_sortie_dir(plan, m, out, autopilot=args.autopilot, goal=goal,
-                                      allow_infeasible=args.allow_infeasible)
+    try:
+        check, written = write_sortie_dir(plan, m, out, autopilot=args.autopilot, goal=goal,
+                                          allow_infeasible=args.allow_infeasible)
+    except FileExistsError as exc:  # the folder changed while planning
+        raise UsageError(f"-o/--output: {exc}") from None
     if not args.quiet:
         print(f"map '{printable(m.name)}': {len(plan.sorties)} sorties on "
               f"{len(plan.vehicles)} vehicle(s), objective {goal}, {plan.evaluations} "
