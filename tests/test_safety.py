@@ -70,6 +70,28 @@ def test_zero_margins_score_exactly_as_the_paper_model():
     assert np.array_equal(f0, f1) and np.array_equal(p0, p1)
 
 
+def test_required_data_with_its_margin_stays_within_the_limit():
+    # a required data the validator accepts (<= 1e7 Mbit) but the margin raises past the limit
+    # used to fail later, inside the planning map, with a traceback naming a field the user
+    # never wrote; now the map is refused on load, one problem naming the field written
+    from planner_core.model.mapio import MapError
+
+    d = _default_margins("T01")
+    d["sensors"][0]["required_data"] = 1e7
+    with pytest.raises(MapError) as err:
+        load_map(d)
+    assert [str(p) for p in err.value.problems] == [
+        "sensors[0].required_data: 1e+07 Mbit with safety.data_margin 0.02 is 1.02e+07 Mbit "
+        "to plan, above the limit 1e+07 (lower one of them)"]
+    d["safety"] = {"data_margin": 0.0}  # the paper's model: the limit itself is allowed
+    assert load_map(d).planning_map().required_data[0] == 1e7
+    d = _default_margins("T01")
+    d.setdefault("radio", {})["required_data"] = 9.9e6
+    with pytest.raises(MapError) as err:
+        load_map(d)
+    assert [str(p).split(":")[0] for p in err.value.problems] == ["radio.required_data"]
+
+
 def test_planning_map_inflates_obstacles_and_raises_data():
     d = _default_margins("T01")
     d["safety"] = {"clearance": 12.0, "data_margin": 0.05}

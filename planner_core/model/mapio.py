@@ -901,6 +901,29 @@ def _pydantic_problems(err: ValidationError) -> list[str]:
     return lines
 
 
+def _margin_problems(spec: MapFile) -> list[str]:
+    """The required data the planner plans with, Q_j x (1 + safety.data_margin), kept within
+    the limit of `radio.required_data` (the planning map is a map too): one problem naming the
+    field the value came from (`radio.required_data` once for the sensors that take it)."""
+    margin = float(spec.safety.data_margin)
+    limit = float(MAP_DEFAULTS["radio.required_data"].bounds[1])
+    if margin <= 0.0:
+        return []
+    out: list[str] = []
+    q = float(spec.radio.required_data)
+    if any(s.required_data is None for s in spec.sensors) and q * (1.0 + margin) > limit:
+        out.append(f"radio.required_data: {q:g} Mbit with safety.data_margin {margin:g} is "
+                   f"{q * (1.0 + margin):.6g} Mbit to plan, above the limit {limit:g} (lower "
+                   "one of them)")
+    for j, s in enumerate(spec.sensors):
+        if s.required_data is not None and s.required_data * (1.0 + margin) > limit:
+            out.append(f"sensors[{j}].required_data: {s.required_data:g} Mbit with "
+                       f"safety.data_margin {margin:g} is "
+                       f"{s.required_data * (1.0 + margin):.6g} Mbit to plan, above the limit "
+                       f"{limit:g} (lower one of them)")
+    return out
+
+
 def _semantic_problems(
     spec: MapFile, end_gap: float = 0.0,
 ) -> tuple[list[str], list[str], list[PolygonShape], Obstacles | None]:
@@ -925,6 +948,7 @@ def _semantic_problems(
         if s.id in seen:
             problems.append(f"sensors[{j}].id: duplicate sensor id '{s.id}'")
         seen.add(s.id)
+    problems += _margin_problems(spec)
     obs = spec.obstacles
     for k, c in enumerate(obs.circles):
         if not inside_area(c.x, c.y):
