@@ -99,3 +99,26 @@ def test_suite_and_example_maps_get_no_bandwidth_finding(path) -> None:
     d = diagnose(load_map(path))
     assert not [f for f in d.findings if f.kind.startswith("C3_")]
     assert d.bandwidth is not None and d.bandwidth.rounds == 0  # the overhead points suffice
+
+
+def test_unreachable_names_its_cause_and_the_heading_does_not_say_ok(tmp_path) -> None:
+    # a sensor no hover point hears: the finding says why, the link itself (altitude, R_c,
+    # xi: nothing is heard even overhead) or the distance to the nearest point a UAV may hover
+    # at (a sensor deep inside a no-fly zone, beyond the link's ground reach); `check`'s first
+    # line then does not read OK (exit 1)
+    high = load_map(dense_field(2, uav={"altitude": 10000}))
+    msgs = [f.message for f in diagnose(high).findings if f.kind == "UNREACHABLE"]
+    assert len(msgs) == 2 and "even overhead the link rate R_c - xi H = 10 - 0.01 x 10000 m " \
+        "is -90 Mbit/s <= 0 (radio.peak_rate, radio.decay, uav.altitude)" in msgs[0]
+    deep = dense_field(1, size=5000.0, obstacles={"no_fly_zones": [{"vertices": [
+        [500, 500], [4500, 500], [4500, 4500], [500, 4500]]}]})
+    deep["start"], deep["end"] = [100, 100], [4900, 4900]
+    msgs = [f.message for f in diagnose(load_map(deep)).findings if f.kind == "UNREACHABLE"]
+    reach = math.sqrt((10 / 0.01) ** 2 - 100**2)  # R_c / xi slant, H 100 m: 995 m
+    assert len(msgs) == 1 and f"beyond the link's ground reach of {reach:.1f} m" in msgs[0]
+    path = tmp_path / "high.json"
+    path.write_text(json.dumps(dense_field(2, uav={"altitude": 10000})))
+    r = run_cli("check", path)
+    assert r.returncode == 1
+    assert r.stdout.splitlines()[0] == \
+        "map 'dense-field': valid, but no plan can meet it (CANNOT below)"

@@ -38,9 +38,13 @@ def run(args: argparse.Namespace) -> int:
                           for f in d.findings]  # fmt: skip
         print(json.dumps(s, indent=2))
         return 0 if d.feasible_so_far else 1
+    from planner_core.model.diagnose import diagnose
+
+    d = diagnose(m)
     default = " (default for this size)" if s["max_hover_points_default"] else ""
     u, r, o = s["uav"], s["radio"], s["objective"]
-    print(f"map '{s['name']}': OK")
+    print(f"map '{s['name']}': " + ("OK" if d.feasible_so_far else
+                                    "valid, but no plan can meet it (CANNOT below)"))
     print(f"  area            {s['area_m'][0]:g} m x {s['area_m'][1]:g} m")
     if s["origin"] is None:
         print("  origin          none: give one (or --origin LAT,LON[,ALT]) to write a mission")
@@ -68,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"  safety          clearance {sf['clearance']:g} m, data margin "
           f"{100 * sf['data_margin']:g} %")
     _energy_lines(s)
-    return _diagnosis(m)
+    return _diagnosis(d)
 
 
 def _energy_lines(s: dict) -> None:
@@ -88,11 +92,9 @@ def _energy_lines(s: dict) -> None:
               f"{where}, swap {f['swap_s']:g} s, goal {s['goal']}")
 
 
-def _diagnosis(m: object) -> int:
-    """Print the fast feasibility diagnosis; 1 when something rules every plan out."""
-    from planner_core.model.diagnose import diagnose
-
-    d = diagnose(m)
+def _diagnosis(d: object) -> int:
+    """Print the fast feasibility diagnosis `d` (`planner_core.model.diagnose.diagnose`'s);
+    1 when something rules every plan out."""
     for f in d.findings:
         print(f"  {'CANNOT' if f.fatal else 'note':<6}  {f.message}")
     if any(f.kind.startswith("C3_") for f in d.findings):

@@ -53,7 +53,7 @@ from typing import Any
 
 import numpy as np
 
-from planner_core.model.formulas import link_rates
+from planner_core.model.formulas import ground_reach, link_rates
 
 __all__ = ["BandwidthBound", "Finding", "Diagnosis", "bandwidth_bound", "diagnose"]
 
@@ -141,9 +141,18 @@ def diagnose(m: Any) -> Diagnosis:
             need[sid] = 0
             continue
         if r <= 0.0:
+            overhead = float(radio.peak_rate) - float(radio.decay) * float(uav.altitude)
+            if overhead <= 0.0:  # the link model reaches no ground point at this altitude
+                why = (f"even overhead the link rate R_c - xi H = {radio.peak_rate:g} - "
+                       f"{radio.decay:g} x {uav.altitude:g} m is {overhead:.4g} Mbit/s <= 0 "
+                       "(radio.peak_rate, radio.decay, uav.altitude)")
+            else:
+                reach_m = float(ground_reach(0.0, uav.altitude, radio.peak_rate, radio.decay))
+                why = (f"the nearest reachable hover point is {d:.1f} m away, beyond the "
+                       f"link's ground reach of {reach_m:.1f} m (rate 0)")
             findings.append(Finding(
                 "UNREACHABLE", True, f"sensor '{sid}': no reachable hover point gets any data "
-                f"from it (nearest reachable point {d:.1f} m away, rate 0)", sid))
+                f"from it: {why}", sid))
             need[sid] = i_max + 1
             continue
         k = math.ceil(q / (t_max * r) - 1e-12)
