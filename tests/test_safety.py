@@ -131,6 +131,15 @@ def test_clearance_near_the_start_leaves_the_start_outside():
     assert plan.feasible
     v = verify(replay(plan_to_items(storable_plan(plan, m, "px4", planning_map=pm), m), m), m)
     assert v.passed, v.table()
+    # the reduced clearance is said where it is judged: the sim's CLEAR row and check's summary
+    clear = next(x for x in v.items if x.name == "CLEAR")
+    assert clear.title == "clearance >= 10 m (less by the start/end)"
+    from lamde_mission.commands.check import _reduced_clearance
+
+    assert _reduced_clearance(m) == (" (less where the start, end or a depot is closer: "
+                                     "1.95 m at circle 0)")
+    d["obstacles"]["circles"][0]["y"] = 300  # far from both ends: nothing reduced
+    assert _reduced_clearance(load_map(d)) == ""
 
 
 def test_non_convex_polygons_and_holes_are_inflated_too():

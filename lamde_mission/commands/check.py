@@ -69,10 +69,26 @@ def run(args: argparse.Namespace) -> int:
     if s["has_witness"]:
         print("  witness         a known feasible plan is stored in the map")
     sf = s["safety"]
-    print(f"  safety          clearance {sf['clearance']:g} m, data margin "
-          f"{100 * sf['data_margin']:g} %")
+    print(f"  safety          clearance {sf['clearance']:g} m{_reduced_clearance(m)}, data "
+          f"margin {100 * sf['data_margin']:g} %")
     _energy_lines(s)
     return _diagnosis(d)
+
+
+def _reduced_clearance(m: object) -> str:
+    """', less where the start, end or a depot is closer: ...' naming the obstacles whose
+    clearance in force (`Map.obstacle_clearances`) is below the asked one (up to three), or ''."""
+    asked = float(m.spec.safety.clearance)
+    obs = m.spec.obstacles
+    labels = ([f"circle {k}" for k in range(len(obs.circles))]
+              + [f"rectangle {k}" for k in range(len(obs.rectangles))]
+              + [f"no-fly zone {k}" for k in range(len(obs.no_fly_zones))])
+    less = [(lab, c) for lab, c in zip(labels, m.obstacle_clearances, strict=True) if c < asked]
+    if not less:
+        return ""
+    shown = ", ".join(f"{c:.3g} m at {lab}" for lab, c in less[:3])
+    more = f" and {len(less) - 3} more" if len(less) > 3 else ""
+    return f" (less where the start, end or a depot is closer: {shown}{more})"
 
 
 def _energy_lines(s: dict) -> None:
