@@ -272,8 +272,29 @@ def test_given_origin_clips_obstacles_and_refuses_sensors_outside(tmp_path) -> N
     assert m.shapes[0].shell[:, 0].min() == pytest.approx(0.0, abs=1e-6)
     doc["features"].append(_feat("sensor", "Point", _pt(-1, 1), id="west"))
     layers = read_layers([(_write(tmp_path, "c2.geojson", doc), None)])
-    with pytest.raises(GisError, match="sensor .* is outside the area"):
+    with pytest.raises(GisError, match="sensor .* is outside the area") as err:
         build_map(layers, origin=origin)
+    # the position quoted is the feature's own, as the file gives it
+    lon, lat = _pt(-1, 1)
+    assert f"sensor (lon {lon:.6f}, lat {lat:.6f}) is outside the area" in str(err.value)
+
+
+def test_a_stray_far_feature_is_named_as_the_cause(tmp_path) -> None:
+    # one sensor on another continent: the data cannot be one map; said once, with the
+    # longitudes and latitudes the file spans, not as every other feature being "outside"
+    doc = _fc(*_basics(), _feat("sensor", "Point", [-70.0, -33.0], id="far"))
+    layers = read_layers([(_write(tmp_path, "far.geojson", doc), None)])
+    with pytest.raises(GisError) as err:
+        build_map(layers)
+    assert len(err.value.problems) == 1
+    assert err.value.problems[0].startswith(
+        "the features lie too far apart for one map (longitude -70.000000 to ")
+    # with an origin given the frame is the user's: only the stray sensor is outside it
+    with pytest.raises(GisError) as err:
+        build_map(layers, origin=(LAT - 0.5 * D, LON - 0.5 * D, 0.0))
+    assert len(err.value.problems) == 1
+    assert err.value.problems[0].endswith(
+        "sensor (lon -70.000000, lat -33.000000) is outside the area")
 
 
 @pytest.mark.slow  # measured 6 s (issue 35: default suite <= 5 min)

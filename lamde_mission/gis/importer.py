@@ -368,6 +368,11 @@ def _all_lonlat(layers: GisLayers) -> np.ndarray:
     return np.array(pts, dtype=float).reshape(-1, 2)
 
 
+def _lonlat(e: dict[str, Any]) -> str:
+    """A point feature's own position as the file gives it: 'lon X, lat Y' (6 decimals)."""
+    return f"lon {float(e['lon']):.6f}, lat {float(e['lat']):.6f}"
+
+
 def _local(lonlat: Any, origin: tuple[float, float, float]) -> np.ndarray:
     a = np.asarray(lonlat, dtype=float).reshape(-1, 2)
     x, y = latlon_to_enu(a[:, 1], a[:, 0], origin)
@@ -420,6 +425,14 @@ def _frame(layers: GisLayers, origin: tuple[float, float, float] | None,
     else:
         o = origin
         w, h = float(hi[0]), float(hi[1])
+    from planner_core.model.mapio import MAX_SIDE
+
+    if w > MAX_SIDE or h > MAX_SIDE:  # a stray feature far from the others, usually
+        lon, lat = data[:, 0], data[:, 1]
+        raise GisError([f"the features lie too far apart for one map (longitude "
+                        f"{lon.min():.6f} to {lon.max():.6f}, latitude {lat.min():.6f} to "
+                        f"{lat.max():.6f}; a map's side is at most {MAX_SIDE / 1000:g} km): is "
+                        "one feature far from the others?"])
     # round the area outward to the centimetre
     w, h = math.ceil(w * 100.0) / 100.0, math.ceil(h * 100.0) / 100.0
     if not (w > 0 and h > 0):
@@ -470,7 +483,7 @@ def build_map(
     def point(e: dict[str, Any], label: str) -> list[float] | None:
         (x, y), = _local([(e["lon"], e["lat"])], o)
         if not (0.0 <= x <= W and 0.0 <= y <= H):
-            problems.append(f"{e['where']}: {label} ({locate(x, y)}) is outside the area")
+            problems.append(f"{e['where']}: {label} ({_lonlat(e)}) is outside the area")
             return None
         return [round(float(x), 4), round(float(y), 4)]
 
@@ -537,7 +550,7 @@ def build_map(
     for c in layers.circles:
         (x, y), = _local([(c["lon"], c["lat"])], o)
         if not (0.0 <= x <= W and 0.0 <= y <= H):
-            problems.append(f"{c['where']}: circle centre ({locate(x, y)}) is outside the area")
+            problems.append(f"{c['where']}: circle centre ({_lonlat(c)}) is outside the area")
             continue
         circles.append({"x": round(float(x), 4), "y": round(float(y), 4), "radius": c["radius"]})
     if area_given and (layers.areas or layers.area_circles):
