@@ -427,3 +427,18 @@ def test_a_sortie_dir_never_replaces_a_folder_of_other_files(tmp_path) -> None:
     assert sortie_dir_refusal(old) is None
     (old / "mission-v1-s1.plan.bak").write_text("{}")
     assert "mission-v1-s1.plan.bak" in sortie_dir_refusal(old)
+
+
+def test_options_a_sortie_directory_cannot_take_are_refused_with_their_reason(tmp_path) -> None:
+    from tests.conftest import run_cli_many
+
+    out = str(tmp_path / "d")
+    rs = run_cli_many(("plan", DEMO, "-o", out, "--report", str(tmp_path / "r.html")),
+                      ("plan", DEMO, "-o", out, "--time-limit", "5"),
+                      ("plan", DEMO, "-o", out, "--finish", "rtl"))
+    whys = ["fleet.json is its report", "runs to its budgets: --budget and --sortie-budget",
+            "every sortie lands at its depot"]
+    for r, why in zip(rs, whys, strict=True):
+        assert r.returncode == 2 and len(r.stderr.splitlines()) == 1, r.stderr
+        assert "not available for a map with a battery or fleet" in r.stderr and why in r.stderr
+    assert not (tmp_path / "d").exists()

@@ -383,14 +383,21 @@ def _run_sorties(args: argparse.Namespace) -> int:
     from lamde_mission.errors import UsageError
     from planner_core.textio import printable
 
-    for opt, bad in (("--format", args.format not in (None, "plan")),
-                     ("--report", args.report), ("--finish", args.finish != "land"),
-                     ("--policy", args.policy), ("--time-limit", args.time_limit is not None),
-                     ("--scheduler", args.scheduler != "default"),
-                     ("--corner-slots", _corner_slots(args) not in ("auto", 0))):
+    for opt, bad, why in (
+        ("--format", args.format not in (None, "plan"),
+         "its sorties are written as .plan files in a directory"),
+        ("--report", args.report, "the sortie directory's fleet.json is its report"),
+        ("--finish", args.finish != "land", "every sortie lands at its depot"),
+        ("--policy", args.policy, "the sortie planner's pipeline runs take no policy file"),
+        ("--time-limit", args.time_limit is not None,
+         "the sortie planner runs to its budgets: --budget and --sortie-budget"),
+        ("--scheduler", args.scheduler != "default",
+         "the sortie planner's pipeline runs keep the default improving rounds"),
+        ("--corner-slots", _corner_slots(args) not in ("auto", 0),
+         "the sortie planner does not take corner slots yet"),
+    ):
         if bad:
-            raise UsageError(f"{opt}: not available for a map with a battery or fleet (its "
-                             "sorties are written as .plan files in a directory)")
+            raise UsageError(f"{opt}: not available for a map with a battery or fleet ({why})")
     if args.plot:  # before any work, as for one flight
         if not args.plot.lower().endswith((".png", ".svg")):
             raise UsageError(f"--plot: {args.plot}: image format must be PNG or SVG "
