@@ -79,11 +79,8 @@ def _reduced_clearance(m: object) -> str:
     """', less where the start, end or a depot is closer: ...' naming the obstacles whose
     clearance in force (`Map.obstacle_clearances`) is below the asked one (up to three), or ''."""
     asked = float(m.spec.safety.clearance)
-    obs = m.spec.obstacles
-    labels = ([f"circle {k}" for k in range(len(obs.circles))]
-              + [f"rectangle {k}" for k in range(len(obs.rectangles))]
-              + [f"no-fly zone {k}" for k in range(len(obs.no_fly_zones))])
-    less = [(lab, c) for lab, c in zip(labels, m.obstacle_clearances, strict=True) if c < asked]
+    less = [(lab, c) for lab, c in zip(m.obstacle_labels, m.obstacle_clearances, strict=True)
+            if c < asked]
     if not less:
         return ""
     shown = ", ".join(f"{c:.3g} m at {lab}" for lab, c in less[:3])

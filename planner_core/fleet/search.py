@@ -555,8 +555,9 @@ def plan_fleet(
         notes.append("start: route first, cluster second")
     if best is None:
         raise ValueError(
-            "uav.battery: no plan of sorties fits the battery from the depots "
-            "(run `lamde-mission check`)"
+            "uav.battery: no plan of sorties found that fits the battery from the depots "
+            "(run `lamde-mission check`: a sensor it names CANNOT be served; else a larger "
+            "battery or a depot nearer the sensors helps)"
         )
     peer_plan = _finish(pl, peer, ["route first, cluster second"]) if peer is not None else None
     for rnd in range(int(rounds)):

@@ -21,6 +21,10 @@ module's (`planner_core.model.energy`). Legs between a depot and a point that cr
 go through visibility-graph corners (`Links`: the seeder's reduced visibility graph, the same
 corners the single-flight plans use), flown as hover points with hover time 0.
 
+A point whose hover time no sortie of it alone can fly (a sensor heavier than one battery)
+is first repeated as consecutive copies sharing that time (`_shared_points`, at most
+`SHARE_MAX`), so the cut may fall between them; copies one piece keeps are joined again.
+
 `split_vehicles` cuts the tour into one consecutive chunk per vehicle first (balanced by work,
 then each cut moved while the objective improves) and splits each chunk.
 
@@ -173,9 +177,13 @@ def split_tour(
     """
     P = np.asarray(P, dtype=float).reshape(-1, 2)
     T = np.asarray(T, dtype=float).reshape(-1)
-    n, D = len(P), len(st.depots)
-    if n == 0:
+    if len(P) == 0:
         return None
+    shared = _shared_points(st, links, P, T)
+    if shared is None:
+        return None
+    P, T = shared
+    n, D = len(P), len(st.depots)
     goal = goal or st.goal
     wf, wh, per = (st.alpha, 1.0 - st.alpha, 0.0) if goal == "total" else (1.0, 1.0, st.vertical_s)
     starts = st.start_depots if starts is None else starts
@@ -246,7 +254,7 @@ def split_tour(
         w_in = ways[d_end][j - 1][::-1]
         pts = np.vstack([w_out, P[i:j], w_in])
         times = np.concatenate([np.zeros(len(w_out)), T[i:j], np.zeros(len(w_in))])
-        out.append(Sortie(d, d_end, pts, times))
+        out.append(_merged_repeats(Sortie(d, d_end, pts, times), float(st.uav.max_hover_time)))
         if ferry[i, d] >= 0:  # the ferry flights that brought the vehicle to d, last first
             hops = _hops(fnext, int(ferry[i, d]), d)
             for a, b in reversed(list(zip(hops[:-1], hops[1:], strict=True))):
@@ -255,6 +263,66 @@ def split_tour(
             d = int(ferry[i, d])
         j, d_end = i, d
     return out[::-1]
+
+
+#: the most sorties one hover point's time is shared among (`_shared_points`): a point that
+#: needs more is left out of the split (and the tour with it), which bounds the split's size
+SHARE_MAX = 64
+
+
+def _shared_points(
+    st: FleetSettings, links: Links, P: np.ndarray, T: np.ndarray
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """The tour with every point whose hover time no single sortie can fly repeated: k
+    consecutive copies at the same place, T_i / k s each, k the least for which a sortie of
+    that point alone (out of and back to its best depots) fits the battery and T_i / k is
+    within T_max (C2: `FleetSettings.uav.max_hover_time`); the split then
+    cuts between the copies and C4 is met over the sorties (the LP across sorties re-times
+    them). None when a point cannot be flown even with 0 s of hover or would need more than
+    `SHARE_MAX` sorties.
+
+    Args:
+        st, links: as `split_tour`.
+        P, T: the tour (n, 2) m and its hover times (n,) s.
+
+    Returns:
+        (P', T'), (n', 2) and (n',), n' >= n; P and T themselves when no point needs sharing.
+    """
+    _, ce, nc, _ = _connections(st, links, P)
+    # per point the most energy a sortie of it alone leaves for its hover: over the depot
+    # pairs (out of d, back to d'), the budget for its points less the climb and the ways
+    out_e, back_e = ce[:, None, :], ce[None, :, :]  # (D, 1, n), (1, D, n)
+    count = 1 + nc[:, None, :] + nc[None, :, :]
+    budget = st.budget_wh(count)
+    room = np.max(budget - st.vertical_wh - out_e - back_e, axis=(0, 1))  # (n,) Wh
+    if not np.all(room > 0.0):
+        return None
+    need = T * st.hover_w / 3600.0  # Wh each point's hover takes
+    k = np.maximum(np.ceil(need / room - 1e-9), 1)
+    k = np.maximum(k, np.ceil(T / float(st.uav.max_hover_time) - 1e-9))  # C2
+    if np.any(k > SHARE_MAX):  # a point hardly reachable: not worth a swarm of sorties
+        return None
+    k = k.astype(int)
+    if np.all(k == 1):
+        return P, T
+    return np.repeat(P, k, axis=0), np.repeat(T / k, k)
+
+
+def _merged_repeats(s: Sortie, t_max: float) -> Sortie:
+    """The sortie with consecutive copies of one point (`_shared_points`) joined into one
+    point hovering their summed time, as long as the sum stays within t_max (C2; a copy
+    beyond it stays a point of its own at the same place)."""
+    pts, times = np.asarray(s.points), np.asarray(s.times)
+    if len(pts) < 2 or not np.any(np.all(pts[1:] == pts[:-1], axis=1)):
+        return s
+    out_p, out_t = [pts[0]], [float(times[0])]
+    for p, t in zip(pts[1:], times[1:], strict=True):
+        if np.array_equal(p, out_p[-1]) and out_t[-1] + t <= t_max:
+            out_t[-1] += float(t)
+        else:
+            out_p.append(p)
+            out_t.append(float(t))
+    return Sortie(s.start, s.end, np.array(out_p), np.array(out_t))
 
 
 def _ferries(

@@ -101,11 +101,7 @@ def diagnose(m: Any) -> Diagnosis:
 
     shapes = _obstacle_polygons(pm)  # inflated by the clearance
     real = _obstacle_polygons(m)  # as the map gives them
-    obs = m.spec.obstacles
-    labels = ([f"circle {k}" for k in range(len(obs.circles))]
-              + [f"rectangle {k}" for k in range(len(obs.rectangles))]
-              + [f"no-fly-zone {k}" for k in range(len(obs.no_fly_zones))]
-              + [f"polygon {k}" for k in range(len(obs.polygons))])  # fmt: skip
+    labels = m.obstacle_labels
     free = box(0.0, 0.0, pm.width, pm.height)
     if shapes:
         free = free.difference(shapely.union_all(shapes))

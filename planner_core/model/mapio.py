@@ -532,8 +532,18 @@ class Map:
 
     # --- safety margins (a transformation of the map; see `Safety`) ---
     @cached_property
+    def obstacle_labels(self) -> tuple[str, ...]:
+        """A label per obstacle, in `obstacle_clearances`' order: "circle k", "rectangle k",
+        "no-fly-zone k", "polygon k" (k the index in its list of the map)."""
+        obs = self.spec.obstacles
+        return tuple([f"circle {k}" for k in range(len(obs.circles))]
+                     + [f"rectangle {k}" for k in range(len(obs.rectangles))]
+                     + [f"no-fly-zone {k}" for k in range(len(obs.no_fly_zones))]
+                     + [f"polygon {k}" for k in range(len(obs.polygons))])  # fmt: skip
+
+    @cached_property
     def obstacle_clearances(self) -> tuple[float, ...]:
-        """Clearance in force per obstacle (circles, rectangles, no-fly zones; metres):
+        """Clearance in force per obstacle (circles, rectangles, no-fly zones, polygons; metres):
         `safety.clearance`, reduced where the start or end point is closer than that to the
         obstacle (down to that distance less `CLEARANCE_PAD`, at least 0)."""
         import shapely
