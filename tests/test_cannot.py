@@ -122,3 +122,42 @@ def test_unreachable_names_its_cause_and_the_heading_does_not_say_ok(tmp_path) -
     assert r.returncode == 1
     assert r.stdout.splitlines()[0] == \
         "map 'dense-field': valid, but no plan can meet it (CANNOT below)"
+
+
+def test_sensors_spread_beyond_twice_the_reach_need_a_point_each(tmp_path) -> None:
+    # a hover point hears only sensors within the ground reach r (995 m at the defaults), so
+    # sensors pairwise more than 2 r apart need a point each: 50 sensors on a 30 km map hold
+    # 42 such (greedy), more than the default I_max 25: CANNOT before any planning (the plan
+    # used to run its whole budget, ~66 s, and end infeasible)
+    from planner_core.model.diagnose import spread_sensors
+    from planner_core.model.formulas import ground_reach
+
+    rng = np.random.default_rng(0)
+    xy = rng.uniform(0.0, 30000.0, (50, 2))
+    m = load_map({"name": "spread", "area": {"width": 30000, "height": 30000},
+                  "start": [100, 100], "end": [29900, 29900],
+                  "sensors": [{"id": f"s{k}", "x": float(x), "y": float(y)}
+                              for k, (x, y) in enumerate(xy)]})  # fmt: skip
+    reach = float(ground_reach(0.0, 100.0, 10.0, 0.01))
+    kept = spread_sensors(xy, np.ones(50), reach)
+    d = np.hypot(*(xy[kept][:, None] - xy[kept][None, :]).transpose(2, 0, 1))
+    assert len(kept) == 42 and np.all(d[np.triu_indices(len(kept), 1)] > 2 * reach)
+    found = [f for f in diagnose(m).findings if f.kind == "SPREAD"]
+    assert len(found) == 1 and found[0].fatal
+    assert found[0].message.startswith("sensors: at least 42 hover points are needed")
+    assert spread_sensors(xy, np.where(np.arange(50) < 10, 1.0, 0.0), reach) == \
+        spread_sensors(xy[:10], np.ones(10), reach)  # sensors needing nothing left out
+
+
+@pytest.mark.parametrize("path", sorted(SUITE.glob("T*.json")) + sorted(MAPS.glob("*.json"))
+                         + sorted((MAPS / "large").glob("L*.json")), ids=lambda p: p.stem)
+def test_no_shipped_map_is_too_spread(path) -> None:
+    if path.name.endswith("_best_known.json") or path.name.endswith("_lower_bounds.json"):
+        pytest.skip("not a map")
+    from planner_core.model.diagnose import spread_sensors
+    from planner_core.model.formulas import ground_reach
+
+    pm = load_map(path).planning_map()
+    s = pm.spec
+    reach = float(ground_reach(0.0, s.uav.altitude, s.radio.peak_rate, s.radio.decay))
+    assert len(spread_sensors(pm.sensors, pm.required_data, reach)) <= pm.max_hover_points

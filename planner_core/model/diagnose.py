@@ -10,6 +10,9 @@ required data raised by the data margin) and with shapely:
   R_lambda); R_j = 0: the sensor cannot be served at all (UNREACHABLE).
 - one hover point collects at most T_max * R_j from it, so the plan needs at least
   ceil(Q_j / (T_max * R_j)) hover points for it; more than I_max: no plan (TOO_MUCH_DATA).
+- a hover point hears only the sensors within the link's ground reach r of it, so sensors
+  pairwise more than 2 r apart each need a hover point of their own: a greedy set of such
+  sensors larger than I_max (times the flights without a battery) proves no plan (SPREAD).
 
 - C3 (the paper's simultaneous uplink, `radio.access` "simultaneous"): a hover point receives
   from every sensor in range at once and their summed rate must stay within R_lambda; in a
@@ -177,6 +180,8 @@ def diagnose(m: Any) -> Diagnosis:
                 "SEVERAL_POINTS", False, f"sensor '{sid}' needs {q:g} Mbit: one hover point "
                 f"collects at most {one:.4g} Mbit (T_max {t_max:g} s x {r:.3g} Mbit/s), so at "
                 f"least {k} of the {i_max} hover points must serve it", sid))
+    if math.isfinite(flights):
+        findings.extend(_spread_findings(pm, i_max, flights, m.uavs))
     access = getattr(radio, "access", "simultaneous")
     bound = None
     if access == "simultaneous":
@@ -200,6 +205,46 @@ def diagnose(m: Any) -> Diagnosis:
         findings.extend(_energy_findings(m, pm, pieces))
     return Diagnosis(findings=tuple(findings), best_rate=best, points_needed=need,
                      bandwidth=bound)  # fmt: skip
+
+
+def spread_sensors(sensors: np.ndarray, need: np.ndarray, reach: float) -> list[int]:
+    """A greedy set of sensors pairwise more than 2 x `reach` apart (each index in turn, kept
+    when it is that far from every one kept), among those with need > 0: no hover point
+    hears two of them, so a plan needs at least one hover point per sensor of the set.
+
+    Args:
+        sensors: (J, 2) positions, m.
+        need: (J,) required data, Mbit (sensors needing 0 are left out).
+        reach: the link's ground reach r, m (`formulas.ground_reach` at rate 0).
+
+    Returns:
+        The indices of the set, in index order.
+
+    Cost: O(J x |set|).
+    """
+    kept: list[int] = []
+    far = (2.0 * reach) ** 2
+    pts = np.asarray(sensors, dtype=float)
+    for j in np.flatnonzero(np.asarray(need) > 0.0):
+        if not kept or np.min(np.sum((pts[kept] - pts[j]) ** 2, axis=1)) > far:
+            kept.append(int(j))
+    return kept
+
+
+def _spread_findings(pm: Any, i_max: int, flights: float, uavs: int) -> list[Finding]:
+    """SPREAD: more sensors pairwise beyond twice the radio reach than hover points."""
+    uav, radio = pm.spec.uav, pm.spec.radio
+    reach = float(ground_reach(0.0, uav.altitude, radio.peak_rate, radio.decay))
+    spread = spread_sensors(pm.sensors, pm.required_data, reach)
+    if len(spread) <= i_max * flights:
+        return []
+    names = ", ".join(f"'{pm.sensor_ids[j]}'" for j in spread[:3])
+    each = f" in each of the {uavs} flights" if flights > 1 else ""
+    return [Finding(
+        "SPREAD", True, f"sensors: at least {len(spread)} hover points are needed: "
+        f"{len(spread)} sensors ({names}, ...) lie more than twice the radio reach "
+        f"({2.0 * reach:.0f} m) from one another and a hover point hears only those within "
+        f"{reach:.0f} m of it; more than I_max = {i_max}{each}")]
 
 
 def _energy_findings(m: Any, pm: Any, pieces: list[Any]) -> list[Finding]:
