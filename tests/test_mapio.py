@@ -56,7 +56,7 @@ def test_points_outside_area_and_inside_obstacles(hand_map: dict) -> None:
     assert any(line.startswith("sensors[0]:") and "outside the area" in line for line in lines)
     hand_map["sensors"][0]["x"] = 10
     lines = _problems(hand_map)
-    assert lines == ["start: (0, 0) lies inside an obstacle"]
+    assert lines == ["start: (0, 0) lies inside an obstacle or no-fly zone"]
 
 
 def test_no_fly_zone_shapes(hand_map: dict) -> None:

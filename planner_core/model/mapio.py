@@ -1009,7 +1009,7 @@ def _semantic_problems(
         for name, flag, gap in zip(("start", "end"), inside, gaps, strict=True):
             x, y = getattr(spec, name)
             if flag:
-                problems.append(f"{name}: ({x:g}, {y:g}) lies inside an obstacle")
+                problems.append(f"{name}: ({x:g}, {y:g}) lies inside an obstacle or no-fly zone")
             elif gap < end_gap:
                 problems.append(
                     f"{name}: ({x:g}, {y:g}) lies {1000 * gap:.3g} mm from an obstacle's edge, "
