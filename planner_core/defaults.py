@@ -288,8 +288,8 @@ _MAP: tuple[Default, ...] = (
     _ranged("radio.decay", 0.01, "xi, Mbit/s per metre", 0.0, 1_000.0,
             "at 1000 Mbit/s per metre any link dies within a millimetre"),
     _ranged("radio.bandwidth", 25.0, "R_lambda, Mbit/s", 0.0, 1e5, _WHY_RATE, lo_open=True),
-    _ranged("radio.required_data", 200.0, "Q_lambda, Mbit (per sensor unless it sets its own)",
-            0.0, 1e7, _WHY_DATA),
+    _ranged("radio.required_data", 200.0, "Q_lambda, Mbit (per sensor unless it sets its own; "
+            "times 1 + safety.data_margin, as planned, at most 1e7)", 0.0, 1e7, _WHY_DATA),
     _ranged("objective.alpha", 0.5, "weight of flight time against hover time", 0.0, 1.0,
             "a convex weight"),
     _ranged("objective.collision_offset", 1000.0, "mu", 0.0, 1e9, _WHY_PENALTY),
