@@ -103,3 +103,16 @@ def test_sigint_while_shutting_down_is_one_line() -> None:
                        timeout=120, cwd=ROOT, preexec_fn=_default_sigint)  # fmt: skip
     assert r.returncode == 130 and r.stderr.splitlines() == [INTERRUPTED], r.stderr
     assert "map 'small-demo': OK" in r.stdout
+
+
+@pytest.mark.parametrize("delay", [1.0, 3.0])
+def test_sigint_while_an_upload_waits_for_a_vehicle_is_one_line(delay: float) -> None:
+    """MAVSDK's client runs its calls on an asyncio loop: a Ctrl-C while it waits for a
+    vehicle ends its tasks before the loop closes (it printed "Task was destroyed but it is
+    pending!" and a RuntimeError traceback after the one line)."""
+    from tests.vehicle_helpers import free_udp_port
+
+    cmd = [str(SCRIPT), "upload", str(ROOT / "tests" / "golden" / "T01-seed0.plan"),
+           "--connect", f"udpin://127.0.0.1:{free_udp_port()}", "--timeout", "20"]
+    kind, rc, _out, err = _outcome(cmd, delay, ROOT)
+    assert kind in ("interrupted", "startup"), (delay, rc, err[-3000:])

@@ -188,7 +188,23 @@ class MavsdkClient:
                     with contextlib.suppress(BaseException):
                         await task
 
-        return self._loop.run_until_complete(asyncio.wait_for(guarded(), timeout))
+        try:
+            return self._loop.run_until_complete(asyncio.wait_for(guarded(), timeout))
+        except KeyboardInterrupt:  # Ctrl-C: its tasks ended here, not destroyed pending later
+            self._cancel_pending()
+            raise
+
+    def _cancel_pending(self) -> None:
+        """Cancel the loop's unfinished tasks and let them unwind (their `finally` blocks
+        run on the open loop), so closing the loop leaves no pending task behind."""
+        if self._loop.is_closed():
+            return
+        pending = [t for t in asyncio.all_tasks(self._loop) if not t.done()]
+        for t in pending:
+            t.cancel()
+        if pending:
+            with contextlib.suppress(BaseException):
+                self._loop.run_until_complete(asyncio.gather(*pending, return_exceptions=True))
 
     def _raise_if_claimed(self) -> None:
         """DuplicateVehicleError once the relay has heard the vehicle's ids from a second
@@ -209,6 +225,7 @@ class MavsdkClient:
         The loop's executor is shut down first: a MAVSDK call still running there (one given
         up by a time-out or a second autopilot) returns before MAVSDK is destroyed under it,
         which would never return."""
+        self._cancel_pending()
         if not self._loop.is_closed():
             self._loop.run_until_complete(self._loop.shutdown_default_executor())
         if self._sdk is not None:
