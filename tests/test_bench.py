@@ -311,3 +311,5 @@ def test_cli_bench_then_report(suite: Path, tmp_path: Path) -> None:
     assert main(["report", str(tmp_path / "missing"), "-o", str(md)]) == 2
     assert main(["report", str(out), "-o", str(md), "--reference", "cmaes"]) == 2
     assert main(["bench", "--suite", str(suite), "--optimizers", "nope", "--out", str(out)]) == 2
+    # a budget below the population every DE-based optimiser starts from, as `plan` refuses it
+    assert main(["bench", "--suite", str(suite), "--budget", "50", "--out", str(out)]) == 2

@@ -65,7 +65,7 @@ def test_cli_backend_errors_exit_2(tmp_path, capsys, monkeypatch) -> None:
     from lamde_mission.cli import main
 
     base = ["bench", "--suite", str(SUITE), "--tasks", "T01", "--optimizers", "random-search",
-            "--runs", "1", "--budget", "50", "--out", str(tmp_path / "o")]
+            "--runs", "1", "--budget", "100", "--out", str(tmp_path / "o")]
     assert main([*base, "--address", "auto"]) == 2
     assert "--address: only with --backend ray" in capsys.readouterr().err
     with pytest.raises(SystemExit) as exc:  # argparse's own choices check

@@ -128,8 +128,9 @@ def run(args: argparse.Namespace) -> int:
     inits = ("seeded", "uniform") if args.init == "both" else (args.init,)
     if args.runs < 1:
         raise UsageError(f"--runs must be >= 1 (got {args.runs})")
-    if args.budget < 1:
-        raise UsageError(f"--budget must be >= 1 (got {args.budget})")
+    if args.budget < D.POPULATION:  # as plan's budget: the first population fits in it
+        raise UsageError(f"--budget must be >= the population ({D.POPULATION}) the DE-based "
+                         f"optimisers start from, as for plan (got {args.budget})")
     if args.jobs < 0:
         raise UsageError(f"--jobs must be >= 0 (got {args.jobs})")
     check_executor_args(args)
