@@ -307,6 +307,15 @@ def test_cli_bench_then_report(suite: Path, tmp_path: Path) -> None:
     assert (figs / "convergence_A1.png").stat().st_size > 0
     assert (figs / "best_paths.png").stat().st_size > 0
     assert "](results/best_paths.png)" in text
+    # a slim copy (benchmarks/store_runs.py) as the main folder: its tables, and a sentence in
+    # place of the best paths it keeps no plans for (it raised KeyError 'hover_points')
+    from planner_core.bench.store import store_runs
+
+    store_runs(out, tmp_path / "slim")
+    md2 = tmp_path / "docs" / "slim.md"
+    assert main(["report", str(tmp_path / "slim"), "-o", str(md2),
+                 "--reference", "random-search"]) == 0
+    assert "Not drawn: these records are slim copies" in md2.read_text()
     # bad input: exit status 2
     assert main(["report", str(tmp_path / "missing"), "-o", str(md)]) == 2
     assert main(["report", str(out), "-o", str(md), "--reference", "cmaes"]) == 2

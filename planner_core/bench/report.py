@@ -353,6 +353,13 @@ def _protocol_body(records: list[dict[str, Any]], opts_all: list[str], reference
         L.append(f"![{t} convergence]({_rel(p, output.parent)})")
     ptasks = list(path_tasks) if path_tasks else _spread([t for t in tasks if t in maps])
     ptasks = [t for t in ptasks if t in maps]
+    slim = [t for t in ptasks if any("hover_points" not in r for o in opts
+                                     for r in by[t].get(o, []))]  # fmt: skip
+    if slim:  # slim copies (benchmarks/store_runs.py) keep no plans to draw
+        ptasks = []
+        L += ["", "### Best paths", "",
+              "Not drawn: these records are slim copies without the runs' hover points "
+              "(`benchmarks/store_runs.py`); `report` the benchmark's own folder to draw them."]
     if ptasks:
         best = {t: {o: min(by[t][o], key=lambda r: r["score"]) for o in opts if by[t].get(o)}
                 for t in ptasks}
