@@ -107,6 +107,13 @@ def main(argv: list[str] | None = None) -> int:
     if not old or not new:
         ap.error(f"--optimiser: no {args.optimiser!r} records in "
                  f"{args.old if not old else args.new}")
+    pairs = ({(r["init"], r["task"], r["seed"]) for r in old}
+             & {(r["init"], r["task"], r["seed"]) for r in new})
+    if not pairs:  # the comparison pairs each run with the other file's run of its seed
+        seeds = sorted({r["seed"] for r in old}), sorted({r["seed"] for r in new})
+        ap.error(f"no run in {args.new} has a run of the same start mode, task and seed in "
+                 f"{args.old} to pair with (seeds {seeds[0][:5]} against {seeds[1][:5]}): "
+                 "run both with the same --seed")
     best = BestKnown(best_known_path(args.suite)).f_values(suite_task_files(args.suite))
     lines, counts, paired = compare(old, new, best)
     print("\n".join(lines))

@@ -525,6 +525,12 @@ def test_compare_runs_marks_maps_by_rank_sum_and_by_seed(tmp_path: Path) -> None
                                          [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]) == "-"
     # 5 pairs lower: one-sided p 1/32 > 0.025, not significant two-sided
     assert compare_runs.signed_rank_mark([0.0] * 5, [1.0, 2.0, 3.0, 4.0, 5.0]) == "~"
+    # no run of one file has a seed of the other: said (exit 2), not an empty table
+    other = tmp_path / "other.jsonl"
+    other.write_text("".join(line.replace('"seed": ', '"seed": 10') for line in
+                             records(0.0).splitlines(keepends=True)))
+    r = _script("benchmarks/compare_runs.py", str(old), str(other))
+    assert r.returncode == 2 and "run both with the same --seed" in r.stderr, r.stderr
 
 
 def test_the_pipeline_comparison_in_docs_is_what_its_stored_runs_give() -> None:
