@@ -303,7 +303,9 @@ def test_ppo_from_a_checkpoint_with_the_bc_anchor_resumes_exactly(tmp_path) -> N
     pytest.importorskip("torch")
     from planner_core.learning.policy.ppo import train
 
-    bc = train(_tiny_cfg(epochs=0), TINY_SPECS, tmp_path / "bc")
+    said: list[str] = []  # --resume on a folder with no training (a typo) says so
+    bc = train(_tiny_cfg(epochs=0), TINY_SPECS, tmp_path / "bc", resume=True, log=said.append)
+    assert any("holds no training to continue (no state.pt): starting one" in s for s in said)
     kw = {"init_checkpoint": str(bc), "bc_coef": 1.0, "bc_decay": 0.5, "lr": 1e-2}
     lines: list[str] = []
     out = train(_tiny_cfg(epochs=0 + 2, **kw), TINY_SPECS, tmp_path / "a", log=lines.append)

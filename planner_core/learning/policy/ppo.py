@@ -632,6 +632,8 @@ def train(
     start_epoch = 0
     state_path = out / "state.pt"
     resumed = resume and state_path.exists()
+    if resume and not resumed and log is not None:  # a mistyped folder shows here
+        log(f"--resume: {out} holds no training to continue (no state.pt): starting one")
     if resumed:
         state = torch.load(state_path, weights_only=False)
         same = {k: v for k, v in state["config"].items() if k != "epochs"} == {
