@@ -85,11 +85,19 @@ def test_a_signed_vehicle_ignores_an_unsigned_ground_station(port) -> None:
     """The ground station hears the signed vehicle (it checks no signatures) but its unsigned
     MISSION_COUNT is dropped: the transfer times out and nothing is stored."""
     with mock_on(port, signing_key=KEY) as v:
-        with pytest.raises(TransferError):
+        with pytest.raises(TransferError) as info:
             upload_mission(hand_mission(2), [], connect=listen_on(port), via="pymavlink",
                            timeout=1.5, attempts=1)  # fmt: skip
         assert v.stats.uploads[MISSION_TYPE.MISSION] == 0
         assert v.items() == []
+    # the vehicle's heartbeat carried a signature: the CLI's hint names the missing key, not
+    # a lossy link (a newcomer review: the MAVSDK client blamed the link)
+    from lamde_mission.commands.upload import UNSIGNED_HINT, _failure_hint
+
+    assert info.value.report is not None and info.value.report.vehicle.signed
+    assert _failure_hint(info.value, "mavsdk", None) == UNSIGNED_HINT
+    assert _failure_hint(info.value, "pymavlink", None) == UNSIGNED_HINT
+    assert _failure_hint(info.value, "pymavlink", KEY) is None  # a key given: not that
 
 
 class _UnsignedForger:

@@ -119,6 +119,26 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     return p
 
 
+#: printed after a transfer that failed when the vehicle signs and we were given no key
+UNSIGNED_HINT = (
+    "hint: the vehicle signs its messages (MAVLink 2 signing), and a vehicle that signs "
+    "ignores unsigned ones: give its key with --signing-key (docs/flying.md)"
+)
+
+
+def _failure_hint(exc: Exception, via: str, key: bytes | None) -> str | None:
+    """The hint after a failed transfer: the missing signing key when the vehicle signs and
+    no key was given, else MAVSDK's lossy-link hint for a MAVSDK transfer, else none."""
+    from lamde_mission.vehicle.transfer import TransferError
+
+    if not isinstance(exc, TransferError):
+        return None
+    vehicle = exc.report.vehicle if exc.report is not None else None
+    if key is None and vehicle is not None and vehicle.signed:
+        return UNSIGNED_HINT
+    return MAVSDK_LOSSY_HINT if via == "mavsdk" else None
+
+
 #: printed after a MAVSDK transfer that timed out (docs/upload.md has the arithmetic)
 MAVSDK_LOSSY_HINT = (
     "hint: MAVSDK gives up a whole list when one item goes unanswered 5 times (a constant "
@@ -307,7 +327,7 @@ def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
     from lamde_mission.formats.fleet import FleetDirError
     from lamde_mission.vehicle.connection import parse_connection
     from lamde_mission.vehicle.fleet import FleetSetupError, sortie_missions, upload_fleet
-    from lamde_mission.vehicle.transfer import DuplicateVehicleError, TransferError, VehicleError
+    from lamde_mission.vehicle.transfer import DuplicateVehicleError, VehicleError
 
     if args.map:
         raise UsageError("--map with --fleet: replay the sorties together with "
@@ -361,9 +381,10 @@ def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
         bad = [str(r.vehicle) for r in report.results if not r.ok]
         print(f"lamde-mission upload: vehicle {', '.join(bad)} failed (see above)",
               file=sys.stderr)  # fmt: skip
-        if args.via == "mavsdk" and any(isinstance(r.error, TransferError)
-                                        for r in report.results):  # fmt: skip
-            print(MAVSDK_LOSSY_HINT, file=sys.stderr)
+        hints = [_failure_hint(r.error, args.via, key) for r in report.results
+                 if r.error is not None]  # fmt: skip
+        for hint in dict.fromkeys(h for h in hints if h is not None):
+            print(hint, file=sys.stderr)
         return 1
     return 0
 
@@ -372,7 +393,6 @@ def run(args: argparse.Namespace) -> int:
     from lamde_mission.errors import UsageError
     from lamde_mission.vehicle.transfer import (
         DuplicateVehicleError,
-        TransferError,
         VehicleError,
     )
     from lamde_mission.vehicle.upload import upload_mission
@@ -430,8 +450,9 @@ def run(args: argparse.Namespace) -> int:
             for line in exc.report.lines():
                 print(line)
         print(f"lamde-mission upload: {exc}", file=sys.stderr)
-        if args.via == "mavsdk" and isinstance(exc, TransferError):
-            print(MAVSDK_LOSSY_HINT, file=sys.stderr)
+        hint = _failure_hint(exc, args.via, key)
+        if hint is not None:
+            print(hint, file=sys.stderr)
         # two autopilots on one id: the link as given cannot work, a retry would not help
         return 2 if isinstance(exc, DuplicateVehicleError) else 1
     for line in report.lines():

@@ -32,7 +32,11 @@ from pymavlink.dialects.v20 import common as mavlink2
 
 from lamde_mission.vehicle.claims import ClaimWatch, is_vehicle_heartbeat
 from lamde_mission.vehicle.connection import Connection, Link
-from lamde_mission.vehicle.signing import enable_signing, is_signature_failure
+from lamde_mission.vehicle.signing import (
+    carries_signature,
+    enable_signing,
+    is_signature_failure,
+)
 
 __all__ = ["VehicleRelay"]
 
@@ -95,6 +99,8 @@ class VehicleRelay:
         self.foreign = 0
         #: the vehicle: its (system, component) and address (None on a serial link), once heard
         self.vehicle_ids: tuple[int, int] | None = None
+        #: whether the pinned vehicle's HEARTBEAT carried a MAVLink 2 signature
+        self.vehicle_signed = False
         self.vehicle_addr: Address | None = None
         self._pinned = False
         #: the second address claiming the vehicle's ids, once heard (the relay then passes
@@ -141,6 +147,7 @@ class VehicleRelay:
             ):
                 self._pinned = True
                 self.vehicle_ids = (msg.get_srcSystem(), msg.get_srcComponent())
+                self.vehicle_signed = carries_signature(msg)
                 self.vehicle_addr = addr
                 if self.link.conn.scheme == "udpin" and addr is not None:
                     self.link.peer = addr

@@ -75,3 +75,15 @@ def enable_signing(mav: Any, key: bytes, *, link_id: int = 0) -> None:
 def is_signature_failure(msg: Any) -> bool:
     """Whether a parsed message is pymavlink's BAD_DATA for a missing or wrong signature."""
     return msg.get_type() == "BAD_DATA" and "signature" in str(getattr(msg, "reason", "")).lower()
+
+
+#: MAVLink 2's incompat flag of a signed message (the MAVLink 2 spec, "Message signing")
+IFLAG_SIGNED = 0x01
+
+
+def carries_signature(msg: Any) -> bool:
+    """Whether a parsed MAVLink 2 message came with a signature block (its header's
+    incompat flag), whatever the parser made of it: a parser without a key keeps signed
+    messages and says nothing of their signature (pymavlink)."""
+    header = getattr(msg, "_header", None)
+    return bool(int(getattr(header, "incompat_flags", 0) or 0) & IFLAG_SIGNED)

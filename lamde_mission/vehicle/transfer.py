@@ -134,16 +134,20 @@ class VehicleInfo:
     component_id: int = 1
     autopilot: str | None = None  # e.g. "PX4", "ARDUPILOTMEGA"
     vehicle_type: str | None = None  # e.g. "quadrotor", "multicopter"
+    signed: bool = False  # its HEARTBEAT carried a MAVLink 2 signature
 
     @classmethod
     def from_heartbeat(cls, msg: object) -> VehicleInfo:
         """From a pymavlink HEARTBEAT message."""
+        from lamde_mission.vehicle.signing import carries_signature
+
         ap = mavlink2.enums["MAV_AUTOPILOT"].get(int(msg.autopilot))
         vt = mavlink2.enums["MAV_TYPE"].get(int(msg.type))
         return cls(
             system_id=int(msg.get_srcSystem()), component_id=int(msg.get_srcComponent()),
             autopilot=ap.name.removeprefix("MAV_AUTOPILOT_") if ap else None,
             vehicle_type=vt.name.removeprefix("MAV_TYPE_").lower() if vt else None,
+            signed=carries_signature(msg),
         )  # fmt: skip
 
     def describe(self) -> str:

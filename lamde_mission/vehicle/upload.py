@@ -275,6 +275,7 @@ class MavsdkClient:
                 system_id=int(await system.get_system_id()), component_id=1,
                 autopilot=None if ap.name == "UNKNOWN" else ap.name,
                 vehicle_type=None if vt.name == "UNKNOWN" else vt.name.lower(),
+                signed=bool(self._relay is not None and self._relay.vehicle_signed),
             )  # fmt: skip
 
         self.vehicle = self._run(info(), 5.0)
