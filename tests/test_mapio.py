@@ -47,6 +47,12 @@ def test_missing_nan_nonpositive_empty(hand_map: dict) -> None:
     hand_map2 = {"area": {"width": 10, "height": 10}, "start": [0, 0], "end": [1, 1],
                  "sensors": []}
     assert _problems(hand_map2) == ["sensors: at least one sensor is required"]
+    # a point of the wrong shape is said in the map's terms, not pydantic's ("a valid tuple")
+    assert _problems({**hand_map2, "sensors": [{"id": "a", "x": 1, "y": 1}], "start": "abc"}) \
+        == ['start: must be a JSON array of two numbers [x, y] (metres), got "abc" (a string)']
+    assert _problems({**hand_map2, "sensors": [{"id": "a", "x": 1, "y": 1}],
+                      "end": [1, 2, 3]}) == [
+        "end: must be a JSON array of two numbers [x, y] (metres), got [1, 2, 3] (an array)"]
 
 
 def test_points_outside_area_and_inside_obstacles(hand_map: dict) -> None:

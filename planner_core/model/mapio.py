@@ -858,6 +858,8 @@ _TYPE_KINDS = {
     "int_from_float": "a JSON integer (no fraction, no quotes)",
     "string_type": "a JSON string",
     "bool_type": "true or false",
+    "tuple_type": "a JSON array of two numbers [x, y] (metres)",
+    "list_type": "a JSON array",
 }
 
 
@@ -898,6 +900,9 @@ def _pydantic_problems(err: ValidationError) -> list[str]:
         elif kind == "too_short" and loc == ("fleet", "depots"):
             lines.append(f"{where}: give at least one depot, or leave the field out (one depot "
                          f"'{DEFAULT_DEPOT}' at the map's start)")  # fmt: skip
+        elif kind == "too_long" and e.get("ctx", {}).get("max_length") == 2:  # a point
+            lines.append(f"{where}: must be a JSON array of two numbers [x, y] (metres), got "
+                         f"{_json_shown(e.get('input'))}")
         elif kind == "string_pattern_mismatch":
             lines.append(f"{where}: must be printable text (no control characters such as "
                          "newlines or tabs)")  # fmt: skip
