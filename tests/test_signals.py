@@ -105,7 +105,7 @@ def test_sigint_while_shutting_down_is_one_line() -> None:
     assert "map 'small-demo': OK" in r.stdout
 
 
-@pytest.mark.parametrize("delay", [1.0, 3.0])
+@pytest.mark.parametrize("delay", [3.0])  # the client is connecting by then
 def test_sigint_while_an_upload_waits_for_a_vehicle_is_one_line(delay: float) -> None:
     """MAVSDK's client runs its calls on an asyncio loop: a Ctrl-C while it waits for a
     vehicle ends its tasks before the loop closes (it printed "Task was destroyed but it is
