@@ -182,6 +182,7 @@ def split_tour(
     shared = _shared_points(st, links, P, T)
     if shared is None:
         return None
+    repeated = len(shared[0]) > len(P)  # copies to join back where one piece keeps several
     P, T = shared
     n, D = len(P), len(st.depots)
     goal = goal or st.goal
@@ -254,7 +255,8 @@ def split_tour(
         w_in = ways[d_end][j - 1][::-1]
         pts = np.vstack([w_out, P[i:j], w_in])
         times = np.concatenate([np.zeros(len(w_out)), T[i:j], np.zeros(len(w_in))])
-        out.append(_merged_repeats(Sortie(d, d_end, pts, times), float(st.uav.max_hover_time)))
+        piece = Sortie(d, d_end, pts, times)
+        out.append(_merged_repeats(piece, float(st.uav.max_hover_time)) if repeated else piece)
         if ferry[i, d] >= 0:  # the ferry flights that brought the vehicle to d, last first
             hops = _hops(fnext, int(ferry[i, d]), d)
             for a, b in reversed(list(zip(hops[:-1], hops[1:], strict=True))):
