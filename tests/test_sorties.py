@@ -322,12 +322,16 @@ def test_plan_dir_writes_sorties_the_sim_passes_and_verify_catches_energy(tmp_pa
 
 @pytest.mark.slow
 def test_plan_dir_replaces_an_old_directory_whole(tmp_path) -> None:
+    # an earlier sortie directory is replaced whole: a sortie file the new plan does not
+    # write is gone (a folder holding other files is refused: the test above)
     out = tmp_path / "demo"
     out.mkdir()
-    (out / "stale.txt").write_text("old")
+    (out / "mission-v1-s9.plan").write_text("old")
+    (out / "fleet.json").write_text("{}")
     r = _plan_cli(str(DEMO), "-o", str(out), *FAST, "--quiet")
     assert r.returncode == 0, r.stderr
-    assert not (out / "stale.txt").exists() and (out / "fleet.json").exists()
+    assert not (out / "mission-v1-s9.plan").exists()
+    assert json.loads((out / "fleet.json").read_text())["vehicles"]
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]
 
 
