@@ -550,6 +550,7 @@ def test_the_pipeline_comparison_in_docs_is_what_its_stored_runs_give() -> None:
     assert "| uniform | 0.242 -> 0.216 % | 12/16 | 3 (T04, T05, T14) | 0 |" in doc
 
 
+@pytest.mark.slow  # measured 2.9 s on a loaded machine (issue 35: default suite <= 5 min)
 def test_the_pipeline_re_measurement_in_docs_is_what_its_stored_runs_give() -> None:
     """docs/search.md's 2026-12-04 table (the earlier checkout against today's 800 runs: 3 and
     10 maps significantly better by rank-sum and paired, worse on none, in both modes) is what
@@ -594,6 +595,7 @@ def test_bench_plan_large_tables_each_map_against_t16(tmp_path: Path) -> None:
     assert all(x["rss_mb"] > 0 and x["evaluations"] <= 300 for x in runs)
 
 
+@pytest.mark.slow  # measured 6.0 s on a loaded machine (issue 35: default suite <= 5 min)
 def test_bench_descent_compares_the_step_rules_start_by_start() -> None:
     """`benchmarks/bench_descent.py`: a line per kicked start with each rule's f, a summary per
     map, the same lines on a second run (deterministic), constructive starts on demand, and a

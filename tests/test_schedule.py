@@ -249,6 +249,7 @@ def test_the_large_rounds_need_i_max_above_20_without_counting_corner_slots() ->
     assert not large_rounds(Problem(load_map(doc)))
 
 
+@pytest.mark.slow  # measured 2.7 s on a loaded machine (issue 35: default suite <= 5 min)
 def test_a_fork_before_the_de_with_another_share_gives_that_shares_whole_run(
         tiny: Problem) -> None:
     """`PipelineRun.fork(config=)` before the DE: the stages before it do not read

@@ -252,6 +252,7 @@ def test_a_learned_scheduler_is_named_with_its_checkpoint_folder(tmp_path) -> No
         make_scheduler("nope:dir")
 
 
+@pytest.mark.slow  # measured 4.1 s on a loaded machine (issue 35: default suite <= 5 min)
 def test_the_cli_plans_with_the_policy_and_refuses_a_missing_checkpoint(tmp_path) -> None:
     import subprocess
     import sys
