@@ -79,9 +79,8 @@ def sortie_dir_refusal(out_dir: str | Path) -> str | None:
                 "(e.g. -o sorties/)")
     if not target.exists():
         return None
-    ours = (FLEET_FILE,)
-    foreign = sorted(e.name for e in target.iterdir()
-                     if not (e.is_file() and (e.name in ours or _SORTIE_NAME.fullmatch(e.name))))
+    foreign = sorted(e.name for e in target.iterdir() if not (
+        e.is_file() and (e.name == FLEET_FILE or _SORTIE_NAME.fullmatch(e.name))))
     if foreign:
         more = f" and {len(foreign) - 3} more" if len(foreign) > 3 else ""
         shown = ", ".join(foreign[:3]) + more

@@ -27,21 +27,17 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     from lamde_mission.commands._common import load_map_or_fail
+    from planner_core.model.diagnose import diagnose
 
     m = load_map_or_fail(args.map)
     s = m.summary()
+    d = diagnose(m)
     if args.json:
-        from planner_core.model.diagnose import diagnose
-
-        d = diagnose(m)
         s["diagnosis"] = [{"kind": f.kind, "fatal": f.fatal, "sensor": f.sensor,
                            "message": f.message, **({"depot": f.depot} if f.depot else {})}
                           for f in d.findings]  # fmt: skip
         print(json.dumps(s, indent=2))
         return 0 if d.feasible_so_far else 1
-    from planner_core.model.diagnose import diagnose
-
-    d = diagnose(m)
     default = " (default for this size)" if s["max_hover_points_default"] else ""
     u, r, o = s["uav"], s["radio"], s["objective"]
     print(f"map '{s['name']}': " + ("OK" if d.feasible_so_far else

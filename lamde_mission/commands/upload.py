@@ -119,6 +119,14 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     return p
 
 
+#: printed after a MAVSDK transfer that timed out (docs/upload.md has the arithmetic)
+MAVSDK_LOSSY_HINT = (
+    "hint: MAVSDK gives up a whole list when one item goes unanswered 5 times (a constant "
+    "inside MAVSDK); on a lossy link use --via pymavlink, which asks for each item again until "
+    "--timeout passes without progress (docs/upload.md)"
+)
+
+
 #: printed after a transfer that failed when the vehicle signs and we were given no key
 UNSIGNED_HINT = (
     "hint: the vehicle signs its messages (MAVLink 2 signing), and a vehicle that signs "
@@ -137,14 +145,6 @@ def _failure_hint(exc: Exception, via: str, key: bytes | None) -> str | None:
     if key is None and vehicle is not None and vehicle.signed:
         return UNSIGNED_HINT
     return MAVSDK_LOSSY_HINT if via == "mavsdk" else None
-
-
-#: printed after a MAVSDK transfer that timed out (docs/upload.md has the arithmetic)
-MAVSDK_LOSSY_HINT = (
-    "hint: MAVSDK gives up a whole list when one item goes unanswered 5 times (a constant "
-    "inside MAVSDK); on a lossy link use --via pymavlink, which asks for each item again until "
-    "--timeout passes without progress (docs/upload.md)"
-)
 
 
 def _read(path: str) -> tuple[list, list | None, list | None]:

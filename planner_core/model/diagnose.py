@@ -100,6 +100,8 @@ def diagnose(m: Any) -> Diagnosis:
     pm = m.planning_map()
     spec = pm.spec
     uav, radio = spec.uav, spec.radio
+    # the link's ground reach: beyond it a hover point hears a sensor at rate 0
+    hear = float(ground_reach(0.0, uav.altitude, radio.peak_rate, radio.decay))
     from planner_core.model.mapio import _obstacle_polygons
 
     shapes = _obstacle_polygons(pm)  # inflated by the clearance
@@ -146,9 +148,8 @@ def diagnose(m: Any) -> Diagnosis:
                        f"{radio.decay:g} x {uav.altitude:g} m is {overhead:.4g} Mbit/s <= 0 "
                        "(radio.peak_rate, radio.decay, uav.altitude)")
             else:
-                reach_m = float(ground_reach(0.0, uav.altitude, radio.peak_rate, radio.decay))
                 why = (f"the nearest reachable hover point is {d:.1f} m away, beyond the "
-                       f"link's ground reach of {reach_m:.1f} m (rate 0)")
+                       f"link's ground reach of {hear:.1f} m (rate 0)")
             findings.append(Finding(
                 "UNREACHABLE", True, f"sensor '{sid}': no reachable hover point gets any data "
                 f"from it: {why}", sid))
@@ -181,7 +182,7 @@ def diagnose(m: Any) -> Diagnosis:
                 f"collects at most {one:.4g} Mbit (T_max {t_max:g} s x {r:.3g} Mbit/s), so at "
                 f"least {k} of the {i_max} hover points must serve it", sid))
     if math.isfinite(flights):
-        findings.extend(_spread_findings(pm, i_max, flights, m.uavs))
+        findings.extend(_spread_findings(pm, hear, i_max, flights, m.uavs))
     access = getattr(radio, "access", "simultaneous")
     bound = None
     if access == "simultaneous":
@@ -202,7 +203,7 @@ def diagnose(m: Any) -> Diagnosis:
                 "C3_HOVER_TIME", False, f.message + more, f.sensor) for f in found]  # fmt: skip
         findings.extend(found)
     if m.has_battery or m.has_fleet:
-        findings.extend(_energy_findings(m, pm, pieces))
+        findings.extend(_energy_findings(m, pm, pieces, hear))
     return Diagnosis(findings=tuple(findings), best_rate=best, points_needed=need,
                      bandwidth=bound)  # fmt: skip
 
@@ -231,10 +232,9 @@ def spread_sensors(sensors: np.ndarray, need: np.ndarray, reach: float) -> list[
     return kept
 
 
-def _spread_findings(pm: Any, i_max: int, flights: float, uavs: int) -> list[Finding]:
-    """SPREAD: more sensors pairwise beyond twice the radio reach than hover points."""
-    uav, radio = pm.spec.uav, pm.spec.radio
-    reach = float(ground_reach(0.0, uav.altitude, radio.peak_rate, radio.decay))
+def _spread_findings(pm: Any, reach: float, i_max: int, flights: float,
+                     uavs: int) -> list[Finding]:  # fmt: skip
+    """SPREAD: more sensors pairwise beyond twice the radio reach (m) than hover points."""
     spread = spread_sensors(pm.sensors, pm.required_data, reach)
     if len(spread) <= i_max * flights:
         return []
@@ -247,9 +247,10 @@ def _spread_findings(pm: Any, i_max: int, flights: float, uavs: int) -> list[Fin
         f"{reach:.0f} m of it; more than I_max = {i_max}{each}")]
 
 
-def _energy_findings(m: Any, pm: Any, pieces: list[Any]) -> list[Finding]:
+def _energy_findings(m: Any, pm: Any, pieces: list[Any], hear: float) -> list[Finding]:
     """Batteries and depots (issue 33; the module docstring): ENERGY_RANGE and DEPOT (fatal),
-    ENERGY_SPLIT (a note), from straight-line lower bounds on each sortie's flight.
+    ENERGY_SPLIT (a note), from straight-line lower bounds on each sortie's flight; `hear` the
+    link's ground reach (m).
 
     Cost: O(J x D) distances for J sensors and D depots, plus 400 radii per sensor for the
     note."""
@@ -257,9 +258,9 @@ def _energy_findings(m: Any, pm: Any, pieces: list[Any]) -> list[Finding]:
     from shapely.geometry import Point
 
     from planner_core.model import energy as en
-    from planner_core.model.formulas import ground_reach, slant_rates
+    from planner_core.model.formulas import slant_rates
 
-    uav, radio = pm.spec.uav, pm.spec.radio
+    uav = pm.spec.uav
     v_max, acc, h = float(uav.max_speed), float(uav.acceleration), float(uav.altitude)
     power = m.power
     usable = m.usable_energy_wh
@@ -267,7 +268,6 @@ def _energy_findings(m: Any, pm: Any, pieces: list[Any]) -> list[Finding]:
     vertical = en.vertical_energy_wh(h, v_max, acc, power)
     per_m = en.least_energy_per_metre_wh(v_max, power)
     hover_wh = en.hover_power_w(power) / en.J_PER_WH  # Wh per hover second
-    hear = float(ground_reach(0.0, h, radio.peak_rate, radio.decay))
     given = bool(m.has_fleet and m.spec.fleet.depots)
     # (label in messages, name, position)
     if given:

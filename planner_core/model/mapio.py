@@ -924,19 +924,13 @@ def _margin_problems(spec: MapFile) -> list[str]:
     limit = float(MAP_DEFAULTS["radio.required_data"].bounds[1])
     if margin <= 0.0:
         return []
-    out: list[str] = []
-    q = float(spec.radio.required_data)
-    if any(s.required_data is None for s in spec.sensors) and q * (1.0 + margin) > limit:
-        out.append(f"radio.required_data: {q:g} Mbit with safety.data_margin {margin:g} is "
-                   f"{q * (1.0 + margin):.6g} Mbit to plan, above the limit {limit:g} (lower "
-                   "one of them)")
-    for j, s in enumerate(spec.sensors):
-        if s.required_data is not None and s.required_data * (1.0 + margin) > limit:
-            out.append(f"sensors[{j}].required_data: {s.required_data:g} Mbit with "
-                       f"safety.data_margin {margin:g} is "
-                       f"{s.required_data * (1.0 + margin):.6g} Mbit to plan, above the limit "
-                       f"{limit:g} (lower one of them)")
-    return out
+    given = [("radio.required_data", float(spec.radio.required_data))] if any(
+        s.required_data is None for s in spec.sensors) else []
+    given += [(f"sensors[{j}].required_data", float(s.required_data))
+              for j, s in enumerate(spec.sensors) if s.required_data is not None]
+    return [f"{name}: {q:g} Mbit with safety.data_margin {margin:g} is "
+            f"{q * (1.0 + margin):.6g} Mbit to plan, above the limit {limit:g} (lower one of "
+            "them)" for name, q in given if q * (1.0 + margin) > limit]
 
 
 def _semantic_problems(
