@@ -20,6 +20,7 @@ from lamde_mission.formats import read_mission, write_mission
 from lamde_mission.items import CMD, MISSION_TYPE
 from lamde_mission.vehicle.connection import Connection, parse_connection
 from lamde_mission.vehicle.mock import NOISY_GCS_SYSTEM, MockVehicle
+from lamde_mission.vehicle.transfer import TransferError
 from lamde_mission.vehicle.upload import upload_mission
 from lamde_mission.vehicle.wire import compare_items
 from planner_core.model.mapio import load_map
@@ -72,13 +73,48 @@ def test_a_lost_final_ack_on_ardupilot_is_settled_by_the_read_back(via, port):
             return True
         return False
 
+    heard: list[tuple[str, int]] = []
+
+    def note(msg) -> bool:  # drops nothing
+        if msg.get_type() in ("MISSION_COUNT", "MISSION_REQUEST_LIST"):
+            heard.append((msg.get_type(), msg.mission_type))
+        return False
+
     mission = hand_mission(3)
-    with mock_on(port, autopilot="ardupilot", lose_out=lose_first_mission_ack) as v:
+    with mock_on(port, autopilot="ardupilot", lose_out=lose_first_mission_ack,
+                 lose_in=note) as v:  # fmt: skip
         report = upload_mission(mission, hand_fence(), connect=listen_on(port), via=via,
                                 timeout=5, attempts=1)  # fmt: skip
         assert v.stats.uploads[MISSION_TYPE.MISSION] == 1
     assert lost and report.ok and report.attempts == 1
+    # the unconfirmed mission is read back before the fence goes up; the fence, confirmed, after
+    count, listed = "MISSION_COUNT", "MISSION_REQUEST_LIST"
+    m, f = MISSION_TYPE.MISSION, MISSION_TYPE.FENCE
+    assert heard.index((listed, m)) < heard.index((count, f)) < heard.index((listed, f)), heard
+    assert heard.count((listed, m)) == 1, heard
     assert any("but the read-back matches" in n for n in report.notes), report.notes
+
+
+def test_a_vehicle_that_never_answers_the_count_fails_each_attempt_without_a_read_back(port):
+    """Nothing of the list reached the vehicle, so no read-back can settle it: each attempt
+    ends after one wait (it used to wait again for the fence and for the read-back)."""
+    heard: list[str] = []
+
+    def ignore_counts(msg) -> bool:
+        heard.append(msg.get_type())
+        return msg.get_type() == "MISSION_COUNT"
+
+    lines: list[str] = []
+    with mock_on(port, lose_in=ignore_counts) as v:
+        with pytest.raises(TransferError) as info:
+            upload_mission(hand_mission(3), hand_fence(), connect=listen_on(port),
+                           via="pymavlink", timeout=0.5, attempts=2, log=lines.append)  # fmt: skip
+        assert v.stats.uploads[MISSION_TYPE.MISSION] == 0
+    err = info.value
+    assert err.unanswered and err.report.attempts == 2
+    assert "waiting for the first item request (0 of 7 items sent" in str(err)
+    assert "MISSION_REQUEST_LIST" not in heard  # no read-back asked for
+    assert not any("read-back decides" in line for line in lines), lines
 
 
 @pytest.mark.parametrize("via", VIAS)

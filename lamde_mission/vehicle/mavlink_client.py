@@ -384,6 +384,7 @@ class MavlinkClient:
         # MISSION_REQUEST (not _INT) is answered with MISSION_ITEM_INT too, as MAVSDK does.
         retries = 0
         resends = resends_crossed = 0
+        answered = False  # anything of this transfer heard from the vehicle
         sent_at: float | None = time.monotonic()
         self._reset_rto()
         self._send(last)
@@ -402,12 +403,13 @@ class MavlinkClient:
                     raise TransferError(
                         f"{kind} upload: no answer from the vehicle while waiting for "
                         f"{waiting} ({highest + 1} of {n} items sent; {timeout:.3g} s "
-                        "without progress)"
-                    )
+                        "without progress)", unanswered=not answered,
+                    )  # fmt: skip
                 resends += 1
                 sent_at = None
                 self._send(last)  # the count again, or the last item sent
                 continue
+            answered = True
             if msg.get_type() == "MISSION_ACK":
                 code = int(msg.type)
                 if code == _m.MAV_MISSION_INVALID_SEQUENCE and highest < n - 1:

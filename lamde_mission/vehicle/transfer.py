@@ -89,7 +89,20 @@ class DuplicateVehicleError(VehicleError):
 
 
 class TransferError(VehicleError):
-    """A transfer step timed out or broke off (lost messages, vehicle gone); worth a retry."""
+    """A transfer step timed out or broke off (lost messages, vehicle gone); worth a retry.
+
+    Args:
+        message: the one line the CLI prints.
+        unanswered: the vehicle answered nothing of this list's upload (no item requested, no
+            MISSION_ACK): no item reached it, so nothing was stored and no read-back can
+            settle the list (`upload_and_verify` ends the attempt at once). False where the
+            client cannot tell (MAVSDK's TIMEOUT) or the vehicle did answer (the final ACK may
+            be what was lost: the list's read-back decides).
+    """
+
+    def __init__(self, message: str, *, unanswered: bool = False) -> None:
+        super().__init__(message)
+        self.unanswered = unanswered
 
 
 class MissionRejectedError(VehicleError):
@@ -391,29 +404,24 @@ def _attempt(
     *,
     home_item: bool = False,
 ) -> None:
+    """One whole attempt: each list up (or cleared), then each read back and compared.
+
+    A list whose upload was not confirmed (TransferError: the final ACK may be what was lost)
+    is read back at once, before the next list goes up: a vehicle that stopped answering fails
+    the attempt after one more wait instead of one per list. A list the vehicle never answered
+    at all (`TransferError.unanswered`) fails the attempt with no read-back.
+    """
     unconfirmed: list[str] = []
-    t0 = time.monotonic()
+    diffs: list[Difference] = []
+    read: set[int] = set()
+    upload_s = verify_s = 0.0
     lists = [(MISSION_TYPE.MISSION, mission)]
     if fence is not None:
         lists.append((MISSION_TYPE.FENCE, fence))
     if rally is not None:
         lists.append((MISSION_TYPE.RALLY, rally))
-    for t, items in lists:
-        what = f"{mission_type_name(t)} upload"
-        try:
-            if items:
-                _step(lambda left, t=t, items=items: client.upload(items, t, left), timeout, what)
-            else:
-                what = f"{mission_type_name(t)} clear"
-                _step(lambda left, t=t: client.clear(t, left), timeout, what)
-        except TransferError as exc:
-            # the final ACK may be what was lost: the read-back decides
-            unconfirmed.append(str(exc))
-            say(f"{exc}; the read-back decides")
-    report.upload_s = time.monotonic() - t0
-    t0 = time.monotonic()
-    diffs: list[Difference] = []
-    for t, items in lists:
+
+    def read_back(t: int, items: list[WireItem]) -> list[Difference]:
         got = _step(
             lambda left, t=t: client.download(t, left), timeout, f"{mission_type_name(t)} download"
         )
@@ -422,11 +430,40 @@ def _attempt(
             if home_item:  # the vehicle writes its home position into item 0
                 found = [d for d in found if d.index != 0]
             report.readback = mission_from_dialect([from_wire(w) for w in got], home_item)
-        diffs += found
-    report.verify_s = time.monotonic() - t0
+        read.add(t)
+        return found
+
+    for t, items in lists:
+        what = f"{mission_type_name(t)} upload"
+        t0 = time.monotonic()
+        try:
+            if items:
+                _step(lambda left, t=t, items=items: client.upload(items, t, left), timeout, what)
+            else:
+                what = f"{mission_type_name(t)} clear"
+                _step(lambda left, t=t: client.clear(t, left), timeout, what)
+        except TransferError as exc:
+            upload_s += time.monotonic() - t0
+            if exc.unanswered:
+                raise
+            # the final ACK may be what was lost: this list's read-back decides, now
+            say(f"{exc}; the read-back decides")
+            t0 = time.monotonic()
+            found = read_back(t, items)
+            verify_s += time.monotonic() - t0
+            if found:
+                report.differences = diffs + found
+                raise TransferError(f"{exc}; the read-back differs ({found[0]})") from None
+            unconfirmed.append(str(exc))
+            continue
+        upload_s += time.monotonic() - t0
+    report.upload_s = upload_s
+    t0 = time.monotonic()
+    for t, items in lists:
+        if t not in read:
+            diffs += read_back(t, items)
+    report.verify_s = verify_s + time.monotonic() - t0
     report.differences = diffs
-    if diffs and unconfirmed:
-        raise TransferError(f"{'; '.join(unconfirmed)}; the read-back differs ({diffs[0]})")
     if diffs:
         raise ReadbackMismatchError(diffs)
     report.notes.extend(f"{u}, but the read-back matches" for u in unconfirmed)
