@@ -163,6 +163,50 @@ def test_refuses_to_mix_budgets_or_maps(suite: Path, tmp_path: Path) -> None:
         _run(suite, out, optimisers=["nope"])
 
 
+def test_refuses_to_resume_under_another_base_seed(suite: Path, tmp_path: Path) -> None:
+    """The folder's runs were of seed 0: resumed with seed 5 they would pass for seed 5's."""
+    out = tmp_path / "res"
+    run_bench(suite, ["random-search"], runs=1, budget=BUDGET, out=out, command="test",
+              executor=SerialExecutor(), best_known=False)  # fmt: skip
+    with pytest.raises(BenchError, match="holds runs of base seed 0, not 5"):
+        run_bench(suite, ["random-search"], runs=1, budget=BUDGET, out=out, command="test",
+                  executor=SerialExecutor(), best_known=False, base_seed=5)  # fmt: skip
+    (out / "meta.json").unlink()  # the records' own seeds say it too
+    with pytest.raises(BenchError, match="not 5"):
+        run_bench(suite, ["random-search"], runs=1, budget=BUDGET, out=out, command="test",
+                  executor=SerialExecutor(), best_known=False, base_seed=5)  # fmt: skip
+    with pytest.raises(BenchError, match="base_seed must be an integer >= 0"):
+        run_bench(suite, ["random-search"], runs=1, budget=BUDGET, out=tmp_path / "o",
+                  executor=SerialExecutor(), best_known=False, base_seed=-1)  # fmt: skip
+
+
+def test_cli_bench_refuses_bad_options_before_any_run(suite: Path, tmp_path: Path,
+                                                      capsys: pytest.CaptureFixture) -> None:
+    """One line, exit 2, nothing run or written: an empty --tasks / --optimizers list (it
+    used to run the whole benchmark and rewrite the best-known file), a negative seed, an
+    --out that is a file, a best-known file in a missing folder."""
+    from lamde_mission.cli import main
+
+    a_file = tmp_path / "notes.txt"
+    a_file.write_text("mine")
+    base = ["bench", "--suite", str(suite), "--runs", "1", "--budget", str(BUDGET)]
+    for extra, needle in (
+        (["--tasks", ","], "--tasks: no name given"),
+        (["--tasks", ""], "--tasks: no name given"),
+        (["--optimizers", ""], "--optimizers: no name given"),
+        (["--i-max", ","], "--i-max: no name given"),
+        (["--seed", "-1"], "--seed must be an integer >= 0"),
+        (["--out", str(a_file)], "is a file, not a results folder"),
+        (["--best-known-file", str(tmp_path / "no" / "bk.json")], "no folder"),
+    ):
+        out = ["--out", str(tmp_path / "res")] if "--out" not in extra else []
+        assert main([*base, *out, *extra]) == 2, extra
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and needle in err[0], (extra, err)
+    assert not (tmp_path / "res").exists() and not (tmp_path / "no").exists()
+    assert not best_known_path(suite).exists() and a_file.read_text() == "mine"
+
+
 def test_records_reader_tolerates_damage(tmp_path: Path) -> None:
     path = tmp_path / RESULTS_FILE
     rec = {"optimiser": "o", "task": "t", "run": 0, "f": 1.0, "phi": 0.0, "score": 1.0,
@@ -318,6 +362,15 @@ def test_cli_bench_then_report(suite: Path, tmp_path: Path) -> None:
     assert "Not drawn: these records are slim copies" in md2.read_text()
     # bad input: exit status 2
     assert main(["report", str(tmp_path / "missing"), "-o", str(md)]) == 2
+    # refused before a figure is written: -o a folder (it wrote the figures there, then
+    # failed with a traceback), an unknown path task (silently left out), a checkpoint with
+    # no curve.csv (refused after writing the figures)
+    fresh = tmp_path / "fresh"
+    fresh.mkdir()
+    for extra in (["-o", str(fresh)], ["-o", str(fresh / "r.md"), "--path-tasks", "T99"],
+                  ["-o", str(fresh / "r.md"), "--policy-checkpoint", str(tmp_path / "nope")]):
+        assert main(["report", str(out), "--reference", "random-search", *extra]) == 2, extra
+        assert list(fresh.iterdir()) == [], extra
     assert main(["report", str(out), "-o", str(md), "--reference", "cmaes"]) == 2
     assert main(["bench", "--suite", str(suite), "--optimizers", "nope", "--out", str(out)]) == 2
     # a budget below the population every DE-based optimiser starts from, as `plan` refuses it

@@ -6,6 +6,7 @@ import argparse
 import os
 import shlex
 import sys
+from pathlib import Path
 
 from lamde_mission.commands._common import add_executor_args, check_executor_args
 from lamde_mission.errors import UsageError
@@ -72,10 +73,14 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     return p
 
 
-def _names(values: list[str] | None) -> list[str] | None:
-    if not values:
+def _names(values: list[str] | None, option: str) -> list[str] | None:
+    """The names of a space- or comma-separated option; None where it was not given."""
+    if values is None:
         return None
-    return [n for v in values for n in v.split(",") if n]
+    names = [n.strip() for v in values for n in v.split(",") if n.strip()]
+    if not names:  # `--tasks ,` or `--tasks ""`: not "all of them"
+        raise UsageError(f"{option}: no name given (leave the option out for the default)")
+    return names
 
 
 def _command(args: argparse.Namespace, optimisers: list[str], tasks: list[str] | None) -> str:
@@ -113,11 +118,11 @@ def run(args: argparse.Namespace) -> int:
     if args.jobs is None:
         args.jobs = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (
             os.cpu_count() or 1)
-    optimisers = _names(args.optimizers) or (list(BEST_KNOWN_OPTIMISERS) if bk
-                                             else list(REGISTRY))
-    tasks = _names(args.tasks)
+    optimisers = _names(args.optimizers, "--optimizers") or (
+        list(BEST_KNOWN_OPTIMISERS) if bk else list(REGISTRY))
+    tasks = _names(args.tasks, "--tasks")
     args.i_max_values = []
-    for v in _names(args.i_max) or []:
+    for v in _names(args.i_max, "--i-max") or []:
         try:
             k = int(v)
         except ValueError:
@@ -133,6 +138,14 @@ def run(args: argparse.Namespace) -> int:
                          f"optimisers start from, as for plan (got {args.budget})")
     if args.jobs < 0:
         raise UsageError(f"--jobs must be >= 0 (got {args.jobs})")
+    if args.seed < 0:
+        raise UsageError(f"--seed must be an integer >= 0 (got {args.seed})")
+    if Path(args.out).exists() and not Path(args.out).is_dir():
+        raise UsageError(f"--out {args.out}: is a file, not a results folder")
+    if args.best_known_file and not args.no_best_known_update:
+        folder = Path(args.best_known_file).parent
+        if not folder.is_dir():
+            raise UsageError(f"--best-known-file {args.best_known_file}: no folder {folder}")
     check_executor_args(args)
     unknown = [o for o in optimisers if o not in REGISTRY]
     if unknown:

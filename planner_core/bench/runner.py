@@ -308,6 +308,8 @@ def run_bench(
                          f"{', '.join([*REGISTRY, *extras])}")
     if runs < 1 or budget < 1:
         raise BenchError("runs and budget must be positive")
+    if int(base_seed) < 0:
+        raise BenchError(f"base_seed must be an integer >= 0, got {base_seed}")
     files = suite_task_files(suite)
     if not files:
         raise BenchError(f"no map files in {suite}")
@@ -332,8 +334,15 @@ def run_bench(
             if Key(j.optimiser, j.task, j.run, j.init, j.i_max) not in have]
     summary = BenchSummary(planned=len(todo), skipped=len(all_jobs) - len(todo), results=results)
 
+    seeds = {Key(j.optimiser, j.task, j.run, j.init, j.i_max): j.seed for j in all_jobs}
+    other = next((r for r in existing.records if r.get("seed") is not None
+                  and seeds.get(key_of(r), r["seed"]) != r["seed"]), None)  # fmt: skip
     meta_path = out / META_FILE
     meta = read_json(meta_path)
+    if other is not None or meta.get("base_seed") not in (None, int(base_seed)):
+        was = meta.get("base_seed", "another")
+        raise BenchError(f"{results} holds runs of base seed {was}, not {base_seed}: "
+                         "use another --out folder for another seed")
     if meta.get("budget") not in (None, int(budget)):
         raise BenchError(f"{meta_path} records budget {meta['budget']}, not {budget}: "
                          "use another --out folder")
@@ -357,6 +366,9 @@ def run_bench(
     best: dict[str, float] = {}
     if best_known:
         bk_path = best_known_path(suite) if best_known is True else Path(best_known)
+        if not bk_path.exists():
+            log(f"note: {bk_path} does not exist: a new best-known file starts from the maps' "
+                "witness plans (a run's 'best-known improved' is against those)")
         bk = BestKnown(bk_path)
         best = bk.ensure(files, command)
     log(f"{len(all_jobs)} runs requested, {summary.skipped} already in {results}, "
