@@ -68,7 +68,23 @@ def test_cli_train_bad_input_is_one_line_exit_2(tmp_path, capsys) -> None:  # no
                  "10"]) == 2
     assert main(["train", "-o", str(tmp_path / "ck"), "--imitate", "lamde"]) == 2
     assert "--imitate: unknown configurator 'lamde'" in capsys.readouterr().err
-    assert not (tmp_path / "ck").exists()
+    capsys.readouterr()
+    # a value of the wrong type (a traceback at the first comparison); the DE's least
+    # population (it said 5, then refused 5 further on); -o a file (a traceback)
+    a_file = tmp_path / "a.plan"
+    a_file.write_text("mine")
+    for args, needle in (
+        (["--set", "lr=abc"], "--set lr: must be a number (its default is 0.0003), got 'abc'"),
+        (["--set", "n_steps=2.5"], "--set n_steps: must be an integer"),
+        (["--set", "net.hidden=true"], "--set net.hidden: must be an integer"),
+        (["--population", "5"], "--population: must be >= 6, got 5"),
+        (["-o", str(a_file)], "is a file, not a checkpoint folder"),
+    ):
+        out = [] if "-o" in args else ["-o", str(tmp_path / "ck")]
+        assert main(["train", *out, *args]) == 2, args
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and needle in err[0], (args, err)
+    assert not (tmp_path / "ck").exists() and a_file.read_text() == "mine"
 
 
 def test_cli_train_runs_on_a_trainset_file(tmp_path, capsys) -> None:  # noqa: ANN001
@@ -82,6 +98,11 @@ def test_cli_train_runs_on_a_trainset_file(tmp_path, capsys) -> None:  # noqa: A
                "--imitate-epochs", "1"])
     assert rc == 0
     assert (tmp_path / "ck" / "weights.npz").exists()
+    # a second training into the same folder would overwrite the checkpoint: refused
+    before = (tmp_path / "ck" / "weights.npz").read_bytes()
+    assert main(["train", "-o", str(tmp_path / "ck"), "--problems", str(trainset)]) == 2
+    assert "holds a checkpoint already: --resume continues" in capsys.readouterr().err
+    assert (tmp_path / "ck" / "weights.npz").read_bytes() == before
     config = json.loads((tmp_path / "ck" / "config.json").read_text())
     assert config["net"]["embed"] == 8 and config["training"]["ppo"]["imitate"] == "fixed"
     assert len(config["training"]["imitation"]) == 1

@@ -76,3 +76,13 @@ def test_a_generated_map_episode_runs_other_actions_to_the_end() -> None:
     assert done and env.result.evaluations <= 3_000 and env.result.phi == 0.0
     with pytest.raises(RuntimeError, match="^step: call reset"):
         env.step(0)
+
+
+def test_a_given_map_that_leaves_improve_nothing_names_itself() -> None:
+    """A budget the stages before `improve` spend whole: a typed error naming the map, its plan
+    seed and the budget (the trainer's command line turns it into one line, exit 2)."""
+    from planner_core.learning.schedule_env import NoImprovingStageError
+
+    env = ScheduleEnv(budget=200, population=20, reference="percent")
+    with pytest.raises(NoImprovingStageError, match=r"^map tiny: .* plan seed 3 and budget 200"):
+        env.reset(seed=0, options={"map": MAPS / "tiny.json", "key": "tiny", "plan_seed": 3})

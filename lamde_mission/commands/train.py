@@ -13,8 +13,10 @@ import argparse
 import dataclasses
 import json
 import sys
+from pathlib import Path
 
 from lamde_mission.commands._common import add_executor_args, check_executor_args
+from planner_core import defaults as D
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -95,6 +97,7 @@ def _config(args: argparse.Namespace):  # noqa: ANN202 - PPOConfig is imported l
     fields = {f.name for f in dataclasses.fields(PPOConfig)}
     net_fields = {f.name for f in dataclasses.fields(NetConfig)}
     net_kw: dict = {}
+    set_kw: dict = {}  # what --set gave, by its name
     for item in args.set:
         name, sep, value = item.partition("=")
         if not sep:
@@ -104,20 +107,25 @@ def _config(args: argparse.Namespace):  # noqa: ANN202 - PPOConfig is imported l
         except json.JSONDecodeError:
             parsed = value
         if name.startswith("net.") and name[4:] in net_fields:
-            net_kw[name[4:]] = parsed
+            net_kw[name[4:]] = set_kw[name] = parsed
         elif name in fields and name != "net":
-            kw[name] = parsed
+            kw[name] = set_kw[name] = parsed
         else:
             raise UsageError(f"--set: unknown field '{name}' (PPOConfig: "
                              f"{', '.join(sorted(fields))}; network: "
                              f"net.{', net.'.join(sorted(net_fields))})")
+    base = PPOConfig()
+    for name, value in set_kw.items():
+        default = (getattr(base.net, name[4:]) if name.startswith("net.")
+                   else getattr(base, name))  # fmt: skip
+        _check_set_type(name, value, default)
     try:
         # the network's defaults are PPOConfig's (new trainings read the context)
-        cfg = PPOConfig(net=NetConfig(**{**PPOConfig().net.to_dict(), **net_kw}), **kw)
+        cfg = PPOConfig(net=NetConfig(**{**base.net.to_dict(), **net_kw}), **kw)
     except (TypeError, ValueError) as exc:
         raise UsageError(f"--set: {exc}") from None
     for name in ("epochs", "envs", "population", "budget", "n_steps", "update_epochs"):
-        least = {"population": 5, "epochs": 0}.get(name, 1)
+        least = {"population": D.MIN_POPULATION, "epochs": 0}.get(name, 1)
         if int(getattr(cfg, name)) < least:
             raise UsageError(f"--{name.replace('_', '-')}: must be >= {least}, "
                              f"got {getattr(cfg, name)}")
@@ -127,6 +135,31 @@ def _config(args: argparse.Namespace):  # noqa: ANN202 - PPOConfig is imported l
     if cfg.budget < cfg.population:
         raise UsageError(f"--budget: must be >= the population ({cfg.population})")
     return cfg
+
+
+def _check_set_type(name: str, value: object, default: object) -> None:
+    """UsageError unless a --set value has the field's type (that of its default): a number
+    for a number, true/false for a flag, a string for a string, a list for a tuple."""
+    from lamde_mission.errors import UsageError
+
+    if default is None:
+        return  # an optional field (a path, a checkpoint): the config checks it
+    if isinstance(default, bool):
+        ok = isinstance(value, bool)
+        want = "true or false"
+    elif isinstance(default, int | float):
+        ok = isinstance(value, int | float) and not isinstance(value, bool) and (
+            isinstance(default, float) or float(value).is_integer())
+        want = "a number" if isinstance(default, float) else "an integer"
+    elif isinstance(default, str):
+        ok, want = isinstance(value, str), "a string"
+    elif isinstance(default, tuple | list):
+        ok, want = isinstance(value, list), "a JSON list"
+    else:
+        return
+    if not ok:
+        raise UsageError(f"--set {name}: must be {want} (its default is {default!r}), "
+                         f"got {value!r}")
 
 
 def _need_torch() -> None:
@@ -147,6 +180,12 @@ def run(args: argparse.Namespace) -> int:
 
     _need_torch()
     cfg = _config(args)
+    out = Path(args.output)
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"-o {args.output}: is a file, not a checkpoint folder")
+    if not args.resume and (out / "weights.npz").exists():
+        raise UsageError(f"-o {args.output}: holds a checkpoint already: --resume continues "
+                         "it; give another folder to train a new one")
     if args.jobs < 0 or (args.jobs == 0 and args.backend == "local"):
         raise UsageError(f"--jobs: must be >= 1 (0 = all CPUs, with --backend ray only), "
                          f"got {args.jobs}")

@@ -48,8 +48,8 @@ import gymnasium
 import numpy as np
 from gymnasium import spaces
 
-__all__ = ["ENV_ID", "FEATURES", "INFEASIBLE_PENALTY", "N_FEATURES", "ScheduleEnv",
-           "ScheduleFeatures"]
+__all__ = ["ENV_ID", "FEATURES", "INFEASIBLE_PENALTY", "N_FEATURES", "NoImprovingStageError",
+           "ScheduleEnv", "ScheduleFeatures"]
 
 #: the id under which `ScheduleEnv` is registered with Gymnasium
 ENV_ID = "lamde/Schedule-v0"
@@ -57,6 +57,14 @@ ENV_ID = "lamde/Schedule-v0"
 INFEASIBLE_PENALTY = 1.0
 #: maps drawn at most per reset before giving up (each skipped when improve would not run)
 MAX_DRAWS = 20
+
+
+class NoImprovingStageError(RuntimeError):
+    """The map given to `ScheduleEnv.reset` leaves its improving stage nothing to do: the
+    incumbent is infeasible when the stage starts, or no budget is left for it (the budget is
+    too small for the stages before it)."""
+
+
 #: weight of the newest gain in each action's running mean of gain per evaluation
 EMA = 0.5
 
@@ -168,6 +176,8 @@ class ScheduleEnv(gymnasium.Env):
             "f_reference").
 
         Raises:
+            NoImprovingStageError: the map given in `options` leaves the improving stage
+                nothing to do.
             RuntimeError: no drawn map let the improving stage run in `MAX_DRAWS` draws.
         """
         from planner_core.pipeline.pipeline import DEFAULT_PIPELINE, PipelineRun
@@ -198,8 +208,10 @@ class ScheduleEnv(gymnasium.Env):
                 if run.enter():
                     break
             if "map" in options:
-                raise RuntimeError("map: its improving stage does not run (the incumbent is "
-                                   "infeasible or no budget is left for it)")
+                raise NoImprovingStageError(
+                    f"map {key}: its improving stage does not run at plan seed {plan_seed} and "
+                    f"budget {cfg.budget} (the incumbent is infeasible when it starts, or the "
+                    "stages before it spend the whole budget: a larger budget leaves it some)")
         else:
             raise RuntimeError(f"no drawn map let the improving stage run in {MAX_DRAWS} draws")
         self.run, self.problem, self.key, self.cfg = run, problem, key, cfg

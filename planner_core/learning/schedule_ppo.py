@@ -431,9 +431,11 @@ def main(argv: list[str] | None = None) -> int:
                             default=f.default, help=f"(default {f.default})")
     ns = ap.parse_args(argv)
     args = Args(**vars(ns))
+    from planner_core.learning.schedule_env import NoImprovingStageError
+
     try:
         m = train(args, progress=lambda line: print(line, file=sys.stderr, flush=True))
-    except ValueError as exc:
+    except (ValueError, NoImprovingStageError) as exc:
         print(f"schedule_ppo: {exc}", file=sys.stderr)
         return 2
     print(f"wrote {args.output}: {m['cpu_seconds'] / 3600:.2f} CPU-h")
