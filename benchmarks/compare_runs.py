@@ -100,9 +100,14 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("old", help="results.jsonl of the reference (e.g. an earlier checkout)")
     ap.add_argument("new", help="results.jsonl to compare with it")
-    ap.add_argument("--optimiser", default="planner")
-    ap.add_argument("--suite", default=str(ROOT / "examples" / "maps" / "suite"))
+    ap.add_argument("--optimiser", default="planner",
+                    help="the optimiser whose records are compared (default planner)")
+    ap.add_argument("--suite", default=str(ROOT / "examples" / "maps" / "suite"),
+                    help="map folder whose best-known file gives the gaps (default the suite)")
     args = ap.parse_args(argv)
+    for name, path in (("old", args.old), ("new", args.new)):
+        if not Path(path).is_file():
+            ap.error(f"{name}: {path}: no such file (give a results.jsonl, or .jsonl.gz)")
     old, new = load(args.old, args.optimiser), load(args.new, args.optimiser)
     if not old or not new:
         ap.error(f"--optimiser: no {args.optimiser!r} records in "
@@ -114,6 +119,11 @@ def main(argv: list[str] | None = None) -> int:
         ap.error(f"no run in {args.new} has a run of the same start mode, task and seed in "
                  f"{args.old} to pair with (seeds {seeds[0][:5]} against {seeds[1][:5]}): "
                  "run both with the same --seed")
+    budgets = ({int(r["budget"]) for r in old if "budget" in r},
+               {int(r["budget"]) for r in new if "budget" in r})
+    if budgets[0] != budgets[1]:  # the seeds pair runs whatever their budget: not comparable
+        ap.error(f"the files ran other budgets ({sorted(budgets[0])} in {args.old}, "
+                 f"{sorted(budgets[1])} in {args.new}): compare runs of one protocol")
     best = BestKnown(best_known_path(args.suite)).f_values(suite_task_files(args.suite))
     lines, counts, paired = compare(old, new, best)
     print("\n".join(lines))

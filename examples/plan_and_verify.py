@@ -3,7 +3,9 @@
     python examples/plan_and_verify.py [MAP] [OUT.plan]
 
 The same steps `lamde-mission plan` takes, spelled out: map -> plan -> mission items -> file ->
-independent replay of the file's items with a verdict per constraint.
+independent replay of the file's items with a verdict per constraint. As `plan` does, it writes
+no file for an infeasible plan (exit 1) and says in one line what is wrong with a bad map
+(exit 2).
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ from pathlib import Path
 
 import lamde_mission
 from lamde_mission.formats import read_mission, write_mission
-from planner_core import load_map
+from planner_core import MapError, load_map
 from sim import replay, verify
 
 HERE = Path(__file__).resolve().parent
@@ -22,12 +24,20 @@ HERE = Path(__file__).resolve().parent
 def main() -> int:
     map_path = Path(sys.argv[1]) if len(sys.argv) > 1 else HERE / "maps" / "small-demo.json"
     out = Path(sys.argv[2]) if len(sys.argv) > 2 else Path("example-mission.plan")
-    m = load_map(map_path)
+    try:
+        m = load_map(map_path)
+    except MapError as exc:  # a missing file, bad JSON or a field out of range: one line
+        print(f"plan_and_verify: {exc}", file=sys.stderr)
+        return 2
     plan = lamde_mission.plan(m, seed=0, budget=10_000)
     print(f"{m.name}: {plan.n_hover} hover points, f = {plan.f:.2f}, phi = {plan.phi:g}, "
           f"{plan.wall_time:.2f} s")
     for (x, y), t in zip(plan.hover_points, plan.hover_times, strict=True):
         print(f"  hover at ({x:7.1f}, {y:7.1f}) m for {t:6.1f} s")
+    if not plan.feasible:  # as `lamde-mission plan`: an infeasible mission is not written
+        print(f"infeasible (phi = {plan.phi:g}): {out} not written; "
+              f"`lamde-mission check {map_path}` says what no plan can meet")
+        return 1
     write_mission(out, plan, m)
     items, fence = read_mission(out)  # replay what the file says, not the optimiser's arrays
     verdicts = verify(replay(items, m), m)

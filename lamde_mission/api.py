@@ -101,7 +101,11 @@ def plan(
 
     Returns:
         The `Plan`, with `stages` (per stage: evaluations, seconds, f before and after) and
-        `timings` (compile, planning, evaluation, total; seconds).
+        `timings` (seconds): compile (loading or compiling the kernels, the first call in
+        a process), setup (reading the map, its margins, building the problem and choosing
+        "auto" corner slots), planning (the pipeline's stages), evaluation (the part of
+        planning spent in the counted evaluator) and total (the whole call: compile + setup +
+        planning and the plan's breakdown).
 
     Raises:
         ValueError: one line naming the field ("population: must be an integer >= 6, got 5")
@@ -132,13 +136,16 @@ def plan(
     # safety margins (clearance, data margin) are a transformation of the map: the model is the
     # paper's, on the inflated map (the same map when both margins are 0)
     planning_map = m.planning_map()
+    t_setup = time.perf_counter() - t_start
     if on_compile is not None and not warmed(config.configurator):
         on_compile()
     t_compile = warm_up(config.configurator)
+    t0 = time.perf_counter()
     # "auto" corner slots are resolved from the planning map (after the kernels load: the rule
     # draws seeder plans) before the problem is built (K = 0: the paper's Problem)
     problem, k_corner = problem_for(planning_map, variable_length=config.variable_length,
                                     corner_slots=corner_slots)
+    t_setup += time.perf_counter() - t0
     result = run_pipeline(problem, config, progress=progress,
                           scheduler=None if default_schedule else scheduler)
     best = problem.breakdown(result.x)
@@ -171,6 +178,7 @@ def plan(
         polish=result.state.polish,
         timings={
             "compile": t_compile,
+            "setup": t_setup,
             "planning": result.seconds,
             "evaluation": ev_seconds,
             "total": wall,

@@ -492,9 +492,20 @@ def update_readme(path: str) -> bool:
 if __name__ == "__main__":
     # python -m planner_core.defaults            print the table as Markdown
     # python -m planner_core.defaults README.md  rewrite README's generated table in place
+    import argparse
     import sys
 
-    if len(sys.argv) > 1:
-        print(f"{sys.argv[1]}: " + ("updated" if update_readme(sys.argv[1]) else "up to date"))
-    else:
+    ap = argparse.ArgumentParser(
+        prog="python -m planner_core.defaults",
+        description="Print the table of every default and its limits as Markdown, or rewrite "
+        "the generated table between its markers in a README.")
+    ap.add_argument("readme", nargs="?", help="file whose generated table to rewrite in place")
+    ns = ap.parse_args()
+    if ns.readme is None:
         sys.stdout.write(render_markdown())
+    else:
+        try:
+            changed = update_readme(ns.readme)
+        except (OSError, ValueError) as exc:
+            ap.exit(2, f"python -m planner_core.defaults: {exc}\n")
+        print(f"{ns.readme}: " + ("updated" if changed else "up to date"))

@@ -56,7 +56,9 @@ def test_plan_is_feasible_and_consistent(small_plan: Plan) -> None:
         assert b.phi_after < b.phi_before or (b.phi_after == b.phi_before
                                               and b.f_after <= b.f_before)
     assert p.stages[-1].f_after == p.f
-    assert set(p.timings) == {"compile", "planning", "evaluation", "total"}
+    assert set(p.timings) == {"compile", "setup", "planning", "evaluation", "total"}
+    parts = p.timings["compile"] + p.timings["setup"] + p.timings["planning"]
+    assert parts <= p.timings["total"] + 1e-9
     assert p.config["budget"] == 3000 and p.config["population"] == 50 and p.stopped == ""
 
 

@@ -531,6 +531,15 @@ def test_compare_runs_marks_maps_by_rank_sum_and_by_seed(tmp_path: Path) -> None
                              records(0.0).splitlines(keepends=True)))
     r = _script("benchmarks/compare_runs.py", str(old), str(other))
     assert r.returncode == 2 and "run both with the same --seed" in r.stderr, r.stderr
+    # runs of other budgets pair by seed but do not compare: said (exit 2)
+    budgeted = tmp_path / "budgeted.jsonl"
+    budgeted.write_text("".join(line.replace('"seed": ', '"budget": 100, "seed": ') for line in
+                                records(0.0).splitlines(keepends=True)))
+    r = _script("benchmarks/compare_runs.py", str(old), str(budgeted))
+    assert r.returncode == 2 and "ran other budgets ([] in" in r.stderr, r.stderr
+    r = _script("benchmarks/compare_runs.py", str(tmp_path / "missing.jsonl"), str(new))
+    assert r.returncode == 2 and "old: " in r.stderr and "no such file" in r.stderr, r.stderr
+    assert "Traceback" not in r.stderr
 
 
 def test_the_pipeline_comparison_in_docs_is_what_its_stored_runs_give() -> None:

@@ -112,6 +112,14 @@ def test_example_script_plans_and_verifies(tmp_path: Path) -> None:
                        text=True, timeout=300)
     assert r.returncode == 0, r.stdout + r.stderr
     assert out.exists() and "C5" in r.stdout
+    # as `plan`: no file for an infeasible plan, one line for a bad map
+    bad = tmp_path / "inf.plan"
+    r = subprocess.run([sys.executable, str(script), str(MAPS / "infeasible-demo.json"),
+                        str(bad)], capture_output=True, text=True, timeout=300)  # fmt: skip
+    assert r.returncode == 1 and "not written" in r.stdout and not bad.exists(), r.stdout
+    r = subprocess.run([sys.executable, str(script), str(tmp_path / "none.json"), str(bad)],
+                       capture_output=True, text=True, timeout=300)  # fmt: skip
+    assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
 
 
 @pytest.mark.slow  # measured 6 s (issue 35: default suite <= 5 min)

@@ -186,6 +186,15 @@ def build_report(
         named = [v for v in ablation.get("variants", {}) if v in present and v != reference]
         opts = named + [o for o in opts if o not in named and o != reference] + [reference]
     tasks = sorted({r["task"] for r in records})
+    # everything that can refuse the report does so before a figure is written
+    if output.is_dir():
+        raise ValueError(f"{output}: is a folder; give the markdown file to write")
+    unknown = [t for t in path_tasks or () if t not in tasks]
+    if unknown:
+        raise ValueError(f"path tasks: {', '.join(unknown)} not in the results "
+                         f"(have {', '.join(tasks)})")
+    if policy_checkpoint is not None and not (Path(policy_checkpoint) / "curve.csv").is_file():
+        raise ValueError(f"policy checkpoint {policy_checkpoint}: no curve.csv")
     budgets = sorted({int(r["budget"]) for r in records})
     budget = budgets[-1]
     figures = Path(figures) if figures is not None else output.with_suffix("")
@@ -230,9 +239,11 @@ def build_report(
         desc = (REGISTRY[o].description if o in REGISTRY else
                 meta.get("optimisers", {}).get(o, {}).get("description", "(not in the registry)"))
         L.append(f"| {o} | {desc} |")
-    if read.truncated_tail or read.bad_lines or read.duplicates:
-        L += ["", f"Note: skipped in the results file: truncated tail {read.truncated_tail}, "
-                  f"unreadable lines {read.bad_lines}, duplicates {read.duplicates}."]
+    skipped = ((["a truncated last line (an interrupted write)"] if read.truncated_tail else [])
+               + ([f"unreadable line(s) {read.bad_lines}"] if read.bad_lines else [])
+               + ([f"{read.duplicates} duplicate run(s)"] if read.duplicates else []))
+    if skipped:
+        L += ["", f"Note: skipped in the results file: {', '.join(skipped)}."]
     if len(budgets) > 1:
         L += ["", f"Warning: the results mix budgets {budgets}."]
 
@@ -596,13 +607,12 @@ def cost_section(records: list[dict[str, Any]], checkpoint: str | Path | None) -
             wsecs = sum(float(r["seconds"]) for r in wrows)
             L += [f"- Warm start ({checkpoint}): {len(wrows)} imitation pass(es), "
                   f"{wsecs:,.0f} s wall ({wsecs / 60:.1f} min) as recorded in `imitation.csv`."]
-    for o in pol:
-        for ref in (o, "de-adaptive"):
-            rs = [r for r in records if r["optimiser"] == ref and r.get("i_max") is None]
-            if rs:
-                L.append(f"- Inference per plan, {ref}: mean optimiser wall time "
-                         f"{np.mean([r['wall_s'] for r in rs]):.2f} s over {len(rs)} run(s) "
-                         f"(budget {int(rs[0]['budget']):,}).")
+    for ref in [*pol, "de-adaptive"]:  # each policy's runs, then the hand-made DE's once
+        rs = [r for r in records if r["optimiser"] == ref and r.get("i_max") is None]
+        if rs and pol:
+            L.append(f"- Inference per plan, {ref}: mean optimiser wall time "
+                     f"{np.mean([r['wall_s'] for r in rs]):.2f} s over {len(rs)} run(s) "
+                     f"(budget {int(rs[0]['budget']):,}).")
     return L
 
 
