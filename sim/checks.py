@@ -11,15 +11,16 @@ cannot carry. It is no safety margin: a plan on the boundary that loses more tha
 stored fails, which is why missions are made storable before they are written
 (`lamde_mission.storage`). `GEOM_TOL` metres for positions and overlap lengths. One extra
 verdict, ENDS, checks that the mission takes off at the map's start and comes to rest at its
-end (the paper's fixed p_0 and p_{I+1}). Two more judge the map's `safety` margins on the flown
-mission: CLEAR (every leg at least `safety.clearance` from every obstacle, measured with
-shapely; near the start or end point the clearance in force is what the map leaves there) and
-MARGIN (every sensor's collected data at least (1 + `safety.data_margin`) x its requirement);
-`Verdicts.data_margins` holds the real margin per sensor and `Verdicts.clearance` the real
-clearance. On a map with a battery (`uav.battery` or `uav.endurance_s`; issue 33) one more,
-ENERGY, judges the mission as one sortie: the energy the sim computes on its own
-(`sim.energy.mission_energy`) at most the usable energy, battery x (1 - reserve); a map
-without a battery gets exactly the verdicts it got before.
+end (the paper's fixed p_0 and p_{I+1}), and ALT that every stop and the take-off are above the
+ground at home (the map is flat: a stop at or below 0 m is in the ground). Two more judge the
+map's `safety` margins on the flown mission: CLEAR (every leg at least `safety.clearance` from
+every obstacle, measured with shapely; near the start or end point the clearance in force is
+what the map leaves there) and MARGIN (every sensor's collected data at least (1 +
+`safety.data_margin`) x its requirement); `Verdicts.data_margins` holds the real margin per
+sensor and `Verdicts.clearance` the real clearance. On a map with a battery (`uav.battery` or
+`uav.endurance_s`; issue 33) one more, ENERGY, judges the mission as one sortie: the energy the
+sim computes on its own (`sim.energy.mission_energy`) at most the usable energy, battery x (1 -
+reserve); a map without a battery gets no ENERGY verdict.
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ import shapely
 
 from planner_core.defaults import L_VIO_TOL
 from sim import energy as sim_energy
+from sim.mission import CMD
 from sim.obstacles import obstacle_shapes, overlap_lengths
 from sim.replay import Timeline
 
@@ -298,6 +300,20 @@ def verify(timeline: Timeline, map: Any) -> Verdicts:  # noqa: A002
               f"{ENDS_TOL:g} m)")  # fmt: skip
     # the margin is the slack, as for every check: >= 0 exactly when it holds
     out.append(Verdict("ENDS", "start -> end", worst <= ENDS_TOL, ENDS_TOL - worst, "m", detail))
+
+    # ALT: every stop and the take-off above the ground at home (a flat map: the paper's model
+    # has no terrain); the LAND item itself comes down
+    route = timeline.route
+    alts = [(float(z), seq) for z, seq, cmd in zip(route.altitudes, route.seqs, route.commands,
+                                                    strict=True) if cmd != CMD.LAND]  # fmt: skip
+    if route.takeoff_altitude is not None:
+        alts.append((float(route.takeoff_altitude), "take-off"))
+    if alts:
+        low, where = min(alts, key=lambda a: a[0])
+        label = where if isinstance(where, str) else f"item {where}"
+        detail = (f"lowest: {label} at {low:.2f} m above home" if low > 0.0 else
+                  f"{label} at {low:.2f} m above home: at or below the ground it took off from")
+        out.append(Verdict("ALT", "altitude > 0 m", low > 0.0, low, "m", detail))
 
     energy = _energy_verdict(timeline, map)
     if energy is not None:

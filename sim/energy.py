@@ -15,7 +15,8 @@ z = sqrt(1 - y^2) = w sqrt(y) at w = V / v0 (differentiate to check: d/dw of the
 sqrt(y)). A ramp at acceleration a costs that over a. The replay's phases: the vertical
 take-off and landing at hover power P(0) (the level-flight model has no climb term), every
 horizontal leg at the speed the mission sets for it (trapezoid or triangle, as `sim.replay`
-flies it), an RTL return leg, and P(0) x every hover time.
+flies it) and P(0) over any time a change of altitude adds to the leg, an RTL return leg, and
+P(0) x every hover time.
 
 Cost: O(legs) per mission, independent of the sensors.
 """
@@ -27,6 +28,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from planner_core.defaults import MAP_DEFAULTS
+from sim.replay import leg_time
 
 __all__ = ["SimPower", "MissionEnergy", "power", "ramp_energy", "leg_energy", "battery",
            "mission_energy"]  # fmt: skip
@@ -140,15 +142,20 @@ class MissionEnergy:
 
 def mission_energy(timeline: Any, map: Any) -> MissionEnergy:  # noqa: A002
     """The energy of a `sim.replay.Timeline` on `map`, Wh: take-off and landing at P(0) over
-    their replayed times, each horizontal leg at its replayed speed (`Timeline.leg_speeds`),
-    the RTL return leg at the final speed, hovers at P(0)."""
+    their replayed times, each horizontal leg at its replayed speed (`Timeline.leg_speeds`)
+    plus P(0) over the time a climb or descent adds to it, the RTL return leg at the final
+    speed, hovers at P(0)."""
     p = SimPower.of(map)
     t = timeline.totals
     a = float(t.accel)
     hover_w = p.hover
     flight = 0.0
-    for d, v in zip(timeline.leg_lengths, timeline.leg_speeds, strict=True):
+    for d, v, tl in zip(timeline.leg_lengths, timeline.leg_speeds, timeline.leg_times,
+                        strict=True):  # fmt: skip
         flight += leg_energy(float(d), float(v), a, p)
+        # a leg paced by its climb or descent (`sim.replay.vertical_time`) takes longer than its
+        # horizontal profile: that time at P(0), as the vertical take-off and landing
+        flight += hover_w * max(float(tl) - leg_time(float(d), float(v), a), 0.0)
     ret = 0.0
     if timeline.return_leg is not None:
         seg = timeline.return_leg[1] - timeline.return_leg[0]

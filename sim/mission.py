@@ -184,6 +184,8 @@ MAX_EXECUTED_ITEMS = 100_000
 #: mission file cannot ask for more than a map may; DJI's and the common multirotors' service
 #: ceilings lie below 7 km AMSL
 MAX_FLIGHT_ALTITUDE: float = float(MAP_DEFAULTS["uav.altitude"].bounds[1])
+#: m/s: the least DO_CHANGE_SPEED speed the sim flies: the map's own `uav.max_speed` bound
+MIN_MISSION_SPEED: float = float(MAP_DEFAULTS["uav.max_speed"].bounds[0])
 
 _GLOBAL_FRAMES = {FRAME.GLOBAL, FRAME.GLOBAL_INT}
 _RELATIVE_FRAMES = {FRAME.GLOBAL_RELATIVE_ALT, FRAME.GLOBAL_RELATIVE_ALT_INT}
@@ -287,8 +289,9 @@ def items_to_route(items: Sequence[MissionItem], map: Any) -> Route:  # noqa: A0
 
     Supported navigation commands: TAKEOFF, WAYPOINT (param1 = hold s), LOITER_TIME
     (param1 = s), LAND, RETURN_TO_LAUNCH; DO_CHANGE_SPEED sets the speed from its position on
-    (the legs after it); DO_JUMP (param1 = the target's seq in this list, param2 = repeats) is
-    flown: the items from the target on run again, `param2` more times, at most
+    (the legs after it; a speed <= 0 changes nothing, as on PX4 and ArduPilot, one below
+    `MIN_MISSION_SPEED` is refused); DO_JUMP (param1 = the target's seq in this list, param2 =
+    repeats) is flown: the items from the target on run again, `param2` more times, at most
     `MAX_EXECUTED_ITEMS` items in all (a jump repeated forever, param2 = -1, is refused). Other
     DO/CONDITION commands are ignored with a note. Items after LAND/RTL are ignored with a
     note. Altitudes more than `MAX_FLIGHT_ALTITUDE` above or below home are refused.
@@ -341,6 +344,7 @@ def _walk(
     speeds: list[float | None] = []
     index_of_seq = {int(it.seq): k for k, it in enumerate(mission)}
     jumps_left: dict[int, int] = {}  # DO_JUMP list index -> repeats still to fly
+    held: set[int] = set()  # seqs noted for autocontinue 0 (once each, DO_JUMP or not)
     pc = 0
     executed = 0
     while pc < len(mission):
@@ -354,6 +358,10 @@ def _walk(
         if finish != "none":
             notes.append(f"items from seq {it.seq} on come after the landing and were ignored")
             break
+        if not it.autocontinue and c < 100 and int(it.seq) not in held:  # a NAV_* item
+            held.add(int(it.seq))
+            notes.append(f"item {it.seq}: autocontinue 0: PX4 holds there until told to go on "
+                         "(ArduPilot ignores the flag); the sim flies on")  # fmt: skip
         if c == CMD.DO_JUMP:
             target, repeats = it.param1, it.param2
             if not (math.isfinite(target) and math.isfinite(repeats)):
@@ -399,7 +407,16 @@ def _walk(
         elif c == CMD.RETURN_TO_LAUNCH:
             finish = "rtl"
         elif c == CMD.DO_CHANGE_SPEED:
-            if it.param2 > 0 and math.isfinite(it.param2):
+            if not math.isfinite(it.param2) or it.param2 <= 0.0:
+                # PX4 and ArduPilot change the speed only for a positive one (-1: no change)
+                notes.append(f"item {it.seq}: DO_CHANGE_SPEED speed {it.param2:g} m/s leaves the "
+                             "speed as it was (autopilots take only a positive one)")  # fmt: skip
+            elif it.param2 < MIN_MISSION_SPEED:
+                raise MissionError(
+                    f"item {it.seq}: DO_CHANGE_SPEED speed {it.param2:g} m/s is below "
+                    f"{MIN_MISSION_SPEED:g} m/s, the least a map's uav.max_speed may be (a "
+                    "mission that slow does not end in any battery's time)")
+            else:
                 speed = float(it.param2)
         elif c < 100:  # MAV_CMD_NAV_* range: a movement the sim cannot model
             raise MissionError(f"item {it.seq}: {_command_name(c)} is not supported by the sim")

@@ -8,11 +8,18 @@ only while hovering, sensor j receiving R_ij * T_i at hover point i. With `radio
 share D_ij of the sim's own allocation LP (`scheduled_allocation`), D_ij <= R_ij * T_i and
 sum_j D_ij <= R_lambda * T_i.
 
-What counts in f: exactly the paper's terms. t_fly sums the horizontal legs from the take-off
-position through every stop to the landing position; t_hover sums the hover times. The
-vertical take-off and landing (and an RTL flight back to launch) are simulated and reported
+What counts in f: exactly the paper's terms. t_fly sums the legs from the take-off position
+through every stop to the landing position; t_hover sums the hover times. The vertical
+take-off and landing (and an RTL flight back to launch) are simulated and reported
 (t_takeoff, t_land, t_return, t_total) but excluded from f, as the paper's model has no
 vertical motion. They are estimated with the same v_max and a as the horizontal legs.
+
+A leg between stops at different altitudes (a mission edited by hand: the planner writes every
+stop at the map's altitude) is flown as a straight line that takes as long as the slower of
+its horizontal profile and its vertical one, the climb or descent rest-to-rest (Eq. 1) at
+most `VZ_UP` / `VZ_DOWN`, the autopilots' default vertical speeds in missions (the slower of
+ArduPilot's and PX4's); that time is in t_fly, so a climb is never free. With equal altitudes
+(every planned mission) the legs are the paper's, to the bit.
 """
 
 from __future__ import annotations
@@ -35,9 +42,31 @@ __all__ = [
     "leg_position",
     "hover_rates",
     "scheduled_allocation",
+    "vertical_time",
+    "VZ_UP",
+    "VZ_DOWN",
 ]
 
 PHASES = ("takeoff", "fly", "hover", "return", "land")
+
+#: m/s, the fastest climb a leg between stops is flown at: ArduPilot's WPNAV_SPEED_UP default
+#: (250 cm/s, `WPNAV_WP_SPEED_UP_CMS` in libraries/AC_WPNav/AC_WPNav.cpp; PX4's
+#: MPC_Z_VEL_MAX_UP is 3 m/s)
+VZ_UP = 2.5
+#: m/s, the fastest descent: PX4's MPC_Z_VEL_MAX_DN default (1 m/s, mc_pos_control_params.c;
+#: ArduPilot's WPNAV_SPEED_DN is 150 cm/s)
+VZ_DOWN = 1.0
+#: m: an altitude change below this on a leg is the float32 round-off of one altitude written
+#: twice, not a climb
+Z_SNAP = 0.01
+
+
+def vertical_time(dz: float, accel: float) -> float:
+    """s to climb (dz > 0) or descend (dz < 0) |dz| m rest-to-rest at most `VZ_UP` / `VZ_DOWN`
+    (Eq. 1 with the map's acceleration); 0 below `Z_SNAP`."""
+    if abs(dz) < Z_SNAP:
+        return 0.0
+    return leg_time(abs(dz), VZ_UP if dz > 0 else VZ_DOWN, accel)
 
 
 def leg_time(d: float, v_max: float, accel: float) -> float:
@@ -274,7 +303,24 @@ def replay_route(route: Route, map: Any, *, dt: float = 1.0) -> Timeline:  # noq
     seg = np.diff(path, axis=0)
     lengths = np.sqrt((seg**2).sum(axis=1))
     lengths = np.where(lengths < SNAP_M, 0.0, lengths)
-    times = np.array([leg_time(d, float(vk), a) for d, vk in zip(lengths, leg_v, strict=True)])
+    h_to = route.takeoff_altitude
+    if h_to is None:
+        h_to = float(route.altitudes[0]) if len(route.altitudes) else float(uav.altitude)
+    # each stop's altitude as flown (a LAND item lands where it is: its leg keeps the altitude)
+    flown_alt = np.empty(n_stops)
+    z_prev = float(h_to)
+    for k in range(n_stops):
+        if route.commands[k] != CMD.LAND:
+            z_prev = float(route.altitudes[k])
+        flown_alt[k] = z_prev
+    climbs = np.diff(np.concatenate([[float(h_to)], flown_alt])) if n_stops else np.zeros(0)
+    times = np.array([max(leg_time(d, float(vk), a), vertical_time(float(dz), a))
+                      for d, vk, dz in zip(lengths, leg_v, climbs, strict=True)])  # fmt: skip
+    if np.any(np.abs(climbs) >= Z_SNAP):
+        k = int(np.argmax(np.abs(climbs)))
+        notes.append(f"the mission changes altitude between stops (by up to {climbs[k]:+.1f} m, "
+                     f"on the leg to item {route.seqs[k]}): such legs are timed with climbs at "
+                     f"{VZ_UP:g} m/s and descents at {VZ_DOWN:g} m/s at most")  # fmt: skip
     hov_mask = route.is_hover
     rates_all = hover_rates(stops, route.altitudes, sensors, radio.peak_rate, radio.decay)
     rates = rates_all[hov_mask]
@@ -319,9 +365,6 @@ def replay_route(route: Route, map: Any, *, dt: float = 1.0) -> Timeline:  # noq
         return np.tile(pos, (n, 1)), np.tile(q, (n, 1))
 
     # take-off (vertical, outside f)
-    h_to = route.takeoff_altitude
-    if h_to is None:
-        h_to = float(route.altitudes[0]) if len(route.altitudes) else float(uav.altitude)
     t_takeoff = leg_time(abs(h_to), v, a)
     ts = rec.times(clock, t_takeoff)
     xy, dq = const(len(ts))
@@ -331,11 +374,14 @@ def replay_route(route: Route, map: Any, *, dt: float = 1.0) -> Timeline:  # noq
 
     for k in range(len(stops)):
         d, tl = float(lengths[k]), float(times[k])
-        target_alt = float(route.altitudes[k]) if route.commands[k] != CMD.LAND else alt_now
+        target_alt = float(flown_alt[k])
         if tl > 0.0:
             ts = rec.times(clock, tl)
-            s = leg_position(ts - clock, d, float(leg_v[k]), a)
-            frac = s / d
+            dz = target_alt - alt_now
+            if vertical_time(dz, a) > leg_time(d, float(leg_v[k]), a):  # the climb paces it
+                frac = leg_position(ts - clock, abs(dz), VZ_UP if dz > 0 else VZ_DOWN, a) / abs(dz)
+            else:
+                frac = leg_position(ts - clock, d, float(leg_v[k]), a) / d
             xy = pos[None, :] + frac[:, None] * (stops[k] - pos)[None, :]
             z = alt_now + frac * (target_alt - alt_now)
             rec.add("fly", ts, xy, z, np.tile(q, (len(ts), 1)))

@@ -144,6 +144,79 @@ def test_mission_speed_is_flown(m):
     assert fast.totals.speed == 20.0 and any("exceeds" in n for n in fast.notes)
 
 
+def test_a_change_of_altitude_between_stops_is_timed_and_costed(m):
+    """A stop edited up to 3,000 m: the legs to and from it take the climb and the descent at
+    the vertical speeds (they cost nothing before: the same f at 60 m as at 3 km), in t_fly and
+    f, and its energy is P(0) over the time the climbs add."""
+    from sim.energy import SimPower, mission_energy
+    from sim.replay import VZ_DOWN, VZ_UP, vertical_time
+
+    plan = _plan(m, HOVER, TIMES)
+    items = plan_to_items(plan, m)
+    flat = replay(items, m)
+    k = next(i for i, it in enumerate(items) if it.command == CMD.LOITER_TIME)
+    h = float(items[k].z)
+    high = replay([replace(it, z=3000.0) if i == k else it for i, it in enumerate(items)], m)
+    a = float(m.spec.uav.acceleration)
+    up, down = vertical_time(3000.0 - h, a), vertical_time(h - 3000.0, a)
+    assert up == leg_time(3000.0 - h, VZ_UP, a) and down == leg_time(3000.0 - h, VZ_DOWN, a)
+    j = int(np.flatnonzero(high.leg_times != flat.leg_times)[0])
+    assert high.leg_times[j] == pytest.approx(up) and high.leg_times[j + 1] == pytest.approx(down)
+    extra = up + down - flat.leg_times[j] - flat.leg_times[j + 1]
+    assert high.totals.t_fly == pytest.approx(flat.totals.t_fly + extra)
+    assert high.totals.f > flat.totals.f + 1000.0  # alpha x about 3,000 s more
+    assert any("changes altitude between stops" in n for n in high.notes)
+    assert not any("altitude" in n for n in flat.notes)
+    # the sampled flight climbs to the stop and comes down again, ending where it did
+    assert high.z.max() == pytest.approx(3000.0) and high.t[-1] == pytest.approx(
+        flat.t[-1] + extra)
+    de = mission_energy(high, m).flight - mission_energy(flat, m).flight
+    assert de == pytest.approx(SimPower.of(m).hover * extra / 3600.0)
+
+
+def test_a_stop_at_or_below_the_ground_fails_alt(m):
+    plan = _plan(m, HOVER, TIMES)
+    items = plan_to_items(plan, m)
+    k = next(i for i, it in enumerate(items) if it.command == CMD.LOITER_TIME)
+    v = verify(replay(items, m), m)
+    assert v["ALT"].passed and v["ALT"].margin == pytest.approx(float(m.spec.uav.altitude))
+    low = [replace(it, z=-50.0) if i == k else it for i, it in enumerate(items)]
+    v = verify(replay(low, m), m)
+    assert "ALT" in v.failed and v["ALT"].margin == -50.0
+    assert f"item {items[k].seq} at -50.00 m above home" in v["ALT"].detail
+
+
+def test_mission_speeds_the_autopilots_ignore_or_that_never_end(m):
+    """DO_CHANGE_SPEED <= 0 leaves the speed (PX4 and ArduPilot read it so), with a note; a
+    positive speed below the map's least max_speed is refused (1e-6 m/s made a 76-year mission
+    that passed every check)."""
+    from sim.mission import MIN_MISSION_SPEED, MissionError
+
+    plan = _plan(m, HOVER, TIMES)
+    items = plan_to_items(plan, m, speed=10.0)
+    k = next(i for i, it in enumerate(items) if it.command == CMD.DO_CHANGE_SPEED)
+    ref = replay(items, m)
+    for bad in (0.0, -20.0, -1.0):
+        tl = replay([replace(it, param2=bad) if i == k else it for i, it in enumerate(items)], m)
+        assert tl.totals.speed == float(m.spec.uav.max_speed)
+        assert any("leaves the speed as it was" in n for n in tl.notes)
+    assert ref.totals.speed == 10.0
+    with pytest.raises(MissionError, match=r"DO_CHANGE_SPEED speed 1e-06 m/s is below 0\.1"):
+        replay([replace(it, param2=1e-6) if i == k else it for i, it in enumerate(items)], m)
+    assert MIN_MISSION_SPEED == 0.1
+
+
+def test_autocontinue_0_is_noted_once_per_item(m):
+    plan = _plan(m, HOVER, TIMES)
+    items = plan_to_items(plan, m)
+    assert not any("autocontinue" in n for n in replay(items, m).notes)
+    k = next(i for i, it in enumerate(items) if it.command == CMD.LOITER_TIME)
+    tl = replay([replace(it, autocontinue=0) if i == k else it for i, it in enumerate(items)], m)
+    held = [n for n in tl.notes if "autocontinue" in n]
+    assert held == [f"item {items[k].seq}: autocontinue 0: PX4 holds there until told to go on "
+                    "(ArduPilot ignores the flag); the sim flies on"]
+
+
 # ----------------------------------------------------------------------------- verify
 
 
@@ -152,7 +225,7 @@ def test_feasible_plan_passes_every_check(m):
     assert plan.feasible
     v = verify(replay(plan_to_items(plan, m), m), m)
     assert v.passed and v.failed == []
-    assert [x.name for x in v] == ["C1", "C2", "C3", "C4", "C5", "CLEAR", "MARGIN", "ENDS"]
+    assert [x.name for x in v] == ["C1", "C2", "C3", "C4", "C5", "CLEAR", "MARGIN", "ENDS", "ALT"]
     assert v["C1"].margin == pytest.approx(120.0)  # hover point 1 is 120 m from the edge
     assert v["C2"].margin == pytest.approx(30.0)
     assert v["C5"].margin > 0 and "clearance" in v["C5"].detail
@@ -165,7 +238,7 @@ def test_feasible_plan_passes_every_check(m):
     d = json.loads(json.dumps(v.to_dict()))  # JSON-ready, and it says what the object says
     assert d["passed"] is True and d["failed"] == []
     assert [x["name"] for x in d["verdicts"]] == ["C1", "C2", "C3", "C4", "C5", "CLEAR", "MARGIN",
-                                                  "ENDS"]
+                                                  "ENDS", "ALT"]
     assert d["verdicts"][0]["margin"] == pytest.approx(120.0)
     assert (d["t_fly"], d["t_hover"], d["f"]) == (v.t_fly, v.t_hover, v.f)
 

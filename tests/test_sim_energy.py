@@ -33,7 +33,7 @@ MAP = {
 }
 HOVER = [[300, 120], [1000, 980], [1700, 1480]]
 TIMES = [40.0, 30.0, 35.0]
-BEFORE = ["C1", "C2", "C3", "C4", "C5", "CLEAR", "MARGIN", "ENDS"]
+BEFORE = ["C1", "C2", "C3", "C4", "C5", "CLEAR", "MARGIN", "ENDS", "ALT"]
 
 
 def _mission(data: dict, **kw):
