@@ -60,8 +60,10 @@ def sortie_dir_refusal(out_dir: str | Path) -> str | None:
 
     A sortie directory replaces the folder at its path whole, so only a path that does not
     exist yet, an empty folder or an earlier sortie directory (nothing but `FLEET_FILE` and
-    `mission-v{vehicle}-s{sortie}.plan` files) may be written; never a file, the working
-    folder or one above it, nor a folder holding anything else (it would be deleted).
+    `mission-v{vehicle}-s{sortie}.plan` files) may be written; never a file, a new path named
+    like a mission file (`.plan`, `.waypoints`, `.geojson`, `.json`, `.txt`: a folder of that
+    name would read as one), the working folder or one above it, nor a folder holding anything
+    else (it would be deleted).
 
     Args:
         out_dir: the directory's path.
@@ -78,6 +80,11 @@ def sortie_dir_refusal(out_dir: str | Path) -> str | None:
         return ("is the working folder or one above it; name a new folder for the sorties "
                 "(e.g. -o sorties/)")
     if not target.exists():
+        from lamde_mission.formats import FORMATS
+
+        if target.suffix.lower() in (*FORMATS, ".json", ".txt"):  # a file's name, not a folder's
+            return (f"names a {target.suffix} file; a map with a battery or fleet is written as "
+                    "a directory of sorties: name a folder (e.g. -o sorties/)")
         return None
     foreign = sorted(e.name for e in target.iterdir() if not (
         e.is_file() and (e.name == FLEET_FILE or _SORTIE_NAME.fullmatch(e.name))))
@@ -222,31 +229,22 @@ def verify_sortie_dir(m: Any, path: str | Path) -> FleetCheck:
             unreadable mission file, an unknown depot).
     """
     from lamde_mission.formats import MissionFileError, load_mission_items
+    from lamde_mission.formats.fleet import read_fleet_dir
 
-    path = Path(path)
-    summary = path / FLEET_FILE
-    try:
-        data = json.loads(summary.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
-        raise ValueError(f"{summary}: cannot read the sortie summary ({exc})") from None
+    fleet = read_fleet_dir(path)  # FleetDirError (a ValueError): the file and field by name
+    summary = fleet.path / FLEET_FILE
     rows = []
-    try:
-        for vi, veh in enumerate(data["vehicles"]):
-            for si, s in enumerate(veh["sorties"]):
-                f = str(s["file"])
-                if Path(f).name != f:
-                    raise ValueError(
-                        f"{summary}: vehicles[{vi}].sorties[{si}].file: {f!r} is "
-                        "not a plain file name inside the directory"
-                    )
-                try:
-                    items, _ = load_mission_items(str(path / f), m)
-                except MissionFileError as exc:
-                    raise ValueError(f"{path / f}: {exc}") from None
-                rows.append((int(veh["vehicle"]), int(s["sortie"]), f, str(s["depot_start"]),
-                             str(s["depot_end"]), items))  # fmt: skip
-    except (KeyError, TypeError) as exc:
-        raise ValueError(f"{summary}: missing or malformed field {exc}") from None
+    for vi, veh in enumerate(fleet.vehicles):
+        for si, s in enumerate(veh.sorties):
+            for which, depot in (("depot_start", s.depot_start), ("depot_end", s.depot_end)):
+                if depot is None:  # the replay flies each sortie from its depot to its depot
+                    raise ValueError(f"{summary}: vehicles[{vi}].sorties[{si}].{which}: missing "
+                                     "(a depot's name of the map)")  # fmt: skip
+            try:
+                items, _ = load_mission_items(str(s.path), m)
+            except MissionFileError as exc:
+                raise ValueError(f"{s.path}: {exc}") from None
+            rows.append((veh.vehicle, s.sortie, s.path.name, s.depot_start, s.depot_end, items))
     return _check(m, rows)
 
 

@@ -200,3 +200,24 @@ def test_the_summary_names_a_scheduler_and_a_split_other_than_the_default() -> N
         ", scheduler lamde-s -> default, DE share 0.4")
     assert _run_settings({"de_share": DE_SHARE, "scheduler": "kicks-rebuild"}) == (
         ", scheduler kicks-rebuild")
+
+
+def test_an_output_that_is_an_input_is_refused_before_planning(tmp_path: Path, capsys) -> None:
+    """`plan farm.json -o r.plan --report farm.json` replaced the hand-written map with the
+    report, and `-o farm.json` (a saved plan) would replace it too. One line, exit 2, the input
+    kept."""
+    from lamde_mission.cli import main
+
+    farm = tmp_path / "farm.json"
+    farm.write_text(DEMO.read_text())
+    for args, needle in (
+        (["plan", str(farm), "-o", str(tmp_path / "r.plan"), "--report", str(farm)],
+         "--report"),
+        (["plan", str(farm), "-o", str(farm)], "-o/--output"),  # a saved plan is .json too
+    ):
+        assert main(args) == 2, args
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith(f"lamde-mission plan: {needle}: "), err
+        assert "is the map this command reads" in err[0], err
+        assert farm.read_text() == DEMO.read_text()
+    assert not (tmp_path / "r.plan").exists()

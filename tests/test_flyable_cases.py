@@ -145,6 +145,18 @@ def test_no_origin_map_is_refused_when_a_mission_is_written(tmp_path):
                ).returncode == 0
     r = cli("plan", CASES / "no-origin-map.json", "-o", out, "--origin", "46.2")
     assert r.returncode == 2 and "--origin" in r.stderr
+    # upload --map replays it on the map first: one line naming origin (a traceback before),
+    # before any link is opened; --origin places it there too, and only with --map
+    r = cli("upload", out, "--map", CASES / "no-origin-map.json", "--connect",
+            "udpout://127.0.0.1:9", "--timeout", "1")  # fmt: skip
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and len(lines) == 1 and "origin:" in lines[0], r.stderr
+    r = cli("upload", out, "--origin", "46.2,7.3,500", "--connect", "udpout://127.0.0.1:9")
+    assert r.returncode == 2 and "--origin: only with --map" in r.stderr
+    # drawing the map alone needs no place on Earth
+    png = tmp_path / "map.png"
+    r = cli("show", CASES / "no-origin-map.json", "-o", png)
+    assert r.returncode == 0 and png.stat().st_size > 0, r.stderr
 
 
 @pytest.mark.slow  # measured 6 s (issue 35: default suite <= 5 min)

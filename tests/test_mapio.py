@@ -55,6 +55,21 @@ def test_missing_nan_nonpositive_empty(hand_map: dict) -> None:
         "end: must be a JSON array of two numbers [x, y] (metres), got [1, 2, 3] (an array)"]
 
 
+def test_a_bound_of_zero_is_not_explained_by_the_caps_reason(hand_map: dict) -> None:
+    """A negative radius was told "no obstacle is larger than 1000 km" (the upper bound's
+    reason); a lower bound above 0 keeps its own reason."""
+    hand_map["obstacles"] = {"circles": [{"x": 500, "y": 500, "radius": -5}]}
+    hand_map["area"]["width"] = 0
+    hand_map["uav"]["max_speed"] = 0.01
+    lines = _problems(hand_map)
+    assert "obstacles.circles[0].radius: must be greater than 0 (got -5)" in lines
+    assert "area.width: must be greater than 0 (got 0)" in lines
+    speed = next(line for line in lines if line.startswith("uav.max_speed:"))
+    assert "greater than or equal to 0.1 (got 0.01); below 0.1 m/s flight times" in speed
+    hand_map["obstacles"]["circles"][0]["radius"] = 2e6
+    assert any("1000 km" in line for line in _problems(hand_map))
+
+
 def test_points_outside_area_and_inside_obstacles(hand_map: dict) -> None:
     hand_map["sensors"][0]["x"] = 5000
     hand_map["obstacles"] = {"circles": [{"x": 0, "y": 0, "radius": 50}]}
@@ -132,3 +147,23 @@ def test_a_null_i_max_keeps_the_papers_values_and_grows_with_the_sensors() -> No
     assert default_max_hover_points(20000, 20000, 160) == 80
     assert default_max_hover_points(30000, 30000, 1000) == MAX_HOVER_POINTS == 200
     assert default_max_hover_points(30000, 30000, 3) == 20
+
+
+def test_a_file_of_another_kind_given_as_a_map_is_named_as_such(tmp_path) -> None:
+    """A QGroundControl mission, GeoJSON, a fleet.json or a saved plan given as the map: one
+    line saying what it is (it listed `version: unknown field` and others one by one)."""
+    from tests.conftest import ROOT
+
+    cases = {
+        "mission.plan": ({"fileType": "Plan", "version": 1, "mission": {}}, "QGroundControl"),
+        "f.geojson": ({"type": "FeatureCollection", "features": []}, "this is GeoJSON"),
+        "fleet.json": ({"map": "m", "vehicles": []}, "fleet.json, not a map"),
+        "saved.json": ({"hover_points": [], "hover_times": [], "f": 1.0}, "a saved plan"),
+    }
+    for name, (doc, needle) in cases.items():
+        path = tmp_path / name
+        path.write_text(json.dumps(doc))
+        with pytest.raises(MapError) as info:
+            load_map(path)
+        assert len(info.value.problems) == 1 and needle in info.value.problems[0], name
+    load_map(ROOT / "examples" / "maps" / "small-demo.json")  # a map is still a map

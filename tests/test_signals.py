@@ -67,6 +67,8 @@ def _outcome(cmd: list[str], delay: float, cwd: Path) -> tuple[str, int, str, st
         return "startup", rc, out, err  # before Python's own handler: ended by the signal
     if "KeyboardInterrupt" in err and ("Traceback" in err or "Fatal Python error" in err):
         return "startup", rc, out, err  # in site / the editable finder / the script's import
+    if err.strip() == "KeyboardInterrupt":
+        return "startup", rc, out, err  # the interpreter's own start-up: no frame to print
     return "bad", rc, out, err
 
 

@@ -76,6 +76,8 @@ def test_a_vehicle_without_the_key_is_not_heard(port, via, vehicle_key, why) -> 
                            timeout=1.5, attempts=1, signing_key=KEY, log=lines.append)  # fmt: skip
         assert v.stats.uploads[MISSION_TYPE.MISSION] == 0
     assert "no vehicle heard" in str(info.value)
+    # the line says the key is the likely fault (it said only "no vehicle heard")
+    assert "came unsigned or signed with another key: check --signing-key" in str(info.value)
     if via == "pymavlink":
         assert any("unsigned or wrongly signed (--signing-key)" in s for s in lines), lines
 

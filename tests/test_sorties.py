@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import subprocess
 import tempfile
 from pathlib import Path
@@ -280,6 +281,22 @@ def test_sortie_dir_is_replayed_by_the_sim_and_energy_is_caught(tmp_path) -> Non
     f.write_text(json.dumps(doc))
     bad = verify_sortie_dir(m, tmp_path / "d")
     assert not bad.passed and any("ENERGY" in line for line in bad.failed())
+    # a damaged fleet.json: the field named by the reader `show` and `upload --fleet` use (it
+    # said "missing or malformed field string indices must be integers", or the path twice)
+    good = (tmp_path / "d" / FLEET_FILE).read_text()
+    for change, needle in (
+        (lambda d: d.update(vehicles="x"), "vehicles: expected a non-empty list"),
+        (lambda d: d.update(vehicles=[]), "vehicles: expected a non-empty list"),
+        (lambda d: d["vehicles"][0]["sorties"][0].update(file=5), ".file: expected a file name"),
+        (lambda d: d["vehicles"][0].update(vehicle="1"), "vehicle: expected the whole number 1"),
+        (lambda d: d["vehicles"][0]["sorties"][0].pop("depot_start"), ".depot_start: missing"),
+    ):
+        doc = json.loads(good)
+        change(doc)
+        (tmp_path / "d" / FLEET_FILE).write_text(json.dumps(doc))
+        with pytest.raises(ValueError, match=re.escape(needle)) as info:
+            verify_sortie_dir(m, tmp_path / "d")
+        assert not str(info.value).startswith(f"{tmp_path / 'd'}/5: "), info.value
 
 
 @pytest.mark.slow
@@ -477,6 +494,18 @@ def test_a_sortie_dir_never_replaces_a_folder_of_other_files(tmp_path) -> None:
     assert sortie_dir_refusal(old) is None
     (old / "mission-v1-s1.plan.bak").write_text("{}")
     assert "mission-v1-s1.plan.bak" in sortie_dir_refusal(old)
+
+
+def test_a_sortie_directory_is_not_given_a_mission_files_name(tmp_path) -> None:
+    """`-o bat.waypoints` on a battery map made a folder named like an ArduPilot file holding
+    QGroundControl files: a new path with a mission file's suffix is refused, a plain one not."""
+    from lamde_mission.sorties import sortie_dir_refusal
+
+    for name in ("bat.plan", "bat.waypoints", "bat.WAYPOINTS", "b.geojson", "b.json", "b.txt"):
+        why = sortie_dir_refusal(tmp_path / name)
+        assert why is not None and "is written as a directory of sorties" in why, name
+    assert sortie_dir_refusal(tmp_path / "sorties") is None
+    assert sortie_dir_refusal(tmp_path / "flight.2026-12-06") is None
 
 
 @pytest.mark.slow  # measured 3.4 s on a loaded machine (issue 35: default suite <= 5 min)

@@ -241,6 +241,12 @@ def test_cli_upload_errors(port, plan_files, tmp_path, capsys):
     assert main(["upload", str(plan_path), "--attempts", "0"]) == 2
     assert main(["upload", str(plan_path), "--timeout", "-1"]) == 2
     capsys.readouterr()
+    # MAVSDK turned 1e10 s into an immediate, false "no vehicle heard ... within 1e+10 s"
+    for big in ("1e10", "3601"):
+        assert main(["upload", str(plan_path), "--timeout", big]) == 2
+        assert "--timeout must be a number of seconds in (0, 3600]" in capsys.readouterr().err
+    with pytest.raises(ValueError, match=r"timeout must be a number of seconds in \(0, 3600\]"):
+        upload_mission(hand_mission(1), connect=listen_on(port), timeout=1e10)
     # no vehicle: exit 1 within the timeout
     t0 = time.monotonic()
     rc = main(["upload", str(plan_path), "--connect", listen_on(port), "--via", "pymavlink",

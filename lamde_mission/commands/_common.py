@@ -23,19 +23,25 @@ def load_map_or_fail(path: str) -> Any:
     return m
 
 
-def check_outputs(paths: list[tuple[str, str | None]], *, mkdir: bool = False) -> None:
-    """UsageError naming the option and path of the first output that cannot be written (or
-    that two options share), before any work; `mkdir` creates missing folders instead."""
+def check_outputs(paths: list[tuple[str, str | None]], *, mkdir: bool = False,
+                  inputs: list[tuple[str, str | None]] = ()) -> None:
+    """UsageError naming the option and path of the first output that cannot be written, that
+    two options share, or that is one of the command's `inputs` (what, path: writing it would
+    destroy it), before any work; `mkdir` creates missing folders instead."""
 
     from lamde_mission.errors import UsageError
     from planner_core.atomic import OutputPathError, check_writable
     from planner_core.textio import printable
 
+    read = {str(Path(p).resolve()): what for what, p in inputs if p}
     seen: dict[str, str] = {}
     for option, path in paths:
         if not path:
             continue
         key = str(Path(path).resolve())
+        if key in read:
+            raise UsageError(f"{option}: {printable(path)} is the {read[key]} this command "
+                             "reads; writing it would replace it (name another file)")
         if key in seen:
             raise UsageError(f"{option}: {printable(path)} is also the {seen[key]} output")
         seen[key] = option

@@ -404,7 +404,7 @@ def _run_sorties(args: argparse.Namespace) -> int:
                              "(.png or .svg)")  # fmt: skip
         from lamde_mission.commands._common import check_outputs
 
-        check_outputs([("--plot", args.plot)], mkdir=args.mkdir)
+        check_outputs([("--plot", args.plot)], mkdir=args.mkdir, inputs=[("map", args.map)])
     from lamde_mission.sorties import sortie_dir_refusal
 
     out = Path(args.output)
@@ -529,7 +529,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--plot: {args.plot}: image format must be PNG or SVG (.png or .svg)")
     check_outputs(
         [("-o/--output", args.output), ("--plot", args.plot), ("--report", args.report)],
-        mkdir=args.mkdir,
+        mkdir=args.mkdir, inputs=[("map", args.map)],
     )
     from lamde_mission.formats import MissionFileError, format_for
 

@@ -113,9 +113,11 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"{out}: output must be a .png or .svg file")
     if args.dpi <= 0:
         raise UsageError(f"--dpi must be positive, got {args.dpi}")
-    check_outputs([("-o/--output", args.output)], mkdir=True)
+    check_outputs([("-o/--output", args.output)], mkdir=True,
+                  inputs=[("map", args.map), ("mission", args.mission)])
     m = load_map_or_fail(args.map)
-    m = with_origin_or_fail(m, args.origin)
+    if args.mission or args.origin is not None:  # the map alone is drawn in its own metres
+        m = with_origin_or_fail(m, args.origin)
     if args.mission and Path(args.mission).is_dir():
         path = plot_fleet_dir(m, args.mission, out, title=args.title, dpi=args.dpi)
         print(f"wrote {path}")

@@ -84,6 +84,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "simulator rejects (a constraint C1..C5 fails, a second take-off, an unusable hover "
         "time) is refused with exit status 2 unless --force",
     )
+    p.add_argument("--origin", metavar="LAT,LON[,ALT]",
+                   help="with --map: the WGS84 position of the map's (0, 0) (degrees, degrees, "
+                   "metres AMSL), for a map that has no origin")
     p.add_argument(
         "--force",
         action="store_true",
@@ -252,15 +255,17 @@ def _flight_check(path: str, mission: list, *, force: bool) -> None:
         print(f"warning: {path}: {printable(str(exc))}; sent anyway (--force)", file=sys.stderr)
 
 
-def _sim_check(path: str, map_path: str, mission: list, *, force: bool) -> None:
-    """Replay `mission` on the map and judge it (as `verify` does); UsageError unless `force`."""
-    from lamde_mission.commands._common import load_map_or_fail
+def _sim_check(path: str, map_path: str, mission: list, *, force: bool,
+               origin: str | None = None) -> None:
+    """Replay `mission` on the map and judge it (as `verify` does); UsageError unless `force`.
+    A map without an origin needs `origin` (`--origin`): UsageError naming it otherwise."""
+    from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
     from lamde_mission.errors import UsageError
     from planner_core.textio import printable
     from sim import replay, verify
     from sim.mission import MissionError
 
-    m = load_map_or_fail(map_path)
+    m = with_origin_or_fail(load_map_or_fail(map_path), origin)
     try:
         problems = [f for f in verify(replay(mission, m), m) if not f.passed]
         lines = [printable(f"{v.name} {v.title}: FAIL, margin {v.margin:.4g} {v.unit}; "
@@ -271,7 +276,7 @@ def _sim_check(path: str, map_path: str, mission: list, *, force: bool) -> None:
         lines = [printable(str(exc))]
     if not lines:
         print(f"simulator: all constraints hold on {printable(map_path)} (C1..C5, CLEAR, "
-              "MARGIN, ENDS, as verify judges them)", flush=True)  # fmt: skip
+              "MARGIN, ENDS, ALT, as verify judges them)", flush=True)  # fmt: skip
         return
     if force:
         for line in lines:
@@ -395,10 +400,13 @@ def run(args: argparse.Namespace) -> int:
         DuplicateVehicleError,
         VehicleError,
     )
-    from lamde_mission.vehicle.upload import upload_mission
+    from lamde_mission.vehicle.upload import MAX_TIMEOUT_S, upload_mission
 
-    if not (math.isfinite(args.timeout) and args.timeout > 0):
-        raise UsageError(f"--timeout must be a positive number of seconds, got {args.timeout:g}")
+    if not (math.isfinite(args.timeout) and 0 < args.timeout <= MAX_TIMEOUT_S):
+        raise UsageError(f"--timeout must be a number of seconds in (0, {MAX_TIMEOUT_S:g}], "
+                         f"got {args.timeout:g}")
+    if args.origin is not None and not args.map:
+        raise UsageError("--origin: only with --map (it places the map the simulator replays)")
     if args.attempts < 1:
         raise UsageError(f"--attempts must be at least 1, got {args.attempts}")
     from lamde_mission.vehicle.connection import parse_connection
@@ -425,7 +433,7 @@ def run(args: argparse.Namespace) -> int:
     _wire_check(args.mission, mission, fence, rally)
     _flight_check(args.mission, mission, force=args.force)
     if args.map:
-        _sim_check(args.mission, args.map, mission, force=args.force)
+        _sim_check(args.mission, args.map, mission, force=args.force, origin=args.origin)
 
     log = _verbose_log(args)
     try:

@@ -291,7 +291,8 @@ class MavlinkClient:
         hb = self._recv(deadline, wanted)
         if hb is None:
             heard = self.watch.heard_systems()
-            raise NoVehicleError(no_vehicle_message(self.endpoint, timeout, want, heard))
+            bad = sum(n for (why, _), n in self.ignored.items() if "signed" in why)
+            raise NoVehicleError(no_vehicle_message(self.endpoint, timeout, want, heard, bad))
         addr = getattr(hb, "_lamde_addr", None)
         if self._link is not None and self.endpoint.scheme == "udpin" and addr is not None:
             self._link.peer = addr

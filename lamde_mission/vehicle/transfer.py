@@ -60,7 +60,8 @@ class NoVehicleError(VehicleError):
 
 
 def no_vehicle_message(
-    endpoint: object, timeout: float, system_id: int | None, heard: Sequence[int]
+    endpoint: object, timeout: float, system_id: int | None, heard: Sequence[int],
+    bad_signatures: int = 0,
 ) -> str:
     """The line of a NoVehicleError: nothing heard, or not the system asked for.
 
@@ -69,17 +70,21 @@ def no_vehicle_message(
         timeout: how long it listened (s).
         system_id: the system id asked for (None: any vehicle).
         heard: the system ids of the vehicles that were heard.
+        bad_signatures: messages dropped on a signed link for a missing or wrong signature
+            (then the key, not the link, is the likely fault, and the line says so).
 
     Returns:
         One line naming the connection, the wait and, for a system id, what answered instead.
     """
+    key = (f"; {bad_signatures} message(s) came unsigned or signed with another key: check "
+           "--signing-key against the vehicle's" if bad_signatures else "")  # fmt: skip
     if system_id is None:
-        return f"no vehicle heard at {endpoint} within {timeout:g} s"
+        return f"no vehicle heard at {endpoint} within {timeout:g} s{key}"
     many = "s" if len(heard) > 1 else ""
     others = (f"heard only system{many} {', '.join(str(s) for s in heard)}" if heard
               else "no vehicle heard at all")  # fmt: skip
     wait = f"heard at {endpoint} within {timeout:g} s"
-    return f"no vehicle with system id {system_id} {wait} ({others})"
+    return f"no vehicle with system id {system_id} {wait} ({others}){key}"
 
 
 class DuplicateVehicleError(VehicleError):

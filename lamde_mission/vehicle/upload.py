@@ -66,6 +66,11 @@ _ACK_OF_RESULT = {
 _log = logging.getLogger("lamde_mission.vehicle.mavsdk")
 
 
+#: s, the longest `timeout` an upload takes: an hour without progress is a dead link (MAVSDK
+#: turned 1e10 s into an immediate "no vehicle heard ... within 1e+10 s")
+MAX_TIMEOUT_S = 3600.0
+
+
 def _route_mavsdk_log() -> None:
     """Send MAVSDK's own log lines to Python logging ("lamde_mission.vehicle.mavsdk") instead
     of the terminal: its errors as warnings, the rest at debug level (our report says what
@@ -263,9 +268,8 @@ class MavsdkClient:
         system = self._run(go(), timeout + 5.0)
         if system is None:
             heard = self._relay.watch.heard_systems()
-            raise NoVehicleError(
-                no_vehicle_message(self.endpoint, timeout, self.target_system, heard)
-            )
+            raise NoVehicleError(no_vehicle_message(
+                self.endpoint, timeout, self.target_system, heard, self._relay.dropped))
         self._system = system
         self._raw = MissionRawAsync(system)
 
@@ -528,8 +532,10 @@ def upload_mission(
     (a multi-vehicle radio or router; `upload_fleet`): its HEARTBEAT is waited for, and only
     its messages are listened to; None takes the first vehicle heard.
     """
-    if not (isinstance(timeout, int | float) and math.isfinite(timeout) and timeout > 0):
-        raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
+    if not (isinstance(timeout, int | float) and math.isfinite(timeout)
+            and 0 < timeout <= MAX_TIMEOUT_S):  # fmt: skip
+        raise ValueError(f"timeout must be a number of seconds in (0, {MAX_TIMEOUT_S:g}], "
+                         f"got {timeout!r}")
     if via not in VIAS:
         raise ValueError(f"via must be one of {', '.join(VIAS)}, got {via!r}")
     conn = parse_connection(connect)  # ValueError, one line

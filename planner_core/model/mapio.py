@@ -910,7 +910,11 @@ def _pydantic_problems(err: ValidationError) -> list[str]:
             got = e.get("input")
             shown = f"{got:g}" if isinstance(got, float) else repr(got)
             msg = e["msg"].replace("Input should be", "must be")
-            lines.append(f"{where}: {msg} (got {shown}); {_range_reason(loc)}")
+            bound = (e.get("ctx") or {}).get("gt", (e.get("ctx") or {}).get("ge"))
+            if kind.startswith("greater") and bound == 0:  # "> 0" needs no reason, and the
+                lines.append(f"{where}: {msg} (got {shown})")  # documented one is the cap's
+            else:
+                lines.append(f"{where}: {msg} (got {shown}); {_range_reason(loc)}")
         else:
             lines.append(f"{where}: {e['msg']}")
     return lines
@@ -1156,6 +1160,25 @@ def _size_problems(data: Mapping[str, Any]) -> list[str]:
     return problems
 
 
+def _other_kind(data: dict[str, Any]) -> str | None:
+    """What a JSON object given as a map is instead, when it is a file this project reads or
+    writes elsewhere (its fields would otherwise show as "unknown field" one by one)."""
+    if data.get("fileType") == "Plan" and "mission" in data:
+        return ("this is a QGroundControl mission (.plan), not a map; a map is the JSON "
+                "`lamde-mission plan` reads (docs/maps.md)")
+    if data.get("type") in ("FeatureCollection", "Feature"):
+        return ("this is GeoJSON, not a map; make a map from it with "
+                "`lamde-mission map from-geojson FILE -o map.json`")
+    if "sensors" in data:
+        return None
+    if "vehicles" in data:
+        return "this is a sortie directory's fleet.json, not a map"
+    if "hover_points" in data and "hover_times" in data:
+        return ("this is a saved plan (`plan -o FILE.json`), not a map; give the map it was "
+                "planned on")
+    return None
+
+
 def load_map(source: str | Path | Mapping[str, Any] | Map) -> Map:
     """Read and validate a map from a path, a JSON string's dict, or a Map.
 
@@ -1193,6 +1216,9 @@ def _load_map(
         raise TypeError(f"load_map expects a path, a dict or a Map, got {type(source).__name__}")
     if not isinstance(data, dict):
         raise MapError(["(map): the top level must be a JSON object"])
+    other = _other_kind(data)
+    if other is not None:
+        raise MapError([f"(map): {other}"])
     sizes = _size_problems(data) if sized else []
     if sizes:
         raise MapError(sizes)
