@@ -19,7 +19,7 @@ from shapely.geometry import LineString, Polygon
 from lamde_mission.gis import GisError, build_map, map_to_geojson, read_layers
 from planner_core.model.geometry import overlap_lengths
 from planner_core.model.mapio import load_map
-from sim.geo import latlon_to_enu
+from sim.geo import enu_to_latlon, latlon_to_enu
 from tests.conftest import ROOT
 
 CAMPUS = ROOT / "tests" / "data" / "campus.geojson"
@@ -326,8 +326,9 @@ def test_qgroundcontrol_geofence(tmp_path) -> None:
     assert len(zones) == 2  # the exclusion triangle and the part of the box outside the L fence
     outside = next(z for z in zones if z.name == "outside the inclusion fence")
     assert Polygon(outside.shell).area == pytest.approx(m.width * m.height / 4, rel=1e-3)
+    assert m.spec.origin.alt == 400.0  # the planned home's altitude (AMSL), not 0
     home = latlon_to_enu(ll(0.5, 0.5)[0], ll(0.5, 0.5)[1],
-                         (m.spec.origin.lat, m.spec.origin.lon, 0.0))  # fmt: skip
+                         (m.spec.origin.lat, m.spec.origin.lon, m.spec.origin.alt))  # fmt: skip
     np.testing.assert_allclose(m.start, np.ravel(home), atol=1e-3)
     assert "start and end default to" in r.stderr
     np.testing.assert_allclose(m.start, m.end)
@@ -402,3 +403,204 @@ def test_cli_map_campus_writes_the_benchmark_map(tmp_path) -> None:
     assert "500 footprints, 15 sensors" in r.stdout
     m = load_map(out)
     assert len(m.shapes) == 500 and len(m.sensor_ids) == 15
+
+
+# --------------------------------------------------------------- round trips, fences, outputs
+
+#: a map whose every setting differs from the defaults, with each kind of geometry; the no-fly
+#: zone 'road' lies on the area's west edge
+FARM = {
+    "name": "farm", "origin": {"lat": 46.21, "lon": 7.32, "alt": 410.0},
+    "area": {"width": 800, "height": 600}, "start": [10, 10], "end": [790, 590],
+    "sensors": [{"id": "s1", "x": 200, "y": 150, "required_data": 120},
+                {"id": "pump", "x": 600, "y": 400}],
+    "obstacles": {
+        "circles": [{"x": 400, "y": 300, "radius": 30}],
+        "rectangles": [{"x": 300, "y": 500, "length": 60, "width": 20, "angle_deg": 15}],
+        "no_fly_zones": [{"vertices": [[0, 200], [100, 200], [100, 260], [0, 260]],
+                          "name": "road"}],
+        "polygons": [{"vertices": [[500, 100], [560, 100], [560, 160], [500, 160]],
+                      "holes": [[[520, 120], [540, 120], [540, 140], [520, 140]]],
+                      "name": "barn"}]},
+    "uav": {"altitude": 60, "max_speed": 15, "acceleration": 3, "max_hover_time": 200,
+            "max_hover_points": 12, "activation_threshold": 0.4,
+            "battery": {"energy_wh": 90, "reserve": 0.25}},
+    "radio": {"peak_rate": 8, "decay": 0.02, "bandwidth": 20, "required_data": 150,
+              "access": "scheduled"},
+    "objective": {"alpha": 0.3, "collision_offset": 900, "collision_weight": 8,
+                  "goal": "makespan"},
+    "safety": {"clearance": 5, "data_margin": 0.05},
+    "fleet": {"uavs": 2, "depots": [{"name": "yard", "x": 10, "y": 10}], "swap_s": 200},
+}  # fmt: skip
+
+
+def _assert_same(got, want, where="map") -> None:
+    """Equal JSON, numbers within 1 cm (positions pass through WGS84), everything else exact."""
+    if isinstance(want, dict):
+        assert isinstance(got, dict) and set(got) == set(want), f"{where}: {got} != {want}"
+        for k in want:
+            _assert_same(got[k], want[k], f"{where}.{k}")
+    elif isinstance(want, list):
+        assert isinstance(got, list) and len(got) == len(want), f"{where}: {got} != {want}"
+        for k, (a, b) in enumerate(zip(got, want, strict=True)):
+            _assert_same(a, b, f"{where}[{k}]")
+    elif isinstance(want, float | int) and not isinstance(want, bool):
+        assert got == pytest.approx(want, abs=0.01), f"{where}: {got} != {want}"
+    else:
+        assert got == want, f"{where}: {got!r} != {want!r}"
+
+
+def _layers_of(tmp_path, doc, name="e.geojson"):
+    return read_layers([(_write(tmp_path, name, doc), None)])
+
+
+def test_geojson_round_trip_keeps_every_setting(tmp_path) -> None:
+    m = load_map(FARM)
+    exported = map_to_geojson(m)
+    doc, notes = build_map(_layers_of(tmp_path, exported), default_name="e")
+    back = load_map(doc)
+    # the settings come back exactly; positions within a centimetre; the rectangle a rectangle
+    _assert_same(back.to_dict(), m.to_dict())
+    for key in ("name", "uav", "radio", "objective", "safety", "fleet"):
+        assert back.to_dict()[key] == m.to_dict()[key], key
+    assert back.spec.uav.altitude == 60.0 and back.name == "farm"
+    # nothing was clipped (the road lies on the edge) and no inclusion fence was involved
+    assert not any("clipped" in n for n in notes), notes
+    assert not any("inclusion fence" in n for n in notes), notes
+    assert any(n.startswith("map settings (uav, radio, objective, safety, fleet) from ")
+               for n in notes)  # fmt: skip
+    # a plain GeoJSON (no settings on its area) gets the defaults, and the name it is given
+    area = exported["features"][0]["properties"]
+    for key in ("name", "uav", "radio", "objective", "safety", "fleet"):
+        area.pop(key)
+    doc, _ = build_map(_layers_of(tmp_path, exported, "plain.geojson"), default_name="plain")
+    plain = load_map(doc)
+    assert plain.name == "plain" and plain.spec.uav.altitude == 100.0
+    assert plain.spec.fleet is None and plain.spec.safety.clearance == 10.0
+
+
+def test_a_new_origin_moves_the_depots_with_the_map(tmp_path) -> None:
+    m = load_map(FARM)
+    layers = _layers_of(tmp_path, map_to_geojson(m))
+    # the same place, the frame's (0, 0) 100 m further west and south: local x, y grow by ~100
+    lat, lon = np.ravel(enu_to_latlon(-100.0, -100.0, (46.21, 7.32, 410.0)))
+    doc, notes = build_map(layers, origin=(float(lat), float(lon), 410.0))
+    depot = load_map(doc).spec.fleet.depots[0]
+    assert (depot.x, depot.y) == (pytest.approx(110.0, abs=0.01), pytest.approx(110.0, abs=0.01))
+    assert any("depots" in n and "moved" in n for n in notes)
+
+
+def test_clipped_only_when_area_is_removed_and_the_area_note_names_its_source(tmp_path) -> None:
+    lon0, lat0 = LON, LAT
+    area = [[_pt(0, 0), _pt(6, 0), _pt(6, 6), _pt(0, 6), _pt(0, 0)]]
+    edge = lon0 - 1e-9  # 0.08 mm west of the area's west edge: on it, not beyond it
+    on_edge = [[[edge, lat0 + 2 * D], [lon0 + D, lat0 + 2 * D], [lon0 + D, lat0 + 3 * D],
+                [edge, lat0 + 3 * D], [edge, lat0 + 2 * D]]]  # fmt: skip
+    across = [[_pt(5, 2), _pt(7, 2), _pt(7, 3), _pt(5, 3), _pt(5, 2)]]  # ~77 m beyond the east
+    doc = _fc(_feat("area", "Polygon", area, name="farm boundary"), *_basics(),
+              _feat("no_fly_zone", "Polygon", on_edge, name="road"),
+              _feat("no_fly_zone", "Polygon", across, name="quarry"))  # fmt: skip
+    mdoc, notes = build_map(_layers_of(tmp_path, doc), default_name="plain")
+    assert not any("'road'" in n for n in notes), notes
+    assert any("'quarry': clipped to the area (it reached 7" in n for n in notes), notes
+    # the area came from the `area` feature: the note says so, not "inclusion fence"
+    assert any(n.startswith("area: the bounding box of the area polygon (") and
+               "features[0] 'farm boundary'" in n for n in notes), notes
+    assert not any("inclusion fence" in n for n in notes), notes
+    assert load_map(mdoc).name == "plain"  # a plain area polygon's name is a label only
+
+
+def _fence_plan(polygons, circles, home) -> dict:
+    return {"fileType": "Plan", "version": 1, "groundStation": "QGroundControl",
+            "mission": {"items": [], "plannedHomePosition": home, "version": 2},
+            "geoFence": {"version": 2, "polygons": polygons, "circles": circles},
+            "rallyPoints": {"points": [], "version": 2}}  # fmt: skip
+
+
+def _ll(i, j) -> list[float]:
+    lon, lat = _pt(i, j)
+    return [lat, lon]
+
+
+def test_several_inclusion_fences_are_intersected(tmp_path) -> None:
+    square = {"inclusion": True, "version": 1,
+              "polygon": [_ll(0, 0), _ll(6, 0), _ll(6, 6), _ll(0, 6)]}
+    circle = {"inclusion": True, "version": 1, "circle": {"center": _ll(3, 3), "radius": 40.0}}
+    plan = _fence_plan([square], [circle], [*_ll(3, 3), 410.0])
+    sensors = _fc(_feat(None, "Point", _pt(3.1, 3.1), id="a"))
+    layers = read_layers([(_write(tmp_path, "f.plan", plan), None),
+                          (_write(tmp_path, "s.geojson", sensors), "sensor")])  # fmt: skip
+    doc, notes = build_map(layers)
+    m = load_map(doc)
+    # the area is the circle's box, not the square's: the circle (inside the square) counts
+    assert m.width == pytest.approx(80.0, abs=0.05) and m.height == pytest.approx(80.0, abs=0.05)
+    outside = [sh for sh in m.shapes if sh.name == "outside the inclusion fence"]
+    assert len(outside) == 4  # the box's corners outside the circle
+    assert sum(Polygon(sh.shell, sh.holes).area for sh in outside) == pytest.approx(
+        80.0 * 80.0 - np.pi * 40.0**2, rel=0.01)
+    said = [n for n in notes if "AC_PolyFence_loader.cpp" in n]
+    assert len(said) == 1 and "intersection of the 2 inclusion fences" in said[0]
+    assert "PX4" in said[0]
+    assert "geoFence.polygons[0]" in said[0] and "geoFence.circles[0]" in said[0]
+    # fences with nothing in common: refused in one line naming both
+    far = {"inclusion": True, "version": 1, "circle": {"center": _ll(20, 20), "radius": 40.0}}
+    plan = _fence_plan([square], [far], [*_ll(3, 3), 410.0])
+    layers = read_layers([(_write(tmp_path, "g.plan", plan), None),
+                          (_write(tmp_path, "s.geojson", sensors), "sensor")])  # fmt: skip
+    with pytest.raises(GisError) as err:
+        build_map(layers)
+    assert len(err.value.problems) == 1
+    line = err.value.problems[0]
+    assert "do not overlap" in line and "geoFence.polygons[0]" in line
+    assert "geoFence.circles[0]" in line
+
+
+def test_plan_home_altitude_is_the_origin_altitude(tmp_path) -> None:
+    square = {"inclusion": True, "version": 1,
+              "polygon": [_ll(0, 0), _ll(6, 0), _ll(6, 6), _ll(0, 6)]}
+    sensors = _write(tmp_path, "s.geojson", _fc(_feat(None, "Point", _pt(2, 2), id="a")))
+    plan = _write(tmp_path, "f.plan", _fence_plan([square], [], [*_ll(1, 1), 410.0]))
+    layers = read_layers([(plan, None), (sensors, "sensor")])
+    doc, notes = build_map(layers)
+    assert doc["origin"]["alt"] == 410.0
+    assert any(n.startswith("origin altitude 410 m from ") for n in notes)
+    # --origin LAT,LON (no ALT) takes it too; an ALT given wins
+    assert build_map(layers, origin=(LAT, LON, None))[0]["origin"]["alt"] == 410.0
+    assert build_map(layers, origin=(LAT, LON, 5.0))[0]["origin"]["alt"] == 5.0
+    bad = _write(tmp_path, "b.plan", _fence_plan([square], [], [*_ll(1, 1), 20000.0]))
+    with pytest.raises(GisError, match=r"b\.plan: mission\.plannedHomePosition\[2\]: altitude "
+                       r"20000 m is outside \[-500, 9000\] m"):  # fmt: skip
+        read_layers([(bad, None)])
+
+
+def test_a_null_sensor_id_falls_back_to_the_name(tmp_path) -> None:
+    doc = _fc(_feat("sensor", "Point", _pt(2, 2), id=None, name="well"),
+              _feat("sensor", "Point", _pt(3, 3), id=None, NAME="gate"),
+              _feat("sensor", "Point", _pt(4, 4), id=None),
+              _feat("start", "Point", _pt(0, 0)), _feat("end", "Point", _pt(5, 5)))  # fmt: skip
+    mdoc, _ = build_map(_layers_of(tmp_path, doc))
+    assert load_map(mdoc).sensor_ids == ("well", "gate", "s3")
+
+
+@pytest.mark.slow  # four CLI runs
+def test_cli_refuses_an_output_that_is_an_input_and_round_trips(tmp_path) -> None:
+    src = _write(tmp_path, "farm.json", FARM)
+    before = src.read_bytes()
+    r = _cli("map", "to-geojson", str(src), "-o", str(src))
+    assert r.returncode == 2 and r.stderr.count("\n") == 1
+    assert "-o/--output" in r.stderr and "is the input" in r.stderr
+    assert src.read_bytes() == before
+    gj = tmp_path / "e.geojson"
+    assert _cli("map", "to-geojson", str(src), "-o", str(gj)).returncode == 0
+    exported = gj.read_bytes()
+    link = tmp_path / "link.geojson"
+    link.symlink_to(gj)
+    r = _cli("map", "from-geojson", str(link), "--sensors", str(gj), "-o", str(gj))
+    assert r.returncode == 2 and r.stderr.count("\n") == 1 and "-o/--output" in r.stderr
+    assert gj.read_bytes() == exported
+    out = tmp_path / "rt.json"
+    r = _cli("map", "from-geojson", str(gj), "-o", str(out))
+    assert r.returncode == 0, r.stderr
+    back = json.loads(out.read_text())
+    assert back["name"] == "farm" and back["uav"]["altitude"] == 60.0
+    assert "clipped" not in r.stderr and "inclusion fence" not in r.stderr

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from typing import Any
 
 from lamde_mission.errors import UsageError
 
@@ -23,10 +24,15 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "property (sensor [id, required_data], obstacle or building, no_fly_zone, start, end, "
         "area, circle) and QGroundControl .plan files (exclusion fences become no-fly zones and "
         "circular obstacles, the inclusion fence the area, the planned home the start and end). "
-        "Coordinates are WGS84 (RFC 7946). Origin: --origin, else the south-west corner of the "
-        "data's bounds grown by --margin. Polygons may be non-convex, with holes; rings are "
-        "cleaned (closing, duplicate and collinear vertices within 5 mm) and self-intersections "
-        "refused naming the feature. Obstacles partly outside the area are clipped to it.",
+        "Coordinates are WGS84 (RFC 7946). Origin: --origin, else the frame of an `area` "
+        "feature written by `map to-geojson`, else the south-west corner of the data's bounds "
+        "grown by --margin (its altitude: a .plan's planned home). Several inclusion fences: "
+        "their intersection (a vehicle must stay inside every one on ArduPilot and current "
+        "PX4). The map settings (name, uav, radio, objective, safety, fleet, witness) an "
+        "exported `area` feature carries are restored; absent, the defaults apply. Polygons may "
+        "be non-convex, with holes; rings are cleaned (closing, duplicate and collinear "
+        "vertices within 5 mm) and self-intersections refused naming the feature. Obstacles "
+        "partly outside the area are clipped to it.",
     )
     fg.add_argument("files", nargs="*", metavar="FILE", help="GeoJSON or QGroundControl .plan")
     fg.add_argument("--obstacles", action="append", default=[], metavar="FILE",
@@ -37,16 +43,20 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                     help="a GeoJSON file whose every feature is a sensor (repeatable)")
     fg.add_argument("--origin", metavar="LAT,LON[,ALT]",
                     help="WGS84 origin of the local frame (default: south-west corner of the "
-                    "data's bounds grown by --margin)")
+                    "data's bounds grown by --margin); ALT defaults to a .plan's planned "
+                    "home altitude, else 0")
     fg.add_argument("--margin", default="100", metavar="M",
                     help="metres of area around the data when the area is not given (default 100)")
-    fg.add_argument("--name", help="map name (default: the first input's file name)")
+    fg.add_argument("--name", help="map name (default: the name an exported `area` feature "
+                    "carries, else the first input's file name)")
     fg.add_argument("-o", "--output", required=True, help="map file to write (JSON)")
     tg = msub.add_parser(
         "to-geojson",
         help="a map file -> GeoJSON (WGS84), readable by GIS tools and by from-geojson",
         description="Write MAP as a GeoJSON FeatureCollection: area, obstacles (holes kept), "
-        "no-fly zones, circles, sensors, start and end, each with a `kind` property.",
+        "no-fly zones, circles, sensors, start and end, each with a `kind` property. The area "
+        "feature's properties carry the map's frame and its settings (name, uav, radio, "
+        "objective, safety, fleet, witness), so `map from-geojson` gives the same map back.",
     )
     tg.add_argument("map", help="map file (JSON)")
     tg.add_argument("-o", "--output", required=True, help="GeoJSON file to write")
@@ -69,7 +79,18 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     return p
 
 
-def _origin(text: str | None) -> tuple[float, float, float] | None:
+def _origin(text: str | None) -> tuple[float, float, float | None] | None:
+    """--origin LAT,LON[,ALT] as (lat, lon, alt or None); None when not given.
+
+    Args:
+        text: the option's text, or None.
+
+    Returns:
+        (lat, lon, alt) with alt None when only LAT,LON are given.
+
+    Raises:
+        UsageError: text that is not two or three numbers in range.
+    """
     if text is None:
         return None
     try:
@@ -78,7 +99,37 @@ def _origin(text: str | None) -> tuple[float, float, float] | None:
         raise UsageError(f"--origin must be LAT,LON[,ALT] in degrees (got {text!r})") from None
     if len(vals) not in (2, 3) or not (-90 <= vals[0] <= 90 and -180 <= vals[1] <= 180):
         raise UsageError(f"--origin must be LAT,LON[,ALT] in degrees (got {text!r})")
-    return vals[0], vals[1], vals[2] if len(vals) == 3 else 0.0
+    return vals[0], vals[1], vals[2] if len(vals) == 3 else None
+
+
+def _refuse_own_input(output: str, inputs: list[str]) -> None:
+    """UsageError (one line, exit 2) when -o names the same file as an input, before anything
+    is read or written.
+
+    Args:
+        output: the -o/--output path.
+        inputs: every input path.
+
+    Raises:
+        UsageError: the output is one of the inputs (same resolved path, or the same file
+            through a link).
+    """
+    import os
+    from pathlib import Path
+
+    from planner_core.textio import printable
+
+    out = Path(output)
+    for src in inputs:
+        same = out.resolve() == Path(src).resolve()
+        if not same and out.exists() and Path(src).exists():
+            try:
+                same = os.path.samefile(out, src)
+            except OSError:
+                same = False
+        if same:
+            raise UsageError(f"-o/--output: {printable(output)} is the input "
+                             f"{printable(src)}; write the output to another file")
 
 
 def _from_geojson(args: argparse.Namespace) -> int:
@@ -96,22 +147,24 @@ def _from_geojson(args: argparse.Namespace) -> int:
     inputs += [(f, "sensor") for f in args.sensors]
     if not inputs:
         raise UsageError("give at least one input FILE (or --obstacles/--no-fly-zones/--sensors)")
+    _refuse_own_input(args.output, [f for f, _ in inputs])
     try:
         margin = float(args.margin)
     except ValueError:
         raise UsageError(f"--margin must be a number of metres (got {args.margin!r})") from None
     if not (math.isfinite(margin) and margin >= 0):
         raise UsageError(f"--margin must be a finite number >= 0 (got {args.margin!r})")
-    name = args.name or Path(inputs[0][0]).stem
+    origin = _origin(args.origin)
     try:
         layers = read_layers(inputs)
-        doc, notes = build_map(layers, origin=_origin(args.origin), margin=margin, name=name)
+        doc, notes = build_map(layers, origin=origin, margin=margin, name=args.name,
+                               default_name=Path(inputs[0][0]).stem)  # fmt: skip
     except GisError as exc:
         raise UsageError("\n".join(exc.problems)) from None
     try:
         m = load_map(doc)
     except MapError as exc:
-        raise UsageError("\n".join(f"the imported map: {p}" for p in exc.problems)) from None
+        raise UsageError("\n".join(_map_problem(p, layers) for p in exc.problems)) from None
     for note in notes + list(m.notes):
         print(f"note: {note}", file=sys.stderr)
     try:
@@ -126,6 +179,15 @@ def _from_geojson(args: argparse.Namespace) -> int:
     return 0
 
 
+def _map_problem(problem: str, layers: Any) -> str:
+    """A problem of the imported map, naming the feature that carried the field when it is a
+    setting restored from an exported area, else 'the imported map'."""
+    head = problem.split(":", 1)[0].split(".", 1)[0].split("[", 1)[0]
+    if layers.settings is not None and head in layers.settings:
+        return f"{layers.settings_where}: {problem}"
+    return f"the imported map: {problem}"
+
+
 def _to_geojson(args: argparse.Namespace) -> int:
     import json
 
@@ -133,6 +195,7 @@ def _to_geojson(args: argparse.Namespace) -> int:
     from lamde_mission.commands._common import load_map_or_fail
     from lamde_mission.gis import map_to_geojson
 
+    _refuse_own_input(args.output, [args.map])
     m = load_map_or_fail(args.map)
     doc = map_to_geojson(m)
     try:
@@ -152,7 +215,8 @@ def _campus(args: argparse.Namespace) -> int:
         raise UsageError(f"--seed must be >= 0 (got {args.seed})")
     given = _origin(args.origin)
     origin = (dict(SUITE_ORIGIN) if given is None
-              else {"lat": given[0], "lon": given[1], "alt": given[2]})  # fmt: skip
+              else {"lat": given[0], "lon": given[1],
+                    "alt": 0.0 if given[2] is None else given[2]})  # fmt: skip
     try:
         doc = campus_map(args.footprints, seed=args.seed, n_sensors=args.sensors)
     except ValueError as exc:

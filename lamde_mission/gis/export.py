@@ -1,12 +1,17 @@
 """A map as GeoJSON (RFC 7946), for a GIS, and readable back by `lamde-mission map from-geojson`.
 
 Every feature has the `kind` property the importer reads: "area" (Polygon; properties `origin`
-[lat, lon, alt], `width_m`, `height_m`, `name`: the importer takes the frame from it, so a round
-trip keeps the local coordinates), "sensor" (Point; `id`, `required_data` when the map sets it),
-"obstacle" (Polygon with holes, for polygon obstacles and rectangles; `name`; rectangles also
-`shape`: "rectangle" and their centre/size/angle), "no_fly_zone" (Polygon with holes; `name`),
-"circle" (a Polygon through `CIRCLE_SEGMENTS` points of the circle for display, with `center`
-[lon, lat] and `radius_m`: the importer reads the circle from those), "start" and "end" (Points).
+[lat, lon, alt], `width_m`, `height_m`: the importer takes the frame from them, so a round trip
+keeps the local coordinates; and the map's settings, every top-level section of the map file
+that is not geometry (`SETTINGS_EXCLUDED` lists the geometric ones): `name`, `uav`, `radio`,
+`objective`, `safety`, and `fleet` and `witness` when the map has them, each as the map file
+writes it, so `map from-geojson` restores them), "sensor" (Point; `id`, `required_data` when the
+map sets it), "obstacle" (Polygon with holes, for polygon obstacles and rectangles; `name`;
+rectangles also `shape`: "rectangle", `center` [lon, lat], `length_m`, `width_m`, `angle_deg`:
+the importer reads the rectangle back from those while the outline still matches them),
+"no_fly_zone" (Polygon with holes; `name`), "circle" (a Polygon through `CIRCLE_SEGMENTS`
+points of the circle for display, with `center` [lon, lat] and `radius_m`: the importer reads
+the circle from those), "start" and "end" (Points).
 Rings are closed, exteriors counter-clockwise and holes clockwise (RFC 7946 Sec. 3.1.6).
 """
 
@@ -19,10 +24,14 @@ import numpy as np
 
 from sim.geo import enu_to_latlon
 
-__all__ = ["map_to_geojson", "map_features", "polygon_geometry", "CIRCLE_SEGMENTS"]
+__all__ = ["map_to_geojson", "map_features", "map_settings", "polygon_geometry",
+           "CIRCLE_SEGMENTS", "SETTINGS_EXCLUDED"]
 
 #: vertices of the polygon drawn for each circular obstacle
 CIRCLE_SEGMENTS = 72
+#: the map file's top-level sections written as features (or as the area feature's frame); every
+#: other section is a setting, carried in the area feature's properties
+SETTINGS_EXCLUDED = frozenset({"origin", "area", "start", "end", "sensors", "obstacles"})
 
 
 def _lonlat(map_: Any, pts: np.ndarray) -> list[list[float]]:
@@ -53,14 +62,38 @@ def _feature(geometry: dict[str, Any], **props: Any) -> dict[str, Any]:
             "properties": {k: v for k, v in props.items() if v is not None}}  # fmt: skip
 
 
+def map_settings(map: Any) -> dict[str, Any]:  # noqa: A002
+    """The map's non-geometric top-level sections, as its map file writes them.
+
+    Args:
+        map: a loaded `planner_core.model.mapio.Map`.
+
+    Returns:
+        {section: value} for every section of `Map.to_dict()` not in `SETTINGS_EXCLUDED` and
+        not null: name, uav, radio, objective, safety, and fleet and witness where given.
+    """
+    return {k: v for k, v in map.to_dict().items()
+            if k not in SETTINGS_EXCLUDED and v is not None}  # fmt: skip
+
+
 def map_features(map: Any) -> list[dict[str, Any]]:  # noqa: A002
-    """The map's area, obstacles, no-fly zones and sensors, start and end as GeoJSON features."""
+    """The map as GeoJSON features: area (with the frame and settings), circles, rectangles,
+    polygon obstacles, no-fly zones, sensors, start and end.
+
+    Args:
+        map: a loaded `planner_core.model.mapio.Map` with an origin.
+
+    Returns:
+        The features, in that order (see the module docstring for their properties).
+    """
     spec = map.spec
     W, H = spec.area.width, spec.area.height
     o = spec.origin
+    settings = map_settings(map)
     feats = [_feature(polygon_geometry(map, np.array([[0.0, 0.0], [W, 0.0], [W, H], [0.0, H]])),
-                      kind="area", name=spec.name, origin=[o.lat, o.lon, o.alt],
-                      width_m=W, height_m=H)]  # fmt: skip
+                      kind="area", name=settings.pop("name", None),
+                      origin=[o.lat, o.lon, o.alt], width_m=W, height_m=H,
+                      **settings)]  # fmt: skip
     ang = np.linspace(0.0, 2.0 * math.pi, CIRCLE_SEGMENTS, endpoint=False)
     for k, c in enumerate(spec.obstacles.circles):
         ring = np.column_stack([c.x + c.radius * np.cos(ang), c.y + c.radius * np.sin(ang)])
@@ -86,5 +119,12 @@ def map_features(map: Any) -> list[dict[str, Any]]:  # noqa: A002
 
 
 def map_to_geojson(map: Any) -> dict[str, Any]:  # noqa: A002
-    """The map as a GeoJSON FeatureCollection (WGS84 [lon, lat]); see the module docstring."""
+    """The map as a GeoJSON FeatureCollection (WGS84 [lon, lat]); see the module docstring.
+
+    Args:
+        map: a loaded `planner_core.model.mapio.Map` with an origin.
+
+    Returns:
+        The FeatureCollection, JSON-ready; `map from-geojson` reads it back to the same map.
+    """
     return {"type": "FeatureCollection", "features": map_features(map)}

@@ -5,16 +5,22 @@ Inputs
 * GeoJSON (RFC 7946): a FeatureCollection, a Feature or a bare geometry; positions are
   [longitude, latitude] in WGS84 (a legacy ``crs`` member naming anything else is refused).
   A feature's layer is its ``kind`` property: ``sensor`` (Point or MultiPoint; optional ``id``
-  (else ``name``, else ``s<n>``) and ``required_data`` in Mbit), ``obstacle`` or its alias
-  ``building`` (Polygon or MultiPolygon), ``no_fly_zone`` (Polygon or MultiPolygon), ``start``
-  and ``end`` (Points), ``area`` (a Polygon; see below), ``circle`` (``center`` [lon, lat] and
-  ``radius_m`` properties, as `map to-geojson` writes circular obstacles). A file given with
-  ``--obstacles``, ``--no-fly-zones`` or ``--sensors`` is that layer whole (footprint exports
-  carry no ``kind``).
+  (when missing or null: ``name``, else ``s<n>``) and ``required_data`` in Mbit), ``obstacle``
+  or its alias ``building`` (Polygon or MultiPolygon; with ``shape: "rectangle"``, ``center``,
+  ``length_m``, ``width_m`` and ``angle_deg``, as `map to-geojson` writes rectangles, the
+  rectangle while the outline matches it within `RECTANGLE_TOLERANCE`), ``no_fly_zone`` (Polygon
+  or MultiPolygon), ``start`` and ``end`` (Points), ``area`` (a Polygon; see below),
+  ``circle`` (``center`` [lon, lat] and ``radius_m`` properties, as `map to-geojson` writes
+  circular obstacles). A file given with ``--obstacles``, ``--no-fly-zones`` or ``--sensors``
+  is that layer whole (footprint exports carry no ``kind``).
 * QGroundControl ``.plan`` (detected by ``"fileType": "Plan"``): its geofence's exclusion
   polygons become no-fly zones, its exclusion circles circular obstacles, its inclusion polygons
   (and circles) the area; the planned home position is the start and the end unless the other
-  inputs give them.
+  inputs give them, and its altitude (m AMSL) the origin's unless one is given.
+* Map settings: an ``area`` feature written by `map to-geojson` carries the map's non-geometric
+  sections (``name``, ``uav``, ``radio``, ``objective``, ``safety``, ``fleet``, ``witness``) in
+  its properties; they are restored as given (the map loader validates them). Without them
+  the map defaults apply.
 
 The local frame
 ---------------
@@ -26,10 +32,13 @@ north-east corner plus the margin. Positions go through the project's ENU <-> WG
 area instead: its bounding box is the map's area, and the part of the box outside it becomes a
 no-fly zone, so "stay inside" holds exactly. An ``area`` feature that carries ``origin``,
 ``width_m`` and ``height_m`` (as `to_geojson` writes them) is taken literally, so a map exported and
-imported again keeps its frame.
+imported again keeps its frame. Several inclusion regions (QGroundControl inclusion polygons and
+circles, GeoJSON ``area`` features) give their intersection (`INCLUSION_RULE` says why); none in
+common is refused naming them.
 
 Features outside the area: obstacles and zones are clipped to it (a leg between points inside
-the rectangular area never leaves it, so L_vio is unchanged), those wholly outside are dropped;
+the rectangular area never leaves it, so L_vio is unchanged; noted when one reached more than
+`CLIP_TOLERANCE` beyond the area), those wholly outside are dropped;
 sensors, start and end outside are refused. Rings are cleaned as the map loader does (closing,
 near-duplicate and collinear vertices within 5 mm; orientation), and a self-intersecting ring is
 refused naming the feature. Every problem is one line naming the file and feature.
@@ -56,6 +65,19 @@ DEFAULT_MARGIN = 100.0
 SLIVER_WIDTH = 0.1
 #: segments per quarter circle of an inclusion circle's inscribed polygon (QGroundControl)
 INCLUSION_CIRCLE_QUAD_SEGS = 16
+#: metres: an obstacle or zone reaching no farther than this outside the area lies on its edge
+#: (a WGS84 round trip moves vertices by far less): it is clipped without a note
+CLIP_TOLERANCE = 0.01
+#: metres: a rectangle's drawn outline may differ this much from its `center`, `length_m`,
+#: `width_m` and `angle_deg` properties and still be read back as that rectangle
+RECTANGLE_TOLERANCE = 0.01
+#: why several inclusion fences are intersected (docs/maps.md, "Several inclusion fences")
+INCLUSION_RULE = (
+    "ArduPilot breaches a vehicle outside any one inclusion fence (AC_PolyFence_loader.cpp "
+    "breached(), unless its FENCE_OPTIONS union bit is set), as does PX4 since PR #22394 "
+    "(geofence.cpp, Nov 2023), while earlier PX4 breached only outside all of them: a mission "
+    "inside the intersection flies on both"
+)
 
 KINDS = {
     "sensor": "sensor",
@@ -84,6 +106,8 @@ class _Poly:
     where: str
     name: str | None
     rings: list[list[tuple[float, float]]]  # lon, lat; exterior first
+    group: str = ""  # the feature or fence it belongs to (a MultiPolygon's parts share one)
+    fence: bool = False  # a QGroundControl inclusion fence (else a GeoJSON `area` polygon)
 
 
 @dataclass
@@ -97,9 +121,13 @@ class GisLayers:
     areas: list[_Poly] = field(default_factory=list)  # polygons the flight must stay within
     area_circles: list[dict[str, Any]] = field(default_factory=list)
     area_frame: dict[str, Any] | None = None  # origin, width_m, height_m of an exported area
+    # where, lon, lat, length, width, angle, poly: rectangles as `map to-geojson` writes them
+    rectangles: list[dict[str, Any]] = field(default_factory=list)
+    settings: dict[str, Any] | None = None  # name, uav, radio, ... carried by an exported area
+    settings_where: str | None = None  # the feature that carried them
     start: dict[str, Any] | None = None  # where, lon, lat
     end: dict[str, Any] | None = None
-    home: dict[str, Any] | None = None  # QGC planned home position
+    home: dict[str, Any] | None = None  # QGC planned home position (where, lon, lat, alt)
     problems: list[str] = field(default_factory=list)
 
 
@@ -194,7 +222,9 @@ def _add_feature(layers: GisLayers, feat: Any, where: str, layer: str | None) ->
             if q is not None and (isinstance(q, bool) or not isinstance(q, int | float)
                                   or not math.isfinite(q) or q < 0):  # fmt: skip
                 raise ValueError(f"{label}: required_data must be a number >= 0 (Mbit)")
-            base = props.get("id", name)
+            base = props.get("id")  # an "id": null (a GIS writes empty fields so) is no id
+            if base is None:
+                base = name
             for k, (lon, lat) in enumerate(points):
                 sid = None if base is None else (str(base) if len(points) == 1 else f"{base}-{k}")
                 layers.sensors.append({"where": label, "id": sid, "lon": lon, "lat": lat,
@@ -215,14 +245,61 @@ def _add_feature(layers: GisLayers, feat: Any, where: str, layer: str | None) ->
     else:
         raise ValueError(f"{label}: {kind} features must be a Polygon or MultiPolygon, "
                          f"got {gtype}")  # fmt: skip
+    if kind == "obstacle" and gtype == "Polygon" and props.get("shape") == "rectangle":
+        rect = _rectangle_props(props)
+        if rect is not None:  # else the outline drawn is the obstacle, a polygon
+            layers.rectangles.append({"where": label, **rect,
+                                      "poly": _Poly(label, name, polys[0], label)})
+            return
     target = {"obstacle": layers.obstacles, "no_fly_zone": layers.no_fly_zones,
               "area": layers.areas}[kind]  # fmt: skip
     for k, rings in enumerate(polys):
         at = label if len(polys) == 1 else f"{label} polygon {k}"
-        target.append(_Poly(at, name, rings))
-    if kind == "area" and all(key in props for key in ("origin", "width_m", "height_m")):
-        layers.area_frame = {"where": label, "origin": props["origin"],
-                             "width": props["width_m"], "height": props["height_m"]}  # fmt: skip
+        target.append(_Poly(at, name, rings, label))
+    if kind == "area":
+        framed = all(key in props for key in ("origin", "width_m", "height_m"))
+        if framed:
+            layers.area_frame = {"where": label, "origin": props["origin"],
+                                 "width": props["width_m"], "height": props["height_m"]}
+        _read_settings(layers, props, label, framed)
+
+
+def _rectangle_props(props: dict[str, Any]) -> dict[str, float] | None:
+    """A rectangle's centre (lon, lat), sides and angle from the properties `map to-geojson`
+    writes; None where one is missing or not a number in range."""
+    try:
+        lon, lat = _position(props.get("center"), "center")
+    except ValueError:
+        return None
+    length, width, angle = props.get("length_m"), props.get("width_m"), props.get("angle_deg")
+    if not (_positive(length) and _positive(width)):
+        return None
+    if isinstance(angle, bool) or not isinstance(angle, int | float) or not math.isfinite(angle):
+        return None
+    return {"lon": lon, "lat": lat, "length": float(length), "width": float(width),
+            "angle": float(angle)}  # fmt: skip
+
+
+def _settings_keys() -> tuple[str, ...]:
+    """The map file's top-level sections that are settings, not geometry (name, uav, radio,
+    objective, safety, fleet, witness, and any the schema gains)."""
+    from lamde_mission.gis.export import SETTINGS_EXCLUDED
+    from planner_core.model.mapio import MapFile
+
+    return tuple(k for k in MapFile.model_fields if k not in SETTINGS_EXCLUDED)
+
+
+def _read_settings(layers: GisLayers, props: dict[str, Any], label: str, framed: bool) -> None:
+    """Keep the map settings an `area` feature carries (as `map to-geojson` writes them). A
+    plain area polygon's `name` is a label, not the map's name: the name counts only beside
+    the exported frame or another section."""
+    carried = {k: props[k] for k in _settings_keys() if k in props and props[k] is not None}
+    if not carried or (set(carried) == {"name"} and not framed):
+        return
+    if layers.settings is not None:
+        raise ValueError(f"{label}: a second area carrying map settings (the first: "
+                         f"{layers.settings_where})")  # fmt: skip
+    layers.settings, layers.settings_where = carried, label
 
 
 def _read_geojson(layers: GisLayers, doc: Any, src: str, layer: str | None) -> None:
@@ -291,7 +368,8 @@ def _read_qgc_plan(layers: GisLayers, doc: dict[str, Any], src: str) -> None:
                 raise ValueError(f"{where}.polygon[{i}]: expected [lat, lon]")
             ring.append(_position([v[1], v[0]], f"{where}.polygon[{i}]"))
         inclusion = bool(poly.get("inclusion", True))  # QGC: a missing key means inclusion
-        (layers.areas if inclusion else layers.no_fly_zones).append(_Poly(where, None, [ring]))
+        (layers.areas if inclusion else layers.no_fly_zones).append(
+            _Poly(where, None, [ring], where, fence=True))
     for k, c in enumerate(gf.get("circles") or []):
         where = f"{src}: geoFence.circles[{k}]"
         circle = c.get("circle") if isinstance(c, dict) else None
@@ -307,12 +385,40 @@ def _read_qgc_plan(layers: GisLayers, doc: dict[str, Any], src: str) -> None:
     home = (doc.get("mission") or {}).get("plannedHomePosition")
     if isinstance(home, list) and len(home) >= 2:
         lon, lat = _position([home[1], home[0]], f"{src}: mission.plannedHomePosition")
-        layers.home = {"where": f"{src}: planned home", "lon": lon, "lat": lat}
+        alt = None  # [lat, lon, altitude AMSL], as QGroundControl writes it
+        if len(home) >= 3 and home[2] is not None:
+            alt = _home_altitude(home[2], f"{src}: mission.plannedHomePosition[2]")
+        layers.home = {"where": f"{src}: planned home", "lon": lon, "lat": lat, "alt": alt}
+
+
+def _home_altitude(v: Any, where: str) -> float:
+    """The planned home's altitude (m AMSL), within the map origin's range; ValueError naming
+    `where` otherwise."""
+    from planner_core.model.mapio import Origin
+
+    alt = _number(v, where)
+    bounds = Origin.model_json_schema()["properties"]["alt"]
+    lo, hi = bounds.get("minimum", -math.inf), bounds.get("maximum", math.inf)
+    if not lo <= alt <= hi:
+        raise ValueError(f"{where}: altitude {alt:g} m is outside [{lo:g}, {hi:g}] m, the range "
+                         "of a map origin's altitude above mean sea level")  # fmt: skip
+    return alt
 
 
 def read_layers(files: list[tuple[str | Path, str | None]]) -> GisLayers:
-    """Read (path, layer) pairs; layer None: per-feature ``kind`` (or a QGC plan). Raises
-    GisError with every problem found."""
+    """Read the input files' features, still in WGS84.
+
+    Args:
+        files: (path, layer) pairs; layer None: each feature's ``kind`` says its layer (or the
+            file is a QGroundControl plan); else "obstacle", "no_fly_zone" or "sensor" for the
+            whole file.
+
+    Returns:
+        The layers read, with the map settings an exported ``area`` feature carries.
+
+    Raises:
+        GisError: every problem found, one line each, naming file and feature.
+    """
     layers = GisLayers()
     for path, layer in files:
         src = str(path)
@@ -357,7 +463,8 @@ def _all_lonlat(layers: GisLayers) -> np.ndarray:
     pts: list[tuple[float, float]] = []
     for s in layers.sensors:
         pts.append((s["lon"], s["lat"]))
-    for p in layers.obstacles + layers.no_fly_zones + layers.areas:
+    rect_polys = [r["poly"] for r in layers.rectangles]
+    for p in layers.obstacles + rect_polys + layers.no_fly_zones + layers.areas:
         for ring in p.rings[:1]:
             pts.extend(ring)
     for c in layers.circles + layers.area_circles:
@@ -385,10 +492,61 @@ def _circle_bounds(c: dict[str, Any], origin: tuple[float, float, float]) -> np.
     return np.array([[x - r, y - r], [x + r, y + r]])
 
 
-def _frame(layers: GisLayers, origin: tuple[float, float, float] | None,
+def _inclusion_regions(layers: GisLayers, origin: tuple[float, float, float]) -> list[Any]:
+    """(name, shapely geometry or None where a polygon is not simple, QGC fence?) per inclusion
+    region in the local frame of `origin`: each QGroundControl inclusion polygon and circle, and
+    each GeoJSON `area` feature (its MultiPolygon parts joined)."""
+    import shapely
+    from shapely.geometry import Polygon
+
+    groups: dict[str, list[Any]] = {}
+    fence: dict[str, bool] = {}
+    for p in layers.areas:
+        g = Polygon(_local(p.rings[0], origin))
+        groups.setdefault(p.group or p.where, []).append(g if g.is_valid else None)
+        fence[p.group or p.where] = p.fence
+    regions: list[Any] = []
+    for name, parts in groups.items():
+        valid = all(g is not None for g in parts)
+        regions.append((name, shapely.union_all(parts) if valid else None, fence[name]))
+    for c in layers.area_circles:
+        (x, y), = _local([(c["lon"], c["lat"])], origin)
+        # inscribed polygon: the allowed region shrinks by at most r(1 - cos(pi/4/segs))
+        regions.append((c["where"], shapely.Point(x, y).buffer(
+            c["radius"], quad_segs=INCLUSION_CIRCLE_QUAD_SEGS), True))
+    return regions
+
+
+def _allowed(regions: list[Any]) -> Any:
+    """Where the flight may go: the intersection of every inclusion region (INCLUSION_RULE);
+    GisError naming them when they have no area in common."""
+    import shapely
+
+    allowed = shapely.intersection_all([g for _, g, _ in regions])
+    if allowed.is_empty or allowed.area <= 0.0:
+        names = ", ".join(name for name, _, _ in regions)
+        raise GisError([f"the inclusion fences {names} do not overlap: a mission that flies on "
+                        "ArduPilot and PX4 alike stays inside every one of them, and no place "
+                        "is inside all of them"])
+    return allowed
+
+
+def _frame(layers: GisLayers, origin: tuple[float, float, float | None] | None,
            margin: float) -> tuple[tuple[float, float, float], float, float, bool, list[str]]:
-    """(origin, width, height, area given, notes)."""
+    """(origin, width, height, area given, notes). An origin whose altitude is None takes the
+    QGroundControl planned home's altitude, else the exported area's, else 0."""
     notes: list[str] = []
+    home_alt = layers.home.get("alt") if layers.home is not None else None
+    if origin is not None and origin[2] is None:
+        alt, src = 0.0, None
+        if home_alt is not None:
+            alt, src = home_alt, layers.home["where"]
+        elif layers.area_frame is not None:
+            f = layers.area_frame
+            alt, src = _parse_origin(f["origin"], f["where"])[2], f["where"]
+        origin = (origin[0], origin[1], alt)
+        if src is not None:
+            notes.append(f"origin altitude {alt:g} m from {src}")
     if layers.area_frame is not None and origin is None:
         f = layers.area_frame
         o = _parse_origin(f["origin"], f["where"])
@@ -402,13 +560,18 @@ def _frame(layers: GisLayers, origin: tuple[float, float, float] | None,
     data = _all_lonlat(layers)
     if not len(data):
         raise GisError(["no features: nothing to build a map from"])
-    provisional = origin or (float(data[:, 1].min()), float(data[:, 0].min()), 0.0)
+    alt = origin[2] if origin is not None else (home_alt if home_alt is not None else 0.0)
+    provisional = origin or (float(data[:, 1].min()), float(data[:, 0].min()), alt)
     if layers.areas or layers.area_circles:
-        # the inclusion fences (or area polygons) bound the area
-        pts = [_local(p.rings[0], provisional) for p in layers.areas]
-        pts += [_circle_bounds(c, provisional) for c in layers.area_circles]
-        xy = np.concatenate(pts)
-        lo, hi = xy.min(axis=0), xy.max(axis=0)
+        # the inclusion fences (or area polygons) bound the area: their intersection's box
+        regions = _inclusion_regions(layers, provisional)
+        if all(g is not None for _, g, _ in regions):
+            lo, hi = (np.array(v) for v in np.reshape(_allowed(regions).bounds, (2, 2)))
+        else:  # a polygon that is not simple: build_map names it
+            pts = [_local(p.rings[0], provisional) for p in layers.areas]
+            pts += [_circle_bounds(c, provisional) for c in layers.area_circles]
+            xy = np.concatenate(pts)
+            lo, hi = xy.min(axis=0), xy.max(axis=0)
         given = True
     else:
         xy = _local(data, provisional)
@@ -418,9 +581,11 @@ def _frame(layers: GisLayers, origin: tuple[float, float, float] | None,
         given = False
     if origin is None:
         lat, lon = enu_to_latlon(lo[0], lo[1], provisional)
-        o = (round(float(lat), 9), round(float(lon), 9), 0.0)
+        o = (round(float(lat), 9), round(float(lon), 9), alt)
         notes.append(f"origin (lat {o[0]:.9f}, lon {o[1]:.9f}): the south-west corner of the "
                      + ("area" if given else f"data's bounds grown by {margin:g} m"))  # fmt: skip
+        if home_alt is not None:
+            notes.append(f"origin altitude {home_alt:g} m from {layers.home['where']}")
         w, h = float(hi[0] - lo[0]), float(hi[1] - lo[1])
     else:
         o = origin
@@ -459,16 +624,34 @@ def _clean_shape(rings_xy: list[np.ndarray], where: str, notes: list[str],
 def build_map(
     layers: GisLayers,
     *,
-    origin: tuple[float, float, float] | None = None,
+    origin: tuple[float, float, float | None] | None = None,
     margin: float = DEFAULT_MARGIN,
-    name: str = "imported",
+    name: str | None = None,
+    default_name: str = "imported",
 ) -> tuple[dict[str, Any], list[str]]:
     """The map file (a dict for `planner_core.load_map`) and notes on what was done.
 
-    Raises GisError with every problem found (one line each, naming file and feature).
+    Args:
+        layers: what `read_layers` read.
+        origin: (lat, lon, alt) of the local (0, 0); None: the exported area's frame, else the
+            south-west corner of the area or the data's bounds. An alt of None takes the
+            QGroundControl planned home's altitude (else 0).
+        margin: metres of area around the data when no area is given.
+        name: the map's name; None: the name an exported area feature carries, else
+            `default_name`.
+        default_name: the name when neither `name` nor the inputs give one.
+
+    Returns:
+        (map document, notes): the document keeps the settings (uav, radio, objective, safety,
+        fleet, witness) an exported area feature carries; absent ones take the map defaults.
+
+    Raises:
+        GisError: every problem found, one line each, naming file and feature.
     """
     import shapely
     from shapely.geometry import Polygon, box
+
+    from planner_core.model.geometry import rectangle_vertices
 
     if not (margin >= 0 and math.isfinite(margin)):
         raise GisError([f"--margin must be a finite number >= 0 (got {margin:g})"])
@@ -531,7 +714,11 @@ def build_map(
                 if not parts:
                     notes.append(f"{p.where}: outside the area; dropped")
                     continue
-                notes.append(f"{p.where}: clipped to the area")
+                # the farthest point of a polygon from the (convex) area is one of its vertices
+                reach = max(area_box.distance(shapely.Point(v)) for v in shell)
+                if reach > CLIP_TOLERANCE:  # on the edge within the tolerance: no clip to tell
+                    notes.append(f"{p.where}: clipped to the area (it reached {reach:.2f} m "
+                                 "outside)")  # fmt: skip
                 for g in parts:
                     ring_sets = [np.asarray(g.exterior.coords)]
                     ring_sets += [np.asarray(h.coords) for h in g.interiors]
@@ -544,7 +731,24 @@ def build_map(
             out.append(_entry(cleaned, p.name))
         return out
 
-    obstacles = shapes(layers.obstacles, "obstacle")
+    rectangles: list[dict[str, Any]] = []
+    drawn: list[_Poly] = []  # rectangles whose outline no longer matches their properties
+    for r in layers.rectangles:
+        (x, y), = _local([(r["lon"], r["lat"])], o)
+        corners = rectangle_vertices(x, y, r["length"], r["width"], r["angle"])
+        outline = Polygon(_local(r["poly"].rings[0], o))
+        off = outline.hausdorff_distance(Polygon(corners))
+        if off > RECTANGLE_TOLERANCE:
+            notes.append(f"{r['where']}: its outline is {off:.2f} m from the rectangle its "
+                         "properties describe; imported as the outline drawn")  # fmt: skip
+            drawn.append(r["poly"])
+        elif max(area_box.distance(shapely.Point(v)) for v in corners) > CLIP_TOLERANCE:
+            drawn.append(r["poly"])  # partly outside: clipped as a polygon (noted there)
+        else:
+            rectangles.append({"x": round(float(x), 4), "y": round(float(y), 4),
+                               "length": r["length"], "width": r["width"],
+                               "angle_deg": r["angle"]})  # fmt: skip
+    obstacles = shapes(drawn + layers.obstacles, "obstacle")
     zones = shapes(layers.no_fly_zones, "no-fly zone")
     circles = []
     for c in layers.circles:
@@ -554,48 +758,119 @@ def build_map(
             continue
         circles.append({"x": round(float(x), 4), "y": round(float(y), 4), "radius": c["radius"]})
     if area_given and (layers.areas or layers.area_circles):
-        allowed = [Polygon(_local(p.rings[0], o)) for p in layers.areas]
-        for c in layers.area_circles:
-            (x, y), = _local([(c["lon"], c["lat"])], o)
-            # inscribed polygon: the allowed region shrinks by at most r(1 - cos(pi/4/segs))
-            allowed.append(shapely.Point(x, y).buffer(c["radius"],
-                                                      quad_segs=INCLUSION_CIRCLE_QUAD_SEGS))
-        bad = [p.where for p, g in zip(layers.areas, allowed, strict=False) if not g.is_valid]
-        if bad:
-            problems += [f"{w}: the inclusion polygon is not simple" for w in bad]
-        else:
-            outside = area_box.difference(shapely.union_all(allowed))
-            # morphological opening: slivers thinner than SLIVER_WIDTH between the box and the
-            # fence (its edges are not exactly the frame's axes) go, mitred corners stay
-            d = 0.5 * SLIVER_WIDTH
-            opened = outside.buffer(-d, join_style="mitre", mitre_limit=10.0)
-            opened = opened.buffer(d, join_style="mitre", mitre_limit=10.0).intersection(area_box)
-            for g in shapely.get_parts(opened):
-                if g.geom_type != "Polygon" or g.is_empty:
-                    continue
-                rings = [np.asarray(g.exterior.coords)] + [np.asarray(h.coords)
-                                                           for h in g.interiors]  # fmt: skip
-                c2 = _clean_shape(rings, "outside the inclusion fence", notes, locate)
-                if isinstance(c2, str):
-                    problems.append(c2)
-                    continue
-                zones.append(_entry(c2, "outside the inclusion fence"))
-            notes.append("area: the bounding box of the inclusion fence; the part of it outside "
-                         f"the fence is a no-fly zone (slivers thinner than {SLIVER_WIDTH * 100:g} "
-                         "cm left out)")  # fmt: skip
+        _inclusion_zones(layers, o, area_box, zones, notes, problems, locate)
+    settings = _settings(layers, o, notes)
     if problems:
         raise GisError(problems)
+    given_name = settings.pop("name", None)
     doc: dict[str, Any] = {
-        "name": name,
+        "name": name if name is not None else (given_name or default_name),
         "origin": {"lat": o[0], "lon": o[1], "alt": o[2]},
         "area": {"width": W, "height": H},
         "start": start,
         "end": end,
         "sensors": sensors,
-        "obstacles": {"circles": circles, "rectangles": [], "no_fly_zones": zones,
+        "obstacles": {"circles": circles, "rectangles": rectangles, "no_fly_zones": zones,
                       "polygons": obstacles},  # fmt: skip
+        **settings,
     }
     return doc, notes
+
+
+def _inclusion_zones(layers: GisLayers, o: tuple[float, float, float], area_box: Any,
+                     zones: list[dict[str, Any]], notes: list[str], problems: list[str],
+                     locate: Any) -> None:  # fmt: skip
+    """Add to `zones` the part of the area outside the inclusion region(s) (the intersection
+    of several: INCLUSION_RULE), and say where the area came from in `notes`."""
+    regions = _inclusion_regions(layers, o)
+    bad = [name for name, g, _ in regions if g is None]
+    if bad:
+        problems += [f"{w}: the inclusion polygon is not simple" for w in bad]
+        return
+    try:
+        allowed = _allowed(regions)
+    except GisError as exc:
+        problems += exc.problems
+        return
+    # GeoJSON `area` polygons alone are "area polygons"; with a QGroundControl fence, all fences
+    what = "inclusion fence" if any(f for _, _, f in regions) else "area polygon"
+    if len(regions) == 1:
+        source = f"the {what} ({regions[0][0]})"
+    else:
+        names = ", ".join(name for name, _, _ in regions)
+        notes.append(f"area: the intersection of the {len(regions)} {what}s ({names}), not "
+                     f"their union: {INCLUSION_RULE}")
+        source = "that intersection"
+    label = f"outside the {what}"
+    outside = area_box.difference(allowed)
+    # morphological opening: slivers thinner than SLIVER_WIDTH between the box and the
+    # fence (its edges are not exactly the frame's axes) go, mitred corners stay
+    d = 0.5 * SLIVER_WIDTH
+    opened = outside.buffer(-d, join_style="mitre", mitre_limit=10.0)
+    opened = opened.buffer(d, join_style="mitre", mitre_limit=10.0).intersection(area_box)
+    added = 0
+    import shapely
+
+    for g in shapely.get_parts(opened):
+        if g.geom_type != "Polygon" or g.is_empty:
+            continue
+        rings = [np.asarray(g.exterior.coords)] + [np.asarray(h.coords) for h in g.interiors]
+        c2 = _clean_shape(rings, label, notes, locate)
+        if isinstance(c2, str):
+            problems.append(c2)
+            continue
+        zones.append(_entry(c2, label))
+        added += 1
+    if layers.area_frame is not None:  # the area is the exported frame, not a bounding box
+        if added:
+            notes.append(f"area: from {layers.area_frame['where']}; the part of it outside "
+                         f"{source} is a no-fly zone '{label}'")  # fmt: skip
+        return
+    said = f"area: the bounding box of {source}"
+    if added:
+        said += (f"; the part of it outside is a no-fly zone '{label}' (slivers thinner than "
+                 f"{SLIVER_WIDTH * 100:g} cm left out)")
+    notes.append(said)
+
+
+def _settings(layers: GisLayers, o: tuple[float, float, float],
+              notes: list[str]) -> dict[str, Any]:  # fmt: skip
+    """The settings an exported area carries, with the local positions in them (fleet depots,
+    witness hover points) moved to this map's frame when --origin moved it."""
+    import copy
+
+    if layers.settings is None:
+        return {}
+    settings = copy.deepcopy(layers.settings)
+    sections = ", ".join(k for k in settings if k != "name") or "name"
+    notes.append(f"map settings ({sections}) from {layers.settings_where}")
+    if layers.area_frame is None:
+        return settings
+    src = _parse_origin(layers.area_frame["origin"], layers.area_frame["where"])
+    if src == tuple(o):
+        return settings
+
+    def moved(pts: Any) -> Any:
+        a = np.asarray(pts, dtype=float).reshape(-1, 2)
+        lat, lon = enu_to_latlon(a[:, 0], a[:, 1], src)
+        b = _local(np.column_stack([lon, lat]), o)
+        return np.round(b, 4).tolist()
+
+    try:
+        depots = (settings.get("fleet") or {}).get("depots") or []
+        xy = moved([[d["x"], d["y"]] for d in depots]) if depots else []
+        for d, (x, y) in zip(depots, xy, strict=True):
+            d["x"], d["y"] = x, y
+        witness = settings.get("witness") or {}
+        if witness.get("hover_points"):
+            witness["hover_points"] = moved(witness["hover_points"])
+    except (TypeError, KeyError, ValueError, AttributeError):
+        return settings  # malformed: the map loader names the field
+    what = [w for w, there in (("fleet depots", depots), ("witness hover points",
+                                                          witness.get("hover_points"))) if there]
+    if what:
+        notes.append(f"{' and '.join(what)} moved with the frame to the new origin")
+    return settings
 
 
 def _entry(shape: tuple[np.ndarray, list[np.ndarray]], name: str | None) -> dict[str, Any]:
