@@ -50,7 +50,7 @@ REPORTS: list[tuple[str, str, str, list[str]]] = [
 
 #: why a report's runs are not in the repository (its figures keep the style they were drawn in)
 NOT_STORED: dict[str, str] = {
-    "results-with-metabox": "the 8,000 runs behind docs/results.md were not committed (42 MB); "
+    "results-with-metabox": "the 8,800 runs behind docs/results.md were not committed (42 MB); "
     "the commands at the top of docs/results.md re-run them, seed for seed (~35 min with "
     "--jobs 1 on this machine), and merge them with the committed MetaBox records "
     "(docs/metabox/results.jsonl.gz) into results-with-metabox; then the report command there "

@@ -4,8 +4,8 @@
 
 The same steps `lamde-mission plan` takes, spelled out: map -> plan -> mission items -> file ->
 independent replay of the file's items with a verdict per constraint. As `plan` does, it writes
-no file for an infeasible plan (exit 1) and says in one line what is wrong with a bad map
-(exit 2).
+no file for an infeasible plan (exit 1) and says in one line what is wrong with a bad map or
+output name (exit 2); a map with a battery or fleet plans as sorties, not here (exit 2).
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ import sys
 from pathlib import Path
 
 import lamde_mission
-from lamde_mission.formats import read_mission, write_mission
+from lamde_mission.formats import MissionFileError, format_for, read_mission, write_mission
 from planner_core import MapError, load_map
 from sim import replay, verify
 
@@ -26,8 +26,14 @@ def main() -> int:
     out = Path(sys.argv[2]) if len(sys.argv) > 2 else Path("example-mission.plan")
     try:
         m = load_map(map_path)
-    except MapError as exc:  # a missing file, bad JSON or a field out of range: one line
+        format_for(out)  # .plan or .waypoints: known before planning
+    except (MapError, MissionFileError) as exc:  # a bad map or output name: one line
         print(f"plan_and_verify: {exc}", file=sys.stderr)
+        return 2
+    if m.has_battery or m.has_fleet:  # one flight cannot say whether a battery flies it
+        print(f"plan_and_verify: {map_path}: a map with a battery or fleet plans as sorties: "
+              f"`lamde-mission plan {map_path} -o DIR/` or lamde_mission.plan_fleet "
+              "(docs/sorties.md)", file=sys.stderr)  # fmt: skip
         return 2
     plan = lamde_mission.plan(m, seed=0, budget=10_000)
     print(f"{m.name}: {plan.n_hover} hover points, f = {plan.f:.2f}, phi = {plan.phi:g}, "

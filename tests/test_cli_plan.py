@@ -120,6 +120,14 @@ def test_example_script_plans_and_verifies(tmp_path: Path) -> None:
     r = subprocess.run([sys.executable, str(script), str(tmp_path / "none.json"), str(bad)],
                        capture_output=True, text=True, timeout=300)  # fmt: skip
     assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    # a battery map plans as sorties (one flight said feasible, then ENERGY failed on the file
+    # it wrote); an output it cannot write (a traceback)
+    for args in ((str(MAPS / "fleet-demo.json"), str(bad)), (str(DEMO), str(tmp_path / "t.txt"))):
+        r = subprocess.run([sys.executable, str(script), *args], capture_output=True, text=True,
+                           timeout=300)  # fmt: skip
+        lines = r.stderr.strip().splitlines()
+        assert r.returncode == 2 and len(lines) == 1 and "Traceback" not in r.stderr, r.stderr
+        assert not Path(args[1]).exists()
 
 
 @pytest.mark.slow  # measured 6 s (issue 35: default suite <= 5 min)

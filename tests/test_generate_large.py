@@ -196,6 +196,38 @@ def test_campus_bad_origin(tmp_path: Path) -> None:
     assert r.returncode == 2 and "--origin" in r.stderr
 
 
+def test_generators_refuse_bad_names_and_outputs_up_front(tmp_path: Path) -> None:
+    """One line, exit 2, nothing written: a --name the map format refuses (a traceback after
+    the generation), an output under a file or in a missing folder (a traceback, or the folder
+    made silently), a campus with more sensors than check reads or with one count at 0 (named
+    together), and `-o .`. With --mkdir the folder is made."""
+    (tmp_path / "my.json").write_text("{}")
+    cases = [
+        (("generate", "x.json", "--size", "5000", "--density", "2", "--name", "a" * 201),
+         "--name: "),
+        (("generate", "x.json", "--size", "5000", "--density", "2", "--name", "evil\nline"),
+         "--name: must be printable text"),
+        (("generate", "my.json/x.json", "--size", "5000", "--density", "1"),
+         "my.json is a file, not a folder"),
+        (("generate", "--suite", "my.json/sub"), "my.json is a file, not a folder"),
+        (("generate", "nodir/x.json", "--size", "5000", "--density", "2"),
+         "the folder nodir does not exist"),
+        (("map", "campus", "--sensors", "2000", "-o", "c.json"), "--sensors must be 1..1000"),
+        (("map", "campus", "--sensors", "0", "-o", "c.json"), "--sensors must be 1..1000"),
+        (("map", "campus", "--footprints", "0", "-o", "c.json"), "--footprints must be >= 1"),
+        (("map", "campus", "-o", "."), "not a file name"),
+        (("map", "campus", "-o", "nodir/c.json"), "the folder nodir does not exist"),
+    ]
+    rs = run_cli_many(*[c for c, _ in cases], cwd=tmp_path)
+    for (args, needle), r in zip(cases, rs, strict=True):
+        lines = r.stderr.strip().splitlines()
+        assert r.returncode == 2 and len(lines) == 1 and needle in lines[0], (args, r.stderr)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["my.json"]
+    r = run_cli("generate", "new/x.json", "--size", "5000", "--density", "1", "--mkdir",
+                cwd=tmp_path)  # fmt: skip
+    assert r.returncode == 0 and (tmp_path / "new" / "x.json").is_file(), r.stderr
+
+
 @pytest.mark.slow  # measured 7 s (issue 35: default suite <= 5 min)
 def test_bench_runs_the_large_suite(tmp_path: Path) -> None:
     """`bench --suite examples/maps/large` accepts the folder (one small map, a tiny budget)."""

@@ -104,6 +104,7 @@ def test_no_fly_zone_shapes(hand_map: dict) -> None:
 
 def test_schema_has_fields() -> None:
     s = map_json_schema()
+    assert s["$schema"] == "https://json-schema.org/draft/2020-12/schema"  # as `schema` says
     assert set(s["required"]) == {"area", "start", "end", "sensors"}
     assert "no_fly_zones" in json.dumps(s)
 

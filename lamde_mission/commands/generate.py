@@ -60,7 +60,38 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--sensors", metavar="N", help="number of sensors (default: by size and "
                    "density; with --layout 0.4 per km^2, within 20..500)")
     p.add_argument("--name", help="map name stored in the file (default: from the arguments)")
+    p.add_argument("--mkdir", action="store_true",
+                   help="create the output's folder (OUT.json's, or OUTDIR's parent) if missing")
     return p
+
+
+def _check_name(name: str | None) -> None:
+    """UsageError naming --name when the map format would refuse it (checked up front: the
+    generator only meets it when it checks the witness, after the work)."""
+    if name is None:
+        return
+    from planner_core.model.mapio import MapError, load_map
+
+    probe = {"name": name, "area": {"width": 100, "height": 100}, "start": [1, 1],
+             "end": [99, 99], "sensors": [{"id": "s", "x": 50, "y": 50}]}  # fmt: skip
+    try:
+        load_map(probe)
+    except MapError as exc:
+        why = "; ".join(p.split(": ", 1)[-1] for p in exc.problems if p.startswith("name"))
+        raise UsageError(f"--name: {why or exc.problems[0]}") from None
+
+
+def _check_folder_output(option: str, folder: Path, mkdir: bool) -> None:
+    """UsageError unless `folder` (a suite's OUTDIR) can be made: not a file, nor under one; its
+    parent must exist unless `mkdir`."""
+    probe = folder
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
+    if probe.exists() and not probe.is_dir():
+        raise UsageError(f"{option} {folder}: {probe} is a file, not a folder")
+    if not folder.exists() and not folder.parent.is_dir() and not mkdir:
+        raise UsageError(f"{option} {folder}: the folder {folder.parent} does not exist "
+                         "(create it, or pass --mkdir)")
 
 
 def _int(value: str | None, option: str, default: int | None = None) -> int | None:
@@ -77,9 +108,11 @@ def run(args: argparse.Namespace) -> int:
     assert seed is not None
     if seed < 0:
         raise UsageError(f"--seed must be >= 0 (got {seed})")
+    _check_name(args.name)
     for option, folder in (("--suite", args.suite), ("--large-suite", args.large_suite)):
         if folder is None:
             continue
+        _check_folder_output(option, Path(folder), args.mkdir)
         extra = [o for o, v in (("OUT.json", args.out), ("--size", args.size),
                                 ("--density", args.density), ("--sensors", args.sensors),
                                 ("--layout", args.layout), ("--cluster-size", args.cluster_size),
@@ -94,6 +127,12 @@ def run(args: argparse.Namespace) -> int:
     if args.out is None:
         raise UsageError("give OUT.json (with --size and --density, or --layout), --suite OUTDIR "
                          "or --large-suite OUTDIR")
+    if Path(args.out).is_dir():
+        opt = "--large-suite" if args.layout is not None else "--suite"
+        raise UsageError(f"{args.out} is a folder; give a file name (or use {opt} {args.out})")
+    from lamde_mission.commands._common import check_outputs
+
+    check_outputs([("OUT.json", args.out)], mkdir=args.mkdir)
     if args.layout is not None:
         return _run_large(args, seed)
     if args.cluster_size is not None:

@@ -76,6 +76,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                     help="WGS84 origin of the local frame (default 23.0493,113.3975,10, the "
                     "origin of every generated map)")
     cg.add_argument("-o", "--output", required=True, help="map file to write (JSON)")
+    cg.add_argument("--mkdir", action="store_true", help="create -o's folder if missing")
     return p
 
 
@@ -208,18 +209,27 @@ def _to_geojson(args: argparse.Namespace) -> int:
 
 def _campus(args: argparse.Namespace) -> int:
     from lamde_mission.atomic import write_text_atomic
+    from lamde_mission.commands._common import check_outputs
     from lamde_mission.gis.synthetic import campus_map
+    from planner_core import textio
     from planner_core.suite import SUITE_ORIGIN, dumps_map
 
     if args.seed < 0:
         raise UsageError(f"--seed must be >= 0 (got {args.seed})")
+    if args.footprints < 1:
+        raise UsageError(f"--footprints must be >= 1 (got {args.footprints})")
+    most = textio.limit("sensors")  # what check and plan read (LAMDE_MAX_SENSORS)
+    if not 1 <= args.sensors <= most:
+        raise UsageError(f"--sensors must be 1..{most} (got {args.sensors}; check and plan read "
+                         "at most LAMDE_MAX_SENSORS sensors)")
+    check_outputs([("-o/--output", args.output)], mkdir=args.mkdir)
     given = _origin(args.origin)
     origin = (dict(SUITE_ORIGIN) if given is None
               else {"lat": given[0], "lon": given[1],
                     "alt": 0.0 if given[2] is None else given[2]})  # fmt: skip
     try:
         doc = campus_map(args.footprints, seed=args.seed, n_sensors=args.sensors)
-    except ValueError as exc:
+    except ValueError as exc:  # both do not fit on the map together
         raise UsageError(f"--footprints/--sensors: {exc}") from None
     # every generated map carries an origin (plan writes WGS84 missions from it): name first
     doc = {"name": doc.pop("name"), "origin": origin, **doc}

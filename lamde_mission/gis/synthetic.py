@@ -71,13 +71,17 @@ def campus_map(
 
     Raises ValueError if the grid cannot hold that many footprints and sensors.
     """
-    if n_footprints < 1 or n_sensors < 1:
-        raise ValueError("n_footprints and n_sensors must be >= 1")
+    if n_footprints < 1:
+        raise ValueError(f"n_footprints must be >= 1, got {n_footprints}")
+    if n_sensors < 1:
+        raise ValueError(f"n_sensors must be >= 1, got {n_sensors}")
     rng = np.random.default_rng([int(seed), int(n_footprints), int(size)])
     n_lots = int(math.ceil(math.sqrt((n_footprints + n_sensors + 2) * 1.5)))
     lot = size / n_lots
     if lot <= 2.0 * STREET:
-        raise ValueError(f"{n_footprints} footprints do not fit on a {size:g} m map")
+        raise ValueError(f"{n_footprints} footprints and {n_sensors} sensors do not fit on a "
+                         f"{size:g} m map (one lot each, lots wider than two {STREET:g} m "
+                         "streets)")
     cells = [(i, j) for j in range(n_lots) for i in range(n_lots)]
     reserved = {(0, 0), (n_lots - 1, n_lots - 1)}
     free = [c for c in cells if c not in reserved]

@@ -355,8 +355,9 @@ def default_max_hover_points(width: float, height: float, sensors: int = 0) -> i
 
 
 def map_json_schema() -> dict[str, Any]:
-    """JSON Schema of the map file."""
-    return MapFile.model_json_schema()
+    """JSON Schema (draft 2020-12, named by its `$schema` key) of the map file."""
+    return {"$schema": "https://json-schema.org/draft/2020-12/schema",
+            **MapFile.model_json_schema()}
 
 
 @dataclass(frozen=True, eq=False)
