@@ -196,11 +196,16 @@ def test_campus_bad_origin(tmp_path: Path) -> None:
     assert r.returncode == 2 and "--origin" in r.stderr
 
 
-def test_generators_refuse_bad_names_and_outputs_up_front(tmp_path: Path) -> None:
+def test_generators_refuse_bad_names_and_outputs_up_front(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture
+) -> None:
     """One line, exit 2, nothing written: a --name the map format refuses (a traceback after
     the generation), an output under a file or in a missing folder (a traceback, or the folder
     made silently), a campus with more sensors than check reads or with one count at 0 (named
     together), and `-o .`. With --mkdir the folder is made."""
+    from lamde_mission.cli import main
+
+    monkeypatch.chdir(tmp_path)
     (tmp_path / "my.json").write_text("{}")
     cases = [
         (("generate", "x.json", "--size", "5000", "--density", "2", "--name", "a" * 201),
@@ -218,14 +223,13 @@ def test_generators_refuse_bad_names_and_outputs_up_front(tmp_path: Path) -> Non
         (("map", "campus", "-o", "."), "not a file name"),
         (("map", "campus", "-o", "nodir/c.json"), "the folder nodir does not exist"),
     ]
-    rs = run_cli_many(*[c for c, _ in cases], cwd=tmp_path)
-    for (args, needle), r in zip(cases, rs, strict=True):
-        lines = r.stderr.strip().splitlines()
-        assert r.returncode == 2 and len(lines) == 1 and needle in lines[0], (args, r.stderr)
+    for args, needle in cases:
+        assert main(list(args)) == 2, args
+        lines = capsys.readouterr().err.strip().splitlines()
+        assert len(lines) == 1 and needle in lines[0], (args, lines)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["my.json"]
-    r = run_cli("generate", "new/x.json", "--size", "5000", "--density", "1", "--mkdir",
-                cwd=tmp_path)  # fmt: skip
-    assert r.returncode == 0 and (tmp_path / "new" / "x.json").is_file(), r.stderr
+    assert main(["generate", "new/x.json", "--size", "5000", "--density", "1", "--mkdir"]) == 0
+    assert (tmp_path / "new" / "x.json").is_file()
 
 
 @pytest.mark.slow  # measured 7 s (issue 35: default suite <= 5 min)
