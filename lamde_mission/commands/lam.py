@@ -9,6 +9,7 @@
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 import time
 from pathlib import Path
@@ -16,6 +17,7 @@ from typing import Any
 
 from lamde_mission.commands._common import add_executor_args, check_executor_args
 from lamde_mission.errors import UsageError
+from planner_core.textio import printable
 
 _FEATURES = ("learned", "ela")
 _SELECTIONS = ("global", "random", "local")
@@ -58,11 +60,18 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                 choices=_FEATURES,
                 help="learned (LAMDE, default) or ela (LAMDE-E)",
             )
-            q.add_argument("-o", "--out", required=True, metavar="OUT.json")
+            q.add_argument("-o", "--out", required=True, metavar="OUT.json",
+                           help="the training-set file (written atomically; its folder must "
+                           "exist unless --mkdir)")  # fmt: skip
             q.add_argument(
                 "--plot",
                 metavar="OUT.png",
-                help="draw tasks and selection in a 2-D PCA of feature space",
+                help="draw tasks and selection in a 2-D PCA of feature space (.png or .svg)",
+            )
+            q.add_argument(
+                "--mkdir",
+                action="store_true",
+                help="create the missing folders of -o and --plot",
             )
             q.add_argument(
                 "--no-build",
@@ -80,15 +89,23 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def _database_options(q: argparse.ArgumentParser) -> None:
+    from planner_core.learning.lam.bbob import MAX_DIMENSION, MAX_INSTANCES, MIN_DIMENSION
+    from planner_core.learning.lam.probe import MAX_N_PROBE, N_PROBE
+
     q.add_argument(
         "--full",
         action="store_true",
         help="the paper's database: 24 functions x 20..200 dims x 100 instances",
     )
-    q.add_argument("--functions", metavar="LIST", help="BBOB ids, e.g. 1-24 or 1,3,5")
-    q.add_argument("--dims", metavar="LIST", help="dimensions, e.g. 20,40,80")
-    q.add_argument("--instances", metavar="N", help="instances per function and dimension")
-    q.add_argument("--n-probe", default="100", metavar="N", help="LHS probe size (default 100)")
+    q.add_argument("--functions", metavar="LIST", help="BBOB ids in 1..24, e.g. 1-24 or 1,3,5")
+    q.add_argument("--dims", metavar="LIST", help=f"dimensions in {MIN_DIMENSION}..{MAX_DIMENSION} "
+                   "(the paper's database stops at 200), e.g. 20,40,80")  # fmt: skip
+    q.add_argument("--instances", metavar="N", help="instances per function and dimension, "
+                   f"1..{MAX_INSTANCES} (the paper's database has 100)")  # fmt: skip
+    q.add_argument("--n-probe", default=str(N_PROBE), metavar="N",
+                   help=f"LHS probe size, 4..{MAX_N_PROBE} (default {N_PROBE}, the paper's); "
+                   "the learned encoder's attention holds d x N x N numbers, so memory grows "
+                   f"with N squared: ~0.5 GB at d = 200, N = {MAX_N_PROBE}")  # fmt: skip
     q.add_argument("--db-seed", default="0", metavar="S", help="database probe seed (default 0)")
     q.add_argument(
         "--jobs",
@@ -102,53 +119,97 @@ def _database_options(q: argparse.ArgumentParser) -> None:
                    "(default $LAMDE_CACHE/lam or ~/.cache/lamde-mission/lam)")  # fmt: skip
 
 
-def _int(value: str, option: str, low: int = 0) -> int:
+def _int(value: str, option: str, low: int = 0, high: int | None = None) -> int:
     try:
         v = int(value)
     except ValueError:
-        raise UsageError(f"{option} must be an integer (got {value!r})") from None
-    if v < low:
-        raise UsageError(f"{option} must be >= {low} (got {v})")
+        raise UsageError(f"{option} must be an integer (got {printable(value)!r:.60})") from None
+    if v < low or (high is not None and v > high):
+        want = f">= {low}" if high is None else f"in [{low}, {high}]"
+        raise UsageError(f"{option} must be an integer {want} (got {v})")
     return v
 
 
-def _int_list(value: str, option: str) -> list[int]:
+_ITEM = re.compile(r"\s*(-?\d+)\s*(?:-\s*(-?\d+)\s*)?")
+
+
+def _int_list(value: str, option: str, low: int, high: int) -> list[int]:
+    """Integers and ranges (``1-24``, ``20,40``), each in [low, high], repeats dropped."""
     out: list[int] = []
-    try:
-        for part in value.split(","):
-            if "-" in part.strip()[1:]:
-                a, b = part.split("-", 1)
-                out.extend(range(int(a), int(b) + 1))
-            elif part.strip():
-                out.append(int(part))
-    except ValueError:
-        raise UsageError(f"{option}: expected integers like 1-24 or 20,40, got {value!r}") from None
+    for part in value.split(","):
+        if not part.strip():
+            continue
+        m = _ITEM.fullmatch(part)
+        if m is None:
+            raise UsageError(f"{option}: expected integers like 1-24 or 20,40, got "
+                             f"{printable(value)!r:.80}")  # fmt: skip
+        a = int(m.group(1))
+        b = a if m.group(2) is None else int(m.group(2))
+        for v in (a, b):
+            if not low <= v <= high:
+                raise UsageError(f"{option}: must be integers in [{low}, {high}], got {v}")
+        if b < a:
+            raise UsageError(f"{option}: the range {a}-{b} goes down; write {b}-{a}")
+        out.extend(v for v in range(a, b + 1) if v not in out)
     if not out:
         raise UsageError(f"{option}: empty list")
     return out
 
 
 def _database(args: argparse.Namespace, features: list[str]) -> Any:
+    """The Database the options name; UsageError naming the option for a bad value (before
+    any work; nothing is created)."""
     from planner_core.learning.lam import FULL, Database, DatabaseSpec, make_extractors
+    from planner_core.learning.lam.bbob import (
+        FUNCTIONS,
+        MAX_DIMENSION,
+        MAX_INSTANCES,
+        MIN_DIMENSION,
+    )
+    from planner_core.learning.lam.probe import MAX_N_PROBE
 
     base = FULL if args.full else None
+    functions = (_int_list(args.functions, "--functions", FUNCTIONS.start, FUNCTIONS.stop - 1)
+                 if args.functions else (base.functions if base else None))  # fmt: skip
+    dims = (_int_list(args.dims, "--dims", MIN_DIMENSION, MAX_DIMENSION)
+            if args.dims else (base.dimensions if base else None))  # fmt: skip
+    instances = (_int(args.instances, "--instances", 1, MAX_INSTANCES)
+                 if args.instances else (base.instances if base else None))  # fmt: skip
+    n_probe = _int(args.n_probe, "--n-probe", 4, MAX_N_PROBE)
+    seed = _int(args.db_seed, "--db-seed")
     try:
-        spec = DatabaseSpec.make(
-            _int_list(args.functions, "--functions") if args.functions else
-            (base.functions if base else None),
-            _int_list(args.dims, "--dims") if args.dims else (base.dimensions if base else None),
-            _int(args.instances, "--instances", 1) if args.instances else
-            (base.instances if base else None),
-        )  # fmt: skip
         return Database(
-            spec=spec,
-            n_probe=_int(args.n_probe, "--n-probe", 4),
-            seed=_int(args.db_seed, "--db-seed"),
+            spec=DatabaseSpec.make(functions, dims, instances),
+            n_probe=n_probe,
+            seed=seed,
             cache_dir=Path(args.cache) if args.cache else None,
             extractors=make_extractors(features),
         )
     except ValueError as exc:
         raise UsageError(str(exc)) from None
+
+
+def _check_cache(db: Any, args: argparse.Namespace, write: bool) -> None:
+    """The cache folder exists (it is created here if not) and, when chunks are to be
+    computed (`write`), files can be made in it; else UsageError naming --cache (or the
+    default folder and $LAMDE_CACHE), before any work."""
+    from planner_core.atomic import OutputPathError, check_writable
+
+    folder = Path(db.cache_dir)
+    what = "--cache" if args.cache else "cache folder (--cache, $LAMDE_CACHE)"
+    shown = printable(str(folder))
+    if folder.exists() and not folder.is_dir():
+        raise UsageError(f"{what}: {shown} is a file, not a folder")
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise UsageError(f"{what}: cannot create the folder {shown} "
+                         f"({exc.strerror or exc})") from None  # fmt: skip
+    if write:
+        try:
+            check_writable(folder / "chunk.npz")
+        except OutputPathError:
+            raise UsageError(f"{what}: cannot write in the folder {shown}") from None
 
 
 class _Bar:
@@ -191,14 +252,48 @@ def _task_files(path: str) -> list[Path]:
     if p.is_dir():
         files = sorted(p.glob("*.json"))
         if not files:
-            raise UsageError(f"--tasks: no .json maps in {p}")
-        return files
-    if p.is_file():
-        return [p]
-    raise UsageError(f"--tasks: {p} does not exist")
+            raise UsageError(f"--tasks: no .json maps in {printable(str(p))}")
+    elif p.is_file():
+        files = [p]
+    else:
+        raise UsageError(f"--tasks: {printable(str(p))} does not exist")
+    for f in files:
+        _refuse_trainset(f)
+    return files
+
+
+def _refuse_trainset(path: Path) -> None:
+    """UsageError in one line when `path` is a training-set file (``lam select``'s output or
+    ``train --problems``' input: a top-level "problems" list, no "sensors") given as a map.
+    Other problems of the file are left to the map loader, which names them."""
+    from planner_core.textio import InputError, read_json
+
+    try:
+        data = read_json(path)
+    except InputError:
+        return
+    if (
+        isinstance(data, dict)
+        and "sensors" not in data
+        and (isinstance(data.get("problems"), list) or data.get("format") == "lamde-trainset/1")
+    ):
+        raise UsageError(f"--tasks: {printable(str(path))}: this is a training-set file "
+                         "(`lam select -o` / `train --problems`), not a map; --tasks takes the "
+                         "task maps (a folder of map .json files or one map)")  # fmt: skip
 
 
 def run(args: argparse.Namespace) -> int:
+    """`lam build` / `lam select`: every option and output is checked before any work.
+
+    Args:
+        args: the parsed options.
+
+    Returns:
+        0 on success.
+
+    Raises:
+        UsageError: one line naming the option (exit 2).
+    """
     _int(args.jobs, "--jobs")
     check_executor_args(args)
     if args.lam_command == "build":
@@ -207,6 +302,7 @@ def run(args: argparse.Namespace) -> int:
         if bad or not names:
             raise UsageError(f"--features: {bad or 'empty'}; choose from {', '.join(_FEATURES)}")
         db = _database(args, names)
+        _check_cache(db, args, write=bool(db.missing()))
         n = _build(db, args)
         print(f"{len(db.spec)} instances, {len(db.chunks())} chunks ({n} computed now) "
               f"in {db.cache_dir}")  # fmt: skip
@@ -214,27 +310,34 @@ def run(args: argparse.Namespace) -> int:
     return _select(args)
 
 
+_PLOT_FORMATS = {".png": "png", ".svg": "svg"}
+
+
 def _select(args: argparse.Namespace) -> int:
-    from lamde_mission.commands._common import load_map_or_fail
+    from lamde_mission.commands._common import check_outputs, load_map_or_fail
 
     k = _int(args.k, "--k", 1)
     seed = _int(args.seed, "--seed")
-    files = _task_files(args.tasks)
     db = _database(args, [args.features])
     if k > len(db.spec):
         raise UsageError(f"--k: {k} is more than the database's {len(db.spec)} instances")
-    if args.out and Path(args.out).is_dir():
-        raise UsageError(f"-o: {args.out} is a folder")
-    if db.missing():
-        if args.no_build:
-            raise UsageError(f"database features missing in {db.cache_dir}: run `lam build`")
-        _build(db, args)
+    if args.plot is not None and Path(args.plot).suffix.lower() not in _PLOT_FORMATS:
+        raise UsageError(f"--plot: {printable(args.plot)}: must end in .png or .svg")
+    files = _task_files(args.tasks)
+    check_outputs([("-o", args.out), ("--plot", args.plot)], mkdir=args.mkdir,
+                  inputs=[("task map", str(f)) for f in files])  # fmt: skip
+    missing = bool(db.missing())
+    if missing and args.no_build:
+        raise UsageError(f"database features missing in {db.cache_dir}: run `lam build`")
+    _check_cache(db, args, write=missing)
 
     from planner_core.learning.lam import select
     from planner_core.learning.lam.trainset import write_trainset
     from planner_core.model.problem import Problem
 
     maps = [load_map_or_fail(str(f)) for f in files]
+    if missing:
+        _build(db, args)
     tasks = [Problem(m) for m in maps]
     names = [m.name or f.stem for m, f in zip(maps, files, strict=True)]
     try:
@@ -242,24 +345,26 @@ def _select(args: argparse.Namespace) -> int:
                              features=args.features)  # fmt: skip
     except ValueError as exc:
         raise UsageError(str(exc)) from None
+    figure = _figure_bytes(args.plot, doc, arrays) if args.plot else None
     write_trainset(args.out, doc)
-    if args.plot:
-        _plot(args.plot, doc, arrays)
+    if figure is not None:
+        from planner_core.atomic import write_bytes_atomic
+
+        write_bytes_atomic(args.plot, figure, mkdir=False)
     fids = sorted({p["objective"]["function"] for p in doc["problems"]})
     print(f"wrote {args.out}: {len(doc['problems'])} training problems "
           f"(objective functions {fids}), rho = {doc['options']['rho']:.3f}")  # fmt: skip
     return 0
 
 
-def _plot(path: str, doc: dict[str, Any], arrays: dict[str, Any]) -> None:
-    """Write :func:`selection_figure` as PNG to `path` (atomically)."""
+def _figure_bytes(path: str, doc: dict[str, Any], arrays: dict[str, Any]) -> bytes:
+    """:func:`selection_figure` as PNG or SVG (by `path`'s suffix), rendered in memory."""
     import io
 
-    from planner_core.atomic import write_bytes_atomic
-
     buf = io.BytesIO()
-    selection_figure(doc, arrays).savefig(buf, format="png", dpi=110)
-    write_bytes_atomic(path, buf.getvalue())
+    fmt = _PLOT_FORMATS[Path(path).suffix.lower()]
+    selection_figure(doc, arrays).savefig(buf, format=fmt, dpi=110)
+    return buf.getvalue()
 
 
 def selection_figure(doc: dict[str, Any], arrays: dict[str, Any]) -> Any:

@@ -30,6 +30,10 @@ import numpy as np
 __all__ = [
     "BBOB_LOWER",
     "BBOB_UPPER",
+    "FUNCTIONS",
+    "MAX_DIMENSION",
+    "MAX_INSTANCES",
+    "MIN_DIMENSION",
     "DEFAULT",
     "FULL",
     "FUNCTION_NAMES",
@@ -37,10 +41,25 @@ __all__ = [
     "DatabaseSpec",
     "InstanceKey",
     "bbob_values",
+    "check_key",
 ]
 
 BBOB_LOWER = -5.0
 BBOB_UPPER = 5.0
+
+#: BBOB's noiseless function ids
+FUNCTIONS = range(1, 25)
+#: dimensions of a database instance (and of a training problem built from one): at least 2 (the
+#: features need a spread of points), at most the largest of the paper's database (:data:`FULL`
+#: stops at 200). An instance of dimension d builds a d x d rotation, so the bound also bounds
+#: memory (a dimension of 1e9 would ask numpy for gigabytes).
+MIN_DIMENSION = 2
+MAX_DIMENSION = 200
+#: instances per function and dimension (and the largest instance id in a database): the paper's
+#: database has 100 (:data:`FULL`), BBOB/COCO's own suites use 15 or fewer
+MAX_INSTANCES = 100
+#: ioh takes an instance id as a C int
+_MAX_INSTANCE_ID = 2**31 - 1
 
 #: BBOB noiseless function names, f1..f24 (Hansen et al. 2009)
 FUNCTION_NAMES = (
@@ -60,6 +79,36 @@ class InstanceKey(NamedTuple):
     instance: int
 
 
+def check_key(key: Any, where: str = "key") -> InstanceKey:
+    """`key` as an :class:`InstanceKey` whose numbers ioh and memory can take.
+
+    Args:
+        key: (function, dimension, instance), integers.
+        where: what names the key in an error (e.g. "objective").
+
+    Returns:
+        The key.
+
+    Raises:
+        ValueError: one line, ``"<where>.<field>: ..."``, for a function id outside 1..24, a
+            dimension outside [MIN_DIMENSION, MAX_DIMENSION] or an instance id outside
+            [1, 2**31 - 1].
+    """
+    try:
+        f, d, i = (int(v) for v in key)
+    except (TypeError, ValueError):
+        raise ValueError(f"{where}: expected three integers (function, dimension, instance), "
+                         f"got {key!r:.60}") from None  # fmt: skip
+    for name, v, low, high in (
+        ("function", f, FUNCTIONS.start, FUNCTIONS.stop - 1),
+        ("dimension", d, MIN_DIMENSION, MAX_DIMENSION),
+        ("instance", i, 1, _MAX_INSTANCE_ID),
+    ):
+        if not low <= v <= high:
+            raise ValueError(f"{where}.{name}: must be an integer in [{low}, {high}], got {v}")
+    return InstanceKey(f, d, i)
+
+
 @dataclass(frozen=True)
 class DatabaseSpec:
     """Which instances D_syn holds: the product functions x dimensions x instances."""
@@ -73,11 +122,11 @@ class DatabaseSpec:
             if not 1 <= f <= 24:
                 raise ValueError(f"functions: {f} is not a BBOB function id (1..24)")
         for d in self.dimensions:
-            if d < 2:
-                raise ValueError(f"dimensions: {d} < 2")
+            if not MIN_DIMENSION <= d <= MAX_DIMENSION:
+                raise ValueError(f"dimensions: {d} is not in [{MIN_DIMENSION}, {MAX_DIMENSION}]")
         for i in self.instances:
-            if i < 1:
-                raise ValueError(f"instances: {i} < 1")
+            if not 1 <= i <= _MAX_INSTANCE_ID:
+                raise ValueError(f"instances: {i} is not in [1, {_MAX_INSTANCE_ID}]")
 
     @classmethod
     def make(
@@ -148,7 +197,7 @@ class BBOBProblem:
     """
 
     def __init__(self, key: InstanceKey | tuple[int, int, int]):
-        self.key = InstanceKey(*(int(v) for v in key))
+        self.key = check_key(key)
         self.dim = self.key.dimension
         self.lower = np.zeros(self.dim)
         self.upper = np.ones(self.dim)

@@ -31,7 +31,13 @@ import numpy as np
 
 from planner_core.atomic import write_bytes_atomic
 from planner_core.learning.lam.bbob import DEFAULT, BBOBProblem, DatabaseSpec, InstanceKey
-from planner_core.learning.lam.probe import N_PROBE, Probe, blas_single_thread, probe
+from planner_core.learning.lam.probe import (
+    MAX_N_PROBE,
+    N_PROBE,
+    Probe,
+    blas_single_thread,
+    probe,
+)
 
 __all__ = [
     "FORMAT",
@@ -84,8 +90,8 @@ class Database:
     extractors: dict[str, Any] | None = None
 
     def __post_init__(self) -> None:
-        if self.n_probe < 4:
-            raise ValueError(f"n_probe: {self.n_probe} < 4")
+        if not 4 <= self.n_probe <= MAX_N_PROBE:
+            raise ValueError(f"n_probe: must be in [4, {MAX_N_PROBE}], got {self.n_probe}")
         self.cache_dir = Path(self.cache_dir) if self.cache_dir else default_cache_dir()
         if self.extractors is None:
             self.extractors = make_extractors()

@@ -15,10 +15,14 @@ from typing import Any, NamedTuple
 import numpy as np
 from scipy.stats import qmc
 
-__all__ = ["N_PROBE", "Probe", "blas_single_thread", "finite_values", "lhs", "probe"]
+__all__ = ["MAX_N_PROBE", "N_PROBE", "Probe", "blas_single_thread", "finite_values", "lhs", "probe"]
 
 #: the paper's probe size
 N_PROBE = 100
+#: the largest probe size `lam build` / `lam select` take: the learned encoder's attention
+#: across samples holds d x N x N numbers, so memory grows with N squared (measured, d = 200:
+#: peak RSS ~0.2 GB at N = 100, ~0.46 GB at N = 300, ~1 GB at N = 500)
+MAX_N_PROBE = 300
 
 
 class Probe(NamedTuple):

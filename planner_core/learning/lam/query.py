@@ -40,7 +40,7 @@ from typing import Any
 
 import numpy as np
 
-from planner_core.learning.lam.bbob import InstanceKey, bbob_values
+from planner_core.learning.lam.bbob import InstanceKey, bbob_values, check_key
 from planner_core.learning.lam.probe import N_PROBE, blas_single_thread, probe
 
 __all__ = [
@@ -218,7 +218,8 @@ def threshold_for(
 class PairProblem:
     """Training problem <s_k, s'_k>: unit box, f = s_k(x), phi = max(0, s'_k(x) - t) / scale.
 
-    ``objective`` and ``constraint`` must have the same dimension (ValueError otherwise).
+    ``objective`` and ``constraint`` must have the same dimension and be valid keys
+    (:func:`~planner_core.learning.lam.bbob.check_key`; ValueError otherwise).
     """
 
     def __init__(
@@ -228,8 +229,8 @@ class PairProblem:
         threshold: float,
         scale: float = 1.0,
     ):
-        self.objective = InstanceKey(*(int(v) for v in objective))
-        self.constraint = InstanceKey(*(int(v) for v in constraint))
+        self.objective = check_key(objective, "objective")
+        self.constraint = check_key(constraint, "constraint")
         if self.objective.dimension != self.constraint.dimension:
             raise ValueError(
                 f"constraint: dimension {self.constraint.dimension} differs from the "

@@ -33,60 +33,145 @@ from pathlib import Path
 from typing import Any
 
 from planner_core.atomic import write_text_atomic
-from planner_core.learning.lam.bbob import InstanceKey
+from planner_core.learning.lam.bbob import (
+    FULL,
+    FUNCTIONS,
+    MAX_DIMENSION,
+    MAX_INSTANCES,
+    MIN_DIMENSION,
+    InstanceKey,
+)
 from planner_core.learning.lam.query import PairProblem
+from planner_core.textio import InputError, printable, read_json
 
-__all__ = ["FORMAT", "dumps_trainset", "load_trainset", "read_trainset", "write_trainset"]
+__all__ = [
+    "FORMAT",
+    "MAX_PROBLEMS",
+    "dumps_trainset",
+    "load_trainset",
+    "read_trainset",
+    "write_trainset",
+]
 
 FORMAT = "lamde-trainset/1"
+#: most problems in one file: `lam select` picks K <= the database's size, and the paper's whole
+#: database (:data:`~planner_core.learning.lam.bbob.FULL`) holds 14,400 instances
+MAX_PROBLEMS = len(FULL)
 
 
 def key_json(key: InstanceKey) -> dict[str, int]:
+    """A key as the file writes it: ``{"function": f, "dimension": d, "instance": i}``.
+
+    Args:
+        key: the BBOB instance key.
+
+    Returns:
+        The JSON object of the key.
+    """
     return {"function": key.function, "dimension": key.dimension, "instance": key.instance}
 
 
 def dumps_trainset(doc: dict[str, Any]) -> str:
-    """Canonical text: sorted keys, 2-space indent, trailing newline."""
+    """Canonical text: sorted keys, 2-space indent, trailing newline.
+
+    Args:
+        doc: a training-set document (module doc).
+
+    Returns:
+        The file's text.
+    """
     return json.dumps(doc, sort_keys=True, indent=2) + "\n"
 
 
 def write_trainset(path: str | Path, doc: dict[str, Any]) -> Path:
-    """Write atomically (temp file then rename)."""
-    return write_text_atomic(path, dumps_trainset(doc))
+    """Write atomically (temp file then rename): readers see the old file or the whole new one.
+
+    Args:
+        path: the file to write; its folder must exist.
+        doc: a training-set document (module doc).
+
+    Returns:
+        The path written.
+
+    Raises:
+        OSError: the folder is missing or cannot be written.
+    """
+    return write_text_atomic(path, dumps_trainset(doc), mkdir=False)
+
+
+#: (field, lowest, highest) of a BBOB key in a file: a file never holds what `lam select` cannot
+#: write (function ids of BBOB, the database's dimensions and instance ids)
+_KEY_RANGES = (
+    ("function", FUNCTIONS.start, FUNCTIONS.stop - 1),
+    ("dimension", MIN_DIMENSION, MAX_DIMENSION),
+    ("instance", 1, MAX_INSTANCES),
+)
 
 
 def _key(entry: Any, where: str) -> InstanceKey:
     if not isinstance(entry, dict):
         raise ValueError(f"{where}: expected an object with function, dimension, instance")
-    try:
-        f, d, i = (int(entry[n]) for n in ("function", "dimension", "instance"))
-    except (KeyError, TypeError, ValueError):
-        raise ValueError(f"{where}: needs integer function, dimension, instance") from None
-    if not 1 <= f <= 24 or d < 2 or i < 1:
-        raise ValueError(f"{where}: function must be 1..24, dimension >= 2, instance >= 1")
-    return InstanceKey(f, d, i)
+    vals = []
+    for name, low, high in _KEY_RANGES:
+        if name not in entry:
+            raise ValueError(f"{where}.{name}: missing (an integer in [{low}, {high}])")
+        v = entry[name]
+        if isinstance(v, bool) or not isinstance(v, int) or not low <= v <= high:
+            shown = repr(v) if isinstance(v, str | bool) or v is None else str(v)
+            if len(shown) > 40:
+                shown = shown[:40] + "..."
+            raise ValueError(f"{where}.{name}: must be an integer in [{low}, {high}], got "
+                             f"{printable(shown)}")  # fmt: skip
+        vals.append(v)
+    return InstanceKey(*vals)
 
 
 def read_trainset(path: str | Path) -> dict[str, Any]:
-    """Parse and check a training-set file; ValueError names the first bad field."""
+    """Parse and check a training-set file.
+
+    The file is read by :func:`planner_core.textio.read_json` (at most ``limit("bytes")``, 64 MiB
+    by default; UTF-8; bounded nesting), holds at most :data:`MAX_PROBLEMS` problems, and every
+    BBOB key is in range (function 1..24, dimension 2..200, instance 1..100), so nothing the
+    file says can make memory or time unbounded.
+
+    Args:
+        path: the training-set JSON file.
+
+    Returns:
+        The document, as parsed.
+
+    Raises:
+        ValueError: one line, ``"<path>: <field>: <problem>"``, for the first bad field (an
+            :class:`planner_core.textio.InputError` for an unreadable, oversized or non-JSON
+            file).
+    """
     try:
-        doc = json.loads(Path(path).read_text())
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"{path}: not JSON ({exc.msg}, line {exc.lineno})") from None
+        doc = read_json(path)
+    except InputError as exc:
+        raise InputError(exc.problem, f"{path}: {exc.where}" if exc.where else str(path)) from None
     if not isinstance(doc, dict) or doc.get("format") != FORMAT:
         raise ValueError(f"{path}: format: expected {FORMAT!r}")
     probs = doc.get("problems")
     if not isinstance(probs, list) or not probs:
         raise ValueError(f"{path}: problems: expected a non-empty list")
+    if len(probs) > MAX_PROBLEMS:
+        raise ValueError(f"{path}: problems: {len(probs):,} entries, more than the limit of "
+                         f"{MAX_PROBLEMS:,} (the paper's whole database)")  # fmt: skip
     for n, p in enumerate(probs):
         where = f"{path}: problems[{n}]"
         if not isinstance(p, dict):
             raise ValueError(f"{where}: expected an object")
-        _key(p.get("objective"), f"{where}.objective")
-        _key(p.get("constraint"), f"{where}.constraint")
+        obj = _key(p.get("objective"), f"{where}.objective")
+        con = _key(p.get("constraint"), f"{where}.constraint")
+        if obj.dimension != con.dimension:
+            raise ValueError(f"{where}.constraint.dimension: {con.dimension} differs from the "
+                             f"objective's {obj.dimension}")  # fmt: skip
         for name in ("threshold", "scale"):
-            if not isinstance(p.get(name), int | float):
+            v = p.get(name)
+            if isinstance(v, bool) or not isinstance(v, int | float):
                 raise ValueError(f"{where}.{name}: expected a number")
+        if not p["scale"] > 0:
+            raise ValueError(f"{where}.scale: must be > 0, got {p['scale']}")
     return doc
 
 
@@ -94,7 +179,16 @@ def load_trainset(path: str | Path) -> list[PairProblem]:
     """The training problems of a ``lam select`` file, in file order.
 
     Each is a box problem (``lower``, ``upper``, ``evaluate(X) -> (f, phi)``) that
-    :func:`planner_core.search.de.run` and the env take unchanged. Raises ValueError on a bad file.
+    :func:`planner_core.search.de.run` and the env take unchanged.
+
+    Args:
+        path: the training-set JSON file (checked by :func:`read_trainset`).
+
+    Returns:
+        One :class:`~planner_core.learning.lam.query.PairProblem` per entry of ``problems``.
+
+    Raises:
+        ValueError: one line naming the file and the first bad field.
     """
     doc = read_trainset(path)
     out = []
