@@ -129,7 +129,7 @@ def trainsets(args: argparse.Namespace, out: Path, commands: list[str]) -> dict[
         paths[v] = str(path)
         argv = ["lam", "select", "--tasks", str(tasks), "--k", str(args.k), "--seed",
                 str(args.seed), "--selection", sel, "--features", feat, "-o", str(path),
-                "--jobs", str(args.jobs), "--quiet", *_db_args(args)]
+                "--mkdir", "--jobs", str(args.jobs), "--quiet", *_db_args(args)]
         cmd = shlex.join(["lamde-mission", *argv])
         if cmd in commands:  # LAMDE-F shares LAMDE's set
             continue

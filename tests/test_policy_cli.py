@@ -208,3 +208,20 @@ def test_cli_train_reads_the_lam_trainset_format(tmp_path) -> None:  # noqa: ANN
     assert rc == 0
     manifest = json.loads((tmp_path / "ck" / "manifest.json").read_text())
     assert manifest["problems"] == specs
+
+
+def test_a_trainset_file_is_read_within_the_input_limits(tmp_path) -> None:  # noqa: ANN001
+    """`train --problems` read its file with plain json (no size limit) and any number of
+    problems: now the project's reader, and at most the full database's count."""
+    from planner_core.learning.lam.trainset import MAX_PROBLEMS
+    from planner_core.learning.policy.problems import read_trainset
+
+    many = tmp_path / "many.json"
+    spec = {"kind": "map", "path": str(MAPS / "tiny.json")}
+    many.write_text(json.dumps({"problems": [spec] * (MAX_PROBLEMS + 1)}))
+    with pytest.raises(ValueError, match=f"{MAX_PROBLEMS + 1} problems, more than {MAX_PROBLEMS}"):
+        read_trainset(many)
+    bad = tmp_path / "bad.json"
+    bad.write_bytes(b'{"problems": [\xff]}')
+    with pytest.raises(ValueError, match=r"^--problems: .*bad\.json: "):
+        read_trainset(bad)

@@ -30,7 +30,6 @@ sets never share a map.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
@@ -165,14 +164,15 @@ def build(spec: dict[str, Any]) -> Any:
 
 
 def read_json_file(path: Path, field: str) -> Any:
-    """The JSON content of ``path``; ValueError "<field>: <path>: no such file" or "... bad
-    JSON (...)" otherwise (one line naming the setting that gave the path)."""
+    """The JSON content of ``path`` through the project's one reader (`planner_core.textio`:
+    its size limit, encodings and nesting bound); ValueError "<field>: <path>: ..." otherwise
+    (one line naming the setting that gave the path: no such file, bad JSON, too large)."""
+    from planner_core import textio
+
     try:
-        return json.loads(path.read_text())
-    except FileNotFoundError:
-        raise ValueError(f"{field}: {path}: no such file") from None
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"{field}: {path}: bad JSON ({exc})") from None
+        return textio.read_json(path)
+    except textio.InputError as exc:
+        raise ValueError(f"{field}: {path}: {exc}") from None
 
 
 def read_trainset(path: str | Path) -> list[dict[str, Any]]:
@@ -194,6 +194,11 @@ def read_trainset(path: str | Path) -> list[dict[str, Any]]:
     problems = data.get("problems") if isinstance(data, dict) else None
     if not isinstance(problems, list) or not problems:
         raise ValueError(f"--problems: {path}: needs a non-empty 'problems' list")
+    from planner_core.learning.lam.trainset import MAX_PROBLEMS
+
+    if len(problems) > MAX_PROBLEMS:  # each is an episode's problem, built in memory
+        raise ValueError(f"--problems: {path}: {len(problems)} problems, more than "
+                         f"{MAX_PROBLEMS} (the full BBOB database's size)")
     out = []
     for i, spec in enumerate(problems):
         if not isinstance(spec, dict) or "kind" not in spec:
