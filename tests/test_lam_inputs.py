@@ -250,3 +250,19 @@ def test_select_writes_svg_and_makes_folders_only_with_mkdir(tmp_path, monkeypat
     assert len(load_trainset(out)) == 3
     assert b"<svg" in plot.read_bytes()[:2000]
     assert not [p for p in tmp_path.rglob("*") if ".lamde-tmp-" in p.name]
+
+
+def test_the_help_shows_the_modules_limits_without_importing_them() -> None:
+    """`lam`'s help mirrors bbob's and probe's limits (importing them would load scipy to build
+    `--help`, which test_help_is_fast_and_lists_commands forbids)."""
+    import importlib
+
+    from lamde_mission.commands import lam as cli
+
+    # the modules themselves (the package exports a function named `probe`)
+    bbob = importlib.import_module("planner_core.learning.lam.bbob")
+    probe = importlib.import_module("planner_core.learning.lam.probe")
+
+    assert (cli.MIN_DIMENSION, cli.MAX_DIMENSION, cli.MAX_INSTANCES) == (
+        bbob.MIN_DIMENSION, bbob.MAX_DIMENSION, bbob.MAX_INSTANCES)
+    assert (cli.N_PROBE, cli.MAX_N_PROBE) == (probe.N_PROBE, probe.MAX_N_PROBE)

@@ -88,10 +88,13 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     return p
 
 
-def _database_options(q: argparse.ArgumentParser) -> None:
-    from planner_core.learning.lam.bbob import MAX_DIMENSION, MAX_INSTANCES, MIN_DIMENSION
-    from planner_core.learning.lam.probe import MAX_N_PROBE, N_PROBE
+# planner_core.learning.lam.bbob's MIN_DIMENSION, MAX_DIMENSION, MAX_INSTANCES and .probe's
+# N_PROBE, MAX_N_PROBE, as the help shows them: importing those modules here would load numpy
+# and scipy to build `--help` (a test holds them equal)
+MIN_DIMENSION, MAX_DIMENSION, MAX_INSTANCES, N_PROBE, MAX_N_PROBE = 2, 200, 100, 100, 300
 
+
+def _database_options(q: argparse.ArgumentParser) -> None:
     q.add_argument(
         "--full",
         action="store_true",
