@@ -41,6 +41,7 @@ def _bound(m: object, **over: float) -> object:
     return bandwidth_bound(pm.sensors, pm.required_data, list(pm.sensor_ids), **kw)
 
 
+@pytest.mark.slow  # measured 1.6 s on a loaded machine (default suite <= 5 min)
 def test_check_says_cannot_for_a_dense_field_naming_every_sensor(tmp_path) -> None:
     path = tmp_path / "dense.json"
     path.write_text(json.dumps(dense_field()))
@@ -101,6 +102,7 @@ def test_suite_and_example_maps_get_no_bandwidth_finding(path) -> None:
     assert d.bandwidth is not None and d.bandwidth.rounds == 0  # the overhead points suffice
 
 
+@pytest.mark.slow  # measured 1.5 s on a loaded machine (default suite <= 5 min)
 def test_unreachable_names_its_cause_and_the_heading_does_not_say_ok(tmp_path) -> None:
     # a sensor no hover point hears: the finding says why, the link itself (altitude, R_c,
     # xi: nothing is heard even overhead) or the distance to the nearest point a UAV may hover

@@ -103,6 +103,7 @@ def test_numpy_integers_are_accepted() -> None:
     D.check("seed", np.uint8(3))
 
 
+@pytest.mark.slow  # measured 1.2 s on a loaded machine (default suite <= 5 min)
 def test_cli_population_5_is_one_line_and_exit_2(tmp_path) -> None:
     out = tmp_path / "x.plan"
     r = run_cli("plan", MAPS / "small-demo.json", "-o", out, "--population", "5")

@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pytest
 
 from planner_core.model import energy as E
 from planner_core.model.diagnose import diagnose
@@ -47,6 +48,7 @@ def _cannot(stdout: str) -> list[str]:
     return [ln.strip() for ln in stdout.splitlines() if ln.strip().startswith("CANNOT")]
 
 
+@pytest.mark.slow  # measured 1.5 s on a loaded machine (default suite <= 5 min)
 def test_check_refuses_a_sensor_and_a_depot_out_of_reach(tmp_path) -> None:
     """One `check` run (a CLI start costs ~1.5 s): the far sensor and a walled-in depot."""
     both = dict(FIELD, obstacles=YARD["obstacles"], fleet=YARD["fleet"])

@@ -32,6 +32,7 @@ def test_make_executor_by_backend() -> None:
         make_executor(-1, "ray")
 
 
+@pytest.mark.slow  # measured 1.3 s on a loaded machine (default suite <= 5 min)
 def test_ray_is_not_imported_by_the_planner_or_a_local_run() -> None:
     code = (
         "import lamde_mission.cli, lamde_mission.api, planner_core.bench, planner_core.execution\n"

@@ -111,6 +111,7 @@ def test_qgc_plan_layout(m, plan, tmp_path):
     assert "NaN" not in path.read_text()
 
 
+@pytest.mark.slow  # measured 1.5 s on a loaded machine (default suite <= 5 min)
 def test_qgc_plan_round_trip(m, plan, tmp_path):
     path = write_mission(tmp_path / "m.plan", plan, m)
     items, fence = read_mission(path)

@@ -146,6 +146,7 @@ def test_encoder_shape_and_param_count():
     assert z.shape == (16,) and np.linalg.norm(z) == pytest.approx(1.0)
 
 
+@pytest.mark.slow  # measured 1.8 s on a loaded machine (default suite <= 5 min)
 def test_numpy_encoder_matches_torch_training_module():
     torch = pytest.importorskip("torch")
     from planner_core.learning.lam.ela import scale_y

@@ -75,6 +75,7 @@ def test_engineering_budget_determinism_and_start_modes(walled: Problem) -> None
     assert uni.evaluations == full.evaluations
 
 
+@pytest.mark.slow  # measured 2.2 s on a loaded machine (default suite <= 5 min)
 def test_engineering_given_a_wall_time_scores_more_rounds_never_worse(walled: Problem) -> None:
     one = eng.optimise(walled, 10_000, seed=1)
     # a limit the first round already passes: the first round whole, nothing more
@@ -156,6 +157,7 @@ def test_pymoo_ga_stops_when_nothing_new_can_be_made() -> None:
     assert 10 <= res.evaluations < 500 and res.f == pytest.approx(1.5)
 
 
+@pytest.mark.slow  # measured 1.3 s on a loaded machine (default suite <= 5 min)
 def test_planner_from_engineering_starts(walled: Problem) -> None:
     """planner-eng-start: the engineering candidates, then the planner on the rest of the budget
     from a population holding the best of them; never worse than `engineering` (same seed)."""

@@ -68,6 +68,7 @@ def test_nice_length():
     assert nice_length(3000) == 500
 
 
+@pytest.mark.slow  # measured 1.5 s on a loaded machine (default suite <= 5 min)
 def test_plot_png_svg_and_bad_suffix(files, tmp_path):
     tl = replay(plan_to_items(files.plan, files.m, finish="rtl"), files.m)
     png = plot_mission(files.m, tmp_path / "a.png", timeline=tl)
@@ -100,6 +101,7 @@ def test_verify_good_mission_exits_0(files):
     assert out["totals"]["f"] == pytest.approx(files.plan.f, rel=1e-5)
 
 
+@pytest.mark.slow  # measured 1.4 s on a loaded machine (default suite <= 5 min)
 def test_verify_cut_mission_exits_1_naming_c4(files):
     r = run_cli("verify", files.map, files.cut)
     assert r.returncode == 1, r.stdout + r.stderr
@@ -138,6 +140,7 @@ def test_show_writes_png(files, tmp_path):
     assert "<svg" in out2.read_text()[:400]
 
 
+@pytest.mark.slow  # measured 1.8 s on a loaded machine (default suite <= 5 min)
 def test_show_bad_input_leaves_no_file(files, tmp_path):
     junk = tmp_path / "junk.waypoints"
     junk.write_text("QGC WPL 110\n0\t1\t0\n")

@@ -271,6 +271,7 @@ def _tiny_cfg(**kw):  # noqa: ANN202
     return PPOConfig(**{**base, **kw})
 
 
+@pytest.mark.slow  # measured 4.3 s on a loaded machine (default suite <= 5 min)
 def test_two_epoch_training_smoke_run_and_resume(tmp_path) -> None:  # noqa: ANN001
     pytest.importorskip("torch")
     from planner_core.learning.policy.ppo import CURVE_FIELDS, train
@@ -296,6 +297,7 @@ def test_two_epoch_training_smoke_run_and_resume(tmp_path) -> None:  # noqa: ANN
         train(_tiny_cfg(lr=0.5), TINY_SPECS, tmp_path / "c", resume=True)
 
 
+@pytest.mark.slow  # measured 1.7 s on a loaded machine (default suite <= 5 min)
 def test_ppo_from_a_checkpoint_with_the_bc_anchor_resumes_exactly(tmp_path) -> None:  # noqa: ANN001
     """init_checkpoint starts PPO from given weights (the epoch-0 checkpoint is those weights,
     no imitation fit); the anchor's reference survives --resume (1 + 1 epochs == 2 epochs); a

@@ -143,6 +143,7 @@ def test_shipped_checkpoint_is_small_and_documented(name: str) -> None:
     assert len(curve) == 1 + config["training"]["epochs_done"]
 
 
+@pytest.mark.slow  # measured 1.7 s on a loaded machine (default suite <= 5 min)
 def test_bench_policy_runs_on_a_small_map() -> None:
     import subprocess
     import sys
@@ -156,6 +157,7 @@ def test_bench_policy_runs_on_a_small_map() -> None:
     assert "policy / evaluation = " in r.stdout
 
 
+@pytest.mark.slow  # measured 1.6 s on a loaded machine (default suite <= 5 min)
 def test_compare_checkpoints_marks_each_map(tmp_path) -> None:  # noqa: ANN001
     """benchmarks/compare_checkpoints.py: per map, on the seeds both files share, '+' where the
     candidate's lamde runs rank significantly lower, '~' where they do not differ."""

@@ -173,6 +173,7 @@ def test_lsrtde_same_seed_same_result_and_deb_rule() -> None:
     assert 0.0 <= a.last_feasible_rate <= 1.0
 
 
+@pytest.mark.slow  # measured 1.2 s on a loaded machine (default suite <= 5 min)
 def test_metabox_evaluator_server_scores_batches_within_the_budget(tmp_path: Path) -> None:
     """The optional out-of-process exchange (benchmarks/metabox/): X batches in, f/phi out,
     the budget enforced, a record in our schema appended at "finish"."""

@@ -364,6 +364,7 @@ def test_gitignore_ignores_no_tracked_file() -> None:
     assert r.stdout == "", f".gitignore ignores tracked files:\n{r.stdout}"
 
 
+@pytest.mark.slow  # measured 1.2 s on a loaded machine (default suite <= 5 min)
 def test_from_geojson_whole_file_layers_cli(tmp_path) -> None:
     """The README's `map from-geojson ends.geojson --obstacles ... --sensors ...` line."""
     import json

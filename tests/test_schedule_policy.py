@@ -209,6 +209,7 @@ def test_the_paired_baseline_is_the_defaults_return_up_to_the_first_departure() 
     np.testing.assert_allclose(plain, gae(ep["rewards"], ep["values"], 1.0, 0.9))
 
 
+@pytest.mark.slow  # measured 1.5 s on a loaded machine (default suite <= 5 min)
 def test_beyond_the_trained_sizes_the_policy_follows_the_default() -> None:
     from planner_core.pipeline.schedule import DefaultScheduler
 

@@ -488,6 +488,7 @@ def test_a_fork_after_the_de_may_not_change_its_share() -> None:
     run.fork(None, config=cfg.replace(kick_trials=cfg.kick_trials))  # the same share: fine
 
 
+@pytest.mark.slow  # measured 1.5 s on a loaded machine (default suite <= 5 min)
 def test_bench_schedule_without_splits_runs_lamde_s_as_plan_does(tmp_path) -> None:
     """Without --splits the prefix has run the DE: lamde-s, whose share differs from the
     default's, runs its own whole plan, the one `plan --scheduler lamde-s` gives."""

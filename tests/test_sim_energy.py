@@ -117,6 +117,7 @@ def test_maps_without_a_battery_get_the_verdicts_of_before() -> None:
     assert not {"energy_wh", "battery_wh", "usable_wh", "reserve_left_wh"} & set(v.to_dict())
 
 
+@pytest.mark.slow  # measured 1.2 s on a loaded machine (default suite <= 5 min)
 def test_verify_prints_the_energy_and_the_reserve_left(tmp_path) -> None:
     from lamde_mission.formats import write_mission
     from tests.conftest import run_cli

@@ -93,6 +93,7 @@ def test_slim_record_keeps_what_the_tables_read() -> None:
     assert "history" not in slim_record({k: v for k, v in full.items() if k != "history"})
 
 
+@pytest.mark.slow  # measured 1.9 s on a loaded machine (default suite <= 5 min)
 def test_report_sections_from_study_folders_and_their_slim_copies(
         studies: dict[str, Path], tmp_path: Path) -> None:
     md = tmp_path / "docs" / "results.md"
@@ -153,6 +154,7 @@ def test_report_sections_from_study_folders_and_their_slim_copies(
     assert len(read_records(slim["imax"] / RESULTS_FILE).records) == 17
 
 
+@pytest.mark.slow  # measured 2.5 s on a loaded machine (default suite <= 5 min)
 def test_study_folders_refused_with_one_clear_line(studies: dict[str, Path], tmp_path: Path,
                                                    capsys: pytest.CaptureFixture) -> None:
     md = tmp_path / "r.md"

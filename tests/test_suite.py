@@ -135,6 +135,7 @@ def test_bad_arguments_raise(kwargs: dict) -> None:
         generate_map(**kwargs)
 
 
+@pytest.mark.slow  # measured 1.4 s on a loaded machine (default suite <= 5 min)
 def test_cli_suite_reproduces_committed_files(tmp_path: Path) -> None:
     out = run_cli("generate", "--suite", str(tmp_path / "suite"))
     assert out.returncode == 0, out.stderr
@@ -147,6 +148,7 @@ def test_cli_suite_reproduces_committed_files(tmp_path: Path) -> None:
     assert sorted(p.name for p in (tmp_path / "suite").iterdir()) == [f"{t[0]}.json" for t in TASKS]
 
 
+@pytest.mark.slow  # measured 1.3 s on a loaded machine (default suite <= 5 min)
 def test_cli_one_map(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     path = tmp_path / "m.json"
     args = ("generate", str(path), "--size", "5000", "--density", "2", "--seed", "5")

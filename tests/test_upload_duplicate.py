@@ -48,6 +48,7 @@ def _plan_file(tmp_path):
 
 
 @pytest.mark.parametrize("via", VIAS)
+@pytest.mark.slow  # measured 2.3 s on a loaded machine (default suite <= 5 min)
 def test_two_mocks_claiming_system_1_are_refused_before_sending(port, tmp_path, capsys,
                                                                 via) -> None:  # fmt: skip
     """One mock at 4 Hz, the other at a real autopilot's 1 Hz (the watch must cover a whole
@@ -74,6 +75,7 @@ def test_two_mocks_claiming_system_1_are_refused_before_sending(port, tmp_path, 
 
 
 @pytest.mark.parametrize("via", VIAS)
+@pytest.mark.slow  # measured 2.6 s on a loaded machine (default suite <= 5 min)
 def test_one_mock_uploads_after_the_watch(port, via) -> None:
     """A single vehicle: the upload goes through, after at least the heartbeat watch."""
     mission = hand_mission(3)
@@ -87,6 +89,7 @@ def test_one_mock_uploads_after_the_watch(port, via) -> None:
 
 
 @pytest.mark.parametrize("via", VIAS)
+@pytest.mark.slow  # measured 1.4 s on a loaded machine (default suite <= 5 min)
 def test_a_second_claim_mid_session_stops_it(port, via) -> None:
     """A second autopilot with the vehicle's ids that starts after the watch (here: the watch
     set to 0 s) still stops the session, naming both addresses; `sent` tells which wording."""

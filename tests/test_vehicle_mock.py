@@ -48,6 +48,7 @@ def _item_msg(w: WireItem):
 # ----------------------------------------------------------------------------- identity
 
 
+@pytest.mark.slow  # measured 2.0 s on a loaded machine (default suite <= 5 min)
 def test_heartbeat_identity_and_rate(link):
     v, gcs = link
     hb = gcs.wait("HEARTBEAT", 1.5)
@@ -171,6 +172,7 @@ def test_a_resent_last_item_after_the_final_ack(autopilot, answer):
 
 
 @pytest.mark.parametrize("autopilot", ["px4", "ardupilot"])
+@pytest.mark.slow  # measured 1.7 s on a loaded machine (default suite <= 5 min)
 def test_an_item_out_of_turn_leaves_the_upload_going(autopilot):
     """PX4 ignores an item it did not ask for, ArduPilot answers MAV_MISSION_INVALID_SEQUENCE;
     both ask again for the item they miss, and the upload completes."""
