@@ -229,4 +229,9 @@ def test_an_output_that_is_an_input_is_refused_before_planning(tmp_path: Path, c
         assert len(err) == 1 and err[0].startswith(f"lamde-mission plan: {needle}: "), err
         assert "is the map this command reads" in err[0], err
         assert farm.read_text() == DEMO.read_text()
+    link = tmp_path / "link.json"  # a hard link: the same file, another resolved path
+    link.hardlink_to(farm)
+    assert main(["plan", str(farm), "-o", str(tmp_path / "r.plan"), "--report", str(link)]) == 2
+    assert "is the map this command reads" in capsys.readouterr().err
+    assert farm.read_text() == DEMO.read_text()
     assert not (tmp_path / "r.plan").exists()

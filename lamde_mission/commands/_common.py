@@ -23,6 +23,19 @@ def load_map_or_fail(path: str) -> Any:
     return m
 
 
+def same_file(a: str | Path, b: str | Path) -> bool:
+    """Whether paths `a` and `b` name one file: the same resolved path, or the same file
+    through a link (`os.path.samefile`, where both exist)."""
+    import os
+
+    if Path(a).resolve() == Path(b).resolve():
+        return True
+    try:
+        return os.path.samefile(a, b)
+    except OSError:  # one of them does not exist (yet)
+        return False
+
+
 def check_outputs(paths: list[tuple[str, str | None]], *, mkdir: bool = False,
                   inputs: list[tuple[str, str | None]] = ()) -> None:
     """UsageError naming the option and path of the first output that cannot be written, that
@@ -33,14 +46,14 @@ def check_outputs(paths: list[tuple[str, str | None]], *, mkdir: bool = False,
     from planner_core.atomic import OutputPathError, check_writable
     from planner_core.textio import printable
 
-    read = {str(Path(p).resolve()): what for what, p in inputs if p}
     seen: dict[str, str] = {}
     for option, path in paths:
         if not path:
             continue
         key = str(Path(path).resolve())
-        if key in read:
-            raise UsageError(f"{option}: {printable(path)} is the {read[key]} this command "
+        what = next((w for w, src in inputs if src and same_file(path, src)), None)
+        if what is not None:
+            raise UsageError(f"{option}: {printable(path)} is the {what} this command "
                              "reads; writing it would replace it (name another file)")
         if key in seen:
             raise UsageError(f"{option}: {printable(path)} is also the {seen[key]} output")

@@ -153,8 +153,6 @@ def run(args: argparse.Namespace) -> int:
             f"--sensors must be 1..{max_sensor_count(size)} on a {size} m map (got {sensors})"
         )
     out = Path(args.out)
-    if out.is_dir():
-        raise UsageError(f"{out} is a folder; give a file name (or use --suite {out})")
     return _run_one(out, size, density, seed, sensors, args.name)
 
 
@@ -207,8 +205,6 @@ def _run_large(args: argparse.Namespace, seed: int) -> int:
     if not 1 <= cluster <= 50:
         raise UsageError(f"--cluster-size must be 1..50 (got {cluster})")
     out = Path(args.out)
-    if out.is_dir():
-        raise UsageError(f"{out} is a folder; give a file name (or use --large-suite {out})")
     t0 = time.perf_counter()
     try:
         data = L.generate_large_map(size, sensors, args.layout, density, seed,

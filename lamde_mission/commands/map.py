@@ -115,20 +115,11 @@ def _refuse_own_input(output: str, inputs: list[str]) -> None:
         UsageError: the output is one of the inputs (same resolved path, or the same file
             through a link).
     """
-    import os
-    from pathlib import Path
-
+    from lamde_mission.commands._common import same_file
     from planner_core.textio import printable
 
-    out = Path(output)
     for src in inputs:
-        same = out.resolve() == Path(src).resolve()
-        if not same and out.exists() and Path(src).exists():
-            try:
-                same = os.path.samefile(out, src)
-            except OSError:
-                same = False
-        if same:
+        if same_file(output, src):
             raise UsageError(f"-o/--output: {printable(output)} is the input "
                              f"{printable(src)}; write the output to another file")
 
