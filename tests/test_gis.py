@@ -604,3 +604,17 @@ def test_cli_refuses_an_output_that_is_an_input_and_round_trips(tmp_path) -> Non
     back = json.loads(out.read_text())
     assert back["name"] == "farm" and back["uav"]["altitude"] == 60.0
     assert "clipped" not in r.stderr and "inclusion fence" not in r.stderr
+
+
+def test_two_plans_with_different_planned_homes_are_refused(tmp_path) -> None:
+    square = {"inclusion": True, "version": 1,
+              "polygon": [_ll(0, 0), _ll(6, 0), _ll(6, 6), _ll(0, 6)]}
+    a = _write(tmp_path, "a.plan", _fence_plan([square], [], [*_ll(1, 1), 410.0]))
+    same = _write(tmp_path, "same.plan", _fence_plan([], [], [*_ll(1, 1), 410.0]))
+    other = _write(tmp_path, "other.plan", _fence_plan([], [], [*_ll(5, 5), 410.0]))
+    # the same home twice (a fence file and a mission of one survey): no conflict
+    read_layers([(a, None), (same, None)])
+    # another home: the start, end and origin altitude would follow the last file read
+    with pytest.raises(GisError, match=r"other\.plan: mission\.plannedHomePosition: a second "
+                       r"planned home, not the one of .*a\.plan: planned home"):  # fmt: skip
+        read_layers([(a, None), (other, None)])

@@ -388,6 +388,12 @@ def _read_qgc_plan(layers: GisLayers, doc: dict[str, Any], src: str) -> None:
         alt = None  # [lat, lon, altitude AMSL], as QGroundControl writes it
         if len(home) >= 3 and home[2] is not None:
             alt = _home_altitude(home[2], f"{src}: mission.plannedHomePosition[2]")
+        if layers.home is not None and (layers.home["lon"], layers.home["lat"],
+                                        layers.home["alt"]) != (lon, lat, alt):
+            # two .plan inputs: the start, the end and the origin's altitude would follow
+            # whichever was read last
+            raise ValueError(f"{src}: mission.plannedHomePosition: a second planned home, "
+                             f"not the one of {layers.home['where']}")
         layers.home = {"where": f"{src}: planned home", "lon": lon, "lat": lat, "alt": alt}
 
 
