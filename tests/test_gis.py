@@ -479,6 +479,25 @@ def test_geojson_round_trip_keeps_every_setting(tmp_path) -> None:
     assert plain.spec.fleet is None and plain.spec.safety.clearance == 10.0
 
 
+def test_settings_saved_as_json_text_by_a_gis_editor_are_read_back(tmp_path) -> None:
+    m = load_map(FARM)
+    exported = map_to_geojson(m)
+    area = exported["features"][0]["properties"]
+    # QGIS keeps nested properties as their JSON text when it saves a layer
+    for key in ("uav", "radio", "objective", "safety", "fleet"):
+        area[key] = json.dumps(area[key])
+    doc, notes = build_map(_layers_of(tmp_path, exported, "qgis.geojson"), default_name="e")
+    back = load_map(doc)
+    for key in ("name", "uav", "radio", "objective", "safety", "fleet"):
+        assert back.to_dict()[key] == m.to_dict()[key], key
+    assert "uav, radio, objective, safety, fleet: read from JSON text (a GIS editor saves " \
+        "nested properties as text)" in notes
+    # text that is not JSON: one line naming the property
+    area["uav"] = '{"altitude": 60,'
+    with pytest.raises(GisError, match=r"properties\.uav: a JSON text that does not parse"):
+        read_layers([(_write(tmp_path, "bad.geojson", exported), None)])
+
+
 def test_a_new_origin_moves_the_depots_with_the_map(tmp_path) -> None:
     m = load_map(FARM)
     layers = _layers_of(tmp_path, map_to_geojson(m))

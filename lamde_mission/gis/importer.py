@@ -53,7 +53,7 @@ from typing import Any
 
 import numpy as np
 
-from planner_core.textio import InputError, read_json
+from planner_core.textio import InputError, loads_json, read_json
 from sim.geo import enu_to_latlon, latlon_to_enu
 
 __all__ = ["GisError", "GisLayers", "read_layers", "build_map", "DEFAULT_MARGIN", "KINDS"]
@@ -125,6 +125,7 @@ class GisLayers:
     rectangles: list[dict[str, Any]] = field(default_factory=list)
     settings: dict[str, Any] | None = None  # name, uav, radio, ... carried by an exported area
     settings_where: str | None = None  # the feature that carried them
+    settings_text: list[str] = field(default_factory=list)  # sections given as JSON text
     start: dict[str, Any] | None = None  # where, lon, lat
     end: dict[str, Any] | None = None
     home: dict[str, Any] | None = None  # QGC planned home position (where, lon, lat, alt)
@@ -296,6 +297,15 @@ def _read_settings(layers: GisLayers, props: dict[str, Any], label: str, framed:
     carried = {k: props[k] for k in _settings_keys() if k in props and props[k] is not None}
     if not carried or (set(carried) == {"name"} and not framed):
         return
+    for k, v in carried.items():
+        # a GIS editor (QGIS) saves a nested property as its JSON text: read it back
+        if k != "name" and isinstance(v, str) and v.lstrip().startswith(("{", "[")):
+            try:
+                carried[k] = loads_json(v)
+            except InputError as e:
+                raise ValueError(f"{label}: properties.{k}: a JSON text that does not parse "
+                                 f"({e})") from None
+            layers.settings_text.append(k)
     if layers.settings is not None:
         raise ValueError(f"{label}: a second area carrying map settings (the first: "
                          f"{layers.settings_where})")  # fmt: skip
@@ -850,6 +860,9 @@ def _settings(layers: GisLayers, o: tuple[float, float, float],
     settings = copy.deepcopy(layers.settings)
     sections = ", ".join(k for k in settings if k != "name") or "name"
     notes.append(f"map settings ({sections}) from {layers.settings_where}")
+    if layers.settings_text:
+        notes.append(f"{', '.join(layers.settings_text)}: read from JSON text (a GIS editor "
+                     "saves nested properties as text)")
     if layers.area_frame is None:
         return settings
     src = _parse_origin(layers.area_frame["origin"], layers.area_frame["where"])
