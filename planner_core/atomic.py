@@ -72,6 +72,22 @@ def clean_stale_temps(path: str | Path) -> list[Path]:
     return removed
 
 
+def file_in_the_way(folder: str | Path) -> Path | None:
+    """The first existing ancestor of `folder` (itself included) when it is not a folder (a
+    file where a folder must be, or be made), else None.
+
+    Args:
+        folder: a folder path that may not exist yet.
+
+    Returns:
+        That path, or None when the first existing ancestor is a folder (or none exists).
+    """
+    probe = Path(folder)
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
+    return probe if probe.exists() and not probe.is_dir() else None
+
+
 def check_writable(path: str | Path, *, mkdir: bool = False, what: str = "") -> Path:
     """Check that `path` can be written atomically; raise OutputPathError naming it if not.
 
@@ -87,11 +103,8 @@ def check_writable(path: str | Path, *, mkdir: bool = False, what: str = "") -> 
     if path.is_dir():
         raise OutputPathError(f"{head}: is a folder, not a file")
     folder = path.parent if str(path.parent) else Path(".")
-    # the first existing ancestor must be a folder
-    probe = folder
-    while not probe.exists() and probe != probe.parent:
-        probe = probe.parent
-    if probe.exists() and not probe.is_dir():
+    probe = file_in_the_way(folder)
+    if probe is not None:
         raise OutputPathError(f"{head}: {probe} is a file, not a folder")
     if not folder.is_dir():
         if not mkdir:

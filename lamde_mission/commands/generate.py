@@ -9,6 +9,7 @@ from pathlib import Path
 
 from lamde_mission.errors import UsageError
 from planner_core import defaults as D
+from planner_core.atomic import file_in_the_way
 
 _SIZES = (5000, 10000)
 _DEFAULT_SEED = D.SUITE_SEED
@@ -84,10 +85,8 @@ def _check_name(name: str | None) -> None:
 def _check_folder_output(option: str, folder: Path, mkdir: bool) -> None:
     """UsageError unless `folder` (a suite's OUTDIR) can be made: not a file, nor under one; its
     parent must exist unless `mkdir`."""
-    probe = folder
-    while not probe.exists() and probe != probe.parent:
-        probe = probe.parent
-    if probe.exists() and not probe.is_dir():
+    probe = file_in_the_way(folder)
+    if probe is not None:
         raise UsageError(f"{option} {folder}: {probe} is a file, not a folder")
     if not folder.exists() and not folder.parent.is_dir() and not mkdir:
         raise UsageError(f"{option} {folder}: the folder {folder.parent} does not exist "
