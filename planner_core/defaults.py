@@ -273,6 +273,14 @@ _MAP: tuple[Default, ...] = (
             "without bound, e.g. 1e-9 m/s asked for ~745 GiB; no rotary-wing UAV flies 200 m/s"),
     _ranged("uav.acceleration", 4.0, "a, m/s^2", 0.01, 100.0,
             "below 0.01 m/s^2 a UAV hardly reaches cruise speed on any map; 100 m/s^2 is 10 g"),
+    _ranged("uav.climb_speed", 2.5, "m/s, vertical speed of the take-off and of a climb "
+            "between stops (ArduPilot's WPNAV_SPEED_UP default; PX4's MPC_Z_V_AUTO_UP is 3): "
+            "set the vehicle's", 0.1, 20.0, "below 0.1 m/s a 100 m take-off takes 17 minutes; "
+            "multirotors climb at 1-10 m/s"),
+    _ranged("uav.descent_speed", 1.0, "m/s, vertical speed of the landing and of a descent "
+            "between stops (PX4's MPC_Z_VEL_MAX_DN default; ArduPilot's WPNAV_SPEED_DN is "
+            "1.5): set the vehicle's", 0.1, 20.0, "below 0.1 m/s a 100 m landing takes 17 "
+            "minutes; multirotors descend at 0.5-5 m/s"),
     _ranged("uav.max_hover_time", 300.0, "T_max, s per hover point", 0.0, 86_400.0,
             "no battery hovers for more than a day; T_max bounds the decision space",
             lo_open=True),

@@ -12,13 +12,15 @@ What counts in f: exactly the paper's terms. t_fly sums the legs from the take-o
 through every stop to the landing position; t_hover sums the hover times. The vertical
 take-off and landing (and an RTL flight back to launch) are simulated and reported
 (t_takeoff, t_land, t_return, t_total) but excluded from f, as the paper's model has no
-vertical motion. They are estimated with the same v_max and a as the horizontal legs.
+vertical motion. They are flown rest to rest (Eq. 1 with the map's acceleration) at most at the
+map's `uav.climb_speed` up and `uav.descent_speed` down, the vehicle's vertical speeds in
+missions (defaults: ArduPilot's climb, 2.5 m/s, and PX4's descent, 1 m/s, the slower of the
+two autopilots' defaults each); the energy of a sortie counts them (`sim.energy`).
 
 A leg between stops at different altitudes (a mission edited by hand: the planner writes every
 stop at the map's altitude) is flown as a straight line that takes as long as the slower of
 its horizontal profile and its vertical one, the climb or descent rest-to-rest (Eq. 1) at
-most `VZ_UP` / `VZ_DOWN`, the autopilots' default vertical speeds in missions (the slower of
-ArduPilot's and PX4's); that time is in t_fly, so a climb is never free. With equal altitudes
+the same vertical speeds; that time is in t_fly, so a climb is never free. With equal altitudes
 (every planned mission) the legs are the paper's, to the bit.
 """
 
@@ -43,30 +45,22 @@ __all__ = [
     "hover_rates",
     "scheduled_allocation",
     "vertical_time",
-    "VZ_UP",
-    "VZ_DOWN",
 ]
 
 PHASES = ("takeoff", "fly", "hover", "return", "land")
 
-#: m/s, the fastest climb a leg between stops is flown at: ArduPilot's WPNAV_SPEED_UP default
-#: (250 cm/s, `WPNAV_WP_SPEED_UP_CMS` in libraries/AC_WPNav/AC_WPNav.cpp; PX4's
-#: MPC_Z_VEL_MAX_UP is 3 m/s)
-VZ_UP = 2.5
-#: m/s, the fastest descent: PX4's MPC_Z_VEL_MAX_DN default (1 m/s, mc_pos_control_params.c;
-#: ArduPilot's WPNAV_SPEED_DN is 150 cm/s)
-VZ_DOWN = 1.0
 #: m: an altitude change below this on a leg is the float32 round-off of one altitude written
 #: twice, not a climb
 Z_SNAP = 0.01
 
 
-def vertical_time(dz: float, accel: float) -> float:
-    """s to climb (dz > 0) or descend (dz < 0) |dz| m rest-to-rest at most `VZ_UP` / `VZ_DOWN`
-    (Eq. 1 with the map's acceleration); 0 below `Z_SNAP`."""
+def vertical_time(dz: float, accel: float, up: float, down: float) -> float:
+    """s to climb (dz > 0) or descend (dz < 0) |dz| m rest-to-rest (Eq. 1 with the map's
+    acceleration) at most `up` / `down` m/s (the map's `uav.climb_speed` and
+    `uav.descent_speed`); 0 below `Z_SNAP`."""
     if abs(dz) < Z_SNAP:
         return 0.0
-    return leg_time(abs(dz), VZ_UP if dz > 0 else VZ_DOWN, accel)
+    return leg_time(abs(dz), up if dz > 0 else down, accel)
 
 
 def leg_time(d: float, v_max: float, accel: float) -> float:
@@ -293,6 +287,7 @@ def replay_route(route: Route, map: Any, *, dt: float = 1.0) -> Timeline:  # noq
         v_end = flown(route.speed)
     v = float(leg_v[0]) if n_stops else v_end
     a = float(uav.acceleration)
+    up, down = float(uav.climb_speed), float(uav.descent_speed)
     alpha = float(spec.objective.alpha)
     sensors = np.asarray(map.sensors, dtype=float)
     ids = tuple(map.sensor_ids)
@@ -314,13 +309,13 @@ def replay_route(route: Route, map: Any, *, dt: float = 1.0) -> Timeline:  # noq
             z_prev = float(route.altitudes[k])
         flown_alt[k] = z_prev
     climbs = np.diff(np.concatenate([[float(h_to)], flown_alt])) if n_stops else np.zeros(0)
-    times = np.array([max(leg_time(d, float(vk), a), vertical_time(float(dz), a))
+    times = np.array([max(leg_time(d, float(vk), a), vertical_time(float(dz), a, up, down))
                       for d, vk, dz in zip(lengths, leg_v, climbs, strict=True)])  # fmt: skip
     if np.any(np.abs(climbs) >= Z_SNAP):
         k = int(np.argmax(np.abs(climbs)))
         notes.append(f"the mission changes altitude between stops (by up to {climbs[k]:+.1f} m, "
                      f"on the leg to item {route.seqs[k]}): such legs are timed with climbs at "
-                     f"{VZ_UP:g} m/s and descents at {VZ_DOWN:g} m/s at most")  # fmt: skip
+                     f"{up:g} m/s and descents at {down:g} m/s at most")  # fmt: skip
     hov_mask = route.is_hover
     rates_all = hover_rates(stops, route.altitudes, sensors, radio.peak_rate, radio.decay)
     rates = rates_all[hov_mask]
@@ -348,7 +343,7 @@ def replay_route(route: Route, map: Any, *, dt: float = 1.0) -> Timeline:  # noq
         alt_max = max(alt_max, abs(float(route.takeoff_altitude)))
     v_slow = min(v, v_end, float(np.min(leg_v, initial=v)))
     span = (float(times.sum()) + float(np.nansum(route.hover_times[hov_mask]))
-            + 2.0 * leg_time(alt_max, v_slow, a)
+            + 2.0 * leg_time(alt_max, min(v_slow, up, down), a)
             + leg_time(float(np.abs(seg).sum()), v_slow, a))  # fmt: skip
     n_max = max(_MAX_CELLS // (J + 4), 1000)
     if not math.isfinite(span):
@@ -364,11 +359,13 @@ def replay_route(route: Route, map: Any, *, dt: float = 1.0) -> Timeline:  # noq
     def const(n: int) -> tuple[np.ndarray, np.ndarray]:
         return np.tile(pos, (n, 1)), np.tile(q, (n, 1))
 
-    # take-off (vertical, outside f)
-    t_takeoff = leg_time(abs(h_to), v, a)
+    # take-off (vertical, outside f): a climb at the climb speed (a descent below home, which
+    # ALT fails, at the descent speed)
+    v_to = up if h_to >= 0 else down
+    t_takeoff = leg_time(abs(h_to), v_to, a)
     ts = rec.times(clock, t_takeoff)
     xy, dq = const(len(ts))
-    rec.add("takeoff", ts, xy, leg_position(ts - clock, abs(h_to), v, a) * np.sign(h_to), dq)
+    rec.add("takeoff", ts, xy, leg_position(ts - clock, abs(h_to), v_to, a) * np.sign(h_to), dq)
     clock += t_takeoff
     alt_now = h_to
 
@@ -378,8 +375,8 @@ def replay_route(route: Route, map: Any, *, dt: float = 1.0) -> Timeline:  # noq
         if tl > 0.0:
             ts = rec.times(clock, tl)
             dz = target_alt - alt_now
-            if vertical_time(dz, a) > leg_time(d, float(leg_v[k]), a):  # the climb paces it
-                frac = leg_position(ts - clock, abs(dz), VZ_UP if dz > 0 else VZ_DOWN, a) / abs(dz)
+            if vertical_time(dz, a, up, down) > leg_time(d, float(leg_v[k]), a):  # the climb
+                frac = leg_position(ts - clock, abs(dz), up if dz > 0 else down, a) / abs(dz)
             else:
                 frac = leg_position(ts - clock, d, float(leg_v[k]), a) / d
             xy = pos[None, :] + frac[:, None] * (stops[k] - pos)[None, :]
@@ -418,10 +415,11 @@ def replay_route(route: Route, map: Any, *, dt: float = 1.0) -> Timeline:  # noq
 
     t_land = 0.0
     if route.finish in ("land", "rtl"):
-        t_land = leg_time(abs(alt_now), v_end, a)
+        v_land = down if alt_now >= 0 else up
+        t_land = leg_time(abs(alt_now), v_land, a)
         ts = rec.times(clock, t_land)
         xy, dq = const(len(ts))
-        z = alt_now - leg_position(ts - clock, abs(alt_now), v_end, a) * np.sign(alt_now)
+        z = alt_now - leg_position(ts - clock, abs(alt_now), v_land, a) * np.sign(alt_now)
         rec.add("land", ts, xy, z, dq)
         clock += t_land
     else:

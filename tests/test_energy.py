@@ -276,11 +276,16 @@ def test_sortie_energy_is_linear_in_hover_times(hand_map: dict) -> None:
     path = np.array([[0.0, 0.0], [300.0, 0.0], [300.0, 250.0], [0.0, 0.0]])
     legs = [300.0, 250.0, math.hypot(300.0, 250.0)]
     flight = float(E.leg_energy_wh(legs, u.max_speed, u.acceleration).sum())
-    # vertical: 100 m at 20 m/s, 4 m/s^2 is 10 s each way, at P(0)
-    vertical = 2 * 10.0 * (P0 + PI) / 3600.0
-    assert E.vertical_energy_wh(u.altitude, u.max_speed, u.acceleration) == pytest.approx(
+    # vertical, by hand: 100 m up at 2.5 m/s with 4 m/s^2 is 100 / 2.5 + 2.5 / 4 = 40.625 s,
+    # 100 m down at 1 m/s is 100.25 s (the climb and descent speeds' defaults), at P(0)
+    assert (u.climb_speed, u.descent_speed) == (2.5, 1.0)
+    assert E.vertical_time_s(u.altitude, 2.5, 1.0, u.acceleration) == pytest.approx(140.875)
+    vertical = 140.875 * (P0 + PI) / 3600.0
+    assert E.vertical_energy_wh(u.altitude, 2.5, 1.0, u.acceleration) == pytest.approx(
         vertical, rel=1e-14
     )
+    # a triangle profile below v^2 / a: 0.1 m at 2.5 m/s peaks at sqrt(0.4) m/s, 2 sqrt(0.025) s
+    assert E.vertical_time_s(0.1, 2.5, 2.5, 4.0) == pytest.approx(4.0 * math.sqrt(0.025))
     e0 = E.sortie_energy_wh(path, [0.0, 0.0], u, m.power)
     assert e0 == pytest.approx(flight + vertical, rel=1e-14)
     e1 = E.sortie_energy_wh(path, [50.0, 70.0], u, m.power)

@@ -109,7 +109,8 @@ def test_the_range_bound_is_below_a_real_sortie() -> None:
     edge = s * (1 - hear / float(np.hypot(*s)))
     real = E.sortie_energy_wh([m.start, edge, m.start], [0.0], uav, m.power)
     v, a = uav.max_speed, uav.acceleration
-    bound = E.vertical_energy_wh(uav.altitude, v, a, m.power) + E.least_energy_per_metre_wh(
+    bound = E.vertical_energy_wh(uav.altitude, uav.climb_speed, uav.descent_speed, a,
+                                 m.power) + E.least_energy_per_metre_wh(
         v, m.power
     ) * 2 * (float(np.hypot(*s)) - hear)
     (f,) = [f for f in diagnose(m).findings if f.kind == "ENERGY_RANGE"]

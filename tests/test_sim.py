@@ -108,7 +108,10 @@ def test_replay_matches_the_model_and_the_timeline_is_consistent(m):
     assert tl.totals.t_total == pytest.approx(
         tl.totals.t_takeoff + tl.totals.t_fly + tl.totals.t_hover + tl.totals.t_land
     )
-    assert tl.totals.t_takeoff == pytest.approx(leg_time(100.0, 20.0, 4.0))
+    # vertical phases at the climb (2.5 m/s) and descent (1 m/s) speeds, not v_max (20 m/s):
+    # 100 / 2.5 + 2.5 / 4 and 100 / 1 + 1 / 4 seconds
+    assert tl.totals.t_takeoff == pytest.approx(40.625)
+    assert tl.totals.t_land == pytest.approx(100.25)
     phases = [p for k, p in enumerate(tl.phase) if k == 0 or p != tl.phase[k - 1]]
     assert phases == ["takeoff", "fly", "hover", "fly", "hover", "fly", "hover", "fly", "land"]
     assert np.all(np.diff(tl.data, axis=0) >= -1e-12)  # data only accumulates
@@ -149,7 +152,7 @@ def test_a_change_of_altitude_between_stops_is_timed_and_costed(m):
     the vertical speeds (they cost nothing before: the same f at 60 m as at 3 km), in t_fly and
     f, and its energy is P(0) over the time the climbs add."""
     from sim.energy import SimPower, mission_energy
-    from sim.replay import VZ_DOWN, VZ_UP, vertical_time
+    from sim.replay import vertical_time
 
     plan = _plan(m, HOVER, TIMES)
     items = plan_to_items(plan, m)
@@ -158,8 +161,10 @@ def test_a_change_of_altitude_between_stops_is_timed_and_costed(m):
     h = float(items[k].z)
     high = replay([replace(it, z=3000.0) if i == k else it for i, it in enumerate(items)], m)
     a = float(m.spec.uav.acceleration)
-    up, down = vertical_time(3000.0 - h, a), vertical_time(h - 3000.0, a)
-    assert up == leg_time(3000.0 - h, VZ_UP, a) and down == leg_time(3000.0 - h, VZ_DOWN, a)
+    vu, vd = float(m.spec.uav.climb_speed), float(m.spec.uav.descent_speed)
+    assert (vu, vd) == (2.5, 1.0)  # the defaults: ArduPilot's climb, PX4's descent
+    up, down = vertical_time(3000.0 - h, a, vu, vd), vertical_time(h - 3000.0, a, vu, vd)
+    assert up == leg_time(3000.0 - h, vu, a) and down == leg_time(3000.0 - h, vd, a)
     j = int(np.flatnonzero(high.leg_times != flat.leg_times)[0])
     assert high.leg_times[j] == pytest.approx(up) and high.leg_times[j + 1] == pytest.approx(down)
     extra = up + down - flat.leg_times[j] - flat.leg_times[j + 1]

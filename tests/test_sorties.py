@@ -33,13 +33,14 @@ DEMO = ROOT / "examples" / "maps" / "fleet-demo.json"
 
 def _open_map(endurance: float, depots: list[tuple[str, float, float]],
               sensors: list[tuple[float, float]], uavs: int = 1) -> dict:
-    """A map without obstacles, a battery of `endurance` hover seconds, the given depots."""
+    """A map without obstacles, a battery of `endurance` hover seconds, the given depots; the
+    take-off and landing at v_max (10 s each, as the batteries here were sized for)."""
     return {
         "name": "open", "origin": {"lat": 46.2, "lon": 7.3, "alt": 500.0},
         "area": {"width": 4000, "height": 4000}, "start": [depots[0][1], depots[0][2]],
         "end": [depots[0][1], depots[0][2]],
         "sensors": [{"id": f"s{k}", "x": x, "y": y} for k, (x, y) in enumerate(sensors)],
-        "uav": {"endurance_s": endurance},
+        "uav": {"endurance_s": endurance, "climb_speed": 20.0, "descent_speed": 20.0},
         "safety": {"clearance": 0, "data_margin": 0},
         "fleet": {"uavs": uavs, "swap_s": 100.0,
                   "depots": [{"name": n, "x": x, "y": y} for n, x, y in depots]},

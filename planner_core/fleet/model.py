@@ -118,15 +118,17 @@ class FleetSettings:
     def vertical_wh(self) -> float:
         """Energy of one sortie's take-off and landing, Wh (`energy.vertical_energy_wh`)."""
         u = self.uav
-        return E.vertical_energy_wh(float(u.altitude), float(u.max_speed),
-                                    float(u.acceleration), self.power)  # fmt: skip
+        return E.vertical_energy_wh(float(u.altitude), float(u.climb_speed),
+                                    float(u.descent_speed), float(u.acceleration),
+                                    self.power)  # fmt: skip
 
     @cached_property
     def vertical_s(self) -> float:
-        """Seconds of one sortie's take-off and landing (Eq. 1 over the altitude, twice)."""
+        """Seconds of one sortie's take-off and landing (`energy.vertical_time_s`: Eq. 1 over
+        the altitude at the climb speed, then at the descent speed)."""
         u = self.uav
-        return 2.0 * float(flight_time(abs(float(u.altitude)), float(u.max_speed),
-                                       float(u.acceleration)))  # fmt: skip
+        return E.vertical_time_s(float(u.altitude), float(u.climb_speed),
+                                 float(u.descent_speed), float(u.acceleration))
 
     def leg_times(self, d: np.ndarray) -> np.ndarray:
         """Eq. 1 time (s) of legs of length d (m)."""

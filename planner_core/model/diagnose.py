@@ -265,7 +265,8 @@ def _energy_findings(m: Any, pm: Any, pieces: list[Any], hear: float) -> list[Fi
     power = m.power
     usable = m.usable_energy_wh
     cap = math.inf if usable is None else float(usable)
-    vertical = en.vertical_energy_wh(h, v_max, acc, power)
+    vertical = en.vertical_energy_wh(h, float(uav.climb_speed), float(uav.descent_speed), acc,
+                                     power)
     per_m = en.least_energy_per_metre_wh(v_max, power)
     hover_wh = en.hover_power_w(power) / en.J_PER_WH  # Wh per hover second
     given = bool(m.has_fleet and m.spec.fleet.depots)

@@ -18,8 +18,9 @@ panels no wider than v0 (the induced term's knee; tests/test_energy.py holds it 
 quadrature and to the closed form within 1e-9); the cruise costs P(v_max) x its time.
 
 Energy of a sortie (depot -> hover points -> depot): the horizontal legs as above, plus the
-vertical take-off and landing (their Eq. 1 time over the altitude H, at hover power P(0): the
-level-flight model has no climb term; documented in docs/energy.md), plus P(0) x every hover
+vertical take-off and landing (their Eq. 1 time over the altitude H at the climb and descent
+speeds `uav.climb_speed` and `uav.descent_speed`, at hover power P(0): the level-flight model
+has no climb term; documented in docs/energy.md), plus P(0) x every hover
 time. It is LINEAR in the hover times: E = E_flight(route) + P(0) / 3600 x sum_k t_k (Wh), which
 keeps the sortie planner's hover-time LP an LP.
 
@@ -49,6 +50,7 @@ __all__ = [
     "ramp_energy_j",
     "leg_energy_wh",
     "hover_energy_wh",
+    "vertical_time_s",
     "vertical_energy_wh",
     "route_flight_energy_wh",
     "sortie_energy_wh",
@@ -227,25 +229,44 @@ def hover_energy_wh(t_s: Any, power: PowerParams | None = None) -> np.ndarray:
     return hover_power_w(power) * np.maximum(np.asarray(t_s, dtype=float), 0.0) / J_PER_WH
 
 
-def vertical_energy_wh(altitude: float, v_max: float, accel: float,
-                       power: PowerParams | None = None) -> float:  # fmt: skip
-    """Energy of the vertical take-off to `altitude` and the landing from it: twice the Eq. 1
-    time over |altitude| at hover power P(0) (Wh). The level-flight model has no climb term;
-    the sim (`sim.replay`) flies the same two vertical phases with the same v_max and a.
+def vertical_time_s(altitude: float, climb_speed: float, descent_speed: float,
+                    accel: float) -> float:
+    """Seconds of the vertical take-off to `altitude` and the landing from it: Eq. 1 over
+    |altitude| at most `climb_speed` up, then at most `descent_speed` down (the autopilots'
+    vertical speeds in missions, `uav.climb_speed` and `uav.descent_speed`).
 
     Args:
         altitude: H (m); 0 gives 0.
-        v_max, accel: the UAV's speed (m/s) and acceleration (m/s^2), > 0.
+        climb_speed, descent_speed: vertical speeds (m/s), > 0.
+        accel: the UAV's acceleration (m/s^2), > 0.
+
+    Returns:
+        Seconds.
+    """
+    h = abs(float(altitude))
+    if h <= 0.0:
+        return 0.0
+    return sum(h / v + v / accel if h > v * v / accel else 2.0 * math.sqrt(h / accel)
+               for v in (float(climb_speed), float(descent_speed)))
+
+
+def vertical_energy_wh(altitude: float, climb_speed: float, descent_speed: float,
+                       accel: float, power: PowerParams | None = None) -> float:
+    """Energy of the vertical take-off to `altitude` and the landing from it: their time
+    (`vertical_time_s`) at hover power P(0) (Wh). The level-flight model has no climb term;
+    the sim (`sim.replay`) flies the same two vertical phases at the same speeds.
+
+    Args:
+        altitude: H (m); 0 gives 0.
+        climb_speed, descent_speed: vertical speeds (m/s), > 0.
+        accel: the UAV's acceleration (m/s^2), > 0.
         power: the model's parameters (default `DEFAULT_POWER`).
 
     Returns:
         Energy in Wh.
     """
-    h = abs(float(altitude))
-    if h <= 0.0:
-        return 0.0
-    t = h / v_max + v_max / accel if h > v_max * v_max / accel else 2.0 * math.sqrt(h / accel)
-    return 2.0 * float(hover_energy_wh(t, power))
+    t = vertical_time_s(altitude, climb_speed, descent_speed, accel)
+    return float(hover_energy_wh(t, power))
 
 
 def route_flight_energy_wh(path_xy: Any, v_max: float, accel: float,
@@ -284,8 +305,8 @@ def sortie_energy_wh(path_xy: Any, hover_s: Any, uav: Any,
     Args:
         path_xy: (K, 2) local metres, K >= 2 (first and last: the depots).
         hover_s: hover times (s) at the points: (K - 2,) for the interior points or (K,).
-        uav: the map's `uav` settings (`max_speed`, `acceleration`, `altitude`; a
-            `planner_core.model.mapio.Map`'s `spec.uav`).
+        uav: the map's `uav` settings (`max_speed`, `acceleration`, `altitude`,
+            `climb_speed`, `descent_speed`; a `planner_core.model.mapio.Map`'s `spec.uav`).
         power: the model's parameters (default `DEFAULT_POWER`; a map's `Map.power`).
 
     Returns:
@@ -303,7 +324,8 @@ def sortie_energy_wh(path_xy: Any, hover_s: Any, uav: Any,
         raise ValueError(f"hover_s: expected {len(pts) - 2} or {len(pts)} hover times for "
                          f"{len(pts)} points, got {len(t)}")  # fmt: skip
     v_max, accel = float(uav.max_speed), float(uav.acceleration)
-    return (vertical_energy_wh(float(uav.altitude), v_max, accel, power)
+    return (vertical_energy_wh(float(uav.altitude), float(uav.climb_speed),
+                               float(uav.descent_speed), accel, power)
             + route_flight_energy_wh(pts, v_max, accel, power)
             + float(hover_energy_wh(t, power).sum()))  # fmt: skip
 

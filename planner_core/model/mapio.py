@@ -217,6 +217,8 @@ class Uav(BaseModel):
     altitude: float = _field("uav.altitude")
     max_speed: float = _field("uav.max_speed")
     acceleration: float = _field("uav.acceleration")
+    climb_speed: float = _field("uav.climb_speed")
+    descent_speed: float = _field("uav.descent_speed")
     max_hover_time: float = _field("uav.max_hover_time")
     max_hover_points: int | None = _field("uav.max_hover_points")
     activation_threshold: float = _field("uav.activation_threshold")
@@ -226,9 +228,10 @@ class Uav(BaseModel):
     power: Power = Field(Power(), description="propulsion power model (Zeng et al. 2019)")
 
 
-#: the fields of the map file added for batteries and fleets (issue 33): left out of
-#: `Map.to_dict` and `Map.summary` unless the file gives them, so older maps read back as before
-_UAV_ENERGY_FIELDS = ("battery", "endurance_s", "power")
+#: the fields of the map file added for batteries and fleets (issue 33) and the vertical
+#: speeds of the take-off and landing: left out of `Map.to_dict` and `Map.summary` unless the
+#: file gives them, so older maps read back as before
+_UAV_ENERGY_FIELDS = ("battery", "endurance_s", "power", "climb_speed", "descent_speed")
 
 
 class Radio(BaseModel):
