@@ -21,7 +21,8 @@ import stat
 import tempfile
 from pathlib import Path
 
-__all__ = ["write_text_atomic", "write_bytes_atomic", "check_writable", "OutputPathError"]
+__all__ = ["write_text_atomic", "write_bytes_atomic", "check_writable", "OutputPathError",
+           "pending_path", "replace_keeping_mode", "file_in_the_way"]
 
 _TMP_TAG = ".lamde-tmp-"
 
@@ -134,6 +135,41 @@ def check_writable(path: str | Path, *, mkdir: bool = False, what: str = "") -> 
         os.unlink(tmp)
     clean_stale_temps(path)
     return path
+
+
+def pending_path(path: str | Path) -> Path:
+    """A temp name beside `path` for a file that another writer fills before it is renamed
+    onto `path` (`replace_keeping_mode`): `.NAME.lamde-tmp-PID-pending.SUFFIX` (the suffix
+    kept for writers that read the format from it). `clean_stale_temps(path)` removes it once
+    its process is gone.
+
+    Args:
+        path: the target file.
+
+    Returns:
+        The temp path (not created).
+    """
+    path = Path(path)
+    return path.with_name(f"{_tmp_prefix(path)}pending{path.suffix}")
+
+
+def replace_keeping_mode(tmp: str | Path, path: str | Path) -> None:
+    """Rename the finished temp file `tmp` onto `path`, giving it the permission bits of the
+    file it replaces (a 0600 file stays 0600), or those a plain `open()` gives a new file.
+
+    Args:
+        tmp: the written temp file, in `path`'s folder.
+        path: the target.
+
+    Raises:
+        OSError: the rename failed.
+    """
+    try:
+        mode = stat.S_IMODE(os.stat(path).st_mode)
+    except OSError:
+        mode = 0o666 & ~_umask()
+    os.chmod(tmp, mode)
+    os.replace(tmp, path)
 
 
 def write_bytes_atomic(path: str | Path, data: bytes, *, mkdir: bool = True) -> Path:

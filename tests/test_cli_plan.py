@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import os
+import stat
 import subprocess
 import sys
 from pathlib import Path
@@ -235,3 +237,22 @@ def test_an_output_that_is_an_input_is_refused_before_planning(tmp_path: Path, c
     assert "is the map this command reads" in capsys.readouterr().err
     assert farm.read_text() == DEMO.read_text()
     assert not (tmp_path / "r.plan").exists()
+
+
+def test_overwriting_a_mission_keeps_its_mode_and_clears_a_killed_runs_pending_file(
+        tmp_path: Path) -> None:
+    """docs/planning.md: overwriting keeps the file's permissions (a 0600 mission stays 0600;
+    it became 0644), and a pending mission a killed run left beside the target (process gone)
+    is removed by the next write (the old `.m.lamde-pending-PID.plan` names never were)."""
+    from planner_core.atomic import pending_path
+
+    out = tmp_path / "m.plan"
+    out.write_text("old")
+    out.chmod(0o600)
+    stale = pending_path(out).with_name(pending_path(out).name.replace(
+        f"-{os.getpid()}-", "-999999999-"))
+    stale.write_text("half a mission")
+    r = run_cli("plan", DEMO, "-o", out, "--budget", 500, "--quiet")
+    assert r.returncode == 0, r.stderr
+    assert stat.S_IMODE(out.stat().st_mode) == 0o600
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.plan"]

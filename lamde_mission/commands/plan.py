@@ -639,11 +639,13 @@ def run(args: argparse.Namespace) -> int:
     # killed between the renames leaves the new plot and report with an older mission, which
     # the report's mission_sha256 tells apart, never a new mission beside an older report
     import hashlib
-    import os
     from pathlib import Path
 
+    from planner_core.atomic import clean_stale_temps, pending_path, replace_keeping_mode
+
     target = Path(args.output)
-    pending = target.with_name(f".{target.stem}.lamde-pending-{os.getpid()}{target.suffix}")
+    clean_stale_temps(target)  # what a killed run left beside it
+    pending = pending_path(target)
     try:
         write_mission(pending, stored, m, fmt, finish=args.finish, autopilot=args.autopilot,
                       planning_map=pm)
@@ -661,7 +663,7 @@ def run(args: argparse.Namespace) -> int:
                       "map": args.map, "output": args.output, "format": fmt,
                       "mission_sha256": hashlib.sha256(pending.read_bytes()).hexdigest()}
             write_text_atomic(args.report, json.dumps(report, indent=2))
-        os.replace(pending, target)
+        replace_keeping_mode(pending, target)  # an overwritten 0600 mission stays 0600
     finally:
         pending.unlink(missing_ok=True)
     if not args.quiet:
