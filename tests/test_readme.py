@@ -23,7 +23,7 @@ README = (ROOT / "README.md").read_text(encoding="utf-8")
 #: examples are held as the README's were (the reference pages are generated, see
 #: tests/test_docs_site.py; the study pages are reports with tests of their own)
 MANUAL = ("getting-started.md", "maps.md", "planning.md", "missions.md", "flying.md",
-          "benchmarks.md", "learning.md", "ray.md", "layout.md", "fleet.md")
+          "benchmarks.md", "learning.md", "ray.md", "layout.md", "fleet.md", "reference/api.md")
 
 
 def _page(name: str) -> str:
