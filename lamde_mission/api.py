@@ -22,11 +22,23 @@ INIT_MODES = _defaults.INIT_MODES
 
 
 def kernels_cached() -> bool:
-    """Whether numba has compiled kernels cached on disk (a fresh install has none: the first
-    `plan` then compiles them, which takes a while; later processes load them)."""
-    import planner_core
+    """Whether numba's disk cache holds the planner's kernels (a fresh install, or an empty
+    `NUMBA_CACHE_DIR`, has none: the first `plan` then compiles them, which takes a while;
+    later processes load them).
 
-    return any(Path(planner_core.__file__).parent.rglob("*.nbi"))
+    Probes the cache index of the open-path solver, which only the warm-up compiles: loading
+    a map compiles two geometry kernels first, so "any kernel cached" announced "loading" on a
+    first run. Falls back to any cached kernel under the package if numba's cache layout
+    differs.
+    """
+    try:
+        from planner_core.model.routing.tour import open_path
+
+        return Path(open_path._cache._cache_file._index_path).exists()
+    except (ImportError, AttributeError, TypeError):
+        import planner_core
+
+        return any(Path(planner_core.__file__).parent.rglob("*.nbi"))
 
 
 def plan(

@@ -78,5 +78,17 @@ def warm_up(configurator: Any = "adaptive") -> float:
     from planner_core.search.refine import _merge_pair
 
     _merge_pair(problem, problem.model.sensors[:3])
+    # the tiny map's site sets are too small for the open-path solver's full search and its
+    # legs too clear for the visibility graph's Dijkstra: both compiled here, not in a plan's
+    # constructive stage (6 s of a first plan's "planning" on the demo map, 2026-12-06)
+    import numpy as np
+
+    from planner_core.model.routing import open_path
+    from planner_core.search.construct import LegTimes
+
+    pts = np.array([[100.0, 100.0], [800.0, 950.0], [1000.0, 950.0], [1400.0, 1300.0],
+                    [300.0, 1200.0], [1200.0, 200.0], [700.0, 400.0], [600.0, 1350.0]])
+    # (800, 950) -> (1000, 950) crosses the circle at (900, 950): a routed leg
+    open_path(LegTimes(problem).matrix(pts))
     _WARM.add(_key(configurator))
     return time.perf_counter() - t0
