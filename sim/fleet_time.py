@@ -1,0 +1,195 @@
+"""Vehicles in the air at once (issue 33's fleets): their separation, and a sensor heard by two.
+
+Each vehicle flies its sorties back to back from its launch time (fleet.json's `launch_s`,
+seconds after the first vehicle's take-off), with a battery swap of `swap_s` on the ground
+between them; a sortie's replay (`sim.replay.Timeline`: t, xy, z, data) places the vehicle on
+the shared clock. On a grid of `dt` seconds, two verdicts:
+
+- **SEPARATION**: two vehicles both airborne (above `AIRBORNE_M`) are never closer than
+  `SEPARATION_M` (3D). Vehicles taking off from one depot at once, flying the same legs at the
+  same altitude, or landing on one spot seconds apart fail it.
+- **LINKS**: no sensor sends to two vehicles at the same time. The link model (paper Sec. 3)
+  gives a sensor one uplink at R_ij; two vehicles hovering in its range at once would each be
+  credited the full rate, data the sensor cannot send.
+
+Positions between samples are linear (the replay samples each phase at `dt` or finer); a
+vehicle on the ground (before its launch, during a swap, after its last landing) is not
+airborne and receives nothing. Like the rest of the sim it imports of `planner_core` nothing.
+Cost: O(V^2 x T / dt) for SEPARATION and O(V x J x T / dt) for LINKS, T the longest span.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from sim.checks import Verdict
+from sim.replay import Timeline
+
+__all__ = ["SEPARATION_M", "AIRBORNE_M", "VehicleTrack", "track", "conflicts",
+           "fleet_time_verdicts"]  # fmt: skip
+
+#: m, the least 3D distance between two vehicles in the air: GNSS position error (a few
+#: metres each), the 10 m obstacle clearance of the map's default, and rotor wash, with room
+SEPARATION_M = 30.0
+#: m above home: a vehicle lower than this is on the ground (taking off or landed)
+AIRBORNE_M = 0.5
+#: Mbit per grid step below which a sensor is not sending (rounding of the replay's sums)
+_SENDING = 1e-9
+
+
+@dataclass(frozen=True)
+class VehicleTrack:
+    """One vehicle on the shared clock, sampled every `dt` s from time 0 (its launch at
+    `launch` s): positions xy (N, 2) m, altitude z (N,) m (0 on the ground), and which sensors
+    send to it in each step (N - 1, J) bool."""
+
+    launch: float
+    dt: float
+    xy: np.ndarray
+    z: np.ndarray
+    sending: np.ndarray
+
+    @property
+    def span(self) -> float:
+        """Seconds from the launch to the last landing."""
+        return (len(self.z) - 1) * self.dt
+
+
+def track(sorties: Sequence[Timeline], swap_s: float, *, dt: float = 1.0) -> VehicleTrack:
+    """One vehicle's sorties (replays, in flying order) on its own clock, launch at 0.
+
+    Args:
+        sorties: the replays; each starts at its take-off, on the ground at its depot.
+        swap_s: seconds on the ground between two sorties.
+        dt: grid step (s), > 0.
+
+    Returns:
+        The `VehicleTrack` (launch 0).
+
+    Raises:
+        ValueError: no sortie, or dt <= 0.
+    """
+    if not len(sorties):
+        raise ValueError("sorties: a vehicle flies at least one sortie")
+    if not dt > 0:
+        raise ValueError("dt must be positive")
+    J = len(sorties[0].sensor_ids)
+    starts, clock = [], 0.0
+    for k, tl in enumerate(sorties):
+        starts.append(clock)
+        clock += float(tl.totals.t_total) + (swap_s if k + 1 < len(sorties) else 0.0)
+    n = int(np.floor(clock / dt)) + 1
+    grid = np.arange(n) * dt
+    xy = np.zeros((n, 2))
+    z = np.zeros(n)
+    data = np.zeros((n, J))
+    for k, tl in enumerate(sorties):
+        t0, t1 = starts[k], starts[k] + float(tl.totals.t_total)
+        local = tl.t
+        # on the ground before this sortie (its depot) and after it until the next one
+        before = grid < t0
+        inside = (grid >= t0) & (grid <= t1)
+        after = grid > t1
+        g = grid[inside] - t0
+        for c in range(2):
+            xy[inside, c] = np.interp(g, local, tl.xy[:, c])
+        z[inside] = np.interp(g, local, tl.z)
+        if k == 0:
+            xy[before] = tl.xy[0]
+        xy[after] = tl.xy[-1]
+        z[after] = 0.0
+        for j in range(J):
+            data[inside, j] += np.interp(g, local, tl.data[:, j])
+            data[after, j] += float(tl.data[-1, j])
+    sending = np.diff(data, axis=0) > _SENDING
+    return VehicleTrack(0.0, float(dt), xy, np.maximum(z, 0.0), sending)
+
+
+def _shifted(tr: VehicleTrack, launch: float) -> VehicleTrack:
+    return VehicleTrack(float(launch), tr.dt, tr.xy, tr.z, tr.sending)
+
+
+def _window(a: VehicleTrack, b: VehicleTrack) -> tuple[slice, slice] | None:
+    """Index ranges of a and b covering the same clock times (both launched on the grid)."""
+    da = int(round(a.launch / a.dt))
+    db = int(round(b.launch / b.dt))
+    lo = max(da, db)
+    hi = min(da + len(a.z), db + len(b.z))
+    if hi - lo < 2:
+        return None
+    return slice(lo - da, hi - da), slice(lo - db, hi - db)
+
+
+def conflicts(a: VehicleTrack, b: VehicleTrack, separation: float = SEPARATION_M
+              ) -> tuple[float, float, float, int, int]:
+    """The closest approach of two vehicles in the air and their first shared link.
+
+    Args:
+        a, b: the tracks (same dt), each at its launch time.
+        separation: m, the least distance allowed.
+
+    Returns:
+        (least distance m while both airborne (inf if never), its clock time s, the first
+        clock time s at which a sensor sends to both (nan if never), that sensor's index (-1),
+        how many grid steps share a sensor).
+    """
+    w = _window(a, b)
+    if w is None:
+        return np.inf, np.nan, np.nan, -1, 0
+    sa, sb = w
+    base = max(a.launch, b.launch)
+    air = (a.z[sa] > AIRBORNE_M) & (b.z[sb] > AIRBORNE_M)
+    d = np.sqrt(((a.xy[sa] - b.xy[sb]) ** 2).sum(axis=1) + (a.z[sa] - b.z[sb]) ** 2)
+    d = np.where(air, d, np.inf)
+    i = int(np.argmin(d))
+    least, at = float(d[i]), base + i * a.dt
+    ea = slice(sa.start, sa.stop - 1)
+    eb = slice(sb.start, sb.stop - 1)
+    both = a.sending[ea] & b.sending[eb]
+    steps = np.flatnonzero(both.any(axis=1))
+    if not len(steps):
+        return least, at, np.nan, -1, 0
+    s0 = int(steps[0])
+    return least, at, base + s0 * a.dt, int(np.flatnonzero(both[s0])[0]), len(steps)
+
+
+def fleet_time_verdicts(tracks: Sequence[VehicleTrack], sensor_ids: Sequence[str],
+                        separation: float = SEPARATION_M) -> list[Verdict]:
+    """SEPARATION and LINKS over every pair of vehicles (module docstring).
+
+    Args:
+        tracks: one per vehicle (vehicle k + 1 at index k), each at its launch time.
+        sensor_ids: the map's sensors, in the order of the tracks' `sending` columns.
+        separation: m.
+
+    Returns:
+        [SEPARATION, LINKS]; margins in m (least distance - separation) and in steps shared.
+    """
+    least, worst, shared = np.inf, None, None
+    for i in range(len(tracks)):
+        for k in range(i + 1, len(tracks)):
+            d, at, t_link, j, n = conflicts(tracks[i], tracks[k], separation)
+            if d < least:
+                least, worst = d, (i + 1, k + 1, at)
+            if n and shared is None:
+                shared = (i + 1, k + 1, t_link, sensor_ids[j], n)
+    if worst is None:
+        sep = Verdict("SEPARATION", f"vehicles >= {separation:g} m apart", True, np.inf, "m",
+                      "never two vehicles in the air at once")
+    else:
+        v1, v2, at = worst
+        sep = Verdict("SEPARATION", f"vehicles >= {separation:g} m apart",
+                      bool(least >= separation), float(least - separation), "m",
+                      f"closest: vehicles {v1} and {v2} {least:.1f} m apart at {at:.0f} s")
+    if shared is None:
+        links = Verdict("LINKS", "a sensor sends to one vehicle at a time", True, 0.0, "steps",
+                        "no sensor heard by two vehicles at once")
+    else:
+        v1, v2, t_link, sid, n = shared
+        links = Verdict("LINKS", "a sensor sends to one vehicle at a time", False, -float(n),
+                        "steps", f"sensor '{sid}' sends to vehicles {v1} and {v2} at once "
+                        f"from {t_link:.0f} s ({n} steps of the grid)")  # fmt: skip
+    return [sep, links]

@@ -1,0 +1,83 @@
+"""Vehicles in the air at once: SEPARATION and LINKS (`sim.fleet_time`) and the staggered
+launches that clear them (`lamde_mission.launches`)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from lamde_mission.launches import stagger
+from sim.fleet_time import SEPARATION_M, VehicleTrack, conflicts, fleet_time_verdicts
+
+
+def _track(n: int, *, x0: float = 0.0, speed: float = 10.0, send: tuple[int, int] = (0, 0),
+           sensors: int = 2, launch: float = 0.0) -> VehicleTrack:
+    """A vehicle climbing for 10 s at x0, then flying east at `speed`, landing at the end;
+    sensor 0 sending to it in steps send[0] .. send[1] - 1."""
+    t = np.arange(n, dtype=float)
+    z = np.clip(t * 10.0, 0.0, 100.0)
+    z[-5:] = np.linspace(80.0, 0.0, 5)
+    x = x0 + np.maximum(t - 10.0, 0.0) * speed
+    xy = np.column_stack([x, np.zeros(n)])
+    sending = np.zeros((n - 1, sensors), dtype=bool)
+    sending[send[0]:send[1], 0] = True
+    return VehicleTrack(launch, 1.0, xy, z, sending)
+
+
+def test_two_vehicles_launched_together_from_one_depot_fail_separation() -> None:
+    a, b = _track(100), _track(100)
+    d, at, _, _, shared = conflicts(a, b)
+    assert d == 0.0 and at == 1.0 and shared == 0
+    sep, links = fleet_time_verdicts([a, b], ["s0", "s1"])
+    assert not sep.passed and sep.margin == -SEPARATION_M and "vehicles 1 and 2 0.0 m" in \
+        sep.detail
+    assert links.passed
+    # far apart (2 km east): clear
+    sep, _ = fleet_time_verdicts([a, _track(100, x0=2000.0)], ["s0", "s1"])
+    assert sep.passed and sep.margin > 1000.0
+
+
+def test_a_sensor_sending_to_two_vehicles_at_once_fails_links() -> None:
+    a = _track(100, send=(20, 40))
+    b = _track(100, x0=5000.0, send=(35, 60))
+    sep, links = fleet_time_verdicts([a, b], ["s0", "s1"])
+    assert sep.passed and not links.passed
+    assert links.detail == ("sensor 's0' sends to vehicles 1 and 2 at once from 35 s (5 steps "
+                            "of the grid)")
+    # the second vehicle launched 20 s later: its sending starts at 55 s, after the first's
+    b20 = VehicleTrack(20.0, b.dt, b.xy, b.z, b.sending)
+    assert fleet_time_verdicts([a, b20], ["s0", "s1"])[1].passed
+
+
+def test_stagger_launches_each_vehicle_at_its_first_clear_time() -> None:
+    a, b, c = _track(100), _track(100), _track(100, x0=5000.0)
+    launches = stagger([a, b, c])
+    # b follows a along the same line at 10 m/s: 30 m behind it needs a 3 s lead at cruise,
+    # but b climbs below a at the depot first; the first 10 s step that clears both is 10 s
+    assert launches[0] == 0.0 and launches[1] == 10.0 and launches[2] == 0.0
+    tracks = [VehicleTrack(t, x.dt, x.xy, x.z, x.sending) for t, x in zip(launches, (a, b, c),
+                                                                         strict=True)]
+    assert all(v.passed for v in fleet_time_verdicts(tracks, ["s0", "s1"]))
+
+
+def test_stagger_ends_after_the_earlier_vehicles_landed() -> None:
+    # the same sensor sends to both over their whole flights: only one after the other works
+    a = _track(50, send=(0, 49))
+    b = _track(50, send=(0, 49))
+    launches = stagger([a, b])
+    assert launches == [0.0, 50.0]
+    assert conflicts(VehicleTrack(50.0, 1.0, b.xy, b.z, b.sending), a)[4] == 0
+
+
+def test_no_overlap_in_time_is_never_a_conflict() -> None:
+    a = _track(30)
+    b = VehicleTrack(500.0, 1.0, a.xy, a.z, a.sending)
+    assert conflicts(a, b)[0] == np.inf
+    sep, links = fleet_time_verdicts([a, b], ["s0", "s1"])
+    assert sep.passed and links.passed and "never two vehicles" in sep.detail
+
+
+@pytest.mark.parametrize("step", [5.0, 10.0])
+def test_stagger_step(step: float) -> None:
+    a, b = _track(100), _track(100)
+    assert stagger([a, b], step=step)[1] % step == 0.0
