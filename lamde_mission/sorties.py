@@ -11,8 +11,10 @@ folder to DIR last (a DIR already there is replaced only then): nothing half-wri
 
 `verify_sortie_dir` replays each mission file of a directory with the simulator on its sortie's
 map (start and end at the depots `fleet.json` names) and judges per sortie C1-C3, C5, ENDS,
-CLEAR and ENERGY (`sim.checks.verify`) and over the whole plan C4 and MARGIN on the data summed
-over the sorties (`sim.sorties.combined_data_verdicts`).
+CLEAR and ENERGY (`sim.checks.verify`), over the whole plan C4 and MARGIN on the data summed
+over the sorties (`sim.sorties.combined_data_verdicts`), and the plan's shape (`FleetCheck.fleet`):
+CHAIN (a vehicle's first sortie leaves a depot a vehicle starts from, each later one the depot
+the one before it landed at), UAVS (no more vehicles than the map's `fleet.uavs`).
 
 fleet.json (the contract of docs/sorties.md):
 
@@ -143,19 +145,22 @@ class SortieCheck:
 
 @dataclass(frozen=True)
 class FleetCheck:
-    """A whole plan's verdicts: per sortie (`sorties`), and `combined` (C4, MARGIN over the
-    sum of the sorties' data); `swap_s` for the spans."""
+    """A whole plan's verdicts: per sortie (`sorties`), `combined` (C4, MARGIN over the sum of
+    the sorties' data) and `fleet` (the plan's shape: CHAIN, UAVS; module docstring);
+    `swap_s` for the spans."""
 
     sorties: tuple[SortieCheck, ...]
     combined: tuple[Any, ...]
     swap_s: float
+    fleet: tuple[Any, ...] = ()
 
     @property
     def passed(self) -> bool:
-        """Every sortie's verdicts except its own C4/MARGIN (a share) and the combined ones."""
+        """Every sortie's verdicts except its own C4/MARGIN (a share), the combined ones and
+        the plan's shape."""
         own = all(v.passed for s in self.sorties for v in s.verdicts
                   if v.name not in ("C4", "MARGIN"))  # fmt: skip
-        return own and all(v.passed for v in self.combined)
+        return own and all(v.passed for v in (*self.combined, *self.fleet))
 
     def failed(self) -> list[str]:
         """Lines naming each failed verdict (sortie and check)."""
@@ -166,6 +171,7 @@ class FleetCheck:
             if not v.passed and v.name not in ("C4", "MARGIN")
         ]
         out += [f"whole plan {v.name}: {v.detail}" for v in self.combined if not v.passed]
+        out += [f"fleet {v.name}: {v.detail}" for v in self.fleet if not v.passed]
         return out
 
     def vehicles(self) -> dict[int, list[SortieCheck]]:
@@ -199,8 +205,73 @@ def _served(tl: Any, req: np.ndarray) -> tuple[str, ...]:
     return tuple(ids[j] for j in range(len(ids)) if q[j] > 1e-3 * max(float(req[j]), 1e-9))
 
 
-def _check(m: Any, rows: list[tuple[int, int, str, str, str, list[Any]]]) -> FleetCheck:
-    """Replay each (vehicle, sortie, file, depot_start, depot_end, items) on its sortie map."""
+def _chain_verdict(m: Any, rows: list[tuple[int, int, str, str, str, list[Any]]]) -> Any:
+    """CHAIN: each vehicle's first sortie leaves a depot a vehicle starts from
+    (`FleetSettings.start_depots`) and each later one the depot the sortie before it landed at
+    (a vehicle takes off where it stands, as `FleetPlan.chained` asks of a plan).
+
+    Args:
+        m: the plan's map.
+        rows: (vehicle, sortie, file, depot_start, depot_end, items), each vehicle's sorties
+            in flying order; depots known to the map.
+
+    Returns:
+        The `sim.checks.Verdict`: its margin minus the largest jump in m (0: none), its detail
+        naming each vehicle, sortie and both depots with their distance.
+    """
+    from planner_core.fleet import FleetSettings
+    from sim.checks import Verdict
+
+    st = FleetSettings.from_map(m)
+    names, xy = list(st.depot_names), np.asarray(st.depots, dtype=float)
+
+    def apart(a: str, b: str) -> float:
+        return float(np.hypot(*(xy[names.index(a)] - xy[names.index(b)])))
+
+    starts = [names[i] for i in st.start_depots]
+    jumps: list[tuple[float, str]] = []
+    for i, (v, k, _f, a, _b, _items) in enumerate(rows):
+        before = rows[i - 1] if i and rows[i - 1][0] == v else None
+        if before is None and a not in starts:
+            d = min(apart(a, x) for x in starts)
+            jumps.append((d, f"vehicle {v} sortie {k} takes off at '{a}', not a depot a vehicle "
+                             f"starts from ({', '.join(starts)}; {d:.0f} m away)"))  # fmt: skip
+        elif before is not None and before[4] != a:
+            d = apart(a, before[4])
+            jumps.append((d, f"vehicle {v} sortie {k} takes off at '{a}' but its sortie "
+                             f"{before[1]} landed at '{before[4]}', {d:.0f} m away"))  # fmt: skip
+    title = "each sortie takes off where its vehicle stands"
+    if not jumps:
+        return Verdict("CHAIN", title, True, 0.0, "m",
+                       "every vehicle takes off where it landed")  # fmt: skip
+    return Verdict("CHAIN", title, False, -max(d for d, _ in jumps), "m",
+                   "; ".join(line for _, line in jumps))  # fmt: skip
+
+
+def _uavs_verdict(m: Any, vehicles: int) -> Any:
+    """UAVS: the plan flies at most the map's `fleet.uavs` vehicles (1 without a fleet).
+
+    Args:
+        m: the plan's map.
+        vehicles: the plan's vehicles (those fleet.json lists).
+
+    Returns:
+        The `sim.checks.Verdict`: its margin the vehicles to spare (negative: too many).
+    """
+    from sim.checks import Verdict
+
+    uavs = int(m.uavs)
+    detail = (f"fleet.json plans {vehicles} vehicle{'s' if vehicles != 1 else ''}, the map's "
+              f"fleet.uavs is {uavs}")  # fmt: skip
+    return Verdict("UAVS", "vehicles <= fleet.uavs", vehicles <= uavs, float(uavs - vehicles),
+                   "vehicles", detail)  # fmt: skip
+
+
+def _check(
+    m: Any, rows: list[tuple[int, int, str, str, str, list[Any]]], vehicles: int
+) -> FleetCheck:
+    """Replay each (vehicle, sortie, file, depot_start, depot_end, items) on its sortie map;
+    judge the whole plan's data and its shape (`vehicles`: how many the plan lists)."""
     from sim import replay, verify
     from sim.sorties import combined_data_verdicts
 
@@ -211,7 +282,8 @@ def _check(m: Any, rows: list[tuple[int, int, str, str, str, list[Any]]]) -> Fle
         tl = replay(items, sm)
         out.append(SortieCheck(v, k, f, a, b, tl, verify(tl, sm), _served(tl, req)))
     combined = combined_data_verdicts([s.timeline for s in out], m)
-    return FleetCheck(tuple(out), tuple(combined), float(m.swap_s))
+    shape = (_chain_verdict(m, rows), _uavs_verdict(m, vehicles))
+    return FleetCheck(tuple(out), tuple(combined), float(m.swap_s), shape)
 
 
 def verify_sortie_dir(m: Any, path: str | Path) -> FleetCheck:
@@ -245,7 +317,7 @@ def verify_sortie_dir(m: Any, path: str | Path) -> FleetCheck:
             except MissionFileError as exc:
                 raise ValueError(f"{s.path}: {exc}") from None
             rows.append((veh.vehicle, s.sortie, s.path.name, s.depot_start, s.depot_end, items))
-    return _check(m, rows)
+    return _check(m, rows, len(fleet.vehicles))
 
 
 def summary_dict(
@@ -346,7 +418,7 @@ def write_sortie_dir(
                     planning_map=spm,
                 )
                 rows.append((v, n, f, a, b, items))
-        check = _check(m, rows)
+        check = _check(m, rows, len(plan.vehicles))
         if not check.passed and not allow_infeasible:
             return check, False
         (pending / FLEET_FILE).write_text(

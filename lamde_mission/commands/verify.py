@@ -18,7 +18,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "2 bad input. MISSION may be a sortie directory (`plan MAP -o DIR/` for a map with a "
         "battery or fleet): each mission-v{vehicle}-s{sortie}.plan is replayed from its depot "
         "to its depot (fleet.json names them), with C1-C3, C5, ENDS, CLEAR and ENERGY per "
-        "sortie and C4 and MARGIN over the data of all sorties together.",
+        "sortie, C4 and MARGIN over the data of all sorties together, and the plan's shape: "
+        "CHAIN (each vehicle takes off where its last sortie landed) and UAVS (no more "
+        "vehicles than the map's fleet.uavs).",
     )
     p.add_argument("map", help="map file (JSON)")
     from lamde_mission.commands._common import add_origin_option
@@ -66,6 +68,7 @@ def _run_sorties(args: argparse.Namespace, m: Any) -> int:
                             "duration_s": s.duration_s, "sensors": list(s.sensors),
                             **s.verdicts.to_dict()} for s in check.sorties],
                "combined": [v.to_dict() for v in check.combined],
+               "fleet": [v.to_dict() for v in check.fleet],
                "makespan_s": {str(v): check.makespan(v) for v in check.vehicles()},
                "total_s": check.total_s, "swaps": check.swaps, "passed": check.passed}
         print(json.dumps(out, indent=2))
@@ -86,6 +89,9 @@ def _run_sorties(args: argparse.Namespace, m: Any) -> int:
         for v in check.combined:
             print(f"whole plan {v.name} {v.title}: {'PASS' if v.passed else 'FAIL'}, margin "
                   f"{v.margin:.6g} {v.unit}; {printable(v.detail)}")
+        for v in check.fleet:
+            print(f"fleet {v.name} {v.title}: {'PASS' if v.passed else 'FAIL'}; "
+                  f"{printable(v.detail)}")
         print(f"total {check.total_s:.1f} s with {check.swaps} battery swaps")
         print("result: " + ("all constraints hold" if check.passed
                             else "FAILED " + "; ".join(printable(x) for x in check.failed())))

@@ -1,0 +1,147 @@
+"""Sortie directories as `verify MAP DIR/`, `upload DIR/ --fleet` and `show MAP DIR/` read them:
+faults a replay of each sortie alone does not see (a vehicle taking off where it did not land,
+more vehicles than the map flies, stray mission files, another map), and fleet.json's figures.
+
+The directories are real plans made fast: the demo's sensors joined into one tour, split into
+battery-sized sorties and LP-timed (`planner_core.fleet`, no pipeline run), written by
+`write_sortie_dir` on examples/maps/fleet-demo.json (with 1 and with 2 UAVs).
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from lamde_mission.cli import main
+from planner_core.model.mapio import load_map
+
+ROOT = Path(__file__).resolve().parents[1]
+DEMO = ROOT / "examples" / "maps" / "fleet-demo.json"
+
+
+def _demo_map(tmp: Path, uavs: int, name: str | None = None) -> Path:
+    """A copy of the fleet demo map with `uavs` vehicles (and another name, if given)."""
+    doc = json.loads(DEMO.read_text())
+    doc["fleet"]["uavs"] = uavs
+    if name is not None:
+        doc["name"] = name
+    path = tmp / f"fleet-demo-{uavs}{'-' + name if name else ''}.json"
+    path.write_text(json.dumps(doc))
+    return path
+
+
+def _fleet_plan(map_path: Path, goal: str | None = None):
+    """A quick real fleet plan of the map (one tour, split by the battery, LP hover times)."""
+    from planner_core.fleet import FleetSettings, Links, fleet_hover_lp, split_vehicles
+    from planner_core.model.problem import Problem
+
+    m = load_map(map_path)
+    pm = m.planning_map()
+    problem = Problem(pm)
+    st = FleetSettings.from_map(m, goal)
+    links = Links(problem)
+    P, T = links.join(pm.sensors, np.full(len(pm.sensors), 25.0))
+    plan = fleet_hover_lp(split_vehicles(st, links, P, T), problem.model)
+    assert plan is not None and plan.chained()
+    return m, plan
+
+
+@pytest.fixture(scope="module")
+def dirs(tmp_path_factory):
+    """{uavs: (map path, sortie directory)} for 1 and 2 UAVs, each written and passing."""
+    from lamde_mission.sorties import write_sortie_dir
+
+    tmp = tmp_path_factory.mktemp("sortie-dirs")
+    out = {}
+    for uavs in (1, 2):
+        map_path = _demo_map(tmp, uavs)
+        m, plan = _fleet_plan(map_path)
+        check, written = write_sortie_dir(plan, m, tmp / f"uavs{uavs}")
+        assert written and check.passed, check.failed()
+        out[uavs] = (map_path, tmp / f"uavs{uavs}")
+    return out
+
+
+def _copy(src: Path, tmp: Path) -> Path:
+    dst = tmp / src.name
+    shutil.copytree(src, dst)
+    return dst
+
+
+def _verify(capsys, *argv: str | Path) -> tuple[int, str, str]:
+    rc = main(["verify", *map(str, argv)])
+    cap = capsys.readouterr()
+    return rc, cap.out, cap.err
+
+
+def test_verify_fails_a_vehicle_taking_off_where_it_did_not_land(dirs, tmp_path, capsys):
+    map_path, src = dirs[1]
+    rc, out, _ = _verify(capsys, map_path, src)
+    assert rc == 0 and "all constraints hold" in out, out
+    assert "fleet CHAIN each sortie takes off where its vehicle stands: PASS" in out
+    # sorties 1 and 2 of vehicle 1 swapped (fleet.json and the files): each sortie alone
+    # still passes, but vehicle 1 lands at 'north' and takes off again at 'home'
+    d = _copy(src, tmp_path)
+    doc = json.loads((d / "fleet.json").read_text())
+    ss = doc["vehicles"][0]["sorties"]
+    assert (ss[0]["depot_start"], ss[0]["depot_end"], ss[1]["depot_end"]) == \
+        ("home", "north", "north")
+    ss[0], ss[1] = ss[1], ss[0]
+    for k, s in enumerate(ss[:2], start=1):
+        s["sortie"], s["file"] = k, f"mission-v1-s{k}.plan"
+    (d / "mission-v1-s1.plan").rename(d / "swap.tmp")
+    (d / "mission-v1-s2.plan").rename(d / "mission-v1-s1.plan")
+    (d / "swap.tmp").rename(d / "mission-v1-s2.plan")
+    (d / "fleet.json").write_text(json.dumps(doc))
+    rc, out, _ = _verify(capsys, map_path, d)
+    assert rc == 1, out
+    line = ("vehicle 1 sortie 2 takes off at 'home' but its sortie 1 landed at 'north', "
+            "2476 m away")  # hypot(1800, 1700)
+    assert f"fleet CHAIN each sortie takes off where its vehicle stands: FAIL; {line}" in out
+    assert f"result: FAILED fleet CHAIN: {line}" in out
+    rc, out, _ = _verify(capsys, map_path, d, "--json")
+    rep = json.loads(out)
+    assert rc == 1 and not rep["passed"]
+    (chain,) = [v for v in rep["fleet"] if v["name"] == "CHAIN"]
+    assert not chain["passed"] and chain["margin"] == pytest.approx(-np.hypot(1800, 1700))
+
+
+def test_verify_fails_more_vehicles_than_the_map_flies(dirs, tmp_path, capsys):
+    map_path, d = dirs[2]
+    rc, out, _ = _verify(capsys, map_path, d)
+    assert rc == 0 and "all constraints hold" in out, out
+    one = _demo_map(tmp_path, 1)  # the same map, fleet.uavs 1
+    rc, out, _ = _verify(capsys, one, d)
+    assert rc == 1, out
+    assert "fleet UAVS vehicles <= fleet.uavs: FAIL; fleet.json plans 2 vehicles, the map's " \
+        "fleet.uavs is 1" in out
+    assert "FAILED fleet UAVS: fleet.json plans 2 vehicles, the map's fleet.uavs is 1" in out
+
+
+def test_a_map_without_a_fleet_flies_one_vehicle() -> None:
+    from lamde_mission.sorties import _uavs_verdict
+
+    doc = json.loads(DEMO.read_text())
+    doc.pop("fleet")
+    m = load_map(doc)
+    assert not _uavs_verdict(m, 2).passed and _uavs_verdict(m, 1).passed
+    assert _uavs_verdict(m, 2).detail == "fleet.json plans 2 vehicles, the map's fleet.uavs is 1"
+
+
+def test_a_first_sortie_leaves_a_depot_a_vehicle_starts_from() -> None:
+    # without fleet.depots a vehicle starts at the map's start ('home'); 'end' is a landing site
+    from lamde_mission.sorties import _chain_verdict
+
+    doc = json.loads(DEMO.read_text())
+    doc["fleet"].pop("depots")
+    m = load_map(doc)
+    ok = _chain_verdict(m, [(1, 1, "a", "home", "end", []), (1, 2, "b", "end", "end", [])])
+    assert ok.passed, ok.detail
+    bad = _chain_verdict(m, [(1, 1, "a", "end", "end", [])])
+    assert not bad.passed
+    assert bad.detail == ("vehicle 1 sortie 1 takes off at 'end', not a depot a vehicle starts "
+                          "from (home; 2476 m away)")
