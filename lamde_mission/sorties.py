@@ -14,7 +14,9 @@ map (start and end at the depots `fleet.json` names) and judges per sortie C1-C3
 CLEAR and ENERGY (`sim.checks.verify`), over the whole plan C4 and MARGIN on the data summed
 over the sorties (`sim.sorties.combined_data_verdicts`), and the plan's shape (`FleetCheck.fleet`):
 CHAIN (a vehicle's first sortie leaves a depot a vehicle starts from, each later one the depot
-the one before it landed at), UAVS (no more vehicles than the map's `fleet.uavs`).
+the one before it landed at), UAVS (no more vehicles than the map's `fleet.uavs`), FILES (no
+mission file in the directory that fleet.json does not list); a note when fleet.json names
+another map (`FleetCheck.notes`).
 
 fleet.json (the contract of docs/sorties.md):
 
@@ -34,7 +36,7 @@ import json
 import os
 import re
 import shutil
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
@@ -146,13 +148,14 @@ class SortieCheck:
 @dataclass(frozen=True)
 class FleetCheck:
     """A whole plan's verdicts: per sortie (`sorties`), `combined` (C4, MARGIN over the sum of
-    the sorties' data) and `fleet` (the plan's shape: CHAIN, UAVS; module docstring);
-    `swap_s` for the spans."""
+    the sorties' data) and `fleet` (the plan's shape: CHAIN, UAVS, FILES; module docstring);
+    `swap_s` for the spans; `notes`, lines that judge nothing (another map's name)."""
 
     sorties: tuple[SortieCheck, ...]
     combined: tuple[Any, ...]
     swap_s: float
     fleet: tuple[Any, ...] = ()
+    notes: tuple[str, ...] = ()
 
     @property
     def passed(self) -> bool:
@@ -267,11 +270,41 @@ def _uavs_verdict(m: Any, vehicles: int) -> Any:
                    "vehicles", detail)  # fmt: skip
 
 
+def _files_verdict(directory: Path, listed: list[str]) -> Any:
+    """FILES: the directory holds no mission file (`.plan`, `.waypoints`, `.geojson`) that
+    fleet.json does not list: an operator loading the files by name would fly a stale one.
+
+    Args:
+        directory: the sortie directory.
+        listed: the file names fleet.json lists.
+
+    Returns:
+        The `sim.checks.Verdict`: its margin minus the stray files' count, its detail naming
+        them.
+    """
+    from lamde_mission.formats import FORMATS
+    from sim.checks import Verdict
+
+    stray = sorted(e.name for e in Path(directory).iterdir()
+                   if e.is_file() and e.suffix.lower() in FORMATS
+                   and e.name not in listed)  # fmt: skip
+    title = "no mission file fleet.json does not list"
+    if not stray:
+        return Verdict("FILES", title, True, 0.0, "files",
+                       f"the {len(listed)} mission files are those fleet.json lists")  # fmt: skip
+    return Verdict("FILES", title, False, -float(len(stray)), "files",
+                   f"{', '.join(stray)} in {Path(directory).name}/ but not listed in "
+                   f"{FLEET_FILE} (stale: an operator loading the files by name would fly "
+                   "it; remove it)")  # fmt: skip
+
+
 def _check(
-    m: Any, rows: list[tuple[int, int, str, str, str, list[Any]]], vehicles: int
+    m: Any, rows: list[tuple[int, int, str, str, str, list[Any]]], vehicles: int,
+    directory: Path,
 ) -> FleetCheck:
     """Replay each (vehicle, sortie, file, depot_start, depot_end, items) on its sortie map;
-    judge the whole plan's data and its shape (`vehicles`: how many the plan lists)."""
+    judge the whole plan's data and its shape (`vehicles`: how many the plan lists; the mission
+    files in `directory`)."""
     from sim import replay, verify
     from sim.sorties import combined_data_verdicts
 
@@ -282,7 +315,8 @@ def _check(
         tl = replay(items, sm)
         out.append(SortieCheck(v, k, f, a, b, tl, verify(tl, sm), _served(tl, req)))
     combined = combined_data_verdicts([s.timeline for s in out], m)
-    shape = (_chain_verdict(m, rows), _uavs_verdict(m, vehicles))
+    shape = (_chain_verdict(m, rows), _uavs_verdict(m, vehicles),
+             _files_verdict(directory, [r[2] for r in rows]))  # fmt: skip
     return FleetCheck(tuple(out), tuple(combined), float(m.swap_s), shape)
 
 
@@ -294,7 +328,7 @@ def verify_sortie_dir(m: Any, path: str | Path) -> FleetCheck:
         path: the directory holding fleet.json and the mission files.
 
     Returns:
-        The `FleetCheck`.
+        The `FleetCheck` (with a note when fleet.json names another map than `m`).
 
     Raises:
         ValueError: one line naming the file and the problem (no fleet.json, a missing or
@@ -317,7 +351,9 @@ def verify_sortie_dir(m: Any, path: str | Path) -> FleetCheck:
             except MissionFileError as exc:
                 raise ValueError(f"{s.path}: {exc}") from None
             rows.append((veh.vehicle, s.sortie, s.path.name, s.depot_start, s.depot_end, items))
-    return _check(m, rows, len(fleet.vehicles))
+    check = _check(m, rows, len(fleet.vehicles), fleet.path)
+    note = fleet.map_note(m.name, "verified")
+    return check if note is None else replace(check, notes=(note,))
 
 
 def summary_dict(
@@ -418,7 +454,7 @@ def write_sortie_dir(
                     planning_map=spm,
                 )
                 rows.append((v, n, f, a, b, items))
-        check = _check(m, rows, len(plan.vehicles))
+        check = _check(m, rows, len(plan.vehicles), pending)
         if not check.passed and not allow_infeasible:
             return check, False
         (pending / FLEET_FILE).write_text(

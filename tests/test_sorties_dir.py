@@ -145,3 +145,44 @@ def test_a_first_sortie_leaves_a_depot_a_vehicle_starts_from() -> None:
     assert not bad.passed
     assert bad.detail == ("vehicle 1 sortie 1 takes off at 'end', not a depot a vehicle starts "
                           "from (home; 2476 m away)")
+
+
+def test_verify_names_mission_files_fleet_json_does_not_list(dirs, tmp_path, capsys):
+    # a stale sortie of an earlier plan copied in: verify replayed only what fleet.json lists
+    map_path, src = dirs[1]
+    d = _copy(src, tmp_path)
+    rc, out, _ = _verify(capsys, map_path, d)
+    assert rc == 0 and "fleet FILES no mission file fleet.json does not list: PASS" in out
+    n = len(json.loads((d / "fleet.json").read_text())["vehicles"][0]["sorties"])
+    stale = [f"mission-v1-s{n + 1}.plan", "mission-v2-s1.plan"]
+    for name in stale:
+        shutil.copy(d / "mission-v1-s1.plan", d / name)
+    (d / "notes.txt").write_text("not a mission")
+    rc, out, _ = _verify(capsys, map_path, d)
+    assert rc == 1, out
+    line = (f"{', '.join(stale)} in {d.name}/ but not listed in fleet.json (stale: an operator "
+            "loading the files by name would fly it; remove it)")
+    assert f"FAILED fleet FILES: {line}" in out
+    assert "notes.txt" not in out
+
+
+def test_verify_notes_a_fleet_json_of_another_map(dirs, tmp_path, capsys):
+    map_path, d = dirs[1]
+    other = _demo_map(tmp_path, 1, name="elsewhere")
+    rc, out, err = _verify(capsys, other, d)
+    assert rc == 0, out
+    assert err.strip() == f"note: {d}: planned on map 'fleet-demo', verified on 'elsewhere'"
+    rc, out, err = _verify(capsys, other, d, "--json")
+    assert json.loads(out)["notes"] == [f"{d}: planned on map 'fleet-demo', verified on "
+                                        "'elsewhere'"]
+    rc, out, err = _verify(capsys, map_path, d)
+    assert rc == 0 and err == ""
+
+
+def test_show_notes_a_fleet_json_of_another_map(dirs, tmp_path, capsys):
+    # the same note as verify's (one helper: FleetDir.map_note)
+    _, d = dirs[1]
+    other = _demo_map(tmp_path, 1, name="elsewhere")
+    assert main(["show", str(other), str(d), "-o", str(tmp_path / "x.png")]) == 0
+    err = capsys.readouterr().err
+    assert err.strip() == f"note: {d}: planned on map 'fleet-demo', drawn on 'elsewhere'"

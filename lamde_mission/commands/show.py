@@ -56,11 +56,9 @@ def fleet_views(directory: str | Path, m: Any) -> list[Any]:
         fleet = read_fleet_dir(directory)
     except FleetDirError as exc:
         raise UsageError(str(exc)) from None
-    if fleet.map_name is not None and fleet.map_name != m.name:
-        from planner_core.textio import printable
-
-        print(f"note: {printable(str(fleet.path))}: planned on map '{printable(fleet.map_name)}'"
-              f", drawn on '{printable(m.name)}'", file=sys.stderr)  # fmt: skip
+    note = fleet.map_note(m.name, "drawn")
+    if note is not None:
+        print(f"note: {note}", file=sys.stderr)
     views = [
         SortieView(v.vehicle, s.sortie, replay_mission_file(str(s.path), m), s.depot_start,
                    s.depot_end)

@@ -19,8 +19,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "battery or fleet): each mission-v{vehicle}-s{sortie}.plan is replayed from its depot "
         "to its depot (fleet.json names them), with C1-C3, C5, ENDS, CLEAR and ENERGY per "
         "sortie, C4 and MARGIN over the data of all sorties together, and the plan's shape: "
-        "CHAIN (each vehicle takes off where its last sortie landed) and UAVS (no more "
-        "vehicles than the map's fleet.uavs).",
+        "CHAIN (each vehicle takes off where its last sortie landed), UAVS (no more "
+        "vehicles than the map's fleet.uavs) and FILES (no mission file in DIR that "
+        "fleet.json does not list).",
     )
     p.add_argument("map", help="map file (JSON)")
     from lamde_mission.commands._common import add_origin_option
@@ -62,13 +63,15 @@ def _run_sorties(args: argparse.Namespace, m: Any) -> int:
         check = verify_sortie_dir(m, args.mission)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
+    for note in check.notes:
+        print(f"note: {note}", file=sys.stderr)
     if args.json:
         out = {"sorties": [{"vehicle": s.vehicle, "sortie": s.sortie, "file": s.file,
                             "depot_start": s.depot_start, "depot_end": s.depot_end,
                             "duration_s": s.duration_s, "sensors": list(s.sensors),
                             **s.verdicts.to_dict()} for s in check.sorties],
                "combined": [v.to_dict() for v in check.combined],
-               "fleet": [v.to_dict() for v in check.fleet],
+               "fleet": [v.to_dict() for v in check.fleet], "notes": list(check.notes),
                "makespan_s": {str(v): check.makespan(v) for v in check.vehicles()},
                "total_s": check.total_s, "swaps": check.swaps, "passed": check.passed}
         print(json.dumps(out, indent=2))

@@ -84,6 +84,24 @@ class FleetDir:
     swaps: int | None = None
     raw: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
 
+    def map_note(self, map_name: str, verb: str) -> str | None:
+        """The note when fleet.json names another map than the one given, else None.
+
+        Args:
+            map_name: the name of the map the directory is read with.
+            verb: what is done on it ("drawn", "verified").
+
+        Returns:
+            "DIR: planned on map 'A', {verb} on 'B'" (printable), or None when the names agree
+            or fleet.json names no map.
+        """
+        from planner_core.textio import printable
+
+        if self.map_name is None or self.map_name == map_name:
+            return None
+        return printable(f"{self.path}: planned on map '{self.map_name}', {verb} on "
+                         f"'{map_name}'")  # fmt: skip
+
     def first_sorties(self) -> list[FleetSortie | None]:
         """Each vehicle's first sortie (None for a vehicle with none), in vehicle order."""
         return self.sorties_numbered(1)
