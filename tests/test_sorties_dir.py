@@ -17,7 +17,11 @@ import numpy as np
 import pytest
 
 from lamde_mission.cli import main
+from lamde_mission.formats import read_mission
+from lamde_mission.vehicle.mock_fleet import MockFleet
 from planner_core.model.mapio import load_map
+from tests.vehicle_helpers import free_udp_port
+from tests.vehicle_helpers import no_leftover_mock_threads as _no_leftover_mock_threads  # noqa: F401 (autouse)
 
 ROOT = Path(__file__).resolve().parents[1]
 DEMO = ROOT / "examples" / "maps" / "fleet-demo.json"
@@ -78,14 +82,10 @@ def _verify(capsys, *argv: str | Path) -> tuple[int, str, str]:
     return rc, cap.out, cap.err
 
 
-def test_verify_fails_a_vehicle_taking_off_where_it_did_not_land(dirs, tmp_path, capsys):
-    map_path, src = dirs[1]
-    rc, out, _ = _verify(capsys, map_path, src)
-    assert rc == 0 and "all constraints hold" in out, out
-    assert "fleet CHAIN each sortie takes off where its vehicle stands: PASS" in out
-    # sorties 1 and 2 of vehicle 1 swapped (fleet.json and the files): each sortie alone
-    # still passes, but vehicle 1 lands at 'north' and takes off again at 'home'
-    d = _copy(src, tmp_path)
+def _swapped(src: Path, tmp: Path) -> Path:
+    """A copy of `src` with sorties 1 and 2 of vehicle 1 swapped (fleet.json and the files):
+    each sortie alone still passes, but vehicle 1 lands at 'north' and takes off at 'home'."""
+    d = _copy(src, tmp)
     doc = json.loads((d / "fleet.json").read_text())
     ss = doc["vehicles"][0]["sorties"]
     assert (ss[0]["depot_start"], ss[0]["depot_end"], ss[1]["depot_end"]) == \
@@ -97,6 +97,15 @@ def test_verify_fails_a_vehicle_taking_off_where_it_did_not_land(dirs, tmp_path,
     (d / "mission-v1-s2.plan").rename(d / "mission-v1-s1.plan")
     (d / "swap.tmp").rename(d / "mission-v1-s2.plan")
     (d / "fleet.json").write_text(json.dumps(doc))
+    return d
+
+
+def test_verify_fails_a_vehicle_taking_off_where_it_did_not_land(dirs, tmp_path, capsys):
+    map_path, src = dirs[1]
+    rc, out, _ = _verify(capsys, map_path, src)
+    assert rc == 0 and "all constraints hold" in out, out
+    assert "fleet CHAIN each sortie takes off where its vehicle stands: PASS" in out
+    d = _swapped(src, tmp_path)
     rc, out, _ = _verify(capsys, map_path, d)
     assert rc == 1, out
     line = ("vehicle 1 sortie 2 takes off at 'home' but its sortie 1 landed at 'north', "
@@ -186,3 +195,39 @@ def test_show_notes_a_fleet_json_of_another_map(dirs, tmp_path, capsys):
     assert main(["show", str(other), str(d), "-o", str(tmp_path / "x.png")]) == 0
     err = capsys.readouterr().err
     assert err.strip() == f"note: {d}: planned on map 'fleet-demo', drawn on 'elsewhere'"
+
+
+def test_upload_fleet_with_map_replays_the_directory_first(dirs, tmp_path, capsys):
+    # it was refused, naming `verify DIR/ --map MAP`, a command verify does not take
+    map_path, src = dirs[2]
+    port = free_udp_port()
+    conn = ["--connect", f"udpin://127.0.0.1:{port}", "--via", "pymavlink", "--timeout", "5"]
+    one = _demo_map(tmp_path, 1)  # fleet.uavs 1: the 2-vehicle plan fails UAVS
+    with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=2, heartbeat_hz=10.0) as fleet:
+        rc = main(["upload", str(src), "--fleet", *conn, "--map", str(one)])
+        cap = capsys.readouterr()
+        assert rc == 1, cap.out + cap.err
+        assert all(sum(v.stats.uploads.values()) == 0 for v in fleet.vehicles)
+        assert cap.err.strip() == (
+            f"lamde-mission upload: {src}: the simulator rejects it on {one}: fleet UAVS: "
+            "fleet.json plans 2 vehicles, the map's fleet.uavs is 1; nothing sent "
+            f"(`lamde-mission verify {one} {src}` shows every verdict; --force sends it "
+            "anyway)")
+        rc = main(["upload", str(src), "--fleet", *conn, "--map", str(one), "--force"])
+        cap = capsys.readouterr()
+        assert rc == 0, cap.out + cap.err
+        assert f"warning: {src}: the simulator rejects it on {one} (fleet UAVS: " in cap.err
+        assert "sent anyway (--force)" in cap.err
+        rc = main(["upload", str(src), "--fleet", *conn, "--map", str(map_path)])
+        cap = capsys.readouterr()
+        assert rc == 0, cap.out + cap.err
+        assert (f"simulator: all constraints hold on {map_path} for the "
+                f"{sum(1 for _ in src.glob('*.plan'))} sorties of {src}") in cap.out
+        for k, v in enumerate(fleet.vehicles, start=1):
+            mission, _fence = read_mission(src / f"mission-v{k}-s1.plan")
+            assert len(v.items()) == len(mission)
+    # a broken chain, a stray file: the same checks as verify's (no vehicle needed)
+    d = _swapped(dirs[1][1], tmp_path)
+    rc = main(["upload", str(d), "--fleet", *conn, "--map", str(dirs[1][0])])
+    err = capsys.readouterr().err
+    assert rc == 1 and "fleet CHAIN: vehicle 1 sortie 2 takes off at 'home'" in err, err

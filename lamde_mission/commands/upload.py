@@ -28,8 +28,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "the vehicles are addressed by MAVLink system id on one connection (--sysid, or the "
         "system ids heard there in ascending order) or one --connect each; all are heard "
         "before anything is sent (a vehicle missing or a count differing from fleet.json: "
-        "exit status 2), then each is uploaded, read back and compared in turn (docs/upload.md, "
-        "'Uploading a fleet').",
+        "exit status 2), then each is uploaded, read back and compared in turn; with --map the "
+        "whole directory is first judged as `verify MAP DIR/` judges it (docs/fleet.md).",
     )
     p.add_argument("mission", help="mission file (.plan or .waypoints); with --fleet a sortie "
                    "directory")
@@ -82,7 +82,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         metavar="MAP",
         help="replay the mission on MAP in the simulator before sending; a mission the "
         "simulator rejects (a constraint C1..C5 fails, a second take-off, an unusable hover "
-        "time) is refused with exit status 2 unless --force",
+        "time) is refused with exit status 2 unless --force. With --fleet the whole sortie "
+        "directory is replayed and judged first, exactly as `verify MAP DIR/` does; when a "
+        "check fails nothing is sent (exit status 1) unless --force",
     )
     p.add_argument("--origin", metavar="LAT,LON[,ALT]",
                    help="with --map: the WGS84 position of the map's (0, 0) (degrees, degrees, "
@@ -287,6 +289,47 @@ def _sim_check(path: str, map_path: str, mission: list, *, force: bool,
                      "(--force sends it anyway)")
 
 
+def _fleet_sim_check(directory: str, map_path: str, *, force: bool,
+                     origin: str | None = None) -> bool:
+    """`upload DIR/ --fleet --map MAP`: the whole sortie directory replayed and judged on the
+    map exactly as `verify MAP DIR/` judges it (every sortie, C4 and MARGIN over all of them,
+    CHAIN, UAVS, FILES), before anything is sent.
+
+    Args:
+        directory: the sortie directory.
+        map_path: the map file.
+        force: warn and go on when a check fails.
+        origin: `--origin`, for a map without an origin.
+
+    Returns:
+        True to go on (all hold, or `force`); False when a check fails (printed, nothing sent).
+
+    Raises:
+        UsageError: a bad map, directory, fleet.json field or mission file (one line).
+    """
+    from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
+    from lamde_mission.commands.verify import check_sortie_dir
+    from planner_core.textio import printable
+
+    m = with_origin_or_fail(load_map_or_fail(map_path), origin)
+    check = check_sortie_dir(m, directory)
+    if check.passed:
+        print(f"simulator: all constraints hold on {printable(map_path)} for the "
+              f"{len(check.sorties)} sorties of {printable(directory)} (as `verify MAP DIR/` "
+              "judges them)", flush=True)  # fmt: skip
+        return True
+    failed = "; ".join(printable(x) for x in check.failed())
+    if force:
+        print(f"warning: {printable(directory)}: the simulator rejects it on "
+              f"{printable(map_path)} ({failed}); sent anyway (--force)", file=sys.stderr)
+        return True
+    print(f"lamde-mission upload: {printable(directory)}: the simulator rejects it on "
+          f"{printable(map_path)}: {failed}; nothing sent (`lamde-mission verify "
+          f"{printable(map_path)} {printable(directory)}` shows every verdict; --force sends "
+          "it anyway)", file=sys.stderr)  # fmt: skip
+    return False
+
+
 def _sysids(text: str | None) -> list[int] | None:
     """`--sysid 1,2,3` as ints (1..255); UsageError naming the bad entry."""
     from lamde_mission.errors import UsageError
@@ -334,10 +377,6 @@ def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
     from lamde_mission.vehicle.fleet import FleetSetupError, sortie_missions, upload_fleet
     from lamde_mission.vehicle.transfer import DuplicateVehicleError, VehicleError
 
-    if args.map:
-        raise UsageError("--map with --fleet: replay the sorties together with "
-                         f"`lamde-mission verify {args.mission} --map {args.map}` first "
-                         "(one sortie alone need not serve every sensor)")  # fmt: skip
     conns = [c.strip() for c in args.connect.split(",")]
     for c in conns:
         try:
@@ -356,6 +395,9 @@ def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
             path = str(Path(args.mission) / fm.source)
             _wire_check(path, fm.mission, fm.fence, fm.rally)
             _flight_check(path, fm.mission, force=args.force)
+    if args.map and not _fleet_sim_check(args.mission, args.map, force=args.force,
+                                         origin=args.origin):
+        return 1
     n = len(missions)
     which = "first sorties" if args.sortie == 1 else f"sortie {args.sortie}"
     print(f"{args.mission}: {n} vehicle{'s' if n > 1 else ''}, {which}: "

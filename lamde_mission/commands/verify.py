@@ -53,18 +53,37 @@ def replay_mission_file(path: str, m: Any) -> Any:
     return timeline
 
 
-def _run_sorties(args: argparse.Namespace, m: Any) -> int:
-    """`verify MAP DIR/`: every sortie of a sortie directory, and the whole plan."""
+def check_sortie_dir(m: Any, path: str) -> Any:
+    """Replay and judge a sortie directory as `verify MAP DIR/` does (`upload DIR/ --fleet
+    --map MAP` too): `lamde_mission.sorties.verify_sortie_dir`, its notes on stderr.
+
+    Args:
+        m: the map (with its origin).
+        path: the sortie directory.
+
+    Returns:
+        The `lamde_mission.sorties.FleetCheck`.
+
+    Raises:
+        UsageError: a bad directory, fleet.json field or mission file (one line naming it).
+    """
     from lamde_mission.errors import UsageError
     from lamde_mission.sorties import verify_sortie_dir
-    from planner_core.textio import printable
 
     try:
-        check = verify_sortie_dir(m, args.mission)
+        check = verify_sortie_dir(m, path)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     for note in check.notes:
         print(f"note: {note}", file=sys.stderr)
+    return check
+
+
+def _run_sorties(args: argparse.Namespace, m: Any) -> int:
+    """`verify MAP DIR/`: every sortie of a sortie directory, and the whole plan."""
+    from planner_core.textio import printable
+
+    check = check_sortie_dir(m, args.mission)
     if args.json:
         out = {"sorties": [{"vehicle": s.vehicle, "sortie": s.sortie, "file": s.file,
                             "depot_start": s.depot_start, "depot_end": s.depot_end,
