@@ -193,10 +193,13 @@ def test_sysid_order_maps_vehicles_to_ids():
 )  # fmt: skip
 def test_fleet_mismatch_sends_nothing(n, connect, ids, shown):
     port = free_udp_port()
+    # one link each on its own port (one URL listed twice is refused up front: below)
+    conns = [f"udpin://127.0.0.1:{p}" for p in [port, *(free_udp_port() for _ in
+                                                         range(connect - 1))]]  # fmt: skip
     with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=3, heartbeat_hz=HZ) as fleet:
         with pytest.raises(FleetSetupError, match=shown):
-            upload_fleet(_missions(n), connect=[f"udpin://127.0.0.1:{port}"] * connect,
-                         system_ids=ids, via="pymavlink", timeout=0.6, window=0.3)  # fmt: skip
+            upload_fleet(_missions(n), connect=conns, system_ids=ids, via="pymavlink",
+                         timeout=0.6, window=0.3)  # fmt: skip
         assert all(sum(v.stats.uploads.values()) == 0 for v in fleet.vehicles)
 
 
@@ -341,6 +344,25 @@ def test_cli_upload_fleet_errors(fleet_dir, tmp_path, capsys):
     assert "2 system ids for one mission" in _one_line_exit_2(
         capsys, ["upload", one, *conn, "--sysid", "1,2"]
     )
+
+
+def test_cli_upload_fleet_refuses_a_connection_listed_twice(fleet_dir, capsys):
+    # it failed late, after the survey, with "Address already in use" (exit 1)
+    a, b = free_udp_port(), free_udp_port()
+    for connect, shown in (
+        (f"udpin://127.0.0.1:{a},udpin://127.0.0.1:{b},udpin://127.0.0.1:{a}",
+         f"--connect: udpin://127.0.0.1:{a} listed twice"),
+        (f"udpin://0.0.0.0:{a},udpin://127.0.0.1:{b},udpin:127.0.0.1:{a}",
+         f"--connect: udpin:127.0.0.1:{a} listed twice (as udpin://0.0.0.0:{a})"),
+    ):
+        t0 = time.monotonic()
+        err = _one_line_exit_2(capsys, ["upload", str(fleet_dir), "--fleet", "--connect",
+                                        connect, "--via", "pymavlink", "--timeout", "5"])
+        assert err == f"lamde-mission upload: {shown}"
+        assert time.monotonic() - t0 < 1.0  # up front: no survey
+    # the API refuses it too, before anything is opened
+    with pytest.raises(ValueError, match=f"udpin://127.0.0.1:{a} listed twice"):
+        upload_fleet(_missions(2), connect=[f"udpin://127.0.0.1:{a}"] * 2, timeout=1)
 
 
 @pytest.mark.parametrize(

@@ -373,16 +373,15 @@ def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
     from lamde_mission.errors import UsageError
     from lamde_mission.formats import MissionFileError
     from lamde_mission.formats.fleet import FleetDirError
-    from lamde_mission.vehicle.connection import parse_connection
+    from lamde_mission.vehicle.connection import parse_connections
     from lamde_mission.vehicle.fleet import FleetSetupError, sortie_missions, upload_fleet
     from lamde_mission.vehicle.transfer import DuplicateVehicleError, VehicleError
 
     conns = [c.strip() for c in args.connect.split(",")]
-    for c in conns:
-        try:
-            parse_connection(c)
-        except ValueError as exc:
-            raise UsageError(f"--connect: {exc}") from None
+    try:
+        parse_connections(conns)
+    except ValueError as exc:
+        raise UsageError(f"--connect: {exc}") from None
     ids = _sysids(args.sysid)
     if args.sortie < 1:
         raise UsageError(f"--sortie must be 1 or more, got {args.sortie}")

@@ -12,7 +12,8 @@ Syntax (MAVSDK's URLs, which both clients accept; `lamde-mission upload --connec
 Accepted spellings: `udp:` = `udpin:`, `tcp:` = `tcpout:`, and `scheme:rest` without `//`
 (mavutil's style). `parse_connection` raises ValueError with one line for anything else (unknown
 scheme, missing or out-of-range port, a serial device that does not exist or is not a terminal,
-a baud rate that is not a standard one).
+a baud rate that is not a standard one); `parse_connections` also refuses a list naming one
+address or device twice (two links cannot both open it).
 """
 
 from __future__ import annotations
@@ -27,7 +28,8 @@ import tty
 from dataclasses import dataclass
 from urllib.parse import urlsplit
 
-__all__ = ["Connection", "parse_connection", "Link", "open_link", "BAUD_RATES", "SCHEMES"]
+__all__ = ["Connection", "parse_connection", "parse_connections", "Link", "open_link",
+           "BAUD_RATES", "SCHEMES"]  # fmt: skip
 
 SCHEMES = ("udpin", "udpout", "tcpin", "tcpout", "serial")
 _ALIASES = {"udp": "udpin", "tcp": "tcpout"}
@@ -113,6 +115,39 @@ def parse_connection(text: str, *, check_device: bool = True) -> Connection:
     if not host or port is None or not 0 < port < 65536:
         raise ValueError(f"{text!r}: expected {scheme}://HOST:PORT with a port 1..65535")
     return Connection(scheme, host=host, port=int(port))
+
+
+def parse_connections(texts: list[str], *, check_device: bool = True) -> list[Connection]:
+    """Parse and check a list of connections, one per vehicle (`upload --fleet --connect
+    A,B`): each as `parse_connection`, and none twice. Two links on one serial device, or
+    listening (udpin, tcpin) on one port of one address (0.0.0.0 is every address), cannot
+    both open it: the second would fail late with "Address already in use".
+
+    Args:
+        texts: the connection strings, in vehicle order.
+        check_device: as for `parse_connection`.
+
+    Returns:
+        The connections, in the order given.
+
+    Raises:
+        ValueError: one line, naming a bad entry (`parse_connection`'s) or the one listed
+            twice.
+    """
+    out = [parse_connection(t, check_device=check_device) for t in texts]
+
+    def same(a: Connection, b: Connection) -> bool:
+        if a.scheme == "serial" or b.scheme == "serial":
+            return a.scheme == b.scheme and a.device == b.device
+        wild = a.scheme in ("udpin", "tcpin") and "0.0.0.0" in (a.host, b.host)
+        return a.scheme == b.scheme and a.port == b.port and (a.host == b.host or wild)
+
+    for j, b in enumerate(out):
+        for k, a in enumerate(out[:j]):
+            if same(a, b):
+                also = "" if a == b else f" (as {str(texts[k]).strip()})"
+                raise ValueError(f"{str(texts[j]).strip()} listed twice{also}")
+    return out
 
 
 # ----------------------------------------------------------------------------- links

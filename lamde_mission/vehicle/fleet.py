@@ -29,7 +29,7 @@ from pathlib import Path
 
 from lamde_mission.items import MissionItem
 from lamde_mission.vehicle.claims import ClaimWatch, duplicate_error
-from lamde_mission.vehicle.connection import Connection, Link, parse_connection
+from lamde_mission.vehicle.connection import Connection, Link, parse_connection, parse_connections
 from lamde_mission.vehicle.transfer import (
     DuplicateVehicleError,
     UploadReport,
@@ -441,8 +441,7 @@ def upload_fleet(
             wire_mission(fm.fence, MISSION_TYPE.FENCE)
         if fm.rally:
             wire_mission(fm.rally, MISSION_TYPE.RALLY)
-    for c in connect:
-        parse_connection(c)
+    parse_connections(list(connect))
     t0 = time.monotonic()
     conns, ids, listened = assign_system_ids(
         len(missions), list(connect), system_ids, timeout=timeout, window=window,
