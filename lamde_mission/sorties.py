@@ -26,7 +26,8 @@ fleet.json (the contract of docs/sorties.md):
         "duration_s": s, "energy_wh": Wh, "reserve_left_wh": Wh, "sensors": ["s01", ...]}]}],
      "total_s": s, "swaps": n, "f_total": sum of f + swap_s per swap}
 
-Durations and energies are the simulator's, on the stored missions. Cost: one storage pass and
+Durations, energies and f_total are the simulator's, on the stored missions (the planner's own
+objective, `FleetPlan.total`, is not stored: its model rounds nothing). Cost: one storage pass and
 one replay per sortie (O(points x J) each).
 """
 
@@ -196,6 +197,12 @@ class FleetCheck:
         return sum(self.makespan(v) for v in vs)
 
     @property
+    def f_total(self) -> float:
+        """The objective "total" on the replays: the paper's f of each stored sortie as the
+        simulator flies it, summed, plus swap_s per swap."""
+        return sum(float(s.timeline.totals.f) for s in self.sorties) + self.swap_s * self.swaps
+
+    @property
     def swaps(self) -> int:
         """Battery swaps: each vehicle's sorties after its first."""
         return sum(len(ss) - 1 for ss in self.vehicles().values())
@@ -356,10 +363,18 @@ def verify_sortie_dir(m: Any, path: str | Path) -> FleetCheck:
     return check if note is None else replace(check, notes=(note,))
 
 
-def summary_dict(
-    m: Any, check: FleetCheck, goal: str, f_total: float | None = None
-) -> dict[str, Any]:
-    """fleet.json's content for a checked plan (module docstring)."""
+def summary_dict(m: Any, check: FleetCheck, goal: str) -> dict[str, Any]:
+    """fleet.json's content for a checked plan (module docstring): every figure the
+    simulator's, on the stored missions.
+
+    Args:
+        m: the plan's map.
+        check: the stored missions' replays (`_check`).
+        goal: the objective the plan was made for.
+
+    Returns:
+        The JSON object.
+    """
     vehicles = []
     for v, ss in check.vehicles().items():
         vehicles.append({
@@ -378,9 +393,8 @@ def summary_dict(
         "vehicles": vehicles,
         "total_s": check.total_s,
         "swaps": check.swaps,
+        "f_total": check.f_total,
     }
-    if f_total is not None:
-        out["f_total"] = f_total
     return out
 
 
@@ -458,7 +472,7 @@ def write_sortie_dir(
         if not check.passed and not allow_infeasible:
             return check, False
         (pending / FLEET_FILE).write_text(
-            json.dumps(summary_dict(m, check, goal, plan.total), indent=2) + "\n", encoding="utf-8"
+            json.dumps(summary_dict(m, check, goal), indent=2) + "\n", encoding="utf-8"
         )
         old = None
         if target.exists():

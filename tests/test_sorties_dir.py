@@ -231,3 +231,21 @@ def test_upload_fleet_with_map_replays_the_directory_first(dirs, tmp_path, capsy
     rc = main(["upload", str(d), "--fleet", *conn, "--map", str(dirs[1][0])])
     err = capsys.readouterr().err
     assert rc == 1 and "fleet CHAIN: vehicle 1 sortie 2 takes off at 'home'" in err, err
+
+
+@pytest.mark.parametrize("uavs", [1, 2])
+def test_fleet_json_figures_are_all_the_replays(dirs, uavs, capsys):
+    # f_total was the planner's unrounded objective beside the sim's durations and energies
+    # (the demo: 251.097 in fleet.json, 80.303 + 51.355 + 120 = 251.658 replayed)
+    map_path, d = dirs[uavs]
+    summary = json.loads((d / "fleet.json").read_text())
+    rc, out, _ = _verify(capsys, map_path, d, "--json")
+    rep = json.loads(out)
+    swap_s = json.loads(map_path.read_text())["fleet"]["swap_s"]
+    replayed = sum(s["f"] for s in rep["sorties"]) + swap_s * rep["swaps"]
+    assert summary["swaps"] == rep["swaps"] >= 1
+    assert summary["f_total"] == pytest.approx(replayed, rel=1e-12)
+    assert rep["f_total"] == pytest.approx(replayed, rel=1e-12)
+    assert summary["total_s"] == pytest.approx(rep["total_s"], rel=1e-12)
+    durations = [s["duration_s"] for v in summary["vehicles"] for s in v["sorties"]]
+    assert durations == pytest.approx([s["duration_s"] for s in rep["sorties"]], rel=1e-12)

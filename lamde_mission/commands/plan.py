@@ -352,7 +352,7 @@ def _wants_sorties(path: str) -> bool:
     return bool(m.has_battery or m.has_fleet)
 
 
-def _sortie_lines(check: Any, plan: Any) -> list[str]:
+def _sortie_lines(check: Any) -> list[str]:
     """Per sortie: depots, duration, energy, reserve left, sensors served; per vehicle its
     makespan; then the plan's totals (the sim's figures on the stored missions)."""
     from planner_core.textio import printable
@@ -369,7 +369,7 @@ def _sortie_lines(check: Any, plan: Any) -> list[str]:
                          f"{len(s.sensors)} sensors served")
         lines.append(f"  vehicle {v}: {len(ss)} sorties, makespan {check.makespan(v):.1f} s")
     lines.append(f"  total {check.total_s:.1f} s over {len(check.sorties)} sorties with "
-                 f"{check.swaps} battery swaps; f summed + swaps {plan.total:.2f}")
+                 f"{check.swaps} battery swaps; f summed + swaps {check.f_total:.2f}")
     for v in check.combined:
         lines.append(f"  whole plan {v.name}: {'PASS' if v.passed else 'FAIL'} ({v.detail})")
     return lines
@@ -464,7 +464,7 @@ def _run_sorties(args: argparse.Namespace) -> int:
         print(f"map '{printable(m.name)}': {len(plan.sorties)} sorties on "
               f"{len(plan.vehicles)} vehicle(s), objective {goal}, {plan.evaluations} "
               f"evaluations (seed {args.seed})")
-        print("\n".join(_sortie_lines(check, plan)))
+        print("\n".join(_sortie_lines(check)))
         if written:
             print(f"wrote {printable(str(out))}/ ({len(check.sorties)} missions and fleet.json)")
     if written and args.plot:  # every sortie as the simulator replays it (`show MAP DIR/`)

@@ -92,7 +92,8 @@ def _run_sorties(args: argparse.Namespace, m: Any) -> int:
                "combined": [v.to_dict() for v in check.combined],
                "fleet": [v.to_dict() for v in check.fleet], "notes": list(check.notes),
                "makespan_s": {str(v): check.makespan(v) for v in check.vehicles()},
-               "total_s": check.total_s, "swaps": check.swaps, "passed": check.passed}
+               "total_s": check.total_s, "swaps": check.swaps, "f_total": check.f_total,
+               "passed": check.passed}
         print(json.dumps(out, indent=2))
     else:
         print(f"sortie directory {printable(args.mission)} on map '{printable(m.name)}': "
@@ -114,7 +115,8 @@ def _run_sorties(args: argparse.Namespace, m: Any) -> int:
         for v in check.fleet:
             print(f"fleet {v.name} {v.title}: {'PASS' if v.passed else 'FAIL'}; "
                   f"{printable(v.detail)}")
-        print(f"total {check.total_s:.1f} s with {check.swaps} battery swaps")
+        print(f"total {check.total_s:.1f} s with {check.swaps} battery swaps; f summed + "
+              f"swaps {check.f_total:.3f}")
         print("result: " + ("all constraints hold" if check.passed
                             else "FAILED " + "; ".join(printable(x) for x in check.failed())))
     return 0 if check.passed else 1
