@@ -71,7 +71,7 @@ def main() -> int:
 
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "sorties"
-        check, written = write_sortie_dir(plan, m, out, goal="makespan")
+        check, written = write_sortie_dir(plan, m, out)  # objective: the plan's
         if not written:
             print("the sorties are infeasible: " + "; ".join(check.failed()), file=sys.stderr)
             return 1

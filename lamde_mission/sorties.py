@@ -404,7 +404,7 @@ def write_sortie_dir(
     out_dir: str | Path,
     *,
     autopilot: str = "generic",
-    goal: str = "total",
+    goal: str | None = None,
     allow_infeasible: bool = False,
 ) -> tuple[FleetCheck, bool]:
     """Store, write and verify the fleet plan `plan` (`planner_core.fleet.FleetPlan`, made on
@@ -416,7 +416,8 @@ def write_sortie_dir(
         out_dir: the directory to create, or to replace when it is empty or an earlier sortie
             directory (`sortie_dir_refusal`).
         autopilot: "generic", "px4" or "ardupilot" (`lamde_mission.storage`).
-        goal: the objective named in fleet.json.
+        goal: the objective named in fleet.json: None for the plan's own
+            (`plan.settings.goal`, what it was made for); given, it must be that one.
         allow_infeasible: write it even when a verdict fails.
 
     Returns:
@@ -427,6 +428,7 @@ def write_sortie_dir(
             holding anything but a sortie directory's files (`sortie_dir_refusal`); checked
             before anything is written.
         OSError: the directory cannot be written (nothing is left half-written).
+        ValueError: `goal` is not the plan's (before anything is written).
     """
     from lamde_mission.formats import write_mission
     from lamde_mission.items import plan_to_items
@@ -435,6 +437,10 @@ def write_sortie_dir(
     from planner_core.model.formulas import ModelParams
 
     st = plan.settings
+    if goal is not None and goal != st.goal:
+        raise ValueError(f"goal: '{goal}', but the plan was made for '{st.goal}' (leave goal "
+                         "out to name the plan's own)")  # fmt: skip
+    goal = st.goal
     shares = collected_by_sortie(plan, ModelParams.from_map(m.planning_map()))  # Mbit, margin in
     margin = 1.0 + float(m.spec.safety.data_margin)
     refusal = sortie_dir_refusal(out_dir)

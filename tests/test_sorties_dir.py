@@ -249,3 +249,18 @@ def test_fleet_json_figures_are_all_the_replays(dirs, uavs, capsys):
     assert summary["total_s"] == pytest.approx(rep["total_s"], rel=1e-12)
     durations = [s["duration_s"] for v in summary["vehicles"] for s in v["sorties"]]
     assert durations == pytest.approx([s["duration_s"] for s in rep["sorties"]], rel=1e-12)
+
+
+def test_fleet_json_names_the_plans_objective(tmp_path):
+    # write_sortie_dir(result.plan, m, d), as docs/sorties.md shows it, wrote "total" for a
+    # plan made for the makespan
+    from lamde_mission.sorties import write_sortie_dir
+
+    m, plan = _fleet_plan(_demo_map(tmp_path, 2), "makespan")
+    assert plan.settings.goal == "makespan"
+    check, written = write_sortie_dir(plan, m, tmp_path / "d")
+    assert written, check.failed()
+    assert json.loads((tmp_path / "d" / "fleet.json").read_text())["objective"] == "makespan"
+    with pytest.raises(ValueError, match="goal: 'total', but the plan was made for 'makespan'"):
+        write_sortie_dir(plan, m, tmp_path / "e", goal="total")
+    assert not (tmp_path / "e").exists()

@@ -456,7 +456,7 @@ def _run_sorties(args: argparse.Namespace) -> int:
         return 1
     plan = result.plan
     try:
-        check, written = write_sortie_dir(plan, m, out, autopilot=args.autopilot, goal=goal,
+        check, written = write_sortie_dir(plan, m, out, autopilot=args.autopilot,
                                           allow_infeasible=args.allow_infeasible)
     except FileExistsError as exc:  # the folder changed while planning
         raise UsageError(f"-o/--output: {exc}") from None
