@@ -831,6 +831,16 @@ def _corners_of(timeline: Any) -> np.ndarray:
     return np.asarray(corner_stops(route), dtype=float).reshape(-1, 2)
 
 
+def _map_depots(map: Any) -> list[tuple[str, tuple[float, float]]]:  # noqa: A002
+    """The map's depots as the sortie planner names them (`FleetSettings`: `fleet.depots`, or
+    "home" and, where it differs, "end"), with their positions (m)."""
+    from planner_core.fleet import FleetSettings
+
+    st = FleetSettings.from_map(map)
+    return [(n, (float(x), float(y))) for n, (x, y) in zip(st.depot_names, st.depots,
+                                                            strict=True)]  # fmt: skip
+
+
 def fleet_figure(
     map: Any,  # noqa: A002
     sorties: Sequence[SortieView],
@@ -845,7 +855,8 @@ def fleet_figure(
     colour labelled "sortie.order · seconds" (up to 40 hover points in all), detour corners
     (NAV_WAYPOINT, flown through) as white diamonds edged in it, the parts of legs
     inside obstacles (C5) in red; depots (where sorties take off and land) as black-edged
-    hexagons with their names, and each battery swap (a vehicle landing from sortie j and
+    hexagons with their names, the map's depots no sortie uses as lighter grey ones (named
+    beside them and in the legend), and each battery swap (a vehicle landing from sortie j and
     leaving on sortie j + 1) as a star in the vehicle's colour with "v1 swap 1". Sensors are
     coloured by the data collected over all sorties together (C4 over the whole plan).
     Cost: O(sorties x samples) for the drawing.
@@ -947,6 +958,16 @@ def fleet_figure(
             scene.labels.append(_Label(" / ".join(sorted(names)), (x, y),
                                        {"fontsize": 8, "fontweight": "bold", "zorder": 9,
                                         "bbox": _TEXT_BOX}, 7.5))  # fmt: skip
+    # the map's other depots, where no sortie takes off or lands: lighter, named in the legend
+    used = {n for names in depots.values() for n in names}
+    idle = [(name, xy) for name, xy in _map_depots(map) if name not in used and not any(
+        np.hypot(xy[0] - x, xy[1] - y) <= 1.0 for x, y in depots)]  # fmt: skip
+    for name, (x, y) in idle:
+        ax.plot(x, y, marker="h", markersize=12, color="0.93", markeredgecolor="0.55",
+                markeredgewidth=1.0, zorder=5, linestyle="")  # fmt: skip
+        scene.marker((x, y), 6.5)
+        scene.labels.append(_Label(name, (x, y), {"fontsize": 7.5, "color": "0.45", "zorder": 9,
+                                                  "bbox": _TEXT_BOX}, 6.5))  # fmt: skip
     # swaps: a vehicle lands from sortie j and leaves on sortie j + 1
     swaps = 0
     by_vehicle: dict[int, list[SortieView]] = {}
@@ -1002,6 +1023,11 @@ def fleet_figure(
             label="depot",
         )
     )
+    if idle:
+        handles.append(Line2D([], [], marker="h", linestyle="", markersize=10,
+                              markerfacecolor="0.93", markeredgecolor="0.55",
+                              label="depot no sortie uses: "
+                              + ", ".join(n for n, _ in idle)))  # fmt: skip
     if swaps:
         handles.append(Line2D([], [], marker="*", linestyle="", markersize=13,
                               markerfacecolor="0.6", markeredgecolor="k",

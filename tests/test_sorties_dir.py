@@ -264,3 +264,29 @@ def test_fleet_json_names_the_plans_objective(tmp_path):
     with pytest.raises(ValueError, match="goal: 'total', but the plan was made for 'makespan'"):
         write_sortie_dir(plan, m, tmp_path / "e", goal="total")
     assert not (tmp_path / "e").exists()
+
+
+def test_show_draws_the_depots_no_sortie_uses(dirs, tmp_path, capsys):
+    # only the depots sorties took off or landed at were drawn: 'east' was missing
+    from matplotlib.text import Text
+
+    from lamde_mission.commands.show import fleet_views
+    from lamde_mission.plot import fleet_figure
+
+    _, d = dirs[1]
+    doc = json.loads(DEMO.read_text())
+    doc["fleet"]["depots"].append({"name": "east", "x": 1900.0, "y": 150.0})
+    path = tmp_path / "with-east.json"
+    path.write_text(json.dumps(doc))
+    m = load_map(path)
+    fig = fleet_figure(m, fleet_views(d, m))
+    texts = [t.get_text() for t in fig.findobj(Text) if t.get_text()]
+    assert "east" in texts and "home" in texts and "north" in texts
+    assert "depot no sortie uses: east" in texts
+    idle = [line for line in fig.axes[0].get_lines() if line.get_marker() == "h"
+            and line.get_markerfacecolor() == "0.93"]
+    assert [tuple(line.get_xydata()[0]) for line in idle] == [(1900.0, 150.0)]
+    texts = [t.get_text() for t in fleet_figure(load_map(DEMO), fleet_views(d, m)).findobj(Text)]
+    assert not any("no sortie uses" in t for t in texts)  # every depot of the demo is used
+    assert main(["show", str(path), str(d), "-o", str(tmp_path / "x.png")]) == 0
+    assert (tmp_path / "x.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -19,8 +19,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "a sortie directory (`lamde-mission plan MAP -o DIR/` for a battery or a fleet: "
         "fleet.json and mission-v{k}-s{j}.plan): every sortie replayed and drawn, one colour "
         "per vehicle, one line style per sortie (solid, dashed, dash-dot, dotted), depots as "
-        "hexagons, battery swaps as stars, sensors coloured by the data of all sorties "
-        "together.",
+        "hexagons (every depot of the map; those no sortie uses lighter), battery swaps as "
+        "stars, sensors coloured by the data of all sorties together.",
     )
     p.add_argument("map", help="map file (JSON)")
     from lamde_mission.commands._common import add_origin_option
