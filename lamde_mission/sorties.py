@@ -23,7 +23,8 @@ fleet.json (the contract of docs/sorties.md):
     {"map": name, "objective": "total" | "makespan",
      "vehicles": [{"vehicle": 1, "makespan_s": s, "sorties": [{"sortie": 1,
         "file": "mission-v1-s1.plan", "depot_start": "home", "depot_end": "home",
-        "duration_s": s, "energy_wh": Wh, "reserve_left_wh": Wh, "sensors": ["s01", ...]}]}],
+        "duration_s": s, "energy_wh": Wh, "reserve_left_wh": Wh (battery - energy),
+        "above_reserve_wh": Wh (usable - energy), "sensors": ["s01", ...]}]}],
      "total_s": s, "swaps": n, "f_total": sum of f + swap_s per swap}
 
 Durations, energies and f_total are the simulator's, on the stored missions (the planner's own
@@ -383,6 +384,7 @@ def summary_dict(m: Any, check: FleetCheck, goal: str) -> dict[str, Any]:
                 "sortie": s.sortie, "file": s.file, "depot_start": s.depot_start,
                 "depot_end": s.depot_end, "duration_s": s.duration_s,
                 "energy_wh": s.verdicts.energy_wh, "reserve_left_wh": s.verdicts.reserve_left_wh,
+                "above_reserve_wh": s.verdicts.above_reserve_wh,
                 "sensors": list(s.sensors),
             } for s in ss],
             "makespan_s": check.makespan(v),

@@ -94,10 +94,19 @@ class Verdicts:
 
     @property
     def reserve_left_wh(self) -> float | None:
-        """Energy left in the battery at landing (Wh): battery - energy; None without one."""
+        """Energy left in the battery at landing (Wh): battery - energy, the reserve included;
+        None without one."""
         if self.energy_wh is None or self.battery_wh is None:
             return None
         return self.battery_wh - self.energy_wh
+
+    @property
+    def above_reserve_wh(self) -> float | None:
+        """Energy left at landing above the reserve (Wh): usable - energy, the slack ENERGY
+        judges (negative: into the reserve); None without a battery."""
+        if self.energy_wh is None or self.usable_wh is None:
+            return None
+        return self.usable_wh - self.energy_wh
 
     @property
     def passed(self) -> bool:
@@ -141,7 +150,8 @@ class Verdicts:
         }
         if self.energy_wh is not None:  # maps with a battery only: older reports unchanged
             out.update(energy_wh=self.energy_wh, battery_wh=self.battery_wh,
-                       usable_wh=self.usable_wh, reserve_left_wh=self.reserve_left_wh)
+                       usable_wh=self.usable_wh, reserve_left_wh=self.reserve_left_wh,
+                       above_reserve_wh=self.above_reserve_wh)
         return out
 
 

@@ -143,3 +143,4 @@ def test_verify_prints_the_energy_and_the_reserve_left(tmp_path) -> None:
     assert 13.07 < used < 13.2, line
     assert "of 16.000 Wh usable (battery 20.000 Wh less its reserve)" in line
     assert f"left at landing {20 - used:.3f} Wh" in line
+    assert line.endswith(f"% of the battery, {16 - used:.3f} Wh above the reserve"), line

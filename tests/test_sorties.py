@@ -317,12 +317,13 @@ def test_plan_dir_writes_sorties_the_sim_passes_and_verify_catches_energy(tmp_pa
         for s in v["sorties"]:
             assert 0 < s["energy_wh"] <= usable
             assert s["reserve_left_wh"] >= m.battery_wh * m.battery_reserve
+            assert s["above_reserve_wh"] == pytest.approx(usable - s["energy_wh"], rel=1e-12)
             assert s["duration_s"] > 0
         assert v["makespan_s"] == pytest.approx(
             sum(s["duration_s"] for s in v["sorties"]) + m.swap_s * (len(v["sorties"]) - 1))
     served = {sid for v in summary["vehicles"] for s in v["sorties"] for sid in s["sensors"]}
     assert served == set(m.sensor_ids)
-    assert "makespan" in r.stdout and "reserve left" in r.stdout
+    assert "makespan" in r.stdout and "Wh left above the reserve" in r.stdout
     ok = _verify_cli(str(DEMO), str(out), "--json")
     assert ok.returncode == 0, ok.stdout + ok.stderr
     rep = json.loads(ok.stdout)

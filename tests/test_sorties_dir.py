@@ -290,3 +290,39 @@ def test_show_draws_the_depots_no_sortie_uses(dirs, tmp_path, capsys):
     assert not any("no sortie uses" in t for t in texts)  # every depot of the demo is used
     assert main(["show", str(path), str(d), "-o", str(tmp_path / "x.png")]) == 0
     assert (tmp_path / "x.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_plan_and_verify_print_what_is_left_above_the_reserve(dirs, capsys):
+    # "reserve left" was battery - energy: the reserve itself included, read as slack
+    from lamde_mission.commands.plan import _sortie_lines
+    from lamde_mission.sorties import verify_sortie_dir
+
+    map_path, d = dirs[1]
+    m = load_map(map_path)
+    summary = json.loads((d / "fleet.json").read_text())
+    first = summary["vehicles"][0]["sorties"][0]
+    slack = m.usable_energy_wh - first["energy_wh"]
+    assert first["above_reserve_wh"] == pytest.approx(slack, rel=1e-12)
+    assert first["reserve_left_wh"] == pytest.approx(m.battery_wh - first["energy_wh"])
+    rc, out, _ = _verify(capsys, map_path, d)
+    (line,) = [x for x in out.splitlines() if x.startswith(first["file"])]
+    assert (f"{slack:.3f} Wh left above the reserve ({m.battery_wh - first['energy_wh']:.3f} "
+            "Wh in the battery)") in line, line
+    assert "reserve left" not in out
+    lines = _sortie_lines(verify_sortie_dir(m, d))
+    assert f"{slack:6.2f} Wh left above the reserve" in lines[0], lines[0]
+    assert not any("reserve left" in x for x in lines)
+
+
+def test_the_docs_say_what_plan_fleet_returns_and_what_is_left() -> None:
+    # README said plan_fleet "returns the plan": it returns a FleetResult, its .plan the plan;
+    # "reserve left" (battery - energy) read as slack
+    import lamde_mission
+
+    assert "A `planner_core.fleet.FleetResult`: `plan` (the `FleetPlan`" in " ".join(
+        lamde_mission.plan_fleet.__doc__.split())
+    readme = " ".join((ROOT / "README.md").read_text().split())
+    assert ("`lamde_mission.plan_fleet(map)` returns a `FleetResult` whose `.plan` is the "
+            "plan") in readme
+    for page in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]:
+        assert "reserve left" not in " ".join(page.read_text().split()), page

@@ -24,7 +24,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "mission-v{vehicle}-s{sortie}.plan (both 1-based: "
         "mission-v1-s2.plan is vehicle 1's second sortie, each a complete mission from "
         "take-off at its depot to landing at its depot) and fleet.json (per sortie: depots, "
-        "duration, energy, reserve left, sensors served; per vehicle: makespan).",
+        "duration, energy, energy left above the reserve, sensors served; per vehicle: "
+        "makespan).",
     )
     p.add_argument("map", help="map file (JSON)")
     from lamde_mission.commands._common import add_origin_option
@@ -353,17 +354,18 @@ def _wants_sorties(path: str) -> bool:
 
 
 def _sortie_lines(check: Any) -> list[str]:
-    """Per sortie: depots, duration, energy, reserve left, sensors served; per vehicle its
-    makespan; then the plan's totals (the sim's figures on the stored missions)."""
+    """Per sortie: depots, duration, energy, what is left above the reserve, sensors served;
+    per vehicle its makespan; then the plan's totals (the sim's figures on the stored
+    missions)."""
     from planner_core.textio import printable
 
     lines = []
     for v, ss in check.vehicles().items():
         for s in ss:
             vd = s.verdicts
-            energy = (f"energy {vd.energy_wh:7.2f} Wh of {vd.usable_wh:.2f} usable, reserve "
-                      f"left {vd.reserve_left_wh:6.2f} Wh") if vd.energy_wh is not None \
-                else "no battery"
+            energy = (f"energy {vd.energy_wh:7.2f} Wh of {vd.usable_wh:.2f} usable, "
+                      f"{vd.above_reserve_wh:6.2f} Wh left above the reserve") \
+                if vd.energy_wh is not None else "no battery"
             lines.append(f"  {s.file:<18} {printable(s.depot_start)} -> "
                          f"{printable(s.depot_end)}: {s.duration_s:8.1f} s, {energy}, "
                          f"{len(s.sensors)} sensors served")

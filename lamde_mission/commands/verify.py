@@ -101,8 +101,9 @@ def _run_sorties(args: argparse.Namespace, m: Any) -> int:
         for s in check.sorties:
             vd = s.verdicts
             energy = (f", energy {vd.energy_wh:.3f} Wh of {vd.usable_wh:.3f} usable, "
-                      f"reserve left {vd.reserve_left_wh:.3f} Wh") if vd.energy_wh is not None \
-                else ""
+                      f"{vd.above_reserve_wh:.3f} Wh left above the reserve "
+                      f"({vd.reserve_left_wh:.3f} Wh in the battery)") \
+                if vd.energy_wh is not None else ""
             print(f"{printable(s.file)}: {printable(s.depot_start)} -> "
                   f"{printable(s.depot_end)}, {s.duration_s:.1f} s{energy}, "
                   f"{len(s.sensors)} sensors served (its C4 and MARGIN: its share only)")
@@ -170,7 +171,8 @@ def run(args: argparse.Namespace) -> int:
             left = verdicts.reserve_left_wh
             print(f"energy {verdicts.energy_wh:.3f} Wh of {verdicts.usable_wh:.3f} Wh usable "
                   f"(battery {verdicts.battery_wh:.3f} Wh less its reserve); left at landing "
-                  f"{left:.3f} Wh, {100 * left / verdicts.battery_wh:.1f} % of the battery")
+                  f"{left:.3f} Wh, {100 * left / verdicts.battery_wh:.1f} % of the battery, "
+                  f"{verdicts.above_reserve_wh:.3f} Wh above the reserve")
         print("result: " + ("all constraints hold" if verdicts.passed
                             else "FAILED " + ", ".join(verdicts.failed)))  # fmt: skip
     return 0 if verdicts.passed else 1
