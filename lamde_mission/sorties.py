@@ -158,6 +158,8 @@ class FleetCheck:
     swap_s: float
     fleet: tuple[Any, ...] = ()
     notes: tuple[str, ...] = ()
+    #: each vehicle's launch, s after the first's take-off (`lamde_mission.launches`)
+    launches: tuple[float, ...] = ()
 
     @property
     def passed(self) -> bool:
@@ -186,16 +188,21 @@ class FleetCheck:
             out.setdefault(s.vehicle, []).append(s)
         return out
 
+    def launch(self, vehicle: int) -> float:
+        """Vehicle's launch, s after the first vehicle's take-off (0 without launches)."""
+        return float(self.launches[vehicle - 1]) if len(self.launches) >= vehicle else 0.0
+
     def makespan(self, vehicle: int) -> float:
-        """Vehicle's first take-off to last landing, swaps included (s)."""
+        """From the first vehicle's take-off to this vehicle's last landing: its launch, its
+        sorties and swaps (s)."""
         ss = self.vehicles()[vehicle]
-        return sum(s.duration_s for s in ss) + self.swap_s * (len(ss) - 1)
+        return self.launch(vehicle) + sum(s.duration_s for s in ss) + \
+            self.swap_s * (len(ss) - 1)
 
     @property
     def total_s(self) -> float:
-        """All sorties' durations plus swap_s per swap (s)."""
-        vs = self.vehicles()
-        return sum(self.makespan(v) for v in vs)
+        """All sorties' durations plus swap_s per swap (s); the launches' waits not counted."""
+        return sum(s.duration_s for s in self.sorties) + self.swap_s * self.swaps
 
     @property
     def f_total(self) -> float:
@@ -308,12 +315,16 @@ def _files_verdict(directory: Path, listed: list[str]) -> Any:
 
 def _check(
     m: Any, rows: list[tuple[int, int, str, str, str, list[Any]]], vehicles: int,
-    directory: Path,
+    directory: Path, launches: list[float] | None = None,
 ) -> FleetCheck:
     """Replay each (vehicle, sortie, file, depot_start, depot_end, items) on its sortie map;
-    judge the whole plan's data and its shape (`vehicles`: how many the plan lists; the mission
-    files in `directory`)."""
+    judge the whole plan's data, its shape (`vehicles`: how many the plan lists; the mission
+    files in `directory`) and its vehicles in the air together (SEPARATION, LINKS at each
+    vehicle's launch; `launches` None: staggered by `lamde_mission.launches.stagger`, as a
+    plan is written)."""
+    from lamde_mission.launches import stagger
     from sim import replay, verify
+    from sim.fleet_time import VehicleTrack, fleet_time_verdicts, track
     from sim.sorties import combined_data_verdicts
 
     out = []
@@ -325,7 +336,19 @@ def _check(
     combined = combined_data_verdicts([s.timeline for s in out], m)
     shape = (_chain_verdict(m, rows), _uavs_verdict(m, vehicles),
              _files_verdict(directory, [r[2] for r in rows]))  # fmt: skip
-    return FleetCheck(tuple(out), tuple(combined), float(m.swap_s), shape)
+    by_vehicle: dict[int, list[Any]] = {}
+    for s in out:
+        by_vehicle.setdefault(s.vehicle, []).append(s.timeline)
+    tracks = [track(by_vehicle[v], float(m.swap_s)) for v in sorted(by_vehicle)]
+    if launches is None:
+        launches = stagger(tracks)
+    launches = [float(t) for t in launches][:len(tracks)]
+    launches += [0.0] * (len(tracks) - len(launches))
+    air = fleet_time_verdicts([VehicleTrack(t, x.dt, x.xy, x.z, x.sending)
+                               for t, x in zip(launches, tracks, strict=True)],
+                              tuple(m.sensor_ids))  # fmt: skip
+    return FleetCheck(tuple(out), tuple(combined), float(m.swap_s), (*shape, *air),
+                      launches=tuple(launches))
 
 
 def verify_sortie_dir(m: Any, path: str | Path) -> FleetCheck:
@@ -359,7 +382,8 @@ def verify_sortie_dir(m: Any, path: str | Path) -> FleetCheck:
             except MissionFileError as exc:
                 raise ValueError(f"{s.path}: {exc}") from None
             rows.append((veh.vehicle, s.sortie, s.path.name, s.depot_start, s.depot_end, items))
-    check = _check(m, rows, len(fleet.vehicles), fleet.path)
+    check = _check(m, rows, len(fleet.vehicles), fleet.path,
+                   [veh.launch_s for veh in fleet.vehicles])
     note = fleet.map_note(m.name, "verified")
     return check if note is None else replace(check, notes=(note,))
 
@@ -387,6 +411,7 @@ def summary_dict(m: Any, check: FleetCheck, goal: str) -> dict[str, Any]:
                 "above_reserve_wh": s.verdicts.above_reserve_wh,
                 "sensors": list(s.sensors),
             } for s in ss],
+            "launch_s": check.launch(v),
             "makespan_s": check.makespan(v),
         })  # fmt: skip
     out: dict[str, Any] = {

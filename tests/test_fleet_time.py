@@ -81,3 +81,38 @@ def test_no_overlap_in_time_is_never_a_conflict() -> None:
 def test_stagger_step(step: float) -> None:
     a, b = _track(100), _track(100)
     assert stagger([a, b], step=step)[1] % step == 0.0
+
+
+SOLO = {"name": "solo", "origin": {"lat": 60.0, "lon": 10.0, "alt": 100.0},
+        "area": {"width": 1500, "height": 1500}, "start": [100, 100], "end": [100, 100],
+        "sensors": [{"id": "solo", "x": 1200, "y": 1200, "required_data": 3000}],
+        "uav": {"endurance_s": 600}, "fleet": {"uavs": 2, "swap_s": 60},
+        "objective": {"goal": "makespan"}}
+
+
+@pytest.mark.slow  # measured ~6 s: a fleet plan and two verifies in fresh processes
+def test_two_uavs_from_one_depot_are_launched_apart_and_verify_holds_them_to_it(tmp_path
+                                                                               ) -> None:
+    """The reviewer's map: two UAVs, one depot, one sensor. They took off from one point at
+    once and flew the same diagonal at 100 m, and verify passed. Now plan staggers the second
+    launch, fleet.json records it, and verify fails the directory with the launches at 0."""
+    import json
+
+    from tests.conftest import run_cli
+
+    path = tmp_path / "solo.json"
+    path.write_text(json.dumps(SOLO))
+    out = tmp_path / "solo"
+    r = run_cli("plan", path, "-o", f"{out}/", "--budget", 2000, "--sortie-budget", 500,
+                "--rounds", 1)
+    assert r.returncode == 0, r.stderr
+    assert "fleet SEPARATION: PASS" in r.stdout and "vehicle 2: launch at +" in r.stdout
+    doc = json.loads((out / "fleet.json").read_text())
+    launches = [v["launch_s"] for v in doc["vehicles"]]
+    assert launches[0] == 0.0 and launches[1] > 0.0
+    assert run_cli("verify", path, out).returncode == 0
+    for v in doc["vehicles"]:
+        v["launch_s"] = 0.0
+    (out / "fleet.json").write_text(json.dumps(doc))
+    r = run_cli("verify", path, out)
+    assert r.returncode == 1 and "fleet SEPARATION vehicles >= 30 m apart: FAIL" in r.stdout

@@ -254,6 +254,7 @@ def test_cli_upload_fleet_dir(via, fleet_dir, capsys):
             assert _holds(v, mission)
     assert "fleet: 3 of 3 vehicles hold their mission" in out
     assert "vehicle 2 (system 2" in out and "mission-v2-s1.plan" in out
+    assert "launch vehicle 1 at +0 s, vehicle 2 at +" in out  # fleet.json's launch_s
 
 
 @pytest.mark.slow  # measured 1.7 s; upload_fleet on one link each runs in the default suite

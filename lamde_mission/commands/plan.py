@@ -369,11 +369,16 @@ def _sortie_lines(check: Any) -> list[str]:
             lines.append(f"  {s.file:<18} {printable(s.depot_start)} -> "
                          f"{printable(s.depot_end)}: {s.duration_s:8.1f} s, {energy}, "
                          f"{len(s.sensors)} sensors served")
-        lines.append(f"  vehicle {v}: {len(ss)} sorties, makespan {check.makespan(v):.1f} s")
+        launch = f"launch at +{check.launch(v):.0f} s, " if len(check.launches) > 1 else ""
+        lines.append(f"  vehicle {v}: {launch}{len(ss)} sorties, makespan "
+                     f"{check.makespan(v):.1f} s")
     lines.append(f"  total {check.total_s:.1f} s over {len(check.sorties)} sorties with "
                  f"{check.swaps} battery swaps; f summed + swaps {check.f_total:.2f}")
     for v in check.combined:
         lines.append(f"  whole plan {v.name}: {'PASS' if v.passed else 'FAIL'} ({v.detail})")
+    for v in check.fleet:
+        if v.name in ("SEPARATION", "LINKS") and len(check.launches) > 1:
+            lines.append(f"  fleet {v.name}: {'PASS' if v.passed else 'FAIL'} ({v.detail})")
     return lines
 
 

@@ -366,6 +366,17 @@ def _verbose_log(args: argparse.Namespace):
     return log
 
 
+def _print_launches(directory: str) -> None:
+    """The launch times fleet.json gives each vehicle (`lamde_mission.launches`: staggered so
+    that no two meet in the air and no sensor sends to two at once)."""
+    from lamde_mission.formats.fleet import read_fleet_dir
+
+    times = [(v.vehicle, v.launch_s) for v in read_fleet_dir(directory).vehicles]
+    print("launch " + ", ".join(f"vehicle {v} at +{t:.0f} s" for v, t in times)
+          + " (fleet.json's launch_s: the vehicles keep apart in the air and no sensor sends "
+          "to two at once only when launched so)", flush=True)  # fmt: skip
+
+
 def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
     """`upload DIR/ --fleet`: every vehicle's first sortie (see `vehicle.fleet`)."""
     from pathlib import Path
@@ -423,6 +434,8 @@ def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
         print(f"lamde-mission upload: {exc}", file=sys.stderr)
         return 1
     print(report.summary())
+    if report.ok and args.sortie == 1 and n > 1:
+        _print_launches(args.mission)
     if not report.ok:
         bad = [str(r.vehicle) for r in report.results if not r.ok]
         print(f"lamde-mission upload: vehicle {', '.join(bad)} failed (see above)",

@@ -91,6 +91,7 @@ def _run_sorties(args: argparse.Namespace, m: Any) -> int:
                             **s.verdicts.to_dict()} for s in check.sorties],
                "combined": [v.to_dict() for v in check.combined],
                "fleet": [v.to_dict() for v in check.fleet], "notes": list(check.notes),
+               "launch_s": {str(v): check.launch(v) for v in check.vehicles()},
                "makespan_s": {str(v): check.makespan(v) for v in check.vehicles()},
                "total_s": check.total_s, "swaps": check.swaps, "f_total": check.f_total,
                "passed": check.passed}
@@ -109,7 +110,8 @@ def _run_sorties(args: argparse.Namespace, m: Any) -> int:
                   f"{len(s.sensors)} sensors served (its C4 and MARGIN: its share only)")
             print("\n".join("  " + printable(r) for r in vd.table().splitlines()))
         for v in check.vehicles():
-            print(f"vehicle {v}: makespan {check.makespan(v):.1f} s")
+            print(f"vehicle {v}: launch at +{check.launch(v):.0f} s, makespan "
+                  f"{check.makespan(v):.1f} s")
         for v in check.combined:
             print(f"whole plan {v.name} {v.title}: {'PASS' if v.passed else 'FAIL'}, margin "
                   f"{v.margin:.6g} {v.unit}; {printable(v.detail)}")

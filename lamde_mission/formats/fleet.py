@@ -70,6 +70,8 @@ class FleetVehicle:
     vehicle: int
     sorties: tuple[FleetSortie, ...]
     makespan_s: float | None = None
+    #: s after the first vehicle's take-off (0 when fleet.json gives none)
+    launch_s: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -212,8 +214,12 @@ def read_fleet_dir(path: str | Path) -> FleetDir:
                 reserve_left_wh=_number(s.get("reserve_left_wh"), f"{ws}.reserve_left_wh"),
                 sensors=tuple(sensors),
             ))  # fmt: skip
+        launch = _number(v.get("launch_s"), f"{wv}.launch_s")
+        if launch is not None and not 0.0 <= launch <= 1e6:
+            raise FleetDirError(f"{wv}.launch_s: expected seconds in [0, 1e6], got {launch:g}")
         vehicles.append(
-            FleetVehicle(number, tuple(sorties), _number(v.get("makespan_s"), f"{wv}.makespan_s"))
+            FleetVehicle(number, tuple(sorties), _number(v.get("makespan_s"), f"{wv}.makespan_s"),
+                         0.0 if launch is None else launch)
         )
     swaps = doc.get("swaps")
     if swaps is not None and (isinstance(swaps, bool) or not isinstance(swaps, int)):
