@@ -164,3 +164,110 @@ def test_non_convex_polygons_and_holes_are_inflated_too():
     sp = storable_plan(plan, m, "px4", planning_map=pm)
     tl = replay(stored_items(plan_to_items(sp, m), "px4"), m)
     assert np.all(_flown_distance(m, tl) >= 15.0)
+
+
+# a start, end or depot within the clearance of a building of any kind (the rectangle of the
+# review's map, the same footprint as a polygon obstacle and as a no-fly zone; beside an
+# edge and diagonally off a corner): the planning map keeps it outside the inflated shape
+_BLOCK = [[500, 200], [600, 200], [600, 800], [500, 800]]
+_NEAR_OBSTACLES = {
+    "rectangle": {"rectangles": [{"x": 550, "y": 500, "length": 100, "width": 600}]},
+    "polygon": {"polygons": [{"vertices": _BLOCK}]},
+    "no-fly zone": {"no_fly_zones": [{"vertices": _BLOCK}]},
+    "L-shaped polygon": {"polygons": [{"vertices": [[500, 200], [600, 200], [600, 300],
+                                                    [550, 300], [550, 800], [500, 800]]}]},
+}  # fmt: skip
+
+
+def _near_map(kind: str, where: list[float], depot: bool = False) -> dict:
+    d = {"name": "near-building", "origin": {"lat": 47.0, "lon": 8.0, "alt": 400.0},
+         "area": {"width": 1000, "height": 1000}, "start": where, "end": where,
+         "sensors": [{"id": "s1", "x": 800, "y": 800}], "obstacles": _NEAR_OBSTACLES[kind]}
+    if depot:  # the start far away; the depot beside the building
+        d["start"] = d["end"] = [100, 100]
+        d["uav"] = {"endurance_s": 1500}
+        d["fleet"] = {"depots": [{"name": "near", "x": where[0], "y": where[1]}]}
+    return d  # fmt: skip
+
+
+@pytest.mark.parametrize("kind", list(_NEAR_OBSTACLES))
+@pytest.mark.parametrize("where", [[495, 300], [495, 195], [496.5, 198.5], [490.05, 500],
+                                   [499.97, 500]])
+@pytest.mark.parametrize("depot", [False, True], ids=["start", "depot"])
+def test_a_start_or_depot_near_a_building_stays_outside_its_inflation(kind, where, depot):
+    # a rectangle or polygon 5 m from the start used to be inflated past it (its buffer divided
+    # by cos(pi/16) on every edge): the planning map refused its own start ("lies inside an
+    # obstacle"), a traceback in check and plan, and the fleet plan called the depot inside
+    from planner_core.model.geometry import points_inside
+    from planner_core.model.mapio import CLEARANCE_PAD, OFFSET_OVERSHOOT
+
+    m = load_map(_near_map(kind, where, depot))
+    pm = m.planning_map()  # raised MapError
+    point = np.array([where], dtype=float)
+    assert not points_inside(point, pm.obstacles)[0]
+    real = [o.shape for o in obstacle_shapes(m)]
+    d = float(shapely.distance(shapely.Point(where), real[0]))
+    cl = m.obstacle_clearances[0]
+    assert cl < min(d, 10.0)  # reduced by the point (a leg keeps it: CLEAR judges d - 2 cm)
+    assert cl == pytest.approx(max(d - 0.06, 0.0)) if d < 10 else cl == 10.0
+    if cl > 0:
+        grown = [o.shape for o in obstacle_shapes(pm)][0]
+        r = cl + CLEARANCE_PAD
+        # an outer approximation of the offset with a bounded overshoot (outer_offset)
+        assert grown.contains(real[0].buffer(r * (1 - 1e-9), quad_segs=64))
+        assert grown.within(real[0].buffer(r * OFFSET_OVERSHOOT * (1 + 1e-9), quad_segs=64))
+        assert grown.distance(shapely.Point(where)) >= 0.004  # half CLEARANCE_SLACK
+    if depot:
+        assert [x.name for x in pm.depots] == ["near"]
+
+
+def test_outer_offset_contains_the_offset_and_overshoots_at_most_as_documented():
+    # GEOS's buffer puts its arc's vertices on the circle, so its chords cut inside the offset:
+    # at a corner turning ~1.49 x pi/8 its one chord sags to r cos(0.75 pi/8) = 0.957 r, and
+    # the old r / cos(pi/16) buffer came to 0.976 of the clearance there
+    from shapely.geometry import Polygon
+
+    from planner_core.model.mapio import OFFSET_OVERSHOOT, outer_offset
+
+    rng = np.random.default_rng(5)
+    a = 1.49 * np.pi / 8
+    shapes = [Polygon([(0, 0), (100, 0), (100 + 100 * np.cos(a), 100 * np.sin(a)), (0, 200)]),
+              Polygon([(0, 0), (100, 0), (100, 100), (0, 100)],
+                      [[(20, 20), (80, 20), (80, 80), (20, 80)]])]  # fmt: skip
+    for _ in range(30):
+        ang = np.sort(rng.uniform(0, 2 * np.pi, int(rng.integers(3, 10))))
+        p = Polygon(np.column_stack([np.cos(ang), np.sin(ang)]) * rng.uniform(20, 100,
+                                                                               (len(ang), 1)))
+        if p.is_valid:
+            shapes.append(p)
+    for k, p in enumerate(shapes):
+        for r, f in ((12.05, OFFSET_OVERSHOOT), (4.0, 1.002), (25.0, OFFSET_OVERSHOOT)):
+            g = outer_offset(p, r, f)
+            assert g.geom_type == "Polygon" and g.is_valid, k
+            edge = [g.exterior, *g.interiors]
+            pts = shapely.points(np.vstack([
+                shapely.get_coordinates(shapely.segmentize(e, 0.5)) for e in edge]))
+            dist = shapely.distance(p, pts)
+            assert dist.min() >= r - 1e-9, (k, r, dist.min())  # every point within r is in
+            assert dist.max() <= r * f + 1e-9, (k, r, dist.max())  # at most r x f away
+    # the courtyard of the second shape survives a small offset, shrunk by r
+    assert len(outer_offset(shapes[1], 12.05).interiors) == 1
+    assert len(outer_offset(shapes[1], 31.0).interiors) == 0
+
+
+def test_check_and_plan_take_off_beside_a_building(tmp_path):
+    # the review's map: check and plan exited 1 with a traceback (MapError from the planning map)
+    from tests.conftest import run_cli_many
+
+    path = tmp_path / "nb.json"
+    path.write_text(json.dumps(_near_map("rectangle", [495, 300])))
+    fleet = tmp_path / "nbf.json"
+    fleet.write_text(json.dumps(_near_map("rectangle", [495, 300], depot=True)))
+    chk, pl, chf = run_cli_many(("check", path), ("plan", path, "-o", tmp_path / "nb.plan",
+                                                  "--budget", "600", "--quiet"),
+                                ("check", fleet))  # fmt: skip
+    assert chk.returncode == 0 and chk.stdout.startswith("map 'near-building': OK"), chk.stderr
+    assert "4.94 m at rectangle 0" in chk.stdout
+    assert pl.returncode == 0 and "Traceback" not in pl.stderr, pl.stderr
+    assert chf.returncode == 0, chf.stdout + chf.stderr
+

@@ -284,8 +284,9 @@ class Safety(BaseModel):
 
     `clearance` (m): every circle, rectangle and no-fly zone is inflated by it for planning, so
     no leg comes closer to an obstacle; the geofence written to the vehicle keeps the real
-    shapes. Near the start or end point an obstacle is inflated only as far as leaves that
-    point outside it (the take-off and landing are where the map says). `data_margin`: every
+    shapes. Near the start, the end or a depot an obstacle of any kind is inflated only as far
+    as leaves that point outside it (the take-off and landing are where the map says;
+    `Map.obstacle_clearances`). `data_margin`: every
     sensor's required data is planned as (1 + data_margin) x Q_lambda. Sensors themselves may
     lie inside an inflated obstacle: data is collected by radio from wherever the UAV hovers.
     A map with both at 0 is planned exactly as the paper's model states it.
@@ -548,22 +549,46 @@ class Map:
     @cached_property
     def obstacle_clearances(self) -> tuple[float, ...]:
         """Clearance in force per obstacle (circles, rectangles, no-fly zones, polygons; metres):
-        `safety.clearance`, reduced where the start or end point is closer than that to the
-        obstacle (down to that distance less `CLEARANCE_PAD`, at least 0)."""
+        `safety.clearance`, reduced where the start, the end or a depot is closer than that to
+        the obstacle, so the inflated obstacle (`planning_map`) leaves that point outside it:
+        a circle down to that distance less `CLEARANCE_PAD`, any other shape less
+        `CLEARANCE_PAD` + `CLEARANCE_SLACK` (its inflated corners are outer polygons, see
+        `outer_offset`); at least 0."""
+        return tuple(c for c, _ in self._inflation)
+
+    @cached_property
+    def _inflation(self) -> tuple[tuple[float, float], ...]:
+        """Per obstacle, in `obstacle_clearances`' order: (clearance in force, the largest
+        overshoot factor its inflated polygon may have: `OFFSET_OVERSHOOT`, or less where a
+        start, end or depot lies within reach of its corners' outer polygons, so the inflated
+        polygon keeps that point outside; 1 for circles, inflated exactly)."""
         import shapely
 
         c = float(self.spec.safety.clearance)
         shapes = _obstacle_polygons(self)
         if c <= 0.0 or not shapes:
-            return tuple(0.0 for _ in shapes)
+            return tuple((0.0, 1.0) for _ in shapes)
         # the map's depots take off and land too: inflation stops short of them as well
         given = self.spec.fleet.depots if self.spec.fleet is not None else None
-        depots = [(d.x, d.y) for d in given or ()]
-        ends = shapely.points([self.spec.start, self.spec.end, *depots])
+        sites = np.array([self.spec.start, self.spec.end, *[(d.x, d.y) for d in given or ()]],
+                         dtype=float)  # fmt: skip
+        ends = shapely.points(sites)
         out = []
-        for poly in shapes:
+        nc = len(self.spec.obstacles.circles)
+        for k, poly in enumerate(shapes):
+            if k < nc:  # a circle: its exact distance (the shape above is a polygon inside it)
+                o = self.spec.obstacles.circles[k]
+                d = float(np.min(np.hypot(sites[:, 0] - o.x, sites[:, 1] - o.y))) - o.radius
+                out.append((max(min(c, d - CLEARANCE_PAD), 0.0), 1.0))
+                continue
             d = float(np.min(shapely.distance(ends, poly)))
-            out.append(max(min(c, d - CLEARANCE_PAD), 0.0))
+            if (c + CLEARANCE_PAD) * OFFSET_OVERSHOOT <= d:
+                out.append((c, OFFSET_OVERSHOOT))
+                continue
+            cl = max(min(c, d - CLEARANCE_PAD - CLEARANCE_SLACK), 0.0)
+            # the inflated polygon reaches at most (cl + pad) x f: half the slack short of d
+            reach = d - 0.5 * CLEARANCE_SLACK
+            out.append((cl, min(OFFSET_OVERSHOOT, reach / (cl + CLEARANCE_PAD))))
         return tuple(out)
 
     def with_origin(self, lat: float, lon: float, alt: float = 0.0) -> Map:
@@ -576,7 +601,9 @@ class Map:
 
     def planning_map(self) -> Map:
         """The map the optimiser plans on: obstacles inflated by their clearance (plus
-        `CLEARANCE_PAD`), rectangles turned into the equivalent no-fly zones, every sensor's
+        `CLEARANCE_PAD`; circles exactly, other shapes by `outer_offset`, which holds every
+        point that near and reaches at most `OFFSET_OVERSHOOT` times as far, never as far as
+        a start, end or depot), rectangles turned into polygon obstacles, every sensor's
         required data times (1 + data_margin), safety margins then 0. Returns `self` when both
         margins are 0, so such a map is planned and scored exactly as before."""
         cached = self.__dict__.get("_planning_map")
@@ -585,9 +612,6 @@ class Map:
         sf = self.spec.safety
         if sf.clearance <= 0.0 and sf.data_margin <= 0.0:
             return self
-        import shapely
-        from shapely.geometry.polygon import orient
-
         d = self.spec.model_dump(mode="json")
         _drop_unset_energy_fields(self.spec, d)  # the planning map gives what the map gives
         d.pop("witness", None)
@@ -607,9 +631,7 @@ class Map:
         def grown(k: int, name: str | None) -> dict[str, Any]:
             poly = shapes[k]
             if cl[k] > 0.0:
-                r = (cl[k] + CLEARANCE_PAD) / math.cos(math.pi / (4 * _QUAD_SEGS))
-                poly = orient(poly.buffer(r, quad_segs=_QUAD_SEGS), 1.0)
-                poly = shapely.simplify(poly, 0.0)  # drop collinear vertices
+                poly = outer_offset(poly, cl[k] + CLEARANCE_PAD, self._inflation[k][1])
             out: dict[str, Any] = {"vertices": [list(v) for v in poly.exterior.coords[:-1]]}
             holes = [[list(v) for v in ring.coords[:-1]] for ring in poly.interiors]
             if holes:
@@ -783,9 +805,76 @@ def _drop_unset_energy_fields(spec: MapFile, d: dict[str, Any]) -> None:
 #: metres added to every non-zero clearance when inflating: covers where a stored mission's
 #: points may lie (MAVLink's 1e-7 degree grid is ~1.1 cm), so the real clearance is kept
 CLEARANCE_PAD = 0.05
-#: segments per quarter circle of an inflated polygon's rounded corners; the offset is divided
-#: by cos(pi / (4 * _QUAD_SEGS)) so the polygon contains the true offset (~2 % more clearance)
-_QUAD_SEGS = 4
+#: metres an inflated polygon (not a circle) stops short of a start, end or depot closer to
+#: it than the clearance, beyond `CLEARANCE_PAD`: room for its corners' outer polygons, which
+#: then end half of it short of that point (`Map._inflation`); a leg keeps at least the
+#: point's distance less 1 cm, and less storage's < 8 mm, within the sim's CLEAR tolerance, 2 cm
+CLEARANCE_SLACK = 0.01
+#: the most an inflated polygon (`outer_offset`) reaches beyond its clearance, as a factor:
+#: 1 / cos(pi / 16), ~2 % (the corners' arcs as outer polygons of at most pi / 8 per segment)
+OFFSET_OVERSHOOT = 1.0 / math.cos(math.pi / 16.0)
+
+
+def outer_offset(poly: Any, r: float, overshoot: float = OFFSET_OVERSHOOT) -> Any:
+    """The shape `poly` grown by `r` metres (its Minkowski sum with a disc), as a polygon that
+    contains the exact offset and exceeds it by a bounded amount.
+
+    GEOS's buffer is the exact offset but at the arcs about the shape's outward corners, where
+    its chords (vertices on the arc) cut inside it. Each such corner's sector, between the
+    normals of its two edges, is therefore added as an outer polygon: segments tangent to the
+    arc (so the arc lies inside), each spanning at most 2 acos(1 / overshoot), whose vertices
+    lie r x overshoot from the corner. So every point within r of the shape is in the result,
+    and every point of the result lies within r x `overshoot` of the shape: the excess over r
+    is at most r x (overshoot - 1) (~2 % by default), found only at outward corners (straight
+    edges and inward corners are offset exactly).
+
+    Args:
+        poly: a shapely Polygon (holes allowed).
+        r: the offset, m (> 0).
+        overshoot: the largest factor allowed, > 1 (default `OFFSET_OVERSHOOT`).
+
+    Returns:
+        A shapely Polygon, exterior counter-clockwise, collinear vertices removed.
+    """
+    import shapely
+    from shapely.geometry.polygon import orient
+
+    half = math.acos(1.0 / max(float(overshoot), 1.0 + 1e-12))  # the widest half segment
+    poly = orient(poly, 1.0)  # the shape on the left of every ring, the offset on the right
+    parts = [poly.buffer(r, join_style="bevel")]
+    for ring in (poly.exterior, *poly.interiors):
+        v = np.asarray(ring.coords, dtype=float)[:-1]
+        e = np.roll(v, -1, axis=0) - v  # edge k: v[k] -> v[k + 1]
+        ang = np.arctan2(e[:, 1], e[:, 0])
+        turn = (ang - np.roll(ang, 1) + math.pi) % (2.0 * math.pi) - math.pi  # at v[k]
+        for k in np.flatnonzero(turn > 0.0):  # a left turn: an arc on the right
+            parts.append(_fan(v[k], r, ang[k - 1] - math.pi / 2.0, float(turn[k]), half))
+    grown = shapely.union_all(parts)
+    if grown.geom_type != "Polygon":  # pieces touching only at a point: keep the largest
+        grown = max(grown.geoms, key=lambda g: g.area)
+    # a hole of the offset holds points farther than r from the shape; a ring the union left
+    # where its pieces meet (rounding: no area, or all of it within r) is no hole
+    holes = [h for h in grown.interiors if (hp := shapely.Polygon(h)).area > 0.0
+             and poly.distance(hp.representative_point()) > r]  # fmt: skip
+    grown = shapely.Polygon(grown.exterior, holes)
+    return shapely.simplify(orient(grown, 1.0), 0.0)  # drop collinear vertices
+
+
+def _fan(c: np.ndarray, r: float, start: float, sweep: float, half: float) -> Any:
+    """The outer polygon of the sector of radius r about c from angle `start` sweeping `sweep`
+    radians (> 0) counter-clockwise: c, the arc's ends, and between them the corners of
+    segments tangent to the arc, each spanning at most 2 x `half` (widened by 1e-9 rad each
+    way, so it overlaps the buffer beside it: no sliver between them)."""
+    import shapely
+
+    segs = max(1, math.ceil(sweep / (2.0 * half) - 1e-9))
+    step = sweep / segs
+    mid = start + step * (np.arange(segs) + 0.5)
+    far = r / math.cos(step / 2.0)
+    pts = [c, c + r * np.array([math.cos(start), math.sin(start)])]
+    pts += list(c + far * np.column_stack([np.cos(mid), np.sin(mid)]))
+    pts.append(c + r * np.array([math.cos(start + sweep), math.sin(start + sweep)]))
+    return shapely.Polygon(np.asarray(pts))
 
 
 def _obstacle_polygons(m: Map) -> list[Any]:
