@@ -142,6 +142,29 @@ def _main(argv: Sequence[str] | None) -> int:
         for line in str(exc).splitlines():
             print(f"lamde-mission {args.command}: {line}", file=sys.stderr)
         return 2
+    except ValueError as exc:
+        problems = _map_problems(exc)
+        if problems is None:
+            raise
+        where = getattr(args, "map", None)
+        for line in problems:
+            print(f"lamde-mission {args.command}: " + (f"{where}: " if where else "") + line,
+                  file=sys.stderr)  # fmt: skip
+        return 2
+
+
+def _map_problems(exc: BaseException) -> list[str] | None:
+    """A map's problems (`planner_core.MapError.problems`, one line each naming the field)
+    when `exc` is such an error, else None: a command that meets one past its own checks
+    (a map derived from the user's, such as the planning map) says so as bad input, exit
+    status 2, never with a traceback. The map module is not imported here: a MapError comes
+    only from it, already loaded."""
+    mapio = sys.modules.get("planner_core.model.mapio")
+    if mapio is None or not isinstance(exc, mapio.MapError):
+        return None
+    from planner_core.textio import printable
+
+    return [printable(p) for p in exc.problems] or [printable(str(exc))]
 
 
 def _reader_went_away() -> int:

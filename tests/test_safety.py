@@ -271,3 +271,22 @@ def test_check_and_plan_take_off_beside_a_building(tmp_path):
     assert pl.returncode == 0 and "Traceback" not in pl.stderr, pl.stderr
     assert chf.returncode == 0, chf.stdout + chf.stderr
 
+
+def test_a_map_error_past_the_commands_checks_is_one_line_exit_2(tmp_path, monkeypatch, capsys):
+    # a MapError a command meets after loading the map (the planning map, a sortie's map)
+    # reaches the user as bad input, one line naming the field, exit 2, no traceback
+    import planner_core.model.diagnose as diag
+    from lamde_mission import cli
+    from planner_core.model.mapio import MapError
+
+    path = tmp_path / "nb.json"
+    path.write_text(json.dumps(_near_map("rectangle", [300, 300])))
+
+    def refuse(m):
+        raise MapError(["start: (300, 300) lies inside an obstacle or no-fly zone"])
+
+    monkeypatch.setattr(diag, "diagnose", refuse)
+    assert cli.main(["check", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err == (f"lamde-mission check: {path}: start: (300, 300) lies inside an obstacle or "
+                   "no-fly zone\n")

@@ -435,6 +435,7 @@ def _run_sorties(args: argparse.Namespace) -> int:
                          "to write missions with; give --origin LAT,LON[,ALT]")
     from lamde_mission.api import check_fleet_map, plan_fleet
     from lamde_mission.sorties import write_sortie_dir
+    from planner_core.model.mapio import MapError
 
     try:
         check_fleet_map(m)
@@ -458,6 +459,8 @@ def _run_sorties(args: argparse.Namespace) -> int:
     try:
         result = plan_fleet(m, config=config, goal=goal, sortie_budget=args.sortie_budget,
                             rounds=args.rounds)
+    except MapError:
+        raise  # bad input (exit 2, one line per problem: `lamde_mission.cli`)
     except ValueError as exc:
         print(f"lamde-mission plan: {args.map}: {exc}", file=sys.stderr)
         return 1
