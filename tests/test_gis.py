@@ -469,14 +469,20 @@ def test_geojson_round_trip_keeps_every_setting(tmp_path) -> None:
     assert not any("inclusion fence" in n for n in notes), notes
     assert any(n.startswith("map settings (uav, radio, objective, safety, fleet) from ")
                for n in notes)  # fmt: skip
-    # a plain GeoJSON (no settings on its area) gets the defaults, and the name it is given
+    # a plain GeoJSON (no settings on its area) gets the defaults, and the name it is given;
+    # its depot feature is still a depot (a fleet of the defaults with that depot)
     area = exported["features"][0]["properties"]
     for key in ("name", "uav", "radio", "objective", "safety", "fleet"):
         area.pop(key)
     doc, _ = build_map(_layers_of(tmp_path, exported, "plain.geojson"), default_name="plain")
     plain = load_map(doc)
     assert plain.name == "plain" and plain.spec.uav.altitude == 100.0
-    assert plain.spec.fleet is None and plain.spec.safety.clearance == 10.0
+    assert plain.spec.safety.clearance == 10.0
+    assert [d.name for d in plain.spec.fleet.depots] == ["yard"] and plain.uavs == 1
+    exported["features"] = [f for f in exported["features"]
+                            if f["properties"]["kind"] != "depot"]  # fmt: skip
+    doc, _ = build_map(_layers_of(tmp_path, exported, "bare.geojson"), default_name="bare")
+    assert load_map(doc).spec.fleet is None
 
 
 def test_settings_saved_as_json_text_by_a_gis_editor_are_read_back(tmp_path) -> None:
@@ -498,15 +504,79 @@ def test_settings_saved_as_json_text_by_a_gis_editor_are_read_back(tmp_path) -> 
         read_layers([(_write(tmp_path, "bad.geojson", exported), None)])
 
 
-def test_a_new_origin_moves_the_depots_with_the_map(tmp_path) -> None:
+@pytest.mark.parametrize("older", [False, True], ids=["depot features", "older export"])
+def test_a_new_origin_moves_the_depots_with_the_map(tmp_path, older) -> None:
     m = load_map(FARM)
-    layers = _layers_of(tmp_path, map_to_geojson(m))
+    exported = map_to_geojson(m)
+    if older:  # as exports before depot features wrote it: the depots in the area's fleet
+        exported["features"] = [f for f in exported["features"]
+                                if f["properties"]["kind"] != "depot"]  # fmt: skip
+        exported["features"][0]["properties"]["fleet"] = m.to_dict()["fleet"]
+    layers = _layers_of(tmp_path, exported)
     # the same place, the frame's (0, 0) 100 m further west and south: local x, y grow by ~100
     lat, lon = np.ravel(enu_to_latlon(-100.0, -100.0, (46.21, 7.32, 410.0)))
     doc, notes = build_map(layers, origin=(float(lat), float(lon), 410.0))
     depot = load_map(doc).spec.fleet.depots[0]
     assert (depot.x, depot.y) == (pytest.approx(110.0, abs=0.01), pytest.approx(110.0, abs=0.01))
-    assert any("depots" in n and "moved" in n for n in notes)
+    assert any("depots" in n and "moved" in n for n in notes) == older
+
+
+def test_depots_are_point_features_and_come_back(tmp_path) -> None:
+    # the depots lived only in the area's fleet settings, in local metres: a GIS showed none,
+    # and from-geojson refused {"kind": "depot"} ("unknown kind 'depot'")
+    d = json.loads(json.dumps(FARM))
+    d["fleet"]["depots"] = [{"name": "yard", "x": 10, "y": 10}, {"name": "barn-2", "x": 700,
+                                                                 "y": 300}]  # fmt: skip
+    m = load_map(d)
+    exported = map_to_geojson(m)
+    feats = [f for f in exported["features"] if f["properties"]["kind"] == "depot"]
+    assert [(f["properties"]["name"], f["properties"]["index"], f["geometry"]["type"])
+            for f in feats] == [("yard", 0, "Point"), ("barn-2", 1, "Point")]  # fmt: skip
+    lon, lat = feats[1]["geometry"]["coordinates"]
+    x, y = latlon_to_enu(lat, lon, (46.21, 7.32, 410.0))
+    assert (float(x), float(y)) == (pytest.approx(700, abs=0.01), pytest.approx(300, abs=0.01))
+    # the area's fleet settings no longer repeat them (one place to move a depot: its point)
+    assert exported["features"][0]["properties"]["fleet"] == {"uavs": 2, "swap_s": 200.0}
+    src = _write(tmp_path, "farm.geojson", exported)
+    out = tmp_path / "back.json"
+    r = _cli("map", "from-geojson", str(src), "-o", str(out))
+    assert r.returncode == 0, r.stderr
+    back = load_map(out)
+    _assert_same(back.to_dict()["fleet"], m.to_dict()["fleet"])
+    # a depot moved in the GIS is moved in the map; the features take precedence over depots
+    # in the carried fleet settings (older exports), which a note says were replaced
+    feats[1]["geometry"]["coordinates"] = [float(v) for v in reversed(np.ravel(
+        enu_to_latlon(650.0, 320.0, (46.21, 7.32, 410.0))))]  # fmt: skip
+    exported["features"][0]["properties"]["fleet"] = m.to_dict()["fleet"]
+    doc, notes = build_map(_layers_of(tmp_path, exported, "moved.geojson"))
+    assert [(dp.name, round(dp.x, 2), round(dp.y, 2)) for dp in load_map(doc).spec.fleet.depots] \
+        == [("yard", 10.0, 10.0), ("barn-2", 650.0, 320.0)]
+    assert any(n.startswith("fleet.depots: the 2 depot features replace the 2 in the fleet "
+                            "settings of ") for n in notes), notes
+
+
+def test_depot_features_in_a_plain_geojson(tmp_path) -> None:
+    base = [_feat("sensor", "Point", _pt(2, 2), id="a"), _feat("start", "Point", _pt(1, 1)),
+            _feat("end", "Point", _pt(1, 1))]  # fmt: skip
+    doc, _ = build_map(_layers_of(tmp_path, _fc(*base, _feat("depot", "Point", _pt(3, 1),
+                                                              name="pad"),
+                                                _feat("depot", "Point", _pt(1, 3)))))
+    m = load_map(doc)
+    assert [d.name for d in m.spec.fleet.depots] == ["pad", "d2"] and m.has_fleet
+    # a depot outside the area, and a name given twice: one line each naming the feature
+    area = [[_pt(0, 0), _pt(6, 0), _pt(6, 6), _pt(0, 6), _pt(0, 0)]]
+    doc = _fc(_feat("area", "Polygon", area), *base, _feat("depot", "Point", _pt(3, 1), name="p"),
+              _feat("depot", "Point", _pt(4, 1), name="p"), _feat("depot", "Point", _pt(9, 1)))
+    with pytest.raises(GisError) as err:
+        build_map(_layers_of(tmp_path, doc, "bad.geojson"))
+    lines = err.value.problems
+    assert any("features[5] 'p': duplicate depot name 'p' (the first: " in x for x in lines)
+    assert any("features[6]: depot (lon " in x and "is outside the area" in x for x in lines)
+    assert len(lines) == 2, lines
+    # a depot is a Point
+    with pytest.raises(GisError, match="depot features must be a Point, got Polygon"):
+        read_layers([(_write(tmp_path, "poly.geojson", _fc(_feat("depot", "Polygon", area))),
+                      None)])
 
 
 def test_clipped_only_when_area_is_removed_and_the_area_note_names_its_source(tmp_path) -> None:

@@ -5,13 +5,15 @@ Every feature has the `kind` property the importer reads: "area" (Polygon; prope
 keeps the local coordinates; and the map's settings, every top-level section of the map file
 that is not geometry (`SETTINGS_EXCLUDED` lists the geometric ones): `name`, `uav`, `radio`,
 `objective`, `safety`, and `fleet` and `witness` when the map has them, each as the map file
-writes it, so `map from-geojson` restores them), "sensor" (Point; `id`, `required_data` when the
+writes it, so `map from-geojson` restores them; the fleet without its `depots`, which are
+features of their own), "depot" (Point; `name`, `index`: one per `fleet.depots` entry, in
+order, so a GIS shows and moves them), "sensor" (Point; `id`, `required_data` when the
 map sets it), "obstacle" (Polygon with holes, for polygon obstacles and rectangles; `name`;
 rectangles also `shape`: "rectangle", `center` [lon, lat], `length_m`, `width_m`, `angle_deg`:
 the importer reads the rectangle back from those while the outline still matches them),
 "no_fly_zone" (Polygon with holes; `name`), "circle" (a Polygon through `CIRCLE_SEGMENTS`
 points of the circle for display, with `center` [lon, lat] and `radius_m`: the importer reads
-the circle from those), "start" and "end" (Points).
+the circle from those), "start" and "end" (Points), then the depots.
 Rings are closed, exteriors counter-clockwise and holes clockwise (RFC 7946 Sec. 3.1.6).
 """
 
@@ -70,15 +72,19 @@ def map_settings(map: Any) -> dict[str, Any]:  # noqa: A002
 
     Returns:
         {section: value} for every section of `Map.to_dict()` not in `SETTINGS_EXCLUDED` and
-        not null: name, uav, radio, objective, safety, and fleet and witness where given.
+        not null: name, uav, radio, objective, safety, and fleet and witness where given; the
+        fleet without `depots` (written as "depot" features, in WGS84 like every position).
     """
-    return {k: v for k, v in map.to_dict().items()
-            if k not in SETTINGS_EXCLUDED and v is not None}  # fmt: skip
+    out = {k: v for k, v in map.to_dict().items()
+           if k not in SETTINGS_EXCLUDED and v is not None}  # fmt: skip
+    if isinstance(out.get("fleet"), dict):  # the depots are features (`map_features`)
+        out["fleet"] = {k: v for k, v in out["fleet"].items() if k != "depots"}
+    return out
 
 
 def map_features(map: Any) -> list[dict[str, Any]]:  # noqa: A002
     """The map as GeoJSON features: area (with the frame and settings), circles, rectangles,
-    polygon obstacles, no-fly zones, sensors, start and end.
+    polygon obstacles, no-fly zones, sensors, start, end and the fleet's depots.
 
     Args:
         map: a loaded `planner_core.model.mapio.Map` with an origin.
@@ -115,6 +121,10 @@ def map_features(map: Any) -> list[dict[str, Any]]:  # noqa: A002
     for kind in ("start", "end"):
         p = getattr(map, kind)
         feats.append(_feature({"type": "Point", "coordinates": _lonlat(map, p)[0]}, kind=kind))
+    depots = spec.fleet.depots if spec.fleet is not None and spec.fleet.depots else ()
+    for k, d in enumerate(depots):
+        feats.append(_feature({"type": "Point", "coordinates": _lonlat(map, [d.x, d.y])[0]},
+                              kind="depot", name=d.name, index=k))  # fmt: skip
     return feats
 
 

@@ -9,7 +9,9 @@ Inputs
   or its alias ``building`` (Polygon or MultiPolygon; with ``shape: "rectangle"``, ``center``,
   ``length_m``, ``width_m`` and ``angle_deg``, as `map to-geojson` writes rectangles, the
   rectangle while the outline matches it within `RECTANGLE_TOLERANCE`), ``no_fly_zone`` (Polygon
-  or MultiPolygon), ``start`` and ``end`` (Points), ``area`` (a Polygon; see below),
+  or MultiPolygon), ``start`` and ``end`` (Points), ``depot`` (a Point: a take-off, landing
+  and battery-swap site of ``fleet.depots``, named by its ``name`` property, else ``d<n>``),
+  ``area`` (a Polygon; see below),
   ``circle`` (``center`` [lon, lat] and ``radius_m`` properties, as `map to-geojson` writes
   circular obstacles). A file given with ``--obstacles``, ``--no-fly-zones`` or ``--sensors``
   is that layer whole (footprint exports carry no ``kind``).
@@ -20,7 +22,10 @@ Inputs
 * Map settings: an ``area`` feature written by `map to-geojson` carries the map's non-geometric
   sections (``name``, ``uav``, ``radio``, ``objective``, ``safety``, ``fleet``, ``witness``) in
   its properties; they are restored as given (the map loader validates them). Without them
-  the map defaults apply.
+  the map defaults apply. ``depot`` features, where any are given, are the fleet's depots, in
+  their order: they take precedence over depots in the carried ``fleet`` section (as older
+  exports wrote them; a note says they were replaced), so a depot moved, added or deleted in a
+  GIS is what the map gets.
 
 The local frame
 ---------------
@@ -89,6 +94,7 @@ KINDS = {
     "end": "end",
     "area": "area",
     "circle": "circle",
+    "depot": "depot",
 }
 LAYER_OPTIONS = {"obstacle": "--obstacles", "no_fly_zone": "--no-fly-zones", "sensor": "--sensors"}
 
@@ -129,6 +135,7 @@ class GisLayers:
     start: dict[str, Any] | None = None  # where, lon, lat
     end: dict[str, Any] | None = None
     home: dict[str, Any] | None = None  # QGC planned home position (where, lon, lat, alt)
+    depots: list[dict[str, Any]] = field(default_factory=list)  # where, name, lon, lat
     problems: list[str] = field(default_factory=list)
 
 
@@ -191,7 +198,7 @@ def _add_feature(layers: GisLayers, feat: Any, where: str, layer: str | None) ->
         if raw is None:
             raise ValueError(
                 f"{label}: no 'kind' property (sensor, obstacle/building, no_fly_zone, start, "
-                "end, area); or give the whole file as one layer with --obstacles, "
+                "end, depot, area); or give the whole file as one layer with --obstacles, "
                 "--no-fly-zones or --sensors"
             )
         kind = KINDS.get(str(raw).strip().lower())
@@ -209,7 +216,7 @@ def _add_feature(layers: GisLayers, feat: Any, where: str, layer: str | None) ->
     if not isinstance(geom, dict):
         raise ValueError(f"{label}: has no geometry")
     gtype, coords = geom.get("type"), geom.get("coordinates")
-    if kind in ("sensor", "start", "end"):
+    if kind in ("sensor", "start", "end", "depot"):
         if gtype == "Point":
             points = [_position(coords, label)]
         elif gtype == "MultiPoint" and kind == "sensor":
@@ -230,6 +237,9 @@ def _add_feature(layers: GisLayers, feat: Any, where: str, layer: str | None) ->
                 sid = None if base is None else (str(base) if len(points) == 1 else f"{base}-{k}")
                 layers.sensors.append({"where": label, "id": sid, "lon": lon, "lat": lat,
                                        "required_data": q})  # fmt: skip
+        elif kind == "depot":
+            layers.depots.append({"where": label, "name": name, "lon": points[0][0],
+                                  "lat": points[0][1]})  # fmt: skip
         else:
             if getattr(layers, kind) is not None:
                 first = getattr(layers, kind)["where"]
@@ -485,7 +495,7 @@ def _all_lonlat(layers: GisLayers) -> np.ndarray:
             pts.extend(ring)
     for c in layers.circles + layers.area_circles:
         pts.append((c["lon"], c["lat"]))
-    for e in (layers.start, layers.end, layers.home):
+    for e in (layers.start, layers.end, layers.home, *layers.depots):
         if e is not None:
             pts.append((e["lon"], e["lat"]))
     return np.array(pts, dtype=float).reshape(-1, 2)
@@ -776,6 +786,8 @@ def build_map(
     if area_given and (layers.areas or layers.area_circles):
         _inclusion_zones(layers, o, area_box, zones, notes, problems, locate)
     settings = _settings(layers, o, notes)
+    if layers.depots:
+        _depot_features(layers, settings, point, notes, problems)
     if problems:
         raise GisError(problems)
     given_name = settings.pop("name", None)
@@ -876,7 +888,8 @@ def _settings(layers: GisLayers, o: tuple[float, float, float],
         return np.round(b, 4).tolist()
 
     try:
-        depots = (settings.get("fleet") or {}).get("depots") or []
+        # (depot features, when given, replace these: `_depot_features`)
+        depots = [] if layers.depots else (settings.get("fleet") or {}).get("depots") or []
         xy = moved([[d["x"], d["y"]] for d in depots]) if depots else []
         for d, (x, y) in zip(depots, xy, strict=True):
             d["x"], d["y"] = x, y
@@ -890,6 +903,32 @@ def _settings(layers: GisLayers, o: tuple[float, float, float],
     if what:
         notes.append(f"{' and '.join(what)} moved with the frame to the new origin")
     return settings
+
+
+def _depot_features(layers: GisLayers, settings: dict[str, Any], point: Any,
+                    notes: list[str], problems: list[str]) -> None:  # fmt: skip
+    """The ``depot`` features as `settings`' ``fleet.depots``, in their order (a fleet section
+    made when the settings have none): they replace depots the carried fleet section gives (a
+    note says so). `point` places a feature in the local frame (None, and a problem, when it
+    lies outside the area); a duplicate name is a problem naming both features."""
+    depots: list[dict[str, Any]] = []
+    seen: dict[str, str] = {}
+    for k, d in enumerate(layers.depots):
+        name = d["name"] if d["name"] else f"d{k + 1}"
+        if name in seen:
+            problems.append(f"{d['where']}: duplicate depot name '{name}' (the first: "
+                            f"{seen[name]})")  # fmt: skip
+        seen.setdefault(name, d["where"])
+        xy = point(d, "depot")
+        if xy is not None:
+            depots.append({"name": name, "x": xy[0], "y": xy[1]})
+    fleet = settings.get("fleet")
+    if not isinstance(fleet, dict):
+        fleet = settings["fleet"] = {}
+    elif fleet.get("depots"):
+        notes.append(f"fleet.depots: the {len(layers.depots)} depot features replace the "
+                     f"{len(fleet['depots'])} in the fleet settings of {layers.settings_where}")
+    fleet["depots"] = depots
 
 
 def _entry(shape: tuple[np.ndarray, list[np.ndarray]], name: str | None) -> dict[str, Any]:
