@@ -127,6 +127,60 @@ def test_a_hover_longer_than_one_battery_is_cut_among_sorties() -> None:
     assert s.times == pytest.approx(np.array([0.8, 0.4, 0.1]) * t_max)
 
 
+#: the review's map: t1 1750 m from the only depot behind a circle, 400 Mbit on a 200 s
+#: battery; a valid plan of 9 sorties was built by hand, but plan found none
+TIGHT200 = {
+    "name": "tight200", "origin": {"lat": 10.0, "lon": 10.0, "alt": 0.0},
+    "area": {"width": 2000, "height": 1000}, "start": [50, 500], "end": [50, 500],
+    "sensors": [{"id": "t1", "x": 1800, "y": 500, "required_data": 400},
+                {"id": "t2", "x": 1700, "y": 800}],
+    "obstacles": {"circles": [{"x": 900, "y": 500, "radius": 100}], "rectangles": [],
+                  "no_fly_zones": []},
+    "uav": {"endurance_s": 200},
+}  # fmt: skip
+
+
+def test_a_hover_point_no_sortie_reaches_is_moved_where_sorties_serve_it() -> None:
+    # the single flight served t1 and t2 from one point 1390 m out (70.8 s): no sortie of it
+    # alone fits the battery even without hover, so the split found no plan at all (and the
+    # cluster-first start, planned as one flight from the depot, neither). The point now moves
+    # along the way to it from the depot to where the same data costs the fewest sorties
+    from planner_core.fleet.search import _Planner
+    from planner_core.fleet.split import SHARE_MAX, solo_room, solo_sorties
+    from planner_core.pipeline import PlanConfig
+
+    m = load_map(TIGHT200)
+    pl = _Planner(m, PlanConfig(seed=0, budget=600), None, 300)
+    P, T = np.array([[1429.91, 680.18]]), np.array([70.78])
+    assert solo_room(pl.st, pl.links, P)[0] <= 0.0  # unreachable where it was
+    Q, U = pl.reachable(P, T)
+    k = solo_sorties(pl.st, solo_room(pl.st, pl.links, Q), U)[0]
+    assert 2 <= k <= SHARE_MAX and np.hypot(*(Q[0] - [50, 500])) < 1300
+    # the same data from both sensors at the new place (rates there times the longer hover)
+    got, want = pl.model.rates(Q)[0] * U[0], pl.model.rates(P)[0] * T[0]
+    assert np.all(got >= want - 1e-6)
+    plan = pl.split(P, T)
+    assert plan is not None and plan.energy_ok() and len(plan.sorties) == k
+    served = collected_by_sortie(plan, pl.model).sum(axis=0)
+    assert np.all(served >= pl.model.required * (1 - 1e-9))
+    # a point one sortie serves alone stays where it is (maps planned before are unchanged)
+    near = np.array([[600.0, 650.0]])
+    assert np.array_equal(pl.reachable(near, np.array([5.0]))[0], near)
+
+
+@pytest.mark.slow  # measured 18 s for plan + verify through the CLI
+def test_a_sensor_needing_several_sorties_far_from_the_depot_is_planned(tmp_path) -> None:
+    # plan exited 1 "no plan of sorties found that fits the battery" on the review's map,
+    # which check passed (t1 "must be shared by at least 5 sorties")
+    path = tmp_path / "t200.json"
+    path.write_text(json.dumps(TIGHT200))
+    r = _plan_cli(path, "-o", tmp_path / "d", "--quiet")
+    assert r.returncode == 0, r.stderr
+    v = _verify_cli(path, tmp_path / "d")
+    assert v.returncode == 0, v.stdout + v.stderr
+    summary = json.loads((tmp_path / "d" / "fleet.json").read_text())
+    assert sum(len(x["sorties"]) for x in summary["vehicles"]) >= 5
+
 @pytest.mark.slow  # measured 6 s (issue 35: default suite <= 5 min)
 def test_a_sensor_heavier_than_one_battery_is_served_over_sorties(tmp_path) -> None:
     # fleet-demo with S2 asking 2,000 Mbit: check notes that at least 4 sorties must share it

@@ -51,7 +51,14 @@ import numpy as np
 
 from planner_core.fleet.lp import collected_by_sortie, fleet_hover_lp
 from planner_core.fleet.model import FleetPlan, FleetSettings, Sortie
-from planner_core.fleet.split import Links, split_tour, split_vehicles
+from planner_core.fleet.split import (
+    SHARE_MAX,
+    Links,
+    solo_room,
+    solo_sorties,
+    split_tour,
+    split_vehicles,
+)
 from planner_core.model.mapio import sub_map_dict
 from planner_core.streams import stream_rng, stream_seed
 
@@ -74,6 +81,10 @@ TRANSFER_NEIGHBOURS = 3
 #: round) tried per vehicle and round, each scored by a split of the vehicle's tour
 TOUR_TRIALS = 300
 TOUR_WINDOW = 10
+#: a hover point one sortie cannot serve alone is offered places on the way to it from this
+#: many of its nearest depots, every 1/SPOT_STEPS of the way (`_Planner.best_spot`)
+SPOT_DEPOTS = 3
+SPOT_STEPS = 64
 
 
 class FleetResult:
@@ -182,11 +193,96 @@ class _Planner:
         return out
 
     def split(self, P: np.ndarray, T: np.ndarray) -> FleetPlan | None:
-        """A tour (corners joined into its blocked legs) split among the vehicles, LP'd."""
-        joined = self.links.join(P, T)
+        """A tour (its points moved where sorties reach them: `reachable`; corners joined
+        into its blocked legs) split among the vehicles, LP'd."""
+        joined = self.links.join(*self.reachable(P, T))
         if joined is None:
             return None
         return self.lp(split_vehicles(self.st, self.links, *joined))
+
+    def reachable(self, P: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The tour P (n, 2), T (n,) s with every hover point that one sortie cannot serve
+        alone (no sortie of it alone fits the battery, or its hover needs several sorties:
+        `split.solo_sorties` > 1) moved to `best_spot`, where taking the same data costs the
+        least; the others as they are. A map planned as one flight puts its hover points where
+        the flight is shortest, not where a battery's out-and-back reaches: a sensor far from
+        every depot was then served from a point no sortie could reach, and no plan was found.
+
+        Returns:
+            (P', T'): P and T themselves when no point needs moving (or no battery).
+        """
+        P = np.asarray(P, dtype=float).reshape(-1, 2)
+        T = np.asarray(T, dtype=float).reshape(-1)
+        if not len(P) or not np.isfinite(self.st.usable_wh):
+            return P, T
+        k = solo_sorties(self.st, solo_room(self.st, self.links, P), T)
+        move = np.flatnonzero((T > 0.0) & (k > 1))
+        if not len(move):
+            return P, T
+        P, T = P.copy(), T.copy()
+        for i in move:
+            spot = self.best_spot(P[i], float(T[i]), float(k[i]))
+            if spot is not None:
+                P[i], T[i] = spot
+        return P, T
+
+    def best_spot(
+        self, p: np.ndarray, t: float, k_here: float
+    ) -> tuple[np.ndarray, float] | None:
+        """Where to hover instead of p (t s) so the data p takes from each sensor costs the
+        fewest sorties and least time: candidates every 1/`SPOT_STEPS` of the way from each of
+        the `SPOT_DEPOTS` nearest depots to p (round the obstacles, through the visibility
+        graph's corners), each hovering t' = max_j (R_pj t / R_qj) over the sensors p hears (0
+        rate at q: not a candidate; C3 broken at q: neither), costed as k sorties out of and
+        back to that depot with t' / k of hover each (k the least that fits the battery and
+        T_max, at most `SHARE_MAX`): k (flight + swap) + t' weighted as the split weighs them.
+        None when no candidate needs fewer than `k_here` sorties (p's own).
+
+        Cost: `SPOT_DEPOTS` visibility-graph routes and SPOT_STEPS x J link rates.
+        """
+        st, model = self.st, self.model
+        req = np.asarray(model.required, dtype=float)
+        data = model.rates(p[None])[0] * t
+        served = (data > 1e-9) & (req > 0)
+        if not served.any():
+            return None
+        wf, wh, per = ((st.alpha, 1.0 - st.alpha, 0.0) if st.goal == "total"
+                       else (1.0, 1.0, st.vertical_s))  # fmt: skip
+        near = np.argsort(np.hypot(*(st.depots - p).T))[:SPOT_DEPOTS]
+        best: tuple[float, np.ndarray, float] | None = None
+        for d in near:
+            way = self.links.way(st.depots[d], p)
+            if way is None:
+                continue
+            path = np.vstack([st.depots[d], way, p])
+            seg = np.hypot(*np.diff(path, axis=0).T)
+            cum = np.concatenate([[0.0], np.cumsum(seg)])
+            if cum[-1] <= 0.0:
+                continue
+            at = np.linspace(0.0, cum[-1], SPOT_STEPS + 1)[1:]
+            s = np.minimum(np.searchsorted(cum, at, side="right") - 1, len(seg) - 1)
+            part = at - cum[s]
+            q = path[s] + (part / np.where(seg[s] > 0, seg[s], 1.0))[:, None] * (path[s + 1]
+                                                                                 - path[s])
+            e_full = np.concatenate([[0.0], np.cumsum(st.leg_energies(seg))])
+            t_full = np.concatenate([[0.0], np.cumsum(st.leg_times(seg))])
+            e_out = e_full[s] + st.leg_energies(part)
+            t_out = t_full[s] + st.leg_times(part)
+            room = st.budget_wh(1 + 2 * s) - st.vertical_wh - 2.0 * e_out
+            R = model.rates(q)
+            ok = (room > 0.0) & np.all(R[:, served] > 0.0, axis=1)
+            if model.access == "simultaneous":
+                ok &= R.sum(axis=1) <= model.bandwidth
+            if not ok.any():
+                continue
+            tq = np.max(data[served] / np.where(R[:, served] > 0, R[:, served], 1.0), axis=1)
+            k = solo_sorties(st, np.where(ok, room, 0.0), tq)
+            cost = k * (wf * 2.0 * t_out + per) + (k - 1.0) * st.swap_s + wh * tq
+            cost = np.where(ok & (k <= SHARE_MAX) & (k < k_here), cost, np.inf)
+            i = int(np.argmin(cost))
+            if np.isfinite(cost[i]) and (best is None or cost[i] < best[0]):
+                best = (float(cost[i]), q[i].copy(), float(tq[i]))
+        return None if best is None else (best[1], best[2])
 
     def cluster_first(self) -> FleetPlan | None:
         """Step 3: per depot a tour of its nearest sensors, the tours joined and split."""

@@ -43,7 +43,7 @@ from planner_core.fleet.model import FleetPlan, FleetSettings, Sortie
 from planner_core.model.geometry import overlap_lengths
 from planner_core.model.routing.graph import CLEAR
 
-__all__ = ["Links", "split_tour", "split_vehicles"]
+__all__ = ["SHARE_MAX", "Links", "solo_room", "solo_sorties", "split_tour", "split_vehicles"]
 
 
 class Links:
@@ -272,13 +272,52 @@ def split_tour(
 SHARE_MAX = 64
 
 
+def solo_room(st: FleetSettings, links: Links, P: np.ndarray) -> np.ndarray:
+    """Per point, the most energy (Wh) a sortie of that point alone leaves for its hover: over
+    the depot pairs (out of d, back to d'), the budget for its points (`budget_wh`) less the
+    climb, the landing and the ways there and back; -inf where no depot reaches it.
+
+    Args:
+        st, links: as `split_tour`.
+        P: points (n, 2), m.
+
+    Returns:
+        (n,) Wh (<= 0: no sortie of the point alone fits the battery, even with no hover).
+    """
+    _, ce, nc, _ = _connections(st, links, np.asarray(P, dtype=float).reshape(-1, 2))
+    out_e, back_e = ce[:, None, :], ce[None, :, :]  # (D, 1, n), (1, D, n)
+    count = 1 + nc[:, None, :] + nc[None, :, :]
+    budget = st.budget_wh(count)
+    return np.max(budget - st.vertical_wh - out_e - back_e, axis=(0, 1))
+
+
+def solo_sorties(st: FleetSettings, room: np.ndarray, T: np.ndarray) -> np.ndarray:
+    """The least sorties among which each point's hover time T (s) can be shared: k such that
+    T / k of hover fits the point's `room` (Wh, `solo_room`) and stays within T_max (C2);
+    inf where the room is not positive.
+
+    Args:
+        st: the fleet's settings (P(0), T_max).
+        room: (n,) Wh; T: (n,) s.
+
+    Returns:
+        (n,) float: whole numbers >= 1, or inf.
+    """
+    room = np.asarray(room, dtype=float)
+    need = np.asarray(T, dtype=float) * st.hover_w / 3600.0  # Wh each point's hover takes
+    with np.errstate(divide="ignore", invalid="ignore"):
+        k = np.where(room > 0.0, np.ceil(need / np.where(room > 0.0, room, 1.0) - 1e-9), np.inf)
+    k = np.maximum(k, np.ceil(np.asarray(T, dtype=float) / float(st.uav.max_hover_time) - 1e-9))
+    return np.maximum(k, 1.0)
+
+
 def _shared_points(
     st: FleetSettings, links: Links, P: np.ndarray, T: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray] | None:
     """The tour with every point whose hover time no single sortie can fly repeated: k
     consecutive copies at the same place, T_i / k s each, k the least for which a sortie of
     that point alone (out of and back to its best depots) fits the battery and T_i / k is
-    within T_max (C2: `FleetSettings.uav.max_hover_time`); the split then
+    within T_max (C2: `FleetSettings.uav.max_hover_time`; `solo_sorties`); the split then
     cuts between the copies and C4 is met over the sorties (the LP across sorties re-times
     them). None when a point cannot be flown even with 0 s of hover or would need more than
     `SHARE_MAX` sorties.
@@ -290,19 +329,8 @@ def _shared_points(
     Returns:
         (P', T'), (n', 2) and (n',), n' >= n; P and T themselves when no point needs sharing.
     """
-    _, ce, nc, _ = _connections(st, links, P)
-    # per point the most energy a sortie of it alone leaves for its hover: over the depot
-    # pairs (out of d, back to d'), the budget for its points less the climb and the ways
-    out_e, back_e = ce[:, None, :], ce[None, :, :]  # (D, 1, n), (1, D, n)
-    count = 1 + nc[:, None, :] + nc[None, :, :]
-    budget = st.budget_wh(count)
-    room = np.max(budget - st.vertical_wh - out_e - back_e, axis=(0, 1))  # (n,) Wh
-    if not np.all(room > 0.0):
-        return None
-    need = T * st.hover_w / 3600.0  # Wh each point's hover takes
-    k = np.maximum(np.ceil(need / room - 1e-9), 1)
-    k = np.maximum(k, np.ceil(T / float(st.uav.max_hover_time) - 1e-9))  # C2
-    if np.any(k > SHARE_MAX):  # a point hardly reachable: not worth a swarm of sorties
+    k = solo_sorties(st, solo_room(st, links, P), T)
+    if np.any(k > SHARE_MAX):  # unreachable, or a swarm of sorties for one point
         return None
     k = k.astype(int)
     if np.all(k == 1):
