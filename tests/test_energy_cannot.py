@@ -60,7 +60,7 @@ def test_check_refuses_a_sensor_and_a_depot_out_of_reach(tmp_path) -> None:
     assert r.returncode == 1, r.stdout + r.stderr
     assert _cannot(r.stdout) == [
         "CANNOT  sensor 'far': no sortie can collect any of its data: from the nearest, depot "
-        "'home', 21213 m away, a sortie needs at least 100 Wh to come within its radio range "
+        "'home', 21213 m away, a sortie needs at least 105.7 Wh to come within its radio range "
         "(995 m) and back, more than the 32 Wh usable (battery 40 Wh less the 20 % reserve)",
         "CANNOT  fleet.depots: depot 'yard' at (2450, 2450): no sortie can leave it: no "
         "sensor is heard from the airspace around it (obstacles wall it in; the radio range "

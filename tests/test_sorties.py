@@ -136,7 +136,8 @@ TIGHT200 = {
                 {"id": "t2", "x": 1700, "y": 800}],
     "obstacles": {"circles": [{"x": 900, "y": 500, "radius": 100}], "rectangles": [],
                   "no_fly_zones": []},
-    "uav": {"endurance_s": 200},
+    # take-off and landing at v_max (10 s each), as the reviewer's map was flown when found
+    "uav": {"endurance_s": 200, "climb_speed": 20.0, "descent_speed": 20.0},
 }  # fmt: skip
 
 
