@@ -42,7 +42,7 @@ def stagger(tracks: Sequence[VehicleTrack], *, separation: float = SEPARATION_M,
         latest = max((p.launch + p.span for p in placed), default=0.0)
         t = 0.0
         while True:
-            cand = VehicleTrack(t, tr.dt, tr.xy, tr.z, tr.sending)
+            cand = tr.at(t)
             if t > latest or all(_clear(cand, p, separation) for p in placed):
                 break
             t += step

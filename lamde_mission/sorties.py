@@ -324,7 +324,7 @@ def _check(
     plan is written)."""
     from lamde_mission.launches import stagger
     from sim import replay, verify
-    from sim.fleet_time import VehicleTrack, fleet_time_verdicts, track
+    from sim.fleet_time import fleet_time_verdicts, track
     from sim.sorties import combined_data_verdicts
 
     out = []
@@ -344,9 +344,8 @@ def _check(
         launches = stagger(tracks)
     launches = [float(t) for t in launches][:len(tracks)]
     launches += [0.0] * (len(tracks) - len(launches))
-    air = fleet_time_verdicts([VehicleTrack(t, x.dt, x.xy, x.z, x.sending)
-                               for t, x in zip(launches, tracks, strict=True)],
-                              tuple(m.sensor_ids))  # fmt: skip
+    air = fleet_time_verdicts([x.at(t) for t, x in zip(launches, tracks, strict=True)],
+                              tuple(m.sensor_ids))
     return FleetCheck(tuple(out), tuple(combined), float(m.swap_s), (*shape, *air),
                       launches=tuple(launches))
 

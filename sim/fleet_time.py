@@ -15,7 +15,9 @@ the shared clock. On a grid of `dt` seconds, two verdicts:
 Positions between samples are linear (the replay samples each phase at `dt` or finer); a
 vehicle on the ground (before its launch, during a swap, after its last landing) is not
 airborne and receives nothing. Like the rest of the sim it imports of `planner_core` nothing.
-Cost: O(V^2 x T / dt) for SEPARATION and O(V x J x T / dt) for LINKS, T the longest span.
+Cost: O(V^2 x T / dt) for SEPARATION and O(V^2 x K x T / dt) for LINKS, T the longest span
+and K the sensors two vehicles both hear (0 when they serve different sensors); building a
+track O(sorties x J x T / dt).
 """
 
 from __future__ import annotations
@@ -44,13 +46,25 @@ _SENDING = 1e-9
 class VehicleTrack:
     """One vehicle on the shared clock, sampled every `dt` s from time 0 (its launch at
     `launch` s): positions xy (N, 2) m, altitude z (N,) m (0 on the ground), and which sensors
-    send to it in each step (N - 1, J) bool."""
+    send to it in each step, `sending` (N - 1, K) bool for the K sensors `sensors` (indices
+    into the map's; None: all J, K = J). Keeping only the sensors a vehicle ever hears makes
+    two vehicles serving other sensors cost nothing to compare."""
 
     launch: float
     dt: float
     xy: np.ndarray
     z: np.ndarray
     sending: np.ndarray
+    sensors: np.ndarray | None = None
+
+    def at(self, launch: float) -> VehicleTrack:
+        """The same track launched at `launch` s."""
+        return VehicleTrack(float(launch), self.dt, self.xy, self.z, self.sending, self.sensors)
+
+    def columns(self) -> np.ndarray:
+        """The map's indices of the `sending` columns."""
+        return (np.arange(self.sending.shape[1]) if self.sensors is None
+                else np.asarray(self.sensors))  # fmt: skip
 
     @property
     def span(self) -> float:
@@ -105,11 +119,8 @@ def track(sorties: Sequence[Timeline], swap_s: float, *, dt: float = 1.0) -> Veh
             data[inside, j] += np.interp(g, local, tl.data[:, j])
             data[after, j] += float(tl.data[-1, j])
     sending = np.diff(data, axis=0) > _SENDING
-    return VehicleTrack(0.0, float(dt), xy, np.maximum(z, 0.0), sending)
-
-
-def _shifted(tr: VehicleTrack, launch: float) -> VehicleTrack:
-    return VehicleTrack(float(launch), tr.dt, tr.xy, tr.z, tr.sending)
+    heard = np.flatnonzero(sending.any(axis=0))
+    return VehicleTrack(0.0, float(dt), xy, np.maximum(z, 0.0), sending[:, heard], heard)
 
 
 def _window(a: VehicleTrack, b: VehicleTrack) -> tuple[slice, slice] | None:
@@ -146,14 +157,18 @@ def conflicts(a: VehicleTrack, b: VehicleTrack, separation: float = SEPARATION_M
     d = np.where(air, d, np.inf)
     i = int(np.argmin(d))
     least, at = float(d[i]), base + i * a.dt
+    ca, cb = a.columns(), b.columns()
+    common, ia, ib = np.intersect1d(ca, cb, return_indices=True)
+    if not len(common):  # no sensor heard by both, ever
+        return least, at, np.nan, -1, 0
     ea = slice(sa.start, sa.stop - 1)
     eb = slice(sb.start, sb.stop - 1)
-    both = a.sending[ea] & b.sending[eb]
+    both = a.sending[ea][:, ia] & b.sending[eb][:, ib]
     steps = np.flatnonzero(both.any(axis=1))
     if not len(steps):
         return least, at, np.nan, -1, 0
     s0 = int(steps[0])
-    return least, at, base + s0 * a.dt, int(np.flatnonzero(both[s0])[0]), len(steps)
+    return least, at, base + s0 * a.dt, int(common[np.flatnonzero(both[s0])[0]]), len(steps)
 
 
 def fleet_time_verdicts(tracks: Sequence[VehicleTrack], sensor_ids: Sequence[str],

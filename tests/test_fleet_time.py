@@ -116,3 +116,24 @@ def test_two_uavs_from_one_depot_are_launched_apart_and_verify_holds_them_to_it(
     (out / "fleet.json").write_text(json.dumps(doc))
     r = run_cli("verify", path, out)
     assert r.returncode == 1 and "fleet SEPARATION vehicles >= 30 m apart: FAIL" in r.stdout
+
+
+def test_tracks_keeping_only_their_heard_sensors_give_the_same_conflicts() -> None:
+    """`track` keeps the columns of the sensors a vehicle ever hears; a pair compares only
+    the sensors both hear: the same first shared link as the full (N - 1, J) tables."""
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        J = 6
+        full = []
+        for k in range(2):
+            s = np.zeros((99, J), dtype=bool)
+            for j in rng.choice(J, size=2, replace=False):
+                a = int(rng.integers(0, 80))
+                s[a:a + int(rng.integers(1, 20)), j] = True
+            t = _track(100, x0=3000.0 * k)
+            full.append(VehicleTrack(t.launch, t.dt, t.xy, t.z, s))
+        compact = []
+        for t in full:
+            heard = np.flatnonzero(t.sending.any(axis=0))
+            compact.append(VehicleTrack(t.launch, t.dt, t.xy, t.z, t.sending[:, heard], heard))
+        assert conflicts(*full)[2:] == pytest.approx(conflicts(*compact)[2:], nan_ok=True)
