@@ -61,6 +61,7 @@ __all__ = [
     "MAP_LISTS",
     "MAX_DEPOTS",
     "MIN_POPULATION",
+    "SHARE_MAX",
     "POPULATION",
     "RUNS",
     "SCORE_FACTOR",
@@ -369,6 +370,11 @@ MAP_CHOICES["objective.goal"] = Default(
 
 #: the most depots a map may give (`fleet.depots`)
 MAX_DEPOTS = 100
+#: the most sorties the sortie planner shares one hover point's time, and one sensor's data,
+#: among (`planner_core.fleet.split`): a point that needs more is left out of the split, which
+#: bounds the split's size; a sensor whose data needs more (`check`'s lower bound) is a
+#: SORTIE_LIMIT there, and the sortie planner refuses the map up front
+SHARE_MAX = 64
 #: the map file's optional fields that are lists of objects (JSON path -> entry)
 MAP_LISTS: dict[str, Default] = {
     "fleet.depots": Default(

@@ -138,3 +138,99 @@ def test_several_flights_turn_per_flight_limits_into_notes() -> None:
         fleet = dict(one, fleet={"uavs": uavs})
         kinds = {f.kind: f.fatal for f in diagnose(load_map(fleet)).findings}
         assert kinds.get("TOO_MUCH_DATA" if fatal else "SEVERAL_SORTIES") is fatal, kinds
+
+
+# ----------------------------------------------------------------------------- where vehicles
+# can take off (the review's maps): a sortie may land at the map's end, but a vehicle takes
+# off only where it stands; with one UAV it never leaves the depots a battery's flight joins
+
+#: 'far' is 141 m from the map's end, 2.5 km from the start; no flight reaches the end
+OP_G = {
+    "name": "op-g", "origin": {"lat": -33.9, "lon": 151.2, "alt": 20.0},
+    "area": {"width": 2500, "height": 1500}, "start": [100, 100], "end": [2400, 1400],
+    "sensors": [{"id": "far", "x": 2300, "y": 1300}, {"id": "near", "x": 300, "y": 200}],
+    "uav": {"endurance_s": 120},
+}  # fmt: skip
+#: one UAV, two depots 2.8 km apart (a battery flies ~1.7 km), a sensor beside each
+OP_H = {
+    "name": "op-h", "origin": {"lat": -33.9, "lon": 151.2, "alt": 20.0},
+    "area": {"width": 3000, "height": 1000}, "start": [100, 500], "end": [100, 500],
+    "sensors": [{"id": "w1", "x": 200, "y": 300}, {"id": "e1", "x": 2800, "y": 700}],
+    "uav": {"endurance_s": 120},
+    "fleet": {"uavs": 1, "depots": [{"name": "west", "x": 100, "y": 500},
+                                    {"name": "east", "x": 2900, "y": 500}]},
+}  # fmt: skip
+
+
+def _fatal(d: dict) -> list[tuple[str, str | None]]:
+    return [(f.kind, f.sensor) for f in diagnose(load_map(d)).findings if f.fatal]
+
+
+def test_the_maps_end_is_a_take_off_site_only_where_a_vehicle_gets_there() -> None:
+    # check said OK (it judged 'far' from the end, as if a vehicle could take off there);
+    # plan then found no plan and sent the user to a CANNOT check never printed
+    (f,) = [f for f in diagnose(load_map(OP_G)).findings if f.fatal]
+    assert (f.kind, f.sensor) == ("ENERGY_RANGE", "far")
+    assert ("the map's end (2400, 1400), 141 m away, is within a sortie's reach of it, but no "
+            "vehicle gets there to take off: the shortest flight there, 2642 m from depot "
+            "'home' (the start), needs at least") in f.message
+    # a battery that flies there (7.41 Wh) but not out to 'far' and back from the start
+    # (8.34 Wh): the end is reached by a ferry, and 'far' served from it
+    assert _fatal(dict(OP_G, uav={"endurance_s": 210})) == []
+    assert _fatal(dict(OP_G, end=[100, 100])) == [("ENERGY_RANGE", "far")]  # as before
+
+
+def test_one_uav_never_leaves_the_depots_a_battery_joins() -> None:
+    # each depot on its own served its sensor, so check said OK; one vehicle cannot be at both
+    (f,) = [f for f in diagnose(load_map(OP_H)).findings if f.fatal]
+    assert f.kind == "VEHICLES" and f.message.startswith(
+        "fleet.uavs: 1 UAV cannot serve 2 sensors that each need a vehicle of their own: "
+        "sensor 'w1' only from depot 'west'; sensor 'e1' only from depot 'east'.")
+    assert "depot 'west' to depot 'east', 2800 m, needs at least 7.798 Wh" in f.message
+    assert _fatal(dict(OP_H, fleet=dict(OP_H["fleet"], uavs=2))) == []  # one at each depot
+    near = dict(OP_H["fleet"], depots=[{"name": "west", "x": 100, "y": 500},
+                                       {"name": "mid", "x": 1500, "y": 500},
+                                       {"name": "east", "x": 2900, "y": 500}])  # fmt: skip
+    assert _fatal(dict(OP_H, fleet=near)) == []  # ferries west -> mid -> east, transitively
+
+
+def test_a_sensor_beyond_the_planners_sortie_limit_is_cannot() -> None:
+    # 204,000 Mbit at 136 Mbit a sortie: 1,502 sorties; check only noted it, plan then failed
+    from planner_core.fleet.split import SHARE_MAX
+
+    far = dict(OP_G, end=[100, 100], sensors=[
+        {"id": "far", "x": 900, "y": 700, "required_data": 200000},
+        {"id": "near", "x": 300, "y": 200}])  # fmt: skip
+    (f,) = [f for f in diagnose(load_map(far)).findings if f.fatal]
+    assert (f.kind, f.sensor) == ("SORTIE_LIMIT", "far")
+    assert (f"at least 1502 sorties must share its data, more than the {SHARE_MAX} the planner "
+            "shares one sensor's data among") in f.message
+    # the planner refuses it up front, in the same words (no work done)
+    from planner_core.fleet.search import plan_fleet
+
+    with pytest.raises(ValueError) as err:
+        plan_fleet(load_map(far), None)  # refused before the config is used
+    assert str(err.value) == f.message
+
+
+@pytest.mark.slow  # measured 4 s: check and plan through the CLI, at once
+def test_plan_points_to_check_only_for_what_check_says(tmp_path) -> None:
+    from tests.conftest import run_cli_many
+
+    g = tmp_path / "g.json"
+    g.write_text(json.dumps(OP_G))
+    chk, pl = run_cli_many(("check", g), ("plan", g, "-o", tmp_path / "g", "--budget", "2000",
+                                          "--sortie-budget", "500", "--rounds", "1", "--quiet"))
+    assert chk.returncode == 1 and "CANNOT  sensor 'far'" in chk.stdout
+    # the fleet line names the sites the planner uses: the end lands, it does not take off
+    assert ("depots home (100, 100) at the start (default) and end (2400, 1400) at the map's "
+            "end (a landing site; a take-off site only after a landing there)") in chk.stdout
+    assert pl.returncode == 1
+    lines = pl.stderr.splitlines()
+    assert lines[0].startswith(f"lamde-mission plan: {g}: uav.battery: no plan of sorties "
+                               "found that fits the battery from the depots: the single "
+                               "flight's tour cannot be cut into sorties")
+    assert "run `lamde-mission check`" not in pl.stderr
+    assert lines[1].startswith("  no plan can meet this map (`lamde-mission check` says "
+                               "CANNOT): sensor 'far': no sortie can collect any of its data")
+    assert len(lines) == 2

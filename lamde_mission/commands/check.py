@@ -17,8 +17,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "beyond twice the radio reach than max_hover_points, an end point walled off, "
         "sensors that no hover point keeping C3 (the bandwidth R_lambda under the paper's "
         "simultaneous uplink) can serve; on a map with a battery or fleet, a sensor no sortie "
-        "can reach and come back from within the usable energy and a depot no sortie can "
-        "leave; exit status 1 naming what cannot be met; docs/energy.md).",
+        "from where a vehicle can take off can reach and come back from within the usable "
+        "energy, more sensors needing vehicles of their own than fleet.uavs, a depot no "
+        "sortie can leave, and a sensor needing more sorties than the sortie planner makes "
+        "for one; exit status 1 naming what cannot be met; docs/energy.md).",
     )
     p.add_argument("map", help="map file (JSON)")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
@@ -41,7 +43,7 @@ def run(args: argparse.Namespace) -> int:
     default = " (default for this size)" if s["max_hover_points_default"] else ""
     u, r, o = s["uav"], s["radio"], s["objective"]
     print(f"map '{s['name']}': " + ("OK" if d.feasible_so_far else
-                                    "valid, but no plan can meet it (CANNOT below)"))
+                                    f"valid, but {_cannot_what(d)} (CANNOT below)"))
     print(f"  area            {s['area_m'][0]:g} m x {s['area_m'][1]:g} m")
     if s["origin"] is None:
         print("  origin          none: give one (or --origin LAT,LON[,ALT]) to write a mission")
@@ -68,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     sf = s["safety"]
     print(f"  safety          clearance {sf['clearance']:g} m{_reduced_clearance(m)}, data "
           f"margin {100 * sf['data_margin']:g} %")
-    _energy_lines(s)
+    _energy_lines(s, m)
     return _diagnosis(d)
 
 
@@ -85,8 +87,10 @@ def _reduced_clearance(m: object) -> str:
     return f" (less where the start, end or a depot is closer: {shown}{more})"
 
 
-def _energy_lines(s: dict) -> None:
-    """The battery and fleet lines of the summary (issue 33), when the map gives them."""
+def _energy_lines(s: dict, m: object) -> None:
+    """The battery and fleet lines of the summary (issue 33), when the map gives them; the
+    depots are the sortie planner's (`Map.sortie_sites` of map `m`: without `fleet.depots`,
+    home at the start, and the map's end as a landing site)."""
     b, f = s.get("battery"), s.get("fleet")
     if b is not None:
         hover_w = s["power"]["hover_w"]
@@ -96,8 +100,13 @@ def _energy_lines(s: dict) -> None:
               f"{100 * b['reserve']:g} %: {b['usable_wh']:.4g} Wh usable per sortie "
               f"({60 * b['usable_wh'] / hover_w:.3g} min of hover at P(0) {hover_w:g} W)")
     if f is not None:
-        where = ("the start (default)" if f["depots_default"] else ", ".join(
-            f"{d['name']} ({d['x']:g}, {d['y']:g})" for d in f["depots"]))  # fmt: skip
+        names, xy, _ = m.sortie_sites
+        sites = [f"{n} ({x:g}, {y:g})" for n, (x, y) in zip(names, xy, strict=True)]
+        where = ", ".join(sites)
+        if f["depots_default"]:
+            where = f"{sites[0]} at the start (default)" + (
+                f" and {sites[1]} at the map's end (a landing site; a take-off site only "
+                "after a landing there)" if len(sites) > 1 else "")
         print(f"  fleet           {f['uavs']} UAV{'s' if f['uavs'] != 1 else ''}, depots "
               f"{where}, swap {f['swap_s']:g} s, goal {s['goal']}")
 
@@ -111,6 +120,15 @@ def _diagnosis(d: object) -> int:
         print("  hint    C3 is the paper's simultaneous uplink; \"radio\": {\"access\": "
               "\"scheduled\"} lets the sensors in range share the bandwidth by time slots")
     if not d.feasible_so_far:
-        print("no plan can meet this map (see CANNOT above)")
+        print(f"{_cannot_what(d, 'this map')} (see CANNOT above)")
         return 1
     return 0
+
+
+def _cannot_what(d: object, it: str = "it") -> str:
+    """'no plan can meet it', or where every CANNOT is the sortie planner's own limit (a
+    SORTIE_LIMIT: a plan may exist, the planner does not make it) 'the sortie planner cannot
+    plan it' (`it` the words for the map)."""
+    if all(f.kind == "SORTIE_LIMIT" for f in d.findings if f.fatal):
+        return f"the sortie planner cannot plan {it}"
+    return f"no plan can meet {it}"

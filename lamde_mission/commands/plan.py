@@ -462,7 +462,8 @@ def _run_sorties(args: argparse.Namespace) -> int:
     except MapError:
         raise  # bad input (exit 2, one line per problem: `lamde_mission.cli`)
     except ValueError as exc:
-        print(f"lamde-mission plan: {args.map}: {exc}", file=sys.stderr)
+        print(f"lamde-mission plan: {args.map}: {exc}; nothing written", file=sys.stderr)
+        _say_cannot(m, str(exc))
         return 1
     plan = result.plan
     try:
@@ -491,6 +492,19 @@ def _run_sorties(args: argparse.Namespace) -> int:
             print(f"  {printable(line)}", file=sys.stderr)
         return 1
     return 0
+
+
+def _say_cannot(m: Any, said: str = "") -> None:
+    """After a failed plan: every line `lamde-mission check` prints as CANNOT for map `m`
+    (the fast diagnosis: what no plan can meet), each on its own line on stderr, but those
+    `said` holds already; where there is none, the caller's message says what failed."""
+    from planner_core.model.diagnose import diagnose
+
+    for f in diagnose(m).findings:
+        if f.fatal and f.message not in said:
+            lead = ("the sortie planner cannot plan this map" if f.kind == "SORTIE_LIMIT"
+                    else "no plan can meet this map")  # fmt: skip
+            print(f"  {lead} (`lamde-mission check` says CANNOT): {f.message}", file=sys.stderr)
 
 
 def _corner_slots(args: argparse.Namespace) -> int | str:

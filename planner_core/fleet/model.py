@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from planner_core.model import energy as E
+from planner_core.model import mapio as _mapio
 from planner_core.model.formulas import flight_time
 
 __all__ = [
@@ -47,8 +48,8 @@ ENERGY_SLACK = 0.002
 #: times rounded up to whole seconds (`lamde_mission.storage`), which costs up to P(0) x 1 s
 HOVER_ROUND_S = 1.0
 #: name of the landing site at the map's end, when the map gives no `fleet.depots` and its end
-#: is not its start (a sortie may land there: the map's start and end remain the default depots)
-END_DEPOT = "end"
+#: is not its start (a sortie may land there: `planner_core.model.mapio.Map.sortie_sites`)
+END_DEPOT = _mapio.END_DEPOT
 
 
 @dataclass(frozen=True, eq=False)
@@ -95,15 +96,7 @@ class FleetSettings:
         goal = goal or m.goal
         if goal not in ("total", "makespan"):
             raise ValueError(f"goal: must be 'total' or 'makespan', got {goal!r}")
-        names = [d.name for d in m.depots]
-        xy = [[d.x, d.y] for d in m.depots]
-        given = m.spec.fleet is not None and bool(m.spec.fleet.depots)
-        if not given and not np.allclose(m.start, m.end) and END_DEPOT not in names:
-            names.append(END_DEPOT)
-            xy.append([float(m.end[0]), float(m.end[1])])
-        starts = tuple(range(len(names))) if given else (0,)
-        dep = np.asarray(xy, dtype=float).reshape(-1, 2)
-        dep.flags.writeable = False
+        names, dep, starts = m.sortie_sites
         return cls(depot_names=tuple(names), depots=dep, start_depots=starts,
                    uavs=int(m.uavs), swap_s=float(m.swap_s), usable_wh=float(usable),
                    power=m.power, uav=m.spec.uav, alpha=float(m.spec.objective.alpha),

@@ -284,6 +284,38 @@ class _Planner:
                 best = (float(cost[i]), q[i].copy(), float(tq[i]))
         return None if best is None else (best[1], best[2])
 
+    def why_not(self, single: tuple[np.ndarray, np.ndarray] | None, clustered: bool) -> str:
+        """What failed, in words, when no start gave a plan (`single`: the single flight, None
+        when it found none; `clustered`: the depots' own flights were tried too): the single
+        flight's first hover point that no sortie reaches even moved toward the depots, or
+        that needs more than `SHARE_MAX` sorties; a leg no way round the obstacles joins; or
+        the cut among the vehicles."""
+        also = (" (nor did the depots' own flights, planned from each depot back to it)"
+                if clustered else "")  # fmt: skip
+        if single is None:
+            return (f"the single flight found no feasible plan to cut into sorties (budget "
+                    f"{self.config.budget}, seed {self.config.seed}){also}")
+        st, model = self.st, self.model
+        P, T = self.reachable(*single)
+        room = solo_room(st, self.links, P)
+        k = solo_sorties(st, room, T)
+        for i in np.flatnonzero((T > 0.0) & (k > SHARE_MAX)):
+            rates = model.rates(P[i : i + 1])[0]
+            heard = [sid for sid, r, q in zip(self.pm.sensor_ids, rates, model.required,
+                                              strict=True) if r > 0 and q > 0][:3]  # fmt: skip
+            at = (f"the single flight's hover point at ({P[i, 0]:.0f}, {P[i, 1]:.0f}), "
+                  f"serving {', '.join(repr(x) for x in heard) or 'no sensor'}")
+            if room[i] <= 0.0:
+                return (f"{at}: no sortie from any depot reaches it and comes back on one "
+                        f"battery, even moved toward the depots{also}")
+            return (f"{at}: its {T[i]:.4g} s of hover would need {k[i]:.0f} sorties, more "
+                    f"than the {SHARE_MAX} the planner shares one point among{also}")
+        if self.links.join(P, T) is None:
+            return f"a leg of the single flight's tour has no way round the obstacles{also}"
+        return (f"the single flight's tour cannot be cut into sorties that fit the battery "
+                f"among {st.uavs} vehicle{'s' if st.uavs != 1 else ''}, each taking off where "
+                f"its last sortie landed{also}")
+
     def cluster_first(self) -> FleetPlan | None:
         """Step 3: per depot a tour of its nearest sensors, the tours joined and split."""
         st = self.st
@@ -605,10 +637,8 @@ def route_first(
         raise ValueError("plan: the single flight found no feasible plan to cut into sorties")
     plan = pl.split(*single)
     if plan is None:
-        raise ValueError(
-            "uav.battery: the single flight cannot be cut into sorties that fit "
-            "the battery from the depots (run `lamde-mission check`)"
-        )
+        raise ValueError("uav.battery: the single flight cannot be cut into sorties that fit "
+                         f"the battery from the depots: {pl.why_not(single, False)}")
     return FleetResult(_finish(pl, plan, ["route first, cluster second"]), single, None, pl.lps)
 
 
@@ -635,9 +665,16 @@ def plan_fleet(
         sorties), the single flight, the route-first peer it started from.
 
     Raises:
-        ValueError: the map has no battery, or no plan of sorties fits the battery from its
-            depots (a sensor out of one battery's reach: `lamde-mission check` names it).
+        ValueError: one line: a sensor whose data needs more sorties than the planner shares
+            one sensor's data among (`split.SHARE_MAX`; `lamde-mission check` says so too:
+            SORTIE_LIMIT), refused before any work; or no plan of sorties found that fits the
+            battery, saying what failed (`_Planner.why_not`).
     """
+    from planner_core.model.diagnose import fleet_findings
+
+    limit = [f.message for f in fleet_findings(m) if f.kind == "SORTIE_LIMIT"]
+    if limit:
+        raise ValueError(limit[0])
     pl = _Planner(m, config, goal, sortie_budget)
     single = pl.single()
     notes: list[str] = []
@@ -650,11 +687,8 @@ def plan_fleet(
     elif best is not None:
         notes.append("start: route first, cluster second")
     if best is None:
-        raise ValueError(
-            "uav.battery: no plan of sorties found that fits the battery from the depots "
-            "(run `lamde-mission check`: a sensor it names CANNOT be served; else a larger "
-            "battery or a depot nearer the sensors helps)"
-        )
+        raise ValueError("uav.battery: no plan of sorties found that fits the battery from the "
+                         f"depots: {pl.why_not(single, True)}")
     peer_plan = _finish(pl, peer, ["route first, cluster second"]) if peer is not None else None
     for rnd in range(int(rounds)):
         before = best.objective()

@@ -39,6 +39,7 @@ from typing import Any
 
 import numpy as np
 
+from planner_core import defaults as _defaults
 from planner_core.fleet.model import FleetPlan, FleetSettings, Sortie
 from planner_core.model.geometry import overlap_lengths
 from planner_core.model.routing.graph import CLEAR
@@ -267,9 +268,8 @@ def split_tour(
     return out[::-1]
 
 
-#: the most sorties one hover point's time is shared among (`_shared_points`): a point that
-#: needs more is left out of the split (and the tour with it), which bounds the split's size
-SHARE_MAX = 64
+#: the most sorties one hover point's time is shared among (`planner_core.defaults`)
+SHARE_MAX = _defaults.SHARE_MAX
 
 
 def solo_room(st: FleetSettings, links: Links, P: np.ndarray) -> np.ndarray:

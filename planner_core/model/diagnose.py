@@ -24,14 +24,23 @@ required data raised by the data margin) and with shapely:
 
 Batteries and fleets (issue 33; only on maps that give `uav.battery` / `uav.endurance_s` or
 `fleet`, so other maps are diagnosed exactly as before). A sortie takes off and lands at a
-depot (`fleet.depots`; without them the map's start or end) in the same free piece of
-airspace, flies at most v_max and spends at least `energy.least_energy_per_metre_wh` per
-metre, the vertical take-off and landing, and P(0) per hover second; a sensor is heard only
-within `ground_reach` of it. Straight-line distances bound the flight from below, so:
+depot (`fleet.depots`; without them the map's start, and the map's end for landing) in the
+same free piece of airspace, flies at most v_max and spends at least
+`energy.least_energy_per_metre_wh` per metre, the vertical take-off and landing, and P(0) per
+hover second; a sensor is heard only within `ground_reach` of it. A vehicle takes off where
+its last sortie landed (its first: any depot, or the start without depots), so it moves only
+among the sites that flights within one battery join, transitively (a group). Straight-line
+distances bound the flight from below, so:
 
-- a sensor that no sortie from any depot can reach (its radio range and back within the usable
-  energy, battery x (1 - reserve)) can get no data at all (ENERGY_RANGE, naming the sensor,
-  the energy needed and the usable energy);
+- a sensor that no sortie from a group a vehicle can take off in can reach (its radio range
+  and back within the usable energy, battery x (1 - reserve)) can get no data at all
+  (ENERGY_RANGE, naming the sensor, the energy needed and the usable energy, and a site within
+  reach that no vehicle gets to, such as the map's end);
+- sensors that only different groups reach, more of them than `fleet.uavs` (a greedy set of
+  sensors whose groups are disjoint: each needs a vehicle of its own; VEHICLES);
+- a sensor whose data needs more sorties than the sortie planner shares one sensor's data
+  among (`planner_core.fleet.split.SHARE_MAX`): the planner's own limit, not a proof that no
+  plan exists (SORTIE_LIMIT; the planner refuses such a map up front);
 - a depot from which no sortie can leave: no sensor is heard from its piece of airspace (it is
   walled in), or every sensor is out of a battery's reach from it (DEPOT, naming the depot);
 - a sensor's data may be split across sorties (C4 sums them), so a sensor one sortie cannot
@@ -94,25 +103,19 @@ def diagnose(m: Any) -> Diagnosis:
 
     Args: m a `planner_core.model.mapio.Map`. Returns: the `Diagnosis` (findings in order:
     the end point, per sensor, then the bandwidth test's)."""
-    import shapely
-    from shapely.geometry import Point, box
+    from shapely.geometry import Point
+
+    from planner_core.model.mapio import _obstacle_polygons
 
     pm = m.planning_map()
     spec = pm.spec
     uav, radio = spec.uav, spec.radio
-    # the link's ground reach: beyond it a hover point hears a sensor at rate 0
-    hear = float(ground_reach(0.0, uav.altitude, radio.peak_rate, radio.decay))
-    from planner_core.model.mapio import _obstacle_polygons
-
-    shapes = _obstacle_polygons(pm)  # inflated by the clearance
+    hear = _hear(pm)
     real = _obstacle_polygons(m)  # as the map gives them
     labels = m.obstacle_labels
-    free = box(0.0, 0.0, pm.width, pm.height)
-    if shapes:
-        free = free.difference(shapely.union_all(shapes))
     start, end = Point(*pm.start), Point(*pm.end)
-    pieces = list(getattr(free, "geoms", [free]))
-    reach = min(pieces, key=lambda g: g.distance(start)) if pieces else free
+    pieces = _airspace(pm)
+    reach = min(pieces, key=lambda g: g.distance(start)) if pieces else None
     findings: list[Finding] = []
     if pieces and reach.distance(end) > 1e-6:
         findings.append(Finding("ENCLOSED", True, "end: the end point cannot be reached from "
@@ -127,7 +130,7 @@ def diagnose(m: Any) -> Diagnosis:
                                  strict=True):  # fmt: skip
         p = Point(*s)
         inside = [labels[k] for k, g in enumerate(real) if g.contains(p)]
-        d = float(reach.distance(p)) if not reach.is_empty else math.inf
+        d = float(reach.distance(p)) if reach is not None else math.inf
         r = 0.0
         if math.isfinite(d):
             r = float(link_rates(np.array([[s[0] + d, s[1]]]), np.array([s]), uav.altitude,
@@ -208,6 +211,40 @@ def diagnose(m: Any) -> Diagnosis:
                      bandwidth=bound)  # fmt: skip
 
 
+def _hear(pm: Any) -> float:
+    """The link's ground reach, m: beyond it a hover point hears a sensor at rate 0."""
+    uav, radio = pm.spec.uav, pm.spec.radio
+    return float(ground_reach(0.0, uav.altitude, radio.peak_rate, radio.decay))
+
+
+def _airspace(pm: Any) -> list[Any]:
+    """The free airspace of the planning map `pm` (the area less every inflated obstacle), as
+    its connected pieces (shapely Polygons; none when obstacles cover the area)."""
+    import shapely
+    from shapely.geometry import box
+
+    from planner_core.model.mapio import _obstacle_polygons
+
+    shapes = _obstacle_polygons(pm)  # inflated by the clearance
+    free = box(0.0, 0.0, pm.width, pm.height)
+    if shapes:
+        free = free.difference(shapely.union_all(shapes))
+    return [g for g in getattr(free, "geoms", [free]) if not g.is_empty]
+
+
+def fleet_findings(m: Any) -> list[Finding]:
+    """The battery and depot findings alone (ENERGY_RANGE, VEHICLES, DEPOT, ENERGY_SPLIT,
+    SORTIE_LIMIT: the module docstring), as `diagnose` makes them, for a map with a battery
+    or a fleet (else none); the sortie planner refuses a map with a SORTIE_LIMIT up front.
+
+    Args: m a `planner_core.model.mapio.Map`. Returns: the findings, in `diagnose`'s order.
+    """
+    if not (m.has_battery or m.has_fleet):
+        return []
+    pm = m.planning_map()
+    return _energy_findings(m, pm, _airspace(pm), _hear(pm))
+
+
 def spread_sensors(sensors: np.ndarray, need: np.ndarray, reach: float) -> list[int]:
     """A greedy set of sensors pairwise more than 2 x `reach` apart (each index in turn, kept
     when it is that far from every one kept), among those with need > 0: no hover point
@@ -248,11 +285,20 @@ def _spread_findings(pm: Any, reach: float, i_max: int, flights: float,
 
 
 def _energy_findings(m: Any, pm: Any, pieces: list[Any], hear: float) -> list[Finding]:
-    """Batteries and depots (issue 33; the module docstring): ENERGY_RANGE and DEPOT (fatal),
-    ENERGY_SPLIT (a note), from straight-line lower bounds on each sortie's flight; `hear` the
-    link's ground reach (m).
+    """Batteries and depots (issue 33; the module docstring): ENERGY_RANGE, VEHICLES, DEPOT and
+    SORTIE_LIMIT (fatal), ENERGY_SPLIT (a note), from straight-line lower bounds on each
+    sortie's flight; `hear` the link's ground reach (m).
 
-    Cost: O(J x D) distances for J sensors and D depots, plus 400 radii per sensor for the
+    Sites are the sortie planner's (`Map.sortie_sites`): the map's depots, each a take-off
+    site, or without them 'home' at the start (where every vehicle
+    takes off) and the map's end (a landing site). A vehicle takes off where its last sortie
+    landed, so it only ever stands at sites joined to its first by flights within one battery
+    (ferries; a lower bound: take-off, landing and the straight line in the same airspace),
+    transitively: a group. Sensors are judged from the groups a vehicle can take off in (a
+    group holding a take-off site); with fewer vehicles than the groups the sensors need
+    (disjoint sets, counted greedily: a lower bound), VEHICLES.
+
+    Cost: O(J x D + D^2) distances for J sensors and D sites, plus 400 radii per sensor for the
     note."""
     import shapely
     from shapely.geometry import Point
@@ -270,13 +316,15 @@ def _energy_findings(m: Any, pm: Any, pieces: list[Any], hear: float) -> list[Fi
     per_m = en.least_energy_per_metre_wh(v_max, power)
     hover_wh = en.hover_power_w(power) / en.J_PER_WH  # Wh per hover second
     given = bool(m.has_fleet and m.spec.fleet.depots)
+    names, where_xy, starts = m.sortie_sites
     # (label in messages, name, position)
     if given:
-        sites = [(f"depot '{d.name}'", d.name, np.array([d.x, d.y], dtype=float))
-                 for d in m.depots]  # fmt: skip
-    else:  # the first sortie leaves the start; a sortie may land at the map's end
-        sites = [(f"depot '{m.depots[0].name}' (the start)", m.depots[0].name, pm.start),
-                 ("the map's end", None, pm.end)]  # fmt: skip
+        sites = [(f"depot '{n}'", n, np.asarray(xy, dtype=float))
+                 for n, xy in zip(names, where_xy, strict=True)]  # fmt: skip
+    else:  # every vehicle leaves the start; a sortie may land at the map's end
+        sites = [(f"depot '{names[0]}' (the start)", names[0], pm.start)]
+        sites += [(f"the map's end ({xy[0]:g}, {xy[1]:g})", None, np.asarray(xy, dtype=float))
+                  for xy in where_xy[1:]]  # fmt: skip
 
     def piece_of(xy: np.ndarray) -> int:
         if not pieces:
@@ -286,44 +334,93 @@ def _energy_findings(m: Any, pm: Any, pieces: list[Any], hear: float) -> list[Fi
         return k if d[k] <= 1e-6 else -1
 
     where = [piece_of(xy) for _, _, xy in sites]
-    groups: dict[int, list[int]] = {}
-    for i, k in enumerate(where):
-        if k >= 0:
-            groups.setdefault(k, []).append(i)
+    n_sites = len(sites)
+    xy_all = np.array([xy for _, _, xy in sites], dtype=float).reshape(-1, 2)
+    apart = np.hypot(xy_all[:, None, 0] - xy_all[None, :, 0],
+                     xy_all[:, None, 1] - xy_all[None, :, 1])
+    # the least energy of a flight from one site to another (inf across walls)
+    same = np.array([[where[a] >= 0 and where[a] == where[b] for b in range(n_sites)]
+                     for a in range(n_sites)], dtype=bool).reshape(n_sites, n_sites)  # fmt: skip
+    ferry = np.where(same, vertical + per_m * apart, math.inf)
+    group = list(range(n_sites))  # union-find: sites a vehicle can move between
+
+    def root(i: int) -> int:
+        while group[i] != i:
+            group[i] = group[group[i]]
+            i = group[i]
+        return i
+
+    for a_ in range(n_sites):
+        for b_ in range(a_ + 1, n_sites):
+            if math.isfinite(ferry[a_, b_]) and ferry[a_, b_] <= cap:  # not across walls
+                group[root(a_)] = root(b_)
+    comp = [root(i) for i in range(n_sites)]
+    takeoff = {comp[i] for i in starts if where[i] >= 0}
+    members: dict[int, list[int]] = {}
+    for i in range(n_sites):
+        if where[i] >= 0:
+            members.setdefault(comp[i], []).append(i)
+    groups = {c: v for c, v in members.items() if c in takeoff}  # where vehicles may stand
+    stranded = {c: v for c, v in members.items() if c not in takeoff}
     sensors, req, ids = pm.sensors, pm.required_data, pm.sensor_ids
-    # per sensor and piece: how close the piece comes to it (hover points lie in the piece)
+    # per sensor and group: how close the group's airspace comes to it
     pts = shapely.points(np.asarray(sensors, dtype=float))
-    near = {k: np.asarray(shapely.distance(pieces[k], pts), dtype=float) for k in groups}
+    near_piece = {k: np.asarray(shapely.distance(pieces[k], pts), dtype=float)
+                  for k in {where[i] for v in members.values() for i in v}}  # fmt: skip
+    near = {c: near_piece[where[v[0]]] for c, v in members.items()}
     dist = np.array([[float(np.hypot(*(s - xy))) for _, _, xy in sites] for s in sensors])
+    dist = dist.reshape(len(sensors), n_sites)
+
+    def cheapest(j: int, among: dict[int, list[int]]) -> tuple[float, str, float, int]:
+        """The cheapest sortie from a group of `among` that hears sensor j at all, to the edge
+        of its radio range and back: (energy, site label, its distance, group)."""
+        best = (math.inf, "", 0.0, -1)
+        for c, v in among.items():
+            if near[c][j] >= hear:
+                continue
+            i = min(v, key=lambda i: dist[j, i])
+            e = vertical + 2.0 * per_m * max(dist[j, i] - hear, 0.0)
+            best = min(best, (e, sites[i][0], dist[j, i], c))
+        return best
+
     out: list[Finding] = []
-    if math.isfinite(cap):
-        for j, sid in enumerate(ids):
-            if req[j] <= 0:
-                continue
-            # the cheapest sortie that hears it at all: to the edge of its radio range and back
-            best = (math.inf, "", 0.0)
-            for k, members in groups.items():
-                if near[k][j] >= hear:
-                    continue
-                i = min(members, key=lambda i: dist[j, i])
-                e = vertical + 2.0 * per_m * max(dist[j, i] - hear, 0.0)
-                best = min(best, (e, sites[i][0], dist[j, i]))
-            e_any, name, d_site = best
-            if e_any >= cap:
-                how = ("no depot's airspace comes within its radio range" if not name else
-                       f"from the nearest, {name}, {d_site:.0f} m away, a sortie needs at "
-                       f"least {e_any:.4g} Wh to come within its radio range ({hear:.0f} m) "
-                       "and back")  # fmt: skip
-                out.append(Finding(
-                    "ENERGY_RANGE", True, f"sensor '{sid}': no sortie can collect any of its "
-                    f"data: {how}, more than the {cap:.4g} Wh usable (battery "
-                    f"{m.battery_wh:.4g} Wh less the {100 * m.battery_reserve:g} % reserve)",
-                    sid))  # fmt: skip
-                continue
-            note = _split_note(j, sid, groups, near, dist, sites, hear, req[j], cap, vertical,
-                               per_m, hover_wh, pm, slant_rates)  # fmt: skip
-            if note is not None:
-                out.append(note)
+    serves: dict[int, set[int]] = {}  # sensor -> the take-off groups whose sorties reach it
+    for j, sid in enumerate(ids):
+        if req[j] <= 0:
+            continue
+        serves[j] = {c for c in groups if near[c][j] < hear
+                     and vertical + 2.0 * per_m * max(min(dist[j, i] for i in groups[c])
+                                                      - hear, 0.0) < cap}  # fmt: skip
+        if not math.isfinite(cap):
+            continue
+        e_any, name, d_site, _ = cheapest(j, groups)
+        if e_any >= cap:
+            how = ("no depot's airspace comes within its radio range" if not name else
+                   f"from the nearest, {name}, {d_site:.0f} m away, a sortie needs at "
+                   f"least {e_any:.4g} Wh to come within its radio range ({hear:.0f} m) "
+                   "and back")  # fmt: skip
+            e_far, far, d_far, c_far = cheapest(j, stranded)
+            also = ""
+            if e_far < cap:  # a site within reach of it that no vehicle can get to
+                a_, b_ = min(((a_, b_) for c in groups for a_ in groups[c]
+                              for b_ in stranded[c_far]), key=lambda ab: ferry[ab],
+                             default=(None, None))  # fmt: skip
+                why = ("obstacles wall it off" if a_ is None or not math.isfinite(ferry[a_, b_])
+                       else f"the shortest flight there, {apart[a_, b_]:.0f} m from "
+                       f"{sites[a_][0]}, needs at least {ferry[a_, b_]:.4g} Wh")
+                also = (f"; {far}, {d_far:.0f} m away, is within a sortie's reach of it, but "
+                        f"no vehicle gets there to take off: {why}")
+            out.append(Finding(
+                "ENERGY_RANGE", True, f"sensor '{sid}': no sortie can collect any of its "
+                f"data: {how}, more than the {cap:.4g} Wh usable (battery "
+                f"{m.battery_wh:.4g} Wh less the {100 * m.battery_reserve:g} % reserve)"
+                f"{also}", sid))  # fmt: skip
+            continue
+        note = _split_note(j, sid, groups, near, dist, sites, hear, req[j], cap, vertical,
+                           per_m, hover_wh, pm, slant_rates)  # fmt: skip
+        if note is not None:
+            out.append(note)
+    out += _vehicle_findings(m, serves, groups, sites, ferry, apart, ids, cap)
     for i, (label, name, xy) in enumerate(sites if given else ()):
         k = where[i]
         label = f"{label} at ({xy[0]:g}, {xy[1]:g})"
@@ -331,7 +428,7 @@ def _energy_findings(m: Any, pm: Any, pieces: list[Any], hear: float) -> list[Fi
             out.append(Finding("DEPOT", True, f"fleet.depots: {label}: no sortie can leave it: "
                                "it lies inside an obstacle's clearance", depot=name))  # fmt: skip
             continue
-        heard = [j for j in range(len(ids)) if req[j] > 0 and near[k][j] < hear]
+        heard = [j for j in range(len(ids)) if req[j] > 0 and near[comp[i]][j] < hear]
         if not heard:
             out.append(Finding(
                 "DEPOT", True, f"fleet.depots: {label}: no sortie can leave it: no sensor is "
@@ -340,7 +437,7 @@ def _energy_findings(m: Any, pm: Any, pieces: list[Any], hear: float) -> list[Fi
             continue
         if not math.isfinite(cap):
             continue
-        back = {j: min(dist[j, b] for b in groups[k]) for j in heard}
+        back = {j: min(dist[j, b] for b in members[comp[i]]) for j in heard}
         costs = [(vertical + per_m * (max(dist[j, i] - hear, 0.0) + max(back[j] - hear, 0.0)),
                   j) for j in heard]  # fmt: skip
         e, j = min(costs)
@@ -350,6 +447,44 @@ def _energy_findings(m: Any, pm: Any, pieces: list[Any], hear: float) -> list[Fi
                 f"to sensor '{ids[j]}' ({dist[j, i]:.0f} m away) and on to a depot, needs at "
                 f"least {e:.4g} Wh, more than the {cap:.4g} Wh usable", depot=name))  # fmt: skip
     return out
+
+
+def _vehicle_findings(m: Any, serves: dict[int, set[int]], groups: dict[int, list[int]],
+                      sites: list, ferry: np.ndarray, apart: np.ndarray, ids: Any,
+                      cap: float) -> list[Finding]:  # fmt: skip
+    """VEHICLES: sensors whose take-off groups (`serves`: sensor -> groups of sites a sortie
+    reaching it may leave) are pairwise disjoint each need a vehicle of their own, since a
+    vehicle never leaves its group; more such sensors than `fleet.uavs` (a greedy set: fewest
+    groups first) rule every plan out."""
+    uavs = int(m.uavs)
+    if len({c for v in serves.values() for c in v}) <= uavs:
+        return []
+    picked: list[int] = []
+    used: set[int] = set()
+    for j in sorted((j for j in serves if serves[j]), key=lambda j: (len(serves[j]), j)):
+        if not serves[j] & used:
+            picked.append(j)
+            used |= serves[j]
+    if len(picked) <= uavs:
+        return []
+
+    def where(j: int) -> str:
+        names = [sites[i][0] for c in sorted(serves[j]) for i in groups[c]]
+        return " or ".join(names[:2]) + (" ..." if len(names) > 2 else "")
+
+    shown = "; ".join(f"sensor '{ids[j]}' only from {where(j)}" for j in picked[:3])
+    more = f" and {len(picked) - 3} more" if len(picked) > 3 else ""
+    pairs = [(a, b) for x in picked for y in picked if x < y for ca in serves[x]
+             for cb in serves[y] if ca != cb for a in groups[ca] for b in groups[cb]]
+    a, b = min(pairs, key=lambda ab: ferry[ab])
+    why = (f"the shortest, {sites[a][0]} to {sites[b][0]}, {apart[a, b]:.0f} m, needs at "
+           f"least {ferry[a, b]:.4g} Wh, more than the {cap:.4g} Wh usable"
+           if math.isfinite(ferry[a, b]) else "obstacles wall them apart")
+    return [Finding(
+        "VEHICLES", True, f"fleet.uavs: {uavs} UAV{'s' if uavs != 1 else ''} cannot serve "
+        f"{len(picked)} sensors that each need a vehicle of their own: {shown}{more}. A vehicle "
+        f"takes off where its last sortie landed, and no flight joins these depots ({why})",
+        str(ids[picked[0]]))]
 
 
 def _split_note(j: int, sid: str, groups: dict[int, list[int]], near: dict[int, np.ndarray],
@@ -385,6 +520,15 @@ def _split_note(j: int, sid: str, groups: dict[int, list[int]], near: dict[int, 
     if need <= cap or most <= 0.0:
         return None
     sorties = math.ceil(q / most - 1e-12)
+    from planner_core.defaults import SHARE_MAX
+
+    if sorties > SHARE_MAX:
+        return Finding(
+            "SORTIE_LIMIT", True, f"sensor '{sid}': the sortie planner cannot plan it: one "
+            f"sortie takes at most {most:.4g} Mbit of its {q:g} Mbit (from the best site, "
+            f"{at}), so at least {sorties} sorties must share its data, more than the "
+            f"{SHARE_MAX} the planner shares one sensor's data among "
+            "(planner_core.fleet.split.SHARE_MAX)", sid)  # fmt: skip
     return Finding(
         "ENERGY_SPLIT", False, f"sensor '{sid}': one sortie cannot serve it alone: from the "
         f"best site, {at}, that needs at least {need:.4g} Wh (the flight and {q:g} Mbit of "

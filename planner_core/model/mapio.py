@@ -524,6 +524,24 @@ class Map:
         return (Depot(name=DEFAULT_DEPOT, x=x, y=y),)
 
     @cached_property
+    def sortie_sites(self) -> tuple[tuple[str, ...], np.ndarray, tuple[int, ...]]:
+        """Where sorties take off and land, as the sortie planner has them
+        (`planner_core.fleet.FleetSettings`): (names, positions (D, 2) m read-only, the indices
+        a vehicle's first sortie may leave). With `fleet.depots`: those, each a take-off
+        site; without: `DEFAULT_DEPOT` at the start, where every vehicle takes off, and, when
+        the end differs, `END_DEPOT` at the end, a landing site (a vehicle takes off where it
+        landed, so a take-off site only for one that landed there)."""
+        names = [d.name for d in self.depots]
+        xy = [[d.x, d.y] for d in self.depots]
+        given = self.spec.fleet is not None and bool(self.spec.fleet.depots)
+        if not given and not np.allclose(self.start, self.end) and END_DEPOT not in names:
+            names.append(END_DEPOT)
+            xy.append([float(self.end[0]), float(self.end[1])])
+        a = np.asarray(xy, dtype=float).reshape(-1, 2)
+        a.flags.writeable = False
+        return tuple(names), a, tuple(range(len(names))) if given else (0,)
+
+    @cached_property
     def depot_xy(self) -> np.ndarray:
         """(D, 2) depot positions, metres, in `depots` order (read-only)."""
         a = np.array([[d.x, d.y] for d in self.depots], dtype=float)
@@ -720,6 +738,9 @@ class Map:
 
 #: the name of the one depot a map without `fleet.depots` has, at its start
 DEFAULT_DEPOT = "home"
+#: the name of the landing site at the map's end, when the map gives no `fleet.depots` and
+#: its end is not its start (a sortie may land there: `Map.sortie_sites`)
+END_DEPOT = "end"
 
 
 def sub_map_dict(
