@@ -537,11 +537,8 @@ def test_depots_are_point_features_and_come_back(tmp_path) -> None:
     assert (float(x), float(y)) == (pytest.approx(700, abs=0.01), pytest.approx(300, abs=0.01))
     # the area's fleet settings no longer repeat them (one place to move a depot: its point)
     assert exported["features"][0]["properties"]["fleet"] == {"uavs": 2, "swap_s": 200.0}
-    src = _write(tmp_path, "farm.geojson", exported)
-    out = tmp_path / "back.json"
-    r = _cli("map", "from-geojson", str(src), "-o", str(out))
-    assert r.returncode == 0, r.stderr
-    back = load_map(out)
+    doc, _ = build_map(_layers_of(tmp_path, exported, "farm.geojson"))
+    back = load_map(doc)
     _assert_same(back.to_dict()["fleet"], m.to_dict()["fleet"])
     # a depot moved in the GIS is moved in the map; the features take precedence over depots
     # in the carried fleet settings (older exports), which a note says were replaced

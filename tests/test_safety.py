@@ -16,7 +16,7 @@ from planner_core.model.mapio import DEFAULT_CLEARANCE, DEFAULT_DATA_MARGIN, loa
 from planner_core.model.problem import Problem
 from sim import replay, verify
 from sim.obstacles import obstacle_shapes
-from tests.conftest import SUITE
+from tests.conftest import SUITE, run_cli
 
 
 def _default_margins(task: str) -> dict:
@@ -255,21 +255,38 @@ def test_outer_offset_contains_the_offset_and_overshoots_at_most_as_documented()
     assert len(outer_offset(shapes[1], 31.0).interiors) == 0
 
 
-def test_check_and_plan_take_off_beside_a_building(tmp_path):
-    # the review's map: check and plan exited 1 with a traceback (MapError from the planning map)
+@pytest.mark.slow  # measured 1.5 s (the diagnosis' first run in the process)
+def test_check_takes_off_beside_a_building(tmp_path, capsys):
+    # the review's map: check exited 1 with a traceback (MapError from the planning map)
+    from lamde_mission import cli
+
+    path = tmp_path / "nb.json"
+    path.write_text(json.dumps(_near_map("rectangle", [495, 300])))
+    assert cli.main(["check", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("map 'near-building': OK"), out
+    assert "(less where the start, end or a depot is closer: 4.94 m at rectangle 0)" in out
+
+
+@pytest.mark.slow  # measured 11 s: two plans through the CLI, at once
+def test_plan_takes_off_beside_a_building(tmp_path):
+    # single-flight plan exited 1 with a traceback; the fleet plan said the depot, 5 m outside
+    # the building, "lies inside an obstacle"
     from tests.conftest import run_cli_many
 
     path = tmp_path / "nb.json"
     path.write_text(json.dumps(_near_map("rectangle", [495, 300])))
     fleet = tmp_path / "nbf.json"
     fleet.write_text(json.dumps(_near_map("rectangle", [495, 300], depot=True)))
-    chk, pl, chf = run_cli_many(("check", path), ("plan", path, "-o", tmp_path / "nb.plan",
-                                                  "--budget", "600", "--quiet"),
-                                ("check", fleet))  # fmt: skip
-    assert chk.returncode == 0 and chk.stdout.startswith("map 'near-building': OK"), chk.stderr
-    assert "4.94 m at rectangle 0" in chk.stdout
-    assert pl.returncode == 0 and "Traceback" not in pl.stderr, pl.stderr
-    assert chf.returncode == 0, chf.stdout + chf.stderr
+    one, many = run_cli_many(
+        ("plan", path, "-o", tmp_path / "nb.plan", "--budget", "600", "--quiet"),
+        ("plan", fleet, "-o", tmp_path / "nbf", "--budget", "600", "--sortie-budget", "300",
+         "--rounds", "0", "--quiet"))  # fmt: skip
+    assert one.returncode == 0 and "Traceback" not in one.stderr, one.stderr
+    assert many.returncode == 0, many.stderr
+    for out in (tmp_path / "nb.plan", tmp_path / "nbf"):
+        v = run_cli("verify", path if out.suffix else fleet, out)
+        assert v.returncode == 0, v.stdout + v.stderr
 
 
 def test_a_map_error_past_the_commands_checks_is_one_line_exit_2(tmp_path, monkeypatch, capsys):
