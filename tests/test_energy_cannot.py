@@ -149,14 +149,16 @@ OP_G = {
     "name": "op-g", "origin": {"lat": -33.9, "lon": 151.2, "alt": 20.0},
     "area": {"width": 2500, "height": 1500}, "start": [100, 100], "end": [2400, 1400],
     "sensors": [{"id": "far", "x": 2300, "y": 1300}, {"id": "near", "x": 300, "y": 200}],
-    "uav": {"endurance_s": 120},
+    # take-off and landing at v_max (10 s each), as the reviewer's maps were flown when found
+    "uav": {"endurance_s": 120, "climb_speed": 20.0, "descent_speed": 20.0},
 }  # fmt: skip
 #: one UAV, two depots 2.8 km apart (a battery flies ~1.7 km), a sensor beside each
 OP_H = {
     "name": "op-h", "origin": {"lat": -33.9, "lon": 151.2, "alt": 20.0},
     "area": {"width": 3000, "height": 1000}, "start": [100, 500], "end": [100, 500],
     "sensors": [{"id": "w1", "x": 200, "y": 300}, {"id": "e1", "x": 2800, "y": 700}],
-    "uav": {"endurance_s": 120},
+    # take-off and landing at v_max (10 s each), as the reviewer's maps were flown when found
+    "uav": {"endurance_s": 120, "climb_speed": 20.0, "descent_speed": 20.0},
     "fleet": {"uavs": 1, "depots": [{"name": "west", "x": 100, "y": 500},
                                     {"name": "east", "x": 2900, "y": 500}]},
 }  # fmt: skip
@@ -176,7 +178,7 @@ def test_the_maps_end_is_a_take_off_site_only_where_a_vehicle_gets_there() -> No
             "'home' (the start), needs at least") in f.message
     # a battery that flies there (7.41 Wh) but not out to 'far' and back from the start
     # (8.34 Wh): the end is reached by a ferry, and 'far' served from it
-    assert _fatal(dict(OP_G, uav={"endurance_s": 210})) == []
+    assert _fatal(dict(OP_G, uav=dict(OP_G["uav"], endurance_s=210))) == []
     assert _fatal(dict(OP_G, end=[100, 100])) == [("ENERGY_RANGE", "far")]  # as before
 
 
