@@ -193,7 +193,9 @@ def test_replay_cost_is_set_by_the_missions_size_not_its_numbers():
         assert time.process_time() - t0 < 5.0
         assert len(tl.t) <= n_max + 2 * (2 * len(route.stops) + 4)
     tl = replay_route(replace(route, takeoff_altitude=1e30), m)
-    assert tl.totals.t_takeoff == pytest.approx(1e30 / 20 + 5)
+    # climbed at the map's climb speed (2.5 m/s by default), not v_max
+    vz = float(m.spec.uav.climb_speed)
+    assert tl.totals.t_takeoff == pytest.approx(1e30 / vz + vz / float(m.spec.uav.acceleration))
 
 
 def test_a_10km_takeoff_replays_in_little_memory():
