@@ -148,7 +148,9 @@ def test_at_and_just_inside_the_sims_limit_flies_fast(tmp_path, suffix, frame, z
     assert time.perf_counter() - t0 < 5.0
     assert out.error is None and out.status == 0, out.stderr
     totals = json.loads(out.stdout)["totals"]
-    assert totals["t_takeoff"] == pytest.approx((z - (HOME[2] if frame == ABS else 0)) / 20 + 5)
+    # climbed at the default climb speed, 2.5 m/s, with a = 4 m/s^2
+    assert totals["t_takeoff"] == pytest.approx((z - (HOME[2] if frame == ABS else 0)) / 2.5
+                                                + 2.5 / 4)
     img = tmp_path / "a.png"
     out = run_cli(["show", str(TINY), str(path), "-o", str(img)])
     assert out.status == 0 and img.stat().st_size > 0, out.stderr
