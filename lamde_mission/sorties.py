@@ -339,6 +339,10 @@ def _check(
     by_vehicle: dict[int, list[Any]] = {}
     for s in out:
         by_vehicle.setdefault(s.vehicle, []).append(s.timeline)
+    if len(by_vehicle) == 1:  # nothing else in the air: no tracks to build
+        return FleetCheck(tuple(out), tuple(combined), float(m.swap_s),
+                          (*shape, *fleet_time_verdicts([], tuple(m.sensor_ids))),
+                          launches=(0.0,))
     tracks = [track(by_vehicle[v], float(m.swap_s)) for v in sorted(by_vehicle)]
     if launches is None:
         launches = stagger(tracks)

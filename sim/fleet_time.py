@@ -99,7 +99,10 @@ def track(sorties: Sequence[Timeline], swap_s: float, *, dt: float = 1.0) -> Veh
     grid = np.arange(n) * dt
     xy = np.zeros((n, 2))
     z = np.zeros(n)
-    data = np.zeros((n, J))
+    # only the sensors this vehicle hears at all: the rest never send to it
+    heard = np.flatnonzero(np.any([tl.data[-1] > _SENDING for tl in sorties], axis=0)) \
+        if J else np.zeros(0, dtype=np.int64)
+    data = np.zeros((n, len(heard)))
     for k, tl in enumerate(sorties):
         t0, t1 = starts[k], starts[k] + float(tl.totals.t_total)
         local = tl.t
@@ -115,12 +118,11 @@ def track(sorties: Sequence[Timeline], swap_s: float, *, dt: float = 1.0) -> Veh
             xy[before] = tl.xy[0]
         xy[after] = tl.xy[-1]
         z[after] = 0.0
-        for j in range(J):
-            data[inside, j] += np.interp(g, local, tl.data[:, j])
-            data[after, j] += float(tl.data[-1, j])
+        for c, j in enumerate(heard):
+            data[inside, c] += np.interp(g, local, tl.data[:, j])
+            data[after, c] += float(tl.data[-1, j])
     sending = np.diff(data, axis=0) > _SENDING
-    heard = np.flatnonzero(sending.any(axis=0))
-    return VehicleTrack(0.0, float(dt), xy, np.maximum(z, 0.0), sending[:, heard], heard)
+    return VehicleTrack(0.0, float(dt), xy, np.maximum(z, 0.0), sending, heard)
 
 
 def _window(a: VehicleTrack, b: VehicleTrack) -> tuple[slice, slice] | None:
