@@ -36,7 +36,7 @@ import shapely
 from planner_core.defaults import L_VIO_TOL
 from sim import energy as sim_energy
 from sim.mission import CMD
-from sim.obstacles import obstacle_shapes, overlap_lengths
+from sim.obstacles import distances_to, obstacle_shapes, overlap_totals
 from sim.replay import Timeline
 
 __all__ = [
@@ -240,11 +240,12 @@ def verify(timeline: Timeline, map: Any) -> Verdicts:  # noqa: A002
     legs = [path]
     if timeline.return_leg is not None:
         legs.append(timeline.return_leg)
-    over = np.vstack([overlap_lengths(p, obstacles) for p in legs]) if obstacles else None
-    if over is None or over.size == 0:
+    # each distinct leg against the obstacles near it only (a DO_JUMP loop or a map at the
+    # obstacle limit would make a table of every leg against every obstacle too large)
+    if not obstacles or not any(len(p) >= 2 for p in legs):
         out.append(Verdict("C5", "L_vio = 0", True, math.inf, "m", "no obstacles"))
     else:
-        per_obstacle = over.sum(axis=0)
+        per_obstacle = overlap_totals(legs, obstacles)
         l_vio = float(per_obstacle.sum())
         if l_vio > C5_TOL:
             hit = np.flatnonzero(per_obstacle > C5_TOL)
@@ -254,9 +255,11 @@ def verify(timeline: Timeline, map: Any) -> Verdicts:  # noqa: A002
             detail = f"path inside obstacles for {l_vio:.6g} m: {names}{extra}"
             out.append(Verdict("C5", "L_vio = 0", False, -l_vio, "m", detail))
         else:
-            lines = shapely.multilinestrings([shapely.linestrings(p) for p in legs
-                                              if len(p) >= 2])  # fmt: skip
-            dist = np.array([o.clearance(lines) for o in obstacles])
+            # circles exact: from their centre less the radius (`Obstacle.clearance`)
+            geoms = np.array([shapely.points(o.circle[:2]) if o.circle is not None else o.shape
+                              for o in obstacles], dtype=object)  # fmt: skip
+            radii = np.array([o.circle[2] if o.circle is not None else 0.0 for o in obstacles])
+            dist = distances_to(legs, geoms) - radii
             k = int(np.argmin(dist))
             detail = f"clearance {float(dist[k]):.3f} m from {obstacles[k].label}"
             out.append(Verdict("C5", "L_vio = 0", True, float(dist[k]), "m", detail))
@@ -267,9 +270,8 @@ def verify(timeline: Timeline, map: Any) -> Verdicts:  # noqa: A002
     want_q = float(getattr(sf, "data_margin", 0.0))
     clearance = math.inf
     if obstacles:
-        lines = shapely.multilinestrings([shapely.linestrings(p) for p in legs if len(p) >= 2])
         shapes = np.array([o.shape for o in obstacles], dtype=object)
-        dist = np.asarray(shapely.distance(lines, shapes), dtype=float)
+        dist = distances_to(legs, shapes)
         ends = shapely.points([map.start, map.end])
         # near the start or end point the clearance is what the map leaves there
         near = np.min(shapely.distance(ends[:, None], shapes[None, :]), axis=0)

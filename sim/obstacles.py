@@ -21,9 +21,19 @@ import numpy as np
 import shapely
 from shapely.geometry import Point, Polygon
 
-__all__ = ["Obstacle", "obstacle_shapes", "overlap_lengths", "CIRCLE_QUAD_SEGS"]
+__all__ = [
+    "Obstacle",
+    "obstacle_shapes",
+    "overlap_lengths",
+    "overlap_totals",
+    "unique_legs",
+    "distances_to",
+    "CIRCLE_QUAD_SEGS",
+]
 
 CIRCLE_QUAD_SEGS = 256
+#: at most this many (leg, obstacle) pairs held at once by `overlap_totals` (~16 MB of indices)
+PAIR_BLOCK = 1 << 20
 
 
 @dataclass(frozen=True, eq=False)
@@ -88,7 +98,8 @@ def overlap_lengths(path: np.ndarray, obstacles: list[Obstacle]) -> np.ndarray:
     """(L, O) metres of each leg of the polyline `path` (L + 1, 2) inside each obstacle.
 
     Legs are measured one by one (the paper sums per leg and per obstacle: a leg crossing two
-    overlapping obstacles counts in both).
+    overlapping obstacles counts in both). Time and memory grow as L x O (every pair is
+    measured and kept): for short paths; `overlap_totals` is the bounded form for a mission.
     """
     path = np.asarray(path, dtype=float).reshape(-1, 2)
     if len(path) < 2 or not obstacles:
@@ -100,20 +111,99 @@ def overlap_lengths(path: np.ndarray, obstacles: list[Obstacle]) -> np.ndarray:
         shapes = np.array([obstacles[k].shape for k in polys], dtype=object)
         inter = shapely.intersection(legs[:, None], shapes[None, :])
         out[:, polys] = shapely.length(inter)
-    a, d = path[:-1], path[1:] - path[:-1]
-    qa = np.einsum("ij,ij->i", d, d)
     for k, o in enumerate(obstacles):
-        if o.circle is None:
-            continue
-        cx, cy, r = o.circle
-        f = a - np.array([cx, cy])
-        qb = 2.0 * np.einsum("ij,ij->i", f, d)
-        qc = np.einsum("ij,ij->i", f, f) - r * r
-        disc = qb * qb - 4.0 * qa * qc
-        hit = (qa > 0.0) & (disc > 0.0)
-        root = np.sqrt(np.where(hit, disc, 0.0))
-        den = np.where(hit, 2.0 * qa, 1.0)
-        t0 = np.clip((-qb - root) / den, 0.0, 1.0)
-        t1 = np.clip((-qb + root) / den, 0.0, 1.0)
-        out[:, k] = np.where(hit, (t1 - t0) * np.sqrt(qa), 0.0)
+        if o.circle is not None:
+            cx, cy, r = o.circle
+            out[:, k] = _chords(path[:-1], path[1:], np.array([cx, cy]), r)
+    return out
+
+
+def _chords(a: np.ndarray, b: np.ndarray, centre: np.ndarray, r: Any) -> np.ndarray:
+    """Metres of each leg a -> b (n, 2) inside the circle(s) `centre` (2,) or (n, 2), radius
+    `r`: the roots of |a + t (b - a) - c|^2 = r^2 clipped to [0, 1]. O(n)."""
+    d = b - a
+    qa = np.einsum("ij,ij->i", d, d)
+    f = a - centre
+    qb = 2.0 * np.einsum("ij,ij->i", f, d)
+    qc = np.einsum("ij,ij->i", f, f) - r * r
+    disc = qb * qb - 4.0 * qa * qc
+    hit = (qa > 0.0) & (disc > 0.0)
+    root = np.sqrt(np.where(hit, disc, 0.0))
+    den = np.where(hit, 2.0 * qa, 1.0)
+    t0 = np.clip((-qb - root) / den, 0.0, 1.0)
+    t1 = np.clip((-qb + root) / den, 0.0, 1.0)
+    return np.where(hit, (t1 - t0) * np.sqrt(qa), 0.0)
+
+
+def unique_legs(paths: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct legs (U, 2, 2) of the polylines `paths` and how often each is flown (U,).
+
+    A DO_JUMP loop flies the same legs again and again; measuring each once is what keeps the
+    checks' work at the mission's distinct legs. O(L log L) time and O(L) memory in L legs.
+    """
+    segs = [np.stack([p[:-1], p[1:]], axis=1) for p in
+            (np.asarray(q, dtype=float).reshape(-1, 2) for q in paths) if len(p) >= 2]
+    if not segs:
+        return np.zeros((0, 2, 2)), np.zeros(0, dtype=np.int64)
+    flat = np.concatenate(segs).reshape(-1, 4)
+    uniq, counts = np.unique(flat, axis=0, return_counts=True)
+    return uniq.reshape(-1, 2, 2), counts.astype(np.int64)
+
+
+def overlap_totals(paths: list[np.ndarray], obstacles: list[Obstacle]) -> np.ndarray:
+    """(O,) metres of the polylines `paths` inside each obstacle: `overlap_lengths` summed over
+    every leg of every path (a leg flown k times counts k times), without its (L, O) table.
+
+    Each distinct leg (`unique_legs`) is tested only against the obstacles an STRtree finds
+    near it: polygons whose shape it intersects, circles whose bounding box it meets (then
+    measured exactly, as `overlap_lengths` does). Time O(U log U + (U + P) log O + P) for U
+    distinct legs, O obstacles and P (leg, obstacle) pairs that meet; memory O(U + O) plus at
+    most max(`PAIR_BLOCK`, O) pairs at a time (legs are queried in chunks of PAIR_BLOCK / O).
+    """
+    n_obs = len(obstacles)
+    out = np.zeros(n_obs)
+    legs, counts = unique_legs(paths)
+    if not n_obs or not len(legs):
+        return out
+    circ = np.array([o.circle is not None for o in obstacles])
+    boxes = np.array([
+        shapely.box(o.circle[0] - o.circle[2], o.circle[1] - o.circle[2],
+                    o.circle[0] + o.circle[2], o.circle[1] + o.circle[2])
+        if o.circle is not None else o.shape for o in obstacles
+    ], dtype=object)  # fmt: skip
+    tree = shapely.STRtree(boxes)
+    shapes = np.array([o.shape for o in obstacles], dtype=object)
+    centres = np.array([o.circle[:2] if o.circle is not None else (0.0, 0.0) for o in obstacles])
+    radii = np.array([o.circle[2] if o.circle is not None else 0.0 for o in obstacles])
+    chunk = max(1, PAIR_BLOCK // n_obs)
+    for lo in range(0, len(legs), chunk):
+        seg = legs[lo:lo + chunk]
+        lines = shapely.linestrings(seg)
+        # circles: their bounding box, measured exactly below; polygons: their shape
+        near = tree.query(lines)  # at most chunk x O pairs
+        near = near[:, circ[near[1]] | shapely.intersects(lines[near[0]], boxes[near[1]])]
+        li, oi = near
+        got = np.zeros(len(li))
+        poly = ~circ[oi]
+        if poly.any():
+            got[poly] = shapely.length(shapely.intersection(lines[li[poly]], shapes[oi[poly]]))
+        c = ~poly
+        if c.any():
+            got[c] = _chords(seg[li[c], 0], seg[li[c], 1], centres[oi[c]], radii[oi[c]])
+        np.add.at(out, oi, got * counts[lo + li])
+    return out
+
+
+def distances_to(paths: list[np.ndarray], geoms: np.ndarray) -> np.ndarray:
+    """(G,) metres from each shapely geometry of `geoms` to the nearest leg of the polylines
+    `paths` (inf without legs): ``shapely.distance(MultiLineString(paths), geoms)``, through an
+    STRtree of the distinct legs rather than every leg against every geometry. Time about
+    O((U + G) log U) for U distinct legs, memory O(U + G)."""
+    legs, _ = unique_legs(paths)
+    out = np.full(len(geoms), np.inf)
+    if not len(legs) or not len(geoms):
+        return out
+    tree = shapely.STRtree(shapely.linestrings(legs))
+    which, dist = tree.query_nearest(geoms, return_distance=True, all_matches=False)
+    np.minimum.at(out, which[0], dist)
     return out

@@ -1,0 +1,91 @@
+"""The sim's leg-against-obstacle work is bounded: each distinct leg is measured once, and only
+against the obstacles near it (`sim.obstacles.overlap_totals`, `distances_to`), with the same
+answers as the plain table of every leg against every obstacle (`overlap_lengths`)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+import shapely
+
+from lamde_mission.items import CMD, plan_to_items
+from planner_core.model.mapio import load_map
+from planner_core.model.problem import Problem
+from sim import obstacles as sim_obstacles
+from sim import replay, verify
+from sim.obstacles import distances_to, obstacle_shapes, overlap_lengths, overlap_totals
+
+
+def _random_map(rng: np.random.Generator) -> object:
+    circles = [{"x": float(x), "y": float(y), "radius": float(r)}
+               for x, y, r in zip(rng.uniform(50, 950, 4), rng.uniform(50, 950, 4),
+                                  rng.uniform(5, 80, 4), strict=True)]  # fmt: skip
+    rects = [{"x": float(x), "y": float(y), "length": float(a), "width": float(b),
+              "angle_deg": float(t)}
+             for x, y, a, b, t in zip(rng.uniform(50, 950, 5), rng.uniform(50, 950, 5),
+                                      rng.uniform(5, 120, 5), rng.uniform(5, 120, 5),
+                                      rng.uniform(0, 180, 5), strict=True)]  # fmt: skip
+    return load_map({
+        "area": {"width": 1000, "height": 1000}, "start": [1, 1], "end": [999, 999],
+        "sensors": [{"id": "a", "x": 500, "y": 2}],
+        "obstacles": {"circles": circles, "rectangles": rects,
+                      "no_fly_zones": [{"vertices": [[300, 300], [420, 310], [360, 330],
+                                                     [410, 420], [290, 400]]}]},
+    })  # fmt: skip
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_overlap_totals_and_distances_equal_the_plain_table(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    obs = obstacle_shapes(_random_map(rng))
+    path = rng.uniform(0, 1000, (30, 2))
+    loop = np.vstack([path[:5]] * 7)  # the same legs flown again (a DO_JUMP loop)
+    paths = [path, loop, path[:1]]
+    plain = sum(overlap_lengths(p, obs).sum(axis=0) for p in paths)
+    assert plain.sum() > 0.0
+    np.testing.assert_allclose(overlap_totals(paths, obs), plain, rtol=1e-12, atol=1e-9)
+    shapes = np.array([o.shape for o in obs], dtype=object)
+    lines = shapely.multilinestrings([shapely.linestrings(p) for p in paths if len(p) >= 2])
+    np.testing.assert_allclose(distances_to(paths, shapes), shapely.distance(lines, shapes),
+                               rtol=0, atol=1e-9)  # fmt: skip
+    assert np.all(overlap_totals([path[:1]], obs) == 0.0)
+    assert np.all(np.isinf(distances_to([path[:1]], shapes)))
+
+
+def test_verify_measures_each_distinct_leg_only_near_obstacles(monkeypatch) -> None:
+    """A DO_JUMP loop over a map of many obstacles: no table of every leg by every obstacle
+    (which ran a 24,000-pass loop on 5,000 rectangles out of memory in verify)."""
+    rects = [{"x": 20 + (i % 20) * 45, "y": 20 + (i // 20) * 45, "length": 2, "width": 2}
+             for i in range(400)]  # fmt: skip
+    m = load_map({"origin": {"lat": 22.3, "lon": 114.2, "alt": 0.0},
+                  "area": {"width": 1000, "height": 1000}, "start": [5, 5], "end": [990, 990],
+                  "sensors": [{"id": "a", "x": 500, "y": 500}, {"id": "b", "x": 800, "y": 200}],
+                  "obstacles": {"rectangles": rects}})  # fmt: skip
+    p = Problem(m)
+    b = p.breakdown(p.encode([[500, 500], [800, 200]], [30.0, 30.0]))
+    plan = SimpleNamespace(hover_points=np.array(b["hover_points"]),
+                           hover_times=np.array(b["hover_times"]))
+    items = plan_to_items(plan, m)
+    k = [i for i, it in enumerate(items) if it.command == CMD.LOITER_TIME]
+    jump = replace(items[k[1]], command=CMD.DO_JUMP, param1=float(items[k[0]].seq), param2=300.0,
+                   param3=0.0, param4=0.0, x=0.0, y=0.0, z=0.0)  # fmt: skip
+    items = items[:k[1] + 1] + [jump] + items[k[1] + 1:]
+    items = [replace(it, seq=i) if it.seq is not None else it for i, it in enumerate(items)]
+    items = [replace(jump, seq=k[1] + 1, param1=float(k[0])) if i == k[1] + 1 else it
+             for i, it in enumerate(items)]  # fmt: skip
+    tl = replay(items, m)
+    assert len(tl.path) > 600  # the loop flown 300 more times
+    biggest = [0]
+    real = shapely.intersection
+
+    def counting(a, b, **kw):
+        biggest[0] = max(biggest[0], np.broadcast(np.asarray(a), np.asarray(b)).size)
+        return real(a, b, **kw)
+
+    monkeypatch.setattr(sim_obstacles.shapely, "intersection", counting)
+    v = verify(tl, m)
+    assert any(x.name == "C5" for x in v.items)
+    assert 0 < biggest[0] <= 100, biggest[0]  # not (legs x 400)
