@@ -389,6 +389,11 @@ MAP_LISTS: dict[str, Default] = {
 DEFAULTS: dict[str, Default] = {d.name: d for d in _RUN}
 #: every optional map field by its JSON path (``"uav.altitude"``), in table order
 MAP_DEFAULTS: dict[str, Default] = {d.name: d for d in _MAP}
+#: the most corner slots K a plan may ask for (`plan --corner-slots`, the API's corner_slots):
+#: what the auto rule can ask for at the largest I_max of the table, a plan's I_max corners
+#: plus one per blocked leg (I_max + 1 legs): 401. The encoding grows as I_max + K (a million
+#: slots took 18 GB)
+MAX_CORNER_SLOTS: int = 2 * int(MAP_DEFAULTS["uav.max_hover_points"].bounds[1]) + 1
 
 POPULATION: int = DEFAULTS["population"].value
 BUDGET: int = DEFAULTS["budget"].value

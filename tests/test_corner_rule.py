@@ -110,6 +110,29 @@ def test_plan_api_refuses_bad_corner_slots_before_any_work() -> None:
         lamde_mission.plan(TIGHT_MAP, corner_slots=2, variable_length=False)
 
 
+def test_corner_slots_are_bounded_in_the_api_and_the_cli(tmp_path: Path, capsys) -> None:
+    """K beyond MAX_CORNER_SLOTS (401: twice the largest I_max plus one) is refused in one line
+    before any work (--corner-slots 1000000 grew the encoding to 18 GB)."""
+    import lamde_mission
+    from lamde_mission.cli import main
+    from planner_core.defaults import MAX_CORNER_SLOTS
+
+    assert MAX_CORNER_SLOTS == 401 and check_corner_slots(401) == 401
+    for big in (402, 10**6, np.int64(10**18)):
+        with pytest.raises(ValueError, match=r"^corner_slots: .* is more than 401, the most"):
+            check_corner_slots(big)
+    with pytest.raises(ValueError, match="more than 401"):
+        lamde_mission.plan(TIGHT_MAP, corner_slots=1_000_000)
+    map_path = tmp_path / "wall.json"
+    map_path.write_text(json.dumps(TIGHT_MAP))
+    out = tmp_path / "x.plan"
+    assert main(["plan", str(map_path), "-o", str(out), "--corner-slots", "1000000"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["lamde-mission plan: --corner-slots: 1,000,000 is more than 401, the most "
+                   "(twice the largest I_max, plus one: what the auto rule can ask for)"]
+    assert not out.exists()
+
+
 @pytest.mark.parametrize("bad", ["-1", "x", "1.5", "", "auto3"])
 def test_cli_bad_corner_slots_is_one_line_and_exit_2(bad: str, tmp_path: Path, capsys) -> None:
     from lamde_mission.cli import main

@@ -76,7 +76,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    "feasible (docs/missions.md). Default auto: K from the map, the blocked "
                    "legs left in the seeder's plans when I_max slots cannot hold their "
                    "corners (0 on the paper's suite maps, 3 on campus-500; docs/scaling.md). "
-                   "0: the paper's model, every point takes one of the I_max slots. A map "
+                   "0: the paper's model, every point takes one of the I_max slots. At most "
+                   f"{D.MAX_CORNER_SLOTS} (what auto can ask for at I_max 200). A map "
                    "with a battery or fleet (sorties) plans with 0")
     p.add_argument("--policy", metavar="CHECKPOINT",
                    help="with --configurator lamde: a checkpoint folder from `lamde-mission "
@@ -508,26 +509,26 @@ def _say_cannot(m: Any, said: str = "") -> None:
 
 
 def _corner_slots(args: argparse.Namespace) -> int | str:
-    """`--corner-slots` as "auto" or an integer >= 0.
+    """`--corner-slots` as "auto" or an integer in [0, MAX_CORNER_SLOTS]
+    (`planner_core.model.corner_slots.check_corner_slots`, the API's check).
 
     Raises:
         UsageError: anything else, one line.
     """
     from lamde_mission.errors import UsageError
+    from planner_core.model.corner_slots import check_corner_slots
+    from planner_core.textio import printable
 
     text = str(args.corner_slots).strip()
     if text == "auto":
         return "auto"
     try:
-        k = int(text)
-    except ValueError:
-        k = -1
-    if k < 0:
-        from planner_core.textio import printable
-
+        return check_corner_slots(int(text))
+    except ValueError as e:
+        if "more than" in str(e):
+            raise UsageError("--corner-slots" + str(e).removeprefix("corner_slots")) from None
         raise UsageError(f"--corner-slots: must be 'auto' or an integer >= 0, got "
-                         f"{printable(str(args.corner_slots))!r}")
-    return k
+                         f"{printable(str(args.corner_slots))!r}") from None
 
 
 def run(args: argparse.Namespace) -> int:

@@ -29,12 +29,13 @@ from typing import Any
 
 import numpy as np
 
+from planner_core.defaults import MAX_CORNER_SLOTS
 from planner_core.model.geometry import overlap_lengths
 from planner_core.model.problem import Problem
 from planner_core.model.routing.graph import CLEAR
 
-__all__ = ["AUTO", "RULE_DRAWS", "auto_corner_slots", "check_corner_slots", "corner_need",
-           "problem_for", "slot_shortfall"]
+__all__ = ["AUTO", "MAX_CORNER_SLOTS", "RULE_DRAWS", "auto_corner_slots", "check_corner_slots",
+           "corner_need", "problem_for", "slot_shortfall"]
 
 #: the `corner_slots` value that asks for the rule
 AUTO = "auto"
@@ -45,7 +46,7 @@ RULE_DRAWS = 3
 
 
 def check_corner_slots(value: Any) -> int | str:
-    """`value` if it is "auto" or an integer >= 0 (then as int).
+    """`value` if it is "auto" or an integer in [0, `MAX_CORNER_SLOTS`] (then as int).
 
     Args:
         value: the `corner_slots` setting.
@@ -54,12 +55,16 @@ def check_corner_slots(value: Any) -> int | str:
         "auto" or the integer.
 
     Raises:
-        ValueError: one line, "corner_slots: must be 'auto' or an integer >= 0, got ...".
+        ValueError: one line, "corner_slots: must be 'auto' or an integer >= 0, got ..." or
+            "corner_slots: K is more than MAX_CORNER_SLOTS, the most ...".
     """
     if isinstance(value, str) and value == AUTO:
         return AUTO
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
         raise ValueError(f"corner_slots: must be 'auto' or an integer >= 0, got {value!r}")
+    if value > MAX_CORNER_SLOTS:
+        raise ValueError(f"corner_slots: {int(value):,} is more than {MAX_CORNER_SLOTS}, the most "
+                         "(twice the largest I_max, plus one: what the auto rule can ask for)")
     return int(value)
 
 
