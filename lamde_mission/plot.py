@@ -26,10 +26,15 @@ import numpy as np
 
 from lamde_mission.atomic import write_bytes_atomic
 
-__all__ = ["mission_figure", "save_figure", "plot_mission", "IMAGE_SUFFIXES", "nice_length",
-           "SortieView", "fleet_figure", "plot_fleet", "SORTIE_STYLES"]  # fmt: skip
+__all__ = ["mission_figure", "save_figure", "plot_mission", "IMAGE_SUFFIXES", "MAX_DPI",
+           "check_dpi", "nice_length", "SortieView", "fleet_figure", "plot_fleet",
+           "SORTIE_STYLES"]  # fmt: skip
 
 IMAGE_SUFFIXES = (".png", ".svg")
+#: the highest PNG resolution drawn (dots per inch): the image's memory grows as dpi^2. `show`
+#: of examples/maps/tiny.json's plan (9 x 11 inches) peaked at 0.29 GB at 150, 0.42 GB at 600,
+#: 0.85 GB at 1,200 (the largest figure, 9 x 15 inches, ~1.3 times that); 10,000 ran out
+MAX_DPI = 600
 
 
 def nice_length(span: float) -> float:
@@ -768,12 +773,28 @@ def _bars_panel(ax: Any, timeline: Any, map_: Any) -> None:
     ax.set_title(title, fontsize=9)
 
 
+def check_dpi(dpi: Any, name: str = "dpi") -> int:
+    """`dpi` if it is an integer in 1..`MAX_DPI`; else ValueError, one line naming `name`."""
+    if isinstance(dpi, bool) or not isinstance(dpi, (int, np.integer)) \
+            or not 1 <= dpi <= MAX_DPI:
+        raise ValueError(f"{name}: must be an integer from 1 to {MAX_DPI} dots per inch (the "
+                         f"image's memory grows as its square), got {dpi!r}")
+    return int(dpi)
+
+
 def save_figure(fig: Any, path: str | Path, *, dpi: int = 150) -> Path:
-    """Render `fig` to PNG or SVG by suffix and write it atomically (no partial file)."""
+    """Render `fig` to PNG or SVG by suffix and write it atomically (no partial file).
+
+    Memory and time grow as the figure's area times dpi^2 (`MAX_DPI`).
+
+    Raises:
+        ValueError: one line, a suffix other than .png/.svg or `dpi` outside 1..MAX_DPI.
+    """
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in IMAGE_SUFFIXES:
         raise ValueError(f"{path}: image format must be PNG or SVG (suffix .png or .svg)")
+    check_dpi(dpi)
     buf = io.BytesIO()
     fig.savefig(buf, format=suffix[1:], dpi=dpi)
     return write_bytes_atomic(path, buf.getvalue())

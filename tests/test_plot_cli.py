@@ -149,3 +149,20 @@ def test_show_bad_input_leaves_no_file(files, tmp_path):
     assert "junk.waypoints" in one_line_error(r1)
     assert ".png or .svg" in one_line_error(r2)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["junk.waypoints"]
+
+
+@pytest.mark.parametrize("dpi", ["10000", "601", "0", "-5"])
+def test_show_dpi_is_bounded_one_line_exit_2(files, tmp_path, capsys, dpi):
+    """--dpi outside 1..MAX_DPI (600) is refused before any drawing (6,000 took 11 GB, 10,000
+    a MemoryError traceback); the API's save_figure refuses it too."""
+    from lamde_mission.cli import main
+    from lamde_mission.plot import MAX_DPI, mission_figure, save_figure
+
+    out = tmp_path / "fig.png"
+    assert main(["show", str(files.map), str(files.good), "-o", str(out), "--dpi", dpi]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"--dpi: must be an integer from 1 to {MAX_DPI}" in err[0], err
+    assert not out.exists()
+    with pytest.raises(ValueError, match=r"^dpi: must be an integer from 1 to 600"):
+        save_figure(mission_figure(files.m), out, dpi=int(dpi))
+    assert not out.exists()

@@ -30,7 +30,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="mission file or sortie directory to draw on the map (optional)")
     p.add_argument("-o", "--output", required=True, help="image file to write (.png or .svg)")
     p.add_argument("--title", help="figure title (default: the map's name and f)")
-    p.add_argument("--dpi", type=int, default=150, help="PNG resolution (default 150)")
+    p.add_argument("--dpi", type=int, default=150,
+                   help="PNG resolution, 1 to 600 dots per inch (default 150)")
     return p
 
 
@@ -104,13 +105,15 @@ def run(args: argparse.Namespace) -> int:
         with_origin_or_fail,
     )
     from lamde_mission.errors import UsageError
-    from lamde_mission.plot import IMAGE_SUFFIXES
+    from lamde_mission.plot import IMAGE_SUFFIXES, check_dpi
 
     out = Path(args.output)
     if out.suffix.lower() not in IMAGE_SUFFIXES:
         raise UsageError(f"{out}: output must be a .png or .svg file")
-    if args.dpi <= 0:
-        raise UsageError(f"--dpi must be positive, got {args.dpi}")
+    try:
+        check_dpi(args.dpi, "--dpi")
+    except ValueError as e:
+        raise UsageError(str(e)) from None
     check_outputs([("-o/--output", args.output)], mkdir=True,
                   inputs=[("map", args.map), ("mission", args.mission)])
     m = load_map_or_fail(args.map)
