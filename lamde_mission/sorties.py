@@ -45,6 +45,8 @@ from typing import Any
 
 import numpy as np
 
+from planner_core.defaults import MAX_FLEET_SORTIES, MAX_FLEET_VEHICLES
+
 __all__ = ["FLEET_FILE", "SortieCheck", "FleetCheck", "sortie_dir_refusal", "sortie_file",
            "sortie_map", "write_sortie_dir", "verify_sortie_dir"]  # fmt: skip
 
@@ -458,7 +460,9 @@ def write_sortie_dir(
             holding anything but a sortie directory's files (`sortie_dir_refusal`); checked
             before anything is written.
         OSError: the directory cannot be written (nothing is left half-written).
-        ValueError: `goal` is not the plan's (before anything is written).
+        ValueError: `goal` is not the plan's, or the plan has more vehicles or sorties than
+            a sortie directory may list (`MAX_FLEET_VEHICLES`, `MAX_FLEET_SORTIES`; before
+            anything is written).
     """
     from lamde_mission.formats import write_mission
     from lamde_mission.items import plan_to_items
@@ -471,6 +475,11 @@ def write_sortie_dir(
         raise ValueError(f"goal: '{goal}', but the plan was made for '{st.goal}' (leave goal "
                          "out to name the plan's own)")  # fmt: skip
     goal = st.goal
+    n_sorties = sum(len(vs) for vs in plan.vehicles)
+    if len(plan.vehicles) > MAX_FLEET_VEHICLES or n_sorties > MAX_FLEET_SORTIES:
+        raise ValueError(f"the plan has {n_sorties:,} sorties on {len(plan.vehicles)} vehicles, "
+                         f"more than a sortie directory holds ({MAX_FLEET_SORTIES:,} sorties, "
+                         f"{MAX_FLEET_VEHICLES} vehicles)")  # fmt: skip
     shares = collected_by_sortie(plan, ModelParams.from_map(m.planning_map()))  # Mbit, margin in
     margin = 1.0 + float(m.spec.safety.data_margin)
     refusal = sortie_dir_refusal(out_dir)

@@ -389,6 +389,12 @@ MAP_LISTS: dict[str, Default] = {
 DEFAULTS: dict[str, Default] = {d.name: d for d in _RUN}
 #: every optional map field by its JSON path (``"uav.altitude"``), in table order
 MAP_DEFAULTS: dict[str, Default] = {d.name: d for d in _MAP}
+#: the most vehicles and sorties a sortie directory's fleet.json may list (`lamde_mission.formats.
+#: fleet.read_fleet_dir`; the planner writes no more, `lamde_mission.sorties.write_sortie_dir`):
+#: the vehicles are at most `fleet.uavs` (100); the sorties 1,000 in all, one per sensor at the
+#: sensor limit. `verify DIR/` replays each sortie (~4 ms each: 20,000 took 83 s)
+MAX_FLEET_SORTIES = 1000
+MAX_FLEET_VEHICLES: int = int(MAP_DEFAULTS["fleet.uavs"].bounds[1])
 #: the most corner slots K a plan may ask for (`plan --corner-slots`, the API's corner_slots):
 #: what the auto rule can ask for at the largest I_max of the table, a plan's I_max corners
 #: plus one per blocked leg (I_max + 1 legs): 401. The encoding grows as I_max + K (a million

@@ -385,6 +385,38 @@ def test_bad_fleet_json_names_the_field(tmp_path, fleet_dir, doc, shown):
     assert shown in str(exc.value) and "\n" not in str(exc.value)
 
 
+def test_fleet_json_lists_at_most_the_sorties_and_vehicles_a_plan_holds(tmp_path, fleet_dir,
+                                                                        capsys):
+    """fleet.json with 20,000 sorties of one file (1.6 MB: verify took 83 s and printed 260,006
+    lines) or 101 vehicles: one line naming the field, exit 2, before any sortie is read; the
+    writer refuses a plan it could not read back."""
+    from types import SimpleNamespace
+
+    from lamde_mission.formats.fleet import MAX_FLEET_SORTIES, MAX_FLEET_VEHICLES
+    from lamde_mission.sorties import write_sortie_dir
+
+    assert (MAX_FLEET_SORTIES, MAX_FLEET_VEHICLES) == (1000, 100)
+    d = tmp_path / "d"
+    shutil.copytree(fleet_dir, d)
+    one = read_fleet_dir(d).vehicles[0].sorties[0].path.name
+    many = [{"sortie": j + 1, "file": one} for j in range(20_000)]
+    (d / "fleet.json").write_text(json.dumps({"vehicles": [{"vehicle": 1, "sorties": many}]}))
+    with pytest.raises(FleetDirError, match=r"vehicles\[\]\.sorties: 20,000 sorties in all, "
+                       r"more than 1,000, the most a sortie directory holds$"):
+        read_fleet_dir(d)
+    assert main(["verify", str(DEMO_MAP), str(d)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "20,000 sorties in all" in err[0], err
+    vs = [{"vehicle": k + 1, "sorties": []} for k in range(101)]
+    (d / "fleet.json").write_text(json.dumps({"vehicles": vs}))
+    with pytest.raises(FleetDirError, match=r"vehicles: 101 vehicles, more than 100"):
+        read_fleet_dir(d)
+    big = SimpleNamespace(settings=SimpleNamespace(goal="total"), vehicles=[[None] * 1001])
+    with pytest.raises(ValueError, match="1,001 sorties on 1 vehicles, more than a sortie"):
+        write_sortie_dir(big, None, tmp_path / "out")
+    assert not (tmp_path / "out").exists()
+
+
 def test_fleet_dir_reads_back(fleet_dir):
     fleet = read_fleet_dir(fleet_dir)
     assert [len(v.sorties) for v in fleet.vehicles] == [2, 1, 1]

@@ -472,6 +472,9 @@ def _run_sorties(args: argparse.Namespace) -> int:
                                           allow_infeasible=args.allow_infeasible)
     except FileExistsError as exc:  # the folder changed while planning
         raise UsageError(f"-o/--output: {exc}") from None
+    except ValueError as exc:  # more sorties than a sortie directory holds
+        print(f"lamde-mission plan: {args.map}: {exc}", file=sys.stderr)
+        return 1
     if not args.quiet:
         print(f"map '{printable(m.name)}': {len(plan.sorties)} sorties on "
               f"{len(plan.vehicles)} vehicle(s), objective {goal}, {plan.evaluations} "

@@ -14,7 +14,10 @@
 Vehicles are numbered 1..V and sorties 1..S_k in order (1-based, as in the file names
 `mission-v{vehicle}-s{sortie}.plan`); every sortie's file is a plain name inside DIR and exists.
 Figures (durations, energies) are kept when present and finite, else None; fields this reader
-does not know are left alone. Reading costs O(vehicles + sorties).
+does not know are left alone. At most `MAX_FLEET_VEHICLES` vehicles (100, `fleet.uavs`' most)
+and `MAX_FLEET_SORTIES` sorties in all (1,000; `planner_core.defaults`), checked before any
+sortie is read: what follows (`verify DIR/` replays every sortie) grows with them. Reading costs
+O(vehicles + sorties).
 """
 
 from __future__ import annotations
@@ -25,10 +28,12 @@ from pathlib import Path
 from typing import Any
 
 from lamde_mission.sorties import FLEET_FILE, sortie_file  # the writer's names, one place
+from planner_core.defaults import MAX_FLEET_SORTIES, MAX_FLEET_VEHICLES
 from planner_core.textio import InputError, read_json
 
-__all__ = ["FLEET_FILE", "FleetDirError", "FleetSortie", "FleetVehicle", "FleetDir",
-           "read_fleet_dir", "sortie_file_name"]  # fmt: skip
+__all__ = ["FLEET_FILE", "MAX_FLEET_SORTIES", "MAX_FLEET_VEHICLES", "FleetDirError",
+           "FleetSortie", "FleetVehicle", "FleetDir", "read_fleet_dir",
+           "sortie_file_name"]  # fmt: skip
 
 
 class FleetDirError(ValueError):
@@ -150,8 +155,8 @@ def read_fleet_dir(path: str | Path) -> FleetDir:
 
     Raises:
         FleetDirError: one line naming the file and field: no such directory, no fleet.json,
-            bad JSON, vehicles or sorties out of order, a file outside the directory or
-            missing.
+            bad JSON, vehicles or sorties out of order or more than `MAX_FLEET_VEHICLES` /
+            `MAX_FLEET_SORTIES`, a file outside the directory or missing.
     """
     path = Path(path)
     if path.name == FLEET_FILE and path.is_file():
@@ -174,6 +179,14 @@ def read_fleet_dir(path: str | Path) -> FleetDir:
     vs = doc.get("vehicles")
     if not isinstance(vs, list) or not vs:
         raise FleetDirError(f"{summary}: vehicles: expected a non-empty list")
+    if len(vs) > MAX_FLEET_VEHICLES:
+        raise FleetDirError(f"{summary}: vehicles: {len(vs):,} vehicles, more than "
+                            f"{MAX_FLEET_VEHICLES}, the most a plan flies (fleet.uavs)")
+    total = sum(len(v["sorties"]) for v in vs
+                if isinstance(v, dict) and isinstance(v.get("sorties"), list))  # fmt: skip
+    if total > MAX_FLEET_SORTIES:
+        raise FleetDirError(f"{summary}: vehicles[].sorties: {total:,} sorties in all, more "
+                            f"than {MAX_FLEET_SORTIES:,}, the most a sortie directory holds")
     vehicles = []
     for k, v in enumerate(vs):
         wv = f"{summary}: vehicles[{k}]"
