@@ -406,3 +406,18 @@ def test_rally_points_and_breach_return_are_range_checked(tmp_path: Path) -> Non
     text = json.dumps(doc).replace("Infinity", "1e39")
     _refused(["verify", str(TINY), _write(tmp_path, "b.plan", text)],
              "geoFence.breachReturn (altitude): altitude 1e+39")  # fmt: skip
+
+
+def test_waypoints_lines_are_counted_as_the_parser_splits_them(tmp_path: Path) -> None:
+    """CR-only (and other) line ends count toward the line cap: a file of 20,000,000 '#a\\r'
+    comment lines passed it (only LFs were counted) and split into 1.9 GB."""
+    from lamde_mission.formats.waypoints import _line_breaks
+
+    for text in ("a\r\nb\rc\nd\x0be\x0cf\x1cg\x85h\u2028i\u2029j\r\r\n\n", "", "x", "\r\n\r",
+                 "a\n\x1d\x1e"):  # fmt: skip
+        assert _line_breaks(text) == len((text + "x").splitlines()) - 1
+    home = "0\t1\t0\t16\t0\t0\t0\t0\t46.2\t7.3\t500\t1\n"
+    for end in ("\r", "\u2028", "\x0c"):
+        wpl = "QGC WPL 110\n" + home + f"#a{end}" * 200_000
+        _refused(["verify", str(TINY), _write(tmp_path, "cr.waypoints", wpl)],
+                 "200,002 lines, far more than the 65,535 items")  # fmt: skip

@@ -108,6 +108,17 @@ def _numbers(a: list[str], lineno: int) -> tuple[list[int], list[float]]:
     return ints, floats  # ints: seq, current, frame, command, autocontinue
 
 
+#: the line boundaries `str.splitlines` splits at besides CR and LF (a CR LF pair is one)
+_OTHER_BREAKS = "\v\f\x1c\x1d\x1e\x85\u2028\u2029"
+
+
+def _line_breaks(text: str) -> int:
+    """The line boundaries of `text` as `str.splitlines` splits at them (CR LF, LF, a lone CR,
+    ...), counted without splitting: O(len(text)) time, O(1) memory."""
+    n = text.count("\n") + text.count("\r") - text.count("\r\n")
+    return n + sum(text.count(c) for c in _OTHER_BREAKS)
+
+
 def parse_waypoints(text: str) -> tuple[MissionItem | None, list[MissionItem]]:
     """(home item, mission items numbered from 0) of `.waypoints` text; MissionError if bad.
 
@@ -119,8 +130,9 @@ def parse_waypoints(text: str) -> tuple[MissionItem | None, list[MissionItem]]:
     # a line per item, a home line, and room for blank or comment lines: refuse a huge file
     # before splitting it
     cap = limit("mission_items")
-    if text.count("\n") > 2 * (cap + 1):
-        raise MissionError(f"{text.count(chr(10)):,} lines, far more than the {cap:,} items "
+    n = _line_breaks(text)
+    if n > 2 * (cap + 1):
+        raise MissionError(f"{n:,} lines, far more than the {cap:,} items "
                            "MAVLink can number (seq and count are uint16)")  # fmt: skip
     lines = text.removeprefix("\ufeff").splitlines()
     if not lines or lines[0].strip() != HEADER:
