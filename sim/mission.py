@@ -294,7 +294,8 @@ def items_to_route(items: Sequence[MissionItem], map: Any) -> Route:  # noqa: A0
     repeats) is flown: the items from the target on run again, `param2` more times, at most
     `MAX_EXECUTED_ITEMS` items in all (a jump repeated forever, param2 = -1, is refused). Other
     DO/CONDITION commands are ignored with a note. Items after LAND/RTL are ignored with a
-    note. Altitudes more than `MAX_FLIGHT_ALTITUDE` above or below home are refused.
+    note. Altitudes more than `MAX_FLIGHT_ALTITUDE` above or below home are refused. Each
+    distinct note is made once, with how many times it came up when a DO_JUMP repeats it.
 
     Args:
         items: the mission items, in seq order (fence and rally items are ignored, noted).
@@ -327,10 +328,16 @@ def _walk(
     cmds: list[int] = []
     speed: float | None = None
     finish: Literal["land", "rtl", "none"] = "none"
-    notes: list[str] = []
+    # each distinct note once, with how often it came up (a DO_JUMP loop passes an ignored
+    # item once per repeat: 24,000 identical lines); insertion order kept
+    seen: dict[str, int] = {}
+
+    def note(text: str) -> None:
+        seen[text] = seen.get(text, 0) + 1
+
     mission = [it for it in items if it.mission_type == MISSION_TYPE.MISSION]
     if len(mission) != len(list(items)):
-        notes.append("non-mission items (fence/rally) were ignored")
+        note("non-mission items (fence/rally) were ignored")
 
     def position(it: MissionItem) -> tuple[float, float]:
         if home_alt is None:  # check_items: no map, the positions do not matter
@@ -356,12 +363,12 @@ def _walk(
                                "(DO_JUMP repeats): refused")  # fmt: skip
         c = it.command
         if finish != "none":
-            notes.append(f"items from seq {it.seq} on come after the landing and were ignored")
+            note(f"items from seq {it.seq} on come after the landing and were ignored")
             break
         if not it.autocontinue and c < 100 and int(it.seq) not in held:  # a NAV_* item
             held.add(int(it.seq))
-            notes.append(f"item {it.seq}: autocontinue 0: PX4 holds there until told to go on "
-                         "(ArduPilot ignores the flag); the sim flies on")  # fmt: skip
+            note(f"item {it.seq}: autocontinue 0: PX4 holds there until told to go on "
+                 "(ArduPilot ignores the flag); the sim flies on")  # fmt: skip
         if c == CMD.DO_JUMP:
             target, repeats = it.param1, it.param2
             if not (math.isfinite(target) and math.isfinite(repeats)):
@@ -409,8 +416,8 @@ def _walk(
         elif c == CMD.DO_CHANGE_SPEED:
             if not math.isfinite(it.param2) or it.param2 <= 0.0:
                 # PX4 and ArduPilot change the speed only for a positive one (-1: no change)
-                notes.append(f"item {it.seq}: DO_CHANGE_SPEED speed {it.param2:g} m/s leaves the "
-                             "speed as it was (autopilots take only a positive one)")  # fmt: skip
+                note(f"item {it.seq}: DO_CHANGE_SPEED speed {it.param2:g} m/s leaves the "
+                     "speed as it was (autopilots take only a positive one)")  # fmt: skip
             elif it.param2 < MIN_MISSION_SPEED:
                 raise MissionError(
                     f"item {it.seq}: DO_CHANGE_SPEED speed {it.param2:g} m/s is below "
@@ -421,11 +428,11 @@ def _walk(
         elif c < 100:  # MAV_CMD_NAV_* range: a movement the sim cannot model
             raise MissionError(f"item {it.seq}: {_command_name(c)} is not supported by the sim")
         else:  # CONDITION_* / DO_* / others: no horizontal motion
-            notes.append(f"item {it.seq}: {_command_name(c)} ignored by the sim")
+            note(f"item {it.seq}: {_command_name(c)} ignored by the sim")
     if not stops:
         raise MissionError("the mission has no navigation items to fly")
     if takeoff_alt is None:
-        notes.append("no TAKEOFF item: launch assumed at the map's start")
+        note("no TAKEOFF item: launch assumed at the map's start")
     return Route(
         launch=launch,
         takeoff_altitude=takeoff_alt,
@@ -437,7 +444,8 @@ def _walk(
         commands=tuple(cmds),
         speed=speed,
         finish=finish,
-        notes=tuple(notes),
+        notes=tuple(n if k == 1 else f"{n} ({k:,} times: DO_JUMP repeats)"
+                    for n, k in seen.items()),
         leg_speeds=tuple(speeds),
         final_speed=speed,
     )

@@ -222,6 +222,24 @@ def test_autocontinue_0_is_noted_once_per_item(m):
                     "(ArduPilot ignores the flag); the sim flies on"]
 
 
+def test_a_note_repeated_by_do_jump_is_made_once_with_its_count(m):
+    """A DO_JUMP loop around an ignored DO_SET_SERVO: one note saying how often (24,000
+    identical lines before)."""
+    plan = _plan(m, HOVER, TIMES)
+    items = plan_to_items(plan, m)
+    k = [i for i, it in enumerate(items) if it.command == CMD.LOITER_TIME]
+    servo = replace(items[k[0]], command=183, param1=1.0, param2=1500.0, x=0.0, y=0.0, z=0.0)
+    jump = replace(items[k[0]], command=CMD.DO_JUMP, param1=float(items[k[0]].seq),
+                   param2=2400.0, x=0.0, y=0.0, z=0.0)  # fmt: skip
+    out = items[:k[0] + 1] + [servo, jump] + items[k[0] + 1:]
+    out = [replace(it, seq=i) for i, it in enumerate(out)]
+    tl = replay(out, m)
+    servo_notes = [n for n in tl.notes if "DO_SET_SERVO" in n]
+    assert servo_notes == [f"item {k[0] + 1}: MAV_CMD_DO_SET_SERVO ignored by the sim "
+                           "(2,401 times: DO_JUMP repeats)"], tl.notes
+    assert len(tl.notes) == len(set(tl.notes)) <= 3
+
+
 # ----------------------------------------------------------------------------- verify
 
 
