@@ -62,7 +62,9 @@ def test_a_bound_of_zero_is_not_explained_by_the_caps_reason(hand_map: dict) -> 
     hand_map["area"]["width"] = 0
     hand_map["uav"]["max_speed"] = 0.01
     lines = _problems(hand_map)
-    assert "obstacles.circles[0].radius: must be greater than 0 (got -5)" in lines
+    radius = next(line for line in lines if line.startswith("obstacles.circles[0].radius:"))
+    assert radius.startswith("obstacles.circles[0].radius: must be greater than or equal to 0.01 "
+                             "(got -5); at least 1 cm: smaller")  # fmt: skip
     assert "area.width: must be greater than 0 (got 0)" in lines
     speed = next(line for line in lines if line.startswith("uav.max_speed:"))
     assert "greater than or equal to 0.1 (got 0.01); below 0.1 m/s flight times" in speed
@@ -100,6 +102,38 @@ def test_no_fly_zone_shapes(hand_map: dict) -> None:
     # a non-convex zone is a valid shape now (issue 15); a bow-tie is not, and is named
     assert not any(line.startswith("obstacles.no_fly_zones[1]") for line in lines)
     assert "obstacles.no_fly_zones[2]: self-intersection at (200, 200)" in lines
+
+
+def test_tiny_obstacles_and_collinear_zones_are_refused_naming_the_field(hand_map: dict) -> None:
+    """A 1e-16 m radius passed check and made the sim's CLEAR margin NaN; a 1e-15 m rectangle
+    was refused as 'obstacles: polygon 0: repeated consecutive vertex'; a zone of collinear
+    vertices as a 'self-intersection'."""
+    from planner_core.model.mapio import MIN_OBSTACLE_SIZE
+
+    assert MIN_OBSTACLE_SIZE == 0.01
+    hand_map["obstacles"] = {
+        "circles": [{"x": 200, "y": 200, "radius": 1e-16}, {"x": 300, "y": 300, "radius": 0.01}],
+        "rectangles": [{"x": 200, "y": 400, "length": 1e-15, "width": 5},
+                       {"x": 300, "y": 400, "length": 5, "width": 0.009}],
+        "no_fly_zones": [{"vertices": [[100, 100], [200, 200], [300, 300]]},
+                         {"vertices": [[100, 500], [300, 500], [200, 500.001], [150, 500]]}],
+        "polygons": [{"vertices": [[600, 100], [700, 100], [700, 200], [600, 200]],
+                      "holes": [[[620, 120], [640, 140], [660, 160]]]}],
+    }  # fmt: skip
+    lines = _problems(hand_map)
+    want = ["obstacles.circles[0].radius: must be greater than or equal to 0.01 (got 1e-16)",
+            "obstacles.rectangles[0].length: must be greater than or equal to 0.01 (got 1e-15)",
+            "obstacles.rectangles[1].width: must be greater than or equal to 0.01 (got 0.009)"]
+    for w in want:
+        assert any(line.startswith(w) for line in lines), (w, lines)
+    assert not any("circles[1]" in line or "polygon 0" in line for line in lines), lines
+    hand_map["obstacles"] = {k: v for k, v in hand_map["obstacles"].items()
+                             if k in ("no_fly_zones", "polygons")}  # fmt: skip
+    lines = _problems(hand_map)
+    assert "obstacles.no_fly_zones[0]: has zero area (collinear vertices)" in lines, lines
+    assert "obstacles.no_fly_zones[1]: has zero area (collinear vertices)" in lines, lines
+    assert "obstacles.polygons[0].holes[0]: has zero area (collinear vertices)" in lines, lines
+    assert not any("self-intersection" in line for line in lines), lines
 
 
 def test_schema_has_fields() -> None:

@@ -55,6 +55,12 @@ _WHY_SIDE = (
     "accurate to 100 km"
 )
 _WHY_SIZE = "no obstacle is larger than 1000 km; larger sizes overflow the geometry's arithmetic"
+#: metres: the least circle radius and rectangle side (`obstacles.circles[].radius`,
+#: `obstacles.rectangles[].length` / `width`): a radius of 1e-16 m passed and made the sim's
+#: clearance NaN, a side of 1e-15 m a degenerate polygon
+MIN_OBSTACLE_SIZE = 0.01
+_WHY_OBSTACLE_SIZE = ("at least 1 cm: smaller is below any position fix and degenerates the "
+                      "geometry; at most 1000 km: larger overflows its arithmetic")
 
 
 def _ranged(
@@ -129,7 +135,7 @@ class Circle(BaseModel):
     model_config = _STRICT
     x: Coord
     y: Coord
-    radius: float = _ranged(..., 0.0, MAX_COORD, "metres", _WHY_SIZE, lo_open=True)
+    radius: float = _ranged(..., MIN_OBSTACLE_SIZE, MAX_COORD, "metres", _WHY_OBSTACLE_SIZE)
 
 
 class Rectangle(BaseModel):
@@ -138,8 +144,8 @@ class Rectangle(BaseModel):
     model_config = _STRICT
     x: Coord
     y: Coord
-    length: float = _ranged(..., 0.0, MAX_COORD, "metres", _WHY_SIZE, lo_open=True)
-    width: float = _ranged(..., 0.0, MAX_COORD, "metres", _WHY_SIZE, lo_open=True)
+    length: float = _ranged(..., MIN_OBSTACLE_SIZE, MAX_COORD, "metres", _WHY_OBSTACLE_SIZE)
+    width: float = _ranged(..., MIN_OBSTACLE_SIZE, MAX_COORD, "metres", _WHY_OBSTACLE_SIZE)
     angle_deg: float = _ranged(
         0.0, -360.0, 360.0, "degrees", "one turn either way says every direction"
     )

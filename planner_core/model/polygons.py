@@ -127,6 +127,18 @@ def is_convex(ring: np.ndarray) -> bool:
     return bool(np.all(cross > 0.0))
 
 
+def _on_one_line(ring: np.ndarray) -> bool:
+    """Whether every vertex of `ring` (V, 2) lies within `VERTEX_TOL` of the line through its
+    first vertex and the vertex farthest from it (a ring of no area, which GEOS calls a
+    self-intersection). O(V)."""
+    d = ring - ring[0]
+    far = d[int(np.argmax(np.hypot(d[:, 0], d[:, 1])))]
+    n = math.hypot(*far)
+    if n == 0.0:
+        return True
+    return bool(np.all(np.abs(d[:, 0] * far[1] - d[:, 1] * far[0]) / n <= VERTEX_TOL))
+
+
 def polygon_problem(
     shell: np.ndarray,
     holes: Sequence[np.ndarray] = (),
@@ -146,6 +158,10 @@ def polygon_problem(
     for k, h in enumerate(holes):
         if len(h) < 3:
             return f"hole {k} needs at least 3 distinct vertices, got {len(h)}"
+    for k, ring in enumerate((shell, *holes)):
+        if _on_one_line(np.asarray(ring, dtype=np.float64)):
+            return ("has zero area (collinear vertices)" if k == 0
+                    else f"hole {k - 1} has zero area (collinear vertices)")  # fmt: skip
     poly = Polygon(shell, [h for h in holes])
     if not poly.is_valid:
         why = shapely.is_valid_reason(poly)
