@@ -60,6 +60,7 @@ def plan(
     on_compile: Callable[[], None] | None = None,
     scheduler: str | Any = "default",
     corner_slots: int | str = "auto",
+    on_setup: Callable[[str | None], None] | None = None,
 ) -> Plan:
     """Plan hover points and hover times for `map`; same seed and budget, same plan.
 
@@ -95,6 +96,11 @@ def plan(
             `planner_core.pipeline.Progress` (stage, evaluations, budget, best_f, best_phi,
             seconds).
         on_compile: called once before the kernels are compiled or loaded (the CLI's notice).
+        on_setup: called with the name of each setup stage as it starts (reading and inflating
+            the map; the visibility graph and the corner-slot rule) and with None as it ends
+            (the CLI's progress lines). Setup is not cut by `time_limit`: the planner needs its
+            result; it grows with the obstacles (a 10 km map of 5,000 small rectangles and 50
+            sensors: see docs/planning.md).
         scheduler: the improving stage's scheduler (issue 34's LAMDE-S seam,
             `planner_core.pipeline.schedule`): "default" (today's rounds), a static schedule's
             name (`schedule.SCHEDULES`: a fixed cycle of macro-actions), "lamde-s" (the
@@ -143,11 +149,17 @@ def plan(
     if check_corner_slots(corner_slots) != AUTO and corner_slots and not config.variable_length:
         raise ValueError("corner_slots: fixed-length mode flies every slot; use 0 or 'auto'")
     default_schedule = isinstance(scheduler, str) and scheduler == "default"
+    def stage(name: str | None) -> None:
+        if on_setup is not None:
+            on_setup(name)
+
     t_start = time.perf_counter()
+    stage("reading the map and inflating its obstacles")
     m = load_map(map)
     # safety margins (clearance, data margin) are a transformation of the map: the model is the
     # paper's, on the inflated map (the same map when both margins are 0)
     planning_map = m.planning_map()
+    stage(None)
     t_setup = time.perf_counter() - t_start
     if on_compile is not None and not warmed(config.configurator):
         on_compile()
@@ -155,8 +167,10 @@ def plan(
     t0 = time.perf_counter()
     # "auto" corner slots are resolved from the planning map (after the kernels load: the rule
     # draws seeder plans) before the problem is built (K = 0: the paper's Problem)
+    stage("building the visibility graph round the obstacles and choosing the corner slots")
     problem, k_corner = problem_for(planning_map, variable_length=config.variable_length,
                                     corner_slots=corner_slots)
+    stage(None)
     t_setup += time.perf_counter() - t0
     result = run_pipeline(problem, config, progress=progress,
                           scheduler=None if default_schedule else scheduler)

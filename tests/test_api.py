@@ -161,3 +161,36 @@ def test_kernels_cached_is_false_on_a_first_run_even_after_the_map_loaded(tmp_pa
     assert r.stdout.strip() == "False"
     warmup.warm_up("adaptive")  # this process's cache (the suite's) holds them after a warm-up
     assert api.kernels_cached()
+
+
+def test_setup_stages_are_announced_and_the_cli_prints_only_slow_ones() -> None:
+    """`on_setup` hears each setup stage (reading the map, the visibility graph and corner-slot
+    rule) start and end: on a map at the obstacle limit setup ran for minutes with no output and
+    past --time-limit, which does not cut it (it says so). The CLI's `SetupNotice` prints a
+    stage's name only once it has run `after` seconds, then the time it took."""
+    import io
+    import threading
+
+    from lamde_mission.commands.plan import SetupNotice
+    from tests.conftest import MAPS
+
+    heard: list[str | None] = []
+    lamde_mission.plan(MAPS / "tiny.json", seed=3, budget=600, on_setup=heard.append)
+    assert heard[1::2] == [None, None] and len(heard) == 4
+    assert "map" in heard[0] and "visibility graph" in heard[2]
+
+    out = io.StringIO()
+    quick = SetupNotice(after=60.0, stream=out)
+    quick("reading the map")
+    quick(None)
+    assert out.getvalue() == ""
+    slow = SetupNotice(after=0.0, stream=out)
+    slow("building the visibility graph")
+    for _ in range(200):  # the timer thread's line (no wall-time bound is asserted)
+        if out.getvalue():
+            break
+        threading.Event().wait(0.01)
+    slow(None)
+    lines = out.getvalue().splitlines()
+    assert lines[0] == "setup: building the visibility graph... (not cut by --time-limit)"
+    assert lines[1].startswith("setup: done in ") and len(lines) == 2

@@ -55,9 +55,12 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    "goes to the improving rounds, so a larger budget buys a better plan")
     p.add_argument("--time-limit", type=float, metavar="SECONDS",
                    help="stop the improving stages after SECONDS and write the best plan found "
-                   "(the one-time kernel compile is not counted; default: none, the budget "
-                   "alone ends the run). Combine with a large --budget to plan for a deadline; "
-                   "a time limit trades the same-seed-same-plan guarantee for the deadline")
+                   "(the one-time kernel compile and the setup, reading the map and building "
+                   "its visibility graph, are not counted: the search needs them; at the "
+                   "obstacle limit setup takes minutes, docs/planning.md; default: none, the "
+                   "budget alone ends the run). Combine with a large --budget to plan for a "
+                   "deadline; a time limit trades the same-seed-same-plan guarantee for the "
+                   "deadline")
     p.add_argument("--population", type=int, default=D.POPULATION,
                    help=f"DE population (default {D.POPULATION}, at least {D.MIN_POPULATION})")
     p.add_argument("--configurator", choices=D.CONFIGURATORS, default=D.CONFIGURATOR,
@@ -511,6 +514,40 @@ def _say_cannot(m: Any, said: str = "") -> None:
             print(f"  {lead} (`lamde-mission check` says CANNOT): {f.message}", file=sys.stderr)
 
 
+class SetupNotice:
+    """`make_plan`'s on_setup for the CLI: a setup stage still running after `after` seconds
+    gets a line on stderr (its name; --time-limit does not cut it), and the time it took when
+    it ends. Quick stages print nothing. A timer thread per stage; O(1)."""
+
+    def __init__(self, after: float = 1.0, stream: Any = None) -> None:
+        self.after = after
+        self.stream = stream
+        self._timer: Any = None
+        self._t0 = 0.0
+        self._shown = False
+
+    def _show(self, name: str) -> None:
+        self._shown = True
+        print(f"setup: {name}... (not cut by --time-limit)", file=self.stream or sys.stderr,
+              flush=True)  # fmt: skip
+
+    def __call__(self, name: str | None) -> None:
+        import threading
+
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+            if self._shown:
+                print(f"setup: done in {time.perf_counter() - self._t0:.1f} s",
+                      file=self.stream or sys.stderr, flush=True)  # fmt: skip
+        self._shown = False
+        if name is not None:
+            self._t0 = time.perf_counter()
+            self._timer = threading.Timer(self.after, self._show, args=(name,))
+            self._timer.daemon = True
+            self._timer.start()
+
+
 def _corner_slots(args: argparse.Namespace) -> int | str:
     """`--corner-slots` as "auto" or an integer in [0, MAX_CORNER_SLOTS]
     (`planner_core.model.corner_slots.check_corner_slots`, the API's check).
@@ -613,6 +650,7 @@ def run(args: argparse.Namespace) -> int:
               "kernels...", file=sys.stderr, flush=True)
 
     progress = None if args.quiet else _ProgressBar()
+    setup = None if args.quiet else SetupNotice()
     try:
         plan = make_plan(
             m,
@@ -631,8 +669,11 @@ def run(args: argparse.Namespace) -> int:
             on_compile=announce,
             scheduler=args.scheduler,
             corner_slots=corner_slots,
+            on_setup=setup,
         )
     finally:
+        if setup is not None:
+            setup(None)
         if progress is not None:
             progress.close()
     pm = m.planning_map()
