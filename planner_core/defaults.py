@@ -27,7 +27,9 @@ bound is held by a slow test that runs ``check`` and ``plan`` in a child under `
   obstacle);
 - ``LAMDE_MAX_VERTICES`` (50,000 zone vertices; ``LAMDE_MAX_ZONE_VERTICES``, 5,000 per zone,
   lies within it): within 4 GB; peak RSS ~340 MiB for ``plan`` (tests/test_graph_memory.py:
-  the graph's candidate pairs are built one block at a time);
+  the graph's candidate pairs are built one block at a time) for convex zones; non-convex zones
+  cost more (10 stars of 5,000 vertices on 10 km: ``check`` 70 s and 667 MB, most of it their
+  inflation, ``plan`` 53-66 s and 711-738 MB; docs/maps.md);
 - the file limits (``LAMDE_MAX_INPUT_BYTES``, 64 MiB; ``LAMDE_MAX_JSON_DEPTH``, 64) bound what
   is read before any of the above is built.
 """
