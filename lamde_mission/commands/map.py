@@ -50,6 +50,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     fg.add_argument("--name", help="map name (default: the name an exported `area` feature "
                     "carries, else the first input's file name)")
     fg.add_argument("-o", "--output", required=True, help="map file to write (JSON)")
+    fg.add_argument("--mkdir", action="store_true", help="create -o's folder if missing")
     tg = msub.add_parser(
         "to-geojson",
         help="a map file -> GeoJSON (WGS84), readable by GIS tools and by from-geojson",
@@ -60,6 +61,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     )
     tg.add_argument("map", help="map file (JSON)")
     tg.add_argument("-o", "--output", required=True, help="GeoJSON file to write")
+    tg.add_argument("--mkdir", action="store_true", help="create -o's folder if missing")
     cg = msub.add_parser(
         "campus",
         help="write a generated campus of non-convex footprints (a benchmark at real scale)",
@@ -103,25 +105,19 @@ def _origin(text: str | None) -> tuple[float, float, float | None] | None:
     return vals[0], vals[1], vals[2] if len(vals) == 3 else None
 
 
-def _refuse_own_input(output: str, inputs: list[str]) -> None:
-    """UsageError (one line, exit 2) when -o names the same file as an input, before anything
-    is read or written.
+def _check_output(args: argparse.Namespace, inputs: list[str]) -> None:
+    """The shared output checks (`check_outputs`) for -o, before anything is read: UsageError
+    (one line, exit 2) when it is one of the inputs, an existing folder, FIFO or device (never
+    replaced), or in a missing folder without --mkdir.
 
     Args:
-        output: the -o/--output path.
+        args: the parsed options (output, mkdir).
         inputs: every input path.
-
-    Raises:
-        UsageError: the output is one of the inputs (same resolved path, or the same file
-            through a link).
     """
-    from lamde_mission.commands._common import same_file
-    from planner_core.textio import printable
+    from lamde_mission.commands._common import check_outputs
 
-    for src in inputs:
-        if same_file(output, src):
-            raise UsageError(f"-o/--output: {printable(output)} is the input "
-                             f"{printable(src)}; write the output to another file")
+    check_outputs([("-o/--output", args.output)], mkdir=args.mkdir,
+                  inputs=[("input", src) for src in inputs])  # fmt: skip
 
 
 def _from_geojson(args: argparse.Namespace) -> int:
@@ -139,7 +135,7 @@ def _from_geojson(args: argparse.Namespace) -> int:
     inputs += [(f, "sensor") for f in args.sensors]
     if not inputs:
         raise UsageError("give at least one input FILE (or --obstacles/--no-fly-zones/--sensors)")
-    _refuse_own_input(args.output, [f for f, _ in inputs])
+    _check_output(args, [f for f, _ in inputs])
     try:
         margin = float(args.margin)
     except ValueError:
@@ -160,7 +156,8 @@ def _from_geojson(args: argparse.Namespace) -> int:
     for note in notes + list(m.notes):
         print(f"note: {note}", file=sys.stderr)
     try:
-        path = write_text_atomic(args.output, json.dumps(m.to_dict(), indent=1) + "\n")
+        path = write_text_atomic(args.output, json.dumps(m.to_dict(), indent=1) + "\n",
+                                 mkdir=False)
     except OSError as exc:
         raise UsageError(f"{args.output}: cannot write ({exc.strerror or exc})") from None
     s = m.summary()
@@ -187,11 +184,12 @@ def _to_geojson(args: argparse.Namespace) -> int:
     from lamde_mission.commands._common import load_map_or_fail
     from lamde_mission.gis import map_to_geojson
 
-    _refuse_own_input(args.output, [args.map])
+    _check_output(args, [args.map])
     m = load_map_or_fail(args.map)
     doc = map_to_geojson(m)
     try:
-        path = write_text_atomic(args.output, json.dumps(doc, indent=1, allow_nan=False) + "\n")
+        path = write_text_atomic(args.output, json.dumps(doc, indent=1, allow_nan=False) + "\n",
+                                 mkdir=False)
     except OSError as exc:
         raise UsageError(f"{args.output}: cannot write ({exc.strerror or exc})") from None
     print(f"wrote {path}: {len(doc['features'])} features")
