@@ -52,6 +52,7 @@ __all__ = [
     "loads_json",
     "read_json",
     "printable",
+    "quoted",
 ]
 
 #: most digits a JSON integer may have: our integer fields fit in 20 (uint64 has 20 digits);
@@ -464,3 +465,19 @@ def printable(text: object) -> str:
         else:
             out.append(ch)
     return "".join(out)
+
+
+def quoted(value: object, width: int = 40) -> str:
+    """`repr(value)` for a one-line message, cut to about `width` characters ("...") and
+    escaped by `printable`: a file's multi-megabyte string (or list, or object) is never
+    copied whole into an error line, nor are its control characters. `reprlib` abbreviates
+    long strings and containers before anything is joined (no copy of the whole value)."""
+    import reprlib
+
+    r = reprlib.Repr()
+    r.maxlevel, r.maxdict, r.maxlist, r.maxtuple, r.maxset = 2, 4, 6, 6, 6
+    r.maxstring = r.maxother = r.maxlong = max(width, 8)
+    text = r.repr(value)
+    if len(text) > width:
+        text = text[: max(width - 3, 1)] + "..."
+    return printable(text)

@@ -4,6 +4,7 @@ traceback), reads are bounded, printed text is escaped."""
 
 from __future__ import annotations
 
+import json
 import os
 from pathlib import Path
 
@@ -54,3 +55,50 @@ def test_map_commands_never_replace_a_fifo_or_make_folders(
         assert "--mkdir" in _one_line(rc, err) and not (tmp_path / f"new{i}").exists()
         rc, out, err = _run(capsys, "map", *args, "-o", deep, "--mkdir")
         assert rc == 0 and deep.is_file(), err
+
+
+# ----------------------------------------------------------------------------- 2: tracebacks
+
+FLY = Path(__file__).parent / "data" / "flyable"
+RALLY = FLY / "rally-and-jump.plan"
+
+
+def _plan_with(tmp_path: Path, change) -> Path:
+    doc = json.loads(RALLY.read_text())
+    change(doc)
+    out = tmp_path / "bad.plan"
+    out.write_text(json.dumps(doc))
+    return out
+
+
+_SECTIONS = {
+    "geoFence.polygons": lambda d: d["geoFence"].__setitem__("polygons", 5),
+    "geoFence.circles": lambda d: d["geoFence"].__setitem__("circles", 7),
+    "geoFence.polygons: expected a list, got true":
+        lambda d: d["geoFence"].__setitem__("polygons", True),
+    "rallyPoints.points": lambda d: d["rallyPoints"].__setitem__("points", 7),
+    "geoFence: expected an object": lambda d: d.__setitem__("geoFence", [1]),
+    "mission: expected an object": lambda d: d.__setitem__("mission", [1]),
+}
+
+
+@pytest.mark.parametrize("needle", list(_SECTIONS))
+def test_plan_sections_of_the_wrong_type_are_one_line(
+    needle: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    bad = _plan_with(tmp_path, _SECTIONS[needle])
+    for args in (("verify", FLY / "tiny-map.json", bad),
+                 ("upload", bad, "--connect", "udpout:127.0.0.1:9", "--timeout", "1"),
+                 ("map", "from-geojson", bad, "-o", tmp_path / "m.json")):  # fmt: skip
+        rc, out, err = _run(capsys, *args)
+        line = _one_line(rc, err)
+        assert needle in line and str(bad) in line, (args, err)
+
+
+def test_geojson_crs_properties_not_an_object(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    src = tmp_path / "c.geojson"
+    src.write_text('{"type":"FeatureCollection","crs":{"properties":[1]},"features":[]}')
+    rc, out, err = _run(capsys, "map", "from-geojson", src, "-o", tmp_path / "m.json")
+    assert "crs" in _one_line(rc, err) and "not WGS84" in err

@@ -163,6 +163,35 @@ def _latlon_pair(v: Any, where: str) -> tuple[float, float]:
     return _float(v[0], where), _float(v[1], where)
 
 
+#: the sections of a .plan, and the lists each holds (absent or null: none)
+SECTIONS = {"mission": ("items",), "geoFence": ("polygons", "circles"),
+            "rallyPoints": ("points",)}
+
+
+def _check_sections(doc: dict[str, Any]) -> None:
+    """MissionError naming the first section that is not an object (absent or null: none),
+    or a list of one (`geoFence.polygons`, `rallyPoints.points`) that is not a list, before
+    anything iterates them (a number there was a TypeError, a list an AttributeError)."""
+    for name, lists in SECTIONS.items():
+        sec = doc.get(name)
+        if sec is None:
+            continue
+        if not isinstance(sec, dict):
+            raise MissionError(f"{name}: expected an object, got {_kind(sec)}")
+        for key in lists:
+            v = sec.get(key)
+            if v is not None and not isinstance(v, list):
+                raise MissionError(f"{name}.{key}: expected a list, got {_kind(v)}")
+
+
+def _kind(v: Any) -> str:
+    """What a JSON value is, for a message (never the value itself: it may be megabytes)."""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    return {dict: "an object", list: "a list", str: "a string", int: "a number",
+            float: "a number"}.get(type(v), type(v).__name__)  # fmt: skip
+
+
 #: the section versions this reader understands (QGroundControl's plan format)
 VERSIONS = {"version": 1, "mission.version": 2, "geoFence.version": 2, "rallyPoints.version": 2}
 
@@ -210,6 +239,7 @@ def parse_plan_lists(
     """
     if not isinstance(doc, dict) or doc.get("fileType") != "Plan":
         raise MissionError('not a QGroundControl plan (fileType must be "Plan")')
+    _check_sections(doc)
     _check_versions(doc)
     mission = doc.get("mission")
     if not isinstance(mission, dict) or not isinstance(mission.get("items"), list):

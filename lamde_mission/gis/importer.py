@@ -58,7 +58,7 @@ from typing import Any
 
 import numpy as np
 
-from planner_core.textio import InputError, loads_json, read_json
+from planner_core.textio import InputError, loads_json, quoted, read_json
 from sim.geo import enu_to_latlon, latlon_to_enu
 
 __all__ = ["GisError", "GisLayers", "read_layers", "build_map", "DEFAULT_MARGIN", "KINDS"]
@@ -327,9 +327,11 @@ def _read_geojson(layers: GisLayers, doc: Any, src: str, layer: str | None) -> N
         raise ValueError(f"{src}: not a GeoJSON object")
     crs = doc.get("crs")
     if crs is not None:
-        name = str((crs.get("properties") or {}).get("name", "")) if isinstance(crs, dict) else ""
+        props = crs.get("properties") if isinstance(crs, dict) else None
+        name = props.get("name") if isinstance(props, dict) else None
+        name = name if isinstance(name, str) else ""
         if not any(t in name for t in ("CRS84", "4326")):
-            raise ValueError(f"{src}: crs {name or crs!r} is not WGS84; RFC 7946 GeoJSON is "
+            raise ValueError(f"{src}: crs {quoted(name or crs)} is not WGS84; RFC 7946 GeoJSON is "
                              "WGS84 longitude/latitude (reproject to EPSG:4326 first)")  # fmt: skip
     t = doc.get("type")
     if t == "FeatureCollection":
@@ -363,10 +365,11 @@ def _number(v: Any, where: str) -> float:
 
 
 def _read_qgc_plan(layers: GisLayers, doc: dict[str, Any], src: str) -> None:
-    from lamde_mission.formats.qgc_plan import _bool, _check_versions
+    from lamde_mission.formats.qgc_plan import _bool, _check_sections, _check_versions
     from lamde_mission.items import MissionError
 
-    try:  # the versions `verify` and `upload` accept, and strict booleans, as they read them
+    try:  # the sections and versions `verify` and `upload` accept, strict booleans, as they do
+        _check_sections(doc)
         _check_versions(doc)
         for key in ("polygons", "circles"):
             for k, shape in enumerate((doc.get("geoFence") or {}).get(key) or []):
