@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import warnings
 from pathlib import Path
 
 import pytest
@@ -102,3 +103,38 @@ def test_geojson_crs_properties_not_an_object(
     src.write_text('{"type":"FeatureCollection","crs":{"properties":[1]},"features":[]}')
     rc, out, err = _run(capsys, "map", "from-geojson", src, "-o", tmp_path / "m.json")
     assert "crs" in _one_line(rc, err) and "not WGS84" in err
+
+
+def _fc(*features: dict) -> dict:
+    return {"type": "FeatureCollection", "features": list(features)}
+
+
+def _pt(kind: str, lon: float, lat: float, **props: object) -> dict:
+    return {"type": "Feature", "geometry": {"type": "Point", "coordinates": [lon, lat]},
+            "properties": {"kind": kind, **props}}  # fmt: skip
+
+
+_BASE = [_pt("sensor", 114.176, 22.324, id="s1"), _pt("start", 114.175, 22.323),
+         _pt("end", 114.177, 22.325)]  # fmt: skip
+_SQUARE = [[114.1754, 22.3234], [114.1756, 22.3234], [114.1756, 22.3236],
+           [114.1754, 22.3236], [114.1754, 22.3234]]  # fmt: skip
+
+
+@pytest.mark.parametrize("feature, field", [
+    ({"type": "Feature", "geometry": {"type": "Polygon", "coordinates": [_SQUARE]},
+      "properties": {"kind": "building", "shape": "rectangle", "center": [114.1755, 22.3235],
+                     "length_m": 1e308, "width_m": 5, "angle_deg": 0}}, "length_m"),
+    ({"type": "Feature", "geometry": None,
+      "properties": {"kind": "circle", "center": [114.1755, 22.3235], "radius_m": 1e308}},
+     "radius_m"),
+])  # fmt: skip
+def test_huge_obstacle_sizes_are_one_line_naming_the_field(
+    feature: dict, field: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    src = tmp_path / "big.geojson"
+    src.write_text(json.dumps(_fc(*_BASE, feature)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no RuntimeWarning of an overflow either
+        rc, out, err = _run(capsys, "map", "from-geojson", src, "-o", tmp_path / "m.json")
+    line = _one_line(rc, err)
+    assert f"features[3] {field}: 1e+308 m is more than" in line, err

@@ -146,6 +146,20 @@ def _positive(r: Any) -> bool:
     return (not isinstance(r, bool)) and isinstance(r, int | float) and r > 0 and math.isfinite(r)
 
 
+def _size(v: Any, where: str) -> float:
+    """A size in metres (a radius, a rectangle's side): a number > 0 and at most the map's
+    `MAX_COORD`; ValueError naming `where` otherwise (1e308 overflowed the frame's arithmetic
+    into warnings and a wrong message, or a traceback)."""
+    from planner_core.model.mapio import MAX_COORD
+
+    if not _positive(v):
+        raise ValueError(f"{where}: must be a number > 0 (metres), got {quoted(v)}")
+    if v > MAX_COORD:
+        raise ValueError(f"{where}: {v:g} m is more than {MAX_COORD:g} m, the largest size a "
+                         "map's obstacle may have")  # fmt: skip
+    return float(v)
+
+
 def _position(p: Any, where: str) -> tuple[float, float]:
     if not isinstance(p, list | tuple) or len(p) < 2:
         raise ValueError(f"{where}: a position must be [longitude, latitude]")
@@ -209,8 +223,9 @@ def _add_feature(layers: GisLayers, feat: Any, where: str, layer: str | None) ->
         r = props.get("radius_m")
         if not _positive(r):
             raise ValueError(f"{label}: a circle needs radius_m > 0 and center [lon, lat]")
+        r = _size(r, f"{label} radius_m")
         lon, lat = _position(props.get("center"), f"{label} center")
-        layers.circles.append({"where": label, "lon": lon, "lat": lat, "radius": float(r)})
+        layers.circles.append({"where": label, "lon": lon, "lat": lat, "radius": r})
         return
     geom = feat.get("geometry")
     if not isinstance(geom, dict):
@@ -257,7 +272,7 @@ def _add_feature(layers: GisLayers, feat: Any, where: str, layer: str | None) ->
         raise ValueError(f"{label}: {kind} features must be a Polygon or MultiPolygon, "
                          f"got {gtype}")  # fmt: skip
     if kind == "obstacle" and gtype == "Polygon" and props.get("shape") == "rectangle":
-        rect = _rectangle_props(props)
+        rect = _rectangle_props(props, label)
         if rect is not None:  # else the outline drawn is the obstacle, a polygon
             layers.rectangles.append({"where": label, **rect,
                                       "poly": _Poly(label, name, polys[0], label)})
@@ -275,9 +290,10 @@ def _add_feature(layers: GisLayers, feat: Any, where: str, layer: str | None) ->
         _read_settings(layers, props, label, framed)
 
 
-def _rectangle_props(props: dict[str, Any]) -> dict[str, float] | None:
+def _rectangle_props(props: dict[str, Any], label: str) -> dict[str, float] | None:
     """A rectangle's centre (lon, lat), sides and angle from the properties `map to-geojson`
-    writes; None where one is missing or not a number in range."""
+    writes; None where one is missing or not a number in range; ValueError naming the feature
+    for a side larger than any map's obstacle."""
     try:
         lon, lat = _position(props.get("center"), "center")
     except ValueError:
@@ -285,6 +301,7 @@ def _rectangle_props(props: dict[str, Any]) -> dict[str, float] | None:
     length, width, angle = props.get("length_m"), props.get("width_m"), props.get("angle_deg")
     if not (_positive(length) and _positive(width)):
         return None
+    length, width = _size(length, f"{label} length_m"), _size(width, f"{label} width_m")
     if isinstance(angle, bool) or not isinstance(angle, int | float) or not math.isfinite(angle):
         return None
     return {"lon": lon, "lat": lat, "length": float(length), "width": float(width),
@@ -403,7 +420,8 @@ def _read_qgc_plan(layers: GisLayers, doc: dict[str, Any], src: str) -> None:
         r = circle.get("radius")
         if not _positive(r):
             raise ValueError(f"{where}.circle.radius: must be a positive number (metres)")
-        entry = {"where": where, "lon": lon, "lat": lat, "radius": float(r)}
+        entry = {"where": where, "lon": lon, "lat": lat,
+                 "radius": _size(r, f"{where}.circle.radius")}
         (layers.area_circles if c.get("inclusion", True) else layers.circles).append(entry)
     home = (doc.get("mission") or {}).get("plannedHomePosition")
     if isinstance(home, list) and len(home) >= 2:
