@@ -107,6 +107,12 @@ LIMITS: dict[str, Limit] = {
         "LAMDE_MAX_VERTICES",
         "vertices of all no-fly zones and polygon obstacles of one map together (holes included)",
     ),
+    "results_bytes": Limit(
+        256 * 1024 * 1024,
+        "LAMDE_MAX_RESULTS_BYTES",
+        "a benchmark's run records (results.jsonl, counted decompressed when gzip-compressed); "
+        "a full benchmark (51 runs x 29 tasks x 10 optimisers, ~6 kB a record) is ~90 MB",
+    ),
     "mission_items": Limit(
         65_535,
         None,
@@ -176,14 +182,18 @@ def not_regular(mode: int) -> str:
     return "is not a regular file"
 
 
-def read_bytes(path: str | Path, *, max_bytes: int | None = None) -> bytes:
-    """The bytes of the regular file `path`, at most `max_bytes` (default `limit("bytes")`).
+def read_bytes(path: str | Path, *, max_bytes: int | None = None, limit_name: str = "bytes",
+               gunzip: bool = False) -> bytes:  # fmt: skip
+    """The bytes of the regular file `path`, at most `max_bytes` (default `limit(limit_name)`).
 
     A non-regular file is refused from `os.stat` before it is opened; the file is then opened
-    non-blocking and checked again (it may have been swapped). Raises InputError (no `where`)
-    for a missing, unreadable, non-regular or oversized file.
+    non-blocking and checked again (it may have been swapped). `gunzip`: the file is gzip
+    (one or more members) and its decompressed bytes are returned, bounded by the same limit
+    while they are decompressed (a 3 MB file of zeros never becomes gigabytes). Raises
+    InputError (no `where`) for a missing, unreadable, non-regular, oversized or corrupt file.
     """
-    cap = limit("bytes") if max_bytes is None else int(max_bytes)
+    env = LIMITS[limit_name].env
+    cap = limit(limit_name) if max_bytes is None else int(max_bytes)
     try:
         st = os.stat(path)
     except FileNotFoundError:
@@ -195,7 +205,7 @@ def read_bytes(path: str | Path, *, max_bytes: int | None = None) -> bytes:
     if not stat.S_ISREG(st.st_mode):
         raise InputError(not_regular(st.st_mode))
     if st.st_size > cap:
-        raise InputError(_too_big(st.st_size, cap))
+        raise InputError(_too_big(st.st_size, cap, env))
     try:
         fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
     except OSError as exc:
@@ -211,13 +221,35 @@ def read_bytes(path: str | Path, *, max_bytes: int | None = None) -> bytes:
     finally:
         os.close(fd)
     if len(data) > cap:
-        raise InputError(_too_big(len(data), cap))
-    return data
+        raise InputError(_too_big(len(data), cap, env))
+    return _gunzip(data, cap, env) if gunzip else data
 
 
-def _too_big(size: int, cap: int) -> str:
-    env = LIMITS["bytes"].env
+def _too_big(size: int, cap: int, env: str | None) -> str:
     return f"file is {size:,} bytes, more than the limit of {cap:,} (raise it with {env})"
+
+
+def _gunzip(data: bytes, cap: int, env: str | None) -> bytes:
+    """The decompressed bytes of gzip `data` (members one after another, as `gzip.decompress`
+    reads them; zero padding after the last ignored), never more than `cap`: InputError once
+    more would come, or for data that is not gzip or ends mid-stream."""
+    import zlib
+
+    out = bytearray()
+    rest = data
+    while rest and rest.strip(b"\x00"):
+        d = zlib.decompressobj(wbits=31)
+        try:
+            out += d.decompress(rest, cap + 1 - len(out))
+        except zlib.error as exc:
+            raise InputError(f"not valid gzip data ({exc})") from None
+        if len(out) > cap:
+            raise InputError(f"decompresses to more than the limit of {cap:,} bytes (raise it "
+                             f"with {env})")  # fmt: skip
+        if not d.eof:
+            raise InputError("the gzip data ends before its stream does (a truncated file)")
+        rest = d.unused_data
+    return bytes(out)
 
 
 _FOREIGN_BOMS = (
@@ -257,9 +289,11 @@ def decode_text(data: bytes) -> str:
     return text
 
 
-def read_text(path: str | Path, *, max_bytes: int | None = None) -> str:
+def read_text(path: str | Path, *, max_bytes: int | None = None, limit_name: str = "bytes",
+              gunzip: bool = False) -> str:  # fmt: skip
     """`read_bytes` then `decode_text`: the text of a regular, bounded, UTF-8 file."""
-    return decode_text(read_bytes(path, max_bytes=max_bytes))
+    return decode_text(read_bytes(path, max_bytes=max_bytes, limit_name=limit_name,
+                                  gunzip=gunzip))
 
 
 # ----------------------------------------------------------------------------- JSON

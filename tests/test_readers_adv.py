@@ -138,3 +138,85 @@ def test_huge_obstacle_sizes_are_one_line_naming_the_field(
         rc, out, err = _run(capsys, "map", "from-geojson", src, "-o", tmp_path / "m.json")
     line = _one_line(rc, err)
     assert f"features[3] {field}: 1e+308 m is more than" in line, err
+
+
+# ----------------------------------------------------------------------------- report's reads
+
+RUNS = Path(__file__).resolve().parent.parent / "docs" / "reduced" / "runs"
+
+
+def _records(n: int = 3) -> list[dict]:
+    import gzip
+
+    lines = gzip.decompress((RUNS / "results.jsonl.gz").read_bytes()).decode().splitlines()
+    return [json.loads(ln) for ln in lines[:n]]
+
+
+def _results(folder: Path, records: list[dict] | None = None, meta: str | None = None) -> Path:
+    folder.mkdir(exist_ok=True)
+    recs = _records() if records is None else records
+    (folder / "results.jsonl").write_text("".join(json.dumps(r) + "\n" for r in recs))
+    (folder / "meta.json").write_text((RUNS / "meta.json").read_text() if meta is None else meta)
+    return folder
+
+
+def _report_refuses(capsys, folder: Path, needle: str) -> str:
+    rc, out, err = _run(capsys, "report", folder, "-o", folder / "r.md")
+    line = _one_line(rc, err)
+    assert needle in line, err
+    assert not (folder / "r.md").exists()
+    return line
+
+
+def test_report_bounds_a_gzip_bomb(tmp_path: Path, capsys, monkeypatch) -> None:
+    import zlib
+
+    monkeypatch.setenv("LAMDE_MAX_RESULTS_BYTES", "1000000")
+    folder = tmp_path / "bomb"
+    folder.mkdir()
+    c = zlib.compressobj(9, zlib.DEFLATED, 31)
+    (folder / "results.jsonl.gz").write_bytes(c.compress(b" " * 3_000_000) + c.flush())
+    _report_refuses(capsys, folder, "decompresses to more than the limit of 1,000,000 bytes")
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs named pipes")
+@pytest.mark.timeout(60)  # a FIFO read would wait for a writer forever
+def test_report_refuses_devices_and_fifos_without_reading(tmp_path: Path, capsys) -> None:
+    folder = _results(tmp_path / "dev")
+    (folder / "results.jsonl").unlink()
+    (folder / "results.jsonl").symlink_to("/dev/zero")
+    _report_refuses(capsys, folder, "results.jsonl: is a character device")
+    (folder / "results.jsonl").unlink()
+    os.mkfifo(folder / "results.jsonl")
+    _report_refuses(capsys, folder, "results.jsonl: is a named pipe (FIFO)")
+    folder = _results(tmp_path / "meta")
+    (folder / "meta.json").unlink()
+    os.mkfifo(folder / "meta.json")
+    _report_refuses(capsys, folder, "meta.json: is a named pipe (FIFO)")
+
+
+def test_report_refuses_deep_nan_and_malformed_records_naming_the_field(
+    tmp_path: Path, capsys
+) -> None:
+    folder = _results(tmp_path / "deep")
+    (folder / "results.jsonl").write_text("[" * 100_000 + "]" * 100_000 + "\n")
+    _report_refuses(capsys, folder, "results.jsonl: line 1: [0][0]")
+    recs = _records()
+    (folder / "results.jsonl").write_text(json.dumps(recs[0]) + "\n")
+    (folder / "meta.json").write_text('{"a":' * 100_000 + "1" + "}" * 100_000)
+    _report_refuses(capsys, folder, "meta.json: a.a.a")
+    (folder / "meta.json").write_bytes(b'\xff{}')
+    _report_refuses(capsys, folder, "meta.json: not UTF-8")
+    for meta, needle in (('{"commands": [1]}', "meta.json: commands[0]: expected an object"),
+                         ('{"suite": 5}', "meta.json: suite: expected a string")):  # fmt: skip
+        (folder / "meta.json").write_text(meta)
+        _report_refuses(capsys, folder, needle)
+    for field, value, needle in (("score", "NaN", "line 2: score: NaN is not a JSON number"),
+                                 ("f", "Infinity", "line 2: f: Infinity is not"),
+                                 ("history", "[1]", "line 2: history: expected an object"),
+                                 ("history", '{"best_f": 5}', "line 2: history.best_f: "
+                                  "expected a list")):  # fmt: skip
+        bad = json.dumps({**recs[1], field: "@"}).replace('"@"', value)
+        folder = _results(tmp_path / f"bad-{field}-{len(value)}", records=[])
+        (folder / "results.jsonl").write_text(json.dumps(recs[0]) + "\n" + bad + "\n")
+        _report_refuses(capsys, folder, needle)

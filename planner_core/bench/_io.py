@@ -4,12 +4,13 @@ under docs/ are)."""
 
 from __future__ import annotations
 
-import gzip
 import json
+import os
 import re
 from pathlib import Path
 from typing import Any
 
+from planner_core import textio
 from planner_core.atomic import write_bytes_atomic, write_text_atomic
 
 __all__ = [
@@ -39,13 +40,18 @@ def write_json_atomic(path: str | Path, data: Any) -> Path:
 
 
 def read_json(path: str | Path) -> dict[str, Any]:
-    """A JSON object from `path`; {} when the file does not exist."""
+    """A JSON object from `path` read by the shared reader (`planner_core.textio`: a regular
+    file, bounded size and depth, UTF-8, no NaN); {} when the file does not exist. ValueError
+    naming the file (and the field) otherwise."""
     path = Path(path)
-    if not path.exists():
+    if not os.path.lexists(path):
         return {}
-    data = json.loads(path.read_text(encoding="utf-8"))
+    try:
+        data = textio.read_json(path)
+    except textio.InputError as exc:
+        raise ValueError(f"{textio.printable(path)}: {exc}") from None
     if not isinstance(data, dict):
-        raise ValueError(f"{path}: expected a JSON object")
+        raise ValueError(f"{textio.printable(path)}: expected a JSON object")
     return data
 
 
@@ -62,13 +68,29 @@ def stored_path(path: str | Path) -> Path:
 
 def read_maybe_gz(path: str | Path) -> bytes:
     """The bytes of a file, decompressed when it is gzip-compressed (name ending in .gz);
-    `results.jsonl` reads `results.jsonl.gz` when only that exists (`stored_path`)."""
+    `results.jsonl` reads `results.jsonl.gz` when only that exists (`stored_path`). Read by the
+    shared reader: a regular file (a FIFO or device is refused, never waited on), at most
+    `limit("results_bytes")` bytes, decompressed ones included; ValueError naming the file."""
     path = stored_path(path)
-    data = path.read_bytes()
-    return gzip.decompress(data) if path.name.endswith(".gz") else data
+    try:
+        return textio.read_bytes(path, limit_name="results_bytes",
+                                 gunzip=path.name.endswith(".gz"))  # fmt: skip
+    except textio.InputError as exc:
+        raise ValueError(f"{textio.printable(path)}: {exc}") from None
 
 
 def read_jsonl(path: str | Path) -> list[dict[str, Any]]:
-    """Every record of a JSON-lines file (blank lines skipped), compressed or not."""
-    return [json.loads(line) for line in read_maybe_gz(path).decode("utf-8").splitlines()
-            if line.strip()]
+    """Every record of a JSON-lines file (blank lines skipped), compressed or not; each line
+    parsed by `textio.loads_json` (bounded depth, no NaN). ValueError naming file and line."""
+    try:
+        text = textio.decode_text(read_maybe_gz(path))
+    except textio.InputError as exc:
+        raise ValueError(f"{textio.printable(path)}: {exc}") from None
+    out = []
+    for n, line in enumerate(text.splitlines(), 1):
+        if line.strip():
+            try:
+                out.append(textio.loads_json(line))
+            except textio.InputError as exc:
+                raise ValueError(f"{textio.printable(path)}: line {n}: {exc}") from None
+    return out

@@ -54,9 +54,64 @@ class ReadReport(NamedTuple):
 _REQUIRED = ("optimiser", "task", "run", "f", "phi", "score", "evaluations")
 
 
+#: numbers of a run record that the tables and figures average: finite where present
+_NUMBERS = ("f", "phi", "score", "evaluations", "wall_s", "budget", "last_feasible_rate")
+#: how `textio` says a line is not (whole) JSON text: a cut or garbled line, skipped
+_CUT = ("not valid JSON", "not UTF-8", "contains a NUL")
+#: lists of numbers of a record's convergence `history`
+_HISTORY = ("evaluations", "best_f", "best_phi")
+
+
+def record_problem(rec: dict[str, Any]) -> str | None:
+    """What makes a parsed run record unusable by the report, as "field: problem" (one line;
+    values shown cut), or None. Checked: the key fields' types, the numbers the tables average
+    (finite: a NaN or Infinity score wrote `nan` into a table), `feasible` a boolean and
+    `history` an object of lists of finite numbers (as the figures read it)."""
+    from planner_core.textio import quoted
+
+    for k in ("optimiser", "task"):
+        if not isinstance(rec[k], str):
+            return f"{k}: expected a string, got {quoted(rec[k])}"
+    for k in ("run", "i_max"):
+        v = rec.get(k)
+        if (k == "run" or v is not None) and (isinstance(v, bool) or not isinstance(v, int)):
+            return f"{k}: expected an integer, got {quoted(v)}"
+    for k in _NUMBERS:
+        v = rec.get(k)
+        if v is None and k not in _REQUIRED:
+            continue
+        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+            return f"{k}: expected a finite number, got {quoted(v)}"
+    if "feasible" in rec and not isinstance(rec["feasible"], bool):
+        return f"feasible: expected true or false, got {quoted(rec['feasible'])}"
+    h = rec.get("history")
+    if h is not None:
+        if not isinstance(h, dict):
+            return f"history: expected an object, got {quoted(h)}"
+        for k in _HISTORY:
+            v = h.get(k)
+            if v is None:
+                continue
+            if not isinstance(v, list):
+                return f"history.{k}: expected a list of numbers, got {quoted(v)}"
+            for i, x in enumerate(v):
+                if isinstance(x, bool) or not isinstance(x, int | float) or not math.isfinite(x):
+                    return f"history.{k}[{i}]: expected a finite number, got {quoted(x)}"
+    return None
+
+
 def read_records(path: str | Path) -> ReadReport:
     """All valid records of a results file (missing file: none), first occurrence per key; a
-    name ending in .gz is read gzip-compressed (the records kept under docs/ are)."""
+    name ending in .gz is read gzip-compressed (the records kept under docs/ are).
+
+    Read by the shared reader (`read_maybe_gz`: regular file, bounded size decompressed too;
+    each line by `textio.loads_json`: bounded depth). A line that is not JSON, not an object or
+    lacks a required field is skipped as unreadable (an interrupted write leaves one); a line
+    that is a record with a field of the wrong type or a NaN/Infinity number is refused:
+    ValueError naming the file, the line and the field.
+    """
+    from planner_core.textio import InputError, decode_text, loads_json, printable
+
     path = Path(path)
     if not path.exists():
         return ReadReport([], False, [], 0)
@@ -72,17 +127,23 @@ def read_records(path: str | Path) -> ReadReport:
         if not raw.strip():
             continue
         last = i == len(lines) - 1
+        where = f"{printable(path)}: line {i + 1}"
         try:
-            rec = json.loads(raw)
-            if not isinstance(rec, dict) or any(k not in rec for k in _REQUIRED):
-                raise ValueError("not a run record")
-            k = key_of(rec)
-        except (ValueError, TypeError, KeyError):
+            rec = loads_json(decode_text(raw))
+        except InputError as exc:  # a cut line is skipped; one too deep, NaN...: refused
+            if exc.where or not exc.problem.startswith(_CUT):
+                raise ValueError(f"{where}: {exc}") from None
+            rec = None
+        if not isinstance(rec, dict) or any(k not in rec for k in _REQUIRED):
             if last and tail_open:
                 truncated = True
             else:
                 bad.append(i + 1)
             continue
+        problem = record_problem(rec)
+        if problem is not None:
+            raise ValueError(f"{where}: {problem}")
+        k = key_of(rec)
         if k in seen:
             dup += 1
             continue
