@@ -220,3 +220,40 @@ def test_report_refuses_deep_nan_and_malformed_records_naming_the_field(
         folder = _results(tmp_path / f"bad-{field}-{len(value)}", records=[])
         (folder / "results.jsonl").write_text(json.dumps(recs[0]) + "\n" + bad + "\n")
         _report_refuses(capsys, folder, needle)
+
+
+# ----------------------------------------------------------------------------- bench's reads
+
+SUITE = MAPS / "suite"
+
+
+@pytest.mark.timeout(120)  # a FIFO read would wait for a writer forever
+def test_bench_refuses_a_bad_best_known_file_before_writing(tmp_path: Path, capsys) -> None:
+    import hashlib
+
+    sha = hashlib.sha256((SUITE / "T01.json").read_bytes()).hexdigest()
+    bk = tmp_path / "bk.json"
+    cases = {
+        '{"tasks": [1]}': "tasks: expected an object",
+        '{"tasks": {"T01": 5}}': "tasks.T01: expected an object",
+        f'{{"tasks": {{"T01": {{"f": "abc", "map_sha256": "{sha}"}}}}}}':
+            "tasks.T01.f: expected a finite number, got 'abc'",
+        f'{{"tasks": {{"T01": {{"f": NaN, "map_sha256": "{sha}"}}}}}}': "tasks.T01.f: NaN",
+        '{"tasks": {"T01": {"f": 1.5}}}': "tasks.T01.map_sha256: expected a string",
+        b"\xff{}": "not UTF-8",
+        None: "is a named pipe (FIFO)",
+    }
+    for text, needle in cases.items():
+        if bk.exists():
+            bk.unlink()
+        if text is None:
+            os.mkfifo(bk)
+        else:
+            bk.write_bytes(text if isinstance(text, bytes) else text.encode())
+        out = tmp_path / "out"
+        rc, _, err = _run(capsys, "bench", "--suite", SUITE, "--tasks", "T01", "--optimizers",
+                          "random-search", "--runs", "1", "--budget", "100", "--jobs", "1",
+                          "--best-known-file", bk, "--out", out, "--quiet")  # fmt: skip
+        line = _one_line(rc, err)
+        assert f"{bk}: {needle}" in line, err
+        assert not out.exists()  # refused before meta.json or results are written

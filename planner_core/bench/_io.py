@@ -18,6 +18,7 @@ __all__ = [
     "read_json",
     "read_jsonl",
     "read_maybe_gz",
+    "read_meta",
     "stored_path",
     "write_bytes_atomic",
     "write_json_atomic",
@@ -53,6 +54,56 @@ def read_json(path: str | Path) -> dict[str, Any]:
     if not isinstance(data, dict):
         raise ValueError(f"{textio.printable(path)}: expected a JSON object")
     return data
+
+
+#: the shape of what `report` and `bench` read from a benchmark's meta.json: a field's type, or
+#: for an object a dict of its fields ("*": every member); absent fields and null are accepted
+_META_SHAPE: dict[str, Any] = {
+    "schema": int,
+    "suite": str,
+    "budget": int,
+    "base_seed": int,
+    "commands": [{"command": str}],
+    "optimisers": {"*": {"description": str}},
+    "stored": {"from": str},
+    "ablation": {"reference": str, "driver": str,
+                 "variants": {"*": {"checkpoint": str, "description": str}}},
+}
+
+
+def read_meta(folder: str | Path) -> dict[str, Any]:
+    """`folder`/meta.json ({} when missing) read by the shared reader, with every field that
+    `report` and `bench` read of the type they read; ValueError naming the file and the field
+    otherwise (a `commands` of numbers was an AttributeError, a numeric `suite` a TypeError)."""
+    from planner_core.textio import json_path, printable, quoted
+
+    path = Path(folder) / "meta.json"
+    meta = read_json(path)
+    names = {dict: "an object", list: "a list", str: "a string"}
+    todo: list[tuple[tuple[Any, ...], Any, Any]] = [((), meta, _META_SHAPE)]
+    while todo:
+        at, value, shape = todo.pop()
+        if value is None and at:
+            continue
+        if isinstance(shape, dict):
+            if not isinstance(value, dict):
+                raise ValueError(f"{printable(path)}: {json_path(at)}: expected an object, got "
+                                 f"{quoted(value)}")  # fmt: skip
+            for k, v in value.items():
+                sub = shape.get("*", shape.get(k))
+                if sub is not None:
+                    todo.append(((*at, k), v, sub))
+        elif isinstance(shape, list):
+            if not isinstance(value, list):
+                raise ValueError(f"{printable(path)}: {json_path(at)}: expected a list, got "
+                                 f"{quoted(value)}")  # fmt: skip
+            todo.extend(((*at, i), v, shape[0]) for i, v in enumerate(value))
+        elif not isinstance(value, shape):
+            raise ValueError(f"{printable(path)}: {json_path(at)}: expected {names[shape]}, "
+                             f"got {quoted(value)}")  # fmt: skip
+    if isinstance(meta.get("ablation"), dict) and "reference" not in meta["ablation"]:
+        raise ValueError(f"{printable(path)}: ablation.reference: missing")
+    return meta
 
 
 def stored_path(path: str | Path) -> Path:

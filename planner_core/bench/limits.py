@@ -163,7 +163,32 @@ class BestKnown:
 
     def load(self) -> dict[str, dict[str, Any]]:
         """Task -> entry (f, map_sha256, hover_points, hover_times, optimiser, seed, ...)."""
-        return dict(read_json(self.path).get("tasks", {}))
+        return dict(self._read().get("tasks") or {})
+
+    def _read(self) -> dict[str, Any]:
+        """The file's JSON object ({} when missing) read by the shared reader, each entry of
+        `tasks` an object with a finite number `f` and a string `map_sha256`; ValueError
+        naming the file and the field otherwise (a list of tasks, an entry 5, "f": "abc" were
+        tracebacks, and "f": NaN was kept as a best-known f)."""
+        from planner_core.textio import json_path, printable, quoted
+
+        data = read_json(self.path)
+        tasks = data.get("tasks")
+        head = printable(self.path)
+        if tasks is not None and not isinstance(tasks, dict):
+            raise ValueError(f"{head}: tasks: expected an object, got {quoted(tasks)}")
+        for name, e in (tasks or {}).items():
+            where = json_path(("tasks", name))
+            if not isinstance(e, dict):
+                raise ValueError(f"{head}: {where}: expected an object, got {quoted(e)}")
+            f = e.get("f")
+            if isinstance(f, bool) or not isinstance(f, int | float) or not math.isfinite(f):
+                raise ValueError(f"{head}: {where}.f: expected a finite number, got "
+                                 f"{quoted(f)}")  # fmt: skip
+            if not isinstance(e.get("map_sha256"), str):
+                raise ValueError(f"{head}: {where}.map_sha256: expected a string, got "
+                                 f"{quoted(e.get('map_sha256'))}")  # fmt: skip
+        return data
 
     def f_values(self, files: dict[str, Path]) -> dict[str, float]:
         """Best-known f per task whose entry matches the current map file (stale ones left out)."""
@@ -181,7 +206,7 @@ class BestKnown:
         from planner_core.model.mapio import load_map
 
         with _locked(self.path):
-            data = read_json(self.path)
+            data = self._read()
             tasks = data.setdefault("tasks", {})
             changed = False
             for name, p in files.items():
@@ -236,7 +261,7 @@ class BestKnown:
             return False
         sha = file_sha256(map_path)
         with _locked(self.path):
-            data = read_json(self.path)
+            data = self._read()
             tasks = data.setdefault("tasks", {})
             e = tasks.get(task)
             if (not replace and e is not None and e.get("map_sha256") == sha

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from planner_core.bench._io import read_json, stored_path, write_text_atomic
+from planner_core.bench._io import read_meta, stored_path, write_text_atomic
 from planner_core.bench.records import RESULTS_FILE, read_records
 from planner_core.bench.stats import ALPHA, ScoreTable, score_table
 from planner_core.defaults import SCORE_FACTOR
@@ -128,53 +128,6 @@ def _spread(tasks: list[str], k: int = 4) -> list[str]:
 
 
 # ----------------------------------------------------------------------------- the report
-
-
-#: the shape of what the report reads from a benchmark's meta.json: a field's type, or for an
-#: object a dict of its fields ("*": every member); absent fields and null are accepted
-_META_SHAPE: dict[str, Any] = {
-    "suite": str,
-    "commands": [{"command": str}],
-    "optimisers": {"*": {"description": str}},
-    "stored": {"from": str},
-    "ablation": {"reference": str, "driver": str,
-                 "variants": {"*": {"checkpoint": str, "description": str}}},
-}
-
-
-def read_meta(folder: str | Path) -> dict[str, Any]:
-    """`folder`/meta.json ({} when missing) read by the shared reader, with every field the
-    report reads of the type it reads; ValueError naming the file and the field otherwise (a
-    `commands` of numbers was an AttributeError, a numeric `suite` a TypeError)."""
-    from planner_core.textio import json_path, printable, quoted
-
-    path = Path(folder) / "meta.json"
-    meta = read_json(path)
-    names = {dict: "an object", list: "a list", str: "a string"}
-    todo: list[tuple[tuple[Any, ...], Any, Any]] = [((), meta, _META_SHAPE)]
-    while todo:
-        at, value, shape = todo.pop()
-        if value is None and at:
-            continue
-        if isinstance(shape, dict):
-            if not isinstance(value, dict):
-                raise ValueError(f"{printable(path)}: {json_path(at)}: expected an object, got "
-                                 f"{quoted(value)}")  # fmt: skip
-            for k, v in value.items():
-                sub = shape.get("*", shape.get(k))
-                if sub is not None:
-                    todo.append(((*at, k), v, sub))
-        elif isinstance(shape, list):
-            if not isinstance(value, list):
-                raise ValueError(f"{printable(path)}: {json_path(at)}: expected a list, got "
-                                 f"{quoted(value)}")  # fmt: skip
-            todo.extend(((*at, i), v, shape[0]) for i, v in enumerate(value))
-        elif not isinstance(value, shape):
-            raise ValueError(f"{printable(path)}: {json_path(at)}: expected {names[shape]}, "
-                             f"got {quoted(value)}")  # fmt: skip
-    if isinstance(meta.get("ablation"), dict) and "reference" not in meta["ablation"]:
-        raise ValueError(f"{printable(path)}: ablation.reference: missing")
-    return meta
 
 
 def build_report(

@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from planner_core import defaults as _defaults
-from planner_core.bench._io import read_json, write_json_atomic
+from planner_core.bench._io import read_meta, write_json_atomic
 from planner_core.bench.limits import BestKnown, best_known_path, suite_task_files
 from planner_core.bench.records import RESULTS_FILE, Key, ResultsWriter, key_of, read_records
 from planner_core.execution import Executor, make_executor
@@ -321,7 +321,19 @@ def run_bench(
         files = {t: files[t] for t in tasks}
     out = Path(out)
     results = out / RESULTS_FILE
-    existing = read_records(results)
+    bk: BestKnown | None = None
+    bk_path = None
+    try:  # every file read is refused (one line naming it) before anything is written
+        existing = read_records(results)
+        meta = read_meta(out)
+        if best_known:
+            bk_path = best_known_path(suite) if best_known is True else Path(best_known)
+            bk = BestKnown(bk_path)
+            bk.load()
+    except BenchError:
+        raise
+    except ValueError as exc:
+        raise BenchError(str(exc)) from None
     if existing.truncated_tail:
         log(f"note: {results}: dropping a truncated last line (an interrupted write)")
     if existing.bad_lines:
@@ -338,7 +350,6 @@ def run_bench(
     other = next((r for r in existing.records if r.get("seed") is not None
                   and seeds.get(key_of(r), r["seed"]) != r["seed"]), None)  # fmt: skip
     meta_path = out / META_FILE
-    meta = read_json(meta_path)
     if other is not None or meta.get("base_seed") not in (None, int(base_seed)):
         was = meta.get("base_seed", "another")
         raise BenchError(f"{results} holds runs of base seed {was}, not {base_seed}: "
@@ -362,15 +373,17 @@ def run_bench(
                                             "jobs_planned": len(todo)})
     write_json_atomic(meta_path, meta)
 
-    bk: BestKnown | None = None
     best: dict[str, float] = {}
-    if best_known:
-        bk_path = best_known_path(suite) if best_known is True else Path(best_known)
-        if not bk_path.exists():
+    if bk is not None:
+        if not bk.path.exists():
             log(f"note: {bk_path} does not exist: a new best-known file starts from the maps' "
                 "witness plans (a run's 'best-known improved' is against those)")
-        bk = BestKnown(bk_path)
-        best = bk.ensure(files, command)
+        try:
+            best = bk.ensure(files, command)
+        except BenchError:
+            raise
+        except ValueError as exc:  # the file changed since it was read
+            raise BenchError(str(exc)) from None
     log(f"{len(all_jobs)} runs requested, {summary.skipped} already in {results}, "
         f"{len(todo)} to run")
     if not todo:
