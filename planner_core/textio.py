@@ -215,7 +215,11 @@ def read_bytes(path: str | Path, *, max_bytes: int | None = None, limit_name: st
         if not stat.S_ISREG(st.st_mode):
             raise InputError(not_regular(st.st_mode))
         with os.fdopen(fd, "rb", closefd=False) as fh:
-            data = fh.read(cap + 1)
+            # the size it has, plus one byte to see it grow (a read of cap + 1 bytes would
+            # allocate the whole limit, 64 MiB, for every small file)
+            data = fh.read(min(cap, st.st_size) + 1)
+            if st.st_size < len(data) <= cap:  # it grew while read: up to the limit
+                data += fh.read(cap + 1 - len(data))
     except OSError as exc:
         raise InputError(f"cannot read ({exc.strerror or exc})") from None
     finally:

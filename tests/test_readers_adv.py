@@ -257,3 +257,59 @@ def test_bench_refuses_a_bad_best_known_file_before_writing(tmp_path: Path, caps
         line = _one_line(rc, err)
         assert f"{bk}: {needle}" in line, err
         assert not out.exists()  # refused before meta.json or results are written
+
+
+# ----------------------------------------------------------------------------- --policy DIR
+
+V2 = Path(__file__).resolve().parent.parent / "planner_core/learning/policy/checkpoints/lamde-v2"
+
+
+def _policy_copy(tmp_path: Path, name: str) -> Path:
+    import shutil
+
+    return Path(shutil.copytree(V2, tmp_path / name))
+
+
+@pytest.mark.timeout(120)  # a FIFO read would wait for a writer forever
+def test_plan_policy_checkpoint_files_are_read_bounded(tmp_path: Path, capsys) -> None:
+    cases = {
+        "list": ("config.json", b"[1]", "config.json: expected a JSON object"),
+        "utf8": ("config.json", b"\xff{}", "config.json: not UTF-8"),
+        "deep": ("config.json", b"[" * 100_000 + b"]" * 100_000, "config.json: [0][0]"),
+        "text": ("weights.npz", b"hello\n", "weights.npz: not a readable numpy .npz archive"),
+        "fifo": ("config.json", None, "config.json: is a named pipe (FIFO)"),
+    }
+    for name, (file, data, needle) in cases.items():
+        ck = _policy_copy(tmp_path, name)
+        (ck / file).unlink()
+        if data is None:
+            os.mkfifo(ck / file)
+        else:
+            (ck / file).write_bytes(data)
+        rc, _, err = _run(capsys, "plan", TINY, "-o", tmp_path / f"{name}.plan", "--quiet",
+                          "--budget", "2000", "--configurator", "lamde", "--policy", ck)
+        assert "--policy" in _one_line(rc, err) and needle in err, (name, err)
+
+
+def test_policy_weights_shapes_are_checked_before_decompressing(tmp_path: Path) -> None:
+    import tracemalloc
+
+    import numpy as np
+
+    from planner_core.learning.policy.checkpoint import CheckpointError, load
+
+    ck = _policy_copy(tmp_path, "bomb")
+    with np.load(ck / "weights.npz") as z:
+        params = {k: z[k] for k in z.files}
+    params["embed.weight"] = np.zeros((5, 5_000_000), dtype=np.float32)  # 100 MB of zeros
+    np.savez_compressed(ck / "weights.npz", **params)
+    assert (ck / "weights.npz").stat().st_size < 1_000_000
+    tracemalloc.start()
+    try:
+        with pytest.raises(CheckpointError, match=r"embed\.weight has shape \(5, 5000000\), "
+                           r"expected \(5, 16\)"):  # fmt: skip
+            load(ck)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 20_000_000, peak  # the archive and the small arrays, never the 100 MB one

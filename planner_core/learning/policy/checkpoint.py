@@ -22,6 +22,7 @@ import numpy as np
 
 from planner_core.atomic import write_bytes_atomic, write_text_atomic
 from planner_core.learning.policy.network import NetConfig, param_shapes
+from planner_core.textio import printable, quoted
 
 #: folder of the checkpoints shipped inside the package
 SHIPPED = Path(__file__).resolve().parent / "checkpoints"
@@ -80,30 +81,98 @@ def save(
 
 
 def load(checkpoint: str | os.PathLike[str]) -> tuple[dict[str, np.ndarray], NetConfig, dict]:
-    """(params, net config, full config dict) of a checkpoint; raises CheckpointError."""
+    """(params, net config, full config dict) of a checkpoint; raises CheckpointError.
+
+    Both files go through the shared reader (`planner_core.textio`: regular files only, so a
+    FIFO never blocks; bounded size; config.json UTF-8 with bounded nesting). Every array of
+    weights.npz is checked against the network's shapes from its .npy header before any of it
+    is decompressed, so the data read is bounded by the network's size (a 2 MB archive of a
+    compressed (5, 50000000) array reached 3 GB before its shape was refused).
+    """
+    from planner_core.textio import InputError, read_json
+
     folder = resolve(checkpoint)
+    cfg_path = folder / "config.json"
     try:
-        config = json.loads((folder / "config.json").read_text())
-    except FileNotFoundError:
-        raise CheckpointError(f"checkpoint: {folder / 'config.json'} is missing") from None
-    except json.JSONDecodeError as exc:
-        raise CheckpointError(f"checkpoint: {folder / 'config.json'}: bad JSON ({exc})") from None
+        config = read_json(cfg_path)
+    except InputError as exc:
+        if str(exc) == "file not found":
+            raise CheckpointError(f"checkpoint: {cfg_path} is missing") from None
+        raise CheckpointError(f"checkpoint: {cfg_path}: {exc}") from None
+    if not isinstance(config, dict):
+        raise CheckpointError(f"checkpoint: {cfg_path}: expected a JSON object")
     if config.get("format") != FORMAT:
         raise CheckpointError(
-            f"checkpoint: {folder / 'config.json'}: format {config.get('format')!r}, "
+            f"checkpoint: {cfg_path}: format {quoted(config.get('format'))}, "
             f"expected {FORMAT!r}"
         )
+    if not isinstance(config.get("net"), dict):
+        raise CheckpointError(f"checkpoint: {cfg_path}: net: expected an object")
     try:
         net = NetConfig(**config["net"])
     except (KeyError, TypeError, ValueError) as exc:
-        raise CheckpointError(f"checkpoint: {folder / 'config.json'}: net: {exc}") from None
-    try:
-        with np.load(folder / "weights.npz") as z:
-            params = {k: z[k].astype(np.float32) for k in z.files}
-    except FileNotFoundError:
-        raise CheckpointError(f"checkpoint: {folder / 'weights.npz'} is missing") from None
+        raise CheckpointError(f"checkpoint: {cfg_path}: net: "
+                              f"{printable(str(exc))[:200]}") from None  # fmt: skip
+    params = _read_weights(folder / "weights.npz", net)
     _check(params, net, folder)
     return params, net, config
+
+
+def _read_weights(path: Path, net: NetConfig) -> dict[str, np.ndarray]:
+    """The arrays of a weights.npz, each checked from its header (name, shape, a float dtype,
+    the member's stored size) before its data is read; CheckpointError naming the file."""
+    import zipfile
+    import zlib
+
+    from numpy.lib import format as npf
+
+    from planner_core.textio import InputError, read_bytes
+
+    try:
+        data = read_bytes(path)
+    except InputError as exc:
+        if str(exc) == "file not found":
+            raise CheckpointError(f"checkpoint: {path} is missing") from None
+        raise CheckpointError(f"checkpoint: {path}: {exc}") from None
+    shapes = param_shapes(net)
+    params: dict[str, np.ndarray] = {}
+    try:
+        with zipfile.ZipFile(io.BytesIO(data)) as zf:
+            members = {i.filename.removesuffix(".npy"): i for i in zf.infolist()}
+            missing = sorted(set(shapes) - set(members))
+            unknown = sorted(set(members) - set(shapes))
+            if missing or unknown:
+                raise CheckpointError(f"checkpoint: {path}: missing {missing}, unexpected "
+                                      f"{[printable(u)[:80] for u in unknown[:10]]}")
+            for key, info in members.items():
+                want = shapes[key]
+                with zf.open(info) as fh:
+                    version = npf.read_magic(fh)
+                    if version == (1, 0):
+                        shape, _fortran, dtype = npf.read_array_header_1_0(fh)
+                    elif version == (2, 0):
+                        shape, _fortran, dtype = npf.read_array_header_2_0(fh)
+                    else:
+                        raise ValueError(f"{key}: .npy format version {version} is not read")
+                    if tuple(shape) != want:
+                        raise CheckpointError(f"checkpoint: {path}: {key} has shape "
+                                              f"{tuple(shape)}, expected {want}")
+                    if dtype.hasobject or dtype.kind != "f":
+                        raise CheckpointError(f"checkpoint: {path}: {key} has dtype {dtype}, "
+                                              "expected floating point numbers")
+                    if info.file_size > fh.tell() + int(np.prod(want)) * dtype.itemsize:
+                        raise CheckpointError(f"checkpoint: {path}: {key} holds more bytes "
+                                              "than its shape needs")
+                with zf.open(info) as fh:
+                    arr = npf.read_array(fh, allow_pickle=False)
+                params[key] = np.asarray(arr).astype(np.float32)
+    except CheckpointError:
+        raise
+    except (zipfile.BadZipFile, zipfile.LargeZipFile, ValueError, OSError, EOFError,
+            zlib.error, NotImplementedError, RuntimeError) as exc:  # fmt: skip
+        raise CheckpointError(f"checkpoint: {path}: not a readable numpy .npz archive "
+                              f"({printable(str(exc))[:200]})") from None
+    return params
 
 
 def _check(params: dict[str, np.ndarray], net: NetConfig, folder: Path) -> None:
