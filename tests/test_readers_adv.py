@@ -313,3 +313,50 @@ def test_policy_weights_shapes_are_checked_before_decompressing(tmp_path: Path) 
     finally:
         tracemalloc.stop()
     assert peak < 20_000_000, peak  # the archive and the small arrays, never the 100 MB one
+
+
+# ----------------------------------------------------------------------------- 4: import counts
+
+
+def _tri(kind: str = "obstacle") -> dict:
+    ring = [[114.1760, 22.3240], [114.17601, 22.3240], [114.1760, 22.32401], [114.1760, 22.3240]]
+    return {"type": "Feature", "geometry": {"type": "Polygon", "coordinates": [ring]},
+            "properties": {"kind": kind}}  # fmt: skip
+
+
+def _import(tmp_path: Path, capsys, features: list[dict]) -> tuple[int, str]:
+    src = tmp_path / "in.geojson"
+    src.write_text(json.dumps(_fc(*_BASE, *features)))
+    rc, _, err = _run(capsys, "map", "from-geojson", src, "-o", tmp_path / "m.json")
+    return rc, err
+
+
+def test_import_stops_at_the_first_count_over_a_limit(tmp_path: Path, capsys,
+                                                      monkeypatch) -> None:  # fmt: skip
+    monkeypatch.setenv("LAMDE_MAX_ZONE_VERTICES", "10")
+    ring = [[114.176 + 1e-4 * (i % 7), 22.324 + 1e-5 * i] for i in range(50)]
+    big = {"type": "Feature", "geometry": {"type": "Polygon", "coordinates": [ring]},
+           "properties": {"kind": "obstacle"}}  # fmt: skip
+    rc, err = _import(tmp_path, capsys, [big, _tri("nonsense")])
+    line = _one_line(rc, err)  # the bad feature after it is never read
+    assert "features[3] ring 0: 50 vertices in one ring, more than the limit of 10" in line
+    assert "LAMDE_MAX_ZONE_VERTICES" in line
+    monkeypatch.delenv("LAMDE_MAX_ZONE_VERTICES")
+    monkeypatch.setenv("LAMDE_MAX_SENSORS", "10")
+    many = {"type": "Feature", "properties": {"kind": "sensor"},
+            "geometry": {"type": "MultiPoint", "coordinates": [[114.176, 22.324]] * 30}}
+    rc, err = _import(tmp_path, capsys, [many, _tri("nonsense")])
+    line = _one_line(rc, err)
+    assert "features[3]: more than the limit of 10 sensors" in line, err
+    monkeypatch.setenv("LAMDE_MAX_OBSTACLES", "10")
+    rc, err = _import(tmp_path, capsys, [_tri()] * 30 + [_tri("nonsense")])
+    line = _one_line(rc, err)
+    assert "features[13]: more than the limit of 10 obstacles" in line, err
+
+
+def test_import_prints_at_most_20_problems(tmp_path: Path, capsys) -> None:
+    rc, err = _import(tmp_path, capsys, [_tri("nonsense")] * 50)
+    lines = err.strip().splitlines()
+    assert rc == 2 and len(lines) == 21, err
+    assert all("unknown kind 'nonsense'" in ln for ln in lines[:20])
+    assert lines[-1].endswith("... and 30 more problems")

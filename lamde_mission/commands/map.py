@@ -148,11 +148,11 @@ def _from_geojson(args: argparse.Namespace) -> int:
         doc, notes = build_map(layers, origin=origin, margin=margin, name=args.name,
                                default_name=Path(inputs[0][0]).stem)  # fmt: skip
     except GisError as exc:
-        raise UsageError("\n".join(exc.problems)) from None
+        raise UsageError(_at_most(exc.problems)) from None
     try:
         m = load_map(doc)
     except MapError as exc:
-        raise UsageError("\n".join(_map_problem(p, layers) for p in exc.problems)) from None
+        raise UsageError(_at_most([_map_problem(p, layers) for p in exc.problems])) from None
     for note in notes + list(m.notes):
         print(f"note: {note}", file=sys.stderr)
     try:
@@ -166,6 +166,19 @@ def _from_geojson(args: argparse.Namespace) -> int:
           f"{m.width:g} m x {m.height:g} m from origin ({m.spec.origin.lat:.9f}, "
           f"{m.spec.origin.lon:.9f})")  # fmt: skip
     return 0
+
+
+#: problem lines printed at most; the rest are counted ("... and N more")
+MOST_PROBLEMS = 20
+
+
+def _at_most(problems: list[str], most: int = MOST_PROBLEMS) -> str:
+    """The first `most` problems, one a line, then "... and N more problems" when there are
+    more (200,000 bad features printed 200,000 lines)."""
+    lines = problems[:most]
+    if len(problems) > most:
+        lines.append(f"... and {len(problems) - most:,} more problems")
+    return "\n".join(lines)
 
 
 def _map_problem(problem: str, layers: Any) -> str:

@@ -107,6 +107,48 @@ class GisError(ValueError):
         super().__init__("\n".join(self.problems))
 
 
+class _OverLimit(Exception):
+    """A count limit (`planner_core.textio.LIMITS`) passed while reading: reading stops at
+    once (not a ValueError, so the per-feature loop does not go on past it)."""
+
+
+class _Budget:
+    """Counts of what the inputs hold so far, against the map loader's limits (sensors,
+    obstacles, vertices of one ring, vertices of all rings), checked as each feature is read
+    and before its positions are converted: a ring of 1,000,000 vertices or a MultiPoint of
+    1.5 M sensors is refused at once, not after the whole import."""
+
+    def __init__(self) -> None:
+        from planner_core import textio
+
+        try:
+            self.caps = {k: textio.limit(k)
+                         for k in ("sensors", "obstacles", "zone_vertices", "vertices")}
+        except textio.InputError as exc:
+            raise _OverLimit(f"(environment) {exc}") from None
+        self.used = dict.fromkeys(self.caps, 0)
+
+    def take(self, key: str, n: int, where: str) -> None:
+        """Count `n` more of `key` at `where`; _OverLimit naming it once past the limit."""
+        from planner_core import textio
+
+        self.used[key] += n
+        what = {"sensors": "sensors", "obstacles": "obstacles", "vertices": "vertices of all "
+                "rings", "zone_vertices": "vertices in one ring"}[key]  # fmt: skip
+        if key == "zone_vertices":
+            self.used[key] = 0  # per ring: only this ring's count matters
+            if n <= self.caps[key]:
+                return
+            lim = textio.LIMITS[key]
+            raise _OverLimit(f"{where}: {n:,} {what}, more than the limit of "
+                             f"{self.caps[key]:,} (raise it with {lim.env})")  # fmt: skip
+        if self.used[key] > self.caps[key]:
+            lim = textio.LIMITS[key]
+            raise _OverLimit(f"{where}: more than the limit of {self.caps[key]:,} {what} in "
+                             f"the inputs so far (raise it with {lim.env}); reading "
+                             "stopped here")  # fmt: skip
+
+
 @dataclass
 class _Poly:
     where: str
@@ -137,6 +179,12 @@ class GisLayers:
     home: dict[str, Any] | None = None  # QGC planned home position (where, lon, lat, alt)
     depots: list[dict[str, Any]] = field(default_factory=list)  # where, name, lon, lat
     problems: list[str] = field(default_factory=list)
+    budget: _Budget | None = field(default=None, repr=False)  # counts against the limits
+
+    def take(self, key: str, n: int, where: str) -> None:
+        """Count `n` more of `key` (`_Budget.take`); nothing when no budget is kept."""
+        if self.budget is not None:
+            self.budget.take(key, n, where)
 
 
 # ----------------------------------------------------------------------------- reading
@@ -177,13 +225,15 @@ def _position(p: Any, where: str) -> tuple[float, float]:
     return lon, lat
 
 
-def _rings(coords: Any, where: str) -> list[list[tuple[float, float]]]:
+def _rings(coords: Any, where: str, layers: GisLayers) -> list[list[tuple[float, float]]]:
     if not isinstance(coords, list) or not coords:
         raise ValueError(f"{where}: a Polygon needs at least its exterior ring")
     out = []
     for r, ring in enumerate(coords):
         if not isinstance(ring, list):
             raise ValueError(f"{where}: ring {r} is not a list of positions")
+        layers.take("zone_vertices", len(ring), f"{where} ring {r}")
+        layers.take("vertices", len(ring), f"{where} ring {r}")
         out.append([_position(p, f"{where} ring {r}") for p in ring])
     return out
 
@@ -224,6 +274,7 @@ def _add_feature(layers: GisLayers, feat: Any, where: str, layer: str | None) ->
         if not _positive(r):
             raise ValueError(f"{label}: a circle needs radius_m > 0 and center [lon, lat]")
         r = _size(r, f"{label} radius_m")
+        layers.take("obstacles", 1, label)
         lon, lat = _position(props.get("center"), f"{label} center")
         layers.circles.append({"where": label, "lon": lon, "lat": lat, "radius": r})
         return
@@ -237,10 +288,13 @@ def _add_feature(layers: GisLayers, feat: Any, where: str, layer: str | None) ->
         elif gtype == "MultiPoint" and kind == "sensor":
             if not isinstance(coords, list):
                 raise ValueError(f"{label}: MultiPoint coordinates must be a list")
+            layers.take("sensors", len(coords), label)
             points = [_position(p, label) for p in coords]
         else:
             raise ValueError(f"{label}: {kind} features must be a Point, got {gtype}")
         if kind == "sensor":
+            if gtype == "Point":
+                layers.take("sensors", 1, label)
             q = props.get("required_data")
             if q is not None and (isinstance(q, bool) or not isinstance(q, int | float)
                                   or not math.isfinite(q) or q < 0):  # fmt: skip
@@ -262,12 +316,15 @@ def _add_feature(layers: GisLayers, feat: Any, where: str, layer: str | None) ->
             setattr(layers, kind, {"where": label, "lon": points[0][0], "lat": points[0][1]})
         return
     # polygon layers
+    if kind != "area" and gtype in ("Polygon", "MultiPolygon"):
+        layers.take("obstacles", len(coords) if gtype == "MultiPolygon" and
+                    isinstance(coords, list) else 1, label)  # fmt: skip
     if gtype == "Polygon":
-        polys = [_rings(coords, label)]
+        polys = [_rings(coords, label, layers)]
     elif gtype == "MultiPolygon":
         if not isinstance(coords, list):
             raise ValueError(f"{label}: MultiPolygon coordinates must be a list")
-        polys = [_rings(c, f"{label} polygon {k}") for k, c in enumerate(coords)]
+        polys = [_rings(c, f"{label} polygon {k}", layers) for k, c in enumerate(coords)]
     else:
         raise ValueError(f"{label}: {kind} features must be a Polygon or MultiPolygon, "
                          f"got {gtype}")  # fmt: skip
@@ -402,6 +459,10 @@ def _read_qgc_plan(layers: GisLayers, doc: dict[str, Any], src: str) -> None:
         verts = poly.get("polygon") if isinstance(poly, dict) else None
         if not isinstance(verts, list) or len(verts) < 3:
             raise ValueError(f"{where}: needs at least 3 [lat, lon] vertices")
+        if poly.get("inclusion", True) is False:
+            layers.take("obstacles", 1, where)
+        layers.take("zone_vertices", len(verts), f"{where}.polygon")
+        layers.take("vertices", len(verts), f"{where}.polygon")
         ring = []
         for i, v in enumerate(verts):
             if not isinstance(v, list) or len(v) < 2:
@@ -422,6 +483,8 @@ def _read_qgc_plan(layers: GisLayers, doc: dict[str, Any], src: str) -> None:
             raise ValueError(f"{where}.circle.radius: must be a positive number (metres)")
         entry = {"where": where, "lon": lon, "lat": lat,
                  "radius": _size(r, f"{where}.circle.radius")}
+        if c.get("inclusion", True) is False:
+            layers.take("obstacles", 1, where)
         (layers.area_circles if c.get("inclusion", True) else layers.circles).append(entry)
     home = (doc.get("mission") or {}).get("plannedHomePosition")
     if isinstance(home, list) and len(home) >= 2:
@@ -466,7 +529,10 @@ def read_layers(files: list[tuple[str | Path, str | None]]) -> GisLayers:
     Raises:
         GisError: every problem found, one line each, naming file and feature.
     """
-    layers = GisLayers()
+    try:
+        layers = GisLayers(budget=_Budget())
+    except _OverLimit as exc:
+        raise GisError([str(exc)]) from None
     for path, layer in files:
         src = str(path)
         try:  # the one decoding path: regular file, size, UTF-8 (BOM ok), depth, numbers
@@ -485,6 +551,8 @@ def read_layers(files: list[tuple[str | Path, str | None]]) -> GisLayers:
                 _read_geojson(layers, doc, src, layer)
         except ValueError as exc:
             layers.problems.append(str(exc))
+        except _OverLimit as exc:  # stop reading: what was found so far, then the limit
+            raise GisError([*layers.problems, str(exc)]) from None
     if layers.problems:
         raise GisError(layers.problems)
     return layers
