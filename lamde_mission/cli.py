@@ -139,8 +139,12 @@ def _main(argv: Sequence[str] | None) -> int:
     except BrokenPipeError:
         return _reader_went_away()
     except UsageError as exc:
-        for line in str(exc).splitlines():
-            print(f"lamde-mission {args.command}: {line}", file=sys.stderr)
+        from planner_core.textio import printable
+
+        # one problem a line: split on "\n" only, every other control character escaped (a
+        # path or a name with ESC, NEL or U+2028 cannot forge a line or a terminal escape)
+        for line in str(exc).split("\n"):
+            print(f"lamde-mission {args.command}: {printable(line)}", file=sys.stderr)
         return 2
     except ValueError as exc:
         problems = _map_problems(exc)

@@ -360,3 +360,56 @@ def test_import_prints_at_most_20_problems(tmp_path: Path, capsys) -> None:
     assert rc == 2 and len(lines) == 21, err
     assert all("unknown kind 'nonsense'" in ln for ln in lines[:20])
     assert lines[-1].endswith("... and 30 more problems")
+
+
+# ----------------------------------------------------------------------------- 5: control chars
+
+_CONTROLS = ("\x85", "\u202e", "\u2028", "\x9b", "\u2066", "\x1b")
+
+
+@pytest.mark.parametrize("ch", _CONTROLS)
+def test_map_names_and_ids_refuse_c1_separators_and_bidi(ch: str, tmp_path: Path,
+                                                        capsys) -> None:  # fmt: skip
+    doc = json.loads(TINY.read_text())
+    doc["name"] = f"a{ch}b"
+    doc["sensors"][0]["id"] = f"s{ch}1"
+    src = tmp_path / "m.json"
+    src.write_text(json.dumps(doc))
+    rc, out, err = _run(capsys, "check", src)
+    assert rc == 2 and "name: must be printable text" in err and "id: must be printable" in err
+    assert ch not in err + out
+    rc, out, err = _run(capsys, "generate", tmp_path / "g.json", "--name", f"a{ch}b")
+    assert "--name" in _one_line(rc, err) and ch not in err
+
+
+def test_paths_and_feature_names_are_escaped_in_messages(tmp_path: Path, capsys) -> None:
+    bad = tmp_path / "m\x1b[31m\u2028x\nnew.json"
+    bad.write_text("[]")
+    rc, out, err = _run(capsys, "check", bad)
+    line = _one_line(rc, err)
+    assert "m\\x1b[31m\\u2028x\\nnew.json" in line and "\x1b" not in err
+    mission = tmp_path / "mis\x1bsion\n.plan"
+    mission.write_text("{}")
+    rc, out, err = _run(capsys, "verify", FLY / "tiny-map.json", mission)
+    assert "mis\\x1bsion\\n.plan" in _one_line(rc, err) and "\x1b" not in err
+    feat = _tri("nonsense")
+    feat["properties"]["name"] = "evil\x1b[2J\x07\nlamde-mission map: wrote x"
+    rc, err = _import(tmp_path, capsys, [feat])
+    line = _one_line(rc, err)
+    assert "'evil\\x1b[2J\\x07\\nlamde-mission map: wrote x'" in line
+
+
+def test_verify_header_escapes_the_mission_path(tmp_path: Path, capsys) -> None:
+    import shutil
+
+    mission = tmp_path / "a\x1b]0;x\x07b.plan"
+    shutil.copy(RALLY, mission)
+    rc, out, err = _run(capsys, "verify", FLY / "tiny-map.json", mission)
+    assert "\x1b" not in out + err and "\x07" not in out + err
+    assert "a\\x1b]0;x\\x07b.plan" in out.splitlines()[0], out
+
+
+def test_show_refuses_a_title_with_control_characters(tmp_path: Path, capsys) -> None:
+    svg = tmp_path / "s.svg"
+    rc, out, err = _run(capsys, "show", TINY, "-o", svg, "--title", "a\x01b")
+    assert "--title" in _one_line(rc, err) and "\\x01" in err and not svg.exists()

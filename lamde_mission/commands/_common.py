@@ -12,14 +12,17 @@ from lamde_mission.errors import UsageError
 def load_map_or_fail(path: str) -> Any:
     """Load and validate a map; turn every problem into a UsageError naming the field."""
     from planner_core.model.mapio import MapError, load_map
+    from planner_core.textio import printable
 
+    shown = printable(path)
     try:
         m = load_map(path)
     except MapError as exc:
-        lines = (p if p.startswith(f"{path}: ") else f"{path}: {p}" for p in exc.problems)
-        raise UsageError("\n".join(lines)) from None
+        lines = (printable(p[len(path) + 2:]) if p.startswith(f"{path}: ") else printable(p)
+                 for p in exc.problems)  # fmt: skip
+        raise UsageError("\n".join(f"{shown}: {ln}" for ln in lines)) from None
     for note in m.notes:
-        print(f"note: {path}: {note}", file=sys.stderr)
+        print(f"note: {shown}: {printable(note)}", file=sys.stderr)
     return m
 
 

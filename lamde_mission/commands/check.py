@@ -42,7 +42,9 @@ def run(args: argparse.Namespace) -> int:
         return 0 if d.feasible_so_far else 1
     default = " (default for this size)" if s["max_hover_points_default"] else ""
     u, r, o = s["uav"], s["radio"], s["objective"]
-    print(f"map '{s['name']}': " + ("OK" if d.feasible_so_far else
+    from planner_core.textio import printable
+
+    print(f"map '{printable(s['name'])}': " + ("OK" if d.feasible_so_far else
                                     f"valid, but {_cannot_what(d)} (CANNOT below)"))
     print(f"  area            {s['area_m'][0]:g} m x {s['area_m'][1]:g} m")
     if s["origin"] is None:
@@ -100,8 +102,10 @@ def _energy_lines(s: dict, m: object) -> None:
               f"{100 * b['reserve']:g} %: {b['usable_wh']:.4g} Wh usable per sortie "
               f"({60 * b['usable_wh'] / hover_w:.3g} min of hover at P(0) {hover_w:g} W)")
     if f is not None:
+        from planner_core.textio import printable
+
         names, xy, _ = m.sortie_sites
-        sites = [f"{n} ({x:g}, {y:g})" for n, (x, y) in zip(names, xy, strict=True)]
+        sites = [f"{printable(n)} ({x:g}, {y:g})" for n, (x, y) in zip(names, xy, strict=True)]
         where = ", ".join(sites)
         if f["depots_default"]:
             where = f"{sites[0]} at the start (default)" + (
@@ -114,8 +118,10 @@ def _energy_lines(s: dict, m: object) -> None:
 def _diagnosis(d: object) -> int:
     """Print the fast feasibility diagnosis `d` (`planner_core.model.diagnose.diagnose`'s);
     1 when something rules every plan out."""
+    from planner_core.textio import printable
+
     for f in d.findings:
-        print(f"  {'CANNOT' if f.fatal else 'note':<6}  {f.message}")
+        print(f"  {'CANNOT' if f.fatal else 'note':<6}  {printable(f.message)}")
     if any(f.kind.startswith("C3_") for f in d.findings):
         print("  hint    C3 is the paper's simultaneous uplink; \"radio\": {\"access\": "
               "\"scheduled\"} lets the sensors in range share the bandwidth by time slots")

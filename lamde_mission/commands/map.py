@@ -128,6 +128,7 @@ def _from_geojson(args: argparse.Namespace) -> int:
     from lamde_mission.atomic import write_text_atomic
     from lamde_mission.gis import GisError, build_map, read_layers
     from planner_core.model.mapio import MapError, load_map
+    from planner_core.textio import printable
 
     inputs = [(f, None) for f in args.files]
     inputs += [(f, "obstacle") for f in args.obstacles]
@@ -161,7 +162,7 @@ def _from_geojson(args: argparse.Namespace) -> int:
     except OSError as exc:
         raise UsageError(f"{args.output}: cannot write ({exc.strerror or exc})") from None
     s = m.summary()
-    print(f"wrote {path}: {s['sensors']} sensors, {s['polygons']} obstacles, "
+    print(f"wrote {printable(path)}: {s['sensors']} sensors, {s['polygons']} obstacles, "
           f"{s['no_fly_zones']} no-fly zones, {s['circles']} circles; area "
           f"{m.width:g} m x {m.height:g} m from origin ({m.spec.origin.lat:.9f}, "
           f"{m.spec.origin.lon:.9f})")  # fmt: skip
@@ -196,6 +197,7 @@ def _to_geojson(args: argparse.Namespace) -> int:
     from lamde_mission.atomic import write_text_atomic
     from lamde_mission.commands._common import load_map_or_fail
     from lamde_mission.gis import map_to_geojson
+    from planner_core.textio import printable
 
     _check_output(args, [args.map])
     m = load_map_or_fail(args.map)
@@ -205,7 +207,7 @@ def _to_geojson(args: argparse.Namespace) -> int:
                                  mkdir=False)
     except OSError as exc:
         raise UsageError(f"{args.output}: cannot write ({exc.strerror or exc})") from None
-    print(f"wrote {path}: {len(doc['features'])} features")
+    print(f"wrote {printable(path)}: {len(doc['features'])} features")
     return 0
 
 

@@ -114,6 +114,13 @@ def run(args: argparse.Namespace) -> int:
         check_dpi(args.dpi, "--dpi")
     except ValueError as e:
         raise UsageError(str(e)) from None
+    if args.title is not None:
+        from planner_core.textio import printable
+
+        bad = next((c for c in args.title if c != "\n" and printable(c) != c), None)
+        if bad is not None:  # an SVG cannot hold C0 controls; the others forge or reorder text
+            raise UsageError(f"--title: holds the control character {printable(bad)} (a "
+                             "figure title is printable text; a newline may split it)")
     check_outputs([("-o/--output", args.output)], mkdir=True,
                   inputs=[("map", args.map), ("mission", args.mission)])
     m = load_map_or_fail(args.map)
@@ -121,7 +128,7 @@ def run(args: argparse.Namespace) -> int:
         m = with_origin_or_fail(m, args.origin)
     if args.mission and Path(args.mission).is_dir():
         path = plot_fleet_dir(m, args.mission, out, title=args.title, dpi=args.dpi)
-        print(f"wrote {path}")
+        print(f"wrote {_shown(path)}")
         return 0
     timeline = None
     if args.mission:
@@ -135,5 +142,12 @@ def run(args: argparse.Namespace) -> int:
         path = plot_mission(m, out, timeline=timeline, title=args.title, dpi=args.dpi)
     except OSError as exc:
         raise UsageError(f"{out}: cannot write ({exc.strerror or exc})") from None
-    print(f"wrote {path}")
+    print(f"wrote {_shown(path)}")
     return 0
+
+
+def _shown(path: object) -> str:
+    """A path for a line of output, control characters escaped (`textio.printable`)."""
+    from planner_core.textio import printable
+
+    return printable(path)

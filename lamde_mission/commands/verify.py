@@ -38,6 +38,7 @@ def replay_mission_file(path: str, m: Any) -> Any:
     from lamde_mission.errors import UsageError
     from lamde_mission.formats import MissionFileError, load_mission_items
     from lamde_mission.items import MissionError
+    from planner_core.textio import printable
     from sim import replay
 
     try:
@@ -47,9 +48,9 @@ def replay_mission_file(path: str, m: Any) -> Any:
     try:
         timeline = replay(items, m)
     except MissionError as exc:
-        raise UsageError(f"{path}: {exc}") from None
+        raise UsageError(f"{printable(path)}: {exc}") from None
     for note in timeline.notes:
-        print(f"note: {path}: {note}", file=sys.stderr)
+        print(f"note: {printable(path)}: {printable(note)}", file=sys.stderr)
     return timeline
 
 
@@ -157,7 +158,7 @@ def run(args: argparse.Namespace) -> int:
 
         corners = (f" + {n_corner} corner{'s' if n_corner != 1 else ''} (NAV_WAYPOINT, flown "
                    "through; not hover points)" if n_corner else "")  # fmt: skip
-        print(f"mission {args.mission} on map '{printable(m.name)}': "
+        print(f"mission {printable(args.mission)} on map '{printable(m.name)}': "
               f"{len(timeline.hover_times)} hover points{corners}")  # fmt: skip
         print("\n".join(printable(r) for r in verdicts.table().splitlines()))
         sf = m.spec.safety

@@ -13,7 +13,7 @@ from typing import Any, Literal
 from lamde_mission.geo import enu_to_latlon
 from lamde_mission.items import CMD, MissionError, MissionItem, geofence_items, plan_to_items
 from lamde_mission.storage import DIALECTS, float32, float32_up, grid_degrees, stored_items
-from planner_core.textio import InputError, loads_json, read_json, read_text
+from planner_core.textio import InputError, loads_json, printable, read_json, read_text
 
 __all__ = [
     "FORMATS",
@@ -46,7 +46,8 @@ def format_for(path: str | Path, fmt: str | None = None) -> str:
     suffix = Path(path).suffix.lower()
     if suffix not in FORMATS:
         known = ", ".join(FORMATS)
-        raise MissionFileError(f"{path}: cannot tell the format from the suffix (use {known})")
+        raise MissionFileError(f"{printable(path)}: cannot tell the format from the suffix "
+                               f"(use {known})")
     return FORMATS[suffix]
 
 
@@ -127,7 +128,7 @@ def read_mission_lists(
     try:
         text = read_text(path)
     except InputError as exc:
-        raise MissionFileError(f"{path}: {exc}") from None
+        raise MissionFileError(f"{printable(path)}: {exc}") from None
     head = text.lstrip()
     try:
         if head.startswith("QGC WPL"):
@@ -148,10 +149,10 @@ def read_mission_lists(
 
             return parse_plan_lists(doc)
     except MissionError as exc:
-        raise MissionFileError(f"{path}: {exc}") from None
+        raise MissionFileError(f"{printable(path)}: {exc}") from None
     raise MissionFileError(
-        f"{path}: not a mission file (expected a QGroundControl .plan or a 'QGC WPL 110' "
-        ".waypoints file)"
+        f"{printable(path)}: not a mission file (expected a QGroundControl .plan or a "
+        "'QGC WPL 110' .waypoints file)"
     )
 
 
@@ -167,7 +168,7 @@ def load_mission_items(
         try:
             doc = read_json(path)
         except InputError as exc:
-            raise MissionFileError(f"{path}: {exc}") from None
+            raise MissionFileError(f"{printable(path)}: {exc}") from None
         if isinstance(doc, dict) and isinstance(doc.get("stored"), dict):
             doc = doc["stored"]  # `plan --report`: the mission as written (storable plan)
         elif isinstance(doc, dict) and isinstance(doc.get("plan"), dict):
@@ -189,9 +190,10 @@ def load_mission_items(
                     items = stored_items(items, doc["autopilot"])
                 return items, geofence_items(map)
             except MissionError as exc:
-                raise MissionFileError(f"{path}: {exc}") from None
+                raise MissionFileError(f"{printable(path)}: {exc}") from None
             except (TypeError, ValueError) as exc:
-                raise MissionFileError(f"{path}: bad hover_points/hover_times ({exc})") from None
+                raise MissionFileError(f"{printable(path)}: bad hover_points/hover_times "
+                                       f"({exc})") from None
     return read_mission(path)
 
 

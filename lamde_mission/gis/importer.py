@@ -58,7 +58,7 @@ from typing import Any
 
 import numpy as np
 
-from planner_core.textio import InputError, loads_json, quoted, read_json
+from planner_core.textio import InputError, loads_json, printable, quoted, read_json
 from sim.geo import enu_to_latlon, latlon_to_enu
 
 __all__ = ["GisError", "GisLayers", "read_layers", "build_map", "DEFAULT_MARGIN", "KINDS"]
@@ -244,9 +244,14 @@ _NAME_KEYS = ("name", "NAME", "Name")
 
 
 def _label(where: str, props: dict[str, Any]) -> tuple[str, str | None]:
+    """(the feature's label for messages, its name): the name escaped (`printable`) and cut
+    to 80 characters in the label, so a name cannot forge output lines or copy megabytes."""
     name = next((props[k] for k in _NAME_KEYS if props.get(k) is not None), None)
     name = str(name) if name is not None else None
-    return (f"{where} '{name}'" if name else where), name
+    if not name:
+        return where, name
+    shown = printable(name[:80]) + ("..." if len(name) > 80 else "")
+    return f"{where} '{shown}'", name
 
 
 def _add_feature(layers: GisLayers, feat: Any, where: str, layer: str | None) -> None:
@@ -267,7 +272,7 @@ def _add_feature(layers: GisLayers, feat: Any, where: str, layer: str | None) ->
             )
         kind = KINDS.get(str(raw).strip().lower())
         if kind is None:
-            raise ValueError(f"{label}: unknown kind {raw!r} (expected one of: "
+            raise ValueError(f"{label}: unknown kind {quoted(raw)} (expected one of: "
                              f"{', '.join(sorted(KINDS))})")  # fmt: skip
     if kind == "circle":  # as `map to-geojson` writes circles: centre and radius in properties
         r = props.get("radius_m")
@@ -534,7 +539,7 @@ def read_layers(files: list[tuple[str | Path, str | None]]) -> GisLayers:
     except _OverLimit as exc:
         raise GisError([str(exc)]) from None
     for path, layer in files:
-        src = str(path)
+        src = printable(path)
         try:  # the one decoding path: regular file, size, UTF-8 (BOM ok), depth, numbers
             doc = read_json(path)
         except InputError as exc:

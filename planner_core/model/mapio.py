@@ -82,7 +82,10 @@ def _ranged(
 
 
 #: text without control characters (names and ids are printed in one-line messages)
-_PRINTABLE = r"^[^\x00-\x1f\x7f]*$"
+#: names and ids: no C0 or C1 control characters, DEL, line/paragraph separators or bidi
+#: controls (embeddings, overrides, isolates): each could forge a line of a summary or reorder
+#: what a terminal shows
+_PRINTABLE = r"^[^\x00-\x1f\x7f-\x9f" + "\u2028\u2029\u202a-\u202e\u2066-\u2069" + "]*$"
 
 Coord = Annotated[float, Field(ge=-MAX_COORD, le=MAX_COORD, strict=True,
                                description=f"metres; {_WHY_COORD}")]  # fmt: skip
