@@ -413,3 +413,40 @@ def test_show_refuses_a_title_with_control_characters(tmp_path: Path, capsys) ->
     svg = tmp_path / "s.svg"
     rc, out, err = _run(capsys, "show", TINY, "-o", svg, "--title", "a\x01b")
     assert "--title" in _one_line(rc, err) and "\\x01" in err and not svg.exists()
+
+
+# ----------------------------------------------------------------------------- 6: long values
+
+_HUGE = "x" * 5_000_000
+
+
+@pytest.mark.parametrize("where", ["params", "type", "version", "command", "doJumpId"])
+def test_plan_messages_never_copy_a_huge_string(where: str, tmp_path: Path, capsys) -> None:
+    def change(d: dict) -> None:
+        item = d["mission"]["items"][0]
+        if where == "params":
+            item["params"][0] = _HUGE
+        elif where == "version":
+            d["version"] = _HUGE
+        else:
+            item[where] = _HUGE
+
+    bad = _plan_with(tmp_path, change)
+    rc, out, err = _run(capsys, "verify", FLY / "tiny-map.json", bad)
+    line = _one_line(rc, err)
+    assert len(line) < 400 and "xxx..." in line, line[:400]
+
+
+def test_geojson_messages_never_copy_a_huge_string(tmp_path: Path, capsys) -> None:
+    kind = {"type": "Feature", "geometry": None, "properties": {"kind": _HUGE}}
+    for doc in (_fc(kind), {"type": _HUGE}):
+        src = tmp_path / "k.geojson"
+        src.write_text(json.dumps(doc))
+        rc, out, err = _run(capsys, "map", "from-geojson", src, "-o", tmp_path / "m.json")
+        line = _one_line(rc, err)
+        assert len(line) < 400 and "xxx..." in line, line[:400]
+    src = tmp_path / "w.waypoints"
+    for text in (_HUGE + "\n", "QGC WPL 111 " + _HUGE + "\n"):
+        src.write_text(text)
+        rc, out, err = _run(capsys, "verify", FLY / "tiny-map.json", src)
+        assert len(_one_line(rc, err)) < 400, err[:400]

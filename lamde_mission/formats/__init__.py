@@ -13,7 +13,7 @@ from typing import Any, Literal
 from lamde_mission.geo import enu_to_latlon
 from lamde_mission.items import CMD, MissionError, MissionItem, geofence_items, plan_to_items
 from lamde_mission.storage import DIALECTS, float32, float32_up, grid_degrees, stored_items
-from planner_core.textio import InputError, loads_json, printable, read_json, read_text
+from planner_core.textio import InputError, loads_json, printable, quoted, read_json, read_text
 
 __all__ = [
     "FORMATS",
@@ -207,7 +207,7 @@ def _check_plan_result(hover_points: Any, hover_times: Any) -> None:
 
     def number(v: Any, where: str, lo: float, hi: float) -> None:
         if isinstance(v, bool) or not isinstance(v, int | float):
-            raise MissionError(f"{where}: expected a number, got {v!r}"[:200])
+            raise MissionError(f"{where}: expected a number, got {quoted(v)}")
         if not (math.isfinite(v) and lo <= v <= hi):
             raise MissionError(f"{where}: {v:g} is outside [{lo:g}, {hi:g}]")
 

@@ -29,7 +29,7 @@ from typing import Any
 
 from lamde_mission.sorties import FLEET_FILE, sortie_file  # the writer's names, one place
 from planner_core.defaults import MAX_FLEET_SORTIES, MAX_FLEET_VEHICLES
-from planner_core.textio import InputError, read_json
+from planner_core.textio import InputError, quoted, read_json
 
 __all__ = ["FLEET_FILE", "MAX_FLEET_SORTIES", "MAX_FLEET_VEHICLES", "FleetDirError",
            "FleetSortie", "FleetVehicle", "FleetDir", "read_fleet_dir",
@@ -124,13 +124,13 @@ def _number(v: Any, where: str) -> float | None:
     if v is None:
         return None
     if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
-        raise FleetDirError(f"{where}: expected a finite number, got {v!r}")
+        raise FleetDirError(f"{where}: expected a finite number, got {quoted(v)}")
     return float(v)
 
 
 def _index(v: Any, where: str, expected: int) -> int:
     if isinstance(v, bool) or not isinstance(v, int):
-        raise FleetDirError(f"{where}: expected the whole number {expected}, got {v!r}")
+        raise FleetDirError(f"{where}: expected the whole number {expected}, got {quoted(v)}")
     if v != expected:
         raise FleetDirError(f"{where}: expected {expected} (numbered 1, 2, ... in order), got {v}")
     return v
@@ -140,7 +140,7 @@ def _name(v: Any, where: str) -> str | None:
     if v is None:
         return None
     if not isinstance(v, str):
-        raise FleetDirError(f"{where}: expected a name (string), got {v!r}")
+        raise FleetDirError(f"{where}: expected a name (string), got {quoted(v)}")
     return v
 
 
@@ -210,7 +210,7 @@ def read_fleet_dir(path: str | Path) -> FleetDir:
                 or name in (".", "..")
             ):
                 raise FleetDirError(f"{ws}.file: expected a file name inside {path}, got "
-                                    f"{name!r}")  # fmt: skip
+                                    f"{quoted(name)}")  # fmt: skip
             fp = path / name
             if not fp.is_file():
                 raise FleetDirError(f"{fp}: no such file (vehicle {number}, sortie {sortie} "
@@ -236,7 +236,7 @@ def read_fleet_dir(path: str | Path) -> FleetDir:
         )
     swaps = doc.get("swaps")
     if swaps is not None and (isinstance(swaps, bool) or not isinstance(swaps, int)):
-        raise FleetDirError(f"{summary}: swaps: expected a whole number, got {swaps!r}")
+        raise FleetDirError(f"{summary}: swaps: expected a whole number, got {quoted(swaps)}")
     return FleetDir(
         path=path, vehicles=tuple(vehicles), map_name=_name(doc.get("map"), f"{summary}: map"),
         objective=_name(doc.get("objective"), f"{summary}: objective"),

@@ -32,7 +32,7 @@ from lamde_mission.items import (
     fence_from_items,
     fence_item,
 )
-from planner_core.textio import InputError, read_json
+from planner_core.textio import InputError, quoted, read_json
 
 __all__ = [
     "FIRMWARE_PX4",
@@ -141,7 +141,7 @@ def _float(v: Any, where: str) -> float:
     if v is None:
         return float("nan")
     if isinstance(v, bool) or not isinstance(v, int | float):
-        raise MissionError(f"{where}: expected a number or null, got {v!r}")
+        raise MissionError(f"{where}: expected a number or null, got {quoted(v)}")
     return float(v)
 
 
@@ -208,7 +208,7 @@ def _check_versions(doc: dict[str, Any]) -> None:
             raise MissionError(f"{path}: missing (a QGroundControl plan says its file version)")
         got = node[key]
         if got != want:
-            raise MissionError(f"{path}: version {got!r} is not supported (this reader knows "
+            raise MissionError(f"{path}: version {quoted(got)} is not supported (this reader knows "
                                f"version {want})")  # fmt: skip
 
 
@@ -253,7 +253,7 @@ def parse_plan_lists(
             raise MissionError(f"{where}: not an object")
         if raw.get("type") != "SimpleItem":
             raise MissionError(
-                f"{where}: item type {raw.get('type')!r} is not supported (only SimpleItem; "
+                f"{where}: item type {quoted(raw.get('type'))} is not supported (only SimpleItem; "
                 "complex items such as surveys must be converted in QGroundControl first)"
             )
         params = raw.get("params")
@@ -267,7 +267,7 @@ def parse_plan_lists(
         jump_id = raw.get("doJumpId")
         if jump_id is not None:
             if isinstance(jump_id, bool) or not isinstance(jump_id, int):
-                raise MissionError(f"{where}.doJumpId: expected an integer, got {jump_id!r}")
+                raise MissionError(f"{where}.doJumpId: expected an integer, got {quoted(jump_id)}")
             jump_ids[jump_id] = len(items)
         item = (
             MissionItem(

@@ -26,7 +26,7 @@ from collections.abc import Callable
 from pymavlink.dialects.v20 import common as _mav
 
 from lamde_mission.items import MissionError, MissionItem
-from planner_core.textio import limit
+from planner_core.textio import limit, quoted
 
 __all__ = [
     "FLOAT32_MAX",
@@ -70,7 +70,7 @@ def check_mission_item(item: MissionItem, name: Callable[[str], str]) -> None:
     for key, top in _UINT.items():
         v = getattr(item, key)
         if isinstance(v, bool) or not isinstance(v, int):
-            raise MissionError(f"{name(key)}: must be an integer, got {v!r}")
+            raise MissionError(f"{name(key)}: must be an integer, got {quoted(v)}")
         if not 0 <= v <= top:
             raise MissionError(f"{name(key)}: {v} is outside 0..{top} (MAVLink's "
                                f"{'uint16' if top > 0xFF else 'uint8'})")  # fmt: skip

@@ -25,7 +25,7 @@ import numpy as np
 from lamde_mission.atomic import write_text_atomic
 from lamde_mission.formats.ranges import check_item_count, check_mission_item
 from lamde_mission.items import CMD, FRAME, MISSION_TYPE, MissionError, MissionItem
-from planner_core.textio import InputError, limit, read_text
+from planner_core.textio import InputError, limit, quoted, read_text
 from sim.mission import command_name
 
 __all__ = ["HEADER", "format_waypoints", "parse_waypoints", "write_waypoints", "read_waypoints",
@@ -137,7 +137,7 @@ def parse_waypoints(text: str) -> tuple[MissionItem | None, list[MissionItem]]:
     lines = text.removeprefix("\ufeff").splitlines()
     if not lines or lines[0].strip() != HEADER:
         found = lines[0].strip()[:40] if lines else ""
-        raise MissionError(f"not a '{HEADER}' waypoint file (first line is {found!r})")
+        raise MissionError(f"not a '{HEADER}' waypoint file (first line is {quoted(found)})")
     rows: list[MissionItem] = []
     for lineno, line in enumerate(lines[1:], start=2):
         s = line.strip()

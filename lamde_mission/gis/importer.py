@@ -431,7 +431,7 @@ def _read_geojson(layers: GisLayers, doc: Any, src: str, layer: str | None) -> N
         _add_feature(layers, {"type": "Feature", "geometry": doc, "properties": {}},
                      f"{src}: geometry", layer)  # fmt: skip
     else:
-        raise ValueError(f"{src}: not GeoJSON (type {t!r}; expected FeatureCollection, "
+        raise ValueError(f"{src}: not GeoJSON (type {quoted(t)}; expected FeatureCollection, "
                          "Feature or a geometry)")  # fmt: skip
 
 
