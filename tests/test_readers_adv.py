@@ -450,3 +450,36 @@ def test_geojson_messages_never_copy_a_huge_string(tmp_path: Path, capsys) -> No
         src.write_text(text)
         rc, out, err = _run(capsys, "verify", FLY / "tiny-map.json", src)
         assert len(_one_line(rc, err)) < 400, err[:400]
+
+
+# ----------------------------------------------------------------------------- 7: silent accepts
+
+
+def test_duplicate_do_jump_ids_and_unordered_waypoint_rows_are_refused(tmp_path: Path,
+                                                                       capsys) -> None:  # fmt: skip
+    bad = _plan_with(tmp_path, lambda d: d["mission"]["items"][2].__setitem__("doJumpId", 1))
+    rc, out, err = _run(capsys, "verify", FLY / "tiny-map.json", bad)
+    assert "mission.items[2].doJumpId: 1 is also the doJumpId of mission.items[0]" in \
+        _one_line(rc, err)  # fmt: skip
+    lines = (FLY / "do-jump.waypoints").read_text().splitlines()
+    lines[3], lines[4] = lines[4], lines[3]  # rows 2 and 3 swapped: seq 3 before 2
+    wp = tmp_path / "swapped.waypoints"
+    wp.write_text("\n".join(lines) + "\n")
+    rc, out, err = _run(capsys, "verify", FLY / "tiny-map.json", wp)
+    assert "line 4: seq 3 out of order" in _one_line(rc, err) and "expected 2" in err
+
+
+@pytest.mark.parametrize("feature, needle", [
+    ({"type": "Feature", "geometry": {"type": "MultiPolygon", "coordinates": []},
+      "properties": {"kind": "obstacle"}}, "a MultiPolygon with no polygons"),
+    (_pt("sensor", 114.1761, 22.3241) | {"geometry": {"type": "Point", "coordinates":
+                                                      [114.1761, 22.3241, "x", None]}},
+     "a position is [longitude, latitude] or [longitude, latitude, altitude]"),
+    (_pt("sensor", 114.1761, 22.3241, id={"a": 1}), "properties.id: a sensor id is text"),
+    (_pt("sensor", 114.1761, 22.3241, name={"a": 1}), "properties.name: a name is text"),
+])  # fmt: skip
+def test_geojson_values_that_were_silently_kept_are_refused(feature: dict, needle: str,
+                                                            tmp_path: Path, capsys) -> None:
+    rc, err = _import(tmp_path, capsys, [feature])
+    line = _one_line(rc, err)
+    assert "features[3]" in line and needle in line, err

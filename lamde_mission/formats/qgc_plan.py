@@ -268,6 +268,9 @@ def parse_plan_lists(
         if jump_id is not None:
             if isinstance(jump_id, bool) or not isinstance(jump_id, int):
                 raise MissionError(f"{where}.doJumpId: expected an integer, got {quoted(jump_id)}")
+            if jump_id in jump_ids:  # DO_JUMP to it would go to whichever came last
+                raise MissionError(f"{where}.doJumpId: {jump_id} is also the doJumpId of "
+                                   f"mission.items[{jump_ids[jump_id]}]; each must be unique")
             jump_ids[jump_id] = len(items)
         item = (
             MissionItem(

@@ -150,6 +150,9 @@ def parse_waypoints(text: str) -> tuple[MissionItem | None, list[MissionItem]]:
         if not -(2**31) <= ints[0] < 2**31:
             raise MissionError(f"line {lineno}: seq {ints[0]} is not a sequence number")
         seq, current, frame, command, autocontinue = ints
+        if seq != len(rows):  # DO_JUMP targets and the vehicle count rows by their seq
+            raise MissionError(f"line {lineno}: seq {seq} out of order (rows are numbered 0, "
+                               f"1, 2, ... in file order; expected {len(rows)})")  # fmt: skip
         item = (
             MissionItem(
                 seq=seq, command=command, frame=frame, current=current,

@@ -211,6 +211,10 @@ def _size(v: Any, where: str) -> float:
 def _position(p: Any, where: str) -> tuple[float, float]:
     if not isinstance(p, list | tuple) or len(p) < 2:
         raise ValueError(f"{where}: a position must be [longitude, latitude]")
+    if len(p) > 3 or (len(p) == 3 and (isinstance(p[2], bool)
+                                       or not isinstance(p[2], int | float))):  # fmt: skip
+        raise ValueError(f"{where}: a position is [longitude, latitude] or [longitude, "
+                         f"latitude, altitude], numbers (RFC 7946); got {quoted(list(p))}")
     lon, lat = p[0], p[1]
     if not all(isinstance(v, int | float) and not isinstance(v, bool) for v in (lon, lat)):
         raise ValueError(f"{where}: coordinates must be numbers")
@@ -246,7 +250,11 @@ _NAME_KEYS = ("name", "NAME", "Name")
 def _label(where: str, props: dict[str, Any]) -> tuple[str, str | None]:
     """(the feature's label for messages, its name): the name escaped (`printable`) and cut
     to 80 characters in the label, so a name cannot forge output lines or copy megabytes."""
-    name = next((props[k] for k in _NAME_KEYS if props.get(k) is not None), None)
+    key = next((k for k in _NAME_KEYS if props.get(k) is not None), None)
+    name = None if key is None else props[key]
+    if name is not None and (isinstance(name, bool) or not isinstance(name, str | int | float)):
+        raise ValueError(f"{where}: properties.{key}: a name is text (or a number), got "
+                         f"{quoted(name)}")  # fmt: skip
     name = str(name) if name is not None else None
     if not name:
         return where, name
@@ -305,6 +313,9 @@ def _add_feature(layers: GisLayers, feat: Any, where: str, layer: str | None) ->
                                   or not math.isfinite(q) or q < 0):  # fmt: skip
                 raise ValueError(f"{label}: required_data must be a number >= 0 (Mbit)")
             base = props.get("id")  # an "id": null (a GIS writes empty fields so) is no id
+            if base is not None and (isinstance(base, bool) or not isinstance(base, str | int)):
+                raise ValueError(f"{label}: properties.id: a sensor id is text (or an "
+                                 f"integer), got {quoted(base)}")  # fmt: skip
             if base is None:
                 base = name
             for k, (lon, lat) in enumerate(points):
@@ -329,6 +340,9 @@ def _add_feature(layers: GisLayers, feat: Any, where: str, layer: str | None) ->
     elif gtype == "MultiPolygon":
         if not isinstance(coords, list):
             raise ValueError(f"{label}: MultiPolygon coordinates must be a list")
+        if not coords:  # the obstacle or zone would vanish without a word
+            raise ValueError(f"{label}: a MultiPolygon with no polygons (give at least one, "
+                             "or leave the feature out)")  # fmt: skip
         polys = [_rings(c, f"{label} polygon {k}", layers) for k, c in enumerate(coords)]
     else:
         raise ValueError(f"{label}: {kind} features must be a Polygon or MultiPolygon, "
