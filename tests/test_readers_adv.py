@@ -483,3 +483,18 @@ def test_geojson_values_that_were_silently_kept_are_refused(feature: dict, needl
     rc, err = _import(tmp_path, capsys, [feature])
     line = _one_line(rc, err)
     assert "features[3]" in line and needle in line, err
+
+
+def test_report_reads_a_policy_curve_through_the_shared_reader(tmp_path: Path, capsys) -> None:
+    folder = _results(tmp_path / "runs")
+    ck = tmp_path / "ck"
+    ck.mkdir()
+    for text, needle in (("epoch,seconds\n1,abc\n", "curve.csv: line 2: seconds: expected a "
+                          "number, got 'abc'"),
+                         ("epoch,seconds\n1,nan\n", "line 2: seconds: expected a finite"),
+                         ("epoch,other\n1,2\n", "line 2: seconds: expected a number, got None"),
+                         (b"epoch,seconds\n1,\xff\n", "curve.csv: not UTF-8")):  # fmt: skip
+        (ck / "curve.csv").write_bytes(text if isinstance(text, bytes) else text.encode())
+        rc, out, err = _run(capsys, "report", folder, "-o", folder / "r.md",
+                            "--policy-checkpoint", ck, "--no-limits")
+        assert needle in _one_line(rc, err), err

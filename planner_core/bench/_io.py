@@ -17,6 +17,7 @@ __all__ = [
     "dumps_json",
     "read_json",
     "read_jsonl",
+    "read_csv_column",
     "read_maybe_gz",
     "read_meta",
     "stored_path",
@@ -104,6 +105,47 @@ def read_meta(folder: str | Path) -> dict[str, Any]:
     if isinstance(meta.get("ablation"), dict) and "reference" not in meta["ablation"]:
         raise ValueError(f"{printable(path)}: ablation.reference: missing")
     return meta
+
+
+def read_csv_column(path: str | Path, column: str,
+                    optional: tuple[str, ...] = ()) -> list[dict[str, float]]:  # fmt: skip
+    """The rows of a CSV file with a header (a checkpoint's curve.csv, imitation.csv), each
+    as {column: value} for `column` (required) and the `optional` columns present, values
+    finite numbers (an empty optional cell is 0). Read by the shared reader (regular file,
+    bounded size, UTF-8); ValueError naming the file, the row and the column otherwise."""
+    import csv
+    import io
+    import math
+
+    shown = textio.printable(path)
+    try:
+        text = textio.read_text(path)
+    except textio.InputError as exc:
+        raise ValueError(f"{shown}: {exc}") from None
+    try:
+        reader = csv.DictReader(io.StringIO(text, newline=""))
+        rows = []
+        for n, row in enumerate(reader, 2):
+            out = {}
+            for key in (column, *optional):
+                raw = row.get(key)
+                if raw is None and key != column and key not in (reader.fieldnames or ()):
+                    continue
+                if raw in (None, "") and key != column:
+                    raw = "0"
+                try:
+                    v = float(raw)  # type: ignore[arg-type]
+                except (TypeError, ValueError):
+                    raise ValueError(f"{shown}: line {n}: {key}: expected a number, got "
+                                     f"{textio.quoted(raw)}") from None  # fmt: skip
+                if not math.isfinite(v):
+                    raise ValueError(f"{shown}: line {n}: {key}: expected a finite number, "
+                                     f"got {textio.quoted(raw)}")  # fmt: skip
+                out[key] = v
+            rows.append(out)
+    except csv.Error as exc:
+        raise ValueError(f"{shown}: not a CSV file ({textio.printable(str(exc))})") from None
+    return rows
 
 
 def stored_path(path: str | Path) -> Path:

@@ -15,7 +15,6 @@ adds :func:`ablation_section` whenever that entry is present.
 
 from __future__ import annotations
 
-import csv
 import math
 from collections import defaultdict
 from collections.abc import Callable
@@ -72,12 +71,13 @@ def normalised_table(records: list[dict[str, Any]], variants: list[str], referen
 
 def training_seconds(checkpoint: str | Path) -> tuple[int, float] | None:
     """(epochs, wall seconds) recorded in a checkpoint folder's curve.csv, or None without it."""
+    from planner_core.bench._io import read_csv_column
+
     curve = Path(checkpoint) / "curve.csv"
     if not curve.exists():
         return None
-    with curve.open(newline="") as fh:
-        rows = list(csv.DictReader(fh))
-    return len(rows), sum(float(r["seconds"]) for r in rows)
+    rows = read_csv_column(curve, "seconds")
+    return len(rows), sum(r["seconds"] for r in rows)
 
 
 def ablation_section(records: list[dict[str, Any]], entry: dict[str, Any], figures: Path,

@@ -284,10 +284,15 @@ KEEP_END = "<!-- end of the hand-written part -->"
 def kept_notes(output: str | Path) -> list[str]:
     """Lines of the hand-written block (KEEP_START ... KEEP_END, markers included) of the
     report already at `output`, with a blank line after; [] when there is none."""
+    from planner_core.textio import InputError, printable, read_text
+
     path = Path(output)
     if not path.is_file():
         return []
-    text = path.read_text(encoding="utf-8")
+    try:
+        text = read_text(path)
+    except InputError as exc:
+        raise ValueError(f"{printable(path)}: {exc}") from None
     i, j = text.find(KEEP_START), text.find(KEEP_END)
     if i < 0 or j < i:
         return []
@@ -589,22 +594,20 @@ def cost_section(records: list[dict[str, Any]], checkpoint: str | Path | None) -
         return []
     L = ["", "## Cost of the learned policy", ""]
     if checkpoint is not None:
-        import csv
+        from planner_core.bench._io import read_csv_column
 
         curve = Path(checkpoint) / "curve.csv"
         if not curve.exists():
             raise ValueError(f"policy checkpoint {checkpoint}: no curve.csv")
-        with curve.open(newline="") as fh:
-            rows = list(csv.DictReader(fh))
-        secs = sum(float(r["seconds"]) for r in rows)
-        eps = sum(int(float(r.get("episodes", 0) or 0)) for r in rows)
+        rows = read_csv_column(curve, "seconds", ("episodes",))
+        secs = sum(r["seconds"] for r in rows)
+        eps = sum(int(r.get("episodes", 0)) for r in rows)
         L += [f"- Training ({checkpoint}): {len(rows)} epoch(s), {eps} episode(s), "
               f"{secs:,.0f} s wall ({secs / 60:.1f} min) as recorded in `curve.csv`."]
         warm = Path(checkpoint) / "imitation.csv"  # the behaviour-cloning warm start, if any
         if warm.exists():
-            with warm.open(newline="") as fh:
-                wrows = list(csv.DictReader(fh))
-            wsecs = sum(float(r["seconds"]) for r in wrows)
+            wrows = read_csv_column(warm, "seconds")
+            wsecs = sum(r["seconds"] for r in wrows)
             L += [f"- Warm start ({checkpoint}): {len(wrows)} imitation pass(es), "
                   f"{wsecs:,.0f} s wall ({wsecs / 60:.1f} min) as recorded in `imitation.csv`."]
     for ref in [*pol, "de-adaptive"]:  # each policy's runs, then the hand-made DE's once
