@@ -498,3 +498,20 @@ def test_report_reads_a_policy_curve_through_the_shared_reader(tmp_path: Path, c
         rc, out, err = _run(capsys, "report", folder, "-o", folder / "r.md",
                             "--policy-checkpoint", ck, "--no-limits")
         assert needle in _one_line(rc, err), err
+
+
+def test_report_refuses_a_malformed_lower_bounds_cache(tmp_path: Path, capsys) -> None:
+    import shutil
+
+    suite = tmp_path / "suite"
+    suite.mkdir()
+    shutil.copy(SUITE / "T01.json", suite / "T01.json")
+    folder = _results(tmp_path / "runs", records=[r for r in _records(20)
+                                                  if r["task"] == "T01"][:2])
+    for text, needle in (('{"tasks": [1]}', "tasks: expected an object"),
+                         ('{"tasks": {"T01": 5}}', "tasks.T01: expected an object"),
+                         ('{"tasks": {"T01": {"sha256": "x", "lb": "abc"}}}',
+                          "tasks.T01.lb: expected a finite number")):  # fmt: skip
+        (tmp_path / "suite_lower_bounds.json").write_text(text)
+        rc, out, err = _run(capsys, "report", folder, "-o", folder / "r.md", "--suite", suite)
+        assert f"suite_lower_bounds.json: {needle}" in _one_line(rc, err), err

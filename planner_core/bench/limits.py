@@ -93,6 +93,39 @@ def _locked(path: Path) -> Iterator[None]:
 # ----------------------------------------------------------------------------- lower bounds
 
 
+def _entries(path: Path, fields: dict[str, type],
+             data: dict[str, Any] | None = None) -> dict[str, dict[str, Any]]:  # fmt: skip
+    """The `tasks` object of a per-task JSON file ({} when the file is missing) read by the
+    shared reader, each entry an object whose `fields` have their type (float: a finite
+    number; `data`: the file's object, already read); ValueError naming the file and the
+    field otherwise (a list of tasks, an entry 5, "f": "abc" or NaN were tracebacks or
+    kept)."""
+    from planner_core.textio import json_path, printable, quoted
+
+    data = read_json(path) if data is None else data
+    tasks = data.get("tasks")
+    head = printable(path)
+    if tasks is None:
+        return {}
+    if not isinstance(tasks, dict):
+        raise ValueError(f"{head}: tasks: expected an object, got {quoted(tasks)}")
+    for name, e in tasks.items():
+        where = json_path(("tasks", name))
+        if not isinstance(e, dict):
+            raise ValueError(f"{head}: {where}: expected an object, got {quoted(e)}")
+        for key, kind in fields.items():
+            v = e.get(key)
+            if kind is float:
+                ok = (not isinstance(v, bool) and isinstance(v, int | float)
+                      and math.isfinite(v))  # fmt: skip
+                want = "a finite number"
+            else:
+                ok, want = isinstance(v, kind), "a string"
+            if not ok:
+                raise ValueError(f"{head}: {where}.{key}: expected {want}, got {quoted(v)}")
+    return tasks
+
+
 def lower_bounds(
     suite: str | Path,
     tasks: list[str] | None = None,
@@ -109,7 +142,7 @@ def lower_bounds(
     path = Path(cache) if cache is not None else lower_bounds_path(suite)
     out: dict[str, dict[str, Any]] = {}
     todo = []
-    entries = read_json(path).get("tasks", {})
+    entries = _entries(path, {"sha256": str, "lb": float})
     for name in names:
         sha = file_sha256(files[name])
         e = entries.get(name)
@@ -123,8 +156,7 @@ def lower_bounds(
             lb = lower_bound(files[name], DEFAULT_SPACING)
             fresh[name] = {"sha256": sha, **lb.to_dict()}
         with _locked(path):
-            data = read_json(path)
-            tasks_all = {**data.get("tasks", {}), **fresh}
+            tasks_all = {**_entries(path, {"sha256": str, "lb": float}), **fresh}
             write_json_atomic(path, {
                 "description": "Lower bound on f per map (planner_core.model.bounds.lower_bound), "
                 "keyed by the map file's SHA-256: LB = alpha * T_fly(|end - start|) + "
@@ -167,27 +199,10 @@ class BestKnown:
 
     def _read(self) -> dict[str, Any]:
         """The file's JSON object ({} when missing) read by the shared reader, each entry of
-        `tasks` an object with a finite number `f` and a string `map_sha256`; ValueError
-        naming the file and the field otherwise (a list of tasks, an entry 5, "f": "abc" were
-        tracebacks, and "f": NaN was kept as a best-known f)."""
-        from planner_core.textio import json_path, printable, quoted
-
+        `tasks` an object with a finite number `f` and a string `map_sha256` (`_entries`);
+        ValueError naming the file and the field otherwise."""
         data = read_json(self.path)
-        tasks = data.get("tasks")
-        head = printable(self.path)
-        if tasks is not None and not isinstance(tasks, dict):
-            raise ValueError(f"{head}: tasks: expected an object, got {quoted(tasks)}")
-        for name, e in (tasks or {}).items():
-            where = json_path(("tasks", name))
-            if not isinstance(e, dict):
-                raise ValueError(f"{head}: {where}: expected an object, got {quoted(e)}")
-            f = e.get("f")
-            if isinstance(f, bool) or not isinstance(f, int | float) or not math.isfinite(f):
-                raise ValueError(f"{head}: {where}.f: expected a finite number, got "
-                                 f"{quoted(f)}")  # fmt: skip
-            if not isinstance(e.get("map_sha256"), str):
-                raise ValueError(f"{head}: {where}.map_sha256: expected a string, got "
-                                 f"{quoted(e.get('map_sha256'))}")  # fmt: skip
+        _entries(self.path, {"f": float, "map_sha256": str}, data)
         return data
 
     def f_values(self, files: dict[str, Path]) -> dict[str, float]:
