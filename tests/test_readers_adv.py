@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import warnings
 from pathlib import Path
 
@@ -515,3 +516,23 @@ def test_report_refuses_a_malformed_lower_bounds_cache(tmp_path: Path, capsys) -
         (tmp_path / "suite_lower_bounds.json").write_text(text)
         rc, out, err = _run(capsys, "report", folder, "-o", folder / "r.md", "--suite", suite)
         assert f"suite_lower_bounds.json: {needle}" in _one_line(rc, err), err
+
+
+@pytest.mark.timeout(120)  # a FIFO read would wait for a writer forever
+def test_schedule_checkpoint_files_are_read_bounded(tmp_path: Path) -> None:
+    import shutil
+
+    from planner_core.learning.schedule_policy import DEFAULT_CHECKPOINT, load
+
+    for name, data, needle in (("manifest.json", None, "manifest.json: is a named pipe"),
+                               ("weights.npz", None, "weights.npz: is a named pipe"),
+                               ("manifest.json", b"[" * 100_000 + b"]" * 100_000,
+                                "manifest.json: [0][0]")):  # fmt: skip
+        ck = Path(shutil.copytree(DEFAULT_CHECKPOINT, tmp_path / f"{name}-{data is None}"))
+        (ck / name).unlink()
+        if data is None:
+            os.mkfifo(ck / name)
+        else:
+            (ck / name).write_bytes(data)
+        with pytest.raises(ValueError, match=re.escape(needle)):
+            load(ck)

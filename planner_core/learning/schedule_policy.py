@@ -114,11 +114,19 @@ def load(folder: str | Path) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
 
     from planner_core.learning.schedule_env import FEATURES
     from planner_core.pipeline.schedule import ACTIONS
+    from planner_core.textio import InputError, printable, read_bytes, read_json
 
     folder = Path(folder)
+    # the shared reader: regular files only (a FIFO never blocks), bounded size and depth
+    for name in ("manifest.json", "weights.npz"):
+        try:
+            if name == "manifest.json":
+                manifest = read_json(folder / name)
+            else:
+                raw = read_bytes(folder / name)
+        except InputError as exc:
+            raise ValueError(f"checkpoint: cannot read {printable(folder / name)}: {exc}") from None
     try:
-        manifest = json.loads((folder / "manifest.json").read_text())
-        raw = (folder / "weights.npz").read_bytes()
         with np.load(io.BytesIO(raw), allow_pickle=False) as z:
             params = {k: np.asarray(z[k], dtype=float) for k in _NAMES}
     except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile) as exc:
