@@ -100,21 +100,29 @@ def _shape_patch(shell: np.ndarray, holes: Any, **style: Any) -> Any:
 
 def _violation_segments(map_: Any, path: np.ndarray) -> list[np.ndarray]:
     """The parts of the path's legs inside an obstacle or no-fly zone (C5), as (k, 2) polylines,
-    measured by the simulator's own shapely geometry."""
+    measured by the simulator's own shapely geometry.
+
+    Each distinct leg once (a DO_JUMP loop repeats them), cut by the union of only the obstacles
+    an STRtree finds it meeting: O(L log L + U log O + P) for L legs, U distinct, O obstacles and
+    P (leg, obstacle) pairs that meet (not every leg against the union of every obstacle).
+    """
     import shapely
-    from shapely.geometry import LineString
 
-    from sim.obstacles import obstacle_shapes
+    from sim.obstacles import obstacle_shapes, unique_legs
 
-    shapes = [o.shape for o in obstacle_shapes(map_)]
-    if not shapes or len(path) < 2:
+    shapes = np.array([o.shape for o in obstacle_shapes(map_)], dtype=object)
+    if not len(shapes) or len(path) < 2:
         return []
-    union = shapely.union_all(shapes)
+    legs, _ = unique_legs([np.asarray(path, dtype=float)])
+    tree = shapely.STRtree(shapes)
     out: list[np.ndarray] = []
-    for a, b in zip(path[:-1], path[1:], strict=True):
+    for (a, b), line in zip(legs, shapely.linestrings(legs), strict=True):
         if np.allclose(a, b):
             continue
-        inter = LineString([a, b]).intersection(union)
+        near = tree.query(line, predicate="intersects")
+        if not len(near):
+            continue
+        inter = line.intersection(shapely.union_all(shapes[near]))
         for g in getattr(inter, "geoms", [inter]):
             if g.geom_type == "LineString" and g.length > 1e-6:
                 out.append(np.asarray(g.coords, dtype=float))
