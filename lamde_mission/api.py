@@ -113,7 +113,7 @@ def plan(
             are feasible, the others (0 s) are corners, written as NAV_WAYPOINT. 0: the
             paper's model, every point a slot. "auto" (default): K from the map
             (`planner_core.model.corner_slots.auto_corner_slots`: the blocked legs of the
-            seeder's plans within I_max; 0 on the paper's suite maps, 3 on campus-500).
+            seeder's plans within I_max; 0 on the paper's suite maps, 4 on campus-500).
             The K planned with is recorded as `config["corner_slots"]` (and
             `config["corner_slots_rule"]` = "auto" when the rule chose it).
 

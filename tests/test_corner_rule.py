@@ -180,9 +180,12 @@ def test_campus_500_plans_feasibly_at_the_default() -> None:
 
     doc = campus_map(500, seed=0)
     m = load_map(doc)
-    assert problem_for(m.planning_map())[1] == 3
+    # 3 until the inflation became the exact outer offset (2026-12-06: edges no longer 2 %
+    # wider, so more legs pass between buildings and the seeder's plans route differently)
+    k = problem_for(m.planning_map())[1]
+    assert k == 4
     plan = lamde_mission.plan(doc, seed=1)
-    assert plan.feasible and plan.config["corner_slots"] == 3
+    assert plan.feasible and plan.config["corner_slots"] == k
     assert np.count_nonzero(np.asarray(plan.hover_times) > 0.0) <= m.max_hover_points
 
 

@@ -14,7 +14,8 @@ corners it kept (points that serve no sensor, 0 s) plus one per leg it had to le
 K is the median of that count over the draws (it stops once most draws fit). Measured
 (docs/scaling.md, "Detour corners and I_max"): all of the first five draws on each of the 16
 suite maps and the 8 large maps fit or hold no corner (K = 0: the paper's Problem, the same
-plans); campus-500's need 3, 3, 4, 5, 4 (K = 3 from the first three).
+plans); campus-500's needed 3, 3, 4, 5, 4 (K = 3 from the first three; 4 since the
+inflation is the exact outer offset, 2026-12-06).
 
 `problem_for(...)` builds the Problem a plan runs on and shares the seeder (its visibility
 graph: 5.7 s of CPU on campus-500) between the K = 0 problem the rule reads and the one with
