@@ -89,16 +89,11 @@ def load(checkpoint: str | os.PathLike[str]) -> tuple[dict[str, np.ndarray], Net
     is decompressed, so the data read is bounded by the network's size (a 2 MB archive of a
     compressed (5, 50000000) array reached 3 GB before its shape was refused).
     """
-    from planner_core.textio import InputError, read_json
+    from planner_core.textio import read_json
 
     folder = resolve(checkpoint)
     cfg_path = folder / "config.json"
-    try:
-        config = read_json(cfg_path)
-    except InputError as exc:
-        if str(exc) == "file not found":
-            raise CheckpointError(f"checkpoint: {cfg_path} is missing") from None
-        raise CheckpointError(f"checkpoint: {cfg_path}: {exc}") from None
+    config = _read_file(read_json, cfg_path)
     if not isinstance(config, dict):
         raise CheckpointError(f"checkpoint: {cfg_path}: expected a JSON object")
     if config.get("format") != FORMAT:
@@ -118,6 +113,19 @@ def load(checkpoint: str | os.PathLike[str]) -> tuple[dict[str, np.ndarray], Net
     return params, net, config
 
 
+def _read_file(read: Any, path: Path) -> Any:
+    """`read(path)` (a `planner_core.textio` reader); its InputError as a CheckpointError
+    naming the file ("is missing" when it does not exist)."""
+    from planner_core.textio import InputError
+
+    try:
+        return read(path)
+    except InputError as exc:
+        if str(exc) == "file not found":
+            raise CheckpointError(f"checkpoint: {path} is missing") from None
+        raise CheckpointError(f"checkpoint: {path}: {exc}") from None
+
+
 def _read_weights(path: Path, net: NetConfig) -> dict[str, np.ndarray]:
     """The arrays of a weights.npz, each checked from its header (name, shape, a float dtype,
     the member's stored size) before its data is read; CheckpointError naming the file."""
@@ -126,14 +134,9 @@ def _read_weights(path: Path, net: NetConfig) -> dict[str, np.ndarray]:
 
     from numpy.lib import format as npf
 
-    from planner_core.textio import InputError, read_bytes
+    from planner_core.textio import read_bytes
 
-    try:
-        data = read_bytes(path)
-    except InputError as exc:
-        if str(exc) == "file not found":
-            raise CheckpointError(f"checkpoint: {path} is missing") from None
-        raise CheckpointError(f"checkpoint: {path}: {exc}") from None
+    data = _read_file(read_bytes, path)
     shapes = param_shapes(net)
     params: dict[str, np.ndarray] = {}
     try:
