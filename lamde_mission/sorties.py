@@ -322,8 +322,8 @@ def _check(
     """Replay each (vehicle, sortie, file, depot_start, depot_end, items) on its sortie map;
     judge the whole plan's data, its shape (`vehicles`: how many the plan lists; the mission
     files in `directory`) and its vehicles in the air together (SEPARATION, LINKS at each
-    vehicle's launch; `launches` None: staggered by `lamde_mission.launches.stagger`, as a
-    plan is written)."""
+    vehicle's launch: `launches[k - 1]` for vehicle k, as fleet.json lists them; None:
+    staggered by `lamde_mission.launches.stagger`, as a plan is written)."""
     from lamde_mission.launches import stagger
     from sim import replay, verify
     from sim.fleet_time import fleet_time_verdicts, track
@@ -341,19 +341,19 @@ def _check(
     by_vehicle: dict[int, list[Any]] = {}
     for s in out:
         by_vehicle.setdefault(s.vehicle, []).append(s.timeline)
-    if len(by_vehicle) == 1:  # nothing else in the air: no tracks to build
-        return FleetCheck(tuple(out), tuple(combined), float(m.swap_s),
-                          (*shape, *fleet_time_verdicts([], tuple(m.sensor_ids))),
-                          launches=(0.0,))
-    tracks = [track(by_vehicle[v], float(m.swap_s)) for v in sorted(by_vehicle)]
-    if launches is None:
-        launches = stagger(tracks)
-    launches = [float(t) for t in launches][:len(tracks)]
-    launches += [0.0] * (len(tracks) - len(launches))
-    air = fleet_time_verdicts([x.at(t) for t, x in zip(launches, tracks, strict=True)],
-                              tuple(m.sensor_ids))
+    flying = sorted(by_vehicle)  # vehicles with a sortie (a vehicle may have none)
+    at: dict[int, float] = {v: 0.0 for v in flying}
+    placed = []
+    if len(flying) > 1:  # one vehicle alone meets nothing in the air: no tracks to build
+        tracks = [track(by_vehicle[v], float(m.swap_s)) for v in flying]
+        given = stagger(tracks) if launches is None else [
+            float(launches[v - 1]) if v <= len(launches) else 0.0 for v in flying]
+        at = dict(zip(flying, given, strict=True))
+        placed = [x.at(t) for x, t in zip(tracks, given, strict=True)]
+    air = fleet_time_verdicts(placed, tuple(m.sensor_ids))
     return FleetCheck(tuple(out), tuple(combined), float(m.swap_s), (*shape, *air),
-                      launches=tuple(launches))
+                      launches=tuple(at.get(v, 0.0) for v in range(1, max(flying, default=0)
+                                                                   + 1)))
 
 
 def verify_sortie_dir(m: Any, path: str | Path) -> FleetCheck:

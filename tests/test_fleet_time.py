@@ -137,3 +137,31 @@ def test_tracks_keeping_only_their_heard_sensors_give_the_same_conflicts() -> No
             heard = np.flatnonzero(t.sending.any(axis=0))
             compact.append(VehicleTrack(t.launch, t.dt, t.xy, t.z, t.sending[:, heard], heard))
         assert conflicts(*full)[2:] == pytest.approx(conflicts(*compact)[2:], nan_ok=True)
+
+
+def test_verify_reads_each_vehicles_launch_by_its_number_when_one_has_no_sortie(tmp_path
+                                                                               ) -> None:
+    """fleet.json may list a vehicle with no sortie: the launches are each vehicle's own (they
+    were taken in the order of the vehicles that fly, so vehicle 3 got vehicle 2's)."""
+    import json
+
+    from lamde_mission.sorties import verify_sortie_dir
+    from planner_core import load_map
+    from tests.fleet_helpers import DEMO_MAP, write_fleet_dir
+
+    d = write_fleet_dir(tmp_path / "d", [[], [["S1"]], [["S1"]]])
+    doc = json.loads((d / "fleet.json").read_text())
+    for v, t in zip(doc["vehicles"], (0.0, 0.0, 2000.0), strict=True):
+        v["launch_s"] = t  # vehicle 3 long after vehicle 2 has landed
+    (d / "fleet.json").write_text(json.dumps(doc))
+    check = verify_sortie_dir(load_map(DEMO_MAP), d)
+    sep = next(v for v in check.fleet if v.name == "SEPARATION")
+    assert sep.passed, sep.detail
+    assert check.launch(3) == 2000.0 and check.launch(2) == 0.0
+    # the same launches for both: they take off together from the one depot
+    for v in doc["vehicles"]:
+        v["launch_s"] = 0.0
+    (d / "fleet.json").write_text(json.dumps(doc))
+    sep = next(v for v in verify_sortie_dir(load_map(DEMO_MAP), d).fleet
+               if v.name == "SEPARATION")
+    assert not sep.passed
