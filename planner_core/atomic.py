@@ -184,18 +184,13 @@ def write_bytes_atomic(path: str | Path, data: bytes, *, mkdir: bool = True) -> 
     if mkdir:
         folder.mkdir(parents=True, exist_ok=True)
     clean_stale_temps(path)
+    fd, tmp = tempfile.mkstemp(prefix=_tmp_prefix(path), dir=folder)  # 0600 while written
     try:
-        mode = stat.S_IMODE(os.stat(path).st_mode)
-    except OSError:
-        mode = 0o666 & ~_umask()  # what a plain open() would give
-    fd, tmp = tempfile.mkstemp(prefix=_tmp_prefix(path), dir=folder)
-    try:
-        os.chmod(tmp, mode)  # mkstemp makes the file 0600
         with os.fdopen(fd, "wb") as fh:
             fh.write(data)
             fh.flush()
             os.fsync(fh.fileno())
-        os.replace(tmp, path)
+        replace_keeping_mode(tmp, path)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
