@@ -40,6 +40,7 @@ from typing import Any
 import numpy as np
 
 from planner_core.defaults import MAP_DEFAULTS
+from planner_core.model.formulas import flight_time
 
 __all__ = [
     "J_PER_WH",
@@ -246,8 +247,7 @@ def vertical_time_s(altitude: float, climb_speed: float, descent_speed: float,
     h = abs(float(altitude))
     if h <= 0.0:
         return 0.0
-    return sum(h / v + v / accel if h > v * v / accel else 2.0 * math.sqrt(h / accel)
-               for v in (float(climb_speed), float(descent_speed)))
+    return sum(float(flight_time(h, float(v), accel)) for v in (climb_speed, descent_speed))
 
 
 def vertical_energy_wh(altitude: float, climb_speed: float, descent_speed: float,
