@@ -343,6 +343,11 @@ _MAP: tuple[Default, ...] = (
             "a crew flies tens of UAVs; 100 bounds the planner's split", integer=True),
     _ranged("fleet.swap_s", 300.0, "seconds a battery swap takes at a depot between sorties",
             0.0, 86_400.0, "a swap longer than a day is no swap"),
+    _ranged("fleet.separation_m", 30.0, "m, the least 3D distance between two vehicles in the "
+            "air: verify's SEPARATION, kept by plan's staggered launches (GNSS error, the 10 m "
+            "clearance and rotor wash, with room; set your airspace's rule)", 0.0, 1_000.0,
+            "0 m is a collision; beyond a kilometre the vehicles of a map fly one after the "
+            "other", lo_open=True),
 )
 
 #: how the sensors in range of a hover point share its radio (`radio.access`), the default

@@ -168,6 +168,38 @@ def test_depot_near_an_obstacle_stays_outside_its_inflation(hand_map: dict) -> N
     assert [d.name for d in pm.depots] == ["near"]
 
 
+def test_separation_is_a_fleet_field_read_and_checked(hand_map: dict, tmp_path, capsys
+                                                     ) -> None:
+    """fleet.separation_m (m, default 30): read by `Map.separation_m`, given back by `to_dict`
+    only when the file gives it (a fleet without it dumps as before), and a bad value is one
+    line naming the field, exit 2 in the command line."""
+    from lamde_mission.cli import main
+
+    assert load_map(hand_map).separation_m == 30.0  # no fleet
+    hand_map["fleet"] = {"uavs": 2}
+    m = load_map(hand_map)
+    assert m.separation_m == 30.0 and "separation_m" not in m.to_dict()["fleet"]
+    assert "separation_m" not in m.planning_map().to_dict()["fleet"]
+    hand_map["fleet"]["separation_m"] = 50
+    m = load_map(hand_map)
+    assert m.separation_m == 50.0 and m.to_dict()["fleet"]["separation_m"] == 50.0
+    assert load_map(json.loads(json.dumps(m.to_dict()))).separation_m == 50.0
+    assert m.planning_map().separation_m == 50.0 and m.summary()["fleet"]["separation_m"] == 50.0
+    good = tmp_path / "good.json"
+    good.write_text(json.dumps(hand_map))
+    assert main(["check", str(good)]) == 0
+    assert "separation 50 m" in capsys.readouterr().out
+    for bad in (-5, 0, 1001, "far", True, None):
+        hand_map["fleet"]["separation_m"] = bad
+        lines = _problems(hand_map)
+        assert len(lines) == 1 and lines[0].startswith("fleet.separation_m: "), (bad, lines)
+        path = tmp_path / "bad.json"
+        path.write_text(json.dumps(hand_map))
+        assert main(["check", str(path)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "fleet.separation_m: " in err[0], (bad, err)
+
+
 def test_schema_lists_the_fields(tmp_path) -> None:
     r = run_cli("schema")
     assert r.returncode == 0, r.stderr
@@ -175,7 +207,8 @@ def test_schema_lists_the_fields(tmp_path) -> None:
     assert {"energy_wh", "reserve"} <= set(defs["Battery"]["properties"])
     assert {"battery", "endurance_s", "power"} <= set(defs["Uav"]["properties"])
     assert defs["Power"]["properties"]["induced_w"]["default"] == PI
-    assert {"uavs", "depots", "swap_s"} <= set(defs["Fleet"]["properties"])
+    assert {"uavs", "depots", "swap_s", "separation_m"} <= set(defs["Fleet"]["properties"])
+    assert defs["Fleet"]["properties"]["separation_m"]["default"] == 30.0
     assert defs["Objective"]["properties"]["goal"]["default"] == "total"
 
 

@@ -112,7 +112,8 @@ def _energy_lines(s: dict, m: object) -> None:
                 f" and {sites[1]} at the map's end (a landing site; a take-off site only "
                 "after a landing there)" if len(sites) > 1 else "")
         print(f"  fleet           {f['uavs']} UAV{'s' if f['uavs'] != 1 else ''}, depots "
-              f"{where}, swap {f['swap_s']:g} s, goal {s['goal']}")
+              f"{where}, swap {f['swap_s']:g} s, separation {f['separation_m']:g} m, goal "
+              f"{s['goal']}")
 
 
 def _diagnosis(d: object) -> int:

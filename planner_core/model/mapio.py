@@ -273,13 +273,15 @@ class Depot(BaseModel):
 
 
 class Fleet(BaseModel):
-    """UAVs flying at once, their depots and the battery swap time (issue 33)."""
+    """UAVs flying at once, their depots, the battery swap time (issue 33) and the least
+    distance between two of them in the air."""
 
     model_config = _STRICT
     uavs: int = _field("fleet.uavs")
     depots: list[Depot] | None = Field(None, min_length=1, max_length=MAX_DEPOTS,
                                        description=MAP_LISTS["fleet.depots"].meaning)
     swap_s: float = _field("fleet.swap_s")
+    separation_m: float = _field("fleet.separation_m")
 
 
 #: metres: obstacles and no-fly zones are inflated by this much for planning (`safety.clearance`)
@@ -522,6 +524,15 @@ class Map:
         f = self.spec.fleet
         return float(f.swap_s if f is not None else MAP_DEFAULTS["fleet.swap_s"].value)
 
+    @property
+    def separation_m(self) -> float:
+        """Metres: the least 3D distance between two vehicles in the air
+        (`fleet.separation_m`, default 30), judged by verify's SEPARATION and kept by plan's
+        staggered launches (`lamde_mission.launches.stagger`)."""
+        f = self.spec.fleet
+        return float(f.separation_m if f is not None
+                     else MAP_DEFAULTS["fleet.separation_m"].value)  # fmt: skip
+
     @cached_property
     def depots(self) -> tuple[Depot, ...]:
         """The take-off, landing and swap sites in force: `fleet.depots`, or one depot named
@@ -739,6 +750,7 @@ class Map:
             },
             "power": {**u.power.model_dump(), "hover_w": self.power.hover_w},
             "fleet": {"uavs": self.uavs, "swap_s": self.swap_s,
+                      "separation_m": self.separation_m,
                       "depots": [d.model_dump() for d in self.depots],
                       "depots_default": not (self.has_fleet and self.spec.fleet.depots)},
             "goal": self.goal,
@@ -821,8 +833,9 @@ def sub_map_dict(
 
 
 def _drop_unset_energy_fields(spec: MapFile, d: dict[str, Any]) -> None:
-    """Remove from the dumped map `d` the battery, power, fleet and goal fields the file did
-    not give (so `Map.to_dict` of a map without them is what it was before issue 33)."""
+    """Remove from the dumped map `d` the battery, power, fleet, separation and goal fields
+    the file did not give (so `Map.to_dict` of a map without them is what it was before issue
+    33, and before `fleet.separation_m`)."""
     for key in _UAV_ENERGY_FIELDS:
         if key not in spec.uav.model_fields_set or d["uav"].get(key) is None:
             d["uav"].pop(key, None)
@@ -830,6 +843,8 @@ def _drop_unset_energy_fields(spec: MapFile, d: dict[str, Any]) -> None:
         d["objective"].pop("goal", None)
     if spec.fleet is None:
         d.pop("fleet", None)
+    elif "separation_m" not in spec.fleet.model_fields_set:
+        d["fleet"].pop("separation_m", None)
 
 
 #: metres added to every non-zero clearance when inflating: covers where a stored mission's
