@@ -30,7 +30,8 @@ def stagger(tracks: Sequence[VehicleTrack], *, separation: float = SEPARATION_M,
 
     Args:
         tracks: one per vehicle, in vehicle order, on one grid step.
-        separation: m, the least distance in the air.
+        separation: m, the least distance in the air: the map's `fleet.separation_m`
+            (`Map.separation_m`).
         step: s between launch times tried (a multiple of the tracks' grid step).
 
     Returns:

@@ -323,7 +323,8 @@ def _check(
     judge the whole plan's data, its shape (`vehicles`: how many the plan lists; the mission
     files in `directory`) and its vehicles in the air together (SEPARATION, LINKS at each
     vehicle's launch: `launches[k - 1]` for vehicle k, as fleet.json lists them; None:
-    staggered by `lamde_mission.launches.stagger`, as a plan is written)."""
+    staggered by `lamde_mission.launches.stagger`, as a plan is written). Both stagger and
+    SEPARATION keep the map's `fleet.separation_m` (`m.separation_m`, metres)."""
     from lamde_mission.launches import stagger
     from sim import replay, verify
     from sim.fleet_time import fleet_time_verdicts, track
@@ -342,15 +343,16 @@ def _check(
     for s in out:
         by_vehicle.setdefault(s.vehicle, []).append(s.timeline)
     flying = sorted(by_vehicle)  # vehicles with a sortie (a vehicle may have none)
+    sep = float(m.separation_m)  # m, the map's fleet.separation_m
     at: dict[int, float] = {v: 0.0 for v in flying}
     placed = []
     if len(flying) > 1:  # one vehicle alone meets nothing in the air: no tracks to build
         tracks = [track(by_vehicle[v], float(m.swap_s)) for v in flying]
-        given = stagger(tracks) if launches is None else [
+        given = stagger(tracks, separation=sep) if launches is None else [
             float(launches[v - 1]) if v <= len(launches) else 0.0 for v in flying]
         at = dict(zip(flying, given, strict=True))
         placed = [x.at(t) for x, t in zip(tracks, given, strict=True)]
-    air = fleet_time_verdicts(placed, tuple(m.sensor_ids))
+    air = fleet_time_verdicts(placed, tuple(m.sensor_ids), separation=sep)
     return FleetCheck(tuple(out), tuple(combined), float(m.swap_s), (*shape, *air),
                       launches=tuple(at.get(v, 0.0) for v in range(1, max(flying, default=0)
                                                                    + 1)))

@@ -5,16 +5,18 @@ seconds after the first vehicle's take-off), with a battery swap of `swap_s` on 
 between them; a sortie's replay (`sim.replay.Timeline`: t, xy, z, data) places the vehicle on
 the shared clock. On a grid of `dt` seconds, two verdicts:
 
-- **SEPARATION**: two vehicles both airborne (above `AIRBORNE_M`) are never closer than
-  `SEPARATION_M` (3D). Vehicles taking off from one depot at once, flying the same legs at the
-  same altitude, or landing on one spot seconds apart fail it.
+- **SEPARATION**: two vehicles both airborne (above `AIRBORNE_M`) are never closer than the
+  map's `fleet.separation_m` (3D; the caller passes it in, default `SEPARATION_M`). Vehicles
+  taking off from one depot at once, flying the same legs at the same altitude, or landing on
+  one spot seconds apart fail it.
 - **LINKS**: no sensor sends to two vehicles at the same time. The link model (paper Sec. 3)
   gives a sensor one uplink at R_ij; two vehicles hovering in its range at once would each be
   credited the full rate, data the sensor cannot send.
 
 Positions between samples are linear (the replay samples each phase at `dt` or finer); a
 vehicle on the ground (before its launch, during a swap, after its last landing) is not
-airborne and receives nothing. Like the rest of the sim it imports of `planner_core` nothing.
+airborne and receives nothing. Like the rest of the sim it imports of `planner_core` only the
+defaults table (`SEPARATION_M`'s value); the map's separation comes in as an argument.
 Cost: O(V^2 x T / dt) for SEPARATION and O(V^2 x K x T / dt) for LINKS, T the longest span
 and K the sensors two vehicles both hear (0 when they serve different sensors); building a
 track O(sorties x J x T / dt).
@@ -27,15 +29,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from planner_core.defaults import MAP_DEFAULTS
 from sim.checks import Verdict
 from sim.replay import Timeline
 
 __all__ = ["SEPARATION_M", "AIRBORNE_M", "VehicleTrack", "track", "conflicts",
            "fleet_time_verdicts"]  # fmt: skip
 
-#: m, the least 3D distance between two vehicles in the air: GNSS position error (a few
-#: metres each), the 10 m obstacle clearance of the map's default, and rotor wash, with room
-SEPARATION_M = 30.0
+#: m, the least 3D distance between two vehicles in the air when the caller gives none: the
+#: default of the map's `fleet.separation_m` (GNSS position error of a few metres each, the
+#: 10 m obstacle clearance of the map's default, and rotor wash, with room)
+SEPARATION_M: float = float(MAP_DEFAULTS["fleet.separation_m"].value)
 #: m above home: a vehicle lower than this is on the ground (taking off or landed)
 AIRBORNE_M = 0.5
 #: Mbit per grid step below which a sensor is not sending (rounding of the replay's sums)
@@ -180,7 +184,8 @@ def fleet_time_verdicts(tracks: Sequence[VehicleTrack], sensor_ids: Sequence[str
     Args:
         tracks: one per vehicle (vehicle k + 1 at index k), each at its launch time.
         sensor_ids: the map's sensors, in the order of the tracks' `sending` columns.
-        separation: m.
+        separation: m, the least distance allowed: the map's `fleet.separation_m`
+            (`Map.separation_m`), > 0.
 
     Returns:
         [SEPARATION, LINKS]; margins in m (least distance - separation) and in steps shared.

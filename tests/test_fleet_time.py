@@ -165,3 +165,50 @@ def test_verify_reads_each_vehicles_launch_by_its_number_when_one_has_no_sortie(
     sep = next(v for v in verify_sortie_dir(load_map(DEMO_MAP), d).fleet
                if v.name == "SEPARATION")
     assert not sep.passed
+
+
+def test_separation_is_the_callers_and_defaults_to_the_maps_default() -> None:
+    """Two vehicles flying side by side 40 m apart pass the default 30 m and fail a 50 m rule;
+    the sim's default is the defaults table's `fleet.separation_m` (one place)."""
+    from planner_core.defaults import MAP_DEFAULTS
+
+    assert SEPARATION_M == MAP_DEFAULTS["fleet.separation_m"].value == 30.0
+    pair = [_track(100), _track(100, x0=40.0)]
+    assert fleet_time_verdicts(pair, ["s0", "s1"])[0].passed
+    sep = fleet_time_verdicts(pair, ["s0", "s1"], separation=50.0)[0]
+    assert not sep.passed and sep.margin == pytest.approx(-10.0)
+    assert sep.title == "vehicles >= 50 m apart"
+
+
+def test_verify_holds_a_directory_to_its_maps_separation(tmp_path, capsys) -> None:
+    """`verify MAP DIR/` judges SEPARATION at the MAP's `fleet.separation_m`: vehicle 2 launched
+    16 s after vehicle 1 from the one depot climbs 35.3 m below it (then they part for S1 and
+    S2): it passes at the default 30 m and fails a map's 50 m rule (it was 30 m whatever the
+    map said)."""
+    import json
+
+    from lamde_mission.cli import main
+    from lamde_mission.sorties import verify_sortie_dir
+    from planner_core import load_map
+    from tests.fleet_helpers import DEMO_MAP, write_fleet_dir
+
+    d = write_fleet_dir(tmp_path / "d", [[["S1"]], [["S2"]]])
+    doc = json.loads((d / "fleet.json").read_text())
+    for v, t in zip(doc["vehicles"], (0.0, 16.0), strict=True):
+        v["launch_s"] = t
+    (d / "fleet.json").write_text(json.dumps(doc))
+    maps = {}
+    for sep in (None, 50):
+        m = json.loads(DEMO_MAP.read_text())
+        m["fleet"] = {"uavs": 2} if sep is None else {"uavs": 2, "separation_m": sep}
+        maps[sep] = tmp_path / f"map-{sep}.json"
+        maps[sep].write_text(json.dumps(m))
+    at30 = next(v for v in verify_sortie_dir(load_map(maps[None]), d).fleet
+                if v.name == "SEPARATION")
+    assert at30.passed and at30.margin == pytest.approx(5.3, abs=0.1), at30.detail
+    # (the hand-made sorties hover 1 s, so the whole plan's C4 fails either way: the rows)
+    main(["verify", str(maps[None]), str(d)])
+    assert "fleet SEPARATION vehicles >= 30 m apart: PASS" in capsys.readouterr().out
+    main(["verify", str(maps[50]), str(d)])
+    out = capsys.readouterr().out
+    assert "fleet SEPARATION vehicles >= 50 m apart: FAIL" in out and "35.3 m apart" in out

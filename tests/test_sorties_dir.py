@@ -326,3 +326,43 @@ def test_the_docs_say_what_plan_fleet_returns_and_what_is_left() -> None:
             "plan") in readme
     for page in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]:
         assert "reserve left" not in " ".join(page.read_text().split()), page
+
+
+def _one_depot_map(tmp: Path, separation: float | None) -> Path:
+    """The fleet demo with 2 UAVs and no `fleet.depots` (both take off at the map's start),
+    with `fleet.separation_m` when given."""
+    doc = json.loads(DEMO.read_text())
+    doc["fleet"]["uavs"] = 2
+    del doc["fleet"]["depots"]
+    if separation is not None:
+        doc["fleet"]["separation_m"] = separation
+    path = tmp / f"one-depot-{separation}.json"
+    path.write_text(json.dumps(doc))
+    return path
+
+
+def test_plan_staggers_the_launches_to_the_maps_separation(tmp_path, capsys):
+    """fleet.separation_m: two UAVs of one depot, written by `write_sortie_dir` (what `plan
+    -o DIR/` calls). At the default 30 m vehicle 2 launches at +110 s and they pass 37 m
+    apart; a map's 50 m rule launches it later and keeps 50 m (it kept 30 m whatever the map
+    said), and `verify` fails the 30 m directory on the 50 m map (exit 1)."""
+    from lamde_mission.sorties import write_sortie_dir
+
+    checks = {}
+    for sep in (None, 50.0):
+        m, plan = _fleet_plan(_one_depot_map(tmp_path, sep))
+        check, written = write_sortie_dir(plan, m, tmp_path / f"d{sep}")
+        assert written, check.failed()
+        checks[sep] = check
+    sep30 = next(v for v in checks[None].fleet if v.name == "SEPARATION")
+    sep50 = next(v for v in checks[50.0].fleet if v.name == "SEPARATION")
+    assert checks[None].launches == (0.0, 110.0) and 0.0 <= sep30.margin < 20.0, sep30.detail
+    assert checks[50.0].launches[1] > 110.0 and sep50.passed and sep50.margin >= 0.0
+    assert sep50.title == "vehicles >= 50 m apart"
+    launches = [v["launch_s"] for v in
+                json.loads((tmp_path / "d50.0" / "fleet.json").read_text())["vehicles"]]
+    assert launches == list(checks[50.0].launches)
+    rc, out, _ = _verify(capsys, _one_depot_map(tmp_path, None), tmp_path / "dNone")
+    assert rc == 0 and "fleet SEPARATION vehicles >= 30 m apart: PASS" in out
+    rc, out, _ = _verify(capsys, _one_depot_map(tmp_path, 50.0), tmp_path / "dNone")
+    assert rc == 1 and "fleet SEPARATION vehicles >= 50 m apart: FAIL" in out
