@@ -7,7 +7,9 @@ required data set to the sortie's share, so storage raises hover times where the
 rounding would leave a share short), writes `mission-v{vehicle}-s{sortie}.plan` (1-based,
 QGroundControl, take-off at the sortie's depot, landing at its depot) and `fleet.json` into a
 hidden folder beside DIR, verifies everything with `verify_sortie_dir`'s replay and renames the
-folder to DIR last (a DIR already there is replaced only then): nothing half-written.
+folder to DIR last (a DIR already there is replaced only then): nothing half-written. A write
+killed before its rename leaves its hidden folder; the next write to DIR removes those of
+processes gone (`planner_core.atomic.clean_stale_dirs`).
 
 `verify_sortie_dir` replays each mission file of a directory with the simulator on its sortie's
 map (start and end at the depots `fleet.json` names) and judges per sortie C1-C3, C5, ENDS,
@@ -45,6 +47,7 @@ from typing import Any
 
 import numpy as np
 
+from planner_core.atomic import clean_stale_dirs, dir_beside
 from planner_core.defaults import MAX_FLEET_SORTIES, MAX_FLEET_VEHICLES
 
 __all__ = ["FLEET_FILE", "SortieCheck", "FleetCheck", "sortie_dir_refusal", "sortie_file",
@@ -454,6 +457,14 @@ def write_sortie_dir(
             (`plan.settings.goal`, what it was made for); given, it must be that one.
         allow_infeasible: write it even when a verdict fails.
 
+    The directory is filled as `.NAME.lamde-pending-PID` beside `out_dir` and renamed onto it
+    last; a directory it replaces is moved to `.NAME.lamde-old-PID` and removed after. A write
+    killed (SIGKILL, power loss) leaves those folders behind: each write removes, before it
+    starts, the pending folders beside `out_dir` whose process PID no longer runs, and once its
+    directory is in place the old ones of such processes (`planner_core.atomic.
+    clean_stale_dirs`); a folder of a process still running (another write in progress) is
+    never touched, so they do not accumulate.
+
     Returns:
         (the `FleetCheck` of the stored missions, whether the directory was written).
 
@@ -488,7 +499,8 @@ def write_sortie_dir(
     if refusal is not None:
         raise FileExistsError(f"{out_dir}: {refusal}")
     target = Path(out_dir).resolve()
-    pending = target.with_name(f".{target.name}.lamde-pending-{os.getpid()}")
+    clean_stale_dirs(target, ("pending",))  # what killed writes to it left beside it
+    pending = dir_beside(target, "pending")
     if pending.exists():
         shutil.rmtree(pending)
     pending.mkdir(parents=False)
@@ -523,11 +535,13 @@ def write_sortie_dir(
         )
         old = None
         if target.exists():
-            old = target.with_name(f".{target.name}.lamde-old-{os.getpid()}")
+            old = dir_beside(target, "old")
             os.replace(target, old)
         os.replace(pending, target)
         if old is not None:
             shutil.rmtree(old, ignore_errors=True)
+        # a write killed between its two renames left the directory it replaced: superseded now
+        clean_stale_dirs(target, ("old",))
         return check, True
     finally:
         if pending.exists():

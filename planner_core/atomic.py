@@ -4,8 +4,11 @@ The lowest layer (no project imports), so planner_core and lamde_mission share o
 
 Temp files are named `.NAME.lamde-tmp-PID-RANDOM` next to the target, so a write killed in
 its window (SIGKILL, power loss) leaves a file that is recognisably ours: the next write to the
-same target removes those whose process is gone. Overwriting an existing file keeps its mode
-(a 0600 file stays 0600); a new file gets what a plain `open()` would give (0666 & ~umask).
+same target removes those whose process is gone. A whole folder written the same way (a
+sortie directory) is filled as `.NAME.lamde-pending-PID` and the folder it replaces moved to
+`.NAME.lamde-old-PID` (`dir_beside`); `clean_stale_dirs` removes those of processes gone.
+Overwriting an existing file keeps its mode (a 0600 file stays 0600); a new file gets what a
+plain `open()` would give (0666 & ~umask).
 
 `check_writable` answers "can this path be written?" before the work that produces it starts
 (by creating and removing a probe temp file in the folder, so read-only mounts, ACLs and
@@ -17,12 +20,14 @@ from __future__ import annotations
 import contextlib
 import os
 import re
+import shutil
 import stat
 import tempfile
 from pathlib import Path
 
 __all__ = ["write_text_atomic", "write_bytes_atomic", "check_writable", "OutputPathError",
-           "pending_path", "replace_keeping_mode", "file_in_the_way"]
+           "pending_path", "replace_keeping_mode", "file_in_the_way", "dir_beside",
+           "clean_stale_dirs", "DIR_KINDS"]
 
 _TMP_TAG = ".lamde-tmp-"
 
@@ -70,6 +75,71 @@ def clean_stale_temps(path: str | Path) -> list[Path]:
         with contextlib.suppress(OSError):
             os.unlink(folder / name)
             removed.append(folder / name)
+    return removed
+
+
+#: the folders a whole-folder write keeps beside its target (`dir_beside`): "pending", the new
+#: folder while it is filled; "old", the folder it replaces, between the two renames
+DIR_KINDS: tuple[str, ...] = ("pending", "old")
+
+
+def dir_beside(path: str | Path, kind: str) -> Path:
+    """The folder `.NAME.lamde-{kind}-PID` beside `path` for this process: where a folder
+    written whole is filled ("pending") before it is renamed onto `path`, or where the folder
+    it replaces is moved ("old") before it is removed. `clean_stale_dirs(path)` removes it
+    once its process is gone.
+
+    Args:
+        path: the target folder.
+        kind: one of `DIR_KINDS`.
+
+    Returns:
+        The folder's path (not created).
+
+    Raises:
+        ValueError: `kind` is not one of `DIR_KINDS`.
+    """
+    if kind not in DIR_KINDS:
+        raise ValueError(f"kind: must be one of {', '.join(DIR_KINDS)}, got {kind!r}")
+    path = Path(path)
+    return path.with_name(f".{path.name}.lamde-{kind}-{os.getpid()}")
+
+
+def clean_stale_dirs(path: str | Path, kinds: tuple[str, ...] = DIR_KINDS) -> list[Path]:
+    """Remove the folders `dir_beside(path, kind)` that earlier, killed writes to `path` left
+    behind (SIGKILL or power loss between filling the folder and renaming it); returns them.
+
+    Only real folders named `.NAME.lamde-{kind}-PID`, kind in `kinds`, whose process PID no
+    longer runs are removed: a write in progress in another process is left alone, as is this
+    process's own (its writer removes it). A dead PID that a new process has taken since keeps
+    its folder until that process ends (never a live writer's folder removed).
+
+    Args:
+        path: the target folder.
+        kinds: which of `DIR_KINDS` to remove.
+
+    Returns:
+        The folders removed.
+    """
+    path = Path(path)
+    folder = path.parent if str(path.parent) else Path(".")
+    pat = re.compile(re.escape(f".{path.name}.lamde-") + "(" + "|".join(map(re.escape, kinds))
+                     + r")-(\d+)")  # fmt: skip
+    removed: list[Path] = []
+    try:
+        names = os.listdir(folder)
+    except OSError:
+        return removed
+    for name in names:
+        m = pat.fullmatch(name)
+        entry = folder / name
+        if m is None or entry.is_symlink() or not entry.is_dir() or _pid_alive(int(m.group(2))):
+            continue
+        try:
+            shutil.rmtree(entry)
+        except OSError:
+            continue
+        removed.append(entry)
     return removed
 
 

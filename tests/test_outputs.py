@@ -16,7 +16,9 @@ import pytest
 from planner_core.atomic import (
     OutputPathError,
     check_writable,
+    clean_stale_dirs,
     clean_stale_temps,
+    dir_beside,
     write_text_atomic,
 )
 from planner_core.textio import printable
@@ -123,6 +125,30 @@ def test_stale_temp_of_a_killed_write_is_cleaned(tmp_path: Path) -> None:
     assert out.read_text() == "new"
     mine.unlink()
     assert clean_stale_temps(out) == []
+
+
+def test_stale_folders_of_a_killed_folder_write_are_cleaned(tmp_path: Path) -> None:
+    """`dir_beside`/`clean_stale_dirs`: a folder written whole (a sortie directory) is filled
+    as `.NAME.lamde-pending-PID`; only real folders of that name of a process gone are removed
+    (not this process's, nor a file or a link of that name, nor another kind's when not asked)."""
+    out = tmp_path / "d"
+    assert dir_beside(out, "pending") == tmp_path / f".d.lamde-pending-{os.getpid()}"
+    with pytest.raises(ValueError, match="kind: must be one of pending, old, got 'tmp'"):
+        dir_beside(out, "tmp")
+    pid, pid2, pid3 = (int(subprocess.run(
+        [sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
+        text=True, check=True).stdout) for _ in range(3))  # exited and reaped
+    stale, old = tmp_path / f".d.lamde-pending-{pid}", tmp_path / f".d.lamde-old-{pid}"
+    for f in (stale, old, dir_beside(out, "pending")):
+        (f / "sub").mkdir(parents=True)
+    afile = tmp_path / f".d.lamde-pending-{pid2}"
+    afile.write_text("x")
+    link = tmp_path / f".d.lamde-pending-{pid3}"
+    link.symlink_to(old, target_is_directory=True)
+    assert clean_stale_dirs(out, ("pending",)) == [stale]
+    assert old.is_dir() and afile.is_file() and link.is_symlink()
+    assert dir_beside(out, "pending").is_dir()  # this process's own: its writer's to remove
+    assert clean_stale_dirs(out) == [old]
 
 
 def test_overwrite_keeps_the_mode(tmp_path: Path) -> None:

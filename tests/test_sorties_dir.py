@@ -366,3 +366,40 @@ def test_plan_staggers_the_launches_to_the_maps_separation(tmp_path, capsys):
     assert rc == 0 and "fleet SEPARATION vehicles >= 30 m apart: PASS" in out
     rc, out, _ = _verify(capsys, _one_depot_map(tmp_path, 50.0), tmp_path / "dNone")
     assert rc == 1 and "fleet SEPARATION vehicles >= 50 m apart: FAIL" in out
+
+
+def test_a_write_removes_the_folders_killed_writes_left_and_keeps_a_live_ones(tmp_path):
+    """A `plan -o d/` killed (SIGKILL) before its rename left `.d.lamde-pending-PID` beside
+    `d/` for ever (and one killed between its two renames `.d.lamde-old-PID`): the next write
+    to `d/` removes those whose process is gone, never one of a process still running (a write
+    in progress), nor another target's."""
+    import subprocess
+    import sys
+
+    from lamde_mission.sorties import write_sortie_dir
+
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True)
+    dead_pid = int(dead.stdout)  # exited and reaped
+    live = subprocess.Popen([sys.executable, "-c", "import sys; sys.stdin.read()"],
+                            stdin=subprocess.PIPE)  # runs until its stdin closes
+    try:
+        left = {}
+        for kind in ("pending", "old"):
+            for who, pid in (("dead", dead_pid), ("live", live.pid)):
+                f = tmp_path / f".d.lamde-{kind}-{pid}"
+                f.mkdir()
+                (f / "mission-v1-s1.plan").write_text("half a mission")
+                left[kind, who] = f
+        other = tmp_path / f".e.lamde-pending-{dead_pid}"  # another target's
+        other.mkdir()
+        m, plan = _fleet_plan(_demo_map(tmp_path, 1))
+        check, written = write_sortie_dir(plan, m, tmp_path / "d")
+        assert written, check.failed()
+        assert live.poll() is None  # still running: its folders are a write in progress
+        assert (tmp_path / "d" / "fleet.json").is_file()
+        assert not left["pending", "dead"].exists() and not left["old", "dead"].exists()
+        assert left["pending", "live"].is_dir() and left["old", "live"].is_dir()
+        assert other.is_dir()
+    finally:
+        live.communicate()
