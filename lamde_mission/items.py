@@ -57,6 +57,7 @@ __all__ = [
     "CORNER_RADIUS_MIN_M",
     "corner_radius",
     "corner_stops",
+    "corner_indices",
 ]
 
 _NAN = float("nan")
@@ -95,10 +96,23 @@ def corner_stops(route: Route) -> np.ndarray:
     Returns:
         The corners' positions (K x 2, m); empty (0 x 2) when there are none.
     """
+    ks = corner_indices(route)
+    return np.asarray(route.stops, dtype=float).reshape(-1, 2)[ks].reshape(-1, 2)
+
+
+def corner_indices(route: Route) -> np.ndarray:
+    """The indices in `route.stops` of the corners (`corner_stops`), in flying order.
+
+    Args:
+        route: a mission read back by `items_to_route`.
+
+    Returns:
+        (K,) integer indices; `route.seqs` at them names each corner's item (a DO_JUMP loop
+        flies the same item again: the figure draws it once).
+    """
     ks = [k for k, (c, h) in enumerate(zip(route.commands, route.is_hover, strict=True))
           if c == CMD.WAYPOINT and not h]  # fmt: skip
-    ks = ks[:-1]  # the end point's WAYPOINT
-    return np.asarray(route.stops, dtype=float).reshape(-1, 2)[ks].reshape(-1, 2)
+    return np.asarray(ks[:-1], dtype=np.int64)  # the last: the end point's WAYPOINT
 
 
 # ----------------------------------------------------------------------------- plan -> items

@@ -4,11 +4,13 @@ Draws the area, circles, rotated rectangles, polygon footprints (courtyards left
 zones (holes open), sensors labelled by id and coloured by the share of their required data
 collected (short ones ringed with "x of y Mbit", unreached ones crossed), the path with arrows
 and numbered hover points ("order · seconds"), the parts of legs inside obstacles in red, start
-and end, a legend below the map and a scale bar in the corner where it covers the fewest
-markers; every label placed where it covers no other label (`_place_labels`, sensor ids left out
-where crowded and counted in the legend); with a replay, a panel of each sensor's data over the
-mission time against its requirement (the ten tightest named, in distinct colours) and, beyond
-ten sensors, a panel of sorted bars naming every sensor (up to `BARS`; the rest summarised).
+and end, each distinct leg, hover point and corner drawn once however often a DO_JUMP loop flies
+it (a hover point flown k times labelled "order · seconds ×k"; `_visits`), a legend below the
+map and a scale bar in the corner where it covers the fewest markers; every label placed where
+it covers no other label (`_place_labels`, sensor ids left out where crowded and counted in the
+legend); with a replay, a panel of each sensor's data over the mission time against its
+requirement (the ten tightest named, in distinct colours) and, beyond ten sensors, a panel of
+sorted bars naming every sensor (up to `BARS`; the rest summarised).
 Uses matplotlib's Agg canvas directly (no pyplot state), imported inside the functions so
 importing this module stays cheap.
 """
@@ -47,18 +49,109 @@ def nice_length(span: float) -> float:
     return float(10**k)
 
 
-def _mission_view(map_: Any, timeline: Any, plan: Any) -> dict[str, Any] | None:
-    """Path, hover points/times, corners (0-s points, written as NAV_WAYPOINT) and data
-    collected, from a sim Timeline or a Plan."""
-    if timeline is not None:
-        from lamde_mission.items import corner_stops
+#: hover points the map panel labels at most, the first in visiting order (a planned mission
+#: has at most 200, `uav.max_hover_points`; a file may hold 65,535 items): placing labels costs
+#: O(labels^2); the legend counts the hover points left unlabelled
+HOVER_LABELS = 200
+#: the data panel shades hovers closer than 1/SHADE_CELLS of the mission time apart as one span
+#: (finer than the panel's pixels at MAX_DPI), one collection of at most SHADE_CELLS spans
+#: however often a DO_JUMP loop hovers
+SHADE_CELLS = 8192
 
+
+@dataclass(frozen=True)
+class _Visits:
+    """What the map panel draws of a mission, each distinct thing once however often a DO_JUMP
+    loop flies it: the legs (U, 2, 2) in the order first flown and the polylines they form
+    (`lines`: the flown path itself when no leg repeats); the hover points (H, 2), their hover
+    times (H,) and passes (H,), numbered 1..H in the order first visited, and `number` (V,), the
+    number of the hover point of each of the V hover visits; the corners (K, 2), each once."""
+
+    legs: np.ndarray
+    lines: list[np.ndarray]
+    hover_points: np.ndarray
+    hover_times: np.ndarray
+    passes: np.ndarray
+    number: np.ndarray
+    corners: np.ndarray
+
+
+def _visits(path: np.ndarray, hover_points: np.ndarray, hover_times: np.ndarray,
+            hover_keys: Any, corners: np.ndarray, corner_keys: Any) -> _Visits:  # fmt: skip
+    """The distinct legs, hover points and corners of a flown mission (`_Visits`), found as the
+    checks find distinct legs (`sim.obstacles.unique_legs`, `distinct_rows`): a hover visit is
+    the same hover point as another when its item (`hover_keys`, the MAVLink seq), position and
+    hover time are the same, a corner when its item and position are. O(n log n) in the visits
+    and legs; the drawing then costs what the mission's distinct items do, not its passes.
+
+    Args:
+        path: (n, 2) the flown path, local metres.
+        hover_points: (V, 2) the position of each hover visit.
+        hover_times: (V,) its hover time, s.
+        hover_keys: (V,) the item of each visit, or None (every visit its own).
+        corners: (k, 2) the corners as flown.
+        corner_keys: (k,) the item of each, or None (every corner its own).
+
+    Returns:
+        The `_Visits`.
+    """
+    from sim.obstacles import distinct_rows, unique_legs
+
+    path = np.asarray(path, dtype=float).reshape(-1, 2)
+    legs, _ = unique_legs([path], flown_order=True)
+    if len(legs):
+        breaks = np.flatnonzero(np.any(legs[1:, 0] != legs[:-1, 1], axis=1)) + 1
+        lines = [np.vstack([g[:1, 0], g[:, 1]]) for g in np.split(legs, breaks)]
+    else:
+        lines = [path]
+    hp = np.asarray(hover_points, dtype=float).reshape(-1, 2)
+    ht = np.asarray(hover_times, dtype=float).reshape(-1)
+    keys = np.arange(len(hp)) if hover_keys is None else np.asarray(hover_keys, dtype=float)
+    first, passes, inverse = distinct_rows(np.column_stack([keys.reshape(-1), hp, ht]))
+    cp = np.asarray(corners, dtype=float).reshape(-1, 2)
+    ckeys = np.arange(len(cp)) if corner_keys is None else np.asarray(corner_keys, dtype=float)
+    cfirst, _, _ = distinct_rows(np.column_stack([ckeys.reshape(-1), cp]))
+    return _Visits(legs=legs, lines=lines, hover_points=hp[first], hover_times=ht[first],
+                   passes=passes, number=inverse + 1, corners=cp[cfirst])  # fmt: skip
+
+
+def _joined(lines: Sequence[np.ndarray]) -> np.ndarray:
+    """The polylines as one (m, 2) array for one Line2D, a NaN row between two of them."""
+    if len(lines) == 1:
+        return lines[0]
+    gap = np.full((1, 2), np.nan)
+    return np.vstack([part for line in lines for part in (gap, line)][1:])
+
+
+def _passes_text(n: int) -> str:
+    """" ×n" for a hover point a DO_JUMP loop visits n > 1 times, else ""."""
+    return f" ×{int(n):,}" if n > 1 else ""
+
+
+def _timeline_visits(timeline: Any) -> _Visits:
+    """`_visits` of a sim replay: hover visits keyed by their item's seq, corners
+    (NAV_WAYPOINT stops that are not hover points, `lamde_mission.items.corner_indices`) by
+    theirs (none without a route)."""
+    from lamde_mission.items import corner_indices
+
+    route = getattr(timeline, "route", None)
+    ks = np.zeros(0, dtype=np.int64) if route is None else corner_indices(route)
+    stops = np.zeros((0, 2)) if route is None else np.asarray(route.stops, dtype=float)
+    seqs = np.zeros(0) if route is None else np.asarray(route.seqs, dtype=np.int64)
+    return _visits(np.asarray(timeline.path, dtype=float), timeline.hover_points,
+                   timeline.hover_times, getattr(timeline, "hover_seqs", None),
+                   stops.reshape(-1, 2)[ks], seqs[ks])  # fmt: skip
+
+
+def _mission_view(map_: Any, timeline: Any, plan: Any) -> dict[str, Any] | None:
+    """Path, the distinct legs, hover points and corners (0-s points, written as NAV_WAYPOINT;
+    `_visits`) and data collected, from a sim Timeline or a Plan."""
+    if timeline is not None:
+        path = np.asarray(timeline.path, dtype=float)
         return {
-            "path": np.asarray(timeline.path, dtype=float),
+            "path": path,
             "return_leg": timeline.return_leg,
-            "hover_points": np.asarray(timeline.hover_points, dtype=float).reshape(-1, 2),
-            "hover_times": np.asarray(timeline.hover_times, dtype=float).reshape(-1),
-            "corners": corner_stops(timeline.route),
+            "visits": _timeline_visits(timeline),
             "collected": np.asarray(timeline.collected, dtype=float),
             "f": timeline.totals.f,
         }
@@ -70,12 +163,11 @@ def _mission_view(map_: Any, timeline: Any, plan: Any) -> dict[str, Any] | None:
                      if isinstance(got, dict) else None)  # fmt: skip
         ht = np.asarray(plan.hover_times, dtype=float).reshape(-1)
         corner = ht == 0.0  # written as NAV_WAYPOINT corners, not hover points
+        path = np.vstack([map_.start, hp, map_.end])
         return {
-            "path": np.vstack([map_.start, hp, map_.end]),
+            "path": path,
             "return_leg": None,
-            "hover_points": hp[~corner],
-            "hover_times": ht[~corner],
-            "corners": hp[corner],
+            "visits": _visits(path, hp[~corner], ht[~corner], None, hp[corner], None),
             "collected": collected,
             "f": getattr(plan, "f", None),
         }
@@ -498,12 +590,13 @@ def _draw_ends(ax: Any, map: Any, hover_points: np.ndarray, hover_radii: np.ndar
                               markeredgecolor="k", label=name))  # fmt: skip
 
 
-def _finish_map(fig: Any, ax: Any, W: float, handles: list[Any], scene: _Scene,
-                n_sensors: int, named_below: bool) -> tuple[int, int]:  # fmt: skip
+def _finish_map(fig: Any, ax: Any, W: float, handles: list[Any], scene: _Scene, n_sensors: int,
+                named_below: bool, unlabelled: int = 0) -> tuple[int, int]:  # fmt: skip
     """The legend below, the layout fixed, the scale bar in the emptiest corner, then every
     label placed (`_place_labels`: the ones always shown first, then sensor ids). When labels
-    were left out, the legend says how many (the layout redone once to make room; the note's
-    counts are the final ones). Returns how many sensor ids and other labels were left out."""
+    were left out, or `unlabelled` hover points past `HOVER_LABELS` got none, the legend says
+    how many (the layout redone once to make room; the note's counts are the final ones).
+    Returns how many sensor ids and other labels were left out."""
     from matplotlib.lines import Line2D
 
     labels = sorted(scene.labels, key=lambda lab: lab.optional)  # stable: order kept within
@@ -530,10 +623,14 @@ def _finish_map(fig: Any, ax: Any, W: float, handles: list[Any], scene: _Scene,
         if k[1]:
             parts.append(f"{k[1]} other labels")
         where = "; the panels below name every sensor" if named_below else ""
-        return " and ".join(parts or ["no labels"]) + f" left out where crowded{where}"
+        crowded = " and ".join(parts or ["no labels"]) + f" left out where crowded{where}"
+        if not unlabelled:
+            return crowded
+        capped = f"hover points past the first {HOVER_LABELS} unlabelled ({unlabelled:,})"
+        return f"{capped}; {crowded}" if parts else capped
 
     dropped, legend, added = attempt([])
-    if any(dropped):
+    if any(dropped) or unlabelled:
         for artist in [legend, *added]:
             artist.remove()
         dropped2, legend, _ = attempt([Line2D([], [], linestyle="none", label=note(dropped))])
@@ -555,7 +652,10 @@ def mission_figure(
     The map panel labels hover points by visiting order and hover seconds ("2 · 41 s") and
     sensors by id, each label placed where it covers no other label, marker or the scale bar
     (`_place_labels`; sensor ids that find no free place are left out and counted in the
-    legend); shows the route's direction with arrows, draws the parts of legs inside an
+    legend; hover points past the first `HOVER_LABELS` get none, counted there too); draws each
+    distinct leg, hover point and corner once however often a DO_JUMP loop flies it (`_visits`:
+    a hover point visited k times is labelled "2 · 41 s ×k", numbered in the order first
+    visited); shows the route's direction with arrows, draws the parts of legs inside an
     obstacle (C5) in red, rings sensors short of data with "x of y Mbit" and crosses those that
     got nothing; the scale bar goes to the corner where it covers the fewest markers. With a
     `timeline` (the simulator's replay) a second panel shows each sensor's data over the
@@ -564,7 +664,8 @@ def mission_figure(
     names every sensor with its final share as sorted bars (the `BARS` tightest; the rest
     summarised as min / median / max). The figure's size follows the area's shape (no wide
     white bands); `figsize` overrides it. Cost: O(J^2) for the label placement (J sensors plus
-    hover points), O(J x samples) for the panels.
+    at most `HOVER_LABELS` hover points), O(J x samples) for the panels, and artists as many as
+    the mission's distinct legs, hover points and corners, not its passes.
 
     Args:
         map: the map (`planner_core.model.mapio.load_map`).
@@ -592,13 +693,17 @@ def mission_figure(
     hover_labels: list[_Label] = []
     hp = np.zeros((0, 2))
     hover_r = np.zeros(0)
+    unlabelled = 0
+    visits = None
     if view is not None:
         p = view["path"]
-        scene.route.append(p)
-        ax.plot(p[:, 0], p[:, 1], "-", color="tab:blue", linewidth=1.6, zorder=3)
+        visits = view["visits"]
+        scene.route.extend(visits.lines)
+        line = _joined(visits.lines)  # each distinct leg once (the path when none repeats)
+        ax.plot(line[:, 0], line[:, 1], "-", color="tab:blue", linewidth=1.6, zorder=3)
         handles.append(Line2D([], [], color="tab:blue", linewidth=1.6,
                               label="path (arrows: direction)"))  # fmt: skip
-        for a, b in zip(p[:-1], p[1:], strict=True):  # the route's order: one arrow per leg
+        for a, b in visits.legs:  # the route's order: one arrow per distinct leg
             if np.hypot(*(b - a)) > 0.02 * max(W, H):
                 mid = a + 0.55 * (b - a)
                 ax.annotate("", xy=mid, xytext=a + 0.45 * (b - a), zorder=3,
@@ -624,8 +729,8 @@ def mission_figure(
             scene.route.append(rl)
             ax.plot(rl[:, 0], rl[:, 1], ":", color="tab:blue", linewidth=1.2, zorder=3)
             handles.append(Line2D([], [], color="tab:blue", linestyle=":", label="return (RTL)"))
-        hp, ht = view["hover_points"], view["hover_times"]
-        cp = view.get("corners", np.zeros((0, 2)))
+        hp, ht, passes = visits.hover_points, visits.hover_times, visits.passes
+        cp = visits.corners
         if len(cp):
             scene.marker(cp, 3.0)
             ax.scatter(cp[:, 0], cp[:, 1], s=14, marker="D", facecolors="white",
@@ -642,12 +747,16 @@ def mission_figure(
                        alpha=0.85, linewidths=0.6, zorder=6)  # fmt: skip
             style = {"fontsize": 8, "color": "saddlebrown", "fontweight": "bold", "zorder": 8,
                      "bbox": _TEXT_BOX}  # fmt: skip
-            for i, (xy, t) in enumerate(zip(hp, ht, strict=True)):
-                hover_labels.append(_Label(f"{i + 1} · {t:.0f} s", tuple(xy), style,
-                                           float(hover_r[i]), short=str(i + 1)))  # fmt: skip
+            unlabelled = max(len(hp) - HOVER_LABELS, 0)
+            for i in range(min(len(hp), HOVER_LABELS)):
+                many = _passes_text(passes[i])
+                hover_labels.append(_Label(f"{i + 1} · {ht[i]:.0f} s{many}", tuple(hp[i]), style,
+                                           float(hover_r[i]), short=f"{i + 1}{many}"))  # fmt: skip
+            looped = bool(np.any(passes > 1))
             handles.append(Line2D([], [], marker="o", linestyle="", markerfacecolor="tab:orange",
                                   markeredgecolor="k",
-                                  label="hover point: order · seconds"))  # fmt: skip
+                                  label="hover point: order · seconds"
+                                  + (" ×passes (DO_JUMP)" if looped else "")))  # fmt: skip
     # placing order: short sensors' "x of y Mbit", hover points, then sensor ids
     n_short = sum(not lab.optional for lab in scene.labels)
     scene.labels[n_short:n_short] = hover_labels
@@ -658,11 +767,11 @@ def mission_figure(
             title += f"  (f = {float(view['f']):.6g})"
     ax.set_title(title)
     if ax_t is not None:
-        _data_panel(ax_t, timeline, map)
+        _data_panel(ax_t, timeline, map, None if visits is None else visits.number)
     if ax_b is not None:
         _bars_panel(ax_b, timeline, map)
     _finish_map(fig, ax, W, handles, scene, len(sensors), named_below=ax_b is not None
-                and len(sensors) <= BARS)  # fmt: skip
+                and len(sensors) <= BARS, unlabelled=unlabelled)  # fmt: skip
     return fig
 
 
@@ -692,11 +801,36 @@ def _series_dash(k: int) -> str:
     return ("-", "--", ":", "-.")[(k // 10) % 4]
 
 
-def _data_panel(ax: Any, timeline: Any, map_: Any) -> None:
+def _hover_run_numbers(timeline: Any, number: Any, n_runs: int) -> np.ndarray:
+    """The number to show on each of the `n_runs` runs of hover samples of a replay: that of
+    the hover point of the run's first visit (`number`, per visit: `_Visits.number`). Hover
+    visits with no leg of positive time between them (a loop of one hover point) are one run
+    of samples. Without `number`, or should the runs not match the visits, 1..n_runs."""
+    plain = np.arange(1, n_runs + 1)
+    route = getattr(timeline, "route", None)
+    if number is None or route is None:
+        return plain
+    stops = np.flatnonzero(np.asarray(route.is_hover, dtype=bool))
+    moved = np.cumsum(np.asarray(timeline.leg_times, dtype=float) > 0.0)
+    starts = np.ones(len(stops), dtype=bool)
+    starts[1:] = moved[stops[1:]] > moved[stops[:-1]]
+    first = np.flatnonzero(starts)
+    number = np.asarray(number).reshape(-1)
+    if len(first) != n_runs or len(number) != len(stops):
+        return plain
+    return number[first]
+
+
+def _data_panel(ax: Any, timeline: Any, map_: Any, number: Any = None) -> None:
     """Each sensor's data collected along the mission time, as a share of its requirement
     (the simulator's replay samples); the requirement is the 100 % line. The `TIME_LINES`
     sensors with the smallest final share are drawn in distinct colours and named at the
-    end; the others are thin grey lines, counted in the panel."""
+    end; the others are thin grey lines, counted in the panel. The hovers are shaded, one
+    collection (spans less than 1/`SHADE_CELLS` of the mission time apart drawn as one), and
+    numbered as on the map (`number`: the map's number of each hover visit; numbers thinned
+    where they touch)."""
+    from matplotlib.collections import PolyCollection
+
     t = np.asarray(timeline.t, dtype=float)
     share, final = _final_share(timeline, map_)
     ids = list(timeline.sensor_ids)
@@ -730,15 +864,25 @@ def _data_panel(ax: Any, timeline: Any, map_: Any) -> None:
     hover = phase == "hover"
     if hover.any():  # shade the hovers, numbered like the map (numbers thinned where they touch)
         edges = np.flatnonzero(np.diff(np.r_[0, hover.astype(int), 0]))
-        span = max(float(t[-1] - t[0]), 1e-9) * 1.1
+        lo, hi = t[edges[::2]], t[edges[1::2] - 1]
+        # one collection, at most SHADE_CELLS spans: a DO_JUMP loop hovers thousands of times
+        total = max(float(t[-1] - t[0]), 1e-9)
+        g = np.flatnonzero(np.r_[True, lo[1:] - hi[:-1] >= total / SHADE_CELLS])
+        ax.add_collection(PolyCollection(
+            [((a, 0.0), (a, 1.0), (b, 1.0), (b, 0.0))
+             for a, b in zip(lo[g], np.maximum.reduceat(hi, g), strict=True)],
+            transform=ax.get_xaxis_transform(), color="tab:orange", alpha=0.15, linewidth=0),
+            autolim=False)  # fmt: skip
+        shown = _hover_run_numbers(timeline, number, len(lo))
+        span = total * 1.1
         width_in = ax.figure.get_size_inches()[0] - 1.6
         last = -np.inf
-        for k, (i0, i1) in enumerate(zip(edges[::2], edges[1::2], strict=True)):
-            ax.axvspan(t[i0], t[i1 - 1], color="tab:orange", alpha=0.15, linewidth=0)
-            x = (t[i0] + t[i1 - 1]) / 2
-            gap = (len(str(k + 1)) + 1.5) * 7 * 0.6 / 72.0 * span / width_in  # in seconds
+        for k, (a, b) in enumerate(zip(lo, hi, strict=True)):
+            x = (a + b) / 2
+            label = str(int(shown[k]))
+            gap = (len(label) + 1.5) * 7 * 0.6 / 72.0 * span / width_in  # in seconds
             if x - last >= gap or k == 0:
-                ax.text(x, 3.0, str(k + 1), fontsize=7, ha="center", color="saddlebrown")
+                ax.text(x, 3.0, label, fontsize=7, ha="center", color="saddlebrown")
                 last = x
     ax.set_xlim(t[0], t[-1] + 0.1 * max(t[-1] - t[0], 1e-9))
     ax.set_ylim(0, max(top, max(ys.values(), default=0.0) + 0.05 * top))
@@ -850,16 +994,6 @@ def _vehicle_colour(vehicle: int) -> Any:
     return colormaps["tab10"]((vehicle - 1) % 10)
 
 
-def _corners_of(timeline: Any) -> np.ndarray:
-    """The corners (NAV_WAYPOINT stops that are not hover points) of a sim replay, (n, 2)."""
-    from lamde_mission.items import corner_stops
-
-    route = getattr(timeline, "route", None)
-    if route is None:
-        return np.zeros((0, 2))
-    return np.asarray(corner_stops(route), dtype=float).reshape(-1, 2)
-
-
 def _map_depots(map: Any) -> list[tuple[str, tuple[float, float]]]:  # noqa: A002
     """The map's depots as the sortie planner names them (`FleetSettings`: `fleet.depots`, or
     "home" and, where it differs, "end"), with their positions (m)."""
@@ -881,14 +1015,17 @@ def fleet_figure(
 
     One colour per vehicle (tab10), one line style per sortie of a vehicle (`SORTIE_STYLES`:
     solid, dashed, dash-dot, dotted), arrows along each leg, hover points in the vehicle's
-    colour labelled "sortie.order · seconds" (up to 40 hover points in all), detour corners
+    colour labelled "sortie.order · seconds" (up to 40 hover points in all; past 40 left out
+    where crowded, past `HOVER_LABELS` unlabelled; "×k" on one a DO_JUMP loop visits k times:
+    each distinct leg, hover point and corner is drawn once, `_visits`), detour corners
     (NAV_WAYPOINT, flown through) as white diamonds edged in it, the parts of legs
     inside obstacles (C5) in red; depots (where sorties take off and land) as black-edged
     hexagons with their names, the map's depots no sortie uses as lighter grey ones (named
     beside them and in the legend), and each battery swap (a vehicle landing from sortie j and
     leaving on sortie j + 1) as a star in the vehicle's colour with "v1 swap 1". Sensors are
     coloured by the data collected over all sorties together (C4 over the whole plan).
-    Cost: O(sorties x samples) for the drawing.
+    Cost: O(sorties x samples) to read the replays, O(distinct legs, hover points and corners)
+    artists and at most `HOVER_LABELS` hover labels for the drawing.
 
     Args:
         map: the map the sorties fly on.
@@ -913,18 +1050,21 @@ def fleet_figure(
     _draw_obstacles(ax, map, handles)
     collected = np.sum([np.asarray(sv.timeline.collected, dtype=float) for sv in sorties], axis=0)
     sensors = _draw_sensors(fig, ax, map, collected, handles, scene)
-    n_hover = sum(len(sv.timeline.hover_points) for sv in sorties)
+    visits = [_timeline_visits(sv.timeline) for sv in sorties]  # each distinct thing once
+    n_hover = sum(len(v.hover_points) for v in visits)
+    labelled = 0
     t_max = max(float(spec.uav.max_hover_time), 1e-9)
     bad_total = 0.0
     n_corner = 0
     vehicles = sorted({sv.vehicle for sv in sorties})
-    for sv in sorties:
+    for sv, vis in zip(sorties, visits, strict=True):
         colour = _vehicle_colour(sv.vehicle)
         style = SORTIE_STYLES[(sv.sortie - 1) % len(SORTIE_STYLES)]
         p = np.asarray(sv.timeline.path, dtype=float)
-        scene.route.append(p)
-        ax.plot(p[:, 0], p[:, 1], linestyle=style, color=colour, linewidth=1.6, zorder=3)
-        for a, b in zip(p[:-1], p[1:], strict=True):
+        scene.route.extend(vis.lines)
+        line = _joined(vis.lines)
+        ax.plot(line[:, 0], line[:, 1], linestyle=style, color=colour, linewidth=1.6, zorder=3)
+        for a, b in vis.legs:
             if np.hypot(*(b - a)) > 0.02 * max(W, H):
                 ax.annotate("", xy=a + 0.55 * (b - a), xytext=a + 0.45 * (b - a), zorder=3,
                             arrowprops={"arrowstyle": "-|>", "color": colour, "lw": 1.4,
@@ -939,14 +1079,13 @@ def fleet_figure(
             scene.route.append(rl)
             ax.plot(rl[:, 0], rl[:, 1], ":", color=colour, linewidth=1.0, zorder=3)
         # corners (NAV_WAYPOINT, flown through) as in the single-plan figure: white diamonds
-        cp = _corners_of(sv.timeline)
+        cp = vis.corners
         if len(cp):
             n_corner += len(cp)
             scene.marker(cp, 3.0)
             ax.scatter(cp[:, 0], cp[:, 1], s=14, marker="D", facecolors="white",
                        edgecolors=[colour], linewidths=0.8, zorder=7)  # fmt: skip
-        hp = np.asarray(sv.timeline.hover_points, dtype=float).reshape(-1, 2)
-        ht = np.asarray(sv.timeline.hover_times, dtype=float).reshape(-1)
+        hp, ht = vis.hover_points, vis.hover_times
         if len(hp):
             size = 40.0 + 260.0 * np.clip(ht / t_max, 0.0, 1.0)
             radius = np.sqrt(size) / 2.0 + 0.5
@@ -955,11 +1094,13 @@ def fleet_figure(
                        alpha=0.8, linewidths=0.6, zorder=6)  # fmt: skip
             style = {"fontsize": 7.5, "color": colour, "fontweight": "bold", "zorder": 8,
                      "bbox": _TEXT_BOX}  # fmt: skip
-            for i, (xy, t) in enumerate(zip(hp, ht, strict=True)):
+            for i in range(min(len(hp), HOVER_LABELS - labelled)):
                 # past 40 hover points in all, a hover label may be left out where crowded
-                scene.labels.append(_Label(f"{sv.sortie}.{i + 1} · {t:.0f} s", tuple(xy), style,
-                                           float(radius[i]), n_hover > 40,
-                                           f"{sv.sortie}.{i + 1}"))  # fmt: skip
+                many = _passes_text(vis.passes[i])
+                scene.labels.append(_Label(f"{sv.sortie}.{i + 1} · {ht[i]:.0f} s{many}",
+                                           tuple(hp[i]), style, float(radius[i]), n_hover > 40,
+                                           f"{sv.sortie}.{i + 1}{many}"))  # fmt: skip
+                labelled += 1
     if bad_total > 0:
         handles.append(
             Line2D(
@@ -1069,7 +1210,8 @@ def fleet_figure(
             linestyle="",
             markerfacecolor="0.6",
             markeredgecolor="k",
-            label="hover point: sortie.order · seconds",
+            label="hover point: sortie.order · seconds"
+            + (" ×passes (DO_JUMP)" if any(np.any(v.passes > 1) for v in visits) else ""),
         )
     )
     if n_corner:
@@ -1081,7 +1223,8 @@ def fleet_figure(
         title = (f"map '{spec.name}': {nv} vehicle{'s' if nv > 1 else ''}, "
                  f"{len(sorties)} sorties, {swaps} swap{'' if swaps == 1 else 's'}")  # fmt: skip
     ax.set_title(title)
-    _finish_map(fig, ax, W, handles, scene, len(sensors), named_below=False)
+    _finish_map(fig, ax, W, handles, scene, len(sensors), named_below=False,
+                unlabelled=n_hover - labelled)
     return fig
 
 

@@ -27,6 +27,7 @@ __all__ = [
     "overlap_lengths",
     "overlap_totals",
     "unique_legs",
+    "distinct_rows",
     "distances_to",
     "CIRCLE_QUAD_SEGS",
 ]
@@ -135,17 +136,59 @@ def _chords(a: np.ndarray, b: np.ndarray, centre: np.ndarray, r: Any) -> np.ndar
     return np.where(hit, (t1 - t0) * np.sqrt(qa), 0.0)
 
 
-def unique_legs(paths: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+def distinct_rows(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The distinct rows of `rows` in the order they first occur, how often each occurs, and
+    which distinct row each row is.
+
+    A DO_JUMP loop visits the same hover points and flies the same legs again and again; the
+    figure draws each once (`lamde_mission.plot`), numbered in the order first flown.
+
+    Args:
+        rows: (n, k) numbers (no NaN).
+
+    Returns:
+        (first, counts, inverse): `rows[first]` are the U distinct rows in the order of their
+        first occurrence, `counts` (U,) how often each occurs, `inverse` (n,) the index in
+        0..U-1 of each row's distinct row. O(n log n) time, O(n) memory.
+    """
+    rows = np.asarray(rows, dtype=float)
+    if not len(rows):
+        empty = np.zeros(0, dtype=np.int64)
+        return empty, empty.copy(), empty.copy()
+    rows = rows.reshape(len(rows), -1)
+    _, first, inverse, counts = np.unique(rows, axis=0, return_index=True,
+                                          return_inverse=True, return_counts=True)  # fmt: skip
+    order = np.argsort(first, kind="stable")
+    rank = np.empty(len(order), dtype=np.int64)
+    rank[order] = np.arange(len(order))
+    return (first[order].astype(np.int64), counts[order].astype(np.int64),
+            rank[np.asarray(inverse).reshape(-1)])  # fmt: skip
+
+
+def unique_legs(
+    paths: list[np.ndarray], *, flown_order: bool = False
+) -> tuple[np.ndarray, np.ndarray]:
     """The distinct legs (U, 2, 2) of the polylines `paths` and how often each is flown (U,).
 
     A DO_JUMP loop flies the same legs again and again; measuring each once is what keeps the
     checks' work at the mission's distinct legs. O(L log L) time and O(L) memory in L legs.
+
+    Args:
+        paths: polylines (n, 2), local metres; those of fewer than two points have no leg.
+        flown_order: the legs in the order first flown (`distinct_rows`; the figure draws
+            them so) rather than sorted by their coordinates (the checks).
+
+    Returns:
+        (legs, counts): the distinct legs, each as (start, end), and how often each is flown.
     """
     segs = [np.stack([p[:-1], p[1:]], axis=1) for p in
             (np.asarray(q, dtype=float).reshape(-1, 2) for q in paths) if len(p) >= 2]
     if not segs:
         return np.zeros((0, 2, 2)), np.zeros(0, dtype=np.int64)
     flat = np.concatenate(segs).reshape(-1, 4)
+    if flown_order:
+        first, counts, _ = distinct_rows(flat)
+        return flat[first].reshape(-1, 2, 2), counts
     uniq, counts = np.unique(flat, axis=0, return_counts=True)
     return uniq.reshape(-1, 2, 2), counts.astype(np.int64)
 

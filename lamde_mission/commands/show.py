@@ -10,12 +10,17 @@ from typing import Any
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    from lamde_mission.plot import HOVER_LABELS
+
     p = sub.add_parser(
         "show",
         help="draw a map (and a mission on it) to a PNG or SVG file",
         description="Draw MAP: area, obstacles, no-fly zones and sensors; with MISSION (.plan, "
         ".waypoints or a plan result .json) also the path replayed by the simulator, hover "
-        "points sized by hover time and sensors coloured by the data collected. MISSION may be "
+        "points sized by hover time and sensors coloured by the data collected; a DO_JUMP loop is "
+        "drawn once (each distinct leg, hover point and corner; a hover point visited k times "
+        f"labelled 'order · seconds ×k'; past {HOVER_LABELS} hover points the rest unlabelled, "
+        "counted in the legend). MISSION may be "
         "a sortie directory (`lamde-mission plan MAP -o DIR/` for a battery or a fleet: "
         "fleet.json and mission-v{k}-s{j}.plan): every sortie replayed and drawn, one colour "
         "per vehicle, one line style per sortie (solid, dashed, dash-dot, dotted), depots as "
