@@ -53,5 +53,5 @@ def stagger(tracks: Sequence[VehicleTrack], *, separation: float = SEPARATION_M,
 
 
 def _clear(a: VehicleTrack, b: VehicleTrack, separation: float) -> bool:
-    d, _, _, _, shared = conflicts(a, b, separation)
+    d, _, _, _, shared = conflicts(a, b)
     return d >= separation and shared == 0

@@ -140,13 +140,11 @@ def _window(a: VehicleTrack, b: VehicleTrack) -> tuple[slice, slice] | None:
     return slice(lo - da, hi - da), slice(lo - db, hi - db)
 
 
-def conflicts(a: VehicleTrack, b: VehicleTrack, separation: float = SEPARATION_M
-              ) -> tuple[float, float, float, int, int]:
+def conflicts(a: VehicleTrack, b: VehicleTrack) -> tuple[float, float, float, int, int]:
     """The closest approach of two vehicles in the air and their first shared link.
 
     Args:
         a, b: the tracks (same dt), each at its launch time.
-        separation: m, the least distance allowed.
 
     Returns:
         (least distance m while both airborne (inf if never), its clock time s, the first
@@ -193,7 +191,7 @@ def fleet_time_verdicts(tracks: Sequence[VehicleTrack], sensor_ids: Sequence[str
     least, worst, shared = np.inf, None, None
     for i in range(len(tracks)):
         for k in range(i + 1, len(tracks)):
-            d, at, t_link, j, n = conflicts(tracks[i], tracks[k], separation)
+            d, at, t_link, j, n = conflicts(tracks[i], tracks[k])
             if d < least:
                 least, worst = d, (i + 1, k + 1, at)
             if n and shared is None:
