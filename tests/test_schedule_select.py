@@ -4,6 +4,7 @@ scheduler choosing what the offline table predicts from the same run's features.
 
 from __future__ import annotations
 
+import hashlib
 import json
 
 import numpy as np
@@ -92,6 +93,43 @@ def test_a_table_round_trips_and_a_missing_one_is_one_line(tmp_path) -> None:
     assert np.array_equal(back.features, table.features) and back.meta["command"] == "test"
     with pytest.raises(ValueError, match=r"^scheduler: no selector table in .*nowhere"):
         SelectorTable.load(tmp_path / "nowhere")
+
+
+@pytest.mark.parametrize("kind", ["selector", "split"])
+def test_a_table_killed_between_its_two_files_is_refused_naming_the_file(
+        tmp_path, monkeypatch, kind) -> None:
+    """Each file is written atomically, the arrays first; the manifest records their sha256,
+    so new arrays beside the old manifest (a run killed between the two writes) are refused
+    in one line naming the archive, and a manifest without a digest (older) still loads."""
+    import dataclasses
+
+    import planner_core.atomic
+
+    cls, npz, manifest = ((SelectorTable, "table.npz", "manifest.json") if kind == "selector"
+                          else (SplitTable, "split.npz", "split.json"))
+    table = fit(GRID, k=1) if kind == "selector" else fit_split(SPLITS, k=3)
+    d = table.save(tmp_path / "t")
+    meta = json.loads((d / manifest).read_text())
+    assert meta[npz.replace(".npz", "_sha256")] == hashlib.sha256(
+        (d / npz).read_bytes()).hexdigest()
+    changed = dataclasses.replace(table, gaps=table.gaps + 1.0)
+
+    def killed(path, text, **kw):
+        raise OSError("killed")
+
+    monkeypatch.setattr(planner_core.atomic, "write_text_atomic", killed)
+    with pytest.raises(OSError, match="killed"):
+        changed.save(d)
+    monkeypatch.undo()
+    assert (d / manifest).read_text() == json.dumps(meta, indent=1, sort_keys=True) + "\n"
+    assert not [p.name for p in d.iterdir() if "lamde-tmp" in p.name]
+    with pytest.raises(ValueError) as err:
+        cls.load(d)
+    assert str(err.value) == (f"scheduler: {d}: {npz} is not the one {manifest} describes "
+                              f"({npz.replace('.npz', '_sha256')} differs)")
+    del meta[npz.replace(".npz", "_sha256")]
+    (d / manifest).write_text(json.dumps(meta))
+    assert np.array_equal(cls.load(d).gaps, changed.gaps)  # no digest: not checked
 
 
 def test_the_shipped_table_loads_and_is_registered() -> None:
@@ -455,6 +493,8 @@ def test_split_records_and_tables_are_checked_in_one_line(tmp_path) -> None:
         meta.update(change)
         (d / "split.json").write_text(json.dumps(meta))
         if "splits" in change:
+            meta.pop("split_sha256")  # an older manifest: no digest, so the arrays are read
+            (d / "split.json").write_text(json.dumps(meta))
             with np.load(d / "split.npz") as z:
                 arrays = dict(z)
             arrays["splits"] = np.array(change["splits"])

@@ -20,7 +20,6 @@ and H x H products (microseconds).
 from __future__ import annotations
 
 import io
-import json
 from pathlib import Path
 from typing import Any
 
@@ -83,18 +82,12 @@ def save(folder: str | Path, params: dict[str, np.ndarray], manifest: dict[str, 
     Raises:
         OSError: the folder cannot be written.
     """
-    import hashlib
+    from planner_core.learning import npz_manifest
 
-    from planner_core.atomic import write_bytes_atomic, write_text_atomic
-
-    buf = io.BytesIO()
-    np.savez(buf, **{k: np.asarray(params[k], dtype=np.float64) for k in _NAMES})
-    raw = buf.getvalue()
     # the manifest names its weights, so a crash between the two writes is caught at `load`
-    manifest = dict(manifest, weights_sha256=hashlib.sha256(raw).hexdigest())
-    write_bytes_atomic(Path(folder) / "weights.npz", raw)
-    write_text_atomic(Path(folder) / "manifest.json",
-                      json.dumps(manifest, indent=1, sort_keys=True) + "\n")
+    npz_manifest.save(folder, "weights.npz",
+                      {k: np.asarray(params[k], dtype=np.float64) for k in _NAMES},
+                      "manifest.json", manifest)
 
 
 def load(folder: str | Path) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
@@ -109,9 +102,9 @@ def load(folder: str | Path) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
             max_points is not a whole number, or it was trained on other actions or features
             than today's.
     """
-    import hashlib
     import zipfile
 
+    from planner_core.learning.npz_manifest import check_digest
     from planner_core.learning.schedule_env import FEATURES
     from planner_core.pipeline.schedule import ACTIONS
     from planner_core.textio import InputError, printable, read_bytes, read_json
@@ -133,10 +126,9 @@ def load(folder: str | Path) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         raise ValueError(f"checkpoint: cannot read {folder}: {exc}") from None
     if not isinstance(manifest, dict):
         raise ValueError(f"checkpoint: {folder}/manifest.json: must be a JSON object")
-    digest = manifest.get("weights_sha256")
-    if digest is not None and digest != hashlib.sha256(raw).hexdigest():
-        raise ValueError(f"checkpoint: {folder}: weights.npz is not the one its manifest "
-                         "describes (weights_sha256 differs)")
+    stale = check_digest(raw, manifest, "weights.npz", "manifest.json")
+    if stale:
+        raise ValueError(f"checkpoint: {folder}: {stale}")
     mp = manifest.get("max_points")
     if mp is not None and (not isinstance(mp, int) or isinstance(mp, bool) or mp < 1):
         raise ValueError(f"checkpoint: {folder}: max_points must be a whole number >= 1, "

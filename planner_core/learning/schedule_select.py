@@ -40,6 +40,7 @@ that template's actions cost (`planner_core.pipeline.schedule`).
 from __future__ import annotations
 
 import argparse
+import io
 import json
 import math
 import re
@@ -216,36 +217,53 @@ class SelectorTable:
         return self.templates[int(np.argmin(self.gaps[idx][near].mean(0)))]
 
     def save(self, directory: str | Path) -> Path:
-        """Write `table.npz` and `manifest.json` into `directory` (created).
+        """Write `table.npz` and then `manifest.json` (with the table's sha256,
+        `table_sha256`) into `directory` (created), each atomically (`npz_manifest.save`).
 
         Returns:
             The directory.
+
+        Raises:
+            OSError: the directory cannot be written.
         """
-        out = Path(directory)
-        out.mkdir(parents=True, exist_ok=True)
-        np.savez_compressed(out / "table.npz", features=self.features, gaps=self.gaps,
-                            templates=np.array(self.templates), maps=np.array(self.maps))
+        from planner_core.learning import npz_manifest
+
         meta = dict(self.meta, k=self.k, features=list(FEATURES), templates=list(self.templates),
                     cases=len(self.gaps), maps=len(set(self.maps)))
-        (out / "manifest.json").write_text(json.dumps(meta, indent=1, sort_keys=True) + "\n")
-        return out
+        npz_manifest.save(directory, "table.npz",
+                          {"features": self.features, "gaps": self.gaps,
+                           "templates": np.array(self.templates), "maps": np.array(self.maps)},
+                          "manifest.json", meta, compressed=True)
+        return Path(directory)
 
     @classmethod
     def load(cls, directory: str | Path = DEFAULT_TABLE) -> SelectorTable:
         """Read a table written by `save`.
 
         Raises:
-            ValueError: one line naming the directory when it holds no table.
+            ValueError: one line naming the directory when it holds no table, or naming
+                `table.npz` when it is not the one `manifest.json` describes (its
+                `table_sha256`; a manifest without one is not checked).
         """
+        import zipfile
+
+        from planner_core.learning.npz_manifest import check_digest
+
         d = Path(directory)
         try:
-            with np.load(d / "table.npz") as z:
+            raw = (d / "table.npz").read_bytes()
+            with np.load(io.BytesIO(raw)) as z:
                 features, gaps = z["features"], z["gaps"]
                 templates, maps = tuple(str(t) for t in z["templates"]), tuple(
                     str(m) for m in z["maps"])
             meta = json.loads((d / "manifest.json").read_text())
-        except (OSError, KeyError, ValueError) as exc:
+            if not isinstance(meta, dict):
+                raise ValueError("manifest.json: not a JSON object")
+        except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile) as exc:
             raise ValueError(f"scheduler: no selector table in {d} ({exc})") from None
+        stale = check_digest(raw, meta, "table.npz", "manifest.json")
+        if stale:
+            raise ValueError(f"scheduler: {d}: {stale}")
         if list(meta.get("features", [])) != list(FEATURES):
             raise ValueError(f"scheduler: {d} was fitted on other features "
                              f"{meta.get('features')}")
@@ -379,39 +397,60 @@ class SplitTable:
         return self.splits[capped_best(self.gaps[near], self.cpu[near], self.cap)]
 
     def save(self, directory: str | Path) -> Path:
-        """Write `split.npz` and `split.json` into `directory` (created). Returns it."""
-        out = Path(directory)
-        out.mkdir(parents=True, exist_ok=True)
-        np.savez_compressed(out / "split.npz", features=self.features, gaps=self.gaps,
-                            cpu=self.cpu, splits=np.array(self.splits),
-                            maps=np.array(self.maps))
+        """Write `split.npz` and then `split.json` (with the table's sha256, `split_sha256`)
+        into `directory` (created), each atomically (`npz_manifest.save`).
+
+        Returns:
+            The directory.
+
+        Raises:
+            OSError: the directory cannot be written.
+        """
+        from planner_core.learning import npz_manifest
+
         meta = dict(self.meta, k=self.k, cap=self.cap, features=list(SPLIT_FEATURES),
                     splits=list(self.splits), cases=len(self.gaps), maps=len(set(self.maps)))
-        (out / "split.json").write_text(json.dumps(meta, indent=1, sort_keys=True) + "\n")
-        return out
+        npz_manifest.save(directory, "split.npz",
+                          {"features": self.features, "gaps": self.gaps, "cpu": self.cpu,
+                           "splits": np.array(self.splits), "maps": np.array(self.maps)},
+                          "split.json", meta, compressed=True)
+        return Path(directory)
 
     @classmethod
     def load(cls, directory: str | Path = DEFAULT_TABLE) -> SplitTable | None:
         """Read a table written by `save`; None when the folder has none (`split.npz`).
 
         Raises:
-            ValueError: one line naming the folder when its split table does not load.
+            ValueError: one line naming the folder when its split table does not load, or
+                naming `split.npz` when it is not the one `split.json` describes (its
+                `split_sha256`; a manifest without one is not checked).
         """
+        import zipfile
+
+        from planner_core.learning.npz_manifest import check_digest
+
         d = Path(directory)
         if not (d / "split.npz").exists():
             return None
         try:
-            with np.load(d / "split.npz") as z:
+            raw = (d / "split.npz").read_bytes()
+            with np.load(io.BytesIO(raw)) as z:
                 arrays = {n: z[n] for n in ("features", "gaps", "cpu", "splits", "maps")}
             meta = json.loads((d / "split.json").read_text())
+            if not isinstance(meta, dict):
+                raise ValueError("split.json: not a JSON object")
             table = cls(arrays["features"].astype(float), arrays["gaps"].astype(float),
                         arrays["cpu"].astype(float),
                         tuple(float(x) for x in arrays["splits"]),
                         tuple(str(m) for m in arrays["maps"]), int(meta["k"]),
                         float(meta["cap"]), meta)
-        except (OSError, KeyError, ValueError, TypeError) as exc:
+        except (OSError, KeyError, ValueError, TypeError, EOFError,
+                zipfile.BadZipFile) as exc:
             raise ValueError(f"scheduler: the split table in {d} does not load ({exc})"
                              ) from None
+        stale = check_digest(raw, meta, "split.npz", "split.json")
+        if stale:
+            raise ValueError(f"scheduler: {d}: {stale}")
         if list(meta.get("features", [])) != list(SPLIT_FEATURES):
             raise ValueError(f"scheduler: the split table in {d} was fitted on other "
                              f"features {meta.get('features')}")
