@@ -197,3 +197,25 @@ def test_examples_load() -> None:
     # the one circle (500, 500) r 60 is what the loaded map blocks: inside it, not just outside
     probe = np.array([[500.0, 500.0], [500.0, 559.0], [500.0, 561.0], [50.0, 50.0]])
     assert points_inside(probe, t.obstacles).tolist() == [True, True, False, False]
+
+
+def test_generate_suite_writes_each_map_whole_or_not_at_all(tmp_path: Path, monkeypatch) -> None:
+    """A write that fails before its rename (a killed run) leaves the old map, not half of
+    the new one, and no temporary file."""
+    import os
+
+    import planner_core.suite as suite
+
+    monkeypatch.setattr(suite, "suite_maps", lambda seed: {"T01": {"name": "new"}})
+    assert suite.generate_suite(tmp_path) == [tmp_path / "T01.json"]
+    assert json.loads((tmp_path / "T01.json").read_text()) == {"name": "new"}
+    (tmp_path / "T01.json").write_text("old\n")
+
+    def killed(fd: int) -> None:
+        raise OSError("killed")
+
+    monkeypatch.setattr(os, "fsync", killed)
+    with pytest.raises(OSError, match="killed"):
+        suite.generate_suite(tmp_path)
+    assert [p.name for p in tmp_path.iterdir()] == ["T01.json"]
+    assert (tmp_path / "T01.json").read_text() == "old\n"

@@ -253,7 +253,7 @@ def _run_suite(folder: Path, seed: int, *, large: bool = False) -> int:
             print(f"wrote {path}: {_line(data, witness_f=True)}")
         n = len(maps)
     else:
-        paths = generate_suite(folder, seed, write=write_text_atomic)
+        paths = generate_suite(folder, seed)
         for path in paths:
             print(f"wrote {path}: {_line(json.loads(path.read_text()))}")
         n = len(paths)

@@ -17,7 +17,6 @@ hover times to 0.01 s).
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -146,22 +145,28 @@ def generated_spec(k: int, map_seed: int) -> tuple[int, int, int]:
     return (5000, 10000)[k % 2], (k // 2) % 8, map_seed + k
 
 
-def generate_suite(
-    folder: str | Path,
-    seed: int = SUITE_SEED,
-    *,
-    write: Callable[[Path, str], object] | None = None,
-) -> list[Path]:
-    """Write T01.json..T16.json into `folder`; `write(path, text)` defaults to Path.write_text."""
+def generate_suite(folder: str | Path, seed: int = SUITE_SEED) -> list[Path]:
+    """Write T01.json..T16.json into `folder` (created), each atomically (a temporary file
+    renamed onto it: a killed run leaves each map old or whole, never half-written).
+
+    Args:
+        folder: the target folder.
+        seed: the suite's seed (`SUITE_SEED`: the committed maps).
+
+    Returns:
+        The 16 paths, T01 first.
+
+    Raises:
+        OSError: the folder cannot be written.
+    """
+    from planner_core.atomic import write_text_atomic
+
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     paths = []
     for name, data in suite_maps(seed).items():
         path = folder / f"{name}.json"
-        if write is None:
-            path.write_text(dumps_map(data))
-        else:
-            write(path, dumps_map(data))
+        write_text_atomic(path, dumps_map(data))
         paths.append(path)
     return paths
 
