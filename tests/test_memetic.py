@@ -82,7 +82,7 @@ def test_polish_elite_includes_the_best_and_never_loses_to_it(problem: Problem) 
     xs, pols = polish_elite(problem, X, st.f, st.phi, 5)
     assert 1 <= len(xs) == len(pols) <= 5
     b = problem.breakdown(res.x)
-    one = polish_hover_times(problem, b["hover_points"], b["hover_times"])
+    one = polish_hover_times(problem, b["hover_points"])
     only = problem.encode(one.hover_points, one.hover_times)
     np.testing.assert_array_equal(xs[0], only)  # the first is the DE's Deb-best, polished
     f, phi = problem.evaluate(xs)

@@ -56,7 +56,7 @@ def test_engineering_plan_is_valid_and_routed(walled: Problem) -> None:
     nodes = np.vstack([walled.start, served, walled.end])
     assert walled._overlap(nodes[:-1], nodes[1:]).sum() > 0.0
     # hover times are the LP's for those positions (the LP is idempotent on its own answer)
-    again = polish_hover_times(walled, pts, times)
+    again = polish_hover_times(walled, pts)
     np.testing.assert_allclose(again.hover_times.sum(), times.sum(), rtol=1e-6)
 
 

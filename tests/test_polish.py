@@ -31,7 +31,7 @@ def test_time_goes_to_the_best_point_and_the_useless_point_is_dropped(backend: s
     m = dict(BASE, sensors=[{"id": "s", "x": 400, "y": 0}])
     p = Problem(m)
     # point 0 right above the sensor (9 Mbit/s), point 1 500 m away on the same line
-    res = polish_hover_times(p, [[400, 0], [900, 0]], [60, 60], backend=backend)
+    res = polish_hover_times(p, [[400, 0], [900, 0]], backend=backend)
     assert res.feasible_c4
     assert res.dropped == (1,)
     np.testing.assert_allclose(res.hover_points, [[400, 0]])

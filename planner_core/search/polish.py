@@ -265,7 +265,6 @@ def _unserved_scheduled(problem: Problem, R: np.ndarray) -> list[dict[str, Any]]
 def polish_hover_times(
     problem: Problem,
     hover_points: np.ndarray,
-    hover_times: np.ndarray | None = None,
     *,
     backend: str = "highs",
 ) -> PolishResult:
@@ -276,6 +275,16 @@ def polish_hover_times(
     LP, the reference) or "cvxpy"; same LP (`BACKENDS`). In scheduled access (`radio.access`)
     the LP is `planner_core.model.hoverlp.scheduled_lp` (the data from each sensor a variable,
     the point's total within R_lambda T_i; HiGHS whatever the backend) and C3 is not reported.
+    The plan's own hover times play no part: the LP chooses them from the positions alone.
+
+    Args:
+        problem: the `Problem` (its sensors, radio, T_max and obstacles).
+        hover_points: (n, 2) hover positions in metres, in flying order.
+        backend: the LP's solver, one of `BACKENDS`.
+
+    Returns:
+        The kept points (m, 2), their hover times (m,) in seconds, the indices dropped, whether
+        C4 can be met, the sensors it cannot serve and why, the C3 excess and the solver used.
     """
     pts = np.asarray(hover_points, dtype=float).reshape(-1, 2)
     req = problem.required.astype(float)
@@ -348,7 +357,7 @@ def polish_elite(
             continue
         seen.add(key)
         b = problem.breakdown(X[i])
-        pol = polish_hover_times(problem, b["hover_points"], b["hover_times"])
+        pol = polish_hover_times(problem, b["hover_points"])
         out.append(problem.encode(pol.hover_points, pol.hover_times))
         results.append(pol)
         if len(out) >= k:

@@ -42,7 +42,7 @@ def lp_finish(budgeted: Evaluator, x: np.ndarray, criterion: Criterion = "deb") 
     from planner_core.search.polish import polish_hover_times
 
     b = inner.breakdown(np.asarray(x, dtype=float))
-    pol = polish_hover_times(inner, b["hover_points"], b["hover_times"])
+    pol = polish_hover_times(inner, b["hover_points"])
     budgeted.evaluate(inner.encode(pol.hover_points, pol.hover_times)[None, :])
 
 
