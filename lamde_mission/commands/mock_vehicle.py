@@ -159,7 +159,7 @@ def run(args: argparse.Namespace) -> int:
     except OSError as exc:
         raise UsageError(f"--connect {args.connect}: {exc.strerror or exc}") from None
     if ids is not None:
-        return _serve_fleet(vehicle, args)
+        return _serve_fleet(vehicle)
     ep = vehicle.endpoint
     where = (f"sending to {ep.host}:{ep.port}" if ep.mode == "udpout"
              else f"listening on {ep.host}:{ep.port}")  # fmt: skip
@@ -204,7 +204,7 @@ def _where(mode: str, host: str, port: int) -> str:
     return f"sending to {host}:{port}" if mode == "udpout" else f"listening on {host}:{port}"
 
 
-def _serve_fleet(fleet: object, args: argparse.Namespace) -> int:
+def _serve_fleet(fleet: object) -> int:
     """The foreground loop of `mock-vehicle --vehicles N`: one line per link, then until Ctrl-C."""
     from lamde_mission.vehicle.mock_fleet import MockFleet
 

@@ -831,7 +831,7 @@ def build_map(
     if layers.start is None and layers.home is not None:
         notes.append(f"start and end default to {layers.home['where']}")
 
-    def shapes(polys: list[_Poly], label: str) -> list[dict[str, Any]]:
+    def shapes(polys: list[_Poly]) -> list[dict[str, Any]]:
         out: list[dict[str, Any]] = []
         for p in polys:
             rings_xy = [_local(r, o) for r in p.rings]
@@ -882,8 +882,8 @@ def build_map(
             rectangles.append({"x": round(float(x), 4), "y": round(float(y), 4),
                                "length": r["length"], "width": r["width"],
                                "angle_deg": r["angle"]})  # fmt: skip
-    obstacles = shapes(drawn + layers.obstacles, "obstacle")
-    zones = shapes(layers.no_fly_zones, "no-fly zone")
+    obstacles = shapes(drawn + layers.obstacles)
+    zones = shapes(layers.no_fly_zones)
     circles = []
     for c in layers.circles:
         (x, y), = _local([(c["lon"], c["lat"])], o)

@@ -260,12 +260,6 @@ class UploadReport:
         return out
 
 
-def _step(fn: Callable[[float], object], timeout: float, what: str) -> object:
-    """One client call with `timeout` s allowed without progress (the client's per-message
-    timeouts and re-requests do the recovery; see `MissionClient`)."""
-    return fn(timeout)
-
-
 def mission_for_dialect(
     mission: Sequence[MissionItem], dialect: Dialect
 ) -> tuple[list[MissionItem], list[str]]:
@@ -415,6 +409,10 @@ def _attempt(
     is read back at once, before the next list goes up: a vehicle that stopped answering fails
     the attempt after one more wait instead of one per list. A list the vehicle never answered
     at all (`TransferError.unanswered`) fails the attempt with no read-back.
+
+    Each client call is allowed `timeout` s without progress; the client's per-message
+    timeouts and re-requests do the recovery (`MissionClient`), and its TransferError names
+    the list and the step ("mission upload: no answer from the vehicle while waiting ...").
     """
     unconfirmed: list[str] = []
     diffs: list[Difference] = []
@@ -427,9 +425,7 @@ def _attempt(
         lists.append((MISSION_TYPE.RALLY, rally))
 
     def read_back(t: int, items: list[WireItem]) -> list[Difference]:
-        got = _step(
-            lambda left, t=t: client.download(t, left), timeout, f"{mission_type_name(t)} download"
-        )
+        got = client.download(t, timeout)
         found = compare_items(items, got, mission_type_name(t))
         if t == MISSION_TYPE.MISSION:
             if home_item:  # the vehicle writes its home position into item 0
@@ -439,14 +435,12 @@ def _attempt(
         return found
 
     for t, items in lists:
-        what = f"{mission_type_name(t)} upload"
         t0 = time.monotonic()
         try:
             if items:
-                _step(lambda left, t=t, items=items: client.upload(items, t, left), timeout, what)
+                client.upload(items, t, timeout)
             else:
-                what = f"{mission_type_name(t)} clear"
-                _step(lambda left, t=t: client.clear(t, left), timeout, what)
+                client.clear(t, timeout)
         except TransferError as exc:
             upload_s += time.monotonic() - t0
             if exc.unanswered:

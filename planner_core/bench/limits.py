@@ -215,7 +215,7 @@ class BestKnown:
                 out[name] = float(e["f"])
         return out
 
-    def ensure(self, files: dict[str, Path], command: str = "") -> dict[str, float]:
+    def ensure(self, files: dict[str, Path]) -> dict[str, float]:
         """Seed missing or stale entries (the map file changed) from each map's witness plan;
         return the best-known f per task (tasks without a witness or entry are left out)."""
         from planner_core.model.mapio import load_map

@@ -342,7 +342,7 @@ def _protocol_body(records: list[dict[str, Any]], opts_all: list[str], reference
         L.append(f"| {t} | " + " | ".join(row) + " |")
 
     if limits:
-        L += _limits_section(tasks, opts, by, suite_dir, maps)
+        L += _limits_section(tasks, opts, by, suite_dir)
 
     # ---- figures
     from planner_core.bench import figures as F
@@ -669,8 +669,8 @@ def _safety_line(suite_dir: Path | None, tasks: Sequence[str]) -> str:
     return f"- Safety margins (planned on the inflated map): {other}."
 
 
-def _limits_section(tasks: list[str], opts: list[str], by: Any, suite_dir: Path | None,
-                    maps: dict[str, Any]) -> list[str]:
+def _limits_section(tasks: list[str], opts: list[str], by: Any,
+                    suite_dir: Path | None) -> list[str]:
     from planner_core.bench.limits import BestKnown, best_known_path, lower_bounds
 
     if suite_dir is None or not suite_dir.is_dir():

@@ -379,7 +379,7 @@ def run_bench(
             log(f"note: {bk_path} does not exist: a new best-known file starts from the maps' "
                 "witness plans (a run's 'best-known improved' is against those)")
         try:
-            best = bk.ensure(files, command)
+            best = bk.ensure(files)
         except BenchError:
             raise
         except ValueError as exc:  # the file changed since it was read

@@ -20,7 +20,7 @@ import numpy as np
 
 from planner_core.bench.baselines import OptimiseResult
 from planner_core.defaults import MIN_POPULATION, POPULATION
-from planner_core.pipeline.evaluator import Criterion, Evaluator, as_evaluator
+from planner_core.pipeline.evaluator import Evaluator, as_evaluator
 
 __all__ = ["optimise", "lp_finish", "can_lp"]
 
@@ -31,7 +31,7 @@ def can_lp(budgeted: Evaluator) -> bool:
     return hasattr(inner, "encode") and hasattr(inner, "breakdown")
 
 
-def lp_finish(budgeted: Evaluator, x: np.ndarray, criterion: Criterion = "deb") -> None:
+def lp_finish(budgeted: Evaluator, x: np.ndarray) -> None:
     """Re-solve the hover times of `x` (problem space) by the polish LP and evaluate the result
     (one evaluation, when the budget has one left and the problem can encode plans); the
     budgeted problem's best then includes it. Problems without `breakdown`/`encode` are left
