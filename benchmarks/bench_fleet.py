@@ -7,8 +7,8 @@ grid of about one depot per `--spacing` metres square (default 7 km; a grid poin
 obstacle is moved east until it is clear), swaps of 300 s (`battery_map`). Per map and seed:
 
 * one UAV, objective total: `planner_core.fleet.plan_fleet` (ours) and the route-first peer
-  it computes from the same single flight (`FleetResult.peer`, the `route-first` entry of
-  `planner_core.bench.baselines.FLEET_REGISTRY`), paired;
+  it computes from the same single flight (`FleetResult.peer`, `planner_core.fleet.route_first`),
+  paired;
 * three UAVs, objective makespan: ours; its makespan over the one-UAV plan's total time.
 
 Every plan is written as a sortie directory (`lamde_mission.sorties.write_sortie_dir`) and

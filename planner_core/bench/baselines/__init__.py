@@ -51,8 +51,6 @@ __all__ = [
     "policy_spec",
     "problem_for",
     "with_start",
-    "FLEET_REGISTRY",
-    "fleet_optimise",
 ]
 
 
@@ -320,31 +318,3 @@ def optimise(name: str, problem: Any, budget: int, seed: int,
                            history=Trace(h.evaluations + probe, h.best_f, h.best_phi))
     return res
 
-
-#: planners of battery-limited maps (issue 33): name -> (target "module:function", description);
-#: each takes (map, PlanConfig, goal=...) and returns a `planner_core.fleet.FleetResult`, its
-#: single flight budgeted by the config (`benchmarks/bench_fleet.py` compares them)
-FLEET_REGISTRY: dict[str, tuple[str, str]] = {
-    "sorties": (
-        "planner_core.fleet.search:plan_fleet",
-        "the sortie planner: route-first and cluster-first starts, sortie re-plans by the "
-        "pipeline, merges, transfers of hover points, re-splits; LP across sorties",
-    ),
-    "route-first": (
-        "planner_core.bench.baselines.route_first:optimise_fleet",
-        "route first, cluster second: the single-flight plan cut into battery-sized sorties "
-        "with returns to the depots (optimal split with depot choice), hover times re-solved",
-    ),
-}
-
-
-def fleet_optimise(name: str, m: Any, config: Any, goal: str | None = None) -> Any:
-    """Run the fleet planner `name` of `FLEET_REGISTRY` on map m (with a battery) with the
-    pipeline settings `config`; KeyError names the choices."""
-    try:
-        target = FLEET_REGISTRY[name][0]
-    except KeyError:
-        raise KeyError(f"unknown fleet planner '{name}'; choose from "
-                       f"{', '.join(FLEET_REGISTRY)}") from None
-    module, func = target.split(":")
-    return getattr(importlib.import_module(module), func)(m, config, goal=goal)
