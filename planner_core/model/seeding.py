@@ -260,14 +260,27 @@ def _nearest_centres(S, C):  # pragma: no cover - compiled
 @njit(cache=True, nogil=True)
 def _prune_step(full, R, ok, b1, b2, idx, n, req, c, t_max, alpha, v_max, accel, limit
                 ):  # pragma: no cover - compiled
-    """One removal of `Seeder.prune_numpy`, compiled, on its state for n points: full (>= n + 2,
+    """One removal of `Seeder.prune`, compiled, on its state for n points: full (>= n + 2,
     2) start, points, end; R (>= n, J) the points' rates; ok (>= n,) whether each point's
     neighbours see each other; b1, b2 (J,) each sensor's best and second-best point; idx the
     points' indices in the prune's input; c = 0.95 T_max. Returns the point m removed (the
     arrays updated in place for n - 1 points; the caller then renews ok[m - 1], ok[m]) or -1
-    when the prune stops. Every quantity as numpy computes it: the greedy times' row sums by
-    `numpy_sum`, leg lengths by hypot, Eq. 1 by `leg_time`, first-of-equals extrema. O(n^2 + J)
-    (+ O(n J) for the rows moved up)."""
+    when the prune stops.
+
+    The bookkeeping: once point m is gone a sensor's best point changes only when m was its
+    best (it moves to its second best), so the cost of every removal needs only each sensor's
+    best and second-best point and the (n, n) matrix `gain` of the largest need point m hands
+    to point i (`own`: each point's own greedy time, the longest need of the sensors it
+    serves); a point is a candidate when no sensor it alone serves within c would go unserved
+    (its second best cannot) and its neighbours see each other. After the removal the best
+    two are recomputed only for the sensors whose best two lost a point (O(n) each), the
+    others renumbered; the rates and the legs' clearance are kept and updated, not
+    recomputed (the caller checks the two legs that changed). `Seeder.prune_reference` does
+    the same from an (n, n, J) array, O(n^2 J) per removal.
+
+    Every quantity as numpy computes it: the greedy times' row sums by `numpy_sum`, leg
+    lengths by hypot, Eq. 1 by `leg_time`, first-of-equals extrema, so the points kept equal
+    `prune_reference`'s to the bit (tests). O(n^2 + J) (+ O(n J) for the rows moved up)."""
     J = R.shape[1]
     served = np.ones(n, dtype=np.bool_)
     for j in range(J):
@@ -740,10 +753,10 @@ class Seeder:
         The cost of removing point m: alpha x the flight time it saves (its two legs replaced
         by one) + (1 - alpha) x the greedy hover times of the rest, each sensor served from
         its best remaining point, from every sensor's best and second-best point kept across
-        removals (`prune_numpy` explains the bookkeeping). Each removal is one compiled step
+        removals (`_prune_step` explains the bookkeeping). Each removal is one compiled step
         (`_prune_step`: O(n^2 + J)) and one check of the two legs it changed; numpy's
         arithmetic is kept (its sums, `hypot`, Eq. 1's `leg_time`), so the same points as
-        `prune_numpy` and `prune_reference` (O(n^2 J) per removal) to the bit (tests)."""
+        `prune_reference` (O(n^2 J) per removal) to the bit (tests)."""
         p = self.p
         M = np.asarray(M, dtype=float).reshape(-1, 2)
         if len(M) <= 1:
@@ -769,77 +782,6 @@ class Seeder:
             if len(fix):
                 ok[fix] = self._clear(full[fix], full[fix + 2])
         return M[idx[:n]]
-
-    def prune_numpy(self, M: np.ndarray, limit: int) -> np.ndarray:
-        """`prune` in numpy, one removal per Python iteration (what `_prune_step` compiles;
-        tests hold the two equal). Route points M (k, 2) with points removed whose sensors
-        the others still serve within 95% of T_max and whose neighbours see each other:
-        while more than `limit` remain, the one whose removal costs least; then any whose
-        removal lowers the estimated f. Returns the kept points in order (m, 2).
-
-        The cost of removing point m: alpha x the flight time it saves (its two legs replaced
-        by one) + (1 - alpha) x the greedy hover times of the rest, each sensor served from
-        its best remaining point. Once m is gone a sensor's best point changes only when m was
-        its best (it moves to its second best), so each iteration needs every sensor's best
-        and second-best point (kept across removals, recomputed only for the sensors whose
-        best two lost a point) and the (n, n) matrix of the largest need point m hands to
-        point i: O(n^2 + J) per removal plus O(n) per sensor re-ranked, where
-        `prune_reference` takes O(n^2 J); the link rates and the legs' clearance are kept and
-        updated, not recomputed (one leg check per removal). Same result as
-        `prune_reference` to the bit (tests)."""
-        p = self.p
-        M = np.asarray(M, dtype=float).reshape(-1, 2)
-        if len(M) <= 1:
-            return M
-        R = p.rates(M)  # (n, J), row i the link rates of point i: kept as points go
-        full = np.vstack([p.start, M, p.end])
-        n = len(M)
-        ok = self._clear(full[:n], full[2:])  # ok[m]: m's neighbours see each other
-        c = 0.95 * p.t_max
-        cols = np.arange(R.shape[1])
-        b1, b2 = _best_two(R, cols)
-        while n > 1:  # `full`: start -> M -> end, rebuilt after each removal
-            m_idx = np.arange(n)
-            r1, r2 = R[b1, cols], R[b2, cols]
-            now = r1 * c >= p.required
-            # removing b1[j] leaves sensor j unserved: that point cannot go
-            blocks = now & (r2 * c < p.required)
-            served = np.ones(n, dtype=bool)
-            served[b1[blocks]] = False
-            cand = np.flatnonzero(ok & served)
-            if len(cand) == 0:
-                break
-            need1 = p.required / np.maximum(r1, 1e-12)
-            need2 = p.required / np.maximum(r2, 1e-12)
-            own = np.zeros(n)  # point i's greedy time: the longest need of the sensors it serves
-            np.maximum.at(own, b1, need1)
-            gain = np.zeros((n, n))  # [m, i]: the longest need m's sensors hand to i
-            np.maximum.at(gain, (b1, b2), need2)
-            times = np.maximum(own[None, :], gain)
-            times[m_idx, m_idx] = 0.0
-            legs = flight_time(np.hypot(*np.diff(full, axis=0).T), p.v_max, p.accel)
-            short = flight_time(np.hypot(*(full[m_idx + 2] - full[m_idx]).T), p.v_max, p.accel)
-            d_fly = short - legs[m_idx] - legs[m_idx + 1]
-            cost = p.alpha * d_fly + (1.0 - p.alpha) * times.sum(axis=1)
-            m = int(cand[np.argmin(cost[cand])])
-            if n <= limit and cost[m] >= (1.0 - p.alpha) * self._times(M, R)[0].sum():
-                break
-            M = np.delete(M, m, axis=0)
-            R = np.delete(R, m, axis=0)
-            ok = np.delete(ok, m)
-            n -= 1
-            # a sensor's best two change only where m was one of them; the rest renumber
-            hit = np.flatnonzero((b1 == m) | (b2 == m))
-            b1 = b1 - (b1 > m)
-            b2 = b2 - (b2 > m)
-            if len(hit) and n > 1:
-                b1[hit], b2[hit] = _best_two(R[:, hit], np.arange(len(hit)))
-            # the legs that skip point m - 1 and point m (as numbered now) changed
-            fix = np.array([i for i in (m - 1, m) if 0 <= i < n], dtype=int)
-            full = np.vstack([p.start, M, p.end])
-            if len(fix):
-                ok[fix] = self._clear(full[fix], full[fix + 2])
-        return M
 
     def prune_reference(self, M: np.ndarray, limit: int) -> np.ndarray:
         """`prune` the obvious way: every iteration recomputes, for each point m, the greedy
