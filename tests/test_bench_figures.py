@@ -157,7 +157,10 @@ def test_one_colour_per_optimiser_in_every_figure() -> None:
     for c in ("adaptive", "lamde", "random", "fixed"):
         assert F.optimiser_style(c) == F.optimiser_style(f"de-{c}")
     assert F.optimiser_style("de-adaptive-fixedlen")["ls"] == "--"
-    assert F.optimiser_style("not-registered") == F.optimiser_style("not-registered")
+    # a name outside the table: a spare colour by a stable hash of the name (crc32, not the
+    # per-process salted hash(): the same colour in every run), solid unless a variant suffix
+    assert F.optimiser_style("not-registered") == {"color": "#7b4173", "ls": "-"}
+    assert F.optimiser_style("not-registered-fixedlen") == {"color": "#843c39", "ls": "--"}
     # the ablation variants: one colour each, LAMDE in de-lamde's
     variants = ("LAMDE", "LAMDE-F", "LAMDE-R", "LAMDE-E", "LAMDE-L", "LAMDE-O")
     assert len({F.optimiser_style(v)["color"] for v in variants}) == len(variants)
