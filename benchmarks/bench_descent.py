@@ -51,12 +51,13 @@ def _starts(problem: object, kind: str, n: int, budget: int, seed: int) -> list:
     """The decision vectors (d,) to descend (module docstring) and their f."""
     import numpy as np
 
+    from planner_core.model.formulas import deb_order
     from planner_core.search.construct import candidate_plans
 
     if kind == "starts":
         X, _ = candidate_plans(problem, seed, 64)
         f, phi = problem.evaluate(X)
-        return [X[k] for k in np.lexsort((f, phi)) if phi[k] == 0][:n]
+        return [X[k] for k in deb_order(f, phi) if phi[k] == 0][:n]
     from planner_core.pipeline import PlanConfig, run_pipeline
     from planner_core.search.descent import hover_of
     from planner_core.search.polish import hover_lp

@@ -24,7 +24,7 @@ import numpy as np
 from scipy.stats import rankdata
 
 from planner_core.bench.baselines import OptimiserSpec
-from planner_core.defaults import SCORE_FACTOR
+from planner_core.model.formulas import penalised_score
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -46,7 +46,7 @@ def table(results: Path, names: list[str]) -> tuple[list[str], dict[str, float]]
         r = json.loads(line)
         if r.get("optimiser") in names and r.get("f") is not None:
             score[(r["task"], r["optimiser"])].append(
-                float(r["f"]) + SCORE_FACTOR * float(r["phi"]))
+                penalised_score(float(r["f"]), float(r["phi"])))
     tasks = sorted({t for t, _ in score})
     lines = ["| map | " + " | ".join(n.removeprefix("cmaes-seeded-lp-") for n in names) + " |",
              "|" + "---|" * (len(names) + 1)]

@@ -33,7 +33,7 @@ import numpy as np
 from scipy.stats import wilcoxon
 
 from planner_core.bench._io import read_maybe_gz
-from planner_core.defaults import SCORE_FACTOR
+from planner_core.model.formulas import penalised_score
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -84,7 +84,7 @@ def main() -> None:
                     and r["optimiser"] not in a.optimizers):
                 continue
             key = (r["task"], r["optimiser"])
-            runs[key][int(r["seed"])] = float(r["f"]) + SCORE_FACTOR * float(r["phi"])
+            runs[key][int(r["seed"])] = penalised_score(float(r["f"]), float(r["phi"]))
             feasible[key][int(r["seed"])] = r["phi"] == 0.0
     feas = {k: sum(v.values()) for k, v in feasible.items()}
     best = json.loads(a.best_known.read_text())["tasks"]

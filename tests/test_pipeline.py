@@ -55,6 +55,44 @@ def test_the_evaluator_stops_at_its_time_limit_after_a_first_evaluation(tiny: Pr
     assert ev.count == 1 and ev.records[-1].stopped == "time limit"
 
 
+class _Rows:
+    """A problem whose row x = (f, phi, tag) evaluates to that f and phi (the tag tells rows
+    with the same f and phi apart)."""
+
+    lower = np.zeros(3)
+    upper = np.full(3, np.inf)
+
+    def evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return X[:, 0].copy(), X[:, 1].copy()
+
+
+def test_the_evaluator_keeps_the_same_incumbents_row_by_row_as_in_one_batch() -> None:
+    """The one-row path (`Evaluator._update_one`, the descents' calls) and the batch path rank
+    by the same Deb rule and penalised score (`planner_core.model.formulas`): ties in phi, in f
+    and in the score, and infinite f or phi, keep the first row either way."""
+    rng = np.random.default_rng(5)
+    for _ in range(200):
+        n = int(rng.integers(1, 9))
+        X = np.column_stack([rng.choice([0.0, 1.0, 2.0, 10.0, 21.0, np.inf], n),
+                             rng.choice([0.0, 0.0, 0.1, 1.0, 2.0, np.inf], n), np.arange(n)])
+        batch, rows = Evaluator(_Rows(), n), Evaluator(_Rows(), n)
+        batch.evaluate(X)
+        for x in X:
+            rows.evaluate(x[None, :])
+        for criterion in ("deb", "penalised"):
+            b, r = _incumbent(batch, criterion), _incumbent(rows, criterion)
+            assert (b is None) == (r is None), (criterion, X)
+            if b is not None:  # None: no row beat the empty incumbent (inf f or phi)
+                assert np.array_equal(b[0], r[0]) and b[1:] == r[1:], (criterion, X)
+
+
+def _incumbent(ev: Evaluator, criterion: str) -> tuple | None:
+    try:
+        return ev.best(criterion)  # type: ignore[arg-type]
+    except RuntimeError:
+        return None
+
+
 @pytest.mark.parametrize(
     ("kwargs", "field"),
     [({"budget": 50}, "budget"), ({"de_share": 1.5}, "de_share"), ({"time_limit": 0}, "time_limit"),

@@ -30,7 +30,7 @@ from typing import Any, Literal, NamedTuple
 
 import numpy as np
 
-from planner_core.model.formulas import PENALTY_FACTOR, deb_best, deb_better, penalised_score
+from planner_core.model.formulas import deb_best, deb_better, penalised_score
 
 __all__ = [
     "BudgetExceeded",
@@ -256,10 +256,10 @@ class Evaluator:
 
     def _update_one(self, x: np.ndarray, f: float, phi: float) -> None:
         _, bf, bp = self._best["deb"]
-        if phi < bp or (phi == bp and f < bf):
+        if deb_better(f, phi, bf, bp):
             self._best["deb"] = (x.copy(), f, phi)
         _, bf, bp = self._best["penalised"]
-        if f + PENALTY_FACTOR * phi < bf + PENALTY_FACTOR * bp:
+        if penalised_score(f, phi) < penalised_score(bf, bp):
             self._best["penalised"] = (x.copy(), f, phi)
         for key, (_, bf, bp) in self._best.items():
             self._trace[key].append((self.count, bf, bp))
