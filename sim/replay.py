@@ -55,16 +55,35 @@ Z_SNAP = 0.01
 
 
 def vertical_time(dz: float, accel: float, up: float, down: float) -> float:
-    """s to climb (dz > 0) or descend (dz < 0) |dz| m rest-to-rest (Eq. 1 with the map's
-    acceleration) at most `up` / `down` m/s (the map's `uav.climb_speed` and
-    `uav.descent_speed`); 0 below `Z_SNAP`."""
+    """The time to climb or descend |dz| rest to rest: Eq. 1 (paper Sec. 3.1) with the map's
+    acceleration, at most `up` m/s up and `down` m/s down.
+
+    Args:
+        dz: the altitude change (m): > 0 a climb, < 0 a descent; |dz| < `Z_SNAP` takes 0 s.
+        accel: the UAV's acceleration (m/s^2), > 0.
+        up: the climb speed (m/s, the map's `uav.climb_speed`), > 0.
+        down: the descent speed (m/s, the map's `uav.descent_speed`), > 0.
+
+    Returns:
+        The time (s).
+    """
     if abs(dz) < Z_SNAP:
         return 0.0
     return leg_time(abs(dz), up if dz > 0 else down, accel)
 
 
 def leg_time(d: float, v_max: float, accel: float) -> float:
-    """Eq. 1: rest-to-rest time over distance d (trapezoid above v^2/a, else triangle)."""
+    """The sim's own Eq. 1 (paper Sec. 3.1): the rest-to-rest time over distance d, a
+    trapezoid speed profile above d = v_max^2 / a, a triangle below.
+
+    Args:
+        d: the distance (m); d <= 0 takes 0 s.
+        v_max: the cruise speed (m/s), > 0.
+        accel: the acceleration a (m/s^2), > 0.
+
+    Returns:
+        The time (s).
+    """
     if d <= 0.0:
         return 0.0
     if d > v_max * v_max / accel:
@@ -73,7 +92,18 @@ def leg_time(d: float, v_max: float, accel: float) -> float:
 
 
 def leg_position(t: np.ndarray, d: float, v_max: float, accel: float) -> np.ndarray:
-    """Distance covered at times t (0 <= t <= leg_time) on a rest-to-rest leg of length d."""
+    """The distance covered at times t on a rest-to-rest leg of length d (Eq. 1's profile:
+    accelerate at a, cruise at v_max on a trapezoid, decelerate at a).
+
+    Args:
+        t: times since the leg's start (s), any shape; clipped to 0 .. `leg_time(d, ...)`.
+        d: the leg's length (m).
+        v_max: the cruise speed (m/s), > 0.
+        accel: the acceleration a (m/s^2), > 0.
+
+    Returns:
+        The distance covered (m, 0 .. d), t's shape; zeros for a leg of no time (d <= 0).
+    """
     t = np.asarray(t, dtype=float)
     total = leg_time(d, v_max, accel)
     if total <= 0.0:
@@ -99,7 +129,19 @@ def leg_position(t: np.ndarray, d: float, v_max: float, accel: float) -> np.ndar
 def hover_rates(
     points: np.ndarray, altitudes: np.ndarray, sensors: np.ndarray, peak: float, decay: float
 ) -> np.ndarray:
-    """R_ij = max(R_c - xi * sqrt(|p_i - s_j|^2 + h_i^2), 0): (I, J) Mbit/s."""
+    """The sim's own link rates R_ij = max(R_c - xi * sqrt(|p_i - s_j|^2 + h_i^2), 0) (paper
+    Sec. 3.1, with each point's own altitude h_i for H).
+
+    Args:
+        points: hover points p_i (m, local), I pairs, e.g. (I, 2).
+        altitudes: each point's altitude h_i above home (m), (I,).
+        sensors: sensor positions s_j (m, local), (J, 2).
+        peak: R_c (Mbit/s).
+        decay: xi (Mbit/s per m).
+
+    Returns:
+        R (Mbit/s, >= 0), shape (I, J).
+    """
     points = np.asarray(points, dtype=float).reshape(-1, 2)
     diff = points[:, None, :] - np.asarray(sensors, dtype=float)[None, :, :]
     dist = np.sqrt((diff**2).sum(axis=2) + np.asarray(altitudes, dtype=float)[:, None] ** 2)
@@ -118,8 +160,14 @@ def scheduled_allocation(
     D_ij >= 0. C4 holds exactly when some allocation meets every Q_j, i.e. s >= 1; the
     data margin is s - 1 for every sensor.
 
-    Args: rates (I, J) Mbit/s, times (I,) s, required (J,) Mbit, bandwidth Mbit/s.
-    Returns: D (I, J) Mbit (zero where R_ij = 0 or Q_j = 0).
+    Args:
+        rates: the link rates R_ij (Mbit/s), (I, J) (or I x J numbers).
+        times: the hover times T_i (s), (I,); negative counts as 0.
+        required: each sensor's required data Q_j (Mbit), (J,).
+        bandwidth: R_lambda (Mbit/s).
+
+    Returns:
+        D (Mbit), shape (I, J): zero where R_ij = 0, T_i = 0 or Q_j = 0.
     """
     from scipy.optimize import linprog
     from scipy.sparse import coo_matrix
@@ -251,15 +299,47 @@ def replay(
     *,
     dt: float = 1.0,
 ) -> Timeline:
-    """Fly `items` (mission type MISSION, seq order) over `map`; samples every `dt` seconds.
+    """Fly a stored mission over a map with the paper's model (module docstring): the
+    timeline of the flight and the paper's totals.
 
-    Raises sim.mission.MissionError for missions the sim cannot fly.
+    Args:
+        items: the mission's items (type MISSION) in seq order, as a vehicle receives them
+            (`sim.mission.MissionItem`; fence and rally items are ignored, noted).
+        map: the map (a `planner_core.model.mapio.Map` or anything with its fields): its
+            origin places the items, its start is the default launch, and `spec` (uav, radio,
+            objective, safety), `sensors`, `sensor_ids` and `required_data` fly it.
+        dt: the sampling step (s), > 0; a mission too long for the sample bound is sampled
+            more coarsely (the totals stay exact).
+
+    Returns:
+        The `Timeline`: samples `t` (N,) s, `xy` (N, 2) m, `z` (N,) m, `phase` (N,), `data`
+        (N, J) Mbit, and the `Totals` (t_fly, t_hover, f in s; collected Mbit per sensor).
+
+    Raises:
+        MissionError: a mission the sim cannot fly, naming the item, or one whose duration
+            is not finite.
+        sim.geo.MissingOriginError: the map has no origin (lat, lon) to place the items.
+        ValueError: dt is not positive.
     """
     return replay_route(items_to_route(items, map), map, dt=dt)
 
 
 def replay_route(route: Route, map: Any, *, dt: float = 1.0) -> Timeline:  # noqa: A002
-    """`replay` for a Route already read from items."""
+    """`replay` for a Route already read from items (`sim.mission.items_to_route`).
+
+    Args:
+        route: the mission as flown: launch, stops (m, local), altitudes, hover times (s),
+            speeds, finish.
+        map: the map, as for `replay` (its `spec`, `sensors`, `sensor_ids`, `required_data`).
+        dt: the sampling step (s), > 0; coarsened for a mission too long for the sample bound.
+
+    Returns:
+        The `Timeline`, as for `replay`.
+
+    Raises:
+        MissionError: the mission's duration is not finite.
+        ValueError: dt is not positive.
+    """
     if not dt > 0:
         raise ValueError("dt must be positive")
     spec = map.spec

@@ -58,8 +58,17 @@ L_VIO_TOL = _L_VIO_TOL
 
 
 def flight_time(d: np.ndarray, v_max: float, accel: float) -> np.ndarray:
-    """Eq. 1: time (s) to fly distance d (m, any shape) from rest to rest: a trapezoid speed
-    profile above d = v_max^2 / a (cruise at v_max), a triangle below; d <= 0 takes 0 s."""
+    """Time to fly distance d from rest to rest (paper Eq. 1, Sec. 3.1): a trapezoid speed
+    profile above d = v_max^2 / a (cruise at v_max), a triangle below.
+
+    Args:
+        d: leg lengths (m), any shape; d <= 0 takes 0 s.
+        v_max: cruise speed v_max (m/s), > 0.
+        accel: acceleration a (m/s^2), > 0.
+
+    Returns:
+        T_fly (s), d's shape (a 0-d array for a scalar d).
+    """
     d = np.asarray(d, dtype=float)
     cruise = d > v_max * v_max / accel
     return np.where(cruise, d / v_max + v_max / accel, 2.0 * np.sqrt(np.maximum(d, 0.0) / accel))
@@ -67,7 +76,16 @@ def flight_time(d: np.ndarray, v_max: float, accel: float) -> np.ndarray:
 
 @njit(cache=True, nogil=True)
 def leg_time(d: float, v_max: float, accel: float) -> float:  # pragma: no cover - compiled
-    """`flight_time` for one leg, for compiled kernels (bit-equal; tests/test_model.py)."""
+    """`flight_time` (Eq. 1) for one leg, for compiled kernels (bit-equal; tests/test_model.py).
+
+    Args:
+        d: the leg's length (m); d <= 0 takes 0 s.
+        v_max: cruise speed (m/s), > 0.
+        accel: acceleration a (m/s^2), > 0.
+
+    Returns:
+        T_fly (s).
+    """
     if d > v_max * v_max / accel:
         return d / v_max + v_max / accel
     return 2.0 * math.sqrt(max(d, 0.0) / accel)
@@ -77,23 +95,52 @@ def leg_time(d: float, v_max: float, accel: float) -> float:  # pragma: no cover
 
 
 def slant_rates(d2: np.ndarray, altitude: float, peak_rate: float, decay: float) -> np.ndarray:
-    """R_c - xi * sqrt(d^2 + H^2) (Mbit/s, not clipped at 0) for squared ground distances d2
-    (m^2, any shape); the link model of Sec. 3."""
+    """The link rate before its clip at 0, R_c - xi * sqrt(d^2 + H^2) (paper Sec. 3.1's R_ij).
+
+    Args:
+        d2: squared ground distances d^2 (m^2), any shape.
+        altitude: flight altitude H (m).
+        peak_rate: R_c (Mbit/s).
+        decay: xi (Mbit/s per m of slant distance).
+
+    Returns:
+        Rates (Mbit/s), d2's shape; negative beyond the radio's reach.
+    """
     return peak_rate - decay * np.sqrt(d2 + altitude**2)
 
 
 @njit(cache=True, nogil=True)
 def slant_rate(d2: float, h2: float, peak_rate: float, decay: float) -> float:  # pragma: no cover
-    """`slant_rates` for one pair, for compiled kernels; h2 = H^2 (bit-equal; tests)."""
+    """`slant_rates` for one pair, for compiled kernels (bit-equal; tests/test_model.py).
+
+    Args:
+        d2: squared ground distance (m^2).
+        h2: squared altitude H^2 (m^2).
+        peak_rate: R_c (Mbit/s).
+        decay: xi (Mbit/s per m).
+
+    Returns:
+        R_c - xi * sqrt(d2 + h2) (Mbit/s), not clipped at 0.
+    """
     return peak_rate - decay * math.sqrt(d2 + h2)
 
 
 def ground_reach(
     rate: np.ndarray | float, altitude: float, peak_rate: float, decay: float
 ) -> np.ndarray:
-    """The link rate read backwards: the largest ground distance (m) at which the rate is still
-    at least `rate` (Mbit/s, any shape), sqrt(((R_c - rate) / xi)^2 - H^2), and 0 where not even
-    the point overhead reaches it; xi = 0 counts as 1e-12 (a reach of ~1e13 m)."""
+    """The link rate (Sec. 3.1) read backwards: the largest ground distance at which the rate
+    is still at least `rate`, sqrt(((R_c - rate) / xi)^2 - H^2).
+
+    Args:
+        rate: the rates wanted (Mbit/s), a float or an array of any shape.
+        altitude: H (m).
+        peak_rate: R_c (Mbit/s).
+        decay: xi (Mbit/s per m); 0 counts as 1e-12 (a reach of ~1e13 m).
+
+    Returns:
+        Ground distances (m), rate's shape (a numpy float for a float); 0 where not even the
+        point overhead reaches the rate (rate >= R_c - xi H).
+    """
     slant = np.maximum(peak_rate - rate, 0.0) / max(decay, 1e-12)
     return np.sqrt(np.maximum(slant * slant - altitude**2, 0.0))
 
@@ -102,12 +149,25 @@ def link_rates(
     pts: np.ndarray, sensors: np.ndarray, altitude: float, peak_rate: float, decay: float,
     window: SensorWindow | None = None,
 ) -> np.ndarray:
-    """R_ij = max(R_c - xi * sqrt(|p_i - s_j|^2 + H^2), 0): points (..., I, 2) and sensors
-    (J, 2) in metres -> rates (..., I, J) in Mbit/s. One (I, 2) set of points takes the
-    compiled `_link_rates_2d` (bit-equal: the same operations in the same order; tests), or
-    with `window` (`sensor_window` of these sensors and radio) `_link_rates_window`: only the
+    """The link rates R_ij = max(R_c - xi * sqrt(|p_i - s_j|^2 + H^2), 0) (paper Sec. 3.1).
+
+    One (I, 2) float64 set of points takes the compiled `_link_rates_2d` (bit-equal: the same
+    operations in the same order; tests), or with `window` `_link_rates_window`: only the
     sensors within radio range in x of each point are computed, O(I x sensors in range) plus
-    O(I J) to zero the array, instead of O(I J) square roots (the same array; tests)."""
+    O(I J) to zero the array, instead of O(I J) square roots (the same array; tests).
+
+    Args:
+        pts: hover points p_i (m), shape (..., I, 2).
+        sensors: sensor positions s_j (m), a numpy array of shape (J, 2).
+        altitude: H (m).
+        peak_rate: R_c (Mbit/s).
+        decay: xi (Mbit/s per m).
+        window: `sensor_window` of these same sensors and radio (None: no range cut); used
+            for a 2-D float64 `pts` only.
+
+    Returns:
+        R (Mbit/s, >= 0), shape (..., I, J).
+    """
     pts = np.asarray(pts)
     if pts.ndim == 2 and pts.dtype == np.float64 and sensors.dtype == np.float64:
         if window is not None and math.isfinite(window.half):
@@ -145,12 +205,24 @@ class SensorWindow(NamedTuple):
 
 def sensor_window(sensors: np.ndarray, altitude: float, peak_rate: float, decay: float
                   ) -> SensorWindow:
-    """The `SensorWindow` of sensors (J, 2) under this radio. The cut is exact, not a
-    tolerance: `slant_rate` is non-increasing in its computed d2 (each operation is monotone
-    and rounding is monotone), c is a d2 a hair beyond the zero of the rate at which
-    `slant_rate` itself gives <= 0 (checked), and |dx| >= half = sqrt(c) (1 + 1e-9) makes the
-    computed d2 >= dx^2 (1 - 2^-53) > c. A kernel may therefore skip every pair with
-    |dx| or |dy| >= half, and only those, and write the rate 0 (or add nothing) there."""
+    """The sensors sorted by x with the radio's range cut, for the compiled rate loops.
+
+    The cut is exact, not a tolerance: `slant_rate` is non-increasing in its computed d2 (each
+    operation is monotone and rounding is monotone), c is a d2 a hair beyond the zero of the
+    rate at which `slant_rate` itself gives <= 0 (checked), and |dx| >= half = sqrt(c)
+    (1 + 1e-9) makes the computed d2 >= dx^2 (1 - 2^-53) > c. A kernel may therefore skip
+    every pair with |dx| or |dy| >= half, and only those, and write the rate 0 (or add
+    nothing) there.
+
+    Args:
+        sensors: sensor positions (m), anything numpy reads as J pairs, e.g. (J, 2).
+        altitude: H (m).
+        peak_rate: R_c (Mbit/s).
+        decay: xi (Mbit/s per m); xi <= 0 or a non-finite radio gives no cut.
+
+    Returns:
+        The `SensorWindow`: `order` (J,) int64, `xs` (J,) m, `half` m (inf: no cut).
+    """
     S = np.asarray(sensors, dtype=float).reshape(-1, 2)
     order = np.argsort(S[:, 0], kind="stable").astype(np.int64)
     xs = np.ascontiguousarray(S[order, 0])
@@ -167,9 +239,19 @@ def sensor_window(sensors: np.ndarray, altitude: float, peak_rate: float, decay:
 
 @njit(cache=True, nogil=True)
 def window_range(xs, half, px):  # pragma: no cover - compiled
-    """[lo, hi) of the x-sorted sensors xs that may lie within `half` of x = px: every sensor
-    outside has |fl(px - x)| >= half (margin 1e-9 of half and of |px| for the rounding of
-    px -/+ the width). px must be finite."""
+    """The slice of the x-sorted sensors that may lie within `half` of x = px, for kernels.
+
+    Every sensor outside it has |fl(px - x)| >= half (margin 1e-9 of half and of |px| for the
+    rounding of px -/+ the width).
+
+    Args:
+        xs: the sensors' x (m), sorted, shape (J,) (`SensorWindow.xs`).
+        half: the range cut (m), `SensorWindow.half`.
+        px: the point's x (m); must be finite.
+
+    Returns:
+        (lo, hi): the indices [lo, hi) into xs (and `SensorWindow.order`) to visit.
+    """
     w = half * (1.0 + 1e-9) + 1e-9 * abs(px)
     return np.searchsorted(xs, px - w, side="left"), np.searchsorted(xs, px + w, side="right")
 
@@ -234,12 +316,23 @@ def _pairwise_block(a, lo, n):  # pragma: no cover - compiled
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def numpy_sum(a, lo, n):  # pragma: no cover - compiled
-    """numpy's float64 sum of a[lo:lo + n] (its pairwise summation: blocks of at most 128,
-    halves of a multiple of 8 above), so the same bits as ``a[lo:lo + n].sum()`` and as a row
-    of ``A.sum(axis=1)`` for a C-contiguous A (tests): for compiled kernels that must give
-    what a numpy twin gives. O(n).
-    numpy's recursion is walked with an explicit stack: numba's disk cache does not load a
-    recursive kernel safely."""
+    """numpy's float64 sum of a[lo:lo + n], for compiled kernels that must give what a numpy
+    twin gives: the same bits as ``a[lo:lo + n].sum()`` and as a row of ``A.sum(axis=1)`` for
+    a C-contiguous A (tests). O(n).
+
+    The algorithm is numpy's pairwise summation (`pairwise_sum` in numpy's
+    ``_core/src/umath/loops_utils.h.src``: blocks of at most 128 summed with eight
+    accumulators, halves of a multiple of 8 above); its recursion is walked with an explicit
+    stack, since numba's disk cache does not load a recursive kernel safely.
+
+    Args:
+        a: a 1-D float64 array.
+        lo: the first index summed.
+        n: how many elements, lo + n <= len(a).
+
+    Returns:
+        The sum (float).
+    """
     if n <= 128:
         return _pairwise_block(a, lo, n)
     s_lo = np.empty(64, dtype=np.int64)
@@ -278,35 +371,92 @@ def numpy_sum(a, lo, n):  # pragma: no cover - compiled
 
 
 def collision_penalty(l_vio: np.ndarray, mu: float, nu: float) -> np.ndarray:
-    """V5 = mu + nu * L_vio where the path's length inside obstacles L_vio (m) exceeds
-    `L_VIO_TOL`, else 0 (Sec. 4.1)."""
+    """The collision violation V_C5 = mu + nu * L_vio (paper Eq. 6, Sec. 4.1), 0 where L_vio
+    is at most `L_VIO_TOL` (the paper: L_vio = 0).
+
+    Args:
+        l_vio: the path's length inside obstacles L_vio (m, Eq. 2), any shape.
+        mu: the offset mu (`objective.collision_offset`, phi's units).
+        nu: the weight nu (`objective.collision_weight`, phi's units per m).
+
+    Returns:
+        V_C5 (phi's units), l_vio's shape.
+    """
     return np.where(l_vio > L_VIO_TOL, mu + nu * l_vio, 0.0)
 
 
 def penalised_score(f: np.ndarray | float, phi: np.ndarray | float) -> np.ndarray | float:
-    """f + 10 * phi, the single number the paper ranks optimisers by (Sec. 5.2)."""
+    """The penalised score f + delta * phi with delta = `PENALTY_FACTOR` (10), the single
+    number the paper ranks optimisers by (Sec. 5.2).
+
+    Args:
+        f: objectives (Eq. 3's weighted time, s), a float or an array.
+        phi: violations (Eq. 7), a float or an array broadcastable with f.
+
+    Returns:
+        The score: a float for floats, else the broadcast array.
+    """
     return f + PENALTY_FACTOR * phi
 
 
 def deb_better(
-    f_a: np.ndarray, phi_a: np.ndarray, f_b: np.ndarray, phi_b: np.ndarray
-) -> np.ndarray:
-    """Deb's feasibility rule: a beats b iff phi_a < phi_b, or phi_a == phi_b and f_a < f_b."""
+    f_a: np.ndarray | float, phi_a: np.ndarray | float, f_b: np.ndarray | float,
+    phi_b: np.ndarray | float,
+) -> np.ndarray | bool:
+    """Deb's feasibility rule (paper Eq. 8, Sec. 4.1): a beats b iff phi_a < phi_b, or
+    phi_a == phi_b and f_a < f_b.
+
+    Args:
+        f_a, phi_a: a's objective (s) and violation, floats or arrays.
+        f_b, phi_b: b's, broadcastable with a's.
+
+    Returns:
+        Whether a beats b: a bool for floats, else a bool array of the broadcast shape.
+    """
     return (phi_a < phi_b) | ((phi_a == phi_b) & (f_a < f_b))
 
 
 def deb_not_worse(f_a: Any, phi_a: Any, f_b: Any, phi_b: Any) -> Any:
-    """Deb's rule, ties kept: a is at least as good as b (phi_a < phi_b, or equal, f_a <= f_b)."""
+    """Deb's rule (Eq. 8) with ties kept: a is at least as good as b (phi_a < phi_b, or
+    phi_a == phi_b and f_a <= f_b).
+
+    Args:
+        f_a, phi_a: a's objective (s) and violation, floats or arrays.
+        f_b, phi_b: b's, broadcastable with a's.
+
+    Returns:
+        Whether a is not worse than b: a bool for floats, else a bool array.
+    """
     return (phi_a < phi_b) | ((phi_a == phi_b) & (f_a <= f_b))
 
 
 def deb_order(f: np.ndarray, phi: np.ndarray) -> np.ndarray:
-    """Indices sorted by Deb's ranking: smaller phi first, ties broken by smaller f (stable)."""
+    """The order of Deb's ranking (Eq. 8): smaller phi first, ties broken by smaller f, full
+    ties in index order (stable).
+
+    Args:
+        f: objectives (s), shape (n,).
+        phi: violations, shape (n,).
+
+    Returns:
+        Indices (n,) int, best first.
+    """
     return np.lexsort((f, phi))
 
 
 def deb_best(f: np.ndarray, phi: np.ndarray) -> int:
-    """Index of the Deb-best individual (lowest phi, then lowest f; first index on full ties)."""
+    """The Deb-best individual (Eq. 8): lowest phi, then lowest f, the first index on full ties.
+
+    Args:
+        f: objectives (s), shape (n,).
+        phi: violations, shape (n,), without NaN.
+
+    Returns:
+        Its index.
+
+    Raises:
+        ValueError: n = 0 (or a NaN in phi, which no phi equals).
+    """
     cand = np.flatnonzero(phi == phi.min())
     return int(cand[np.argmin(f[cand])])
 
@@ -374,8 +524,25 @@ class ModelParams:
         required: Any = (),
         n_points: int | None = None,
     ) -> ModelParams:
-        """From the map file's `uav`, `radio` and `objective` settings (objects with the
-        schema's field names, `planner_core.model.mapio.Uav` etc.) and the map's geometry."""
+        """From the map file's settings and the map's geometry (before a map is loaded).
+
+        Args:
+            uav, radio, objective: the map file's `uav`, `radio` and `objective` settings
+                (objects with the schema's field names, `planner_core.model.mapio.Uav` etc.).
+            width, height: the area (m).
+            start, end: the take-off and landing points (m), two numbers each.
+            sensors: sensor positions (m), J pairs.
+            required: each sensor's required data (Mbit), J numbers.
+            n_points: I_max (None: `uav.max_hover_points`, 0 when that is None).
+
+        Returns:
+            The parameters.
+
+        Raises:
+            ValueError: `start` or `end` not two numbers, `sensors` not pairs (numpy's
+                message), or a setting a string that is not a number.
+            TypeError: a setting that is None or of another type.
+        """
         return cls(
             altitude=float(uav.altitude),
             v_max=float(uav.max_speed),
@@ -400,8 +567,15 @@ class ModelParams:
 
     @classmethod
     def from_map(cls, m: Any) -> ModelParams:
-        """From a loaded map (`planner_core.model.mapio.Map`: `spec`, `width`, `height`, `start`,
-        `end`, `sensors`, `required_data`, `max_hover_points`)."""
+        """From a loaded map.
+
+        Args:
+            m: a `planner_core.model.mapio.Map` (read: `spec`, `width`, `height`, `start`,
+                `end`, `sensors`, `required_data`, `max_hover_points`).
+
+        Returns:
+            The parameters.
+        """
         spec = m.spec
         return cls.from_settings(
             spec.uav, spec.radio, spec.objective, width=m.width, height=m.height,
@@ -416,13 +590,28 @@ class ModelParams:
         return sensor_window(self.sensors, self.altitude, self.peak_rate, self.decay)
 
     def rates(self, pts: np.ndarray, sensors: np.ndarray | None = None) -> np.ndarray:
-        """`link_rates` of points (..., I, 2) to this map's sensors (or `sensors`): (..., I, J).
-        This map's sensors take the range cut (`window`): O(I x sensors in range)."""
+        """`link_rates` (Sec. 3.1) under this radio; this map's sensors take the range cut
+        (`window`): O(I x sensors in range).
+
+        Args:
+            pts: hover points (m), shape (..., I, 2).
+            sensors: other sensor positions (m), (J, 2) (None: this map's).
+
+        Returns:
+            R (Mbit/s, >= 0), shape (..., I, J).
+        """
         if sensors is None:
             return link_rates(pts, self.sensors, self.altitude, self.peak_rate, self.decay,
                               self.window)
         return link_rates(pts, sensors, self.altitude, self.peak_rate, self.decay)
 
     def flight_time(self, d: np.ndarray) -> np.ndarray:
-        """`flight_time` with this UAV's v_max and a."""
+        """`flight_time` (Eq. 1) with this UAV's v_max and a.
+
+        Args:
+            d: leg lengths (m), any shape.
+
+        Returns:
+            T_fly (s), d's shape.
+        """
         return flight_time(d, self.v_max, self.accel)
