@@ -36,6 +36,7 @@ import numpy as np
 from sim.mission import CMD, SNAP_M, MissionError, MissionItem, Route, items_to_route
 
 __all__ = [
+    "PHASES",
     "Timeline",
     "Totals",
     "replay",
@@ -47,6 +48,8 @@ __all__ = [
     "vertical_time",
 ]
 
+#: the names a `Timeline` sample's phase takes, in flight order; `_Recorder.add` refuses any
+#: other, so a misspelt phase fails at once instead of going unnoticed by readers of `phase`
 PHASES = ("takeoff", "fly", "hover", "return", "land")
 
 #: m: an altitude change below this on a leg is the float32 round-off of one altitude written
@@ -223,9 +226,9 @@ class Timeline:
     """Samples of the flight and its totals.
 
     Samples: `t` (N,) s, `xy` (N, 2) local m, `z` (N,) m above home, `phase` (N,) one of
-    takeoff/fly/hover/return/land, `data` (N, J) Mbit collected so far per sensor. Each phase
-    segment contributes its first and last instant (so boundary times appear twice, once per
-    phase) and points every `dt` seconds in between.
+    `PHASES` (takeoff/fly/hover/return/land), `data` (N, J) Mbit collected so far per sensor.
+    Each phase segment contributes its first and last instant (so boundary times appear twice,
+    once per phase) and points every `dt` seconds in between.
     """
 
     t: np.ndarray
@@ -286,6 +289,14 @@ class _Recorder:
         return np.linspace(t0, t0 + duration, n + 1)
 
     def add(self, phase: str, t: np.ndarray, xy: np.ndarray, z: np.ndarray, data: np.ndarray):
+        """Append one phase segment's samples: times t (n,) s, xy (n, 2) m, z (n,) m and data
+        (n, J) Mbit, each labelled `phase`.
+
+        Raises:
+            ValueError: `phase` is not one of `PHASES` (a bug in the replay).
+        """
+        if phase not in PHASES:
+            raise ValueError(f"replay: phase {phase!r} is not one of {PHASES}")
         self.t.append(t)
         self.xy.append(xy)
         self.z.append(z)

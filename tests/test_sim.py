@@ -19,7 +19,7 @@ from planner_core.model.mapio import load_map
 from planner_core.model.problem import Problem
 from sim import replay, verify
 from sim.checks import ENDS_TOL
-from sim.replay import leg_position, leg_time
+from sim.replay import PHASES, _Recorder, leg_position, leg_time
 from tests.conftest import ROOT, SUITE
 
 MAP = {
@@ -137,6 +137,18 @@ def test_replay_rtl_flies_back_outside_f(m):
     assert tl.totals.t_return == pytest.approx(leg_time(d, 20.0, 4.0))
     assert "return" in tl.phase
     np.testing.assert_allclose(tl.xy[-1], [0, 0], atol=1e-6)
+
+
+def test_every_phase_of_a_timeline_is_one_of_phases_and_a_misspelt_one_is_refused(m):
+    """`sim.replay.PHASES` is the set the replay labels its samples with: an RTL mission flies
+    each of them, and a phase name outside it (a typo at a call site) fails at once."""
+    tl = replay(plan_to_items(_plan(m, HOVER, TIMES), m, finish="rtl"), m)
+    assert set(tl.phase) == set(PHASES)
+    rec = _Recorder(1, 1.0)
+    t = np.zeros(1)
+    with pytest.raises(ValueError, match="'hovr' is not one of"):
+        rec.add("hovr", t, np.zeros((1, 2)), t, np.zeros((1, 1)))
+    assert rec.phase == []
 
 
 def test_mission_speed_is_flown(m):
