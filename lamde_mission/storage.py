@@ -82,6 +82,7 @@ class Dialect:
 
     @property
     def firmware_type(self) -> int:
+        """QGroundControl's `.plan` firmwareType: the MAV_AUTOPILOT value (the same enum)."""
         return self.autopilot
 
 
@@ -94,7 +95,18 @@ AUTOPILOTS = tuple(DIALECTS)
 
 
 def dialect_of(name: str | Dialect) -> Dialect:
-    """The Dialect named `name` (px4, ardupilot, generic); ValueError naming the choices."""
+    """The storage dialect of an autopilot family, by name.
+
+    Args:
+        name: "px4", "ardupilot" or "generic" (case and surrounding spaces ignored), or a
+            `Dialect` (returned as it is).
+
+    Returns:
+        The `Dialect`.
+
+    Raises:
+        ValueError: an unknown name; the message names the choices.
+    """
     if isinstance(name, Dialect):
         return name
     key = str(name).strip().lower()
@@ -104,8 +116,17 @@ def dialect_of(name: str | Dialect) -> Dialect:
 
 
 def dialect_for_autopilot(autopilot: int | str | None) -> Dialect:
-    """The dialect of a HEARTBEAT's autopilot field (a MAV_AUTOPILOT number or name such as
-    "ARDUPILOTMEGA" / "PX4"); anything else is "generic"."""
+    """The dialect of a vehicle, from its HEARTBEAT's autopilot field (MAVLink's
+    MAV_AUTOPILOT enum).
+
+    Args:
+        autopilot: a MAV_AUTOPILOT number, or a name such as "ARDUPILOTMEGA",
+            "MAV_AUTOPILOT_PX4" or "ardupilot" (case ignored), or None.
+
+    Returns:
+        "ardupilot" or "px4"'s `Dialect` for those autopilots, "generic" for anything else
+        (None included).
+    """
     if autopilot is None:
         return DIALECTS["generic"]
     if isinstance(autopilot, str):
@@ -126,20 +147,44 @@ def dialect_for_autopilot(autopilot: int | str | None) -> Dialect:
 
 
 def grid_degrees(v: Any) -> Any:
-    """Degrees on the int32 1e-7 degree grid (round to nearest), as MISSION_ITEM_INT carries."""
+    """Degrees on the int32 1e-7 degree grid, as MAVLink's MISSION_ITEM_INT carries them
+    (x, y in degE7).
+
+    Args:
+        v: latitudes or longitudes (degrees), a number or any shape.
+
+    Returns:
+        The nearest grid values (degrees, round half to even): a float for a number, else an
+        array of v's shape.
+    """
     a = np.asarray(v, dtype=float)
     out = np.round(a * LATLON_SCALE) / LATLON_SCALE
     return float(out) if np.ndim(out) == 0 else out
 
 
 def float32(v: float) -> float:
-    """`v` as float32 stores it (round to nearest; NaN stays NaN)."""
+    """A number as a float32 field stores it (IEEE 754 binary32, round to nearest), as
+    MISSION_ITEM_INT's param1..4 and z are.
+
+    Args:
+        v: the number.
+
+    Returns:
+        The stored value as a Python float (NaN stays NaN; beyond float32's range, +-inf).
+    """
     v = float(v)
     return v if math.isnan(v) else float(np.float32(v))
 
 
 def float32_up(v: float) -> float:
-    """The smallest float32 value >= v."""
+    """The smallest float32 (IEEE 754 binary32) value >= v.
+
+    Args:
+        v: the number.
+
+    Returns:
+        That value as a Python float (inf above float32's largest finite value).
+    """
     v = float(v)
     f = np.float32(v)
     if float(f) < v:
@@ -155,8 +200,22 @@ def _float32_down(v: float) -> float:
 
 
 def hover_time_up(t: float, dialect: Dialect | str, t_max: float | None = None) -> float:
-    """The smallest hover time >= t that `dialect` stores unchanged, at most `t_max` (then the
-    largest storable value <= t_max): whole seconds for ArduPilot-style storage, else float32."""
+    """The smallest hover time >= t that `dialect` stores unchanged: whole seconds for
+    ArduPilot-style storage (AP_Mission's uint16), else float32.
+
+    Args:
+        t: the hover time (s); negative counts as 0 (whole seconds: t within 1e-12,
+            relative, above a whole second counts as that second).
+        dialect: a `Dialect` or its name.
+        t_max: the most it may be (s; None: no bound): a time that would round above it
+            becomes the largest storable value <= t_max.
+
+    Returns:
+        The storable hover time (s).
+
+    Raises:
+        ValueError: an unknown dialect name.
+    """
     d = dialect_of(dialect)
     t = max(float(t), 0.0)
     if d.whole_second_hover:
@@ -172,10 +231,24 @@ def hover_time_up(t: float, dialect: Dialect | str, t_max: float | None = None) 
 
 
 def stored_item(item: MissionItem, dialect: Dialect | str) -> MissionItem:
-    """`item` as the autopilot stores it: lat/lon on the 1e-7 degree grid (global frames),
-    params and altitude as float32, for whole-second dialects LOITER_TIME's param1 cut to
-    whole seconds (as ArduPilot's uint16 conversion does), and a WAYPOINT's param2 (a corner's
-    acceptance radius) 0 where the dialect does not store it (`Dialect.waypoint_radius`)."""
+    """A mission item as the autopilot stores it (MAVLink's MISSION_ITEM_INT; ArduPilot's
+    AP_Mission for whole-second dialects).
+
+    Lat/lon go on the 1e-7 degree grid (global frames; NaN kept), params and altitude to
+    float32; for whole-second dialects LOITER_TIME's param1 is cut to whole seconds in
+    0..65535 (as ArduPilot's uint16 conversion does), and a WAYPOINT's param2 (a corner's
+    acceptance radius) is 0 where the dialect does not store it (`Dialect.waypoint_radius`).
+
+    Args:
+        item: the item as written (x, y in degrees in a global frame, z in m).
+        dialect: a `Dialect` or its name.
+
+    Returns:
+        A new item with the stored values.
+
+    Raises:
+        ValueError: an unknown dialect name.
+    """
     d = dialect_of(dialect)
     p1, p2 = item.param1, item.param2
     if d.whole_second_hover and item.command == CMD.LOITER_TIME and math.isfinite(p1):
@@ -197,7 +270,18 @@ def stored_item(item: MissionItem, dialect: Dialect | str) -> MissionItem:
 
 
 def stored_items(items: Sequence[MissionItem], dialect: Dialect | str) -> list[MissionItem]:
-    """Every item as the autopilot stores it (see `stored_item`)."""
+    """Every item as the autopilot stores it (`stored_item`).
+
+    Args:
+        items: the mission items, in order.
+        dialect: a `Dialect` or its name.
+
+    Returns:
+        The stored items, in the same order.
+
+    Raises:
+        ValueError: an unknown dialect name.
+    """
     d = dialect_of(dialect)
     return [stored_item(it, d) for it in items]
 
@@ -218,6 +302,7 @@ class StorablePlan:
 
     @property
     def n_hover(self) -> int:
+        """The number of points, I (hover points and 0 s corners)."""
         return len(self.hover_times)
 
 
@@ -250,7 +335,8 @@ def storable_plan(
     planning_map: Any = None,
     finish: Literal["land", "rtl"] = "land",
 ) -> StorablePlan:
-    """`plan` (hover_points I x 2 m, hover_times s) made exactly storable by `dialect`.
+    """A plan made exactly storable by an autopilot (module docstring: MISSION_ITEM_INT's
+    grid and float32, ArduPilot's whole seconds), so the stored mission still meets C1-C5.
 
     Each hover point moves to a nearby 1e-7 degree grid point whose legs (from the previous,
     already stored, point and to the next) stay out of the obstacles of `planning_map` (the
@@ -268,6 +354,23 @@ def storable_plan(
     raised only while fewer than I_max points hover, so a plan with corner slots keeps at
     most I_max hover points. Every check uses the sim's own geometry and replay on the
     stored items.
+
+    Args:
+        plan: anything with `hover_points` (I, 2) m and `hover_times` (I,) s, in flight order.
+        map: the map the mission is written for: its origin places the grid, its start and
+            end are the route's ends.
+        dialect: a `Dialect` or its name.
+        planning_map: the map the plan was made on (obstacles inflated by the clearance,
+            required data with the margin); None: `map`.
+        finish: how the mission ends, "land" or "rtl" (as `plan_to_items` writes it).
+
+    Returns:
+        The `StorablePlan`: hover points (I, 2) m, hover times (I,) s, the dialect, moved_m
+        (I,) m and added_s (I,) s.
+
+    Raises:
+        ValueError: an unknown dialect name.
+        lamde_mission.geo.MissingOriginError: the map has no origin.
     """
     from sim.obstacles import obstacle_shapes, overlap_lengths
     from sim.replay import hover_rates, replay

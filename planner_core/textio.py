@@ -131,9 +131,19 @@ class InputError(ValueError):
 
 
 def limit(name: str) -> int:
-    """The limit `name` in force: its environment variable if set, else the default.
+    """The limit `name` in force: its environment variable if set (not blank), else the
+    default (`LIMITS`).
 
-    Raises InputError naming the variable when it is set to anything but a positive integer.
+    Args:
+        name: a key of `LIMITS` ("bytes", "depth", "sensors", ...).
+
+    Returns:
+        The limit (a count: bytes, levels, items or vertices, as `LIMITS[name]` says).
+
+    Raises:
+        InputError: the variable is set to anything but a positive integer of at most 12
+            digits (underscores allowed); its `where` names the variable.
+        KeyError: `name` is not a key of `LIMITS` (a bug in the caller).
     """
     lim = LIMITS[name]
     if lim.env is None:
@@ -149,7 +159,17 @@ def limit(name: str) -> int:
 
 
 def json_path(parts: Any) -> str:
-    """`("uav", "max_speed")` -> "uav.max_speed"; integers become `[i]`."""
+    """The dotted name of a field in a JSON document, for error messages.
+
+    Args:
+        parts: the path from the top: keys (any object, shown as str) and list indices
+            (ints), e.g. ``("uav", "max_speed")`` or ``("mission", "items", 3)``.
+
+    Returns:
+        E.g. "uav.max_speed" or "mission.items[3]" ("" for no parts); a key that is not
+        printable or is longer than 80 characters is shown by `ascii` of its first 80, so the
+        name stays one line.
+    """
     out = ""
     for part in parts:
         if isinstance(part, int):
@@ -175,7 +195,15 @@ _KINDS = (
 
 
 def not_regular(mode: int) -> str:
-    """Why a file of this `st_mode` cannot be read or written as a file ("is a directory, ...")."""
+    """Why a file of this mode cannot be read or written as a file.
+
+    Args:
+        mode: an `os.stat_result.st_mode` that is not a regular file's.
+
+    Returns:
+        E.g. "is a directory, not a regular file" or "is a named pipe (FIFO), not a regular
+        file" (to follow the file's name in a message).
+    """
     for test, name in _KINDS:
         if test(mode):
             return f"is {name}, not a regular file"
@@ -184,13 +212,27 @@ def not_regular(mode: int) -> str:
 
 def read_bytes(path: str | Path, *, max_bytes: int | None = None, limit_name: str = "bytes",
                gunzip: bool = False) -> bytes:  # fmt: skip
-    """The bytes of the regular file `path`, at most `max_bytes` (default `limit(limit_name)`).
+    """The bytes of a regular file, bounded.
 
     A non-regular file is refused from `os.stat` before it is opened; the file is then opened
-    non-blocking and checked again (it may have been swapped). `gunzip`: the file is gzip
-    (one or more members) and its decompressed bytes are returned, bounded by the same limit
-    while they are decompressed (a 3 MB file of zeros never becomes gigabytes). Raises
-    InputError (no `where`) for a missing, unreadable, non-regular, oversized or corrupt file.
+    non-blocking and checked again (it may have been swapped).
+
+    Args:
+        path: the file.
+        max_bytes: the most bytes it may hold (None: `limit(limit_name)`).
+        limit_name: the `LIMITS` entry that bounds it when `max_bytes` is None, and whose
+            variable the "too big" message names.
+        gunzip: the file is gzip (RFC 1952; one or more members): its decompressed bytes are
+            returned, bounded by the same limit while they are decompressed (a 3 MB file of
+            zeros never becomes gigabytes).
+
+    Returns:
+        The file's bytes (decompressed with `gunzip`).
+
+    Raises:
+        InputError: a missing, unreadable, non-regular, oversized or (gunzip) corrupt or
+            truncated file, with no `where`; or the limit's variable set to a bad value
+            (`limit`), naming it.
     """
     env = LIMITS[limit_name].env
     cap = limit(limit_name) if max_bytes is None else int(max_bytes)
@@ -265,10 +307,18 @@ _FOREIGN_BOMS = (
 
 
 def decode_text(data: bytes) -> str:
-    """`data` as UTF-8 text, a leading UTF-8 byte-order mark dropped; InputError otherwise.
+    """Bytes as UTF-8 text (RFC 3629), a leading UTF-8 byte-order mark dropped.
 
-    The error names the first offending byte and its offset in the file (and its line), or the
-    encoding announced by a UTF-16/UTF-32 byte-order mark.
+    Args:
+        data: a file's bytes.
+
+    Returns:
+        The text.
+
+    Raises:
+        InputError: the bytes are not UTF-8 (the message names the first offending byte, its
+            offset in the file and its line), start with a UTF-16/UTF-32 byte-order mark (the
+            message names that encoding), or hold a NUL character.
     """
     skip = 0
     if data.startswith(codecs.BOM_UTF8):
@@ -295,7 +345,17 @@ def decode_text(data: bytes) -> str:
 
 def read_text(path: str | Path, *, max_bytes: int | None = None, limit_name: str = "bytes",
               gunzip: bool = False) -> str:  # fmt: skip
-    """`read_bytes` then `decode_text`: the text of a regular, bounded, UTF-8 file."""
+    """The text of a regular, bounded, UTF-8 file: `read_bytes` then `decode_text`.
+
+    Args:
+        path, max_bytes, limit_name, gunzip: as for `read_bytes`.
+
+    Returns:
+        The text (a UTF-8 byte-order mark dropped).
+
+    Raises:
+        InputError: as `read_bytes` and `decode_text` raise it.
+    """
     return decode_text(read_bytes(path, max_bytes=max_bytes, limit_name=limit_name,
                                   gunzip=gunzip))
 
@@ -395,11 +455,21 @@ def _lone_surrogate(s: str) -> bool:
 
 
 def loads_json(text: str, *, max_depth: int | None = None) -> Any:
-    """Parse JSON text under the module's rules; InputError naming the field otherwise.
+    """Parse JSON text (RFC 8259) under the module's rules.
 
-    `max_depth` defaults to `limit("depth")`. Integers longer than `MAX_INT_DIGITS` digits,
-    numbers beyond a double's range, NaN/Infinity literals, unpaired surrogates and a key
-    repeated within one object (Python's json keeps the last silently) are refused.
+    Args:
+        text: the JSON text.
+        max_depth: the most levels of arrays/objects (None: `limit("depth")`).
+
+    Returns:
+        The value (dict, list, str, int, float, bool or None); every float is finite.
+
+    Raises:
+        InputError: text that is not JSON (line and column), nests deeper than `max_depth`,
+            or holds an integer longer than `MAX_INT_DIGITS` digits, a number beyond a
+            double's range, a NaN/Infinity literal, an unpaired surrogate or a key repeated
+            within one object (Python's json keeps the last silently; RFC 8259 says names
+            SHOULD be unique); `where` names the field.
     """
     depth = limit("depth") if max_depth is None else int(max_depth)
     if _may_exceed_depth(text, depth):
@@ -476,7 +546,20 @@ def loads_json(text: str, *, max_depth: int | None = None) -> Any:
 
 def read_json(path: str | Path, *, max_bytes: int | None = None,
               max_depth: int | None = None) -> Any:  # fmt: skip
-    """`read_text` then `loads_json`: the JSON value of a file, under every rule above."""
+    """The JSON value of a file, under every rule of the module: `read_text` then
+    `loads_json`.
+
+    Args:
+        path: the file.
+        max_bytes: the most bytes it may hold (None: `limit("bytes")`).
+        max_depth: the most levels of nesting (None: `limit("depth")`).
+
+    Returns:
+        The value, as `loads_json` returns it.
+
+    Raises:
+        InputError: as `read_text` and `loads_json` raise it.
+    """
     return loads_json(read_text(path, max_bytes=max_bytes), max_depth=max_depth)
 
 
@@ -484,10 +567,18 @@ _ESCAPES = {"\n": "\\n", "\r": "\\r", "\t": "\\t"}
 
 
 def printable(text: object) -> str:
-    """`text` safe to print on a terminal: control characters (C0, DEL, C1), format characters
-    (bidi overrides, zero-width) and line/paragraph separators shown as escapes (``\\n``,
-    ``\\x1b``, ``\\u202e``), so a map's name or a sensor id cannot forge lines of a summary or
-    send terminal escape codes. Other text (accents, CJK) is kept as it is."""
+    """Text safe to print on a terminal: control characters (C0, DEL, C1), format characters
+    (bidi overrides, zero-width), line/paragraph separators and lone surrogates (Unicode
+    general categories Cc, Cf, Zl, Zp, Cs) shown as escapes (``\\n``, ``\\x1b``,
+    ``\\u202e``), so a map's name or a sensor id cannot forge lines of a summary or send
+    terminal escape codes. Other text (accents, CJK) is kept as it is.
+
+    Args:
+        text: anything; its `str` is escaped.
+
+    Returns:
+        The escaped text (one line).
+    """
     import unicodedata
 
     out = []
@@ -506,10 +597,19 @@ def printable(text: object) -> str:
 
 
 def quoted(value: object, width: int = 40) -> str:
-    """`repr(value)` for a one-line message, cut to about `width` characters ("...") and
-    escaped by `printable`: a file's multi-megabyte string (or list, or object) is never
-    copied whole into an error line, nor are its control characters. `reprlib` abbreviates
-    long strings and containers before anything is joined (no copy of the whole value)."""
+    """`repr(value)` for a one-line message, cut short and escaped by `printable`: a file's
+    multi-megabyte string (or list, or object) is never copied whole into an error line, nor
+    are its control characters. `reprlib` abbreviates long strings and containers before
+    anything is joined (no copy of the whole value).
+
+    Args:
+        value: anything.
+        width: about how many characters to keep (at least 8 per abbreviated part); a longer
+            repr is cut to width - 3 characters and "...".
+
+    Returns:
+        The quoted, escaped text (its escapes may make it longer than `width`).
+    """
     import reprlib
 
     r = reprlib.Repr()

@@ -182,6 +182,7 @@ class Evaluator:
 
     @property
     def exhausted(self) -> bool:
+        """Whether no evaluation is left (`remaining` is 0: of the budget or of the stage)."""
         return self.remaining <= 0
 
     @property
@@ -195,11 +196,20 @@ class Evaluator:
         return self.time_limit is not None and self.elapsed >= self.time_limit
 
     def evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Evaluate rows of X (n, d), problem space; (f (n,), phi (n,)), NaN read as +inf.
+        """Evaluate plans, counting them against the budget and keeping the incumbents.
+
+        Args:
+            X: decision vectors in problem space, (n, d) (one (d,) row is read as (1, d));
+                n = 0 evaluates nothing and counts nothing.
+
+        Returns:
+            (f, phi): the objective (s, the paper's Eq. 3 weighted time) and the violation
+            (Eq. 7) of each row, (n,) each; NaN read as +inf.
 
         Raises:
             BudgetExceeded: n exceeds `remaining`.
             TimeLimitReached: the time limit has passed and something was evaluated before.
+            ValueError: the problem returned f or phi of another shape than (n,).
         """
         X = np.atleast_2d(np.asarray(X, dtype=float))
         n = X.shape[0]
@@ -220,9 +230,12 @@ class Evaluator:
         return f, phi
 
     def charge(self, n: int) -> None:
-        """Count n evaluations made on the run's behalf of another problem: a part of the map
+        """Count evaluations made on the run's behalf of another problem: a part of the map
         planned by its own pipeline run (`planner_core.pipeline.windows`), whose plans are not
         this problem's; nothing else changes (incumbents, trace).
+
+        Args:
+            n: the evaluations to count (n <= 0 counts nothing).
 
         Raises:
             BudgetExceeded: n exceeds `remaining`.
@@ -268,7 +281,11 @@ class Evaluator:
     def report(self, detail: str) -> None:
         """Tell the progress callback (if any) what the running stage has done so far, between
         evaluations: a stage that builds for seconds before it evaluates (the constructive
-        plans on hundreds of sensors) calls this after each step. Counts nothing."""
+        plans on hundreds of sensors) calls this after each step. Counts nothing.
+
+        Args:
+            detail: what the stage has done, e.g. "12/64 plans" (`Progress.detail`).
+        """
         if self.progress is not None:
             _, bf, bp = self._best["deb"]
             bf, bp = (bf, bp) if self.has_best else (math.inf, math.inf)
@@ -281,10 +298,18 @@ class Evaluator:
         return self._best["deb"][0] is not None
 
     def best(self, criterion: Criterion = "deb") -> tuple[np.ndarray, float, float]:
-        """The incumbent (x in problem space, f, phi) under Deb's rule or the penalised score.
+        """The best plan evaluated so far.
+
+        Args:
+            criterion: "deb" (Deb's rule, paper Eq. 8: phi first, then f) or "penalised"
+                (f + 10 * phi, Sec. 5.2).
+
+        Returns:
+            (x, f, phi): its decision vector (d,) in problem space (a copy), its objective (s)
+            and its violation.
 
         Raises:
-            RuntimeError: nothing has been evaluated yet.
+            RuntimeError: no evaluated row has become an incumbent under `criterion` yet.
         """
         x, f, phi = self._best[criterion]
         if x is None:
@@ -292,7 +317,15 @@ class Evaluator:
         return x.copy(), f, phi
 
     def trace(self, criterion: Criterion = "deb") -> Trace:
-        """The incumbent after every evaluate call, under the given criterion."""
+        """The incumbent after every evaluate call (a call of no rows adds nothing).
+
+        Args:
+            criterion: "deb" or "penalised", as for `best`.
+
+        Returns:
+            The `Trace`: evaluations (k,) int64 and the incumbent's best_f (k,) s and best_phi
+            (k,), one entry per call (inf before any incumbent).
+        """
         rows = self._trace[criterion]
         return Trace(
             evaluations=np.array([r[0] for r in rows], dtype=np.int64),
@@ -303,9 +336,20 @@ class Evaluator:
     # ------------------------------------------------------------------ stages
     @contextmanager
     def stage(self, name: str, allotted: int) -> Iterator[None]:
-        """Run the body as stage `name` with at most `allotted` evaluations (refused beyond
-        them); appends its `StageRecord` to `records` when the body ends, also when it ends
-        with `TimeLimitReached` (which propagates)."""
+        """Run the body as one stage of the run: its evaluations are capped and recorded.
+
+        Stages nest: the outer stage's name and allotment are restored when the body ends.
+
+        Args:
+            name: the stage's name (in `Progress.stage`, `StageRecord.name` and the
+                `BudgetExceeded` message).
+            allotted: the most evaluations the body may make (< 0 counts as 0); the budget's
+                `remaining` caps it too.
+
+        Raises:
+            TimeLimitReached: from the body, after the stage's `StageRecord` (stopped "time
+                limit") is appended to `records`; it is appended however the body ends.
+        """
         _, f0, p0 = self._best["deb"]
         c0, e0, t0 = self.count, self.evaluate_seconds, time.perf_counter()
         outer = self._stage, self._stage_end
@@ -327,10 +371,19 @@ class Evaluator:
 
 
 def as_evaluator(problem: Any, budget: int) -> Evaluator:
-    """`problem` itself when it already is a fresh Evaluator with this budget, else a wrap.
+    """The counted evaluator of a run: `problem` itself when it already is a fresh Evaluator
+    with this budget (a caller's clock and progress callback kept), else a new wrap.
+
+    Args:
+        problem: a problem (`lower`, `upper`, `evaluate`) or an `Evaluator`.
+        budget: the run's evaluations, >= 1.
+
+    Returns:
+        The Evaluator.
 
     Raises:
-        ValueError: an Evaluator that has evaluated something or carries another budget.
+        ValueError: an Evaluator that has evaluated something or carries another budget, or
+            (a wrap) budget < 1.
     """
     if isinstance(problem, Evaluator):
         if problem.budget != int(budget) or problem.count != 0:

@@ -35,7 +35,11 @@ BENDS = {5000: (0, 0, 1, 1, 2, 2, 3, 3), 10000: (0, 1, 1, 2, 3, 4, 5, 6)}
 
 
 def suite_tasks() -> list[tuple[str, int, int]]:
-    """The 16 tasks as (name, size, density): T01..T08 on 5 km, T09..T16 on 10 km."""
+    """The suite's 16 tasks (paper Sec. 5.1): T01..T08 on 5 km, T09..T16 on 10 km.
+
+    Returns:
+        (name, size in m, density 0..7) per task, in name order.
+    """
     return [
         (f"T{k * N_DENSITIES + d + 1:02d}", size, d)
         for k, size in enumerate(sorted(SIZES))
@@ -44,24 +48,67 @@ def suite_tasks() -> list[tuple[str, int, int]]:
 
 
 def default_sensor_count(size: int, density: int) -> int:
-    """Sensors grow with size and density: 8..15 on 5 km, 15..29 on 10 km."""
+    """The number of sensors of a suite map: it grows with size and density, 8..15 on 5 km,
+    15..29 on 10 km.
+
+    Args:
+        size: the map's side (m), a key of `SIZES`.
+        density: 0 (sparsest) .. `N_DENSITIES` - 1 (densest).
+
+    Returns:
+        J.
+
+    Raises:
+        ValueError: as `check_size_density`.
+    """
     check_size_density(size, density)
     return 8 + density if size == 5000 else 15 + 2 * density
 
 
 def max_sensor_count(size: int) -> int:
-    """The most sensors a map of this size may ask for (two per hover point)."""
+    """The most sensors a map of this size may ask for (two per hover point, 2 I_max).
+
+    Args:
+        size: the map's side (m), a key of `SIZES`.
+
+    Returns:
+        The largest J.
+
+    Raises:
+        ValueError: an unknown size (`check_size_density`).
+    """
     check_size_density(size, 0)
     return 2 * SIZES[size]
 
 
 def obstacle_counts(size: int, density: int) -> tuple[int, int, int]:
-    """(circles, rectangles, no-fly zones) at this size and density."""
+    """The obstacles of a suite map at this size and density (paper Sec. 3.2's three kinds).
+
+    Args:
+        size: the map's side (m), a key of `SIZES`.
+        density: 0 (sparsest) .. `N_DENSITIES` - 1 (densest).
+
+    Returns:
+        (circles, rectangles, no-fly zones).
+
+    Raises:
+        ValueError: as `check_size_density`.
+    """
     check_size_density(size, density)
     return _CIRCLES[size][density], _RECTANGLES[size][density], _NFZS[size][density]
 
 
 def check_size_density(size: int, density: int) -> None:
+    """Check a suite map's size and density, the two axes of the suite's table.
+
+    Args:
+        size: the map's side (m): one of `SIZES` (5000, 10000).
+        density: the obstacle density, 0 (sparsest) .. `N_DENSITIES` - 1 (densest).
+
+    Raises:
+        ValueError: `size` is not a key of `SIZES`, or `density` is outside 0 ..
+            `N_DENSITIES` - 1; the message names the field and the allowed values.
+    """
     if size not in SIZES:
         raise ValueError(f"size must be one of {sorted(SIZES)} (got {size})")
     if not 0 <= density < N_DENSITIES:
