@@ -285,7 +285,16 @@ def _polish_reserve(config: PlanConfig) -> int:
 
 class Polish(_Base):
     """The hover-time LP (`planner_core.search.polish.polish_elite`) for the DE's final
-    population's `ELITE` Deb-best distinct rows, each evaluated once. Cost: ELITE LPs (I x J)."""
+    population's `ELITE` Deb-best distinct rows, each evaluated once.
+
+    Cost, per row: its breakdown (I x J rates, the C5 check of its I + 1 legs, I x V), one LP
+    (I x J), and (variable-length plans) a drop trial for each of its Z points whose polished
+    time is ~0 (`polish.ZERO_TIME`): the route-overlap check `polish._route_overlap` of
+    start -> points -> end (I + 1 legs against the obstacles, I x V) with and without the
+    point, twice a trial; a drop starts the scan again over the Z - 1 left, so at most
+    Z (Z + 1) / 2 trials (Z <= I: the detour corners and the points the LP leaves idle), and
+    any drop re-solves the LP on the kept points. Then ELITE evaluations (I x (J + V) each)
+    and two uncounted breakdowns."""
 
     name = "polish"
 
@@ -331,8 +340,23 @@ class Polish(_Base):
 class FinishIncumbent(_Base):
     """The final stage on the incumbent (`planner_core.search.final.finish`): its descent,
     the structural search, the removal moves and kicks, at most `descent_trials` +
-    `restructure_trials` + `kick_trials` evaluations. Cost: that many evaluations, each with
-    an LP (I x J)."""
+    `restructure_trials` + `kick_trials` evaluations (`PlanConfig.final_trials`).
+
+    Cost: at most that many evaluations (I x (J + V) each: rates and the C5 check of the
+    I + 1 legs), each with its hover-time LP (I x J), plus work no evaluation counts:
+
+    * the C3/C5 screen (`search.trial.held_points`: O(I x sensors in range) rates and the
+      I + 1 legs against the obstacles, I x V) before every descent trial (and of its held
+      points' turned steps), kick and structural move; a refused one costs only that, with
+      at most `structure.KICK_ATTEMPTS` (4) kicks drawn per evaluation, and per pass of the
+      structural search (at most one pass per evaluation it spends, plus one) O(I) merges,
+      splits and removals, a removal screening up to 20 shifted neighbours:
+      O(I^2 x (J + V)) a pass;
+    * the rerouting of a structural move whose legs cut an obstacle through the visibility
+      graph (`Seeder.route`; G = O(V) pushed-out corners, E edges): its legs' obstacle
+      tests (I x V), and for each blocked leg not met before its ends linked to the corners
+      they see (tangency and line-of-sight tests, O(G x V) a point) and a Dijkstra
+      (O(E log G)); legs and points met before are looked up, not routed again."""
 
     name = "finish"
 
@@ -357,7 +381,12 @@ class OtherStructure(_Base):
     hover points than the incumbent, else with more (`planner_core.search.final.
     other_structure`); local moves rarely turn one structure into the other (docs/search.md,
     "A second structure"). At most `other_trials` evaluations; runs only when a descent's
-    trials fit. Cost: as `FinishIncumbent`."""
+    trials fit.
+
+    Cost: finding the plan, an uncounted breakdown (I x (J + V)) of the incumbent and of the
+    pool's plans in Deb order until one fits (at most the pool's size; done twice, by
+    `applies` and by `run`); then `FinishIncumbent`'s cost with `other_trials` evaluations in
+    place of `final_trials` (its descent, structural search and kicks share them)."""
 
     name = "other structure"
 
@@ -405,8 +434,21 @@ class Improve(_Base):
 
     The incumbent is the evaluator's, so a restart that ends worse changes nothing. Stops
     when fewer than a descent's trials are left or the scheduler says so (the default: after
-    `schedule.IDLE_ROUNDS` actions in a row spent nothing). Cost: that of its actions; a fresh
-    sweep costs what `ConstructivePlans` costs.
+    `schedule.IDLE_ROUNDS` actions in a row spent nothing).
+
+    Cost: every evaluation the earlier stages left, in actions of at most one quantum
+    (max(`final_trials`, `descent_trials`) evaluations) each, at the cost of the stage they
+    repeat: kicks and the structural search as in `FinishIncumbent`, per evaluation and
+    screen; a restart a whole `FinishIncumbent` on another plan, found by an uncounted
+    breakdown (I x (J + V)) of the pool's plans in Deb order until one fits, after a fresh
+    sweep what `ConstructivePlans` costs for `start_candidates` plans (only with
+    `schedule.FRESH_ROOM` quanta left); a rebuild per move the points' rates (I x J), a
+    k-means of the window's sensors, the snap and open path of its new sites, then a
+    structural move's screen, rerouting, LP and race, and once a run its candidate sites
+    (O(J^2) sensor-pair midpoints; `planner_core.search.rebuild`); a DE block
+    `DifferentialEvolution`'s N x I x (J + V) a generation; a window a pipeline run on its
+    sub-map (`planner_core.pipeline.windows`, its evaluations charged one for one). A
+    scheduler's own choice (a learned policy's inference) comes on top, once an action.
 
     Args:
         scheduler: a registry name (`schedule.scheduler_names()`), a `Scheduler`, or None
