@@ -52,7 +52,13 @@ import numpy as np
 from numba import njit
 
 from planner_core.model.formulas import L_VIO_TOL
-from planner_core.model.polygons import EDGE_BOUNDARY, EDGE_OWNED, EDGE_SHARED, convex_pieces
+from planner_core.model.polygons import (
+    EDGE_BOUNDARY,
+    EDGE_OWNED,
+    EDGE_SHARED,
+    convex_pieces,
+    ring_area,
+)
 
 __all__ = [
     "Obstacles",
@@ -103,8 +109,7 @@ def _check_polygon(v: np.ndarray, index: int) -> None:
     winding = float(np.sum(np.arctan2(cross, dot)))
     if abs(winding - 2.0 * math.pi) > 1e-6:
         raise ValueError(f"polygon {index}: not a simple convex CCW polygon (winding {winding:g})")
-    area2 = float(np.sum(v[:, 0] * np.roll(v[:, 1], -1) - np.roll(v[:, 0], -1) * v[:, 1]))
-    if not area2 > 0.0:
+    if not ring_area(v) > 0.0:
         raise ValueError(f"polygon {index}: zero area")
 
 

@@ -7,6 +7,8 @@ from typing import Any
 
 import numpy as np
 
+from planner_core.model.polygons import ring_area
+
 __all__ = ["CIRCLE_SIDES", "offset_convex", "obstacle_polygons"]
 
 #: sides of the polygon circumscribed about a circle (radius + margin)
@@ -59,8 +61,7 @@ def obstacle_polygons(obstacles: Any, margin: float) -> list[np.ndarray]:
         polys.append(offset_convex(v, margin, n, _NEEDLE))
     for shell, _ in getattr(obstacles, "regions", ()):
         v = np.asarray(shell, dtype=float)
-        x, y = v[:, 0], v[:, 1]
-        if np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y) < 0.0:
+        if ring_area(v) < 0.0:
             v = v[::-1]  # counter-clockwise, so the normals point out
         polys.append(offset_convex(v, margin, min_denominator=_NEEDLE))
     return polys
