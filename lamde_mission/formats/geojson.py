@@ -21,36 +21,22 @@ from typing import Any
 import numpy as np
 
 from lamde_mission.atomic import write_text_atomic
-from lamde_mission.geo import enu_to_latlon
-from lamde_mission.gis.export import polygon_geometry
+from lamde_mission.gis.export import (
+    CIRCLE_SEGMENTS,
+    circle_ring,
+    feature,
+    linear_ring,
+    lonlat,
+    polygon_geometry,
+)
 from lamde_mission.items import fence_shapes
 
 __all__ = ["geojson_document", "write_geojson", "CIRCLE_SEGMENTS"]
 
-#: vertices of the polygon approximating each circular obstacle
-CIRCLE_SEGMENTS = 72
-
-
-def _lonlat(map_: Any, pts: np.ndarray) -> list[list[float]]:
-    pts = np.asarray(pts, dtype=float).reshape(-1, 2)
-    lat, lon = enu_to_latlon(pts[:, 0], pts[:, 1], map_)
-    return [[float(b), float(a)] for a, b in zip(lat, lon, strict=True)]
-
-
-def _ring(map_: Any, poly: np.ndarray) -> list[list[float]]:
-    """A closed, counter-clockwise linear ring in [lon, lat]."""
-    poly = np.asarray(poly, dtype=float)
-    x, y = poly[:, 0], poly[:, 1]
-    area2 = float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
-    if area2 < 0:
-        poly = poly[::-1]
-    ring = _lonlat(map_, poly)
-    ring.append(list(ring[0]))
-    return ring
-
 
 def _feature(geometry: dict[str, Any], **props: Any) -> dict[str, Any]:
-    return {"type": "Feature", "geometry": geometry, "properties": props}
+    """A plan's feature: its properties all kept, None as null (`feature`)."""
+    return feature(geometry, keep_none=True, **props)
 
 
 def _clean(v: Any) -> Any:
@@ -65,23 +51,22 @@ def geojson_document(plan: Any, map: Any) -> dict[str, Any]:  # noqa: A002
     feats: list[dict[str, Any]] = []
     w, h = spec.area.width, spec.area.height
     area = np.array([[0.0, 0.0], [w, 0.0], [w, h], [0.0, h]])
-    feats.append(_feature({"type": "Polygon", "coordinates": [_ring(map, area)]},
+    feats.append(_feature({"type": "Polygon", "coordinates": [linear_ring(map, area)]},
                           kind="area", width_m=w, height_m=h, name=spec.name))  # fmt: skip
     circles, _ = fence_shapes(map)
-    ang = np.linspace(0.0, 2.0 * math.pi, CIRCLE_SEGMENTS, endpoint=False)
     for k, (centre, r) in enumerate(circles):
-        ring = np.column_stack([centre[0] + r * np.cos(ang), centre[1] + r * np.sin(ang)])
+        ring = circle_ring(centre[0], centre[1], r)
         feats.append(_feature(
-            {"type": "Polygon", "coordinates": [_ring(map, ring)]},
-            kind="circle", index=k, radius=r, centre=_lonlat(map, centre)[0],
+            {"type": "Polygon", "coordinates": [linear_ring(map, ring)]},
+            kind="circle", index=k, radius=r, centre=lonlat(map, centre)[0],
             centre_local=[float(centre[0]), float(centre[1])],
         ))  # fmt: skip
     for k, (r, poly) in enumerate(zip(spec.obstacles.rectangles, map.rectangle_polygons,
                                       strict=True)):  # fmt: skip
-        feats.append(_feature({"type": "Polygon", "coordinates": [_ring(map, poly)]},
+        feats.append(_feature({"type": "Polygon", "coordinates": [linear_ring(map, poly)]},
                               kind="rectangle", index=k, length=r.length, width=r.width,
                               angle_deg=r.angle_deg,
-                              centre=_lonlat(map, np.array([r.x, r.y]))[0]))  # fmt: skip
+                              centre=lonlat(map, np.array([r.x, r.y]))[0]))  # fmt: skip
     for sh in map.shapes:  # no-fly zones and polygon footprints, holes kept
         props: dict[str, Any] = {"kind": "no_fly_zone" if sh.kind == "no_fly_zone"
                                  else "obstacle", "index": sh.index}  # fmt: skip
@@ -94,7 +79,7 @@ def geojson_document(plan: Any, map: Any) -> dict[str, Any]:  # noqa: A002
     for j, s in enumerate(spec.sensors):
         got = collected.get(s.id)
         feats.append(_feature(
-            {"type": "Point", "coordinates": _lonlat(map, np.array([s.x, s.y]))[0]},
+            {"type": "Point", "coordinates": lonlat(map, np.array([s.x, s.y]))[0]},
             kind="sensor", id=s.id, required=float(required[j]),
             collected=_clean(float(got)) if got is not None else None,
             satisfied=(bool(got >= required[j]) if got is not None else None),
@@ -103,7 +88,7 @@ def geojson_document(plan: Any, map: Any) -> dict[str, Any]:  # noqa: A002
     ht = np.asarray(plan.hover_times, dtype=float).reshape(-1)
     nodes = np.vstack([map.start, hp, map.end])
     feats.append(_feature(
-        {"type": "LineString", "coordinates": _lonlat(map, nodes)},
+        {"type": "LineString", "coordinates": lonlat(map, nodes)},
         kind="path", n_hover=int(np.count_nonzero(ht != 0.0)),
         n_corner=int(np.count_nonzero(ht == 0.0)),
         f=_clean(float(getattr(plan, "f", math.nan))),
@@ -111,13 +96,13 @@ def geojson_document(plan: Any, map: Any) -> dict[str, Any]:  # noqa: A002
         feasible=getattr(plan, "feasible", None),
     ))  # fmt: skip
     for i, (p, t) in enumerate(zip(hp, ht, strict=True)):
-        point = {"type": "Point", "coordinates": _lonlat(map, p)[0]}
+        point = {"type": "Point", "coordinates": lonlat(map, p)[0]}
         if float(t) == 0.0:  # a corner (items.plan_to_items writes it as NAV_WAYPOINT)
             feats.append(_feature(point, kind="corner", index=i))
         else:
             feats.append(_feature(point, kind="hover", index=i, hover_time=float(t)))
     for kind, p in (("start", map.start), ("end", map.end)):
-        feats.append(_feature({"type": "Point", "coordinates": _lonlat(map, p)[0]}, kind=kind))
+        feats.append(_feature({"type": "Point", "coordinates": lonlat(map, p)[0]}, kind=kind))
     return {"type": "FeatureCollection", "features": feats}
 
 

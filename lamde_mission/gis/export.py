@@ -24,10 +24,11 @@ from typing import Any
 
 import numpy as np
 
+from planner_core.model.polygons import ring_area
 from sim.geo import enu_to_latlon
 
-__all__ = ["map_to_geojson", "map_features", "map_settings", "polygon_geometry",
-           "CIRCLE_SEGMENTS", "SETTINGS_EXCLUDED"]
+__all__ = ["map_to_geojson", "map_features", "map_settings", "polygon_geometry", "lonlat",
+           "linear_ring", "circle_ring", "feature", "CIRCLE_SEGMENTS", "SETTINGS_EXCLUDED"]
 
 #: vertices of the polygon drawn for each circular obstacle
 CIRCLE_SEGMENTS = 72
@@ -36,32 +37,76 @@ CIRCLE_SEGMENTS = 72
 SETTINGS_EXCLUDED = frozenset({"origin", "area", "start", "end", "sensors", "obstacles"})
 
 
-def _lonlat(map_: Any, pts: np.ndarray) -> list[list[float]]:
+def lonlat(map_: Any, pts: Any) -> list[list[float]]:
+    """Local points as GeoJSON positions.
+
+    Args:
+        map_: a loaded `planner_core.model.mapio.Map` with an origin.
+        pts: local ENU points, metres: anything of 2k numbers, read as (k, 2).
+
+    Returns:
+        k positions [longitude, latitude] (WGS84 degrees), in the order of `pts`.
+    """
     pts = np.asarray(pts, dtype=float).reshape(-1, 2)
     lat, lon = enu_to_latlon(pts[:, 0], pts[:, 1], map_)
     return [[float(b), float(a)] for a, b in zip(lat, lon, strict=True)]
 
 
-def _ring(map_: Any, ring: np.ndarray, ccw: bool) -> list[list[float]]:
+def linear_ring(map_: Any, ring: Any, ccw: bool = True) -> list[list[float]]:
+    """A closed GeoJSON linear ring of a local vertex cycle, turned the asked way.
+
+    Args:
+        map_: a loaded `planner_core.model.mapio.Map` with an origin.
+        ring: the cycle's vertices (V, 2), local metres, without the closing vertex.
+        ccw: counter-clockwise (an exterior, RFC 7946 Sec. 3.1.6) or clockwise (a hole).
+
+    Returns:
+        V + 1 positions [lon, lat]: the vertices, reversed when their signed area
+        (`planner_core.model.polygons.ring_area`) says the other way, then the first again.
+    """
     ring = np.asarray(ring, dtype=float).reshape(-1, 2)
-    x, y = ring[:, 0], ring[:, 1]
-    area2 = float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
-    if (area2 > 0) != ccw:
+    if (ring_area(ring) > 0) != ccw:
         ring = ring[::-1]
-    out = _lonlat(map_, ring)
+    out = lonlat(map_, ring)
     out.append(list(out[0]))
     return out
 
 
+def circle_ring(x: float, y: float, radius: float) -> np.ndarray:
+    """The polygon drawn for a circle: `CIRCLE_SEGMENTS` points on it (a GeoJSON has no circle).
+
+    Args:
+        x, y: the centre, local metres.
+        radius: metres.
+
+    Returns:
+        (CIRCLE_SEGMENTS, 2) local points, counter-clockwise from angle 0 (east).
+    """
+    ang = np.linspace(0.0, 2.0 * math.pi, CIRCLE_SEGMENTS, endpoint=False)
+    return np.column_stack([x + radius * np.cos(ang), y + radius * np.sin(ang)])
+
+
 def polygon_geometry(map_: Any, shell: np.ndarray, holes: Any = ()) -> dict[str, Any]:
     """A GeoJSON Polygon (closed rings, exterior CCW, holes CW) of local rings (V, 2)."""
-    rings = [_ring(map_, shell, True)] + [_ring(map_, h, False) for h in holes]
+    rings = [linear_ring(map_, shell, True)] + [linear_ring(map_, h, False) for h in holes]
     return {"type": "Polygon", "coordinates": rings}
 
 
-def _feature(geometry: dict[str, Any], **props: Any) -> dict[str, Any]:
-    return {"type": "Feature", "geometry": geometry,
-            "properties": {k: v for k, v in props.items() if v is not None}}  # fmt: skip
+def feature(geometry: dict[str, Any], /, keep_none: bool = False, **props: Any) -> dict[str, Any]:
+    """A GeoJSON Feature.
+
+    Args:
+        geometry: its GeoJSON geometry object.
+        keep_none: keep properties whose value is None (written as null); by default they are
+            left out, as the map's features leave out what the map does not set.
+        **props: its properties, in the order given.
+
+    Returns:
+        {"type": "Feature", "geometry": geometry, "properties": props}.
+    """
+    if not keep_none:
+        props = {k: v for k, v in props.items() if v is not None}
+    return {"type": "Feature", "geometry": geometry, "properties": props}
 
 
 def map_settings(map: Any) -> dict[str, Any]:  # noqa: A002
@@ -96,35 +141,33 @@ def map_features(map: Any) -> list[dict[str, Any]]:  # noqa: A002
     W, H = spec.area.width, spec.area.height
     o = spec.origin
     settings = map_settings(map)
-    feats = [_feature(polygon_geometry(map, np.array([[0.0, 0.0], [W, 0.0], [W, H], [0.0, H]])),
-                      kind="area", name=settings.pop("name", None),
-                      origin=[o.lat, o.lon, o.alt], width_m=W, height_m=H,
-                      **settings)]  # fmt: skip
-    ang = np.linspace(0.0, 2.0 * math.pi, CIRCLE_SEGMENTS, endpoint=False)
+    feats = [feature(polygon_geometry(map, np.array([[0.0, 0.0], [W, 0.0], [W, H], [0.0, H]])),
+                     kind="area", name=settings.pop("name", None),
+                     origin=[o.lat, o.lon, o.alt], width_m=W, height_m=H,
+                     **settings)]  # fmt: skip
     for k, c in enumerate(spec.obstacles.circles):
-        ring = np.column_stack([c.x + c.radius * np.cos(ang), c.y + c.radius * np.sin(ang)])
-        feats.append(_feature(polygon_geometry(map, ring), kind="circle", index=k,
-                              radius_m=c.radius,
-                              center=_lonlat(map, np.array([c.x, c.y]))[0]))  # fmt: skip
+        feats.append(feature(polygon_geometry(map, circle_ring(c.x, c.y, c.radius)),
+                             kind="circle", index=k, radius_m=c.radius,
+                             center=lonlat(map, np.array([c.x, c.y]))[0]))  # fmt: skip
     for k, (r, poly) in enumerate(zip(spec.obstacles.rectangles, map.rectangle_polygons,
                                       strict=True)):  # fmt: skip
-        feats.append(_feature(polygon_geometry(map, poly), kind="obstacle", shape="rectangle",
-                              index=k, length_m=r.length, width_m=r.width, angle_deg=r.angle_deg,
-                              center=_lonlat(map, np.array([r.x, r.y]))[0]))  # fmt: skip
+        feats.append(feature(polygon_geometry(map, poly), kind="obstacle", shape="rectangle",
+                             index=k, length_m=r.length, width_m=r.width, angle_deg=r.angle_deg,
+                             center=lonlat(map, np.array([r.x, r.y]))[0]))  # fmt: skip
     for sh in map.shapes:
         kind = "no_fly_zone" if sh.kind == "no_fly_zone" else "obstacle"
-        feats.append(_feature(polygon_geometry(map, sh.shell, sh.holes), kind=kind, name=sh.name,
-                              index=sh.index))  # fmt: skip
+        feats.append(feature(polygon_geometry(map, sh.shell, sh.holes), kind=kind, name=sh.name,
+                             index=sh.index))  # fmt: skip
     for s in spec.sensors:
-        feats.append(_feature({"type": "Point", "coordinates": _lonlat(map, [s.x, s.y])[0]},
-                              kind="sensor", id=s.id, required_data=s.required_data))  # fmt: skip
+        feats.append(feature({"type": "Point", "coordinates": lonlat(map, [s.x, s.y])[0]},
+                             kind="sensor", id=s.id, required_data=s.required_data))  # fmt: skip
     for kind in ("start", "end"):
         p = getattr(map, kind)
-        feats.append(_feature({"type": "Point", "coordinates": _lonlat(map, p)[0]}, kind=kind))
+        feats.append(feature({"type": "Point", "coordinates": lonlat(map, p)[0]}, kind=kind))
     depots = spec.fleet.depots if spec.fleet is not None and spec.fleet.depots else ()
     for k, d in enumerate(depots):
-        feats.append(_feature({"type": "Point", "coordinates": _lonlat(map, [d.x, d.y])[0]},
-                              kind="depot", name=d.name, index=k))  # fmt: skip
+        feats.append(feature({"type": "Point", "coordinates": lonlat(map, [d.x, d.y])[0]},
+                             kind="depot", name=d.name, index=k))  # fmt: skip
     return feats
 
 
