@@ -92,6 +92,38 @@ class Draw:
     def inside(self, p: np.ndarray, margin: float = 0.0) -> bool:
         return bool(np.all(p >= margin) and np.all(p <= self.size - margin))
 
+    def convex_nfz(self, centre: np.ndarray) -> np.ndarray | None:
+        """Draw one convex no-fly zone around `centre` (the paper's Sec. 3.2 shape).
+
+        Draws, in this order, from `rng`: the vertex count (`_NFZ_VERTICES`), the angular gaps
+        between the vertices, their starting angle, a squash of the x axis (0.6..1), a rotation
+        and the diameter (`_NFZ_DIAMETER`); the maps' bytes depend on this order.
+
+        Args:
+            centre: (2,) the zone's centre, local metres.
+
+        Returns:
+            (n, 2) vertices rounded to 0.1 m, counter-clockwise, or None when the zone leaves
+            the area or is not strictly convex after rounding (the draws are spent either way).
+        """
+        rng = self.rng
+        n = int(rng.integers(_NFZ_VERTICES[0], _NFZ_VERTICES[1] + 1))
+        gaps = rng.uniform(0.6, 1.4, size=n)
+        ang = rng.uniform(0, 2 * math.pi) + np.cumsum(gaps / gaps.sum() * 2 * math.pi)
+        pts = np.stack([np.cos(ang) * rng.uniform(0.6, 1.0), np.sin(ang)], axis=1)
+        rot = rng.uniform(0, 2 * math.pi)
+        c, sn = math.cos(rot), math.sin(rot)
+        pts = pts @ np.array([[c, sn], [-sn, c]])
+        diam = np.max(np.hypot(*(pts[:, None, :] - pts[None, :, :]).transpose(2, 0, 1)))
+        pts = _r1(centre + pts * (rng.uniform(*_NFZ_DIAMETER) / diam))
+        if not self.inside(pts):
+            return None
+        e = np.roll(pts, -1, axis=0) - pts
+        e2 = np.roll(e, -1, axis=0)
+        if np.any(e[:, 0] * e2[:, 1] - e[:, 1] * e2[:, 0] <= 1.0):
+            return None  # keep it strictly convex and counter-clockwise after rounding
+        return pts
+
     def rates(self, hover: np.ndarray, sensors: np.ndarray) -> np.ndarray:
         """R (I, J), the model's rate formula."""
         return self.model.rates(hover, sensors)
@@ -136,21 +168,9 @@ class Draw:
             for _ in range(300):
                 t = 0.2 + 0.6 * (k + rng.uniform(0.15, 0.85)) / self.n_nfz
                 centre = self.start + t * axis + rng.normal(0.0, 0.12 * s) * perp
-                n = int(rng.integers(_NFZ_VERTICES[0], _NFZ_VERTICES[1] + 1))
-                gaps = rng.uniform(0.6, 1.4, size=n)
-                ang = rng.uniform(0, 2 * math.pi) + np.cumsum(gaps / gaps.sum() * 2 * math.pi)
-                pts = np.stack([np.cos(ang) * rng.uniform(0.6, 1.0), np.sin(ang)], axis=1)
-                rot = rng.uniform(0, 2 * math.pi)
-                c, sn = math.cos(rot), math.sin(rot)
-                pts = pts @ np.array([[c, sn], [-sn, c]])
-                diam = np.max(np.hypot(*(pts[:, None, :] - pts[None, :, :]).transpose(2, 0, 1)))
-                pts = _r1(centre + pts * (rng.uniform(*_NFZ_DIAMETER) / diam))
-                if not self.inside(pts):
+                pts = self.convex_nfz(centre)
+                if pts is None:
                     continue
-                e = np.roll(pts, -1, axis=0) - pts
-                e2 = np.roll(e, -1, axis=0)
-                if np.any(e[:, 0] * e2[:, 1] - e[:, 1] * e2[:, 0] <= 1.0):
-                    continue  # keep it strictly convex and counter-clockwise after rounding
                 if np.min(shapely.distance(ends, shapely.Polygon(pts))) < _NFZ_ENDPOINT_CLEARANCE:
                     continue
                 self.nfz.append(pts)

@@ -40,9 +40,7 @@ from planner_core.model.formulas import ModelParams
 from planner_core.model.mapio import Objective, Radio, Uav
 from planner_core.suite.draw import (
     _C3_MARGIN,
-    _NFZ_DIAMETER,
     _NFZ_ENDPOINT_CLEARANCE,
-    _NFZ_VERTICES,
     _SENSOR_NFZ_CLEARANCE,
     Draw,
     Retry,
@@ -245,21 +243,9 @@ class LargeDraw(Draw):
                     centre = self.start + t * axis + rng.normal(0.0, 0.12 * s) * perp
                 else:
                     centre = rng.uniform(0.1 * s, 0.9 * s, size=2)
-                n = int(rng.integers(_NFZ_VERTICES[0], _NFZ_VERTICES[1] + 1))
-                gaps = rng.uniform(0.6, 1.4, size=n)
-                ang = rng.uniform(0, 2 * math.pi) + np.cumsum(gaps / gaps.sum() * 2 * math.pi)
-                pts = np.stack([np.cos(ang) * rng.uniform(0.6, 1.0), np.sin(ang)], axis=1)
-                rot = rng.uniform(0, 2 * math.pi)
-                c, sn = math.cos(rot), math.sin(rot)
-                pts = pts @ np.array([[c, sn], [-sn, c]])
-                diam = np.max(np.hypot(*(pts[:, None, :] - pts[None, :, :]).transpose(2, 0, 1)))
-                pts = _r1(centre + pts * (rng.uniform(*_NFZ_DIAMETER) / diam))
-                if not self.inside(pts):
+                pts = self.convex_nfz(centre)
+                if pts is None:
                     continue
-                e = np.roll(pts, -1, axis=0) - pts
-                e2 = np.roll(e, -1, axis=0)
-                if np.any(e[:, 0] * e2[:, 1] - e[:, 1] * e2[:, 0] <= 1.0):
-                    continue  # strictly convex and counter-clockwise after rounding
                 poly = shapely.Polygon(pts)
                 if np.min(shapely.distance(ends, poly)) < _NFZ_ENDPOINT_CLEARANCE:
                     continue
