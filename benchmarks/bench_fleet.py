@@ -117,16 +117,13 @@ def run(maps: list[str], seeds: list[int], out: Path, dirs: Path, endurance: flo
 
 def summary(path: Path) -> str:
     """The docs table from the records at `path` (module docstring)."""
-    import gzip
-
     from scipy.stats import wilcoxon
 
-    raw = Path(path).read_bytes()
-    text = gzip.decompress(raw).decode() if raw[:2] == b"\x1f\x8b" else raw.decode()
+    from planner_core.textio import read_jsonl
+
     recs, seen = [], set()
-    for x in text.splitlines():  # one record per map, seed and fleet (the first kept)
-        r = json.loads(x) if x.strip() else None
-        if r is not None and (r["map"], r["seed"], r["uavs"]) not in seen:
+    for r in read_jsonl(path):  # one record per map, seed and fleet (the first kept)
+        if (r["map"], r["seed"], r["uavs"]) not in seen:
             seen.add((r["map"], r["seed"], r["uavs"]))
             recs.append(r)
     one = [r for r in recs if r["uavs"] == 1]

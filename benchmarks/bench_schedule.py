@@ -32,7 +32,6 @@ workers of the executor (one (map, seed) case an item; the grid is CPU-bound: ru
 from __future__ import annotations
 
 import argparse
-import gzip
 import json
 import statistics
 import subprocess
@@ -191,12 +190,10 @@ def run_grid(maps: list[tuple[str, Any]], seeds: list[int], budget: int,
 
 
 def _read(paths: list[str]) -> list[dict[str, Any]]:
-    out = []
-    for p in paths:
-        opener = gzip.open if p.endswith(".gz") else open
-        with opener(p, "rt") as fh:
-            out.extend(json.loads(line) for line in fh if line.strip())
-    return out
+    """The records of bench JSON lines files (plain or .gz), in order (`textio.read_jsonl`)."""
+    from planner_core.textio import read_jsonl
+
+    return [r for p in paths for r in read_jsonl(p)]
 
 
 def _arm(r: dict[str, Any]) -> str:

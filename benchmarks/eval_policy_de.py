@@ -66,14 +66,11 @@ def scores(out: Path) -> dict[str, dict[str, dict[int, float]]]:
     """optimiser -> task -> run -> penalised score, from ``<out>/results.jsonl`` (``out`` a
     folder) or from a records file (``.jsonl`` or ``.jsonl.gz``, e.g. the stored
     ``docs/policy/issue34-*.jsonl.gz``)."""
-    import gzip
+    from planner_core.textio import read_jsonl
 
     res: dict[str, dict[str, dict[int, float]]] = {}
     path = out / "results.jsonl" if out.is_dir() else out
-    raw = path.read_bytes()
-    text = gzip.decompress(raw).decode() if path.suffix == ".gz" else raw.decode()
-    for line in text.splitlines():
-        r = json.loads(line)
+    for r in read_jsonl(path):
         if r.get("error"):
             continue
         res.setdefault(r["optimiser"], {}).setdefault(r["task"], {})[int(r["run"])] = float(

@@ -45,9 +45,8 @@ weave between sensor discs that overlap (MST edges of length 0). Cost: one LP of
 from __future__ import annotations
 
 import argparse
-import gzip
-import json
 import math
+import os
 import sys
 import time
 from dataclasses import dataclass
@@ -153,14 +152,16 @@ def fleet_lower_bound(m: Any) -> FleetBound:
 
 
 def _records(path: Path) -> dict[str, list[dict[str, Any]]]:
-    raw = Path(path).read_bytes()
-    text = gzip.decompress(raw).decode() if raw[:2] == b"\x1f\x8b" else raw.decode()
+    """map -> its one-UAV records of bench_fleet.py at `path` (JSON lines, .gz: compressed),
+    the first of each seed; {} for /dev/null (no measured runs: docs/sorties.md's second
+    table)."""
+    from planner_core.textio import read_jsonl
+
+    if Path(path) == Path(os.devnull):
+        return {}
     out: dict[str, list[dict[str, Any]]] = {}
     seen = set()
-    for x in text.splitlines():
-        if not x.strip():
-            continue
-        r = json.loads(x)
+    for r in read_jsonl(path):
         if r["uavs"] == 1 and (r["map"], r["seed"]) not in seen:
             seen.add((r["map"], r["seed"]))
             out.setdefault(r["map"], []).append(r)

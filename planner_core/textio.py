@@ -21,6 +21,10 @@ A limit a user could need more of is read from an environment variable (a positi
 
 Errors are `InputError` (a ValueError): ``str(err)`` is one line, ``"<field>: <problem>"`` or just
 ``"<problem>"`` for the file as a whole; callers prefix the file name.
+
+Run records (JSON lines, plain or gzip-compressed: `read_jsonl`, `read_maybe_gz`) are read here
+too, so the benchmarks and the schedule selector share one reader; their ValueErrors already
+name the file (and the line).
 """
 
 from __future__ import annotations
@@ -51,6 +55,9 @@ __all__ = [
     "read_text",
     "loads_json",
     "read_json",
+    "stored_path",
+    "read_maybe_gz",
+    "read_jsonl",
     "printable",
     "quoted",
 ]
@@ -561,6 +568,58 @@ def read_json(path: str | Path, *, max_bytes: int | None = None,
         InputError: as `read_text` and `loads_json` raise it.
     """
     return loads_json(read_text(path, max_bytes=max_bytes), max_depth=max_depth)
+
+
+def stored_path(path: str | Path) -> Path:
+    """`path` as stored: itself when it exists, else its gzip-compressed twin (`path` + .gz,
+    or `path` without .gz) when that exists, else `path` unchanged."""
+    path = Path(path)
+    if path.exists():
+        return path
+    twin = path.with_name(path.name[:-3]) if path.name.endswith(".gz") else \
+        path.with_name(path.name + ".gz")
+    return twin if twin.exists() else path
+
+
+def read_maybe_gz(path: str | Path) -> bytes:
+    """The bytes of a file, decompressed when it is gzip-compressed (name ending in .gz);
+    `results.jsonl` reads `results.jsonl.gz` when only that exists (`stored_path`). Read by
+    `read_bytes`: a regular file (a FIFO or device is refused, never waited on), at most
+    `limit("results_bytes")` bytes, decompressed ones included; ValueError naming the file."""
+    path = stored_path(path)
+    try:
+        return read_bytes(path, limit_name="results_bytes", gunzip=path.name.endswith(".gz"))
+    except InputError as exc:
+        raise ValueError(f"{printable(path)}: {exc}") from None
+
+
+def read_jsonl(path: str | Path) -> list[dict[str, Any]]:
+    """Every record of a JSON-lines file (run records: the benchmarks', the schedule
+    selector's), compressed or not (`read_maybe_gz`).
+
+    Args:
+        path: the file; a name ending in .gz is gzip-compressed.
+
+    Returns:
+        The records in file order, each line parsed by `loads_json` (bounded depth, no NaN);
+        blank lines skipped.
+
+    Raises:
+        ValueError: naming the file (and the line) for a missing, non-regular, oversized,
+            corrupt or non-UTF-8 file or a line that is not JSON under these rules.
+    """
+    try:
+        text = decode_text(read_maybe_gz(path))
+    except InputError as exc:
+        raise ValueError(f"{printable(path)}: {exc}") from None
+    out = []
+    for n, line in enumerate(text.splitlines(), 1):
+        if line.strip():
+            try:
+                out.append(loads_json(line))
+            except InputError as exc:
+                raise ValueError(f"{printable(path)}: line {n}: {exc}") from None
+    return out
 
 
 _ESCAPES = {"\n": "\\n", "\r": "\\r", "\t": "\\t"}

@@ -153,6 +153,19 @@ def test_the_cli_fits_and_refuses_a_bad_k(tmp_path, capsys) -> None:
     assert capsys.readouterr().err.startswith("schedule_select: records: ")
 
 
+def test_the_cli_reads_records_by_the_shared_reader(tmp_path, capsys) -> None:
+    """`fit` reads its records by `textio.read_jsonl`: a bad line is named with its file and
+    line number (a bare JSONDecodeError before), and NaN, which JSON has not, is refused."""
+    path = tmp_path / "grid.jsonl"
+    path.write_text(json.dumps(GRID[0]) + "\n{not json\n")
+    assert main(["fit", str(path), "-o", str(tmp_path / "out")]) == 2
+    assert capsys.readouterr().err.startswith(f"schedule_select: records: {path}: line 2: ")
+    path.write_text(json.dumps(GRID[0]).replace("}", ', "x": NaN}', 1) + "\n")
+    assert main(["fit", str(path), "-o", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"schedule_select: records: {path}: line 1: ") and "NaN" in err
+
+
 def test_the_live_scheduler_follows_the_template_the_table_predicts_from_the_run() -> None:
     """The features the scheduler reads at the stage's first decision are the ones
     bench_schedule.py records before `improve`, and the plan is that template's, to the bit."""

@@ -1,6 +1,7 @@
 """Small file helpers for the benchmark: atomic writes (temp file + rename), JSON reads, and
 reads of run records that may be stored gzip-compressed (`results.jsonl.gz`: the records kept
-under docs/ are)."""
+under docs/ are; `read_jsonl`, `read_maybe_gz` and `stored_path` live in `planner_core.textio`,
+where the schedule selector reads them too, and are re-exported here)."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from typing import Any
 
 from planner_core import textio
 from planner_core.atomic import write_bytes_atomic, write_text_atomic
+from planner_core.textio import read_jsonl, read_maybe_gz, stored_path
 
 __all__ = [
     "dumps_json",
@@ -146,44 +148,3 @@ def read_csv_column(path: str | Path, column: str,
     except csv.Error as exc:
         raise ValueError(f"{shown}: not a CSV file ({textio.printable(str(exc))})") from None
     return rows
-
-
-def stored_path(path: str | Path) -> Path:
-    """`path` as stored: itself when it exists, else its gzip-compressed twin (`path` + .gz,
-    or `path` without .gz) when that exists, else `path` unchanged."""
-    path = Path(path)
-    if path.exists():
-        return path
-    twin = path.with_name(path.name[:-3]) if path.name.endswith(".gz") else \
-        path.with_name(path.name + ".gz")
-    return twin if twin.exists() else path
-
-
-def read_maybe_gz(path: str | Path) -> bytes:
-    """The bytes of a file, decompressed when it is gzip-compressed (name ending in .gz);
-    `results.jsonl` reads `results.jsonl.gz` when only that exists (`stored_path`). Read by the
-    shared reader: a regular file (a FIFO or device is refused, never waited on), at most
-    `limit("results_bytes")` bytes, decompressed ones included; ValueError naming the file."""
-    path = stored_path(path)
-    try:
-        return textio.read_bytes(path, limit_name="results_bytes",
-                                 gunzip=path.name.endswith(".gz"))  # fmt: skip
-    except textio.InputError as exc:
-        raise ValueError(f"{textio.printable(path)}: {exc}") from None
-
-
-def read_jsonl(path: str | Path) -> list[dict[str, Any]]:
-    """Every record of a JSON-lines file (blank lines skipped), compressed or not; each line
-    parsed by `textio.loads_json` (bounded depth, no NaN). ValueError naming file and line."""
-    try:
-        text = textio.decode_text(read_maybe_gz(path))
-    except textio.InputError as exc:
-        raise ValueError(f"{textio.printable(path)}: {exc}") from None
-    out = []
-    for n, line in enumerate(text.splitlines(), 1):
-        if line.strip():
-            try:
-                out.append(textio.loads_json(line))
-            except textio.InputError as exc:
-                raise ValueError(f"{textio.printable(path)}: line {n}: {exc}") from None
-    return out

@@ -692,17 +692,6 @@ def _shipped_split() -> SplitTable | None:
     return _SHIPPED_SPLIT[0]
 
 
-def _read(paths: Sequence[str]) -> list[dict[str, Any]]:
-    import gzip
-
-    out = []
-    for p in paths:
-        opener = gzip.open if str(p).endswith(".gz") else open
-        with opener(p, "rt") as fh:
-            out.extend(json.loads(line) for line in fh if line.strip())
-    return out
-
-
 def main(argv: list[str] | None = None) -> int:
     """`python -m planner_core.learning.schedule_select fit RECORDS ... -o DIR [--k K]`: fit a
     table on grid records, print its leave-one-map-out figures, write it; `fit-split ...
@@ -737,7 +726,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"schedule_select: --cap: must be >= 1, got {args.cap}", file=sys.stderr)
         return 2
     try:
-        records = _read(args.records)
+        from planner_core.textio import read_jsonl
+
+        records = [r for p in args.records for r in read_jsonl(p)]
         commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
                                 text=True, timeout=10).stdout.strip()
         meta = {
