@@ -639,6 +639,69 @@ def _finish_map(fig: Any, ax: Any, W: float, handles: list[Any], scene: _Scene, 
     return dropped
 
 
+def _draw_route(ax: Any, scene: _Scene, map_: Any, visits: _Visits, path: np.ndarray,
+                return_leg: Any, *, colour: Any, linestyle: str, arrow_scale: float,
+                return_width: float, corner_edge: Any, hover_face: Any,
+                hover_alpha: float) -> tuple[list[float], np.ndarray]:  # fmt: skip
+    """Draw one flown route on the map panel, each distinct leg, hover point and corner once
+    (`_Visits`), and note its route and markers in `scene`: the legs as one line, an arrow
+    along each leg longer than 2 % of the area, the parts of `path` inside obstacles (C5) in
+    red, the return leg (RTL) dotted, the corners as small white diamonds, the hover points as
+    discs of area 40 + 260 T / T_max points^2. Legend entries and labels are the caller's.
+
+    Args:
+        ax: the map panel.
+        scene: what the labels must not cover (route vertices and markers added here).
+        map_: the map (its area, T_max and obstacles).
+        visits: the route's distinct legs, hover points and corners.
+        path: (n, 2) the flown path, local metres (for the parts inside obstacles).
+        return_leg: (m, 2) the RTL return leg, or None.
+        colour, linestyle: the route's line; arrows and the return leg in `colour` too.
+        arrow_scale: the arrows' mutation scale.
+        return_width: the return leg's line width, points.
+        corner_edge, hover_face: matplotlib colours of the corners' edges and the hover discs.
+        hover_alpha: the hover discs' opacity.
+
+    Returns:
+        The lengths (m) of the parts of `path` inside obstacles, in drawing order, and the hover
+        discs' radii (H,), points.
+    """
+    spec = map_.spec
+    W, H = spec.area.width, spec.area.height
+    scene.route.extend(visits.lines)
+    line = _joined(visits.lines)  # each distinct leg once (the path when none repeats)
+    ax.plot(line[:, 0], line[:, 1], linestyle=linestyle, color=colour, linewidth=1.6, zorder=3)
+    for a, b in visits.legs:  # the route's order: one arrow per distinct leg
+        if np.hypot(*(b - a)) > 0.02 * max(W, H):
+            ax.annotate("", xy=a + 0.55 * (b - a), xytext=a + 0.45 * (b - a), zorder=3,
+                        arrowprops={"arrowstyle": "-|>", "color": colour, "lw": 1.4,
+                                    "mutation_scale": arrow_scale})  # fmt: skip
+    lengths = []
+    for seg in _violation_segments(map_, path):
+        ax.plot(seg[:, 0], seg[:, 1], "-", color="red", linewidth=4.0, zorder=7,
+                solid_capstyle="butt")  # fmt: skip
+        lengths.append(float(np.sum(np.hypot(*np.diff(seg, axis=0).T))))
+    if return_leg is not None:
+        rl = np.asarray(return_leg, dtype=float)
+        scene.route.append(rl)
+        ax.plot(rl[:, 0], rl[:, 1], ":", color=colour, linewidth=return_width, zorder=3)
+    cp = visits.corners
+    if len(cp):  # corners (NAV_WAYPOINT, flown through)
+        scene.marker(cp, 3.0)
+        ax.scatter(cp[:, 0], cp[:, 1], s=14, marker="D", facecolors="white",
+                   edgecolors=corner_edge, linewidths=0.8, zorder=7)  # fmt: skip
+    hp, ht = visits.hover_points, visits.hover_times
+    radius = np.zeros(0)
+    if len(hp):
+        t_max = max(float(spec.uav.max_hover_time), 1e-9)
+        size = 40.0 + 260.0 * np.clip(ht / t_max, 0.0, 1.0)
+        radius = np.sqrt(size) / 2.0 + 0.5
+        scene.marker(hp, radius)
+        ax.scatter(hp[:, 0], hp[:, 1], s=size, facecolors=hover_face, edgecolors="k",
+                   alpha=hover_alpha, linewidths=0.6, zorder=6)  # fmt: skip
+    return lengths, radius
+
+
 def mission_figure(
     map: Any,  # noqa: A002
     *,
@@ -680,7 +743,7 @@ def mission_figure(
     from matplotlib.lines import Line2D
 
     spec = map.spec
-    W, H = spec.area.width, spec.area.height
+    W = spec.area.width
     view = _mission_view(map, timeline, plan)
     has_time = timeline is not None and len(getattr(timeline, "t", ())) > 1
     has_bars = has_time and len(map.sensor_ids) > TIME_LINES
@@ -696,55 +759,32 @@ def mission_figure(
     unlabelled = 0
     visits = None
     if view is not None:
-        p = view["path"]
         visits = view["visits"]
-        scene.route.extend(visits.lines)
-        line = _joined(visits.lines)  # each distinct leg once (the path when none repeats)
-        ax.plot(line[:, 0], line[:, 1], "-", color="tab:blue", linewidth=1.6, zorder=3)
+        lengths, hover_r = _draw_route(ax, scene, map, visits, view["path"], view["return_leg"],
+                                       colour="tab:blue", linestyle="-", arrow_scale=14,
+                                       return_width=1.2, corner_edge="tab:blue",
+                                       hover_face="tab:orange", hover_alpha=0.85)  # fmt: skip
         handles.append(Line2D([], [], color="tab:blue", linewidth=1.6,
                               label="path (arrows: direction)"))  # fmt: skip
-        for a, b in visits.legs:  # the route's order: one arrow per distinct leg
-            if np.hypot(*(b - a)) > 0.02 * max(W, H):
-                mid = a + 0.55 * (b - a)
-                ax.annotate("", xy=mid, xytext=a + 0.45 * (b - a), zorder=3,
-                            arrowprops={"arrowstyle": "-|>", "color": "tab:blue", "lw": 1.4,
-                                        "mutation_scale": 14})  # fmt: skip
-        bad = _violation_segments(map, p)
-        for seg in bad:
-            ax.plot(seg[:, 0], seg[:, 1], "-", color="red", linewidth=4.0, zorder=7,
-                    solid_capstyle="butt")  # fmt: skip
-        if bad:
-            total = sum(float(np.sum(np.hypot(*np.diff(s, axis=0).T))) for s in bad)
+        if lengths:
             handles.append(
                 Line2D(
                     [],
                     [],
                     color="red",
                     linewidth=4,
-                    label=f"path inside obstacles (C5): {total:.0f} m",
+                    label=f"path inside obstacles (C5): {sum(lengths):.0f} m",
                 )
             )
         if view["return_leg"] is not None:
-            rl = np.asarray(view["return_leg"])
-            scene.route.append(rl)
-            ax.plot(rl[:, 0], rl[:, 1], ":", color="tab:blue", linewidth=1.2, zorder=3)
             handles.append(Line2D([], [], color="tab:blue", linestyle=":", label="return (RTL)"))
         hp, ht, passes = visits.hover_points, visits.hover_times, visits.passes
         cp = visits.corners
         if len(cp):
-            scene.marker(cp, 3.0)
-            ax.scatter(cp[:, 0], cp[:, 1], s=14, marker="D", facecolors="white",
-                       edgecolors="tab:blue", linewidths=0.8, zorder=7)  # fmt: skip
             handles.append(Line2D([], [], marker="D", linestyle="", markerfacecolor="white",
                                   markeredgecolor="tab:blue",
                                   label=f"corner, flown through ({len(cp)})"))  # fmt: skip
         if len(hp):
-            t_max = max(float(spec.uav.max_hover_time), 1e-9)
-            size = 40.0 + 260.0 * np.clip(ht / t_max, 0.0, 1.0)
-            hover_r = np.sqrt(size) / 2.0 + 0.5
-            scene.marker(hp, hover_r)
-            ax.scatter(hp[:, 0], hp[:, 1], s=size, facecolors="tab:orange", edgecolors="k",
-                       alpha=0.85, linewidths=0.6, zorder=6)  # fmt: skip
             style = {"fontsize": 8, "color": "saddlebrown", "fontweight": "bold", "zorder": 8,
                      "bbox": _TEXT_BOX}  # fmt: skip
             unlabelled = max(len(hp) - HOVER_LABELS, 0)
@@ -1044,7 +1084,7 @@ def fleet_figure(
     if not sorties:
         raise ValueError("no sorties to draw")
     spec = map.spec
-    W, H = spec.area.width, spec.area.height
+    W = spec.area.width
     fig, ax, _ax_t, _ax_b, handles = _map_axes(map, has_time=False, figsize=figsize)
     scene = _new_scene()
     _draw_obstacles(ax, map, handles)
@@ -1053,45 +1093,21 @@ def fleet_figure(
     visits = [_timeline_visits(sv.timeline) for sv in sorties]  # each distinct thing once
     n_hover = sum(len(v.hover_points) for v in visits)
     labelled = 0
-    t_max = max(float(spec.uav.max_hover_time), 1e-9)
-    bad_total = 0.0
+    bad: list[float] = []  # lengths (m) of the parts of legs inside obstacles, all sorties
     n_corner = 0
     vehicles = sorted({sv.vehicle for sv in sorties})
     for sv, vis in zip(sorties, visits, strict=True):
         colour = _vehicle_colour(sv.vehicle)
         style = SORTIE_STYLES[(sv.sortie - 1) % len(SORTIE_STYLES)]
-        p = np.asarray(sv.timeline.path, dtype=float)
-        scene.route.extend(vis.lines)
-        line = _joined(vis.lines)
-        ax.plot(line[:, 0], line[:, 1], linestyle=style, color=colour, linewidth=1.6, zorder=3)
-        for a, b in vis.legs:
-            if np.hypot(*(b - a)) > 0.02 * max(W, H):
-                ax.annotate("", xy=a + 0.55 * (b - a), xytext=a + 0.45 * (b - a), zorder=3,
-                            arrowprops={"arrowstyle": "-|>", "color": colour, "lw": 1.4,
-                                        "mutation_scale": 12})  # fmt: skip
-        for seg in _violation_segments(map, p):
-            ax.plot(seg[:, 0], seg[:, 1], "-", color="red", linewidth=4.0, zorder=7,
-                    solid_capstyle="butt")  # fmt: skip
-            bad_total += float(np.sum(np.hypot(*np.diff(seg, axis=0).T)))
-        rl = sv.timeline.return_leg
-        if rl is not None:
-            rl = np.asarray(rl, dtype=float)
-            scene.route.append(rl)
-            ax.plot(rl[:, 0], rl[:, 1], ":", color=colour, linewidth=1.0, zorder=3)
-        # corners (NAV_WAYPOINT, flown through) as in the single-plan figure: white diamonds
-        cp = vis.corners
-        if len(cp):
-            n_corner += len(cp)
-            scene.marker(cp, 3.0)
-            ax.scatter(cp[:, 0], cp[:, 1], s=14, marker="D", facecolors="white",
-                       edgecolors=[colour], linewidths=0.8, zorder=7)  # fmt: skip
+        lengths, radius = _draw_route(ax, scene, map, vis,
+                                      np.asarray(sv.timeline.path, dtype=float),
+                                      sv.timeline.return_leg, colour=colour, linestyle=style,
+                                      arrow_scale=12, return_width=1.0, corner_edge=[colour],
+                                      hover_face=[colour], hover_alpha=0.8)  # fmt: skip
+        bad.extend(lengths)
+        n_corner += len(vis.corners)
         hp, ht = vis.hover_points, vis.hover_times
         if len(hp):
-            size = 40.0 + 260.0 * np.clip(ht / t_max, 0.0, 1.0)
-            radius = np.sqrt(size) / 2.0 + 0.5
-            scene.marker(hp, radius)
-            ax.scatter(hp[:, 0], hp[:, 1], s=size, facecolors=[colour], edgecolors="k",
-                       alpha=0.8, linewidths=0.6, zorder=6)  # fmt: skip
             style = {"fontsize": 7.5, "color": colour, "fontweight": "bold", "zorder": 8,
                      "bbox": _TEXT_BOX}  # fmt: skip
             for i in range(min(len(hp), HOVER_LABELS - labelled)):
@@ -1101,6 +1117,7 @@ def fleet_figure(
                                            tuple(hp[i]), style, float(radius[i]), n_hover > 40,
                                            f"{sv.sortie}.{i + 1}{many}"))  # fmt: skip
                 labelled += 1
+    bad_total = sum(bad)
     if bad_total > 0:
         handles.append(
             Line2D(
