@@ -40,7 +40,8 @@ from sim.obstacles import distances_to, obstacle_shapes, overlap_totals
 from sim.replay import Timeline
 
 __all__ = [
-    "Verdict", "Verdicts", "verify", "REL_TOL", "GEOM_TOL", "C5_TOL", "ENDS_TOL", "CLEAR_TOL",
+    "Verdict", "Verdicts", "verify", "c4_verdict", "margin_verdict", "REL_TOL", "GEOM_TOL",
+    "C5_TOL", "ENDS_TOL", "CLEAR_TOL",
 ]  # fmt: skip
 
 #: relative tolerance on hover times (C2), rate sums (C3) and collected data (C4): about
@@ -155,6 +156,66 @@ class Verdicts:
         return out
 
 
+def c4_verdict(collected: np.ndarray, required: np.ndarray, ids: Any, *,
+               title: str = "Q_j >= Q_lambda", prefix: str = "",
+               tightest: str = "tightest: sensor") -> Verdict:  # fmt: skip
+    """C4, Q_j >= Q_lambda for every sensor, within `REL_TOL` (relative, at least 1 Mbit).
+
+    Args:
+        collected: (J,) the data each sensor delivered, Mbit.
+        required: (J,) each sensor's requirement Q_lambda, Mbit.
+        ids: the J sensor ids, in the same order.
+        title: the verdict's title.
+        prefix: put before the detail ("over 3 sorties: ").
+        tightest: the detail's words before the tightest sensor's id when none is short.
+
+    Returns:
+        The C4 verdict: margin min_j (Q_j - Q_lambda) in Mbit; the detail names up to five
+        short sensors and the worst, or the tightest one.
+    """
+    q = collected
+    req = required
+    slack = q - req
+    tol = REL_TOL * np.maximum(req, 1.0)
+    short = np.flatnonzero(slack < -tol)
+    j = int(np.argmin(slack)) if len(slack) else 0
+    if len(short):
+        names = ", ".join(f"'{ids[k]}'" for k in short[:5]) + (" ..." if len(short) > 5 else "")
+        detail = (f"{prefix}{len(short)} sensor(s) short: {names}; worst '{ids[j]}' "
+                  f"{q[j]:.6g} of {req[j]:g} Mbit")  # fmt: skip
+    else:
+        detail = f"{prefix}{tightest} '{ids[j]}' {q[j]:.6g} of {req[j]:g} Mbit"
+    return Verdict("C4", title, not len(short), float(slack[j]), "Mbit", detail)
+
+
+def margin_verdict(collected: np.ndarray, required: np.ndarray, ids: Any, want: float, *,
+                   suffix: str = "") -> tuple[Verdict, np.ndarray]:  # fmt: skip
+    """MARGIN: every sensor's data at least (1 + `want`) x its requirement (`safety.data_margin`).
+
+    Args:
+        collected: (J,) the data each sensor delivered, Mbit.
+        required: (J,) each sensor's requirement, Mbit (a sensor requiring 0 is not judged).
+        ids: the J sensor ids, in the same order.
+        want: the margin asked, a fraction (0.02: 2 %).
+        suffix: put after the title ("data margin >= 2 %").
+
+    Returns:
+        The verdict (margin: the tightest sensor's collected / required - 1 - `want`, passing
+        down to -`REL_TOL` (1 + `want`); +inf with "no data required") and each sensor's
+        collected / required - 1 (J,), +inf where nothing is required.
+    """
+    title = f"data margin >= {100 * want:g} %{suffix}"
+    served = required > 0
+    frac = np.where(served, collected / np.where(served, required, 1.0) - 1.0, np.inf)
+    if not np.any(served):
+        return Verdict("MARGIN", title, True, math.inf, "", "no data required"), frac
+    j = int(np.argmin(frac))
+    m = float(frac[j] - want)
+    ok = m >= -REL_TOL * (1.0 + want)
+    detail = f"tightest: sensor '{ids[j]}' {100 * frac[j]:+.4g} % over Q_lambda"
+    return Verdict("MARGIN", title, bool(ok), m, "", detail), frac
+
+
 def _hover_label(i: int, seqs: tuple[int, ...]) -> str:
     return f"hover point {i + 1} (item {seqs[i]})"
 
@@ -221,18 +282,8 @@ def verify(timeline: Timeline, map: Any) -> Verdicts:  # noqa: A002
     # C4: Q_j >= Q_lambda for every sensor
     q = timeline.collected
     req = np.asarray(map.required_data, dtype=float)
-    slack = q - req
-    tol = REL_TOL * np.maximum(req, 1.0)
-    short = np.flatnonzero(slack < -tol)
-    j = int(np.argmin(slack)) if len(slack) else 0
     ids = timeline.sensor_ids
-    if len(short):
-        names = ", ".join(f"'{ids[k]}'" for k in short[:5]) + (" ..." if len(short) > 5 else "")
-        detail = (f"{len(short)} sensor(s) short: {names}; worst '{ids[j]}' "
-                  f"{q[j]:.6g} of {req[j]:g} Mbit")  # fmt: skip
-    else:
-        detail = f"tightest: sensor '{ids[j]}' {q[j]:.6g} of {req[j]:g} Mbit"
-    out.append(Verdict("C4", "Q_j >= Q_lambda", not len(short), float(slack[j]), "Mbit", detail))
+    out.append(c4_verdict(q, req, ids))
 
     # C5: L_vio = 0 over the flown horizontal path (and an RTL return leg, if any)
     obstacles = obstacle_shapes(map)
@@ -289,19 +340,9 @@ def verify(timeline: Timeline, map: Any) -> Verdicts:  # noqa: A002
     else:
         out.append(Verdict("CLEAR", f"clearance >= {want_c:g} m", True, math.inf, "m",
                            "no obstacles"))  # fmt: skip
-    served = req > 0
-    frac = np.where(served, q / np.where(served, req, 1.0) - 1.0, np.inf)
+    margin, frac = margin_verdict(q, req, ids, want_q)
     margins = {ids[k]: float(frac[k]) for k in range(len(ids))}
-    if np.any(served):
-        j = int(np.argmin(frac))
-        m = float(frac[j] - want_q)
-        ok = m >= -REL_TOL * (1.0 + want_q)
-        detail = f"tightest: sensor '{ids[j]}' {100 * frac[j]:+.4g} % over Q_lambda"
-        out.append(Verdict("MARGIN", f"data margin >= {100 * want_q:g} %", bool(ok), m, "",
-                           detail))  # fmt: skip
-    else:
-        out.append(Verdict("MARGIN", f"data margin >= {100 * want_q:g} %", True, math.inf, "",
-                           "no data required"))  # fmt: skip
+    out.append(margin)
 
     # ENDS: take off at the start, come to rest at the end
     d0 = float(np.linalg.norm(timeline.route.launch - map.start))

@@ -9,13 +9,12 @@ end); the whole plan is judged against the plan's map. Like the rest of the sim 
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
-from sim.checks import REL_TOL, Verdict
+from sim.checks import Verdict, c4_verdict, margin_verdict
 from sim.replay import Timeline
 
 __all__ = ["combined_data_verdicts"]
@@ -42,30 +41,9 @@ def combined_data_verdicts(timelines: Sequence[Timeline], map: Any) -> list[Verd
         if tuple(tl.sensor_ids) != ids:
             raise ValueError("timelines: a sortie's replay has other sensors than the map")
         q = q + tl.collected
-    slack = q - req
-    tol = REL_TOL * np.maximum(req, 1.0)
-    short = np.flatnonzero(slack < -tol)
-    j = int(np.argmin(slack)) if len(slack) else 0
     n = len(timelines)
-    if len(short):
-        names = ", ".join(f"'{ids[k]}'" for k in short[:5]) + (" ..." if len(short) > 5 else "")
-        detail = (f"over {n} sorties: {len(short)} sensor(s) short: {names}; worst "
-                  f"'{ids[j]}' {q[j]:.6g} of {req[j]:g} Mbit")  # fmt: skip
-    else:
-        detail = f"over {n} sorties: tightest '{ids[j]}' {q[j]:.6g} of {req[j]:g} Mbit"
-    out = [Verdict("C4", "Q_j >= Q_lambda (all sorties)", not len(short), float(slack[j]),
-                   "Mbit", detail)]  # fmt: skip
+    out = [c4_verdict(q, req, ids, title="Q_j >= Q_lambda (all sorties)",
+                      prefix=f"over {n} sorties: ", tightest="tightest")]  # fmt: skip
     want = float(getattr(getattr(map.spec, "safety", None), "data_margin", 0.0))
-    served = req > 0
-    if np.any(served):
-        frac = np.where(served, q / np.where(served, req, 1.0) - 1.0, np.inf)
-        k = int(np.argmin(frac))
-        m = float(frac[k] - want)
-        out.append(Verdict("MARGIN", f"data margin >= {100 * want:g} % (all sorties)",
-                           bool(m >= -REL_TOL * (1.0 + want)), m, "",
-                           f"tightest: sensor '{ids[k]}' {100 * frac[k]:+.4g} % over "
-                           "Q_lambda"))  # fmt: skip
-    else:
-        out.append(Verdict("MARGIN", f"data margin >= {100 * want:g} % (all sorties)", True,
-                           math.inf, "", "no data required"))  # fmt: skip
+    out.append(margin_verdict(q, req, ids, want, suffix=" (all sorties)")[0])
     return out
