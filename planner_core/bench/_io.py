@@ -5,6 +5,7 @@ where the schedule selector reads them too, and are re-exported here)."""
 
 from __future__ import annotations
 
+import datetime as _dt
 import json
 import os
 import re
@@ -23,6 +24,7 @@ __all__ = [
     "read_maybe_gz",
     "read_meta",
     "stored_path",
+    "utc_now",
     "write_bytes_atomic",
     "write_json_atomic",
     "write_text_atomic",
@@ -30,6 +32,12 @@ __all__ = [
 
 
 _NUMBER_LIST = re.compile(r"\[\s*(-?[\d.eE+-]+(?:,\s*-?[\d.eE+-]+)*)\s*\]")
+
+
+def utc_now() -> str:
+    """The time now in UTC to the second, as the benchmark's files stamp it
+    ("2025-01-31T12:00:00Z": a run's "started", a best-known solution's "found")."""
+    return _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
 
 
 def dumps_json(data: Any) -> str:

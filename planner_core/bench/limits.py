@@ -14,7 +14,6 @@ losing each other's updates).
 from __future__ import annotations
 
 import contextlib
-import datetime as _dt
 import fcntl
 import hashlib
 import math
@@ -25,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from planner_core.bench._io import read_json, write_json_atomic
+from planner_core.bench._io import read_json, utc_now, write_json_atomic
 
 __all__ = [
     "BEST_KNOWN_PROTOCOL",
@@ -183,10 +182,6 @@ def verify_plan(
     return float(f[0]), float(phi[0])
 
 
-def _now() -> str:
-    return _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
-
-
 class BestKnown:
     """The best-known feasible solution per task, stored in `path` (usually beside the suite)."""
 
@@ -243,7 +238,7 @@ class BestKnown:
                     "budget": None,
                     "run": None,
                     "command": "stored witness of the map (planner_core.suite)",
-                    "found": _now(),
+                    "found": utc_now(),
                     "hover_points": [list(map(float, q)) for q in w.hover_points],
                     "hover_times": [float(t) for t in w.hover_times],
                 }
@@ -290,7 +285,7 @@ class BestKnown:
                 "budget": budget,
                 "run": run,
                 "command": command,
-                "found": _now(),
+                "found": utc_now(),
                 "hover_points": np.asarray(hover_points, dtype=float).reshape(-1, 2).tolist(),
                 "hover_times": np.asarray(hover_times, dtype=float).reshape(-1).tolist(),
             }

@@ -11,7 +11,6 @@ runs that beat the best-known f of their task update the best-known file beside 
 
 from __future__ import annotations
 
-import datetime as _dt
 import hashlib
 import json
 import math
@@ -26,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from planner_core import defaults as _defaults
-from planner_core.bench._io import read_meta, write_json_atomic
+from planner_core.bench._io import read_meta, utc_now, write_json_atomic
 from planner_core.bench.limits import BestKnown, best_known_path, suite_task_files
 from planner_core.bench.records import RESULTS_FILE, Key, ResultsWriter, key_of, read_records
 from planner_core.execution import Executor, make_executor
@@ -228,10 +227,6 @@ def _imax_tag(rec: dict[str, Any]) -> str:
     return "" if rec.get("i_max") is None else f" I_max {rec['i_max']}"
 
 
-def _now() -> str:
-    return _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
-
-
 def _check_existing(records: list[dict[str, Any]], budget: int, shas: dict[str, str],
                     results: Path) -> None:
     budgets = {int(r["budget"]) for r in records if "budget" in r}
@@ -369,7 +364,7 @@ def run_bench(
         del meta["optimisers"]
     meta.update({"schema": SCHEMA, "suite": str(suite), "budget": int(budget),
                  "base_seed": int(base_seed)})
-    meta.setdefault("commands", []).append({"command": command, "started": _now(),
+    meta.setdefault("commands", []).append({"command": command, "started": utc_now(),
                                             "jobs_planned": len(todo)})
     write_json_atomic(meta_path, meta)
 
