@@ -125,13 +125,6 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     return p
 
 
-def _shown(path: str) -> str:
-    """A path for a line of output, control characters escaped (`textio.printable`)."""
-    from planner_core.textio import printable
-
-    return printable(path)
-
-
 class _ProgressBar:
     """The stage running and the budget spent: one updating line on stderr (a TTY), or a line
     per stage and per quarter of the budget otherwise; `close` ends the line, so what is
@@ -690,21 +683,21 @@ def run(args: argparse.Namespace) -> int:
     verdicts = verify(timeline, m)
     feasible = verdicts.passed
     if not feasible and not args.allow_infeasible:
+        from planner_core.textio import printable
+
         if not args.quiet:
             print(_summary(plan, m, timeline, verdicts, None, stored))
         if plan.feasible:  # the plan met the model; the mission as stored does not
-            print(f"lamde-mission plan: the plan for {_shown(args.map)} is feasible, but not once "
-                  "stored "
-                  f"as {stored.dialect.name} stores it (1e-7 degree lat/lon, float32, hover "
-                  "time resolution); nothing written:", file=sys.stderr)  # fmt: skip
+            print(f"lamde-mission plan: the plan for {printable(args.map)} is feasible, but "
+                  f"not once stored as {stored.dialect.name} stores it (1e-7 degree lat/lon, "
+                  "float32, hover time resolution); nothing written:", file=sys.stderr)  # fmt: skip
         else:
-            print(f"lamde-mission plan: no feasible mission found for {_shown(args.map)} "
+            print(f"lamde-mission plan: no feasible mission found for {printable(args.map)} "
                   f"(budget {args.budget}, seed {args.seed}); nothing written:", file=sys.stderr)
         for line in _violations(plan, verdicts):
             print(f"  {line}", file=sys.stderr)
         if not plan.feasible:
             from planner_core.model.diagnose import diagnose
-            from planner_core.textio import printable
 
             fatal = [f.message for f in diagnose(m).findings if f.fatal]
             for line in fatal:

@@ -111,6 +111,7 @@ def run(args: argparse.Namespace) -> int:
     )
     from lamde_mission.errors import UsageError
     from lamde_mission.plot import IMAGE_SUFFIXES, check_dpi
+    from planner_core.textio import printable
 
     out = Path(args.output)
     if out.suffix.lower() not in IMAGE_SUFFIXES:
@@ -120,8 +121,6 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as e:
         raise UsageError(str(e)) from None
     if args.title is not None:
-        from planner_core.textio import printable
-
         bad = next((c for c in args.title if c != "\n" and printable(c) != c), None)
         if bad is not None:  # an SVG cannot hold C0 controls; the others forge or reorder text
             raise UsageError(f"--title: holds the control character {printable(bad)} (a "
@@ -133,7 +132,7 @@ def run(args: argparse.Namespace) -> int:
         m = with_origin_or_fail(m, args.origin)
     if args.mission and Path(args.mission).is_dir():
         path = plot_fleet_dir(m, args.mission, out, title=args.title, dpi=args.dpi)
-        print(f"wrote {_shown(path)}")
+        print(f"wrote {printable(path)}")
         return 0
     timeline = None
     if args.mission:
@@ -147,12 +146,5 @@ def run(args: argparse.Namespace) -> int:
         path = plot_mission(m, out, timeline=timeline, title=args.title, dpi=args.dpi)
     except OSError as exc:
         raise UsageError(f"{out}: cannot write ({exc.strerror or exc})") from None
-    print(f"wrote {_shown(path)}")
+    print(f"wrote {printable(path)}")
     return 0
-
-
-def _shown(path: object) -> str:
-    """A path for a line of output, control characters escaped (`textio.printable`)."""
-    from planner_core.textio import printable
-
-    return printable(path)
