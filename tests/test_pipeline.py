@@ -46,6 +46,33 @@ def test_the_evaluator_refuses_beyond_the_budget_and_the_stage_allotment(tiny: P
     assert list(t.evaluations) == [4]
 
 
+def test_the_evaluator_hands_on_its_own_copies_with_nan_as_inf() -> None:
+    """A NaN from the problem loses every comparison (+inf, the DE core's rule,
+    `sanitise_evaluation`), the problem's arrays are never handed on or written, and results
+    of the wrong length are refused."""
+
+    class Broken:
+        lower, upper = np.zeros(2), np.ones(2)
+
+        def __init__(self) -> None:
+            self.f = np.array([1.0, np.nan, 3.0])
+            self.phi = np.array([0.0, 0.0, np.nan])
+
+        def evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            return self.f[: len(X)], self.phi[: len(X)]
+
+    p = Broken()
+    ev = Evaluator(p, 10)
+    f, phi = ev.evaluate(np.zeros((3, 2)))
+    assert list(f) == [1.0, np.inf, 3.0] and list(phi) == [0.0, 0.0, np.inf]
+    f[0] = phi[0] = 7.0
+    assert p.f[0] == 1.0 and p.phi[0] == 0.0 and np.isnan(p.f[1]) and np.isnan(p.phi[2])
+    assert ev.best()[1:] == (1.0, 0.0)
+    p.f = np.array([1.0, 2.0])  # two f for three solutions
+    with pytest.raises(ValueError, match=r"evaluate returned shapes \(2,\), \(3,\); expected"):
+        ev.evaluate(np.zeros((3, 2)))
+
+
 def test_the_evaluator_stops_at_its_time_limit_after_a_first_evaluation(tiny: Problem) -> None:
     ev = Evaluator(tiny, 100, time_limit=0.05)
     time.sleep(0.06)

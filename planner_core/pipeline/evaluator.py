@@ -31,6 +31,7 @@ from typing import Any, Literal, NamedTuple
 import numpy as np
 
 from planner_core.model.formulas import deb_best, deb_better, penalised_score
+from planner_core.search.de.core import sanitise_evaluation
 
 __all__ = [
     "BudgetExceeded",
@@ -116,14 +117,6 @@ class StageRecord:
         for k, v in self.__dict__.items():
             out[k] = None if isinstance(v, float) and not np.isfinite(v) else v
         return out
-
-
-def _sanitise(v: Any, n: int) -> np.ndarray:
-    a = np.array(v, dtype=float).reshape(-1)
-    if a.shape != (n,):
-        raise ValueError(f"evaluate returned shape {a.shape}, expected ({n},)")
-    a[np.isnan(a)] = np.inf
-    return a
 
 
 class Evaluator:
@@ -221,7 +214,8 @@ class Evaluator:
         t0 = time.perf_counter()
         f, phi = self.problem.evaluate(X)
         self.evaluate_seconds += time.perf_counter() - t0
-        f, phi = _sanitise(f, n), _sanitise(phi, n)
+        # own copies (the problem's arrays are never handed on), NaN -> +inf
+        f, phi = sanitise_evaluation(np.array(f, dtype=float), np.array(phi, dtype=float), n)
         self.count += n
         self._update(X, f, phi)
         if self.progress is not None:

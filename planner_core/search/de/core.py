@@ -35,17 +35,30 @@ from planner_core.search.de.rng import Streams, generation_rng
 from planner_core.search.de.types import BoxProblem, Config, Configurator, DEState, Outcome
 
 __all__ = [
-    "ask", "ask_words", "evaluate", "init", "outcome", "step", "tell", "to_problem", "to_unit",
-    "trial_count", "validate_config",
+    "ask", "ask_words", "evaluate", "init", "outcome", "sanitise_evaluation", "step", "tell",
+    "to_problem", "to_unit", "trial_count", "validate_config",
 ]  # fmt: skip
 
 
 # --------------------------------------------------------------------------- evaluation results
 
 
-def _sanitise(f: np.ndarray, phi: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Float arrays with NaN -> +inf so that a broken evaluation never wins a comparison
-    (copied only when a NaN must be replaced; the caller's arrays are never written)."""
+def sanitise_evaluation(f: Any, phi: Any, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """A problem's `evaluate` results made safe for Deb's rule: NaN -> +inf, so that a broken
+    evaluation never wins a comparison (the DE's and the pipeline's `Evaluator`'s one rule).
+
+    Args:
+        f: the n objective values (any shape of n numbers).
+        phi: the n constraint violations.
+        n: how many solutions were evaluated.
+
+    Returns:
+        f and phi as float arrays (n,); copied only when a NaN must be replaced (the caller's
+        arrays are never written).
+
+    Raises:
+        ValueError: f or phi does not hold n values.
+    """
     f = np.asarray(f, dtype=float).reshape(-1)
     phi = np.asarray(phi, dtype=float).reshape(-1)
     if f.shape != (n,) or phi.shape != (n,):
@@ -117,7 +130,7 @@ def init(
         X = to_unit(problem, sampler(rng, population))
         if X.shape != (population, d):
             raise ValueError(f"initial_population gave shape {X.shape}, not ({population}, {d})")
-    f, phi = _sanitise(*problem.evaluate(to_problem(problem, X)), population)
+    f, phi = sanitise_evaluation(*problem.evaluate(to_problem(problem, X)), population)
     return DEState(
         X=_frozen(X),
         f=_frozen(f.copy()),
@@ -183,7 +196,7 @@ def _ask(
 def tell(state: DEState, trials: np.ndarray, f: np.ndarray, phi: np.ndarray) -> DEState:
     """Deb selection of trials (k, d) against parents 0..k-1; a new state one generation on."""
     k = trials.shape[0]
-    f_t, phi_t = _sanitise(f, phi, k)
+    f_t, phi_t = sanitise_evaluation(f, phi, k)
     return _select(state, trials, f_t, phi_t, deb_better(f_t, phi_t, state.f[:k], state.phi[:k]))
 
 
@@ -220,7 +233,7 @@ def outcome(
 ) -> Outcome:
     """The generation's outcome for ``update`` hooks (``state`` is the state before ``tell``)."""
     k = trials.shape[0]
-    f_t, phi_t = _sanitise(f, phi, k)
+    f_t, phi_t = sanitise_evaluation(f, phi, k)
     f_p, phi_p = state.f[:k], state.phi[:k]
     return Outcome(
         config=config,
