@@ -387,3 +387,28 @@ def test_the_default_gives_the_de_a_smaller_share_beyond_160_sensors() -> None:
     assert configured("default", Problem(load_map(doc)), cfg) is cfg
     # a scheduler without a configure of its own (a static schedule) follows the default's
     assert configured("kicks-rebuild", p05, cfg).de_share == LARGE_DE_SHARE
+
+
+class _Watching(StaticScheduler):
+    """A static schedule that keeps the last `Observation` it was shown."""
+
+    last: Observation | None = None
+
+    def choose(self, observation: Observation) -> str:
+        self.last = observation
+        return super().choose(observation)
+
+
+@pytest.mark.parametrize("action", ["restructure", "kicks-300"])
+def test_a_restructure_or_kicks_action_spends_at_most_its_quantum(action: str) -> None:
+    # a quantum of 101 (descent 1 + restructure 100 + kicks 0) against the structural search
+    # and the removal moves of up to 100 each: together they stop at the quantum (they spent
+    # 107 on T05 when each pass was capped alone); the quantum binds, so `==`
+    p = Problem(load_map(SUITE / "T05.json").planning_map())
+    cfg = PlanConfig(seed=0, budget=8_000, population=20, restructure_trials=100,
+                     descent_trials=1, kick_trials=0)
+    s = _Watching("watch", [action])
+    run_pipeline(p, cfg, scheduler=s)
+    assert s.last is not None and s.last.quantum == 101
+    steps = [r.evaluations for r in s.last.history if r.action == action]
+    assert len(steps) >= 3 and max(steps) == s.last.quantum, steps

@@ -1,11 +1,16 @@
 """LAMDE-S's seam (issue 34, part 1): the improving phase as named macro-actions, each spending
-at most one evaluation quantum through the run's `Evaluator`, chosen one at a time by a
-`Scheduler`.
+at most one evaluation quantum through the run's `Evaluator` (a fresh sweep's plans on top,
+below), chosen one at a time by a `Scheduler`.
 
 The `improve` stage (`planner_core.pipeline.stages.Improve`) runs an `ImproveRun`: after each
 macro-action its scheduler sees an `Observation` (budget left, the incumbent, what each
 action spent and gained) and names the next action. The quantum is one finish's evaluations
-(`PlanConfig.final_trials`, at least a descent's), capped by what is left. The actions:
+(`PlanConfig.final_trials`, at least a descent's), capped by what is left; the structural
+search and the removal moves spend at most `restructure_trials` each and the quantum
+together. A `fresh` sweep (also `restart`'s when the pool has no other plan) scores its new
+constructive plans, at most `start_candidates`, before the finish's quantum: such an action
+spends up to `start_candidates` + the quantum (the default rounds' `restart` included, so
+left as it is: the golden plans). The actions:
 
 * `kicks-300`, `kicks-120`, `kicks-700`: the structural search and removal moves on the
   incumbent when it changed since they last ran, then kicks on it (iterated local search,
@@ -189,7 +194,8 @@ class Observation:
     Attributes:
         step: actions taken so far in this stage.
         remaining: evaluations left in the stage; budget: the run's budget.
-        quantum: evaluations one action may spend (before the cap by `remaining`).
+        quantum: evaluations one action may spend (before the cap by `remaining`; a fresh
+            sweep's plans on top, module docstring).
         idle: actions in a row that spent nothing.
         f, phi: the incumbent's scores.
         elapsed: seconds since the run's evaluator was created.
@@ -544,21 +550,24 @@ class ImproveRun:
         return rec
 
     # ------------------------------------------------------------------ the actions
-    def _structural(self) -> None:
+    def _structural(self, trials: int) -> None:
+        """The structural search, then the removal moves, on the incumbent: at most
+        `restructure_trials` evaluations each and `trials` (the action's quantum) together."""
         from planner_core.search.structure import MOVES, restructure
 
         ev, cfg = self.ev, self.state.config
+        c0 = ev.count
         self._searched = ev.best()[0].tobytes()
         for moves in (MOVES, ("removal",)):
-            restructure(self.state.problem, ev.best()[0], ev.evaluate,
-                        trials=min(cfg.restructure_trials, ev.remaining), moves=moves)
+            left = min(cfg.restructure_trials, trials - (ev.count - c0), ev.remaining)
+            restructure(self.state.problem, ev.best()[0], ev.evaluate, trials=left, moves=moves)
 
     def _kicks(self, spread: float, trials: int) -> None:
         from planner_core.search.structure import kicks
 
         ev, c0 = self.ev, self.ev.count
         if ev.best()[0].tobytes() != self._searched:
-            self._structural()
+            self._structural(trials)
         left = trials - (ev.count - c0)
         if left > 0:
             kicks(self.state.problem, ev.best()[0], ev.evaluate, trials=left,
@@ -585,7 +594,7 @@ class ImproveRun:
                                             trials=trials, seed=seed >> 1)
 
     def _restructure(self, trials: int) -> None:
-        self._structural()
+        self._structural(trials)
 
     def _finish(self, y: np.ndarray | None, trials: int) -> None:
         from planner_core.search.final import finish
