@@ -222,10 +222,6 @@ class Link:
         self._sock = self._listen = None
         self._fd = None
 
-    def local_address(self) -> tuple[str, int] | None:
-        s = self._sock or self._listen
-        return s.getsockname()[:2] if s is not None else None
-
     def waitables(self) -> list:
         """What `select` can wait on for this link's input right now (a file descriptor or
         sockets; empty once closed)."""

@@ -193,11 +193,6 @@ class MavlinkClient:
         if silences >= self.backoff_after:
             self._rto = min(1.5 * self._rto, self.max_timeout)
 
-    @property
-    def retry_timeout(self) -> float:
-        """The silence (s) after which the next message is resent."""
-        return self._rto
-
     def _ignore(self, reason: str, msg: Any) -> None:
         addr = getattr(msg, "_lamde_addr", None)
         where = f"{addr[0]}:{addr[1]}" if addr else "the link"

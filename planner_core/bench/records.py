@@ -11,7 +11,6 @@ from __future__ import annotations
 import json
 import math
 import os
-from collections.abc import Iterable
 from pathlib import Path
 from typing import IO, Any, NamedTuple
 
@@ -236,10 +235,6 @@ class ResultsWriter:
         self._fh.write(line + "\n")
         self._fh.flush()
         os.fsync(self._fh.fileno())
-
-    def write_all(self, records: Iterable[dict[str, Any]]) -> None:
-        for r in records:
-            self.write(r)
 
     def close(self) -> None:
         if self._fh is not None:

@@ -321,11 +321,6 @@ class OptimizationEnv(gymnasium.Env):
         if problem is not None:
             self._declare_spaces()
 
-    @property
-    def _seeder(self) -> np.random.Generator:
-        """The generator episode seeds are drawn from (Gymnasium's :attr:`np_random`)."""
-        return self.np_random
-
     def _declare_spaces(self) -> None:
         """Observation and action spaces for the current problem's dimension and population."""
         n, d = int(self.population), int(np.asarray(self.problem.lower).shape[0])

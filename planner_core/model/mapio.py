@@ -54,7 +54,6 @@ _WHY_SIDE = (
     "the paper's maps are at most 10 km a side; one flat local frame from the origin stays "
     "accurate to 100 km"
 )
-_WHY_SIZE = "no obstacle is larger than 1000 km; larger sizes overflow the geometry's arithmetic"
 #: metres: the least circle radius and rectangle side (`obstacles.circles[].radius`,
 #: `obstacles.rectangles[].length` / `width`): a radius of 1e-16 m passed and made the sim's
 #: clearance NaN, a side of 1e-15 m a degenerate polygon

@@ -15,9 +15,7 @@ from typing import Any
 
 from planner_core.defaults import INIT_MODES
 
-__all__ = ["DEFAULT_INIT", "INIT_MODES", "UniformStart", "with_init"]
-
-DEFAULT_INIT = INIT_MODES[0]
+__all__ = ["INIT_MODES", "UniformStart", "with_init"]
 
 
 class UniformStart:

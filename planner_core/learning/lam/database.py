@@ -127,14 +127,6 @@ class Database:
         names = list(self.extractors) if names is None else list(names)
         return [c for c in self.chunks() if any(not self.chunk_path(c, n).exists() for n in names)]
 
-    def compute_chunk(
-        self, keys: Sequence[InstanceKey], names: Sequence[str] | None = None
-    ) -> dict[str, np.ndarray]:
-        """Probe each instance once and run the extractors ``names`` (default all) on (U, f)."""
-        names = list(self.extractors) if names is None else list(names)
-        job = (list(keys), {n: self.extractors[n] for n in names}, self.n_probe, self.seed)
-        return _chunk_job(job)[1]
-
     def build(
         self,
         progress: Callable[[int, int], None] | None = None,
