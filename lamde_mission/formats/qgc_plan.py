@@ -32,20 +32,17 @@ from lamde_mission.items import (
     fence_from_items,
     fence_item,
 )
-from planner_core.textio import InputError, quoted, read_json
+from planner_core.textio import quoted
 
 __all__ = [
     "FIRMWARE_PX4",
-    "FIRMWARE_ARDUPILOT",
     "VEHICLE_QUADROTOR",
     "plan_document",
     "parse_plan_document",
     "write_qgc_plan",
-    "read_qgc_plan",
 ]
 
 FIRMWARE_PX4 = 12  # MAV_AUTOPILOT_PX4
-FIRMWARE_ARDUPILOT = 3  # MAV_AUTOPILOT_ARDUPILOTMEGA
 VEHICLE_QUADROTOR = 2  # MAV_TYPE_QUADROTOR
 _CIRCLES = (CMD.FENCE_CIRCLE_INCLUSION, CMD.FENCE_CIRCLE_EXCLUSION)
 _LLA = {"x": "latitude", "y": "longitude", "z": "altitude"}
@@ -382,12 +379,3 @@ def write_qgc_plan(
     """Write a `.plan` file atomically; keyword arguments as for `plan_document`."""
     doc = plan_document(items, fence, **kwargs)
     return write_text_atomic(path, json.dumps(doc, indent=4, allow_nan=False) + "\n")
-
-
-def read_qgc_plan(path: str | Path) -> tuple[list[MissionItem], list[MissionItem]]:
-    """(mission items, fence items) of a `.plan` file; raise MissionError if malformed."""
-    try:
-        doc = read_json(path)
-    except InputError as exc:
-        raise MissionError(str(exc)) from None
-    return parse_plan_document(doc)

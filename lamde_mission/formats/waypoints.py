@@ -25,11 +25,11 @@ import numpy as np
 from lamde_mission.atomic import write_text_atomic
 from lamde_mission.formats.ranges import check_item_count, check_mission_item
 from lamde_mission.items import CMD, FRAME, MISSION_TYPE, MissionError, MissionItem
-from planner_core.textio import InputError, limit, quoted, read_text
+from planner_core.textio import limit, quoted
 from sim.mission import command_name
 
-__all__ = ["HEADER", "format_waypoints", "parse_waypoints", "write_waypoints", "read_waypoints",
-           "is_home_row", "check_mission_list"]
+__all__ = ["HEADER", "format_waypoints", "parse_waypoints", "write_waypoints", "is_home_row",
+           "check_mission_list"]
 
 HEADER = "QGC WPL 110"
 
@@ -197,15 +197,6 @@ def write_waypoints(
 ) -> Path:
     """Write a `.waypoints` file atomically."""
     return write_text_atomic(path, format_waypoints(items, home))
-
-
-def read_waypoints(path: str | Path) -> list[MissionItem]:
-    """Mission items of a `.waypoints` file (the home line dropped, seq from 0)."""
-    try:
-        text = read_text(path)
-    except InputError as exc:
-        raise MissionError(str(exc)) from None
-    return parse_waypoints(text)[1]
 
 
 def check_mission_list(items: Sequence[MissionItem], what: str = "item") -> None:

@@ -28,7 +28,7 @@ import tty
 from dataclasses import dataclass
 from urllib.parse import urlsplit
 
-__all__ = ["Connection", "parse_connection", "parse_connections", "Link", "open_link",
+__all__ = ["Connection", "parse_connection", "parse_connections", "Link",
            "BAUD_RATES", "SCHEMES"]  # fmt: skip
 
 SCHEMES = ("udpin", "udpout", "tcpin", "tcpout", "serial")
@@ -288,8 +288,3 @@ class Link:
                 self._sock.sendto(buf, self.peer)
             else:
                 self._sock.sendall(buf)
-
-
-def open_link(conn: Connection) -> Link:
-    """A `Link` for `conn`; OSError (closed) if it cannot be opened."""
-    return Link(conn)
