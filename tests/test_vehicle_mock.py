@@ -271,6 +271,53 @@ def test_loss_is_seeded_and_counted():
         assert heard == v.stats.sent - v.stats.dropped
 
 
+def _drop_pattern(v: MockVehicle, n: int = 200) -> tuple[list[bool], list[bool]]:
+    """Which of n HEARTBEATs `v` loses on the way out and which of n datagrams on the way in
+    (its loss draws in order, without timing)."""
+    out, inn = [], []
+    for _ in range(n):
+        sent, got = v.stats.dropped, v.stats.dropped_in
+        v._send_heartbeat()
+        v._datagram(b"", ("127.0.0.1", 9))
+        out.append(v.stats.dropped > sent)
+        inn.append(v.stats.dropped_in > got)
+    return out, inn
+
+
+def test_the_default_seed_drops_the_same_messages_every_run():
+    runs = []
+    for _ in range(2):
+        v = MockVehicle(f"udpout:127.0.0.1:{free_udp_port()}", loss=0.5, loss_in=0.5)
+        try:
+            runs.append(_drop_pattern(v))
+        finally:
+            v.stop()
+    (out, inn), again = runs
+    assert (out, inn) == again
+    assert 0 < sum(out) < len(out) and 0 < sum(inn) < len(inn)
+
+
+def test_the_default_seed_gives_each_fleet_vehicle_the_same_losses_every_run():
+    from lamde_mission.vehicle.mock_fleet import MockFleet
+
+    runs = []
+    for _ in range(2):
+        fleet = MockFleet(f"udpout:127.0.0.1:{free_udp_port()}", vehicles=2, loss=0.5,
+                          loss_in=0.5)
+        try:
+            runs.append([_drop_pattern(v) for v in fleet.vehicles])
+        finally:
+            fleet.stop()
+    assert runs[0] == runs[1]
+    assert runs[0][0] != runs[0][1]  # vehicle k draws from seed + k
+
+
+def test_mock_vehicle_seed_defaults_to_0():
+    from lamde_mission.cli import build_parser
+
+    assert build_parser().parse_args(["mock-vehicle"]).seed == 0
+
+
 def test_latency_delays_outgoing_messages():
     port = free_udp_port()
     with RawGcs(port) as gcs, MockVehicle(f"udpout:127.0.0.1:{port}", latency_ms=200) as v:

@@ -64,7 +64,13 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         metavar="MS",
         help="delay outgoing messages by MS milliseconds (default: 0)",
     )
-    p.add_argument("--seed", type=int, default=None, help="seed of the message loss")
+    p.add_argument(
+        "--seed",
+        type=int,
+        default=0,
+        help="seed of the message loss (default: 0; the same seed drops the same messages of "
+        "the same exchange; with several vehicles vehicle k draws from SEED + k)",
+    )
     p.add_argument(
         "--reject",
         default=None,

@@ -29,14 +29,16 @@ its home position (`home`), whatever was sent there, and NAV_LOITER_TIME's hover
 cut to a whole number.
 
 Every message has mission_type echoed. `loss` drops that fraction of outgoing messages and
-`loss_in` that fraction of incoming ones (seeded; a lossy radio both ways), `latency_ms` delays
-outgoing ones. While an upload from one ground station is in progress, mission messages from
-another (other system/component ids) are refused with MAV_MISSION_DENIED addressed to it, as
-PX4 does, and never disturb that upload. `noisy_gcs_hz` runs a second, noisy ground station on
-the same radio link: system `NOISY_GCS_SYSTEM` broadcasting mission messages (target system 0:
-list requests, item requests, items and ACKs) that both the vehicle and the ground station
-hear; the vehicle answers them, addressed to system `NOISY_GCS_SYSTEM`. Run it in a background
-thread (`with MockVehicle(...) as v:`) or in the foreground (`serve_forever`, what
+`loss_in` that fraction of incoming ones (a lossy radio both ways; drawn from `seed`, 0 by
+default, so the same seed drops the same messages of the same exchange; None draws a fresh
+seed), `latency_ms` delays outgoing ones. While an upload from one ground station is in
+progress, mission messages from another (other system/component ids) are refused with
+MAV_MISSION_DENIED addressed to it, as PX4 does, and never disturb that upload.
+`noisy_gcs_hz` runs a second, noisy ground station on the same radio link: system
+`NOISY_GCS_SYSTEM` broadcasting mission messages (target system 0: list requests, item
+requests, items and ACKs) that both the vehicle and the ground station hear; the vehicle
+answers them, addressed to system `NOISY_GCS_SYSTEM`. Run it in a background thread
+(`with MockVehicle(...) as v:`) or in the foreground (`serve_forever`, what
 `lamde-mission mock-vehicle` does).
 """
 
@@ -151,7 +153,7 @@ class MockVehicle:
         loss_in: float = 0.0,
         noisy_gcs_hz: float = 0.0,
         latency_ms: float = 0.0,
-        seed: int | None = None,
+        seed: int | None = 0,
         reject: int | str | None = None,
         max_items: int = 1000,
         rerequest_s: float | None = None,

@@ -103,7 +103,8 @@ class MockFleet:
             one such connection per vehicle.
         vehicles: how many (default: as many as `system_ids`, else as many connections).
         system_ids: their MAVLink system ids (default 1..N), distinct.
-        seed: vehicle k (0-based) gets seed + k for its message loss (None: unseeded).
+        seed: vehicle k (0-based) gets seed + k for its message loss (default 0: the same
+            losses every run; None: unseeded).
         on_event: gets each vehicle's transfer events as "system S: text".
         **options: passed to every `MockVehicle` (loss, loss_in, latency_ms, autopilot,
             reject, max_items, heartbeat_hz, corrupt, signing_key, ...).
@@ -119,7 +120,7 @@ class MockFleet:
         *,
         vehicles: int | None = None,
         system_ids: Sequence[int] | None = None,
-        seed: int | None = None,
+        seed: int | None = 0,
         on_event: Callable[[str], None] | None = None,
         **options: Any,
     ) -> None:
