@@ -10,6 +10,7 @@ TYPE_CHECKING = False  # typing.TYPE_CHECKING without importing typing (~15 ms)
 if TYPE_CHECKING:
     import argparse
     from collections.abc import Callable, Sequence
+    from typing import NoReturn
 
 __all__ = ["main", "build_parser"]
 
@@ -21,14 +22,15 @@ def build_parser() -> argparse.ArgumentParser:
     """The top-level parser with one sub-parser per available command.
 
     Returns:
-        The parser; each sub-parser's defaults carry `_run`, its command's `run`.
+        The parser (and every sub-parser, nested ones included: `add_subparsers` makes them of
+        its class) a `_OneLineParser`: bad arguments give one line and exit status 2; each
+        sub-parser's defaults carry `_run`, its command's `run`.
     """
-    import argparse
     import importlib
 
     from lamde_mission.commands import COMMANDS
 
-    parser = argparse.ArgumentParser(
+    parser = _one_line_parser()(
         prog="lamde-mission",
         description="Plan UAV data-collection missions over wireless sensor networks (LAMDE) "
         "and export them as MAVLink missions.",
@@ -45,6 +47,29 @@ def build_parser() -> argparse.ArgumentParser:
         p = module.add_parser(sub)
         p.set_defaults(_run=module.run)
     return parser
+
+
+def _one_line_parser() -> type[argparse.ArgumentParser]:
+    """`argparse.ArgumentParser` whose `error` prints one line, "PROG: MESSAGE" (e.g.
+    "lamde-mission plan: argument --seed: invalid int value: 'abc'", control characters
+    escaped by `planner_core.textio.printable`), and exits with status 2, without argparse's
+    usage block (`--help` prints that, unchanged). A class made on first use, so that this
+    module imports only `sys` at the top."""
+    global _ONE_LINE_PARSER
+    if _ONE_LINE_PARSER is None:
+        import argparse
+
+        class _OneLineParser(argparse.ArgumentParser):
+            def error(self, message: str) -> NoReturn:
+                from planner_core.textio import printable
+
+                self.exit(2, f"{self.prog}: {printable(message)}\n")
+
+        _ONE_LINE_PARSER = _OneLineParser
+    return _ONE_LINE_PARSER
+
+
+_ONE_LINE_PARSER: type[argparse.ArgumentParser] | None = None
 
 
 def _version() -> str:
@@ -150,10 +175,14 @@ def _main(argv: Sequence[str] | None) -> int:
         problems = _map_problems(exc)
         if problems is None:
             raise
+        from planner_core.textio import printable
+
+        # the map's path escaped as the UsageError branch's lines (a name with ESC or a
+        # newline cannot forge a line or a terminal escape)
         where = getattr(args, "map", None)
         for line in problems:
-            print(f"lamde-mission {args.command}: " + (f"{where}: " if where else "") + line,
-                  file=sys.stderr)  # fmt: skip
+            print(f"lamde-mission {args.command}: " + (f"{printable(where)}: " if where else "")
+                  + line, file=sys.stderr)  # fmt: skip
         return 2
 
 

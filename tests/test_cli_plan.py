@@ -256,3 +256,53 @@ def test_overwriting_a_mission_keeps_its_mode_and_clears_a_killed_runs_pending_f
     assert r.returncode == 0, r.stderr
     assert stat.S_IMODE(out.stat().st_mode) == 0o600
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m.plan"]
+
+
+@pytest.mark.parametrize(
+    ("argv", "line"),
+    [
+        (["plan", "m.json", "-o", "x.plan", "--seed", "abc"],
+         "lamde-mission plan: argument --seed: invalid int value: 'abc'"),
+        (["mock-vehicle", "--loss", "x"],
+         "lamde-mission mock-vehicle: argument --loss: invalid float value: 'x'"),
+        (["map", "from-geojson", "a.geojson"],  # a nested sub-parser
+         "lamde-mission map from-geojson: the following arguments are required: -o/--output"),
+        (["plan", "m.json", "-o", "x.plan", "--e\x1b[2Jx"],  # escaped, as every error line
+         "lamde-mission: unrecognized arguments: --e\\x1b[2Jx"),
+    ],
+)
+def test_a_bad_argument_is_one_line_naming_it_and_exit_2(
+    argv: list[str], line: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from lamde_mission.cli import main
+
+    with pytest.raises(SystemExit) as info:
+        main(argv)
+    assert info.value.code == 2
+    assert capsys.readouterr().err.splitlines() == [line]
+
+
+def test_help_still_prints_the_usage(capsys: pytest.CaptureFixture[str]) -> None:
+    from lamde_mission.cli import main
+
+    with pytest.raises(SystemExit) as info:
+        main(["plan", "--help"])
+    assert info.value.code == 0
+    out = capsys.readouterr().out
+    assert out.startswith("usage: lamde-mission plan ") and "--seed" in out
+
+
+def test_a_map_error_past_the_commands_checks_escapes_the_maps_path(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import lamde_mission.commands.check as check
+    from lamde_mission.cli import main
+    from planner_core.model.mapio import MapError
+
+    def run(args: object) -> int:
+        raise MapError(["sensors: required field is missing"])
+
+    monkeypatch.setattr(check, "run", run)
+    assert main(["check", "evil\x1b[2J\nname.json"]) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        "lamde-mission check: evil\\x1b[2J\\nname.json: sensors: required field is missing"]
