@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 
 import numpy as np
 import pytest
@@ -456,3 +457,25 @@ def test_warm_start_alone_is_a_checkpoint(tmp_path) -> None:  # noqa: ANN001
     assert len((out / "imitation.csv").read_text().splitlines()) == 3
     with pytest.raises(ValueError, match="warm start"):
         train(_tiny_cfg(epochs=0, imitate="none"), TINY_SPECS, tmp_path / "none")
+
+
+class _BrokenModule:
+    """A module whose names raise what a broken install raises on import (not ImportError)."""
+
+    def __getattr__(self, name: str) -> object:
+        raise RuntimeError("a broken tensorboard install")
+
+
+def test_the_tensorboard_writer_is_optional_but_a_broken_install_is_not_hidden(
+    monkeypatch: pytest.MonkeyPatch, tmp_path
+) -> None:
+    pytest.importorskip("torch")
+    from planner_core.learning.policy.ppo import _scalar_writer
+
+    # neither installed (a None entry in sys.modules makes the import raise ImportError)
+    monkeypatch.setitem(sys.modules, "torch.utils.tensorboard", None)
+    monkeypatch.setitem(sys.modules, "tensorboardX", None)
+    assert _scalar_writer(tmp_path) is None
+    monkeypatch.setitem(sys.modules, "torch.utils.tensorboard", _BrokenModule())
+    with pytest.raises(RuntimeError, match="broken tensorboard"):
+        _scalar_writer(tmp_path)

@@ -573,13 +573,15 @@ CURVE_FIELDS = ("epoch", "episodes", "return", "feasible_rate", "best_score", "p
 
 
 def _scalar_writer(folder: Path) -> Any:
-    """A TensorBoard SummaryWriter when tensorboard (or tensorboardX) is installed, else None."""
+    """A TensorBoard SummaryWriter when tensorboard (or tensorboardX) is installed, else None.
+    Only an ImportError means "not installed": any other error of an installed but broken one
+    propagates."""
     try:
         from torch.utils.tensorboard import SummaryWriter
-    except Exception:  # tensorboard is optional
+    except ImportError:  # tensorboard is optional
         try:
             from tensorboardX import SummaryWriter  # type: ignore[no-redef]
-        except Exception:
+        except ImportError:
             return None
     return SummaryWriter(str(folder / "tb"))
 
