@@ -61,21 +61,29 @@ def clean_stale_temps(path: str | Path) -> list[Path]:
     (a write in progress in another process is left alone).
     """
     path = Path(path)
-    folder = path.parent if str(path.parent) else Path(".")
-    pat = re.compile(re.escape(f".{path.name}{_TMP_TAG}") + r"(\d+)-[^/]*$")
     removed: list[Path] = []
+    for entry in _left_by_dead(path, re.escape(f".{path.name}{_TMP_TAG}") + r"(\d+)-[^/]*"):
+        with contextlib.suppress(OSError):
+            os.unlink(entry)
+            removed.append(entry)
+    return removed
+
+
+def _left_by_dead(path: Path, pattern: str) -> list[Path]:
+    """The entries beside `path` whose whole name matches `pattern` (its last group a PID)
+    and whose process no longer runs; [] when the folder cannot be listed."""
+    folder = path.parent if str(path.parent) else Path(".")
+    pat = re.compile(pattern)
     try:
         names = os.listdir(folder)
     except OSError:
-        return removed
+        return []
+    out = []
     for name in names:
-        m = pat.match(name)
-        if m is None or _pid_alive(int(m.group(1))):
-            continue
-        with contextlib.suppress(OSError):
-            os.unlink(folder / name)
-            removed.append(folder / name)
-    return removed
+        m = pat.fullmatch(name)
+        if m is not None and not _pid_alive(int(m.group(m.lastindex or 0))):
+            out.append(folder / name)
+    return out
 
 
 #: the folders a whole-folder write keeps beside its target (`dir_beside`): "pending", the new
@@ -122,18 +130,10 @@ def clean_stale_dirs(path: str | Path, kinds: tuple[str, ...] = DIR_KINDS) -> li
         The folders removed.
     """
     path = Path(path)
-    folder = path.parent if str(path.parent) else Path(".")
-    pat = re.compile(re.escape(f".{path.name}.lamde-") + "(" + "|".join(map(re.escape, kinds))
-                     + r")-(\d+)")  # fmt: skip
     removed: list[Path] = []
-    try:
-        names = os.listdir(folder)
-    except OSError:
-        return removed
-    for name in names:
-        m = pat.fullmatch(name)
-        entry = folder / name
-        if m is None or entry.is_symlink() or not entry.is_dir() or _pid_alive(int(m.group(2))):
+    pattern = re.escape(f".{path.name}.lamde-") + "(" + "|".join(map(re.escape, kinds)) + r")-(\d+)"
+    for entry in _left_by_dead(path, pattern):
+        if entry.is_symlink() or not entry.is_dir():
             continue
         try:
             shutil.rmtree(entry)
