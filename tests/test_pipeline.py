@@ -73,6 +73,38 @@ def test_the_evaluator_hands_on_its_own_copies_with_nan_as_inf() -> None:
         ev.evaluate(np.zeros((3, 2)))
 
 
+@pytest.mark.parametrize("one_row", [True, False])
+def test_the_evaluator_has_an_incumbent_after_any_evaluated_row(one_row: bool) -> None:
+    """Rows whose f or phi is infinite (a NaN made +inf, an unflyable plan) still become the
+    incumbents when there is none yet, under both criteria, one row at a time or in a batch;
+    a finite row then replaces them (the module's promise: an incumbent after one row)."""
+
+    class Values:
+        lower, upper = np.zeros(2), np.ones(2)
+        f = np.array([np.inf, np.inf])
+        phi = np.array([np.inf, 0.0])
+
+        def evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            return self.f[: len(X)].copy(), self.phi[: len(X)].copy()
+
+    p = Values()
+    ev = Evaluator(p, 10)
+    X = np.array([[0.1, 0.1], [0.2, 0.2]])
+    if one_row:
+        ev.evaluate(X[:1])
+        assert ev.has_best and ev.best("penalised")[1:] == (np.inf, np.inf)
+        p.f, p.phi = p.f[1:], p.phi[1:]
+        ev.evaluate(X[1:])
+    else:
+        ev.evaluate(X)
+    assert ev.has_best
+    assert ev.best("deb")[1:] == (np.inf, 0.0) and list(ev.best("deb")[0]) == [0.2, 0.2]
+    assert ev.best("penalised")[2] in (np.inf, 0.0)
+    p.f, p.phi = np.array([5.0]), np.array([1.0])
+    ev.evaluate(np.array([[0.3, 0.3]]))
+    assert ev.best("penalised")[1:] == (5.0, 1.0) and ev.best("deb")[1:] == (np.inf, 0.0)
+
+
 def test_the_evaluator_stops_at_its_time_limit_after_a_first_evaluation(tiny: Problem) -> None:
     ev = Evaluator(tiny, 100, time_limit=0.05)
     time.sleep(0.06)

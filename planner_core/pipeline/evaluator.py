@@ -250,23 +250,23 @@ class Evaluator:
             self._update_one(X[0], float(f[0]), float(phi[0]))
             return
         i = deb_best(f, phi)
-        _, bf, bp = self._best["deb"]
-        if deb_better(f[i], phi[i], bf, bp):
+        bx, bf, bp = self._best["deb"]
+        if bx is None or deb_better(f[i], phi[i], bf, bp):
             self._best["deb"] = (X[i].copy(), float(f[i]), float(phi[i]))
         score = penalised_score(f, phi)
         j = int(np.argmin(score))
-        _, bf, bp = self._best["penalised"]
-        if score[j] < penalised_score(bf, bp):
+        bx, bf, bp = self._best["penalised"]
+        if bx is None or score[j] < penalised_score(bf, bp):
             self._best["penalised"] = (X[j].copy(), float(f[j]), float(phi[j]))
         for key, (_, bf, bp) in self._best.items():
             self._trace[key].append((self.count, bf, bp))
 
     def _update_one(self, x: np.ndarray, f: float, phi: float) -> None:
-        _, bf, bp = self._best["deb"]
-        if deb_better(f, phi, bf, bp):
+        bx, bf, bp = self._best["deb"]
+        if bx is None or deb_better(f, phi, bf, bp):
             self._best["deb"] = (x.copy(), f, phi)
-        _, bf, bp = self._best["penalised"]
-        if penalised_score(f, phi) < penalised_score(bf, bp):
+        bx, bf, bp = self._best["penalised"]
+        if bx is None or penalised_score(f, phi) < penalised_score(bf, bp):
             self._best["penalised"] = (x.copy(), f, phi)
         for key, (_, bf, bp) in self._best.items():
             self._trace[key].append((self.count, bf, bp))
