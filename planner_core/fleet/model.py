@@ -87,6 +87,13 @@ class FleetSettings:
 
         Without a battery the usable energy is infinite (a fleet flies one sortie a vehicle).
 
+        Args:
+            m: a loaded map (`planner_core.model.mapio.Map`).
+            goal: "total" or "makespan"; None takes the map's `fleet.goal`.
+
+        Returns:
+            The settings.
+
         Raises:
             ValueError: an unknown goal.
         """
@@ -124,17 +131,39 @@ class FleetSettings:
                                  float(u.descent_speed), float(u.acceleration))
 
     def leg_times(self, d: np.ndarray) -> np.ndarray:
-        """Eq. 1 time (s) of legs of length d (m)."""
+        """Eq. 1 time of rest-to-rest legs at the UAV's max speed and acceleration
+        (`planner_core.model.formulas.flight_time`).
+
+        Args:
+            d: leg lengths (m), any shape; d <= 0 takes 0 s.
+
+        Returns:
+            Seconds, d's shape.
+        """
         return flight_time(d, float(self.uav.max_speed), float(self.uav.acceleration))
 
     def leg_energies(self, d: np.ndarray) -> np.ndarray:
-        """Energy (Wh) of rest-to-rest legs of length d (m) (`energy.leg_energy_wh`)."""
+        """Energy of rest-to-rest legs flown with Eq. 1's profile (`energy.leg_energy_wh`).
+
+        Args:
+            d: leg lengths (m), any shape; d <= 0 costs 0.
+
+        Returns:
+            Wh, d's shape.
+        """
         return E.leg_energy_wh(d, float(self.uav.max_speed), float(self.uav.acceleration),
                                self.power)  # fmt: skip
 
     def budget_wh(self, n_points: int) -> float:
-        """Energy a sortie with n_points points may plan to spend (Wh): the usable energy
-        less `ENERGY_SLACK` of it and `HOVER_ROUND_S` of hover per point (kept for storage)."""
+        """Energy a sortie may plan to spend: the usable energy less `ENERGY_SLACK` of it and
+        `HOVER_ROUND_S` of hover power P(0) per point (kept for storage's rounding).
+
+        Args:
+            n_points: points of the sortie (hover points and detour corners).
+
+        Returns:
+            Wh (infinite without a battery).
+        """
         return (
             self.usable_wh * (1.0 - ENERGY_SLACK)
             - self.hover_w * HOVER_ROUND_S * n_points / E.J_PER_WH
@@ -145,7 +174,11 @@ class FleetSettings:
 class Sortie:
     """One flight on one battery: depot `start` -> `points` (k, 2) -> depot `end`, hovering
     `times` (k,) s at the points (0 at detour corners). Depots are indices into
-    `FleetSettings.depots`."""
+    `FleetSettings.depots`. Points and times are stored as read-only float copies.
+
+    Raises:
+        ValueError: `times` and `points` of different lengths.
+    """
 
     start: int
     end: int
@@ -163,15 +196,36 @@ class Sortie:
         object.__setattr__(self, "times", t)
 
     def path(self, s: FleetSettings) -> np.ndarray:
-        """(k + 2, 2) the flown route: depot, points, depot (m)."""
+        """The flown route: depot, points, depot.
+
+        Args:
+            s: the settings whose depots `start` and `end` index.
+
+        Returns:
+            (k + 2, 2) positions, m.
+        """
         return np.vstack([s.depots[self.start], self.points, s.depots[self.end]])
 
     def leg_lengths(self, s: FleetSettings) -> np.ndarray:
-        """(k + 1,) lengths of the straight legs, m."""
+        """Lengths of the straight legs of `path`.
+
+        Args:
+            s: the fleet's settings.
+
+        Returns:
+            (k + 1,) lengths, m.
+        """
         return np.hypot(*np.diff(self.path(s), axis=0).T)
 
     def t_fly(self, s: FleetSettings) -> float:
-        """Horizontal flight time (s), Eq. 1 per leg."""
+        """Horizontal flight time t_fly: Eq. 1 per leg, summed (no take-off or landing).
+
+        Args:
+            s: the fleet's settings.
+
+        Returns:
+            Seconds.
+        """
         return float(s.leg_times(self.leg_lengths(s)).sum())
 
     @property
@@ -180,23 +234,62 @@ class Sortie:
         return float(self.times.sum())
 
     def f(self, s: FleetSettings) -> float:
-        """The paper's f of this sortie: alpha t_fly + (1 - alpha) t_hover."""
+        """The paper's f of this sortie (Sec. 3): alpha t_fly + (1 - alpha) t_hover.
+
+        Args:
+            s: the fleet's settings (alpha, speeds, depots).
+
+        Returns:
+            f, seconds.
+        """
         return s.alpha * self.t_fly(s) + (1.0 - s.alpha) * self.t_hover
 
     def duration(self, s: FleetSettings) -> float:
-        """Seconds from take-off to landing: flight, hovers, vertical take-off and landing."""
+        """Time from take-off to landing: t_fly + t_hover + `FleetSettings.vertical_s`.
+
+        Args:
+            s: the fleet's settings.
+
+        Returns:
+            Seconds.
+        """
         return self.t_fly(s) + self.t_hover + s.vertical_s
 
     def flight_wh(self, s: FleetSettings) -> float:
-        """Energy of everything but the hovers (Wh): `sortie_energy_wh` with zero hover."""
+        """Energy of everything but the hovers: `sortie_energy_wh` with zero hover times
+        (legs, take-off and landing).
+
+        Args:
+            s: the fleet's settings.
+
+        Returns:
+            Wh.
+        """
         return E.sortie_energy_wh(self.path(s), np.zeros(len(self.points)), s.uav, s.power)
 
     def energy(self, s: FleetSettings) -> float:
-        """Energy of the sortie, Wh (`planner_core.model.energy.sortie_energy_wh`)."""
+        """Energy of the sortie (`planner_core.model.energy.sortie_energy_wh`).
+
+        Args:
+            s: the fleet's settings.
+
+        Returns:
+            Wh.
+        """
         return E.sortie_energy_wh(self.path(s), self.times, s.uav, s.power)
 
     def with_times(self, times: np.ndarray) -> Sortie:
-        """The same route with other hover times (s)."""
+        """The same route with other hover times.
+
+        Args:
+            times: (k,) hover times, s.
+
+        Returns:
+            A new sortie.
+
+        Raises:
+            ValueError: `times` not one per point.
+        """
         return Sortie(self.start, self.end, self.points, times)
 
 
@@ -226,8 +319,18 @@ class FleetPlan:
         return sum(len(v) - 1 for v in self.vehicles)
 
     def vehicle_span(self, v: int) -> float:
-        """Seconds vehicle v flies from its first take-off to its last landing, swaps
-        included."""
+        """Time vehicle v flies from its first take-off to its last landing: the sum of its
+        sorties' `Sortie.duration` plus `swap_s` per swap.
+
+        Args:
+            v: index into `vehicles`.
+
+        Returns:
+            Seconds.
+
+        Raises:
+            IndexError: v out of range.
+        """
         s = self.settings
         return sum(x.duration(s) for x in self.vehicles[v]) + s.swap_s * (len(self.vehicles[v]) - 1)
 
@@ -249,14 +352,25 @@ class FleetPlan:
         return sum(x.duration(s) for x in self.sorties) + s.swap_s * self.swaps
 
     def objective(self, goal: str | None = None) -> tuple[float, float]:
-        """What the search minimises, compared as a tuple: (total, makespan) for "total",
-        (makespan, total) for "makespan" (default: the settings' goal)."""
+        """What the search minimises, compared as a tuple.
+
+        Args:
+            goal: "total" or "makespan"; None takes the settings' goal. Any other value is
+                read as "makespan".
+
+        Returns:
+            (total, makespan) for "total", (makespan, total) otherwise; seconds.
+        """
         g = goal or self.settings.goal
         return (self.total, self.makespan) if g == "total" else (self.makespan, self.total)
 
     def chained(self) -> bool:
-        """Every vehicle's first sortie leaves a start depot and each later one the depot the
-        one before it landed at (a vehicle takes off where it stands)."""
+        """Whether the sorties chain: every vehicle's first sortie leaves a start depot and each
+        later one the depot the one before it landed at (a vehicle takes off where it stands).
+
+        Returns:
+            True when they do.
+        """
         st = self.settings
         for vs in self.vehicles:
             if vs[0].start not in st.start_depots:
@@ -266,14 +380,28 @@ class FleetPlan:
         return True
 
     def energy_ok(self) -> bool:
-        """Every sortie within the usable energy (the planner's model)."""
+        """Whether every sortie's `Sortie.energy` is within `FleetSettings.usable_wh` (the
+        planner's model, without `budget_wh`'s margins).
+
+        Returns:
+            True when all are.
+        """
         u = self.settings.usable_wh
         return all(x.energy(self.settings) <= u for x in self.sorties)
 
     def replace(
         self, vehicles: Any, *, evaluations: int | None = None, notes: tuple[str, ...] | None = None
     ) -> FleetPlan:
-        """This plan with other vehicles (and evaluation count / notes)."""
+        """This plan with other vehicles (and evaluation count / notes).
+
+        Args:
+            vehicles: each vehicle's sorties in flying order (empty vehicles are dropped).
+            evaluations: the new count; None keeps this plan's.
+            notes: the new notes; None keeps this plan's.
+
+        Returns:
+            A new plan with the same settings.
+        """
         return FleetPlan(self.settings, vehicles,
                          self.evaluations if evaluations is None else evaluations,
                          self.notes if notes is None else notes)  # fmt: skip
