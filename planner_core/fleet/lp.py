@@ -61,7 +61,8 @@ def fleet_hover_lp(plan: FleetPlan, model: Any, goal: str | None = None) -> Flee
         plan: the routes (their hover times are replaced).
         model: the planning map's `planner_core.model.formulas.ModelParams` (rates, required
             data with the data margin, T_max).
-        goal: "total" or "makespan" (default: the plan's settings').
+        goal: "total" or "makespan" (default: the plan's settings'); any other value is
+            solved as "total".
 
     Returns:
         The re-timed plan, or None when no hover times meet C4 within every sortie's energy
@@ -138,8 +139,17 @@ def fleet_hover_lp(plan: FleetPlan, model: Any, goal: str | None = None) -> Flee
 
 
 def collected_by_sortie(plan: FleetPlan, model: Any) -> np.ndarray:
-    """(S, J) data (Mbit) each sortie collects from each sensor: sum over its points of
-    R_ij t_i (the paper's Q_j, per sortie; C4 holds when the columns sum to the required)."""
+    """Data each sortie collects from each sensor: sum over its points of R_ij t_i (the
+    paper's Q_j, Sec. 3, per sortie; C4 holds when each column sums to at least the required).
+
+    Args:
+        plan: the plan; its sorties in `FleetPlan.sorties` order (vehicle by vehicle).
+        model: the planning map's `planner_core.model.formulas.ModelParams` (`rates` in
+            Mbit/s, `required` in Mbit).
+
+    Returns:
+        (S, J) Mbit, S sorties by J sensors (a sortie without points: a row of zeros).
+    """
     rows = []
     for s in plan.sorties:
         if len(s.points):
