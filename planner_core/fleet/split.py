@@ -61,13 +61,28 @@ class Links:
         self._cache: dict[bytes, np.ndarray | None] = {}
 
     def clear(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        """Whether each leg a -> b ((n, 2) each) is collision-free."""
+        """Whether each leg a -> b is collision-free (overlap with the obstacles <= `CLEAR`).
+
+        Args:
+            a, b: (n, 2) the legs' ends, m.
+
+        Returns:
+            (n,) bool.
+        """
         return overlap_lengths(np.asarray(a, dtype=float), np.asarray(b, dtype=float),
                                self.obstacles) <= CLEAR  # fmt: skip
 
     def way(self, a: np.ndarray, b: np.ndarray) -> np.ndarray | None:
-        """Corners (k, 2) to fly through from a to b (k = 0 when the leg is clear), in order;
-        None when the graph joins them by no way."""
+        """Corners to fly through from a to b, in order: none when the leg is clear, else the
+        shortest way over the seeder's visibility graph. Cached both ways round.
+
+        Args:
+            a, b: (2,) the ends, m.
+
+        Returns:
+            (k, 2) corners, m (k = 0 when the leg is clear); None when the graph joins them by
+            no way.
+        """
         a = np.asarray(a, dtype=float).reshape(2)
         b = np.asarray(b, dtype=float).reshape(2)
         key = a.tobytes() + b.tobytes()
@@ -92,8 +107,15 @@ class Links:
         return out
 
     def join(self, pts: np.ndarray, times: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
-        """A tour through pts (n, 2) with corners (hover time 0) put into its blocked legs:
-        (points, times), or None when some leg cannot be routed."""
+        """A tour through pts with corners (hover time 0) put into its blocked legs (`way`).
+
+        Args:
+            pts: (n, 2) the tour's points, m.
+            times: (n,) their hover times, s.
+
+        Returns:
+            (points (m, 2), times (m,)), m >= n, copies; None when some leg cannot be routed.
+        """
         pts = np.asarray(pts, dtype=float).reshape(-1, 2)
         times = np.asarray(times, dtype=float).reshape(-1)
         if len(pts) < 2:
@@ -410,6 +432,13 @@ def split_vehicles(
     consecutive chunks, each cut into sorties by `split_tour`: the chunks first balanced by
     their work (flight along the tour plus hover), then each cut moved by 8, 4, 2, 1 points
     while the plan's objective (`FleetPlan.objective`) improves.
+
+    Args:
+        st: the fleet's settings (depots, battery, swap time, weights).
+        links: obstacle-free ways on the planning map.
+        P, T: the tour's points (n, 2), m, and hover times (n,), s; its own legs must be clear.
+        vehicles: chunks to cut into (at most n); default `st.uavs`.
+        goal: "total" or "makespan", as `split_tour`; default st's.
 
     Returns:
         The plan (no LP run on it yet), or None when some chunk cannot be split.
