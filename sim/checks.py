@@ -72,6 +72,11 @@ class Verdict:
     detail: str
 
     def to_dict(self) -> dict[str, Any]:
+        """The verdict as a JSON-ready dict.
+
+        Returns:
+            The fields by name; a non-finite margin as None.
+        """
         d = asdict(self)
         d["margin"] = self.margin if math.isfinite(self.margin) else None
         return d
@@ -79,7 +84,8 @@ class Verdict:
 
 @dataclass(frozen=True)
 class Verdicts:
-    """All verdicts (C1..C5, ENDS) of one replay, with the totals they were judged on."""
+    """All verdicts of one replay (C1..C5, CLEAR, MARGIN, ENDS, ALT, and ENERGY on a map with a
+    battery), with the totals they were judged on: t_fly, t_hover and f in s."""
 
     items: tuple[Verdict, ...]
     t_fly: float
@@ -111,6 +117,7 @@ class Verdicts:
 
     @property
     def passed(self) -> bool:
+        """Whether every verdict passed (True for no verdicts)."""
         return all(v.passed for v in self.items)
 
     @property
@@ -119,6 +126,11 @@ class Verdicts:
         return [v.name for v in self.items if not v.passed]
 
     def __getitem__(self, name: str) -> Verdict:
+        """The verdict named `name` ("C1", "ENERGY", ...).
+
+        Raises:
+            KeyError: no verdict of that name (ENERGY on a map without a battery).
+        """
         for v in self.items:
             if v.name == name:
                 return v
@@ -128,7 +140,11 @@ class Verdicts:
         return iter(self.items)
 
     def table(self) -> str:
-        """A fixed-width text table: constraint, PASS/FAIL, margin, worst case."""
+        """A fixed-width text table, one row a verdict: check, PASS/FAIL, margin, detail.
+
+        Returns:
+            The table's lines joined by newlines (a header, a rule, then the rows).
+        """
         rows = [("check", "result", "margin", "detail")]
         for v in self.items:
             m = f"{v.margin:.6g} {v.unit}" if math.isfinite(v.margin) else "-"
@@ -139,6 +155,13 @@ class Verdicts:
         return "\n".join(lines)
 
     def to_dict(self) -> dict[str, Any]:
+        """The verdicts and totals as a JSON-ready dict (the report's `verdicts` block).
+
+        Returns:
+            passed, failed, t_fly, t_hover, f (s), clearance_m (None when infinite),
+            data_margins and each verdict's `Verdict.to_dict`; on a map with a battery also
+            energy_wh, battery_wh, usable_wh, reserve_left_wh and above_reserve_wh (Wh).
+        """
         out = {
             "passed": self.passed,
             "failed": self.failed,
@@ -221,7 +244,19 @@ def _hover_label(i: int, seqs: tuple[int, ...]) -> str:
 
 
 def verify(timeline: Timeline, map: Any) -> Verdicts:  # noqa: A002
-    """Judge a replayed mission against the map: C1..C5 of the paper and ENDS."""
+    """Judge a replayed mission against the map: C1..C5 of the paper (Sec. 3), CLEAR and
+    MARGIN (the map's `safety`), ENDS, ALT (when the route has a stop or a take-off) and, on a
+    map with a battery, ENERGY (`sim.energy.mission_energy`); module docstring.
+
+    Args:
+        timeline: the replay (`sim.replay.Timeline`).
+        map: the loaded map the mission was planned for (area, sensors' required data,
+            obstacles, start and end, `safety`, battery).
+
+    Returns:
+        The verdicts in that order, with the replay's totals, each sensor's data margin,
+        the real clearance (m) and, with a battery, the energies (Wh).
+    """
     spec = map.spec
     hp, ht, seqs = timeline.hover_points, timeline.hover_times, timeline.hover_seqs
     n = len(ht)
