@@ -52,7 +52,14 @@ class SimPower:
 
     @classmethod
     def of(cls, map: Any) -> SimPower:  # noqa: A002
-        """From a map's `spec.uav.power` (absent fields: the defaults table's values)."""
+        """From a map's `spec.uav.power` (absent fields: the defaults table's values).
+
+        Args:
+            map: a loaded map; one without `spec.uav.power` takes every default.
+
+        Returns:
+            The parameters, floats (W, m/s, kg/m^3, m^2).
+        """
         spec = getattr(getattr(getattr(map, "spec", None), "uav", None), "power", None)
         vals = {}
         for name in _FIELDS:
@@ -67,8 +74,16 @@ class SimPower:
 
 
 def power(v: float, p: SimPower) -> float:
-    """P(V), W, at speed V (m/s), Zeng et al. Eq. 12 (the induced term through y, which keeps
-    its digits at high speed)."""
+    """Propulsion power at level speed V: Zeng et al. (2019) Eq. 12 (the induced term through
+    y, which keeps its digits at high speed).
+
+    Args:
+        v: speed V (m/s); its sign is ignored.
+        p: the model's parameters.
+
+    Returns:
+        P(V), W.
+    """
     v = abs(float(v))
     w = v / p.induced_velocity
     y = 1.0 / (math.sqrt(1.0 + 0.25 * w**4) + 0.5 * w * w)
@@ -78,8 +93,17 @@ def power(v: float, p: SimPower) -> float:
 
 
 def ramp_energy(v_peak: float, accel: float, p: SimPower) -> float:
-    """J of one ramp between rest and v_peak at constant acceleration: (1/a) int_0^V P(u) du in
-    closed form (module docstring)."""
+    """Energy of one ramp between rest and v_peak at constant acceleration: (1/a) int_0^V P(u)
+    du in closed form (module docstring).
+
+    Args:
+        v_peak: V (m/s); <= 0 costs 0.
+        accel: a (m/s^2), > 0.
+        p: the model's parameters.
+
+    Returns:
+        J.
+    """
     big_v = max(float(v_peak), 0.0)
     if big_v <= 0.0:
         return 0.0
@@ -98,8 +122,19 @@ def ramp_energy(v_peak: float, accel: float, p: SimPower) -> float:
 
 
 def leg_energy(d: float, v_max: float, accel: float, p: SimPower) -> float:
-    """J of a rest-to-rest leg of d metres at cruise speed v_max (trapezoid above v^2 / a,
-    triangle peaking at sqrt(a d) below), as `sim.replay.leg_position` flies it."""
+    """Energy of a rest-to-rest leg (paper Eq. 1's profile: trapezoid above v_max^2 / a,
+    triangle peaking at sqrt(a d) below), as `sim.replay.leg_position` flies it: two ramps
+    (`ramp_energy`) plus P(v_max) over the cruise.
+
+    Args:
+        d: leg length (m); <= 0 costs 0.
+        v_max: cruise speed (m/s), > 0.
+        accel: a (m/s^2), > 0.
+        p: the model's parameters.
+
+    Returns:
+        J.
+    """
     if d <= 0.0:
         return 0.0
     ramps = v_max * v_max / accel
@@ -109,8 +144,17 @@ def leg_energy(d: float, v_max: float, accel: float, p: SimPower) -> float:
 
 
 def battery(map: Any, p: SimPower | None = None) -> tuple[float, float] | None:  # noqa: A002
-    """(full battery Wh, reserve) from the map's `uav.battery` / `uav.endurance_s`, or None
-    when it gives no battery. endurance_s is hover seconds: endurance_s x P(0) / 3600 Wh."""
+    """The map's battery from `uav.battery.energy_wh`, else `uav.endurance_s` (hover seconds:
+    endurance_s x P(0) / 3600 Wh); the reserve from `uav.battery.reserve` or the defaults table.
+
+    Args:
+        map: a loaded map.
+        p: the power parameters for P(0) (default `SimPower.of(map)`; used only with
+            endurance_s).
+
+    Returns:
+        (full battery Wh, reserve fraction), or None when the map gives no battery.
+    """
     uav = map.spec.uav
     b = getattr(uav, "battery", None)
     energy = getattr(b, "energy_wh", None) if b is not None else None
@@ -128,7 +172,14 @@ def battery(map: Any, p: SimPower | None = None) -> tuple[float, float] | None: 
 
 @dataclass(frozen=True)
 class MissionEnergy:
-    """What a replayed mission spends, Wh, by phase; `total` is their sum."""
+    """What a replayed mission spends, Wh, by phase; `total` is their sum.
+
+    Attributes:
+        vertical: the take-off and landing at P(0).
+        flight: the horizontal legs, with P(0) over the time a climb or descent adds.
+        ret: the RTL return leg (0 without one).
+        hover: P(0) x the hover times.
+    """
 
     vertical: float
     flight: float
@@ -137,6 +188,7 @@ class MissionEnergy:
 
     @property
     def total(self) -> float:
+        """vertical + flight + ret + hover, Wh."""
         return self.vertical + self.flight + self.ret + self.hover
 
 
@@ -144,7 +196,15 @@ def mission_energy(timeline: Any, map: Any) -> MissionEnergy:  # noqa: A002
     """The energy of a `sim.replay.Timeline` on `map`, Wh: take-off and landing at P(0) over
     their replayed times, each horizontal leg at its replayed speed (`Timeline.leg_speeds`)
     plus P(0) over the time a climb or descent adds to it, the RTL return leg at the final
-    speed, hovers at P(0)."""
+    speed, hovers at P(0).
+
+    Args:
+        timeline: the replay (`sim.replay.Timeline`).
+        map: the loaded map (its `uav.power`, through `SimPower.of`).
+
+    Returns:
+        The energy by phase, Wh.
+    """
     p = SimPower.of(map)
     t = timeline.totals
     a = float(t.accel)
