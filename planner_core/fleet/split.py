@@ -114,7 +114,8 @@ class Links:
             times: (n,) their hover times, s.
 
         Returns:
-            (points (m, 2), times (m,)), m >= n, copies; None when some leg cannot be routed.
+            (points (n', 2) m, times (n',) s), n' >= n, copies; None when some leg cannot
+            be routed.
         """
         pts = np.asarray(pts, dtype=float).reshape(-1, 2)
         times = np.asarray(times, dtype=float).reshape(-1)
