@@ -62,11 +62,22 @@ class VehicleTrack:
     sensors: np.ndarray | None = None
 
     def at(self, launch: float) -> VehicleTrack:
-        """The same track launched at `launch` s."""
+        """The same track launched at another time (arrays shared, not copied).
+
+        Args:
+            launch: seconds after the first vehicle's take-off (fleet.json's `launch_s`).
+
+        Returns:
+            The moved track.
+        """
         return VehicleTrack(float(launch), self.dt, self.xy, self.z, self.sending, self.sensors)
 
     def columns(self) -> np.ndarray:
-        """The map's indices of the `sending` columns."""
+        """The map's sensor indices of the `sending` columns.
+
+        Returns:
+            (K,) int: `sensors`, or 0..J-1 when it is None.
+        """
         return (np.arange(self.sending.shape[1]) if self.sensors is None
                 else np.asarray(self.sensors))  # fmt: skip
 
@@ -148,8 +159,9 @@ def conflicts(a: VehicleTrack, b: VehicleTrack) -> tuple[float, float, float, in
 
     Returns:
         (least distance m while both airborne (inf if never), its clock time s, the first
-        clock time s at which a sensor sends to both (nan if never), that sensor's index (-1),
-        how many grid steps share a sensor).
+        clock time s at which a sensor sends to both (nan if never), that sensor's index into
+        the map's sensors (-1 if none), how many grid steps some sensor sends to both (0 if
+        none)). nan times and 0 steps when the two are never on the clock together.
     """
     w = _window(a, b)
     if w is None:
@@ -186,7 +198,9 @@ def fleet_time_verdicts(tracks: Sequence[VehicleTrack], sensor_ids: Sequence[str
             (`Map.separation_m`), > 0.
 
     Returns:
-        [SEPARATION, LINKS]; margins in m (least distance - separation) and in steps shared.
+        [SEPARATION, LINKS]. SEPARATION's margin: least airborne distance - separation, m
+        (+inf when no two are in the air at once). LINKS's: minus the grid steps shared by the
+        first pair (in index order) that shares a sensor, "steps" (0 when none does).
     """
     least, worst, shared = np.inf, None, None
     for i in range(len(tracks)):
