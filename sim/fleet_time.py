@@ -199,17 +199,20 @@ def fleet_time_verdicts(tracks: Sequence[VehicleTrack], sensor_ids: Sequence[str
 
     Returns:
         [SEPARATION, LINKS]. SEPARATION's margin: least airborne distance - separation, m
-        (+inf when no two are in the air at once). LINKS's: minus the grid steps shared by the
-        first pair (in index order) that shares a sensor, "steps" (0 when none does).
+        (+inf when no two are in the air at once). LINKS's: minus the grid steps shared over
+        every pair that shares a sensor, "steps" (0 when none does); its detail names the
+        pair sharing the most steps (the first such pair in index order on a tie).
     """
-    least, worst, shared = np.inf, None, None
+    least, worst, shared, steps, pairs = np.inf, None, None, 0, 0
     for i in range(len(tracks)):
         for k in range(i + 1, len(tracks)):
             d, at, t_link, j, n = conflicts(tracks[i], tracks[k])
             if d < least:
                 least, worst = d, (i + 1, k + 1, at)
-            if n and shared is None:
-                shared = (i + 1, k + 1, t_link, sensor_ids[j], n)
+            if n:
+                steps, pairs = steps + n, pairs + 1
+                if shared is None or n > shared[4]:
+                    shared = (i + 1, k + 1, t_link, sensor_ids[j], n)
     if worst is None:
         sep = Verdict("SEPARATION", f"vehicles >= {separation:g} m apart", True, np.inf, "m",
                       "never two vehicles in the air at once")
@@ -223,7 +226,8 @@ def fleet_time_verdicts(tracks: Sequence[VehicleTrack], sensor_ids: Sequence[str
                         "no sensor heard by two vehicles at once")
     else:
         v1, v2, t_link, sid, n = shared
-        links = Verdict("LINKS", "a sensor sends to one vehicle at a time", False, -float(n),
+        more = f"; {steps} steps over {pairs} pairs of vehicles" if pairs > 1 else ""
+        links = Verdict("LINKS", "a sensor sends to one vehicle at a time", False, -float(steps),
                         "steps", f"sensor '{sid}' sends to vehicles {v1} and {v2} at once "
-                        f"from {t_link:.0f} s ({n} steps of the grid)")  # fmt: skip
+                        f"from {t_link:.0f} s ({n} steps of the grid{more})")  # fmt: skip
     return [sep, links]

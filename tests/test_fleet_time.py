@@ -44,6 +44,14 @@ def test_a_sensor_sending_to_two_vehicles_at_once_fails_links() -> None:
     assert sep.passed and not links.passed
     assert links.detail == ("sensor 's0' sends to vehicles 1 and 2 at once from 35 s (5 steps "
                             "of the grid)")
+    assert links.margin == -5.0
+    # a third vehicle sharing s0 with the first for longer (20 steps): LINKS names that pair
+    # and its margin counts every shared step (5 + 20, and 5 more with the second)
+    c = _track(100, x0=10000.0, send=(20, 40))
+    _, links3 = fleet_time_verdicts([a, b, c], ["s0", "s1"])
+    assert not links3.passed and links3.margin == -30.0
+    assert links3.detail == ("sensor 's0' sends to vehicles 1 and 3 at once from 20 s (20 steps "
+                             "of the grid; 30 steps over 3 pairs of vehicles)")
     # the second vehicle launched 20 s later: its sending starts at 55 s, after the first's
     b20 = VehicleTrack(20.0, b.dt, b.xy, b.z, b.sending)
     assert fleet_time_verdicts([a, b20], ["s0", "s1"])[1].passed
