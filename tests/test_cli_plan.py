@@ -239,6 +239,7 @@ def test_an_output_that_is_an_input_is_refused_before_planning(tmp_path: Path, c
     assert not (tmp_path / "r.plan").exists()
 
 
+@pytest.mark.slow  # measured 5.9 s on a loaded machine (default suite <= 5 min)
 def test_overwriting_a_mission_keeps_its_mode_and_clears_a_killed_runs_pending_file(
         tmp_path: Path) -> None:
     """docs/planning.md: overwriting keeps the file's permissions (a 0600 mission stays 0600;

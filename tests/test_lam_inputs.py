@@ -110,6 +110,7 @@ def test_problems_refuse_dimensions_numpy_cannot_hold() -> None:
         BBOBProblem((1, 20, 10**12))  # ioh takes a C int
 
 
+@pytest.mark.slow  # measured 4.7 s on a loaded machine (default suite <= 5 min)
 def test_cli_train_refuses_a_huge_dimension_in_one_line(tmp_path, capsys) -> None:
     pytest.importorskip("torch")
     path = _write(tmp_path, _doc(objective__dimension=10**9, constraint__dimension=10**9))

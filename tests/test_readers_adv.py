@@ -486,6 +486,7 @@ def test_geojson_values_that_were_silently_kept_are_refused(feature: dict, needl
     assert "features[3]" in line and needle in line, err
 
 
+@pytest.mark.slow  # measured 12.3 s on a loaded machine (default suite <= 5 min)
 def test_report_reads_a_policy_curve_through_the_shared_reader(tmp_path: Path, capsys) -> None:
     folder = _results(tmp_path / "runs")
     ck = tmp_path / "ck"
