@@ -190,22 +190,32 @@ def _shape_patch(shell: np.ndarray, holes: Any, **style: Any) -> Any:
     return PathPatch(MplPath(np.concatenate(verts), np.concatenate(codes)), **style)
 
 
-def _violation_segments(map_: Any, path: np.ndarray) -> list[np.ndarray]:
+def _violation_segments(map_: Any, path: np.ndarray | None,
+                        legs: np.ndarray | None = None) -> list[np.ndarray]:  # fmt: skip
     """The parts of the path's legs inside an obstacle or no-fly zone (C5), as (k, 2) polylines,
     measured by the simulator's own shapely geometry.
 
     Each distinct leg once (a DO_JUMP loop repeats them), cut by the union of only the obstacles
     an STRtree finds it meeting: O(L log L + U log O + P) for L legs, U distinct, O obstacles and
     P (leg, obstacle) pairs that meet (not every leg against the union of every obstacle).
+
+    Args:
+        map_: the map (its obstacles and no-fly zones).
+        path: (n, 2) the flown path, local metres; not read when `legs` is given.
+        legs: (U, 2, 2) the path's distinct legs when the caller has them (`_Visits.legs`).
+
+    Returns:
+        The polylines (k, 2), m.
     """
     import shapely
 
     from sim.obstacles import obstacle_shapes, unique_legs
 
     shapes = np.array([o.shape for o in obstacle_shapes(map_)], dtype=object)
-    if not len(shapes) or len(path) < 2:
+    if legs is None:
+        legs, _ = unique_legs([np.asarray(path, dtype=float)])
+    if not len(shapes) or not len(legs):
         return []
-    legs, _ = unique_legs([np.asarray(path, dtype=float)])
     tree = shapely.STRtree(shapes)
     out: list[np.ndarray] = []
     for (a, b), line in zip(legs, shapely.linestrings(legs), strict=True):
@@ -639,13 +649,13 @@ def _finish_map(fig: Any, ax: Any, W: float, handles: list[Any], scene: _Scene, 
     return dropped
 
 
-def _draw_route(ax: Any, scene: _Scene, map_: Any, visits: _Visits, path: np.ndarray,
+def _draw_route(ax: Any, scene: _Scene, map_: Any, visits: _Visits,
                 return_leg: Any, *, colour: Any, linestyle: str, arrow_scale: float,
                 return_width: float, corner_edge: Any, hover_face: Any,
                 hover_alpha: float) -> tuple[list[float], np.ndarray]:  # fmt: skip
     """Draw one flown route on the map panel, each distinct leg, hover point and corner once
     (`_Visits`), and note its route and markers in `scene`: the legs as one line, an arrow
-    along each leg longer than 2 % of the area, the parts of `path` inside obstacles (C5) in
+    along each leg longer than 2 % of the area, the parts of its legs inside obstacles (C5) in
     red, the return leg (RTL) dotted, the corners as small white diamonds, the hover points as
     discs of area 40 + 260 T / T_max points^2. Legend entries and labels are the caller's.
 
@@ -654,7 +664,6 @@ def _draw_route(ax: Any, scene: _Scene, map_: Any, visits: _Visits, path: np.nda
         scene: what the labels must not cover (route vertices and markers added here).
         map_: the map (its area, T_max and obstacles).
         visits: the route's distinct legs, hover points and corners.
-        path: (n, 2) the flown path, local metres (for the parts inside obstacles).
         return_leg: (m, 2) the RTL return leg, or None.
         colour, linestyle: the route's line; arrows and the return leg in `colour` too.
         arrow_scale: the arrows' mutation scale.
@@ -663,7 +672,7 @@ def _draw_route(ax: Any, scene: _Scene, map_: Any, visits: _Visits, path: np.nda
         hover_alpha: the hover discs' opacity.
 
     Returns:
-        The lengths (m) of the parts of `path` inside obstacles, in drawing order, and the hover
+        The lengths (m) of the parts of its legs inside obstacles, in drawing order, and the hover
         discs' radii (H,), points.
     """
     spec = map_.spec
@@ -677,7 +686,7 @@ def _draw_route(ax: Any, scene: _Scene, map_: Any, visits: _Visits, path: np.nda
                         arrowprops={"arrowstyle": "-|>", "color": colour, "lw": 1.4,
                                     "mutation_scale": arrow_scale})  # fmt: skip
     lengths = []
-    for seg in _violation_segments(map_, path):
+    for seg in _violation_segments(map_, None, visits.legs):  # the legs already made distinct
         ax.plot(seg[:, 0], seg[:, 1], "-", color="red", linewidth=4.0, zorder=7,
                 solid_capstyle="butt")  # fmt: skip
         lengths.append(float(np.sum(np.hypot(*np.diff(seg, axis=0).T))))
@@ -760,7 +769,7 @@ def mission_figure(
     visits = None
     if view is not None:
         visits = view["visits"]
-        lengths, hover_r = _draw_route(ax, scene, map, visits, view["path"], view["return_leg"],
+        lengths, hover_r = _draw_route(ax, scene, map, visits, view["return_leg"],
                                        colour="tab:blue", linestyle="-", arrow_scale=14,
                                        return_width=1.2, corner_edge="tab:blue",
                                        hover_face="tab:orange", hover_alpha=0.85)  # fmt: skip
@@ -1099,10 +1108,9 @@ def fleet_figure(
     for sv, vis in zip(sorties, visits, strict=True):
         colour = _vehicle_colour(sv.vehicle)
         style = SORTIE_STYLES[(sv.sortie - 1) % len(SORTIE_STYLES)]
-        lengths, radius = _draw_route(ax, scene, map, vis,
-                                      np.asarray(sv.timeline.path, dtype=float),
-                                      sv.timeline.return_leg, colour=colour, linestyle=style,
-                                      arrow_scale=12, return_width=1.0, corner_edge=[colour],
+        lengths, radius = _draw_route(ax, scene, map, vis, sv.timeline.return_leg,
+                                      colour=colour, linestyle=style, arrow_scale=12,
+                                      return_width=1.0, corner_edge=[colour],
                                       hover_face=[colour], hover_alpha=0.8)  # fmt: skip
         bad.extend(lengths)
         n_corner += len(vis.corners)
