@@ -53,7 +53,7 @@ from typing import Any
 
 import numpy as np
 
-from planner_core.pipeline.schedule import _points, pool_structures
+from planner_core.pipeline.schedule import DefaultScheduler, _points, pool_structures
 
 __all__ = [
     "DEFAULT_TABLE",
@@ -634,22 +634,29 @@ class SelectorScheduler:
 
     def configure(self, problem: Any, config: Any) -> Any:
         """The run's config with the DE share the split table picks for `problem`
-        (`map_features`; `SplitTable.predict`), before any stage runs. A config whose
-        `de_share` differs from the default (`planner_core.defaults.DE_SHARE`) keeps it, as
-        does a selector without a split table (`SelectorScheduler(split=None)`: the
-        template choice alone, at the config's share, whatever it is).
+        (`map_features`; `SplitTable.predict`), before any stage runs, but never more than
+        the default scheduler gives the map (`DefaultScheduler.configure`: 0 beyond 160
+        sensors and 0.2 up to 120 with the large rounds, rules measured after the table was
+        fitted on shares 0.3-0.6; a smaller share lowered f on nearly every case of every
+        training set, docs/scheduler.md). A config whose `de_share` differs from the default
+        (`planner_core.defaults.DE_SHARE`) keeps it; a selector without a split table
+        (`SelectorScheduler(split=None)`) gives what the default scheduler gives.
 
         Args:
-            problem: the run's `Problem`; config: its `PlanConfig`.
+            problem: the run's `Problem`.
+            config: its `PlanConfig`.
 
         Returns:
             A `PlanConfig` (`config` itself when nothing changes).
         """
         from planner_core.defaults import DE_SHARE
 
-        if self.split is None or config.de_share != DE_SHARE:
+        if config.de_share != DE_SHARE:
             return config
-        share = self.split.predict(map_features(problem))
+        default = DefaultScheduler().configure(problem, config)
+        if self.split is None:
+            return default
+        share = min(self.split.predict(map_features(problem)), default.de_share)
         return config if share == config.de_share else config.replace(de_share=share)
 
     def reset(self, problem: Any, config: Any) -> None:
