@@ -59,6 +59,13 @@ def clean_stale_temps(path: str | Path) -> list[Path]:
 
     Only files named `.NAME.lamde-tmp-PID-*` whose process PID no longer runs are removed
     (a write in progress in another process is left alone).
+
+    Args:
+        path: the target file whose folder is searched.
+
+    Returns:
+        The temp files removed ([] when the folder cannot be listed; one that cannot be
+        unlinked is skipped).
     """
     path = Path(path)
     removed: list[Path] = []
@@ -164,8 +171,21 @@ def check_writable(path: str | Path, *, mkdir: bool = False, what: str = "") -> 
 
     Refused: an existing folder as the output, a parent that is a file, a missing folder
     (created instead when `mkdir`), a folder where no file can be created (read-only folder or
-    mount), an existing file that is read-only. `what` (e.g. "--report") prefixes the message.
+    mount), an existing file that is read-only.
     Also removes stale temp files of earlier killed writes (`clean_stale_temps`).
+
+    Args:
+        path: the output file.
+        mkdir: create a missing folder (with its parents) instead of refusing it.
+        what: prefixes the message (e.g. "--report"); "" for none.
+
+    Returns:
+        `path` as a Path.
+
+    Raises:
+        OutputPathError: `path` is not a file name, is a folder or not a regular file, is a
+            read-only file, its parent is a file, or its folder is missing (without `mkdir`),
+            cannot be created or cannot be written in.
     """
     path = Path(path)
     head = f"{what}: {path}" if what else str(path)
@@ -245,9 +265,21 @@ def replace_keeping_mode(tmp: str | Path, path: str | Path) -> None:
 def write_bytes_atomic(path: str | Path, data: bytes, *, mkdir: bool = True) -> Path:
     """Write `data` to `path` so that readers see either the old file or the whole new one.
 
-    An existing file's permission bits are kept; a missing folder is created unless
-    `mkdir=False` (then FileNotFoundError). Stale temp files of earlier killed writes to the
-    same path are removed first. Raises OSError when the folder cannot be written.
+    An existing file's permission bits are kept. Stale temp files of earlier killed writes to
+    the same path are removed first.
+
+    Args:
+        path: the target file.
+        data: the whole new content.
+        mkdir: create a missing folder (with its parents); False: a missing folder raises
+            FileNotFoundError.
+
+    Returns:
+        `path` as a Path.
+
+    Raises:
+        FileNotFoundError: the folder is missing and `mkdir=False`.
+        OSError: the folder cannot be written (the temp file is removed).
     """
     path = Path(path)
     folder = path.parent if str(path.parent) else Path(".")
@@ -275,5 +307,18 @@ def _umask() -> int:
 
 
 def write_text_atomic(path: str | Path, text: str, *, mkdir: bool = True) -> Path:
-    """Text version of `write_bytes_atomic` (UTF-8)."""
+    """Text version of `write_bytes_atomic` (UTF-8).
+
+    Args:
+        path: the target file.
+        text: the whole new content, written as UTF-8.
+        mkdir: create a missing folder; False: a missing folder raises FileNotFoundError.
+
+    Returns:
+        `path` as a Path.
+
+    Raises:
+        FileNotFoundError: the folder is missing and `mkdir=False`.
+        OSError: the folder cannot be written.
+    """
     return write_bytes_atomic(path, text.encode("utf-8"), mkdir=mkdir)

@@ -103,7 +103,18 @@ class Default:
 
     def check(self, value: Any) -> Any:
         """Return ``value`` if it lies in the valid range, else raise ``ValueError`` naming
-        the setting: ``"<name>: must be <valid>, got <value!r>"``."""
+        the setting.
+
+        Args:
+            value: the candidate value (any type; ``ok`` None accepts anything).
+
+        Returns:
+            ``value`` unchanged.
+
+        Raises:
+            ValueError: ``ok(value)`` is false; the message is
+                ``"<name>: must be <valid>, got <value!r>"``.
+        """
         if self.ok is not None and not self.ok(value):
             raise ValueError(f"{self.name}: must be {self.valid}, got {value!r}")
         return value
@@ -442,7 +453,20 @@ L_VIO_TOL: float = 1e-9
 
 
 def check(name: str, value: Any) -> Any:
-    """Return ``value`` if it is valid for setting ``name``; else ``ValueError`` naming it."""
+    """Return ``value`` if it is valid for setting ``name``; else ``ValueError`` naming it.
+
+    Args:
+        name: the setting's name, looked up in ``DEFAULTS``, ``MAP_CHOICES``, ``MAP_LISTS``,
+            then ``MAP_DEFAULTS``.
+        value: the candidate value.
+
+    Returns:
+        ``value`` unchanged.
+
+    Raises:
+        ValueError: ``value`` is outside the setting's range (``Default.check``).
+        KeyError: ``name`` is in none of the tables.
+    """
     tables = (DEFAULTS, MAP_CHOICES, MAP_LISTS)
     table = next((t for t in tables if name in t), MAP_DEFAULTS)
     return table[name].check(value)
@@ -454,11 +478,18 @@ def check_run_args(
 ) -> None:
     """Check a planning run's population, budget, configurator name and start mode together.
 
-    Raises ``ValueError`` with one line naming the first bad field: population must be an
-    integer >= ``MIN_POPULATION``; budget an integer >= population; configurator (when a str)
-    one of ``CONFIGURATORS`` (a configurator object passes unchecked); init (when given) one of
-    ``INIT_MODES``; memetic (when given) one of ``MEMETIC_MODES``; starts and start_candidates
-    (when given) integers >= 0.
+    Args:
+        population: DE population size; must be an integer >= ``MIN_POPULATION``.
+        budget: evaluation budget; must be an integer >= population.
+        configurator: when a str, one of ``CONFIGURATORS`` (a configurator object, or None,
+            passes unchecked).
+        init: when given, one of ``INIT_MODES``.
+        memetic: when given, one of ``MEMETIC_MODES``.
+        starts: when given, an integer >= 0.
+        start_candidates: when given, an integer >= 0.
+
+    Raises:
+        ValueError: one line naming the first bad field.
     """
     check("population", population)
     check("budget", budget)
@@ -489,7 +520,15 @@ def _cell(v: Any) -> str:
 
 def render_markdown(table: dict[str, Default] | None = None) -> str:
     """The table as GitHub Markdown (name, default, meaning, valid range), one row per entry,
-    ending with a newline. ``table`` defaults to the run settings followed by the map fields."""
+    ending with a newline.
+
+    Args:
+        table: the entries, by name; None (or empty) defaults to the run settings followed by
+            the map fields (``DEFAULTS``, ``MAP_DEFAULTS``, ``MAP_CHOICES``, ``MAP_LISTS``).
+
+    Returns:
+        The Markdown table, header row first, ending with a newline.
+    """
     rows = list((table or {**DEFAULTS, **MAP_DEFAULTS, **MAP_CHOICES, **MAP_LISTS}).values())
     lines = ["| name | default | meaning | valid |", "| --- | --- | --- | --- |"]
     lines += [f"| `{d.name}` | {_cell(d.value)} | {d.meaning} | {d.valid} |" for d in rows]
@@ -502,7 +541,18 @@ README_MARKERS = ("<!-- defaults:begin -->\n", "<!-- defaults:end -->")
 
 def update_readme(path: str) -> bool:
     """Rewrite the table between ``README_MARKERS`` in the file at ``path`` (temp file, then
-    rename); True if it changed. ValueError if the markers are missing."""
+    rename).
+
+    Args:
+        path: the README file (UTF-8).
+
+    Returns:
+        True if it changed (False: already up to date, the file left untouched).
+
+    Raises:
+        ValueError: the markers are missing (or the end marker precedes the begin marker).
+        OSError: the file cannot be read or written.
+    """
     import os
 
     with open(path, encoding="utf-8") as fh:

@@ -62,6 +62,14 @@ def stream_seed(seed: int, name: str, *more: int) -> int:
     ``SeedSequence([seed, STREAMS[name], *more])`` (0 .. 2**32 - 1; callers that need a signed
     32-bit seed shift it right by one).
 
+    Args:
+        seed: the run's seed (an integer >= 0).
+        name: a key of `STREAMS`.
+        *more: the step's indices (integers >= 0), where it runs several times.
+
+    Returns:
+        The derived seed, an int in 0 .. 2**32 - 1.
+
     Raises:
         ValueError: an unknown name.
     """

@@ -572,7 +572,14 @@ def read_json(path: str | Path, *, max_bytes: int | None = None,
 
 def stored_path(path: str | Path) -> Path:
     """`path` as stored: itself when it exists, else its gzip-compressed twin (`path` + .gz,
-    or `path` without .gz) when that exists, else `path` unchanged."""
+    or `path` without .gz) when that exists, else `path` unchanged.
+
+    Args:
+        path: the file as named (with or without .gz).
+
+    Returns:
+        The path to read, as a Path.
+    """
     path = Path(path)
     if path.exists():
         return path
@@ -585,7 +592,18 @@ def read_maybe_gz(path: str | Path) -> bytes:
     """The bytes of a file, decompressed when it is gzip-compressed (name ending in .gz);
     `results.jsonl` reads `results.jsonl.gz` when only that exists (`stored_path`). Read by
     `read_bytes`: a regular file (a FIFO or device is refused, never waited on), at most
-    `limit("results_bytes")` bytes, decompressed ones included; ValueError naming the file."""
+    `limit("results_bytes")` bytes, decompressed ones included.
+
+    Args:
+        path: the file; its gzip twin is read when only that exists.
+
+    Returns:
+        The file's bytes, decompressed when the stored name ends in .gz.
+
+    Raises:
+        ValueError: naming the file, for a missing, unreadable, non-regular, oversized or
+            corrupt (gzip) file (the `InputError` of `read_bytes`).
+    """
     path = stored_path(path)
     try:
         return read_bytes(path, limit_name="results_bytes", gunzip=path.name.endswith(".gz"))
