@@ -90,8 +90,21 @@ def generate_map(
 ) -> dict[str, Any]:
     """One map with a stored witness (phi == 0), as JSON-ready data; same arguments, same map.
 
-    size: 5000 or 10000 (metres a side); density: 0..7; n_sensors: default grows with size and
-    density (`default_sensor_count`). Raises ValueError for bad arguments.
+    Args:
+        size: 5000 or 10000 (metres a side).
+        density: obstacle density, 0..7.
+        seed: the map's seed, an integer >= 0 (`SUITE_SEED`: the suite's).
+        name: the map's name (None: "gen-<size>-d<density>-s<seed>").
+        n_sensors: 1..`max_sensor_count(size)`; None: default grows with size and density
+            (`default_sensor_count`).
+        origin: the map's geographic origin (None: `SUITE_ORIGIN`).
+
+    Returns:
+        The map as JSON-ready data (witness included), as `dumps_map` writes it.
+
+    Raises:
+        ValueError: bad arguments (size, density, seed or sensor count).
+        GenerationError: no attempt of `_MAX_ATTEMPTS` gave a map whose witness checks.
     """
     check_size_density(size, density)
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
@@ -121,7 +134,14 @@ def generate_map(
 
 
 def suite_maps(seed: int = SUITE_SEED) -> dict[str, dict[str, Any]]:
-    """The 16 suite maps by name (T01..T16); each task uses `seed` with its own size/density."""
+    """The 16 suite maps by name (T01..T16); each task uses `seed` with its own size/density.
+
+    Args:
+        seed: the suite's seed (`SUITE_SEED`: the committed maps).
+
+    Returns:
+        {name: map data} in task order, T01 first (`generate_map`'s data).
+    """
     return {name: generate_map(size, d, seed, name=name) for name, size, d in suite_tasks()}
 
 
@@ -129,6 +149,10 @@ def generated_maps(n: int, map_seed: int) -> list[tuple[str, dict[str, Any]]]:
     """`n` generated paper-size maps for training and held-out sets (the schedule benchmark,
     LAMDE-S's training): 5,000 m and 10,000 m a side alternating, densities 0-7 in turn, map
     seeds `map_seed`, `map_seed` + 1, ...
+
+    Args:
+        n: how many maps.
+        map_seed: the first map's seed (the k-th map's is `map_seed` + k).
 
     Returns:
         [(name "gen-<size>-d<density>-s<seed>", map data)], in that order.
@@ -141,7 +165,15 @@ def generated_maps(n: int, map_seed: int) -> list[tuple[str, dict[str, Any]]]:
 
 
 def generated_spec(k: int, map_seed: int) -> tuple[int, int, int]:
-    """The k-th map of `generated_maps(n, map_seed)`: (size in m, density, map seed)."""
+    """The k-th map of `generated_maps(n, map_seed)`: (size in m, density, map seed).
+
+    Args:
+        k: the map's index, 0-based.
+        map_seed: the seed of map 0.
+
+    Returns:
+        (size in m: 5000 for even k, 10000 for odd; density (k // 2) % 8; seed map_seed + k).
+    """
     return (5000, 10000)[k % 2], (k // 2) % 8, map_seed + k
 
 
@@ -177,7 +209,15 @@ _WIDTH = 100
 
 
 def dumps_map(data: dict[str, Any]) -> str:
-    """Readable, stable JSON: short containers on one line, long number lists wrapped."""
+    """Readable, stable JSON: short containers on one line, long number lists wrapped.
+
+    Args:
+        data: JSON-ready map data (`generate_map`'s).
+
+    Returns:
+        The JSON text (lines up to 100 characters where the values allow), ending with a
+        newline.
+    """
     return _fmt(data, 0, 0) + "\n"
 
 

@@ -90,6 +90,15 @@ class Draw:
 
     # ---------------------------------------------------------------- helpers
     def inside(self, p: np.ndarray, margin: float = 0.0) -> bool:
+        """Whether points lie in the square area, at least `margin` from its sides.
+
+        Args:
+            p: a point (2,) or points (n, 2), local metres.
+            margin: the distance (m) kept from every side.
+
+        Returns:
+            True when every coordinate is within margin .. size - margin.
+        """
         return bool(np.all(p >= margin) and np.all(p <= self.size - margin))
 
     def convex_nfz(self, centre: np.ndarray) -> np.ndarray | None:
@@ -125,11 +134,26 @@ class Draw:
         return pts
 
     def rates(self, hover: np.ndarray, sensors: np.ndarray) -> np.ndarray:
-        """R (I, J), the model's rate formula."""
+        """R (I, J), the model's rate formula.
+
+        Args:
+            hover: hover points (m), (I, 2).
+            sensors: sensor positions (m), (J, 2).
+
+        Returns:
+            R (Mbit/s, >= 0), (I, J) (`ModelParams.rates`, paper Sec. 3.1).
+        """
         return self.model.rates(hover, sensors)
 
     def nfz_distance(self, geoms: Any) -> np.ndarray:
-        """Distance of shapely geometries to the nearest no-fly zone (inf when there is none)."""
+        """Distance of shapely geometries to the nearest no-fly zone (inf when there is none).
+
+        Args:
+            geoms: a shapely geometry or an array of them, local metres.
+
+        Returns:
+            Distances (m), `geoms`'s shape.
+        """
         out = np.full(np.shape(geoms), np.inf)
         for poly in self.nfz_shapes:
             out = np.minimum(out, shapely.distance(geoms, poly))
@@ -245,8 +269,15 @@ class Draw:
 
     # ---------------------------------------------------------------- 4. bends
     def bend_allowed(self, bend: np.ndarray) -> bool:
-        """Whether a bend point (2,) m may be placed (inside the area is checked apart): always
-        on the paper's maps; a layout that keeps zones free of hover points overrides it."""
+        """Whether a bend point may be placed (inside the area is checked apart): always
+        on the paper's maps; a layout that keeps zones free of hover points overrides it.
+
+        Args:
+            bend: the bend point (2,), local metres.
+
+        Returns:
+            True (this class).
+        """
         return True
 
     def bends(self) -> None:
@@ -439,6 +470,17 @@ class Draw:
         self.obstacles()
 
     def to_dict(self, name: str, origin: dict[str, float]) -> dict[str, Any]:
+        """The drawn map as JSON-ready map data, its witness plan included.
+
+        Args:
+            name: the map's name.
+            origin: the map's geographic origin (copied).
+
+        Returns:
+            The map data: area, start, end, sensors S01.., circles, rectangles, no-fly zones,
+            I_max, safety clearance and data margin 0 (the paper's model), and the witness's
+            hover points and times.
+        """
         def xy(p: np.ndarray) -> list[float]:
             return [float(p[0]), float(p[1])]
 

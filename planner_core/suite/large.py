@@ -380,7 +380,14 @@ class LargeDraw(Draw):
         return True
 
     def bend_allowed(self, bend: np.ndarray) -> bool:
-        """The paper's bends (`Draw.bends`), none inside a field or over the corridor."""
+        """The paper's bends (`Draw.bends`), none inside a field or over the corridor.
+
+        Args:
+            bend: the bend point (2,), local metres.
+
+        Returns:
+            Whether it stays out of the layout's sensor zones (always True for "uniform").
+        """
         return self._off_sensor_zone(bend)
 
     # ---------------------------------------------------------------- 5. sensors
