@@ -111,12 +111,20 @@ class FleetSettings:
 
     @cached_property
     def hover_w(self) -> float:
-        """P(0), W."""
+        """P(0), W.
+
+        Returns:
+            The hover power P(0) of `power` (`energy.hover_power_w`), W.
+        """
         return float(E.hover_power_w(self.power))
 
     @cached_property
     def vertical_wh(self) -> float:
-        """Energy of one sortie's take-off and landing, Wh (`energy.vertical_energy_wh`)."""
+        """Energy of one sortie's take-off and landing, Wh (`energy.vertical_energy_wh`).
+
+        Returns:
+            Wh, at the UAV's altitude, climb and descent speeds and acceleration.
+        """
         u = self.uav
         return E.vertical_energy_wh(float(u.altitude), float(u.climb_speed),
                                     float(u.descent_speed), float(u.acceleration),
@@ -125,7 +133,11 @@ class FleetSettings:
     @cached_property
     def vertical_s(self) -> float:
         """Seconds of one sortie's take-off and landing (`energy.vertical_time_s`: Eq. 1 over
-        the altitude at the climb speed, then at the descent speed)."""
+        the altitude at the climb speed, then at the descent speed).
+
+        Returns:
+            Seconds.
+        """
         u = self.uav
         return E.vertical_time_s(float(u.altitude), float(u.climb_speed),
                                  float(u.descent_speed), float(u.acceleration))
@@ -230,7 +242,11 @@ class Sortie:
 
     @property
     def t_hover(self) -> float:
-        """Sum of the hover times, s."""
+        """Sum of the hover times, s.
+
+        Returns:
+            Seconds (0 for a sortie without points).
+        """
         return float(self.times.sum())
 
     def f(self, s: FleetSettings) -> float:
@@ -310,12 +326,20 @@ class FleetPlan:
 
     @property
     def sorties(self) -> list[Sortie]:
-        """Every sortie, vehicle by vehicle."""
+        """Every sortie, vehicle by vehicle.
+
+        Returns:
+            A new list of the sorties, each vehicle's in flying order.
+        """
         return [s for v in self.vehicles for s in v]
 
     @property
     def swaps(self) -> int:
-        """Battery swaps: sorties after each vehicle's first."""
+        """Battery swaps: sorties after each vehicle's first.
+
+        Returns:
+            The count, >= 0.
+        """
         return sum(len(v) - 1 for v in self.vehicles)
 
     def vehicle_span(self, v: int) -> float:
@@ -336,18 +360,30 @@ class FleetPlan:
 
     @property
     def makespan(self) -> float:
-        """The longest vehicle's span, s."""
+        """The longest vehicle's span, s.
+
+        Returns:
+            Seconds (`vehicle_span`'s largest; 0.0 without vehicles).
+        """
         return max((self.vehicle_span(v) for v in range(len(self.vehicles))), default=0.0)
 
     @property
     def total(self) -> float:
-        """Sum of the paper's f over sorties + swap_s per swap (the "total" objective)."""
+        """Sum of the paper's f over sorties + swap_s per swap (the "total" objective).
+
+        Returns:
+            Seconds.
+        """
         s = self.settings
         return sum(x.f(s) for x in self.sorties) + s.swap_s * self.swaps
 
     @property
     def total_time(self) -> float:
-        """Seconds of flight, hover, take-off and landing over all sorties, plus the swaps."""
+        """Seconds of flight, hover, take-off and landing over all sorties, plus the swaps.
+
+        Returns:
+            Seconds (`Sortie.duration` summed, plus `swap_s` per swap).
+        """
         s = self.settings
         return sum(x.duration(s) for x in self.sorties) + s.swap_s * self.swaps
 
