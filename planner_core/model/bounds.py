@@ -51,7 +51,11 @@ class LowerBound:
     status: str  # "optimal", or why not
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready fields."""
+        """JSON-ready fields.
+
+        Returns:
+            {lb, flight_lb, hover_lb, alpha, spacing, n_candidates, status} (`asdict`).
+        """
         return asdict(self)
 
 
@@ -88,7 +92,23 @@ def _cell_rates(m: Map, spacing: float) -> tuple[np.ndarray, np.ndarray, np.ndar
 def hover_lower_bound(
     m: Map | str | dict, spacing: float = DEFAULT_SPACING
 ) -> tuple[float, int, float, str]:
-    """H_LB (seconds), the number of candidate cells, the cell side used, and the LP status."""
+    """H_LB (seconds), the number of candidate cells, the cell side used, and the LP status.
+
+    Args:
+        m: a loaded map, a map file path or its dict (`load_map`).
+        spacing: the largest cell side, m (> 0).
+
+    Returns:
+        (H_LB s, candidate cells, cell side m, status): (0, 0, side, "optimal") when no sensor
+        needs data; H_LB inf with status "infeasible: ..." when a sensor that needs data is
+        out of radio range of the whole area, or the solver's status when the LP is not
+        solved to optimality. H_LB is the solver's optimum less a relative 1e-7 (its
+        tolerance), at least 0.
+
+    Raises:
+        ValueError: spacing <= 0.
+        MapError: `m` is not a valid map (`load_map`).
+    """
     import cvxpy as cp
     import scipy.sparse as sp
 
@@ -123,7 +143,20 @@ def hover_lower_bound(
 
 
 def lower_bound(m: Map | str | dict, spacing: float = DEFAULT_SPACING) -> LowerBound:
-    """LB = alpha * T_fly(|end - start|) + (1 - alpha) * H_LB for map `m` (see module docstring)."""
+    """LB = alpha * T_fly(|end - start|) + (1 - alpha) * H_LB for map `m` (see module docstring).
+
+    Args:
+        m: a loaded map, a map file path or its dict (`load_map`).
+        spacing: the largest cell side of the hover LP, m (> 0).
+
+    Returns:
+        The `LowerBound` (seconds). With alpha = 1 the hover part is dropped, so `lb` stays
+        finite even when H_LB is inf (see `status`).
+
+    Raises:
+        ValueError: spacing <= 0.
+        MapError: `m` is not a valid map (`load_map`).
+    """
     m = load_map(m)
     mp = ModelParams.from_map(m)
     alpha = mp.alpha

@@ -99,7 +99,16 @@ def _shortfall(problem: Problem, d: int) -> tuple[int, int, int]:
 
 def corner_need(corners: int, blocked: int, unserved: int) -> int:
     """The corner slots one seeder plan asks for: 0 when it fits (no leg blocked, no sensor
-    unserved), else its corners plus one per blocked leg."""
+    unserved), else its corners plus one per blocked leg.
+
+    Args:
+        corners: the plan's points that serve no sensor (hover time 0).
+        blocked: its legs cut by obstacles.
+        unserved: its sensors no point serves within T_max.
+
+    Returns:
+        The slots, >= 0.
+    """
     return corners + blocked if blocked + unserved else 0
 
 

@@ -94,7 +94,11 @@ class Diagnosis:
 
     @property
     def feasible_so_far(self) -> bool:
-        """No finding rules every plan out (necessary conditions only)."""
+        """No finding rules every plan out (necessary conditions only).
+
+        Returns:
+            True when no finding is fatal.
+        """
         return not any(f.fatal for f in self.findings)
 
 

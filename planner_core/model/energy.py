@@ -92,7 +92,14 @@ class PowerParams:
     def from_spec(cls, spec: Any) -> PowerParams:
         """From the map file's `uav.power` (an object with the schema's field names:
         `blade_profile_w`, `induced_w`, `tip_speed`, `induced_velocity`, `fuselage_drag_ratio`,
-        `air_density`, `rotor_solidity`, `rotor_disc_area`); None gives `DEFAULT_POWER`."""
+        `air_density`, `rotor_solidity`, `rotor_disc_area`); None gives `DEFAULT_POWER`.
+
+        Args:
+            spec: the `uav.power` settings, or None.
+
+        Returns:
+            The parameters (each field read as a float), or `DEFAULT_POWER`.
+        """
         if spec is None:
             return DEFAULT_POWER
         return cls(
@@ -104,7 +111,11 @@ class PowerParams:
 
     @property
     def hover_w(self) -> float:
-        """P(0) = P0 + Pi, W."""
+        """P(0) = P0 + Pi, W.
+
+        Returns:
+            The hover power P(0), W (`hover_power_w`).
+        """
         return hover_power_w(self)
 
 
@@ -153,7 +164,14 @@ def _power_terms(v: Any, p: PowerParams) -> tuple[np.ndarray, np.ndarray, np.nda
 
 
 def hover_power_w(power: PowerParams | None = None) -> float:
-    """P(0) = P0 + Pi (W), the hover power (Zeng et al. 2019, Eq. 12 at V = 0)."""
+    """P(0) = P0 + Pi (W), the hover power (Zeng et al. 2019, Eq. 12 at V = 0).
+
+    Args:
+        power: the model's parameters (default `DEFAULT_POWER`).
+
+    Returns:
+        P(0), W.
+    """
     return float(power_w(0.0, power))
 
 

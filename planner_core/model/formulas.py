@@ -586,7 +586,11 @@ class ModelParams:
     @cached_property
     def window(self) -> SensorWindow:
         """This map's sensors sorted by x with the radio's range cut (`sensor_window`): the
-        compiled rate loops visit only the sensors in range of a point."""
+        compiled rate loops visit only the sensors in range of a point.
+
+        Returns:
+            The `SensorWindow` (built once, then kept).
+        """
         return sensor_window(self.sensors, self.altitude, self.peak_rate, self.decay)
 
     def rates(self, pts: np.ndarray, sensors: np.ndarray | None = None) -> np.ndarray:

@@ -226,7 +226,11 @@ class Obstacles:
     @cached_property
     def kernel_arrays(self) -> tuple:
         """What the kernel (`_overlap_serial`) takes after the legs, in its order (circles ...
-        tile_members, 14 items): one tuple for compiled callers of `cut_legs`."""
+        tile_members, 14 items): one tuple for compiled callers of `cut_legs`.
+
+        Returns:
+            The 14 read-only arrays and scalars, built once and kept.
+        """
         return (self.circles, self.poly_vertices, self.poly_offsets, self.edge_normals,
                 self.edge_flags, self.tol, self.cull_radii, self.cull_centres32, self.origin,
                 self.extent, self.tile_centres32, self.tile_radii, self.tile_offsets,
@@ -338,7 +342,20 @@ class Obstacles:
         A region is (shell (V, 2), [hole (V_h, 2), ...]): any valid simple polygon with holes,
         rings as cleaned vertex cycles in any orientation (`planner_core.model.polygons.clean_ring`,
         `polygon_problem`); it is decomposed into convex pieces placed after `polygons`.
-        Validates everything; raises ValueError naming the polygon or region index.
+        Validates everything.
+
+        Args:
+            circles: (cx, cy, r) per circle, metres.
+            polygons: convex counter-clockwise polygons, (V, 2) each, metres; a repeated
+                closing vertex is dropped.
+            regions: (shell (V, 2), holes [(V_h, 2), ...]) per region, metres.
+
+        Returns:
+            The packed, read-only `Obstacles`.
+
+        Raises:
+            ValueError: an invalid polygon or region (naming its index), or bad circles
+                (non-finite, radius <= 0) or coordinates beyond 1e15 m.
         """
         c = np.array(circles, dtype=np.float64).reshape(-1, 3)
         cleaned = [_clean_polygon(p, i) for i, p in enumerate(polygons)]
@@ -364,25 +381,61 @@ class Obstacles:
 
     @property
     def n_regions(self) -> int:
+        """Regions (general polygons with holes) packed.
+
+        Returns:
+            Their number.
+        """
         return len(self.regions)
 
     @property
     def n_circles(self) -> int:
+        """Circles packed.
+
+        Returns:
+            Their number, K.
+        """
         return int(self.circles.shape[0])
 
     @property
     def n_polygons(self) -> int:
+        """Convex polygons packed, the regions' pieces included.
+
+        Returns:
+            Their number, P.
+        """
         return int(self.poly_offsets.shape[0] - 1)
 
     def polygon(self, p: int) -> np.ndarray:
-        """Vertices (V, 2) of polygon p (read-only view)."""
+        """Vertices (V, 2) of polygon p (read-only view).
+
+        Args:
+            p: the polygon's index, 0 .. P - 1.
+
+        Returns:
+            (V, 2) counter-clockwise vertices, metres (a read-only view).
+        """
         return self.poly_vertices[self.poly_offsets[p] : self.poly_offsets[p + 1]]
 
 
 def rectangle_vertices(
     cx: float, cy: float, length: float, width: float, angle_deg: float
 ) -> np.ndarray:
-    """(4, 2) CCW corners; `length` runs along the axis angle_deg counter-clockwise from east."""
+    """(4, 2) CCW corners; `length` runs along the axis angle_deg counter-clockwise from east.
+
+    Args:
+        cx: the centre's x, metres.
+        cy: the centre's y, metres.
+        length: the side along the axis, metres (> 0).
+        width: the side across the axis, metres (> 0).
+        angle_deg: the axis' angle counter-clockwise from east, degrees.
+
+    Returns:
+        (4, 2) float64 corners, counter-clockwise, metres.
+
+    Raises:
+        ValueError: a side not positive, or length x width not finite.
+    """
     if not (length > 0.0 and width > 0.0) or not math.isfinite(length * width):
         raise ValueError(f"rectangle needs positive finite sides, got {length!r} x {width!r}")
     th = math.radians(angle_deg)
@@ -857,6 +910,17 @@ def overlap_lengths(a: np.ndarray, b: np.ndarray, obstacles: Obstacles) -> np.nd
 
     Exact analytic answer up to the boundary tolerance in the module docstring; NaN legs give NaN.
     Single-threaded and releases the GIL, so callers may split a batch over threads.
+
+    Args:
+        a: leg starts, metres, shape (..., 2).
+        b: leg ends, metres, shape (..., 2) (broadcast against `a`).
+        obstacles: the packed obstacles.
+
+    Returns:
+        L_vio per leg, metres (>= 0, NaN for a NaN leg), the broadcast leading shape.
+
+    Raises:
+        ValueError: `a` or `b` without a trailing axis of 2.
     """
     return _overlap(a, b, obstacles, False)
 
@@ -882,6 +946,17 @@ def overlap_first(a: np.ndarray, b: np.ndarray, obstacles: Obstacles) -> np.ndar
     leaves the kernel's tests at its first cut, so on a map with many obstacles (most long
     legs cut) it costs the tiles and obstacles up to that cut, not all of them: the same
     O(legs x tiles + candidate pairs) bound as `overlap_lengths`, much less in practice.
+
+    Args:
+        a: leg starts, metres, shape (..., 2).
+        b: leg ends, metres, shape (..., 2) (broadcast against `a`).
+        obstacles: the packed obstacles.
+
+    Returns:
+        Metres per leg, the broadcast leading shape.
+
+    Raises:
+        ValueError: `a` or `b` without a trailing axis of 2.
     """
     return _overlap(a, b, obstacles, True)
 
@@ -891,7 +966,18 @@ def cut_legs(a, b, obst, limit):  # pragma: no cover - compiled
     """``overlap_first(a, b, obstacles) > limit`` for compiled callers: legs a -> b (n, 2) each,
     C-contiguous float64, `obst` the obstacles' `Obstacles.kernel_arrays`; (n,) bool. The same
     kernel call on the same legs as `overlap_first`, so the same flags (tests); O(`overlap_first`)
-    without its Python wrapper (~10 us a call)."""
+    without its Python wrapper (~10 us a call).
+
+    Args:
+        a: (n, 2) leg starts, metres, C-contiguous float64.
+        b: (n, 2) leg ends, metres, C-contiguous float64.
+        obst: `Obstacles.kernel_arrays`.
+        limit: metres; a leg is cut when its first overlap exceeds it (below 2 tol, e.g.
+            `routing.graph.CLEAR`).
+
+    Returns:
+        (n,) bool, True where the leg is cut.
+    """
     (circles, verts, offs, normals, eflags, tol, cull_r, cull_c32, origin, extent, tile_c32,
      tile_r, tile_offs, tile_members) = obst
     out = np.empty(a.shape[0], dtype=np.float64)
@@ -960,6 +1046,18 @@ def overlap_lengths_reference(a: np.ndarray, b: np.ndarray, obstacles: Obstacles
     Regions (general polygons) are measured whole, as shapely polygons with holes, not piece by
     piece, inflated by tol (a mitred shapely buffer): length(leg & region) - length(leg &
     boundary), counted when above tol.
+
+    Args:
+        a: leg starts, metres, shape (..., 2).
+        b: leg ends, metres, shape (..., 2) (broadcast against `a`).
+        obstacles: the packed obstacles.
+
+    Returns:
+        L_vio per leg, metres (NaN for a leg with a non-finite end), the broadcast leading
+        shape.
+
+    Raises:
+        ValueError: `a` or `b` without a trailing axis of 2.
     """
     from shapely.geometry import LineString, Polygon
 
@@ -996,7 +1094,18 @@ def overlap_lengths_reference(a: np.ndarray, b: np.ndarray, obstacles: Obstacles
 
 
 def points_inside(points: np.ndarray, obstacles: Obstacles) -> np.ndarray:
-    """(..., 2) -> bool (...): True where a point lies strictly inside any obstacle (by > tol)."""
+    """(..., 2) -> bool (...): True where a point lies strictly inside any obstacle (by > tol).
+
+    Args:
+        points: points, metres, shape (..., 2).
+        obstacles: the packed obstacles.
+
+    Returns:
+        bool, shape (...).
+
+    Raises:
+        ValueError: `points` without a trailing axis of 2.
+    """
     p = np.asarray(points, dtype=np.float64)
     if p.shape[-1:] != (2,):
         raise ValueError(f"points need a trailing axis of 2, got {p.shape}")

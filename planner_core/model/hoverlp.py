@@ -75,13 +75,9 @@ def hover_lp(
 ) -> tuple[np.ndarray, float, np.ndarray] | None:
     """The feasible hover-time LP of `_lp_matrices` with its duals, for sensitivity analysis.
 
-    R (I, J) link rates (Mbit/s) of the hover points to every sensor, req (J,) required data
-    Q_j (Mbit), t_max (s). Returns (T (I,) hover times in s, topped up so that C4 holds
-    exactly (`top_up`), V = sum T in s, y (J,) >= 0 the duals of the coverage rows
-    (R^T T)_j / Q_j >= 1, zero for sensors that need nothing), or None when the LP is
-    infeasible (some sensor not served even at T_max everywhere). By LP sensitivity (e.g.
-    Bertsimas & Tsitsiklis, Introduction to Linear Optimization, Sec. 5.1), dV/dR_ij =
-    -y_j T_i / Q_j at a non-degenerate optimum: what `planner_core.search.descent` uses.
+    By LP sensitivity (e.g. Bertsimas & Tsitsiklis, Introduction to Linear Optimization,
+    Sec. 5.1), dV/dR_ij = -y_j T_i / Q_j at a non-degenerate optimum: what
+    `planner_core.search.descent` uses.
 
     Its matrix (the needed sensors' rows of R^T, each over its Q_j) and work arrays come from
     one compiled call (`_scaled_rows`, O(I J); `scaled_rows_reference` its numpy twin).
@@ -96,13 +92,25 @@ def hover_lp(
     the blocks and the simplex save: the descent solves this LP once per trial. The fast path
     of the polish's LP (`planner_core.search.polish._solve_lp(..., "linprog")`, one LP through
     scipy, is its reference; tests/test_descent.py holds them equal; `_solve_lp(..., "highs")`
-    calls it for a feasible LP). `highs`: the HiGHS step (default `_highs_lp`; the polish
-    passes its own name for it so that a test can count the calls). `warm`: a dict the caller
-    keeps for one sequence of related solves (a descent): the
-    last optimal basis of each shape of HiGHS's part is kept in it and the next solve starts
-    from it. Where the LP has several optima the one returned may depend on that basis, so a
-    caller that must be reproducible passes a fresh dict per sequence (None: a cold start,
-    the same answer whatever was solved before).
+    calls it for a feasible LP).
+
+    Args:
+        R: (I, J) link rates (Mbit/s) of the hover points to every sensor.
+        req: (J,) required data Q_j (Mbit).
+        t_max: the most hover time per point, s.
+        warm: a dict the caller keeps for one sequence of related solves (a descent): the
+            last optimal basis of each shape of HiGHS's part is kept in it and the next solve
+            starts from it. Where the LP has several optima the one returned may depend on
+            that basis, so a caller that must be reproducible passes a fresh dict per
+            sequence (None: a cold start, the same answer whatever was solved before).
+        highs: the HiGHS step (default `_highs_lp`; the polish passes its own name for it so
+            that a test can count the calls).
+
+    Returns:
+        (T (I,) hover times in s, topped up so that C4 holds exactly (`top_up`), V = sum T
+        in s, y (J,) >= 0 the duals of the coverage rows (R^T T)_j / Q_j >= 1, zero for
+        sensors that need nothing), or None when the LP is infeasible (some sensor not
+        served even at T_max everywhere).
     """
     n = R.shape[0]
     y = np.zeros(len(req))
@@ -155,7 +163,16 @@ def _scaled_rows(R, req):  # pragma: no cover - compiled
 
 def scaled_rows_reference(R: np.ndarray, req: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """`_scaled_rows`' A and `need` in numpy: (R[:, req > 0] / req[req > 0]).T (rows, I) and
-    the indices of the sensors with req > 0."""
+    the indices of the sensors with req > 0.
+
+    Args:
+        R: (I, J) link rates, Mbit/s.
+        req: (J,) required data, Mbit.
+
+    Returns:
+        (A (rows, I) C-contiguous, 1/s: each needed sensor's rates over its req; need
+        (rows,) int sensor indices).
+    """
     need = req > 0
     return np.ascontiguousarray((R[:, need] / req[need]).T), np.flatnonzero(need)
 
@@ -681,7 +698,20 @@ def _highs_lp(
 
 def top_up(R: np.ndarray, req: np.ndarray, times: np.ndarray, t_max: float) -> np.ndarray:
     """Scale hover times (s) up by the worst remaining ratio (tiny) so that Q_j >= req_j
-    (Mbit) holds exactly; R (I, J) Mbit/s, times (I,) s, at most t_max s each."""
+    (Mbit) holds exactly.
+
+    At most 5 rounds; each multiplies by min(ratio (1 + 1e-12), 1 + 1e-6) and adds 1e-12 s,
+    so only a tiny shortfall is closed (and t_max may keep one).
+
+    Args:
+        R: (I, J) link rates, Mbit/s (dense, or scipy.sparse: only ``R.T @ times`` is used).
+        req: (J,) required data, Mbit.
+        times: (I,) hover times, s.
+        t_max: the most hover time per point, s.
+
+    Returns:
+        (I,) hover times, s, at most t_max s each (`times` itself when nothing is short).
+    """
     for _ in range(5):
         Q = R.T @ times
         short = (req > 0) & (Q < req)
@@ -700,8 +730,17 @@ def hover_lp_sparse(
     (R^T T)_j / Q_j >= 1 for every j with Q_j > 0, 0 <= T <= t_max, solved whole by HiGHS
     without the dense blocks (the feasibility diagnosis states it over thousands of cells).
 
-    Returns (T (I,) s, topped up as `hover_lp`'s, V = sum T s, y (J,) >= 0 the coverage rows'
-    duals) or None when infeasible (a sensor that needs data and has no link)."""
+    Args:
+        R: (I, J) link rates, Mbit/s, scipy.sparse (or anything `scipy.sparse.csr_matrix`
+            takes).
+        req: (J,) required data Q_j, Mbit.
+        t_max: the most hover time per point, s (may be inf).
+
+    Returns:
+        (T (I,) s, topped up as `hover_lp`'s, V = sum T s, y (J,) >= 0 the coverage rows'
+        duals) or None when infeasible (a sensor that needs data and has no link, or HiGHS
+        finds no optimum).
+    """
     import scipy.sparse as sp
 
     R = sp.csr_matrix(R, dtype=float)

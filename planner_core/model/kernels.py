@@ -24,15 +24,24 @@ __all__ = ["model_terms", "scheduled_flow"]
 @njit(cache=True, fastmath=False, nogil=True)
 def scheduled_flow(R, t, Q, bandwidth):  # pragma: no cover - compiled
     """Scheduled access (`radio.access` "scheduled"): the most data the hover times can take
-    toward the requirements, per sensor (J,) Mbit. R (k, J) link rates Mbit/s of k hover
-    points, t (k,) hover times s, Q (J,) required Mbit, bandwidth R_lambda Mbit/s.
+    toward the requirements, per sensor (J,) Mbit.
 
     The allocation D_ij <= R_ij t_i, sum_j D_ij <= R_lambda t_i is a flow from the points to
     the sensors (capacities R_lambda t_i, R_ij t_i, Q_j); its maximum (Edmonds-Karp, BFS
     augmenting paths) leaves the least total shortfall sum_j (Q_j - F_j), F_j = sum_i D_ij
     <= Q_j. A point within its bandwidth (sum_j R_ij <= R_lambda) sends every link in full
     first (what any allocation may do); the saturated ones are then augmented. The paths are
-    capped (k J + k + J of them): stopping early only under-counts, never over-counts."""
+    capped (k J + k + J of them): stopping early only under-counts, never over-counts.
+
+    Args:
+        R: (k, J) link rates, Mbit/s, of k hover points.
+        t: (k,) hover times, s.
+        Q: (J,) required data, Mbit.
+        bandwidth: R_lambda, Mbit/s.
+
+    Returns:
+        F (J,) Mbit: the data each sensor delivers, F_j <= Q_j.
+    """
     k, J = R.shape
     F = np.zeros(J)
     cap_pt = np.empty(k)  # residual bandwidth per point, Mbit
@@ -116,13 +125,41 @@ def model_terms(
     scheduled=False,
 ):  # fmt: skip
     """Fill f, v3, v4 (n,) and leg endpoints A, B (n, I_max + 1, 2) for population X (n, 4 I).
-    `scheduled`: radio.access "scheduled" (no C3; collected data from `scheduled_flow`).
 
     order, xs, half: the sensors' `formulas.SensorWindow` (the range cut): each hover point
     visits only the sensors within `half` of it in x and y (found by a binary search of xs),
     in index order, so O(n I_max x sensors in range) instead of O(n I_max J) square roots;
     the pairs skipped have a rate <= 0, which adds nothing, so the same sums in the same order
-    as every sensor visited (half = inf, the reference; tests)."""
+    as every sensor visited (half = inf, the reference; tests).
+
+    Args:
+        X: (n, 4 I) decision vectors (x m, y m, t s, eps per slot), clipped to [0, upper].
+        n_points: I, the slots.
+        variable: variable-length encoding (a slot flies when eps >= tau); False: every slot.
+        tau: the activation threshold.
+        upper: (4 I,) the decision vector's upper bounds (width, height, T_max, 1 per slot).
+        start: (2,) the mission's start, m.
+        end: (2,) the mission's end, m.
+        sensors: (J, 2) sensor positions, m.
+        required: (J,) required data Q_j, Mbit.
+        altitude: H, m.
+        peak_rate: R_c, Mbit/s.
+        decay: xi, Mbit/s per m.
+        order: (J,) the sensors' indices by x (`SensorWindow.order`).
+        xs: (J,) their x, sorted, m (`SensorWindow.xs`).
+        half: the range cut, m (`SensorWindow.half`; inf: every sensor).
+        bandwidth: R_lambda, Mbit/s.
+        v_max: cruise speed, m/s.
+        accel: acceleration a, m/s^2.
+        alpha: the weight of flight against hover time.
+        A: (n, I + 1, 2) out: leg starts, m (unused legs zero-length at the end point).
+        B: (n, I + 1, 2) out: leg ends, m.
+        f: (n,) out: alpha t_fly + (1 - alpha) t_hover, s (Eq. 1 leg times).
+        v3: (n,) out: C3's excess over the bandwidth summed over the points, Mbit/s (0 when
+            scheduled).
+        v4: (n,) out: C4's shortfall summed over the sensors, Mbit.
+        scheduled: radio.access "scheduled" (no C3; collected data from `scheduled_flow`).
+    """
     n = X.shape[0]
     J = sensors.shape[0]
     h2 = altitude * altitude

@@ -18,7 +18,16 @@ __all__ = ["clark_evans"]
 
 def clark_evans(sensors: np.ndarray, area: float) -> float:
     """The Clark-Evans ratio of the points sensors (J, 2) m over an area of `area` m^2 (module
-    docstring); 1 for fewer than 2 points or no area. Cost: one k-d tree query, O(J log J)."""
+    docstring); 1 for fewer than 2 points or no area. Cost: one k-d tree query, O(J log J).
+
+    Args:
+        sensors: (J, 2) sensor positions, m.
+        area: the area they lie in, m^2.
+
+    Returns:
+        The mean nearest-neighbour distance over 0.5 sqrt(area / J) (1.0 for J < 2 or
+        area <= 0).
+    """
     from scipy.spatial import cKDTree
 
     xy = np.asarray(sensors, dtype=float).reshape(-1, 2)

@@ -191,7 +191,11 @@ class ObstaclesSpec(BaseModel):
 
     @property
     def count(self) -> int:
-        """Obstacles of every kind: circles, rectangles, no-fly zones and polygons."""
+        """Obstacles of every kind: circles, rectangles, no-fly zones and polygons.
+
+        Returns:
+            Their number, >= 0.
+        """
         return (len(self.circles) + len(self.rectangles) + len(self.no_fly_zones)
                 + len(self.polygons))
 
@@ -369,7 +373,11 @@ def default_max_hover_points(width: float, height: float, sensors: int = 0) -> i
 
 
 def map_json_schema() -> dict[str, Any]:
-    """JSON Schema (draft 2020-12, named by its `$schema` key) of the map file."""
+    """JSON Schema (draft 2020-12, named by its `$schema` key) of the map file.
+
+    Returns:
+        The schema as JSON-ready data (`MapFile.model_json_schema()` with `$schema` first).
+    """
     return {"$schema": "https://json-schema.org/draft/2020-12/schema",
             **MapFile.model_json_schema()}
 
@@ -387,16 +395,30 @@ class PolygonShape:
 
     @property
     def convex(self) -> bool:
-        """Convex and without holes: the kernel takes it as one polygon."""
+        """Convex and without holes: the kernel takes it as one polygon.
+
+        Returns:
+            True when it has no holes and its shell is convex (`is_convex`).
+        """
         return not self.holes and is_convex(self.shell)
 
     @property
     def label(self) -> str:
+        """The shape's name in messages.
+
+        Returns:
+            "no-fly-zone k" or "polygon k" (k its index in its list), then its name quoted
+            when it has one.
+        """
         base = f"{self.kind.replace('_', '-')} {self.index}"
         return f"{base} '{self.name}'" if self.name else base
 
     def pieces(self) -> list[np.ndarray]:
-        """Convex pieces (V, 2) counter-clockwise, disjoint interiors, union = the shape."""
+        """Convex pieces (V, 2) counter-clockwise, disjoint interiors, union = the shape.
+
+        Returns:
+            The pieces' vertex arrays, (V, 2) each, local metres (`convex_pieces`).
+        """
         return [v for v, _ in convex_pieces(self.shell, self.holes)]
 
 
@@ -416,19 +438,38 @@ class Map:
     # --- scalars in the paper's symbols ---
     @property
     def name(self) -> str:
+        """The map's name.
+
+        Returns:
+            `spec.name`.
+        """
         return self.spec.name
 
     @property
     def width(self) -> float:
+        """The area's side along x (east).
+
+        Returns:
+            Metres.
+        """
         return self.spec.area.width
 
     @property
     def height(self) -> float:
+        """The area's side along y (north).
+
+        Returns:
+            Metres.
+        """
         return self.spec.area.height
 
     @property
     def max_hover_points(self) -> int:
-        """I_max in force (the file's value or the default)."""
+        """I_max in force (the file's value or the default).
+
+        Returns:
+            `uav.max_hover_points`, or `default_max_hover_points` for the area and sensors.
+        """
         u = self.spec.uav.max_hover_points
         if u is not None:
             return u
@@ -436,24 +477,47 @@ class Map:
 
     @cached_property
     def start(self) -> np.ndarray:
+        """The mission's start.
+
+        Returns:
+            (2,) position, local metres.
+        """
         return np.array(self.spec.start, dtype=float)
 
     @cached_property
     def end(self) -> np.ndarray:
+        """The mission's end.
+
+        Returns:
+            (2,) position, local metres.
+        """
         return np.array(self.spec.end, dtype=float)
 
     @cached_property
     def sensor_ids(self) -> tuple[str, ...]:
+        """The sensors' ids.
+
+        Returns:
+            (J,) ids, in the file's order.
+        """
         return tuple(s.id for s in self.spec.sensors)
 
     @cached_property
     def sensors(self) -> np.ndarray:
-        """(J, 2) sensor positions."""
+        """(J, 2) sensor positions.
+
+        Returns:
+            (J, 2) positions, local metres, in the file's order.
+        """
         return np.array([[s.x, s.y] for s in self.spec.sensors], dtype=float)
 
     @cached_property
     def required_data(self) -> np.ndarray:
-        """(J,) Q_lambda per sensor, Mbit."""
+        """(J,) Q_lambda per sensor, Mbit.
+
+        Returns:
+            (J,) Mbit: each sensor's `required_data`, else `radio.required_data`.
+        """
         q = self.spec.radio.required_data
         return np.array(
             [s.required_data if s.required_data is not None else q for s in self.spec.sensors]
@@ -461,6 +525,12 @@ class Map:
 
     @cached_property
     def rectangle_polygons(self) -> tuple[np.ndarray, ...]:
+        """The rectangles' corners.
+
+        Returns:
+            One (4, 2) counter-clockwise corner array per rectangle, local metres
+            (`rectangle_vertices`).
+        """
         return tuple(
             rectangle_vertices(r.x, r.y, r.length, r.width, r.angle_deg)
             for r in self.spec.obstacles.rectangles
@@ -469,57 +539,93 @@ class Map:
     @cached_property
     def obstacles(self) -> Obstacles:
         """All obstacles in the geometry kernel's packed form: circles; rectangles, convex
-        no-fly zones and convex polygon obstacles as polygons; the other shapes as regions."""
+        no-fly zones and convex polygon obstacles as polygons; the other shapes as regions.
+
+        Returns:
+            The packed `Obstacles`.
+        """
         return _pack(self.spec, self.shapes)
 
     # --- batteries, power and fleets (issue 33; docs/energy.md) ---
     @property
     def has_battery(self) -> bool:
-        """The map gives a battery (`uav.battery.energy_wh` or `uav.endurance_s`)."""
+        """The map gives a battery (`uav.battery.energy_wh` or `uav.endurance_s`).
+
+        Returns:
+            True when either is given.
+        """
         u = self.spec.uav
         return u.endurance_s is not None or (u.battery is not None
                                              and u.battery.energy_wh is not None)  # fmt: skip
 
     @property
     def has_fleet(self) -> bool:
-        """The map gives a `fleet` section (UAVs, depots, swap time)."""
+        """The map gives a `fleet` section (UAVs, depots, swap time).
+
+        Returns:
+            True when it does.
+        """
         return self.spec.fleet is not None
 
     @cached_property
     def power(self) -> _energy.PowerParams:
         """The propulsion power model's parameters in force (`uav.power`, defaults: Zeng et
-        al. 2019 Table I), for `planner_core.model.energy`."""
+        al. 2019 Table I), for `planner_core.model.energy`.
+
+        Returns:
+            The `PowerParams` (`PowerParams.from_spec(uav.power)`).
+        """
         return _energy.PowerParams.from_spec(self.spec.uav.power)
 
     @property
     def battery_wh(self) -> float | None:
         """A full battery's energy (Wh): `uav.battery.energy_wh`, or `uav.endurance_s` x P(0);
-        None without a battery."""
+        None without a battery.
+
+        Returns:
+            Wh, or None without a battery.
+        """
         u = self.spec.uav
         e = u.battery.energy_wh if u.battery is not None else None
         return _energy.battery_energy_wh(e, u.endurance_s, self.power)
 
     @property
     def battery_reserve(self) -> float:
-        """Fraction of the battery kept at landing (`uav.battery.reserve`, default 0.2)."""
+        """Fraction of the battery kept at landing (`uav.battery.reserve`, default 0.2).
+
+        Returns:
+            The fraction, also without a battery (then the default).
+        """
         b = self.spec.uav.battery
         return float(b.reserve if b is not None else MAP_DEFAULTS["uav.battery.reserve"].value)
 
     @property
     def usable_energy_wh(self) -> float | None:
-        """Energy one sortie may spend (Wh): battery x (1 - reserve); None without a battery."""
+        """Energy one sortie may spend (Wh): battery x (1 - reserve); None without a battery.
+
+        Returns:
+            Wh, or None without a battery.
+        """
         full = self.battery_wh
         return None if full is None else _energy.usable_energy_wh(full, self.battery_reserve)
 
     @property
     def uavs(self) -> int:
-        """UAVs flying at once (`fleet.uavs`, default 1)."""
+        """UAVs flying at once (`fleet.uavs`, default 1).
+
+        Returns:
+            The count.
+        """
         f = self.spec.fleet
         return int(f.uavs if f is not None else MAP_DEFAULTS["fleet.uavs"].value)
 
     @property
     def swap_s(self) -> float:
-        """Seconds a battery swap takes (`fleet.swap_s`, default 300)."""
+        """Seconds a battery swap takes (`fleet.swap_s`, default 300).
+
+        Returns:
+            Seconds.
+        """
         f = self.spec.fleet
         return float(f.swap_s if f is not None else MAP_DEFAULTS["fleet.swap_s"].value)
 
@@ -527,7 +633,11 @@ class Map:
     def separation_m(self) -> float:
         """Metres: the least 3D distance between two vehicles in the air
         (`fleet.separation_m`, default 30), judged by verify's SEPARATION and kept by plan's
-        staggered launches (`lamde_mission.launches.stagger`)."""
+        staggered launches (`lamde_mission.launches.stagger`).
+
+        Returns:
+            Metres.
+        """
         f = self.spec.fleet
         return float(f.separation_m if f is not None
                      else MAP_DEFAULTS["fleet.separation_m"].value)  # fmt: skip
@@ -535,7 +645,11 @@ class Map:
     @cached_property
     def depots(self) -> tuple[Depot, ...]:
         """The take-off, landing and swap sites in force: `fleet.depots`, or one depot named
-        `DEFAULT_DEPOT` at the map's start (a sortie may then land at the map's end)."""
+        `DEFAULT_DEPOT` at the map's start (a sortie may then land at the map's end).
+
+        Returns:
+            The `Depot`s, in the file's order.
+        """
         f = self.spec.fleet
         if f is not None and f.depots:
             return tuple(f.depots)
@@ -549,7 +663,12 @@ class Map:
         a vehicle's first sortie may leave). With `fleet.depots`: those, each a take-off
         site; without: `DEFAULT_DEPOT` at the start, where every vehicle takes off, and, when
         the end differs, `END_DEPOT` at the end, a landing site (a vehicle takes off where it
-        landed, so a take-off site only for one that landed there)."""
+        landed, so a take-off site only for one that landed there).
+
+        Returns:
+            (names (D,), positions (D, 2) local metres read-only, first-sortie depot indices:
+            all with `fleet.depots`, else (0,)).
+        """
         names = [d.name for d in self.depots]
         xy = [[d.x, d.y] for d in self.depots]
         given = self.spec.fleet is not None and bool(self.spec.fleet.depots)
@@ -562,21 +681,33 @@ class Map:
 
     @cached_property
     def depot_xy(self) -> np.ndarray:
-        """(D, 2) depot positions, metres, in `depots` order (read-only)."""
+        """(D, 2) depot positions, metres, in `depots` order (read-only).
+
+        Returns:
+            (D, 2) read-only array, local metres (no `END_DEPOT`: see `sortie_sites`).
+        """
         a = np.array([[d.x, d.y] for d in self.depots], dtype=float)
         a.flags.writeable = False
         return a
 
     @property
     def goal(self) -> str:
-        """What several sorties minimise (`objective.goal`): "total" or "makespan"."""
+        """What several sorties minimise (`objective.goal`): "total" or "makespan".
+
+        Returns:
+            "total" or "makespan".
+        """
         return self.spec.objective.goal
 
     # --- safety margins (a transformation of the map; see `Safety`) ---
     @cached_property
     def obstacle_labels(self) -> tuple[str, ...]:
         """A label per obstacle, in `obstacle_clearances`' order: "circle k", "rectangle k",
-        "no-fly-zone k", "polygon k" (k the index in its list of the map)."""
+        "no-fly-zone k", "polygon k" (k the index in its list of the map).
+
+        Returns:
+            One label per obstacle, circles, rectangles, no-fly zones, then polygons.
+        """
         obs = self.spec.obstacles
         return tuple([f"circle {k}" for k in range(len(obs.circles))]
                      + [f"rectangle {k}" for k in range(len(obs.rectangles))]
@@ -590,7 +721,11 @@ class Map:
         the obstacle, so the inflated obstacle (`planning_map`) leaves that point outside it:
         a circle down to that distance less `CLEARANCE_PAD`, any other shape less
         `CLEARANCE_PAD` + `CLEARANCE_SLACK` (its inflated corners are outer polygons, see
-        `outer_offset`); at least 0."""
+        `outer_offset`); at least 0.
+
+        Returns:
+            One clearance (m, >= 0) per obstacle, in `obstacle_labels`' order.
+        """
         return tuple(c for c, _ in self._inflation)
 
     @cached_property
@@ -629,8 +764,19 @@ class Map:
         return tuple(out)
 
     def with_origin(self, lat: float, lon: float, alt: float = 0.0) -> Map:
-        """This map placed at (lat, lon, alt) (what `--origin LAT,LON[,ALT]` does); MapError
-        for coordinates out of range."""
+        """This map placed at (lat, lon, alt) (what `--origin LAT,LON[,ALT]` does).
+
+        Args:
+            lat: WGS84 latitude of the local (0, 0), degrees (-90..90).
+            lon: WGS84 longitude of the local (0, 0), degrees (-180..180).
+            alt: altitude above mean sea level of the take-off ground, m (-500..9000).
+
+        Returns:
+            A new, validated Map (`load_map`) with that origin.
+
+        Raises:
+            MapError: coordinates out of range.
+        """
         d = self.spec.model_dump(mode="json")
         _drop_unset_energy_fields(self.spec, d)
         d["origin"] = {"lat": lat, "lon": lon, "alt": alt}
@@ -642,7 +788,11 @@ class Map:
         point that near and reaches at most `OFFSET_OVERSHOOT` times as far, never as far as
         a start, end or depot), rectangles turned into polygon obstacles, every sensor's
         required data times (1 + data_margin), safety margins then 0. Returns `self` when both
-        margins are 0, so such a map is planned and scored exactly as before."""
+        margins are 0, so such a map is planned and scored exactly as before.
+
+        Returns:
+            The planning Map (built once, then cached on this map), or `self`.
+        """
         cached = self.__dict__.get("_planning_map")
         if cached is not None:
             return cached
@@ -693,7 +843,12 @@ class Map:
         return pm
 
     def to_dict(self) -> dict[str, Any]:
-        """The map as JSON-ready data (polygons cleaned, exteriors counter-clockwise)."""
+        """The map as JSON-ready data (polygons cleaned, exteriors counter-clockwise).
+
+        Returns:
+            The map file's fields as a dict; `polygons` and `witness` left out when empty, and
+            the battery, power, fleet, separation and goal fields the file did not give.
+        """
         d = self.spec.model_dump(mode="json", exclude_none=False)
         obs = d["obstacles"]
         for sh in self.shapes:
@@ -712,7 +867,14 @@ class Map:
         return d
 
     def summary(self) -> dict[str, Any]:
-        """Counts, area, I_max and the defaults in force, for `lamde-mission check`."""
+        """Counts, area, I_max and the defaults in force, for `lamde-mission check`.
+
+        Returns:
+            JSON-ready dict: name, area_m, origin, start, end, the counts of sensors and
+            obstacles, I_max (and whether it is the default), the uav, radio, objective and
+            safety settings, total_required_data_mbit, has_witness, then the battery, power
+            and fleet entries where the map gives them.
+        """
         s = self.spec
         return {
             "name": s.name,

@@ -61,7 +61,14 @@ EDGE_SHARED = 2
 
 
 def ring_area(ring: np.ndarray) -> float:
-    """Signed area (m^2) of a vertex cycle (V, 2), positive when counter-clockwise."""
+    """Signed area (m^2) of a vertex cycle (V, 2), positive when counter-clockwise.
+
+    Args:
+        ring: (V, 2) vertex cycle, metres, without the closing vertex.
+
+    Returns:
+        The shoelace area, m^2 (negative when clockwise).
+    """
     x, y = ring[:, 0], ring[:, 1]
     xn, yn = np.concatenate((x[1:], x[:1])), np.concatenate((y[1:], y[:1]))
     return 0.5 * float(np.dot(x, yn) - np.dot(xn, y))
@@ -80,10 +87,19 @@ def clean_ring(points: Sequence[Sequence[float]] | np.ndarray,
     """One ring made a plain vertex cycle: (V, 2) float64 without the closing vertex.
 
     Drops a closing vertex within `tol` of the first, merges consecutive vertices closer than
-    `tol` and removes vertices within `tol` of the segment joining their neighbours. Returns the
-    cycle and counts of what was changed: {"closing": 0|1, "duplicate": n, "collinear": n}.
-    Orientation is kept. Raises ValueError for a non-finite coordinate; the caller checks that
-    at least 3 vertices remain.
+    `tol` and removes vertices within `tol` of the segment joining their neighbours (never
+    below 3). Orientation is kept. The caller checks that at least 3 vertices remain.
+
+    Args:
+        points: the ring's vertices, (V, 2), metres, closed or not.
+        tol: metres (`VERTEX_TOL`, 5 mm).
+
+    Returns:
+        (cycle (V', 2) float64, counts of what was changed: {"closing": 0|1,
+        "duplicate": n, "collinear": n}).
+
+    Raises:
+        ValueError: a non-finite coordinate ("has a non-finite coordinate").
     """
     v = np.array(points, dtype=np.float64).reshape(-1, 2)
     if not np.all(np.isfinite(v)):
@@ -120,7 +136,17 @@ def clean_ring(points: Sequence[Sequence[float]] | np.ndarray,
 
 
 def is_convex(ring: np.ndarray) -> bool:
-    """Whether a counter-clockwise cycle (V, 2) turns left (or straight) at every vertex."""
+    """Whether a counter-clockwise cycle (V, 2) turns left at every vertex.
+
+    Strictly: a straight vertex (cross product 0) makes it not convex; cleaned rings
+    (`clean_ring`) have none.
+
+    Args:
+        ring: (V, 2) vertex cycle, metres, without the closing vertex.
+
+    Returns:
+        True when every turn's cross product is > 0 (False for a clockwise cycle).
+    """
     e = np.concatenate((ring[1:], ring[:1])) - ring
     e2 = np.concatenate((e[1:], e[:1]))
     cross = e[:, 0] * e2[:, 1] - e[:, 1] * e2[:, 0]
@@ -147,8 +173,17 @@ def polygon_problem(
     """Why the polygon (rings as vertex cycles) is not a simple polygon with area, or None.
 
     Uses GEOS's validity test; the answer names the problem and where, e.g.
-    "self-intersection at (12.5, 40)"; `locate(x, y)` may word the place instead (e.g. as
-    longitude and latitude).
+    "self-intersection at (12.5, 40)".
+
+    Args:
+        shell: (V, 2) the exterior ring, metres.
+        holes: (V_h, 2) each, the holes' rings, metres.
+        locate: words the place of a problem from (x, y) instead of "x, y" (e.g. as
+            longitude and latitude); None: the local coordinates.
+
+    Returns:
+        One lower-case line naming the problem (fewer than 3 vertices, zero area, or GEOS's
+        reason and where), or None for a valid polygon with area.
     """
     import shapely
     from shapely.geometry import Polygon
@@ -186,9 +221,18 @@ def clean_polygon(
     """A polygon's rings (exterior first, then holes) made ready for `convex_pieces`.
 
     Each ring is cleaned (`clean_ring`), the polygon checked (`polygon_problem`), the exterior
-    made counter-clockwise and the holes clockwise (RFC 7946). Returns (shell, holes, notes):
-    notes say what was changed ("given clockwise; ...", "merged 1 near-duplicate vertex(es)
-    ..."). Raises ValueError with one line naming the problem (and the ring, or where).
+    made counter-clockwise and the holes clockwise (RFC 7946).
+
+    Args:
+        rings: the exterior ring, then the holes, each (V, 2) metres.
+        locate: words the place of a problem (see `polygon_problem`); None: local x, y.
+
+    Returns:
+        (shell (V, 2), holes [(V_h, 2), ...], notes): notes say what was changed ("given
+        clockwise; ...", "merged 1 near-duplicate vertex(es) ...").
+
+    Raises:
+        ValueError: one line naming the problem (and the ring, or where).
     """
     out: list[np.ndarray] = []
     merged = {"duplicate": 0, "collinear": 0}
@@ -235,12 +279,22 @@ def convex_pieces(
 ) -> list[tuple[np.ndarray, np.ndarray]]:
     """Convex pieces with disjoint interiors whose union is the polygon (shell minus holes).
 
-    `shell` and `holes` are cleaned vertex cycles (any orientation) of a valid polygon (see
-    `polygon_problem`). Returns [(vertices (V, 2) counter-clockwise, flags (V,) int8)], where
-    flags[i] describes the edge from vertex i to vertex i + 1 (`EDGE_BOUNDARY`, `EDGE_OWNED`,
-    `EDGE_SHARED`; see the module docstring). A convex polygon without holes is one piece, its
-    vertices unchanged (made counter-clockwise). Raises ValueError if the triangulation does not
-    reproduce the polygon's own vertices (a degenerate input).
+    A convex polygon without holes is one piece, its vertices unchanged (made
+    counter-clockwise). Constrained Delaunay triangles merged by Hertel-Mehlhorn.
+
+    Args:
+        shell: cleaned vertex cycle (V, 2), metres, any orientation, of a valid polygon (see
+            `polygon_problem`).
+        holes: cleaned vertex cycles (V_h, 2), metres, any orientation.
+
+    Returns:
+        [(vertices (V, 2) counter-clockwise, flags (V,) int8)], where flags[i] describes the
+        edge from vertex i to vertex i + 1 (`EDGE_BOUNDARY`, `EDGE_OWNED`, `EDGE_SHARED`; see
+        the module docstring).
+
+    Raises:
+        ValueError: the triangulation does not reproduce the polygon's own vertices, has a
+            zero-area triangle or does not tile the polygon (a degenerate input).
     """
     shell = np.asarray(shell, dtype=np.float64).reshape(-1, 2)
     if ring_area(shell) < 0.0:

@@ -132,7 +132,14 @@ class Problem:
         return nodes[:, :-1], nodes[:, 1:]
 
     def rates(self, pts: np.ndarray) -> np.ndarray:
-        """R_ij = max(R_c - xi * sqrt(|p_i - s_j|^2 + H^2), 0), shape (..., I, J) in Mbit/s."""
+        """R_ij = max(R_c - xi * sqrt(|p_i - s_j|^2 + H^2), 0), shape (..., I, J) in Mbit/s.
+
+        Args:
+            pts: hover points (m), shape (..., I, 2).
+
+        Returns:
+            R (Mbit/s, >= 0) to this map's sensors, shape (..., I, J) (`ModelParams.rates`).
+        """
         return self.model.rates(pts)
 
     # ------------------------------------------------------------------ evaluation
@@ -179,6 +186,15 @@ class Problem:
         The compiled fast path (`planner_core.model.kernels`, then the obstacle kernel on all
         n (I_max + 1) legs in one batch); `_evaluate_parts` is its numpy twin. Cost: O(n I_max
         x sensors in range) for the terms plus the legs' obstacle tests.
+
+        Args:
+            X: (n, dim) decision vectors, or one (dim,) vector (read as n = 1).
+
+        Returns:
+            (f (n,) s, phi (n,) >= 0: v3 + v4 + v5, plus v6 with corner slots).
+
+        Raises:
+            ValueError: X not of shape (n, dim).
         """
         X = np.ascontiguousarray(np.atleast_2d(X), dtype=float)
         if X.ndim != 2 or X.shape[1] != self.dim:
@@ -204,7 +220,17 @@ class Problem:
         return f, v3 + v4 + v5
 
     def breakdown(self, x: np.ndarray) -> dict[str, Any]:
-        """Every term of the model for one solution, as plain Python values (JSON-ready)."""
+        """Every term of the model for one solution, as plain Python values (JSON-ready).
+
+        Args:
+            x: (dim,) one decision vector.
+
+        Returns:
+            f, phi, score, t_fly, t_hover (s), l_vio (m), v3, v4, v5, n_hover, the active
+            hover points (m) and times (s), leg times (s) and lengths (m), v3 per point, and
+            per sensor id the data collected, required and short (Mbit); with corner slots
+            also v6 and n_corner (active points of 0 s).
+        """
         p = self._evaluate_parts(np.asarray(x, dtype=float)[None, :])
         act = p["active"][0]
         hp = p["points"][0][act]
@@ -241,6 +267,14 @@ class Problem:
         graph and hovers long enough to serve every sensor, so most starts are feasible.
         Uniform ones keep the population diverse. The DE uses this hook when a problem has it
         (synthetic problems do not), and its draws come from the DE's own seeded generator.
+
+        Args:
+            rng: the DE's generator; every draw comes from it.
+            n: population size.
+
+        Returns:
+            (n, dim): rows 0 .. n // 2 - 1 seeded (`Seeder.solution`), the rest uniform in
+            [lower, upper].
         """
         span = self.upper - self.lower
         X = self.lower + rng.random((n, self.dim)) * span
@@ -253,7 +287,11 @@ class Problem:
         """This problem's `planner_core.model.seeding.Seeder` (visibility graph, reach), built on
         first
         use and kept: the sensor-aware starts, the memetic repair and the engineering peer share
-        it."""
+        it.
+
+        Returns:
+            The Seeder (`Seeder.for_problem`), the same object on every call.
+        """
         return Seeder.for_problem(self)
 
     def _clustered_solution(self, rng: np.random.Generator) -> np.ndarray:
@@ -262,7 +300,21 @@ class Problem:
 
     # ------------------------------------------------------------------ encoding
     def encode(self, hover_points: np.ndarray, hover_times: np.ndarray) -> np.ndarray:
-        """A decision vector whose decoded plan is exactly these hover points and times."""
+        """A decision vector whose decoded plan is exactly these hover points and times.
+
+        Args:
+            hover_points: (k, 2) hover points, m, in flying order.
+            hover_times: (k,) hover times, s.
+
+        Returns:
+            (dim,) vector: the k points first with eps 1, the other slots at the end point with
+            t = 0 and eps = 0.
+
+        Raises:
+            ValueError: k > n_points; k != n_points in fixed-length mode; k < n_points with
+                activation_threshold 0 in variable-length mode; (numpy's) hover_times of
+                another length than the points, but 1.
+        """
         hp = np.asarray(hover_points, dtype=float).reshape(-1, 2)
         ht = np.asarray(hover_times, dtype=float).reshape(-1)
         k = len(hp)

@@ -445,7 +445,16 @@ class Seeder:
     @classmethod
     def for_problem(cls, problem: Any, margin: float = MARGIN) -> Seeder:
         """The seeder of a `planner_core.model.problem.Problem` (its model, obstacles and
-        encoding)."""
+        encoding).
+
+        Args:
+            problem: the Problem (its `model`, `obstacles`, `variable_length`).
+            margin: metres a pushed point is set beyond an obstacle's side, and how far the
+                visibility graph pushes the obstacles out (`build_visibility_graph`).
+
+        Returns:
+            A new Seeder.
+        """
         return cls(problem.model, problem.obstacles, variable_length=problem.variable_length,
                    margin=margin)  # fmt: skip
 
@@ -470,7 +479,16 @@ class Seeder:
     def push_one(self, q: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """Point q (2,) moved `margin` metres beyond the nearest side of the first obstacle
         containing it (q itself when it is in none); rng only picks a direction for a point at a
-        circle's exact centre."""
+        circle's exact centre.
+
+        Args:
+            q: (2,) the point, local metres.
+            rng: draws the direction for a point within 1e-9 m of a circle's centre (one draw
+                when a circle holds q).
+
+        Returns:
+            (2,) the moved point, or q itself.
+        """
         obs = self.obstacles
         circ = obs.circles
         # only circles whose box holds q can hold it (hypot >= each |coordinate difference|);
@@ -485,7 +503,15 @@ class Seeder:
         return self._push_out_of_polygon(q)
 
     def push_one_reference(self, q: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        """The slow reference of `push_one`: every circle tested with `math.hypot`."""
+        """The slow reference of `push_one`: every circle tested with `math.hypot`.
+
+        Args:
+            q: (2,) the point, local metres.
+            rng: as in `push_one`.
+
+        Returns:
+            (2,) the moved point, or q itself (the same as `push_one`).
+        """
         obs = self.obstacles
         for cx, cy, r in obs.circles:
             d = math.hypot(q[0] - cx, q[1] - cy)
@@ -520,7 +546,16 @@ class Seeder:
         points) and a point met again, by the seeder's
         routes or the constructive leg times (a third of L02's points), is not tested again
         against the ~1,000 corners it is tangent to: the new points of a call are tested in
-        one `connect_reference` call. The same rows as `connect_reference` (tests)."""
+        one `connect_reference` call. The same rows as `connect_reference` (tests).
+
+        Args:
+            pts: (P, 2) points, local metres; anything but a float64 (P, 2) array (or an
+                empty graph or no points) goes to `connect_reference` uncached.
+
+        Returns:
+            (P, N) float array, metres; inf where the point does not see the node tangentially
+            (N: the graph's nodes).
+        """
         g = self.graph
         pts = np.asarray(pts)
         if g.n == 0 or len(pts) == 0 or pts.dtype != np.float64 or pts.ndim != 2:
@@ -542,7 +577,14 @@ class Seeder:
         return out
 
     def connect_reference(self, pts: np.ndarray) -> np.ndarray:
-        """`connect` computed afresh for every point: its slow reference."""
+        """`connect` computed afresh for every point: its slow reference.
+
+        Args:
+            pts: (P, 2) points, local metres.
+
+        Returns:
+            (P, N) distances, metres (inf elsewhere), as `connect`.
+        """
         g = self.graph
         out = np.full((len(pts), g.n), np.inf)
         if g.n == 0 or len(pts) == 0:
@@ -639,7 +681,20 @@ class Seeder:
         """Centres C (K, 2), already in visiting order, each moved within its sensors' service
         radius (owner (J,): the centre serving each sensor; lim (J,) metres) to clear its two
         legs and lower its share of f; alternate halves, all candidates of a half in one
-        geometry call. Returns the moved centres (K, 2); rng turns the candidate directions."""
+        geometry call.
+
+        Args:
+            C: (K, 2) centres in visiting order, local metres.
+            owner: (J,) index of the centre serving each sensor.
+            lim: (J,) each sensor's service radius, metres.
+            rng: turns the candidate directions (one draw).
+            sweeps: rounds; each moves every other centre, then the rest, the candidate rings
+                shrinking by `_SHRINK` per round.
+
+        Returns:
+            (K, 2) the moved centres (a point whose every candidate lands in an obstacle
+            keeps its position); C itself when K is 0.
+        """
         p = self.p
         K = len(C)
         if K == 0:
@@ -684,7 +739,14 @@ class Seeder:
         meet the incumbent's legs outside what they change, is not routed again: the same
         corners as a fresh search (tests). Cost: the legs' obstacle tests, O((K + 1) x the
         obstacles' vertices), and a shortest path over the visibility graph per new blocked
-        leg."""
+        leg.
+
+        Args:
+            C: (K, 2) centres in visiting order, local metres.
+
+        Returns:
+            (interior points (M, 2) local metres, is_centre (M,) bool: False at a corner).
+        """
         p = self.p
         pts = np.vstack([p.start, C, p.end])
         clear = self._clear(pts[:-1], pts[1:])
@@ -756,7 +818,15 @@ class Seeder:
         removals (`_prune_step` explains the bookkeeping). Each removal is one compiled step
         (`_prune_step`: O(n^2 + J)) and one check of the two legs it changed; numpy's
         arithmetic is kept (its sums, `hypot`, Eq. 1's `leg_time`), so the same points as
-        `prune_reference` (O(n^2 J) per removal) to the bit (tests)."""
+        `prune_reference` (O(n^2 J) per removal) to the bit (tests).
+
+        Args:
+            M: (k, 2) route points, local metres.
+            limit: points are removed while more than this remain (I_max in `hover_plan`).
+
+        Returns:
+            (m, 2) the kept points, in order; M itself (as float (k, 2)) when k <= 1.
+        """
         p = self.p
         M = np.asarray(M, dtype=float).reshape(-1, 2)
         if len(M) <= 1:
@@ -787,7 +857,15 @@ class Seeder:
         """`prune` the obvious way: every iteration recomputes, for each point m, the greedy
         hover times of the others from an (n, n, J) array, O(n^3 J) over a prune of n points;
         what `prune` computes from each sensor's best and second-best point (tests hold the
-        two equal)."""
+        two equal).
+
+        Args:
+            M: (k, 2) route points, local metres.
+            limit: the most points kept without a cost saving.
+
+        Returns:
+            (m, 2) the kept points, in order (as `prune`).
+        """
         p = self.p
         while len(M) > 1:
             full = np.vstack([p.start, M, p.end])
@@ -821,7 +899,15 @@ class Seeder:
 
     def truncate(self, M: np.ndarray, limit: int) -> np.ndarray:
         """Route points M (k, 2) cut to `limit`, each time dropping the one whose removal adds
-        the least length inside obstacles (the partially colliding fallback)."""
+        the least length inside obstacles (the partially colliding fallback).
+
+        Args:
+            M: (k, 2) route points, local metres.
+            limit: how many to keep.
+
+        Returns:
+            (min(k, limit), 2) the kept points, in order.
+        """
         p = self.p
         while len(M) > limit:
             full = np.vstack([p.start, M, p.end])
@@ -832,7 +918,17 @@ class Seeder:
 
     def fill(self, M: np.ndarray, limit: int) -> np.ndarray:
         """Route points M (k, 2) with the longest legs split by collinear points until there
-        are `limit` (fixed-length mode: a point on a clear leg keeps it clear)."""
+        are `limit` (fixed-length mode: a point on a clear leg keeps it clear).
+
+        Args:
+            M: (k, 2) route points, local metres.
+            limit: how many points to reach.
+
+        Returns:
+            (max(k, limit), 2) points, in route order; each new one at the first of the leg's
+            candidate fractions (0.5 first) whose point hears at most `_BANDWIDTH_USE` x the
+            bandwidth (C3), else the one that hears least above it.
+        """
         p = self.p
         frac = np.array([0.5, 0.35, 0.65, 0.2, 0.8, 0.05, 0.95])
         while len(M) < limit:
@@ -863,7 +959,17 @@ class Seeder:
     # ------------------------------------------------------------------ public
     def hover_plan(self, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
         """One start as (hover points (M, 2), hover times (M,)); M <= I_max, and M = I_max when
-        every slot is active (fixed-length mode)."""
+        every slot is active (fixed-length mode).
+
+        Args:
+            rng: every random draw of the plan (cluster count, radius, k-means++, jitter,
+                time factor).
+
+        Returns:
+            (hover points (M, 2) local metres, hover times (M,) s: the greedy times x a
+            factor drawn in 1..1.1, capped at T_max). Filled to M = I_max when not
+            `variable_length` or tau <= 0.
+        """
         p = self.p
         I, J = p.n_points, len(p.sensors)
         hi = min(I, J)
@@ -899,7 +1005,16 @@ class Seeder:
         return M, np.minimum(times * rng.uniform(1.0, 1.1), p.t_max)
 
     def solution(self, rng: np.random.Generator) -> np.ndarray:
-        """One decision vector: the hover plan at sorted random slots, random inactive rest."""
+        """One decision vector: the hover plan at sorted random slots, random inactive rest.
+
+        Args:
+            rng: the plan's draws (`hover_plan`), then the slots and the inactive rest.
+
+        Returns:
+            (4 n_points,) the rows (x m, y m, t s, eps) flattened: the plan's rows get eps in
+            [tau, 1), the others uniform positions in the area, t in [0, T_max) and eps in
+            [0, tau).
+        """
         p = self.p
         I = p.n_points
         M, times = self.hover_plan(rng)

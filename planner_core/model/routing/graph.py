@@ -43,10 +43,22 @@ class VisibilityGraph:
 
     @property
     def n(self) -> int:
+        """Nodes of the graph.
+
+        Returns:
+            N.
+        """
         return int(self.nodes.shape[0])
 
     def tangent_mask(self, pts: np.ndarray) -> np.ndarray:
-        """(P, N): whether the line from each point to each node is tangent at the node."""
+        """(P, N): whether the line from each point to each node is tangent at the node.
+
+        Args:
+            pts: (P, 2) points, metres.
+
+        Returns:
+            (P, N) bool (visibility not tested: see `Seeder.connect`).
+        """
         return _tangent_mask(np.ascontiguousarray(pts, dtype=float), self.nodes, self.prev,
                              self.next)  # fmt: skip
 
@@ -55,8 +67,18 @@ class VisibilityGraph:
         """(N,) least cost from a point to every node: src_dist (N,) its cost to the nodes it
         sees (inf elsewhere), then along graph edges costing `weights` (aligned with `indices`;
         default the edge lengths, m); inf for a node it cannot reach. Multi-source Dijkstra
-        (`_spread`: a bucket queue when the weights allow, else an indexed heap). `bounds`:
-        (least, largest) weight when the caller keeps them (else found here, O(E))."""
+        (`_spread`: a bucket queue when the weights allow, else an indexed heap).
+
+        Args:
+            src_dist: (N,) the point's cost to the nodes it sees (inf elsewhere).
+            weights: (2E,) edge costs aligned with `indices` (None: `weights`, the edge
+                lengths, m).
+            bounds: (least, largest) weight when the caller keeps them (else found here,
+                O(E), `weight_bounds`).
+
+        Returns:
+            (N,) least cost to every node (inf where unreachable).
+        """
         w = self.weights if weights is None else np.ascontiguousarray(weights, dtype=float)
         lo, hi = weight_bounds(w) if bounds is None else bounds
         return _spread(self.indptr, self.indices, w, np.ascontiguousarray(src_dist, dtype=float),
@@ -66,7 +88,15 @@ class VisibilityGraph:
               weights: np.ndarray | None = None) -> tuple[float, list[int]]:
         """Shortest a -> nodes -> b given a's (src_dist) and b's (dst_dist) distances to the
         nodes they see (inf elsewhere): (length, node path); (inf, []) when there is none.
-        `weights`: edge costs aligned with `indices` (default the edge lengths, m)."""
+
+        Args:
+            src_dist: (N,) a's distances to the nodes it sees (inf elsewhere).
+            dst_dist: (N,) b's distances to the nodes it sees (inf elsewhere).
+            weights: edge costs aligned with `indices` (default the edge lengths, m).
+
+        Returns:
+            (length in the weights' units, node indices from a's side to b's), or (inf, []).
+        """
         w = self.weights if weights is None else np.ascontiguousarray(weights, dtype=float)
         length, path = _route(self.indptr, self.indices, w, src_dist, dst_dist)
         return float(length), path.tolist()
@@ -256,7 +286,14 @@ def _sift_up(heap, pos, d, i, u, key):
 
 def weight_bounds(weights: np.ndarray) -> tuple[float, float]:
     """(least, largest) of edge weights (inf, 0 when there are none): what `_spread` needs to
-    choose and size its bucket queue."""
+    choose and size its bucket queue.
+
+    Args:
+        weights: edge weights, any shape.
+
+    Returns:
+        (least, largest) as floats; (inf, 0.0) for none.
+    """
     w = np.asarray(weights, dtype=float)
     return (float(w.min()), float(w.max())) if w.size else (np.inf, 0.0)
 
@@ -445,7 +482,18 @@ def build_visibility_graph(
 ) -> VisibilityGraph:
     """The reduced visibility graph of `obstacles` (a `geometry.Obstacles`) pushed out by
     `margin` metres (see `VisibilityGraph`); nodes inside an obstacle or outside the area
-    [0, width] x [0, height] are left out."""
+    [0, width] x [0, height] are left out.
+
+    Args:
+        obstacles: the packed obstacles.
+        width: the area's side along x, metres.
+        height: the area's side along y, metres.
+        margin: how far the corners are pushed out, metres (`offset.obstacle_polygons`).
+
+    Returns:
+        The graph: edges join node pairs tangent at both ends whose line is clear
+        (overlap <= `CLEAR`), weighted by length, m.
+    """
     polys = obstacle_polygons(obstacles, margin)
     if polys:
         nodes = np.concatenate(polys)
@@ -489,7 +537,15 @@ def build_visibility_graph(
 
 def shortest_paths(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """All-pairs shortest paths (Floyd-Warshall) of a weight matrix w (n, n) with inf for no
-    edge: (distances (n, n), next hop (n, n), -1 where there is no path)."""
+    edge: (distances (n, n), next hop (n, n), -1 where there is no path).
+
+    Args:
+        w: (n, n) edge weights, inf for no edge (the diagonal is taken as 0; w is copied).
+
+    Returns:
+        (distances (n, n), next hop (n, n) int: the node after i on the way to j, -1 where
+        there is no path). O(n^3).
+    """
     n = len(w)
     w = np.array(w, dtype=float)
     np.fill_diagonal(w, 0.0)
@@ -503,7 +559,16 @@ def shortest_paths(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def path_hops(nxt: np.ndarray, a: int, b: int) -> list[int]:
-    """The nodes strictly between a and b on the shortest path (from `shortest_paths`)."""
+    """The nodes strictly between a and b on the shortest path (from `shortest_paths`).
+
+    Args:
+        nxt: (n, n) next hops from `shortest_paths`.
+        a: the first node.
+        b: the last node; b must be reachable from a (nxt[a, b] = -1 is not checked).
+
+    Returns:
+        The node indices in order, [] when a == b or they are adjacent.
+    """
     out: list[int] = []
     u = a
     while u != b:

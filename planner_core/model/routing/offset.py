@@ -24,9 +24,16 @@ def offset_convex(
     each new vertex is c from both its edges' lines (at a reflex corner of a non-convex polygon
     the new vertex lies in the notch, c from both lines).
 
-    `normals` (n, 2): unit outward normals of the edges v_k -> v_k+1 when already known
-    (computed from the vertices otherwise). `min_denominator` > 0 caps the mitre at very sharp
-    corners (the vertex then lies less than c from its edges' lines, still outside the polygon).
+    Args:
+        poly: (n, 2) counter-clockwise vertices, metres.
+        c: the push, metres.
+        normals: (n, 2) unit outward normals of the edges v_k -> v_k+1 when already known
+            (computed from the vertices otherwise).
+        min_denominator: > 0 caps the mitre at very sharp corners (the vertex then lies less
+            than c from its edges' lines, still outside the polygon); 0: no cap.
+
+    Returns:
+        (n, 2) the pushed vertices, metres, in the same order.
     """
     poly = np.asarray(poly, dtype=float)
     if normals is None:
@@ -46,7 +53,16 @@ def obstacle_polygons(obstacles: Any, margin: float) -> list[np.ndarray]:
     the notch that few tangent lines use. Holes are left out (a courtyard cannot be reached
     without crossing the building). Whether an edge is clear is decided on the real shape, where
     a leg along an internal cut between two pieces counts as inside
-    (`planner_core.model.polygons`)."""
+    (`planner_core.model.polygons`).
+
+    Args:
+        obstacles: a `geometry.Obstacles`.
+        margin: the push, metres (a circle's polygon is circumscribed about radius + margin).
+
+    Returns:
+        The pushed polygons, (V, 2) counter-clockwise each, metres; mitres capped at
+        needle-sharp corners (`_NEEDLE`).
+    """
     polys: list[np.ndarray] = []
     ang = 2.0 * np.pi * (np.arange(CIRCLE_SIDES) + 0.5) / CIRCLE_SIDES
     for cx, cy, r in obstacles.circles:

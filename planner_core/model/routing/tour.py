@@ -28,8 +28,15 @@ def open_tour(W: np.ndarray, first_improvement: bool = False) -> np.ndarray:  # 
 
     Nearest neighbour from 0 (ties: lowest index), then 2-opt: reversing t[i+1..j] when that
     shortens the path by more than 1e-6. Best-move 2-opt (the largest gain each round, at most
-    8 P rounds) by default; `first_improvement` applies every improving move as the sweep finds
-    it and sweeps until none is left.
+    8 P rounds) by default.
+
+    Args:
+        W: (P, P) weights (e.g. metres or seconds), P >= 1.
+        first_improvement: apply every improving move as the sweep finds it and sweep until
+            none is left (False: best-move 2-opt).
+
+    Returns:
+        (P,) int64 order, t[0] = 0 and t[P - 1] = P - 1.
     """
     P = W.shape[0]
     t = np.empty(P, dtype=np.int64)
@@ -62,7 +69,15 @@ def open_tour(W: np.ndarray, first_improvement: bool = False) -> np.ndarray:  # 
 
 @njit(cache=True, nogil=True)
 def path_cost(W: np.ndarray, t: np.ndarray) -> float:  # pragma: no cover - compiled
-    """Length of the path t (P,) under weights W (P, P): sum of W[t[i], t[i + 1]]."""
+    """Length of the path t (P,) under weights W (P, P): sum of W[t[i], t[i + 1]].
+
+    Args:
+        W: (P, P) weights.
+        t: (P,) the order, node indices.
+
+    Returns:
+        The sum, in W's unit (0.0 for fewer than 2 nodes).
+    """
     s = 0.0
     for i in range(t.shape[0] - 1):
         s += W[t[i], t[i + 1]]
@@ -218,7 +233,16 @@ def open_path(W: np.ndarray, kicks: int = KICKS) -> np.ndarray:  # pragma: no co
     on a tie); then an iterated local search (Lourenco, Martin & Stuetzle 2003): `kicks` times a
     double-bridge move on the best path (cut points from a fixed-seed generator), improved
     again, kept when shorter. Deterministic. 2-opt assumes W symmetric (a reversed run costs
-    what it did)."""
+    what it did).
+
+    Args:
+        W: (P, P) symmetric weights (e.g. seconds).
+        kicks: double-bridge kicks of the iterated local search (`KICKS`); none below 6
+            points.
+
+    Returns:
+        (P,) int order, first 0 and last P - 1 (0..P-1 unchanged for P <= 3).
+    """
     P = W.shape[0]
     if P <= 3:
         return np.arange(P)
