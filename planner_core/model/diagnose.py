@@ -105,8 +105,13 @@ class Diagnosis:
 def diagnose(m: Any) -> Diagnosis:
     """Diagnose `m` (a Map; its planning map is what is judged).
 
-    Args: m a `planner_core.model.mapio.Map`. Returns: the `Diagnosis` (findings in order:
-    the end point, per sensor, then the bandwidth test's)."""
+    Args:
+        m: a `planner_core.model.mapio.Map`.
+
+    Returns:
+        The `Diagnosis` (findings in order: the end point, per sensor, then the bandwidth
+        test's).
+    """
     from shapely.geometry import Point
 
     from planner_core.model.mapio import _obstacle_polygons
@@ -241,7 +246,11 @@ def fleet_findings(m: Any) -> list[Finding]:
     SORTIE_LIMIT: the module docstring), as `diagnose` makes them, for a map with a battery
     or a fleet (else none); the sortie planner refuses a map with a SORTIE_LIMIT up front.
 
-    Args: m a `planner_core.model.mapio.Map`. Returns: the findings, in `diagnose`'s order.
+    Args:
+        m: a `planner_core.model.mapio.Map`.
+
+    Returns:
+        The findings, in `diagnose`'s order.
     """
     if not (m.has_battery or m.has_fleet):
         return []
@@ -665,11 +674,21 @@ def bandwidth_bound(
     most I_max x T_max and nothing can be proven. In between, the cells the relaxation uses
     are split in four and both are solved again (`C3_ROUNDS` at most).
 
-    Args: sensors (J, 2) m, required (J,) Mbit (Q_j, the planning map's), ids (J,) sensor ids;
-    width, height m (the area, C1); altitude m (H); peak_rate, bandwidth Mbit/s (R_c,
-    R_lambda); decay Mbit/s per m (xi); t_max s (T_max); i_max (I_max).
+    Args:
+        sensors: (J, 2) m.
+        required: (J,) Mbit (Q_j, the planning map's).
+        ids: (J,) sensor ids.
+        width: m (the area, C1).
+        height: m (the area, C1).
+        altitude: m (H).
+        peak_rate: Mbit/s (R_c).
+        decay: Mbit/s per m (xi).
+        bandwidth: Mbit/s (R_lambda).
+        t_max: s (T_max).
+        i_max: I_max.
 
-    Returns: a `BandwidthBound`.
+    Returns:
+        A `BandwidthBound`.
     """
     from planner_core.model.formulas import ground_reach, link_rates, slant_rates
     from planner_core.model.hoverlp import hover_lp

@@ -814,12 +814,17 @@ def scheduled_lp(
     With R_lambda >= sum_j R_ij at every point it is `hover_lp`'s LP (D_ij = R_ij T_i). Stated
     in D_ij / Q_j, solved whole by HiGHS (highspy).
 
-    Args: R (I, J) link rates, Mbit/s (numpy or scipy sparse); req (J,) Q_j, Mbit;
-    bandwidth R_lambda, Mbit/s; t_max T_max, s (may be inf).
+    Args:
+        R: (I, J) link rates, Mbit/s (numpy or scipy sparse).
+        req: (J,) Q_j, Mbit.
+        bandwidth: R_lambda, Mbit/s.
+        t_max: T_max, s (may be inf).
 
-    Returns: (T (I,) s, D (I, J) scipy CSR Mbit, V = sum T s, y (J,) >= 0 the duals of the C4
-    rows in D_ij / Q_j units, zero for sensors that need nothing), or None when infeasible
-    (a sensor that needs data out of every point's range, or more than T_max allows).
+    Returns:
+        (T (I,) s, D (I, J) scipy CSR Mbit, V = sum T s, y (J,) >= 0 the duals of the C4
+        rows in D_ij / Q_j units, zero for sensors that need nothing), or None when
+        infeasible (a sensor that needs data out of every point's range, or more than T_max
+        allows).
     """
     import scipy.sparse as sp
 
