@@ -33,6 +33,11 @@ def test_shortest_paths_and_hops() -> None:
     assert dist[0, 3] == 3.0 and path_hops(nxt, 0, 3) == [1, 2] and path_hops(nxt, 0, 1) == []
     dist, nxt = shortest_paths(np.array([[0.0, inf], [inf, 0.0]]))
     assert dist[0, 1] == inf and nxt[0, 1] == -1
+    with pytest.raises(ValueError, match="no path from node 0 to node 1"):
+        path_hops(nxt, 0, 1)  # it returned [-1] (nxt's last row read as the hop)
+    loop = np.array([[0, 1, 1], [1, 0, 0], [0, 0, 0]])  # 0 -> 1 -> 0 -> ... never reaches 2
+    with pytest.raises(ValueError, match="no path"):
+        path_hops(loop, 0, 2)
 
 
 def test_route_follows_graph_edges() -> None:

@@ -564,15 +564,21 @@ def path_hops(nxt: np.ndarray, a: int, b: int) -> list[int]:
     Args:
         nxt: (n, n) next hops from `shortest_paths`.
         a: the first node.
-        b: the last node; b must be reachable from a (nxt[a, b] = -1 is not checked).
+        b: the last node.
 
     Returns:
         The node indices in order, [] when a == b or they are adjacent.
+
+    Raises:
+        ValueError: b is not reachable from a (nxt[a, b] = -1), or `nxt` holds a cycle on
+            the way (it is not a next-hop table of `shortest_paths`).
     """
     out: list[int] = []
     u = a
     while u != b:
         u = int(nxt[u, b])
+        if u < 0 or len(out) >= len(nxt):
+            raise ValueError(f"path_hops: no path from node {a} to node {b}")
         if u == b:
             break
         out.append(u)
