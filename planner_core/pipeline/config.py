@@ -77,25 +77,49 @@ class PlanConfig:
             D.check("time_limit", self.time_limit)
 
     def replace(self, **changes: Any) -> PlanConfig:
-        """A copy with `changes` (checked again)."""
+        """A copy with `changes` (checked again).
+
+        Args:
+            **changes: field name -> new value.
+
+        Returns:
+            The new `PlanConfig`.
+
+        Raises:
+            ValueError: a changed field out of its range (as the constructor).
+            TypeError: a name that is no field.
+        """
         return dataclasses.replace(self, **changes)
 
     @property
     def configurator_name(self) -> str:
-        """The configurator's registry name, or its class name for an object."""
+        """The configurator's registry name, or its class name for an object.
+
+        Returns:
+            The name.
+        """
         c = self.configurator
         return c if isinstance(c, str) else type(c).__name__
 
     @property
     def final_trials(self) -> int:
         """Evaluations of one finish of a plan: its descent, the structural search, the removal
-        moves and the kicks (0 with the descent off)."""
+        moves and the kicks (0 with the descent off).
+
+        Returns:
+            descent_trials + restructure_trials + kick_trials, or 0 with `descent` False.
+        """
         if not self.descent:
             return 0
         return self.descent_trials + self.restructure_trials + self.kick_trials
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready settings (a configurator object and `order` by name)."""
+        """JSON-ready settings (a configurator object and `order` by name).
+
+        Returns:
+            {field: value}; `configurator` its `configurator_name`, `order` None or the
+            callable's `__name__` (its class name without one).
+        """
         out = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
         out["configurator"] = self.configurator_name
         out["order"] = None if self.order is None else getattr(self.order, "__name__",

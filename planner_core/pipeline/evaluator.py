@@ -66,7 +66,11 @@ class Trace(NamedTuple):
 
     @property
     def best_score(self) -> np.ndarray:
-        """The incumbent's penalised score f + 10 * phi along the run."""
+        """The incumbent's penalised score f + 10 * phi along the run.
+
+        Returns:
+            (k,) float, one entry per `evaluations` entry.
+        """
         return penalised_score(self.best_f, self.best_phi)
 
 
@@ -105,14 +109,22 @@ class StageRecord:
 
     @property
     def gain(self) -> float:
-        """f before - f after when both are feasible (s of the objective; 0 when the stage
-        found nothing better), nan when either is infeasible."""
+        """The stage's improvement of the incumbent's objective.
+
+        Returns:
+            f before - f after when both are feasible (s of the objective; 0 when the stage
+            found nothing better), nan when either is infeasible.
+        """
         if self.phi_before > 0 or self.phi_after > 0:
             return float("nan")
         return float(self.f_before - self.f_after)
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready fields (non-finite floats, the f and phi of no incumbent yet, as None)."""
+        """JSON-ready fields.
+
+        Returns:
+            {field: value}; non-finite floats (the f and phi of no incumbent yet) as None.
+        """
         out: dict[str, Any] = {}
         for k, v in self.__dict__.items():
             out[k] = None if isinstance(v, float) and not np.isfinite(v) else v
@@ -167,7 +179,11 @@ class Evaluator:
     # ------------------------------------------------------------------ budget and clock
     @property
     def remaining(self) -> int:
-        """Evaluations still allowed: of the budget, and of the running stage's allotment."""
+        """Evaluations still allowed: of the budget, and of the running stage's allotment.
+
+        Returns:
+            The smaller of the two, >= 0.
+        """
         left = self.budget - self.count
         if self._stage_end is not None:
             left = min(left, self._stage_end - self.count)
@@ -175,17 +191,29 @@ class Evaluator:
 
     @property
     def exhausted(self) -> bool:
-        """Whether no evaluation is left (`remaining` is 0: of the budget or of the stage)."""
+        """Whether no evaluation is left.
+
+        Returns:
+            True when `remaining` is 0 (of the budget or of the stage).
+        """
         return self.remaining <= 0
 
     @property
     def elapsed(self) -> float:
-        """Seconds since the evaluator was made (the run's clock)."""
+        """The run's clock.
+
+        Returns:
+            Seconds since the evaluator was made (`time.perf_counter`).
+        """
         return time.perf_counter() - self.t0
 
     @property
     def expired(self) -> bool:
-        """Whether the time limit has passed (never without one)."""
+        """Whether the time limit has passed.
+
+        Returns:
+            True once `elapsed` >= `time_limit`; always False without a limit.
+        """
         return self.time_limit is not None and self.elapsed >= self.time_limit
 
     def evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -288,7 +316,11 @@ class Evaluator:
 
     @property
     def has_best(self) -> bool:
-        """Whether anything has been evaluated."""
+        """Whether anything has been evaluated.
+
+        Returns:
+            True once an evaluated row is the Deb incumbent (any non-empty evaluate call).
+        """
         return self._best["deb"][0] is not None
 
     def best(self, criterion: Criterion = "deb") -> tuple[np.ndarray, float, float]:

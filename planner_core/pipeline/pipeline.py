@@ -101,7 +101,17 @@ class PipelineResult:
 def allotment(stage: Stage, later: Sequence[Stage], config: PlanConfig, left: int) -> int:
     """Evaluations `stage` gets with `left` of the budget unspent: its share (all of `left`
     for None), never what the `later` stages reserve; a stage that `yields` (the DE) also
-    leaves the later stages' own shares, down to its reserve."""
+    leaves the later stages' own shares, down to its reserve.
+
+    Args:
+        stage: the stage about to run.
+        later: the stages after it, in order.
+        config: the run's settings (the stages' `share` and `reserve` read it).
+        left: evaluations of the budget unspent.
+
+    Returns:
+        The stage's allotment (evaluations), >= 0.
+    """
     free = left - sum(s.reserve(config) for s in later)
     want = stage.share(config)
     n = free if want is None else min(int(want), free)
@@ -124,11 +134,18 @@ def _thin(ev: Evaluator) -> dict[str, np.ndarray]:
 
 
 def with_scheduler(pipeline: Sequence[Stage], scheduler: Any) -> tuple[Stage, ...]:
-    """`pipeline` with its `improve` stage choosing macro-actions by `scheduler` (a registry
-    name, a `schedule.Scheduler`, or None: the pipeline unchanged).
+    """`pipeline` with its `improve` stage choosing macro-actions by `scheduler`.
+
+    Args:
+        pipeline: the stages in order.
+        scheduler: a registry name, a `schedule.Scheduler`, or None (the pipeline unchanged).
+
+    Returns:
+        The stages, each `Improve` replaced by `Improve(scheduler)`.
 
     Raises:
-        ValueError: one line naming `scheduler` for an unknown name.
+        ValueError: one line naming `scheduler` for an unknown name (as
+            `schedule.make_scheduler`, which checks it before any work).
     """
     if scheduler is None:
         return tuple(pipeline)
@@ -180,7 +197,13 @@ class PipelineRun:
         return n if n > 0 and stage.applies(self.state, ev) else 0
 
     def advance(self, until: str | None = None) -> None:
-        """Run the stages in order up to (not including) the first named `until` (None: all)."""
+        """Run the stages in order up to (not including) the first named `until`.
+
+        Stops early when the time limit has passed (`stopped` "time limit").
+
+        Args:
+            until: a stage's `name` (None: all).
+        """
         while self.i < len(self.stages) and not self.stopped:
             stage = self.stages[self.i]
             if until is not None and stage.name == until:
@@ -198,8 +221,12 @@ class PipelineRun:
                 self.stopped = "time limit"
 
     def enter(self) -> bool:
-        """Open the next stage's allotment without running it (False, and the stage passed,
-        when it gets nothing or does not apply)."""
+        """Open the next stage's allotment without running it.
+
+        Returns:
+            True when opened; False, and the stage passed, when it gets nothing or does not
+            apply (or the time limit has passed: the run stopped, the stage not passed).
+        """
         n = self._allot()
         if self.stopped:
             return False
@@ -211,8 +238,12 @@ class PipelineRun:
         return True
 
     def leave(self, state: PlanState, stopped: str = "") -> None:
-        """Close the stage `enter` opened, with its final `state` (`stopped`: "time limit"
-        when the clock ended it)."""
+        """Close the stage `enter` opened, with its final state.
+
+        Args:
+            state: the stage's final `PlanState` (the run's from here on).
+            stopped: "time limit" when the clock ended it, else "".
+        """
         self.state = state
         if self._open is not None:
             self._open.__exit__(None, None, None)
@@ -222,18 +253,25 @@ class PipelineRun:
 
     def fork(self, scheduler: Any = None, config: PlanConfig | None = None) -> PipelineRun:
         """An independent copy of this run between stages (the evaluator, state and stages
-        copied, the problem shared), its `improve` stage choosing by `scheduler` (None: as
-        it was): the schedule benchmark runs the stages before `improve` once per map and
-        seed, then each schedule from there. Same as running the whole pipeline with that
-        scheduler, to the bit (tests/test_schedule.py). `config`: the copy's config from
-        here on (None: this run's); with the budget and seed unchanged and only settings
-        of stages not yet run changed (the DE's `de_share` before the DE), the same plan as
-        a whole run with that config (the split benchmark forks before the DE). A
-        scheduler's `configure` is not asked here: the caller passes what it returns.
+        copied, the problem shared): the schedule benchmark runs the stages before `improve`
+        once per map and seed, then each schedule from there. Same as running the whole
+        pipeline with that scheduler, to the bit (tests/test_schedule.py). With the budget
+        and seed unchanged and only settings of stages not yet run changed (the DE's
+        `de_share` before the DE), the same plan as a whole run with that config (the split
+        benchmark forks before the DE). A scheduler's `configure` is not asked here: the
+        caller passes what it returns.
+
+        Args:
+            scheduler: the copy's `improve` stage chooses by it (None: as it was).
+            config: the copy's config from here on (None: this run's).
+
+        Returns:
+            The copy, its clock (`t0`) restarted.
 
         Raises:
             RuntimeError: a stage is open (`enter` without `leave`).
-            ValueError: `config` with another budget than the run's evaluator.
+            ValueError: `config` with another budget than the run's evaluator, or another
+                `de_share` once the DE has run; an unknown scheduler (`with_scheduler`).
         """
         import copy
 
@@ -255,7 +293,15 @@ class PipelineRun:
         return twin
 
     def result(self) -> PipelineResult:
-        """The run's `PipelineResult` (the evaluator's Deb-best)."""
+        """The run's result.
+
+        Returns:
+            The `PipelineResult` (x, f, phi: the evaluator's Deb-best; seconds since the run
+            or fork was made).
+
+        Raises:
+            RuntimeError: nothing has been evaluated (`Evaluator.best`).
+        """
         ev = self.ev
         x, f, phi = ev.best("deb")
         return PipelineResult(x=x, f=float(f), phi=float(phi), evaluations=ev.count,

@@ -227,9 +227,25 @@ class Scheduler(Protocol):
 
     name: str
 
-    def reset(self, problem: Any, config: PlanConfig) -> None: ...
+    def reset(self, problem: Any, config: PlanConfig) -> None:
+        """Prepare for a run (before its first `choose`).
 
-    def choose(self, observation: Observation) -> str: ...
+        Args:
+            problem: the run's `Problem`.
+            config: the run's `PlanConfig`.
+        """
+        ...
+
+    def choose(self, observation: Observation) -> str:
+        """The next macro-action.
+
+        Args:
+            observation: what the stage looks like before it.
+
+        Returns:
+            An action name: one of `ACTIONS` ("stop" ends the stage).
+        """
+        ...
 
 
 def large_rounds(problem: Any) -> bool:
@@ -238,7 +254,15 @@ def large_rounds(problem: Any) -> bool:
     paper's largest, `planner_core.search.descent.large_problem`), and a
     rebuild can change its number of points (variable length, tau > 0) and be scored by the
     simultaneous-access LP (not `radio.access` "scheduled", where the moves' C3 checks and LP
-    refuse every draw, as they refuse kicks)."""
+    refuse every draw, as they refuse kicks).
+
+    Args:
+        problem: the run's `Problem` (`hover_limit`, `variable_length`, `tau`, optional
+            `scheduled`).
+
+    Returns:
+        True when all four hold.
+    """
     return (large_problem(problem) and bool(problem.variable_length)
             and float(problem.tau) > 0.0 and not bool(getattr(problem, "scheduled", False)))
 
@@ -311,7 +335,14 @@ class DefaultScheduler:
         return config
 
     def reset(self, problem: Any, config: PlanConfig) -> None:
-        """Read the problem: `large_rounds(problem)`."""
+        """Read the problem: `large_rounds(problem)`, and whether it may plan windows (the
+        rounds large, `plan_windows` on and the sensors' Clark-Evans ratio over the map's
+        area at least `WINDOWS_LAYOUT`); no windows yet.
+
+        Args:
+            problem: the run's `Problem` (its sensors and map).
+            config: the run's `PlanConfig` (unused).
+        """
         from planner_core.model.layout import clark_evans
 
         self.large = large_rounds(problem)
@@ -320,7 +351,17 @@ class DefaultScheduler:
             problem.model.sensors, problem.map.width * problem.map.height) >= WINDOWS_LAYOUT
 
     def choose(self, observation: Observation) -> str:
-        """The next action (see the class docstring)."""
+        """The next action (see the class docstring).
+
+        Args:
+            observation: the stage before it (`idle`, `step`, `history` read).
+
+        Returns:
+            "stop" after `IDLE_ROUNDS` idle actions; large rounds: "windows" once stalled
+            on a uniform layout (back to the cycle for good when a windows action spent
+            nothing), else `LARGE_CYCLE[step % len(LARGE_CYCLE)]`; otherwise "restart" on
+            odd steps, "kicks-<s>" on even ones (s cycling through `SPREADS`).
+        """
         if observation.idle >= IDLE_ROUNDS:
             return "stop"
         k = observation.step
@@ -371,10 +412,22 @@ class StaticScheduler:
         self.name, self.sequence = name, seq
 
     def reset(self, problem: Any, config: PlanConfig) -> None:
-        """Nothing to reset (stateless)."""
+        """Nothing to reset (stateless).
+
+        Args:
+            problem: the run's `Problem` (unused).
+            config: the run's `PlanConfig` (unused).
+        """
 
     def choose(self, observation: Observation) -> str:
-        """The sequence's next action, or "stop" after `IDLE_ROUNDS` idle actions."""
+        """The sequence's next action, or "stop" after `IDLE_ROUNDS` idle actions.
+
+        Args:
+            observation: the stage before it (`idle`, `step` read).
+
+        Returns:
+            "stop", or `sequence[step % len(sequence)]`.
+        """
         if observation.idle >= IDLE_ROUNDS:
             return "stop"
         return self.sequence[observation.step % len(self.sequence)]
@@ -407,14 +460,26 @@ LEARNED: dict[str, str] = {
 
 
 def scheduler_names() -> tuple[str, ...]:
-    """Every registry name: "default", the static schedules, then the learned ones."""
+    """Every registry name.
+
+    Returns:
+        "default", the static schedules (`SCHEDULES`), then the learned ones (`LEARNED`).
+    """
     return ("default", *SCHEDULES, *LEARNED)
 
 
 def make_scheduler(spec: str | Scheduler | None) -> Scheduler:
-    """A scheduler from a registry name (`scheduler_names()`), a learned one's name with its
-    checkpoint folder ("lamde-s-ppo:DIR", "lamde-s:DIR"; the shipped one without), an object,
-    or None (default).
+    """A scheduler from its spec.
+
+    Args:
+        spec: a registry name (`scheduler_names()`), a learned one's name with its checkpoint
+            folder ("lamde-s-ppo:DIR", "lamde-s:DIR"; the shipped one without), an object,
+            or None (default).
+
+    Returns:
+        A `DefaultScheduler` for None or "default", a `StaticScheduler` for a static
+        schedule's name, the learned class's instance (imported when asked for), or `spec`
+        itself for an object.
 
     Raises:
         ValueError: one line naming `scheduler` for an unknown name or a non-scheduler, or
@@ -451,6 +516,14 @@ def configured(spec: str | Scheduler | None, problem: Any, config: PlanConfig) -
     `LARGE_SENSORS` sensors and up to `MID_SENSORS`), so that only a scheduler that chooses
     the split changes it.
 
+    Args:
+        spec: the scheduler, as `make_scheduler` reads it.
+        problem: the run's `Problem`.
+        config: the config asked for.
+
+    Returns:
+        The `PlanConfig` the run keeps.
+
     Raises:
         ValueError: as `make_scheduler`; or `configure` returned no `PlanConfig`.
     """
@@ -465,7 +538,15 @@ def configured(spec: str | Scheduler | None, problem: Any, config: PlanConfig) -
 
 
 def scheduler_name(spec: str | Scheduler | None) -> str:
-    """The registry name of `spec` (its `name` for an object)."""
+    """The registry name of a scheduler spec.
+
+    Args:
+        spec: a name, a scheduler object or None.
+
+    Returns:
+        "default" for None, `spec` for a name (as given, checkpoint folder included), an
+        object's `name` (its class name without one).
+    """
     if spec is None:
         return "default"
     return spec if isinstance(spec, str) else str(getattr(spec, "name", type(spec).__name__))
@@ -500,18 +581,30 @@ class ImproveRun:
 
     @property
     def quantum(self) -> int:
-        """Evaluations one action may spend: one finish's, at least a descent's."""
+        """Evaluations one action may spend: one finish's, at least a descent's.
+
+        Returns:
+            max(`final_trials`, `descent_trials`) of the state's config.
+        """
         cfg = self.state.config
         return max(cfg.final_trials, cfg.descent_trials)
 
     @property
     def can_continue(self) -> bool:
-        """Whether another action may run: at least a descent's trials left and fewer than
-        `MAX_IDLE` idle actions in a row."""
+        """Whether another action may run.
+
+        Returns:
+            True with at least a descent's trials left and fewer than `MAX_IDLE` idle actions
+            in a row.
+        """
         return self.ev.remaining >= self.state.config.descent_trials and self.idle < MAX_IDLE
 
     def observe(self) -> Observation:
-        """The `Observation` before the next action."""
+        """What the scheduler sees before the next action.
+
+        Returns:
+            The `Observation` (the evaluator's Deb incumbent as f, phi and x).
+        """
         x, f, phi = self.ev.best()
         return Observation(step=self.step, remaining=self.ev.remaining,
                            budget=self.ev.budget, quantum=self.quantum, idle=self.idle,
@@ -519,7 +612,10 @@ class ImproveRun:
                            history=tuple(self.history), state=self.state, x=x)
 
     def act(self, action: str) -> StepRecord:
-        """Run one macro-action (`ACTIONS`, not "stop", or "windows").
+        """Run one macro-action.
+
+        Args:
+            action: its name: one of `ACTIONS` but "stop", or "windows".
 
         Returns:
             Its `StepRecord`.
@@ -681,8 +777,16 @@ class ImproveRun:
     def run(self, scheduler: Scheduler) -> Any:
         """Ask `scheduler` for actions until it says "stop" or `can_continue` is false.
 
+        Args:
+            scheduler: reset with the state's problem and config first.
+
         Returns:
-            The final `PlanState`.
+            The final `PlanState` (its `actions` the actions taken; `schedule` a selector's
+            template where the scheduler has one).
+
+        Raises:
+            ValueError: the scheduler named an unknown action (`act`).
+            planner_core.pipeline.TimeLimitReached: the run's clock ran out (propagates).
         """
         scheduler.reset(self.state.problem, self.state.config)
         while self.can_continue:

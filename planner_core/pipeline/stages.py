@@ -51,20 +51,50 @@ class Pool:
 
     @classmethod
     def empty(cls, d: int) -> Pool:
+        """A pool with no plans.
+
+        Args:
+            d: the decision vectors' length.
+
+        Returns:
+            The `Pool`, X (0, d).
+        """
         return cls(np.zeros((0, d)), np.zeros(0), np.zeros(0), ())
 
     def add(self, X: np.ndarray, f: np.ndarray, phi: np.ndarray, kind: str) -> Pool:
+        """A new pool with scored plans appended (this one unchanged).
+
+        Args:
+            X: the plans, (k, d) problem space (read as (-1, d)).
+            f: their objectives (k,), s.
+            phi: their violations (k,).
+            kind: all k rows' kind ("constructive", "seeder", "descended", "fresh").
+
+        Returns:
+            The `Pool` of m + k rows.
+        """
         X = np.asarray(X, dtype=float).reshape(-1, self.X.shape[1])
         return Pool(np.vstack([self.X, X]), np.concatenate([self.f, np.asarray(f, float)]),
                     np.concatenate([self.phi, np.asarray(phi, float)]),
                     self.kinds + (kind,) * len(X))
 
     def of_kind(self, kind: str) -> np.ndarray:
-        """Row indices of the plans of one kind (constructive, seeder, descended), in order."""
+        """Row indices of the plans of one kind, in order.
+
+        Args:
+            kind: "constructive", "seeder", "descended" or "fresh".
+
+        Returns:
+            (k,) int64 row indices (empty for a kind the pool lacks).
+        """
         return np.flatnonzero(np.array(self.kinds) == kind)
 
     def ordered(self) -> np.ndarray:
-        """Row indices, Deb-best first."""
+        """Row indices, Deb-best first.
+
+        Returns:
+            (m,) int row indices (`deb_order` of f, phi); empty for an empty pool.
+        """
         return deb_order(self.f, self.phi) if len(self.f) else np.zeros(0, dtype=np.int64)
 
     def __len__(self) -> int:
@@ -91,6 +121,17 @@ class PlanState:
     actions: tuple[str, ...] = ()
 
     def replace(self, **changes: Any) -> PlanState:
+        """A copy with some fields changed.
+
+        Args:
+            **changes: field name -> new value.
+
+        Returns:
+            The new `PlanState`.
+
+        Raises:
+            TypeError: a name that is no field.
+        """
         return dataclasses.replace(self, **changes)
 
 
@@ -103,13 +144,54 @@ class Stage(Protocol):
     name: str
     yields: bool
 
-    def share(self, config: PlanConfig) -> int | None: ...
+    def share(self, config: PlanConfig) -> int | None:
+        """The evaluations this stage asks for.
 
-    def reserve(self, config: PlanConfig) -> int: ...
+        Args:
+            config: the run's settings.
 
-    def applies(self, state: PlanState, evaluator: Evaluator) -> bool: ...
+        Returns:
+            Evaluations, or None for whatever is left when it runs.
+        """
+        ...
 
-    def run(self, state: PlanState, evaluator: Evaluator) -> PlanState: ...
+    def reserve(self, config: PlanConfig) -> int:
+        """What earlier stages must leave for this one.
+
+        Args:
+            config: the run's settings.
+
+        Returns:
+            Evaluations, >= 0.
+        """
+        ...
+
+    def applies(self, state: PlanState, evaluator: Evaluator) -> bool:
+        """Whether the stage runs (asked only when its allotment is > 0).
+
+        Args:
+            state: the run's state before it.
+            evaluator: the run's evaluator (incumbent, `remaining`).
+
+        Returns:
+            True to run it.
+        """
+        ...
+
+    def run(self, state: PlanState, evaluator: Evaluator) -> PlanState:
+        """Run the stage inside its allotment (`Evaluator.stage`).
+
+        Args:
+            state: the run's state before it.
+            evaluator: the run's evaluator; every evaluation goes through it.
+
+        Returns:
+            The state after it.
+
+        Raises:
+            TimeLimitReached: the evaluator's clock ran out (the pipeline catches it).
+        """
+        ...
 
 
 class _Base:
@@ -158,6 +240,16 @@ class ConstructivePlans(_Base):
         self.seeder = seeder
 
     def share(self, config: PlanConfig) -> int:
+        """Its evaluations: one per plan.
+
+        Args:
+            config: the run's settings.
+
+        Returns:
+            0 when `starts` or `start_candidates` is <= 0; else `start_candidates` plus the
+            seeder plans (`seeder`, or `SEEDER_PLANS`) when the descent is on and
+            `descents` > 0.
+        """
         from planner_core.search.construct import SEEDER_PLANS
 
         if config.starts <= 0 or config.start_candidates <= 0:
@@ -167,6 +259,21 @@ class ConstructivePlans(_Base):
         return config.start_candidates + seeder
 
     def run(self, state: PlanState, ev: Evaluator) -> PlanState:
+        """Build the constructive plans (at most `start_candidates` and `ev.remaining`), then,
+        with the descent on, `descents` > 0, the clock not out and room left, seeder plans for
+        the rest of the allotment; score all in one evaluate call.
+
+        Args:
+            state: the run's state (config, problem, pool).
+            ev: the run's evaluator.
+
+        Returns:
+            The state with the plans in its pool (kinds "constructive", "seeder"); `state`
+            itself when no constructive plan was built.
+
+        Raises:
+            TimeLimitReached: the evaluator's clock ran out (the pipeline catches it).
+        """
         from planner_core.search.construct import candidate_plans, seeder_plans
 
         cfg, problem = state.config, state.problem
@@ -201,14 +308,45 @@ class StartDescents(_Base):
     name = "start descents"
 
     def share(self, config: PlanConfig) -> int:
+        """Its evaluations: two kinds x `descents` x `descent_trials`.
+
+        Args:
+            config: the run's settings.
+
+        Returns:
+            0 with the descent off or `starts` <= 0, else 2 x descents x descent_trials.
+        """
         if not config.descent or config.starts <= 0:
             return 0
         return 2 * config.descents * config.descent_trials
 
     def applies(self, state: PlanState, ev: Evaluator) -> bool:
+        """Whether there is anything to descend.
+
+        Args:
+            state: the run's state.
+            ev: the run's evaluator (unused).
+
+        Returns:
+            True when the pool holds a plan.
+        """
         return len(state.pool) > 0
 
     def run(self, state: PlanState, ev: Evaluator) -> PlanState:
+        """Descend the `descents` Deb-first plans of each kind (an infeasible one is not
+        descended, `descend`), at most `descent_trials` and `ev.remaining` evaluations each.
+
+        Args:
+            state: the run's state (config, problem, pool).
+            ev: the run's evaluator.
+
+        Returns:
+            The state with each result that lowered f in the pool (kind "descended"). The
+            rows injected into the DE are chosen by `DifferentialEvolution.run`.
+
+        Raises:
+            TimeLimitReached: the evaluator's clock ran out (the pipeline catches it).
+        """
         from planner_core.search.descent import descend
 
         cfg, problem, pool = state.config, state.problem, state.pool
@@ -248,6 +386,15 @@ class DifferentialEvolution(_Base):
     yields = True
 
     def share(self, config: PlanConfig) -> int | None:
+        """Its evaluations (class docstring).
+
+        Args:
+            config: the run's settings.
+
+        Returns:
+            None (the rest) with the descent or the polish off; else max(population,
+            round(de_share x min(budget, `defaults.BUDGET`))).
+        """
         if not (config.descent and config.polish):
             return None  # nothing after the polish: the DE gets the rest
         from planner_core.defaults import BUDGET
@@ -256,9 +403,30 @@ class DifferentialEvolution(_Base):
         return max(config.population, round(config.de_share * min(config.budget, BUDGET)))
 
     def reserve(self, config: PlanConfig) -> int:
+        """What earlier stages leave it: one population.
+
+        Args:
+            config: the run's settings.
+
+        Returns:
+            `population` evaluations.
+        """
         return config.population
 
     def run(self, state: PlanState, ev: Evaluator) -> PlanState:
+        """Run the DE on everything the allotment has left (`ev.remaining`).
+
+        Args:
+            state: the run's state (config, problem, pool).
+            ev: the run's evaluator.
+
+        Returns:
+            The state with `de` the DE's `Result` and `injected` the pool's `starts`
+            Deb-best rows (k, d) put into its initial population.
+
+        Raises:
+            TimeLimitReached: the evaluator's clock ran out (the pipeline catches it).
+        """
         from planner_core.search.construct import InjectedPopulation
         from planner_core.search.de import run
         from planner_core.search.refine import refine, use_memetic
@@ -299,15 +467,57 @@ class Polish(_Base):
     name = "polish"
 
     def share(self, config: PlanConfig) -> int:
+        """Its evaluations, the same as its `reserve`.
+
+        Args:
+            config: the run's settings.
+
+        Returns:
+            0 with the polish off; else max(min(`ELITE`, budget // 4, budget - population),
+            0).
+        """
         return _polish_reserve(config)
 
     def reserve(self, config: PlanConfig) -> int:
+        """What earlier stages leave it (its `share`).
+
+        Args:
+            config: the run's settings.
+
+        Returns:
+            Evaluations, as `share`.
+        """
         return _polish_reserve(config)
 
     def applies(self, state: PlanState, ev: Evaluator) -> bool:
+        """Whether there is a DE population to polish.
+
+        Args:
+            state: the run's state.
+            ev: the run's evaluator (unused).
+
+        Returns:
+            True with the polish on and a DE result.
+        """
         return state.config.polish and state.de is not None
 
     def run(self, state: PlanState, ev: Evaluator) -> PlanState:
+        """Polish the DE's final population's elite (at most `ev.remaining` rows) and
+        evaluate the polished plans in one call.
+
+        Args:
+            state: the run's state (problem, DE result).
+            ev: the run's evaluator.
+
+        Returns:
+            The state with `polish` a record of the Deb-best polished plan against the DE's
+            best (`f_before`, `phi_before`, `f_after`, `phi_after`, `accepted`,
+            `dropped_points`, `c3_violation`, `c4_achievable`, `unserved`, `solver`);
+            `state` itself when no row was polished.
+
+        Raises:
+            TimeLimitReached: the evaluator's clock ran out (the pipeline catches it).
+        """
         from planner_core.model.formulas import deb_best, deb_not_worse
         from planner_core.search.de.core import to_problem
         from planner_core.search.polish import polish_elite
@@ -361,12 +571,41 @@ class FinishIncumbent(_Base):
     name = "finish"
 
     def share(self, config: PlanConfig) -> int:
+        """Its evaluations: one finish.
+
+        Args:
+            config: the run's settings.
+
+        Returns:
+            `final_trials` with the polish on, else 0.
+        """
         return config.final_trials if config.polish else 0
 
     def applies(self, state: PlanState, ev: Evaluator) -> bool:
+        """Whether the incumbent is feasible.
+
+        Args:
+            state: the run's state (unused).
+            ev: the run's evaluator.
+
+        Returns:
+            True when something was evaluated and the Deb incumbent's phi is 0.
+        """
         return _incumbent_feasible(ev)
 
     def run(self, state: PlanState, ev: Evaluator) -> PlanState:
+        """Finish the incumbent with `ev.remaining` evaluations.
+
+        Args:
+            state: the run's state (config, problem).
+            ev: the run's evaluator.
+
+        Returns:
+            The state with the incumbent's number of hover points in `finished`.
+
+        Raises:
+            TimeLimitReached: the evaluator's clock ran out (the pipeline catches it).
+        """
         from planner_core.search.final import finish
 
         cfg, problem = state.config, state.problem
@@ -391,9 +630,27 @@ class OtherStructure(_Base):
     name = "other structure"
 
     def share(self, config: PlanConfig) -> int:
+        """Its evaluations.
+
+        Args:
+            config: the run's settings.
+
+        Returns:
+            `other_trials` with the polish on and `final_trials` > 0, else 0.
+        """
         return config.other_trials if config.polish and config.final_trials else 0
 
     def applies(self, state: PlanState, ev: Evaluator) -> bool:
+        """Whether a second structure can be finished.
+
+        Args:
+            state: the run's state (config, problem, pool).
+            ev: the run's evaluator.
+
+        Returns:
+            True with a feasible incumbent, at least `descent_trials` evaluations left and
+            a pool plan of another structure (`final.other_structure`).
+        """
         return (_incumbent_feasible(ev) and ev.remaining >= state.config.descent_trials
                 and self._other(state, ev) is not None)
 
@@ -405,6 +662,18 @@ class OtherStructure(_Base):
         return other_structure(state.problem, pool.X[pool.ordered()], ev.best()[0])
 
     def run(self, state: PlanState, ev: Evaluator) -> PlanState:
+        """Finish the pool's plan of another structure with `ev.remaining` evaluations.
+
+        Args:
+            state: the run's state (config, problem, pool).
+            ev: the run's evaluator.
+
+        Returns:
+            The state with that plan's number of hover points in `finished`.
+
+        Raises:
+            TimeLimitReached: the evaluator's clock ran out (the pipeline catches it).
+        """
         from planner_core.search.final import finish
 
         cfg, problem = state.config, state.problem
@@ -461,20 +730,61 @@ class Improve(_Base):
         self.scheduler = scheduler
 
     def share(self, config: PlanConfig) -> int | None:
+        """Its evaluations: the rest.
+
+        Args:
+            config: the run's settings.
+
+        Returns:
+            None (the rest) with the polish on and `final_trials` > 0, else 0.
+        """
         return None if config.polish and config.final_trials else 0
 
     def applies(self, state: PlanState, ev: Evaluator) -> bool:
+        """Whether the incumbent is feasible.
+
+        Args:
+            state: the run's state (unused).
+            ev: the run's evaluator.
+
+        Returns:
+            True when something was evaluated and the Deb incumbent's phi is 0.
+        """
         return _incumbent_feasible(ev)
 
     def configure(self, problem: Any, config: PlanConfig) -> PlanConfig:
         """The run's config as its scheduler wants it (`schedule.configured`; the default
         scheduler's `DefaultScheduler.configure`: the DE's share beyond 160 sensors and up to
-        120)."""
+        120).
+
+        Args:
+            problem: the run's `Problem`.
+            config: the config asked for.
+
+        Returns:
+            The `PlanConfig` the run keeps.
+
+        Raises:
+            ValueError: an unknown scheduler, or its `configure` returned no `PlanConfig`.
+        """
         from planner_core.pipeline.schedule import configured
 
         return configured(self.scheduler, problem, config)  # None: the default's
 
     def run(self, state: PlanState, ev: Evaluator) -> PlanState:
+        """Run macro-actions chosen by the scheduler (`schedule.ImproveRun.run`).
+
+        Args:
+            state: the run's state.
+            ev: the run's evaluator (it must have an incumbent).
+
+        Returns:
+            The final state (`actions` the actions taken; `schedule` a selector's template).
+
+        Raises:
+            ValueError: an unknown scheduler or action.
+            TimeLimitReached: the evaluator's clock ran out (the pipeline catches it).
+        """
         from planner_core.pipeline.schedule import ImproveRun, make_scheduler
 
         return ImproveRun(state, ev).run(make_scheduler(self.scheduler))
@@ -496,14 +806,47 @@ class Repair(_Base):
     name = "repair"
 
     def share(self, config: PlanConfig) -> int | None:
+        """Its evaluations: the rest.
+
+        Args:
+            config: the run's settings (unused).
+
+        Returns:
+            None.
+        """
         return None
 
     def applies(self, state: PlanState, ev: Evaluator) -> bool:
+        """Whether there is an incumbent to repair, or budget a DE could still use.
+
+        Args:
+            state: the run's state (config).
+            ev: the run's evaluator.
+
+        Returns:
+            True when something was evaluated and the incumbent is infeasible or at least a
+            population of evaluations is left.
+        """
         if not ev.has_best:
             return False
         return ev.best()[2] > 0.0 or ev.remaining >= state.config.population
 
     def run(self, state: PlanState, ev: Evaluator) -> PlanState:
+        """With less than a population left, evaluate the repair's candidates for the
+        incumbent (as many as fit); else the DE with the memetic step on everything left,
+        its population the incumbent then the DE's final population in Deb order (the pool's
+        plans without a DE result).
+
+        Args:
+            state: the run's state (config, problem, DE result, pool).
+            ev: the run's evaluator.
+
+        Returns:
+            `state` unchanged (the evaluator keeps the incumbent).
+
+        Raises:
+            TimeLimitReached: the evaluator's clock ran out (the pipeline catches it).
+        """
         from planner_core.search.construct import InjectedPopulation
         from planner_core.search.de import run
         from planner_core.search.de.core import to_problem

@@ -48,7 +48,14 @@ _WARM: set[str] = set()
 
 
 def warmed(configurator: Any) -> bool:
-    """Whether this process already warmed up for `configurator` (a name or an object)."""
+    """Whether this process already warmed up for a configurator.
+
+    Args:
+        configurator: a registry name or a configurator object (keyed by its class name).
+
+    Returns:
+        True after a `warm_up` with it in this process.
+    """
     return _key(configurator) in _WARM
 
 
@@ -57,9 +64,19 @@ def _key(configurator: Any) -> str:
 
 
 def warm_up(configurator: Any = "adaptive") -> float:
-    """Run the default pipeline once on `WARMUP_MAP` with `configurator`; returns its wall
-    time (s), 0.0 when this process already did. Deterministic and side-effect free (nothing
-    but numba's cache and this module's set of warmed configurators)."""
+    """Run the default pipeline once on `WARMUP_MAP` with `configurator`. Deterministic and
+    side-effect free (nothing but numba's cache and this module's set of warmed
+    configurators).
+
+    Args:
+        configurator: a registry name or a configurator object (`PlanConfig.configurator`).
+
+    Returns:
+        Its wall time (s), 0.0 when this process already did.
+
+    Raises:
+        ValueError: an unknown configurator name (`PlanConfig`).
+    """
     if warmed(configurator):
         return 0.0
     from planner_core.defaults import MIN_POPULATION

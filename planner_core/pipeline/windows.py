@@ -76,6 +76,13 @@ def sub_budget(remaining: int, trials: int, n: int, i: int, w: int) -> int:
     end, less each one's race, between `SUB_MIN` and `SUB_BUDGET`, and at most what the
     action's `trials` leave after the race (below 100: no window, `replan_window`'s rule).
 
+    Args:
+        remaining: the improving stage's evaluations left.
+        trials: evaluations the action may spend.
+        n: hovering points of the plan.
+        i: the window's first point.
+        w: the window's width (points).
+
     Returns:
         The sub-run's budget (evaluations).
     """
@@ -89,8 +96,15 @@ def window_map(problem: Any, P: np.ndarray, T: np.ndarray, i: int, w: int
     """The sub-map of the window P[i:i + w] of hover points P (n, 2) m with hover times T (n,)
     s (module docstring), or None when the other points already collect every sensor's data.
 
+    Args:
+        problem: the run's `Problem` (its model, map, start and end).
+        P: the hovering points (n, 2), m.
+        T: their hover times (n,), s.
+        i: the window's first point.
+        w: the window's width (points).
+
     Returns:
-        A map dict (`planner_core.model.mapio.load_map` reads it).
+        A map dict (`planner_core.model.mapio.load_map` reads it), or None.
     """
     from planner_core.model.mapio import sub_map_dict
 
