@@ -45,9 +45,26 @@ class FixedConfigurator:
             raise ValueError("F and Cr must lie in [0, 1]")
 
     def init(self, state: DEState) -> None:
+        """No memory (stateless).
+
+        Args:
+            state: the run's initial state (unused).
+
+        Returns:
+            None.
+        """
         return None
 
     def configure(self, state: DEState, rng: np.random.Generator) -> Config:
+        """The fixed configuration for every individual.
+
+        Args:
+            state: the run's state (its population N read).
+            rng: the generation's generator (unused).
+
+        Returns:
+            A `Config` of (N,) arrays: the mutation and crossover ids, F and Cr.
+        """
         n = state.population
         return Config(
             _full(n, mutation_index(self.mutation), np.intp),
@@ -57,6 +74,15 @@ class FixedConfigurator:
         )
 
     def update(self, memory: Any, outcome: Outcome) -> None:
+        """Nothing to learn.
+
+        Args:
+            memory: the current memory (unused).
+            outcome: the generation's outcome (unused).
+
+        Returns:
+            None.
+        """
         return None
 
 
@@ -65,9 +91,27 @@ class RandomConfigurator:
     """Uniform operators, F and Cr uniform in [0, 1]: the untrained-policy baseline."""
 
     def init(self, state: DEState) -> None:
+        """No memory (stateless).
+
+        Args:
+            state: the run's initial state (unused).
+
+        Returns:
+            None.
+        """
         return None
 
     def configure(self, state: DEState, rng: np.random.Generator) -> Config:
+        """A uniform draw per individual.
+
+        Args:
+            state: the run's state (its population N read).
+            rng: the generation's generator: mutation ids, crossover ids, F, Cr, in order.
+
+        Returns:
+            A `Config` of (N,) arrays: mutation ids in 0..6, crossover ids in 0..1, F and Cr
+            in [0, 1).
+        """
         n = state.population
         return Config(
             rng.integers(0, N_MUTATIONS, size=n),
@@ -77,6 +121,15 @@ class RandomConfigurator:
         )
 
     def update(self, memory: Any, outcome: Outcome) -> None:
+        """Nothing to learn.
+
+        Args:
+            memory: the current memory (unused).
+            outcome: the generation's outcome (unused).
+
+        Returns:
+            None.
+        """
         return None
 
 
@@ -99,6 +152,12 @@ def rank_credit(outcome: Outcome) -> np.ndarray:
 
     Scale-free (mixes violation and objective progress without units) and rewards trials that
     land near the top of the population more than trials that merely beat a poor parent.
+
+    Args:
+        outcome: the generation's outcome (k trials, the parents compared against).
+
+    Returns:
+        (k,) float credits in [0, 1].
     """
     ft, pt = outcome.f_trial[:, None], outcome.phi_trial[:, None]
     fp, pp = outcome.f_parent[None, :], outcome.phi_parent[None, :]
@@ -145,6 +204,15 @@ class AdaptiveConfigurator:
             raise ValueError("stall_gens must be positive")
 
     def init(self, state: DEState) -> AdaptiveMemory:
+        """The first memory.
+
+        Args:
+            state: the run's initial state (unused).
+
+        Returns:
+            An `AdaptiveMemory`: every arm's F centre `f_init`, Cr centre `cr_bin` (binomial)
+            or `cr_exp` (exponential), quality 0.1, stall 0.
+        """
         a = len(ARMS)
         return AdaptiveMemory(
             m_f=np.full(a, self.f_init),
@@ -153,7 +221,15 @@ class AdaptiveConfigurator:
         )
 
     def probabilities(self, memory: AdaptiveMemory) -> np.ndarray:
-        """Arm probabilities (14,) for the next generation."""
+        """Arm probabilities for the next generation (class docstring: quality shares with
+        a floor, plus the stall-driven share of best/1/exp).
+
+        Args:
+            memory: the current memory.
+
+        Returns:
+            (14,) probabilities summing to 1, indexed by arm = 2 m + c.
+        """
         a = len(ARMS)
         q = np.maximum(memory.quality, 0.0)
         share = q / q.sum() if q.sum() > 0 else np.full(a, 1.0 / a)
@@ -164,7 +240,15 @@ class AdaptiveConfigurator:
 
     def configure(self, state: DEState, rng: np.random.Generator) -> Config:
         """Draw each individual's arm, F and Cr (compiled; equal bit for bit to
-        :meth:`configure_reference`)."""
+        :meth:`configure_reference`).
+
+        Args:
+            state: the run's state (population N; `memory`, `init`'s when None).
+            rng: the generation's generator: N uniforms, then (2, N) standard normals.
+
+        Returns:
+            A `Config` of (N,) arrays; F in [0.02, 1], Cr in [0, 1].
+        """
         mem: AdaptiveMemory = state.memory if state.memory is not None else self.init(state)
         n = state.population
         u = rng.random(n)
@@ -179,6 +263,13 @@ class AdaptiveConfigurator:
         """:meth:`configure` in plain numpy: the readable statement of the draw, kept for tests.
 
         One uniform per individual picks its arm by inverse CDF, two normals its F and Cr.
+
+        Args:
+            state: the run's state (population N; `memory`, `init`'s when None).
+            rng: the generation's generator: N uniforms, then (2, N) standard normals.
+
+        Returns:
+            A `Config` of (N,) arrays; F in [0.02, 1], Cr in [0, 1].
         """
         mem: AdaptiveMemory = state.memory if state.memory is not None else self.init(state)
         n = state.population
@@ -191,7 +282,16 @@ class AdaptiveConfigurator:
         return Config(ARMS[arm, 0], ARMS[arm, 1], F, Cr)
 
     def update(self, memory: AdaptiveMemory, outcome: Outcome) -> AdaptiveMemory:
-        """The next memory (compiled; equal bit for bit to :meth:`update_reference`)."""
+        """The next memory (compiled; equal bit for bit to :meth:`update_reference`).
+
+        Args:
+            memory: the current memory (never written).
+            outcome: the generation's outcome (its first k config rows made the k trials).
+
+        Returns:
+            A new `AdaptiveMemory` (stall 0 when a trial Deb-beat the best parent, else + 1);
+            `memory` itself when there were no trials.
+        """
         k = len(outcome.success)
         if k == 0:
             return memory
@@ -208,7 +308,15 @@ class AdaptiveConfigurator:
         return AdaptiveMemory(m_f, m_cr, quality, 0 if improved else memory.stall + 1)
 
     def update_reference(self, memory: AdaptiveMemory, outcome: Outcome) -> AdaptiveMemory:
-        """:meth:`update` in plain numpy: the readable statement of the rule, kept for tests."""
+        """:meth:`update` in plain numpy: the readable statement of the rule, kept for tests.
+
+        Args:
+            memory: the current memory (never written).
+            outcome: the generation's outcome (its first k config rows made the k trials).
+
+        Returns:
+            A new `AdaptiveMemory`; `memory` itself when there were no trials.
+        """
         k = len(outcome.success)
         if k == 0:
             return memory
@@ -302,8 +410,21 @@ _REGISTRY: dict[str, Any] = {
 
 
 def make_configurator(name: str, **kw: Any) -> Any:
-    """Build a configurator by name: "fixed", "random", "adaptive" or "lamde" (the shipped
-    policy checkpoint, planner_core.learning.policy; numpy only); keywords go to it."""
+    """Build a configurator by name.
+
+    Args:
+        name: "fixed", "random", "adaptive" or "lamde" (the shipped policy checkpoint,
+            planner_core.learning.policy; numpy only).
+        **kw: keywords for its constructor.
+
+    Returns:
+        The configurator object.
+
+    Raises:
+        ValueError: an unknown name, or a value the configurator refuses (e.g. F outside
+            [0, 1]).
+        TypeError: a keyword the configurator does not take.
+    """
     try:
         cls = _REGISTRY[name]
     except KeyError:

@@ -83,15 +83,30 @@ def _frozen(a: np.ndarray) -> np.ndarray:
 
 def ask_words(state: DEState, rng: np.random.Generator | None = None) -> np.ndarray:
     """The raw 64-bit words ask splits into donors and crossover draws: the first
-    ``donor_words(k) + crossover_words(k, d)`` of the generation's generator (``rng``, when
-    given, must be that generator, fresh)."""
+    ``donor_words(k) + crossover_words(k, d)`` of the generation's generator.
+
+    Args:
+        state: the state before the generation (k = :func:`trial_count`, d its dimension).
+        rng: when given, that generator, fresh (None: :func:`generation_rng` of the state).
+
+    Returns:
+        (donor_words(k) + crossover_words(k, d),) uint64 words.
+    """
     k, d = trial_count(state), state.dim
     rng = generation_rng(state) if rng is None else rng
     return rng.bit_generator.random_raw(donor_words(k) + crossover_words(k, d))
 
 
 def to_problem(problem: BoxProblem, U: np.ndarray) -> np.ndarray:
-    """Map unit-box points to the problem's bounds: lower + u * (upper - lower)."""
+    """Map unit-box points to the problem's bounds: lower + u * (upper - lower).
+
+    Args:
+        problem: its `lower` and `upper` (d,) read.
+        U: unit-box points (..., d).
+
+    Returns:
+        Problem-space points, U's shape.
+    """
     lower = np.asarray(problem.lower, dtype=float)
     out = np.multiply(U, np.asarray(problem.upper, dtype=float) - lower)
     out += lower
@@ -99,7 +114,15 @@ def to_problem(problem: BoxProblem, U: np.ndarray) -> np.ndarray:
 
 
 def to_unit(problem: BoxProblem, X: np.ndarray) -> np.ndarray:
-    """Map problem-space points into the unit box, clamped (a zero-width bound maps to 0)."""
+    """Map problem-space points into the unit box, clamped (a zero-width bound maps to 0).
+
+    Args:
+        problem: its `lower` and `upper` (d,) read.
+        X: problem-space points (..., d).
+
+    Returns:
+        Unit-box points in [0, 1], X's shape.
+    """
     lower = np.asarray(problem.lower, dtype=float)
     span = np.asarray(problem.upper, dtype=float) - lower
     U = (np.asarray(X, dtype=float) - lower) / np.where(span > 0, span, 1.0)
@@ -113,6 +136,20 @@ def init(
 
     Uniform, unless the problem offers `initial_population(rng, n)` (problem-space points,
     e.g. the UAV problem's sensor-aware starts); those are clamped into the box.
+
+    Args:
+        problem: the problem (`lower`, `upper`, `evaluate`, optional `initial_population`).
+        seed: the run's seed, >= 0.
+        population: N, >= `MIN_POPULATION`.
+        budget: evaluations in all, >= N.
+
+    Returns:
+        The `DEState` at generation 0 (N evaluations, no configurator memory).
+
+    Raises:
+        ValueError: population < `MIN_POPULATION`, budget < population, a negative seed,
+            an `initial_population` of another shape than (N, d), or `evaluate` results
+            that do not hold N values.
     """
     if population < MIN_POPULATION:
         raise ValueError(f"population must be >= {MIN_POPULATION}, got {population}")
@@ -144,13 +181,31 @@ def init(
 
 
 def trial_count(state: DEState) -> int:
-    """How many trials the next generation evaluates: min(N, budget - evaluations)."""
+    """How many trials the next generation evaluates.
+
+    Args:
+        state: the state before the generation.
+
+    Returns:
+        k = min(N, budget - evaluations), >= 0.
+    """
     return max(0, min(state.population, state.budget - state.evaluations))
 
 
 def validate_config(config: Config, n: int) -> Config:
     """Coerce a configuration to (n,) arrays of ids and rates. The values are checked where they
-    are used (`fast.ask`): ids in range, F and Cr not NaN (and clipped to [0, 1])."""
+    are used (`fast.ask`): ids in range, F and Cr not NaN (and clipped to [0, 1]).
+
+    Args:
+        config: the configuration (array-likes).
+        n: the population size.
+
+    Returns:
+        A `Config`: mutation and crossover (n,) intp, F and Cr (n,) float.
+
+    Raises:
+        ValueError: a field that does not hold n values.
+    """
     mut = np.asarray(config.mutation, dtype=np.intp).reshape(-1)
     cx = np.asarray(config.crossover, dtype=np.intp).reshape(-1)
     F = np.asarray(config.F, dtype=float).reshape(-1)
@@ -164,7 +219,18 @@ def validate_config(config: Config, n: int) -> Config:
 def ask(state: DEState, config: Config, words: np.ndarray | None = None) -> np.ndarray:
     """Trial vectors (k, d) in the unit box for individuals 0..k-1 (k = :func:`trial_count`).
 
-    ``words``: :func:`ask_words` of this state, when the caller already drew them.
+    Args:
+        state: the state before the generation.
+        config: the generation's `Config` ((N,) fields).
+        words: :func:`ask_words` of this state, when the caller already drew them (None:
+            drawn here).
+
+    Returns:
+        (k, d) trials clamped to [0, 1]; (0, d) when the budget is spent.
+
+    Raises:
+        ValueError: a config field that does not hold N values, an id out of range, a NaN
+            F or Cr, `words` of the wrong length, or N < 6 (`fast.ask`).
     """
     return _ask(state, config, words)
 
@@ -194,7 +260,21 @@ def _ask(
 
 
 def tell(state: DEState, trials: np.ndarray, f: np.ndarray, phi: np.ndarray) -> DEState:
-    """Deb selection of trials (k, d) against parents 0..k-1; a new state one generation on."""
+    """Deb selection of trials against parents 0..k-1.
+
+    Args:
+        state: the state before the generation.
+        trials: (k, d) unit-box trials.
+        f: their objectives (k values).
+        phi: their violations (k values).
+
+    Returns:
+        A new `DEState` one generation on (k more evaluations), each winning trial in its
+        parent's place.
+
+    Raises:
+        ValueError: f or phi does not hold k values.
+    """
     k = trials.shape[0]
     f_t, phi_t = sanitise_evaluation(f, phi, k)
     return _select(state, trials, f_t, phi_t, deb_better(f_t, phi_t, state.f[:k], state.phi[:k]))
@@ -231,7 +311,21 @@ def _select(
 def outcome(
     state: DEState, config: Config, trials: np.ndarray, f: np.ndarray, phi: np.ndarray
 ) -> Outcome:
-    """The generation's outcome for ``update`` hooks (``state`` is the state before ``tell``)."""
+    """The generation's outcome for ``update`` hooks.
+
+    Args:
+        state: the state before ``tell``.
+        config: the generation's `Config` (all N rows).
+        trials: (k, d) unit-box trials.
+        f: their objectives (k values; NaN read as inf).
+        phi: their violations (k values; NaN read as inf).
+
+    Returns:
+        The `Outcome` (its `success`: the trial Deb-beats its parent).
+
+    Raises:
+        ValueError: f or phi does not hold k values.
+    """
     k = trials.shape[0]
     f_t, phi_t = sanitise_evaluation(f, phi, k)
     f_p, phi_p = state.f[:k], state.phi[:k]
@@ -250,7 +344,16 @@ def outcome(
 
 
 def evaluate(problem: BoxProblem, trials: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Evaluate unit-box trials on the problem (mapped to its bounds)."""
+    """Evaluate unit-box trials on the problem (mapped to its bounds).
+
+    Args:
+        problem: the problem.
+        trials: (k, d) unit-box points.
+
+    Returns:
+        The problem's (f, phi) as it returns them (not sanitised); two empty arrays for
+        k = 0.
+    """
     if trials.shape[0] == 0:
         return np.empty(0), np.empty(0)
     return problem.evaluate(to_problem(problem, trials))
@@ -264,8 +367,20 @@ def step(
 ) -> tuple[DEState, Outcome]:
     """One generation: configure, ask, evaluate, tell, and feed the outcome to the configurator.
 
-    ``streams``: a :class:`Streams` of ``state.seed`` to reuse across generations (same result,
-    less overhead); the generator handed to ``configure`` is valid during that call only.
+    The generator handed to ``configure`` is valid during that call only.
+
+    Args:
+        state: the state before the generation.
+        problem: the problem (its `evaluate` called once with the k trials; not for k = 0).
+        configurator: the configurator (`configure`, `update`).
+        streams: a :class:`Streams` of ``state.seed`` to reuse across generations (same
+            result, less overhead; None or another seed's: a new one).
+
+    Returns:
+        (the next `DEState`, carrying `update`'s memory; the generation's `Outcome`).
+
+    Raises:
+        ValueError: as :func:`ask`, or evaluate results that do not hold k values.
     """
     if streams is None or streams.seed != state.seed:
         streams = Streams(state.seed)

@@ -156,10 +156,25 @@ def ask(
 
     Bit for bit what the numpy operators give when they draw the same words: donors from
     `operators.draw_donors`, then `operators.draw_crossover`, then `mutate`, `crossover` and
-    clipping to [0, 1]. ``words`` holds ``donor_words(m) + crossover_words(m, d)`` uint64s.
-    Operator ids out of range and NaN rates raise ValueError; F and Cr are clipped to [0, 1].
-    With ``bounds = (lower, span)`` it returns ``(trials, lower + trials * span)``, the second
-    equal to `core.to_problem` of the first, computed in the same pass.
+    clipping to [0, 1]. F and Cr are clipped to [0, 1].
+
+    Args:
+        words: ``donor_words(m) + crossover_words(m, d)`` raw uint64s.
+        X: the population (n, d), unit box.
+        mutation: operator ids (m,), 0..6.
+        F: scale factors (m,).
+        best: the Deb-best row of X.
+        crossover: crossover ids (m,), 0 bin / 1 exp.
+        Cr: crossover rates (m,).
+        bounds: ``(lower, span)`` (d,) each, or None.
+
+    Returns:
+        The trials (m, d) in [0, 1]; with ``bounds``, ``(trials, lower + trials * span)``,
+        the second equal to `core.to_problem` of the first, computed in the same pass.
+
+    Raises:
+        ValueError: n < 6 (five distinct donors), ``words`` of another length, operator ids
+            out of range or NaN rates.
     """
     n, d = X.shape
     if n < N_DONORS + 1:

@@ -51,13 +51,25 @@ def run(
 ) -> Result:
     """Optimise ``problem`` until the budget is spent; same seed -> identical result.
 
-    ``configurator`` is an object or a registry name ("fixed", "random", "adaptive", "lamde");
-    ``callback`` receives a :class:`Progress` after the initial population and each generation.
-    ``refine``: a memetic step, x -> (m, d) candidates, run on the elite every
-    `de.memetic.PERIOD` generations (`planner_core.search.de.refine_step`; its evaluations count
-    against
-    the budget). None by default: measured, it does not change the polished result
-    (docs/search.md).
+    Args:
+        problem: the problem (`lower`, `upper`, `evaluate`, optional `initial_population`).
+        configurator: an object or a registry name ("fixed", "random", "adaptive", "lamde").
+        seed: the run's seed, >= 0.
+        population: N, >= `MIN_POPULATION`.
+        budget: evaluations in all (the initial population's count), >= N.
+        callback: receives a :class:`Progress` after the initial population and each
+            generation (None: nothing).
+        refine: a memetic step, x -> (m, d) candidates, run on the elite every
+            `de.refine_step.PERIOD` generations (`planner_core.search.de.refine_step`; its
+            evaluations count against the budget). None by default: measured, it does not
+            change the polished result (docs/search.md).
+
+    Returns:
+        The `Result`: the Deb-best x (d,) in problem space, its f and phi, evaluations and
+        generations spent, the per-generation `History`, the final `DEState`.
+
+    Raises:
+        ValueError: an unknown configurator name, or as `core.init` and `core.step`.
     """
     if isinstance(configurator, str):
         configurator = make_configurator(configurator)

@@ -59,7 +59,17 @@ _TERMS = np.array(
 
 
 def mutation_index(name: str | int) -> int:
-    """Operator id from a name such as ``"rand/1"`` (ids pass through after a range check)."""
+    """Operator id from a name such as ``"rand/1"`` (ids pass through after a range check).
+
+    Args:
+        name: a name of `MUTATIONS` or an id.
+
+    Returns:
+        The id, 0..6.
+
+    Raises:
+        ValueError: an unknown name or an id out of range.
+    """
     if isinstance(name, str):
         try:
             return MUTATIONS.index(name)
@@ -72,7 +82,17 @@ def mutation_index(name: str | int) -> int:
 
 
 def crossover_index(name: str | int) -> int:
-    """Crossover id from ``"bin"``/``"binomial"`` or ``"exp"``/``"exponential"`` (or an id)."""
+    """Crossover id from ``"bin"``/``"binomial"`` or ``"exp"``/``"exponential"`` (or an id).
+
+    Args:
+        name: a name or an id.
+
+    Returns:
+        The id: 0 binomial, 1 exponential.
+
+    Raises:
+        ValueError: an unknown name or an id out of range.
+    """
     if isinstance(name, str):
         key = {"binomial": "bin", "exponential": "exp"}.get(name, name)
         try:
@@ -95,7 +115,14 @@ _TWO_M32 = 2.0**-32
 
 
 def unit_doubles(words: np.ndarray) -> np.ndarray:
-    """Uniforms in [0, 1) with 53 random bits, one per raw 64-bit word (numpy's own mapping)."""
+    """Uniforms in [0, 1) with 53 random bits, one per raw 64-bit word (numpy's own mapping).
+
+    Args:
+        words: raw uint64 words, any shape.
+
+    Returns:
+        Floats, the words' shape.
+    """
     return (words >> _SHIFT53).astype(float) * _TWO_M53
 
 
@@ -104,6 +131,13 @@ def unit_halves(words: np.ndarray, count: int) -> np.ndarray:
 
     Half the raw draws of :func:`unit_doubles`; the crossover's ``u < Cr`` tests need no more
     resolution than 2**-32.
+
+    Args:
+        words: raw uint64 words (at least ceil(count / 2); flattened).
+        count: how many uniforms.
+
+    Returns:
+        (count,) floats.
     """
     halves = np.empty((words.size, 2), dtype=np.uint64)
     halves[:, 0] = words >> _SHIFT32
@@ -113,17 +147,41 @@ def unit_halves(words: np.ndarray, count: int) -> np.ndarray:
 
 def below(uniforms: np.ndarray, m: int | np.ndarray) -> np.ndarray:
     """Integers in ``0..m-1`` from uniforms in [0, 1): ``floor(u * m)``, kept < m (uniform to
-    within ``m * 2**-53`` for 53-bit uniforms)."""
+    within ``m * 2**-53`` for 53-bit uniforms).
+
+    Args:
+        uniforms: floats in [0, 1), any shape.
+        m: the range, a scalar or an array broadcasting against `uniforms`.
+
+    Returns:
+        intp integers, the broadcast shape.
+    """
     return np.minimum((uniforms * m).astype(np.intp), np.asarray(m, dtype=np.intp) - 1)
 
 
 def donor_words(rows: int, k: int = N_DONORS) -> int:
-    """Raw words :func:`draw_donors` takes: one per donor."""
+    """Raw words :func:`draw_donors` takes: one per donor.
+
+    Args:
+        rows: rows drawn.
+        k: donors per row.
+
+    Returns:
+        rows x k.
+    """
     return rows * k
 
 
 def crossover_words(rows: int, d: int) -> int:
-    """Raw words :func:`draw_crossover` takes: one per row for ``j``, then ``u`` two per word."""
+    """Raw words :func:`draw_crossover` takes: one per row for ``j``, then ``u`` two per word.
+
+    Args:
+        rows: rows drawn.
+        d: the dimension.
+
+    Returns:
+        rows + ceil(rows x d / 2).
+    """
     return rows + (rows * d + 1) // 2
 
 
@@ -133,6 +191,18 @@ def draw_donors(rng: np.random.Generator, n: int, rows: int, k: int = N_DONORS) 
 
     Randomness: :func:`donor_words` raw words, row-major; donor c of a row is a rank uniform in
     ``0..n-2-c`` among the indices not yet taken (:func:`below` of :func:`unit_doubles`).
+
+    Args:
+        rng: the generation's generator (its bit generator's raw words are read).
+        n: the population size.
+        rows: rows to draw (individuals 0..rows-1).
+        k: donors per row.
+
+    Returns:
+        (rows, k) intp donor indices.
+
+    Raises:
+        ValueError: n < k + 1.
     """
     if n < k + 1:
         raise ValueError(f"population {n} too small for {k} distinct donors (need >= {k + 1})")
@@ -159,8 +229,17 @@ def mutate(
 ) -> np.ndarray:
     """Mutants for rows ``i = 0..m-1`` (m = len(mutation)) of population ``X`` (n, d).
 
-    ``mutation`` (m,) operator ids, ``F`` (m,), ``best`` the guide index (scalar or (m,)),
-    ``donors`` (m, 5) from :func:`draw_donors`. Formulas in the module docstring.
+    Formulas in the module docstring.
+
+    Args:
+        X: the population (n, d).
+        mutation: (m,) operator ids.
+        F: (m,) scale factors.
+        best: the guide index (scalar or (m,)).
+        donors: (m, 5) from :func:`draw_donors`.
+
+    Returns:
+        (m, d) mutants, not clamped.
     """
     m = len(mutation)
     cand = np.empty((m, 2 + N_DONORS), dtype=np.intp)
@@ -178,6 +257,14 @@ def draw_crossover(rng: np.random.Generator, rows: int, d: int) -> tuple[np.ndar
 
     :func:`crossover_words` raw words: ``j`` from the first ``rows`` (:func:`below` of
     :func:`unit_doubles`), then ``u`` row-major from :func:`unit_halves`.
+
+    Args:
+        rng: the generation's generator (its bit generator's raw words are read).
+        rows: rows to draw.
+        d: the dimension.
+
+    Returns:
+        (u (rows, d) floats in [0, 1), j (rows,) intp in 0..d-1).
     """
     words = rng.bit_generator.random_raw(crossover_words(rows, d))
     j = below(unit_doubles(words[:rows]), d)
@@ -193,6 +280,15 @@ def crossover_mask(
     Exponential (1): a circular run starting at ``j``; it has length
     ``L = 1 + #(leading True in u[0..d-2] < Cr)`` (capped at d), i.e. after each copied gene the
     run continues while the next uniform is below Cr; genes ``j, j+1, .., j+L-1 (mod d)``.
+
+    Args:
+        crossover: (m,) ids, 0 binomial / 1 exponential.
+        Cr: (m,) crossover rates.
+        u: (m, d) uniforms (:func:`draw_crossover`).
+        j: (m,) start / forced indices.
+
+    Returns:
+        (m, d) bool mask.
     """
     m, d = u.shape
     cr = np.asarray(Cr, dtype=float)[:, None]
@@ -213,5 +309,17 @@ def crossover(
     u: np.ndarray,
     j: np.ndarray,
 ) -> np.ndarray:
-    """Trials: mutant genes where :func:`crossover_mask` is True, parent genes elsewhere."""
+    """Trials: mutant genes where :func:`crossover_mask` is True, parent genes elsewhere.
+
+    Args:
+        x: (m, d) parents.
+        v: (m, d) mutants.
+        crossover_ids: (m,) ids, 0 binomial / 1 exponential.
+        Cr: (m,) crossover rates.
+        u: (m, d) uniforms.
+        j: (m,) start / forced indices.
+
+    Returns:
+        (m, d) trials, not clamped.
+    """
     return np.where(crossover_mask(crossover_ids, Cr, u, j), v, x)

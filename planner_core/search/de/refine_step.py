@@ -29,8 +29,15 @@ PERIOD = 10
 
 
 def due(state: DEState, period: int = PERIOD) -> bool:
-    """True when generation `state.generation` should refine: the period divides the
-    generation and budget is left."""
+    """Whether generation `state.generation` should refine.
+
+    Args:
+        state: the state after the generation.
+        period: generations between memetic steps (<= 0: never).
+
+    Returns:
+        True when the period divides the generation (> 0) and budget is left.
+    """
     return (
         period > 0
         and state.generation > 0
@@ -48,7 +55,19 @@ def _frozen(a: np.ndarray) -> np.ndarray:
 def memetic_step(
     state: DEState, problem: Any, refine: Callable[[np.ndarray], np.ndarray]
 ) -> DEState:
-    """Refine the elite through `refine`, evaluate on `problem` (budget-counted), inject."""
+    """Refine the elite through `refine`, evaluate on `problem` (budget-counted), inject.
+
+    Args:
+        state: the DE's state.
+        problem: the problem (bounds and `evaluate`).
+        refine: x (d,) problem space -> candidates (m, d) problem space.
+
+    Returns:
+        The state with the first min(m, budget left) candidates' evaluations counted; the
+        Deb-best of them, clamped to the box, in the Deb-worst individual's place (and the
+        new best) when it is Deb-better than the elite; `state` itself when nothing could be
+        evaluated.
+    """
     x = to_problem(problem, state.X[state.best])
     cand = np.asarray(refine(x), dtype=float).reshape(-1, state.dim)
     k = min(len(cand), state.budget - state.evaluations)

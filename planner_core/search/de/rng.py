@@ -30,11 +30,26 @@ class Streams:
         self._bits = np.random.PCG64(0)
 
     def rng(self, generation: int) -> np.random.Generator:
+        """Generation g's generator (valid until the next call: its bit generator is shared).
+
+        Args:
+            generation: g, >= 0.
+
+        Returns:
+            A Generator over the root PCG64 advanced by g * `GENERATION_STRIDE`.
+        """
         self._bits.state = self._root
         self._bits.advance(int(generation) * GENERATION_STRIDE)
         return np.random.Generator(self._bits)
 
 
 def generation_rng(state: DEState) -> np.random.Generator:
-    """The Generator of generation ``state.generation``: pure in (seed, generation)."""
+    """The Generator of generation ``state.generation``: pure in (seed, generation).
+
+    Args:
+        state: its `seed` and `generation` read.
+
+    Returns:
+        A fresh Generator (its own `Streams`).
+    """
     return Streams(state.seed).rng(state.generation)

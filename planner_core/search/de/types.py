@@ -34,7 +34,16 @@ class BoxProblem(Protocol):
     lower: np.ndarray
     upper: np.ndarray
 
-    def evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
+    def evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Score points.
+
+        Args:
+            X: points (n, d) in problem space.
+
+        Returns:
+            (f (n,), phi (n,)): objective and constraint violation (0: feasible).
+        """
+        ...
 
 
 class Config(NamedTuple):
@@ -67,31 +76,65 @@ class DEState:
 
     @property
     def population(self) -> int:
+        """N.
+
+        Returns:
+            The population size, rows of X.
+        """
         return int(self.X.shape[0])
 
     @property
     def dim(self) -> int:
+        """d.
+
+        Returns:
+            The dimension, columns of X.
+        """
         return int(self.X.shape[1])
 
     @property
     def max_generations(self) -> int:
-        """G: the number of generations the budget allows after the initial population."""
+        """G: the number of generations the budget allows after the initial population.
+
+        Returns:
+            `max_generations(population, budget)`.
+        """
         return max_generations(self.population, self.budget)
 
     @property
     def done(self) -> bool:
+        """Whether the budget is spent.
+
+        Returns:
+            True when evaluations >= budget.
+        """
         return self.evaluations >= self.budget
 
     @property
     def best_f(self) -> float:
+        """The Deb-best individual's objective.
+
+        Returns:
+            f[best].
+        """
         return float(self.f[self.best])
 
     @property
     def best_phi(self) -> float:
+        """The Deb-best individual's violation.
+
+        Returns:
+            phi[best].
+        """
         return float(self.phi[self.best])
 
     @property
     def feasible_fraction(self) -> float:
+        """The share of the population that is feasible.
+
+        Returns:
+            Individuals with phi == 0 over N, in [0, 1].
+        """
         return float(np.count_nonzero(self.phi == 0.0)) / self.population
 
 
@@ -144,6 +187,11 @@ class Result:
 
     @property
     def feasible(self) -> bool:
+        """Whether the best solution is feasible.
+
+        Returns:
+            True when phi == 0.
+        """
         return self.phi == 0.0
 
 
@@ -155,13 +203,50 @@ class Configurator(Protocol):
     next memory. The core never looks inside the memory.
     """
 
-    def init(self, state: DEState) -> Any: ...
+    def init(self, state: DEState) -> Any:
+        """The initial memory.
 
-    def configure(self, state: DEState, rng: np.random.Generator) -> Config: ...
+        Args:
+            state: the run's initial state (population evaluated, no memory yet).
 
-    def update(self, memory: Any, outcome: Outcome) -> Any: ...
+        Returns:
+            The memory value (None if stateless).
+        """
+        ...
+
+    def configure(self, state: DEState, rng: np.random.Generator) -> Config:
+        """The generation's configuration.
+
+        Args:
+            state: the run's state (`memory` read).
+            rng: the generation's generator, after ask's words (valid during the call only).
+
+        Returns:
+            A `Config` of (N,) arrays.
+        """
+        ...
+
+    def update(self, memory: Any, outcome: Outcome) -> Any:
+        """Learn from a generation.
+
+        Args:
+            memory: the current memory (never mutated).
+            outcome: what the generation did.
+
+        Returns:
+            The next memory.
+        """
+        ...
 
 
 def max_generations(population: int, budget: int) -> int:
-    """G = ceil((budget - N) / N): generations after the initial population."""
+    """G = ceil((budget - N) / N): generations after the initial population.
+
+    Args:
+        population: N, > 0.
+        budget: evaluations in all.
+
+    Returns:
+        G, >= 0.
+    """
     return max(0, math.ceil((budget - population) / population))
