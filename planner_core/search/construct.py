@@ -94,8 +94,17 @@ Order = Callable[[Any, np.ndarray, "LegTimes"], np.ndarray]
 
 
 def reach(problem: Any, frac: float) -> np.ndarray:
-    """(J,) ground distance (m) within which hovering frac x T_max collects each sensor's data
-    (Sec. 3's link rate read backwards; `planner_core.model.formulas.ground_reach`)."""
+    """Each sensor's service reach (Sec. 3's link rate read backwards;
+    `planner_core.model.formulas.ground_reach`).
+
+    Args:
+        problem: the UAV `Problem` (its model's required data, T_max and link).
+        frac: the share of T_max hovered, > 0.
+
+    Returns:
+        (J,) ground distance (m) within which hovering frac x T_max collects each sensor's
+        data (its Q_j floored at 1e-9 Mbit).
+    """
     mp = problem.model
     need = np.maximum(np.asarray(mp.required, dtype=float), 1e-9) / (frac * mp.t_max)
     return ground_reach(need, mp.altitude, mp.peak_rate, mp.decay)
@@ -114,7 +123,16 @@ def candidate_sites(problem: Any, extra: np.ndarray | None = None) -> np.ndarray
     """Candidate hover sites (n, 2), metres: sensor positions, midpoints of sensor pairs, and
     `extra` (e.g. k-means centres), clipped to the area, pushed out of obstacles, deduplicated,
     those over `BANDWIDTH_USE` of the bandwidth dropped (but each sensor's own position kept
-    when no other candidate covers it at frac = 0.9). Module docstring, step 2."""
+    when no other candidate covers it at frac = 0.9). Module docstring, step 2. A sensor no
+    C3-respecting site covers first gets `ring_sites` around it.
+
+    Args:
+        problem: the UAV `Problem` (model, obstacles, seeder).
+        extra: more points (k, 2) m, or None.
+
+    Returns:
+        (n, 2) sites, m.
+    """
     mp = problem.model
     seeder = problem.seeder
     S = np.asarray(mp.sensors, dtype=float)
@@ -161,7 +179,16 @@ def ring_sites(sensors: np.ndarray, lim: np.ndarray) -> np.ndarray:
     """Candidate sites (len(sensors) x |RING_RADII| x RING_DIRECTIONS, 2) m on rings around
     each sensor (k, 2) at `RING_RADII` of its reach lim (k,) m: in a dense field the points
     that keep C3 (the summed rate of every sensor heard within R_lambda) lie towards the
-    field's edge, still within the sensor's reach (issue 31)."""
+    field's edge, still within the sensor's reach (issue 31).
+
+    Args:
+        sensors: the sensors' positions (k, 2), m.
+        lim: their reach (k,), m (`reach`).
+
+    Returns:
+        (k x |RING_RADII| x RING_DIRECTIONS, 2) points, m, sensor by sensor, radius by
+        radius; not clipped to the area nor pushed out of obstacles.
+    """
     ang = 2.0 * np.pi * np.arange(RING_DIRECTIONS) / RING_DIRECTIONS
     unit = np.column_stack([np.cos(ang), np.sin(ang)])  # (D, 2)
     radii = np.asarray(lim, dtype=float)[:, None] * np.asarray(RING_RADII)[None, :]  # (k, R)
@@ -186,8 +213,15 @@ class CoverTable:
         self._csr: dict[float, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
 
     def cover(self, frac: float) -> np.ndarray:
-        """(n, J) bool: site i covers sensor j at reach fraction frac; a sensor no site covers
-        at frac counts as covered by the sites that collect its data within T_max."""
+        """Which sites cover which sensors (cached per fraction).
+
+        Args:
+            frac: the reach fraction.
+
+        Returns:
+            (n, J) bool: site i covers sensor j at reach fraction frac; a sensor no site
+            covers at frac counts as covered by the sites that collect its data within T_max.
+        """
         if frac not in self._cov:
             cov = covers(self.problem, self.sites, frac, self.R)
             full = covers(self.problem, self.sites, 1.0, self.R)
@@ -195,9 +229,16 @@ class CoverTable:
         return self._cov[frac]
 
     def covered(self, frac: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """`cover(frac)` as rows of non-zeros: (indptr (n + 1,), sensors (nnz,) ascending per
-        site, hover (nnz,) s, the hover time each site needs for each sensor it covers,
-        Q_j / R_ij, inf where R_ij = 0)."""
+        """`cover(frac)` as rows of non-zeros (cached per fraction).
+
+        Args:
+            frac: the reach fraction.
+
+        Returns:
+            (indptr (n + 1,) int64, sensors (nnz,) int64 ascending per site, hover (nnz,) s,
+            the hover time each site needs for each sensor it covers, Q_j / R_ij, inf where
+            R_ij = 0).
+        """
         if frac not in self._csr:
             rows, cols = np.nonzero(self.cover(frac))
             indptr = np.searchsorted(rows, np.arange(len(self.sites) + 1)).astype(np.int64)
@@ -225,7 +266,18 @@ def greedy_cover(
     them. Counts and hover maxima read each site's covered sensors (`CoverTable.covered`, a
     few per site on a large map), not the J columns. The same picks as recounting every site
     at every pick (`greedy_cover_reference`), at O(nnz) for the first count and O(n + the
-    recounted sites' sensors) per pick instead of O(n J) per pick."""
+    recounted sites' sensors) per pick instead of O(n J) per pick.
+
+    Args:
+        problem: the UAV `Problem`.
+        sites: candidate sites (n, 2), m (unread when `table` is given).
+        frac: the reach fraction.
+        chosen: points (m, 2) m already in the plan, or None.
+        table: the sites' `CoverTable`, or None.
+
+    Returns:
+        (p,) int64 site indices, in pick order.
+    """
     table = table if table is not None else CoverTable(problem, sites)
     cov = table.cover(frac)
     left = cov.any(axis=0)
@@ -310,7 +362,17 @@ def greedy_cover_reference(
     plan; they are not returned). A sensor no site covers at `frac` counts as covered by the
     sites that collect its data within T_max; one no site serves even then is left uncovered.
     Every site recounted at every pick: what `greedy_cover` computes lazily (tests hold the
-    two equal)."""
+    two equal).
+
+    Args:
+        problem: the UAV `Problem`.
+        sites: candidate sites (n, 2), m.
+        frac: the reach fraction.
+        chosen: points (m, 2) m already in the plan, or None.
+
+    Returns:
+        (p,) int64 site indices, in pick order.
+    """
     mp = problem.model
     need = np.asarray(mp.required, dtype=float)
     cov = covers(problem, sites, frac)
@@ -450,7 +512,17 @@ def _kpp_indices(data, first, u):  # pragma: no cover - compiled
 def site_sets(problem: Any, seed: int) -> Iterator[tuple[str, np.ndarray]]:
     """The candidate site sets in scoring order, each as (label, sites (m, 2)): one greedy
     cover per reach fraction, then the k-means sweep, k = 1 .. min(I_max, J) for the first
-    init, then again for the next (module docstring, steps 2-4)."""
+    init, then again for the next (module docstring, steps 2-4).
+
+    Args:
+        problem: the UAV `Problem`.
+        seed: the run's seed (the k-means inits' stream).
+
+    Yields:
+        (label, sites (m, 2) m): "cover <frac>", then "k-means k=<k> init <r>" (the
+        in-bandwidth pushed-out centres, then the greedy sites covering the rest at 0.9);
+        one ("no sensors", (0, 2)) on a map without sensors.
+    """
     mp = problem.model
     S = np.asarray(mp.sensors, dtype=float)
     J = len(S)
@@ -515,7 +587,15 @@ class LegTimes:
         return first, np.array([self._far[k] for k in keys]).reshape(len(pts), self.graph.n)
 
     def matrix(self, nodes: np.ndarray) -> np.ndarray:
-        """(P, P) symmetric leg times (s) between the points nodes (P, 2), zero diagonal."""
+        """Leg times between points.
+
+        Args:
+            nodes: the points (P, 2), m.
+
+        Returns:
+            (P, P) symmetric leg times (s), zero diagonal (class docstring: a blocked pair
+            over the graph, else `_UNROUTABLE` s per metre inside obstacles on top).
+        """
         nodes = np.asarray(nodes, dtype=float).reshape(-1, 2)
         mp = self.problem.model
         P = len(nodes)
@@ -549,7 +629,17 @@ def via_corners(far: np.ndarray, first: np.ndarray, ia: np.ndarray, ib: np.ndarr
     (point a over the graph to v, then straight to point b, which sees v), inf where none;
     far and first (P, N) s. A point sees few of the N corners tangentially, so the minimum
     runs over b's finite entries only: O(K x corners seen) instead of the (K, N) array of
-    `(far[ia] + first[ib]).min(axis=1)`, the same value (tests)."""
+    `(far[ia] + first[ib]).min(axis=1)`, the same value (tests).
+
+    Args:
+        far: times (P, N) s from each point to each corner over the graph.
+        first: times (P, N) s from each point straight to each corner it sees (inf elsewhere).
+        ia: the pairs' first points (K,), row indices.
+        ib: the pairs' second points (K,), row indices.
+
+    Returns:
+        (K,) s, inf where no corner joins the pair.
+    """
     ia = np.asarray(ia, dtype=np.int64)
     ib = np.asarray(ib, dtype=np.int64)
     if not len(ia):
@@ -579,7 +669,16 @@ def order_sites(problem: Any, sites: np.ndarray, legs: LegTimes | None = None) -
     """Visiting order (m,) of the sites (m, 2) on the open path start -> sites -> end: our own
     open path (`planner_core.model.routing.open_path`: nearest neighbour and cheapest insertion,
     2-opt,
-    Or-opt) on the obstacle-aware Eq. 1 leg times of `legs` (module docstring, step 5)."""
+    Or-opt) on the obstacle-aware Eq. 1 leg times of `legs` (module docstring, step 5).
+
+    Args:
+        problem: the UAV `Problem` (start, end).
+        sites: the sites (m, 2), m.
+        legs: the map's `LegTimes` (None: built here).
+
+    Returns:
+        (m,) int64 permutation of the sites (identity for m <= 1).
+    """
     sites = np.asarray(sites, dtype=float).reshape(-1, 2)
     if len(sites) <= 1:
         return np.arange(len(sites))
@@ -592,7 +691,16 @@ def timed_plan(problem: Any, pts: np.ndarray) -> np.ndarray:
     """The decision vector (d,) of hover points pts (m, 2) with LP hover times
     (`planner_core.search.polish`); when every slot must stay active (tau <= 0), filled to I_max
     with
-    collinear points first."""
+    collinear points first.
+
+    Args:
+        problem: the UAV `Problem`.
+        pts: hover points (m, 2), m, in visiting order.
+
+    Returns:
+        (d,) decision vector (`Problem.encode`): the LP's kept points and times; where every
+        slot must stay, all points, those the LP dropped with time 0.
+    """
     I = int(problem.n_points)
     if problem.variable_length and problem.tau <= 0.0 and len(pts) < I:
         pts = problem.seeder.fill(pts, I)  # every slot is active: collinear fillers
@@ -614,9 +722,20 @@ def build_plans(
     legs: LegTimes | None = None,
 ) -> list[np.ndarray]:
     """Decision vectors (d,) from a site set (m, 2): visiting order (`order`, default
-    `order_sites`), slide, visibility-graph detours and I_max (`memetic.repair_points`, one or
+    `order_sites`), slide, visibility-graph detours and I_max (`refine.repair_points`, one or
     two hover-point sets), LP hover times (module docstring, steps 5-7); one vector per set.
-    `rng` drives the slide's candidate directions only."""
+    `rng` drives the slide's candidate directions only.
+
+    Args:
+        problem: the UAV `Problem`.
+        sites: the site set (m, 2), m.
+        rng: the slide's generator.
+        order: the visiting order (None: `order_sites`).
+        legs: the map's `LegTimes` (None: built here).
+
+    Returns:
+        One (d,) decision vector per hover-point set (one or two).
+    """
     sites = np.asarray(sites, dtype=float).reshape(-1, 2)
     legs = legs if legs is not None else LegTimes(problem)
     C = sites[(order or order_sites)(problem, sites, legs)]
@@ -636,7 +755,19 @@ def candidate_plans(
     decision vectors, labels (m,) naming the site set each came from). Deterministic for a
     seed; nothing is evaluated. `stop`: asked after each site set once a plan exists; True
     ends the list there (the pipeline's time limit). `progress`: told after each site set what
-    is built so far ("12/64 plans")."""
+    is built so far ("12/64 plans").
+
+    Args:
+        problem: the UAV `Problem`.
+        seed: the run's seed (k-means inits, slides).
+        limit: the most plans (None: all; <= 0: none).
+        order: the visiting order (None: `order_sites`).
+        stop: the early stop, or None.
+        progress: the progress callback, or None.
+
+    Returns:
+        (X (m, d), labels): distinct decision vectors and their site sets' labels.
+    """
     d = int(np.asarray(problem.lower).shape[0])
     rows: list[np.ndarray] = []
     labels: list[str] = []
@@ -668,7 +799,17 @@ def seeder_plans(problem: Any, seed: int, k: int,
     """k (k, d) plans of the problem's seeder (`Seeder.solution`: clustered sensors, a short
     order, visibility-graph detours; what the DE's seeded start population holds), from their
     own generator of `seed`, so the same in both start modes. `progress`: told after each
-    plan ("3/20 seeder plans")."""
+    plan ("3/20 seeder plans").
+
+    Args:
+        problem: the UAV `Problem` (its seeder).
+        seed: the run's seed.
+        k: how many (< 0 counts as 0).
+        progress: the progress callback, or None.
+
+    Returns:
+        (k, d) decision vectors.
+    """
     rng = stream_rng(seed, "seeder-plans")
     d = int(np.asarray(problem.lower).shape[0])
     rows = []
@@ -704,7 +845,15 @@ class InjectedPopulation:
 
     def initial_population(self, rng: np.random.Generator, n: int) -> np.ndarray:
         """(n, d) problem-space starts: the wrapped problem's (or uniform, with the `seeded`
-        rows first), last rows replaced by `starts`."""
+        rows first), last rows replaced by `starts`.
+
+        Args:
+            rng: the DE run's generator (the hook's or the uniform draw).
+            n: the population size.
+
+        Returns:
+            (n, d) starts; the first n of `starts` when they fill it.
+        """
         k = min(len(self.starts), n)
         if k == n:
             return np.array(self.starts[:n], dtype=float)

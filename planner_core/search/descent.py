@@ -101,7 +101,14 @@ def large_problem(problem: Any) -> bool:
     """Whether `problem` allows more hover points than the paper's maps (`Problem.hover_limit`
     > `PAPER_POINTS`; corner slots not counted): its descents take per-point steps, its moves
     a first screen (`planner_core.search.structure._move`), and its default improving rounds
-    are the large ones (`planner_core.pipeline.schedule.large_rounds`)."""
+    are the large ones (`planner_core.pipeline.schedule.large_rounds`).
+
+    Args:
+        problem: the UAV `Problem` (its `hover_limit` read).
+
+    Returns:
+        True when hover_limit > `PAPER_POINTS`.
+    """
     return int(problem.hover_limit) > PAPER_POINTS
 
 Evaluate = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
@@ -126,7 +133,14 @@ class Descent:
 
 
 def hover_of(b: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
-    """Hover points (I, 2) m and times (I,) s of a `Problem.breakdown` dict."""
+    """Hover points and times of a plan.
+
+    Args:
+        b: a `Problem.breakdown` dict ("hover_points", "hover_times" read).
+
+    Returns:
+        (P (I, 2) m, T (I,) s).
+    """
     return (np.asarray(b["hover_points"], dtype=float).reshape(-1, 2),
             np.asarray(b["hover_times"], dtype=float))
 
@@ -135,10 +149,18 @@ def objective(
     problem: Any, P: np.ndarray, warm: dict[Any, Any] | None = None,
     R: np.ndarray | None = None,
 ) -> tuple[float, np.ndarray, np.ndarray] | None:
-    """F(P) (s), its gradient dF/dP (I, 2) (s/m) and the LP hover times T (I,) (s) for hover
-    points P (I, 2) in metres; None when no hover times serve every sensor (the LP is
-    infeasible). `warm`: the LP's warm-start store (`polish.hover_lp`). Module docstring for
-    the formulas. `R`: the points' link rates (I, J), when the caller has them."""
+    """F(P), its gradient and the LP hover times. Module docstring for the formulas.
+
+    Args:
+        problem: the UAV `Problem`.
+        P: hover points (I, 2), m.
+        warm: the LP's warm-start store (`polish.hover_lp`), or None.
+        R: the points' link rates (I, J) Mbit/s, when the caller has them.
+
+    Returns:
+        (F (s), dF/dP (I, 2) s/m, T (I,) s); None when no hover times serve every sensor
+        (the LP is infeasible).
+    """
     P = np.asarray(P, dtype=float).reshape(-1, 2)
     m = problem.model
     if R is None:
@@ -157,8 +179,18 @@ def gradient_reference(
 ) -> tuple[float, np.ndarray]:
     """The flight time t_fly (s) of start -> P -> end and dF/dP (I, 2) (s/m) with numpy, term
     by term as in the module docstring: what `_flight_and_gradient` compiles (tests hold the
-    two equal). R (I, J) the points' link rates, T (I,) the LP's hover times, y (J,) its
-    coverage duals."""
+    two equal).
+
+    Args:
+        problem: the UAV `Problem`.
+        P: hover points (I, 2), m.
+        R: the points' link rates (I, J), Mbit/s.
+        T: the LP's hover times (I,), s.
+        y: its coverage duals (J,).
+
+    Returns:
+        (t_fly s, dF/dP (I, 2) s/m).
+    """
     m = problem.model
     nodes = path_nodes(problem, P)
     seg = np.diff(nodes, axis=0)
@@ -217,7 +249,18 @@ def _flight_and_gradient(P, start, end, sensors, required, R, T, y, H, decay, v_
 
 def objective_reference(problem: Any, P: np.ndarray) -> float:
     """F(P) alone, the obvious way: the polish's own LP for the hover times (no drop of points),
-    the flight time leg by leg; what `objective` computes with its gradient."""
+    the flight time leg by leg; what `objective` computes with its gradient.
+
+    Args:
+        problem: the UAV `Problem`.
+        P: hover points (I, 2), m.
+
+    Returns:
+        F, s (an infeasible LP gives its shortfall solution's times, not None).
+
+    Raises:
+        RuntimeError: the LP solver fails.
+    """
     P = np.asarray(P, dtype=float).reshape(-1, 2)
     m = problem.model
     from planner_core.search.polish import _solve_lp
@@ -245,10 +288,27 @@ def descend(
     `evaluate` (X (n, d) -> f, phi) is the caller's counted evaluation; the start itself is not
     re-evaluated (its f is recomputed from the LP). `race` (n, limit): once n evaluations are
     spent the descent stops unless its best f is <= limit (checked once; `_move`'s race).
-    `steps`: the step rule, `GLOBAL` or `PER_POINT` (module docstring; `step` m is then every
-    point's first step); None: `PER_POINT` on a `large_problem`, else `GLOBAL`.
-    Returns None when x is not a feasible plan with at least one hover point, or when
-    `trials` < 1. Deterministic (no random numbers). Raises ValueError for another `steps`.
+    Deterministic (no random numbers).
+
+    Args:
+        problem: the UAV `Problem`.
+        x: the start plan (d,), problem space.
+        evaluate: the caller's counted evaluation, X (n, d) -> (f, phi).
+        trials: the most evaluations.
+        step: the first step, m (the largest point move of the first trial).
+        min_step: the descent stops when the step falls below this, m.
+        race: (n, limit): once n evaluations are spent the descent stops unless its best f
+            is <= limit (checked once; `_move`'s race); None: no race.
+        steps: the step rule, `GLOBAL` or `PER_POINT` (module docstring; `step` m is then
+            every point's first step); None: `PER_POINT` on a `large_problem`, else `GLOBAL`.
+
+    Returns:
+        The `Descent` (x (d,), f s, phi, evaluations, f_start s); None when x is not a
+        feasible plan with at least one hover point, one of its points breaks C3 or C5
+        (`held_points`), its LP is infeasible, or `trials` < 1.
+
+    Raises:
+        ValueError: another `steps`.
     """
     if steps is None:
         steps = PER_POINT if large_problem(problem) else GLOBAL

@@ -45,7 +45,24 @@ def finish(
     local moves rarely turn one structure into the other (merges and removals take one point
     at a time, each raced against the incumbent): on T06 the final plans with 7-9 points end
     1.2-1.9 % above the best-known and those with 4-6 points 0.1-0.4 % (docs/search.md, "A
-    second structure"). None when x is not a feasible plan or `trials` < 1."""
+    second structure").
+
+    Args:
+        problem: the UAV `Problem`.
+        x: the plan (d,), problem space.
+        evaluate: the caller's counted evaluation.
+        trials: evaluations for x's finish.
+        seed: the kicks' seed.
+        descent_trials: the descent's cap (None: `DESCENT_TRIALS`).
+        restructure_trials: each structural search's cap (None: `RESTRUCTURE_TRIALS`).
+        other: the second plan (d,), or None.
+        other_trials: evaluations for its finish (< 1: not finished).
+
+    Returns:
+        The `Descent`; None when x is not a feasible plan or `trials` < 1 (or anything else
+        that makes `descend` refuse it: no hover point, a point `held_points` holds, 0
+        descent trials); the second plan's finish is left out when `descend` refuses it.
+    """
     cur = _finish_one(problem, x, evaluate, trials=trials, seed=seed,
                       descent_trials=descent_trials, restructure_trials=restructure_trials)
     if cur is None or other is None or other_trials < 1:
@@ -70,7 +87,16 @@ def other_structure(problem: Any, starts: np.ndarray | None, x: np.ndarray) -> n
     the final plans that end well above the best-known are those with more points (on
     `plan`'s seeds 0-24 of T06 fewer-first gave +0.52 % against +0.68 % for the best start of
     any other size; 8 seeds x 16 maps: T11 0.19 -> 0.16 %, T15 0.42 -> 0.44 %, the rest
-    within 0.01 %)."""
+    within 0.01 %).
+
+    Args:
+        problem: the UAV `Problem`.
+        starts: decision vectors (k, d), best first, or None.
+        x: the plan (d,).
+
+    Returns:
+        A row of `starts` (d,), or None.
+    """
     if starts is None or not len(starts):
         return None
     n = len(problem.breakdown(np.asarray(x, dtype=float))["hover_points"])

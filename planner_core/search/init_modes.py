@@ -34,9 +34,17 @@ class UniformStart:
 
 
 def with_init(problem: Any, init: str) -> Any:
-    """``problem`` as an optimiser should see it in start mode ``init`` (one of INIT_MODES).
+    """``problem`` as an optimiser should see it in start mode ``init``.
 
-    Raises ValueError naming the valid modes for any other mode.
+    Args:
+        problem: the problem.
+        init: the start mode, one of INIT_MODES ("seeded", "uniform").
+
+    Returns:
+        ``problem`` itself ("seeded") or a `UniformStart` around it ("uniform").
+
+    Raises:
+        ValueError: any other mode (naming the valid ones).
     """
     if init == "seeded":
         return problem

@@ -52,7 +52,11 @@ class PolishResult:
     solver: str = ""
 
     def describe(self) -> list[str]:
-        """One line per sensor that no hover times can serve, saying why."""
+        """One line per sensor that no hover times can serve, saying why.
+
+        Returns:
+            The `unserved` entries' messages, in sensor order.
+        """
         return [u["message"] for u in self.unserved]
 
 
@@ -195,8 +199,15 @@ def hover_lp(
     """`planner_core.model.hoverlp.hover_lp` (the hover-time LP's one home), its HiGHS step
     looked up here at call time (`_highs_lp`), so that a test may count the calls.
 
-    Args: R (I, J) Mbit/s, req (J,) Mbit, t_max s, warm as there. Returns (T s, sum T s,
-    duals) or None when infeasible."""
+    Args:
+        R: link rates (I, J), Mbit/s.
+        req: required data (J,), Mbit.
+        t_max: the most hover time per point, s.
+        warm: the warm-start store, as there (None: a cold start).
+
+    Returns:
+        (T (I,) s, sum T s, duals (J,)), or None when infeasible.
+    """
     return _hover_lp(R, req, t_max, warm, highs=_highs_lp)
 
 
@@ -344,9 +355,19 @@ def polish_elite(
 ) -> tuple[np.ndarray, list[PolishResult]]:
     """The hover-time LP for the k Deb-best distinct rows of a population.
 
-    X (n, d) problem space with f, phi (n,); returns the polished decision vectors (m, d),
-    m <= k, in Deb order of the inputs, and their `PolishResult`s. The caller evaluates them
-    (and counts those evaluations) and keeps the best."""
+    The caller evaluates them (and counts those evaluations) and keeps the best.
+
+    Args:
+        problem: the UAV `Problem`.
+        X: the population (n, d), problem space.
+        f: its objectives (n,).
+        phi: its violations (n,).
+        k: the most rows (a k < 1 still polishes the first).
+
+    Returns:
+        (the polished decision vectors (m, d), m <= max(k, 1), in Deb order of the inputs;
+        their `PolishResult`s).
+    """
     from planner_core.model.formulas import deb_order
 
     X = np.asarray(X, dtype=float)

@@ -62,7 +62,11 @@ class Rebuilder:
 
     @property
     def sites(self) -> np.ndarray:
-        """Candidate sites (n, 2), metres, within the bandwidth."""
+        """Candidate sites (n, 2), metres, within the bandwidth.
+
+        Returns:
+            `construct.candidate_sites(problem)`, built on first use and kept.
+        """
         if self._sites is None:
             from planner_core.search.construct import candidate_sites
 
@@ -77,7 +81,14 @@ class Rebuilder:
         the reference takes them, over the sites within a hair of it only, and the first of
         least value wins. Cost: O(k log n) instead of the reference's O(k n) (n sites; on L06
         9,629 sites made the snap 0.8 of a draw's 0.95 ms). Points or sites that are not
-        finite or lie beyond `_TREE_LIMIT` go to the reference."""
+        finite or lie beyond `_TREE_LIMIT` go to the reference.
+
+        Args:
+            pts: points (k, 2), m.
+
+        Returns:
+            (k,) int64 indices into `sites`.
+        """
         from scipy.spatial import cKDTree
 
         sites = self.sites
@@ -113,7 +124,16 @@ class Rebuilder:
         centres, `construct._kmeans`, each snapped to the nearest candidate site; duplicates
         merged); the other points stay. None when no sensor is the window's or the plan would
         exceed I_max hover points (`Problem.hover_limit`; the re-routing's corners may use
-        corner slots)."""
+        corner slots).
+
+        Args:
+            P: hover points (I, 2), m, in visiting order.
+            T: their hover times (I,), s.
+            rng: the rebuild's generator (window size and place, k, the k-means init).
+
+        Returns:
+            The point set (I', 2), or None (also for I = 0).
+        """
         from planner_core.model.routing import open_path
         from planner_core.search.construct import _kmeans
 
@@ -148,6 +168,13 @@ class Rebuilder:
 def nearest_reference(sites: np.ndarray, pts: np.ndarray) -> np.ndarray:
     """Index (k,) of the site of sites (n, 2) nearest to each point of pts (k, 2): the first
     index of least squared distance over every site (`Rebuilder.nearest`'s reference). O(k n).
+
+    Args:
+        sites: the sites (n, 2), m.
+        pts: the points (k, 2), m.
+
+    Returns:
+        (k,) int indices into `sites`.
     """
     d2 = ((pts[:, None, :] - sites[None, :, :]) ** 2).sum(axis=-1)
     return d2.argmin(axis=1)

@@ -53,9 +53,19 @@ def _leg_cost(problem: Any, a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, n
 
 
 def two_opt_order(problem: Any, pts: np.ndarray, max_passes: int = 4) -> np.ndarray:
-    """Hover points (k, 2) re-ordered by first-improvement 2-opt on the open route from the
-    map's start to its end: a segment reversal is kept when the route gets faster (Eq. 1 leg
-    times) and its total overlap does not grow. Returns a permutation of the rows."""
+    """Hover points (k, 2) re-ordered by 2-opt on the open route from the map's start to its
+    end: in each pass the reversal of most gain is kept when the route gets faster (Eq. 1 leg
+    times) and its total overlap does not grow.
+
+    Args:
+        problem: the UAV `Problem` (start, end, obstacles, flight time).
+        pts: hover points (k, 2), m.
+        max_passes: the most passes (one reversal each).
+
+    Returns:
+        The points (k, 2) in the new order (the rows permuted, not their indices); `pts`
+        as (k, 2) for k < 2.
+    """
     pts = np.asarray(pts, dtype=float).reshape(-1, 2)
     k = len(pts)
     if k < 2:
@@ -90,7 +100,17 @@ def use_memetic(setting: str, problem: Any) -> bool:
     """Whether a run on `problem` (as the optimiser sees it) uses the memetic step, for the
     defaults table's `memetic` setting: "on", "off", or "auto" = on exactly when the run starts
     without the problem's seeding hook (the uniform start, `planner_core.search.init_modes`).
-    Raises ValueError naming `memetic` for any other setting."""
+
+    Args:
+        setting: "on", "off" or "auto".
+        problem: the problem as the optimiser sees it.
+
+    Returns:
+        Whether the memetic step runs.
+
+    Raises:
+        ValueError: naming `memetic`, for any other setting.
+    """
     from planner_core.defaults import check
 
     check("memetic", setting)
@@ -103,7 +123,16 @@ def covers(problem: Any, sites: np.ndarray, frac: float = SERVE_FRACTION,
            rates: np.ndarray | None = None) -> np.ndarray:
     """(n, J) bool: whether hovering frac x T_max at each of the sites (n, 2) collects each
     sensor's required data (Eq. R_ij; a sensor that needs nothing counts as covered).
-    `rates`: the sites' link rates (n, J), when the caller keeps them."""
+
+    Args:
+        problem: the UAV `Problem` (required data, T_max, link).
+        sites: hover sites (n, 2), m.
+        frac: the share of T_max hovered.
+        rates: the sites' link rates (n, J) Mbit/s, when the caller keeps them.
+
+    Returns:
+        (n, J) bool.
+    """
     mp = problem.model
     need = np.asarray(mp.required, dtype=float)
     if rates is None:
@@ -132,7 +161,16 @@ def repair_points(problem: Any, pts: np.ndarray) -> list[np.ndarray]:
     (module docstring, step 4), each set once: (1) route, then prune and merge the routed points;
     (2) merge serving points and re-route until the corners fit. Which fits better depends on
     the map (measured on the suite, each alone leaves other runs infeasible), so the memetic
-    step evaluates both. Deterministic."""
+    step evaluates both. Deterministic.
+
+    Args:
+        problem: the UAV `Problem` (model, seeder).
+        pts: hover points (k, 2), m, in visiting order.
+
+    Returns:
+        One or two point sets (m, 2), m; the second only when the route outgrew I_max and
+        the other way gave another set.
+    """
     seeder = problem.seeder
     mp = problem.model
     pts = np.asarray(pts, dtype=float).reshape(-1, 2)
@@ -364,7 +402,15 @@ def _merge_pair(problem: Any, pts: np.ndarray) -> np.ndarray | None:
 def merge_pair_reference(problem: Any, pts: np.ndarray) -> np.ndarray | None:
     """`_merge_pair` the obvious way, pair by pair and place by place (one rate row and one
     route sum each): what `_merge_pair` computes in blocks of pairs (tests hold the two
-    equal)."""
+    equal).
+
+    Args:
+        problem: the UAV `Problem`.
+        pts: hover points (k, 2), m.
+
+    Returns:
+        The points (k - 1, 2) with the pair merged, or None when no pair can be merged.
+    """
     mp = problem.model
     need = np.asarray(mp.required, dtype=float)
     serves = covers(problem, pts)  # (k, J)
@@ -408,7 +454,15 @@ def repair(problem: Any, x: np.ndarray) -> np.ndarray:
     """The repair alone (step 4) as a refine function: candidates (m, d), problem space, for an
     infeasible x; (0, d) for a feasible one. The memetic step without its improving moves
     (steps 1-3), for measuring what the repair of unserved sensors does on its own
-    (`benchmarks/validate_policy.py --pipeline repair`)."""
+    (`benchmarks/validate_policy.py --pipeline repair`).
+
+    Args:
+        problem: the UAV `Problem`.
+        x: a decision vector (d,), problem space.
+
+    Returns:
+        (m, d) candidates, m <= 2 (one per non-empty repaired set).
+    """
     b = problem.breakdown(np.asarray(x, dtype=float))
     d = int(np.asarray(problem.lower).shape[0])
     return np.asarray(_repairs(problem, b), dtype=float).reshape(-1, d)
@@ -416,7 +470,18 @@ def repair(problem: Any, x: np.ndarray) -> np.ndarray:
 
 def refine(problem: Any, x: np.ndarray) -> np.ndarray:
     """Candidates (m, d), problem space, from solution x: re-ordered with LP hover times, then
-    each of up to `REMOVALS` removals, and for an infeasible x its repair (module docstring)."""
+    each of up to `REMOVALS` removals, and for an infeasible x its repair (module docstring).
+
+    Args:
+        problem: the UAV `Problem`.
+        x: a decision vector (d,), problem space.
+
+    Returns:
+        (m, d) candidates in this order: the repairs (infeasible x only); then, when x has
+        hover points, the 2-opt order with LP times, the points pulled `PULLS` of the way
+        towards their route neighbours' midpoint (LP times), and (variable length, more
+        than one point) each of the `REMOVALS` least-time points removed.
+    """
     b = problem.breakdown(np.asarray(x, dtype=float))
     pts = np.asarray(b["hover_points"], dtype=float).reshape(-1, 2)
     d = int(np.asarray(problem.lower).shape[0])

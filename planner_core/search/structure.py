@@ -48,7 +48,16 @@ def split_moves(problem: Any, P: np.ndarray, T: np.ndarray) -> list[np.ndarray]:
     """Point sets (I + 1, 2) with one hover point split in two: for each point serving two or
     more sensors (collecting >= `SERVES` of Q_j there), its sensors halved along their principal
     axis, and the point replaced by two points `SPLIT_FRACTIONS` of the way towards each half's
-    centroid, in the order that makes the shorter path. P (I, 2) m, T (I,) s."""
+    centroid, in the order that makes the shorter path.
+
+    Args:
+        problem: the UAV `Problem`.
+        P: hover points (I, 2), m.
+        T: their hover times (I,), s.
+
+    Returns:
+        The point sets, point by point, fraction by fraction.
+    """
     return list(_splits(problem, P, T))
 
 
@@ -78,7 +87,15 @@ def _splits(problem: Any, P: np.ndarray, T: np.ndarray) -> Iterator[np.ndarray]:
 def waypoint_moves(P: np.ndarray, T: np.ndarray) -> list[np.ndarray]:
     """The point set (I', 2) without the points that hover ~0 s (`polish.ZERO_TIME`): detour
     corners, which `restructure` then routes afresh; none when there are no such points or
-    nothing would be left. P (I, 2) m, T (I,) s."""
+    nothing would be left.
+
+    Args:
+        P: hover points (I, 2), m.
+        T: their hover times (I,), s.
+
+    Returns:
+        [P without them], or [].
+    """
     keep = np.asarray(T) > ZERO_TIME
     return [P[keep]] if 0 < keep.sum() < len(P) else []
 
@@ -95,7 +112,16 @@ def removal_moves(problem: Any, P: np.ndarray, T: np.ndarray) -> list[np.ndarray
     side, leaves nothing held (the start and the end stay). Every point costs a stop (Eq. 1: a
     leg from rest to rest), a corner for nothing but the detour; `waypoint_moves` drops the
     corners but routes the legs afresh, which puts corners back wherever the neighbours stay
-    where they are. P (I, 2) m, T (I,) s."""
+    where they are.
+
+    Args:
+        problem: the UAV `Problem`.
+        P: hover points (I, 2), m.
+        T: their hover times (I,), s.
+
+    Returns:
+        The point sets, in that order.
+    """
     return list(_removals(problem, P, T))
 
 
@@ -131,7 +157,14 @@ def _removals(problem: Any, P: np.ndarray, T: np.ndarray) -> Iterator[np.ndarray
 
 def merge_moves(P: np.ndarray) -> list[np.ndarray]:
     """Point sets (I - 1, 2) with two consecutive hover points replaced by their midpoint,
-    the closest pairs first. P (I, 2) m."""
+    the closest pairs first.
+
+    Args:
+        P: hover points (I, 2), m.
+
+    Returns:
+        I - 1 point sets (none for I < 2).
+    """
     gaps = np.linalg.norm(np.diff(P, axis=0), axis=1)
     out = []
     for i in np.argsort(gaps, kind="stable"):
@@ -209,12 +242,24 @@ def restructure(
     within C3 and C5 and every sensor servable is evaluated with its LP hover times and
     descended in a race against the incumbent (`_move`, at most `move_trials` more
     evaluations); the first Deb-better result is kept and the moves are tried again from it,
-    until none improves or `trials` evaluations are spent (all through `evaluate`). Raises
-    ValueError for an unknown kind of move.
+    until none improves or `trials` evaluations are spent (all through `evaluate`).
+    Variable-length plans only (the number of hover points changes; at most I_max);
+    deterministic.
 
-    Variable-length plans only (the number of hover points changes; at most I_max): returns
-    None in the fixed-length mode, with tau <= 0 (every slot active), for an infeasible x or
-    `trials` < 1. x (d,) a decision vector; deterministic.
+    Args:
+        problem: the UAV `Problem`.
+        x: a decision vector (d,).
+        evaluate: the caller's counted evaluation.
+        trials: the most evaluations.
+        move_trials: a move's descent cap (after its own evaluation).
+        moves: the kinds, in order: "waypoint", "merge", "split", "removal".
+
+    Returns:
+        The best plan found (`Descent`); None in the fixed-length mode, with tau <= 0 (every
+        slot active), for an infeasible x or `trials` < 1.
+
+    Raises:
+        ValueError: an unknown kind of move.
     """
     kinds = {  # each kind's moves drawn one at a time: the search stops at the first better
         "waypoint": lambda P, T: waypoint_moves(P, T),
@@ -278,8 +323,22 @@ def kicks(
     before evaluation, into an obstacle, past the bandwidth or leaving a sensor unserved, costs
     none; at most `KICK_ATTEMPTS` x `trials` kicks are drawn). `spread` (m): the kick's
     standard deviation per axis. Seeded: the same seed and `stream` (0: the final stage's own;
-    the pipeline's later rounds pass their round) give the same plan. None for an infeasible
-    x or `trials` < 1."""
+    the pipeline's later rounds pass their round) give the same plan.
+
+    Args:
+        problem: the UAV `Problem`.
+        x: the plan (d,).
+        evaluate: the caller's counted evaluation.
+        trials: the most evaluations.
+        seed: the run's seed.
+        move_trials: a move's descent cap.
+        spread: the kick's standard deviation per axis, m.
+        stream: the random stream (0: the final stage's).
+
+    Returns:
+        The best plan found (`Descent`); None for an infeasible x, a plan without hover
+        points or `trials` < 1.
+    """
     m = problem.model
     rng = stream_rng(seed, "kicks", *((stream,) if stream else ()))
     box = np.array([m.width, m.height])
@@ -304,6 +363,16 @@ def perturbation_search(
     the incumbent (`_move`, at most `move_trials` more evaluations; `reroute`: legs through
     obstacles re-routed first) and kept when Deb-better; until `trials` evaluations are spent
     or `attempts` x `trials` draws made (a draw refused before evaluation costs none).
+
+    Args:
+        problem: the UAV `Problem`.
+        x: the plan (d,).
+        evaluate: the caller's counted evaluation.
+        draw: (P, T) -> Q (I', 2) or None.
+        trials: the most evaluations.
+        attempts: draws per evaluation allowed.
+        move_trials: a move's descent cap.
+        reroute: re-route legs through obstacles before a move is scored.
 
     Returns:
         The best plan found (`Descent`); None for an infeasible x (d,), a plan without hover

@@ -39,7 +39,15 @@ __all__ = [
 
 
 def path_nodes(problem: Any, P: np.ndarray) -> np.ndarray:
-    """start -> P (I, 2) -> end as one (I + 2, 2) array."""
+    """start -> P (I, 2) -> end as one (I + 2, 2) array.
+
+    Args:
+        problem: its `start` and `end` (2,) m read.
+        P: hover points (I, 2), m.
+
+    Returns:
+        (I + 2, 2) nodes, m.
+    """
     out = np.empty((len(P) + 2, 2))
     out[0] = problem.start
     out[1:-1] = P
@@ -52,7 +60,16 @@ def held_points(problem: Any, P: np.ndarray, R: np.ndarray | None = None) -> np.
     bandwidth) or end or start a leg that cuts an obstacle by more than `L_VIO_TOL` (C5).
     `R`: the points' link rates (I, J) Mbit/s, when the caller has them. The flags come from
     one compiled call (`_held_mask`); `held_points_reference` is the numpy twin (tests).
-    Cost: O(I x sensors in range) rates (unless given), O(I J) sums and I + 1 legs."""
+    Cost: O(I x sensors in range) rates (unless given), O(I J) sums and I + 1 legs.
+
+    Args:
+        problem: the UAV `Problem` (model, obstacles).
+        P: hover points (I, 2), m.
+        R: their link rates (I, J) Mbit/s, or None.
+
+    Returns:
+        (h,) int indices into P, ascending.
+    """
     m = problem.model
     P = _writable(P)
     R = m.rates(P) if R is None else _writable(R)
@@ -62,7 +79,16 @@ def held_points(problem: Any, P: np.ndarray, R: np.ndarray | None = None) -> np.
 
 def held_points_reference(problem: Any, P: np.ndarray, R: np.ndarray | None = None
                           ) -> np.ndarray:
-    """`held_points` in numpy, step by step (tests hold the two equal)."""
+    """`held_points` in numpy, step by step (tests hold the two equal).
+
+    Args:
+        problem: the UAV `Problem`.
+        P: hover points (I, 2), m.
+        R: their link rates (I, J) Mbit/s, or None.
+
+    Returns:
+        (h,) int indices into P, ascending.
+    """
     m = problem.model
     bad = (m.rates(P) if R is None else R).sum(axis=1) > m.bandwidth
     nodes = path_nodes(problem, P)
@@ -95,11 +121,20 @@ class HeldCheck:
         self.cut = overlap_first(nodes[:-1], nodes[1:], problem.obstacles) > L_VIO_TOL
 
     def held(self) -> np.ndarray:
-        """Indices of the points that break C3 or end or start a leg that breaks C5."""
+        """Indices of the points that break C3 or end or start a leg that breaks C5.
+
+        Returns:
+            (h,) int indices, ascending.
+        """
         return np.flatnonzero(self.rate_bad | self.cut[:-1] | self.cut[1:])
 
     def moved(self, P: np.ndarray, idx: np.ndarray) -> None:
-        """The points P (I, 2) after the points idx (indices) moved: their flags renewed."""
+        """Renew the moved points' flags.
+
+        Args:
+            P: the points (I, 2) m after the move.
+            idx: the indices of the points that moved.
+        """
         m = self.problem.model
         idx = np.asarray(idx, dtype=np.int64)
         self.rate_bad[idx] = m.rates(P[idx]).sum(axis=1) > m.bandwidth
@@ -160,7 +195,19 @@ def trial_points_reference(
     breaks C3 or C5 is put back at P until nothing does (at most I rounds, `HeldCheck`).
     Returns (Pn (I, 2), Pn's link rates (I, J) or None where they were not computed, verdict
     `TRIAL_OK`, `TRIAL_HELD` or `TRIAL_SAME`). Cost: O(I J) rates and I + 1 legs, plus, with
-    k held points, 2 k turns (rates and 4 k legs) and a few rounds of the held ones."""
+    k held points, 2 k turns (rates and 4 k legs) and a few rounds of the held ones.
+
+    Args:
+        problem: the UAV `Problem`.
+        P: hover points (I, 2), m.
+        g: the gradient (I, 2), s/m.
+        scale: its largest |entry| (or 1.0 with a move already scaled).
+        step: the step, m.
+        box: the area (2,), m.
+
+    Returns:
+        (Pn (I, 2) m, its link rates (I, J) Mbit/s or None, verdict).
+    """
     move = -g / scale * step
     Pn = np.clip(P + move, 0.0, box)
     Rn = problem.model.rates(Pn)
@@ -186,9 +233,22 @@ def trial_points(
     """`trial_points_reference` in one compiled call (`_trial_kernel`): the same points, flags
     and verdict, to the bit (the same operations in the same order, the same batches of legs
     for the obstacle kernel, numpy's pairwise sum for the summed rates; tests), and Pn's link
-    rates (I, J) Mbit/s always (for `objective`). P, g (I, 2); scale, step floats; box (2,).
-    Cost as the reference's in arithmetic, without its ~40 numpy and wrapper calls (~0.2 ms)
-    per trial."""
+    rates (I, J) Mbit/s (for `objective`). Cost as the reference's in arithmetic, without its
+    ~40 numpy and wrapper calls (~0.2 ms) per trial.
+
+    Args:
+        problem: the UAV `Problem`.
+        P: hover points (I, 2), m.
+        g: the gradient (I, 2), s/m.
+        scale: its largest |entry| (or 1.0 with a move already scaled).
+        step: the step, m.
+        box: the area (2,), m.
+
+    Returns:
+        (Pn (I, 2) m, rates (I, J) Mbit/s, verdict). The rates are Pn's for `TRIAL_OK` and
+        where no point was held; after a slide (`TRIAL_HELD`, or `TRIAL_SAME` once every
+        point went back) they are those of the unslid step's points, not Pn's.
+    """
     m = problem.model
     win = m.window
     return _trial_kernel(
