@@ -319,7 +319,9 @@ class Problem:
         ht = np.asarray(hover_times, dtype=float).reshape(-1)
         k = len(hp)
         if k > self.n_points:
-            raise ValueError(f"{k} hover points exceed I_max = {self.n_points}")
+            slots = self.n_points - self.hover_limit
+            raise ValueError(f"{k} hover points exceed I_max = {self.hover_limit}"
+                             + (f" + {slots} corner slots" if slots else ""))
         if not self.variable_length and k != self.n_points:
             raise ValueError(f"fixed-length mode needs exactly {self.n_points} hover points")
         x = np.zeros((self.n_points, 4))
