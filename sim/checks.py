@@ -101,8 +101,11 @@ class Verdicts:
 
     @property
     def reserve_left_wh(self) -> float | None:
-        """Energy left in the battery at landing (Wh): battery - energy, the reserve included;
-        None without one."""
+        """Energy left in the battery at landing (Wh): battery - energy, the reserve included.
+
+        Returns:
+            battery_wh - energy_wh, Wh; None without a battery.
+        """
         if self.energy_wh is None or self.battery_wh is None:
             return None
         return self.battery_wh - self.energy_wh
@@ -110,19 +113,31 @@ class Verdicts:
     @property
     def above_reserve_wh(self) -> float | None:
         """Energy left at landing above the reserve (Wh): usable - energy, the slack ENERGY
-        judges (negative: into the reserve); None without a battery."""
+        judges.
+
+        Returns:
+            usable_wh - energy_wh, Wh (negative: into the reserve); None without a battery.
+        """
         if self.energy_wh is None or self.usable_wh is None:
             return None
         return self.usable_wh - self.energy_wh
 
     @property
     def passed(self) -> bool:
-        """Whether every verdict passed (True for no verdicts)."""
+        """Whether every verdict passed.
+
+        Returns:
+            True when each of `items` passed (True for no verdicts).
+        """
         return all(v.passed for v in self.items)
 
     @property
     def failed(self) -> list[str]:
-        """Names of the verdicts that failed, in order."""
+        """Names of the verdicts that failed.
+
+        Returns:
+            Their names ("C4", "ENERGY", ...), in the order of `items`.
+        """
         return [v.name for v in self.items if not v.passed]
 
     def __getitem__(self, name: str) -> Verdict:

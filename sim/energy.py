@@ -69,7 +69,11 @@ class SimPower:
 
     @property
     def hover(self) -> float:
-        """P(0) = P0 + Pi, W."""
+        """Hover power, P(0) = P0 + Pi.
+
+        Returns:
+            P(0), W.
+        """
         return power(0.0, self)
 
 
@@ -188,7 +192,11 @@ class MissionEnergy:
 
     @property
     def total(self) -> float:
-        """vertical + flight + ret + hover, Wh."""
+        """The mission's energy.
+
+        Returns:
+            vertical + flight + ret + hover, Wh.
+        """
         return self.vertical + self.flight + self.ret + self.hover
 
 

@@ -83,7 +83,11 @@ class VehicleTrack:
 
     @property
     def span(self) -> float:
-        """Seconds from the launch to the last landing."""
+        """The track's length in time.
+
+        Returns:
+            Seconds from the launch to the last landing, (samples - 1) x dt.
+        """
         return (len(self.z) - 1) * self.dt
 
 

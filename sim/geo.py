@@ -34,7 +34,16 @@ class MissingOriginError(ValueError):
 def origin_of(map_or_origin: Any) -> tuple[float, float, float]:
     """(lat, lon, alt) of a Map, a MapFile, an Origin model or a 3-tuple.
 
-    Raises MissingOriginError when a map has none (no default place is ever assumed)."""
+    Args:
+        map_or_origin: a Map or MapFile (read through its `spec` and `origin`), an Origin
+            model (`lat`, `lon`, `alt`) or a (lat, lon[, alt]) sequence: degrees, degrees, m.
+
+    Returns:
+        (lat, lon, alt) as floats: degrees, degrees, metres (0.0 when not given).
+
+    Raises:
+        MissingOriginError: a map has none (no default place is ever assumed).
+    """
     obj = map_or_origin
     if hasattr(obj, "spec"):
         obj = obj.spec
@@ -55,7 +64,16 @@ def origin_of(map_or_origin: Any) -> tuple[float, float, float]:
 def enu_to_latlon(x: Any, y: Any, origin: Any) -> tuple[np.ndarray, np.ndarray]:
     """Latitude and longitude (degrees) of local points (x east, y north, metres).
 
-    Accepts scalars or arrays; returns float64 arrays of the broadcast shape.
+    Args:
+        x: east, metres; a scalar or an array.
+        y: north, metres; a scalar or an array (broadcast against `x`).
+        origin: the map's origin, anything `origin_of` reads.
+
+    Returns:
+        (lat, lon), degrees: float64 arrays of the broadcast shape.
+
+    Raises:
+        MissingOriginError: `origin` is a map without an origin.
     """
     lat0, lon0, h0 = origin_of(origin)
     e = np.asarray(x, dtype=float)
@@ -72,7 +90,19 @@ def enu_to_latlon(x: Any, y: Any, origin: Any) -> tuple[np.ndarray, np.ndarray]:
 
 
 def latlon_to_enu(lat: Any, lon: Any, origin: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Local (x east, y north) metres of latitude/longitude points (inverse of `enu_to_latlon`)."""
+    """Local (x east, y north) metres of latitude/longitude points (inverse of `enu_to_latlon`).
+
+    Args:
+        lat: latitude, degrees; a scalar or an array.
+        lon: longitude, degrees; a scalar or an array (broadcast against `lat`).
+        origin: the map's origin, anything `origin_of` reads.
+
+    Returns:
+        (x, y), metres east and north: float64 arrays of the broadcast shape.
+
+    Raises:
+        MissingOriginError: `origin` is a map without an origin.
+    """
     lat0, lon0, h0 = origin_of(origin)
     la = np.asarray(lat, dtype=float)
     lo = np.asarray(lon, dtype=float)

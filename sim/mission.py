@@ -99,19 +99,48 @@ class MissionItem:
 
     @property
     def params(self) -> tuple[float, float, float, float, float, float, float]:
-        """The seven MAVLink parameters [p1, p2, p3, p4, lat, lon, alt]."""
+        """The seven MAVLink parameters.
+
+        Returns:
+            (p1, p2, p3, p4, lat, lon, alt): param1..param4, x (deg), y (deg), z (m).
+        """
         return (self.param1, self.param2, self.param3, self.param4, self.x, self.y, self.z)
 
     def with_seq(self, seq: int) -> MissionItem:
+        """This item at another position in its list.
+
+        Args:
+            seq: the new sequence number (cast to int).
+
+        Returns:
+            A copy with `seq` replaced.
+        """
         return replace(self, seq=int(seq))
 
     def without_nan(self, fill: float = 0.0) -> MissionItem:
-        """This item with NaN parameters replaced by `fill` (for formats without NaN)."""
+        """This item with NaN parameters replaced by `fill` (for formats without NaN).
+
+        Args:
+            fill: the value for each NaN among param1..param4, x, y, z.
+
+        Returns:
+            A copy (the same values where none is NaN).
+        """
         names = ("param1", "param2", "param3", "param4", "x", "y", "z")
         return replace(self, **{k: fill for k in names if math.isnan(getattr(self, k))})
 
     def same_as(self, other: MissionItem, *, rel: float = 0.0, abs_: float = 0.0) -> bool:
-        """Equality that treats NaN parameters as equal (dataclass `==` does not)."""
+        """Equality that treats NaN parameters as equal (dataclass `==` does not).
+
+        Args:
+            other: the item to compare with.
+            rel: relative tolerance on the seven parameters (`math.isclose`'s rel_tol).
+            abs_: absolute tolerance on them, in their own units (`math.isclose`'s abs_tol).
+
+        Returns:
+            True when seq, command, frame, current, autocontinue and mission_type are equal
+            and each parameter is close (or NaN in both).
+        """
         ints = ("seq", "command", "frame", "current", "autocontinue", "mission_type")
         if any(int(getattr(self, k)) != int(getattr(other, k)) for k in ints):
             return False
@@ -127,7 +156,17 @@ class MissionItem:
 def items_equal(
     a: Sequence[MissionItem], b: Sequence[MissionItem], *, rel: float = 0.0, abs_: float = 0.0
 ) -> bool:
-    """Two item lists are equal item by item (NaN equal to NaN)."""
+    """Two item lists are equal item by item (NaN equal to NaN).
+
+    Args:
+        a: the first list of items.
+        b: the second list of items.
+        rel: relative tolerance on each parameter (`MissionItem.same_as`).
+        abs_: absolute tolerance on each parameter (`MissionItem.same_as`).
+
+    Returns:
+        True when the lists have the same length and every pair is `same_as`.
+    """
     if len(a) != len(b):
         return False
     return all(x.same_as(y, rel=rel, abs_=abs_) for x, y in zip(a, b, strict=True))
@@ -137,9 +176,22 @@ def items_equal(
 
 
 def fence_from_items(items: Iterable[MissionItem]) -> tuple[list[tuple], list[list[tuple]]]:
-    """Group fence items into circles [(lat, lon, radius, inclusion)] and polygons
-    [[(lat, lon), ...] with `inclusion` as the first element's 3rd field]; raise MissionError
-    on a polygon whose vertex count does not match param1."""
+    """Group fence items into circles and polygons.
+
+    Args:
+        items: fence items (MAV_MISSION_TYPE_FENCE) in seq order; FENCE_RETURN_POINT items
+            are skipped.
+
+    Returns:
+        (circles, polygons): circles [(lat, lon, radius, inclusion)] (deg, deg, m from
+        param1, bool); polygons [[(lat, lon, inclusion), ...]], one list per polygon, each
+        vertex carrying its polygon's `inclusion` (the first element's 3rd field).
+
+    Raises:
+        MissionError: a polygon whose vertex count does not match param1 (interrupted, or
+            the last one short), a polygon of fewer than 3 vertices, or an item that is not
+            a fence item.
+    """
     circles: list[tuple] = []
     polygons: list[list[tuple]] = []
     pending: list[MissionItem] = []
@@ -220,10 +272,20 @@ class Route:
 
     @property
     def hover_points(self) -> np.ndarray:
+        """The stops that are hover points of the paper's model.
+
+        Returns:
+            (I, 2) local metres, `stops[is_hover]`.
+        """
         return self.stops[self.is_hover]
 
     @property
     def hover_durations(self) -> np.ndarray:
+        """The hover times of the hover points.
+
+        Returns:
+            (I,) seconds, `hover_times[is_hover]`.
+        """
         return self.hover_times[self.is_hover]
 
 
@@ -261,7 +323,14 @@ def _has_position(it: MissionItem) -> bool:
 
 
 def command_name(c: int) -> str:
-    """The MAV_CMD name of command number `c` (e.g. 16 -> "MAV_CMD_NAV_WAYPOINT")."""
+    """The MAV_CMD name of command number `c` (e.g. 16 -> "MAV_CMD_NAV_WAYPOINT").
+
+    Args:
+        c: the MAV_CMD number.
+
+    Returns:
+        Its name in pymavlink's MAV_CMD enum, or "command <c>" for a number it lacks.
+    """
     entry = mavutil.mavlink.enums["MAV_CMD"].get(c)
     return entry.name if entry is not None else f"command {c}"
 

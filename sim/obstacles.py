@@ -50,7 +50,14 @@ class Obstacle:
 
     def clearance(self, lines: Any) -> float:
         """Metres from the shapely geometry `lines` to this obstacle (negative: inside a circle
-        by that much); circles exact, not via their drawn polygon."""
+        by that much); circles exact, not via their drawn polygon.
+
+        Args:
+            lines: a shapely geometry (a leg, a path), local metres.
+
+        Returns:
+            The distance, metres (0 when it touches or enters a polygon).
+        """
         if self.circle is None:
             return float(shapely.distance(lines, self.shape))
         cx, cy, r = self.circle
@@ -58,6 +65,12 @@ class Obstacle:
 
     @property
     def label(self) -> str:
+        """The obstacle's name in messages.
+
+        Returns:
+            "<kind> <index>" (kind with '-' for '_', e.g. "no-fly-zone 0"), then " '<name>'"
+            when the map names it.
+        """
         base = f"{self.kind.replace('_', '-')} {self.index}"
         return f"{base} '{self.name}'" if self.name else base
 
@@ -76,7 +89,15 @@ def _rectangle(x: float, y: float, length: float, width: float, angle_deg: float
 
 def obstacle_shapes(map: Any) -> list[Obstacle]:  # noqa: A002
     """Every obstacle of the map (circles, rectangles, no-fly zones, polygon obstacles) as a
-    shapely polygon."""
+    shapely polygon.
+
+    Args:
+        map: a map with `spec.obstacles` (circles, rectangles, no_fly_zones, polygons).
+
+    Returns:
+        The `Obstacle`s in that order, each indexed within its own list; circles carry their
+        exact (cx, cy, r), their shape a buffer of `CIRCLE_QUAD_SEGS` segments per quarter.
+    """
     obs = map.spec.obstacles
     out = [
         Obstacle(
@@ -101,6 +122,14 @@ def overlap_lengths(path: np.ndarray, obstacles: list[Obstacle]) -> np.ndarray:
     Legs are measured one by one (the paper sums per leg and per obstacle: a leg crossing two
     overlapping obstacles counts in both). Time and memory grow as L x O (every pair is
     measured and kept): for short paths; `overlap_totals` is the bounded form for a mission.
+
+    Args:
+        path: (L + 1, 2) polyline, local metres.
+        obstacles: the O obstacles (`obstacle_shapes`).
+
+    Returns:
+        (L, O) float array, metres; (max(L, 0), O) zeros for fewer than two points or no
+        obstacles.
     """
     path = np.asarray(path, dtype=float).reshape(-1, 2)
     if len(path) < 2 or not obstacles:
@@ -202,6 +231,13 @@ def overlap_totals(paths: list[np.ndarray], obstacles: list[Obstacle]) -> np.nda
     measured exactly, as `overlap_lengths` does). Time O(U log U + (U + P) log O + P) for U
     distinct legs, O obstacles and P (leg, obstacle) pairs that meet; memory O(U + O) plus at
     most max(`PAIR_BLOCK`, O) pairs at a time (legs are queried in chunks of PAIR_BLOCK / O).
+
+    Args:
+        paths: polylines (n, 2), local metres; those of fewer than two points have no leg.
+        obstacles: the O obstacles (`obstacle_shapes`).
+
+    Returns:
+        (O,) float array, metres (zeros without legs or obstacles).
     """
     n_obs = len(obstacles)
     out = np.zeros(n_obs)
@@ -241,7 +277,15 @@ def distances_to(paths: list[np.ndarray], geoms: np.ndarray) -> np.ndarray:
     """(G,) metres from each shapely geometry of `geoms` to the nearest leg of the polylines
     `paths` (inf without legs): ``shapely.distance(MultiLineString(paths), geoms)``, through an
     STRtree of the distinct legs rather than every leg against every geometry. Time about
-    O((U + G) log U) for U distinct legs, memory O(U + G)."""
+    O((U + G) log U) for U distinct legs, memory O(U + G).
+
+    Args:
+        paths: polylines (n, 2), local metres; those of fewer than two points have no leg.
+        geoms: (G,) shapely geometries, local metres.
+
+    Returns:
+        (G,) float array, metres (inf everywhere without legs).
+    """
     legs, _ = unique_legs(paths)
     out = np.full(len(geoms), np.inf)
     if not len(legs) or not len(geoms):

@@ -258,7 +258,11 @@ class Timeline:
 
     @property
     def collected(self) -> np.ndarray:
-        """(J,) Mbit collected per sensor at the end of the mission."""
+        """Data collected per sensor at the end of the mission.
+
+        Returns:
+            (J,) Mbit, a copy of the last row of `data`.
+        """
         return self.data[-1].copy()
 
 
