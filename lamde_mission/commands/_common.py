@@ -10,7 +10,19 @@ from lamde_mission.errors import UsageError
 
 
 def load_map_or_fail(path: str) -> Any:
-    """Load and validate a map; turn every problem into a UsageError naming the field."""
+    """Load and validate a map; turn every problem into a UsageError naming the field.
+
+    The map's notes are printed on stderr ("note: PATH: ...").
+
+    Args:
+        path: the map file (JSON).
+
+    Returns:
+        The loaded `planner_core.model.mapio.Map`.
+
+    Raises:
+        UsageError: one line per problem, each prefixed with the path (exit 2).
+    """
     from planner_core.model.mapio import MapError, load_map
     from planner_core.textio import printable
 
@@ -28,7 +40,16 @@ def load_map_or_fail(path: str) -> Any:
 
 def same_file(a: str | Path, b: str | Path) -> bool:
     """Whether paths `a` and `b` name one file: the same resolved path, or the same file
-    through a link (`os.path.samefile`, where both exist)."""
+    through a link (`os.path.samefile`, where both exist).
+
+    Args:
+        a: a path.
+        b: another path.
+
+    Returns:
+        True when they name one file; False otherwise, or when one does not exist (and the
+        resolved paths differ).
+    """
     import os
 
     if Path(a).resolve() == Path(b).resolve():
@@ -43,7 +64,18 @@ def check_outputs(paths: list[tuple[str, str | None]], *, mkdir: bool = False,
                   inputs: list[tuple[str, str | None]] = ()) -> None:
     """UsageError naming the option and path of the first output that cannot be written, that
     two options share, or that is one of the command's `inputs` (what, path: writing it would
-    destroy it), before any work; `mkdir` creates missing folders instead."""
+    destroy it), before any work; `mkdir` creates missing folders instead.
+
+    Args:
+        paths: (option, path) per output, e.g. ("--plot", "a.png"); a None or empty path
+            (option not given) is skipped.
+        mkdir: create a missing output folder rather than refuse it.
+        inputs: (what, path) per file the command reads, e.g. ("map", "m.json"); a None
+            path is skipped.
+
+    Raises:
+        UsageError: the first such output, one line naming the option and the path.
+    """
 
     from lamde_mission.errors import UsageError
     from planner_core.atomic import OutputPathError, check_writable
@@ -68,7 +100,12 @@ def check_outputs(paths: list[tuple[str, str | None]], *, mkdir: bool = False,
 
 
 def add_executor_args(p: Any, what: str = "jobs") -> None:
-    """--backend / --address: where batch work runs (planner_core.execution)."""
+    """--backend / --address: where batch work runs (planner_core.execution).
+
+    Args:
+        p: the command's `argparse.ArgumentParser`.
+        what: the work's name in the help text ("the {what} run").
+    """
     p.add_argument("--backend", choices=("local", "ray"), default="local",
                    help=f"where the {what} run: local = a process pool on this machine "
                    "(default), ray = a Ray cluster (needs the ray extra: "
@@ -81,7 +118,14 @@ def add_executor_args(p: Any, what: str = "jobs") -> None:
 
 def check_executor_args(args: Any) -> None:
     """UsageError (exit 2) for --address without --backend ray, or --backend ray without Ray
-    installed; imports Ray only to check that it is there."""
+    installed; does not import Ray, only looks for it (`importlib.util.find_spec`).
+
+    Args:
+        args: the parsed options (`backend`, `address`; `add_executor_args`).
+
+    Raises:
+        UsageError: one line naming the option.
+    """
     if args.address is not None and args.backend != "ray":
         raise UsageError("--address: only with --backend ray")
     if args.backend == "ray":
@@ -93,15 +137,31 @@ def check_executor_args(args: Any) -> None:
 
 
 def add_origin_option(p: Any) -> None:
-    """`--origin LAT,LON[,ALT]`: place a map that has no origin (or move one that has)."""
+    """`--origin LAT,LON[,ALT]`: place a map that has no origin (or move one that has).
+
+    Args:
+        p: the command's `argparse.ArgumentParser`.
+    """
     p.add_argument("--origin", metavar="LAT,LON[,ALT]",
                    help="WGS84 position of the map's (0, 0) (degrees, degrees, metres AMSL); "
                    "needed when the map has no origin, since a mission is latitude/longitude")
 
 
 def with_origin_or_fail(m: Any, origin: str | None) -> Any:
-    """The map placed by `--origin`, or as it is if it has an origin; UsageError naming
-    `origin` when it has none and none was given (no default place is ever assumed)."""
+    """The map placed by `--origin`, or as it is if it has an origin (no default place is
+    ever assumed).
+
+    Args:
+        m: the loaded map.
+        origin: the `--origin` text, "LAT,LON[,ALT]" (degrees, degrees, metres AMSL), or None.
+
+    Returns:
+        The map placed at `origin` (`Map.with_origin`), or `m` itself when `origin` is None.
+
+    Raises:
+        UsageError: `origin` is not two or three numbers or is out of range (naming
+            --origin), or the map has no origin and none was given (naming `origin`).
+    """
     if origin is not None:
         from planner_core.model.mapio import MapError
 

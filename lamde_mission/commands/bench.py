@@ -24,6 +24,14 @@ _BK_OUT = "results-best-known"
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Register `lamde-mission bench` (options, help).
+
+    Args:
+        sub: the subcommands of `lamde_mission.cli.build_parser`.
+
+    Returns:
+        The command's parser (`build_parser` sets `run` as its `_run`).
+    """
     p = sub.add_parser(
         "bench",
         help="compare optimisers on the benchmark suite (same maps, same budget)",
@@ -103,6 +111,19 @@ def _command(args: argparse.Namespace, optimisers: list[str], tasks: list[str] |
 
 
 def run(args: argparse.Namespace) -> int:
+    """`bench` (or `bench --list`): every option is checked before any run.
+
+    Args:
+        args: the parsed options; `runs`, `budget`, `out`, `jobs` and `i_max_values` are
+            filled in on it (the defaults, or the --best-known protocol's).
+
+    Returns:
+        0 when every run is done or already present (and for --list), 1 when any failed.
+
+    Raises:
+        UsageError: a bad option, or a suite or results folder `run_bench` refuses (one
+            line, exit 2).
+    """
     from planner_core.bench.baselines import REGISTRY
     from planner_core.bench.runner import BEST_KNOWN_OPTIMISERS, BenchError, run_bench
 

@@ -7,6 +7,14 @@ import json
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Register `lamde-mission check` (options, help).
+
+    Args:
+        sub: the subcommands of `lamde_mission.cli.build_parser`.
+
+    Returns:
+        The command's parser (`build_parser` sets `run` as its `_run`).
+    """
     p = sub.add_parser(
         "check",
         help="validate a map file and print its summary",
@@ -28,6 +36,17 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
+    """`check MAP`: the map's summary and the fast feasibility diagnosis, as text or JSON.
+
+    Args:
+        args: the parsed options (`map`, `json`).
+
+    Returns:
+        0 when nothing rules every plan out, 1 when the diagnosis finds something fatal.
+
+    Raises:
+        UsageError: the map cannot be read or is invalid (one line per problem, exit 2).
+    """
     from lamde_mission.commands._common import load_map_or_fail
     from planner_core.model.diagnose import diagnose
 

@@ -25,6 +25,14 @@ _CLUSTER_SIZE = 12
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Register `lamde-mission generate` (options, help).
+
+    Args:
+        sub: the subcommands of `lamde_mission.cli.build_parser`.
+
+    Returns:
+        The command's parser (`build_parser` sets `run` as its `_run`).
+    """
     lo, hi = _LARGE_SIZES
     p = sub.add_parser(
         "generate",
@@ -103,6 +111,18 @@ def _int(value: str | None, option: str, default: int | None = None) -> int | No
 
 
 def run(args: argparse.Namespace) -> int:
+    """`generate`: one map (OUT.json with --size and --density, or --layout), the suite
+    (--suite) or the large suite (--large-suite); options and outputs checked first.
+
+    Args:
+        args: the parsed options.
+
+    Returns:
+        0 when the map(s) are written, 1 when the generator cannot make the map asked for.
+
+    Raises:
+        UsageError: a bad option, an output that cannot be written (one line, exit 2).
+    """
     seed = _int(args.seed, "--seed", _DEFAULT_SEED)
     assert seed is not None
     if seed < 0:

@@ -24,6 +24,14 @@ _SELECTIONS = ("global", "random", "local")
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Register `lamde-mission lam` and its subcommands build and select (options, help).
+
+    Args:
+        sub: the subcommands of `lamde_mission.cli.build_parser`.
+
+    Returns:
+        The command's parser (`build_parser` sets `run` as its `_run`).
+    """
     p = sub.add_parser(
         "lam",
         help="landscape-aware module: build the BBOB feature database, select training problems",
@@ -372,9 +380,20 @@ def _figure_bytes(path: str, doc: dict[str, Any], arrays: dict[str, Any]) -> byt
 
 def selection_figure(doc: dict[str, Any], arrays: dict[str, Any]) -> Any:
     """Tasks and the selected synthetic problems in the first two principal components of the
-    database's features (`arrays`: Z (n, k) database features, z_f / z_phi (tasks, k), the
-    selected rows `objective` / `constraint`); title with the selection's options, legend
-    outside the data."""
+    database's features; title with the selection's options, legend outside the data.
+
+    Args:
+        doc: the training-set document of `planner_core.learning.lam.select` (its
+            `options`: tasks, k, selection, features, n_probe, seed).
+        arrays: Z (n, k) database features, z_f / z_phi (tasks, k), the selected rows
+            `objective` / `constraint` (indices into Z).
+
+    Returns:
+        The matplotlib `Figure` (Agg canvas, not saved).
+
+    Raises:
+        KeyError: `arrays` or `doc["options"]` lacks one of those entries.
+    """
     import numpy as np
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure

@@ -10,6 +10,15 @@ from lamde_mission.errors import UsageError
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Register `lamde-mission map` and its subcommands from-geojson, to-geojson and campus
+    (options, help).
+
+    Args:
+        sub: the subcommands of `lamde_mission.cli.build_parser`.
+
+    Returns:
+        The command's parser (`build_parser` sets `run` as its `_run`).
+    """
     p = sub.add_parser(
         "map",
         help="import a map from GeoJSON / QGroundControl layers, or export one as GeoJSON",
@@ -247,6 +256,18 @@ def _campus(args: argparse.Namespace) -> int:
 
 
 def run(args: argparse.Namespace) -> int:
+    """`map from-geojson`, `map to-geojson` or `map campus`, by `args.map_command`.
+
+    Args:
+        args: the parsed options.
+
+    Returns:
+        0 when the output is written.
+
+    Raises:
+        UsageError: a bad option, input layer or map, or an output that cannot be written
+            (one line per problem, exit 2).
+    """
     if args.map_command == "from-geojson":
         return _from_geojson(args)
     if args.map_command == "campus":

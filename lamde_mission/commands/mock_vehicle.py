@@ -7,6 +7,14 @@ import sys
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Register `lamde-mission mock-vehicle` (options, help).
+
+    Args:
+        sub: the subcommands of `lamde_mission.cli.build_parser`.
+
+    Returns:
+        The command's parser (`build_parser` sets `run` as its `_run`).
+    """
     p = sub.add_parser(
         "mock-vehicle",
         help="run a mock MAVLink autopilot (no simulator needed) until Ctrl-C",
@@ -120,6 +128,19 @@ def _fleet_ids(args: argparse.Namespace) -> list[int] | None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """`mock-vehicle`: serve one mock autopilot (or a fleet: --vehicles/--sysids) in the
+    foreground until Ctrl-C, then print its message counts on stderr.
+
+    Args:
+        args: the parsed options.
+
+    Returns:
+        0 once stopped by Ctrl-C.
+
+    Raises:
+        UsageError: a bad option (signing key, heartbeat rate, fleet ids, --ports), or a
+            --connect address that cannot be opened (one line, exit 2).
+    """
     from lamde_mission.errors import UsageError
     from lamde_mission.vehicle.mock import MockVehicle
 

@@ -12,6 +12,14 @@ from planner_core import defaults as D
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Register `lamde-mission plan` (options, help).
+
+    Args:
+        sub: the subcommands of `lamde_mission.cli.build_parser`.
+
+    Returns:
+        The command's parser (`build_parser` sets `run` as its `_run`).
+    """
     p = sub.add_parser(
         "plan",
         help="plan a mission for a map and write it as .plan, .waypoints or .geojson",
@@ -572,6 +580,19 @@ def _corner_slots(args: argparse.Namespace) -> int | str:
 
 
 def run(args: argparse.Namespace) -> int:
+    """`plan MAP -o OUT`: plan, store, replay and judge the mission, then write it (and the
+    --plot and --report); a map with a battery or fleet is planned as sorties
+    (`_run_sorties`). Every option and output is checked before the optimisation.
+
+    Args:
+        args: the parsed options.
+
+    Returns:
+        0 ok, 1 infeasible (nothing written, or written with --allow-infeasible).
+
+    Raises:
+        UsageError: a bad option, map or output (one line per problem, exit 2).
+    """
     if _wants_sorties(args.map):
         return _run_sorties(args)
     for opt, given in (("--objective", args.objective), ("--sortie-budget", args.sortie_budget),

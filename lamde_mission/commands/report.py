@@ -9,6 +9,14 @@ from lamde_mission.errors import UsageError
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Register `lamde-mission report` (options, help).
+
+    Args:
+        sub: the subcommands of `lamde_mission.cli.build_parser`.
+
+    Returns:
+        The command's parser (`build_parser` sets `run` as its `_run`).
+    """
     p = sub.add_parser(
         "report",
         help="write the markdown report of a benchmark folder (table, limits, figures)",
@@ -70,6 +78,18 @@ def _command(args: argparse.Namespace, tasks: list[str] | None) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    """`report RESULTS -o OUT`: the markdown report (`planner_core.bench.report.build_report`).
+
+    Args:
+        args: the parsed options.
+
+    Returns:
+        0 when the report is written.
+
+    Raises:
+        UsageError: RESULTS (or --imax, --ablations) holds no results.jsonl, or the report
+            cannot be built from it (one line, exit 2).
+    """
     from pathlib import Path
 
     from planner_core.bench._io import stored_path

@@ -7,6 +7,14 @@ import json
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Register `lamde-mission schema` (options, help).
+
+    Args:
+        sub: the subcommands of `lamde_mission.cli.build_parser`.
+
+    Returns:
+        The command's parser (`build_parser` sets `run` as its `_run`).
+    """
     return sub.add_parser(
         "schema",
         help="print the JSON Schema of the map file",
@@ -15,6 +23,14 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
+    """`schema`: print the map format's JSON Schema (indented JSON) on stdout.
+
+    Args:
+        args: the parsed options (none are read).
+
+    Returns:
+        0.
+    """
     from planner_core.model.mapio import map_json_schema
 
     print(json.dumps(map_json_schema(), indent=2))

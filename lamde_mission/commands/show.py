@@ -10,6 +10,14 @@ from typing import Any
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Register `lamde-mission show` (options, help).
+
+    Args:
+        sub: the subcommands of `lamde_mission.cli.build_parser`.
+
+    Returns:
+        The command's parser (`build_parser` sets `run` as its `_run`).
+    """
     from lamde_mission.plot import HOVER_LABELS
 
     p = sub.add_parser(
@@ -104,6 +112,19 @@ def plot_fleet_dir(
 
 
 def run(args: argparse.Namespace) -> int:
+    """`show MAP [MISSION | DIR/] -o OUT`: draw the map, with the mission replayed on it (or
+    every sortie of a sortie directory), to PNG or SVG.
+
+    Args:
+        args: the parsed options.
+
+    Returns:
+        0 when the figure is written.
+
+    Raises:
+        UsageError: a bad output suffix, --dpi or --title, a bad map or mission, or an output
+            that cannot be written (one line per problem, exit 2).
+    """
     from lamde_mission.commands._common import (
         check_outputs,
         load_map_or_fail,

@@ -20,6 +20,14 @@ from planner_core import defaults as D
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Register `lamde-mission train` (options, help).
+
+    Args:
+        sub: the subcommands of `lamde_mission.cli.build_parser`.
+
+    Returns:
+        The command's parser (`build_parser` sets `run` as its `_run`).
+    """
     p = sub.add_parser(
         "train",
         help="meta-train the LAMDE policy with PPO and write a checkpoint folder",
@@ -176,6 +184,18 @@ def _need_torch() -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    """`train -o OUT`: meta-train the policy with PPO, a checkpoint written every epoch.
+
+    Args:
+        args: the parsed options.
+
+    Returns:
+        0 when training ends.
+
+    Raises:
+        UsageError: torch is missing, a bad option, OUT a file or an existing checkpoint
+            without --resume, a bad training set, or `ppo.train` refuses (one line, exit 2).
+    """
     from lamde_mission.errors import UsageError
 
     _need_torch()

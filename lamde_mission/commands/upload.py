@@ -8,6 +8,14 @@ import sys
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Register `lamde-mission upload` (options, help).
+
+    Args:
+        sub: the subcommands of `lamde_mission.cli.build_parser`.
+
+    Returns:
+        The command's parser (`build_parser` sets `run` as its `_run`).
+    """
     p = sub.add_parser(
         "upload",
         help="upload a .plan/.waypoints mission to a vehicle and verify it by reading it back",
@@ -449,6 +457,21 @@ def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
 
 
 def run(args: argparse.Namespace) -> int:
+    """`upload MISSION` (or `upload DIR/ --fleet`): check the mission, upload mission, fence
+    and rally, read them back and compare; the report's lines on stdout.
+
+    Args:
+        args: the parsed options.
+
+    Returns:
+        0 every upload verified; 1 an upload failed or a link could not be opened (or,
+        with --fleet --map, the sim's checks failed); 2 two autopilots answer on one system
+        id (`DuplicateVehicleError`).
+
+    Raises:
+        UsageError: a bad option or mission file, or a mission the checks refuse without
+            --force (one line, exit 2).
+    """
     from lamde_mission.errors import UsageError
     from lamde_mission.vehicle.transfer import (
         DuplicateVehicleError,

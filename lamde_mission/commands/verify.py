@@ -9,6 +9,14 @@ from typing import Any
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    """Register `lamde-mission verify` (options, help).
+
+    Args:
+        sub: the subcommands of `lamde_mission.cli.build_parser`.
+
+    Returns:
+        The command's parser (`build_parser` sets `run` as its `_run`).
+    """
     p = sub.add_parser(
         "verify",
         help="replay a mission file in the simulator and check constraints C1..C5",
@@ -34,7 +42,18 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def replay_mission_file(path: str, m: Any) -> Any:
-    """Read a mission file and replay it on map `m`; bad input becomes a UsageError."""
+    """Read a mission file and replay it on map `m`; its notes go to stderr.
+
+    Args:
+        path: the mission file (.plan, .waypoints or a plan result .json).
+        m: the map (with its origin).
+
+    Returns:
+        The `sim.replay.Timeline`.
+
+    Raises:
+        UsageError: bad input (a file that cannot be read, a mission the sim cannot fly).
+    """
     from lamde_mission.errors import UsageError
     from lamde_mission.formats import MissionFileError, load_mission_items
     from lamde_mission.items import MissionError
@@ -127,6 +146,18 @@ def _run_sorties(args: argparse.Namespace, m: Any) -> int:
 
 
 def run(args: argparse.Namespace) -> int:
+    """`verify MAP MISSION` (or a sortie directory): replay and judge, as text or JSON.
+
+    Args:
+        args: the parsed options.
+
+    Returns:
+        0 when every check passes, 1 when any fails.
+
+    Raises:
+        UsageError: a bad map, origin, mission file or sortie directory (one line per
+            problem, exit 2).
+    """
     from pathlib import Path
 
     from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
