@@ -35,7 +35,20 @@ class MissionFileError(ValueError):
 
 
 def format_for(path: str | Path, fmt: str | None = None) -> str:
-    """The format name for `path` ("plan", "waypoints", "geojson"); MissionFileError if unknown."""
+    """The format name for `path` ("plan", "waypoints", "geojson").
+
+    Args:
+        path: the mission file; its suffix (.plan, .waypoints, .geojson, any case) names the
+            format when `fmt` is None.
+        fmt: a format name that overrides the suffix ("plan", "waypoints", "geojson"; case
+            and a leading dot ignored, "json" read as "geojson").
+
+    Returns:
+        "plan", "waypoints" or "geojson".
+
+    Raises:
+        MissionFileError: an unknown `fmt`, or (without one) an unknown suffix.
+    """
     if fmt is not None:
         f = fmt.lower().lstrip(".")
         if f == "json":
@@ -52,7 +65,17 @@ def format_for(path: str | Path, fmt: str | None = None) -> str:
 
 
 def home_of(map: Any) -> tuple[float, float, float]:  # noqa: A002
-    """Planned home: the start point's latitude/longitude and the origin's altitude AMSL."""
+    """Planned home: the start point's latitude/longitude and the origin's altitude AMSL.
+
+    Args:
+        map: a loaded map with an origin.
+
+    Returns:
+        (lat, lon, alt): degrees, degrees, metres AMSL.
+
+    Raises:
+        MissingOriginError: the map has no origin.
+    """
     lat, lon = enu_to_latlon(map.start[0], map.start[1], map)
     return float(lat), float(lon), float(map.spec.origin.alt)
 
@@ -78,6 +101,24 @@ def write_mission(
     was made on a map with safety margins; a no-op for a plan that already is), so lat/lon lie
     on the 1e-7 degree grid, parameters are float32 values and hover times are rounded *up* to
     whole seconds where the autopilot keeps whole seconds; storing the file changes nothing.
+
+    Args:
+        path: the file to write.
+        plan: the plan (a `Plan` or anything with `hover_points` (I, 2) m and `hover_times`
+            (I,) s).
+        map: the map it was planned for, with an origin.
+        fmt: "plan", "waypoints" or "geojson" (`format_for`); None: from the suffix.
+        finish: end the mission with LAND or RETURN_TO_LAUNCH.
+        fence: write the exclusion geofence (`.plan` only).
+        autopilot: "px4", "ardupilot" or "generic": how the vehicle stores the numbers.
+        planning_map: the map the plan was made on (with safety margins), when not `map`.
+
+    Returns:
+        The path written.
+
+    Raises:
+        MissionFileError: the format cannot be told (`format_for`).
+        ValueError: an unknown `autopilot`, or numbers a file cannot hold.
     """
     from lamde_mission.storage import dialect_of, storable_plan, stored_items
 
@@ -111,8 +152,15 @@ def read_mission(path: str | Path) -> tuple[list[MissionItem], list[MissionItem]
     """(mission items, fence items) of a `.plan` or `.waypoints` file (`read_mission_lists`
     also gives the rally points; an upload must use it, to leave nothing out).
 
-    Raises MissionFileError, naming the file, for anything unreadable or unsupported
-    (a GeoJSON file is refused: it is a display format without MAVLink commands).
+    Args:
+        path: the file; recognised by its content, whatever its suffix.
+
+    Returns:
+        (mission, fence) items; the fence is empty for a `.waypoints` file.
+
+    Raises:
+        MissionFileError: naming the file, for anything unreadable or unsupported (a GeoJSON
+            file is refused: it is a display format without MAVLink commands).
     """
     mission, fence, _rally = read_mission_lists(path)
     return mission, fence
@@ -122,8 +170,19 @@ def read_mission_lists(
     path: str | Path,
 ) -> tuple[list[MissionItem], list[MissionItem], list[MissionItem]]:
     """(mission, fence, rally) items of a `.plan` or `.waypoints` file (a `.waypoints` file
-    has neither fence nor rally). A UTF-8 byte-order mark is accepted. MissionFileError naming
-    the file for anything unreadable or unsupported."""
+    has neither fence nor rally). A UTF-8 byte-order mark is accepted.
+
+    Args:
+        path: the file; recognised by its content ("QGC WPL" text or a JSON object),
+            whatever its suffix.
+
+    Returns:
+        (mission, fence, rally) lists of `MissionItem`.
+
+    Raises:
+        MissionFileError: naming the file, for anything unreadable or unsupported (a GeoJSON
+            FeatureCollection included).
+    """
     path = Path(path)
     try:
         text = read_text(path)
@@ -162,7 +221,21 @@ def load_mission_items(
 ) -> tuple[list[MissionItem], list[MissionItem]]:
     """Like `read_mission`, and also accepts a saved plan result (JSON with hover_points and
     hover_times, as `Plan.to_dict` writes, or the report `plan --report` writes: its `stored`
-    mission), turned into items on `map` with `plan_to_items`."""
+    mission), turned into items on `map` with `plan_to_items`.
+
+    Args:
+        path: a `.plan` or `.waypoints` file, or a `.json` plan result or report.
+        map: the map (with its origin) a plan result is placed on.
+
+    Returns:
+        (mission, fence) items; for a plan result, the fence is the map's geofence
+        (`geofence_items`) and the mission is as its `autopilot` stores it, when the report
+        names one.
+
+    Raises:
+        MissionFileError: naming the file, for anything unreadable or unsupported, or bad
+            hover_points/hover_times.
+    """
     path = Path(path)
     if path.suffix.lower() == ".json":
         try:

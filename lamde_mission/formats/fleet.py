@@ -110,12 +110,23 @@ class FleetDir:
                          f"'{map_name}'")  # fmt: skip
 
     def first_sorties(self) -> list[FleetSortie | None]:
-        """Each vehicle's first sortie (None for a vehicle with none), in vehicle order."""
+        """Each vehicle's first sortie, in vehicle order.
+
+        Returns:
+            One `FleetSortie` per vehicle, None for a vehicle with none.
+        """
         return self.sorties_numbered(1)
 
     def sorties_numbered(self, sortie: int) -> list[FleetSortie | None]:
-        """Each vehicle's sortie `sortie` (1-based; None for a vehicle with fewer), in vehicle
-        order."""
+        """Each vehicle's sortie `sortie`, in vehicle order.
+
+        Args:
+            sortie: the sortie's number, 1-based.
+
+        Returns:
+            One `FleetSortie` per vehicle, None for a vehicle with fewer (every entry None
+            for `sortie` < 1).
+        """
         return [v.sorties[sortie - 1] if len(v.sorties) >= sortie >= 1 else None
                 for v in self.vehicles]  # fmt: skip
 

@@ -46,7 +46,22 @@ def _clean(v: Any) -> Any:
 
 
 def geojson_document(plan: Any, map: Any) -> dict[str, Any]:  # noqa: A002
-    """The FeatureCollection for `plan` (hover points, times, breakdown) on `map`."""
+    """The FeatureCollection for `plan` (hover points, times, breakdown) on `map`.
+
+    Args:
+        plan: a `Plan`, or anything with `hover_points` (I, 2) m and `hover_times` (I,) s;
+            `f`, `feasible` and `breakdown` (its `collected` Mbit by sensor id, `t_fly`,
+            `t_hover` s) are read where present.
+        map: the map, with an origin.
+
+    Returns:
+        The GeoJSON FeatureCollection (WGS84, [lon, lat]), features in the order: area,
+        circles, rectangles, no-fly zones and polygon footprints, sensors, path, hover points
+        and corners, start, end. Non-finite numbers are null.
+
+    Raises:
+        MissingOriginError: the map has no origin.
+    """
     spec = map.spec
     feats: list[dict[str, Any]] = []
     w, h = spec.area.width, spec.area.height
@@ -107,6 +122,18 @@ def geojson_document(plan: Any, map: Any) -> dict[str, Any]:  # noqa: A002
 
 
 def write_geojson(path: str | Path, plan: Any, map: Any) -> Path:  # noqa: A002
-    """Write the GeoJSON view atomically."""
+    """Write the GeoJSON view atomically.
+
+    Args:
+        path: the file to write.
+        plan: the plan (`geojson_document`).
+        map: the map, with an origin.
+
+    Returns:
+        The path written.
+
+    Raises:
+        MissingOriginError: the map has no origin.
+    """
     doc = geojson_document(plan, map)
     return write_text_atomic(path, json.dumps(doc, indent=1, allow_nan=False) + "\n")

@@ -111,7 +111,25 @@ def plan_document(
     vehicle_type: int = VEHICLE_QUADROTOR,
     rally: Sequence[MissionItem] = (),
 ) -> dict[str, Any]:
-    """The `.plan` JSON object. `home` is (lat, lon, altitude AMSL) of the planned home."""
+    """The `.plan` JSON object. `home` is (lat, lon, altitude AMSL) of the planned home.
+
+    Args:
+        items: the mission items (at least one); a DO_JUMP's param1 is written as the
+            target's doJumpId (seq + 1), NaN parameters as null.
+        fence: fence items (`geofence_items`), grouped into circles and polygons.
+        home: (lat, lon, alt) of the planned home: degrees, degrees, metres AMSL.
+        cruise_speed: m/s.
+        hover_speed: m/s; None: `cruise_speed`.
+        firmware_type: QGC's firmwareType, a MAV_AUTOPILOT value (default PX4, 12).
+        vehicle_type: a MAV_TYPE value (default quadrotor, 2).
+        rally: rally point items, written as [lat, lon, alt].
+
+    Returns:
+        The document (file version 1, mission, geoFence and rallyPoints version 2).
+
+    Raises:
+        ValueError: no mission items, or fence items that do not group into shapes.
+    """
     if not items:
         raise ValueError("a QGC plan needs at least one mission item")
     return {
@@ -218,8 +236,18 @@ def _plan_field(where: str, name: str) -> str:
 
 
 def parse_plan_document(doc: Any) -> tuple[list[MissionItem], list[MissionItem]]:
-    """Mission items and fence items of a `.plan` JSON object; raise MissionError if malformed.
-    (`parse_plan_lists` also gives the rally points.)"""
+    """Mission items and fence items of a `.plan` JSON object (`parse_plan_lists` also gives
+    the rally points).
+
+    Args:
+        doc: the parsed JSON.
+
+    Returns:
+        (mission, fence) items.
+
+    Raises:
+        MissionError: the document is malformed.
+    """
     items, fence, _rally = parse_plan_lists(doc)
     return items, fence
 
@@ -233,6 +261,15 @@ def parse_plan_lists(
     `doJumpId` in QGC's files) becomes the target's sequence number in the mission list. The
     geoFence's `breachReturn` becomes a FENCE_RETURN_POINT (5000) fence item, first; rally
     points become RALLY_POINT (5100) items of MAV_MISSION_TYPE_RALLY.
+
+    Args:
+        doc: the parsed JSON.
+
+    Returns:
+        (mission, fence, rally) lists of `MissionItem`.
+
+    Raises:
+        MissionError: the document is malformed (naming the field).
     """
     if not isinstance(doc, dict) or doc.get("fileType") != "Plan":
         raise MissionError('not a QGroundControl plan (fileType must be "Plan")')
@@ -376,6 +413,19 @@ def write_qgc_plan(
     fence: Sequence[MissionItem] = (),
     **kwargs: Any,
 ) -> Path:
-    """Write a `.plan` file atomically; keyword arguments as for `plan_document`."""
+    """Write a `.plan` file atomically; keyword arguments as for `plan_document`.
+
+    Args:
+        path: the file to write.
+        items: the mission items.
+        fence: the fence items.
+        **kwargs: `home`, `cruise_speed` and the other keywords of `plan_document`.
+
+    Returns:
+        The path written.
+
+    Raises:
+        ValueError: as `plan_document`, or a non-finite number JSON cannot hold.
+    """
     doc = plan_document(items, fence, **kwargs)
     return write_text_atomic(path, json.dumps(doc, indent=4, allow_nan=False) + "\n")

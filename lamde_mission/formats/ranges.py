@@ -66,6 +66,15 @@ def check_mission_item(item: MissionItem, name: Callable[[str], str]) -> None:
     `name(field)` turns "command", "frame", "current", "autocontinue", "param1".."param4",
     "x", "y" or "z" into the file's own name for it (e.g. "mission.items[3].params[0]" or
     "line 5: param1"), so the message names the field as the user sees it.
+
+    Args:
+        item: the item to check.
+        name: field name -> the file's name for it.
+
+    Raises:
+        MissionError: the first field out of range: a non-integer or out-of-range command,
+            frame, current or autocontinue; a param1..4 beyond float32; a non-finite or
+            too-high altitude; a latitude/longitude out of range, or an x/y beyond int32.
     """
     for key, top in _UINT.items():
         v = getattr(item, key)
@@ -105,7 +114,15 @@ def check_mission_item(item: MissionItem, name: Callable[[str], str]) -> None:
 
 
 def check_item_count(n: int, where: str) -> None:
-    """Raise MissionError if `n` items exceed MAVLink's uint16 count (65,535)."""
+    """Raise MissionError if `n` items exceed MAVLink's uint16 count (65,535).
+
+    Args:
+        n: the number of items.
+        where: what holds them, for the message (e.g. "the file").
+
+    Raises:
+        MissionError: `n` exceeds the cap (`planner_core.textio.limit("mission_items")`).
+    """
     cap = limit("mission_items")
     if n > cap:
         raise MissionError(f"{where}: {n:,} items, more than MAVLink's {cap:,} "

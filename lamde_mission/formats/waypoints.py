@@ -51,7 +51,18 @@ def _line(seq: int, it: MissionItem) -> str:
 
 
 def format_waypoints(items: Sequence[MissionItem], home: tuple[float, float, float]) -> str:
-    """The file text: header, home line (lat, lon, altitude AMSL), then the items as 1..N."""
+    """The file text: header, home line (lat, lon, altitude AMSL), then the items as 1..N.
+
+    Args:
+        items: the mission items; a DO_JUMP's param1 is written as the target's row (+1).
+        home: (lat, lon, alt) of the home line: degrees, degrees, metres AMSL.
+
+    Returns:
+        The text, tab-separated, one line per row, ending with a newline.
+
+    Raises:
+        ValueError: an infinite parameter (NaN is written as 0).
+    """
     home_item = MissionItem(
         seq=0, command=CMD.WAYPOINT, frame=FRAME.GLOBAL, current=1, autocontinue=1,
         x=float(home[0]), y=float(home[1]), z=float(home[2]),
@@ -126,6 +137,16 @@ def parse_waypoints(text: str) -> tuple[MissionItem | None, list[MissionItem]]:
     (row numbers) are then renumbered to the list without it. The home item is None when the
     file has no home line. A UTF-8 byte-order mark is accepted. Fence or rally commands
     (5000-5004, 5100) in the list are refused: the file format holds a mission only.
+
+    Args:
+        text: the file's text.
+
+    Returns:
+        (home, items): the home item or None, and the mission items with seq 0..N-1.
+
+    Raises:
+        MissionError: a bad header, line, field, sequence number or DO_JUMP target, too many
+            lines or items, no items, or a fence or rally command (naming the line or row).
     """
     # a line per item, a home line, and room for blank or comment lines: refuse a huge file
     # before splitting it
@@ -187,7 +208,14 @@ def parse_waypoints(text: str) -> tuple[MissionItem | None, list[MissionItem]]:
 
 def is_home_row(it: MissionItem) -> bool:
     """Row 0 of a `.waypoints` file is the home position when it is a NAV_WAYPOINT in an
-    absolute-altitude global frame (what Mission Planner and ArduPilot write there)."""
+    absolute-altitude global frame (what Mission Planner and ArduPilot write there).
+
+    Args:
+        it: a row of the file.
+
+    Returns:
+        True when `it` has seq 0, command NAV_WAYPOINT and frame GLOBAL or GLOBAL_INT.
+    """
     return int(it.seq) == 0 and it.command == CMD.WAYPOINT and it.frame in (
         FRAME.GLOBAL, FRAME.GLOBAL_INT)
 
@@ -195,13 +223,33 @@ def is_home_row(it: MissionItem) -> bool:
 def write_waypoints(
     path: str | Path, items: Sequence[MissionItem], home: tuple[float, float, float]
 ) -> Path:
-    """Write a `.waypoints` file atomically."""
+    """Write a `.waypoints` file atomically.
+
+    Args:
+        path: the file to write.
+        items: the mission items (`format_waypoints`).
+        home: (lat, lon, alt) of the home line: degrees, degrees, metres AMSL.
+
+    Returns:
+        The path written.
+
+    Raises:
+        ValueError: an infinite parameter.
+    """
     return write_text_atomic(path, format_waypoints(items, home))
 
 
 def check_mission_list(items: Sequence[MissionItem], what: str = "item") -> None:
-    """Refuse fence and rally commands in a mission list (MissionError naming the row): sent
-    as mission items they would replace the vehicle's mission with fence vertices."""
+    """Refuse fence and rally commands in a mission list: sent as mission items they would
+    replace the vehicle's mission with fence vertices.
+
+    Args:
+        items: the mission list.
+        what: the word for an entry in the message ("item", "row").
+
+    Raises:
+        MissionError: the first fence or rally command, naming its row (`what` and seq).
+    """
     for it in items:
         if it.command in CMD.FENCE_COMMANDS or it.command == CMD.RALLY_POINT:
             kind = "rally" if it.command == CMD.RALLY_POINT else "fence"
