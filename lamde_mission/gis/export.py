@@ -87,7 +87,16 @@ def circle_ring(x: float, y: float, radius: float) -> np.ndarray:
 
 
 def polygon_geometry(map_: Any, shell: np.ndarray, holes: Any = ()) -> dict[str, Any]:
-    """A GeoJSON Polygon (closed rings, exterior CCW, holes CW) of local rings (V, 2)."""
+    """A GeoJSON Polygon (closed rings, exterior CCW, holes CW) of local rings (V, 2).
+
+    Args:
+        map_: a loaded `planner_core.model.mapio.Map` with an origin.
+        shell: the exterior ring (V, 2), local metres, without the closing vertex.
+        holes: the hole rings, each (V, 2), local metres.
+
+    Returns:
+        {"type": "Polygon", "coordinates": rings}, the exterior first, positions [lon, lat].
+    """
     rings = [linear_ring(map_, shell, True)] + [linear_ring(map_, h, False) for h in holes]
     return {"type": "Polygon", "coordinates": rings}
 

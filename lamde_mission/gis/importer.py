@@ -182,7 +182,18 @@ class GisLayers:
     budget: _Budget | None = field(default=None, repr=False)  # counts against the limits
 
     def take(self, key: str, n: int, where: str) -> None:
-        """Count `n` more of `key` (`_Budget.take`); nothing when no budget is kept."""
+        """Count `n` more of `key` (`_Budget.take`); nothing when no budget is kept.
+
+        Args:
+            key: "sensors", "obstacles", "vertices" (of all rings) or "zone_vertices" (of
+                one ring).
+            n: how many more.
+            where: the file and feature, for the message.
+
+        Raises:
+            _OverLimit: the count passes its limit (`planner_core.textio.LIMITS`): reading
+                stops at once.
+        """
         if self.budget is not None:
             self.budget.take(key, n, where)
 

@@ -69,7 +69,19 @@ def campus_map(
 ) -> dict[str, Any]:
     """A map file (dict for `planner_core.load_map`) with `n_footprints` non-convex footprints.
 
-    Raises ValueError if the grid cannot hold that many footprints and sensors.
+    Args:
+        n_footprints: how many footprints (polygon obstacles), >= 1.
+        seed: the random seed (with `n_footprints` and `size`: same arguments, same map).
+        size: the square area's side, metres.
+        n_sensors: how many sensors, >= 1, one per empty lot.
+
+    Returns:
+        The map file as a dict: name, area, start and end (the corner lots), sensors and
+        `obstacles.polygons` (vertices and holes in metres, 3 decimals).
+
+    Raises:
+        ValueError: `n_footprints` or `n_sensors` < 1, or the grid cannot hold that many
+            footprints and sensors.
     """
     if n_footprints < 1:
         raise ValueError(f"n_footprints must be >= 1, got {n_footprints}")
