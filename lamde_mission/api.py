@@ -30,6 +30,10 @@ def kernels_cached() -> bool:
     a map compiles two geometry kernels first, so "any kernel cached" announced "loading" on a
     first run. Falls back to any cached kernel under the package if numba's cache layout
     differs.
+
+    Returns:
+        True when the open-path solver's cache index exists (or, on the fallback, any `.nbi`
+        index under `planner_core`).
     """
     try:
         from planner_core.model.routing.tour import open_path

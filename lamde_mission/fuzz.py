@@ -158,7 +158,17 @@ def _mutate_bytes(data: bytes, rng: random.Random) -> bytes:
 
 
 def mutate(data: bytes, rng: random.Random, *, rounds: int | None = None) -> bytes:
-    """A hostile variant of `data` (1-3 mutations; tree mutations when it is JSON)."""
+    """A hostile variant of `data` (1-3 mutations; tree mutations when it is JSON).
+
+    Args:
+        data: the input file's bytes.
+        rng: the random source (same seed, same variant).
+        rounds: how many mutations; None: 1, 1, 2 or 3 drawn from `rng`.
+
+    Returns:
+        The mutated bytes (each round a tree mutation with probability 0.6 when `data` is
+        JSON the standard parser reads, else a byte mutation).
+    """
     k = rounds if rounds is not None else rng.choice((1, 1, 2, 3))
     for _ in range(k):
         tree = rng.random() < 0.6
@@ -185,7 +195,15 @@ class CliOutcome:
 
 
 def run_cli(argv: Sequence[str]) -> CliOutcome:
-    """Run `lamde-mission argv` in this process with stdout/stderr captured."""
+    """Run `lamde-mission argv` in this process with stdout/stderr captured.
+
+    Args:
+        argv: the arguments after `lamde-mission`.
+
+    Returns:
+        The `CliOutcome`: the exit status (a SystemExit's code, 2 when it is not an int),
+        or None and the exception when one escaped `main`.
+    """
     from lamde_mission.cli import main
 
     out, err = io.StringIO(), io.StringIO()

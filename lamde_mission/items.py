@@ -142,6 +142,21 @@ def plan_to_items(
     point (the sim reads it as a stop that is not a hover point, and still as a full stop of
     Eq. 1's trapezoid: its time and energy are those of a stop, an upper bound on a blended
     turn).
+
+    Args:
+        plan: anything with `hover_points` (I, 2) local metres and `hover_times` (I,) s.
+        map: the map, with an origin; its start, end, altitude H (m) and v_max (m/s).
+        finish: "land" (LAND at the end point) or "rtl" (RETURN_TO_LAUNCH).
+        speed: the cruise speed of DO_CHANGE_SPEED, m/s; None: the map's v_max.
+
+    Returns:
+        TAKEOFF, DO_CHANGE_SPEED, one LOITER_TIME (or corner WAYPOINT) per point, the end
+        WAYPOINT, then LAND or RETURN_TO_LAUNCH; frame GLOBAL_RELATIVE_ALT at altitude H.
+
+    Raises:
+        ValueError: a `finish` other than "land"/"rtl", or hover points and hover times of
+            different lengths.
+        MissingOriginError: the map has no origin.
     """
     if finish not in ("land", "rtl"):
         raise ValueError(f"finish must be 'land' or 'rtl', got {finish!r}")
@@ -201,6 +216,13 @@ def fence_shapes(map: Any) -> tuple[list[tuple[np.ndarray, float]], list[np.ndar
     and polygon obstacles (`map.shapes`), each an (n, 2) counter-clockwise vertex array: a shape
     without holes as its exterior ring (exclusion polygons need not be convex), a shape with
     holes as its convex pieces (a fence polygon has no holes; the pieces leave a courtyard open).
+
+    Args:
+        map: a loaded map.
+
+    Returns:
+        (circles, polygons): circles [(centre (2,), r)] in metres, polygons [(n, 2)] in
+        metres.
     """
     circles = [(np.array([c.x, c.y], dtype=float), float(c.radius))
                for c in map.spec.obstacles.circles]  # fmt: skip
@@ -212,7 +234,18 @@ def fence_shapes(map: Any) -> tuple[list[tuple[np.ndarray, float]], list[np.ndar
 
 def fence_item(seq: int, command: int, p1: float, lat: float, lon: float) -> MissionItem:
     """One fence vertex or circle item as QGroundControl and MAVSDK write them (frame GLOBAL,
-    autocontinue 0, mission type FENCE; param1 = vertex count or radius)."""
+    autocontinue 0, mission type FENCE; param1 = vertex count or radius).
+
+    Args:
+        seq: its position in the fence list.
+        command: a FENCE_* MAV_CMD (`CMD`).
+        p1: param1: the polygon's vertex count, or the circle's radius (m).
+        lat: latitude, degrees.
+        lon: longitude, degrees.
+
+    Returns:
+        The `MissionItem` (z 0).
+    """
     return MissionItem(
         seq=seq, command=command, frame=FRAME.GLOBAL, autocontinue=0, param1=float(p1),
         x=lat, y=lon, z=0.0, mission_type=MISSION_TYPE.FENCE,
@@ -226,6 +259,16 @@ def geofence_items(map: Any) -> list[MissionItem]:  # noqa: A002
     vertex count); then circles: FENCE_CIRCLE_EXCLUSION (param1 = radius m). Polygons first and
     autocontinue 0, as QGroundControl and MAVSDK's importer produce them, so the same fence
     reads the same through either. Frame GLOBAL (the altitude is unused by fences).
+
+    Args:
+        map: the map, with an origin.
+
+    Returns:
+        The fence items, seq from 0: the polygons of `fence_shapes` (rectangles, then no-fly
+        zones and polygon obstacles) vertex by vertex, then the circles.
+
+    Raises:
+        MissingOriginError: the map has no origin.
     """
     circles, polys = fence_shapes(map)
     out: list[MissionItem] = []

@@ -40,7 +40,14 @@ MAX_DPI = 600
 
 
 def nice_length(span: float) -> float:
-    """A round length (1, 2 or 5 x 10^k metres) near a fifth of `span`, for the scale bar."""
+    """A round length (1, 2 or 5 x 10^k metres) near a fifth of `span`, for the scale bar.
+
+    Args:
+        span: the length the bar is drawn against, metres (a fifth of it at least 1e-9).
+
+    Returns:
+        The largest of 5, 2, 1 x 10^k metres not above a fifth of `span`.
+    """
     target = max(span / 5.0, 1e-9)
     k = math.floor(math.log10(target))
     for m in (5, 2, 1):
@@ -975,7 +982,19 @@ def _bars_panel(ax: Any, timeline: Any, map_: Any) -> None:
 
 
 def check_dpi(dpi: Any, name: str = "dpi") -> int:
-    """`dpi` if it is an integer in 1..`MAX_DPI`; else ValueError, one line naming `name`."""
+    """`dpi` if it is an integer in 1..`MAX_DPI`.
+
+    Args:
+        dpi: the resolution asked for, dots per inch.
+        name: the option's name in the message (e.g. "--dpi").
+
+    Returns:
+        `dpi` as an int.
+
+    Raises:
+        ValueError: one line naming `name`, for a bool, a non-integer or a value outside
+            1..MAX_DPI.
+    """
     if isinstance(dpi, bool) or not isinstance(dpi, (int, np.integer)) \
             or not 1 <= dpi <= MAX_DPI:
         raise ValueError(f"{name}: must be an integer from 1 to {MAX_DPI} dots per inch (the "
@@ -987,6 +1006,14 @@ def save_figure(fig: Any, path: str | Path, *, dpi: int = 150) -> Path:
     """Render `fig` to PNG or SVG by suffix and write it atomically (no partial file).
 
     Memory and time grow as the figure's area times dpi^2 (`MAX_DPI`).
+
+    Args:
+        fig: a matplotlib Figure.
+        path: the image file, .png or .svg.
+        dpi: dots per inch, 1..MAX_DPI.
+
+    Returns:
+        The path written.
 
     Raises:
         ValueError: one line, a suffix other than .png/.svg or `dpi` outside 1..MAX_DPI.
@@ -1010,7 +1037,22 @@ def plot_mission(
     title: str | None = None,
     dpi: int = 150,
 ) -> Path:
-    """Draw `map` (with a replayed `timeline` or a `plan`, if given) and save it to `out`."""
+    """Draw `map` (with a replayed `timeline` or a `plan`, if given) and save it to `out`.
+
+    Args:
+        map: the map (`planner_core.model.mapio.load_map`).
+        out: the image file, .png or .svg.
+        timeline: the simulator's replay of the stored mission (`sim.replay`), or None.
+        plan: a plan (hover points, m; hover times, s), used when there is no timeline.
+        title: the title (default: the map's name and f).
+        dpi: dots per inch, 1..MAX_DPI.
+
+    Returns:
+        The path written.
+
+    Raises:
+        ValueError: a suffix other than .png/.svg, or `dpi` outside 1..MAX_DPI.
+    """
     if Path(out).suffix.lower() not in IMAGE_SUFFIXES:
         raise ValueError(f"{out}: image format must be PNG or SVG (suffix .png or .svg)")
     fig = mission_figure(map, timeline=timeline, plan=plan, title=title)

@@ -68,15 +68,29 @@ class Plan:
 
     @property
     def n_hover(self) -> int:
+        """The number of points, hover points and 0 s corners together.
+
+        Returns:
+            I, the length of `hover_times`.
+        """
         return len(self.hover_times)
 
     @property
     def score(self) -> float:
-        """f + 10 * phi (paper Sec. 5.2; `planner_core.model.formulas.penalised_score`)."""
+        """f + 10 * phi (paper Sec. 5.2; `planner_core.model.formulas.penalised_score`).
+
+        Returns:
+            The penalised score, s (f in s, phi weighted by 10).
+        """
         return float(penalised_score(self.f, self.phi))
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready data; `Plan.from_dict(plan.to_dict())` gives an equal plan."""
+        """JSON-ready data; `Plan.from_dict(plan.to_dict())` gives an equal plan.
+
+        Returns:
+            Every field by name (arrays as lists, `stages` as their dicts), plus
+            `format_version` (`PLAN_FORMAT_VERSION`).
+        """
         return {
             "format_version": PLAN_FORMAT_VERSION,
             "map_name": self.map_name,
@@ -101,7 +115,21 @@ class Plan:
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> Plan:
-        """Inverse of `to_dict`."""
+        """Inverse of `to_dict`.
+
+        Args:
+            d: a `to_dict` dict (e.g. read from JSON); `format_version`, `history`,
+                `configurator`, `variable_length`, `polish`, `timings`, `stages`, `config` and
+                `stopped` may be absent (their defaults); a stage's None reads back as inf.
+
+        Returns:
+            The plan.
+
+        Raises:
+            ValueError: an unsupported `format_version`, or hover points and hover times of
+                different lengths.
+            KeyError: a required field is missing.
+        """
         version = d.get("format_version", PLAN_FORMAT_VERSION)
         if version != PLAN_FORMAT_VERSION:
             raise ValueError(f"format_version: unsupported plan format {version}")
@@ -127,7 +155,14 @@ class Plan:
         )
 
     def same_as(self, other: Plan) -> bool:
-        """Bit-for-bit equality of the decision content (points, times, f, phi)."""
+        """Bit-for-bit equality of the decision content (points, times, f, phi).
+
+        Args:
+            other: the plan to compare with.
+
+        Returns:
+            True when hover points, hover times, f and phi are exactly equal.
+        """
         return (
             np.array_equal(self.hover_points, other.hover_points)
             and np.array_equal(self.hover_times, other.hover_times)

@@ -58,7 +58,15 @@ FLEET_FILE = "fleet.json"
 
 
 def sortie_file(vehicle: int, sortie: int) -> str:
-    """`mission-v{vehicle}-s{sortie}.plan` (both 1-based)."""
+    """`mission-v{vehicle}-s{sortie}.plan` (both 1-based).
+
+    Args:
+        vehicle: the vehicle's number, 1-based.
+        sortie: the sortie's number on that vehicle, 1-based.
+
+    Returns:
+        The file name (no folder).
+    """
     return f"mission-v{int(vehicle)}-s{int(sortie)}.plan"
 
 
@@ -115,6 +123,16 @@ def sortie_map(
     "home" and "end"), sensors' required data `required` (J,) Mbit (default 0: the whole
     plan's C4 is judged over all sorties), the battery kept (ENERGY), the fleet left out.
 
+    Args:
+        m: the whole map (with its battery or fleet).
+        start: the depot the sortie takes off from.
+        end: the depot it lands at.
+        required: (J,) Mbit per sensor (user units, before the data margin); None: zeros.
+        name: the sortie map's name (default m's).
+
+    Returns:
+        The loaded sortie `Map`.
+
     Raises:
         ValueError: an unknown depot name.
     """
@@ -148,7 +166,11 @@ class SortieCheck:
 
     @property
     def duration_s(self) -> float:
-        """Take-off to landing, s (the sim's)."""
+        """Take-off to landing, s (the sim's).
+
+        Returns:
+            The timeline's t_total, s.
+        """
         return float(self.timeline.totals.t_total)
 
 
@@ -169,13 +191,22 @@ class FleetCheck:
     @property
     def passed(self) -> bool:
         """Every sortie's verdicts except its own C4/MARGIN (a share), the combined ones and
-        the plan's shape."""
+        the plan's shape.
+
+        Returns:
+            True when all of them passed.
+        """
         own = all(v.passed for s in self.sorties for v in s.verdicts
                   if v.name not in ("C4", "MARGIN"))  # fmt: skip
         return own and all(v.passed for v in (*self.combined, *self.fleet))
 
     def failed(self) -> list[str]:
-        """Lines naming each failed verdict (sortie and check)."""
+        """Lines naming each failed verdict (sortie and check).
+
+        Returns:
+            "v{vehicle} s{sortie} NAME: detail" per failed sortie verdict (its own C4/MARGIN
+            left out), then "whole plan NAME: detail", then "fleet NAME: detail".
+        """
         out = [
             f"v{s.vehicle} s{s.sortie} {v.name}: {v.detail}"
             for s in self.sorties
@@ -187,37 +218,71 @@ class FleetCheck:
         return out
 
     def vehicles(self) -> dict[int, list[SortieCheck]]:
-        """Sorties by vehicle, in order."""
+        """Sorties by vehicle, in order.
+
+        Returns:
+            {vehicle: [its `SortieCheck`s in the order of `sorties`]}, vehicles in order of
+            first appearance.
+        """
         out: dict[int, list[SortieCheck]] = {}
         for s in self.sorties:
             out.setdefault(s.vehicle, []).append(s)
         return out
 
     def launch(self, vehicle: int) -> float:
-        """Vehicle's launch, s after the first vehicle's take-off (0 without launches)."""
+        """Vehicle's launch, s after the first vehicle's take-off (0 without launches).
+
+        Args:
+            vehicle: the vehicle's number, 1-based.
+
+        Returns:
+            `launches[vehicle - 1]`, s; 0.0 when `launches` does not reach it.
+        """
         return float(self.launches[vehicle - 1]) if len(self.launches) >= vehicle else 0.0
 
     def makespan(self, vehicle: int) -> float:
         """From the first vehicle's take-off to this vehicle's last landing: its launch, its
-        sorties and swaps (s)."""
+        sorties and swaps (s).
+
+        Args:
+            vehicle: the vehicle's number, 1-based.
+
+        Returns:
+            launch + its sorties' durations + swap_s per swap, s.
+
+        Raises:
+            KeyError: the vehicle flies no sortie here.
+        """
         ss = self.vehicles()[vehicle]
         return self.launch(vehicle) + sum(s.duration_s for s in ss) + \
             self.swap_s * (len(ss) - 1)
 
     @property
     def total_s(self) -> float:
-        """All sorties' durations plus swap_s per swap (s); the launches' waits not counted."""
+        """All sorties' durations plus swap_s per swap (s); the launches' waits not counted.
+
+        Returns:
+            The total, s.
+        """
         return sum(s.duration_s for s in self.sorties) + self.swap_s * self.swaps
 
     @property
     def f_total(self) -> float:
         """The objective "total" on the replays: the paper's f of each stored sortie as the
-        simulator flies it, summed, plus swap_s per swap."""
+        simulator flies it, summed, plus swap_s per swap.
+
+        Returns:
+            The sum, s.
+        """
         return sum(float(s.timeline.totals.f) for s in self.sorties) + self.swap_s * self.swaps
 
     @property
     def swaps(self) -> int:
-        """Battery swaps: each vehicle's sorties after its first."""
+        """Battery swaps: each vehicle's sorties after its first.
+
+        Returns:
+            The count over all vehicles.
+        """
         return sum(len(ss) - 1 for ss in self.vehicles().values())
 
 

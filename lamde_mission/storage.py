@@ -82,7 +82,11 @@ class Dialect:
 
     @property
     def firmware_type(self) -> int:
-        """QGroundControl's `.plan` firmwareType: the MAV_AUTOPILOT value (the same enum)."""
+        """QGroundControl's `.plan` firmwareType: the MAV_AUTOPILOT value (the same enum).
+
+        Returns:
+            `autopilot`.
+        """
         return self.autopilot
 
 
@@ -302,7 +306,11 @@ class StorablePlan:
 
     @property
     def n_hover(self) -> int:
-        """The number of points, I (hover points and 0 s corners)."""
+        """The number of points, I (hover points and 0 s corners).
+
+        Returns:
+            I, the length of `hover_times`.
+        """
         return len(self.hover_times)
 
 
