@@ -119,7 +119,11 @@ class ClaimWatch:
         self._seen: dict[tuple[int, int], list[Address]] = {}
 
     def ends_at(self) -> float:
-        """When the listening before the first send is over (the watch's clock)."""
+        """When the listening before the first send is over (the watch's clock).
+
+        Returns:
+            opened + window_s, seconds on the watch's clock.
+        """
         return self.opened + self.window_s
 
     def note(self, msg: Any, addr: Address | None) -> bool:

@@ -59,11 +59,19 @@ class Connection:
 
     @property
     def mode(self) -> str:
-        """The scheme (kept for code that knew only UDP endpoints)."""
+        """The scheme (kept for code that knew only UDP endpoints).
+
+        Returns:
+            `scheme`.
+        """
         return self.scheme
 
     def url(self) -> str:
-        """MAVSDK's spelling, e.g. `udpin://0.0.0.0:14540`, `serial:///dev/ttyUSB0:57600`."""
+        """MAVSDK's spelling, e.g. `udpin://0.0.0.0:14540`, `serial:///dev/ttyUSB0:57600`.
+
+        Returns:
+            "serial://{device}:{baud}", or "{scheme}://{host}:{port}".
+        """
         if self.scheme == "serial":
             return f"serial://{self.device}:{self.baud}"
         return f"{self.scheme}://{self.host}:{self.port}"
@@ -73,9 +81,19 @@ class Connection:
 
 
 def parse_connection(text: str, *, check_device: bool = True) -> Connection:
-    """Parse and check a connection string (see the module docstring); ValueError, one line.
+    """Parse and check a connection string (see the module docstring).
 
-    `check_device` also checks that a serial device exists and is a character device.
+    Args:
+        text: the connection string (surrounding spaces ignored).
+        check_device: also check that a serial device exists and is a character device.
+
+    Returns:
+        The `Connection`; an empty udpin/tcpin host is 0.0.0.0.
+
+    Raises:
+        ValueError: one line: an unknown scheme, a missing or out-of-range port, anything
+            after HOST:PORT, a baud rate not in `BAUD_RATES`, or (with `check_device`) a
+            serial device that does not exist or is not a character device.
     """
     raw = str(text).strip()
     scheme, sep, rest = raw.partition(":")
@@ -209,6 +227,11 @@ class Link:
 
     @property
     def is_open(self) -> bool:
+        """Whether the link holds a socket, a listening socket or a device.
+
+        Returns:
+            True while it holds one; False once closed.
+        """
         return self._sock is not None or self._listen is not None or self._fd is not None
 
     def close(self) -> None:
@@ -223,14 +246,27 @@ class Link:
         self._fd = None
 
     def waitables(self) -> list:
-        """What `select` can wait on for this link's input right now (a file descriptor or
-        sockets; empty once closed)."""
+        """What `select` can wait on for this link's input right now.
+
+        Returns:
+            [the serial file descriptor], or the open sockets (connected and listening);
+            empty once closed.
+        """
         if self._fd is not None:
             return [self._fd]
         return [s for s in (self._sock, self._listen) if s is not None]
 
     def recv(self, wait: float) -> list[tuple[bytes, tuple[str, int] | None]]:
-        """What arrived within `wait` s (empty list if nothing)."""
+        """What arrived within `wait` s; on `tcpin`, the first connection is accepted (and
+        pinned as `peer`; later ones are closed) and nothing is returned for that call.
+
+        Args:
+            wait: seconds to wait for input (negative as 0).
+
+        Returns:
+            [(bytes, source address)]: the address is None for serial and `peer` for TCP;
+            at most 64 datagrams or reads; an empty list if nothing (or on a select error).
+        """
         waitable = self.waitables()
         if not waitable:
             return []
@@ -280,7 +316,13 @@ class Link:
 
     def send(self, buf: bytes) -> None:
         """Write `buf` to the peer; nothing if no peer yet (udpin/tcpin before the vehicle).
-        OSError on failure."""
+
+        Args:
+            buf: the bytes (a packed MAVLink message).
+
+        Raises:
+            OSError: the write failed.
+        """
         if self._fd is not None:
             os.write(self._fd, buf)
         elif self._sock is not None and self.peer is not None:

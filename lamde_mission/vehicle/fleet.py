@@ -75,13 +75,23 @@ class VehicleResult:
 
     @property
     def ok(self) -> bool:
-        """Whether the vehicle holds its mission, read back identical (or had none to get)."""
+        """Whether the vehicle holds its mission, read back identical (or had none to get).
+
+        Returns:
+            True when the report is ok and there is no error; for a skipped vehicle, when
+            there is no error.
+        """
         if self.skipped:
             return self.error is None
         return self.report is not None and self.report.ok and self.error is None
 
     def lines(self) -> list[str]:
-        """This vehicle's part of the report: a head line, the upload's lines indented."""
+        """This vehicle's part of the report: a head line, the upload's lines indented.
+
+        Returns:
+            The head line, then the report's (or the error's report's) lines indented and a
+            "FAILED: ..." line on an error; one line for a skipped vehicle.
+        """
         head = f"vehicle {self.vehicle} (system {self.system_id} at {self.connect}, {self.source})"
         if self.skipped:
             return [f"{head}: no sortie planned, nothing sent"]
@@ -104,15 +114,29 @@ class FleetReport:
 
     @property
     def ok(self) -> bool:
+        """Whether every vehicle's result is ok.
+
+        Returns:
+            True when there are results and each is ok.
+        """
         return bool(self.results) and all(r.ok for r in self.results)
 
     def lines(self) -> list[str]:
         """The report `lamde-mission upload --fleet` prints: each vehicle's lines, then one
-        summary line."""
+        summary line.
+
+        Returns:
+            The lines, without newlines.
+        """
         return [line for r in self.results for line in r.lines()] + [self.summary()]
 
     def summary(self) -> str:
-        """The last line: how many vehicles hold their mission, and the times."""
+        """The last line: how many vehicles hold their mission, and the times.
+
+        Returns:
+            The line: vehicles sent to and holding their mission, the survey's and the whole
+            time (s), the vehicles without this sortie, and a pointer to FAILED lines.
+        """
         sent = [r for r in self.results if not r.skipped]
         good = sum(r.ok for r in sent)
         n = len(sent)

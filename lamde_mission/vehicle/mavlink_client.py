@@ -204,7 +204,11 @@ class MavlinkClient:
         self.ignored[key] += 1
 
     def ignored_lines(self) -> list[str]:
-        """One line per (reason, sender) of what was ignored, with counts."""
+        """One line per (reason, sender) of what was ignored, with counts.
+
+        Returns:
+            "ignored N x SENDER: REASON" lines, in the order first ignored.
+        """
         return [f"ignored {n} x {src}: {reason}" for (reason, src), n in self.ignored.items()]
 
     def _from_vehicle(self, msg: Any) -> bool:
@@ -273,10 +277,21 @@ class MavlinkClient:
     # ------------------------------------------------------------------ connect
 
     def connect(self, timeout: float) -> VehicleInfo:
-        """Wait up to `timeout` s for an autopilot's HEARTBEAT (component 1); NoVehicleError.
+        """Wait up to `timeout` s for an autopilot's HEARTBEAT (component 1).
 
         Pins the vehicle: its address and its system/component ids; from here on nothing else
-        is listened to or answered."""
+        is listened to or answered. Then listens for the rest of the HEARTBEAT watch.
+
+        Args:
+            timeout: seconds to wait for the HEARTBEAT (of `target_system`, when set).
+
+        Returns:
+            The pinned vehicle.
+
+        Raises:
+            NoVehicleError: no such HEARTBEAT within `timeout`.
+            DuplicateVehicleError: another address claims the vehicle's ids (`claims`).
+        """
         deadline = time.monotonic() + timeout
         want = self.target_system
 
@@ -356,8 +371,24 @@ class MavlinkClient:
         )  # fmt: skip
 
     def upload(self, items: Sequence[WireItem], mission_type: int, timeout: float) -> None:
-        """Upload one list (seq 0..n-1, all of `mission_type`); raise on refusal, or after
-        `timeout` s without progress (no new item requested, no final ACK)."""
+        """Upload one list (seq 0..n-1, all of `mission_type`); an empty list is a `clear`.
+
+        Args:
+            items: the list (`wire_mission`).
+            mission_type: its MAV_MISSION_TYPE.
+            timeout: seconds without progress (no new item requested, no final ACK).
+
+        Returns:
+            None, once the vehicle's MISSION_ACK accepts the whole list.
+
+        Raises:
+            MissionRejectedError: the vehicle refused (a MISSION_ACK with an error code).
+            TransferError: not connected, `timeout` s without progress (`unanswered` when the
+                vehicle answered nothing), the final ACK lost (the vehicle answered the
+                resent last item with MAV_MISSION_ERROR), or a request for an item out of
+                range.
+            DuplicateVehicleError: another address claims the vehicle's ids.
+        """
         ts, tc = self._target()
         t = int(mission_type)
         n = len(items)
@@ -450,7 +481,21 @@ class MavlinkClient:
             self._send(last)
 
     def download(self, mission_type: int, timeout: float) -> list[WireItem]:
-        """Read one list back (MISSION_REQUEST_LIST, then each item by MISSION_REQUEST_INT)."""
+        """Read one list back (MISSION_REQUEST_LIST, then each item by MISSION_REQUEST_INT).
+
+        Args:
+            mission_type: its MAV_MISSION_TYPE.
+            timeout: seconds without an answer per request.
+
+        Returns:
+            The items the vehicle holds, in seq order (a MISSION_ITEM's float x/y as
+            MISSION_ITEM_INT would carry them).
+
+        Raises:
+            MissionRejectedError: the vehicle answered with an error MISSION_ACK.
+            TransferError: not connected, or no answer within `timeout`.
+            DuplicateVehicleError: another address claims the vehicle's ids.
+        """
         ts, tc = self._target()
         t = int(mission_type)
         kind = mission_type_name(t)
@@ -491,7 +536,20 @@ class MavlinkClient:
         return out
 
     def clear(self, mission_type: int, timeout: float) -> None:
-        """MISSION_CLEAR_ALL for one mission type, resent until the vehicle's MISSION_ACK."""
+        """MISSION_CLEAR_ALL for one mission type, resent until the vehicle's MISSION_ACK.
+
+        Args:
+            mission_type: its MAV_MISSION_TYPE.
+            timeout: seconds without an answer.
+
+        Returns:
+            None, once the vehicle's MISSION_ACK accepts the clear.
+
+        Raises:
+            MissionRejectedError: the MISSION_ACK is not MAV_MISSION_ACCEPTED.
+            TransferError: not connected, or no answer within `timeout`.
+            DuplicateVehicleError: another address claims the vehicle's ids.
+        """
         ts, tc = self._target()
         t = int(mission_type)
 

@@ -254,13 +254,27 @@ class MockVehicle:
 
     @property
     def address(self) -> tuple[str, int]:
-        """The local (host, port) the mock's socket is bound to."""
+        """The local (host, port) the mock's socket is bound to.
+
+        Returns:
+            The socket's `getsockname()`.
+
+        Raises:
+            RuntimeError: the mock vehicle is closed.
+        """
         if self._sock is None:
             raise RuntimeError("the mock vehicle is closed")
         return self._sock.getsockname()
 
     def start(self) -> MockVehicle:
-        """Run the vehicle in a background thread (returns self)."""
+        """Run the vehicle in a background thread.
+
+        Returns:
+            self.
+
+        Raises:
+            RuntimeError: already running, closed, or sharing its socket (its fleet runs it).
+        """
         if self._thread is not None:
             raise RuntimeError("the mock vehicle is already running")
         if self._sock is None:
@@ -273,7 +287,11 @@ class MockVehicle:
         return self
 
     def stop(self, timeout: float = 2.0) -> None:
-        """Stop the background thread and close the socket (idempotent)."""
+        """Stop the background thread and close the socket (idempotent).
+
+        Args:
+            timeout: seconds to wait for the thread to end.
+        """
         self._stop.set()
         if self._thread is not None:
             self._thread.join(timeout)
@@ -303,18 +321,48 @@ class MockVehicle:
     # ------------------------------------------------------------------ stored lists
 
     def wire_items(self, mission_type: int = MISSION_TYPE.MISSION) -> list[WireItem]:
-        """The list stored for `mission_type`, exactly as received."""
+        """The list stored for `mission_type`, exactly as received.
+
+        Args:
+            mission_type: MAV_MISSION_TYPE mission, fence or rally.
+
+        Returns:
+            A copy of the stored list.
+
+        Raises:
+            KeyError: another mission type.
+        """
         with self._lock:
             return list(self._store[int(mission_type)])
 
     def items(self, mission_type: int = MISSION_TYPE.MISSION) -> list[MissionItem]:
-        """The list stored for `mission_type` as MissionItems (lat/lon back in degrees)."""
+        """The list stored for `mission_type` as MissionItems (lat/lon back in degrees).
+
+        Args:
+            mission_type: MAV_MISSION_TYPE mission, fence or rally.
+
+        Returns:
+            The items (`from_wire`).
+
+        Raises:
+            KeyError: another mission type.
+        """
         return [from_wire(w) for w in self.wire_items(mission_type)]
 
     def set_items(
         self, items: Sequence[MissionItem | WireItem], mission_type: int | None = None
     ) -> None:
-        """Store a list as if it had been uploaded (seq renumbered from 0)."""
+        """Store a list as if it had been uploaded.
+
+        Args:
+            items: the list; MissionItems are converted with seq renumbered from 0
+                (`to_wire`), WireItems are stored as given.
+            mission_type: the list to store it as; None: the first item's type (mission for
+                an empty list).
+
+        Raises:
+            ValueError: an unsupported mission type, or a MissionItem MAVLink cannot carry.
+        """
         wire = [w if isinstance(w, WireItem) else to_wire(w, seq=k) for k, w in enumerate(items)]
         t = int(mission_type if mission_type is not None else (wire[0].mission_type if wire else 0))
         if t not in _TYPES:
@@ -324,7 +372,11 @@ class MockVehicle:
 
     @property
     def peer(self) -> tuple[str, int] | None:
-        """Where the mock sends (None for udpin until someone has written to it)."""
+        """Where the mock sends.
+
+        Returns:
+            (host, port), or None for udpin until someone has written to it.
+        """
         return self._peer
 
     # ------------------------------------------------------------------ the loop

@@ -157,20 +157,41 @@ class MockFleet:
     # ------------------------------------------------------------------ access
 
     def vehicle(self, system_id: int) -> MockVehicle:
-        """The vehicle with this system id (KeyError if none)."""
+        """The vehicle with this system id.
+
+        Args:
+            system_id: its MAVLink system id.
+
+        Returns:
+            The `MockVehicle`.
+
+        Raises:
+            KeyError: no vehicle has that id.
+        """
         for v in self.vehicles:
             if v.system_id == int(system_id):
                 return v
         raise KeyError(f"no mock vehicle with system id {system_id}")
 
     def connections(self) -> list[str]:
-        """Where each vehicle talks, in vehicle order (the same for all on one link)."""
+        """Where each vehicle talks, in vehicle order (the same for all on one link).
+
+        Returns:
+            "mode:host:port" per vehicle.
+        """
         return [f"{v.endpoint.mode}:{v.endpoint.host}:{v.endpoint.port}" for v in self.vehicles]
 
     # ------------------------------------------------------------------ life cycle
 
     def start(self) -> MockFleet:
-        """Run every vehicle in the background (one thread per socket); returns self."""
+        """Run every vehicle in the background (one thread per socket).
+
+        Returns:
+            self.
+
+        Raises:
+            RuntimeError: already running, or closed.
+        """
         if self.shared:
             if self._thread is not None:
                 raise RuntimeError("the mock fleet is already running")
@@ -185,7 +206,11 @@ class MockFleet:
         return self
 
     def stop(self, timeout: float = 2.0) -> None:
-        """Stop every vehicle and close the sockets (idempotent)."""
+        """Stop every vehicle and close the sockets (idempotent).
+
+        Args:
+            timeout: seconds to wait for each thread to end.
+        """
         stop = getattr(self, "_stop", None)
         if stop is not None:
             stop.set()

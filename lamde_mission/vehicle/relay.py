@@ -185,7 +185,12 @@ class VehicleRelay:
                 self.link.send(msg.pack(self._sign))
 
     def ignored_lines(self) -> list[str]:
-        """One line per kind of message the relay kept from MAVSDK, with counts."""
+        """One line per kind of message the relay kept from MAVSDK, with counts.
+
+        Returns:
+            "ignored N x ..." lines for wrongly signed messages, messages from another
+            address than the vehicle's and from another system on its link (those counted).
+        """
         out = []
         if self.dropped:
             out.append(f"ignored {self.dropped} x a message: unsigned or wrongly signed "

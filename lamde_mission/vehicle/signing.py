@@ -73,7 +73,14 @@ def enable_signing(mav: Any, key: bytes, *, link_id: int = 0) -> None:
 
 
 def is_signature_failure(msg: Any) -> bool:
-    """Whether a parsed message is pymavlink's BAD_DATA for a missing or wrong signature."""
+    """Whether a parsed message is pymavlink's BAD_DATA for a missing or wrong signature.
+
+    Args:
+        msg: a parsed pymavlink message.
+
+    Returns:
+        True for BAD_DATA whose reason mentions "signature" (any case).
+    """
     return msg.get_type() == "BAD_DATA" and "signature" in str(getattr(msg, "reason", "")).lower()
 
 
@@ -84,6 +91,13 @@ IFLAG_SIGNED = 0x01
 def carries_signature(msg: Any) -> bool:
     """Whether a parsed MAVLink 2 message came with a signature block (its header's
     incompat flag), whatever the parser made of it: a parser without a key keeps signed
-    messages and says nothing of their signature (pymavlink)."""
+    messages and says nothing of their signature (pymavlink).
+
+    Args:
+        msg: a parsed pymavlink message.
+
+    Returns:
+        True when its header's incompat flags have `IFLAG_SIGNED` (False without a header).
+    """
     header = getattr(msg, "_header", None)
     return bool(int(getattr(header, "incompat_flags", 0) or 0) & IFLAG_SIGNED)

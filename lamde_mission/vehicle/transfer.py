@@ -156,7 +156,16 @@ class VehicleInfo:
 
     @classmethod
     def from_heartbeat(cls, msg: object) -> VehicleInfo:
-        """From a pymavlink HEARTBEAT message."""
+        """From a pymavlink HEARTBEAT message.
+
+        Args:
+            msg: the HEARTBEAT (its source system and component, autopilot, type).
+
+        Returns:
+            The `VehicleInfo`: autopilot without "MAV_AUTOPILOT_", vehicle type lower case
+            without "MAV_TYPE_" (None for numbers pymavlink lacks), `signed` when the message
+            carried a MAVLink 2 signature.
+        """
         from lamde_mission.vehicle.signing import carries_signature
 
         ap = mavlink2.enums["MAV_AUTOPILOT"].get(int(msg.autopilot))
@@ -169,6 +178,11 @@ class VehicleInfo:
         )  # fmt: skip
 
     def describe(self) -> str:
+        """The vehicle in a few words, for the report.
+
+        Returns:
+            "system N" then the autopilot and vehicle type where known, comma-separated.
+        """
         parts = [f"system {self.system_id}"]
         parts += [p for p in (self.autopilot, self.vehicle_type) if p]
         return ", ".join(parts)
@@ -180,13 +194,61 @@ class MissionClient(Protocol):
 
     name: str
 
-    def connect(self, timeout: float) -> VehicleInfo: ...
+    def connect(self, timeout: float) -> VehicleInfo:
+        """Wait for the vehicle's HEARTBEAT.
 
-    def upload(self, items: Sequence[WireItem], mission_type: int, timeout: float) -> None: ...
+        Args:
+            timeout: seconds to wait.
 
-    def download(self, mission_type: int, timeout: float) -> list[WireItem]: ...
+        Returns:
+            Who answered.
 
-    def clear(self, mission_type: int, timeout: float) -> None: ...
+        Raises:
+            NoVehicleError: nothing answered within `timeout`.
+        """
+        ...
+
+    def upload(self, items: Sequence[WireItem], mission_type: int, timeout: float) -> None:
+        """Upload one list.
+
+        Args:
+            items: the list, seq 0..n-1 (`wire_mission`).
+            mission_type: its MAV_MISSION_TYPE.
+            timeout: seconds without progress before giving up.
+
+        Raises:
+            TransferError: no progress within `timeout`.
+            MissionRejectedError: the vehicle refused the list.
+        """
+        ...
+
+    def download(self, mission_type: int, timeout: float) -> list[WireItem]:
+        """Read one list back.
+
+        Args:
+            mission_type: its MAV_MISSION_TYPE.
+            timeout: seconds without progress before giving up.
+
+        Returns:
+            The items the vehicle holds, in seq order.
+
+        Raises:
+            TransferError: no progress within `timeout`.
+        """
+        ...
+
+    def clear(self, mission_type: int, timeout: float) -> None:
+        """Clear one list on the vehicle.
+
+        Args:
+            mission_type: its MAV_MISSION_TYPE.
+            timeout: seconds without progress before giving up.
+
+        Raises:
+            TransferError: no progress within `timeout`.
+            MissionRejectedError: the vehicle refused.
+        """
+        ...
 
     def close(self) -> None: ...
 
@@ -216,7 +278,14 @@ class UploadReport:
     readback: list[MissionItem] = field(default_factory=list)
 
     def lines(self, max_differences: int = 20) -> list[str]:
-        """The short report `lamde-mission upload` prints."""
+        """The short report `lamde-mission upload` prints.
+
+        Args:
+            max_differences: the most read-back differences listed (the rest counted).
+
+        Returns:
+            The lines, without newlines.
+        """
         out = []
         if self.vehicle is not None and self.connect_s is not None:
             out.append(
@@ -269,6 +338,13 @@ def mission_for_dialect(
     vehicle would cut it down, and the sensors would be short of data). ArduPilot: a home
     placeholder goes first as item 0 (the vehicle overwrites it with its home position and
     never flies it) and every DO_JUMP target moves up by one with the items.
+
+    Args:
+        mission: the mission items, in the file's numbering.
+        dialect: the autopilot's storage rules (`lamde_mission.storage.Dialect`).
+
+    Returns:
+        (items, notes): the items renumbered from 0, and one line per change made.
     """
     out: list[MissionItem] = []
     notes: list[str] = []
@@ -293,7 +369,16 @@ def mission_for_dialect(
 
 
 def mission_from_dialect(items: Sequence[MissionItem], home_item: bool) -> list[MissionItem]:
-    """A read-back in the file's numbering: without the home item, DO_JUMP targets back."""
+    """A read-back in the file's numbering: without the home item, DO_JUMP targets back.
+
+    Args:
+        items: the items read back.
+        home_item: whether item 0 is the vehicle's home (`Dialect.home_item`).
+
+    Returns:
+        The items renumbered from 0 without item 0 and DO_JUMP targets down by one; a copy
+        of `items` when `home_item` is False.
+    """
     if not home_item:
         return list(items)
     out = [replace(it, param1=it.param1 - 1) if it.command == CMD.DO_JUMP else it
@@ -303,7 +388,14 @@ def mission_from_dialect(items: Sequence[MissionItem], home_item: bool) -> list[
 
 def check_mission_list(mission: Sequence[MissionItem]) -> None:
     """ValueError for fence or rally commands in a mission list (they would replace the
-    vehicle's mission with fence vertices)."""
+    vehicle's mission with fence vertices).
+
+    Args:
+        mission: the mission list.
+
+    Raises:
+        ValueError: the first fence or rally command, naming its item.
+    """
     for it in mission:
         if it.command in CMD.FENCE_COMMANDS or it.command == CMD.RALLY_POINT:
             raise ValueError(f"mission item {it.seq}: command {it.command} is a fence/rally "
@@ -332,9 +424,26 @@ def upload_and_verify(
     the file's numbering. Connecting may take up to `timeout` s; each list's transfer gives up
     after `timeout` s without progress (the clients recover lost messages one by one, as the
     mission protocol specifies), and the whole transfer is tried again up to `attempts` times.
-    Returns the report on success; raises
-    NoVehicleError, MissionRejectedError, TransferError or ReadbackMismatchError (each with
-    `.report`) on failure. ValueError for items MAVLink cannot carry.
+
+    Args:
+        client: the uploader (`MissionClient`).
+        mission: the mission items, in the file's numbering.
+        fence: the fence items; None leaves the vehicle's fence alone, empty clears it.
+        rally: the rally items; None leaves the vehicle's rally points alone.
+        autopilot: "px4", "ardupilot" or "generic"; None: from the vehicle's HEARTBEAT.
+        timeout: seconds to connect, and per list without progress.
+        attempts: how many times the whole transfer is tried, >= 1.
+        endpoint: the connection, for the report.
+        log: called with a line per step (None: silent).
+
+    Returns:
+        The report, on success (`ok` True).
+
+    Raises:
+        VehicleError: NoVehicleError, MissionRejectedError, TransferError or
+            ReadbackMismatchError (each with `.report`) on failure.
+        ValueError: items MAVLink cannot carry, an empty mission, fence or rally commands in
+            the mission, `attempts` < 1, `timeout` <= 0 or an unknown `autopilot`.
     """
     if attempts < 1:
         raise ValueError(f"attempts must be >= 1, got {attempts}")

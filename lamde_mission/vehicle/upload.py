@@ -168,7 +168,12 @@ class MavsdkClient:
             self._set_timeout(seconds)
 
     def upload_message_timeout(self) -> float:
-        """The message timeout this client gives MAVSDK for an upload to this vehicle."""
+        """The message timeout this client gives MAVSDK for an upload to this vehicle.
+
+        Returns:
+            Seconds: `MAVSDK_UPLOAD_TIMEOUT_S` for the connected vehicle's autopilot,
+            `MAVSDK_UPLOAD_TIMEOUT_DEFAULT_S` for another autopilot or before `connect`.
+        """
         ap = self.vehicle.autopilot if self.vehicle is not None else None
         return MAVSDK_UPLOAD_TIMEOUT_S.get(ap or "", MAVSDK_UPLOAD_TIMEOUT_DEFAULT_S)
 
@@ -221,7 +226,11 @@ class MavsdkClient:
                                   sent=self.sent)  # fmt: skip
 
     def ignored_lines(self) -> list[str]:
-        """What the relay kept from MAVSDK (wrongly signed, from other addresses), counted."""
+        """What the relay kept from MAVSDK (wrongly signed, from other addresses), counted.
+
+        Returns:
+            The relay's lines (`VehicleRelay.ignored_lines`); empty once closed.
+        """
         return self._relay.ignored_lines() if self._relay is not None else []
 
     def close(self) -> None:
@@ -253,7 +262,20 @@ class MavsdkClient:
     # ------------------------------------------------------------------ connect
 
     def connect(self, timeout: float) -> VehicleInfo:
-        """Listen/connect at the URL and wait up to `timeout` s for an autopilot."""
+        """Listen/connect at the URL and wait up to `timeout` s for an autopilot, then for the
+        rest of the relay's HEARTBEAT watch (`claims.HEARTBEAT_WATCH_S`).
+
+        Args:
+            timeout: seconds to wait for the first autopilot.
+
+        Returns:
+            Who answered (autopilot and vehicle type None where MAVSDK says UNKNOWN).
+
+        Raises:
+            VehicleError: MAVSDK cannot open its link to the relay.
+            NoVehicleError: no autopilot (or not the system id asked for) within `timeout`.
+            DuplicateVehicleError: a second autopilot claims the vehicle's ids.
+        """
         from mavsdk.asyncio import MavsdkConnectionError
         from mavsdk.asyncio.plugins.mission_raw import MissionRawAsync
 
@@ -333,7 +355,19 @@ class MavsdkClient:
             ) from None  # fmt: skip
 
     def upload(self, items: Sequence[WireItem], mission_type: int, timeout: float) -> None:
-        """Upload one list through MissionRaw (mission, geofence or rally points)."""
+        """Upload one list through MissionRaw (mission, geofence or rally points).
+
+        Args:
+            items: the list (`wire_mission`).
+            mission_type: MAV_MISSION_TYPE mission, fence or rally.
+            timeout: seconds; the call's limit adds what MAVSDK's own retries may take per
+                item (`_limit`).
+
+        Raises:
+            TransferError: not connected, or no result in time (or MAVSDK's TIMEOUT).
+            MissionRejectedError: the vehicle (or MAVSDK) refused the list.
+            DuplicateVehicleError: a second autopilot claims the vehicle's ids.
+        """
         from mavsdk.asyncio.plugins.mission_raw import MissionItem as RawItem
 
         raw_items = [RawItem(*w.fields()) for w in items]
@@ -364,7 +398,21 @@ class MavsdkClient:
         return timeout + n * per * (MAVSDK_RETRIES + 1)
 
     def download(self, mission_type: int, timeout: float) -> list[WireItem]:
-        """Read one list back through MissionRaw (MAVSDK's 0.5 s message timeout)."""
+        """Read one list back through MissionRaw (MAVSDK's 0.5 s message timeout).
+
+        Args:
+            mission_type: MAV_MISSION_TYPE mission, fence or rally.
+            timeout: seconds; the call's limit adds what MAVSDK's own retries may take per
+                item uploaded last (`_limit`).
+
+        Returns:
+            The items the vehicle holds.
+
+        Raises:
+            TransferError: not connected, or no result in time (or MAVSDK's TIMEOUT).
+            MissionRejectedError: the vehicle (or MAVSDK) refused the download.
+            DuplicateVehicleError: a second autopilot claims the vehicle's ids.
+        """
         self._message_timeout(MAVSDK_ITEM_TIMEOUT_S)
         timeout = self._limit(timeout, self._expected.get(int(mission_type), 0))
         down = {
@@ -376,7 +424,18 @@ class MavsdkClient:
         return [_wire_of(r) for r in got]
 
     def clear(self, mission_type: int, timeout: float) -> None:
-        """Clear the mission (MissionRaw) or the geofence (Geofence plugin) on the vehicle."""
+        """Clear the mission (MissionRaw) or the geofence (Geofence plugin) on the vehicle.
+
+        Args:
+            mission_type: MAV_MISSION_TYPE mission or fence.
+            timeout: seconds.
+
+        Raises:
+            ValueError: rally points (MAVSDK has no call to clear them).
+            TransferError: not connected, or no result in time.
+            MissionRejectedError: the vehicle refused.
+            DuplicateVehicleError: a second autopilot claims the vehicle's ids.
+        """
         t = int(mission_type)
         self.sent = True
         if t == MISSION_TYPE.MISSION:
@@ -398,8 +457,18 @@ class MavsdkClient:
         """MAVSDK's own QGroundControl importer on `path`: (mission, fence, rally) as WireItems.
 
         Needs a connected vehicle (MAVSDK asks it for its autopilot type: for ArduPilot it puts
-        the planned home in as item 0). Raises MissionRejectedError naming MAVSDK's result
-        (e.g. FAILED_TO_PARSE_QGC_PLAN) when it refuses the file.
+        the planned home in as item 0).
+
+        Args:
+            path: the `.plan` file.
+
+        Returns:
+            (mission, fence, rally) lists of `WireItem`.
+
+        Raises:
+            MissionRejectedError: naming MAVSDK's result (e.g. FAILED_TO_PARSE_QGC_PLAN) when
+                it refuses the file.
+            TransferError: not connected, or no result within 10 s.
         """
         try:
             data = self._call(
@@ -518,19 +587,45 @@ def upload_mission(
     are re-requested one by one); a failed attempt (time-out, read-back difference) is retried
     as a whole up to `attempts` times. `connect` is checked first
     (`connection.parse_connection`), and every item against MAVLink's field types before the
-    client is made: nothing is sent that the wire cannot carry. Returns the report; raises a
-    `VehicleError` subclass (NoVehicleError, MissionRejectedError, TransferError,
-    ReadbackMismatchError; `.report` attached) on failure, ValueError for bad arguments or
-    items MAVLink cannot carry. `signing_key` (32 bytes, `signing.signing_key`) signs the link
-    with MAVLink 2 signing: the vehicle's unsigned or wrongly signed messages are ignored
-    (MAVSDK, which cannot sign, talks through its local `relay.VehicleRelay`, which signs).
-    Both clients listen to HEARTBEATs for `heartbeat_watch` s (None:
-    `claims.HEARTBEAT_WATCH_S`, read at the call) from opening the link before
-    anything is sent, and raise `DuplicateVehicleError` (naming both addresses) when a second
-    address claims the vehicle's system and component ids, then or later (`claims`).
-    `system_id` picks the vehicle by its MAVLink system id on a link several vehicles share
-    (a multi-vehicle radio or router; `upload_fleet`): its HEARTBEAT is waited for, and only
-    its messages are listened to; None takes the first vehicle heard.
+    client is made: nothing is sent that the wire cannot carry. Both clients listen to
+    HEARTBEATs for `heartbeat_watch` s from opening the link before anything is sent.
+
+    Args:
+        mission: the mission items.
+        fence: the fence items; None leaves the vehicle's fence alone (a `.waypoints` file
+            has none), empty clears it.
+        rally: MISSION_TYPE_RALLY items, uploaded as the rally list; None leaves the
+            vehicle's alone.
+        connect: the vehicle's connection (`connection.parse_connection`).
+        via: "mavsdk" or "pymavlink" (`VIAS`).
+        timeout: seconds, in (0, `MAX_TIMEOUT_S`]: the wait for the vehicle, and per list
+            without progress.
+        attempts: how many times a failed attempt is tried as a whole.
+        log: called with a line per step and what the client ignored or recovered.
+        progress: `progress(what, done, total)` per item (pymavlink).
+        autopilot: px4, ardupilot or generic: overrides the storage rules read from the
+            vehicle's HEARTBEAT (`transfer.upload_and_verify`).
+        signing_key: 32 bytes (`signing.signing_key`): signs the link with MAVLink 2
+            signing; the vehicle's unsigned or wrongly signed messages are ignored (MAVSDK,
+            which cannot sign, talks through its local `relay.VehicleRelay`, which signs).
+        heartbeat_watch: seconds of HEARTBEATs listened to before the first send (None:
+            `claims.HEARTBEAT_WATCH_S`, read at the call).
+        system_id: picks the vehicle by its MAVLink system id (1..255) on a link several
+            vehicles share (a multi-vehicle radio or router; `upload_fleet`): its HEARTBEAT
+            is waited for, and only its messages are listened to; None takes the first
+            vehicle heard.
+
+    Returns:
+        The report, with what the client ignored among its notes.
+
+    Raises:
+        VehicleError: the link cannot be opened; a subclass (NoVehicleError,
+            MissionRejectedError, TransferError, ReadbackMismatchError; `.report` attached)
+            on failure of the transfer; `DuplicateVehicleError`
+            (naming both addresses) when a second address claims the vehicle's system and
+            component ids, during the watch or later (`claims`).
+        ValueError: bad arguments (timeout, via, connect, system_id, attempts, autopilot) or
+            items MAVLink cannot carry.
     """
     if not (isinstance(timeout, int | float) and math.isfinite(timeout)
             and 0 < timeout <= MAX_TIMEOUT_S):  # fmt: skip

@@ -98,7 +98,12 @@ class WireItem:
     mission_type: int
 
     def fields(self) -> tuple:
-        """The values in MISSION_ITEM_INT order (seq .. mission_type), for message packing."""
+        """The values in MISSION_ITEM_INT order (seq .. mission_type), for message packing.
+
+        Returns:
+            (seq, frame, command, current, autocontinue, param1..param4, x, y, z,
+            mission_type).
+        """
         return (
             self.seq, self.frame, self.command, self.current, self.autocontinue,
             self.param1, self.param2, self.param3, self.param4, self.x, self.y, self.z,
@@ -118,10 +123,24 @@ def _xy_to_int(v: float, frame: int, name: str, seq: int) -> int:
 
 
 def to_wire(item: MissionItem, *, seq: int | None = None, current: int | None = None) -> WireItem:
-    """`item` as MISSION_ITEM_INT carries it; ValueError naming the item and field if a value
-    does not fit MAVLink's type for it (`formats.ranges.check_mission_item`: command uint16,
-    frame/current/autocontinue uint8, params and z float32, x/y int32 after scaling, latitude
-    and longitude in range). Nothing is ever wrapped or truncated to fit."""
+    """`item` as MISSION_ITEM_INT carries it. Nothing is ever wrapped or truncated to fit.
+
+    Args:
+        item: the mission item.
+        seq: the sequence number sent (default the item's).
+        current: the `current` flag sent (default the item's).
+
+    Returns:
+        The `WireItem`: params and z rounded to float32, x/y as int32 (degrees x 1e7 in
+        global frames, metres x 1e4 in local frames, plain in MAV_FRAME_MISSION; NaN as
+        INT32_MAX).
+
+    Raises:
+        ValueError: naming the item and field, a value that does not fit MAVLink's type for
+            it (`formats.ranges.check_mission_item`, whose MissionError is a ValueError:
+            command uint16, frame/current/autocontinue uint8, params and z float32, x/y int32
+            after scaling, latitude and longitude in range).
+    """
     from lamde_mission.formats.ranges import check_mission_item
 
     s = int(item.seq if seq is None else seq)
@@ -144,7 +163,17 @@ def to_wire(item: MissionItem, *, seq: int | None = None, current: int | None = 
 def wire_mission(items: Sequence[MissionItem], mission_type: int | None = None) -> list[WireItem]:
     """The list to upload: seq renumbered 0..n-1, item 0 marked current, one mission type.
 
-    ValueError if the items mix mission types or a value does not fit MAVLink's fields.
+    Args:
+        items: the items, in order.
+        mission_type: the list's MAV_MISSION_TYPE, which every item must have; None: the
+            items' own (one type).
+
+    Returns:
+        The `WireItem`s.
+
+    Raises:
+        ValueError: the items mix mission types (or differ from `mission_type`), or a value
+            does not fit MAVLink's fields (`to_wire`).
     """
     out = [to_wire(it, seq=k, current=int(k == 0)) for k, it in enumerate(items)]
     types = {w.mission_type for w in out} | ({mission_type} if mission_type is not None else set())
@@ -155,7 +184,15 @@ def wire_mission(items: Sequence[MissionItem], mission_type: int | None = None) 
 
 
 def from_wire(w: WireItem) -> MissionItem:
-    """The MissionItem a WireItem stands for (x/y back in degrees for global frames)."""
+    """The MissionItem a WireItem stands for (x/y back in degrees for global frames).
+
+    Args:
+        w: the wire item.
+
+    Returns:
+        The `MissionItem`: x/y divided by the frame's scale (INT32_MAX as NaN), params and z
+        as floats.
+    """
     scale = _xy_scale(w.frame)
 
     def xy(i: int) -> float:
@@ -219,6 +256,19 @@ def compare_items(
 
     x/y may differ by `xy_tolerance` int units in global frames (1 = 1e-7 degree, the rounding
     of the int32 encoding); everything else must be equal (NaN equal to NaN; `current` ignored).
+
+    Args:
+        sent: the items sent (`MissionItem`s are converted with `to_wire`, seq = position).
+        got: the items read back.
+        what: "mission", "fence" or "rally", for the differences.
+        xy_tolerance: int32 units x/y may differ by in global frames (0 elsewhere).
+
+    Returns:
+        The `Difference`s: the count first when the lengths differ, then per item pair (the
+        shorter list's length) each differing field; empty when they match.
+
+    Raises:
+        ValueError: a `MissionItem` that does not fit MAVLink's fields (`to_wire`).
     """
     a = [w if isinstance(w, WireItem) else to_wire(w, seq=k) for k, w in enumerate(sent)]
     b = [w if isinstance(w, WireItem) else to_wire(w, seq=k) for k, w in enumerate(got)]
@@ -245,7 +295,14 @@ def compare_items(
 
 
 def mission_result_name(code: int) -> str:
-    """MAV_MISSION_RESULT name of `code` (e.g. 4 -> "MAV_MISSION_NO_SPACE")."""
+    """MAV_MISSION_RESULT name of `code` (e.g. 4 -> "MAV_MISSION_NO_SPACE").
+
+    Args:
+        code: a MAV_MISSION_RESULT number.
+
+    Returns:
+        Its enum name, or "MAV_MISSION_RESULT <code>" for a number pymavlink lacks.
+    """
     entry = mavlink2.enums["MAV_MISSION_RESULT"].get(int(code))
     return entry.name if entry is not None else f"MAV_MISSION_RESULT {code}"
 
@@ -258,7 +315,18 @@ _RESULTS = {
 
 
 def mission_result_code(value: int | str) -> int:
-    """A MAV_MISSION_RESULT code from a number or a name ("NO_SPACE", "MAV_MISSION_NO_SPACE")."""
+    """A MAV_MISSION_RESULT code from a number or a name ("NO_SPACE", "MAV_MISSION_NO_SPACE").
+
+    Args:
+        value: an int, a string of digits, or a name (case and surrounding spaces ignored;
+            the MAV_MISSION_ prefix optional).
+
+    Returns:
+        The code.
+
+    Raises:
+        ValueError: an unknown code or name (the message lists the known names).
+    """
     if isinstance(value, int) or (isinstance(value, str) and value.strip().isdigit()):
         code = int(value)
         if code in _RESULTS:
@@ -282,7 +350,14 @@ _TYPE_NAMES = {
 
 
 def mission_type_name(t: int) -> str:
-    """ "mission", "fence" or "rally" (else the number)."""
+    """ "mission", "fence" or "rally" (else the number).
+
+    Args:
+        t: a MAV_MISSION_TYPE number.
+
+    Returns:
+        "mission", "fence", "rally", or "mission type <t>".
+    """
     return _TYPE_NAMES.get(int(t), f"mission type {t}")
 
 
@@ -298,7 +373,11 @@ class Endpoint:
     port: int
 
     def url(self) -> str:
-        """MAVSDK's spelling: udpin://host:port."""
+        """MAVSDK's spelling: udpin://host:port.
+
+        Returns:
+            "{mode}://{host}:{port}".
+        """
         return f"{self.mode}://{self.host}:{self.port}"
 
     def __str__(self) -> str:
@@ -308,8 +387,17 @@ class Endpoint:
 def parse_endpoint(text: str) -> Endpoint:
     """`udpin://host:port`, `udpin:host:port`, `udpout:...` (and `udp:` = udpin, as mavutil).
 
-    ValueError for anything else. The mock vehicle speaks UDP only; the uploaders take every
-    link `connection.parse_connection` knows (UDP, TCP, serial).
+    The mock vehicle speaks UDP only; the uploaders take every link
+    `connection.parse_connection` knows (UDP, TCP, serial).
+
+    Args:
+        text: the endpoint (surrounding spaces ignored).
+
+    Returns:
+        The `Endpoint`; an empty udpin host is 0.0.0.0.
+
+    Raises:
+        ValueError: anything else (another scheme, no host, a port outside 1..65535).
     """
     raw = text.strip()
     mode, sep, rest = raw.partition(":")
@@ -338,13 +426,28 @@ class PacketCapture:
         self.buf = b""
 
     def write(self, buf: bytes) -> None:
+        """Keep the packed message (the last one only).
+
+        Args:
+            buf: the message's bytes, as pymavlink packs them.
+        """
         self.buf = bytes(buf)
 
 
 def open_udp(ep: Endpoint) -> tuple[socket.socket, tuple[str, int] | None]:
     """A non-blocking UDP socket for `ep` and the peer to send to (None for udpin, which answers
     whoever talks first). udpin binds the endpoint; udpout binds an ephemeral local port, on
-    loopback when the peer is on loopback. Raises OSError (the socket closed) on failure."""
+    loopback when the peer is on loopback.
+
+    Args:
+        ep: the endpoint.
+
+    Returns:
+        (socket, peer): peer (ip, port) for udpout, its host resolved; None for udpin.
+
+    Raises:
+        OSError: the bind or the name lookup failed (the socket closed).
+    """
     sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
     try:
         peer = None
