@@ -37,6 +37,17 @@ SINGLE_THREAD_ENV = {
 class Executor(Protocol):
     """Runs fn over items; results come back as they finish (order not guaranteed)."""
 
-    def map_unordered(self, fn: Callable[[T], R], items: Iterable[T]) -> Iterator[R]: ...
+    def map_unordered(self, fn: Callable[[T], R], items: Iterable[T]) -> Iterator[R]:
+        """Run `fn(item)` for every item, yielding each result as soon as it is done.
+
+        Args:
+            fn: a top-level (importable) function of one item.
+            items: picklable, self-contained job values; may be a long or lazy iterable (an
+                implementation may keep only a bounded number in flight).
+
+        Yields:
+            fn's results, in any order.
+        """
+        ...
 
     def close(self) -> None: ...

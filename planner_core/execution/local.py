@@ -26,10 +26,27 @@ class SerialExecutor:
     """Runs every item in this process, in order."""
 
     def map_unordered(self, fn: Callable[[T], R], items: Iterable[T]) -> Iterator[R]:
+        """Run `fn(item)` for every item here, in order.
+
+        Args:
+            fn: a function of one item.
+            items: the items, consumed lazily.
+
+        Yields:
+            fn's results, in the items' order.
+
+        Raises:
+            Exception: whatever fn raises, at once (the items after it are not run).
+        """
         for item in items:
             yield fn(item)
 
     def close(self) -> None:
+        """Nothing to release.
+
+        Returns:
+            None.
+        """
         return None
 
     def __enter__(self) -> SerialExecutor:
@@ -112,6 +129,19 @@ class ProcessExecutor:
         return self._pool
 
     def map_unordered(self, fn: Callable[[T], R], items: Iterable[T]) -> Iterator[R]:
+        """Run `fn(item)` for every item on the worker pool (started on first use), at most 2 * jobs
+        items in flight; items still pending when the generator is closed are cancelled.
+
+        Args:
+            fn: a top-level (importable, picklable) function of one item.
+            items: picklable items, consumed lazily.
+
+        Yields:
+            fn's results, as they finish (any order).
+
+        Raises:
+            Exception: whatever fn raised in a worker (re-raised here by `Future.result`).
+        """
         pool = self._ensure_pool()
         it = iter(items)
         pending: set[Future[Any]] = set()
@@ -151,7 +181,18 @@ def make_executor(jobs: int, backend: str = "local", address: str | None = None)
     ``address`` must be None. ``ray``: a `ray_executor.RayExecutor` connected to ``address``
     (None / "auto" / "ray://HOST:PORT"); without an address it starts a local Ray instance with
     ``jobs`` CPUs (all of them if jobs == 0). Ray is imported only when the executor first runs.
-    Raises ValueError for an unknown backend, a negative ``jobs`` or an address with ``local``.
+
+    Args:
+        jobs: worker processes (local; 0 = this process) or CPUs of a local Ray instance
+            (0 = all); >= 0.
+        backend: one of `BACKENDS`, "local" or "ray".
+        address: the Ray cluster's address (None / "auto" / "ray://HOST:PORT"); None for local.
+
+    Returns:
+        A `SerialExecutor`, `ProcessExecutor` or `ray_executor.RayExecutor`.
+
+    Raises:
+        ValueError: an unknown backend, a negative ``jobs`` or an address with ``local``.
     """
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")

@@ -45,7 +45,14 @@ class RayUnavailable(RuntimeError):
 
 
 def import_ray() -> Any:
-    """Import and return the `ray` module; raises `RayUnavailable` if it is not installed."""
+    """Import and return the `ray` module.
+
+    Returns:
+        The `ray` module.
+
+    Raises:
+        RayUnavailable: Ray is not installed (the message says how to install it).
+    """
     try:
         import ray
     except ImportError as exc:
@@ -106,11 +113,33 @@ class RayExecutor:
         return self._ray
 
     def cluster_cpus(self) -> int:
-        """CPUs the connected Ray cluster offers (starts or connects to Ray if needed)."""
+        """CPUs the connected Ray cluster offers (starts or connects to Ray if needed).
+
+        Returns:
+            The cluster's "CPU" resource, at least 1 (1 when it reports none).
+
+        Raises:
+            RayUnavailable: Ray is not installed.
+        """
         ray = self._ensure_ray()
         return max(1, int(ray.cluster_resources().get("CPU", 1)))
 
     def map_unordered(self, fn: Callable[[T], R], items: Iterable[T]) -> Iterator[R]:
+        """Run `fn(item)` as Ray tasks (one CPU each, no retries, `SINGLE_THREAD_ENV` in their
+        runtime environment); tasks still pending when the generator is closed are cancelled.
+
+        Args:
+            fn: a top-level (importable) function of one item, shipped to the workers.
+            items: picklable, self-contained items, consumed lazily; at most ``max_in_flight``
+                (default 2 x `cluster_cpus`) submitted and not yet returned.
+
+        Yields:
+            fn's results, as they finish (any order).
+
+        Raises:
+            RayUnavailable: Ray is not installed.
+            Exception: whatever fn raised in its task, as `ray.get` re-raises it.
+        """
         ray = self._ensure_ray()
         # the thread limits are set per task too, so they hold on a runtime someone else started
         task = ray.remote(fn).options(num_cpus=1, runtime_env=_runtime_env(), max_retries=0)
