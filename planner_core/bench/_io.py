@@ -36,25 +36,57 @@ _NUMBER_LIST = re.compile(r"\[\s*(-?[\d.eE+-]+(?:,\s*-?[\d.eE+-]+)*)\s*\]")
 
 def utc_now() -> str:
     """The time now in UTC to the second, as the benchmark's files stamp it
-    ("2025-01-31T12:00:00Z": a run's "started", a best-known solution's "found")."""
+    ("2025-01-31T12:00:00Z": a run's "started", a best-known solution's "found").
+
+    Returns:
+        "YYYY-MM-DDTHH:MM:SSZ".
+    """
     return _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%dT%H:%M:%SZ")
 
 
 def dumps_json(data: Any) -> str:
-    """Indented JSON (one space) with lists of plain numbers kept on one line."""
+    """Indented JSON (one space) with lists of plain numbers kept on one line.
+
+    Args:
+        data: a JSON-serialisable value.
+
+    Returns:
+        The JSON text, without a final newline.
+    """
     text = json.dumps(data, indent=1)
     return _NUMBER_LIST.sub(lambda m: "[" + ", ".join(re.split(r",\s*", m.group(1))) + "]", text)
 
 
 def write_json_atomic(path: str | Path, data: Any) -> Path:
-    """`dumps_json(data)` written atomically."""
+    """`dumps_json(data)` written atomically (plus a final newline; `write_text_atomic`).
+
+    Args:
+        path: the file; a missing folder is created.
+        data: a JSON-serialisable value.
+
+    Returns:
+        The path written.
+
+    Raises:
+        OSError: the folder cannot be written.
+    """
     return write_text_atomic(path, dumps_json(data) + "\n")
 
 
 def read_json(path: str | Path) -> dict[str, Any]:
     """A JSON object from `path` read by the shared reader (`planner_core.textio`: a regular
-    file, bounded size and depth, UTF-8, no NaN); {} when the file does not exist. ValueError
-    naming the file (and the field) otherwise."""
+    file, bounded size and depth, UTF-8, no NaN); {} when the file does not exist.
+
+    Args:
+        path: the JSON file.
+
+    Returns:
+        The object ({} for a missing file).
+
+    Raises:
+        ValueError: naming the file (and the field) when it is unreadable, not such JSON, or
+            not an object.
+    """
     path = Path(path)
     if not os.path.lexists(path):
         return {}
@@ -84,8 +116,19 @@ _META_SHAPE: dict[str, Any] = {
 
 def read_meta(folder: str | Path) -> dict[str, Any]:
     """`folder`/meta.json ({} when missing) read by the shared reader, with every field that
-    `report` and `bench` read of the type they read; ValueError naming the file and the field
-    otherwise (a `commands` of numbers was an AttributeError, a numeric `suite` a TypeError)."""
+    `report` and `bench` read of the type they read (a `commands` of numbers was an
+    AttributeError, a numeric `suite` a TypeError).
+
+    Args:
+        folder: the benchmark folder.
+
+    Returns:
+        The meta object ({} when meta.json is missing); absent fields and null are accepted.
+
+    Raises:
+        ValueError: naming the file and the field: a field of the wrong type, an `ablation`
+            entry without `reference`, or an unreadable file (`read_json`).
+    """
     from planner_core.textio import json_path, printable, quoted
 
     path = Path(folder) / "meta.json"
@@ -119,10 +162,22 @@ def read_meta(folder: str | Path) -> dict[str, Any]:
 
 def read_csv_column(path: str | Path, column: str,
                     optional: tuple[str, ...] = ()) -> list[dict[str, float]]:  # fmt: skip
-    """The rows of a CSV file with a header (a checkpoint's curve.csv, imitation.csv), each
-    as {column: value} for `column` (required) and the `optional` columns present, values
-    finite numbers (an empty optional cell is 0). Read by the shared reader (regular file,
-    bounded size, UTF-8); ValueError naming the file, the row and the column otherwise."""
+    """The rows of a CSV file with a header (a checkpoint's curve.csv, imitation.csv), read by
+    the shared reader (regular file, bounded size, UTF-8).
+
+    Args:
+        path: the CSV file.
+        column: the required column.
+        optional: further columns, read when the header has them (an empty cell is 0).
+
+    Returns:
+        One dict per data row: {column: value} for `column` and the `optional` columns
+        present, values finite floats.
+
+    Raises:
+        ValueError: naming the file, the row and the column: an unreadable file, not CSV, or
+            a cell that is not a finite number (an empty or missing `column` cell included).
+    """
     import csv
     import io
     import math

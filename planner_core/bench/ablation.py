@@ -35,8 +35,17 @@ META_KEY = "ablation"
 
 
 def normalised(record: dict[str, Any]) -> float:
-    """final / initial penalised score of one run record (NaN when the initial score is not a
-    positive finite number, or the record has no trace)."""
+    """Normalised performance of one run (paper Sec. 5.3, footnote to Fig. 3): final / initial
+    penalised score.
+
+    Args:
+        record: a run record with "score" and "history" (its first "best_f", "best_phi" entry
+            is the incumbent after the first population).
+
+    Returns:
+        score / (f + 10 phi) of the first trace entry; NaN when that initial score is not a
+        positive finite number, or the record has no trace.
+    """
     h = record.get("history") or {}
     if not h.get("best_f"):
         return math.nan
@@ -48,9 +57,22 @@ def normalised(record: dict[str, Any]) -> float:
 
 def normalised_table(records: list[dict[str, Any]], variants: list[str], reference: str,
                      alpha: float = ALPHA) -> dict[str, dict[str, Any]]:
-    """Per variant: n, mean, std (ddof 0), median of the normalised performance over all its
-    runs, and the Wilcoxon mark against `reference` ("" for the reference itself; "+" the
-    reference is significantly better, i.e. lower, "-" worse, "~" no difference)."""
+    """Per variant: the normalised performance over all its runs and its Wilcoxon mark against
+    `reference`.
+
+    Args:
+        records: run records (each with "optimiser"); runs whose normalised value is not
+            finite are dropped.
+        variants: the variants (optimiser names), in the table's order.
+        reference: the reference variant.
+        alpha: significance level of the two-sided rank-sum test.
+
+    Returns:
+        {variant: {"n", "mean", "std" (ddof 0), "median", "mark", "values" ((n,) array)}} in
+        `variants`' order, variants without runs left out; "mark" is "" for the reference
+        itself, "+" the reference is significantly better (i.e. lower), "-" worse, "~" no
+        difference.
+    """
     acc: dict[str, list[float]] = defaultdict(list)
     for r in records:
         v = normalised(r)
@@ -70,7 +92,18 @@ def normalised_table(records: list[dict[str, Any]], variants: list[str], referen
 
 
 def training_seconds(checkpoint: str | Path) -> tuple[int, float] | None:
-    """(epochs, wall seconds) recorded in a checkpoint folder's curve.csv, or None without it."""
+    """Training cost recorded in a checkpoint folder's curve.csv.
+
+    Args:
+        checkpoint: the policy checkpoint folder.
+
+    Returns:
+        (epochs, wall seconds): curve.csv's rows and the sum of its "seconds" column; None
+        without curve.csv.
+
+    Raises:
+        ValueError: an unreadable curve.csv (`read_csv_column`).
+    """
     from planner_core.bench._io import read_csv_column
 
     curve = Path(checkpoint) / "curve.csv"
@@ -86,12 +119,28 @@ def ablation_section(records: list[dict[str, Any]], entry: dict[str, Any], figur
                      scores: dict[str, list[str]] | None = None) -> list[str]:
     """Markdown of the ablation study: how each variant was trained, then per start mode the
     normalised-performance table (+ Wilcoxon against the reference) and its box-plot figure
-    (paper Fig. 3; PNGs in folder `figures`, linked as `link(png path)`). The per-task score
-    table with +/~/- counts (paper Table 3) is the report's protocol section, whose reference
-    column is the ablation's reference; or, when the study is a section of another report
-    (`lamde-mission report --ablations DIR`), `scores[mode]`: its lines, given here, placed
-    before that mode's normalised performance. `source`: lines saying where the runs are,
-    after the section's first paragraph."""
+    (paper Fig. 3). The per-task score table with +/~/- counts (paper Table 3) is the
+    report's protocol section, whose reference column is the ablation's reference; or, when
+    the study is a section of another report (`lamde-mission report --ablations DIR`),
+    `scores[mode]`.
+
+    Args:
+        records: the study's run records (those with an I_max are left out of the tables).
+        entry: meta.json's ablation entry: "reference", "variants" ({name: {"description",
+            "checkpoint", ...}}).
+        figures: folder the PNGs are written to.
+        link: maps a written PNG's path to the link text used in the Markdown.
+        alpha: significance level of the rank-sum test.
+        source: lines saying where the runs are, after the section's first paragraph.
+        scores: per start mode, the per-task score table's lines, placed before that mode's
+            normalised performance.
+
+    Returns:
+        The section's Markdown lines.
+
+    Raises:
+        ValueError: a variant's curve.csv is unreadable (`training_seconds`).
+    """
     from planner_core.bench import figures as F
 
     reference = str(entry["reference"])

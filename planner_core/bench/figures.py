@@ -88,7 +88,15 @@ def optimiser_style(name: str) -> dict[str, Any]:
     """Line style of optimiser `name`: {"color", "ls"}, the same in every figure.
 
     The configurator names of `benchmarks/validate_policy.py` (adaptive, lamde, random, fixed)
-    get the colours of the registry's de-<name>.
+    get the colours of the registry's de-<name>; other unknown names a spare colour chosen by a
+    stable hash (CRC-32) of the name.
+
+    Args:
+        name: the optimiser's (or configurator's, variant's) name.
+
+    Returns:
+        {"color": hex colour, "ls": "--" for a fixed-length, memetic or seeded-LP variant, else
+        "-"}.
     """
     key = name if name in _COLOURS else f"de-{name}"
     colour = _COLOURS.get(key) or _SPARE[zlib.crc32(name.encode()) % len(_SPARE)]
@@ -97,8 +105,18 @@ def optimiser_style(name: str) -> dict[str, Any]:
 
 def protocol_text(init: str | Sequence[str] | None, budget: int | None,
                   runs: int | Sequence[int] | None, per: str = "optimiser and task") -> str:
-    """"uniform start (paper protocol) · 10,000 evaluations per run · 2 runs per optimiser and
-    task" (each part left out when unknown; `per` names what the runs are counted per)."""
+    """The protocol as a title line, e.g. "uniform start (paper protocol) · 10,000 evaluations
+    per run · 2 runs per optimiser and task" (each part left out when unknown).
+
+    Args:
+        init: start mode(s), or None.
+        budget: evaluations per run, or None (0 is left out too).
+        runs: runs per cell, or the distinct counts (shown as a range), or None.
+        per: names what the runs are counted per.
+
+    Returns:
+        The parts joined by " · " ("" when none is known).
+    """
     parts = []
     inits = [init] if isinstance(init, str) else list(init or [])
     if inits:
@@ -114,14 +132,32 @@ def protocol_text(init: str | Sequence[str] | None, budget: int | None,
 
 def use_log_scale(values: Any) -> bool:
     """True when the finite `values` are all positive and span a factor of 10 or more (one
-    decade); a zero or negative value keeps the axis linear (a log axis would hide it)."""
+    decade); a zero or negative value keeps the axis linear (a log axis would hide it).
+
+    Args:
+        values: numbers, any shape (non-finite ones ignored).
+
+    Returns:
+        Whether to use a log axis (False for fewer than two finite values).
+    """
     v = np.asarray(values, dtype=float).ravel()
     v = v[np.isfinite(v)]
     return v.size > 1 and float(v.min()) > 0 and float(v.max()) >= 10.0 * float(v.min())
 
 
 def save(fig: Any, path: str | Path) -> Path:
-    """Write `fig` as PNG to `path` (temp file then rename); return the path."""
+    """Write `fig` as PNG to `path` (temp file then rename) at `DPI`; return the path.
+
+    Args:
+        fig: a matplotlib Figure.
+        path: the PNG file; a missing folder is created.
+
+    Returns:
+        The path written.
+
+    Raises:
+        OSError: the folder cannot be written.
+    """
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=DPI)
     return write_bytes_atomic(Path(path), buf.getvalue())
@@ -201,9 +237,19 @@ def convergence_figure(task: str, per_opt: Mapping[str, Sequence[Mapping[str, An
                        opts: Sequence[str], budget: int, *, init: str | None = None) -> Any:
     """Median (25-75 % band) of the incumbent's score f + 10 phi against evaluations on `task`.
 
-    `per_opt[o]`: benchmark records (`history` with evaluations, best_f, best_phi; `score`,
-    `feasible`) of optimiser o. Each run's final score is a marker right of the curves: a dot
-    when the run ended feasible, a cross when not; the legend says how many were feasible.
+    Each run's final score is a marker right of the curves: a dot when the run ended
+    feasible, a cross when not; the legend says how many were feasible.
+
+    Args:
+        task: the task's name (title).
+        per_opt: per_opt[o]: benchmark records (`history` with evaluations, best_f, best_phi;
+            `score`, `feasible`) of optimiser o.
+        opts: the optimisers, in legend order (those without records are left out).
+        budget: evaluations per run (the x axis and the budget line).
+        init: the start mode, for the title.
+
+    Returns:
+        The Figure.
     """
     from matplotlib.lines import Line2D
 
@@ -258,11 +304,19 @@ def scores_figure(tasks: Sequence[str],
                   opts: Sequence[str], *, what: str, protocol: str,
                   legend_title: str = "optimiser") -> Any:
     """Every run's final score per task (x) and optimiser (side by side), with its median (bar)
-    and 25-75 % box; dots are feasible runs, crosses infeasible ones.
-
-    `runs[task][optimiser]`: (score f + 10 phi, feasible) per run. `what`: the first title line
-    (what is compared), `protocol`: the second (start mode, budget, runs). Many tasks are split
+    and 25-75 % box; dots are feasible runs, crosses infeasible ones. Many tasks are split
     over two rows sharing the score axis, so the figure stays readable at page width.
+
+    Args:
+        tasks: the tasks, in x order.
+        runs: runs[task][optimiser]: (score f + 10 phi, feasible) per run.
+        opts: the optimisers, in order (those without runs are left out).
+        what: the first title line (what is compared).
+        protocol: the second (start mode, budget, runs).
+        legend_title: the legend's title.
+
+    Returns:
+        The Figure.
     """
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
@@ -371,10 +425,21 @@ def paths_figure(tasks: Sequence[str], maps: Mapping[str, Any],
                  protocol: str = "", runs: int | None = None) -> Any:
     """One small map per task and optimiser with that optimiser's best route (solid when
     feasible, dotted and marked INFEASIBLE when not) over the best-known route (wide grey).
+    Panels of one task fill rows of up to three; the panel title gives the task, optimiser
+    and score. Axes in km.
 
-    `best[task][optimiser]`: the record of its lowest-score run (hover_points, score,
-    feasible); `known[task]`: a best-known entry (hover_points, f, optimiser). Panels of one
-    task fill rows of up to three; the panel title gives the task, optimiser and score.
+    Args:
+        tasks: the tasks to draw.
+        maps: task -> its loaded map (`planner_core.model.mapio.Map`).
+        best: best[task][optimiser]: the record of its lowest-score run (hover_points, score,
+            feasible).
+        opts: the optimisers, in order.
+        known: known[task]: a best-known entry (hover_points, f, optimiser).
+        protocol: the title's protocol text.
+        runs: runs per optimiser, named in the title when given.
+
+    Returns:
+        The Figure.
     """
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
@@ -439,7 +504,18 @@ def paths_figure(tasks: Sequence[str], maps: Mapping[str, Any],
 def imax_figure(tables: Mapping[str, Mapping[str, Mapping[int, tuple[float, float, int]]]], *,
                 n_tasks: int, runs: int, budget: int | None) -> Any:
     """The I_max study (paper Fig. 4): mean ± std of the last population's feasible rate
-    against I_max, per optimiser; `tables[init][optimiser][i_max]` = (mean, std, n)."""
+    against I_max, per optimiser (filled markers for the first start mode, open for the
+    next).
+
+    Args:
+        tables: tables[init][optimiser][i_max] = (mean, std, n) (`report.imax_table`).
+        n_tasks: tasks the study ran on (title).
+        runs: runs per cell (title).
+        budget: evaluations per run, or None when mixed (title).
+
+    Returns:
+        The Figure.
+    """
     from matplotlib.lines import Line2D
 
     fig = _new_figure((8.4, 4.4))
@@ -475,8 +551,15 @@ def imax_figure(tables: Mapping[str, Mapping[str, Mapping[int, tuple[float, floa
 def ablation_figure(values: Mapping[str, Sequence[float]], protocol: str) -> Any:
     """The ablation study (paper Fig. 3): one box per variant (median, 25-75 %, whiskers at 1.5
     IQR, outliers) of the normalised performance of its runs, final / initial score (lower is
-    better), with the mean as a diamond; `values[variant]` in the order to draw; `protocol` is
-    the title's protocol text (:func:`protocol_text`). Log axis when the values span a decade."""
+    better), with the mean as a diamond. Log axis when the values span a decade.
+
+    Args:
+        values: values[variant]: normalised performances of its runs, in the order to draw.
+        protocol: the title's protocol text (:func:`protocol_text`).
+
+    Returns:
+        The Figure.
+    """
     names = list(values)
     fig = _new_figure((1.3 * len(names) + 2.6, 4.4))
     ax = fig.add_subplot()
@@ -505,7 +588,19 @@ def scan_figure(panels: Mapping[str, Sequence[tuple[float, str, int, int, Sequen
     the maps of its median score over the reference's; below 1 is better), the static
     configurations grey, named configurators in their colours; a ring marks a configurator
     significantly better than the reference on at least 12 of the maps (`rows[i][4]` are its
-    per-map Wilcoxon marks). `panels[pipeline]` are `validate_policy.scan_rows` rows."""
+    per-map Wilcoxon marks).
+
+    Args:
+        panels: panels[pipeline]: `validate_policy.scan_rows` rows, each (score ratio,
+            configurator label ("fixed:..." for a static one), feasible runs, runs, per-map
+            marks).
+        reference: the reference configurator's name (axis label and legend).
+        what: the first title line.
+        protocol: the title's protocol text.
+
+    Returns:
+        The Figure.
+    """
     names = list(panels)
     fig = _new_figure((4.2 * len(names) + 0.6, 4.4))
     axes = fig.subplots(1, len(names), squeeze=False, sharey=True)[0]

@@ -46,24 +46,58 @@ BEST_KNOWN_PROTOCOL = "lamde-mission bench --best-known --suite examples/maps/su
 
 
 def best_known_path(suite: str | Path) -> Path:
-    """`<parent>/<suite name>_best_known.json`, beside the suite folder."""
+    """The best-known file of a suite, beside the suite folder.
+
+    Args:
+        suite: the suite folder.
+
+    Returns:
+        `<parent>/<suite name>_best_known.json`.
+    """
     folder = Path(suite)
     return folder.parent / f"{folder.name}_best_known.json"
 
 
 def lower_bounds_path(suite: str | Path) -> Path:
-    """`<parent>/<suite name>_lower_bounds.json`, beside the suite folder."""
+    """The lower-bound cache of a suite, beside the suite folder.
+
+    Args:
+        suite: the suite folder.
+
+    Returns:
+        `<parent>/<suite name>_lower_bounds.json`.
+    """
     folder = Path(suite)
     return folder.parent / f"{folder.name}_lower_bounds.json"
 
 
 def file_sha256(path: str | Path) -> str:
-    """Hex SHA-256 of a file's bytes (identifies the exact map a result belongs to)."""
+    """Hex SHA-256 of a file's bytes (identifies the exact map a result belongs to).
+
+    Args:
+        path: the file.
+
+    Returns:
+        64 hex digits.
+
+    Raises:
+        OSError: the file cannot be read.
+    """
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
 def suite_task_files(suite: str | Path) -> dict[str, Path]:
-    """Task name (file stem) -> map file, for every map JSON in the suite folder, sorted."""
+    """Task name (file stem) -> map file, for every map JSON in the suite folder, sorted.
+
+    Args:
+        suite: the suite folder; files whose name starts with "." or "_" are skipped.
+
+    Returns:
+        {stem: path}, in name order.
+
+    Raises:
+        FileNotFoundError: the suite folder does not exist.
+    """
     folder = Path(suite)
     if not folder.is_dir():
         raise FileNotFoundError(f"suite folder not found: {folder}")
@@ -132,8 +166,23 @@ def lower_bounds(
     cache: str | Path | None = None,
     compute_missing: bool = True,
 ) -> dict[str, dict[str, Any]]:
-    """LB per task from the cache beside the suite; missing or stale entries are computed and
-    stored (unless `compute_missing` is False, then they are left out)."""
+    """LB per task from the cache beside the suite; missing or stale entries (the map's SHA-256
+    changed) are computed (`planner_core.model.bounds.lower_bound`) and stored, under a lock.
+
+    Args:
+        suite: the suite folder.
+        tasks: the tasks wanted (None: all; names not in the suite are dropped).
+        cache: the cache file (None: `lower_bounds_path(suite)`).
+        compute_missing: False leaves missing or stale entries out instead of computing them.
+
+    Returns:
+        Task -> entry ("sha256", "lb" in s, and the rest of `LowerBound.to_dict`), in the
+        order of `tasks` (or the suite's).
+
+    Raises:
+        FileNotFoundError: the suite folder does not exist.
+        ValueError: naming the file and the field, for an unreadable or malformed cache.
+    """
     from planner_core.model.bounds import DEFAULT_SPACING, lower_bound
 
     files = suite_task_files(suite)
@@ -172,7 +221,21 @@ def lower_bounds(
 def verify_plan(
     map_path: str | Path, hover_points: Any, hover_times: Any
 ) -> tuple[float, float]:
-    """(f, phi) of a decoded plan (hover points and times in order) on the map."""
+    """f and phi of a decoded plan (hover points and times in order) on the map, in the
+    variable-length encoding.
+
+    Args:
+        map_path: the map file.
+        hover_points: (k, 2) hover points, m (reshaped from any layout of 2k numbers).
+        hover_times: (k,) hover times, s.
+
+    Returns:
+        (f, phi): the objective (paper Eq. 3, s) and the total violation (Eq. 7).
+
+    Raises:
+        ValueError: more than I_max hover points (`Problem.encode`), or a map that does not
+            load.
+    """
     from planner_core.model.problem import Problem
 
     problem = Problem(map_path, variable_length=True)
@@ -189,7 +252,15 @@ class BestKnown:
         self.path = Path(path)
 
     def load(self) -> dict[str, dict[str, Any]]:
-        """Task -> entry (f, map_sha256, hover_points, hover_times, optimiser, seed, ...)."""
+        """Task -> entry (f, map_sha256, hover_points, hover_times, optimiser, seed, ...).
+
+        Returns:
+            A copy of the file's `tasks` ({} when the file is missing).
+
+        Raises:
+            ValueError: naming the file and the field: an unreadable file, or an entry without a
+                finite `f` or a string `map_sha256`.
+        """
         return dict(self._read().get("tasks") or {})
 
     def _read(self) -> dict[str, Any]:
@@ -201,7 +272,17 @@ class BestKnown:
         return data
 
     def f_values(self, files: dict[str, Path]) -> dict[str, float]:
-        """Best-known f per task whose entry matches the current map file (stale ones left out)."""
+        """Best-known f per task whose entry matches the current map file (stale ones left out).
+
+        Args:
+            files: task name -> map file.
+
+        Returns:
+            Task -> f (s).
+
+        Raises:
+            ValueError: an unreadable or malformed best-known file (`load`).
+        """
         entries = self.load()
         out = {}
         for name, p in files.items():
@@ -211,8 +292,18 @@ class BestKnown:
         return out
 
     def ensure(self, files: dict[str, Path]) -> dict[str, float]:
-        """Seed missing or stale entries (the map file changed) from each map's witness plan;
-        return the best-known f per task (tasks without a witness or entry are left out)."""
+        """Seed missing or stale entries (the map file changed) from each map's witness plan (when
+        feasible on the map), under the file's lock; then read the best-known f back.
+
+        Args:
+            files: task name -> map file.
+
+        Returns:
+            The best-known f per task (s); tasks without a witness or entry are left out.
+
+        Raises:
+            ValueError: an unreadable or malformed best-known file.
+        """
         from planner_core.model.mapio import load_map
 
         with _locked(self.path):
@@ -263,9 +354,29 @@ class BestKnown:
     ) -> bool:
         """Store this plan if it is feasible on the map and beats the stored f; True if stored.
 
-        `replace`: store it even when the stored f is lower (for a stored plan that an outside
-        check, the simulator's, found infeasible: `benchmarks/refresh_best_known.py`); the plan
-        must still be feasible on the map."""
+        A stored entry for another version of the map (SHA-256 differs) is replaced whatever its
+        f. The read-compare-write runs under the file's lock.
+
+        Args:
+            task: the task name.
+            map_path: its map file.
+            hover_points: (k, 2) hover points, m.
+            hover_times: (k,) hover times, s.
+            optimiser: who found it.
+            seed: the run's seed.
+            budget: the run's budget (evaluations).
+            run: the run index.
+            command: the command that ran it.
+            replace: store it even when the stored f is lower (for a stored plan that an outside
+                check, the simulator's, found infeasible: `benchmarks/refresh_best_known.py`); the
+                plan must still be feasible on the map.
+
+        Returns:
+            True if stored; False when infeasible (phi > 0 or f not finite) or not better.
+
+        Raises:
+            ValueError: an unreadable or malformed best-known file, or a plan `verify_plan` refuses.
+        """
         f, phi = verify_plan(map_path, hover_points, hover_times)
         if phi != 0.0 or not math.isfinite(f):
             return False

@@ -35,7 +35,17 @@ class Key(NamedTuple):
 
 
 def key_of(record: dict[str, Any]) -> Key:
-    """The identity of a run record (records written before start modes existed were seeded)."""
+    """The identity of a run record (records written before start modes existed were seeded).
+
+    Args:
+        record: a run record with "optimiser", "task", "run" (and optionally "init", "i_max").
+
+    Returns:
+        Its `Key` (init "seeded" and i_max None when absent).
+
+    Raises:
+        KeyError: a record without "optimiser", "task" or "run".
+    """
     i_max = record.get("i_max")
     return Key(str(record["optimiser"]), str(record["task"]), int(record["run"]),
                str(record.get("init", "seeded")), None if i_max is None else int(i_max))
@@ -62,10 +72,17 @@ _HISTORY = ("evaluations", "best_f", "best_phi")
 
 
 def record_problem(rec: dict[str, Any]) -> str | None:
-    """What makes a parsed run record unusable by the report, as "field: problem" (one line;
-    values shown cut), or None. Checked: the key fields' types, the numbers the tables average
-    (finite: a NaN or Infinity score wrote `nan` into a table), `feasible` a boolean and
-    `history` an object of lists of finite numbers (as the figures read it)."""
+    """What makes a parsed run record unusable by the report. Checked: the key fields' types,
+    the numbers the tables average (finite: a NaN or Infinity score wrote `nan` into a table),
+    `feasible` a boolean and `history` an object of lists of finite numbers (as the figures
+    read it).
+
+    Args:
+        rec: a parsed record holding at least "optimiser" and "task".
+
+    Returns:
+        The first problem as "field: problem" (one line; values shown cut), or None.
+    """
     from planner_core.textio import quoted
 
     for k in ("optimiser", "task"):
@@ -106,8 +123,19 @@ def read_records(path: str | Path) -> ReadReport:
     Read by the shared reader (`read_maybe_gz`: regular file, bounded size decompressed too;
     each line by `textio.loads_json`: bounded depth). A line that is not JSON, not an object or
     lacks a required field is skipped as unreadable (an interrupted write leaves one); a line
-    that is a record with a field of the wrong type or a NaN/Infinity number is refused:
-    ValueError naming the file, the line and the field.
+    that is a record with a field of the wrong type or a NaN/Infinity number is refused.
+
+    Args:
+        path: the results file. Only `path` itself is checked for existence: pass
+            `stored_path(path)` to read a results.jsonl.gz stored in its place.
+
+    Returns:
+        The `ReadReport`: the records, whether the last line was cut off, the 1-based numbers
+        of the other unreadable lines, and how many duplicate keys were skipped.
+
+    Raises:
+        ValueError: naming the file, the line and the field, for a refused record (or a line
+            too deep or with NaN); naming the file for an unreadable one.
     """
     from planner_core.textio import InputError, decode_text, loads_json, printable
 
@@ -158,7 +186,14 @@ def complete_runs(records: list[dict[str, Any]]) -> tuple[list[dict[str, Any]], 
     records hold (the benchmark plans the full product); run r is complete when every cell has
     a record of run r. The benchmark runs run-major (every cell's run 0 before any run 1), so
     an unfinished benchmark leaves only its last run index(es) partial: leaving them out keeps
-    every cell at the same number of runs (a fair comparison)."""
+    every cell at the same number of runs (a fair comparison).
+
+    Args:
+        records: run records.
+
+    Returns:
+        (the records of complete runs, in their order; the sorted run indices left out).
+    """
     keys = [key_of(r) for r in records]
     n_cells = math.prod(len({k[i] for k in keys}) for i in (0, 1, 3, 4))
     have: dict[int, set[tuple[str, str, str, int | None]]] = {}
@@ -180,7 +215,15 @@ def slim_record(record: dict[str, Any]) -> dict[str, Any]:
     performance read (:data:`SLIM_FIELDS`, and the first entry of the convergence trace: the
     incumbent after the first population); the map's hash, the hover points, x and the rest of
     the trace are dropped (they are what makes a record 3-6 kB). The convergence and best-path
-    figures cannot be drawn from slim records; every table can, to the same digits."""
+    figures cannot be drawn from slim records; every table can, to the same digits.
+
+    Args:
+        record: a full run record.
+
+    Returns:
+        A new dict: the `SLIM_FIELDS` present, and "history" with the first entry of each of
+        "evaluations", "best_f", "best_phi" present when the trace has a "best_f".
+    """
     out = {k: record[k] for k in SLIM_FIELDS if k in record}
     h = record.get("history") or {}
     if h.get("best_f"):
@@ -228,7 +271,14 @@ class ResultsWriter:
         self._fh: IO[str] | None = self.path.open("a", encoding="utf-8")
 
     def write(self, record: dict[str, Any]) -> None:
-        """Append one record as a single JSON line and push it to disk."""
+        """Append one record as a single JSON line and push it to disk (flush and fsync).
+
+        Args:
+            record: a JSON-serialisable run record.
+
+        Raises:
+            ValueError: the writer is closed.
+        """
         if self._fh is None:
             raise ValueError("writer is closed")
         line = json.dumps(record, separators=(",", ":"))

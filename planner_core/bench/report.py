@@ -48,14 +48,29 @@ DEFAULT_REFERENCE = "de-adaptive"
 
 
 def fmt(v: float) -> str:
-    """A score for the table: 1 decimal below 1e5, else 3 significant digits in e-notation."""
+    """A score for the table: 1 decimal below 1e5, else 3 significant digits in e-notation.
+
+    Args:
+        v: the score, or None.
+
+    Returns:
+        The text; "-" for None or NaN, "inf" / "-inf" for infinities.
+    """
     if v is None or not np.isfinite(v):
         return "-" if v is None or np.isnan(v) else ("inf" if v > 0 else "-inf")
     return f"{v:.1f}" if abs(v) < 1e5 else f"{v:.3e}"
 
 
 def order_optimisers(present: Sequence[str], reference: str | None) -> list[str]:
-    """Reference first, then the registry's order, then any other names alphabetically."""
+    """Reference first, then the registry's order, then any other names alphabetically.
+
+    Args:
+        present: the optimiser names present.
+        reference: the reference column (put first only when present), or None.
+
+    Returns:
+        The names of `present`, ordered.
+    """
     from planner_core.bench.baselines import REGISTRY
 
     known = [o for o in REGISTRY if o in present and o != reference]
@@ -64,7 +79,15 @@ def order_optimisers(present: Sequence[str], reference: str | None) -> list[str]
 
 
 def format_table(table: ScoreTable) -> list[str]:
-    """Markdown lines of the score table (cells "mean ± std mark", best bold, counts row)."""
+    """Markdown lines of the score table (cells "mean ± std mark", best bold, counts row).
+
+    Args:
+        table: the `ScoreTable` (`stats.score_table`).
+
+    Returns:
+        Header, rule, one line per task ("-" for an empty cell), and a "+/~/-" counts row when
+        the table has a reference.
+    """
     opts = table.optimisers
     lines = ["| Task | " + " | ".join(_col(o, table.reference) for o in opts) + " |",
              "|---|" + "---:|" * len(opts)]
@@ -148,16 +171,41 @@ def build_report(
 ) -> Path:
     """Write the markdown report of `results_dir` to `output` (figures beside it); return it.
 
-    `reference` must be one of the optimisers present when given explicitly; the default falls
-    back to the first optimiser present. `figures`: folder for the PNGs (default: a folder named
-    after the report, e.g. docs/results/ for docs/results.md). Each start mode present
-    ("init" of the records; older records without it are seeded) gets its own section; runs
-    with an I_max override go to the I_max study section; `policy_checkpoint`: a policy
-    checkpoint folder whose `curve.csv` gives the training cost; `title`: the first heading. When
-    meta.json holds an ablation entry (`benchmarks/ablations.py`), its reference is the default
-    reference and the ablation section follows (`planner_core.bench.ablation`). `imax`,
-    `ablations`: benchmark folders of those studies, each reported in its own section after the
-    protocols (`study_sections`).
+    Each start mode present ("init" of the records; older records without it are seeded) gets
+    its own section; runs with an I_max override go to the I_max study section. When meta.json
+    holds an ablation entry (`benchmarks/ablations.py`), its reference is the default reference
+    and the ablation section follows (`planner_core.bench.ablation`). A hand-written block of a
+    report already at `output` is kept (`kept_notes`). Everything that can refuse the report
+    does so before a figure is written.
+
+    Args:
+        results_dir: the benchmark folder (results.jsonl or results.jsonl.gz, meta.json).
+        output: the markdown file to write.
+        reference: the Wilcoxon reference column; must be one of the optimisers present when
+            given explicitly; the default (or None) falls back to the first optimiser present
+            in `order_optimisers`' order.
+        suite: the suite folder (default: meta.json's "suite"), for the maps, limits and
+            safety margins.
+        figures: folder for the PNGs (default: a folder named after the report, e.g.
+            docs/results/ for docs/results.md).
+        path_tasks: tasks of the best-path figure (default: up to four spread over the tasks).
+        limits: whether to add the section against LB and best-known.
+        command: the command line, shown as "Report produced by".
+        alpha: significance level of the rank-sum tests.
+        policy_checkpoint: a policy checkpoint folder whose `curve.csv` gives the training
+            cost.
+        title: the first heading.
+        imax: benchmark folder of the I_max study, reported in its own section after the
+            protocols (`study_sections`).
+        ablations: benchmark folder of the ablation study, likewise.
+
+    Returns:
+        `output`.
+
+    Raises:
+        ValueError: no results, an explicit reference without results, `output` a folder,
+            path tasks not in the results, a policy checkpoint without curve.csv, an
+            unreadable results or meta file, or a study folder `study_sections` refuses.
     """
     from planner_core.bench.baselines import REGISTRY
 
@@ -283,7 +331,17 @@ KEEP_END = "<!-- end of the hand-written part -->"
 
 def kept_notes(output: str | Path) -> list[str]:
     """Lines of the hand-written block (KEEP_START ... KEEP_END, markers included) of the
-    report already at `output`, with a blank line after; [] when there is none."""
+    report already at `output`, with a blank line after; [] when there is none.
+
+    Args:
+        output: the report's path.
+
+    Returns:
+        The block's lines and a final "" ([] without a file or a block).
+
+    Raises:
+        ValueError: naming the file, when it exists but cannot be read as text.
+    """
     from planner_core.textio import InputError, printable, read_text
 
     path = Path(output)
@@ -393,8 +451,15 @@ def _protocol_body(records: list[dict[str, Any]], opts_all: list[str], reference
 
 
 def imax_table(records: list[dict[str, Any]]) -> dict[str, dict[int, tuple[float, float, int]]]:
-    """I_max study: optimiser -> I_max -> (mean, std over runs and tasks, n) of the last
-    population's feasible rate (records without a rate are skipped)."""
+    """I_max study: the last population's feasible rate per optimiser and I_max (records
+    without a rate or an I_max are skipped).
+
+    Args:
+        records: run records.
+
+    Returns:
+        optimiser -> I_max (ascending) -> (mean, std (ddof 0) over runs and tasks, n).
+    """
     acc: dict[str, dict[int, list[float]]] = defaultdict(lambda: defaultdict(list))
     for r in records:
         rate = r.get("last_feasible_rate")
@@ -410,9 +475,20 @@ def imax_section(records: list[dict[str, Any]], path: Path, output: Path,
                  alpha: float = ALPHA) -> list[str]:
     """Markdown (table + figure) of the I_max study (paper Fig. 4): the last population's
     feasible rate against I_max, per optimiser and start mode, then the final scores at each
-    I_max summed up over the tasks (best means, Wilcoxon +/~/- against `reference`, default:
-    the first optimiser in the report's order); `source`: lines saying where the runs are,
-    after the first paragraph."""
+    I_max summed up over the tasks (best means, Wilcoxon +/~/- against `reference`).
+
+    Args:
+        records: the study's run records (each with an "i_max").
+        path: the PNG to write the figure to.
+        output: the report's path (the figure is linked relative to its folder).
+        source: lines saying where the runs are, after the first paragraph.
+        reference: the Wilcoxon reference (default, or when absent: the first optimiser in
+            the report's order).
+        alpha: significance level of the rank-sum tests.
+
+    Returns:
+        The section's Markdown lines.
+    """
     L = ["", "## I_max study (paper Fig. 4)", "",
          "Feasible rate of the last population (share with phi = 0) against I_max "
          "(`uav.max_hover_points` overridden on every map): mean ± std over tasks and runs. "
@@ -511,12 +587,25 @@ def study_sections(output: str | Path, figures: str | Path, *, imax: str | Path 
                    reference: str | None = None) -> list[str]:
     """Markdown of the ablation study and the I_max study, each from its own benchmark folder
     (`benchmarks/ablations.py --out DIR` with its meta.json ablation entry; `lamde-mission
-    bench --i-max ... --out DIR`), or a slim copy of it (`benchmarks/store_runs.py`), for a
-    report `output` whose PNGs go to `figures`. Only the run indices finished in every cell are
-    used (`records.complete_runs`), so an unfinished study is reported on equal counts and says
-    what it left out. `reference`: the I_max study's Wilcoxon reference (the ablations use their
-    own, LAMDE). Raises ValueError for a folder without results or (ablations) without the
-    ablation entry."""
+    bench --i-max ... --out DIR`), or a slim copy of it (`benchmarks/store_runs.py`). Only the
+    run indices finished in every cell are used (`records.complete_runs`), so an unfinished
+    study is reported on equal counts and says what it left out.
+
+    Args:
+        output: the report's path (figures are linked relative to its folder).
+        figures: folder for the PNGs.
+        imax: the I_max study's benchmark folder, or None.
+        ablations: the ablation study's benchmark folder, or None.
+        alpha: significance level of the rank-sum tests.
+        reference: the I_max study's Wilcoxon reference (the ablations use their own, LAMDE).
+
+    Returns:
+        The sections' Markdown lines (ablations first); [] when neither folder is given.
+
+    Raises:
+        ValueError: a folder without results or without a run index finished in every cell,
+            (ablations) without the ablation entry, or (imax) without runs overriding I_max.
+    """
     output, figures = Path(output), Path(figures)
     L: list[str] = []
     if ablations is not None:
@@ -585,10 +674,21 @@ def _policy_names(records: list[dict[str, Any]]) -> list[str]:
 
 def cost_section(records: list[dict[str, Any]], checkpoint: str | Path | None) -> list[str]:
     """Training cost (from the checkpoint's `curve.csv`, column `seconds` per epoch, and its
-    warm start's `imitation.csv` when there is one) and
-    inference cost per plan (mean optimiser wall time of the policy's runs, against our
-    hand-made adaptive DE on the same runs). Empty when there is neither a checkpoint nor a
-    policy run."""
+    warm start's `imitation.csv` when there is one) and inference cost per plan (mean
+    optimiser wall time of the policy's runs, those with "lamde" in their name, against our
+    hand-made adaptive DE on the same runs).
+
+    Args:
+        records: run records.
+        checkpoint: the policy checkpoint folder, or None.
+
+    Returns:
+        The section's Markdown lines; empty when there is neither a checkpoint nor a policy
+        run.
+
+    Raises:
+        ValueError: the checkpoint has no curve.csv, or a CSV cannot be read.
+    """
     pol = _policy_names(records)
     if checkpoint is None and not pol:
         return []

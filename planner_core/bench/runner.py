@@ -96,7 +96,17 @@ class BenchSummary:
 
 
 def run_seed(base_seed: int, task: str, run: int) -> int:
-    """Seed of run `run` on `task`: independent across runs and tasks, stable across calls."""
+    """Seed of run `run` on `task`: independent across runs and tasks, stable across calls
+    (`numpy.random.SeedSequence` of the base seed, the task name's CRC-32 and the run).
+
+    Args:
+        base_seed: the benchmark's base seed.
+        task: the task name.
+        run: the run index.
+
+    Returns:
+        The seed, in [0, 2**31 - 1).
+    """
     ss = np.random.SeedSequence([int(base_seed), zlib.crc32(task.encode()), int(run)])
     return int(ss.generate_state(1)[0] % (2**31 - 1))
 
@@ -104,7 +114,18 @@ def run_seed(base_seed: int, task: str, run: int) -> int:
 def downsample(evaluations: np.ndarray, values: list[np.ndarray], budget: int,
                points: int = HISTORY_POINTS) -> tuple[np.ndarray, list[np.ndarray]]:
     """Keep the trace entries current at `points` evenly spaced evaluation counts (and the first
-    and last entries): a step function the report can put on a common grid."""
+    and last entries): a step function the report can put on a common grid.
+
+    Args:
+        evaluations: (n,) evaluation counts of the trace, ascending.
+        values: arrays of length n (best f, best phi) sampled alongside.
+        budget: the run's evaluation budget (the grid ends there).
+        points: grid points, evenly spaced over (0, budget].
+
+    Returns:
+        (kept evaluation counts, the kept entries of each of `values`), each of length
+        <= points + 2; an empty trace is returned as it is.
+    """
     ev = np.asarray(evaluations)
     if ev.size == 0:
         return ev, [np.asarray(v) for v in values]
@@ -120,7 +141,19 @@ def _floats(a: Any) -> list[Any]:
 
 def execute(job: Job) -> dict[str, Any]:
     """Run one job and return its record (or an error record with the traceback); top-level,
-    so worker processes can unpickle it."""
+    so worker processes can unpickle it. Wall and CPU time exclude a warm-up (the optimiser's
+    imports and one evaluation).
+
+    Args:
+        job: the run: optimiser, task, seed, budget, the map's content, start mode, I_max.
+
+    Returns:
+        The run record: the job's identity plus "score" (f + 10 phi), "f" (s), "phi",
+        "feasible", "evaluations", "wall_s", "cpu_s", "n_hover", "n_points",
+        "last_feasible_rate", "hover_points", "hover_times", "x" and the downsampled
+        "history"; or, when anything raised, the identity plus "error" and "traceback" (the
+        exception is not raised: one broken run must not end the benchmark).
+    """
     from planner_core.bench.baselines import get, optimise, problem_for
     from planner_core.model.formulas import penalised_score
     from planner_core.model.mapio import load_map
@@ -175,7 +208,15 @@ def execute(job: Job) -> dict[str, Any]:
 
 def with_i_max(content: dict[str, Any], i_max: int | None) -> dict[str, Any]:
     """The map content with `uav.max_hover_points` (I_max) set to `i_max` (None: unchanged);
-    a copy, the original is not touched."""
+    a copy, the original is not touched.
+
+    Args:
+        content: a map file's parsed JSON content.
+        i_max: the I_max override, or None.
+
+    Returns:
+        `content` itself for None, else a shallow copy with a new "uav" object.
+    """
     if i_max is None:
         return content
     out = dict(content)
@@ -189,8 +230,25 @@ def plan_jobs(files: dict[str, Path], optimisers: list[str], runs: int, budget: 
               specs: dict[str, Any] | None = None) -> list[Job]:
     """All jobs, run-major (every task, optimiser, start mode and I_max gets run 0 before any
     gets run 1), so a partial benchmark is balanced. Each map file is read once; its jobs share
-    the content. Run r of task t has the same seed in every start mode and I_max. `specs`:
-    OptimiserSpecs of names outside the registry, carried by their jobs."""
+    the content. Run r of task t has the same seed in every start mode and I_max.
+
+    Args:
+        files: task name -> map file.
+        optimisers: optimiser names.
+        runs: runs per cell.
+        budget: evaluations per run.
+        base_seed: the base seed of `run_seed`.
+        inits: start modes.
+        i_max: I_max overrides (None: the map's own).
+        specs: OptimiserSpecs of names outside the registry, carried by their jobs.
+
+    Returns:
+        The `Job`s, runs x tasks x inits x i_max x optimisers of them.
+
+    Raises:
+        BenchError: a map file that is not JSON or not an object (`read_map_file`).
+        OSError: a map file that cannot be read.
+    """
     content = {t: read_map_file(p) for t, p in files.items()}
     specs = specs or {}
     return [
@@ -212,7 +270,18 @@ def _spec_json(spec: Any) -> dict[str, Any]:
 
 
 def read_map_file(path: str | Path) -> tuple[dict[str, Any], str]:
-    """(parsed JSON content, hex SHA-256 of the bytes) of a map file, from one read."""
+    """A map file's parsed JSON content and the SHA-256 of its bytes, from one read.
+
+    Args:
+        path: the map file.
+
+    Returns:
+        (parsed JSON content, hex SHA-256 of the bytes).
+
+    Raises:
+        BenchError: not valid JSON, or its top level is not an object.
+        OSError: the file cannot be read.
+    """
     data = Path(path).read_bytes()
     try:
         content = json.loads(data)
@@ -267,22 +336,49 @@ def run_bench(
     """Run every missing (optimiser, task, run, init, I_max) and append each result to
     `<out>/results.jsonl`.
 
-    `inits`: start modes (`planner_core.bench.baselines.INIT_MODES`: "seeded" the product's,
-    "uniform"
-    the paper's protocol). `i_max`: I_max values to override the maps' own with (None = the
-    map's; the I_max study, paper Fig. 4).
-
-    `best_known`: True = `<suite>_best_known.json` beside the suite folder, a path = that file,
-    None/False = no updates.
     `executor` overrides `jobs`, `backend` and `address`; without it the executor is
-    `planner_core.execution.make_executor(jobs, backend, address)` (local: 0 = in this process,
-    N = N worker processes; ray: a Ray cluster at `address`, or a local Ray instance with `jobs`
-    CPUs), closed when the benchmark ends. Results are the same on every backend.
+    `planner_core.execution.make_executor(jobs, backend, address)`, closed when the benchmark
+    ends. Results are the same on every backend. Every file is read (and refused, one line
+    naming it) before anything is written; then `<out>/meta.json` records the command.
 
-    `extra`: OptimiserSpecs outside the registry (`planner_core.bench.baselines.policy_spec`: the
-    ablation variants), runnable under their names; `<out>/meta.json` records each one's
-    target, arguments, encoding and probe count, and a resumed benchmark refuses a name whose
-    entry changed.
+    Args:
+        suite: the suite folder of map files.
+        optimisers: optimiser names (the registry's or `extra`'s).
+        runs: runs per cell, >= 1.
+        budget: evaluations per run, >= 1.
+        out: the output folder.
+        tasks: the tasks to run (None: every map of the suite).
+        jobs: local: 0 = in this process, N = N worker processes; ray: CPUs of a local Ray
+            instance.
+        base_seed: base seed of `run_seed`, >= 0.
+        best_known: True = `<suite>_best_known.json` beside the suite folder, a path = that
+            file, None/False = no updates.
+        command: the command line recorded in meta.json and with best-known updates.
+        executor: an executor to run the jobs on (not closed here).
+        backend: "local" or "ray" (`make_executor`).
+        address: a Ray cluster's address (ray: a Ray cluster at `address`, or a local Ray
+            instance with `jobs` CPUs).
+        log: receives progress lines and notes.
+        inits: start modes (`planner_core.bench.baselines.INIT_MODES`: "seeded" the
+            product's, "uniform" the paper's protocol).
+        i_max: I_max values to override the maps' own with (None = the map's; the I_max
+            study, paper Fig. 4), each in [1, 200].
+        extra: OptimiserSpecs outside the registry (`planner_core.bench.baselines.policy_spec`:
+            the ablation variants), runnable under their names; `<out>/meta.json` records each
+            one's target, arguments, encoding and probe count, and a resumed benchmark refuses a
+            name whose entry changed.
+
+    Returns:
+        The `BenchSummary`: jobs planned and skipped, runs done, failed runs' error records,
+        tasks whose best-known entry improved, the results file.
+
+    Raises:
+        BenchError: an unknown start mode, optimiser or task, an I_max outside [1, 200], an
+            extra name that shadows the registry, runs, budget or base seed out of range, an
+            empty suite, an unreadable results, meta or best-known file, or an output folder
+            holding runs of another budget, base seed, map version or optimiser entry.
+        FileNotFoundError: the suite folder does not exist.
+        ValueError: a bad `jobs` or `backend`, or an address with local (`make_executor`).
     """
     from planner_core.bench.baselines import INIT_MODES, REGISTRY
 

@@ -19,7 +19,18 @@ ALPHA = 0.05
 
 
 def wilcoxon_mark(reference: Sequence[float], other: Sequence[float], alpha: float = ALPHA) -> str:
-    """"+" / "-" / "~": is `reference` significantly better / worse than / like `other`?"""
+    """"+" / "-" / "~": is `reference` significantly better / worse than / like `other`?
+
+    Two-sided Wilcoxon rank-sum test (`scipy.stats.ranksums`); lower scores are better.
+
+    Args:
+        reference: the reference optimiser's scores.
+        other: the other optimiser's scores.
+        alpha: significance level.
+
+    Returns:
+        "+", "-" or "~" ("~" also for a non-finite p); "" when either side is empty.
+    """
     from scipy.stats import ranksums
 
     ref = np.asarray(reference, dtype=float)
@@ -61,7 +72,19 @@ def score_table(
     reference: str | None,
     alpha: float = ALPHA,
 ) -> ScoreTable:
-    """Build the table from scores[task][optimiser] = per-run scores (missing = empty cell)."""
+    """Build the table (paper Table 2) from per-run scores.
+
+    Args:
+        scores: scores[task][optimiser] = per-run scores (missing = empty cell).
+        tasks: the table's rows, in order.
+        optimisers: the table's columns, in order.
+        reference: the optimiser the others are marked against; None for no marks.
+        alpha: significance level of the rank-sum test.
+
+    Returns:
+        The `ScoreTable`: a `Cell` per task and optimiser (empty: NaN mean and std, n 0) and the
+        (+, ~, -) counts per optimiser.
+    """
     cells: dict[str, dict[str, Cell]] = {}
     counts = {o: [0, 0, 0] for o in optimisers}
     for t in tasks:

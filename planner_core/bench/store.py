@@ -40,8 +40,20 @@ def _order(record: dict[str, Any]) -> tuple[Any, ...]:
 
 
 def store_runs(src: str | Path, dst: str | Path) -> int:
-    """Write the slim copy of benchmark folder `src` to `dst` (see the module); return the
-    number of records stored. Raises ValueError when `src` has no results or `dst` is `src`."""
+    """Write the slim copy of benchmark folder `src` to `dst` (see the module).
+
+    Args:
+        src: the benchmark folder (its results.jsonl, read by `read_records`; a
+            results.jsonl.gz alone is not read; meta.json).
+        dst: the folder written (created if missing); not `src`.
+
+    Returns:
+        The number of records stored.
+
+    Raises:
+        ValueError: `src` has no results or `dst` is `src`; a results file or meta.json
+            that cannot be read (`read_records`, `read_json`).
+    """
     src, dst = Path(src), Path(dst)
     if src.resolve() == dst.resolve():
         raise ValueError(f"store: the destination {dst} is the source folder")

@@ -89,6 +89,16 @@ class OptimiserSpec:
     constructive: bool = False
 
     def function(self) -> Any:
+        """The optimiser's function, imported from `target` ("module:function") now.
+
+        Returns:
+            The callable `optimise(problem, budget, seed, **kwargs) -> OptimiseResult`.
+
+        Raises:
+            ImportError: its module (or a library it needs: cma, scipy, pymoo, ortools) is not
+                installed.
+            AttributeError: the module has no such function.
+        """
         module, func = self.target.split(":")
         return getattr(importlib.import_module(module), func)
 
@@ -246,9 +256,23 @@ def policy_spec(name: str, checkpoint: str, *, variable_length: bool = True,
                 probe_evaluations: int = 0, description: str = "") -> OptimiserSpec:
     """A benchmark entry `name` for our DE driven by the policy checkpoint folder `checkpoint`
     (the ablation variants of paper Sec. 5.3, `benchmarks/ablations.py`): population
-    POPULATION, no polish, the given encoding; `probe_evaluations` are charged to its budget
-    (see OptimiserSpec). The entry is not in REGISTRY: pass it to `optimise(..., spec=)` or
-    `run_bench(..., extra=)`. Raises ValueError for a negative probe count."""
+    POPULATION, no polish, the given encoding. The entry is not in REGISTRY: pass it to
+    `optimise(..., spec=)` or `run_bench(..., extra=)`.
+
+    Args:
+        name: the entry's name.
+        checkpoint: the policy checkpoint folder (configurator "lamde").
+        variable_length: the encoding: variable-length (True) or fixed-length.
+        probe_evaluations: evaluations charged to its budget before the run (see
+            OptimiserSpec), >= 0.
+        description: the report's description (default: one built from the arguments).
+
+    Returns:
+        The `OptimiserSpec`.
+
+    Raises:
+        ValueError: a negative probe count.
+    """
     if probe_evaluations < 0:
         raise ValueError(f"probe_evaluations: must be >= 0, got {probe_evaluations}")
     enc = "variable-length" if variable_length else "fixed-length (all I_max points active)"
@@ -265,12 +289,26 @@ def policy_spec(name: str, checkpoint: str, *, variable_length: bool = True,
 
 
 def names() -> list[str]:
-    """Registered optimiser names, in the report's column order."""
+    """Registered optimiser names, in the report's column order.
+
+    Returns:
+        The names of `REGISTRY`.
+    """
     return list(REGISTRY)
 
 
 def get(name: str) -> OptimiserSpec:
-    """The registry entry for `name`; KeyError names the valid choices."""
+    """The registry entry for `name`.
+
+    Args:
+        name: a registered optimiser name.
+
+    Returns:
+        Its `OptimiserSpec`.
+
+    Raises:
+        KeyError: an unknown name (the message names the valid choices).
+    """
     try:
         return REGISTRY[name]
     except KeyError:
@@ -279,7 +317,20 @@ def get(name: str) -> OptimiserSpec:
 
 def problem_for(name: str, problem: Any, spec: OptimiserSpec | None = None) -> Any:
     """The problem in the encoding optimiser `name` (or `spec`, an entry outside the registry)
-    uses (a new fixed-length Problem if needed)."""
+    uses (a new fixed-length Problem if needed).
+
+    Args:
+        name: the optimiser's registry name (used when `spec` is None).
+        problem: the UAV problem (`planner_core.model.problem.Problem`).
+        spec: an entry outside the registry, or None.
+
+    Returns:
+        `problem` itself when its encoding fits (or the entry takes any), else a new `Problem`
+        on the same map with the entry's `variable_length`.
+
+    Raises:
+        KeyError: `spec` is None and `name` is not registered.
+    """
     spec = spec or get(name)
     want = spec.variable_length
     if want is None or getattr(problem, "variable_length", want) == want:
@@ -293,12 +344,28 @@ def optimise(name: str, problem: Any, budget: int, seed: int,
              init: str = "seeded", spec: OptimiserSpec | None = None) -> OptimiseResult:
     """Run optimiser `name` on `problem` with at most `budget` evaluations; same seed, same result.
 
-    `init`: "seeded" (the problem's `initial_population` hook, when it has one) or "uniform"
-    (the hook hidden: uniform starts in the box). The returned x is in the encoding of
-    `problem_for(name, problem)` (use that problem to decode). `spec`: an entry outside the
-    registry (`policy_spec`) to run under `name`. An entry's `probe_evaluations` are charged
-    first: the optimiser gets the rest of the budget, and the result's evaluation count and
-    trace include the probes (so the trace starts at probes + the first population).
+    The returned x is in the encoding of `problem_for(name, problem)` (use that problem to
+    decode). An entry's `probe_evaluations` are charged first: the optimiser gets the rest of
+    the budget, and the result's evaluation count and trace include the probes (so the trace
+    starts at probes + the first population).
+
+    Args:
+        name: the optimiser's name (registered, or `spec`'s).
+        problem: the UAV problem.
+        budget: evaluations at most, counted by an `Evaluator`.
+        seed: the run's seed.
+        init: "seeded" (the problem's `initial_population` hook, when it has one) or "uniform"
+            (the hook hidden: uniform starts in the box).
+        spec: an entry outside the registry (`policy_spec`) to run under `name`.
+
+    Returns:
+        The `OptimiseResult`.
+
+    Raises:
+        KeyError: an unknown name without `spec`.
+        ValueError: an unknown start mode, a budget that does not exceed the probe
+            evaluations, or one the optimiser refuses.
+        RuntimeError: the optimiser reported another evaluation count than the one counted.
     """
     spec = spec or get(name)
     probe = int(spec.probe_evaluations)

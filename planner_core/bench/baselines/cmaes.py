@@ -50,8 +50,23 @@ def optimise(
 ) -> OptimiseResult:
     """CMA-ES with restarts until `budget` evaluations are spent; best under f + 10 * phi.
 
-    `seeded`: start from the Deb-best of the DE's seeded initial population, restart from the
-    best so far, finish with the hover-time LP (module docstring)."""
+    Args:
+        problem: the problem (`lower`, `upper` (d,), `evaluate`; optionally the
+            `initial_population` hook), or a fresh `Evaluator` with this budget.
+        budget: evaluations at most.
+        seed: the run's seed (pycma's seed per restart and the uniform starts derive from it).
+        sigma0: initial step size in the unit box (None: `SEEDED_SIGMA0` when seeded, else
+            `SIGMA0`).
+        seeded: start from the Deb-best of the DE's seeded initial population, restart from
+            the best so far, finish with the hover-time LP (module docstring).
+
+    Returns:
+        The `OptimiseResult` of the best penalised score seen (its trace by penalised score).
+
+    Raises:
+        ValueError: (seeded) a budget below the minimum population + 1, or an `Evaluator`
+            that is not fresh (`as_evaluator`).
+    """
 
     if sigma0 is None:
         sigma0 = SEEDED_SIGMA0 if seeded else SIGMA0

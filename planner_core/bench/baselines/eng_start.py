@@ -26,7 +26,17 @@ STARTS = 10
 
 def optimise(problem: Any, budget: int, seed: int, *, starts: int = STARTS) -> OptimiseResult:
     """The engineering pipeline's candidates (all, OR-Tools order), then the planner from a
-    population holding its `starts` best (module docstring); at most `budget` evaluations."""
+    population holding its `starts` best (module docstring); at most `budget` evaluations.
+
+    Args:
+        problem: the UAV problem (or an `Evaluator` of it).
+        budget: evaluations at most (also the number of candidates that may be scored).
+        seed: the run's seed.
+        starts: engineering plans put into the DE's initial population.
+
+    Returns:
+        The `OptimiseResult` of `planner_core.bench.baselines.de.planner`.
+    """
     from planner_core.bench.baselines.de import planner
     from planner_core.bench.baselines.engineering import ortools_order
 

@@ -60,9 +60,20 @@ def _base(problem: Any) -> Any:
 
 
 def ortools_order(problem: Any, sites: np.ndarray, legs: LegTimes) -> np.ndarray:
-    """Visiting order (m,) of the sites (m, 2) on the open path start -> sites -> end, by
-    OR-Tools' routing solver on the leg times of `legs` (module docstring). RuntimeError when
-    it finds no route."""
+    """Visiting order of the sites on the open path start -> sites -> end, by OR-Tools' routing
+    solver on the leg times of `legs` (module docstring).
+
+    Args:
+        problem: the UAV problem (its `start`, `end`, m).
+        sites: (m, 2) hover sites, m.
+        legs: the obstacle-aware Eq. 1 leg times (`construct.LegTimes`).
+
+    Returns:
+        (m,) int64 indices into `sites`, in visiting order (0 or 1 site: arange(m)).
+
+    Raises:
+        RuntimeError: OR-Tools finds no route.
+    """
     from ortools.constraint_solver import pywrapcp, routing_enums_pb2
 
     sites = np.asarray(sites, dtype=float).reshape(-1, 2)
@@ -95,11 +106,24 @@ def score_candidates(
     budgeted: Any, seed: int, order: str = "ortools", *, stop: Any = None,
     skip: set[bytes] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Build the pipeline's distinct candidate plans in order, as many as `budgeted` (a
-    `Evaluator`) has evaluations left, and evaluate them through it: (X (m, d), f (m,),
-    phi (m,)). `stop` (a callable, None: never): asked after each site set, True ends the list
-    there (`candidate_plans`). `skip`: byte strings of decision vectors already scored, left
-    out and extended with the new ones. ValueError for an unknown `order`."""
+    """Build the pipeline's distinct candidate plans in order, as many as `budgeted` has
+    evaluations left, and evaluate them through it.
+
+    Args:
+        budgeted: an `Evaluator` of the UAV problem.
+        seed: drives the k-means inits and the slide's directions.
+        order: one of `ORDERS`.
+        stop: a callable (None: never), asked after each site set; True ends the list there
+            (`candidate_plans`).
+        skip: byte strings of decision vectors already scored, left out and extended with the
+            new ones.
+
+    Returns:
+        (X (m, d), f (m,), phi (m,)) of the plans evaluated (m may be 0).
+
+    Raises:
+        ValueError: an unknown `order`, or a problem that is not the UAV problem.
+    """
     if order not in ORDERS:
         raise ValueError(f"order: unknown '{order}', choose one of {', '.join(ORDERS)}")
     base = _base(budgeted)

@@ -51,8 +51,20 @@ BUDGET_PER_IND = 25
 def optimise(problem: Any, budget: int, seed: int) -> OptimiseResult:
     """L-SRTDE for exactly min(budget, what the schedule spends) evaluations; Deb-best result.
 
-    Works in the unit box (x = lower + u (upper - lower)); `problem` has `lower`, `upper` (d,)
-    and `evaluate(X) -> (f, phi)` for X (n, d). ValueError when the budget is below NP_MIN.
+    Works in the unit box (x = lower + u (upper - lower)).
+
+    Args:
+        problem: has `lower`, `upper` (d,) and `evaluate(X) -> (f, phi)` for X (n, d);
+            optionally the `initial_population` hook (the seeded protocol).
+        budget: evaluations at most, >= NP_MIN.
+        seed: the run's seed.
+
+    Returns:
+        The `OptimiseResult` of the Deb-best seen, with the last population's feasible share
+        as `last_feasible_rate`.
+
+    Raises:
+        ValueError: the budget is below NP_MIN.
     """
     budgeted = as_evaluator(problem, budget)
     lo, hi = budgeted.lower, budgeted.upper

@@ -46,7 +46,21 @@ def optimise(
     problem: Any, budget: int, seed: int, *, population: int = POPULATION
 ) -> OptimiseResult:
     """pymoo GA (feasibility first) on f with G = phi <= 0 until the budget less one is spent,
-    then the LP on the Deb-best point (module docstring)."""
+    then the LP on the Deb-best point (module docstring).
+
+    Args:
+        problem: the problem (`lower`, `upper`, `evaluate`; the LP needs `encode` and
+            `breakdown`), or a fresh `Evaluator` with this budget.
+        budget: evaluations at most.
+        seed: the run's seed (the start population's and pymoo's).
+        population: GA population (capped at the budget less the LP's evaluation).
+
+    Returns:
+        The `OptimiseResult` of the Deb-best seen.
+
+    Raises:
+        ValueError: a budget below the minimum population + the LP's evaluation.
+    """
     from pymoo.algorithms.soo.nonconvex.ga import GA
     from pymoo.core.evaluator import Evaluator
     from pymoo.core.problem import Problem as PymooProblem

@@ -16,7 +16,16 @@ BATCH = 100
 
 
 def optimise(problem: Any, budget: int, seed: int) -> OptimiseResult:
-    """Evaluate `budget` uniform samples in batches; return the Deb-best."""
+    """Evaluate `budget` uniform samples in the box in batches of `BATCH`; return the Deb-best.
+
+    Args:
+        problem: the problem (`lower`, `upper`, `evaluate`), or a fresh `Evaluator`.
+        budget: evaluations, all spent.
+        seed: the run's seed.
+
+    Returns:
+        The `OptimiseResult` of the Deb-best sample.
+    """
     budgeted = as_evaluator(problem, budget)
     rng = np.random.default_rng(np.random.SeedSequence(int(seed)))
     lo, hi = budgeted.lower, budgeted.upper

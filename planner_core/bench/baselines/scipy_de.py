@@ -35,7 +35,18 @@ POPULATION = _POPULATION
 def optimise(
     problem: Any, budget: int, seed: int, *, population: int = POPULATION
 ) -> OptimiseResult:
-    """Scipy's DE with restarts until exactly `budget` evaluations; best under f + 10 * phi."""
+    """Scipy's DE with restarts until exactly `budget` evaluations; best under f + 10 * phi.
+
+    Args:
+        problem: the problem (`lower`, `upper`, `evaluate`; optionally the
+            `initial_population` hook, used for the first population), or a fresh `Evaluator`.
+        budget: evaluations, all spent (the last fewer than 5 as uniform samples).
+        seed: the run's seed.
+        population: population size (at least 5, as scipy requires).
+
+    Returns:
+        The `OptimiseResult` of the best penalised score seen.
+    """
 
     budgeted = as_evaluator(problem, budget)
     lo, hi = budgeted.lower, budgeted.upper

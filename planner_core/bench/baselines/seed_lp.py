@@ -26,16 +26,28 @@ __all__ = ["optimise", "lp_finish", "can_lp"]
 
 
 def can_lp(budgeted: Evaluator) -> bool:
-    """True when the wrapped problem can decode and encode plans (the LP step applies)."""
+    """True when the wrapped problem can decode and encode plans (the LP step applies).
+
+    Args:
+        budgeted: the run's `Evaluator`.
+
+    Returns:
+        Whether its problem has `encode` and `breakdown`.
+    """
     inner = budgeted.problem
     return hasattr(inner, "encode") and hasattr(inner, "breakdown")
 
 
 def lp_finish(budgeted: Evaluator, x: np.ndarray) -> None:
-    """Re-solve the hover times of `x` (problem space) by the polish LP and evaluate the result
-    (one evaluation, when the budget has one left and the problem can encode plans); the
-    budgeted problem's best then includes it. Problems without `breakdown`/`encode` are left
-    alone."""
+    """Re-solve the hover times of `x` by the polish LP (`planner_core.search.polish`) and
+    evaluate the result (one evaluation, when the budget has one left and the problem can
+    encode plans); the budgeted problem's best then includes it. Problems without
+    `breakdown`/`encode` are left alone.
+
+    Args:
+        budgeted: the run's `Evaluator`.
+        x: (d,) decision vector in problem space.
+    """
     inner = budgeted.problem
     if budgeted.remaining < 1 or not can_lp(budgeted):
         return
@@ -47,7 +59,20 @@ def lp_finish(budgeted: Evaluator, x: np.ndarray) -> None:
 
 
 def optimise(problem: Any, budget: int, seed: int) -> OptimiseResult:
-    """The DE's seeded initial population for `seed`, its Deb-best, the LP on it; no search."""
+    """The DE's seeded initial population for `seed`, its Deb-best, the LP on it; no search.
+
+    Args:
+        problem: the UAV problem, or a fresh `Evaluator` of it.
+        budget: evaluations at most; POPULATION + 1 of them are used (fewer when the budget
+            is smaller).
+        seed: the run's seed.
+
+    Returns:
+        The `OptimiseResult` of the Deb-best of everything evaluated.
+
+    Raises:
+        ValueError: a budget below the minimum population + 1.
+    """
     from planner_core.search.de.core import init, to_problem
 
     budgeted = as_evaluator(problem, budget)
