@@ -86,7 +86,16 @@ _BELOW_ONE = float(np.nextafter(1.0, 0.0))
 
 
 def mantissa_exponent(y: np.ndarray, eta: float = DEFAULT_ETA) -> np.ndarray:
-    """Encode values as (omega, b / eta) pairs, shape ``y.shape + (2,)`` (see module doc)."""
+    """Encode values as (omega, b / eta) pairs (see module doc): y = omega * 10**b with
+    0.1 <= |omega| < 1; 0 -> (0, 0); +-inf -> (+-1, 400 / eta).
+
+    Args:
+        y: values, any shape (f or phi).
+        eta: exponent scale.
+
+    Returns:
+        Array of shape ``y.shape + (2,)``: mantissa in [-1, 1], scaled exponent b / eta.
+    """
     y = np.asarray(y, dtype=float)
     out = np.zeros(y.shape + (2,))
     a = np.abs(y)
@@ -132,7 +141,11 @@ class FeatureMemory(NamedTuple):
 
 
 def initial_features() -> FeatureMemory:
-    """The context memory of a run before its first generation."""
+    """The context memory of a run before its first generation.
+
+    Returns:
+        Every arm's success at ``SUCCESS_PRIOR``, ``stall`` 0.
+    """
     return FeatureMemory(np.full(N_ARMS, SUCCESS_PRIOR), 0)
 
 
@@ -167,7 +180,15 @@ def update_features(
 def next_features(memory: FeatureMemory, out: Outcome) -> FeatureMemory:
     """:func:`update_features` from a generation's :class:`Outcome` (the env's step and the
     policy configurator's ``update`` both call this; "improved" is adaptive's rule: some trial
-    Deb-beats the best of the generation's parents)."""
+    Deb-beats the best of the generation's parents).
+
+    Args:
+        memory: the memory before the generation.
+        out: the generation's outcome (its first k configuration entries are the k trials').
+
+    Returns:
+        The next memory; `memory` itself when the generation had no trials.
+    """
     k = len(out.success)
     if k == 0:
         return memory
@@ -198,7 +219,16 @@ def context(state: DEState, memory: FeatureMemory | None = None) -> np.ndarray:
 
 def observe(state: DEState, eta: float = DEFAULT_ETA) -> dict[str, np.ndarray]:
     """The paper's state s_g for a DE state (pure; also usable by a policy configurator),
-    with the context of :func:`context` (from ``state.memory`` when it is a FeatureMemory)."""
+    with the context of :func:`context` (from ``state.memory`` when it is a FeatureMemory).
+
+    Args:
+        state: the DE state (population X in the unit box, f, phi, generation).
+        eta: exponent scale of :func:`mantissa_exponent`.
+
+    Returns:
+        {"X": (N, d) copy, "f": (N, 2), "phi": (N, 2), "progress": (1,) g / G (1 when G = 0),
+        "context": (N_CONTEXT,)} (module doc's table).
+    """
     G = state.max_generations
     return {
         "X": np.array(state.X),
@@ -259,7 +289,19 @@ def reward(
     1. ``phi_cur > delta``: relative violation decrease (phi_prev - phi_cur) / phi_prev.
     2. ``phi_prev > delta >= phi_cur``: bonus 1 + exp(-g/G) for entering the feasible region.
     3. both <= delta: relative objective decrease (f_prev - f_cur) / |f_prev| (|.| so that a
-       decrease is positive when f < 0). A zero or infinite denominator gives 0.
+       decrease is positive when f < 0).
+
+    Args:
+        phi_prev: the best's total violation at g-1.
+        f_prev: the best's objective at g-1.
+        phi_cur: the best's total violation at g.
+        f_cur: the best's objective at g.
+        progress: g / G.
+        delta: feasibility tolerance (violations below it count as feasible here only).
+
+    Returns:
+        The reward; 0 for a zero or infinite denominator (phi_prev in case 1, f_prev in
+        case 3).
     """
     if phi_cur > delta:
         if phi_prev == 0 or not math.isfinite(phi_prev):
@@ -274,7 +316,18 @@ def reward(
 
 
 def as_config(action: Any) -> Config:
-    """Accept a Config, a (mutation, crossover, F, Cr) sequence or a dict with those keys."""
+    """Accept a Config, a (mutation, crossover, F, Cr) sequence or a dict with those keys.
+
+    Args:
+        action: the per-individual configuration, one of those forms.
+
+    Returns:
+        The :class:`Config` (`action` itself when it is one).
+
+    Raises:
+        KeyError: a mapping without one of the four keys.
+        ValueError: a sequence that is not of four items.
+    """
     if isinstance(action, Config):
         return action
     if isinstance(action, Mapping):
@@ -352,8 +405,17 @@ class OptimizationEnv(gymnasium.Env):
     ) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
         """Start a new run; a given seed makes this and every later episode reproducible.
 
-        Raises ValueError for a missing problem, an unknown option, or a population/budget
-        outside ``planner_core.defaults``' ranges (the message names the field).
+        Args:
+            seed: re-seeds :attr:`np_random` (None: keep its stream).
+            options: "problem", "population", "budget", each overriding the env's own.
+
+        Returns:
+            (observation, info): :func:`observe` of the initial population, and its "generation",
+            "evaluations", "best_f", "best_phi", "feasible_fraction".
+
+        Raises:
+            ValueError: a missing problem, an unknown option, or a population/budget outside
+                ``planner_core.defaults``' ranges (the message names the field).
         """
         super().reset(seed=seed)
         options = dict(options or {})
@@ -373,7 +435,20 @@ class OptimizationEnv(gymnasium.Env):
         return observe(self.state, self.eta), self._info(self.state)
 
     def step(self, action: Any) -> tuple[dict[str, np.ndarray], float, bool, bool, dict[str, Any]]:
-        """One DE generation under ``action`` -> (obs, reward, terminated, truncated, info)."""
+        """One DE generation under ``action`` -> (obs, reward, terminated, truncated, info).
+
+        Args:
+            action: the per-individual configuration (:func:`as_config`'s forms), (N,) entries.
+
+        Returns:
+            (obs, reward, terminated, truncated, info): :func:`observe` after the generation;
+            :func:`reward` on the Deb-best before and after; True once the budget is spent; always
+            False; the reset's info plus "credit" (N,) (:func:`trial_credit`, 0 past the trials),
+            "parent_feasible" (N,) bool and "population_credit" (float).
+
+        Raises:
+            RuntimeError: called before reset(), or after the episode is over (budget spent).
+        """
         state = self.state
         if state is None:
             raise RuntimeError("call reset() before step()")

@@ -237,6 +237,9 @@ class ScheduleEnv(gymnasium.Env):
                                                        dict[str, Any]]:
         """Run one macro-action (`ACTIONS[action]`).
 
+        Args:
+            action: index into `ACTIONS` ("stop" ends the stage).
+
         Returns:
             (observation, reward, terminated, truncated (always False), info with "action",
             "evaluations" and, at the end, "f", "phi").
@@ -272,7 +275,11 @@ class ScheduleEnv(gymnasium.Env):
 
     # ------------------------------------------------------------------ features
     def observation(self) -> Any:
-        """The structured `schedule.Observation` a `Scheduler` would see now."""
+        """The structured `schedule.Observation` a `Scheduler` would see now.
+
+        Returns:
+            The improving stage's current `schedule.Observation`.
+        """
         return self.improve.observe()
 
     def _features(self) -> np.ndarray:

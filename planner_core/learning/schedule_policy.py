@@ -79,6 +79,11 @@ def save(folder: str | Path, params: dict[str, np.ndarray], manifest: dict[str, 
     """Write `weights.npz` and `manifest.json` into `folder` (created), each through a
     temporary file and a rename; the manifest records the weights' sha256 (`load` checks it).
 
+    Args:
+        folder: the checkpoint folder.
+        params: the network (`init_params`'s keys; stored as float64).
+        manifest: JSON-able metadata (hidden width, action and feature names, command, ...).
+
     Raises:
         OSError: the folder cannot be written.
     """
@@ -92,6 +97,9 @@ def save(folder: str | Path, params: dict[str, np.ndarray], manifest: dict[str, 
 
 def load(folder: str | Path) -> tuple[dict[str, np.ndarray], dict[str, Any]]:
     """Read a checkpoint folder written by `save`.
+
+    Args:
+        folder: the checkpoint folder.
 
     Returns:
         (params, manifest).
@@ -201,6 +209,12 @@ class PolicyScheduler:
     def from_checkpoint(cls, folder: str | Path) -> PolicyScheduler:
         """The scheduler of a checkpoint folder (`--scheduler lamde-s-ppo:DIR`).
 
+        Args:
+            folder: a folder written by `save`.
+
+        Returns:
+            The `PolicyScheduler`.
+
         Raises:
             ValueError: "scheduler: checkpoint: ..." when the folder does not load (`load`).
         """
@@ -210,7 +224,14 @@ class PolicyScheduler:
             raise ValueError(f"scheduler: {exc}") from None
 
     def reset(self, problem: Any, config: Any) -> None:
-        """Start a stage: new feature memory for `problem`."""
+        """Start a stage: new feature memory for `problem`; beyond "max_points" the stage is
+        handed to a `DefaultScheduler` (``template`` "default").
+
+        Args:
+            problem: the run's `Problem`.
+            config: its `PlanConfig` (a time limit is dropped from the features' view when
+                the policy was trained without one).
+        """
         from planner_core.learning.schedule_env import ScheduleFeatures
         from planner_core.pipeline.schedule import DefaultScheduler
 
@@ -231,7 +252,15 @@ class PolicyScheduler:
             self.template = "default"
 
     def choose(self, observation: Any) -> str:
-        """The most probable action of the observation's features."""
+        """The most probable action of the observation's features.
+
+        Args:
+            observation: the improving stage's `schedule.Observation`.
+
+        Returns:
+            An action name of `schedule.ACTIONS`: "stop" after `IDLE_ROUNDS` idle actions,
+            the default's choice beyond "max_points".
+        """
         from planner_core.pipeline.schedule import ACTIONS, IDLE_ROUNDS
 
         if self._default is not None:

@@ -119,12 +119,25 @@ class Agent(nn.Module):
         self.register_buffer("sd", torch.tensor(params["sd"], dtype=torch.float64))
 
     def forward(self, x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """Logits and values of a batch of observations (`schedule_policy.forward`'s arithmetic).
+
+        Args:
+            x: (n, F) float64 observations.
+
+        Returns:
+            (logits (n, A), values (n,)).
+        """
         p = self.p
         h = torch.tanh(((x - self.mu) / self.sd) @ p["W1"] + p["b1"])
         h = torch.tanh(h @ p["W2"] + p["b2"])
         return h @ p["Wpi"] + p["bpi"], (h @ p["Wv"] + p["bv"])[:, 0]
 
     def numpy_params(self) -> dict[str, np.ndarray]:
+        """The weights as `schedule_policy` stores them.
+
+        Returns:
+            {"mu", "sd", "W1", "b1", "W2", "b2", "Wpi", "bpi", "Wv", "bv"}: float64 copies.
+        """
         out = {k: v.detach().numpy().copy() for k, v in self.p.items()}
         out["mu"], out["sd"] = self.mu.numpy().copy(), self.sd.numpy().copy()
         return out
@@ -133,7 +146,16 @@ class Agent(nn.Module):
 def gae(rewards: np.ndarray, values: np.ndarray, gamma: float, lam: float) -> np.ndarray:
     """Generalised advantage estimates of one episode that ends in a terminal state
     (`planner_core.learning.policy.ppo.gae` on a single column, done at the last step).
-    rewards, values: (T,). Returns (T,)."""
+
+    Args:
+        rewards: (T,) rewards.
+        values: (T,) V of each step's state.
+        gamma: discount.
+        lam: GAE lambda.
+
+    Returns:
+        (T,) advantages.
+    """
     from planner_core.learning.policy.ppo import gae as segment_gae
 
     r = np.asarray(rewards, dtype=float)[:, None]
@@ -232,6 +254,9 @@ _RANGES = (
 def check(args: Args) -> None:
     """Every setting in its range, the reference known, the output writable (its folder is
     created by `save` at the end).
+
+    Args:
+        args: the training's settings.
 
     Raises:
         ValueError: one line naming the field ("lr: must be > 0, got -1.0"); an unwritable
@@ -419,7 +444,17 @@ def _flag(text: str) -> bool:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """The command line (module docstring). Returns the exit status (2: bad arguments)."""
+    """The command line (module docstring): every `Args` field is an option; trains and writes
+    the checkpoint.
+
+    Args:
+        argv: the arguments (None: ``sys.argv[1:]``).
+
+    Returns:
+        The exit status: 0 written, 2 bad arguments (a ValueError of `train`, e.g. a
+        setting `check` refuses, or a `NoImprovingStageError`; one line on stderr). An
+        argument argparse refuses exits with status 2 (SystemExit) instead.
+    """
     ap = argparse.ArgumentParser(prog="python -m planner_core.learning.schedule_ppo",
                                  description="train LAMDE-S's policy: behaviour cloning of "
                                  "the default scheduler, then PPO")

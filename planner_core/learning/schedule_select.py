@@ -220,6 +220,9 @@ class SelectorTable:
         """Write `table.npz` and then `manifest.json` (with the table's sha256,
         `table_sha256`) into `directory` (created), each atomically (`npz_manifest.save`).
 
+        Args:
+            directory: the table's folder.
+
         Returns:
             The directory.
 
@@ -239,6 +242,12 @@ class SelectorTable:
     @classmethod
     def load(cls, directory: str | Path = DEFAULT_TABLE) -> SelectorTable:
         """Read a table written by `save`.
+
+        Args:
+            directory: the table's folder (default: the shipped `DEFAULT_TABLE`).
+
+        Returns:
+            The `SelectorTable`.
 
         Raises:
             ValueError: one line naming the directory when it holds no table, or naming
@@ -274,6 +283,10 @@ def cases_from_records(records: Iterable[dict[str, Any]]) -> tuple[
         list[tuple[str, int]], np.ndarray, np.ndarray, list[str]]:
     """The complete cases of grid records (`benchmarks/bench_schedule.py` lines).
 
+    Args:
+        records: the grid's records (dicts with "map", "seed", "template", "f", "phi" and
+            the case's "features").
+
     Returns:
         (keys, F, G, templates): the templates every case ran (sorted; records of others are
         left out); (map, seed) of each case where all of them were feasible; F (n, 9)
@@ -308,6 +321,10 @@ def _order_best_first(G: np.ndarray, templates: list[str]) -> tuple[np.ndarray, 
 def cross_validate(table: SelectorTable, k: int | None = None) -> dict[str, float]:
     """Leave one map out over the table's own cases: each held-out case's template is chosen
     from the other maps' cases, and compared with the best static template of those maps.
+
+    Args:
+        table: the selector table.
+        k: neighbours (None: the table's).
 
     Returns:
         mean gaps (per cent) of the selector, the best static choice and the oracle (0), and
@@ -400,6 +417,9 @@ class SplitTable:
         """Write `split.npz` and then `split.json` (with the table's sha256, `split_sha256`)
         into `directory` (created), each atomically (`npz_manifest.save`).
 
+        Args:
+            directory: the table's folder.
+
         Returns:
             The directory.
 
@@ -419,6 +439,12 @@ class SplitTable:
     @classmethod
     def load(cls, directory: str | Path = DEFAULT_TABLE) -> SplitTable | None:
         """Read a table written by `save`; None when the folder has none (`split.npz`).
+
+        Args:
+            directory: the table's folder (default: the shipped `DEFAULT_TABLE`).
+
+        Returns:
+            The `SplitTable`, or None.
 
         Raises:
             ValueError: one line naming the folder when its split table does not load, or
@@ -476,7 +502,16 @@ class SplitTable:
 
 def capped_best(gaps: np.ndarray, cpu: np.ndarray, cap: float) -> int:
     """The column of least mean gap over the rows of gaps (n, S) among those whose mean CPU
-    ratio (cpu (n, S)) is at most `cap`; column 0 (the default split) always qualifies."""
+    ratio (cpu (n, S)) is at most `cap`; column 0 (the default split) always qualifies.
+
+    Args:
+        gaps: (n, S) per cent gaps to each case's best split.
+        cpu: (n, S) CPU time over the default split's.
+        cap: the CPU cap.
+
+    Returns:
+        The column index (ties to the earlier).
+    """
     g = gaps.mean(0)
     over = cpu.mean(0) > cap
     over[0] = False
@@ -487,6 +522,10 @@ def split_cases(records: Iterable[dict[str, Any]]) -> tuple[
         list[tuple[str, int]], np.ndarray, np.ndarray, np.ndarray, list[float]]:
     """The complete cases of split records (`bench_schedule.py --splits`, template
     "default").
+
+    Args:
+        records: the records (dicts; those of template "default" with a "de_share" are
+            read).
 
     Returns:
         (keys, F, G, C, splits): the splits at least half the cases ran (the default first,
@@ -548,7 +587,14 @@ def map_spec(name: str) -> str:
     """A map's spec: its name without a generator-seed suffix ("L04-s3001" -> "L04",
     "gen-5000-d0-s3400" -> "gen-5000-d0"); maps of one spec from other generator seeds share
     their size, sensor count, layout and density, so a check that holds one out must hold
-    them all out."""
+    them all out.
+
+    Args:
+        name: the map's name.
+
+    Returns:
+        The name less a final "-s<digits>".
+    """
     return re.sub(r"-s\d+$", "", name)
 
 
@@ -557,6 +603,10 @@ def cross_validate_split(table: SplitTable, k: int | None = None) -> dict[str, f
     over the split table's cases: each held-out case's split chosen from the other specs'
     cases, against the best static split of those cases within the cap (the least mean gap
     among the splits whose mean CPU ratio is at most `cap`).
+
+    Args:
+        table: the split table.
+        k: neighbours (None: the table's).
 
     Returns:
         mean gaps (per cent) and mean CPU ratios of the choice and of the static split, and
@@ -584,8 +634,18 @@ def fit_split(records: Iterable[dict[str, Any]], k: int | None = None, cap: floa
     """A split table from split records (`split_cases`); k by leave-one-spec-out
     (`cross_validate_split`) when None: the least mean gap.
 
+    Args:
+        records: `bench_schedule.py --splits` records (dicts).
+        k: neighbours; None: the best of `K_GRID`.
+        cap: the CPU cap.
+        meta: provenance stored in the manifest.
+
+    Returns:
+        The table (its `meta` holds the cross-validation of every k tried).
+
     Raises:
-        ValueError: no complete, feasible case.
+        ValueError: no complete, feasible case, or the cases of fewer than 2 map specs
+            (the fit leaves one out at a time); as `split_cases` raises it.
     """
     keys, F, G, C, splits = split_cases(records)
     if not len(keys):
@@ -629,7 +689,17 @@ class SelectorScheduler:
     @classmethod
     def from_checkpoint(cls, folder: str) -> SelectorScheduler:
         """The selector of a table folder (`--scheduler lamde-s:DIR`; `SelectorTable.load`,
-        and its split table when the folder has one, `SplitTable.load`)."""
+        and its split table when the folder has one, `SplitTable.load`).
+
+        Args:
+            folder: the table folder.
+
+        Returns:
+            The `SelectorScheduler`.
+
+        Raises:
+            ValueError: a table that does not load.
+        """
         return cls(SelectorTable.load(folder), SplitTable.load(folder))
 
     def configure(self, problem: Any, config: Any) -> Any:
@@ -660,11 +730,24 @@ class SelectorScheduler:
         return config if share == config.de_share else config.replace(de_share=share)
 
     def reset(self, problem: Any, config: Any) -> None:
-        """Forget the last run's choice."""
+        """Forget the last run's choice.
+
+        Args:
+            problem: the run's `Problem`.
+            config: its `PlanConfig` (unused).
+        """
         self._problem, self.template, self._inner = problem, None, None
 
     def choose(self, observation: Any) -> str:
-        """The chosen template's next action (the template picked at the first call)."""
+        """The chosen template's next action (the template picked at the first call; beyond
+        the paper's sizes, `schedule.large_rounds`, the "default" template).
+
+        Args:
+            observation: the improving stage's `schedule.Observation`.
+
+        Returns:
+            An action name of `schedule.ACTIONS`.
+        """
         if self._inner is None:
             from planner_core.pipeline.schedule import large_rounds, make_scheduler
 
@@ -703,8 +786,15 @@ def main(argv: list[str] | None = None) -> int:
     """`python -m planner_core.learning.schedule_select fit RECORDS ... -o DIR [--k K]`: fit a
     table on grid records, print its leave-one-map-out figures, write it; `fit-split ...
     [--cap 1.5]` the same for the DE-share table on `--splits` records (into the same folder:
-    the two tables sit side by side). Returns the exit status (2: bad arguments or
-    records)."""
+    the two tables sit side by side).
+
+    Args:
+        argv: the arguments (None: ``sys.argv[1:]``).
+
+    Returns:
+        The exit status: 0 written, 2 bad arguments or records (one line on stderr). An
+        argument argparse refuses exits with status 2 (SystemExit) instead.
+    """
     ap = argparse.ArgumentParser(prog="python -m planner_core.learning.schedule_select",
                                  description="fit the LAMDE-S selector table on "
                                  "bench_schedule.py records")

@@ -75,12 +75,28 @@ def select(
     selection: str = "global",
     features: str = "learned",
 ) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
-    """Run the landscape-aware module: probe the tasks, query D_syn, build the pairs.
+    """Run the landscape-aware module: probe the tasks, query D_syn, build the pairs. Same
+    inputs and seed -> the same document.
 
-    ``db`` must be built (``Database.build``) for the ``features`` extractor. Returns the
-    training-set document (format in :mod:`planner_core.learning.lam.trainset`) and the arrays used
-    (``Z`` database features after standardisation, ``z_f``, ``z_phi``, ``objective`` and
-    ``constraint`` indices) for plotting. Same inputs and seed -> the same document.
+    Args:
+        db: the database, built (``Database.build``) for the ``features`` extractor.
+        tasks: the task problems (box problems: ``lower``, ``upper``, ``evaluate``).
+        names: the tasks' names, as the document records them.
+        k: pairs to select.
+        seed: seed of the task probes and the query.
+        selection: the query's selection mode (one of ``SELECTIONS``).
+        features: the extractor: "learned" or "ela".
+
+    Returns:
+        (document, arrays): the training-set document (format in
+        :mod:`planner_core.learning.lam.trainset`) and the arrays used for plotting: ``Z``
+        database features after standardisation, ``z_f``, ``z_phi``, ``objective`` and
+        ``constraint`` indices.
+
+    Raises:
+        ValueError: ``features`` not in the database, no tasks, or a bad query argument
+            (`match`).
+        FileNotFoundError: the database is not built for ``features`` (``Database.load``).
     """
     if features not in db.extractors:
         raise ValueError(f"features: {features!r} not in the database ({sorted(db.extractors)})")

@@ -132,7 +132,19 @@ class DatabaseSpec:
     def make(
         cls, functions: Any = None, dimensions: Any = None, instances: Any = None
     ) -> DatabaseSpec:
-        """Build from iterables (None -> the DEFAULT's value); an int n for instances = 1..n."""
+        """Build from iterables (None -> the DEFAULT's value); an int n for instances = 1..n.
+
+        Args:
+            functions: BBOB function ids (1..24).
+            dimensions: dimensions, each in [MIN_DIMENSION, MAX_DIMENSION].
+            instances: instance ids, or an int n for 1..n.
+
+        Returns:
+            The spec.
+
+        Raises:
+            ValueError: an id or dimension out of range.
+        """
         if isinstance(instances, int):
             instances = range(1, instances + 1)
         return cls(
@@ -142,7 +154,11 @@ class DatabaseSpec:
         )
 
     def keys(self) -> list[InstanceKey]:
-        """All keys, ordered by dimension, then function, then instance."""
+        """All keys, ordered by dimension, then function, then instance.
+
+        Returns:
+            The `InstanceKey`s of the product, len(self) of them.
+        """
         return [
             InstanceKey(f, d, i)
             for d, f, i in itertools.product(self.dimensions, self.functions, self.instances)
@@ -152,6 +168,11 @@ class DatabaseSpec:
         return len(self.functions) * len(self.dimensions) * len(self.instances)
 
     def to_json(self) -> dict[str, list[int]]:
+        """The spec as a JSON object (recorded in a training-set document).
+
+        Returns:
+            {"functions", "dimensions", "instances"}: lists of ints.
+        """
         return {
             "functions": list(self.functions),
             "dimensions": list(self.dimensions),
@@ -176,9 +197,18 @@ def _ioh_problem(function: int, dimension: int, instance: int) -> Any:
 
 
 def bbob_values(key: InstanceKey, U: np.ndarray) -> np.ndarray:
-    """BBOB precision ``s(x) - f_opt`` at unit-box points ``U`` (n, d) -> (n,), x = -5 + 10 U.
+    """BBOB precision ``s(x) - f_opt`` at unit-box points ``U`` (n, d) -> (n,), x = -5 + 10 U
+    (U clipped to [0, 1]; evaluated by ``ioh``).
 
-    Raises ValueError when U's second axis is not the key's dimension.
+    Args:
+        key: the instance (function, dimension, instance).
+        U: (n, d) unit-box points (one point (d,) is taken as (1, d)).
+
+    Returns:
+        (n,) precisions (0 at the optimum).
+
+    Raises:
+        ValueError: U's second axis is not the key's dimension.
     """
     U = np.atleast_2d(np.asarray(U, dtype=float))
     if U.shape[1] != key.dimension:
@@ -207,6 +237,16 @@ class BBOBProblem:
         return f"BBOBProblem(f{f} {FUNCTION_NAMES[f - 1]}, d={d}, instance={i})"
 
     def evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(n, d) unit-box points -> (f (n,), phi (n,) zeros)."""
+        """Evaluate unit-box points on the instance (`bbob_values`); no constraints.
+
+        Args:
+            X: (n, d) unit-box points.
+
+        Returns:
+            (f (n,), phi (n,) zeros).
+
+        Raises:
+            ValueError: X's second axis is not the instance's dimension.
+        """
         f = bbob_values(self.key, X)
         return f, np.zeros_like(f)

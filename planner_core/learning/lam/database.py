@@ -51,13 +51,28 @@ FORMAT = "lamde-lam-chunk/1"
 
 
 def default_cache_dir() -> Path:
-    """``$LAMDE_CACHE/lam`` or ``~/.cache/lamde-mission/lam``."""
+    """The database's cache folder.
+
+    Returns:
+        ``$LAMDE_CACHE/lam`` if LAMDE_CACHE is set (not empty), else
+        ``~/.cache/lamde-mission/lam``.
+    """
     root = os.environ.get("LAMDE_CACHE")
     return Path(root) / "lam" if root else Path.home() / ".cache" / "lamde-mission" / "lam"
 
 
 def make_extractors(names: Sequence[str] = ("ela", "learned")) -> dict[str, Any]:
-    """Extractor objects by name ("ela", "learned"); ValueError on an unknown name."""
+    """Extractor objects by name.
+
+    Args:
+        names: extractor names, "ela" and/or "learned".
+
+    Returns:
+        {name: extractor} (``ELAExtractor``, ``LearnedExtractor``).
+
+    Raises:
+        ValueError: an unknown name.
+    """
     out: dict[str, Any] = {}
     for name in names:
         if name == "ela":
@@ -74,7 +89,17 @@ def make_extractors(names: Sequence[str] = ("ela", "learned")) -> dict[str, Any]
 
 
 def instance_probe(key: InstanceKey, n_probe: int = N_PROBE, seed: int = 0) -> Probe:
-    """The database's probe of one instance (module doc)."""
+    """The database's probe of one instance (module doc): LHS with seed
+    ``SeedSequence([seed, f, d, i])``.
+
+    Args:
+        key: the instance.
+        n_probe: probe points.
+        seed: the database's probe seed.
+
+    Returns:
+        The `Probe` (U (n_probe, d), f (n_probe,), phi zeros).
+    """
     ss = np.random.SeedSequence([int(seed), key.function, key.dimension, key.instance])
     return probe(BBOBProblem(key), n_probe, ss)
 
@@ -98,7 +123,11 @@ class Database:
 
     # ------------------------------------------------------------------ chunks
     def chunks(self) -> list[list[InstanceKey]]:
-        """Key lists, one per (dimension, function), in spec order."""
+        """Key lists, one per (dimension, function), in spec order.
+
+        Returns:
+            One list of `InstanceKey`s per chunk (that function's instances at that dimension).
+        """
         return [
             [InstanceKey(f, d, i) for i in self.spec.instances]
             for d in self.spec.dimensions
@@ -106,7 +135,16 @@ class Database:
         ]
 
     def chunk_hash(self, keys: Sequence[InstanceKey], name: str) -> str:
-        """Content hash naming the file of one chunk's features by extractor ``name``."""
+        """Content hash naming the file of one chunk's features by extractor ``name``.
+
+        Args:
+            keys: the chunk's keys.
+            name: the extractor's name (its identity enters the hash).
+
+        Returns:
+            The first 24 hex digits of the sha256 of the format, keys, N_probe, seed and
+            extractor identity.
+        """
         blob = json.dumps(
             {
                 "format": FORMAT,
@@ -120,10 +158,26 @@ class Database:
         return hashlib.sha256(blob.encode()).hexdigest()[:24]
 
     def chunk_path(self, keys: Sequence[InstanceKey], name: str) -> Path:
+        """The file of one chunk's features by extractor ``name``.
+
+        Args:
+            keys: the chunk's keys.
+            name: the extractor's name.
+
+        Returns:
+            ``<cache_dir>/<name>-<chunk_hash>.npz``.
+        """
         return Path(self.cache_dir) / f"{name}-{self.chunk_hash(keys, name)}.npz"
 
     def missing(self, names: Sequence[str] | None = None) -> list[list[InstanceKey]]:
-        """Chunks with at least one of the extractors ``names`` (default all) not on disk."""
+        """Chunks with at least one of the extractors ``names`` (default all) not on disk.
+
+        Args:
+            names: extractor names, or None for all of this database's.
+
+        Returns:
+            Their key lists, in spec order.
+        """
         names = list(self.extractors) if names is None else list(names)
         return [c for c in self.chunks() if any(not self.chunk_path(c, n).exists() for n in names)]
 
@@ -132,12 +186,18 @@ class Database:
         progress: Callable[[int, int], None] | None = None,
         executor: Any = None,
     ) -> int:
-        """Compute and store every missing chunk; returns how many chunks were computed.
+        """Compute and store every missing chunk. Files are written here (atomically), as each
+        result arrives.
 
-        ``progress(done, total)`` is called after each chunk (done counts cached ones too).
-        ``executor`` (``planner_core.execution``: ``map_unordered(fn, items)``) spreads
-        chunks over processes; a job carries its keys, extractors (with weights) and probe
-        settings, never a path. Files are written here, as each result arrives.
+        Args:
+            progress: ``progress(done, total)``, called once before the work and after each chunk
+                (done counts cached ones too).
+            executor: ``planner_core.execution`` (``map_unordered(fn, items)``), spreads chunks
+                over processes; a job carries its keys, extractors (with weights) and probe
+                settings, never a path. None computes here, in order.
+
+        Returns:
+            How many chunks were computed.
         """
         chunks = self.chunks()
         total = len(chunks)
@@ -164,9 +224,17 @@ class Database:
 
     # ------------------------------------------------------------------ reading
     def load(self, name: str) -> tuple[list[InstanceKey], np.ndarray]:
-        """All keys and the (len, dim) features of extractor ``name``.
+        """All keys and the features of extractor ``name``.
 
-        Raises FileNotFoundError naming the count of missing chunks if the build is incomplete.
+        Args:
+            name: the extractor's name.
+
+        Returns:
+            (keys, (len(keys), dim) features), in chunk order.
+
+        Raises:
+            ValueError: ``name`` is not one of this database's extractors.
+            FileNotFoundError: naming the count of missing chunks if the build is incomplete.
         """
         if name not in self.extractors:
             raise ValueError(f"features: {name!r} not in this database ({sorted(self.extractors)})")

@@ -64,7 +64,14 @@ _EPS_GRID = np.concatenate([[0.0], 10.0 ** np.linspace(-5.0, 5.0, 201)])
 
 
 def scale_y(y: np.ndarray) -> np.ndarray:
-    """Min-max scale to [0, 1]; a constant (or empty-range) y becomes zeros."""
+    """Min-max scale to [0, 1]; a constant (or empty-range) y becomes zeros.
+
+    Args:
+        y: values, any shape (not empty).
+
+    Returns:
+        y's shape, in [0, 1].
+    """
     y = np.asarray(y, dtype=float)
     lo, hi = float(np.min(y)), float(np.max(y))
     if not hi > lo:
@@ -215,9 +222,19 @@ def _nbc(U: np.ndarray, y: np.ndarray) -> list[float]:
 
 
 def ela_features(U: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """The ELA subset of the module doc for one probe: U (n, d), y (n,) -> (16,) float64.
+    """The ELA subset of the module doc for one probe (`ELA_NAMES`, in that order); non-finite
+    features are set to 0.
 
-    Raises ValueError when shapes disagree or n < 4.
+    Args:
+        U: (n, d) unit-box probe points.
+        y: (n,) values there (min-max scaled first, so the features are invariant to
+            y -> a y + b, a > 0).
+
+    Returns:
+        (16,) float64.
+
+    Raises:
+        ValueError: the shapes disagree or n < 4.
     """
     U = np.asarray(U, dtype=float)
     y = np.asarray(y, dtype=float).reshape(-1)

@@ -59,12 +59,23 @@ PARAM_SHAPES.update({"head.w": (EMBED, EMBED), "head.b": (EMBED,)})
 
 
 def n_params() -> int:
-    """Number of scalar parameters (3,168)."""
+    """Number of scalar parameters (3,168).
+
+    Returns:
+        The sum of the sizes of `PARAM_SHAPES`.
+    """
     return int(sum(np.prod(s) for s in PARAM_SHAPES.values()))
 
 
 def init_params(seed: int = 0) -> dict[str, np.ndarray]:
-    """Random parameters (Glorot-uniform weights, zero biases, unit LayerNorm gains)."""
+    """Random parameters (Glorot-uniform weights, zero biases, unit LayerNorm gains).
+
+    Args:
+        seed: seed of ``numpy.random.default_rng``.
+
+    Returns:
+        {name: array of its `PARAM_SHAPES` shape}.
+    """
     rng = np.random.default_rng(seed)
     out: dict[str, np.ndarray] = {}
     for name, shape in PARAM_SHAPES.items():
@@ -99,7 +110,19 @@ def _block(h: np.ndarray, P: dict[str, np.ndarray], blk: str) -> np.ndarray:
 
 
 def encode(U: np.ndarray, y: np.ndarray, params: dict[str, np.ndarray]) -> np.ndarray:
-    """The 16-d unit-norm feature of one probe: U (n, d), y (n,) -> (16,) (module doc)."""
+    """The 16-d unit-norm feature of one probe (module doc's forward pass).
+
+    Args:
+        U: (n, d) unit-box probe points.
+        y: (n,) values there.
+        params: the encoder's parameters (`PARAM_SHAPES`).
+
+    Returns:
+        (16,) feature of unit L2 norm.
+
+    Raises:
+        ValueError: U is not 2-d or its rows do not match y's length.
+    """
     U = np.asarray(U, dtype=float)
     y = np.asarray(y, dtype=float).reshape(-1)
     if U.ndim != 2 or U.shape[0] != y.size:
@@ -117,7 +140,15 @@ def encode(U: np.ndarray, y: np.ndarray, params: dict[str, np.ndarray]) -> np.nd
 def load_params(path: str | Path | None = None) -> dict[str, np.ndarray]:
     """Load weights from an .npz (default: the shipped ``data/encoder.npz``).
 
-    Raises ValueError naming the first missing or mis-shaped parameter.
+    Args:
+        path: the .npz file, or None for the shipped weights.
+
+    Returns:
+        {name: float array} for exactly the names of `PARAM_SHAPES` (other arrays dropped).
+
+    Raises:
+        ValueError: naming the first missing or mis-shaped parameter.
+        OSError: the file cannot be read.
     """
     if path is None:
         ref = resources.files("planner_core.learning.lam") / "data" / "encoder.npz"
@@ -135,7 +166,15 @@ def load_params(path: str | Path | None = None) -> dict[str, np.ndarray]:
 
 
 def params_digest(params: dict[str, np.ndarray]) -> str:
-    """sha256 (first 16 hex) of the parameters, in PARAM_SHAPES order, as little-endian f8."""
+    """sha256 (first 16 hex) of the parameters, in PARAM_SHAPES order (each name, then its values
+    as little-endian f8).
+
+    Args:
+        params: the encoder's parameters (every name of `PARAM_SHAPES`).
+
+    Returns:
+        16 hex digits.
+    """
     h = hashlib.sha256()
     for name in PARAM_SHAPES:
         h.update(name.encode())

@@ -94,7 +94,15 @@ def select_maps(pool: np.ndarray, targets: np.ndarray, k: int, *, selection: str
 
 
 def main(argv: list[str] | None = None) -> int:
-    """The command line (module docstring). Returns the exit status (2: bad arguments)."""
+    """The command line (module docstring): choose maps from a generated pool, write the JSON.
+
+    Args:
+        argv: the arguments (None: ``sys.argv[1:]``).
+
+    Returns:
+        The exit status: 0 written, 2 bad arguments (one line on stderr). An argument
+        argparse refuses exits with status 2 (SystemExit) instead.
+    """
     from planner_core.atomic import write_text_atomic
     from planner_core.suite import generated_maps, generated_spec
 

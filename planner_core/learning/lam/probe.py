@@ -34,7 +34,11 @@ class Probe(NamedTuple):
 
     @property
     def feasible_fraction(self) -> float:
-        """Share of probe points with phi <= 0."""
+        """Share of probe points with phi <= 0.
+
+        Returns:
+            The share, in [0, 1].
+        """
         return float(np.mean(self.phi <= 0.0))
 
 
@@ -44,6 +48,9 @@ def blas_single_thread() -> AbstractContextManager[Any]:
     Features work on 100 x 100 matrices: measured here, a multi-threaded LAPACK solve of that
     size takes ~0.13 s on a busy 2-core machine (threads spin against each other) and ~1 ms on
     one thread. Batch work runs one probe per core instead.
+
+    Returns:
+        The context manager (``threadpool_limits(limits=1)``).
     """
     from threadpoolctl import threadpool_limits
 
@@ -51,9 +58,19 @@ def blas_single_thread() -> AbstractContextManager[Any]:
 
 
 def lhs(n: int, d: int, seed: int | np.random.SeedSequence | np.random.Generator) -> np.ndarray:
-    """n Latin Hypercube points in [0, 1)^d, shape (n, d); same seed -> same points.
+    """n Latin Hypercube points in [0, 1)^d (``scipy.stats.qmc.LatinHypercube``); same seed ->
+    same points.
 
-    Raises ValueError for n < 2 or d < 1.
+    Args:
+        n: points, >= 2.
+        d: dimension, >= 1.
+        seed: a seed, SeedSequence or Generator (used as it is).
+
+    Returns:
+        (n, d) points.
+
+    Raises:
+        ValueError: n < 2 or d < 1.
     """
     if n < 2:
         raise ValueError(f"n_probe: {n} < 2")
@@ -71,6 +88,13 @@ def finite_values(y: np.ndarray) -> np.ndarray:
     """Replace NaN / +-inf by the largest / smallest finite value (0 if none is finite).
 
     UAV evaluations can return +inf for undecodable solutions; features need finite numbers.
+
+    Args:
+        y: values, any shape.
+
+    Returns:
+        A finite float copy of y (NaN and +inf -> the largest finite value, -inf -> the
+        smallest; all zeros when none is finite).
     """
     y = np.asarray(y, dtype=float).copy()
     ok = np.isfinite(y)
@@ -87,8 +111,16 @@ def finite_values(y: np.ndarray) -> np.ndarray:
 def probe(problem: Any, n: int = N_PROBE, seed: Any = 0) -> Probe:
     """LHS-probe a box problem: U (n, d) in the unit box, evaluated at lower + U (upper - lower).
 
-    ``seed`` is anything ``numpy.random.default_rng`` accepts. Non-finite f / phi are replaced
-    by :func:`finite_values`.
+    Args:
+        problem: a box problem (``lower``, ``upper`` (d,), ``evaluate(X) -> (f, phi)``).
+        n: probe points, >= 2.
+        seed: anything ``numpy.random.default_rng`` accepts.
+
+    Returns:
+        The `Probe`; non-finite f / phi are replaced by :func:`finite_values`.
+
+    Raises:
+        ValueError: n < 2 or a zero-dimensional box.
     """
     lower = np.asarray(problem.lower, dtype=float)
     upper = np.asarray(problem.upper, dtype=float)

@@ -79,7 +79,19 @@ def task_features(
     n_probe: int = N_PROBE,
     seed: int = 0,
 ) -> TaskFeatures:
-    """Probe each task (LHS, seed ``SeedSequence([seed, m])``) and extract z_f and z_phi."""
+    """Probe each task (LHS, seed ``SeedSequence([seed, m])``) and extract z_f and z_phi.
+
+    Args:
+        problems: the M task problems (box problems: ``lower``, ``upper``, ``evaluate``).
+        names: their names.
+        extractor: the feature extractor (``__call__(U, y) -> (q,)``).
+        n_probe: probe points per task.
+        seed: the probes' base seed.
+
+    Returns:
+        The `TaskFeatures`: names, dimensions, z_f (M, q), z_phi (M, q), probed feasible
+        fraction (M,).
+    """
     zf, zp, ff, dims = [], [], [], []
     with blas_single_thread():
         for m, prob in enumerate(problems):
@@ -92,7 +104,14 @@ def task_features(
 
 
 def standardiser(Z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(mean, std) per feature over the database; std 0 -> 1."""
+    """(mean, std) per feature over the database; std 0 -> 1.
+
+    Args:
+        Z: (S, q) database features.
+
+    Returns:
+        (mean (q,), std (q,), ddof 0, zeros replaced by 1).
+    """
     mu = Z.mean(axis=0)
     sd = Z.std(axis=0)
     return mu, np.where(sd > 0, sd, 1.0)
@@ -120,7 +139,20 @@ def match(
 ) -> list[Selected]:
     """The two-stage query (module doc) over database keys / features Z (S, q).
 
-    Raises ValueError for an unknown selection, k < 1 or k > the database size.
+    Args:
+        keys: the database's S instance keys.
+        Z: (S, q) their features (standardised as the tasks').
+        z_f: (M, q) the tasks' objective features.
+        z_phi: (M, q) the tasks' violation features.
+        k: pairs to select, 1..S.
+        selection: "global", "random" or "local" (module doc's ablations).
+        seed: the random selection's seed.
+
+    Returns:
+        k `Selected` pairs, in the order taken.
+
+    Raises:
+        ValueError: an unknown selection, k < 1 or k > the database size.
     """
     if selection not in SELECTIONS:
         raise ValueError(f"selection: {selection!r} is not one of {SELECTIONS}")
@@ -205,7 +237,18 @@ def stage_one(Df: np.ndarray, k: int, selection: str = "global"
 def threshold_for(
     constraint: InstanceKey, rho: float, n_probe: int = N_PROBE, seed: int = 0
 ) -> tuple[float, float]:
-    """(t, scale) of the threshold rule (module doc) for one constraint instance."""
+    """(t, scale) of the threshold rule (module doc) for one constraint instance: the
+    rho-quantile and value range of its database probe.
+
+    Args:
+        constraint: the constraint instance s'_k.
+        rho: the feasible-share target, clipped to `RHO_RANGE`.
+        n_probe: the database's probe size.
+        seed: the database's probe seed.
+
+    Returns:
+        (t, scale): the threshold and the probe's value range (1 if constant).
+    """
     from planner_core.learning.lam.database import instance_probe
 
     y = instance_probe(constraint, n_probe, seed).f
@@ -253,7 +296,17 @@ class PairProblem:
         )
 
     def evaluate(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(n, d) unit-box points -> (f (n,), phi (n,) >= 0)."""
+        """Evaluate unit-box points: f = s_k(x), phi = max(0, s'_k(x) - t) / scale.
+
+        Args:
+            X: (n, d) unit-box points.
+
+        Returns:
+            (f (n,), phi (n,) >= 0).
+
+        Raises:
+            ValueError: X's second axis is not the problem's dimension.
+        """
         f = bbob_values(self.objective, X)
         g = bbob_values(self.constraint, X)
         return f, np.maximum(0.0, g - self.threshold) / self.scale

@@ -44,7 +44,16 @@ def _torch():
 
 
 def TorchEncoder(params: dict[str, np.ndarray]):  # noqa: N802 - a class factory
-    """A torch module with the same forward as :func:`planner_core.learning.lam.encoder.encode`."""
+    """A torch module with the same forward as :func:`planner_core.learning.lam.encoder.encode`.
+
+    Args:
+        params: initial parameters, {name: array} of `PARAM_SHAPES` (copied into torch
+            parameters).
+
+    Returns:
+        The module: ``forward(U (b, n, d), ys (b, n) already min-max scaled) -> (b, 16)``
+        unit-norm, and ``numpy_params()`` giving the weights back as float arrays.
+    """
     torch = _torch()
     nn = torch.nn
 
@@ -91,7 +100,20 @@ def make_pool(
     n_probe: int = 100,
     seed: int = 0,
 ) -> dict[int, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
-    """Per dimension: U (m, n, d), scaled y (m, n), function labels (m,), instance ids (m,)."""
+    """Per dimension: U (m, n, d), scaled y (m, n), function labels (m,), instance ids (m,),
+    for all 24 functions x `instances` x `probes` LHS probes (seed
+    ``SeedSequence([seed, f, d, i, r])``).
+
+    Args:
+        dims: dimensions.
+        instances: BBOB instance ids (1001.. are held out from every database).
+        probes: independent probes per instance.
+        n_probe: points per probe.
+        seed: the probes' base seed.
+
+    Returns:
+        {d: (U, scaled y, labels, instance ids)}, m = 24 x len(instances) x probes.
+    """
     pool = {}
     for d in dims:
         Us, ys, fs, iids = [], [], [], []
@@ -129,7 +151,21 @@ def train(
     pool: dict | None = None,
     log_every: int = 25,
 ) -> dict[str, np.ndarray]:
-    """Train from random init (seed) and return numpy parameters (module doc)."""
+    """Train from random init (seed) and return numpy parameters (module doc).
+
+    Args:
+        steps: optimiser steps (dimensions alternate per step).
+        seed: seed of the init, the batches and torch.
+        lr: initial Adam learning rate (cosine-decayed over `steps`).
+        temperature: the contrastive loss's temperature.
+        per_function: instances per function in a batch (two probes each).
+        functions_per_batch: functions in a batch.
+        pool: `make_pool`'s output (None: built with `seed`).
+        log_every: print the loss every this many steps and at the last (0: never).
+
+    Returns:
+        {name: float array} of `PARAM_SHAPES`.
+    """
     torch = _torch()
     torch.manual_seed(seed)
     rng = np.random.default_rng(seed)
@@ -160,7 +196,12 @@ def train(
 
 
 def save_params(params: dict[str, np.ndarray], path: str | Path) -> None:
-    """Write weights as float32 .npz, atomically (shapes as in PARAM_SHAPES)."""
+    """Write weights as float32 .npz, atomically (shapes as in PARAM_SHAPES).
+
+    Args:
+        params: {name: array} holding every name of `PARAM_SHAPES`.
+        path: the .npz file; a missing folder is created.
+    """
     import io
 
     buf = io.BytesIO()
@@ -169,6 +210,14 @@ def save_params(params: dict[str, np.ndarray], path: str | Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """The command line: train with --steps, --seed, --lr and write the weights to --out.
+
+    Args:
+        argv: the arguments (None: ``sys.argv[1:]``).
+
+    Returns:
+        0 (argparse exits with status 2 on bad arguments).
+    """
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default="planner_core/learning/lam/data/encoder.npz")
     ap.add_argument("--steps", type=int, default=700)

@@ -39,7 +39,18 @@ class CheckpointError(ValueError):
 
 
 def resolve(checkpoint: str | os.PathLike[str]) -> Path:
-    """The folder of a checkpoint given by shipped name or path; raises CheckpointError."""
+    """The folder of a checkpoint given by shipped name or path (a folder path is taken first).
+
+    Args:
+        checkpoint: a folder path, or the name of a checkpoint in `SHIPPED`.
+
+    Returns:
+        The checkpoint's folder.
+
+    Raises:
+        CheckpointError: neither a folder nor a shipped checkpoint (the message lists the
+            shipped ones).
+    """
     path = Path(checkpoint)
     if not path.is_dir():
         shipped = SHIPPED / str(checkpoint)
@@ -64,8 +75,18 @@ def save(
 ) -> Path:
     """Write a checkpoint folder (each file atomically); returns the folder.
 
-    ``meta``: JSON-able training metadata stored under ``"training"`` in config.json;
-    ``extra``: file name -> text for further files (manifest.json, curve.csv).
+    Args:
+        folder: the folder (created if missing).
+        params: {name: array} of the network's parameters (stored as float32).
+        net: the network's configuration.
+        meta: JSON-able training metadata stored under ``"training"`` in config.json.
+        extra: file name -> text for further files (manifest.json, curve.csv).
+
+    Returns:
+        The folder.
+
+    Raises:
+        CheckpointError: the parameters do not match the network's names and shapes.
     """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -81,13 +102,24 @@ def save(
 
 
 def load(checkpoint: str | os.PathLike[str]) -> tuple[dict[str, np.ndarray], NetConfig, dict]:
-    """(params, net config, full config dict) of a checkpoint; raises CheckpointError.
+    """(params, net config, full config dict) of a checkpoint.
 
     Both files go through the shared reader (`planner_core.textio`: regular files only, so a
     FIFO never blocks; bounded size; config.json UTF-8 with bounded nesting). Every array of
     weights.npz is checked against the network's shapes from its .npy header before any of it
     is decompressed, so the data read is bounded by the network's size (a 2 MB archive of a
     compressed (5, 50000000) array reached 3 GB before its shape was refused).
+
+    Args:
+        checkpoint: a shipped name or a folder path (`resolve`).
+
+    Returns:
+        (params {name: array}, the `NetConfig`, config.json's object).
+
+    Raises:
+        CheckpointError: a missing folder or file, another format than `FORMAT`, a bad
+            ``net`` entry, or weights that do not match the network (one line naming the
+            file).
     """
     from planner_core.textio import read_json
 

@@ -62,17 +62,42 @@ class PolicyConfigurator:
                 object.__setattr__(self, "eta", float(eta))
 
     def init(self, state: DEState) -> FeatureMemory | None:
-        """The run's context memory when the network reads it (``net.context``), else None."""
+        """The run's context memory when the network reads it (``net.context``), else None.
+
+        Args:
+            state: the DE state at the run's start (unused).
+
+        Returns:
+            :func:`planner_core.learning.env.initial_features`, or None.
+        """
         return initial_features() if self.net.context else None
 
     def configure(self, state: DEState, rng: np.random.Generator) -> Config:
+        """One (mutation, crossover, F, Cr) per individual for this generation: the network on the
+        env's observation of `state`, sampled (or, with ``mode``, its modes; module doc).
+
+        Args:
+            state: the DE state (population, f, phi, generation, context memory).
+            rng: generation g's generator from the DE core (unused with ``mode``).
+
+        Returns:
+            The :class:`Config`, (N,) entries each.
+        """
         out = forward(self.params, self.net, observe(state, self.eta))
         mut, cx, F, Cr = mode_actions(out) if self.mode else sample_actions(out, rng)
         return Config(mut, cx, F, Cr)
 
     def update(self, memory: Any, outcome: Outcome) -> FeatureMemory | None:
         """The next context memory (:func:`planner_core.learning.env.next_features`), or None
-        for a network without context."""
+        for a network without context.
+
+        Args:
+            memory: the memory `init` or the last update returned.
+            outcome: the generation's outcome.
+
+        Returns:
+            The next `FeatureMemory`, or None when `memory` is not one.
+        """
         if not isinstance(memory, FeatureMemory):
             return None
         return next_features(memory, outcome)

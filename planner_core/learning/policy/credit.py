@@ -134,7 +134,12 @@ def credit_signal(rec: dict[str, np.ndarray]) -> dict[str, dict[str, float]]:
 
 
 def main(argv: list[str] | None = None) -> None:
-    """Print :func:`credit_signal` on one generated map (module doc)."""
+    """Print :func:`credit_signal` on one generated map (module doc).
+
+    Args:
+        argv: the arguments (--size, --density, --map-seed, --seed, --population, --budget;
+            None: ``sys.argv[1:]``).
+    """
     from planner_core.model.problem import Problem
     from planner_core.suite import generate_map
 

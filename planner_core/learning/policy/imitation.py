@@ -71,12 +71,25 @@ class RewardScaler:
         self.running: dict[str, float] = {}  # key -> current episode's R_t
 
     def reset(self, key: str) -> None:
-        """A new episode of ``key`` starts (its discounted return restarts at 0)."""
+        """A new episode of ``key`` starts (its discounted return restarts at 0).
+
+        Args:
+            key: the episode key, e.g. ``"uav-5000-d1-s7000/uniform"``.
+        """
         self.running[key] = 0.0
 
     def scale(self, key: str, rewards: np.ndarray) -> np.ndarray:
         """Scale the consecutive rewards (T,) of one episode of ``key``: first update the
-        running statistics with their discounted returns (Welford), then divide by the std."""
+        running statistics with their discounted returns (Welford), then divide by the std
+        (population std of R_t; 1 until two returns are seen) plus ``eps``.
+
+        Args:
+            key: the episode key.
+            rewards: (T,) rewards, in order.
+
+        Returns:
+            (T,) scaled rewards, clipped to [-clip, clip].
+        """
         R = self.running.get(key, 0.0)
         n, mean, m2 = self.stats.get(key, [0.0, 0.0, 0.0])
         for r in np.asarray(rewards, dtype=float):
@@ -91,9 +104,19 @@ class RewardScaler:
         return np.clip(np.asarray(rewards, dtype=float) / (std + self.eps), -self.clip, self.clip)
 
     def state_dict(self) -> dict[str, Any]:
+        """The scaler's state, for the training state (``resume``).
+
+        Returns:
+            {"stats": {key: [count, mean, M2]}, "running": {key: R_t}} (shallow copies).
+        """
         return {"stats": dict(self.stats), "running": dict(self.running)}
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
+        """Restore the state of :meth:`state_dict` (missing parts: empty).
+
+        Args:
+            state: a :meth:`state_dict` object.
+        """
         self.stats = {k: list(v) for k, v in state.get("stats", {}).items()}
         self.running = dict(state.get("running", {}))
 
@@ -119,9 +142,23 @@ def demo_episode(
     eta: float,
     delta: float,
 ) -> tuple[list[dict[str, np.ndarray]], np.ndarray, np.ndarray]:
-    """One DE run driven by ``configurator`` (memory kept, as :func:`planner_core.search.de.run`):
-    the observation before every generation, the configuration it chose (G, N, 4) and the
-    env's reward of that generation (G,)."""
+    """One DE run driven by ``configurator`` (memory kept, as :func:`planner_core.search.de.run`).
+
+    Args:
+        problem: the box problem (in its start mode's wrapper).
+        configurator: the hand-made configurator (``init``, ``configure``, ``update``).
+        seed: the run's DE seed.
+        population: N.
+        budget: evaluations.
+        eta: the observation's exponent scale.
+        delta: the reward's feasibility tolerance.
+
+    Returns:
+        (observations, actions, rewards): the observation before every generation, the
+        configuration it chose (G, N, 4) float32 (mutation id, crossover id, F, Cr; F and Cr
+        clipped to [RATE_EPS, 1 - RATE_EPS]; a last generation of fewer trials padded with its
+        last row) and the env's reward of that generation (G,).
+    """
     state = init(problem, seed, population, budget)
     state = dataclasses.replace(state, memory=configurator.init(state))
     streams = Streams(state.seed)
@@ -162,8 +199,27 @@ def collect_demos(
 ) -> Demos:
     """Demonstrations of ``configurator`` on every problem x start mode (see module doc).
 
-    Rewards are scaled by ``scaler`` (keys ``name/mode``; a fresh one per episode key when
-    None) before the returns-to-go are taken; every ``stride``-th generation is kept.
+    Args:
+        problems: the training problems.
+        names: their names (episode key ``name/mode``).
+        configurator: the hand-made configurator's name (`make_configurator`).
+        init_modes: start modes.
+        seed: the base seed of the episodes' DE seeds.
+        population: N.
+        budget: evaluations per episode.
+        gamma: discount of the returns-to-go (and of a fresh scaler).
+        eta: the observation's exponent scale.
+        delta: the reward's feasibility tolerance.
+        stride: every ``stride``-th generation is kept, >= 1.
+        scaler: scales the rewards (keys ``name/mode``) before the returns-to-go are taken;
+            None: a fresh ``RewardScaler(gamma)`` (statistics per episode key).
+        progress: ``progress(done, total)`` after each episode.
+
+    Returns:
+        The `Demos`.
+
+    Raises:
+        ValueError: stride < 1, an unknown configurator or start mode, or no problems.
     """
     if stride < 1:
         raise ValueError(f"imitate_stride: must be >= 1, got {stride}")

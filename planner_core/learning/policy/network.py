@@ -83,6 +83,11 @@ class NetConfig:
             raise ValueError(f"embed ({self.embed}) must be divisible by heads ({self.heads})")
 
     def to_dict(self) -> dict[str, int]:
+        """The sizes as stored in a checkpoint's config.json.
+
+        Returns:
+            {"embed", "heads", "ff", "hidden", "inducing", "context"}: ints.
+        """
         return asdict(self)
 
 
@@ -117,7 +122,14 @@ def _isab_shapes(prefix: str, cfg: NetConfig) -> dict[str, tuple[int, ...]]:
 
 
 def param_shapes(cfg: NetConfig) -> dict[str, tuple[int, ...]]:
-    """Every parameter's name and shape (weights are stored (in, out): ``y = x @ W + b``)."""
+    """Every parameter's name and shape (weights are stored (in, out): ``y = x @ W + b``).
+
+    Args:
+        cfg: the network's sizes.
+
+    Returns:
+        {name: shape}, in a fixed order.
+    """
     E, H = cfg.embed, cfg.hidden
     shapes: dict[str, tuple[int, ...]] = {
         "embed.weight": (N_FEATURES, E),
@@ -145,7 +157,14 @@ def param_shapes(cfg: NetConfig) -> dict[str, tuple[int, ...]]:
 
 
 def param_count(cfg: NetConfig) -> int:
-    """Number of scalar parameters."""
+    """Number of scalar parameters.
+
+    Args:
+        cfg: the network's sizes.
+
+    Returns:
+        The sum of the sizes of :func:`param_shapes`.
+    """
     return int(sum(np.prod(s) for s in param_shapes(cfg).values()))
 
 
@@ -155,6 +174,13 @@ def init_params(cfg: NetConfig, seed: int = 0) -> dict[str, np.ndarray]:
 
     The mutation and crossover heads start at zero weight (uniform operator choice) and the
     Beta heads at zero (alpha = beta = 1 + softplus(0) ~ 1.69: broad, centred on 0.5).
+
+    Args:
+        cfg: the network's sizes.
+        seed: seed of ``numpy.random.default_rng``.
+
+    Returns:
+        {name: float32 array} of :func:`param_shapes`.
     """
     rng = np.random.default_rng(seed)
     shapes = param_shapes(cfg)
@@ -187,8 +213,17 @@ class PolicyOutput(NamedTuple):
 
 
 def tokens(X: np.ndarray, f_enc: np.ndarray, phi_enc: np.ndarray) -> np.ndarray:
-    """Token features (N, d, 5) from the env's observation parts X (N, d), f (N, 2), phi (N, 2)
-    (the readable statement; :func:`forward` embeds them without building this array)."""
+    """Token features from the env's observation parts (the readable statement; :func:`forward`
+    embeds them without building this array).
+
+    Args:
+        X: (N, d) population in the unit box.
+        f_enc: (N, 2) mantissa-exponent pairs of f.
+        phi_enc: (N, 2) mantissa-exponent pairs of phi.
+
+    Returns:
+        (N, d, 5) float64: ``[x_ij, omega_f_i, eps_f_i, omega_phi_i, eps_phi_i]``.
+    """
     n, d = X.shape
     out = np.empty((n, d, N_FEATURES), dtype=np.float64)
     out[:, :, 0] = X
@@ -367,14 +402,23 @@ def forward(
     obs: dict[str, np.ndarray],
     dtype: Any = np.float32,
 ) -> PolicyOutput:
-    """The policy on one observation (:func:`planner_core.learning.env.observe`): X (N, d), f (N,
-    2),
-    phi (N, 2), progress (1,), and context (K,) when ``cfg.context`` is K > 0. ``dtype``: the
-    arithmetic precision (float32 by default, as
-    the weights and the torch twin; the outputs are returned as float64). BLAS runs on one
-    thread inside (threadpoolctl).
+    """The policy on one observation (:func:`planner_core.learning.env.observe`). BLAS runs on
+    one thread inside (threadpoolctl).
 
-    Raises ValueError when the observation's shapes disagree.
+    Args:
+        params: the network's parameters (:func:`param_shapes`).
+        cfg: the network's sizes.
+        obs: X (N, d), f (N, 2), phi (N, 2), progress (1,), and context (K,) when
+            ``cfg.context`` is K > 0.
+        dtype: the arithmetic precision (float32 by default, as the weights and the torch
+            twin).
+
+    Returns:
+        The :class:`PolicyOutput`, returned as float64: logits (N, 7) and (N, 2), Beta
+        (alpha, beta) (N, 2) of F and Cr, the critic's value.
+
+    Raises:
+        ValueError: the observation's shapes disagree.
     """
     X = np.asarray(obs["X"])
     if X.ndim != 2 or obs["f"].shape != (X.shape[0], 2) or obs["phi"].shape != (X.shape[0], 2):
@@ -434,11 +478,18 @@ def _categorical(logits: np.ndarray, u: np.ndarray) -> np.ndarray:
 def sample_actions(
     out: PolicyOutput, rng: np.random.Generator
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """One draw per individual: (mutation (N,), crossover (N,), F (N,), Cr (N,)).
+    """One draw per individual.
 
     Draw order from ``rng`` (fixed, so a seeded generator gives the same actions): N uniforms
-    for the mutation, N for the crossover, then ``rng.beta`` for F (N) and Cr (N). Rates are
-    kept in [RATE_EPS, 1 - RATE_EPS].
+    for the mutation, N for the crossover, then ``rng.beta`` for F (N) and Cr (N).
+
+    Args:
+        out: the policy's distributions (:func:`forward`).
+        rng: the generator.
+
+    Returns:
+        (mutation (N,), crossover (N,), F (N,), Cr (N,)): operator ids (intp) and rates kept
+        in [RATE_EPS, 1 - RATE_EPS].
     """
     n = out.mutation_logits.shape[0]
     mut = _categorical(out.mutation_logits, rng.random(n))
@@ -449,7 +500,16 @@ def sample_actions(
 
 
 def mode_actions(out: PolicyOutput) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The most likely action per individual: argmax operators, Beta modes for F and Cr."""
+    """The most likely action per individual: argmax operators, Beta modes for F and Cr
+    (``(alpha - 1) / (alpha + beta - 2)``). Uses no randomness.
+
+    Args:
+        out: the policy's distributions (:func:`forward`).
+
+    Returns:
+        (mutation (N,), crossover (N,), F (N,), Cr (N,)): operator ids (intp) and rates kept
+        in [RATE_EPS, 1 - RATE_EPS].
+    """
     def beta_mode(ab: np.ndarray) -> np.ndarray:
         return (ab[:, 0] - 1.0) / (ab[:, 0] + ab[:, 1] - 2.0)
 
@@ -464,7 +524,19 @@ def mode_actions(out: PolicyOutput) -> tuple[np.ndarray, np.ndarray, np.ndarray,
 def log_prob(
     out: PolicyOutput, mutation: np.ndarray, crossover: np.ndarray, F: np.ndarray, Cr: np.ndarray
 ) -> np.ndarray:
-    """Exact log-probability (N,) of each individual's action (sum of its four parts)."""
+    """Exact log-probability of each individual's action (sum of its four parts: the two
+    categorical operators and the Beta densities of F and Cr).
+
+    Args:
+        out: the policy's distributions (:func:`forward`).
+        mutation: (N,) mutation ids.
+        crossover: (N,) crossover ids.
+        F: (N,) scale factors, in (0, 1).
+        Cr: (N,) crossover rates, in (0, 1).
+
+    Returns:
+        (N,) log-probabilities.
+    """
     from scipy.stats import beta as beta_dist
 
     def log_softmax(z: np.ndarray) -> np.ndarray:

@@ -189,6 +189,11 @@ class PPOConfig:
     ``context`` reads as 0, the network of ``lamde-v1``/``lamde-v2``)."""
 
     def to_dict(self) -> dict[str, Any]:
+        """The settings as JSON-able values (stored in the checkpoint and the training state).
+
+        Returns:
+            ``dataclasses.asdict`` of the config, ``init_modes`` as a list, ``net`` as a dict.
+        """
         d = dataclasses.asdict(self)
         d["init_modes"] = list(self.init_modes)
         return d
@@ -196,7 +201,18 @@ class PPOConfig:
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> PPOConfig:
         """The config of :meth:`to_dict`; a stored config from before issue 34 (no ``credit``)
-        reads as the shared credit it was trained with."""
+        reads as the shared credit it was trained with.
+
+        Args:
+            d: a :meth:`to_dict` object (not modified).
+
+        Returns:
+            The `PPOConfig`.
+
+        Raises:
+            TypeError: an unknown field.
+            ValueError: network sizes `NetConfig` refuses.
+        """
         d = dict(d)
         d.setdefault("credit", "shared")
         net = NetConfig(**d.pop("net", {}))
@@ -224,11 +240,21 @@ class TorchPolicy(nn.Module):
         })
 
     def load_numpy(self, params: dict[str, np.ndarray]) -> None:
+        """Copy numpy weights into the module's parameters (no gradient).
+
+        Args:
+            params: {numpy name: array}, each of its parameter's shape (a subset may be given).
+        """
         with torch.no_grad():
             for k, v in params.items():
                 self.p[k.replace(".", "__")].copy_(torch.as_tensor(np.asarray(v)))
 
     def numpy_params(self) -> dict[str, np.ndarray]:
+        """The weights under their numpy names.
+
+        Returns:
+            {name: float32 array} (copies).
+        """
         return {k.replace("__", "."): v.detach().cpu().numpy().astype(np.float32).copy()
                 for k, v in self.p.items()}
 
@@ -280,10 +306,20 @@ class TorchPolicy(nn.Module):
         mask: torch.Tensor,
         context: torch.Tensor | None = None,
     ) -> tuple[torch.Tensor, ...]:
-        """X (B, N, D) padded, f and phi (B, N, 2), progress (B,), mask (B, D) True = real
-        dimension, context (B, K) (used when ``cfg.context`` is K > 0) -> mutation logits
-        (B, N, 7), crossover logits (B, N, 2), F and Cr Beta
-        parameters (B, N, 2) each, value (B,)."""
+        """The policy on a batch of observations (:func:`batch_obs`).
+
+        Args:
+            X: (B, N, D) populations, dimensions padded.
+            f: (B, N, 2) mantissa-exponent pairs of f.
+            phi: (B, N, 2) mantissa-exponent pairs of phi.
+            progress: (B,) g / G.
+            mask: (B, D) True = real dimension.
+            context: (B, K) context vectors, used when ``cfg.context`` is K > 0.
+
+        Returns:
+            (mutation logits (B, N, 7), crossover logits (B, N, 2), F and Cr Beta parameters
+            (B, N, 2) each, value (B,)).
+        """
         B, N, D = X.shape
         t = torch.cat([X[..., None], f[:, :, None, :].expand(B, N, D, 2),
                        phi[:, :, None, :].expand(B, N, D, 2)], dim=-1)
@@ -315,8 +351,15 @@ class TorchPolicy(nn.Module):
 def log_prob_entropy(
     out: tuple[torch.Tensor, ...], actions: torch.Tensor
 ) -> tuple[torch.Tensor, torch.Tensor]:
-    """Exact per-individual log-probability and entropy (both (B, N)) of ``actions`` (B, N, 4):
-    columns mutation id, crossover id, F, Cr."""
+    """Exact per-individual log-probability and entropy of ``actions``.
+
+    Args:
+        out: :meth:`TorchPolicy.forward`'s output (its first four entries are read).
+        actions: (B, N, 4): columns mutation id, crossover id, F, Cr.
+
+    Returns:
+        (log-probability (B, N), entropy (B, N)).
+    """
     mut, cx, F_ab, Cr_ab = out[:4]
     dm, dc = Categorical(logits=mut), Categorical(logits=cx)
     dF, dCr = Beta(F_ab[..., 0], F_ab[..., 1]), Beta(Cr_ab[..., 0], Cr_ab[..., 1])
@@ -329,9 +372,17 @@ def log_prob_entropy(
 def kl_from_reference(
     ref: tuple[torch.Tensor, ...], out: tuple[torch.Tensor, ...]
 ) -> torch.Tensor:
-    """Exact per-individual KL(pi_ref || pi) (B, N) between two policy outputs (the factorised
+    """Exact per-individual KL(pi_ref || pi) between two policy outputs (the factorised
     distribution: the mutation and crossover categoricals and the F and Cr Betas, closed form
-    for each; the KL of a product is the sum of the KLs). ``ref`` is held fixed (no gradient)."""
+    for each; the KL of a product is the sum of the KLs).
+
+    Args:
+        ref: the reference policy's output, held fixed (no gradient).
+        out: the trained policy's output on the same batch.
+
+    Returns:
+        (B, N) KL divergences.
+    """
     def dists(o: tuple[torch.Tensor, ...]) -> tuple[Any, ...]:
         return (Categorical(logits=o[0]), Categorical(logits=o[1]),
                 Beta(o[2][..., 0], o[2][..., 1]), Beta(o[3][..., 0], o[3][..., 1]))
@@ -340,7 +391,20 @@ def kl_from_reference(
 
 
 def batch_obs(obs: list[dict[str, np.ndarray]]) -> dict[str, torch.Tensor]:
-    """Stack env observations of problems with the same N (dimensions padded, masked)."""
+    """Stack env observations of problems with the same N (dimensions padded, masked). An
+    observation without a context (written by hand, or before issue 34) reads as a run's
+    first one.
+
+    Args:
+        obs: env observations (:func:`planner_core.learning.env.observe`), same N each.
+
+    Returns:
+        Tensors: "X" (B, N, D) float32, "f", "phi" (B, N, 2), "progress" (B,), "mask" (B, D)
+        bool, "context" (B, K).
+
+    Raises:
+        ValueError: observations of different N.
+    """
     B = len(obs)
     N = obs[0]["X"].shape[0]
     D = max(o["X"].shape[1] for o in obs)
@@ -392,7 +456,19 @@ def with_context(params: dict[str, np.ndarray], net: NetConfig, wider: NetConfig
     """Weights of a network without context (``net.context == 0``) as weights of ``wider``
     (the same sizes with ``context`` K): zero rows for the context in ``join.weight``, so the
     wider network computes exactly what the given one does until training moves them (how a
-    new training starts from ``lamde-v2``). Raises ValueError for other size differences."""
+    new training starts from ``lamde-v2``).
+
+    Args:
+        params: the narrow network's weights (not modified).
+        net: its sizes.
+        wider: the sizes with a context.
+
+    Returns:
+        A new dict: ``params`` with a widened float32 ``join.weight``.
+
+    Raises:
+        ValueError: ``net`` has a context or differs from ``wider`` in another size.
+    """
     if net.context or dataclasses.replace(net, context=wider.context) != wider:
         raise ValueError(f"init_checkpoint: network {net} cannot be widened to {wider}")
     out = dict(params)
@@ -424,12 +500,24 @@ def ppo_update(
 ) -> dict[str, float]:
     """``cfg.update_epochs`` full-batch PPO steps on one buffer (B samples of N individuals).
 
-    ``advantages``: (B,) one per sample (shared credit; normalised here when ``norm_adv``) or
-    (B, N) one per individual (per-individual credit, already scale-free).
-    ``reference``: the frozen warm-start policy of the behaviour-cloning anchor, weighted by
-    ``bc_coef`` (this epoch's :attr:`PPOConfig.bc_coef`; 0 or None: no anchor).
-    Returns the last epoch's policy loss, value loss, entropy, approx-KL ((r-1) - log r, as
-    CleanRL), clip fraction and the anchor's KL(pi_ref || pi) (mean per individual).
+    Args:
+        model: the policy trained.
+        optimizer: its optimiser.
+        cfg: the settings (clip, coefficients, norm_adv, update_epochs, max_grad_norm).
+        obs: the batched observations (:func:`batch_obs`), B samples.
+        actions: (B, N, 4) the actions taken.
+        old_logp: (B, N) their log-probabilities when taken.
+        advantages: (B,) one per sample (shared credit; normalised here when ``norm_adv``) or
+            (B, N) one per individual (per-individual credit, already scale-free).
+        returns: (B,) targets of the critic.
+        reference: the frozen warm-start policy of the behaviour-cloning anchor, or None.
+        bc_coef: the anchor's weight (this epoch's :attr:`PPOConfig.bc_coef`); 0 (or
+            ``reference`` None): no anchor.
+
+    Returns:
+        The last epoch's "policy_loss", "value_loss", "entropy", "approx_kl" ((r-1) - log r,
+        as CleanRL), "clipfrac" and "bc_kl" (the anchor's KL(pi_ref || pi), mean per
+        individual).
     """
     adv = advantages
     if cfg.norm_adv and adv.numel() > 1 and adv.dim() == 1:
@@ -471,7 +559,19 @@ def clipped_objective(
     model: TorchPolicy, cfg: PPOConfig, obs: dict[str, torch.Tensor], actions: torch.Tensor,
     old_logp: torch.Tensor, advantages: torch.Tensor,
 ) -> float:
-    """The clipped surrogate loss L_clip of the current weights on a fixed batch (for tests)."""
+    """The clipped surrogate loss L_clip of the current weights on a fixed batch (for tests).
+
+    Args:
+        model: the policy.
+        cfg: the settings (its ``clip``).
+        obs: the batched observations.
+        actions: (B, N, 4) actions.
+        old_logp: (B, N) their old log-probabilities.
+        advantages: (B,) one per sample (not normalised here).
+
+    Returns:
+        L_clip (mean over samples and individuals).
+    """
     with torch.no_grad():
         logp, _ = log_prob_entropy(_forward(model, obs), actions)
         ratio = (logp - old_logp).exp()
@@ -483,12 +583,22 @@ def gae(
     rewards: np.ndarray, values: np.ndarray, dones: np.ndarray, next_value: np.ndarray,
     gamma: float, lam: float,
 ) -> np.ndarray:
-    """GAE advantages (T, B) of one n-step segment (Schulman et al. 2016).
+    """GAE advantages of one n-step segment (Schulman et al. 2016).
 
-    rewards, values, dones: (T, B), ``dones[t] = 1`` when the episode ended with step t (then
-    nothing is bootstrapped past it); ``next_value`` (B,): V of the state after the segment.
     ``delta_t = r_t + gamma V_{t+1} (1 - done_t) - V_t``, ``A_t = delta_t + gamma lam
     (1 - done_t) A_{t+1}``.
+
+    Args:
+        rewards: (T, B) rewards.
+        values: (T, B) V of each step's state.
+        dones: (T, B), ``dones[t] = 1`` when the episode ended with step t (then nothing is
+            bootstrapped past it).
+        next_value: (B,) V of the state after the segment.
+        gamma: discount.
+        lam: GAE lambda.
+
+    Returns:
+        (T, B) advantages.
     """
     T = rewards.shape[0]
     adv = np.zeros_like(rewards)
@@ -509,9 +619,18 @@ def imitation_loss(
     model: TorchPolicy, obs: dict[str, torch.Tensor], actions: torch.Tensor, returns: torch.Tensor,
     vf_coef: float,
 ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-    """(total, negative log-likelihood per individual, value loss) on one batch: ``obs`` batched
-    (:func:`planner_core.learning.policy.ppo.batch_obs`), ``actions`` (B, N, 4), ``returns``
-    (B,)."""
+    """Behaviour-cloning loss on one batch.
+
+    Args:
+        model: the policy.
+        obs: batched observations (:func:`planner_core.learning.policy.ppo.batch_obs`).
+        actions: (B, N, 4) demonstrated actions.
+        returns: (B,) returns-to-go.
+        vf_coef: weight of the value loss.
+
+    Returns:
+        (total, negative log-likelihood per individual, value loss), scalar tensors.
+    """
     out = _forward(model, obs)
     logp, _ = log_prob_entropy(out, actions)
     nll = -logp.mean()
@@ -531,12 +650,25 @@ def pretrain(
     seed: int,
     log: Callable[[str], None] | None = None,
 ) -> list[dict[str, float]]:
-    """Behaviour cloning (:mod:`planner_core.learning.policy.imitation`): maximum-likelihood fit of
-    the
-    actor (and least squares of the critic, weight ``vf_coef``) to ``demos`` in ``epochs``
-    passes of Adam over shuffled mini-batches of ``batch`` observations (order from
-    ``default_rng([seed, DEMO_KEY, epoch])``); returns one row per pass: mean imitation NLL,
-    value loss, seconds."""
+    """Behaviour cloning (:mod:`planner_core.learning.policy.imitation`): maximum-likelihood fit
+    of the actor (and least squares of the critic, weight ``vf_coef``) to ``demos`` with Adam
+    over shuffled mini-batches (order from ``default_rng([seed, DEMO_KEY, epoch])``), gradient
+    norm clipped.
+
+    Args:
+        model: the policy fitted (in place).
+        demos: the demonstrations.
+        epochs: passes over the demonstrations.
+        batch: observations per mini-batch.
+        lr: Adam's learning rate.
+        vf_coef: weight of the value loss.
+        max_grad_norm: gradient-norm clip.
+        seed: seed of the mini-batch order.
+        log: gets one line per pass.
+
+    Returns:
+        One row per pass: "epoch", mean imitation "nll", "value_loss", "seconds".
+    """
     optimizer = torch.optim.Adam(model.parameters(), lr=lr, eps=1e-5)
     S = len(demos.obs)
     rows = []
@@ -596,16 +728,32 @@ def train(
     progress: Callable[[int, int, str], None] | None = None,
     executor: Executor | None = None,
 ) -> Path:
-    """Meta-train a policy on the problems ``specs`` (see planner_core.learning.policy.problems) and
-    write a checkpoint folder ``out`` every epoch (weights.npz, config.json, manifest.json,
-    curve.csv, and state.pt for ``resume``). Returns ``out``.
+    """Meta-train a policy on the problems ``specs`` (see planner_core.learning.policy.problems)
+    and write a checkpoint folder ``out`` every epoch (weights.npz, config.json, manifest.json,
+    curve.csv, imitation.csv, and state.pt for ``resume``). The checkpoint does not depend on
+    the executor.
 
-    ``log(line)`` gets one line per epoch; ``progress(done, total, text)`` is called after each
-    n-step segment of each chunk. ``executor`` runs the rollout segments
-    (:mod:`planner_core.learning.policy.rollout`; :func:`planner_core.execution.make_executor`: a
-    local
-    process pool or Ray); None runs them in this process. The checkpoint does not depend on it.
-    The caller closes the executor. Raises ValueError for bad settings or problem specs.
+    Args:
+        cfg: the training settings.
+        specs: the problem specs.
+        out: the checkpoint folder.
+        resume: continue the training saved in ``out`` (state.pt; only ``cfg.epochs`` may
+            differ); without state.pt a new one starts (and ``log`` says so).
+        log: ``log(line)`` gets one line per epoch (and the warm start's).
+        progress: ``progress(done, total, text)`` is called after each n-step segment of each
+            chunk.
+        executor: runs the rollout segments (:mod:`planner_core.learning.policy.rollout`;
+            :func:`planner_core.execution.make_executor`: a local process pool or Ray); None
+            runs them in this process. The caller closes the executor.
+
+    Returns:
+        ``out``.
+
+    Raises:
+        ValueError: bad settings or problem specs, a resumed folder trained with other
+            settings or problems, or an ``init_checkpoint`` whose network does not fit
+            (CheckpointError, a ValueError, for an unreadable one).
+        RuntimeError: the episodes of one chunk ran out of step.
     """
     out = Path(out)
     if cfg.credit not in ("individual", "shared"):
@@ -808,7 +956,14 @@ def train(
 
 
 def curve_csv(curve: list[dict[str, Any]]) -> str:
-    """The training curve as CSV text (one row per epoch, columns CURVE_FIELDS)."""
+    """The training curve as CSV text (one row per epoch, columns CURVE_FIELDS).
+
+    Args:
+        curve: the epochs' rows (each holding every field of CURVE_FIELDS).
+
+    Returns:
+        The CSV text with a header; floats written with 6 significant digits.
+    """
     return _rows_csv(curve, CURVE_FIELDS)
 
 
@@ -849,8 +1004,16 @@ def _save(out: Path, model: TorchPolicy, optimizer: torch.optim.Optimizer, cfg: 
 
 
 def text_progress(stream: Any = None, width: int = 24) -> Callable[[int, int, str], None]:
-    """A progress bar on one updating line (TTY) or a line per 5 % otherwise, on `stream`
-    (None: the sys.stderr of the call, not of the import)."""
+    """A progress bar on one updating line (TTY, at most every 0.2 s) or a line per 5 %
+    otherwise, with elapsed and estimated remaining seconds.
+
+    Args:
+        stream: the text stream (None: the sys.stderr of the call, not of the import).
+        width: the bar's width in characters.
+
+    Returns:
+        ``show(done, total, text)``, the callback `train` takes as ``progress``.
+    """
     stream = sys.stderr if stream is None else stream
     tty = bool(getattr(stream, "isatty", lambda: False)())
     state = {"last": -1.0, "t0": time.monotonic()}

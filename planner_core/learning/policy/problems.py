@@ -42,7 +42,14 @@ assert SUITE_SEED not in range(TRAIN_SEED_BASE, VALIDATION_SEED_BASE + 1000)
 
 def default_training_specs(count: int = 16) -> list[dict[str, Any]]:
     """``count`` UAV maps: alternating 5 km / 10 km, densities cycling 0..7, seeds
-    TRAIN_SEED_BASE + k."""
+    TRAIN_SEED_BASE + k.
+
+    Args:
+        count: maps.
+
+    Returns:
+        ``count`` ``uav`` specs.
+    """
     return [
         {"kind": "uav", "size": (5000, 10000)[k % 2], "density": (k // 2 + 3 * (k % 2)) % 8,
          "seed": TRAIN_SEED_BASE + k}
@@ -55,7 +62,18 @@ def bbob_training_specs(count: int, dimensions: tuple[int, ...] = (20, 40, 80)
     """``count`` plain BBOB instances (no LAM, no constraint; the paper's LAMDE-O): problem k is
     function ``1 + k % 24``, dimension ``dimensions[(k // 24) % len(dimensions)]``, instance
     ``1 + k // (24 * len(dimensions))``, so the 24 functions are covered evenly before any
-    repeats. Raises ValueError for count < 1, no dimensions or a dimension < 2."""
+    repeats.
+
+    Args:
+        count: instances, >= 1.
+        dimensions: the dimensions cycled through, each >= 2.
+
+    Returns:
+        ``count`` ``bbob`` specs.
+
+    Raises:
+        ValueError: count < 1, no dimensions or a dimension < 2.
+    """
     dims = tuple(int(d) for d in dimensions)
     if count < 1:
         raise ValueError(f"bbob: count must be >= 1, got {count}")
@@ -72,7 +90,15 @@ def with_encoding(specs: list[dict[str, Any]], variable_length: bool) -> list[di
     """The specs with the UAV encoding set: ``variable_length=False`` adds
     ``"variable_length": false`` to every ``uav``/``map`` spec (LAMDE-F), True removes the key.
     Synthetic problems (``lam-pair``, ``bbob``) have no hover points and pass unchanged, so on a
-    set of synthetic problems only the encoding at use differs between LAMDE and LAMDE-F."""
+    set of synthetic problems only the encoding at use differs between LAMDE and LAMDE-F.
+
+    Args:
+        specs: problem specs (not modified).
+        variable_length: the encoding.
+
+    Returns:
+        New spec dicts, in order.
+    """
     out = []
     for spec in specs:
         spec = dict(spec)
@@ -86,7 +112,14 @@ def with_encoding(specs: list[dict[str, Any]], variable_length: bool) -> list[di
 
 def validation_specs(count: int = 4) -> list[dict[str, Any]]:
     """``count`` UAV maps for validation (seeds VALIDATION_SEED_BASE + k), both sizes, spread
-    over the densities."""
+    over the densities.
+
+    Args:
+        count: maps.
+
+    Returns:
+        ``count`` ``uav`` specs.
+    """
     return [
         {"kind": "uav", "size": (5000, 10000)[k % 2], "density": (2 * k + 1) % 8,
          "seed": VALIDATION_SEED_BASE + k}
@@ -95,7 +128,18 @@ def validation_specs(count: int = 4) -> list[dict[str, Any]]:
 
 
 def spec_name(spec: dict[str, Any]) -> str:
-    """A short readable name for a spec."""
+    """A short readable name for a spec.
+
+    Args:
+        spec: a problem spec.
+
+    Returns:
+        E.g. "uav-5000-d1-s7000" ("-fixedlen" appended for the fixed-length encoding),
+        "bbob-f3i1-d20", "bbob-f3i1-c7i2-d20", a map's path or name.
+
+    Raises:
+        KeyError: a ``uav``, ``bbob`` or ``lam-pair`` spec without a field its name shows.
+    """
     fixed = "" if spec.get("variable_length", True) else "-fixedlen"
     if spec.get("kind") == "uav":
         return f"uav-{spec['size']}-d{spec['density']}-s{spec['seed']}{fixed}"
@@ -111,7 +155,18 @@ def spec_name(spec: dict[str, Any]) -> str:
 
 
 def build(spec: dict[str, Any]) -> Any:
-    """The problem of one spec; raises ValueError naming the bad field."""
+    """The problem of one spec.
+
+    Args:
+        spec: a problem spec (module doc).
+
+    Returns:
+        The problem: a UAV `Problem`, a `BBOBProblem` or a `PairProblem`.
+
+    Raises:
+        ValueError: naming the bad field: an unknown kind, a missing or out-of-range field,
+            a non-boolean ``variable_length``, or a map that does not load.
+    """
     from planner_core.model.problem import Problem
 
     kind = spec.get("kind")
@@ -165,8 +220,19 @@ def build(spec: dict[str, Any]) -> Any:
 
 def read_json_file(path: Path, field: str) -> Any:
     """The JSON content of ``path`` through the project's one reader (`planner_core.textio`:
-    its size limit, encodings and nesting bound); ValueError "<field>: <path>: ..." otherwise
-    (one line naming the setting that gave the path: no such file, bad JSON, too large)."""
+    its size limit, encodings and nesting bound).
+
+    Args:
+        path: the JSON file.
+        field: the setting that gave the path (the message's first word).
+
+    Returns:
+        The JSON value.
+
+    Raises:
+        ValueError: "<field>: <path>: ..." (one line naming the setting that gave the path: no
+            such file, bad JSON, too large).
+    """
     from planner_core import textio
 
     try:
@@ -176,9 +242,20 @@ def read_json_file(path: Path, field: str) -> Any:
 
 
 def read_trainset(path: str | Path) -> list[dict[str, Any]]:
-    """The ``problems`` list of a training-set JSON file; raises ValueError on bad content.
+    """The ``problems`` list of a training-set JSON file (or of the landscape-aware module's
+    ``lamde-trainset/1`` file, whose entries become ``lam-pair`` specs).
 
     Relative map paths are resolved against the file's folder.
+
+    Args:
+        path: the training-set file.
+
+    Returns:
+        The specs, in order.
+
+    Raises:
+        ValueError: on bad content: unreadable, no non-empty ``problems`` list, more than
+            ``MAX_PROBLEMS`` problems, an entry that is not an object with ``kind``.
     """
     path = Path(path)
     data = read_json_file(path, "--problems")

@@ -65,7 +65,14 @@ def portable_spec(spec: dict[str, Any]) -> dict[str, Any]:
     """``spec`` as a job can carry it to any machine: a ``{"kind": "map", "path": p}`` spec
     becomes ``{"kind": "map", "map": <p's JSON content>}``; every other spec is returned as is.
 
-    Raises ValueError naming the path when the file is missing or not JSON.
+    Args:
+        spec: a problem spec.
+
+    Returns:
+        The portable spec (``spec`` itself when nothing is to read).
+
+    Raises:
+        ValueError: naming the path when the file is missing or not JSON.
     """
     if spec.get("kind") != "map" or "map" in spec or "path" not in spec:
         return spec
@@ -78,8 +85,18 @@ def _built(key: str) -> Any:
 
 
 def problem_of(spec: dict[str, Any]) -> Any:
-    """The problem of ``spec`` (:func:`planner_core.learning.policy.problems.build`), built once per
-    process and spec. Raises ValueError as ``build`` does."""
+    """The problem of ``spec`` (:func:`planner_core.learning.policy.problems.build`), built once
+    per process and spec (a cache of ``PROBLEM_CACHE`` problems).
+
+    Args:
+        spec: a JSON-able problem spec.
+
+    Returns:
+        The built problem (shared by later calls with an equal spec).
+
+    Raises:
+        ValueError: as ``build`` raises it.
+    """
     return _built(json.dumps(spec, sort_keys=True))
 
 
@@ -93,7 +110,14 @@ class EpisodeKey:
 
 
 def episode_rng(key: EpisodeKey) -> np.random.Generator:
-    """The episode's own generator (module docstring, "Seeds")."""
+    """The episode's own generator (module docstring, "Seeds").
+
+    Args:
+        key: the episode (training seed, epoch, index).
+
+    Returns:
+        ``default_rng(SeedSequence(seed, spawn_key=(epoch, index)))``.
+    """
     return np.random.default_rng(np.random.SeedSequence(key.seed,
                                                         spawn_key=(key.epoch, key.index)))
 
@@ -172,11 +196,24 @@ class Segment:
 
     @property
     def done(self) -> bool:
+        """Whether the episode ended with this segment.
+
+        Returns:
+            True when ``carry`` is None.
+        """
         return self.carry is None
 
     def obs(self, t: int) -> dict[str, np.ndarray]:
         """The observation of step ``t`` in the env's layout
-        (:func:`planner_core.learning.env.observe`)."""
+        (:func:`planner_core.learning.env.observe`).
+
+        Args:
+            t: the step, 0..steps - 1.
+
+        Returns:
+            {"X" (N, d), "f" (N, 2), "phi" (N, 2), "progress" (1,), "context" (K,)}, views
+            of the segment's arrays.
+        """
         return {"X": self.X[t], "f": self.f[t], "phi": self.phi[t],
                 "progress": self.progress[t:t + 1], "context": self.context[t]}
 
@@ -184,7 +221,16 @@ class Segment:
 def run_segment(job: SegmentJob) -> Segment:
     """Run up to ``job.n_steps`` generations of the job's episode with the job's weights.
 
-    Raises ValueError for a bad spec or start mode (from building the problem).
+    Args:
+        job: the segment's job (a first segment resets the DE, a later one continues from
+            ``job.carry``).
+
+    Returns:
+        The `Segment` (``carry`` None when the episode ended).
+
+    Raises:
+        ValueError: a bad spec or start mode (from building the problem), or network sizes
+            `NetConfig` refuses.
     """
     c0, w0 = time.process_time(), time.perf_counter()
     cfg = NetConfig(**job.net)
@@ -239,8 +285,20 @@ def run_segment(job: SegmentJob) -> Segment:
 
 
 def collect(executor: Any, jobs: Iterable[SegmentJob]) -> list[Segment]:
-    """Run ``jobs`` on ``executor`` (:class:`planner_core.execution.Executor`) and return the
-    segments in the jobs' order, whatever order they finished in."""
+    """Run ``jobs`` on ``executor`` and return the segments in the jobs' order, whatever order
+    they finished in.
+
+    Args:
+        executor: a :class:`planner_core.execution.Executor`.
+        jobs: the segment jobs, one per episode.
+
+    Returns:
+        The segments, in the jobs' order.
+
+    Raises:
+        ValueError: two jobs for the same episode.
+        RuntimeError: no segment came back for a job.
+    """
     jobs = list(jobs)
     rows = {job.key: i for i, job in enumerate(jobs)}
     if len(rows) != len(jobs):
