@@ -585,3 +585,20 @@ def test_bench_schedule_without_splits_runs_lamde_s_as_plan_does(tmp_path) -> No
     split_recs.write_text("".join(json.dumps(dict(r, features=_feats(9))) + "\n"
                                   for r in SPLITS))
     assert _bench().main(["--evaluate", str(DEFAULT_TABLE), str(split_recs)]) == 2
+
+
+def test_the_shipped_tables_record_their_archives_digests() -> None:
+    """Every shipped scheduler checkpoint's manifest records its archive's sha256 (the
+    lamde-s manifests predated the digest, so a swapped table.npz or split.npz loaded
+    unchecked), and the digest is the archive's."""
+    from planner_core.learning.npz_manifest import check_digest, digest_key
+
+    shipped = ROOT / "planner_core" / "learning" / "checkpoints"
+    pairs = [("lamde-s", "table.npz", "manifest.json"), ("lamde-s", "split.npz", "split.json"),
+             ("lamde-s-ppo", "weights.npz", "manifest.json")]
+    for folder, npz, manifest in pairs:
+        meta = json.loads((shipped / folder / manifest).read_text(encoding="utf-8"))
+        assert digest_key(npz) in meta, (folder, manifest)
+        raw = (shipped / folder / npz).read_bytes()
+        assert check_digest(raw, meta, npz, manifest) is None, (folder, npz)
+        assert check_digest(raw + b"x", meta, npz, manifest) is not None
