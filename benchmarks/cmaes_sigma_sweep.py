@@ -16,7 +16,6 @@ The best-known file is never touched.
 from __future__ import annotations
 
 import argparse
-import json
 from collections import defaultdict
 from pathlib import Path
 
@@ -25,6 +24,7 @@ from scipy.stats import rankdata
 
 from planner_core.bench.baselines import OptimiserSpec
 from planner_core.model.formulas import penalised_score
+from planner_core.textio import read_jsonl
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -42,8 +42,7 @@ def entry(sigma0: float) -> OptimiserSpec:
 def table(results: Path, names: list[str]) -> tuple[list[str], dict[str, float]]:
     """Markdown lines of the per-map means and the mean rank of each entry."""
     score: dict[tuple[str, str], list[float]] = defaultdict(list)
-    for line in results.read_text().splitlines():
-        r = json.loads(line)
+    for r in read_jsonl(results):  # results.jsonl, or its .gz stored in its place
         if r.get("optimiser") in names and r.get("f") is not None:
             score[(r["task"], r["optimiser"])].append(
                 penalised_score(float(r["f"]), float(r["phi"])))

@@ -105,8 +105,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--suite", default=str(ROOT / "examples" / "maps" / "suite"),
                     help="map folder whose best-known file gives the gaps (default the suite)")
     args = ap.parse_args(argv)
+    from planner_core.textio import stored_path
+
     for name, path in (("old", args.old), ("new", args.new)):
-        if not Path(path).is_file():
+        if not stored_path(path).is_file():  # results.jsonl: or its .gz stored in its place
             ap.error(f"{name}: {path}: no such file (give a results.jsonl, or .jsonl.gz)")
     old, new = load(args.old, args.optimiser), load(args.new, args.optimiser)
     if not old or not new:

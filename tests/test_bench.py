@@ -226,6 +226,32 @@ def test_records_reader_tolerates_damage(tmp_path: Path) -> None:
     assert [x["run"] for x in read_records(path).records] == [0, 1, 2, 3]
 
 
+def test_a_run_folder_stored_compressed_is_read_by_its_plain_name(suite: Path,
+                                                                   tmp_path: Path) -> None:
+    """A folder holding only results.jsonl.gz (as docs/ keeps them): `read_records` of the
+    plain name reads it, so `store_runs` (and the report) find its runs; the runner refuses
+    to add runs there (they would go to a plain results.jsonl that readers then prefer)."""
+    import gzip
+
+    from planner_core.bench.store import store_runs
+
+    folder = tmp_path / "stored"
+    rec = {"optimiser": "o", "task": "t", "run": 0, "f": 1.0, "phi": 0.0, "score": 1.0,
+           "evaluations": 5}
+    with ResultsWriter(folder / RESULTS_FILE) as w:
+        w.write(rec)
+        w.write({**rec, "run": 1})
+    plain = folder / RESULTS_FILE
+    (folder / (RESULTS_FILE + ".gz")).write_bytes(gzip.compress(plain.read_bytes()))
+    plain.unlink()
+    assert [x["run"] for x in read_records(plain).records] == [0, 1]
+    assert store_runs(folder, tmp_path / "slim") == 2
+    assert [x["run"] for x in read_records(tmp_path / "slim" / RESULTS_FILE).records] == [0, 1]
+    with pytest.raises(BenchError, match=r"results\.jsonl\.gz, runs stored compressed"):
+        _run(suite, folder)
+    assert not plain.exists()
+
+
 def test_downsample_keeps_a_step_function() -> None:
     ev = np.arange(1, 1001) * 10
     val = -np.arange(1000.0)

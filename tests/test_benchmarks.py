@@ -494,6 +494,22 @@ def test_docs_heldout_and_25_run_figures_are_what_the_stored_runs_give() -> None
     assert "on 5 maps (T01-T03, T09, T10; 97.0 % feasible)" in page
 
 
+def test_scripts_read_a_results_file_stored_compressed(tmp_path: Path) -> None:
+    """`compare_runs.py OLD/results.jsonl ...` and `cmaes_sigma_sweep.py --table-only` read
+    results.jsonl.gz where only that is stored (as docs/ keeps them), as every reader does."""
+    import gzip
+
+    rec = {"optimiser": "planner", "task": "T01", "init": "seeded", "seed": 0, "score": 1.0,
+           "f": 1.0, "phi": 0.0}
+    (tmp_path / "results.jsonl.gz").write_bytes(gzip.compress((json.dumps(rec) + "\n").encode()))
+    plain = tmp_path / "results.jsonl"
+    lines, _ = _script_module("cmaes_sigma_sweep").table(plain, ["planner"])
+    assert lines[2] == "| T01 | **1.00** |"
+    compare_runs = _script_module("compare_runs")
+    assert compare_runs.load(str(plain), "planner") == [rec]
+    assert compare_runs.main([str(plain), str(plain)]) in (0, 1)  # compared, not "no such file"
+
+
 @pytest.mark.slow  # measured 4 s (issue 35: default suite <= 5 min)
 def test_compare_runs_marks_maps_by_rank_sum_and_by_seed(tmp_path: Path) -> None:
     """`benchmarks/compare_runs.py OLD NEW`: per map and start mode the mean gaps, the paper's

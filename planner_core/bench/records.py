@@ -14,7 +14,7 @@ import os
 from pathlib import Path
 from typing import IO, Any, NamedTuple
 
-from planner_core.bench._io import read_maybe_gz
+from planner_core.bench._io import read_maybe_gz, stored_path
 
 __all__ = ["RESULTS_FILE", "Key", "key_of", "read_records", "ResultsWriter", "ReadReport",
            "complete_runs", "slim_record"]
@@ -118,7 +118,10 @@ def record_problem(rec: dict[str, Any]) -> str | None:
 
 def read_records(path: str | Path) -> ReadReport:
     """All valid records of a results file (missing file: none), first occurrence per key; a
-    name ending in .gz is read gzip-compressed (the records kept under docs/ are).
+    name ending in .gz is read gzip-compressed (the records kept under docs/ are), and a plain
+    name whose file is absent reads its compressed twin (`stored_path`: `results.jsonl` reads
+    `results.jsonl.gz` when only that exists), so every caller finds a run folder's records
+    by the plain name.
 
     Read by the shared reader (`read_maybe_gz`: regular file, bounded size decompressed too;
     each line by `textio.loads_json`: bounded depth). A line that is not JSON, not an object or
@@ -126,8 +129,7 @@ def read_records(path: str | Path) -> ReadReport:
     that is a record with a field of the wrong type or a NaN/Infinity number is refused.
 
     Args:
-        path: the results file. Only `path` itself is checked for existence: pass
-            `stored_path(path)` to read a results.jsonl.gz stored in its place.
+        path: the results file, with or without .gz (`stored_path` picks the one stored).
 
     Returns:
         The `ReadReport`: the records, whether the last line was cut off, the 1-based numbers
@@ -139,7 +141,7 @@ def read_records(path: str | Path) -> ReadReport:
     """
     from planner_core.textio import InputError, decode_text, loads_json, printable
 
-    path = Path(path)
+    path = stored_path(path)
     if not path.exists():
         return ReadReport([], False, [], 0)
     data = read_maybe_gz(path)

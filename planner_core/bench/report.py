@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from planner_core.bench._io import read_meta, stored_path, write_text_atomic
+from planner_core.bench._io import read_meta, write_text_atomic
 from planner_core.bench.records import RESULTS_FILE, read_records
 from planner_core.bench.stats import ALPHA, ScoreTable, score_table
 from planner_core.defaults import SCORE_FACTOR
@@ -211,7 +211,7 @@ def build_report(
 
     results_dir = Path(results_dir)
     output = Path(output)
-    read = read_records(stored_path(results_dir / RESULTS_FILE))
+    read = read_records(results_dir / RESULTS_FILE)
     records = read.records
     if not records:
         raise ValueError(f"no results in {results_dir / RESULTS_FILE}")
@@ -573,7 +573,7 @@ def _study_records(folder: Path, what: str) -> tuple[list[dict[str, Any]], dict[
                                                       list[int]]:
     from planner_core.bench.records import complete_runs
 
-    recs = read_records(stored_path(folder / RESULTS_FILE)).records
+    recs = read_records(folder / RESULTS_FILE).records
     if not recs:
         raise ValueError(f"--{what} {folder}: no results in {folder / RESULTS_FILE}")
     kept, left_out = complete_runs(recs)

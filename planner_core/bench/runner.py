@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from planner_core import defaults as _defaults
-from planner_core.bench._io import read_meta, utc_now, write_json_atomic
+from planner_core.bench._io import read_meta, stored_path, utc_now, write_json_atomic
 from planner_core.bench.limits import BestKnown, best_known_path, suite_task_files
 from planner_core.bench.records import RESULTS_FILE, Key, ResultsWriter, key_of, read_records
 from planner_core.execution import Executor, make_executor
@@ -376,7 +376,8 @@ def run_bench(
         BenchError: an unknown start mode, optimiser or task, an I_max outside [1, 200], an
             extra name that shadows the registry, runs, budget or base seed out of range, an
             empty suite, an unreadable results, meta or best-known file, or an output folder
-            holding runs of another budget, base seed, map version or optimiser entry.
+            holding runs of another budget, base seed, map version or optimiser entry, or
+            its runs only compressed (results.jsonl.gz: read-only).
         FileNotFoundError: the suite folder does not exist.
         ValueError: a bad `jobs` or `backend`, or an address with local (`make_executor`).
     """
@@ -412,6 +413,11 @@ def run_bench(
         files = {t: files[t] for t in tasks}
     out = Path(out)
     results = out / RESULTS_FILE
+    if not results.exists() and stored_path(results) != results:  # new runs would go to a
+        # plain results.jsonl beside it, which readers then prefer: the stored runs lost
+        raise BenchError(f"out {out}: holds {stored_path(results).name}, runs stored "
+                         "compressed (read-only): gunzip it to add runs there, or use another "
+                         "out folder")
     bk: BestKnown | None = None
     bk_path = None
     try:  # every file read is refused (one line naming it) before anything is written

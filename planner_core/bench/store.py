@@ -43,8 +43,8 @@ def store_runs(src: str | Path, dst: str | Path) -> int:
     """Write the slim copy of benchmark folder `src` to `dst` (see the module).
 
     Args:
-        src: the benchmark folder (its results.jsonl, read by `read_records`; a
-            results.jsonl.gz alone is not read; meta.json).
+        src: the benchmark folder (its results.jsonl, or results.jsonl.gz stored in its
+            place, read by `read_records`; meta.json).
         dst: the folder written (created if missing); not `src`.
 
     Returns:
