@@ -180,6 +180,27 @@ def test_refuses_to_resume_under_another_base_seed(suite: Path, tmp_path: Path) 
                   executor=SerialExecutor(), best_known=False, base_seed=-1)  # fmt: skip
 
 
+def test_run_bench_refuses_a_missing_suite_and_bad_executor_arguments_as_bench_errors(
+        suite: Path, tmp_path: Path) -> None:
+    """Every refusal of `run_bench` is a BenchError (the CLI's one line, exit 2), before
+    anything is written: a missing suite folder (was FileNotFoundError), a bad `jobs`,
+    `backend` or an address with the local backend (were ValueErrors from `make_executor`,
+    raised after meta.json was written)."""
+    out = tmp_path / "res"
+    for kw, needle in (
+        ({"jobs": -1}, "jobs must be >= 0"),
+        ({"jobs": 0, "backend": "dask"}, "backend must be one of local, ray, got 'dask'"),
+        ({"jobs": 0, "address": "auto"}, "an address is only for the ray backend"),
+    ):
+        with pytest.raises(BenchError, match=needle):
+            run_bench(suite, ["random-search"], runs=1, budget=BUDGET, out=out,
+                      command="test", best_known=False, **kw)
+    with pytest.raises(BenchError, match="none: no such folder of map files"):
+        run_bench(tmp_path / "none", ["random-search"], runs=1, budget=BUDGET, out=out,
+                  command="test", executor=SerialExecutor(), best_known=False)
+    assert not out.exists()
+
+
 def test_cli_bench_refuses_bad_options_before_any_run(suite: Path, tmp_path: Path,
                                                       capsys: pytest.CaptureFixture) -> None:
     """One line, exit 2, nothing run or written: an empty --tasks / --optimizers list (it
@@ -198,6 +219,9 @@ def test_cli_bench_refuses_bad_options_before_any_run(suite: Path, tmp_path: Pat
         (["--seed", "-1"], "--seed must be an integer >= 0"),
         (["--out", str(a_file)], "is a file, not a results folder"),
         (["--best-known-file", str(tmp_path / "no" / "bk.json")], "no folder"),
+        (["--suite", str(tmp_path / "none")], "none: no such folder of map files"),
+        (["--suite", str(a_file)], "notes.txt: no such folder of map files"),
+        (["--jobs", "-1"], "--jobs must be >= 0"),
     ):
         out = ["--out", str(tmp_path / "res")] if "--out" not in extra else []
         assert main([*base, *out, *extra]) == 2, extra

@@ -187,7 +187,7 @@ def run(args: argparse.Namespace) -> int:
                       command=command, log=log, inits=inits,
                       i_max=tuple(args.i_max_values) or (None,), backend=args.backend,
                       address=args.address)
-    except (BenchError, FileNotFoundError) as exc:
+    except BenchError as exc:
         raise UsageError(str(exc)) from None
     print(f"bench: {s.done} run(s) done, {s.skipped} already present, {len(s.failed)} failed; "
           f"results in {s.results}")

@@ -28,7 +28,7 @@ from planner_core import defaults as _defaults
 from planner_core.bench._io import read_meta, stored_path, utc_now, write_json_atomic
 from planner_core.bench.limits import BestKnown, best_known_path, suite_task_files
 from planner_core.bench.records import RESULTS_FILE, Key, ResultsWriter, key_of, read_records
-from planner_core.execution import Executor, make_executor
+from planner_core.execution import Executor, executor_problem, make_executor
 
 __all__ = [
     "BEST_KNOWN_BUDGET",
@@ -377,9 +377,9 @@ def run_bench(
             extra name that shadows the registry, runs, budget or base seed out of range, an
             empty suite, an unreadable results, meta or best-known file, or an output folder
             holding runs of another budget, base seed, map version or optimiser entry, or
-            its runs only compressed (results.jsonl.gz: read-only).
-        FileNotFoundError: the suite folder does not exist.
-        ValueError: a bad `jobs` or `backend`, or an address with local (`make_executor`).
+            its runs only compressed (results.jsonl.gz: read-only), a missing suite folder,
+            or (without `executor`) a bad `jobs` or `backend`, or an address with local
+            (`executor_problem`), each refused before anything is written.
     """
     from planner_core.bench.baselines import INIT_MODES, REGISTRY
 
@@ -402,7 +402,14 @@ def run_bench(
         raise BenchError("runs and budget must be positive")
     if int(base_seed) < 0:
         raise BenchError(f"base_seed must be an integer >= 0, got {base_seed}")
-    files = suite_task_files(suite)
+    if executor is None:  # refused here, before meta.json is written
+        problem = executor_problem(jobs, backend, address)
+        if problem is not None:
+            raise BenchError(problem)
+    try:
+        files = suite_task_files(suite)
+    except FileNotFoundError:
+        raise BenchError(f"suite {suite}: no such folder of map files") from None
     if not files:
         raise BenchError(f"no map files in {suite}")
     if tasks:

@@ -11,8 +11,9 @@ from planner_core.execution.local import (
     BACKENDS,
     ProcessExecutor,
     SerialExecutor,
+    executor_problem,
     make_executor,
 )
 
 __all__ = ["BACKENDS", "Executor", "ProcessExecutor", "SINGLE_THREAD_ENV", "SerialExecutor",
-           "make_executor"]
+           "executor_problem", "make_executor"]

@@ -6,6 +6,7 @@
 from __future__ import annotations
 
 import multiprocessing
+import numbers
 import os
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
@@ -13,7 +14,7 @@ from typing import Any, TypeVar
 
 from planner_core.execution.base import SINGLE_THREAD_ENV
 
-__all__ = ["BACKENDS", "SerialExecutor", "ProcessExecutor", "make_executor"]
+__all__ = ["BACKENDS", "SerialExecutor", "ProcessExecutor", "executor_problem", "make_executor"]
 
 #: executor backends by name (`make_executor`, the CLI's --backend)
 BACKENDS = ("local", "ray")
@@ -174,6 +175,28 @@ class ProcessExecutor:
         self.close()
 
 
+def executor_problem(jobs: int, backend: str = "local", address: str | None = None) -> str | None:
+    """What `make_executor` refuses in these arguments, checked without building anything (a
+    caller refuses them before it writes a file).
+
+    Args:
+        jobs: as `make_executor`'s.
+        backend: as `make_executor`'s.
+        address: as `make_executor`'s.
+
+    Returns:
+        The first problem as one line naming the argument ("backend must be one of local,
+        ray, got 'dask'"), or None.
+    """
+    if backend not in BACKENDS:
+        return f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}"
+    if isinstance(jobs, bool) or not isinstance(jobs, numbers.Integral) or jobs < 0:
+        return f"jobs must be >= 0 (an integer), got {jobs!r}"
+    if backend == "local" and address is not None:
+        return "an address is only for the ray backend"
+    return None
+
+
 def make_executor(jobs: int, backend: str = "local", address: str | None = None) -> Any:
     """An executor by backend name.
 
@@ -192,16 +215,14 @@ def make_executor(jobs: int, backend: str = "local", address: str | None = None)
         A `SerialExecutor`, `ProcessExecutor` or `ray_executor.RayExecutor`.
 
     Raises:
-        ValueError: an unknown backend, a negative ``jobs`` or an address with ``local``.
+        ValueError: an unknown backend, a negative ``jobs`` or an address with ``local``
+            (`executor_problem`'s line).
     """
-    if backend not in BACKENDS:
-        raise ValueError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
-    if jobs < 0:
-        raise ValueError(f"jobs must be >= 0, got {jobs}")
+    problem = executor_problem(jobs, backend, address)
+    if problem is not None:
+        raise ValueError(problem)
     if backend == "ray":
         from planner_core.execution.ray_executor import RayExecutor
 
         return RayExecutor(address, num_cpus=jobs or None)
-    if address is not None:
-        raise ValueError("an address is only for the ray backend")
     return SerialExecutor() if jobs == 0 else ProcessExecutor(jobs)
