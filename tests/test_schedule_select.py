@@ -95,6 +95,31 @@ def test_a_table_round_trips_and_a_missing_one_is_one_line(tmp_path) -> None:
         SelectorTable.load(tmp_path / "nowhere")
 
 
+def test_a_manifest_without_a_usable_k_is_one_line(tmp_path, capsys) -> None:
+    """A manifest.json without "k" (was a KeyError), with a non-integer one (was a TypeError
+    or ValueError from int()) or with one outside 1..cases is refused in one line naming the
+    folder, through `SelectorTable.load` and `--scheduler lamde-s:DIR` (exit 2)."""
+    from lamde_mission.cli import main
+
+    d = fit(GRID, k=1).save(tmp_path / "t")
+    meta = json.loads((d / "manifest.json").read_text())
+    for k, needle in ((None, "must be an integer, got nothing"), ("x", "got 'x'"),
+                      (2.5, "got 2.5"), (True, "got True"), (0, "k must be 1..6, got 0"),
+                      (7, "k must be 1..6, got 7")):
+        (d / "manifest.json").write_text(json.dumps(
+            {n: v for n, v in meta.items() if n != "k"} | ({} if k is None else {"k": k})))
+        with pytest.raises(ValueError, match=r"^scheduler: the selector table in .*t: ") as e:
+            SelectorTable.load(d)
+        assert needle in str(e.value) and "\n" not in str(e.value)
+    (d / "manifest.json").write_text(json.dumps({n: v for n, v in meta.items() if n != "k"}))
+    out = tmp_path / "x.plan"
+    rc = main(["plan", str(ROOT / "examples" / "maps" / "small-demo.json"), "--scheduler",
+               f"lamde-s:{d}", "-o", str(out)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 2 and len(err) == 1 and "must be an integer, got nothing" in err[0], err
+    assert not out.exists()
+
+
 @pytest.mark.parametrize("kind", ["selector", "split"])
 def test_a_table_killed_between_its_two_files_is_refused_naming_the_file(
         tmp_path, monkeypatch, kind) -> None:

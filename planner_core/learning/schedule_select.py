@@ -250,8 +250,9 @@ class SelectorTable:
             The `SelectorTable`.
 
         Raises:
-            ValueError: one line naming the directory when it holds no table, or naming
-                `table.npz` when it is not the one `manifest.json` describes (its
+            ValueError: one line naming the directory when it holds no table (files missing or
+                unreadable) or its manifest has no integer "k" or one outside 1..cases, or
+                naming `table.npz` when it is not the one `manifest.json` describes (its
                 `table_sha256`; a manifest without one is not checked).
         """
         import zipfile
@@ -270,13 +271,20 @@ class SelectorTable:
                 raise ValueError("manifest.json: not a JSON object")
         except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile) as exc:
             raise ValueError(f"scheduler: no selector table in {d} ({exc})") from None
+        k = meta.get("k")
+        if isinstance(k, bool) or not isinstance(k, int):
+            raise ValueError(f"scheduler: the selector table in {d}: manifest.json \"k\" must "
+                             f"be an integer, got {'nothing' if k is None else repr(k)}")
         stale = check_digest(raw, meta, "table.npz", "manifest.json")
         if stale:
             raise ValueError(f"scheduler: {d}: {stale}")
         if list(meta.get("features", [])) != list(FEATURES):
             raise ValueError(f"scheduler: {d} was fitted on other features "
                              f"{meta.get('features')}")
-        return cls(features, gaps, templates, maps, int(meta["k"]), meta)
+        if not 1 <= k <= len(gaps):
+            raise ValueError(f"scheduler: the selector table in {d}: k must be 1..{len(gaps)}, "
+                             f"got {k}")
+        return cls(features, gaps, templates, maps, k, meta)
 
 
 def cases_from_records(records: Iterable[dict[str, Any]]) -> tuple[
