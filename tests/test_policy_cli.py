@@ -87,6 +87,41 @@ def test_cli_train_bad_input_is_one_line_exit_2(tmp_path, capsys) -> None:  # no
     assert not (tmp_path / "ck").exists() and a_file.read_text() == "mine"
 
 
+def test_a_uav_spec_with_a_non_integer_field_is_one_value_error_naming_it() -> None:
+    """`problems.build` of a uav spec: size, density and seed must be JSON integers (int()
+    raised TypeError for null, an unnamed ValueError for "abc", and cut 5000.5 to 5000);
+    out-of-range values keep the generator's message, with the spec."""
+    from planner_core.learning.policy.problems import build
+
+    ok = {"kind": "uav", "size": 5000, "density": 1, "seed": 1}
+    for key, value, needle in (
+        ("size", None, "size must be an integer, got None"),
+        ("density", "abc", "density must be an integer, got 'abc'"),
+        ("size", 5000.5, "size must be an integer, got 5000.5"),
+        ("seed", True, "seed must be an integer, got True"),
+        ("seed", [1], "seed must be an integer, got [1]"),
+        ("size", 7, "size must be one of [5000, 10000] (got 7)"),
+        ("seed", -1, "seed must be a non-negative integer (got -1)"),
+    ):
+        with pytest.raises(ValueError, match=r"^problems: uav spec ") as e:
+            build({**ok, key: value})
+        assert needle in str(e.value) and "\n" not in str(e.value), (key, value)
+
+
+def test_cli_train_refuses_a_uav_spec_with_a_null_field(tmp_path, capsys) -> None:  # noqa: ANN001
+    """`lamde-mission train --problems` with {"size": null}: one line naming the field, exit 2
+    (was a TypeError traceback), nothing written."""
+    pytest.importorskip("torch")
+    path = tmp_path / "p.json"
+    path.write_text(json.dumps({"problems": [{"kind": "uav", "size": None, "density": 1,
+                                              "seed": 1}]}))
+    assert main(["train", "-o", str(tmp_path / "ck"), "--problems", str(path), "--epochs",
+                 "1", "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "size must be an integer, got None" in err[0], err
+    assert not (tmp_path / "ck" / "weights.npz").exists()
+
+
 def test_cli_train_runs_on_a_trainset_file(tmp_path, capsys) -> None:  # noqa: ANN001
     pytest.importorskip("torch")
     trainset = tmp_path / "trainset.json"

@@ -164,8 +164,9 @@ def build(spec: dict[str, Any]) -> Any:
         The problem: a UAV `Problem`, a `BBOBProblem` or a `PairProblem`.
 
     Raises:
-        ValueError: naming the bad field: an unknown kind, a missing or out-of-range field,
-            a non-boolean ``variable_length``, or a map that does not load.
+        ValueError: naming the bad field: an unknown kind, a missing or out-of-range field, a
+            ``uav`` size, density or seed that is not a JSON integer, a non-boolean
+            ``variable_length``, or a map that does not load.
     """
     from planner_core.model.problem import Problem
 
@@ -179,8 +180,15 @@ def build(spec: dict[str, Any]) -> Any:
         for key in ("size", "density", "seed"):
             if key not in spec:
                 raise ValueError(f"problems: uav spec {spec} lacks '{key}'")
-        data = generate_map(int(spec["size"]), int(spec["density"]), int(spec["seed"]),
-                            name=spec_name(spec))
+            v = spec[key]
+            if isinstance(v, bool) or not isinstance(v, int):  # int() took null, "7", 7.9
+                raise ValueError(f"problems: uav spec {spec}: {key} must be an integer, "
+                                 f"got {v!r}")
+        try:
+            data = generate_map(spec["size"], spec["density"], spec["seed"],
+                                name=spec_name(spec))
+        except ValueError as exc:  # the generator's range checks, naming the field
+            raise ValueError(f"problems: uav spec {spec}: {exc}") from None
         return Problem(data, variable_length=variable_length)
     if kind == "map":
         if "map" in spec:
