@@ -299,6 +299,47 @@ def test_cli_says_to_use_pymavlink_when_mavsdk_gives_up(via, port, tmp_path, cap
         assert err[-1].startswith("lamde-mission upload: ") and "pymavlink" not in err[-1], err
 
 
+def test_mavsdk_that_hangs_while_connecting_is_one_vehicle_error_line(port, tmp_path, capsys,
+                                                                     monkeypatch):
+    """MAVSDK's first_autopilot given `timeout` that does not return past `CONNECT_MARGIN_S`
+    more (a stand-in that never returns; the margin made short): `connect` raises a
+    VehicleError naming the wait and the endpoint (was a plain TimeoutError that neither
+    upload_and_verify nor the command caught: a traceback), and the command prints one line,
+    exit 1."""
+    pytest.importorskip("mavsdk")
+    import asyncio
+
+    import mavsdk.asyncio
+
+    import lamde_mission.vehicle.upload as up
+
+    class HangingMavsdk:
+        def __init__(self, _cfg: object) -> None:
+            pass
+
+        async def add_any_connection(self, _url: str) -> None:
+            return None
+
+        async def first_autopilot(self, timeout_s: float) -> None:
+            await asyncio.Event().wait()  # never set: MAVSDK hanging past its own time-out
+
+        def destroy(self) -> None:
+            pass
+
+    monkeypatch.setattr(mavsdk.asyncio, "Mavsdk", HangingMavsdk)
+    monkeypatch.setattr(up, "CONNECT_MARGIN_S", 0.05)
+    with up.MavsdkClient(listen_on(port)) as client, pytest.raises(
+            up.VehicleError, match=r"^MAVSDK did not return within 0\.1 s while waiting for "
+            r"the vehicle at .*; try --via pymavlink$"):
+        client.connect(0.05)
+    plan_path, _, _ = _plan_files(tmp_path)
+    rc = main(["upload", str(plan_path), "--connect", listen_on(port), "--via", "mavsdk",
+               "--timeout", "0.05", "--attempts", "1"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert rc == 1 and len(err) == 1, err
+    assert err[0].startswith("lamde-mission upload: MAVSDK did not return within"), err
+
+
 def test_cli_force_never_sends_what_the_wire_cannot_carry(tmp_path, capsys):
     mission = hand_mission(1)
     mission[0] = replace(mission[0], command=CMD.TAKEOFF)

@@ -102,6 +102,10 @@ MAVSDK_RETRIES = 5
 MAVSDK_UPLOAD_TIMEOUT_S = {"PX4": 1.0, "ARDUPILOT": 1.6}
 MAVSDK_UPLOAD_TIMEOUT_DEFAULT_S = 1.6
 
+#: s, what MAVSDK gets beyond its own time-out to return while connecting (`first_autopilot`
+#: given `timeout`; the vehicle's autopilot and type): past it, MAVSDK is taken to hang
+CONNECT_MARGIN_S = 5.0
+
 
 class MavsdkClient:
     """Mission transfers through MAVSDK's MissionRaw plugin (blocking calls, own event loop).
@@ -272,7 +276,8 @@ class MavsdkClient:
             Who answered (autopilot and vehicle type None where MAVSDK says UNKNOWN).
 
         Raises:
-            VehicleError: MAVSDK cannot open its link to the relay.
+            VehicleError: MAVSDK cannot open its link to the relay, or does not return
+                within `CONNECT_MARGIN_S` beyond its own time-out (it hangs).
             NoVehicleError: no autopilot (or not the system id asked for) within `timeout`.
             DuplicateVehicleError: a second autopilot claims the vehicle's ids.
         """
@@ -287,7 +292,14 @@ class MavsdkClient:
                                    f"{exc}") from None  # fmt: skip
             return await self._sdk.first_autopilot(timeout_s=float(timeout))
 
-        system = self._run(go(), timeout + 5.0)
+        def step(coro: Any, limit: float, what: str) -> Any:
+            try:
+                return self._run(coro, limit)
+            except TimeoutError:  # MAVSDK's own time-out passed long ago: it hangs
+                raise VehicleError(f"MAVSDK did not return within {limit:g} s while {what} at "
+                                   f"{self.endpoint}; try --via pymavlink") from None
+
+        system = step(go(), timeout + CONNECT_MARGIN_S, "waiting for the vehicle")
         if system is None:
             heard = self._relay.watch.heard_systems()
             raise NoVehicleError(no_vehicle_message(
@@ -304,11 +316,12 @@ class MavsdkClient:
                 signed=bool(self._relay is not None and self._relay.vehicle_signed),
             )  # fmt: skip
 
-        self.vehicle = self._run(info(), 5.0)
+        self.vehicle = step(info(), CONNECT_MARGIN_S,
+                            "asking for the vehicle's autopilot and type")
         # the rest of the watch before anything is sent (`claims.HEARTBEAT_WATCH_S`)
         left = self._relay.watch.ends_at() - time.monotonic()
         if left > 0:
-            self._run(asyncio.sleep(left), left + 5.0)
+            step(asyncio.sleep(left), left + CONNECT_MARGIN_S, "watching for a second autopilot")
         self._raise_if_claimed()
         return self.vehicle
 
