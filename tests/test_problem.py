@@ -105,6 +105,20 @@ def test_encode_round_trip(hand_map: dict) -> None:
         p.encode([[1, 1]] * 3, [1, 1, 1])
 
 
+def test_encode_needs_one_hover_time_per_point(hand_map: dict) -> None:
+    """A single time was broadcast to every point and another wrong count failed with numpy's
+    broadcast message; both are one ValueError naming hover_times (no caller relies on the
+    broadcast)."""
+    p = Problem(hand_map)
+    assert p.n_points >= 2
+    for times in ([50.0], [50.0, 60.0, 70.0], []):
+        with pytest.raises(ValueError, match=rf"^hover_times: {len(times)} value\(s\) for 2 "
+                           r"hover point\(s\); give one per point$"):
+            p.encode([[300, 0], [400, 0]], times)
+    assert p.breakdown(p.encode([[300, 0], [400, 0]], [50.0, 60.0]))["hover_times"] == [50.0,
+                                                                                        60.0]
+
+
 def test_problem_accepts_map_path_and_value(tmp_path, hand_map: dict) -> None:
     import json
 

@@ -311,13 +311,16 @@ class Problem:
             t = 0 and eps = 0.
 
         Raises:
-            ValueError: k > n_points; k != n_points in fixed-length mode; k < n_points with
-                activation_threshold 0 in variable-length mode; (numpy's) hover_times of
-                another length than the points, but 1.
+            ValueError: hover_times not one value per hover point; k > n_points; k !=
+                n_points in fixed-length mode; k < n_points with activation_threshold 0 in
+                variable-length mode.
         """
         hp = np.asarray(hover_points, dtype=float).reshape(-1, 2)
         ht = np.asarray(hover_times, dtype=float).reshape(-1)
         k = len(hp)
+        if len(ht) != k:  # numpy would broadcast a single time to every point
+            raise ValueError(f"hover_times: {len(ht)} value(s) for {k} hover point(s); give "
+                             "one per point")
         if k > self.n_points:
             slots = self.n_points - self.hover_limit
             raise ValueError(f"{k} hover points exceed I_max = {self.hover_limit}"
