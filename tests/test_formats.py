@@ -294,6 +294,12 @@ def test_plan_booleans_are_read_as_written(m, plan):
     del doc["mission"]["items"][2]["autoContinue"]  # absent: QGC's default, true
     items, fence = parse_plan_document(doc)
     assert items[2].autocontinue == 1 and fence[-1].command == 5004
+    # the writer takes each shape's flag from its items (the module doc said always false)
+    doc["geoFence"]["circles"][0]["inclusion"] = True
+    _, fence = parse_plan_document(doc)
+    again = plan_document(items, fence, home=(0, 0, 0), cruise_speed=5)["geoFence"]
+    assert [c["inclusion"] for c in again["circles"]] == [True]
+    assert [q["inclusion"] for q in again["polygons"]][0] is True
 
 
 @pytest.mark.parametrize("bad", ["3", True, 2.5])

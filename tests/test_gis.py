@@ -704,3 +704,22 @@ def test_two_plans_with_different_planned_homes_are_refused(tmp_path) -> None:
     with pytest.raises(GisError, match=r"other\.plan: mission\.plannedHomePosition: a second "
                        r"planned home, not the one of .*a\.plan: planned home"):  # fmt: skip
         read_layers([(a, None), (other, None)])
+
+
+def test_map_help_and_docstring_name_every_subcommand() -> None:
+    """`lamde-mission map`'s help line, description and module docstring name each of its
+    subcommands (they named from-geojson and to-geojson, not campus)."""
+    import argparse
+
+    import lamde_mission.commands.map as map_command
+    from lamde_mission.cli import build_parser
+
+    top = build_parser()
+    (sub,) = [a for a in top._actions if isinstance(a, argparse._SubParsersAction)]
+    p = sub.choices["map"]
+    (msub,) = [a for a in p._actions if isinstance(a, argparse._SubParsersAction)]
+    help_line = next(a.help for a in sub._choices_actions if a.dest == "map")
+    assert sorted(msub.choices) == ["campus", "from-geojson", "to-geojson"]
+    for name in msub.choices:
+        assert f"map {name}" in p.description and name in map_command.__doc__, name
+    assert "campus" in help_line

@@ -1,4 +1,5 @@
-"""`lamde-mission map from-geojson|to-geojson`: real maps in (GeoJSON, QGroundControl) and out."""
+"""`lamde-mission map from-geojson|to-geojson|campus`: real maps in (GeoJSON, QGroundControl)
+and out, and a generated campus of building footprints (a benchmark map at real scale)."""
 
 from __future__ import annotations
 
@@ -21,9 +22,11 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """
     p = sub.add_parser(
         "map",
-        help="import a map from GeoJSON / QGroundControl layers, or export one as GeoJSON",
+        help="import a map from GeoJSON / QGroundControl layers, export one as GeoJSON, or "
+        "generate a campus",
         description="Convert between GIS layers (WGS84) and the planner's map file (local "
-        "metres). `map from-geojson FILE... -o map.json`; `map to-geojson MAP -o map.geojson`.",
+        "metres), or generate a campus of building footprints. `map from-geojson FILE... -o "
+        "map.json`; `map to-geojson MAP -o map.geojson`; `map campus -o campus.json`.",
     )
     msub = p.add_subparsers(dest="map_command", metavar="SUBCOMMAND", required=True)
     fg = msub.add_parser(

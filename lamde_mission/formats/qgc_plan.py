@@ -1,15 +1,20 @@
-"""QGroundControl `.plan` files (JSON): mission items, exclusion geofence, no rally points.
+"""QGroundControl `.plan` files (JSON): mission items, geofence and rally points.
 
-Layout follows QGC's documented plan format (file version 1, mission version 2, geoFence
-version 2, rallyPoints version 2). Choices:
+`plan_document` (`write_qgc_plan`) writes the three lists and `parse_plan_lists` reads them
+back; the planner's missions (`formats.write_mission`) carry an exclusion geofence (the map's
+obstacles) and an empty rally-point list. Layout follows QGC's documented plan format (file
+version 1, mission version 2, geoFence version 2, rallyPoints version 2). Choices:
 
 - firmwareType 12 (MAV_AUTOPILOT_PX4) by default: QGC's default, and our NaN yaw parameters
   follow PX4's "NaN = keep the yaw mode" meaning. ArduPilot reads the same items (it ignores
   those yaw parameters); pass `firmware_type=3` to tag a file for ArduPilot.
 - vehicleType 2 (MAV_TYPE_QUADROTOR): the paper's rotary-wing UAV.
 - NaN parameters are written as JSON null, as QGC does; read back as NaN.
-- Every fence shape carries "inclusion": false explicitly (QGC treats a missing key as an
-  inclusion fence).
+- Every fence shape carries its "inclusion" flag explicitly, from its fence items' command
+  (inclusion or exclusion; false for the planner's obstacles): QGC treats a missing key as an
+  inclusion fence, and so does the reader.
+- A geofence's FENCE_RETURN_POINT item is its `breachReturn`; rally points are written as
+  [lat, lon, alt] and read back as RALLY_POINT items (relative altitude).
 """
 
 from __future__ import annotations
