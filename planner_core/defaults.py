@@ -189,7 +189,12 @@ _RUN: tuple[Default, ...] = (
             "this and every stage after the polish; docs/search.md)", "an integer >= 0",
             _int_at_least(0)),
     Default("descent_trials", 40, "evaluations one descent may spend at most (counted in the "
-            "budget)", "an integer >= 0", _int_at_least(0)),
+            "budget); 0: no descent, and so no finish either (`planner_core.search.final."
+            "finish` starts with the descent and stops when it does not run): the start "
+            "descents, the final stage and the other structure spend nothing, the improving "
+            "stage's restarts finish nothing (a fresh one still scores its constructive plans), "
+            "and the evaluations go to the improving stage (its kicks and structural search "
+            "still run)", "an integer >= 0", _int_at_least(0)),
     Default("restructure_trials", 300, "evaluations the structural search on the final plan "
             "may spend (`planner_core.search.structure.restructure`: drop the detour corners, "
             "merge two "

@@ -495,6 +495,9 @@ def test_restructure_and_finish_are_counted_feasible_and_never_worse() -> None:
     assert g is not None and g.evaluations == sum(calls) <= 150 and g.f <= r.f + 1e-9
     again = finish(problem, x, problem.evaluate, trials=150)
     assert again is not None and again.x.tobytes() == g.x.tobytes()
+    # descent_trials 0 (planner_core.defaults): no descent, and so no finish at all
+    calls.clear()
+    assert finish(problem, x, counted, trials=150, descent_trials=0) is None and calls == []
     fixed = Problem(SUITE / "T15.json", variable_length=False)
     assert restructure(fixed, fixed.encode(*_full(fixed)), fixed.evaluate, trials=10) is None
 

@@ -19,7 +19,7 @@ from planner_core.pipeline import (
     TimeLimitReached,
     run_pipeline,
 )
-from tests.conftest import MAPS
+from tests.conftest import MAPS, SUITE
 
 
 @pytest.fixture(scope="module")
@@ -176,6 +176,17 @@ def test_same_seed_and_budget_same_plan_and_stage_counts(tiny: Problem) -> None:
     assert [(s.name, s.evaluations) for s in a.stages] == [
         (s.name, s.evaluations) for s in b.stages]
     assert sum(s.evaluations for s in a.stages) == a.evaluations <= 1_500
+
+
+def test_descent_trials_zero_turns_off_every_finish_as_the_defaults_table_says() -> None:
+    """`descent_trials` 0 (planner_core.defaults): no start descents, the final stage and the
+    other structure spend nothing (`finish` starts with the descent), and what they leave goes
+    to the improving stage."""
+    p = Problem(SUITE / "T03.json")
+    r = run_pipeline(p, PlanConfig(seed=1, descent_trials=0))
+    spent = {s.name: s.evaluations for s in r.stages}
+    assert "start descents" not in spent and spent["finish"] == spent["other structure"] == 0
+    assert r.phi == 0 and spent["improve"] > 0 and r.evaluations == PlanConfig().budget
 
 
 def test_an_infeasible_run_spends_its_whole_budget_on_the_repair() -> None:

@@ -32,7 +32,9 @@ class PlanConfig:
         start_candidates: constructive plans built and scored, >= 0.
         descents: best plans of each kind descended before the DE, >= 0.
         descent_trials, restructure_trials, kick_trials, other_trials: evaluations of one
-            descent, of the structural search, of the kicks and of a second structure, >= 0.
+            descent, of the structural search, of the kicks and of a second structure, >= 0
+            (descent_trials 0: no descent and no finish, which starts with one; the defaults
+            table says where the evaluations go).
         de_share: share of the budget the DE gets (at least its population), in [0, 1].
         descent: False turns off every descent and the final stage (`--no-descent`).
         polish: False turns off the LP polish and every stage after it (`--no-polish`).
