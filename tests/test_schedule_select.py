@@ -377,8 +377,29 @@ def test_a_split_table_round_trips_and_a_damaged_one_is_one_line(tmp_path) -> No
     assert np.array_equal(back.gaps, table.gaps) and back.maps == table.maps
     assert back.predict(_mfeats(201)) == 0.4
     assert SplitTable.load(tmp_path / "none") is None  # no split table: none
+    meta = json.loads((tmp_path / "split.json").read_text())
+    (tmp_path / "split.json").write_text(json.dumps(dict(meta, k=2.5)))
+    with pytest.raises(ValueError, match='"k" must be an integer, got 2.5'):
+        SplitTable.load(tmp_path)  # it was cut to 2 and loaded
     (tmp_path / "split.json").write_text("{")
     with pytest.raises(ValueError, match="split table in .* does not load"):
+        SplitTable.load(tmp_path)
+
+
+def test_the_tables_are_read_by_the_shared_bounded_reader(tmp_path, monkeypatch) -> None:
+    """A table folder given on the command line (`--scheduler lamde-s:DIR`) is read through
+    `planner_core.textio`: a FIFO in place of an archive is refused without blocking, and a
+    file over the byte limit is refused before it is read whole."""
+    import os
+
+    fit(GRID, k=1).save(tmp_path)
+    fit_split(SPLITS, k=3).save(tmp_path)
+    os.replace(tmp_path / "table.npz", tmp_path / "old.npz")
+    os.mkfifo(tmp_path / "table.npz")
+    with pytest.raises(ValueError, match="no selector table in .*not a regular file"):
+        SelectorTable.load(tmp_path)
+    monkeypatch.setenv("LAMDE_MAX_INPUT_BYTES", "100")
+    with pytest.raises(ValueError, match="split table in .* does not load .*LAMDE_MAX_INPUT_BYTES"):
         SplitTable.load(tmp_path)
 
 

@@ -41,7 +41,6 @@ from __future__ import annotations
 
 import argparse
 import io
-import json
 import math
 import re
 import subprocess
@@ -54,6 +53,7 @@ from typing import Any
 import numpy as np
 
 from planner_core.pipeline.schedule import DefaultScheduler, _points, pool_structures
+from planner_core.textio import read_bytes, read_json
 
 __all__ = [
     "DEFAULT_TABLE",
@@ -261,12 +261,14 @@ class SelectorTable:
 
         d = Path(directory)
         try:
-            raw = (d / "table.npz").read_bytes()
-            with np.load(io.BytesIO(raw)) as z:
+            # the shared reader: regular files only (a FIFO never blocks), bounded size and
+            # depth (an InputError is a ValueError)
+            raw = read_bytes(d / "table.npz")
+            with np.load(io.BytesIO(raw), allow_pickle=False) as z:
                 features, gaps = z["features"], z["gaps"]
                 templates, maps = tuple(str(t) for t in z["templates"]), tuple(
                     str(m) for m in z["maps"])
-            meta = json.loads((d / "manifest.json").read_text())
+            meta = read_json(d / "manifest.json")
             if not isinstance(meta, dict):
                 raise ValueError("manifest.json: not a JSON object")
         except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile) as exc:
@@ -467,12 +469,16 @@ class SplitTable:
         if not (d / "split.npz").exists():
             return None
         try:
-            raw = (d / "split.npz").read_bytes()
-            with np.load(io.BytesIO(raw)) as z:
+            raw = read_bytes(d / "split.npz")  # bounded, as the selector table's
+            with np.load(io.BytesIO(raw), allow_pickle=False) as z:
                 arrays = {n: z[n] for n in ("features", "gaps", "cpu", "splits", "maps")}
-            meta = json.loads((d / "split.json").read_text())
+            meta = read_json(d / "split.json")
             if not isinstance(meta, dict):
                 raise ValueError("split.json: not a JSON object")
+            k = meta.get("k")
+            if isinstance(k, bool) or not isinstance(k, int):
+                raise ValueError(f'"k" must be an integer, got '
+                                 f"{'nothing' if k is None else repr(k)}")
             table = cls(arrays["features"].astype(float), arrays["gaps"].astype(float),
                         arrays["cpu"].astype(float),
                         tuple(float(x) for x in arrays["splits"]),
