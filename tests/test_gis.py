@@ -37,6 +37,12 @@ def campus(tmp_path_factory) -> tuple[Path, subprocess.CompletedProcess]:
     return out, r
 
 
+def test_the_manuals_campus_is_the_one_tested() -> None:
+    # docs/maps.md imports examples/gis/campus.geojson, and tests/test_readme.py's COVERED_BY
+    # names the `campus` fixture above (tests/data/campus.geojson) as what exercises it
+    assert (ROOT / "examples" / "gis" / "campus.geojson").read_bytes() == CAMPUS.read_bytes()
+
+
 def _by_name(m) -> dict:
     return {sh.name: sh for sh in m.shapes}
 

@@ -145,7 +145,7 @@ def test_readme_reaches_a_verified_mission_in_60_lines() -> None:
 #: README command (its leading words, enough to tell it apart) -> the test that runs it, and the
 #: strings that test's source must contain (the subcommand and the options the README shows)
 COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
-    "lamde-mission map from-geojson campus.geojson":
+    "lamde-mission map from-geojson examples/gis/campus.geojson":
         ("test_gis.py::campus", ("from-geojson",)),  # the fixture every campus test uses
     "lamde-mission map from-geojson ends.geojson":
         ("test_readme.py::test_from_geojson_whole_file_layers_cli", ("--obstacles", "--sensors")),
