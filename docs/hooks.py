@@ -1,13 +1,19 @@
 """MkDocs hooks (`mkdocs.yml`: `hooks:`): the generated parts of the reference pages.
 
 A page marks a generated part with `<!-- NAME:begin -->` and `<!-- NAME:end -->`; at build time
-the text between them is replaced by what the code says now, so the reference cannot go stale:
+the text between them is replaced by what the code says now, so the site's reference cannot go
+stale:
 
 - `cli`: every subcommand of `lamde-mission` (nested ones too) with its `--help`, from
   `lamde_mission.cli.build_parser()`;
 - `defaults`: the defaults table of `planner_core/defaults.py` (`render_markdown()`);
 - `api`: one mkdocstrings `:::` entry per name in `lamde_mission.__all__`, at the module that
   defines it.
+
+The `cli` and `defaults` parts are also committed in the Markdown (`COMMITTED`, in the pages of
+`PAGES`), so the pages read in the repository as on the site; `python docs/hooks.py --update`
+rewrites them, and tests/test_docs_reference.py fails while they differ from what the code
+generates. (The `api` part is mkdocstrings directives, which only the site renders.)
 
 `python docs/hooks.py NAME` prints one part, as the site gets it.
 """
@@ -17,11 +23,22 @@ from __future__ import annotations
 import argparse
 import os
 import re
-from collections.abc import Callable, Iterator
+import sys
+from collections.abc import Callable, Iterable, Iterator
+from pathlib import Path
 
 MARKERS = re.compile(r"(<!-- (\w+):begin -->\n).*?(<!-- \2:end -->)", re.S)
 #: the width `--help` is wrapped at on the page (argparse reads COLUMNS)
 HELP_COLUMNS = 100
+#: the generated parts committed in the Markdown (filled again at build time all the same)
+COMMITTED = ("cli", "defaults")
+#: the pages holding them, relative to the repository root
+PAGES = ("docs/reference/cli.md", "docs/reference/defaults.md")
+ROOT = Path(__file__).resolve().parent.parent
+#: the first line of the `cli` part: argparse lays out `--help` a little differently from one
+#: Python to the next (3.13 writes `-o, --output OUTPUT` for `-o OUTPUT, --output OUTPUT`)
+PYTHON_LINE = ("The `--help` text as Python {version}'s argparse writes it (other versions "
+               "differ slightly).")
 
 
 def iter_commands(
@@ -40,22 +57,30 @@ def iter_commands(
 
 
 def _help(parser: argparse.ArgumentParser) -> str:
-    old = os.environ.get("COLUMNS")
-    os.environ["COLUMNS"] = str(HELP_COLUMNS)
+    # the width, and no colour whatever the terminal (Python 3.14's argparse colours on one)
+    env = {"COLUMNS": str(HELP_COLUMNS), "PYTHON_COLORS": "0", "NO_COLOR": "1"}
+    old = {k: os.environ.get(k) for k in env}
+    os.environ.update(env)
     try:
         return parser.format_help()
     finally:
-        if old is None:
-            del os.environ["COLUMNS"]
-        else:
-            os.environ["COLUMNS"] = old
+        for k, v in old.items():
+            if v is None:
+                del os.environ[k]
+            else:
+                os.environ[k] = v
+
+
+def python_version() -> str:
+    """`major.minor` of the Python running, as the `cli` part's first line names it."""
+    return f"{sys.version_info[0]}.{sys.version_info[1]}"
 
 
 def cli_markdown() -> str:
     """Every command's `--help` as a section of its own (`## lamde-mission plan`, ...)."""
     from lamde_mission.cli import build_parser
 
-    parts = []
+    parts = [PYTHON_LINE.format(version=python_version()) + "\n"]
     for path, parser in iter_commands(build_parser()):
         name = " ".join(("lamde-mission", *path))
         level = "#" * min(2 + max(len(path) - 1, 0), 4)
@@ -90,16 +115,57 @@ GENERATORS: dict[str, Callable[[], str]] = {
 }
 
 
-def fill(markdown: str) -> str:
-    """`markdown` with every marked part replaced by its generator's output."""
+def fill(markdown: str, names: Iterable[str] | None = None) -> str:
+    """`markdown` with its marked parts replaced by their generators' output.
+
+    Args:
+        markdown: a page's text.
+        names: the parts to fill (None: every part with a generator); others are left as
+            they are.
+
+    Returns:
+        The page's text (unchanged where it has no such part).
+    """
+    wanted = set(GENERATORS if names is None else names)
 
     def one(m: re.Match[str]) -> str:
         gen = GENERATORS.get(m.group(2))
-        if gen is None:
+        if gen is None or m.group(2) not in wanted:
             return m.group(0)
         return m.group(1) + "\n" + gen().rstrip("\n") + "\n\n" + m.group(3)
 
     return MARKERS.sub(one, markdown)
+
+
+def update(path: str | Path) -> bool:
+    """Rewrite the committed parts (`COMMITTED`) of the page at `path` with what the code
+    generates now (a temporary file beside it, then renamed over it).
+
+    Args:
+        path: a Markdown page holding at least one of them (UTF-8).
+
+    Returns:
+        True if it changed (False: already up to date, the file left untouched).
+
+    Raises:
+        ValueError: the page has no `COMMITTED` part between its markers.
+        OSError: the file cannot be read or written.
+    """
+    path = Path(path)
+    text = path.read_text(encoding="utf-8")
+    if not any(m.group(2) in COMMITTED for m in MARKERS.finditer(text)):
+        raise ValueError(f"{path}: no <!-- NAME:begin --> ... <!-- NAME:end --> part of "
+                         f"{', '.join(COMMITTED)}")
+    new = fill(text, COMMITTED)
+    if new == text:
+        return False
+    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
+    try:
+        tmp.write_text(new, encoding="utf-8")
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+    return True
 
 
 def on_page_markdown(markdown: str, **kwargs: object) -> str:
@@ -107,7 +173,38 @@ def on_page_markdown(markdown: str, **kwargs: object) -> str:
     return fill(markdown)
 
 
-if __name__ == "__main__":
-    import sys
+def main(argv: list[str] | None = None) -> int:
+    """`python docs/hooks.py NAME` prints one part; `python docs/hooks.py --update [PAGE ...]`
+    rewrites the committed parts of the pages (default: `PAGES`) and says which changed.
 
-    sys.stdout.write(GENERATORS[sys.argv[1]]() + "\n")
+    Args:
+        argv: the arguments (default: the command line's).
+
+    Returns:
+        The exit status: 0, or 2 for a page that cannot be read, written or has no part.
+    """
+    ap = argparse.ArgumentParser(
+        prog="python docs/hooks.py",
+        description="Print one generated part of the reference pages, or rewrite the parts "
+        "committed in the Markdown (" + ", ".join(COMMITTED) + ").")
+    ap.add_argument("name", nargs="?", choices=sorted(GENERATORS), help="the part to print")
+    ap.add_argument("--update", nargs="*", metavar="PAGE",
+                    help=f"rewrite these pages' committed parts (default: {' '.join(PAGES)})")
+    ns = ap.parse_args(argv)
+    if (ns.name is None) == (ns.update is None):
+        ap.error("give a part to print or --update, one of the two")
+    if ns.name is not None:
+        sys.stdout.write(GENERATORS[ns.name]() + "\n")
+        return 0
+    for page in ns.update or PAGES:
+        try:
+            changed = update(Path(page) if ns.update else ROOT / page)
+        except (OSError, ValueError) as exc:
+            print(f"python docs/hooks.py: {exc}", file=sys.stderr)
+            return 2
+        print(f"{page}: " + ("updated" if changed else "up to date"))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
