@@ -10,7 +10,7 @@ EDITABLE := --config-settings editable_mode=compat
 # MkDocs' banner about its successor, printed on every build
 export NO_MKDOCS_2_WARNING := 1
 
-.PHONY: setup demo test test-slow lint docs docs-build figures bench clean
+.PHONY: setup demo test test-slow lint docs docs-build docs-update figures bench clean
 
 # everything: what `make test` needs
 setup: $(VENV)/.installed
@@ -62,6 +62,12 @@ docs: $(VENV)/.docs
 # the manual into build/site, warnings as errors
 docs-build: $(VENV)/.docs
 	$(BIN)/mkdocs build --strict
+
+# the generated copies committed beside the sources: README's defaults table and the manual's
+# CLI and defaults reference pages (tests fail while they are stale)
+docs-update: setup
+	$(PY) -m planner_core.defaults README.md
+	$(PY) docs/hooks.py --update
 
 # every figure the manual and the README show: the benchmark figures redrawn from the runs stored
 # under docs/ (no benchmark is re-run; a report whose runs are not stored is named, its stored
