@@ -52,8 +52,9 @@ def _plan_file(tmp_path):
 def test_two_mocks_claiming_system_1_are_refused_before_sending(port, tmp_path, capsys,
                                                                 via) -> None:  # fmt: skip
     """One mock at 4 Hz, the other at a real autopilot's 1 Hz (the watch must cover a whole
-    period of the slower one): exit 2, one line on stderr naming both mocks' addresses,
-    nothing on stdout, neither mock sent a single item."""
+    period of the slower one): exit 1 (the link failed; it was 2, as for bad input), one line
+    on stderr naming both mocks' addresses, nothing on stdout, neither mock sent a single
+    item."""
     path = _plan_file(tmp_path)
     with mock_on(port) as a, mock_on(port, heartbeat_hz=1.0) as b:
         t0 = time.monotonic()
@@ -63,7 +64,7 @@ def test_two_mocks_claiming_system_1_are_refused_before_sending(port, tmp_path, 
         uploads = a.stats.uploads[MISSION_TYPE.MISSION] + b.stats.uploads[MISSION_TYPE.MISSION]
         addrs = {f"{h}:{p}" for h, p in (a.address, b.address)}
     out = capsys.readouterr()
-    assert rc == 2, out
+    assert rc == 1, out
     assert out.out == "" and len(out.err.splitlines()) == 1, out
     line = out.err.strip()
     assert line.startswith("lamde-mission upload: two autopilots claim system 1 component 1: ")

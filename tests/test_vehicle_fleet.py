@@ -204,8 +204,9 @@ def test_fleet_mismatch_sends_nothing(n, connect, ids, shown):
 
 
 def test_two_autopilots_with_one_id_stop_the_survey(fleet_dir, capsys):
-    """Systems 1, 2 on one socket and a second system 2 from another address: exit 2 naming
-    both addresses, nothing uploaded to anyone."""
+    """Systems 1, 2 on one socket and a second system 2 from another address: exit 1 (the
+    link failed, not the command: upload's one rule) naming both addresses, nothing uploaded
+    to anyone."""
     from lamde_mission.vehicle.mock import MockVehicle
 
     port = free_udp_port()
@@ -216,7 +217,7 @@ def test_two_autopilots_with_one_id_stop_the_survey(fleet_dir, capsys):
         link = ["--connect", f"udpin://127.0.0.1:{port}", "--via", "pymavlink", "--timeout", "2"]
         rc = main(["upload", str(fleet_dir), "--fleet", "--sysid", "1,2,3", *link])
         err = capsys.readouterr().err
-        assert rc == 2 and "two autopilots claim system 2 component 1" in err
+        assert rc == 1 and "two autopilots claim system 2 component 1" in err
         assert f"127.0.0.1:{impostor.address[1]}" in err
         assert all(sum(v.stats.uploads.values()) == 0 for v in [*fleet.vehicles, impostor])
 
@@ -300,10 +301,10 @@ def test_cli_upload_fleet_second_sortie_after_the_swap(fleet_dir, capsys):
     assert rc == 2 and "no vehicle flies a sortie 3" in capsys.readouterr().err
 
 
-def _one_line_exit_2(capsys, argv) -> str:
+def _one_line_exit_2(capsys, argv, status: int = 2) -> str:
     rc = main(argv)
     err = capsys.readouterr().err.strip()
-    assert rc == 2 and len(err.splitlines()) == 1, err
+    assert rc == status and len(err.splitlines()) == 1, (rc, err)
     return err
 
 
@@ -324,12 +325,12 @@ def test_cli_upload_fleet_errors(fleet_dir, tmp_path, capsys):
         capsys, ["upload", str(broken), "--fleet", *conn]
     )
     with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=2, heartbeat_hz=HZ) as fleet:
-        # fleet.json plans 3 vehicles, 2 answer
-        err = _one_line_exit_2(capsys, ["upload", str(fleet_dir), "--fleet", *conn])
+        # fleet.json plans 3 vehicles, 2 answer: the link's answer, exit 1 (was 2)
+        err = _one_line_exit_2(capsys, ["upload", str(fleet_dir), "--fleet", *conn], 1)
         assert "3 missions but 2 vehicles answer" in err and "nothing was uploaded" in err
-        # a vehicle missing
+        # a vehicle missing: exit 1, as a single upload's vehicle that does not answer
         err = _one_line_exit_2(capsys, ["upload", str(fleet_dir), "--fleet", *conn,
-                                        "--sysid", "1,2,3"])  # fmt: skip
+                                        "--sysid", "1,2,3"], 1)  # fmt: skip
         assert "vehicle 3: no HEARTBEAT from system 3" in err
         assert all(sum(v.stats.uploads.values()) == 0 for v in fleet.vehicles)
     assert "--sysid: 'x' is not" in _one_line_exit_2(
@@ -345,6 +346,32 @@ def test_cli_upload_fleet_errors(fleet_dir, tmp_path, capsys):
     assert "2 system ids for one mission" in _one_line_exit_2(
         capsys, ["upload", one, *conn, "--sysid", "1,2"]
     )
+
+
+def test_cli_upload_exit_status_single_file_and_fleet_alike(fleet_dir, capsys):
+    """upload's one rule (README, docs/fleet.md, `upload --help`): 1 when a check or the link
+    fails, 2 for bad input. The single upload refused what the simulator rejects with 2 (the
+    fleet: 1), and the fleet exited 2 when no vehicle answered (the single upload: 1)."""
+    port = free_udp_port()
+    conn = ["--connect", f"udpin://127.0.0.1:{port}", "--via", "pymavlink", "--timeout", "0.5",
+            "--attempts", "1"]  # fmt: skip
+    one = str(fleet_dir / "mission-v1-s1.plan")
+    # the simulator rejects it (C4: the sortie serves 2 of small-demo's 4 sensors); no link
+    err = _one_line_exit_2(capsys, ["upload", one, *conn, "--map", str(DEMO_MAP)], 1)
+    assert err.startswith(f"lamde-mission upload: {one}: the simulator rejects it on ")
+    assert "C4" in err and "nothing sent" in err and "--force" in err
+    # no vehicle answers: 1 both ways
+    err = _one_line_exit_2(capsys, ["upload", one, *conn], 1)
+    assert "no vehicle heard" in err
+    err = _one_line_exit_2(capsys, ["upload", str(fleet_dir), "--fleet", *conn], 1)
+    assert "3 missions but 0 vehicles answer" in err and "nothing was uploaded" in err
+    # bad input: 2 both ways
+    for target in ([one], [str(fleet_dir), "--fleet"]):
+        assert "--attempts must be at least 1" in _one_line_exit_2(
+            capsys, ["upload", *target, *conn[:-2], "--attempts", "0"])
+    two = f"udpin://127.0.0.1:{port},udpin://127.0.0.1:{free_udp_port()}"
+    assert "--connect: 2 connections for 3 vehicles" in _one_line_exit_2(
+        capsys, ["upload", str(fleet_dir), "--fleet", *conn[2:], "--connect", two])
 
 
 def test_cli_upload_fleet_refuses_a_connection_listed_twice(fleet_dir, capsys):

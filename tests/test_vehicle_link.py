@@ -255,11 +255,11 @@ def _plan_files(tmp_path):
 def test_cli_sim_check_refuses_unless_force(via, port, tmp_path, capsys):
     plan_path, map_ok, map_greedy = _plan_files(tmp_path)
     with mock_on(port) as v:
-        # rejected by the simulator on the greedy map: exit 2, nothing sent
+        # rejected by the simulator on the greedy map: a failed check, exit 1, nothing sent
         rc = main(["upload", str(plan_path), "--map", str(map_greedy), "--connect",
                    listen_on(port), "--via", via, "--timeout", "5"])  # fmt: skip
         err = capsys.readouterr().err
-        assert rc == 2 and "simulator rejects" in err and "C4" in err and "--force" in err
+        assert rc == 1 and "simulator rejects" in err and "C4" in err and "--force" in err
         assert v.stats.uploads[MISSION_TYPE.MISSION] == 0
         # accepted on its own map
         rc = main(["upload", str(plan_path), "--map", str(map_ok), "--connect", listen_on(port),
@@ -562,13 +562,14 @@ def test_a_forged_heartbeat_that_captured_the_link_is_refused(port):
 def test_a_second_autopilot_with_the_same_id_during_an_upload_is_named(port, tmp_path, capsys):
     """The vehicle is pinned first; a second autopilot with its ids starts beating at the same
     time: the CLI stops before sending (the heartbeat watch) with one line naming both, exit
-    status 2 (the link as given cannot work), never 'identical'."""
+    status 1 (the link failed: upload's rule, single file and --fleet alike; it was 2, as for
+    bad input), never 'identical'."""
     plan_path, _map_ok, _ = _plan_files(tmp_path)
     with mock_on(port, latency_ms=40.0), _FakeAutopilot(port):
         rc = main(["upload", str(plan_path), "--via", "pymavlink", "--connect",
                    listen_on(port), "--timeout", "10"])  # fmt: skip
     out = capsys.readouterr()
-    assert rc == 2, out
+    assert rc == 1, out
     lines = [ln for ln in out.err.splitlines() if ln.startswith("lamde-mission upload:")]
     assert len(lines) == 1 and "two autopilots claim system 1 component 1" in lines[0]
     assert "nothing was sent" in lines[0]

@@ -21,10 +21,15 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         help="upload a .plan/.waypoints mission to a vehicle and verify it by reading it back",
         description="Upload the mission and the geofence of a QGroundControl .plan (or the "
         "mission of a .waypoints file; the vehicle's fence is then left alone) to a vehicle over "
-        "MAVLink, download both back and compare them item by item. Exit status 0 only when "
-        "they match; 1 when no vehicle answers, the vehicle refuses the mission or the "
-        "read-back differs; 2 for a bad file or option, or when two autopilots claim the "
-        "vehicle's system id from two addresses. Items go up numbered from 0; "
+        "MAVLink, download both back and compare them item by item. Exit status, single file "
+        "and --fleet alike: 0 only when every upload is read back identical; 1 when a check "
+        "or the link fails: the simulator rejects the mission on --map (nothing sent), no "
+        "vehicle answers (with --fleet: a vehicle missing, or more or fewer answering than "
+        "fleet.json plans; nothing sent), two autopilots claim the vehicle's system id from "
+        "two addresses, a link cannot be opened, the vehicle refuses the mission, a transfer "
+        "fails or the read-back differs; 2 for bad input, found before any link is opened: a "
+        "bad file, directory or option, or a mission the simulator cannot fly at all (as "
+        "verify's exit status 2). Items go up numbered from 0; "
         "a .waypoints file's home line is not uploaded (the mission starts with its first "
         "item, as from a .plan). Every mission first passes the simulator's checks that need "
         "no map (what verify refuses for the mission itself: a negative hover time, a second "
@@ -36,7 +41,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "the vehicles are addressed by MAVLink system id on one connection (--sysid, or the "
         "system ids heard there in ascending order) or one --connect each; all are heard "
         "before anything is sent (a vehicle missing or a count differing from fleet.json: "
-        "exit status 2), then each is uploaded, read back and compared in turn; with --map the "
+        "exit status 1), then each is uploaded, read back and compared in turn; with --map the "
         "whole directory is first judged as `verify MAP DIR/` judges it (docs/fleet.md).",
     )
     p.add_argument("mission", help="mission file (.plan or .waypoints); with --fleet a sortie "
@@ -52,7 +57,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "0.0.0.0 listens on every network interface: anyone on those networks can send the "
         "first HEARTBEAT and be taken for the vehicle, or read the mission (MAVLink without "
         "signing has no authentication). Both uploaders listen to HEARTBEATs for 1.2 s before "
-        "sending anything and stop (exit status 2, both addresses named) when a second "
+        "sending anything and stop (exit status 1, both addresses named) when a second "
         "address claims the vehicle's system and component id, then or later. On a shared "
         "LAN listen on the radio's address or 127.0.0.1, send to the vehicle's own address "
         "with udpout://, or sign the link (--signing-key)",
@@ -88,11 +93,12 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument(
         "--map",
         metavar="MAP",
-        help="replay the mission on MAP in the simulator before sending; a mission the "
-        "simulator rejects (a constraint C1..C5 fails, a second take-off, an unusable hover "
-        "time) is refused with exit status 2 unless --force. With --fleet the whole sortie "
-        "directory is replayed and judged first, exactly as `verify MAP DIR/` does; when a "
-        "check fails nothing is sent (exit status 1) unless --force",
+        help="replay the mission on MAP in the simulator before sending, as `verify MAP "
+        "MISSION` does: when a check fails (C1..C5, CLEAR, MARGIN, ENDS, ALT, ENERGY) nothing "
+        "is sent, exit status 1, unless --force; a mission the simulator cannot fly at all (a "
+        "second take-off, an unusable hover time) is bad input, exit status 2 unless --force. "
+        "With --fleet the whole sortie directory is replayed and judged first, exactly as "
+        "`verify MAP DIR/` does, with the same exit statuses",
     )
     p.add_argument("--origin", metavar="LAT,LON[,ALT]",
                    help="with --map: the WGS84 position of the map's (0, 0) (degrees, degrees, "
@@ -266,9 +272,25 @@ def _flight_check(path: str, mission: list, *, force: bool) -> None:
 
 
 def _sim_check(path: str, map_path: str, mission: list, *, force: bool,
-               origin: str | None = None) -> None:
-    """Replay `mission` on the map and judge it (as `verify` does); UsageError unless `force`.
-    A map without an origin needs `origin` (`--origin`): UsageError naming it otherwise."""
+               origin: str | None = None) -> bool:
+    """`upload MISSION --map MAP`: replay `mission` on the map and judge it as `verify MAP
+    MISSION` does, before anything is sent.
+
+    Args:
+        path: the mission file, for the messages.
+        map_path: the map file.
+        mission: its mission items.
+        force: warn and go on when a check fails or the simulator cannot fly it.
+        origin: `--origin`, for a map without an origin.
+
+    Returns:
+        True to go on (all hold, or `force`); False when a check fails (printed on stderr,
+        one line, nothing sent: exit status 1, as `verify`'s).
+
+    Raises:
+        UsageError: a bad map or origin, or a mission the simulator cannot fly (verify's
+            exit status 2), unless `force` for the latter.
+    """
     from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
     from lamde_mission.errors import UsageError
     from planner_core.textio import printable
@@ -287,14 +309,17 @@ def _sim_check(path: str, map_path: str, mission: list, *, force: bool,
     if not lines:
         print(f"simulator: all constraints hold on {printable(map_path)} (C1..C5, CLEAR, "
               "MARGIN, ENDS, ALT, as verify judges them)", flush=True)  # fmt: skip
-        return
+        return True
     if force:
         for line in lines:
-            print(f"warning: {path}: the simulator rejects it ({line}); sent anyway (--force)",
-                  file=sys.stderr)
-        return
-    raise UsageError(f"{path}: the simulator rejects it on {map_path}: {'; '.join(lines)} "
-                     "(--force sends it anyway)")
+            print(f"warning: {printable(path)}: the simulator rejects it ({line}); sent anyway "
+                  "(--force)", file=sys.stderr)  # fmt: skip
+        return True
+    print(f"lamde-mission upload: {printable(path)}: the simulator rejects it on "
+          f"{printable(map_path)}: {'; '.join(lines)}; nothing sent (`lamde-mission verify "
+          f"{printable(map_path)} {printable(path)}` shows every verdict; --force sends it "
+          "anyway)", file=sys.stderr)  # fmt: skip
+    return False
 
 
 def _fleet_sim_check(directory: str, map_path: str, *, force: bool,
@@ -393,8 +418,14 @@ def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
     from lamde_mission.formats import MissionFileError
     from lamde_mission.formats.fleet import FleetDirError
     from lamde_mission.vehicle.connection import parse_connections
-    from lamde_mission.vehicle.fleet import FleetSetupError, sortie_missions, upload_fleet
-    from lamde_mission.vehicle.transfer import DuplicateVehicleError, VehicleError
+    from lamde_mission.vehicle.fleet import (
+        FleetSetupError,
+        FleetSurveyError,
+        sortie_missions,
+        upload_fleet,
+    )
+    from lamde_mission.vehicle.transfer import VehicleError
+    from planner_core.textio import printable
 
     conns = [c.strip() for c in args.connect.split(",")]
     try:
@@ -431,15 +462,14 @@ def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
             attempts=args.attempts, autopilot=args.autopilot, signing_key=key,
             log=_verbose_log(args), progress=_Progress(verbose=args.verbose), on_vehicle=done,
         )  # fmt: skip
-    except FleetSetupError as exc:
+    except FleetSurveyError as exc:  # the link's answer, not the command: as NoVehicleError
+        print(f"lamde-mission upload: {printable(args.mission)}: {printable(str(exc))}",
+              file=sys.stderr)  # fmt: skip
+        return 1
+    except (FleetSetupError, ValueError) as exc:  # a --connect or --sysid list that cannot fit
         raise UsageError(f"{args.mission}: {exc}") from None
-    except ValueError as exc:
-        raise UsageError(f"{args.mission}: {exc}") from None
-    except DuplicateVehicleError as exc:
-        print(f"lamde-mission upload: {exc}", file=sys.stderr)
-        return 2
-    except VehicleError as exc:  # a link that cannot be opened
-        print(f"lamde-mission upload: {exc}", file=sys.stderr)
+    except VehicleError as exc:  # a link that cannot be opened, two autopilots on one id
+        print(f"lamde-mission upload: {printable(str(exc))}", file=sys.stderr)
         return 1
     print(report.summary())
     if report.ok and args.sortie == 1 and n > 1:
@@ -464,19 +494,18 @@ def run(args: argparse.Namespace) -> int:
         args: the parsed options.
 
     Returns:
-        0 every upload verified; 1 an upload failed or a link could not be opened (or,
-        with --fleet --map, the sim's checks failed); 2 two autopilots answer on one system
-        id (`DuplicateVehicleError`).
+        0 every upload verified; 1 a check or the link failed: the simulator's checks on
+        --map (nothing sent), no vehicle answering (with --fleet: the vehicles heard not
+        matching fleet.json), two autopilots on one system id, a link that cannot be opened,
+        a refused mission, a failed transfer or a read-back that differs.
 
     Raises:
-        UsageError: a bad option or mission file, or a mission the checks refuse without
-            --force (one line, exit 2).
+        UsageError: bad input, before any link is opened: a bad option, mission file or
+            sortie directory, or a mission the simulator cannot fly at all without --force
+            (one line, exit 2).
     """
     from lamde_mission.errors import UsageError
-    from lamde_mission.vehicle.transfer import (
-        DuplicateVehicleError,
-        VehicleError,
-    )
+    from lamde_mission.vehicle.transfer import VehicleError
     from lamde_mission.vehicle.upload import MAX_TIMEOUT_S, upload_mission
 
     if not (math.isfinite(args.timeout) and 0 < args.timeout <= MAX_TIMEOUT_S):
@@ -509,8 +538,9 @@ def run(args: argparse.Namespace) -> int:
     mission, fence, rally = _read(args.mission)
     _wire_check(args.mission, mission, fence, rally)
     _flight_check(args.mission, mission, force=args.force)
-    if args.map:
-        _sim_check(args.mission, args.map, mission, force=args.force, origin=args.origin)
+    if args.map and not _sim_check(args.mission, args.map, mission, force=args.force,
+                                   origin=args.origin):
+        return 1
 
     log = _verbose_log(args)
     try:
@@ -538,8 +568,7 @@ def run(args: argparse.Namespace) -> int:
         hint = _failure_hint(exc, args.via, key)
         if hint is not None:
             print(hint, file=sys.stderr)
-        # two autopilots on one id: the link as given cannot work, a retry would not help
-        return 2 if isinstance(exc, DuplicateVehicleError) else 1
+        return 1
     for line in report.lines():
         print(line)
     return 0

@@ -10,7 +10,7 @@ id, on one connection each the vehicle heard on it.
 Before anything is sent, `survey` listens to every connection at once for the vehicles'
 HEARTBEATs (at least `claims.HEARTBEAT_WATCH_S`, at most `timeout`): a vehicle that does not
 answer, a count that differs from the missions', or two autopilots claiming one system id from
-two addresses stop it with nothing sent (`FleetSetupError`, `DuplicateVehicleError`). The
+two addresses stop it with nothing sent (`FleetSurveyError`, `DuplicateVehicleError`). The
 uploads then run one vehicle after the other, each through its own client pinned to its system
 id (MAVSDK through a relay that passes it that system only: one MAVSDK per vehicle, as MAVSDK's
 maintainers advise for several vehicles on one stream, mavlink/MAVSDK-Python issue 685); each
@@ -36,14 +36,25 @@ from lamde_mission.vehicle.transfer import (
     VehicleError,
 )
 
-__all__ = ["first_sortie_missions", "sortie_missions", "FleetSetupError", "FleetMission",
+__all__ = ["first_sortie_missions", "sortie_missions", "FleetSetupError", "FleetSurveyError",
+           "FleetMission",
            "VehicleResult", "FleetReport", "survey", "assign_system_ids",
            "upload_fleet"]  # fmt: skip
 
 
 class FleetSetupError(ValueError):
     """The vehicles do not match the missions (a vehicle missing, a count that differs, a
-    connection or id list of the wrong length): nothing was uploaded. One line."""
+    connection or id list of the wrong length): nothing was uploaded. One line. The CLI's exit
+    status 2 (bad input) for a list of the wrong length or an id out of range; a
+    `FleetSurveyError` (what the link answered) is 1."""
+
+
+class FleetSurveyError(FleetSetupError):
+    """What the survey heard does not match the missions: a vehicle (or system id) not heard
+    within the timeout, or more or fewer vehicles answering than there are missions. Nothing
+    was uploaded. The link, not the command, is at fault (a vehicle off or out of range, a
+    radio down), so the CLI exits with status 1, as a single upload does when no vehicle
+    answers. One line."""
 
 
 @dataclass(frozen=True)
@@ -330,8 +341,9 @@ def assign_system_ids(
         (connection per vehicle, system id per vehicle, seconds listened).
 
     Raises:
-        FleetSetupError: a list of the wrong length, an id twice on one link, a vehicle
-            missing, more or fewer vehicles than missions, two vehicles on a one-vehicle link.
+        FleetSetupError: a list of the wrong length, an id twice on one link.
+        FleetSurveyError: a vehicle missing, more or fewer vehicles than missions, two
+            vehicles on a one-vehicle link.
         DuplicateVehicleError: one system id from two addresses.
     """
     conns = list(connections)
@@ -372,13 +384,13 @@ def assign_system_ids(
             missing = [s for s in ids if s not in got]
             if missing:
                 k = ids.index(missing[0]) + 1
-                raise FleetSetupError(
+                raise FleetSurveyError(
                     f"vehicle {k}: no HEARTBEAT from system {missing[0]} at {conns[0]} within "
                     f"{timeout:g} s ({_heard_line(got)}); nothing was uploaded"
                 )
             return [conns[0]] * n, ids, listened
         if len(got) != n:
-            raise FleetSetupError(
+            raise FleetSurveyError(
                 f"{n} missions but {len(got)} vehicles answer at {conns[0]} "
                 f"({_heard_line(got)}, listened {listened:.1f} s); nothing was uploaded (--sysid "
                 "names the vehicles to use)"
@@ -389,16 +401,16 @@ def assign_system_ids(
         got = heard[k]
         if ids is not None:
             if ids[k] not in got:
-                raise FleetSetupError(
+                raise FleetSurveyError(
                     f"vehicle {k + 1}: no HEARTBEAT from system {ids[k]} at {conns[k]} within "
                     f"{timeout:g} s ({_heard_line(got)}); nothing was uploaded"
                 )
             out.append(ids[k])
         elif not got:
-            raise FleetSetupError(f"vehicle {k + 1}: no vehicle heard at {conns[k]} within "
+            raise FleetSurveyError(f"vehicle {k + 1}: no vehicle heard at {conns[k]} within "
                                   f"{timeout:g} s; nothing was uploaded")  # fmt: skip
         elif len(got) > 1:
-            raise FleetSetupError(
+            raise FleetSurveyError(
                 f"vehicle {k + 1}: {len(got)} vehicles answer at {conns[k]} "
                 f"({_heard_line(got)}); nothing was uploaded (--sysid says which is "
                 f"vehicle {k + 1})"
@@ -443,7 +455,8 @@ def upload_fleet(
         The report; `report.ok` only if every vehicle holds its mission, read back identical.
 
     Raises:
-        FleetSetupError: vehicles and missions do not match (nothing sent).
+        FleetSetupError: `connect` or `system_ids` do not fit the missions (nothing sent).
+        FleetSurveyError: the vehicles heard do not match the missions (nothing sent).
         DuplicateVehicleError: one system id claimed from two addresses (nothing sent, or the
             vehicles before it only).
         ValueError: bad arguments or items MAVLink cannot carry (before anything is sent).
