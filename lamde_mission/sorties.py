@@ -50,8 +50,9 @@ import numpy as np
 from planner_core.atomic import clean_stale_dirs, dir_beside
 from planner_core.defaults import MAX_FLEET_SORTIES, MAX_FLEET_VEHICLES
 
-__all__ = ["FLEET_FILE", "SortieCheck", "FleetCheck", "sortie_dir_refusal", "sortie_file",
-           "sortie_map", "write_sortie_dir", "verify_sortie_dir"]  # fmt: skip
+__all__ = ["FLEET_FILE", "SortieCheck", "FleetCheck", "sortie_dir_refusal",
+           "output_in_sortie_dir", "sortie_file", "sortie_map", "write_sortie_dir",
+           "verify_sortie_dir"]  # fmt: skip
 
 #: the summary file of a sortie directory
 FLEET_FILE = "fleet.json"
@@ -113,6 +114,27 @@ def sortie_dir_refusal(out_dir: str | Path) -> str | None:
         return (f"holds {shown}, which a sortie directory does not (writing it replaces the "
                 "folder whole); name a new or empty folder, or an earlier sortie directory")
     return None
+
+
+def output_in_sortie_dir(path: str | Path, out_dir: str | Path) -> str | None:
+    """Why another output (`plan --plot`, `show -o`) may not be written at `path`, or None: a
+    path inside the sortie directory `out_dir` (links followed) would be deleted by the next
+    write of that directory, which replaces it whole, or would make it refuse the folder
+    (`sortie_dir_refusal`: a sortie directory holds nothing but fleet.json and its missions).
+
+    Args:
+        path: the other output's path.
+        out_dir: the sortie directory's path (it need not exist yet).
+
+    Returns:
+        None when `path` lies outside `out_dir`, else the reason in a few words, naming both.
+    """
+    inner, folder = Path(path).resolve(), Path(out_dir).resolve()
+    if inner == folder or not inner.is_relative_to(folder):
+        return None
+    return (f"{path} is inside the sortie directory {out_dir}, "
+            "which holds nothing but fleet.json and its missions (plan replaces it whole, and "
+            "refuses a folder holding anything else); write it beside that folder")
 
 
 def sortie_map(

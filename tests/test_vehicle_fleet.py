@@ -566,6 +566,39 @@ def test_cli_show_fleet_dir(fleet_dir, tmp_path, capsys):
     assert not (tmp_path / "x.png").exists()
 
 
+def test_a_picture_inside_the_sortie_directory_is_refused_up_front(fleet_dir, tmp_path, capsys):
+    """`plan MAP -o dd/ --plot dd/fleet.png --mkdir` wrote both, and the next `plan -o dd/`
+    refused dd/ for holding fleet.png; `show MAP DIR/ -o DIR/x.png` did the same. Now both are
+    refused before any work: exit 2, one line naming the option, nothing written or made."""
+    fleet_map = ROOT / "examples" / "maps" / "fleet-demo.json"
+    new = tmp_path / "dd"
+    for plot in (new / "fleet.png", new / "pics" / "fleet.png"):
+        err = _one_line_exit_2(capsys, ["plan", str(fleet_map), "-o", str(new), "--plot",
+                                        str(plot), "--mkdir"])  # fmt: skip
+        assert err == (f"lamde-mission plan: --plot: {plot} is inside the sortie directory "
+                       f"{new}, which holds nothing but fleet.json and its missions (plan "
+                       "replaces it whole, and refuses a folder holding anything else); write "
+                       "it beside that folder")
+        assert not new.exists()
+    earlier = tmp_path / "earlier"
+    shutil.copytree(fleet_dir, earlier)
+    before = sorted(p.name for p in earlier.iterdir())
+    link = tmp_path / "link"
+    link.symlink_to(earlier)  # the same folder by another name
+    for plot in (earlier / "fleet.png", link / "fleet.png"):
+        err = _one_line_exit_2(capsys, ["plan", str(fleet_map), "-o", str(earlier), "--plot",
+                                        str(plot)])  # fmt: skip
+        assert err.startswith(f"lamde-mission plan: --plot: {plot} is inside the sortie ")
+        err = _one_line_exit_2(capsys, ["show", str(DEMO_MAP), str(earlier), "-o", str(plot)])
+        assert err.startswith(f"lamde-mission show: -o/--output: {plot} is inside the sortie ")
+    err = _one_line_exit_2(capsys, ["show", str(DEMO_MAP), str(earlier), "-o",
+                                    str(earlier / "pics" / "x.svg")])  # fmt: skip
+    assert "is inside the sortie directory" in err
+    assert sorted(p.name for p in earlier.iterdir()) == before
+    # beside the folder is fine
+    assert main(["show", str(DEMO_MAP), str(earlier), "-o", str(tmp_path / "earlier.png")]) == 0
+
+
 # ----------------------------------------------------------------------------- the example
 
 

@@ -123,7 +123,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    "px4. The summary and exit status are those of the stored mission")
     p.add_argument("--plot", metavar="PNG", help="also draw the mission (.png or .svg); for a "
                    "sortie directory every sortie, a colour per vehicle, a line style per "
-                   "sortie, depots and battery swaps marked (as `show MAP DIR/`)")
+                   "sortie, depots and battery swaps marked (as `show MAP DIR/`), written "
+                   "beside DIR, never inside it (DIR is replaced whole)")
     p.add_argument("--report", metavar="JSON", help="also write the plan and verdicts as JSON")
     p.add_argument("--allow-infeasible", action="store_true",
                    help="write the mission even if constraints are violated (exit status 1)")
@@ -417,14 +418,18 @@ def _run_sorties(args: argparse.Namespace) -> int:
     ):
         if bad:
             raise UsageError(f"{opt}: not available for a map with a battery or fleet ({why})")
-    if args.plot:  # before any work, as for one flight
+    from lamde_mission.sorties import output_in_sortie_dir, sortie_dir_refusal
+
+    if args.plot:  # before any work (nothing written, no folder made), as for one flight
         if not args.plot.lower().endswith((".png", ".svg")):
             raise UsageError(f"--plot: {args.plot}: image format must be PNG or SVG "
                              "(.png or .svg)")  # fmt: skip
+        inside = output_in_sortie_dir(args.plot, args.output)
+        if inside is not None:
+            raise UsageError(f"--plot: {inside}")
         from lamde_mission.commands._common import check_outputs
 
         check_outputs([("--plot", args.plot)], mkdir=args.mkdir, inputs=[("map", args.map)])
-    from lamde_mission.sorties import sortie_dir_refusal
 
     out = Path(args.output)
     refusal = sortie_dir_refusal(out)  # before any work: writing replaces the folder whole

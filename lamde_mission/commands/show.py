@@ -146,6 +146,12 @@ def run(args: argparse.Namespace) -> int:
         if bad is not None:  # an SVG cannot hold C0 controls; the others forge or reorder text
             raise UsageError(f"--title: holds the control character {printable(bad)} (a "
                              "figure title is printable text; a newline may split it)")
+    if args.mission and Path(args.mission).is_dir():  # before check_outputs makes a folder
+        from lamde_mission.sorties import output_in_sortie_dir
+
+        inside = output_in_sortie_dir(args.output, args.mission)
+        if inside is not None:
+            raise UsageError(f"-o/--output: {inside}")
     check_outputs([("-o/--output", args.output)], mkdir=True,
                   inputs=[("map", args.map), ("mission", args.mission)])
     m = load_map_or_fail(args.map)
