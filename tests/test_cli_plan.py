@@ -213,6 +213,27 @@ def test_the_summary_names_a_scheduler_and_a_split_other_than_the_default() -> N
         ", scheduler kicks-rebuild")
 
 
+def test_a_format_that_disagrees_with_the_suffix_is_refused_before_planning(tmp_path: Path,
+                                                                           capsys) -> None:
+    """`plan MAP -o x.plan --format waypoints` wrote QGC WPL text into x.plan (QGroundControl
+    would not open it): one line naming --format and the suffix, exit 2, nothing written, no
+    folder made by --mkdir; a sortie map takes only --format plan (its own line)."""
+    from lamde_mission.cli import main
+
+    new = tmp_path / "new"
+    for out, fmt in ((new / "x.plan", "waypoints"), (new / "x.waypoints", "geojson"),
+                     (new / "x.GeoJSON", "plan")):  # fmt: skip
+        assert main(["plan", str(DEMO), "-o", str(out), "--format", fmt, "--mkdir"]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith(
+            f"lamde-mission plan: --format: format {fmt} disagrees with the suffix "
+            f"{out.suffix.lower()} of {out} "), err
+        assert not new.exists()
+    assert main(["plan", str(MAPS / "fleet-demo.json"), "-o", str(new), "--format",
+                 "waypoints"]) == 2  # fmt: skip
+    assert "--format: not available for a map with a battery" in capsys.readouterr().err
+
+
 def test_an_output_that_is_an_input_is_refused_before_planning(tmp_path: Path, capsys) -> None:
     """`plan farm.json -o r.plan --report farm.json` replaced the hand-written map with the
     report, and `-o farm.json` (a saved plan) would replace it too. One line, exit 2, the input

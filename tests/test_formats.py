@@ -77,6 +77,26 @@ def test_format_from_suffix():
         format_for("x.plan", "kml")
 
 
+def test_a_format_that_disagrees_with_the_suffix_is_refused(m, plan, tmp_path):
+    """`write_mission("x.plan", ..., fmt="waypoints")` wrote QGC WPL text into x.plan, which
+    QGroundControl would not open: a known suffix takes only its own format; a file without
+    one (x.txt) takes any."""
+    assert format_for("x.PLAN", "plan") == "plan" and format_for("x.waypoints", ".WAYPOINTS")
+    assert format_for("x.geojson", "json") == "geojson" and format_for("x", "plan") == "plan"
+    for path, fmt, owner in (("x.plan", "waypoints", "QGroundControl JSON"),
+                             ("x.waypoints", "plan", "QGC WPL text"),
+                             ("x.geojson", "plan", "GeoJSON")):  # fmt: skip
+        suffix = path[1:]
+        with pytest.raises(MissionFileError, match=rf"^format {fmt} disagrees with the suffix "
+                           rf"{suffix} of {path} \(a {suffix} file is {owner}, "):
+            format_for(path, fmt)
+    out = tmp_path / "x.plan"
+    with pytest.raises(MissionFileError, match="disagrees"):
+        write_mission(out, plan, m, fmt="waypoints")
+    assert not out.exists()
+    assert read_mission(write_mission(tmp_path / "x.txt", plan, m, fmt="waypoints"))[0]
+
+
 def test_qgc_plan_layout(m, plan, tmp_path):
     path = write_mission(tmp_path / "m.plan", plan, m, autopilot="px4")
     doc = json.loads(path.read_text())

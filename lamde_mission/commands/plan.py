@@ -54,7 +54,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="maps with a battery or fleet: improving rounds of the sortie planner "
                    "at most (default 3; 0: the better of its two starts)")
     p.add_argument("--format", choices=("plan", "waypoints", "geojson"),
-                   help="output format (default: from OUT's suffix)")
+                   help="output format (default: from OUT's suffix): for an OUT without "
+                   "one of the suffixes .plan, .waypoints, .geojson (e.g. mission.txt); one "
+                   "that disagrees with OUT's suffix is refused (a .plan file holding QGC WPL "
+                   "text would not open in QGroundControl)")
     p.add_argument("--seed", type=int, default=D.SEED,
                    help=f"random seed (same seed, same plan; default {D.SEED})")
     p.add_argument("--budget", type=int, default=D.BUDGET,
@@ -618,6 +621,13 @@ def run(args: argparse.Namespace) -> int:
     # first, before the mission formats (and the simulator under them) are even imported
     if args.plot and not args.plot.lower().endswith((".png", ".svg")):
         raise UsageError(f"--plot: {args.plot}: image format must be PNG or SVG (.png or .svg)")
+    if args.format:  # one that disagrees with OUT's suffix: before --mkdir makes a folder
+        from lamde_mission.formats import MissionFileError, format_for
+
+        try:
+            format_for(args.output, args.format)
+        except MissionFileError as exc:
+            raise UsageError(f"--format: {exc}") from None
     check_outputs(
         [("-o/--output", args.output), ("--plot", args.plot), ("--report", args.report)],
         mkdir=args.mkdir, inputs=[("map", args.map)],

@@ -29,6 +29,10 @@ __all__ = [
 #: suffix -> format name
 FORMATS = {".plan": "plan", ".waypoints": "waypoints", ".geojson": "geojson"}
 
+#: format name -> what its files hold (for the messages)
+FORMAT_TEXT = {"plan": "QGroundControl JSON", "waypoints": "QGC WPL text",
+               "geojson": "GeoJSON"}  # fmt: skip
+
 
 class MissionFileError(ValueError):
     """A mission file that cannot be read or written (message names the file)."""
@@ -39,24 +43,33 @@ def format_for(path: str | Path, fmt: str | None = None) -> str:
 
     Args:
         path: the mission file; its suffix (.plan, .waypoints, .geojson, any case) names the
-            format when `fmt` is None.
-        fmt: a format name that overrides the suffix ("plan", "waypoints", "geojson"; case
-            and a leading dot ignored, "json" read as "geojson").
+            format.
+        fmt: a format name ("plan", "waypoints", "geojson"; case and a leading dot ignored,
+            "json" read as "geojson"): for a `path` without one of those suffixes (e.g.
+            mission.txt), or the suffix's own format.
 
     Returns:
         "plan", "waypoints" or "geojson".
 
     Raises:
-        MissionFileError: an unknown `fmt`, or (without one) an unknown suffix.
+        MissionFileError: an unknown `fmt`; a `fmt` that disagrees with a known suffix (a
+            .plan file that is not QGroundControl JSON would not open in QGroundControl);
+            without `fmt`, an unknown suffix.
     """
+    suffix = Path(path).suffix.lower()
     if fmt is not None:
         f = fmt.lower().lstrip(".")
         if f == "json":
             f = "geojson"
         if f not in FORMATS.values():
             raise MissionFileError(f"unknown mission format {fmt!r} (use plan, waypoints, geojson)")
+        owner = FORMATS.get(suffix)
+        if owner is not None and owner != f:
+            raise MissionFileError(
+                f"format {f} disagrees with the suffix {suffix} of {printable(path)} (a "
+                f"{suffix} file is {FORMAT_TEXT[owner]}, {f} is {FORMAT_TEXT[f]}): name the "
+                f"file .{f}, or leave the format out")  # fmt: skip
         return f
-    suffix = Path(path).suffix.lower()
     if suffix not in FORMATS:
         known = ", ".join(FORMATS)
         raise MissionFileError(f"{printable(path)}: cannot tell the format from the suffix "
