@@ -40,6 +40,7 @@ import json
 import os
 import re
 import shutil
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from types import SimpleNamespace
@@ -464,9 +465,11 @@ def verify_sortie_dir(m: Any, path: str | Path) -> FleetCheck:
     """
     from lamde_mission.formats import MissionFileError, load_mission_items
     from lamde_mission.formats.fleet import read_fleet_dir
+    from planner_core.fleet import FleetSettings
 
     fleet = read_fleet_dir(path)  # FleetDirError (a ValueError): the file and field by name
     summary = fleet.path / FLEET_FILE
+    depots = FleetSettings.from_map(m).depot_names
     rows = []
     for vi, veh in enumerate(fleet.vehicles):
         for si, s in enumerate(veh.sorties):
@@ -474,6 +477,9 @@ def verify_sortie_dir(m: Any, path: str | Path) -> FleetCheck:
                 if depot is None:  # the replay flies each sortie from its depot to its depot
                     raise ValueError(f"{summary}: vehicles[{vi}].sorties[{si}].{which}: missing "
                                      "(a depot's name of the map)")  # fmt: skip
+                if depot not in depots:
+                    raise ValueError(_unknown_depot(fleet, m.name, depots, veh.vehicle, s,
+                                                    which, depot))  # fmt: skip
             try:
                 items, _ = load_mission_items(str(s.path), m)
             except MissionFileError as exc:
@@ -483,6 +489,20 @@ def verify_sortie_dir(m: Any, path: str | Path) -> FleetCheck:
                    [veh.launch_s for veh in fleet.vehicles])
     note = fleet.map_note(m.name, "verified")
     return check if note is None else replace(check, notes=(note,))
+
+
+def _unknown_depot(fleet: Any, map_name: str, depots: Sequence[str], vehicle: int, s: Any,
+                   which: str, depot: str) -> str:
+    """The line for a sortie whose depot `map_name` lacks: fleet.json, the vehicle, sortie and
+    file, the depot and the map's depots; when fleet.json names another map (the usual cause:
+    `verify MAP DIR/` with the wrong MAP), that the directory was planned on it."""
+    verb = "takes off at" if which == "depot_start" else "lands at"
+    line = (f"{fleet.path / FLEET_FILE}: vehicle {vehicle} sortie {s.sortie} ({s.path.name}) "
+            f"{verb} depot '{depot}', which map '{map_name}' does not have (its depots: "
+            f"{', '.join(depots)})")
+    if fleet.map_name is not None and fleet.map_name != map_name:
+        line += f"; the directory was planned on map '{fleet.map_name}', not '{map_name}'"
+    return line
 
 
 def summary_dict(m: Any, check: FleetCheck, goal: str) -> dict[str, Any]:

@@ -188,6 +188,32 @@ def test_verify_notes_a_fleet_json_of_another_map(dirs, tmp_path, capsys):
     assert rc == 0 and err == ""
 
 
+def test_verify_on_a_map_without_the_directorys_depots_names_the_map_it_was_planned_on(
+        dirs, tmp_path, capsys):  # fmt: skip
+    """`verify small-demo.json DIR/` (DIR planned on fleet-demo) said only "depot: unknown
+    depot 'north' (the map's are home, end)", naming neither fleet.json nor the sortie nor the
+    map it was planned on; `upload DIR/ --fleet --map` the same. Still exit 2, one line."""
+    _, d = dirs[1]
+    small = ROOT / "examples" / "maps" / "small-demo.json"
+    line = (f"{d / 'fleet.json'}: vehicle 1 sortie 1 (mission-v1-s1.plan) lands at depot "
+            "'north', which map 'small-demo' does not have (its depots: home, end); the "
+            "directory was planned on map 'fleet-demo', not 'small-demo'")
+    rc, out, err = _verify(capsys, small, d)
+    assert rc == 2 and out == "" and err == f"lamde-mission verify: {line}\n"
+    port = free_udp_port()
+    rc = main(["upload", str(d), "--fleet", "--map", str(small), "--connect",
+               f"udpin://127.0.0.1:{port}", "--timeout", "0.5"])  # fmt: skip
+    assert rc == 2 and capsys.readouterr().err == f"lamde-mission upload: {line}\n"
+    # the same name, another map (depots edited): no "planned on" part
+    doc = json.loads(DEMO.read_text())
+    doc["fleet"]["depots"] = [dp for dp in doc["fleet"]["depots"] if dp["name"] != "north"]
+    edited = tmp_path / "edited.json"
+    edited.write_text(json.dumps(doc))
+    rc, out, err = _verify(capsys, edited, d)
+    assert rc == 2 and err.startswith(f"lamde-mission verify: {d / 'fleet.json'}: vehicle 1 ")
+    assert "which map 'fleet-demo' does not have" in err and "planned on" not in err
+
+
 def test_show_notes_a_fleet_json_of_another_map(dirs, tmp_path, capsys):
     # the same note as verify's (one helper: FleetDir.map_note)
     _, d = dirs[1]

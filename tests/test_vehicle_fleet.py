@@ -338,7 +338,7 @@ def test_cli_upload_fleet_errors(fleet_dir, tmp_path, capsys):
     )
     # --map replays the whole directory first (tests/test_sorties_dir.py): small-demo has no
     # depot 'north', so this one is refused naming it
-    assert "unknown depot 'north'" in _one_line_exit_2(
+    assert "vehicle 2 sortie 1 (mission-v2-s1.plan) takes off at depot 'north'" in _one_line_exit_2(
         capsys, ["upload", str(fleet_dir), "--fleet", *conn, "--map", str(DEMO_MAP)]
     )
     assert "add --fleet" in _one_line_exit_2(capsys, ["upload", str(fleet_dir), *conn])
