@@ -4,6 +4,7 @@ leave (planner_core.model.diagnose), through the CLI; the bounds are sound lower
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -162,6 +163,29 @@ OP_H = {
     "fleet": {"uavs": 1, "depots": [{"name": "west", "x": 100, "y": 500},
                                     {"name": "east", "x": 2900, "y": 500}]},
 }  # fmt: skip
+
+
+def test_no_plan_of_sorties_on_a_chain_of_depots_says_what_to_change() -> None:
+    """OP_H's tour (a sensor beside each of two depots 2.8 km apart, one UAV): each point fits
+    a sortie of its own, but no vehicle gets from one depot to the other. plan said only that
+    the tour "cannot be cut into sorties"; it now says every point fits, the heaviest's need
+    against the usable energy, and what to change (vehicles, depots, battery)."""
+    from planner_core.fleet.search import _Planner
+    from planner_core.pipeline import PlanConfig
+
+    pl = _Planner(load_map(OP_H), PlanConfig(), None, 300)
+    single = (np.array([[200.0, 320.0], [2800.0, 680.0]]), np.array([8.0, 8.0]))
+    assert pl.split(*single) is None
+    why = pl.why_not(single, False)
+    assert why.startswith(
+        "the single flight's tour cannot be cut into sorties that fit the battery among 1 "
+        "vehicle, each taking off where its last sortie landed, the first at depot 'west' or "
+        "'east'; every point of the tour fits a sortie of its own (the heaviest, the hover "
+        "point at ("), why
+    assert re.search(r"needs \d+\.\d\d Wh of the 4\.49 Wh usable\), so what fails is getting a "
+                     r"vehicle to the depots those sorties leave from: more vehicles "
+                     r"\(fleet\.uavs\), more depots or depots nearer the sensors and one "
+                     r"another \(fleet\.depots\), or a larger battery", why), why
 
 
 def _fatal(d: dict) -> list[tuple[str, str | None]]:

@@ -169,6 +169,43 @@ def test_a_hover_point_no_sortie_reaches_is_moved_where_sorties_serve_it() -> No
     assert np.array_equal(pl.reachable(near, np.array([5.0]))[0], near)
 
 
+def _review_wk3(endurance_s: float) -> dict:
+    """The newcomer review's map: fleet-demo with a 250 s battery, a third depot 'east' and 2
+    UAVs (check: OK, S2 needs at least 7 sorties, S3 4; plan: no plan of sorties)."""
+    doc = json.loads(DEMO.read_text())
+    doc["uav"]["endurance_s"] = endurance_s
+    doc["fleet"]["depots"].append({"name": "east", "x": 1990, "y": 10})
+    doc["fleet"]["uavs"] = 2
+    return doc
+
+
+def test_no_plan_of_sorties_says_what_to_change() -> None:
+    """plan said only "the single flight's tour cannot be cut into sorties that fit the battery
+    among 2 vehicles ...", nothing to act on. The tour (the single flight of the review's run)
+    turns round the building at a corner no sortie reaches: the message names it, the usable
+    energy against what a sortie there needs, and the battery that would do; that battery does
+    (the same tour splits). Nothing here plans: `why_not` only speaks after a failure."""
+    from planner_core.fleet.search import _Planner
+    from planner_core.pipeline import PlanConfig
+
+    single = (np.array([[672.08, 461.78], [1432.38, 1301.93]]), np.array([25.61, 26.56]))
+    pl = _Planner(load_map(_review_wk3(250.0)), PlanConfig(), None, 300)
+    assert pl.split(*single) is None and pl.st.uavs == 2
+    why = pl.why_not(single, True)
+    assert why == (
+        "the single flight's tour turns round an obstacle at (1280, 1142), a corner no sortie "
+        "from any depot reaches and comes back from on one battery (nor did the depots' own "
+        "flights, planned from each depot back to it); a sortie has 9.36 Wh usable (the "
+        "battery's 11.70 Wh less its 20 % reserve), the take-off and landing alone 6.59 Wh of "
+        "it, and a sortie to it alone (no hover) needs 11.45 Wh (from depot 'north' and back): "
+        "a battery of at least 14.31 Wh (uav.battery.energy_wh; or uav.endurance_s 306), or a "
+        "depot nearer to (1280, 1142) (fleet.depots)")
+    endurance = float(re.search(r"uav\.endurance_s (\d+)", why).group(1))
+    assert pl.st.usable_for(pl.st.budget_wh(1), 1) == pytest.approx(pl.st.usable_wh)
+    bigger = _Planner(load_map(_review_wk3(endurance)), PlanConfig(), None, 300)
+    assert bigger.split(*single) is not None  # the battery it names is enough for this tour
+
+
 @pytest.mark.slow  # measured 18 s for plan + verify through the CLI
 def test_a_sensor_needing_several_sorties_far_from_the_depot_is_planned(tmp_path) -> None:
     # plan exited 1 "no plan of sorties found that fits the battery" on the review's map,

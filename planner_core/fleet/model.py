@@ -181,6 +181,21 @@ class FleetSettings:
             - self.hover_w * HOVER_ROUND_S * n_points / E.J_PER_WH
         )
 
+    def usable_for(self, spend_wh: Any, n_points: Any) -> Any:
+        """The least usable energy (battery x (1 - reserve)) whose `budget_wh(n_points)` is
+        `spend_wh`: the inverse of `budget_wh`, for saying what battery a sortie would need.
+
+        Args:
+            spend_wh: Wh a sortie plans to spend, any shape.
+            n_points: its points (hover points and detour corners), broadcast with it.
+
+        Returns:
+            Wh, the broadcast shape.
+        """
+        return ((np.asarray(spend_wh, dtype=float)
+                 + self.hover_w * HOVER_ROUND_S * np.asarray(n_points) / E.J_PER_WH)
+                / (1.0 - ENERGY_SLACK))  # fmt: skip
+
 
 @dataclass(frozen=True, eq=False)
 class Sortie:

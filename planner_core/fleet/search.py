@@ -54,6 +54,7 @@ from planner_core.fleet.model import FleetPlan, FleetSettings, Sortie
 from planner_core.fleet.split import (
     SHARE_MAX,
     Links,
+    solo_need,
     solo_room,
     solo_sorties,
     split_tour,
@@ -285,16 +286,20 @@ class _Planner:
         return None if best is None else (best[1], best[2])
 
     def why_not(self, single: tuple[np.ndarray, np.ndarray] | None, clustered: bool) -> str:
-        """What failed, in words, when no start gave a plan (`single`: the single flight, None
-        when it found none; `clustered`: the depots' own flights were tried too): the single
-        flight's first hover point that no sortie reaches even moved toward the depots, or
-        that needs more than `SHARE_MAX` sorties; a leg no way round the obstacles joins; or
-        the cut among the vehicles."""
+        """What failed, in words, and what to change, when no start gave a plan (`single`: the
+        single flight, None when it found none; `clustered`: the depots' own flights were
+        tried too): the single flight's first hover point that no sortie reaches even moved
+        toward the depots, or that needs more than `SHARE_MAX` sorties; a leg no way round the
+        obstacles joins; a corner of the tour (a detour round an obstacle) no sortie reaches;
+        or the cut among the vehicles. Each battery case ends with `_advice`: the usable
+        energy against what the point needs, and the battery, depots or vehicles that would
+        change it. Only said after planning failed: nothing here changes a plan."""
         also = (" (nor did the depots' own flights, planned from each depot back to it)"
                 if clustered else "")  # fmt: skip
         if single is None:
             return (f"the single flight found no feasible plan to cut into sorties (budget "
-                    f"{self.config.budget}, seed {self.config.seed}){also}")
+                    f"{self.config.budget}, seed {self.config.seed}){also}; a larger budget "
+                    "may find one")
         st, model = self.st, self.model
         P, T = self.reachable(*single)
         room = solo_room(st, self.links, P)
@@ -307,14 +312,70 @@ class _Planner:
                   f"serving {', '.join(repr(x) for x in heard) or 'no sensor'}")
             if room[i] <= 0.0:
                 return (f"{at}: no sortie from any depot reaches it and comes back on one "
-                        f"battery, even moved toward the depots{also}")
+                        f"battery, even moved toward the depots{also}; "
+                        + self._advice(P[i], 0.0, " (no hover)"))
             return (f"{at}: its {T[i]:.4g} s of hover would need {k[i]:.0f} sorties, more "
-                    f"than the {SHARE_MAX} the planner shares one point among{also}")
-        if self.links.join(P, T) is None:
+                    f"than the {SHARE_MAX} the planner shares one point among{also}; "
+                    + self._advice(P[i], float(T[i]) / SHARE_MAX,
+                                   f" (1/{SHARE_MAX} of its hover)"))
+        joined = self.links.join(P, T)
+        if joined is None:
             return f"a leg of the single flight's tour has no way round the obstacles{also}"
+        JP, JT = joined
+        # the hover points all fit (above): a corner the tour turns at round an obstacle
+        # (no hover) can still lie beyond every sortie's reach, and the split needs it flown
+        for i in np.flatnonzero(solo_room(st, self.links, JP) <= 0.0):
+            return (f"the single flight's tour turns round an obstacle at ({JP[i, 0]:.0f}, "
+                    f"{JP[i, 1]:.0f}), a corner no sortie from any depot reaches and comes "
+                    f"back from on one battery{also}; "
+                    + self._advice(JP[i], 0.0, " (no hover)"))
+        shares = solo_sorties(st, solo_room(st, self.links, JP), JT)
+        need, _, _ = solo_need(st, self.links, JP, JT / shares)
+        i = int(np.argmax(need))
+        what = "hover point" if JT[i] > 0.0 else "corner"
+        shared = f" (its hover shared among {shares[i]:.0f})" if shares[i] > 1 else ""
+        first = " or ".join(f"'{st.depot_names[d]}'" for d in st.start_depots)
         return (f"the single flight's tour cannot be cut into sorties that fit the battery "
                 f"among {st.uavs} vehicle{'s' if st.uavs != 1 else ''}, each taking off where "
-                f"its last sortie landed{also}")
+                f"its last sortie landed, the first at depot {first}{also}; every point of the "
+                f"tour fits a sortie of its own (the heaviest, the {what} at ({JP[i, 0]:.0f}, "
+                f"{JP[i, 1]:.0f}){shared}, needs {need[i]:.2f} Wh of the {st.usable_wh:.2f} "
+                "Wh usable), so what fails is getting a vehicle to the depots those sorties "
+                "leave from: more vehicles (fleet.uavs), more depots or depots nearer the "
+                "sensors and one another (fleet.depots), or a larger battery "
+                "(uav.battery.energy_wh or uav.endurance_s)")
+
+    def _advice(self, p: np.ndarray, hover_s: float, how: str) -> str:
+        """What the battery gives against what a sortie to `p` needs, and what to change: the
+        usable energy (battery less reserve) and the take-off and landing's share of it; the
+        least usable energy a sortie of p alone needs (`split.solo_need`: from its best
+        depots, with `hover_s` of hover; `how` says which), and the battery (energy_wh and
+        endurance_s, the reserve kept) that would give that much, or a depot nearer to p.
+
+        Args:
+            p: (2,) the point, m (planning map).
+            hover_s: seconds of hover the sortie takes there.
+            how: words after "a sortie to it alone" (e.g. " (no hover)").
+
+        Returns:
+            One clause, no trailing punctuation.
+        """
+        st = self.st
+        need, a, b = solo_need(st, self.links, np.asarray(p, dtype=float)[None], [hover_s])
+        reserve = float(self.m.battery_reserve)
+        have = (f"a sortie has {st.usable_wh:.2f} Wh usable (the battery's "
+                f"{st.usable_wh / (1.0 - reserve):.2f} Wh less its {100 * reserve:g} % "
+                f"reserve), the take-off and landing alone {st.vertical_wh:.2f} Wh of it")
+        if not np.isfinite(need[0]):
+            return f"{have}: a depot with a way to it (fleet.depots)"
+        names = st.depot_names
+        via = (f"depot '{names[a[0]]}' and back" if a[0] == b[0]
+               else f"depot '{names[a[0]]}' to depot '{names[b[0]]}'")
+        battery = need[0] / (1.0 - reserve)
+        return (f"{have}, and a sortie to it alone{how} needs {need[0]:.2f} Wh (from {via}): "
+                f"a battery of at least {battery:.2f} Wh (uav.battery.energy_wh; or "
+                f"uav.endurance_s {battery * 3600.0 / st.hover_w:.0f}), or a depot nearer to "
+                f"({p[0]:.0f}, {p[1]:.0f}) (fleet.depots)")
 
     def cluster_first(self) -> FleetPlan | None:
         """Step 3: per depot a tour of its nearest sensors, the tours joined and split."""

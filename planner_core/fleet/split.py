@@ -44,7 +44,8 @@ from planner_core.fleet.model import FleetPlan, FleetSettings, Sortie
 from planner_core.model.geometry import overlap_lengths
 from planner_core.model.routing.graph import CLEAR
 
-__all__ = ["SHARE_MAX", "Links", "solo_room", "solo_sorties", "split_tour", "split_vehicles"]
+__all__ = ["SHARE_MAX", "Links", "solo_room", "solo_need", "solo_sorties", "split_tour",
+           "split_vehicles"]  # fmt: skip
 
 
 class Links:
@@ -312,6 +313,32 @@ def solo_room(st: FleetSettings, links: Links, P: np.ndarray) -> np.ndarray:
     count = 1 + nc[:, None, :] + nc[None, :, :]
     budget = st.budget_wh(count)
     return np.max(budget - st.vertical_wh - out_e - back_e, axis=(0, 1))
+
+
+def solo_need(
+    st: FleetSettings, links: Links, P: np.ndarray, T: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per point, the least usable energy (Wh: battery x (1 - reserve), `FleetSettings.
+    usable_for`) a sortie of that point alone needs to fly it with T s of hover: the take-off
+    and landing, the way out of depot a and back to depot b (the pair needing least) and the
+    hover at P(0). What `solo_room` measures against the battery, said as the battery needed.
+
+    Args:
+        st, links: as `split_tour`.
+        P: points (n, 2), m; T: (n,) s of hover in that sortie.
+
+    Returns:
+        (need (n,) Wh, inf where no depot reaches the point; a (n,), b (n,) the depots'
+        indices).
+    """
+    P = np.asarray(P, dtype=float).reshape(-1, 2)
+    _, ce, nc, _ = _connections(st, links, P)
+    D, n = ce.shape
+    spend = (st.vertical_wh + ce[:, None, :] + ce[None, :, :]
+             + st.hover_w * np.asarray(T, dtype=float) / 3600.0)  # (D, D, n)  # fmt: skip
+    need = st.usable_for(spend, 1 + nc[:, None, :] + nc[None, :, :]).reshape(D * D, n)
+    pair = np.argmin(need, axis=0)
+    return need[pair, np.arange(n)], pair // D, pair % D
 
 
 def solo_sorties(st: FleetSettings, room: np.ndarray, T: np.ndarray) -> np.ndarray:
