@@ -169,7 +169,7 @@ def _main(argv: Sequence[str] | None) -> int:
         # one problem a line: split on "\n" only, every other control character escaped (a
         # path or a name with ESC, NEL or U+2028 cannot forge a line or a terminal escape)
         for line in str(exc).split("\n"):
-            print(f"lamde-mission {args.command}: {printable(line)}", file=sys.stderr)
+            print(f"lamde-mission {_command_name(args)}: {printable(line)}", file=sys.stderr)
         return 2
     except ValueError as exc:
         problems = _map_problems(exc)
@@ -181,9 +181,18 @@ def _main(argv: Sequence[str] | None) -> int:
         # newline cannot forge a line or a terminal escape)
         where = getattr(args, "map", None)
         for line in problems:
-            print(f"lamde-mission {args.command}: " + (f"{printable(where)}: " if where else "")
+            print(f"lamde-mission {_command_name(args)}: "
+                  + (f"{printable(where)}: " if where else "")
                   + line, file=sys.stderr)  # fmt: skip
         return 2
+
+
+def _command_name(args: argparse.Namespace) -> str:
+    """The command as typed, its subcommand included ("map from-geojson", "lam build": a
+    command with subcommands keeps the chosen one in `{command}_command`), as argparse names
+    it in its own errors."""
+    sub = getattr(args, f"{args.command}_command", None)
+    return f"{args.command} {sub}" if sub else args.command
 
 
 def _map_problems(exc: BaseException) -> list[str] | None:

@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from lamde_mission.atomic import write_bytes_atomic
+from planner_core.textio import counted
 
 __all__ = ["mission_figure", "save_figure", "plot_mission", "IMAGE_SUFFIXES", "MAX_DPI",
            "check_dpi", "nice_length", "SortieView", "fleet_figure", "plot_fleet",
@@ -1233,7 +1234,7 @@ def fleet_figure(
                 [],
                 color=_vehicle_colour(v),
                 linewidth=2.2,
-                label=f"vehicle {v}: {n} sortie{'s' if n > 1 else ''}",
+                label=f"vehicle {v}: {counted(n, 'sortie')}",
             )
         )
     most = max(len(svs) for svs in by_vehicle.values())
@@ -1287,8 +1288,8 @@ def fleet_figure(
                               label=f"corner, flown through ({n_corner})"))  # fmt: skip
     if title is None:
         nv = len(vehicles)
-        title = (f"map '{spec.name}': {nv} vehicle{'s' if nv > 1 else ''}, "
-                 f"{len(sorties)} sorties, {swaps} swap{'' if swaps == 1 else 's'}")  # fmt: skip
+        title = (f"map '{spec.name}': {counted(nv, 'vehicle')}, "
+                 f"{counted(len(sorties), 'sortie')}, {counted(swaps, 'swap')}")  # fmt: skip
     ax.set_title(title)
     _finish_map(fig, ax, W, handles, scene, len(sensors), named_below=False,
                 unlabelled=n_hover - labelled)

@@ -50,6 +50,7 @@ import numpy as np
 
 from planner_core.atomic import clean_stale_dirs, dir_beside
 from planner_core.defaults import MAX_FLEET_SORTIES, MAX_FLEET_VEHICLES
+from planner_core.textio import counted
 
 __all__ = ["FLEET_FILE", "SortieCheck", "FleetCheck", "sortie_dir_refusal",
            "output_in_sortie_dir", "sortie_file", "sortie_map", "write_sortie_dir",
@@ -372,8 +373,7 @@ def _uavs_verdict(m: Any, vehicles: int) -> Any:
     from sim.checks import Verdict
 
     uavs = int(m.uavs)
-    detail = (f"fleet.json plans {vehicles} vehicle{'s' if vehicles != 1 else ''}, the map's "
-              f"fleet.uavs is {uavs}")  # fmt: skip
+    detail = f"fleet.json plans {counted(vehicles, 'vehicle')}, the map's fleet.uavs is {uavs}"
     return Verdict("UAVS", "vehicles <= fleet.uavs", vehicles <= uavs, float(uavs - vehicles),
                    "vehicles", detail)  # fmt: skip
 
@@ -597,7 +597,8 @@ def write_sortie_dir(
     goal = st.goal
     n_sorties = sum(len(vs) for vs in plan.vehicles)
     if len(plan.vehicles) > MAX_FLEET_VEHICLES or n_sorties > MAX_FLEET_SORTIES:
-        raise ValueError(f"the plan has {n_sorties:,} sorties on {len(plan.vehicles)} vehicles, "
+        raise ValueError(f"the plan has {counted(n_sorties, 'sortie')} on "
+                         f"{counted(len(plan.vehicles), 'vehicle')}, "
                          f"more than a sortie directory holds ({MAX_FLEET_SORTIES:,} sorties, "
                          f"{MAX_FLEET_VEHICLES} vehicles)")  # fmt: skip
     shares = collected_by_sortie(plan, ModelParams.from_map(m.planning_map()))  # Mbit, margin in

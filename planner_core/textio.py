@@ -59,6 +59,7 @@ __all__ = [
     "read_maybe_gz",
     "read_jsonl",
     "printable",
+    "counted",
     "quoted",
 ]
 
@@ -696,3 +697,19 @@ def quoted(value: object, width: int = 40) -> str:
     if len(text) > width:
         text = text[: max(width - 3, 1)] + "..."
     return printable(text)
+
+
+def counted(n: int, noun: str, plural: str | None = None) -> str:
+    """"1 obstacle", "0 obstacles", "1,001 sorties": a count (thousands separated) and its
+    noun, singular for 1 only. The one place the CLI's summary lines pluralise ("1 obstacles",
+    "1 battery swaps" were printed).
+
+    Args:
+        n: the count.
+        noun: the singular ("battery swap", "no-fly zone").
+        plural: the plural where it is not noun + "s".
+
+    Returns:
+        "{n:,} {noun}" or "{n:,} {plural}".
+    """
+    return f"{n:,} {noun if n == 1 else (plural or noun + 's')}"

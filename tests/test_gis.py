@@ -390,6 +390,31 @@ def test_show_draws_footprints_and_bad_options_exit_2(campus, tmp_path) -> None:
     assert r.returncode == 2 and "missing.geojson: file not found" in r.stderr
 
 
+def test_round_trip_summary_counts_every_obstacle_and_names_the_subcommand(tmp_path,
+                                                                         capsys) -> None:
+    """`map from-geojson` of small-demo's export printed "0 obstacles, 1 no-fly zones, 1
+    circles" (only polygons counted as obstacles, so the rectangle looked lost), `check` "1
+    circles, 1 rectangles"; its errors began "lamde-mission map:" where argparse's name the
+    subcommand."""
+    from lamde_mission.cli import main
+
+    gj, back = tmp_path / "sd.geojson", tmp_path / "sd-back.json"
+    assert main(["map", "to-geojson", str(ROOT / "examples" / "maps" / "small-demo.json"),
+                 "-o", str(gj)]) == 0  # fmt: skip
+    assert capsys.readouterr().out == f"wrote {gj}: 10 features\n"
+    assert main(["map", "from-geojson", str(gj), "-o", str(back)]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith(f"wrote {back}: 4 sensors, 2 obstacles (1 circle, 1 rectangle), 1 "
+                          "no-fly zone; area 2000 m x 2000 m from origin "), out
+    assert main(["check", str(back)]) == 0
+    assert ("  obstacles       1 circle, 1 rectangle, 0 polygons, 1 no-fly zone\n"
+            in capsys.readouterr().out)
+    assert main(["map", "from-geojson", str(tmp_path / "nope.geojson"), "-o",
+                 str(tmp_path / "x.json")]) == 2  # fmt: skip
+    err = capsys.readouterr().err
+    assert err == f"lamde-mission map from-geojson: {tmp_path / 'nope.geojson'}: file not found\n"
+
+
 def test_multipolygon_problem_names_the_part(tmp_path) -> None:
     ok = [[_pt(2, 2), _pt(3, 2), _pt(3, 3), _pt(2, 2)]]
     bow = [[_pt(2, 4), _pt(3, 5), _pt(3, 4), _pt(2, 5), _pt(2, 4)]]

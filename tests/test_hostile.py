@@ -35,7 +35,9 @@ def _refused(argv: list[str], field: str) -> str:
     lines = out.stderr.splitlines()
     assert out.status == 2, (argv, out.status, out.stderr)
     assert len(lines) == 1, lines
-    assert lines[0].startswith(f"lamde-mission {argv[0]}: "), lines
+    # the subcommand too: `map from-geojson` (as argparse names it)
+    name = " ".join(argv[:2]) if argv[0] in ("map", "lam") else argv[0]
+    assert lines[0].startswith(f"lamde-mission {name}: "), lines
     assert field in lines[0], (field, lines[0])
     return lines[0]
 
@@ -283,7 +285,7 @@ def test_fuzz_geojson(rng: random.Random, tmp_path_factory) -> None:
     assert out_.error is None, f"exception {out_.error!r}"
     assert out_.status in (0, 2), (out_.status, out_.stderr)
     for line in out_.stderr.splitlines():
-        assert line.startswith(("lamde-mission map: ", "note: ")), line
+        assert line.startswith(("lamde-mission map from-geojson: ", "note: ")), line
     if out_.status == 2:
         assert sorted(p.name for p in d.iterdir()) == ["in.geojson"]
     else:

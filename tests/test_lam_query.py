@@ -290,7 +290,8 @@ def test_selection_figure_says_what_it_shows():
               "objective": np.arange(5), "constraint": np.arange(5, 10)}
     fig = selection_figure(doc, arrays)
     texts = " | ".join(t.get_text().replace("\n", " ") for t in fig.findobj(Text))
-    for needle in ("K = 5 training problems for 2 task(s) (T01, T09)", "selection two-stage",
+    # "task(s)": counts say their noun in the singular for 1 only (planner_core.textio.counted)
+    for needle in ("K = 5 training problems for 2 tasks (T01, T09)", "selection two-stage",
                    "ela features", "principal component 1", "database D_syn (40 instances)",
                    "selected objective s_k", "selected constraint s'_k", "task objective z_f",
                    "task constraint z_phi"):

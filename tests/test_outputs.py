@@ -21,7 +21,7 @@ from planner_core.atomic import (
     dir_beside,
     write_text_atomic,
 )
-from planner_core.textio import printable
+from planner_core.textio import counted, printable
 from tests.conftest import MAPS, run_cli, run_cli_many
 
 DEMO = MAPS / "small-demo.json"
@@ -176,6 +176,15 @@ def test_printable_escapes_controls() -> None:
     assert printable("\x1b[2J") == "\\x1b[2J"
     assert printable("x\u202ey\u2028") == "x\\u202ey\\u2028"
     assert printable("\x9b") == "\\x9b"
+
+
+def test_counted_is_singular_for_one_only() -> None:
+    # "1 obstacles", "1 sorties", "1 battery swaps" were printed
+    assert counted(1, "battery swap") == "1 battery swap"
+    assert counted(0, "no-fly zone") == "0 no-fly zones"
+    assert counted(2, "sortie") == "2 sorties" and counted(1, "sortie") == "1 sortie"
+    assert counted(1001, "sortie") == "1,001 sorties"
+    assert counted(3, "child", "children") == "3 children" and counted(1, "child") == "1 child"
 
 
 @pytest.mark.parametrize("field", ["name", "id"])

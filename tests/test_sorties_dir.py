@@ -340,6 +340,25 @@ def test_plan_and_verify_print_what_is_left_above_the_reserve(dirs, capsys):
     assert not any("reserve left" in x for x in lines)
 
 
+def test_plan_and_verify_count_in_the_singular_for_one(dirs, capsys):
+    # "4 sorties on 1 vehicle(s)", "1 battery swaps" were printed (one helper now:
+    # planner_core.textio.counted, tests/test_outputs.py)
+    from lamde_mission.commands.plan import _sortie_lines
+    from lamde_mission.sorties import verify_sortie_dir
+
+    map_path, d = dirs[1]
+    check = verify_sortie_dir(load_map(map_path), d)
+    n, swaps = len(check.sorties), check.swaps
+    assert len(check.vehicles()) == 1 and n > 1 and swaps == n - 1
+    rc, out, _ = _verify(capsys, map_path, d)
+    assert rc == 0 and f"sortie directory {d} on map 'fleet-demo': {n} sorties on 1 vehicle\n" \
+        in out, out
+    assert f"with {swaps} battery swap{'s' if swaps > 1 else ''}; f summed" in out
+    assert "(s)" not in out
+    lines = "\n".join(_sortie_lines(check))
+    assert f"  vehicle 1: {n} sorties, makespan " in lines and "1 sensors" not in lines
+
+
 def test_the_docs_say_what_plan_fleet_returns_and_what_is_left() -> None:
     # README said plan_fleet "returns the plan": it returns a FleetResult, its .plan the plan;
     # "reserve left" (battery - energy) read as slack

@@ -439,7 +439,8 @@ def test_fleet_json_lists_at_most_the_sorties_and_vehicles_a_plan_holds(tmp_path
     with pytest.raises(FleetDirError, match=r"vehicles: 101 vehicles, more than 100"):
         read_fleet_dir(d)
     big = SimpleNamespace(settings=SimpleNamespace(goal="total"), vehicles=[[None] * 1001])
-    with pytest.raises(ValueError, match="1,001 sorties on 1 vehicles, more than a sortie"):
+    # "on 1 vehicles": a count names its noun in the singular for 1 (textio.counted)
+    with pytest.raises(ValueError, match="1,001 sorties on 1 vehicle, more than a sortie"):
         write_sortie_dir(big, None, tmp_path / "out")
     assert not (tmp_path / "out").exists()
 

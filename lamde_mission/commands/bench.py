@@ -189,8 +189,10 @@ def run(args: argparse.Namespace) -> int:
                       address=args.address)
     except BenchError as exc:
         raise UsageError(str(exc)) from None
-    print(f"bench: {s.done} run(s) done, {s.skipped} already present, {len(s.failed)} failed; "
-          f"results in {s.results}")
+    from planner_core.textio import counted
+
+    print(f"bench: {counted(s.done, 'run')} done, {s.skipped} already present, "
+          f"{len(s.failed)} failed; results in {s.results}")
     if s.best_known_updates:
         print(f"bench: best-known improved on {', '.join(sorted(set(s.best_known_updates)))}")
     for rec in s.failed:

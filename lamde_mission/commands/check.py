@@ -61,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
         return 0 if d.feasible_so_far else 1
     default = " (default for this size)" if s["max_hover_points_default"] else ""
     u, r, o = s["uav"], s["radio"], s["objective"]
-    from planner_core.textio import printable
+    from planner_core.textio import counted, printable
 
     print(f"map '{printable(s['name'])}': " + ("OK" if d.feasible_so_far else
                                     f"valid, but {_cannot_what(d)} (CANNOT below)"))
@@ -75,8 +75,9 @@ def run(args: argparse.Namespace) -> int:
           f"({s['end'][0]:g}, {s['end'][1]:g})")
     print(f"  sensors         {s['sensors']} (total required {s['total_required_data_mbit']:g} "
           "Mbit)")
-    print(f"  obstacles       {s['circles']} circles, {s['rectangles']} rectangles, "
-          f"{s['polygons']} polygons, {s['no_fly_zones']} no-fly zones")
+    print(f"  obstacles       {counted(s['circles'], 'circle')}, "
+          f"{counted(s['rectangles'], 'rectangle')}, {counted(s['polygons'], 'polygon')}, "
+          f"{counted(s['no_fly_zones'], 'no-fly zone')}")
     print(f"  I_max           {s['max_hover_points']}{default}")
     print(f"  uav             H {u['altitude']:g} m, v_max {u['max_speed']:g} m/s, "
           f"a {u['acceleration']:g} m/s^2, T_max {u['max_hover_time']:g} s, "
@@ -121,7 +122,7 @@ def _energy_lines(s: dict, m: object) -> None:
               f"{100 * b['reserve']:g} %: {b['usable_wh']:.4g} Wh usable per sortie "
               f"({60 * b['usable_wh'] / hover_w:.3g} min of hover at P(0) {hover_w:g} W)")
     if f is not None:
-        from planner_core.textio import printable
+        from planner_core.textio import counted, printable
 
         names, xy, _ = m.sortie_sites
         sites = [f"{printable(n)} ({x:g}, {y:g})" for n, (x, y) in zip(names, xy, strict=True)]
@@ -130,7 +131,7 @@ def _energy_lines(s: dict, m: object) -> None:
             where = f"{sites[0]} at the start (default)" + (
                 f" and {sites[1]} at the map's end (a landing site; a take-off site only "
                 "after a landing there)" if len(sites) > 1 else "")
-        print(f"  fleet           {f['uavs']} UAV{'s' if f['uavs'] != 1 else ''}, depots "
+        print(f"  fleet           {counted(f['uavs'], 'UAV')}, depots "
               f"{where}, swap {f['swap_s']:g} s, separation {f['separation_m']:g} m, goal "
               f"{s['goal']}")
 

@@ -277,7 +277,9 @@ def _run_suite(folder: Path, seed: int, *, large: bool = False) -> int:
         for path in paths:
             print(f"wrote {path}: {_line(json.loads(path.read_text()))}")
         n = len(paths)
-    print(f"{n} maps in {time.perf_counter() - t0:.1f} s (seed {seed})", flush=True)
+    from planner_core.textio import counted
+
+    print(f"{counted(n, 'map')} in {time.perf_counter() - t0:.1f} s (seed {seed})", flush=True)
     if large:
         _note_sensor_limit(list(maps.values()))
     return 0

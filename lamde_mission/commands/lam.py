@@ -17,7 +17,7 @@ from typing import Any
 
 from lamde_mission.commands._common import add_executor_args, check_executor_args
 from lamde_mission.errors import UsageError
-from planner_core.textio import printable
+from planner_core.textio import counted, printable
 
 _FEATURES = ("learned", "ela")
 _SELECTIONS = ("global", "random", "local")
@@ -315,7 +315,8 @@ def run(args: argparse.Namespace) -> int:
         db = _database(args, names)
         _check_cache(db, args, write=bool(db.missing()))
         n = _build(db, args)
-        print(f"{len(db.spec)} instances, {len(db.chunks())} chunks ({n} computed now) "
+        print(f"{counted(len(db.spec), 'instance')}, {counted(len(db.chunks()), 'chunk')} ({n} "
+              "computed now) "
               f"in {db.cache_dir}")  # fmt: skip
         return 0
     return _select(args)
@@ -363,7 +364,7 @@ def _select(args: argparse.Namespace) -> int:
 
         write_bytes_atomic(args.plot, figure, mkdir=False)
     fids = sorted({p["objective"]["function"] for p in doc["problems"]})
-    print(f"wrote {args.out}: {len(doc['problems'])} training problems "
+    print(f"wrote {args.out}: {counted(len(doc['problems']), 'training problem')} "
           f"(objective functions {fids}), rho = {doc['options']['rho']:.3f}")  # fmt: skip
     return 0
 
@@ -423,9 +424,10 @@ def selection_figure(doc: dict[str, Any], arrays: dict[str, Any]) -> Any:
     o = doc["options"]
     tasks = list(o.get("tasks", []))
     shown = ", ".join(tasks[:6]) + (", ..." if len(tasks) > 6 else "")
-    fig.suptitle(f"Landscape-aware selection (paper Sec. 4.3): K = {o['k']} training problems "
-                 f"for {len(tasks)} task(s) ({shown})\nselection {o['selection']}, "
-                 f"{o['features']} features, N_probe {o['n_probe']}, seed {o['seed']}",
+    fig.suptitle(f"Landscape-aware selection (paper Sec. 4.3): K = "
+                 f"{counted(o['k'], 'training problem')} for {counted(len(tasks), 'task')} "
+                 f"({shown})\nselection {o['selection']}, {o['features']} features, "
+                 f"N_probe {o['n_probe']}, seed {o['seed']}",
                  fontsize=10)  # fmt: skip
     ax.set_xlabel("principal component 1 of the landscape features (unitless)")
     ax.set_ylabel("principal component 2 (unitless)")

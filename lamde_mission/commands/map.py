@@ -173,12 +173,25 @@ def _from_geojson(args: argparse.Namespace) -> int:
                                  mkdir=False)
     except OSError as exc:
         raise UsageError(f"{args.output}: cannot write ({exc.strerror or exc})") from None
-    s = m.summary()
-    print(f"wrote {printable(path)}: {s['sensors']} sensors, {s['polygons']} obstacles, "
-          f"{s['no_fly_zones']} no-fly zones, {s['circles']} circles; area "
-          f"{m.width:g} m x {m.height:g} m from origin ({m.spec.origin.lat:.9f}, "
-          f"{m.spec.origin.lon:.9f})")  # fmt: skip
+    print(f"wrote {printable(path)}: {_contents(m)}; area {m.width:g} m x {m.height:g} m from "
+          f"origin ({m.spec.origin.lat:.9f}, {m.spec.origin.lon:.9f})")
     return 0
+
+
+def _contents(m: Any) -> str:
+    """What a map holds, every obstacle kind counted ("4 sensors, 2 obstacles (1 circle, 1
+    rectangle), 1 no-fly zone"): the rectangle of a round trip was missing (only polygons
+    were counted as obstacles)."""
+    from planner_core.textio import counted
+
+    s = m.summary()
+    kinds = [counted(s[k], noun) for k, noun in (("circles", "circle"),
+                                                  ("rectangles", "rectangle"),
+                                                  ("polygons", "polygon")) if s[k]]  # fmt: skip
+    n = s["circles"] + s["rectangles"] + s["polygons"]
+    return (f"{counted(s['sensors'], 'sensor')}, {counted(n, 'obstacle')}"
+            + (f" ({', '.join(kinds)})" if kinds else "")
+            + f", {counted(s['no_fly_zones'], 'no-fly zone')}")
 
 
 #: problem lines printed at most; the rest are counted ("... and N more")
@@ -209,7 +222,7 @@ def _to_geojson(args: argparse.Namespace) -> int:
     from lamde_mission.atomic import write_text_atomic
     from lamde_mission.commands._common import load_map_or_fail
     from lamde_mission.gis import map_to_geojson
-    from planner_core.textio import printable
+    from planner_core.textio import counted, printable
 
     _check_output(args, [args.map])
     m = load_map_or_fail(args.map)
@@ -219,7 +232,7 @@ def _to_geojson(args: argparse.Namespace) -> int:
                                  mkdir=False)
     except OSError as exc:
         raise UsageError(f"{args.output}: cannot write ({exc.strerror or exc})") from None
-    print(f"wrote {printable(path)}: {len(doc['features'])} features")
+    print(f"wrote {printable(path)}: {counted(len(doc['features']), 'feature')}")
     return 0
 
 
@@ -253,7 +266,8 @@ def _campus(args: argparse.Namespace) -> int:
         path = write_text_atomic(args.output, dumps_map(doc))
     except OSError as exc:
         raise UsageError(f"{args.output}: cannot write ({exc.strerror or exc})") from None
-    print(f"wrote {path}: {args.footprints} footprints, {args.sensors} sensors, origin "
+    print(f"wrote {path}: {textio.counted(args.footprints, 'footprint')}, "
+          f"{textio.counted(args.sensors, 'sensor')}, origin "
           f"({origin['lat']}, {origin['lon']})")
     return 0
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from typing import Any
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -217,13 +218,7 @@ def run(args: argparse.Namespace) -> int:
         pass
     finally:
         vehicle.stop()
-    s = vehicle.stats
-    print(
-        f"stopped: {s.received} messages in ({s.dropped_in} dropped), {s.sent} out "
-        f"({s.dropped} dropped), "
-        f"{sum(s.uploads.values())} uploads, {sum(s.downloads.values())} downloads",
-        file=sys.stderr,
-    )
+    print(f"stopped: {_stats_line(vehicle.stats)}", file=sys.stderr)
     return 0
 
 
@@ -256,8 +251,15 @@ def _serve_fleet(fleet: object) -> int:
     finally:
         fleet.stop()
     for v in fleet.vehicles:
-        s = v.stats
-        print(f"stopped system {v.system_id}: {s.received} messages in ({s.dropped_in} dropped), "
-              f"{s.sent} out ({s.dropped} dropped), {sum(s.uploads.values())} uploads, "
-              f"{sum(s.downloads.values())} downloads", file=sys.stderr)  # fmt: skip
+        print(f"stopped system {v.system_id}: {_stats_line(v.stats)}", file=sys.stderr)
     return 0
+
+
+def _stats_line(s: Any) -> str:
+    """A mock's traffic when it stops: "12 messages in (0 dropped), 14 out (0 dropped), 1
+    upload, 1 download" (`MockStats`)."""
+    from planner_core.textio import counted
+
+    return (f"{counted(s.received, 'message')} in ({s.dropped_in} dropped), {s.sent} out "
+            f"({s.dropped} dropped), {counted(sum(s.uploads.values()), 'upload')}, "
+            f"{counted(sum(s.downloads.values()), 'download')}")

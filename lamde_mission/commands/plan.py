@@ -241,7 +241,7 @@ def _summary(
     plan: Any, m: Any, timeline: Any, verdicts: Any, out: str | list[str] | None,
     stored: Any = None,
 ) -> str:
-    from planner_core.textio import printable
+    from planner_core.textio import counted, printable
 
     b = plan.breakdown
     t = timeline.totals
@@ -256,14 +256,14 @@ def _summary(
     n_corner = sum(1 for t in times if float(t) == 0.0)
     # corner slots (issue 31): K slots beyond I_max that only corners may use
     k_slots = int(plan.config.get("corner_slots", 0))
-    slots = (f"{k_slots} corner slot{'s' if k_slots != 1 else ''} beyond I_max"
+    slots = (f"{counted(k_slots, 'corner slot')} beyond I_max"
              + (", auto" if plan.config.get("corner_slots_rule") == "auto" else "")
              if k_slots else "")  # fmt: skip
-    corners = (f" + {n_corner} corner{'s' if n_corner != 1 else ''} (0 s, NAV_WAYPOINT"
+    corners = (f" + {counted(n_corner, 'corner')} (0 s, NAV_WAYPOINT"
                + (f"; {slots})" if slots else ")") if n_corner
                else f" ({slots})" if slots else "")  # fmt: skip
     lines = [
-        f"map '{printable(m.name)}': {plan.n_hover - n_corner} hover points{corners}, "
+        f"map '{printable(m.name)}': {counted(plan.n_hover - n_corner, 'hover point')}{corners}, "
         f"{plan.evaluations} evaluations, "
         f"{plan.timings.get('planning', plan.wall_time - t_compile):.2f} s planning (seed "
         f"{plan.seed}, {plan.configurator}{sched}{stopped})" + compiling,
@@ -373,7 +373,7 @@ def _sortie_lines(check: Any) -> list[str]:
     """Per sortie: depots, duration, energy, what is left above the reserve, sensors served;
     per vehicle its makespan; then the plan's totals (the sim's figures on the stored
     missions)."""
-    from planner_core.textio import printable
+    from planner_core.textio import counted, printable
 
     lines = []
     for v, ss in check.vehicles().items():
@@ -384,12 +384,13 @@ def _sortie_lines(check: Any) -> list[str]:
                 if vd.energy_wh is not None else "no battery"
             lines.append(f"  {s.file:<18} {printable(s.depot_start)} -> "
                          f"{printable(s.depot_end)}: {s.duration_s:8.1f} s, {energy}, "
-                         f"{len(s.sensors)} sensors served")
+                         f"{counted(len(s.sensors), 'sensor')} served")
         launch = f"launch at +{check.launch(v):.0f} s, " if len(check.launches) > 1 else ""
-        lines.append(f"  vehicle {v}: {launch}{len(ss)} sorties, makespan "
+        lines.append(f"  vehicle {v}: {launch}{counted(len(ss), 'sortie')}, makespan "
                      f"{check.makespan(v):.1f} s")
-    lines.append(f"  total {check.total_s:.1f} s over {len(check.sorties)} sorties with "
-                 f"{check.swaps} battery swaps; f summed + swaps {check.f_total:.2f}")
+    lines.append(f"  total {check.total_s:.1f} s over {counted(len(check.sorties), 'sortie')} "
+                 f"with {counted(check.swaps, 'battery swap')}; f summed + swaps "
+                 f"{check.f_total:.2f}")
     for v in check.combined:
         lines.append(f"  whole plan {v.name}: {'PASS' if v.passed else 'FAIL'} ({v.detail})")
     for v in check.fleet:
@@ -404,7 +405,7 @@ def _run_sorties(args: argparse.Namespace) -> int:
 
     from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
     from lamde_mission.errors import UsageError
-    from planner_core.textio import printable
+    from planner_core.textio import counted, printable
 
     for opt, bad, why in (
         ("--format", args.format not in (None, "plan"),
@@ -495,12 +496,13 @@ def _run_sorties(args: argparse.Namespace) -> int:
         print(f"lamde-mission plan: {args.map}: {exc}", file=sys.stderr)
         return 1
     if not args.quiet:
-        print(f"map '{printable(m.name)}': {len(plan.sorties)} sorties on "
-              f"{len(plan.vehicles)} vehicle(s), objective {goal}, {plan.evaluations} "
+        print(f"map '{printable(m.name)}': {counted(len(plan.sorties), 'sortie')} on "
+              f"{counted(len(plan.vehicles), 'vehicle')}, objective {goal}, {plan.evaluations} "
               f"evaluations (seed {args.seed})")
         print("\n".join(_sortie_lines(check)))
         if written:
-            print(f"wrote {printable(str(out))}/ ({len(check.sorties)} missions and fleet.json)")
+            print(f"wrote {printable(str(out))}/ ({counted(len(check.sorties), 'mission')} and "
+                  "fleet.json)")
     if written and args.plot:  # every sortie as the simulator replays it (`show MAP DIR/`)
         from lamde_mission.commands.show import plot_fleet_dir
 

@@ -342,14 +342,14 @@ def _fleet_sim_check(directory: str, map_path: str, *, force: bool,
     """
     from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
     from lamde_mission.commands.verify import check_sortie_dir
-    from planner_core.textio import printable
+    from planner_core.textio import counted, printable
 
     m = with_origin_or_fail(load_map_or_fail(map_path), origin)
     check = check_sortie_dir(m, directory)
     if check.passed:
         print(f"simulator: all constraints hold on {printable(map_path)} for the "
-              f"{len(check.sorties)} sorties of {printable(directory)} (as `verify MAP DIR/` "
-              "judges them)", flush=True)  # fmt: skip
+              f"{counted(len(check.sorties), 'sortie')} of {printable(directory)} (as `verify "
+              "MAP DIR/` judges them)", flush=True)  # fmt: skip
         return True
     failed = "; ".join(printable(x) for x in check.failed())
     if force:
@@ -425,7 +425,7 @@ def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
         upload_fleet,
     )
     from lamde_mission.vehicle.transfer import VehicleError
-    from planner_core.textio import printable
+    from planner_core.textio import counted, printable
 
     conns = [c.strip() for c in args.connect.split(",")]
     try:
@@ -449,7 +449,7 @@ def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
         return 1
     n = len(missions)
     which = "first sorties" if args.sortie == 1 else f"sortie {args.sortie}"
-    print(f"{args.mission}: {n} vehicle{'s' if n > 1 else ''}, {which}: "
+    print(f"{args.mission}: {counted(n, 'vehicle')}, {which}: "
           + ", ".join(m.source for m in missions), flush=True)  # fmt: skip
 
     def done(result: object) -> None:  # each vehicle's lines as soon as it is done

@@ -101,7 +101,7 @@ def check_sortie_dir(m: Any, path: str) -> Any:
 
 def _run_sorties(args: argparse.Namespace, m: Any) -> int:
     """`verify MAP DIR/`: every sortie of a sortie directory, and the whole plan."""
-    from planner_core.textio import printable
+    from planner_core.textio import counted, printable
 
     check = check_sortie_dir(m, args.mission)
     if args.json:
@@ -118,7 +118,8 @@ def _run_sorties(args: argparse.Namespace, m: Any) -> int:
         print(json.dumps(out, indent=2))
     else:
         print(f"sortie directory {printable(args.mission)} on map '{printable(m.name)}': "
-              f"{len(check.sorties)} sorties on {len(check.vehicles())} vehicle(s)")
+              f"{counted(len(check.sorties), 'sortie')} on "
+              f"{counted(len(check.vehicles()), 'vehicle')}")
         for s in check.sorties:
             vd = s.verdicts
             energy = (f", energy {vd.energy_wh:.3f} Wh of {vd.usable_wh:.3f} usable, "
@@ -127,7 +128,8 @@ def _run_sorties(args: argparse.Namespace, m: Any) -> int:
                 if vd.energy_wh is not None else ""
             print(f"{printable(s.file)}: {printable(s.depot_start)} -> "
                   f"{printable(s.depot_end)}, {s.duration_s:.1f} s{energy}, "
-                  f"{len(s.sensors)} sensors served (its C4 and MARGIN: its share only)")
+                  f"{counted(len(s.sensors), 'sensor')} served (its C4 and MARGIN: its share "
+                  "only)")
             print("\n".join("  " + printable(r) for r in vd.table().splitlines()))
         for v in check.vehicles():
             print(f"vehicle {v}: launch at +{check.launch(v):.0f} s, makespan "
@@ -138,8 +140,8 @@ def _run_sorties(args: argparse.Namespace, m: Any) -> int:
         for v in check.fleet:
             print(f"fleet {v.name} {v.title}: {'PASS' if v.passed else 'FAIL'}; "
                   f"{printable(v.detail)}")
-        print(f"total {check.total_s:.1f} s with {check.swaps} battery swaps; f summed + "
-              f"swaps {check.f_total:.3f}")
+        print(f"total {check.total_s:.1f} s with {counted(check.swaps, 'battery swap')}; "
+              f"f summed + swaps {check.f_total:.3f}")
         print("result: " + ("all constraints hold" if check.passed
                             else "FAILED " + "; ".join(printable(x) for x in check.failed())))
     return 0 if check.passed else 1
@@ -185,12 +187,12 @@ def run(args: argparse.Namespace) -> int:
         }  # fmt: skip
         print(json.dumps(out, indent=2))
     else:
-        from planner_core.textio import printable
+        from planner_core.textio import counted, printable
 
-        corners = (f" + {n_corner} corner{'s' if n_corner != 1 else ''} (NAV_WAYPOINT, flown "
-                   "through; not hover points)" if n_corner else "")  # fmt: skip
+        corners = (f" + {counted(n_corner, 'corner')} (NAV_WAYPOINT, flown through; not hover "
+                   "points)" if n_corner else "")  # fmt: skip
         print(f"mission {printable(args.mission)} on map '{printable(m.name)}': "
-              f"{len(timeline.hover_times)} hover points{corners}")  # fmt: skip
+              f"{counted(len(timeline.hover_times), 'hover point')}{corners}")  # fmt: skip
         print("\n".join(printable(r) for r in verdicts.table().splitlines()))
         sf = m.spec.safety
         print(f"safety: clearance {verdicts.clearance:.3f} m (asked {sf.clearance:g} m); data "

@@ -58,7 +58,7 @@ from typing import Any
 
 import numpy as np
 
-from planner_core.textio import InputError, loads_json, printable, quoted, read_json
+from planner_core.textio import InputError, counted, loads_json, printable, quoted, read_json
 from sim.geo import enu_to_latlon, latlon_to_enu
 
 __all__ = ["GisError", "GisLayers", "read_layers", "build_map", "DEFAULT_MARGIN", "KINDS"]
@@ -1045,8 +1045,9 @@ def _depot_features(layers: GisLayers, settings: dict[str, Any], point: Any,
     if not isinstance(fleet, dict):
         fleet = settings["fleet"] = {}
     elif fleet.get("depots"):
-        notes.append(f"fleet.depots: the {len(layers.depots)} depot features replace the "
-                     f"{len(fleet['depots'])} in the fleet settings of {layers.settings_where}")
+        notes.append(f"fleet.depots: the {counted(len(layers.depots), 'depot feature')} replace "
+                     f"the {len(fleet['depots'])} in the fleet settings of "
+                     f"{layers.settings_where}")
     fleet["depots"] = depots
 
 

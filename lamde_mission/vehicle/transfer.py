@@ -33,6 +33,7 @@ from lamde_mission.vehicle.wire import (
     mission_type_name,
     wire_mission,
 )
+from planner_core.textio import counted
 
 __all__ = [
     "VehicleError",
@@ -297,7 +298,7 @@ class UploadReport:
         elif self.fence_items == 0:
             fence = "and cleared the fence (the file has none)"
         else:
-            fence = f"and {self.fence_items} fence item{'s' if self.fence_items != 1 else ''}"
+            fence = f"and {counted(self.fence_items, 'fence item')}"
         if self.dialect is not None:
             out.append(f"compared under {self.dialect}'s storage rules"
                        + (" (item 0 is the vehicle's home position)"
@@ -307,17 +308,18 @@ class UploadReport:
         out.extend(f"note: {n}" for n in self.notes)
         if self.ok:
             out.append(
-                f"uploaded {self.mission_items} mission items {fence} in "
+                f"uploaded {counted(self.mission_items, 'mission item')} {fence} in "
                 f"{self.upload_s:.2f} s (attempt {self.attempts} of {self.max_attempts})"
             )
             if self.rally_items is None:
                 out.append("rally points left as they are (the file has none)")
             else:
-                out.append(f"uploaded {self.rally_items} rally points")
+                out.append(f"uploaded {counted(self.rally_items, 'rally point')}")
             out.append(f"read back and compared in {self.verify_s:.2f} s: identical")
         elif self.differences:
             out.append(
-                f"read-back differs from what was sent ({len(self.differences)} differences):"
+                f"read-back differs from what was sent "
+                f"({counted(len(self.differences), 'difference')}):"
             )
             out.extend(f"  {d}" for d in self.differences[:max_differences])
             if len(self.differences) > max_differences:

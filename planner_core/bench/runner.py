@@ -29,6 +29,7 @@ from planner_core.bench._io import read_meta, stored_path, utc_now, write_json_a
 from planner_core.bench.limits import BestKnown, best_known_path, suite_task_files
 from planner_core.bench.records import RESULTS_FILE, Key, ResultsWriter, key_of, read_records
 from planner_core.execution import Executor, executor_problem, make_executor
+from planner_core.textio import counted
 
 __all__ = [
     "BEST_KNOWN_BUDGET",
@@ -488,7 +489,7 @@ def run_bench(
             raise
         except ValueError as exc:  # the file changed since it was read
             raise BenchError(str(exc)) from None
-    log(f"{len(all_jobs)} runs requested, {summary.skipped} already in {results}, "
+    log(f"{counted(len(all_jobs), 'run')} requested, {summary.skipped} already in {results}, "
         f"{len(todo)} to run")
     if not todo:
         return summary
