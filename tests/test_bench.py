@@ -231,6 +231,52 @@ def test_cli_bench_refuses_bad_options_before_any_run(suite: Path, tmp_path: Pat
     assert not best_known_path(suite).exists() and a_file.read_text() == "mine"
 
 
+def test_an_optimiser_whose_extra_is_missing_is_refused_before_any_run(
+        suite: Path, tmp_path: Path, capsys: pytest.CaptureFixture,
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Without the `baselines` extra, `bench --optimizers engineering` started and failed run
+    by run ("ModuleNotFoundError: No module named 'ortools'", exit 1); now one line names the
+    optimiser, the module and the pip extra, exit 2, nothing run or written (as `train` says
+    it needs torch). The modules are hidden as an uninstalled one is (sys.modules[m] = None)."""
+    import sys
+    import tomllib
+
+    from lamde_mission.cli import main
+    from planner_core.bench.baselines import REGISTRY, missing_extras
+
+    # every entry that needs more than the core names an extra of pyproject.toml providing it
+    extras = tomllib.loads((Path(__file__).resolve().parents[1] / "pyproject.toml").read_text(
+        encoding="utf-8"))["project"]["optional-dependencies"]
+    needing = {n: s for n, s in REGISTRY.items() if s.requires}
+    assert set(needing) == {"engineering", "planner-eng-start", "pymoo-ga"}
+    for name, spec in needing.items():
+        for module in spec.requires:
+            assert any(r.startswith(module) for r in extras[spec.extra]), (name, module)
+    assert missing_extras(list(REGISTRY)) is None  # this venv has them
+    assert main(["bench", "--list"]) == 0  # --list says which need an extra
+    listed = [x for x in capsys.readouterr().out.splitlines() if "[needs " in x]
+    assert [x.split()[0] for x in listed] == list(needing)
+    assert listed[0].endswith(" [needs ortools: pip install 'lamde-mission[baselines]']")
+    monkeypatch.setitem(sys.modules, "ortools", None)
+    monkeypatch.setitem(sys.modules, "pymoo", None)
+    assert missing_extras(["de-adaptive", "engineering-own-order"]) is None  # no OR-Tools
+    assert missing_extras(["engineering", "pymoo-ga", "planner-eng-start", "engineering"]) == (
+        "engineering, pymoo-ga, planner-eng-start need ortools, pymoo, not installed: pip "
+        "install 'lamde-mission[baselines]'")
+    out = tmp_path / "res"
+    assert main(["bench", "--suite", str(suite), "--optimizers", "random-search,engineering",
+                 "--runs", "1", "--budget", str(BUDGET), "--jobs", "0", "--out",
+                 str(out)]) == 2  # fmt: skip
+    cap = capsys.readouterr()
+    assert cap.err == ("lamde-mission bench: --optimizers: engineering needs ortools, not "
+                       "installed: pip install 'lamde-mission[baselines]'\n") and cap.out == ""
+    with pytest.raises(BenchError, match=r"^optimisers: pymoo-ga needs pymoo, not installed: "
+                       r"pip install 'lamde-mission\[baselines\]'$"):
+        run_bench(suite, ["pymoo-ga"], runs=1, budget=BUDGET, out=out, command="test",
+                  executor=SerialExecutor(), best_known=False)
+    assert not out.exists() and not best_known_path(suite).exists()
+
+
 def test_records_reader_tolerates_damage(tmp_path: Path) -> None:
     path = tmp_path / RESULTS_FILE
     rec = {"optimiser": "o", "task": "t", "run": 0, "f": 1.0, "phi": 0.0, "score": 1.0,

@@ -47,7 +47,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    "T01 T02 or T01,T02; default all maps in the suite)")
     p.add_argument("--optimizers", "--optimisers", nargs="+", metavar="NAME", dest="optimizers",
                    help="optimisers to run (space or comma separated; default all; "
-                   "--list shows them)")
+                   "--list shows them, and the pip extra each needs beyond the core: one "
+                   "whose extra is not installed is refused before anything runs)")
     p.add_argument("--runs", type=int, help=f"runs per optimiser and task (default "
                    f"{_DEFAULT_RUNS}; {_BK_RUNS} with --best-known)")
     p.add_argument("--budget", type=int, help=f"evaluations per run, initial population "
@@ -124,12 +125,14 @@ def run(args: argparse.Namespace) -> int:
         UsageError: a bad option, or a suite or results folder `run_bench` refuses (one
             line, exit 2).
     """
-    from planner_core.bench.baselines import REGISTRY
+    from planner_core.bench.baselines import REGISTRY, missing_extras
     from planner_core.bench.runner import BEST_KNOWN_OPTIMISERS, BenchError, run_bench
 
     if args.list:
         for name, spec in REGISTRY.items():
-            print(f"{name:22s} {spec.description}")
+            needs = (f" [needs {', '.join(spec.requires)}: pip install "
+                     f"'lamde-mission[{spec.extra}]']" if spec.requires else "")  # fmt: skip
+            print(f"{name:22s} {spec.description}{needs}")
         return 0
     bk = args.best_known
     args.runs = args.runs if args.runs is not None else (_BK_RUNS if bk else _DEFAULT_RUNS)
@@ -172,6 +175,9 @@ def run(args: argparse.Namespace) -> int:
     if unknown:
         raise UsageError(f"--optimizers: unknown {', '.join(unknown)}; choose from "
                          f"{', '.join(REGISTRY)}")
+    lacking = missing_extras(optimisers)  # as train's torch: before anything starts
+    if lacking:
+        raise UsageError(f"--optimizers: {lacking}")
     command = _command(args, optimisers, tasks)
     best_known: str | bool = False if args.no_best_known_update else (
         args.best_known_file or True)

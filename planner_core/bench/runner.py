@@ -382,7 +382,7 @@ def run_bench(
             or (without `executor`) a bad `jobs` or `backend`, or an address with local
             (`executor_problem`), each refused before anything is written.
     """
-    from planner_core.bench.baselines import INIT_MODES, REGISTRY
+    from planner_core.bench.baselines import INIT_MODES, REGISTRY, missing_extras
 
     log = log or (lambda _msg: None)
     bad = [m for m in inits if m not in INIT_MODES]
@@ -399,6 +399,9 @@ def run_bench(
     if unknown:
         raise BenchError(f"unknown optimiser(s) {', '.join(unknown)}; choose from "
                          f"{', '.join([*REGISTRY, *extras])}")
+    lacking = missing_extras(optimisers, extra)  # before any run, not one failure per run
+    if lacking:
+        raise BenchError(f"optimisers: {lacking}")
     if runs < 1 or budget < 1:
         raise BenchError("runs and budget must be positive")
     if int(base_seed) < 0:

@@ -13,6 +13,7 @@ optimiser alone; `lamde_mission.api.plan` adds the polish for users.
 from __future__ import annotations
 
 import importlib
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
@@ -46,6 +47,7 @@ __all__ = [
     "UniformStart",
     "as_evaluator",
     "get",
+    "missing_extras",
     "names",
     "optimise",
     "policy_spec",
@@ -87,6 +89,20 @@ class OptimiserSpec:
     #: True: builds its plans without any start population, so it is the same in both start
     #: modes (`--init seeded|uniform`), and its seed may not change the answer on a small map
     constructive: bool = False
+    #: modules it imports beyond the package's own dependencies, and the pip extra of
+    #: pyproject.toml that installs them (`missing_extras`)
+    requires: tuple[str, ...] = ()
+    extra: str | None = None
+
+    def missing(self) -> list[str]:
+        """The modules of `requires` not installed here (found without importing them).
+
+        Returns:
+            Their names, in `requires` order; empty when it can run.
+        """
+        import importlib.util
+
+        return [m for m in self.requires if importlib.util.find_spec(m) is None]
 
     def function(self) -> Any:
         """The optimiser's function, imported from `target` ("module:function") now.
@@ -196,6 +212,8 @@ REGISTRY: dict[str, OptimiserSpec] = {
             "its candidates (one evaluation each); the same in both start modes",
             spends_budget=False,
             constructive=True,
+            requires=("ortools",),
+            extra="baselines",
         ),
         OptimiserSpec(
             "engineering-own-order",
@@ -214,6 +232,8 @@ REGISTRY: dict[str, OptimiserSpec] = {
             "population's last 10 rows (`planner` instead scores its first "
             f"{START_CANDIDATES}, ordered by its own open path)",
             spends_budget=False,  # the planner's improving rounds may stop early
+            requires=("ortools",),
+            extra="baselines",
         ),
         OptimiserSpec(
             "pymoo-ga",
@@ -221,6 +241,8 @@ REGISTRY: dict[str, OptimiserSpec] = {
             f"pymoo GA (population {POPULATION}, SBX, polynomial mutation, feasibility-first "
             "tournament and survival on G = phi <= 0) from the DE's start population of the "
             "run's start mode, then the polish LP",
+            requires=("pymoo",),
+            extra="baselines",
         ),
         OptimiserSpec(
             "scipy-de",
@@ -286,6 +308,40 @@ def policy_spec(name: str, checkpoint: str, *, variable_length: bool = True,
         variable_length=variable_length,
         probe_evaluations=int(probe_evaluations),
     )
+
+
+def missing_extras(names: Sequence[str], extra: Sequence[OptimiserSpec] = ()) -> str | None:
+    """Why some of the optimisers `names` cannot run here, in one line, or None: each whose
+    `requires` are not all installed, with the modules and the pip extra that installs them
+    ("engineering needs ortools, not installed: pip install 'lamde-mission[baselines]'"), so
+    a benchmark is refused before it starts instead of failing run by run.
+
+    Args:
+        names: optimiser names (the registry's or `extra`'s; unknown names are skipped).
+        extra: entries outside the registry (`policy_spec`).
+
+    Returns:
+        The line, or None when every one can run.
+    """
+    specs = {**REGISTRY, **{e.name: e for e in extra}}
+    lacking: dict[str, list[str]] = {}  # extra -> "name (modules)"
+    modules: dict[str, list[str]] = {}
+    for name in dict.fromkeys(names):
+        spec = specs.get(name)
+        gone = spec.missing() if spec is not None else []
+        if gone:
+            key = spec.extra or ""
+            lacking.setdefault(key, []).append(name)
+            modules.setdefault(key, [])
+            modules[key] += [m for m in gone if m not in modules[key]]
+    if not lacking:
+        return None
+    parts = []
+    for key, who in lacking.items():
+        how = f": pip install 'lamde-mission[{key}]'" if key else ""
+        parts.append(f"{', '.join(who)} need{'s' if len(who) == 1 else ''} "
+                     f"{', '.join(modules[key])}, not installed{how}")
+    return "; ".join(parts)
 
 
 def names() -> list[str]:
