@@ -87,6 +87,29 @@ def test_cli_train_bad_input_is_one_line_exit_2(tmp_path, capsys) -> None:  # no
     assert not (tmp_path / "ck").exists() and a_file.read_text() == "mine"
 
 
+def test_cli_train_help_shows_every_default() -> None:
+    """`train --help` gave no default for --maps, --epochs, --envs, --population or --budget,
+    where every other command's options show theirs; the values shown are PPOConfig's."""
+    import argparse
+
+    from lamde_mission.cli import build_parser
+    from lamde_mission.commands.train import HELP_DEFAULTS
+
+    sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    train = sub.choices["train"]
+    bare = [a.option_strings[-1] for a in train._actions
+            if a.option_strings and a.nargs != 0 and not a.required  # an option taking a value
+            and "default" not in (a.help or "")]  # fmt: skip
+    assert bare == [], bare
+    text = train.format_help()
+    for shown in ("(default 8)", "(default 10; 0: the warm start alone)", "(default 4)",
+                  "(default 50; planning uses 100)", "(default 3,000)"):
+        assert shown in " ".join(text.split()), shown
+    ppo = pytest.importorskip("planner_core.learning.policy.ppo")  # imports torch
+    base = ppo.PPOConfig()
+    assert HELP_DEFAULTS == {k: getattr(base, k) for k in HELP_DEFAULTS}
+
+
 def test_a_uav_spec_with_a_non_integer_field_is_one_value_error_naming_it() -> None:
     """`problems.build` of a uav spec: size, density and seed must be JSON integers (int()
     raised TypeError for null, an unnamed ValueError for "abc", and cut 5000.5 to 5000);

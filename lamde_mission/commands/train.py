@@ -18,6 +18,11 @@ from pathlib import Path
 from lamde_mission.commands._common import add_executor_args, check_executor_args
 from planner_core import defaults as D
 
+#: PPOConfig's defaults that --help shows (`planner_core.learning.policy.ppo.PPOConfig`, which
+#: imports torch, so the help cannot read them there; tests/test_policy_cli.py keeps them equal)
+HELP_DEFAULTS = {"seed": 0, "epochs": 10, "envs": 4, "population": 50, "budget": 3000,
+                 "imitate": "adaptive", "imitate_epochs": 8}
+
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Register `lamde-mission train` (options, help).
@@ -44,31 +49,39 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="training-set JSON with a 'problems' list (default: built-in UAV maps)")
     p.add_argument("--maps", type=int, default=8,
                    help="number of built-in training maps when neither --problems nor --bbob "
-                   "is given")
+                   "is given (default %(default)s)")
     p.add_argument("--bbob", type=int, metavar="K",
                    help="train on K plain BBOB instances instead (no landscape-aware module, "
                    "no constraint: the paper's ablation LAMDE-O; functions 1..24 cycled over "
-                   "--bbob-dims)")
+                   "--bbob-dims; default: none, the UAV maps)")
     p.add_argument("--bbob-dims", default="20,40,80", metavar="LIST",
                    help="dimensions of the --bbob problems (default 20,40,80)")
     p.add_argument("--fixed-length", action="store_true",
                    help="fixed-length encoding on the UAV training problems (all I_max hover "
                    "points active; the paper's LAMDE-F; plan with `plan --fixed-length`); "
                    "synthetic problems (lam-pair, bbob) have no hover points and are unchanged")
-    p.add_argument("--epochs", type=int, help="passes over the training problems")
-    p.add_argument("--seed", type=int, help="training seed (default 0)")
-    p.add_argument("--envs", type=int, help="problems rolled out together")
-    p.add_argument("--population", type=int, help="DE population during training")
-    p.add_argument("--budget", type=int, help="evaluations per training episode")
+    h = HELP_DEFAULTS
+    p.add_argument("--epochs", type=int, help="passes over the training problems (default "
+                   f"{h['epochs']}; 0: the warm start alone)")
+    p.add_argument("--seed", type=int, help=f"training seed (default {h['seed']})")
+    p.add_argument("--envs", type=int, help="problems rolled out together (default "
+                   f"{h['envs']})")
+    p.add_argument("--population", type=int, help="DE population during training (default "
+                   f"{h['population']}; planning uses {D.POPULATION})")
+    p.add_argument("--budget", type=int, help="evaluations per training episode (default "
+                   f"{h['budget']:,})")
     p.add_argument("--init", choices=("uniform", "seeded", "both"), default="both",
                    help="start modes of the training episodes (default both, alternating)")
     p.add_argument("--imitate", metavar="CONFIGURATOR",
                    help="behaviour-cloning warm start: fit the policy to this hand-made "
-                   "configurator's choices before PPO (default adaptive; 'none' skips it)")
+                   f"configurator's choices before PPO (default {h['imitate']}; 'none' skips "
+                   "it)")
     p.add_argument("--imitate-epochs", type=int, metavar="K",
-                   help="passes of the warm start over the demonstrations (default 8)")
+                   help="passes of the warm start over the demonstrations (default "
+                   f"{h['imitate_epochs']})")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
-                   help="any other PPOConfig field (JSON value), e.g. --set lr=1e-3; repeatable")
+                   help="any other PPOConfig field (JSON value), e.g. --set lr=1e-3; repeatable "
+                   "(default: PPOConfig's, docs/learning.md)")
     p.add_argument("--jobs", type=int, default=1,
                    help="rollout workers (default 1: the rollouts run in this process; N > 1: N "
                    "worker processes, at most --envs busy at a time); with --backend ray and no "
