@@ -100,6 +100,9 @@ class Default:
     bounds: tuple[float, float, bool, bool] | None = None
     #: why the range is what it is (shown in the map's JSON Schema and its error lines)
     why: str = ""
+    #: (below the range, above it) where each side has its own reason (`why` is then both,
+    #: joined by "; "): an error line gives the side the value broke (`why_for`)
+    why_sides: tuple[str, str] | None = None
 
     def check(self, value: Any) -> Any:
         """Return ``value`` if it lies in the valid range, else raise ``ValueError`` naming
@@ -118,6 +121,17 @@ class Default:
         if self.ok is not None and not self.ok(value):
             raise ValueError(f"{self.name}: must be {self.valid}, got {value!r}")
         return value
+
+    def why_for(self, above: bool) -> str:
+        """The reason for the side of the range a value broke.
+
+        Args:
+            above: the value lies above the range (else below it).
+
+        Returns:
+            That side's reason where `why_sides` gives one, else `why`.
+        """
+        return self.why if self.why_sides is None else self.why_sides[int(bool(above))]
 
 
 def _is_int(v: Any) -> bool:
@@ -254,10 +268,12 @@ _RUN: tuple[Default, ...] = (
 )
 
 
-def _ranged(name: str, value: Any, meaning: str, lo: float, hi: float, why: str, *,
-            lo_open: bool = False, hi_open: bool = False, integer: bool = False) -> Default:
-    """A map number with a physical range [lo, hi] (open ends where asked) and its reason;
-    null is valid where the default is null (the field is optional, with no value of its own)."""
+def _ranged(name: str, value: Any, meaning: str, lo: float, hi: float,
+            why: str | tuple[str, str], *, lo_open: bool = False, hi_open: bool = False,
+            integer: bool = False) -> Default:
+    """A map number with a physical range [lo, hi] (open ends where asked) and its reason (or
+    (below, above): a reason for each side); null is valid where the default is null (the
+    field is optional, with no value of its own)."""
     interval = f"{'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'}"
     nullable = value is None
     kind = "an integer" if integer else "a number"
@@ -273,7 +289,9 @@ def _ranged(name: str, value: Any, meaning: str, lo: float, hi: float, why: str,
             return False
         return (v > lo if lo_open else v >= lo) and (v < hi if hi_open else v <= hi)
 
-    return Default(name, value, meaning, valid, ok, (lo, hi, lo_open, hi_open), why)
+    sides = why if isinstance(why, tuple) else None
+    return Default(name, value, meaning, valid, ok, (lo, hi, lo_open, hi_open),
+                   "; ".join(why) if sides else str(why), sides)
 
 
 _WHY_RATE = "100 Gbit/s is beyond any UAV radio link"
@@ -288,18 +306,20 @@ _MAP: tuple[Default, ...] = (
     _ranged("uav.altitude", 100.0, "H, cruise altitude above take-off, m", 0.0, 10_000.0,
             "a rotary-wing UAV flies above the ground and below 10 km", lo_open=True),
     _ranged("uav.max_speed", 20.0, "v_max, m/s", 0.1, 200.0,
-            "below 0.1 m/s flight times (and the simulator's samples, one per second) grow "
-            "without bound, e.g. 1e-9 m/s asked for ~745 GiB; no rotary-wing UAV flies 200 m/s"),
+            ("below 0.1 m/s flight times (and the simulator's samples, one per second) grow "
+             "without bound, e.g. 1e-9 m/s asked for ~745 GiB",
+             "above 200 m/s: no rotary-wing UAV flies that fast")),
     _ranged("uav.acceleration", 4.0, "a, m/s^2", 0.01, 100.0,
-            "below 0.01 m/s^2 a UAV hardly reaches cruise speed on any map; 100 m/s^2 is 10 g"),
+            ("below 0.01 m/s^2 a UAV hardly reaches cruise speed on any map",
+             "above 100 m/s^2: that is 10 g")),
     _ranged("uav.climb_speed", 2.5, "m/s, vertical speed of the take-off and of a climb "
             "between stops (ArduPilot's WPNAV_SPEED_UP default; PX4's MPC_Z_V_AUTO_UP is 3): "
-            "set the vehicle's", 0.1, 20.0, "below 0.1 m/s a 100 m take-off takes 17 minutes; "
-            "multirotors climb at 1-10 m/s"),
+            "set the vehicle's", 0.1, 20.0, ("below 0.1 m/s a 100 m take-off takes 17 minutes",
+                                             "multirotors climb at 1-10 m/s")),
     _ranged("uav.descent_speed", 1.0, "m/s, vertical speed of the landing and of a descent "
             "between stops (PX4's MPC_Z_VEL_MAX_DN default; ArduPilot's WPNAV_SPEED_DN is "
-            "1.5): set the vehicle's", 0.1, 20.0, "below 0.1 m/s a 100 m landing takes 17 "
-            "minutes; multirotors descend at 0.5-5 m/s"),
+            "1.5): set the vehicle's", 0.1, 20.0, ("below 0.1 m/s a 100 m landing takes 17 "
+                                                   "minutes", "multirotors descend at 0.5-5 m/s")),
     _ranged("uav.max_hover_time", 300.0, "T_max, s per hover point", 0.0, 86_400.0,
             "no battery hovers for more than a day; T_max bounds the decision space",
             lo_open=True),
@@ -362,8 +382,8 @@ _MAP: tuple[Default, ...] = (
     _ranged("fleet.separation_m", 30.0, "m, the least 3D distance between two vehicles in the "
             "air: verify's SEPARATION, kept by plan's staggered launches (GNSS error, the 10 m "
             "clearance and rotor wash, with room; set your airspace's rule)", 0.0, 1_000.0,
-            "0 m is a collision; beyond a kilometre the vehicles of a map fly one after the "
-            "other", lo_open=True),
+            ("0 m is a collision", "beyond a kilometre the vehicles of a map fly one after the "
+             "other"), lo_open=True),
 )
 
 #: how the sensors in range of a hover point share its radio (`radio.access`), the default

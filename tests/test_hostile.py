@@ -356,10 +356,13 @@ def test_every_map_number_is_refused_just_outside_its_range() -> None:
                     load_map(data)
                 line = info.value.problems[0]
                 assert line.startswith(f"{name}: "), (name, value, line)
-                if outside < 0 and bound == 0:  # "must be greater than 0" is its own reason;
-                    assert d.why not in line and "greater than" in line, line  # not the cap's
-                else:
-                    assert d.why in line, (name, value, line)
+                assert f": must be in {'(' if lo_open else '['}{lo:g}, {hi:g}" in line, line
+                if outside < 0 and bound == 0:  # "must be in (0, ..." is its own reason;
+                    assert d.why not in line, line  # not the cap's
+                else:  # the reason for the end it broke (each end its own, where given)
+                    assert d.why_for(outside > 0) in line, (name, value, line)
+                    other = d.why_sides and d.why_sides[int(outside < 0)]
+                    assert not other or other not in line, (name, value, line)
                 assert math.isfinite(value)
 
 

@@ -42,7 +42,8 @@ def test_missing_nan_nonpositive_empty(hand_map: dict) -> None:
     hand_map["start"] = [math.nan, 0]
     lines = _problems(hand_map)
     assert "end: required field is missing" in lines
-    assert any(line.startswith("area.width:") and "greater than 0" in line for line in lines)
+    # a range error names the whole valid range, whichever end was broken
+    assert "area.width: must be in (0, 100000] (got -5)" in lines
     assert any(line.startswith("start[0]:") and "finite" in line for line in lines)
     hand_map2 = {"area": {"width": 10, "height": 10}, "start": [0, 0], "end": [1, 1],
                  "sensors": []}
@@ -63,11 +64,18 @@ def test_a_bound_of_zero_is_not_explained_by_the_caps_reason(hand_map: dict) -> 
     hand_map["uav"]["max_speed"] = 0.01
     lines = _problems(hand_map)
     radius = next(line for line in lines if line.startswith("obstacles.circles[0].radius:"))
-    assert radius.startswith("obstacles.circles[0].radius: must be greater than or equal to 0.01 "
-                             "(got -5); at least 1 cm: smaller")  # fmt: skip
-    assert "area.width: must be greater than 0 (got 0)" in lines
+    assert radius.startswith("obstacles.circles[0].radius: must be in [0.01, 1e+06] (got -5); "
+                             "at least 1 cm: smaller")  # fmt: skip
+    assert "area.width: must be in (0, 100000] (got 0)" in lines
     speed = next(line for line in lines if line.startswith("uav.max_speed:"))
-    assert "greater than or equal to 0.1 (got 0.01); below 0.1 m/s flight times" in speed
+    assert speed.startswith("uav.max_speed: must be in [0.1, 200] (got 0.01); below 0.1 m/s "
+                            "flight times")
+    # a value too low was also told "no rotary-wing UAV flies 200 m/s": each end its reason
+    assert "200 m/s" not in speed and "must be in [0.1, 200]" in speed
+    hand_map["uav"]["max_speed"] = 500
+    (speed,) = [x for x in _problems(hand_map) if x.startswith("uav.max_speed:")]
+    assert speed == ("uav.max_speed: must be in [0.1, 200] (got 500); above 200 m/s: no "
+                     "rotary-wing UAV flies that fast")
     hand_map["obstacles"]["circles"][0]["radius"] = 2e6
     assert any("1000 km" in line for line in _problems(hand_map))
 
@@ -121,9 +129,9 @@ def test_tiny_obstacles_and_collinear_zones_are_refused_naming_the_field(hand_ma
                       "holes": [[[620, 120], [640, 140], [660, 160]]]}],
     }  # fmt: skip
     lines = _problems(hand_map)
-    want = ["obstacles.circles[0].radius: must be greater than or equal to 0.01 (got 1e-16)",
-            "obstacles.rectangles[0].length: must be greater than or equal to 0.01 (got 1e-15)",
-            "obstacles.rectangles[1].width: must be greater than or equal to 0.01 (got 0.009)"]
+    want = ["obstacles.circles[0].radius: must be in [0.01, 1e+06] (got 1e-16)",
+            "obstacles.rectangles[0].length: must be in [0.01, 1e+06] (got 1e-15)",
+            "obstacles.rectangles[1].width: must be in [0.01, 1e+06] (got 0.009)"]
     for w in want:
         assert any(line.startswith(w) for line in lines), (w, lines)
     assert not any("circles[1]" in line or "polygon 0" in line for line in lines), lines

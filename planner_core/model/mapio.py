@@ -64,9 +64,11 @@ _WHY_OBSTACLE_SIZE = ("at least 1 cm: smaller is below any position fix and dege
 
 def _ranged(
     default: Any, lo: float | None, hi: float | None, what: str, why: str, *,
-    lo_open: bool = False, hi_open: bool = False,
+    lo_open: bool = False, hi_open: bool = False, sides: tuple[str, str] | None = None,
 ) -> Any:  # fmt: skip
-    """A Field with bounds [lo, hi] (open ends where asked), `why` kept in the description."""
+    """A Field with bounds [lo, hi] (open ends where asked), `why` kept in the description;
+    the interval and `sides` (a reason below the range, one above it) kept for the error line
+    (`_range_problem`)."""
     kw: dict[str, Any] = {}
     if lo is not None:
         kw["gt" if lo_open else "ge"] = lo
@@ -74,10 +76,14 @@ def _ranged(
         kw["lt" if hi_open else "le"] = hi
     lb = "" if lo is None else ("(" if lo_open else "[") + f"{lo:g}"
     ub = "" if hi is None else f"{hi:g}" + (")" if hi_open else "]")
-    desc = f"{what}; range {lb or '(-inf'}, {ub or 'inf)'}: {why}"
+    interval = f"{lb or '(-inf'}, {ub or 'inf)'}"
+    desc = f"{what}; range {interval}: {why}"
+    extra = {"x-range-reason": why, "x-range": interval}
+    if sides is not None:
+        extra["x-range-reason-below"], extra["x-range-reason-above"] = sides
     # strict: a JSON number only (no "2000", no true read as 1), an integer where one is asked
-    return Field(default, description=desc, json_schema_extra={"x-range-reason": why},
-                 strict=True, **kw)  # fmt: skip
+    return Field(default, description=desc, json_schema_extra=extra, strict=True,
+                 **kw)  # fmt: skip
 
 
 #: text without control characters (names and ids are printed in one-line messages)
@@ -96,7 +102,8 @@ def _field(path: str) -> Any:
     `planner_core.defaults.MAP_DEFAULTS` (one place for README, `check` and `plan`)."""
     d = MAP_DEFAULTS[path]
     lo, hi, lo_open, hi_open = d.bounds
-    return _ranged(d.value, lo, hi, d.meaning, d.why, lo_open=lo_open, hi_open=hi_open)
+    return _ranged(d.value, lo, hi, d.meaning, d.why, lo_open=lo_open, hi_open=hi_open,
+                   sides=d.why_sides)
 
 
 class Origin(BaseModel):
@@ -1132,22 +1139,27 @@ _ITEM_REASONS = {
 }  # fmt: skip
 
 
-def _range_reason(loc: tuple[Any, ...]) -> str:
-    """The documented reason for the bound that the value at `loc` broke."""
+def _range_reason(loc: tuple[Any, ...], above: bool | None = None) -> tuple[str, str | None]:
+    """The documented reason for the bound that the value at `loc` broke (the side's own,
+    `above` or below, where the field gives one), and the field's valid interval ("[0.1,
+    200]"; None for a value inside a list or pair, which has no field of its own)."""
     names = [i for i, part in enumerate(loc) if isinstance(part, str)]
     if not names:
-        return "out of the documented range"
+        return "out of the documented range", None
     i = names[-1]
     if i < len(loc) - 1 or loc[i] in _ITEM_REASONS:
-        return _ITEM_REASONS.get(str(loc[i]), "out of the documented range")
+        return _ITEM_REASONS.get(str(loc[i]), "out of the documented range"), None
     model = _model_at(loc[: i + 1])
     info = model.model_fields.get(str(loc[i])) if model is not None else None
     extra = getattr(info, "json_schema_extra", None)
     if isinstance(extra, dict) and "x-range-reason" in extra:
-        return str(extra["x-range-reason"])
+        side = None if above is None else extra.get(
+            "x-range-reason-above" if above else "x-range-reason-below")
+        interval = extra.get("x-range")
+        return str(side or extra["x-range-reason"]), None if interval is None else str(interval)
     if info is not None and info.description and "; " in info.description:
-        return info.description.split("; ", 1)[1]
-    return "out of the documented range"
+        return info.description.split("; ", 1)[1], None
+    return "out of the documented range", None
 
 
 #: pydantic's strict type errors -> what the field must be, in JSON's words
@@ -1208,12 +1220,16 @@ def _pydantic_problems(err: ValidationError) -> list[str]:
         elif kind in _RANGE_KINDS:
             got = e.get("input")
             shown = f"{got:g}" if isinstance(got, float) else repr(got)
-            msg = e["msg"].replace("Input should be", "must be")
+            above = kind.startswith("less")
+            reason, interval = _range_reason(loc, above)
+            # the whole valid range, whichever end was broken, where the field has one
+            msg = (f"must be in {interval}" if interval is not None
+                   else e["msg"].replace("Input should be", "must be"))  # fmt: skip
             bound = (e.get("ctx") or {}).get("gt", (e.get("ctx") or {}).get("ge"))
-            if kind.startswith("greater") and bound == 0:  # "> 0" needs no reason, and the
-                lines.append(f"{where}: {msg} (got {shown})")  # documented one is the cap's
+            if not above and bound == 0:  # "> 0" needs no reason, and the documented one
+                lines.append(f"{where}: {msg} (got {shown})")  # is the cap's
             else:
-                lines.append(f"{where}: {msg} (got {shown}); {_range_reason(loc)}")
+                lines.append(f"{where}: {msg} (got {shown}); {reason}")
         else:
             lines.append(f"{where}: {e['msg']}")
     return lines
