@@ -60,6 +60,7 @@ __all__ = [
     "read_jsonl",
     "printable",
     "counted",
+    "rounded_up",
     "quoted",
 ]
 
@@ -713,3 +714,22 @@ def counted(n: int, noun: str, plural: str | None = None) -> str:
         "{n:,} {noun}" or "{n:,} {plural}".
     """
     return f"{n:,} {noun if n == 1 else (plural or noun + 's')}"
+
+
+def rounded_up(x: float, places: int = 0) -> float:
+    """The least multiple of 10^-places not below x: a value a message suggests (a battery
+    that would do), printed with `places` decimals, that still does once printed (14.3076 Wh
+    prints 14.31, 15.2615 prints 15.27 where round-to-nearest would print a too-small 15.26).
+
+    Args:
+        x: the value, finite.
+        places: decimals it is printed with (0: a whole number).
+
+    Returns:
+        The rounded-up value, >= x; print it with f"{v:.{places}f}".
+    """
+    scale = 10.0**places
+    k = math.ceil(x * scale)
+    if k / scale < x:  # x * scale rounded down in floating point
+        k += 1
+    return k / scale

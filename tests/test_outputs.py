@@ -21,7 +21,7 @@ from planner_core.atomic import (
     dir_beside,
     write_text_atomic,
 )
-from planner_core.textio import counted, printable
+from planner_core.textio import counted, printable, rounded_up
 from tests.conftest import MAPS, run_cli, run_cli_many
 
 DEMO = MAPS / "small-demo.json"
@@ -185,6 +185,16 @@ def test_counted_is_singular_for_one_only() -> None:
     assert counted(2, "sortie") == "2 sorties" and counted(1, "sortie") == "1 sortie"
     assert counted(1001, "sortie") == "1,001 sorties"
     assert counted(3, "child", "children") == "3 children" and counted(1, "child") == "1 child"
+
+
+def test_rounded_up_never_prints_less_than_the_value() -> None:
+    # plan's suggested battery printed 15.26 Wh for a 15.2615 Wh need (round to nearest)
+    assert rounded_up(15.2615, 2) == 15.27 and f"{rounded_up(15.2615, 2):.2f}" == "15.27"
+    assert rounded_up(326.08) == 327.0 and rounded_up(306.0) == 306.0
+    assert rounded_up(14.31, 2) == 14.31  # already on the grid: unchanged
+    for x in (0.1 + 0.2, 1.005, 2.675, 1e-9, 123456.789):
+        for places in (0, 1, 2, 3):
+            assert float(f"{rounded_up(x, places):.{places}f}") >= x
 
 
 @pytest.mark.parametrize("field", ["name", "id"])

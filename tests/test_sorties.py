@@ -198,12 +198,41 @@ def test_no_plan_of_sorties_says_what_to_change() -> None:
         "flights, planned from each depot back to it); a sortie has 9.36 Wh usable (the "
         "battery's 11.70 Wh less its 20 % reserve), the take-off and landing alone 6.59 Wh of "
         "it, and a sortie to it alone (no hover) needs 11.45 Wh (from depot 'north' and back): "
-        "a battery of at least 14.31 Wh (uav.battery.energy_wh; or uav.endurance_s 306), or a "
-        "depot nearer to (1280, 1142) (fleet.depots)")
+        "a battery of 14.31 Wh (uav.battery.energy_wh; or uav.endurance_s 306) would fly it, "
+        "or a depot nearer to (1280, 1142) (fleet.depots)")
     endurance = float(re.search(r"uav\.endurance_s (\d+)", why).group(1))
     assert pl.st.usable_for(pl.st.budget_wh(1), 1) == pytest.approx(pl.st.usable_wh)
     bigger = _Planner(load_map(_review_wk3(endurance)), PlanConfig(), None, 300)
     assert bigger.split(*single) is not None  # the battery it names is enough for this tour
+    # not a lower bound, so never said as one: 255 s (less than the 306 named) plans too
+    assert "at least" not in why
+    assert _Planner(load_map(_review_wk3(255.0)), PlanConfig(), None, 300).split(*single)
+
+
+def test_the_battery_plan_suggests_is_rounded_up() -> None:
+    """The battery plan's no-plan-of-sorties line names must do as printed: with a 25 %
+    reserve of 20.9 % the corner above needs a 14.4704 Wh battery (309.18 s of hover), which
+    rounding to nearest printed as 14.47 Wh and 309 s, both too small; now 14.48 Wh and 310 s."""
+    from planner_core.fleet.search import _Planner
+    from planner_core.fleet.split import solo_need, solo_room
+    from planner_core.model import energy as E
+    from planner_core.pipeline import PlanConfig
+
+    doc = _review_wk3(250.0)
+    doc["uav"]["battery"]["reserve"] = 0.209
+    single = (np.array([[672.08, 461.78], [1432.38, 1301.93]]), np.array([25.61, 26.56]))
+    pl = _Planner(load_map(doc), PlanConfig(), None, 300)
+    why = pl.why_not(single, True)
+    got = re.search(r"needs ([\d.]+) Wh .*: a battery of ([\d.]+) Wh \(uav\.battery\.energy_wh; "
+                    r"or uav\.endurance_s (\d+)\) would fly it", why)
+    assert got, why
+    assert got.group(2, 3) == ("14.48", "310")
+    JP, _ = pl.links.join(*pl.reachable(*single))
+    corner = JP[np.flatnonzero(solo_room(pl.st, pl.links, JP) <= 0.0)[0]]
+    need = float(solo_need(pl.st, pl.links, corner[None], [0.0])[0][0])  # 11.446 Wh usable
+    assert 14.47 * 0.791 < need <= 14.48 * 0.791
+    assert float(E.hover_energy_wh(309.0, pl.st.power)) * 0.791 < need
+    assert need <= float(E.hover_energy_wh(310.0, pl.st.power)) * 0.791
 
 
 @pytest.mark.slow  # measured 18 s for plan + verify through the CLI

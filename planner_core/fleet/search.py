@@ -62,6 +62,7 @@ from planner_core.fleet.split import (
 )
 from planner_core.model.mapio import sub_map_dict
 from planner_core.streams import stream_rng, stream_seed
+from planner_core.textio import rounded_up
 
 __all__ = ["SORTIE_BUDGET", "ROUNDS", "TRANSFER_NEIGHBOURS", "FleetResult", "plan_fleet",
            "route_first", "sortie_map_dict"]  # fmt: skip
@@ -350,7 +351,10 @@ class _Planner:
         usable energy (battery less reserve) and the take-off and landing's share of it; the
         least usable energy a sortie of p alone needs (`split.solo_need`: from its best
         depots, with `hover_s` of hover; `how` says which), and the battery (energy_wh and
-        endurance_s, the reserve kept) that would give that much, or a depot nearer to p.
+        endurance_s, the reserve kept, each rounded up at its printed precision) that would
+        give that much, or a depot nearer to p. The battery is one that would fly the sortie,
+        not a least one: with another battery the tour itself changes, and a smaller battery
+        may then plan.
 
         Args:
             p: (2,) the point, m (planning map).
@@ -371,11 +375,15 @@ class _Planner:
         names = st.depot_names
         via = (f"depot '{names[a[0]]}' and back" if a[0] == b[0]
                else f"depot '{names[a[0]]}' to depot '{names[b[0]]}'")
+        # what would do, not a lower bound (a larger battery changes the tour, and a smaller
+        # one than this may then plan): each rounded up, so the printed value does
         battery = need[0] / (1.0 - reserve)
+        wh = rounded_up(battery, 2)
+        seconds = rounded_up(battery * 3600.0 / st.hover_w)
         return (f"{have}, and a sortie to it alone{how} needs {need[0]:.2f} Wh (from {via}): "
-                f"a battery of at least {battery:.2f} Wh (uav.battery.energy_wh; or "
-                f"uav.endurance_s {battery * 3600.0 / st.hover_w:.0f}), or a depot nearer to "
-                f"({p[0]:.0f}, {p[1]:.0f}) (fleet.depots)")
+                f"a battery of {wh:.2f} Wh (uav.battery.energy_wh; or uav.endurance_s "
+                f"{seconds:.0f}) would fly it, or a depot nearer to ({p[0]:.0f}, {p[1]:.0f}) "
+                "(fleet.depots)")
 
     def cluster_first(self) -> FleetPlan | None:
         """Step 3: per depot a tour of its nearest sensors, the tours joined and split."""
