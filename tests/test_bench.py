@@ -260,9 +260,10 @@ def test_an_optimiser_whose_extra_is_missing_is_refused_before_any_run(
     monkeypatch.setitem(sys.modules, "ortools", None)
     monkeypatch.setitem(sys.modules, "pymoo", None)
     assert missing_extras(["de-adaptive", "engineering-own-order"]) is None  # no OR-Tools
+    # per optimiser the module it needs (the union read as if each needed both)
     assert missing_extras(["engineering", "pymoo-ga", "planner-eng-start", "engineering"]) == (
-        "engineering, pymoo-ga, planner-eng-start need ortools, pymoo, not installed: pip "
-        "install 'lamde-mission[baselines]'")
+        "engineering needs ortools, pymoo-ga needs pymoo, planner-eng-start needs ortools, not "
+        "installed: pip install 'lamde-mission[baselines]'")
     out = tmp_path / "res"
     assert main(["bench", "--suite", str(suite), "--optimizers", "random-search,engineering",
                  "--runs", "1", "--budget", str(BUDGET), "--jobs", "0", "--out",
@@ -275,6 +276,47 @@ def test_an_optimiser_whose_extra_is_missing_is_refused_before_any_run(
         run_bench(suite, ["pymoo-ga"], runs=1, budget=BUDGET, out=out, command="test",
                   executor=SerialExecutor(), best_known=False)
     assert not out.exists() and not best_known_path(suite).exists()
+
+
+def test_plain_bench_without_an_extra_runs_the_others_with_a_note(
+        suite: Path, tmp_path: Path, capsys: pytest.CaptureFixture,
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """`bench` with no --optimizers (all by default) in a venv without the baselines extra
+    (the `make demo` one) was refused outright, exit 2, naming --optimizers the user never
+    typed; it now runs every optimiser that can run here and says in one note which it left
+    out and the pip extra. Modules hidden as in the test above; run_bench is replaced by one
+    that records what it was asked to run."""
+    import sys
+    from types import SimpleNamespace
+
+    import planner_core.bench.runner as runner
+    from lamde_mission.cli import main
+    from planner_core.bench.baselines import REGISTRY
+
+    asked: list[list[str]] = []
+
+    def fake_run_bench(suite_: Any, optimisers: list[str], **kw: Any) -> Any:
+        asked.append(list(optimisers))
+        return SimpleNamespace(done=0, skipped=0, failed=[], results=tmp_path,
+                               best_known_updates=[])  # fmt: skip
+
+    monkeypatch.setattr(runner, "run_bench", fake_run_bench)
+    monkeypatch.setitem(sys.modules, "ortools", None)
+    monkeypatch.setitem(sys.modules, "pymoo", None)
+    args = ["bench", "--suite", str(suite), "--runs", "1", "--budget", str(BUDGET), "--jobs",
+            "0", "--out", str(tmp_path / "res"), "--quiet"]  # fmt: skip
+    assert main(args) == 0
+    others = [n for n in REGISTRY if n not in ("engineering", "planner-eng-start", "pymoo-ga")]
+    assert asked == [others]
+    err = capsys.readouterr().err
+    assert err == ("note: engineering needs ortools, planner-eng-start needs ortools, pymoo-ga "
+                   "needs pymoo, not installed: pip install 'lamde-mission[baselines]'; running "
+                   f"the other {len(others)} optimisers\n")
+    assert main([*args, "--optimizers", "pymoo-ga"]) == 2  # named: refused, as before
+    assert capsys.readouterr().err == ("lamde-mission bench: --optimizers: pymoo-ga needs "
+                                       "pymoo, not installed: pip install "
+                                       "'lamde-mission[baselines]'\n")
+    assert asked == [others]
 
 
 def test_records_reader_tolerates_damage(tmp_path: Path) -> None:

@@ -46,9 +46,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--tasks", nargs="+", metavar="T", help="only these tasks (file stems, e.g. "
                    "T01 T02 or T01,T02; default all maps in the suite)")
     p.add_argument("--optimizers", "--optimisers", nargs="+", metavar="NAME", dest="optimizers",
-                   help="optimisers to run (space or comma separated; default all; "
-                   "--list shows them, and the pip extra each needs beyond the core: one "
-                   "whose extra is not installed is refused before anything runs)")
+                   help="optimisers to run (space or comma separated; default all those "
+                   "that can run here; --list shows them, and the pip extra each needs beyond "
+                   "the core: one named whose extra is not installed is refused before "
+                   "anything runs, by default it is left out with a note)")
     p.add_argument("--runs", type=int, help=f"runs per optimiser and task (default "
                    f"{_DEFAULT_RUNS}; {_BK_RUNS} with --best-known)")
     p.add_argument("--budget", type=int, help=f"evaluations per run, initial population "
@@ -127,6 +128,7 @@ def run(args: argparse.Namespace) -> int:
     """
     from planner_core.bench.baselines import REGISTRY, missing_extras
     from planner_core.bench.runner import BEST_KNOWN_OPTIMISERS, BenchError, run_bench
+    from planner_core.textio import counted
 
     if args.list:
         for name, spec in REGISTRY.items():
@@ -142,8 +144,8 @@ def run(args: argparse.Namespace) -> int:
     if args.jobs is None:
         args.jobs = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (
             os.cpu_count() or 1)
-    optimisers = _names(args.optimizers, "--optimizers") or (
-        list(BEST_KNOWN_OPTIMISERS) if bk else list(REGISTRY))
+    named = _names(args.optimizers, "--optimizers")
+    optimisers = named or (list(BEST_KNOWN_OPTIMISERS) if bk else list(REGISTRY))
     tasks = _names(args.tasks, "--tasks")
     args.i_max_values = []
     for v in _names(args.i_max, "--i-max") or []:
@@ -176,8 +178,14 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--optimizers: unknown {', '.join(unknown)}; choose from "
                          f"{', '.join(REGISTRY)}")
     lacking = missing_extras(optimisers)  # as train's torch: before anything starts
-    if lacking:
+    if lacking and named:
         raise UsageError(f"--optimizers: {lacking}")
+    if lacking:  # the default set: those that can run here, and a note on the others
+        optimisers = [o for o in optimisers if not REGISTRY[o].missing()]
+        if not optimisers:
+            raise UsageError(f"no optimiser of the default set can run here: {lacking}")
+        print(f"note: {lacking}; running the other {counted(len(optimisers), 'optimiser')}",
+              file=sys.stderr)
     command = _command(args, optimisers, tasks)
     best_known: str | bool = False if args.no_best_known_update else (
         args.best_known_file or True)
@@ -195,8 +203,6 @@ def run(args: argparse.Namespace) -> int:
                       address=args.address)
     except BenchError as exc:
         raise UsageError(str(exc)) from None
-    from planner_core.textio import counted
-
     print(f"bench: {counted(s.done, 'run')} done, {s.skipped} already present, "
           f"{len(s.failed)} failed; results in {s.results}")
     if s.best_known_updates:

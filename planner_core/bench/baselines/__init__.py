@@ -312,9 +312,10 @@ def policy_spec(name: str, checkpoint: str, *, variable_length: bool = True,
 
 def missing_extras(names: Sequence[str], extra: Sequence[OptimiserSpec] = ()) -> str | None:
     """Why some of the optimisers `names` cannot run here, in one line, or None: each whose
-    `requires` are not all installed, with the modules and the pip extra that installs them
-    ("engineering needs ortools, not installed: pip install 'lamde-mission[baselines]'"), so
-    a benchmark is refused before it starts instead of failing run by run.
+    `requires` are not all installed, with the modules it needs, then the pip extra that
+    installs them ("engineering needs ortools, pymoo-ga needs pymoo, not installed: pip
+    install 'lamde-mission[baselines]'"), so a benchmark is refused (or, by default, runs
+    without them) before it starts instead of failing run by run.
 
     Args:
         names: optimiser names (the registry's or `extra`'s; unknown names are skipped).
@@ -324,24 +325,19 @@ def missing_extras(names: Sequence[str], extra: Sequence[OptimiserSpec] = ()) ->
         The line, or None when every one can run.
     """
     specs = {**REGISTRY, **{e.name: e for e in extra}}
-    lacking: dict[str, list[str]] = {}  # extra -> "name (modules)"
-    modules: dict[str, list[str]] = {}
+    lacking: dict[str, list[str]] = {}  # extra -> "name needs modules", in names' order
     for name in dict.fromkeys(names):
         spec = specs.get(name)
         gone = spec.missing() if spec is not None else []
         if gone:
-            key = spec.extra or ""
-            lacking.setdefault(key, []).append(name)
-            modules.setdefault(key, [])
-            modules[key] += [m for m in gone if m not in modules[key]]
+            lacking.setdefault(spec.extra or "", []).append(f"{name} needs {', '.join(gone)}")
     if not lacking:
         return None
-    parts = []
-    for key, who in lacking.items():
-        how = f": pip install 'lamde-mission[{key}]'" if key else ""
-        parts.append(f"{', '.join(who)} need{'s' if len(who) == 1 else ''} "
-                     f"{', '.join(modules[key])}, not installed{how}")
-    return "; ".join(parts)
+    return "; ".join(
+        f"{', '.join(who)}, not installed"
+        + (f": pip install 'lamde-mission[{key}]'" if key else "")
+        for key, who in lacking.items()
+    )
 
 
 def names() -> list[str]:
