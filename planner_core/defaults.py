@@ -37,8 +37,9 @@ bound is held by a slow test that runs ``check`` and ``plan`` in a child under `
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from types import MappingProxyType
 from typing import Any
 
 __all__ = [
@@ -77,6 +78,7 @@ __all__ = [
     "OTHER_TRIALS",
     "START_CANDIDATES",
     "SUITE_SEED",
+    "TRAIN_DEFAULTS",
     "check",
     "check_run_args",
     "render_markdown",
@@ -465,6 +467,14 @@ BEST_KNOWN_BUDGET: int = DEFAULTS["best_known_budget"].value
 BEST_KNOWN_RUNS: int = DEFAULTS["best_known_runs"].value
 ETA: float = DEFAULTS["eta"].value
 DELTA: float = DEFAULTS["delta"].value
+
+#: meta-training's defaults that `train --help` shows; `PPOConfig`
+#: (`planner_core.learning.policy.ppo`, which imports torch) reads its fields' defaults from
+#: here, so the help and the trainer cannot differ
+TRAIN_DEFAULTS: Mapping[str, Any] = MappingProxyType({
+    "seed": 0, "epochs": 10, "envs": 4, "population": 50, "budget": 3000,
+    "imitate": "adaptive", "imitate_epochs": 8,
+})
 
 #: Metres. The one overlap tolerance of planner and sim (paper C5: a positive overlap is a
 #: violation). It is the float rounding scale of the geometry on maps up to 10 km (1e-13 per

@@ -93,7 +93,7 @@ def test_cli_train_help_shows_every_default() -> None:
     import argparse
 
     from lamde_mission.cli import build_parser
-    from lamde_mission.commands.train import HELP_DEFAULTS
+    from planner_core.defaults import TRAIN_DEFAULTS
 
     sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
     train = sub.choices["train"]
@@ -105,9 +105,10 @@ def test_cli_train_help_shows_every_default() -> None:
     for shown in ("(default 8)", "(default 10; 0: the warm start alone)", "(default 4)",
                   "(default 50; planning uses 100)", "(default 3,000)"):
         assert shown in " ".join(text.split()), shown
+    # the trainer reads them from the same table (a literal retyped in PPOConfig fails here)
     ppo = pytest.importorskip("planner_core.learning.policy.ppo")  # imports torch
     base = ppo.PPOConfig()
-    assert HELP_DEFAULTS == {k: getattr(base, k) for k in HELP_DEFAULTS}
+    assert dict(TRAIN_DEFAULTS) == {k: getattr(base, k) for k in TRAIN_DEFAULTS}
 
 
 def test_a_uav_spec_with_a_non_integer_field_is_one_value_error_naming_it() -> None:

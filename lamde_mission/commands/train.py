@@ -18,11 +18,6 @@ from pathlib import Path
 from lamde_mission.commands._common import add_executor_args, check_executor_args
 from planner_core import defaults as D
 
-#: PPOConfig's defaults that --help shows (`planner_core.learning.policy.ppo.PPOConfig`, which
-#: imports torch, so the help cannot read them there; tests/test_policy_cli.py keeps them equal)
-HELP_DEFAULTS = {"seed": 0, "epochs": 10, "envs": 4, "population": 50, "budget": 3000,
-                 "imitate": "adaptive", "imitate_epochs": 8}
-
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     """Register `lamde-mission train` (options, help).
@@ -60,7 +55,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="fixed-length encoding on the UAV training problems (all I_max hover "
                    "points active; the paper's LAMDE-F; plan with `plan --fixed-length`); "
                    "synthetic problems (lam-pair, bbob) have no hover points and are unchanged")
-    h = HELP_DEFAULTS
+    h = D.TRAIN_DEFAULTS  # PPOConfig's, read there from the same table
     p.add_argument("--epochs", type=int, help="passes over the training problems (default "
                    f"{h['epochs']}; 0: the warm start alone)")
     p.add_argument("--seed", type=int, help=f"training seed (default {h['seed']})")

@@ -90,6 +90,7 @@ from torch import nn
 from torch.distributions import Beta, Categorical, kl_divergence
 
 from planner_core.atomic import write_bytes_atomic
+from planner_core.defaults import TRAIN_DEFAULTS
 from planner_core.execution import Executor, SerialExecutor
 from planner_core.learning.env import DEFAULT_DELTA, DEFAULT_ETA, N_CONTEXT, initial_features
 from planner_core.learning.policy import checkpoint as ckpt
@@ -106,15 +107,15 @@ class PPOConfig:
     """Every hyper-parameter of meta-training (defaults: the paper / RLDE-AFL where they give
     one, sized down where this 2-core machine needs it)."""
 
-    seed: int = 0
+    seed: int = TRAIN_DEFAULTS["seed"]
     """Seed of the weights' initialisation, the rollouts' DE seeds and action draws."""
-    epochs: int = 10
+    epochs: int = TRAIN_DEFAULTS["epochs"]
     """E: passes over the training problems (Algorithm 1, line 2); 0 = the warm start alone."""
-    envs: int = 4
+    envs: int = TRAIN_DEFAULTS["envs"]
     """Problems rolled out together, batched in one forward pass per generation."""
-    population: int = 50
+    population: int = TRAIN_DEFAULTS["population"]
     """N of the DE during training (the policy is population-agnostic; planning uses 100)."""
-    budget: int = 3000
+    budget: int = TRAIN_DEFAULTS["budget"]
     """Evaluations per training episode (G = budget / N - 1 generations; progress g/G spans
     [0, 1] whatever the budget)."""
     n_steps: int = 10
@@ -146,11 +147,11 @@ class PPOConfig:
     """Feasibility tolerance of the reward (planner_core.learning.env)."""
     threads: int = 1
     """torch intra-op threads (1 keeps runs reproducible and leaves a core to the DE)."""
-    imitate: str = "adaptive"
+    imitate: str = TRAIN_DEFAULTS["imitate"]
     """Behaviour-cloning warm start (:mod:`planner_core.learning.policy.imitation`): the hand-made
     configurator whose choices the actor is fitted to by maximum likelihood (and the critic to
     its returns) before PPO, on every training problem in every start mode; "none" skips it."""
-    imitate_epochs: int = 8
+    imitate_epochs: int = TRAIN_DEFAULTS["imitate_epochs"]
     """Passes over the demonstrations (0 = no warm start)."""
     imitate_lr: float = 1e-3
     """Adam learning rate of the warm start."""
