@@ -85,6 +85,20 @@ def test_battery_and_fleet_read_and_round_trip(hand_map: dict) -> None:
     assert load_map(hand_map).power.hover_w == 150.0
 
 
+def test_the_battery_formulas_invert_each_other() -> None:
+    # plan's advice wrote the inverses out by hand (battery x 3600 / hover_w, usable /
+    # (1 - reserve)); they now sit next to the forward formulas and undo them
+    p = E.PowerParams(p0=100.0, pi=50.0, u_tip=U_TIP, v0=V0, d0=D0, rho=RHO, s=S, area=A)
+    assert float(E.hover_endurance_s(10.0, p)) == pytest.approx(240.0, rel=1e-15)
+    for s in (0.0, 1.0, 306.0, 1500.0):
+        assert float(E.hover_endurance_s(E.battery_energy_wh(None, s, p), p)) == pytest.approx(
+            s, rel=1e-14, abs=1e-12)
+    assert E.battery_for_usable_wh(80.0, 0.2) == pytest.approx(100.0, rel=1e-15)
+    for r in (0.0, 0.2, 0.9):
+        assert E.usable_energy_wh(E.battery_for_usable_wh(9.36, r), r) == pytest.approx(
+            9.36, rel=1e-14)
+
+
 def test_energy_fields_name_the_problem(hand_map: dict) -> None:
     both = copy.deepcopy(hand_map)
     both["uav"]["battery"] = {"energy_wh": 90.0}

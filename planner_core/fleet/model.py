@@ -166,6 +166,22 @@ class FleetSettings:
         return E.leg_energy_wh(d, float(self.uav.max_speed), float(self.uav.acceleration),
                                self.power)  # fmt: skip
 
+    def hover_wh(self, t_s: Any) -> np.ndarray:
+        """Energy of hovering t seconds at P(0) (`energy.hover_energy_wh`).
+
+        Args:
+            t_s: hover times (s), any shape.
+
+        Returns:
+            Wh, t_s's shape.
+        """
+        return E.hover_energy_wh(t_s, self.power)
+
+    def _kept_wh(self, n_points: Any) -> Any:
+        """What `budget_wh` keeps back beyond `ENERGY_SLACK`: `HOVER_ROUND_S` of hover power
+        P(0) per point, for storage's rounding (Wh, n_points' shape)."""
+        return self.hover_w * HOVER_ROUND_S * n_points / E.J_PER_WH
+
     def budget_wh(self, n_points: int) -> float:
         """Energy a sortie may plan to spend: the usable energy less `ENERGY_SLACK` of it and
         `HOVER_ROUND_S` of hover power P(0) per point (kept for storage's rounding).
@@ -176,10 +192,7 @@ class FleetSettings:
         Returns:
             Wh (infinite without a battery).
         """
-        return (
-            self.usable_wh * (1.0 - ENERGY_SLACK)
-            - self.hover_w * HOVER_ROUND_S * n_points / E.J_PER_WH
-        )
+        return self.usable_wh * (1.0 - ENERGY_SLACK) - self._kept_wh(n_points)
 
     def usable_for(self, spend_wh: Any, n_points: Any) -> Any:
         """The least usable energy (battery x (1 - reserve)) whose `budget_wh(n_points)` is
@@ -192,8 +205,7 @@ class FleetSettings:
         Returns:
             Wh, the broadcast shape.
         """
-        return ((np.asarray(spend_wh, dtype=float)
-                 + self.hover_w * HOVER_ROUND_S * np.asarray(n_points) / E.J_PER_WH)
+        return ((np.asarray(spend_wh, dtype=float) + self._kept_wh(np.asarray(n_points)))
                 / (1.0 - ENERGY_SLACK))  # fmt: skip
 
 

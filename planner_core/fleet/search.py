@@ -60,6 +60,7 @@ from planner_core.fleet.split import (
     split_tour,
     split_vehicles,
 )
+from planner_core.model import energy as E
 from planner_core.model.mapio import sub_map_dict
 from planner_core.streams import stream_rng, stream_seed
 from planner_core.textio import rounded_up
@@ -367,9 +368,10 @@ class _Planner:
         st = self.st
         need, a, b = solo_need(st, self.links, np.asarray(p, dtype=float)[None], [hover_s])
         reserve = float(self.m.battery_reserve)
-        have = (f"a sortie has {st.usable_wh:.2f} Wh usable (the battery's "
-                f"{st.usable_wh / (1.0 - reserve):.2f} Wh less its {100 * reserve:g} % "
-                f"reserve), the take-off and landing alone {st.vertical_wh:.2f} Wh of it")
+        full = E.battery_for_usable_wh(st.usable_wh, reserve)
+        have = (f"a sortie has {st.usable_wh:.2f} Wh usable (the battery's {full:.2f} Wh less "
+                f"its {100 * reserve:g} % reserve), the take-off and landing alone "
+                f"{st.vertical_wh:.2f} Wh of it")
         if not np.isfinite(need[0]):
             return f"{have}: a depot with a way to it (fleet.depots)"
         names = st.depot_names
@@ -377,9 +379,9 @@ class _Planner:
                else f"depot '{names[a[0]]}' to depot '{names[b[0]]}'")
         # what would do, not a lower bound (a larger battery changes the tour, and a smaller
         # one than this may then plan): each rounded up, so the printed value does
-        battery = need[0] / (1.0 - reserve)
+        battery = E.battery_for_usable_wh(need[0], reserve)
         wh = rounded_up(battery, 2)
-        seconds = rounded_up(battery * 3600.0 / st.hover_w)
+        seconds = rounded_up(float(E.hover_endurance_s(battery, st.power)))
         return (f"{have}, and a sortie to it alone{how} needs {need[0]:.2f} Wh (from {via}): "
                 f"a battery of {wh:.2f} Wh (uav.battery.energy_wh; or uav.endurance_s "
                 f"{seconds:.0f}) would fly it, or a depot nearer to ({p[0]:.0f}, {p[1]:.0f}) "

@@ -334,8 +334,7 @@ def solo_need(
     P = np.asarray(P, dtype=float).reshape(-1, 2)
     _, ce, nc, _ = _connections(st, links, P)
     D, n = ce.shape
-    spend = (st.vertical_wh + ce[:, None, :] + ce[None, :, :]
-             + st.hover_w * np.asarray(T, dtype=float) / 3600.0)  # (D, D, n)  # fmt: skip
+    spend = st.vertical_wh + ce[:, None, :] + ce[None, :, :] + st.hover_wh(T)  # (D, D, n)
     need = st.usable_for(spend, 1 + nc[:, None, :] + nc[None, :, :]).reshape(D * D, n)
     pair = np.argmin(need, axis=0)
     return need[pair, np.arange(n)], pair // D, pair % D
@@ -354,7 +353,7 @@ def solo_sorties(st: FleetSettings, room: np.ndarray, T: np.ndarray) -> np.ndarr
         (n,) float: whole numbers >= 1, or inf.
     """
     room = np.asarray(room, dtype=float)
-    need = np.asarray(T, dtype=float) * st.hover_w / 3600.0  # Wh each point's hover takes
+    need = st.hover_wh(T)  # Wh each point's hover takes
     with np.errstate(divide="ignore", invalid="ignore"):
         k = np.where(room > 0.0, np.ceil(need / np.where(room > 0.0, room, 1.0) - 1e-9), np.inf)
     k = np.maximum(k, np.ceil(np.asarray(T, dtype=float) / float(st.uav.max_hover_time) - 1e-9))

@@ -56,7 +56,9 @@ __all__ = [
     "route_flight_energy_wh",
     "sortie_energy_wh",
     "battery_energy_wh",
+    "hover_endurance_s",
     "usable_energy_wh",
+    "battery_for_usable_wh",
     "least_energy_per_metre_wh",
 ]
 
@@ -374,6 +376,21 @@ def battery_energy_wh(energy_wh: float | None, endurance_s: float | None,
     return None
 
 
+def hover_endurance_s(energy_wh: Any, power: PowerParams | None = None) -> np.ndarray:
+    """Seconds of hover at P(0) that `energy_wh` pays for: energy_wh x 3600 / P(0), the
+    inverse of `hover_energy_wh` (and of `battery_energy_wh`'s endurance_s), for saying a
+    battery as a `uav.endurance_s`.
+
+    Args:
+        energy_wh: energies (Wh), any shape.
+        power: the model's parameters (default `DEFAULT_POWER`).
+
+    Returns:
+        Seconds, energy_wh's shape.
+    """
+    return np.asarray(energy_wh, dtype=float) * J_PER_WH / hover_power_w(power)
+
+
 def usable_energy_wh(battery_wh: float, reserve: float) -> float:
     """Energy a sortie may spend (Wh): battery x (1 - reserve).
 
@@ -385,6 +402,20 @@ def usable_energy_wh(battery_wh: float, reserve: float) -> float:
         Wh.
     """
     return float(battery_wh) * (1.0 - float(reserve))
+
+
+def battery_for_usable_wh(usable_wh: float, reserve: float) -> float:
+    """The full battery (Wh) whose usable energy is `usable_wh`: usable / (1 - reserve), the
+    inverse of `usable_energy_wh`.
+
+    Args:
+        usable_wh: energy a sortie may spend (Wh).
+        reserve: the fraction kept at landing, in [0, 0.9] (`uav.battery.reserve`).
+
+    Returns:
+        Wh.
+    """
+    return float(usable_wh) / (1.0 - float(reserve))
 
 
 def least_energy_per_metre_wh(v_max: float, power: PowerParams | None = None) -> float:
