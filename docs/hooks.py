@@ -6,7 +6,10 @@ stale:
 
 - `cli`: every subcommand of `lamde-mission` (nested ones too) with its `--help`, from
   `lamde_mission.cli.build_parser()`;
-- `defaults`: the defaults table of `planner_core/defaults.py` (`render_markdown()`);
+- `defaults`: the defaults table of `planner_core/defaults.py` (`render_markdown()`), written
+  by that module's `with_table` (as `python -m planner_core.defaults README.md` writes the
+  README's copy), which keeps the blank lines a page has around the table (none in the README,
+  one each side here), so either command leaves the other's output unchanged;
 - `api`: one mkdocstrings `:::` entry per name in `lamde_mission.__all__`, at the module that
   defines it.
 
@@ -116,7 +119,8 @@ GENERATORS: dict[str, Callable[[], str]] = {
 
 
 def fill(markdown: str, names: Iterable[str] | None = None) -> str:
-    """`markdown` with its marked parts replaced by their generators' output.
+    """`markdown` with its marked parts replaced by their generators' output (the `defaults`
+    part by `planner_core.defaults.with_table`, which keeps the page's blank lines around it).
 
     Args:
         markdown: a page's text.
@@ -126,12 +130,16 @@ def fill(markdown: str, names: Iterable[str] | None = None) -> str:
     Returns:
         The page's text (unchanged where it has no such part).
     """
+    from planner_core import defaults
+
     wanted = set(GENERATORS if names is None else names)
 
     def one(m: re.Match[str]) -> str:
         gen = GENERATORS.get(m.group(2))
         if gen is None or m.group(2) not in wanted:
             return m.group(0)
+        if m.group(2) == "defaults":  # its one writer, shared with the README's
+            return defaults.with_table(m.group(0))
         return m.group(1) + "\n" + gen().rstrip("\n") + "\n\n" + m.group(3)
 
     return MARKERS.sub(one, markdown)

@@ -82,6 +82,8 @@ __all__ = [
     "check",
     "check_run_args",
     "render_markdown",
+    "update_readme",
+    "with_table",
 ]
 
 
@@ -574,9 +576,42 @@ def render_markdown(table: dict[str, Default] | None = None) -> str:
 README_MARKERS = ("<!-- defaults:begin -->\n", "<!-- defaults:end -->")
 
 
+def with_table(text: str, name: str = "the text") -> str:
+    """`text` with the table between its ``README_MARKERS`` rendered anew (`render_markdown`),
+    the blank lines it has around the table kept as they are: the README has none (it keeps
+    within its line budget; GitHub ends an HTML comment at its line), docs/reference/
+    defaults.md one on each side (Python-Markdown would read a table right after the comment
+    as part of it); an empty part holding a blank line gets one on each side. The one writer
+    of the table: `update_readme` and docs/hooks.py (the site's build and its `--update`) both
+    call it, so neither changes what the other wrote.
+
+    Args:
+        text: a page holding the markers (the first pair is filled).
+        name: what to call the page in the error (a path).
+
+    Returns:
+        The page's text.
+
+    Raises:
+        ValueError: the markers are missing (or the end marker precedes the begin marker).
+    """
+    begin, end = README_MARKERS
+    i, j = text.find(begin), text.find(end)
+    if i < 0 or j < i + len(begin):
+        raise ValueError(f"{name}: no {begin.strip()} ... {end} markers")
+    body = text[i + len(begin) : j]
+    if body.strip("\n"):  # a table (or what is left of one): its blank lines kept
+        lead = len(body) - len(body.lstrip("\n"))
+        trail = len(body) - len(body.rstrip("\n")) - 1  # the table ends with a newline
+    else:  # empty: a blank line asks for one on each side
+        lead = trail = min(len(body), 1)
+    table = "\n" * lead + render_markdown() + "\n" * trail
+    return text[: i + len(begin)] + table + text[j:]
+
+
 def update_readme(path: str) -> bool:
-    """Rewrite the table between ``README_MARKERS`` in the file at ``path`` (temp file, then
-    rename).
+    """Rewrite the table between ``README_MARKERS`` in the file at ``path`` (`with_table`;
+    temp file, then rename).
 
     Args:
         path: the README file (UTF-8).
@@ -592,11 +627,7 @@ def update_readme(path: str) -> bool:
 
     with open(path, encoding="utf-8") as fh:
         text = fh.read()
-    begin, end = README_MARKERS
-    i, j = text.find(begin), text.find(end)
-    if i < 0 or j < i:
-        raise ValueError(f"{path}: no {begin.strip()} ... {end} markers")
-    new = text[: i + len(begin)] + render_markdown() + text[j:]
+    new = with_table(text, path)
     if new == text:
         return False
     tmp = f"{path}.tmp{os.getpid()}"

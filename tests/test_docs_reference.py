@@ -86,6 +86,32 @@ def test_committed_cli_help_is_the_generated_one() -> None:
     assert hooks.on_page_markdown(text) == text
 
 
+def test_the_defaults_table_has_one_writer(tmp_path: Path) -> None:
+    """`python docs/hooks.py --update README.md` wrote the README's defaults table with a blank
+    line each side (2 lines over the README's budget) where `python -m planner_core.defaults
+    README.md` writes none, so each undid the other. Both now go through
+    `planner_core.defaults.with_table`, which keeps the page's own blank lines: either leaves
+    the other's output as it is, on the README, the reference page and stale copies of both."""
+    from planner_core import defaults
+
+    for rel in ("README.md", "docs/reference/defaults.md"):
+        text = (ROOT / rel).read_text(encoding="utf-8")
+        assert defaults.with_table(text) == text and hooks.fill(text, ["defaults"]) == text, rel
+    begin, end = defaults.README_MARKERS
+    table = defaults.render_markdown()
+    for stale, fresh in ((f"{begin}| old |\n{end}\n", f"{begin}{table}{end}\n"),
+                         (f"{begin}\n| old |\n\n{end}\n", f"{begin}\n{table}\n{end}\n"),
+                         (f"{begin}\n{end}\n", f"{begin}\n{table}\n{end}\n"),
+                         (f"{begin}{end}\n", f"{begin}{table}{end}\n")):
+        for first, second in ((defaults.update_readme, hooks.update),
+                              (hooks.update, defaults.update_readme)):
+            page = tmp_path / "page.md"
+            page.write_text("intro\n" + stale, encoding="utf-8")
+            assert first(str(page)) is True
+            assert page.read_text(encoding="utf-8") == "intro\n" + fresh
+            assert second(str(page)) is False, (first, stale)
+
+
 def test_update_rewrites_only_the_committed_parts(tmp_path: Path, capsys) -> None:
     page = tmp_path / "ref.md"
     page.write_text("intro\n<!-- defaults:begin -->\nold\n<!-- defaults:end -->\n"
@@ -94,8 +120,8 @@ def test_update_rewrites_only_the_committed_parts(tmp_path: Path, capsys) -> Non
                     encoding="utf-8")  # fmt: skip
     assert hooks.update(page) is True
     text = page.read_text(encoding="utf-8")
-    assert text == ("intro\n<!-- defaults:begin -->\n\n" + hooks.defaults_markdown().rstrip("\n")
-                    + "\n\n<!-- defaults:end -->\n<!-- api:begin -->\nmine\n<!-- api:end -->\n"
+    assert text == ("intro\n<!-- defaults:begin -->\n" + hooks.defaults_markdown()
+                    + "<!-- defaults:end -->\n<!-- api:begin -->\nmine\n<!-- api:end -->\n"
                     "<!-- other:begin -->\nmine too\n<!-- other:end -->\nrest\n")  # fmt: skip
     assert hooks.update(page) is False
     assert [p.name for p in tmp_path.iterdir()] == ["ref.md"]  # no temporary file left
