@@ -15,12 +15,27 @@ from planner_core.execution import ProcessExecutor, SerialExecutor, make_executo
 from tests.conftest import SUITE, modules_after
 
 
-def test_make_executor_by_backend() -> None:
+def _hide_ray(monkeypatch: pytest.MonkeyPatch, present: bool = False) -> None:
+    """Make `importlib.util.find_spec("ray")` say Ray is (not) installed, whatever it is;
+    hidden, `import ray` fails too (as for an uninstalled module), so no Ray ever starts."""
+    import importlib.machinery
+    import importlib.util
+
+    real = importlib.util.find_spec
+    spec = importlib.machinery.ModuleSpec("ray", None) if present else None
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *a: spec if name == "ray" else real(name, *a))
+    if not present:
+        monkeypatch.setitem(sys.modules, "ray", None)
+
+
+def test_make_executor_by_backend(monkeypatch: pytest.MonkeyPatch) -> None:
     assert isinstance(make_executor(0), SerialExecutor)
     ex = make_executor(2)
     assert isinstance(ex, ProcessExecutor) and ex.jobs == 2
     from planner_core.execution.ray_executor import RayExecutor
 
+    _hide_ray(monkeypatch, present=True)  # found, never imported here
     ray_ex = make_executor(3, "ray", "ray://head:10001")
     assert isinstance(ray_ex, RayExecutor)  # built without importing or starting Ray
     assert (ray_ex.address, ray_ex.num_cpus) == ("ray://head:10001", 3)
@@ -30,6 +45,27 @@ def test_make_executor_by_backend() -> None:
         make_executor(1, "local", "auto")
     with pytest.raises(ValueError, match="jobs must be >= 0"):
         make_executor(-1, "ray")
+    _hide_ray(monkeypatch)
+    with pytest.raises(ValueError, match=r"^backend ray: Ray is not installed; pip install "):
+        make_executor(3, "ray", "ray://head:10001")
+
+
+def test_run_bench_refuses_ray_missing_before_writing_anything(
+        tmp_path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """run_bench(backend="ray") without Ray wrote meta.json, then failed in the executor on
+    its first run (executor_problem did not look for Ray; make_executor built a RayExecutor
+    that imports Ray only when it runs). The executor's one check now refuses it first."""
+    from planner_core.bench import BenchError, run_bench
+    from planner_core.execution import executor_problem
+
+    _hide_ray(monkeypatch)
+    assert executor_problem(0, "ray").startswith("backend ray: Ray is not installed; ")
+    out = tmp_path / "o"
+    with pytest.raises(BenchError, match=r"^backend ray: Ray is not installed; pip install "
+                       r"'lamde-mission\[ray\]'"):
+        run_bench(SUITE, ["random-search"], runs=1, budget=100, out=out, tasks=["T01"],
+                  backend="ray", command="test", best_known=False)
+    assert not out.exists()
 
 
 @pytest.mark.slow  # measured 1.3 s on a loaded machine (default suite <= 5 min)
@@ -38,7 +74,9 @@ def test_ray_is_not_imported_by_the_planner_or_a_local_run() -> None:
         "import lamde_mission.cli, lamde_mission.api, planner_core.bench, planner_core.execution\n"
         "from planner_core.execution import make_executor\n"
         "from planner_core.execution.ray_executor import RayExecutor\n"
-        "RayExecutor('auto'); make_executor(0, 'ray')\n"
+        "RayExecutor('auto')\n"
+        "import importlib.util\n"
+        "if importlib.util.find_spec('ray'): make_executor(0, 'ray')\n"
         "with make_executor(0) as ex: assert list(ex.map_unordered(abs, [-1])) == [1]\n"
     )
     assert modules_after(code, "ray", timeout=120) == []
@@ -61,8 +99,6 @@ def test_process_executor_streams_with_a_bounded_number_in_flight() -> None:
 
 
 def test_cli_backend_errors_exit_2(tmp_path, capsys, monkeypatch) -> None:
-    import importlib.util
-
     from lamde_mission.cli import main
 
     base = ["bench", "--suite", str(SUITE), "--tasks", "T01", "--optimizers", "random-search",
@@ -73,9 +109,7 @@ def test_cli_backend_errors_exit_2(tmp_path, capsys, monkeypatch) -> None:
         main([*base, "--backend", "dask"])
     assert exc.value.code == 2
     # Ray not installed: one line saying how to install it, before anything is written
-    real = importlib.util.find_spec
-    monkeypatch.setattr(importlib.util, "find_spec",
-                        lambda name, *a: None if name == "ray" else real(name, *a))
+    _hide_ray(monkeypatch)
     assert main([*base, "--backend", "ray"]) == 2
     assert "--backend ray: Ray is not installed; pip install 'lamde-mission[ray]'" in (
         capsys.readouterr().err)

@@ -118,7 +118,7 @@ def add_executor_args(p: Any, what: str = "jobs") -> None:
 
 def check_executor_args(args: Any) -> None:
     """UsageError (exit 2) for --address without --backend ray, or --backend ray without Ray
-    installed; does not import Ray, only looks for it (`importlib.util.find_spec`).
+    installed; does not import Ray, only looks for it (`ray_executor.ray_missing`).
 
     Args:
         args: the parsed options (`backend`, `address`; `add_executor_args`).
@@ -129,11 +129,11 @@ def check_executor_args(args: Any) -> None:
     if args.address is not None and args.backend != "ray":
         raise UsageError("--address: only with --backend ray")
     if args.backend == "ray":
-        import importlib.util
+        from planner_core.execution.ray_executor import ray_missing
 
-        if importlib.util.find_spec("ray") is None:
-            raise UsageError("--backend ray: Ray is not installed; "
-                             "pip install 'lamde-mission[ray]' (or pip install -e '.[ray]')")
+        missing = ray_missing()  # the check every path of the executor makes
+        if missing is not None:
+            raise UsageError(f"--backend ray: {missing}")
 
 
 def add_origin_option(p: Any) -> None:

@@ -379,8 +379,9 @@ def run_bench(
             empty suite, an unreadable results, meta or best-known file, or an output folder
             holding runs of another budget, base seed, map version or optimiser entry, or
             its runs only compressed (results.jsonl.gz: read-only), a missing suite folder,
-            or (without `executor`) a bad `jobs` or `backend`, or an address with local
-            (`executor_problem`), each refused before anything is written.
+            or (without `executor`) a bad `jobs` or `backend`, an address with local or the
+            ray backend without Ray installed (`executor_problem`), each refused before
+            anything is written.
     """
     from planner_core.bench.baselines import INIT_MODES, REGISTRY, missing_extras
 

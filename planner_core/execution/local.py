@@ -13,6 +13,7 @@ from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wai
 from typing import Any, TypeVar
 
 from planner_core.execution.base import SINGLE_THREAD_ENV
+from planner_core.execution.ray_executor import ray_missing
 
 __all__ = ["BACKENDS", "SerialExecutor", "ProcessExecutor", "executor_problem", "make_executor"]
 
@@ -186,7 +187,8 @@ def executor_problem(jobs: int, backend: str = "local", address: str | None = No
 
     Returns:
         The first problem as one line naming the argument ("backend must be one of local,
-        ray, got 'dask'"), or None.
+        ray, got 'dask'"; "backend ray: Ray is not installed; pip install ..." where Ray
+        cannot be found, looked up without importing it), or None.
     """
     if backend not in BACKENDS:
         return f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}"
@@ -194,6 +196,10 @@ def executor_problem(jobs: int, backend: str = "local", address: str | None = No
         return f"jobs must be >= 0 (an integer), got {jobs!r}"
     if backend == "local" and address is not None:
         return "an address is only for the ray backend"
+    if backend == "ray":
+        missing = ray_missing()
+        if missing is not None:
+            return f"backend ray: {missing}"
     return None
 
 
@@ -215,8 +221,8 @@ def make_executor(jobs: int, backend: str = "local", address: str | None = None)
         A `SerialExecutor`, `ProcessExecutor` or `ray_executor.RayExecutor`.
 
     Raises:
-        ValueError: an unknown backend, a negative ``jobs`` or an address with ``local``
-            (`executor_problem`'s line).
+        ValueError: an unknown backend, a negative ``jobs``, an address with ``local`` or
+            the ray backend without Ray installed (`executor_problem`'s line).
     """
     problem = executor_problem(jobs, backend, address)
     if problem is not None:

@@ -31,7 +31,7 @@ from typing import Any, TypeVar
 
 from planner_core.execution.base import SINGLE_THREAD_ENV
 
-__all__ = ["RayExecutor", "RayUnavailable", "import_ray"]
+__all__ = ["RayExecutor", "RayUnavailable", "import_ray", "ray_missing"]
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -42,6 +42,20 @@ INSTALL_HINT = "pip install 'lamde-mission[ray]' (or pip install -e '.[ray]' in 
 
 class RayUnavailable(RuntimeError):
     """The Ray backend was asked for but Ray is not installed (message says how to install)."""
+
+
+def ray_missing() -> str | None:
+    """Why the Ray backend cannot run here, found without importing Ray
+    (`importlib.util.find_spec`): "Ray is not installed; pip install ...", or None.
+
+    Returns:
+        The line, or None where Ray is installed.
+    """
+    import importlib.util
+
+    if importlib.util.find_spec("ray") is None:
+        return f"Ray is not installed; {INSTALL_HINT}"
+    return None
 
 
 def import_ray() -> Any:
