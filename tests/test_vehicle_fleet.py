@@ -348,6 +348,24 @@ def test_cli_upload_fleet_errors(fleet_dir, tmp_path, capsys):
     )
 
 
+def test_upload_force_warns_of_a_rejected_file_in_one_line_naming_the_map(fleet_dir, capsys):
+    """The single file's --force printed one warning per failed check and no map ("warning:
+    F: the simulator rejects it (C4 ...); sent anyway"), the sortie directory's one line naming
+    the map: both now go through one helper (upload._rejected), refusal and warning alike."""
+    from lamde_mission.commands import upload as U
+
+    one = str(fleet_dir / "mission-v1-s1.plan")
+    mission, _ = read_mission(one)
+    assert U._sim_check(one, str(DEMO_MAP), mission, force=True) is True
+    err = capsys.readouterr().err
+    assert err.startswith(f"warning: {one}: the simulator rejects it on {DEMO_MAP} (C4 ")
+    assert err.endswith("); sent anyway (--force)\n") and err.count("\n") == 1, err
+    assert U._sim_check(one, str(DEMO_MAP), mission, force=False) is False
+    refused = capsys.readouterr().err
+    assert refused.startswith(f"lamde-mission upload: {one}: the simulator rejects it on "
+                              f"{DEMO_MAP}: C4 ") and refused.count("\n") == 1
+
+
 def test_cli_upload_exit_status_single_file_and_fleet_alike(fleet_dir, capsys):
     """upload's one rule (README, docs/fleet.md, `upload --help`): 1 when a check or the link
     fails, 2 for bad input. The single upload refused what the simulator rejects with 2 (the

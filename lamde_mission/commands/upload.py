@@ -310,14 +310,32 @@ def _sim_check(path: str, map_path: str, mission: list, *, force: bool,
         print(f"simulator: all constraints hold on {printable(map_path)} (C1..C5, CLEAR, "
               "MARGIN, ENDS, ALT, as verify judges them)", flush=True)  # fmt: skip
         return True
+    return _rejected(path, map_path, "; ".join(lines), force=force)
+
+
+def _rejected(what: str, map_path: str, failed: str, *, force: bool) -> bool:
+    """Say that the simulator rejects `what` (a mission file or a sortie directory) on the
+    map, one line on stderr: with `force` a warning (it is sent anyway), else the refusal
+    (nothing sent; `verify` shows every verdict).
+
+    Args:
+        what: the mission file or sortie directory, as the user gave it.
+        map_path: the map file.
+        failed: the failing verdicts, joined by "; ", already escaped (`printable`).
+        force: warn and go on.
+
+    Returns:
+        `force`: True to send anyway, False when nothing is sent.
+    """
+    from planner_core.textio import printable
+
     if force:
-        for line in lines:
-            print(f"warning: {printable(path)}: the simulator rejects it ({line}); sent anyway "
-                  "(--force)", file=sys.stderr)  # fmt: skip
+        print(f"warning: {printable(what)}: the simulator rejects it on {printable(map_path)} "
+              f"({failed}); sent anyway (--force)", file=sys.stderr)  # fmt: skip
         return True
-    print(f"lamde-mission upload: {printable(path)}: the simulator rejects it on "
-          f"{printable(map_path)}: {'; '.join(lines)}; nothing sent (`lamde-mission verify "
-          f"{printable(map_path)} {printable(path)}` shows every verdict; --force sends it "
+    print(f"lamde-mission upload: {printable(what)}: the simulator rejects it on "
+          f"{printable(map_path)}: {failed}; nothing sent (`lamde-mission verify "
+          f"{printable(map_path)} {printable(what)}` shows every verdict; --force sends it "
           "anyway)", file=sys.stderr)  # fmt: skip
     return False
 
@@ -352,15 +370,7 @@ def _fleet_sim_check(directory: str, map_path: str, *, force: bool,
               "MAP DIR/` judges them)", flush=True)  # fmt: skip
         return True
     failed = "; ".join(printable(x) for x in check.failed())
-    if force:
-        print(f"warning: {printable(directory)}: the simulator rejects it on "
-              f"{printable(map_path)} ({failed}); sent anyway (--force)", file=sys.stderr)
-        return True
-    print(f"lamde-mission upload: {printable(directory)}: the simulator rejects it on "
-          f"{printable(map_path)}: {failed}; nothing sent (`lamde-mission verify "
-          f"{printable(map_path)} {printable(directory)}` shows every verdict; --force sends "
-          "it anyway)", file=sys.stderr)  # fmt: skip
-    return False
+    return _rejected(directory, map_path, failed, force=force)
 
 
 def _sysids(text: str | None) -> list[int] | None:
