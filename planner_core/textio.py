@@ -60,6 +60,7 @@ __all__ = [
     "read_jsonl",
     "printable",
     "counted",
+    "for_count",
     "rounded_up",
     "quoted",
 ]
@@ -700,10 +701,27 @@ def quoted(value: object, width: int = 40) -> str:
     return printable(text)
 
 
+def for_count(n: int, one: str, many: str | None = None) -> str:
+    """The word that goes with a count of n, singular for 1 only: a noun after a list of
+    names ("unknown optimiser x", "optimisers x, y") or a verb agreeing with a count ("the 1
+    depot feature replaces", "the 2 ... replace"). The one place lines choose the plural
+    (`counted` goes through it).
+
+    Args:
+        n: the count.
+        one: the form for 1 ("optimiser", "replaces").
+        many: the form for any other count where it is not one + "s" ("replace", "vertices").
+
+    Returns:
+        `one` or `many`.
+    """
+    return one if n == 1 else (many or one + "s")
+
+
 def counted(n: int, noun: str, plural: str | None = None) -> str:
     """"1 obstacle", "0 obstacles", "1,001 sorties": a count (thousands separated) and its
-    noun, singular for 1 only. The one place the CLI's summary lines pluralise ("1 obstacles",
-    "1 battery swaps" were printed).
+    noun, singular for 1 only (`for_count`). What the CLI's lines count goes through it ("1
+    obstacles", "1 battery swaps" were printed).
 
     Args:
         n: the count.
@@ -713,7 +731,7 @@ def counted(n: int, noun: str, plural: str | None = None) -> str:
     Returns:
         "{n:,} {noun}" or "{n:,} {plural}".
     """
-    return f"{n:,} {noun if n == 1 else (plural or noun + 's')}"
+    return f"{n:,} {for_count(n, noun, plural)}"
 
 
 def rounded_up(x: float, places: int = 0) -> float:

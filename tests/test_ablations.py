@@ -171,7 +171,7 @@ def test_run_bench_runs_extra_entries_and_refuses_a_changed_one(suite: Path, tmp
     with pytest.raises(BenchError, match="optimiser VAR-A was run as"):
         run_bench(suite, ["VAR-A"], runs=2, budget=200, out=out, executor=SerialExecutor(),
                   best_known=False, inits=("uniform",), extra=[changed])
-    with pytest.raises(BenchError, match="shadow registry names"):
+    with pytest.raises(BenchError, match="^extra optimiser de-adaptive shadows registry names$"):
         run_bench(suite, ["de-adaptive"], runs=1, budget=200, out=tmp_path / "o2",
                   executor=SerialExecutor(), best_known=False,
                   extra=[policy_spec("de-adaptive", str(checkpoint))])

@@ -194,8 +194,11 @@ def test_v6_counts_hover_points_beyond_imax_and_never_corners(m):
     hp, ht = np.array(PLAN.hover_points), np.array(PLAN.hover_times)  # 2 hover + 1 corner
     with pytest.raises(ValueError, match=r"3 hover points exceed I_max = 2$"):
         _problem(lim, 0).encode(hp, ht)
-    with pytest.raises(ValueError, match=r"4 hover points exceed I_max = 2 \+ 1 corner slots"):
+    with pytest.raises(ValueError, match=r"4 hover points exceed I_max = 2 \+ 1 corner slot$"):
         k1.encode(np.vstack([hp, hp[:1]]), np.append(ht, 0.0))  # it said "I_max = 3"
+    assert repr(k1).endswith(", 1 corner slot)")  # "1 corner slots", as the line above
+    with pytest.raises(ValueError, match=r"^hover_times: 1 value for 3 hover points; give one"):
+        k1.encode(hp, ht[:1])
     x_ok = k1.encode(hp, ht)
     x_bad = k1.encode(hp, np.where(ht == 0.0, 5.0, ht))  # the corner hovers: 3 > I_max 2
     f, phi = k1.evaluate(np.vstack([x_ok, x_bad]))

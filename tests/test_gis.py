@@ -64,7 +64,7 @@ def test_campus_imports_exactly(campus) -> None:
     assert Polygon(shapes["restricted"].shell).exterior.is_ccw  # given clockwise, reordered
     # the origin is the data's south-west corner grown by the 100 m margin (documented)
     assert "south-west corner of the data's bounds grown by 100 m" in r.stderr
-    assert "'annex': merged 1 near-duplicate vertex(es) and removed 1 vertex(es) in the middle " \
+    assert "'annex': merged 1 near-duplicate vertex and removed 1 vertex in the middle " \
         "of an edge (tolerance 5 mm)" in r.stderr
     xy = np.vstack([m.sensors, m.start, m.end] + [sh.shell for sh in m.shapes])
     assert xy.min() == pytest.approx(100.0, abs=0.05)
@@ -580,6 +580,11 @@ def test_depots_are_point_features_and_come_back(tmp_path) -> None:
     assert [(dp.name, round(dp.x, 2), round(dp.y, 2)) for dp in load_map(doc).spec.fleet.depots] \
         == [("yard", 10.0, 10.0), ("barn-2", 650.0, 320.0)]
     assert any(n.startswith("fleet.depots: the 2 depot features replace the 2 in the fleet "
+                            "settings of ") for n in notes), notes
+    # one feature left: the verb agrees ("the 1 depot feature replace the 2" was printed)
+    exported["features"].remove(feats[1])
+    _, notes = build_map(_layers_of(tmp_path, exported, "one.geojson"))
+    assert any(n.startswith("fleet.depots: the 1 depot feature replaces the 2 in the fleet "
                             "settings of ") for n in notes), notes
 
 

@@ -21,7 +21,7 @@ from planner_core.atomic import (
     dir_beside,
     write_text_atomic,
 )
-from planner_core.textio import counted, printable, rounded_up
+from planner_core.textio import counted, for_count, printable, rounded_up
 from tests.conftest import MAPS, run_cli, run_cli_many
 
 DEMO = MAPS / "small-demo.json"
@@ -185,6 +185,10 @@ def test_counted_is_singular_for_one_only() -> None:
     assert counted(2, "sortie") == "2 sorties" and counted(1, "sortie") == "1 sortie"
     assert counted(1001, "sortie") == "1,001 sorties"
     assert counted(3, "child", "children") == "3 children" and counted(1, "child") == "1 child"
+    # the word alone, after a list or as a verb agreeing with a count
+    assert for_count(1, "optimiser") == "optimiser" and for_count(2, "optimiser") == "optimisers"
+    assert for_count(1, "replaces", "replace") == "replaces"
+    assert for_count(0, "replaces", "replace") == "replace"
 
 
 def test_rounded_up_never_prints_less_than_the_value() -> None:

@@ -295,7 +295,7 @@ def test_cli_upload_fleet_second_sortie_after_the_swap(fleet_dir, capsys):
         assert _holds(fleet.vehicle(1), second)  # vehicle 1 flies two sorties
         assert [len(v.items()) for v in fleet.vehicles[1:]] == [0, 0]  # the others one
     assert "no sortie 2): no sortie planned, nothing sent" in out
-    assert "fleet: 1 of 1 vehicles hold their mission" in out
+    assert "fleet: 1 of 1 vehicle holds its mission" in out  # "1 of 1 vehicles hold their"
     assert "2 without this sortie, nothing sent" in out
     rc = main(["upload", str(fleet_dir), "--fleet", "--sortie", "3", *conn])
     assert rc == 2 and "no vehicle flies a sortie 3" in capsys.readouterr().err

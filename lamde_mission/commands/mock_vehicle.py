@@ -229,12 +229,13 @@ def _where(mode: str, host: str, port: int) -> str:
 def _serve_fleet(fleet: object) -> int:
     """The foreground loop of `mock-vehicle --vehicles N`: one line per link, then until Ctrl-C."""
     from lamde_mission.vehicle.mock_fleet import MockFleet
+    from planner_core.textio import counted, for_count
 
     assert isinstance(fleet, MockFleet)
     ids = ", ".join(str(s) for s in fleet.system_ids)
     n = len(fleet.vehicles)
-    many = "s" if n > 1 else ""
-    what = f"{n} vehicle{many} (system{many} {ids}, component 1, quadrotor{many})"
+    what = (f"{counted(n, 'vehicle')} ({for_count(n, 'system')} {ids}, component 1, "
+            f"{for_count(n, 'quadrotor')})")
     if fleet.shared:
         ep = fleet.vehicles[0].endpoint
         print(f"mock fleet: {what} on one link, {_where(ep.mode, ep.host, ep.port)}; Ctrl-C to "

@@ -58,7 +58,15 @@ from typing import Any
 
 import numpy as np
 
-from planner_core.textio import InputError, counted, loads_json, printable, quoted, read_json
+from planner_core.textio import (
+    InputError,
+    counted,
+    for_count,
+    loads_json,
+    printable,
+    quoted,
+    read_json,
+)
 from sim.geo import enu_to_latlon, latlon_to_enu
 
 __all__ = ["GisError", "GisLayers", "read_layers", "build_map", "DEFAULT_MARGIN", "KINDS"]
@@ -1045,8 +1053,10 @@ def _depot_features(layers: GisLayers, settings: dict[str, Any], point: Any,
     if not isinstance(fleet, dict):
         fleet = settings["fleet"] = {}
     elif fleet.get("depots"):
-        notes.append(f"fleet.depots: the {counted(len(layers.depots), 'depot feature')} replace "
-                     f"the {len(fleet['depots'])} in the fleet settings of "
+        n = len(layers.depots)
+        notes.append(f"fleet.depots: the {counted(n, 'depot feature')} "
+                     f"{for_count(n, 'replaces', 'replace')} the {len(fleet['depots'])} in the "
+                     "fleet settings of "
                      f"{layers.settings_where}")
     fleet["depots"] = depots
 

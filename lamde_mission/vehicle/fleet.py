@@ -35,6 +35,7 @@ from lamde_mission.vehicle.transfer import (
     UploadReport,
     VehicleError,
 )
+from planner_core.textio import counted, for_count
 
 __all__ = ["first_sortie_missions", "sortie_missions", "FleetSetupError", "FleetSurveyError",
            "FleetMission",
@@ -153,7 +154,8 @@ class FleetReport:
         n = len(sent)
         idle = len(self.results) - n
         return (
-            f"fleet: {good} of {n} vehicles hold their mission, read back identical "
+            f"fleet: {good} of {counted(n, 'vehicle')} "
+            f"{for_count(good, 'holds its', 'hold their')} mission, read back identical "
             f"(survey {self.survey_s:.2f} s, all {self.total_s:.2f} s)"
             + (f"; {idle} without this sortie, nothing sent" if idle else "")
             + ("" if good == n else "; the others: see FAILED above")
@@ -221,8 +223,7 @@ def sortie_missions(directory: str | Path, sortie: int) -> list[FleetMission]:
 def _heard_line(heard: Sequence[int]) -> str:
     if not heard:
         return "no vehicle heard"
-    s = "s" if len(heard) > 1 else ""
-    return f"heard system{s} {', '.join(str(x) for x in heard)}"
+    return f"heard {for_count(len(heard), 'system')} {', '.join(str(x) for x in heard)}"
 
 
 def survey(
@@ -348,14 +349,16 @@ def assign_system_ids(
     """
     conns = list(connections)
     if len(conns) not in (1, n):
-        raise FleetSetupError(f"--connect: {len(conns)} connections for {n} vehicles (give one "
-                              "connection for all, or one per vehicle)")  # fmt: skip
+        raise FleetSetupError(f"--connect: {counted(len(conns), 'connection')} for "
+                              f"{counted(n, 'vehicle')} (give one connection for all, or one "
+                              "per vehicle)")  # fmt: skip
     shared = len(conns) == 1 and n > 1
     if system_ids is not None:
         ids = [int(s) for s in system_ids]
         if len(ids) != n:
-            raise FleetSetupError(f"--sysid: {len(ids)} system ids for {n} vehicles (give one "
-                                  "per vehicle, in vehicle order)")  # fmt: skip
+            raise FleetSetupError(f"--sysid: {counted(len(ids), 'system id')} for "
+                                  f"{counted(n, 'vehicle')} (give one per vehicle, in vehicle "
+                                  "order)")  # fmt: skip
         for s in ids:
             if not 1 <= s <= 255:
                 raise FleetSetupError(f"--sysid: {s} is not a MAVLink system id (1..255)")
@@ -391,7 +394,8 @@ def assign_system_ids(
             return [conns[0]] * n, ids, listened
         if len(got) != n:
             raise FleetSurveyError(
-                f"{n} missions but {len(got)} vehicles answer at {conns[0]} "
+                f"{counted(n, 'mission')} but {counted(len(got), 'vehicle')} "
+                f"{for_count(len(got), 'answers', 'answer')} at {conns[0]} "
                 f"({_heard_line(got)}, listened {listened:.1f} s); nothing was uploaded (--sysid "
                 "names the vehicles to use)"
             )

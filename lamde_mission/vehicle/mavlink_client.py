@@ -58,6 +58,7 @@ from lamde_mission.vehicle.wire import (
     mission_type_name,
     to_wire,
 )
+from planner_core.textio import counted
 
 __all__ = ["MavlinkClient"]
 
@@ -429,7 +430,7 @@ class MavlinkClient:
                                f"the request for item {highest + 1}")  # fmt: skip
                     raise TransferError(
                         f"{kind} upload: no answer from the vehicle while waiting for "
-                        f"{waiting} ({highest + 1} of {n} items sent; {timeout:.3g} s "
+                        f"{waiting} ({highest + 1} of {counted(n, 'item')} sent; {timeout:.3g} s "
                         "without progress)", unanswered=not answered,
                     )  # fmt: skip
                 resends += 1
@@ -452,7 +453,7 @@ class MavlinkClient:
                         "the resent last item with MAV_MISSION_ERROR (no transfer in progress)"
                     )
                 if code != _m.MAV_MISSION_ACCEPTED:
-                    raise self._nack(msg, t, f"upload of {n} items")
+                    raise self._nack(msg, t, f"upload of {counted(n, 'item')}")
                 if highest == n - 1:
                     self._progress(f"{kind} upload", n, n)
                     if resends:

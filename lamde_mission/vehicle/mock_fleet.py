@@ -27,6 +27,7 @@ from typing import Any
 
 from lamde_mission.vehicle.mock import NOISY_GCS_SYSTEM, MockVehicle
 from lamde_mission.vehicle.wire import open_udp, parse_endpoint
+from planner_core.textio import counted
 
 __all__ = ["MockFleet", "vehicle_connections", "fleet_system_ids"]
 
@@ -133,7 +134,8 @@ class MockFleet:
         self.system_ids = fleet_system_ids(vehicles, system_ids)
         n = len(self.system_ids)
         if conns is not None and len(conns) != n:
-            raise ValueError(f"{len(conns)} connections for {n} vehicles: give one per vehicle")
+            raise ValueError(f"{counted(len(conns), 'connection')} for {counted(n, 'vehicle')}: "
+                             "give one per vehicle")
         #: True: all vehicles on one socket; False: one socket each
         self.shared = shared
         self._sock: socket.socket | None = None

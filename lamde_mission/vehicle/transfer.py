@@ -33,7 +33,7 @@ from lamde_mission.vehicle.wire import (
     mission_type_name,
     wire_mission,
 )
-from planner_core.textio import counted
+from planner_core.textio import counted, for_count
 
 __all__ = [
     "VehicleError",
@@ -77,12 +77,12 @@ def no_vehicle_message(
     Returns:
         One line naming the connection, the wait and, for a system id, what answered instead.
     """
-    key = (f"; {bad_signatures} message(s) came unsigned or signed with another key: check "
-           "--signing-key against the vehicle's" if bad_signatures else "")  # fmt: skip
+    key = (f"; {counted(bad_signatures, 'message')} came unsigned or signed with another key: "
+           "check --signing-key against the vehicle's" if bad_signatures else "")  # fmt: skip
     if system_id is None:
         return f"no vehicle heard at {endpoint} within {timeout:g} s{key}"
-    many = "s" if len(heard) > 1 else ""
-    others = (f"heard only system{many} {', '.join(str(s) for s in heard)}" if heard
+    systems = ", ".join(str(s) for s in heard)
+    others = (f"heard only {for_count(len(heard), 'system')} {systems}" if heard
               else "no vehicle heard at all")  # fmt: skip
     wait = f"heard at {endpoint} within {timeout:g} s"
     return f"no vehicle with system id {system_id} {wait} ({others}){key}"

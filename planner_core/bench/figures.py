@@ -33,6 +33,7 @@ import numpy as np
 from planner_core.atomic import write_bytes_atomic
 from planner_core.defaults import SCORE_FACTOR
 from planner_core.model.formulas import penalised_score
+from planner_core.textio import counted
 
 __all__ = [
     "DPI",
@@ -125,8 +126,8 @@ def protocol_text(init: str | Sequence[str] | None, budget: int | None,
         parts.append(f"{int(budget):,} evaluations per run")
     counts = sorted({runs} if isinstance(runs, int) else set(runs or []))
     if counts:
-        n = str(counts[0]) if len(counts) == 1 else f"{counts[0]}-{counts[-1]}"
-        parts.append(f"{n} run{'s' if counts[-1] != 1 else ''} per {per}")
+        n = counted(counts[0], "run") if len(counts) == 1 else f"{counts[0]}-{counts[-1]} runs"
+        parts.append(f"{n} per {per}")
     return " · ".join(parts)
 
 
@@ -478,7 +479,7 @@ def paths_figure(tasks: Sequence[str], maps: Mapping[str, Any],
         row += n_rows
     lead = "Best route of each optimiser"
     if runs:
-        lead += f" (lowest f + {SCORE_FACTOR:g}·φ of its {runs} run{'s' if runs != 1 else ''})"
+        lead += f" (lowest f + {SCORE_FACTOR:g}·φ of its {counted(int(runs), 'run')})"
     if any((known or {}).get(t) for t in tasks):
         lead += ", against the best-known route"
     _suptitle(fig, lead, protocol)

@@ -29,7 +29,7 @@ from planner_core.bench._io import read_meta, stored_path, utc_now, write_json_a
 from planner_core.bench.limits import BestKnown, best_known_path, suite_task_files
 from planner_core.bench.records import RESULTS_FILE, Key, ResultsWriter, key_of, read_records
 from planner_core.execution import Executor, executor_problem, make_executor
-from planner_core.textio import counted
+from planner_core.textio import counted, for_count
 
 __all__ = [
     "BEST_KNOWN_BUDGET",
@@ -388,17 +388,20 @@ def run_bench(
     log = log or (lambda _msg: None)
     bad = [m for m in inits if m not in INIT_MODES]
     if bad or not inits:
-        raise BenchError(f"init: unknown start mode(s) {', '.join(bad) or '(none given)'}; "
+        raise BenchError(f"init: unknown {for_count(len(bad), 'start mode')} "
+                         f"{', '.join(bad) or '(none given)'}; "
                          f"choose from {', '.join(INIT_MODES)}")
     if any(k is not None and not 1 <= int(k) <= 200 for k in i_max):
         raise BenchError(f"i_max: every value must lie in [1, 200] (got {list(i_max)})")
     extras = {e.name: e for e in extra}
     clash = [n for n in extras if n in REGISTRY]
     if clash:
-        raise BenchError(f"extra optimiser(s) {', '.join(clash)} shadow registry names")
+        raise BenchError(f"extra {for_count(len(clash), 'optimiser')} {', '.join(clash)} "
+                         f"{for_count(len(clash), 'shadows', 'shadow')} registry names")
     unknown = [o for o in optimisers if o not in REGISTRY and o not in extras]
     if unknown:
-        raise BenchError(f"unknown optimiser(s) {', '.join(unknown)}; choose from "
+        raise BenchError(f"unknown {for_count(len(unknown), 'optimiser')} "
+                         f"{', '.join(unknown)}; choose from "
                          f"{', '.join([*REGISTRY, *extras])}")
     lacking = missing_extras(optimisers, extra)  # before any run, not one failure per run
     if lacking:
@@ -420,7 +423,8 @@ def run_bench(
     if tasks:
         missing = [t for t in tasks if t not in files]
         if missing:
-            raise BenchError(f"task(s) {', '.join(missing)} not in {suite} "
+            raise BenchError(f"{for_count(len(missing), 'task')} {', '.join(missing)} not in "
+                             f"{suite} "
                              f"(have {', '.join(files)})")
         files = {t: files[t] for t in tasks}
     out = Path(out)
@@ -446,7 +450,8 @@ def run_bench(
     if existing.truncated_tail:
         log(f"note: {results}: dropping a truncated last line (an interrupted write)")
     if existing.bad_lines:
-        log(f"note: {results}: ignoring unreadable line(s) {existing.bad_lines}")
+        log(f"note: {results}: ignoring unreadable "
+            f"{for_count(len(existing.bad_lines), 'line')} {existing.bad_lines}")
     all_jobs = plan_jobs(files, list(optimisers), runs, budget, base_seed, inits, i_max,
                          extras)
     _check_existing(existing.records, budget, {j.task: j.map_sha256 for j in all_jobs}, results)

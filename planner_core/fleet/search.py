@@ -63,7 +63,7 @@ from planner_core.fleet.split import (
 from planner_core.model import energy as E
 from planner_core.model.mapio import sub_map_dict
 from planner_core.streams import stream_rng, stream_seed
-from planner_core.textio import rounded_up
+from planner_core.textio import counted, rounded_up
 
 __all__ = ["SORTIE_BUDGET", "ROUNDS", "TRANSFER_NEIGHBOURS", "FleetResult", "plan_fleet",
            "route_first", "sortie_map_dict"]  # fmt: skip
@@ -338,7 +338,7 @@ class _Planner:
         shared = f" (its hover shared among {shares[i]:.0f})" if shares[i] > 1 else ""
         first = " or ".join(f"'{st.depot_names[d]}'" for d in st.start_depots)
         return (f"the single flight's tour cannot be cut into sorties that fit the battery "
-                f"among {st.uavs} vehicle{'s' if st.uavs != 1 else ''}, each taking off where "
+                f"among {counted(st.uavs, 'vehicle')}, each taking off where "
                 f"its last sortie landed, the first at depot {first}{also}; every point of the "
                 f"tour fits a sortie of its own (the heaviest, the {what} at ({JP[i, 0]:.0f}, "
                 f"{JP[i, 1]:.0f}){shared}, needs {need[i]:.2f} Wh of the {st.usable_wh:.2f} "

@@ -66,6 +66,7 @@ from typing import Any
 import numpy as np
 
 from planner_core.model.formulas import ground_reach, link_rates
+from planner_core.textio import counted
 
 __all__ = ["BandwidthBound", "Finding", "Diagnosis", "bandwidth_bound", "diagnose"]
 
@@ -494,9 +495,10 @@ def _vehicle_findings(m: Any, serves: dict[int, set[int]], groups: dict[int, lis
            f"least {ferry[a, b]:.4g} Wh, more than the {cap:.4g} Wh usable"
            if math.isfinite(ferry[a, b]) else "obstacles wall them apart")
     return [Finding(
-        "VEHICLES", True, f"fleet.uavs: {uavs} UAV{'s' if uavs != 1 else ''} cannot serve "
-        f"{len(picked)} sensors that each need a vehicle of their own: {shown}{more}. A vehicle "
-        f"takes off where its last sortie landed, and no flight joins these depots ({why})",
+        "VEHICLES", True, f"fleet.uavs: {counted(uavs, 'UAV')} cannot serve "
+        f"{counted(len(picked), 'sensor')} that each need a vehicle of their own: {shown}{more}. "
+        f"A vehicle takes off where its last sortie landed, and no flight joins these depots "
+        f"({why})",
         str(ids[picked[0]]))]
 
 
@@ -561,7 +563,8 @@ def _bandwidth_findings(b: BandwidthBound, bw: float, t_max: float, i_max: int) 
     for sid in b.short:
         others = len(b.short) - 1
         out.append(Finding(
-            "C3_HOVER_TIME", True, f"sensor '{sid}': with {others} other sensor(s) named here "
+            "C3_HOVER_TIME", True, f"sensor '{sid}': with {counted(others, 'other sensor')} "
+            "named here "
             f"it needs at least {b.v_low:.6g} s of hover time at hover points that keep C3 "
             f"(sum of rates <= R_lambda = {bw:g} Mbit/s), more than I_max x T_max = "
             f"{i_max} x {t_max:g} s = {b.cap:g} s ({how})", sid))

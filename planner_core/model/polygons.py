@@ -36,6 +36,8 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from planner_core.textio import counted
+
 __all__ = [
     "EDGE_BOUNDARY",
     "EDGE_OWNED",
@@ -229,7 +231,7 @@ def clean_polygon(
 
     Returns:
         (shell (V, 2), holes [(V_h, 2), ...], notes): notes say what was changed ("given
-        clockwise; ...", "merged 1 near-duplicate vertex(es) ...").
+        clockwise; ...", "merged 1 near-duplicate vertex ...").
 
     Raises:
         ValueError: one line naming the problem (and the ring, or where).
@@ -262,9 +264,11 @@ def clean_polygon(
     holes = [h if ring_area(h) < 0.0 else h[::-1].copy() for h in out[1:]]
     done = []
     if merged["duplicate"]:
-        done.append(f"merged {merged['duplicate']} near-duplicate vertex(es)")
+        n = merged["duplicate"]
+        done.append(f"merged {counted(n, 'near-duplicate vertex', 'near-duplicate vertices')}")
     if merged["collinear"]:
-        done.append(f"removed {merged['collinear']} vertex(es) in the middle of an edge")
+        done.append(f"removed {counted(merged['collinear'], 'vertex', 'vertices')} in the middle "
+                    "of an edge")
     if done:
         notes.append(f"{' and '.join(done)} (tolerance {VERTEX_TOL * 1000:g} mm)")
     return shell, holes, notes

@@ -18,6 +18,7 @@ from planner_core.model.geometry import overlap_lengths
 from planner_core.model.kernels import model_terms, scheduled_flow
 from planner_core.model.mapio import Map, load_map
 from planner_core.model.seeding import Seeder
+from planner_core.textio import counted
 
 __all__ = ["Problem"]
 
@@ -91,7 +92,7 @@ class Problem:
 
     def __repr__(self) -> str:
         mode = "variable" if self.variable_length else "fixed"
-        corners = f", {self.corner_slots} corner slots" if self.corner_slots else ""
+        corners = f", {counted(self.corner_slots, 'corner slot')}" if self.corner_slots else ""
         return f"Problem({self.map.name!r}, dim={self.dim}, {mode}-length{corners})"
 
     def _excess_hover(self, X: np.ndarray) -> np.ndarray:
@@ -319,12 +320,12 @@ class Problem:
         ht = np.asarray(hover_times, dtype=float).reshape(-1)
         k = len(hp)
         if len(ht) != k:  # numpy would broadcast a single time to every point
-            raise ValueError(f"hover_times: {len(ht)} value(s) for {k} hover point(s); give "
-                             "one per point")
+            raise ValueError(f"hover_times: {counted(len(ht), 'value')} for "
+                             f"{counted(k, 'hover point')}; give one per point")
         if k > self.n_points:
             slots = self.n_points - self.hover_limit
-            raise ValueError(f"{k} hover points exceed I_max = {self.hover_limit}"
-                             + (f" + {slots} corner slots" if slots else ""))
+            raise ValueError(f"{counted(k, 'hover point')} exceed I_max = {self.hover_limit}"
+                             + (f" + {counted(slots, 'corner slot')}" if slots else ""))
         if not self.variable_length and k != self.n_points:
             raise ValueError(f"fixed-length mode needs exactly {self.n_points} hover points")
         x = np.zeros((self.n_points, 4))
