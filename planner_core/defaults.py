@@ -81,6 +81,8 @@ __all__ = [
     "TRAIN_DEFAULTS",
     "check",
     "check_run_args",
+    "interval_text",
+    "number_text",
     "render_markdown",
     "update_readme",
     "with_table",
@@ -272,13 +274,49 @@ _RUN: tuple[Default, ...] = (
 )
 
 
+def number_text(v: float) -> str:
+    """A number as the map's tables and error lines print it: a whole number in plain digits
+    (1000000, not 1e+06; 86400), anything else as ``:g`` (6 significant digits: 0.01, 1e-09),
+    in plain digits too where that would write a positive exponent (10200000, not 1.02e+07);
+    from 1e16 on as ``:g``.
+
+    Args:
+        v: the number.
+
+    Returns:
+        Its text.
+    """
+    f = float(v)
+    if f.is_integer() and abs(f) < 1e16:
+        return str(int(f))  # every digit: a whole number is shown as it is
+    g = f"{f:g}"
+    return f"{float(g):.0f}" if "e+" in g and abs(float(g)) < 1e16 else g
+
+
+def interval_text(lo: float | None, hi: float | None, lo_open: bool = False,
+                  hi_open: bool = False) -> str:
+    """"[0.01, 1000000]", "(0, 100000]": a range as tables and error lines print it
+    (`number_text` for each end; None for an end without a bound).
+
+    Args:
+        lo, hi: the ends, or None (-inf, inf).
+        lo_open, hi_open: whether each end is excluded.
+
+    Returns:
+        The interval's text.
+    """
+    left = "(-inf" if lo is None else ("(" if lo_open else "[") + number_text(lo)
+    right = "inf)" if hi is None else number_text(hi) + (")" if hi_open else "]")
+    return f"{left}, {right}"
+
+
 def _ranged(name: str, value: Any, meaning: str, lo: float, hi: float,
             why: str | tuple[str, str], *, lo_open: bool = False, hi_open: bool = False,
             integer: bool = False) -> Default:
     """A map number with a physical range [lo, hi] (open ends where asked) and its reason (or
     (below, above): a reason for each side); null is valid where the default is null (the
     field is optional, with no value of its own)."""
-    interval = f"{'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'}"
+    interval = interval_text(lo, hi, lo_open, hi_open)
     nullable = value is None
     kind = "an integer" if integer else "a number"
     valid = f"{'null or ' if nullable else ''}{kind} in {interval}"

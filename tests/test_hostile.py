@@ -330,7 +330,7 @@ def test_every_map_number_is_refused_just_outside_its_range() -> None:
     with a line naming the field and the reason (so `check` and `plan` agree on it)."""
     import math
 
-    from planner_core.defaults import MAP_DEFAULTS
+    from planner_core.defaults import MAP_DEFAULTS, interval_text
 
     for name, d in MAP_DEFAULTS.items():
         assert d.bounds is not None and d.why, name
@@ -356,9 +356,9 @@ def test_every_map_number_is_refused_just_outside_its_range() -> None:
                     load_map(data)
                 line = info.value.problems[0]
                 assert line.startswith(f"{name}: "), (name, value, line)
-                assert f": must be in {'(' if lo_open else '['}{lo:g}, {hi:g}" in line, line
-                if outside < 0 and bound == 0:  # "must be in (0, ..." is its own reason;
-                    assert d.why not in line, line  # not the cap's
+                assert f": must be in {interval_text(lo, hi, lo_open, hi_open)} " in line, line
+                if outside < 0 and bound == 0 and not d.why_sides:  # "must be in (0, ..." is
+                    assert d.why not in line, line  # its own reason, not the cap's
                 else:  # the reason for the end it broke (each end its own, where given)
                     assert d.why_for(outside > 0) in line, (name, value, line)
                     other = d.why_sides and d.why_sides[int(outside < 0)]

@@ -64,7 +64,7 @@ def test_a_bound_of_zero_is_not_explained_by_the_caps_reason(hand_map: dict) -> 
     hand_map["uav"]["max_speed"] = 0.01
     lines = _problems(hand_map)
     radius = next(line for line in lines if line.startswith("obstacles.circles[0].radius:"))
-    assert radius.startswith("obstacles.circles[0].radius: must be in [0.01, 1e+06] (got -5); "
+    assert radius.startswith("obstacles.circles[0].radius: must be in [0.01, 1000000] (got -5); "
                              "at least 1 cm: smaller")  # fmt: skip
     assert "area.width: must be in (0, 100000] (got 0)" in lines
     speed = next(line for line in lines if line.startswith("uav.max_speed:"))
@@ -78,6 +78,28 @@ def test_a_bound_of_zero_is_not_explained_by_the_caps_reason(hand_map: dict) -> 
                      "rotary-wing UAV flies that fast")
     hand_map["obstacles"]["circles"][0]["radius"] = 2e6
     assert any("1000 km" in line for line in _problems(hand_map))
+
+
+def test_bounds_print_in_plain_digits_and_a_zero_bound_keeps_its_own_reason(
+        hand_map: dict) -> None:
+    """Obstacle sizes printed "must be in [0.01, 1e+06] (got 2e+06)" where the others print
+    plain numbers ("(0, 100000]"); they now read [0.01, 1000000] (got 2000000). And
+    fleet.separation_m's reason below its open 0 ("0 m is a collision") never showed: a 0
+    bound dropped every reason, meant for fields whose one reason is the cap's."""
+    hand_map["obstacles"] = {"circles": [{"x": 500, "y": 500, "radius": 2e6}]}
+    (radius,) = [x for x in _problems(hand_map) if x.startswith("obstacles.circles[0]")]
+    assert radius.startswith("obstacles.circles[0].radius: must be in [0.01, 1000000] (got "
+                             "2000000); ")
+    del hand_map["obstacles"]
+    for value in (0.0, -5.0):
+        hand_map["fleet"] = {"separation_m": value}
+        (line,) = [x for x in _problems(hand_map) if x.startswith("fleet.separation_m")]
+        assert line == (f"fleet.separation_m: must be in (0, 1000] (got {value:g}); 0 m is a "
+                        "collision")
+    hand_map["fleet"] = {"separation_m": 1500.0}
+    (line,) = [x for x in _problems(hand_map) if x.startswith("fleet.separation_m")]
+    assert line.endswith("(got 1500); beyond a kilometre the vehicles of a map fly one after "
+                         "the other")
 
 
 def test_points_outside_area_and_inside_obstacles(hand_map: dict) -> None:
@@ -129,9 +151,9 @@ def test_tiny_obstacles_and_collinear_zones_are_refused_naming_the_field(hand_ma
                       "holes": [[[620, 120], [640, 140], [660, 160]]]}],
     }  # fmt: skip
     lines = _problems(hand_map)
-    want = ["obstacles.circles[0].radius: must be in [0.01, 1e+06] (got 1e-16)",
-            "obstacles.rectangles[0].length: must be in [0.01, 1e+06] (got 1e-15)",
-            "obstacles.rectangles[1].width: must be in [0.01, 1e+06] (got 0.009)"]
+    want = ["obstacles.circles[0].radius: must be in [0.01, 1000000] (got 1e-16)",
+            "obstacles.rectangles[0].length: must be in [0.01, 1000000] (got 1e-15)",
+            "obstacles.rectangles[1].width: must be in [0.01, 1000000] (got 0.009)"]
     for w in want:
         assert any(line.startswith(w) for line in lines), (w, lines)
     assert not any("circles[1]" in line or "polygon 0" in line for line in lines), lines

@@ -81,8 +81,8 @@ def test_required_data_with_its_margin_stays_within_the_limit():
     with pytest.raises(MapError) as err:
         load_map(d)
     assert [str(p) for p in err.value.problems] == [
-        "sensors[0].required_data: 1e+07 Mbit with safety.data_margin 0.02 is 1.02e+07 Mbit "
-        "to plan, above the limit 1e+07 (lower one of them)"]
+        "sensors[0].required_data: 10000000 Mbit with safety.data_margin 0.02 is 10200000 Mbit "
+        "to plan, above the limit 10000000 (lower one of them)"]
     d["safety"] = {"data_margin": 0.0}  # the paper's model: the limit itself is allowed
     assert load_map(d).planning_map().required_data[0] == 1e7
     d = _default_margins("T01")

@@ -289,13 +289,14 @@ def _check_plan_result(hover_points: Any, hover_times: Any) -> None:
     import math
 
     from lamde_mission.formats.ranges import FLOAT32_MAX, check_item_count
+    from planner_core.defaults import interval_text
     from planner_core.model.mapio import MAX_COORD
 
     def number(v: Any, where: str, lo: float, hi: float) -> None:
         if isinstance(v, bool) or not isinstance(v, int | float):
             raise MissionError(f"{where}: expected a number, got {quoted(v)}")
         if not (math.isfinite(v) and lo <= v <= hi):
-            raise MissionError(f"{where}: {v:g} is outside [{lo:g}, {hi:g}]")
+            raise MissionError(f"{where}: {v:g} is outside {interval_text(lo, hi)}")
 
     for name, v in (("hover_points", hover_points), ("hover_times", hover_times)):
         if not isinstance(v, list):

@@ -542,14 +542,15 @@ def _read_qgc_plan(layers: GisLayers, doc: dict[str, Any], src: str) -> None:
 def _home_altitude(v: Any, where: str) -> float:
     """The planned home's altitude (m AMSL), within the map origin's range; ValueError naming
     `where` otherwise."""
+    from planner_core.defaults import interval_text
     from planner_core.model.mapio import Origin
 
     alt = _number(v, where)
     bounds = Origin.model_json_schema()["properties"]["alt"]
     lo, hi = bounds.get("minimum", -math.inf), bounds.get("maximum", math.inf)
     if not lo <= alt <= hi:
-        raise ValueError(f"{where}: altitude {alt:g} m is outside [{lo:g}, {hi:g}] m, the range "
-                         "of a map origin's altitude above mean sea level")  # fmt: skip
+        raise ValueError(f"{where}: altitude {alt:g} m is outside {interval_text(lo, hi)} m, "
+                         "the range of a map origin's altitude above mean sea level")  # fmt: skip
     return alt
 
 

@@ -20,7 +20,14 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from planner_core import textio
-from planner_core.defaults import MAP_CHOICES, MAP_DEFAULTS, MAP_LISTS, MAX_DEPOTS
+from planner_core.defaults import (
+    MAP_CHOICES,
+    MAP_DEFAULTS,
+    MAP_LISTS,
+    MAX_DEPOTS,
+    interval_text,
+    number_text,
+)
 from planner_core.model import energy as _energy
 from planner_core.model.geometry import Obstacles, points_inside, rectangle_vertices
 from planner_core.model.polygons import clean_polygon, convex_pieces, is_convex
@@ -74,9 +81,7 @@ def _ranged(
         kw["gt" if lo_open else "ge"] = lo
     if hi is not None:
         kw["lt" if hi_open else "le"] = hi
-    lb = "" if lo is None else ("(" if lo_open else "[") + f"{lo:g}"
-    ub = "" if hi is None else f"{hi:g}" + (")" if hi_open else "]")
-    interval = f"{lb or '(-inf'}, {ub or 'inf)'}"
+    interval = interval_text(lo, hi, lo_open, hi_open)
     desc = f"{what}; range {interval}: {why}"
     extra = {"x-range-reason": why, "x-range": interval}
     if sides is not None:
@@ -1139,16 +1144,18 @@ _ITEM_REASONS = {
 }  # fmt: skip
 
 
-def _range_reason(loc: tuple[Any, ...], above: bool | None = None) -> tuple[str, str | None]:
+def _range_reason(loc: tuple[Any, ...],
+                  above: bool | None = None) -> tuple[str, str | None, bool]:  # fmt: skip
     """The documented reason for the bound that the value at `loc` broke (the side's own,
-    `above` or below, where the field gives one), and the field's valid interval ("[0.1,
-    200]"; None for a value inside a list or pair, which has no field of its own)."""
+    `above` or below, where the field gives one), the field's valid interval ("[0.1,
+    200]"; None for a value inside a list or pair, which has no field of its own), and
+    whether the reason is that side's own (not the field's one reason for both ends)."""
     names = [i for i, part in enumerate(loc) if isinstance(part, str)]
     if not names:
-        return "out of the documented range", None
+        return "out of the documented range", None, False
     i = names[-1]
     if i < len(loc) - 1 or loc[i] in _ITEM_REASONS:
-        return _ITEM_REASONS.get(str(loc[i]), "out of the documented range"), None
+        return _ITEM_REASONS.get(str(loc[i]), "out of the documented range"), None, False
     model = _model_at(loc[: i + 1])
     info = model.model_fields.get(str(loc[i])) if model is not None else None
     extra = getattr(info, "json_schema_extra", None)
@@ -1156,10 +1163,11 @@ def _range_reason(loc: tuple[Any, ...], above: bool | None = None) -> tuple[str,
         side = None if above is None else extra.get(
             "x-range-reason-above" if above else "x-range-reason-below")
         interval = extra.get("x-range")
-        return str(side or extra["x-range-reason"]), None if interval is None else str(interval)
+        return (str(side or extra["x-range-reason"]),
+                None if interval is None else str(interval), side is not None)
     if info is not None and info.description and "; " in info.description:
-        return info.description.split("; ", 1)[1], None
-    return "out of the documented range", None
+        return info.description.split("; ", 1)[1], None, False
+    return "out of the documented range", None, False
 
 
 #: pydantic's strict type errors -> what the field must be, in JSON's words
@@ -1219,15 +1227,15 @@ def _pydantic_problems(err: ValidationError) -> list[str]:
                          "newlines or tabs)")  # fmt: skip
         elif kind in _RANGE_KINDS:
             got = e.get("input")
-            shown = f"{got:g}" if isinstance(got, float) else repr(got)
+            shown = number_text(got) if isinstance(got, float) else repr(got)
             above = kind.startswith("less")
-            reason, interval = _range_reason(loc, above)
+            reason, interval, own = _range_reason(loc, above)
             # the whole valid range, whichever end was broken, where the field has one
             msg = (f"must be in {interval}" if interval is not None
                    else e["msg"].replace("Input should be", "must be"))  # fmt: skip
             bound = (e.get("ctx") or {}).get("gt", (e.get("ctx") or {}).get("ge"))
-            if not above and bound == 0:  # "> 0" needs no reason, and the documented one
-                lines.append(f"{where}: {msg} (got {shown})")  # is the cap's
+            if not above and bound == 0 and not own:  # "> 0" needs no reason, and the
+                lines.append(f"{where}: {msg} (got {shown})")  # field's one is the cap's
             else:
                 lines.append(f"{where}: {msg} (got {shown}); {reason}")
         else:
@@ -1247,9 +1255,9 @@ def _margin_problems(spec: MapFile) -> list[str]:
         s.required_data is None for s in spec.sensors) else []
     given += [(f"sensors[{j}].required_data", float(s.required_data))
               for j, s in enumerate(spec.sensors) if s.required_data is not None]
-    return [f"{name}: {q:g} Mbit with safety.data_margin {margin:g} is "
-            f"{q * (1.0 + margin):.6g} Mbit to plan, above the limit {limit:g} (lower one of "
-            "them)" for name, q in given if q * (1.0 + margin) > limit]
+    return [f"{name}: {number_text(q)} Mbit with safety.data_margin {margin:g} is "
+            f"{number_text(q * (1.0 + margin))} Mbit to plan, above the limit {number_text(limit)} "
+            "(lower one of them)" for name, q in given if q * (1.0 + margin) > limit]
 
 
 def _semantic_problems(
