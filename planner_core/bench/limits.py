@@ -39,7 +39,6 @@ __all__ = [
 ]
 
 
-
 #: the command that runs the best-known protocol (1,000,000 evaluations x 5 runs, strongest
 #: optimisers; see lamde_mission.commands.bench)
 BEST_KNOWN_PROTOCOL = "lamde-mission bench --best-known --suite examples/maps/suite"

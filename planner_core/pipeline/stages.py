@@ -213,8 +213,6 @@ class _Base:
         return f"{type(self).__name__}()"
 
 
-
-
 def _incumbent_feasible(ev: Evaluator) -> bool:
     return ev.has_best and ev.best()[2] == 0.0
 
