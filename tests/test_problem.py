@@ -112,8 +112,9 @@ def test_encode_needs_one_hover_time_per_point(hand_map: dict) -> None:
     p = Problem(hand_map)
     assert p.n_points >= 2
     for times in ([50.0], [50.0, 60.0, 70.0], []):
-        with pytest.raises(ValueError, match=rf"^hover_times: {len(times)} value\(s\) for 2 "
-                           r"hover point\(s\); give one per point$"):
+        n = f"{len(times)} value" + ("" if len(times) == 1 else "s")
+        with pytest.raises(ValueError, match=rf"^hover_times: {n} for 2 hover points; give one "
+                           r"per point$"):
             p.encode([[300, 0], [400, 0]], times)
     assert p.breakdown(p.encode([[300, 0], [400, 0]], [50.0, 60.0]))["hover_times"] == [50.0,
                                                                                         60.0]
