@@ -167,12 +167,9 @@ def update(path: str | Path) -> bool:
     new = fill(text, COMMITTED)
     if new == text:
         return False
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    try:
-        tmp.write_text(new, encoding="utf-8")
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
+    from planner_core.atomic import write_text_atomic
+
+    write_text_atomic(path, new, mkdir=False)
     return True
 
 
