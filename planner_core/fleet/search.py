@@ -326,12 +326,15 @@ class _Planner:
         JP, JT = joined
         # the hover points all fit (above): a corner the tour turns at round an obstacle
         # (no hover) can still lie beyond every sortie's reach, and the split needs it flown
-        for i in np.flatnonzero(solo_room(st, self.links, JP) <= 0.0):
+        joined_room = solo_room(st, self.links, JP)
+        cut_off = np.flatnonzero(joined_room <= 0.0)
+        if len(cut_off):
+            i = int(cut_off[0])
             return (f"the single flight's tour turns round an obstacle at ({JP[i, 0]:.0f}, "
                     f"{JP[i, 1]:.0f}), a corner no sortie from any depot reaches and comes "
                     f"back from on one battery{also}; "
                     + self._advice(JP[i], 0.0, " (no hover)"))
-        shares = solo_sorties(st, solo_room(st, self.links, JP), JT)
+        shares = solo_sorties(st, joined_room, JT)
         need, _, _ = solo_need(st, self.links, JP, JT / shares)
         i = int(np.argmax(need))
         what = "hover point" if JT[i] > 0.0 else "corner"
