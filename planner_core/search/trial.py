@@ -237,12 +237,7 @@ def trial_points(
     ~40 numpy and wrapper calls (~0.2 ms) per trial.
 
     Args:
-        problem: the UAV `Problem`.
-        P: hover points (I, 2), m.
-        g: the gradient (I, 2), s/m.
-        scale: its largest |entry| (or 1.0 with a move already scaled).
-        step: the step, m.
-        box: the area (2,), m.
+        problem, P, g, scale, step, box: as `trial_points_reference`'s.
 
     Returns:
         (Pn (I, 2) m, rates (I, J) Mbit/s, verdict). The rates are Pn's for `TRIAL_OK` and
