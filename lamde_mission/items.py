@@ -276,10 +276,16 @@ def geofence_items(map: Any) -> list[MissionItem]:  # noqa: A002
     def add(command: int, p1: float, lat: float, lon: float) -> None:
         out.append(fence_item(len(out), command, p1, lat, lon))
 
+    # every vertex and centre converted in one call (one per polygon made a campus of a
+    # thousand obstacles spend a second here), then taken back in order
+    pts = [np.asarray(p, dtype=float).reshape(-1, 2) for p in polys]
+    pts += [np.asarray(c, dtype=float).reshape(-1, 2) for c, _ in circles]
+    ll = iter(_latlon(map, np.vstack(pts)) if pts else [])
     for poly in polys:
-        for lat, lon in _latlon(map, poly):
+        for _ in range(len(poly)):
+            lat, lon = next(ll)
             add(CMD.FENCE_POLYGON_VERTEX_EXCLUSION, len(poly), lat, lon)
-    for centre, r in circles:
-        ((lat, lon),) = _latlon(map, centre)
+    for _, r in circles:
+        lat, lon = next(ll)
         add(CMD.FENCE_CIRCLE_EXCLUSION, r, lat, lon)
     return out

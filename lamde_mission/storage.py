@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from types import SimpleNamespace
 from typing import Any, Literal
 
@@ -303,6 +303,9 @@ class StorablePlan:
     dialect: Dialect
     moved_m: np.ndarray
     added_s: np.ndarray
+    #: (map, planning_map, finish) it was made for: `storable_plan` hands it back unchanged
+    #: when asked again for the same (objects compared by identity)
+    made_for: tuple[Any, Any, str] | None = field(default=None, repr=False)
 
     @property
     def n_hover(self) -> int:
@@ -374,7 +377,9 @@ def storable_plan(
 
     Returns:
         The `StorablePlan`: hover points (I, 2) m, hover times (I,) s, the dialect, moved_m
-        (I,) m and added_s (I,) s.
+        (I,) m and added_s (I,) s. `plan` itself when it is a `StorablePlan` made for the
+        same map and planning map (the same objects), dialect and finish: storing it again
+        changes nothing, and `write_mission` is handed what `plan` made.
 
     Raises:
         ValueError: an unknown dialect name.
@@ -385,6 +390,10 @@ def storable_plan(
 
     d = dialect_of(dialect)
     pm = map if planning_map is None else planning_map
+    made = getattr(plan, "made_for", None)
+    if (isinstance(plan, StorablePlan) and plan.dialect == d and made is not None
+            and made[0] is map and made[1] is pm and made[2] == finish):
+        return plan  # already made for this map, dialect and finish: storing it again is a no-op
     hp = np.asarray(plan.hover_points, dtype=float).reshape(-1, 2)
     ht = np.asarray(plan.hover_times, dtype=float).reshape(-1)
     spec = pm.spec
@@ -467,4 +476,5 @@ def storable_plan(
         dialect=d,
         moved_m=np.hypot(*(points - hp).T) if len(hp) else np.zeros(0),
         added_s=times - ht,
+        made_for=(map, pm, finish),
     )

@@ -120,8 +120,9 @@ def overlap_lengths(path: np.ndarray, obstacles: list[Obstacle]) -> np.ndarray:
     """(L, O) metres of each leg of the polyline `path` (L + 1, 2) inside each obstacle.
 
     Legs are measured one by one (the paper sums per leg and per obstacle: a leg crossing two
-    overlapping obstacles counts in both). Time and memory grow as L x O (every pair is
-    measured and kept): for short paths; `overlap_totals` is the bounded form for a mission.
+    overlapping obstacles counts in both). Time and memory grow as L x O (every pair is kept;
+    the circles are measured in one vectorised call, a polygon only where its bounding box meets
+    the leg's): for short paths; `overlap_totals` is the bounded form for a mission.
 
     Args:
         path: (L + 1, 2) polyline, local metres.
@@ -137,14 +138,28 @@ def overlap_lengths(path: np.ndarray, obstacles: list[Obstacle]) -> np.ndarray:
     out = np.zeros((len(path) - 1, len(obstacles)))
     polys = [k for k, o in enumerate(obstacles) if o.circle is None]
     if polys:
-        legs = shapely.linestrings(np.stack([path[:-1], path[1:]], axis=1))
         shapes = np.array([obstacles[k].shape for k in polys], dtype=object)
-        inter = shapely.intersection(legs[:, None], shapes[None, :])
-        out[:, polys] = shapely.length(inter)
-    for k, o in enumerate(obstacles):
-        if o.circle is not None:
-            cx, cy, r = o.circle
-            out[:, k] = _chords(path[:-1], path[1:], np.array([cx, cy]), r)
+        # only the (leg, polygon) pairs whose bounding boxes meet are intersected: the others
+        # have no length inside (0 either way), and a short path meets few of many polygons
+        lo, hi = np.minimum(path[:-1], path[1:]), np.maximum(path[:-1], path[1:])
+        box = shapely.bounds(shapes)  # (P, 4): xmin, ymin, xmax, ymax
+        meet = ((lo[:, None, 0] <= box[None, :, 2]) & (hi[:, None, 0] >= box[None, :, 0])
+                & (lo[:, None, 1] <= box[None, :, 3]) & (hi[:, None, 1] >= box[None, :, 1]))
+        li, pi = np.nonzero(meet)
+        if len(li):
+            legs = shapely.linestrings(np.stack([path[:-1], path[1:]], axis=1))
+            got = np.zeros((len(path) - 1, len(polys)))
+            got[li, pi] = shapely.length(shapely.intersection(legs[li], shapes[pi]))
+            out[:, polys] = got
+    circ = [k for k, o in enumerate(obstacles) if o.circle is not None]
+    if circ:
+        # every (leg, circle) pair in one call of `_chords` (per-row centres and radii), leg
+        # major: the same arithmetic per pair as one call per circle, without O Python calls
+        c = np.array([obstacles[k].circle for k in circ], dtype=float)  # (C, 3)
+        n_legs, n_c = len(path) - 1, len(circ)
+        got = _chords(np.repeat(path[:-1], n_c, axis=0), np.repeat(path[1:], n_c, axis=0),
+                      np.tile(c[:, :2], (n_legs, 1)), np.tile(c[:, 2], n_legs))
+        out[:, circ] = got.reshape(n_legs, n_c)
     return out
 
 

@@ -23,6 +23,7 @@ from lamde_mission.items import (
     plan_to_items,
 )
 from planner_core.model.mapio import load_map
+from tests.conftest import ROOT
 
 M = mavutil.mavlink
 
@@ -114,6 +115,33 @@ def test_geofence_items(m):
     circ, polys = fence_from_items(fence)
     assert len(circ) == 2 and [len(p) for p in polys] == [4, 4]
     assert not any(c[3] for c in circ) and not any(p[0][2] for p in polys)
+
+
+def test_geofence_items_equal_each_shape_converted_on_its_own():
+    """Every vertex and centre is converted to lat/lon in one call: the same items, number for
+    number, as one conversion per polygon and per circle (a large map's thousand obstacles)."""
+    from lamde_mission.items import fence_item, fence_shapes
+    from sim.geo import enu_to_latlon
+
+    m = load_map(ROOT / "examples/maps/large/L02.json")
+    circles, polys = fence_shapes(m)
+    ref = []
+    for poly in polys:
+        lat, lon = enu_to_latlon(np.asarray(poly)[:, 0], np.asarray(poly)[:, 1], m)
+        for a, b in zip(lat, lon, strict=True):
+            ref.append(fence_item(len(ref), CMD.FENCE_POLYGON_VERTEX_EXCLUSION, len(poly),
+                                  float(a), float(b)))  # fmt: skip
+    for centre, r in circles:
+        lat, lon = enu_to_latlon(centre[:1], centre[1:], m)  # (1,) arrays, as before
+        ref.append(fence_item(len(ref), CMD.FENCE_CIRCLE_EXCLUSION, r, float(lat[0]),
+                              float(lon[0])))  # fmt: skip
+    assert len(polys) > 200 and len(circles) > 200
+    got = geofence_items(m)
+    # the same items; lat/lon to 1e-12 degree (~0.1 um: a vectorised sin may differ in the
+    # last bit from a short array's), far below the 1e-7 degree grid the file stores
+    assert [replace(a, x=0.0, y=0.0) for a in got] == [replace(b, x=0.0, y=0.0) for b in ref]
+    np.testing.assert_allclose([(a.x, a.y) for a in got], [(b.x, b.y) for b in ref],
+                               rtol=0, atol=1e-12)  # fmt: skip
 
 
 def test_fence_grouping_rejects_broken_polygons(m):

@@ -118,3 +118,35 @@ def test_the_figure_cuts_each_distinct_leg_by_the_obstacles_it_meets_only(monkey
     assert 0 < biggest[0] <= 40, biggest[0]  # the rectangles one leg crosses, not all 400
     total = sum(float(np.sum(np.hypot(*np.diff(g, axis=0).T))) for g in got)
     assert total == pytest.approx(sum(w.length for w in want), rel=1e-12) and total > 0.0
+
+
+def _pair_by_pair(path: np.ndarray, obs: list) -> np.ndarray:
+    """The slow reference of `overlap_lengths`: each leg against each obstacle on its own
+    (shapely's intersection for a polygon, one `_chords` call per circle)."""
+    out = np.zeros((len(path) - 1, len(obs)))
+    for i in range(len(path) - 1):
+        leg = shapely.linestrings(path[i:i + 2])
+        for k, o in enumerate(obs):
+            if o.circle is None:
+                out[i, k] = shapely.length(shapely.intersection(leg, o.shape))
+            else:
+                cx, cy, r = o.circle
+                out[i, k] = sim_obstacles._chords(path[i:i + 1], path[i + 1:i + 2],
+                                                  np.array([cx, cy]), r)[0]  # fmt: skip
+    return out
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_overlap_lengths_equals_each_leg_against_each_obstacle(seed: int) -> None:
+    """`overlap_lengths` measures every circle in one call and intersects only the polygons
+    whose box a leg's box meets: the same table, bit for bit, as leg by leg and obstacle by
+    obstacle (legs across the map, short legs, a leg along an edge, a zero-length leg)."""
+    rng = np.random.default_rng(seed)
+    obs = obstacle_shapes(_random_map(rng))
+    path = np.vstack([rng.uniform(0, 1000, (12, 2)),
+                      rng.uniform(0, 1000, (1, 2)) + rng.uniform(-30, 30, (6, 2)),
+                      [[300, 300], [420, 310], [420, 310]]])  # fmt: skip
+    got = overlap_lengths(path, obs)
+    assert got.shape == (len(path) - 1, len(obs)) and got.sum() > 0.0
+    assert np.array_equal(got, _pair_by_pair(path, obs))
+    assert overlap_lengths(path[:1], obs).shape == (0, len(obs))

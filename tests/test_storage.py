@@ -157,3 +157,23 @@ def test_plan_file_says_its_firmware(tmp_path):
         path = tmp_path / f"{autopilot}.plan"
         write_mission(path, storable_plan(plan, m, autopilot), m, autopilot=autopilot)
         assert json.loads(path.read_text())["mission"]["firmwareType"] == fw
+
+
+def test_storable_plan_of_its_own_result_is_that_result_for_the_same_map_and_finish():
+    """`plan` makes the plan storable once and hands it to `write_mission`, which stores what
+    it is given: asked again for the same map, planning map, dialect and finish, the storable
+    plan is returned as it is (storing it again was a no-op that cost a second on a large
+    map); for another dialect, finish or planning map it is made storable afresh."""
+    import lamde_mission
+
+    m = load_map(CASE_TINY)
+    pm = m.planning_map()
+    plan = lamde_mission.plan(m, seed=0, budget=2000)
+    stored = storable_plan(plan, m, "px4", planning_map=pm)
+    assert storable_plan(stored, m, "px4", planning_map=pm) is stored
+    for again in (storable_plan(stored, m, "ardupilot", planning_map=pm),
+                  storable_plan(stored, m, "px4", planning_map=pm, finish="rtl"),
+                  storable_plan(stored, m, "px4")):  # the plan's own map: no margins
+        assert again is not stored
+        np.testing.assert_array_equal(again.hover_points, stored.hover_points)
+        assert np.all(again.hover_times >= stored.hover_times)

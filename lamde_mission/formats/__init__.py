@@ -111,9 +111,10 @@ def write_mission(
     `.waypoints` holds the mission only; `.geojson` holds the map and plan for display.
     Every number written is what `autopilot` (px4, ardupilot, generic) stores: the plan is
     first made storable (`lamde_mission.storage.storable_plan`, on `planning_map` when the plan
-    was made on a map with safety margins; a no-op for a plan that already is), so lat/lon lie
-    on the 1e-7 degree grid, parameters are float32 values and hover times are rounded *up* to
-    whole seconds where the autopilot keeps whole seconds; storing the file changes nothing.
+    was made on a map with safety margins; a storable plan it made for these maps is kept as
+    it is), so lat/lon lie on the 1e-7 degree grid, parameters are float32 values and hover
+    times are rounded *up* to whole seconds where the autopilot keeps whole seconds; storing
+    the file changes nothing.
 
     Args:
         path: the file to write.
