@@ -104,6 +104,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         return _main(argv)
     except KeyboardInterrupt:
         return _interrupted()
+    except SystemError as exc:
+        # a Ctrl-C inside a compiled (numba) kernel: the dispatcher returns with the
+        # KeyboardInterrupt set, which Python reports as a SystemError caused by it
+        if _from_ctrl_c(exc):
+            return _interrupted()
+        raise
     finally:
         if restore is not None:  # first: one C call, no window for a KeyboardInterrupt after
             restore()
@@ -141,6 +147,19 @@ def _unraisable(u: object, hook: object) -> None:
         sys.stderr.flush()
         os._exit(130)
     hook(u)  # type: ignore[operator]
+
+
+def _from_ctrl_c(exc: BaseException) -> bool:
+    """Whether `exc` was caused by a KeyboardInterrupt (its `__cause__` / `__context__`
+    chain, at most a few links)."""
+    seen = 0
+    e: BaseException | None = exc
+    while e is not None and seen < 8:
+        if isinstance(e, KeyboardInterrupt):
+            return True
+        e = e.__cause__ or e.__context__
+        seen += 1
+    return False
 
 
 def _interrupted() -> int:

@@ -64,6 +64,32 @@ def test_a_ctrl_c_inside_main_is_one_line_in_process(monkeypatch) -> None:
     assert out.status == 130 and out.stderr.splitlines() == [INTERRUPTED]
 
 
+def test_a_ctrl_c_inside_a_compiled_kernel_is_one_line(monkeypatch) -> None:
+    """A SIGINT while a numba kernel runs (the visibility graph's `_tangent_pairs` on a large
+    campus) comes out of the dispatcher as `SystemError: CPUDispatcher(...) returned a result
+    with an exception set`, caused by the KeyboardInterrupt: one line and 130, no traceback.
+    Any other SystemError is not swallowed."""
+    import lamde_mission.cli as cli
+
+    def kernel(argv):
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as e:
+            raise SystemError("CPUDispatcher(<function _tangent_pairs>) returned a result "
+                              "with an exception set") from e
+
+    monkeypatch.setattr(cli, "_main", kernel)
+    out = run_cli(["check", str(TINY)])
+    assert out.status == 130 and out.stderr.splitlines() == [INTERRUPTED]
+
+    def other(argv):
+        raise SystemError("something else")
+
+    monkeypatch.setattr(cli, "_main", other)
+    with pytest.raises(SystemError, match="something else"):
+        cli.main(["check", str(TINY)])
+
+
 def test_importing_the_package_leaves_sigint_alone() -> None:
     """Only the console script gets the start-up handler; a program importing the package
     keeps Python's own."""
