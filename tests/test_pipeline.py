@@ -253,3 +253,39 @@ def test_a_feasible_run_whose_improving_stages_stall_spends_the_rest_on_the_de()
     assert r.phi == 0 and r.evaluations == 3000
     spent = {s.name: s.evaluations for s in r.stages}
     assert spent.get("repair", 0) >= 100
+
+
+def test_the_maps_witness_is_a_start_only_when_no_constructive_plan_is_feasible(monkeypatch
+                                                                                ) -> None:
+    """A generated map stores a feasible plan (its witness). Where none of the constructive
+    and seeder plans is feasible (1,000 uniform sensors on 30 km: 26-45 sensors unserved and
+    the run ended infeasible, its witness unused), the witness joins the pool, is descended
+    and the run ends feasible; where one is, the witness is not evaluated (the default plans
+    stay as they were)."""
+    import planner_core.search.construct as construct
+    from planner_core.pipeline.stages import witness_plan
+
+    p = Problem(SUITE / "T03.json")
+    w = witness_plan(p)
+    assert w is not None and p.breakdown(w)["phi"] == 0.0
+    cfg = PlanConfig(seed=0, budget=2_000)
+    normal = run_pipeline(p, cfg)
+    assert "witness" not in normal.state.pool.kinds and normal.phi == 0.0
+
+    # every built plan hovers at the start only: it serves no sensor (phi > 0)
+    def unserved(problem, *args, **kwargs):
+        x = problem.encode(np.asarray([problem.start], dtype=float), np.asarray([10.0]))
+        return np.asarray([x]), ["start only"]
+
+    monkeypatch.setattr(construct, "candidate_plans", unserved)
+    monkeypatch.setattr(construct, "seeder_plans",
+                        lambda problem, seed, k, progress=None: unserved(problem)[0])
+    rescued = run_pipeline(p, cfg)
+    assert rescued.state.pool.kinds.count("witness") == 1 and rescued.phi == 0.0
+    assert rescued.f <= p.breakdown(w)["f"]
+    # the start descents act on feasible plans only: here on the witness alone
+    spent = {s.name: s.evaluations for s in rescued.stages}
+    assert spent["start descents"] > 0
+    monkeypatch.setattr("planner_core.pipeline.stages.witness_plan", lambda problem: None)
+    alone = {s.name: s.evaluations for s in run_pipeline(p, cfg).stages}
+    assert alone.get("start descents", 0) == 0

@@ -299,9 +299,14 @@ class ConstructivePlans(_Base):
 class StartDescents(_Base):
     """The hover-point descent with exact LP hover times (`planner_core.search.descent`) on
     the `descents` Deb-best feasible plans of each kind (constructive, seeder), at most
-    `descent_trials` evaluations each; every moved result joins the pool. Then the `starts`
-    Deb-best of the pool become the rows injected into the DE's population. Cost per trial:
-    one LP (I x J) and the C3/C5 checks (I x J, I x V)."""
+    `descent_trials` evaluations each; every moved result joins the pool. When the pool holds
+    no feasible plan and the map stores a witness (`witness_plan`: the known feasible plan a
+    generated map carries), the witness joins the pool first (kind "witness", one
+    evaluation) and is descended too: where every constructive plan leaves sensors unserved
+    (1,000 uniform sensors on 30 km) the run still has a feasible plan to improve; a pool with
+    a feasible plan is left as it was. Then the `starts` Deb-best of the pool become the rows
+    injected into the DE's population. Cost per trial: one LP (I x J) and the C3/C5 checks
+    (I x J, I x V)."""
 
     name = "start descents"
 
@@ -339,8 +344,9 @@ class StartDescents(_Base):
             ev: the run's evaluator.
 
         Returns:
-            The state with each result that lowered f in the pool (kind "descended"). The
-            rows injected into the DE are chosen by `DifferentialEvolution.run`.
+            The state with each result that lowered f in the pool (kind "descended"), and the
+            map's witness (kind "witness") where the pool held no feasible plan. The rows
+            injected into the DE are chosen by `DifferentialEvolution.run`.
 
         Raises:
             TimeLimitReached: the evaluator's clock ran out (the pipeline catches it).
@@ -348,8 +354,12 @@ class StartDescents(_Base):
         from planner_core.search.descent import descend
 
         cfg, problem, pool = state.config, state.problem, state.pool
+        w = witness_plan(problem) if not np.any(pool.phi == 0.0) else None
+        if w is not None and ev.remaining > 0:
+            fw, pw = ev.evaluate(w[None, :])
+            pool = pool.add(w[None, :], fw, pw, "witness")
         rows = []
-        for kind in ("constructive", "seeder"):
+        for kind in ("constructive", "seeder", "witness"):
             idx = pool.of_kind(kind)
             for i in idx[deb_order(pool.f[idx], pool.phi[idx])][:cfg.descents]:
                 trials = min(cfg.descent_trials, ev.remaining)
@@ -359,6 +369,31 @@ class StartDescents(_Base):
         for x, f, phi in rows:
             pool = pool.add(x[None, :], [f], [phi], "descended")
         return state.replace(pool=pool)
+
+
+def witness_plan(problem: Any) -> np.ndarray | None:
+    """The decision vector (d,) of the map's witness (`witness` in the map file: a known
+    feasible plan the generator stores, `planner_core.model.mapio.Witness`) on `problem`, or
+    None: the map has none (a planning map with safety margins drops it: it was checked on
+    the uninflated map), or its points do not fit the problem's encoding (more than I_max, a
+    fixed-length problem of another size).
+
+    Args:
+        problem: the UAV `Problem` (its `map` is the planning map).
+
+    Returns:
+        (d,) decision vector, or None.
+    """
+    spec = getattr(getattr(problem, "map", None), "spec", None)
+    wit = getattr(spec, "witness", None)
+    if wit is None or not len(wit.hover_points):
+        return None
+    try:
+        return np.asarray(problem.encode(np.asarray(wit.hover_points, dtype=float),
+                                         np.asarray(wit.hover_times, dtype=float)),
+                          dtype=float)  # fmt: skip
+    except ValueError:
+        return None
 
 
 def _inject(state: PlanState) -> np.ndarray:
