@@ -439,11 +439,10 @@ def _run_sorties(args: argparse.Namespace) -> int:
     refusal = sortie_dir_refusal(out)  # before any work: writing replaces the folder whole
     if refusal is not None:
         raise UsageError(f"-o/--output: {printable(args.output)} {refusal}")
-    if not out.resolve().parent.is_dir():
-        if not args.mkdir:
-            raise UsageError(f"-o/--output: folder {printable(str(out.resolve().parent))} "
-                             "does not exist (--mkdir creates it)")
-        out.resolve().parent.mkdir(parents=True, exist_ok=True)
+    from lamde_mission.commands._common import check_output_folder
+
+    # filled beside itself and renamed onto OUT: its parent must take new entries
+    check_output_folder("-o/--output", out, mkdir=args.mkdir, whole=True)
     try:
         D.check_run_args(population=args.population, budget=args.budget, starts=args.starts)
         D.check("seed", args.seed)
@@ -492,6 +491,9 @@ def _run_sorties(args: argparse.Namespace) -> int:
                                           allow_infeasible=args.allow_infeasible)
     except FileExistsError as exc:  # the folder changed while planning
         raise UsageError(f"-o/--output: {exc}") from None
+    except OSError as exc:  # past the check (disk full, a race): the pending folder is removed
+        raise UsageError(f"-o/--output: {printable(str(out))}: cannot write "
+                         f"({exc.strerror or exc}); nothing written") from None
     except ValueError as exc:  # more sorties than a sortie directory holds
         print(f"lamde-mission plan: {args.map}: {exc}", file=sys.stderr)
         return 1
@@ -755,14 +757,17 @@ def run(args: argparse.Namespace) -> int:
     target = Path(args.output)
     clean_stale_temps(target)  # what a killed run left beside it
     pending = pending_path(target)
+    writing = ("-o/--output", args.output)  # the output being written, for an OSError's line
     try:
         write_mission(pending, stored, m, fmt, finish=args.finish, autopilot=args.autopilot,
                       planning_map=pm)
         if args.plot:
             from lamde_mission.plot import plot_mission
 
+            writing = ("--plot", args.plot)
             plot_mission(m, args.plot, timeline=timeline, plan=plan)
         if args.report:
+            writing = ("--report", args.report)
             from lamde_mission.atomic import write_text_atomic
 
             report = {"plan": plan.to_dict(), "verdicts": verdicts.to_dict(),
@@ -772,7 +777,13 @@ def run(args: argparse.Namespace) -> int:
                       "map": args.map, "output": args.output, "format": fmt,
                       "mission_sha256": hashlib.sha256(pending.read_bytes()).hexdigest()}
             write_text_atomic(args.report, json.dumps(report, indent=2))
+        writing = ("-o/--output", args.output)
         replace_keeping_mode(pending, target)  # an overwritten 0600 mission stays 0600
+    except OSError as exc:  # past the output check (disk full, a race): one line, no traceback
+        from planner_core.textio import printable
+
+        raise UsageError(f"{writing[0]}: {printable(writing[1])}: cannot write "
+                         f"({exc.strerror or exc}); the mission was not written") from None
     finally:
         pending.unlink(missing_ok=True)
     if not args.quiet:
