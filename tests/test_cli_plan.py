@@ -137,7 +137,7 @@ def test_plan_time_limit_and_bad_budgets_exit_2_with_one_line(tmp_path: Path) ->
     """A budget below the population and a non-positive time limit are refused up front (one
     line naming the option, exit 2, nothing written)."""
     out = tmp_path / "m.plan"
-    for args, needle in ((["--budget", "50"], "--budget: must be an integer >= population"),
+    for args, needle in ((["--budget", "50"], "--budget: must be an integer in [population (100)"),
                          (["--time-limit", "0"], "--time-limit: must be null or a number > 0"),
                          (["--time-limit", "-3"], "--time-limit: must be"),
                          (["--time-limit", "nan"], "--time-limit: must be")):

@@ -49,7 +49,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    "longest vehicle's time); default the map's objective.goal")
     p.add_argument("--sortie-budget", type=int, default=None, metavar="N",
                    help="maps with a battery or fleet: evaluations of each pipeline run on one "
-                   "sortie's or depot's sensors (default 2,000)")
+                   "sortie's or depot's sensors (default 2,000; from the population to "
+                   f"{D.MAX_BUDGET:,})")
     p.add_argument("--rounds", type=int, default=None, metavar="N",
                    help="maps with a battery or fleet: improving rounds of the sortie planner "
                    "at most (default 3; 0: the better of its two starts)")
@@ -61,9 +62,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=D.SEED,
                    help=f"random seed (same seed, same plan; default {D.SEED})")
     p.add_argument("--budget", type=int, default=D.BUDGET,
-                   help=f"evaluations in all stages (default {D.BUDGET:,}; must be >= the "
-                   "population); what the default pipeline does not need for its fixed stages "
-                   "goes to the improving rounds, so a larger budget buys a better plan")
+                   help=f"evaluations in all stages (default {D.BUDGET:,}; from the "
+                   f"population to {D.MAX_BUDGET:,}); what the default pipeline does not "
+                   "need for its fixed stages goes to the improving rounds, so a larger budget "
+                   "buys a better plan")
     p.add_argument("--time-limit", type=float, metavar="SECONDS",
                    help="stop the improving stages after SECONDS and write the best plan found "
                    "(the one-time kernel compile and the setup, reading the map and building "
@@ -445,6 +447,8 @@ def _run_sorties(args: argparse.Namespace) -> int:
     check_output_folder("-o/--output", out, mkdir=args.mkdir, whole=True)
     try:
         D.check_run_args(population=args.population, budget=args.budget, starts=args.starts)
+        if args.sortie_budget is not None:
+            D.check_budget(args.sortie_budget, args.population, "sortie_budget")
         D.check("seed", args.seed)
     except ValueError as exc:
         raise UsageError("--" + str(exc).replace("_", "-", 1)) from None
@@ -468,9 +472,6 @@ def _run_sorties(args: argparse.Namespace) -> int:
                         starts=args.starts, descent=not args.no_descent,
                         variable_length=not args.fixed_length, polish=not args.no_polish)
     goal = args.objective or m.goal
-    if args.sortie_budget is not None and args.sortie_budget < args.population:
-        raise UsageError(f"--sortie-budget: must be >= the population {args.population}, got "
-                         f"{args.sortie_budget}")
     if args.rounds is not None and args.rounds < 0:
         raise UsageError(f"--rounds: must be >= 0, got {args.rounds}")
     if not args.quiet:
