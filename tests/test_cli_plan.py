@@ -289,8 +289,14 @@ def test_overwriting_a_mission_keeps_its_mode_and_clears_a_killed_runs_pending_f
          "lamde-mission mock-vehicle: argument --loss: invalid float value: 'x'"),
         (["map", "from-geojson", "a.geojson"],  # a nested sub-parser
          "lamde-mission map from-geojson: the following arguments are required: -o/--output"),
-        (["plan", "m.json", "-o", "x.plan", "--e\x1b[2Jx"],  # escaped, as every error line
-         "lamde-mission: unrecognized arguments: --e\\x1b[2Jx"),
+        # an unknown argument names the command it was given to, as every other error does
+        # (it was "lamde-mission: unrecognized arguments: ..."); escaped, as every error line
+        (["plan", "m.json", "-o", "x.plan", "--e\x1b[2Jx"],
+         "lamde-mission plan: unrecognized arguments: --e\\x1b[2Jx"),
+        (["plan", "m.json", "-o", "x.plan", "extra", "--bogus"],
+         "lamde-mission plan: unrecognized arguments: extra --bogus"),
+        (["map", "from-geojson", "a.geojson", "-o", "m.json", "--bogus"],
+         "lamde-mission map from-geojson: unrecognized arguments: --bogus"),
     ],
 )
 def test_a_bad_argument_is_one_line_naming_it_and_exit_2(
