@@ -63,8 +63,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    f"{h['envs']})")
     p.add_argument("--population", type=int, help="DE population during training (default "
                    f"{h['population']}; planning uses {D.POPULATION})")
-    p.add_argument("--budget", type=int, help="evaluations per training episode (default "
-                   f"{h['budget']:,}; from the population to {D.MAX_BUDGET:,})")
+    p.add_argument("--budget", type=int, help="evaluations per training episode, from the "
+                   f"population to {D.MAX_BUDGET:,} (default {h['budget']:,})")
     p.add_argument("--init", choices=("uniform", "seeded", "both"), default="both",
                    help="start modes of the training episodes (default both, alternating)")
     p.add_argument("--imitate", metavar="CONFIGURATOR",
