@@ -81,7 +81,8 @@ def plan(
     Args:
         map: a map file path, its JSON as a dict, or a `planner_core.Map`.
         seed: random seed, >= 0.
-        budget: evaluations in all (>= population); every stage's are counted.
+        budget: evaluations in all, from the population to
+            `planner_core.defaults.MAX_BUDGET`; every stage's are counted.
         population: the DE's population N (>= 6).
         configurator: "adaptive" (default), "fixed", "random", "lamde" (the shipped learned
             policy) or a configurator object.
@@ -264,11 +265,13 @@ def plan_fleet(
         map: a map file path, its JSON as a dict, or a `planner_core.Map`, with a battery
             (`uav.battery` or `uav.endurance_s`) or a `fleet`.
         seed: random seed, >= 0.
-        budget: evaluations of the single flight's pipeline (>= the population).
+        budget: evaluations of the single flight's pipeline, an integer in [population,
+            `planner_core.defaults.MAX_BUDGET`].
         goal: "total" (the paper's f summed over sorties + swap_s per swap) or "makespan"
             (the longest vehicle's time); None: the map's `objective.goal`.
-        sortie_budget: evaluations of each pipeline run on one sortie's or depot's sensors
-            (default `planner_core.fleet.search.SORTIE_BUDGET`).
+        sortie_budget: evaluations of each pipeline run on one sortie's or depot's sensors,
+            an integer in [population, `planner_core.defaults.MAX_BUDGET`] (default
+            `planner_core.fleet.search.SORTIE_BUDGET`).
         rounds: improving rounds at most (default `planner_core.fleet.search.ROUNDS`).
         config: a `planner_core.pipeline.PlanConfig` for the pipeline runs (then seed and
             budget are its own).
@@ -297,10 +300,8 @@ def plan_fleet(
         config = PlanConfig(seed=seed, budget=budget)
     elif not isinstance(config, PlanConfig):
         raise ValueError(f"config: must be a PlanConfig, got {type(config).__name__}")
-    sb = search.SORTIE_BUDGET if sortie_budget is None else int(sortie_budget)
-    if sb < config.population:
-        raise ValueError(f"sortie_budget: must be >= the population {config.population}, "
-                         f"got {sb}")
+    sb = search.SORTIE_BUDGET if sortie_budget is None else sortie_budget
+    _defaults.check_budget(sb, config.population, "sortie_budget")
     r = search.ROUNDS if rounds is None else int(rounds)
     if r < 0:
         raise ValueError(f"rounds: must be >= 0, got {r}")

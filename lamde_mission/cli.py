@@ -174,7 +174,12 @@ def _main(argv: Sequence[str] | None) -> int:
     from lamde_mission.errors import UsageError
 
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args, extra = parser.parse_known_args(argv)
+    if extra:  # argparse's parse_args names the top-level program for these: name the command
+        from planner_core.textio import printable
+
+        parser.exit(2, f"{parser.prog} {_command_name(args)}: "
+                    f"{printable('unrecognized arguments: ' + ' '.join(extra))}\n")
     try:
         status = int(args._run(args) or 0)
         if sys.stdout is not None:  # None: started with fd 1 closed (`>&-`)

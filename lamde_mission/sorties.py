@@ -645,7 +645,12 @@ def write_sortie_dir(
         if target.exists():
             old = dir_beside(target, "old")
             os.replace(target, old)
-        os.replace(pending, target)
+        try:
+            os.replace(pending, target)
+        except BaseException:
+            if old is not None:  # the folder it was to replace goes back to its path
+                os.replace(old, target)
+            raise
         if old is not None:
             shutil.rmtree(old, ignore_errors=True)
         # a write killed between its two renames left the directory it replaced: superseded now

@@ -12,7 +12,8 @@ plain `open()` would give (0666 & ~umask).
 
 `check_writable` answers "can this path be written?" before the work that produces it starts
 (by creating and removing a probe temp file in the folder, so read-only mounts, ACLs and
-permissions all count, also for root).
+permissions all count, also for root); `check_folder_writable` answers it for an output folder
+(a sortie directory, a suite's OUTDIR).
 """
 
 from __future__ import annotations
@@ -25,7 +26,8 @@ import stat
 import tempfile
 from pathlib import Path
 
-__all__ = ["write_text_atomic", "write_bytes_atomic", "check_writable", "OutputPathError",
+__all__ = ["write_text_atomic", "write_bytes_atomic", "check_writable", "check_folder_writable",
+           "OutputPathError",
            "pending_path", "replace_keeping_mode", "file_in_the_way", "dir_beside",
            "clean_stale_dirs", "DIR_KINDS"]
 
@@ -214,6 +216,15 @@ def check_writable(path: str | Path, *, mkdir: bool = False, what: str = "") -> 
             raise OutputPathError(f"{head}: exists and is not a regular file")
         if not st.st_mode & 0o222:
             raise OutputPathError(f"{head}: the existing file is read-only")
+    _probe(path, head)
+    return path
+
+
+def _probe(path: Path, head: str) -> None:
+    """OutputPathError (prefixed `head`) unless a file can be made in `path`'s folder: a temp
+    file named for `path` is created and removed there (so read-only mounts, ACLs and
+    permissions all count, also for root); then `clean_stale_temps(path)`."""
+    folder = path.parent if str(path.parent) else Path(".")
     try:
         fd, tmp = tempfile.mkstemp(prefix=_tmp_prefix(path), dir=folder)
     except OSError as exc:
@@ -224,7 +235,55 @@ def check_writable(path: str | Path, *, mkdir: bool = False, what: str = "") -> 
     with contextlib.suppress(OSError):
         os.unlink(tmp)
     clean_stale_temps(path)
-    return path
+
+
+def check_folder_writable(folder: str | Path, *, mkdir: bool = False, what: str = "",
+                          whole: bool = False) -> Path:
+    """Check that the output folder `folder` can be written; raise OutputPathError naming it if
+    not. `check_writable` for a folder of outputs, before the work that fills it.
+
+    An existing folder must take new files (a suite's OUTDIR is filled in place); a new one,
+    or any folder written `whole` (filled beside itself and renamed onto its path, as a sortie
+    directory: `dir_beside`), needs its parent folder to take new entries. Refused: a file at
+    `folder` or at one of its ancestors, a missing parent folder (created instead when
+    `mkdir`), a folder where nothing can be created (read-only folder or mount, permissions).
+    Nothing is created but the parent folder `mkdir` asks for.
+
+    Args:
+        folder: the output folder (it need not exist).
+        mkdir: create a missing parent folder (with its parents) instead of refusing it.
+        what: prefixes the message (e.g. "--suite"); "" for none.
+        whole: the folder is written whole beside itself and renamed onto `folder` (links
+            followed: the parent of the folder `folder` resolves to is the one written).
+
+    Returns:
+        `folder` as a Path.
+
+    Raises:
+        OutputPathError: `folder` is a file or under one, its parent is missing (without
+            `mkdir`) or cannot be created, or the folder written in cannot take a new file.
+    """
+    folder = Path(folder)
+    head = f"{what}: {folder}" if what else str(folder)
+    probe = file_in_the_way(folder)
+    if probe is not None:
+        where = "" if probe == folder else f"{probe} "
+        raise OutputPathError(f"{head}: {where}is a file, not a folder")
+    target = folder.resolve() if whole else folder
+    parent = target.parent if str(target.parent) else Path(".")
+    if not folder.is_dir() and not parent.is_dir():
+        if not mkdir:
+            raise OutputPathError(
+                f"{head}: the folder {parent} does not exist (create it, or pass --mkdir)"
+            )
+        try:
+            parent.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise OutputPathError(
+                f"{head}: cannot create the folder {parent} ({exc.strerror or exc})"
+            ) from None
+    _probe(folder / "probe" if folder.is_dir() and not whole else target, head)
+    return folder
 
 
 def pending_path(path: str | Path) -> Path:

@@ -62,6 +62,7 @@ __all__ = [
     "MAP_CHOICES",
     "MAP_DEFAULTS",
     "MAP_LISTS",
+    "MAX_BUDGET",
     "MAX_DEPOTS",
     "MIN_POPULATION",
     "SHARE_MAX",
@@ -80,6 +81,7 @@ __all__ = [
     "SUITE_SEED",
     "TRAIN_DEFAULTS",
     "check",
+    "check_budget",
     "check_run_args",
     "interval_text",
     "number_text",
@@ -162,6 +164,10 @@ def _positive_number(v: Any) -> bool:
 #: the DE's mutations draw up to five donors distinct from each other and from the target
 #: (rand/2), so a population needs at least six members (``de.operators.N_DONORS + 1``)
 MIN_POPULATION = 6
+#: the most objective evaluations one run may be given (a run's `budget`, `plan --budget` and
+#: `--sortie-budget`, `bench --budget`, `train --budget`; `check_budget`): 10 x `bench
+#: --best-known`'s 1,000,000 a run, so that no number a user gives makes a run endless
+MAX_BUDGET = 10_000_000
 #: configurator names, the default first (the hand-made adaptive DE until a trained policy beats
 #: it on unseen maps; "lamde" is the shipped learned policy, planner_core.learning.policy);
 #: ``planner_core.search.de.configurators`` registers exactly these
@@ -177,7 +183,8 @@ _RUN: tuple[Default, ...] = (
     Default("population", 100, "DE population size N (individuals per generation)",
             f"an integer >= {MIN_POPULATION}", _int_at_least(MIN_POPULATION)),
     Default("budget", 10_000, "objective evaluations per run, the initial population included "
-            "(paper Sec. 5.1)", "an integer >= population", _int_at_least(MIN_POPULATION)),
+            "(paper Sec. 5.1)", f"an integer in [population, {MAX_BUDGET}]",  # check_budget's
+            lambda v: _is_int(v) and MIN_POPULATION <= int(v) <= MAX_BUDGET),
     Default("min_population", MIN_POPULATION, "smallest population the mutations work with "
             "(five distinct donors + the target, for rand/2)", f"fixed at {MIN_POPULATION}",
             lambda v: v == MIN_POPULATION),
@@ -547,6 +554,34 @@ def check(name: str, value: Any) -> Any:
     return table[name].check(value)
 
 
+def check_budget(value: Any, least: Any, name: str = "budget",
+                 least_name: str | None = "population") -> Any:
+    """Return ``value`` if it is a valid evaluation budget: an integer from ``least`` (the
+    run's population: its first generation is counted in the budget) to ``MAX_BUDGET``; else
+    ``ValueError`` naming ``name`` and the range. The one budget check of every run (plan,
+    the sortie planner's runs, bench, train, the API's ``PlanConfig``).
+
+    Args:
+        value: the candidate budget (evaluations).
+        least: the smallest budget allowed (an integer).
+        name: the setting's name in the message (``"sortie_budget"``).
+        least_name: what ``least`` is, named in the range ("[population (100), 10000000]");
+            None: the number alone ("[1, 10000000]").
+
+    Returns:
+        ``value`` unchanged.
+
+    Raises:
+        ValueError: ``"<name>: must be an integer in [<least>, <MAX_BUDGET>], got <value!r>"``.
+    """
+    if not (_is_int(value) and int(least) <= int(value) <= MAX_BUDGET):
+        interval = interval_text(int(least), MAX_BUDGET)
+        if least_name is not None:  # "[population (100), 10000000]"
+            interval = f"[{least_name} ({number_text(int(least))}), {number_text(MAX_BUDGET)}]"
+        raise ValueError(f"{name}: must be an integer in {interval}, got {value!r}")
+    return value
+
+
 def check_run_args(
     *, population: Any, budget: Any, configurator: Any = None, init: Any = None,
     memetic: Any = None, starts: Any = None, start_candidates: Any = None,
@@ -555,7 +590,8 @@ def check_run_args(
 
     Args:
         population: DE population size; must be an integer >= ``MIN_POPULATION``.
-        budget: evaluation budget; must be an integer >= population.
+        budget: evaluation budget; must be an integer in [population, ``MAX_BUDGET``]
+            (``check_budget``).
         configurator: when a str, one of ``CONFIGURATORS`` (a configurator object, or None,
             passes unchecked).
         init: when given, one of ``INIT_MODES``.
@@ -567,10 +603,7 @@ def check_run_args(
         ValueError: one line naming the first bad field.
     """
     check("population", population)
-    check("budget", budget)
-    if int(budget) < int(population):
-        raise ValueError(f"budget: must be an integer >= population ({population}), "
-                         f"got {budget!r}")
+    check_budget(budget, population)
     if isinstance(configurator, str):
         check("configurator", configurator)
     if init is not None:

@@ -137,7 +137,7 @@ def test_plan_time_limit_and_bad_budgets_exit_2_with_one_line(tmp_path: Path) ->
     """A budget below the population and a non-positive time limit are refused up front (one
     line naming the option, exit 2, nothing written)."""
     out = tmp_path / "m.plan"
-    for args, needle in ((["--budget", "50"], "--budget: must be an integer >= population"),
+    for args, needle in ((["--budget", "50"], "--budget: must be an integer in [population (100)"),
                          (["--time-limit", "0"], "--time-limit: must be null or a number > 0"),
                          (["--time-limit", "-3"], "--time-limit: must be"),
                          (["--time-limit", "nan"], "--time-limit: must be")):
@@ -289,8 +289,14 @@ def test_overwriting_a_mission_keeps_its_mode_and_clears_a_killed_runs_pending_f
          "lamde-mission mock-vehicle: argument --loss: invalid float value: 'x'"),
         (["map", "from-geojson", "a.geojson"],  # a nested sub-parser
          "lamde-mission map from-geojson: the following arguments are required: -o/--output"),
-        (["plan", "m.json", "-o", "x.plan", "--e\x1b[2Jx"],  # escaped, as every error line
-         "lamde-mission: unrecognized arguments: --e\\x1b[2Jx"),
+        # an unknown argument names the command it was given to, as every other error does
+        # (it was "lamde-mission: unrecognized arguments: ..."); escaped, as every error line
+        (["plan", "m.json", "-o", "x.plan", "--e\x1b[2Jx"],
+         "lamde-mission plan: unrecognized arguments: --e\\x1b[2Jx"),
+        (["plan", "m.json", "-o", "x.plan", "extra", "--bogus"],
+         "lamde-mission plan: unrecognized arguments: extra --bogus"),
+        (["map", "from-geojson", "a.geojson", "-o", "m.json", "--bogus"],
+         "lamde-mission map from-geojson: unrecognized arguments: --bogus"),
     ],
 )
 def test_a_bad_argument_is_one_line_naming_it_and_exit_2(

@@ -98,6 +98,64 @@ def test_api_names_the_bad_field(kwargs: dict, field: str) -> None:
     assert "\n" not in str(exc.value)
 
 
+HUGE = 99999999999999999999999  # the review's: accepted, and the run never ended
+
+
+def test_a_budget_above_max_budget_is_refused_by_every_entry_point(
+    tmp_path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A budget has an upper bound, MAX_BUDGET (it had none: `plan --budget 1e23` ran without
+    end): the API, PlanConfig, plan_fleet's sortie_budget, and `plan --budget`,
+    `plan --sortie-budget` (a fleet map), `bench --budget` and `train --budget` all refuse one
+    above it with the one message of `check_budget`, naming the option and the range, before
+    any work (the planners and the map reader are tripwires here); MAX_BUDGET itself passes."""
+    import lamde_mission.api
+    import lamde_mission.commands._common
+    from lamde_mission.cli import main
+    from planner_core.pipeline import PlanConfig
+
+    rng = f"[population (100), {D.MAX_BUDGET}]"
+    assert D.check_budget(D.MAX_BUDGET, 100) == D.MAX_BUDGET
+    assert PlanConfig(budget=D.MAX_BUDGET).budget == D.MAX_BUDGET
+    for bad in (D.MAX_BUDGET + 1, HUGE):
+        with pytest.raises(ValueError) as exc:
+            D.check_budget(bad, 100)
+        assert str(exc.value) == f"budget: must be an integer in {rng}, got {bad}"
+        with pytest.raises(ValueError, match=r"^budget: must be an integer in \[population"):
+            PlanConfig(budget=bad)
+        with pytest.raises(ValueError, match=rf"^budget: .*{D.MAX_BUDGET}\], got {bad}$"):
+            lamde_mission.plan(MAPS / "tiny.json", budget=bad)
+        with pytest.raises(ValueError, match=rf"^sortie_budget: .*{D.MAX_BUDGET}\], got {bad}$"):
+            lamde_mission.api.plan_fleet(MAPS / "fleet-demo.json", sortie_budget=bad)
+    with pytest.raises(ValueError, match=r"^budget: must be an integer in \[1, 10000000\]"):
+        D.check_budget(0, 1, least_name=None)
+
+    def tripwire(*_a: object, **_k: object) -> None:
+        raise AssertionError("reached past the budget check")
+
+    monkeypatch.setattr(lamde_mission.api, "plan", tripwire)
+    monkeypatch.setattr(lamde_mission.api, "plan_fleet", tripwire)
+    monkeypatch.setattr(lamde_mission.commands._common, "load_map_or_fail", tripwire)
+    monkeypatch.chdir(tmp_path)
+    for argv, line in (
+        (["plan", str(MAPS / "small-demo.json"), "-o", "x.plan", "--budget", str(HUGE)],
+         f"lamde-mission plan: --budget: must be an integer in {rng}, got {HUGE}"),
+        (["plan", str(MAPS / "fleet-demo.json"), "-o", "d", "--budget", str(HUGE)],
+         f"lamde-mission plan: --budget: must be an integer in {rng}, got {HUGE}"),
+        (["plan", str(MAPS / "fleet-demo.json"), "-o", "d", "--sortie-budget", str(HUGE)],
+         f"lamde-mission plan: --sortie-budget: must be an integer in {rng}, got {HUGE}"),
+        (["bench", "--budget", str(HUGE), "--out", "b"],
+         f"lamde-mission bench: --budget: must be an integer in {rng}, got {HUGE}"),
+        (["train", "-o", "t.pt", "--budget", str(HUGE)],
+         "lamde-mission train: --budget: must be an integer in [population (50), "
+         f"{D.MAX_BUDGET}], got {HUGE}"),
+    ):
+        capsys.readouterr()
+        assert main(argv) == 2, argv
+        assert capsys.readouterr().err.splitlines() == [line]
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_numpy_integers_are_accepted() -> None:
     D.check_run_args(population=np.int64(6), budget=np.int32(12), configurator="fixed")
     D.check("seed", np.uint8(3))

@@ -4,6 +4,7 @@ and ids from a map are printed with control characters escaped (issue 20)."""
 
 from __future__ import annotations
 
+import errno
 import json
 import os
 import stat
@@ -15,6 +16,7 @@ import pytest
 
 from planner_core.atomic import (
     OutputPathError,
+    check_folder_writable,
     check_writable,
     clean_stale_dirs,
     clean_stale_temps,
@@ -25,6 +27,9 @@ from planner_core.textio import counted, for_count, printable, rounded_up
 from tests.conftest import MAPS, run_cli, run_cli_many
 
 DEMO = MAPS / "small-demo.json"
+FLEET_DEMO = MAPS / "fleet-demo.json"
+#: /sys refuses new entries even to root: a read-only folder whoever runs the test
+READ_ONLY = Path("/sys")
 
 
 def _bad_outputs(tmp: Path) -> dict[str, list[str]]:
@@ -105,6 +110,175 @@ def test_check_writable_cases(tmp_path: Path) -> None:
     check_writable(tmp_path / "a" / "b.plan", mkdir=True)
     assert (tmp_path / "a").is_dir()
     assert list((tmp_path / "a").iterdir()) == []  # the probe left nothing
+
+
+def test_check_folder_writable_cases(tmp_path: Path) -> None:
+    """An output folder: a new one needs a writable parent (made with `mkdir`), an existing
+    one takes files in place, one written `whole` needs its parent even when it exists; a
+    file in the way and a read-only folder are refused; the probe leaves nothing."""
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    assert check_folder_writable(tmp_path / "new") == tmp_path / "new"
+    assert not (tmp_path / "new").exists()
+    with pytest.raises(OutputPathError, match="--suite: .*/afile: is a file, not a folder"):
+        check_folder_writable(afile, what="--suite")
+    with pytest.raises(OutputPathError, match="afile is a file, not a folder"):
+        check_folder_writable(afile / "sub", mkdir=True)
+    with pytest.raises(OutputPathError, match="the folder .*/a does not exist"):
+        check_folder_writable(tmp_path / "a" / "b")
+    check_folder_writable(tmp_path / "a" / "b", mkdir=True)
+    assert (tmp_path / "a").is_dir() and not (tmp_path / "a" / "b").exists()
+    with pytest.raises(OutputPathError, match="cannot write in the folder /sys"):
+        check_folder_writable(READ_ONLY / "suite")
+    with pytest.raises(OutputPathError, match="cannot write in the folder /sys"):
+        check_folder_writable(READ_ONLY)  # an existing folder is written in place
+    with pytest.raises(OutputPathError, match="cannot write in the folder /sys "):
+        check_folder_writable(READ_ONLY / "kernel", whole=True)  # its parent takes the rename
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a", "afile"]
+    assert list((tmp_path / "a").iterdir()) == []
+
+
+def _folder_outputs(tmp: Path) -> list[tuple[list[str], str]]:
+    """(argv, the line's needle) per unwritable sortie directory or suite folder."""
+    afile = tmp / "afile"
+    afile.write_text("x")
+    fleet = str(FLEET_DEMO)
+    return [
+        (["plan", fleet, "-o", f"{READ_ONLY}/fleet/"],
+         "-o/--output: /sys/fleet: cannot write in the folder /sys"),
+        (["plan", fleet, "-o", f"{READ_ONLY}/fleet/", "--mkdir"], "cannot write in the folder"),
+        (["plan", fleet, "-o", f"{afile}/fleet/", "--mkdir"], "afile is a file, not a folder"),
+        (["plan", fleet, "-o", f"{tmp}/missing/fleet/"], "missing does not exist"),
+        (["generate", "--suite", f"{READ_ONLY}/suite"],
+         "--suite: /sys/suite: cannot write in the folder /sys"),
+        (["generate", "--large-suite", f"{READ_ONLY}/large", "--mkdir"],
+         "--large-suite: /sys/large: cannot write in the folder /sys"),
+        (["generate", "--suite", f"{afile}/suite", "--mkdir"], "afile is a file, not a folder"),
+        (["generate", "--large-suite", str(afile)], "afile: is a file, not a folder"),
+    ]
+
+
+def test_bad_output_folders_are_refused_before_the_map_is_read_or_any_work(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A sortie directory (`plan -o DIR/` on a map with a battery or fleet) or a suite folder
+    (`generate --suite/--large-suite`) that cannot be written (read-only, under a file,
+    missing parent) exits 2 with one line naming the option, before the map is loaded, the
+    sortie planner runs or a map is generated (they were checked only at write time: a
+    traceback after the work); nothing is made."""
+    import lamde_mission.api
+    import lamde_mission.commands._common
+    import planner_core.suite
+    import planner_core.suite.large
+    from lamde_mission.cli import main
+
+    def tripwire(*_a: object, **_k: object) -> None:
+        raise AssertionError("reached past the output check")
+
+    monkeypatch.setattr(lamde_mission.api, "plan_fleet", tripwire)
+    monkeypatch.setattr(lamde_mission.commands._common, "load_map_or_fail", tripwire)
+    monkeypatch.setattr(planner_core.suite, "suite_maps", tripwire)
+    monkeypatch.setattr(planner_core.suite.large, "large_suite_maps", tripwire)
+    for argv, needle in _folder_outputs(tmp_path):
+        capsys.readouterr()
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and needle in err[0], (argv, err)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["afile"]
+
+
+def _enospc(*_a: object, **_k: object) -> None:
+    raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+
+def test_a_failed_mission_write_is_one_line_and_leaves_nothing(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An OSError past the output check (disk full while writing) is one line naming the
+    output, exit 2, no traceback, no file and no temp file left (it was a traceback). The
+    planner is replaced by a fixed plan (no optimisation run)."""
+    import lamde_mission.api
+    import lamde_mission.formats
+    from lamde_mission.cli import main
+    from planner_core.model.mapio import load_map
+    from tests.conftest import plan_at
+
+    tiny = MAPS / "tiny.json"
+    fixed = plan_at(load_map(tiny), [[500.0, 650.0]], [60.0])
+    monkeypatch.setattr(lamde_mission.api, "plan", lambda *_a, **_k: fixed)
+    monkeypatch.setattr(lamde_mission.formats, "write_mission", _enospc)
+    out = tmp_path / "m.plan"
+    assert main(["plan", str(tiny), "-o", str(out), "--quiet", "--allow-infeasible"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"lamde-mission plan: -o/--output: {out}: cannot write (No space left on "
+                   "device); the mission was not written"]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_failed_sortie_directory_write_is_one_line_and_keeps_the_old_one(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The last rename of a sortie directory failing (a race, a full disk) is one line, exit 2,
+    and the earlier sortie directory it was to replace stays at its path, whole (it was left
+    moved aside as `.NAME.lamde-old-PID`, and a traceback printed). The sortie planner is
+    replaced by a quick real plan (tests/test_sorties_dir.py)."""
+    from types import SimpleNamespace
+
+    import lamde_mission.api
+    import lamde_mission.sorties
+    from lamde_mission.cli import main
+    from lamde_mission.sorties import write_sortie_dir
+    from tests.test_sorties_dir import _fleet_plan
+
+    m, plan = _fleet_plan(FLEET_DEMO)
+    out = tmp_path / "fleet"
+    assert write_sortie_dir(plan, m, out)[1]
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    monkeypatch.setattr(lamde_mission.api, "plan_fleet",
+                        lambda *_a, **_k: SimpleNamespace(plan=plan))
+    real = os.replace
+
+    def replace(src: object, dst: object) -> None:
+        if ".lamde-pending-" in str(src):
+            _enospc()
+        real(src, dst)
+
+    monkeypatch.setattr(lamde_mission.sorties.os, "replace", replace)
+    assert main(["plan", str(FLEET_DEMO), "-o", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"lamde-mission plan: -o/--output: {out}: cannot write (No space left on "
+                   "device); nothing written"]
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    assert [p.name for p in tmp_path.iterdir()] == ["fleet"]
+
+
+def test_a_failed_suite_write_is_one_line_naming_the_file_and_what_was_written(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """`generate --suite`: a write failing past the check (disk full after some maps) is one
+    line naming the option, the file and how many maps were written, exit 2 (a traceback);
+    each map written is whole. The generator is replaced by two committed maps."""
+    import lamde_mission.atomic
+    import planner_core.suite
+    from lamde_mission.cli import main
+
+    maps = {n: json.loads((MAPS / "suite" / f"{n}.json").read_text()) for n in ("T01", "T02")}
+    monkeypatch.setattr(planner_core.suite, "suite_maps", lambda *_a, **_k: maps)
+    real = lamde_mission.atomic.write_text_atomic
+
+    def write(path: Path, text: str, **kw: object) -> Path:
+        if Path(path).name == "T02.json":
+            _enospc()
+        return real(path, text, **kw)
+
+    monkeypatch.setattr(lamde_mission.atomic, "write_text_atomic", write)
+    out = tmp_path / "suite"
+    assert main(["generate", "--suite", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"lamde-mission generate: --suite: {out / 'T02.json'}: cannot write (No "
+                   "space left on device); 1 of 2 maps written"]
+    assert [p.name for p in out.iterdir()] == ["T01.json"]
+    assert json.loads((out / "T01.json").read_text()) == maps["T01"]
 
 
 def test_stale_temp_of_a_killed_write_is_cleaned(tmp_path: Path) -> None:

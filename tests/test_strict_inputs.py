@@ -97,6 +97,42 @@ def test_every_map_number_refuses_a_string_and_a_boolean(path: tuple) -> None:
         assert len(info.value.problems) == 1, info.value.problems  # the field alone is blamed
 
 
+def object_paths(node: Any, path: tuple = ()) -> list[tuple]:
+    """Every path to a JSON object below the top level (a section, an item of a list)."""
+    here = [path] if isinstance(node, dict) and path else []
+    if isinstance(node, dict):
+        return here + [p for k, v in node.items() for p in object_paths(v, (*path, k))]
+    if isinstance(node, list):
+        return [p for i, v in enumerate(node) for p in object_paths(v, (*path, i))]
+    return here
+
+
+def test_every_map_object_refuses_another_type_in_json_words() -> None:
+    """A section or item that must be an object (`obstacles`, `uav.battery`, `sensors[0]`,
+    `fleet.depots[0]`, ...) given as an array, a number or a string reads as every type error
+    does, "must be a JSON object, got [] (an array)": it named pydantic's class ("Input should
+    be a valid dictionary or instance of ObstaclesSpec")."""
+    paths = object_paths(full_map())
+    assert {"obstacles", "uav.battery", "sensors[0]", "fleet.depots[0]", "witness",
+            "obstacles.no_fly_zones[0]"} <= {shown(p) for p in paths}  # fmt: skip
+    for path in paths:
+        for bad, got in (([], "[] (an array)"), (5, "5 (an integer)"), ("x", '"x" (a string)')):
+            with pytest.raises(MapError) as info:
+                load_map(set_at(full_map(), path, bad))
+            assert info.value.problems == [f"{shown(path)}: must be a JSON object, got {got}"]
+
+
+@pytest.mark.parametrize(("path", "choices"), [(("radio", "access"), "'simultaneous' or "
+                                                 "'scheduled'"),
+                                                (("objective", "goal"), "'total' or 'makespan'")])
+def test_a_choice_field_says_must_be_and_what_it_got(path: tuple, choices: str) -> None:
+    """A field of named choices reads as the others ("must be ..., got ..."), not pydantic's
+    "Input should be ..."."""
+    with pytest.raises(MapError) as info:
+        load_map(set_at(full_map(), path, "other"))
+    assert info.value.problems == [f"{shown(path)}: must be {choices}, got \"other\" (a string)"]
+
+
 def _value(path: tuple) -> Any:
     node: Any = full_map()
     for part in path:

@@ -99,6 +99,31 @@ def check_outputs(paths: list[tuple[str, str | None]], *, mkdir: bool = False,
             raise UsageError(printable(str(exc))) from None
 
 
+def check_output_folder(option: str, folder: str | Path, *, mkdir: bool = False,
+                        whole: bool = False) -> None:
+    """UsageError naming `option` and `folder` when that output folder cannot be written
+    (`planner_core.atomic.check_folder_writable`: a file in the way, a missing parent without
+    `mkdir`, a read-only folder or mount), before any work; `check_outputs` for a folder.
+
+    Args:
+        option: the option that names the folder, e.g. "--suite".
+        folder: the output folder (it need not exist).
+        mkdir: create a missing parent folder rather than refuse it.
+        whole: the folder is written beside itself and renamed onto its path (a sortie
+            directory), so its parent must take new entries even when it exists.
+
+    Raises:
+        UsageError: one line naming the option, the folder and the problem.
+    """
+    from planner_core.atomic import OutputPathError, check_folder_writable
+    from planner_core.textio import printable
+
+    try:
+        check_folder_writable(folder, mkdir=mkdir, what=option, whole=whole)
+    except OutputPathError as exc:
+        raise UsageError(printable(str(exc))) from None
+
+
 def add_executor_args(p: Any, what: str = "jobs") -> None:
     """--backend / --address: where batch work runs (planner_core.execution).
 

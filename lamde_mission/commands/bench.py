@@ -53,7 +53,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--runs", type=int, help=f"runs per optimiser and task (default "
                    f"{_DEFAULT_RUNS}; {_BK_RUNS} with --best-known)")
     p.add_argument("--budget", type=int, help=f"evaluations per run, initial population "
-                   f"included (default {_DEFAULT_BUDGET:,}; {_BK_BUDGET:,} with --best-known)")
+                   f"included (default {_DEFAULT_BUDGET:,}; {_BK_BUDGET:,} with --best-known; "
+                   f"from the population, {D.POPULATION}, to {D.MAX_BUDGET:,})")
     p.add_argument("--jobs", type=int, help="worker processes (default: the CPU count; 0 = run "
                    "in this process); with --backend ray and no --address: the CPUs of the Ray "
                    "instance started here (0 = all); ignored with --address")
@@ -159,9 +160,10 @@ def run(args: argparse.Namespace) -> int:
     inits = ("seeded", "uniform") if args.init == "both" else (args.init,)
     if args.runs < 1:
         raise UsageError(f"--runs must be >= 1 (got {args.runs})")
-    if args.budget < D.POPULATION:  # as plan's budget: the first population fits in it
-        raise UsageError(f"--budget must be >= the population ({D.POPULATION}) the DE-based "
-                         f"optimisers start from, as for plan (got {args.budget})")
+    try:  # as plan's budget: the DE-based optimisers' first population fits in it
+        D.check_budget(args.budget, D.POPULATION)
+    except ValueError as exc:
+        raise UsageError(f"--{exc}") from None
     if args.jobs < 0:
         raise UsageError(f"--jobs must be >= 0 (got {args.jobs})")
     if args.seed < 0:

@@ -9,7 +9,6 @@ from pathlib import Path
 
 from lamde_mission.errors import UsageError
 from planner_core import defaults as D
-from planner_core.atomic import file_in_the_way
 
 _SIZES = (5000, 10000)
 _DEFAULT_SEED = D.SUITE_SEED
@@ -90,17 +89,6 @@ def _check_name(name: str | None) -> None:
         raise UsageError(f"--name: {why or exc.problems[0]}") from None
 
 
-def _check_folder_output(option: str, folder: Path, mkdir: bool) -> None:
-    """UsageError unless `folder` (a suite's OUTDIR) can be made: not a file, nor under one; its
-    parent must exist unless `mkdir`."""
-    probe = file_in_the_way(folder)
-    if probe is not None:
-        raise UsageError(f"{option} {folder}: {probe} is a file, not a folder")
-    if not folder.exists() and not folder.parent.is_dir() and not mkdir:
-        raise UsageError(f"{option} {folder}: the folder {folder.parent} does not exist "
-                         "(create it, or pass --mkdir)")
-
-
 def _int(value: str | None, option: str, default: int | None = None) -> int | None:
     if value is None:
         return default
@@ -131,7 +119,11 @@ def run(args: argparse.Namespace) -> int:
     for option, folder in (("--suite", args.suite), ("--large-suite", args.large_suite)):
         if folder is None:
             continue
-        _check_folder_output(option, Path(folder), args.mkdir)
+        from lamde_mission.commands._common import check_output_folder
+
+        # every output checked before the generation: a file in the way, a missing parent
+        # (without --mkdir), a read-only folder or mount
+        check_output_folder(option, folder, mkdir=args.mkdir)
         extra = [o for o, v in (("OUT.json", args.out), ("--size", args.size),
                                 ("--density", args.density), ("--sensors", args.sensors),
                                 ("--layout", args.layout), ("--cluster-size", args.cluster_size),
@@ -178,7 +170,6 @@ def run(args: argparse.Namespace) -> int:
 def _run_one(
     out: Path, size: int, density: int, seed: int, sensors: int | None, name: str | None
 ) -> int:
-    from lamde_mission.atomic import write_text_atomic
     from planner_core.suite import GenerationError, dumps_map, generate_map
 
     t0 = time.perf_counter()
@@ -187,9 +178,22 @@ def _run_one(
     except GenerationError as exc:
         print(f"lamde-mission generate: {exc}", file=sys.stderr)
         return 1
-    write_text_atomic(out, dumps_map(data))
+    _write_map(out, dumps_map(data))
     print(f"wrote {out}: {_line(data)} ({time.perf_counter() - t0:.1f} s)")
     return 0
+
+
+def _write_map(out: Path, text: str) -> None:
+    """Write OUT.json atomically; an OSError (disk full, the folder changed since it was
+    checked) is one UsageError line naming it (nothing half-written)."""
+    from lamde_mission.atomic import write_text_atomic
+    from planner_core.textio import printable
+
+    try:
+        write_text_atomic(out, text)
+    except OSError as exc:
+        raise UsageError(f"OUT.json: {printable(str(out))}: cannot write "
+                         f"({exc.strerror or exc})") from None
 
 
 def _default_large_sensors(size: int) -> int:
@@ -198,7 +202,6 @@ def _default_large_sensors(size: int) -> int:
 
 
 def _run_large(args: argparse.Namespace, seed: int) -> int:
-    from lamde_mission.atomic import write_text_atomic
     from planner_core.suite import GenerationError, dumps_map
     from planner_core.suite import large as L
 
@@ -231,7 +234,7 @@ def _run_large(args: argparse.Namespace, seed: int) -> int:
     except GenerationError as exc:
         print(f"lamde-mission generate: {exc}", file=sys.stderr)
         return 1
-    write_text_atomic(out, dumps_map(data))
+    _write_map(out, dumps_map(data))
     print(f"wrote {out}: {_line(data, witness_f=True)} ({time.perf_counter() - t0:.1f} s)")
     _note_sensor_limit([data])
     return 0
@@ -253,36 +256,45 @@ def _note_sensor_limit(maps: list[dict]) -> None:
 
 
 def _run_suite(folder: Path, seed: int, *, large: bool = False) -> int:
-    import json
-
-    from lamde_mission.atomic import write_text_atomic
-    from planner_core.suite import dumps_map, generate_suite
+    from planner_core.suite import suite_maps
+    from planner_core.textio import counted
 
     option = "--large-suite" if large else "--suite"
-    if folder.exists() and not folder.is_dir():
-        raise UsageError(f"{option} {folder}: exists and is not a folder")
     t0 = time.perf_counter()
     if large:
         from planner_core.suite.large import large_suite_maps
 
-        folder.mkdir(parents=True, exist_ok=True)
         maps = large_suite_maps(seed)
-        for name, data in maps.items():
-            path = folder / f"{name}.json"
-            write_text_atomic(path, dumps_map(data))
-            print(f"wrote {path}: {_line(data, witness_f=True)}")
-        n = len(maps)
     else:
-        paths = generate_suite(folder, seed)
-        for path in paths:
-            print(f"wrote {path}: {_line(json.loads(path.read_text()))}")
-        n = len(paths)
-    from planner_core.textio import counted
-
-    print(f"{counted(n, 'map')} in {time.perf_counter() - t0:.1f} s (seed {seed})", flush=True)
+        maps = suite_maps(seed)
+    _write_maps(option, folder, maps, witness_f=large)
+    print(f"{counted(len(maps), 'map')} in {time.perf_counter() - t0:.1f} s (seed {seed})",
+          flush=True)
     if large:
         _note_sensor_limit(list(maps.values()))
     return 0
+
+
+def _write_maps(option: str, folder: Path, maps: dict[str, dict], *, witness_f: bool) -> None:
+    """Write each map as `folder/NAME.json` (the folder made if missing), each atomically,
+    printing a line per map; an OSError (disk full, the folder changed since it was checked)
+    is one UsageError line naming `option`, the file and how many maps were written."""
+    from lamde_mission.atomic import write_text_atomic
+    from planner_core.suite import dumps_map
+    from planner_core.textio import counted, printable
+
+    path = folder
+    done = 0
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        for name, data in maps.items():
+            path = folder / f"{name}.json"
+            write_text_atomic(path, dumps_map(data))
+            print(f"wrote {path}: {_line(data, witness_f=witness_f)}")
+            done += 1
+    except OSError as exc:
+        raise UsageError(f"{option}: {printable(str(path))}: cannot write ({exc.strerror or exc}); "
+                         f"{done} of {counted(len(maps), 'map')} written") from None
 
 
 def _line(d: dict, *, witness_f: bool = False) -> str:

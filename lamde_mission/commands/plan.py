@@ -49,7 +49,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    "longest vehicle's time); default the map's objective.goal")
     p.add_argument("--sortie-budget", type=int, default=None, metavar="N",
                    help="maps with a battery or fleet: evaluations of each pipeline run on one "
-                   "sortie's or depot's sensors (default 2,000)")
+                   "sortie's or depot's sensors (default 2,000; from the population to "
+                   f"{D.MAX_BUDGET:,})")
     p.add_argument("--rounds", type=int, default=None, metavar="N",
                    help="maps with a battery or fleet: improving rounds of the sortie planner "
                    "at most (default 3; 0: the better of its two starts)")
@@ -61,9 +62,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=D.SEED,
                    help=f"random seed (same seed, same plan; default {D.SEED})")
     p.add_argument("--budget", type=int, default=D.BUDGET,
-                   help=f"evaluations in all stages (default {D.BUDGET:,}; must be >= the "
-                   "population); what the default pipeline does not need for its fixed stages "
-                   "goes to the improving rounds, so a larger budget buys a better plan")
+                   help=f"evaluations in all stages (default {D.BUDGET:,}; from the "
+                   f"population to {D.MAX_BUDGET:,}); what the default pipeline does not "
+                   "need for its fixed stages goes to the improving rounds, so a larger budget "
+                   "buys a better plan")
     p.add_argument("--time-limit", type=float, metavar="SECONDS",
                    help="stop the improving stages after SECONDS and write the best plan found "
                    "(the one-time kernel compile and the setup, reading the map and building "
@@ -439,13 +441,14 @@ def _run_sorties(args: argparse.Namespace) -> int:
     refusal = sortie_dir_refusal(out)  # before any work: writing replaces the folder whole
     if refusal is not None:
         raise UsageError(f"-o/--output: {printable(args.output)} {refusal}")
-    if not out.resolve().parent.is_dir():
-        if not args.mkdir:
-            raise UsageError(f"-o/--output: folder {printable(str(out.resolve().parent))} "
-                             "does not exist (--mkdir creates it)")
-        out.resolve().parent.mkdir(parents=True, exist_ok=True)
+    from lamde_mission.commands._common import check_output_folder
+
+    # filled beside itself and renamed onto OUT: its parent must take new entries
+    check_output_folder("-o/--output", out, mkdir=args.mkdir, whole=True)
     try:
         D.check_run_args(population=args.population, budget=args.budget, starts=args.starts)
+        if args.sortie_budget is not None:
+            D.check_budget(args.sortie_budget, args.population, "sortie_budget")
         D.check("seed", args.seed)
     except ValueError as exc:
         raise UsageError("--" + str(exc).replace("_", "-", 1)) from None
@@ -469,9 +472,6 @@ def _run_sorties(args: argparse.Namespace) -> int:
                         starts=args.starts, descent=not args.no_descent,
                         variable_length=not args.fixed_length, polish=not args.no_polish)
     goal = args.objective or m.goal
-    if args.sortie_budget is not None and args.sortie_budget < args.population:
-        raise UsageError(f"--sortie-budget: must be >= the population {args.population}, got "
-                         f"{args.sortie_budget}")
     if args.rounds is not None and args.rounds < 0:
         raise UsageError(f"--rounds: must be >= 0, got {args.rounds}")
     if not args.quiet:
@@ -492,6 +492,9 @@ def _run_sorties(args: argparse.Namespace) -> int:
                                           allow_infeasible=args.allow_infeasible)
     except FileExistsError as exc:  # the folder changed while planning
         raise UsageError(f"-o/--output: {exc}") from None
+    except OSError as exc:  # past the check (disk full, a race): the pending folder is removed
+        raise UsageError(f"-o/--output: {printable(str(out))}: cannot write "
+                         f"({exc.strerror or exc}); nothing written") from None
     except ValueError as exc:  # more sorties than a sortie directory holds
         print(f"lamde-mission plan: {args.map}: {exc}", file=sys.stderr)
         return 1
@@ -755,14 +758,17 @@ def run(args: argparse.Namespace) -> int:
     target = Path(args.output)
     clean_stale_temps(target)  # what a killed run left beside it
     pending = pending_path(target)
+    writing = ("-o/--output", args.output)  # the output being written, for an OSError's line
     try:
         write_mission(pending, stored, m, fmt, finish=args.finish, autopilot=args.autopilot,
                       planning_map=pm)
         if args.plot:
             from lamde_mission.plot import plot_mission
 
+            writing = ("--plot", args.plot)
             plot_mission(m, args.plot, timeline=timeline, plan=plan)
         if args.report:
+            writing = ("--report", args.report)
             from lamde_mission.atomic import write_text_atomic
 
             report = {"plan": plan.to_dict(), "verdicts": verdicts.to_dict(),
@@ -772,7 +778,13 @@ def run(args: argparse.Namespace) -> int:
                       "map": args.map, "output": args.output, "format": fmt,
                       "mission_sha256": hashlib.sha256(pending.read_bytes()).hexdigest()}
             write_text_atomic(args.report, json.dumps(report, indent=2))
+        writing = ("-o/--output", args.output)
         replace_keeping_mode(pending, target)  # an overwritten 0600 mission stays 0600
+    except OSError as exc:  # past the output check (disk full, a race): one line, no traceback
+        from planner_core.textio import printable
+
+        raise UsageError(f"{writing[0]}: {printable(writing[1])}: cannot write "
+                         f"({exc.strerror or exc}); the mission was not written") from None
     finally:
         pending.unlink(missing_ok=True)
     if not args.quiet:

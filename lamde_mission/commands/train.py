@@ -63,8 +63,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    f"{h['envs']})")
     p.add_argument("--population", type=int, help="DE population during training (default "
                    f"{h['population']}; planning uses {D.POPULATION})")
-    p.add_argument("--budget", type=int, help="evaluations per training episode (default "
-                   f"{h['budget']:,})")
+    p.add_argument("--budget", type=int, help="evaluations per training episode, from the "
+                   f"population to {D.MAX_BUDGET:,} (default {h['budget']:,})")
     p.add_argument("--init", choices=("uniform", "seeded", "both"), default="both",
                    help="start modes of the training episodes (default both, alternating)")
     p.add_argument("--imitate", metavar="CONFIGURATOR",
@@ -148,8 +148,10 @@ def _config(args: argparse.Namespace):  # noqa: ANN202 - PPOConfig is imported l
     if cfg.epochs == 0 and (cfg.imitate == "none" or cfg.imitate_epochs < 1):
         raise UsageError("--epochs: 0 (the warm start alone) needs --imitate and "
                          "--imitate-epochs >= 1")
-    if cfg.budget < cfg.population:
-        raise UsageError(f"--budget: must be >= the population ({cfg.population})")
+    try:  # the episodes' runs check it too (`check_run_args`), but only once training started
+        D.check_budget(cfg.budget, cfg.population)
+    except ValueError as exc:
+        raise UsageError(f"--{exc}") from None
     return cfg
 
 

@@ -346,7 +346,7 @@ def run_bench(
         suite: the suite folder of map files.
         optimisers: optimiser names (the registry's or `extra`'s).
         runs: runs per cell, >= 1.
-        budget: evaluations per run, >= 1.
+        budget: evaluations per run, an integer in [1, `planner_core.defaults.MAX_BUDGET`].
         out: the output folder.
         tasks: the tasks to run (None: every map of the suite).
         jobs: local: 0 = in this process, N = N worker processes; ray: CPUs of a local Ray
@@ -406,8 +406,12 @@ def run_bench(
     lacking = missing_extras(optimisers, extra)  # before any run, not one failure per run
     if lacking:
         raise BenchError(f"optimisers: {lacking}")
-    if runs < 1 or budget < 1:
-        raise BenchError("runs and budget must be positive")
+    if runs < 1:
+        raise BenchError("runs must be positive")
+    try:
+        _defaults.check_budget(budget, 1, least_name=None)
+    except ValueError as exc:
+        raise BenchError(str(exc)) from None
     if int(base_seed) < 0:
         raise BenchError(f"base_seed must be an integer >= 0, got {base_seed}")
     if executor is None:  # refused here, before meta.json is written

@@ -1179,6 +1179,10 @@ _TYPE_KINDS = {
     "bool_type": "true or false",
     "tuple_type": "a JSON array of two numbers [x, y] (metres)",
     "list_type": "a JSON array",
+    # a nested section or item (`obstacles`, `uav.battery`, `sensors[0]`): pydantic names its
+    # class ("a valid dictionary or instance of ObstaclesSpec"), the map file knows objects
+    "model_type": "a JSON object",
+    "dict_type": "a JSON object",
 }
 
 
@@ -1238,6 +1242,9 @@ def _pydantic_problems(err: ValidationError) -> list[str]:
                 lines.append(f"{where}: {msg} (got {shown})")  # field's one is the cap's
             else:
                 lines.append(f"{where}: {msg} (got {shown}); {reason}")
+        elif kind == "literal_error":  # "must be 'total' or 'makespan'", as the others read
+            lines.append(f"{where}: {e['msg'].replace('Input should be', 'must be', 1)}, got "
+                         f"{_json_shown(e.get('input'))}")
         else:
             lines.append(f"{where}: {e['msg']}")
     return lines

@@ -23,7 +23,8 @@ class PlanConfig:
 
     Args:
         seed: random seed, >= 0 (same seed and budget, same plan).
-        budget: evaluations in all, >= population.
+        budget: evaluations in all, from the population to `MAX_BUDGET`
+            (`planner_core.defaults.check_budget`).
         population: the DE's population N, >= `MIN_POPULATION`.
         configurator: a registry name (`CONFIGURATORS`) or a configurator object.
         init: start mode, "seeded" or "uniform" (`INIT_MODES`).
