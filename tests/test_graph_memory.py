@@ -50,6 +50,8 @@ def test_the_graph_is_the_same_whatever_the_block(monkeypatch) -> None:
     m = load_map(TINY)
     g1 = build_visibility_graph(m.obstacles, m.width, m.height, 1.0)
     monkeypatch.setattr(graph, "PAIR_BLOCK", 3)
+    # the build reads PAIR_BLOCK when it runs (a default bound at import ignored the patch)
+    assert len(_row_blocks(g1.n)) == len(_row_blocks(g1.n, 3)) > 5
     g2 = build_visibility_graph(m.obstacles, m.width, m.height, 1.0)
     assert len(g1.edges) > 10
     np.testing.assert_array_equal(g1.edges, g2.edges)

@@ -151,9 +151,10 @@ def _tangent_pairs(nodes, prev, nxt, i0, i1):
 PAIR_BLOCK = 4_000_000
 
 
-def _row_blocks(n: int, block: int = PAIR_BLOCK) -> list[tuple[int, int]]:
+def _row_blocks(n: int, block: int | None = None) -> list[tuple[int, int]]:
     """[i0, i1) row ranges of the upper triangle of an n x n pair matrix, each holding about
-    `block` pairs (at least one row)."""
+    `block` pairs (None: `PAIR_BLOCK` as it is at the call) (at least one row)."""
+    block = PAIR_BLOCK if block is None else block
     out = []
     i0 = 0
     while i0 < n:
