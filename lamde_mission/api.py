@@ -65,6 +65,7 @@ def plan(
     scheduler: str | Any = "default",
     corner_slots: int | str = "auto",
     on_setup: Callable[[str | None], None] | None = None,
+    on_setup_progress: Callable[[str, float], None] | None = None,
 ) -> Plan:
     """Plan hover points and hover times for `map`; same seed and budget, same plan.
 
@@ -106,6 +107,10 @@ def plan(
             (the CLI's progress lines). Setup is not cut by `time_limit`: the planner needs its
             result; it grows with the obstacles (a 10 km map of 5,000 small rectangles and 50
             sensors: see docs/planning.md).
+        on_setup_progress: called during a setup stage that can tell how far it is with what
+            it is doing and the fraction of it done: ("the visibility graph", f), f increasing
+            to 1.0 (`build_visibility_graph`'s `progress`: node pairs tested, after each block
+            of ~4 million; a minute at 2,000 campus footprints). None: nothing.
         scheduler: the improving stage's scheduler (issue 34's LAMDE-S seam,
             `planner_core.pipeline.schedule`): "default" (today's rounds), a static schedule's
             name (`schedule.SCHEDULES`: a fixed cycle of macro-actions), "lamde-s" (the
@@ -173,8 +178,10 @@ def plan(
     # "auto" corner slots are resolved from the planning map (after the kernels load: the rule
     # draws seeder plans) before the problem is built (K = 0: the paper's Problem)
     stage("building the visibility graph round the obstacles and choosing the corner slots")
+    graph_progress = (None if on_setup_progress is None
+                      else lambda f: on_setup_progress("the visibility graph", f))
     problem, k_corner = problem_for(planning_map, variable_length=config.variable_length,
-                                    corner_slots=corner_slots)
+                                    corner_slots=corner_slots, progress=graph_progress)
     stage(None)
     t_setup += time.perf_counter() - t0
     result = run_pipeline(problem, config, progress=progress,

@@ -194,3 +194,115 @@ def test_setup_stages_are_announced_and_the_cli_prints_only_slow_ones() -> None:
     lines = out.getvalue().splitlines()
     assert lines[0] == "setup: building the visibility graph... (not cut by --time-limit)"
     assert lines[1].startswith("setup: done in ") and len(lines) == 2
+
+
+def shown_at_once(stream=None, tty: bool = False):
+    """A `SetupNotice` that shows each stage's name at once, before the stage goes on (no
+    race with its timer thread), on a TTY or not."""
+    from lamde_mission.commands.plan import SetupNotice
+
+    class Notice(SetupNotice):
+        def _tty(self) -> bool:
+            return tty
+
+        def __call__(self, name: str | None) -> None:
+            super().__call__(name)
+            if self._timer is not None:
+                self._timer.join()
+
+    return Notice(after=0.0, stream=stream)
+
+
+def test_the_setup_line_shows_how_far_the_visibility_graph_is() -> None:
+    """Issue 31 (progress for every stage longer than a second): the visibility graph's build
+    printed its stage's name and then nothing for a minute at 2,000 campus footprints. A
+    shown stage's fraction gets a line of its own: off a TTY once past each quarter (as the
+    plan's progress bar), on a TTY one line updated in place, at most every `EVERY` s, then
+    overwritten by the time taken. Before the name is shown (a quick stage) nothing."""
+    import io
+    import re
+
+    from lamde_mission.commands.plan import SetupNotice
+
+    steps = (0.1, 0.3, 0.32, 0.6, 0.9, 1.0)
+    out = io.StringIO()
+    notice = shown_at_once(out)
+    notice("building the visibility graph")
+    for f in steps:
+        notice.fraction("the visibility graph", f)
+    notice(None)
+    lines = out.getvalue().splitlines()
+    assert lines[0] == "setup: building the visibility graph... (not cut by --time-limit)"
+    assert [re.sub(r", \d+ s$", "", line) for line in lines[1:4]] == [
+        f"setup: the visibility graph {p:>3} %" for p in (30, 60, 90)]
+    assert lines[4].startswith("setup: done in ") and len(lines) == 5
+
+    tty = io.StringIO()
+    notice = shown_at_once(tty, tty=True)
+    notice.EVERY = 0.0
+    notice("building the visibility graph")
+    for f in steps:
+        notice.fraction("the visibility graph", f)
+    notice(None)
+    name, updates = tty.getvalue().split("\n", 1)
+    assert name == "setup: building the visibility graph... (not cut by --time-limit)"
+    shown = updates.split("\r")
+    assert shown[0] == "" and updates.count("\n") == 1 and updates.endswith("\n")
+    assert [re.sub(r", \d+ s *$", "", u) for u in shown[1:-1]] == [
+        f"setup: the visibility graph {round(100 * f):>3} %" for f in steps]
+    assert shown[-1].startswith("setup: done in ")  # padded over the longer line before
+    assert shown[-1] == shown[-1].rstrip().ljust(len(shown[-2])) + "\n"
+
+    tty = io.StringIO()
+    notice = shown_at_once(tty, tty=True)
+    notice.EVERY = 1e9  # one update (the first) within any run of this test
+    notice("building the visibility graph")
+    for f in steps:
+        notice.fraction("the visibility graph", f)
+    assert tty.getvalue().count("\r") == 1 and " 10 %" in tty.getvalue()
+
+    quick = io.StringIO()
+    notice = SetupNotice(after=60.0, stream=quick)
+    notice("building the visibility graph")
+    notice.fraction("the visibility graph", 0.5)
+    notice(None)
+    assert quick.getvalue() == ""
+
+
+def test_a_setup_stage_cut_short_ends_its_line_and_claims_no_time() -> None:
+    """`close` (the CLI's `finally`, a Ctrl-C or an error in setup): the open TTY line is
+    ended, so "lamde-mission: interrupted" starts on its own, and no "setup: done in" is
+    printed for a stage that did not finish (the CLI said "done" before the interrupt)."""
+    import io
+
+    for tty in (True, False):
+        out = io.StringIO()
+        notice = shown_at_once(out, tty=tty)
+        notice("building the visibility graph")
+        notice.fraction("the visibility graph", 0.5)
+        notice.close()
+        notice.close()
+        notice(None)  # ended already: nothing more
+        text = out.getvalue()
+        assert "done in" not in text and text.endswith("\n")
+        assert text.count("\n") == 2  # the name; the 50 % line, ended
+
+
+def test_plan_tells_the_cli_how_far_the_visibility_graph_is(monkeypatch, tmp_path) -> None:
+    """`plan(on_setup_progress=...)` hears ("the visibility graph", f) up to 1.0 from the
+    build, and `lamde-mission plan` shows it on its setup line."""
+    from lamde_mission.commands import plan as plan_cmd
+    from lamde_mission.fuzz import run_cli
+    from tests.conftest import MAPS
+
+    heard: list[tuple[str, float]] = []
+    lamde_mission.plan(MAPS / "tiny.json", seed=3, budget=600,
+                       on_setup_progress=lambda what, f: heard.append((what, f)))  # fmt: skip
+    assert heard and heard[-1] == ("the visibility graph", 1.0)
+    assert all(w == "the visibility graph" for w, _ in heard)
+    notice = type(shown_at_once(tty=True))  # made before SetupNotice is patched
+    monkeypatch.setattr(plan_cmd, "SetupNotice", lambda: notice(after=0.0))
+    out = run_cli(["plan", str(MAPS / "tiny.json"), "-o", str(tmp_path / "t.plan"),
+                   "--seed", "3", "--budget", "600"])  # fmt: skip
+    assert out.status == 0, (out.stderr, out.error)
+    assert "\rsetup: the visibility graph 100 %, " in out.stderr

@@ -101,6 +101,26 @@ def test_the_shared_seeder_is_a_fresh_seeder() -> None:
                                       fresh.solution(np.random.default_rng(s)))  # fmt: skip
 
 
+@pytest.mark.parametrize("slots", [AUTO, 0, 5])
+def test_problem_for_builds_the_seeder_and_reports_the_graph(slots) -> None:
+    """Issue 31 (progress for every stage longer than a second): `problem_for` builds the
+    seeder's visibility graph, minutes at the obstacle limit, telling `progress` how far it
+    is, for every K: with an explicit K it was left to the pipeline's first stage, where no
+    setup line showed it and --time-limit counted it. The seeder is the one `Problem.seeder`
+    builds."""
+    pm = load_map(TIGHT_MAP).planning_map()
+    heard: list[float] = []
+    problem, k = problem_for(pm, corner_slots=slots, progress=heard.append)
+    assert heard and heard[-1] == 1.0 and heard == sorted(heard)
+    assert "seeder" in vars(problem)  # built, not left to its first use
+    fresh = Seeder.for_problem(problem)
+    assert problem.seeder.p is problem.model and problem.seeder.graph.n == fresh.graph.n > 0
+    np.testing.assert_array_equal(problem.seeder.graph.edges, fresh.graph.edges)
+    for s in range(2):
+        np.testing.assert_array_equal(problem.seeder.solution(np.random.default_rng(s)),
+                                      fresh.solution(np.random.default_rng(s)))  # fmt: skip
+
+
 def test_plan_api_refuses_bad_corner_slots_before_any_work() -> None:
     import lamde_mission
 

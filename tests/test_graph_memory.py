@@ -50,10 +50,51 @@ def test_the_graph_is_the_same_whatever_the_block(monkeypatch) -> None:
     m = load_map(TINY)
     g1 = build_visibility_graph(m.obstacles, m.width, m.height, 1.0)
     monkeypatch.setattr(graph, "PAIR_BLOCK", 3)
+    # the build reads PAIR_BLOCK when it runs (a default bound at import ignored the patch)
+    assert len(_row_blocks(g1.n)) == len(_row_blocks(g1.n, 3)) > 5
     g2 = build_visibility_graph(m.obstacles, m.width, m.height, 1.0)
     assert len(g1.edges) > 10
     np.testing.assert_array_equal(g1.edges, g2.edges)
     np.testing.assert_array_equal(g1.weights, g2.weights)
+
+
+def same_graph(a: graph.VisibilityGraph, b: graph.VisibilityGraph) -> None:
+    for field in ("nodes", "prev", "next", "indptr", "indices", "weights", "edges"):
+        x, y = getattr(a, field), getattr(b, field)
+        assert x.dtype == y.dtype and x.tobytes() == y.tobytes(), field
+
+
+def test_the_build_reports_its_progress_and_builds_the_same_graph(monkeypatch) -> None:
+    """Issue 31 (progress for every stage longer than a second): at 2,000 campus footprints the
+    build ran for a minute with no word; `progress` now hears the fraction of node pairs done
+    after each block, increasing to 1.0, and the graph is the same to the byte."""
+    from planner_core.model.problem import Problem
+    from planner_core.model.seeding import Seeder
+
+    m = load_map(TINY)
+    plain = build_visibility_graph(m.obstacles, m.width, m.height, 1.0)
+    monkeypatch.setattr(graph, "PAIR_BLOCK", 3)
+    heard: list[float] = []
+    told = build_visibility_graph(m.obstacles, m.width, m.height, 1.0, progress=heard.append)
+    same_graph(plain, told)
+    n = plain.n
+    done = np.cumsum([sum(n - i - 1 for i in range(i0, i1)) for i0, i1 in _row_blocks(n, 3)])
+    assert len(heard) == len(done) > 5 and heard[-1] == 1.0
+    assert heard == pytest.approx((done / (n * (n - 1) // 2)).tolist(), rel=1e-12)
+    assert all(a < b for a, b in zip(heard[:-1], heard[1:], strict=True))
+    # the seeder hands its callback on; a map without corners tells 1.0 once
+    problem = Problem(TINY)
+    heard.clear()
+    seeder = Seeder.for_problem(problem, progress=heard.append)
+    same_graph(Seeder.for_problem(problem).graph, seeder.graph)
+    assert heard[-1] == 1.0 and len(heard) > 5
+    heard.clear()
+    d = json.loads(TINY.read_text())
+    d["obstacles"] = {}
+    bare = load_map(d)
+    empty = build_visibility_graph(bare.obstacles, bare.width, bare.height, 1.0,
+                                   progress=heard.append)  # fmt: skip
+    assert empty.n == 0 and heard == [1.0]
 
 
 def vertex_limit_map(path: Path) -> Path:

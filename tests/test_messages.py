@@ -90,6 +90,37 @@ def test_a_ctrl_c_inside_a_compiled_kernel_is_one_line(monkeypatch) -> None:
         cli.main(["check", str(TINY)])
 
 
+def test_a_ctrl_c_in_the_visibility_graph_ends_as_the_other_interrupts(monkeypatch,
+                                                                        tmp_path) -> None:
+    """A Ctrl-C during `plan`'s setup, the visibility graph's build half done with its
+    percentage line open: the line is ended and "lamde-mission: interrupted" follows on its
+    own (status 130), with no "setup: done in" for the stage cut short (the CLI printed one),
+    and nothing written."""
+    import planner_core.model.seeding as seeding
+    from lamde_mission.commands import plan as plan_cmd
+    from tests.test_api import shown_at_once
+
+    build = seeding.build_visibility_graph
+
+    def cut(obstacles, width, height, margin, *, progress=None):
+        if progress is None:  # the kernels' warm-up
+            return build(obstacles, width, height, margin)
+        progress(0.5)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(seeding, "build_visibility_graph", cut)
+    notices = [type(shown_at_once(tty=tty)) for tty in (True, False)]  # before the patch
+    for notice in notices:
+        monkeypatch.setattr(plan_cmd, "SetupNotice", lambda n=notice: n(after=0.0))
+        out = run_cli(["plan", str(ROOT / "examples" / "maps" / "tiny.json"), "-o",
+                       str(tmp_path / "t.plan"), "--budget", "600"])  # fmt: skip
+        assert out.status == 130, (out.stderr, out.error)
+        lines = out.stderr.splitlines()
+        assert lines[-1] == INTERRUPTED and "done in" not in lines[-2], lines
+        assert lines[-2].split("\r")[-1].startswith("setup: the visibility graph  50 %")
+        assert list(tmp_path.iterdir()) == []
+
+
 def test_importing_the_package_leaves_sigint_alone() -> None:
     """Only the console script gets the start-up handler; a program importing the package
     keeps Python's own."""

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import time
 from typing import Any
@@ -536,37 +537,122 @@ def _say_cannot(m: Any, said: str = "") -> None:
 
 
 class SetupNotice:
-    """`make_plan`'s on_setup for the CLI: a setup stage still running after `after` seconds
-    gets a line on stderr (its name; --time-limit does not cut it), and the time it took when
-    it ends. Quick stages print nothing. A timer thread per stage; O(1)."""
+    """`make_plan`'s on_setup (the instance) and on_setup_progress (`fraction`) for the CLI: a
+    setup stage still running after `after` seconds gets a line on stderr (its name;
+    --time-limit does not cut it), and the time it took when it ends. Quick stages print
+    nothing. A shown stage that tells how far it is (the visibility graph) gets a line of its
+    own beneath the name, "setup: the visibility graph  35 %, 21 s": on a TTY updated in place
+    (at most every `EVERY` s) and overwritten by the time taken, otherwise a line per quarter,
+    as the plan's progress bar does. `close` ends an interrupted stage's line without a time
+    taken. A timer thread per stage; O(1) a call."""
+
+    #: seconds between two updates of a TTY's percentage line
+    EVERY = 0.2
 
     def __init__(self, after: float = 1.0, stream: Any = None) -> None:
+        import threading
+
         self.after = after
-        self.stream = stream
+        self.stream = stream  # None: the sys.stderr of the moment
+        self._lock = threading.Lock()  # the timer thread's line and the caller's
         self._timer: Any = None
+        self._stage = 0  # which stage's timer may still show its name
         self._t0 = 0.0
         self._shown = False
+        self._part: tuple[str, float] | None = None  # the running stage's (what, fraction)
+        self._last = -math.inf  # when the percentage line was last written (TTY)
+        self._quarter = 0.25  # the next quarter that gets a line (off a TTY)
+        self._open = 0  # the width of a TTY percentage line written and not yet ended
 
-    def _show(self, name: str) -> None:
-        self._shown = True
-        print(f"setup: {name}... (not cut by --time-limit)", file=self.stream or sys.stderr,
-              flush=True)  # fmt: skip
+    def _out(self) -> Any:
+        return self.stream or sys.stderr
+
+    def _tty(self) -> bool:
+        return bool(getattr(self._out(), "isatty", lambda: False)())
+
+    def _show(self, name: str, stage: int) -> None:
+        with self._lock:
+            if stage != self._stage:  # the stage ended while the timer fired
+                return
+            self._shown = True
+            print(f"setup: {name}... (not cut by --time-limit)", file=self._out(), flush=True)
+            if self._part is not None and self._tty():  # off a TTY: from the next quarter
+                self._say_part(*self._part, force=True)
+
+    def _say_part(self, what: str, frac: float, force: bool = False) -> None:
+        """The percentage line of the running, shown stage (the lock held): on a TTY at most
+        every `EVERY` s (`force`: now), otherwise once past each quarter short of 1.0."""
+        now = time.perf_counter()
+        out = self._out()
+        line = f"setup: {what} {100 * frac:3.0f} %, {now - self._t0:.0f} s"
+        if self._tty():
+            if not force and now - self._last < self.EVERY:
+                return
+            out.write("\r" + line.ljust(self._open))
+            self._open = max(self._open, len(line))
+        else:
+            if not self._quarter <= frac < 1.0:
+                return
+            while self._quarter <= frac:
+                self._quarter += 0.25
+            out.write(line + "\n")
+        self._last = now
+        out.flush()
+
+    def fraction(self, what: str, frac: float) -> None:
+        """The running stage is `frac` of the way through `what` (`make_plan`'s
+        on_setup_progress): shown once the stage's name is.
+
+        Args:
+            what: what the stage is doing ("the visibility graph").
+            frac: the fraction of it done, in [0, 1].
+        """
+        with self._lock:
+            self._part = (what, frac)
+            if self._shown:
+                self._say_part(what, frac)
+
+    def _end(self, done: bool) -> None:
+        """End the running stage (the lock held): its timer, its open line, and, when `done`
+        and shown, the time it took."""
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+        self._stage += 1
+        out = self._out()
+        if self._shown and done:
+            line = f"setup: done in {time.perf_counter() - self._t0:.1f} s"
+            out.write(("\r" + line.ljust(self._open) if self._open else line) + "\n")
+            out.flush()
+        elif self._open:
+            out.write("\n")
+            out.flush()
+        self._shown = False
+        self._part = None
+        self._open = 0
+        self._last = -math.inf
+        self._quarter = 0.25
 
     def __call__(self, name: str | None) -> None:
         import threading
 
-        if self._timer is not None:
-            self._timer.cancel()
-            self._timer = None
-            if self._shown:
-                print(f"setup: done in {time.perf_counter() - self._t0:.1f} s",
-                      file=self.stream or sys.stderr, flush=True)  # fmt: skip
-        self._shown = False
-        if name is not None:
-            self._t0 = time.perf_counter()
-            self._timer = threading.Timer(self.after, self._show, args=(name,))
-            self._timer.daemon = True
-            self._timer.start()
+        with self._lock:
+            self._end(done=True)
+            if name is not None:
+                self._t0 = time.perf_counter()
+                self._timer = threading.Timer(self.after, self._show, args=(name, self._stage))
+                self._timer.daemon = True
+                self._timer.start()
+
+    def close(self) -> None:
+        """End a stage cut short (Ctrl-C, an error): no time taken is claimed, an open TTY line
+        is ended so that what is printed next starts on its own (idempotent)."""
+        got = self._lock.acquire(timeout=1.0)  # a Ctrl-C inside `fraction` released it
+        try:
+            self._end(done=False)
+        finally:
+            if got:
+                self._lock.release()
 
 
 def _corner_slots(args: argparse.Namespace) -> int | str:
@@ -711,10 +797,11 @@ def run(args: argparse.Namespace) -> int:
             scheduler=args.scheduler,
             corner_slots=corner_slots,
             on_setup=setup,
+            on_setup_progress=None if setup is None else setup.fraction,
         )
     finally:
-        if setup is not None:
-            setup(None)
+        if setup is not None:  # an interrupted stage: its line ended, no "done in" claimed
+            setup.close()
         if progress is not None:
             progress.close()
     pm = m.planning_map()

@@ -17,15 +17,16 @@ suite maps and the 8 large maps fit or hold no corner (K = 0: the paper's Proble
 plans); campus-500's needed 3, 3, 4, 5, 4 (K = 3 from the first three; 4 since the
 inflation is the exact outer offset, 2026-12-06).
 
-`problem_for(...)` builds the Problem a plan runs on and shares the seeder (its visibility
-graph: 5.7 s of CPU on campus-500) between the K = 0 problem the rule reads and the one with
-K slots.
+`problem_for(...)` builds the Problem a plan runs on and its seeder (its visibility graph:
+5.7 s of CPU on campus-500, ~1 min at 2,000 footprints; a `progress` callback hears how far),
+and shares the seeder between the K = 0 problem the rule reads and the one with K slots.
 """
 
 from __future__ import annotations
 
 import copy
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -34,6 +35,7 @@ from planner_core.defaults import MAX_CORNER_SLOTS
 from planner_core.model.geometry import overlap_lengths
 from planner_core.model.problem import Problem
 from planner_core.model.routing.graph import CLEAR
+from planner_core.model.seeding import Seeder
 
 __all__ = ["AUTO", "MAX_CORNER_SLOTS", "RULE_DRAWS", "auto_corner_slots", "check_corner_slots",
            "corner_need", "problem_for", "slot_shortfall"]
@@ -142,13 +144,21 @@ def auto_corner_slots(problem: Problem, draws: int = RULE_DRAWS) -> int:
 
 
 def problem_for(planning_map: Any, *, variable_length: bool = True,
-                corner_slots: int | str = AUTO) -> tuple[Problem, int]:
+                corner_slots: int | str = AUTO,
+                progress: Callable[[float], None] | None = None) -> tuple[Problem, int]:
     """The Problem a plan runs on and its corner slots, "auto" resolved by `auto_corner_slots`.
+
+    Its seeder (`Problem.seeder`: the visibility graph, which every default pipeline uses) is
+    built here, for every K, so that a plan's setup holds the build (minutes at the obstacle
+    limit), not its first stage.
 
     Args:
         planning_map: the planning map (`Map.planning_map()`).
         variable_length: False: every slot flown (then "auto" is 0).
         corner_slots: "auto" or K >= 0.
+        progress: told the fraction of the visibility graph's build done
+            (`build_visibility_graph`'s `progress`: increasing, the last call 1.0); None:
+            nothing.
 
     Returns:
         (problem, K). With "auto" and K > 0 the problem's seeder is the rule's, with this
@@ -159,14 +169,24 @@ def problem_for(planning_map: Any, *, variable_length: bool = True,
     """
     k = check_corner_slots(corner_slots)
     if k != AUTO:
-        return Problem(planning_map, variable_length=variable_length, corner_slots=k), k
+        problem = Problem(planning_map, variable_length=variable_length, corner_slots=k)
+        _build_seeder(problem, progress)
+        return problem, k
     base = Problem(planning_map, variable_length=variable_length)
+    _build_seeder(base, progress)
     k = auto_corner_slots(base)
     if k == 0:
         return base, 0
     problem = Problem(planning_map, variable_length=variable_length, corner_slots=k)
     _share_seeder(base, problem)
     return problem, k
+
+
+def _build_seeder(problem: Problem, progress: Callable[[float], None] | None) -> None:
+    """Build `problem`'s seeder now, telling `progress` how far its visibility graph is: the
+    object `Problem.seeder` would build on first use (`Seeder.for_problem`), put in the
+    cached_property's slot."""
+    problem.__dict__["seeder"] = Seeder.for_problem(problem, progress=progress)
 
 
 def _share_seeder(base: Problem, problem: Problem) -> None:

@@ -28,6 +28,7 @@ counts the evaluations of the starts itself. The steps other builders reuse are 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -407,7 +408,9 @@ class Seeder:
     """Builds obstacle-aware, sensor-serving starting solutions for one map (reusable).
 
     `model`: the map's `ModelParams`; `obstacles`: its `geometry.Obstacles`;
-    `variable_length`: False for the fixed-length encoding (every start then has I_max points).
+    `variable_length`: False for the fixed-length encoding (every start then has I_max points);
+    `progress`: told the fraction of the visibility graph's build done (the slow part at the
+    obstacle limit; `build_visibility_graph`), None: nothing.
     """
 
     def __init__(
@@ -417,12 +420,14 @@ class Seeder:
         *,
         variable_length: bool = True,
         margin: float = MARGIN,
+        progress: Callable[[float], None] | None = None,
     ):
         p = self.p = model
         self.obstacles = obstacles
         self.variable_length = bool(variable_length)
         self.margin = float(margin)
-        self.graph = build_visibility_graph(obstacles, p.width, p.height, self.margin)
+        self.graph = build_visibility_graph(obstacles, p.width, p.height, self.margin,
+                                            progress=progress)  # fmt: skip
         self.size = np.array([p.width, p.height], dtype=float)
         # farthest ground distance at which 90% of T_max still serves each sensor
         rate_needed = np.maximum(p.required, 1e-9) / (0.9 * p.t_max)
@@ -443,7 +448,8 @@ class Seeder:
         self._unit = np.column_stack([np.cos(ang), np.sin(ang)])
 
     @classmethod
-    def for_problem(cls, problem: Any, margin: float = MARGIN) -> Seeder:
+    def for_problem(cls, problem: Any, margin: float = MARGIN, *,
+                    progress: Callable[[float], None] | None = None) -> Seeder:
         """The seeder of a `planner_core.model.problem.Problem` (its model, obstacles and
         encoding).
 
@@ -451,12 +457,14 @@ class Seeder:
             problem: the Problem (its `model`, `obstacles`, `variable_length`).
             margin: metres a pushed point is set beyond an obstacle's side, and how far the
                 visibility graph pushes the obstacles out (`build_visibility_graph`).
+            progress: told the fraction of the visibility graph's build done
+                (`build_visibility_graph`'s `progress`); None: nothing.
 
         Returns:
             A new Seeder.
         """
         return cls(problem.model, problem.obstacles, variable_length=problem.variable_length,
-                   margin=margin)  # fmt: skip
+                   margin=margin, progress=progress)  # fmt: skip
 
     # ------------------------------------------------------------------ geometry helpers
     def _clear(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:

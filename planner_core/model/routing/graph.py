@@ -8,6 +8,7 @@ both nodes' polygons, the only edges a shortest path uses.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -151,9 +152,10 @@ def _tangent_pairs(nodes, prev, nxt, i0, i1):
 PAIR_BLOCK = 4_000_000
 
 
-def _row_blocks(n: int, block: int = PAIR_BLOCK) -> list[tuple[int, int]]:
+def _row_blocks(n: int, block: int | None = None) -> list[tuple[int, int]]:
     """[i0, i1) row ranges of the upper triangle of an n x n pair matrix, each holding about
-    `block` pairs (at least one row)."""
+    `block` pairs (None: `PAIR_BLOCK` as it is at the call) (at least one row)."""
+    block = PAIR_BLOCK if block is None else block
     out = []
     i0 = 0
     while i0 < n:
@@ -478,7 +480,8 @@ def _spread_reference(indptr, indices, weights, src_dist):
 
 
 def build_visibility_graph(
-    obstacles: Any, width: float, height: float, margin: float
+    obstacles: Any, width: float, height: float, margin: float, *,
+    progress: Callable[[float], None] | None = None,
 ) -> VisibilityGraph:
     """The reduced visibility graph of `obstacles` (a `geometry.Obstacles`) pushed out by
     `margin` metres (see `VisibilityGraph`); nodes inside an obstacle or outside the area
@@ -489,6 +492,11 @@ def build_visibility_graph(
         width: the area's side along x, metres.
         height: the area's side along y, metres.
         margin: how far the corners are pushed out, metres (`offset.obstacle_polygons`).
+        progress: called after each block of node pairs (`_row_blocks`: tangency, then a
+            clear line) with the fraction of the N(N-1)/2 pairs done, increasing, the last
+            call 1.0 (one call, 1.0, when there are fewer than two nodes); None: nothing.
+            The graph is the same with or without it (a map at the obstacle limit takes
+            minutes here: the CLI's setup line shows it).
 
     Returns:
         The graph: edges join node pairs tangent at both ends whose line is clear
@@ -509,6 +517,7 @@ def build_visibility_graph(
     prev = np.ascontiguousarray(prev[keep])
     nxt = np.ascontiguousarray(nxt[keep])
     n = len(nodes)
+    pairs = n * (n - 1) // 2
     if n:
         kept_i, kept_j = [], []
         for i0, i1 in _row_blocks(n):
@@ -516,9 +525,13 @@ def build_visibility_graph(
             clear = overlap_first(nodes[bi], nodes[bj], obstacles) <= CLEAR  # = overlap_lengths
             kept_i.append(bi[clear])
             kept_j.append(bj[clear])
+            if progress is not None and pairs:  # rows i1.. hold (n - i1)(n - i1 - 1)/2 pairs
+                progress(1.0 - (n - i1) * (n - i1 - 1) // 2 / pairs)
         i, j = np.concatenate(kept_i), np.concatenate(kept_j)
     else:
         i = j = np.zeros(0, dtype=np.int64)
+    if progress is not None and not pairs:
+        progress(1.0)
     length = np.hypot(nodes[i, 0] - nodes[j, 0], nodes[i, 1] - nodes[j, 1])
     src = np.concatenate([i, j])
     dst = np.concatenate([j, i])
