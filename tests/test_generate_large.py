@@ -191,6 +191,44 @@ def test_campus_has_an_origin_and_passes_check(tmp_path: Path) -> None:
     assert r.returncode == 0 and "OK" in r.stdout and "origin" in r.stdout, r.stdout + r.stderr
 
 
+def test_campus_no_plan_can_meet_is_not_written(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture
+) -> None:
+    """`map campus` wrote a map `check` then refused (1,000 footprints with 100 sensors: a
+    sensor whose every receiving hover point breaks C3): it now diagnoses the campus as check
+    does and, like generate, writes nothing and exits 1 with one line naming the first fatal
+    finding and what to change; --access scheduled (no C3) writes that campus."""
+    from lamde_mission.cli import main
+    from planner_core.model import diagnose as dg
+
+    monkeypatch.chdir(tmp_path)
+    crowded = ["map", "campus", "--footprints", "10", "--sensors", "100", "-o", "c.json"]
+    assert main(crowded) == 1
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1, lines
+    assert lines[0].startswith("lamde-mission map campus: not writing c.json: no plan can meet "
+                               "the campus of 10 footprints and 100 sensors: sensor '")
+    assert "breaks C3" in lines[0] and "more findings)" in lines[0]
+    assert "ask for fewer --sensors, or pass --access scheduled" in lines[0]
+    assert not (tmp_path / "c.json").exists()
+    assert main([*crowded, "--access", "scheduled"]) == 0
+    doc = json.loads((tmp_path / "c.json").read_text())
+    assert doc["radio"] == {"access": "scheduled"} and len(doc["sensors"]) == 100
+    assert dg.diagnose(load_map(doc)).feasible_so_far
+    # another fatal finding: its message, and fewer sensors or footprints
+    ok = ["map", "campus", "--footprints", "10", "--sensors", "3", "-o", "d.json"]
+    diagnose = dg.diagnose
+    monkeypatch.setattr(dg, "diagnose", lambda m: dg.Diagnosis(findings=(
+        dg.Finding("INSIDE", False, "a note"), dg.Finding("ENCLOSED", True, "end: walled in"))))
+    capsys.readouterr()
+    assert main(ok) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.endswith("3 sensors: end: walled in; ask for fewer --sensors or fewer --footprints")
+    assert not (tmp_path / "d.json").exists()
+    monkeypatch.setattr(dg, "diagnose", diagnose)
+    assert main(ok) == 0 and "radio" not in json.loads((tmp_path / "d.json").read_text())
+
+
 def test_campus_bad_origin(tmp_path: Path) -> None:
     r = run_cli("map", "campus", "--origin", "north", "-o", tmp_path / "c.json")
     assert r.returncode == 2 and "--origin" in r.stderr
