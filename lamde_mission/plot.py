@@ -29,7 +29,8 @@ import numpy as np
 from lamde_mission.atomic import write_bytes_atomic
 from planner_core.textio import counted
 
-__all__ = ["mission_figure", "save_figure", "plot_mission", "IMAGE_SUFFIXES", "MAX_DPI",
+__all__ = ["mission_figure", "save_figure", "figure_bytes", "plot_mission", "IMAGE_SUFFIXES",
+           "MAX_DPI",
            "check_dpi", "nice_length", "SortieView", "fleet_figure", "plot_fleet",
            "SORTIE_STYLES"]  # fmt: skip
 
@@ -1003,8 +1004,43 @@ def check_dpi(dpi: Any, name: str = "dpi") -> int:
     return int(dpi)
 
 
+#: the salt of an SVG's element ids (matplotlib's rcParam `svg.hashsalt`, random per save when
+#: unset), fixed so that the same figure saves to the same bytes
+SVG_HASHSALT = "lamde-mission"
+
+
+def figure_bytes(fig: Any, fmt: str, *, dpi: int) -> bytes:
+    """Render `fig` in memory as PNG or SVG, the same figure always to the same bytes.
+
+    An SVG carries no date (matplotlib writes the time of saving as `<dc:date>` unless told
+    not to) and its clip-path ids are hashed with `SVG_HASHSALT` instead of a random salt; the
+    rcParam is set for this save only (`matplotlib.rc_context`), not for the caller's session.
+
+    Args:
+        fig: a matplotlib Figure.
+        fmt: "png" or "svg".
+        dpi: dots per inch (not checked here: `check_dpi`).
+
+    Returns:
+        The image file's bytes.
+
+    Raises:
+        ValueError: `fmt` is neither "png" nor "svg".
+    """
+    import matplotlib
+
+    if fmt not in ("png", "svg"):
+        raise ValueError(f"image format must be png or svg, got {fmt!r}")
+    metadata = {"Date": None} if fmt == "svg" else None
+    buf = io.BytesIO()
+    with matplotlib.rc_context({"svg.hashsalt": SVG_HASHSALT}):
+        fig.savefig(buf, format=fmt, dpi=dpi, metadata=metadata)
+    return buf.getvalue()
+
+
 def save_figure(fig: Any, path: str | Path, *, dpi: int = 150) -> Path:
-    """Render `fig` to PNG or SVG by suffix and write it atomically (no partial file).
+    """Render `fig` to PNG or SVG by suffix (`figure_bytes`: the same figure, the same bytes) and
+    write it atomically (no partial file).
 
     Memory and time grow as the figure's area times dpi^2 (`MAX_DPI`).
 
@@ -1024,9 +1060,7 @@ def save_figure(fig: Any, path: str | Path, *, dpi: int = 150) -> Path:
     if suffix not in IMAGE_SUFFIXES:
         raise ValueError(f"{path}: image format must be PNG or SVG (suffix .png or .svg)")
     check_dpi(dpi)
-    buf = io.BytesIO()
-    fig.savefig(buf, format=suffix[1:], dpi=dpi)
-    return write_bytes_atomic(path, buf.getvalue())
+    return write_bytes_atomic(path, figure_bytes(fig, suffix[1:], dpi=dpi))
 
 
 def plot_mission(

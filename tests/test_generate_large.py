@@ -16,6 +16,7 @@ from planner_core.model.formulas import ModelParams
 from planner_core.model.mapio import load_map
 from planner_core.suite import dumps_map, generate_map
 from planner_core.suite import large as L
+from planner_core.suite.draw import Retry
 from tests.conftest import ROOT, run_cli, run_cli_many
 
 LARGE = ROOT / "examples" / "maps" / "large"
@@ -161,7 +162,67 @@ def test_impossible_layout_says_why(tmp_path: Path) -> None:
     assert out.returncode == 1
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and "fields fit on a 5000 m map" in lines[0], out.stderr
+    assert lines[0].endswith("; use fewer sensors, a larger cluster size (fewer fields) or a "
+                             "larger size")  # density 0: no lower density
     assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize(("size", "density", "advice"), [
+    (L.MAX_SIZE, 0, "; use fewer sensors"),  # said "use a larger size": 30 km is the largest
+    (L.MAX_SIZE, 7, "; use fewer sensors or a lower density"),
+    (20000, 0, "; use fewer sensors or a larger size"),  # density 0 is the lowest
+    (20000, 3, "; use fewer sensors, a larger size or a lower density"),
+])
+def test_no_map_after_the_attempts_advises_only_what_is_possible(
+    size: int, density: int, advice: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture,
+) -> None:
+    """`generate --layout corridor --size 30000 --sensors 1000` (density 0 or 7) said "use a
+    larger size" after 12 failed attempts (measured 28 and 57 s; every attempt fails here as
+    it did there, at the sensors): the advice names only changes the generator accepts."""
+    from lamde_mission.cli import main
+
+    def fail(draw: L.LargeDraw) -> None:
+        draw.stage, draw.placed_best = "sensors", 835
+        raise Retry
+
+    monkeypatch.setattr(L.LargeDraw, "run", fail)
+    out = tmp_path / "x.json"
+    assert main(["generate", str(out), "--layout", "corridor", "--size", str(size),
+                 "--sensors", "1000", "--density", str(density)]) == 1  # fmt: skip
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1, lines
+    assert lines[0].startswith(f"lamde-mission generate: no C3-feasible corridor map after 12 "
+                               f"attempts (size {size} m, density {density}, ")
+    assert "failed at: sensors 12x; at most 835 sensors could be placed" in lines[0]
+    assert lines[0].endswith(advice) and not out.exists()
+
+
+def test_clustered_ring_shortfall_says_what_is_short_and_what_fits(
+    tmp_path: Path, capsys: pytest.CaptureFixture
+) -> None:
+    """`--layout clustered --size 30000 --sensors 1000 --density 7` said "need 168 hover
+    points, more than the 130 I_max = 200 leaves": the 130 are I_max less the points kept for
+    the route's corners round the 36 no-fly zones (2 each, at most I_max / 4 = 50) and for
+    the 20 bent legs (at most I_max / 10). Each change named is the least that fits."""
+    from lamde_mission.cli import main
+
+    out = tmp_path / "x.json"
+    assert main(["generate", str(out), "--layout", "clustered", "--size", "30000",
+                 "--sensors", "1000", "--density", "7"]) == 1  # fmt: skip
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert lines == [
+        "lamde-mission generate: clustered layout: 84 fields of 12 sensors need 168 hover "
+        "points (2 on each field's ring), but only 130 of the map's I_max = 200 are left for "
+        "them (50 are kept for the route's corners round the no-fly zones, 20 for bent legs); "
+        "each field gets its 2 with at most 780 sensors, a cluster size of at least 16 (fewer "
+        "fields) or a density of at most 2 (fewer no-fly zones and bends)"]
+    assert not out.exists()
+    fit = L._ring_points_fit
+    assert fit(30000, 7, 780, 12) and not fit(30000, 7, 781, 12)
+    assert fit(30000, 7, 1000, 16) and not fit(30000, 7, 1000, 15)
+    assert fit(30000, 2, 1000, 12) and not fit(30000, 3, 1000, 12)
+    assert L._stop_budget(30000, 7, 1000) == (130, 50, 20, 200)
 
 
 def test_help_matches_the_generator() -> None:
@@ -173,6 +234,11 @@ def test_help_matches_the_generator() -> None:
     text = " ".join(r.stdout.split())
     assert "--layout uniform|clustered|corridor --size 5000..30000" in text
     assert "(default 12)" in text and "--large-suite OUTDIR" in text
+    # 1,000 is the most asked for, not what fits (not at 30 km for uniform at density 7)
+    assert ("--sensors 1..1000 [--density 0-7]` (how many sensors fit depends on the size, "
+            "layout and density:") in text
+    assert "exits 1 saying why and what to change" in text
+    assert "at most 1000, fewer where the size, layout and density do not fit them" in text
 
 
 @pytest.mark.slow  # measured 15 s (issue 35: default suite <= 5 min)
@@ -189,6 +255,44 @@ def test_campus_has_an_origin_and_passes_check(tmp_path: Path) -> None:
     assert load_map(a).spec.origin is not None
     r = run_cli("check", a)
     assert r.returncode == 0 and "OK" in r.stdout and "origin" in r.stdout, r.stdout + r.stderr
+
+
+def test_campus_no_plan_can_meet_is_not_written(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture
+) -> None:
+    """`map campus` wrote a map `check` then refused (1,000 footprints with 100 sensors: a
+    sensor whose every receiving hover point breaks C3): it now diagnoses the campus as check
+    does and, like generate, writes nothing and exits 1 with one line naming the first fatal
+    finding and what to change; --access scheduled (no C3) writes that campus."""
+    from lamde_mission.cli import main
+    from planner_core.model import diagnose as dg
+
+    monkeypatch.chdir(tmp_path)
+    crowded = ["map", "campus", "--footprints", "10", "--sensors", "100", "-o", "c.json"]
+    assert main(crowded) == 1
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1, lines
+    assert lines[0].startswith("lamde-mission map campus: not writing c.json: no plan can meet "
+                               "the campus of 10 footprints and 100 sensors: sensor '")
+    assert "breaks C3" in lines[0] and "more findings)" in lines[0]
+    assert "ask for fewer --sensors, or pass --access scheduled" in lines[0]
+    assert not (tmp_path / "c.json").exists()
+    assert main([*crowded, "--access", "scheduled"]) == 0
+    doc = json.loads((tmp_path / "c.json").read_text())
+    assert doc["radio"] == {"access": "scheduled"} and len(doc["sensors"]) == 100
+    assert dg.diagnose(load_map(doc)).feasible_so_far
+    # another fatal finding: its message, and fewer sensors or footprints
+    ok = ["map", "campus", "--footprints", "10", "--sensors", "3", "-o", "d.json"]
+    diagnose = dg.diagnose
+    monkeypatch.setattr(dg, "diagnose", lambda m: dg.Diagnosis(findings=(
+        dg.Finding("INSIDE", False, "a note"), dg.Finding("ENCLOSED", True, "end: walled in"))))
+    capsys.readouterr()
+    assert main(ok) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.endswith("3 sensors: end: walled in; ask for fewer --sensors or fewer --footprints")
+    assert not (tmp_path / "d.json").exists()
+    monkeypatch.setattr(dg, "diagnose", diagnose)
+    assert main(ok) == 0 and "radio" not in json.loads((tmp_path / "d.json").read_text())
 
 
 def test_campus_bad_origin(tmp_path: Path) -> None:

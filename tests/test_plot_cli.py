@@ -82,6 +82,25 @@ def test_plot_png_svg_and_bad_suffix(files, tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.png", "b.svg", "c.png"]
 
 
+def test_svg_saves_are_byte_identical_and_leave_rcparams_alone(files, tmp_path):
+    """The same figure saved twice as SVG gives the same bytes: matplotlib wrote the time of
+    saving (`<dc:date>`) and clip-path ids salted at random; the fixed salt is set for the save
+    only, not in the caller's rcParams. PNG was already the same."""
+    import matplotlib
+
+    from lamde_mission.plot import SVG_HASHSALT, mission_figure, save_figure
+
+    fig = mission_figure(files.m, plan=files.plan, title="plan")
+    before = matplotlib.rcParams["svg.hashsalt"]
+    a = save_figure(fig, tmp_path / "a.svg").read_bytes()
+    b = save_figure(fig, tmp_path / "b.svg").read_bytes()
+    assert b"clip-path=" in a and b"<dc:date>" not in a
+    assert a == b
+    assert matplotlib.rcParams["svg.hashsalt"] == before != SVG_HASHSALT
+    assert save_figure(fig, tmp_path / "a.png").read_bytes() \
+        == save_figure(fig, tmp_path / "b.png").read_bytes()
+
+
 # ----------------------------------------------------------------------------- verify
 
 

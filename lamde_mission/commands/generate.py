@@ -41,7 +41,11 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "`generate OUT.json --size 5000|10000 --density 0-7`, or the whole suite: "
         "`generate --suite OUTDIR` (T01..T16). Large deployments: "
         f"`generate OUT.json --layout {'|'.join(_LAYOUTS)} --size {lo}..{hi} "
-        f"--sensors 1..{_LARGE_SENSORS} [--density 0-7]`: uniform (sensors spread over the area, "
+        f"--sensors 1..{_LARGE_SENSORS} [--density 0-7]` (how many sensors fit depends on the "
+        "size, layout and density: e.g. 1,000 at 30 km did not fit the uniform layout at "
+        "density 7 nor the corridor at density 0 or 7; when they do not fit, generate writes "
+        "nothing and exits 1 saying why and what to change): uniform (sensors spread over the "
+        "area, "
         "500 m apart at least), clustered (fields of --cluster-size sensors, each served from "
         "points at the field's edge, where C3 holds), corridor (sensors along a pipeline or "
         "road crossing the area, served from beside it); I_max = max(20, min(200, "
@@ -66,7 +70,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help=f"sensors per field, --layout clustered only (default {_CLUSTER_SIZE})")
     p.add_argument("--seed", metavar="S", help=f"random seed, >= 0 (default {_DEFAULT_SEED})")
     p.add_argument("--sensors", metavar="N", help="number of sensors (default: by size and "
-                   "density; with --layout 0.4 per km^2, within 20..500)")
+                   f"density; with --layout 0.4 per km^2, within 20..500; at most "
+                   f"{_LARGE_SENSORS}, fewer where the size, layout and density do not fit "
+                   "them)")
     p.add_argument("--name", help="map name stored in the file (default: from the arguments)")
     p.add_argument("--mkdir", action="store_true",
                    help="create the output's folder (OUT.json's, or OUTDIR's parent) if missing")

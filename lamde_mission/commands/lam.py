@@ -370,13 +370,12 @@ def _select(args: argparse.Namespace) -> int:
 
 
 def _figure_bytes(path: str, doc: dict[str, Any], arrays: dict[str, Any]) -> bytes:
-    """:func:`selection_figure` as PNG or SVG (by `path`'s suffix), rendered in memory."""
-    import io
+    """:func:`selection_figure` as PNG or SVG (by `path`'s suffix), rendered in memory
+    (`lamde_mission.plot.figure_bytes`: the same selection, the same bytes)."""
+    from lamde_mission.plot import figure_bytes
 
-    buf = io.BytesIO()
     fmt = _PLOT_FORMATS[Path(path).suffix.lower()]
-    selection_figure(doc, arrays).savefig(buf, format=fmt, dpi=110)
-    return buf.getvalue()
+    return figure_bytes(selection_figure(doc, arrays), fmt, dpi=110)
 
 
 def selection_figure(doc: dict[str, Any], arrays: dict[str, Any]) -> Any:

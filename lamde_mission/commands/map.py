@@ -8,6 +8,7 @@ import sys
 from typing import Any
 
 from lamde_mission.errors import UsageError
+from planner_core import defaults as D
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -80,8 +81,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         description="A seeded campus: N footprints (L, U, T shapes, blocks with a courtyard) on "
         "a grid of lots over a 5 km area, sensors in empty lots, start and end in the corners. "
         "The benchmarks use campus-500 at seed 0. The map is placed at --origin (default: the "
-        "generated maps' fixed origin) so `plan` can write its missions in WGS84. "
-        "Same seed, same bytes.",
+        "generated maps' fixed origin) so `plan` can write its missions in WGS84. The map is "
+        "diagnosed as `check` does; one no plan can meet (too many sensors in one another's "
+        "radio range for C3, the paper's simultaneous uplink) is not written: exit status 1 "
+        "naming the first reason and what to change. Same seed, same bytes.",
     )
     cg.add_argument("--footprints", type=int, default=500, metavar="N", help="default 500")
     cg.add_argument("--sensors", type=int, default=15, metavar="N", help="default 15")
@@ -89,6 +92,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     cg.add_argument("--origin", metavar="LAT,LON[,ALT]",
                     help="WGS84 origin of the local frame (default 23.0493,113.3975,10, the "
                     "origin of every generated map)")
+    cg.add_argument("--access", choices=D.ACCESS_MODES, default=D.ACCESS_MODES[0],
+                    help="the map's radio.access: simultaneous (default, the paper's C3: the "
+                    "sensors a hover point hears share R_lambda at once; the map then has no "
+                    "radio entry) or scheduled (time slots, no C3)")
     cg.add_argument("-o", "--output", required=True, help="map file to write (JSON)")
     cg.add_argument("--mkdir", action="store_true", help="create -o's folder if missing")
     return p
@@ -262,6 +269,12 @@ def _campus(args: argparse.Namespace) -> int:
         raise UsageError(f"--footprints/--sensors: {exc}") from None
     # every generated map carries an origin (plan writes WGS84 missions from it): name first
     doc = {"name": doc.pop("name"), "origin": origin, **doc}
+    if args.access != D.ACCESS_MODES[0]:
+        doc["radio"] = {"access": args.access}
+    cannot = _cannot_plan(doc, args)
+    if cannot is not None:
+        print(f"lamde-mission map campus: {textio.printable(cannot)}", file=sys.stderr)
+        return 1
     try:
         path = write_text_atomic(args.output, dumps_map(doc))
     except OSError as exc:
@@ -270,6 +283,41 @@ def _campus(args: argparse.Namespace) -> int:
           f"{textio.counted(args.sensors, 'sensor')}, origin "
           f"({origin['lat']}, {origin['lon']})")
     return 0
+
+
+def _cannot_plan(doc: dict[str, Any], args: argparse.Namespace) -> str | None:
+    """Why no plan can meet the campus `doc` (the first fatal finding of `check`'s diagnosis,
+    `planner_core.model.diagnose`) and what to ask for instead, one line; None when nothing
+    rules every plan out. The campus's empty lots hold the sensors, so many sensors in a
+    5 km area crowd into one another's radio range and break C3 (campus 1,000 footprints
+    with 100 sensors: sensors no C3-respecting hover point receives from).
+
+    Args:
+        doc: the map file `map campus` would write.
+        args: the parsed options (footprints, sensors, access, output).
+
+    Returns:
+        The reason and the advice, or None.
+    """
+    from planner_core.model.diagnose import diagnose
+    from planner_core.model.mapio import load_map
+    from planner_core.textio import counted
+
+    d = diagnose(load_map(doc))
+    fatal = [f for f in d.findings if f.fatal]
+    if not fatal:
+        return None
+    first = fatal[0]
+    if first.kind.startswith("C3_"):
+        change = ("ask for fewer --sensors, or pass --access scheduled (C3 is the paper's "
+                  "simultaneous uplink; scheduled access lets the sensors in range share the "
+                  "bandwidth by time slots)")
+    else:
+        change = "ask for fewer --sensors or fewer --footprints"
+    more = f" (and {counted(len(fatal) - 1, 'more finding')})" if len(fatal) > 1 else ""
+    return (f"not writing {args.output}: no plan can meet the campus of "
+            f"{counted(args.footprints, 'footprint')} and {counted(args.sensors, 'sensor')}: "
+            f"{first.message}{more}; {change}")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -1,4 +1,5 @@
-"""Large deployments: maps of up to 30 km a side and 500 sensors, each with a stored witness plan.
+"""Large deployments: maps of up to 30 km a side and 1,000 sensors (as many as the size, layout
+and density fit), each with a stored witness plan.
 
 The paper's generator (`planner_core.suite`) stops at 10 km and 40 sensors. This one keeps its
 rules and scales them: the witness is drawn first (stops, a tour routed around the no-fly zones,
@@ -73,7 +74,9 @@ LAYOUTS = ("uniform", "clustered", "corridor")
 #: smallest and largest map side, metres
 MIN_SIZE = 5000
 MAX_SIZE = 30000
-#: the most sensors one large map may ask for
+#: the most sensors one large map may ask for; how many fit depends on the size, layout and
+#: density (`generate_large_map` raises GenerationError naming why when they do not: e.g. 1,000
+#: at 30 km did not fit the uniform layout at density 7 nor the corridor at density 0 or 7)
 MAX_SENSORS = 1000
 #: sensors per field in the clustered layout (the default of `cluster_size`)
 CLUSTER_SIZE = 12
@@ -113,6 +116,58 @@ def large_max_hover_points(n_sensors: int) -> int:
         max(20, min(200, ceil(n_sensors / 2))).
     """
     return max(20, min(200, math.ceil(n_sensors / 2)))
+
+
+def _stop_budget(size: int, density: int, n_sensors: int) -> tuple[int, int, int, int]:
+    """How I_max is shared on a large map: (the witness's stops, the hover points kept for the
+    route's corners round the no-fly zones, those kept for bent legs, I_max); the stops get
+    what the other two leave, at least 1."""
+    imax = large_max_hover_points(n_sensors)
+    _, _, n_nfz, bends = large_obstacle_counts(size, density)
+    corners, bent = min(2 * n_nfz, imax // 4), min(bends, imax // 10)
+    return max(1, imax - corners - bent), corners, bent, imax
+
+
+def _ring_points_fit(size: int, density: int, n_sensors: int, cluster_size: int) -> bool:
+    """Whether the clustered layout's fields get 2 hover points each on their rings (the
+    witness's stops, `_stop_budget`)."""
+    return 2 * math.ceil(n_sensors / cluster_size) <= _stop_budget(size, density, n_sensors)[0]
+
+
+def _roomier(fixes: list[str], size: int, density: int) -> list[str]:
+    """`fixes` and, where they are possible, a larger size (below `MAX_SIZE`) and a lower
+    density (above 0): never a change the generator refuses."""
+    return (fixes + (["a larger size"] if size < MAX_SIZE else [])
+            + (["a lower density"] if density > 0 else []))  # fmt: skip
+
+
+def _either(fixes: list[str]) -> str:
+    """'a, b or c' (`fixes`, at least one)."""
+    return (", ".join(fixes[:-1]) + " or " if len(fixes) > 1 else "") + fixes[-1]
+
+
+def _ring_shortfall(size: int, density: int, n_sensors: int, cluster_size: int) -> str:
+    """The clustered layout's fields need more ring points than I_max leaves them: what is short
+    (numbers from `_stop_budget`) and the changes that give each field its 2 (the most sensors
+    that do, the least cluster size that does, the densest density that does)."""
+    budget, corners, bent, imax = _stop_budget(size, density, n_sensors)
+    n_fields = math.ceil(n_sensors / cluster_size)
+    # one field always fits: I_max >= 20 keeps at most 5 + 2 of them for corners and bends
+    fewer = next(n for n in range(n_sensors - 1, 0, -1)
+                 if _ring_points_fit(size, density, n, cluster_size))  # fmt: skip
+    fixes = [f"at most {fewer} sensors"]
+    larger = [k for k in range(cluster_size + 1, 51)
+              if _ring_points_fit(size, density, n_sensors, k)]  # fmt: skip
+    if larger:
+        fixes.append(f"a cluster size of at least {larger[0]} (fewer fields)")
+    lower = [d for d in range(density - 1, -1, -1)
+             if _ring_points_fit(size, d, n_sensors, cluster_size)]  # fmt: skip
+    if lower:
+        fixes.append(f"a density of at most {lower[0]} (fewer no-fly zones and bends)")
+    return (f"{n_fields} fields of {cluster_size} sensors need {2 * n_fields} hover points (2 on "
+            f"each field's ring), but only {budget} of the map's I_max = {imax} are left for "
+            f"them ({corners} are kept for the route's corners round the no-fly zones, {bent} "
+            f"for bent legs); each field gets its 2 with {_either(fixes)}")
 
 
 def large_obstacle_counts(size: int, density: int) -> tuple[int, int, int, int]:
@@ -187,9 +242,10 @@ class LargeDraw(Draw):
         self._imax = large_max_hover_points(n_sensors)
         super().__init__(rng, 10000, density, n_sensors)  # the model's settings; sizes below
         self.size = float(size)
+        self.size_m = int(size)
         self.imax = self._imax
-        self.n_circles, self.n_rects, self.n_nfz, bends = large_obstacle_counts(size, density)
-        self.n_bends = min(bends, self.imax // 10)
+        self.n_circles, self.n_rects, self.n_nfz, _ = large_obstacle_counts(size, density)
+        self.n_bends = _stop_budget(size, density, n_sensors)[2]
         self.model = ModelParams.from_settings(
             Uav(), Radio(), Objective(), width=self.size, height=self.size, n_points=self.imax
         )
@@ -263,14 +319,10 @@ class LargeDraw(Draw):
                 return  # the area is full: as many zones as fit
 
     # ---------------------------------------------------------------- 3. stops
-    def _stop_budget(self) -> int:
-        reserve = min(2 * self.n_nfz, self.imax // 4) + self.n_bends
-        return max(1, self.imax - reserve)
-
     def stops(self) -> None:
         """The witness's stops, by layout (uniform: spread over the area; clustered: rings
         around the fields; corridor: both sides of the polyline)."""
-        budget = self._stop_budget()
+        budget = _stop_budget(self.size_m, self.density, self.n_sensors)[0]
         if self.layout == "uniform":
             self.stop_points = self._uniform_stops(budget)
         elif self.layout == "clustered":
@@ -308,10 +360,8 @@ class LargeDraw(Draw):
         per = max(2, math.ceil(self.cluster_size / 3))
         per = min(per, budget // n_fields)
         if per < 2:
-            raise _Impossible(
-                f"{n_fields} fields of {self.cluster_size} sensors need {2 * n_fields} hover "
-                f"points, more than the {budget} I_max = {self.imax} leaves"
-            )
+            raise _Impossible(_ring_shortfall(self.size_m, self.density, self.n_sensors,
+                                              self.cluster_size))  # fmt: skip
         reach = RING_RADIUS[1]
         min_sep = 2.0 * reach + 300.0
         ends = np.array([self.start, self.end])
@@ -332,10 +382,13 @@ class LargeDraw(Draw):
                     centres = np.vstack([centres, c[idx[0]]])
                     break
             else:
+                fixes = ["fewer sensors"] + (["a larger cluster size (fewer fields)"]
+                                             if self.cluster_size < 50 else [])
                 raise _Impossible(
                     f"only {len(centres)} of {n_fields} fields fit on a {self.size:g} m map "
                     f"(each needs a clear disc of {reach + _RING_NFZ_CLEARANCE:g} m radius, "
-                    f"{min_sep:g} m between centres)"
+                    f"{min_sep:g} m between centres); "
+                    + "use " + _either(_roomier(fixes, self.size_m, self.density))
                 )
         self.field_centres = centres
         stops = []
@@ -453,7 +506,8 @@ class LargeDraw(Draw):
 
 
 class _Impossible(Exception):
-    """These parameters leave no C3-feasible witness (not a matter of the draw)."""
+    """These parameters leave no C3-feasible witness (not a matter of the draw); the message
+    ends with what to change."""
 
 
 def _check_args(size: Any, n_sensors: Any, layout: Any, density: Any, cluster_size: Any) -> None:
@@ -521,8 +575,7 @@ def generate_large_map(
         try:
             draw.run()
         except _Impossible as exc:
-            fix = "a larger size, fewer sensors" + (" or a lower density" if density else "")
-            raise GenerationError(f"{layout} layout: {exc}; use {fix}") from None
+            raise GenerationError(f"{layout} layout: {exc}") from None
         except Retry:
             best = max(best, draw.placed_best)
             failed[draw.stage] = failed.get(draw.stage, 0) + 1
@@ -536,8 +589,8 @@ def generate_large_map(
     raise GenerationError(
         f"no C3-feasible {layout} map after {_MAX_ATTEMPTS} attempts (size {size} m, density "
         f"{density}, seed {seed}, {n_sensors} sensors; failed at: {why}; at most {best} sensors "
-        "could be placed where a witness hover point hears them and keeps C3); use a larger "
-        "size, fewer sensors or a lower density"
+        "could be placed where a witness hover point hears them and keeps C3); "
+        + "use " + _either(_roomier(["fewer sensors"], size, density))
     )
 
 
