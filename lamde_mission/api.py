@@ -84,7 +84,7 @@ def plan(
         seed: random seed, >= 0.
         budget: evaluations in all, from the population to
             `planner_core.defaults.MAX_BUDGET`; every stage's are counted.
-        population: the DE's population N (>= 6).
+        population: the DE's population N (6 to 10,000, `defaults.MAX_POPULATION`).
         configurator: "adaptive" (default), "fixed", "random", "lamde" (the shipped learned
             policy) or a configurator object.
         init: "seeded" (the problem's sensor-aware starts) or "uniform" (the paper's protocol).

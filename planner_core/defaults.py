@@ -164,6 +164,10 @@ def _positive_number(v: Any) -> bool:
 #: the DE's mutations draw up to five donors distinct from each other and from the target
 #: (rand/2), so a population needs at least six members (``de.operators.N_DONORS + 1``)
 MIN_POPULATION = 6
+#: the largest population: a generation holds a few (N, d) arrays of d = 4 I_max + 4 (<= 804)
+#: floats, ~65 MB each at 10,000, where a population of the budget's size (10^7) would ask for
+#: tens of GB
+MAX_POPULATION = 10_000
 #: the most objective evaluations one run may be given (a run's `budget`, `plan --budget` and
 #: `--sortie-budget`, `bench --budget`, `train --budget`; `check_budget`): 10 x `bench
 #: --best-known`'s 1,000,000 a run, so that no number a user gives makes a run endless
@@ -181,7 +185,8 @@ MEMETIC_MODES: tuple[str, ...] = ("auto", "on", "off")
 
 _RUN: tuple[Default, ...] = (
     Default("population", 100, "DE population size N (individuals per generation)",
-            f"an integer >= {MIN_POPULATION}", _int_at_least(MIN_POPULATION)),
+            f"an integer in [{MIN_POPULATION}, {MAX_POPULATION}]",
+            lambda v: _is_int(v) and MIN_POPULATION <= int(v) <= MAX_POPULATION),
     Default("budget", 10_000, "objective evaluations per run, the initial population included "
             "(paper Sec. 5.1)", f"an integer in [population, {MAX_BUDGET}]",  # check_budget's
             lambda v: _is_int(v) and MIN_POPULATION <= int(v) <= MAX_BUDGET),
@@ -589,7 +594,8 @@ def check_run_args(
     """Check a planning run's population, budget, configurator name and start mode together.
 
     Args:
-        population: DE population size; must be an integer >= ``MIN_POPULATION``.
+        population: DE population size; must be an integer in [``MIN_POPULATION``,
+            ``MAX_POPULATION``].
         budget: evaluation budget; must be an integer in [population, ``MAX_BUDGET``]
             (``check_budget``).
         configurator: when a str, one of ``CONFIGURATORS`` (a configurator object, or None,

@@ -189,3 +189,28 @@ def test_update_readme_rewrites_only_the_table(tmp_path) -> None:
     (tmp_path / "bare.md").write_text("no table\n")
     with pytest.raises(ValueError, match="markers"):
         D.update_readme(str(tmp_path / "bare.md"))
+
+
+def test_a_population_above_max_population_is_refused_before_any_work(tmp_path, capsys
+                                                                      ) -> None:
+    """The population had no upper bound but the budget's: `--population 10000000` would ask
+    for (N, d) arrays of tens of GB. It is now at most MAX_POPULATION, checked with the other
+    run settings (PlanConfig, the API, `plan --population`), one line naming it."""
+    from lamde_mission.cli import main
+    from planner_core.pipeline import PlanConfig
+
+    assert PlanConfig(population=D.MAX_POPULATION, budget=D.MAX_POPULATION).population \
+        == D.MAX_POPULATION
+    msg = f"population: must be an integer in [{D.MIN_POPULATION}, {D.MAX_POPULATION}]"
+    bad = D.MAX_POPULATION + 1
+    with pytest.raises(ValueError, match=re.escape(f"{msg}, got {bad}")):
+        PlanConfig(population=bad, budget=D.MAX_BUDGET)
+    with pytest.raises(ValueError, match=re.escape(msg)):
+        import lamde_mission
+
+        lamde_mission.plan(MAPS / "tiny.json", population=bad, budget=D.MAX_BUDGET)
+    status = main(["plan", str(MAPS / "tiny.json"), "-o", str(tmp_path / "x.plan"),
+                   "--population", str(bad), "--budget", str(D.MAX_BUDGET)])  # fmt: skip
+    err = capsys.readouterr().err
+    assert status == 2 and len(err.splitlines()) == 1 and "population" in err, err
+    assert not list(tmp_path.iterdir())

@@ -76,7 +76,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    "deadline; a time limit trades the same-seed-same-plan guarantee for the "
                    "deadline")
     p.add_argument("--population", type=int, default=D.POPULATION,
-                   help=f"DE population (default {D.POPULATION}, at least {D.MIN_POPULATION})")
+                   help=f"DE population (default {D.POPULATION}; {D.MIN_POPULATION} to "
+                        f"{D.MAX_POPULATION:,})")
     p.add_argument("--configurator", choices=D.CONFIGURATORS, default=D.CONFIGURATOR,
                    help="how DE operators and F/Cr are chosen each generation "
                    f"(default {D.CONFIGURATOR})")
