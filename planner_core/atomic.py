@@ -200,16 +200,7 @@ def check_writable(path: str | Path, *, mkdir: bool = False, what: str = "") -> 
     if probe is not None:
         raise OutputPathError(f"{head}: {probe} is a file, not a folder")
     if not folder.is_dir():
-        if not mkdir:
-            raise OutputPathError(
-                f"{head}: the folder {folder} does not exist (create it, or pass --mkdir)"
-            )
-        try:
-            folder.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise OutputPathError(
-                f"{head}: cannot create the folder {folder} ({exc.strerror or exc})"
-            ) from None
+        _make_folder(folder, head, mkdir)
     if path.exists():
         st = path.stat()
         if not stat.S_ISREG(st.st_mode):
@@ -218,6 +209,22 @@ def check_writable(path: str | Path, *, mkdir: bool = False, what: str = "") -> 
             raise OutputPathError(f"{head}: the existing file is read-only")
     _probe(path, head)
     return path
+
+
+def _make_folder(folder: Path, head: str, mkdir: bool) -> None:
+    """The missing output folder `folder` created (with its parents) when `mkdir`, else
+    OutputPathError (prefixed `head`) saying it does not exist; one too when it cannot be
+    created."""
+    if not mkdir:
+        raise OutputPathError(
+            f"{head}: the folder {folder} does not exist (create it, or pass --mkdir)"
+        )
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputPathError(
+            f"{head}: cannot create the folder {folder} ({exc.strerror or exc})"
+        ) from None
 
 
 def _probe(path: Path, head: str) -> None:
@@ -272,16 +279,7 @@ def check_folder_writable(folder: str | Path, *, mkdir: bool = False, what: str 
     target = folder.resolve() if whole else folder
     parent = target.parent if str(target.parent) else Path(".")
     if not folder.is_dir() and not parent.is_dir():
-        if not mkdir:
-            raise OutputPathError(
-                f"{head}: the folder {parent} does not exist (create it, or pass --mkdir)"
-            )
-        try:
-            parent.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise OutputPathError(
-                f"{head}: cannot create the folder {parent} ({exc.strerror or exc})"
-            ) from None
+        _make_folder(parent, head, mkdir)
     _probe(folder / "probe" if folder.is_dir() and not whole else target, head)
     return folder
 
