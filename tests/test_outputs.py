@@ -258,20 +258,20 @@ def test_a_failed_suite_write_is_one_line_naming_the_file_and_what_was_written(
     """`generate --suite`: a write failing past the check (disk full after some maps) is one
     line naming the option, the file and how many maps were written, exit 2 (a traceback);
     each map written is whole. The generator is replaced by two committed maps."""
-    import lamde_mission.atomic
+    import planner_core.atomic
     import planner_core.suite
     from lamde_mission.cli import main
 
     maps = {n: json.loads((MAPS / "suite" / f"{n}.json").read_text()) for n in ("T01", "T02")}
     monkeypatch.setattr(planner_core.suite, "suite_maps", lambda *_a, **_k: maps)
-    real = lamde_mission.atomic.write_text_atomic
+    real = planner_core.atomic.write_text_atomic  # planner_core.suite.write_maps writes
 
     def write(path: Path, text: str, **kw: object) -> Path:
         if Path(path).name == "T02.json":
             _enospc()
         return real(path, text, **kw)
 
-    monkeypatch.setattr(lamde_mission.atomic, "write_text_atomic", write)
+    monkeypatch.setattr(planner_core.atomic, "write_text_atomic", write)
     out = tmp_path / "suite"
     assert main(["generate", "--suite", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()

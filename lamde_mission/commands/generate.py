@@ -282,25 +282,27 @@ def _run_suite(folder: Path, seed: int, *, large: bool = False) -> int:
 
 
 def _write_maps(option: str, folder: Path, maps: dict[str, dict], *, witness_f: bool) -> None:
-    """Write each map as `folder/NAME.json` (the folder made if missing), each atomically,
-    printing a line per map; an OSError (disk full, the folder changed since it was checked)
-    is one UsageError line naming `option`, the file and how many maps were written."""
-    from lamde_mission.atomic import write_text_atomic
-    from planner_core.suite import dumps_map
+    """Write each map as `folder/NAME.json` (`planner_core.suite.write_maps`), printing a line
+    per map; an OSError (disk full, the folder changed since it was checked) is one UsageError
+    line naming `option`, the file and how many maps were written."""
+    from planner_core.suite import write_maps
     from planner_core.textio import counted, printable
 
-    path = folder
-    done = 0
+    done: list[Path] = []
+
+    def say(path: Path, data: dict) -> None:
+        done.append(path)
+        print(f"wrote {path}: {_line(data, witness_f=witness_f)}")
+
     try:
-        folder.mkdir(parents=True, exist_ok=True)
-        for name, data in maps.items():
-            path = folder / f"{name}.json"
-            write_text_atomic(path, dumps_map(data))
-            print(f"wrote {path}: {_line(data, witness_f=witness_f)}")
-            done += 1
+        write_maps(folder, maps, say)
     except OSError as exc:
+        names = list(maps)
+        # the map it stopped at, or the folder when that could not be made
+        path = folder / f"{names[len(done)]}.json" \
+            if folder.is_dir() and len(done) < len(names) else folder
         raise UsageError(f"{option}: {printable(str(path))}: cannot write ({exc.strerror or exc}); "
-                         f"{done} of {counted(len(maps), 'map')} written") from None
+                         f"{len(done)} of {counted(len(maps), 'map')} written") from None
 
 
 def _line(d: dict, *, witness_f: bool = False) -> str:

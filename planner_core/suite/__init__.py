@@ -17,6 +17,7 @@ hover times to 0.01 s).
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -51,6 +52,7 @@ __all__ = [
     "generated_maps",
     "generated_spec",
     "generate_suite",
+    "write_maps",
     "dumps_map",
     "GenerationError",
 ]
@@ -178,8 +180,7 @@ def generated_spec(k: int, map_seed: int) -> tuple[int, int, int]:
 
 
 def generate_suite(folder: str | Path, seed: int = SUITE_SEED) -> list[Path]:
-    """Write T01.json..T16.json into `folder` (created), each atomically (a temporary file
-    renamed onto it: a killed run leaves each map old or whole, never half-written).
+    """Write T01.json..T16.json into `folder` (created), each atomically (`write_maps`).
 
     Args:
         folder: the target folder.
@@ -191,15 +192,38 @@ def generate_suite(folder: str | Path, seed: int = SUITE_SEED) -> list[Path]:
     Raises:
         OSError: the folder cannot be written.
     """
+    return write_maps(folder, suite_maps(seed))
+
+
+def write_maps(folder: str | Path, maps: dict[str, dict[str, Any]],
+               written: Callable[[Path, dict[str, Any]], None] | None = None) -> list[Path]:
+    """Write each map as `folder/NAME.json` (the folder created), in order, each atomically
+    (a temporary file renamed onto it: a killed run leaves each map old or whole, never
+    half-written); `written(path, map)` is told after each.
+
+    Args:
+        folder: the target folder.
+        maps: the map files by name (`suite_maps`, `large.large_suite_maps`).
+        written: called after each map is written, or None.
+
+    Returns:
+        The paths written, in the order of `maps`.
+
+    Raises:
+        OSError: the folder cannot be made or a map cannot be written (the maps before it
+            are written).
+    """
     from planner_core.atomic import write_text_atomic
 
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     paths = []
-    for name, data in suite_maps(seed).items():
+    for name, data in maps.items():
         path = folder / f"{name}.json"
         write_text_atomic(path, dumps_map(data))
         paths.append(path)
+        if written is not None:
+            written(path, data)
     return paths
 
 
