@@ -172,6 +172,14 @@ MAX_POPULATION = 10_000
 #: `--sortie-budget`, `bench --budget`, `train --budget`; `check_budget`): 10 x `bench
 #: --best-known`'s 1,000,000 a run, so that no number a user gives makes a run endless
 MAX_BUDGET = 10_000_000
+#: the most runs per optimiser and task of one benchmark (`bench --runs`, `run_bench`): the
+#: paper's protocol is 30 (Sec. 5), `--best-known`'s 5; the job list and the records grow with
+#: runs x tasks x optimisers
+MAX_RUNS = 1_000
+#: the most worker processes (local backend) or CPUs of a Ray instance started here that one
+#: command may ask for (`--jobs`, `make_executor`): each worker is a Python process of ~100-200
+#: MB, so a number far beyond any machine's cores would exhaust its memory before doing work
+MAX_JOBS = 256
 #: configurator names, the default first (the hand-made adaptive DE until a trained policy beats
 #: it on unseen maps; "lamde" is the shipped learned policy, planner_core.learning.policy);
 #: ``planner_core.search.de.configurators`` registers exactly these

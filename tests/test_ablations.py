@@ -51,8 +51,9 @@ def test_bbob_specs_cover_the_functions_and_build_plain_problems() -> None:
         build({"kind": "bbob", "function": 25, "dimension": 5, "instance": 1})
     with pytest.raises(ValueError, match="lacks 'instance'"):
         build({"kind": "bbob", "function": 2, "dimension": 5})
-    with pytest.raises(ValueError, match="count must be >= 1"):
-        bbob_training_specs(0)
+    for count in (0, 14_401):  # 14,400: the paper's whole BBOB database (MAX_PROBLEMS)
+        with pytest.raises(ValueError, match=r"count must be an integer in \[1, 14,400\]"):
+            bbob_training_specs(count)
 
 
 def test_fixed_length_reaches_uav_problems_only() -> None:

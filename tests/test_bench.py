@@ -189,12 +189,14 @@ def test_run_bench_refuses_a_missing_suite_and_bad_executor_arguments_as_bench_e
     out = tmp_path / "res"
     for kw, needle in (
         ({"jobs": -1}, "jobs must be >= 0"),
+        ({"jobs": 257}, "jobs must be at most 256"),
+        ({"jobs": 0, "runs": 1001}, r"runs must be an integer in \[1, 1,000\]"),
         ({"jobs": 0, "backend": "dask"}, "backend must be one of local, ray, got 'dask'"),
         ({"jobs": 0, "address": "auto"}, "an address is only for the ray backend"),
     ):
         with pytest.raises(BenchError, match=needle):
-            run_bench(suite, ["random-search"], runs=1, budget=BUDGET, out=out,
-                      command="test", best_known=False, **kw)
+            run_bench(suite, ["random-search"], **{"runs": 1, **kw}, budget=BUDGET, out=out,
+                      command="test", best_known=False)
     with pytest.raises(BenchError, match="none: no such folder of map files"):
         run_bench(tmp_path / "none", ["random-search"], runs=1, budget=BUDGET, out=out,
                   command="test", executor=SerialExecutor(), best_known=False)
@@ -222,6 +224,8 @@ def test_cli_bench_refuses_bad_options_before_any_run(suite: Path, tmp_path: Pat
         (["--suite", str(tmp_path / "none")], "none: no such folder of map files"),
         (["--suite", str(a_file)], "notes.txt: no such folder of map files"),
         (["--jobs", "-1"], "--jobs must be >= 0"),
+        (["--jobs", "257"], "--jobs: must be at most 256"),
+        (["--runs", "1001"], "--runs must be an integer in [1, 1,000]"),
     ):
         out = ["--out", str(tmp_path / "res")] if "--out" not in extra else []
         assert main([*base, *out, *extra]) == 2, extra

@@ -45,6 +45,9 @@ def test_make_executor_by_backend(monkeypatch: pytest.MonkeyPatch) -> None:
         make_executor(1, "local", "auto")
     with pytest.raises(ValueError, match="jobs must be >= 0"):
         make_executor(-1, "ray")
+    for backend in ("local", "ray"):  # a number no machine has: refused, nothing spawned
+        with pytest.raises(ValueError, match="jobs must be at most 256"):
+            make_executor(257, backend)
     _hide_ray(monkeypatch)
     with pytest.raises(ValueError, match=r"^backend ray: Ray is not installed; pip install "):
         make_executor(3, "ray", "ray://head:10001")

@@ -152,6 +152,7 @@ def _one_line(capsys, *needles: str) -> str:
         (["--instances", "100000000"], ["--instances", "[1, 100]"]),
         (["--n-probe", "100000000"], ["--n-probe", f"[4, {MAX_N_PROBE}]"]),
         (["--functions", "30"], ["--functions:", "30"]),
+        (["--jobs", "257"], ["--jobs: must be at most 256", "257"]),
     ],
 )
 @pytest.mark.parametrize("command", ["build", "select"])

@@ -78,6 +78,10 @@ def test_cli_train_bad_input_is_one_line_exit_2(tmp_path, capsys) -> None:  # no
         (["--set", "n_steps=2.5"], "--set n_steps: must be an integer"),
         (["--set", "net.hidden=true"], "--set net.hidden: must be an integer"),
         (["--population", "5"], "--population: must be >= 6, got 5"),
+        (["--jobs", "257"], "--jobs: must be at most 256"),
+        (["--maps", "1001"], "--maps: must be an integer in [1, 1,000] (the training maps' seeds"),
+        (["--maps", "0"], "--maps: must be an integer in [1, 1,000]"),
+        (["--bbob", "14401"], "--bbob: count must be an integer in [1, 14,400], got 14401"),
         (["-o", str(a_file)], "is a file, not a checkpoint folder"),
     ):
         out = [] if "-o" in args else ["-o", str(tmp_path / "ck")]

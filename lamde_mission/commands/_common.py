@@ -142,15 +142,22 @@ def add_executor_args(p: Any, what: str = "jobs") -> None:
 
 
 def check_executor_args(args: Any) -> None:
-    """UsageError (exit 2) for --address without --backend ray, or --backend ray without Ray
-    installed; does not import Ray, only looks for it (`ray_executor.ray_missing`).
+    """UsageError (exit 2) for --jobs above `planner_core.defaults.MAX_JOBS`, --address
+    without --backend ray, or --backend ray without Ray installed; does not import Ray, only
+    looks for it (`ray_executor.ray_missing`). Each command checks --jobs' lower end itself
+    (`train` needs a worker, `bench` and `lam` allow 0).
 
     Args:
-        args: the parsed options (`backend`, `address`; `add_executor_args`).
+        args: the parsed options (`jobs`, `backend`, `address`; `add_executor_args`).
 
     Raises:
         UsageError: one line naming the option.
     """
+    from planner_core.defaults import MAX_JOBS
+
+    if isinstance(args.jobs, int) and args.jobs > MAX_JOBS:
+        raise UsageError(f"--jobs: must be at most {MAX_JOBS} (worker processes, or CPUs of the "
+                         f"Ray instance started here), got {args.jobs}")
     if args.address is not None and args.backend != "ray":
         raise UsageError("--address: only with --backend ray")
     if args.backend == "ray":

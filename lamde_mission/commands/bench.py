@@ -51,7 +51,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    "the core: one named whose extra is not installed is refused before "
                    "anything runs, by default it is left out with a note)")
     p.add_argument("--runs", type=int, help=f"runs per optimiser and task (default "
-                   f"{_DEFAULT_RUNS}; {_BK_RUNS} with --best-known)")
+                   f"{_DEFAULT_RUNS}; {_BK_RUNS} with --best-known; at most {D.MAX_RUNS:,})")
     p.add_argument("--budget", type=int, help=f"evaluations per run, initial population "
                    f"included (default {_DEFAULT_BUDGET:,}; {_BK_BUDGET:,} with --best-known; "
                    f"from the population, {D.POPULATION}, to {D.MAX_BUDGET:,})")
@@ -158,8 +158,8 @@ def run(args: argparse.Namespace) -> int:
             raise UsageError(f"--i-max: {k} outside [1, 200]")
         args.i_max_values.append(k)
     inits = ("seeded", "uniform") if args.init == "both" else (args.init,)
-    if args.runs < 1:
-        raise UsageError(f"--runs must be >= 1 (got {args.runs})")
+    if not 1 <= args.runs <= D.MAX_RUNS:
+        raise UsageError(f"--runs must be an integer in [1, {D.MAX_RUNS:,}] (got {args.runs})")
     try:  # as plan's budget: the DE-based optimisers' first population fits in it
         D.check_budget(args.budget, D.POPULATION)
     except ValueError as exc:

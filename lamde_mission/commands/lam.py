@@ -305,7 +305,7 @@ def run(args: argparse.Namespace) -> int:
     Raises:
         UsageError: one line naming the option (exit 2).
     """
-    _int(args.jobs, "--jobs")
+    args.jobs = _int(args.jobs, "--jobs")  # an integer from here on (check_executor_args' bound)
     check_executor_args(args)
     if args.lam_command == "build":
         names = [s.strip() for s in args.features.split(",") if s.strip()]

@@ -251,9 +251,10 @@ def run(args: argparse.Namespace) -> int:
         except ValueError as exc:
             raise UsageError(f"--bbob: {exc}") from None
     else:
-        if args.maps < 1:
-            raise UsageError(f"--maps: must be >= 1, got {args.maps}")
-        specs = default_training_specs(args.maps)
+        try:
+            specs = default_training_specs(args.maps)
+        except ValueError as exc:
+            raise UsageError(f"--maps: {exc}") from None
     specs = with_encoding(specs, variable_length=not args.fixed_length)
     from planner_core.execution import SerialExecutor, make_executor
 

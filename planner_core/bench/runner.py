@@ -345,7 +345,7 @@ def run_bench(
     Args:
         suite: the suite folder of map files.
         optimisers: optimiser names (the registry's or `extra`'s).
-        runs: runs per cell, >= 1.
+        runs: runs per cell, 1 to `planner_core.defaults.MAX_RUNS`.
         budget: evaluations per run, an integer in [1, `planner_core.defaults.MAX_BUDGET`].
         out: the output folder.
         tasks: the tasks to run (None: every map of the suite).
@@ -406,8 +406,8 @@ def run_bench(
     lacking = missing_extras(optimisers, extra)  # before any run, not one failure per run
     if lacking:
         raise BenchError(f"optimisers: {lacking}")
-    if runs < 1:
-        raise BenchError("runs must be positive")
+    if not 1 <= runs <= _defaults.MAX_RUNS:
+        raise BenchError(f"runs must be an integer in [1, {_defaults.MAX_RUNS:,}], got {runs}")
     try:
         _defaults.check_budget(budget, 1, least_name=None)
     except ValueError as exc:

@@ -12,6 +12,7 @@ from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from typing import Any, TypeVar
 
+from planner_core.defaults import MAX_JOBS
 from planner_core.execution.base import SINGLE_THREAD_ENV
 from planner_core.execution.ray_executor import ray_missing
 
@@ -194,6 +195,8 @@ def executor_problem(jobs: int, backend: str = "local", address: str | None = No
         return f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}"
     if isinstance(jobs, bool) or not isinstance(jobs, numbers.Integral) or jobs < 0:
         return f"jobs must be >= 0 (an integer), got {jobs!r}"
+    if jobs > MAX_JOBS:
+        return f"jobs must be at most {MAX_JOBS} (worker processes), got {jobs!r}"
     if backend == "local" and address is not None:
         return "an address is only for the ray backend"
     if backend == "ray":
@@ -213,7 +216,7 @@ def make_executor(jobs: int, backend: str = "local", address: str | None = None)
 
     Args:
         jobs: worker processes (local; 0 = this process) or CPUs of a local Ray instance
-            (0 = all); >= 0.
+            (0 = all); 0 to `planner_core.defaults.MAX_JOBS`.
         backend: one of `BACKENDS`, "local" or "ray".
         address: the Ray cluster's address (None / "auto" / "ray://HOST:PORT"); None for local.
 
@@ -221,8 +224,9 @@ def make_executor(jobs: int, backend: str = "local", address: str | None = None)
         A `SerialExecutor`, `ProcessExecutor` or `ray_executor.RayExecutor`.
 
     Raises:
-        ValueError: an unknown backend, a negative ``jobs``, an address with ``local`` or
-            the ray backend without Ray installed (`executor_problem`'s line).
+        ValueError: an unknown backend, ``jobs`` negative or above ``MAX_JOBS``, an address
+            with ``local`` or the ray backend without Ray installed (`executor_problem`'s
+            line).
     """
     problem = executor_problem(jobs, backend, address)
     if problem is not None:

@@ -37,6 +37,9 @@ from planner_core.suite import SUITE_SEED
 
 TRAIN_SEED_BASE = 7000
 VALIDATION_SEED_BASE = 8000
+#: the most built-in training maps (`train --maps`): map k has seed TRAIN_SEED_BASE + k, which
+#: must stay below the validation maps' seeds
+MAX_TRAIN_MAPS = VALIDATION_SEED_BASE - TRAIN_SEED_BASE
 assert SUITE_SEED not in range(TRAIN_SEED_BASE, VALIDATION_SEED_BASE + 1000)
 
 
@@ -45,11 +48,19 @@ def default_training_specs(count: int = 16) -> list[dict[str, Any]]:
     TRAIN_SEED_BASE + k.
 
     Args:
-        count: maps.
+        count: maps, 1 to ``MAX_TRAIN_MAPS`` (the training seeds stop where the validation
+            maps' begin, ``VALIDATION_SEED_BASE``).
 
     Returns:
         ``count`` ``uav`` specs.
+
+    Raises:
+        ValueError: ``count`` outside [1, ``MAX_TRAIN_MAPS``].
     """
+    if not 1 <= count <= MAX_TRAIN_MAPS:
+        raise ValueError(f"must be an integer in [1, {MAX_TRAIN_MAPS:,}] (the training maps' "
+                         f"seeds {TRAIN_SEED_BASE}.. stop where the validation maps' begin), "
+                         f"got {count}")
     return [
         {"kind": "uav", "size": (5000, 10000)[k % 2], "density": (k // 2 + 3 * (k % 2)) % 8,
          "seed": TRAIN_SEED_BASE + k}
@@ -65,20 +76,22 @@ def bbob_training_specs(count: int, dimensions: tuple[int, ...] = (20, 40, 80)
     repeats.
 
     Args:
-        count: instances, >= 1.
+        count: instances, 1 to ``MAX_PROBLEMS`` (`planner_core.learning.lam.trainset`).
         dimensions: the dimensions cycled through, each >= 2.
 
     Returns:
         ``count`` ``bbob`` specs.
 
     Raises:
-        ValueError: count < 1, no dimensions or a dimension < 2.
+        ValueError: count outside [1, MAX_PROBLEMS], no dimensions or a dimension < 2.
     """
+    from planner_core.learning.lam.trainset import MAX_PROBLEMS
+
     dims = tuple(int(d) for d in dimensions)
-    if count < 1:
-        raise ValueError(f"bbob: count must be >= 1, got {count}")
+    if not 1 <= count <= MAX_PROBLEMS:  # each is an episode's problem, built in memory
+        raise ValueError(f"count must be an integer in [1, {MAX_PROBLEMS:,}], got {count}")
     if not dims or min(dims) < 2:
-        raise ValueError(f"bbob: dimensions must be >= 2, got {list(dims)}")
+        raise ValueError(f"dimensions must be >= 2, got {list(dims)}")
     return [
         {"kind": "bbob", "function": 1 + k % 24, "dimension": dims[(k // 24) % len(dims)],
          "instance": 1 + k // (24 * len(dims))}
