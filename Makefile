@@ -23,6 +23,7 @@ $(PY):
 # pulls a multi-GB CUDA build for the demo
 $(VENV)/.planning: pyproject.toml | $(PY)
 	$(PY) -m pip install -q -e . $(EDITABLE) || $(PY) -m pip install -q -e .
+	$(PY) -m planner_core.pipeline.warmup
 	touch $@
 
 # planning + the manual's tools (mkdocs, Material, mkdocstrings): `make docs`
@@ -35,6 +36,7 @@ $(VENV)/.docs: pyproject.toml | $(PY)
 $(VENV)/.installed: pyproject.toml | $(PY)
 	$(PY) -m pip install -q torch==2.13.0
 	$(PY) -m pip install -q -e '.[dev,train,ray,baselines,docs]' $(EDITABLE) || $(PY) -m pip install -q -e '.[dev,train,ray,baselines,docs]'
+	$(PY) -m planner_core.pipeline.warmup
 	touch $(VENV)/.planning $(VENV)/.docs $@
 
 demo: $(VENV)/.planning

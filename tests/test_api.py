@@ -163,6 +163,36 @@ def test_kernels_cached_is_false_on_a_first_run_even_after_the_map_loaded(tmp_pa
     assert api.kernels_cached()
 
 
+@pytest.mark.slow  # measured 50-90 s: compiles every kernel into an empty cache
+def test_the_install_step_leaves_every_kernel_of_a_plan_cached(tmp_path) -> None:
+    """`make setup` and `make demo` end with `python -m planner_core.pipeline.warmup`: a fresh
+    install's first plan (and first test) compiled the kernels, 50-90 s of a newcomer's first
+    `plan` on 2 CPUs. After the step, a new process finds them in the cache and its warm-up
+    compiles nothing."""
+    import os
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    r = subprocess.run([sys.executable, "-m", "planner_core.pipeline.warmup"], cwd=root,
+                       env=env, capture_output=True, text=True, timeout=900)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.startswith("planner kernels compiled or loaded in "), r.stdout
+    code = ("from numba.core import event\n"
+            "compiled = []\n"
+            "class L(event.Listener):\n"
+            "    def on_start(self, ev): compiled.append(ev.data['dispatcher'].py_func.__name__)\n"
+            "    def on_end(self, ev): pass\n"
+            "event.register('numba:compile', L())\n"
+            "from lamde_mission.api import kernels_cached\n"
+            "from planner_core.pipeline.warmup import warm_up\n"
+            "print(kernels_cached()); warm_up(); print(compiled)")
+    r = subprocess.run([sys.executable, "-c", code], cwd=root, env=env, capture_output=True,
+                       text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split() == ["True", "[]"], r.stdout
+
+
 def test_setup_stages_are_announced_and_the_cli_prints_only_slow_ones() -> None:
     """`on_setup` hears each setup stage (reading the map, the visibility graph and corner-slot
     rule) start and end: on a map at the obstacle limit setup ran for minutes with no output and

@@ -6,7 +6,9 @@ and four sensors; the whole default pipeline runs on it at a budget of `BUDGET` 
 with a population of `MIN_POPULATION`, which touches every compiled kernel (the DE's, the
 model's, the overlap kernels, the LP's, the graph's and the tour's). Its wall time is what
 `plan` reports as `timings["compile"]`; a process that already warmed up a configurator skips
-it. Cost: ~0.1-0.5 s with the cache on disk, several seconds on the first run after install.
+it. Cost: ~0.1-0.5 s with the cache on disk; 50-90 s on the first run after install (2 CPUs,
+2026-12-06), which `make setup` and `make demo` therefore pay as their last install step
+(`python -m planner_core.pipeline.warmup`).
 """
 
 from __future__ import annotations
@@ -109,3 +111,9 @@ def warm_up(configurator: Any = "adaptive") -> float:
     open_path(LegTimes(problem).matrix(pts))
     _WARM.add(_key(configurator))
     return time.perf_counter() - t0
+
+
+if __name__ == "__main__":  # `python -m planner_core.pipeline.warmup`: `make setup`'s last step
+    # a fresh install compiles the kernels here (tens of seconds, once), so that neither the
+    # first `plan` nor the first test pays for it; with numba's disk cache in place, ~0.5 s
+    print(f"planner kernels compiled or loaded in {warm_up():.1f} s")
