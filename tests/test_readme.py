@@ -169,6 +169,9 @@ COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
         ("test_ablations.py::test_cli_train_bbob_and_fixed_length", ('"--bbob"', '"--bbob-dims"')),
     "lamde-mission train -o my-policy --problems trainset.json --fixed-length":
         ("test_ablations.py::test_cli_train_bbob_and_fixed_length", ('"--fixed-length"',)),
+    "python -m planner_core.pipeline.warmup":
+        ("test_api.py::test_the_install_step_leaves_every_kernel_of_a_plan_cached",
+         ('"planner_core.pipeline.warmup"',)),
     "python -m planner_core.learning.policy.credit":
         ("test_credit.py::test_the_credit_diagnostic_cli_prints_both_signals", ("credit.main",)),
     "python benchmarks/ablations.py":

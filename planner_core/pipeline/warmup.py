@@ -97,6 +97,7 @@ def warm_up(configurator: Any = "adaptive") -> float:
     from planner_core.search.refine import _merge_pair
 
     _merge_pair(problem, problem.model.sensors[:3])
+    _merge_pair(problem, problem.model.sensors[:3].copy())  # a plan's points are writable
     # the tiny map's site sets are too small for the open-path solver's full search and its
     # legs too clear for the visibility graph's Dijkstra: both compiled here, not in a plan's
     # constructive stage (6 s of a first plan's "planning" on the demo map, 2026-12-06)
@@ -109,6 +110,17 @@ def warm_up(configurator: Any = "adaptive") -> float:
                     [300.0, 1200.0], [1200.0, 200.0], [700.0, 400.0], [600.0, 1350.0]])
     # (800, 950) -> (1000, 950) crosses the circle at (900, 950): a routed leg
     open_path(LegTimes(problem).matrix(pts))
+    # k-means on a window's sensors (writable, where the constructive stage's are the map's
+    # read-only array): the rebuilds of maps beyond the paper's I_max, never the tiny map's
+    from planner_core.search.construct import _kmeans
+
+    _kmeans(problem.model.sensors.copy(), 2, np.random.default_rng(0))
+    # the hover LP's simplex (`hoverlp._rest_simplex`) solves blocks of more points than its
+    # vertex enumeration takes, which the tiny map never forms (4 s of T16's first plan)
+    from planner_core.model import hoverlp
+
+    A = np.ascontiguousarray(np.array([[1.0, 0.5], [0.5, 1.0]]))
+    hoverlp._rest_simplex(A, hoverlp._TARGET, 300.0, np.empty(2), np.zeros(2))
     _WARM.add(_key(configurator))
     return time.perf_counter() - t0
 
