@@ -334,3 +334,52 @@ def test_a_map_error_past_the_commands_checks_escapes_the_maps_path(
     assert main(["check", "evil\x1b[2J\nname.json"]) == 2
     assert capsys.readouterr().err.splitlines() == [
         "lamde-mission check: evil\\x1b[2J\\nname.json: sensors: required field is missing"]
+
+
+def test_the_status_line_rewrites_in_place_on_a_tty_and_steps_off_one() -> None:
+    """`_StatusLine`, the writer behind the plan's progress bar and its setup lines: on a TTY
+    one line rewritten in place ("\\r", padded to the widest so far), at most every `every` s
+    unless forced, ended by `end` (idempotent; a final line padded over the open one); off a
+    TTY a line of its own once past each step short of 1.0, or when forced. `now` is the
+    caller's clock, so no wall time is involved."""
+    import io
+
+    from lamde_mission.commands.plan import _StatusLine
+
+    class Stream(io.StringIO):
+        def __init__(self, tty: bool) -> None:
+            super().__init__()
+            self.tty = tty
+
+        def isatty(self) -> bool:
+            return self.tty
+
+    out = Stream(tty=True)
+    line = _StatusLine(out, every=0.1)
+    assert line.tty()
+    assert line.show("abcdef", 0.1, now=10.0)
+    assert not line.show("skipped", 0.2, now=10.05)  # within `every` of the last
+    assert line.show("xy", 0.3, now=10.2)  # padded over "abcdef"
+    assert line.show("forced", 0.3, now=10.21, force=True)
+    line.end("done")
+    line.end()  # ended already: nothing more
+    assert out.getvalue() == "\rabcdef\rxy    \rforced\rdone  \n"
+    assert line.show("ab", 0.1, now=10.22)  # afresh: due at once, no padding of old lines
+    line.end()
+    assert out.getvalue().endswith("\rdone  \n\rab\n")
+
+    out = Stream(tty=False)
+    line = _StatusLine(out, every=0.1, step=0.25)
+    assert not line.tty()
+    for frac in (0.1, 0.3, 0.4, 0.8, 0.9, 1.0):  # time plays no part off a TTY
+        line.show(f"at {frac}", frac, now=0.0)
+    line.show("forced", 1.0, now=0.0, force=True)
+    line.end()  # no line is open off a TTY
+    line.end("done")
+    assert out.getvalue() == "at 0.3\nat 0.8\nforced\ndone\n"
+    line.show("again", 0.3, now=0.0)  # `end` starts the steps afresh
+    assert out.getvalue().endswith("done\nagain\n")
+
+    told = _StatusLine(Stream(tty=False), tty=lambda: True)  # the caller's say wins
+    told.show("x", 0.0, now=0.0)
+    assert told.tty() and told.out.getvalue() == "\rx"
