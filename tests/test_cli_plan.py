@@ -57,8 +57,8 @@ def test_infeasible_map_writes_nothing_unless_allowed(tmp_path: Path) -> None:
     r = run_cli("plan", mp, "-o", out, "--budget", 600, "--quiet")
     assert r.returncode == 1
     assert not out.exists() and list(tmp_path.iterdir()) == [mp]
-    assert "nothing written" in r.stderr and "C4 sensor" in r.stderr
-    assert "T_max too small" in r.stderr
+    # `check` says CANNOT: refused before planning, with check's reason
+    assert "nothing written" in r.stderr and "no plan can meet this map: sensor 'S1'" in r.stderr
     r = run_cli("plan", mp, "-o", out, "--budget", 600, "--quiet", "--allow-infeasible")
     assert r.returncode == 1 and out.exists()
     assert "INFEASIBLE" in r.stderr
@@ -334,3 +334,101 @@ def test_a_map_error_past_the_commands_checks_escapes_the_maps_path(
     assert main(["check", "evil\x1b[2J\nname.json"]) == 2
     assert capsys.readouterr().err.splitlines() == [
         "lamde-mission check: evil\\x1b[2J\\nname.json: sensors: required field is missing"]
+
+
+def test_the_status_line_rewrites_in_place_on_a_tty_and_steps_off_one() -> None:
+    """`_StatusLine`, the writer behind the plan's progress bar and its setup lines: on a TTY
+    one line rewritten in place ("\\r", padded to the widest so far), at most every `every` s
+    unless forced, ended by `end` (idempotent; a final line padded over the open one); off a
+    TTY a line of its own once past each step short of 1.0, or when forced. `now` is the
+    caller's clock, so no wall time is involved."""
+    import io
+
+    from lamde_mission.commands.plan import _StatusLine
+
+    class Stream(io.StringIO):
+        def __init__(self, tty: bool) -> None:
+            super().__init__()
+            self.tty = tty
+
+        def isatty(self) -> bool:
+            return self.tty
+
+    out = Stream(tty=True)
+    line = _StatusLine(out, every=0.1)
+    assert line.tty()
+    assert line.show("abcdef", 0.1, now=10.0)
+    assert not line.show("skipped", 0.2, now=10.05)  # within `every` of the last
+    assert line.show("xy", 0.3, now=10.2)  # padded over "abcdef"
+    assert line.show("forced", 0.3, now=10.21, force=True)
+    line.end("done")
+    line.end()  # ended already: nothing more
+    assert out.getvalue() == "\rabcdef\rxy    \rforced\rdone  \n"
+    assert line.show("ab", 0.1, now=10.22)  # afresh: due at once, no padding of old lines
+    line.end()
+    assert out.getvalue().endswith("\rdone  \n\rab\n")
+
+    out = Stream(tty=False)
+    line = _StatusLine(out, every=0.1, step=0.25)
+    assert not line.tty()
+    for frac in (0.1, 0.3, 0.4, 0.8, 0.9, 1.0):  # time plays no part off a TTY
+        line.show(f"at {frac}", frac, now=0.0)
+    line.show("forced", 1.0, now=0.0, force=True)
+    line.end()  # no line is open off a TTY
+    line.end("done")
+    assert out.getvalue() == "at 0.3\nat 0.8\nforced\ndone\n"
+    line.show("again", 0.3, now=0.0)  # `end` starts the steps afresh
+    assert out.getvalue().endswith("done\nagain\n")
+
+    told = _StatusLine(Stream(tty=False), tty=lambda: True)  # the caller's say wins
+    told.show("x", 0.0, now=0.0)
+    assert told.tty() and told.out.getvalue() == "\rx"
+
+
+@pytest.mark.parametrize("cannot", ["too much data", "walled in"])
+def test_a_map_check_says_cannot_is_refused_before_planning(tmp_path: Path, monkeypatch,
+                                                            cannot: str) -> None:
+    """A map `lamde-mission check` says CANNOT for: `plan` ran its whole budget and only then
+    printed check's reasons (over two minutes on a 2,000-footprint campus that C3 rules out,
+    where check says CANNOT in 10 s). It now runs check's diagnosis first and refuses the map
+    with check's reasons, exit status 1 as for any plan it cannot make, nothing written, the
+    planner never started; --allow-infeasible still plans it (to write the best mission it
+    finds)."""
+    import lamde_mission.api as api
+    from lamde_mission.fuzz import run_cli as run_here
+
+    m = json.loads((MAPS / "tiny.json").read_text())
+    if cannot == "too much data":
+        m["sensors"][0]["required_data"] = 1e6  # no I_max hover points of T_max can collect it
+    else:
+        m["end"] = [500, 500]  # inside four walls
+        m["obstacles"]["circles"] = []
+        m["obstacles"]["rectangles"] = [
+            {"x": 500, "y": 400, "length": 260, "width": 20},
+            {"x": 500, "y": 600, "length": 260, "width": 20},
+            {"x": 400, "y": 500, "length": 20, "width": 260},
+            {"x": 600, "y": 500, "length": 20, "width": 260}]  # fmt: skip
+    path = tmp_path / "cannot.json"
+    path.write_text(json.dumps(m))
+    said = run_here(["check", str(path)])
+    assert said.status == 1, (said.stdout, said.error)
+    reasons = [ln.split("CANNOT", 1)[1].strip() for ln in said.stdout.splitlines()
+               if ln.strip().startswith("CANNOT")]  # fmt: skip
+    assert reasons
+
+    def planner(*args, **kwargs):
+        raise AssertionError("the planner ran")
+
+    monkeypatch.setattr(api, "plan", planner)
+    out = tmp_path / "x.plan"
+    for quiet in ([], ["--quiet"]):
+        r = run_here(["plan", str(path), "-o", str(out), "--budget", "600", *quiet])
+        assert r.status == 1 and r.error is None, (r.stderr, r.error)
+        lines = r.stderr.splitlines()
+        assert lines[0] == (f"lamde-mission plan: no feasible mission for {path}: `lamde-mission "
+                            "check` says CANNOT, so it was not planned; nothing written:")
+        assert lines[1:-1] == [f"  no plan can meet this map: {why}" for why in reasons]
+        assert lines[-1].startswith("  --allow-infeasible plans it anyway")
+        assert r.stdout == "" and list(tmp_path.iterdir()) == [path]
+    r = run_here(["plan", str(path), "-o", str(out), "--budget", "600", "--allow-infeasible"])
+    assert isinstance(r.error, AssertionError) and "CANNOT" not in r.stderr  # planned, as before

@@ -7,6 +7,7 @@ import json
 import math
 import sys
 import time
+from collections.abc import Callable
 from typing import Any
 
 from planner_core import defaults as D
@@ -141,10 +142,96 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     return p
 
 
+class _StatusLine:
+    """One status line on a stream (stderr), shared by the plan's progress bar and its setup
+    lines: on a TTY one line rewritten in place, "\\r" and the line padded to the widest
+    written so far (a shorter line leaves nothing of a longer one), at most every `every`
+    seconds unless forced; off a TTY a line of its own, once past each `step` of the way
+    (short of 1.0) or when forced. `end` ends an open TTY line. The caller formats the line
+    and reads its own clock (`now`, any clock, the same for every call)."""
+
+    def __init__(self, stream: Any = None, every: float = 0.1, step: float = 0.25,
+                 tty: Callable[[], bool] | None = None) -> None:
+        """Args:
+            stream: the text stream; None: the sys.stderr of each write (a default bound at
+                import would keep a stream that a caller, or pytest's capture, has since
+                replaced and closed).
+            every: the least seconds between two TTY lines that are not forced.
+            step: off a TTY, a line once past each multiple of `step` (a fraction).
+            tty: a callable telling whether the stream is a terminal; None: its isatty.
+        """
+        self.stream = stream
+        self.every = every
+        self.step = step
+        self._is_tty = tty
+        self.last = -math.inf  # when a line was last written (the caller's clock)
+        self.next_step = step  # off a TTY: the next fraction that gets a line
+        self.wide = 0  # the widest TTY line written since the last end
+        self.open = False  # a TTY line is written and not yet ended
+
+    @property
+    def out(self) -> Any:
+        """The stream written to now."""
+        return sys.stderr if self.stream is None else self.stream
+
+    def tty(self) -> bool:
+        """Whether the stream is a terminal (the line is rewritten in place)."""
+        if self._is_tty is not None:
+            return bool(self._is_tty())
+        return bool(getattr(self.out, "isatty", lambda: False)())
+
+    def due(self, frac: float, now: float, force: bool = False) -> bool:
+        """Whether a line `frac` of the way, at time `now`, is to be written: forced, or on a
+        TTY `every` s after the last, or off one once past the next step short of 1.0."""
+        if force:
+            return True
+        if self.tty():
+            return now - self.last >= self.every
+        return self.next_step <= frac < 1.0
+
+    def write(self, line: str, frac: float, now: float) -> None:
+        """Write `line` (`frac` of the way, at time `now`), due or not: in place on a TTY, on
+        its own line otherwise; the steps up to `frac` are passed."""
+        out = self.out
+        if self.tty():
+            out.write("\r" + line.ljust(self.wide))
+            self.wide = max(self.wide, len(line))
+            self.open = True
+        else:
+            out.write(line + "\n")
+        self.last = now
+        while self.next_step <= frac:
+            self.next_step += self.step
+        out.flush()
+
+    def show(self, line: str, frac: float, now: float, force: bool = False) -> bool:
+        """`write` the line if it is `due`; whether it was."""
+        if not self.due(frac, now, force):
+            return False
+        self.write(line, frac, now)
+        return True
+
+    def end(self, final: str | None = None) -> None:
+        """End the line and start afresh (no line written yet, the first step next): `final`
+        on a line of its own (on a TTY over the open line, padded over it), else only a
+        newline after an open TTY line (idempotent)."""
+        out = self.out
+        if final is not None:
+            out.write(("\r" + final.ljust(self.wide) if self.open else final) + "\n")
+            out.flush()
+        elif self.open:
+            out.write("\n")
+            out.flush()
+        self.wide = 0
+        self.open = False
+        self.last = -math.inf
+        self.next_step = self.step
+
+
 class _ProgressBar:
     """The stage running and the budget spent: one updating line on stderr (a TTY), or a line
     per stage and per quarter of the budget otherwise; `close` ends the line, so what is
-    printed next starts on its own."""
+    printed next starts on its own (`_StatusLine`)."""
 
     #: seconds between two lines of a long stage's own progress (`Progress.detail`) off a TTY
     DETAIL_EVERY = 5.0
@@ -153,14 +240,9 @@ class _ProgressBar:
         # None: the sys.stderr of the moment (a default bound at import would keep a stream
         # that a caller, or pytest's capture, has since replaced and closed)
         stream = sys.stderr if stream is None else stream
-        self.stream = stream
+        self.line = _StatusLine(stream, every=0.1, step=0.25)
         self.width = width
-        self.tty = bool(getattr(stream, "isatty", lambda: False)())
-        self.last = 0.0
-        self.next_quarter = 0.25
         self.stage = ""
-        self.open = False  # a TTY line is written and not yet ended
-        self.wide = 0
 
     def __call__(self, p: Any) -> None:
         frac = p.evaluations / max(p.budget, 1)
@@ -169,17 +251,11 @@ class _ProgressBar:
         new_stage = p.stage != self.stage
         self.stage = p.stage
         detail = getattr(p, "detail", "")
-        if self.tty:
-            if not (done or new_stage) and now - self.last < 0.1:
+        if detail and not self.line.tty():  # a long stage between evaluations: a line every
+            if now - self.line.last < self.DETAIL_EVERY:  # DETAIL_EVERY s at most
                 return
-        elif detail:  # a long stage between evaluations: a line every DETAIL_EVERY s at most
-            if now - self.last < self.DETAIL_EVERY:
-                return
-        elif not (done or new_stage) and frac < self.next_quarter:
+        elif not self.line.due(frac, now, force=done or new_stage):
             return
-        self.last = now
-        while self.next_quarter <= frac:
-            self.next_quarter += 0.25
         fill = int(round(frac * self.width))
         bar = "#" * fill + "." * (self.width - fill)
         if p.best_f == float("inf") and p.best_phi == float("inf"):
@@ -190,20 +266,11 @@ class _ProgressBar:
         line = f"{p.stage:<15} [{bar}] {p.evaluations}/{p.budget} evals  {best}"
         if detail:
             line += f"  ({detail})"
-        if self.tty:
-            self.stream.write("\r" + line.ljust(self.wide))
-            self.wide = max(self.wide, len(line))
-            self.open = True
-        else:
-            self.stream.write(line + "\n")
-        self.stream.flush()
+        self.line.write(line, frac, now)
 
     def close(self) -> None:
         """End an open TTY line (idempotent)."""
-        if self.open:
-            self.stream.write("\n")
-            self.stream.flush()
-            self.open = False
+        self.line.end()
 
 
 def _stage_table(plan: Any) -> list[str]:
@@ -537,6 +604,35 @@ def _say_cannot(m: Any, said: str = "") -> None:
             print(f"  {lead} (`lamde-mission check` says CANNOT): {f.message}", file=sys.stderr)
 
 
+def _cannot(m: Any, on_setup: Callable[[str | None], None] | None = None) -> list[str]:
+    """What `lamde-mission check` says CANNOT for map `m` (`diagnose`'s fatal findings: what no
+    plan can meet), found before planning: its necessary conditions cost 0.2-1.7 % of a
+    default plan's CPU time on T16, L02, L03 and L08, against minutes of a search that cannot
+    succeed (a 2,000-footprint campus that C3 rules out: refused in 15 s, where the plan took
+    143 s to fail). The planning map it judges is the one the plan then uses (cached on `m`).
+
+    Args:
+        m: the loaded map (a `planner_core.model.mapio.Map`).
+        on_setup: the plan's `on_setup` (`SetupNotice`): told of the two stages, so a slow
+            one on a large map gets its line; None: nothing.
+
+    Returns:
+        The CANNOT findings' sentences, in `check`'s order; empty when there is none.
+    """
+    from planner_core.model.diagnose import diagnose
+
+    def stage(name: str | None) -> None:
+        if on_setup is not None:
+            on_setup(name)
+
+    stage("inflating the map's obstacles by their clearance")
+    m.planning_map()
+    stage("checking what no plan can meet (as `lamde-mission check` does)")
+    fatal = [f.message for f in diagnose(m).findings if f.fatal]
+    stage(None)
+    return fatal
+
+
 class SetupNotice:
     """`make_plan`'s on_setup (the instance) and on_setup_progress (`fraction`) for the CLI: a
     setup stage still running after `after` seconds gets a line on stderr (its name;
@@ -554,19 +650,18 @@ class SetupNotice:
         import threading
 
         self.after = after
-        self.stream = stream  # None: the sys.stderr of the moment
         self._lock = threading.Lock()  # the timer thread's line and the caller's
         self._timer: Any = None
         self._stage = 0  # which stage's timer may still show its name
         self._t0 = 0.0
         self._shown = False
         self._part: tuple[str, float] | None = None  # the running stage's (what, fraction)
-        self._last = -math.inf  # when the percentage line was last written (TTY)
-        self._quarter = 0.25  # the next quarter that gets a line (off a TTY)
-        self._open = 0  # the width of a TTY percentage line written and not yet ended
+        # the percentage line (stream None: the sys.stderr of the moment); off a TTY once past
+        # each quarter short of 1.0
+        self._line = _StatusLine(stream, every=self.EVERY, step=0.25, tty=self._tty)
 
     def _out(self) -> Any:
-        return self.stream or sys.stderr
+        return self._line.out
 
     def _tty(self) -> bool:
         return bool(getattr(self._out(), "isatty", lambda: False)())
@@ -584,21 +679,9 @@ class SetupNotice:
         """The percentage line of the running, shown stage (the lock held): on a TTY at most
         every `EVERY` s (`force`: now), otherwise once past each quarter short of 1.0."""
         now = time.perf_counter()
-        out = self._out()
-        line = f"setup: {what} {100 * frac:3.0f} %, {now - self._t0:.0f} s"
-        if self._tty():
-            if not force and now - self._last < self.EVERY:
-                return
-            out.write("\r" + line.ljust(self._open))
-            self._open = max(self._open, len(line))
-        else:
-            if not self._quarter <= frac < 1.0:
-                return
-            while self._quarter <= frac:
-                self._quarter += 0.25
-            out.write(line + "\n")
-        self._last = now
-        out.flush()
+        self._line.every = self.EVERY  # an instance may set its own
+        self._line.show(f"setup: {what} {100 * frac:3.0f} %, {now - self._t0:.0f} s", frac,
+                        now, force=force)
 
     def fraction(self, what: str, frac: float) -> None:
         """The running stage is `frac` of the way through `what` (`make_plan`'s
@@ -620,19 +703,10 @@ class SetupNotice:
             self._timer.cancel()
             self._timer = None
         self._stage += 1
-        out = self._out()
-        if self._shown and done:
-            line = f"setup: done in {time.perf_counter() - self._t0:.1f} s"
-            out.write(("\r" + line.ljust(self._open) if self._open else line) + "\n")
-            out.flush()
-        elif self._open:
-            out.write("\n")
-            out.flush()
+        self._line.end(f"setup: done in {time.perf_counter() - self._t0:.1f} s"
+                       if self._shown and done else None)  # fmt: skip
         self._shown = False
         self._part = None
-        self._open = 0
-        self._last = -math.inf
-        self._quarter = 0.25
 
     def __call__(self, name: str | None) -> None:
         import threading
@@ -682,13 +756,15 @@ def _corner_slots(args: argparse.Namespace) -> int | str:
 def run(args: argparse.Namespace) -> int:
     """`plan MAP -o OUT`: plan, store, replay and judge the mission, then write it (and the
     --plot and --report); a map with a battery or fleet is planned as sorties
-    (`_run_sorties`). Every option and output is checked before the optimisation.
+    (`_run_sorties`). Every option and output is checked before the optimisation, and so is
+    the map: one `check` says CANNOT for is refused unless --allow-infeasible (`_cannot`).
 
     Args:
         args: the parsed options.
 
     Returns:
-        0 ok, 1 infeasible (nothing written, or written with --allow-infeasible).
+        0 ok, 1 infeasible (nothing written, or written with --allow-infeasible; a map no
+        plan can meet: refused before planning, nothing written).
 
     Raises:
         UsageError: a bad option, map or output (one line per problem, exit 2).
@@ -780,6 +856,20 @@ def run(args: argparse.Namespace) -> int:
     progress = None if args.quiet else _ProgressBar()
     setup = None if args.quiet else SetupNotice()
     try:
+        # a map `check` says CANNOT is refused before the search (it would run its whole
+        # budget to fail); --allow-infeasible plans and writes it as before
+        cannot = [] if args.allow_infeasible else _cannot(m, setup)
+        if cannot:
+            from planner_core.textio import printable
+
+            print(f"lamde-mission plan: no feasible mission for {printable(args.map)}: "
+                  "`lamde-mission check` says CANNOT, so it was not planned; nothing written:",
+                  file=sys.stderr)  # fmt: skip
+            for line in cannot:
+                print(f"  no plan can meet this map: {printable(line)}", file=sys.stderr)
+            print("  --allow-infeasible plans it anyway and writes the mission (exit status 1)",
+                  file=sys.stderr)  # fmt: skip
+            return 1
         plan = make_plan(
             m,
             seed=args.seed,
@@ -825,15 +915,9 @@ def run(args: argparse.Namespace) -> int:
                   f"(budget {args.budget}, seed {args.seed}); nothing written:", file=sys.stderr)
         for line in _violations(plan, verdicts):
             print(f"  {line}", file=sys.stderr)
-        if not plan.feasible:
-            from planner_core.model.diagnose import diagnose
-
-            fatal = [f.message for f in diagnose(m).findings if f.fatal]
-            for line in fatal:
-                print(f"  no plan can meet this map: {printable(line)}", file=sys.stderr)
-            if not fatal:
-                print("  try a larger --budget, another --seed, or --allow-infeasible to write "
-                      "it anyway", file=sys.stderr)  # fmt: skip
+        if not plan.feasible:  # `_cannot` found nothing no plan can meet before the plan
+            print("  try a larger --budget, another --seed, or --allow-infeasible to write "
+                  "it anyway", file=sys.stderr)  # fmt: skip
         return 1
     # the mission goes to a hidden file beside its target first and is renamed last: a run
     # killed between the renames leaves the new plot and report with an older mission, which

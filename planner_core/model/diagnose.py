@@ -113,6 +113,7 @@ def diagnose(m: Any) -> Diagnosis:
         The `Diagnosis` (findings in order: the end point, per sensor, then the bandwidth
         test's).
     """
+    import shapely
     from shapely.geometry import Point
 
     from planner_core.model.mapio import _obstacle_polygons
@@ -124,7 +125,7 @@ def diagnose(m: Any) -> Diagnosis:
     real = _obstacle_polygons(m)  # as the map gives them
     labels = m.obstacle_labels
     start, end = Point(*pm.start), Point(*pm.end)
-    pieces = _airspace(pm)
+    pieces = _airspace(pm, real if pm is m else None)  # no margins: the same shapes
     reach = min(pieces, key=lambda g: g.distance(start)) if pieces else None
     findings: list[Finding] = []
     if pieces and reach.distance(end) > 1e-6:
@@ -136,11 +137,20 @@ def diagnose(m: Any) -> Diagnosis:
     flights = math.inf if m.has_battery else float(m.uavs)
     best: dict[str, float] = {}
     need: dict[str, int] = {}
-    for sid, s, q, q_real in zip(pm.sensor_ids, pm.sensors, pm.required_data, m.required_data,
-                                 strict=True):  # fmt: skip
-        p = Point(*s)
-        inside = [labels[k] for k, g in enumerate(real) if g.contains(p)]
-        d = float(reach.distance(p)) if reach is not None else math.inf
+    # every sensor at once (one tree query, one distance call: J x obstacles shapely calls
+    # one by one were most of `diagnose` on maps of a thousand obstacles)
+    points = shapely.points(np.asarray(pm.sensors, dtype=float).reshape(-1, 2))
+    holds: list[list[int]] = [[] for _ in range(len(points))]  # obstacles holding sensor j
+    if real:
+        j_in, k_in = shapely.STRtree(real).query(points, predicate="within")
+        for j, k in sorted(zip(j_in.tolist(), k_in.tolist(), strict=True)):  # map order
+            holds[j].append(k)
+    dist = (shapely.distance(reach, points) if reach is not None
+            else np.full(len(points), math.inf))  # fmt: skip
+    for j, (sid, s, q, q_real) in enumerate(zip(pm.sensor_ids, pm.sensors, pm.required_data,
+                                                m.required_data, strict=True)):  # fmt: skip
+        inside = [labels[k] for k in holds[j]]
+        d = float(dist[j])
         r = 0.0
         if math.isfinite(d):
             r = float(link_rates(np.array([[s[0] + d, s[1]]]), np.array([s]), uav.altitude,
@@ -227,15 +237,17 @@ def _hear(pm: Any) -> float:
     return float(ground_reach(0.0, uav.altitude, radio.peak_rate, radio.decay))
 
 
-def _airspace(pm: Any) -> list[Any]:
+def _airspace(pm: Any, shapes: list[Any] | None = None) -> list[Any]:
     """The free airspace of the planning map `pm` (the area less every inflated obstacle), as
-    its connected pieces (shapely Polygons; none when obstacles cover the area)."""
+    its connected pieces (shapely Polygons; none when obstacles cover the area); `shapes`:
+    `pm`'s obstacle polygons when the caller has them already."""
     import shapely
     from shapely.geometry import box
 
     from planner_core.model.mapio import _obstacle_polygons
 
-    shapes = _obstacle_polygons(pm)  # inflated by the clearance
+    if shapes is None:
+        shapes = _obstacle_polygons(pm)  # inflated by the clearance
     free = box(0.0, 0.0, pm.width, pm.height)
     if shapes:
         free = free.difference(shapely.union_all(shapes))
