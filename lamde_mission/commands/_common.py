@@ -9,13 +9,15 @@ from typing import Any
 from lamde_mission.errors import UsageError
 
 
-def load_map_or_fail(path: str) -> Any:
+def load_map_or_fail(path: str, loaded: Any = None) -> Any:
     """Load and validate a map; turn every problem into a UsageError naming the field.
 
     The map's notes are printed on stderr ("note: PATH: ...").
 
     Args:
         path: the map file (JSON).
+        loaded: the map already loaded from `path` by the caller (`plan` loads it once to
+            choose between one flight and sorties); None: load it here.
 
     Returns:
         The loaded `planner_core.model.mapio.Map`.
@@ -28,7 +30,7 @@ def load_map_or_fail(path: str) -> Any:
 
     shown = printable(path)
     try:
-        m = load_map(path)
+        m = load_map(path) if loaded is None else loaded
     except MapError as exc:
         lines = (printable(p[len(path) + 2:]) if p.startswith(f"{path}: ") else printable(p)
                  for p in exc.problems)  # fmt: skip
