@@ -3,9 +3,10 @@ placed twice (a second layout for the legend's note), leader lines and direction
 one FancyArrowPatch each (clipped by bisection at every draw), every obstacle a patch, every
 sensor's data line every replay sample (26,000 x 400 on L03), and `savefig` drew the whole
 figure once more before drawing it into the file. These tests pin what replaced that: each
-label measured and drawn once, leaders and arrows and obstacles in collections, each data line
-through its bends only (the same line), one layout unless the note needs a new legend row, and
-one draw per save; the pictures stay the same (placements, arrow shapes, SVG bytes)."""
+label annotated once, leaders and arrows and obstacles in collections, each data line through
+its bends only (the same line), one layout unless the note needs a new legend row, and one
+draw per save; an arrow covers the pixels the annotation arrow did, and the same mission still
+saves to the same PNG and SVG bytes."""
 
 from __future__ import annotations
 
