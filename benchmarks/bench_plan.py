@@ -37,8 +37,13 @@ wall beside it, which a loaded machine stretches), its ratio to T16's in the sam
 measured first and last), f, feasibility and the peak RSS. Targets: <= 5x T16 up to 160
 sensors, <= 20x up to 400, peak RSS <= 2 GB.
 `LAMDE_MAX_SENSORS` is raised for the children to the suite's largest map when needed.
+With ``--show`` each child also writes its plan as a `.plan` file and draws it as
+`lamde-mission show MAP MISSION -o OUT` does, in the same process (the CLI's `main`): once to
+PNG (the first drawing, so matplotlib's import counts, as in a fresh `show`) and then to SVG;
+the table adds the CPU seconds of each (medians), the records `show_png` and `show_svg`.
 
-    python benchmarks/bench_plan.py --large [DIR] [--cold 1] [--maps L01 L02] [-o runs.jsonl]
+    python benchmarks/bench_plan.py --large [DIR] [--cold 1] [--maps L01 L02] [--show]
+        [-o runs.jsonl]
 """
 
 from __future__ import annotations
@@ -67,17 +72,45 @@ def _stages(p: Any) -> dict[str, float]:
     return {k: v for k, v in p.timings.items() if k not in ("total", "compile")}
 
 
-def _plan(map_: str, seed: int, budget: int) -> dict[str, Any]:
+def _plan(map_: str, seed: int, budget: int, plans: list[Any] | None = None) -> dict[str, Any]:
+    """One timed `plan()`, its record (the plan itself appended to `plans` when given)."""
     import lamde_mission
 
     c0, t0 = time.process_time(), time.perf_counter()
     p = lamde_mission.plan(map_, seed=seed, budget=budget)
+    if plans is not None:
+        plans.append(p)
     return {"wall": time.perf_counter() - t0, "cpu": time.process_time() - c0,
             "compile": p.timings.get("compile", 0.0), "setup": p.timings.get("setup", 0.0),
             "stages": _stages(p), "f": p.f,
             "feasible": bool(p.feasible), "evaluations": p.evaluations,
             "summary": f"map {p.map_name}: f {p.f:.2f}, phi {p.phi:.3g}, feasible "
                        f"{p.feasible}, {p.n_hover} hover points, {p.evaluations} evaluations"}
+
+
+def _show(map_: str, plan: Any) -> dict[str, Any]:
+    """`--show`: `plan` (made on `map_`) written as a .plan file and drawn by `lamde-mission
+    show` in this process, to PNG and then SVG: the CPU and wall seconds of each drawing
+    (`show_png`, `show_svg`: {"cpu": s, "wall": s})."""
+    import tempfile
+
+    from lamde_mission.cli import main
+    from lamde_mission.formats import write_mission
+    from planner_core.model.mapio import load_map
+
+    out: dict[str, Any] = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        mission = Path(tmp) / "mission.plan"
+        write_mission(mission, plan, load_map(map_))
+        for fmt in ("png", "svg"):
+            c0, t0 = time.process_time(), time.perf_counter()
+            with contextlib.redirect_stdout(sys.stderr):  # "wrote ..." kept off the record
+                rc = main(["show", map_, str(mission), "-o", str(Path(tmp) / f"show.{fmt}")])
+            if rc != 0:
+                raise SystemExit(f"show {map_} -o show.{fmt}: exit {rc}")
+            out[f"show_{fmt}"] = {"cpu": time.process_time() - c0,
+                                  "wall": time.perf_counter() - t0}  # fmt: skip
+    return out
 
 
 def child(args: argparse.Namespace) -> None:
@@ -89,10 +122,13 @@ def child(args: argparse.Namespace) -> None:
 
         warm_up()
     t0 = time.perf_counter()
-    r = _plan(args.map, args.seed, args.budget)
+    plans: list[Any] = []
+    r = _plan(args.map, args.seed, args.budget, plans)
     r["process_wall"] = time.perf_counter() - t0
     r["rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     r["heavy"] = [m for m in ("torch", "matplotlib") if m in sys.modules]
+    if args.show:  # after planning's memory and imports are recorded
+        r.update(_show(args.map, plans[0]))
     print(json.dumps(r))
 
 
@@ -113,17 +149,18 @@ def _median_stages(runs: list[dict[str, Any]]) -> str:
 LARGE = ROOT / "examples" / "maps" / "large"
 
 
-def _cold(path: str, seed: int, budget: int, env: dict[str, str] | None = None
-          ) -> dict[str, Any]:
-    """One plan() in a fresh process of this script (`child`), its JSON record."""
+def _cold(path: str, seed: int, budget: int, env: dict[str, str] | None = None,
+          show: bool = False) -> dict[str, Any]:
+    """One plan() in a fresh process of this script (`child`), its JSON record (with `show`,
+    the plan drawn too: `_show`)."""
     cmd = [sys.executable, str(Path(__file__).resolve()), path, "--seed", str(seed),
-           "--budget", str(budget), "--child", "--warm-up"]
+           "--budget", str(budget), "--child", "--warm-up", *(["--show"] if show else [])]
     out = subprocess.run(cmd, capture_output=True, text=True, check=True, env=env).stdout
     return json.loads(out.strip().splitlines()[-1])
 
 
 def large(folder: Path, names: list[str] | None, seed: int, budget: int, runs: int,
-          output: str | None) -> int:
+          output: str | None, show: bool = False) -> int:
     """`--large`: the large suite's plan times as ratios to T16's (module docstring). Returns
     0 when every target is met, else 1."""
     maps = sorted(folder.glob("*.json"))
@@ -147,7 +184,7 @@ def large(folder: Path, names: list[str] | None, seed: int, budget: int, runs: i
     def measure(path: Path) -> list[dict[str, Any]]:
         out = []
         for i in range(runs):
-            r = _cold(str(path), seed + i, budget, env)
+            r = _cold(str(path), seed + i, budget, env, show)
             r.update(map=path.stem, seed=seed + i, budget=budget)
             out.append(r)
             records.append(r)
@@ -160,7 +197,7 @@ def large(folder: Path, names: list[str] | None, seed: int, budget: int, runs: i
     print(f"T16: plan() {base:.2f} s CPU (median of {len(t16)} fresh processes after a "
           f"warm-up, first and last), wall {statistics.median(r['wall'] for r in t16):.2f} s")
     print("map    sensors  I_max   plan CPU s  wall s   x T16   target   feasible   f"
-          "            peak RSS MB")
+          "            peak RSS MB" + ("  show PNG s  SVG s" if show else ""))
     ok = True
     for name, rs in rows.items():
         n, imax = info[name]
@@ -173,9 +210,13 @@ def large(folder: Path, names: list[str] | None, seed: int, budget: int, runs: i
         met = (target is None or ratio <= target) and rss <= 2048
         ok &= met and feas == len(rs)
         tgt = f"<= {target:g}x" if target else "-"
+        drawn = ""
+        if show:  # CPU seconds of `show` to PNG (with matplotlib's import) and then to SVG
+            drawn = "".join(f"  {statistics.median(r[f'show_{x}']['cpu'] for r in rs):>{w}.2f}"
+                            for x, w in (("png", 8), ("svg", 5)))  # fmt: skip
         print(f"{name:<6} {n:>7}  {imax!s:>5}  {cpu:>11.2f}  {wall:>6.2f}  {ratio:>6.1f}  "
               f"{tgt:>7}  {feas}/{len(rs):<8} {statistics.fmean(r['f'] for r in rs):<12.2f} "
-              f"{rss:>8.0f}  {'met' if met else 'NOT met'}")
+              f"{rss:>8.0f}  {'met' if met else 'NOT met'}{drawn}")
     with contextlib.suppress(OSError):
         print(f"load average while measuring: {os.getloadavg()[0]:.2f} (1 min) on "
               f"{os.cpu_count()} CPUs")
@@ -199,6 +240,8 @@ def main() -> None:
                     help="plan the large suite (default examples/maps/large) against T16")
     ap.add_argument("--maps", nargs="+", help="with --large: only these maps (e.g. L01 L02)")
     ap.add_argument("-o", "--output", help="with --large: write every run as JSON lines")
+    ap.add_argument("--show", action="store_true",
+                    help="with --large: also time `lamde-mission show` of each plan (PNG, SVG)")
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--warm-up", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--warm-child", action="store_true", help=argparse.SUPPRESS)
@@ -211,9 +254,11 @@ def main() -> None:
         return
     if args.cold < 1 or args.warm < 1:
         ap.error("--cold and --warm must be >= 1")
+    if args.show and args.large is None:
+        ap.error("--show: only with --large")
     if args.large is not None:
         sys.exit(large(Path(args.large), args.maps, args.seed, args.budget, args.cold,
-                       args.output))
+                       args.output, args.show))
     cold_limit = 2.0
     if args.map.startswith("campus-") and args.map[7:].isdigit():
         cold_limit = 5.0  # issue 15: a campus of hundreds of footprints plans in seconds

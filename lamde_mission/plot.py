@@ -12,7 +12,10 @@ legend); with a replay, a panel of each sensor's data over the mission time agai
 requirement (the ten tightest named, in distinct colours) and, beyond ten sensors, a panel of
 sorted bars naming every sensor (up to `BARS`; the rest summarised).
 Uses matplotlib's Agg canvas directly (no pyplot state), imported inside the functions so
-importing this module stays cheap.
+importing this module stays cheap. Drawn to be cheap on 400-sensor maps: obstacles, leader
+lines, direction arrows and the grey data lines are collections (not an artist each), each data
+line runs through its bends only (`_bends`), every label is measured and drawn once, the layout
+is done once unless the legend's note needs a new row, and a save draws the figure once.
 """
 
 from __future__ import annotations
@@ -20,7 +23,7 @@ from __future__ import annotations
 import io
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -183,9 +186,8 @@ def _mission_view(map_: Any, timeline: Any, plan: Any) -> dict[str, Any] | None:
     return None
 
 
-def _shape_patch(shell: np.ndarray, holes: Any, **style: Any) -> Any:
-    """A patch for a polygon with holes (holes drawn open: a courtyard is flyable)."""
-    from matplotlib.patches import PathPatch
+def _shape_path(shell: np.ndarray, holes: Any) -> Any:
+    """A matplotlib Path for a polygon with holes (holes drawn open: a courtyard is flyable)."""
     from matplotlib.path import Path as MplPath
 
     verts: list[np.ndarray] = []
@@ -196,7 +198,7 @@ def _shape_patch(shell: np.ndarray, holes: Any, **style: Any) -> Any:
         c = np.full(len(ring) + 1, MplPath.LINETO, dtype=np.uint8)
         c[0], c[-1] = MplPath.MOVETO, MplPath.CLOSEPOLY
         codes.append(c)
-    return PathPatch(MplPath(np.concatenate(verts), np.concatenate(codes)), **style)
+    return MplPath(np.concatenate(verts), np.concatenate(codes))
 
 
 def _violation_segments(map_: Any, path: np.ndarray | None,
@@ -240,8 +242,12 @@ def _violation_segments(map_: Any, path: np.ndarray | None,
     return out
 
 
-#: the white box behind labels
-_TEXT_BOX = {"boxstyle": "round,pad=0.15", "facecolor": "white", "alpha": 0.7, "edgecolor": "none"}
+#: the white box behind labels, `_BOX_PAD` font sizes beyond the text on each side
+_BOX_PAD = 0.15
+_TEXT_BOX = {"boxstyle": f"round,pad={_BOX_PAD}", "facecolor": "white", "alpha": 0.7,
+             "edgecolor": "none"}  # fmt: skip
+#: the thin line joining a label placed past the first ring to its marker
+_LEADER = {"colors": "0.35", "linewidths": 0.6, "capstyle": "round", "zorder": 8}
 
 #: where a label may go around its marker, in order of preference: (dx, dy, ha, va)
 _DIRECTIONS = ((1, 1, "left", "bottom"), (1, -1, "left", "top"), (-1, 1, "right", "bottom"),
@@ -270,12 +276,15 @@ class _Label:
 @dataclass
 class _Scene:
     """What the map panel's labels and scale bar must not cover: markers (x, y, m; radius in
-    points), the route's vertices (m), and the labels to place."""
+    points), the route's vertices (m), and the labels to place; and the direction arrows to
+    draw once the layout is fixed (`_draw_arrows`): each route's (k, 2, 2) arrows (from, to;
+    m), colour and head size (points)."""
 
     points: list[np.ndarray]
     radii: list[np.ndarray]
     route: list[np.ndarray]
     labels: list[_Label]
+    arrows: list[tuple[np.ndarray, Any, float]] = field(default_factory=list)
 
     def marker(self, xy: Any, radius: Any) -> None:
         xy = np.asarray(xy, dtype=float).reshape(-1, 2)
@@ -297,11 +306,14 @@ def _marker_boxes(ax: Any, scene: _Scene) -> np.ndarray:
 
 
 def _overlaps(box: np.ndarray, boxes: np.ndarray) -> np.ndarray:
-    """Which of `boxes` (k, 4) overlap `box` (4,) (touching edges do not)."""
+    """Which of `boxes` (k, 4) overlap `box` (4,) (touching edges do not): (k,); for n boxes
+    (n, 4) at once, (n, k)."""
+    box = np.asarray(box, dtype=float)
     if not len(boxes):
-        return np.zeros(0, dtype=bool)
-    return ((box[0] < boxes[:, 2]) & (box[2] > boxes[:, 0]) & (box[1] < boxes[:, 3])
-            & (box[3] > boxes[:, 1]))  # fmt: skip
+        return np.zeros(box.shape[:-1] + (0,), dtype=bool)
+    b = box[..., None, :]
+    return ((b[..., 0] < boxes[:, 2]) & (b[..., 2] > boxes[:, 0]) & (b[..., 1] < boxes[:, 3])
+            & (b[..., 3] > boxes[:, 1]))  # fmt: skip
 
 
 def _route_points(ax: Any, scene: _Scene) -> np.ndarray:
@@ -344,67 +356,210 @@ def _place_scale_bar(ax: Any, W: float, renderer: Any, markers: np.ndarray,
     return best[2]
 
 
-def _place_labels(ax: Any, renderer: Any, labels: Sequence[_Label],
-                  avoid: np.ndarray) -> tuple[int, int]:  # fmt: skip
+@dataclass(frozen=True)
+class _Placed:
+    """A label given its place: the label, the text shown (its own or its short one), the
+    offset of its alignment point from the marker (points), the alignment, the text's box in
+    display pixels (x0, y0, x1, y1; the white box around it not included) and whether a leader
+    line joins it to its marker."""
+
+    label: _Label
+    text: str
+    offset: tuple[float, float]
+    ha: str
+    va: str
+    box: np.ndarray
+    leader: bool
+
+
+class _TextSizes:
+    """Label texts' (width, height) in display pixels, each text and font measured once: the
+    size does not depend on where the text goes, and `_place_labels` tries a label in up to 32
+    places, again when the layout is redone. One probe Text per font, its text changed (no
+    annotation made and removed to be measured)."""
+
+    def __init__(self, ax: Any) -> None:
+        self.ax = ax
+        self.probes: dict[Any, Any] = {}
+        self.sizes: dict[Any, tuple[float, float]] = {}
+
+    def __call__(self, renderer: Any, text: str, style: dict[str, Any]) -> tuple[float, float]:
+        from matplotlib.text import Text
+
+        font = tuple(sorted((k, v) for k, v in style.items()
+                            if k not in ("bbox", "color", "zorder")))  # fmt: skip
+        key = (text, font)
+        if key not in self.sizes:
+            probe = self.probes.get(font)
+            if probe is None:
+                probe = self.probes[font] = Text(0.0, 0.0, "", **dict(font))
+                probe.set_figure(self.ax.figure)
+            probe.set_text(text)
+            e = probe.get_window_extent(renderer)
+            self.sizes[key] = (float(e.width), float(e.height))
+        return self.sizes[key]
+
+
+def _place_labels(ax: Any, renderer: Any, labels: Sequence[_Label], avoid: np.ndarray,
+                  sizes: _TextSizes) -> tuple[list[_Placed], int, int]:
     """Place each label beside its marker, greedily in the given order: the first candidate
     position (`_DIRECTIONS` x `_RINGS`, inside the axes) whose box overlaps no label placed
     before and no box of `avoid` (markers, the scale bar); past the first ring a thin leader
     line joins label and marker. A label that is not optional, finding no free place, may cover
     a marker, never another label: failing that, its shorter text is tried, then it is left
     out; an optional one (a sensor id) is tried on the first two rings only, so long leader
-    lines do not crowd the map, and is left out when no place is free. Returns how many
-    optional and how many other labels were left out. Deterministic; cost O(labels^2 + labels
-    x markers)."""
+    lines do not crowd the map, and is left out when no place is free. Nothing is drawn here
+    (`_draw_labels` draws the places found); texts are measured once (`sizes`).
+    Deterministic; cost O(labels^2 + labels x markers).
+
+    Args:
+        ax: the map panel, its layout fixed.
+        renderer: the figure's renderer (text sizes in its pixels).
+        labels: the labels, in the order to place them.
+        avoid: (k, 4) boxes in display pixels that labels should not cover.
+        sizes: the texts' sizes (`_TextSizes`, shared between calls).
+
+    Returns:
+        The labels placed, and how many optional and how many other labels were left out.
+    """
     dpi_px = ax.figure.dpi / 72.0
     e = ax.get_window_extent(renderer)
     frame = (e.x0, e.y0, e.x1, e.y1)
     placed = np.zeros((0, 4))
+    out: list[_Placed] = []
     dropped = [0, 0]
 
+    directions = np.array([(dx, dy) for dx, dy, _, _ in _DIRECTIONS], dtype=float)
+    # the share of the box's width (height) left of (below) the alignment point
+    left = np.array([{"left": 0.0, "right": 1.0, "center": 0.5}[ha] for _, _, ha, _ in _DIRECTIONS])
+    below = np.array([{"bottom": 0.0, "top": 1.0, "center": 0.5}[va] for *_, va in _DIRECTIONS])
+
     def search(text: str, lab: _Label) -> Any:
-        probe = ax.annotate(text, lab.xy, xytext=(0, 0), textcoords="offset points",
-                            **lab.style)  # fmt: skip
-        t = probe.get_window_extent(renderer)
-        probe.remove()
+        """Every candidate place at once, in the order of preference (ring, then direction):
+        the first that is free of labels and markers, else (a label that must be shown) the
+        first free of labels."""
+        tw, th = sizes(renderer, text, lab.style)
         pad = 0.2 * float(lab.style.get("fontsize", 8)) * dpi_px
-        w, h = t.width + 2 * pad, t.height + 2 * pad
+        w, h = tw + 2 * pad, th + 2 * pad
         anchor = ax.transData.transform(lab.xy)
-        best = None
-        for ring, extra in enumerate(_RINGS[:2] if lab.optional else _RINGS):
-            d = lab.radius + extra
-            for k, (dx, dy, ha, va) in enumerate(_DIRECTIONS):
-                ox, oy = dx * d, dy * d
-                x0 = anchor[0] + ox * dpi_px - {"left": 0.0, "right": w, "center": w / 2}[ha]
-                y0 = anchor[1] + oy * dpi_px - {"bottom": 0.0, "top": h, "center": h / 2}[va]
-                box = np.array([x0, y0, x0 + w, y0 + h])
-                if box[0] < frame[0] or box[1] < frame[1] or box[2] > frame[2] \
-                        or box[3] > frame[3]:  # fmt: skip
-                    continue
-                if _overlaps(box, placed).any():
-                    continue
-                score = (bool(_overlaps(box, avoid).any()), ring, k)
-                if best is None or score < best[0]:
-                    best = (score, text, ox, oy, ha, va, ring, box)
-            if best is not None and not best[0][0]:
-                break
-        if best is not None and lab.optional and best[0][0]:
-            return None  # a sensor id does not cover a marker
-        return best
+        rings = np.asarray(_RINGS[:2] if lab.optional else _RINGS)
+        off = directions[None, :, :] * (lab.radius + rings)[:, None, None]  # (rings, 8, 2) pt
+        x0 = (anchor[0] + off[..., 0] * dpi_px - left * w).reshape(-1)
+        y0 = (anchor[1] + off[..., 1] * dpi_px - below * h).reshape(-1)
+        boxes = np.column_stack([x0, y0, x0 + w, y0 + h])
+        free = ((boxes[:, 0] >= frame[0]) & (boxes[:, 1] >= frame[1]) & (boxes[:, 2] <= frame[2])
+                & (boxes[:, 3] <= frame[3]))  # fmt: skip
+        free &= ~_overlaps(boxes, placed).any(axis=1)
+        clear = free & ~_overlaps(boxes, avoid).any(axis=1)
+        if clear.any():
+            i = int(np.argmax(clear))
+        elif free.any() and not lab.optional:  # a sensor id does not cover a marker
+            i = int(np.argmax(free))
+        else:
+            return None
+        ring, k = divmod(i, len(_DIRECTIONS))
+        _, _, ha, va = _DIRECTIONS[k]
+        ox, oy = float(off[ring, k, 0]), float(off[ring, k, 1])
+        tx = anchor[0] + ox * dpi_px - {"left": 0.0, "right": tw, "center": tw / 2}[ha]
+        ty = anchor[1] + oy * dpi_px - {"bottom": 0.0, "top": th, "center": th / 2}[va]
+        return _Placed(lab, text, (ox, oy), ha, va, np.array([tx, ty, tx + tw, ty + th]),
+                       ring > 0), boxes[i]  # fmt: skip
 
     for lab in labels:
-        best = search(lab.text, lab)
-        if best is None and lab.short:
-            best = search(lab.short, lab)
-        if best is None:
+        found = search(lab.text, lab)
+        if found is None and lab.short:
+            found = search(lab.short, lab)
+        if found is None:
             dropped[0 if lab.optional else 1] += 1
             continue
-        _, text, ox, oy, ha, va, ring, box = best
-        leader = ({"arrowstyle": "-", "color": "0.35", "lw": 0.6, "shrinkA": 0,
-                   "shrinkB": lab.radius} if ring > 0 else None)  # fmt: skip
-        ax.annotate(text, lab.xy, xytext=(ox, oy), textcoords="offset points", ha=ha, va=va,
-                    arrowprops=leader, **lab.style)  # fmt: skip
-        placed = np.vstack([placed, box])
-    return dropped[0], dropped[1]
+        out.append(found[0])
+        placed = np.vstack([placed, found[1]])
+    return out, dropped[0], dropped[1]
+
+
+def _leader_segments(ax: Any, placed: Sequence[_Placed]) -> np.ndarray:
+    """The leader lines of the labels that have one, (k, 2, 2) in data coordinates: from the
+    edge of the label's white box, on the line from its centre to the marker, to the marker's
+    edge (`_Label.radius` points short of it), as an annotation's arrow would run. Computed
+    once the layout is fixed: the figure's size is, so a point is the same data length at any
+    dpi."""
+    dpi_px = ax.figure.dpi / 72.0
+    segs = []
+    for p in placed:
+        if not p.leader:
+            continue
+        anchor = ax.transData.transform(p.label.xy)
+        centre = (p.box[:2] + p.box[2:]) / 2.0
+        pad = _BOX_PAD * float(p.label.style.get("fontsize", 8)) * dpi_px
+        half = (p.box[2:] - p.box[:2]) / 2.0 + pad
+        d = anchor - centre
+        length = float(np.hypot(*d))
+        if length == 0.0:
+            continue
+        start = centre + d * min(half[i] / abs(d[i]) if d[i] else np.inf for i in (0, 1))
+        end = anchor - d / length * p.label.radius * dpi_px
+        if np.dot(end - start, d) > 0:
+            segs.append([start, end])
+    if not segs:
+        return np.zeros((0, 2, 2))
+    return ax.transData.inverted().transform(np.reshape(segs, (-1, 2))).reshape(-1, 2, 2)
+
+
+def _draw_labels(ax: Any, placed: Sequence[_Placed]) -> None:
+    """Draw the placed labels (`_place_labels`), each once: its text in its white box, and
+    every leader line together in one collection beneath the labels."""
+    from matplotlib.collections import LineCollection
+
+    segs = _leader_segments(ax, placed)
+    if len(segs):
+        ax.add_collection(LineCollection(segs, **_LEADER), autolim=False)
+    for p in placed:
+        ax.annotate(p.text, p.label.xy, xytext=p.offset, textcoords="offset points", ha=p.ha,
+                    va=p.va, **p.label.style)  # fmt: skip
+
+
+def _arrow_paths(ax: Any, arrows: np.ndarray, scale: float, linewidth: float) -> list[Any]:
+    """The paths (data coordinates) of '-|>' arrows from arrows[:, 0] to arrows[:, 1], as
+    `ax.annotate("", xy=to, xytext=from, arrowprops={"arrowstyle": "-|>", "mutation_scale":
+    scale, "lw": linewidth})` draws them: each end shrunk 2 points (where the arrow is longer),
+    matplotlib's own '-|>' head (`ArrowStyle`); two paths an arrow, its shaft (to stroke) and
+    its head (to fill and stroke). Computed once the layout is fixed (a point is then the same
+    data length at any dpi)."""
+    from matplotlib.patches import ArrowStyle
+    from matplotlib.path import Path as MplPath
+
+    px = ax.figure.dpi / 72.0
+    style = ArrowStyle("-|>")
+    inverse = ax.transData.inverted()
+    ends = ax.transData.transform(np.asarray(arrows, dtype=float).reshape(-1, 2)).reshape(-1, 2, 2)
+    out = []
+    for a, b in ends:
+        shrink = 2.0 * px  # FancyArrowPatch's shrinkA, shrinkB: not where the arrow is shorter
+        u = (b - a) / max(float(np.hypot(*(b - a))), 1e-300)
+        if np.hypot(*(b - a)) > shrink:
+            a = a + u * shrink
+        if np.hypot(*(b - a)) > shrink:
+            b = b - u * shrink
+        parts, _ = style(MplPath(np.array([a, b])), scale * px, linewidth * px, None)
+        for p in parts:
+            v = p.vertices.copy()
+            if p.codes is not None:  # CLOSEPOLY's vertex is not read: its subpath's first
+                v[p.codes == MplPath.CLOSEPOLY] = v[0]
+            out.append(MplPath(inverse.transform(v), p.codes))
+    return out
+
+
+def _draw_arrows(ax: Any, scene: _Scene) -> None:
+    """Each route's direction arrows (`_Scene.arrows`) as one collection: shafts stroked and
+    '-|>' heads filled, 1.4 points wide in the route's colour, round joins and caps, as a
+    FancyArrowPatch draws them."""
+    from matplotlib.collections import PathCollection
+
+    for arrows, colour, scale in scene.arrows:
+        ax.add_collection(PathCollection(_arrow_paths(ax, arrows, scale, 1.4),
+                                         facecolors=["none", colour], edgecolors=[colour],
+                                         linewidths=1.4, joinstyle="round", capstyle="round",
+                                         zorder=3), autolim=False)  # fmt: skip
 
 
 def _map_axes(map_: Any, *, has_time: bool, has_bars: bool = False,
@@ -453,9 +608,11 @@ def _map_axes(map_: Any, *, has_time: bool, has_bars: bool = False,
 
 def _draw_obstacles(ax: Any, map: Any, handles: list[Any]) -> None:  # noqa: A002
     """Circles, rotated rectangles, footprints and no-fly zones (holes open), with their
-    legend entries."""
-    from matplotlib.patches import Circle, Patch
-    from matplotlib.patches import Polygon as PolygonPatch
+    legend entries: the obstacles one collection, the no-fly zones another (each shape its own
+    path)."""
+    from matplotlib.collections import PathCollection
+    from matplotlib.patches import Patch
+    from matplotlib.path import Path as MplPath
 
     spec = map.spec
     shapes = list(getattr(map, "shapes", ()))
@@ -465,13 +622,18 @@ def _draw_obstacles(ax: Any, map: Any, handles: list[Any]) -> None:  # noqa: A00
     obstacle_style = {"facecolor": "0.55", "edgecolor": "0.25", "alpha": 0.75, "linewidth": lw}
     nfz_style = {"facecolor": "tab:red", "alpha": 0.18, "edgecolor": "tab:red", "hatch": "//",
                  "linewidth": 1.0}  # fmt: skip
-    for c in spec.obstacles.circles:
-        ax.add_patch(Circle((c.x, c.y), c.radius, **obstacle_style))
-    for poly in map.rectangle_polygons:
-        ax.add_patch(PolygonPatch(poly, closed=True, **obstacle_style))
-    for sh in shapes:
-        style = nfz_style if sh.kind == "no_fly_zone" else obstacle_style
-        ax.add_patch(_shape_patch(sh.shell, sh.holes, **style))
+    # one collection for the obstacles, one for the no-fly zones (each shape its own path, so
+    # overlaps shade as separate patches would): a 1,000-obstacle campus is two artists
+    unit = MplPath.unit_circle()
+    solid = [MplPath(unit.vertices * c.radius + (c.x, c.y), unit.codes)
+             for c in spec.obstacles.circles]  # fmt: skip
+    solid += [MplPath(np.vstack([poly, poly[:1]]), closed=True)
+              for poly in (np.asarray(p, dtype=float) for p in map.rectangle_polygons)]
+    solid += [_shape_path(sh.shell, sh.holes) for sh in shapes if sh.kind != "no_fly_zone"]
+    nfz = [_shape_path(sh.shell, sh.holes) for sh in shapes if sh.kind == "no_fly_zone"]
+    for paths, style in ((solid, obstacle_style), (nfz, nfz_style)):
+        if paths:
+            ax.add_collection(PathCollection(paths, **style))
     if spec.obstacles.circles or spec.obstacles.rectangles or n_footprints:
         handles.append(Patch(label="obstacles", **obstacle_style))
     if len(shapes) > n_footprints:
@@ -609,31 +771,48 @@ def _draw_ends(ax: Any, map: Any, hover_points: np.ndarray, hover_radii: np.ndar
                               markeredgecolor="k", label=name))  # fmt: skip
 
 
+def _fix_layout(fig: Any) -> None:
+    """Keep the figure's panels where its layout put them: no layout engine at all, not
+    matplotlib's placeholder ("none"), for which `savefig` draws the whole figure once more,
+    every label and tick measured again, before drawing it into the file. The rcParams that
+    would make None mean a layout engine are off while it is set."""
+    import matplotlib
+
+    with matplotlib.rc_context({"figure.autolayout": False,
+                                "figure.constrained_layout.use": False}):  # fmt: skip
+        fig.set_layout_engine(None)
+
+
 def _finish_map(fig: Any, ax: Any, W: float, handles: list[Any], scene: _Scene, n_sensors: int,
                 named_below: bool, unlabelled: int = 0) -> tuple[int, int]:  # fmt: skip
     """The legend below, the layout fixed, the scale bar in the emptiest corner, then every
     label placed (`_place_labels`: the ones always shown first, then sensor ids). When labels
     were left out, or `unlabelled` hover points past `HOVER_LABELS` got none, the legend says
-    how many (the layout redone once to make room; the note's counts are the final ones).
+    how many (the layout redone to make room only where the note needs a new row of the
+    legend; the note's counts are the final ones). The direction arrows (`_draw_arrows`) and
+    the labels (`_draw_labels`) are drawn last, once, where the final layout put them.
     Returns how many sensor ids and other labels were left out."""
     from matplotlib.lines import Line2D
 
     labels = sorted(scene.labels, key=lambda lab: lab.optional)  # stable: order kept within
+    sizes = _TextSizes(ax)  # the labels' text sizes, measured once for both attempts
 
-    def attempt(extra: list[Any]) -> tuple[tuple[int, int], Any, list[Any]]:
-        legend = fig.legend(handles=handles + extra, loc="outside lower center",
-                            ncol=min(len(handles) + len(extra), 4), fontsize=8,
-                            frameon=False)  # fmt: skip
+    def legend_with(extra: list[Any]) -> Any:
+        return fig.legend(handles=handles + extra, loc="outside lower center",
+                          ncol=min(len(handles) + len(extra), 4), fontsize=8,
+                          frameon=False)  # fmt: skip
+
+    def attempt() -> tuple[tuple[int, int], list[Any], list[_Placed]]:
         fig.set_layout_engine("constrained")
         fig.draw_without_rendering()
-        fig.set_layout_engine("none")  # positions fixed: the pixels the labels are fitted in
+        _fix_layout(fig)  # positions fixed: the pixels the labels are fitted in
         renderer = fig.canvas.get_renderer()
         markers = _marker_boxes(ax, scene)
-        n_texts, n_artists = len(ax.texts), len(ax.artists)
+        n_artists = len(ax.artists)
         bar = _place_scale_bar(ax, W, renderer, markers, _route_points(ax, scene))
-        dropped = _place_labels(ax, renderer, labels, np.vstack([markers, bar[None, :]]))
-        added = list(ax.texts[n_texts:]) + list(ax.artists[n_artists:])
-        return dropped, legend, added
+        placed, *dropped = _place_labels(ax, renderer, labels,
+                                         np.vstack([markers, bar[None, :]]), sizes)  # fmt: skip
+        return (dropped[0], dropped[1]), list(ax.artists[n_artists:]), placed
 
     def note(k: tuple[int, int]) -> str:
         parts = []
@@ -648,13 +827,22 @@ def _finish_map(fig: Any, ax: Any, W: float, handles: list[Any], scene: _Scene, 
         capped = f"hover points past the first {HOVER_LABELS} unlabelled ({unlabelled:,})"
         return f"{capped}; {crowded}" if parts else capped
 
-    dropped, legend, added = attempt([])
+    legend = legend_with([])
+    dropped, added, placed = attempt()
     if any(dropped) or unlabelled:
-        for artist in [legend, *added]:
-            artist.remove()
-        dropped2, legend, _ = attempt([Line2D([], [], linestyle="none", label=note(dropped))])
-        legend.get_texts()[-1].set_text(note(dropped2))
-        dropped = dropped2
+        renderer = fig.canvas.get_renderer()
+        height = legend.get_tightbbox(renderer).height
+        legend.remove()
+        legend = legend_with([Line2D([], [], linestyle="none", label=note(dropped))])
+        # the layout leaves the legend below the panels its height, nothing else of it: where
+        # the note takes no new row the layout, and so every place found, stays as it is
+        if legend.get_tightbbox(renderer).height != height:
+            for artist in added:
+                artist.remove()
+            dropped, _, placed = attempt()
+        legend.get_texts()[-1].set_text(note(dropped))
+    _draw_arrows(ax, scene)
+    _draw_labels(ax, placed)  # once, where the last attempt placed them
     return dropped
 
 
@@ -664,7 +852,8 @@ def _draw_route(ax: Any, scene: _Scene, map_: Any, visits: _Visits,
                 hover_alpha: float) -> tuple[list[float], np.ndarray]:  # fmt: skip
     """Draw one flown route on the map panel, each distinct leg, hover point and corner once
     (`_Visits`), and note its route and markers in `scene`: the legs as one line, an arrow
-    along each leg longer than 2 % of the area, the parts of its legs inside obstacles (C5) in
+    along each leg longer than 2 % of the area (noted in `scene.arrows`, drawn once the layout
+    is fixed: `_draw_arrows`), the parts of its legs inside obstacles (C5) in
     red, the return leg (RTL) dotted, the corners as small white diamonds, the hover points as
     discs of area 40 + 260 T / T_max points^2. Legend entries and labels are the caller's.
 
@@ -689,11 +878,12 @@ def _draw_route(ax: Any, scene: _Scene, map_: Any, visits: _Visits,
     scene.route.extend(visits.lines)
     line = _joined(visits.lines)  # each distinct leg once (the path when none repeats)
     ax.plot(line[:, 0], line[:, 1], linestyle=linestyle, color=colour, linewidth=1.6, zorder=3)
-    for a, b in visits.legs:  # the route's order: one arrow per distinct leg
-        if np.hypot(*(b - a)) > 0.02 * max(W, H):
-            ax.annotate("", xy=a + 0.55 * (b - a), xytext=a + 0.45 * (b - a), zorder=3,
-                        arrowprops={"arrowstyle": "-|>", "color": colour, "lw": 1.4,
-                                    "mutation_scale": arrow_scale})  # fmt: skip
+    legs = visits.legs.reshape(-1, 2, 2)
+    long = legs[np.hypot(*(legs[:, 1] - legs[:, 0]).T) > 0.02 * max(W, H)]
+    if len(long):  # one arrow per distinct leg, drawn once the layout is fixed
+        a, b = long[:, 0], long[:, 1]
+        scene.arrows.append((np.stack([a + 0.45 * (b - a), a + 0.55 * (b - a)], axis=1),
+                             colour, float(arrow_scale)))  # fmt: skip
     lengths = []
     for seg in _violation_segments(map_, None, visits.legs):  # the legs already made distinct
         ax.plot(seg[:, 0], seg[:, 1], "-", color="red", linewidth=4.0, zorder=7,
@@ -745,8 +935,8 @@ def mission_figure(
     names every sensor with its final share as sorted bars (the `BARS` tightest; the rest
     summarised as min / median / max). The figure's size follows the area's shape (no wide
     white bands); `figsize` overrides it. Cost: O(J^2) for the label placement (J sensors plus
-    at most `HOVER_LABELS` hover points), O(J x samples) for the panels, and artists as many as
-    the mission's distinct legs, hover points and corners, not its passes.
+    at most `HOVER_LABELS` hover points), O(J x samples) to find where the data lines bend, and
+    an artist per label; legs, arrows, obstacles and data lines are a few collections.
 
     Args:
         map: the map (`planner_core.model.mapio.load_map`).
@@ -833,13 +1023,77 @@ def mission_figure(
     return fig
 
 
-def _final_share(timeline: Any, map_: Any) -> tuple[np.ndarray, np.ndarray]:
-    """(share over time (samples x J, %), final share (J,, %)) of each sensor's requirement."""
-    data = np.asarray(timeline.data, dtype=float)
-    required = np.asarray(map_.required_data, dtype=float)
-    share = 100.0 * data / np.maximum(required, 1e-300)[None, :]
-    share[:, required <= 0] = 100.0
-    return share, share[-1]
+def _share(data: Any, required: Any) -> np.ndarray:
+    """Data collected as a share of the requirement, %: `data` (Mbit; (..., J) against
+    `required` (J,), or any shape against one sensor's scalar); a sensor that requires
+    nothing is at 100 %."""
+    required = np.asarray(required, dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(required > 0, 100.0 * np.asarray(data, dtype=float)
+                        / np.maximum(required, 1e-300), 100.0)  # fmt: skip
+
+
+def _bends(t: np.ndarray, y: np.ndarray, tol: Any, rtol: float = 1e-9) -> list[np.ndarray]:
+    """For each column of `y`, the samples its polyline over `t` needs: the first and the last,
+    and the ends of every interval where the column changes, except where two such intervals
+    in a row have the same slope (within `rtol`). Through those only it draws the same line
+    as through every sample: where a column does not change it is flat, and a sample dropped
+    inside a straight run is checked to lie within `tol` of the thinned line (a column where
+    one does not keeps every interval's ends). NaN and jumps (a change in no time) keep their
+    samples. A replay's data is flat while flying and rises straight while hovering
+    (`sim.replay`), so tens of thousands of samples per sensor come down to a few. Cost: two
+    passes over `y`, then O(changes log changes) for the changing (interval, column) pairs.
+
+    Args:
+        t: (n,) sample times, s, non-decreasing.
+        y: (n, J) each column's value at each sample.
+        tol: the largest distance of a dropped sample from the thinned line, in units of `y`
+            (a scalar, or (J,) one per column).
+        rtol: slopes this close (relative) are one straight run.
+
+    Returns:
+        J increasing index arrays into the samples, each starting at 0 and ending at n - 1.
+    """
+    t = np.asarray(t, dtype=float)
+    y = np.asarray(y, dtype=float).reshape(len(t), -1)
+    n, J = y.shape
+    if n <= 2:
+        return [np.arange(n) for _ in range(J)]
+    dt = np.diff(t)
+    dy = np.diff(y, axis=0)
+    r, c = np.nonzero(dy)  # the (interval, column) pairs that change: NaN included
+    order = np.lexsort((r, c))  # by column, then time
+    r, c = r[order], c[order]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        slope = dy[r, c] / dt[r]  # not finite for a jump or a NaN: never straight
+    tols = np.broadcast_to(np.asarray(tol, dtype=float), (J,))
+    # straight[m]: pair m and m + 1 are adjacent intervals of one column with the same slope
+    straight = ((c[1:] == c[:-1]) & (r[1:] == r[:-1] + 1) & np.isfinite(slope[1:])
+                & np.isfinite(slope[:-1]) & (np.abs(slope[1:] - slope[:-1])
+                <= rtol * np.maximum(np.abs(slope[1:]), np.abs(slope[:-1]))))  # fmt: skip
+
+    def vertices(straight: np.ndarray) -> np.ndarray:
+        """The sorted keys column * n + sample of every column's vertices."""
+        ends = np.r_[~straight, True]  # interval m's end, unless the run goes on straight
+        starts = np.r_[True, ~straight]
+        cols = np.arange(J) * n
+        return np.unique(np.concatenate([cols, cols + n - 1, c[starts] * n + r[starts],
+                                         c[ends] * n + r[ends] + 1]))  # fmt: skip
+
+    keys = vertices(straight)
+    inner = np.flatnonzero(straight)  # the samples dropped: the end of interval m
+    if len(inner):
+        at = c[inner] * n + r[inner] + 1
+        hi = np.searchsorted(keys, at)
+        k0, k1 = keys[hi - 1] - c[inner] * n, keys[hi] - c[inner] * n
+        w = (t[r[inner] + 1] - t[k0]) / np.maximum(t[k1] - t[k0], 1e-300)
+        line = y[k0, c[inner]] + w * (y[k1, c[inner]] - y[k0, c[inner]])
+        far = np.abs(line - y[r[inner] + 1, c[inner]]) > tols[c[inner]]
+        if far.any():  # not straight within tol: that column keeps every interval's ends
+            straight = straight & ~np.isin(c[:-1], c[inner][far])
+            keys = vertices(straight)
+    cols = keys // n
+    return np.split(keys - cols * n, np.cumsum(np.bincount(cols, minlength=J))[:-1])
 
 
 def _tightest(final: np.ndarray, k: int) -> list[int]:
@@ -887,16 +1141,24 @@ def _data_panel(ax: Any, timeline: Any, map_: Any, number: Any = None) -> None:
     collection (spans less than 1/`SHADE_CELLS` of the mission time apart drawn as one), and
     numbered as on the map (`number`: the map's number of each hover visit; numbers thinned
     where they touch)."""
-    from matplotlib.collections import PolyCollection
+    from matplotlib.collections import LineCollection, PolyCollection
 
     t = np.asarray(timeline.t, dtype=float)
-    share, final = _final_share(timeline, map_)
+    data = np.asarray(timeline.data, dtype=float)
+    required = np.asarray(map_.required_data, dtype=float)
     ids = list(timeline.sensor_ids)
-    top = max(110.0, float(np.nanmax(share)) * 1.05)
+    # each sensor's line through the samples where it bends only (`_bends`: the same line to
+    # within 1e-6 % of its requirement, a few vertices instead of every sample)
+    bends = _bends(t, data, np.where(required > 0, 1e-8 * required, np.inf))
+    lines = [np.column_stack([t[k], _share(data[k, j], required[j])])
+             for j, k in enumerate(bends)]  # fmt: skip
+    final = _share(data[-1], required)
+    top = max(110.0, float(np.nanmax(np.concatenate([ln[:, 1] for ln in lines]))) * 1.05)
     named = _tightest(final, TIME_LINES)
     others = [j for j in range(len(ids)) if j not in set(named)]
-    for j in others:
-        ax.plot(t, share[:, j], linewidth=0.7, color="0.7", zorder=1)
+    if others:  # the grey lines, one collection
+        ax.add_collection(LineCollection([lines[j] for j in others], linewidths=0.7,
+                                         colors="0.7", zorder=1))  # fmt: skip
     # end labels spread apart vertically (at least 7 % of the axis) so close lines stay legible
     ys: dict[int, float] = {}
     for j in named:  # smallest final share first
@@ -906,8 +1168,8 @@ def _data_panel(ax: Any, timeline: Any, map_: Any, number: Any = None) -> None:
         ys[j] = y
     for k, j in enumerate(named):
         colour = _series_colour(k)
-        ax.plot(t, share[:, j], linewidth=1.2, color=colour, linestyle=_series_dash(k),
-                zorder=2)  # fmt: skip
+        ax.plot(lines[j][:, 0], lines[j][:, 1], linewidth=1.2, color=colour,
+                linestyle=_series_dash(k), zorder=2)  # fmt: skip
         ax.annotate(f"{ids[j]} {final[j]:.0f} %", (t[-1], final[j]),
                     xytext=(t[-1] + 0.01 * (t[-1] - t[0]), ys[j]), fontsize=7.5, color=colour,
                     va="center", annotation_clip=False, ha="left")  # fmt: skip
@@ -956,7 +1218,7 @@ def _bars_panel(ax: Any, timeline: Any, map_: Any) -> None:
     count, min, median and max."""
     from matplotlib import colormaps
 
-    _, final = _final_share(timeline, map_)
+    final = _share(np.asarray(timeline.data)[-1], map_.required_data)
     ids = list(timeline.sensor_ids)
     order = _tightest(final, len(ids))
     shown, rest = order[:BARS], order[BARS:]
@@ -1150,8 +1412,8 @@ def fleet_figure(
     beside them and in the legend), and each battery swap (a vehicle landing from sortie j and
     leaving on sortie j + 1) as a star in the vehicle's colour with "v1 swap 1". Sensors are
     coloured by the data collected over all sorties together (C4 over the whole plan).
-    Cost: O(sorties x samples) to read the replays, O(distinct legs, hover points and corners)
-    artists and at most `HOVER_LABELS` hover labels for the drawing.
+    Cost: O(sorties x samples) to read the replays, a few collections per sortie (its distinct
+    legs' arrows, hover points and corners) and at most `HOVER_LABELS` hover labels.
 
     Args:
         map: the map the sorties fly on.

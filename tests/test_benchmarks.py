@@ -601,7 +601,8 @@ def test_the_pipeline_re_measurement_in_docs_is_what_its_stored_runs_give() -> N
 @pytest.mark.slow  # measured 27 s (issue 35: default suite <= 5 min)
 def test_bench_plan_large_tables_each_map_against_t16(tmp_path: Path) -> None:
     """`bench_plan.py --large DIR`: one row per map with its plan time as a ratio to T16's in
-    the same run, feasibility and peak RSS; the runs as JSON lines."""
+    the same run, feasibility and peak RSS; the runs as JSON lines. With `--show`, each plan is
+    drawn as `show` draws it, the CPU seconds of the PNG and the SVG in the row and records."""
     import shutil
 
     folder = tmp_path / "large"
@@ -609,15 +610,18 @@ def test_bench_plan_large_tables_each_map_against_t16(tmp_path: Path) -> None:
     shutil.copy(ROOT / "examples" / "maps" / "small-demo.json", folder / "X01.json")
     out = tmp_path / "runs.jsonl"
     r = _script("benchmarks/bench_plan.py", "--large", str(folder), "--cold", "1",
-                "--budget", "300", "-o", str(out))
+                "--budget", "300", "-o", str(out), "--show")
     assert r.returncode in (0, 1), r.stderr
     lines = r.stdout.splitlines()
     assert lines[0].startswith("T16: plan()")
     row = next(s for s in lines if s.startswith("X01"))
     assert "x T16" in lines[1] and row.split()[1] == "4"  # small-demo's sensors
+    assert lines[1].endswith("show PNG s  SVG s") and all(float(v) > 0 for v in row.split()[-2:])
     runs = [json.loads(s) for s in out.read_text().splitlines()]
     assert [x["map"] for x in runs] == ["T16", "X01", "T16"]
     assert all(x["rss_mb"] > 0 and x["evaluations"] <= 300 for x in runs)
+    assert all(x[f"show_{f}"]["cpu"] > 0 for x in runs for f in ("png", "svg"))
+    assert all(x["heavy"] == [] for x in runs)  # the drawing comes after planning's record
 
 
 @pytest.mark.slow  # measured 6.0 s on a loaded machine (issue 35: default suite <= 5 min)

@@ -56,9 +56,9 @@ def _marker_boxes(fig) -> np.ndarray:
     """Every scatter and marker of the map panel as a square box in display pixels."""
     ax = fig.axes[0]
     out = []
-    for coll in ax.collections:
+    for coll in ax.collections:  # a scatter has sizes; leader lines and obstacles have none
         offs = coll.get_offsets()
-        if len(offs) and len(coll.get_sizes()):
+        if len(offs) and len(getattr(coll, "get_sizes", lambda: ())()):
             px = ax.transData.transform(offs)
             r = np.sqrt(np.broadcast_to(coll.get_sizes(), (len(px),))) / 2 * fig.dpi / 72
             out.append(np.hstack([px - r[:, None], px + r[:, None]]))
