@@ -219,7 +219,10 @@ def test_cli_bench_refuses_bad_options_before_any_run(suite: Path, tmp_path: Pat
         (["--optimizers", ""], "--optimizers: no name given"),
         (["--i-max", ","], "--i-max: no name given"),
         (["--seed", "-1"], "--seed must be an integer >= 0"),
-        (["--out", str(a_file)], "is a file, not a results folder"),
+        (["--out", str(a_file)], f"--out: {a_file}: is a file, not a folder"),
+        # under a file: a traceback at the first write (meta.json), exit 1
+        (["--out", str(a_file / "sub")], f"--out: {a_file / 'sub'}: {a_file} is a file, not "
+         "a folder"),
         (["--best-known-file", str(tmp_path / "no" / "bk.json")], "no folder"),
         (["--suite", str(tmp_path / "none")], "none: no such folder of map files"),
         (["--suite", str(a_file)], "notes.txt: no such folder of map files"),

@@ -82,7 +82,11 @@ def test_cli_train_bad_input_is_one_line_exit_2(tmp_path, capsys) -> None:  # no
         (["--maps", "1001"], "--maps: must be an integer in [1, 1,000] (the training maps' seeds"),
         (["--maps", "0"], "--maps: must be an integer in [1, 1,000]"),
         (["--bbob", "14401"], "--bbob: count must be an integer in [1, 14,400], got 14401"),
-        (["-o", str(a_file)], "is a file, not a checkpoint folder"),
+        (["-o", str(a_file)], f"-o/--output: {a_file}: is a file, not a folder"),
+        # under a file: it ran the warm start, then crashed (NotADirectoryError, exit 1)
+        (["-o", str(a_file / "sub"), "--maps", "1", "--envs", "2", "--epochs", "1", "--budget",
+          "500", "--population", "20", "--imitate-epochs", "1"],
+         f"-o/--output: {a_file / 'sub'}: {a_file} is a file, not a folder"),
     ):
         out = [] if "-o" in args else ["-o", str(tmp_path / "ck")]
         assert main(["train", *out, *args]) == 2, args
