@@ -485,7 +485,11 @@ def test_cli_bench_then_report(suite: Path, tmp_path: Path) -> None:
     assert main(args) == 0
     assert len(read_records(out / RESULTS_FILE).records) == 8
     md = tmp_path / "docs" / "results.md"
-    assert main(["report", str(out), "-o", str(md), "--reference", "random-search"]) == 0
+    # -o in a missing folder needs --mkdir, as plan's, map's and lam select's
+    assert main(["report", str(out), "-o", str(md), "--reference", "random-search"]) == 2
+    assert not md.parent.exists()
+    assert main(["report", str(out), "-o", str(md), "--reference", "random-search",
+                 "--mkdir"]) == 0
     text = md.read_text()
     head = text.splitlines()[:8]
     assert any(line.strip().startswith("lamde-mission bench --suite") for line in head)

@@ -223,6 +223,55 @@ def test_report_refuses_deep_nan_and_malformed_records_naming_the_field(
         _report_refuses(capsys, folder, needle)
 
 
+def _tree(root: Path) -> list[str]:
+    return sorted(str(p.relative_to(root)) for p in root.rglob("*"))
+
+
+def test_report_outputs_under_a_file_are_one_line_before_any_figure(tmp_path: Path,
+                                                                     capsys) -> None:
+    """A report or figures path under a file ended in a NotADirectoryError traceback (exit 1)
+    after the report's figures were drawn; now one line naming the option, exit 2, nothing
+    written (as `plan -o` and `lam select -o`)."""
+    folder = _results(tmp_path / "runs")
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    (tmp_path / "r").write_text("mine")  # where r.md's figures would go
+    before = _tree(tmp_path)
+    for args, needle in (
+        (["-o", afile / "sub" / "r.md"], f"-o/--output: {afile / 'sub' / 'r.md'}: {afile} is "
+         "a file, not a folder"),
+        (["-o", tmp_path / "x.md", "--figures", afile / "f"], f"--figures: {afile / 'f'}: "
+         f"{afile} is a file, not a folder"),
+        (["-o", tmp_path / "r.md"], f"-o/--output (its figures' folder): {tmp_path / 'r'}: is "
+         "a file, not a folder"),
+    ):
+        rc, _out, err = _run(capsys, "report", folder, *args, "--no-limits")
+        line = _one_line(rc, err)
+        assert line == f"lamde-mission report: {needle}", err
+        assert _tree(tmp_path) == before, args
+
+
+def test_report_makes_missing_folders_only_with_mkdir(tmp_path: Path, capsys) -> None:
+    """`report -o` made missing folders where `plan`, `map` and `lam select` refuse them
+    without --mkdir (exit 2); now report does as they do, for -o and --figures."""
+    folder = _results(tmp_path / "runs")
+    md = tmp_path / "new" / "deep" / "r.md"
+    rc, _out, err = _run(capsys, "report", folder, "-o", md, "--no-limits")
+    assert _one_line(rc, err) == (f"lamde-mission report: -o/--output: {md}: the folder "
+                                  f"{md.parent} does not exist (create it, or pass --mkdir)")
+    figs = tmp_path / "figs" / "f"
+    rc, _out, err = _run(capsys, "report", folder, "-o", tmp_path / "x.md", "--figures", figs,
+                         "--no-limits")
+    assert "--figures: " in _one_line(rc, err) and "pass --mkdir" in err
+    assert not (tmp_path / "new").exists() and not (tmp_path / "figs").exists()
+    assert not (tmp_path / "x.md").exists()
+    rc, out, err = _run(capsys, "report", folder, "-o", md, "--figures", figs, "--no-limits",
+                        "--mkdir")
+    assert rc == 0, err
+    assert md.read_text().startswith("# Benchmark results") and any(figs.glob("*.png"))
+    assert "--mkdir" not in md.read_text()  # not part of the command the report records
+
+
 # ----------------------------------------------------------------------------- bench's reads
 
 SUITE = MAPS / "suite"

@@ -27,8 +27,8 @@ from planner_core.bench.records import RESULTS_FILE, read_records
 from planner_core.bench.stats import ALPHA, ScoreTable, score_table
 from planner_core.defaults import SCORE_FACTOR
 
-__all__ = ["DEFAULT_REFERENCE", "build_report", "cost_section", "imax_section", "imax_table",
-           "order_optimisers", "format_table", "fmt", "study_sections"]
+__all__ = ["DEFAULT_REFERENCE", "build_report", "cost_section", "figures_folder", "imax_section",
+           "imax_table", "order_optimisers", "format_table", "fmt", "study_sections"]
 
 #: start modes in the report's order, and what each means
 INIT_ORDER = ("uniform", "seeded")
@@ -153,6 +153,20 @@ def _spread(tasks: list[str], k: int = 4) -> list[str]:
 # ----------------------------------------------------------------------------- the report
 
 
+def figures_folder(output: str | Path, figures: str | Path | None = None) -> Path:
+    """The folder a report's PNGs go to: `figures` when given, else a folder named after the
+    report beside it (docs/results/ for docs/results.md).
+
+    Args:
+        output: the markdown report's path.
+        figures: the folder asked for, or None.
+
+    Returns:
+        The folder (not created).
+    """
+    return Path(figures) if figures is not None else Path(output).with_suffix("")
+
+
 def build_report(
     results_dir: str | Path,
     output: str | Path,
@@ -245,7 +259,7 @@ def build_report(
         raise ValueError(f"policy checkpoint {policy_checkpoint}: no curve.csv")
     budgets = sorted({int(r["budget"]) for r in records})
     budget = budgets[-1]
-    figures = Path(figures) if figures is not None else output.with_suffix("")
+    figures = figures_folder(output, figures)
     suite_dir = Path(suite) if suite is not None else (Path(meta["suite"]) if "suite" in meta
                                                        else None)
 
