@@ -95,6 +95,38 @@ def test_cli_train_bad_input_is_one_line_exit_2(tmp_path, capsys) -> None:  # no
     assert not (tmp_path / "ck").exists() and a_file.read_text() == "mine"
 
 
+def test_cli_train_resume_from_a_damaged_state_is_one_line(tmp_path, capsys) -> None:  # noqa: ANN001
+    """`train --resume` on a state.pt cut short ended in torch's "PytorchStreamReader failed
+    reading zip archive" traceback, exit 1 (a state of another kind: a KeyError); now one line
+    naming the file, exit 2, the folder's files unchanged."""
+    import io
+
+    torch = pytest.importorskip("torch")
+    buf = io.BytesIO()
+    torch.save({"model": {"w": torch.zeros(64, 64)}, "epoch": 1}, buf)
+    whole = buf.getvalue()
+    ck = tmp_path / "ck"
+    ck.mkdir()
+    (ck / "weights.npz").write_bytes(b"kept")
+    state = ck / "state.pt"
+    problems = tmp_path / "p.json"
+    problems.write_text(json.dumps({"problems": [{"kind": "map",
+                                                  "path": str(MAPS / "tiny.json")}]}))
+    args = ["train", "-o", str(ck), "--resume", "--problems", str(problems), "--envs", "2",
+            "--epochs", "1", "--budget", "60", "--population", "6", "--quiet"]
+    for content, needle in ((whole[: len(whole) // 2], "not a readable training state"),
+                            (b"", "not a readable training state"),
+                            (whole, "not a training state (no optimizer, curve, config, "
+                             "specs)")):  # fmt: skip
+        state.write_bytes(content)
+        assert main(args) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith(f"lamde-mission train: --resume: {state}: "
+                                                   f"{needle}"), err
+        assert sorted(p.name for p in ck.iterdir()) == ["state.pt", "weights.npz"]
+        assert state.read_bytes() == content and (ck / "weights.npz").read_bytes() == b"kept"
+
+
 def test_cli_train_help_shows_every_default() -> None:
     """`train --help` gave no default for --maps, --epochs, --envs, --population or --budget,
     where every other command's options show theirs; the values shown are PPOConfig's."""
