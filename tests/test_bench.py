@@ -69,9 +69,9 @@ def suite(tmp_path: Path) -> Path:
 
 
 def _run(suite: Path, out: Path, executor: Any = None, optimisers: list[str] = OPTS,
-         runs: int = 2, budget: int = BUDGET) -> Any:
+         runs: int = 2, budget: int = BUDGET, log: Any = None) -> Any:
     return run_bench(suite, optimisers, runs=runs, budget=budget, out=out, command="test",
-                     executor=executor or SerialExecutor())
+                     executor=executor or SerialExecutor(), log=log)
 
 
 def _scores(out: Path) -> dict[Any, float]:
@@ -113,8 +113,12 @@ def test_resume_after_truncated_write(suite: Path, tmp_path: Path) -> None:
     (part / RESULTS_FILE).write_bytes(b"".join(lines[:3]) + lines[3][: len(lines[3]) // 2])
     read = read_records(part / RESULTS_FILE)
     assert len(read.records) == 3 and read.truncated_tail and not read.bad_lines
-    s = _run(suite, part)
+    said: list[str] = []
+    s = _run(suite, part, log=said.append)
     assert (s.done, s.skipped) == (5, 3)
+    # the wording `report` uses for the lines it skips (records.skipped_note)
+    assert f"note: {part / RESULTS_FILE}: skipped a truncated last line (an interrupted " \
+        "write)" in said
     again = read_records(part / RESULTS_FILE)
     assert not again.truncated_tail and not again.bad_lines and again.duplicates == 0
     assert len(again.records) == 8

@@ -223,6 +223,32 @@ def test_report_refuses_deep_nan_and_malformed_records_naming_the_field(
         _report_refuses(capsys, folder, needle)
 
 
+def test_report_says_on_stderr_which_lines_it_skipped(tmp_path: Path, capsys) -> None:
+    """A garbage line or a record without "task" in the middle of results.jsonl was skipped
+    with a note inside the markdown only: exit 0 and tables over fewer runs, nothing on the
+    terminal. Now the note `bench` prints when it resumes the folder (file and line numbers)
+    is on stderr too; still exit 0, as bench runs those runs again and goes on (an error here
+    would refuse a folder bench calls whole)."""
+    r0, r1, r2 = _records()
+    folder = _results(tmp_path / "runs", records=[])
+    lines = [json.dumps(r0), "garbage{", json.dumps({k: v for k, v in r1.items() if k != "task"}),
+             json.dumps(r2), json.dumps(r0)]
+    results = folder / "results.jsonl"
+    results.write_text("\n".join(lines) + "\n" + json.dumps(r1)[:40])  # a cut last line
+    rc, out, err = _run(capsys, "report", folder, "-o", tmp_path / "r.md", "--no-limits")
+    assert rc == 0, err
+    assert err.splitlines() == [f"note: {results}: skipped a truncated last line (an "
+                                "interrupted write), unreadable lines [2, 3], 1 duplicate run; "
+                                "their runs are not in the report"]
+    assert out.splitlines() == [f"report: wrote {tmp_path / 'r.md'}"]
+    assert ("Note: skipped in the results file: a truncated last line (an interrupted write), "
+            "unreadable lines [2, 3], 1 duplicate run.") in (tmp_path / "r.md").read_text()
+    # a whole file: no note
+    _results(folder, records=[r0, r1, r2])
+    rc, out, err = _run(capsys, "report", folder, "-o", tmp_path / "r.md", "--no-limits")
+    assert rc == 0 and err == "", err
+
+
 def _tree(root: Path) -> list[str]:
     return sorted(str(p.relative_to(root)) for p in root.rglob("*"))
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import shlex
+import sys
 
 from lamde_mission.errors import UsageError
 
@@ -114,14 +115,18 @@ def run(args: argparse.Namespace) -> int:
     check_outputs([("-o/--output", args.output)], mkdir=args.mkdir)
     check_output_folder("--figures" if args.figures else "-o/--output (its figures' folder)",
                         figures_folder(args.output, args.figures), mkdir=args.mkdir)
+    notes: list[str] = []  # lines not read in a results file: said once the report is made
     try:
         out = build_report(args.results, args.output,
                            reference=args.reference or DEFAULT_REFERENCE,
                            suite=args.suite, figures=args.figures, path_tasks=tasks,
                            limits=not args.no_limits, command=_command(args, tasks),
                            policy_checkpoint=args.policy_checkpoint, title=args.title,
-                           imax=args.imax, ablations=args.ablations)
+                           imax=args.imax, ablations=args.ablations,
+                           log=notes.append)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
+    for note in notes:  # as `bench` says them when it resumes the folder
+        print(note, file=sys.stderr)
     print(f"report: wrote {out}")
     return 0
