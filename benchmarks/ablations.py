@@ -373,7 +373,8 @@ def main(argv: list[str] | None = None) -> int:
     _log(args, f"steps: training sets {t1 - t0:.1f} s, trainings {t2 - t1:.1f} s, "
                f"evaluation {t3 - t2:.1f} s")
     if args.report:
-        argv_r = ["report", str(out), "-o", args.report, "--title", args.title]
+        # --mkdir: the report comes after hours of runs; its folder is made, as it always was
+        argv_r = ["report", str(out), "-o", args.report, "--title", args.title, "--mkdir"]
         if args.no_limits:
             argv_r.append("--no-limits")
         rc = cli(argv_r)

@@ -69,9 +69,9 @@ def suite(tmp_path: Path) -> Path:
 
 
 def _run(suite: Path, out: Path, executor: Any = None, optimisers: list[str] = OPTS,
-         runs: int = 2, budget: int = BUDGET) -> Any:
+         runs: int = 2, budget: int = BUDGET, log: Any = None) -> Any:
     return run_bench(suite, optimisers, runs=runs, budget=budget, out=out, command="test",
-                     executor=executor or SerialExecutor())
+                     executor=executor or SerialExecutor(), log=log)
 
 
 def _scores(out: Path) -> dict[Any, float]:
@@ -113,8 +113,12 @@ def test_resume_after_truncated_write(suite: Path, tmp_path: Path) -> None:
     (part / RESULTS_FILE).write_bytes(b"".join(lines[:3]) + lines[3][: len(lines[3]) // 2])
     read = read_records(part / RESULTS_FILE)
     assert len(read.records) == 3 and read.truncated_tail and not read.bad_lines
-    s = _run(suite, part)
+    said: list[str] = []
+    s = _run(suite, part, log=said.append)
     assert (s.done, s.skipped) == (5, 3)
+    # the wording `report` uses for the lines it skips (records.skipped_note)
+    assert f"note: {part / RESULTS_FILE}: skipped a truncated last line (an interrupted " \
+        "write)" in said
     again = read_records(part / RESULTS_FILE)
     assert not again.truncated_tail and not again.bad_lines and again.duplicates == 0
     assert len(again.records) == 8
@@ -219,7 +223,10 @@ def test_cli_bench_refuses_bad_options_before_any_run(suite: Path, tmp_path: Pat
         (["--optimizers", ""], "--optimizers: no name given"),
         (["--i-max", ","], "--i-max: no name given"),
         (["--seed", "-1"], "--seed must be an integer >= 0"),
-        (["--out", str(a_file)], "is a file, not a results folder"),
+        (["--out", str(a_file)], f"--out: {a_file}: is a file, not a folder"),
+        # under a file: a traceback at the first write (meta.json), exit 1
+        (["--out", str(a_file / "sub")], f"--out: {a_file / 'sub'}: {a_file} is a file, not "
+         "a folder"),
         (["--best-known-file", str(tmp_path / "no" / "bk.json")], "no folder"),
         (["--suite", str(tmp_path / "none")], "none: no such folder of map files"),
         (["--suite", str(a_file)], "notes.txt: no such folder of map files"),
@@ -482,7 +489,11 @@ def test_cli_bench_then_report(suite: Path, tmp_path: Path) -> None:
     assert main(args) == 0
     assert len(read_records(out / RESULTS_FILE).records) == 8
     md = tmp_path / "docs" / "results.md"
-    assert main(["report", str(out), "-o", str(md), "--reference", "random-search"]) == 0
+    # -o in a missing folder needs --mkdir, as plan's, map's and lam select's
+    assert main(["report", str(out), "-o", str(md), "--reference", "random-search"]) == 2
+    assert not md.parent.exists()
+    assert main(["report", str(out), "-o", str(md), "--reference", "random-search",
+                 "--mkdir"]) == 0
     text = md.read_text()
     head = text.splitlines()[:8]
     assert any(line.strip().startswith("lamde-mission bench --suite") for line in head)

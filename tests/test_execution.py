@@ -156,6 +156,70 @@ print(json.dumps({"env": {k: os.environ[k] for k in SINGLE_THREAD_ENV},
     assert got["numba"] == 1  # numba was loaded already: capped at run time
 
 
+_CTRL_C_WORKER = """
+import os, signal, sys
+import lamde_mission
+from planner_core.execution.local import _init_worker
+# the handler the worker starts with: the console script's (its spawned main module imports
+# lamde_mission as `lamde-mission` does), or SIGINT ignored (a background job's)
+signal.signal(signal.SIGINT, lamde_mission._quit_on_sigint if sys.argv[1] == "script"
+              else signal.SIG_IGN)
+_init_worker({})
+os.kill(os.getpid(), signal.SIGINT)
+print("still running")
+"""
+
+
+@pytest.mark.skipif(os.name != "posix", reason="a SIGINT sent with os.kill")
+def test_a_worker_ends_quietly_on_ctrl_c_and_keeps_an_ignored_one() -> None:
+    """`bench --jobs 2` stopped by Ctrl-C printed "lamde-mission: interrupted" three times: each
+    worker (the console script's start-up handler, installed as the spawned worker re-imports
+    the script) and the parent. The pool initializer now makes a worker end at once without a
+    word (the parent says it, once); a SIGINT its parent ignored stays ignored."""
+    def run(mode: str) -> subprocess.CompletedProcess[str]:
+        return subprocess.run([sys.executable, "-c", _CTRL_C_WORKER, mode], capture_output=True,
+                              text=True, timeout=120)
+
+    r = run("script")
+    assert (r.returncode, r.stdout, r.stderr) == (130, "", "")
+    r = run("ignored")
+    assert (r.returncode, r.stdout, r.stderr) == (0, "still running\n", "")
+
+
+def _ctrl_c_self(_item: int) -> int:
+    """A pool item that sends its worker a SIGINT, as a terminal's Ctrl-C reaches every
+    process of the group; the worker's handler ends it before the sleep does."""
+    import signal
+    import time
+
+    os.kill(os.getpid(), signal.SIGINT)
+    time.sleep(60)
+    return 0
+
+
+@pytest.mark.skipif(os.name != "posix", reason="a SIGINT sent with os.kill")
+def test_a_pool_worker_stopped_by_ctrl_c_ends_without_a_word(capfd) -> None:
+    """In the pool, a Ctrl-C ends the worker (its run is lost, as the parent stops too)
+    without a line or a traceback, rather than coming back to the parent as the item's
+    KeyboardInterrupt."""
+    from concurrent.futures.process import BrokenProcessPool
+
+    ex = ProcessExecutor(1)
+    try:
+        try:
+            list(ex.map_unordered(_ctrl_c_self, [0]))
+            got = "returned"
+        except BrokenProcessPool:
+            got = "ended"
+        except KeyboardInterrupt:  # the worker's, raised again here
+            got = "KeyboardInterrupt"
+    finally:
+        ex.close()
+    assert got == "ended"
+    err = capfd.readouterr().err
+    assert "interrupted" not in err and "Traceback" not in err, err
+
+
 @pytest.mark.skipif(os.name != "posix", reason="POSIX re-parents orphans; Windows does not")
 def test_pool_workers_end_when_their_parent_is_killed(tmp_path) -> None:
     """A parent killed outright (SIGKILL: no shutdown) leaves no worker running on: each

@@ -73,6 +73,31 @@ def test_a_key_out_of_range_is_one_line_naming_the_field(tmp_path, part, field, 
                    f"got {shown}")  # fmt: skip
 
 
+@pytest.mark.parametrize(("fmt", "shown"), [("lamde-trainset/9", "'lamde-trainset/9'"),
+                                             (9, "9"), (None, "missing")])
+def test_another_format_version_names_it_and_the_one_read(tmp_path, fmt, shown) -> None:
+    """A training set of another format version said `problems[0] must be an object with
+    'kind'` through `train --problems` (its entries taken for specs); now both readers name
+    the version found and the one read."""
+    from planner_core.learning.policy.problems import read_trainset
+
+    doc = _doc()
+    if fmt is None:
+        del doc["format"]
+    else:
+        doc["format"] = fmt
+    path = _write(tmp_path, doc)
+    want = (f"{path}: format: {shown}, not a version this program reads (it reads "
+            "'lamde-trainset/1')")
+    with pytest.raises(ValueError) as err:
+        load_trainset(path)
+    assert str(err.value) == want
+    if fmt is not None:  # without a format, train reads a file of problem specs
+        with pytest.raises(ValueError) as err:
+            read_trainset(path)
+        assert str(err.value) == f"--problems: {want}"
+
+
 def test_more_problems_than_the_database_holds_are_refused(tmp_path) -> None:
     path = _write(tmp_path, _doc(MAX_PROBLEMS + 1))
     with pytest.raises(ValueError, match=r"problems: 14,401 entries, more than the limit of "

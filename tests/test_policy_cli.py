@@ -82,13 +82,49 @@ def test_cli_train_bad_input_is_one_line_exit_2(tmp_path, capsys) -> None:  # no
         (["--maps", "1001"], "--maps: must be an integer in [1, 1,000] (the training maps' seeds"),
         (["--maps", "0"], "--maps: must be an integer in [1, 1,000]"),
         (["--bbob", "14401"], "--bbob: count must be an integer in [1, 14,400], got 14401"),
-        (["-o", str(a_file)], "is a file, not a checkpoint folder"),
+        (["-o", str(a_file)], f"-o/--output: {a_file}: is a file, not a folder"),
+        # under a file: it ran the warm start, then crashed (NotADirectoryError, exit 1)
+        (["-o", str(a_file / "sub"), "--maps", "1", "--envs", "2", "--epochs", "1", "--budget",
+          "500", "--population", "20", "--imitate-epochs", "1"],
+         f"-o/--output: {a_file / 'sub'}: {a_file} is a file, not a folder"),
     ):
         out = [] if "-o" in args else ["-o", str(tmp_path / "ck")]
         assert main(["train", *out, *args]) == 2, args
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and needle in err[0], (args, err)
     assert not (tmp_path / "ck").exists() and a_file.read_text() == "mine"
+
+
+def test_cli_train_resume_from_a_damaged_state_is_one_line(tmp_path, capsys) -> None:  # noqa: ANN001
+    """`train --resume` on a state.pt cut short ended in torch's "PytorchStreamReader failed
+    reading zip archive" traceback, exit 1 (a state of another kind: a KeyError); now one line
+    naming the file, exit 2, the folder's files unchanged."""
+    import io
+
+    torch = pytest.importorskip("torch")
+    buf = io.BytesIO()
+    torch.save({"model": {"w": torch.zeros(64, 64)}, "epoch": 1}, buf)
+    whole = buf.getvalue()
+    ck = tmp_path / "ck"
+    ck.mkdir()
+    (ck / "weights.npz").write_bytes(b"kept")
+    state = ck / "state.pt"
+    problems = tmp_path / "p.json"
+    problems.write_text(json.dumps({"problems": [{"kind": "map",
+                                                  "path": str(MAPS / "tiny.json")}]}))
+    args = ["train", "-o", str(ck), "--resume", "--problems", str(problems), "--envs", "2",
+            "--epochs", "1", "--budget", "60", "--population", "6", "--quiet"]
+    for content, needle in ((whole[: len(whole) // 2], "not a readable training state"),
+                            (b"", "not a readable training state"),
+                            (whole, "not a training state (no optimizer, curve, config, "
+                             "specs)")):  # fmt: skip
+        state.write_bytes(content)
+        assert main(args) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith(f"lamde-mission train: --resume: {state}: "
+                                                   f"{needle}"), err
+        assert sorted(p.name for p in ck.iterdir()) == ["state.pt", "weights.npz"]
+        assert state.read_bytes() == content and (ck / "weights.npz").read_bytes() == b"kept"
 
 
 def test_cli_train_help_shows_every_default() -> None:

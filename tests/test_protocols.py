@@ -73,7 +73,7 @@ def test_bench_both_modes_resume_keys_and_report_sections(suite: Path, tmp_path:
     from lamde_mission.cli import main
 
     md = tmp_path / "docs" / "r.md"
-    assert main(["report", str(out), "-o", str(md)]) == 0
+    assert main(["report", str(out), "-o", str(md), "--mkdir"]) == 0
     text = md.read_text()
     assert text.index("## Protocol: init uniform") < text.index("## Protocol: init seeded")
     assert "runs per optimiser, task and start mode: 1." in text

@@ -223,6 +223,81 @@ def test_report_refuses_deep_nan_and_malformed_records_naming_the_field(
         _report_refuses(capsys, folder, needle)
 
 
+def test_report_says_on_stderr_which_lines_it_skipped(tmp_path: Path, capsys) -> None:
+    """A garbage line or a record without "task" in the middle of results.jsonl was skipped
+    with a note inside the markdown only: exit 0 and tables over fewer runs, nothing on the
+    terminal. Now the note `bench` prints when it resumes the folder (file and line numbers)
+    is on stderr too; still exit 0, as bench runs those runs again and goes on (an error here
+    would refuse a folder bench calls whole)."""
+    r0, r1, r2 = _records()
+    folder = _results(tmp_path / "runs", records=[])
+    lines = [json.dumps(r0), "garbage{", json.dumps({k: v for k, v in r1.items() if k != "task"}),
+             json.dumps(r2), json.dumps(r0)]
+    results = folder / "results.jsonl"
+    results.write_text("\n".join(lines) + "\n" + json.dumps(r1)[:40])  # a cut last line
+    rc, out, err = _run(capsys, "report", folder, "-o", tmp_path / "r.md", "--no-limits")
+    assert rc == 0, err
+    assert err.splitlines() == [f"note: {results}: skipped a truncated last line (an "
+                                "interrupted write), unreadable lines [2, 3], 1 duplicate run; "
+                                "their runs are not in the report"]
+    assert out.splitlines() == [f"report: wrote {tmp_path / 'r.md'}"]
+    assert ("Note: skipped in the results file: a truncated last line (an interrupted write), "
+            "unreadable lines [2, 3], 1 duplicate run.") in (tmp_path / "r.md").read_text()
+    # a whole file: no note
+    _results(folder, records=[r0, r1, r2])
+    rc, out, err = _run(capsys, "report", folder, "-o", tmp_path / "r.md", "--no-limits")
+    assert rc == 0 and err == "", err
+
+
+def _tree(root: Path) -> list[str]:
+    return sorted(str(p.relative_to(root)) for p in root.rglob("*"))
+
+
+def test_report_outputs_under_a_file_are_one_line_before_any_figure(tmp_path: Path,
+                                                                     capsys) -> None:
+    """A report or figures path under a file ended in a NotADirectoryError traceback (exit 1)
+    after the report's figures were drawn; now one line naming the option, exit 2, nothing
+    written (as `plan -o` and `lam select -o`)."""
+    folder = _results(tmp_path / "runs")
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    (tmp_path / "r").write_text("mine")  # where r.md's figures would go
+    before = _tree(tmp_path)
+    for args, needle in (
+        (["-o", afile / "sub" / "r.md"], f"-o/--output: {afile / 'sub' / 'r.md'}: {afile} is "
+         "a file, not a folder"),
+        (["-o", tmp_path / "x.md", "--figures", afile / "f"], f"--figures: {afile / 'f'}: "
+         f"{afile} is a file, not a folder"),
+        (["-o", tmp_path / "r.md"], f"-o/--output (its figures' folder): {tmp_path / 'r'}: is "
+         "a file, not a folder"),
+    ):
+        rc, _out, err = _run(capsys, "report", folder, *args, "--no-limits")
+        line = _one_line(rc, err)
+        assert line == f"lamde-mission report: {needle}", err
+        assert _tree(tmp_path) == before, args
+
+
+def test_report_makes_missing_folders_only_with_mkdir(tmp_path: Path, capsys) -> None:
+    """`report -o` made missing folders where `plan`, `map` and `lam select` refuse them
+    without --mkdir (exit 2); now report does as they do, for -o and --figures."""
+    folder = _results(tmp_path / "runs")
+    md = tmp_path / "new" / "deep" / "r.md"
+    rc, _out, err = _run(capsys, "report", folder, "-o", md, "--no-limits")
+    assert _one_line(rc, err) == (f"lamde-mission report: -o/--output: {md}: the folder "
+                                  f"{md.parent} does not exist (create it, or pass --mkdir)")
+    figs = tmp_path / "figs" / "f"
+    rc, _out, err = _run(capsys, "report", folder, "-o", tmp_path / "x.md", "--figures", figs,
+                         "--no-limits")
+    assert "--figures: " in _one_line(rc, err) and "pass --mkdir" in err
+    assert not (tmp_path / "new").exists() and not (tmp_path / "figs").exists()
+    assert not (tmp_path / "x.md").exists()
+    rc, out, err = _run(capsys, "report", folder, "-o", md, "--figures", figs, "--no-limits",
+                        "--mkdir")
+    assert rc == 0, err
+    assert md.read_text().startswith("# Benchmark results") and any(figs.glob("*.png"))
+    assert "--mkdir" not in md.read_text()  # not part of the command the report records
+
+
 # ----------------------------------------------------------------------------- bench's reads
 
 SUITE = MAPS / "suite"

@@ -349,6 +349,27 @@ def test_the_trainer_refuses_bad_settings_before_any_work(tmp_path, capsys, flag
     assert not (tmp_path / "ck").exists()
 
 
+def test_the_trainer_without_torch_is_one_line_exit_2(tmp_path) -> None:
+    """`python -m planner_core.learning.schedule_ppo` without torch ended in the import's
+    ModuleNotFoundError traceback (exit 1), where `lamde-mission train` says it needs torch in
+    one line (exit 2); now the module's command line says so too. Torch is hidden as an
+    uninstalled one is (sys.modules["torch"] = None), the module run as `-m` runs it."""
+    import subprocess
+    import sys
+
+    from tests.conftest import ROOT
+
+    code = ("import runpy, sys; sys.modules['torch'] = None; "
+            f"sys.argv = ['schedule_ppo', '-o', {str(tmp_path / 'ck')!r}]; "
+            "runpy.run_module('planner_core.learning.schedule_ppo', run_name='__main__', "
+            "alter_sys=True)")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT,
+                       timeout=120)
+    assert r.returncode == 2, r.stderr
+    assert r.stderr == "schedule_ppo: needs torch: pip install 'lamde-mission[train]'\n"
+    assert r.stdout == "" and not (tmp_path / "ck").exists()
+
+
 def test_the_trainer_refuses_a_bad_maps_file_or_output_before_any_work(tmp_path,
                                                                         capsys) -> None:
     pytest.importorskip("torch")

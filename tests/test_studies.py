@@ -99,7 +99,7 @@ def test_report_sections_from_study_folders_and_their_slim_copies(
     md = tmp_path / "docs" / "results.md"
     assert main(["report", str(studies["main"]), "-o", str(md), "--no-limits", "--reference",
                  "de-lamde", "--imax", str(studies["imax"]), "--ablations",
-                 str(studies["abl"])]) == 0
+                 str(studies["abl"]), "--mkdir"]) == 0
     text = md.read_text()
     command = text.split("Report produced by:")[1].splitlines()[2]
     assert f"--imax {studies['imax']} --ablations {studies['abl']}" in command

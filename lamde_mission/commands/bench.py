@@ -8,7 +8,11 @@ import shlex
 import sys
 from pathlib import Path
 
-from lamde_mission.commands._common import add_executor_args, check_executor_args
+from lamde_mission.commands._common import (
+    add_executor_args,
+    check_executor_args,
+    check_output_folder,
+)
 from lamde_mission.errors import UsageError
 from planner_core import defaults as D
 
@@ -168,8 +172,6 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"--jobs must be >= 0 (got {args.jobs})")
     if args.seed < 0:
         raise UsageError(f"--seed must be an integer >= 0 (got {args.seed})")
-    if Path(args.out).exists() and not Path(args.out).is_dir():
-        raise UsageError(f"--out {args.out}: is a file, not a results folder")
     if args.best_known_file and not args.no_best_known_update:
         folder = Path(args.best_known_file).parent
         if not folder.is_dir():
@@ -188,6 +190,9 @@ def run(args: argparse.Namespace) -> int:
             raise UsageError(f"no optimiser of the default set can run here: {lacking}")
         print(f"note: {lacking}; running the other {counted(len(optimisers), 'optimiser')}",
               file=sys.stderr)
+    # the results folder last of the options, before any run: a file in the way (a traceback
+    # at the first write), a read-only folder; a missing one is made, as every run's write does
+    check_output_folder("--out", args.out, mkdir=True)
     command = _command(args, optimisers, tasks)
     best_known: str | bool = False if args.no_best_known_update else (
         args.best_known_file or True)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import shlex
+import sys
 
 from lamde_mission.errors import UsageError
 
@@ -51,6 +52,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--ablations", metavar="DIR",
                    help="add the ablation study (paper Table 3, Fig. 3) from this folder "
                    "(`benchmarks/ablations.py --out DIR`, or its slim copy)")
+    p.add_argument("--mkdir", action="store_true",
+                   help="create missing folders of -o and --figures (otherwise exit 2)")
     return p
 
 
@@ -87,13 +90,16 @@ def run(args: argparse.Namespace) -> int:
         0 when the report is written.
 
     Raises:
-        UsageError: RESULTS (or --imax, --ablations) holds no results.jsonl, or the report
-            cannot be built from it (one line, exit 2).
+        UsageError: RESULTS (or --imax, --ablations) holds no results.jsonl, -o or the
+            figures' folder cannot be written (a file in the way, a missing folder without
+            --mkdir, a read-only folder), or the report cannot be built from it (one line,
+            exit 2).
     """
     from pathlib import Path
 
+    from lamde_mission.commands._common import check_output_folder, check_outputs
     from planner_core.bench._io import stored_path
-    from planner_core.bench.report import DEFAULT_REFERENCE, build_report
+    from planner_core.bench.report import DEFAULT_REFERENCE, build_report, figures_folder
 
     def has_results(folder: str) -> bool:  # plain, or gzip-compressed as docs/ keeps them
         return stored_path(Path(folder) / "results.jsonl").exists()
@@ -104,14 +110,23 @@ def run(args: argparse.Namespace) -> int:
         if folder and not has_results(folder):
             raise UsageError(f"{flag} {folder}: no results.jsonl")
     tasks = [t for v in args.path_tasks for t in v.split(",") if t] if args.path_tasks else None
+    # before any figure: a file in the way (a traceback after the first figures), a missing
+    # folder without --mkdir (as plan, map and lam select), a read-only folder
+    check_outputs([("-o/--output", args.output)], mkdir=args.mkdir)
+    check_output_folder("--figures" if args.figures else "-o/--output (its figures' folder)",
+                        figures_folder(args.output, args.figures), mkdir=args.mkdir)
+    notes: list[str] = []  # lines not read in a results file: said once the report is made
     try:
         out = build_report(args.results, args.output,
                            reference=args.reference or DEFAULT_REFERENCE,
                            suite=args.suite, figures=args.figures, path_tasks=tasks,
                            limits=not args.no_limits, command=_command(args, tasks),
                            policy_checkpoint=args.policy_checkpoint, title=args.title,
-                           imax=args.imax, ablations=args.ablations)
+                           imax=args.imax, ablations=args.ablations,
+                           log=notes.append)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
+    for note in notes:  # as `bench` says them when it resumes the folder
+        print(note, file=sys.stderr)
     print(f"report: wrote {out}")
     return 0

@@ -15,7 +15,11 @@ import json
 import sys
 from pathlib import Path
 
-from lamde_mission.commands._common import add_executor_args, check_executor_args
+from lamde_mission.commands._common import (
+    add_executor_args,
+    check_executor_args,
+    check_output_folder,
+)
 from planner_core import defaults as D
 
 
@@ -203,16 +207,15 @@ def run(args: argparse.Namespace) -> int:
         0 when training ends.
 
     Raises:
-        UsageError: torch is missing, a bad option, OUT a file or an existing checkpoint
-            without --resume, a bad training set, or `ppo.train` refuses (one line, exit 2).
+        UsageError: torch is missing, a bad option, OUT a file, under a file or not writable,
+            an existing checkpoint without --resume, a bad training set, or `ppo.train`
+            refuses (one line, exit 2).
     """
     from lamde_mission.errors import UsageError
 
     _need_torch()
     cfg = _config(args)
     out = Path(args.output)
-    if out.exists() and not out.is_dir():
-        raise UsageError(f"-o {args.output}: is a file, not a checkpoint folder")
     if not args.resume and (out / "weights.npz").exists():
         raise UsageError(f"-o {args.output}: holds a checkpoint already: --resume continues "
                          "it; give another folder to train a new one")
@@ -256,6 +259,9 @@ def run(args: argparse.Namespace) -> int:
         except ValueError as exc:
             raise UsageError(f"--maps: {exc}") from None
     specs = with_encoding(specs, variable_length=not args.fixed_length)
+    # the last check, before the warm start: a file in the way (it crashed after the warm
+    # start), a read-only folder; a missing one is made, as the first checkpoint's write does
+    check_output_folder("-o/--output", out, mkdir=True)
     from planner_core.execution import SerialExecutor, make_executor
 
     progress = None if args.quiet else ppo.text_progress()

@@ -17,7 +17,7 @@ from typing import IO, Any, NamedTuple
 from planner_core.bench._io import read_maybe_gz, stored_path
 
 __all__ = ["RESULTS_FILE", "Key", "key_of", "read_records", "ResultsWriter", "ReadReport",
-           "complete_runs", "slim_record"]
+           "complete_runs", "slim_record", "skipped_parts", "skipped_note"]
 
 #: the results file inside a benchmark output folder
 RESULTS_FILE = "results.jsonl"
@@ -179,6 +179,44 @@ def read_records(path: str | Path) -> ReadReport:
         seen.add(k)
         records.append(rec)
     return ReadReport(records, truncated, bad, dup)
+
+
+def skipped_parts(read: ReadReport) -> list[str]:
+    """What a read of a results file left out, one phrase each: "a truncated last line (an
+    interrupted write)", "unreadable lines [2, 3]", "1 duplicate run". The one wording of the
+    report's note and of the notes `bench` and `report` print.
+
+    Args:
+        read: what `read_records` returned.
+
+    Returns:
+        The phrases, in that order; [] when nothing was left out.
+    """
+    from planner_core.textio import counted, for_count
+
+    return ((["a truncated last line (an interrupted write)"] if read.truncated_tail else [])
+            + ([f"unreadable {for_count(len(read.bad_lines), 'line')} {read.bad_lines}"]
+               if read.bad_lines else [])
+            + ([counted(read.duplicates, "duplicate run")] if read.duplicates else []))
+
+
+def skipped_note(path: str | Path, read: ReadReport) -> str | None:
+    """The note a command prints when a read of a results file left lines out: "note: PATH:
+    skipped unreadable lines [2, 3]" (`skipped_parts`; the file `stored_path` reads, escaped).
+
+    Args:
+        path: the results file read (with or without .gz, as given to `read_records`).
+        read: what `read_records` returned for it.
+
+    Returns:
+        The note (one line), or None when nothing was left out.
+    """
+    from planner_core.textio import printable
+
+    parts = skipped_parts(read)
+    if not parts:
+        return None
+    return f"note: {printable(str(stored_path(path)))}: skipped {', '.join(parts)}"
 
 
 def complete_runs(records: list[dict[str, Any]]) -> tuple[list[dict[str, Any]], list[int]]:

@@ -16,19 +16,25 @@ from __future__ import annotations
 import math
 import os
 from collections import defaultdict
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from planner_core.bench._io import read_meta, write_text_atomic
-from planner_core.bench.records import RESULTS_FILE, read_records
+from planner_core.bench.records import (
+    RESULTS_FILE,
+    ReadReport,
+    read_records,
+    skipped_note,
+    skipped_parts,
+)
 from planner_core.bench.stats import ALPHA, ScoreTable, score_table
 from planner_core.defaults import SCORE_FACTOR
 
-__all__ = ["DEFAULT_REFERENCE", "build_report", "cost_section", "imax_section", "imax_table",
-           "order_optimisers", "format_table", "fmt", "study_sections"]
+__all__ = ["DEFAULT_REFERENCE", "build_report", "cost_section", "figures_folder", "imax_section",
+           "imax_table", "order_optimisers", "format_table", "fmt", "study_sections"]
 
 #: start modes in the report's order, and what each means
 INIT_ORDER = ("uniform", "seeded")
@@ -153,6 +159,20 @@ def _spread(tasks: list[str], k: int = 4) -> list[str]:
 # ----------------------------------------------------------------------------- the report
 
 
+def figures_folder(output: str | Path, figures: str | Path | None = None) -> Path:
+    """The folder a report's PNGs go to: `figures` when given, else a folder named after the
+    report beside it (docs/results/ for docs/results.md).
+
+    Args:
+        output: the markdown report's path.
+        figures: the folder asked for, or None.
+
+    Returns:
+        The folder (not created).
+    """
+    return Path(figures) if figures is not None else Path(output).with_suffix("")
+
+
 def build_report(
     results_dir: str | Path,
     output: str | Path,
@@ -168,6 +188,7 @@ def build_report(
     title: str = "Benchmark results",
     imax: str | Path | None = None,
     ablations: str | Path | None = None,
+    log: Callable[[str], None] | None = None,
 ) -> Path:
     """Write the markdown report of `results_dir` to `output` (figures beside it); return it.
 
@@ -198,6 +219,10 @@ def build_report(
         imax: benchmark folder of the I_max study, reported in its own section after the
             protocols (`study_sections`).
         ablations: benchmark folder of the ablation study, likewise.
+        log: receives a note (`records.skipped_note`) for each results file read (this
+            folder's and the studies') whose lines were not all read: a cut last line, an
+            unreadable line, a duplicate run; their runs are left out of the report, which
+            says so too.
 
     Returns:
         `output`.
@@ -215,6 +240,7 @@ def build_report(
     records = read.records
     if not records:
         raise ValueError(f"no results in {results_dir / RESULTS_FILE}")
+    _note_skipped(results_dir / RESULTS_FILE, read, log)
     meta = read_meta(results_dir)
     present = sorted({r["optimiser"] for r in records})
     from planner_core.bench.ablation import META_KEY, ablation_section
@@ -245,7 +271,7 @@ def build_report(
         raise ValueError(f"policy checkpoint {policy_checkpoint}: no curve.csv")
     budgets = sorted({int(r["budget"]) for r in records})
     budget = budgets[-1]
-    figures = Path(figures) if figures is not None else output.with_suffix("")
+    figures = figures_folder(output, figures)
     suite_dir = Path(suite) if suite is not None else (Path(meta["suite"]) if "suite" in meta
                                                        else None)
 
@@ -287,9 +313,7 @@ def build_report(
         desc = (REGISTRY[o].description if o in REGISTRY else
                 meta.get("optimisers", {}).get(o, {}).get("description", "(not in the registry)"))
         L.append(f"| {o} | {desc} |")
-    skipped = ((["a truncated last line (an interrupted write)"] if read.truncated_tail else [])
-               + ([f"unreadable line(s) {read.bad_lines}"] if read.bad_lines else [])
-               + ([f"{read.duplicates} duplicate run(s)"] if read.duplicates else []))
+    skipped = skipped_parts(read)
     if skipped:
         L += ["", f"Note: skipped in the results file: {', '.join(skipped)}."]
     if len(budgets) > 1:
@@ -316,7 +340,7 @@ def build_report(
                           reference=reference, alpha=alpha)
     if ablation:
         L += ablation_section(main, ablation, figures, lambda p: _rel(p, output.parent), alpha)
-    L += study_sections(output, figures, imax=imax, ablations=ablations, alpha=alpha,
+    L += study_sections(output, figures, imax=imax, ablations=ablations, alpha=alpha, log=log,
                         reference=reference)
     L += cost_section(records, policy_checkpoint)
     write_text_atomic(output, "\n".join(L) + "\n")
@@ -569,13 +593,23 @@ def _study_source(folder: Path, meta: dict[str, Any], left_out: list[int],
     return L
 
 
-def _study_records(folder: Path, what: str) -> tuple[list[dict[str, Any]], dict[str, Any],
-                                                      list[int]]:
+def _note_skipped(path: Path, read: ReadReport, log: Callable[[str], None] | None) -> None:
+    """`log` the note on the lines a read of results file `path` left out, if any (the
+    report's tables are over the runs read)."""
+    note = skipped_note(path, read)
+    if note is not None and log is not None:
+        log(f"{note}; their runs are not in the report")
+
+
+def _study_records(folder: Path, what: str, log: Callable[[str], None] | None = None
+                   ) -> tuple[list[dict[str, Any]], dict[str, Any], list[int]]:
     from planner_core.bench.records import complete_runs
 
-    recs = read_records(folder / RESULTS_FILE).records
+    read = read_records(folder / RESULTS_FILE)
+    recs = read.records
     if not recs:
         raise ValueError(f"--{what} {folder}: no results in {folder / RESULTS_FILE}")
+    _note_skipped(folder / RESULTS_FILE, read, log)
     kept, left_out = complete_runs(recs)
     if not kept:
         raise ValueError(f"--{what} {folder}: no run index is finished in every cell yet")
@@ -584,7 +618,8 @@ def _study_records(folder: Path, what: str) -> tuple[list[dict[str, Any]], dict[
 
 def study_sections(output: str | Path, figures: str | Path, *, imax: str | Path | None = None,
                    ablations: str | Path | None = None, alpha: float = ALPHA,
-                   reference: str | None = None) -> list[str]:
+                   reference: str | None = None,
+                   log: Callable[[str], None] | None = None) -> list[str]:
     """Markdown of the ablation study and the I_max study, each from its own benchmark folder
     (`benchmarks/ablations.py --out DIR` with its meta.json ablation entry; `lamde-mission
     bench --i-max ... --out DIR`), or a slim copy of it (`benchmarks/store_runs.py`). Only the
@@ -598,6 +633,8 @@ def study_sections(output: str | Path, figures: str | Path, *, imax: str | Path 
         ablations: the ablation study's benchmark folder, or None.
         alpha: significance level of the rank-sum tests.
         reference: the I_max study's Wilcoxon reference (the ablations use their own, LAMDE).
+        log: receives a note for a study's results file whose lines were not all read
+            (`build_report`'s).
 
     Returns:
         The sections' Markdown lines (ablations first); [] when neither folder is given.
@@ -612,7 +649,7 @@ def study_sections(output: str | Path, figures: str | Path, *, imax: str | Path 
         from planner_core.bench.ablation import META_KEY, ablation_section
 
         folder = Path(ablations)
-        recs, meta, left_out = _study_records(folder, "ablations")
+        recs, meta, left_out = _study_records(folder, "ablations", log)
         entry = meta.get(META_KEY)
         if not entry:
             raise ValueError(f"--ablations {folder}: meta.json has no '{META_KEY}' entry "
@@ -634,7 +671,7 @@ def study_sections(output: str | Path, figures: str | Path, *, imax: str | Path 
                               scores=scores)
     if imax is not None:
         folder = Path(imax)
-        recs, meta, left_out = _study_records(folder, "imax")
+        recs, meta, left_out = _study_records(folder, "imax", log)
         study = [r for r in recs if r.get("i_max") is not None]
         if not study:
             raise ValueError(f"--imax {folder}: no run overrides I_max (bench --i-max)")

@@ -27,7 +27,14 @@ import numpy as np
 from planner_core import defaults as _defaults
 from planner_core.bench._io import read_meta, stored_path, utc_now, write_json_atomic
 from planner_core.bench.limits import BestKnown, best_known_path, suite_task_files
-from planner_core.bench.records import RESULTS_FILE, Key, ResultsWriter, key_of, read_records
+from planner_core.bench.records import (
+    RESULTS_FILE,
+    Key,
+    ResultsWriter,
+    key_of,
+    read_records,
+    skipped_note,
+)
 from planner_core.execution import Executor, executor_problem, make_executor
 from planner_core.textio import counted, for_count
 
@@ -451,11 +458,9 @@ def run_bench(
         raise
     except ValueError as exc:
         raise BenchError(str(exc)) from None
-    if existing.truncated_tail:
-        log(f"note: {results}: dropping a truncated last line (an interrupted write)")
-    if existing.bad_lines:
-        log(f"note: {results}: ignoring unreadable "
-            f"{for_count(len(existing.bad_lines), 'line')} {existing.bad_lines}")
+    note = skipped_note(results, existing)
+    if note is not None:  # the runs of lines not read are missing: planned again below
+        log(note)
     all_jobs = plan_jobs(files, list(optimisers), runs, budget, base_seed, inits, i_max,
                          extras)
     _check_existing(existing.records, budget, {j.task: j.map_sha256 for j in all_jobs}, results)

@@ -81,12 +81,31 @@ def _exit_with_parent(parent: int, poll: float = PARENT_POLL_S) -> None:
         threading.Thread(target=watch, name="exit-with-parent", daemon=True).start()
 
 
+def _quit_quietly(signum: int, frame: object) -> None:
+    """A pool worker's SIGINT handler: end at once and say nothing. A Ctrl-C at the terminal
+    reaches every process of the group; the process that started the pool says it was
+    interrupted, once (`lamde-mission: interrupted` was printed by each worker too, through
+    the console script's start-up handler its spawned main module installs). Ending, not
+    ignoring it: the pool's shutdown waits for the items still running, so a worker that
+    ignored the Ctrl-C would hold its parent until its item (a whole benchmark run) ends.
+
+    Args:
+        signum: the signal (SIGINT).
+        frame: the interrupted frame (unused).
+    """
+    os._exit(128 + signum)
+
+
 def _init_worker(env: dict[str, str], parent: int | None = None) -> None:
     """Pool initializer: the thread limits in the worker's environment (for anything loaded or
-    started from now on), numba's thread count capped if numba is already loaded, and the
-    worker set to end with its parent (`_exit_with_parent`)."""
+    started from now on), numba's thread count capped if numba is already loaded, the worker
+    set to end with its parent (`_exit_with_parent`), and to end quietly on a Ctrl-C
+    (`_quit_quietly`; a SIGINT its parent ignored, as a background job's, stays ignored)."""
+    import signal
     import sys
 
+    if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:
+        signal.signal(signal.SIGINT, _quit_quietly)
     os.environ.update(env)
     numba = sys.modules.get("numba")
     if numba is not None and "NUMBA_NUM_THREADS" in env:

@@ -52,8 +52,19 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import torch
-from torch import nn
+
+try:
+    import torch
+    from torch import nn
+except ImportError as exc:  # missing, or a broken install (a library it cannot load)
+    if __name__ != "__main__":
+        raise
+    # the command line (`python -m ...`) without torch: one line and status 2, as
+    # `lamde-mission train` says it, not the import's traceback
+    _why = "" if getattr(exc, "name", None) == "torch" else f" ({exc})"
+    sys.stderr.write(f"schedule_ppo: needs torch{_why}: pip install 'lamde-mission[train]'"[:300]
+                     + "\n")
+    raise SystemExit(2) from None
 
 __all__ = ["Args", "train"]
 

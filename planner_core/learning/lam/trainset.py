@@ -42,7 +42,7 @@ from planner_core.learning.lam.bbob import (
     InstanceKey,
 )
 from planner_core.learning.lam.query import PairProblem
-from planner_core.textio import InputError, printable, read_json
+from planner_core.textio import InputError, printable, quoted, read_json
 
 __all__ = [
     "FORMAT",
@@ -149,8 +149,12 @@ def read_trainset(path: str | Path) -> dict[str, Any]:
         doc = read_json(path)
     except InputError as exc:
         raise InputError(exc.problem, f"{path}: {exc.where}" if exc.where else str(path)) from None
-    if not isinstance(doc, dict) or doc.get("format") != FORMAT:
-        raise ValueError(f"{path}: format: expected {FORMAT!r}")
+    if not isinstance(doc, dict):
+        raise ValueError(f"{path}: expected a JSON object with \"format\": {FORMAT!r}")
+    if doc.get("format") != FORMAT:
+        found = quoted(doc["format"]) if "format" in doc else "missing"
+        raise ValueError(f"{path}: format: {found}, not a version this program reads (it reads "
+                         f"{FORMAT!r})")
     probs = doc.get("problems")
     if not isinstance(probs, list) or not probs:
         raise ValueError(f"{path}: problems: expected a non-empty list")

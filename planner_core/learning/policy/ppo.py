@@ -752,8 +752,9 @@ def train(
 
     Raises:
         ValueError: bad settings or problem specs, a resumed folder trained with other
-            settings or problems, or an ``init_checkpoint`` whose network does not fit
-            (CheckpointError, a ValueError, for an unreadable one).
+            settings or problems or whose state.pt cannot be read (CheckpointError), or an
+            ``init_checkpoint`` whose network does not fit (CheckpointError, a ValueError, for
+            an unreadable one).
         RuntimeError: the episodes of one chunk ran out of step.
     """
     out = Path(out)
@@ -786,7 +787,7 @@ def train(
     if resume and not resumed and log is not None:  # a mistyped folder shows here
         log(f"--resume: {out} holds no training to continue (no state.pt): starting one")
     if resumed:
-        state = torch.load(state_path, weights_only=False)
+        state = _load_state(state_path)
         same = {k: v for k, v in state["config"].items() if k != "epochs"} == {
             k: v for k, v in cfg.to_dict().items() if k != "epochs"}
         if not same or state["specs"] != specs:
@@ -980,6 +981,29 @@ def _rows_csv(rows: list[dict[str, Any]], fields: tuple[str, ...]) -> str:
         w.writerow({k: (f"{row[k]:.6g}" if isinstance(row[k], float) else row[k])
                     for k in fields})
     return buf.getvalue()
+
+
+#: the entries of a training state (state.pt, written by `_save`) that `train` reads back
+STATE_KEYS = ("model", "optimizer", "epoch", "curve", "config", "specs")
+
+
+def _load_state(path: Path) -> dict[str, Any]:
+    """The training state `_save` wrote to `path` (state.pt), for ``resume``; one that torch
+    cannot read (cut short, damaged) or that lacks an entry of `STATE_KEYS` is a CheckpointError
+    naming the file (nothing is written before it is read)."""
+    from planner_core.textio import printable
+
+    try:
+        state = torch.load(path, weights_only=False)
+    except Exception as exc:  # torch's zip reader, pickle, EOF: each its own exception
+        why = printable(str(exc).split("\n")[0].split(". ")[0])[:200] or type(exc).__name__
+        raise ckpt.CheckpointError(f"--resume: {path}: not a readable training state ({why}); "
+                                   "it was cut short or damaged") from None
+    missing = [k for k in STATE_KEYS if not isinstance(state, dict) or k not in state]
+    if missing:
+        raise ckpt.CheckpointError(f"--resume: {path}: not a training state (no "
+                                   f"{', '.join(missing)})")
+    return state
 
 
 def _save(out: Path, model: TorchPolicy, optimizer: torch.optim.Optimizer, cfg: PPOConfig,

@@ -275,12 +275,14 @@ def read_trainset(path: str | Path) -> list[dict[str, Any]]:
         The specs, in order.
 
     Raises:
-        ValueError: on bad content: unreadable, no non-empty ``problems`` list, more than
+        ValueError: on bad content: unreadable, a ``format`` other than ``lamde-trainset/1``
+            (the message names both), no non-empty ``problems`` list, more than
             ``MAX_PROBLEMS`` problems, an entry that is not an object with ``kind``.
     """
     path = Path(path)
     data = read_json_file(path, "--problems")
-    if isinstance(data, dict) and data.get("format") == "lamde-trainset/1":
+    if isinstance(data, dict) and "format" in data:  # a file of specs has none: lam select's,
+        # whose reader refuses a format (version) other than the one it reads, naming both
         from planner_core.learning.lam.trainset import read_trainset as read_lam
 
         try:
