@@ -127,6 +127,43 @@ def test_cli_train_resume_from_a_damaged_state_is_one_line(tmp_path, capsys) -> 
         assert state.read_bytes() == content and (ck / "weights.npz").read_bytes() == b"kept"
 
 
+class _RunsCode:
+    """A pickled object that runs code when unpickled: what a state.pt from elsewhere could
+    hold."""
+
+    def __init__(self, marker: str) -> None:
+        self.marker = marker
+
+    def __reduce__(self):  # noqa: ANN204
+        return (open, (self.marker, "w"))
+
+
+def test_cli_train_resume_runs_no_code_from_a_state_file(tmp_path, capsys) -> None:  # noqa: ANN001
+    """`train --resume` read state.pt with torch.load(weights_only=False), i.e. full pickle: a
+    state.pt from someone else could run any code on resume. It is read with weights_only=True
+    (tensors, dicts, lists, numbers, strings: all a training state holds); anything else is
+    refused in one line, exit 2, and nothing in it is run."""
+    import io
+
+    torch = pytest.importorskip("torch")
+    marker = tmp_path / "ran"
+    buf = io.BytesIO()
+    torch.save({"model": {}, "optimizer": {}, "epoch": 1, "curve": [], "config": {},
+                "specs": [], "evil": _RunsCode(str(marker))}, buf)
+    ck = tmp_path / "ck"
+    ck.mkdir()
+    (ck / "weights.npz").write_bytes(b"kept")
+    (ck / "state.pt").write_bytes(buf.getvalue())
+    problems = tmp_path / "p.json"
+    problems.write_text(json.dumps({"problems": [{"kind": "map",
+                                                  "path": str(MAPS / "tiny.json")}]}))
+    assert main(["train", "-o", str(ck), "--resume", "--problems", str(problems), "--envs", "2",
+                 "--epochs", "1", "--budget", "60", "--population", "6", "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "not a readable training state" in err[0], err
+    assert not marker.exists()
+
+
 def test_cli_train_help_shows_every_default() -> None:
     """`train --help` gave no default for --maps, --epochs, --envs, --population or --budget,
     where every other command's options show theirs; the values shown are PPOConfig's."""

@@ -987,18 +987,30 @@ def _rows_csv(rows: list[dict[str, Any]], fields: tuple[str, ...]) -> str:
 STATE_KEYS = ("model", "optimizer", "epoch", "curve", "config", "specs")
 
 
+#: the only pickled globals a training state may name beyond weights_only's own (numpy
+#: scalars and their dtypes)
+_STATE_GLOBALS = [np._core.multiarray.scalar, np.dtype,
+                  *(type(np.dtype(c)) for c in "?bBhHiIlLqQefdg")]
+
+
 def _load_state(path: Path) -> dict[str, Any]:
     """The training state `_save` wrote to `path` (state.pt), for ``resume``; one that torch
     cannot read (cut short, damaged) or that lacks an entry of `STATE_KEYS` is a CheckpointError
-    naming the file (nothing is written before it is read)."""
+    naming the file (nothing is written before it is read). Read with ``weights_only=True``:
+    tensors, containers, numbers and strings, all a training state holds, and no pickled
+    object that would run code (a state.pt from elsewhere)."""
     from planner_core.textio import printable
 
     try:
-        state = torch.load(path, weights_only=False)
+        # numpy scalars (the curve's figures) are rebuilt from their dtype and bytes, nothing
+        # more; every other global stays refused
+        with torch.serialization.safe_globals(_STATE_GLOBALS):
+            state = torch.load(path, weights_only=True)
     except Exception as exc:  # torch's zip reader, pickle, EOF: each its own exception
         why = printable(str(exc).split("\n")[0].split(". ")[0])[:200] or type(exc).__name__
         raise ckpt.CheckpointError(f"--resume: {path}: not a readable training state ({why}); "
-                                   "it was cut short or damaged") from None
+                                   "it was cut short, damaged, or holds objects other than "
+                                   "tensors, numbers and strings") from None
     missing = [k for k in STATE_KEYS if not isinstance(state, dict) or k not in state]
     if missing:
         raise ckpt.CheckpointError(f"--resume: {path}: not a training state (no "
