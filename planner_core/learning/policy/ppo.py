@@ -989,7 +989,7 @@ STATE_KEYS = ("model", "optimizer", "epoch", "curve", "config", "specs")
 
 #: the only pickled globals a training state may name beyond weights_only's own (numpy
 #: scalars and their dtypes)
-_STATE_GLOBALS = [np._core.multiarray.scalar, np.dtype,
+_STATE_GLOBALS = [(np._core if hasattr(np, "_core") else np.core).multiarray.scalar, np.dtype,
                   *(type(np.dtype(c)) for c in "?bBhHiIlLqQefdg")]
 
 
