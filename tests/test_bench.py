@@ -6,6 +6,7 @@ import copy
 import json
 import os
 import pickle
+import re
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import Any
@@ -528,3 +529,120 @@ def test_cli_bench_then_report(suite: Path, tmp_path: Path) -> None:
     assert main(["bench", "--suite", str(suite), "--optimizers", "nope", "--out", str(out)]) == 2
     # a budget below the population every DE-based optimiser starts from, as `plan` refuses it
     assert main(["bench", "--suite", str(suite), "--budget", "50", "--out", str(out)]) == 2
+
+
+# ----------------------------------------------------------------------------- the manual's records
+
+
+def _benchmarks_page() -> str:
+    from tests.conftest import ROOT
+
+    return (ROOT / "docs" / "benchmarks.md").read_text(encoding="utf-8")
+
+
+def _documented(text: str, start: str, end: str) -> set[str]:
+    """The backticked names in the first column of the table between `start` and `end`."""
+    part = text[text.index(start):text.index(end, text.index(start))]
+    names: set[str] = set()
+    for line in part.splitlines():
+        if line.startswith("| `"):
+            names.update(re.findall(r"`([^`]+)`", line.split("|")[1]))
+    return names
+
+
+def _record_fields() -> set[str]:
+    return _documented(_benchmarks_page(), "## Records", "**Deterministic and timing fields.**")
+
+
+def _meta_fields() -> set[str]:
+    return _documented(_benchmarks_page(), "**meta.json**", "## Your own optimiser")
+
+
+def _timing_fields() -> set[str]:
+    (said,) = re.findall(r"\*\*Deterministic and timing fields\.\*\* (.*?) are timings",
+                         _benchmarks_page(), re.S)
+    return set(re.findall(r"`([^`]+)`", said))
+
+
+def test_every_field_of_a_record_is_documented_and_all_but_the_timings_repeat(
+        suite: Path) -> None:
+    """docs/benchmarks.md's Records table names every field a run record has (one with an I_max
+    override, the only optional field, and one without), and every field but the ones it calls
+    timings is the same when the run is run again (they were listed only in the code)."""
+    documented, timing = _record_fields(), _timing_fields()
+    assert timing == {"wall_s", "cpu_s"}
+    files = suite_task_files(suite)
+    for i_max in (None, 2):
+        (job,) = plan_jobs({"A1": files["A1"]}, ["de-adaptive"], runs=1, budget=BUDGET,
+                           inits=("uniform",), i_max=(i_max,))
+        a, b = execute(job), execute(job)
+        assert "error" not in a, a
+        want = documented if i_max is not None else documented - {"i_max"}
+        assert set(a) == want, f"documented but not written: {sorted(want - set(a))}; " \
+            f"written but not documented: {sorted(set(a) - want)}"  # fmt: skip
+        assert {k: v for k, v in a.items() if k not in timing} == \
+            {k: v for k, v in b.items() if k not in timing}  # fmt: skip
+        assert set(a["history"]) == {"evaluations", "best_f", "best_phi"}
+
+
+def _own_optimiser_example() -> str:
+    text = _benchmarks_page()
+    part = text[text.index("## Your own optimiser"):]
+    (code,) = re.findall(r"```python\n(.*?)```", part, re.S)
+    return code
+
+
+def test_the_own_optimiser_example_runs_and_writes_what_the_records_section_says(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+        capsys: pytest.CaptureFixture[str]) -> None:
+    """The manual's `run_bench(extra=)` example, run as a script in a scratch folder (its own
+    `__main__`, where its entry's target points; tests/test_readme.py also pastes it into a new
+    interpreter, slow): it prints what its comment says, its entry's runs are in the results
+    beside the registry's, with the documented fields, and meta.json records the entry with
+    documented fields only."""
+    import sys
+    import types
+
+    from tests.conftest import ROOT
+
+    code = _own_optimiser_example()
+    (said,) = re.findall(r"print\(.*\)\s*#\s*(.*)", code)
+    (tmp_path / "examples").symlink_to(ROOT / "examples", target_is_directory=True)
+    monkeypatch.chdir(tmp_path)
+    script = types.ModuleType("__main__")
+    monkeypatch.setitem(sys.modules, "__main__", script)
+    exec(compile(code, "docs/benchmarks.md", "exec"), script.__dict__)
+    assert capsys.readouterr().out.strip() == said.strip()
+    recs = read_records(tmp_path / "my-bench" / RESULTS_FILE).records
+    assert sorted((x["optimiser"], x["task"], x["run"]) for x in recs) == sorted(
+        (o, t, k) for o in ("my-sampler", "random-search") for t in ("T01", "T02")
+        for k in range(2))
+    fields = _record_fields() - {"i_max"}
+    for x in recs:
+        assert set(x) == fields and x["evaluations"] == x["budget"] == 300
+        assert x["seed"] == run_seed(0, x["task"], x["run"])
+    meta = json.loads((tmp_path / "my-bench" / "meta.json").read_text())
+    assert set(meta) <= _meta_fields(), sorted(set(meta) - _meta_fields())
+    assert meta["optimisers"]["my-sampler"]["kwargs"] == {"batch": 50}
+    assert set(meta["commands"][0]) == {"command", "started", "jobs_planned"}
+
+
+def test_cli_bench_updates_the_best_known_file_beside_the_suite_unless_told_not_to(
+        suite: Path, tmp_path: Path) -> None:
+    """As docs/benchmarks.md says next to its `bench --runs 25` line: a plain `bench` writes
+    SUITE_best_known.json beside the suite (the poor witnesses are beaten), and
+    `--no-best-known-update` leaves it as it was."""
+    from lamde_mission.cli import main
+
+    bk = suite.parent / "suite_best_known.json"
+    args = ["bench", "--suite", str(suite), "--optimizers", "de-adaptive", "--runs", "1",
+            "--budget", "1000", "--jobs", "0", "--quiet", "--init", "seeded"]
+    assert main([*args, "--out", str(tmp_path / "a"), "--no-best-known-update"]) == 0
+    assert not bk.exists()
+    assert main([*args, "--out", str(tmp_path / "b")]) == 0
+    entries = json.loads(bk.read_text())["tasks"]
+    assert {e["optimiser"] for e in entries.values()} == {"de-adaptive"}
+    before = bk.read_bytes()
+    assert main([*args, "--seed", "1", "--out", str(tmp_path / "c"),
+                 "--no-best-known-update"]) == 0
+    assert bk.read_bytes() == before

@@ -243,6 +243,9 @@ COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
         ("test_benchmarks.py::test_bench_descent_compares_the_step_rules_start_by_start",
          ("bench_descent",)),
     "lamde-mission bench": ("test_bench.py::test_cli_bench_then_report", ('"bench"',)),
+    "lamde-mission bench --runs 25 --jobs 2 --out results --no-best-known-update":
+        ("test_bench.py::test_cli_bench_updates_the_best_known_file_beside_the_suite_unless_told_"
+         "not_to", ('"bench"', '"--no-best-known-update"')),
     "lamde-mission report": ("test_bench.py::test_cli_bench_then_report", ('"report"',)),
     "lamde-mission report results -o docs/results.md --reference de-lamde --imax":
         ("test_studies.py::test_report_sections_from_study_folders_and_their_slim_copies",
