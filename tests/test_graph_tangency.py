@@ -1,7 +1,9 @@
 """The visibility graph's tangency kernel (`_tangent_pairs`: both ends' tests for a row of
 pairs into flags, branch-free, then compacted) finds exactly the pairs of its plain reference
-(`_tangent_pairs_reference`: `_tangent` pair by pair), so the graph built with either is the
-same to the byte: nodes, edges and weights, on suite, large and generated campus maps."""
+(`_tangent_pairs_reference`: `_tangent` pair by pair), and its line of sight
+(`overlap_first`, the nearest tiles first) answers as the plain sum over every obstacle
+(`overlap_lengths`), so the graph built either way is the same to the byte: nodes, edges and
+weights, on suite, large and generated campus maps."""
 
 from __future__ import annotations
 
@@ -11,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from planner_core.model.geometry import overlap_lengths
 from planner_core.model.mapio import load_map
 from planner_core.model.routing import graph
 from planner_core.model.routing.graph import (
@@ -61,8 +64,9 @@ def _campus() -> dict:
 
 @pytest.mark.parametrize("name", ["T16", "L08", "campus-60"])
 def test_the_graph_is_the_same_as_the_references(name: str, monkeypatch) -> None:
-    """Built with the fast tangency kernel and with the reference: the same arrays to the
-    byte (L08: 1,023 obstacles, 5,014 corners, ~77,000 edges)."""
+    """Built as a plan builds it and with the references (pair-by-pair tangency, the summed
+    overlap): the same arrays to the byte (L08: 1,023 obstacles, 5,014 corners, ~77,000
+    edges)."""
     if name == "T16":
         m = load_map(json.loads((MAPS / "suite" / "T16.json").read_text()))
     elif name == "L08":
@@ -71,6 +75,7 @@ def test_the_graph_is_the_same_as_the_references(name: str, monkeypatch) -> None
         m = load_map(_campus())
     fast = build_visibility_graph(m.obstacles, m.width, m.height, MARGIN)
     monkeypatch.setattr(graph, "_tangent_pairs", _tangent_pairs_reference)
+    monkeypatch.setattr(graph, "overlap_first", overlap_lengths)  # every obstacle, in order
     ref = build_visibility_graph(m.obstacles, m.width, m.height, MARGIN)
     assert fast.n > 20 and len(fast.edges) > 50
     for field in ("nodes", "prev", "next", "indptr", "indices", "weights", "edges"):

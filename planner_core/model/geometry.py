@@ -958,7 +958,11 @@ def overlap_first(a: np.ndarray, b: np.ndarray, obstacles: Obstacles) -> np.ndar
     clear / blocked questions of the seeder, the visibility graph and the descent. A cut leg
     leaves the kernel's tests at its first cut, so on a map with many obstacles (most long
     legs cut) it costs the tiles and obstacles up to that cut, not all of them: the same
-    O(legs x tiles + candidate pairs) bound as `overlap_lengths`, much less in practice.
+    O(legs x tiles + candidate pairs) bound as `overlap_lengths`, much less in practice. A
+    kernel chunk of at least `_NEAR_FIRST_LEGS` legs takes the tiles nearest its first leg's
+    start first (legs sharing a start, as the visibility graph's rows, are mostly cut near
+    it: half the line-of-sight time on a 2,000-footprint campus); which cut it reports may
+    then differ from the tiles' fixed order, whether one is found does not.
 
     Args:
         a: leg starts, metres, shape (..., 2).
