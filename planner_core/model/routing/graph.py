@@ -120,8 +120,73 @@ def _tangent(u, fx, fy, nodes, prev, nxt):
 
 @njit(cache=True, nogil=True)
 def _tangent_pairs(nodes, prev, nxt, i0, i1):
-    """The node pairs (i, j), i0 <= i < i1, i < j, whose line is tangent at both nodes; the
-    output grows as pairs are found (doubling), so memory follows what is kept, not n^2."""
+    """The node pairs (i, j), i0 <= i < i1, i < j, whose line is tangent at both nodes (both
+    polygon neighbours of each end on one side of the line: `_tangent`'s test at both ends,
+    the same floats, so the same pairs as `_tangent_pairs_reference`); the output grows as
+    pairs are found (doubling), so memory follows what is kept (plus a row), not n^2.
+
+    Row by row: first both ends' tests for every j > i into a flag row, branch-free over
+    structure-of-arrays copies of the nodes and their sides (vectorises), then the flags
+    compacted into the output. ~3.5x faster than the reference's pair-by-pair branches (a
+    quarter of the pairs tangent at random: the branches mispredict)."""
+    n = nodes.shape[0]
+    xs = np.ascontiguousarray(nodes[:, 0])
+    ys = np.ascontiguousarray(nodes[:, 1])
+    # each node's two polygon sides, as `_tangent` computes them
+    px = np.empty(n)
+    py = np.empty(n)
+    qx = np.empty(n)
+    qy = np.empty(n)
+    for u in range(n):
+        px[u] = prev[u, 0] - nodes[u, 0]
+        py[u] = prev[u, 1] - nodes[u, 1]
+        qx[u] = nxt[u, 0] - nodes[u, 0]
+        qy[u] = nxt[u, 1] - nodes[u, 1]
+    flags = np.zeros(n + 8, dtype=np.uint8)
+    cap = 1024
+    out_i = np.empty(cap, dtype=np.int64)
+    out_j = np.empty(cap, dtype=np.int64)
+    k = 0
+    for i in range(i0, i1):
+        xi = xs[i]
+        yi = ys[i]
+        pxi = px[i]
+        pyi = py[i]
+        qxi = qx[i]
+        qyi = qy[i]
+        for j in range(i + 1, n):
+            # at i, seen from j: _tangent(i, nodes[j]); at j, seen from i: _tangent(j, nodes[i])
+            dx = xi - xs[j]
+            dy = yi - ys[j]
+            s1 = dx * pyi - dy * pxi
+            s2 = dx * qyi - dy * qxi
+            tol = 1e-9 * (abs(dx) + abs(dy) + 1.0) * 20.0
+            ex = xs[j] - xi
+            ey = ys[j] - yi
+            r1 = ex * py[j] - ey * px[j]
+            r2 = ex * qy[j] - ey * qx[j]
+            tol2 = 1e-9 * (abs(ex) + abs(ey) + 1.0) * 20.0
+            flags[j] = np.uint8((s1 * s2 >= -tol * tol) & (r1 * r2 >= -tol2 * tol2))
+        need = k + (n - i - 1)
+        if need > cap:
+            while cap < need:
+                cap *= 2
+            grown_i = np.empty(cap, dtype=np.int64)
+            grown_j = np.empty(cap, dtype=np.int64)
+            grown_i[:k] = out_i[:k]
+            grown_j[:k] = out_j[:k]
+            out_i, out_j = grown_i, grown_j
+        for j in range(i + 1, n):
+            out_i[k] = i
+            out_j[k] = j
+            k += flags[j]
+    return out_i[:k].copy(), out_j[:k].copy()
+
+
+@njit(cache=True, nogil=True)
+def _tangent_pairs_reference(nodes, prev, nxt, i0, i1):
+    """The slow, plain reference of `_tangent_pairs` (tests hold the two equal): pair by pair,
+    `_tangent` at both ends."""
     n = nodes.shape[0]
     cap = 1024
     out_i = np.empty(cap, dtype=np.int64)
@@ -486,6 +551,22 @@ def build_visibility_graph(
     """The reduced visibility graph of `obstacles` (a `geometry.Obstacles`) pushed out by
     `margin` metres (see `VisibilityGraph`); nodes inside an obstacle or outside the area
     [0, width] x [0, height] are left out.
+
+    Cost: N nodes (~4 per rectangle, ~6.4 per campus footprint; sensors are not nodes).
+    Tangency (`_tangent_pairs`, branch-free, ~14 ns a pair) runs over all N(N-1)/2 pairs;
+    the line of sight (`overlap_first`) over the tangent ones only (16-25 % of the pairs, ~95 %
+    of those cut), each costing the obstacle tiles up to its first cut (the tiles nearest the
+    row's corner first): O(N^2) tangency plus O(tangent pairs x tiles) float32 tile tests in
+    the worst case, far fewer as cut lines leave. Measured on 2 shared CPUs under load
+    (2026-12-06), the numba cache warm, CPU seconds of this call (`time.process_time`
+    around ``build_visibility_graph(m.obstacles, m.width, m.height, 20.0)`` after
+    ``m = load_map(MAP)``), the same sha256 of every array before and after:
+
+    - campus-2000 (`lamde-mission map campus --footprints 2000 --sensors 100 --access
+      scheduled`: 6,047 convex pieces, 12,870 nodes, 20.6 M tangent pairs, 1,086,707 edges):
+      9.7 s CPU (25.8 s wall) before, 5.1 s CPU (14.6 s wall) after;
+    - examples/maps/large/L08.json (1,023 obstacles, 5,014 nodes, 2.0 M tangent pairs,
+      76,954 edges): 0.87 s CPU (1.7 s wall) before, 0.42 s CPU (0.65 s wall) after.
 
     Args:
         obstacles: the packed obstacles.
