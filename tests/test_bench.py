@@ -617,6 +617,10 @@ def test_the_own_optimiser_example_runs_and_writes_what_the_records_section_says
     assert sorted((x["optimiser"], x["task"], x["run"]) for x in recs) == sorted(
         (o, t, k) for o in ("my-sampler", "random-search") for t in ("T01", "T02")
         for k in range(2))
+    # an optimiser of its own, not random search under another name (the example first was)
+    score = {(x["optimiser"], x["task"], x["run"]): x["score"] for x in recs}
+    assert any(score["my-sampler", t, k] != score["random-search", t, k]
+               for t in ("T01", "T02") for k in range(2))
     fields = _record_fields() - {"i_max"}
     for x in recs:
         assert set(x) == fields and x["evaluations"] == x["budget"] == 300
