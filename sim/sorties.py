@@ -42,8 +42,9 @@ def combined_data_verdicts(timelines: Sequence[Timeline], map: Any) -> list[Verd
             raise ValueError("timelines: a sortie's replay has other sensors than the map")
         q = q + tl.collected
     n = len(timelines)
+    sorties = "1 sortie" if n == 1 else f"{n} sorties"
     out = [c4_verdict(q, req, ids, title="Q_j >= Q_lambda (all sorties)",
-                      prefix=f"over {n} sorties: ", tightest="tightest")]  # fmt: skip
+                      prefix=f"over {sorties}: ", tightest="tightest")]  # fmt: skip
     want = float(getattr(getattr(map.spec, "safety", None), "data_margin", 0.0))
     out.append(margin_verdict(q, req, ids, want, suffix=" (all sorties)")[0])
     return out

@@ -647,3 +647,18 @@ def test_options_a_sortie_directory_cannot_take_are_refused_with_their_reason(tm
         assert r.returncode == 2 and len(r.stderr.splitlines()) == 1, r.stderr
         assert "not available for a map with a battery or fleet" in r.stderr and why in r.stderr
     assert not (tmp_path / "d").exists()
+
+
+def test_the_whole_plans_c4_counts_its_sorties_in_words() -> None:
+    """verify's whole-plan C4 said "over 1 sorties" for a plan of one sortie."""
+    from types import SimpleNamespace
+
+    from sim.sorties import combined_data_verdicts
+
+    m = SimpleNamespace(sensor_ids=("a", "b"), required_data=[10.0, 20.0],
+                        spec=SimpleNamespace(safety=SimpleNamespace(data_margin=0.0)))
+    tl = SimpleNamespace(sensor_ids=("a", "b"), collected=np.array([6.0, 11.0]))
+    one = combined_data_verdicts([tl], m)[0]
+    two = combined_data_verdicts([tl, tl], m)[0]
+    assert "over 1 sortie: " in one.detail and not one.passed
+    assert "over 2 sorties: " in two.detail and two.passed
