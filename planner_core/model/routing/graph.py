@@ -171,16 +171,23 @@ def _tangent_pairs(nodes, prev, nxt, i0, i1):
         if need > cap:
             while cap < need:
                 cap *= 2
-            grown_i = np.empty(cap, dtype=np.int64)
-            grown_j = np.empty(cap, dtype=np.int64)
-            grown_i[:k] = out_i[:k]
-            grown_j[:k] = out_j[:k]
-            out_i, out_j = grown_i, grown_j
+            out_i, out_j = _grown(out_i, out_j, k, cap)
         for j in range(i + 1, n):
             out_i[k] = i
             out_j[k] = j
             k += flags[j]
     return out_i[:k].copy(), out_j[:k].copy()
+
+
+@njit(cache=True, nogil=True)
+def _grown(out_i, out_j, k, cap):  # pragma: no cover - compiled
+    """The pair buffers `out_i`, `out_j` copied into new ones of `cap` entries (their first
+    `k` kept): the growth both `_tangent_pairs` and its reference use."""
+    grown_i = np.empty(cap, dtype=np.int64)
+    grown_j = np.empty(cap, dtype=np.int64)
+    grown_i[:k] = out_i[:k]
+    grown_j[:k] = out_j[:k]
+    return grown_i, grown_j
 
 
 @njit(cache=True, nogil=True)
@@ -199,11 +206,7 @@ def _tangent_pairs_reference(nodes, prev, nxt, i0, i1):
             ):
                 if k == cap:
                     cap *= 2
-                    grown_i = np.empty(cap, dtype=np.int64)
-                    grown_j = np.empty(cap, dtype=np.int64)
-                    grown_i[:k] = out_i[:k]
-                    grown_j[:k] = out_j[:k]
-                    out_i, out_j = grown_i, grown_j
+                    out_i, out_j = _grown(out_i, out_j, k, cap)
                 out_i[k] = i
                 out_j[k] = j
                 k += 1
