@@ -236,6 +236,12 @@ MAX_EXECUTED_ITEMS = 100_000
 #: mission file cannot ask for more than a map may; DJI's and the common multirotors' service
 #: ceilings lie below 7 km AMSL
 MAX_FLIGHT_ALTITUDE: float = float(MAP_DEFAULTS["uav.altitude"].bounds[1])
+#: DO_CHANGE_SPEED param1 values (MAVLink SPEED_TYPE) that name a vertical speed: ArduPilot
+#: Copter's mission sets its climb or descent speed from them (WPNAV_SPEED_UP / _DN), while PX4's
+#: navigator takes param2 as the cruise speed whatever the type. The sim flies PX4's reading, the
+#: slower and costlier one for a battery, and says so in a note.
+_VERTICAL_SPEED_TYPES = {2.0: "climb speed", 3.0: "descent speed"}
+
 #: m/s: the least DO_CHANGE_SPEED speed the sim flies: the map's own `uav.max_speed` bound
 MIN_MISSION_SPEED: float = float(MAP_DEFAULTS["uav.max_speed"].bounds[0])
 
@@ -356,15 +362,17 @@ def check_items(items: Sequence[MissionItem]) -> None:
 def items_to_route(items: Sequence[MissionItem], map: Any) -> Route:  # noqa: A002
     """Read a mission back into local metres: launch, stops, hover times, speed and finish.
 
-    Supported navigation commands: TAKEOFF, WAYPOINT (param1 = hold s), LOITER_TIME
-    (param1 = s), LAND, RETURN_TO_LAUNCH; DO_CHANGE_SPEED sets the speed from its position on
-    (the legs after it; a speed <= 0 changes nothing, as on PX4 and ArduPilot, one below
-    `MIN_MISSION_SPEED` is refused); DO_JUMP (param1 = the target's seq in this list, param2 =
-    repeats) is flown: the items from the target on run again, `param2` more times, at most
-    `MAX_EXECUTED_ITEMS` items in all (a jump repeated forever, param2 = -1, is refused). Other
-    DO/CONDITION commands are ignored with a note. Items after LAND/RTL are ignored with a
-    note. Altitudes more than `MAX_FLIGHT_ALTITUDE` above or below home are refused. Each
-    distinct note is made once, with how many times it came up when a DO_JUMP repeats it.
+    Supported navigation commands: TAKEOFF, WAYPOINT (param1 = hold s), LOITER_TIME (param1 =
+    s), LAND, RETURN_TO_LAUNCH; DO_CHANGE_SPEED sets the speed from its position on (the legs
+    after it; a speed <= 0 changes nothing, as on PX4 and ArduPilot, one below
+    `MIN_MISSION_SPEED` is refused; a climb or descent speed type, param1 2 or 3, is flown as
+    the cruise speed, as PX4 does, with a note of ArduPilot's reading); DO_JUMP (param1 = the
+    target's seq in this list, param2 = repeats) is flown: the items from the target on run
+    again, `param2` more times, at most `MAX_EXECUTED_ITEMS` items in all (a jump repeated
+    forever, param2 = -1, is refused). Other DO/CONDITION commands are ignored with a note.
+    Items after LAND/RTL are ignored with a note. Altitudes more than `MAX_FLIGHT_ALTITUDE`
+    above or below home are refused. Each distinct note is made once, with how many times it
+    came up when a DO_JUMP repeats it.
 
     Args:
         items: the mission items, in seq order (fence and rally items are ignored, noted).
@@ -494,6 +502,11 @@ def _walk(
                     "mission that slow does not end in any battery's time)")
             else:
                 speed = float(it.param2)
+                if it.param1 in _VERTICAL_SPEED_TYPES:
+                    note(f"item {it.seq}: DO_CHANGE_SPEED of speed type {it.param1:g} "
+                         f"({_VERTICAL_SPEED_TYPES[it.param1]}) is flown as the cruise speed, "
+                         "as PX4 flies any speed type; ArduPilot Copter changes only its "
+                         f"{_VERTICAL_SPEED_TYPES[it.param1]} for what follows")  # fmt: skip
         elif c < 100:  # MAV_CMD_NAV_* range: a movement the sim cannot model
             raise MissionError(f"item {it.seq}: {_command_name(c)} is not supported by the sim")
         else:  # CONDITION_* / DO_* / others: no horizontal motion

@@ -223,6 +223,24 @@ def test_mission_speeds_the_autopilots_ignore_or_that_never_end(m):
     assert MIN_MISSION_SPEED == 0.1
 
 
+def test_a_climb_or_descent_speed_type_is_flown_as_px4_flies_it_with_a_note(m):
+    """DO_CHANGE_SPEED of speed type 2 (climb) or 3 (descent): PX4's navigator takes param2 as
+    the cruise speed whatever the type, ArduPilot Copter changes only its vertical speed. The
+    sim flies PX4's reading (the slower, costlier one) and says both; types 0 and 1 say nothing."""
+    plan = _plan(m, HOVER, TIMES)
+    items = plan_to_items(plan, m, speed=10.0)
+    k = next(i for i, it in enumerate(items) if it.command == CMD.DO_CHANGE_SPEED)
+    assert items[k].param1 == 1.0 and not any("speed type" in n for n in replay(items, m).notes)
+    for kind, name in ((2.0, "climb speed"), (3.0, "descent speed")):
+        tl = replay([replace(it, param1=kind, param2=2.5) if i == k else it
+                     for i, it in enumerate(items)], m)
+        assert tl.totals.speed == 2.5
+        assert [n for n in tl.notes if "speed type" in n] == [
+            f"item {items[k].seq}: DO_CHANGE_SPEED of speed type {kind:g} ({name}) is flown "
+            "as the cruise speed, as PX4 flies any speed type; ArduPilot Copter changes only "
+            f"its {name} for what follows"]
+
+
 def test_autocontinue_0_is_noted_once_per_item(m):
     plan = _plan(m, HOVER, TIMES)
     items = plan_to_items(plan, m)
