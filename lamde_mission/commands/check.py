@@ -57,6 +57,12 @@ def run(args: argparse.Namespace) -> int:
         s["diagnosis"] = [{"kind": f.kind, "fatal": f.fatal, "sensor": f.sensor,
                            "message": f.message, **({"depot": f.depot} if f.depot else {})}
                           for f in d.findings]  # fmt: skip
+        if s["has_witness"]:
+            from planner_core.suite import witness_score
+
+            score = witness_score(m)
+            s["witness"] = None if score is None else {"f": score[0], "phi": score[1],
+                                                       "feasible": score[1] == 0.0}
         print(json.dumps(s, indent=2))
         return 0 if d.feasible_so_far else 1
     default = " (default for this size)" if s["max_hover_points_default"] else ""
@@ -88,12 +94,27 @@ def run(args: argparse.Namespace) -> int:
     print(f"  objective       alpha {o['alpha']:g}, mu {o['collision_offset']:g}, "
           f"nu {o['collision_weight']:g} /m")
     if s["has_witness"]:
-        print("  witness         a known feasible plan is stored in the map")
+        print(f"  witness         {_witness_line(m)}")
     sf = s["safety"]
     print(f"  safety          clearance {sf['clearance']:g} m{_reduced_clearance(m)}, data "
           f"margin {100 * sf['data_margin']:g} %")
     _energy_lines(s, m)
     return _diagnosis(d)
+
+
+def _witness_line(m: object) -> str:
+    """What the map's stored witness plan proves: feasible on the map as it is (a plan exists),
+    or not any more (a map edited since it was stored; nothing plans from it)."""
+    from planner_core.suite import witness_score
+
+    score = witness_score(m)
+    if score is None:
+        return "a stored plan with more hover points than I_max: it proves nothing here"
+    f, phi = score
+    if phi == 0.0:
+        return f"a stored plan feasible on this map (f {f:.6g}): a plan exists"
+    return (f"a stored plan NOT feasible on this map as it is now (phi {phi:.4g}; edited "
+            "since it was stored?): it proves nothing, and nothing plans from it")
 
 
 def _reduced_clearance(m: object) -> str:

@@ -54,6 +54,7 @@ __all__ = [
     "generate_suite",
     "write_maps",
     "dumps_map",
+    "witness_score",
     "GenerationError",
 ]
 
@@ -64,6 +65,33 @@ class GenerationError(RuntimeError):
     """No map met every check within the attempt budget (should not happen for valid input)."""
 
 
+def witness_score(m: Any) -> tuple[float, float] | None:
+    """The paper's f and phi of the map's stored witness plan, scored on the map as it is now.
+
+    A generated map stores a witness checked to phi == 0 (`generate_map`); a map edited since
+    may no longer be served by it. Scored as the planner scores a plan (`Problem`: the
+    planning map, with the map's margins). Cost: one evaluation, O(I x sensors + legs x
+    obstacles).
+
+    Args:
+        m: a `planner_core.model.mapio.Map`.
+
+    Returns:
+        (f, phi) of the witness (phi 0: feasible), or None when the map stores none or the
+        witness has more hover points than I_max (no plan of this map can hold it).
+    """
+    w = m.spec.witness
+    if w is None:
+        return None
+    hp = np.array(w.hover_points, dtype=float).reshape(-1, 2)
+    ht = np.array(w.hover_times, dtype=float)
+    if len(hp) > m.max_hover_points:
+        return None
+    problem = Problem(m)
+    f, phi = problem.evaluate(problem.encode(hp, ht)[None, :])
+    return float(f[0]), float(phi[0])
+
+
 def _witness_ok(data: dict[str, Any]) -> bool:
     """Load the map and check its witness: phi == 0, times <= T_max, points in the area."""
     m = load_map(data)
@@ -72,13 +100,12 @@ def _witness_ok(data: dict[str, Any]) -> bool:
         return False
     hp = np.array(w.hover_points, dtype=float).reshape(-1, 2)
     ht = np.array(w.hover_times, dtype=float)
-    if len(hp) > m.max_hover_points or np.any(ht < 0) or np.any(ht > m.spec.uav.max_hover_time):
+    if np.any(ht < 0) or np.any(ht > m.spec.uav.max_hover_time):
         return False
     if np.any(hp < 0) or np.any(hp[:, 0] > m.width) or np.any(hp[:, 1] > m.height):
         return False
-    problem = Problem(m)
-    _, phi = problem.evaluate(problem.encode(hp, ht)[None, :])
-    return bool(phi[0] == 0.0)
+    score = witness_score(m)
+    return score is not None and score[1] == 0.0
 
 
 def generate_map(
