@@ -58,7 +58,7 @@ def test_infeasible_map_writes_nothing_unless_allowed(tmp_path: Path) -> None:
     assert r.returncode == 1
     assert not out.exists() and list(tmp_path.iterdir()) == [mp]
     # `check` says CANNOT: refused before planning, with check's reason
-    assert "nothing written" in r.stderr and "no plan can meet this map: sensor 'S1'" in r.stderr
+    assert "nothing written" in r.stderr and "\n  CANNOT  sensor 'S1'" in r.stderr
     r = run_cli("plan", mp, "-o", out, "--budget", 600, "--quiet", "--allow-infeasible")
     assert r.returncode == 1 and out.exists()
     assert "INFEASIBLE" in r.stderr
@@ -426,8 +426,9 @@ def test_a_map_check_says_cannot_is_refused_before_planning(tmp_path: Path, monk
         assert r.status == 1 and r.error is None, (r.stderr, r.error)
         lines = r.stderr.splitlines()
         assert lines[0] == (f"lamde-mission plan: no feasible mission for {path}: `lamde-mission "
-                            "check` says CANNOT, so it was not planned; nothing written:")
-        assert lines[1:-1] == [f"  no plan can meet this map: {why}" for why in reasons]
+                            "check` says CANNOT (no plan can meet this map), so it was not "
+                            "planned; nothing written:")
+        assert lines[1:-1] == [f"  CANNOT  {why}" for why in reasons]  # as check says them
         assert lines[-1].startswith("  --allow-infeasible plans it anyway")
         assert r.stdout == "" and list(tmp_path.iterdir()) == [path]
     r = run_here(["plan", str(path), "-o", str(out), "--budget", "600", "--allow-infeasible"])
@@ -453,3 +454,25 @@ def test_plan_reads_its_map_once(tmp_path: Path, monkeypatch: pytest.MonkeyPatch
     assert main(["plan", str(MAPS / "tiny.json"), "-o", str(out), "--budget", "600",
                  "--quiet"]) == 0
     assert out.exists() and loads == [str(MAPS / "tiny.json")]
+
+
+def test_after_a_failed_plan_each_cannot_lead_is_said_once(capsys) -> None:
+    """`_say_cannot` (after a plan of sorties failed): one finding keeps its one line; several
+    under one lead are listed beneath it as check's CANNOT lines, not each behind the lead."""
+    from lamde_mission.commands.plan import _say_cannot
+    from planner_core.model.diagnose import diagnose
+    from planner_core.model.mapio import load_map
+
+    d = json.loads((MAPS / "small-demo.json").read_text())
+    d.pop("witness")
+    d["sensors"][0]["required_data"] = d["sensors"][1]["required_data"] = 1e6
+    m = load_map(d)
+    why = [f.message for f in diagnose(m).findings if f.fatal]
+    assert len(why) == 2
+    _say_cannot(m)
+    assert capsys.readouterr().err.splitlines() == [
+        "  no plan can meet this map (`lamde-mission check` says CANNOT):",
+        f"    CANNOT  {why[0]}", f"    CANNOT  {why[1]}"]
+    _say_cannot(m, said=why[0])  # what the failure's own message said is not said again
+    assert capsys.readouterr().err.splitlines() == [
+        f"  no plan can meet this map (`lamde-mission check` says CANNOT): {why[1]}"]

@@ -597,14 +597,24 @@ def _say_cannot(m: Any, said: str = "") -> None:
     `said` holds already; where there is none, the caller's message says what failed."""
     from planner_core.model.diagnose import diagnose
 
+    said_by: dict[str, list[str]] = {}  # lead -> messages, each lead said once
     for f in diagnose(m).findings:
         if f.fatal and f.message not in said:
             lead = ("the sortie planner cannot plan this map" if f.kind == "SORTIE_LIMIT"
                     else "no plan can meet this map")  # fmt: skip
-            print(f"  {lead} (`lamde-mission check` says CANNOT): {f.message}", file=sys.stderr)
+            said_by.setdefault(lead, []).append(f.message)
+    for lead, messages in said_by.items():
+        if len(messages) == 1:
+            print(f"  {lead} (`lamde-mission check` says CANNOT): {messages[0]}",
+                  file=sys.stderr)
+            continue
+        print(f"  {lead} (`lamde-mission check` says CANNOT):", file=sys.stderr)
+        for message in messages:
+            print(f"    CANNOT  {message}", file=sys.stderr)
 
 
-def _cannot(m: Any, on_setup: Callable[[str | None], None] | None = None) -> list[str]:
+def _cannot(m: Any, on_setup: Callable[[str | None], None] | None = None
+            ) -> tuple[list[str], str]:
     """What `lamde-mission check` says CANNOT for map `m` (`diagnose`'s fatal findings: what no
     plan can meet), found before planning: its necessary conditions cost 0.2-1.7 % of a
     default plan's CPU time on T16, L02, L03 and L08, against minutes of a search that cannot
@@ -617,8 +627,11 @@ def _cannot(m: Any, on_setup: Callable[[str | None], None] | None = None) -> lis
             one on a large map gets its line; None: nothing.
 
     Returns:
-        The CANNOT findings' sentences, in `check`'s order; empty when there is none.
+        (the CANNOT findings' sentences, in `check`'s order, empty when there is none; what
+        they mean, in `check`'s words: "no plan can meet this map", or "the sortie planner
+        cannot plan this map" where each is the sortie planner's own limit).
     """
+    from lamde_mission.commands.check import _cannot_what
     from planner_core.model.diagnose import diagnose
 
     def stage(name: str | None) -> None:
@@ -628,9 +641,9 @@ def _cannot(m: Any, on_setup: Callable[[str | None], None] | None = None) -> lis
     stage("inflating the map's obstacles by their clearance")
     m.planning_map()
     stage("checking what no plan can meet (as `lamde-mission check` does)")
-    fatal = [f.message for f in diagnose(m).findings if f.fatal]
+    d = diagnose(m)
     stage(None)
-    return fatal
+    return [f.message for f in d.findings if f.fatal], _cannot_what(d, "this map")
 
 
 class SetupNotice:
@@ -859,15 +872,15 @@ def run(args: argparse.Namespace) -> int:
     try:
         # a map `check` says CANNOT is refused before the search (it would run its whole
         # budget to fail); --allow-infeasible plans and writes it as before
-        cannot = [] if args.allow_infeasible else _cannot(m, setup)
+        cannot, what = ([], "") if args.allow_infeasible else _cannot(m, setup)
         if cannot:
             from planner_core.textio import printable
 
             print(f"lamde-mission plan: no feasible mission for {printable(args.map)}: "
-                  "`lamde-mission check` says CANNOT, so it was not planned; nothing written:",
-                  file=sys.stderr)  # fmt: skip
+                  f"`lamde-mission check` says CANNOT ({what}), so it was not planned; "
+                  "nothing written:", file=sys.stderr)  # fmt: skip
             for line in cannot:
-                print(f"  no plan can meet this map: {printable(line)}", file=sys.stderr)
+                print(f"  CANNOT  {printable(line)}", file=sys.stderr)
             print("  --allow-infeasible plans it anyway and writes the mission (exit status 1)",
                   file=sys.stderr)  # fmt: skip
             return 1
