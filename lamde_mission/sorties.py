@@ -25,7 +25,8 @@ fleet.json (the contract of docs/sorties.md):
     {"map": name, "objective": "total" | "makespan",
      "vehicles": [{"vehicle": 1, "makespan_s": s, "sorties": [{"sortie": 1,
         "file": "mission-v1-s1.plan", "depot_start": "home", "depot_end": "home",
-        "duration_s": s, "energy_wh": Wh, "reserve_left_wh": Wh (battery - energy),
+        "takeoff_s": s, "landing_s": s (on the plan's clock: after the first vehicle's
+        take-off), "duration_s": s, "energy_wh": Wh, "reserve_left_wh": Wh (battery - energy),
         "above_reserve_wh": Wh (usable - energy), "sensors": ["s01", ...]}]}],
      "total_s": s, "swaps": n, "f_total": sum of f + swap_s per swap}
 
@@ -264,6 +265,41 @@ class FleetCheck:
         """
         return float(self.launches[vehicle - 1]) if len(self.launches) >= vehicle else 0.0
 
+    def takeoff(self, vehicle: int, sortie: int) -> float:
+        """When a sortie takes off, on the plan's clock: the vehicle's launch, then its earlier
+        sorties back to back with `swap_s` on the ground after each (the timing SEPARATION and
+        LINKS are judged at; `sim.fleet_time.track` lays a vehicle out the same way).
+
+        Args:
+            vehicle: the vehicle's number, 1-based.
+            sortie: the sortie's number on that vehicle, 1-based.
+
+        Returns:
+            Seconds after the first vehicle's take-off.
+
+        Raises:
+            KeyError: the vehicle flies no sortie here.
+            IndexError: the vehicle flies fewer sorties.
+        """
+        ss = self.vehicles()[vehicle]
+        if not 1 <= sortie <= len(ss):
+            raise IndexError(f"vehicle {vehicle} flies {len(ss)} sorties, not {sortie}")
+        return self.launch(vehicle) + sum(s.duration_s for s in ss[:sortie - 1]) + \
+            self.swap_s * (sortie - 1)
+
+    def takeoffs(self) -> list[float]:
+        """Every sortie's take-off (`takeoff`), in the order of `sorties`.
+
+        Returns:
+            Seconds after the first vehicle's take-off, one per sortie.
+        """
+        seen: dict[int, int] = {}
+        out = []
+        for s in self.sorties:
+            seen[s.vehicle] = seen.get(s.vehicle, 0) + 1
+            out.append(self.takeoff(s.vehicle, seen[s.vehicle]))
+        return out
+
     def makespan(self, vehicle: int) -> float:
         """From the first vehicle's take-off to this vehicle's last landing: its launch, its
         sorties and swaps (s).
@@ -272,14 +308,13 @@ class FleetCheck:
             vehicle: the vehicle's number, 1-based.
 
         Returns:
-            launch + its sorties' durations + swap_s per swap, s.
+            The last sortie's take-off (`takeoff`) + its duration, s.
 
         Raises:
             KeyError: the vehicle flies no sortie here.
         """
         ss = self.vehicles()[vehicle]
-        return self.launch(vehicle) + sum(s.duration_s for s in ss) + \
-            self.swap_s * (len(ss) - 1)
+        return self.takeoff(vehicle, len(ss)) + ss[-1].duration_s
 
     @property
     def total_s(self) -> float:
@@ -523,11 +558,13 @@ def summary_dict(m: Any, check: FleetCheck, goal: str) -> dict[str, Any]:
             "vehicle": v,
             "sorties": [{
                 "sortie": s.sortie, "file": s.file, "depot_start": s.depot_start,
-                "depot_end": s.depot_end, "duration_s": s.duration_s,
+                "depot_end": s.depot_end, "takeoff_s": check.takeoff(v, k + 1),
+                "landing_s": check.takeoff(v, k + 1) + s.duration_s,
+                "duration_s": s.duration_s,
                 "energy_wh": s.verdicts.energy_wh, "reserve_left_wh": s.verdicts.reserve_left_wh,
                 "above_reserve_wh": s.verdicts.above_reserve_wh,
                 "sensors": list(s.sensors),
-            } for s in ss],
+            } for k, s in enumerate(ss)],
             "launch_s": check.launch(v),
             "makespan_s": check.makespan(v),
         })  # fmt: skip

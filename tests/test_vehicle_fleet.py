@@ -255,7 +255,9 @@ def test_cli_upload_fleet_dir(via, fleet_dir, capsys):
             assert _holds(v, mission)
     assert "fleet: 3 of 3 vehicles hold their mission" in out
     assert "vehicle 2 (system 2" in out and "mission-v2-s1.plan" in out
-    assert "launch vehicle 1 at +0 s, vehicle 2 at +" in out  # fleet.json's launch_s
+    # a hand-made fleet.json without take-off times: the first sortie's is the launch_s (0)
+    assert ("take off (sortie 1, s after vehicle 1's first take-off): vehicle 1 at +0 s, "
+            "vehicle 2 at +0 s, vehicle 3 at +0 s;") in out
 
 
 @pytest.mark.slow  # measured 1.7 s; upload_fleet on one link each runs in the default suite
@@ -297,6 +299,8 @@ def test_cli_upload_fleet_second_sortie_after_the_swap(fleet_dir, capsys):
     assert "no sortie 2): no sortie planned, nothing sent" in out
     assert "fleet: 1 of 1 vehicle holds its mission" in out  # "1 of 1 vehicles hold their"
     assert "2 without this sortie, nothing sent" in out
+    assert "take off (sortie 2, s after vehicle 1's first take-off): vehicle 1 at a time " \
+        "fleet.json does not give;" in out
     rc = main(["upload", str(fleet_dir), "--fleet", "--sortie", "3", *conn])
     assert rc == 2 and "no vehicle flies a sortie 3" in capsys.readouterr().err
 

@@ -448,13 +448,14 @@ def _sortie_lines(check: Any) -> list[str]:
 
     lines = []
     for v, ss in check.vehicles().items():
-        for s in ss:
+        for k, s in enumerate(ss):
             vd = s.verdicts
             energy = (f"energy {vd.energy_wh:7.2f} Wh of {vd.usable_wh:.2f} usable, "
                       f"{vd.above_reserve_wh:6.2f} Wh left above the reserve") \
                 if vd.energy_wh is not None else "no battery"
             lines.append(f"  {s.file:<18} {printable(s.depot_start)} -> "
-                         f"{printable(s.depot_end)}: {s.duration_s:8.1f} s, {energy}, "
+                         f"{printable(s.depot_end)}: take-off +{check.takeoff(v, k + 1):.0f} "
+                         f"s, {s.duration_s:8.1f} s, {energy}, "
                          f"{counted(len(s.sensors), 'sensor')} served")
         launch = f"launch at +{check.launch(v):.0f} s, " if len(check.launches) > 1 else ""
         lines.append(f"  vehicle {v}: {launch}{counted(len(ss), 'sortie')}, makespan "

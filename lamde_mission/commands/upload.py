@@ -409,15 +409,26 @@ def _verbose_log(args: argparse.Namespace):
     return log
 
 
-def _print_launches(directory: str) -> None:
-    """The launch times fleet.json gives each vehicle (`lamde_mission.launches`: staggered so
-    that no two meet in the air and no sensor sends to two at once)."""
+def _print_takeoffs(directory: str, sortie: int) -> None:
+    """When each vehicle's sortie `sortie` takes off, as fleet.json gives it (`takeoff_s`, on
+    the plan's clock; a directory written before take-off times has only each vehicle's
+    `launch_s`, the first sortie's): the vehicles keep apart in the air and no sensor sends
+    to two at once only when they take off so (`lamde_mission.launches`)."""
     from lamde_mission.formats.fleet import read_fleet_dir
 
-    times = [(v.vehicle, v.launch_s) for v in read_fleet_dir(directory).vehicles]
-    print("launch " + ", ".join(f"vehicle {v} at +{t:.0f} s" for v, t in times)
-          + " (fleet.json's launch_s: the vehicles keep apart in the air and no sensor sends "
-          "to two at once only when launched so)", flush=True)  # fmt: skip
+    times = []
+    for v in read_fleet_dir(directory).vehicles:
+        if len(v.sorties) < sortie:
+            continue
+        t = v.sorties[sortie - 1].takeoff_s
+        if t is None and sortie == 1:
+            t = v.launch_s
+        times.append(f"vehicle {v.vehicle} at +{t:.0f} s" if t is not None
+                     else f"vehicle {v.vehicle} at a time fleet.json does not give")
+    if times:
+        print(f"take off (sortie {sortie}, s after vehicle 1's first take-off): "
+              + ", ".join(times) + "; the vehicles keep apart in the air and no sensor "
+              "sends to two at once only when they take off so", flush=True)  # fmt: skip
 
 
 def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
@@ -482,8 +493,8 @@ def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
         print(f"lamde-mission upload: {printable(str(exc))}", file=sys.stderr)
         return 1
     print(report.summary())
-    if report.ok and args.sortie == 1 and n > 1:
-        _print_launches(args.mission)
+    if report.ok:
+        _print_takeoffs(args.mission, args.sortie)
     if not report.ok:
         bad = [str(r.vehicle) for r in report.results if not r.ok]
         print(f"lamde-mission upload: vehicle {', '.join(bad)} failed (see above)",

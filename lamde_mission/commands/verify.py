@@ -107,8 +107,10 @@ def _run_sorties(args: argparse.Namespace, m: Any) -> int:
     if args.json:
         out = {"sorties": [{"vehicle": s.vehicle, "sortie": s.sortie, "file": s.file,
                             "depot_start": s.depot_start, "depot_end": s.depot_end,
+                            "takeoff_s": at,
                             "duration_s": s.duration_s, "sensors": list(s.sensors),
-                            **s.verdicts.to_dict()} for s in check.sorties],
+                            **s.verdicts.to_dict()}
+                           for s, at in zip(check.sorties, check.takeoffs(), strict=True)],
                "combined": [v.to_dict() for v in check.combined],
                "fleet": [v.to_dict() for v in check.fleet], "notes": list(check.notes),
                "launch_s": {str(v): check.launch(v) for v in check.vehicles()},
@@ -120,14 +122,14 @@ def _run_sorties(args: argparse.Namespace, m: Any) -> int:
         print(f"sortie directory {printable(args.mission)} on map '{printable(m.name)}': "
               f"{counted(len(check.sorties), 'sortie')} on "
               f"{counted(len(check.vehicles()), 'vehicle')}")
-        for s in check.sorties:
+        for s, at in zip(check.sorties, check.takeoffs(), strict=True):
             vd = s.verdicts
             energy = (f", energy {vd.energy_wh:.3f} Wh of {vd.usable_wh:.3f} usable, "
                       f"{vd.above_reserve_wh:.3f} Wh left above the reserve "
                       f"({vd.reserve_left_wh:.3f} Wh in the battery)") \
                 if vd.energy_wh is not None else ""
             print(f"{printable(s.file)}: {printable(s.depot_start)} -> "
-                  f"{printable(s.depot_end)}, {s.duration_s:.1f} s{energy}, "
+                  f"{printable(s.depot_end)}, take-off +{at:.0f} s, {s.duration_s:.1f} s{energy}, "
                   f"{counted(len(s.sensors), 'sensor')} served (its C4 and MARGIN: its share "
                   "only)")
             print("\n".join("  " + printable(r) for r in vd.table().splitlines()))

@@ -7,7 +7,8 @@
      "vehicles": [{"vehicle": 1, "makespan_s": s,
                    "sorties": [{"sortie": 1, "file": "mission-v1-s1.plan",
                                 "depot_start": "home", "depot_end": "home",
-                                "duration_s": s, "energy_wh": Wh, "reserve_left_wh": Wh,
+                                "takeoff_s": s, "duration_s": s, "energy_wh": Wh,
+                                "reserve_left_wh": Wh,
                                 "sensors": ["s01", ...]}, ...]}, ...],
      "total_s": s, "swaps": n}
 
@@ -40,6 +41,11 @@ class FleetDirError(ValueError):
     """A sortie directory that cannot be read: one line naming the file and the field."""
 
 
+#: s, the latest take-off time fleet.json may give (a sortie's `takeoff_s`): MAX_FLEET_SORTIES
+#: sorties of a day each
+MAX_CLOCK_S = 1e8
+
+
 def sortie_file_name(vehicle: int, sortie: int) -> str:
     """The file of vehicle `vehicle`'s sortie `sortie` (both 1-based), as the writer
     (`lamde_mission.sorties.sortie_file`) names it: mission-v1-s2.plan.
@@ -66,6 +72,9 @@ class FleetSortie:
     energy_wh: float | None = None
     reserve_left_wh: float | None = None
     sensors: tuple[str, ...] = ()
+    #: s after the first vehicle's take-off (None when fleet.json gives none: written before
+    #: take-off times were)
+    takeoff_s: float | None = None
 
 
 @dataclass(frozen=True)
@@ -229,6 +238,10 @@ def read_fleet_dir(path: str | Path) -> FleetDir:
             sensors = s.get("sensors", [])
             if not isinstance(sensors, list) or not all(isinstance(x, str) for x in sensors):
                 raise FleetDirError(f"{ws}.sensors: expected a list of sensor ids")
+            takeoff = _number(s.get("takeoff_s"), f"{ws}.takeoff_s")
+            if takeoff is not None and not 0.0 <= takeoff <= MAX_CLOCK_S:
+                raise FleetDirError(f"{ws}.takeoff_s: expected seconds in [0, {MAX_CLOCK_S:g}], "
+                                    f"got {takeoff:g}")  # fmt: skip
             sorties.append(FleetSortie(
                 sortie=sortie, path=fp,
                 depot_start=_name(s.get("depot_start"), f"{ws}.depot_start"),
@@ -236,7 +249,7 @@ def read_fleet_dir(path: str | Path) -> FleetDir:
                 duration_s=_number(s.get("duration_s"), f"{ws}.duration_s"),
                 energy_wh=_number(s.get("energy_wh"), f"{ws}.energy_wh"),
                 reserve_left_wh=_number(s.get("reserve_left_wh"), f"{ws}.reserve_left_wh"),
-                sensors=tuple(sensors),
+                sensors=tuple(sensors), takeoff_s=takeoff,
             ))  # fmt: skip
         launch = _number(v.get("launch_s"), f"{wv}.launch_s")
         if launch is not None and not 0.0 <= launch <= 1e6:

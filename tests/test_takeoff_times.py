@@ -1,0 +1,99 @@
+"""Each sortie's take-off time on the plan's clock (a field crew's reviewer: after the first
+sortie nothing said when a vehicle relaunches, though SEPARATION and LINKS hold only at the
+times the plan was judged at): fleet.json's `takeoff_s` / `landing_s`, `plan`'s and `verify`'s
+lines, and `upload --fleet --sortie K`."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from lamde_mission.cli import main
+from lamde_mission.formats.fleet import read_fleet_dir
+from tests.conftest import MAPS
+
+
+@pytest.fixture(scope="module")
+def two_uavs(tmp_path_factory):
+    """fleet-demo flown by 2 UAVs on a 300 s battery: 3 sorties, vehicle 1 flies two (a swap)."""
+    tmp = tmp_path_factory.mktemp("takeoff")
+    d = json.loads((MAPS / "fleet-demo.json").read_text())
+    d["fleet"]["uavs"] = 2
+    d["uav"]["endurance_s"] = 300.0
+    path = tmp / "two.json"
+    path.write_text(json.dumps(d))
+    out = tmp / "sorties"
+    assert main(["plan", str(path), "-o", str(out), "--budget", "300", "--population", "20",
+                 "--sortie-budget", "150", "--rounds", "1", "--quiet"]) == 0  # fmt: skip
+    return path, out
+
+
+def test_fleet_json_gives_each_sortie_its_take_off_and_landing(two_uavs, capsys) -> None:
+    path, out = two_uavs
+    doc = json.loads((out / "fleet.json").read_text())
+    swap = json.loads(path.read_text())["fleet"]["swap_s"]
+    sorties = 0
+    for v in doc["vehicles"]:
+        clock = v["launch_s"]  # by hand: launch, then sorties back to back with a swap between
+        for s in v["sorties"]:
+            assert s["takeoff_s"] == pytest.approx(clock, abs=1e-9)
+            assert s["landing_s"] == pytest.approx(clock + s["duration_s"], abs=1e-9)
+            clock += s["duration_s"] + swap
+            sorties += 1
+        assert v["makespan_s"] == pytest.approx(v["sorties"][-1]["landing_s"], abs=1e-9)
+    assert sorties >= 3 and len(doc["vehicles"]) == 2  # a swap on a vehicle: its clock goes on
+    read = read_fleet_dir(out)
+    assert [s.takeoff_s for v in read.vehicles for s in v.sorties] == [
+        s["takeoff_s"] for v in doc["vehicles"] for s in v["sorties"]]
+    # verify says the same times, in its lines and its JSON
+    assert main(["verify", str(path), str(out), "--json"]) == 0
+    said = json.loads(capsys.readouterr().out)
+    assert [s["takeoff_s"] for s in said["sorties"]] == [
+        s["takeoff_s"] for v in doc["vehicles"] for s in v["sorties"]]
+    assert main(["verify", str(path), str(out)]) == 0
+    text = capsys.readouterr().out
+    for v in doc["vehicles"]:
+        for s in v["sorties"]:
+            assert f"{s['file']}: " in text
+            line = next(ln for ln in text.splitlines() if ln.startswith(f"{s['file']}: "))
+            assert f"take-off +{s['takeoff_s']:.0f} s, " in line
+
+
+def test_a_fleet_json_take_off_out_of_range_is_one_line(two_uavs, tmp_path) -> None:
+    from lamde_mission.formats.fleet import FleetDirError
+
+    _, out = two_uavs
+    import shutil
+
+    bad = tmp_path / "bad"
+    shutil.copytree(out, bad)
+    doc = json.loads((bad / "fleet.json").read_text())
+    doc["vehicles"][0]["sorties"][0]["takeoff_s"] = -5
+    (bad / "fleet.json").write_text(json.dumps(doc))
+    with pytest.raises(FleetDirError, match=r"vehicles\[0\]\.sorties\[0\]\.takeoff_s: expected "
+                       r"seconds in \[0, 1e\+08\], got -5"):
+        read_fleet_dir(bad)
+
+
+def test_upload_fleet_says_when_each_vehicle_takes_off_for_the_sortie_sent(two_uavs,
+                                                                           capsys) -> None:
+    from lamde_mission.vehicle.mock_fleet import MockFleet
+    from tests.vehicle_helpers import free_udp_port
+    from tests.vehicle_helpers import no_leftover_mock_threads as _leftover  # noqa: F401
+
+    _, out = two_uavs
+    doc = json.loads((out / "fleet.json").read_text())
+    port = free_udp_port()
+    conn = ["--connect", f"udpin://127.0.0.1:{port}", "--via", "pymavlink", "--timeout", "5"]
+    with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=2, heartbeat_hz=10.0):
+        for k in (1, 2):
+            assert main(["upload", str(out), "--fleet", "--sortie", str(k), *conn]) == 0
+            said = [ln for ln in capsys.readouterr().out.splitlines()
+                    if ln.startswith("take off")]
+            times = ", ".join(f"vehicle {v['vehicle']} at +{v['sorties'][k - 1]['takeoff_s']:.0f} s"
+                              for v in doc["vehicles"] if len(v["sorties"]) >= k)
+            assert said == [f"take off (sortie {k}, s after vehicle 1's first take-off): "
+                            f"{times}; the vehicles keep apart in the air and no sensor sends "
+                            "to two at once only when they take off so"]
+    assert doc["vehicles"][0]["sorties"][1]["takeoff_s"] > 0  # the swap's relaunch, not 0
