@@ -50,6 +50,7 @@ __all__ = [
     "stored_items",
     "StorablePlan",
     "storable_plan",
+    "CORNER_NOISE_S",
 ]
 
 _m = mavutil.mavlink
@@ -338,6 +339,13 @@ def _candidates(map_: Any, p: np.ndarray, reach: int) -> np.ndarray:
     return pts[order]
 
 
+#: s: a planned hover time below this is a detour corner's (0 s, written as NAV_WAYPOINT), not a
+#: hover: rounding noise of the hover-time LP (~1e-12 s); a microsecond of hover collects at
+#: most R_c x 1e-6 Mbit, which the storage's own check (a sensor short is raised elsewhere)
+#: makes up
+CORNER_NOISE_S = 1e-6
+
+
 def storable_plan(
     plan: Any,
     map: Any,  # noqa: A002 - the project's name for it
@@ -361,7 +369,9 @@ def storable_plan(
     `planning_map`'s required data (which includes the data margin), at the point with the
     best rate to it, and rounded up to the dialect's storage (`hover_time_up`, never above
     T_max); in simultaneous access never at a point whose summed rates exceed R_lambda
-    (hovering there would break C3). A point of 0 s (a corner, written as NAV_WAYPOINT) is
+    (hovering there would break C3), and at a point that hovers already before a corner. A
+    planned time below `CORNER_NOISE_S` counts as 0 s. A point of 0 s (a corner, written as
+    NAV_WAYPOINT) is
     raised only while fewer than I_max points hover, so a plan with corner slots keeps at
     most I_max hover points. Every check uses the sim's own geometry and replay on the
     stored items.
@@ -396,6 +406,10 @@ def storable_plan(
         return plan  # already made for this map, dialect and finish: storing it again is a no-op
     hp = np.asarray(plan.hover_points, dtype=float).reshape(-1, 2)
     ht = np.asarray(plan.hover_times, dtype=float).reshape(-1)
+    # a corner's time comes out of the hover-time LP as 0 or as rounding noise (1e-12 s on
+    # L02): noise stored as float32 (px4) was a LOITER_TIME of 1e-12 s, and in whole seconds
+    # (ceil) a time just above the noise would be a 1 s hover; both are corners, 0 s
+    ht = np.where(ht < CORNER_NOISE_S, 0.0, ht)
     spec = pm.spec
     W, H = spec.area.width, spec.area.height
     alt = float32(spec.uav.altitude)
@@ -466,6 +480,8 @@ def storable_plan(
                 room &= raw > 0.0  # a corner (0 s) stays one once I_max points hover
             if not np.any(room & (R[:, j] > 0)):
                 continue
+            if np.any(room & (R[:, j] > 0) & (raw > 0.0)):
+                room &= raw > 0.0  # a point that hovers already, before a corner is made one
             i = int(np.argmax(np.where(room, R[:, j], -1.0)))
             extra = short[j] / R[i, j] * (1.0 + 1e-9) + 1e-9
             raw[i] = min(raw[i] + extra, t_max)

@@ -177,3 +177,55 @@ def test_storable_plan_of_its_own_result_is_that_result_for_the_same_map_and_fin
         assert again is not stored
         np.testing.assert_array_equal(again.hover_points, stored.hover_points)
         assert np.all(again.hover_times >= stored.hover_times)
+
+
+def test_lp_noise_on_a_corner_is_a_corner_in_every_dialect():
+    """The hover-time LP tops every time up by 1e-12 s, a detour corner's too (L02, seed 0: 10
+    corners at 1e-12 s, one point at 2.5e-7 s): PX4's float32 kept them as LOITER_TIME items
+    of 1e-12 s ("76 hover points" where generic wrote 66 + 10 corners) and whole seconds made
+    the 2.5e-7 s one a 1 s hover. Below `CORNER_NOISE_S` a time is a corner's, 0 s."""
+    from types import SimpleNamespace
+
+    from lamde_mission.storage import CORNER_NOISE_S
+
+    m = load_map(CASE_TINY | {"safety": {"clearance": 0, "data_margin": 0}})
+    base = storable_plan(SimpleNamespace(hover_points=[[300, 900], [700, 800], [850, 350]],
+                                         hover_times=[40.0, 40.0, 40.0]), m, "px4")  # fmt: skip
+    assert np.all(base.hover_times > 0)
+    hp = np.insert(base.hover_points, [1, 2], [[500, 1000], [800, 600]], axis=0)
+    for noise in (1e-12, 2.5e-7, 0.5 * CORNER_NOISE_S):
+        ht = np.insert(base.hover_times, [1, 2], [noise, 1e-12])
+        for dialect in ("px4", "ardupilot", "generic"):
+            stored = storable_plan(SimpleNamespace(hover_points=hp, hover_times=ht), m, dialect)
+            assert list(stored.hover_times[[1, 3]]) == [0.0, 0.0], (noise, dialect)
+            items = stored_items(plan_to_items(stored, m), dialect)
+            cmds = [it.command for it in items if it.command in (CMD.LOITER_TIME,
+                                                                  CMD.WAYPOINT)]
+            # hover, corner, hover, corner, hover, then the WAYPOINT at the end point
+            assert cmds == [CMD.LOITER_TIME, CMD.WAYPOINT, CMD.LOITER_TIME, CMD.WAYPOINT,
+                            CMD.LOITER_TIME, CMD.WAYPOINT], (noise, dialect)
+            assert verify(replay(items, m), m).passed
+    # a real hover time just above the noise stays a hover
+    ht = np.insert(base.hover_times, [1, 2], [2 * CORNER_NOISE_S, 0.0])
+    assert storable_plan(SimpleNamespace(hover_points=hp, hover_times=ht), m,
+                         "px4").hover_times[1] > 0.0
+
+
+@pytest.mark.slow  # measured 20 s (three plans of L02)
+def test_l02_writes_the_same_corners_for_every_autopilot(tmp_path):
+    """The reviewer's case: `plan L02 --autopilot px4` wrote 76 hover points, generic 66 + 10
+    corners; a sensor short after float32 then also raised a corner into a hover. Each
+    dialect now writes the plan's corners as NAV_WAYPOINT and no LOITER_TIME under 1 ms."""
+    import lamde_mission
+    from tests.conftest import MAPS
+
+    m = load_map(MAPS / "large" / "L02.json")
+    plan = lamde_mission.plan(m, seed=0)
+    corners = int(np.count_nonzero(np.asarray(plan.hover_times) < 1e-6))
+    assert corners >= 10
+    for dialect in ("px4", "ardupilot", "generic"):
+        stored = storable_plan(plan, m, dialect, planning_map=m.planning_map())
+        items = stored_items(plan_to_items(stored, m), dialect)
+        hover = [it.param1 for it in items if it.command == CMD.LOITER_TIME]
+        assert len(hover) == len(plan.hover_times) - corners and min(hover) >= 1e-3, dialect
+        assert verify(replay(items, m), m).passed, dialect
