@@ -444,13 +444,16 @@ def _files_verdict(directory: Path, listed: list[str]) -> Any:
 def _check(
     m: Any, rows: list[tuple[int, int, str, str, str, list[Any]]], vehicles: int,
     directory: Path, launches: list[float] | None = None,
+    speed_limits: dict[int, float] | None = None,
 ) -> FleetCheck:
     """Replay each (vehicle, sortie, file, depot_start, depot_end, items) on its sortie map;
     judge the whole plan's data, its shape (`vehicles`: how many the plan lists; the mission
     files in `directory`) and its vehicles in the air together (SEPARATION, LINKS at each
     vehicle's launch: `launches[k - 1]` for vehicle k, as fleet.json lists them; None:
     staggered by `lamde_mission.launches.stagger`, as a plan is written). Both stagger and
-    SEPARATION keep the map's `fleet.separation_m` (`m.separation_m`, metres)."""
+    SEPARATION keep the map's `fleet.separation_m` (`m.separation_m`, metres). `speed_limits`:
+    {vehicle: m/s}, each such vehicle's sorties flown at most at its own speed limit
+    (`sim.replay`'s speed_limit), on the same launch times."""
     from lamde_mission.launches import stagger
     from sim import replay, verify
     from sim.fleet_time import fleet_time_verdicts, track
@@ -460,7 +463,7 @@ def _check(
     req = np.asarray(m.required_data, dtype=float)
     for v, k, f, a, b, items in rows:
         sm = sortie_map(m, a, b, name=f"{m.name} v{v} s{k}")
-        tl = replay(items, sm)
+        tl = replay(items, sm, speed_limit=(speed_limits or {}).get(v))
         out.append(SortieCheck(v, k, f, a, b, tl, verify(tl, sm), _served(tl, req)))
     combined = combined_data_verdicts([s.timeline for s in out], m)
     shape = (_chain_verdict(m, rows), _uavs_verdict(m, vehicles),
@@ -484,12 +487,16 @@ def _check(
                                                                    + 1)))
 
 
-def verify_sortie_dir(m: Any, path: str | Path) -> FleetCheck:
+def verify_sortie_dir(m: Any, path: str | Path,
+                      speed_limits: dict[int, float] | None = None) -> FleetCheck:
     """Replay and judge the sortie directory `path` on map `m` (module docstring).
 
     Args:
         m: the map the plan was made for (with its origin).
         path: the directory holding fleet.json and the mission files.
+        speed_limits: {vehicle (1-based): its own horizontal speed limit, m/s}: that
+            vehicle's sorties flown at most at it (as PX4 flies a mission above
+            MPC_XY_VEL_MAX), at the launch times fleet.json gives; None: as planned.
 
     Returns:
         The `FleetCheck` (with a note when fleet.json names another map than `m`).
@@ -521,7 +528,7 @@ def verify_sortie_dir(m: Any, path: str | Path) -> FleetCheck:
                 raise ValueError(f"{s.path}: {exc}") from None
             rows.append((veh.vehicle, s.sortie, s.path.name, s.depot_start, s.depot_end, items))
     check = _check(m, rows, len(fleet.vehicles), fleet.path,
-                   [veh.launch_s for veh in fleet.vehicles])
+                   [veh.launch_s for veh in fleet.vehicles], speed_limits)
     note = fleet.map_note(m.name, "verified")
     return check if note is None else replace(check, notes=(note,))
 

@@ -313,6 +313,7 @@ def replay(
     map: Any,  # noqa: A002
     *,
     dt: float = 1.0,
+    speed_limit: float | None = None,
 ) -> Timeline:
     """Fly a stored mission over a map with the paper's model (module docstring): the
     timeline of the flight and the paper's totals.
@@ -325,6 +326,9 @@ def replay(
             objective, safety), `sensors`, `sensor_ids` and `required_data` fly it.
         dt: the sampling step (s), > 0; a mission too long for the sample bound is sampled
             more coarsely (the totals stay exact).
+        speed_limit: the vehicle's own horizontal speed limit (m/s, > 0; PX4's
+            MPC_XY_VEL_MAX caps a DO_CHANGE_SPEED's cruise speed): every leg is flown at
+            most at it, with a note; None: the mission's speeds (at most v_max).
 
     Returns:
         The `Timeline`: samples `t` (N,) s, `xy` (N, 2) m, `z` (N,) m, `phase` (N,), `data`
@@ -336,10 +340,11 @@ def replay(
         sim.geo.MissingOriginError: the map has no origin (lat, lon) to place the items.
         ValueError: dt is not positive.
     """
-    return replay_route(items_to_route(items, map), map, dt=dt)
+    return replay_route(items_to_route(items, map), map, dt=dt, speed_limit=speed_limit)
 
 
-def replay_route(route: Route, map: Any, *, dt: float = 1.0) -> Timeline:  # noqa: A002
+def replay_route(route: Route, map: Any, *, dt: float = 1.0,  # noqa: A002
+                 speed_limit: float | None = None) -> Timeline:
     """`replay` for a Route already read from items (`sim.mission.items_to_route`).
 
     Args:
@@ -347,6 +352,7 @@ def replay_route(route: Route, map: Any, *, dt: float = 1.0) -> Timeline:  # noq
             speeds, finish.
         map: the map, as for `replay` (its `spec`, `sensors`, `sensor_ids`, `required_data`).
         dt: the sampling step (s), > 0; coarsened for a mission too long for the sample bound.
+        speed_limit: as for `replay`.
 
     Returns:
         The `Timeline`, as for `replay`.
@@ -361,17 +367,28 @@ def replay_route(route: Route, map: Any, *, dt: float = 1.0) -> Timeline:  # noq
     uav, radio = spec.uav, spec.radio
     notes = list(route.notes)
     v_max = float(uav.max_speed)
-    warned: set[float] = set()
+    warned: set[Any] = set()
+
+    if speed_limit is not None and not (math.isfinite(speed_limit) and speed_limit > 0):
+        raise ValueError(f"speed_limit must be a positive speed (m/s), got {speed_limit!r}")
 
     def flown(speed: float | None) -> float:
-        """A DO_CHANGE_SPEED speed as flown: at most the UAV's v_max."""
+        """A DO_CHANGE_SPEED speed as flown: at most the UAV's v_max and the vehicle's own
+        limit."""
         if speed is None:
-            return v_max
-        if speed > v_max and speed not in warned:
+            speed = v_max
+        elif speed > v_max and speed not in warned:
             warned.add(speed)
             notes.append(f"mission speed {speed:g} m/s exceeds the UAV's v_max {v_max:g} m/s; "
                          "flown at v_max")  # fmt: skip
-        return min(float(speed), v_max)
+        speed = min(float(speed), v_max)
+        if speed_limit is not None and speed > speed_limit:
+            if ("limit", speed) not in warned:
+                warned.add(("limit", speed))
+                notes.append(f"mission speed {speed:g} m/s exceeds the vehicle's speed limit "
+                             f"{speed_limit:g} m/s; flown at the limit")  # fmt: skip
+            speed = float(speed_limit)
+        return speed
 
     n_stops = len(route.stops)
     if route.leg_speeds:

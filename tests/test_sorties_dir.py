@@ -229,7 +229,10 @@ def test_upload_fleet_with_map_replays_the_directory_first(dirs, tmp_path, capsy
     port = free_udp_port()
     conn = ["--connect", f"udpin://127.0.0.1:{port}", "--via", "pymavlink", "--timeout", "5"]
     one = _demo_map(tmp_path, 1)  # fleet.uavs 1: the 2-vehicle plan fails UAVS
-    with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=2, heartbeat_hz=10.0) as fleet:
+    # vehicles set to fly the plan's 20 m/s (PX4's default MPC_XY_VEL_MAX, 12, fails ENERGY:
+    # tests/test_speed_limit.py)
+    with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=2, heartbeat_hz=10.0,
+                   params={"MPC_XY_VEL_MAX": 20.0}) as fleet:  # fmt: skip
         rc = main(["upload", str(src), "--fleet", *conn, "--map", str(one)])
         cap = capsys.readouterr()
         assert rc == 1, cap.out + cap.err

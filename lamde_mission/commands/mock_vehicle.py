@@ -102,8 +102,37 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    "with this key: 64 hex digits or a passphrase (its SHA-256), as for upload")
     p.add_argument("--heartbeat-hz", type=float, default=1.0, metavar="HZ",
                    help="HEARTBEATs per second (default: 1, as PX4 and ArduPilot send them)")
+    p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                   help="answer this parameter with VALUE (repeatable; PARAM_REQUEST_READ / "
+                   "_LIST); by default a PX4 mock says MPC_XY_VEL_MAX=12 and an ArduPilot one "
+                   "WPNAV_SPEED=1000, their autopilots' defaults")
     p.add_argument("-q", "--quiet", action="store_true", help="do not print transfer events")
     return p
+
+
+def _params(given: list[str]) -> dict[str, float]:
+    """--param NAME=VALUE, each a MAVLink parameter id (1..16 characters) and a finite number;
+    UsageError naming the bad one."""
+    import math
+    import re
+
+    from lamde_mission.errors import UsageError
+
+    out: dict[str, float] = {}
+    for text in given:
+        name, sep, value = text.partition("=")
+        if not sep or not re.fullmatch(r"[A-Za-z0-9_]{1,16}", name):
+            raise UsageError(f"--param: {text!r} is not NAME=VALUE with a parameter id of 1-16 "
+                             "letters, digits or underscores")  # fmt: skip
+        try:
+            v = float(value)
+        except ValueError:
+            v = math.nan
+        if not math.isfinite(v) or abs(v) > 3.4e38:
+            raise UsageError(f"--param {name}: {value!r} is not a number a MAVLink parameter "
+                             "holds (a finite float32)")  # fmt: skip
+        out[name] = v
+    return out
 
 
 def _fleet_ids(args: argparse.Namespace) -> list[int] | None:
@@ -160,7 +189,7 @@ def run(args: argparse.Namespace) -> int:
     options = dict(
         loss=args.loss, loss_in=args.loss_in, noisy_gcs_hz=args.noisy_gcs_hz,
         latency_ms=args.latency_ms, reject=args.reject, max_items=args.max_items,
-        autopilot=args.autopilot, signing_key=key,
+        autopilot=args.autopilot, signing_key=key, params=_params(args.param),
     )  # fmt: skip
     if not (0.0 < args.heartbeat_hz <= 100.0):
         raise UsageError(f"--heartbeat-hz must be in (0, 100], got {args.heartbeat_hz:g}")

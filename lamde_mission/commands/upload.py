@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from collections.abc import Callable
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -340,6 +341,100 @@ def _rejected(what: str, map_path: str, failed: str, *, force: bool) -> bool:
     return False
 
 
+def _asked_speed(mission: list) -> float | None:
+    """The fastest cruise speed the mission asks for (its DO_CHANGE_SPEEDs above 0, m/s), or
+    None when it sets none."""
+    from lamde_mission.items import CMD
+
+    asked = [float(it.param2) for it in mission
+             if it.command == CMD.DO_CHANGE_SPEED and it.param2 > 0]  # fmt: skip
+    return max(asked) if asked else None
+
+
+def _speed_verdict(what: str, name: str, limit: float, asked: float, map_path: str | None,
+                   judge: Callable[[], tuple[list[str], str]], *, force: bool) -> str | None:
+    """What the vehicle's speed limit does to `what` (a mission, or a vehicle's sorties): a
+    warning without a map; with one the simulator's verdicts at the limit (`judge`: the failed
+    lines and what changed), a note when all hold, the refusal line when one fails (None with
+    `force`, a warning then)."""
+    from planner_core.textio import printable
+
+    head = (f"{printable(what)}: the vehicle's {name} is {limit:g} m/s, below the {asked:g} "
+            f"m/s the mission asks (DO_CHANGE_SPEED), so it flies at {limit:g} m/s")
+    fix = f"set {name} to {asked:g} or more, or plan the map with uav.max_speed {limit:g}"
+    if map_path is None:
+        print(f"warning: {head}; its flight time and energy were planned at {asked:g} m/s "
+              f"(--map checks it at {limit:g} m/s; {fix})", file=sys.stderr)  # fmt: skip
+        return None
+    failed, changed = judge()
+    if not failed:
+        print(f"note: {head}: {changed}; every check holds at that speed on "
+              f"{printable(map_path)}", flush=True)  # fmt: skip
+        return None
+    lines = "; ".join(printable(x) for x in failed)
+    if force:
+        print(f"warning: {head}, and at that speed the simulator rejects it on "
+              f"{printable(map_path)} ({lines}); sent anyway (--force)", file=sys.stderr)
+        return None
+    return (f"{head}, and at that speed the simulator rejects it on {printable(map_path)}: "
+            f"{lines}; nothing sent ({fix}; --force sends it anyway)")
+
+
+def _mission_speed_check(path: str, mission: list, map_path: str | None, *, force: bool,
+                         origin: str | None = None) -> Callable[[str, float], str | None]:
+    """`upload MISSION`'s check of the vehicle's speed limit (`transfer.SPEED_LIMIT_PARAM`,
+    read after connecting): below the mission's speed, a warning, or with `--map` the
+    simulator's verdicts with every leg flown at the limit (`_speed_verdict`)."""
+    from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
+    from sim import replay, verify
+
+    asked = _asked_speed(mission)
+
+    def check(name: str, limit: float) -> str | None:
+        if asked is None or limit >= asked:
+            return None
+
+        def judge() -> tuple[list[str], str]:
+            m = with_origin_or_fail(load_map_or_fail(map_path), origin)
+            slow, planned = replay(mission, m, speed_limit=limit), replay(mission, m)
+            failed = [f"{v.name} {v.title}: FAIL, margin {v.margin:.4g} {v.unit}; {v.detail}"
+                      for v in verify(slow, m) if not v.passed]  # fmt: skip
+            return failed, (f"t_fly {slow.totals.t_fly:.0f} s instead of "
+                            f"{planned.totals.t_fly:.0f} s")
+
+        return _speed_verdict(path, name, limit, asked, map_path, judge, force=force)
+
+    return check
+
+
+def _fleet_speed_check(directory: str, missions: list, map_path: str | None, *, force: bool,
+                       origin: str | None = None) -> Callable[[int, str, float], str | None]:
+    """`upload DIR/ --fleet`'s check of each vehicle's speed limit: below its sortie's speed,
+    a warning, or with `--map` the whole directory judged as `verify MAP DIR/` does with that
+    vehicle's sorties flown at its limit (slower sorties move its later take-offs and the
+    fleet's separation; `sorties.verify_sortie_dir`'s speed_limits)."""
+    from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
+    from lamde_mission.sorties import verify_sortie_dir
+
+    asked = {fm.vehicle: _asked_speed(fm.mission) for fm in missions if fm.mission}
+
+    def check(vehicle: int, name: str, limit: float) -> str | None:
+        want = asked.get(vehicle)
+        if want is None or limit >= want:
+            return None
+
+        def judge() -> tuple[list[str], str]:
+            m = with_origin_or_fail(load_map_or_fail(map_path), origin)
+            slow = verify_sortie_dir(m, directory, {vehicle: limit})
+            return slow.failed(), (f"vehicle {vehicle}'s makespan "
+                                   f"{slow.makespan(vehicle):.0f} s")
+
+        return _speed_verdict(f"{directory} vehicle {vehicle}", name, limit, want, map_path,
+                              judge, force=force)
+
+    return check
+
+
 def _fleet_sim_check(directory: str, map_path: str, *, force: bool,
                      origin: str | None = None) -> bool:
     """`upload DIR/ --fleet --map MAP`: the whole sortie directory replayed and judged on the
@@ -482,6 +577,8 @@ def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
             missions, connect=conns, system_ids=ids, via=args.via, timeout=args.timeout,
             attempts=args.attempts, autopilot=args.autopilot, signing_key=key,
             log=_verbose_log(args), progress=_Progress(verbose=args.verbose), on_vehicle=done,
+            speed_check=_fleet_speed_check(args.mission, missions, args.map, force=args.force,
+                                           origin=args.origin),
         )  # fmt: skip
     except FleetSurveyError as exc:  # the link's answer, not the command: as NoVehicleError
         print(f"lamde-mission upload: {printable(args.mission)}: {printable(str(exc))}",
@@ -578,6 +675,8 @@ def run(args: argparse.Namespace) -> int:
             autopilot=args.autopilot,
             signing_key=key,
             system_id=None if ids is None else ids[0],
+            speed_check=_mission_speed_check(args.mission, mission, args.map,
+                                             force=args.force, origin=args.origin),
         )
     except ValueError as exc:  # items MAVLink cannot carry
         raise UsageError(f"{args.mission}: {exc}") from None

@@ -22,6 +22,7 @@ each as `upload_mission`'s.
 from __future__ import annotations
 
 import contextlib
+import functools
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -438,6 +439,7 @@ def upload_fleet(
     progress: Callable[[str, int, int], None] | None = None,
     on_vehicle: Callable[[VehicleResult], None] | None = None,
     window: float | None = None,
+    speed_check: Callable[[int, str, float], str | None] | None = None,
 ) -> FleetReport:
     """Upload mission k to vehicle k, read each back and compare (see the module docstring).
 
@@ -454,6 +456,9 @@ def upload_fleet(
         log, progress: as for `upload_mission`.
         on_vehicle: called with each vehicle's result as soon as it is done.
         window: the least seconds the survey listens (None: `claims.HEARTBEAT_WATCH_S`).
+        speed_check: `speed_check(vehicle, parameter, m/s)` after each vehicle's speed
+            limit is read (`upload_mission`'s, with the vehicle's number first); a line
+            fails that vehicle (`SpeedLimitError`, nothing sent to it); None reads nothing.
 
     Returns:
         The report; `report.ok` only if every vehicle holds its mission, read back identical.
@@ -501,6 +506,8 @@ def upload_fleet(
                 fm.mission, fm.fence, connect=conn, via=via, timeout=timeout, attempts=attempts,
                 log=log, progress=progress, rally=fm.rally, autopilot=autopilot,
                 signing_key=signing_key, heartbeat_watch=0.0, system_id=sid,
+                speed_check=None if speed_check is None else functools.partial(
+                    speed_check, fm.vehicle),
             )  # fmt: skip
         except DuplicateVehicleError as exc:
             exc.fleet_report = report  # the vehicles done before it

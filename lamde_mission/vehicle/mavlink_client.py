@@ -64,6 +64,9 @@ __all__ = ["MavlinkClient"]
 
 _m = mavlink2
 
+#: s between two PARAM_REQUEST_READs of one parameter (`MavlinkClient.read_param`)
+PARAM_RESEND_S = 0.5
+
 #: messages the mission protocol exchanges (what a second ground station's traffic consists of)
 _MISSION_MSGS = frozenset({
     "MISSION_COUNT", "MISSION_REQUEST_LIST", "MISSION_REQUEST_INT", "MISSION_REQUEST",
@@ -318,6 +321,37 @@ class MavlinkClient:
         # the rest of the watch: a second autopilot with these ids raises in `_recv`
         self._recv(self.watch.ends_at(), lambda _msg: False)
         return self.vehicle
+
+    def read_param(self, name: str, timeout: float) -> float | None:
+        """One parameter of the pinned vehicle, by name (PARAM_REQUEST_READ, answered by
+        PARAM_VALUE; the MAVLink parameter protocol), asked again every `PARAM_RESEND_S`.
+
+        Args:
+            name: the parameter's id, at most 16 characters (e.g. "MPC_XY_VEL_MAX").
+            timeout: seconds to wait for the answer, > 0.
+
+        Returns:
+            Its value (float), or None when the vehicle does not answer in `timeout` s (no
+            such parameter: autopilots answer nothing).
+
+        Raises:
+            TransferError: not connected.
+        """
+        ts, tc = self._target()
+        deadline = time.monotonic() + timeout
+        key = name.encode()[:16]
+
+        def answer(msg: Any) -> bool:
+            return (msg.get_type() == "PARAM_VALUE" and self._from_vehicle(msg)
+                    and str(msg.param_id).rstrip("\x00") == name)  # fmt: skip
+
+        while True:
+            self._send(self._mav.param_request_read_encode(ts, tc, key, -1))
+            msg = self._recv(min(deadline, time.monotonic() + PARAM_RESEND_S), answer)
+            if msg is not None:
+                return float(msg.param_value)
+            if time.monotonic() >= deadline:
+                return None
 
     def _target(self) -> tuple[int, int]:
         if self.vehicle is None:

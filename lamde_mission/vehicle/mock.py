@@ -72,7 +72,8 @@ from lamde_mission.vehicle.wire import (
     to_wire,
 )
 
-__all__ = ["MockVehicle", "MockStats", "CAPABILITIES", "NOISY_GCS_SYSTEM", "UPLOAD_TIMING"]
+__all__ = ["MockVehicle", "MockStats", "CAPABILITIES", "NOISY_GCS_SYSTEM", "UPLOAD_TIMING",
+           "MOCK_PARAMS"]
 
 #: system id of the mock's second, noisy ground station
 NOISY_GCS_SYSTEM = 254
@@ -103,6 +104,13 @@ _TYPE_ALL = _m.MAV_MISSION_TYPE_ALL
 #: link's stream slow-down, 0 on a clear link) after its last request, and cancels
 #: `upload_timeout_ms` (8000 ms, MissionItemProtocol.h) after the last item it accepted.
 UPLOAD_TIMING = {"px4": (0.25, 5.0), "ardupilot": (1.0, 8.0)}
+
+#: the parameters a mock vehicle answers by default, at its autopilot's defaults: PX4's
+#: multicopter horizontal speed limit MPC_XY_VEL_MAX (12 m/s; a mission's DO_CHANGE_SPEED is
+#: capped at it, FlightTaskAuto) and ArduPilot Copter's WPNAV_SPEED (cm/s, the default
+#: horizontal speed of a mission)
+MOCK_PARAMS: dict[str, dict[str, float]] = {"px4": {"MPC_XY_VEL_MAX": 12.0},
+                                            "ardupilot": {"WPNAV_SPEED": 1000.0}}
 
 
 @dataclass
@@ -169,6 +177,7 @@ class MockVehicle:
         home: tuple[float, float, float] = (-35.3632621, 149.1652374, 584.0),
         signing_key: bytes | None = None,
         sock: socket.socket | None = None,
+        params: dict[str, float] | None = None,
     ) -> None:
         if not 0.0 <= loss < 1.0:
             raise ValueError(f"loss must be in [0, 1), got {loss!r}")
@@ -204,6 +213,13 @@ class MockVehicle:
         self.lose_in = lose_in
         self.lose_out = lose_out
         self.autopilot = autopilot
+        #: the parameters the vehicle answers PARAM_REQUEST_READ / _LIST with: its autopilot's
+        #: defaults (`MOCK_PARAMS`), updated by `params`
+        self.params: dict[str, float] = {**MOCK_PARAMS.get(autopilot, {}),
+                                         **{str(k): float(v) for k, v in (params or {}).items()}}
+        for k in self.params:
+            if not 0 < len(k) <= 16:
+                raise ValueError(f"params: a MAVLink parameter id has 1..16 characters, got {k!r}")
         self.home = tuple(float(v) for v in home)
         self.on_event = on_event
         self.stats = MockStats()
@@ -597,6 +613,26 @@ class MockVehicle:
             self._send_heartbeat()
         else:
             self._command_ack(cmd, _m.MAV_RESULT_UNSUPPORTED, src)
+
+    def _param_value(self, name: str) -> None:
+        names = list(self.params)
+        self._send(self._mav.param_value_encode(
+            name.encode(), float(self.params[name]), _m.MAV_PARAM_TYPE_REAL32, len(names),
+            names.index(name)))  # fmt: skip
+
+    def _on_param_request_read(self, msg: object, src: tuple[int, int]) -> None:
+        """PARAM_VALUE for a known parameter (by id, or by index when param_index >= 0);
+        nothing for an unknown one, as PX4 and ArduPilot answer."""
+        names = list(self.params)
+        index = int(msg.param_index)
+        name = names[index] if 0 <= index < len(names) else (
+            str(msg.param_id).rstrip("\x00") if index < 0 else None)
+        if name in self.params:
+            self._param_value(name)
+
+    def _on_param_request_list(self, msg: object, src: tuple[int, int]) -> None:
+        for name in self.params:
+            self._param_value(name)
 
     def _on_command_int(self, msg: object, src: tuple[int, int]) -> None:
         self._command_ack(int(msg.command), _m.MAV_RESULT_UNSUPPORTED, src)

@@ -60,6 +60,20 @@ class NoVehicleError(VehicleError):
     """Nothing answered at the address within the timeout."""
 
 
+class SpeedLimitError(VehicleError):
+    """The vehicle's speed limit (`SPEED_LIMIT_PARAM`) makes the mission fail a check: refused
+    after connecting, before anything was sent."""
+
+
+#: per storage dialect, the vehicle parameter that caps a mission's horizontal speed: PX4's
+#: multicopter FlightTaskAuto flies a DO_CHANGE_SPEED's cruise speed at most at MPC_XY_VEL_MAX
+#: (m/s; 12 by default). ArduPilot Copter's WPNAV_SPEED is the speed a mission starts at, which
+#: DO_CHANGE_SPEED replaces: no cap is read there.
+SPEED_LIMIT_PARAM: dict[str, str] = {"px4": "MPC_XY_VEL_MAX"}
+#: s to wait for the vehicle's answer to the parameter read
+PARAM_TIMEOUT_S = 3.0
+
+
 def no_vehicle_message(
     endpoint: object, timeout: float, system_id: int | None, heard: Sequence[int],
     bad_signatures: int = 0,
@@ -209,6 +223,18 @@ class MissionClient(Protocol):
         """
         ...
 
+    def read_param(self, name: str, timeout: float) -> float | None:
+        """One parameter of the vehicle (the MAVLink parameter protocol), by name.
+
+        Args:
+            name: the parameter's id (at most 16 characters).
+            timeout: seconds to wait.
+
+        Returns:
+            Its value, or None when the vehicle does not answer in time.
+        """
+        ...
+
     def upload(self, items: Sequence[WireItem], mission_type: int, timeout: float) -> None:
         """Upload one list.
 
@@ -277,6 +303,9 @@ class UploadReport:
     dialect: str | None = None  # px4 / ardupilot / generic: the storage rules compared under
     #: the mission as last read back from the vehicle, in the file's numbering (no home item)
     readback: list[MissionItem] = field(default_factory=list)
+    #: (parameter, value) of the vehicle's horizontal speed limit (`SPEED_LIMIT_PARAM`), m/s,
+    #: when it was read (a `speed_check` given, a dialect that has one, the vehicle answered)
+    speed_limit: tuple[str, float] | None = None
 
     def lines(self, max_differences: int = 20) -> list[str]:
         """The short report `lamde-mission upload` prints.
@@ -303,6 +332,9 @@ class UploadReport:
             out.append(f"compared under {self.dialect}'s storage rules"
                        + (" (item 0 is the vehicle's home position)"
                           if self.dialect == "ardupilot" else ""))  # fmt: skip
+        if self.speed_limit is not None:
+            out.append(f"the vehicle's speed limit: {self.speed_limit[0]} "
+                       f"{self.speed_limit[1]:g} m/s")
         for k, err in enumerate(self.errors, start=1):
             out.append(f"attempt {k} of {self.max_attempts} failed: {err}")
         out.extend(f"note: {n}" for n in self.notes)
@@ -415,6 +447,7 @@ def upload_and_verify(
     attempts: int = 3,
     endpoint: str = "",
     log: Callable[[str], None] | None = None,
+    speed_check: Callable[[str, float], str | None] | None = None,
 ) -> UploadReport:
     """Upload `mission` and `fence` through `client`, read both back and compare them.
 
@@ -437,13 +470,18 @@ def upload_and_verify(
         attempts: how many times the whole transfer is tried, >= 1.
         endpoint: the connection, for the report.
         log: called with a line per step (None: silent).
+        speed_check: where the dialect has a speed limit parameter (`SPEED_LIMIT_PARAM`),
+            it is read after connecting (`report.speed_limit`; a note when the vehicle does
+            not answer in `PARAM_TIMEOUT_S`) and `speed_check(name, value m/s)` says what
+            the mission fails at that speed, or None; None: nothing is read.
 
     Returns:
         The report, on success (`ok` True).
 
     Raises:
         VehicleError: NoVehicleError, MissionRejectedError, TransferError or
-            ReadbackMismatchError (each with `.report`) on failure.
+            ReadbackMismatchError (each with `.report`) on failure; SpeedLimitError (with
+            `.report`; nothing sent) with `speed_check`'s line.
         ValueError: items MAVLink cannot carry, an empty mission, fence or rally commands in
             the mission, `attempts` < 1, `timeout` <= 0 or an unknown `autopilot`.
     """
@@ -476,6 +514,19 @@ def upload_and_verify(
         report.rally_items = None if up_rally is None else len(up_rally)
         report.connect_s = time.monotonic() - t0
         say(f"connected to {report.vehicle.describe()} in {report.connect_s:.2f} s")
+        param = SPEED_LIMIT_PARAM.get(dialect.name)
+        if speed_check is not None and param is not None:
+            value = client.read_param(param, min(timeout, PARAM_TIMEOUT_S))
+            if value is None:
+                report.notes.append(f"the vehicle did not say its {param} in "
+                                    f"{min(timeout, PARAM_TIMEOUT_S):g} s: the mission's speed "
+                                    "is not checked against its limit")  # fmt: skip
+            else:
+                report.speed_limit = (param, float(value))
+                say(f"the vehicle's {param} is {value:g} m/s")
+                problem = speed_check(param, float(value))
+                if problem is not None:
+                    raise SpeedLimitError(problem)
         last: VehicleError | None = None
         for attempt in range(1, attempts + 1):
             report.attempts = attempt

@@ -325,6 +325,37 @@ class MavsdkClient:
         self._raise_if_claimed()
         return self.vehicle
 
+    def read_param(self, name: str, timeout: float) -> float | None:
+        """One float parameter of the vehicle through MAVSDK's Param plugin
+        (`get_param_float`: the MAVLink parameter protocol).
+
+        Args:
+            name: the parameter's id, at most 16 characters.
+            timeout: seconds to wait, > 0 (MAVSDK's own retries run inside it).
+
+        Returns:
+            Its value, or None when MAVSDK gets no answer in time or the vehicle has no such
+            float parameter.
+
+        Raises:
+            TransferError: not connected.
+        """
+        from mavsdk.asyncio.plugins.param import ParamAsync, ParamError
+
+        if self._system is None:
+            raise TransferError("not connected (call connect first)")
+
+        async def get() -> float | None:
+            try:
+                return float(await ParamAsync(self._system).get_param_float(name))
+            except ParamError:
+                return None
+
+        try:
+            return self._run(get(), float(timeout))
+        except TimeoutError:
+            return None
+
     # ------------------------------------------------------------------ transfers
 
     def _call(
@@ -589,6 +620,7 @@ def upload_mission(
     signing_key: bytes | None = None,
     heartbeat_watch: float | None = None,
     system_id: int | None = None,
+    speed_check: Callable[[str, float], str | None] | None = None,
 ) -> UploadReport:
     """Upload a mission and its fence to the vehicle at `connect`, read both back, compare.
 
@@ -627,6 +659,8 @@ def upload_mission(
             vehicles share (a multi-vehicle radio or router; `upload_fleet`): its HEARTBEAT
             is waited for, and only its messages are listened to; None takes the first
             vehicle heard.
+        speed_check: reads the vehicle's horizontal speed limit after connecting and says
+            what the mission fails at it (`transfer.upload_and_verify`); None reads nothing.
 
     Returns:
         The report, with what the client ignored among its notes.
@@ -636,7 +670,8 @@ def upload_mission(
             MissionRejectedError, TransferError, ReadbackMismatchError; `.report` attached)
             on failure of the transfer; `DuplicateVehicleError`
             (naming both addresses) when a second address claims the vehicle's system and
-            component ids, during the watch or later (`claims`).
+            component ids, during the watch or later (`claims`); `SpeedLimitError` (nothing
+            sent) with `speed_check`'s line.
         ValueError: bad arguments (timeout, via, connect, system_id, attempts, autopilot) or
             items MAVLink cannot carry.
     """
@@ -661,7 +696,7 @@ def upload_mission(
     try:
         report = upload_and_verify(
             client, mission, fence, rally=rally, autopilot=autopilot, timeout=timeout,
-            attempts=attempts, endpoint=connect, log=log,
+            attempts=attempts, endpoint=connect, log=log, speed_check=speed_check,
         )  # fmt: skip
     except VehicleError as exc:
         if exc.report is not None:
