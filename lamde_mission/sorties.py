@@ -28,7 +28,9 @@ fleet.json (the contract of docs/sorties.md):
         "takeoff_s": s, "landing_s": s (on the plan's clock: after the first vehicle's
         take-off), "duration_s": s, "energy_wh": Wh, "reserve_left_wh": Wh (battery - energy),
         "above_reserve_wh": Wh (usable - energy), "sensors": ["s01", ...]}]}],
-     "total_s": s, "swaps": n, "f_total": sum of f + swap_s per swap}
+     "total_s": s, "swaps": n, "f_total": sum of f + swap_s per swap,
+     "timing_tolerance_s": s (several vehicles: how far each sortie may take off from its
+     time with SEPARATION and LINKS holding, `sim.fleet_time.timing_tolerance`)}
 
 Durations, energies and f_total are the simulator's, on the stored missions (the planner's own
 objective, `FleetPlan.total`, is not stored: its model rounds nothing). Cost: one storage pass and
@@ -212,6 +214,9 @@ class FleetCheck:
     notes: tuple[str, ...] = ()
     #: each vehicle's launch, s after the first's take-off (`lamde_mission.launches`)
     launches: tuple[float, ...] = ()
+    #: s: how far each sortie may take off from its time with SEPARATION and LINKS holding
+    #: (`sim.fleet_time.timing_tolerance`); None with one vehicle flying
+    timing_tolerance_s: float | None = None
 
     @property
     def passed(self) -> bool:
@@ -477,14 +482,27 @@ def _check(
     placed = []
     if len(flying) > 1:  # one vehicle alone meets nothing in the air: no tracks to build
         tracks = [track(by_vehicle[v], float(m.swap_s)) for v in flying]
-        given = stagger(tracks, separation=sep) if launches is None else [
+        given = stagger(tracks, separation=sep, tolerance=m.launch_tolerance_s) \
+            if launches is None else [
             float(launches[v - 1]) if v <= len(launches) else 0.0 for v in flying]
         at = dict(zip(flying, given, strict=True))
         placed = [x.at(t) for x, t in zip(tracks, given, strict=True)]
     air = fleet_time_verdicts(placed, tuple(m.sensor_ids), separation=sep)
-    return FleetCheck(tuple(out), tuple(combined), float(m.swap_s), (*shape, *air),
-                      launches=tuple(at.get(v, 0.0) for v in range(1, max(flying, default=0)
-                                                                   + 1)))
+    check = FleetCheck(tuple(out), tuple(combined), float(m.swap_s), (*shape, *air),
+                       launches=tuple(at.get(v, 0.0) for v in range(1, max(flying, default=0)
+                                                                    + 1)))
+    if len(flying) < 2:
+        return check
+    from sim.checks import Verdict
+    from sim.fleet_time import timing_tolerance
+
+    slack = timing_tolerance(placed, separation=sep)
+    want = float(m.launch_tolerance_s)
+    timing = Verdict("TIMING", f"take-offs may be {want:g} s off", bool(slack >= want),
+                     slack - want, "s", f"SEPARATION and LINKS hold while each sortie takes "
+                     f"off within +-{slack:g} s of its time (the map's fleet.launch_tolerance_s "
+                     f"asks {want:g} s)")  # fmt: skip
+    return replace(check, fleet=(*check.fleet, timing), timing_tolerance_s=slack)
 
 
 def verify_sortie_dir(m: Any, path: str | Path,
@@ -575,6 +593,8 @@ def summary_dict(m: Any, check: FleetCheck, goal: str) -> dict[str, Any]:
             "launch_s": check.launch(v),
             "makespan_s": check.makespan(v),
         })  # fmt: skip
+    tolerance = {} if check.timing_tolerance_s is None else {
+        "timing_tolerance_s": check.timing_tolerance_s}
     out: dict[str, Any] = {
         "map": m.name,
         "objective": goal,
@@ -582,6 +602,7 @@ def summary_dict(m: Any, check: FleetCheck, goal: str) -> dict[str, Any]:
         "total_s": check.total_s,
         "swaps": check.swaps,
         "f_total": check.f_total,
+        **tolerance,
     }
     return out
 

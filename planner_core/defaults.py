@@ -446,6 +446,11 @@ _MAP: tuple[Default, ...] = (
             "clearance and rotor wash, with room; set your airspace's rule)", 0.0, 1_000.0,
             ("0 m is a collision", "beyond a kilometre the vehicles of a map fly one after the "
              "other"), lo_open=True),
+    _ranged("fleet.launch_tolerance_s", 30.0, "s, how far each sortie may take off from its "
+            "planned time with SEPARATION and LINKS still holding: plan staggers the launches "
+            "for it, verify's TIMING judges it (a crew launches to the half minute, not the "
+            "second)", 0.0, 120.0, "beyond two minutes a crew re-plans rather than flies "
+            "the schedule"),
 )
 
 #: how the sensors in range of a hover point share its radio (`radio.access`), the default

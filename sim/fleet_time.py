@@ -34,7 +34,7 @@ from sim.checks import Verdict
 from sim.replay import Timeline
 
 __all__ = ["SEPARATION_M", "AIRBORNE_M", "VehicleTrack", "track", "conflicts",
-           "fleet_time_verdicts"]  # fmt: skip
+           "fleet_time_verdicts", "timing_tolerance", "TOLERANCE_CAP_S"]  # fmt: skip
 
 #: m, the least 3D distance between two vehicles in the air when the caller gives none: the
 #: default of the map's `fleet.separation_m` (GNSS position error of a few metres each, the
@@ -235,3 +235,78 @@ def fleet_time_verdicts(tracks: Sequence[VehicleTrack], sensor_ids: Sequence[str
                         "steps", f"sensor '{sid}' sends to vehicles {v1} and {v2} at once "
                         f"from {t_link:.0f} s ({n} steps of the grid{more})")  # fmt: skip
     return [sep, links]
+
+
+#: s, the widest take-off slip `timing_tolerance` looks for (each sortie early or late by up
+#: to it): beyond two minutes a crew re-plans rather than flies the schedule
+TOLERANCE_CAP_S = 120.0
+
+
+def timing_tolerance(tracks: Sequence[VehicleTrack], separation: float = SEPARATION_M, *,
+                     cap: float = TOLERANCE_CAP_S) -> float:
+    """How far each sortie may take off from its planned time with SEPARATION and LINKS
+    still holding: the largest W (s, a multiple of the grid step, at most `cap`) such that
+    every sortie taking off anywhere within +-W s of its time, each independently, keeps
+    every two vehicles in the air `separation` apart and no sensor sending to two at once.
+
+    Two sorties of different vehicles then fly shifted against each other by up to 2 W. A
+    conflict is between two sorties, so it is enough to shift one vehicle's whole track
+    against the other's by every such amount: the smallest shift at which a pair of vehicles
+    conflicts is searched outward from their planned offset (pairs that cannot meet are
+    skipped: flights more than 2 `cap` apart in time, or airborne boxes farther apart than
+    `separation` with no sensor heard by both). Sorties of one vehicle never fly at once; a
+    vehicle on the ground is not checked (as in `conflicts`). Cost: per pair of vehicles that
+    can meet, at most 4 `cap` / dt + 1 shifts, each O(T / dt) for T the shorter span.
+
+    Args:
+        tracks: one per vehicle, each at its launch time, on one grid step.
+        separation: m, the least distance allowed (the map's `fleet.separation_m`).
+        cap: s, the largest tolerance looked for (> 0).
+
+    Returns:
+        W in s: 0 when the planned times themselves conflict (or only those), `cap` when no
+        slip within it does.
+
+    Raises:
+        ValueError: cap not positive.
+    """
+    if not cap > 0:
+        raise ValueError("cap must be positive")
+    if not tracks:
+        return float(cap)
+    dt = tracks[0].dt
+    boxes = []
+    for tr in tracks:
+        up = tr.z > AIRBORNE_M
+        xy = tr.xy[up] if np.any(up) else tr.xy[:1]
+        boxes.append((xy.min(axis=0), xy.max(axis=0)))
+    widest = int(np.floor(2.0 * cap / dt))
+    least = widest + 1  # the smallest conflicting relative shift found, in steps
+    for i in range(len(tracks)):
+        for k in range(i + 1, len(tracks)):
+            a, b = tracks[i], tracks[k]
+            if (b.launch - (a.launch + a.span) > 2 * cap
+                    or a.launch - (b.launch + b.span) > 2 * cap):
+                continue
+            gap = np.maximum(np.maximum(boxes[i][0] - boxes[k][1], boxes[k][0] - boxes[i][1]),
+                             0.0)
+            if float(np.hypot(*gap)) > separation and not len(
+                    np.intersect1d(a.columns(), b.columns())):
+                continue
+            for s in range(least):
+                shifts = (s,) if s == 0 else (s, -s)
+                if any(_conflict(a, b.at(b.launch + shift * dt), separation)
+                       for shift in shifts):
+                    least = s
+                    break
+    if least > widest:
+        return float(cap)
+    # conflicting at a relative shift of `least` steps: each sortie may slip (least - 1) / 2
+    return float(max(least - 1, 0) // 2) * dt
+
+
+def _conflict(a: VehicleTrack, b: VehicleTrack, separation: float) -> bool:
+    """Do two tracks, at their launches, come closer than `separation` in the air or share a
+    sending sensor?"""
+    d, _, _, _, n = conflicts(a, b)
+    return d < separation or n > 0

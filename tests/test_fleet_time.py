@@ -220,3 +220,39 @@ def test_verify_holds_a_directory_to_its_maps_separation(tmp_path, capsys) -> No
     main(["verify", str(maps[50]), str(d)])
     out = capsys.readouterr().out
     assert "fleet SEPARATION vehicles >= 50 m apart: FAIL" in out and "35.3 m apart" in out
+
+
+def _tolerance_by_brute_force(tracks: list[VehicleTrack], separation: float, cap: int) -> float:
+    """The largest whole W <= cap with no two tracks conflicting at any relative shift within
+    2 W of their planned offset: every pair, every shift, no pruning."""
+    for w in range(cap, -1, -1):
+        ok = True
+        for i in range(len(tracks)):
+            for k in range(i + 1, len(tracks)):
+                for s in range(-2 * w, 2 * w + 1):
+                    d, _, _, _, n = conflicts(tracks[i], tracks[k].at(tracks[k].launch + s))
+                    if d < separation or n:
+                        ok = False
+        if ok:
+            return float(w)
+    return 0.0
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_timing_tolerance_equals_brute_force_and_stagger_keeps_it(seed: int) -> None:
+    """`timing_tolerance` (pruned, searched outward) against every shift of every pair; and
+    `stagger(..., tolerance=W)` launches leave at least W (tolerance 0: the old launches)."""
+    from sim.fleet_time import timing_tolerance
+
+    rng = np.random.default_rng(seed)
+    tracks = [_track(int(rng.integers(40, 90)), x0=float(rng.choice([0.0, 15.0, 400.0, 3000.0])),
+                     speed=float(rng.uniform(5.0, 15.0)),
+                     send=(int(rng.integers(0, 20)), int(rng.integers(20, 39))) if rng.random()
+                     < 0.5 else (0, 0)) for _ in range(3)]  # fmt: skip
+    for w in (0.0, 5.0, 12.0):
+        launches = stagger(tracks, tolerance=w, step=5.0)
+        placed = [t.at(at) for t, at in zip(tracks, launches, strict=True)]
+        got = timing_tolerance(placed, cap=20.0)
+        assert got == _tolerance_by_brute_force(placed, SEPARATION_M, 20)
+        assert got >= w
+    assert stagger(tracks, tolerance=0.0, step=5.0) == stagger(tracks, step=5.0)

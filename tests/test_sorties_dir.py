@@ -376,15 +376,18 @@ def test_the_docs_say_what_plan_fleet_returns_and_what_is_left() -> None:
         assert "reserve left" not in " ".join(page.read_text().split()), page
 
 
-def _one_depot_map(tmp: Path, separation: float | None) -> Path:
+def _one_depot_map(tmp: Path, separation: float | None, tolerance: float | None = 0.0) -> Path:
     """The fleet demo with 2 UAVs and no `fleet.depots` (both take off at the map's start),
-    with `fleet.separation_m` when given."""
+    with `fleet.separation_m` when given, and `fleet.launch_tolerance_s` (0: launches clear
+    at their planned times only, as before the tolerance; None: the default)."""
     doc = json.loads(DEMO.read_text())
     doc["fleet"]["uavs"] = 2
     del doc["fleet"]["depots"]
     if separation is not None:
         doc["fleet"]["separation_m"] = separation
-    path = tmp / f"one-depot-{separation}.json"
+    if tolerance is not None:
+        doc["fleet"]["launch_tolerance_s"] = tolerance
+    path = tmp / f"one-depot-{separation}-{tolerance}.json"
     path.write_text(json.dumps(doc))
     return path
 
@@ -451,3 +454,49 @@ def test_a_write_removes_the_folders_killed_writes_left_and_keeps_a_live_ones(tm
         assert other.is_dir()
     finally:
         live.communicate()
+
+
+def test_plan_staggers_for_the_maps_launch_tolerance_and_verify_judges_it(tmp_path, capsys):
+    """fleet.launch_tolerance_s (a field crew's reviewer: with vehicle 2 launched 50-90 s off
+    its time, or a swap of 200 s where 300 were planned, SEPARATION failed down to 0.2 m; the
+    stagger took the first clear 10 s step, so any slip broke it). At the default 30 s the
+    stagger keeps both vehicles clear for every relative shift within 60 s, verify's TIMING
+    says how far each sortie may slip, and fails a directory launched on the edge."""
+    from lamde_mission.sorties import write_sortie_dir
+    from sim.fleet_time import conflicts
+
+    edge_map, safe_map = _one_depot_map(tmp_path, None), _one_depot_map(tmp_path, None, None)
+    m0, plan = _fleet_plan(edge_map)
+    edge, _ = write_sortie_dir(plan, m0, tmp_path / "edge")
+    m30, plan = _fleet_plan(safe_map)
+    safe, _ = write_sortie_dir(plan, m30, tmp_path / "safe")
+    assert m30.launch_tolerance_s == 30.0
+    t_edge, t_safe = edge.launches[1], safe.launches[1]
+    assert t_safe > t_edge and safe.passed and safe.timing_tolerance_s >= 30.0
+    timing = next(v for v in safe.fleet if v.name == "TIMING")
+    assert timing.passed and timing.margin == safe.timing_tolerance_s - 30.0
+    assert edge.timing_tolerance_s < 30.0  # on the edge: 0 s of room at launch tolerance 0
+    # by brute force, on the directory's own tracks: no conflict for a relative shift of up
+    # to twice the tolerance, and one just beyond (or the search's cap)
+    from lamde_mission.sorties import FleetCheck  # noqa: F401 (the type of `safe`)
+    from sim.fleet_time import track
+
+    tracks = [track([s.timeline for s in ss], m30.swap_s) for ss in safe.vehicles().values()]
+    a, b = tracks[0].at(0.0), tracks[1]
+    w = int(safe.timing_tolerance_s)
+    def clash(shift: int) -> bool:
+        d, _, _, _, n = conflicts(a, b.at(t_safe + shift))
+        return d < m30.separation_m or n > 0
+
+    assert not any(clash(shift) for shift in range(-2 * w, 2 * w + 1))
+    from sim.fleet_time import TOLERANCE_CAP_S
+
+    if w < TOLERANCE_CAP_S:  # the largest: a shift of 2 w + 1 or 2 w + 2 clashes
+        assert any(clash(s) for s in (2 * w + 1, -2 * w - 1, 2 * w + 2, -2 * w - 2))
+    # verify judges the edge directory against the 30 s the default asks: TIMING fails
+    rc, out, _ = _verify(capsys, safe_map, tmp_path / "edge")
+    assert rc == 1 and "fleet TIMING take-offs may be 30 s off: FAIL" in out
+    rc, out, _ = _verify(capsys, safe_map, tmp_path / "safe")
+    assert rc == 0 and "fleet TIMING take-offs may be 30 s off: PASS" in out
+    doc = json.loads((tmp_path / "safe" / "fleet.json").read_text())
+    assert doc["timing_tolerance_s"] == safe.timing_tolerance_s

@@ -466,7 +466,7 @@ def _sortie_lines(check: Any) -> list[str]:
     for v in check.combined:
         lines.append(f"  whole plan {v.name}: {'PASS' if v.passed else 'FAIL'} ({v.detail})")
     for v in check.fleet:
-        if v.name in ("SEPARATION", "LINKS") and len(check.launches) > 1:
+        if v.name in ("SEPARATION", "LINKS", "TIMING") and len(check.launches) > 1:
             lines.append(f"  fleet {v.name}: {'PASS' if v.passed else 'FAIL'} ({v.detail})")
     return lines
 

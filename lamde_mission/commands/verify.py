@@ -116,7 +116,7 @@ def _run_sorties(args: argparse.Namespace, m: Any) -> int:
                "launch_s": {str(v): check.launch(v) for v in check.vehicles()},
                "makespan_s": {str(v): check.makespan(v) for v in check.vehicles()},
                "total_s": check.total_s, "swaps": check.swaps, "f_total": check.f_total,
-               "passed": check.passed}
+               "timing_tolerance_s": check.timing_tolerance_s, "passed": check.passed}
         print(json.dumps(out, indent=2))
     else:
         print(f"sortie directory {printable(args.mission)} on map '{printable(m.name)}': "

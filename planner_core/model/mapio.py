@@ -297,6 +297,7 @@ class Fleet(BaseModel):
                                        description=MAP_LISTS["fleet.depots"].meaning)
     swap_s: float = _field("fleet.swap_s")
     separation_m: float = _field("fleet.separation_m")
+    launch_tolerance_s: float = _field("fleet.launch_tolerance_s")
 
 
 #: metres: obstacles and no-fly zones are inflated by this much for planning (`safety.clearance`)
@@ -654,6 +655,19 @@ class Map:
         return float(f.separation_m if f is not None
                      else MAP_DEFAULTS["fleet.separation_m"].value)  # fmt: skip
 
+    @property
+    def launch_tolerance_s(self) -> float:
+        """Seconds each sortie may take off early or late with SEPARATION and LINKS holding
+        (`fleet.launch_tolerance_s`, default 30): plan's staggered launches keep it
+        (`lamde_mission.launches.stagger`), verify's TIMING judges it.
+
+        Returns:
+            Seconds.
+        """
+        f = self.spec.fleet
+        return float(f.launch_tolerance_s if f is not None
+                     else MAP_DEFAULTS["fleet.launch_tolerance_s"].value)  # fmt: skip
+
     @cached_property
     def depots(self) -> tuple[Depot, ...]:
         """The take-off, landing and swap sites in force: `fleet.depots`, or one depot named
@@ -924,6 +938,7 @@ class Map:
             "power": {**u.power.model_dump(), "hover_w": self.power.hover_w},
             "fleet": {"uavs": self.uavs, "swap_s": self.swap_s,
                       "separation_m": self.separation_m,
+                      "launch_tolerance_s": self.launch_tolerance_s,
                       "depots": [d.model_dump() for d in self.depots],
                       "depots_default": not (self.has_fleet and self.spec.fleet.depots)},
             "goal": self.goal,
@@ -1016,8 +1031,10 @@ def _drop_unset_energy_fields(spec: MapFile, d: dict[str, Any]) -> None:
         d["objective"].pop("goal", None)
     if spec.fleet is None:
         d.pop("fleet", None)
-    elif "separation_m" not in spec.fleet.model_fields_set:
-        d["fleet"].pop("separation_m", None)
+    else:
+        for key in ("separation_m", "launch_tolerance_s"):
+            if key not in spec.fleet.model_fields_set:
+                d["fleet"].pop(key, None)
 
 
 #: metres added to every non-zero clearance when inflating: covers where a stored mission's
