@@ -157,12 +157,16 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("--cluster-size is for --layout clustered")
     size = _int(args.size, "--size")
     density = _int(args.density, "--density")
-    if size is None or density is None:
-        raise UsageError("one map needs --size (5000 or 10000) and --density (0..7)")
-    if size not in _SIZES:
-        raise UsageError(f"--size must be 5000 or 10000 (got {size}; other sizes need --layout)")
-    if not 0 <= density <= 7:
+    # a value given is judged first: "--size 7000" alone is a wrong size, not a missing one
+    if size is not None and size not in _SIZES:
+        raise UsageError(f"--size must be 5000 or 10000 without --layout (got {size})")
+    if density is not None and not 0 <= density <= 7:
         raise UsageError(f"--density must be 0..7 (got {density})")
+    missing = [need for need, value in (("--size (5000 or 10000)", size),
+                                        ("--density (0..7)", density)) if value is None]
+    if missing:
+        raise UsageError(f"one map without --layout needs {' and '.join(missing)}")
+    assert size is not None and density is not None
     sensors = _int(args.sensors, "--sensors")
     from planner_core.suite import max_sensor_count
 
