@@ -55,7 +55,7 @@ from planner_core.atomic import clean_stale_dirs, dir_beside
 from planner_core.defaults import MAX_FLEET_SORTIES, MAX_FLEET_VEHICLES
 from planner_core.textio import counted
 
-__all__ = ["FLEET_FILE", "SortieCheck", "FleetCheck", "sortie_dir_refusal",
+__all__ = ["FLEET_FILE", "SortieCheck", "FleetCheck", "sortie_dir_refusal", "sortie_dir_of",
            "output_in_sortie_dir", "sortie_file", "sortie_map", "write_sortie_dir",
            "verify_sortie_dir"]  # fmt: skip
 
@@ -78,6 +78,35 @@ def sortie_file(vehicle: int, sortie: int) -> str:
 
 #: the names a sortie directory holds (`sortie_file`, `FLEET_FILE`): nothing else is replaced
 _SORTIE_NAME = re.compile(r"mission-v[0-9]+-s[0-9]+\.plan")
+
+
+def sortie_dir_of(path: str | Path) -> Path | None:
+    """The sortie directory a mission file is one sortie of, if it is: its folder holds a
+    fleet.json that lists it, or its name is `mission-v{k}-s{j}.plan` (`sortie_file`).
+
+    Verified alone (`verify MAP FILE`) such a file is judged against the whole map's start,
+    end and data, not its own depots and its share of the data (`verify MAP DIR/`).
+
+    Args:
+        path: the mission file.
+
+    Returns:
+        Its folder when it is a sortie of a sortie directory, else None. A fleet.json that
+        cannot be read is passed over (the name alone decides then).
+    """
+    from lamde_mission.formats.fleet import FleetDirError, read_fleet_dir
+
+    path = Path(path)
+    if _SORTIE_NAME.fullmatch(path.name):
+        return path.parent
+    if not (path.parent / FLEET_FILE).is_file():
+        return None
+    try:
+        fleet = read_fleet_dir(path.parent)
+    except FleetDirError:
+        return None
+    listed = {s.path.name for veh in fleet.vehicles for s in veh.sorties}
+    return path.parent if path.name in listed else None
 
 
 def sortie_dir_refusal(out_dir: str | Path) -> str | None:

@@ -97,9 +97,10 @@ LIMITS: dict[str, Limit] = {
     "sensors": Limit(
         1_000,
         "LAMDE_MAX_SENSORS",
-        "sensors in one map; planning time grows with them (default budget, 2 cores: 160 "
-        "sensors ~13 s, 400 ~50 s, 500 ~60 s, 1,000 ~100-210 s of CPU, peak RSS < 1 GB; the "
-        "paper's maps have <= 29; the large suite, `bench_plan.py --large`, has up to 400)",
+        "sensors in one map; planning time grows with them (default budget, CPU seconds on 2 "
+        "shared cores: 160 sensors ~6-8 s, 400 ~15 s, measured 2026-12-06; 1,000 ~100-210 s, "
+        "2026-12-02; peak RSS < 1 GB; the paper's maps have <= 29; the large suite, "
+        "`bench_plan.py --large`, has up to 400)",
     ),
     "obstacles": Limit(
         5_000,

@@ -531,6 +531,43 @@ def test_cli_bench_then_report(suite: Path, tmp_path: Path) -> None:
     assert main(["bench", "--suite", str(suite), "--budget", "50", "--out", str(out)]) == 2
 
 
+def test_report_finds_the_suite_from_another_folder(
+        suite: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """`bench --suite examples/maps/large --out /tmp/B` from the repository root, then `report
+    B` from /tmp, said "Safety margins: unknown (the suite folder is not here...)" and "(suite
+    folder examples/maps/large not found)": meta.json kept only the relative path. bench now
+    records the absolute one too, and report tries the path as given from here, then the
+    absolute one, then the given one from the results folder; the report names the suite as
+    given, wherever it is made (an old meta.json without the absolute path works as before)."""
+    from planner_core.bench.report import build_report, suite_folder
+
+    monkeypatch.chdir(tmp_path)
+    out = tmp_path / "B"
+    run_bench(Path("suite"), ["random-search"], runs=1, budget=BUDGET, out=out, command="t",
+              executor=SerialExecutor())
+    meta = json.loads((out / "meta.json").read_text())
+    assert meta["suite"] == "suite" and meta["suite_absolute"] == str(suite.resolve())
+    assert suite_folder(meta, out) == Path("suite")  # from here, as given
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    assert suite_folder(meta, out) == suite.resolve()
+    md = build_report(out, elsewhere / "r.md", reference="random-search")
+    text = md.read_text()
+    assert "from `suite`;" in text and "Safety margins: unknown" not in text, text
+    assert "- Safety margins: none" in text or "- Safety margins (planned" in text
+    assert "not found" not in text and "best-known: `suite_best_known.json`" in text
+    # an old meta.json: the given path from here, else from the results folder, else as given
+    old = {"suite": "suite"}
+    assert suite_folder(old, out) == Path("suite")  # not here: said not found, as before
+    assert suite_folder(old, tmp_path) == tmp_path / "suite"
+    monkeypatch.chdir(tmp_path)
+    assert suite_folder(old, elsewhere) == Path("suite")
+    assert suite_folder({}, out) is None
+    # the path as given wins over the absolute one recorded (a moved checkout: its own suite)
+    assert suite_folder({**meta, "suite_absolute": str(elsewhere)}, out) == Path("suite")
+
+
 # ----------------------------------------------------------------------------- the manual's records
 
 

@@ -260,3 +260,60 @@ def test_plan_points_to_check_only_for_what_check_says(tmp_path) -> None:
     assert lines[1].startswith("  no plan can meet this map (`lamde-mission check` says "
                                "CANNOT): sensor 'far': no sortie can collect any of its data")
     assert len(lines) == 2
+
+
+def _small_battery_map(tmp_path, endurance_s: float, extra: int = 0):
+    """examples/maps/fleet-demo.json with `uav.endurance_s` and `extra` more sensors (a grid, in
+    scheduled access: C3 would rule the crowded grid out too)."""
+    from tests.conftest import ROOT
+
+    doc = json.loads((ROOT / "examples" / "maps" / "fleet-demo.json").read_text())
+    doc["uav"]["endurance_s"] = endurance_s
+    doc["sensors"] += [{"id": f"G{k:03d}", "x": 150.0 + 60.0 * (k % 30),
+                        "y": 1900.0 - 40.0 * (k // 30)} for k in range(extra)]  # fmt: skip
+    if extra:
+        doc.setdefault("radio", {})["access"] = "scheduled"
+    path = tmp_path / f"small-{endurance_s:g}.json"
+    path.write_text(json.dumps(doc))
+    return path
+
+
+#: fleet-demo at endurance 150 s (H 100 m, reserve 20 %): the one line check and plan print
+VERTICAL = ("uav: no sortie can fly: the take-off to 100 m and the landing alone need 6.593 Wh "
+            "(140.9 s at hover power), more than the 5.616 Wh usable (battery 7.02 Wh less the "
+            "20 % reserve); a battery of more than 8.24 Wh (uav.battery.energy_wh; or "
+            "uav.endurance_s more than 176) is needed, and more to fly to the sensors and hover "
+            "there (or a lower uav.altitude, faster uav.climb_speed and uav.descent_speed)")
+
+
+def test_a_battery_the_take_off_and_landing_use_up_is_one_finding(tmp_path, capsys) -> None:
+    """A battery too small to take off and land (fleet-demo with endurance_s 150) made `check`
+    print a CANNOT per sensor and per depot (155 lines on a 150-sensor map) for one cause: now
+    one fatal ENERGY_VERTICAL finding gives the take-off + landing and usable energies and the
+    battery needed, in text and --json; `plan` refuses the map up front in the same words,
+    without planning. At endurance 176 s it is still said (the vertical phases take 140.9 s,
+    80 % of 176 s is 140.8 s), at 177 s no longer."""
+    from lamde_mission.cli import main
+
+    path = _small_battery_map(tmp_path, 150, extra=150)
+    assert main(["check", str(path)]) == 1
+    out = capsys.readouterr().out
+    assert _cannot(out) == [f"CANNOT  {VERTICAL}"], out
+    assert out.splitlines()[-1] == "no plan can meet this map (see CANNOT above)"
+    assert main(["check", str(path), "--json"]) == 1
+    found = json.loads(capsys.readouterr().out)["diagnosis"]
+    fatal = [f for f in found if f["fatal"]]
+    assert fatal == [{"kind": "ENERGY_VERTICAL", "fatal": True, "sensor": None,
+                      "message": VERTICAL}], fatal
+    assert not any(f["kind"] in ("ENERGY_RANGE", "DEPOT", "ENERGY_SPLIT") for f in found)
+    demo = _small_battery_map(tmp_path, 150)  # the sortie planner plans simultaneous access
+    assert main(["check", str(demo)]) == 1
+    assert _cannot(capsys.readouterr().out) == [f"CANNOT  {VERTICAL}"]  # was 4 sensors, 2 depots
+    assert main(["plan", str(demo), "-o", str(tmp_path / "out"), "--quiet"]) == 1
+    cap = capsys.readouterr()
+    assert cap.err.splitlines() == [f"lamde-mission plan: {demo}: {VERTICAL}; nothing written"]
+    assert not (tmp_path / "out").exists()
+    kinds = {e: {f.kind for f in diagnose(load_map(_small_battery_map(tmp_path, e))).findings}
+             for e in (176, 177)}  # fmt: skip
+    assert "ENERGY_VERTICAL" in kinds[176] and "ENERGY_VERTICAL" not in kinds[177]
+    assert "ENERGY_RANGE" in kinds[177]  # the sensors are still out of such a battery's reach

@@ -14,7 +14,7 @@ import pytest
 
 from planner_core.model.formulas import ModelParams
 from planner_core.model.mapio import load_map
-from planner_core.suite import dumps_map, generate_map
+from planner_core.suite import GenerationError, dumps_map, generate_map
 from planner_core.suite import large as L
 from planner_core.suite.draw import Retry
 from tests.conftest import ROOT, run_cli, run_cli_many
@@ -225,6 +225,54 @@ def test_clustered_ring_shortfall_says_what_is_short_and_what_fits(
     assert L._stop_budget(30000, 7, 1000) == (130, 50, 20, 200)
 
 
+def test_layout_sensor_bound_is_lamde_max_sensors(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture
+) -> None:
+    """`LAMDE_MAX_SENSORS=2000 generate x.json --layout uniform --size 30000 --sensors 1500` said
+    "--sensors must be 1..1000 with --layout", though the variable raises the limit check and
+    plan read (README's limits table): the bound is now that limit (the generator's draw, stubbed
+    here to fail at once, is reached), and a refusal names the variable; a variable that is
+    not a number is one line, exit 2, for generate and map campus alike."""
+    from lamde_mission.cli import main
+    from planner_core.textio import LIMITS
+
+    assert L.MAX_SENSORS == LIMITS["sensors"].default
+
+    def fail(draw: L.LargeDraw) -> None:
+        draw.stage, draw.placed_best = "sensors", 7
+        raise Retry
+
+    monkeypatch.setattr(L.LargeDraw, "run", fail)
+    out = tmp_path / "x.json"
+    ask = ["generate", str(out), "--layout", "uniform", "--size", "30000", "--sensors", "1500"]
+    monkeypatch.setenv("LAMDE_MAX_SENSORS", "2000")
+    assert main(ask) == 1  # the generator tried (and, stubbed, failed)
+    err = capsys.readouterr().err
+    assert "no C3-feasible uniform map after 12 attempts" in err and "1500 sensors" in err, err
+    with pytest.raises(GenerationError):  # the library takes 1,500 too
+        L.generate_large_map(30000, 1500, "uniform")
+    for env, most in ((None, 1000), ("10", 10)):
+        if env is None:
+            monkeypatch.delenv("LAMDE_MAX_SENSORS")
+        else:
+            monkeypatch.setenv("LAMDE_MAX_SENSORS", env)
+        n = most + 1
+        assert main([*ask[:-1], str(n)]) == 2
+        assert capsys.readouterr().err.strip().splitlines() == [
+            f"lamde-mission generate: --sensors must be 1..{most} with --layout (got {n}; check "
+            "and plan read at most LAMDE_MAX_SENSORS sensors)"]
+        with pytest.raises(ValueError, match=f"sensors must be 1..{most} .*LAMDE_MAX_SENSORS"):
+            L.generate_large_map(30000, n, "uniform")
+    monkeypatch.setenv("LAMDE_MAX_SENSORS", "lots")
+    for argv in (ask, ["map", "campus", "-o", str(out)]):
+        assert main(argv) == 2
+        lines = capsys.readouterr().err.strip().splitlines()
+        assert len(lines) == 1, lines
+        assert lines[0].endswith(": LAMDE_MAX_SENSORS: must be a positive integer (at most 12 "
+                                 "digits), got 'lots'"), lines
+    assert not out.exists()
+
+
 def test_help_matches_the_generator() -> None:
     from lamde_mission.commands import generate as G
 
@@ -234,11 +282,13 @@ def test_help_matches_the_generator() -> None:
     text = " ".join(r.stdout.split())
     assert "--layout uniform|clustered|corridor --size 5000..30000" in text
     assert "(default 12)" in text and "--large-suite OUTDIR" in text
-    # 1,000 is the most asked for, not what fits (not at 30 km for uniform at density 7)
-    assert ("--sensors 1..1000 [--density 0-7]` (how many sensors fit depends on the size, "
-            "layout and density:") in text
+    # LAMDE_MAX_SENSORS (1,000) is the most asked for, not what fits (not at 30 km for uniform
+    # at density 7)
+    assert ("--sensors 1..N [--density 0-7]` (N: LAMDE_MAX_SENSORS, what check and plan read, "
+            "default 1000; how many sensors fit depends on the size, layout and density:") in text
     assert "exits 1 saying why and what to change" in text
-    assert "at most 1000, fewer where the size, layout and density do not fit them" in text
+    assert ("at most LAMDE_MAX_SENSORS (default 1000), fewer where the size, layout and density "
+            "do not fit them") in text
 
 
 @pytest.mark.slow  # measured 15 s (issue 35: default suite <= 5 min)

@@ -119,6 +119,46 @@ def test_verify_fails_a_vehicle_taking_off_where_it_did_not_land(dirs, tmp_path,
     assert not chain["passed"] and chain["margin"] == pytest.approx(-np.hypot(1800, 1700))
 
 
+def test_verify_of_one_sortie_file_says_it_is_one_sortie(dirs, tmp_path, capsys):
+    """`verify MAP DIR/mission-v1-s2.plan` failed ENDS and C4 with no hint that the file is one
+    sortie judged against the whole map's start, end and data: a line after the result now says
+    so and names `verify MAP DIR/` (JSON: `sortie_of`); the verdicts are those of the same file
+    outside a sortie directory, which gets no such line. A file fleet.json lists under another
+    name is one sortie too."""
+    map_path, src = dirs[1]
+    d = _copy(src, tmp_path)
+    alone = tmp_path / "alone"
+    alone.mkdir()
+    shutil.copy(d / "mission-v1-s2.plan", alone / "second.plan")
+    rc, out, _ = _verify(capsys, map_path, d / "mission-v1-s2.plan")
+    rc_alone, out_alone, _ = _verify(capsys, map_path, alone / "second.plan")
+    assert rc == rc_alone == 1 and "FAILED" in out and "ENDS" in out, out
+    lines, lines_alone = out.splitlines(), out_alone.splitlines()
+    assert lines[1:-1] == lines_alone[1:]  # the verdicts and figures unchanged
+    assert lines[-2].startswith("result: FAILED ")
+    assert lines[-1] == (
+        f"note: {d}/mission-v1-s2.plan is one sortie of the sortie directory {d}/, judged here "
+        "against the whole map's start, end and data; for the sortie's own depots and the data "
+        f"over all sorties run `lamde-mission verify {map_path} {d}/`")
+    rc, out, _ = _verify(capsys, map_path, d / "mission-v1-s2.plan", "--json")
+    rep = json.loads(out)
+    assert rep.pop("sortie_of") == {"directory": str(d),
+                                    "verify": f"lamde-mission verify {map_path} {d}/"}
+    _, out_alone, _ = _verify(capsys, map_path, alone / "second.plan", "--json")
+    assert rc == 1 and rep == json.loads(out_alone)
+    # listed by fleet.json under another name (a hand-made directory)
+    doc = json.loads((d / "fleet.json").read_text())
+    doc["vehicles"][0]["sorties"][1]["file"] = "second.plan"
+    (d / "fleet.json").write_text(json.dumps(doc))
+    (d / "mission-v1-s2.plan").rename(d / "second.plan")
+    rc, out, _ = _verify(capsys, map_path, d / "second.plan")
+    assert rc == 1 and out.splitlines()[-1].startswith(
+        f"note: {d}/second.plan is one sortie of the sortie directory {d}/"), out
+    (d / "fleet.json").unlink()  # a file neither listed nor so named: no line
+    rc, out, _ = _verify(capsys, map_path, d / "second.plan")
+    assert rc == 1 and out.splitlines()[-1].startswith("result: FAILED "), out
+
+
 def test_verify_fails_more_vehicles_than_the_map_flies(dirs, tmp_path, capsys):
     map_path, d = dirs[2]
     rc, out, _ = _verify(capsys, map_path, d)

@@ -183,6 +183,31 @@ def test_cli_bad_arguments(args: list[str], tmp_path: Path) -> None:
     assert not list(tmp_path.iterdir())  # nothing written
 
 
+@pytest.mark.parametrize(("args", "line"), [
+    # said "one map needs --size (5000 or 10000) and --density (0..7)", as if --size were missing
+    (["--size", "7000"], "--size must be 5000 or 10000 without --layout (got 7000)"),
+    (["--size", "7000", "--density", "1"],
+     "--size must be 5000 or 10000 without --layout (got 7000)"),
+    (["--density", "9"], "--density must be 0..7 (got 9)"),
+    (["--size", "5000", "--density", "-1"], "--density must be 0..7 (got -1)"),
+    (["--size", "10000"], "one map without --layout needs --density (0..7)"),
+    (["--density", "3"], "one map without --layout needs --size (5000 or 10000)"),
+    ([], "one map without --layout needs --size (5000 or 10000) and --density (0..7)"),
+])
+def test_cli_one_map_names_the_wrong_or_missing_option(
+    args: list[str], line: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """A value given is judged before what is missing: one line naming the option and the
+    value, exit 2, nothing written."""
+    from lamde_mission.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["generate", "x.json", *args]) == 2
+    assert capsys.readouterr().err.splitlines() == [f"lamde-mission generate: {line}"]
+    assert not list(tmp_path.iterdir())
+
+
 def test_examples_load() -> None:
     demo = load_map(MAPS / "small-demo.json")
     assert demo.width <= 3000 and 2 <= len(demo.sensors) <= 8

@@ -40,6 +40,26 @@ def load_map_or_fail(path: str, loaded: Any = None) -> Any:
     return m
 
 
+def sensor_limit() -> int:
+    """The most sensors a generated map may have: LAMDE_MAX_SENSORS, what check and plan read
+    (`planner_core.textio.limit("sensors")`), so that `generate --layout` and `map campus` write
+    only maps those commands accept.
+
+    Returns:
+        The limit in force (1,000 unless LAMDE_MAX_SENSORS says otherwise).
+
+    Raises:
+        UsageError: LAMDE_MAX_SENSORS is set to anything but a positive integer (one line
+            naming it, exit status 2).
+    """
+    from planner_core import textio
+
+    try:
+        return textio.limit("sensors")
+    except textio.InputError as exc:
+        raise UsageError(str(exc)) from None
+
+
 def same_file(a: str | Path, b: str | Path) -> bool:
     """Whether paths `a` and `b` name one file: the same resolved path, or the same file
     through a link (`os.path.samefile`, where both exist).

@@ -15,8 +15,8 @@ _DEFAULT_SEED = D.SUITE_SEED
 
 
 # the large generator's ranges, spelled here so that `--help` loads no numpy; equal to
-# planner_core.suite.large's LAYOUTS, MIN_SIZE, MAX_SIZE, MAX_SENSORS, CLUSTER_SIZE (a test
-# holds them equal)
+# planner_core.suite.large's LAYOUTS, MIN_SIZE, MAX_SIZE, MAX_SENSORS (LAMDE_MAX_SENSORS's
+# default), CLUSTER_SIZE (a test holds them equal)
 _LAYOUTS = ("uniform", "clustered", "corridor")
 _LARGE_SIZES = (5000, 30000)
 _LARGE_SENSORS = 1000
@@ -41,7 +41,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "`generate OUT.json --size 5000|10000 --density 0-7`, or the whole suite: "
         "`generate --suite OUTDIR` (T01..T16). Large deployments: "
         f"`generate OUT.json --layout {'|'.join(_LAYOUTS)} --size {lo}..{hi} "
-        f"--sensors 1..{_LARGE_SENSORS} [--density 0-7]` (how many sensors fit depends on the "
+        "--sensors 1..N [--density 0-7]` (N: LAMDE_MAX_SENSORS, what check and plan read, "
+        f"default {_LARGE_SENSORS}; how many sensors fit depends on the "
         "size, layout and density: e.g. 1,000 at 30 km did not fit the uniform layout at "
         "density 7 nor the corridor at density 0 or 7; when they do not fit, generate writes "
         "nothing and exits 1 saying why and what to change): uniform (sensors spread over the "
@@ -70,9 +71,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help=f"sensors per field, --layout clustered only (default {_CLUSTER_SIZE})")
     p.add_argument("--seed", metavar="S", help=f"random seed, >= 0 (default {_DEFAULT_SEED})")
     p.add_argument("--sensors", metavar="N", help="number of sensors (default: by size and "
-                   f"density; with --layout 0.4 per km^2, within 20..500; at most "
-                   f"{_LARGE_SENSORS}, fewer where the size, layout and density do not fit "
-                   "them)")
+                   "density; with --layout 0.4 per km^2, within 20..500; at most "
+                   f"LAMDE_MAX_SENSORS (default {_LARGE_SENSORS}), fewer where the size, layout "
+                   "and density do not fit them)")
     p.add_argument("--name", help="map name stored in the file (default: from the arguments)")
     p.add_argument("--mkdir", action="store_true",
                    help="create the output's folder (OUT.json's, or OUTDIR's parent) if missing")
@@ -156,12 +157,16 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("--cluster-size is for --layout clustered")
     size = _int(args.size, "--size")
     density = _int(args.density, "--density")
-    if size is None or density is None:
-        raise UsageError("one map needs --size (5000 or 10000) and --density (0..7)")
-    if size not in _SIZES:
-        raise UsageError(f"--size must be 5000 or 10000 (got {size}; other sizes need --layout)")
-    if not 0 <= density <= 7:
+    # a value given is judged first: "--size 7000" alone is a wrong size, not a missing one
+    if size is not None and size not in _SIZES:
+        raise UsageError(f"--size must be 5000 or 10000 without --layout (got {size})")
+    if density is not None and not 0 <= density <= 7:
         raise UsageError(f"--density must be 0..7 (got {density})")
+    missing = [need for need, value in (("--size (5000 or 10000)", size),
+                                        ("--density (0..7)", density)) if value is None]
+    if missing:
+        raise UsageError(f"one map without --layout needs {' and '.join(missing)}")
+    assert size is not None and density is not None
     sensors = _int(args.sensors, "--sensors")
     from planner_core.suite import max_sensor_count
 
@@ -208,6 +213,7 @@ def _default_large_sensors(size: int) -> int:
 
 
 def _run_large(args: argparse.Namespace, seed: int) -> int:
+    from lamde_mission.commands._common import sensor_limit
     from planner_core.suite import GenerationError, dumps_map
     from planner_core.suite import large as L
 
@@ -224,8 +230,10 @@ def _run_large(args: argparse.Namespace, seed: int) -> int:
         raise UsageError(f"--density must be 0..7 (got {density})")
     sensors = _int(args.sensors, "--sensors", _default_large_sensors(size))
     assert sensors is not None
-    if not 1 <= sensors <= L.MAX_SENSORS:
-        raise UsageError(f"--sensors must be 1..{L.MAX_SENSORS} with --layout (got {sensors})")
+    most = sensor_limit()
+    if not 1 <= sensors <= most:
+        raise UsageError(f"--sensors must be 1..{most} with --layout (got {sensors}; check and "
+                         "plan read at most LAMDE_MAX_SENSORS sensors)")
     if args.cluster_size is not None and args.layout != "clustered":
         raise UsageError("--cluster-size is for --layout clustered")
     cluster = _int(args.cluster_size, "--cluster-size", L.CLUSTER_SIZE)
@@ -242,12 +250,12 @@ def _run_large(args: argparse.Namespace, seed: int) -> int:
         return 1
     _write_map(out, dumps_map(data))
     print(f"wrote {out}: {_line(data, witness_f=True)} ({time.perf_counter() - t0:.1f} s)")
-    _note_sensor_limit([data])
     return 0
 
 
 def _note_sensor_limit(maps: list[dict]) -> None:
-    """Say on stderr how to read maps with more sensors than LAMDE_MAX_SENSORS allows."""
+    """Say on stderr how to read maps with more sensors than LAMDE_MAX_SENSORS allows (the
+    large suite's fixed maps; `--layout` asks for at most that many)."""
     from planner_core import textio
 
     most = max(len(d["sensors"]) for d in maps)

@@ -245,7 +245,7 @@ def _to_geojson(args: argparse.Namespace) -> int:
 
 def _campus(args: argparse.Namespace) -> int:
     from lamde_mission.atomic import write_text_atomic
-    from lamde_mission.commands._common import check_outputs
+    from lamde_mission.commands._common import check_outputs, sensor_limit
     from lamde_mission.gis.synthetic import campus_map
     from planner_core import textio
     from planner_core.suite import SUITE_ORIGIN, dumps_map
@@ -254,7 +254,7 @@ def _campus(args: argparse.Namespace) -> int:
         raise UsageError(f"--seed must be >= 0 (got {args.seed})")
     if args.footprints < 1:
         raise UsageError(f"--footprints must be >= 1 (got {args.footprints})")
-    most = textio.limit("sensors")  # what check and plan read (LAMDE_MAX_SENSORS)
+    most = sensor_limit()  # what check and plan read (LAMDE_MAX_SENSORS)
     if not 1 <= args.sensors <= most:
         raise UsageError(f"--sensors must be 1..{most} (got {args.sensors}; check and plan read "
                          "at most LAMDE_MAX_SENSORS sensors)")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import shlex
 import sys
 from typing import Any
 
@@ -177,8 +178,15 @@ def run(args: argparse.Namespace) -> int:
     from lamde_mission.items import corner_stops
 
     n_corner = len(corner_stops(timeline.route))
+    from lamde_mission.sorties import sortie_dir_of
+
+    sortie_dir = sortie_dir_of(args.mission)
+    whole = None if sortie_dir is None else \
+        f"lamde-mission verify {shlex.quote(args.map)} {shlex.quote(f'{sortie_dir}/')}"
     if args.json:
         out = verdicts.to_dict()
+        if sortie_dir is not None:  # one sortie judged as a whole mission (the verdicts as such)
+            out["sortie_of"] = {"directory": str(sortie_dir), "verify": whole}
         # corners (NAV_WAYPOINT, flown through) are counted apart from the hover points
         out["hover_points"] = len(timeline.hover_times)
         out["corners"] = n_corner
@@ -213,6 +221,11 @@ def run(args: argparse.Namespace) -> int:
                   f"{verdicts.above_reserve_wh:.3f} Wh above the reserve")
         print("result: " + ("all constraints hold" if verdicts.passed
                             else "FAILED " + ", ".join(verdicts.failed)))  # fmt: skip
+        if sortie_dir is not None:
+            print(f"note: {printable(args.mission)} is one sortie of the sortie directory "
+                  f"{printable(str(sortie_dir))}/, judged here against the whole map's start, "
+                  "end and data; for the sortie's own depots and the data over all sorties run "
+                  f"`{printable(whole)}`")
     return 0 if verdicts.passed else 1
 
 

@@ -104,6 +104,7 @@ def read_json(path: str | Path) -> dict[str, Any]:
 _META_SHAPE: dict[str, Any] = {
     "schema": int,
     "suite": str,
+    "suite_absolute": str,
     "budget": int,
     "base_seed": int,
     "commands": [{"command": str}],

@@ -34,7 +34,8 @@ from planner_core.bench.stats import ALPHA, ScoreTable, score_table
 from planner_core.defaults import SCORE_FACTOR
 
 __all__ = ["DEFAULT_REFERENCE", "build_report", "cost_section", "figures_folder", "imax_section",
-           "imax_table", "order_optimisers", "format_table", "fmt", "study_sections"]
+           "imax_table", "order_optimisers", "format_table", "fmt", "study_sections",
+           "suite_folder"]
 
 #: start modes in the report's order, and what each means
 INIT_ORDER = ("uniform", "seeded")
@@ -205,8 +206,9 @@ def build_report(
         reference: the Wilcoxon reference column; must be one of the optimisers present when
             given explicitly; the default (or None) falls back to the first optimiser present
             in `order_optimisers`' order.
-        suite: the suite folder (default: meta.json's "suite"), for the maps, limits and
-            safety margins.
+        suite: the suite folder (default: meta.json's, found by `suite_folder` from here, the
+            absolute path recorded or the results folder), for the maps, limits and safety
+            margins.
         figures: folder for the PNGs (default: a folder named after the report, e.g.
             docs/results/ for docs/results.md).
         path_tasks: tasks of the best-path figure (default: up to four spread over the tasks).
@@ -272,8 +274,11 @@ def build_report(
     budgets = sorted({int(r["budget"]) for r in records})
     budget = budgets[-1]
     figures = figures_folder(output, figures)
-    suite_dir = Path(suite) if suite is not None else (Path(meta["suite"]) if "suite" in meta
-                                                       else None)
+    shown = Path(suite) if suite is not None else (Path(meta["suite"]) if "suite" in meta
+                                                   else None)  # fmt: skip
+    # read from where the folder is found (`suite_folder`); named as given or recorded, so that
+    # the report's text does not depend on the folder it is made from
+    suite_dir = Path(suite) if suite is not None else suite_folder(meta, results_dir)
 
     L: list[str] = [f"# {title}", ""]
     cmds = [c.get("command", "") for c in meta.get("commands", []) if c.get("command")]
@@ -293,7 +298,7 @@ def build_report(
     L += [
         "## Setup",
         "",
-        f"- {len(tasks)} task(s) ({', '.join(tasks)}) from `{suite_dir}`; "
+        f"- {len(tasks)} task(s) ({', '.join(tasks)}) from `{shown}`; "
         f"budget {budget:,} evaluations per run (initial population included); "
         + (f"runs per optimiser, task and start mode: {', '.join(map(str, runs_per))}."
            if runs_per else "only I_max study runs (below)."),
@@ -333,7 +338,7 @@ def build_report(
         L += ["", f"## Protocol: init {mode}", "", INIT_TEXT[mode]]
         L += _protocol_body(recs, opts, reference, alpha, suite_dir, maps, limits, figures,
                             output, path_tasks, budget, mode, suffix="" if len(modes) == 1
-                            else f"_{mode}")
+                            else f"_{mode}", shown=shown)
     study = [r for r in records if r.get("i_max") is not None]
     if study:
         L += imax_section(study, figures / "imax_feasible_rate.png", output,
@@ -384,10 +389,11 @@ def kept_notes(output: str | Path) -> list[str]:
 def _protocol_body(records: list[dict[str, Any]], opts_all: list[str], reference: str,
                    alpha: float, suite_dir: Path | None, maps: dict[str, Any], limits: bool,
                    figures: Path, output: Path, path_tasks: Sequence[str] | None, budget: int,
-                   mode: str, suffix: str) -> list[str]:
+                   mode: str, suffix: str, shown: Path | None = None) -> list[str]:
     """The tables and figures of one protocol (start mode `mode`): score table, per
     optimiser, feasibility, limits, scores per task, convergence, best paths. Figure names
-    carry `suffix`."""
+    carry `suffix`; the suite is read from `suite_dir` and named `shown` (default: the
+    same)."""
     tasks = sorted({r["task"] for r in records})
     present = {r["optimiser"] for r in records}
     opts = [o for o in opts_all if o in present]
@@ -424,7 +430,7 @@ def _protocol_body(records: list[dict[str, Any]], opts_all: list[str], reference
         L.append(f"| {t} | " + " | ".join(row) + " |")
 
     if limits:
-        L += _limits_section(tasks, opts, by, suite_dir)
+        L += _limits_section(tasks, opts, by, suite_dir, suite_dir if shown is None else shown)
 
     # ---- figures
     from planner_core.bench import figures as F
@@ -756,6 +762,33 @@ def cost_section(records: list[dict[str, Any]], checkpoint: str | Path | None) -
     return L
 
 
+def suite_folder(meta: dict[str, Any], results_dir: str | Path) -> Path | None:
+    """The suite folder of a benchmark, as recorded in its meta.json, found from here.
+
+    `bench` records the suite as given ("suite", often relative to the folder it ran in) and,
+    since 2026-12-06, its absolute path ("suite_absolute"); `report` may run elsewhere. Tried
+    in order: the recorded path relative to the current folder, the absolute one, then the
+    recorded path relative to the results folder; the first that is a folder wins.
+
+    Args:
+        meta: the benchmark's meta.json (`read_meta`).
+        results_dir: the benchmark folder.
+
+    Returns:
+        The folder found; when none is, the recorded path as given (the caller says it is not
+        found); None when meta.json records no suite.
+    """
+    if "suite" not in meta:
+        return None
+    given = Path(meta["suite"])
+    tries = [given]
+    if meta.get("suite_absolute"):
+        tries.append(Path(meta["suite_absolute"]))
+    if not given.is_absolute():
+        tries.append(Path(results_dir) / given)
+    return next((p for p in tries if p.is_dir()), given)
+
+
 def _known_entries(suite_dir: Path | None, maps: dict[str, Any]) -> dict[str, dict[str, Any]]:
     """Best-known entries of these tasks that match the current map files."""
     if suite_dir is None or not suite_dir.is_dir():
@@ -807,11 +840,12 @@ def _safety_line(suite_dir: Path | None, tasks: Sequence[str]) -> str:
 
 
 def _limits_section(tasks: list[str], opts: list[str], by: Any,
-                    suite_dir: Path | None) -> list[str]:
+                    suite_dir: Path | None, shown: Path | None) -> list[str]:
+    """The section against LB and best-known, read from `suite_dir`, which it names `shown`."""
     from planner_core.bench.limits import BestKnown, best_known_path, lower_bounds
 
     if suite_dir is None or not suite_dir.is_dir():
-        return ["", "### Against the limits", "", f"(suite folder {suite_dir} not found)"]
+        return ["", "### Against the limits", "", f"(suite folder {shown} not found)"]
     from planner_core.bench.limits import suite_task_files
 
     files = {t: p for t, p in suite_task_files(suite_dir).items() if t in tasks}
@@ -822,8 +856,8 @@ def _limits_section(tasks: list[str], opts: list[str], by: Any,
     L = ["", "### Against the limits", "",
          "LB: `planner_core.model.bounds` (alpha * flight time of the straight line start -> end + "
          "(1 - alpha) * the LP minimum hover time over 25 m cells, ignoring C3, C5 and flight); "
-         f"best-known: `{best_known_path(suite_dir)}` (the best feasible f found by any run "
-         "so far; initially the map's witness). Ratios: mean f over an optimiser's feasible "
+         f"best-known: `{best_known_path(shown or suite_dir)}` (the best feasible f found by any "
+         "run so far; initially the map's witness). Ratios: mean f over an optimiser's feasible "
          "runs divided by best-known (1 = as good as the best known) and by LB "
          "(both >= 1; \"-\" = no feasible run).", "", "Mean feasible f / best-known:", "",
          "| Task | LB | best-known f | found by | " + " | ".join(opts) + " |",

@@ -5,7 +5,8 @@ name and the run index; the same for every optimiser, so all see the same seeds)
 its map's JSON content (not its path), so any worker, on any machine, can run it. Jobs go through
 an executor (`planner_core.execution`); results stream back and each finished run is appended
 to `<out>/results.jsonl` at once, so an interrupted benchmark resumes where it stopped.
-`<out>/meta.json` records the suite, budget and every command that wrote to the folder. Feasible
+`<out>/meta.json` records the suite (as given, and its absolute path for a report made from
+another folder), budget and every command that wrote to the folder. Feasible
 runs that beat the best-known f of their task update the best-known file beside the suite.
 """
 
@@ -490,7 +491,9 @@ def run_bench(
             entries[name] = entry
     if not entries:
         del meta["optimisers"]
-    meta.update({"schema": SCHEMA, "suite": str(suite), "budget": int(budget),
+    # the suite as given (shown in reports) and absolute (found by a report made elsewhere)
+    meta.update({"schema": SCHEMA, "suite": str(suite),
+                 "suite_absolute": str(Path(suite).resolve()), "budget": int(budget),
                  "base_seed": int(base_seed)})
     meta.setdefault("commands", []).append({"command": command, "started": utc_now(),
                                             "jobs_planned": len(todo)})

@@ -741,12 +741,15 @@ def plan_fleet(
     Raises:
         ValueError: one line: a sensor whose data needs more sorties than the planner shares
             one sensor's data among (`split.SHARE_MAX`; `lamde-mission check` says so too:
-            SORTIE_LIMIT), refused before any work; or no plan of sorties found that fits the
+            SORTIE_LIMIT), or a battery the take-off and landing alone use up
+            (ENERGY_VERTICAL), refused before any work; or no plan of sorties found that fits the
             battery, saying what failed (`_Planner.why_not`).
     """
     from planner_core.model.diagnose import fleet_findings
 
-    limit = [f.message for f in fleet_findings(m) if f.kind == "SORTIE_LIMIT"]
+    # refused before any work, in `check`'s words: the planner's own limit, or a battery the
+    # take-off and landing alone use up (no sortie of any plan can fly)
+    limit = [f.message for f in fleet_findings(m) if f.kind in ("SORTIE_LIMIT", "ENERGY_VERTICAL")]
     if limit:
         raise ValueError(limit[0])
     pl = _Planner(m, config, goal, sortie_budget)

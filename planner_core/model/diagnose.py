@@ -32,6 +32,10 @@ its last sortie landed (its first: any depot, or the start without depots), so i
 among the sites that flights within one battery join, transitively (a group). Straight-line
 distances bound the flight from below, so:
 
+- a battery whose usable energy the take-off to the flight altitude and the landing alone
+  use up: no sortie can fly, one fatal finding instead of one per sensor and depot
+  (ENERGY_VERTICAL: the vertical phases' energy, the usable energy, and the battery or
+  `uav.endurance_s` a sortie needs more than);
 - a sensor that no sortie from a group a vehicle can take off in can reach (its radio range
   and back within the usable energy, battery x (1 - reserve)) can get no data at all
   (ENERGY_RANGE, naming the sensor, the energy needed and the usable energy, and a site within
@@ -255,9 +259,10 @@ def _airspace(pm: Any, shapes: list[Any] | None = None) -> list[Any]:
 
 
 def fleet_findings(m: Any) -> list[Finding]:
-    """The battery and depot findings alone (ENERGY_RANGE, VEHICLES, DEPOT, ENERGY_SPLIT,
-    SORTIE_LIMIT: the module docstring), as `diagnose` makes them, for a map with a battery
-    or a fleet (else none); the sortie planner refuses a map with a SORTIE_LIMIT up front.
+    """The battery and depot findings alone (ENERGY_VERTICAL, ENERGY_RANGE, VEHICLES, DEPOT,
+    ENERGY_SPLIT, SORTIE_LIMIT: the module docstring), as `diagnose` makes them, for a map with
+    a battery or a fleet (else none); the sortie planner refuses a map with a SORTIE_LIMIT or
+    ENERGY_VERTICAL up front.
 
     Args:
         m: a `planner_core.model.mapio.Map`.
@@ -311,7 +316,8 @@ def _spread_findings(pm: Any, reach: float, i_max: int, flights: float,
 
 
 def _energy_findings(m: Any, pm: Any, pieces: list[Any], hear: float) -> list[Finding]:
-    """Batteries and depots (issue 33; the module docstring): ENERGY_RANGE, VEHICLES, DEPOT and
+    """Batteries and depots (issue 33; the module docstring): ENERGY_VERTICAL alone when the
+    take-off and landing use up the usable energy; else ENERGY_RANGE, VEHICLES, DEPOT and
     SORTIE_LIMIT (fatal), ENERGY_SPLIT (a note), from straight-line lower bounds on each
     sortie's flight; `hear` the link's ground reach (m).
 
@@ -339,6 +345,8 @@ def _energy_findings(m: Any, pm: Any, pieces: list[Any], hear: float) -> list[Fi
     cap = math.inf if usable is None else float(usable)
     vertical = en.vertical_energy_wh(h, float(uav.climb_speed), float(uav.descent_speed), acc,
                                      power)
+    if vertical >= cap:  # one fact rules out every sortie: no sensor or depot is the cause
+        return [_vertical_finding(m, vertical, cap)]
     per_m = en.least_energy_per_metre_wh(v_max, power)
     hover_wh = en.hover_power_w(power) / en.J_PER_WH  # Wh per hover second
     given = bool(m.has_fleet and m.spec.fleet.depots)
@@ -473,6 +481,32 @@ def _energy_findings(m: Any, pm: Any, pieces: list[Any], hear: float) -> list[Fi
                 f"to sensor '{ids[j]}' ({dist[j, i]:.0f} m away) and on to a depot, needs at "
                 f"least {e:.4g} Wh, more than the {cap:.4g} Wh usable", depot=name))  # fmt: skip
     return out
+
+
+def _vertical_finding(m: Any, vertical: float, usable: float) -> Finding:
+    """ENERGY_VERTICAL: the take-off to the flight altitude and the landing from it alone
+    (`energy.vertical_energy_wh`, `vertical`) need at least the `usable` energy, so no sortie
+    can fly (each sensor and depot would be CANNOT for this one cause): the figures, and the
+    battery a sortie needs more than (the vertical energy plus the reserve, as
+    uav.battery.energy_wh and as uav.endurance_s; more again to fly to a sensor and hover)."""
+    from planner_core.model import energy as en
+
+    uav = m.spec.uav
+    reserve = float(m.battery_reserve)
+    t = en.vertical_time_s(float(uav.altitude), float(uav.climb_speed), float(uav.descent_speed),
+                           float(uav.acceleration))  # fmt: skip
+    least = en.battery_for_usable_wh(vertical, reserve)
+    # the least a battery must exceed, printed so that "more than" stays true
+    wh = math.floor(least * 100.0) / 100.0
+    seconds = math.floor(float(en.hover_endurance_s(least, m.power)))
+    return Finding(
+        "ENERGY_VERTICAL", True, f"uav: no sortie can fly: the take-off to {uav.altitude:g} m and "
+        f"the landing alone need {vertical:.4g} Wh ({t:.1f} s at hover power), more than the "
+        f"{usable:.4g} Wh usable (battery {m.battery_wh:.4g} Wh less the "
+        f"{100 * reserve:g} % reserve); a battery of more than {wh:.2f} Wh "
+        f"(uav.battery.energy_wh; or uav.endurance_s more than {seconds:d}) is needed, and "
+        "more to fly to the sensors and hover there (or a lower uav.altitude, faster "
+        "uav.climb_speed and uav.descent_speed)")
 
 
 def _vehicle_findings(m: Any, serves: dict[int, set[int]], groups: dict[int, list[int]],

@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 import shapely
 
+from planner_core import textio
 from planner_core.model.formulas import ModelParams
 from planner_core.model.mapio import Objective, Radio, Uav
 from planner_core.suite.draw import (
@@ -54,6 +55,7 @@ __all__ = [
     "MIN_SIZE",
     "MAX_SIZE",
     "MAX_SENSORS",
+    "max_sensors",
     "CLUSTER_SIZE",
     "UNIFORM_SPACING",
     "FIELD_RADIUS",
@@ -74,10 +76,12 @@ LAYOUTS = ("uniform", "clustered", "corridor")
 #: smallest and largest map side, metres
 MIN_SIZE = 5000
 MAX_SIZE = 30000
-#: the most sensors one large map may ask for; how many fit depends on the size, layout and
-#: density (`generate_large_map` raises GenerationError naming why when they do not: e.g. 1,000
-#: at 30 km did not fit the uniform layout at density 7 nor the corridor at density 0 or 7)
-MAX_SENSORS = 1000
+#: the most sensors one large map may ask for by default: the limit check and plan read
+#: (`textio.LIMITS["sensors"]`); LAMDE_MAX_SENSORS raises or lowers it (`max_sensors`). How many
+#: fit depends on the size, layout and density (`generate_large_map` raises GenerationError
+#: naming why when they do not: e.g. 1,000 at 30 km did not fit the uniform layout at density 7
+#: nor the corridor at density 0 or 7)
+MAX_SENSORS = textio.LIMITS["sensors"].default
 #: sensors per field in the clustered layout (the default of `cluster_size`)
 CLUSTER_SIZE = 12
 #: metres: the least distance between two sensors, per layout
@@ -104,6 +108,21 @@ _STOP_NFZ_CLEARANCE = 550.0  # a uniform stop to any no-fly zone (its sensors li
 _RING_NFZ_CLEARANCE = 150.0  # a field's whole ring (centre + ring radius) to any no-fly zone
 _CORRIDOR_NFZ_CLEARANCE = 950.0  # the corridor's polyline to any no-fly zone
 _EDGE = 150.0  # metres: witness stops stay this far inside the area
+
+
+def max_sensors() -> int:
+    """The most sensors a large map may have: the limit `check` and `plan` read, so that every
+    generated map is one they accept (not a limit of the generator, whose layouts fit fewer at
+    some sizes and densities: GenerationError says so).
+
+    Returns:
+        LAMDE_MAX_SENSORS when set, else `MAX_SENSORS` (`textio.limit("sensors")`).
+
+    Raises:
+        textio.InputError: LAMDE_MAX_SENSORS is set to anything but a positive integer (its
+            `where` names the variable).
+    """
+    return textio.limit("sensors")
 
 
 def large_max_hover_points(n_sensors: int) -> int:
@@ -516,8 +535,10 @@ def _check_args(size: Any, n_sensors: Any, layout: Any, density: Any, cluster_si
 
     if not is_int(size) or not MIN_SIZE <= size <= MAX_SIZE:
         raise ValueError(f"size must be an integer {MIN_SIZE}..{MAX_SIZE} m (got {size!r})")
-    if not is_int(n_sensors) or not 1 <= n_sensors <= MAX_SENSORS:
-        raise ValueError(f"sensors must be 1..{MAX_SENSORS} (got {n_sensors!r})")
+    most = max_sensors()
+    if not is_int(n_sensors) or not 1 <= n_sensors <= most:
+        raise ValueError(f"sensors must be 1..{most} (got {n_sensors!r}; check and plan read at "
+                         "most LAMDE_MAX_SENSORS sensors)")
     if layout not in LAYOUTS:
         raise ValueError(f"layout must be one of {', '.join(LAYOUTS)} (got {layout!r})")
     if not is_int(density) or not 0 <= density < N_DENSITIES:
@@ -541,7 +562,7 @@ def generate_large_map(
 
     Args:
         size: map side, metres (`MIN_SIZE`..`MAX_SIZE`).
-        n_sensors: sensors, 1..`MAX_SENSORS`.
+        n_sensors: sensors, 1..`max_sensors()` (LAMDE_MAX_SENSORS, what check and plan read).
         layout: one of `LAYOUTS`.
         density: obstacle density 0 (sparse) .. 7 (dense); counts from the paper's 10 km table
             scaled by the area (`large_obstacle_counts`).
@@ -555,7 +576,8 @@ def generate_large_map(
         `large_max_hover_points(n_sensors)`.
 
     Raises:
-        ValueError: a bad argument (the message names it).
+        ValueError: a bad argument (the message names it); LAMDE_MAX_SENSORS set to anything
+            but a positive integer (`textio.InputError`).
         GenerationError: no map passed every check; the message says why and what to change.
     """
     from planner_core.suite import SUITE_ORIGIN, GenerationError, _witness_ok
