@@ -260,6 +260,16 @@ TIME_LINES = 10
 BARS = 60
 
 
+def _swap_text(who: list[tuple[int, int]]) -> str:
+    """The label of the battery swaps at one place: [(vehicle, swap number)] as "v1 swap 1"
+    or "v1 swaps 1, 2; v3 swap 1", vehicles in order."""
+    by: dict[int, list[int]] = {}
+    for v, j in who:
+        by.setdefault(v, []).append(j)
+    return "; ".join(f"v{v} swap{'s' if len(js) > 1 else ''} {', '.join(map(str, sorted(js)))}"
+                     for v, js in sorted(by.items()))
+
+
 @dataclass
 class _Label:
     """A label to place beside a marker: its text, anchor (x, y, m), text style, the marker's
@@ -1507,6 +1517,10 @@ def fleet_figure(
     by_vehicle: dict[int, list[SortieView]] = {}
     for sv in sorties:
         by_vehicle.setdefault(sv.vehicle, []).append(sv)
+    # one label per place: several swaps at one depot ("v1 swaps 1, 2; v3 swap 1") overlapped
+    # as labels of their own
+    here: dict[tuple[float, float], list[tuple[int, int]]] = {}
+    leave: dict[tuple[float, float], list[tuple[int, int]]] = {}
     for v, svs in by_vehicle.items():
         svs = sorted(svs, key=lambda s: s.sortie)
         for j, (a, b) in enumerate(zip(svs[:-1], svs[1:], strict=True), start=1):
@@ -1515,13 +1529,17 @@ def fleet_figure(
             ax.plot(*at, marker="*", markersize=15, color=_vehicle_colour(v),
                     markeredgecolor="k", zorder=8, linestyle="")  # fmt: skip
             scene.marker(at, 7.5)
-            style = {"fontsize": 7.5, "color": _vehicle_colour(v), "zorder": 9,
-                     "bbox": _TEXT_BOX}  # fmt: skip
-            scene.labels.append(_Label(f"v{v} swap {j}", tuple(at), style, 7.5))
+            here.setdefault((round(float(at[0])), round(float(at[1]))), []).append((v, j))
             off = np.asarray(b.timeline.path, dtype=float)[0]
             if not np.allclose(at, off, atol=1.0):
-                scene.labels.append(_Label(f"v{v} swap {j} (takes off here)", tuple(off), style,
-                                           7.5))  # fmt: skip
+                leave.setdefault((round(float(off[0])), round(float(off[1]))), []).append((v, j))
+    for places, tail in ((here, ""), (leave, " (takes off here)")):
+        for xy, who in places.items():
+            colours = {_vehicle_colour(v) for v, _ in who}
+            style = {"fontsize": 7.5, "color": colours.pop() if len(colours) == 1 else "k",
+                     "zorder": 9, "bbox": _TEXT_BOX}  # fmt: skip
+            scene.labels.append(_Label(_swap_text(who) + tail, (float(xy[0]), float(xy[1])),
+                                       style, 7.5))  # fmt: skip
     for v in vehicles:
         n = len(by_vehicle[v])
         handles.append(

@@ -652,3 +652,20 @@ def test_cli_plan_plot_draws_the_sortie_directory(tmp_path, capsys):
         assert main(["plan", str(fleet_map), "-o", str(tmp_path / "d2"), "--plot", str(bad)]) == 2
         assert shown in capsys.readouterr().err
     assert not (tmp_path / "d2").exists()
+
+
+def test_swaps_at_one_depot_share_one_label(tmp_path):
+    """A field crew's reviewer: "v1 swap 1", "v1 swap 2" and "v3 swap 1" at one depot were
+    three labels on one spot and overlapped. One label per place now."""
+    from lamde_mission.commands.show import fleet_views
+    from lamde_mission.plot import _swap_text, fleet_figure
+    from planner_core.model.mapio import load_map
+
+    assert _swap_text([(3, 1), (1, 2), (1, 1)]) == "v1 swaps 1, 2; v3 swap 1"
+    assert _swap_text([(2, 1)]) == "v2 swap 1"
+    d = write_fleet_dir(tmp_path / "d", [[["S1"], ["S2"], ["S3"]], [["S4"], ["S1"]]])
+    m = load_map(DEMO_MAP)
+    fig = fleet_figure(m, fleet_views(d, m))
+    texts = [t.get_text() for t in fig.findobj(Text) if t.get_text()]
+    assert "v1 swaps 1, 2; v2 swap 1" in texts
+    assert not any(t.startswith("v1 swap 1") or t == "v2 swap 1" for t in texts)
