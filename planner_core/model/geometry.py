@@ -56,7 +56,7 @@ from planner_core.model.polygons import (
     EDGE_BOUNDARY,
     EDGE_OWNED,
     EDGE_SHARED,
-    convex_pieces,
+    convex_pieces_many,
     ring_area,
 )
 
@@ -363,11 +363,13 @@ class Obstacles:
         flags = [np.zeros(len(v), dtype=np.int8) for v in cleaned]
         piece_region = [-1] * len(cleaned)
         kept: list[tuple[np.ndarray, tuple[np.ndarray, ...]]] = []
-        for r, (shell, holes) in enumerate(regions):
-            try:
-                pieces = convex_pieces(shell, holes)
-            except (ValueError, KeyError) as exc:
-                raise ValueError(f"region {r}: {exc}") from None
+        regions = list(regions)
+        for r, ((shell, holes), pieces) in enumerate(
+                zip(regions, convex_pieces_many(regions), strict=True)):
+            if isinstance(pieces, ValueError | KeyError):
+                raise ValueError(f"region {r}: {pieces}") from None
+            if isinstance(pieces, Exception):
+                raise pieces
             for v, f in pieces:  # checked with all the others in __post_init__
                 cleaned.append(v)
                 flags.append(f)

@@ -845,8 +845,9 @@ class Map:
             poly = shapes[k]
             if cl[k] > 0.0:
                 poly = outer_offset(poly, cl[k] + CLEARANCE_PAD, self._inflation[k][1])
-            out: dict[str, Any] = {"vertices": [list(v) for v in poly.exterior.coords[:-1]]}
-            holes = [[list(v) for v in ring.coords[:-1]] for ring in poly.interiors]
+            # the rings' coordinates as lists of [x, y] (one array each, not a tuple per vertex)
+            out: dict[str, Any] = {"vertices": np.asarray(poly.exterior.coords)[:-1].tolist()}
+            holes = [np.asarray(ring.coords)[:-1].tolist() for ring in poly.interiors]
             if holes:
                 out["holes"] = holes
             if name is not None:
@@ -1063,6 +1064,10 @@ def outer_offset(poly: Any, r: float, overshoot: float = OFFSET_OVERSHOOT) -> An
     is at most r x (overshoot - 1) (~2 % by default), found only at outward corners (straight
     edges and inward corners are offset exactly).
 
+    The same polygon as `_outer_offset_reference`, to the bit (tests): the corners' outer
+    polygons are the same points (`_fans`), built together. Cost per polygon of V vertices:
+    O(V) array work and one union of its buffer with up to V outer polygons (GEOS).
+
     Args:
         poly: a shapely Polygon (holes allowed).
         r: the offset, m (> 0).
@@ -1071,6 +1076,51 @@ def outer_offset(poly: Any, r: float, overshoot: float = OFFSET_OVERSHOOT) -> An
     Returns:
         A shapely Polygon, exterior counter-clockwise, collinear vertices removed.
     """
+    import shapely
+    from shapely.geometry.polygon import orient
+
+    half = math.acos(1.0 / max(float(overshoot), 1.0 + 1e-12))  # the widest half segment
+    poly = orient(poly, 1.0)  # the shape on the left of every ring, the offset on the right
+    parts = [poly.buffer(r, join_style="bevel")]
+    for ring in (poly.exterior, *poly.interiors):
+        v = np.asarray(ring.coords, dtype=float)[:-1]
+        e = np.concatenate((v[1:], v[:1])) - v  # edge k: v[k] -> v[k + 1]
+        ang = np.arctan2(e[:, 1], e[:, 0])
+        turn = (ang - np.concatenate((ang[-1:], ang[:-1])) + math.pi) % (2.0 * math.pi) - math.pi
+        ks = np.flatnonzero(turn > 0.0)  # left turns (at v[k]): an arc on the right
+        if len(ks):
+            parts += list(_fans(v[ks], r, ang[ks - 1] - math.pi / 2.0, turn[ks], half))
+    grown = shapely.union_all(parts)
+    if grown.geom_type != "Polygon":  # pieces touching only at a point: keep the largest
+        grown = max(grown.geoms, key=lambda g: g.area)
+    # a hole of the offset holds points farther than r from the shape; a ring the union left
+    # where its pieces meet (rounding: no area, or all of it within r) is no hole
+    holes = [h for h in grown.interiors if (hp := shapely.Polygon(h)).area > 0.0
+             and poly.distance(hp.representative_point()) > r]  # fmt: skip
+    grown = shapely.Polygon(grown.exterior, holes)
+    return shapely.simplify(orient(grown, 1.0), 0.0)  # drop collinear vertices
+
+
+def _fan(c: np.ndarray, r: float, start: float, sweep: float, half: float) -> Any:
+    """The outer polygon of the sector of radius r about c from angle `start` sweeping `sweep`
+    radians (> 0) counter-clockwise: c, the arc's ends, and between them the corners of
+    segments tangent to the arc, each spanning at most 2 x `half` (widened by 1e-9 rad each
+    way, so it overlaps the buffer beside it: no sliver between them)."""
+    import shapely
+
+    segs = max(1, math.ceil(sweep / (2.0 * half) - 1e-9))
+    step = sweep / segs
+    mid = start + step * (np.arange(segs) + 0.5)
+    far = r / math.cos(step / 2.0)
+    pts = [c, c + r * np.array([math.cos(start), math.sin(start)])]
+    pts += list(c + far * np.column_stack([np.cos(mid), np.sin(mid)]))
+    pts.append(c + r * np.array([math.cos(start + sweep), math.sin(start + sweep)]))
+    return shapely.Polygon(np.asarray(pts))
+
+
+def _outer_offset_reference(poly: Any, r: float, overshoot: float = OFFSET_OVERSHOOT) -> Any:
+    """`outer_offset` building each corner's outer polygon on its own (`_fan`), the
+    reference it equals to the bit (tests). One shapely polygon built per outward corner."""
     import shapely
     from shapely.geometry.polygon import orient
 
@@ -1110,6 +1160,43 @@ def _fan(c: np.ndarray, r: float, start: float, sweep: float, half: float) -> An
     pts += list(c + far * np.column_stack([np.cos(mid), np.sin(mid)]))
     pts.append(c + r * np.array([math.cos(start + sweep), math.sin(start + sweep)]))
     return shapely.Polygon(np.asarray(pts))
+
+
+def _fans(c: np.ndarray, r: float, start: np.ndarray, sweep: np.ndarray,
+          half: float) -> np.ndarray:
+    """`_fan` for K corners at once: c (K, 2), start and sweep (K,); the same points, float
+    for float (the same operations on the same numbers: sums and products element by element,
+    `math.cos` / `math.sin` of each scalar, `np.cos` / `np.sin` of each corner's own `mid`
+    array), as K shapely polygons made in one call. O(K + segments) array work."""
+    import shapely
+
+    starts, sweeps = start.tolist(), sweep.tolist()
+    segs = [max(1, math.ceil(sw / (2.0 * half) - 1e-9)) for sw in sweeps]
+    steps = [sw / n for sw, n in zip(sweeps, segs, strict=True)]
+    far = np.array([r / math.cos(st / 2.0) for st in steps])
+    n = np.array(segs, dtype=np.int64)
+    first = np.cumsum(n) - n  # where each corner's segments start
+    local = np.arange(int(n.sum())) - np.repeat(first, n)
+    mid = np.repeat(start, n) + np.repeat(np.array(steps), n) * (local + 0.5)
+    bounds = np.concatenate(([0], np.cumsum(n))).tolist()
+    cos = np.concatenate([np.cos(mid[a:b]) for a, b in zip(bounds, bounds[1:], strict=False)])
+    sin = np.concatenate([np.sin(mid[a:b]) for a, b in zip(bounds, bounds[1:], strict=False)])
+    K = len(starts)
+    size = n + 3  # the centre, the arc's start, the segments' corners, the arc's end
+    row0 = np.cumsum(size) - size
+    pts = np.empty((int(size.sum()), 2))
+    pts[row0] = c
+    ends = np.array([[math.cos(s), math.sin(s), math.cos(s + w), math.sin(s + w)]
+                     for s, w in zip(starts, sweeps, strict=True)]).reshape(K, 4)
+    pts[row0 + 1] = c + r * ends[:, 0:2]
+    rows = np.repeat(row0 + 2, n) + local
+    cf = np.repeat(c, n, axis=0)
+    ff = np.repeat(far, n)
+    pts[rows, 0] = cf[:, 0] + ff * cos
+    pts[rows, 1] = cf[:, 1] + ff * sin
+    pts[row0 + 2 + n] = c + r * ends[:, 2:4]
+    rings = shapely.linearrings(pts, indices=np.repeat(np.arange(K), size))
+    return shapely.polygons(rings)
 
 
 def _obstacle_polygons(m: Map) -> list[Any]:
@@ -1458,8 +1545,9 @@ def _pack(spec: MapFile, shapes: tuple[PolygonShape, ...]) -> Obstacles:
     obs = spec.obstacles
     circles = [(c.x, c.y, c.radius) for c in obs.circles]
     rects = [rectangle_vertices(r.x, r.y, r.length, r.width, r.angle_deg) for r in obs.rectangles]
-    convex = [sh.shell for sh in shapes if sh.convex]
-    regions = [(sh.shell, sh.holes) for sh in shapes if not sh.convex]
+    flat = [sh.convex for sh in shapes]  # once per shape (`is_convex`, O(V))
+    convex = [sh.shell for sh, c in zip(shapes, flat, strict=True) if c]
+    regions = [(sh.shell, sh.holes) for sh, c in zip(shapes, flat, strict=True) if not c]
     return Obstacles.build(circles, rects + convex, regions)
 
 
