@@ -238,23 +238,6 @@ def test_the_constructive_stage_reports_its_plans_between_evaluations(tiny: Prob
     assert "no plan scored yet" in out.getvalue() and f"({seen[0].detail})" in out.getvalue()
 
 
-def test_a_feasible_run_whose_improving_stages_stall_spends_the_rest_on_the_de() -> None:
-    """Scheduled access on a dense field (12 sensors on a 20 m ring): the descents' moves
-    assume the simultaneous uplink and cannot act, so the budget they leave goes to the last
-    stage's DE instead of ending unspent (the reviewer's 2,040 of 3,000)."""
-    import math
-
-    sensors = [{"id": f"d{k}", "x": round(500 + 20 * math.cos(k * math.pi / 6), 2),
-                "y": round(500 + 20 * math.sin(k * math.pi / 6), 2)} for k in range(12)]
-    m = {"name": "dense-scheduled", "area": {"width": 1000, "height": 1000},
-         "start": [50, 50], "end": [950, 950], "sensors": sensors,
-         "radio": {"access": "scheduled"}}
-    r = run_pipeline(Problem(m), PlanConfig(seed=0, budget=3000))
-    assert r.phi == 0 and r.evaluations == 3000
-    spent = {s.name: s.evaluations for s in r.stages}
-    assert spent.get("repair", 0) >= 100
-
-
 def test_the_maps_witness_is_a_start_only_when_no_constructive_plan_is_feasible(monkeypatch
                                                                                 ) -> None:
     """A generated map stores a feasible plan (its witness). Where none of the constructive

@@ -130,3 +130,103 @@ def test_a_bad_access_is_one_line_naming_the_field(tmp_path) -> None:
     assert r.returncode == 2
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and "radio.access" in lines[0]
+
+
+def _ring_map() -> dict:
+    """12 sensors on a 20 m ring (`dense_field`), scheduled access: every plan's hover point
+    over the field breaks the paper's C3 (12 x ~9 Mbit/s over R_lambda 25)."""
+    return dense_field(radio={"access": "scheduled"})
+
+
+def test_the_improving_stages_spend_their_budget_under_scheduled_access() -> None:
+    """A reviewer: under scheduled access finish, other structure and improve spent 0
+    evaluations and a feasible plan's leftover went to a repair that changed nothing (the
+    descent held every point that broke C3 and scored moves by the simultaneous LP). Now
+    the finish and the improving rounds spend it, none ends worse than it started, and the
+    repair stage gets nothing on the feasible plan."""
+    from planner_core.pipeline import PlanConfig, run_pipeline
+
+    cfg = PlanConfig(seed=0, budget=3000, de_share=0.2)  # the improving rounds get ~1,300
+    r = run_pipeline(Problem(load_map(_ring_map())), cfg)
+    assert r.phi == 0 and r.evaluations > cfg.budget - cfg.descent_trials  # all but a descent's
+    spent = {s.name: s for s in r.stages}
+    assert spent["finish"].evaluations > 0 and spent["improve"].evaluations > 0
+    for name in ("finish", "other structure", "improve"):
+        if name in spent:
+            assert spent[name].f_after <= spent[name].f_before, name
+    assert "repair" not in spent or spent["repair"].evaluations == 0
+
+
+def test_c3_screens_are_off_under_scheduled_access() -> None:
+    """`held_points` (the descent's and the moves' screen) holds a point over the field for
+    C3 in simultaneous access, not in scheduled access (no C3 there: `c3_limit` inf)."""
+    from planner_core.search.trial import held_points
+
+    P = np.array([[500.0, 500.0]])
+    simultaneous = Problem(load_map(dense_field()))
+    scheduled = Problem(load_map(_ring_map()))
+    assert simultaneous.model.rates(P).sum() > simultaneous.model.bandwidth
+    assert list(held_points(simultaneous, P)) == [0]
+    assert list(held_points(scheduled, P)) == []
+    assert scheduled.model.c3_limit == np.inf
+    assert simultaneous.model.c3_limit == simultaneous.model.bandwidth
+
+
+def test_the_descents_objective_is_the_scheduled_lp_with_its_gradient() -> None:
+    """In scheduled access the descent's F(P) takes its hover time from the scheduled LP
+    (not the simultaneous one, which undercounts where a point breaks C3), and its gradient
+    (per-pair link duals, `scheduled_lp_links`) matches central differences of
+    `objective_reference`, with bandwidths that bind at some points and not at others."""
+    from planner_core.search.descent import objective, objective_reference
+    from planner_core.search.trial import path_nodes
+
+    rng = np.random.default_rng(0)
+    longer = []
+    for bw in (25.0, 12.0, 8.0):
+        S = rng.uniform(0, 3000, (25, 2))
+        doc = {"name": "grad", "area": {"width": 3000, "height": 3000}, "start": [10, 10],
+               "end": [2990, 2990],
+               "sensors": [{"id": f"s{k}", "x": float(x), "y": float(y)}
+                           for k, (x, y) in enumerate(S)],
+               "radio": {"access": "scheduled", "bandwidth": bw}}  # fmt: skip
+        p = Problem(load_map(doc))
+        m = p.model
+        P = np.clip(S[rng.choice(25, 8, replace=False)] + rng.normal(0, 150, (8, 2)), 0, 3000)
+        R = m.rates(P)
+        while not (R > 0).any(axis=0).all():  # a point at each sensor out of range
+            P = np.vstack([P, S[np.flatnonzero(~(R > 0).any(axis=0))[0]] + 5.0])
+            R = m.rates(P)
+        assert (R.sum(axis=1) > bw).any()
+        F, g, T = objective(p, P)
+        V = scheduled_lp(R, m.required, bw, m.t_max)[2]
+        nodes = path_nodes(p, P)
+        t_fly = float(m.flight_time(np.hypot(*np.diff(nodes, axis=0).T)).sum())
+        assert F == pytest.approx(m.alpha * t_fly + (1 - m.alpha) * V, rel=1e-9)
+        assert F == pytest.approx(objective_reference(p, P), rel=1e-9)
+        assert np.all(scheduled_flow(R, T, m.required, bw) >= m.required * (1 - 1e-9))
+        longer.append(V - hover_lp(R, m.required, m.t_max)[1])
+        h, num = 1e-3, np.zeros_like(P)
+        for i in range(len(P)):
+            for d in range(2):
+                up, down = P.copy(), P.copy()
+                up[i, d] += h
+                down[i, d] -= h
+                num[i, d] = (objective_reference(p, up) - objective_reference(p, down)) / (2 * h)
+        assert np.abs(g - num).max() <= 1e-6 * max(np.abs(num).max(), 1e-3), bw
+    assert max(longer) > 1.0  # s: the simultaneous LP's time would undercount
+
+
+def test_a_scheduled_plan_is_the_same_whatever_the_lp_cache_holds() -> None:
+    """The scheduled LP's solved components are kept (`hoverlp._scheduled_cache`): the same
+    seed gives the same plan to the bit after another run filled the cache and after it was
+    emptied."""
+    import planner_core.model.hoverlp as hoverlp
+    from planner_core.pipeline import PlanConfig, run_pipeline
+
+    cfg = PlanConfig(seed=3, budget=1500, de_share=0.2)
+    hoverlp._scheduled_cache().clear()
+    cold = run_pipeline(Problem(load_map(_ring_map())), cfg).x.tobytes()
+    run_pipeline(Problem(load_map(_ring_map())), cfg.replace(seed=5))
+    assert len(hoverlp._scheduled_cache())
+    warm = run_pipeline(Problem(load_map(_ring_map())), cfg).x.tobytes()
+    assert warm == cold

@@ -583,6 +583,19 @@ class ModelParams:
             n_points=m.max_hover_points,
         )  # fmt: skip
 
+    @property
+    def c3_limit(self) -> float:
+        """The summed link rate C3 allows at a hover point: R_lambda (`bandwidth`) in
+        simultaneous access (the paper's C3), inf in scheduled access (`access`: the sensors
+        share R_lambda by time slots, so no C3; what a point collects is bounded in the
+        evaluation's `scheduled_flow` and the scheduled hover-time LP instead). The local
+        search's C3 screens (`planner_core.search.trial`) compare against it.
+
+        Returns:
+            Mbit/s (math.inf in scheduled access).
+        """
+        return math.inf if self.access == "scheduled" else self.bandwidth
+
     @cached_property
     def window(self) -> SensorWindow:
         """This map's sensors sorted by x with the radio's range cut (`sensor_window`): the

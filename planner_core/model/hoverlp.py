@@ -767,21 +767,34 @@ def _highs_general(
 ) -> tuple[np.ndarray, np.ndarray] | None:
     """min cost.x s.t. row_lo <= A x <= row_hi, col_lo <= x <= col_hi through HiGHS (highspy):
     (x, row duals) or None when not solved to optimality. A scipy sparse; inf bounds free."""
-    import highspy
 
     csr = A.tocsr()
+    return _highs_arrays(cost, col_lo, col_hi, (csr.shape[0], False, csr.indptr, csr.indices,
+                                                csr.data), row_lo, row_hi)
+
+
+def _highs_arrays(
+    cost: np.ndarray, col_lo: np.ndarray, col_hi: np.ndarray, matrix: tuple[Any, ...],
+    row_lo: np.ndarray, row_hi: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """`_highs_general` with the matrix as compressed arrays: matrix = (rows, colwise,
+    start, index, value), row-wise (CSR) or column-wise (CSC)."""
+    import highspy
+
+    n_rows, colwise, start, index, value = matrix
     lp = highspy.HighsLp()
-    lp.num_col_, lp.num_row_ = len(cost), csr.shape[0]
+    lp.num_col_, lp.num_row_ = len(cost), int(n_rows)
     inf = highspy.kHighsInf
     lp.col_cost_ = np.asarray(cost, dtype=float)
     lp.col_lower_ = np.where(np.isfinite(col_lo), col_lo, -inf).astype(float)
     lp.col_upper_ = np.where(np.isfinite(col_hi), col_hi, inf).astype(float)
     lp.row_lower_ = np.where(np.isfinite(row_lo), row_lo, -inf).astype(float)
     lp.row_upper_ = np.where(np.isfinite(row_hi), row_hi, inf).astype(float)
-    lp.a_matrix_.format_ = highspy.MatrixFormat.kRowwise
-    lp.a_matrix_.start_ = csr.indptr.astype(np.int32)
-    lp.a_matrix_.index_ = csr.indices.astype(np.int32)
-    lp.a_matrix_.value_ = csr.data.astype(float)
+    lp.a_matrix_.format_ = (highspy.MatrixFormat.kColwise if colwise
+                            else highspy.MatrixFormat.kRowwise)
+    lp.a_matrix_.start_ = np.asarray(start).astype(np.int32)
+    lp.a_matrix_.index_ = np.asarray(index).astype(np.int32)
+    lp.a_matrix_.value_ = np.asarray(value).astype(float)
     solver = _highs()
     solver.passModel(lp)
     # primal simplex: ~4x faster than the default dual on the scheduled LP's many D_ij columns
@@ -826,41 +839,173 @@ def scheduled_lp(
         infeasible (a sensor that needs data out of every point's range, or more than T_max
         allows).
     """
-    import scipy.sparse as sp
+    sol = _scheduled_solve(R, req, bandwidth, t_max)
+    return None if sol is None else sol[:4]
 
-    R = sp.csr_matrix(R, dtype=float)
+
+def scheduled_lp_links(
+    R: np.ndarray, req: np.ndarray, bandwidth: float, t_max: float
+) -> tuple[np.ndarray, float, np.ndarray] | None:
+    """`scheduled_lp` with the sensitivity of its optimum to the link rates, for the local
+    search's gradient (`planner_core.search.descent.objective` in scheduled access): the dual
+    u_ij <= 0 of the row D_ij / Q_j <= (R_ij / Q_j) T_i gives dV/dR_ij = u_ij T_i / Q_j
+    (envelope theorem), returned as L_ij = -u_ij / Q_j >= 0, so that dV/dR_ij = -L_ij T_i:
+    the simultaneous LP's y_j / Q_j per pair (`hover_lp`'s duals), zero where the point's
+    bandwidth row, not the sensor's link, limits what it takes.
+
+    The LP falls apart into the connected components of the points and the sensors that need
+    data linked to them (no row or column joins two): each is solved on its own and kept (per
+    thread, the last `SCHEDULED_CACHE_SIZE`, by its rates, data, R_lambda and T_max), so a
+    move of one point solves the LPs of the components it touches only (the local search's
+    kicks and rebuilds). Points in no component hover 0 s. Cost: one HiGHS LP per new
+    component (~0.5-10 ms on the large maps' plans), a connected-components pass over the
+    I x J links.
+
+    Args:
+        R: (I, J) link rates, Mbit/s (dense).
+        req: (J,) Q_j, Mbit.
+        bandwidth: R_lambda, Mbit/s.
+        t_max: T_max, s (may be inf).
+
+    Returns:
+        (T (I,) s, V = sum T s, L (I, J) >= 0 per Mbit/s, dense), or None as `scheduled_lp`.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    R = np.ascontiguousarray(R, dtype=float)
     req = np.asarray(req, dtype=float).reshape(-1)
     n, J = R.shape
+    need = req > 0
+    pi, pj = np.nonzero((R > 0) & need[None, :])
+    linked = np.zeros(J, dtype=bool)
+    linked[pj] = True
+    if not linked[need].all():
+        return None  # a sensor that needs data has no link
+    T, L = np.zeros(n), np.zeros((n, J))
+    if not len(pi):
+        return T, 0.0, L
+    graph = coo_matrix((np.ones(len(pi)), (pi, n + pj)), shape=(n + J, n + J))
+    _, label = connected_components(graph, directed=False)
+    comp = label[pi]
+    order = np.argsort(comp, kind="stable")  # each component's pairs, still row-major
+    cut = np.flatnonzero(np.diff(comp[order])) + 1
+    for idx in np.split(order, cut):
+        ri = pi[idx]
+        rows = ri[np.r_[True, ri[1:] != ri[:-1]]]
+        cols = np.unique(pj[idx])
+        sub = R[rows][:, cols]
+        key = (sub.shape, sub.tobytes(), req[cols].tobytes(), float(bandwidth), float(t_max))
+        cache = _scheduled_cache()
+        got = cache.pop(key, None)
+        if got is None:
+            core = _scheduled_core(sub, req[cols], bandwidth, t_max)
+            if core is None:
+                return None
+            t, _, dual, _, (si, sj), _ = core
+            w = np.zeros(sub.shape)
+            w[si, sj] = np.maximum(-dual, 0.0) / req[cols][sj]
+            got = (t, w)
+        cache[key] = got  # the most recent last
+        while len(cache) > SCHEDULED_CACHE_SIZE:
+            del cache[next(iter(cache))]
+        T[rows] = got[0]
+        L[rows[:, None], cols[None, :]] = got[1]
+    return T, float(T.sum()), L
+
+
+#: components `scheduled_lp_links` keeps solved (per thread), the least recently used
+#: dropped first
+SCHEDULED_CACHE_SIZE = 4096
+_SCHEDULED = threading.local()
+
+
+def _scheduled_cache() -> dict[tuple[Any, ...], tuple[np.ndarray, np.ndarray]]:
+    """This thread's solved components (`scheduled_lp_links`), oldest first."""
+    cache = getattr(_SCHEDULED, "cache", None)
+    if cache is None:
+        cache = _SCHEDULED.cache = {}
+    return cache
+
+
+def _scheduled_solve(
+    R: Any, req: np.ndarray, bandwidth: float, t_max: float
+) -> tuple[np.ndarray, Any, float, np.ndarray, Any] | None:
+    """`scheduled_lp`'s solve: its (T, D, V, y) and L (I, J) CSR, `scheduled_lp_links`'s
+    link weights."""
+    import scipy.sparse as sp
+
+    core = _scheduled_core(R, req, bandwidth, t_max)
+    if core is None:
+        return None
+    T, d, dual_links, y, (pi, pj), (n, J) = core
+    req = np.asarray(req, dtype=float).reshape(-1)
+    if not len(pi):
+        return T, sp.csr_matrix((n, J)), float(T.sum()), y, sp.csr_matrix((n, J))
+    D = sp.csr_matrix((np.maximum(d, 0.0) * req[pj], (pi, pj)), shape=(n, J))
+    L = sp.csr_matrix((np.maximum(-dual_links, 0.0) / req[pj], (pi, pj)), shape=(n, J))
+    return T, D, float(T.sum()), y, L
+
+
+def _scheduled_core(
+    R: Any, req: np.ndarray, bandwidth: float, t_max: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray],
+           tuple[int, int]] | None:
+    """The scheduled LP (`scheduled_lp`'s docstring) over the pairs (i, j) with R_ij > 0 and
+    Q_j > 0, in row-major order: (T (I,), d (k,) = D_ij / Q_j, the link rows' duals (k,),
+    y (J,), (pi, pj) the pairs' indices, (I, J)), or None when infeasible. R dense (numpy)
+    or scipy sparse; the matrix is passed to HiGHS column by column, built here."""
+    req = np.asarray(req, dtype=float).reshape(-1)
+    if isinstance(R, np.ndarray):
+        n, J = R.shape
+        pi, pj = np.nonzero((R > 0) & (req > 0)[None, :])
+        pr = R[pi, pj]
+    else:
+        import scipy.sparse as sp
+
+        R = sp.csr_matrix(R, dtype=float)
+        n, J = R.shape
+        coo = R.tocoo()
+        keep = (coo.data > 0) & (req[coo.col] > 0)
+        pi, pj, pr = coo.row[keep], coo.col[keep], coo.data[keep]
     y = np.zeros(J)
+    empty = np.zeros(0)
     if not np.any(req > 0):
-        return np.zeros(n), sp.csr_matrix((n, J)), 0.0, y
-    coo = R.tocoo()
-    keep = (coo.data > 0) & (req[coo.col] > 0)
-    pi, pj, pr = coo.row[keep], coo.col[keep], coo.data[keep]
+        return np.zeros(n), empty, empty, y, (pi[:0], pj[:0]), (n, J)
     need = np.flatnonzero(req > 0)
-    if len(np.setdiff1d(need, pj)):
+    linked = np.zeros(J, dtype=bool)
+    linked[pj] = True
+    if not linked[need].all():
         return None  # a sensor that needs data has no link
     k = len(pi)
     a = pr / req[pj]  # d_ij = D_ij / Q_j <= a_ij T_i
-    rows = np.arange(k)
     # rows 0..k-1: d_k - a_k T_i <= 0; k..k+n-1: sum_j Q_j d_ij - R_lambda T_i <= 0;
-    # then one row per sensor that needs data: sum_i d_ij >= 1 (a hair above: `TARGET`)
+    # then one row per sensor that needs data: sum_i d_ij >= 1 (a hair above: `TARGET`).
+    # Columns T_0..T_{n-1} (each: its pairs' link rows, then its bandwidth row), then d_r
+    # (each: its link row, its point's bandwidth row, its sensor's row); rows ascending.
     row_of = np.full(J, -1)
     row_of[need] = np.arange(len(need))
-    r_idx = np.concatenate([rows, rows, k + pi, k + np.arange(n), k + n + row_of[pj]])
-    c_idx = np.concatenate([n + rows, pi, n + rows, np.arange(n), n + rows])
-    vals = np.concatenate([np.ones(k), -a, req[pj], np.full(n, -float(bandwidth)), np.ones(k)])
-    A = sp.csr_matrix((vals, (r_idx, c_idx)), shape=(k + n + len(need), n + k))
-    m = A.shape[0]
+    per = np.bincount(pi, minlength=n) + 1
+    start = np.concatenate([[0], np.cumsum(per), n + k + 3 * np.arange(1, k + 1)])
+    index = np.empty(n + k + 3 * k, dtype=np.int64)
+    value = np.empty(n + k + 3 * k)
+    slot = np.arange(k) + pi  # pair r in T_{pi[r]}'s column: i bandwidth entries before
+    index[slot], value[slot] = np.arange(k), -a
+    last = start[1:n + 1] - 1
+    index[last], value[last] = k + np.arange(n), -float(bandwidth)
+    dcols = (n + k + np.arange(3 * k)).reshape(k, 3)
+    index[dcols[:, 0]], value[dcols[:, 0]] = np.arange(k), 1.0
+    index[dcols[:, 1]], value[dcols[:, 1]] = k + pi, req[pj]
+    index[dcols[:, 2]], value[dcols[:, 2]] = k + n + row_of[pj], 1.0
+    m = k + n + len(need)
     lo = np.concatenate([np.full(k + n, -np.inf), np.full(len(need), _TARGET)])
     hi = np.concatenate([np.zeros(k + n), np.full(len(need), np.inf)])
     cost = np.concatenate([np.ones(n), np.zeros(k)])
     ub = np.concatenate([np.full(n, float(t_max)), np.full(k, np.inf)])
-    sol = _highs_general(cost, np.zeros(n + k), ub, A, lo, hi)
+    sol = _highs_arrays(cost, np.zeros(n + k), ub, (m, True, start, index, value), lo, hi)
     if sol is None:
         return None
     x, dual = sol
     T = np.clip(x[:n], 0.0, t_max)
-    D = sp.csr_matrix((np.maximum(x[n:], 0.0) * req[pj], (pi, pj)), shape=(n, J))
     y[need] = np.maximum(dual[m - len(need):], 0.0)
-    return T, D, float(T.sum()), y
+    return T, x[n:], dual[:k], y, (pi, pj), (n, J)

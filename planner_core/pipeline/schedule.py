@@ -251,20 +251,18 @@ class Scheduler(Protocol):
 def large_rounds(problem: Any) -> bool:
     """Whether the default improving rounds of `problem` are `LARGE_CYCLE`: its I_max (hover
     points, `Problem.hover_limit`; corner slots not counted) exceeds `PAPER_POINTS` (the
-    paper's largest, `planner_core.search.descent.large_problem`), and a
-    rebuild can change its number of points (variable length, tau > 0) and be scored by the
-    simultaneous-access LP (not `radio.access` "scheduled", where the moves' C3 checks and LP
-    refuse every draw, as they refuse kicks).
+    paper's largest, `planner_core.search.descent.large_problem`), and a rebuild can change
+    its number of points (variable length, tau > 0). Either access model (`radio.access`):
+    in scheduled access the moves are scored by the scheduled hover-time LP
+    (`planner_core.search.descent.lp_times`) and screened for C5 alone.
 
     Args:
-        problem: the run's `Problem` (`hover_limit`, `variable_length`, `tau`, optional
-            `scheduled`).
+        problem: the run's `Problem` (`hover_limit`, `variable_length`, `tau`).
 
     Returns:
-        True when all four hold.
+        True when all three hold.
     """
-    return (large_problem(problem) and bool(problem.variable_length)
-            and float(problem.tau) > 0.0 and not bool(getattr(problem, "scheduled", False)))
+    return large_problem(problem) and bool(problem.variable_length) and float(problem.tau) > 0.0
 
 
 class DefaultScheduler:

@@ -832,9 +832,11 @@ class Repair(_Base):
     sensors and blocked legs, `planner_core.search.refine`), so an infeasible run spends all
     of its budget on becoming feasible; with less than a population left, the repair's
     candidates for the incumbent. Also when the incumbent is feasible but the improving
-    stages left a population or more unspent (their moves cannot act: e.g. scheduled access,
-    where the descent's C3 and hover-time LP are the simultaneous uplink's), so no run ends
-    with budget a DE could still use. Cost: as `DifferentialEvolution`."""
+    stages left a population or more unspent (their scheduler stopped early), so no run ends
+    with budget a DE could still use; under either `radio.access` the improving stages'
+    moves act on a feasible plan (scheduled access: the scheduled hover-time LP, no C3
+    screen), so a feasible run leaves this stage nothing in the default rounds. Cost: as
+    `DifferentialEvolution`."""
 
     name = "repair"
 

@@ -9,7 +9,8 @@ corners are left to the re-routing), and makes a sub-map (`planner_core.model.ma
 start and end at the points before and after the window (the map's start or end at the plan's
 ends), each sensor's required data what the window must collect given what the other points
 collect now at their LP hover times (paper Sec. 3, simultaneous access: data at point i from
-sensor j is T_i R_ij), the sensors and obstacles that meet the box of the window's points,
+sensor j is T_i R_ij; in scheduled access the most their times can take, the evaluation's
+max flow), the sensors and obstacles that meet the box of the window's points,
 ends and those sensors widened by `MARGIN` (a sub-plan's leg that crosses a dropped obstacle
 is re-routed when spliced, and the spliced plan is evaluated, C3 and C5 included, on the whole
 map), I_max `SUB_POINTS`. The sub-map is planned by `WINDOW_PIPELINE` (the default pipeline
@@ -110,9 +111,14 @@ def window_map(problem: Any, P: np.ndarray, T: np.ndarray, i: int, w: int
 
     m = problem.model
     n = len(P)
-    D = m.rates(P) * T[:, None]  # (n, J) Mbit collected at each point from each sensor
     out = np.r_[0:i, i + w:n]
-    got = D[out].sum(axis=0)
+    if getattr(problem, "scheduled", False):  # the most the other points' times can take
+        from planner_core.search.polish import _collected
+
+        got = _collected(problem, m.rates(P[out]), T[out])
+    else:
+        D = m.rates(P) * T[:, None]  # (n, J) Mbit collected at each point from each sensor
+        got = D[out].sum(axis=0)
     req = np.maximum(m.required - got, 0.0)
     req = np.where(req > 1e-6 * np.maximum(m.required, 1e-12), req, 0.0)
     need = req > 0.0

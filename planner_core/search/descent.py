@@ -42,6 +42,12 @@ from constructive starts of L06 and L08 each ends lower about half the time); ov
 runs of the 240-400-sensor maps the per-point steps ended lower on 8 of 10 seeds of each
 (docs/search.md, "Per-point steps and the first screen").
 
+Scheduled access (`radio.access`): V is the scheduled hover-time LP's
+(`polish.scheduled_hover_lp`: the data D_ij a point takes from each sensor are variables, no
+C3), and dV/dR_ij = -L_ij T_i with L the duals of its link rows D_ij <= R_ij T_i
+(`planner_core.model.hoverlp.scheduled_lp_links`) in place of y_j / Q_j; the trial points are
+screened for C5 alone (`ModelParams.c3_limit`).
+
 The descent keeps the number of points and their visiting order; the pipeline
 (`planner_core.pipeline`) runs it on the best constructive and seeder plans before the DE and,
 inside the final stage (`planner_core.search.final`), on the incumbent (docs/search.md).
@@ -62,7 +68,7 @@ import numpy as np
 from numba import njit
 
 from planner_core.model.formulas import deb_better, leg_time
-from planner_core.search.polish import hover_lp
+from planner_core.search.polish import hover_lp, scheduled_hover_lp
 from planner_core.search.trial import TRIAL_OK, held_points, path_nodes, trial_points
 
 __all__ = [
@@ -75,6 +81,7 @@ __all__ = [
     "descend",
     "hover_of",
     "large_problem",
+    "lp_times",
     "objective",
     "gradient_reference",
     "objective_reference",
@@ -165,12 +172,55 @@ def objective(
     m = problem.model
     if R is None:
         R = m.rates(P)
+    if getattr(problem, "scheduled", False):
+        return _objective_scheduled(problem, P, R)
     lp = hover_lp(R, m.required, m.t_max, warm)
     if lp is None:
         return None
     T, V, y = lp
     t_fly, g = _flight_and_gradient(P, problem.start, problem.end, m.sensors, m.required, R,
                                     T, y, m.altitude, m.decay, m.v_max, m.accel, m.alpha)
+    return m.alpha * t_fly + (1.0 - m.alpha) * V, g, T
+
+
+def lp_times(problem: Any, R: np.ndarray) -> np.ndarray | None:
+    """The hover times (I,) s a move's points get (`planner_core.search.structure._move`):
+    the hover-time LP of the problem's access model, `hover_lp` (simultaneous, the paper's)
+    or `polish.scheduled_hover_lp` (`radio.access` "scheduled").
+
+    Args:
+        problem: the UAV `Problem`.
+        R: the points' link rates (I, J), Mbit/s.
+
+    Returns:
+        T (I,) s, or None when no hover times serve every sensor.
+    """
+    m = problem.model
+    lp = (scheduled_hover_lp(problem, R) if getattr(problem, "scheduled", False)
+          else hover_lp(R, m.required, m.t_max))
+    return None if lp is None else lp[0]
+
+
+def _objective_scheduled(
+    problem: Any, P: np.ndarray, R: np.ndarray
+) -> tuple[float, np.ndarray, np.ndarray] | None:
+    """`objective` in scheduled access: V and T from `polish.scheduled_hover_lp`, the hover
+    term of the gradient from its per-pair weights L (dV/dR_ij = -L_ij T_i in place of
+    -y_j T_i / Q_j; the flight term as `_flight_and_gradient`'s, called with no duals)."""
+    m = problem.model
+    lp = scheduled_hover_lp(problem, R)
+    if lp is None:
+        return None
+    T, V, L = lp
+    t_fly, g = _flight_and_gradient(P, problem.start, problem.end, m.sensors, m.required, R,
+                                    T, np.zeros(len(m.required)), m.altitude, m.decay,
+                                    m.v_max, m.accel, m.alpha)
+    i, j = np.nonzero((L > 0.0) & (R > 0.0))
+    if len(i):
+        diff = P[i] - m.sensors[j]
+        slant = np.sqrt((diff**2).sum(axis=1) + m.altitude**2)
+        w = (T[i] * L[i, j] * m.decay / slant)[:, None] * diff  # -dV/dR_ij x dR_ij/dp_i
+        np.add.at(g, i, (1.0 - m.alpha) * w)
     return m.alpha * t_fly + (1.0 - m.alpha) * V, g, T
 
 
@@ -248,24 +298,34 @@ def _flight_and_gradient(P, start, end, sensors, required, R, T, y, H, decay, v_
 
 
 def objective_reference(problem: Any, P: np.ndarray) -> float:
-    """F(P) alone, the obvious way: the polish's own LP for the hover times (no drop of points),
-    the flight time leg by leg; what `objective` computes with its gradient.
+    """F(P) alone, the obvious way: the polish's own LP for the hover times (no drop of points;
+    in scheduled access `planner_core.model.hoverlp.scheduled_lp`, not raised), the flight
+    time leg by leg; what `objective` computes with its gradient.
 
     Args:
         problem: the UAV `Problem`.
         P: hover points (I, 2), m.
 
     Returns:
-        F, s (an infeasible LP gives its shortfall solution's times, not None).
+        F, s (an infeasible LP gives its shortfall solution's times, not None; in scheduled
+        access it raises).
 
     Raises:
-        RuntimeError: the LP solver fails.
+        RuntimeError: the LP solver fails, or the scheduled LP is infeasible.
     """
     P = np.asarray(P, dtype=float).reshape(-1, 2)
     m = problem.model
     from planner_core.search.polish import _solve_lp
 
-    T, _ = _solve_lp(m.rates(P), m.required, m.t_max, True, "linprog")
+    if getattr(problem, "scheduled", False):  # the scheduled access's LP, not raised
+        from planner_core.model.hoverlp import scheduled_lp
+
+        sol = scheduled_lp(m.rates(P), m.required, m.bandwidth, m.t_max)
+        if sol is None:
+            raise RuntimeError("scheduled hover-time LP failed: infeasible")
+        T = sol[0]
+    else:
+        T, _ = _solve_lp(m.rates(P), m.required, m.t_max, True, "linprog")
     nodes = path_nodes(problem, P)
     legs = zip(nodes[:-1], nodes[1:], strict=True)
     t_fly = sum(float(m.flight_time(np.linalg.norm(b - a))) for a, b in legs)

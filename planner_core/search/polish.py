@@ -33,7 +33,8 @@ from planner_core.model.hoverlp import hover_lp as _hover_lp
 from planner_core.model.hoverlp import top_up as _top_up
 from planner_core.model.problem import Problem
 
-__all__ = ["BACKENDS", "PolishResult", "hover_lp", "polish_hover_times", "ZERO_TIME"]
+__all__ = ["BACKENDS", "PolishResult", "hover_lp", "polish_hover_times", "scheduled_hover_lp",
+           "ZERO_TIME"]
 
 #: A polished hover time at or below this many seconds counts as zero (candidate for dropping).
 ZERO_TIME = 1e-3
@@ -240,15 +241,52 @@ def _hover_times(
     sol = scheduled_lp(R, req, float(problem.bandwidth), t_max) if feasible else None
     if sol is None:
         return np.full(R.shape[0], t_max), "scheduled: T_max everywhere (infeasible)"
-    times = sol[0]
-    for _ in range(5):  # the LP's solution within solver tolerance: raise it by a hair
+    return _raise_to_flow(problem, R, req, sol[0]), "scheduled LP (HiGHS, highspy)"
+
+
+def _raise_to_flow(problem: Problem, R: np.ndarray, req: np.ndarray,
+                   times: np.ndarray) -> np.ndarray:
+    """Scheduled access: the LP's hover times (I,) s, within solver tolerance, raised by a
+    hair (at most 5 rounds, each at most 1e-6 and 1e-12 s) until the max-flow allocation the
+    evaluation uses (`_collected`) meets every requirement, at most T_max each."""
+    t_max = float(problem.t_max)
+    for _ in range(5):
         got = _collected(problem, R, times)
         short = (req > 0) & (got < req)
         if not short.any():
             break
         ratio = float(np.max(req[short] / np.maximum(got[short], 1e-300)))
         times = np.minimum(times * min(ratio * (1 + 1e-12), 1.0 + 1e-6) + 1e-12, t_max)
-    return times, "scheduled LP (HiGHS, highspy)"
+    return times
+
+
+def scheduled_hover_lp(
+    problem: Problem, R: np.ndarray
+) -> tuple[np.ndarray, float, np.ndarray] | None:
+    """The hover-time LP of scheduled access (`radio.access` "scheduled") for the local search
+    (`planner_core.search.descent.objective`, the structural moves, kicks and rebuilds): what
+    `hover_lp` is to simultaneous access, through
+    `planner_core.model.hoverlp.scheduled_lp_links`, its times raised by a hair as the polish
+    raises them (`_raise_to_flow`), so that the evaluation's max-flow allocation serves every
+    sensor.
+
+    Args:
+        problem: the UAV `Problem` (required data, T_max, R_lambda).
+        R: the hover points' link rates (I, J), Mbit/s.
+
+    Returns:
+        (T (I,) s, V = sum T s, L (I, J) >= 0: dV/dR_ij = -L_ij T_i), or None when no hover
+        times within T_max serve every sensor.
+    """
+    from planner_core.model.hoverlp import scheduled_lp_links
+
+    req = problem.required.astype(float)
+    sol = scheduled_lp_links(np.ascontiguousarray(R, dtype=float), req,
+                             float(problem.bandwidth), float(problem.t_max))
+    if sol is None:
+        return None
+    times = _raise_to_flow(problem, R, req, sol[0])
+    return times, float(times.sum()), sol[2]
 
 
 def _unserved_scheduled(problem: Problem, R: np.ndarray) -> list[dict[str, Any]]:

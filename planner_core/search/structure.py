@@ -3,7 +3,8 @@
 `restructure` is a first-improvement local search over waypoint removals (detour corners that
 hover ~0 s), merges of two consecutive points, splits of one point in two and removals of one
 point with a neighbour moved to clear the joining leg; `kicks` is an iterated local search that
-moves one point at random. Every move is evaluated with its LP hover times and descended
+moves one point at random. Every move is evaluated with its LP hover times (the map's access
+model: `descent.lp_times`, the scheduled LP in scheduled access) and descended
 (`planner_core.search.descent.descend`) in a race against the incumbent (`_move`; on a large
 problem a move whose own evaluation is more than `RACE_FIRST` above the incumbent is not
 descended), all through the caller's counted `evaluate`. Cost per move: its LP (I points x J
@@ -20,8 +21,15 @@ from typing import Any
 import numpy as np
 
 from planner_core.model.formulas import deb_better
-from planner_core.search.descent import Descent, Evaluate, descend, hover_of, large_problem
-from planner_core.search.polish import ZERO_TIME, hover_lp
+from planner_core.search.descent import (
+    Descent,
+    Evaluate,
+    descend,
+    hover_of,
+    large_problem,
+    lp_times,
+)
+from planner_core.search.polish import ZERO_TIME
 from planner_core.search.trial import held_points
 from planner_core.streams import stream_rng
 
@@ -212,10 +220,10 @@ def _move(
         held = len(held_points(problem, Q))
     if held:
         return None
-    lp = hover_lp(m.rates(Q), m.required, m.t_max)
-    if lp is None:
+    T = lp_times(problem, m.rates(Q))
+    if T is None:
         return None
-    x = problem.encode(Q, lp[0])
+    x = problem.encode(Q, T)
     f, phi = (float(np.asarray(v).reshape(-1)[0]) for v in evaluate(x[None, :]))
     if incumbent is not None and large_problem(problem) and f > incumbent * (1.0 + RACE_FIRST):
         return x, f, phi, 1  # out of the race at the first evaluation

@@ -1,6 +1,7 @@
 """One descent trial's points (`planner_core.search.descent`): every hover point moved against
-the gradient, the points that break C3 (summed link rate over the bandwidth) or whose legs cut
-an obstacle (C5) slid along the limit by +-45 degrees, and what still breaks either put back.
+the gradient, the points that break C3 (summed link rate over the bandwidth; none in scheduled
+access, where the limit is `ModelParams.c3_limit`, inf) or whose legs cut an obstacle (C5)
+slid along the limit by +-45 degrees, and what still breaks either put back.
 
 `trial_points` does it in one compiled call (`_trial_kernel`); `trial_points_reference` is
 the same sequence in numpy, step by step, and tests hold the two equal to the bit
@@ -73,7 +74,7 @@ def held_points(problem: Any, P: np.ndarray, R: np.ndarray | None = None) -> np.
     m = problem.model
     P = _writable(P)
     R = m.rates(P) if R is None else _writable(R)
-    return np.flatnonzero(_held_mask(P, R, m.start, m.end, m.bandwidth,
+    return np.flatnonzero(_held_mask(P, R, m.start, m.end, m.c3_limit,
                                      problem.obstacles.kernel_arrays, L_VIO_TOL))
 
 
@@ -90,7 +91,7 @@ def held_points_reference(problem: Any, P: np.ndarray, R: np.ndarray | None = No
         (h,) int indices into P, ascending.
     """
     m = problem.model
-    bad = (m.rates(P) if R is None else R).sum(axis=1) > m.bandwidth
+    bad = (m.rates(P) if R is None else R).sum(axis=1) > m.c3_limit
     nodes = path_nodes(problem, P)
     cut = overlap_first(nodes[:-1], nodes[1:], problem.obstacles) > L_VIO_TOL
     bad |= cut[:-1] | cut[1:]  # leg k ends at point k and leg k + 1 starts there
@@ -116,7 +117,7 @@ class HeldCheck:
         """P (I, 2): the hover points now (m)."""
         self.problem = problem
         m = problem.model
-        self.rate_bad = m.rates(P).sum(axis=1) > m.bandwidth
+        self.rate_bad = m.rates(P).sum(axis=1) > m.c3_limit
         nodes = path_nodes(problem, P)
         self.cut = overlap_first(nodes[:-1], nodes[1:], problem.obstacles) > L_VIO_TOL
 
@@ -137,7 +138,7 @@ class HeldCheck:
         """
         m = self.problem.model
         idx = np.asarray(idx, dtype=np.int64)
-        self.rate_bad[idx] = m.rates(P[idx]).sum(axis=1) > m.bandwidth
+        self.rate_bad[idx] = m.rates(P[idx]).sum(axis=1) > m.c3_limit
         legs = np.unique(np.concatenate([idx, idx + 1]))  # leg k runs node k -> node k + 1
         nodes = path_nodes(self.problem, P)
         self.cut[legs] = overlap_first(nodes[legs], nodes[legs + 1],
@@ -173,7 +174,7 @@ def _slide(
     c = cand.reshape(-1, 2)
     prev, nxt = np.repeat(back[held], a, axis=0), np.repeat(ahead[held + 2], a, axis=0)
     cut = overlap_first(np.vstack([prev, c]), np.vstack([c, nxt]), problem.obstacles) > L_VIO_TOL
-    bad = (cut[: k * a] | cut[k * a:] | (m.rates(c).sum(axis=1) > m.bandwidth)).reshape(k, a)
+    bad = (cut[: k * a] | cut[k * a:] | (m.rates(c).sum(axis=1) > m.c3_limit)).reshape(k, a)
     first = np.argmax(~bad, axis=1)
     ok = ~bad[np.arange(k), first]
     Pn[held[ok]] = cand[np.arange(k)[ok], first[ok]]
@@ -249,7 +250,7 @@ def trial_points(
     return _trial_kernel(
         _writable(P), _writable(g), float(scale), float(step), _writable(box), m.start, m.end,
         _SLIDE, m.sensors, win.order, win.xs, float(win.half), m.altitude**2, m.peak_rate,
-        m.decay, math.isfinite(win.half), m.bandwidth, problem.obstacles.kernel_arrays,
+        m.decay, math.isfinite(win.half), m.c3_limit, problem.obstacles.kernel_arrays,
         L_VIO_TOL,
     )  # fmt: skip
 
