@@ -89,8 +89,11 @@ def test_upload_reads_px4s_limit_and_says_what_it_changes(demo_plan, capsys, via
         assert "speed limit" not in capsys.readouterr().out  # nothing caps it there
 
 
-def test_a_fleet_that_fails_a_check_at_the_limit_is_refused_before_sending(tmp_path,
-                                                                          capsys) -> None:
+def test_a_fleet_is_judged_once_with_every_vehicle_at_its_limit_before_sending(tmp_path,
+                                                                              capsys) -> None:
+    """Every vehicle's limit is read before anything is sent, and the directory judged once
+    with each vehicle at its own limit (a reviewer: judged one vehicle at a time, vehicle 1
+    was refused against a vehicle 2 at 20 m/s it would never fly, and vehicle 2 was sent)."""
     d = json.loads((MAPS / "fleet-demo.json").read_text())
     d["fleet"]["uavs"] = 2
     path = tmp_path / "two.json"
@@ -102,9 +105,8 @@ def test_a_fleet_that_fails_a_check_at_the_limit_is_refused_before_sending(tmp_p
     from planner_core.model.mapio import load_map
 
     assert verify_sortie_dir(load_map(path), out).passed
-    # vehicle 1 at 12 m/s: later over its sensors, so a sensor sends to both vehicles at once
-    slow = verify_sortie_dir(load_map(path), out, {1: 12.0})
-    assert not slow.passed and slow.failed()
+    slow = verify_sortie_dir(load_map(path), out, {1: 12.0, 2: 12.0})
+    assert not slow.passed  # both at 12 m/s: later over their sensors, TIMING loses its 30 s
     failed = "; ".join(slow.failed())
     port = free_udp_port()
     conn = ["--connect", f"udpin://127.0.0.1:{port}", "--via", "pymavlink", "--timeout", "5"]
@@ -112,17 +114,39 @@ def test_a_fleet_that_fails_a_check_at_the_limit_is_refused_before_sending(tmp_p
         rc = main(["upload", str(out), "--fleet", *conn, "--map", str(path)])
         cap = capsys.readouterr()
         assert rc == 1
-        assert (f"FAILED: {out} vehicle 1: the vehicle's MPC_XY_VEL_MAX is 12 m/s, below the "
-                "20 m/s the mission asks (DO_CHANGE_SPEED), so it flies at 12 m/s, and at that "
-                f"speed the simulator rejects it on {path}: {failed}; nothing sent") in cap.out
-        assert "nothing sent (set MPC_XY_VEL_MAX to 20 or more, or plan the map with " \
-            "uav.max_speed 12; --force sends it anyway)" in cap.out
-        assert sum(fleet.vehicles[0].stats.uploads.values()) == 0  # nothing sent to it
+        assert cap.err.strip() == (
+            f"lamde-mission upload: {out}: vehicle 1 MPC_XY_VEL_MAX 12 m/s, vehicle 2 "
+            "MPC_XY_VEL_MAX 12 m/s, below the 20 m/s the sorties ask (DO_CHANGE_SPEED), so "
+            f"they fly at their limits, and at those speeds the simulator rejects the fleet on "
+            f"{path}: {failed}; nothing sent to any vehicle (set the limit to 20 or more, or "
+            "plan the map with uav.max_speed 12; --force sends it anyway)")
+        assert all(sum(v.stats.uploads.values()) == 0 for v in fleet.vehicles)
         rc = main(["upload", str(out), "--fleet", *conn, "--map", str(path), "--force"])
         cap = capsys.readouterr()
         assert rc == 0, cap.out + cap.err
-        assert "and at that speed the simulator rejects it on" in cap.err
         assert "sent anyway (--force)" in cap.err
+        assert cap.out.count("the vehicle's speed limit: MPC_XY_VEL_MAX 12 m/s") == 2
+    with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=2, heartbeat_hz=10.0,
+                   params={"MPC_XY_VEL_MAX": 20.0}):  # fmt: skip
+        assert main(["upload", str(out), "--fleet", *conn, "--map", str(path)]) == 0
+        assert "below the" not in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("limit", [0.0, -5.0, 0.001])
+def test_a_speed_limit_no_mission_flies_at_is_refused(demo_plan, capsys, limit) -> None:
+    """A vehicle saying MPC_XY_VEL_MAX 0 or -5 made upload exit 2 blaming the file
+    ("speed_limit must be a positive speed"), and 0.001 m/s was judged and sent (t_fly of
+    29 days). Below the sim's least mission speed it is refused, naming the parameter."""
+    port = free_udp_port()
+    conn = ["--connect", f"udpin://127.0.0.1:{port}", "--via", "pymavlink", "--timeout", "5"]
+    with MockVehicle(f"udpout:127.0.0.1:{port}", heartbeat_hz=10.0,
+                     params={"MPC_XY_VEL_MAX": limit}) as v:  # fmt: skip
+        assert main(["upload", str(demo_plan), *conn, "--map", str(DEMO)]) == 1
+        err = capsys.readouterr().err
+        assert (f"{demo_plan}: the vehicle's MPC_XY_VEL_MAX is {limit:g} m/s, not a speed a "
+                "mission can be flown at (at least 0.1 m/s): set MPC_XY_VEL_MAX on the vehicle; "
+                "nothing sent") in err
+        assert sum(v.stats.uploads.values()) == 0
 
 
 def test_mock_vehicle_param_option_is_checked(capsys) -> None:

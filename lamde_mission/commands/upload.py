@@ -391,6 +391,9 @@ def _mission_speed_check(path: str, mission: list, map_path: str | None, *, forc
     asked = _asked_speed(mission)
 
     def check(name: str, limit: float) -> str | None:
+        bad = _unflyable_limit(path, name, limit)
+        if bad is not None:
+            return bad
         if asked is None or limit >= asked:
             return None
 
@@ -407,30 +410,76 @@ def _mission_speed_check(path: str, mission: list, map_path: str | None, *, forc
     return check
 
 
+def _unflyable_limit(what: str, name: str, limit: float) -> str | None:
+    """The refusal when a vehicle's speed limit is no speed a mission can be flown at (below
+    the sim's least mission speed, or not finite), else None."""
+    import math
+
+    from planner_core.textio import printable
+    from sim.mission import MIN_MISSION_SPEED
+
+    if math.isfinite(limit) and limit >= MIN_MISSION_SPEED:
+        return None
+    return (f"{printable(what)}: the vehicle's {name} is {limit:g} m/s, not a speed a mission "
+            f"can be flown at (at least {MIN_MISSION_SPEED:g} m/s): set {name} on the vehicle; "
+            "nothing sent")
+
+
 def _fleet_speed_check(directory: str, missions: list, map_path: str | None, *, force: bool,
-                       origin: str | None = None) -> Callable[[int, str, float], str | None]:
-    """`upload DIR/ --fleet`'s check of each vehicle's speed limit: below its sortie's speed,
-    a warning, or with `--map` the whole directory judged as `verify MAP DIR/` does with that
-    vehicle's sorties flown at its limit (slower sorties move its later take-offs and the
-    fleet's separation; `sorties.verify_sortie_dir`'s speed_limits)."""
+                       origin: str | None = None
+                       ) -> Callable[[dict[int, tuple[str, float] | None]], str | None]:
+    """`upload DIR/ --fleet`'s check of the vehicles' speed limits, read from every vehicle
+    before anything is sent (`vehicle.fleet.upload_fleet`): the vehicles below their sorties'
+    speed get a warning, or with `--map` the whole directory judged once as `verify MAP DIR/`
+    does with each of them flying at its own limit (its slower sorties also move its later
+    take-offs; `sorties.verify_sortie_dir`'s speed_limits); a vehicle whose limit was not
+    read gets a note."""
     from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
     from lamde_mission.sorties import verify_sortie_dir
+    from planner_core.textio import printable
 
     asked = {fm.vehicle: _asked_speed(fm.mission) for fm in missions if fm.mission}
 
-    def check(vehicle: int, name: str, limit: float) -> str | None:
-        want = asked.get(vehicle)
-        if want is None or limit >= want:
+    def check(limits: dict[int, tuple[str, float] | None]) -> str | None:
+        for v, got in sorted(limits.items()):
+            if got is None:
+                print(f"note: {printable(directory)} vehicle {v}: its speed limit could not be "
+                      "read: its sorties' speed is not checked against it", file=sys.stderr)
+                continue
+            bad = _unflyable_limit(f"{directory} vehicle {v}", *got)
+            if bad is not None:
+                return bad
+        slow = {v: got for v, got in limits.items()
+                if got is not None and asked.get(v) is not None and got[1] < asked[v]}
+        if not slow:
             return None
-
-        def judge() -> tuple[list[str], str]:
-            m = with_origin_or_fail(load_map_or_fail(map_path), origin)
-            slow = verify_sortie_dir(m, directory, {vehicle: limit})
-            return slow.failed(), (f"vehicle {vehicle}'s makespan "
-                                   f"{slow.makespan(vehicle):.0f} s")
-
-        return _speed_verdict(f"{directory} vehicle {vehicle}", name, limit, want, map_path,
-                              judge, force=force)
+        names = ", ".join(f"vehicle {v} {name} {lim:g} m/s" for v, (name, lim) in
+                          sorted(slow.items()))  # fmt: skip
+        want = max(asked[v] for v in slow)
+        head = (f"{printable(directory)}: {names}, below the {want:g} m/s the sorties ask "
+                "(DO_CHANGE_SPEED), so they fly at their limits")
+        fix = (f"set the limit to {want:g} or more, or plan the map with uav.max_speed "
+               f"{min(lim for _, lim in slow.values()):g}")
+        if map_path is None:
+            print(f"warning: {head}; their flight times and energy were planned at {want:g} "
+                  f"m/s (--map checks the fleet at the limits; {fix})", file=sys.stderr)
+            return None
+        m = with_origin_or_fail(load_map_or_fail(map_path), origin)
+        judged = verify_sortie_dir(m, directory, {v: lim for v, (_, lim) in slow.items()})
+        if judged.passed:
+            spans = ", ".join(f"vehicle {v}'s makespan {judged.makespan(v):.0f} s"
+                              for v in sorted(slow))  # fmt: skip
+            print(f"note: {head}: {spans}; every check holds at those speeds on "
+                  f"{printable(map_path)}", flush=True)  # fmt: skip
+            return None
+        lines = "; ".join(printable(x) for x in judged.failed())
+        if force:
+            print(f"warning: {head}, and at those speeds the simulator rejects the fleet on "
+                  f"{printable(map_path)} ({lines}); sent anyway (--force)", file=sys.stderr)
+            return None
+        return (f"{head}, and at those speeds the simulator rejects the fleet on "
+                f"{printable(map_path)}: {lines}; nothing sent to any vehicle ({fix}; --force "
+                "sends it anyway)")
 
     return check
 

@@ -22,17 +22,18 @@ each as `upload_mission`'s.
 from __future__ import annotations
 
 import contextlib
-import functools
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from lamde_mission.items import MissionItem
 from lamde_mission.vehicle.claims import ClaimWatch, duplicate_error
 from lamde_mission.vehicle.connection import Connection, Link, parse_connection, parse_connections
 from lamde_mission.vehicle.transfer import (
     DuplicateVehicleError,
+    SpeedLimitError,
     UploadReport,
     VehicleError,
 )
@@ -425,6 +426,44 @@ def assign_system_ids(
     return conns, out, listened
 
 
+def _read_speed_limits(
+    missions: Sequence[FleetMission], conns: Sequence[Any], ids: Sequence[int], *, via: str,
+    timeout: float, autopilot: str | None, signing_key: bytes | None,
+    log: Callable[[str], None] | None,
+) -> dict[int, tuple[str, float] | None]:
+    """Each vehicle's horizontal speed limit, read before anything is sent (`upload_fleet`'s
+    speed_check): a short connection of its own per vehicle with a mission, the parameter of
+    its dialect (`transfer.SPEED_LIMIT_PARAM`; the HEARTBEAT's autopilot unless `autopilot`).
+
+    Returns:
+        {vehicle: (parameter, m/s), or None when it did not answer or could not be reached}
+        for the vehicles whose dialect has such a parameter.
+    """
+    from lamde_mission.storage import dialect_for_autopilot, dialect_of
+    from lamde_mission.vehicle.transfer import PARAM_TIMEOUT_S, SPEED_LIMIT_PARAM
+    from lamde_mission.vehicle.upload import make_client
+
+    out: dict[int, tuple[str, float] | None] = {}
+    for fm, conn, sid in zip(missions, conns, ids, strict=True):
+        if not fm.mission:
+            continue
+        client = make_client(via, conn, log=log, signing_key=signing_key, heartbeat_watch=0.0,
+                             system_id=sid)  # fmt: skip
+        try:
+            info = client.connect(timeout)
+            dialect = (dialect_of(autopilot) if autopilot is not None
+                       else dialect_for_autopilot(info.autopilot))  # fmt: skip
+            name = SPEED_LIMIT_PARAM.get(dialect.name)
+            if name is not None:
+                value = client.read_param(name, min(timeout, PARAM_TIMEOUT_S))
+                out[fm.vehicle] = None if value is None else (name, float(value))
+        except VehicleError:
+            out[fm.vehicle] = None  # the upload itself says what is wrong with the link
+        finally:
+            client.close()
+    return out
+
+
 def upload_fleet(
     missions: Sequence[FleetMission],
     *,
@@ -439,7 +478,7 @@ def upload_fleet(
     progress: Callable[[str, int, int], None] | None = None,
     on_vehicle: Callable[[VehicleResult], None] | None = None,
     window: float | None = None,
-    speed_check: Callable[[int, str, float], str | None] | None = None,
+    speed_check: Callable[[dict[int, tuple[str, float] | None]], str | None] | None = None,
 ) -> FleetReport:
     """Upload mission k to vehicle k, read each back and compare (see the module docstring).
 
@@ -456,9 +495,11 @@ def upload_fleet(
         log, progress: as for `upload_mission`.
         on_vehicle: called with each vehicle's result as soon as it is done.
         window: the least seconds the survey listens (None: `claims.HEARTBEAT_WATCH_S`).
-        speed_check: `speed_check(vehicle, parameter, m/s)` after each vehicle's speed
-            limit is read (`upload_mission`'s, with the vehicle's number first); a line
-            fails that vehicle (`SpeedLimitError`, nothing sent to it); None reads nothing.
+        speed_check: after the survey and before anything is sent, every vehicle's speed
+            limit is read (`transfer.SPEED_LIMIT_PARAM`, where its dialect has one) and
+            `speed_check({vehicle: (parameter, m/s) or None when unread})` judges the whole
+            fleet at once; a line refuses the upload (`SpeedLimitError`, nothing sent to any
+            vehicle); None reads nothing.
 
     Returns:
         The report; `report.ok` only if every vehicle holds its mission, read back identical.
@@ -493,6 +534,13 @@ def upload_fleet(
         len(missions), list(connect), system_ids, timeout=timeout, window=window,
         signing_key=signing_key,
     )  # fmt: skip
+    limits: dict[int, tuple[str, float] | None] = {}
+    if speed_check is not None:
+        limits = _read_speed_limits(missions, conns, ids, via=via, timeout=timeout,
+                                    autopilot=autopilot, signing_key=signing_key, log=log)
+        problem = speed_check(limits)
+        if problem is not None:
+            raise SpeedLimitError(problem)
     report = FleetReport(survey_s=listened)
     for fm, conn, sid in zip(missions, conns, ids, strict=True):
         result = VehicleResult(fm.vehicle, sid, conn, fm.source, skipped=not fm.mission)
@@ -506,9 +554,8 @@ def upload_fleet(
                 fm.mission, fm.fence, connect=conn, via=via, timeout=timeout, attempts=attempts,
                 log=log, progress=progress, rally=fm.rally, autopilot=autopilot,
                 signing_key=signing_key, heartbeat_watch=0.0, system_id=sid,
-                speed_check=None if speed_check is None else functools.partial(
-                    speed_check, fm.vehicle),
             )  # fmt: skip
+            result.report.speed_limit = limits.get(fm.vehicle)
         except DuplicateVehicleError as exc:
             exc.fleet_report = report  # the vehicles done before it
             raise
