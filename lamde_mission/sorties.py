@@ -576,8 +576,44 @@ def verify_sortie_dir(m: Any, path: str | Path,
             rows.append((veh.vehicle, s.sortie, s.path.name, s.depot_start, s.depot_end, items))
     check = _check(m, rows, len(fleet.vehicles), fleet.path,
                    [veh.launch_s for veh in fleet.vehicles], speed_limits)
+    given = [(veh.vehicle, s.sortie, s.takeoff_s) for veh in fleet.vehicles for s in veh.sorties]
+    check = replace(check, fleet=(*check.fleet, _times_verdict(
+        given, check.takeoffs(), fleet.swap_s, float(m.swap_s))))
     note = fleet.map_note(m.name, "verified")
     return check if note is None else replace(check, notes=(note,))
+
+
+#: s: a fleet.json take-off time this far from the plan's clock is another time (rounding of
+#: the JSON figures is far below it)
+TAKEOFF_TOL_S = 0.5
+
+
+def _times_verdict(given: list[tuple[int, int, float | None]], clock: list[float],
+                   swap_given: float | None, swap_map: float) -> Any:
+    """TIMES: the take-off times fleet.json gives (what `upload --fleet` prints for the crew)
+    are the plan's clock as verified: the launches, the sorties' replays and the map's swap_s.
+    A hand-edited time, or a map whose swap_s is not the one planned with, fails it."""
+    from sim.checks import Verdict
+
+    title = "fleet.json's take-off times are the verified ones"
+    off = [(v, k, t, c) for (v, k, t), c in zip(given, clock, strict=True)
+           if t is not None and abs(t - c) > TAKEOFF_TOL_S]
+    swap = ("" if swap_given is None or swap_given == swap_map else
+            f"; fleet.json was planned with swap_s {swap_given:g} s, the map says {swap_map:g} "
+            "s, which moves every later take-off")
+    if not off and not swap:
+        n = sum(t is not None for _, _, t in given)
+        return Verdict("TIMES", title, True, 0.0, "s",
+                       f"the {n} take-off times fleet.json gives are the plan's clock" if n
+                       else "fleet.json gives no take-off times (the launches only)")
+    worst = max((abs(t - c) for _, _, t, c in off), default=0.0)
+    first = "" if not off else (
+        f"vehicle {off[0][0]} sortie {off[0][1]} at {off[0][2]:g} s in fleet.json, "
+        f"{off[0][3]:.1f} s on the plan's clock (launch, sorties, swap_s)"
+        + (f"; {len(off)} sorties differ" if len(off) > 1 else ""))
+    return Verdict("TIMES", title, False, -worst, "s",
+                   (first + swap).lstrip("; ") + ": upload prints fleet.json's times, the "
+                   "checks hold at the plan's clock")
 
 
 def _unknown_depot(fleet: Any, map_name: str, depots: Sequence[str], vehicle: int, s: Any,
@@ -630,6 +666,7 @@ def summary_dict(m: Any, check: FleetCheck, goal: str) -> dict[str, Any]:
         "vehicles": vehicles,
         "total_s": check.total_s,
         "swaps": check.swaps,
+        "swap_s": check.swap_s,
         "f_total": check.f_total,
         **tolerance,
     }

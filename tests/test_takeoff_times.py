@@ -97,3 +97,49 @@ def test_upload_fleet_says_when_each_vehicle_takes_off_for_the_sortie_sent(two_u
                             f"{times}; the vehicles keep apart in the air and no sensor sends "
                             "to two at once only when they take off so"]
     assert doc["vehicles"][0]["sorties"][1]["takeoff_s"] > 0  # the swap's relaunch, not 0
+
+
+def test_verify_fails_take_off_times_that_are_not_the_plans_clock(two_uavs, tmp_path,
+                                                                   capsys) -> None:
+    """A reviewer: a hand-edited takeoff_s (1100 where the clock says 569) passed verify and
+    was printed by upload; a map whose swap_s is not the plan's moved every later take-off
+    without a word. TIMES fails both; fleet.json records the swap_s it was planned with."""
+    import shutil
+
+    path, out = two_uavs
+    doc = json.loads((out / "fleet.json").read_text())
+    assert doc["swap_s"] == json.loads(path.read_text())["fleet"]["swap_s"]
+    assert main(["verify", str(path), str(out)]) == 0
+    assert "fleet TIMES fleet.json's take-off times are the verified ones: PASS; the 3 " \
+        "take-off times fleet.json gives are the plan's clock" in capsys.readouterr().out
+    edited = tmp_path / "edited"
+    shutil.copytree(out, edited)
+    clock = doc["vehicles"][0]["sorties"][1]["takeoff_s"]
+    doc["vehicles"][0]["sorties"][1]["takeoff_s"] = clock + 500.0
+    (edited / "fleet.json").write_text(json.dumps(doc))
+    assert main(["verify", str(path), str(edited)]) == 1
+    said = capsys.readouterr().out
+    assert (f"fleet TIMES fleet.json's take-off times are the verified ones: FAIL; vehicle 1 "
+            f"sortie 2 at {clock + 500.0:g} s in fleet.json, {clock:.1f} s on the plan's clock "
+            "(launch, sorties, swap_s): upload prints fleet.json's times, the checks hold at "
+            "the plan's clock") in said
+    # the map's swap_s is not the one planned with: every later take-off moves
+    d = json.loads(path.read_text())
+    d["fleet"]["swap_s"] = doc["swap_s"] + 60.0
+    other = tmp_path / "swap.json"
+    other.write_text(json.dumps(d))
+    assert main(["verify", str(other), str(out)]) == 1
+    said = capsys.readouterr().out
+    assert (f"fleet.json was planned with swap_s {doc['swap_s']:g} s, the map says "
+            f"{doc['swap_s'] + 60.0:g} s, which moves every later take-off") in said
+    # a directory written before take-off times were recorded: nothing to compare
+    old = tmp_path / "old"
+    shutil.copytree(out, old)
+    plain = json.loads((out / "fleet.json").read_text())
+    plain.pop("swap_s")
+    for v in plain["vehicles"]:
+        for s in v["sorties"]:
+            s.pop("takeoff_s"), s.pop("landing_s")
+    (old / "fleet.json").write_text(json.dumps(plain))
+    assert main(["verify", str(path), str(old)]) == 0
+    assert "fleet.json gives no take-off times (the launches only)" in capsys.readouterr().out

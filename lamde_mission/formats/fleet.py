@@ -97,6 +97,9 @@ class FleetDir:
     map_name: str | None = None
     objective: str | None = None
     total_s: float | None = None
+    #: s, the battery swap the plan was made with (None when fleet.json gives none: written
+    #: before it was recorded)
+    swap_s: float | None = None
     swaps: int | None = None
     raw: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
 
@@ -265,4 +268,5 @@ def read_fleet_dir(path: str | Path) -> FleetDir:
         path=path, vehicles=tuple(vehicles), map_name=_name(doc.get("map"), f"{summary}: map"),
         objective=_name(doc.get("objective"), f"{summary}: objective"),
         total_s=_number(doc.get("total_s"), f"{summary}: total_s"), swaps=swaps, raw=doc,
+        swap_s=_number(doc.get("swap_s"), f"{summary}: swap_s"),
     )  # fmt: skip
