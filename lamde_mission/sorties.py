@@ -80,9 +80,23 @@ def sortie_file(vehicle: int, sortie: int) -> str:
 _SORTIE_NAME = re.compile(r"mission-v[0-9]+-s[0-9]+\.plan")
 
 
+def looks_like_a_sortie(path: str | Path) -> bool:
+    """Whether a mission file is named as a sortie directory names its sorties,
+    `mission-v{k}-s{j}.plan` (`sortie_file`).
+
+    Args:
+        path: the mission file.
+
+    Returns:
+        True for such a name, wherever the file lies.
+    """
+    return bool(_SORTIE_NAME.fullmatch(Path(path).name))
+
+
 def sortie_dir_of(path: str | Path) -> Path | None:
     """The sortie directory a mission file is one sortie of, if it is: its folder holds a
-    fleet.json that lists it, or its name is `mission-v{k}-s{j}.plan` (`sortie_file`).
+    fleet.json that lists it, or holds a fleet.json and the file is named as a sortie
+    (`looks_like_a_sortie`).
 
     Verified alone (`verify MAP FILE`) such a file is judged against the whole map's start,
     end and data, not its own depots and its share of the data (`verify MAP DIR/`).
@@ -91,16 +105,18 @@ def sortie_dir_of(path: str | Path) -> Path | None:
         path: the mission file.
 
     Returns:
-        Its folder when it is a sortie of a sortie directory, else None. A fleet.json that
-        cannot be read is passed over (the name alone decides then).
+        Its folder when it is a sortie of a sortie directory, else None (also for a file
+        named as a sortie in a folder without fleet.json: that folder is no sortie
+        directory to verify). A fleet.json that cannot be read is passed over (the name
+        alone decides then).
     """
     from lamde_mission.formats.fleet import FleetDirError, read_fleet_dir
 
     path = Path(path)
-    if _SORTIE_NAME.fullmatch(path.name):
-        return path.parent
     if not (path.parent / FLEET_FILE).is_file():
         return None
+    if looks_like_a_sortie(path):
+        return path.parent
     try:
         fleet = read_fleet_dir(path.parent)
     except FleetDirError:

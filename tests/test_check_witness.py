@@ -57,3 +57,20 @@ def test_a_map_without_a_witness_prints_no_witness_line() -> None:
                                      for ln in r.stdout.splitlines())
     assert "witness" not in json.loads(run_here(["check", str(MAPS / "tiny.json"),
                                                  "--json"]).stdout)
+
+
+def test_on_a_battery_map_the_witness_proves_nothing_about_sorties(tmp_path) -> None:
+    """A reviewer: on a 3-UAV battery map check said "a stored plan feasible on this map ...:
+    a plan exists" beside "valid, but no plan can meet it" and 30 CANNOT lines; the witness is
+    a single flight, scored without the battery."""
+    d = json.loads((MAPS / "small-demo.json").read_text())
+    d["uav"] = {**d.get("uav", {}), "endurance_s": 60.0}  # far too short for any sortie
+    path = tmp_path / "battery.json"
+    path.write_text(json.dumps(d))
+    f, phi = witness_score(load_map(path))
+    assert phi == 0.0
+    r = run_here(["check", str(path)])
+    assert r.status == 1  # CANNOT: the battery
+    assert _witness_line(r.stdout) == (f"a stored single flight feasible on this map (f "
+                                       f"{f:.6g}), battery left aside: it proves nothing about "
+                                       "sorties")

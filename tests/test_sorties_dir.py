@@ -157,6 +157,17 @@ def test_verify_of_one_sortie_file_says_it_is_one_sortie(dirs, tmp_path, capsys)
     (d / "fleet.json").unlink()  # a file neither listed nor so named: no line
     rc, out, _ = _verify(capsys, map_path, d / "second.plan")
     assert rc == 1 and out.splitlines()[-1].startswith("result: FAILED "), out
+    # named as a sortie, but no fleet.json beside it (a reviewer: the note named `verify MAP
+    # ./`, which fails, "fleet.json: no such file"): a note that names no directory
+    shutil.copy(alone / "second.plan", alone / "mission-v2-s1.plan")
+    rc, out, _ = _verify(capsys, map_path, alone / "mission-v2-s1.plan")
+    assert rc == 1 and out.splitlines()[-1] == (
+        f"note: {alone}/mission-v2-s1.plan is named as one sortie of a sortie directory, "
+        "judged here against the whole map's start, end and data; a sortie is verified with "
+        "its directory (`lamde-mission verify MAP DIR/`, DIR holding fleet.json), which is not "
+        "beside this file"), out
+    rc, out, _ = _verify(capsys, map_path, alone / "mission-v2-s1.plan", "--json")
+    assert "sortie_of" not in json.loads(out)
 
 
 def test_verify_fails_more_vehicles_than_the_map_flies(dirs, tmp_path, capsys):

@@ -111,6 +111,9 @@ def _witness_line(m: object) -> str:
     if score is None:
         return "a stored plan with more hover points than I_max: it proves nothing here"
     f, phi = score
+    if phi == 0.0 and (getattr(m, "has_battery", False) or getattr(m, "has_fleet", False)):
+        return (f"a stored single flight feasible on this map (f {f:.6g}), battery left aside: "
+                "it proves nothing about sorties")
     if phi == 0.0:
         return f"a stored plan feasible on this map (f {f:.6g}): a plan exists"
     return (f"a stored plan NOT feasible on this map as it is now (phi {phi:.4g}; edited "

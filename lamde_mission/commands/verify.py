@@ -178,7 +178,7 @@ def run(args: argparse.Namespace) -> int:
     from lamde_mission.items import corner_stops
 
     n_corner = len(corner_stops(timeline.route))
-    from lamde_mission.sorties import sortie_dir_of
+    from lamde_mission.sorties import looks_like_a_sortie, sortie_dir_of
 
     sortie_dir = sortie_dir_of(args.mission)
     whole = None if sortie_dir is None else \
@@ -226,6 +226,11 @@ def run(args: argparse.Namespace) -> int:
                   f"{printable(str(sortie_dir))}/, judged here against the whole map's start, "
                   "end and data; for the sortie's own depots and the data over all sorties run "
                   f"`{printable(whole)}`")
+        elif looks_like_a_sortie(args.mission):
+            print(f"note: {printable(args.mission)} is named as one sortie of a sortie "
+                  "directory, judged here against the whole map's start, end and data; a "
+                  "sortie is verified with its directory (`lamde-mission verify MAP DIR/`, DIR "
+                  "holding fleet.json), which is not beside this file")
     return 0 if verdicts.passed else 1
 
 
