@@ -230,3 +230,37 @@ def test_a_scheduled_plan_is_the_same_whatever_the_lp_cache_holds() -> None:
     assert len(hoverlp._scheduled_cache())
     warm = run_pipeline(Problem(load_map(_ring_map())), cfg).x.tobytes()
     assert warm == cold
+
+
+def test_a_component_within_c3_takes_the_simultaneous_lp_with_the_same_value() -> None:
+    """`scheduled_lp_links`' fast path: where every point of a component hears at most R_lambda
+    in all, the bandwidth rows cannot bind and the LP is the simultaneous one (compiled
+    `hover_lp`). Its value equals HiGHS's scheduled LP (`_scheduled_core`, the reference) on
+    random such components, its times serve every sensor, and its link weights are y_j / Q_j."""
+    import numpy as np
+
+    from planner_core.model.hoverlp import (
+        _scheduled_cache,
+        _scheduled_core,
+        hover_lp,
+        scheduled_lp_links,
+    )
+
+    rng = np.random.default_rng(5)
+    for _ in range(60):
+        n, J = int(rng.integers(1, 6)), int(rng.integers(1, 8))
+        R = rng.uniform(0.5, 9.0, (n, J)) * (rng.random((n, J)) < 0.7)
+        R[rng.integers(0, n), :] += 0.1  # every sensor linked
+        bw = float(R.sum(axis=1).max()) * float(rng.uniform(1.0, 1.5))  # within C3
+        req = rng.uniform(10.0, 400.0, J)
+        _scheduled_cache().clear()
+        got = scheduled_lp_links(R, req, bw, 300.0)
+        ref = _scheduled_core(R, req, bw, 300.0)
+        assert (got is None) == (ref is None)
+        if got is None:
+            continue
+        T, V, L = got
+        assert V == pytest.approx(float(ref[0].sum()), rel=1e-9, abs=1e-9)
+        assert np.all(R.T @ T >= req * (1 - 1e-9))
+        y = hover_lp(R, req, 300.0)[2]
+        assert np.allclose(L, np.where(R > 0, (y / req)[None, :], 0.0))

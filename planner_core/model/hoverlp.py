@@ -857,9 +857,11 @@ def scheduled_lp_links(
     data linked to them (no row or column joins two): each is solved on its own and kept (per
     thread, the last `SCHEDULED_CACHE_SIZE`, by its rates, data, R_lambda and T_max), so a
     move of one point solves the LPs of the components it touches only (the local search's
-    kicks and rebuilds). Points in no component hover 0 s. Cost: one HiGHS LP per new
-    component (~0.5-10 ms on the large maps' plans), a connected-components pass over the
-    I x J links.
+    kicks and rebuilds). A component whose points each hear at most R_lambda in all is the
+    simultaneous LP (its bandwidth rows cannot bind, so D_ij = R_ij T_i) and is solved by the
+    compiled `hover_lp`, its link weights y_j / Q_j on every link. Points in no component
+    hover 0 s. Cost: one HiGHS LP per new component past C3 (~0.5-10 ms on the large maps'
+    plans), a connected-components pass over the I x J links.
 
     Args:
         R: (I, J) link rates, Mbit/s (dense).
@@ -898,6 +900,14 @@ def scheduled_lp_links(
         key = (sub.shape, sub.tobytes(), req[cols].tobytes(), float(bandwidth), float(t_max))
         cache = _scheduled_cache()
         got = cache.pop(key, None)
+        if got is None and float(sub.sum(axis=1).max()) <= bandwidth:
+            # every point of the component hears at most R_lambda in all: the bandwidth rows
+            # cannot bind, D_ij = R_ij T_i, and the LP is the simultaneous one (`hover_lp`,
+            # compiled) with its link duals y_j / Q_j on every link
+            lp = hover_lp(sub, req[cols], t_max)
+            if lp is None:
+                return None
+            got = (lp[0], np.where(sub > 0, (lp[2] / req[cols])[None, :], 0.0))
         if got is None:
             core = _scheduled_core(sub, req[cols], bandwidth, t_max)
             if core is None:
