@@ -476,3 +476,17 @@ def test_after_a_failed_plan_each_cannot_lead_is_said_once(capsys) -> None:
     _say_cannot(m, said=why[0])  # what the failure's own message said is not said again
     assert capsys.readouterr().err.splitlines() == [
         f"  no plan can meet this map (`lamde-mission check` says CANNOT): {why[1]}"]
+
+
+@pytest.mark.parametrize("extra", [["--sortie-budget", "150"], ["--rounds", "2"],
+                                   ["--objective", "makespan"]])
+def test_a_map_that_does_not_load_is_named_before_the_sortie_options(tmp_path, extra) -> None:
+    """`plan MISSING -o d/ --sortie-budget 150` said "--sortie-budget: the map has no battery
+    and no fleet" (the map never loaded, so it had none), and without the option "-o: cannot
+    tell the format" for the sortie directory it meant: the map's own line comes first."""
+    from lamde_mission.fuzz import run_cli as run_here
+
+    missing = tmp_path / "nowhere.json"
+    r = run_here(["plan", str(missing), "-o", str(tmp_path / "d") + "/", *extra])
+    assert r.status == 2 and r.stderr.strip() == f"lamde-mission plan: {missing}: file not found"
+    assert list(tmp_path.iterdir()) == []

@@ -784,7 +784,11 @@ def run(args: argparse.Namespace) -> int:
         UsageError: a bad option, map or output (one line per problem, exit 2).
     """
     peeked = _peek_map(args.map)
-    if peeked is not None and (peeked.has_battery or peeked.has_fleet):
+    if peeked is None:  # a map that does not load says why first (not "no battery", a suffix)
+        from lamde_mission.commands._common import load_map_or_fail
+
+        peeked = load_map_or_fail(args.map)
+    if peeked.has_battery or peeked.has_fleet:
         return _run_sorties(args, peeked)
     for opt, given in (("--objective", args.objective), ("--sortie-budget", args.sortie_budget),
                        ("--rounds", args.rounds)):
