@@ -1076,7 +1076,6 @@ def outer_offset(poly: Any, r: float, overshoot: float = OFFSET_OVERSHOOT) -> An
     Returns:
         A shapely Polygon, exterior counter-clockwise, collinear vertices removed.
     """
-    import shapely
     from shapely.geometry.polygon import orient
 
     half = math.acos(1.0 / max(float(overshoot), 1.0 + 1e-12))  # the widest half segment
@@ -1090,6 +1089,16 @@ def outer_offset(poly: Any, r: float, overshoot: float = OFFSET_OVERSHOOT) -> An
         ks = np.flatnonzero(turn > 0.0)  # left turns (at v[k]): an arc on the right
         if len(ks):
             parts += list(_fans(v[ks], r, ang[ks - 1] - math.pi / 2.0, turn[ks], half))
+    return _offset_union(parts, poly, r)
+
+
+def _offset_union(parts: list[Any], poly: Any, r: float) -> Any:
+    """`outer_offset`'s last step (and its reference's): the union of the buffer and the
+    corners' outer polygons, its largest piece, without the rings the union leaves where its
+    pieces meet, counter-clockwise and without collinear vertices."""
+    import shapely
+    from shapely.geometry.polygon import orient
+
     grown = shapely.union_all(parts)
     if grown.geom_type != "Polygon":  # pieces touching only at a point: keep the largest
         grown = max(grown.geoms, key=lambda g: g.area)
@@ -1121,7 +1130,6 @@ def _fan(c: np.ndarray, r: float, start: float, sweep: float, half: float) -> An
 def _outer_offset_reference(poly: Any, r: float, overshoot: float = OFFSET_OVERSHOOT) -> Any:
     """`outer_offset` building each corner's outer polygon on its own (`_fan`), the
     reference it equals to the bit (tests). One shapely polygon built per outward corner."""
-    import shapely
     from shapely.geometry.polygon import orient
 
     half = math.acos(1.0 / max(float(overshoot), 1.0 + 1e-12))  # the widest half segment
@@ -1134,32 +1142,7 @@ def _outer_offset_reference(poly: Any, r: float, overshoot: float = OFFSET_OVERS
         turn = (ang - np.roll(ang, 1) + math.pi) % (2.0 * math.pi) - math.pi  # at v[k]
         for k in np.flatnonzero(turn > 0.0):  # a left turn: an arc on the right
             parts.append(_fan(v[k], r, ang[k - 1] - math.pi / 2.0, float(turn[k]), half))
-    grown = shapely.union_all(parts)
-    if grown.geom_type != "Polygon":  # pieces touching only at a point: keep the largest
-        grown = max(grown.geoms, key=lambda g: g.area)
-    # a hole of the offset holds points farther than r from the shape; a ring the union left
-    # where its pieces meet (rounding: no area, or all of it within r) is no hole
-    holes = [h for h in grown.interiors if (hp := shapely.Polygon(h)).area > 0.0
-             and poly.distance(hp.representative_point()) > r]  # fmt: skip
-    grown = shapely.Polygon(grown.exterior, holes)
-    return shapely.simplify(orient(grown, 1.0), 0.0)  # drop collinear vertices
-
-
-def _fan(c: np.ndarray, r: float, start: float, sweep: float, half: float) -> Any:
-    """The outer polygon of the sector of radius r about c from angle `start` sweeping `sweep`
-    radians (> 0) counter-clockwise: c, the arc's ends, and between them the corners of
-    segments tangent to the arc, each spanning at most 2 x `half` (widened by 1e-9 rad each
-    way, so it overlaps the buffer beside it: no sliver between them)."""
-    import shapely
-
-    segs = max(1, math.ceil(sweep / (2.0 * half) - 1e-9))
-    step = sweep / segs
-    mid = start + step * (np.arange(segs) + 0.5)
-    far = r / math.cos(step / 2.0)
-    pts = [c, c + r * np.array([math.cos(start), math.sin(start)])]
-    pts += list(c + far * np.column_stack([np.cos(mid), np.sin(mid)]))
-    pts.append(c + r * np.array([math.cos(start + sweep), math.sin(start + sweep)]))
-    return shapely.Polygon(np.asarray(pts))
+    return _offset_union(parts, poly, r)
 
 
 def _fans(c: np.ndarray, r: float, start: np.ndarray, sweep: np.ndarray,
