@@ -45,6 +45,7 @@ import re
 import shutil
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from functools import cached_property
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
@@ -315,6 +316,18 @@ class FleetCheck:
         """
         return float(self.launches[vehicle - 1]) if len(self.launches) >= vehicle else 0.0
 
+    @cached_property
+    def _clock(self) -> dict[tuple[int, int], float]:
+        """{(vehicle, its sortie's number, 1-based): take-off s}, in one pass over `sorties`:
+        the vehicle's launch, its earlier sorties' durations, `swap_s` per earlier sortie."""
+        done: dict[int, tuple[int, float]] = {}  # vehicle -> (sorties so far, their seconds)
+        out = {}
+        for s in self.sorties:
+            n, flown = done.get(s.vehicle, (0, 0.0))
+            out[(s.vehicle, n + 1)] = self.launch(s.vehicle) + flown + self.swap_s * n
+            done[s.vehicle] = (n + 1, flown + s.duration_s)
+        return out
+
     def takeoff(self, vehicle: int, sortie: int) -> float:
         """When a sortie takes off, on the plan's clock: the vehicle's launch, then its earlier
         sorties back to back with `swap_s` on the ground after each (the timing SEPARATION and
@@ -331,11 +344,11 @@ class FleetCheck:
             KeyError: the vehicle flies no sortie here.
             IndexError: the vehicle flies fewer sorties.
         """
-        ss = self.vehicles()[vehicle]
-        if not 1 <= sortie <= len(ss):
+        got = self._clock.get((vehicle, sortie))
+        if got is None:
+            ss = self.vehicles()[vehicle]  # KeyError: no sortie of this vehicle
             raise IndexError(f"vehicle {vehicle} flies {len(ss)} sorties, not {sortie}")
-        return self.launch(vehicle) + sum(s.duration_s for s in ss[:sortie - 1]) + \
-            self.swap_s * (sortie - 1)
+        return got
 
     def takeoffs(self) -> list[float]:
         """Every sortie's take-off (`takeoff`), in the order of `sorties`.
@@ -343,12 +356,7 @@ class FleetCheck:
         Returns:
             Seconds after the first vehicle's take-off, one per sortie.
         """
-        seen: dict[int, int] = {}
-        out = []
-        for s in self.sorties:
-            seen[s.vehicle] = seen.get(s.vehicle, 0) + 1
-            out.append(self.takeoff(s.vehicle, seen[s.vehicle]))
-        return out
+        return list(self._clock.values())
 
     def makespan(self, vehicle: int) -> float:
         """From the first vehicle's take-off to this vehicle's last landing: its launch, its
@@ -664,8 +672,8 @@ def summary_dict(m: Any, check: FleetCheck, goal: str) -> dict[str, Any]:
             "vehicle": v,
             "sorties": [{
                 "sortie": s.sortie, "file": s.file, "depot_start": s.depot_start,
-                "depot_end": s.depot_end, "takeoff_s": check.takeoff(v, k + 1),
-                "landing_s": check.takeoff(v, k + 1) + s.duration_s,
+                "depot_end": s.depot_end, "takeoff_s": (at := check.takeoff(v, k + 1)),
+                "landing_s": at + s.duration_s,
                 "duration_s": s.duration_s,
                 "energy_wh": s.verdicts.energy_wh, "reserve_left_wh": s.verdicts.reserve_left_wh,
                 "above_reserve_wh": s.verdicts.above_reserve_wh,

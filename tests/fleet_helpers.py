@@ -84,3 +84,25 @@ def write_fleet_dir(
     }
     (directory / "fleet.json").write_text(json.dumps(summary, indent=2))
     return directory
+
+
+def plan_fleet_demo(directory: Path, uavs: int = 2, endurance_s: float | None = None
+                    ) -> tuple[Path, Path]:
+    """examples/maps/fleet-demo.json flown by `uavs` UAVs (and a battery of `endurance_s` s,
+    if given), planned by `plan -o DIR/` at a small budget into `directory`.
+
+    Returns:
+        (the map's path, the sortie directory).
+    """
+    from lamde_mission.cli import main
+
+    d = json.loads((ROOT / "examples" / "maps" / "fleet-demo.json").read_text())
+    d["fleet"]["uavs"] = uavs
+    if endurance_s is not None:
+        d["uav"]["endurance_s"] = endurance_s
+    path = directory / f"fleet-demo-{uavs}.json"
+    path.write_text(json.dumps(d))
+    out = directory / "sorties"
+    assert main(["plan", str(path), "-o", str(out), "--budget", "300", "--population", "20",
+                 "--sortie-budget", "150", "--rounds", "1", "--quiet"]) == 0  # fmt: skip
+    return path, out

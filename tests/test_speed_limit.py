@@ -6,8 +6,6 @@ simulator's verdicts at the limit, refused (exit 1, nothing sent) when one fails
 
 from __future__ import annotations
 
-import json
-
 import pytest
 
 from lamde_mission.cli import main
@@ -94,13 +92,9 @@ def test_a_fleet_is_judged_once_with_every_vehicle_at_its_limit_before_sending(t
     """Every vehicle's limit is read before anything is sent, and the directory judged once
     with each vehicle at its own limit (a reviewer: judged one vehicle at a time, vehicle 1
     was refused against a vehicle 2 at 20 m/s it would never fly, and vehicle 2 was sent)."""
-    d = json.loads((MAPS / "fleet-demo.json").read_text())
-    d["fleet"]["uavs"] = 2
-    path = tmp_path / "two.json"
-    path.write_text(json.dumps(d))
-    out = tmp_path / "sorties"
-    assert main(["plan", str(path), "-o", str(out), "--budget", "300", "--population", "20",
-                 "--sortie-budget", "150", "--rounds", "1", "--quiet"]) == 0  # fmt: skip
+    from tests.fleet_helpers import plan_fleet_demo
+
+    path, out = plan_fleet_demo(tmp_path)
     from lamde_mission.sorties import verify_sortie_dir
     from planner_core.model.mapio import load_map
 

@@ -11,22 +11,14 @@ import pytest
 
 from lamde_mission.cli import main
 from lamde_mission.formats.fleet import read_fleet_dir
-from tests.conftest import MAPS
 
 
 @pytest.fixture(scope="module")
 def two_uavs(tmp_path_factory):
     """fleet-demo flown by 2 UAVs on a 300 s battery: 3 sorties, vehicle 1 flies two (a swap)."""
-    tmp = tmp_path_factory.mktemp("takeoff")
-    d = json.loads((MAPS / "fleet-demo.json").read_text())
-    d["fleet"]["uavs"] = 2
-    d["uav"]["endurance_s"] = 300.0
-    path = tmp / "two.json"
-    path.write_text(json.dumps(d))
-    out = tmp / "sorties"
-    assert main(["plan", str(path), "-o", str(out), "--budget", "300", "--population", "20",
-                 "--sortie-budget", "150", "--rounds", "1", "--quiet"]) == 0  # fmt: skip
-    return path, out
+    from tests.fleet_helpers import plan_fleet_demo
+
+    return plan_fleet_demo(tmp_path_factory.mktemp("takeoff"), endurance_s=300.0)
 
 
 def test_fleet_json_gives_each_sortie_its_take_off_and_landing(two_uavs, capsys) -> None:

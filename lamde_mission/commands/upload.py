@@ -413,8 +413,6 @@ def _mission_speed_check(path: str, mission: list, map_path: str | None, *, forc
 def _unflyable_limit(what: str, name: str, limit: float) -> str | None:
     """The refusal when a vehicle's speed limit is no speed a mission can be flown at (below
     the sim's least mission speed, or not finite), else None."""
-    import math
-
     from planner_core.textio import printable
     from sim.mission import MIN_MISSION_SPEED
 
