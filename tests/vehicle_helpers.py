@@ -4,6 +4,7 @@ named test_*)."""
 from __future__ import annotations
 
 import math
+import random
 import select
 import socket
 import threading
@@ -28,14 +29,36 @@ def no_leftover_mock_threads() -> Iterator[None]:
     assert not left, "a mock vehicle thread outlived its test"
 
 
-def free_udp_port() -> int:
-    """A UDP port on 127.0.0.1 nobody uses right now (bind to port 0, read it, close)."""
-    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+def _ephemeral_low() -> int:
+    """The first port of the kernel's ephemeral range (Linux; 32768 where it cannot be read)."""
     try:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-    finally:
-        s.close()
+        with open("/proc/sys/net/ipv4/ip_local_port_range") as f:
+            return int(f.read().split()[0])
+    except (OSError, ValueError, IndexError):
+        return 32768
+
+
+def free_udp_port() -> int:
+    """A UDP port on 127.0.0.1 nobody uses right now, below the kernel's ephemeral range.
+
+    A port taken by binding to port 0 comes from the ephemeral range, and once it is released
+    the mock's ``udpout`` socket (bound by the kernel on its first send) may be given that same
+    port before the ground side binds it: "Address already in use", about once in a few
+    thousand uploads. Ports below the ephemeral range are never handed out that way.
+    """
+    rng = random.SystemRandom()
+    top = max(_ephemeral_low(), 12_000)
+    for _ in range(200):
+        port = rng.randrange(10_000, top)
+        s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        try:
+            s.bind(("127.0.0.1", port))
+        except OSError:
+            continue
+        finally:
+            s.close()
+        return port
+    raise RuntimeError("no free UDP port below the ephemeral range in 200 tries")
 
 
 def hand_mission(n_hover: int = 3, *, lat: float = -35.3632, lon: float = 149.1652) -> list:
