@@ -9,7 +9,6 @@ from __future__ import annotations
 import ast
 import os
 import re
-import socket
 import subprocess
 import sys
 from pathlib import Path
@@ -17,6 +16,7 @@ from pathlib import Path
 import pytest
 
 from tests.conftest import ROOT
+from tests.vehicle_helpers import free_udp_port
 
 README = (ROOT / "README.md").read_text(encoding="utf-8")
 #: the manual's hand-written pages that took over the README's reference sections: their
@@ -98,12 +98,6 @@ def test_python_block_runs_when_pasted(where: str, i: int, code: str, tmp_path: 
     assert r.returncode == 0, f"{where} python block {i} failed:\n{code}\n{r.stderr[-3000:]}"
 
 
-def _free_udp_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
 @pytest.mark.slow  # measured 32 s (issue 35: default suite <= 5 min)
 def test_readme_tutorial_runs(tmp_path: Path) -> None:
     """The README's shell blocks after the quick start, in order, as one bash script in a
@@ -113,7 +107,7 @@ def test_readme_tutorial_runs(tmp_path: Path) -> None:
     hold it)."""
     blocks = _fenced(_tutorial(), "bash")
     assert len(blocks) >= 4, "the tutorial lost its shell blocks"
-    port = _free_udp_port()
+    port = free_udp_port()
     mock = f"lamde-mission mock-vehicle --connect udpout:127.0.0.1:{port}"
     script = "\n".join(blocks).replace("lamde-mission mock-vehicle", mock)
     script = script.replace("14540", str(port))
