@@ -189,12 +189,14 @@ def output_in_sortie_dir(path: str | Path, out_dir: str | Path) -> str | None:
 
 
 def sortie_map(
-    m: Any, start: str, end: str, required: np.ndarray | None = None, name: str | None = None
+    m: Any, start: str, end: str, required: np.ndarray | None = None, name: str | None = None,
+    vehicle: int = 1,
 ) -> Any:
-    """The map one sortie is stored and replayed on: `m` with start and end at the depots
-    named `start` and `end` (`planner_core.fleet.FleetSettings` names: the map's depots, or
-    "home" and "end"), sensors' required data `required` (J,) Mbit (default 0: the whole
-    plan's C4 is judged over all sorties), the battery kept (ENERGY), the fleet left out.
+    """The map one sortie is stored and replayed on: `m` with start and end at `vehicle`'s
+    pads (`Map.vehicle_pads`; vehicle 1's are the depots themselves) at the depots named
+    `start` and `end` (`planner_core.fleet.FleetSettings` names: the map's depots, or "home"
+    and "end"), sensors' required data `required` (J,) Mbit (default 0: the whole plan's C4
+    is judged over all sorties), the battery kept (ENERGY), the fleet left out.
 
     Args:
         m: the whole map (with its battery or fleet).
@@ -202,6 +204,8 @@ def sortie_map(
         end: the depot it lands at.
         required: (J,) Mbit per sensor (user units, before the data margin); None: zeros.
         name: the sortie map's name (default m's).
+        vehicle: the vehicle flying it, 1-based (beyond the map's `fleet.uavs`: its pad in
+            the layout for that many, `Map.pads_for`; the UAVS verdict fails such a plan).
 
     Returns:
         The loaded sortie `Map`.
@@ -213,14 +217,16 @@ def sortie_map(
     from planner_core.model.mapio import load_map
 
     st = FleetSettings.from_map(m)
-    names, xy = list(st.depot_names), np.asarray(st.depots)
+    names = list(st.depot_names)
     for d in (start, end):
         if d not in names:
             raise ValueError(f"depot: unknown depot '{d}' (the map's are "
                              f"{', '.join(names)})")  # fmt: skip
     req = np.zeros(len(m.sensor_ids)) if required is None else np.asarray(required, float)
-    return load_map(sortie_map_dict(m, xy[names.index(start)], xy[names.index(end)], req,
-                                    name=name))  # fmt: skip
+    v = int(vehicle) - 1
+    pads = m.pads_for(max(int(m.uavs), v + 1))
+    a, b = (pads[v, names.index(d)] for d in (start, end))
+    return load_map(sortie_map_dict(m, a, b, req, name=name))
 
 
 @dataclass(frozen=True)
@@ -245,6 +251,62 @@ class SortieCheck:
             The timeline's t_total, s.
         """
         return float(self.timeline.totals.t_total)
+
+    @property
+    def takeoff_xy(self) -> np.ndarray:
+        """Where the replay takes off (the stored mission's take-off), local m.
+
+        Returns:
+            (2,) m.
+        """
+        return np.asarray(self.timeline.xy[0], dtype=float)
+
+    @property
+    def landing_xy(self) -> np.ndarray:
+        """Where the replay lands (the stored mission's landing), local m.
+
+        Returns:
+            (2,) m.
+        """
+        return np.asarray(self.timeline.xy[-1], dtype=float)
+
+
+#: compass points of `pad_words`, from north clockwise
+_COMPASS = ("N", "NE", "E", "SE", "S", "SW", "W", "NW")
+
+
+def pad_words(m: Any, depot: str, xy: np.ndarray) -> str:
+    """A depot's name and, when a sortie takes off or lands beside it (its vehicle's own pad,
+    `Map.vehicle_pads`), how far and which way: "north" or "north, pad 35 m E".
+
+    Args:
+        m: the plan's map.
+        depot: the depot's name (one of the map's sortie sites).
+        xy: (2,) the take-off or landing position, local m.
+
+    Returns:
+        The words (printable).
+    """
+    from planner_core.textio import printable
+
+    names, sites, _ = m.sortie_sites
+    if depot not in names:
+        return printable(depot)
+    dx, dy = np.asarray(xy, dtype=float) - sites[list(names).index(depot)]
+    far = float(np.hypot(dx, dy))
+    if far < 0.5:
+        return printable(depot)
+    way = _COMPASS[int(np.round(np.degrees(np.arctan2(dx, dy)) / 45.0)) % 8]
+    return f"{printable(depot)}, pad {far:.0f} m {way}"
+
+
+def _position(m: Any, xy: np.ndarray) -> dict[str, float]:
+    """{"x", "y" (local m), "lat", "lon" (WGS84 degrees, 1e-7)} of a point of map m."""
+    from lamde_mission.geo import enu_to_latlon
+
+    lat, lon = enu_to_latlon(xy[0], xy[1], m)
+    return {"x": round(float(xy[0]), 3), "y": round(float(xy[1]), 3),
+            "lat": round(float(lat), 7), "lon": round(float(lon), 7)}  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -520,7 +582,7 @@ def _check(
     out = []
     req = np.asarray(m.required_data, dtype=float)
     for v, k, f, a, b, items in rows:
-        sm = sortie_map(m, a, b, name=f"{m.name} v{v} s{k}")
+        sm = sortie_map(m, a, b, name=f"{m.name} v{v} s{k}", vehicle=v)
         tl = replay(items, sm, speed_limit=(speed_limits or {}).get(v))
         out.append(SortieCheck(v, k, f, a, b, tl, verify(tl, sm), _served(tl, req)))
     combined = combined_data_verdicts([s.timeline for s in out], m)
@@ -672,7 +734,10 @@ def summary_dict(m: Any, check: FleetCheck, goal: str) -> dict[str, Any]:
             "vehicle": v,
             "sorties": [{
                 "sortie": s.sortie, "file": s.file, "depot_start": s.depot_start,
-                "depot_end": s.depot_end, "takeoff_s": (at := check.takeoff(v, k + 1)),
+                "depot_end": s.depot_end,
+                "takeoff_at": _position(m, s.takeoff_xy),
+                "landing_at": _position(m, s.landing_xy),
+                "takeoff_s": (at := check.takeoff(v, k + 1)),
                 "landing_s": at + s.duration_s,
                 "duration_s": s.duration_s,
                 "energy_wh": s.verdicts.energy_wh, "reserve_left_wh": s.verdicts.reserve_left_wh,
@@ -773,7 +838,8 @@ def write_sortie_dir(
         for v, vs in enumerate(plan.vehicles, start=1):
             for n, s in enumerate(vs, start=1):
                 a, b = st.depot_names[s.start], st.depot_names[s.end]
-                sm = sortie_map(m, a, b, shares[k] / margin, name=f"{m.name} v{v} s{n}")
+                sm = sortie_map(m, a, b, shares[k] / margin, name=f"{m.name} v{v} s{n}",
+                                vehicle=v)
                 k += 1
                 spm = sm.planning_map()
                 p = SimpleNamespace(hover_points=s.points, hover_times=s.times)

@@ -389,7 +389,7 @@ def test_plan_and_verify_print_what_is_left_above_the_reserve(dirs, capsys):
     assert (f"{slack:.3f} Wh left above the reserve ({m.battery_wh - first['energy_wh']:.3f} "
             "Wh in the battery)") in line, line
     assert "reserve left" not in out
-    lines = _sortie_lines(verify_sortie_dir(m, d))
+    lines = _sortie_lines(verify_sortie_dir(m, d), m)
     assert f"{slack:6.2f} Wh left above the reserve" in lines[0], lines[0]
     assert not any("reserve left" in x for x in lines)
 
@@ -401,7 +401,8 @@ def test_plan_and_verify_count_in_the_singular_for_one(dirs, capsys):
     from lamde_mission.sorties import verify_sortie_dir
 
     map_path, d = dirs[1]
-    check = verify_sortie_dir(load_map(map_path), d)
+    m = load_map(map_path)
+    check = verify_sortie_dir(m, d)
     n, swaps = len(check.sorties), check.swaps
     assert len(check.vehicles()) == 1 and n > 1 and swaps == n - 1
     rc, out, _ = _verify(capsys, map_path, d)
@@ -409,7 +410,7 @@ def test_plan_and_verify_count_in_the_singular_for_one(dirs, capsys):
         in out, out
     assert f"with {swaps} battery swap{'s' if swaps > 1 else ''}; f summed" in out
     assert "(s)" not in out
-    lines = "\n".join(_sortie_lines(check))
+    lines = "\n".join(_sortie_lines(check, m))
     assert f"  vehicle 1: {n} sorties, makespan " in lines and "1 sensors" not in lines
 
 
@@ -445,9 +446,10 @@ def _one_depot_map(tmp: Path, separation: float | None, tolerance: float | None 
 
 def test_plan_staggers_the_launches_to_the_maps_separation(tmp_path, capsys):
     """fleet.separation_m: two UAVs of one depot, written by `write_sortie_dir` (what `plan
-    -o DIR/` calls). At the default 30 m vehicle 2 launches at +110 s and they pass 37 m
-    apart; a map's 50 m rule launches it later and keeps 50 m (it kept 30 m whatever the map
-    said), and `verify` fails the 30 m directory on the 50 m map (exit 1)."""
+    -o DIR/` calls). Each vehicle takes off from and lands at its own pad, the separation +
+    5 m from the depot (vehicle 1's is the depot): 35 m at the default 30 m, 55 m under a
+    map's 50 m rule, and both keep the map's rule in the air (it kept 30 m whatever the map
+    said); `verify` fails the 30 m directory on the 50 m map (exit 1)."""
     from lamde_mission.sorties import write_sortie_dir
 
     checks = {}
@@ -456,10 +458,16 @@ def test_plan_staggers_the_launches_to_the_maps_separation(tmp_path, capsys):
         check, written = write_sortie_dir(plan, m, tmp_path / f"d{sep}")
         assert written, check.failed()
         checks[sep] = check
+        names, sites, _ = m.sortie_sites
+        for s in check.sorties:
+            far = [float(np.hypot(*(xy - sites[names.index(d)])))
+                   for xy, d in ((s.takeoff_xy, s.depot_start), (s.landing_xy, s.depot_end))]
+            want = 0.0 if s.vehicle == 1 else (sep or 30.0) + 5.0
+            assert far == pytest.approx([want, want], abs=0.05), (s.file, far)
     sep30 = next(v for v in checks[None].fleet if v.name == "SEPARATION")
     sep50 = next(v for v in checks[50.0].fleet if v.name == "SEPARATION")
-    assert checks[None].launches == (0.0, 110.0) and 0.0 <= sep30.margin < 20.0, sep30.detail
-    assert checks[50.0].launches[1] > 110.0 and sep50.passed and sep50.margin >= 0.0
+    assert sep30.passed and sep30.margin >= 0.0, sep30.detail
+    assert sep50.passed and sep50.margin >= 0.0, sep50.detail
     assert sep50.title == "vehicles >= 50 m apart"
     launches = [v["launch_s"] for v in
                 json.loads((tmp_path / "d50.0" / "fleet.json").read_text())["vehicles"]]

@@ -102,8 +102,9 @@ def test_verify_fails_take_off_times_that_are_not_the_plans_clock(two_uavs, tmp_
     doc = json.loads((out / "fleet.json").read_text())
     assert doc["swap_s"] == json.loads(path.read_text())["fleet"]["swap_s"]
     assert main(["verify", str(path), str(out)]) == 0
-    assert "fleet TIMES fleet.json's take-off times are the verified ones: PASS; the 3 " \
-        "take-off times fleet.json gives are the plan's clock" in capsys.readouterr().out
+    n = sum(len(v["sorties"]) for v in doc["vehicles"])
+    assert "fleet TIMES fleet.json's take-off times are the verified ones: PASS; the " \
+        f"{n} take-off times fleet.json gives are the plan's clock" in capsys.readouterr().out
     edited = tmp_path / "edited"
     shutil.copytree(out, edited)
     clock = doc["vehicles"][0]["sorties"][1]["takeoff_s"]

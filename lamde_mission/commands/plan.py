@@ -440,11 +440,12 @@ def _peek_map(path: str) -> Any:
         return None
 
 
-def _sortie_lines(check: Any) -> list[str]:
+def _sortie_lines(check: Any, m: Any) -> list[str]:
     """Per sortie: depots, duration, energy, what is left above the reserve, sensors served;
     per vehicle its makespan; then the plan's totals (the sim's figures on the stored
     missions)."""
-    from planner_core.textio import counted, printable
+    from lamde_mission.sorties import pad_words
+    from planner_core.textio import counted
 
     lines = []
     for v, ss in check.vehicles().items():
@@ -453,8 +454,9 @@ def _sortie_lines(check: Any) -> list[str]:
             energy = (f"energy {vd.energy_wh:7.2f} Wh of {vd.usable_wh:.2f} usable, "
                       f"{vd.above_reserve_wh:6.2f} Wh left above the reserve") \
                 if vd.energy_wh is not None else "no battery"
-            lines.append(f"  {s.file:<18} {printable(s.depot_start)} -> "
-                         f"{printable(s.depot_end)}: take-off +{check.takeoff(v, k + 1):.0f} "
+            lines.append(f"  {s.file:<18} {pad_words(m, s.depot_start, s.takeoff_xy)} -> "
+                         f"{pad_words(m, s.depot_end, s.landing_xy)}: take-off "
+                         f"+{check.takeoff(v, k + 1):.0f} "
                          f"s, {s.duration_s:8.1f} s, {energy}, "
                          f"{counted(len(s.sensors), 'sensor')} served")
         launch = f"launch at +{check.launch(v):.0f} s, " if len(check.launches) > 1 else ""
@@ -572,7 +574,7 @@ def _run_sorties(args: argparse.Namespace, loaded: Any = None) -> int:
         print(f"map '{printable(m.name)}': {counted(len(plan.sorties), 'sortie')} on "
               f"{counted(len(plan.vehicles), 'vehicle')}, objective {goal}, {plan.evaluations} "
               f"evaluations (seed {args.seed})")
-        print("\n".join(_sortie_lines(check)))
+        print("\n".join(_sortie_lines(check, m)))
         if written:
             print(f"wrote {printable(str(out))}/ ({counted(len(check.sorties), 'mission')} and "
                   "fleet.json)")

@@ -102,6 +102,7 @@ def check_sortie_dir(m: Any, path: str) -> Any:
 
 def _run_sorties(args: argparse.Namespace, m: Any) -> int:
     """`verify MAP DIR/`: every sortie of a sortie directory, and the whole plan."""
+    from lamde_mission.sorties import pad_words
     from planner_core.textio import counted, printable
 
     check = check_sortie_dir(m, args.mission)
@@ -129,8 +130,9 @@ def _run_sorties(args: argparse.Namespace, m: Any) -> int:
                       f"{vd.above_reserve_wh:.3f} Wh left above the reserve "
                       f"({vd.reserve_left_wh:.3f} Wh in the battery)") \
                 if vd.energy_wh is not None else ""
-            print(f"{printable(s.file)}: {printable(s.depot_start)} -> "
-                  f"{printable(s.depot_end)}, take-off +{at:.0f} s, {s.duration_s:.1f} s{energy}, "
+            print(f"{printable(s.file)}: {pad_words(m, s.depot_start, s.takeoff_xy)} -> "
+                  f"{pad_words(m, s.depot_end, s.landing_xy)}, take-off +{at:.0f} s, "
+                  f"{s.duration_s:.1f} s{energy}, "
                   f"{counted(len(s.sensors), 'sensor')} served (its C4 and MARGIN: its share "
                   "only)")
             print("\n".join("  " + printable(r) for r in vd.table().splitlines()))

@@ -22,7 +22,7 @@ Units: m, s, Wh, Mbit.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Any
 
@@ -66,6 +66,12 @@ class FleetSettings:
         uav: the map's `uav` settings (speed, acceleration, altitude, T_max).
         alpha: the paper's weight of flight against hover time.
         goal: "total" or "makespan".
+        pads: (V, D, 2) each vehicle's pad at each depot, m (`Map.vehicle_pads`; [0] is
+            `depots`); None: every vehicle at the depot itself.
+        pad_wh: Wh `budget_wh` keeps back for the pads: a sortie is searched from its depot
+            and flown from its vehicle's pad (`FleetPlan.on_pads`), which costs at most one
+            leg from the pad to the depot at each end and a corner there. 0 for one vehicle,
+            and for a plan already on its pads.
     """
 
     depot_names: tuple[str, ...]
@@ -78,6 +84,8 @@ class FleetSettings:
     uav: Any
     alpha: float
     goal: str
+    pads: np.ndarray | None = None
+    pad_wh: float = 0.0
 
     @classmethod
     def from_map(cls, m: Any, goal: str | None = None) -> FleetSettings:
@@ -104,10 +112,39 @@ class FleetSettings:
         if goal not in ("total", "makespan"):
             raise ValueError(f"goal: must be 'total' or 'makespan', got {goal!r}")
         names, dep, starts = m.sortie_sites
-        return cls(depot_names=tuple(names), depots=dep, start_depots=starts,
-                   uavs=int(m.uavs), swap_s=float(m.swap_s), usable_wh=float(usable),
-                   power=m.power, uav=m.spec.uav, alpha=float(m.spec.objective.alpha),
-                   goal=goal)  # fmt: skip
+        st = cls(depot_names=tuple(names), depots=dep, start_depots=starts,
+                 uavs=int(m.uavs), swap_s=float(m.swap_s), usable_wh=float(usable),
+                 power=m.power, uav=m.spec.uav, alpha=float(m.spec.objective.alpha),
+                 goal=goal)  # fmt: skip
+        if st.uavs < 2:
+            return st
+        pads = m.vehicle_pads
+        reach = float(np.hypot(*(pads - np.asarray(dep)[None]).reshape(-1, 2).T).max())
+        allowance = 2.0 * (float(st.leg_energies(np.array(reach))) + st._kept_wh(1))
+        return replace(st, pads=pads, pad_wh=allowance)
+
+    def pad(self, vehicle: int, depot: int) -> np.ndarray:
+        """Where a vehicle takes off from and lands at a depot.
+
+        Args:
+            vehicle: 0-based index into the fleet's vehicles (beyond `pads`: the depot).
+            depot: index into `depots`.
+
+        Returns:
+            (2,) m.
+        """
+        if self.pads is None or vehicle >= len(self.pads):
+            return np.asarray(self.depots[depot], dtype=float)
+        return np.asarray(self.pads[vehicle, depot], dtype=float)
+
+    def on_pads(self) -> FleetSettings:
+        """These settings for a plan whose sorties fly from their vehicles' pads: no pad
+        allowance kept back (`pad_wh` 0).
+
+        Returns:
+            The settings with `pad_wh` 0.
+        """
+        return replace(self, pad_wh=0.0)
 
     @cached_property
     def hover_w(self) -> float:
@@ -183,8 +220,9 @@ class FleetSettings:
         return self.hover_w * HOVER_ROUND_S * n_points / E.J_PER_WH
 
     def budget_wh(self, n_points: int) -> float:
-        """Energy a sortie may plan to spend: the usable energy less `ENERGY_SLACK` of it and
-        `HOVER_ROUND_S` of hover power P(0) per point (kept for storage's rounding).
+        """Energy a sortie may plan to spend: the usable energy less `ENERGY_SLACK` of it,
+        `HOVER_ROUND_S` of hover power P(0) per point (kept for storage's rounding) and
+        `pad_wh` (kept for flying from the vehicle's pad).
 
         Args:
             n_points: points of the sortie (hover points and detour corners).
@@ -192,7 +230,7 @@ class FleetSettings:
         Returns:
             Wh (infinite without a battery).
         """
-        return self.usable_wh * (1.0 - ENERGY_SLACK) - self._kept_wh(n_points)
+        return self.usable_wh * (1.0 - ENERGY_SLACK) - self._kept_wh(n_points) - self.pad_wh
 
     def usable_for(self, spend_wh: Any, n_points: Any) -> Any:
         """The least usable energy (battery x (1 - reserve)) whose `budget_wh(n_points)` is
@@ -205,15 +243,17 @@ class FleetSettings:
         Returns:
             Wh, the broadcast shape.
         """
-        return ((np.asarray(spend_wh, dtype=float) + self._kept_wh(np.asarray(n_points)))
-                / (1.0 - ENERGY_SLACK))  # fmt: skip
+        return ((np.asarray(spend_wh, dtype=float) + self._kept_wh(np.asarray(n_points))
+                 + self.pad_wh) / (1.0 - ENERGY_SLACK))  # fmt: skip
 
 
 @dataclass(frozen=True, eq=False)
 class Sortie:
     """One flight on one battery: depot `start` -> `points` (k, 2) -> depot `end`, hovering
     `times` (k,) s at the points (0 at detour corners). Depots are indices into
-    `FleetSettings.depots`. Points and times are stored as read-only float copies.
+    `FleetSettings.depots`; the sortie takes off from and lands at vehicle `pad`'s pads there
+    (`FleetSettings.pad`: 0, the default, is the depot itself). Points and times are stored
+    as read-only float copies.
 
     Raises:
         ValueError: `times` and `points` of different lengths.
@@ -223,6 +263,7 @@ class Sortie:
     end: int
     points: np.ndarray
     times: np.ndarray
+    pad: int = 0
 
     def __post_init__(self) -> None:
         p = np.asarray(self.points, dtype=float).reshape(-1, 2).copy()
@@ -235,7 +276,7 @@ class Sortie:
         object.__setattr__(self, "times", t)
 
     def path(self, s: FleetSettings) -> np.ndarray:
-        """The flown route: depot, points, depot.
+        """The flown route: the pad at depot `start`, the points, the pad at depot `end`.
 
         Args:
             s: the settings whose depots `start` and `end` index.
@@ -243,7 +284,7 @@ class Sortie:
         Returns:
             (k + 2, 2) positions, m.
         """
-        return np.vstack([s.depots[self.start], self.points, s.depots[self.end]])
+        return np.vstack([s.pad(self.pad, self.start), self.points, s.pad(self.pad, self.end)])
 
     def leg_lengths(self, s: FleetSettings) -> np.ndarray:
         """Lengths of the straight legs of `path`.
@@ -333,7 +374,7 @@ class Sortie:
         Raises:
             ValueError: `times` not one per point.
         """
-        return Sortie(self.start, self.end, self.points, times)
+        return Sortie(self.start, self.end, self.points, times, self.pad)
 
 
 @dataclass(frozen=True, eq=False)

@@ -676,9 +676,67 @@ class _Planner:
         return best
 
 
+def on_pads(plan: FleetPlan, links: Links) -> FleetPlan:
+    """The plan flown from each vehicle's own pads (`FleetSettings.pads`; vehicle v at index
+    v): each sortie takes off from and lands at its vehicle's pad at its depots, by the
+    cheapest clear way of four (straight to the first point or through a 0-second corner at
+    the depot, likewise back), its hover times kept. The search planned each sortie from the
+    depot with `FleetSettings.pad_wh` kept back, which pays for the dearest of the four (the
+    legs from the pads to the depots and the corners there), so every sortie keeps within its
+    battery. Cost: O(points) per sortie (its legs' clearance and energy, four times).
+
+    Args:
+        plan: a plan searched from the depots (settings with their pads and `pad_wh`).
+        links: the planning map's `Links` (obstacle clearance of a leg).
+
+    Returns:
+        The plan on its pads, with settings `FleetSettings.on_pads` (the same plan when the
+        fleet has one vehicle).
+
+    Raises:
+        RuntimeError: a sortie over its energy on its pads (the allowance broken: a bug).
+    """
+    st = plan.settings
+    if st.pads is None:
+        return plan
+    flown = st.on_pads()
+    vehicles = []
+    for v, vs in enumerate(plan.vehicles):
+        row = []
+        for s in vs:
+            best = None
+            for via_a in (False, True):
+                for via_b in (False, True):
+                    pts, ts = s.points, s.times
+                    if via_a:
+                        pts = np.vstack([st.depots[s.start], pts])
+                        ts = np.concatenate([[0.0], ts])
+                    if via_b:
+                        pts = np.vstack([pts, st.depots[s.end]])
+                        ts = np.concatenate([ts, [0.0]])
+                    cand = Sortie(s.start, s.end, pts, ts, v)
+                    path = cand.path(flown)
+                    if not bool(np.all(links.clear(path[:-1], path[1:]))):
+                        continue
+                    e = cand.energy(flown) + flown._kept_wh(len(pts))
+                    if best is None or e < best[0] - 1e-12:
+                        best = (e, cand)
+            if best is None:  # the depot corners at both ends are always clear: not reached
+                raise RuntimeError(f"vehicle {v + 1}: no clear way from its pad")
+            row.append(best[1])
+        vehicles.append(row)
+    out = FleetPlan(flown, vehicles, plan.evaluations, plan.notes)
+    over = [k for k, x in enumerate(out.sorties) if x.energy(flown) > flown.usable_wh]
+    if over:
+        raise RuntimeError(f"sorties {over} exceed the battery on their pads (pad_wh "
+                           f"{st.pad_wh:.3f} Wh kept back)")  # fmt: skip
+    return out
+
+
 def _finish(pl: _Planner, plan: FleetPlan, notes: list[str]) -> FleetPlan:
-    return plan.replace(
-        plan.vehicles,
+    flown = on_pads(plan, pl.links)
+    return flown.replace(
+        flown.vehicles,
         evaluations=pl.evaluations,
         notes=tuple(notes + [f"{pl.lps} LPs across sorties"]),
     )

@@ -29,6 +29,7 @@ from planner_core.defaults import (
     number_text,
 )
 from planner_core.model import energy as _energy
+from planner_core.model import pads as _pads
 from planner_core.model.geometry import Obstacles, points_inside, rectangle_vertices
 from planner_core.model.polygons import clean_polygon, convex_pieces, is_convex
 
@@ -715,6 +716,58 @@ class Map:
         a = np.array([[d.x, d.y] for d in self.depots], dtype=float)
         a.flags.writeable = False
         return a
+
+    @property
+    def vehicle_pads(self) -> np.ndarray:
+        """Each vehicle's own pad at each sortie site (`planner_core.model.pads`): vehicle 1's
+        is the site itself, the others' lie `fleet.separation_m` + `PAD_MARGIN_M` apart
+        around it, inside the area, clear of the planning map's (inflated) obstacles and
+        reached from the site by a clear straight leg.
+
+        Returns:
+            (V, D, 2) read-only, local metres: V = `uavs`, D the sites of `sortie_sites`
+            (`pads_for(uavs)`).
+
+        Raises:
+            ValueError: a site without room for every vehicle's pad, naming it.
+        """
+        return self.pads_for(int(self.uavs))
+
+    def pads_for(self, vehicles: int) -> np.ndarray:
+        """`vehicle_pads` laid out for `vehicles` vehicles (cached per count): the map's own
+        layout at `fleet.uavs`; a larger count is for replaying a plan of more vehicles than
+        the map flies (which `verify`'s UAVS fails), each then at a pad of its own.
+
+        Args:
+            vehicles: V >= 1.
+
+        Returns:
+            (V, D, 2) read-only, local metres.
+
+        Raises:
+            ValueError: a site without room for every vehicle's pad, naming it.
+        """
+        cache = self.__dict__.setdefault("_pads_for", {})
+        got = cache.get(int(vehicles))
+        if got is not None:
+            return got
+        from planner_core.model.geometry import overlap_lengths
+
+        names, sites, _ = self.sortie_sites
+        W, H = self.spec.area.width, self.spec.area.height
+        obstacles = self.planning_map().obstacles
+
+        def free(site: np.ndarray, pads: np.ndarray) -> np.ndarray:
+            inside = ((pads[:, 0] >= 0) & (pads[:, 0] <= W) & (pads[:, 1] >= 0)
+                      & (pads[:, 1] <= H))  # fmt: skip
+            legs = overlap_lengths(np.broadcast_to(site, pads.shape), pads, obstacles)
+            return inside & ~points_inside(pads, obstacles) & (legs <= _pads.CLEAR_M)
+
+        spacing = float(self.separation_m) + _pads.PAD_MARGIN_M
+        out = _pads.pad_layout(sites, int(vehicles), spacing, free, names=tuple(names))
+        out.flags.writeable = False
+        cache[int(vehicles)] = out
+        return out
 
     @property
     def goal(self) -> str:
