@@ -807,7 +807,8 @@ def plan_fleet(
 
     # refused before any work, in `check`'s words: the planner's own limit, or a battery the
     # take-off and landing alone use up (no sortie of any plan can fly)
-    limit = [f.message for f in fleet_findings(m) if f.kind in ("SORTIE_LIMIT", "ENERGY_VERTICAL")]
+    limit = [f.message for f in fleet_findings(m)
+             if f.kind in ("SORTIE_LIMIT", "ENERGY_VERTICAL", "PADS")]
     if limit:
         raise ValueError(limit[0])
     pl = _Planner(m, config, goal, sortie_budget)

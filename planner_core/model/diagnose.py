@@ -47,6 +47,8 @@ distances bound the flight from below, so:
   plan exists (SORTIE_LIMIT; the planner refuses such a map up front);
 - a depot from which no sortie can leave: no sensor is heard from its piece of airspace (it is
   walled in), or every sensor is out of a battery's reach from it (DEPOT, naming the depot);
+- a depot without room for every vehicle's own pad (`fleet.separation_m` + 5 m apart, clear
+  of obstacles, inside the area: `planner_core.model.pads`; PADS, naming the depot);
 - a sensor's data may be split across sorties (C4 sums them), so a sensor one sortie cannot
   serve alone from its best depot is a note (ENERGY_SPLIT: the energy serving it alone needs,
   the usable energy, and how many sorties at least must share it); with several sorties the
@@ -231,6 +233,7 @@ def diagnose(m: Any) -> Diagnosis:
         findings.extend(found)
     if m.has_battery or m.has_fleet:
         findings.extend(_energy_findings(m, pm, pieces, hear))
+        findings.extend(_pad_findings(m))
     return Diagnosis(findings=tuple(findings), best_rate=best, points_needed=need,
                      bandwidth=bound)  # fmt: skip
 
@@ -260,9 +263,9 @@ def _airspace(pm: Any, shapes: list[Any] | None = None) -> list[Any]:
 
 def fleet_findings(m: Any) -> list[Finding]:
     """The battery and depot findings alone (ENERGY_VERTICAL, ENERGY_RANGE, VEHICLES, DEPOT,
-    ENERGY_SPLIT, SORTIE_LIMIT: the module docstring), as `diagnose` makes them, for a map with
-    a battery or a fleet (else none); the sortie planner refuses a map with a SORTIE_LIMIT or
-    ENERGY_VERTICAL up front.
+    ENERGY_SPLIT, SORTIE_LIMIT, PADS: the module docstring), as `diagnose` makes them, for a
+    map with a battery or a fleet (else none); the sortie planner refuses a map with a
+    SORTIE_LIMIT, ENERGY_VERTICAL or PADS up front.
 
     Args:
         m: a `planner_core.model.mapio.Map`.
@@ -273,7 +276,18 @@ def fleet_findings(m: Any) -> list[Finding]:
     if not (m.has_battery or m.has_fleet):
         return []
     pm = m.planning_map()
-    return _energy_findings(m, pm, _airspace(pm), _hear(pm))
+    return _energy_findings(m, pm, _airspace(pm), _hear(pm)) + _pad_findings(m)
+
+
+def _pad_findings(m: Any) -> list[Finding]:
+    """PADS: a sortie site without room for every vehicle's own pad (`Map.vehicle_pads`:
+    `fleet.separation_m` + 5 m apart, clear of obstacles, inside the area); no plan of the
+    fleet can be flown from it. Cost: `planner_core.model.pads.pad_layout`'s."""
+    try:
+        m.pads_for(int(m.uavs))
+    except ValueError as exc:
+        return [Finding("PADS", True, str(exc))]
+    return []
 
 
 def spread_sensors(sensors: np.ndarray, need: np.ndarray, reach: float) -> list[int]:

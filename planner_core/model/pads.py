@@ -108,6 +108,6 @@ def pad_layout(
                              f"pads ({spacing:g} m apart, fleet.separation_m + "
                              f"{PAD_MARGIN_M:g} m) within {MAX_RINGS * spacing:g} m clear of "
                              "obstacles and inside the area: move the depot into the open, "
-                             "add a depot or fly fewer UAVs")  # fmt: skip
+                             "add a depot, fly fewer UAVs or lower fleet.separation_m")  # fmt: skip
     out.flags.writeable = False
     return out

@@ -1,0 +1,183 @@
+"""Each vehicle's own pad at each depot (planner_core.model.pads; issue 33's fleets): the
+layout, the planner's allowance for flying from a pad, and what the files say."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from planner_core.fleet.model import FleetPlan, FleetSettings, Sortie
+from planner_core.fleet.search import on_pads
+from planner_core.model.mapio import load_map
+from planner_core.model.pads import MAX_RINGS, PAD_MARGIN_M, pad_layout
+from tests.conftest import ROOT
+
+DEMO = ROOT / "examples" / "maps" / "fleet-demo.json"
+
+
+def _every_pair_apart(pads: np.ndarray) -> float:
+    flat = pads.reshape(-1, 2)
+    d = np.hypot(*(flat[:, None, :] - flat[None, :, :]).transpose(2, 0, 1))
+    return float(d[~np.eye(len(flat), dtype=bool)].min())
+
+
+@pytest.mark.parametrize("vehicles", [1, 2, 3, 7, 20])
+def test_pads_keep_the_spacing_and_vehicle_1_keeps_the_depot(vehicles):
+    rng = np.random.default_rng(vehicles)
+    depots = rng.uniform(0, 2000, size=(3, 2))
+    depots[1] = depots[0] + [50.0, 0.0]  # two depots close together share their ground
+    pads = pad_layout(depots, vehicles, 35.0, lambda site, p: np.ones(len(p), bool))
+    assert pads.shape == (vehicles, 3, 2)
+    assert np.array_equal(pads[0], depots)
+    if vehicles > 1:
+        extra = pads[1:].reshape(-1, 2)
+        gaps = np.hypot(*(extra[:, None, :] - np.vstack([depots, extra])[None]).transpose(2, 0, 1))
+        gaps[np.arange(len(extra)), len(depots) + np.arange(len(extra))] = np.inf
+        assert gaps.min() >= 35.0 - 1e-9
+    again = pad_layout(depots, vehicles, 35.0, lambda site, p: np.ones(len(p), bool))
+    assert np.array_equal(pads, again)
+
+
+def test_pads_skip_what_the_test_refuses_and_say_when_there_is_no_room():
+    depot = np.array([[1000.0, 1000.0]])
+    # refuse everything west of the depot (a building there)
+    pads = pad_layout(depot, 5, 35.0, lambda site, p: p[:, 0] >= site[0])
+    assert np.all(pads[1:, 0, 0] >= 1000.0)
+    with pytest.raises(ValueError, match=r"depot 'yard' has room for 1 of the 3 vehicles' pads "
+                                         r"\(35 m apart"):
+        pad_layout(depot, 3, 35.0, lambda site, p: np.zeros(len(p), bool), names=("yard",))
+    # open ground: the lattice's rings hold far more than the 100 vehicles a map may fly
+    assert len(pad_layout(depot, 100, 35.0, lambda s, p: np.ones(len(p), bool))) == 100
+    assert MAX_RINGS * 35.0 > 6 * 35.0
+
+
+def _demo(uavs: int, **fleet) -> dict:
+    doc = json.loads(DEMO.read_text())
+    doc["fleet"]["uavs"] = uavs
+    doc["fleet"].update(fleet)
+    return doc
+
+
+def test_map_pads_are_clear_of_obstacles_and_follow_the_separation():
+    doc = _demo(4, separation_m=40.0)
+    # a building just east of depot 'home' (at 100, 100): no pad inside it or behind it
+    doc["obstacles"]["rectangles"] = [*doc["obstacles"].get("rectangles", []),
+                                      {"x": 160.0, "y": 100.0, "length": 40.0, "width": 200.0,
+                                       "angle_deg": 0.0}]
+    m = load_map(doc)
+    pads = m.vehicle_pads
+    names, sites, _ = m.sortie_sites
+    assert pads.shape == (4, len(names), 2) and np.array_equal(pads[0], sites)
+    assert _every_pair_apart(pads) >= 40.0 + PAD_MARGIN_M - 1e-9
+    pm = m.planning_map()
+    from planner_core.model.geometry import overlap_lengths, points_inside
+
+    for d in range(len(names)):
+        p = pads[1:, d]
+        assert not points_inside(p, pm.obstacles).any()
+        assert np.all(overlap_lengths(np.broadcast_to(sites[d], p.shape), p, pm.obstacles) <= 1e-9)
+    assert np.all(pads[1:, 0, 0] < 140.0)  # nothing east, beyond the building's face
+
+
+def test_one_vehicle_plans_from_the_depot_with_nothing_kept_back():
+    st = FleetSettings.from_map(load_map(_demo(1)))
+    assert st.pads is None and st.pad_wh == 0.0
+    st3 = FleetSettings.from_map(load_map(_demo(3)))
+    reach = 35.0  # pads 2 and 3 at the separation + 5 m from the depot
+    assert st3.pad_wh == pytest.approx(2.0 * (float(st3.leg_energies(np.array(reach)))
+                                              + st3._kept_wh(1)))
+    assert st3.budget_wh(4) == pytest.approx(st.budget_wh(4) - st3.pad_wh)
+
+
+class _Walls:
+    """A stand-in for `Links`: every leg is clear except those that touch a pad and do not go
+    to or from its depot (so a sortie must fly pad -> depot corner -> points)."""
+
+    def __init__(self, st: FleetSettings) -> None:
+        self.pads = st.pads[1:].reshape(-1, 2)
+        self.depots = np.asarray(st.depots)
+
+    def clear(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        out = []
+        for x, y in zip(np.asarray(a), np.asarray(b), strict=True):
+            touch = any(np.allclose(x, p) or np.allclose(y, p) for p in self.pads)
+            depot = any(np.allclose(x, d) or np.allclose(y, d) for d in self.depots)
+            out.append(not touch or depot)
+        return np.array(out)
+
+
+def test_on_pads_takes_the_depot_corner_when_the_straight_leg_is_blocked_and_fits_the_battery():
+    m = load_map(_demo(2))
+    st = FleetSettings.from_map(m)
+    rng = np.random.default_rng(5)
+    vehicles = []
+    for _v in range(2):
+        pts = rng.uniform(150, 400, size=(3, 2))
+        s = Sortie(0, 0, pts, np.zeros(3))
+        spare = st.budget_wh(3) - s.energy(st)
+        assert spare > 0
+        # hover to the last Wh the search allows: the pads' allowance must pay for the rest
+        t = spare * 3600.0 / st.hover_w / 3
+        vehicles.append([Sortie(0, 0, pts, np.full(3, t))])
+    plan = FleetPlan(st, vehicles)
+    straight = on_pads(plan, type("Open", (), {"clear": lambda self, a, b: np.ones(len(a),
+                                                                                   bool)})())
+    walled = on_pads(plan, _Walls(st))
+    for flown in (straight, walled):
+        assert flown.settings.pad_wh == 0.0 and flown.energy_ok()
+        for v, (before, after) in enumerate(zip(plan.sorties, flown.sorties, strict=True)):
+            path = after.path(flown.settings)
+            assert np.array_equal(path[0], st.pads[v, 0]) and np.array_equal(path[-1],
+                                                                              st.pads[v, 0])
+            assert after.t_hover == pytest.approx(before.t_hover)
+    v1, v2 = walled.sorties
+    assert len(v1.points) == 3  # vehicle 1 stands on the depot: nothing to go round
+    assert len(v2.points) == 5 and np.array_equal(v2.points[0], st.depots[0])
+    assert np.array_equal(v2.points[-1], st.depots[0]) and v2.times[[0, -1]].tolist() == [0, 0]
+    assert len(straight.sorties[1].points) == 3
+
+
+def test_a_fleet_directory_gives_each_vehicle_its_pads_in_the_files(tmp_path, capsys):
+    from lamde_mission.cli import main
+    from lamde_mission.formats import read_mission
+
+    path = tmp_path / "three.json"
+    path.write_text(json.dumps(_demo(3)))
+    out = tmp_path / "d"
+    assert main(["plan", str(path), "-o", f"{out}/"]) == 0
+    said = capsys.readouterr().out
+    doc = json.loads((out / "fleet.json").read_text())
+    m = load_map(path)
+    names, sites, _ = m.sortie_sites
+    assert len(doc["vehicles"]) >= 2
+    for veh in doc["vehicles"]:
+        v = veh["vehicle"]
+        for s in veh["sorties"]:
+            ends = ((s["takeoff_at"], s["depot_start"]), (s["landing_at"], s["depot_end"]))
+            for at, depot in ends:
+                pad = m.vehicle_pads[v - 1, names.index(depot)]
+                assert [at["x"], at["y"]] == pytest.approx(pad.tolist(), abs=0.02)
+            items, _fence = read_mission(out / s["file"])
+            land = [it for it in items if it.command == 21][-1]
+            assert (land.x, land.y) == pytest.approx((s["landing_at"]["lat"],
+                                                      s["landing_at"]["lon"]), abs=2e-7)
+            if v > 1:
+                assert f"{s['file']:<18} {s['depot_start']}, pad 35 m " in said
+
+
+def test_check_and_plan_refuse_a_depot_without_room_for_the_pads(tmp_path, capsys):
+    from lamde_mission.cli import main
+
+    path = tmp_path / "far-apart.json"
+    path.write_text(json.dumps(_demo(3, separation_m=1000.0)))  # 1,005 m between pads
+    line = ("fleet: depot 'north' has room for 1 of the 3 vehicles' pads (1005 m apart, "
+            "fleet.separation_m + 5 m)")
+    assert main(["check", str(path)]) == 1
+    out = capsys.readouterr().out
+    assert f"CANNOT  {line}" in out and "lower fleet.separation_m" in out
+    assert main(["plan", str(path), "-o", f"{tmp_path / 'd'}/"]) == 1
+    err = capsys.readouterr().err
+    assert line in err and err.strip().endswith("nothing written")
+    assert not (tmp_path / "d").exists()
