@@ -181,3 +181,21 @@ def test_check_and_plan_refuse_a_depot_without_room_for_the_pads(tmp_path, capsy
     err = capsys.readouterr().err
     assert line in err and err.strip().endswith("nothing written")
     assert not (tmp_path / "d").exists()
+
+
+def test_upload_names_each_vehicles_pad_for_the_crew(tmp_path, capsys):
+    from lamde_mission.commands.upload import _print_takeoffs
+    from tests.fleet_helpers import plan_fleet_demo
+
+    _, d = plan_fleet_demo(tmp_path, uavs=3)
+    capsys.readouterr()
+    _print_takeoffs(str(d), 1)
+    said = capsys.readouterr().out.splitlines()[-1]
+    doc = json.loads((d / "fleet.json").read_text())
+    want = ", ".join(
+        f"vehicle {v['vehicle']} at lat {v['sorties'][0]['takeoff_at']['lat']:.7f}, lon "
+        f"{v['sorties'][0]['takeoff_at']['lon']:.7f} ('{v['sorties'][0]['depot_start']}')"
+        for v in doc["vehicles"])
+    assert said == f"from their own pads (sortie 1): {want}"
+    first = [v["sorties"][0]["takeoff_at"] for v in doc["vehicles"]]
+    assert len({(p["lat"], p["lon"]) for p in first}) == len(first)  # no two share a spot

@@ -555,22 +555,31 @@ def _print_takeoffs(directory: str, sortie: int) -> None:
     """When each vehicle's sortie `sortie` takes off, as fleet.json gives it (`takeoff_s`, on
     the plan's clock; a directory written before take-off times has only each vehicle's
     `launch_s`, the first sortie's): the vehicles keep apart in the air and no sensor sends
-    to two at once only when they take off so (`lamde_mission.launches`)."""
+    to two at once only when they take off so (`lamde_mission.launches`); then where each
+    takes off, its own pad (`takeoff_at`), when fleet.json gives it."""
     from lamde_mission.formats.fleet import read_fleet_dir
+    from planner_core.textio import printable
 
-    times = []
+    times, pads = [], []
     for v in read_fleet_dir(directory).vehicles:
         if len(v.sorties) < sortie:
             continue
-        t = v.sorties[sortie - 1].takeoff_s
+        s = v.sorties[sortie - 1]
+        t = s.takeoff_s
         if t is None and sortie == 1:
             t = v.launch_s
         times.append(f"vehicle {v.vehicle} at +{t:.0f} s" if t is not None
                      else f"vehicle {v.vehicle} at a time fleet.json does not give")
+        if s.takeoff_at is not None:
+            where = f" ('{printable(s.depot_start)}')" if s.depot_start else ""
+            pads.append(f"vehicle {v.vehicle} at lat {s.takeoff_at[0]:.7f}, lon "
+                        f"{s.takeoff_at[1]:.7f}{where}")
     if times:
         print(f"take off (sortie {sortie}, s after vehicle 1's first take-off): "
               + ", ".join(times) + "; the vehicles keep apart in the air and no sensor "
               "sends to two at once only when they take off so", flush=True)  # fmt: skip
+    if pads:
+        print(f"from their own pads (sortie {sortie}): " + ", ".join(pads), flush=True)
 
 
 def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:

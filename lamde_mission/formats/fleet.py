@@ -7,6 +7,7 @@
      "vehicles": [{"vehicle": 1, "makespan_s": s,
                    "sorties": [{"sortie": 1, "file": "mission-v1-s1.plan",
                                 "depot_start": "home", "depot_end": "home",
+                                "takeoff_at": {"lat": deg, "lon": deg, ...},
                                 "takeoff_s": s, "duration_s": s, "energy_wh": Wh,
                                 "reserve_left_wh": Wh,
                                 "sensors": ["s01", ...]}, ...]}, ...],
@@ -75,6 +76,9 @@ class FleetSortie:
     #: s after the first vehicle's take-off (None when fleet.json gives none: written before
     #: take-off times were)
     takeoff_s: float | None = None
+    #: (lat, lon) degrees of the vehicle's pad the sortie takes off from (`takeoff_at`; None
+    #: when fleet.json gives none: written before each vehicle had its own pad)
+    takeoff_at: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -157,6 +161,19 @@ def _index(v: Any, where: str, expected: int) -> int:
     if v != expected:
         raise FleetDirError(f"{where}: expected {expected} (numbered 1, 2, ... in order), got {v}")
     return v
+
+
+def _latlon(v: Any, where: str) -> tuple[float, float] | None:
+    """A position's {"lat", "lon"} (WGS84 degrees), None when absent."""
+    if v is None:
+        return None
+    if not isinstance(v, dict):
+        raise FleetDirError(f"{where}: expected an object with lat and lon, got {quoted(v)}")
+    lat, lon = _number(v.get("lat"), f"{where}.lat"), _number(v.get("lon"), f"{where}.lon")
+    if lat is None or lon is None or not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0):
+        raise FleetDirError(f"{where}: expected lat in [-90, 90] and lon in [-180, 180] "
+                            "degrees")  # fmt: skip
+    return lat, lon
 
 
 def _name(v: Any, where: str) -> str | None:
@@ -253,6 +270,7 @@ def read_fleet_dir(path: str | Path) -> FleetDir:
                 energy_wh=_number(s.get("energy_wh"), f"{ws}.energy_wh"),
                 reserve_left_wh=_number(s.get("reserve_left_wh"), f"{ws}.reserve_left_wh"),
                 sensors=tuple(sensors), takeoff_s=takeoff,
+                takeoff_at=_latlon(s.get("takeoff_at"), f"{ws}.takeoff_at"),
             ))  # fmt: skip
         launch = _number(v.get("launch_s"), f"{wv}.launch_s")
         if launch is not None and not 0.0 <= launch <= 1e6:
