@@ -27,8 +27,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "simultaneous uplink) can serve; on a map with a battery or fleet, a sensor no sortie "
         "from where a vehicle can take off can reach and come back from within the usable "
         "energy, more sensors needing vehicles of their own than fleet.uavs, a depot no "
-        "sortie can leave, and a sensor needing more sorties than the sortie planner makes "
-        "for one; exit status 1 naming what cannot be met; docs/energy.md).",
+        "sortie can leave or without room for every vehicle's own pad, and a sensor needing "
+        "more sorties than the sortie planner makes for one; exit status 1 naming what "
+        "cannot be met; docs/energy.md).",
     )
     p.add_argument("map", help="map file (JSON)")
     p.add_argument("--json", action="store_true", help="print the summary as JSON")
