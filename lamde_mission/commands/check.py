@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 import json
+from collections.abc import Sequence
+from typing import Any
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -161,13 +163,53 @@ def _energy_lines(s: dict, m: object) -> None:
               f"{s['goal']}")
 
 
+#: findings of one kind about sensors printed in full; the rest of that kind (two or more)
+#: share one line naming them
+SHOWN_PER_KIND = 5
+
+
+def finding_lines(findings: Sequence[Any]) -> list[tuple[bool, str]]:
+    """The diagnosis's findings as `check` prints them: each in full, except that beyond the
+    first `SHOWN_PER_KIND` findings of one kind about sensors the rest of that kind (two or
+    more) share one line naming the first few (a battery too small for a 30 km map made one
+    long CANNOT line per sensor). Cost: O(findings).
+
+    Args:
+        findings: `planner_core.model.diagnose.Finding`s, in the diagnosis's order.
+
+    Returns:
+        (fatal, printable line) pairs, the shared lines after the others.
+    """
+    from planner_core.textio import counted, printable
+
+    total: dict[tuple[str, bool], int] = {}
+    for f in findings:
+        if f.sensor is not None:
+            total[(f.kind, f.fatal)] = total.get((f.kind, f.fatal), 0) + 1
+    seen: dict[tuple[str, bool], int] = {}
+    more: dict[tuple[str, bool], list[str]] = {}  # (kind, fatal) -> sensors beyond the first
+    out = []
+    for f in findings:
+        key = (f.kind, f.fatal)
+        seen[key] = seen.get(key, 0) + 1
+        if (f.sensor is not None and total[key] > SHOWN_PER_KIND + 1
+                and seen[key] > SHOWN_PER_KIND):
+            more.setdefault(key, []).append(f.sensor)
+            continue
+        out.append((bool(f.fatal), printable(f.message)))
+    for (kind, fatal), sensors in more.items():
+        names = ", ".join(f"'{printable(x)}'" for x in sensors[:SHOWN_PER_KIND])
+        out.append((fatal, f"{counted(len(sensors), 'more sensor')} alike ({kind}): {names}"
+                           f"{', ...' if len(sensors) > SHOWN_PER_KIND else ''} "
+                           "(`lamde-mission check --json` gives each one's line)"))
+    return out
+
+
 def _diagnosis(d: object) -> int:
     """Print the fast feasibility diagnosis `d` (`planner_core.model.diagnose.diagnose`'s);
     1 when something rules every plan out."""
-    from planner_core.textio import printable
-
-    for f in d.findings:
-        print(f"  {'CANNOT' if f.fatal else 'note':<6}  {printable(f.message)}")
+    for fatal, line in finding_lines(d.findings):
+        print(f"  {'CANNOT' if fatal else 'note':<6}  {line}")
     if any(f.kind.startswith("C3_") for f in d.findings):
         print("  hint    C3 is the paper's simultaneous uplink; \"radio\": {\"access\": "
               "\"scheduled\"} lets the sensors in range share the bandwidth by time slots")

@@ -598,14 +598,17 @@ def _say_cannot(m: Any, said: str = "") -> None:
     """After a failed plan: every line `lamde-mission check` prints as CANNOT for map `m`
     (the fast diagnosis: what no plan can meet), each on its own line on stderr, but those
     `said` holds already; where there is none, the caller's message says what failed."""
+    from lamde_mission.commands.check import finding_lines
     from planner_core.model.diagnose import diagnose
 
-    said_by: dict[str, list[str]] = {}  # lead -> messages, each lead said once
+    by_lead: dict[str, list[Any]] = {}  # lead -> findings, each lead said once
     for f in diagnose(m).findings:
         if f.fatal and f.message not in said:
             lead = ("the sortie planner cannot plan this map" if f.kind == "SORTIE_LIMIT"
                     else "no plan can meet this map")  # fmt: skip
-            said_by.setdefault(lead, []).append(f.message)
+            by_lead.setdefault(lead, []).append(f)
+    # check's lines: beyond a few of one kind about sensors, the rest share one line
+    said_by = {lead: [line for _, line in finding_lines(fs)] for lead, fs in by_lead.items()}
     for lead, messages in said_by.items():
         if len(messages) == 1:
             print(f"  {lead} (`lamde-mission check` says CANNOT): {messages[0]}",
