@@ -6,14 +6,20 @@ would take off together and fly the same first legs at the same altitude. Vehicl
 at 0; each next vehicle at the first multiple of `STEP_S` seconds at which it conflicts with
 none launched before it (greedy, in vehicle order), also when either is shifted against the
 other by up to twice the map's `fleet.launch_tolerance_s`: each sortie may then take off that
-much early or late (a crew launches to the half minute, not the second; verify's TIMING). A
-launch that late after every earlier vehicle has landed conflicts with nothing, so the search
-ends. The operator launches each sortie at its time (fleet.json's `takeoff_s`, printed by
+much early or late (a crew launches to the half minute, not the second; verify's TIMING). The
+search ends at the first step more than twice the tolerance after every earlier vehicle has
+landed, and takes it even when it is not clear: from there on no sensor can send to two at
+once, but SEPARATION counts a vehicle standing on the ground (at its first position before its
+launch, at its last after its last landing: `sim.fleet_time.conflicts`), so a vehicle taking
+off from, or landing on, the spot where another stands conflicts at every launch. No delay
+clears that; only distinct pads do (the planner's), and verify's SEPARATION fails the plan
+meanwhile. The operator launches each sortie at its time (fleet.json's `takeoff_s`, printed by
 `plan` and `upload --fleet`); the makespan counts the launch.
 
 Cost: per vehicle, O(tries' new offsets x V x T / dt (+ J x T / dt)): each offset against each
-earlier vehicle is judged once, and the tries (<= (the earlier vehicles' longest span + 2
-tolerance) / STEP_S) move by STEP_S, so each brings STEP_S / dt new offsets.
+earlier vehicle is judged once (`conflicts`, O(the two spans / dt) however far apart in time),
+and the tries (<= (the earlier vehicles' longest span + 2 tolerance) / STEP_S + 1) move by
+STEP_S, so each brings STEP_S / dt new offsets.
 """
 
 from __future__ import annotations
@@ -44,7 +50,9 @@ def stagger(tracks: Sequence[VehicleTrack], *, separation: float = SEPARATION_M,
             the planned times only.
 
     Returns:
-        One launch time per vehicle, the first 0.
+        One launch time per vehicle, the first 0. A vehicle that no launch clears (one taking
+        off from or landing on where an earlier one stands: module docstring) gets the first
+        step more than 2 `tolerance` after every earlier vehicle has landed, not clear.
     """
     placed: list[VehicleTrack] = []
     launches: list[float] = []

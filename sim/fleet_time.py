@@ -5,21 +5,29 @@ seconds after the first vehicle's take-off), with a battery swap of `swap_s` on 
 between them; a sortie's replay (`sim.replay.Timeline`: t, xy, z, data) places the vehicle on
 the shared clock. On a grid of `dt` seconds, two verdicts:
 
-- **SEPARATION**: two vehicles both airborne (above `AIRBORNE_M`) are never closer than the
-  map's `fleet.separation_m` (3D; the caller passes it in, default `SEPARATION_M`). Vehicles
-  taking off from one depot at once, flying the same legs at the same altitude, or landing on
-  one spot seconds apart fail it.
+- **SEPARATION**: two vehicles of which at least one is airborne (above `AIRBORNE_M`) are never
+  closer than the map's `fleet.separation_m` (3D distance; the caller passes it in, default
+  `SEPARATION_M`). A pair is judged over the span from the earlier of its two launches to the
+  later of its two tracks' ends: a vehicle not yet launched stands on the ground at its first
+  position (its track's xy[0], z = 0), and a vehicle after its last landing stands at its last
+  position (xy[-1], z = 0); during a swap it stands where its track has it. Two vehicles both
+  on the ground are not compared (they do not move). So vehicles taking off from one depot at
+  once, flying the same legs at the same altitude, landing on one spot seconds apart, or
+  landing on (taking off from) the spot where another stands waiting, swapping or done, fail
+  it: in the field that is a collision on the pad.
 - **LINKS**: no sensor sends to two vehicles at the same time. The link model (paper Sec. 3)
   gives a sensor one uplink at R_ij; two vehicles hovering in its range at once would each be
-  credited the full rate, data the sensor cannot send.
+  credited the full rate, data the sensor cannot send. Judged only while both vehicles are on
+  the clock (between their launches and last landings); a vehicle on the ground receives
+  nothing.
 
-Positions between samples are linear (the replay samples each phase at `dt` or finer); a
-vehicle on the ground (before its launch, during a swap, after its last landing) is not
-airborne and receives nothing. Like the rest of the sim it imports of `planner_core` only the
-defaults table (`SEPARATION_M`'s value); the map's separation comes in as an argument.
+Positions between samples are linear (the replay samples each phase at `dt` or finer). Like
+the rest of the sim it imports of `planner_core` only the defaults table (`SEPARATION_M`'s
+value); the map's separation comes in as an argument.
 Cost: O(V^2 x T / dt) for SEPARATION and O(V^2 x K x T / dt) for LINKS, T the longest span
-and K the sensors two vehicles both hear (0 when they serve different sensors); building a
-track O(sorties x J x T / dt).
+(a pair costs its two spans, never the time between them: before, between and after them
+both stand still) and K the sensors two vehicles both hear (0 when they serve different
+sensors); building a track O(sorties x J x T / dt).
 """
 
 from __future__ import annotations
@@ -155,28 +163,73 @@ def _window(a: VehicleTrack, b: VehicleTrack) -> tuple[slice, slice] | None:
     return slice(lo - da, hi - da), slice(lo - db, hi - db)
 
 
+def _steps(a: VehicleTrack, b: VehicleTrack) -> tuple[np.ndarray, int, int]:
+    """The clock's grid steps on which a or b is inside its track (outside both, both stand
+    on the ground), ascending, and each one's launch step. At most len(a.z) + len(b.z) steps
+    however far apart the two are in time."""
+    da = int(round(a.launch / a.dt))
+    db = int(round(b.launch / b.dt))
+    na, nb = len(a.z), len(b.z)
+    lo, hi = min(da, db), max(da + na, db + nb)
+    if hi - lo <= na + nb:  # the two tracks overlap or touch: one run of steps
+        return np.arange(lo, hi), da, db
+    (d0, n0), (d1, n1) = sorted(((da, na), (db, nb)))
+    return np.concatenate([np.arange(d0, d0 + n0), np.arange(d1, d1 + n1)]), da, db
+
+
+def _placed(tr: VehicleTrack, steps: np.ndarray, first: int) -> tuple[np.ndarray, np.ndarray]:
+    """Where a vehicle launched at grid step `first` is at clock steps `steps`: its track's
+    samples inside it; before, on the ground at its first position; after, at its last (index
+    clamping: nothing is built for the time outside the track). xy (S, 2) m, z (S,) m."""
+    k = steps - first
+    i = np.clip(k, 0, len(tr.z) - 1)
+    return tr.xy[i], np.where((k >= 0) & (k < len(tr.z)), tr.z[i], 0.0)
+
+
+def _on_ground(tr: VehicleTrack, at: float) -> bool:
+    """Is the vehicle on the ground at clock time `at` s (not yet launched, landed for good, or
+    at most `AIRBORNE_M` up inside its track)?"""
+    k = int(round(at / tr.dt)) - int(round(tr.launch / tr.dt))
+    return not (0 <= k < len(tr.z) and tr.z[k] > AIRBORNE_M)
+
+
 def conflicts(a: VehicleTrack, b: VehicleTrack) -> tuple[float, float, float, int, int]:
-    """The closest approach of two vehicles in the air and their first shared link.
+    """The closest approach of two vehicles, at least one in the air, and their first shared
+    link (module docstring).
+
+    SEPARATION's distance is taken over the span from the earlier launch to the later track's
+    end: a vehicle not launched yet stands at its first position (xy[0], z = 0), one after its
+    last landing at its last (xy[-1], z = 0); on grid steps where both are on the ground the
+    two are not compared. So two tracks that never overlap in time are still compared (one
+    landed on a spot the other takes off from later fails). LINKS only counts the steps where
+    both are on the clock. Cost: O((len(a.z) + len(b.z)) x (1 + K)), K the sensors both hear:
+    the steps inside either track, each track indexed (clamped) in place, never the time
+    between the two tracks.
 
     Args:
         a, b: the tracks (same dt), each at its launch time.
 
     Returns:
-        (least distance m while both airborne (inf if never), its clock time s, the first
-        clock time s at which a sensor sends to both (nan if never), that sensor's index into
-        the map's sensors (-1 if none), how many grid steps some sensor sends to both (0 if
-        none)). nan times and 0 steps when the two are never on the clock together.
+        (least 3D distance m on the steps where at least one of them is airborne (inf if
+        neither ever is), its clock time s (nan if inf; the first such step on a tie), the
+        first clock time s at which a sensor sends to both (nan if never), that sensor's index
+        into the map's sensors (-1 if none), how many grid steps some sensor sends to both (0
+        if none)). The link entries are nan, -1, 0 when the two are never on the clock
+        together.
     """
+    steps, da, db = _steps(a, b)
+    xa, za = _placed(a, steps, da)
+    xb, zb = _placed(b, steps, db)
+    air = (za > AIRBORNE_M) | (zb > AIRBORNE_M)
+    d = np.where(air, np.sqrt(((xa - xb) ** 2).sum(axis=1) + (za - zb) ** 2), np.inf)
+    i = int(np.argmin(d))
+    least = float(d[i])
+    at = float(steps[i]) * a.dt if np.isfinite(least) else np.nan
     w = _window(a, b)
     if w is None:
-        return np.inf, np.nan, np.nan, -1, 0
+        return least, at, np.nan, -1, 0
     sa, sb = w
     base = max(a.launch, b.launch)
-    air = (a.z[sa] > AIRBORNE_M) & (b.z[sb] > AIRBORNE_M)
-    d = np.sqrt(((a.xy[sa] - b.xy[sb]) ** 2).sum(axis=1) + (a.z[sa] - b.z[sb]) ** 2)
-    d = np.where(air, d, np.inf)
-    i = int(np.argmin(d))
-    least, at = float(d[i]), base + i * a.dt
     ca, cb = a.columns(), b.columns()
     common, ia, ib = np.intersect1d(ca, cb, return_indices=True)
     if not len(common):  # no sensor heard by both, ever
@@ -184,16 +237,20 @@ def conflicts(a: VehicleTrack, b: VehicleTrack) -> tuple[float, float, float, in
     ea = slice(sa.start, sa.stop - 1)
     eb = slice(sb.start, sb.stop - 1)
     both = a.sending[ea][:, ia] & b.sending[eb][:, ib]
-    steps = np.flatnonzero(both.any(axis=1))
-    if not len(steps):
+    steps_both = np.flatnonzero(both.any(axis=1))
+    if not len(steps_both):
         return least, at, np.nan, -1, 0
-    s0 = int(steps[0])
-    return least, at, base + s0 * a.dt, int(common[np.flatnonzero(both[s0])[0]]), len(steps)
+    s0 = int(steps_both[0])
+    return least, at, base + s0 * a.dt, int(common[np.flatnonzero(both[s0])[0]]), \
+        len(steps_both)
 
 
 def fleet_time_verdicts(tracks: Sequence[VehicleTrack], sensor_ids: Sequence[str],
                         separation: float = SEPARATION_M) -> list[Verdict]:
-    """SEPARATION and LINKS over every pair of vehicles (module docstring).
+    """SEPARATION and LINKS over every pair of vehicles (module docstring): SEPARATION holds
+    when no two vehicles, at least one airborne, come closer than `separation`, a vehicle
+    standing at its first position before its launch and at its last after its last landing
+    (`conflicts`); LINKS only while both are on the clock. Cost: O(V^2 x T / dt (1 + K)).
 
     Args:
         tracks: one per vehicle (vehicle k + 1 at index k), each at its launch time.
@@ -202,10 +259,12 @@ def fleet_time_verdicts(tracks: Sequence[VehicleTrack], sensor_ids: Sequence[str
             (`Map.separation_m`), > 0.
 
     Returns:
-        [SEPARATION, LINKS]. SEPARATION's margin: least airborne distance - separation, m
-        (+inf when no two are in the air at once). LINKS's: minus the grid steps shared over
-        every pair that shares a sensor, "steps" (0 when none does); its detail names the
-        pair sharing the most steps (the first such pair in index order on a tie).
+        [SEPARATION, LINKS]. SEPARATION's margin: least distance with at least one of the two
+        airborne - separation, m (+inf when no vehicle is ever airborne, or fewer than two
+        vehicles); its detail names the closest pair, when, and which one stood on the ground
+        then if one did. LINKS's: minus the grid steps shared over every pair that shares a
+        sensor, "steps" (0 when none does); its detail names the pair sharing the most steps
+        (the first such pair in index order on a tie).
     """
     least, worst, shared, steps, pairs = np.inf, None, None, 0, 0
     for i in range(len(tracks)):
@@ -219,12 +278,15 @@ def fleet_time_verdicts(tracks: Sequence[VehicleTrack], sensor_ids: Sequence[str
                     shared = (i + 1, k + 1, t_link, sensor_ids[j], n)
     if worst is None:
         sep = Verdict("SEPARATION", f"vehicles >= {separation:g} m apart", True, np.inf, "m",
-                      "never two vehicles in the air at once")
+                      "never a vehicle in the air beside another")
     else:
         v1, v2, at = worst
+        down = [v for v in (v1, v2) if _on_ground(tracks[v - 1], at)]
+        where = f" (vehicle {down[0]} on the ground)" if down else ""
         sep = Verdict("SEPARATION", f"vehicles >= {separation:g} m apart",
                       bool(least >= separation), float(least - separation), "m",
-                      f"closest: vehicles {v1} and {v2} {least:.1f} m apart at {at:.0f} s")
+                      f"closest: vehicles {v1} and {v2} {least:.1f} m apart at {at:.0f} s"
+                      f"{where}")
     if shared is None:
         links = Verdict("LINKS", "a sensor sends to one vehicle at a time", True, 0.0, "steps",
                         "no sensor heard by two vehicles at once")
@@ -252,11 +314,17 @@ def timing_tolerance(tracks: Sequence[VehicleTrack], separation: float = SEPARAT
     Two sorties of different vehicles then fly shifted against each other by up to 2 W. A
     conflict is between two sorties, so it is enough to shift one vehicle's whole track
     against the other's by every such amount: the smallest shift at which a pair of vehicles
-    conflicts is searched outward from their planned offset (pairs that cannot meet are
-    skipped: flights more than 2 `cap` apart in time, or airborne boxes farther apart than
-    `separation` with no sensor heard by both). Sorties of one vehicle never fly at once; a
-    vehicle on the ground is not checked (as in `conflicts`). Cost: per pair of vehicles that
-    can meet, at most 4 `cap` / dt + 1 shifts, each O(T / dt) for T the shorter span.
+    conflicts is searched outward from their planned offset. SEPARATION is `conflicts`'s:
+    at least one of the two airborne, a vehicle standing at its first position before its
+    launch and at its last after its last landing, so two vehicles far apart in time still
+    meet when one flies near where the other stands. Pairs that cannot meet are skipped: each
+    vehicle's box holds every position of its track (airborne, and on the ground: its first
+    and last, where it swaps), and a pair is skipped when the boxes are farther apart than
+    `separation` and either no sensor is heard by both or the two tracks are more than 2 `cap`
+    apart in time (LINKS needs both on the clock); time alone never skips a pair (a vehicle
+    stands on the ground for ever before and after its flights). Sorties of one vehicle never
+    fly at once. Cost: per pair of vehicles that can meet, at most 4 `cap` / dt + 1 shifts,
+    each O((T_a + T_b) / dt) for T_a, T_b the two spans.
 
     Args:
         tracks: one per vehicle, each at its launch time, on one grid step.
@@ -275,23 +343,19 @@ def timing_tolerance(tracks: Sequence[VehicleTrack], separation: float = SEPARAT
     if not tracks:
         return float(cap)
     dt = tracks[0].dt
-    boxes = []
-    for tr in tracks:
-        up = tr.z > AIRBORNE_M
-        xy = tr.xy[up] if np.any(up) else tr.xy[:1]
-        boxes.append((xy.min(axis=0), xy.max(axis=0)))
+    # every position a vehicle is ever at: airborne, swapping, and standing before / after
+    boxes = [(tr.xy.min(axis=0), tr.xy.max(axis=0)) for tr in tracks]
     widest = int(np.floor(2.0 * cap / dt))
     least = widest + 1  # the smallest conflicting relative shift found, in steps
     for i in range(len(tracks)):
         for k in range(i + 1, len(tracks)):
             a, b = tracks[i], tracks[k]
-            if (b.launch - (a.launch + a.span) > 2 * cap
-                    or a.launch - (b.launch + b.span) > 2 * cap):
-                continue
             gap = np.maximum(np.maximum(boxes[i][0] - boxes[k][1], boxes[k][0] - boxes[i][1]),
                              0.0)
-            if float(np.hypot(*gap)) > separation and not len(
-                    np.intersect1d(a.columns(), b.columns())):
+            if float(np.hypot(*gap)) > separation and (
+                    b.launch - (a.launch + a.span) > 2 * cap
+                    or a.launch - (b.launch + b.span) > 2 * cap
+                    or not len(np.intersect1d(a.columns(), b.columns()))):
                 continue
             for s in range(least):
                 shifts = (s,) if s == 0 else (s, -s)
@@ -306,7 +370,8 @@ def timing_tolerance(tracks: Sequence[VehicleTrack], separation: float = SEPARAT
 
 
 def _conflict(a: VehicleTrack, b: VehicleTrack, separation: float) -> bool:
-    """Do two tracks, at their launches, come closer than `separation` in the air or share a
+    """Do two tracks, at their launches, come closer than `separation` with one of them in the
+    air (`conflicts`: standing at their first / last positions outside their tracks) or share a
     sending sensor?"""
     d, _, _, _, n = conflicts(a, b)
     return d < separation or n > 0

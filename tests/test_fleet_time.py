@@ -11,14 +11,18 @@ from sim.fleet_time import SEPARATION_M, VehicleTrack, conflicts, fleet_time_ver
 
 
 def _track(n: int, *, x0: float = 0.0, speed: float = 10.0, send: tuple[int, int] = (0, 0),
-           sensors: int = 2, launch: float = 0.0) -> VehicleTrack:
-    """A vehicle climbing for 10 s at x0, then flying east at `speed`, landing at the end;
-    sensor 0 sending to it in steps send[0] .. send[1] - 1."""
+           sensors: int = 2, launch: float = 0.0, pad: float = 0.0) -> VehicleTrack:
+    """A vehicle climbing for 10 s at x0, then flying east at `speed` along y = 0, landing at
+    the end; sensor 0 sending to it in steps send[0] .. send[1] - 1. It climbs and lands at
+    y = `pad` (its own row of pads: SEPARATION counts a vehicle standing on the ground, so two
+    vehicles taking off from one spot can never be staggered apart), at 100 m when it joins
+    and leaves the line."""
     t = np.arange(n, dtype=float)
     z = np.clip(t * 10.0, 0.0, 100.0)
     z[-5:] = np.linspace(80.0, 0.0, 5)
     x = x0 + np.maximum(t - 10.0, 0.0) * speed
-    xy = np.column_stack([x, np.zeros(n)])
+    y = np.where((t < 10.0) | (t >= n - 5), pad, 0.0)
+    xy = np.column_stack([x, y])
     sending = np.zeros((n - 1, sensors), dtype=bool)
     sending[send[0]:send[1], 0] = True
     return VehicleTrack(launch, 1.0, xy, z, sending)
@@ -58,10 +62,11 @@ def test_a_sensor_sending_to_two_vehicles_at_once_fails_links() -> None:
 
 
 def test_stagger_launches_each_vehicle_at_its_first_clear_time() -> None:
-    a, b, c = _track(100), _track(100), _track(100, x0=5000.0)
+    a, b, c = _track(100), _track(100, pad=40.0), _track(100, x0=5000.0)
     launches = stagger([a, b, c])
-    # b follows a along the same line at 10 m/s: 30 m behind it needs a 3 s lead at cruise,
-    # but b climbs below a at the depot first; the first 10 s step that clears both is 10 s
+    # b follows a along the same line at 10 m/s from a pad 40 m off a's: 30 m behind it
+    # needs a 3 s lead at cruise, but at 0 both join the line at 10 s on one spot; the first
+    # 10 s step that clears both is 10 s (b stands 40 m from a's climb, lands 40 m from it)
     assert launches[0] == 0.0 and launches[1] == 10.0 and launches[2] == 0.0
     tracks = [VehicleTrack(t, x.dt, x.xy, x.z, x.sending) for t, x in zip(launches, (a, b, c),
                                                                          strict=True)]
@@ -71,24 +76,51 @@ def test_stagger_launches_each_vehicle_at_its_first_clear_time() -> None:
 def test_stagger_ends_after_the_earlier_vehicles_landed() -> None:
     # the same sensor sends to both over their whole flights: only one after the other works
     a = _track(50, send=(0, 49))
-    b = _track(50, send=(0, 49))
+    b = _track(50, send=(0, 49), pad=40.0)
     launches = stagger([a, b])
     assert launches == [0.0, 50.0]
     assert conflicts(VehicleTrack(50.0, 1.0, b.xy, b.z, b.sending), a)[4] == 0
+    assert all(v.passed for v in fleet_time_verdicts([a, b.at(50.0)], ["s0", "s1"]))
 
 
-def test_no_overlap_in_time_is_never_a_conflict() -> None:
-    a = _track(30)
+@pytest.mark.parametrize("tolerance", [0.0, 5.0])
+def test_stagger_gives_up_on_two_vehicles_of_one_pad(tolerance: float) -> None:
+    """Two vehicles taking off from one spot: the second stands there while the first climbs
+    off it (and the first stands on its landing spot, which the second lands on), so no
+    launch clears them. The search still ends where it always did, at the first step more
+    than 2 tolerance after the first has landed, and SEPARATION fails it on the ground."""
+    a, b = _track(50), _track(50)
+    launches = stagger([a, b], tolerance=tolerance)
+    assert launches == [0.0, 50.0 + (10.0 if tolerance else 0.0)]
+    sep, links = fleet_time_verdicts([a, b.at(launches[1])], ["s0", "s1"])
+    assert not sep.passed and links.passed
+    assert sep.detail.startswith("closest: vehicles 1 and 2 10.0 m apart at 1 s") and \
+        sep.detail.endswith("(vehicle 2 on the ground)")
+
+
+def test_tracks_that_never_overlap_in_time_are_compared_on_the_ground() -> None:
+    """The second vehicle launched long after the first landed: LINKS has nothing to compare
+    (a vehicle on the ground receives nothing), SEPARATION compares each flying vehicle with
+    the other standing: from one pad 10 m (the first climbing off where the second waits),
+    from pads 40 m apart 41.2 m (the first 10 m up beside the second's pad)."""
+    a = _track(30, send=(0, 29))
     b = VehicleTrack(500.0, 1.0, a.xy, a.z, a.sending)
-    assert conflicts(a, b)[0] == np.inf
+    d, at, t_link, j, n = conflicts(a, b)
+    assert (d, at) == (10.0, 1.0) and np.isnan(t_link) and (j, n) == (-1, 0)
     sep, links = fleet_time_verdicts([a, b], ["s0", "s1"])
-    assert sep.passed and links.passed and "never two vehicles" in sep.detail
+    assert not sep.passed and links.passed and "(vehicle 2 on the ground)" in sep.detail
+    apart = _track(30, send=(0, 29), pad=40.0, launch=500.0)
+    assert conflicts(a, apart)[:2] == (pytest.approx(np.hypot(40.0, 10.0)), 1.0)
+    sep, links = fleet_time_verdicts([a, apart], ["s0", "s1"])
+    assert sep.passed and sep.margin == pytest.approx(np.hypot(40.0, 10.0) - 30.0)
+    assert links.passed
 
 
 @pytest.mark.parametrize("step", [5.0, 10.0])
 def test_stagger_step(step: float) -> None:
-    a, b = _track(100), _track(100)
-    assert stagger([a, b], step=step)[1] % step == 0.0
+    a, b = _track(100), _track(100, pad=40.0)
+    at = stagger([a, b], step=step)[1]
+    assert at % step == 0.0 and 0.0 < at < 99.0  # clear before a has landed
 
 
 SOLO = {"name": "solo", "origin": {"lat": 60.0, "lon": 10.0, "alt": 100.0},
@@ -241,14 +273,15 @@ def _tolerance_by_brute_force(tracks: list[VehicleTrack], separation: float, cap
 @pytest.mark.parametrize("seed", range(6))
 def test_timing_tolerance_equals_brute_force_and_stagger_keeps_it(seed: int) -> None:
     """`timing_tolerance` (pruned, searched outward) against every shift of every pair; and
-    `stagger(..., tolerance=W)` launches leave at least W (tolerance 0: the old launches)."""
+    `stagger(..., tolerance=W)` launches leave at least W (tolerance 0: the old launches).
+    Each vehicle has its own row of pads (40 m apart), so a launch always clears it."""
     from sim.fleet_time import timing_tolerance
 
     rng = np.random.default_rng(seed)
     tracks = [_track(int(rng.integers(40, 90)), x0=float(rng.choice([0.0, 15.0, 400.0, 3000.0])),
-                     speed=float(rng.uniform(5.0, 15.0)),
+                     speed=float(rng.uniform(5.0, 15.0)), pad=40.0 * (k + 1),
                      send=(int(rng.integers(0, 20)), int(rng.integers(20, 39))) if rng.random()
-                     < 0.5 else (0, 0)) for _ in range(3)]  # fmt: skip
+                     < 0.5 else (0, 0)) for k in range(3)]  # fmt: skip
     for w in (0.0, 5.0, 12.0):
         launches = stagger(tracks, tolerance=w, step=5.0)
         placed = [t.at(at) for t, at in zip(tracks, launches, strict=True)]
@@ -256,3 +289,21 @@ def test_timing_tolerance_equals_brute_force_and_stagger_keeps_it(seed: int) -> 
         assert got == _tolerance_by_brute_force(placed, SEPARATION_M, 20)
         assert got >= w
     assert stagger(tracks, tolerance=0.0, step=5.0) == stagger(tracks, step=5.0)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_timing_tolerance_equals_brute_force_on_the_ground_far_apart_in_time(seed: int
+                                                                             ) -> None:
+    """Pads shared or near (the rows 0, 20, 40 m), launches up to 300 s apart: pairs more than
+    2 cap apart in time still conflict when one flies over or near where the other stands
+    (the old time skip would miss them); `timing_tolerance` equals every shift of every pair."""
+    from sim.fleet_time import timing_tolerance
+
+    rng = np.random.default_rng(100 + seed)
+    tracks = [_track(int(rng.integers(20, 50)), x0=float(rng.choice([0.0, 15.0, 200.0])),
+                     speed=float(rng.uniform(5.0, 15.0)), pad=float(rng.choice([0.0, 20.0, 40.0])),
+                     launch=float(rng.integers(0, 300)),
+                     send=(int(rng.integers(0, 10)), int(rng.integers(10, 19))) if rng.random()
+                     < 0.3 else (0, 0)) for _ in range(3)]  # fmt: skip
+    assert timing_tolerance(tracks, cap=10.0) == _tolerance_by_brute_force(tracks, SEPARATION_M,
+                                                                           10)
