@@ -1485,11 +1485,19 @@ def fleet_figure(
                 label=f"path inside obstacles (C5): {bad_total:.0f} m",
             )
         )
-    # depots: every take-off and landing position, named as fleet.json names them
+    # depots: every take-off and landing position, named as fleet.json names them; a named
+    # depot of the map is drawn once, at the depot, each vehicle's own pad beside it (a
+    # vehicle's pad: planner_core.model.pads) as a small square in the vehicle's colour
+    where = dict(_map_depots(map))
     depots: dict[tuple[float, float], set[str]] = {}
+    pads: dict[tuple[float, float], int] = {}
     for sv in sorties:
         p = np.asarray(sv.timeline.path, dtype=float)
         for xy, name in ((p[0], sv.depot_start), (p[-1], sv.depot_end)):
+            home = where.get(name) if name else None
+            if home is not None and np.hypot(xy[0] - home[0], xy[1] - home[1]) > 1.0:
+                pads[(round(float(xy[0]), 1), round(float(xy[1]), 1))] = sv.vehicle
+                xy = home
             key = (round(float(xy[0]), 1), round(float(xy[1]), 1))
             depots.setdefault(key, set())
             if name:
@@ -1502,6 +1510,9 @@ def fleet_figure(
             scene.labels.append(_Label(" / ".join(sorted(names)), (x, y),
                                        {"fontsize": 8, "fontweight": "bold", "zorder": 9,
                                         "bbox": _TEXT_BOX}, 7.5))  # fmt: skip
+    for (x, y), v in pads.items():
+        ax.plot(x, y, marker="s", markersize=6, color=_vehicle_colour(v), markeredgecolor="k",
+                markeredgewidth=0.8, zorder=7, linestyle="")  # fmt: skip
     # the map's other depots, where no sortie takes off or lands: lighter, named in the legend
     used = {n for names in depots.values() for n in names}
     idle = [(name, xy) for name, xy in _map_depots(map) if name not in used and not any(
@@ -1529,10 +1540,16 @@ def fleet_figure(
             ax.plot(*at, marker="*", markersize=15, color=_vehicle_colour(v),
                     markeredgecolor="k", zorder=8, linestyle="")  # fmt: skip
             scene.marker(at, 7.5)
-            here.setdefault((round(float(at[0])), round(float(at[1]))), []).append((v, j))
+            # the label at the depot (the vehicles' pads around it share it)
+            label_at = where.get(a.depot_end, at) if a.depot_end else at
+            here.setdefault((round(float(label_at[0])), round(float(label_at[1]))),
+                            []).append((v, j))
             off = np.asarray(b.timeline.path, dtype=float)[0]
-            if not np.allclose(at, off, atol=1.0):
-                leave.setdefault((round(float(off[0])), round(float(off[1]))), []).append((v, j))
+            if a.depot_end != b.depot_start or (not a.depot_end
+                                                and not np.allclose(at, off, atol=1.0)):
+                leave_at = where.get(b.depot_start, off) if b.depot_start else off
+                leave.setdefault((round(float(leave_at[0])), round(float(leave_at[1]))),
+                                 []).append((v, j))
     for places, tail in ((here, ""), (leave, " (takes off here)")):
         for xy, who in places.items():
             colours = {_vehicle_colour(v) for v, _ in who}
@@ -1575,6 +1592,10 @@ def fleet_figure(
             label="depot",
         )
     )
+    if pads:
+        handles.append(Line2D([], [], marker="s", linestyle="", markersize=6,
+                              markerfacecolor="0.6", markeredgecolor="k",
+                              label="a vehicle's own pad (its colour)"))  # fmt: skip
     if idle:
         handles.append(Line2D([], [], marker="h", linestyle="", markersize=10,
                               markerfacecolor="0.93", markeredgecolor="0.55",

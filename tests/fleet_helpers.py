@@ -37,6 +37,10 @@ def write_fleet_dir(
         depots: name -> (x, y) m; default {"home": the map's start}.
         sortie_depots: (take-off depot, landing depot) per sortie; default the first depot.
 
+    Each vehicle takes off from and lands at its own pad at a depot of the map's (as `plan`
+    writes it: `Map.pads_for`, vehicle 1's the depot itself); a depot the map does not have
+    is flown from its given point.
+
     Returns:
         The directory.
     """
@@ -45,14 +49,19 @@ def write_fleet_dir(
     depots = depots or {"home": tuple(doc["start"])}
     first = next(iter(depots))
     by_id = {s["id"]: s for s in doc["sensors"]}
+    whole = load_map(doc)
+    names, _, _ = whole.sortie_sites
+    pads = whole.pads_for(max(len(routes), int(whole.uavs)))
+
+    def at(k: int, name: str) -> list[float]:
+        return pads[k, names.index(name)].tolist() if name in names else list(depots[name])
+
     vehicles = []
     for k, sorties in enumerate(routes):
         out = []
         for j, ids in enumerate(sorties):
             a, b = sortie_depots[k][j] if sortie_depots else (first, first)
-            sub = dict(
-                doc, sensors=[by_id[i] for i in ids], start=list(depots[a]), end=list(depots[b])
-            )
+            sub = dict(doc, sensors=[by_id[i] for i in ids], start=at(k, a), end=at(k, b))
             sub.pop("witness", None)
             m = load_map(sub)
             plan = SimpleNamespace(
