@@ -602,7 +602,8 @@ def _check(
             float(launches[v - 1]) if v <= len(launches) else 0.0 for v in flying]
         at = dict(zip(flying, given, strict=True))
         placed = [x.at(t) for x, t in zip(tracks, given, strict=True)]
-    air = fleet_time_verdicts(placed, tuple(m.sensor_ids), separation=sep)
+    air = fleet_time_verdicts(placed, tuple(m.sensor_ids), separation=sep,
+                              numbers=flying if placed else None)
     check = FleetCheck(tuple(out), tuple(combined), float(m.swap_s), (*shape, *air),
                        launches=tuple(at.get(v, 0.0) for v in range(1, max(flying, default=0)
                                                                     + 1)))

@@ -441,9 +441,11 @@ _MAP: tuple[Default, ...] = (
             "a crew flies tens of UAVs; 100 bounds the planner's split", integer=True),
     _ranged("fleet.swap_s", 300.0, "seconds a battery swap takes at a depot between sorties",
             0.0, 86_400.0, "a swap longer than a day is no swap"),
-    _ranged("fleet.separation_m", 30.0, "m, the least 3D distance between two vehicles in the "
-            "air: verify's SEPARATION, kept by plan's staggered launches (GNSS error, the 10 m "
-            "clearance and rotor wash, with room; set your airspace's rule)", 0.0, 1_000.0,
+    _ranged("fleet.separation_m", 30.0, "m, the least 3D distance between two vehicles while "
+            "one is in the air, the other in the air or on the ground: verify's SEPARATION, "
+            "kept by plan's staggered launches and each vehicle's own pad at a depot (this + 5 "
+            "m apart) (GNSS error, the 10 m clearance and rotor wash, with room; set your "
+            "airspace's rule)", 0.0, 1_000.0,
             ("0 m is a collision", "beyond a kilometre the vehicles of a map fly one after the "
              "other"), lo_open=True),
     _ranged("fleet.launch_tolerance_s", 30.0, "s, how far each sortie may take off from its "

@@ -246,7 +246,8 @@ def conflicts(a: VehicleTrack, b: VehicleTrack) -> tuple[float, float, float, in
 
 
 def fleet_time_verdicts(tracks: Sequence[VehicleTrack], sensor_ids: Sequence[str],
-                        separation: float = SEPARATION_M) -> list[Verdict]:
+                        separation: float = SEPARATION_M,
+                        numbers: Sequence[int] | None = None) -> list[Verdict]:
     """SEPARATION and LINKS over every pair of vehicles (module docstring): SEPARATION holds
     when no two vehicles, at least one airborne, come closer than `separation`, a vehicle
     standing at its first position before its launch and at its last after its last landing
@@ -257,6 +258,8 @@ def fleet_time_verdicts(tracks: Sequence[VehicleTrack], sensor_ids: Sequence[str
         sensor_ids: the map's sensors, in the order of the tracks' `sending` columns.
         separation: m, the least distance allowed: the map's `fleet.separation_m`
             (`Map.separation_m`), > 0.
+        numbers: each track's vehicle number as the details name it (fleet.json's; a
+            vehicle without a sortie has no track); default 1, 2, ... in order.
 
     Returns:
         [SEPARATION, LINKS]. SEPARATION's margin: least distance with at least one of the two
@@ -266,27 +269,30 @@ def fleet_time_verdicts(tracks: Sequence[VehicleTrack], sensor_ids: Sequence[str
         sensor, "steps" (0 when none does); its detail names the pair sharing the most steps
         (the first such pair in index order on a tie).
     """
+    no = list(numbers) if numbers is not None else list(range(1, len(tracks) + 1))
+    if len(no) != len(tracks):
+        raise ValueError(f"numbers: {len(no)} for {len(tracks)} tracks")
     least, worst, shared, steps, pairs = np.inf, None, None, 0, 0
     for i in range(len(tracks)):
         for k in range(i + 1, len(tracks)):
             d, at, t_link, j, n = conflicts(tracks[i], tracks[k])
             if d < least:
-                least, worst = d, (i + 1, k + 1, at)
+                least, worst = d, (i, k, at)
             if n:
                 steps, pairs = steps + n, pairs + 1
                 if shared is None or n > shared[4]:
-                    shared = (i + 1, k + 1, t_link, sensor_ids[j], n)
+                    shared = (no[i], no[k], t_link, sensor_ids[j], n)
     if worst is None:
         sep = Verdict("SEPARATION", f"vehicles >= {separation:g} m apart", True, np.inf, "m",
                       "never a vehicle in the air beside another")
     else:
-        v1, v2, at = worst
-        down = [v for v in (v1, v2) if _on_ground(tracks[v - 1], at)]
+        i1, i2, at = worst
+        down = [no[i] for i in (i1, i2) if _on_ground(tracks[i], at)]
         where = f" (vehicle {down[0]} on the ground)" if down else ""
         sep = Verdict("SEPARATION", f"vehicles >= {separation:g} m apart",
                       bool(least >= separation), float(least - separation), "m",
-                      f"closest: vehicles {v1} and {v2} {least:.1f} m apart at {at:.0f} s"
-                      f"{where}")
+                      f"closest: vehicles {no[i1]} and {no[i2]} {least:.1f} m apart at "
+                      f"{at:.0f} s{where}")
     if shared is None:
         links = Verdict("LINKS", "a sensor sends to one vehicle at a time", True, 0.0, "steps",
                         "no sensor heard by two vehicles at once")

@@ -204,7 +204,8 @@ def test_verify_reads_each_vehicles_launch_by_its_number_when_one_has_no_sortie(
     (d / "fleet.json").write_text(json.dumps(doc))
     sep = next(v for v in verify_sortie_dir(load_map(DEMO_MAP), d).fleet
                if v.name == "SEPARATION")
-    assert not sep.passed
+    # named by their numbers in fleet.json (vehicle 1 flies nothing: they were "1 and 2")
+    assert not sep.passed and "closest: vehicles 2 and 3 " in sep.detail, sep.detail
 
 
 def test_separation_is_the_callers_and_defaults_to_the_maps_default() -> None:
