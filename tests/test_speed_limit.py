@@ -149,3 +149,25 @@ def test_mock_vehicle_param_option_is_checked(capsys) -> None:
                       ("X=1e39", "is not a number")):
         assert main(["mock-vehicle", "--param", bad]) == 2
         assert said in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("via", ["pymavlink", pytest.param("mavsdk", marks=pytest.mark.slow)])
+def test_autopilot_px4_on_an_ardupilot_vehicle_says_so_and_reads_no_px4_parameter(
+        demo_plan, capsys, via) -> None:
+    """--autopilot px4 on a vehicle whose HEARTBEAT says ArduPilot: the upload read PX4's
+    MPC_XY_VEL_MAX from it, waited out the parameter timeout and said only that the vehicle
+    did not answer. It now says the vehicle is ArduPilot, stores as asked and reads nothing
+    (ArduPilot then keeps item 0 as its home: the read-back differs, exit 1, as it should)."""
+    port = free_udp_port()
+    conn = ["--connect", f"udpin://127.0.0.1:{port}", "--via", via, "--timeout", "10"]
+    with MockVehicle(f"udpout:127.0.0.1:{port}", heartbeat_hz=10.0, autopilot="ardupilot"):
+        assert main(["upload", str(demo_plan), *conn, "--map", str(DEMO),
+                     "--autopilot", "px4"]) == 1  # fmt: skip
+    cap = capsys.readouterr()
+    said = cap.out + cap.err
+    assert ("--autopilot px4, but the vehicle's HEARTBEAT says ardupilot: the mission is "
+            "stored and compared as px4 asks") in said
+    assert "MPC_XY_VEL_MAX is px4's and the vehicle says it is ardupilot: its speed limit is "\
+        "not read" in said
+    assert "did not say its MPC_XY_VEL_MAX" not in said
+    assert "read-back differs from what was sent" in said

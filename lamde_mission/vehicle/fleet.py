@@ -433,14 +433,15 @@ def _read_speed_limits(
 ) -> dict[int, tuple[str, float] | None]:
     """Each vehicle's horizontal speed limit, read before anything is sent (`upload_fleet`'s
     speed_check): a short connection of its own per vehicle with a mission, the parameter of
-    its dialect (`transfer.SPEED_LIMIT_PARAM`; the HEARTBEAT's autopilot unless `autopilot`).
+    its dialect (`transfer.speed_limit_param`; the HEARTBEAT's autopilot unless `autopilot`,
+    none read when the HEARTBEAT names another autopilot than `autopilot`).
 
     Returns:
         {vehicle: (parameter, m/s), or None when it did not answer or could not be reached}
         for the vehicles whose dialect has such a parameter.
     """
     from lamde_mission.storage import dialect_for_autopilot, dialect_of
-    from lamde_mission.vehicle.transfer import PARAM_TIMEOUT_S, SPEED_LIMIT_PARAM
+    from lamde_mission.vehicle.transfer import PARAM_TIMEOUT_S, speed_limit_param
     from lamde_mission.vehicle.upload import make_client
 
     out: dict[int, tuple[str, float] | None] = {}
@@ -451,9 +452,9 @@ def _read_speed_limits(
                              system_id=sid)  # fmt: skip
         try:
             info = client.connect(timeout)
-            dialect = (dialect_of(autopilot) if autopilot is not None
-                       else dialect_for_autopilot(info.autopilot))  # fmt: skip
-            name = SPEED_LIMIT_PARAM.get(dialect.name)
+            heard = dialect_for_autopilot(info.autopilot)
+            dialect = dialect_of(autopilot) if autopilot is not None else heard
+            name = speed_limit_param(dialect, heard)
             if name is not None:
                 value = client.read_param(name, min(timeout, PARAM_TIMEOUT_S))
                 out[fm.vehicle] = None if value is None else (name, float(value))

@@ -70,6 +70,24 @@ class SpeedLimitError(VehicleError):
 #: (m/s; 12 by default). ArduPilot Copter's WPNAV_SPEED is the speed a mission starts at, which
 #: DO_CHANGE_SPEED replaces: no cap is read there.
 SPEED_LIMIT_PARAM: dict[str, str] = {"px4": "MPC_XY_VEL_MAX"}
+
+
+def speed_limit_param(asked: Dialect, heard: Dialect) -> str | None:
+    """The speed limit parameter to read from a vehicle: the asked dialect's
+    (`SPEED_LIMIT_PARAM`), unless the vehicle's HEARTBEAT names another autopilot (an
+    ArduPilot vehicle uploaded with --autopilot px4 has no MPC_XY_VEL_MAX: asking would only
+    wait out `PARAM_TIMEOUT_S`); a generic HEARTBEAT names none.
+
+    Args:
+        asked: the dialect the mission is stored in (--autopilot, or the HEARTBEAT's).
+        heard: the dialect of the HEARTBEAT's autopilot field (`dialect_for_autopilot`).
+
+    Returns:
+        The parameter's name, or None.
+    """
+    if heard.name != "generic" and heard.name != asked.name:
+        return None
+    return SPEED_LIMIT_PARAM.get(asked.name)
 #: s to wait for the vehicle's answer to the parameter read
 PARAM_TIMEOUT_S = 3.0
 
@@ -504,9 +522,15 @@ def upload_and_verify(
     try:
         t0 = time.monotonic()
         report.vehicle = client.connect(timeout)
-        dialect = (dialect_of(autopilot) if autopilot is not None
-                   else dialect_for_autopilot(report.vehicle.autopilot))  # fmt: skip
+        heard = dialect_for_autopilot(report.vehicle.autopilot)
+        dialect = dialect_of(autopilot) if autopilot is not None else heard
         report.dialect = dialect.name
+        # the HEARTBEAT names another autopilot than the one asked for (generic says nothing)
+        other = heard.name != "generic" and heard.name != dialect.name
+        if other:
+            report.notes.append(f"--autopilot {dialect.name}, but the vehicle's HEARTBEAT says "
+                                f"{heard.name}: the mission is stored and compared as "
+                                f"{dialect.name} asks")  # fmt: skip
         sent, notes = mission_for_dialect(mission, dialect)
         report.notes.extend(notes)
         up_mission = wire_mission(sent, MISSION_TYPE.MISSION)
@@ -514,8 +538,12 @@ def upload_and_verify(
         report.rally_items = None if up_rally is None else len(up_rally)
         report.connect_s = time.monotonic() - t0
         say(f"connected to {report.vehicle.describe()} in {report.connect_s:.2f} s")
-        param = SPEED_LIMIT_PARAM.get(dialect.name)
-        if speed_check is not None and param is not None:
+        param = speed_limit_param(dialect, heard)
+        if speed_check is not None and other and SPEED_LIMIT_PARAM.get(dialect.name):
+            report.notes.append(f"{SPEED_LIMIT_PARAM[dialect.name]} is {dialect.name}'s and the "
+                                f"vehicle says it is {heard.name}: its speed limit is not "
+                                "read")  # fmt: skip
+        elif speed_check is not None and param is not None:
             value = client.read_param(param, min(timeout, PARAM_TIMEOUT_S))
             if value is None:
                 report.notes.append(f"the vehicle did not say its {param} in "
