@@ -264,3 +264,21 @@ def test_a_component_within_c3_takes_the_simultaneous_lp_with_the_same_value() -
         assert np.all(R.T @ T >= req * (1 - 1e-9))
         y = hover_lp(R, req, 300.0)[2]
         assert np.allclose(L, np.where(R > 0, (y / req)[None, :], 0.0))
+
+
+def test_link_components_equal_scipys_connected_components_on_random_links() -> None:
+    """`hoverlp.link_components` (compiled union-find, what `scheduled_lp_links` splits its LP
+    by) against its scipy twin: the same components, points and sensors ascending in each,
+    in the order of their first point; unlinked points and sensors in none."""
+    from planner_core.model.hoverlp import link_components, link_components_reference
+
+    rng = np.random.default_rng(11)
+    for _ in range(200):
+        n, J = int(rng.integers(1, 40)), int(rng.integers(1, 60))
+        pi, pj = np.nonzero(rng.random((n, J)) < rng.uniform(0.005, 0.2))
+        fast, slow = link_components(pi, pj, n, J), link_components_reference(pi, pj, n, J)
+        assert len(fast) == len(slow)
+        for (r1, c1), (r2, c2) in zip(fast, slow, strict=True):
+            assert np.array_equal(r1, r2) and np.array_equal(c1, c2)
+        if len(pi):
+            assert sorted(np.concatenate([r for r, _ in fast]).tolist()) == sorted(set(pi.tolist()))

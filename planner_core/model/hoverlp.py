@@ -872,9 +872,6 @@ def scheduled_lp_links(
     Returns:
         (T (I,) s, V = sum T s, L (I, J) >= 0 per Mbit/s, dense), or None as `scheduled_lp`.
     """
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
     R = np.ascontiguousarray(R, dtype=float)
     req = np.asarray(req, dtype=float).reshape(-1)
     n, J = R.shape
@@ -887,16 +884,8 @@ def scheduled_lp_links(
     T, L = np.zeros(n), np.zeros((n, J))
     if not len(pi):
         return T, 0.0, L
-    graph = coo_matrix((np.ones(len(pi)), (pi, n + pj)), shape=(n + J, n + J))
-    _, label = connected_components(graph, directed=False)
-    comp = label[pi]
-    order = np.argsort(comp, kind="stable")  # each component's pairs, still row-major
-    cut = np.flatnonzero(np.diff(comp[order])) + 1
-    for idx in np.split(order, cut):
-        ri = pi[idx]
-        rows = ri[np.r_[True, ri[1:] != ri[:-1]]]
-        cols = np.unique(pj[idx])
-        sub = R[rows][:, cols]
+    for rows, cols in link_components(pi, pj, n, J):
+        sub = R[np.ix_(rows, cols)]
         key = (sub.shape, sub.tobytes(), req[cols].tobytes(), float(bandwidth), float(t_max))
         cache = _scheduled_cache()
         got = cache.pop(key, None)
@@ -922,6 +911,105 @@ def scheduled_lp_links(
         T[rows] = got[0]
         L[rows[:, None], cols[None, :]] = got[1]
     return T, float(T.sum()), L
+
+
+def link_components(pi: np.ndarray, pj: np.ndarray, n: int,
+                    J: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The connected components of the bipartite graph of n points and J sensors joined by
+    the links (pi[e], pj[e]): per component its points and its sensors, each ascending, the
+    components in the order of their first point (what `scheduled_lp_links` solves one by
+    one). Compiled union-find (`_link_labels`); `link_components_reference` is the scipy
+    twin. Cost: O(E alpha(E) + n + J) for E links.
+
+    Args:
+        pi: (E,) point index of each link (0..n-1).
+        pj: (E,) sensor index of each link (0..J-1).
+        n: points; J: sensors.
+
+    Returns:
+        [(rows (k,) int, cols (m,) int)] per component; points and sensors without a link
+        are in none.
+    """
+    label, k = _link_labels(np.asarray(pi, dtype=np.int64), np.asarray(pj, dtype=np.int64),
+                            int(n), int(J))  # fmt: skip
+    return _groups(label[:n], label[n:], k)
+
+
+def _groups(pl: np.ndarray, sl: np.ndarray, k: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Points and sensors grouped by their component label (-1: none), ascending in each."""
+    rows = np.argsort(pl, kind="stable")
+    rows = rows[pl[rows] >= 0]
+    cols = np.argsort(sl, kind="stable")
+    cols = cols[sl[cols] >= 0]
+    r_cut = np.cumsum(np.bincount(pl[rows], minlength=k))
+    c_cut = np.cumsum(np.bincount(sl[cols], minlength=k))
+    return [(rows[(r_cut[c - 1] if c else 0):r_cut[c]], cols[(c_cut[c - 1] if c else 0):c_cut[c]])
+            for c in range(k)]
+
+
+def link_components_reference(pi: np.ndarray, pj: np.ndarray, n: int,
+                              J: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Slow, obviously correct twin of `link_components` (scipy's connected components on the
+    (n + J)-node graph; components relabelled in the order of their first point).
+
+    Args:
+        pi, pj, n, J: as `link_components`.
+
+    Returns:
+        As `link_components`.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    graph = coo_matrix((np.ones(len(pi)), (pi, n + pj)), shape=(n + J, n + J))
+    _, label = connected_components(graph, directed=False)
+    used = np.zeros(n + J, dtype=bool)
+    used[pi] = True
+    used[n + np.asarray(pj)] = True
+    first: dict[int, int] = {}
+    for node in range(n + J):
+        if used[node] and label[node] not in first:
+            first[int(label[node])] = len(first)
+    lab = np.array([first[int(label[x])] if used[x] else -1 for x in range(n + J)], dtype=int)
+    return _groups(lab[:n], lab[n:], len(first))
+
+
+@njit(cache=True, fastmath=False, nogil=True)
+def _link_labels(pi, pj, n, J):  # pragma: no cover - compiled
+    """Union-find over the links (node p for point p, n + j for sensor j): each linked node's
+    component label, 0.. in the order of the component's lowest node, -1 for a node without a
+    link; and the number of components."""
+    parent = np.arange(n + J)
+    used = np.zeros(n + J, dtype=np.bool_)
+    for e in range(len(pi)):
+        a = pi[e]
+        b = n + pj[e]
+        used[a] = True
+        used[b] = True
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        while parent[b] != b:
+            parent[b] = parent[parent[b]]
+            b = parent[b]
+        if a < b:
+            parent[b] = a
+        elif b < a:
+            parent[a] = b
+    label = np.full(n + J, -1, dtype=np.int64)
+    of_root = np.full(n + J, -1, dtype=np.int64)
+    k = 0
+    for x in range(n + J):
+        if not used[x]:
+            continue
+        r = x
+        while parent[r] != r:
+            r = parent[r]
+        if of_root[r] < 0:
+            of_root[r] = k
+            k += 1
+        label[x] = of_root[r]
+    return label, k
 
 
 #: components `scheduled_lp_links` keeps solved (per thread), the least recently used

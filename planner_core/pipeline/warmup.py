@@ -121,6 +121,9 @@ def warm_up(configurator: Any = "adaptive") -> float:
 
     A = np.ascontiguousarray(np.array([[1.0, 0.5], [0.5, 1.0]]))
     hoverlp._rest_simplex(A, hoverlp._TARGET, 300.0, np.empty(2), np.zeros(2))
+    # scheduled access's LP components (`hoverlp.link_components`): maps with
+    # radio.access "scheduled" only
+    hoverlp.link_components(np.array([0, 1]), np.array([0, 0]), 2, 1)
     _WARM.add(_key(configurator))
     return time.perf_counter() - t0
 
