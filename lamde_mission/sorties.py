@@ -190,13 +190,14 @@ def output_in_sortie_dir(path: str | Path, out_dir: str | Path) -> str | None:
 
 def sortie_map(
     m: Any, start: str, end: str, required: np.ndarray | None = None, name: str | None = None,
-    vehicle: int = 1,
+    pads: tuple[int, int] = (0, 0),
 ) -> Any:
-    """The map one sortie is stored and replayed on: `m` with start and end at `vehicle`'s
-    pads (`Map.vehicle_pads`; vehicle 1's are the depots themselves) at the depots named
-    `start` and `end` (`planner_core.fleet.FleetSettings` names: the map's depots, or "home"
-    and "end"), sensors' required data `required` (J,) Mbit (default 0: the whole plan's C4
-    is judged over all sorties), the battery kept (ENERGY), the fleet left out.
+    """The map one sortie is stored and replayed on: `m` with start and end at pads
+    `pads` (`Map.pads_for`; pad 0 the depot itself; which vehicle uses which:
+    `planner_core.model.pads.pad_ranks`) of the depots named `start` and `end`
+    (`planner_core.fleet.FleetSettings` names: the map's depots, or "home" and "end"),
+    sensors' required data `required` (J,) Mbit (default 0: the whole plan's C4 is judged
+    over all sorties), the battery kept (ENERGY), the fleet left out.
 
     Args:
         m: the whole map (with its battery or fleet).
@@ -204,8 +205,8 @@ def sortie_map(
         end: the depot it lands at.
         required: (J,) Mbit per sensor (user units, before the data margin); None: zeros.
         name: the sortie map's name (default m's).
-        vehicle: the vehicle flying it, 1-based (beyond the map's `fleet.uavs`: its pad in
-            the layout for that many, `Map.pads_for`; the UAVS verdict fails such a plan).
+        pads: (pad at `start`, pad at `end`), 0-based (beyond the map's `fleet.uavs`: the
+            layout for that many, `Map.pads_for`; the UAVS verdict fails such a plan).
 
     Returns:
         The loaded sortie `Map`.
@@ -223,9 +224,8 @@ def sortie_map(
             raise ValueError(f"depot: unknown depot '{d}' (the map's are "
                              f"{', '.join(names)})")  # fmt: skip
     req = np.zeros(len(m.sensor_ids)) if required is None else np.asarray(required, float)
-    v = int(vehicle) - 1
-    pads = m.pads_for(max(int(m.uavs), v + 1))
-    a, b = (pads[v, names.index(d)] for d in (start, end))
+    layout = m.pads_for(max(int(m.uavs), int(max(pads)) + 1))
+    a, b = (layout[int(k), names.index(d)] for k, d in zip(pads, (start, end), strict=True))
     return load_map(sortie_map_dict(m, a, b, req, name=name))
 
 
@@ -271,13 +271,10 @@ class SortieCheck:
         return np.asarray(self.timeline.xy[-1], dtype=float)
 
 
-#: compass points of `pad_words`, from north clockwise
-_COMPASS = ("N", "NE", "E", "SE", "S", "SW", "W", "NW")
-
-
 def pad_words(m: Any, depot: str, xy: np.ndarray) -> str:
     """A depot's name and, when a sortie takes off or lands beside it (its vehicle's own pad,
-    `Map.vehicle_pads`), how far and which way: "north" or "north, pad 35 m E".
+    `Map.vehicle_pads`), where, as a crew paces it from the depot: "north" or "north, pad 35 m
+    N, 35 m E" (`planner_core.model.pads.offset_words`).
 
     Args:
         m: the plan's map.
@@ -287,26 +284,31 @@ def pad_words(m: Any, depot: str, xy: np.ndarray) -> str:
     Returns:
         The words (printable).
     """
+    from planner_core.model.pads import offset_words
     from planner_core.textio import printable
 
     names, sites, _ = m.sortie_sites
     if depot not in names:
         return printable(depot)
     dx, dy = np.asarray(xy, dtype=float) - sites[list(names).index(depot)]
-    far = float(np.hypot(dx, dy))
-    if far < 0.5:
+    if float(np.hypot(dx, dy)) < 0.5:
         return printable(depot)
-    way = _COMPASS[int(np.round(np.degrees(np.arctan2(dx, dy)) / 45.0)) % 8]
-    return f"{printable(depot)}, pad {far:.0f} m {way}"
+    return f"{printable(depot)}, pad {offset_words(dx, dy)}"
 
 
-def _position(m: Any, xy: np.ndarray) -> dict[str, float]:
-    """{"x", "y" (local m), "lat", "lon" (WGS84 degrees, 1e-7)} of a point of map m."""
+def _position(m: Any, xy: np.ndarray, depot: str | None = None) -> dict[str, float]:
+    """{"x", "y" (local m), "lat", "lon" (WGS84 degrees, 1e-7)} of a point of map m, and with
+    a depot's name its "east_m", "north_m" from that depot (a pad, as a crew lays it out)."""
     from lamde_mission.geo import enu_to_latlon
 
     lat, lon = enu_to_latlon(xy[0], xy[1], m)
-    return {"x": round(float(xy[0]), 3), "y": round(float(xy[1]), 3),
-            "lat": round(float(lat), 7), "lon": round(float(lon), 7)}  # fmt: skip
+    out = {"x": round(float(xy[0]), 3), "y": round(float(xy[1]), 3),
+           "lat": round(float(lat), 7), "lon": round(float(lon), 7)}  # fmt: skip
+    names, sites, _ = m.sortie_sites
+    if depot is not None and depot in names:
+        dx, dy = np.asarray(xy, dtype=float) - sites[list(names).index(depot)]
+        out.update(east_m=round(float(dx), 2), north_m=round(float(dy), 2))
+    return out
 
 
 @dataclass(frozen=True)
@@ -575,14 +577,16 @@ def _check(
     {vehicle: m/s}, each such vehicle's sorties flown at most at its own speed limit
     (`sim.replay`'s speed_limit), on the same launch times."""
     from lamde_mission.launches import stagger
+    from planner_core.model.pads import pad_ranks
     from sim import replay, verify
     from sim.fleet_time import fleet_time_verdicts, track
     from sim.sorties import combined_data_verdicts
 
     out = []
     req = np.asarray(m.required_data, dtype=float)
+    rank = pad_ranks((v, d) for v, _k, _f, a, b, _i in rows for d in (a, b))
     for v, k, f, a, b, items in rows:
-        sm = sortie_map(m, a, b, name=f"{m.name} v{v} s{k}", vehicle=v)
+        sm = sortie_map(m, a, b, name=f"{m.name} v{v} s{k}", pads=(rank[(v, a)], rank[(v, b)]))
         tl = replay(items, sm, speed_limit=(speed_limits or {}).get(v))
         out.append(SortieCheck(v, k, f, a, b, tl, verify(tl, sm), _served(tl, req)))
     combined = combined_data_verdicts([s.timeline for s in out], m)
@@ -664,10 +668,104 @@ def verify_sortie_dir(m: Any, path: str | Path,
     check = _check(m, rows, len(fleet.vehicles), fleet.path,
                    [veh.launch_s for veh in fleet.vehicles], speed_limits)
     given = [(veh.vehicle, s.sortie, s.takeoff_s) for veh in fleet.vehicles for s in veh.sorties]
+    places = [(s.takeoff_at, s.landing_at) for veh in fleet.vehicles for s in veh.sorties]
     check = replace(check, fleet=(*check.fleet, _times_verdict(
-        given, check.takeoffs(), fleet.swap_s, float(m.swap_s))))
-    note = fleet.map_note(m.name, "verified")
-    return check if note is None else replace(check, notes=(note,))
+        given, check.takeoffs(), fleet.swap_s, float(m.swap_s)), _places_verdict(
+        m, check, places, fleet.depots)))
+    notes = [n for n in (fleet.map_note(m.name, "verified"), _pads_note(m, check)) if n]
+    return replace(check, notes=tuple(notes)) if notes else check
+
+
+#: m: a place fleet.json gives this far from the mission's is another place (a position on
+#: the 1e-7 degree grid moves by about 1 cm)
+PLACE_TOL_M = 0.1
+
+
+def _places_verdict(m: Any, check: FleetCheck, places: list[tuple[Any, Any]],
+                    depots: dict[str, tuple[float, float]]) -> Any:
+    """PLACES: the take-off and landing places fleet.json gives (each vehicle's pad, which
+    `upload --fleet` prints for the crew) are the missions' own, and the depots it names are
+    the map's. A hand-edited place (two vehicles told to stand on one spot) fails it.
+
+    Args:
+        m: the map verified on.
+        check: the replays, in fleet.json's order of sorties.
+        places: per sortie (takeoff_at, landing_at) as fleet.json gives them ((lat, lon) or
+            None).
+        depots: fleet.json's depots {name: (lat, lon)} (empty when it gives none).
+
+    Returns:
+        The `sim.checks.Verdict` (its margin minus the largest distance beyond the tolerance).
+    """
+    from lamde_mission.geo import latlon_to_enu
+    from sim.checks import Verdict
+
+    title = "fleet.json's take-off and landing places are the missions'"
+    off: list[tuple[float, str]] = []
+    n = 0
+    for sc, (t_at, l_at) in zip(check.sorties, places, strict=True):
+        for what, given, xy in (("takes off", t_at, sc.takeoff_xy),
+                                ("lands", l_at, sc.landing_xy)):
+            if given is None:
+                continue
+            n += 1
+            x, y = latlon_to_enu(given[0], given[1], m)
+            d = float(np.hypot(float(x) - xy[0], float(y) - xy[1]))
+            if d > PLACE_TOL_M:
+                off.append((d, f"vehicle {sc.vehicle} sortie {sc.sortie} {what} at lat "
+                               f"{given[0]:.7f}, lon {given[1]:.7f} in fleet.json, {d:.1f} m "
+                               f"from where its mission {what}"))  # fmt: skip
+    names, sites, _ = m.sortie_sites
+    for name, (lat, lon) in depots.items():
+        if name not in names:
+            continue
+        x, y = latlon_to_enu(lat, lon, m)
+        d = float(np.hypot(float(x) - sites[list(names).index(name)][0],
+                           float(y) - sites[list(names).index(name)][1]))
+        if d > PLACE_TOL_M:
+            off.append((d, f"depot '{name}' at lat {lat:.7f}, lon {lon:.7f} in fleet.json, "
+                           f"{d:.1f} m from the map's"))  # fmt: skip
+    if not off:
+        return Verdict("PLACES", title, True, 0.0, "m",
+                       f"the {n} places fleet.json gives are the missions' own" if n else
+                       "fleet.json gives no places (written before each vehicle had its own "
+                       "pad)")  # fmt: skip
+    off.sort(key=lambda o: -o[0])
+    more = f"; {len(off)} places differ" if len(off) > 1 else ""
+    return Verdict("PLACES", title, False, -(off[0][0] - PLACE_TOL_M), "m",
+                   f"{off[0][1]}{more}: upload prints fleet.json's places for the crew, the "
+                   "vehicles fly the missions'")  # fmt: skip
+
+
+def _pads_note(m: Any, check: FleetCheck) -> str | None:
+    """When a sortie's ENDS fails because its mission takes off or lands on another spot than
+    its vehicle's pad on this map: a line saying so (a directory planned before each vehicle
+    had its own pad, or with another fleet.separation_m, safety.clearance or obstacles near a
+    depot, is planned again)."""
+    from planner_core.model.pads import pad_ranks
+
+    worst = None
+    names, _, _ = m.sortie_sites
+    rank = pad_ranks((sc.vehicle, d) for sc in check.sorties
+                     for d in (sc.depot_start, sc.depot_end))  # fmt: skip
+    for sc in check.sorties:
+        if not any(v.name == "ENDS" and not v.passed for v in sc.verdicts):
+            continue
+        if sc.depot_start not in names:
+            continue
+        k = rank[(sc.vehicle, sc.depot_start)]
+        pad = m.pads_for(max(int(m.uavs), k + 1))[k, list(names).index(sc.depot_start)]
+        d = float(np.hypot(*(sc.takeoff_xy - pad)))
+        if worst is None or d > worst[0]:
+            worst = (d, sc, pad)
+    if worst is None:
+        return None
+    d, sc, pad = worst
+    return (f"vehicle {sc.vehicle} sortie {sc.sortie} takes off {d:.1f} m from its pad at "
+            f"'{sc.depot_start}' on this map ({pad_words(m, sc.depot_start, pad)}; each vehicle "
+            f"has its own pad, fleet.separation_m + 5 m apart): a directory planned before "
+            "pads, or on a map with another fleet.separation_m, safety.clearance or obstacles "
+            "near a depot, is planned again")
 
 
 #: s: a fleet.json take-off time this far from the plan's clock is another time (rounding of
@@ -736,8 +834,8 @@ def summary_dict(m: Any, check: FleetCheck, goal: str) -> dict[str, Any]:
             "sorties": [{
                 "sortie": s.sortie, "file": s.file, "depot_start": s.depot_start,
                 "depot_end": s.depot_end,
-                "takeoff_at": _position(m, s.takeoff_xy),
-                "landing_at": _position(m, s.landing_xy),
+                "takeoff_at": _position(m, s.takeoff_xy, s.depot_start),
+                "landing_at": _position(m, s.landing_xy, s.depot_end),
                 "takeoff_s": (at := check.takeoff(v, k + 1)),
                 "landing_s": at + s.duration_s,
                 "duration_s": s.duration_s,
@@ -750,9 +848,12 @@ def summary_dict(m: Any, check: FleetCheck, goal: str) -> dict[str, Any]:
         })  # fmt: skip
     tolerance = {} if check.timing_tolerance_s is None else {
         "timing_tolerance_s": check.timing_tolerance_s}
+    used = sorted({d for x in check.sorties for d in (x.depot_start, x.depot_end)})
+    names, sites, _ = m.sortie_sites
     out: dict[str, Any] = {
         "map": m.name,
         "objective": goal,
+        "depots": {d: _position(m, sites[list(names).index(d)]) for d in used if d in names},
         "vehicles": vehicles,
         "total_s": check.total_s,
         "swaps": check.swaps,
@@ -810,6 +911,7 @@ def write_sortie_dir(
     from lamde_mission.storage import storable_plan, stored_items
     from planner_core.fleet import collected_by_sortie
     from planner_core.model.formulas import ModelParams
+    from planner_core.model.pads import pad_ranks
 
     st = plan.settings
     if goal is not None and goal != st.goal:
@@ -836,11 +938,15 @@ def write_sortie_dir(
     try:
         rows = []
         k = 0
+        # each vehicle's pads as verify finds them (the plan's own when it is on its pads:
+        # `planner_core.fleet.search.on_pads` counts them the same way)
+        rank = pad_ranks((v, st.depot_names[d]) for v, vs in enumerate(plan.vehicles, start=1)
+                         for s in vs for d in (s.start, s.end))  # fmt: skip
         for v, vs in enumerate(plan.vehicles, start=1):
             for n, s in enumerate(vs, start=1):
                 a, b = st.depot_names[s.start], st.depot_names[s.end]
                 sm = sortie_map(m, a, b, shares[k] / margin, name=f"{m.name} v{v} s{n}",
-                                vehicle=v)
+                                pads=(rank[(v, a)], rank[(v, b)]))
                 k += 1
                 spm = sm.planning_map()
                 p = SimpleNamespace(hover_points=s.points, hover_times=s.times)

@@ -13,6 +13,7 @@ from lamde_mission.formats import write_mission
 from lamde_mission.formats.fleet import sortie_file_name
 from lamde_mission.items import plan_to_items
 from planner_core.model.mapio import load_map
+from planner_core.model.pads import pad_ranks
 from sim import replay
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -38,8 +39,8 @@ def write_fleet_dir(
         sortie_depots: (take-off depot, landing depot) per sortie; default the first depot.
 
     Each vehicle takes off from and lands at its own pad at a depot of the map's (as `plan`
-    writes it: `Map.pads_for`, vehicle 1's the depot itself); a depot the map does not have
-    is flown from its given point.
+    writes it: `Map.pads_for`, the vehicles using a depot in the order of their numbers,
+    `pad_ranks`); a depot the map does not have is flown from its given point.
 
     Returns:
         The directory.
@@ -52,9 +53,15 @@ def write_fleet_dir(
     whole = load_map(doc)
     names, _, _ = whole.sortie_sites
     pads = whole.pads_for(max(len(routes), int(whole.uavs)))
+    ends = [sortie_depots[k][j] if sortie_depots else (first, first)
+            for k, sorties in enumerate(routes) for j in range(len(sorties))]
+    who = [k for k, sorties in enumerate(routes) for _ in sorties]
+    rank = pad_ranks((k, d) for k, ab in zip(who, ends, strict=True) for d in ab)
 
     def at(k: int, name: str) -> list[float]:
-        return pads[k, names.index(name)].tolist() if name in names else list(depots[name])
+        if name not in names:
+            return list(depots[name])
+        return pads[rank[(k, name)], names.index(name)].tolist()
 
     vehicles = []
     for k, sorties in enumerate(routes):

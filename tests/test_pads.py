@@ -11,7 +11,7 @@ import pytest
 from planner_core.fleet.model import FleetPlan, FleetSettings, Sortie
 from planner_core.fleet.search import on_pads
 from planner_core.model.mapio import load_map
-from planner_core.model.pads import MAX_RINGS, PAD_MARGIN_M, pad_layout
+from planner_core.model.pads import MAX_RINGS, PAD_MARGIN_M, pad_layout, pad_ranks
 from tests.conftest import ROOT
 
 DEMO = ROOT / "examples" / "maps" / "fleet-demo.json"
@@ -152,18 +152,20 @@ def test_a_fleet_directory_gives_each_vehicle_its_pads_in_the_files(tmp_path, ca
     m = load_map(path)
     names, sites, _ = m.sortie_sites
     assert len(doc["vehicles"]) >= 2
+    rank = pad_ranks((veh["vehicle"], d) for veh in doc["vehicles"] for s in veh["sorties"]
+                     for d in (s["depot_start"], s["depot_end"]))
     for veh in doc["vehicles"]:
         v = veh["vehicle"]
         for s in veh["sorties"]:
             ends = ((s["takeoff_at"], s["depot_start"]), (s["landing_at"], s["depot_end"]))
             for at, depot in ends:
-                pad = m.vehicle_pads[v - 1, names.index(depot)]
+                pad = m.vehicle_pads[rank[(v, depot)], names.index(depot)]
                 assert [at["x"], at["y"]] == pytest.approx(pad.tolist(), abs=0.02)
             items, _fence = read_mission(out / s["file"])
             land = [it for it in items if it.command == 21][-1]
             assert (land.x, land.y) == pytest.approx((s["landing_at"]["lat"],
                                                       s["landing_at"]["lon"]), abs=2e-7)
-            if v > 1:
+            if rank[(v, s["depot_start"])] > 0:
                 assert f"{s['file']:<18} {s['depot_start']}, pad 35 m " in said
 
 
@@ -171,9 +173,9 @@ def test_check_and_plan_refuse_a_depot_without_room_for_the_pads(tmp_path, capsy
     from lamde_mission.cli import main
 
     path = tmp_path / "far-apart.json"
-    path.write_text(json.dumps(_demo(3, separation_m=1000.0)))  # 1,005 m between pads
-    line = ("fleet: depot 'north' has room for 1 of the 3 vehicles' pads (1005 m apart, "
-            "fleet.separation_m + 5 m)")
+    path.write_text(json.dumps(_demo(4, separation_m=1000.0)))  # 1,005 m between pads
+    line = ("fleet: depot 'home' has room for 3 of the 4 vehicles' pads (1005 m apart: "
+            "fleet.separation_m + 5 m; every depot holds a pad for each vehicle)")
     assert main(["check", str(path)]) == 1
     out = capsys.readouterr().out
     assert f"CANNOT  {line}" in out and "lower fleet.separation_m" in out
@@ -184,18 +186,38 @@ def test_check_and_plan_refuse_a_depot_without_room_for_the_pads(tmp_path, capsy
 
 
 def test_upload_names_each_vehicles_pad_for_the_crew(tmp_path, capsys):
+    """Two vehicles of one depot: upload says where to set each, paced from the depot, with the
+    position its mission takes off from (what the vehicle is sent), not fleet.json's."""
+    from lamde_mission.cli import main
     from lamde_mission.commands.upload import _print_takeoffs
-    from tests.fleet_helpers import plan_fleet_demo
+    from lamde_mission.sorties import write_sortie_dir
+    from tests.test_sorties_dir import _fleet_plan, _one_depot_map
 
-    _, d = plan_fleet_demo(tmp_path, uavs=3)
+    path = _one_depot_map(tmp_path, None, None)  # 2 UAVs, both from the map's start
+    m, plan = _fleet_plan(path)
+    d = tmp_path / "d"
+    check, written = write_sortie_dir(plan, m, d)
+    assert written, check.failed()
+    fleet = json.loads((d / "fleet.json").read_text())
+    assert len(fleet["vehicles"]) == 2
     capsys.readouterr()
     _print_takeoffs(str(d), 1)
     said = capsys.readouterr().out.splitlines()[-1]
-    doc = json.loads((d / "fleet.json").read_text())
-    want = ", ".join(
-        f"vehicle {v['vehicle']} at lat {v['sorties'][0]['takeoff_at']['lat']:.7f}, lon "
-        f"{v['sorties'][0]['takeoff_at']['lon']:.7f} ('{v['sorties'][0]['depot_start']}')"
-        for v in doc["vehicles"])
-    assert said == f"from their own pads (sortie 1): {want}"
-    first = [v["sorties"][0]["takeoff_at"] for v in doc["vehicles"]]
-    assert len({(p["lat"], p["lon"]) for p in first}) == len(first)  # no two share a spot
+    at = [v["sorties"][0]["takeoff_at"] for v in fleet["vehicles"]]
+    assert said == (
+        "set each vehicle on its own pad (sortie 1): vehicle 1 on 'home' itself (lat "
+        f"{at[0]['lat']:.7f}, lon {at[0]['lon']:.7f}), vehicle 2 on 35 m E of 'home' (lat "
+        f"{at[1]['lat']:.7f}, lon {at[1]['lon']:.7f})")
+    assert at[1]["east_m"] == pytest.approx(35.0, abs=0.02) and at[1]["north_m"] == \
+        pytest.approx(0.0, abs=0.02)
+    # a hand-edited fleet.json (both told to stand on vehicle 1's spot) changes nothing said,
+    # and verify's PLACES fails it
+    fleet["vehicles"][1]["sorties"][0]["takeoff_at"] = dict(at[0])
+    (d / "fleet.json").write_text(json.dumps(fleet))
+    _print_takeoffs(str(d), 1)
+    assert capsys.readouterr().out.splitlines()[-1] == said
+    assert main(["verify", str(path), str(d)]) == 1
+    out = capsys.readouterr().out
+    assert ("fleet PLACES fleet.json's take-off and landing places are the missions': FAIL; "
+            "vehicle 2 sortie 1 takes off at lat") in out
+    assert "35.0 m from where its mission takes off" in out

@@ -451,6 +451,7 @@ def test_plan_staggers_the_launches_to_the_maps_separation(tmp_path, capsys):
     map's 50 m rule, and both keep the map's rule in the air (it kept 30 m whatever the map
     said); `verify` fails the 30 m directory on the 50 m map (exit 1)."""
     from lamde_mission.sorties import write_sortie_dir
+    from planner_core.model.pads import pad_ranks
 
     checks = {}
     for sep in (None, 50.0):
@@ -459,11 +460,15 @@ def test_plan_staggers_the_launches_to_the_maps_separation(tmp_path, capsys):
         assert written, check.failed()
         checks[sep] = check
         names, sites, _ = m.sortie_sites
+        rank = pad_ranks((s.vehicle, d) for s in check.sorties
+                         for d in (s.depot_start, s.depot_end))
         for s in check.sorties:
             far = [float(np.hypot(*(xy - sites[names.index(d)])))
                    for xy, d in ((s.takeoff_xy, s.depot_start), (s.landing_xy, s.depot_end))]
-            want = 0.0 if s.vehicle == 1 else (sep or 30.0) + 5.0
-            assert far == pytest.approx([want, want], abs=0.05), (s.file, far)
+            want = [0.0 if rank[(s.vehicle, d)] == 0 else (sep or 30.0) + 5.0
+                    for d in (s.depot_start, s.depot_end)]
+            assert far == pytest.approx(want, abs=0.05), (s.file, far)
+        assert max(rank.values()) == 1  # the two share a depot
     sep30 = next(v for v in checks[None].fleet if v.name == "SEPARATION")
     sep50 = next(v for v in checks[50.0].fleet if v.name == "SEPARATION")
     assert sep30.passed and sep30.margin >= 0.0, sep30.detail

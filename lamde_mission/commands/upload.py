@@ -555,13 +555,19 @@ def _print_takeoffs(directory: str, sortie: int) -> None:
     """When each vehicle's sortie `sortie` takes off, as fleet.json gives it (`takeoff_s`, on
     the plan's clock; a directory written before take-off times has only each vehicle's
     `launch_s`, the first sortie's): the vehicles keep apart in the air and no sensor sends
-    to two at once only when they take off so (`lamde_mission.launches`); then where each
-    takes off, its own pad (`takeoff_at`), when fleet.json gives it."""
+    to two at once only when they take off so (`lamde_mission.launches`). Then where each
+    takes off, its own pad: the mission's NAV_TAKEOFF position (what the vehicle is sent),
+    paced from its depot where fleet.json gives the depot ("35 m N, 35 m E of 'yard'"), with
+    its latitude and longitude. `verify`'s PLACES holds fleet.json's places to the missions'."""
+    from lamde_mission.formats import MissionFileError, read_mission
     from lamde_mission.formats.fleet import read_fleet_dir
+    from lamde_mission.geo import latlon_to_enu
+    from planner_core.model.pads import offset_words
     from planner_core.textio import printable
 
+    fleet = read_fleet_dir(directory)
     times, pads = [], []
-    for v in read_fleet_dir(directory).vehicles:
+    for v in fleet.vehicles:
         if len(v.sorties) < sortie:
             continue
         s = v.sorties[sortie - 1]
@@ -570,16 +576,30 @@ def _print_takeoffs(directory: str, sortie: int) -> None:
             t = v.launch_s
         times.append(f"vehicle {v.vehicle} at +{t:.0f} s" if t is not None
                      else f"vehicle {v.vehicle} at a time fleet.json does not give")
-        if s.takeoff_at is not None:
-            where = f" ('{printable(s.depot_start)}')" if s.depot_start else ""
-            pads.append(f"vehicle {v.vehicle} at lat {s.takeoff_at[0]:.7f}, lon "
-                        f"{s.takeoff_at[1]:.7f}{where}")
+        try:
+            items, _ = read_mission(s.path)
+        except MissionFileError:
+            continue  # the upload itself says what is wrong with the file
+        up = [it for it in items if it.command == 22 and (it.x or it.y)]  # MAV_CMD_NAV_TAKEOFF
+        if not up:
+            continue
+        lat, lon = float(up[0].x), float(up[0].y)
+        depot = fleet.depots.get(s.depot_start or "")
+        if depot is not None:
+            dx, dy = latlon_to_enu(lat, lon, (depot[0], depot[1], 0.0))
+            words = offset_words(float(dx), float(dy))
+            where = (f"'{printable(s.depot_start)}' itself" if words == "the depot itself"
+                     else f"{words} of '{printable(s.depot_start)}'")
+        else:
+            where = f"'{printable(s.depot_start)}'" if s.depot_start else "its take-off"
+        pads.append(f"vehicle {v.vehicle} on {where} (lat {lat:.7f}, lon {lon:.7f})")
     if times:
         print(f"take off (sortie {sortie}, s after vehicle 1's first take-off): "
               + ", ".join(times) + "; the vehicles keep apart in the air and no sensor "
               "sends to two at once only when they take off so", flush=True)  # fmt: skip
     if pads:
-        print(f"from their own pads (sortie {sortie}): " + ", ".join(pads), flush=True)
+        print(f"set each vehicle on its own pad (sortie {sortie}): " + ", ".join(pads),
+              flush=True)
 
 
 def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:

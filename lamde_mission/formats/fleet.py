@@ -8,10 +8,11 @@
                    "sorties": [{"sortie": 1, "file": "mission-v1-s1.plan",
                                 "depot_start": "home", "depot_end": "home",
                                 "takeoff_at": {"lat": deg, "lon": deg, ...},
+                                "landing_at": {"lat": deg, "lon": deg, ...},
                                 "takeoff_s": s, "duration_s": s, "energy_wh": Wh,
                                 "reserve_left_wh": Wh,
                                 "sensors": ["s01", ...]}, ...]}, ...],
-     "total_s": s, "swaps": n}
+     "total_s": s, "swaps": n, "depots": {"home": {"lat": deg, "lon": deg, ...}, ...}}
 
 Vehicles are numbered 1..V and sorties 1..S_k in order (1-based, as in the file names
 `mission-v{vehicle}-s{sortie}.plan`); every sortie's file is a plain name inside DIR and exists.
@@ -79,6 +80,8 @@ class FleetSortie:
     #: (lat, lon) degrees of the vehicle's pad the sortie takes off from (`takeoff_at`; None
     #: when fleet.json gives none: written before each vehicle had its own pad)
     takeoff_at: tuple[float, float] | None = None
+    #: (lat, lon) degrees of the pad it lands at (`landing_at`; None as `takeoff_at`)
+    landing_at: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -105,6 +108,9 @@ class FleetDir:
     #: before it was recorded)
     swap_s: float | None = None
     swaps: int | None = None
+    #: {depot name: (lat, lon) degrees} of the depots the sorties use (empty when fleet.json
+    #: gives none: written before each vehicle had its own pad)
+    depots: dict[str, tuple[float, float]] = field(default_factory=dict)
     raw: dict[str, Any] = field(default_factory=dict, repr=False, compare=False)
 
     def map_note(self, map_name: str, verb: str) -> str | None:
@@ -271,6 +277,7 @@ def read_fleet_dir(path: str | Path) -> FleetDir:
                 reserve_left_wh=_number(s.get("reserve_left_wh"), f"{ws}.reserve_left_wh"),
                 sensors=tuple(sensors), takeoff_s=takeoff,
                 takeoff_at=_latlon(s.get("takeoff_at"), f"{ws}.takeoff_at"),
+                landing_at=_latlon(s.get("landing_at"), f"{ws}.landing_at"),
             ))  # fmt: skip
         launch = _number(v.get("launch_s"), f"{wv}.launch_s")
         if launch is not None and not 0.0 <= launch <= 1e6:
@@ -282,8 +289,18 @@ def read_fleet_dir(path: str | Path) -> FleetDir:
     swaps = doc.get("swaps")
     if swaps is not None and (isinstance(swaps, bool) or not isinstance(swaps, int)):
         raise FleetDirError(f"{summary}: swaps: expected a whole number, got {quoted(swaps)}")
+    depots_doc = doc.get("depots", {})
+    if not isinstance(depots_doc, dict) or len(depots_doc) > MAX_FLEET_SORTIES:
+        raise FleetDirError(f"{summary}: depots: expected an object of depot names, got "
+                            f"{quoted(depots_doc)}")  # fmt: skip
+    depots = {}
+    for name, where in depots_doc.items():
+        got = _latlon(where, f"{summary}: depots.{name}")
+        if got is not None:
+            depots[str(name)] = got
     return FleetDir(
         path=path, vehicles=tuple(vehicles), map_name=_name(doc.get("map"), f"{summary}: map"),
+        depots=depots,
         objective=_name(doc.get("objective"), f"{summary}: objective"),
         total_s=_number(doc.get("total_s"), f"{summary}: total_s"), swaps=swaps, raw=doc,
         swap_s=_number(doc.get("swap_s"), f"{summary}: swap_s"),

@@ -66,8 +66,9 @@ class FleetSettings:
         uav: the map's `uav` settings (speed, acceleration, altitude, T_max).
         alpha: the paper's weight of flight against hover time.
         goal: "total" or "makespan".
-        pads: (V, D, 2) each vehicle's pad at each depot, m (`Map.vehicle_pads`; [0] is
-            `depots`); None: every vehicle at the depot itself.
+        pads: (V, D, 2) the pads of each depot, m (`Map.vehicle_pads`; [0] is `depots`); the
+            vehicles a plan sends to a depot take them in the order of their numbers; None:
+            every vehicle at the depot itself.
         pad_wh: Wh `budget_wh` keeps back for the pads: a sortie is searched from its depot
             and flown from its vehicle's pad (`FleetPlan.on_pads`), which costs at most one
             leg from the pad to the depot at each end and a corner there. 0 for one vehicle,
@@ -123,19 +124,19 @@ class FleetSettings:
         allowance = 2.0 * (float(st.leg_energies(np.array(reach))) + st._kept_wh(1))
         return replace(st, pads=pads, pad_wh=allowance)
 
-    def pad(self, vehicle: int, depot: int) -> np.ndarray:
-        """Where a vehicle takes off from and lands at a depot.
+    def pad(self, k: int, depot: int) -> np.ndarray:
+        """Pad k of a depot (`planner_core.model.pads.pad_ranks` says which vehicle uses it).
 
         Args:
-            vehicle: 0-based index into the fleet's vehicles (beyond `pads`: the depot).
+            k: the pad's index, 0 the depot itself (beyond `pads`: the depot).
             depot: index into `depots`.
 
         Returns:
             (2,) m.
         """
-        if self.pads is None or vehicle >= len(self.pads):
+        if self.pads is None or k >= len(self.pads):
             return np.asarray(self.depots[depot], dtype=float)
-        return np.asarray(self.pads[vehicle, depot], dtype=float)
+        return np.asarray(self.pads[k, depot], dtype=float)
 
     def on_pads(self) -> FleetSettings:
         """These settings for a plan whose sorties fly from their vehicles' pads: no pad
@@ -251,9 +252,9 @@ class FleetSettings:
 class Sortie:
     """One flight on one battery: depot `start` -> `points` (k, 2) -> depot `end`, hovering
     `times` (k,) s at the points (0 at detour corners). Depots are indices into
-    `FleetSettings.depots`; the sortie takes off from and lands at vehicle `pad`'s pads there
-    (`FleetSettings.pad`: 0, the default, is the depot itself). Points and times are stored
-    as read-only float copies.
+    `FleetSettings.depots`; the sortie takes off from pad `pads[0]` of depot `start` and lands
+    at pad `pads[1]` of depot `end` (`FleetSettings.pad`; pad 0, the default, is the depot
+    itself). Points and times are stored as read-only float copies.
 
     Raises:
         ValueError: `times` and `points` of different lengths.
@@ -263,7 +264,7 @@ class Sortie:
     end: int
     points: np.ndarray
     times: np.ndarray
-    pad: int = 0
+    pads: tuple[int, int] = (0, 0)
 
     def __post_init__(self) -> None:
         p = np.asarray(self.points, dtype=float).reshape(-1, 2).copy()
@@ -284,7 +285,8 @@ class Sortie:
         Returns:
             (k + 2, 2) positions, m.
         """
-        return np.vstack([s.pad(self.pad, self.start), self.points, s.pad(self.pad, self.end)])
+        return np.vstack([s.pad(self.pads[0], self.start), self.points,
+                          s.pad(self.pads[1], self.end)])
 
     def leg_lengths(self, s: FleetSettings) -> np.ndarray:
         """Lengths of the straight legs of `path`.
@@ -374,7 +376,7 @@ class Sortie:
         Raises:
             ValueError: `times` not one per point.
         """
-        return Sortie(self.start, self.end, self.points, times, self.pad)
+        return Sortie(self.start, self.end, self.points, times, self.pads)
 
 
 @dataclass(frozen=True, eq=False)

@@ -120,7 +120,8 @@ sortie_map_dict = sub_map_dict
 class _Planner:
     """One fleet planning run: the map, its planning map's problem, settings, counters."""
 
-    def __init__(self, m: Any, config: Any, goal: str | None, sortie_budget: int) -> None:
+    def __init__(self, m: Any, config: Any, goal: str | None, sortie_budget: int,
+                 pad_wh: float | None = None) -> None:
         from planner_core.model.problem import Problem
 
         self.m = m
@@ -128,6 +129,8 @@ class _Planner:
         self.problem = Problem(self.pm, variable_length=config.variable_length)
         self.model = self.problem.model
         self.st = FleetSettings.from_map(m, goal)
+        if pad_wh is not None:  # less kept back for the pads: `_finish` pins and re-times
+            self.st = replace(self.st, pad_wh=min(float(pad_wh), self.st.pad_wh))
         self.config = config
         self.sortie_budget = int(sortie_budget)
         self.links = Links(self.problem)
@@ -677,8 +680,10 @@ class _Planner:
 
 
 def on_pads(plan: FleetPlan, links: Links) -> FleetPlan:
-    """The plan flown from each vehicle's own pads (`FleetSettings.pads`; vehicle v at index
-    v): each sortie takes off from and lands at its vehicle's pad at its depots, by the
+    """The plan flown from each vehicle's own pads (`FleetSettings.pads`; at each depot the
+    vehicles using it take its pads in the order of their numbers,
+    `planner_core.model.pads.pad_ranks`): each sortie takes off from and lands at its
+    vehicle's pad at its depots, by the
     cheapest clear way of four (straight to the first point or through a 0-second corner at
     the depot, likewise back), its hover times kept. The search planned each sortie from the
     depot with `FleetSettings.pad_wh` kept back, which pays for the dearest of the four (the
@@ -694,16 +699,23 @@ def on_pads(plan: FleetPlan, links: Links) -> FleetPlan:
         fleet has one vehicle).
 
     Raises:
-        RuntimeError: a sortie over its energy on its pads (the allowance broken: a bug).
+        RuntimeError: a sortie over its energy on its pads although the search kept
+            `pad_wh` back for them (the allowance broken: a bug). Searched without it
+            (`pad_wh` 0) a sortie may end over its energy: the caller re-times or re-plans.
     """
+    from planner_core.model.pads import pad_ranks
+
     st = plan.settings
     if st.pads is None:
         return plan
     flown = st.on_pads()
+    rank = pad_ranks((v, st.depot_names[d]) for v, vs in enumerate(plan.vehicles)
+                     for s in vs for d in (s.start, s.end))  # fmt: skip
     vehicles = []
     for v, vs in enumerate(plan.vehicles):
         row = []
         for s in vs:
+            ranks = (rank[(v, st.depot_names[s.start])], rank[(v, st.depot_names[s.end])])
             best = None
             for via_a in (False, True):
                 for via_b in (False, True):
@@ -714,7 +726,7 @@ def on_pads(plan: FleetPlan, links: Links) -> FleetPlan:
                     if via_b:
                         pts = np.vstack([pts, st.depots[s.end]])
                         ts = np.concatenate([ts, [0.0]])
-                    cand = Sortie(s.start, s.end, pts, ts, v)
+                    cand = Sortie(s.start, s.end, pts, ts, ranks)
                     path = cand.path(flown)
                     if not bool(np.all(links.clear(path[:-1], path[1:]))):
                         continue
@@ -726,15 +738,63 @@ def on_pads(plan: FleetPlan, links: Links) -> FleetPlan:
             row.append(best[1])
         vehicles.append(row)
     out = FleetPlan(flown, vehicles, plan.evaluations, plan.notes)
-    over = [k for k, x in enumerate(out.sorties) if x.energy(flown) > flown.usable_wh]
-    if over:
+    if st.pad_wh > 0.0 and not out.energy_ok():
+        over = [k for k, x in enumerate(out.sorties) if x.energy(flown) > flown.usable_wh]
         raise RuntimeError(f"sorties {over} exceed the battery on their pads (pad_wh "
                            f"{st.pad_wh:.3f} Wh kept back)")  # fmt: skip
     return out
 
 
+class _OffPads(Exception):
+    """A plan searched with less than the pads' full allowance that no re-timing fits on its
+    pads; `excess` the most Wh a sortie of it is over its battery there."""
+
+    def __init__(self, excess: float) -> None:
+        super().__init__(f"{excess:.4f} Wh over on the pads")
+        self.excess = float(excess)
+
+
+def _next_allowance(m: Any, goal: str | None,
+                    tried: list[tuple[float, float]]) -> float | None:
+    """The pads' allowance (Wh kept back per sortie) to plan with next (`plan_fleet`,
+    `route_first`): none first (a vehicle alone at its depots stands on them; a little slack
+    often fits the others' pads); after a plan that did not fit its pads, a half again what
+    its worst sortie was over there; then the full allowance (`FleetSettings.pad_wh`, which
+    always fits); None after that.
+
+    Args:
+        m: the map.
+        goal: the objective (for the settings).
+        tried: (allowance planned with, Wh its worst sortie was over on its pads) so far.
+
+    Returns:
+        Wh, or None when the full allowance was tried.
+    """
+    full = FleetSettings.from_map(m, goal).pad_wh
+    if not tried:
+        return 0.0
+    last, excess = tried[-1]
+    if last >= full:
+        return None
+    if len(tried) == 1:
+        return min(full, last + 1.5 * excess)
+    return full
+
+
 def _finish(pl: _Planner, plan: FleetPlan, notes: list[str]) -> FleetPlan:
+    """The plan on its vehicles' pads (`on_pads`), its notes and counts. Searched without the
+    pads' allowance, a sortie the pads put over its battery has the hover times of the whole
+    plan re-solved by the LP across sorties on the pads' routes (a sensor's data moved to
+    other sorties); when that fails too, `_OffPads` (the caller plans again keeping the
+    allowance back, which always fits)."""
     flown = on_pads(plan, pl.links)
+    if not flown.energy_ok():
+        st = flown.settings
+        excess = max(x.energy(st) - st.usable_wh for x in flown.sorties)
+        flown = pl.lp(flown)
+        if flown is None:
+            raise _OffPads(excess)
+        notes = notes + ["hover times re-solved on the vehicles' pads"]
     return flown.replace(
         flown.vehicles,
         evaluations=pl.evaluations,
@@ -763,15 +823,23 @@ def route_first(
         ValueError: the map has no battery; or no split fits the battery (a point no depot
             reaches and returns from with its hover time), naming the problem.
     """
-    pl = _Planner(m, config, goal, sortie_budget)
-    single = pl.single()
-    if single is None:
-        raise ValueError("plan: the single flight found no feasible plan to cut into sorties")
-    plan = pl.split(*single)
-    if plan is None:
-        raise ValueError("uav.battery: the single flight cannot be cut into sorties that fit "
-                         f"the battery from the depots: {pl.why_not(single, False)}")
-    return FleetResult(_finish(pl, plan, ["route first, cluster second"]), single, None, pl.lps)
+    tried: list[tuple[float, float]] = []
+    while (pad_wh := _next_allowance(m, goal, tried)) is not None:
+        pl = _Planner(m, config, goal, sortie_budget, pad_wh=pad_wh)
+        single = pl.single()
+        if single is None:
+            raise ValueError("plan: the single flight found no feasible plan to cut into "
+                             "sorties")  # fmt: skip
+        plan = pl.split(*single)
+        if plan is None:
+            raise ValueError("uav.battery: the single flight cannot be cut into sorties that "
+                             f"fit the battery from the depots: {pl.why_not(single, False)}")
+        try:
+            return FleetResult(_finish(pl, plan, ["route first, cluster second"]), single, None,
+                               pl.lps)  # fmt: skip
+        except _OffPads as off:
+            tried.append((pl.st.pad_wh, off.excess))
+    raise AssertionError("the full allowance always fits")
 
 
 def plan_fleet(
@@ -811,7 +879,22 @@ def plan_fleet(
              if f.kind in ("SORTIE_LIMIT", "ENERGY_VERTICAL", "PADS")]
     if limit:
         raise ValueError(limit[0])
-    pl = _Planner(m, config, goal, sortie_budget)
+    # searched from the depots as they stand, then flown from the vehicles' pads (`_finish`);
+    # only when no re-timing fits them on their pads, planned again with the pads' allowance
+    # kept back from every sortie's battery (`FleetSettings.pad_wh`), which always fits
+    tried: list[tuple[float, float]] = []
+    while (pad_wh := _next_allowance(m, goal, tried)) is not None:
+        try:
+            return _plan_fleet(m, config, goal, sortie_budget, rounds, pad_wh=pad_wh)
+        except _OffPads as off:
+            tried.append((pad_wh, off.excess))
+    raise AssertionError("the full allowance always fits")
+
+
+def _plan_fleet(m: Any, config: Any, goal: str | None, sortie_budget: int, rounds: int, *,
+                pad_wh: float) -> FleetResult:
+    """`plan_fleet`'s search with `pad_wh` kept back for the pads (`_Planner`)."""
+    pl = _Planner(m, config, goal, sortie_budget, pad_wh=pad_wh)
     single = pl.single()
     notes: list[str] = []
     peer = pl.split(*single) if single is not None else None
@@ -825,7 +908,11 @@ def plan_fleet(
     if best is None:
         raise ValueError("uav.battery: no plan of sorties found that fits the battery from the "
                          f"depots: {pl.why_not(single, True)}")
-    peer_plan = _finish(pl, peer, ["route first, cluster second"]) if peer is not None else None
+    try:
+        peer_plan = (_finish(pl, peer, ["route first, cluster second"]) if peer is not None
+                     else None)  # fmt: skip
+    except _OffPads:  # the peer on its own, which keeps the allowance where it must
+        peer_plan = route_first(m, config, goal=goal, sortie_budget=sortie_budget).plan
     for rnd in range(int(rounds)):
         before = best.objective()
         for step in ("replan", "merge", "eliminate", "transfer", "resplit", "retour"):

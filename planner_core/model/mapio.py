@@ -720,9 +720,10 @@ class Map:
     @property
     def vehicle_pads(self) -> np.ndarray:
         """Each vehicle's own pad at each sortie site (`planner_core.model.pads`): vehicle 1's
-        is the site itself, the others' lie `fleet.separation_m` + `PAD_MARGIN_M` apart
-        around it, inside the area, clear of the planning map's (inflated) obstacles and
-        reached from the site by a clear straight leg.
+        is the site itself, the others' lie `fleet.separation_m` + `PAD_MARGIN_M` apart on a
+        grid aligned with east and north around it, inside the area, at least `PAD_CLEAR_M`
+        (or the map's clearance, where larger) from every obstacle, and reached from the site
+        by a straight leg clear of the planning map's (inflated) obstacles.
 
         Returns:
             (V, D, 2) read-only, local metres: V = `uavs`, D the sites of `sortie_sites`
@@ -757,11 +758,16 @@ class Map:
         W, H = self.spec.area.width, self.spec.area.height
         obstacles = self.planning_map().obstacles
 
+        keep = max(_pads.PAD_CLEAR_M, float(self.spec.safety.clearance))
+
         def free(site: np.ndarray, pads: np.ndarray) -> np.ndarray:
             inside = ((pads[:, 0] >= 0) & (pads[:, 0] <= W) & (pads[:, 1] >= 0)
                       & (pads[:, 1] <= H))  # fmt: skip
+            near = (_edge_distances(pads, self.spec, self.shapes) < keep) | points_inside(
+                pads, obstacles)
             legs = overlap_lengths(np.broadcast_to(site, pads.shape), pads, obstacles)
-            return inside & ~points_inside(pads, obstacles) & (legs <= _pads.CLEAR_M)
+            return np.select([~inside, near, legs > _pads.CLEAR_M],
+                             [_pads.OUTSIDE, _pads.NEAR, _pads.BEHIND], _pads.FREE)
 
         spacing = float(self.separation_m) + _pads.PAD_MARGIN_M
         out = _pads.pad_layout(sites, int(vehicles), spacing, free, names=tuple(names))

@@ -5,52 +5,96 @@ a battery swap. Sharing one point, a vehicle would land on, or take off beside, 
 standing on the ground; the simulator's SEPARATION counts a vehicle on the ground and fails
 that (`sim.fleet_time`). So each vehicle k (0-based) has its own pad at each depot:
 
-* pad 0 is the depot itself, so a single vehicle flies exactly where it did before;
-* the other pads are points of a hexagonal lattice of step `spacing` around the depot (the
-  map's `fleet.separation_m` + `PAD_MARGIN_M`), taken nearest first (ties by angle from east,
+* pad 0 is the depot itself, so a single vehicle flies exactly where it did before, and of
+  the vehicles a plan sends to a depot the lowest-numbered stands on it (`pad_ranks`: the
+  vehicles using a depot take its pads in the order of their numbers);
+* the other pads are points of a square lattice of step `spacing` (the map's
+  `fleet.separation_m` + `PAD_MARGIN_M`) aligned with east and north around the depot, so a
+  crew lays each out as whole steps east or west and north or south of the depot ("35 m E",
+  "35 m N, 35 m E"); taken nearest first (ties: east, north, west, south, then
   counter-clockwise), each at least `spacing` from every pad already given (any depot's) and
-  accepted by the caller's test (inside the area, clear of the planning map's inflated
-  obstacles, reached from its depot by a clear straight leg).
+  accepted by the caller's test (`FREE`, or why not: outside the area, within `PAD_CLEAR_M`
+  or the map's clearance of an obstacle, no clear straight leg from the depot).
 
 Deterministic for a map. Cost: O(D x C) tests for D depots and C lattice points looked at
-(C grows with the square of the rings needed: about 1.1 V for V vehicles on open ground),
-plus the caller's test (one batch per depot).
+(C grows with the square of the rings needed: V for V vehicles on open ground), plus the
+caller's test (one batch per depot).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 
 import numpy as np
 
-__all__ = ["PAD_MARGIN_M", "MAX_RINGS", "CLEAR_M", "pad_layout"]
+__all__ = ["PAD_MARGIN_M", "PAD_CLEAR_M", "MAX_RINGS", "CLEAR_M", "FREE", "OUTSIDE", "NEAR",
+           "BEHIND", "pad_layout", "offset_words", "pad_ranks"]
 
 #: m added to `fleet.separation_m` between two pads: a vehicle's landing error (GNSS, a few
 #: metres) on top of the separation the simulator asks of a vehicle landing beside another
 PAD_MARGIN_M = 5.0
-#: lattice rings looked at around a depot before giving up: 100 vehicles need 6 on open ground
+#: m a pad keeps from every obstacle at least (the map's clearance where larger): a vehicle
+#: standing there, its rotors and its landing error, clear of a wall
+PAD_CLEAR_M = 5.0
+#: lattice rings looked at around a depot before giving up: 100 vehicles need 5 on open ground
 MAX_RINGS = 12
+#: why a lattice point is no pad (the caller's test): it may be one; outside the area; within
+#: the pad clearance of an obstacle (or inside one); no clear straight leg from the depot
+FREE, OUTSIDE, NEAR, BEHIND = 0, 1, 2, 3
 #: m of a leg inside obstacles at or below which the leg is clear (the routing's `CLEAR`)
 CLEAR_M = 1e-9
 
 
 def _lattice(rings: int) -> np.ndarray:
-    """Hexagonal lattice points of step 1 within `rings` rings of the origin, origin left out,
-    nearest first (ties by angle from east, counter-clockwise).
+    """Square lattice points of step 1 within `rings` rings of the origin (a square), origin
+    left out, nearest first (ties by angle from east, counter-clockwise).
 
     Returns:
-        (n, 2) unit-step offsets.
+        (n, 2) unit-step offsets (east, north).
     """
-    pts = []
-    for q in range(-rings, rings + 1):
-        for r in range(max(-rings, -q - rings), min(rings, -q + rings) + 1):
-            if q == 0 and r == 0:
-                continue
-            pts.append((q + 0.5 * r, r * np.sqrt(3.0) / 2.0))
-    a = np.array(pts, dtype=float)
+    q, r = np.meshgrid(np.arange(-rings, rings + 1), np.arange(-rings, rings + 1))
+    a = np.column_stack([q.ravel(), r.ravel()]).astype(float)
+    a = a[np.any(a != 0, axis=1)]
     dist = np.round(np.hypot(a[:, 0], a[:, 1]), 9)
     ang = np.round(np.mod(np.arctan2(a[:, 1], a[:, 0]), 2.0 * np.pi), 9)
     return a[np.lexsort((ang, dist))]
+
+
+def offset_words(dx: float, dy: float) -> str:
+    """A pad's place from its depot as a crew paces it: "35 m E", "35 m N, 35 m E", "70 m S,
+    35 m W" (north-south first; whole metres); "the depot itself" within half a metre.
+
+    Args:
+        dx: metres east of the depot (negative: west).
+        dy: metres north of the depot (negative: south).
+
+    Returns:
+        The words.
+    """
+    parts = []
+    if abs(dy) >= 0.5:
+        parts.append(f"{abs(dy):.0f} m {'N' if dy > 0 else 'S'}")
+    if abs(dx) >= 0.5:
+        parts.append(f"{abs(dx):.0f} m {'E' if dx > 0 else 'W'}")
+    return ", ".join(parts) if parts else "the depot itself"
+
+
+def pad_ranks(uses: Iterable[tuple[int, str]]) -> dict[tuple[int, str], int]:
+    """Which pad of each depot each vehicle uses: the vehicles that take off or land at a
+    depot, in the order of their numbers, take its pads 0, 1, ... (pad 0 the depot itself),
+    so a vehicle alone at a depot stands on the depot. The planner (`fleet.search.on_pads`),
+    the writer and `verify` all count them from the plan's sorties, so they agree.
+
+    Args:
+        uses: (vehicle number, depot name) for every take-off and landing of the plan.
+
+    Returns:
+        {(vehicle, depot): pad index}.
+    """
+    by_depot: dict[str, set[int]] = {}
+    for v, d in uses:
+        by_depot.setdefault(d, set()).add(int(v))
+    return {(v, d): k for d, vs in by_depot.items() for k, v in enumerate(sorted(vs))}
 
 
 def pad_layout(
@@ -66,8 +110,9 @@ def pad_layout(
         depots: (D, 2) depot positions, m (local ENU).
         vehicles: V >= 1, the fleet's vehicles.
         spacing: m, the least distance between two pads, > 0.
-        free: free(depot (2,), pads (n, 2)) -> (n,) bool: whether each candidate pad may be
-            used (inside the area, clear of obstacles, a clear leg from the depot).
+        free: free(depot (2,), pads (n, 2)) -> (n,) int: `FREE` where a candidate pad may be
+            used, else why not (`OUTSIDE`, `NEAR`, `BEHIND`); a bool array reads True as
+            `FREE` and False as `NEAR`.
         names: the depots' names for messages (default "depot k").
 
     Returns:
@@ -75,7 +120,7 @@ def pad_layout(
 
     Raises:
         ValueError: a depot without room for V pads within `MAX_RINGS` lattice steps, naming
-            it, the pads found and the spacing.
+            it, the spacing and what kept the nearest spots out.
     """
     dep = np.asarray(depots, dtype=float).reshape(-1, 2)
     V, D = int(vehicles), len(dep)
@@ -85,29 +130,46 @@ def pad_layout(
         raise ValueError("spacing must be positive")
     out = np.repeat(dep[None], V, axis=0)
     if V == 1:
+        out.flags.writeable = False
         return out
     offsets = _lattice(MAX_RINGS) * float(spacing)
     taken = [p for p in dep]  # every depot is pad 0 of its own
     for d in range(D):
         cand = dep[d] + offsets
-        ok = np.asarray(free(dep[d], cand), dtype=bool)
+        why = np.asarray(free(dep[d], cand))
+        if why.dtype == bool:
+            why = np.where(why, FREE, NEAR)
         k = 1
-        for c, good in zip(cand, ok, strict=True):
+        looked = 0
+        crowded = 0
+        for c, w in zip(cand, why, strict=True):
             if k == V:
                 break
-            if not good:
+            looked += 1
+            if w != FREE:
                 continue
             if min(float(np.hypot(*(c - t))) for t in taken) < spacing - 1e-9:
+                crowded += 1
                 continue
             out[k, d] = c
             taken.append(c)
             k += 1
         if k < V:
             who = names[d] if names is not None else f"depot {d}"
-            raise ValueError(f"fleet: depot '{who}' has room for {k} of the {V} vehicles' "
-                             f"pads ({spacing:g} m apart, fleet.separation_m + "
-                             f"{PAD_MARGIN_M:g} m) within {MAX_RINGS * spacing:g} m clear of "
-                             "obstacles and inside the area: move the depot into the open, "
-                             "add a depot, fly fewer UAVs or lower fleet.separation_m")  # fmt: skip
+            counts = {code: int(np.sum(why == code)) for code in (OUTSIDE, NEAR, BEHIND)}
+            kept = "; ".join(text for text in (
+                f"{counts[OUTSIDE]} outside the area" if counts[OUTSIDE] else "",
+                f"{counts[NEAR]} within {PAD_CLEAR_M:g} m (or the map's clearance) of an "
+                "obstacle" if counts[NEAR] else "",
+                f"{counts[BEHIND]} with no clear straight leg from the depot"
+                if counts[BEHIND] else "",
+                f"{crowded} nearer than {spacing:g} m to another depot's pad" if crowded else "",
+            ) if text)  # fmt: skip
+            raise ValueError(
+                f"fleet: depot '{who}' has room for {k} of the {V} vehicles' pads ({spacing:g} m "
+                f"apart: fleet.separation_m + {PAD_MARGIN_M:g} m; every depot holds a pad for "
+                f"each vehicle) on the {looked} nearest spots of a {spacing:g} m grid around it, "
+                f"out to {MAX_RINGS * spacing:g} m ({kept}): move the depot into the open, fly "
+                "fewer UAVs or lower fleet.separation_m")
     out.flags.writeable = False
     return out
