@@ -1510,9 +1510,12 @@ def fleet_figure(
             scene.labels.append(_Label(" / ".join(sorted(names)), (x, y),
                                        {"fontsize": 8, "fontweight": "bold", "zorder": 9,
                                         "bbox": _TEXT_BOX}, 7.5))  # fmt: skip
-    for (x, y), v in pads.items():
+    for (x, y), v in pads.items():  # above the swap stars and depots drawn there
         ax.plot(x, y, marker="s", markersize=6, color=_vehicle_colour(v), markeredgecolor="k",
-                markeredgewidth=0.8, zorder=7, linestyle="")  # fmt: skip
+                markeredgewidth=0.8, zorder=8.5, linestyle="")  # fmt: skip
+        scene.labels.append(_Label(f"v{v} pad", (x, y), {"fontsize": 6.5, "zorder": 9,
+                                                         "color": _vehicle_colour(v),
+                                                         "bbox": _TEXT_BOX}, 3.0))  # fmt: skip
     # the map's other depots, where no sortie takes off or lands: lighter, named in the legend
     used = {n for names in depots.values() for n in names}
     idle = [(name, xy) for name, xy in _map_depots(map) if name not in used and not any(
@@ -1594,8 +1597,9 @@ def fleet_figure(
     )
     if pads:
         handles.append(Line2D([], [], marker="s", linestyle="", markersize=6,
-                              markerfacecolor="0.6", markeredgecolor="k",
-                              label="a vehicle's own pad (its colour)"))  # fmt: skip
+                              markerfacecolor=_vehicle_colour(min(pads.values())),
+                              markeredgecolor="k",
+                              label="vN pad: vehicle N's own pad at a depot, in its colour"))
     if idle:
         handles.append(Line2D([], [], marker="h", linestyle="", markersize=10,
                               markerfacecolor="0.93", markeredgecolor="0.55",

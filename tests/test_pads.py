@@ -221,3 +221,22 @@ def test_upload_names_each_vehicles_pad_for_the_crew(tmp_path, capsys):
     assert ("fleet PLACES fleet.json's take-off and landing places are the missions': FAIL; "
             "vehicle 2 sortie 1 takes off at lat") in out
     assert "35.0 m from where its mission takes off" in out
+
+
+def test_show_marks_each_vehicles_pad(tmp_path):
+    """show/--plot: a pad beside its depot is a small square in its vehicle's colour labelled
+    'v2 pad' (the reviewer found it hidden under the swap star, its legend grey as a building)."""
+    from matplotlib.text import Text
+
+    from lamde_mission.commands.show import fleet_views
+    from lamde_mission.plot import fleet_figure
+    from lamde_mission.sorties import write_sortie_dir
+    from tests.test_sorties_dir import _fleet_plan, _one_depot_map
+
+    m, plan = _fleet_plan(_one_depot_map(tmp_path, None, None))
+    check, written = write_sortie_dir(plan, m, tmp_path / "d")
+    assert written, check.failed()
+    fig = fleet_figure(m, fleet_views(tmp_path / "d", m))
+    texts = [t.get_text() for t in fig.findobj(Text)]
+    assert "v2 pad" in texts and "v1 pad" not in texts
+    assert any("vN pad: vehicle N's own pad" in t for t in texts)
