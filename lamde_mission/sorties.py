@@ -5,30 +5,38 @@ stored as the autopilot stores it, replayed by the simulator, and a `fleet.json`
 sortie's own map: the plan's map with the sortie's depots as start and end and each sensor's
 required data set to the sortie's share, so storage raises hover times where the grid or the
 rounding would leave a share short), writes `mission-v{vehicle}-s{sortie}.plan` (1-based,
-QGroundControl, take-off at the sortie's depot, landing at its depot) and `fleet.json` into a
+QGroundControl, take-off at its vehicle's pad at the sortie's depot, landing at its pad at its
+depot: `planner_core.model.pads`) and `fleet.json` into a
 hidden folder beside DIR, verifies everything with `verify_sortie_dir`'s replay and renames the
 folder to DIR last (a DIR already there is replaced only then): nothing half-written. A write
 killed before its rename leaves its hidden folder; the next write to DIR removes those of
 processes gone (`planner_core.atomic.clean_stale_dirs`).
 
 `verify_sortie_dir` replays each mission file of a directory with the simulator on its sortie's
-map (start and end at the depots `fleet.json` names) and judges per sortie C1-C3, C5, ENDS,
+map (start and end at its vehicle's pads at the depots `fleet.json` names) and judges per
+sortie C1-C3, C5, ENDS,
 CLEAR and ENERGY (`sim.checks.verify`), over the whole plan C4 and MARGIN on the data summed
 over the sorties (`sim.sorties.combined_data_verdicts`), and the plan's shape (`FleetCheck.fleet`):
 CHAIN (a vehicle's first sortie leaves a depot a vehicle starts from, each later one the depot
 the one before it landed at), UAVS (no more vehicles than the map's `fleet.uavs`), FILES (no
-mission file in the directory that fleet.json does not list); a note when fleet.json names
-another map (`FleetCheck.notes`).
+mission file in the directory that fleet.json does not list), SEPARATION, LINKS and TIMING
+(vehicles together, `sim.fleet_time`), TIMES (fleet.json's take-off times are the plan's
+clock) and PLACES (fleet.json's take-off and landing places are the missions'); notes when
+fleet.json names another map or a sortie leaves another spot than its pad on this map
+(`FleetCheck.notes`).
 
 fleet.json (the contract of docs/sorties.md):
 
     {"map": name, "objective": "total" | "makespan",
      "vehicles": [{"vehicle": 1, "makespan_s": s, "sorties": [{"sortie": 1,
         "file": "mission-v1-s1.plan", "depot_start": "home", "depot_end": "home",
+        "takeoff_at": {"x": m, "y": m, "lat": deg, "lon": deg, "east_m": m, "north_m": m},
+        "landing_at": {...} (the vehicle's pads, east_m and north_m from the depot),
         "takeoff_s": s, "landing_s": s (on the plan's clock: after the first vehicle's
         take-off), "duration_s": s, "energy_wh": Wh, "reserve_left_wh": Wh (battery - energy),
         "above_reserve_wh": Wh (usable - energy), "sensors": ["s01", ...]}]}],
-     "total_s": s, "swaps": n, "f_total": sum of f + swap_s per swap,
+     "total_s": s, "swaps": n, "swap_s": s, "f_total": sum of f + swap_s per swap,
+     "depots": {"home": {"x": m, "y": m, "lat": deg, "lon": deg}, ...} (those the sorties use),
      "timing_tolerance_s": s (several vehicles: how far each sortie may take off from its
      time with SEPARATION and LINKS holding, `sim.fleet_time.timing_tolerance`)}
 
