@@ -124,6 +124,13 @@ def test_a_fleet_is_judged_once_with_every_vehicle_at_its_limit_before_sending(t
                    params={"MPC_XY_VEL_MAX": 20.0}):  # fmt: skip
         assert main(["upload", str(out), "--fleet", *conn, "--map", str(path)]) == 0
         assert "below the" not in capsys.readouterr().err
+    # without --map it is sent with a warning that says what the slower flight puts at risk:
+    # the reviewer's vehicles at 12 m/s came 28.7 m close, and it spoke of energy only
+    with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=2, heartbeat_hz=10.0):
+        assert main(["upload", str(out), "--fleet", *conn]) == 0
+        err = capsys.readouterr().err
+        assert ("their flight times and energy, and the vehicles' separation and take-off "
+                "times, were planned at 20 m/s (--map checks the fleet at the limits") in err
 
 
 @pytest.mark.parametrize("limit", [0.0, -5.0, 0.001])

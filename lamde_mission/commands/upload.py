@@ -459,8 +459,9 @@ def _fleet_speed_check(directory: str, missions: list, map_path: str | None, *, 
         fix = (f"set the limit to {want:g} or more, or plan the map with uav.max_speed "
                f"{min(lim for _, lim in slow.values()):g}")
         if map_path is None:
-            print(f"warning: {head}; their flight times and energy were planned at {want:g} "
-                  f"m/s (--map checks the fleet at the limits; {fix})", file=sys.stderr)
+            print(f"warning: {head}; their flight times and energy, and the vehicles' "
+                  f"separation and take-off times, were planned at {want:g} m/s (--map checks "
+                  f"the fleet at the limits; {fix})", file=sys.stderr)
             return None
         m = with_origin_or_fail(load_map_or_fail(map_path), origin)
         judged = verify_sortie_dir(m, directory, {v: lim for v, (_, lim) in slow.items()})
