@@ -491,9 +491,11 @@ SHARE_MAX = 64
 MAP_LISTS: dict[str, Default] = {
     "fleet.depots": Default(
         "fleet.depots", None, "take-off, landing and battery-swap sites, [{name, x, y}] in "
-        "local metres (null: one depot `home` at the map's start; a sortie may land at the "
-        "map's end)", f"null or 1-{MAX_DEPOTS} depots, names unique, each inside the area and "
-        "outside every obstacle and no-fly zone",
+        "local metres, each with its vehicles' pads [[x, y], ...] where the crew has them "
+        "(`pads`; null: on a grid around it) (null: one depot `home` at the map's start; a "
+        "sortie may land at the map's end)",
+        f"null or 1-{MAX_DEPOTS} depots, names unique, each inside the area and outside every "
+        "obstacle and no-fly zone",
         lambda v: v is None or (isinstance(v, list) and 1 <= len(v) <= MAX_DEPOTS)),
 }
 

@@ -4,6 +4,7 @@ layout, the planner's allowance for flying from a pad, and what the files say.""
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -240,3 +241,17 @@ def test_show_marks_each_vehicles_pad(tmp_path):
     texts = [t.get_text() for t in fig.findobj(Text)]
     assert "v2 pad" in texts and "v1 pad" not in texts
     assert any("vN pad: vehicle N's own pad" in t for t in texts)
+
+
+def test_a_depot_may_list_its_pads_as_the_crew_has_them():
+    doc = _demo(3)
+    doc["fleet"]["depots"][0]["pads"] = [[100.0, 150.0]]  # 50 m N of 'home' (100, 100)
+    m = load_map(doc)
+    assert m.vehicle_pads[:, 0].tolist() == [[100.0, 100.0], [100.0, 150.0], [135.0, 100.0]]
+    for pad, said in (([100.0, 120.0], "lies 20.0 m from another pad or depot, nearer than "
+                                       "35 m (fleet.separation_m + 5 m)"),
+                      ([-50.0, 100.0], "lies outside the area")):
+        doc["fleet"]["depots"][0]["pads"] = [pad]
+        with pytest.raises(ValueError, match=r"^fleet\.depots\[0\]\.pads\[0\]: the pad of depot "
+                                             r"'home' at \(.*\) " + re.escape(said)):
+            load_map(doc).pads_for(3)

@@ -278,6 +278,10 @@ class Objective(BaseModel):
         MAP_CHOICES["objective.goal"].value, description=MAP_CHOICES["objective.goal"].meaning)
 
 
+#: pads a depot may list (`Depot.pads`): as many as vehicles fly
+MAX_DEPOT_PADS = 100
+
+
 class Depot(BaseModel):
     """A take-off, landing and battery-swap site (local metres)."""
 
@@ -286,6 +290,12 @@ class Depot(BaseModel):
                       description="printable text, unique among the depots (quoted in messages)")
     x: Coord
     y: Coord
+    pads: list[tuple[Coord, Coord]] | None = Field(
+        None, max_length=MAX_DEPOT_PADS,
+        description="[[x, y], ...] local metres: the depot's pads 2, 3, ... as the crew has "
+        "them (pad 1 is the depot itself), in the order the vehicles using the depot take "
+        "them; null: on a grid around the depot (planner_core.model.pads); pads it needs "
+        "beyond these come from the grid")
 
 
 class Fleet(BaseModel):
@@ -770,7 +780,9 @@ class Map:
                              [_pads.OUTSIDE, _pads.NEAR, _pads.BEHIND], _pads.FREE)
 
         spacing = float(self.separation_m) + _pads.PAD_MARGIN_M
-        out = _pads.pad_layout(sites, int(vehicles), spacing, free, names=tuple(names))
+        given = {d.name: [tuple(p) for p in d.pads] for d in self.depots if d.pads}
+        out = _pads.pad_layout(sites, int(vehicles), spacing, free, names=tuple(names),
+                               given=[given.get(n, []) for n in names])
         out.flags.writeable = False
         cache[int(vehicles)] = out
         return out

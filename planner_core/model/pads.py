@@ -103,6 +103,7 @@ def pad_layout(
     spacing: float,
     free: Callable[[np.ndarray, np.ndarray], np.ndarray],
     names: tuple[str, ...] | None = None,
+    given: list[list[tuple[float, float]]] | None = None,
 ) -> np.ndarray:
     """Each vehicle's pad at each depot (module docstring).
 
@@ -114,13 +115,17 @@ def pad_layout(
             used, else why not (`OUTSIDE`, `NEAR`, `BEHIND`); a bool array reads True as
             `FREE` and False as `NEAR`.
         names: the depots' names for messages (default "depot k").
+        given: per depot, its pads 1, 2, ... as the map lists them (`Depot.pads`), taken
+            before the lattice's; each must pass `free` and keep `spacing` from every other
+            pad and depot.
 
     Returns:
         (V, D, 2) pads, m; [0] is `depots` itself.
 
     Raises:
         ValueError: a depot without room for V pads within `MAX_RINGS` lattice steps, naming
-            it, the spacing and what kept the nearest spots out.
+            it, the spacing and what kept the nearest spots out; or a listed pad that is not
+            free or too near another, naming it.
     """
     dep = np.asarray(depots, dtype=float).reshape(-1, 2)
     V, D = int(vehicles), len(dep)
@@ -135,11 +140,35 @@ def pad_layout(
     offsets = _lattice(MAX_RINGS) * float(spacing)
     taken = [p for p in dep]  # every depot is pad 0 of its own
     for d in range(D):
+        who = names[d] if names is not None else f"depot {d}"
+        k = 1
+        for i, xy in enumerate((given[d] if given is not None else [])[: V - 1]):
+            c = np.asarray(xy, dtype=float)
+            got = np.asarray(free(dep[d], c[None]))
+            why_not = (FREE if got[0] else NEAR) if got.dtype == bool else int(got[0])
+            where = f"fleet.depots[{d}].pads[{i}]: the pad of depot '{who}' at ({c[0]:g}, {c[1]:g})"
+            if why_not == OUTSIDE:
+                raise ValueError(f"{where} lies outside the area")
+            if why_not == NEAR:
+                raise ValueError(f"{where} lies within {PAD_CLEAR_M:g} m (or the map's "
+                                 "clearance) of an obstacle")
+            if why_not == BEHIND:
+                raise ValueError(f"{where}: the straight leg from the depot crosses an "
+                                 "obstacle")
+            near = min(float(np.hypot(*(c - t))) for t in taken)
+            if near < spacing - 1e-9:
+                raise ValueError(f"{where} lies {near:.1f} m from another pad or depot, "
+                                 f"nearer than {spacing:g} m (fleet.separation_m + "
+                                 f"{PAD_MARGIN_M:g} m)")
+            out[k, d] = c
+            taken.append(c)
+            k += 1
+        if k == V:
+            continue
         cand = dep[d] + offsets
         why = np.asarray(free(dep[d], cand))
         if why.dtype == bool:
             why = np.where(why, FREE, NEAR)
-        k = 1
         looked = 0
         crowded = 0
         for c, w in zip(cand, why, strict=True):
@@ -155,7 +184,6 @@ def pad_layout(
             taken.append(c)
             k += 1
         if k < V:
-            who = names[d] if names is not None else f"depot {d}"
             counts = {code: int(np.sum(why == code)) for code in (OUTSIDE, NEAR, BEHIND)}
             kept = "; ".join(text for text in (
                 f"{counts[OUTSIDE]} outside the area" if counts[OUTSIDE] else "",
