@@ -255,3 +255,20 @@ def test_a_depot_may_list_its_pads_as_the_crew_has_them():
         with pytest.raises(ValueError, match=r"^fleet\.depots\[0\]\.pads\[0\]: the pad of depot "
                                              r"'home' at \(.*\) " + re.escape(said)):
             load_map(doc).pads_for(3)
+
+
+def test_check_lists_the_pads(tmp_path, capsys):
+    from lamde_mission.cli import main
+
+    doc = _demo(3)
+    doc["fleet"]["depots"][0]["pads"] = [[100.0, 150.0]]
+    path = tmp_path / "pads.json"
+    path.write_text(json.dumps(doc))
+    assert main(["check", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert ("  pads            beside each depot, taken by the vehicles that use it in number "
+            "order (the first stands on the depot): home: 50 m N, 35 m E; north: 35 m E, "
+            "35 m N\n") in out
+    path.write_text(json.dumps(_demo(1)))
+    assert main(["check", str(path)]) == 0
+    assert "pads " not in capsys.readouterr().out

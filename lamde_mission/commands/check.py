@@ -161,6 +161,20 @@ def _energy_lines(s: dict, m: object) -> None:
         print(f"  fleet           {counted(f['uavs'], 'UAV')}, depots "
               f"{where}, swap {f['swap_s']:g} s, separation {f['separation_m']:g} m, goal "
               f"{s['goal']}")
+        if f["uavs"] > 1:
+            from planner_core.model.pads import offset_words
+
+            try:
+                pads = m.vehicle_pads
+            except ValueError:  # PADS says why below
+                pads = None
+            if pads is not None:
+                each = "; ".join(
+                    f"{printable(n)}: " + ", ".join(offset_words(*(pads[k, d] - xy[d]))
+                                                    for k in range(1, len(pads)))
+                    for d, n in enumerate(names))  # fmt: skip
+                print(f"  pads            beside each depot, taken by the vehicles that use it "
+                      f"in number order (the first stands on the depot): {each}")
 
 
 #: findings of one kind about sensors printed in full; the rest of that kind (two or more)
