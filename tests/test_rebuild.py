@@ -129,3 +129,12 @@ def test_the_snap_to_the_nearest_site_equals_the_reference(t05: Problem) -> None
     grid._sites = grid._sites[::-1].copy()  # new sites: a new tree
     q = np.vstack([ties, grid._sites])
     assert np.array_equal(grid.nearest(q), nearest_reference(grid._sites, q))
+
+
+def test_unique_rows_equals_numpys_unique_along_rows() -> None:
+    from planner_core.search.rebuild import _unique_rows
+
+    rng = np.random.default_rng(3)
+    for _ in range(300):
+        a = rng.integers(-3, 4, size=(int(rng.integers(0, 8)), 2)).astype(float) * 50.0
+        assert np.array_equal(_unique_rows(a), np.unique(a, axis=0))
