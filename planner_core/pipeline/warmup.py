@@ -124,6 +124,10 @@ def warm_up(configurator: Any = "adaptive") -> float:
     # scheduled access's LP components (`hoverlp.link_components`): maps with
     # radio.access "scheduled" only
     hoverlp.link_components(np.array([0, 1]), np.array([0, 0]), 2, 1)
+    # the rebuild's snap to the nearest candidate site (maps beyond the paper's I_max)
+    from planner_core.search.rebuild import _nearest_scan
+
+    _nearest_scan(np.zeros((2, 2)), np.ones((1, 2)))
     _WARM.add(_key(configurator))
     return time.perf_counter() - t0
 
