@@ -884,30 +884,41 @@ def scheduled_lp_links(
     T, L = np.zeros(n), np.zeros((n, J))
     if not len(pi):
         return T, 0.0, L
+    if np.isfinite(t_max):
+        # a sensor no allocation can fill even at T_max everywhere (each point sends it at
+        # most min(R_ij, R_lambda)): the LP is infeasible, no need to build it (most of the
+        # rebuild moves' refused draws on clustered fields)
+        # (a margin far above HiGHS's feasibility tolerance: only a clear shortfall is cut)
+        most = np.minimum(R[:, need], float(bandwidth)).sum(axis=0) * float(t_max)
+        if np.any(most < req[need] * (1.0 - 1e-6)):
+            return None
+    cache = _scheduled_cache()
     for rows, cols in link_components(pi, pj, n, J):
         sub = R[np.ix_(rows, cols)]
         key = (sub.shape, sub.tobytes(), req[cols].tobytes(), float(bandwidth), float(t_max))
-        cache = _scheduled_cache()
-        got = cache.pop(key, None)
-        if got is None and float(sub.sum(axis=1).max()) <= bandwidth:
+        got = cache.pop(key, _UNSOLVED)
+        if got is None:  # solved before: infeasible
+            cache[key] = None
+            return None
+        if got is _UNSOLVED and float(sub.sum(axis=1).max()) <= bandwidth:
             # every point of the component hears at most R_lambda in all: the bandwidth rows
             # cannot bind, D_ij = R_ij T_i, and the LP is the simultaneous one (`hover_lp`,
             # compiled) with its link duals y_j / Q_j on every link
             lp = hover_lp(sub, req[cols], t_max)
             if lp is None:
+                _remember(cache, key, None)
                 return None
             got = (lp[0], np.where(sub > 0, (lp[2] / req[cols])[None, :], 0.0))
-        if got is None:
+        if got is _UNSOLVED:
             core = _scheduled_core(sub, req[cols], bandwidth, t_max)
             if core is None:
+                _remember(cache, key, None)
                 return None
             t, _, dual, _, (si, sj), _ = core
             w = np.zeros(sub.shape)
             w[si, sj] = np.maximum(-dual, 0.0) / req[cols][sj]
             got = (t, w)
-        cache[key] = got  # the most recent last
-        while len(cache) > SCHEDULED_CACHE_SIZE:
-            del cache[next(iter(cache))]
+        _remember(cache, key, got)
         T[rows] = got[0]
         L[rows[:, None], cols[None, :]] = got[1]
     return T, float(T.sum()), L
@@ -1012,9 +1023,19 @@ def _link_labels(pi, pj, n, J):  # pragma: no cover - compiled
     return label, k
 
 
-#: components `scheduled_lp_links` keeps solved (per thread), the least recently used
-#: dropped first
+#: components `scheduled_lp_links` keeps solved (per thread; an infeasible one as None), the
+#: least recently used dropped first
 SCHEDULED_CACHE_SIZE = 4096
+#: a component `scheduled_lp_links` has not solved yet (its cache holds None for infeasible)
+_UNSOLVED: Any = object()
+
+
+def _remember(cache: dict[tuple[Any, ...], Any], key: tuple[Any, ...], got: Any) -> None:
+    """Keep a solved component (None: infeasible) as the most recent, dropping the oldest
+    beyond `SCHEDULED_CACHE_SIZE`."""
+    cache[key] = got
+    while len(cache) > SCHEDULED_CACHE_SIZE:
+        del cache[next(iter(cache))]
 _SCHEDULED = threading.local()
 
 
