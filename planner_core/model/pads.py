@@ -3,7 +3,7 @@
 Several vehicles use one depot: they wait there to launch, land there and stand there through
 a battery swap. Sharing one point, a vehicle would land on, or take off beside, another one
 standing on the ground; the simulator's SEPARATION counts a vehicle on the ground and fails
-that (`sim.fleet_time`). So each vehicle k (0-based) has its own pad at each depot:
+that (`sim.fleet_time`). So each depot has pads, one for each vehicle that uses it:
 
 * pad 0 is the depot itself, so a single vehicle flies exactly where it did before, and of
   the vehicles a plan sends to a depot the lowest-numbered stands on it (`pad_ranks`: the
@@ -27,6 +27,9 @@ from collections.abc import Callable, Iterable
 
 import numpy as np
 
+# m of a leg inside obstacles at or below which the leg is clear (the routing's, one place)
+from planner_core.model.routing.graph import CLEAR as CLEAR_M
+
 __all__ = ["PAD_MARGIN_M", "PAD_CLEAR_M", "MAX_RINGS", "CLEAR_M", "FREE", "OUTSIDE", "NEAR",
            "BEHIND", "pad_layout", "offset_words", "pad_ranks"]
 
@@ -41,8 +44,6 @@ MAX_RINGS = 12
 #: why a lattice point is no pad (the caller's test): it may be one; outside the area; within
 #: the pad clearance of an obstacle (or inside one); no clear straight leg from the depot
 FREE, OUTSIDE, NEAR, BEHIND = 0, 1, 2, 3
-#: m of a leg inside obstacles at or below which the leg is clear (the routing's `CLEAR`)
-CLEAR_M = 1e-9
 
 
 def _lattice(rings: int) -> np.ndarray:
