@@ -1,5 +1,5 @@
-"""check and plan print a few findings of one kind about sensors in full and the rest on one
-line (a 25-minute battery on a 10 km map made one long CANNOT line per sensor)."""
+"""check and plan print the first findings of one kind about sensors in full and the rest on
+one line (a 400 s battery on a 10 km map made one long CANNOT line per sensor)."""
 
 from __future__ import annotations
 
@@ -16,14 +16,16 @@ def _f(kind: str, j: int, fatal: bool = True) -> Finding:
 
 
 def test_beyond_the_first_few_one_line_names_the_rest():
-    fs = [_f("ENERGY_RANGE", j) for j in range(9)] + [_f("ENERGY_SPLIT", 9, False)]
+    n = SHOWN_PER_KIND + 4
+    fs = [_f("ENERGY_RANGE", j) for j in range(n)] + [_f("ENERGY_SPLIT", n, False)]
     fs += [Finding("VEHICLES", True, "fleet.uavs: no sensor named here")]
     lines = finding_lines(fs)
     full = [line for _, line in lines if "ENERGY_RANGE message" in line]
     assert len(full) == SHOWN_PER_KIND
-    assert (False, "sensor 's9': ENERGY_SPLIT message") in lines
+    assert (False, f"sensor 's{n}': ENERGY_SPLIT message") in lines
     assert (True, "fleet.uavs: no sensor named here") in lines
-    assert lines[-1] == (True, "4 more sensors alike (ENERGY_RANGE): 's5', 's6', 's7', 's8' "
+    rest = ", ".join(f"'s{j}'" for j in range(SHOWN_PER_KIND, n))
+    assert lines[-1] == (True, f"4 more sensors alike (ENERGY_RANGE): {rest} "
                                "(`lamde-mission check --json` gives each one's line)")
     # one more than the few is printed in full, not as "1 more sensor alike"
     six = finding_lines([_f("ENERGY_RANGE", j) for j in range(SHOWN_PER_KIND + 1)])

@@ -179,7 +179,7 @@ def _energy_lines(s: dict, m: object) -> None:
 
 #: findings of one kind about sensors printed in full; the rest of that kind (two or more)
 #: share one line naming them
-SHOWN_PER_KIND = 5
+SHOWN_PER_KIND = 10
 
 
 def finding_lines(findings: Sequence[Any]) -> list[tuple[bool, str]]:
