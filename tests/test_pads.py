@@ -248,13 +248,33 @@ def test_a_depot_may_list_its_pads_as_the_crew_has_them():
     doc["fleet"]["depots"][0]["pads"] = [[100.0, 150.0]]  # 50 m N of 'home' (100, 100)
     m = load_map(doc)
     assert m.vehicle_pads[:, 0].tolist() == [[100.0, 100.0], [100.0, 150.0], [135.0, 100.0]]
-    for pad, said in (([100.0, 120.0], "lies 20.0 m from another pad or depot, nearer than "
-                                       "35 m (fleet.separation_m + 5 m)"),
-                      ([-50.0, 100.0], "lies outside the area")):
-        doc["fleet"]["depots"][0]["pads"] = [pad]
-        with pytest.raises(ValueError, match=r"^fleet\.depots\[0\]\.pads\[0\]: the pad of depot "
-                                             r"'home' at \(.*\) " + re.escape(said)):
+    for pads, said in (([[100.0, 120.0]], "lies 20.0 m from depot 'home', nearer than 35 m "
+                                          "(fleet.separation_m + 5 m)"),
+                       ([[-50.0, 100.0]], "lies outside the area"),
+                       # beyond the two the 3 vehicles use, still held to the rules
+                       ([[100.0, 150.0], [150.0, 100.0], [100.0, 170.0]],
+                        "lies 20.0 m from the pad at (100, 150) of depot 'home'")):
+        doc["fleet"]["depots"][0]["pads"] = pads
+        k = len(pads) - 1
+        with pytest.raises(ValueError, match=rf"^fleet\.depots\[0\]\.pads\[{k}\]: the pad of "
+                                             r"depot 'home' at \(.*\) " + re.escape(said)):
             load_map(doc).pads_for(3)
+    # one vehicle uses no pad, but a listed one that breaks the rules is still named
+    one = _demo(1)
+    one["fleet"]["depots"][0]["pads"] = [[-50.0, 100.0]]
+    with pytest.raises(ValueError, match=r"pads\[0\].*lies outside the area"):
+        load_map(one).pads_for(1)
+
+
+def test_two_depots_nearer_than_the_pads_spacing_are_named():
+    """A reviewer's gate 20 m from the yard: check said OK and plan failed SEPARATION (a
+    vehicle standing on one depot, another landing on the other) without a reason."""
+    doc = _demo(2)
+    doc["fleet"]["depots"].append({"name": "gate", "x": 100.0, "y": 120.0})
+    with pytest.raises(ValueError, match=r"^fleet: depots 'home' and 'gate' are 20\.0 m apart, "
+                                         r"nearer than 35 m \(fleet\.separation_m \+ 5 m\)"):
+        load_map(doc).pads_for(2)
+    assert load_map(dict(doc, fleet=dict(doc["fleet"], uavs=1))).vehicle_pads.shape[0] == 1
 
 
 def test_check_lists_the_pads(tmp_path, capsys):

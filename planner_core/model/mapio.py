@@ -773,11 +773,11 @@ class Map:
         def free(site: np.ndarray, pads: np.ndarray) -> np.ndarray:
             inside = ((pads[:, 0] >= 0) & (pads[:, 0] <= W) & (pads[:, 1] >= 0)
                       & (pads[:, 1] <= H))  # fmt: skip
-            near = (_edge_distances(pads, self.spec, self.shapes) < keep) | points_inside(
-                pads, obstacles)
+            gap = _edge_distances(pads, self.spec, self.shapes)
             legs = overlap_lengths(np.broadcast_to(site, pads.shape), pads, obstacles)
-            return np.select([~inside, near, legs > _pads.CLEAR_M],
-                             [_pads.OUTSIDE, _pads.NEAR, _pads.BEHIND], _pads.FREE)
+            return np.select([~inside, gap <= 0.0, (gap < keep) | points_inside(pads, obstacles),
+                              legs > _pads.CLEAR_M],
+                             [_pads.OUTSIDE, _pads.INSIDE, _pads.NEAR, _pads.BEHIND], _pads.FREE)
 
         spacing = float(self.separation_m) + _pads.PAD_MARGIN_M
         given = {d.name: [tuple(p) for p in d.pads] for d in self.depots if d.pads}

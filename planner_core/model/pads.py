@@ -31,7 +31,7 @@ import numpy as np
 from planner_core.model.routing.graph import CLEAR as CLEAR_M
 
 __all__ = ["PAD_MARGIN_M", "PAD_CLEAR_M", "MAX_RINGS", "CLEAR_M", "FREE", "OUTSIDE", "NEAR",
-           "BEHIND", "pad_layout", "offset_words", "pad_ranks"]
+           "BEHIND", "INSIDE", "pad_layout", "offset_words", "pad_ranks"]
 
 #: m added to `fleet.separation_m` between two pads: a vehicle's landing error (GNSS, a few
 #: metres) on top of the separation the simulator asks of a vehicle landing beside another
@@ -42,8 +42,8 @@ PAD_CLEAR_M = 5.0
 #: lattice rings looked at around a depot before giving up: 100 vehicles need 5 on open ground
 MAX_RINGS = 12
 #: why a lattice point is no pad (the caller's test): it may be one; outside the area; within
-#: the pad clearance of an obstacle (or inside one); no clear straight leg from the depot
-FREE, OUTSIDE, NEAR, BEHIND = 0, 1, 2, 3
+#: the pad clearance of an obstacle; no clear straight leg from the depot; inside an obstacle
+FREE, OUTSIDE, NEAR, BEHIND, INSIDE = 0, 1, 2, 3, 4
 
 
 def _lattice(rings: int) -> np.ndarray:
@@ -113,8 +113,8 @@ def pad_layout(
         vehicles: V >= 1, the fleet's vehicles.
         spacing: m, the least distance between two pads, > 0.
         free: free(depot (2,), pads (n, 2)) -> (n,) int: `FREE` where a candidate pad may be
-            used, else why not (`OUTSIDE`, `NEAR`, `BEHIND`); a bool array reads True as
-            `FREE` and False as `NEAR`.
+            used, else why not (`OUTSIDE`, `INSIDE`, `NEAR`, `BEHIND`); a bool array reads
+            True as `FREE` and False as `NEAR`.
         names: the depots' names for messages (default "depot k").
         given: per depot, its pads 1, 2, ... as the map lists them (`Depot.pads`), taken
             before the lattice's; each must pass `free` and keep `spacing` from every other
@@ -124,9 +124,11 @@ def pad_layout(
         (V, D, 2) pads, m; [0] is `depots` itself.
 
     Raises:
-        ValueError: a depot without room for V pads within `MAX_RINGS` lattice steps, naming
-            it, the spacing and what kept the nearest spots out; or a listed pad that is not
-            free or too near another, naming it.
+        ValueError: with two vehicles or more, two depots nearer than `spacing`, naming
+            them; a depot without room for V pads within `MAX_RINGS` lattice steps, naming
+            it, the spacing and what kept the nearest spots out; or a listed pad (any of
+            them, also beyond the V - 1 used) that is not free or is too near another pad or
+            depot, naming both.
     """
     dep = np.asarray(depots, dtype=float).reshape(-1, 2)
     V, D = int(vehicles), len(dep)
@@ -134,37 +136,52 @@ def pad_layout(
         raise ValueError("vehicles must be at least 1")
     if not spacing > 0:
         raise ValueError("spacing must be positive")
+    label = [names[d] if names is not None else f"depot {d}" for d in range(D)]
+    rule = f"{spacing:g} m (fleet.separation_m + {PAD_MARGIN_M:g} m)"
     out = np.repeat(dep[None], V, axis=0)
-    if V == 1:
-        out.flags.writeable = False
-        return out
+    # every spot a vehicle may stand on, with its words: each depot is pad 0 of its own
+    taken: list[tuple[np.ndarray, str]] = [(p, f"depot '{label[d]}'") for d, p in
+                                           enumerate(dep)]  # fmt: skip
+    if V > 1:
+        for a in range(D):
+            for b in range(a + 1, D):
+                apart = float(np.hypot(*(dep[a] - dep[b])))
+                if apart < spacing - 1e-9:
+                    raise ValueError(
+                        f"fleet: depots '{label[a]}' and '{label[b]}' are {apart:.1f} m apart, "
+                        f"nearer than {rule}: a vehicle landing at one passes that near "
+                        "another standing on the other; move one, or give one depot for both")
     offsets = _lattice(MAX_RINGS) * float(spacing)
-    taken = [p for p in dep]  # every depot is pad 0 of its own
     for d in range(D):
-        who = names[d] if names is not None else f"depot {d}"
+        who = label[d]
         k = 1
-        for i, xy in enumerate((given[d] if given is not None else [])[: V - 1]):
+        # every pad the map lists is held to the rules, those beyond the vehicles' too
+        for i, xy in enumerate(given[d] if given is not None else []):
             c = np.asarray(xy, dtype=float)
             got = np.asarray(free(dep[d], c[None]))
             why_not = (FREE if got[0] else NEAR) if got.dtype == bool else int(got[0])
-            where = f"fleet.depots[{d}].pads[{i}]: the pad of depot '{who}' at ({c[0]:g}, {c[1]:g})"
+            where = (f"fleet.depots[{d}].pads[{i}]: the pad of depot '{who}' at "
+                     f"({c[0]:g}, {c[1]:g})")  # fmt: skip
             if why_not == OUTSIDE:
                 raise ValueError(f"{where} lies outside the area")
+            if why_not == INSIDE:
+                raise ValueError(f"{where} lies inside an obstacle or no-fly zone")
             if why_not == NEAR:
                 raise ValueError(f"{where} lies within {PAD_CLEAR_M:g} m (or the map's "
-                                 "clearance) of an obstacle")
+                                 "safety.clearance, where larger) of an obstacle or no-fly "
+                                 "zone")  # fmt: skip
             if why_not == BEHIND:
                 raise ValueError(f"{where}: the straight leg from the depot crosses an "
-                                 "obstacle")
-            near = min(float(np.hypot(*(c - t))) for t in taken)
+                                 "obstacle or its clearance")
+            near, what = min(((float(np.hypot(*(c - t))), w) for t, w in taken),
+                             key=lambda o: o[0])  # fmt: skip
             if near < spacing - 1e-9:
-                raise ValueError(f"{where} lies {near:.1f} m from another pad or depot, "
-                                 f"nearer than {spacing:g} m (fleet.separation_m + "
-                                 f"{PAD_MARGIN_M:g} m)")
-            out[k, d] = c
-            taken.append(c)
-            k += 1
-        if k == V:
+                raise ValueError(f"{where} lies {near:.1f} m from {what}, nearer than {rule}")
+            taken.append((c, f"the pad at ({c[0]:g}, {c[1]:g}) of depot '{who}'"))
+            if k < V:
+                out[k, d] = c
+                k += 1
+        if V == 1 or k == V:
             continue
         cand = dep[d] + offsets
         why = np.asarray(free(dep[d], cand))
@@ -178,16 +195,18 @@ def pad_layout(
             looked += 1
             if w != FREE:
                 continue
-            if min(float(np.hypot(*(c - t))) for t in taken) < spacing - 1e-9:
+            if min(float(np.hypot(*(c - t))) for t, _ in taken) < spacing - 1e-9:
                 crowded += 1
                 continue
             out[k, d] = c
-            taken.append(c)
+            taken.append((c, f"the pad at ({c[0]:g}, {c[1]:g}) of depot '{who}'"))
             k += 1
         if k < V:
-            counts = {code: int(np.sum(why == code)) for code in (OUTSIDE, NEAR, BEHIND)}
+            counts = {code: int(np.sum(why == code))
+                      for code in (OUTSIDE, INSIDE, NEAR, BEHIND)}  # fmt: skip
             kept = "; ".join(text for text in (
                 f"{counts[OUTSIDE]} outside the area" if counts[OUTSIDE] else "",
+                f"{counts[INSIDE]} inside an obstacle" if counts[INSIDE] else "",
                 f"{counts[NEAR]} within {PAD_CLEAR_M:g} m (or the map's clearance) of an "
                 "obstacle" if counts[NEAR] else "",
                 f"{counts[BEHIND]} with no clear straight leg from the depot"
