@@ -287,8 +287,28 @@ def test_check_lists_the_pads(tmp_path, capsys):
     assert main(["check", str(path)]) == 0
     out = capsys.readouterr().out
     assert ("  pads            beside each depot, taken by the vehicles that use it in number "
-            "order (the first stands on the depot): home: 50 m N, 35 m E; north: 35 m E, "
-            "35 m N\n") in out
+            "order (pad 1, the first, is the depot): home: pad 2 50 m N; pad 3 35 m E | north: "
+            "pad 2 35 m E; pad 3 35 m N\n") in out
+    assert main(["check", str(path), "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)["fleet"]["pads"]
+    assert got["home"] == [{"pad": 2, "x": 100.0, "y": 150.0, "east_m": 0.0, "north_m": 50.0},
+                           {"pad": 3, "x": 135.0, "y": 100.0, "east_m": 35.0, "north_m": 0.0}]
     path.write_text(json.dumps(_demo(1)))
     assert main(["check", str(path)]) == 0
     assert "pads " not in capsys.readouterr().out
+
+
+def test_check_notes_a_separation_above_the_flight_altitude(tmp_path, capsys):
+    """A reviewer's 120 m separation at 100 m altitude: check said OK and plan failed
+    SEPARATION against a vehicle on the ground. check now says why it may."""
+    from lamde_mission.cli import main
+
+    path = tmp_path / "high.json"
+    path.write_text(json.dumps(_demo(3, separation_m=120.0)))
+    assert main(["check", str(path)]) == 0
+    assert ("  note    fleet.separation_m 120 m is more than the flight altitude (uav.altitude "
+            "100 m): a vehicle flying within 66 m of another standing on its pad comes nearer "
+            "than that") in capsys.readouterr().out
+    path.write_text(json.dumps(_demo(3, separation_m=100.0)))
+    assert main(["check", str(path)]) == 0
+    assert "SEPARATION" not in capsys.readouterr().out

@@ -57,6 +57,8 @@ def run(args: argparse.Namespace) -> int:
     s = m.summary()
     d = diagnose(m)
     if args.json:
+        if s.get("fleet") is not None and int(m.uavs) > 1:
+            s["fleet"]["pads"] = _pads_json(m)
         s["diagnosis"] = [{"kind": f.kind, "fatal": f.fatal, "sensor": f.sensor,
                            "message": f.message, **({"depot": f.depot} if f.depot else {})}
                           for f in d.findings]  # fmt: skip
@@ -136,6 +138,20 @@ def _reduced_clearance(m: object) -> str:
     return f" (less where the start, end or a depot is closer: {shown}{more})"
 
 
+def _pads_json(m: Any) -> dict[str, list[dict[str, float]]] | None:
+    """{depot: [pad 2, pad 3, ...]} of a fleet's map (`Map.vehicle_pads`), each pad's local
+    x, y and east_m, north_m from its depot; None when a depot has no room (PADS says why)."""
+    try:
+        pads = m.vehicle_pads
+    except ValueError:
+        return None
+    names, xy, _ = m.sortie_sites
+    return {n: [{"pad": k + 1, "x": float(pads[k, d, 0]), "y": float(pads[k, d, 1]),
+                 "east_m": float(pads[k, d, 0] - xy[d][0]) + 0.0,
+                 "north_m": float(pads[k, d, 1] - xy[d][1]) + 0.0}
+                for k in range(1, len(pads))] for d, n in enumerate(names)}  # fmt: skip
+
+
 def _energy_lines(s: dict, m: object) -> None:
     """The battery and fleet lines of the summary (issue 33), when the map gives them; the
     depots are the sortie planner's (`Map.sortie_sites` of map `m`: without `fleet.depots`,
@@ -169,12 +185,13 @@ def _energy_lines(s: dict, m: object) -> None:
             except ValueError:  # PADS says why below
                 pads = None
             if pads is not None:
-                each = "; ".join(
-                    f"{printable(n)}: " + ", ".join(offset_words(*(pads[k, d] - xy[d]))
-                                                    for k in range(1, len(pads)))
+                each = " | ".join(
+                    f"{printable(n)}: " + "; ".join(
+                        f"pad {k + 1} {offset_words(*(pads[k, d] - xy[d]))}"
+                        for k in range(1, len(pads)))
                     for d, n in enumerate(names))  # fmt: skip
                 print(f"  pads            beside each depot, taken by the vehicles that use it "
-                      f"in number order (the first stands on the depot): {each}")
+                      f"in number order (pad 1, the first, is the depot): {each}")
 
 
 #: findings of one kind about sensors printed in full; the rest of that kind (two or more)

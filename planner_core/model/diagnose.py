@@ -281,12 +281,24 @@ def fleet_findings(m: Any) -> list[Finding]:
 
 def _pad_findings(m: Any) -> list[Finding]:
     """PADS: a sortie site without room for every vehicle's own pad (`Map.vehicle_pads`:
-    `fleet.separation_m` + 5 m apart, clear of obstacles, inside the area); no plan of the
-    fleet can be flown from it. Cost: `planner_core.model.pads.pad_layout`'s."""
+    `fleet.separation_m` + 5 m apart, clear of obstacles, inside the area), two sites nearer
+    than that or a listed pad that breaks the rules; no plan of the fleet can be flown from
+    it. SEPARATION_ALTITUDE (a note): a separation above the flight altitude, which a vehicle
+    flying near another on the ground breaks. Cost: `planner_core.model.pads.pad_layout`'s."""
     try:
         m.pads_for(int(m.uavs))
     except ValueError as exc:
         return [Finding("PADS", True, str(exc))]
+    sep, h = float(m.separation_m), float(m.spec.uav.altitude)
+    if int(m.uavs) > 1 and sep > h:
+        # SEPARATION counts a vehicle on the ground: one flying over it at the altitude
+        # comes within sep of it inside this radius, and the planner does not route round it
+        r = math.sqrt(sep * sep - h * h)
+        return [Finding("SEPARATION_ALTITUDE", False, (
+            f"fleet.separation_m {sep:g} m is more than the flight altitude (uav.altitude "
+            f"{h:g} m): a vehicle flying within {r:.0f} m of another standing on its pad comes "
+            "nearer than that, which the planner does not route around, so a plan may fail "
+            "SEPARATION; fly higher or lower fleet.separation_m"))]
     return []
 
 
