@@ -312,3 +312,41 @@ def test_check_notes_a_separation_above_the_flight_altitude(tmp_path, capsys):
     path.write_text(json.dumps(_demo(3, separation_m=100.0)))
     assert main(["check", str(path)]) == 0
     assert "SEPARATION" not in capsys.readouterr().out
+
+
+def test_upload_refuses_vehicles_that_share_a_spot(tmp_path, capsys):
+    """A directory planned before pads (two vehicles take off and land on one depot point):
+    upload --fleet, even without --map, refuses it (exit 1, nothing sent) unless --force; with
+    --map and a fleet.json without depots it paces the pads from the map's depots."""
+    from lamde_mission.cli import main
+    from lamde_mission.commands.upload import _print_takeoffs
+    from lamde_mission.vehicle.mock_fleet import MockFleet
+    from tests.fleet_helpers import write_fleet_dir
+    from tests.vehicle_helpers import free_udp_port
+
+    doc = _demo(2)
+    doc["fleet"]["depots"] = doc["fleet"]["depots"][:1]
+    path = tmp_path / "one.json"
+    path.write_text(json.dumps(doc))
+    same = write_fleet_dir(tmp_path / "same", [[["S1"]], [["S2"]]], map_path=path,
+                           depots={"home": (100.0, 100.0), "spot": (100.0, 100.0)},
+                           sortie_depots=[[("home", "home")], [("spot", "spot")]])
+    port = free_udp_port()
+    conn = ["--connect", f"udpin://127.0.0.1:{port}", "--via", "pymavlink", "--timeout", "5"]
+    with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=2, heartbeat_hz=10.0,
+                   params={"MPC_XY_VEL_MAX": 20.0}) as fleet:
+        assert main(["upload", str(same), "--fleet", *conn]) == 1
+        err = capsys.readouterr().err
+        assert "vehicles 1 and 2 both take off or land at lat" in err
+        assert err.strip().endswith("nothing sent (--force sends it anyway)")
+        assert all(sum(v.stats.uploads.values()) == 0 for v in fleet.vehicles)
+    # each on its own pad (as plan writes them), a fleet.json that gives no depots: the words
+    # come from the map's depots (--map), else the depot's name alone
+    own = write_fleet_dir(tmp_path / "own", [[["S1"]], [["S2"]]], map_path=path)
+    assert "depots" not in json.loads((own / "fleet.json").read_text())
+    _print_takeoffs(str(own), 1, str(path))
+    said = capsys.readouterr().out
+    assert "vehicle 1 on 'home' itself (lat" in said
+    assert "vehicle 2 on 35 m E of 'home' (lat" in said
+    _print_takeoffs(str(own), 1)
+    assert "vehicle 2 on 'home' (lat" in capsys.readouterr().out

@@ -552,14 +552,66 @@ def _verbose_log(args: argparse.Namespace):
     return log
 
 
-def _print_takeoffs(directory: str, sortie: int) -> None:
+#: m: two vehicles whose missions take off or land this near each other share one spot
+SHARED_SPOT_M = 1.0
+
+
+def _stands(directory: str) -> list[tuple[int, float, float]]:
+    """Every (vehicle, lat, lon) a directory's missions take off from (NAV_TAKEOFF) or land at
+    (NAV_LAND), read from the mission files fleet.json lists (unreadable ones left out: the
+    upload itself names them)."""
+    from lamde_mission.formats import MissionFileError, read_mission
+    from lamde_mission.formats.fleet import read_fleet_dir
+
+    out = []
+    for v in read_fleet_dir(directory).vehicles:
+        for s in v.sorties:
+            try:
+                items, _ = read_mission(s.path)
+            except MissionFileError:
+                continue
+            out += [(v.vehicle, float(it.x), float(it.y)) for it in items
+                    if it.command in (21, 22) and (it.x or it.y)]  # NAV_LAND, NAV_TAKEOFF
+    return out
+
+
+def _shared_spots(directory: str) -> str | None:
+    """Two vehicles of a sortie directory that take off or land at one spot (within
+    `SHARED_SPOT_M`), as a directory planned before each vehicle had its own pad has them:
+    one would land on, or take off beside, the other standing there. Judged from the mission
+    files alone (no map needed); None when every vehicle has spots of its own. Cost: O(S^2)
+    for S take-offs and landings (2 per sortie, at most 2,000)."""
+    import numpy as np
+
+    from lamde_mission.geo import latlon_to_enu
+
+    stands = _stands(directory)
+    if not stands:
+        return None
+    origin = (stands[0][1], stands[0][2], 0.0)
+    xy = np.array([latlon_to_enu(lat, lon, origin) for _, lat, lon in stands], dtype=float)
+    who = np.array([v for v, _, _ in stands])
+    d = np.hypot(xy[:, None, 0] - xy[None, :, 0], xy[:, None, 1] - xy[None, :, 1])
+    bad = np.argwhere((d < SHARED_SPOT_M) & (who[:, None] < who[None, :]))
+    if not len(bad):
+        return None
+    a, b = bad[0]
+    return (f"vehicles {who[a]} and {who[b]} both take off or land at lat {stands[a][1]:.7f}, "
+            f"lon {stands[a][2]:.7f}: one would land on, or take off beside, the other "
+            "standing there (a directory planned before each vehicle had its own pad: plan it "
+            "again)")
+
+
+def _print_takeoffs(directory: str, sortie: int, map_path: str | None = None,
+                    origin: str | None = None) -> None:
     """When each vehicle's sortie `sortie` takes off, as fleet.json gives it (`takeoff_s`, on
     the plan's clock; a directory written before take-off times has only each vehicle's
     `launch_s`, the first sortie's): the vehicles keep apart in the air and no sensor sends
     to two at once only when they take off so (`lamde_mission.launches`). Then where each
     takes off, its own pad: the mission's NAV_TAKEOFF position (what the vehicle is sent),
     paced from its depot where fleet.json gives the depot ("35 m N, 35 m E of 'yard'"), with
-    its latitude and longitude. `verify`'s PLACES holds fleet.json's places to the missions'."""
+    its latitude and longitude (a fleet.json without depots: with `map_path`, the map's
+    depots). `verify`'s PLACES holds fleet.json's places to the missions'."""
     from lamde_mission.formats import MissionFileError, read_mission
     from lamde_mission.formats.fleet import read_fleet_dir
     from lamde_mission.geo import latlon_to_enu
@@ -567,6 +619,9 @@ def _print_takeoffs(directory: str, sortie: int) -> None:
     from planner_core.textio import printable
 
     fleet = read_fleet_dir(directory)
+    depots = dict(fleet.depots)
+    if map_path is not None and not depots:  # written before fleet.json gave its depots
+        depots = _map_depots_latlon(map_path, origin)
     times, pads = [], []
     for v in fleet.vehicles:
         if len(v.sorties) < sortie:
@@ -585,7 +640,7 @@ def _print_takeoffs(directory: str, sortie: int) -> None:
         if not up:
             continue
         lat, lon = float(up[0].x), float(up[0].y)
-        depot = fleet.depots.get(s.depot_start or "")
+        depot = depots.get(s.depot_start or "")
         if depot is not None:
             dx, dy = latlon_to_enu(lat, lon, (depot[0], depot[1], 0.0))
             words = offset_words(float(dx), float(dy))
@@ -601,6 +656,20 @@ def _print_takeoffs(directory: str, sortie: int) -> None:
     if pads:
         print(f"set each vehicle on its own pad (sortie {sortie}): " + ", ".join(pads),
               flush=True)
+
+
+def _map_depots_latlon(map_path: str, origin: str | None) -> dict[str, tuple[float, float]]:
+    """{depot: (lat, lon)} of the map's sortie sites (`Map.sortie_sites`)."""
+    from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
+    from lamde_mission.geo import enu_to_latlon
+
+    m = with_origin_or_fail(load_map_or_fail(map_path), origin)
+    names, xy, _ = m.sortie_sites
+    out = {}
+    for n, (x, y) in zip(names, xy, strict=True):
+        lat, lon = enu_to_latlon(x, y, m)
+        out[n] = (float(lat), float(lon))
+    return out
 
 
 def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
@@ -637,6 +706,14 @@ def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
             path = str(Path(args.mission) / fm.source)
             _wire_check(path, fm.mission, fm.fence, fm.rally)
             _flight_check(path, fm.mission, force=args.force)
+    shared = _shared_spots(args.mission)
+    if shared is not None:
+        if not args.force:
+            print(f"lamde-mission upload: {printable(args.mission)}: {shared}; nothing sent "
+                  "(--force sends it anyway)", file=sys.stderr)  # fmt: skip
+            return 1
+        print(f"warning: {printable(args.mission)}: {shared}; sent anyway (--force)",
+              file=sys.stderr)  # fmt: skip
     if args.map and not _fleet_sim_check(args.mission, args.map, force=args.force,
                                          origin=args.origin):
         return 1
@@ -668,7 +745,7 @@ def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
         return 1
     print(report.summary())
     if report.ok:
-        _print_takeoffs(args.mission, args.sortie)
+        _print_takeoffs(args.mission, args.sortie, args.map, args.origin)
     if not report.ok:
         bad = [str(r.vehicle) for r in report.results if not r.ok]
         print(f"lamde-mission upload: vehicle {', '.join(bad)} failed (see above)",
