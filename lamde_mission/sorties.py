@@ -315,7 +315,7 @@ def _position(m: Any, xy: np.ndarray, depot: str | None = None) -> dict[str, flo
     names, sites, _ = m.sortie_sites
     if depot is not None and depot in names:
         dx, dy = np.asarray(xy, dtype=float) - sites[list(names).index(depot)]
-        out.update(east_m=round(float(dx), 2), north_m=round(float(dy), 2))
+        out.update(east_m=round(float(dx), 2) + 0.0, north_m=round(float(dy), 2) + 0.0)
     return out
 
 
@@ -676,7 +676,8 @@ def verify_sortie_dir(m: Any, path: str | Path,
     check = _check(m, rows, len(fleet.vehicles), fleet.path,
                    [veh.launch_s for veh in fleet.vehicles], speed_limits)
     given = [(veh.vehicle, s.sortie, s.takeoff_s) for veh in fleet.vehicles for s in veh.sorties]
-    places = [(s.takeoff_at, s.landing_at) for veh in fleet.vehicles for s in veh.sorties]
+    places = [((s.takeoff_at, s.takeoff_offset), (s.landing_at, s.landing_offset))
+              for veh in fleet.vehicles for s in veh.sorties]
     check = replace(check, fleet=(*check.fleet, _times_verdict(
         given, check.takeoffs(), fleet.swap_s, float(m.swap_s)), _places_verdict(
         m, check, places, fleet.depots)))
@@ -698,8 +699,8 @@ def _places_verdict(m: Any, check: FleetCheck, places: list[tuple[Any, Any]],
     Args:
         m: the map verified on.
         check: the replays, in fleet.json's order of sorties.
-        places: per sortie (takeoff_at, landing_at) as fleet.json gives them ((lat, lon) or
-            None).
+        places: per sortie ((takeoff lat, lon), (east_m, north_m)) and the same for the
+            landing, as fleet.json gives them (None where it gives none).
         depots: fleet.json's depots {name: (lat, lon)} (empty when it gives none).
 
     Returns:
@@ -711,21 +712,31 @@ def _places_verdict(m: Any, check: FleetCheck, places: list[tuple[Any, Any]],
     title = "fleet.json's take-off and landing places are the missions'"
     off: list[tuple[float, str]] = []
     n = 0
-    for sc, (t_at, l_at) in zip(check.sorties, places, strict=True):
-        for what, given, xy in (("takes off", t_at, sc.takeoff_xy),
-                                ("lands", l_at, sc.landing_xy)):
-            if given is None:
-                continue
-            n += 1
-            x, y = latlon_to_enu(given[0], given[1], m)
-            d = float(np.hypot(float(x) - xy[0], float(y) - xy[1]))
-            if d > PLACE_TOL_M:
-                off.append((d, f"vehicle {sc.vehicle} sortie {sc.sortie} {what} at lat "
-                               f"{given[0]:.7f}, lon {given[1]:.7f} in fleet.json, {d:.1f} m "
-                               f"from where its mission {what}"))  # fmt: skip
     names, sites, _ = m.sortie_sites
+    for sc, (t_at, l_at) in zip(check.sorties, places, strict=True):
+        for what, (given, paced), xy, depot in (
+                ("takes off", t_at, sc.takeoff_xy, sc.depot_start),
+                ("lands", l_at, sc.landing_xy, sc.depot_end)):  # fmt: skip
+            if given is not None:
+                n += 1
+                x, y = latlon_to_enu(given[0], given[1], m)
+                d = float(np.hypot(float(x) - xy[0], float(y) - xy[1]))
+                if d > PLACE_TOL_M:
+                    off.append((d, f"vehicle {sc.vehicle} sortie {sc.sortie} {what} at lat "
+                                   f"{given[0]:.7f}, lon {given[1]:.7f} in fleet.json, {d:.1f} "
+                                   f"m from where its mission {what}"))  # fmt: skip
+            if paced is not None and depot in names:
+                n += 1
+                e, nn = xy - sites[list(names).index(depot)]
+                d = float(np.hypot(paced[0] - e, paced[1] - nn))
+                if d > PLACE_TOL_M:
+                    off.append((d, f"vehicle {sc.vehicle} sortie {sc.sortie} {what} "
+                                   f"{paced[0]:g} m east, {paced[1]:g} m north of '{depot}' in "
+                                   f"fleet.json, {d:.1f} m from where its mission {what}"))
     for name, (lat, lon) in depots.items():
         if name not in names:
+            off.append((np.inf, f"depot '{name}' in fleet.json is not one of the map's "
+                                f"({', '.join(names)})"))  # fmt: skip
             continue
         x, y = latlon_to_enu(lat, lon, m)
         d = float(np.hypot(float(x) - sites[list(names).index(name)][0],
@@ -740,9 +751,10 @@ def _places_verdict(m: Any, check: FleetCheck, places: list[tuple[Any, Any]],
                        "pad)")  # fmt: skip
     off.sort(key=lambda o: -o[0])
     more = f"; {len(off)} places differ" if len(off) > 1 else ""
-    return Verdict("PLACES", title, False, -(off[0][0] - PLACE_TOL_M), "m",
-                   f"{off[0][1]}{more}: upload prints fleet.json's places for the crew, the "
-                   "vehicles fly the missions'")  # fmt: skip
+    worst = off[0][0] if np.isfinite(off[0][0]) else 1e9
+    return Verdict("PLACES", title, False, -(worst - PLACE_TOL_M), "m",
+                   f"{off[0][1]}{more}: the crew sets the vehicles where fleet.json and upload "
+                   "(pacing from fleet.json's depots) say, the vehicles fly the missions'")
 
 
 def _pads_note(m: Any, check: FleetCheck) -> str | None:

@@ -220,8 +220,20 @@ def test_upload_names_each_vehicles_pad_for_the_crew(tmp_path, capsys):
     assert main(["verify", str(path), str(d)]) == 1
     out = capsys.readouterr().out
     assert ("fleet PLACES fleet.json's take-off and landing places are the missions': FAIL; "
-            "vehicle 2 sortie 1 takes off at lat") in out
+            "vehicle 2 sortie 1 takes off ") in out
     assert "35.0 m from where its mission takes off" in out
+    # the paced words (east_m, north_m) and the depots fleet.json names are held too
+    fleet["vehicles"][1]["sorties"][0]["takeoff_at"] = dict(at[1], east_m=-35.0)
+    (d / "fleet.json").write_text(json.dumps(fleet))
+    assert main(["verify", str(path), str(d)]) == 1
+    assert "vehicle 2 sortie 1 takes off -35 m east, 0 m north of 'home' in fleet.json, 70.0 m" \
+        in capsys.readouterr().out
+    fleet["vehicles"][1]["sorties"][0]["takeoff_at"] = dict(at[1])
+    fleet["depots"]["ghost"] = dict(fleet["depots"]["home"])
+    (d / "fleet.json").write_text(json.dumps(fleet))
+    assert main(["verify", str(path), str(d)]) == 1
+    assert "depot 'ghost' in fleet.json is not one of the map's" in capsys.readouterr().out
+    assert '"north_m": -0.0' not in (d / "fleet.json").read_text()
 
 
 def test_show_marks_each_vehicles_pad(tmp_path):

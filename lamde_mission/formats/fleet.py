@@ -82,6 +82,10 @@ class FleetSortie:
     takeoff_at: tuple[float, float] | None = None
     #: (lat, lon) degrees of the pad it lands at (`landing_at`; None as `takeoff_at`)
     landing_at: tuple[float, float] | None = None
+    #: (east_m, north_m) of the take-off and landing pads from their depots, as fleet.json
+    #: gives them for the crew (None where it gives none)
+    takeoff_offset: tuple[float, float] | None = None
+    landing_offset: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -182,6 +186,17 @@ def _latlon(v: Any, where: str) -> tuple[float, float] | None:
     return lat, lon
 
 
+def _offset(v: Any, where: str) -> tuple[float, float] | None:
+    """A place's {"east_m", "north_m"} from its depot, None when absent."""
+    if not isinstance(v, dict) or ("east_m" not in v and "north_m" not in v):
+        return None
+    east, north = _number(v.get("east_m"), f"{where}.east_m"), _number(v.get("north_m"),
+                                                                         f"{where}.north_m")
+    if east is None or north is None:
+        raise FleetDirError(f"{where}: expected both east_m and north_m (metres)")
+    return east, north
+
+
 def _name(v: Any, where: str) -> str | None:
     if v is None:
         return None
@@ -278,6 +293,8 @@ def read_fleet_dir(path: str | Path) -> FleetDir:
                 sensors=tuple(sensors), takeoff_s=takeoff,
                 takeoff_at=_latlon(s.get("takeoff_at"), f"{ws}.takeoff_at"),
                 landing_at=_latlon(s.get("landing_at"), f"{ws}.landing_at"),
+                takeoff_offset=_offset(s.get("takeoff_at"), f"{ws}.takeoff_at"),
+                landing_offset=_offset(s.get("landing_at"), f"{ws}.landing_at"),
             ))  # fmt: skip
         launch = _number(v.get("launch_s"), f"{wv}.launch_s")
         if launch is not None and not 0.0 <= launch <= 1e6:
