@@ -665,3 +665,21 @@ def test_the_whole_plans_c4_counts_its_sorties_in_words() -> None:
     two = combined_data_verdicts([tl, tl], m)[0]
     assert "over 1 sortie: " in one.detail and not one.passed
     assert "over 2 sorties: " in two.detail and two.passed
+
+
+def test_no_plan_names_the_sensors_a_point_serves_most() -> None:
+    """why_not named the first three sensors of the map with any link to the point (a
+    reviewer's point 990 m from the first named, 240 m from its own); now the three it takes
+    most data from, the rest counted."""
+    from planner_core.fleet.search import _Planner
+    from planner_core.pipeline import PlanConfig
+
+    single = (np.array([[1240.0, 820.0]]), np.array([900.0]))  # beside S3, hovering long
+    pl = _Planner(load_map(_review_wk3(250.0)), PlanConfig(), None, 300)
+    why = pl.why_not(single, True)
+    m = re.search(r"serving ((?:'S\d'(?:, )?)+)( and \d+ more)?", why)
+    assert m, why
+    rates = pl.model.rates(single[0])[0]
+    want = [pl.pm.sensor_ids[j] for j in np.argsort(-rates, kind="stable")[:3] if rates[j] > 0]
+    assert m.group(1).split(", ") == [f"'{x}'" for x in want]
+    assert want[0] == "S3"

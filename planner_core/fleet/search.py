@@ -311,10 +311,16 @@ class _Planner:
         k = solo_sorties(st, room, T)
         for i in np.flatnonzero((T > 0.0) & (k > SHARE_MAX)):
             rates = model.rates(P[i : i + 1])[0]
-            heard = [sid for sid, r, q in zip(self.pm.sensor_ids, rates, model.required,
-                                              strict=True) if r > 0 and q > 0][:3]  # fmt: skip
+            # the sensors it takes most data from (T_i R_ij), not the first in the map's order
+            # (a reviewer's point 990 m from the first it named, 240 m from its own)
+            ids = self.pm.sensor_ids
+            take = [(float(T[i] * r), j) for j, (r, q) in enumerate(zip(rates, model.required,
+                                                                         strict=True))
+                    if r > 0 and q > 0]  # fmt: skip
+            heard = [ids[j] for _, j in sorted(take, key=lambda o: (-o[0], o[1]))[:3]]
+            many = f" and {len(take) - 3} more" if len(take) > 3 else ""
             at = (f"the single flight's hover point at ({P[i, 0]:.0f}, {P[i, 1]:.0f}), "
-                  f"serving {', '.join(repr(x) for x in heard) or 'no sensor'}")
+                  f"serving {', '.join(repr(x) for x in heard) or 'no sensor'}{many}")
             if room[i] <= 0.0:
                 return (f"{at}: no sortie from any depot reaches it and comes back on one "
                         f"battery, even moved toward the depots{also}; "
