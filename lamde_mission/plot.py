@@ -1599,7 +1599,7 @@ def fleet_figure(
         handles.append(Line2D([], [], marker="s", linestyle="", markersize=6,
                               markerfacecolor=_vehicle_colour(min(pads.values())),
                               markeredgecolor="k",
-                              label="vN pad: vehicle N's own pad at a depot, in its colour"))
+                              label="vN pad: vehicle N's own pad"))
     if idle:
         handles.append(Line2D([], [], marker="h", linestyle="", markersize=10,
                               markerfacecolor="0.93", markeredgecolor="0.55",
