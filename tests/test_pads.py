@@ -352,6 +352,9 @@ def test_upload_refuses_vehicles_that_share_a_spot(tmp_path, capsys):
         assert "vehicles 1 and 2 both take off or land at lat" in err
         assert err.strip().endswith("nothing sent (--force sends it anyway)")
         assert all(sum(v.stats.uploads.values()) == 0 for v in fleet.vehicles)
+    # show draws it, with a note saying the same
+    assert main(["show", str(path), str(same), "-o", str(tmp_path / "same.png")]) == 0
+    assert "vehicles 1 and 2 both take off or land at lat" in capsys.readouterr().err
     # each on its own pad (as plan writes them), a fleet.json that gives no depots: the words
     # come from the map's depots (--map), else the depot's name alone
     own = write_fleet_dir(tmp_path / "own", [[["S1"]], [["S2"]]], map_path=path)

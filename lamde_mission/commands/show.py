@@ -73,6 +73,11 @@ def fleet_views(directory: str | Path, m: Any) -> list[Any]:
     note = fleet.map_note(m.name, "drawn")
     if note is not None:
         print(f"note: {note}", file=sys.stderr)
+    from lamde_mission.sorties import shared_spots
+
+    shared = shared_spots(directory)
+    if shared is not None:  # drawn all the same: the picture is how one finds out
+        print(f"note: {directory}: {shared}; `verify MAP DIR/` fails it", file=sys.stderr)
     views = [
         SortieView(v.vehicle, s.sortie, replay_mission_file(str(s.path), m), s.depot_start,
                    s.depot_end)

@@ -552,56 +552,6 @@ def _verbose_log(args: argparse.Namespace):
     return log
 
 
-#: m: two vehicles whose missions take off or land this near each other share one spot
-SHARED_SPOT_M = 1.0
-
-
-def _stands(directory: str) -> list[tuple[int, float, float]]:
-    """Every (vehicle, lat, lon) a directory's missions take off from (NAV_TAKEOFF) or land at
-    (NAV_LAND), read from the mission files fleet.json lists (unreadable ones left out: the
-    upload itself names them)."""
-    from lamde_mission.formats import MissionFileError, read_mission
-    from lamde_mission.formats.fleet import read_fleet_dir
-
-    out = []
-    for v in read_fleet_dir(directory).vehicles:
-        for s in v.sorties:
-            try:
-                items, _ = read_mission(s.path)
-            except MissionFileError:
-                continue
-            out += [(v.vehicle, float(it.x), float(it.y)) for it in items
-                    if it.command in (21, 22) and (it.x or it.y)]  # NAV_LAND, NAV_TAKEOFF
-    return out
-
-
-def _shared_spots(directory: str) -> str | None:
-    """Two vehicles of a sortie directory that take off or land at one spot (within
-    `SHARED_SPOT_M`), as a directory planned before each vehicle had its own pad has them:
-    one would land on, or take off beside, the other standing there. Judged from the mission
-    files alone (no map needed); None when every vehicle has spots of its own. Cost: O(S^2)
-    for S take-offs and landings (2 per sortie, at most 2,000)."""
-    import numpy as np
-
-    from lamde_mission.geo import latlon_to_enu
-
-    stands = _stands(directory)
-    if not stands:
-        return None
-    origin = (stands[0][1], stands[0][2], 0.0)
-    xy = np.array([latlon_to_enu(lat, lon, origin) for _, lat, lon in stands], dtype=float)
-    who = np.array([v for v, _, _ in stands])
-    d = np.hypot(xy[:, None, 0] - xy[None, :, 0], xy[:, None, 1] - xy[None, :, 1])
-    bad = np.argwhere((d < SHARED_SPOT_M) & (who[:, None] < who[None, :]))
-    if not len(bad):
-        return None
-    a, b = bad[0]
-    return (f"vehicles {who[a]} and {who[b]} both take off or land at lat {stands[a][1]:.7f}, "
-            f"lon {stands[a][2]:.7f}: one would land on, or take off beside, the other "
-            "standing there (a directory planned before each vehicle had its own pad: plan it "
-            "again)")
-
-
 def _print_takeoffs(directory: str, sortie: int, map_path: str | None = None,
                     origin: str | None = None) -> None:
     """When each vehicle's sortie `sortie` takes off, as fleet.json gives it (`takeoff_s`, on
@@ -706,7 +656,9 @@ def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
             path = str(Path(args.mission) / fm.source)
             _wire_check(path, fm.mission, fm.fence, fm.rally)
             _flight_check(path, fm.mission, force=args.force)
-    shared = _shared_spots(args.mission)
+    from lamde_mission.sorties import shared_spots
+
+    shared = shared_spots(args.mission)
     if shared is not None:
         if not args.force:
             print(f"lamde-mission upload: {printable(args.mission)}: {shared}; nothing sent "
