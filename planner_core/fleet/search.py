@@ -868,7 +868,9 @@ def plan_fleet(
 
     Returns:
         The `FleetResult`: the plan (planning-map coordinates; hover times from the LP across
-        sorties), the single flight, the route-first peer it started from.
+        sorties; each vehicle's sorties flown from its own pads, `on_pads`, searched first
+        with no allowance for them and again with more only where they do not fit), the
+        single flight, the route-first peer it started from.
 
     Raises:
         ValueError: one line: a sensor whose data needs more sorties than the planner shares
