@@ -283,23 +283,68 @@ class SortieCheck:
 SHARED_SPOT_M = 1.0
 
 
-def _stands(directory: str | Path) -> list[tuple[int, float, float]]:
-    """Every (vehicle, lat, lon) a directory's missions take off from (NAV_TAKEOFF) or land at
-    (NAV_LAND), read from the mission files fleet.json lists (unreadable ones left out: the
-    upload itself names them)."""
+#: MAVLink MAV_CMD_NAV_TAKEOFF and MAV_CMD_NAV_LAND
+NAV_TAKEOFF, NAV_LAND = 22, 21
+
+
+def mission_stands(path: str | Path) -> list[tuple[int, float, float]]:
+    """Where a mission file's vehicle stands on the ground: (command, lat, lon) of each
+    NAV_TAKEOFF and NAV_LAND item that gives a position, in the file's order.
+
+    Args:
+        path: the mission file.
+
+    Returns:
+        [(NAV_TAKEOFF or NAV_LAND, lat deg, lon deg)]; empty for an unreadable file (whoever
+        sends or verifies it names what is wrong with it).
+    """
     from lamde_mission.formats import MissionFileError, read_mission
+
+    try:
+        items, _ = read_mission(path)
+    except MissionFileError:
+        return []
+    return [(int(it.command), float(it.x), float(it.y)) for it in items
+            if it.command in (NAV_TAKEOFF, NAV_LAND) and (it.x or it.y)]  # fmt: skip
+
+
+def depot_xy(m: Any, name: str | None) -> np.ndarray | None:
+    """A sortie site's position by name (`Map.sortie_sites`).
+
+    Args:
+        m: the map.
+        name: the depot's name.
+
+    Returns:
+        (2,) local m, or None when the map has no such site.
+    """
+    names, sites, _ = m.sortie_sites
+    return sites[list(names).index(name)] if name in names else None
+
+
+def depot_positions(m: Any, names: Sequence[str] | None = None) -> dict[str, dict[str, float]]:
+    """{depot: {"x", "y", "lat", "lon"}} of the map's sortie sites (those named in `names`,
+    in the map's order; all by default).
+
+    Args:
+        m: the map (with an origin).
+        names: the depots wanted (unknown ones left out); None: every site.
+
+    Returns:
+        The positions (`_position`).
+    """
+    known, sites, _ = m.sortie_sites
+    return {n: _position(m, xy) for n, xy in zip(known, sites, strict=True)
+            if names is None or n in names}  # fmt: skip
+
+
+def _stands(directory: str | Path) -> list[tuple[int, float, float]]:
+    """Every (vehicle, lat, lon) a directory's missions take off from or land at
+    (`mission_stands` of the mission files fleet.json lists)."""
     from lamde_mission.formats.fleet import read_fleet_dir
 
-    out = []
-    for v in read_fleet_dir(directory).vehicles:
-        for s in v.sorties:
-            try:
-                items, _ = read_mission(s.path)
-            except MissionFileError:
-                continue
-            out += [(v.vehicle, float(it.x), float(it.y)) for it in items
-                    if it.command in (21, 22) and (it.x or it.y)]  # NAV_LAND, NAV_TAKEOFF
-    return out
+    return [(v.vehicle, lat, lon) for v in read_fleet_dir(directory).vehicles
+            for s in v.sorties for _, lat, lon in mission_stands(s.path)]  # fmt: skip
 
 
 def shared_spots(directory: str | Path) -> str | None:
@@ -350,10 +395,10 @@ def pad_words(m: Any, depot: str, xy: np.ndarray) -> str:
     from planner_core.model.pads import offset_words
     from planner_core.textio import printable
 
-    names, sites, _ = m.sortie_sites
-    if depot not in names:
+    at = depot_xy(m, depot)
+    if at is None:
         return printable(depot)
-    dx, dy = np.asarray(xy, dtype=float) - sites[list(names).index(depot)]
+    dx, dy = np.asarray(xy, dtype=float) - at
     if float(np.hypot(dx, dy)) < 0.5:
         return printable(depot)
     return f"{printable(depot)}, pad {offset_words(dx, dy)}"
@@ -367,9 +412,9 @@ def _position(m: Any, xy: np.ndarray, depot: str | None = None) -> dict[str, flo
     lat, lon = enu_to_latlon(xy[0], xy[1], m)
     out = {"x": round(float(xy[0]), 3), "y": round(float(xy[1]), 3),
            "lat": round(float(lat), 7), "lon": round(float(lon), 7)}  # fmt: skip
-    names, sites, _ = m.sortie_sites
-    if depot is not None and depot in names:
-        dx, dy = np.asarray(xy, dtype=float) - sites[list(names).index(depot)]
+    at = depot_xy(m, depot)
+    if at is not None:
+        dx, dy = np.asarray(xy, dtype=float) - at
         out.update(east_m=round(float(dx), 2) + 0.0, north_m=round(float(dy), 2) + 0.0)
     return out
 
@@ -767,7 +812,7 @@ def _places_verdict(m: Any, check: FleetCheck, places: list[tuple[Any, Any]],
     title = "fleet.json's take-off and landing places are the missions'"
     off: list[tuple[float, str]] = []
     n = 0
-    names, sites, _ = m.sortie_sites
+    names = m.sortie_sites[0]
     for sc, (t_at, l_at) in zip(check.sorties, places, strict=True):
         for what, (given, paced), xy, depot in (
                 ("takes off", t_at, sc.takeoff_xy, sc.depot_start),
@@ -780,22 +825,23 @@ def _places_verdict(m: Any, check: FleetCheck, places: list[tuple[Any, Any]],
                     off.append((d, f"vehicle {sc.vehicle} sortie {sc.sortie} {what} at lat "
                                    f"{given[0]:.7f}, lon {given[1]:.7f} in fleet.json, {d:.1f} "
                                    f"m from where its mission {what}"))  # fmt: skip
-            if paced is not None and depot in names:
+            home = depot_xy(m, depot)
+            if paced is not None and home is not None:
                 n += 1
-                e, nn = xy - sites[list(names).index(depot)]
+                e, nn = xy - home
                 d = float(np.hypot(paced[0] - e, paced[1] - nn))
                 if d > PLACE_TOL_M:
                     off.append((d, f"vehicle {sc.vehicle} sortie {sc.sortie} {what} "
                                    f"{paced[0]:g} m east, {paced[1]:g} m north of '{depot}' in "
                                    f"fleet.json, {d:.1f} m from where its mission {what}"))
     for name, (lat, lon) in depots.items():
-        if name not in names:
+        home = depot_xy(m, name)
+        if home is None:
             off.append((np.inf, f"depot '{name}' in fleet.json is not one of the map's "
                                 f"({', '.join(names)})"))  # fmt: skip
             continue
         x, y = latlon_to_enu(lat, lon, m)
-        d = float(np.hypot(float(x) - sites[list(names).index(name)][0],
-                           float(y) - sites[list(names).index(name)][1]))
+        d = float(np.hypot(float(x) - home[0], float(y) - home[1]))
         if d > PLACE_TOL_M:
             off.append((d, f"depot '{name}' at lat {lat:.7f}, lon {lon:.7f} in fleet.json, "
                            f"{d:.1f} m from the map's"))  # fmt: skip
@@ -820,7 +866,7 @@ def _pads_note(m: Any, check: FleetCheck) -> str | None:
     from planner_core.model.pads import pad_ranks
 
     worst = None
-    names, _, _ = m.sortie_sites
+    names = list(m.sortie_sites[0])
     rank = pad_ranks((sc.vehicle, d) for sc in check.sorties
                      for d in (sc.depot_start, sc.depot_end))  # fmt: skip
     for sc in check.sorties:
@@ -829,7 +875,7 @@ def _pads_note(m: Any, check: FleetCheck) -> str | None:
         if sc.depot_start not in names:
             continue
         k = rank[(sc.vehicle, sc.depot_start)]
-        pad = m.pads_for(max(int(m.uavs), k + 1))[k, list(names).index(sc.depot_start)]
+        pad = m.pads_for(max(int(m.uavs), k + 1))[k, names.index(sc.depot_start)]
         d = float(np.hypot(*(sc.takeoff_xy - pad)))
         if worst is None or d > worst[0]:
             worst = (d, sc, pad)
@@ -923,12 +969,11 @@ def summary_dict(m: Any, check: FleetCheck, goal: str) -> dict[str, Any]:
         })  # fmt: skip
     tolerance = {} if check.timing_tolerance_s is None else {
         "timing_tolerance_s": check.timing_tolerance_s}
-    used = sorted({d for x in check.sorties for d in (x.depot_start, x.depot_end)})
-    names, sites, _ = m.sortie_sites
+    used = {d for x in check.sorties for d in (x.depot_start, x.depot_end)}
     out: dict[str, Any] = {
         "map": m.name,
         "objective": goal,
-        "depots": {d: _position(m, sites[list(names).index(d)]) for d in used if d in names},
+        "depots": dict(sorted(depot_positions(m, used).items())),
         "vehicles": vehicles,
         "total_s": check.total_s,
         "swaps": check.swaps,

@@ -177,21 +177,16 @@ def _energy_lines(s: dict, m: object) -> None:
         print(f"  fleet           {counted(f['uavs'], 'UAV')}, depots "
               f"{where}, swap {f['swap_s']:g} s, separation {f['separation_m']:g} m, goal "
               f"{s['goal']}")
-        if f["uavs"] > 1:
+        pads = _pads_json(m) if f["uavs"] > 1 else None  # None: PADS says why below
+        if pads is not None:
             from planner_core.model.pads import offset_words
 
-            try:
-                pads = m.vehicle_pads
-            except ValueError:  # PADS says why below
-                pads = None
-            if pads is not None:
-                each = " | ".join(
-                    f"{printable(n)}: " + "; ".join(
-                        f"pad {k + 1} {offset_words(*(pads[k, d] - xy[d]))}"
-                        for k in range(1, len(pads)))
-                    for d, n in enumerate(names))  # fmt: skip
-                print(f"  pads            beside each depot, taken by the vehicles that use it "
-                      f"in number order (pad 1, the first, is the depot): {each}")
+            each = " | ".join(
+                f"{printable(n)}: " + "; ".join(
+                    f"pad {p['pad']} {offset_words(p['east_m'], p['north_m'])}" for p in ps)
+                for n, ps in pads.items())  # fmt: skip
+            print(f"  pads            beside each depot, taken by the vehicles that use it "
+                  f"in number order (pad 1, the first, is the depot): {each}")
 
 
 #: findings of one kind about sensors printed in full; the rest of that kind (two or more)

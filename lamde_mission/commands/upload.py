@@ -562,9 +562,9 @@ def _print_takeoffs(directory: str, sortie: int, map_path: str | None = None,
     paced from its depot where fleet.json gives the depot ("35 m N, 35 m E of 'yard'"), with
     its latitude and longitude (a fleet.json without depots: with `map_path`, the map's
     depots). `verify`'s PLACES holds fleet.json's places to the missions'."""
-    from lamde_mission.formats import MissionFileError, read_mission
     from lamde_mission.formats.fleet import read_fleet_dir
     from lamde_mission.geo import latlon_to_enu
+    from lamde_mission.sorties import NAV_TAKEOFF, mission_stands
     from planner_core.model.pads import offset_words
     from planner_core.textio import printable
 
@@ -582,14 +582,10 @@ def _print_takeoffs(directory: str, sortie: int, map_path: str | None = None,
             t = v.launch_s
         times.append(f"vehicle {v.vehicle} at +{t:.0f} s" if t is not None
                      else f"vehicle {v.vehicle} at a time fleet.json does not give")
-        try:
-            items, _ = read_mission(s.path)
-        except MissionFileError:
-            continue  # the upload itself says what is wrong with the file
-        up = [it for it in items if it.command == 22 and (it.x or it.y)]  # MAV_CMD_NAV_TAKEOFF
-        if not up:
+        up = [(lat, lon) for cmd, lat, lon in mission_stands(s.path) if cmd == NAV_TAKEOFF]
+        if not up:  # (an unreadable file: the upload itself says what is wrong with it)
             continue
-        lat, lon = float(up[0].x), float(up[0].y)
+        lat, lon = up[0]
         depot = depots.get(s.depot_start or "")
         if depot is not None:
             dx, dy = latlon_to_enu(lat, lon, (depot[0], depot[1], 0.0))
@@ -611,15 +607,10 @@ def _print_takeoffs(directory: str, sortie: int, map_path: str | None = None,
 def _map_depots_latlon(map_path: str, origin: str | None) -> dict[str, tuple[float, float]]:
     """{depot: (lat, lon)} of the map's sortie sites (`Map.sortie_sites`)."""
     from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
-    from lamde_mission.geo import enu_to_latlon
+    from lamde_mission.sorties import depot_positions
 
     m = with_origin_or_fail(load_map_or_fail(map_path), origin)
-    names, xy, _ = m.sortie_sites
-    out = {}
-    for n, (x, y) in zip(names, xy, strict=True):
-        lat, lon = enu_to_latlon(x, y, m)
-        out[n] = (float(lat), float(lon))
-    return out
+    return {n: (p["lat"], p["lon"]) for n, p in depot_positions(m).items()}
 
 
 def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:

@@ -70,9 +70,10 @@ class FleetSettings:
             vehicles a plan sends to a depot take them in the order of their numbers; None:
             every vehicle at the depot itself.
         pad_wh: Wh `budget_wh` keeps back for the pads: a sortie is searched from its depot
-            and flown from its vehicle's pad (`FleetPlan.on_pads`), which costs at most one
-            leg from the pad to the depot at each end and a corner there. 0 for one vehicle,
-            and for a plan already on its pads.
+            and flown from its vehicle's pad (`planner_core.fleet.search.on_pads`), which
+            costs at most one leg from the pad to the depot at each end and a corner there
+            (`from_map` gives that full allowance; the search may keep less and re-time). 0
+            for one vehicle, and for a plan already on its pads.
     """
 
     depot_names: tuple[str, ...]

@@ -689,12 +689,12 @@ def on_pads(plan: FleetPlan, links: Links) -> FleetPlan:
     """The plan flown from each vehicle's own pads (`FleetSettings.pads`; at each depot the
     vehicles using it take its pads in the order of their numbers,
     `planner_core.model.pads.pad_ranks`): each sortie takes off from and lands at its
-    vehicle's pad at its depots, by the
-    cheapest clear way of four (straight to the first point or through a 0-second corner at
-    the depot, likewise back), its hover times kept. The search planned each sortie from the
-    depot with `FleetSettings.pad_wh` kept back, which pays for the dearest of the four (the
-    legs from the pads to the depots and the corners there), so every sortie keeps within its
-    battery. Cost: O(points) per sortie (its legs' clearance and energy, four times).
+    vehicle's pad at its depots, by the cheapest clear way of four (straight to the first
+    point or through a 0-second corner at the depot, likewise back), its hover times kept.
+    With the full `FleetSettings.pad_wh` kept back in the search, which pays for the dearest
+    of the four (the legs from the pads to the depots and the corners there), every sortie
+    keeps within its battery; with less, `_finish` re-times what does not. Cost: O(points)
+    per sortie (its legs' clearance and energy, four times).
 
     Args:
         plan: a plan searched from the depots (settings with their pads and `pad_wh`).
