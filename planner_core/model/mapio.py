@@ -746,7 +746,8 @@ class Map:
         return self.pads_for(int(self.uavs))
 
     def pads_for(self, vehicles: int) -> np.ndarray:
-        """`vehicle_pads` laid out for `vehicles` vehicles (cached per count): the map's own
+        """`vehicle_pads` laid out for `vehicles` vehicles (cached per count, a layout without
+        room too): the map's own
         layout at `fleet.uavs`; a larger count is for replaying a plan of more vehicles than
         the map flies (which `verify`'s UAVS fails), each then at a pad of its own.
 
@@ -761,6 +762,8 @@ class Map:
         """
         cache = self.__dict__.setdefault("_pads_for", {})
         got = cache.get(int(vehicles))
+        if isinstance(got, ValueError):  # no room, found before: the same line again
+            raise ValueError(*got.args)
         if got is not None:
             return got
         from planner_core.model.geometry import overlap_lengths
@@ -782,8 +785,12 @@ class Map:
 
         spacing = float(self.separation_m) + _pads.PAD_MARGIN_M
         given = {d.name: [tuple(p) for p in d.pads] for d in self.depots if d.pads}
-        out = _pads.pad_layout(sites, int(vehicles), spacing, free, names=tuple(names),
-                               given=[given.get(n, []) for n in names])
+        try:
+            out = _pads.pad_layout(sites, int(vehicles), spacing, free, names=tuple(names),
+                                   given=[given.get(n, []) for n in names])
+        except ValueError as exc:  # check asks several times (PADS, its pads line, --json)
+            cache[int(vehicles)] = exc
+            raise
         out.flags.writeable = False
         cache[int(vehicles)] = out
         return out
