@@ -151,7 +151,14 @@ def _missions(folder: Path) -> list[tuple[Path, Path]]:
     return pairs
 
 
+# plan's refusal of a .plan output for a map that is planned as a directory of sorties
+SORTIES_MAP = "a map with a battery or fleet is written as a directory of sorties"
+
+
 def _clean(res: CliOutcome, command: str) -> bool:
+    """Whether stderr is what the contract allows: exit 2 with every line (notes apart)
+    prefixed by `lamde-mission COMMAND: `, or any other status with prefixed, note or
+    indented lines. COMMAND is the subcommand's words (`check`, `map from-geojson`)."""
     lines = res.stderr.splitlines()
     prefix = f"lamde-mission {command}: "
     if "Traceback" in res.stderr:
@@ -227,7 +234,7 @@ def main(argv: list[str] | None = None) -> int:
             if res.error is not None or "Traceback" in res.stderr:
                 counts["tracebacks"] += 1
                 problem = f"traceback: {res.error!r}"
-            elif not _clean(res, argv_first[0]):
+            elif not _clean(res, " ".join(argv_first[:2] if kind == "geojson" else argv_first[:1])):
                 counts["unclean stderr"] += 1
                 problem = f"stderr: {res.stderr[:200]!r}"
             elif res.status == 2:
@@ -260,15 +267,21 @@ def main(argv: list[str] | None = None) -> int:
                         counts["check/plan disagree"] += 1
                         problem = f"check refused, plan gave {res2.status}"
                 else:
-                    res2 = run_cli(["plan", str(path), "-o", str(out), "--quiet", "--budget",
-                                    str(args.plan_budget), "--population", "20", "--no-polish"])
+                    small = ["--quiet", "--budget", str(args.plan_budget), "--population", "20",
+                             "--no-polish"]
+                    res2 = run_cli(["plan", str(path), "-o", str(out), *small])
+                    if res2.status == 2 and SORTIES_MAP in res2.stderr:
+                        # a map with a battery or fleet is planned into a directory of sorties
+                        out = case / "sorties"
+                        res2 = run_cli(["plan", str(path), "-o", str(out), *small])
                     if res2.error is not None:
                         counts["tracebacks"] += 1
                         problem = f"plan traceback: {res2.error!r}"
                     elif res2.status == 0:
                         keep.add(out.name)
                         try:
-                            read_mission(out)
+                            for written in sorted(out.glob("*.plan")) if out.is_dir() else [out]:
+                                read_mission(written)
                         except ValueError as exc:
                             counts["partial files"] += 1
                             problem = f"written mission unreadable: {exc}"
