@@ -798,19 +798,32 @@ def _finish_map(fig: Any, ax: Any, W: float, handles: list[Any], scene: _Scene, 
     """The legend below, the layout fixed, the scale bar in the emptiest corner, then every
     label placed (`_place_labels`: the ones always shown first, then sensor ids). When labels
     were left out, or `unlabelled` hover points past `HOVER_LABELS` got none, the legend says
-    how many (the layout redone to make room only where the note needs a new row of the
-    legend; the note's counts are the final ones). The direction arrows (`_draw_arrows`) and
-    the labels (`_draw_labels`) are drawn last, once, where the final layout put them.
-    Returns how many sensor ids and other labels were left out."""
-    from matplotlib.lines import Line2D
-
+    how many in the legend's title, a line kept for it (the layout redone only where the
+    note needs more lines: a narrow figure; the note's counts are the final ones). The legend
+    takes four columns, fewer where four would run past the figure's edges. The direction
+    arrows (`_draw_arrows`) and the labels (`_draw_labels`) are drawn last, once, where the
+    final layout put them. Returns how many sensor ids and other labels were left out."""
     labels = sorted(scene.labels, key=lambda lab: lab.optional)  # stable: order kept within
     sizes = _TextSizes(ax)  # the labels' text sizes, measured once for both attempts
 
-    def legend_with(extra: list[Any]) -> Any:
-        return fig.legend(handles=handles + extra, loc="outside lower center",
-                          ncol=min(len(handles) + len(extra), 4), fontsize=8,
-                          frameon=False)  # fmt: skip
+    def legend_with() -> Any:
+        # four columns where they fit the figure's width, fewer where long entries (a narrow
+        # figure: a tall map) would run past its edges; a title line kept for the note of
+        # labels left out, so that writing it there needs no new layout
+        renderer = fig.canvas.get_renderer()
+        for ncol in range(min(len(handles), 4), 0, -1):
+            legend = fig.legend(handles=handles, loc="outside lower center", ncol=ncol,
+                                fontsize=8, frameon=False, title=" ", title_fontsize=8)
+            if ncol == 1 or legend.get_window_extent(renderer).width <= fig.bbox.width:
+                return legend
+            legend.remove()
+        raise AssertionError("unreachable: one column is always kept")
+
+    def set_note(legend: Any, text: str) -> None:
+        # the note on one line where it fits the figure's width, else a line per clause
+        legend.set_title(text)
+        if legend.get_window_extent(fig.canvas.get_renderer()).width > fig.bbox.width:
+            legend.set_title(text.replace("; ", ";\n"))
 
     def attempt() -> tuple[tuple[int, int], list[Any], list[_Placed]]:
         fig.set_layout_engine("constrained")
@@ -837,20 +850,19 @@ def _finish_map(fig: Any, ax: Any, W: float, handles: list[Any], scene: _Scene, 
         capped = f"hover points past the first {HOVER_LABELS} unlabelled ({unlabelled:,})"
         return f"{capped}; {crowded}" if parts else capped
 
-    legend = legend_with([])
+    legend = legend_with()
     dropped, added, placed = attempt()
     if any(dropped) or unlabelled:
         renderer = fig.canvas.get_renderer()
         height = legend.get_tightbbox(renderer).height
-        legend.remove()
-        legend = legend_with([Line2D([], [], linestyle="none", label=note(dropped))])
+        set_note(legend, note(dropped))
         # the layout leaves the legend below the panels its height, nothing else of it: where
-        # the note takes no new row the layout, and so every place found, stays as it is
+        # the note fits the title line kept for it, the layout and every place found stand
         if legend.get_tightbbox(renderer).height != height:
             for artist in added:
                 artist.remove()
             dropped, _, placed = attempt()
-        legend.get_texts()[-1].set_text(note(dropped))
+        set_note(legend, note(dropped))
     _draw_arrows(ax, scene)
     _draw_labels(ax, placed)  # once, where the last attempt placed them
     return dropped
@@ -1218,7 +1230,7 @@ def _data_panel(ax: Any, timeline: Any, map_: Any, number: Any = None) -> None:
     ax.set_ylim(0, max(top, max(ys.values(), default=0.0) + 0.05 * top))
     ax.set_xlabel("mission time (s)")
     ax.set_ylabel("collected / required (%)")
-    ax.set_title(title, fontsize=9)
+    ax.set_title(title, fontsize=9, wrap=True)  # wrapped on a narrow figure (a tall map)
 
 
 def _bars_panel(ax: Any, timeline: Any, map_: Any) -> None:
@@ -1252,7 +1264,7 @@ def _bars_panel(ax: Any, timeline: Any, map_: Any) -> None:
         r = final[rest]
         title += (f"; {len(rest)} more: min {r.min():.0f} %, median {np.median(r):.0f} %, "
                   f"max {r.max():.0f} %")  # fmt: skip
-    ax.set_title(title, fontsize=9)
+    ax.set_title(title, fontsize=9, wrap=True)  # wrapped on a narrow figure (a tall map)
 
 
 def check_dpi(dpi: Any, name: str = "dpi") -> int:

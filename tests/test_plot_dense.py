@@ -104,7 +104,7 @@ def _check_readable(fig, m) -> None:
     title = ax_b.get_title()
     rest = int(title.split("; ")[1].split(" more")[0]) if "more:" in title else 0
     assert len(in_bars) + rest == len(ids)
-    legend = " ".join(t.get_text() for t in fig.legends[0].get_texts())
+    legend = fig.legends[0].get_title().get_text()  # the note of labels left out
     left_out = len(ids - on_map)
     if left_out:  # short sensors whose label found no place are counted as other labels
         assert f"of {len(ids)} sensor ids" in legend or "other labels left out" in legend

@@ -61,7 +61,8 @@ def _map_texts(fig) -> list[str]:
 
 
 def _legend(fig) -> list[str]:
-    return [t.get_text() for lg in fig.legends for t in lg.get_texts()]
+    """The legends' entries and titles (a title holds the note of labels left out)."""
+    return [t.get_text() for lg in fig.legends for t in (*lg.get_texts(), lg.get_title())]
 
 
 def test_distinct_rows_in_first_seen_order() -> None:

@@ -27,11 +27,15 @@ from tests.conftest import plan_at
 from tests.test_plot_dense import _dense_map
 
 
-def _dense(nfz: bool = False):
+def _dense(nfz: bool = False, tall: bool = False):
     """The 28-sensor cluster of test_plot_dense, 12 hover points of 30 s (labels crowd: some
     sensor ids are left out, some labels need a leader line); with `nfz`, a no-fly zone away
-    from the cluster (one more legend entry)."""
+    from the cluster (one more legend entry); with `tall`, on a 1.4 x 5 km area (a narrow
+    figure)."""
     d = _dense_map()
+    if tall:
+        d["area"] = {"width": 1400, "height": 5000}
+        d["obstacles"]["circles"] = [{"x": 700, "y": 3000, "radius": 80}]
     if nfz:
         d["obstacles"]["no_fly_zones"] = [{"vertices": [[1600, 100], [1900, 100], [1900, 250],
                                                         [1600, 250]]}]  # fmt: skip
@@ -205,16 +209,20 @@ def test_bends_keep_the_samples_a_line_needs() -> None:
                          - np.r_[0.0, drift])) <= 1e-6  # fmt: skip
 
 
-@pytest.mark.parametrize(("nfz", "layouts"), [(False, 1), (True, 2)])
-def test_layout_once_unless_the_note_needs_a_new_legend_row(monkeypatch, nfz, layouts) -> None:
-    """Labels left out are counted in a note at the end of the legend. Seven entries and the
-    note fill two rows of four: the layout is not redone and the places found stand; eight and
-    the note need a third row: laid out again, the labels placed again."""
-    m, tl = _dense(nfz)
+@pytest.mark.parametrize(("nfz", "tall", "layouts"), [(False, False, 1), (True, False, 1),
+                                                     (False, True, 2)])  # fmt: skip
+def test_layout_once_unless_the_note_needs_more_lines(monkeypatch, nfz, tall, layouts) -> None:
+    """Labels left out are counted in a note, the legend's title, a line kept for it from the
+    first layout: with seven entries or eight (a no-fly zone), the layout is not redone and
+    the places found stand. On a narrow figure (a tall map) the note takes a line per clause:
+    laid out again, the labels placed again."""
+    m, tl = _dense(nfz, tall)
     done = _counting(monkeypatch, matplotlib.figure.Figure, "draw_without_rendering")
     fig = plot.mission_figure(m, timeline=tl)
     legend = [t.get_text() for t in fig.legends[0].get_texts()]
-    assert len(legend) == (9 if nfz else 8) and "left out where crowded" in legend[-1]
+    note = fig.legends[0].get_title().get_text()
+    assert len(legend) == (8 if nfz else 7) and "left out where crowded" in note
+    assert note.count("\n") == (1 if tall else 0)
     assert len(done) == layouts
 
 
@@ -229,3 +237,21 @@ def test_a_save_draws_the_figure_once_and_svg_stays_deterministic(monkeypatch, f
     out = [plot.figure_bytes(f, fmt, dpi=60) for f in figs]
     assert len(draws) == 2  # one per save
     assert out[0] == out[1]
+
+
+def test_the_legend_and_titles_stay_inside_a_narrow_figure() -> None:
+    """On a tall, narrow map (1.4 x 5 km) four legend columns ran past both edges of the
+    figure, and so did the note of labels left out and the panels' titles: the legend takes
+    fewer columns until it fits and keeps every entry, the note a line per clause, the titles
+    wrap."""
+    m, tl = _dense(tall=True)
+    fig = plot.mission_figure(m, timeline=tl)
+    fig.canvas.draw()
+    r = fig.canvas.get_renderer()
+    legend = fig.legends[0]
+    box = legend.get_window_extent(r)
+    assert box.x0 >= 0.0 and box.x1 <= fig.bbox.width, (box.bounds, fig.bbox.width)
+    assert legend._ncols < 4 and len(legend.get_texts()) == 7
+    for ax in fig.axes[1:3]:
+        title = ax.title.get_window_extent(r)
+        assert title.x0 >= 0.0 and title.x1 <= fig.bbox.width, (ax.get_title(), title.bounds)
