@@ -83,6 +83,18 @@ def test_bad_input_exits_2_with_one_line(tmp_path: Path, args: list[str], needle
     assert list(tmp_path.iterdir()) == []
 
 
+def test_a_folder_output_for_a_single_flight_map_says_why(tmp_path: Path) -> None:
+    """A reviewer's `plan small-demo.json -o outdir/` was told "cannot tell the format from
+    the suffix": a folder is the output of a map with a battery or fleet, and the line says
+    so, naming the files a single flight is written to."""
+    for out in ("outdir/", str(tmp_path)):
+        r = run_cli("plan", DEMO, "-o", out, "--budget", 300, cwd=tmp_path)
+        assert r.returncode == 2 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+        assert "a folder; a map without a battery or fleet is planned as a single flight " \
+               "into one file (.plan, .waypoints or .geojson)" in r.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_bad_map_exits_2(tmp_path: Path) -> None:
     bad = tmp_path / "bad.json"
     bad.write_text('{"area": {"width": 10, "height": 10}, "start": [0, 0], "end": [1, 1]}')

@@ -391,7 +391,8 @@ def test_output_that_is_a_directory_is_refused_before_planning(tmp_path: Path) -
     folder = tmp_path / "out.plan"
     folder.mkdir()
     _refused(["plan", str(TINY), "-o", str(folder), "--quiet"],
-             "-o/--output: " + str(folder) + ": is a folder, not a file")  # fmt: skip
+             "-o/--output: " + str(folder) + ": is a folder; a map without a battery or "
+             "fleet is planned as a single flight into one file")  # fmt: skip
     _refused(["plan", str(TINY), "-o", str(tmp_path / "x.plan"), "--report",
               str(TINY / "r.json"), "--quiet"], "--report: ")  # fmt: skip
     (tmp_path / "img.svg").mkdir()

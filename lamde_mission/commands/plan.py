@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 import time
 from collections.abc import Callable
@@ -808,6 +809,7 @@ def run(args: argparse.Namespace) -> int:
         with_origin_or_fail,
     )
     from lamde_mission.errors import UsageError
+    from planner_core.textio import printable
 
     # check every output before the (long) optimisation, so bad input fails fast: the paths
     # first, before the mission formats (and the simulator under them) are even imported
@@ -820,6 +822,13 @@ def run(args: argparse.Namespace) -> int:
             format_for(args.output, args.format)
         except MissionFileError as exc:
             raise UsageError(f"--format: {exc}") from None
+    if args.output.endswith(("/", os.sep)) or os.path.isdir(args.output):
+        what = "is a folder" if os.path.isdir(args.output) else "names a folder"
+        raise UsageError(
+            f"-o/--output: {printable(args.output)}: {what}; a map without a battery or "
+            "fleet is planned as a single flight into one file (.plan, .waypoints or "
+            ".geojson); a folder of sorties is for a map with uav.battery, uav.endurance_s or "
+            "fleet")
     check_outputs(
         [("-o/--output", args.output), ("--plot", args.plot), ("--report", args.report)],
         mkdir=args.mkdir, inputs=[("map", args.map)],
