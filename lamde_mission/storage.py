@@ -346,6 +346,34 @@ def _candidates(map_: Any, p: np.ndarray, reach: int) -> np.ndarray:
 CORNER_NOISE_S = 1e-6
 
 
+#: a plan that collects at least this share less than a sensor's requirement as planned is
+#: short by its own making, not by storage's round-off: `storable_plan` makes up only what
+#: storing it took away (the planner's plans meet C4 to ~1e-9 relative)
+PLANNED_SHORT = 1e-6
+
+
+def _checked_plan(plan: Any) -> tuple[np.ndarray, np.ndarray]:
+    """(hover points (I, 2) m, hover times (I,) s) of `plan` as floats, checked: a shape,
+    non-finite number or negative time no mission file can hold raises ValueError naming
+    the field and the first offending index."""
+    hp = np.asarray(plan.hover_points, dtype=float)
+    ht = np.asarray(plan.hover_times, dtype=float).reshape(-1)
+    if hp.size == 0:
+        hp = hp.reshape(0, 2)
+    if hp.ndim != 2 or hp.shape[1] != 2:
+        raise ValueError(f"hover_points: shape {hp.shape}, expected (I, 2) metres")
+    if len(ht) != len(hp):
+        raise ValueError(f"hover_times: {len(ht)} times for {len(hp)} hover points")
+    for name, a in (("hover_points", hp), ("hover_times", ht)):
+        bad = np.flatnonzero(~np.isfinite(a.reshape(len(a), -1)).all(axis=1))
+        if len(bad):
+            raise ValueError(f"{name}[{int(bad[0])}]: {a[bad[0]]} is not a finite number")
+    neg = np.flatnonzero(ht < 0.0)
+    if len(neg):
+        raise ValueError(f"hover_times[{int(neg[0])}]: {ht[neg[0]]:g} s is negative")
+    return hp, ht
+
+
 def storable_plan(
     plan: Any,
     map: Any,  # noqa: A002 - the project's name for it
@@ -368,7 +396,10 @@ def storable_plan(
     hold none. Hover times are then raised, where the sim finds a sensor short of
     `planning_map`'s required data (which includes the data margin), at the point with the
     best rate to it, and rounded up to the dialect's storage (`hover_time_up`, never above
-    T_max); in simultaneous access never at a point whose summed rates exceed R_lambda
+    T_max), by no more than storing took away: a sensor the plan leaves short as planned
+    (by more than `PLANNED_SHORT`) is raised only back to what the plan collects, so a plan
+    is never repaired by being written; in simultaneous access never at a point whose summed
+    rates exceed R_lambda
     (hovering there would break C3), and at a point that hovers already before a corner. A
     planned time below `CORNER_NOISE_S` counts as 0 s. A point of 0 s (a corner, written as
     NAV_WAYPOINT) is
@@ -392,7 +423,8 @@ def storable_plan(
         changes nothing, and `write_mission` is handed what `plan` made.
 
     Raises:
-        ValueError: an unknown dialect name.
+        ValueError: an unknown dialect name; hover points not (I, 2), hover times not one
+            per point, a number not finite, or a negative hover time.
         lamde_mission.geo.MissingOriginError: the map has no origin.
     """
     from sim.obstacles import obstacle_shapes, overlap_lengths
@@ -404,8 +436,7 @@ def storable_plan(
     if (isinstance(plan, StorablePlan) and plan.dialect == d and made is not None
             and made[0] is map and made[1] is pm and made[2] == finish):
         return plan  # already made for this map, dialect and finish: storing it again is a no-op
-    hp = np.asarray(plan.hover_points, dtype=float).reshape(-1, 2)
-    ht = np.asarray(plan.hover_times, dtype=float).reshape(-1)
+    hp, ht = _checked_plan(plan)
     # a corner's time comes out of the hover-time LP as 0 or as rounding noise (1e-12 s on
     # L02): noise stored as float32 (px4) was a LOITER_TIME of 1e-12 s, and in whole seconds
     # (ceil) a time just above the noise would be a 1 s hover; both are corners, 0 s
@@ -452,8 +483,16 @@ def storable_plan(
 
     t_max = float(spec.uav.max_hover_time)
     i_max = int(pm.max_hover_points or 0)  # 0: no limit known
-    times = np.array([hover_time_up(t, d, t_max) for t in ht])
+    # a time above T_max (a peer's plan that breaks C2) is stored as it is, rounded up, for
+    # verify to judge; rounding never takes a time within T_max past it
+    times = np.array([hover_time_up(t, d, t_max if t <= t_max else None) for t in ht])
     need = np.asarray(pm.required_data, dtype=float)
+    # what the plan collects as planned (before storage): storage makes up what storing took
+    # away, up to the requirement, never a shortfall the plan had itself (a peer's
+    # infeasible plan written for verify is judged as it is, not repaired)
+    planned = replay(plan_to_items(SimpleNamespace(hover_points=hp, hover_times=ht), map,
+                                   finish=finish), map).collected  # fmt: skip
+    need = np.where(planned >= need * (1.0 - PLANNED_SHORT), need, np.minimum(planned, need))
     for _ in range(8):
         items = plan_to_items(SimpleNamespace(hover_points=points, hover_times=times), map,
                               finish=finish)  # fmt: skip
@@ -485,7 +524,7 @@ def storable_plan(
             i = int(np.argmax(np.where(room, R[:, j], -1.0)))
             extra = short[j] / R[i, j] * (1.0 + 1e-9) + 1e-9
             raw[i] = min(raw[i] + extra, t_max)
-        times = np.array([hover_time_up(t, d, t_max) for t in raw])
+        times = np.array([hover_time_up(t, d, t_max if t <= t_max else None) for t in raw])
     return StorablePlan(
         hover_points=points,
         hover_times=times,

@@ -229,3 +229,54 @@ def test_l02_writes_the_same_corners_for_every_autopilot(tmp_path):
         hover = [it.param1 for it in items if it.command == CMD.LOITER_TIME]
         assert len(hover) == len(plan.hover_times) - corners and min(hover) >= 1e-3, dialect
         assert verify(replay(items, m), m).passed, dialect
+
+
+class _Plan:
+    """A plan as a peer gives it: hover points (I, 2) m and hover times (I,) s."""
+
+    def __init__(self, points, times) -> None:
+        self.hover_points, self.hover_times = np.asarray(points), np.asarray(times, dtype=float)
+
+
+def test_a_plan_short_as_planned_is_written_short_not_repaired(tmp_path):
+    """A reviewer wrote a peer's infeasible plan (a random-search result, phi 34.67) with
+    `write_mission` and `verify` passed it: storage had raised 168.9 s to 205 s and 178.7 s
+    to 300 s. Storage makes up only what storing takes away: here the times are rounded up
+    to whole seconds and no more, C4 fails as it did as planned, and a time above T_max is
+    stored above it for C2 to judge."""
+    m = load_map(CASE_TINY)
+    P = np.array([[300.0, 700.0], [850.0, 450.0]])
+    T = np.array([12.3, 7.6])
+    as_planned = verify(replay(plan_to_items(_Plan(P, T), m), m), m)
+    assert not as_planned.passed
+    for autopilot in ("ardupilot", "px4"):
+        out = write_mission(tmp_path / f"{autopilot}.plan", _Plan(P, T), m, autopilot=autopilot)
+        items, _ = read_mission(out)
+        stored = [it.param1 for it in items if it.command == CMD.LOITER_TIME]
+        assert stored == pytest.approx([13.0, 8.0] if autopilot == "ardupilot" else T.tolist(),
+                                       rel=1e-5)  # float32, rounded up
+        assert "C4" in verify(replay(items, m), m).failed
+    t_max = float(m.spec.uav.max_hover_time)
+    out = write_mission(tmp_path / "over.plan", _Plan(P, [t_max + 40.5, 7.6]), m,
+                        autopilot="ardupilot")
+    items, _ = read_mission(out)
+    assert [it.param1 for it in items if it.command == CMD.LOITER_TIME][0] == t_max + 41
+    assert "C2" in verify(replay(items, m), m).failed
+
+
+@pytest.mark.parametrize(("points", "times", "needle"), [
+    ([[300.0, 700.0]], [-5.0], r"hover_times\[0\]: -5 s is negative"),
+    ([[300.0, 700.0]], [float("nan")], r"hover_times\[0\]: nan is not a finite number"),
+    ([[300.0, float("inf")]], [5.0], r"hover_points\[0\]: .* is not a finite number"),
+    ([[300.0, 700.0, 1.0]], [5.0], r"hover_points: shape \(1, 3\), expected \(I, 2\)"),
+    ([[300.0, 700.0]], [5.0, 6.0], r"hover_times: 2 times for 1 hover points"),
+])
+def test_numbers_no_mission_file_holds_are_refused_naming_the_field(tmp_path, points, times,
+                                                                    needle):
+    """Negative, non-finite or mis-shaped hover points and times: a ValueError naming the
+    field and index (a negative time was written as 230 s; NaN raised 'cannot convert float
+    NaN to integer'), and nothing written."""
+    m = load_map(CASE_TINY)
+    with pytest.raises(ValueError, match=needle):
+        write_mission(tmp_path / "x.plan", _Plan(np.array(points), np.array(times)), m)
+    assert list(tmp_path.iterdir()) == []

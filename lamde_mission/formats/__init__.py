@@ -114,7 +114,8 @@ def write_mission(
     was made on a map with safety margins; a storable plan it made for these maps is kept as
     it is), so lat/lon lie on the 1e-7 degree grid, parameters are float32 values and hover
     times are rounded *up* to whole seconds where the autopilot keeps whole seconds; storing
-    the file changes nothing.
+    the file changes nothing. Storage makes up no shortfall the plan has as planned (an
+    infeasible plan is written infeasible, for `verify` to judge).
 
     Args:
         path: the file to write.
@@ -132,7 +133,8 @@ def write_mission(
 
     Raises:
         MissionFileError: the format cannot be told (`format_for`).
-        ValueError: an unknown `autopilot`, or numbers a file cannot hold.
+        ValueError: an unknown `autopilot`, or numbers a file cannot hold (hover points not
+            (I, 2), hover times not one per point, a non-finite number, a negative time).
     """
     from lamde_mission.storage import dialect_of, storable_plan, stored_items
 
