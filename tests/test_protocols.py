@@ -81,7 +81,7 @@ def test_bench_both_modes_resume_keys_and_report_sections(suite: Path, tmp_path:
     assert main(["bench", "--suite", str(suite), "--i-max", "0", "--out", str(out)]) == 2
 
 
-def test_imax_study_records_and_table(suite: Path, tmp_path: Path) -> None:
+def test_imax_study_records_and_table(suite: Path, tmp_path: Path, monkeypatch) -> None:
     out = tmp_path / "imax"
     s = run_bench(suite, ["de-adaptive", "de-adaptive-fixedlen"], runs=1, budget=BUDGET,
                   out=out, tasks=["A1"], i_max=(2, 5), inits=("uniform",), command="t",
@@ -111,6 +111,14 @@ def test_imax_study_records_and_table(suite: Path, tmp_path: Path) -> None:
     assert main(["report", str(out), "-o", str(md)]) == 0
     assert "## I_max study" in md.read_text() and (tmp_path / "i" / "imax_feasible_rate.png"
                                                   ).stat().st_size > 0
+    # without -o, beside the results: nothing in the working folder (a reviewer's `report
+    # RUNS` run in the checkout rewrote the tracked docs/results.md)
+    monkeypatch.chdir(tmp_path)
+    before = sorted(p.name for p in tmp_path.iterdir())
+    assert main(["report", str(out)]) == 0
+    assert "## I_max study" in (out / "report.md").read_text()
+    assert (out / "report" / "imax_feasible_rate.png").stat().st_size > 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == before
     with pytest.raises(ValueError, match="i_max"):
         run_bench(suite, ["de-adaptive"], runs=1, budget=BUDGET, out=out, i_max=(0,))
 
