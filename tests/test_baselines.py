@@ -179,3 +179,18 @@ def test_optimise_checks_the_count(problem: Problem, monkeypatch: pytest.MonkeyP
     monkeypatch.setattr(baselines.OptimiserSpec, "function", lambda self: liar)
     with pytest.raises(RuntimeError, match="counted 0"):
         optimise("liar", problem, 50, 0)
+
+
+@pytest.mark.parametrize(("budget", "seed", "needle"), [
+    (200.5, 0, r"budget: must be an integer in \[1, "),
+    (0, 0, r"budget: must be an integer in \[1, "),
+    (200, -1, r"seed: "),
+    (200, 1.5, r"seed: "),
+])
+def test_optimise_names_a_bad_budget_or_seed(problem: Problem, budget, seed, needle) -> None:
+    """The API as the CLI: a reviewer's budget of 200.5 ran as 200 and seed -1 gave numpy's
+    'expected non-negative integer' naming no argument."""
+    from planner_core.bench.baselines import optimise
+
+    with pytest.raises(ValueError, match=needle):
+        optimise("random-search", problem, budget, seed)

@@ -25,6 +25,8 @@ from planner_core.defaults import (
     POPULATION,
     SCORE_FACTOR,
     START_CANDIDATES,
+    check,
+    check_budget,
 )
 from planner_core.pipeline.evaluator import (
     BudgetExceeded,
@@ -415,10 +417,13 @@ def optimise(name: str, problem: Any, budget: int, seed: int,
 
     Raises:
         KeyError: an unknown name without `spec`.
-        ValueError: an unknown start mode, a budget that does not exceed the probe
-            evaluations, or one the optimiser refuses.
+        ValueError: a budget that is not an integer in [1, MAX_BUDGET] or does not exceed
+            the probe evaluations, a seed that is not an integer >= 0 (each named), an
+            unknown start mode, or a budget the optimiser refuses.
         RuntimeError: the optimiser reported another evaluation count than the one counted.
     """
+    check_budget(budget, 1, least_name=None)  # an integer: 200.5 ran as 200
+    check("seed", seed)  # a negative seed: numpy's error named no argument
     spec = spec or get(name)
     probe = int(spec.probe_evaluations)
     if probe >= int(budget):
