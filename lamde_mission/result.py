@@ -33,8 +33,11 @@ class Plan:
     and phi before and after the hover-time LP (None when the polish did not run); `stages`
     has one `planner_core.pipeline.StageRecord` per stage that ran (evaluations, seconds, f
     and phi before and after); `config` the run's `PlanConfig` as a dict; `stopped` is
-    "time limit" when the clock ended the run, else ""; `timings` (s): compile (the kernels,
-    once per process), planning (the pipeline), evaluation (inside it), total.
+    "time limit" when the clock ended the run, else ""; `timings` (s): setup (reading the map
+    and inflating its obstacles by the clearance), compile (the kernels, once per process),
+    planning (the pipeline), evaluation (inside it), total (all of these, = `wall_time`).
+    `wall_time` (s) is the whole `plan()` call, compile included: compare plans by
+    `timings["planning"]`, which a cold kernel cache does not stretch.
     """
 
     map_name: str
