@@ -92,8 +92,10 @@ def test_a_de_block_schedule_spends_evaluations_in_the_improve_stage(tiny: Probl
 
 
 def test_unknown_schedulers_and_actions_are_refused_in_one_line() -> None:
-    with pytest.raises(ValueError, match="^scheduler: must be one of default, "):
+    with pytest.raises(ValueError, match="^scheduler: must be one of default, ") as err:
         make_scheduler("nope")
+    assert "(or lamde-s:DIR, lamde-s-ppo:DIR: a learned one from its checkpoint folder " \
+        "DIR)" in str(err.value)  # the forms a checkpoint takes, named too
     with pytest.raises(ValueError, match="^scheduler: a static schedule"):
         StaticScheduler("x", ["stop"])
     with pytest.raises(ValueError, match="^scheduler: must be a name"):

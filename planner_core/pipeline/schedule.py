@@ -497,8 +497,10 @@ def make_scheduler(spec: str | Scheduler | None) -> Scheduler:
         return learned.from_checkpoint(folder) if folder else learned()
     if isinstance(spec, str):
         if spec not in SCHEDULES:
-            raise ValueError(f"scheduler: must be one of {', '.join(scheduler_names())}, "
-                             f"got {spec!r}")
+            forms = ", ".join(f"{n}:DIR" for n in LEARNED)
+            raise ValueError(f"scheduler: must be one of {', '.join(scheduler_names())} (or "
+                             f"{forms}: a learned one from its checkpoint folder DIR), got "
+                             f"{spec!r}")
         return StaticScheduler(spec, SCHEDULES[spec])
     if not isinstance(spec, Scheduler):
         raise ValueError(f"scheduler: must be a name or have reset() and choose(), got "
