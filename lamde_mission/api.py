@@ -258,6 +258,7 @@ def plan_fleet(
     sortie_budget: int | None = None,
     rounds: int | None = None,
     config: Any = None,
+    progress: Callable[..., None] | None = None,
 ) -> Any:
     """Plan the sorties and vehicles for a map with a battery or a fleet (issue 33); same
     seed, same plan.
@@ -282,6 +283,9 @@ def plan_fleet(
         rounds: improving rounds at most (default `planner_core.fleet.search.ROUNDS`).
         config: a `planner_core.pipeline.PlanConfig` for the pipeline runs (then seed and
             budget are its own).
+        progress: called with a line (str) saying what the search does next, at each phase,
+            and with `step=True` at each move of a round (`planner_core.fleet.plan_fleet`);
+            None: nothing said.
 
     Returns:
         A `planner_core.fleet.FleetResult`: `plan` (the `FleetPlan`: vehicles x sorties, on
@@ -313,4 +317,5 @@ def plan_fleet(
     if r < 0:
         raise ValueError(f"rounds: must be >= 0, got {r}")
     warm_up(config.configurator)
-    return search.plan_fleet(m, config, goal=goal, sortie_budget=sb, rounds=r)
+    return search.plan_fleet(m, config, goal=goal, sortie_budget=sb, rounds=r,
+                             progress=progress)

@@ -683,3 +683,31 @@ def test_no_plan_names_the_sensors_a_point_serves_most() -> None:
     want = [pl.pm.sensor_ids[j] for j in np.argsort(-rates, kind="stable")[:3] if rates[j] > 0]
     assert m.group(1).split(", ") == [f"'{x}'" for x in want]
     assert want[0] == "S3"
+
+
+def test_the_sortie_planner_says_what_it_does_next(tmp_path: Path) -> None:
+    """A reviewer's 18 s sortie plan printed one line, then '92000 evaluations' after
+    --budget 2000. `plan_fleet(progress=...)` is told each phase (the single flight, the two
+    starts, each round, the pads) and each move of a round (step=True); `plan` prints the
+    phases on stderr (the moves only on a terminal) and says where the evaluations went."""
+    from lamde_mission.api import plan_fleet
+
+    said: list[tuple[str, bool]] = []
+    plan_fleet(DEMO, budget=600, sortie_budget=300, rounds=1,
+               progress=lambda line, step=False: said.append((line, step)))
+    phases = [line for line, step in said if not step]
+    assert phases[:3] == ["the single flight (600 evaluations)",
+                          "cutting it into sorties (route first, cluster second)",
+                          "cluster first (pipeline runs of 300 evaluations)"]
+    assert phases[3].startswith("round 1 of at most 1 (objective ")
+    assert phases[-1] == "each vehicle's sorties flown from its pads"
+    assert [line.split(" (")[0] for line, step in said if step] == [
+        f"round 1: {m}" for m in ("replan", "merge", "eliminate", "transfer", "resplit",
+                                  "retour")]
+    r = run_cli("plan", DEMO, "-o", tmp_path / "d", "--budget", 600, "--sortie-budget", 300,
+                "--rounds", 1)
+    assert r.returncode == 0, r.stderr
+    assert "s  the single flight (600 evaluations)" in r.stderr
+    assert "round 1: replan" not in r.stderr  # the moves: a terminal's only
+    assert ("evaluations in all: the single flight's 600 (--budget) and pipeline runs of 300 "
+            "on sorties' sensors (--sortie-budget)") in r.stdout

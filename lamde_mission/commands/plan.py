@@ -532,6 +532,7 @@ def _run_sorties(args: argparse.Namespace, loaded: Any = None) -> int:
                          "to write missions with; give --origin LAT,LON[,ALT]")
     from lamde_mission.api import check_fleet_map, plan_fleet
     from lamde_mission.sorties import write_sortie_dir
+    from planner_core.fleet.search import SORTIE_BUDGET
     from planner_core.model.mapio import MapError
 
     try:
@@ -547,18 +548,32 @@ def _run_sorties(args: argparse.Namespace, loaded: Any = None) -> int:
     goal = args.objective or m.goal
     if args.rounds is not None and args.rounds < 0:
         raise UsageError(f"--rounds: must be >= 0, got {args.rounds}")
+    status = None
     if not args.quiet:
         print(f"planning sorties for '{printable(m.name)}' (objective {goal}, seed "
               f"{args.seed})...", file=sys.stderr, flush=True)
+        status = _StatusLine(every=0.0)
+        t0 = time.monotonic()
+
+        def progress(line: str, step: bool = False) -> None:
+            # each phase on a line of its own in a log, each move too on a terminal (in place)
+            if step and not status.tty():
+                return
+            status.write(f"  {time.monotonic() - t0:6.1f} s  {line}", 0.0, time.monotonic())
     try:
         result = plan_fleet(m, config=config, goal=goal, sortie_budget=args.sortie_budget,
-                            rounds=args.rounds)
+                            rounds=args.rounds, progress=None if status is None else progress)
     except MapError:
         raise  # bad input (exit 2, one line per problem: `lamde_mission.cli`)
     except ValueError as exc:
+        if status is not None:
+            status.end()
         print(f"lamde-mission plan: {args.map}: {exc}; nothing written", file=sys.stderr)
         _say_cannot(m, str(exc))
         return 1
+    finally:
+        if status is not None:
+            status.end()
     plan = result.plan
     try:
         check, written = write_sortie_dir(plan, m, out, autopilot=args.autopilot,
@@ -573,8 +588,11 @@ def _run_sorties(args: argparse.Namespace, loaded: Any = None) -> int:
         return 1
     if not args.quiet:
         print(f"map '{printable(m.name)}': {counted(len(plan.sorties), 'sortie')} on "
-              f"{counted(len(plan.vehicles), 'vehicle')}, objective {goal}, {plan.evaluations} "
-              f"evaluations (seed {args.seed})")
+              f"{counted(len(plan.vehicles), 'vehicle')}, objective {goal}, "
+              f"{plan.evaluations:,} evaluations in all: the single flight's "
+              f"{args.budget:,} (--budget) and pipeline runs of "
+              f"{args.sortie_budget or SORTIE_BUDGET:,} on "
+              f"sorties' sensors (--sortie-budget) (seed {args.seed})")
         print("\n".join(_sortie_lines(check, m)))
         if written:
             print(f"wrote {printable(str(out))}/ ({counted(len(check.sorties), 'mission')} and "

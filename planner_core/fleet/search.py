@@ -44,6 +44,7 @@ pipeline runs and quadratic for the transfer LPs.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
 
@@ -855,6 +856,7 @@ def plan_fleet(
     goal: str | None = None,
     sortie_budget: int = SORTIE_BUDGET,
     rounds: int = ROUNDS,
+    progress: Callable[..., None] | None = None,
 ) -> FleetResult:
     """The sortie planner (module docstring): sorties and vehicles for a map with a battery.
 
@@ -865,6 +867,10 @@ def plan_fleet(
         goal: "total" or "makespan" (default the map's `objective.goal`).
         sortie_budget: evaluations of each pipeline run on one sortie's or depot's sensors.
         rounds: improving rounds at most (0: the better start only).
+        progress: called with a line saying what the search does next, at each phase (the
+            single flight, the starts, each round, the pads) and, with `step=True`, at each
+            move of a round (a terminal shows those; a log needs only the phases); None:
+            nothing said.
 
     Returns:
         The `FleetResult`: the plan (planning-map coordinates; hover times from the LP across
@@ -893,20 +899,31 @@ def plan_fleet(
     tried: list[tuple[float, float]] = []
     while (pad_wh := _next_allowance(m, goal, tried)) is not None:
         try:
-            return _plan_fleet(m, config, goal, sortie_budget, rounds, pad_wh=pad_wh)
+            return _plan_fleet(m, config, goal, sortie_budget, rounds, pad_wh=pad_wh,
+                               progress=progress)
         except _OffPads as off:
             tried.append((pad_wh, off.excess))
+            if progress is not None:
+                progress(f"planned again: the pads put a sortie {off.excess:.2f} Wh over its "
+                         "battery")
     raise AssertionError("the full allowance always fits")
 
 
 def _plan_fleet(m: Any, config: Any, goal: str | None, sortie_budget: int, rounds: int, *,
-                pad_wh: float) -> FleetResult:
+                pad_wh: float, progress: Callable[..., None] | None = None) -> FleetResult:
     """`plan_fleet`'s search with `pad_wh` kept back for the pads (`_Planner`)."""
+    def say(line: str, step: bool = False) -> None:
+        if progress is not None:
+            progress(line, step=step)
+
     pl = _Planner(m, config, goal, sortie_budget, pad_wh=pad_wh)
+    say(f"the single flight ({config.budget:,} evaluations)")
     single = pl.single()
     notes: list[str] = []
+    say("cutting it into sorties (route first, cluster second)")
     peer = pl.split(*single) if single is not None else None
     best = peer
+    say(f"cluster first (pipeline runs of {sortie_budget:,} evaluations)")
     cf = pl.cluster_first()
     if cf is not None and (best is None or cf.objective() < best.objective()):
         best = cf
@@ -923,7 +940,10 @@ def _plan_fleet(m: Any, config: Any, goal: str | None, sortie_budget: int, round
         peer_plan = route_first(m, config, goal=goal, sortie_budget=sortie_budget).plan
     for rnd in range(int(rounds)):
         before = best.objective()
+        say(f"round {rnd + 1} of at most {int(rounds)} (objective {before[0]:,.1f}, "
+            f"{len(best.sorties)} sorties)")
         for step in ("replan", "merge", "eliminate", "transfer", "resplit", "retour"):
+            say(f"round {rnd + 1}: {step} (objective {best.objective()[0]:,.1f})", step=True)
             if step == "replan":
                 cand = pl.replan(best, rnd)
             elif step == "retour":
@@ -944,6 +964,7 @@ def _plan_fleet(m: Any, config: Any, goal: str | None, sortie_budget: int, round
                 best = cand
         if not best.objective() < before:
             break
+    say("each vehicle's sorties flown from its pads")
     return FleetResult(
         _finish(pl, best, notes),
         single if single is not None else (np.zeros((0, 2)), np.zeros(0)),
