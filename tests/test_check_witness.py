@@ -74,3 +74,18 @@ def test_on_a_battery_map_the_witness_proves_nothing_about_sorties(tmp_path) -> 
     assert _witness_line(r.stdout) == (f"a stored single flight feasible on this map (f "
                                        f"{f:.6g}), battery left aside: it proves nothing about "
                                        "sorties")
+
+
+def test_check_says_a_map_with_obstacles_and_no_clearance_has_none() -> None:
+    """A reviewer flew nothing but read `safety clearance 0 m` on a battery map the docs point
+    to, unremarked: check says that legs may then touch the obstacles' edges and names the
+    field; a map with a clearance, or with no obstacles, prints the plain line."""
+    def safety(path: str) -> str:
+        r = run_here(["check", path])
+        (line,) = [ln for ln in r.stdout.splitlines() if ln.strip().startswith("safety")]
+        return line.split("safety", 1)[1].strip()
+
+    assert safety(str(MAPS / "L01-25min.json")) == (
+        "clearance 0 m (none: legs may touch the obstacles' edges; a field mission wants a "
+        "few metres: safety.clearance), data margin 0 %")
+    assert safety(str(MAPS / "small-demo.json")) == "clearance 10 m, data margin 2 %"
