@@ -215,7 +215,8 @@ def test_a_null_i_max_keeps_the_papers_values_and_grows_with_the_sensors() -> No
 
 
 def test_a_file_of_another_kind_given_as_a_map_is_named_as_such(tmp_path) -> None:
-    """A QGroundControl mission, GeoJSON, a fleet.json or a saved plan given as the map: one
+    """A QGroundControl mission, GeoJSON, a fleet.json, a saved plan or a suite's best-known
+    file given as the map: one
     line saying what it is (it listed `version: unknown field` and others one by one)."""
     from tests.conftest import ROOT
 
@@ -224,6 +225,11 @@ def test_a_file_of_another_kind_given_as_a_map_is_named_as_such(tmp_path) -> Non
         "f.geojson": ({"type": "FeatureCollection", "features": []}, "this is GeoJSON"),
         "fleet.json": ({"map": "m", "vehicles": []}, "fleet.json, not a map"),
         "saved.json": ({"hover_points": [], "hover_times": [], "f": 1.0}, "a saved plan"),
+        # examples/maps holds the suites' best-known files beside the maps: a reviewer's
+        # `check` on one listed seven fields one by one
+        "suite_best_known.json": (json.loads((ROOT / "examples" / "maps" /
+                                              "suite_best_known.json").read_text()),
+                                  "a benchmark suite's best-known or lower-bounds file"),
     }
     for name, (doc, needle) in cases.items():
         path = tmp_path / name

@@ -1673,6 +1673,9 @@ def _other_kind(data: dict[str, Any]) -> str | None:
     if "hover_points" in data and "hover_times" in data:
         return ("this is a saved plan (`plan -o FILE.json`), not a map; give the map it was "
                 "planned on")
+    if isinstance(data.get("tasks"), dict):  # SUITE_best_known.json, SUITE_lower_bounds.json
+        return ("this is a benchmark suite's best-known or lower-bounds file (per task), not a "
+                "map; `bench` and `report` read it beside the suite's folder of maps")
     return None
 
 
