@@ -47,7 +47,11 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "system ids heard there in ascending order) or one --connect each; all are heard "
         "before anything is sent (a vehicle missing or a count differing from fleet.json: "
         "exit status 1), then each is uploaded, read back and compared in turn; with --map the "
-        "whole directory is first judged as `verify MAP DIR/` judges it (docs/fleet.md).",
+        "whole directory is first judged as `verify MAP DIR/` judges it (docs/fleet.md). "
+        "Before sending, each PX4 vehicle's MPC_XY_VEL_MAX is read: below the speed a mission "
+        "asks, --map judges it again at that limit; without --map a sortie planned with a "
+        "battery is refused (exit status 1, nothing sent to any vehicle: its energy at the "
+        "limit is unchecked; --force sends it), anything else gets a warning (docs/flying.md).",
     )
     p.add_argument("mission", help="mission file (.plan or .waypoints); with --fleet a sortie "
                    "directory")
@@ -103,7 +107,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "is sent, exit status 1, unless --force; a mission the simulator cannot fly at all (a "
         "second take-off, an unusable hover time) is bad input, exit status 2 unless --force. "
         "With --fleet the whole sortie directory is replayed and judged first, exactly as "
-        "`verify MAP DIR/` does, with the same exit statuses",
+        "`verify MAP DIR/` does, with the same exit statuses; a vehicle whose speed limit is "
+        "below the mission's speed is judged again at its limit before anything is sent",
     )
     p.add_argument("--origin", metavar="LAT,LON[,ALT]",
                    help="with --map: the WGS84 position of the map's (0, 0) (degrees, degrees, "
@@ -111,8 +116,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument(
         "--force",
         action="store_true",
-        help="send a mission the simulator rejects, with or without --map (never one whose "
-        "fields MAVLink cannot carry)",
+        help="send a mission the simulator rejects, with or without --map, or a sortie planned "
+        "with a battery whose energy at the vehicle's lower speed limit is unchecked (no --map), "
+        "with a warning (never one whose fields MAVLink cannot carry)",
     )
     p.add_argument(
         "--signing-key",
