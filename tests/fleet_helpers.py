@@ -85,6 +85,7 @@ def write_fleet_dir(
                     "depot_start": a,
                     "depot_end": b,
                     "duration_s": t.t_total,
+                    "energy_wh": None,  # as plan writes it for a map without a battery
                     "sensors": list(ids),
                 }
             )

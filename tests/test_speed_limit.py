@@ -1,8 +1,9 @@
 """The vehicle's own speed limit at upload (a field crew's reviewer: PX4 flies a mission's
 DO_CHANGE_SPEED at most at MPC_XY_VEL_MAX, 12 m/s by default, so a sortie planned at 20 m/s
 with 0.3 Wh above the reserve drew 62.7 of 56.2 usable Wh, and upload said nothing). upload
-reads the parameter after connecting, before sending: a warning without --map; with --map the
-simulator's verdicts at the limit, refused (exit 1, nothing sent) when one fails."""
+reads the parameter after connecting, before sending: with --map the simulator's verdicts at
+the limit, refused (exit 1, nothing sent) when one fails; without --map a sortie planned with a
+battery is refused (its energy at the limit is unchecked), anything else gets a warning."""
 
 from __future__ import annotations
 
@@ -84,17 +85,23 @@ def test_upload_reads_px4s_limit_and_says_what_it_changes(demo_plan, capsys, via
         assert "the vehicle's speed limit: MPC_XY_VEL_MAX 20 m/s" in cap.out
     with MockVehicle(f"udpout:127.0.0.1:{port}", heartbeat_hz=10.0, autopilot="ardupilot"):
         assert main(["upload", str(demo_plan), *conn, "--map", str(DEMO)]) == 0
-        assert "speed limit" not in capsys.readouterr().out  # nothing caps it there
+        assert "the vehicle's speed limit" not in capsys.readouterr().out  # nothing caps it
 
 
-def test_a_fleet_is_judged_once_with_every_vehicle_at_its_limit_before_sending(tmp_path,
+@pytest.fixture(scope="module")
+def fleet2(tmp_path_factory):
+    """(map, sortie directory): fleet-demo (a battery) flown by 2 UAVs at 20 m/s."""
+    from tests.fleet_helpers import plan_fleet_demo
+
+    return plan_fleet_demo(tmp_path_factory.mktemp("fleet2"))
+
+
+def test_a_fleet_is_judged_once_with_every_vehicle_at_its_limit_before_sending(fleet2,
                                                                               capsys) -> None:
     """Every vehicle's limit is read before anything is sent, and the directory judged once
     with each vehicle at its own limit (a reviewer: judged one vehicle at a time, vehicle 1
     was refused against a vehicle 2 at 20 m/s it would never fly, and vehicle 2 was sent)."""
-    from tests.fleet_helpers import plan_fleet_demo
-
-    path, out = plan_fleet_demo(tmp_path)
+    path, out = fleet2
     from lamde_mission.sorties import verify_sortie_dir
     from planner_core.model.mapio import load_map
 
@@ -108,6 +115,13 @@ def test_a_fleet_is_judged_once_with_every_vehicle_at_its_limit_before_sending(t
         rc = main(["upload", str(out), "--fleet", *conn, "--map", str(path)])
         cap = capsys.readouterr()
         assert rc == 1
+        # what --map judged first says so: at the planned speeds, the limits judged next (it
+        # read "all constraints hold", then the refusal, as a contradiction)
+        n = len(list(out.glob("mission-v*-s*.plan")))
+        assert (f"simulator: all constraints hold on {path} for the {n} sorties of {out} at "
+                "their planned speeds (as `verify MAP DIR/` judges them; a vehicle whose speed "
+                "limit is lower is judged again at its limit before anything is sent)\n"
+                ) in cap.out
         assert cap.err.strip() == (
             f"lamde-mission upload: {out}: vehicle 1 MPC_XY_VEL_MAX 12 m/s, vehicle 2 "
             "MPC_XY_VEL_MAX 12 m/s, below the 20 m/s the sorties ask (DO_CHANGE_SPEED), so "
@@ -124,13 +138,139 @@ def test_a_fleet_is_judged_once_with_every_vehicle_at_its_limit_before_sending(t
                    params={"MPC_XY_VEL_MAX": 20.0}):  # fmt: skip
         assert main(["upload", str(out), "--fleet", *conn, "--map", str(path)]) == 0
         assert "below the" not in capsys.readouterr().err
-    # without --map it is sent with a warning that says what the slower flight puts at risk:
-    # the reviewer's vehicles at 12 m/s came 28.7 m close, and it spoke of energy only
-    with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=2, heartbeat_hz=10.0):
+    # without --map: test_without_a_map_a_battery_sortie_below_its_speed_is_refused
+
+
+def _sent(fleet: MockFleet) -> list[int]:
+    """How many uploads each mock vehicle of `fleet` received."""
+    return [sum(v.stats.uploads.values()) for v in fleet.vehicles]
+
+
+def test_without_a_map_a_battery_sortie_below_its_speed_is_refused(fleet2, capsys) -> None:
+    """A reviewer: `upload DIR/ --fleet` without --map sent a sortie planned at 20 m/s with
+    0.27 Wh above the reserve to a PX4 vehicle at MPC_XY_VEL_MAX 12 (15.49 of 14.60 usable Wh
+    at 12 m/s, as --map finds), exit 0, with a warning that never said energy was exceeded.
+    fleet.json gives the sorties' energies but not the map's energy model: refused, nothing
+    sent to any vehicle, naming the vehicle, its limit, the planned speed and energy and the
+    fixes; --force sends it with a warning; a vehicle at or above 20 m/s is not named."""
+    from lamde_mission.formats.fleet import read_fleet_dir
+
+    path, out = fleet2
+    fleet_json = read_fleet_dir(out)
+    figures = {v.vehicle: v.sorties[0] for v in fleet_json.vehicles}
+    assert all(s.energy_wh is not None and s.above_reserve_wh is not None
+               for s in figures.values())  # fmt: skip
+
+    def said(v: int) -> str:
+        s = figures[v]
+        return (f"vehicle {v}'s mission-v{v}-s1.plan: {s.energy_wh:.2f} Wh planned at 20 m/s, "
+                f"{s.above_reserve_wh:.2f} Wh above the reserve")
+
+    port = free_udp_port()
+    conn = ["--connect", f"udpin://127.0.0.1:{port}", "--via", "pymavlink", "--timeout", "5"]
+    with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=2, heartbeat_hz=10.0) as fleet:
+        assert main(["upload", str(out), "--fleet", *conn]) == 1
+        cap = capsys.readouterr()
+        assert cap.err.strip() == (
+            f"lamde-mission upload: {out}: vehicle 1 MPC_XY_VEL_MAX 12 m/s, vehicle 2 "
+            "MPC_XY_VEL_MAX 12 m/s, below the 20 m/s the sorties ask (DO_CHANGE_SPEED), so "
+            "they fly at their limits, and their energy at those speeds is unchecked "
+            f"({said(1)}; {said(2)}; the sortie directory does not hold the map's energy "
+            "model): nothing sent to any vehicle (--map MAP re-checks every sortie at the "
+            "vehicles' limits; or set the limit to 20 or more, or plan the map with "
+            "uav.max_speed 12; --force sends it anyway)")
+        assert "hold their mission" not in cap.out and _sent(fleet) == [0, 0]
+        # one vehicle at 20 m/s: only the other is named, and still nothing is sent
+        fleet.vehicles[0].params["MPC_XY_VEL_MAX"] = 20.0
+        assert main(["upload", str(out), "--fleet", *conn]) == 1
+        err = capsys.readouterr().err
+        assert f"{out}: vehicle 2 MPC_XY_VEL_MAX 12 m/s, below the 20 m/s" in err
+        assert "vehicle 1 MPC" not in err and f"({said(2)}; the sortie" in err
+        assert _sent(fleet) == [0, 0]
+        fleet.vehicles[0].params["MPC_XY_VEL_MAX"] = 12.0
+        # --force: sent, with the same words as a warning
+        assert main(["upload", str(out), "--fleet", *conn, "--force"]) == 0
+        cap = capsys.readouterr()
+        assert (f"warning: {out}: vehicle 1 MPC_XY_VEL_MAX 12 m/s, vehicle 2 MPC_XY_VEL_MAX 12 "
+                "m/s, below the 20 m/s the sorties ask (DO_CHANGE_SPEED), so they fly at their "
+                f"limits, and their energy at those speeds is unchecked ({said(1)}; {said(2)}; "
+                "the sortie directory does not hold the map's energy model); sent anyway "
+                "(--force; --map MAP checks every sortie at the vehicles' limits)\n") in cap.err
+        assert "fleet: 2 of 2 vehicles hold their mission, read back identical" in cap.out
+        assert all(n > 0 for n in _sent(fleet))
+    for limit in (20.0, 25.0):  # at or above the planned speed: nothing to say
+        with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=2, heartbeat_hz=10.0,
+                       params={"MPC_XY_VEL_MAX": limit}) as fleet:  # fmt: skip
+            assert main(["upload", str(out), "--fleet", *conn]) == 0
+            cap = capsys.readouterr()
+            assert "below the" not in cap.err and "unchecked" not in cap.err
+            assert "fleet: 2 of 2 vehicles hold their mission" in cap.out
+
+
+def test_a_battery_sortie_uploaded_alone_below_its_speed_is_refused(fleet2, capsys) -> None:
+    """`upload DIR/mission-v1-s1.plan` (the single-file path) of a sortie planned with a
+    battery: the same refusal without --map, --force sends it; a standalone mission (no
+    sortie directory, so no battery known) keeps its warning
+    (`test_upload_reads_px4s_limit_and_says_what_it_changes`)."""
+    from lamde_mission.formats.fleet import read_fleet_dir
+
+    _path, out = fleet2
+    s = read_fleet_dir(out).vehicles[0].sorties[0]
+    sortie = out / "mission-v1-s1.plan"
+    port = free_udp_port()
+    conn = ["--connect", f"udpin://127.0.0.1:{port}", "--via", "pymavlink", "--timeout", "5"]
+    head = (f"{sortie}: the vehicle's MPC_XY_VEL_MAX is 12 m/s, below the 20 m/s the mission "
+            "asks (DO_CHANGE_SPEED), so it flies at 12 m/s, and its energy at that speed is "
+            f"unchecked (a sortie of {out}/, {s.energy_wh:.2f} Wh planned at 20 m/s, "
+            f"{s.above_reserve_wh:.2f} Wh above the reserve)")
+    again = (f"`lamde-mission upload {out}/ --fleet --map MAP` checks every sortie at the "
+             "vehicles' limits")
+    with MockVehicle(f"udpout:127.0.0.1:{port}", heartbeat_hz=10.0) as v:
+        assert main(["upload", str(sortie), *conn]) == 1
+        err = capsys.readouterr().err
+        assert (f"lamde-mission upload: {head}: nothing sent ({again}; or set MPC_XY_VEL_MAX to "
+                "20 or more, or plan the map with uav.max_speed 12; --force sends it anyway)"
+                ) in err
+        assert sum(v.stats.uploads.values()) == 0
+        assert main(["upload", str(sortie), *conn, "--force"]) == 0
+        err = capsys.readouterr().err
+        assert f"warning: {head}; sent anyway (--force; {again})" in err
+        assert len(v.items()) > 0
+
+
+def test_without_a_battery_a_slow_fleet_is_warned_and_an_unsaid_battery_refused(
+        tmp_path, capsys) -> None:
+    """A sortie directory planned for a map without a battery (fleet.json: "energy_wh":
+    null) has no energy to overdraw: a warning, sent. A fleet.json that gives no energy_wh
+    at all does not say there is no battery: refused as one with a battery."""
+    import json
+
+    from tests.fleet_helpers import write_fleet_dir
+
+    out = write_fleet_dir(tmp_path / "sorties", [[["S1", "S2"]], [["S3"]]])
+    port = free_udp_port()
+    conn = ["--connect", f"udpin://127.0.0.1:{port}", "--via", "pymavlink", "--timeout", "5"]
+    with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=2, heartbeat_hz=10.0) as fleet:
         assert main(["upload", str(out), "--fleet", *conn]) == 0
         err = capsys.readouterr().err
-        assert ("their flight times and energy, and the vehicles' separation and take-off "
-                "times, were planned at 20 m/s (--map checks the fleet at the limits") in err
+        assert (f"warning: {out}: vehicle 1 MPC_XY_VEL_MAX 12 m/s, vehicle 2 MPC_XY_VEL_MAX 12 "
+                "m/s, below the 20 m/s the sorties ask (DO_CHANGE_SPEED), so they fly at their "
+                "limits; their flight times, and the vehicles' separation and take-off times, "
+                "were planned at 20 m/s (--map checks the fleet at the limits; set the limit to "
+                "20 or more, or plan the map with uav.max_speed 12)") in err
+        assert all(n > 0 for n in _sent(fleet))
+    doc = json.loads((out / "fleet.json").read_text())
+    for v in doc["vehicles"]:
+        for s in v["sorties"]:
+            del s["energy_wh"]
+    (out / "fleet.json").write_text(json.dumps(doc))
+    with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=2, heartbeat_hz=10.0) as fleet:
+        assert main(["upload", str(out), "--fleet", *conn]) == 1
+        err = capsys.readouterr().err
+        assert ("their energy at those speeds is unchecked (vehicle 1's mission-v1-s1.plan: "
+                "fleet.json gives no energy planned at 20 m/s; vehicle 2's mission-v2-s1.plan: "
+                "fleet.json gives no energy planned at 20 m/s; the sortie directory") in err
+        assert _sent(fleet) == [0, 0]
 
 
 @pytest.mark.parametrize("limit", [0.0, -5.0, 0.001])

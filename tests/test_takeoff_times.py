@@ -78,7 +78,10 @@ def test_upload_fleet_says_when_each_vehicle_takes_off_for_the_sortie_sent(two_u
     doc = json.loads((out / "fleet.json").read_text())
     port = free_udp_port()
     conn = ["--connect", f"udpin://127.0.0.1:{port}", "--via", "pymavlink", "--timeout", "5"]
-    with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=2, heartbeat_hz=10.0):
+    # vehicles that fly the planned 20 m/s: below it a battery sortie is refused without --map
+    # (tests/test_speed_limit.py)
+    with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=2, heartbeat_hz=10.0,
+                   params={"MPC_XY_VEL_MAX": 20.0}):  # fmt: skip
         for k in (1, 2):
             assert main(["upload", str(out), "--fleet", "--sortie", str(k), *conn]) == 0
             said = [ln for ln in capsys.readouterr().out.splitlines()

@@ -6,6 +6,10 @@ import argparse
 import math
 import sys
 from collections.abc import Callable
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from lamde_mission.formats.fleet import FleetSortie
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -43,7 +47,11 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "system ids heard there in ascending order) or one --connect each; all are heard "
         "before anything is sent (a vehicle missing or a count differing from fleet.json: "
         "exit status 1), then each is uploaded, read back and compared in turn; with --map the "
-        "whole directory is first judged as `verify MAP DIR/` judges it (docs/fleet.md).",
+        "whole directory is first judged as `verify MAP DIR/` judges it (docs/fleet.md). "
+        "Before sending, each PX4 vehicle's MPC_XY_VEL_MAX is read: below the speed a mission "
+        "asks, --map judges it again at that limit; without --map a sortie planned with a "
+        "battery is refused (exit status 1, nothing sent to any vehicle: its energy at the "
+        "limit is unchecked; --force sends it), anything else gets a warning (docs/flying.md).",
     )
     p.add_argument("mission", help="mission file (.plan or .waypoints); with --fleet a sortie "
                    "directory")
@@ -99,7 +107,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "is sent, exit status 1, unless --force; a mission the simulator cannot fly at all (a "
         "second take-off, an unusable hover time) is bad input, exit status 2 unless --force. "
         "With --fleet the whole sortie directory is replayed and judged first, exactly as "
-        "`verify MAP DIR/` does, with the same exit statuses",
+        "`verify MAP DIR/` does, with the same exit statuses; a vehicle whose speed limit is "
+        "below the mission's speed is judged again at its limit before anything is sent",
     )
     p.add_argument("--origin", metavar="LAT,LON[,ALT]",
                    help="with --map: the WGS84 position of the map's (0, 0) (degrees, degrees, "
@@ -107,8 +116,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument(
         "--force",
         action="store_true",
-        help="send a mission the simulator rejects, with or without --map (never one whose "
-        "fields MAVLink cannot carry)",
+        help="send a mission the simulator rejects, with or without --map, or a sortie planned "
+        "with a battery whose energy at the vehicle's lower speed limit is unchecked (no --map), "
+        "with a warning (never one whose fields MAVLink cannot carry)",
     )
     p.add_argument(
         "--signing-key",
@@ -272,6 +282,12 @@ def _flight_check(path: str, mission: list, *, force: bool) -> None:
         print(f"warning: {path}: {printable(str(exc))}; sent anyway (--force)", file=sys.stderr)
 
 
+#: what follows the simulator's "all constraints hold" line of `--map`: it judged the speeds
+#: the missions ask, and a vehicle limited below them is judged again once connected
+_LIMIT_NEXT = ("a vehicle whose speed limit is lower is judged again at its limit before "
+               "anything is sent")
+
+
 def _sim_check(path: str, map_path: str, mission: list, *, force: bool,
                origin: str | None = None) -> bool:
     """`upload MISSION --map MAP`: replay `mission` on the map and judge it as `verify MAP
@@ -299,8 +315,10 @@ def _sim_check(path: str, map_path: str, mission: list, *, force: bool,
     from sim.mission import MissionError
 
     m = with_origin_or_fail(load_map_or_fail(map_path), origin)
+    verdicts: list = []
     try:
-        problems = [f for f in verify(replay(mission, m), m) if not f.passed]
+        verdicts = list(verify(replay(mission, m), m))
+        problems = [f for f in verdicts if not f.passed]
         lines = [printable(f"{v.name} {v.title}: FAIL, margin {v.margin:.4g} {v.unit}; "
                            f"{v.detail}") for v in problems]  # fmt: skip
     except MissionError as exc:  # a mission the sim cannot fly: verify's line, word for word
@@ -308,8 +326,10 @@ def _sim_check(path: str, map_path: str, mission: list, *, force: bool,
             raise UsageError(f"{path}: {exc}") from None
         lines = [printable(str(exc))]
     if not lines:
-        print(f"simulator: all constraints hold on {printable(map_path)} (C1..C5, CLEAR, "
-              "MARGIN, ENDS, ALT, as verify judges them)", flush=True)  # fmt: skip
+        energy = ", ENERGY" if any(v.name == "ENERGY" for v in verdicts) else ""
+        print(f"simulator: all constraints hold on {printable(map_path)} at the mission's own "
+              f"speeds (C1..C5, CLEAR, MARGIN, ENDS, ALT{energy}, as verify judges them; "
+              f"{_LIMIT_NEXT})", flush=True)  # fmt: skip
         return True
     return _rejected(path, map_path, "; ".join(lines), force=force)
 
@@ -352,16 +372,42 @@ def _asked_speed(mission: list) -> float | None:
 
 
 def _speed_verdict(what: str, name: str, limit: float, asked: float, map_path: str | None,
-                   judge: Callable[[], tuple[list[str], str]], *, force: bool) -> str | None:
-    """What the vehicle's speed limit does to `what` (a mission, or a vehicle's sorties): a
-    warning without a map; with one the simulator's verdicts at the limit (`judge`: the failed
-    lines and what changed), a note when all hold, the refusal line when one fails (None with
-    `force`, a warning then)."""
+                   judge: Callable[[], tuple[list[str], str]], *, force: bool,
+                   unchecked: tuple[str, str] | None = None) -> str | None:
+    """What the vehicle's speed limit does to `what` (a mission file) below the speed it asks.
+
+    Args:
+        what: the mission file, for the messages.
+        name: the limit's parameter (MPC_XY_VEL_MAX).
+        limit: its value, m/s.
+        asked: the mission's fastest DO_CHANGE_SPEED, m/s (above `limit`).
+        map_path: `--map`, or None.
+        judge: with a map, the simulator's verdicts at the limit: (the failed lines, what
+            changed); called once, only with a map.
+        force: warn and send instead of refusing.
+        unchecked: without a map, for a sortie of a directory planned with a battery: (its
+            planned energy in words, its directory); its energy at the limit is unchecked.
+
+    Returns:
+        None to send (a note when every check holds at the limit, a warning without a map or
+        with `force`), else the refusal line: a check fails at the limit, or (`unchecked`)
+        the energy cannot be checked without the map.
+    """
     from planner_core.textio import printable
 
     head = (f"{printable(what)}: the vehicle's {name} is {limit:g} m/s, below the {asked:g} "
             f"m/s the mission asks (DO_CHANGE_SPEED), so it flies at {limit:g} m/s")
     fix = f"set {name} to {asked:g} or more, or plan the map with uav.max_speed {limit:g}"
+    if map_path is None and unchecked is not None:
+        planned, folder = unchecked
+        line = (f"{head}, and its energy at that speed is unchecked (a sortie of "
+                f"{printable(folder)}/, {planned})")
+        again = (f"`lamde-mission upload {printable(folder)}/ --fleet --map MAP` checks every "
+                 f"sortie at the vehicles' limits")
+        if force:
+            print(f"warning: {line}; sent anyway (--force; {again})", file=sys.stderr)
+            return None
+        return f"{line}: nothing sent ({again}; or {fix}; --force sends it anyway)"
     if map_path is None:
         print(f"warning: {head}; its flight time and energy were planned at {asked:g} m/s "
               f"(--map checks it at {limit:g} m/s; {fix})", file=sys.stderr)  # fmt: skip
@@ -383,8 +429,22 @@ def _speed_verdict(what: str, name: str, limit: float, asked: float, map_path: s
 def _mission_speed_check(path: str, mission: list, map_path: str | None, *, force: bool,
                          origin: str | None = None) -> Callable[[str, float], str | None]:
     """`upload MISSION`'s check of the vehicle's speed limit (`transfer.SPEED_LIMIT_PARAM`,
-    read after connecting): below the mission's speed, a warning, or with `--map` the
-    simulator's verdicts with every leg flown at the limit (`_speed_verdict`)."""
+    read after connecting), below the mission's speed (`_speed_verdict`): with `--map` the
+    simulator's verdicts with every leg flown at the limit; without, a refusal for a sortie of
+    a sortie directory planned with a battery (its energy at the limit is unchecked,
+    `_sortie_with_battery`), else a warning (no battery known: no energy to check).
+
+    Args:
+        path: the mission file.
+        mission: its mission items.
+        map_path: `--map`, or None.
+        force: warn and send instead of refusing.
+        origin: `--origin`, for a map without an origin.
+
+    Returns:
+        `check(parameter, limit)` for `upload_mission`'s speed_check: None to send, else the
+        refusal line. With a map it replays the mission twice, O(legs).
+    """
     from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
     from sim import replay, verify
 
@@ -396,6 +456,7 @@ def _mission_speed_check(path: str, mission: list, map_path: str | None, *, forc
             return bad
         if asked is None or limit >= asked:
             return None
+        unchecked = None if map_path is not None else _sortie_with_battery(path, asked)
 
         def judge() -> tuple[list[str], str]:
             m = with_origin_or_fail(load_map_or_fail(map_path), origin)
@@ -405,9 +466,38 @@ def _mission_speed_check(path: str, mission: list, map_path: str | None, *, forc
             return failed, (f"t_fly {slow.totals.t_fly:.0f} s instead of "
                             f"{planned.totals.t_fly:.0f} s")
 
-        return _speed_verdict(path, name, limit, asked, map_path, judge, force=force)
+        return _speed_verdict(path, name, limit, asked, map_path, judge, force=force,
+                              unchecked=unchecked)
 
     return check
+
+
+def _sortie_with_battery(path: str, asked: float) -> tuple[str, str] | None:
+    """For a mission file that is a sortie of a sortie directory (`sorties.sortie_dir_of`)
+    planned with a battery: (its planned energy in words, the directory), else None (not a
+    sortie, or fleet.json says `"energy_wh": null`: a map without a battery). A sortie that
+    fleet.json does not list, or a fleet.json that cannot be read, counts as planned with a
+    battery. O(vehicles + sorties).
+
+    Args:
+        path: the mission file.
+        asked: the speed it was planned at, m/s.
+
+    Returns:
+        (words, directory) or None.
+    """
+    from pathlib import Path
+
+    from lamde_mission.sorties import sortie_dir_of
+
+    folder = sortie_dir_of(path)
+    if folder is None:
+        return None
+    planned = _planned_sorties(str(folder))
+    s = planned.get(Path(path).name)
+    if s is not None and s.no_battery:
+        return None
+    return _planned_energy(s, asked), str(folder)
 
 
 def _unflyable_limit(what: str, name: str, limit: float) -> str | None:
@@ -423,20 +513,82 @@ def _unflyable_limit(what: str, name: str, limit: float) -> str | None:
             "nothing sent")
 
 
+def _planned_sorties(directory: str) -> dict[str, FleetSortie]:
+    """{file name: its sortie} of a sortie directory's fleet.json, for the energies the
+    sorties were planned with; O(vehicles + sorties).
+
+    Args:
+        directory: the sortie directory.
+
+    Returns:
+        Every sortie fleet.json lists, by its file's name; empty when fleet.json cannot be
+        read (its reader's refusal comes from the upload itself).
+    """
+    from lamde_mission.formats.fleet import FleetDirError, read_fleet_dir
+
+    try:
+        fleet = read_fleet_dir(directory)
+    except FleetDirError:
+        return {}
+    return {s.path.name: s for v in fleet.vehicles for s in v.sorties}
+
+
+def _planned_energy(s: FleetSortie | None, asked: float) -> str:
+    """What fleet.json says a sortie was planned to spend, in a few words ("14.33 Wh planned
+    at 20 m/s, 0.27 Wh above the reserve").
+
+    Args:
+        s: the sortie as fleet.json gives it (None: not listed there).
+        asked: the speed it was planned at, m/s.
+
+    Returns:
+        The words; without figures where fleet.json gives none.
+    """
+    if s is None or s.energy_wh is None:
+        return f"fleet.json gives no energy planned at {asked:g} m/s"
+    slack = ("" if s.above_reserve_wh is None
+             else f", {s.above_reserve_wh:.2f} Wh above the reserve")  # fmt: skip
+    return f"{s.energy_wh:.2f} Wh planned at {asked:g} m/s{slack}"
+
+
 def _fleet_speed_check(directory: str, missions: list, map_path: str | None, *, force: bool,
                        origin: str | None = None
                        ) -> Callable[[dict[int, tuple[str, float] | None]], str | None]:
     """`upload DIR/ --fleet`'s check of the vehicles' speed limits, read from every vehicle
-    before anything is sent (`vehicle.fleet.upload_fleet`): the vehicles below their sorties'
-    speed get a warning, or with `--map` the whole directory judged once as `verify MAP DIR/`
-    does with each of them flying at its own limit (its slower sorties also move its later
-    take-offs; `sorties.verify_sortie_dir`'s speed_limits); a vehicle whose limit was not
-    read gets a note."""
+    before anything is sent (`vehicle.fleet.upload_fleet`).
+
+    With `--map` the whole directory is judged once as `verify MAP DIR/` does with each
+    vehicle below its sorties' speed flying at its own limit (its slower sorties also move
+    its later take-offs; `sorties.verify_sortie_dir`'s speed_limits): a note when every check
+    holds, else the refusal. Without a map, such a vehicle whose sortie was planned with a
+    battery (fleet.json gives its energy, or does not say `"energy_wh": null`) is refused:
+    its energy at the limit is unchecked, and the directory does not hold the map's energy
+    model (`uav.power`, acceleration, climb speeds) to check it; a warning when the map had no
+    battery. `force` turns every refusal into a warning. A vehicle whose limit was not read
+    gets a note.
+
+    Args:
+        directory: the sortie directory.
+        missions: the missions being sent (`vehicle.fleet.sortie_missions`).
+        map_path: `--map`, or None.
+        force: warn and send instead of refusing.
+        origin: `--origin`, for a map without an origin.
+
+    Returns:
+        `check(limits)` for `upload_fleet`'s speed_check: None to send, else the refusal line.
+        Judging with a map replays every sortie, O(sorties x legs); without, O(vehicles).
+
+    Raises:
+        UsageError: (from `check`) a bad map or origin.
+    """
     from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
     from lamde_mission.sorties import verify_sortie_dir
     from planner_core.textio import printable
 
     asked = {fm.vehicle: _asked_speed(fm.mission) for fm in missions if fm.mission}
+    planned = _planned_sorties(directory)
+    source = {fm.vehicle: fm.source for fm in missions if fm.mission}
+    sent = {v: planned.get(name) for v, name in source.items()}
 
     def check(limits: dict[int, tuple[str, float] | None]) -> str | None:
         for v, got in sorted(limits.items()):
@@ -459,10 +611,24 @@ def _fleet_speed_check(directory: str, missions: list, map_path: str | None, *, 
         fix = (f"set the limit to {want:g} or more, or plan the map with uav.max_speed "
                f"{min(lim for _, lim in slow.values()):g}")
         if map_path is None:
-            print(f"warning: {head}; their flight times and energy, and the vehicles' "
-                  f"separation and take-off times, were planned at {want:g} m/s (--map checks "
-                  f"the fleet at the limits; {fix})", file=sys.stderr)
-            return None
+            battery = {v: sent[v] for v in sorted(slow)
+                       if sent.get(v) is None or not sent[v].no_battery}  # fmt: skip
+            if not battery:  # a map without a battery: no energy to overdraw
+                print(f"warning: {head}; their flight times, and the vehicles' separation and "
+                      f"take-off times, were planned at {want:g} m/s (--map checks the fleet "
+                      f"at the limits; {fix})", file=sys.stderr)  # fmt: skip
+                return None
+            what = "; ".join(f"vehicle {v}'s {printable(source[v])}: "
+                             f"{_planned_energy(fs, asked[v])}"
+                             for v, fs in battery.items())  # fmt: skip
+            unchecked = (f"{head}, and their energy at those speeds is unchecked ({what}; the "
+                         "sortie directory does not hold the map's energy model)")
+            if force:
+                print(f"warning: {unchecked}; sent anyway (--force; --map MAP checks every "
+                      f"sortie at the vehicles' limits)", file=sys.stderr)  # fmt: skip
+                return None
+            return (f"{unchecked}: nothing sent to any vehicle (--map MAP re-checks every "
+                    f"sortie at the vehicles' limits; or {fix}; --force sends it anyway)")
         m = with_origin_or_fail(load_map_or_fail(map_path), origin)
         judged = verify_sortie_dir(m, directory, {v: lim for v, (_, lim) in slow.items()})
         if judged.passed:
@@ -509,8 +675,9 @@ def _fleet_sim_check(directory: str, map_path: str, *, force: bool,
     check = check_sortie_dir(m, directory)
     if check.passed:
         print(f"simulator: all constraints hold on {printable(map_path)} for the "
-              f"{counted(len(check.sorties), 'sortie')} of {printable(directory)} (as `verify "
-              "MAP DIR/` judges them)", flush=True)  # fmt: skip
+              f"{counted(len(check.sorties), 'sortie')} of {printable(directory)} at their "
+              f"planned speeds (as `verify MAP DIR/` judges them; {_LIMIT_NEXT})",
+              flush=True)  # fmt: skip
         return True
     failed = "; ".join(printable(x) for x in check.failed())
     return _rejected(directory, map_path, failed, force=force)

@@ -10,14 +10,15 @@
                                 "takeoff_at": {"lat": deg, "lon": deg, ...},
                                 "landing_at": {"lat": deg, "lon": deg, ...},
                                 "takeoff_s": s, "duration_s": s, "energy_wh": Wh,
-                                "reserve_left_wh": Wh,
+                                "reserve_left_wh": Wh, "above_reserve_wh": Wh,
                                 "sensors": ["s01", ...]}, ...]}, ...],
      "total_s": s, "swaps": n, "depots": {"home": {"lat": deg, "lon": deg, ...}, ...}}
 
 Vehicles are numbered 1..V and sorties 1..S_k in order (1-based, as in the file names
 `mission-v{vehicle}-s{sortie}.plan`); every sortie's file is a plain name inside DIR and exists.
-Figures (durations, energies) are kept when present and finite, else None; fields this reader
-does not know are left alone. At most `MAX_FLEET_VEHICLES` vehicles (100, `fleet.uavs`' most)
+Figures (durations, energies) are kept when present and finite, else None; `"energy_wh": null`
+says the plan's map had no battery (`FleetSortie.no_battery`); fields this reader does not
+know are left alone. At most `MAX_FLEET_VEHICLES` vehicles (100, `fleet.uavs`' most)
 and `MAX_FLEET_SORTIES` sorties in all (1,000; `planner_core.defaults`), checked before any
 sortie is read: what follows (`verify DIR/` replays every sortie) grows with them. Reading costs
 O(vehicles + sorties).
@@ -73,6 +74,12 @@ class FleetSortie:
     duration_s: float | None = None
     energy_wh: float | None = None
     reserve_left_wh: float | None = None
+    #: Wh, usable - energy (negative: into the reserve; None where fleet.json gives none)
+    above_reserve_wh: float | None = None
+    #: fleet.json gives "energy_wh": null, as `plan` writes it for a map without a battery:
+    #: no ENERGY to judge. False where it gives an energy, and where it gives no energy_wh at
+    #: all (not known: a reader that needs to know takes it for a battery)
+    no_battery: bool = False
     sensors: tuple[str, ...] = ()
     #: s after the first vehicle's take-off (None when fleet.json gives none: written before
     #: take-off times were)
@@ -290,6 +297,8 @@ def read_fleet_dir(path: str | Path) -> FleetDir:
                 duration_s=_number(s.get("duration_s"), f"{ws}.duration_s"),
                 energy_wh=_number(s.get("energy_wh"), f"{ws}.energy_wh"),
                 reserve_left_wh=_number(s.get("reserve_left_wh"), f"{ws}.reserve_left_wh"),
+                above_reserve_wh=_number(s.get("above_reserve_wh"), f"{ws}.above_reserve_wh"),
+                no_battery="energy_wh" in s and s["energy_wh"] is None,
                 sensors=tuple(sensors), takeoff_s=takeoff,
                 takeoff_at=_latlon(s.get("takeoff_at"), f"{ws}.takeoff_at"),
                 landing_at=_latlon(s.get("landing_at"), f"{ws}.landing_at"),
