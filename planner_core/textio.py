@@ -97,10 +97,8 @@ LIMITS: dict[str, Limit] = {
     "sensors": Limit(
         1_000,
         "LAMDE_MAX_SENSORS",
-        "sensors in one map; planning time grows with them (default budget, CPU seconds on 2 "
-        "shared cores: 160 sensors ~6-8 s, 400 ~15 s, measured 2026-12-06; 1,000 ~100-210 s, "
-        "2026-12-02; peak RSS < 1 GB; the paper's maps have <= 29; the large suite, "
-        "`bench_plan.py --large`, has up to 400)",
+        "sensors in one map; planning time grows with them: at the default budget ~15 s of "
+        "CPU for 400 sensors, ~2-4 min for 1,000 (docs/maps.md, 'Bad files and input limits')",
     ),
     "obstacles": Limit(
         5_000,
