@@ -644,16 +644,6 @@ def test_bench_descent_compares_the_step_rules_start_by_start() -> None:
     assert bad.returncode == 2 and bad.stderr.strip().count("\n") == 0 and "T99" in bad.stderr
 
 
-def _fuzz_module():
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location("fuzz_inputs",
-                                                  ROOT / "benchmarks" / "fuzz_inputs.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
 def test_fuzz_harness_reads_refusals_as_the_cli_writes_them(tmp_path) -> None:
     """The fuzzer's contract check: `map from-geojson` refusals carry both words of the
     command (seed 60 counted 163 clean refusals as unclean when it looked for `map:`), and a
@@ -661,7 +651,7 @@ def test_fuzz_harness_reads_refusals_as_the_cli_writes_them(tmp_path) -> None:
     is recognised by the harness's SORTIES_MAP, read from the CLI's own message)."""
     from lamde_mission.fuzz import CliOutcome, run_cli
 
-    fuzz = _fuzz_module()
+    fuzz = _script_module("fuzz_inputs")
     line = "lamde-mission map from-geojson: in.geojson: not valid JSON (line 3)\n"
     assert fuzz._clean(CliOutcome(2, "", line, None), "map from-geojson")
     assert not fuzz._clean(CliOutcome(2, "", line, None), "check")
