@@ -212,9 +212,7 @@ def run(args: argparse.Namespace) -> int:
               f"{_margins(verdicts.data_margins)}")
         print(f"f = {t.f:.6f}  (alpha {t.alpha:g}: t_fly {t.t_fly:.3f} s, "
               f"t_hover {t.t_hover:.3f} s)")  # fmt: skip
-        print(f"mission time {t.t_total:.1f} s including take-off {t.t_takeoff:.1f} s, "
-              f"landing {t.t_land:.1f} s" + (f", return {t.t_return:.1f} s" if t.t_return else "")
-              + f"; distance {t.distance:.1f} m")  # fmt: skip
+        print(_time_line(timeline))
         if verdicts.energy_wh is not None:  # a map with a battery (docs/energy.md)
             left = verdicts.reserve_left_wh
             print(f"energy {verdicts.energy_wh:.3f} Wh of {verdicts.usable_wh:.3f} Wh usable "
@@ -234,6 +232,27 @@ def run(args: argparse.Namespace) -> int:
                   "sortie is verified with its directory (`lamde-mission verify MAP DIR/`, DIR "
                   "holding fleet.json), which is not beside this file")
     return 0 if verdicts.passed else 1
+
+
+def _time_line(timeline: Any) -> str:
+    """verify's mission-time line: the total with its take-off, landing and return, each said
+    as the mission has it: a take-off without a TAKEOFF item is the sim's assumption, and a
+    mission without LAND or RETURN_TO_LAUNCH has no landing.
+
+    Args:
+        timeline: the replay (`sim.replay.Timeline`).
+
+    Returns:
+        One line (no newline).
+    """
+    t, route = timeline.totals, timeline.route
+    take_off = (f"take-off {t.t_takeoff:.1f} s" if route.takeoff_altitude is not None else
+                f"take-off {t.t_takeoff:.1f} s assumed (no TAKEOFF item)")
+    landing = (f"landing {t.t_land:.1f} s" if route.finish != "none" else
+               "no landing (it holds at its last stop)")
+    ret = f", return {t.t_return:.1f} s" if t.t_return else ""
+    return (f"mission time {t.t_total:.1f} s including {take_off}, {landing}{ret}; distance "
+            f"{t.distance:.1f} m")
 
 
 #: sensors whose data margins verify lists by name; beyond, the least of them and a summary
