@@ -1,26 +1,25 @@
 """Verdicts on a replayed mission: the paper's constraints C1..C5, each with a margin.
 
-With `radio.access` "scheduled" C3 judges the replay's allocation of the shared bandwidth
-(sum_j D_ij <= R_lambda T_i, D_ij <= R_ij T_i) and C4 the data it allocates.
+With `radio.access` "scheduled" C3 judges the replay's allocation of the shared bandwidth (sum_j
+D_ij <= R_lambda T_i, D_ij <= R_ij T_i) and C4 the data it allocates.
 
-A margin is the worst slack in the constraint's unit: >= 0 when it holds, negative by how much
-it is broken. Tolerances: `REL_TOL` (relative, on hover times, rate sums and collected data) is
-1e-6, about eight float32 steps (float32's relative precision is 2**-23 ~ 1.2e-7): a mission
-passes through MAVLink's float32 parameters, so a finer tolerance would judge noise the file
-cannot carry. It is no safety margin: a plan on the boundary that loses more than that when
-stored fails, which is why missions are made storable before they are written
-(`lamde_mission.storage`). `GEOM_TOL` metres for positions and overlap lengths. One extra
-verdict, ENDS, checks that the mission takes off at the map's start and comes to rest at its
-end (the paper's fixed p_0 and p_{I+1}; a mission with neither LAND nor RETURN_TO_LAUNCH
-fails: it holds at its last stop until a failsafe), and ALT that every stop and the take-off are above the
-ground at home (the map is flat: a stop at or below 0 m is in the ground). Two more judge the
-map's `safety` margins on the flown mission: CLEAR (every leg at least `safety.clearance` from
-every obstacle, measured with shapely; near the start or end point the clearance in force is
-what the map leaves there) and MARGIN (every sensor's collected data at least (1 +
-`safety.data_margin`) x its requirement); `Verdicts.data_margins` holds the real margin per
+A margin is the worst slack in the constraint's unit: >= 0 when it holds, negative by how much it is
+broken. Tolerances: `REL_TOL` (relative, on hover times, rate sums and collected data) is 1e-6,
+about eight float32 steps (float32's relative precision is 2**-23 ~ 1.2e-7): a mission passes
+through MAVLink's float32 parameters, so a finer tolerance would judge noise the file cannot carry.
+It is no safety margin: a plan on the boundary that loses more than that when stored fails, which is
+why missions are made storable before they are written (`lamde_mission.storage`). `GEOM_TOL` metres
+for positions and overlap lengths. One extra verdict, ENDS, checks that the mission takes off at the
+map's start and comes to rest at its end (the paper's fixed p_0 and p_{I+1}; a mission with neither
+LAND nor RETURN_TO_LAUNCH fails: it holds at its last stop until a failsafe), and ALT that every
+stop and the take-off are above the ground at home (the map is flat: a stop at or below 0 m is in
+the ground). Two more judge the map's `safety` margins on the flown mission: CLEAR (every leg at
+least `safety.clearance` from every obstacle, measured with shapely; near the start or end point the
+clearance in force is what the map leaves there) and MARGIN (every sensor's collected data at least
+(1 + `safety.data_margin`) x its requirement); `Verdicts.data_margins` holds the real margin per
 sensor and `Verdicts.clearance` the real clearance. On a map with a battery (`uav.battery` or
-`uav.endurance_s`; issue 33) one more, ENERGY, judges the mission as one sortie: the energy the
-sim computes on its own (`sim.energy.mission_energy`) at most the usable energy, battery x (1 -
+`uav.endurance_s`; issue 33) one more, ENERGY, judges the mission as one sortie: the energy the sim
+computes on its own (`sim.energy.mission_energy`) at most the usable energy, battery x (1 -
 reserve); a map without a battery gets no ENERGY verdict.
 """
 
@@ -182,7 +181,8 @@ class Verdicts:
 
         Returns:
             passed, failed, t_fly, t_hover, f (s), clearance_m (None when infinite),
-            data_margins and each verdict's `Verdict.to_dict`; on a map with a battery also
+            data_margins (None for a sensor requiring no data) and each verdict's
+            `Verdict.to_dict`; on a map with a battery also
             energy_wh, battery_wh, usable_wh, reserve_left_wh and above_reserve_wh (Wh).
         """
         out = {
@@ -192,7 +192,9 @@ class Verdicts:
             "t_hover": self.t_hover,
             "f": self.f,
             "clearance_m": self.clearance if math.isfinite(self.clearance) else None,
-            "data_margins": dict(self.data_margins),
+            # a sensor requiring no data has margin +inf: null, as JSON has no infinity
+            "data_margins": {k: (v if math.isfinite(v) else None)
+                             for k, v in self.data_margins.items()},
             "verdicts": [v.to_dict() for v in self.items],
         }
         if self.energy_wh is not None:  # maps with a battery only: older reports unchanged
