@@ -261,6 +261,18 @@ class SortieCheck:
         return float(self.timeline.totals.t_total)
 
     @property
+    def collected_mbit(self) -> dict[str, float]:
+        """What the sortie collects from each sensor it serves (`sensors`), by id: its share
+        of the data that the whole plan's C4 and MARGIN judge.
+
+        Returns:
+            {sensor id: Mbit}, in the map's sensor order.
+        """
+        q = self.timeline.collected
+        ids = list(self.timeline.sensor_ids)
+        return {sid: float(q[ids.index(sid)]) for sid in self.sensors}
+
+    @property
     def takeoff_xy(self) -> np.ndarray:
         """Where the replay takes off (the stored mission's take-off), local m.
 
@@ -438,28 +450,27 @@ class FleetCheck:
 
     @property
     def passed(self) -> bool:
-        """Every sortie's verdicts except its own C4/MARGIN (a share), the combined ones and
-        the plan's shape.
+        """Every sortie's verdicts (no C4 or MARGIN: `_check`), the combined ones and the
+        plan's shape.
 
         Returns:
             True when all of them passed.
         """
-        own = all(v.passed for s in self.sorties for v in s.verdicts
-                  if v.name not in ("C4", "MARGIN"))  # fmt: skip
+        own = all(v.passed for s in self.sorties for v in s.verdicts)
         return own and all(v.passed for v in (*self.combined, *self.fleet))
 
     def failed(self) -> list[str]:
         """Lines naming each failed verdict (sortie and check).
 
         Returns:
-            "v{vehicle} s{sortie} NAME: detail" per failed sortie verdict (its own C4/MARGIN
-            left out), then "whole plan NAME: detail", then "fleet NAME: detail".
+            "v{vehicle} s{sortie} NAME: detail" per failed sortie verdict, then "whole plan
+            NAME: detail", then "fleet NAME: detail".
         """
         out = [
             f"v{s.vehicle} s{s.sortie} {v.name}: {v.detail}"
             for s in self.sorties
             for v in s.verdicts
-            if not v.passed and v.name not in ("C4", "MARGIN")
+            if not v.passed
         ]
         out += [f"whole plan {v.name}: {v.detail}" for v in self.combined if not v.passed]
         out += [f"fleet {v.name}: {v.detail}" for v in self.fleet if not v.passed]
@@ -582,6 +593,23 @@ def _served(tl: Any, req: np.ndarray) -> tuple[str, ...]:
     return tuple(ids[j] for j in range(len(ids)) if q[j] > 1e-3 * max(float(req[j]), 1e-9))
 
 
+def _sortie_verdicts(vd: Any) -> Any:
+    """A sortie's own verdicts: `sim.checks.verify` on its sortie map less C4 and MARGIN. The
+    sortie map requires no data (`sortie_map`: a sensor may be served by several sorties), so
+    they would judge nothing ("0 of 0 Mbit" of some sensor it does not serve, "no data
+    required"); the whole plan's C4 and MARGIN judge the data of all sorties together
+    (`FleetCheck.combined`), and `SortieCheck.collected_mbit` says what the sortie adds.
+
+    Args:
+        vd: the sortie's `sim.checks.Verdicts`.
+
+    Returns:
+        The same verdicts without C4 and MARGIN, and without data margins (each +inf).
+    """
+    return replace(vd, items=tuple(v for v in vd.items if v.name not in ("C4", "MARGIN")),
+                   data_margins={})
+
+
 def _chain_verdict(m: Any, rows: list[tuple[int, int, str, str, str, list[Any]]]) -> Any:
     """CHAIN: each vehicle's first sortie leaves a depot a vehicle starts from
     (`FleetSettings.start_depots`) and each later one the depot the sortie before it landed at
@@ -696,7 +724,8 @@ def _check(
     for v, k, f, a, b, items in rows:
         sm = sortie_map(m, a, b, name=f"{m.name} v{v} s{k}", pads=(rank[(v, a)], rank[(v, b)]))
         tl = replay(items, sm, speed_limit=(speed_limits or {}).get(v))
-        out.append(SortieCheck(v, k, f, a, b, tl, verify(tl, sm), _served(tl, req)))
+        out.append(SortieCheck(v, k, f, a, b, tl, _sortie_verdicts(verify(tl, sm)),
+                               _served(tl, req)))
     combined = combined_data_verdicts([s.timeline for s in out], m)
     shape = (_chain_verdict(m, rows), _uavs_verdict(m, vehicles),
              _files_verdict(directory, [r[2] for r in rows]))  # fmt: skip
@@ -781,8 +810,30 @@ def verify_sortie_dir(m: Any, path: str | Path,
     check = replace(check, fleet=(*check.fleet, _times_verdict(
         given, check.takeoffs(), fleet.swap_s, float(m.swap_s)), _places_verdict(
         m, check, places, fleet.depots)))
-    notes = [n for n in (fleet.map_note(m.name, "verified"), _pads_note(m, check)) if n]
+    notes = [n for n in (_far_note(m, check), fleet.map_note(m.name, "verified"),
+                         _pads_note(m, check)) if n]  # fmt: skip
     return replace(check, notes=tuple(notes)) if notes else check
+
+
+def _far_note(m: Any, check: FleetCheck) -> str | None:
+    """A note when a sortie's mission lies far from the map's area (`sim.replay.far_from_area`:
+    the wrong map, or another origin), naming the first such file and counting the others.
+
+    Args:
+        m: the map verified on.
+        check: the replayed directory.
+
+    Returns:
+        One line, or None when every sortie flies near the map's area.
+    """
+    from sim.replay import far_from_area
+
+    far = [(s.file, n) for s in check.sorties
+           if (n := far_from_area(s.timeline.route, m)) is not None]  # fmt: skip
+    if not far:
+        return None
+    more = f" (and {counted(len(far) - 1, 'other sortie')})" if len(far) > 1 else ""
+    return f"{far[0][0]}{more}: {far[0][1]}"
 
 
 #: m: a place fleet.json gives this far from the mission's is another place (a position on

@@ -1,25 +1,25 @@
 """Verdicts on a replayed mission: the paper's constraints C1..C5, each with a margin.
 
-With `radio.access` "scheduled" C3 judges the replay's allocation of the shared bandwidth
-(sum_j D_ij <= R_lambda T_i, D_ij <= R_ij T_i) and C4 the data it allocates.
+With `radio.access` "scheduled" C3 judges the replay's allocation of the shared bandwidth (sum_j
+D_ij <= R_lambda T_i, D_ij <= R_ij T_i) and C4 the data it allocates.
 
-A margin is the worst slack in the constraint's unit: >= 0 when it holds, negative by how much
-it is broken. Tolerances: `REL_TOL` (relative, on hover times, rate sums and collected data) is
-1e-6, about eight float32 steps (float32's relative precision is 2**-23 ~ 1.2e-7): a mission
-passes through MAVLink's float32 parameters, so a finer tolerance would judge noise the file
-cannot carry. It is no safety margin: a plan on the boundary that loses more than that when
-stored fails, which is why missions are made storable before they are written
-(`lamde_mission.storage`). `GEOM_TOL` metres for positions and overlap lengths. One extra
-verdict, ENDS, checks that the mission takes off at the map's start and comes to rest at its
-end (the paper's fixed p_0 and p_{I+1}), and ALT that every stop and the take-off are above the
-ground at home (the map is flat: a stop at or below 0 m is in the ground). Two more judge the
-map's `safety` margins on the flown mission: CLEAR (every leg at least `safety.clearance` from
-every obstacle, measured with shapely; near the start or end point the clearance in force is
-what the map leaves there) and MARGIN (every sensor's collected data at least (1 +
-`safety.data_margin`) x its requirement); `Verdicts.data_margins` holds the real margin per
+A margin is the worst slack in the constraint's unit: >= 0 when it holds, negative by how much it is
+broken. Tolerances: `REL_TOL` (relative, on hover times, rate sums and collected data) is 1e-6,
+about eight float32 steps (float32's relative precision is 2**-23 ~ 1.2e-7): a mission passes
+through MAVLink's float32 parameters, so a finer tolerance would judge noise the file cannot carry.
+It is no safety margin: a plan on the boundary that loses more than that when stored fails, which is
+why missions are made storable before they are written (`lamde_mission.storage`). `GEOM_TOL` metres
+for positions and overlap lengths. One extra verdict, ENDS, checks that the mission takes off at the
+map's start and comes to rest at its end (the paper's fixed p_0 and p_{I+1}; a mission with neither
+LAND nor RETURN_TO_LAUNCH fails: it holds at its last stop until a failsafe), and ALT that every
+stop and the take-off are above the ground at home (the map is flat: a stop at or below 0 m is in
+the ground). Two more judge the map's `safety` margins on the flown mission: CLEAR (every leg at
+least `safety.clearance` from every obstacle, measured with shapely; near the start or end point the
+clearance in force is what the map leaves there) and MARGIN (every sensor's collected data at least
+(1 + `safety.data_margin`) x its requirement); `Verdicts.data_margins` holds the real margin per
 sensor and `Verdicts.clearance` the real clearance. On a map with a battery (`uav.battery` or
-`uav.endurance_s`; issue 33) one more, ENERGY, judges the mission as one sortie: the energy the
-sim computes on its own (`sim.energy.mission_energy`) at most the usable energy, battery x (1 -
+`uav.endurance_s`; issue 33) one more, ENERGY, judges the mission as one sortie: the energy the sim
+computes on its own (`sim.energy.mission_energy`) at most the usable energy, battery x (1 -
 reserve); a map without a battery gets no ENERGY verdict.
 """
 
@@ -36,7 +36,14 @@ import shapely
 from planner_core.defaults import L_VIO_TOL
 from sim import energy as sim_energy
 from sim.mission import CMD
-from sim.obstacles import distances_to, obstacle_shapes, overlap_totals
+from sim.obstacles import (
+    distances_to,
+    distinct_rows,
+    leg_overlaps,
+    obstacle_shapes,
+    overlap_totals,
+    points_inside,
+)
 from sim.replay import Timeline
 
 __all__ = [
@@ -174,7 +181,8 @@ class Verdicts:
 
         Returns:
             passed, failed, t_fly, t_hover, f (s), clearance_m (None when infinite),
-            data_margins and each verdict's `Verdict.to_dict`; on a map with a battery also
+            data_margins (None for a sensor requiring no data) and each verdict's
+            `Verdict.to_dict`; on a map with a battery also
             energy_wh, battery_wh, usable_wh, reserve_left_wh and above_reserve_wh (Wh).
         """
         out = {
@@ -184,7 +192,9 @@ class Verdicts:
             "t_hover": self.t_hover,
             "f": self.f,
             "clearance_m": self.clearance if math.isfinite(self.clearance) else None,
-            "data_margins": dict(self.data_margins),
+            # a sensor requiring no data has margin +inf: null, as JSON has no infinity
+            "data_margins": {k: (v if math.isfinite(v) else None)
+                             for k, v in self.data_margins.items()},
             "verdicts": [v.to_dict() for v in self.items],
         }
         if self.energy_wh is not None:  # maps with a battery only: older reports unchanged
@@ -256,6 +266,79 @@ def margin_verdict(collected: np.ndarray, required: np.ndarray, ids: Any, want: 
 
 def _hover_label(i: int, seqs: tuple[int, ...]) -> str:
     return f"hover point {i + 1} (item {seqs[i]})"
+
+
+#: offenders a C5 detail names of each kind (hover points inside, legs crossing) before
+#: "and N more"
+NAMED_OFFENDERS = 3
+
+
+def _leg_label(g: int, timeline: Timeline) -> str:
+    """Leg g of the flight (the legs of `timeline.path`, then the RTL return leg) named by
+    its items, as verify names them: "take-off -> item 2", "item 2 -> item 3", "item 5 ->
+    launch (RTL)"."""
+    seqs = timeline.route.seqs
+    n_path = len(timeline.path) - 1
+    if g >= n_path:
+        return f"item {seqs[-1]} -> launch (RTL)"
+    return f"{'take-off' if g == 0 else f'item {seqs[g - 1]}'} -> item {seqs[g]}"
+
+
+def _nearest_leg(paths: list[np.ndarray], shape: Any) -> int:
+    """The first flight (an index into the legs of `paths` in order) of the distinct leg
+    nearest the shapely geometry `shape` (the first such leg flown on a tie). O(L log L) for L
+    legs."""
+    flat = np.concatenate([np.stack([p[:-1], p[1:]], axis=1) for p in paths
+                           if len(p) >= 2]).reshape(-1, 4)  # fmt: skip
+    first, _, _ = distinct_rows(flat)
+    d = shapely.distance(shapely.linestrings(flat[first].reshape(-1, 2, 2)), shape)
+    return int(first[int(np.argmin(d))])
+
+
+def _more(shown: list[str], total: int) -> str:
+    return ", ".join(shown) + (f" and {total - len(shown)} more" if total > len(shown) else "")
+
+
+def _c5_offenders(timeline: Timeline, legs: list[np.ndarray], obstacles: list[Any]) -> str:
+    """The part of a failed C5's detail naming what is at fault, by item as verify names
+    items: each hover point inside an obstacle (with its hover time there) and the legs
+    crossing, the worst first (most length inside, over all its flights), at most
+    `NAMED_OFFENDERS` of each and a count of the rest. One line; empty when nothing is named.
+    Time O(L log L + (L + O) log O) for L legs and O obstacles (`leg_overlaps`,
+    `points_inside`)."""
+    parts = []
+    hp, seqs = timeline.hover_points, timeline.hover_seqs
+    pi, oi = points_inside(hp, obstacles)
+    if len(pi):
+        # a DO_JUMP flies a hover item again: each item once, its hover times summed
+        at: dict[tuple[int, int], float] = {}
+        label: dict[int, str] = {}
+        for p, o in zip(pi.tolist(), oi.tolist(), strict=True):
+            key = (seqs[p], o)
+            at[key] = at.get(key, 0.0) + float(timeline.hover_times[p])
+            label.setdefault(seqs[p], _hover_label(p, seqs))
+        worst = sorted(at.items(), key=lambda kv: -kv[1])
+        shown = [f"{label[s]} inside {obstacles[o].label} for {t:.6g} s"
+                 for (s, o), t in worst[:NAMED_OFFENDERS]]
+        parts.append("; " + _more(shown, len(worst)))
+    first, counts, li, oi, length = leg_overlaps(legs, obstacles, tol=C5_TOL)
+    if len(li):
+        per_leg = np.zeros(len(first))
+        np.add.at(per_leg, li, length * counts[li])
+        bad = np.flatnonzero(per_leg > 0)
+        bad = bad[np.argsort(-per_leg[bad], kind="stable")]
+        shown = []
+        for u in bad[:NAMED_OFFENDERS]:
+            sel = li == u
+            order = np.argsort(-length[sel], kind="stable")
+            where = _more([f"{obstacles[o].label} {d * counts[u]:.3g} m" for o, d in
+                           zip(oi[sel][order][:NAMED_OFFENDERS], length[sel][order], strict=False)],
+                          int(sel.sum()))  # fmt: skip
+            times = f", flown {counts[u]} times" if counts[u] > 1 else ""
+            shown.append(f"{_leg_label(int(first[u]), timeline)} ({per_leg[u]:.3g} m{times}: "
+                         f"{where})")
+        parts.append(f"; leg{'s' if len(bad) > 1 else ''} crossing: {_more(shown, len(bad))}")
+    return "".join(parts)
 
 
 def verify(timeline: Timeline, map: Any) -> Verdicts:  # noqa: A002
@@ -353,7 +436,8 @@ def verify(timeline: Timeline, map: Any) -> Verdicts:  # noqa: A002
             order = hit[np.argsort(-per_obstacle[hit])]
             names = ", ".join(f"{obstacles[k].label} {per_obstacle[k]:.3g} m" for k in order[:4])
             extra = " (includes the RTL return leg)" if timeline.return_leg is not None else ""
-            detail = f"path inside obstacles for {l_vio:.6g} m: {names}{extra}"
+            detail = (f"path inside obstacles for {l_vio:.6g} m: {names}{extra}"
+                      f"{_c5_offenders(timeline, legs, obstacles)}")  # fmt: skip
             out.append(Verdict("C5", "L_vio = 0", False, -l_vio, "m", detail))
         else:
             # circles exact: from their centre less the radius (`Obstacle.clearance`)
@@ -380,7 +464,8 @@ def verify(timeline: Timeline, map: Any) -> Verdicts:  # noqa: A002
         k = int(np.argmin(dist - force))
         clearance = float(dist.min())
         m = float(dist[k] - force[k])
-        detail = (f"closest {dist[k]:.3f} m from {obstacles[k].label} "
+        leg = _leg_label(_nearest_leg(legs, shapes[k]), timeline)
+        detail = (f"closest {dist[k]:.3f} m from {obstacles[k].label} on the leg {leg} "
                   f"(clearance in force there {force[k]:.3f} m)")  # fmt: skip
         # where the start or end leaves less room, the row says so: the margin is measured
         # against the clearance in force there, not the asked one
@@ -394,15 +479,7 @@ def verify(timeline: Timeline, map: Any) -> Verdicts:  # noqa: A002
     margins = {ids[k]: float(frac[k]) for k in range(len(ids))}
     out.append(margin)
 
-    # ENDS: take off at the start, come to rest at the end
-    d0 = float(np.linalg.norm(timeline.route.launch - map.start))
-    d1 = float(np.linalg.norm(timeline.path[-1] - map.end))
-    worst = max(d0, d1)
-    worst = 0.0 if worst < GEOM_TOL else worst  # round-off of the lat/lon round trip
-    detail = (f"take-off {d0:.3f} m from start, last stop {d1:.3f} m from end (within "
-              f"{ENDS_TOL:g} m)")  # fmt: skip
-    # the margin is the slack, as for every check: >= 0 exactly when it holds
-    out.append(Verdict("ENDS", "start -> end", worst <= ENDS_TOL, ENDS_TOL - worst, "m", detail))
+    out.append(_ends_verdict(timeline, map))
 
     # ALT: every stop and the take-off above the ground at home (a flat map: the paper's model
     # has no terrain); the LAND item itself comes down
@@ -425,6 +502,30 @@ def verify(timeline: Timeline, map: Any) -> Verdicts:  # noqa: A002
     return Verdicts(items=tuple(out), t_fly=t.t_fly, t_hover=t.t_hover, f=t.f,
                     data_margins=margins, clearance=clearance,
                     **(energy[1] if energy is not None else {}))  # fmt: skip
+
+
+def _ends_verdict(timeline: Timeline, map: Any) -> Verdict:  # noqa: A002
+    """ENDS: the mission takes off at the map's start and comes down at its end (module
+    docstring). A mission with neither LAND nor RETURN_TO_LAUNCH fails whatever its last stop:
+    the vehicle holds there until a failsafe (the battery's, or the operator's) brings it
+    down; its margin is -inf. Without a TAKEOFF item the take-off is the sim's assumption (a
+    climb at the map's start: `sim.mission.items_to_route` notes what each autopilot does),
+    said in the detail. O(1)."""
+    route = timeline.route
+    d0 = float(np.linalg.norm(route.launch - map.start))
+    d1 = float(np.linalg.norm(timeline.path[-1] - map.end))
+    take_off = (f"take-off {d0:.3f} m from start" if route.takeoff_altitude is not None else
+                "no TAKEOFF item: take-off assumed at the start")
+    if route.finish == "none":
+        detail = (f"the mission does not land (no LAND or RETURN_TO_LAUNCH item): it holds at "
+                  f"its last stop, item {route.seqs[-1]}, {d1:.3f} m from end, until a failsafe; "
+                  f"{take_off}")  # fmt: skip
+        return Verdict("ENDS", "start -> end", False, -math.inf, "m", detail)
+    worst = max(d0, d1)
+    worst = 0.0 if worst < GEOM_TOL else worst  # round-off of the lat/lon round trip
+    detail = f"{take_off}, last stop {d1:.3f} m from end (within {ENDS_TOL:g} m)"
+    # the margin is the slack, as for every check: >= 0 exactly when it holds
+    return Verdict("ENDS", "start -> end", worst <= ENDS_TOL, ENDS_TOL - worst, "m", detail)
 
 
 def _energy_verdict(timeline: Timeline, map: Any) -> tuple[Verdict, dict[str, float]] | None:  # noqa: A002

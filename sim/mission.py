@@ -372,7 +372,9 @@ def items_to_route(items: Sequence[MissionItem], map: Any) -> Route:  # noqa: A0
     forever, param2 = -1, is refused). Other DO/CONDITION commands are ignored with a note.
     Items after LAND/RTL are ignored with a note. Altitudes more than `MAX_FLIGHT_ALTITUDE`
     above or below home are refused. Each distinct note is made once, with how many times it
-    came up when a DO_JUMP repeats it.
+    came up when a DO_JUMP repeats it. Without a TAKEOFF item the launch is the map's start,
+    with a note of what each autopilot does then (ArduCopter refuses to start the mission on
+    the ground; PX4 climbs first where it stands).
 
     Args:
         items: the mission items, in seq order (fence and rally items are ignored, noted).
@@ -514,7 +516,13 @@ def _walk(
     if not stops:
         raise MissionError("the mission has no navigation items to fly")
     if takeoff_alt is None:
-        note("no TAKEOFF item: launch assumed at the map's start")
+        # ArduCopter's ModeAuto::init refuses AUTO on the ground unless the first navigation
+        # command is a take-off; PX4's navigator climbs first where it stands (to the first
+        # item's altitude, at least MIS_TAKEOFF_ALT) unless told to require one
+        note("no TAKEOFF item: ArduCopter will not start this mission on the ground (\"Auto: "
+             "Missing Takeoff Cmd\"; it flies it only if switched to AUTO in the air); PX4 "
+             "climbs where it stands first; the sim assumes that climb, at the map's start, "
+             "to the first item's altitude")
     return Route(
         launch=launch,
         takeoff_altitude=takeoff_alt,

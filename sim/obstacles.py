@@ -14,6 +14,7 @@ drawing and messages only.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -29,6 +30,8 @@ __all__ = [
     "unique_legs",
     "distinct_rows",
     "distances_to",
+    "leg_overlaps",
+    "points_inside",
     "CIRCLE_QUAD_SEGS",
 ]
 
@@ -237,28 +240,23 @@ def unique_legs(
     return uniq.reshape(-1, 2, 2), counts.astype(np.int64)
 
 
-def overlap_totals(paths: list[np.ndarray], obstacles: list[Obstacle]) -> np.ndarray:
-    """(O,) metres of the polylines `paths` inside each obstacle: `overlap_lengths` summed over
-    every leg of every path (a leg flown k times counts k times), without its (L, O) table.
+def _overlap_pairs(legs: np.ndarray, obstacles: list[Obstacle]) -> Iterator[
+        tuple[int, np.ndarray, np.ndarray, np.ndarray]]:  # fmt: skip
+    """The (leg, obstacle) pairs that meet, with the length of the leg inside, chunk by chunk.
 
-    Each distinct leg (`unique_legs`) is tested only against the obstacles an STRtree finds
-    near it: polygons whose shape it intersects, circles whose bounding box it meets (then
-    measured exactly, as `overlap_lengths` does). Time O(U log U + (U + P) log O + P) for U
-    distinct legs, O obstacles and P (leg, obstacle) pairs that meet; memory O(U + O) plus at
-    most max(`PAIR_BLOCK`, O) pairs at a time (legs are queried in chunks of PAIR_BLOCK / O).
+    Each leg of `legs` (U, 2, 2) is tested only against the obstacles an STRtree finds near
+    it: polygons whose shape it intersects, circles whose bounding box it meets (then measured
+    exactly, as `overlap_lengths` does). Legs are queried in chunks of PAIR_BLOCK / O.
 
     Args:
-        paths: polylines (n, 2), local metres; those of fewer than two points have no leg.
-        obstacles: the O obstacles (`obstacle_shapes`).
+        legs: (U, 2, 2) legs, each as (start, end), local metres; U >= 1.
+        obstacles: the O >= 1 obstacles (`obstacle_shapes`).
 
-    Returns:
-        (O,) float array, metres (zeros without legs or obstacles).
+    Yields:
+        (lo, li, oi, length): the chunk's first leg, then per pair the leg's index within the
+        chunk, the obstacle's index and the metres inside (0 for a pair that only touches).
     """
     n_obs = len(obstacles)
-    out = np.zeros(n_obs)
-    legs, counts = unique_legs(paths)
-    if not n_obs or not len(legs):
-        return out
     circ = np.array([o.circle is not None for o in obstacles])
     boxes = np.array([
         shapely.box(o.circle[0] - o.circle[2], o.circle[1] - o.circle[2],
@@ -284,8 +282,105 @@ def overlap_totals(paths: list[np.ndarray], obstacles: list[Obstacle]) -> np.nda
         c = ~poly
         if c.any():
             got[c] = _chords(seg[li[c], 0], seg[li[c], 1], centres[oi[c]], radii[oi[c]])
+        yield lo, li, oi, got
+
+
+def overlap_totals(paths: list[np.ndarray], obstacles: list[Obstacle]) -> np.ndarray:
+    """(O,) metres of the polylines `paths` inside each obstacle: `overlap_lengths` summed over
+    every leg of every path (a leg flown k times counts k times), without its (L, O) table.
+
+    Each distinct leg (`unique_legs`) is tested only against the obstacles an STRtree finds
+    near it (`_overlap_pairs`). Time O(U log U + (U + P) log O + P) for U distinct legs, O
+    obstacles and P (leg, obstacle) pairs that meet; memory O(U + O) plus at most
+    max(`PAIR_BLOCK`, O) pairs at a time.
+
+    Args:
+        paths: polylines (n, 2), local metres; those of fewer than two points have no leg.
+        obstacles: the O obstacles (`obstacle_shapes`).
+
+    Returns:
+        (O,) float array, metres (zeros without legs or obstacles).
+    """
+    out = np.zeros(len(obstacles))
+    legs, counts = unique_legs(paths)
+    if not len(obstacles) or not len(legs):
+        return out
+    for lo, li, oi, got in _overlap_pairs(legs, obstacles):
         np.add.at(out, oi, got * counts[lo + li])
     return out
+
+
+def leg_overlaps(
+    paths: list[np.ndarray], obstacles: list[Obstacle], *, tol: float = 0.0
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Which legs of the polylines `paths` run inside which obstacles, and for how long: the
+    pairs behind `overlap_totals`, each distinct leg once (a DO_JUMP loop flies the same legs
+    again), in the order first flown, so that a message can name the legs at fault.
+
+    Time and memory as `overlap_totals` (the distinct legs in flown order: `distinct_rows`).
+
+    Args:
+        paths: polylines (n, 2), local metres; those of fewer than two points have no leg.
+        obstacles: the O obstacles (`obstacle_shapes`).
+        tol: metres: pairs with at most this length inside are left out.
+
+    Returns:
+        (first, counts, leg, obstacle, length): per distinct leg (U,) the index of its first
+        flight among the legs of `paths` taken in order (path 0's legs, then path 1's, ...)
+        and how often it is flown; per pair (P,) the distinct leg's index, the obstacle's
+        index and the metres inside one flight of the leg (> tol), sorted by leg.
+    """
+    empty = np.zeros(0, dtype=np.int64)
+    segs = [np.stack([p[:-1], p[1:]], axis=1) for p in
+            (np.asarray(q, dtype=float).reshape(-1, 2) for q in paths) if len(p) >= 2]
+    if not segs or not obstacles:
+        return empty, empty.copy(), empty.copy(), empty.copy(), np.zeros(0)
+    flat = np.concatenate(segs).reshape(-1, 4)
+    first, counts, _ = distinct_rows(flat)
+    legs = flat[first].reshape(-1, 2, 2)
+    li_all, oi_all, got_all = [], [], []
+    for lo, li, oi, got in _overlap_pairs(legs, obstacles):
+        keep = got > tol
+        li_all.append(lo + li[keep])
+        oi_all.append(oi[keep])
+        got_all.append(got[keep])
+    li = np.concatenate(li_all).astype(np.int64)
+    order = np.argsort(li, kind="stable")
+    return (first, counts, li[order], np.concatenate(oi_all).astype(np.int64)[order],
+            np.concatenate(got_all)[order])  # fmt: skip
+
+
+def points_inside(points: np.ndarray, obstacles: list[Obstacle]) -> tuple[np.ndarray, np.ndarray]:
+    """Which points lie inside which obstacles: in a polygon's interior (its boundary and its
+    holes are outside), or nearer a circle's centre than its radius (exact, not its drawn
+    polygon). Through an STRtree of the obstacles' bounding boxes: time O((N + O) log O + P)
+    for N points and P (point, box) pairs, memory O(N + O + P).
+
+    Args:
+        points: (N, 2) local metres.
+        obstacles: the O obstacles (`obstacle_shapes`).
+
+    Returns:
+        (point, obstacle): (P,) index pairs, by point then obstacle.
+    """
+    pts = np.asarray(points, dtype=float).reshape(-1, 2)
+    empty = np.zeros(0, dtype=np.int64)
+    if not len(pts) or not obstacles:
+        return empty, empty.copy()
+    boxes = shapely.box(*np.array([o.shape.bounds for o in obstacles]).T)
+    geoms = shapely.points(pts)
+    pi, oi = shapely.STRtree(boxes).query(geoms)
+    inside = np.zeros(len(pi), dtype=bool)
+    for k in np.unique(oi):  # one vectorised test per obstacle met
+        sel = oi == k
+        o = obstacles[int(k)]
+        if o.circle is not None:
+            cx, cy, r = o.circle
+            inside[sel] = np.hypot(pts[pi[sel], 0] - cx, pts[pi[sel], 1] - cy) < r
+        else:
+            inside[sel] = shapely.contains_properly(o.shape, geoms[pi[sel]])
+    order = np.lexsort((oi[inside], pi[inside]))
+    return pi[inside][order].astype(np.int64), oi[inside][order].astype(np.int64)
 
 
 def distances_to(paths: list[np.ndarray], geoms: np.ndarray) -> np.ndarray:

@@ -46,6 +46,7 @@ __all__ = [
     "hover_rates",
     "scheduled_allocation",
     "vertical_time",
+    "far_from_area",
 ]
 
 #: the names a `Timeline` sample's phase takes, in flight order; `_Recorder.add` refuses any
@@ -201,6 +202,36 @@ def scheduled_allocation(
         return D
     D[ii, jj] = np.maximum(res.x[:n], 0.0) * scale
     return D
+
+
+def far_from_area(route: Route, map: Any) -> str | None:  # noqa: A002
+    """A note when every stop of the mission lies farther from the map's area [0, W] x [0, H]
+    than the area's size, max(W, H): a mission for another map, or a map with another origin,
+    whose verdicts measure kilometres of nothing. O(stops).
+
+    Args:
+        route: the mission as flown (its stops, local metres).
+        map: the map (its `spec.area`; its origin named in the note when it has one).
+
+    Returns:
+        "the mission lies N km from this map's area (...): the wrong map, or another
+        origin?", or None when a stop lies within that distance (or the map has no area).
+    """
+    area = getattr(map.spec, "area", None)
+    if area is None or not len(route.stops):
+        return None
+    w, h = float(area.width), float(area.height)
+    xy = np.asarray(route.stops, dtype=float).reshape(-1, 2)
+    dx = np.maximum.reduce([np.zeros(len(xy)), -xy[:, 0], xy[:, 0] - w])
+    dy = np.maximum.reduce([np.zeros(len(xy)), -xy[:, 1], xy[:, 1] - h])
+    d = float(np.min(np.hypot(dx, dy)))
+    if not d > max(w, h):
+        return None
+    origin = getattr(map.spec, "origin", None)
+    where = (f" (origin lat {float(origin.lat):.6g}, lon {float(origin.lon):.6g})"
+             if origin is not None else "")  # fmt: skip
+    return (f"the mission lies {d / 1000:,.1f} km from this map's area{where}: the wrong map, "
+            "or another origin?")
 
 
 @dataclass(frozen=True)
@@ -536,6 +567,10 @@ def replay_route(route: Route, map: Any, *, dt: float = 1.0,  # noqa: A002
         clock += t_land
     else:
         notes.append("the mission does not land (no LAND or RETURN_TO_LAUNCH item)")
+
+    far = far_from_area(route, map)
+    if far is not None:  # first: every verdict below is measured from the wrong place
+        notes.insert(0, far)
 
     totals = Totals(
         t_fly=t_fly,

@@ -564,3 +564,33 @@ def test_plan_staggers_for_the_maps_launch_tolerance_and_verify_judges_it(tmp_pa
     assert rc == 0 and "fleet TIMING take-offs may be 30 s off: PASS" in out
     doc = json.loads((tmp_path / "safe" / "fleet.json").read_text())
     assert doc["timing_tolerance_s"] == safe.timing_tolerance_s
+
+
+def test_verify_dir_says_what_each_sortie_collects_instead_of_a_c4_of_nothing(dirs, capsys):
+    """Each sortie was judged on its sortie map, which requires no data: its own C4 named a
+    sensor it does not serve ("tightest: sensor 'S4' 0 of 0 Mbit") and MARGIN said "no data
+    required" beside "3 sensors served". Now a sortie's rows leave C4 and MARGIN out, a line
+    says what it collects from each sensor it serves, and the whole plan's C4 and MARGIN stay;
+    the JSON gives `collected_mbit` and no infinite data margins (not JSON)."""
+    map_path, src = dirs[1]
+    m = load_map(map_path)
+    req = dict(zip(m.sensor_ids, m.required_data, strict=True))
+    rc, out, _ = _verify(capsys, map_path, src)
+    assert rc == 0, out
+    assert "  C4 " not in out and "  MARGIN " not in out and "no data required" not in out
+    assert "its share only" not in out
+    assert "whole plan C4 Q_j >= Q_lambda (all sorties): PASS" in out
+    assert "whole plan MARGIN data margin" in out
+    rc, js, _ = _verify(capsys, map_path, src, "--json")
+    rep = json.loads(js, parse_constant=lambda c: pytest.fail(f"{c} is not JSON"))
+    data = [ln.strip() for ln in out.splitlines() if ln.startswith("  data: ")]
+    assert len(data) == len(rep["sorties"]) >= 2
+    for line, s in zip(data, rep["sorties"], strict=True):
+        assert [v["name"] for v in s["verdicts"]] == ["C1", "C2", "C3", "C5", "CLEAR", "ENDS",
+                                                      "ALT", "ENERGY"]
+        assert list(s["collected_mbit"]) == s["sensors"] and s["data_margins"] == {}
+        for sid, q in s["collected_mbit"].items():
+            assert f"'{sid}' {q:.6g} Mbit ({100 * q / req[sid]:.3g} % of its " in line, line
+        for sid in set(m.sensor_ids) - set(s["sensors"]):
+            assert f"'{sid}'" not in line
+        assert line.endswith("C4 and MARGIN judge all sorties together (whole plan, below)")

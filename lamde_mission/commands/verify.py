@@ -111,6 +111,7 @@ def _run_sorties(args: argparse.Namespace, m: Any) -> int:
                             "depot_start": s.depot_start, "depot_end": s.depot_end,
                             "takeoff_s": at,
                             "duration_s": s.duration_s, "sensors": list(s.sensors),
+                            "collected_mbit": s.collected_mbit,
                             **s.verdicts.to_dict()}
                            for s, at in zip(check.sorties, check.takeoffs(), strict=True)],
                "combined": [v.to_dict() for v in check.combined],
@@ -133,9 +134,9 @@ def _run_sorties(args: argparse.Namespace, m: Any) -> int:
             print(f"{printable(s.file)}: {pad_words(m, s.depot_start, s.takeoff_xy)} -> "
                   f"{pad_words(m, s.depot_end, s.landing_xy)}, take-off +{at:.0f} s, "
                   f"{s.duration_s:.1f} s{energy}, "
-                  f"{counted(len(s.sensors), 'sensor')} served (its C4 and MARGIN: its share "
-                  "only)")
+                  f"{counted(len(s.sensors), 'sensor')} served")
             print("\n".join("  " + printable(r) for r in vd.table().splitlines()))
+            print("  " + printable(_sortie_data(s, m)))
         for v in check.vehicles():
             print(f"vehicle {v}: launch at +{check.launch(v):.0f} s, makespan "
                   f"{check.makespan(v):.1f} s")
@@ -212,9 +213,7 @@ def run(args: argparse.Namespace) -> int:
               f"{_margins(verdicts.data_margins)}")
         print(f"f = {t.f:.6f}  (alpha {t.alpha:g}: t_fly {t.t_fly:.3f} s, "
               f"t_hover {t.t_hover:.3f} s)")  # fmt: skip
-        print(f"mission time {t.t_total:.1f} s including take-off {t.t_takeoff:.1f} s, "
-              f"landing {t.t_land:.1f} s" + (f", return {t.t_return:.1f} s" if t.t_return else "")
-              + f"; distance {t.distance:.1f} m")  # fmt: skip
+        print(_time_line(timeline))
         if verdicts.energy_wh is not None:  # a map with a battery (docs/energy.md)
             left = verdicts.reserve_left_wh
             print(f"energy {verdicts.energy_wh:.3f} Wh of {verdicts.usable_wh:.3f} Wh usable "
@@ -234,6 +233,51 @@ def run(args: argparse.Namespace) -> int:
                   "sortie is verified with its directory (`lamde-mission verify MAP DIR/`, DIR "
                   "holding fleet.json), which is not beside this file")
     return 0 if verdicts.passed else 1
+
+
+def _sortie_data(s: Any, m: Any) -> str:
+    """verify DIR/'s line of what one sortie collects: each sensor it serves with its Mbit and
+    share of the sensor's requirement (the first `MARGINS_LISTED` by name, then a count);
+    judged only with the other sorties' data (the whole plan's C4 and MARGIN), which it says.
+
+    Args:
+        s: the `lamde_mission.sorties.SortieCheck`.
+        m: the plan's map (each sensor's required data).
+
+    Returns:
+        One line (no newline, no indent).
+    """
+    req = dict(zip(m.sensor_ids, (float(q) for q in m.required_data), strict=True))
+    got = s.collected_mbit
+    if not got:
+        return "data: collects from no sensor (C4 and MARGIN judge all sorties together, below)"
+    parts = [f"'{k}' {q:.6g} Mbit" + (f" ({100 * q / req[k]:.3g} % of its {req[k]:g} Mbit)"
+                                      if req.get(k, 0.0) > 0 else "")
+             for k, q in list(got.items())[:MARGINS_LISTED]]  # fmt: skip
+    more = f" and {len(got) - MARGINS_LISTED} more" if len(got) > MARGINS_LISTED else ""
+    return (f"data: collects {', '.join(parts)}{more}; C4 and MARGIN judge all sorties "
+            "together (whole plan, below)")
+
+
+def _time_line(timeline: Any) -> str:
+    """verify's mission-time line: the total with its take-off, landing and return, each said
+    as the mission has it: a take-off without a TAKEOFF item is the sim's assumption, and a
+    mission without LAND or RETURN_TO_LAUNCH has no landing.
+
+    Args:
+        timeline: the replay (`sim.replay.Timeline`).
+
+    Returns:
+        One line (no newline).
+    """
+    t, route = timeline.totals, timeline.route
+    take_off = (f"take-off {t.t_takeoff:.1f} s" if route.takeoff_altitude is not None else
+                f"take-off {t.t_takeoff:.1f} s assumed (no TAKEOFF item)")
+    landing = (f"landing {t.t_land:.1f} s" if route.finish != "none" else
+               "no landing (it holds at its last stop)")
+    ret = f", return {t.t_return:.1f} s" if t.t_return else ""
+    return (f"mission time {t.t_total:.1f} s including {take_off}, {landing}{ret}; distance "
+            f"{t.distance:.1f} m")
 
 
 #: sensors whose data margins verify lists by name; beyond, the least of them and a summary
