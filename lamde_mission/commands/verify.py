@@ -30,7 +30,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "sortie, C4 and MARGIN over the data of all sorties together, and the plan's shape: "
         "CHAIN (each vehicle takes off where its last sortie landed), UAVS (no more "
         "vehicles than the map's fleet.uavs) and FILES (no mission file in DIR that "
-        "fleet.json does not list).",
+        "fleet.json does not list). Items are named as they go up to the vehicle: numbered "
+        "from 0, a .waypoints file's home line left out, so item N is QGroundControl's item "
+        "N+1 and a .waypoints file's line with seq N+1.",
     )
     p.add_argument("map", help="map file (JSON)")
     from lamde_mission.commands._common import add_origin_option
