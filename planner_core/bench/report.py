@@ -310,6 +310,9 @@ def build_report(
         "- Our DE variants report the raw DE result (no hover-time polish), so the comparison "
         "is on the optimiser alone.",
         _safety_line(suite_dir, tasks),
+        *(["- Wall times exclude compiling: each worker process compiles (or loads from "
+           "numba's disk cache) the kernels its optimisers run before its first timed run."]
+          if meta.get("wall_excludes_compile") else []),
         "",
         "| Optimiser | What it is |",
         "|---|---|",
