@@ -35,7 +35,7 @@ from planner_core.defaults import SCORE_FACTOR
 
 __all__ = ["DEFAULT_REFERENCE", "build_report", "cost_section", "figures_folder", "imax_section",
            "imax_table", "order_optimisers", "format_table", "fmt", "study_sections",
-           "suite_folder"]
+           "suite_folder", "suite_of_results"]
 
 #: start modes in the report's order, and what each means
 INIT_ORDER = ("uniform", "seeded")
@@ -790,6 +790,27 @@ def suite_folder(meta: dict[str, Any], results_dir: str | Path) -> Path | None:
     if not given.is_absolute():
         tries.append(Path(results_dir) / given)
     return next((p for p in tries if p.is_dir()), given)
+
+
+def suite_of_results(results: str | Path) -> Path | None:
+    """The suite folder a results file's runs were made on: its folder's meta.json, found from
+    here (`suite_folder`); for the analysis scripts (`benchmarks/search_table.py`,
+    `benchmarks/compare_runs.py`), which take a results file rather than its folder.
+
+    Args:
+        results: a `results.jsonl` (or `.jsonl.gz`, or a copy under another name) of `bench`.
+
+    Returns:
+        The suite folder when a meta.json beside the file records one that is a folder here;
+        None otherwise (no meta.json, no suite recorded, or the folder not found).
+
+    Raises:
+        ValueError: an unreadable or malformed meta.json (`read_meta`, naming the file).
+    """
+    folder = Path(results).parent
+    meta = read_meta(folder)
+    found = suite_folder(meta, folder)
+    return found if found is not None and found.is_dir() else None
 
 
 def _known_entries(suite_dir: Path | None, maps: dict[str, Any]) -> dict[str, dict[str, Any]]:
