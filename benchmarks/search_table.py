@@ -4,7 +4,11 @@ Reads one or more bench results files (`lamde-mission bench ... --out DIR` write
 DIR/results.jsonl) and prints a Markdown table: per task, each optimiser's mean penalised score
 f + 10 phi over its runs, feasible runs, and for every peer the two-sided Wilcoxon signed-rank p
 of the planner against it, paired by run seed (same seed = same seeded start); then the planner's
-gap to the best-known f of examples/maps/suite_best_known.json.
+gap to the best-known f of the runs' suite: `--best-known F`, else the best-known file beside the
+suite the first results file's meta.json records (`bench --suite examples/maps/large` ->
+examples/maps/large_best_known.json; entries of a changed map left out), else
+examples/maps/suite_best_known.json. The file used is printed, and a map without a best-known f
+is named (its gap "no best-known", left out of the within-1 % count).
 
     python benchmarks/search_table.py results/results.jsonl [...] [--planner planner]
         [--best-known F] [--init seeded|uniform] [--runs N] [--optimizers A B ...] [--gaps]
@@ -26,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from collections import defaultdict
 from pathlib import Path
 
@@ -50,11 +55,55 @@ def _source(arg: str) -> tuple[Path, dict[str, str] | None]:
     return Path(path), keep
 
 
+def best_known_f(given: Path | None, first_results: Path) -> tuple[dict[str, float], str]:
+    """The best-known f per task, and the line saying where it comes from.
+
+    Args:
+        given: `--best-known` (a file whose `tasks` map task -> {"f": ...}), or None: the file
+            beside the suite that `first_results`' meta.json records (entries of a map file
+            that changed since left out, `BestKnown.f_values`), else the default suite's.
+        first_results: the first results file given.
+
+    Returns:
+        ({task: f}, "best-known: PATH ..."); {} with the line saying why when the file is
+        missing.
+
+    Raises:
+        ValueError: an unreadable or malformed best-known file or meta.json (naming it).
+    """
+    from planner_core.bench.limits import BestKnown, best_known_path, suite_task_files
+    from planner_core.bench.report import suite_of_results
+
+    if given is None:
+        suite = suite_of_results(first_results)
+        if suite is not None:
+            path = best_known_path(suite)
+            if not path.exists():
+                return {}, f"best-known: {path} (the runs' suite {suite}, from meta.json) " \
+                    "does not exist"
+            return (BestKnown(path).f_values(suite_task_files(suite)),
+                    f"best-known: {path} (the runs' suite {suite}, from meta.json)")
+        given = ROOT / "examples/maps/suite_best_known.json"
+        how = "the default suite's: no meta.json with a suite beside the first results file"
+    else:
+        how = "--best-known"
+    if not given.exists():
+        return {}, f"best-known: {given} ({how}) does not exist"
+    data = json.loads(given.read_text())
+    tasks = data.get("tasks") if isinstance(data, dict) else None
+    if not isinstance(tasks, dict):
+        raise ValueError(f"{given}: no \"tasks\" object")
+    out = {t: float(e["f"]) for t, e in tasks.items() if isinstance(e, dict) and "f" in e}
+    return out, f"best-known: {given} ({how})"
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("results", nargs="+", help="results JSONL, optionally PATH:NAME[=LABEL],...")
     ap.add_argument("--planner", default="planner")
-    ap.add_argument("--best-known", type=Path, default=ROOT / "examples/maps/suite_best_known.json")
+    ap.add_argument("--best-known", type=Path, default=None,
+                    help="best-known file (default: beside the suite in the runs' meta.json, "
+                    "else examples/maps/suite_best_known.json)")
     ap.add_argument("--init", choices=("seeded", "uniform"), default=None,
                     help="only the runs of this start mode (default: all runs)")
     ap.add_argument("--runs", type=int, default=None, help="only runs 0 .. N-1")
@@ -87,7 +136,10 @@ def main() -> None:
             runs[key][int(r["seed"])] = penalised_score(float(r["f"]), float(r["phi"]))
             feasible[key][int(r["seed"])] = r["phi"] == 0.0
     feas = {k: sum(v.values()) for k, v in feasible.items()}
-    best = json.loads(a.best_known.read_text())["tasks"]
+    try:
+        best, source = best_known_f(a.best_known, _source(a.results[0])[0])
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        sys.exit(f"search_table: best-known: {exc}")
     tasks = sorted({t for t, _ in runs})
     opts = [a.planner] + sorted({o for _, o in runs} - {a.planner})
     peers = opts[1:]
@@ -120,20 +172,31 @@ def main() -> None:
             if p < 0.05:
                 (sig_better if np.mean(x) < np.mean(y) else sig_worse)[o] += 1
             cells.append(f"{p:.3g}{' *' if p < 0.05 and np.mean(x) < np.mean(y) else ''}")
-        bk = best.get(t, {}).get("f")
+        bk = best.get(t)
         for o in gap_cols:
             v = list(runs[(t, o)].values())
             m = np.mean(v) if v else np.nan
-            gap = 100 * (m - bk) / bk if bk else np.nan
+            if not bk:
+                cells.append("no best-known")
+                continue
+            gap = 100 * (m - bk) / bk
             within[o] += int(bool(np.isfinite(gap) and gap <= 1.0))
             cells.append(f"{gap:+.2f} %" if np.isfinite(gap) else "-")
         print("| " + " | ".join(cells) + " |")
     print()
+    print(f"- {source}")
+    unknown = [t for t in tasks if not best.get(t)]
+    if unknown:
+        print(f"- no best-known f for {', '.join(unknown)} ({len(unknown)}/{len(tasks)} maps): "
+              "no gap, not counted below; give --best-known FILE, or run `bench` with its "
+              "best-known update on")
+    known = len(tasks) - len(unknown)
     for o in peers:
         print(f"- {a.planner} has the lower mean than {o} on {wins[o]}/{len(tasks)} maps "
               f"(p < 0.05: better on {sig_better[o]}, worse on {sig_worse[o]})")
     for o in gap_cols:
-        print(f"- {o}'s mean is within 1 % of the best-known on {within[o]}/{len(tasks)} maps")
+        print(f"- {o}'s mean is within 1 % of the best-known on {within[o]}/{known} maps"
+              + (f" with a best-known ({len(unknown)} without)" if unknown else ""))
 
 
 if __name__ == "__main__":

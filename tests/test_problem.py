@@ -96,6 +96,41 @@ def test_out_of_bounds_values_are_clamped(hand_map: dict) -> None:
     assert b["hover_points"] == [[0.0, 0.0]]
 
 
+@pytest.mark.parametrize("variable", [True, False])
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_a_non_finite_vector_is_never_feasible(hand_map: dict, variable: bool,
+                                               bad: float) -> None:
+    """A row with a NaN (or +-inf) entry read as feasible: on small-demo.json X[1, 0] = nan gave
+    f = nan, phi = 0.0, and on T01 `evaluate` said phi 0 where `breakdown` said nan. Now f and
+    phi are inf in both, for any entry of any row (a hover coordinate, a time, an activation
+    gene), and the other rows of the population are evaluated as alone."""
+    from tests.conftest import ROOT
+
+    maps = [hand_map, ROOT / "examples" / "maps" / "small-demo.json",
+            ROOT / "examples" / "maps" / "suite" / "T01.json"]
+    for m in maps:
+        p = Problem(m, variable_length=variable)
+        rng = np.random.default_rng(0)
+        X = p.lower + rng.random((4, p.dim)) * (p.upper - p.lower)
+        f0, phi0 = p.evaluate(X)
+        for j in (0, 2, 3, p.dim - 1):
+            Y = X.copy()
+            Y[1, j] = bad
+            f, phi = p.evaluate(Y)
+            assert f[1] == np.inf and phi[1] == np.inf, (m, j)
+            keep = [0, 2, 3]
+            np.testing.assert_array_equal(f[keep], f0[keep])
+            np.testing.assert_array_equal(phi[keep], phi0[keep])
+            b = p.breakdown(Y[1])
+            assert (b["f"], b["phi"], b["score"]) == (np.inf, np.inf, np.inf), (m, j)
+        assert np.all(np.isfinite(X))  # the caller's array is not touched
+        Y = X.copy()
+        Y[1, :2] = 1e308  # finite, clipped to the box as ever (though their sum overflows)
+        f, phi = p.evaluate(Y)
+        assert np.isfinite(f[1]) and np.isfinite(phi[1])
+        assert (f[1], phi[1]) == p.evaluate(np.clip(Y[1], p.lower, p.upper)[None, :])
+
+
 def test_encode_round_trip(hand_map: dict) -> None:
     p = Problem(hand_map)
     x = p.encode([[300, 0]], [50])

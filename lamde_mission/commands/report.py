@@ -48,6 +48,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="the report's first heading (default 'Benchmark results')")
     p.add_argument("--no-limits", action="store_true",
                    help="leave out the lower-bound / best-known section")
+    p.add_argument("--update-lower-bounds", action="store_true",
+                   help="store the lower bounds the report computes in the cache beside the "
+                   "suite (<suite>_lower_bounds.json); by default in RESULTS/lower_bounds.json, "
+                   "so nothing is written beside the suite")
     p.add_argument("--imax", metavar="DIR",
                    help="add the I_max study (paper Fig. 4) from this benchmark folder (`bench "
                    "--i-max ... --out DIR`, or its slim copy from benchmarks/store_runs.py)")
@@ -73,6 +77,8 @@ def _command(args: argparse.Namespace, tasks: list[str] | None) -> str:
         parts += ["--policy-checkpoint", args.policy_checkpoint]
     if args.no_limits:
         parts.append("--no-limits")
+    if args.update_lower_bounds:
+        parts.append("--update-lower-bounds")
     if args.title != "Benchmark results":
         parts += ["--title", args.title]
     if args.imax:
@@ -128,7 +134,7 @@ def run(args: argparse.Namespace) -> int:
                            limits=not args.no_limits, command=_command(args, tasks),
                            policy_checkpoint=args.policy_checkpoint, title=args.title,
                            imax=args.imax, ablations=args.ablations,
-                           log=notes.append)
+                           log=notes.append, update_lower_bounds=args.update_lower_bounds)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     for note in notes:  # as `bench` says them when it resumes the folder

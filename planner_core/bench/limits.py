@@ -3,12 +3,12 @@
 Both files sit beside the suite folder, not in it (the folder holds exactly the maps):
 for `examples/maps/suite/` they are `examples/maps/suite_lower_bounds.json` and
 `examples/maps/suite_best_known.json`. The first caches `planner_core.model.bounds.lower_bound` per
-map, keyed by the map file's SHA-256 (a changed map is recomputed). The second holds, per task,
-the best feasible f
-found so far, its hover points/times, and who found it (optimiser, seed, budget, command); the
-map's witness plan is the initial entry, and any benchmark run that finds a better feasible f
-replaces it (re-checked on the map before it is stored; a file lock keeps concurrent runners from
-losing each other's updates).
+map, keyed by the map file's SHA-256 (a changed map is recomputed); `report` only reads it and
+keeps what it computes in the run's folder unless asked (`report --update-lower-bounds`). The
+second holds, per task, the best feasible f found so far, its hover points/times, and who
+found it (optimiser, seed, budget, command); the map's witness plan is the initial entry, and
+any benchmark run that finds a better feasible f replaces it (re-checked on the map before it
+is stored; a file lock keeps concurrent runners from losing each other's updates).
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ import fcntl
 import hashlib
 import math
 import os
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -164,15 +164,23 @@ def lower_bounds(
     *,
     cache: str | Path | None = None,
     compute_missing: bool = True,
+    also_read: Sequence[str | Path] = (),
 ) -> dict[str, dict[str, Any]]:
-    """LB per task from the cache beside the suite; missing or stale entries (the map's SHA-256
-    changed) are computed (`planner_core.model.bounds.lower_bound`) and stored, under a lock.
+    """LB per task from the cache (by default the one beside the suite); missing or stale
+    entries (the map's SHA-256 changed) are computed (`planner_core.model.bounds.lower_bound`,
+    about a second a map) and stored in `cache`, under a lock. The caches of `also_read` are
+    read, never written: `report` reads the one beside the suite and stores what it computes
+    in the run's folder (`build_report`), so a report on a suite outside the repository's
+    leaves no file beside it.
 
     Args:
         suite: the suite folder.
         tasks: the tasks wanted (None: all; names not in the suite are dropped).
-        cache: the cache file (None: `lower_bounds_path(suite)`).
+        cache: the cache file read and written (None: `lower_bounds_path(suite)`); written
+            only when an entry is computed.
         compute_missing: False leaves missing or stale entries out instead of computing them.
+        also_read: further cache files, read only (missing ones skipped), consulted after
+            `cache`.
 
     Returns:
         Task -> entry ("sha256", "lb" in s, and the rest of `LowerBound.to_dict`), in the
@@ -189,11 +197,13 @@ def lower_bounds(
     path = Path(cache) if cache is not None else lower_bounds_path(suite)
     out: dict[str, dict[str, Any]] = {}
     todo = []
-    entries = _entries(path, {"sha256": str, "lb": float})
+    kinds = {"sha256": str, "lb": float}
+    sources = [_entries(path, kinds), *(_entries(Path(p), kinds) for p in also_read)]
     for name in names:
         sha = file_sha256(files[name])
-        e = entries.get(name)
-        if e is not None and e.get("sha256") == sha:
+        e = next((src[name] for src in sources
+                  if name in src and src[name].get("sha256") == sha), None)
+        if e is not None:
             out[name] = e
         else:
             todo.append((name, sha))

@@ -33,9 +33,12 @@ from planner_core.bench.records import (
 from planner_core.bench.stats import ALPHA, ScoreTable, score_table
 from planner_core.defaults import SCORE_FACTOR
 
-__all__ = ["DEFAULT_REFERENCE", "build_report", "cost_section", "figures_folder", "imax_section",
-           "imax_table", "order_optimisers", "format_table", "fmt", "study_sections",
-           "suite_folder"]
+__all__ = ["DEFAULT_REFERENCE", "LB_CACHE_FILE", "build_report", "cost_section",
+           "figures_folder", "imax_section", "imax_table", "order_optimisers", "format_table",
+           "fmt", "study_sections", "suite_folder", "suite_of_results"]
+
+#: the lower bounds a report computed, in the benchmark folder (`build_report`)
+LB_CACHE_FILE = "lower_bounds.json"
 
 #: start modes in the report's order, and what each means
 INIT_ORDER = ("uniform", "seeded")
@@ -190,6 +193,7 @@ def build_report(
     imax: str | Path | None = None,
     ablations: str | Path | None = None,
     log: Callable[[str], None] | None = None,
+    update_lower_bounds: bool = False,
 ) -> Path:
     """Write the markdown report of `results_dir` to `output` (figures beside it); return it.
 
@@ -225,6 +229,12 @@ def build_report(
             folder's and the studies') whose lines were not all read: a cut last line, an
             unreadable line, a duplicate run; their runs are left out of the report, which
             says so too.
+        update_lower_bounds: where the limits section stores the lower bounds it computes
+            (a map the cache beside the suite lacks, or whose file changed): False (default)
+            in `results_dir`/lower_bounds.json (`LB_CACHE_FILE`), read back by the next
+            report of the folder, so a report writes nothing beside the suite (a suite in a
+            checkout stays clean); True in the cache beside the suite
+            (`planner_core.bench.limits.lower_bounds_path`), as `report --update-lower-bounds`.
 
     Returns:
         `output`.
@@ -307,9 +317,13 @@ def build_report(
         f"- Marks: Wilcoxon rank-sum test (`scipy.stats.ranksums`, two-sided, alpha {alpha}) of "
         f"each optimiser against the reference **{reference}**: `+` the reference is "
         "significantly better, `-` significantly worse, `~` no significant difference.",
-        "- Our DE variants report the raw DE result (no hover-time polish), so the comparison "
-        "is on the optimiser alone.",
+        *(["- Our DE variants report the raw DE result (no hover-time polish), so the "
+           "comparison is on the optimiser alone."]
+          if any(_raw_de(o, meta) for o in opts) else []),
         _safety_line(suite_dir, tasks),
+        *(["- Wall times exclude compiling: each worker process compiles (or loads from "
+           "numba's disk cache) the kernels its optimisers run before its first timed run."]
+          if meta.get("wall_excludes_compile") else []),
         "",
         "| Optimiser | What it is |",
         "|---|---|",
@@ -338,7 +352,9 @@ def build_report(
         L += ["", f"## Protocol: init {mode}", "", INIT_TEXT[mode]]
         L += _protocol_body(recs, opts, reference, alpha, suite_dir, maps, limits, figures,
                             output, path_tasks, budget, mode, suffix="" if len(modes) == 1
-                            else f"_{mode}", shown=shown)
+                            else f"_{mode}", shown=shown,
+                            lb_cache=None if update_lower_bounds
+                            else results_dir / LB_CACHE_FILE)
     study = [r for r in records if r.get("i_max") is not None]
     if study:
         L += imax_section(study, figures / "imax_feasible_rate.png", output,
@@ -356,6 +372,22 @@ def build_report(
 #: over when the report is rebuilt over it, placed after the commands
 KEEP_START = "<!-- hand-written: kept when this report is rebuilt -->"
 KEEP_END = "<!-- end of the hand-written part -->"
+
+
+#: the target of our DE run alone (`planner_core.bench.baselines.de.optimise`: no polish)
+_RAW_DE = "planner_core.bench.baselines.de:optimise"
+
+
+def _raw_de(name: str, meta: dict[str, Any]) -> bool:
+    """Whether optimiser `name` is one of our DE variants, which report the raw DE result: a
+    registry entry or an entry of meta.json's `optimisers` (the ablation variants) whose target
+    is `_RAW_DE` (`planner`, `engineering` and the rest polish; a MetaBox agent is not ours)."""
+    from planner_core.bench.baselines import REGISTRY
+
+    if name in REGISTRY:
+        return REGISTRY[name].target == _RAW_DE
+    entry = meta.get("optimisers", {}).get(name, {})
+    return isinstance(entry, dict) and entry.get("target") == _RAW_DE
 
 
 def kept_notes(output: str | Path) -> list[str]:
@@ -389,11 +421,12 @@ def kept_notes(output: str | Path) -> list[str]:
 def _protocol_body(records: list[dict[str, Any]], opts_all: list[str], reference: str,
                    alpha: float, suite_dir: Path | None, maps: dict[str, Any], limits: bool,
                    figures: Path, output: Path, path_tasks: Sequence[str] | None, budget: int,
-                   mode: str, suffix: str, shown: Path | None = None) -> list[str]:
+                   mode: str, suffix: str, shown: Path | None = None,
+                   lb_cache: Path | None = None) -> list[str]:
     """The tables and figures of one protocol (start mode `mode`): score table, per
     optimiser, feasibility, limits, scores per task, convergence, best paths. Figure names
     carry `suffix`; the suite is read from `suite_dir` and named `shown` (default: the
-    same)."""
+    same); computed lower bounds go to `lb_cache` (None: the cache beside the suite)."""
     tasks = sorted({r["task"] for r in records})
     present = {r["optimiser"] for r in records}
     opts = [o for o in opts_all if o in present]
@@ -430,7 +463,8 @@ def _protocol_body(records: list[dict[str, Any]], opts_all: list[str], reference
         L.append(f"| {t} | " + " | ".join(row) + " |")
 
     if limits:
-        L += _limits_section(tasks, opts, by, suite_dir, suite_dir if shown is None else shown)
+        L += _limits_section(tasks, opts, by, suite_dir, suite_dir if shown is None else shown,
+                             lb_cache)
 
     # ---- figures
     from planner_core.bench import figures as F
@@ -789,6 +823,27 @@ def suite_folder(meta: dict[str, Any], results_dir: str | Path) -> Path | None:
     return next((p for p in tries if p.is_dir()), given)
 
 
+def suite_of_results(results: str | Path) -> Path | None:
+    """The suite folder a results file's runs were made on: its folder's meta.json, found from
+    here (`suite_folder`); for the analysis scripts (`benchmarks/search_table.py`,
+    `benchmarks/compare_runs.py`), which take a results file rather than its folder.
+
+    Args:
+        results: a `results.jsonl` (or `.jsonl.gz`, or a copy under another name) of `bench`.
+
+    Returns:
+        The suite folder when a meta.json beside the file records one that is a folder here;
+        None otherwise (no meta.json, no suite recorded, or the folder not found).
+
+    Raises:
+        ValueError: an unreadable or malformed meta.json (`read_meta`, naming the file).
+    """
+    folder = Path(results).parent
+    meta = read_meta(folder)
+    found = suite_folder(meta, folder)
+    return found if found is not None and found.is_dir() else None
+
+
 def _known_entries(suite_dir: Path | None, maps: dict[str, Any]) -> dict[str, dict[str, Any]]:
     """Best-known entries of these tasks that match the current map files."""
     if suite_dir is None or not suite_dir.is_dir():
@@ -840,16 +895,25 @@ def _safety_line(suite_dir: Path | None, tasks: Sequence[str]) -> str:
 
 
 def _limits_section(tasks: list[str], opts: list[str], by: Any,
-                    suite_dir: Path | None, shown: Path | None) -> list[str]:
-    """The section against LB and best-known, read from `suite_dir`, which it names `shown`."""
-    from planner_core.bench.limits import BestKnown, best_known_path, lower_bounds
+                    suite_dir: Path | None, shown: Path | None,
+                    lb_cache: Path | None = None) -> list[str]:
+    """The section against LB and best-known, read from `suite_dir`, which it names `shown`;
+    lower bounds read from the cache beside the suite and `lb_cache`, computed ones stored in
+    `lb_cache` (None: in the cache beside the suite)."""
+    from planner_core.bench.limits import (
+        BestKnown,
+        best_known_path,
+        lower_bounds,
+        lower_bounds_path,
+    )
 
     if suite_dir is None or not suite_dir.is_dir():
         return ["", "### Against the limits", "", f"(suite folder {shown} not found)"]
     from planner_core.bench.limits import suite_task_files
 
     files = {t: p for t, p in suite_task_files(suite_dir).items() if t in tasks}
-    lbs = lower_bounds(suite_dir, list(files))
+    lbs = lower_bounds(suite_dir, list(files), cache=lb_cache,
+                       also_read=() if lb_cache is None else (lower_bounds_path(suite_dir),))
     bk_all = BestKnown(best_known_path(suite_dir))
     bk_f = bk_all.f_values(files)
     bk_entries = bk_all.load()

@@ -134,7 +134,13 @@ def hover_lower_bound(
     cap = m.max_hover_points * m.spec.uav.max_hover_time
     T = cp.Variable(n)
     prob = cp.Problem(cp.Minimize(cp.sum(T)), [A @ T >= 1.0, T >= 0, T <= cap, cp.sum(T) <= cap])
-    prob.solve(solver="HIGHS" if "HIGHS" in cp.installed_solvers() else None)
+    if "HIGHS" in cp.installed_solvers():
+        from planner_core.model.hoverlp import quiet_highs
+
+        quiet_highs()  # else cvxpy's HiGHS prints highspy's banner on stdout (`report`'s)
+        prob.solve(solver="HIGHS")
+    else:
+        prob.solve()
     if prob.status not in ("optimal", "optimal_inaccurate"):
         return math.inf, n, side, str(prob.status)
     # the solver's optimum can sit a hair above the exact LP value; step down by its tolerance

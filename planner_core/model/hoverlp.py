@@ -20,7 +20,8 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-__all__ = ["BLOCK_COMBOS", "BLOCK_VERTICES", "TARGET", "hover_lp", "hover_lp_sparse", "top_up"]
+__all__ = ["BLOCK_COMBOS", "BLOCK_VERTICES", "TARGET", "hover_lp", "hover_lp_sparse",
+           "quiet_highs", "top_up"]
 
 #: the coverage rows' right-hand side (each sensor's data scaled to 1): a hair above the
 #: requirement, so solver tolerance cannot leave a tiny shortfall
@@ -56,6 +57,15 @@ def _highs() -> Any:
         h.setOptionValue("output_flag", False)
         _HIGHS.solver = h
     return h
+
+
+def quiet_highs() -> None:
+    """Make this process's first HiGHS solver the quiet one (`_highs`), so that a solver made
+    later by another interface (cvxpy's HIGHS, which `planner_core.model.bounds` uses) prints no
+    banner ("Running HiGHS ... Copyright"): highspy prints it when a process constructs its
+    first solver. Costs one solver's construction, once per thread.
+    """
+    _highs()
 
 
 #: blocks of the hover-time LP with at most this many points, and at most `BLOCK_COMBOS` sets

@@ -149,6 +149,8 @@ class Problem:
         return overlap_lengths(a, b, self.obstacles)
 
     def _evaluate_parts(self, X: np.ndarray) -> dict[str, np.ndarray]:
+        """Every term of `evaluate`, the readable numpy way, for (n, dim) X; a row with a
+        non-finite entry gets f = phi = inf (`evaluate`), its other terms as computed (NaN)."""
         X = np.atleast_2d(X)
         pts, times, active = self._split(X)
         a, b = self._legs(pts, active)
@@ -174,6 +176,10 @@ class Problem:
         v4 = v4_each.sum(axis=1)
         v6 = self._excess_hover(X)
         phi = v3 + v4 + v5 + v6
+        bad = ~np.isfinite(X).all(axis=1)
+        if bad.any():  # not a plan: never feasible (`evaluate`)
+            f = np.where(bad, np.inf, f)
+            phi = np.where(bad, np.inf, phi)
         return {
             "f": f, "phi": phi, "t_fly": t_fly, "t_hover": t_hover, "l_vio": l_vio,
             "v3": v3, "v4": v4, "v5": v5, "v6": v6, "v3_each": v3_each, "v4_each": v4_each,
@@ -186,13 +192,20 @@ class Problem:
 
         The compiled fast path (`planner_core.model.kernels`, then the obstacle kernel on all
         n (I_max + 1) legs in one batch); `_evaluate_parts` is its numpy twin. Cost: O(n I_max
-        x sensors in range) for the terms plus the legs' obstacle tests.
+        x sensors in range) for the terms plus the legs' obstacle tests, and one O(n dim)
+        finiteness check.
+
+        A row with a non-finite entry (NaN, +-inf: an optimiser's arithmetic gone wrong) is
+        not a plan: its f and phi are inf, so it is never feasible and loses to every plan under
+        Deb's rule and the penalised score (NaN gave f = nan, phi = 0: "feasible"); the kernels
+        see the lower bound in its place, never a NaN. `breakdown` says the same.
 
         Args:
             X: (n, dim) decision vectors, or one (dim,) vector (read as n = 1).
 
         Returns:
-            (f (n,) s, phi (n,) >= 0: v3 + v4 + v5, plus v6 with corner slots).
+            (f (n,) s, phi (n,) >= 0: v3 + v4 + v5, plus v6 with corner slots; both inf for a
+            row with a non-finite entry).
 
         Raises:
             ValueError: X not of shape (n, dim).
@@ -200,6 +213,12 @@ class Problem:
         X = np.ascontiguousarray(np.atleast_2d(X), dtype=float)
         if X.ndim != 2 or X.shape[1] != self.dim:
             raise ValueError(f"X: expected shape (n, {self.dim}), got {X.shape}")
+        bad = None
+        if not np.isfinite(X.sum()):  # a finite sum: every entry finite (one pass, no mask)
+            finite = np.isfinite(X).all(axis=1)  # or finite entries whose sum overflowed
+            if not finite.all():  # the kernels get a plan in the box; the rows set below
+                bad = ~finite
+                X = np.where(bad[:, None], self.lower, X)
         n = X.shape[0]
         legs = self.n_points + 1
         A = np.empty((n, legs, 2))
@@ -216,9 +235,13 @@ class Problem:
         # the legs as one (n (I_max + 1), 2) batch: the kernel's fast call, no broadcasting
         l_vio = self._overlap(A.reshape(-1, 2), B.reshape(-1, 2)).reshape(n, legs).sum(axis=1)
         v5 = collision_penalty(l_vio, self.mu, self.nu)
+        phi = v3 + v4 + v5
         if self.corner_slots:
-            return f, v3 + v4 + v5 + self._excess_hover(X)
-        return f, v3 + v4 + v5
+            phi = phi + self._excess_hover(X)
+        if bad is not None:
+            f[bad] = np.inf
+            phi[bad] = np.inf
+        return f, phi
 
     def breakdown(self, x: np.ndarray) -> dict[str, Any]:
         """Every term of the model for one solution, as plain Python values (JSON-ready).
@@ -230,7 +253,8 @@ class Problem:
             f, phi, score, t_fly, t_hover (s), l_vio (m), v3, v4, v5, n_hover, the active
             hover points (m) and times (s), leg times (s) and lengths (m), v3 per point, and
             per sensor id the data collected, required and short (Mbit); with corner slots
-            also v6 and n_corner (active points of 0 s).
+            also v6 and n_corner (active points of 0 s). A vector with a non-finite entry has
+            f = phi = score = inf, as `evaluate` gives it (its other terms may be NaN).
         """
         p = self._evaluate_parts(np.asarray(x, dtype=float)[None, :])
         act = p["active"][0]
