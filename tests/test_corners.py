@@ -250,14 +250,33 @@ def test_planning_with_corner_slots_keeps_imax_hover_points(tmp_path: Path):
     assert verify(replay(items, lim), lim).passed
 
 
+def _on_the_boundary(m, points, times) -> SimpleNamespace:
+    """The plan (points, times scaled) whose tightest sensor collects 1 - 5e-7 of its
+    requirement as planned: short by less than `storage.PLANNED_SHORT`, so storing it (float32
+    times, px4) leaves a shortfall that storage must make up, as it does for the planner's
+    LP plans on a constraint's boundary (a plan short by more is written as it is)."""
+    from lamde_mission.storage import _grid_point
+
+    # the points on the 1e-7 degree grid already: storing moves none (a move of a few mm
+    # changes a point's rates by ~1e-5, more than the shortfall made here), so the float32
+    # times alone leave the tightest sensor short
+    points = np.array([_grid_point(m, np.asarray(q, dtype=float)) for q in points])
+    plan = SimpleNamespace(hover_points=points, hover_times=np.asarray(times, dtype=float))
+    got = replay(plan_to_items(plan, m), m).collected
+    need = np.asarray(m.planning_map().required_data, dtype=float)
+    scale = float(np.max(need[need > 0] / got[need > 0])) * (1.0 - 5e-7)
+    return SimpleNamespace(hover_points=points, hover_times=plan.hover_times * scale)
+
+
 def test_storage_raises_hover_times_beside_a_corner(m):
     """The storage step raises short hover times where the replay's hover points (the corner is
     not one) are fewer than the plan's points: rows stay aligned (it failed with a shape error
     on T16 at 3,000 evaluations)."""
-    short = SimpleNamespace(hover_points=PLAN.hover_points, hover_times=[1.0, 0.0, 1.0])
-    stored = storable_plan(short, m, "generic", planning_map=m.planning_map())
-    assert stored.hover_times[1] == 0.0 and np.all(stored.hover_times[[0, 2]] > 1.0)
-    items = plan_to_items(stored, m)
+    short = _on_the_boundary(m, PLAN.hover_points, [1.0, 0.0, 1.0])
+    stored = storable_plan(short, m, "px4", planning_map=m.planning_map())
+    assert stored.hover_times[1] == 0.0
+    assert np.any(stored.hover_times[[0, 2]] > short.hover_times[[0, 2]] * (1 + 2e-7))
+    items = stored_items(plan_to_items(stored, m), "px4")
     assert verify(replay(items, m), m).passed
 
 
@@ -289,11 +308,12 @@ def test_storage_never_raises_a_point_that_would_break_c3():
     rates = hover_rates(np.array([[1000.0, 1000.0], [1000.0, 1500.0]]), np.array([100.0, 100.0]),
                         np.asarray(fm.sensors, dtype=float), radio.peak_rate, radio.decay)
     assert rates[0].sum() > radio.bandwidth >= rates[1].sum()
-    # 41 s at the hover point leaves c and d short (200 Mbit at 4.87 Mbit/s needs 41.07 s)
-    short = SimpleNamespace(hover_points=[[1000, 1000], [1000, 1500]], hover_times=[0.0, 41.0])
-    stored = storable_plan(short, fm, "generic", planning_map=fm.planning_map())
-    assert stored.hover_times[0] == 0.0 and stored.hover_times[1] > 41.0
-    v = verify(replay(plan_to_items(stored, fm), fm), fm)
+    # the hover point on the boundary of c's and d's data (200 Mbit at 4.87 Mbit/s: 41.07 s)
+    short = _on_the_boundary(fm, [[1000, 1000], [1000, 1500]], [0.0, 41.0])
+    stored = storable_plan(short, fm, "px4", planning_map=fm.planning_map())
+    assert stored.hover_times[0] == 0.0  # the corner keeps C3: not raised
+    assert stored.hover_times[1] > short.hover_times[1] * (1 + 2e-7)  # raised, not rounded
+    v = verify(replay(stored_items(plan_to_items(stored, fm), "px4"), fm), fm)
     assert v.passed, v.failed
 
 
@@ -303,9 +323,10 @@ def test_storage_in_scheduled_access_keeps_the_dense_point():
     (800 Mbit at 25 Mbit/s takes 32 s), and the stored plan serves it and passes the sim's
     allocation check."""
     fm = load_map({**DENSE_FIELD, "name": "field-scheduled", "radio": {"access": "scheduled"}})
-    plan = SimpleNamespace(hover_points=[[1000, 1000]], hover_times=[31.0])
-    stored = storable_plan(plan, fm, "generic", planning_map=fm.planning_map())
+    plan = _on_the_boundary(fm, [[1000, 1000]], [31.0])  # 800 Mbit at 25 Mbit/s: 32 s
+    assert 31.9 < plan.hover_times[0] < 32.0
+    stored = storable_plan(plan, fm, "px4", planning_map=fm.planning_map())
     assert np.hypot(*(stored.hover_points[0] - [1000.0, 1000.0])) < 0.05
-    assert stored.hover_times[0] >= 32.0
-    v = verify(replay(plan_to_items(stored, fm), fm), fm)
+    assert stored.hover_times[0] > plan.hover_times[0] * (1 + 2e-7)  # raised, not rounded
+    v = verify(replay(stored_items(plan_to_items(stored, fm), "px4"), fm), fm)
     assert v.passed, v.failed
