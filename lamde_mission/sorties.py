@@ -807,8 +807,9 @@ def verify_sortie_dir(m: Any, path: str | Path,
     given = [(veh.vehicle, s.sortie, s.takeoff_s) for veh in fleet.vehicles for s in veh.sorties]
     places = [((s.takeoff_at, s.takeoff_offset), (s.landing_at, s.landing_offset))
               for veh in fleet.vehicles for s in veh.sorties]
-    check = replace(check, fleet=(*check.fleet, _times_verdict(
-        given, check.takeoffs(), fleet.swap_s, float(m.swap_s)), _places_verdict(
+    times = (_times_verdict(given, check.takeoffs(), fleet.swap_s, float(m.swap_s))
+             if not speed_limits else _times_at_limits(given, check.takeoffs()))
+    check = replace(check, fleet=(*check.fleet, times, _places_verdict(
         m, check, places, fleet.depots)))
     notes = [n for n in (_far_note(m, check), fleet.map_note(m.name, "verified"),
                          _pads_note(m, check)) if n]  # fmt: skip
@@ -943,6 +944,24 @@ def _pads_note(m: Any, check: FleetCheck) -> str | None:
 #: s: a fleet.json take-off time this far from the plan's clock is another time (rounding of
 #: the JSON figures is far below it)
 TAKEOFF_TOL_S = 0.5
+
+
+def _times_at_limits(given: list[tuple[int, int, float | None]], clock: list[float]) -> Any:
+    """TIMES when the directory is judged at the vehicles' speed limits (`upload --fleet --map`
+    below the planned speed): fleet.json's times are the planned speeds', so a slower vehicle's
+    later take-offs move by design; the verdict holds and says by how much (the times
+    themselves are judged at the planned speeds, `verify MAP DIR/` and upload's first check).
+    A reviewer's two-sortie vehicle at PX4's default 12 m/s failed TIMES on every upload."""
+    from sim.checks import Verdict
+
+    moved = [(v, k, t, c) for (v, k, t), c in zip(given, clock, strict=True)
+             if t is not None and abs(t - c) > TAKEOFF_TOL_S]
+    detail = ("no take-off moves at these speeds" if not moved else
+              f"at these speeds vehicle {moved[0][0]} sortie {moved[0][1]} takes off at "
+              f"{moved[0][3]:.1f} s, not fleet.json's {moved[0][2]:g} s (planned speeds)"
+              + (f"; {len(moved)} take-offs move" if len(moved) > 1 else ""))
+    return Verdict("TIMES", "take-off times at the vehicles' speed limits", True, 0.0, "s",
+                   detail)
 
 
 def _times_verdict(given: list[tuple[int, int, float | None]], clock: list[float],

@@ -18,6 +18,7 @@ from tests.vehicle_helpers import free_udp_port
 from tests.vehicle_helpers import no_leftover_mock_threads as _leftover  # noqa: F401 (autouse)
 
 DEMO = MAPS / "small-demo.json"
+DEMO_FLEET = MAPS / "fleet-demo.json"
 
 
 @pytest.fixture(scope="module")
@@ -318,3 +319,32 @@ def test_autopilot_px4_on_an_ardupilot_vehicle_says_so_and_reads_no_px4_paramete
         "not read" in said
     assert "did not say its MPC_XY_VEL_MAX" not in said
     assert "read-back differs from what was sent" in said
+
+
+def test_a_vehicles_later_take_offs_move_at_its_limit_and_times_holds(tmp_path) -> None:
+    """A reviewer: `upload DIR/ --fleet --map MAP` refused every vehicle of two sorties at
+    PX4's default 12 m/s, whatever else held: at the limit sortie 2 takes off later than
+    fleet.json's planned-speed time, and TIMES failed. Judged at the vehicles' limits TIMES
+    holds and says how far the take-off moves (fleet.json's times are judged at the planned
+    speeds); here a battery large enough for 12 m/s, so every check holds."""
+    import json
+
+    from lamde_mission.sorties import verify_sortie_dir
+    from planner_core.model.mapio import load_map
+    from tests.conftest import run_cli
+
+    out = tmp_path / "demo"
+    r = run_cli("plan", DEMO_FLEET, "-o", out, "--budget", 600, "--sortie-budget", 300,
+                "--rounds", 0, "--quiet")
+    assert r.returncode == 0, r.stderr
+    fleet = json.loads((out / "fleet.json").read_text())
+    assert len(fleet["vehicles"][0]["sorties"]) >= 2
+    big = json.loads(DEMO_FLEET.read_text())
+    big["uav"]["endurance_s"] = 600.0
+    m = load_map(big)
+    assert verify_sortie_dir(m, out).passed
+    slow = verify_sortie_dir(m, out, {1: 12.0})
+    assert slow.passed, slow.failed()
+    (times,) = [v for v in slow.fleet if v.name == "TIMES"]
+    assert times.passed and "sortie 2 takes off at" in times.detail, times.detail
+    assert "(planned speeds)" in times.detail
