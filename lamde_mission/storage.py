@@ -365,7 +365,7 @@ def _checked_plan(plan: Any) -> tuple[np.ndarray, np.ndarray]:
     if len(ht) != len(hp):
         raise ValueError(f"hover_times: {len(ht)} times for {len(hp)} hover points")
     for name, a in (("hover_points", hp), ("hover_times", ht)):
-        bad = np.flatnonzero(~np.isfinite(a.reshape(len(a), -1)).all(axis=1))
+        bad = np.flatnonzero(~np.isfinite(a.reshape(len(a), -1)).all(axis=1)) if len(a) else []
         if len(bad):
             raise ValueError(f"{name}[{int(bad[0])}]: {a[bad[0]]} is not a finite number")
     neg = np.flatnonzero(ht < 0.0)

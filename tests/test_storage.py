@@ -264,6 +264,16 @@ def test_a_plan_short_as_planned_is_written_short_not_repaired(tmp_path):
     assert "C2" in verify(replay(items, m), m).failed
 
 
+def test_a_plan_without_hover_points_is_written_for_verify_to_judge(tmp_path):
+    """A (0, 2) plan is a valid shape: written as take-off, speed and landing (a reviewer got
+    numpy's 'cannot reshape array of size 0'), and verify fails C4."""
+    m = load_map(CASE_TINY)
+    out = write_mission(tmp_path / "empty.plan", _Plan(np.zeros((0, 2)), np.zeros(0)), m)
+    items, _ = read_mission(out)
+    assert not any(it.command == CMD.LOITER_TIME for it in items)
+    assert "C4" in verify(replay(items, m), m).failed
+
+
 @pytest.mark.parametrize(("points", "times", "needle"), [
     ([[300.0, 700.0]], [-5.0], r"hover_times\[0\]: -5 s is negative"),
     ([[300.0, 700.0]], [float("nan")], r"hover_times\[0\]: nan is not a finite number"),
