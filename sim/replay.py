@@ -231,7 +231,8 @@ def far_from_area(route: Route, map: Any) -> str | None:  # noqa: A002
     where = (f" (origin lat {float(origin.lat):.6g}, lon {float(origin.lon):.6g})"
              if origin is not None else "")  # fmt: skip
     return (f"the mission lies {d / 1000:,.1f} km from this map's area{where}: the wrong map, "
-            "or another origin?")
+            "or another origin? (the figures below are measured that far away, on a projection "
+            "made for this map: they mean nothing)")
 
 
 @dataclass(frozen=True)

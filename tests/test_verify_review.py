@@ -178,7 +178,8 @@ def test_a_mission_far_from_the_maps_area_says_so_first(m, tmp_path, capsys):
     tl = replay(items, mf)
     assert tl.notes[0].startswith("the mission lies 10") and tl.notes[0].endswith(
         " km from this map's area (origin lat 47.2, lon 7.3): the wrong map, or another "
-        "origin?"), tl.notes
+        "origin? (the figures below are measured that far away, on a projection made for this "
+        "map: they mean nothing)"), tl.notes
     v = verify(tl, mf)
     assert "C1" in v.failed and "ENDS" in v.failed  # the verdicts are kept
     assert not any("km from this map" in n for n in replay(items, m).notes)
