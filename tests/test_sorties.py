@@ -700,7 +700,8 @@ def test_the_sortie_planner_says_what_it_does_next(tmp_path: Path) -> None:
                           "cutting it into sorties (route first, cluster second)",
                           "cluster first (pipeline runs of 300 evaluations)"]
     assert phases[3].startswith("round 1 of at most 1 (objective ")
-    assert phases[-1] == "each vehicle's sorties flown from its pads"
+    assert phases[-2] == "each vehicle's sorties flown from its pads"
+    assert phases[-1].startswith("done: objective ") and "simulator's" in phases[-1]
     assert [line.split(" (")[0] for line, step in said if step] == [
         f"round 1: {m}" for m in ("replan", "merge", "eliminate", "transfer", "resplit",
                                   "retour")]

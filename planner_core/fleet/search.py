@@ -965,8 +965,11 @@ def _plan_fleet(m: Any, config: Any, goal: str | None, sortie_budget: int, round
         if not best.objective() < before:
             break
     say("each vehicle's sorties flown from its pads")
+    done = _finish(pl, best, notes)
+    say(f"done: objective {done.objective()[0]:,.1f} from the pads (the summary's figures are "
+        "the simulator's, replayed on the stored missions)")
     return FleetResult(
-        _finish(pl, best, notes),
+        done,
         single if single is not None else (np.zeros((0, 2)), np.zeros(0)),
         peer_plan,
         pl.lps,
