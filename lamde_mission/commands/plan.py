@@ -35,7 +35,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "mission-v{vehicle}-s{sortie}.plan (both 1-based: "
         "mission-v1-s2.plan is vehicle 1's second sortie, each a complete mission from "
         "take-off at its depot to landing at its depot) and fleet.json (per sortie: depots, "
-        "duration, energy, energy left above the reserve, sensors served; per vehicle: "
+        "duration, energy, energy left above the reserve, sensors it takes data from; per vehicle: "
         "makespan).",
     )
     p.add_argument("map", help="map file (JSON)")
@@ -459,7 +459,7 @@ def _sortie_lines(check: Any, m: Any) -> list[str]:
                          f"{pad_words(m, s.depot_end, s.landing_xy)}: take-off "
                          f"+{check.takeoff(v, k + 1):.0f} "
                          f"s, {s.duration_s:8.1f} s, {energy}, "
-                         f"{counted(len(s.sensors), 'sensor')} served")
+                         f"data from {counted(len(s.sensors), 'sensor')}")
         launch = f"launch at +{check.launch(v):.0f} s, " if len(check.launches) > 1 else ""
         lines.append(f"  vehicle {v}: {launch}{counted(len(ss), 'sortie')}, makespan "
                      f"{check.makespan(v):.1f} s")

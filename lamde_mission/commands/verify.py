@@ -136,7 +136,7 @@ def _run_sorties(args: argparse.Namespace, m: Any) -> int:
             print(f"{printable(s.file)}: {pad_words(m, s.depot_start, s.takeoff_xy)} -> "
                   f"{pad_words(m, s.depot_end, s.landing_xy)}, take-off +{at:.0f} s, "
                   f"{s.duration_s:.1f} s{energy}, "
-                  f"{counted(len(s.sensors), 'sensor')} served")
+                  f"data from {counted(len(s.sensors), 'sensor')}")
             print("\n".join("  " + printable(r) for r in vd.table().splitlines()))
             print("  " + printable(_sortie_data(s, m)))
         for v in check.vehicles():
