@@ -32,7 +32,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "vehicles than the map's fleet.uavs) and FILES (no mission file in DIR that "
         "fleet.json does not list). Items are named as they go up to the vehicle: numbered "
         "from 0, a .waypoints file's home line left out, so item N is QGroundControl's item "
-        "N+1 and a .waypoints file's line with seq N+1.",
+        "N+1, a .waypoints file's line with seq N+1 and an ArduPilot vehicle's seq N+1 (its "
+        "seq 0 is home); PX4's seq N.",
     )
     p.add_argument("map", help="map file (JSON)")
     from lamde_mission.commands._common import add_origin_option
