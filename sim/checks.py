@@ -260,7 +260,8 @@ def margin_verdict(collected: np.ndarray, required: np.ndarray, ids: Any, want: 
     j = int(np.argmin(frac))
     m = float(frac[j] - want)
     ok = m >= -REL_TOL * (1.0 + want)
-    detail = f"tightest: sensor '{ids[j]}' {100 * frac[j]:+.4g} % over Q_lambda"
+    side = "over" if frac[j] >= 0 else "below"  # "-80.44 % over" read as a typo
+    detail = f"tightest: sensor '{ids[j]}' {100 * abs(frac[j]):.4g} % {side} Q_lambda"
     return Verdict("MARGIN", title, bool(ok), m, "", detail), frac
 
 
