@@ -211,3 +211,33 @@ def test_the_layout_rule_reads_the_suite_as_documented() -> None:
         s = DefaultScheduler(plan_windows=False)  # the learned schedulers' action space
         s.reset(problem, PlanConfig())
         assert s.large and not s.uniform, task
+
+
+def test_moves_descend_to_coarser_steps_on_clustered_fields_and_corridors(monkeypatch) -> None:
+    """A structural move's descent stops at `FIELD_MIN_STEP` (5 m) on a large problem whose
+    layout is not uniform (L04-L08), at the descent's own 1 cm elsewhere (L01-L03, and the
+    paper's maps: not large), and `_move` hands that step to its descent."""
+    from planner_core.search import structure
+    from planner_core.search.structure import FIELD_MIN_STEP, move_min_step
+
+    for task, uniform in (("L01", True), ("L03", True), ("L04", False), ("L07", False)):
+        problem = Problem(load_map(LARGE / f"{task}.json").planning_map())
+        assert problem.uniform_layout == uniform, task
+        assert move_min_step(problem) == (None if uniform else FIELD_MIN_STEP), task
+    paper = Problem(load_map(SUITE / "T16.json"))
+    assert move_min_step(paper) is None  # 20 hover points at most: not large
+    import lamde_mission
+
+    m = load_map(LARGE / "L04.json")
+    plan = lamde_mission.plan(m, seed=0, budget=1500)  # a feasible plan to move from
+    problem = Problem(m.planning_map())
+    seen: list[object] = []
+
+    def spy(*args, **kw):
+        seen.append(kw.get("min_step"))
+        return None  # as a descent that found nothing: _move keeps the move's own plan
+
+    monkeypatch.setattr(structure, "descend", spy)
+    ev = Evaluator(problem, 100)
+    out = structure._move(problem, np.asarray(plan.hover_points), ev.evaluate, 10)
+    assert out is not None and seen == [FIELD_MIN_STEP]

@@ -5,15 +5,21 @@ measure of spatial relationships in populations", Ecology 35(4), 1954): the sens
 nearest-neighbour distance over 0.5 sqrt(area / J), the mean for J points drawn uniformly
 over the area. About 1 for a uniform layout, below for clustered fields and corridors (the
 large suite: 0.97-1.13 for L01-L03, 0.12-0.20 for L04-L08), above for a regular one. The
-stage scheduler's split table (`planner_core.learning.schedule_select`) and the default
-scheduler's window rule (`planner_core.pipeline.schedule`) read it.
+stage scheduler's split table (`planner_core.learning.schedule_select`), the default
+scheduler's window rule (`planner_core.pipeline.schedule`) and the structural moves' descent
+(`planner_core.search.structure`) read it, through `UNIFORM_LAYOUT` and
+`planner_core.model.problem.Problem.uniform_layout`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["clark_evans"]
+__all__ = ["UNIFORM_LAYOUT", "clark_evans"]
+
+#: a layout whose Clark-Evans ratio is at least this is uniform (the large suite's L01-L03,
+#: 0.97-1.13); below it, clustered fields and corridors (L04-L08, 0.12-0.20)
+UNIFORM_LAYOUT = 0.5
 
 
 def clark_evans(sensors: np.ndarray, area: float) -> float:

@@ -319,6 +319,20 @@ class Problem:
         """
         return Seeder.for_problem(self)
 
+    @cached_property
+    def uniform_layout(self) -> bool:
+        """Whether the sensors lie uniformly over the area: their Clark-Evans ratio
+        (`planner_core.model.layout.clark_evans`) at least `layout.UNIFORM_LAYOUT`; False for
+        clustered fields and corridors. Computed once (O(J log J)) and kept.
+
+        Returns:
+            True for a uniform layout.
+        """
+        from planner_core.model.layout import UNIFORM_LAYOUT, clark_evans
+
+        return bool(clark_evans(self.model.sensors, self.map.width * self.map.height)
+                    >= UNIFORM_LAYOUT)
+
     def _clustered_solution(self, rng: np.random.Generator) -> np.ndarray:
         """One obstacle-aware sensor-serving start (the problem's seeder)."""
         return self.seeder.solution(rng)

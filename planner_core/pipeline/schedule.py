@@ -59,6 +59,7 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 from planner_core.model.formulas import deb_order
+from planner_core.model.layout import UNIFORM_LAYOUT
 from planner_core.pipeline.config import PlanConfig
 from planner_core.pipeline.evaluator import Evaluator
 from planner_core.search.descent import PAPER_POINTS, large_problem
@@ -127,8 +128,8 @@ STALL_ACTIONS = 3
 #: windows only on maps whose sensors' Clark-Evans ratio (`planner_core.model.layout`) is at
 #: least this: uniform layouts (L01-L03 0.97-1.13); on clustered fields and corridors (L04-L08
 #: 0.12-0.20) windows were worse than the rounds they replaced (docs/scaling.md, "Windows
-#: planned again")
-WINDOWS_LAYOUT = 0.5
+#: planned again"); `Problem.uniform_layout` reads it
+WINDOWS_LAYOUT = UNIFORM_LAYOUT
 #: windows tried in a row by one `windows` action while none spends an evaluation
 WINDOW_TRIES = 8
 
@@ -341,12 +342,9 @@ class DefaultScheduler:
             problem: the run's `Problem` (its sensors and map).
             config: the run's `PlanConfig` (unused).
         """
-        from planner_core.model.layout import clark_evans
-
         self.large = large_rounds(problem)
         self.windows = False
-        self.uniform = self.plan_windows and self.large and clark_evans(
-            problem.model.sensors, problem.map.width * problem.map.height) >= WINDOWS_LAYOUT
+        self.uniform = self.plan_windows and self.large and problem.uniform_layout
 
     def choose(self, observation: Observation) -> str:
         """The next action (see the class docstring).

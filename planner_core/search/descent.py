@@ -339,7 +339,7 @@ def descend(
     *,
     trials: int,
     step: float = STEP,
-    min_step: float = MIN_STEP,
+    min_step: float | None = None,
     race: tuple[int, float] | None = None,
     steps: str | None = None,
 ) -> Descent | None:
@@ -356,7 +356,7 @@ def descend(
         evaluate: the caller's counted evaluation, X (n, d) -> (f, phi).
         trials: the most evaluations.
         step: the first step, m (the largest point move of the first trial).
-        min_step: the descent stops when the step falls below this, m.
+        min_step: the descent stops when the step falls below this, m (None: `MIN_STEP`).
         race: (n, limit): once n evaluations are spent the descent stops unless its best f
             is <= limit (checked once; `_move`'s race); None: no race.
         steps: the step rule, `GLOBAL` or `PER_POINT` (module docstring; `step` m is then
@@ -370,6 +370,8 @@ def descend(
     Raises:
         ValueError: another `steps`.
     """
+    if min_step is None:
+        min_step = MIN_STEP
     if steps is None:
         steps = PER_POINT if large_problem(problem) else GLOBAL
     if steps not in STEP_RULES:
