@@ -316,3 +316,15 @@ def test_the_window_run_table_is_what_its_runs_give_against_the_sweep_share() ->
     _table_against_before("**A window's run without seeder plans**",
                           "large-suite-25-window-run.jsonl.gz", "large-suite-25-sweep.jsonl.gz", 3)
 
+
+
+def test_the_field_step_table_is_what_its_runs_give_against_the_runs_before() -> None:
+    """docs/scaling.md, 'Coarser steps for the moves': L04-L08 (the layouts that are not
+    uniform, where a move's descent stops at 5 m), paired run by run with each map's runs of
+    the default before (L04, L07 at the DE's share 0.2; L05, L06, L08 at the share 0)."""
+    _table_against_before("## Coarser steps for the moves", "large-suite-25-fieldstep.jsonl.gz",
+                          {"L04": "large-suite-25-share02.jsonl.gz",
+                           "L05": "large-suite-25-share0.jsonl.gz",
+                           "L06": "large-suite-25-share0.jsonl.gz",
+                           "L07": "large-suite-25-share02.jsonl.gz",
+                           "L08": "large-suite-25-share0.jsonl.gz"}, 5)
