@@ -25,18 +25,12 @@ from planner_core.model.mapio import load_map
 from planner_core.model.problem import Problem
 from sim import replay, verify
 from sim.checks import NAMED_OFFENDERS
+from tests.test_sim import MAP as SIM_MAP
 
-MAP = {
+MAP = {  # test_sim's map (its area, ends and sensors) with two named buildings
+    **SIM_MAP,
     "name": "review",
     "origin": {"lat": 46.2, "lon": 7.3, "alt": 0.0},
-    "area": {"width": 2000, "height": 2000},
-    "start": [0, 0],
-    "end": [1900, 1800],
-    "sensors": [
-        {"id": "a", "x": 300, "y": 100},
-        {"id": "b", "x": 1000, "y": 1000, "required_data": 150},
-        {"id": "c", "x": 1700, "y": 1500},
-    ],
     "obstacles": {
         "polygons": [
             {"name": "court", "vertices": [[100, 500], [400, 500], [400, 800], [100, 800]]},
