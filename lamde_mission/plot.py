@@ -1226,11 +1226,18 @@ def _data_panel(ax: Any, timeline: Any, map_: Any, number: Any = None) -> None:
             if x - last >= gap or k == 0:
                 ax.text(x, 3.0, label, fontsize=7, ha="center", color="saddlebrown")
                 last = x
-    ax.set_xlim(t[0], t[-1] + 0.1 * max(t[-1] - t[0], 1e-9))
+    # room at the right for the end labels: a tenth of the axis, or what the longest label
+    # takes on a narrow figure (a tall map's: "S3 104 %" ran over the frame)
+    total = max(float(t[-1] - t[0]), 1e-9)
+    width_in = max(ax.figure.get_size_inches()[0] - 1.6, 1.0)
+    label_in = max((len(f"{ids[j]} {final[j]:.0f} %") for j in named), default=0) \
+        * 7.5 * 0.6 / 72.0 + 0.05
+    room = min(label_in / width_in, 0.5)  # the labels' share of the axis, at most half
+    ax.set_xlim(t[0], t[0] + max(1.1 * total, 1.01 * total / (1.0 - room)))
     ax.set_ylim(0, max(top, max(ys.values(), default=0.0) + 0.05 * top))
     ax.set_xlabel("mission time (s)")
     ax.set_ylabel("collected / required (%)")
-    ax.set_title(title, fontsize=9, wrap=True)  # wrapped on a narrow figure (a tall map)
+    ax.set_title(_fitted(ax, title, 9.0), fontsize=9)
 
 
 def _bars_panel(ax: Any, timeline: Any, map_: Any) -> None:
@@ -1264,7 +1271,18 @@ def _bars_panel(ax: Any, timeline: Any, map_: Any) -> None:
         r = final[rest]
         title += (f"; {len(rest)} more: min {r.min():.0f} %, median {np.median(r):.0f} %, "
                   f"max {r.max():.0f} %")  # fmt: skip
-    ax.set_title(title, fontsize=9, wrap=True)  # wrapped on a narrow figure (a tall map)
+    ax.set_title(_fitted(ax, title, 9.0), fontsize=9)
+
+
+def _fitted(ax: Any, text: str, fontsize: float) -> str:
+    """`text` with each of its lines wrapped to the figure's width (an estimate: 0.55 em a
+    character), so that a narrow figure's (a tall map's) panel titles stay inside it; explicit
+    line breaks, which the layout makes room for (matplotlib's own wrap is done at draw time,
+    after the layout, and the wrapped lines ran into the panel above)."""
+    import textwrap
+
+    chars = max(int(ax.figure.get_size_inches()[0] * 72.0 / (0.55 * fontsize)), 20)
+    return "\n".join(textwrap.fill(line, chars) for line in text.split("\n"))
 
 
 def check_dpi(dpi: Any, name: str = "dpi") -> int:

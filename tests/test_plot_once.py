@@ -241,9 +241,10 @@ def test_a_save_draws_the_figure_once_and_svg_stays_deterministic(monkeypatch, f
 
 def test_the_legend_and_titles_stay_inside_a_narrow_figure() -> None:
     """On a tall, narrow map (1.4 x 5 km) four legend columns ran past both edges of the
-    figure, and so did the note of labels left out and the panels' titles: the legend takes
-    fewer columns until it fits and keeps every entry, the note a line per clause, the titles
-    wrap."""
+    figure, and so did the note of labels left out, the panels' titles and the data panel's
+    end labels: the legend takes fewer columns until it fits and keeps every entry, the note a
+    line per clause, the titles wrap before the layout (into the room it gives them), and the
+    data panel leaves room at its right for its labels."""
     m, tl = _dense(tall=True)
     fig = plot.mission_figure(m, timeline=tl)
     fig.canvas.draw()
@@ -255,3 +256,10 @@ def test_the_legend_and_titles_stay_inside_a_narrow_figure() -> None:
     for ax in fig.axes[1:3]:
         title = ax.title.get_window_extent(r)
         assert title.x0 >= 0.0 and title.x1 <= fig.bbox.width, (ax.get_title(), title.bounds)
+        # a wrapped title takes room from the layout, not from the panel above it
+        above = fig.axes[fig.axes.index(ax) - 1].get_tightbbox(r)
+        assert title.y1 <= above.y0 + 1.0, (ax.get_title(), title.bounds, above.bounds)
+    # the data panel's end labels ("S24 679 %") stay inside its frame
+    frame = fig.axes[1].get_window_extent(r)
+    ends = [a for a in fig.axes[1].texts if isinstance(a, Annotation) and "%" in a.get_text()]
+    assert ends and all(a.get_window_extent(r).x1 <= frame.x1 + 1.0 for a in ends)
