@@ -139,5 +139,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(str(exc)) from None
     for note in notes:  # as `bench` says them when it resumes the folder
         print(note, file=sys.stderr)
-    print(f"report: wrote {out}")
+    pngs = figures_folder(args.output, args.figures)
+    drawn = len(list(pngs.glob("*.png"))) if pngs.is_dir() else 0
+    print(f"report: wrote {out}" + (f" and {drawn} figures in {pngs}/" if drawn else ""))
     return 0
