@@ -38,7 +38,7 @@ from sim import energy as sim_energy
 from sim.mission import CMD
 from sim.obstacles import (
     distances_to,
-    distinct_rows,
+    flown_legs,
     leg_overlaps,
     obstacle_shapes,
     overlap_totals,
@@ -289,10 +289,8 @@ def _nearest_leg(paths: list[np.ndarray], shape: Any) -> int:
     """The first flight (an index into the legs of `paths` in order) of the distinct leg
     nearest the shapely geometry `shape` (the first such leg flown on a tie). O(L log L) for L
     legs."""
-    flat = np.concatenate([np.stack([p[:-1], p[1:]], axis=1) for p in paths
-                           if len(p) >= 2]).reshape(-1, 4)  # fmt: skip
-    first, _, _ = distinct_rows(flat)
-    d = shapely.distance(shapely.linestrings(flat[first].reshape(-1, 2, 2)), shape)
+    legs, _, first = flown_legs(paths)
+    d = shapely.distance(shapely.linestrings(legs), shape)
     return int(first[int(np.argmin(d))])
 
 

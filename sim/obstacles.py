@@ -30,6 +30,7 @@ __all__ = [
     "unique_legs",
     "distinct_rows",
     "distances_to",
+    "flown_legs",
     "leg_overlaps",
     "points_inside",
     "CIRCLE_QUAD_SEGS",
@@ -228,16 +229,43 @@ def unique_legs(
     Returns:
         (legs, counts): the distinct legs, each as (start, end), and how often each is flown.
     """
-    segs = [np.stack([p[:-1], p[1:]], axis=1) for p in
-            (np.asarray(q, dtype=float).reshape(-1, 2) for q in paths) if len(p) >= 2]
-    if not segs:
-        return np.zeros((0, 2, 2)), np.zeros(0, dtype=np.int64)
-    flat = np.concatenate(segs).reshape(-1, 4)
     if flown_order:
-        first, counts, _ = distinct_rows(flat)
-        return flat[first].reshape(-1, 2, 2), counts
+        legs, counts, _ = flown_legs(paths)
+        return legs, counts
+    flat = _leg_rows(paths)
+    if not len(flat):
+        return np.zeros((0, 2, 2)), np.zeros(0, dtype=np.int64)
     uniq, counts = np.unique(flat, axis=0, return_counts=True)
     return uniq.reshape(-1, 2, 2), counts.astype(np.int64)
+
+
+def _leg_rows(paths: list[np.ndarray]) -> np.ndarray:
+    """(L, 4) every leg of the polylines `paths` in flown order (path 0's legs, then path
+    1's, ...), each as (x0, y0, x1, y1); polylines of fewer than two points have none."""
+    segs = [np.stack([p[:-1], p[1:]], axis=1) for p in
+            (np.asarray(q, dtype=float).reshape(-1, 2) for q in paths) if len(p) >= 2]
+    return np.concatenate(segs).reshape(-1, 4) if segs else np.zeros((0, 4))
+
+
+def flown_legs(paths: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The distinct legs of the polylines `paths` in the order first flown, with how often
+    each is flown and where: what a message naming legs by their items needs. O(L log L) time
+    and O(L) memory in L legs (`distinct_rows`).
+
+    Args:
+        paths: polylines (n, 2), local metres; those of fewer than two points have no leg.
+
+    Returns:
+        (legs (U, 2, 2), counts (U,), first (U,)): each distinct leg as (start, end), how
+        often it is flown, and the index of its first flight among the legs of `paths` taken
+        in order.
+    """
+    flat = _leg_rows(paths)
+    if not len(flat):
+        empty = np.zeros(0, dtype=np.int64)
+        return np.zeros((0, 2, 2)), empty, empty.copy()
+    first, counts, _ = distinct_rows(flat)
+    return flat[first].reshape(-1, 2, 2), counts, first
 
 
 def _overlap_pairs(legs: np.ndarray, obstacles: list[Obstacle]) -> Iterator[
@@ -317,7 +345,7 @@ def leg_overlaps(
     pairs behind `overlap_totals`, each distinct leg once (a DO_JUMP loop flies the same legs
     again), in the order first flown, so that a message can name the legs at fault.
 
-    Time and memory as `overlap_totals` (the distinct legs in flown order: `distinct_rows`).
+    Time and memory as `overlap_totals` (the distinct legs in flown order: `flown_legs`).
 
     Args:
         paths: polylines (n, 2), local metres; those of fewer than two points have no leg.
@@ -331,13 +359,9 @@ def leg_overlaps(
         index and the metres inside one flight of the leg (> tol), sorted by leg.
     """
     empty = np.zeros(0, dtype=np.int64)
-    segs = [np.stack([p[:-1], p[1:]], axis=1) for p in
-            (np.asarray(q, dtype=float).reshape(-1, 2) for q in paths) if len(p) >= 2]
-    if not segs or not obstacles:
+    legs, counts, first = flown_legs(paths)
+    if not len(legs) or not obstacles:
         return empty, empty.copy(), empty.copy(), empty.copy(), np.zeros(0)
-    flat = np.concatenate(segs).reshape(-1, 4)
-    first, counts, _ = distinct_rows(flat)
-    legs = flat[first].reshape(-1, 2, 2)
     li_all, oi_all, got_all = [], [], []
     for lo, li, oi, got in _overlap_pairs(legs, obstacles):
         keep = got > tol
