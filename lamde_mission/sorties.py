@@ -946,6 +946,14 @@ def _pads_note(m: Any, check: FleetCheck) -> str | None:
 TAKEOFF_TOL_S = 0.5
 
 
+def _moved_takeoffs(given: list[tuple[int, int, float | None]], clock: list[float]
+                    ) -> list[tuple[int, int, float, float]]:
+    """(vehicle, sortie, fleet.json's time, the clock's) of each take-off fleet.json gives
+    more than `TAKEOFF_TOL_S` from `clock` (the replay's take-offs, in the same order)."""
+    return [(v, k, t, c) for (v, k, t), c in zip(given, clock, strict=True)
+            if t is not None and abs(t - c) > TAKEOFF_TOL_S]
+
+
 def _times_at_limits(given: list[tuple[int, int, float | None]], clock: list[float]) -> Any:
     """TIMES when the directory is judged at the vehicles' speed limits (`upload --fleet --map`
     below the planned speed): fleet.json's times are the planned speeds', so a slower vehicle's
@@ -954,8 +962,7 @@ def _times_at_limits(given: list[tuple[int, int, float | None]], clock: list[flo
     A reviewer's two-sortie vehicle at PX4's default 12 m/s failed TIMES on every upload."""
     from sim.checks import Verdict
 
-    moved = [(v, k, t, c) for (v, k, t), c in zip(given, clock, strict=True)
-             if t is not None and abs(t - c) > TAKEOFF_TOL_S]
+    moved = _moved_takeoffs(given, clock)
     detail = ("no take-off moves at these speeds" if not moved else
               f"at these speeds vehicle {moved[0][0]} sortie {moved[0][1]} takes off at "
               f"{moved[0][3]:.1f} s, not fleet.json's {moved[0][2]:g} s (planned speeds)"
@@ -972,8 +979,7 @@ def _times_verdict(given: list[tuple[int, int, float | None]], clock: list[float
     from sim.checks import Verdict
 
     title = "fleet.json's take-off times are the verified ones"
-    off = [(v, k, t, c) for (v, k, t), c in zip(given, clock, strict=True)
-           if t is not None and abs(t - c) > TAKEOFF_TOL_S]
+    off = _moved_takeoffs(given, clock)
     swap = ("" if swap_given is None or swap_given == swap_map else
             f"; fleet.json was planned with swap_s {swap_given:g} s, the map says {swap_map:g} "
             "s, which moves every later take-off")
