@@ -158,7 +158,7 @@ def test_the_default_scheduler_turns_to_windows_when_the_cycle_stalls() -> None:
     """On a problem with the large rounds and a uniform layout the default runs
     `LARGE_CYCLE` while its last `STALL_ACTIONS` actions gain at least `WINDOWS_STALL` of f
     per 1,000 evaluations, then `windows` for the rest of the stage; on clustered fields
-    and corridors never (`WINDOWS_LAYOUT`)."""
+    and corridors never (`Problem.uniform_layout`)."""
     from types import SimpleNamespace
 
     from planner_core.pipeline.schedule import (

@@ -38,7 +38,7 @@ evaluations and random streams (each action's stream is its index in the stage),
 plan to the bit (tests/test_schedule.py against digests recorded before the
 refactor; tests/test_golden.py). Larger problems alternate kicks with `rebuild`
 (`LARGE_CYCLE`) until the cycle stalls on a uniform layout (`WINDOWS_STALL`,
-`WINDOWS_LAYOUT`), then plan windows (`windows`), and beyond `LARGE_SENSORS` sensors it also
+`Problem.uniform_layout`), then plan windows (`windows`), and beyond `LARGE_SENSORS` sensors it also
 gives the DE `LARGE_DE_SHARE` of the budget before the run starts, up to `MID_SENSORS`
 `MID_DE_SHARE` (`DefaultScheduler.configure`). A `StaticScheduler` cycles
 a fixed sequence (`SCHEDULES`, the registry `lamde-mission plan --scheduler NAME` reads).
@@ -59,7 +59,6 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 from planner_core.model.formulas import deb_order
-from planner_core.model.layout import UNIFORM_LAYOUT
 from planner_core.pipeline.config import PlanConfig
 from planner_core.pipeline.evaluator import Evaluator
 from planner_core.search.descent import PAPER_POINTS, large_problem
@@ -86,7 +85,6 @@ __all__ = [
     "StaticScheduler",
     "StepRecord",
     "STALL_ACTIONS",
-    "WINDOWS_LAYOUT",
     "WINDOWS_STALL",
     "WINDOW_TRIES",
     "make_scheduler",
@@ -125,11 +123,6 @@ MID_DE_SHARE = 0.2
 WINDOWS_STALL = 0.0025
 #: the actions `WINDOWS_STALL` looks back over (a kick, a rebuild, a kick)
 STALL_ACTIONS = 3
-#: windows only on maps whose sensors' Clark-Evans ratio (`planner_core.model.layout`) is at
-#: least this: uniform layouts (L01-L03 0.97-1.13); on clustered fields and corridors (L04-L08
-#: 0.12-0.20) windows were worse than the rounds they replaced (docs/scaling.md, "Windows
-#: planned again"); `Problem.uniform_layout` reads it
-WINDOWS_LAYOUT = UNIFORM_LAYOUT
 #: windows tried in a row by one `windows` action while none spends an evaluation
 WINDOW_TRIES = 8
 
@@ -273,9 +266,10 @@ class DefaultScheduler:
     `LARGE_CYCLE`, kicks alternating with `rebuild` (destroy-and-repair windows,
     `planner_core.search.rebuild`), no restarts, until its last `STALL_ACTIONS` actions lowered
     f by less than `WINDOWS_STALL` per 1,000 evaluations on a uniform layout
-    (`WINDOWS_LAYOUT`); the rest of the stage then goes to `windows` (stretches of ~8 hover
-    points planned again by the pipeline, `planner_core.pipeline.windows`). Either way it
-    stops after `IDLE_ROUNDS` idle actions.
+    (`Problem.uniform_layout`: windows were worse than the rounds they replaced on clustered
+    fields and corridors, docs/scaling.md, "Windows planned again"); the rest of the stage
+    then goes to `windows` (stretches of ~8 hover points planned again by the pipeline,
+    `planner_core.pipeline.windows`). Either way it stops after `IDLE_ROUNDS` idle actions.
 
     Why by size (docs/search.md, "Rebuilding windows"): on the 8 large maps x 3 seeds,
     `LARGE_CYCLE` ends 1.17 % lower than the paper-size rounds (20 of 24 runs lower, 3
@@ -335,8 +329,8 @@ class DefaultScheduler:
 
     def reset(self, problem: Any, config: PlanConfig) -> None:
         """Read the problem: `large_rounds(problem)`, and whether it may plan windows (the
-        rounds large, `plan_windows` on and the sensors' Clark-Evans ratio over the map's
-        area at least `WINDOWS_LAYOUT`); no windows yet.
+        rounds large, `plan_windows` on and the sensors' layout uniform,
+        `Problem.uniform_layout`); no windows yet.
 
         Args:
             problem: the run's `Problem` (its sensors and map).
