@@ -730,3 +730,47 @@ def test_connect_equals_its_reference_on_a_large_map() -> None:
     for batch in (pts[:25], pts, pts[::-1], p.model.sensors[:30]):
         assert np.array_equal(p.seeder.connect(batch), p.seeder.connect_reference(batch))
     assert np.isfinite(p.seeder.connect(pts)).any()
+
+
+@pytest.mark.parametrize("task", ["T16", "L02"])
+def test_window_c3_flags_equal_the_pairwise_sum_at_the_bandwidth(task: str) -> None:
+    """The trial's C3 flags from each point's window summed in order (`_over_bw_window`,
+    `_points_over_bw`) equal numpy's pairwise row sum against the bandwidth (`_over_bw`), also
+    where the bandwidth is set to a row's pairwise sum or one ulp either side of it, so that the
+    window's order cannot decide and the pairwise sum must; and points off the map's numbers
+    (NaN) take their whole row."""
+    import math
+
+    from planner_core.model.mapio import load_map
+    from planner_core.search.trial import (
+        _decided,
+        _over_bw,
+        _over_bw_window,
+        _points_over_bw,
+        _rates_k,
+    )
+
+    path = (SUITE / f"{task}.json" if task.startswith("T")
+            else SUITE.parent / "large" / f"{task}.json")
+    m = Problem(load_map(path).planning_map()).model
+    win = m.window
+    assert math.isfinite(win.half)
+    rng = np.random.default_rng(5)
+    near = m.sensors[rng.integers(0, len(m.sensors), 60)] + rng.normal(0, 120, (60, 2))
+    pts = np.vstack([near, [[np.nan, 10.0]]])
+    args = (m.sensors, win.order, win.xs, float(win.half), m.altitude**2, m.peak_rate, m.decay,
+            True)
+    R = _rates_k(pts, *args)
+    sums = R[:-1].sum(axis=1)
+    busy = sums[sums > 0]
+    undecided = 0
+    for bw in (m.c3_limit, *busy[:8], *np.nextafter(busy[:8], np.inf),
+               *np.nextafter(busy[:8], -np.inf)):
+        want = _over_bw(R, bw)
+        assert np.array_equal(_over_bw_window(R, pts, win.order, win.xs, float(win.half), True,
+                                              bw), want), bw
+        assert np.array_equal(_points_over_bw(pts, *args, bw), want), bw
+        undecided += sum(_decided(s, R.shape[1], bw) < 0 for s in sums)
+    assert undecided >= 24  # the rows at their own sums and one ulp off went the pairwise way
+    assert np.array_equal(_over_bw_window(R, pts, win.order, win.xs, float(win.half), False,
+                                          m.c3_limit), _over_bw(R, m.c3_limit))

@@ -152,22 +152,25 @@ def _scaled_rows(R, req):  # pragma: no cover - compiled
     """The LP's matrix and work arrays in one call, for `hover_lp`: A (rows, I) with
     A[r, i] = R[i, j_r] / req[j_r] for the sensors j_r with req > 0 in index order (`need`,
     their indices), and zeroed T (I,), duals (rows,) and the HiGHS mask (I,) bool. R (I, J)
-    Mbit/s, req (J,) Mbit. The same divisions as `scaled_rows_reference` (tests). O(I J)."""
+    Mbit/s, req (J,) Mbit. The same divisions as `scaled_rows_reference` (tests), done only
+    for the links (R_ij != 0; a zero rate's entry is 0.0), R read along its rows. O(I J)
+    reads, a division per link."""
     n, J = R.shape
     m = 0
-    for j in range(J):
-        m += req[j] > 0
-    need = np.empty(m, dtype=np.int64)
-    r = 0
+    row_of = np.full(J, -1, dtype=np.int64)
     for j in range(J):
         if req[j] > 0:
-            need[r] = j
-            r += 1
-    A = np.empty((m, n))
-    for r in range(m):
-        j = need[r]
-        for i in range(n):
-            A[r, i] = R[i, j] / req[j]
+            row_of[j] = m
+            m += 1
+    need = np.empty(m, dtype=np.int64)
+    for j in range(J):
+        if row_of[j] >= 0:
+            need[row_of[j]] = j
+    A = np.zeros((m, n))
+    for i in range(n):
+        for j in range(J):
+            if R[i, j] != 0.0 and row_of[j] >= 0:
+                A[row_of[j], i] = R[i, j] / req[j]
     return A, need, np.zeros(n), np.zeros(m), np.zeros(n, dtype=np.bool_)
 
 

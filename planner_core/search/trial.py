@@ -9,7 +9,9 @@ the same sequence in numpy, step by step, and tests hold the two equal to the bi
 C5" for a whole point set or for one that changes a few points at a time; `held_points`
 is also one compiled call (`_held_mask`, its twin `held_points_reference`).
 
-Cost per trial: O(I x sensors in range) link rates, O(I J) sums and I + 1 legs against the
+Cost per trial: O(I x sensors in range) link rates and C3 sums (a point's window summed in
+order decides C3 unless it lies within `_SUM_SLACK` of the bandwidth, where the pairwise sum
+over its J rates does), an (I, J) rate matrix for the objective, and I + 1 legs against the
 obstacles (tiled, `planner_core.model.geometry`); with k held points 2 k turns (their rates
 and 4 k legs) and at most I rounds putting points back.
 """
@@ -22,7 +24,14 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from planner_core.model.formulas import L_VIO_TOL, _link_rates_2d, _link_rates_window, numpy_sum
+from planner_core.model.formulas import (
+    L_VIO_TOL,
+    _link_rates_2d,
+    _link_rates_window,
+    numpy_sum,
+    slant_rate,
+    window_range,
+)
 from planner_core.model.geometry import cut_legs, overlap_first
 
 __all__ = [
@@ -61,12 +70,12 @@ def held_points(problem: Any, P: np.ndarray, R: np.ndarray | None = None) -> np.
     bandwidth) or end or start a leg that cuts an obstacle by more than `L_VIO_TOL` (C5).
     `R`: the points' link rates (I, J) Mbit/s, when the caller has them. The flags come from
     one compiled call (`_held_mask`); `held_points_reference` is the numpy twin (tests).
-    Cost: O(I x sensors in range) rates (unless given), O(I J) sums and I + 1 legs.
+    Cost: O(I x sensors in range) rates (unless given) and sums, and I + 1 legs.
 
     Args:
         problem: the UAV `Problem` (model, obstacles).
         P: hover points (I, 2), m.
-        R: their link rates (I, J) Mbit/s, or None.
+        R: their link rates (I, J) Mbit/s (`ModelParams.rates` of P), or None.
 
     Returns:
         (h,) int indices into P, ascending.
@@ -74,7 +83,9 @@ def held_points(problem: Any, P: np.ndarray, R: np.ndarray | None = None) -> np.
     m = problem.model
     P = _writable(P)
     R = m.rates(P) if R is None else _writable(R)
-    return np.flatnonzero(_held_mask(P, R, m.start, m.end, m.c3_limit,
+    win = m.window
+    return np.flatnonzero(_held_mask(P, R, m.start, m.end, win.order, win.xs, float(win.half),
+                                     math.isfinite(win.half), m.c3_limit,
                                      problem.obstacles.kernel_arrays, L_VIO_TOL))
 
 
@@ -285,12 +296,87 @@ def _over_bw(R, bandwidth):  # pragma: no cover - compiled
     return out
 
 
+#: the relative distance from the bandwidth beyond which a row's sum in any order decides C3
+#: as numpy's pairwise sum does: two float64 sums of J >= 1 non-negative terms differ by at
+#: most 2 (J - 1) u of the sum (u = 2^-53; Higham, Accuracy and Stability, 2002, Sec. 4.2),
+#: taken here with a factor 4 to spare
+_SUM_SLACK = 8.0 * 2.0**-53
+
+
 @njit(cache=True, nogil=True)
-def _held_mask(P, R, start, end, bandwidth, obst, limit):  # pragma: no cover - compiled
+def _decided(s, J, bandwidth):  # pragma: no cover - compiled
+    """0 / 1: the flag ``sum > bandwidth`` that a row whose sum in some order is s (>= 0)
+    takes whatever the order; -1 where s lies too near the bandwidth to tell (`_SUM_SLACK`)."""
+    if abs(s - bandwidth) > _SUM_SLACK * J * max(s, abs(bandwidth)):
+        return 1 if s > bandwidth else 0
+    return -1
+
+
+@njit(cache=True, nogil=True)
+def _over_bw_window(R, P, order, xs, half, windowed, bandwidth):  # pragma: no cover - compiled
+    """`_over_bw` of the rates R (n, J) of the points P (n, 2), reading only the columns of each
+    point's sensor window (`formulas.window_range`; every rate outside it is 0, as both rate
+    kernels write it): the window's sum in order decides, unless it lies within
+    `_SUM_SLACK` of the bandwidth, where the row's pairwise sum does (the same flags; tests).
+    O(n x sensors in the window) where `_over_bw` reads all n J rates."""
+    n, J = R.shape
+    if not windowed:
+        return _over_bw(R, bandwidth)
+    out = np.empty(n, dtype=np.bool_)
+    for i in range(n):
+        px = P[i, 0]
+        if not (math.isfinite(px) and math.isfinite(P[i, 1])):
+            out[i] = numpy_sum(R[i], 0, J) > bandwidth
+            continue
+        lo, hi = window_range(xs, half, px)
+        s = 0.0
+        for q in range(lo, hi):
+            s += R[i, order[q]]
+        d = _decided(s, J, bandwidth)
+        out[i] = numpy_sum(R[i], 0, J) > bandwidth if d < 0 else d == 1
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _points_over_bw(pts, sensors, order, xs, half, h2, peak, decay, windowed,
+                    bandwidth):  # pragma: no cover - compiled
+    """``_over_bw(_rates_k(pts, ...), bandwidth)`` without the (n, J) rates: each point's
+    window rates summed as they are computed (`_link_rates_window`'s arithmetic) decide as in
+    `_over_bw_window`; a point near the bandwidth, off the map's numbers or without a window
+    gets its full row and the pairwise sum (the same flags; tests). O(n x sensors in the
+    window)."""
+    n, J = pts.shape[0], sensors.shape[0]
+    out = np.empty(n, dtype=np.bool_)
+    for i in range(n):
+        px, py = pts[i, 0], pts[i, 1]
+        d = -1
+        if windowed and math.isfinite(px) and math.isfinite(py):
+            lo, hi = window_range(xs, half, px)
+            s = 0.0
+            for q in range(lo, hi):
+                j = order[q]
+                dy = py - sensors[j, 1]
+                if abs(dy) >= half:
+                    continue
+                dx = px - sensors[j, 0]
+                s += max(slant_rate(dx * dx + dy * dy, h2, peak, decay), 0.0)
+            d = _decided(s, J, bandwidth)
+        if d < 0:
+            row = _rates_k(pts[i:i + 1], sensors, order, xs, half, h2, peak, decay, windowed)
+            out[i] = numpy_sum(row[0], 0, J) > bandwidth
+        else:
+            out[i] = d == 1
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _held_mask(P, R, start, end, order, xs, half, windowed, bandwidth, obst,
+               limit):  # pragma: no cover - compiled
     """`held_points_reference` as a mask (I,): points P (I, 2) whose rates R (I, J) sum
-    (numpy's pairwise sum) above `bandwidth`, or that end or start a leg cut by more than
-    `limit` (`cut_legs` on the I + 1 legs in path order, as `overlap_first` sees them)."""
-    bad = _over_bw(R, bandwidth)
+    (numpy's pairwise sum, decided as `_over_bw_window` does) above `bandwidth`, or that end
+    or start a leg cut by more than `limit` (`cut_legs` on the I + 1 legs in path order, as
+    `overlap_first` sees them)."""
+    bad = _over_bw_window(R, P, order, xs, half, windowed, bandwidth)
     a, b = _path_legs(P, start, end)
     cut = cut_legs(a, b, obst, limit)
     for i in range(P.shape[0]):
@@ -336,7 +422,7 @@ def _trial_kernel(P, g, scale, step, box, start, end, slide, sensors, order, xs,
             move[i, d] = mv
             Pn[i, d] = _clip1(P[i, d] + mv, 0.0, box[d])
     R = _rates_k(Pn, sensors, order, xs, half, h2, peak, decay, windowed)
-    bad = _held_mask(Pn, R, start, end, bandwidth, obst, limit)
+    bad = _held_mask(Pn, R, start, end, order, xs, half, windowed, bandwidth, obst, limit)
     k = 0
     for i in range(n):
         k += bad[i]
@@ -365,8 +451,7 @@ def _trial_kernel(P, g, scale, step, box, start, end, slide, sensors, order, xs,
                 la[ka + r, d] = cand[r, d]
                 lb[r, d] = cand[r, d]
     cutc = cut_legs(la, lb, obst, limit)
-    badc = _over_bw(_rates_k(cand, sensors, order, xs, half, h2, peak, decay, windowed),
-                    bandwidth)
+    badc = _points_over_bw(cand, sensors, order, xs, half, h2, peak, decay, windowed, bandwidth)
     for q in range(k):
         for t in range(na):
             r = q * na + t
@@ -375,8 +460,8 @@ def _trial_kernel(P, g, scale, step, box, start, end, slide, sensors, order, xs,
                 break
     # `HeldCheck`: put back what still breaks C3 or C5, renewing the moved points' flags
     Pn = back
-    rate_bad = _over_bw(_rates_k(Pn, sensors, order, xs, half, h2, peak, decay, windowed),
-                        bandwidth)
+    rate_bad = _points_over_bw(Pn, sensors, order, xs, half, h2, peak, decay, windowed,
+                               bandwidth)
     a, b = _path_legs(Pn, start, end)
     cut = cut_legs(a, b, obst, limit)
     still = True
@@ -394,8 +479,8 @@ def _trial_kernel(P, g, scale, step, box, start, end, slide, sensors, order, xs,
         moved = np.empty((k, 2))
         for q in range(k):
             moved[q, 0], moved[q, 1] = Pn[held[q], 0], Pn[held[q], 1]
-        fl = _over_bw(_rates_k(moved, sensors, order, xs, half, h2, peak, decay, windowed),
-                      bandwidth)
+        fl = _points_over_bw(moved, sensors, order, xs, half, h2, peak, decay, windowed,
+                             bandwidth)
         for q in range(k):
             rate_bad[held[q]] = fl[q]
         leg = np.zeros(n + 1, dtype=np.bool_)  # np.unique(held, held + 1): sorted, once each
