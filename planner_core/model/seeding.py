@@ -769,20 +769,22 @@ class Seeder:
             key = {leg: (pts[leg].tobytes(), pts[leg + 1].tobytes(), leg == 0, leg + 1 == last)
                    for leg in blocked.tolist()}
             new = np.array([leg for leg, k in key.items() if k not in known], dtype=np.int64)
-            if len(new):  # the graph links of the new legs' ends (none when all are known)
+            links: dict[int, np.ndarray] = {}  # the graph links of the new legs' ends only
+            if len(new):
                 ends = np.unique(np.concatenate([new, new + 1]))
                 inner = ends[(ends > 0) & (ends < last)]
-                A = np.full((len(pts), self.graph.n), np.inf)
-                A[0], A[-1] = self._ends[0], self._ends[1]
-                A[inner] = self.connect(pts[inner])
+                links[0], links[last] = self._ends[0], self._ends[1]
+                links.update(zip(inner.tolist(), self.connect(pts[inner]), strict=True))
                 if self._route_weights is not None:  # enter a C3-breaking corner last of all
-                    A = A + _OVER_BANDWIDTH_NODE * self._c3_bad[None, :]
+                    over = _OVER_BANDWIDTH_NODE * self._c3_bad
+                    links = {i: row + over for i, row in links.items()}
             pos = np.arange(len(C), dtype=float)  # insertion keys: corners go after centre i-1
             keys = [pos]
             for leg in blocked.tolist():
                 path = known.get(key[leg])
                 if path is None:
-                    _, path = self.graph.route(A[leg], A[leg + 1], self._route_weights)
+                    _, path = self.graph.route(links[leg], links[leg + 1],
+                                               self._route_weights)
                     known[key[leg]] = path
                 if path:
                     out.append(self.graph.nodes[path])
