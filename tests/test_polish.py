@@ -165,3 +165,31 @@ def test_the_shortfall_lp_through_highspy_agrees_with_scipys_linprog() -> None:
             out[backend] = (T.sum(), short.sum())
         assert out["highs"][1] == pytest.approx(out["linprog"][1], rel=1e-6, abs=1e-7)
         assert out["highs"][0] == pytest.approx(out["linprog"][0], rel=1e-6, abs=1e-6)
+
+
+def test_dropped_overlap_equals_the_route_without_the_point() -> None:
+    """The zero-time drop's one-leg test (`_dropped_overlap`) gives what the whole route's
+    `_route_overlap` without the point gives, on clear routes (where it tests one leg) and on
+    routes that already cut an obstacle (where it tests them all), for every point of L02's
+    best-known plan and of the same plan pushed into its obstacles."""
+    import json
+    from pathlib import Path
+
+    from planner_core.model.mapio import load_map
+    from planner_core.search.polish import _dropped_overlap, _route_overlap
+
+    root = Path(__file__).resolve().parent.parent / "examples" / "maps"
+    p = Problem(load_map(root / "large" / "L02.json").planning_map())
+    best = json.loads((root / "large_best_known.json").read_text())["tasks"]["L02"]
+    pts = np.asarray(best["hover_points"], dtype=float)
+    rng = np.random.default_rng(3)
+    seen = {True: 0, False: 0}
+    for P in (pts, pts + rng.normal(0.0, 150.0, pts.shape)):
+        for keep in (np.ones(len(P), dtype=bool), rng.random(len(P)) < 0.7):
+            kept = _route_overlap(p, P[keep])
+            seen[kept == 0.0] += 1
+            for i in np.flatnonzero(keep):
+                trial = keep.copy()
+                trial[i] = False
+                assert _dropped_overlap(p, P, keep, int(i), kept) == _route_overlap(p, P[trial])
+    assert seen[True] and seen[False], seen

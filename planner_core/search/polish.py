@@ -74,6 +74,24 @@ def _route_overlap(problem: Problem, pts: np.ndarray) -> float:
     return length if length > L_VIO_TOL else 0.0
 
 
+def _dropped_overlap(problem: Problem, pts: np.ndarray, keep: np.ndarray, i: int,
+                     kept_overlap: float) -> float:
+    """`_route_overlap` of the kept points pts[keep] without point i, given the kept route's
+    own (`kept_overlap`). Where that is 0 every kept leg's overlap is 0 (each obstacle's is 0
+    or above 2 tol > `L_VIO_TOL`, `geometry.overlap_first`), so the sum over the route without
+    i is the new leg's alone, to the bit: one leg tested instead of the route. O(obstacles)
+    then, else O(I x obstacles)."""
+    if kept_overlap != 0.0:
+        trial = keep.copy()
+        trial[i] = False
+        return _route_overlap(problem, pts[trial])
+    nodes = np.vstack([problem.start, pts[keep], problem.end])
+    at = int(np.count_nonzero(keep[:i])) + 1  # i's node among the kept route's
+    length = float(overlap_lengths(nodes[at - 1:at], nodes[at + 1:at + 2],
+                                   problem.obstacles).sum())
+    return length if length > L_VIO_TOL else 0.0
+
+
 def _unserved(problem: Problem, R: np.ndarray) -> list[dict[str, Any]]:
     out = []
     best = R.sum(axis=0) * problem.t_max if len(R) else np.zeros(len(problem.required))
@@ -351,13 +369,15 @@ def polish_hover_times(
         changed = True
         while changed:
             changed = False
+            kept_overlap = _route_overlap(problem, pts[keep])
+            kept_flight = _route_flight_time(problem, pts[keep])
             for i in np.flatnonzero(keep & (times <= ZERO_TIME)):
                 trial = keep.copy()
                 trial[i] = False
                 # a collision-free path must stay so; a colliding one must not get worse
-                if _route_overlap(problem, pts[trial]) > _route_overlap(problem, pts[keep]):
+                if _dropped_overlap(problem, pts, keep, i, kept_overlap) > kept_overlap:
                     continue
-                if _route_flight_time(problem, pts[trial]) > _route_flight_time(problem, pts[keep]):
+                if _route_flight_time(problem, pts[trial]) > kept_flight:
                     continue
                 keep = trial
                 changed = True
