@@ -215,16 +215,15 @@ def test_the_layout_rule_reads_the_suite_as_documented() -> None:
 
 def test_moves_descend_to_coarser_steps_on_clustered_fields_and_corridors(monkeypatch) -> None:
     """A structural move's descent stops at `FIELD_MIN_STEP` (5 m) on a large problem whose
-    layout is not uniform and whose sensors are at most `FIELD_MAX_SENSORS` (L04, L05, L07,
-    L08), at the descent's own 1 cm elsewhere (L01-L03; L06's 400 sensors; the paper's maps:
-    not large), and `_move` hands that step to its descent."""
+    layout is not uniform (L04-L08), at the descent's own 1 cm elsewhere (L01-L03; the
+    paper's maps: not large), and `_move` hands that step to its descent."""
     from planner_core.search import structure
     from planner_core.search.structure import FIELD_MIN_STEP, move_min_step
 
     for task, uniform, step in (("L01", True, None), ("L03", True, None),
                                 ("L04", False, FIELD_MIN_STEP), ("L07", False, FIELD_MIN_STEP),
                                 ("L08", False, FIELD_MIN_STEP),
-                                ("L06", False, None)):  # 400 sensors: no time to spare
+                                ("L06", False, FIELD_MIN_STEP)):
         problem = Problem(load_map(LARGE / f"{task}.json").planning_map())
         assert problem.uniform_layout == uniform, task
         assert move_min_step(problem) == step, task

@@ -35,7 +35,6 @@ from planner_core.streams import stream_rng
 
 __all__ = [
     "CLEAR_SHIFTS",
-    "FIELD_MAX_SENSORS",
     "FIELD_MIN_STEP",
     "KICK",
     "MOVES",
@@ -246,17 +245,14 @@ def _move(
 #: on the uniform maps (L01-L03) -0.06 to +0.03 %, so they keep 1 cm (docs/search.md,
 #: "Coarser steps for the moves")
 FIELD_MIN_STEP = 5.0
-#: ... on maps of at most this many sensors: the extra moves cost CPU (1.04-1.20x), and L06
-#: (400 sensors) has none to spare: 19.0x T16's plan time at 1 cm, 22.4x at 5 m, against the
-#: 20x issue 31 allows (`benchmarks/bench_plan.py --large --maps L06 --cold 3`, 2026-12-07)
-FIELD_MAX_SENSORS = 300
 
 
 def move_min_step(problem: Any) -> float | None:
     """The least step (m) of a structural move's descent on `problem`: `FIELD_MIN_STEP` on a
     large problem (`descent.large_problem`) whose layout is not uniform
-    (`Problem.uniform_layout`) and whose sensors are at most `FIELD_MAX_SENSORS`, else None
-    (the descent's own `MIN_STEP`).
+    (`Problem.uniform_layout`), else None (the descent's own `MIN_STEP`). The extra moves
+    cost CPU (1.04-1.24x on L05-L08 and two 500-sensor maps; L06 plans in 18.7x T16's time,
+    within issue 31's 20x: docs/search.md, "Coarser steps for the moves").
 
     Args:
         problem: the UAV `Problem`.
@@ -264,8 +260,7 @@ def move_min_step(problem: Any) -> float | None:
     Returns:
         The step, m, or None.
     """
-    if (large_problem(problem) and not getattr(problem, "uniform_layout", True)
-            and len(problem.model.sensors) <= FIELD_MAX_SENSORS):
+    if large_problem(problem) and not getattr(problem, "uniform_layout", True):
         return FIELD_MIN_STEP
     return None
 
