@@ -161,7 +161,11 @@ class Problem:
         hov = np.where(active, times, 0.0)
         t_hover = hov.sum(axis=1)
         f = self.alpha * t_fly + (1.0 - self.alpha) * t_hover
-        R = self.rates(pts) * active[:, :, None]
+        # each plan's (I, J) rates by the compiled range-cut kernel (the same array as the
+        # (n, I, J) numpy broadcast: `formulas.link_rates`), O(I x sensors in range) a plan;
+        # a plan with a non-finite point keeps numpy's broadcast (NaN stays NaN)
+        R = (np.stack([self.rates(q) for q in pts]) if len(pts) and np.isfinite(pts).all()
+             else self.rates(pts)) * active[:, :, None]
         if self.scheduled:  # no C3; the most data the hover times can take (a max flow)
             v3_each = np.zeros(R.shape[:2])
             Q = np.stack([scheduled_flow(R[s][active[s]], hov[s][active[s]], self.required,
