@@ -33,6 +33,7 @@ __all__ = [
     "link_rates",
     "SensorWindow",
     "sensor_window",
+    "window_pair_rate",
     "window_range",
     "numpy_sum",
     "ground_reach",
@@ -274,12 +275,31 @@ def _link_rates_window(pts, sensors, order, xs, half, h2, peak_rate, decay):  # 
         lo, hi = window_range(xs, half, px)
         for q in range(lo, hi):
             j = order[q]
-            dy = py - sensors[j, 1]
-            if abs(dy) >= half:
-                continue
-            dx = px - sensors[j, 0]
-            out[i, j] = max(slant_rate(dx * dx + dy * dy, h2, peak_rate, decay), 0.0)
+            out[i, j] = window_pair_rate(px, py, sensors[j, 0], sensors[j, 1], half, h2,
+                                         peak_rate, decay)
     return out
+
+
+@njit(cache=True, nogil=True, inline="always")
+def window_pair_rate(px, py, sx, sy, half, h2, peak_rate, decay):  # pragma: no cover - compiled
+    """The link rate (Mbit/s) of the point (px, py) to the sensor (sx, sy) under the range cut
+    of `sensor_window`, for compiled kernels: 0 where |dy| >= half, else `slant_rate` clipped
+    at 0 (what `_link_rates_window` writes for the pair; the range cut in x is its caller's,
+    `window_range`). O(1).
+
+    Args:
+        px, py: the point (m); sx, sy: the sensor (m).
+        half: the range cut (m), `SensorWindow.half`.
+        h2: H^2 (m^2); peak_rate: R_c (Mbit/s); decay: xi (Mbit/s per m).
+
+    Returns:
+        The rate, Mbit/s, >= 0.
+    """
+    dy = py - sy
+    if abs(dy) >= half:
+        return 0.0
+    dx = px - sx
+    return max(slant_rate(dx * dx + dy * dy, h2, peak_rate, decay), 0.0)
 
 
 # ----------------------------------------------------------------------------- sums

@@ -29,7 +29,7 @@ from planner_core.model.formulas import (
     _link_rates_2d,
     _link_rates_window,
     numpy_sum,
-    slant_rate,
+    window_pair_rate,
     window_range,
 )
 from planner_core.model.geometry import cut_legs, overlap_first
@@ -355,11 +355,8 @@ def _points_over_bw(pts, sensors, order, xs, half, h2, peak, decay, windowed,
             s = 0.0
             for q in range(lo, hi):
                 j = order[q]
-                dy = py - sensors[j, 1]
-                if abs(dy) >= half:
-                    continue
-                dx = px - sensors[j, 0]
-                s += max(slant_rate(dx * dx + dy * dy, h2, peak, decay), 0.0)
+                s += window_pair_rate(px, py, sensors[j, 0], sensors[j, 1], half, h2, peak,
+                                      decay)
             d = _decided(s, J, bandwidth)
         if d < 0:
             row = _rates_k(pts[i:i + 1], sensors, order, xs, half, h2, peak, decay, windowed)
