@@ -193,3 +193,21 @@ def test_dropped_overlap_equals_the_route_without_the_point() -> None:
                 trial[i] = False
                 assert _dropped_overlap(p, P, keep, int(i), kept) == _route_overlap(p, P[trial])
     assert seen[True] and seen[False], seen
+
+
+def test_dropped_overlap_takes_the_whole_route_when_a_kept_point_is_not_finite() -> None:
+    """A route with a NaN point has overlap 0 by `_route_overlap` (NaN compares false) though its
+    legs are not clear: the one-leg shortcut would differ, so the whole route decides."""
+    from planner_core.search.polish import _dropped_overlap, _route_overlap
+
+    p = Problem(dict(BASE, sensors=[{"id": "s", "x": 400, "y": 0}],
+                     obstacles={"circles": [{"x": 500, "y": 0, "radius": 50}]}))
+    # dropping (500, 200) leaves the leg (400, 0) -> (600, 0) through the circle: 100 m alone
+    pts = np.array([[np.nan, 5.0], [400.0, 0.0], [500.0, 200.0], [600.0, 0.0]])
+    keep = np.ones(4, dtype=bool)
+    kept = _route_overlap(p, pts)
+    assert kept == 0.0
+    for i in range(4):
+        trial = keep.copy()
+        trial[i] = False
+        assert _dropped_overlap(p, pts, keep, i, kept) == _route_overlap(p, pts[trial])

@@ -737,8 +737,9 @@ def test_window_c3_flags_equal_the_pairwise_sum_at_the_bandwidth(task: str) -> N
     """The trial's C3 flags from each point's window summed in order (`_over_bw_window`,
     `_points_over_bw`) equal numpy's pairwise row sum against the bandwidth (`_over_bw`), also
     where the bandwidth is set to a row's pairwise sum or one ulp either side of it, so that the
-    window's order cannot decide and the pairwise sum must; and points off the map's numbers
-    (NaN) take their whole row."""
+    window's order cannot decide and the pairwise sum must; an infinite bandwidth (scheduled
+    access) or a NaN one flags nothing at once; and points off the map's numbers (NaN) take
+    their whole row."""
     import math
 
     from planner_core.model.mapio import load_map
@@ -764,7 +765,7 @@ def test_window_c3_flags_equal_the_pairwise_sum_at_the_bandwidth(task: str) -> N
     sums = R[:-1].sum(axis=1)
     busy = sums[sums > 0]
     undecided = 0
-    for bw in (m.c3_limit, *busy[:8], *np.nextafter(busy[:8], np.inf),
+    for bw in (m.c3_limit, np.inf, np.nan, *busy[:8], *np.nextafter(busy[:8], np.inf),
                *np.nextafter(busy[:8], -np.inf)):
         want = _over_bw(R, bw)
         assert np.array_equal(_over_bw_window(R, pts, win.order, win.xs, float(win.half), True,
@@ -772,5 +773,6 @@ def test_window_c3_flags_equal_the_pairwise_sum_at_the_bandwidth(task: str) -> N
         assert np.array_equal(_points_over_bw(pts, *args, bw), want), bw
         undecided += sum(_decided(s, R.shape[1], bw) < 0 for s in sums)
     assert undecided >= 24  # the rows at their own sums and one ulp off went the pairwise way
+    assert all(_decided(s, R.shape[1], bw) == 0 for s in sums for bw in (np.inf, np.nan))
     assert np.array_equal(_over_bw_window(R, pts, win.order, win.xs, float(win.half), False,
                                           m.c3_limit), _over_bw(R, m.c3_limit))

@@ -77,11 +77,11 @@ def _route_overlap(problem: Problem, pts: np.ndarray) -> float:
 def _dropped_overlap(problem: Problem, pts: np.ndarray, keep: np.ndarray, i: int,
                      kept_overlap: float) -> float:
     """`_route_overlap` of the kept points pts[keep] without point i, given the kept route's
-    own (`kept_overlap`). Where that is 0 every kept leg's overlap is 0 (each obstacle's is 0
-    or above 2 tol > `L_VIO_TOL`, `geometry.overlap_first`), so the sum over the route without
-    i is the new leg's alone, to the bit: one leg tested instead of the route. O(obstacles)
-    then, else O(I x obstacles)."""
-    if kept_overlap != 0.0:
+    own (`kept_overlap`). Where that is 0 and the kept points are finite every kept leg's
+    overlap is 0 (each obstacle's is 0 or above 2 tol > `L_VIO_TOL`,
+    `geometry.overlap_first`), so the sum over the route without i is the new leg's alone, to
+    the bit: one leg tested instead of the route. O(obstacles) then, else O(I x obstacles)."""
+    if kept_overlap != 0.0 or not np.isfinite(pts[keep]).all():  # NaN legs compare false
         trial = keep.copy()
         trial[i] = False
         return _route_overlap(problem, pts[trial])

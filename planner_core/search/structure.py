@@ -251,8 +251,8 @@ def move_min_step(problem: Any) -> float | None:
     """The least step (m) of a structural move's descent on `problem`: `FIELD_MIN_STEP` on a
     large problem (`descent.large_problem`) whose layout is not uniform
     (`Problem.uniform_layout`), else None (the descent's own `MIN_STEP`). The extra moves
-    cost CPU (1.04-1.24x on L05-L08 and two 500-sensor maps; L06 plans in 18.7x T16's time,
-    within issue 31's 20x: docs/search.md, "Coarser steps for the moves").
+    cost CPU (1.04-1.20x on L05-L08, 1.02-1.25x on two 500-sensor maps; L06 plans in 18.7x
+    T16's time, within issue 31's 20x: docs/search.md, "Coarser steps for the moves").
 
     Args:
         problem: the UAV `Problem`.

@@ -306,7 +306,11 @@ _SUM_SLACK = 8.0 * 2.0**-53
 @njit(cache=True, nogil=True)
 def _decided(s, J, bandwidth):  # pragma: no cover - compiled
     """0 / 1: the flag ``sum > bandwidth`` that a row whose sum in some order is s (>= 0)
-    takes whatever the order; -1 where s lies too near the bandwidth to tell (`_SUM_SLACK`)."""
+    takes whatever the order; -1 where s lies too near the bandwidth to tell (`_SUM_SLACK`).
+    No sum is above an infinite or NaN bandwidth (scheduled access: `ModelParams.c3_limit`
+    inf), so those decide 0 at once."""
+    if not bandwidth < math.inf:
+        return 0
     if abs(s - bandwidth) > _SUM_SLACK * J * max(s, abs(bandwidth)):
         return 1 if s > bandwidth else 0
     return -1
