@@ -776,3 +776,48 @@ def test_window_c3_flags_equal_the_pairwise_sum_at_the_bandwidth(task: str) -> N
     assert all(_decided(s, R.shape[1], bw) == 0 for s in sums for bw in (np.inf, np.nan))
     assert np.array_equal(_over_bw_window(R, pts, win.order, win.xs, float(win.half), False,
                                           m.c3_limit), _over_bw(R, m.c3_limit))
+
+
+def _bits_equal(a: np.ndarray, b: np.ndarray) -> bool:
+    """The same float64 bits (signed zeros and NaN payloads told apart)."""
+    return a.shape == b.shape and np.array_equal(np.asarray(a).view(np.int64),
+                                                 np.asarray(b).view(np.int64))
+
+
+def test_solve_small_skips_only_what_leaves_the_bits() -> None:
+    """`hoverlp._solve_small` (zeros skipped) gives `_solve_small_reference`'s verdict and
+    solution to the bit: the simplex's bases (sparse rows of scaled rates and unit rows, both
+    systems), dense and negative matrices, singular ones, and inputs holding -0.0, NaN or inf
+    (which take the reference's loops); and square cuts of L02's scaled rates."""
+    from planner_core.model import hoverlp
+
+    rng = np.random.default_rng(8)
+    cases: list[tuple[np.ndarray, np.ndarray]] = []
+    for _ in range(300):
+        k = int(rng.integers(1, 40))
+        M = rng.uniform(0.0, 0.05, (k, k)) * (rng.random((k, k)) < rng.uniform(0.02, 0.3))
+        unit = rng.random(k) < rng.uniform(0.0, 0.8)  # T_i >= 0 rows of a basis
+        M[unit] = 0.0
+        M[unit, rng.integers(0, k, int(unit.sum()))] = 1.0
+        b = np.where(unit, 0.0, 1.0)
+        cases += [(M, b), (np.ascontiguousarray(M.T), np.ones(k))]
+        D = rng.normal(0.0, 1.0, (k, k))
+        cases.append((D, rng.normal(0.0, 1.0, k)))
+        S = D.copy()
+        S[-1] = S[0] * 2.0  # singular
+        cases.append((S, np.ones(k)))
+        odd = D.copy()
+        odd[rng.integers(0, k), rng.integers(0, k)] = rng.choice([-0.0, np.nan, np.inf])
+        cases.append((odd, -0.0 * np.ones(k)))
+    for A, _ in _lp_cases():  # L02's scaled rates of 30 and 65 points, cut square
+        if A.shape[1] > 20 and A.shape[0] >= A.shape[1]:
+            m, k = A.shape
+            cases.append((np.ascontiguousarray(A[:k]), np.ones(k)))
+    for M, b in cases:
+        k = M.shape[0]
+        out1, out2 = np.empty(k), np.empty(k)
+        ok1 = hoverlp._solve_small(M, b, out1)
+        ok2 = hoverlp._solve_small_reference(M, b, out2)
+        assert ok1 == ok2
+        if ok1:
+            assert _bits_equal(out1, out2)

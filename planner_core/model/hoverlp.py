@@ -11,6 +11,7 @@ diagnosis (`planner_core.model.diagnose`) all take it from here. Units: s, Mbit,
 
 from __future__ import annotations
 
+import math
 import os
 import sys
 import threading
@@ -193,7 +194,74 @@ def scaled_rows_reference(R: np.ndarray, req: np.ndarray) -> tuple[np.ndarray, n
 @njit(cache=True, fastmath=False, nogil=True)
 def _solve_small(M, rhs, out):  # pragma: no cover - compiled
     """Gaussian elimination with partial pivoting on a copy of M (k, k); out = M^-1 rhs.
-    False when M is singular (a pivot below 1e-12 of M's largest entry)."""
+    False when M is singular (a pivot below 1e-12 of M's largest entry).
+
+    `_solve_small_reference`'s arithmetic with the zeros skipped: a row whose multiplier is 0,
+    the pivot row's zero entries and, in the back substitution, the zero entries of a row. Each
+    skipped operation is x - (+-0) with x finite and never -0 (M and rhs hold no -0, and a
+    difference is -0 only from -0 - +0), which leaves x's bits as they are, so `out` is the
+    reference's to the bit (tests); M or rhs holding a -0 or a non-finite entry, or a
+    multiplier or unknown that is not finite, take the reference's full loops. Cost: O(k^2)
+    plus O(k x the pivot rows' non-zeros) a column, where the reference is O(k^3): the
+    simplex's bases on the large maps (`_rest_simplex`, k 70-90) are mostly unit rows."""
+    k = M.shape[0]
+    for i in range(k):
+        if not math.isfinite(rhs[i]) or (rhs[i] == 0.0 and math.copysign(1.0, rhs[i]) < 0.0):
+            return _solve_small_reference(M, rhs, out)
+        for j in range(k):
+            x = M[i, j]
+            if not math.isfinite(x) or (x == 0.0 and math.copysign(1.0, x) < 0.0):
+                return _solve_small_reference(M, rhs, out)
+    W = M.copy()
+    v = rhs.copy()
+    big = 0.0
+    for i in range(k):
+        for j in range(k):
+            big = max(big, abs(W[i, j]))
+    nz = np.empty(k, dtype=np.int64)
+    for col in range(k):
+        p = col
+        for i in range(col + 1, k):
+            if abs(W[i, col]) > abs(W[p, col]):
+                p = i
+        if abs(W[p, col]) <= 1e-12 * big:
+            return False
+        if p != col:
+            for j in range(k):
+                W[col, j], W[p, j] = W[p, j], W[col, j]
+            v[col], v[p] = v[p], v[col]
+        n_nz = 0
+        for j in range(col, k):
+            if W[col, j] != 0.0:
+                nz[n_nz] = j
+                n_nz += 1
+        for i in range(col + 1, k):
+            f = W[i, col] / W[col, col]
+            if f == 0.0:
+                continue
+            if math.isfinite(f):
+                for q in range(n_nz):
+                    j = nz[q]
+                    W[i, j] -= f * W[col, j]
+            else:
+                for j in range(col, k):
+                    W[i, j] -= f * W[col, j]
+            v[i] -= f * v[col]
+    for i in range(k - 1, -1, -1):
+        s = v[i]
+        for j in range(i + 1, k):
+            w = W[i, j]
+            if w != 0.0 or not math.isfinite(out[j]):
+                s -= w * out[j]
+        out[i] = s / W[i, i]
+    return True
+
+
+@njit(cache=True, fastmath=False, nogil=True)
+def _solve_small_reference(M, rhs, out):  # pragma: no cover - compiled
+    """`_solve_small` with every operation done: Gaussian elimination with partial pivoting
+    on a copy of M (k, k), out = M^-1 rhs, False when M is singular (a pivot below 1e-12 of
+    M's largest entry). O(k^3)."""
     k = M.shape[0]
     W = M.copy()
     v = rhs.copy()
@@ -497,7 +565,7 @@ def _lp_blocks_reference(A, target, t_max, kmax, max_combos, T, y, rest):  # pra
             for a in range(k):
                 for q in range(k):
                     Mt[a, q] = M[q, a]
-            if _solve_small(M, b, t) and _solve_small(Mt, ones, z):
+            if _solve_small_reference(M, b, t) and _solve_small_reference(Mt, ones, z):
                 ok = True
                 for a in range(k):  # multiplier x its constraint's scale; time x data rate
                     if z[a] * cmax[idx[a]] < -1e-9 or t[a] * tmax_a[a] < -1e-9:
