@@ -821,3 +821,19 @@ def test_solve_small_skips_only_what_leaves_the_bits() -> None:
         assert ok1 == ok2
         if ok1:
             assert _bits_equal(out1, out2)
+
+
+def test_rest_block_equals_numpys_indexing() -> None:
+    """`hoverlp._rest_block` gives the rows and the sub-matrix that numpy's mask and `np.ix_`
+    give, for the LP cases and random masks (none, some, all points)."""
+    from planner_core.model import hoverlp
+
+    rng = np.random.default_rng(21)
+    for A, _ in _lp_cases():
+        for rest in (np.zeros(A.shape[1], dtype=bool), rng.random(A.shape[1]) < 0.5,
+                     np.ones(A.shape[1], dtype=bool)):
+            rows, sub = hoverlp._rest_block(A, rest)
+            want = (A[:, rest] > 0.0).any(axis=1)
+            assert np.array_equal(rows, want)
+            assert _bits_equal(sub, np.ascontiguousarray(A[np.ix_(want, rest)]))
+            assert sub.flags.c_contiguous

@@ -133,8 +133,7 @@ def hover_lp(
     if not _lp_blocks(A, _TARGET, float(t_max), BLOCK_VERTICES, BLOCK_COMBOS, T, yn, rest):
         return None  # a sensor no point reaches, or a lone point that needs more than t_max
     if rest.any():
-        rows = (A[:, rest] > 0.0).any(axis=1)
-        sub = np.ascontiguousarray(A[np.ix_(rows, rest)])
+        rows, sub = _rest_block(A, rest)
         t_rest, y_rest = np.empty(sub.shape[1]), np.zeros(sub.shape[0])
         if _rest_simplex(sub, _TARGET, float(t_max), t_rest, y_rest):
             T[rest], yn[rows] = t_rest, y_rest
@@ -189,6 +188,31 @@ def scaled_rows_reference(R: np.ndarray, req: np.ndarray) -> tuple[np.ndarray, n
     """
     need = req > 0
     return np.ascontiguousarray((R[:, need] / req[need]).T), np.flatnonzero(need)
+
+
+@njit(cache=True, fastmath=False, nogil=True)
+def _rest_block(A, rest):  # pragma: no cover - compiled
+    """The LP's part for the simplex: (rows (m,) bool, the rows of A (m, n) with a positive
+    entry in a `rest` (n,) column; sub (rows, cols) the copy of A there, C-contiguous), what
+    ``(A[:, rest] > 0).any(axis=1)`` and ``A[np.ix_(rows, rest)]`` give (tests). O(m n)."""
+    m, n = A.shape
+    cols = np.flatnonzero(rest)
+    rows = np.zeros(m, dtype=np.bool_)
+    nr = 0
+    for j in range(m):
+        for c in cols:
+            if A[j, c] > 0.0:
+                rows[j] = True
+                nr += 1
+                break
+    sub = np.empty((nr, cols.shape[0]))
+    r = 0
+    for j in range(m):
+        if rows[j]:
+            for q in range(cols.shape[0]):
+                sub[r, q] = A[j, cols[q]]
+            r += 1
+    return rows, sub
 
 
 @njit(cache=True, fastmath=False, nogil=True)
