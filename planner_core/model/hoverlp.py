@@ -190,6 +190,41 @@ def scaled_rows_reference(R: np.ndarray, req: np.ndarray) -> tuple[np.ndarray, n
     return np.ascontiguousarray((R[:, need] / req[need]).T), np.flatnonzero(need)
 
 
+#: `_solve_small` solves systems of at most this many unknowns by the reference's loops
+_DENSE_SOLVE = 8
+
+
+@njit(cache=True, fastmath=False, nogil=True)
+def _solve_two(M, rhs, out):  # pragma: no cover - compiled
+    """`_solve_small_reference` for k = 2 written out: the same operations in the same order
+    (the largest entry, the pivot row by |M[1, 0]| > |M[0, 0]|, the singular tests, one
+    elimination, the back substitution), without its copies and loops (tests). O(1)."""
+    w00, w01, w10, w11 = M[0, 0], M[0, 1], M[1, 0], M[1, 1]
+    v0, v1 = rhs[0], rhs[1]
+    big = 0.0
+    big = max(big, abs(w00))
+    big = max(big, abs(w01))
+    big = max(big, abs(w10))
+    big = max(big, abs(w11))
+    if abs(w10) > abs(w00):
+        if abs(w10) <= 1e-12 * big:
+            return False
+        w00, w01, w10, w11 = w10, w11, w00, w01
+        v0, v1 = v1, v0
+    elif abs(w00) <= 1e-12 * big:
+        return False
+    f = w10 / w00
+    w11 -= f * w01
+    v1 -= f * v0
+    if abs(w11) <= 1e-12 * big:
+        return False
+    out[1] = v1 / w11
+    s = v0
+    s -= w01 * out[1]
+    out[0] = s / w00
+    return True
+
+
 @njit(cache=True, fastmath=False, nogil=True)
 def _rest_block(A, rest):  # pragma: no cover - compiled
     """The LP's part for the simplex: (rows (m,) bool, the rows of A (m, n) with a positive
@@ -227,8 +262,13 @@ def _solve_small(M, rhs, out):  # pragma: no cover - compiled
     reference's to the bit (tests); M or rhs holding a -0 or a non-finite entry, or a
     multiplier or unknown that is not finite, take the reference's full loops. Cost: O(k^2)
     plus O(k x the pivot rows' non-zeros) a column, where the reference is O(k^3): the
-    simplex's bases on the large maps (`_rest_simplex`, k 70-90) are mostly unit rows."""
+    simplex's bases on the large maps (`_rest_simplex`, k 70-90) are mostly unit rows; up to
+    `_DENSE_SOLVE` unknowns (the small blocks' vertices) the reference's loops are cheaper."""
     k = M.shape[0]
+    if k == 2:  # the small blocks' vertices: most solves
+        return _solve_two(M, rhs, out)
+    if k <= _DENSE_SOLVE:
+        return _solve_small_reference(M, rhs, out)
     for i in range(k):
         if not math.isfinite(rhs[i]) or (rhs[i] == 0.0 and math.copysign(1.0, rhs[i]) < 0.0):
             return _solve_small_reference(M, rhs, out)
