@@ -409,6 +409,37 @@ def _path_legs(P, start, end):  # pragma: no cover - compiled
 
 
 @njit(cache=True, nogil=True)
+def _renew_flags(Pn, held, k, rate_bad, cut, start, end, sensors, order, xs, half, h2, peak,
+                 decay, windowed, bandwidth, obst, limit):  # pragma: no cover - compiled
+    """`HeldCheck.moved` in the kernel: the C3 flags `rate_bad` (n,) of the points held[:k] of
+    Pn (n, 2) and the C5 flags `cut` (n + 1,) of the legs they end or start, renewed in place
+    (the legs in ascending order, once each, in one batch). O(k x sensors in range + 2k legs)."""
+    n = Pn.shape[0]
+    moved = np.empty((k, 2))
+    for q in range(k):
+        moved[q, 0], moved[q, 1] = Pn[held[q], 0], Pn[held[q], 1]
+    fl = _points_over_bw(moved, sensors, order, xs, half, h2, peak, decay, windowed, bandwidth)
+    for q in range(k):
+        rate_bad[held[q]] = fl[q]
+    leg = np.zeros(n + 1, dtype=np.bool_)  # np.unique(held, held + 1): sorted, once each
+    for q in range(k):
+        leg[held[q]] = True
+        leg[held[q] + 1] = True
+    legs = np.flatnonzero(leg)
+    nl = legs.shape[0]
+    a = np.empty((nl, 2))
+    b = np.empty((nl, 2))
+    for q in range(nl):
+        j = legs[q]  # leg j runs node j -> node j + 1 (node 0 the start, n + 1 the end)
+        for d in range(2):
+            a[q, d] = start[d] if j == 0 else Pn[j - 1, d]
+            b[q, d] = end[d] if j == n else Pn[j, d]
+    cl = cut_legs(a, b, obst, limit)
+    for q in range(nl):
+        cut[legs[q]] = cl[q]
+
+
+@njit(cache=True, nogil=True)
 def _trial_kernel(P, g, scale, step, box, start, end, slide, sensors, order, xs, half, h2, peak,
                   decay, windowed, bandwidth, obst, limit):  # pragma: no cover - compiled
     """`trial_points` (its docstring): `trial_points_reference` step by step, each numpy call
@@ -459,12 +490,16 @@ def _trial_kernel(P, g, scale, step, box, start, end, slide, sensors, order, xs,
             if not (cutc[r] | cutc[ka + r] | badc[r]):
                 back[held[q], 0], back[held[q], 1] = cand[r, 0], cand[r, 1]
                 break
-    # `HeldCheck`: put back what still breaks C3 or C5, renewing the moved points' flags
+    # `HeldCheck`: put back what still breaks C3 or C5, renewing the moved points' flags. Its
+    # first flags: a point that was not held is where it was checked above and kept C3, and a
+    # leg between two such points (or one and the start or end) is the leg checked above and
+    # was not cut (else its points were held), so only the held points and their legs are
+    # checked again (each flag is the point's or the leg's alone: the same flags)
     Pn = back
-    rate_bad = _points_over_bw(Pn, sensors, order, xs, half, h2, peak, decay, windowed,
-                               bandwidth)
-    a, b = _path_legs(Pn, start, end)
-    cut = cut_legs(a, b, obst, limit)
+    rate_bad = np.zeros(n, dtype=np.bool_)
+    cut = np.zeros(n + 1, dtype=np.bool_)
+    _renew_flags(Pn, held, k, rate_bad, cut, start, end, sensors, order, xs, half, h2, peak,
+                 decay, windowed, bandwidth, obst, limit)
     still = True
     for _ in range(n):
         k = 0
@@ -477,29 +512,8 @@ def _trial_kernel(P, g, scale, step, box, start, end, slide, sensors, order, xs,
         held = np.flatnonzero(bad)
         for q in range(k):
             Pn[held[q], 0], Pn[held[q], 1] = P[held[q], 0], P[held[q], 1]
-        moved = np.empty((k, 2))
-        for q in range(k):
-            moved[q, 0], moved[q, 1] = Pn[held[q], 0], Pn[held[q], 1]
-        fl = _points_over_bw(moved, sensors, order, xs, half, h2, peak, decay, windowed,
-                             bandwidth)
-        for q in range(k):
-            rate_bad[held[q]] = fl[q]
-        leg = np.zeros(n + 1, dtype=np.bool_)  # np.unique(held, held + 1): sorted, once each
-        for q in range(k):
-            leg[held[q]] = True
-            leg[held[q] + 1] = True
-        legs = np.flatnonzero(leg)
-        nl = legs.shape[0]
-        a = np.empty((nl, 2))
-        b = np.empty((nl, 2))
-        for q in range(nl):
-            j = legs[q]  # leg j runs node j -> node j + 1 (node 0 the start, n + 1 the end)
-            for d in range(2):
-                a[q, d] = start[d] if j == 0 else Pn[j - 1, d]
-                b[q, d] = end[d] if j == n else Pn[j, d]
-        cl = cut_legs(a, b, obst, limit)
-        for q in range(nl):
-            cut[legs[q]] = cl[q]
+        _renew_flags(Pn, held, k, rate_bad, cut, start, end, sensors, order, xs, half, h2,
+                     peak, decay, windowed, bandwidth, obst, limit)
     if still:
         return Pn, R, 1
     if _same_points(Pn, P):
