@@ -284,16 +284,8 @@ def _solve_small(M, rhs, out):  # pragma: no cover - compiled
             big = max(big, abs(W[i, j]))
     nz = np.empty(k, dtype=np.int64)
     for col in range(k):
-        p = col
-        for i in range(col + 1, k):
-            if abs(W[i, col]) > abs(W[p, col]):
-                p = i
-        if abs(W[p, col]) <= 1e-12 * big:
+        if not _partial_pivot(W, v, col, big):
             return False
-        if p != col:
-            for j in range(k):
-                W[col, j], W[p, j] = W[p, j], W[col, j]
-            v[col], v[p] = v[p], v[col]
         n_nz = 0
         for j in range(col, k):
             if W[col, j] != 0.0:
@@ -321,6 +313,25 @@ def _solve_small(M, rhs, out):  # pragma: no cover - compiled
     return True
 
 
+@njit(cache=True, fastmath=False, nogil=True, inline="always")
+def _partial_pivot(W, v, col, big):  # pragma: no cover - compiled
+    """Gaussian elimination's step `col` on W (k, k) and v (k,), in place: the row of the
+    largest |W[i, col]| from col down (the first of equals) swapped into row col; False when
+    that entry is at most 1e-12 x `big` (M's largest entry: singular). O(k)."""
+    k = W.shape[0]
+    p = col
+    for i in range(col + 1, k):
+        if abs(W[i, col]) > abs(W[p, col]):
+            p = i
+    if abs(W[p, col]) <= 1e-12 * big:
+        return False
+    if p != col:
+        for j in range(k):
+            W[col, j], W[p, j] = W[p, j], W[col, j]
+        v[col], v[p] = v[p], v[col]
+    return True
+
+
 @njit(cache=True, fastmath=False, nogil=True)
 def _solve_small_reference(M, rhs, out):  # pragma: no cover - compiled
     """`_solve_small` with every operation done: Gaussian elimination with partial pivoting
@@ -334,16 +345,8 @@ def _solve_small_reference(M, rhs, out):  # pragma: no cover - compiled
         for j in range(k):
             big = max(big, abs(W[i, j]))
     for col in range(k):
-        p = col
-        for i in range(col + 1, k):
-            if abs(W[i, col]) > abs(W[p, col]):
-                p = i
-        if abs(W[p, col]) <= 1e-12 * big:
+        if not _partial_pivot(W, v, col, big):
             return False
-        if p != col:
-            for j in range(k):
-                W[col, j], W[p, j] = W[p, j], W[col, j]
-            v[col], v[p] = v[p], v[col]
         for i in range(col + 1, k):
             f = W[i, col] / W[col, col]
             for j in range(col, k):
