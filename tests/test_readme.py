@@ -199,6 +199,9 @@ COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
     "lamde-mission mock-vehicle --vehicles":
         ("test_vehicle_fleet.py::test_cli_mock_vehicle_fleet_runs_until_ctrl_c",
          ('"mock-vehicle"', '"--vehicles"', '"--ports"')),
+    "lamde-mission mock-vehicle --vehicles 3 --param MPC_XY_VEL_MAX=20":
+        ("test_speed_limit.py::test_the_documented_fleet_recipe_runs_as_written",
+         ("MPC_XY_VEL_MAX=20", '"upload"', '"--fleet"')),
     "lamde-mission mock-vehicle --sysids":
         ("test_vehicle_fleet.py::test_cli_mock_vehicle_fleet_runs_until_ctrl_c",
          ('"mock-vehicle"', '"--sysids"')),
