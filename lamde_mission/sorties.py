@@ -201,8 +201,8 @@ def sortie_map(
     pads: tuple[int, int] = (0, 0),
 ) -> Any:
     """The map one sortie is stored and replayed on: `m` with start and end at pads
-    `pads` (`Map.pads_for`; pad 0 the depot itself; which vehicle uses which:
-    `planner_core.model.pads.pad_ranks`) of the depots named `start` and `end`
+    `pads` (indices into `Map.pads_for`; index 0, pad 1, the depot itself; which vehicle uses
+    which: `planner_core.model.pads.pad_ranks`) of the depots named `start` and `end`
     (`planner_core.fleet.FleetSettings` names: the map's depots, or "home" and "end"),
     sensors' required data `required` (J,) Mbit (default 0: the whole plan's C4 is judged
     over all sorties), the battery kept (ENERGY), the fleet left out.

@@ -732,11 +732,12 @@ class Map:
     @property
     def vehicle_pads(self) -> np.ndarray:
         """The pads of each sortie site (`planner_core.model.pads`; the vehicles a plan sends
-        to a site take them in the order of their numbers, `pad_ranks`): pad 0 is the site
-        itself, the others lie `fleet.separation_m` + `PAD_MARGIN_M` apart on a
-        grid aligned with east and north around it, inside the area, at least `PAD_CLEAR_M`
-        (or the map's clearance, where larger) from every obstacle, and reached from the site
-        by a straight leg clear of the planning map's (inflated) obstacles.
+        to a site take them in the order of their numbers, `pad_ranks`): index 0 (pad 1, as
+        `check` numbers them) is the site itself, the others lie `fleet.separation_m` +
+        `PAD_MARGIN_M` apart on a grid aligned with east and north around it, inside the
+        area, at least `PAD_CLEAR_M` (or the map's clearance, where larger) from every
+        obstacle, and reached from the site by a straight leg clear of the planning map's
+        (inflated) obstacles.
 
         Returns:
             (V, D, 2) read-only, local metres: V = `uavs`, D the sites of `sortie_sites`
