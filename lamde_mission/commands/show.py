@@ -31,7 +31,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "counted in the legend). MISSION may be "
         "a sortie directory (`lamde-mission plan MAP -o DIR/` for a battery or a fleet: "
         "fleet.json and mission-v{k}-s{j}.plan): every sortie replayed and drawn, one colour "
-        "per vehicle, one line style per sortie (solid, dashed, dash-dot, dotted), depots as "
+        "per vehicle, one line style per sortie (solid, dashed, dash-dot, dotted and four dash "
+        "patterns; from a vehicle's ninth sortie on again, the legend naming the sorties that "
+        "share one), depots as "
         "hexagons (every depot of the map; those no sortie uses lighter), battery swaps as "
         "stars, sensors coloured by the data of all sorties together.",
     )
