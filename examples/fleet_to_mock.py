@@ -15,8 +15,13 @@ system id (`upload_fleet`), and check that every mock vehicle holds exactly the 
 file. The same from a shell:
 
     lamde-mission plan MAP -o sorties/                 # a map with "fleet": {"uavs": 3, ...}
-    lamde-mission mock-vehicle --vehicles 3 &          # systems 1, 2, 3 sending to :14540
+    lamde-mission mock-vehicle --vehicles 3 --param MPC_XY_VEL_MAX=20 &   # systems 1, 2, 3
     lamde-mission upload sorties/ --fleet              # listens on 0.0.0.0:14540
+
+The mocks answer MPC_XY_VEL_MAX 20 m/s, the speed the sorties were planned at: at PX4's default
+of 12 m/s (the mock's default too) both `upload --fleet` and `upload_fleet` refuse sorties
+planned with a battery, nothing sent (their energy at 12 m/s is unchecked; `--map MAP`, or
+`speeds.fleet_speed_check(missions, map=m)`, judges them at the limit).
 """
 
 from __future__ import annotations
@@ -39,6 +44,8 @@ from planner_core.model.mapio import load_map
 ROOT = Path(__file__).resolve().parent
 MAP = ROOT / "maps" / "fleet-demo.json"
 UAVS = 3
+#: m/s, the mocks' MPC_XY_VEL_MAX: the map's uav.max_speed, the speed the sorties ask
+SPEED_LIMIT = 20.0
 
 
 def free_udp_ports(n: int) -> list[int]:
@@ -84,7 +91,8 @@ def main() -> int:
         ports = free_udp_ports(UAVS if args.ports else 1)
         mock_side = [f"udpout:127.0.0.1:{p}" for p in ports]
         ground_side = [f"udpin://127.0.0.1:{p}" for p in ports]
-        with MockFleet(mock_side if args.ports else mock_side[0], vehicles=UAVS) as fleet:
+        with MockFleet(mock_side if args.ports else mock_side[0], vehicles=UAVS,
+                       params={"MPC_XY_VEL_MAX": SPEED_LIMIT}) as fleet:
             report = upload_fleet(missions, connect=ground_side, via=args.via, timeout=20)
             print("\n".join(report.lines()))
             for fm, r in zip(missions, report.results, strict=True):

@@ -35,7 +35,7 @@ from planner_core.textio import counted
 __all__ = ["mission_figure", "save_figure", "figure_bytes", "plot_mission", "IMAGE_SUFFIXES",
            "MAX_DPI",
            "check_dpi", "nice_length", "SortieView", "fleet_figure", "plot_fleet",
-           "SORTIE_STYLES"]  # fmt: skip
+           "SORTIE_STYLES", "sortie_style"]  # fmt: skip
 
 IMAGE_SUFFIXES = (".png", ".svg")
 #: the highest PNG resolution drawn (dots per inch): the image's memory grows as dpi^2. `show`
@@ -1399,8 +1399,39 @@ def plot_mission(
 # ----------------------------------------------------------------------------- fleets
 
 
-#: the line style of sortie j (1-based) of a vehicle: SORTIE_STYLES[(j - 1) % 4]
-SORTIE_STYLES = ("-", "--", "-.", ":")
+#: the line style of sortie j (1-based) of a vehicle, `sortie_style(j)`: matplotlib's solid,
+#: dashed, dash-dot and dotted, then long dashes, dash-dot-dot, sparse dots and paired short
+#: dashes (dash patterns in line widths, each period within the legend's sample line). A
+#: vehicle's sorties 9, 10, ... take them again; the legend names every sortie number that
+#: shares a style ("sorties 1, 9"), and the hover labels "sortie.order" tell them apart
+SORTIE_STYLES: tuple[Any, ...] = ("-", "--", "-.", ":", (0, (6.0, 1.5)),
+                                  (0, (3.0, 1.2, 1.0, 1.2, 1.0, 1.2)), (0, (1.0, 3.0)),
+                                  (0, (2.0, 1.0, 2.0, 4.0)))  # fmt: skip
+
+
+def sortie_style(sortie: int) -> Any:
+    """The line style of a vehicle's sortie number `sortie` (1-based): SORTIE_STYLES, again
+    from sortie len(SORTIE_STYLES) + 1 on.
+
+    Args:
+        sortie: the sortie's number, 1-based.
+
+    Returns:
+        A matplotlib linestyle (a name or an (offset, dashes) pair).
+    """
+    return SORTIE_STYLES[(int(sortie) - 1) % len(SORTIE_STYLES)]
+
+
+def _style_label(first: int, most: int) -> str:
+    """The legend's words for style `first` (1-based) when a vehicle flies up to `most`
+    sorties: "sortie 3", or every sortie sharing it, "sorties 1, 9, 17" (past four numbers,
+    the first three, "...", and the last)."""
+    share = list(range(first, most + 1, len(SORTIE_STYLES)))
+    if len(share) == 1:
+        return f"sortie {first}"
+    shown = [str(j) for j in share] if len(share) <= 4 else \
+        [*(str(j) for j in share[:3]), "...", str(share[-1])]
+    return "sorties " + ", ".join(shown)
 
 
 @dataclass(frozen=True)
@@ -1441,19 +1472,20 @@ def fleet_figure(
 ) -> Any:
     """A matplotlib Figure of `map` with every sortie of a fleet, each replayed by the sim.
 
-    One colour per vehicle (tab10), one line style per sortie of a vehicle (`SORTIE_STYLES`:
-    solid, dashed, dash-dot, dotted), arrows along each leg, hover points in the vehicle's
-    colour labelled "sortie.order · seconds" (up to 40 hover points in all; past 40 left out
-    where crowded, past `HOVER_LABELS` unlabelled; "×k" on one a DO_JUMP loop visits k times:
-    each distinct leg, hover point and corner is drawn once, `_visits`), detour corners
-    (NAV_WAYPOINT, flown through) as white diamonds edged in it, the parts of legs
-    inside obstacles (C5) in red; depots (where sorties take off and land) as black-edged
-    hexagons with their names, the map's depots no sortie uses as lighter grey ones (named
-    beside them and in the legend), and each battery swap (a vehicle landing from sortie j and
-    leaving on sortie j + 1) as a star in the vehicle's colour with "v1 swap 1". Sensors are
-    coloured by the data collected over all sorties together (C4 over the whole plan).
-    Cost: O(sorties x samples) to read the replays, a few collections per sortie (its distinct
-    legs' arrows, hover points and corners) and at most `HOVER_LABELS` hover labels.
+    One colour per vehicle (tab10), one line style per sortie of a vehicle (`sortie_style`:
+    solid, dashed, dash-dot, dotted and four dash patterns; a vehicle's sorties 9, 10, ... take
+    them again, the legend naming each style's sorties), arrows along each leg, hover points in
+    the vehicle's colour labelled "sortie.order · seconds" (up to 40 hover points in all; past
+    40 left out where crowded, past `HOVER_LABELS` unlabelled; "×k" on one a DO_JUMP loop visits
+    k times: each distinct leg, hover point and corner is drawn once, `_visits`), detour corners
+    (NAV_WAYPOINT, flown through) as white diamonds edged in it, the parts of legs inside
+    obstacles (C5) in red; depots (where sorties take off and land) as black-edged hexagons with
+    their names, the map's depots no sortie uses as lighter grey ones (named beside them and in
+    the legend), and each battery swap (a vehicle landing from sortie j and leaving on
+    sortie j + 1) as a star in the vehicle's colour with "v1 swap 1". Sensors are coloured by
+    the data collected over all sorties together (C4 over the whole plan). Cost: O(sorties x
+    samples) to read the replays, a few collections per sortie (its distinct legs' arrows,
+    hover points and corners) and at most `HOVER_LABELS` hover labels.
 
     Args:
         map: the map the sorties fly on.
@@ -1486,7 +1518,7 @@ def fleet_figure(
     vehicles = sorted({sv.vehicle for sv in sorties})
     for sv, vis in zip(sorties, visits, strict=True):
         colour = _vehicle_colour(sv.vehicle)
-        style = SORTIE_STYLES[(sv.sortie - 1) % len(SORTIE_STYLES)]
+        style = sortie_style(sv.sortie)
         lengths, radius = _draw_route(ax, scene, map, vis, sv.timeline.return_leg,
                                       colour=colour, linestyle=style, arrow_scale=12,
                                       return_width=1.0, corner_edge=[colour],
@@ -1602,15 +1634,15 @@ def fleet_figure(
             )
         )
     most = max(len(svs) for svs in by_vehicle.values())
-    for j in range(1, min(most, len(SORTIE_STYLES)) + 1):
+    for j in range(1, min(most, len(SORTIE_STYLES)) + 1):  # every style a sortie flies
         handles.append(
             Line2D(
                 [],
                 [],
                 color="0.2",
                 linewidth=1.6,
-                linestyle=SORTIE_STYLES[j - 1],
-                label=f"sortie {j}",
+                linestyle=sortie_style(j),
+                label=_style_label(j, most),
             )
         )
     handles.append(

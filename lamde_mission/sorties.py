@@ -201,8 +201,8 @@ def sortie_map(
     pads: tuple[int, int] = (0, 0),
 ) -> Any:
     """The map one sortie is stored and replayed on: `m` with start and end at pads
-    `pads` (`Map.pads_for`; pad 0 the depot itself; which vehicle uses which:
-    `planner_core.model.pads.pad_ranks`) of the depots named `start` and `end`
+    `pads` (indices into `Map.pads_for`; index 0, pad 1, the depot itself; which vehicle uses
+    which: `planner_core.model.pads.pad_ranks`) of the depots named `start` and `end`
     (`planner_core.fleet.FleetSettings` names: the map's depots, or "home" and "end"),
     sensors' required data `required` (J,) Mbit (default 0: the whole plan's C4 is judged
     over all sorties), the battery kept (ENERGY), the fleet left out.
@@ -812,8 +812,39 @@ def verify_sortie_dir(m: Any, path: str | Path,
     check = replace(check, fleet=(*check.fleet, times, _places_verdict(
         m, check, places, fleet.depots)))
     notes = [n for n in (_far_note(m, check), fleet.map_note(m.name, "verified"),
-                         _pads_note(m, check)) if n]  # fmt: skip
+                         _battery_note(m, fleet), _pads_note(m, check)) if n]  # fmt: skip
     return replace(check, notes=tuple(notes)) if notes else check
+
+
+def _battery_note(m: Any, fleet: Any) -> str | None:
+    """A note when fleet.json gives the energies of sorties planned with a battery and the map
+    verified on has none: ENERGY is not judged, and those energies (what `upload --fleet`
+    reports without a map) no longer say what the sorties may spend. O(sorties).
+
+    Args:
+        m: the map verified on.
+        fleet: the directory's fleet.json (`formats.fleet.read_fleet_dir`).
+
+    Returns:
+        One line naming the directory, the sorties with an energy and the first of them, or
+        None when the map has a battery or fleet.json gives no energy.
+    """
+    from planner_core.textio import printable
+
+    if m.has_battery:
+        return None
+    planned = [s for v in fleet.vehicles for s in v.sorties if s.energy_wh is not None]
+    if not planned:
+        return None
+    first = planned[0]
+    which = (f"{first.path.name}: {first.energy_wh:.2f} Wh" if len(planned) == 1 else
+             f"{counted(len(planned), 'sortie')}, e.g. {first.path.name}: "
+             f"{first.energy_wh:.2f} Wh")  # fmt: skip
+    return printable(
+        f"{fleet.path}: planned with a battery (its energies: {which}), verified on map "
+        f"'{m.name}', which has none: ENERGY is not judged, and fleet.json's energies and "
+        "reserves no longer apply (verify on the map with its uav.battery or uav.endurance_s "
+        "to judge them)")
 
 
 def _far_note(m: Any, check: FleetCheck) -> str | None:

@@ -502,3 +502,58 @@ def test_a_map_that_does_not_load_is_named_before_the_sortie_options(tmp_path, e
     r = run_here(["plan", str(missing), "-o", str(tmp_path / "d") + "/", *extra])
     assert r.status == 2 and r.stderr.strip() == f"lamde-mission plan: {missing}: file not found"
     assert list(tmp_path.iterdir()) == []
+
+
+def test_past_40_sensors_the_summary_lists_the_least_served_and_the_report_all(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A newcomer: `plan` on a 200-sensor map printed 200 per-sensor lines. Past
+    SENSOR_LINES (40: the paper's maps print as before) it lists the SENSORS_SHOWN least
+    served, and counts the rest with the least margin among them; --verbose lists every
+    sensor, and --report holds every sensor as the simulator replayed it."""
+    from lamde_mission.cli import main
+    from lamde_mission.commands.plan import SENSOR_LINES, SENSORS_SHOWN
+
+    farm, out, rep = tmp_path / "farm.json", tmp_path / "m.plan", tmp_path / "r.json"
+    assert main(["generate", str(farm), "--layout", "clustered", "--size", "10000",
+                 "--sensors", "48", "--cluster-size", "12", "--seed", "7"]) == 0  # fmt: skip
+    capsys.readouterr()
+    plan = ["plan", str(farm), "-o", str(out), "--budget", "300", "--report", str(rep)]
+    assert main(plan) == 0
+    text = capsys.readouterr().out
+    lines = text.splitlines()
+    head = lines.index(f"  data collected vs required (Mbit), the {SENSORS_SHOWN} least "
+                       "served of 48 sensors:")
+    rows = lines[head + 1: head + 1 + SENSORS_SHOWN]
+    assert all(r.startswith("    S") and " ok " in r for r in rows)
+    more = lines[head + 1 + SENSORS_SHOWN]
+    assert more.startswith(f"    ... and {48 - SENSORS_SHOWN} more, all ok (the least +")
+    assert more.endswith("above its requirement); every sensor: --verbose, or --report's "
+                         '"sensors"')
+    sensors = json.loads(rep.read_text())["sensors"]
+    assert [s["id"] for s in sensors] == [f"S{k:02d}" for k in range(1, 49)]
+    margins = sorted(s["collected"] / s["required"] for s in sensors)
+    shown = [float(r.split()[1]) / float(r.split()[3]) for r in rows]
+    assert shown == pytest.approx(margins[:SENSORS_SHOWN], abs=1e-3)  # the least served
+    assert 48 > SENSOR_LINES
+    assert main([*plan, "--verbose"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    head = lines.index("  data collected vs required (Mbit):")
+    assert [r.split()[0] for r in lines[head + 1: head + 49]] == [s["id"] for s in sensors]
+
+
+def test_the_short_sensors_are_always_listed() -> None:
+    from lamde_mission.commands.plan import SENSORS_SHOWN, _sensor_lines
+
+    rows = [{"id": f"s{k}", "collected": 10.0 + k, "required": 10.0, "ok": True}
+            for k in range(60)]  # fmt: skip
+    for k in (30, 50, 59):  # short, and beyond the 10 least served by position
+        rows[k] = {"id": f"s{k}", "collected": 5.0, "required": 10.0, "ok": False}
+    lines = _sensor_lines(rows)
+    names = [ln.split()[0] for ln in lines[1:-1]]
+    assert names[:3] == ["s30", "s50", "s59"] and len(names) == SENSORS_SHOWN
+    assert all("SHORT" in ln for ln in lines[1:4])
+    assert lines[-1].startswith("    ... and 50 more, all ok (the least +70.00 % above")
+    rows = [dict(r, collected=1.0, ok=False) for r in rows]  # every one short: all listed
+    lines = _sensor_lines(rows)
+    assert len(lines) == 61 and "more" not in lines[-1]
+    assert len(_sensor_lines(rows[:40])) == 41  # 40 sensors: every one, as before

@@ -395,3 +395,27 @@ def test_bench_runs_the_large_suite(tmp_path: Path) -> None:
     assert r.returncode == 0, r.stdout + r.stderr
     rec = json.loads((tmp_path / "out" / "results.jsonl").read_text().splitlines()[-1])
     assert rec["task"] == "L04"
+
+
+def test_the_documented_large_map_command_runs(tmp_path: Path) -> None:
+    """A newcomer found --layout, --sensors and --cluster-size only in docs/scaling.md and
+    `generate --help`: docs/maps.md's "Generated maps" gives them, and its command runs as
+    written: 48 sensors in fields of 12, with a witness the map's check passes."""
+    from tests.conftest import ROOT
+
+    page = (ROOT / "docs" / "maps.md").read_text(encoding="utf-8")
+    section = page[page.index("## Generated maps"):page.index("## Bad files")]
+    for option in ("--layout", "--sensors", "--cluster-size", "--large-suite"):
+        assert f"`{option}" in section or f" {option} " in section, option
+    line = next(ln for ln in section.splitlines() if "--cluster-size" in ln
+                and ln.startswith("lamde-mission generate"))  # fmt: skip
+    argv = line.split("#")[0].split()[2:]
+    assert argv[0] == "farm.json" and "--layout" in argv and "--sensors" in argv
+    r = run_cli("generate", *argv, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    doc = json.loads((tmp_path / "farm.json").read_text())
+    n, k = int(argv[argv.index("--sensors") + 1]), int(argv[argv.index("--cluster-size") + 1])
+    assert len(doc["sensors"]) == n and n % k == 0
+    assert doc["witness"]["hover_points"] and doc["origin"]
+    r = run_cli("check", tmp_path / "farm.json")
+    assert r.returncode == 0 and "OK" in r.stdout, r.stdout + r.stderr

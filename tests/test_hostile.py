@@ -373,9 +373,87 @@ def test_control_characters_never_split_a_message() -> None:
     with pytest.raises(MapError) as info:
         load_map(d)
     assert info.value.problems == [
-        "sensors[0].id: must be printable text (no control characters such as newlines or tabs)",
+        "sensors[0].id: must be printable text (no control characters, line or paragraph "
+        "separators, or bidirectional controls: names are printed in one-line messages); "
+        "character 2 is a newline (U+000A), a C0 control character",
         "uav.'max\\nsped': unknown field (did you mean 'max_speed'?)",
     ]
+
+
+@pytest.mark.parametrize(("change", "line"), [
+    (lambda d: d.update(fleet={"depots": [{"name": "a", "x": 5, "y": 5},
+                                          {"name": "", "x": 6, "y": 6}]}),
+     'fleet.depots[1].name: must be 1 to 100 characters long, got "" (an empty string)'),
+    (lambda d: d.update(fleet={"depots": [{"name": "n" * 101, "x": 5, "y": 5}]}),
+     'fleet.depots[0].name: must be 1 to 100 characters long, got "' + "n" * 36
+     + '... (a string of 101 characters)'),
+    (lambda d: d.update(fleet={"depots": [{"name": f"d{k}", "x": 5, "y": 5}
+                                          for k in range(101)]}),
+     "fleet.depots: must hold 1 to 100 depots, got 101"),
+    (lambda d: d.update(fleet={"depots": [{"name": "a", "x": 5, "y": 5,
+                                           "pads": [[6, 6]] * 101}]}),
+     "fleet.depots[0].pads: must hold at most 100 pads, got 101"),
+    (lambda d: d.update(name=""), 'name: must be 1 to 200 characters long, got "" (an empty '
+                                  "string)"),
+    (lambda d: d.update(name="m" * 201), "name: must be 1 to 200 characters long, got "
+     '"mmmmmmmmmmmmmmmmmmmmmmmmmmmmmmmmmmmm... (a string of 201 characters)'),
+    (lambda d: d["sensors"][0].update(id=""),
+     'sensors[0].id: must be 1 to 100 characters long, got "" (an empty string)'),
+    (lambda d: d.update(witness={"hover_points": [[1, 1]] * 201, "hover_times": [1]}),
+     "witness.hover_points: must hold at most 200 hover points, got 201"),
+    (lambda d: d["obstacles"].update(no_fly_zones=[{"vertices": [[1, 1], [2, 1], [2, 2]],
+                                                    "name": "z" * 201}]),
+     "obstacles.no_fly_zones[0].name: must be at most 200 characters long, got "
+     '"zzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzz... (a string of 201 characters)'),
+])  # fmt: skip
+def test_length_errors_are_one_house_style_line(change, line) -> None:
+    """A newcomer met pydantic's own words ("String should have at least 1 character", "List
+    should have at most 100 items after validation, not 101") among the map's messages: every
+    string or list of the wrong length now names the field, the whole allowed range and what
+    was given."""
+    d = _tiny()
+    change(d)
+    with pytest.raises(MapError) as info:
+        load_map(d)
+    assert info.value.problems == [line]
+    assert "should have" not in line
+
+
+@pytest.mark.parametrize(("char", "said"), [
+    ("\u202e", "U+202E RIGHT-TO-LEFT OVERRIDE, a bidirectional embedding or override (it "
+                "reorders what a terminal shows)"),
+    ("\u2067", "U+2067 RIGHT-TO-LEFT ISOLATE, a bidirectional isolate (it reorders what a "
+                "terminal shows)"),
+    ("\u2028", "U+2028 LINE SEPARATOR, a line or paragraph separator"),
+    ("\t", "a tab (U+0009), a C0 control character"),
+    ("\x85", "U+0085, a C1 control character"),
+    ("\x7f", "U+007F, the control character DEL"),
+])  # fmt: skip
+def test_an_unprintable_name_names_its_character_class(char, said) -> None:
+    """A depot name holding a bidi override was refused as "no control characters such as
+    newlines or tabs": the line now names the character, where it is, and its class."""
+    d = _tiny()
+    d["fleet"] = {"depots": [{"name": f"ab{char}c", "x": 5, "y": 5}]}
+    with pytest.raises(MapError) as info:
+        load_map(d)
+    assert info.value.problems == [
+        "fleet.depots[0].name: must be printable text (no control characters, line or "
+        "paragraph separators, or bidirectional controls: names are printed in one-line "
+        f"messages); character 3 is {said}"]
+
+
+def test_generate_refuses_an_empty_map_name_as_the_map_format_does(tmp_path, capsys) -> None:
+    """`generate g1.json --name ""` wrote a map named "" while a depot's name must not be
+    empty: a map's name is not empty either (1 to 200 characters), and generate says so up
+    front."""
+    from lamde_mission.cli import main
+
+    out = tmp_path / "g1.json"
+    assert main(["generate", str(out), "--name", "", "--size", "5000", "--density", "1"]) == 2
+    assert capsys.readouterr().err.strip() == (
+        'lamde-mission generate: --name: must be 1 to 200 characters long, got "" (an empty '
+        "string)")
+    assert not out.exists()
 
 
 def test_readme_lists_every_input_limit() -> None:

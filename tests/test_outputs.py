@@ -397,3 +397,25 @@ def test_plan_never_prints_a_maps_control_characters(field: str, tmp_path: Path)
         assert not any(line.startswith("wrote /etc") for line in out.splitlines())
         if r.returncode != 2:
             assert printable(evil) in r.stdout
+
+
+def test_show_refuses_a_missing_output_folder_as_plan_does_unless_mkdir(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A newcomer: `show MAP DIR/ -o nope2/x.png` made the folder silently (exit 0), while
+    `plan --plot nope5/x.png`, `generate` and `map` refuse a missing folder. show now shares
+    their check (`_common.check_outputs`): one line, exit 2, nothing made; --mkdir makes it."""
+    from lamde_mission.cli import main
+
+    for cmd in (["show", str(DEMO)], ["plan", str(DEMO), "-o", str(tmp_path / "m.plan")]):
+        out = tmp_path / "nope" / "x.png"
+        argv = [*cmd, "-o" if cmd[0] == "show" else "--plot", str(out)]
+        assert main(argv) == 2
+        lines = capsys.readouterr().err.strip().splitlines()
+        option = "-o/--output" if cmd[0] == "show" else "--plot"
+        assert lines == [f"lamde-mission {cmd[0]}: {option}: {out}: the folder {out.parent} does "
+                         "not exist (create it, or pass --mkdir)"], lines
+        assert not out.parent.exists()
+    out = tmp_path / "made" / "deeper" / "x.svg"
+    assert main(["show", str(DEMO), "-o", str(out), "--mkdir"]) == 0
+    assert "<svg" in out.read_text()[:400]

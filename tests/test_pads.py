@@ -265,11 +265,11 @@ def test_a_depot_may_list_its_pads_as_the_crew_has_them():
                        ([[-50.0, 100.0]], "lies outside the area"),
                        # beyond the two the 3 vehicles use, still held to the rules
                        ([[100.0, 150.0], [150.0, 100.0], [100.0, 170.0]],
-                        "lies 20.0 m from the pad at (100, 150) of depot 'home'")):
+                        "lies 20.0 m from pad 2 at (100, 150) of depot 'home'")):
         doc["fleet"]["depots"][0]["pads"] = pads
         k = len(pads) - 1
-        with pytest.raises(ValueError, match=rf"^fleet\.depots\[0\]\.pads\[{k}\]: the pad of "
-                                             r"depot 'home' at \(.*\) " + re.escape(said)):
+        with pytest.raises(ValueError, match=rf"^fleet\.depots\[0\]\.pads\[{k}\]: pad {k + 2} "
+                                             r"of depot 'home' at \(.*\) " + re.escape(said)):
             load_map(doc).pads_for(3)
     # one vehicle uses no pad, but a listed one that breaks the rules is still named
     one = _demo(1)
@@ -308,6 +308,29 @@ def test_check_lists_the_pads(tmp_path, capsys):
     path.write_text(json.dumps(_demo(1)))
     assert main(["check", str(path)]) == 0
     assert "pads " not in capsys.readouterr().out
+
+
+def test_pads_are_numbered_from_1_wherever_a_person_reads_them(capsys):
+    """A newcomer: docs/sorties.md said "pad 0 is the depot itself" and, on the same page,
+    that listed pads are "pads 2, 3, ..."; `check` and the schema say "pad 1 ... is the
+    depot". One numbering for people (the code's indices start at 0): pad 1 is the depot,
+    the pads a depot lists are 2, 3, ..., in the docs, `check`, the schema and the errors."""
+    from lamde_mission.cli import main
+    from tests.conftest import ROOT
+
+    page = (ROOT / "docs" / "sorties.md").read_text(encoding="utf-8")
+    assert "pad 1 is the depot itself, pads 2, 3, ..." in page
+    assert "(pads 2 and 3, after the depot's pad 1;" in " ".join(page.split())
+    assert not re.search(r"\bpads? 0\b", page)
+    assert main(["schema"]) == 0
+    schema = capsys.readouterr().out
+    assert "the depot's pads 2, 3, ... as the crew has them (pad 1 is the depot itself)" in schema
+    assert not re.search(r"\bpads? 0\b", schema)
+    doc = _demo(3)
+    doc["fleet"]["depots"][0]["pads"] = [[100.0, 150.0], [100.0, 160.0]]
+    with pytest.raises(ValueError, match=r"^fleet\.depots\[0\]\.pads\[1\]: pad 3 of depot "
+                                         r"'home' at \(100, 160\) lies 10\.0 m from pad 2 at "):
+        load_map(doc).pads_for(3)
 
 
 def test_check_notes_a_separation_above_the_flight_altitude(tmp_path, capsys):

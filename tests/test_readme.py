@@ -185,6 +185,9 @@ COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
         ("test_plot_cli.py::test_show_writes_png", ('"show"',)),
     "lamde-mission generate --suite":
         ("test_suite.py::test_cli_suite_reproduces_committed_files", ('"--suite"',)),
+    "lamde-mission generate farm.json --layout":
+        ("test_generate_large.py::test_the_documented_large_map_command_runs",
+         ("maps.md", '"--cluster-size"')),
     "lamde-mission generate my.json":
         ("test_suite.py::test_cli_one_map", ('"--density"', '"--seed"')),
     "lamde-mission mock-vehicle":
@@ -199,6 +202,9 @@ COVERED_BY: dict[str, tuple[str, tuple[str, ...]]] = {
     "lamde-mission mock-vehicle --vehicles":
         ("test_vehicle_fleet.py::test_cli_mock_vehicle_fleet_runs_until_ctrl_c",
          ('"mock-vehicle"', '"--vehicles"', '"--ports"')),
+    "lamde-mission mock-vehicle --vehicles 3 --param MPC_XY_VEL_MAX=20":
+        ("test_speed_limit.py::test_the_documented_fleet_recipe_runs_as_written",
+         ("MPC_XY_VEL_MAX=20", '"upload"', '"--fleet"')),
     "lamde-mission mock-vehicle --sysids":
         ("test_vehicle_fleet.py::test_cli_mock_vehicle_fleet_runs_until_ctrl_c",
          ('"mock-vehicle"', '"--sysids"')),

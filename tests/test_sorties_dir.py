@@ -239,6 +239,37 @@ def test_verify_notes_a_fleet_json_of_another_map(dirs, tmp_path, capsys):
     assert rc == 0 and err == ""
 
 
+def test_verify_notes_a_directory_planned_with_a_battery_on_a_map_without_one(dirs, tmp_path,
+                                                                              capsys):
+    """A newcomer: a directory planned with a battery, verified against the same map without
+    one, passed with no word that fleet.json's energies no longer apply (ENERGY is not judged
+    there). A note now, on stderr and in --json's notes; the verdict is unchanged."""
+    from lamde_mission.formats.fleet import read_fleet_dir
+
+    map_path, d = dirs[1]
+    doc = json.loads(map_path.read_text())
+    del doc["uav"]["endurance_s"], doc["uav"]["battery"]  # no battery at all
+    bare = tmp_path / "no-battery.json"
+    bare.write_text(json.dumps(doc))
+    planned = [s for v in read_fleet_dir(d).vehicles for s in v.sorties]
+    assert all(s.energy_wh is not None for s in planned)
+    first = planned[0]
+    which = (f"{first.path.name}: {first.energy_wh:.2f} Wh" if len(planned) == 1 else
+             f"{len(planned)} sorties, e.g. {first.path.name}: {first.energy_wh:.2f} Wh")
+    note = (f"{d}: planned with a battery (its energies: {which}), verified on map "
+            "'fleet-demo', which has none: ENERGY is not judged, and fleet.json's energies and "
+            "reserves no longer apply (verify on the map with its uav.battery or "
+            "uav.endurance_s to judge them)")
+    rc, out, err = _verify(capsys, bare, d)
+    assert rc == 0, out
+    assert err.strip() == f"note: {note}"
+    assert "ENERGY" not in out
+    rc, out, err = _verify(capsys, bare, d, "--json")
+    assert json.loads(out)["notes"] == [note]
+    rc, out, err = _verify(capsys, map_path, d)  # the map it was planned on: no note
+    assert rc == 0 and err == ""
+
+
 def test_verify_on_a_map_without_the_directorys_depots_names_the_map_it_was_planned_on(
         dirs, tmp_path, capsys):  # fmt: skip
     """`verify small-demo.json DIR/` (DIR planned on fleet-demo) said only "depot: unknown

@@ -257,8 +257,8 @@ def test_without_a_battery_a_slow_fleet_is_warned_and_an_unsaid_battery_refused(
         assert (f"warning: {out}: vehicle 1 MPC_XY_VEL_MAX 12 m/s, vehicle 2 MPC_XY_VEL_MAX 12 "
                 "m/s, below the 20 m/s the sorties ask (DO_CHANGE_SPEED), so they fly at their "
                 "limits; their flight times, and the vehicles' separation and take-off times, "
-                "were planned at 20 m/s (--map checks the fleet at the limits; set the limit to "
-                "20 or more, or plan the map with uav.max_speed 12)") in err
+                "were planned at 20 m/s (--map MAP checks the fleet at the limits; set the limit "
+                "to 20 or more, or plan the map with uav.max_speed 12)") in err
         assert all(n > 0 for n in _sent(fleet))
     doc = json.loads((out / "fleet.json").read_text())
     for v in doc["vehicles"]:
@@ -348,3 +348,121 @@ def test_a_vehicles_later_take_offs_move_at_its_limit_and_times_holds(tmp_path) 
     (times,) = [v for v in slow.fleet if v.name == "TIMES"]
     assert times.passed and "sortie 2 takes off at" in times.detail, times.detail
     assert "(planned speeds)" in times.detail
+
+
+def test_the_python_upload_fleet_checks_the_limits_by_default_as_the_cli_does(fleet2,
+                                                                            capsys) -> None:
+    """A newcomer: the Python `upload_fleet` (docs/fleet.md's snippet, fleet_to_mock.py) sent
+    sorties planned at 20 m/s with a battery to mocks at MPC_XY_VEL_MAX 12 and said nothing,
+    while `upload DIR/ --fleet` refuses them. By default it now reads every limit and applies
+    the CLI's check (`speeds.fleet_speed_check`): the same refusal, in the API's words, and
+    nothing sent; `speed_check=None` skips it, force=True warns and sends, a map judges."""
+    from lamde_mission.vehicle.fleet import first_sortie_missions, upload_fleet
+    from lamde_mission.vehicle.speeds import (
+        API_HINTS,
+        CLI_HINTS,
+        SpeedLimitWarning,
+        fleet_speed_check,
+    )
+    from lamde_mission.vehicle.transfer import SpeedLimitError
+    from planner_core.model.mapio import load_map
+
+    path, out = fleet2
+    missions = first_sortie_missions(out)
+    assert [fm.sortie.path for fm in missions] == [out / fm.source for fm in missions]
+    port = free_udp_port()
+    conn = ["--connect", f"udpin://127.0.0.1:{port}", "--via", "pymavlink", "--timeout", "5"]
+    api = {"connect": [f"udpin://127.0.0.1:{port}"], "via": "pymavlink", "timeout": 5,
+           "window": 0.3}
+    with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=2, heartbeat_hz=10.0) as fleet:
+        assert main(["upload", str(out), "--fleet", *conn]) == 1
+        cli = capsys.readouterr().err.strip().removeprefix("lamde-mission upload: ")
+        with pytest.raises(SpeedLimitError) as exc:
+            upload_fleet(missions, **api)
+        assert _sent(fleet) == [0, 0]
+        # one check, two sets of words: the CLI's options, the API's arguments
+        said = str(exc.value)
+        for cli_words, api_words in zip(CLI_HINTS, API_HINTS, strict=True):
+            cli = cli.replace(cli_words, api_words)
+        assert said == cli and "fleet_speed_check(..., force=True) sends it anyway" in said
+        # with the map: judged at the limits, as `upload DIR/ --fleet --map MAP`
+        with pytest.raises(SpeedLimitError, match="the simulator rejects the fleet on demo"):
+            upload_fleet(missions, **api, speed_check=fleet_speed_check(
+                missions, map=load_map(path), map_label="demo"))
+        assert _sent(fleet) == [0, 0]
+        with pytest.warns(SpeedLimitWarning, match="energy at those speeds is unchecked"):
+            report = upload_fleet(missions, **api,
+                                  speed_check=fleet_speed_check(missions, force=True))
+        assert report.ok and all(n > 0 for n in _sent(fleet))
+        report = upload_fleet(missions, **api, speed_check=None)  # the explicit skip
+        assert report.ok
+        assert all(r.report.speed_limit is None for r in report.results)  # nothing read
+        with pytest.raises(ValueError, match='speed_check must be a function, "planned" or '
+                                             "None"):
+            upload_fleet(missions, **api, speed_check="default")
+    with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=2, heartbeat_hz=10.0,
+                   params={"MPC_XY_VEL_MAX": 20.0}):  # fmt: skip
+        import warnings
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            report = upload_fleet(missions, **api)
+        assert report.ok
+        assert [r.report.speed_limit for r in report.results] == [("MPC_XY_VEL_MAX", 20.0)] * 2
+
+
+def test_hand_made_fleet_missions_below_the_limit_are_warned_about(capsys) -> None:
+    """Missions made by hand are no sorties of a directory: no planned energy is known, so,
+    as a single mission's upload, a warning and sent (not refused)."""
+    from lamde_mission.vehicle.fleet import FleetMission, upload_fleet
+    from lamde_mission.vehicle.speeds import SpeedLimitWarning
+    from tests.vehicle_helpers import hand_mission
+
+    missions = [FleetMission(k + 1, hand_mission(k + 2), [], source=f"m{k + 1}")
+                for k in range(2)]  # fmt: skip
+    port = free_udp_port()
+    with (MockFleet(f"udpout:127.0.0.1:{port}", vehicles=2, heartbeat_hz=10.0),
+          pytest.warns(SpeedLimitWarning) as got):
+        report = upload_fleet(missions, connect=[f"udpin://127.0.0.1:{port}"],
+                              via="pymavlink", timeout=5, window=0.3)  # fmt: skip
+    assert report.ok
+    assert str(got[0].message).startswith(
+        "the fleet: vehicle 1 MPC_XY_VEL_MAX 12 m/s, vehicle 2 MPC_XY_VEL_MAX 12 m/s, below the "
+        "18 m/s the sorties ask (DO_CHANGE_SPEED)")
+
+
+def test_the_documented_fleet_recipe_runs_as_written(fleet2, tmp_path) -> None:
+    """docs/fleet.md, the README and fleet_to_mock.py gave `mock-vehicle --vehicles 3 &` then
+    `upload sorties/ --fleet`: the mock says PX4's default MPC_XY_VEL_MAX, 12 m/s, below the
+    sorties' 20 m/s, so every battery map was refused (exit 1). The mock keeps PX4's default
+    (it stands for a PX4 vehicle; the refusal is what a real one gets); the recipes set the
+    limit the sorties were planned at. Run here as written, on a free port."""
+    import re
+    import subprocess
+    import sys
+
+    from tests.conftest import ROOT
+
+    texts = {name: (ROOT / name).read_text(encoding="utf-8")
+             for name in ("docs/fleet.md", "README.md", "examples/fleet_to_mock.py")}
+    recipe = "lamde-mission mock-vehicle --vehicles 3 --param MPC_XY_VEL_MAX=20"
+    for name, text in texts.items():
+        assert recipe in text, name
+        assert not re.search(r"lamde-mission mock-vehicle --vehicles 3( *&|`)", text), name
+    path, out = fleet2
+    port = free_udp_port()
+    argv = recipe.split()[1:]
+    argv[argv.index("3")] = "2"  # fleet2 plans two UAVs
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "lamde_mission.cli", *argv, "--connect",
+         f"udpout:127.0.0.1:{port}", "--heartbeat-hz", "10"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        assert "2 vehicles" in proc.stdout.readline()
+        rc = main(["upload", str(out), "--fleet", "--connect", f"udpin://127.0.0.1:{port}",
+                   "--via", "pymavlink", "--timeout", "10"])  # fmt: skip
+        assert rc == 0
+    finally:
+        proc.kill()
+        proc.communicate()

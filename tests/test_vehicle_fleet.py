@@ -578,6 +578,37 @@ def test_fleet_figure_marks_vehicles_sorties_depots_and_swaps(fleet_dir):
     assert len(colours) == 3
 
 
+def test_a_vehicles_sorties_past_four_keep_their_own_line_styles(tmp_path):
+    """A newcomer: after sortie 4 the line styles repeated (vehicle 2's sorties 1 and 5 both
+    solid) and the legend listed sorties 1-4 only. Eight styles now (`sortie_style`), every
+    one a vehicle flies in the legend; past eight, the legend names the sorties sharing a
+    style ("sorties 1, 9")."""
+    from matplotlib.lines import _get_dash_pattern
+
+    from lamde_mission.commands.show import fleet_views
+    from lamde_mission.plot import SORTIE_STYLES, _style_label, fleet_figure, sortie_style
+    from planner_core.model.mapio import load_map
+
+    patterns = [_get_dash_pattern(s) for s in SORTIE_STYLES]
+    assert len(SORTIE_STYLES) == 8 and len({(o, tuple(d or ())) for o, d in patterns}) == 8
+    assert sortie_style(5) != sortie_style(1) and sortie_style(9) == sortie_style(1)
+    ids = ["S1", "S2", "S3", "S4"]
+    d = write_fleet_dir(tmp_path / "d", [[["S1"]], [[ids[j % 4]] for j in range(10)]])
+    m = load_map(DEMO_MAP)
+    fig = fleet_figure(m, fleet_views(d, m))
+    legend = [t.get_text() for t in fig.legends[0].get_texts()]
+    sorties = [t for t in legend if t.startswith("sortie")]
+    assert sorties == ["sorties 1, 9", "sorties 2, 10", *(f"sortie {j}" for j in range(3, 9))]
+    from lamde_mission.plot import _vehicle_colour
+
+    two = [ln for ln in fig.axes[0].get_lines() if ln.get_linewidth() == 1.6
+           and tuple(ln.get_color()) == tuple(_vehicle_colour(2))]  # fmt: skip
+    drawn = [(o, tuple(p or ())) for o, p in (ln._unscaled_dash_pattern for ln in two)]
+    assert len(two) == 10 and len(set(drawn)) == 8  # sorties 1-8 apart, 9 and 10 again
+    assert drawn[:8] == [(o, tuple(p or ())) for o, p in patterns]
+    assert _style_label(1, 40) == "sorties 1, 9, 17, ..., 33"
+
+
 def test_cli_show_fleet_dir(fleet_dir, tmp_path, capsys):
     out = tmp_path / "fleet.png"
     assert main(["show", str(DEMO_MAP), str(fleet_dir), "-o", str(out)]) == 0

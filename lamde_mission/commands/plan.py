@@ -140,6 +140,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--mkdir", action="store_true",
                    help="create missing folders of the output paths (otherwise exit 2)")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
+    p.add_argument("--verbose", action="store_true",
+                   help=f"the summary lists every sensor's data (by default, past "
+                   f"{SENSOR_LINES} sensors, the {SENSORS_SHOWN} least served and every short "
+                   "one; --report holds them all)")
     return p
 
 
@@ -309,9 +313,64 @@ def _run_settings(config: dict[str, Any]) -> str:
     return f", scheduler {sched}" + (f" -> {choice}" if choice else "") + share
 
 
+#: the summary lists every sensor's data up to this many sensors (the paper's maps, 40 at most)
+SENSOR_LINES = 40
+#: past SENSOR_LINES sensors (without --verbose), the least served this many are listed, and
+#: every short one; the rest are counted in one line
+SENSORS_SHOWN = 10
+
+
+def _sensor_rows(m: Any, timeline: Any) -> list[dict[str, Any]]:
+    """Each sensor's data as the simulator replayed it: id, collected and required Mbit,
+    whether it is served (C4), in map order; what `--report`'s "sensors" holds. O(J)."""
+    req = dict(zip(m.sensor_ids, m.required_data.tolist(), strict=True))
+    got = timeline.totals.collected
+    return [{"id": sid, "collected": float(got[sid]), "required": float(req[sid]),
+             "ok": bool(got[sid] >= req[sid])} for sid in m.sensor_ids]  # fmt: skip
+
+
+def _sensor_lines(rows: list[dict[str, Any]], *, every: bool = False) -> list[str]:
+    """The summary's data lines: every sensor up to SENSOR_LINES (or `every`), else the
+    SENSORS_SHOWN least served (lowest collected / required) and every short one, least
+    served first, and one line counting the rest. O(J log J).
+
+    Args:
+        rows: `_sensor_rows`.
+        every: list every sensor whatever the count (`--verbose`).
+
+    Returns:
+        The lines, header first.
+    """
+    from planner_core.textio import counted, printable
+
+    def ratio(r: dict[str, Any]) -> float:
+        return r["collected"] / r["required"] if r["required"] > 0 else float("inf")
+
+    def line(r: dict[str, Any]) -> str:
+        ok = "ok" if r["ok"] else "SHORT"
+        over = f"{100 * (ratio(r) - 1):+.2f} %" if r["required"] > 0 else ""
+        return (f"    {printable(r['id']):<12} {r['collected']:10.1f} / {r['required']:<8.1f} "
+                f"{ok:<5} {over}")
+
+    if every or len(rows) <= SENSOR_LINES:
+        return ["  data collected vs required (Mbit):", *(line(r) for r in rows)]
+    order = sorted(range(len(rows)), key=lambda k: (ratio(rows[k]), k))
+    shown = [k for n, k in enumerate(order) if n < SENSORS_SHOWN or not rows[k]["ok"]]
+    listed = set(shown)
+    rest = [rows[k] for k in order if k not in listed]
+    out = [f"  data collected vs required (Mbit), the {len(shown)} least served of "
+           f"{counted(len(rows), 'sensor')}:", *(line(rows[k]) for k in shown)]
+    if rest:  # sorted: the first is the least served of them
+        margin = (f"the least {100 * (ratio(rest[0]) - 1):+.2f} % above its requirement"
+                  if rest[0]["required"] > 0 else "none required")
+        out.append(f"    ... and {len(rest)} more, all ok ({margin}); every sensor: --verbose, "
+                   "or --report's \"sensors\"")
+    return out
+
+
 def _summary(
     plan: Any, m: Any, timeline: Any, verdicts: Any, out: str | list[str] | None,
-    stored: Any = None,
+    stored: Any = None, *, every_sensor: bool = False,
 ) -> str:
     from planner_core.textio import counted, printable
 
@@ -356,13 +415,7 @@ def _summary(
                      f"phi {pol['phi_before']:.4g} -> {pol['phi_after']:.4g}"
                      + ("" if pol["accepted"] else " (kept the unpolished plan)"))
     lines.extend(_stage_table(plan))
-    lines.append("  data collected vs required (Mbit):")
-    req = dict(zip(m.sensor_ids, m.required_data.tolist(), strict=True))
-    got = t.collected
-    for sid in m.sensor_ids:
-        ok = "ok" if got[sid] >= req[sid] else "SHORT"
-        over = f"{100 * (got[sid] / req[sid] - 1):+.2f} %" if req[sid] > 0 else ""
-        lines.append(f"    {printable(sid):<12} {got[sid]:10.1f} / {req[sid]:<8.1f} {ok:<5} {over}")
+    lines.extend(_sensor_lines(_sensor_rows(m, timeline), every=every_sensor))
     sf = m.spec.safety
     lines.append(f"  safety: clearance {verdicts.clearance:.2f} m (asked {sf.clearance:g} m), "
                  f"data margin asked {100 * sf.data_margin:g} %")
@@ -956,7 +1009,8 @@ def run(args: argparse.Namespace) -> int:
         from planner_core.textio import printable
 
         if not args.quiet:
-            print(_summary(plan, m, timeline, verdicts, None, stored))
+            print(_summary(plan, m, timeline, verdicts, None, stored,
+                           every_sensor=args.verbose))
         if plan.feasible:  # the plan met the model; the mission as stored does not
             print(f"lamde-mission plan: the plan for {printable(args.map)} is feasible, but "
                   f"not once stored as {stored.dialect.name} stores it (1e-7 degree lat/lon, "
@@ -998,6 +1052,7 @@ def run(args: argparse.Namespace) -> int:
                       "stored": {"autopilot": stored.dialect.name, "finish": args.finish,
                                  "hover_points": stored.hover_points.tolist(),
                                  "hover_times": stored.hover_times.tolist()},
+                      "sensors": _sensor_rows(m, timeline),
                       "map": args.map, "output": args.output, "format": fmt,
                       "mission_sha256": hashlib.sha256(pending.read_bytes()).hexdigest()}
             write_text_atomic(args.report, json.dumps(report, indent=2))
@@ -1012,7 +1067,8 @@ def run(args: argparse.Namespace) -> int:
         pending.unlink(missing_ok=True)
     if not args.quiet:
         print(_summary(plan, m, timeline, verdicts,
-                       [p for p in (args.output, args.plot, args.report) if p], stored))
+                       [p for p in (args.output, args.plot, args.report) if p], stored,
+                       every_sensor=args.verbose))
     if not feasible:
         print("lamde-mission plan: the mission is INFEASIBLE (written because of "
               "--allow-infeasible):", file=sys.stderr)

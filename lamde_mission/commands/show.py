@@ -31,7 +31,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "counted in the legend). MISSION may be "
         "a sortie directory (`lamde-mission plan MAP -o DIR/` for a battery or a fleet: "
         "fleet.json and mission-v{k}-s{j}.plan): every sortie replayed and drawn, one colour "
-        "per vehicle, one line style per sortie (solid, dashed, dash-dot, dotted), depots as "
+        "per vehicle, one line style per sortie (solid, dashed, dash-dot, dotted and four dash "
+        "patterns; from a vehicle's ninth sortie on again, the legend naming the sorties that "
+        "share one), depots as "
         "hexagons (every depot of the map; those no sortie uses lighter), battery swaps as "
         "stars, sensors coloured by the data of all sorties together.",
     )
@@ -45,6 +47,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--title", help="figure title (default: the map's name and f)")
     p.add_argument("--dpi", type=int, default=150,
                    help="PNG resolution, 1 to 600 dots per inch (default 150)")
+    p.add_argument("--mkdir", action="store_true",
+                   help="create -o's missing folders (otherwise exit 2)")
     return p
 
 
@@ -128,7 +132,8 @@ def run(args: argparse.Namespace) -> int:
 
     Raises:
         UsageError: a bad output suffix, --dpi or --title, a bad map or mission, or an output
-            that cannot be written (one line per problem, exit 2).
+            that cannot be written: a missing folder without --mkdir (as plan's --plot,
+            generate and map), a read-only one (one line per problem, exit 2).
     """
     from lamde_mission.commands._common import (
         check_outputs,
@@ -157,7 +162,7 @@ def run(args: argparse.Namespace) -> int:
         inside = output_in_sortie_dir(args.output, args.mission)
         if inside is not None:
             raise UsageError(f"-o/--output: {inside}")
-    check_outputs([("-o/--output", args.output)], mkdir=True,
+    check_outputs([("-o/--output", args.output)], mkdir=args.mkdir,
                   inputs=[("map", args.map), ("mission", args.mission)])
     m = load_map_or_fail(args.map)
     if args.mission or args.origin is not None:  # the map alone is drawn in its own metres

@@ -361,16 +361,6 @@ def _rejected(what: str, map_path: str, failed: str, *, force: bool) -> bool:
     return False
 
 
-def _asked_speed(mission: list) -> float | None:
-    """The fastest cruise speed the mission asks for (its DO_CHANGE_SPEEDs above 0, m/s), or
-    None when it sets none."""
-    from lamde_mission.items import CMD
-
-    asked = [float(it.param2) for it in mission
-             if it.command == CMD.DO_CHANGE_SPEED and it.param2 > 0]  # fmt: skip
-    return max(asked) if asked else None
-
-
 def _speed_verdict(what: str, name: str, limit: float, asked: float, map_path: str | None,
                    judge: Callable[[], tuple[list[str], str]], *, force: bool,
                    unchecked: tuple[str, str] | None = None) -> str | None:
@@ -446,12 +436,13 @@ def _mission_speed_check(path: str, mission: list, map_path: str | None, *, forc
         refusal line. With a map it replays the mission twice, O(legs).
     """
     from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
+    from lamde_mission.vehicle.speeds import asked_speed, unflyable_limit
     from sim import replay, verify
 
-    asked = _asked_speed(mission)
+    asked = asked_speed(mission)
 
     def check(name: str, limit: float) -> str | None:
-        bad = _unflyable_limit(path, name, limit)
+        bad = unflyable_limit(path, name, limit)
         if bad is not None:
             return bad
         if asked is None or limit >= asked:
@@ -489,6 +480,7 @@ def _sortie_with_battery(path: str, asked: float) -> tuple[str, str] | None:
     from pathlib import Path
 
     from lamde_mission.sorties import sortie_dir_of
+    from lamde_mission.vehicle.speeds import planned_energy
 
     folder = sortie_dir_of(path)
     if folder is None:
@@ -497,20 +489,7 @@ def _sortie_with_battery(path: str, asked: float) -> tuple[str, str] | None:
     s = planned.get(Path(path).name)
     if s is not None and s.no_battery:
         return None
-    return _planned_energy(s, asked), str(folder)
-
-
-def _unflyable_limit(what: str, name: str, limit: float) -> str | None:
-    """The refusal when a vehicle's speed limit is no speed a mission can be flown at (below
-    the sim's least mission speed, or not finite), else None."""
-    from planner_core.textio import printable
-    from sim.mission import MIN_MISSION_SPEED
-
-    if math.isfinite(limit) and limit >= MIN_MISSION_SPEED:
-        return None
-    return (f"{printable(what)}: the vehicle's {name} is {limit:g} m/s, not a speed a mission "
-            f"can be flown at (at least {MIN_MISSION_SPEED:g} m/s): set {name} on the vehicle; "
-            "nothing sent")
+    return planned_energy(s, asked), str(folder)
 
 
 def _planned_sorties(directory: str) -> dict[str, FleetSortie]:
@@ -533,39 +512,14 @@ def _planned_sorties(directory: str) -> dict[str, FleetSortie]:
     return {s.path.name: s for v in fleet.vehicles for s in v.sorties}
 
 
-def _planned_energy(s: FleetSortie | None, asked: float) -> str:
-    """What fleet.json says a sortie was planned to spend, in a few words ("14.33 Wh planned
-    at 20 m/s, 0.27 Wh above the reserve").
-
-    Args:
-        s: the sortie as fleet.json gives it (None: not listed there).
-        asked: the speed it was planned at, m/s.
-
-    Returns:
-        The words; without figures where fleet.json gives none.
-    """
-    if s is None or s.energy_wh is None:
-        return f"fleet.json gives no energy planned at {asked:g} m/s"
-    slack = ("" if s.above_reserve_wh is None
-             else f", {s.above_reserve_wh:.2f} Wh above the reserve")  # fmt: skip
-    return f"{s.energy_wh:.2f} Wh planned at {asked:g} m/s{slack}"
-
-
 def _fleet_speed_check(directory: str, missions: list, map_path: str | None, *, force: bool,
                        origin: str | None = None
                        ) -> Callable[[dict[int, tuple[str, float] | None]], str | None]:
     """`upload DIR/ --fleet`'s check of the vehicles' speed limits, read from every vehicle
-    before anything is sent (`vehicle.fleet.upload_fleet`).
-
-    With `--map` the whole directory is judged once as `verify MAP DIR/` does with each
-    vehicle below its sorties' speed flying at its own limit (its slower sorties also move
-    its later take-offs; `sorties.verify_sortie_dir`'s speed_limits): a note when every check
-    holds, else the refusal. Without a map, such a vehicle whose sortie was planned with a
-    battery (fleet.json gives its energy, or does not say `"energy_wh": null`) is refused:
-    its energy at the limit is unchecked, and the directory does not hold the map's energy
-    model (`uav.power`, acceleration, climb speeds) to check it; a warning when the map had no
-    battery. `force` turns every refusal into a warning. A vehicle whose limit was not read
-    gets a note.
+    before anything is sent: `vehicle.speeds.fleet_speed_check`, the check the Python
+    `upload_fleet` applies by default, in the CLI's words (`--map MAP`, `--force`), its
+    warnings on stderr and its note on stdout; the map is loaded only when a vehicle is
+    below its sorties' speed.
 
     Args:
         directory: the sortie directory.
@@ -582,71 +536,17 @@ def _fleet_speed_check(directory: str, missions: list, map_path: str | None, *, 
         UsageError: (from `check`) a bad map or origin.
     """
     from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
-    from lamde_mission.sorties import verify_sortie_dir
-    from planner_core.textio import printable
+    from lamde_mission.vehicle.speeds import CLI_HINTS, fleet_speed_check
 
-    asked = {fm.vehicle: _asked_speed(fm.mission) for fm in missions if fm.mission}
-    planned = _planned_sorties(directory)
-    source = {fm.vehicle: fm.source for fm in missions if fm.mission}
-    sent = {v: planned.get(name) for v, name in source.items()}
+    def load() -> object:
+        return with_origin_or_fail(load_map_or_fail(map_path), origin)
 
-    def check(limits: dict[int, tuple[str, float] | None]) -> str | None:
-        for v, got in sorted(limits.items()):
-            if got is None:
-                print(f"note: {printable(directory)} vehicle {v}: its speed limit could not be "
-                      "read: its sorties' speed is not checked against it", file=sys.stderr)
-                continue
-            bad = _unflyable_limit(f"{directory} vehicle {v}", *got)
-            if bad is not None:
-                return bad
-        slow = {v: got for v, got in limits.items()
-                if got is not None and asked.get(v) is not None and got[1] < asked[v]}
-        if not slow:
-            return None
-        names = ", ".join(f"vehicle {v} {name} {lim:g} m/s" for v, (name, lim) in
-                          sorted(slow.items()))  # fmt: skip
-        want = max(asked[v] for v in slow)
-        head = (f"{printable(directory)}: {names}, below the {want:g} m/s the sorties ask "
-                "(DO_CHANGE_SPEED), so they fly at their limits")
-        fix = (f"set the limit to {want:g} or more, or plan the map with uav.max_speed "
-               f"{min(lim for _, lim in slow.values()):g}")
-        if map_path is None:
-            battery = {v: sent[v] for v in sorted(slow)
-                       if sent.get(v) is None or not sent[v].no_battery}  # fmt: skip
-            if not battery:  # a map without a battery: no energy to overdraw
-                print(f"warning: {head}; their flight times, and the vehicles' separation and "
-                      f"take-off times, were planned at {want:g} m/s (--map checks the fleet "
-                      f"at the limits; {fix})", file=sys.stderr)  # fmt: skip
-                return None
-            what = "; ".join(f"vehicle {v}'s {printable(source[v])}: "
-                             f"{_planned_energy(fs, asked[v])}"
-                             for v, fs in battery.items())  # fmt: skip
-            unchecked = (f"{head}, and their energy at those speeds is unchecked ({what}; the "
-                         "sortie directory does not hold the map's energy model)")
-            if force:
-                print(f"warning: {unchecked}; sent anyway (--force; --map MAP checks every "
-                      f"sortie at the vehicles' limits)", file=sys.stderr)  # fmt: skip
-                return None
-            return (f"{unchecked}: nothing sent to any vehicle (--map MAP re-checks every "
-                    f"sortie at the vehicles' limits; or {fix}; --force sends it anyway)")
-        m = with_origin_or_fail(load_map_or_fail(map_path), origin)
-        judged = verify_sortie_dir(m, directory, {v: lim for v, (_, lim) in slow.items()})
-        if judged.passed:
-            spans = ", ".join(f"vehicle {v}'s makespan {judged.makespan(v):.0f} s"
-                              for v in sorted(slow))  # fmt: skip
-            print(f"note: {head}: {spans}; every check holds at those speeds on "
-                  f"{printable(map_path)}", flush=True)  # fmt: skip
-            return None
-        lines = "; ".join(printable(x) for x in judged.failed())
-        if force:
-            print(f"warning: {head}, and at those speeds the simulator rejects the fleet on "
-                  f"{printable(map_path)} ({lines}); sent anyway (--force)", file=sys.stderr)
-            return None
-        return (f"{head}, and at those speeds the simulator rejects the fleet on "
-                f"{printable(map_path)}: {lines}; nothing sent to any vehicle ({fix}; --force "
-                "sends it anyway)")
-
-    return check
+    return fleet_speed_check(
+        missions, directory=directory, map=load if map_path is not None else None,
+        map_label=map_path, force=force, hints=CLI_HINTS,
+        warn=lambda line: print(f"warning: {line}", file=sys.stderr),
+        note=lambda line: print(f"note: {line}", flush=True),
+    )  # fmt: skip
 
 
 def _fleet_sim_check(directory: str, map_path: str, *, force: bool,

@@ -26,7 +26,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, Literal
 
 from lamde_mission.items import MissionItem
 from lamde_mission.vehicle.claims import ClaimWatch, duplicate_error
@@ -38,6 +38,9 @@ from lamde_mission.vehicle.transfer import (
     VehicleError,
 )
 from planner_core.textio import counted, for_count
+
+if TYPE_CHECKING:
+    from lamde_mission.formats.fleet import FleetSortie
 
 __all__ = ["first_sortie_missions", "sortie_missions", "FleetSetupError", "FleetSurveyError",
            "FleetMission",
@@ -63,7 +66,9 @@ class FleetSurveyError(FleetSetupError):
 @dataclass(frozen=True)
 class FleetMission:
     """What vehicle `vehicle` (1-based) gets: its mission, fence (None: left alone) and rally
-    points (None: left alone), and the file they came from (for the report). An empty mission
+    points (None: left alone), the file they came from (for the report) and, for a sortie of
+    a sortie directory, the sortie as fleet.json gives it (its energy and battery, for the
+    speed-limit check, `speeds.fleet_speed_check`; None: made by hand). An empty mission
     sends nothing to that vehicle (a vehicle the plan gives no sortie), though it is still
     surveyed and counted."""
 
@@ -72,6 +77,7 @@ class FleetMission:
     fence: Sequence[MissionItem] | None = ()
     rally: Sequence[MissionItem] | None = None
     source: str = ""
+    sortie: FleetSortie | None = None
 
 
 @dataclass
@@ -192,7 +198,8 @@ def sortie_missions(directory: str | Path, sortie: int) -> list[FleetMission]:
 
     Returns:
         One FleetMission per vehicle of fleet.json, in vehicle order (an empty mission, sent to
-        no one, for a vehicle with fewer sorties); `source` is the file's name.
+        no one, for a vehicle with fewer sorties); `source` is the file's name, `sortie` its
+        entry in fleet.json.
 
     Raises:
         ValueError: `sortie` below 1, or no vehicle flies that many sorties.
@@ -218,7 +225,8 @@ def sortie_missions(directory: str | Path, sortie: int) -> list[FleetMission]:
         mission, fence, rally = read_mission_lists(first.path)
         if not mission:
             raise MissionFileError(f"{first.path}: the mission holds no items")
-        out.append(FleetMission(v.vehicle, mission, fence, rally or None, first.path.name))
+        out.append(FleetMission(v.vehicle, mission, fence, rally or None, first.path.name,
+                                first))
     return out
 
 
@@ -479,7 +487,8 @@ def upload_fleet(
     progress: Callable[[str, int, int], None] | None = None,
     on_vehicle: Callable[[VehicleResult], None] | None = None,
     window: float | None = None,
-    speed_check: Callable[[dict[int, tuple[str, float] | None]], str | None] | None = None,
+    speed_check: (Callable[[dict[int, tuple[str, float] | None]], str | None] | None
+                  | Literal["planned"]) = "planned",
 ) -> FleetReport:
     """Upload mission k to vehicle k, read each back and compare (see the module docstring).
 
@@ -500,7 +509,12 @@ def upload_fleet(
             limit is read (`transfer.SPEED_LIMIT_PARAM`, where its dialect has one) and
             `speed_check({vehicle: (parameter, m/s) or None when unread})` judges the whole
             fleet at once; a line refuses the upload (`SpeedLimitError`, nothing sent to any
-            vehicle); None reads nothing.
+            vehicle). "planned" (the default): `speeds.fleet_speed_check(missions)`, the check
+            of `upload DIR/ --fleet` without --map: a vehicle below the speed its sortie was
+            planned at with a battery is refused, any other below its speed warned about
+            (`speeds.SpeedLimitWarning`); `fleet_speed_check(missions, map=m)` judges the
+            directory on the map at the limits instead, `force=True` warns instead of
+            refusing. None skips the check and reads nothing.
 
     Returns:
         The report; `report.ok` only if every vehicle holds its mission, read back identical.
@@ -508,6 +522,7 @@ def upload_fleet(
     Raises:
         FleetSetupError: `connect` or `system_ids` do not fit the missions (nothing sent).
         FleetSurveyError: the vehicles heard do not match the missions (nothing sent).
+        SpeedLimitError: `speed_check` refused a vehicle's speed limit (nothing sent).
         DuplicateVehicleError: one system id claimed from two addresses (nothing sent, or the
             vehicles before it only).
         ValueError: bad arguments or items MAVLink cannot carry (before anything is sent).
@@ -530,6 +545,13 @@ def upload_fleet(
         if fm.rally:
             wire_mission(fm.rally, MISSION_TYPE.RALLY)
     parse_connections(list(connect))
+    if speed_check == "planned":
+        from lamde_mission.vehicle.speeds import fleet_speed_check
+
+        speed_check = fleet_speed_check(missions)
+    elif isinstance(speed_check, str):
+        raise ValueError(f'speed_check must be a function, "planned" or None, got '
+                         f"{speed_check!r}")
     t0 = time.monotonic()
     conns, ids, listened = assign_system_ids(
         len(missions), list(connect), system_ids, timeout=timeout, window=window,

@@ -254,8 +254,8 @@ class Sortie:
     """One flight on one battery: depot `start` -> `points` (k, 2) -> depot `end`, hovering
     `times` (k,) s at the points (0 at detour corners). Depots are indices into
     `FleetSettings.depots`; the sortie takes off from pad `pads[0]` of depot `start` and lands
-    at pad `pads[1]` of depot `end` (`FleetSettings.pad`; pad 0, the default, is the depot
-    itself). Points and times are stored as read-only float copies.
+    at pad `pads[1]` of depot `end` (`FleetSettings.pad`; indices: 0, the default, is the depot
+    itself, pad 1 as `check` numbers them). Points and times are stored as read-only float copies.
 
     Raises:
         ValueError: `times` and `points` of different lengths.

@@ -348,7 +348,9 @@ class MapFile(BaseModel):
     """The whole map file (JSON)."""
 
     model_config = _STRICT
-    name: str = Field("unnamed", max_length=200, pattern=_PRINTABLE)
+    name: str = Field("unnamed", min_length=1, max_length=200, pattern=_PRINTABLE,
+                      description="printable text, not empty (as a depot's name or a "
+                      "sensor's id; quoted in messages)")
     origin: Origin | None = Field(
         None, description="WGS84 position of (0, 0); needed to write or read a mission (no "
         "default place is assumed)")
@@ -730,11 +732,12 @@ class Map:
     @property
     def vehicle_pads(self) -> np.ndarray:
         """The pads of each sortie site (`planner_core.model.pads`; the vehicles a plan sends
-        to a site take them in the order of their numbers, `pad_ranks`): pad 0 is the site
-        itself, the others lie `fleet.separation_m` + `PAD_MARGIN_M` apart on a
-        grid aligned with east and north around it, inside the area, at least `PAD_CLEAR_M`
-        (or the map's clearance, where larger) from every obstacle, and reached from the site
-        by a straight leg clear of the planning map's (inflated) obstacles.
+        to a site take them in the order of their numbers, `pad_ranks`): index 0 (pad 1, as
+        `check` numbers them) is the site itself, the others lie `fleet.separation_m` +
+        `PAD_MARGIN_M` apart on a grid aligned with east and north around it, inside the
+        area, at least `PAD_CLEAR_M` (or the map's clearance, where larger) from every
+        obstacle, and reached from the site by a straight leg clear of the planning map's
+        (inflated) obstacles.
 
         Returns:
             (V, D, 2) read-only, local metres: V = `uavs`, D the sites of `sortie_sites`
@@ -1365,6 +1368,91 @@ def _json_shown(v: Any) -> str:
     return f"{text[:37] + '...' if len(text) > 40 else text} ({kind})"
 
 
+#: what a list field holds, for its length messages ("must hold 1 to 100 depots")
+_LIST_NOUNS = {"depots": "depots", "pads": "pads", "sensors": "sensors",
+               "hover_points": "hover points", "hover_times": "hover times",
+               "vertices": "vertices", "holes": "holes", "circles": "circles",
+               "rectangles": "rectangles", "no_fly_zones": "no-fly zones"}  # fmt: skip
+
+
+def _length_bounds(loc: tuple[Any, ...], ctx: Mapping[str, Any]) -> tuple[int | None, int | None]:
+    """The (least, most) length the field at `loc` allows (its Field's min_length and
+    max_length; None where it sets none), else the one bound pydantic's error gives (`ctx`):
+    a message states the whole allowed range, whichever end was broken. O(depth of `loc`)."""
+    import annotated_types
+
+    lo, hi = ctx.get("min_length"), ctx.get("max_length")
+    if not loc or not isinstance(loc[-1], str):
+        return lo, hi
+    model = _model_at(loc)
+    info = model.model_fields.get(loc[-1]) if model is not None else None
+    for meta in getattr(info, "metadata", ()) or ():
+        if isinstance(meta, annotated_types.MinLen):
+            lo = meta.min_length
+        elif isinstance(meta, annotated_types.MaxLen):
+            hi = meta.max_length
+    return (lo or None), hi
+
+
+def _length_problem(loc: tuple[Any, ...], where: str, e: Mapping[str, Any]) -> str:
+    """A string or list of the wrong length (pydantic's string_too_short/_long, too_short/
+    _long) in the house style: the field, what is allowed (both ends), what was given
+    ("fleet.depots[1].name: must be 1 to 100 characters long, got "" (an empty string)").
+    O(length of the value shown, cut to 40 characters)."""
+    lo, hi = _length_bounds(loc, e.get("ctx") or {})
+    got = e.get("input")
+    text = isinstance(got, str) or e["type"].startswith("string")
+    noun = "characters" if text else _LIST_NOUNS.get(
+        next((str(p) for p in reversed(loc) if isinstance(p, str)), ""), "items")
+    if lo is not None and hi is not None:
+        allowed = f"{lo} to {hi} {noun}"
+    elif hi is not None:
+        allowed = f"at most {hi} {noun}"
+    else:
+        allowed = f"at least {lo} {noun}"
+    if text:
+        n = len(got) if isinstance(got, str) else (e.get("ctx") or {}).get("actual_length")
+        shown = _json_shown(got).rsplit(" (", 1)[0] if isinstance(got, str) else "a string"
+        size = "an empty string" if n == 0 else f"a string of {n} characters"
+        return f"{where}: must be {allowed} long, got {shown} ({size})"
+    n = len(got) if isinstance(got, (list, tuple)) else (e.get("ctx") or {}).get("actual_length")
+    return f"{where}: must hold {allowed}, got {n}"
+
+
+#: the characters `_PRINTABLE` refuses, by class: (first, last code point, the class in words)
+_UNPRINTABLE_CLASSES = (
+    (0x00, 0x1F, "a C0 control character"),
+    (0x7F, 0x7F, "the control character DEL"),
+    (0x80, 0x9F, "a C1 control character"),
+    (0x2028, 0x2029, "a line or paragraph separator"),
+    (0x202A, 0x202E, "a bidirectional embedding or override (it reorders what a terminal shows)"),
+    (0x2066, 0x2069, "a bidirectional isolate (it reorders what a terminal shows)"),
+)
+_CHAR_WORDS = {"\n": "a newline", "\t": "a tab", "\r": "a carriage return"}
+
+
+def _unprintable_problem(where: str, got: Any) -> str:
+    """A name or id holding a character `_PRINTABLE` refuses, in the house style: the field,
+    the first such character, its position and class, and what is allowed. O(len(got))."""
+    import unicodedata
+
+    allowed = ("must be printable text (no control characters, line or paragraph separators, "
+               "or bidirectional controls: names are printed in one-line messages)")
+    if not isinstance(got, str):
+        return f"{where}: {allowed}"
+    for k, ch in enumerate(got):
+        code = ord(ch)
+        cls = next((c for a, b, c in _UNPRINTABLE_CLASSES if a <= code <= b), None)
+        if cls is None:
+            continue
+        name = unicodedata.name(ch, "")
+        what = f"U+{code:04X} {name}" if name else f"U+{code:04X}"
+        if ch in _CHAR_WORDS:
+            what = f"{_CHAR_WORDS[ch]} ({what})"
+        return f"{where}: {allowed}; character {k + 1} is {what}, {cls}"
+    return f"{where}: {allowed}"
+
+
 def _pydantic_problems(err: ValidationError) -> list[str]:
     lines = []
     for e in err.errors():
@@ -1392,9 +1480,10 @@ def _pydantic_problems(err: ValidationError) -> list[str]:
         elif kind == "too_long" and e.get("ctx", {}).get("max_length") == 2:  # a point
             lines.append(f"{where}: must be a JSON array of two numbers [x, y] (metres), got "
                          f"{_json_shown(e.get('input'))}")
+        elif kind in ("string_too_short", "string_too_long", "too_short", "too_long"):
+            lines.append(_length_problem(loc, where, e))
         elif kind == "string_pattern_mismatch":
-            lines.append(f"{where}: must be printable text (no control characters such as "
-                         "newlines or tabs)")  # fmt: skip
+            lines.append(_unprintable_problem(where, e.get("input")))
         elif kind in _RANGE_KINDS:
             got = e.get("input")
             shown = number_text(got) if isinstance(got, float) else repr(got)

@@ -5,16 +5,18 @@ a battery swap. Sharing one point, a vehicle would land on, or take off beside, 
 standing on the ground; the simulator's SEPARATION counts a vehicle on the ground and fails
 that (`sim.fleet_time`). So each depot has pads, one for each vehicle that uses it:
 
-* pad 0 is the depot itself, so a single vehicle flies exactly where it did before, and of
-  the vehicles a plan sends to a depot the lowest-numbered stands on it (`pad_ranks`: the
-  vehicles using a depot take its pads in the order of their numbers);
-* the other pads are points of a square lattice of step `spacing` (the map's
-  `fleet.separation_m` + `PAD_MARGIN_M`) aligned with east and north around the depot, so a
-  crew lays each out as whole steps east or west and north or south of the depot ("35 m E",
-  "35 m N, 35 m E"); taken nearest first (ties: east, north, west, south, then
-  counter-clockwise), each at least `spacing` from every pad already given (any depot's) and
-  accepted by the caller's test (`FREE`, or why not: outside the area, within `PAD_CLEAR_M`
-  or the map's clearance of an obstacle, no clear straight leg from the depot).
+* pad 1 (index 0 of a layout, `pad_layout`'s first row) is the depot itself, so a single
+  vehicle flies exactly where it did before, and of the vehicles a plan sends to a depot the
+  lowest-numbered stands on it (`pad_ranks`: the vehicles using a depot take its pads in the
+  order of their numbers). Pads are numbered from 1 wherever a person reads them (`check`,
+  the map's `fleet.depots[].pads`, which lists pads 2, 3, ...); the code indexes them from 0;
+* the other pads (2, 3, ...: indices 1, 2, ...) are points of a square lattice of step
+  `spacing` (the map's `fleet.separation_m` + `PAD_MARGIN_M`) aligned with east and north
+  around the depot, so a crew lays each out as whole steps east or west and north or south
+  of the depot ("35 m E", "35 m N, 35 m E"); taken nearest first (ties: east, north, west,
+  south, then counter-clockwise), each at least `spacing` from every pad already given (any
+  depot's) and accepted by the caller's test (`FREE`, or why not: outside the area, within
+  `PAD_CLEAR_M` or the map's clearance of an obstacle, no clear straight leg from the depot).
 
 Deterministic for a map. Cost: O(D x C) tests for D depots and C lattice points looked at
 (C grows with the square of the rings needed: V for V vehicles on open ground), plus the
@@ -82,7 +84,8 @@ def offset_words(dx: float, dy: float) -> str:
 
 def pad_ranks(uses: Iterable[tuple[int, str]]) -> dict[tuple[int, str], int]:
     """Which pad of each depot each vehicle uses: the vehicles that take off or land at a
-    depot, in the order of their numbers, take its pads 0, 1, ... (pad 0 the depot itself),
+    depot, in the order of their numbers, take its pads by index 0, 1, ... (index 0 is pad 1,
+    the depot itself),
     so a vehicle alone at a depot stands on the depot. The planner (`fleet.search.on_pads`),
     the writer and `verify` all count them from the plan's sorties, so they agree.
 
@@ -139,7 +142,7 @@ def pad_layout(
     label = [names[d] if names is not None else f"depot {d}" for d in range(D)]
     rule = f"{spacing:g} m (fleet.separation_m + {PAD_MARGIN_M:g} m)"
     out = np.repeat(dep[None], V, axis=0)
-    # every spot a vehicle may stand on, with its words: each depot is pad 0 of its own
+    # every spot a vehicle may stand on, with its words: each depot is its own pad 1 (index 0)
     taken: list[tuple[np.ndarray, str]] = [(p, f"depot '{label[d]}'") for d, p in
                                            enumerate(dep)]  # fmt: skip
     if V > 1:
@@ -160,7 +163,8 @@ def pad_layout(
             c = np.asarray(xy, dtype=float)
             got = np.asarray(free(dep[d], c[None]))
             why_not = (FREE if got[0] else NEAR) if got.dtype == bool else int(got[0])
-            where = (f"fleet.depots[{d}].pads[{i}]: the pad of depot '{who}' at "
+            # listed pads are pads 2, 3, ... (pad 1 is the depot), as `check` numbers them
+            where = (f"fleet.depots[{d}].pads[{i}]: pad {i + 2} of depot '{who}' at "
                      f"({c[0]:g}, {c[1]:g})")  # fmt: skip
             if why_not == OUTSIDE:
                 raise ValueError(f"{where} lies outside the area")
@@ -177,7 +181,7 @@ def pad_layout(
                              key=lambda o: o[0])  # fmt: skip
             if near < spacing - 1e-9:
                 raise ValueError(f"{where} lies {near:.1f} m from {what}, nearer than {rule}")
-            taken.append((c, f"the pad at ({c[0]:g}, {c[1]:g}) of depot '{who}'"))
+            taken.append((c, f"pad {i + 2} at ({c[0]:g}, {c[1]:g}) of depot '{who}'"))
             if k < V:
                 out[k, d] = c
                 k += 1
@@ -199,7 +203,7 @@ def pad_layout(
                 crowded += 1
                 continue
             out[k, d] = c
-            taken.append((c, f"the pad at ({c[0]:g}, {c[1]:g}) of depot '{who}'"))
+            taken.append((c, f"pad {k + 1} at ({c[0]:g}, {c[1]:g}) of depot '{who}'"))
             k += 1
         if k < V:
             counts = {code: int(np.sum(why == code))
