@@ -63,33 +63,76 @@ def test_check_refuses_a_sensor_and_a_depot_out_of_reach(tmp_path) -> None:
         "CANNOT  sensor 'far': no sortie can collect any of its data: from the nearest, depot "
         "'home', 21213 m away, a sortie needs at least 105.7 Wh to come within its radio range "
         "(995 m) and back, more than the 32 Wh usable (battery 40 Wh less the 20 % reserve)",
-        "CANNOT  fleet.depots: depot 'yard' at (2450, 2450): no sortie can leave it: no "
-        "sensor is heard from the airspace around it (obstacles wall it in; the radio range "
-        "is 995 m)",
     ]
+    # the walled-in depot is a note: plans leave from 'home'
+    assert ("note    fleet.depots: depot 'yard' at (2450, 2450): no sortie can leave it: no "
+            "sensor is heard from the airspace around it (obstacles wall it in; the radio range "
+            "is 995 m); no plan uses it (plans leave from depot 'home')") in r.stdout
     assert r.stdout.rstrip().endswith("no plan can meet this map (see CANNOT above)")
     # the big sensor alone needs more than a battery, but sorties may share its data: a note
     assert "note    sensor 'big': one sortie cannot serve it alone" in r.stdout
     assert "must be shared by at least" in r.stdout
 
 
-def test_a_walled_in_depot_without_a_battery() -> None:
+def test_a_walled_in_depot_is_cannot_only_when_no_other_depot_can_be_left() -> None:
+    """A vehicle's first sortie may leave any depot: one no sortie can leave is harmless while
+    another can be left (a note, DEPOT_UNUSED), and CANNOT only when none is left."""
     found = diagnose(load_map(YARD)).findings
-    assert [(f.kind, f.depot) for f in found if f.fatal] == [("DEPOT", "yard")]
+    assert not [f for f in found if f.fatal]
+    assert [(f.kind, f.depot) for f in found if f.depot] == [("DEPOT_UNUSED", "yard")]
+    alone = dict(YARD, fleet=dict(YARD["fleet"], depots=YARD["fleet"]["depots"][1:]))
+    found = diagnose(load_map(alone)).findings
+    assert [(f.kind, f.fatal, f.depot) for f in found if f.depot] == [("DEPOT", True, "yard")]
+    assert found[-1].message == (
+        "fleet.depots: depot 'yard' at (2450, 2450): no sortie can leave it: no sensor is heard "
+        "from the airspace around it (obstacles wall it in; the radio range is 995 m)")
+    # two depots, both walled in (the second in a courtyard of its own): both CANNOT
+    court = {"vertices": [[200, 2000], [1100, 2000], [1100, 2900], [200, 2900]],
+             "holes": [[[400, 2200], [400, 2700], [900, 2700], [900, 2200]]]}
+    both = dict(YARD, obstacles={"polygons": [*YARD["obstacles"]["polygons"], court]},
+                fleet=dict(YARD["fleet"], depots=[{"name": "yard", "x": 2450, "y": 2450},
+                                                  {"name": "court", "x": 650, "y": 2450}]))
+    found = diagnose(load_map(both)).findings
+    assert [(f.kind, f.fatal, f.depot) for f in found if f.depot] == [
+        ("DEPOT", True, "yard"), ("DEPOT", True, "court")]
+    assert all(f.message.endswith(", and no other depot can be left either")
+               for f in found if f.depot)
+
+
+def test_the_reviewers_walled_yard_beside_fleet_demo_is_a_note() -> None:
+    """examples' fleet-demo plus a third depot 'yard' at (1940, 45) in a building's courtyard:
+    check said CANNOT (exit 1), while plan wrote a plan from 'home' and 'north' that verify
+    passed, and show drew 'depot no sortie uses: yard'."""
+    from tests.conftest import ROOT
+
+    doc = json.loads((ROOT / "examples" / "maps" / "fleet-demo.json").read_text())
+    doc["obstacles"]["polygons"] = [{
+        "vertices": [[1860, 5], [1995, 5], [1995, 110], [1860, 110]],
+        "holes": [[[1915, 20], [1965, 20], [1965, 70], [1915, 70]]]}]  # fmt: skip
+    doc["fleet"]["depots"].append({"name": "yard", "x": 1940, "y": 45})
+    found = diagnose(load_map(doc)).findings
+    assert not [f for f in found if f.fatal]
+    (yard,) = [f for f in found if f.depot]
+    assert (yard.kind, yard.message) == ("DEPOT_UNUSED", (
+        "fleet.depots: depot 'yard' at (1940, 45): no sortie can leave it: no sensor is heard "
+        "from the airspace around it (obstacles wall it in; the radio range is 995 m); no plan "
+        "uses it (plans leave from depot 'home' or 'north')"))
 
 
 def test_a_depot_out_of_a_batterys_reach_and_a_shared_sensor() -> None:
     depots = [{"name": "home", "x": 0, "y": 0}, {"name": "lost", "x": 19000, "y": 1000}]
     found = diagnose(load_map(dict(FIELD, fleet={"depots": depots}))).findings
     fatal = [(f.kind, f.sensor or f.depot) for f in found if f.fatal]
-    assert fatal == [("ENERGY_RANGE", "far"), ("DEPOT", "lost")]
+    assert fatal == [("ENERGY_RANGE", "far")]  # 'lost' is a note: sorties leave 'home'
     (lost,) = [f for f in found if f.depot == "lost"]
-    assert (
-        lost.message.startswith(
-            "fleet.depots: depot 'lost' at (19000, 1000): no sortie can leave it"
-        )
-        and "32 Wh usable" in lost.message
-    )
+    assert lost.kind == "DEPOT_UNUSED" and lost.message.startswith(
+        "fleet.depots: depot 'lost' at (19000, 1000): no sortie can leave it: the cheapest, to "
+        "sensor ")
+    assert lost.message.endswith("32 Wh usable; no plan uses it (plans leave from depot "
+                                 "'home')")
+    alone = dict(FIELD, fleet={"depots": depots[1:]})
+    assert ("DEPOT", "lost") in [(f.kind, f.depot) for f in diagnose(load_map(alone)).findings
+                                 if f.fatal]
     # without the far sensor nothing is fatal: 'big' is a note (its data may be shared)
     big = dict(FIELD, sensors=[s for s in FIELD["sensors"] if s["id"] != "far"])
     found = diagnose(load_map(big)).findings

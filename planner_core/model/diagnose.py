@@ -46,7 +46,9 @@ distances bound the flight from below, so:
   among (`planner_core.fleet.split.SHARE_MAX`): the planner's own limit, not a proof that no
   plan exists (SORTIE_LIMIT; the planner refuses such a map up front);
 - a depot from which no sortie can leave: no sensor is heard from its piece of airspace (it is
-  walled in), or every sensor is out of a battery's reach from it (DEPOT, naming the depot);
+  walled in), or every sensor is out of a battery's reach from it. A vehicle's first sortie
+  may leave any depot, so it is a note while another depot can be left (DEPOT_UNUSED, naming
+  the depot and those plans leave from), fatal only when none can (DEPOT, naming each);
 - a depot without room for every vehicle's own pad (`fleet.separation_m` + 5 m apart, clear
   of obstacles, inside the area: `planner_core.model.pads`; PADS, naming the depot);
 - a sensor's data may be split across sorties (C4 sums them), so a sensor one sortie cannot
@@ -263,9 +265,9 @@ def _airspace(pm: Any, shapes: list[Any] | None = None) -> list[Any]:
 
 def fleet_findings(m: Any) -> list[Finding]:
     """The battery and depot findings alone (ENERGY_VERTICAL, ENERGY_RANGE, VEHICLES, DEPOT,
-    ENERGY_SPLIT, SORTIE_LIMIT, PADS: the module docstring), as `diagnose` makes them, for a
-    map with a battery or a fleet (else none); the sortie planner refuses a map with a
-    SORTIE_LIMIT, ENERGY_VERTICAL or PADS up front.
+    DEPOT_UNUSED, ENERGY_SPLIT, SORTIE_LIMIT, PADS: the module docstring), as `diagnose` makes
+    them, for a map with a battery or a fleet (else none); the sortie planner refuses a map
+    with a SORTIE_LIMIT, ENERGY_VERTICAL or PADS up front.
 
     Args:
         m: a `planner_core.model.mapio.Map`.
@@ -344,8 +346,8 @@ def _spread_findings(pm: Any, reach: float, i_max: int, flights: float,
 def _energy_findings(m: Any, pm: Any, pieces: list[Any], hear: float) -> list[Finding]:
     """Batteries and depots (issue 33; the module docstring): ENERGY_VERTICAL alone when the
     take-off and landing use up the usable energy; else ENERGY_RANGE, VEHICLES, DEPOT and
-    SORTIE_LIMIT (fatal), ENERGY_SPLIT (a note), from straight-line lower bounds on each
-    sortie's flight; `hear` the link's ground reach (m).
+    SORTIE_LIMIT (fatal), ENERGY_SPLIT and DEPOT_UNUSED (notes), from straight-line lower
+    bounds on each sortie's flight; `hear` the link's ground reach (m).
 
     Sites are the sortie planner's (`Map.sortie_sites`): the map's depots, each a take-off
     site, or without them 'home' at the start (where every vehicle
@@ -481,19 +483,39 @@ def _energy_findings(m: Any, pm: Any, pieces: list[Any], hear: float) -> list[Fi
         if note is not None:
             out.append(note)
     out += _vehicle_findings(m, serves, groups, sites, ferry, apart, ids, cap)
-    for i, (label, name, xy) in enumerate(sites if given else ()):
-        k = where[i]
-        label = f"{label} at ({xy[0]:g}, {xy[1]:g})"
-        if k < 0:
-            out.append(Finding("DEPOT", True, f"fleet.depots: {label}: no sortie can leave it: "
-                               "it lies inside an obstacle's clearance", depot=name))  # fmt: skip
+    if given:
+        out += _depot_findings(sites, where, comp, members, near, dist, req, ids, hear, cap,
+                               vertical, per_m)  # fmt: skip
+    return out
+
+
+def _depot_findings(sites: list, where: list[int], comp: list[int],
+                    members: dict[int, list[int]], near: dict[int, np.ndarray],
+                    dist: np.ndarray, req: np.ndarray, ids: Any, hear: float, cap: float,
+                    vertical: float, per_m: float) -> list[Finding]:  # fmt: skip
+    """DEPOT: the map's depots (`fleet.depots`, every one a take-off site) that no sortie can
+    leave: inside an obstacle's clearance, walled in (no sensor heard from its piece of
+    airspace, `near` m per group and sensor against the radio reach `hear` m), or whose
+    cheapest sortie (to a sensor's radio range and on to a depot of its group, straight-line
+    lower bounds: `vertical` Wh and `per_m` Wh a metre) needs more than the usable `cap` Wh.
+    A vehicle's first sortie may leave any depot, so such a depot is harmless while another
+    one can be left: a note (DEPOT_UNUSED, naming the depots plans leave from); fatal only when
+    no depot is left that a sortie can leave.
+
+    Returns:
+        One finding per depot no sortie can leave, in the map's order.
+
+    Cost: O(D x J) for D depots and J sensors.
+    """
+    why: dict[int, str] = {}
+    for i in range(len(sites)):
+        if where[i] < 0:
+            why[i] = "it lies inside an obstacle's clearance"
             continue
         heard = [j for j in range(len(ids)) if req[j] > 0 and near[comp[i]][j] < hear]
         if not heard:
-            out.append(Finding(
-                "DEPOT", True, f"fleet.depots: {label}: no sortie can leave it: no sensor is "
-                f"heard from the airspace around it (obstacles wall it in; the radio range is "
-                f"{hear:.0f} m)", depot=name))  # fmt: skip
+            why[i] = (f"no sensor is heard from the airspace around it (obstacles wall it in; "
+                      f"the radio range is {hear:.0f} m)")
             continue
         if not math.isfinite(cap):
             continue
@@ -502,10 +524,21 @@ def _energy_findings(m: Any, pm: Any, pieces: list[Any], hear: float) -> list[Fi
                   j) for j in heard]  # fmt: skip
         e, j = min(costs)
         if e >= cap:
-            out.append(Finding(
-                "DEPOT", True, f"fleet.depots: {label}: no sortie can leave it: the cheapest, "
-                f"to sensor '{ids[j]}' ({dist[j, i]:.0f} m away) and on to a depot, needs at "
-                f"least {e:.4g} Wh, more than the {cap:.4g} Wh usable", depot=name))  # fmt: skip
+            why[i] = (f"the cheapest, to sensor '{ids[j]}' ({dist[j, i]:.0f} m away) and on to "
+                      f"a depot, needs at least {e:.4g} Wh, more than the {cap:.4g} Wh usable")
+    left = [sites[i][1] for i in range(len(sites)) if i not in why]
+    out = []
+    for i, reason in why.items():
+        label, name, xy = sites[i]
+        line = (f"fleet.depots: {label} at ({xy[0]:g}, {xy[1]:g}): no sortie can leave it: "
+                f"{reason}")
+        if left:
+            others = " or ".join(f"'{n}'" for n in left)
+            out.append(Finding("DEPOT_UNUSED", False, f"{line}; no plan uses it (plans leave "
+                               f"from depot {others})", depot=name))  # fmt: skip
+        else:
+            also = ", and no other depot can be left either" if len(sites) > 1 else ""
+            out.append(Finding("DEPOT", True, f"{line}{also}", depot=name))
     return out
 
 
