@@ -494,8 +494,8 @@ MAP_LISTS: dict[str, Default] = {
         "local metres, each with its vehicles' pads [[x, y], ...] where the crew has them "
         "(`pads`; null: on a grid around it) (null: one depot `home` at the map's start; a "
         "sortie may land at the map's end)",
-        f"null or 1-{MAX_DEPOTS} depots, names unique, each inside the area and outside every "
-        "obstacle and no-fly zone",
+        f"null or 1-{MAX_DEPOTS} depots, names unique, each and each listed pad inside the "
+        "area and outside every obstacle and no-fly zone",
         lambda v: v is None or (isinstance(v, list) and 1 <= len(v) <= MAX_DEPOTS)),
 }
 

@@ -68,9 +68,39 @@ def test_hover_time_cannot_is_proven_with_the_ring_inside_the_area() -> None:
     assert kinds == ["C3_HOVER_TIME"] * 12
     assert d.bandwidth.v_low == pytest.approx(12 * 204 / 25, rel=1e-3)
     assert d.bandwidth.v_low > d.bandwidth.cap == 80.0
+    # none of them alone needs more than the cap (8.2 s): each line names the others
+    assert d.bandwidth.alone == ()
+    (s01,) = [f.message for f in d.findings if f.fatal and f.sensor == "s01"]
+    assert s01.startswith("sensor 's01': with sensors 's02', 's03', 's04' and 8 more it needs at "
+                          "least 97.9"), s01
     # with 10 s per point the relaxation stays below the cap: nothing is claimed
     m = load_map(dense_field(size=3000.0, uav={"max_hover_time": 10.0}))
     assert diagnose(m).feasible_so_far
+
+
+def test_a_sensor_that_alone_needs_more_hover_time_is_named_alone() -> None:
+    """fleet-demo with S4 asking 200,000 Mbit: check noted "sensor 'S1': with 1 other sensor
+    named here it needs at least 22689.3 s of hover time ..." though S1 asks 200 Mbit, 1.5 km
+    from S4, and the other sensor was not named on the line; S4's notes said "at least 16
+    sorties" beside the CANNOT's 184. S4 alone needs 204,000 / 9 = 22,667 s: it alone is named,
+    and each count of sorties gives the most any finding of S4 proves."""
+    doc = json.loads((MAPS / "fleet-demo.json").read_text())
+    doc["sensors"][3]["required_data"] = 200000
+    d = diagnose(load_map(doc))
+    assert d.bandwidth.short == ("S4",) and d.bandwidth.alone == pytest.approx((204000 / 9,))
+    assert not [f for f in d.findings if f.sensor == "S1"]
+    lines = {f.kind: f.message for f in d.findings if f.sensor == "S4"}
+    assert lines["C3_HOVER_TIME"].startswith(
+        "sensor 'S4': it alone needs at least 22666.7 s of hover time at hover points that keep "
+        "C3 (sum of rates <= R_lambda = 25 Mbit/s), more than I_max x T_max = 5 x 300 s = "
+        "1500 s (proven over the whole area on cells down to ")
+    assert lines["C3_HOVER_TIME"].endswith(
+        "; that bounds one sortie: at least 16 sorties must share its hover time, and at least "
+        "184 for the battery (below)")
+    assert lines["SEVERAL_SORTIES"].endswith(
+        "more than one flight's I_max = 5: at least 16 sorties must share it, and at least 184 "
+        "for the battery (below)")
+    assert "so at least 184 sorties must share its data" in lines["SORTIE_LIMIT"]
 
 
 @pytest.mark.parametrize("seed", range(6))

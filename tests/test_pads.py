@@ -262,7 +262,6 @@ def test_a_depot_may_list_its_pads_as_the_crew_has_them():
     assert m.vehicle_pads[:, 0].tolist() == [[100.0, 100.0], [100.0, 150.0], [135.0, 100.0]]
     for pads, said in (([[100.0, 120.0]], "lies 20.0 m from depot 'home', nearer than 35 m "
                                           "(fleet.separation_m + 5 m)"),
-                       ([[-50.0, 100.0]], "lies outside the area"),
                        # beyond the two the 3 vehicles use, still held to the rules
                        ([[100.0, 150.0], [150.0, 100.0], [100.0, 170.0]],
                         "lies 20.0 m from pad 2 at (100, 150) of depot 'home'")):
@@ -273,9 +272,37 @@ def test_a_depot_may_list_its_pads_as_the_crew_has_them():
             load_map(doc).pads_for(3)
     # one vehicle uses no pad, but a listed one that breaks the rules is still named
     one = _demo(1)
-    one["fleet"]["depots"][0]["pads"] = [[-50.0, 100.0]]
-    with pytest.raises(ValueError, match=r"pads\[0\].*lies outside the area"):
+    one["fleet"]["depots"][0]["pads"] = [[100.0, 150.0], [100.0, 170.0]]
+    with pytest.raises(ValueError, match=r"pads\[1\].*lies 20\.0 m from the pad at"):
         load_map(one).pads_for(1)
+
+
+@pytest.mark.parametrize("uavs", [1, 3])
+def test_a_listed_pad_outside_the_area_or_inside_an_obstacle_is_bad_input(uavs, tmp_path):
+    """A position the file gives outside the area is bad input wherever it appears (exit 2,
+    one line naming the field), as a depot's own is: a reviewer's pad outside the area with one
+    UAV (which uses no pad) made check say CANNOT and plan refuse (exit 1), while the same
+    mistake on the depot was exit 2. Inside an obstacle or no-fly zone likewise."""
+    from lamde_mission.cli import main
+    from planner_core.model.mapio import MapError
+
+    doc = _demo(uavs)
+    doc["fleet"]["depots"][1]["pads"] = [[1900.0, 1850.0], [2100.0, 1800.0]]
+    with pytest.raises(MapError) as err:
+        load_map(doc)
+    assert err.value.problems == [
+        "fleet.depots[1].pads[1]: the pad of depot 'north' at (2100, 1800) is outside the area "
+        "[0, 2000] x [0, 2000]"]
+    path = tmp_path / "pad.json"
+    path.write_text(json.dumps(doc))
+    assert main(["check", str(path)]) == 2
+    # the no-fly zone of fleet-demo covers (1600, 500)
+    doc["fleet"]["depots"][1]["pads"] = [[1600.0, 500.0]]
+    with pytest.raises(MapError) as err:
+        load_map(doc)
+    assert err.value.problems == [
+        "fleet.depots[1].pads[0]: the pad of depot 'north' at (1600, 500) lies inside an "
+        "obstacle or no-fly zone: no vehicle can stand there"]
 
 
 def test_two_depots_nearer_than_the_pads_spacing_are_named():

@@ -28,8 +28,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
         "sensors that no hover point keeping C3 (the bandwidth R_lambda under the paper's "
         "simultaneous uplink) can serve; on a map with a battery or fleet, a sensor no sortie "
         "from where a vehicle can take off can reach and come back from within the usable "
-        "energy, more sensors needing vehicles of their own than fleet.uavs, a depot no "
-        "sortie can leave or without room for every vehicle's own pad, and a sensor needing "
+        "energy, more sensors needing vehicles of their own than fleet.uavs, depots no "
+        "sortie can leave (all of them: one among others is a note) or a depot without room "
+        "for every vehicle's own pad, and a sensor needing "
         "more sorties than the sortie planner makes for one; exit status 1 naming what "
         "cannot be met; docs/energy.md).",
     )

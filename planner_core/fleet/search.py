@@ -50,6 +50,7 @@ from typing import Any
 
 import numpy as np
 
+from planner_core.defaults import MAP_DEFAULTS
 from planner_core.fleet.lp import collected_by_sortie, fleet_hover_lp
 from planner_core.fleet.model import FleetPlan, FleetSettings, Sortie
 from planner_core.fleet.split import (
@@ -89,6 +90,11 @@ TOUR_WINDOW = 10
 #: many of its nearest depots, every 1/SPOT_STEPS of the way (`_Planner.best_spot`)
 SPOT_DEPOTS = 3
 SPOT_STEPS = 64
+#: `_Planner.enough_battery` looks at the endurances between two powers of two seconds, P / 2
+#: and P, in steps of P / ENOUGH_STEPS (0.8-1.6 %), up to the largest `uav.endurance_s` a map
+#: may give (86,400 s)
+ENOUGH_STEPS = 128
+ENDURANCE_MAX_S = int(MAP_DEFAULTS["uav.endurance_s"].bounds[1])
 
 
 class FleetResult:
@@ -299,7 +305,47 @@ class _Planner:
         obstacles joins; a corner of the tour (a detour round an obstacle) no sortie reaches;
         or the cut among the vehicles. Each battery case ends with `_advice`: the usable
         energy against what the point needs, and the battery, depots or vehicles that would
-        change it. Only said after planning failed: nothing here changes a plan."""
+        change it. What `lamde-mission check` says CANNOT of the battery and depots
+        (`diagnose.fleet_findings`) leads, since no battery that only fixes the search's point
+        plans such a map; a battery that plans it (`enough_battery`) ends the line. Only said
+        after planning failed: nothing here changes a plan.
+
+        Args:
+            single: the single flight's hover points (n, 2) m and times (n,) s, or None.
+            clustered: the depots' own flights were tried too.
+
+        Returns:
+            One line, no trailing punctuation.
+
+        Cost: `diagnose.fleet_findings` and `enough_battery`'s splits."""
+        from planner_core.model.diagnose import fleet_findings
+
+        # what `check` proves no plan can meet comes first: the search's own trouble below is
+        # one tour's, and a battery that fixes it may still leave the map unplannable
+        cannot = [f.message for f in fleet_findings(self.m) if f.fatal]
+        lead = ""
+        if cannot:
+            more = (f" (and {counted(len(cannot) - 1, 'more CANNOT')} in `lamde-mission check`)"
+                    if len(cannot) > 1 else "")  # fmt: skip
+            lead = (f"no plan can meet this map (`lamde-mission check` says CANNOT): "
+                    f"{cannot[0]}{more}; the search: ")
+        reason = self._why_not(single, clustered)
+        if single is None or not np.isfinite(self.st.usable_wh):
+            return lead + reason
+        enough = self.enough_battery(single)
+        if enough is None:
+            return (f"{lead}{reason}; no battery up to uav.endurance_s {ENDURANCE_MAX_S:,} cuts "
+                    f"the same single flight (seed {self.config.seed}, budget "
+                    f"{self.config.budget}) into sorties that fit it")
+        wh, seconds = enough
+        return (f"{lead}{reason}; a battery of {wh:.2f} Wh (uav.battery.energy_wh; or "
+                f"uav.endurance_s {seconds:d}) plans this map: the same single flight (seed "
+                f"{self.config.seed}, budget {self.config.budget}) cuts into sorties that fit "
+                "it (a smaller one may plan too)")
+
+    def _why_not(self, single: tuple[np.ndarray, np.ndarray] | None, clustered: bool) -> str:
+        """`why_not`'s account of the search: what failed and what to change, without check's
+        CANNOT and the battery that plans."""
         also = (" (nor did the depots' own flights, planned from each depot back to it)"
                 if clustered else "")  # fmt: skip
         if single is None:
@@ -360,15 +406,78 @@ class _Planner:
                 "sensors and one another (fleet.depots), or a larger battery "
                 "(uav.battery.energy_wh or uav.endurance_s)")
 
+    def enough_battery(self, single: tuple[np.ndarray, np.ndarray]) -> tuple[float, int] | None:
+        """A battery that plans this map: a whole `uav.endurance_s` at which the single flight's
+        tour `single` splits into sorties that fit (`split`, as route first, cluster second
+        cuts it: searched from the depots with no allowance for the pads and with the full
+        one, the first and last `plan_fleet` plans with), and the same battery as
+        `uav.battery.energy_wh` rounded up to 0.01 Wh (which splits it too). The single flight
+        does not depend on the battery, so a plan with the same seed and budget on that
+        battery finds this tour and this split of it, and its other start and rounds only keep
+        a better plan: the battery suffices. It is not the least (another tour may need less).
+
+        Searched on a grid that does not depend on the map's battery, so maps that differ only
+        in it are told the same: the first power of two seconds above the map's endurance at
+        which the tour splits, P, then the multiples of P / `ENOUGH_STEPS` above the last power
+        that did not (and above the map's endurance), the first that splits.
+
+        Args:
+            single: the single flight's hover points (n, 2) m and times (n,) s.
+
+        Returns:
+            (Wh, seconds), or None: no battery (or no finite one), or no endurance up to the
+            largest `uav.endurance_s` (86,400 s) splits the tour.
+
+        Cost: at most log2(86,400) + `ENOUGH_STEPS` splits, each `split`'s (O(n x L x D^2)
+        and an LP across sorties), twice as many with pads (tens of ms each on L01's tour).
+        """
+        import copy
+
+        if not np.isfinite(self.st.usable_wh) or not len(single[0]):
+            return None
+        reserve = float(self.m.battery_reserve)
+        full = FleetSettings.from_map(self.m, self.st.goal).pad_wh
+        allowances = sorted({0.0, float(full)})
+        top = ENDURANCE_MAX_S
+
+        def splits(battery_wh: float) -> bool:
+            usable = E.usable_energy_wh(battery_wh, reserve)
+            trial = copy.copy(self)  # the same links and problem, another battery
+            for pad in allowances:
+                trial.st = replace(self.st, usable_wh=usable, pad_wh=pad)
+                if trial.split(*single) is None:
+                    return False
+            return True
+
+        def battery(seconds: int) -> float:
+            return float(E.hover_energy_wh(seconds, self.st.power))
+
+        have = int(np.floor(float(E.hover_endurance_s(
+            E.battery_for_usable_wh(self.st.usable_wh, reserve), self.st.power))))  # fmt: skip
+        below, power = have, 1
+        while power <= have:
+            power *= 2
+        while not splits(battery(min(power, top))):
+            if power >= top:
+                return None
+            below, power = max(below, power), 2 * power
+        power = min(power, top)
+        step = max(1, power // ENOUGH_STEPS)
+        for seconds in [*range(step * (below // step + 1), power, step), power]:
+            wh = rounded_up(battery(seconds), 2)
+            if (seconds == power or splits(battery(seconds))) and splits(wh):
+                return wh, seconds
+        return None
+
     def _advice(self, p: np.ndarray, hover_s: float, how: str) -> str:
         """What the battery gives against what a sortie to `p` needs, and what to change: the
         usable energy (battery less reserve) and the take-off and landing's share of it; the
         least usable energy a sortie of p alone needs (`split.solo_need`: from its best
-        depots, with `hover_s` of hover; `how` says which), and the battery (energy_wh and
-        endurance_s, the reserve kept, each rounded up at its printed precision) that would
-        give that much, or a depot nearer to p. The battery is one that would fly the sortie,
-        not a least one: with another battery the tour itself changes, and a smaller battery
-        may then plan.
+        depots, with `hover_s` of hover; `how` says which), and a larger battery or a depot
+        nearer to p. No battery is named here: the battery that gives that one sortie is
+        neither enough for a plan (the other sorties and the flights between depots may need
+        more) nor needed by one (the split moves and shares the point: a smaller one may
+        plan), and `why_not` ends with a battery that plans (`enough_battery`).
 
         Args:
             p: (2,) the point, m (planning map).
@@ -390,14 +499,8 @@ class _Planner:
         names = st.depot_names
         via = (f"depot '{names[a[0]]}' and back" if a[0] == b[0]
                else f"depot '{names[a[0]]}' to depot '{names[b[0]]}'")
-        # what would do, not a lower bound (a larger battery changes the tour, and a smaller
-        # one than this may then plan): each rounded up, so the printed value does
-        battery = E.battery_for_usable_wh(need[0], reserve)
-        wh = rounded_up(battery, 2)
-        seconds = rounded_up(float(E.hover_endurance_s(battery, st.power)))
         return (f"{have}, and a sortie to it alone{how} needs {need[0]:.2f} Wh (from {via}): "
-                f"a battery of {wh:.2f} Wh (uav.battery.energy_wh; or uav.endurance_s "
-                f"{seconds:.0f}) would fly it, or a depot nearer to ({p[0]:.0f}, {p[1]:.0f}) "
+                f"a larger battery, or a depot nearer to ({p[0]:.0f}, {p[1]:.0f}) "
                 "(fleet.depots)")
 
     def cluster_first(self) -> FleetPlan | None:

@@ -220,7 +220,9 @@ def split_tour(
     CH = np.concatenate([[0.0], np.cumsum(T)])  # (n + 1,)
     h = st.hover_w / 3600.0
     cap = st.usable_wh
-    fkey = ("_ferries", wf, per)
+    # the ferries that fit depend on the battery too (`budget_wh`): a planner that tries
+    # other batteries on the same links (`_Planner.enough_battery`) must not reuse them
+    fkey = ("_ferries", wf, per, st.usable_wh, st.pad_wh)
     if fkey not in links.__dict__:
         links.__dict__[fkey] = _ferries(st, links, wf, per)
     fc, fnext, fways = links.__dict__[fkey]

@@ -19,8 +19,9 @@ required data raised by the data margin) and with shapely:
   dense field of sensors every point near enough to collect may break it. `bandwidth_bound`
   proves over the whole area (cells bounding the rates from both sides, and the hover-time
   LP over them) which sensors no C3-respecting point receives from (C3_NO_POINT) or that no
-  plan can serve within I_max x T_max of hover time at such points (C3_HOVER_TIME). In
-  scheduled access C3 does not apply and the test is skipped.
+  plan can serve within I_max x T_max of hover time at such points (C3_HOVER_TIME: a sensor
+  that alone needs more is named alone, else each line names the others of the set that
+  together need it). In scheduled access C3 does not apply and the test is skipped.
 
 Batteries and fleets (issue 33; only on maps that give `uav.battery` / `uav.endurance_s` or
 `fleet`, so other maps are diagnosed exactly as before). A sortie takes off and lands at a
@@ -46,7 +47,9 @@ distances bound the flight from below, so:
   among (`planner_core.fleet.split.SHARE_MAX`): the planner's own limit, not a proof that no
   plan exists (SORTIE_LIMIT; the planner refuses such a map up front);
 - a depot from which no sortie can leave: no sensor is heard from its piece of airspace (it is
-  walled in), or every sensor is out of a battery's reach from it (DEPOT, naming the depot);
+  walled in), or every sensor is out of a battery's reach from it. A vehicle's first sortie
+  may leave any depot, so it is a note while another depot can be left (DEPOT_UNUSED, naming
+  the depot and those plans leave from), fatal only when none can (DEPOT, naming each);
 - a depot without room for every vehicle's own pad (`fleet.separation_m` + 5 m apart, clear
   of obstacles, inside the area: `planner_core.model.pads`; PADS, naming the depot);
 - a sensor's data may be split across sorties (C4 sums them), so a sensor one sortie cannot
@@ -54,7 +57,9 @@ distances bound the flight from below, so:
   the usable energy, and how many sorties at least must share it); with several sorties the
   per-flight limits I_max and I_max x T_max (TOO_MUCH_DATA, C3_HOVER_TIME) bound each sortie,
   not the plan: fatal only beyond what `fleet.uavs` flights without a battery can hold, notes
-  with a battery (as many sorties as needed).
+  with a battery (as many sorties as needed). Each finding that counts the sorties a
+  sensor's data needs at least also gives the most any finding of that sensor proves
+  (`_agreed`).
 
 Findings that are no proof of infeasibility are notes: a sensor inside an obstacle or a no-fly
 zone (served by radio from outside it: the best rate says how well), a sensor needing more than
@@ -87,6 +92,9 @@ class Finding:
     sensor: str | None = None
     #: the depot a DEPOT finding names (issue 33)
     depot: str | None = None
+    #: the sorties at least that must share the sensor's data, where the finding proves a
+    #: number (SEVERAL_SORTIES, ENERGY_SPLIT, SORTIE_LIMIT, a C3_HOVER_TIME note of one sensor)
+    sorties: int | None = None
 
 
 @dataclass(frozen=True)
@@ -198,7 +206,8 @@ def diagnose(m: Any) -> Diagnosis:
             else:
                 findings.append(Finding(
                     "SEVERAL_SORTIES", False, f"{why}, more than one flight's I_max = "
-                    f"{i_max}: at least {math.ceil(k / i_max)} sorties must share it", sid))
+                    f"{i_max}: at least {math.ceil(k / i_max)} sorties must share it", sid,
+                    sorties=math.ceil(k / i_max)))  # fmt: skip
         elif k > i_max:
             findings.append(Finding(
                 "TOO_MUCH_DATA", True, f"sensor '{sid}' needs {q:g} Mbit (required "
@@ -227,15 +236,57 @@ def diagnose(m: Any) -> Diagnosis:
         )  # fmt: skip
         found = _bandwidth_findings(bound, float(radio.bandwidth), t_max, i_plan)
         if not math.isfinite(flights):  # a battery: sorties share the hover time
-            more = "; that bounds one sortie, and with a battery sorties share the hover time"
-            found = [f if f.kind != "C3_HOVER_TIME" else Finding(
-                "C3_HOVER_TIME", False, f.message + more, f.sensor) for f in found]  # fmt: skip
+            found = [f if f.kind != "C3_HOVER_TIME" else _shared_hover(f, bound)
+                     for f in found]  # fmt: skip
         findings.extend(found)
     if m.has_battery or m.has_fleet:
         findings.extend(_energy_findings(m, pm, pieces, hear))
         findings.extend(_pad_findings(m))
-    return Diagnosis(findings=tuple(findings), best_rate=best, points_needed=need,
+    return Diagnosis(findings=tuple(_agreed(findings)), best_rate=best, points_needed=need,
                      bandwidth=bound)  # fmt: skip
+
+
+def _shared_hover(f: Finding, b: BandwidthBound) -> Finding:
+    """A C3_HOVER_TIME finding on a map with a battery: a note (it bounds one sortie, and
+    sorties share the hover time), saying how many sorties at least its hover time needs."""
+    if f.sensor in b.short and b.alone:
+        need = b.alone[b.short.index(f.sensor)]
+        k = math.ceil(need / b.cap * (1.0 - C3_TOL))
+        return Finding("C3_HOVER_TIME", False, f"{f.message}; that bounds one sortie: at least "
+                       f"{k} sorties must share its hover time", f.sensor, sorties=k)
+    k = math.ceil(b.v_low / b.cap * (1.0 - C3_TOL))
+    return Finding("C3_HOVER_TIME", False, f"{f.message}; that bounds one sortie: at least {k} "
+                   "sorties must share their hover time", f.sensor)
+
+
+#: what each finding that counts sorties counts them for (`_agreed`)
+SORTIES_FOR = {"SEVERAL_SORTIES": "for its hover points", "ENERGY_SPLIT": "for the battery",
+               "SORTIE_LIMIT": "for the battery",
+               "C3_HOVER_TIME": "for its hover time at hover points that keep C3"}
+
+
+def _agreed(findings: list[Finding]) -> list[Finding]:
+    """The findings, each that says how many sorties at least must share a sensor's data
+    (`Finding.sorties`) also giving the most any finding of that sensor proves, and what for
+    ("at least 16 sorties must share it, and at least 184 for the battery (below)"): each
+    bound is true, but a line saying 16 beside one saying 184 read as a contradiction.
+
+    Cost: O(findings)."""
+    most: dict[str, tuple[int, int]] = {}  # sensor -> (sorties, index of the finding)
+    for i, f in enumerate(findings):
+        if f.sensor is not None and f.sorties is not None and f.sorties > most.get(
+                f.sensor, (0, -1))[0]:  # fmt: skip
+            most[f.sensor] = (f.sorties, i)
+    out = []
+    for i, f in enumerate(findings):
+        k, at = most.get(f.sensor, (0, -1)) if f.sensor is not None else (0, -1)
+        if f.sorties is not None and f.sorties < k:
+            where = "below" if at > i else "above"
+            f = Finding(f.kind, f.fatal, f"{f.message}, and at least {k} "
+                        f"{SORTIES_FOR[findings[at].kind]} ({where})", f.sensor, f.depot,
+                        f.sorties)  # fmt: skip
+        out.append(f)
+    return out
 
 
 def _hear(pm: Any) -> float:
@@ -263,9 +314,9 @@ def _airspace(pm: Any, shapes: list[Any] | None = None) -> list[Any]:
 
 def fleet_findings(m: Any) -> list[Finding]:
     """The battery and depot findings alone (ENERGY_VERTICAL, ENERGY_RANGE, VEHICLES, DEPOT,
-    ENERGY_SPLIT, SORTIE_LIMIT, PADS: the module docstring), as `diagnose` makes them, for a
-    map with a battery or a fleet (else none); the sortie planner refuses a map with a
-    SORTIE_LIMIT, ENERGY_VERTICAL or PADS up front.
+    DEPOT_UNUSED, ENERGY_SPLIT, SORTIE_LIMIT, PADS: the module docstring), as `diagnose` makes
+    them, for a map with a battery or a fleet (else none); the sortie planner refuses a map
+    with a SORTIE_LIMIT, ENERGY_VERTICAL or PADS up front.
 
     Args:
         m: a `planner_core.model.mapio.Map`.
@@ -344,8 +395,8 @@ def _spread_findings(pm: Any, reach: float, i_max: int, flights: float,
 def _energy_findings(m: Any, pm: Any, pieces: list[Any], hear: float) -> list[Finding]:
     """Batteries and depots (issue 33; the module docstring): ENERGY_VERTICAL alone when the
     take-off and landing use up the usable energy; else ENERGY_RANGE, VEHICLES, DEPOT and
-    SORTIE_LIMIT (fatal), ENERGY_SPLIT (a note), from straight-line lower bounds on each
-    sortie's flight; `hear` the link's ground reach (m).
+    SORTIE_LIMIT (fatal), ENERGY_SPLIT and DEPOT_UNUSED (notes), from straight-line lower
+    bounds on each sortie's flight; `hear` the link's ground reach (m).
 
     Sites are the sortie planner's (`Map.sortie_sites`): the map's depots, each a take-off
     site, or without them 'home' at the start (where every vehicle
@@ -481,19 +532,39 @@ def _energy_findings(m: Any, pm: Any, pieces: list[Any], hear: float) -> list[Fi
         if note is not None:
             out.append(note)
     out += _vehicle_findings(m, serves, groups, sites, ferry, apart, ids, cap)
-    for i, (label, name, xy) in enumerate(sites if given else ()):
-        k = where[i]
-        label = f"{label} at ({xy[0]:g}, {xy[1]:g})"
-        if k < 0:
-            out.append(Finding("DEPOT", True, f"fleet.depots: {label}: no sortie can leave it: "
-                               "it lies inside an obstacle's clearance", depot=name))  # fmt: skip
+    if given:
+        out += _depot_findings(sites, where, comp, members, near, dist, req, ids, hear, cap,
+                               vertical, per_m)  # fmt: skip
+    return out
+
+
+def _depot_findings(sites: list, where: list[int], comp: list[int],
+                    members: dict[int, list[int]], near: dict[int, np.ndarray],
+                    dist: np.ndarray, req: np.ndarray, ids: Any, hear: float, cap: float,
+                    vertical: float, per_m: float) -> list[Finding]:  # fmt: skip
+    """DEPOT: the map's depots (`fleet.depots`, every one a take-off site) that no sortie can
+    leave: inside an obstacle's clearance, walled in (no sensor heard from its piece of
+    airspace, `near` m per group and sensor against the radio reach `hear` m), or whose
+    cheapest sortie (to a sensor's radio range and on to a depot of its group, straight-line
+    lower bounds: `vertical` Wh and `per_m` Wh a metre) needs more than the usable `cap` Wh.
+    A vehicle's first sortie may leave any depot, so such a depot is harmless while another
+    one can be left: a note (DEPOT_UNUSED, naming the depots plans leave from); fatal only when
+    no depot is left that a sortie can leave.
+
+    Returns:
+        One finding per depot no sortie can leave, in the map's order.
+
+    Cost: O(D x J) for D depots and J sensors.
+    """
+    why: dict[int, str] = {}
+    for i in range(len(sites)):
+        if where[i] < 0:
+            why[i] = "it lies inside an obstacle's clearance"
             continue
         heard = [j for j in range(len(ids)) if req[j] > 0 and near[comp[i]][j] < hear]
         if not heard:
-            out.append(Finding(
-                "DEPOT", True, f"fleet.depots: {label}: no sortie can leave it: no sensor is "
-                f"heard from the airspace around it (obstacles wall it in; the radio range is "
-                f"{hear:.0f} m)", depot=name))  # fmt: skip
+            why[i] = (f"no sensor is heard from the airspace around it (obstacles wall it in; "
+                      f"the radio range is {hear:.0f} m)")
             continue
         if not math.isfinite(cap):
             continue
@@ -502,10 +573,21 @@ def _energy_findings(m: Any, pm: Any, pieces: list[Any], hear: float) -> list[Fi
                   j) for j in heard]  # fmt: skip
         e, j = min(costs)
         if e >= cap:
-            out.append(Finding(
-                "DEPOT", True, f"fleet.depots: {label}: no sortie can leave it: the cheapest, "
-                f"to sensor '{ids[j]}' ({dist[j, i]:.0f} m away) and on to a depot, needs at "
-                f"least {e:.4g} Wh, more than the {cap:.4g} Wh usable", depot=name))  # fmt: skip
+            why[i] = (f"the cheapest, to sensor '{ids[j]}' ({dist[j, i]:.0f} m away) and on to "
+                      f"a depot, needs at least {e:.4g} Wh, more than the {cap:.4g} Wh usable")
+    left = [sites[i][1] for i in range(len(sites)) if i not in why]
+    out = []
+    for i, reason in why.items():
+        label, name, xy = sites[i]
+        line = (f"fleet.depots: {label} at ({xy[0]:g}, {xy[1]:g}): no sortie can leave it: "
+                f"{reason}")
+        if left:
+            others = " or ".join(f"'{n}'" for n in left)
+            out.append(Finding("DEPOT_UNUSED", False, f"{line}; no plan uses it (plans leave "
+                               f"from depot {others})", depot=name))  # fmt: skip
+        else:
+            also = ", and no other depot can be left either" if len(sites) > 1 else ""
+            out.append(Finding("DEPOT", True, f"{line}{also}", depot=name))
     return out
 
 
@@ -615,12 +697,12 @@ def _split_note(j: int, sid: str, groups: dict[int, list[int]], near: dict[int, 
             f"sortie takes at most {most:.4g} Mbit of its {q:g} Mbit (from the best site, "
             f"{at}), so at least {sorties} sorties must share its data, more than the "
             f"{SHARE_MAX} the planner shares one sensor's data among "
-            "(planner_core.fleet.split.SHARE_MAX)", sid)  # fmt: skip
+            "(planner_core.fleet.split.SHARE_MAX)", sid, sorties=sorties)  # fmt: skip
     return Finding(
         "ENERGY_SPLIT", False, f"sensor '{sid}': one sortie cannot serve it alone: from the "
         f"best site, {at}, that needs at least {need:.4g} Wh (the flight and {q:g} Mbit of "
         f"hover), more than the {cap:.4g} Wh usable; its data must be shared by at least "
-        f"{sorties} sorties", sid)  # fmt: skip
+        f"{sorties} sorties", sid, sorties=sorties)  # fmt: skip
 
 
 def _bandwidth_findings(b: BandwidthBound, bw: float, t_max: float, i_max: int) -> list[Finding]:
@@ -632,14 +714,19 @@ def _bandwidth_findings(b: BandwidthBound, bw: float, t_max: float, i_max: int) 
             "C3_NO_POINT", True, f"sensor '{sid}': every hover point that receives from it "
             f"breaks C3: the sensors in range there send more than R_lambda = {bw:g} Mbit/s "
             f"at once ({how})", sid))  # fmt: skip
-    for sid in b.short:
-        others = len(b.short) - 1
-        out.append(Finding(
-            "C3_HOVER_TIME", True, f"sensor '{sid}': with {counted(others, 'other sensor')} "
-            "named here "
-            f"it needs at least {b.v_low:.6g} s of hover time at hover points that keep C3 "
-            f"(sum of rates <= R_lambda = {bw:g} Mbit/s), more than I_max x T_max = "
-            f"{i_max} x {t_max:g} s = {b.cap:g} s ({how})", sid))
+    keep = (f"hover time at hover points that keep C3 (sum of rates <= R_lambda = {bw:g} "
+            f"Mbit/s), more than I_max x T_max = {i_max} x {t_max:g} s = {b.cap:g} s ({how})")
+    for k, sid in enumerate(b.short):
+        if b.alone:  # each of them alone needs more: no other sensor is to blame
+            out.append(Finding("C3_HOVER_TIME", True, f"sensor '{sid}': it alone needs at "
+                               f"least {b.alone[k]:.6g} s of {keep}", sid))
+            continue
+        others = [f"'{o}'" for o in b.short if o != sid]
+        named = ", ".join(others[:3]) + (f" and {len(others) - 3} more" if len(others) > 3
+                                         else "")  # fmt: skip
+        named = f"{'sensor' if len(others) == 1 else 'sensors'} {named}"
+        out.append(Finding("C3_HOVER_TIME", True, f"sensor '{sid}': with {named} it needs at "
+                           f"least {b.v_low:.6g} s of {keep}", sid))
     if not b.proven and b.v_grid > b.cap:
         need = "no plan at all" if not math.isfinite(b.v_grid) else f"{b.v_grid:.6g} s"
         out.append(Finding(
@@ -675,6 +762,9 @@ class BandwidthBound:
     `no_point`: ids of sensors no hover point that keeps C3 receives from (proven over the
     whole area); `short`: ids of sensors that together need more hover time at C3-respecting
     points than I_max x T_max allows (proven), `v_low` s that least time (a lower bound);
+    `alone` s, one per sensor of `short`, where each of them alone needs more than the cap
+    (its data over the best rate any C3-respecting point can get from it), `short` then only
+    those (empty: `short` is a set that needs it together);
     `v_grid` s: the least hover time using only the test's grid points (an upper estimate of
     what the continuum needs; inf when the grid serves no plan), `cell` m the finest cell
     side, `cap` s = I_max x T_max, `proven` whether a CANNOT is proven (`no_point` or `short`;
@@ -683,6 +773,7 @@ class BandwidthBound:
 
     no_point: tuple[str, ...] = ()
     short: tuple[str, ...] = ()
+    alone: tuple[float, ...] = ()
     v_low: float = 0.0
     v_grid: float = 0.0
     cell: float = 0.0
@@ -821,7 +912,7 @@ def bandwidth_bound(
                          distance_upper_bound=reach + side)  # fmt: skip
     box = box[np.isfinite(near)]
     cell = side
-    v_low, v_grid, short, no_point = 0.0, v0, (), ()
+    v_low, v_grid, short, no_point, alone = 0.0, v0, (), (), ()
     rounds = 0
     for rounds in range(1, C3_ROUNDS + 1):  # noqa: B007 - reported
         # the cells' centres first (cheap): a plan within the cap there ends the test
@@ -848,6 +939,15 @@ def bandwidth_bound(
         if v > cap * (1.0 + C3_TOL):
             v_low = v
             short = _binding(R, req, bw, y, cap, ids)
+            # a sensor alone: its data over the best rate a kept cell can give it (at most
+            # R_lambda); those that alone need more than the cap are named alone
+            best = np.minimum(np.asarray(R.max(axis=0).todense()).reshape(-1), bw)
+            with np.errstate(divide="ignore"):
+                need = np.where(best > 0, req / np.where(best > 0, best, 1.0), math.inf)
+            over = [j for j in range(J) if ids[j] in short and need[j] > cap * (1.0 + C3_TOL)]
+            if over:
+                short = tuple(ids[j] for j in over)
+                alone = tuple(float(need[j]) for j in over)
             break
         stalled = rounds > 2 and v - v_low < C3_STALL * (cap - v_low)
         v_low = max(v_low, v)
@@ -867,8 +967,9 @@ def bandwidth_bound(
         box = np.vstack([box[~used], kids])
         cell = min(cell, float(np.max(split[:, 2] - split[:, 0])) / 2)
     proven = bool(no_point or short)
-    return BandwidthBound(no_point=no_point, short=short, v_low=v_low, v_grid=v_grid,
-                          cell=cell, cap=cap, proven=proven, rounds=rounds)  # fmt: skip
+    return BandwidthBound(no_point=no_point, short=short, alone=alone, v_low=v_low,
+                          v_grid=v_grid, cell=cell, cap=cap, proven=proven,
+                          rounds=rounds)  # fmt: skip
 
 
 def _binding(

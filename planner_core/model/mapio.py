@@ -1579,6 +1579,12 @@ def _semantic_problems(
         if dp.name in names:
             problems.append(f"fleet.depots[{k}].name: duplicate depot name '{dp.name}'")
         names.add(dp.name)
+        # a listed pad is a position the file gives, as the depot's is: outside the area it
+        # is bad input whether or not a plan of this fleet uses it (one UAV uses none)
+        for i, (x, y) in enumerate(dp.pads or ()):
+            if not inside_area(x, y):
+                problems.append(f"fleet.depots[{k}].pads[{i}]: the pad of depot '{dp.name}' at "
+                                f"({x:g}, {y:g}) is outside the area [0, {W:g}] x [0, {H:g}]")
     if spec.witness is not None and len(spec.witness.hover_points) != len(spec.witness.hover_times):
         problems.append("witness: hover_points and hover_times differ in length")
     for k, (x, y) in enumerate(spec.witness.hover_points if spec.witness is not None else ()):
@@ -1619,6 +1625,16 @@ def _semantic_problems(
                                     f"closer than {100 * end_gap:g} cm: a mission file keeps "
                                     "positions on a 1e-7 degree grid, which may move it up to "
                                     "8 mm, into the obstacle")  # fmt: skip
+            listed = [(k, i, dp.name, xy) for k, dp in enumerate(depots)
+                      for i, xy in enumerate(dp.pads or ())]  # fmt: skip
+            if listed:
+                inside = points_inside(np.array([xy for *_, xy in listed], dtype=float),
+                                       obstacles)  # fmt: skip
+                for (k, i, name, (x, y)), flag in zip(listed, inside, strict=True):
+                    if flag:
+                        problems.append(f"fleet.depots[{k}].pads[{i}]: the pad of depot "
+                                        f"'{name}' at ({x:g}, {y:g}) lies inside an obstacle "
+                                        "or no-fly zone: no vehicle can stand there")
         return problems, notes, shapes, obstacles
     return problems, notes, shapes, None
 
