@@ -21,9 +21,12 @@ CHAIN (a vehicle's first sortie leaves a depot a vehicle starts from, each later
 the one before it landed at), UAVS (no more vehicles than the map's `fleet.uavs`), FILES (no
 mission file in the directory that fleet.json does not list), SEPARATION, LINKS and TIMING
 (vehicles together, `sim.fleet_time`), TIMES (fleet.json's take-off times are the plan's
-clock) and PLACES (fleet.json's take-off and landing places are the missions'); notes when
+clock), PLACES (fleet.json's take-off and landing places are the missions') and FIGURES
+(fleet.json's durations, energies, sensors and totals are the replays'); notes when
 fleet.json names another map or a sortie leaves another spot than its pad on this map
-(`FleetCheck.notes`).
+(`FleetCheck.notes`). fleet.json is read by `formats.fleet.read_fleet_dir` (unknown fields, a
+file listed twice: bad input) and a depot the map lacks refused by `check_sortie_depots`, the
+checks `show MAP DIR/` makes too.
 
 fleet.json (the contract of docs/sorties.md):
 
@@ -66,7 +69,7 @@ from planner_core.textio import counted
 
 __all__ = ["FLEET_FILE", "SortieCheck", "FleetCheck", "sortie_dir_refusal", "sortie_dir_of",
            "output_in_sortie_dir", "sortie_file", "sortie_map", "write_sortie_dir",
-           "verify_sortie_dir"]  # fmt: skip
+           "verify_sortie_dir", "check_sortie_depots"]  # fmt: skip
 
 #: the summary file of a sortie directory
 FLEET_FILE = "fleet.json"
@@ -762,32 +765,25 @@ def _check(
     return replace(check, fleet=(*check.fleet, timing), timing_tolerance_s=slack)
 
 
-def verify_sortie_dir(m: Any, path: str | Path,
-                      speed_limits: dict[int, float] | None = None) -> FleetCheck:
-    """Replay and judge the sortie directory `path` on map `m` (module docstring).
+def check_sortie_depots(fleet: Any, m: Any) -> None:
+    """Every sortie of a sortie directory names the depot it takes off at and the one it lands
+    at (`depot_start`, `depot_end`), and map `m` has both: a sortie is replayed, and drawn,
+    from its depot to its depot. The one check `verify MAP DIR/`, `upload DIR/ --fleet --map
+    MAP` and `show MAP DIR/` make (exit 2 for each). Cost: O(sorties x depots).
 
     Args:
-        m: the map the plan was made for (with its origin).
-        path: the directory holding fleet.json and the mission files.
-        speed_limits: {vehicle (1-based): its own horizontal speed limit, m/s}: that
-            vehicle's sorties flown at most at it (as PX4 flies a mission above
-            MPC_XY_VEL_MAX), at the launch times fleet.json gives; None: as planned.
-
-    Returns:
-        The `FleetCheck` (with a note when fleet.json names another map than `m`).
+        fleet: the directory as read (`formats.fleet.read_fleet_dir`).
+        m: the map it is verified or drawn on.
 
     Raises:
-        ValueError: one line naming the file and the problem (no fleet.json, a missing or
-            unreadable mission file, an unknown depot).
+        ValueError: one line naming fleet.json, the vehicle, sortie and file, the depot, the
+            map's depots and the map the directory was planned on (`_unknown_depot`); or the
+            field of a sortie without a depot.
     """
-    from lamde_mission.formats import MissionFileError, load_mission_items
-    from lamde_mission.formats.fleet import read_fleet_dir
     from planner_core.fleet import FleetSettings
 
-    fleet = read_fleet_dir(path)  # FleetDirError (a ValueError): the file and field by name
     summary = fleet.path / FLEET_FILE
     depots = FleetSettings.from_map(m).depot_names
-    rows = []
     for vi, veh in enumerate(fleet.vehicles):
         for si, s in enumerate(veh.sorties):
             for which, depot in (("depot_start", s.depot_start), ("depot_end", s.depot_end)):
@@ -797,6 +793,37 @@ def verify_sortie_dir(m: Any, path: str | Path,
                 if depot not in depots:
                     raise ValueError(_unknown_depot(fleet, m.name, depots, veh.vehicle, s,
                                                     which, depot))  # fmt: skip
+
+
+def verify_sortie_dir(m: Any, path: str | Path,
+                      speed_limits: dict[int, float] | None = None) -> FleetCheck:
+    """Replay and judge the sortie directory `path` on map `m` (module docstring).
+
+    Args:
+        m: the map the plan was made for (with its origin).
+        path: the directory holding fleet.json and the mission files.
+        speed_limits: {vehicle (1-based): its own horizontal speed limit, m/s}: that
+            vehicle's sorties flown at most at it (as PX4 flies a mission above
+            MPC_XY_VEL_MAX), at the launch times fleet.json gives; None: as planned (only
+            then is FIGURES judged: fleet.json's durations and energies are the planned
+            speeds').
+
+    Returns:
+        The `FleetCheck` (with a note when fleet.json names another map than `m`).
+
+    Raises:
+        ValueError: one line naming the file and the problem (no fleet.json or a bad field
+            of it, `formats.fleet.read_fleet_dir`; a missing or unreadable mission file; an
+            unknown depot, `check_sortie_depots`).
+    """
+    from lamde_mission.formats import MissionFileError, load_mission_items
+    from lamde_mission.formats.fleet import read_fleet_dir
+
+    fleet = read_fleet_dir(path)  # FleetDirError (a ValueError): the file and field by name
+    check_sortie_depots(fleet, m)
+    rows = []
+    for veh in fleet.vehicles:
+        for s in veh.sorties:
             try:
                 items, _ = load_mission_items(str(s.path), m)
             except MissionFileError as exc:
@@ -805,12 +832,11 @@ def verify_sortie_dir(m: Any, path: str | Path,
     check = _check(m, rows, len(fleet.vehicles), fleet.path,
                    [veh.launch_s for veh in fleet.vehicles], speed_limits)
     given = [(veh.vehicle, s.sortie, s.takeoff_s) for veh in fleet.vehicles for s in veh.sorties]
-    places = [((s.takeoff_at, s.takeoff_offset), (s.landing_at, s.landing_offset))
-              for veh in fleet.vehicles for s in veh.sorties]
     times = (_times_verdict(given, check.takeoffs(), fleet.swap_s, float(m.swap_s))
              if not speed_limits else _times_at_limits(given, check.takeoffs()))
-    check = replace(check, fleet=(*check.fleet, times, _places_verdict(
-        m, check, places, fleet.depots)))
+    figures = () if speed_limits else (_figures_verdict(check, fleet),)
+    check = replace(check, fleet=(*check.fleet, times, _places_verdict(m, check, fleet),
+                                  *figures))
     notes = [n for n in (_far_note(m, check), fleet.map_note(m.name, "verified"),
                          _battery_note(m, fleet), _pads_note(m, check)) if n]  # fmt: skip
     return replace(check, notes=tuple(notes)) if notes else check
@@ -847,6 +873,101 @@ def _battery_note(m: Any, fleet: Any) -> str | None:
         "to judge them)")
 
 
+#: sensors a FIGURES line names by id where fleet.json and the replay differ (then a count)
+SENSORS_NAMED = 3
+
+
+def _sensor_words(ids: Sequence[str]) -> str:
+    """'S1', 'S2' and 2 more: the first `SENSORS_NAMED` ids quoted, then a count."""
+    from planner_core.textio import printable
+
+    shown = ", ".join(f"'{printable(x)}'" for x in ids[:SENSORS_NAMED])
+    return shown + (f" and {len(ids) - SENSORS_NAMED} more" if len(ids) > SENSORS_NAMED else "")
+
+
+def _figures_verdict(check: FleetCheck, fleet: Any) -> Any:
+    """FIGURES: what fleet.json states beside the times and places (what the crew reads) is what
+    the replays find: each sortie's `duration_s`, `landing_s`, `energy_wh`, `reserve_left_wh`,
+    `above_reserve_wh` (null where the map has no battery) and `sensors`, each vehicle's
+    `makespan_s`, and `total_s`, `swaps`, `f_total` and `timing_tolerance_s`; seconds to
+    `formats.fleet.CLOCK_TOL_S`, energies to `ENERGY_TOL_WH`, the sensors as sets. A figure
+    fleet.json does not give is not judged (a directory written before it was recorded), nor
+    are the energies on a map without a battery (`_battery_note`'s line says why). A
+    hand-edited energy, duration or list of sensors passed verify before.
+
+    Args:
+        check: the replays, in fleet.json's order of sorties (with TIMING's tolerance).
+        fleet: the directory as read (`formats.fleet.read_fleet_dir`).
+
+    Returns:
+        The `sim.checks.Verdict`: its margin minus the figures that differ (0: none), its
+        detail naming the first (the vehicle, sortie and field, both values) and the count.
+        Cost: O(sorties x sensors).
+    """
+    from lamde_mission.formats.fleet import CLOCK_TOL_S, ENERGY_TOL_WH
+    from sim.checks import Verdict
+
+    off: list[str] = []
+    n = 0
+
+    def judge(who: str, key: str, given: float | None, found: float | None, unit: str,
+              tol: float, null: bool = False) -> None:
+        nonlocal n
+        if given is None and not null:
+            return
+        if found is None and unit == "Wh":
+            return  # the map verified on has no battery: not judged (`_battery_note` says so)
+        n += 1
+        if given is None or found is None:
+            if given is not None or found is not None:
+                shown = "null" if given is None else f"{given:g} {unit}"
+                what = "no battery on this map" if found is None else f"{found:.3f} {unit}"
+                off.append(f"{who}{key} {shown} in fleet.json, replayed {what}")
+            return
+        if abs(given - found) > tol:
+            said, got = ((f"{given:g} {unit}", f"{found:.3f} {unit}") if unit
+                         else (f"{given:g}", f"{found:g}"))  # fmt: skip
+            off.append(f"{who}{key} {said} in fleet.json, replayed {got}")
+
+    sorties = [s for v in fleet.vehicles for s in v.sorties]
+    for sc, s, at in zip(check.sorties, sorties, check.takeoffs(), strict=True):
+        who, vd = f"vehicle {sc.vehicle} sortie {sc.sortie} ", sc.verdicts
+        judge(who, "duration_s", s.duration_s, sc.duration_s, "s", CLOCK_TOL_S)
+        judge(who, "landing_s", s.landing_s, at + sc.duration_s, "s", CLOCK_TOL_S)
+        judge(who, "energy_wh", s.energy_wh, vd.energy_wh, "Wh", ENERGY_TOL_WH, s.no_battery)
+        judge(who, "reserve_left_wh", s.reserve_left_wh, vd.reserve_left_wh, "Wh", ENERGY_TOL_WH)
+        judge(who, "above_reserve_wh", s.above_reserve_wh, vd.above_reserve_wh, "Wh",
+              ENERGY_TOL_WH)
+        n += 1
+        listed, served = set(s.sensors), set(sc.sensors)
+        if listed != served:
+            gone = [x for x in sc.sensors if x not in listed]
+            more = [x for x in s.sensors if x not in served]
+            off.append(f"{who}sensors in fleet.json " + " and ".join(w for w in (
+                f"leave out {_sensor_words(gone)}, which the replay collects from" if gone
+                else "", f"list {_sensor_words(more)}, which the replay collects nothing from"
+                if more else "") if w))  # fmt: skip
+    for v in fleet.vehicles:
+        if v.sorties:
+            judge(f"vehicle {v.vehicle} ", "makespan_s", v.makespan_s, check.makespan(v.vehicle),
+                  "s", CLOCK_TOL_S)
+    judge("", "total_s", fleet.total_s, check.total_s, "s", CLOCK_TOL_S)
+    judge("", "swaps", None if fleet.swaps is None else float(fleet.swaps), float(check.swaps),
+          "", 0.5)
+    judge("", "f_total", fleet.f_total, check.f_total, "s", CLOCK_TOL_S)
+    if fleet.timing_tolerance_s is not None or check.timing_tolerance_s is None:
+        judge("", "timing_tolerance_s", fleet.timing_tolerance_s, check.timing_tolerance_s, "s",
+              CLOCK_TOL_S)
+    title = "fleet.json's durations, energies and sensors are the replays'"
+    if not off:
+        return Verdict("FIGURES", title, True, 0.0, "figures",
+                       f"the {n} figures fleet.json gives are the replays'")
+    more = f"; {len(off)} figures differ" if len(off) > 1 else ""
+    return Verdict("FIGURES", title, False, -float(len(off)), "figures",
+                   f"{off[0]}{more}: the crew reads fleet.json's figures, the vehicles fly the "
+                   "missions")
+
+
 def _far_note(m: Any, check: FleetCheck) -> str | None:
     """A note when a sortie's mission lies far from the map's area (`sim.replay.far_from_area`:
     the wrong map, or another origin), naming the first such file and counting the others.
@@ -868,13 +989,7 @@ def _far_note(m: Any, check: FleetCheck) -> str | None:
     return f"{far[0][0]}{more}: {far[0][1]}"
 
 
-#: m: a place fleet.json gives this far from the mission's is another place (a position on
-#: the 1e-7 degree grid moves by about 1 cm)
-PLACE_TOL_M = 0.1
-
-
-def _places_verdict(m: Any, check: FleetCheck, places: list[tuple[Any, Any]],
-                    depots: dict[str, tuple[float, float]]) -> Any:
+def _places_verdict(m: Any, check: FleetCheck, fleet: Any) -> Any:
     """PLACES: the take-off and landing places fleet.json gives (each vehicle's pad, which
     `upload --fleet` prints for the crew) are the missions' own, and the depots it names are
     the map's. A hand-edited place (two vehicles told to stand on one spot) fails it.
@@ -882,13 +997,15 @@ def _places_verdict(m: Any, check: FleetCheck, places: list[tuple[Any, Any]],
     Args:
         m: the map verified on.
         check: the replays, in fleet.json's order of sorties.
-        places: per sortie ((takeoff lat, lon), (east_m, north_m)) and the same for the
-            landing, as fleet.json gives them (None where it gives none).
-        depots: fleet.json's depots {name: (lat, lon)} (empty when it gives none).
+        fleet: the directory as read (`formats.fleet.read_fleet_dir`): per sortie its
+            `takeoff_at` and `landing_at` (lat, lon; east_m, north_m from the depot; x, y),
+            and its `depots` (lat, lon; x, y), each judged where fleet.json gives it.
 
     Returns:
-        The `sim.checks.Verdict` (its margin minus the largest distance beyond the tolerance).
+        The `sim.checks.Verdict` (its margin minus the largest distance beyond
+        `formats.fleet.PLACE_TOL_M`).
     """
+    from lamde_mission.formats.fleet import PLACE_TOL_M
     from lamde_mission.geo import latlon_to_enu
     from sim.checks import Verdict
 
@@ -896,10 +1013,13 @@ def _places_verdict(m: Any, check: FleetCheck, places: list[tuple[Any, Any]],
     off: list[tuple[float, str]] = []
     n = 0
     names = m.sortie_sites[0]
-    for sc, (t_at, l_at) in zip(check.sorties, places, strict=True):
-        for what, (given, paced), xy, depot in (
-                ("takes off", t_at, sc.takeoff_xy, sc.depot_start),
-                ("lands", l_at, sc.landing_xy, sc.depot_end)):  # fmt: skip
+    given_sorties = [s for v in fleet.vehicles for s in v.sorties]
+    for sc, s in zip(check.sorties, given_sorties, strict=True):
+        for what, given, paced, local, xy, depot in (
+                ("takes off", s.takeoff_at, s.takeoff_offset, s.takeoff_xy, sc.takeoff_xy,
+                 sc.depot_start),
+                ("lands", s.landing_at, s.landing_offset, s.landing_xy, sc.landing_xy,
+                 sc.depot_end)):  # fmt: skip
             if given is not None:
                 n += 1
                 x, y = latlon_to_enu(given[0], given[1], m)
@@ -908,6 +1028,13 @@ def _places_verdict(m: Any, check: FleetCheck, places: list[tuple[Any, Any]],
                     off.append((d, f"vehicle {sc.vehicle} sortie {sc.sortie} {what} at lat "
                                    f"{given[0]:.7f}, lon {given[1]:.7f} in fleet.json, {d:.1f} "
                                    f"m from where its mission {what}"))  # fmt: skip
+            if local is not None:
+                n += 1
+                d = float(np.hypot(local[0] - xy[0], local[1] - xy[1]))
+                if d > PLACE_TOL_M:
+                    off.append((d, f"vehicle {sc.vehicle} sortie {sc.sortie} {what} at x "
+                                   f"{local[0]:g}, y {local[1]:g} m in fleet.json, {d:.1f} m "
+                                   f"from where its mission {what}"))  # fmt: skip
             home = depot_xy(m, depot)
             if paced is not None and home is not None:
                 n += 1
@@ -917,7 +1044,7 @@ def _places_verdict(m: Any, check: FleetCheck, places: list[tuple[Any, Any]],
                     off.append((d, f"vehicle {sc.vehicle} sortie {sc.sortie} {what} "
                                    f"{paced[0]:g} m east, {paced[1]:g} m north of '{depot}' in "
                                    f"fleet.json, {d:.1f} m from where its mission {what}"))
-    for name, (lat, lon) in depots.items():
+    for name, (lat, lon) in fleet.depots.items():
         home = depot_xy(m, name)
         if home is None:
             off.append((np.inf, f"depot '{name}' in fleet.json is not one of the map's "
@@ -928,6 +1055,12 @@ def _places_verdict(m: Any, check: FleetCheck, places: list[tuple[Any, Any]],
         if d > PLACE_TOL_M:
             off.append((d, f"depot '{name}' at lat {lat:.7f}, lon {lon:.7f} in fleet.json, "
                            f"{d:.1f} m from the map's"))  # fmt: skip
+        local = fleet.depots_xy.get(name)
+        if local is not None:
+            d = float(np.hypot(local[0] - home[0], local[1] - home[1]))
+            if d > PLACE_TOL_M:
+                off.append((d, f"depot '{name}' at x {local[0]:g}, y {local[1]:g} m in "
+                               f"fleet.json, {d:.1f} m from the map's"))  # fmt: skip
     if not off:
         return Verdict("PLACES", title, True, 0.0, "m",
                        f"the {n} places fleet.json gives are the missions' own" if n else
@@ -972,17 +1105,15 @@ def _pads_note(m: Any, check: FleetCheck) -> str | None:
             "near a depot, is planned again")
 
 
-#: s: a fleet.json take-off time this far from the plan's clock is another time (rounding of
-#: the JSON figures is far below it)
-TAKEOFF_TOL_S = 0.5
-
-
 def _moved_takeoffs(given: list[tuple[int, int, float | None]], clock: list[float]
                     ) -> list[tuple[int, int, float, float]]:
     """(vehicle, sortie, fleet.json's time, the clock's) of each take-off fleet.json gives
-    more than `TAKEOFF_TOL_S` from `clock` (the replay's take-offs, in the same order)."""
+    more than `formats.fleet.CLOCK_TOL_S` from `clock` (the replay's take-offs, in the same
+    order)."""
+    from lamde_mission.formats.fleet import CLOCK_TOL_S
+
     return [(v, k, t, c) for (v, k, t), c in zip(given, clock, strict=True)
-            if t is not None and abs(t - c) > TAKEOFF_TOL_S]
+            if t is not None and abs(t - c) > CLOCK_TOL_S]
 
 
 def _times_at_limits(given: list[tuple[int, int, float | None]], clock: list[float]) -> Any:

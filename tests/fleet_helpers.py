@@ -18,6 +18,7 @@ from sim import replay
 
 ROOT = Path(__file__).resolve().parents[1]
 DEMO_MAP = ROOT / "examples" / "maps" / "small-demo.json"
+FLEET_DEMO = ROOT / "examples" / "maps" / "fleet-demo.json"
 
 
 def write_fleet_dir(
@@ -27,6 +28,7 @@ def write_fleet_dir(
     map_path: Path = DEMO_MAP,
     depots: dict[str, tuple[float, float]] | None = None,
     sortie_depots: list[list[tuple[str, str]]] | None = None,
+    own_pads: bool = True,
 ) -> Path:
     """Write DIR/mission-v{k}-s{j}.plan and DIR/fleet.json for hand-made routes.
 
@@ -37,6 +39,8 @@ def write_fleet_dir(
         map_path: the map.
         depots: name -> (x, y) m; default {"home": the map's start}.
         sortie_depots: (take-off depot, landing depot) per sortie; default the first depot.
+        own_pads: False: every vehicle takes off from and lands at the depot's point itself,
+            as a directory planned before each vehicle had its own pad.
 
     Each vehicle takes off from and lands at its own pad at a depot of the map's (as `plan`
     writes it: `Map.pads_for`, the vehicles using a depot in the order of their numbers,
@@ -61,6 +65,8 @@ def write_fleet_dir(
     def at(k: int, name: str) -> list[float]:
         if name not in names:
             return list(depots[name])
+        if not own_pads:
+            return pads[0, names.index(name)].tolist()
         return pads[rank[(k, name)], names.index(name)].tolist()
 
     vehicles = []
@@ -123,3 +129,33 @@ def plan_fleet_demo(directory: Path, uavs: int = 2, endurance_s: float | None = 
     assert main(["plan", str(path), "-o", str(out), "--budget", "300", "--population", "20",
                  "--sortie-budget", "150", "--rounds", "1", "--quiet"]) == 0  # fmt: skip
     return path, out
+
+
+def fleet_demo_map(tmp: Path, uavs: int, name: str | None = None) -> Path:
+    """A copy of the fleet demo map with `uavs` vehicles (and another name, if given)."""
+    doc = json.loads(FLEET_DEMO.read_text())
+    doc["fleet"]["uavs"] = uavs
+    if name is not None:
+        doc["name"] = name
+    path = tmp / f"fleet-demo-{uavs}{'-' + name if name else ''}.json"
+    path.write_text(json.dumps(doc))
+    return path
+
+
+def quick_fleet_plan(map_path: Path, goal: str | None = None):
+    """A quick real fleet plan of the map (one tour, split by the battery, LP hover times; no
+    pipeline run): (the map, the `planner_core.fleet.FleetPlan`), for `write_sortie_dir`."""
+    import numpy as np
+
+    from planner_core.fleet import FleetSettings, Links, fleet_hover_lp, split_vehicles
+    from planner_core.model.problem import Problem
+
+    m = load_map(map_path)
+    pm = m.planning_map()
+    problem = Problem(pm)
+    st = FleetSettings.from_map(m, goal)
+    links = Links(problem)
+    P, T = links.join(pm.sensors, np.full(len(pm.sensors), 25.0))
+    plan = fleet_hover_lp(split_vehicles(st, links, P, T), problem.model)
+    assert plan is not None and plan.chained()
+    return m, plan

@@ -273,7 +273,7 @@ def test_a_depot_may_list_its_pads_as_the_crew_has_them():
     # one vehicle uses no pad, but a listed one that breaks the rules is still named
     one = _demo(1)
     one["fleet"]["depots"][0]["pads"] = [[100.0, 150.0], [100.0, 170.0]]
-    with pytest.raises(ValueError, match=r"pads\[1\].*lies 20\.0 m from the pad at"):
+    with pytest.raises(ValueError, match=r"pads\[1\].*lies 20\.0 m from pad 2 at"):
         load_map(one).pads_for(1)
 
 
@@ -390,9 +390,10 @@ def test_upload_refuses_vehicles_that_share_a_spot(tmp_path, capsys):
     doc["fleet"]["depots"] = doc["fleet"]["depots"][:1]
     path = tmp_path / "one.json"
     path.write_text(json.dumps(doc))
+    # (both at the depot itself: the map's depot, so that show draws it; a depot the map
+    # lacks is refused, as verify refuses it, `sorties.check_sortie_depots`)
     same = write_fleet_dir(tmp_path / "same", [[["S1"]], [["S2"]]], map_path=path,
-                           depots={"home": (100.0, 100.0), "spot": (100.0, 100.0)},
-                           sortie_depots=[[("home", "home")], [("spot", "spot")]])
+                           own_pads=False)
     port = free_udp_port()
     conn = ["--connect", f"udpin://127.0.0.1:{port}", "--via", "pymavlink", "--timeout", "5"]
     with MockFleet(f"udpout:127.0.0.1:{port}", vehicles=2, heartbeat_hz=10.0,

@@ -20,38 +20,13 @@ from lamde_mission.cli import main
 from lamde_mission.formats import read_mission
 from lamde_mission.vehicle.mock_fleet import MockFleet
 from planner_core.model.mapio import load_map
+from tests.fleet_helpers import fleet_demo_map as _demo_map
+from tests.fleet_helpers import quick_fleet_plan as _fleet_plan
 from tests.vehicle_helpers import free_udp_port
 from tests.vehicle_helpers import no_leftover_mock_threads as _no_leftover_mock_threads  # noqa: F401 (autouse)
 
 ROOT = Path(__file__).resolve().parents[1]
 DEMO = ROOT / "examples" / "maps" / "fleet-demo.json"
-
-
-def _demo_map(tmp: Path, uavs: int, name: str | None = None) -> Path:
-    """A copy of the fleet demo map with `uavs` vehicles (and another name, if given)."""
-    doc = json.loads(DEMO.read_text())
-    doc["fleet"]["uavs"] = uavs
-    if name is not None:
-        doc["name"] = name
-    path = tmp / f"fleet-demo-{uavs}{'-' + name if name else ''}.json"
-    path.write_text(json.dumps(doc))
-    return path
-
-
-def _fleet_plan(map_path: Path, goal: str | None = None):
-    """A quick real fleet plan of the map (one tour, split by the battery, LP hover times)."""
-    from planner_core.fleet import FleetSettings, Links, fleet_hover_lp, split_vehicles
-    from planner_core.model.problem import Problem
-
-    m = load_map(map_path)
-    pm = m.planning_map()
-    problem = Problem(pm)
-    st = FleetSettings.from_map(m, goal)
-    links = Links(problem)
-    P, T = links.join(pm.sensors, np.full(len(pm.sensors), 25.0))
-    plan = fleet_hover_lp(split_vehicles(st, links, P, T), problem.model)
-    assert plan is not None and plan.chained()
-    return m, plan
 
 
 @pytest.fixture(scope="module")

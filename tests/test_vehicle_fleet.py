@@ -59,6 +59,18 @@ def fleet_dir(tmp_path_factory):
     )  # fmt: skip
 
 
+@pytest.fixture(scope="module")
+def fleet_map(tmp_path_factory):
+    """small-demo with `fleet_dir`'s depots ('home', 'north') and three vehicles: the map
+    `fleet_dir` is drawn on (a depot the map lacks is refused, as verify refuses it)."""
+    doc = json.loads(DEMO_MAP.read_text())
+    doc["fleet"] = {"uavs": 3, "depots": [{"name": "home", "x": 100.0, "y": 100.0},
+                                          {"name": "north", "x": 1900.0, "y": 1800.0}]}
+    path = tmp_path_factory.mktemp("fleet-map") / "small-demo.json"
+    path.write_text(json.dumps(doc))
+    return path
+
+
 # ----------------------------------------------------------------------------- the mock
 
 
@@ -555,12 +567,12 @@ def test_cli_mock_vehicle_fleet_bad_options(argv, shown, capsys):
 # ----------------------------------------------------------------------------- show DIR/
 
 
-def test_fleet_figure_marks_vehicles_sorties_depots_and_swaps(fleet_dir):
+def test_fleet_figure_marks_vehicles_sorties_depots_and_swaps(fleet_dir, fleet_map):
     from lamde_mission.commands.show import fleet_views
     from lamde_mission.plot import fleet_figure
     from planner_core.model.mapio import load_map
 
-    m = load_map(DEMO_MAP)
+    m = load_map(fleet_map)
     views = fleet_views(fleet_dir, m)
     assert [(v.vehicle, v.sortie) for v in views] == [(1, 1), (1, 2), (2, 1), (3, 1)]
     fig = fleet_figure(m, views)
@@ -609,9 +621,9 @@ def test_a_vehicles_sorties_past_four_keep_their_own_line_styles(tmp_path):
     assert _style_label(1, 40) == "sorties 1, 9, 17, ..., 33"
 
 
-def test_cli_show_fleet_dir(fleet_dir, tmp_path, capsys):
+def test_cli_show_fleet_dir(fleet_dir, fleet_map, tmp_path, capsys):
     out = tmp_path / "fleet.png"
-    assert main(["show", str(DEMO_MAP), str(fleet_dir), "-o", str(out)]) == 0
+    assert main(["show", str(fleet_map), str(fleet_dir), "-o", str(out)]) == 0
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     bad = tmp_path / "nofleet"
     bad.mkdir()
@@ -620,7 +632,8 @@ def test_cli_show_fleet_dir(fleet_dir, tmp_path, capsys):
     assert not (tmp_path / "x.png").exists()
 
 
-def test_a_picture_inside_the_sortie_directory_is_refused_up_front(fleet_dir, tmp_path, capsys):
+def test_a_picture_inside_the_sortie_directory_is_refused_up_front(fleet_dir, fleet_map,
+                                                                   tmp_path, capsys):
     """`plan MAP -o dd/ --plot dd/fleet.png --mkdir` wrote both, and the next `plan -o dd/`
     refused dd/ for holding fleet.png; `show MAP DIR/ -o DIR/x.png` did the same. Now both are
     refused before any work: exit 2, one line naming the option, nothing written or made."""
@@ -650,7 +663,7 @@ def test_a_picture_inside_the_sortie_directory_is_refused_up_front(fleet_dir, tm
     assert "is inside the sortie directory" in err
     assert sorted(p.name for p in earlier.iterdir()) == before
     # beside the folder is fine
-    assert main(["show", str(DEMO_MAP), str(earlier), "-o", str(tmp_path / "earlier.png")]) == 0
+    assert main(["show", str(fleet_map), str(earlier), "-o", str(tmp_path / "earlier.png")]) == 0
 
 
 # ----------------------------------------------------------------------------- the example

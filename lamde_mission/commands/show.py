@@ -63,25 +63,30 @@ def fleet_views(directory: str | Path, m: Any) -> list[Any]:
         `plot.SortieView`s in vehicle, then sortie order.
 
     Raises:
-        UsageError: a bad directory, file or mission (one line naming it).
+        UsageError: a bad directory, file or mission (one line naming it): fleet.json as
+            `verify MAP DIR/` reads it (`formats.fleet.read_fleet_dir`), a depot the map lacks
+            (`sorties.check_sortie_depots`, verify's one check).
     """
     from lamde_mission.commands.verify import replay_mission_file
     from lamde_mission.errors import UsageError
-    from lamde_mission.formats.fleet import FleetDirError, read_fleet_dir
+    from lamde_mission.formats.fleet import read_fleet_dir
     from lamde_mission.plot import SortieView
+    from lamde_mission.sorties import check_sortie_depots, shared_spots
 
     try:
         fleet = read_fleet_dir(directory)
-    except FleetDirError as exc:
+        check_sortie_depots(fleet, m)
+    except ValueError as exc:  # FleetDirError is one
         raise UsageError(str(exc)) from None
     note = fleet.map_note(m.name, "drawn")
     if note is not None:
         print(f"note: {note}", file=sys.stderr)
-    from lamde_mission.sorties import shared_spots
-
-    shared = shared_spots(directory)
-    if shared is not None:  # drawn all the same: the picture is how one finds out
+    # drawn all the same: the picture is how one finds out
+    shared, off = shared_spots(directory), fleet.disagreement()
+    if shared is not None:
         print(f"note: {directory}: {shared}; `verify MAP DIR/` fails it", file=sys.stderr)
+    if off is not None:  # it names fleet.json itself
+        print(f"note: {off}; `verify MAP DIR/` fails it", file=sys.stderr)
     views = [
         SortieView(v.vehicle, s.sortie, replay_mission_file(str(s.path), m), s.depot_start,
                    s.depot_end)

@@ -714,8 +714,20 @@ def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
             path = str(Path(args.mission) / fm.source)
             _wire_check(path, fm.mission, fm.fence, fm.rally)
             _flight_check(path, fm.mission, force=args.force)
+    from lamde_mission.formats.fleet import read_fleet_dir
     from lamde_mission.sorties import shared_spots
 
+    # what upload prints for the crew (take-off times, pads) is fleet.json's: it must agree
+    # with itself and with the missions sent (`FleetDir.disagreements`, without a map; with
+    # --map, verify's TIMES, PLACES and FIGURES hold it to the replays instead)
+    off = None if args.map else read_fleet_dir(args.mission).disagreement()
+    if off is not None:
+        if not args.force:
+            print(f"lamde-mission upload: {off}; nothing sent (the crew goes by fleet.json: "
+                  "upload prints its take-off times and pads; `lamde-mission verify MAP DIR/` "
+                  "holds it to the replays; --force sends it anyway)", file=sys.stderr)
+            return 1
+        print(f"warning: {off}; sent anyway (--force)", file=sys.stderr)
     shared = shared_spots(args.mission)
     if shared is not None:
         if not args.force:
