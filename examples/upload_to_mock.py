@@ -7,11 +7,15 @@ No simulator or drone needed: the mock vehicle runs in a background thread on 12
 
 Steps: plan examples/maps/small-demo.json (a short DE run), write it as a QGroundControl .plan
 (mission + exclusion geofence), read the file back, start `MockVehicle`, upload the mission and
-the fence, download both and compare item by item. The same thing from a shell:
+the fence, download both and compare item by item. Before sending, `upload_mission` reads the
+vehicle's speed limit: the mock says PX4's default MPC_XY_VEL_MAX, 12 m/s, below the plan's
+20 m/s, and the check given here (`speeds.mission_speed_check` on the map) replays the mission
+at 12 m/s and notes its longer flight (every check still holds: the map has no battery). The
+same thing from a shell:
 
     lamde-mission plan examples/maps/small-demo.json -o mission.plan
     lamde-mission mock-vehicle &              # sends to 127.0.0.1:14540
-    lamde-mission upload mission.plan         # listens on 0.0.0.0:14540
+    lamde-mission upload mission.plan --map examples/maps/small-demo.json   # on 0.0.0.0:14540
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ from pathlib import Path
 import lamde_mission
 from lamde_mission.formats import read_mission, write_mission
 from lamde_mission.vehicle import MockVehicle, VehicleError, upload_mission
+from lamde_mission.vehicle.speeds import mission_speed_check
 from planner_core.model.mapio import load_map
 
 ROOT = Path(__file__).resolve().parent
@@ -67,14 +72,19 @@ def main() -> int:
         vias = ("mavsdk", "pymavlink") if args.via == "both" else (args.via,)
         for via in vias:
             port = free_udp_port()
+            print(f"\n{via}:")
             with MockVehicle(f"udpout:127.0.0.1:{port}", loss=args.loss, seed=args.seed) as v:
                 try:
+                    # judged on the map at the vehicle's limit, as `upload --map` does (the
+                    # default check, without the map, would warn that 12 m/s is below 20)
+                    check = mission_speed_check(mission, source=path, map=m,
+                                                note=lambda line: print(f"  note: {line}"))
                     report = upload_mission(mission, fence, connect=f"udpin://127.0.0.1:{port}",
-                                            via=via, timeout=20, attempts=5)  # fmt: skip
+                                            via=via, timeout=20, attempts=5,
+                                            speed_check=check)  # fmt: skip
                 except VehicleError as exc:
                     print(f"{via}: FAILED: {exc}", file=sys.stderr)
                     return 1
-                print(f"\n{via}:")
                 for line in report.lines():
                     print(f"  {line}")
                 kept = v.items()

@@ -470,3 +470,169 @@ def test_the_documented_fleet_recipe_runs_as_written(fleet2, tmp_path) -> None:
     finally:
         proc.kill()
         proc.communicate()
+
+
+def _api_words(cli: str, folder: object) -> str:
+    """The CLI's line of a single mission's speed check in the API's words: each of
+    MISSION_CLI_HINTS replaced by its MISSION_API_HINTS (the directory's clause first, as it
+    holds "--map")."""
+    from lamde_mission.vehicle.speeds import MISSION_API_HINTS, MISSION_CLI_HINTS
+
+    pairs = list(zip(MISSION_CLI_HINTS, MISSION_API_HINTS, strict=True))
+    for cli_words, api_words in reversed(pairs):
+        cli = cli.replace(cli_words.replace("{dir}", str(folder)),
+                          api_words.replace("{dir}", str(folder)))  # fmt: skip
+    return cli
+
+
+def test_the_python_upload_mission_checks_the_limit_by_default_as_the_cli_does(capsys) -> None:
+    """The Python `upload_mission` read no speed limit unless given a speed_check, while
+    `upload MISSION` checks it: by default it now reads MPC_XY_VEL_MAX and applies the CLI's
+    check (`speeds.mission_speed_check`). Bare items have no battery known: below their speed
+    a SpeedLimitWarning (on the caller's line) and sent, as the CLI does for a standalone
+    .plan; a limit no mission flies at is refused, nothing sent; speed_check=None skips it."""
+    import warnings
+
+    from lamde_mission.vehicle import upload_mission
+    from lamde_mission.vehicle.speeds import SpeedLimitWarning
+    from lamde_mission.vehicle.transfer import SpeedLimitError
+    from tests.vehicle_helpers import hand_mission
+
+    mission = hand_mission(2)  # DO_CHANGE_SPEED 18 m/s
+    port = free_udp_port()
+    api = {"connect": f"udpin://127.0.0.1:{port}", "via": "pymavlink", "timeout": 5}
+    with (MockVehicle(f"udpout:127.0.0.1:{port}", heartbeat_hz=10.0) as v,
+          pytest.warns(SpeedLimitWarning) as got):  # fmt: skip
+        report = upload_mission(mission, [], **api)
+    assert report.ok and len(v.items()) == len(mission)
+    assert report.speed_limit == ("MPC_XY_VEL_MAX", 12.0)
+    assert [str(w.message) for w in got] == [
+        "the mission: the vehicle's MPC_XY_VEL_MAX is 12 m/s, below the 18 m/s the mission asks "
+        "(DO_CHANGE_SPEED), so it flies at 12 m/s; its flight time and energy were planned at "
+        "18 m/s (mission_speed_check(..., map=MAP) checks it at 12 m/s; set MPC_XY_VEL_MAX to "
+        "18 or more, or plan the map with uav.max_speed 12)"]
+    assert got[0].filename == __file__  # the caller's line, not the library's
+    with MockVehicle(f"udpout:127.0.0.1:{port}", heartbeat_hz=10.0,
+                     params={"MPC_XY_VEL_MAX": 0.0}) as v:  # fmt: skip
+        with pytest.raises(SpeedLimitError) as exc:
+            upload_mission(mission, [], **api)
+        assert str(exc.value) == (
+            "the mission: the vehicle's MPC_XY_VEL_MAX is 0 m/s, not a speed a mission can be "
+            "flown at (at least 0.1 m/s): set MPC_XY_VEL_MAX on the vehicle; nothing sent")
+        assert sum(v.stats.uploads.values()) == 0
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            report = upload_mission(mission, [], **api, speed_check=None)  # nothing read
+        assert report.ok and report.speed_limit is None and len(v.items()) == len(mission)
+        assert not any("speed limit" in line for line in report.lines())
+    with MockVehicle(f"udpout:127.0.0.1:{port}", heartbeat_hz=10.0,
+                     params={"MPC_XY_VEL_MAX": 18.0}):  # fmt: skip
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            report = upload_mission(mission, [], **api)
+        assert report.ok and report.speed_limit == ("MPC_XY_VEL_MAX", 18.0)
+    with pytest.raises(ValueError, match='speed_check must be a function, "planned" or None'):
+        upload_mission(mission, [], **api, speed_check="default")  # before any link is opened
+    assert capsys.readouterr().err == ""
+
+
+def test_upload_fleets_vehicles_are_not_checked_twice() -> None:
+    """`upload_fleet` judges every vehicle's limit at once before sending; each vehicle's
+    `upload_mission` then reads none again (no single-mission warning on top of the
+    fleet's, and speed_check=None sends to vehicles below the missions' speed silently)."""
+    import warnings
+
+    from lamde_mission.vehicle.fleet import FleetMission, upload_fleet
+    from tests.vehicle_helpers import hand_mission
+
+    missions = [FleetMission(k + 1, hand_mission(k + 2), [], source=f"m{k + 1}")
+                for k in range(2)]  # fmt: skip
+    port = free_udp_port()
+    with (MockFleet(f"udpout:127.0.0.1:{port}", vehicles=2, heartbeat_hz=10.0) as fleet,
+          warnings.catch_warnings()):  # fmt: skip
+        warnings.simplefilter("error")
+        report = upload_fleet(missions, connect=[f"udpin://127.0.0.1:{port}"],
+                              via="pymavlink", timeout=5, window=0.3, speed_check=None)
+    assert report.ok and all(n > 0 for n in _sent(fleet))
+    assert all(r.report.speed_limit is None for r in report.results)
+
+
+def test_the_apis_refusal_of_a_battery_sortie_is_the_clis_but_for_the_hints(fleet2,
+                                                                           capsys) -> None:
+    """`mission_speed_check(items, source=FILE)` finds, as `upload FILE` does, that FILE is a
+    sortie of a directory planned with a battery: the same refusal, word for word but for the
+    hints (the CLI's options, the API's arguments), nothing sent; force=True warns and sends.
+    The same items given bare (the default check) have no battery known: a warning, sent."""
+    from lamde_mission.formats import read_mission
+    from lamde_mission.vehicle import upload_mission
+    from lamde_mission.vehicle.speeds import SpeedLimitWarning, mission_speed_check
+    from lamde_mission.vehicle.transfer import SpeedLimitError
+
+    _path, out = fleet2
+    sortie = out / "mission-v1-s1.plan"
+    items, fence = read_mission(sortie)
+    port = free_udp_port()
+    conn = ["--connect", f"udpin://127.0.0.1:{port}", "--via", "pymavlink", "--timeout", "5"]
+    api = {"connect": f"udpin://127.0.0.1:{port}", "via": "pymavlink", "timeout": 5}
+    with MockVehicle(f"udpout:127.0.0.1:{port}", heartbeat_hz=10.0) as v:
+        assert main(["upload", str(sortie), *conn]) == 1
+        cli = capsys.readouterr().err.strip().removeprefix("lamde-mission upload: ")
+        with pytest.raises(SpeedLimitError) as exc:
+            upload_mission(items, fence, **api,
+                           speed_check=mission_speed_check(items, source=sortie))
+        assert sum(v.stats.uploads.values()) == 0
+        said = str(exc.value)
+        assert said == _api_words(cli, out) and said != cli
+        assert (f"(`sorties.verify_sortie_dir(MAP, '{out}', {{vehicle: limit}})` checks every "
+                "sortie at the vehicles' limits; or set MPC_XY_VEL_MAX to 20 or more, or plan "
+                "the map with uav.max_speed 12; mission_speed_check(..., force=True) sends it "
+                "anyway)") in said
+        # force: the CLI's --force warning, in the API's words, and sent
+        assert main(["upload", str(sortie), *conn, "--force"]) == 0
+        cli = capsys.readouterr().err
+        with pytest.warns(SpeedLimitWarning) as got:
+            report = upload_mission(items, fence, **api, speed_check=mission_speed_check(
+                items, source=sortie, force=True))
+        assert report.ok
+        warned = str(got[0].message)
+        assert f"warning: {warned}\n" in _api_words(cli, out)  # the whole line
+        assert "; sent anyway (mission_speed_check(..., force=True); `sorties." in warned
+        # bare items: no file, so no battery known: the default check warns and sends
+        with pytest.warns(SpeedLimitWarning, match="^the mission: the vehicle's MPC_XY_VEL_MAX "
+                                                   "is 12 m/s, below the 20 m/s"):
+            assert upload_mission(items, fence, **api).ok
+    with pytest.raises(ValueError, match="source: mission-v1-s1.plan is no file"):
+        mission_speed_check(items, source="mission-v1-s1.plan")  # FleetMission.source: a name
+
+
+def test_the_apis_verdicts_on_a_map_are_the_clis(demo_plan, fleet2, capsys) -> None:
+    """With a map the check replays the mission at the limit as `upload MISSION --map MAP`
+    does: the same note when every check holds, the same refusal (but for the hints) when
+    one fails. Here the check is called as `upload_mission` calls it, once the limit is read."""
+    from lamde_mission.commands.upload import _mission_speed_check
+    from lamde_mission.formats import read_mission
+    from lamde_mission.vehicle.speeds import mission_speed_check
+    from planner_core.model.mapio import load_map
+
+    items, _ = read_mission(demo_plan)
+    notes: list[str] = []
+    api = mission_speed_check(items, source=demo_plan, map=load_map(DEMO), map_label=str(DEMO),
+                              note=notes.append)  # fmt: skip
+    assert api("MPC_XY_VEL_MAX", 12.0) is None
+    assert _mission_speed_check(str(demo_plan), items, str(DEMO), force=False)(
+        "MPC_XY_VEL_MAX", 12.0) is None
+    assert capsys.readouterr().out == f"note: {notes[0]}\n"
+    assert "every check holds at that speed on" in notes[0]
+    assert api("MPC_XY_VEL_MAX", 20.0) is None and len(notes) == 1  # at its speed: nothing
+    # a sortie planned with a battery, replayed alone at 12 m/s on its map: checks fail
+    path, out = fleet2
+    sortie = out / "mission-v1-s1.plan"
+    items, _ = read_mission(sortie)
+    cli = _mission_speed_check(str(sortie), items, str(path), force=False)("MPC_XY_VEL_MAX", 12.0)
+    said = mission_speed_check(items, source=sortie, map=lambda: load_map(path),
+                               map_label=str(path))("MPC_XY_VEL_MAX", 12.0)  # fmt: skip
+    assert cli is not None and said is not None
+    assert f"at that speed the simulator rejects it on {path}: " in said
+    assert said == _api_words(cli, out) and said.endswith(
+        "nothing sent (set MPC_XY_VEL_MAX to 20 or more, or plan the map with uav.max_speed 12; "
+        "mission_speed_check(..., force=True) sends it anyway)")

@@ -6,10 +6,6 @@ import argparse
 import math
 import sys
 from collections.abc import Callable
-from typing import TYPE_CHECKING
-
-if TYPE_CHECKING:
-    from lamde_mission.formats.fleet import FleetSortie
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -361,68 +357,15 @@ def _rejected(what: str, map_path: str, failed: str, *, force: bool) -> bool:
     return False
 
 
-def _speed_verdict(what: str, name: str, limit: float, asked: float, map_path: str | None,
-                   judge: Callable[[], tuple[list[str], str]], *, force: bool,
-                   unchecked: tuple[str, str] | None = None) -> str | None:
-    """What the vehicle's speed limit does to `what` (a mission file) below the speed it asks.
-
-    Args:
-        what: the mission file, for the messages.
-        name: the limit's parameter (MPC_XY_VEL_MAX).
-        limit: its value, m/s.
-        asked: the mission's fastest DO_CHANGE_SPEED, m/s (above `limit`).
-        map_path: `--map`, or None.
-        judge: with a map, the simulator's verdicts at the limit: (the failed lines, what
-            changed); called once, only with a map.
-        force: warn and send instead of refusing.
-        unchecked: without a map, for a sortie of a directory planned with a battery: (its
-            planned energy in words, its directory); its energy at the limit is unchecked.
-
-    Returns:
-        None to send (a note when every check holds at the limit, a warning without a map or
-        with `force`), else the refusal line: a check fails at the limit, or (`unchecked`)
-        the energy cannot be checked without the map.
-    """
-    from planner_core.textio import printable
-
-    head = (f"{printable(what)}: the vehicle's {name} is {limit:g} m/s, below the {asked:g} "
-            f"m/s the mission asks (DO_CHANGE_SPEED), so it flies at {limit:g} m/s")
-    fix = f"set {name} to {asked:g} or more, or plan the map with uav.max_speed {limit:g}"
-    if map_path is None and unchecked is not None:
-        planned, folder = unchecked
-        line = (f"{head}, and its energy at that speed is unchecked (a sortie of "
-                f"{printable(folder)}/, {planned})")
-        again = (f"`lamde-mission upload {printable(folder)}/ --fleet --map MAP` checks every "
-                 f"sortie at the vehicles' limits")
-        if force:
-            print(f"warning: {line}; sent anyway (--force; {again})", file=sys.stderr)
-            return None
-        return f"{line}: nothing sent ({again}; or {fix}; --force sends it anyway)"
-    if map_path is None:
-        print(f"warning: {head}; its flight time and energy were planned at {asked:g} m/s "
-              f"(--map checks it at {limit:g} m/s; {fix})", file=sys.stderr)  # fmt: skip
-        return None
-    failed, changed = judge()
-    if not failed:
-        print(f"note: {head}: {changed}; every check holds at that speed on "
-              f"{printable(map_path)}", flush=True)  # fmt: skip
-        return None
-    lines = "; ".join(printable(x) for x in failed)
-    if force:
-        print(f"warning: {head}, and at that speed the simulator rejects it on "
-              f"{printable(map_path)} ({lines}); sent anyway (--force)", file=sys.stderr)
-        return None
-    return (f"{head}, and at that speed the simulator rejects it on {printable(map_path)}: "
-            f"{lines}; nothing sent ({fix}; --force sends it anyway)")
-
-
 def _mission_speed_check(path: str, mission: list, map_path: str | None, *, force: bool,
                          origin: str | None = None) -> Callable[[str, float], str | None]:
     """`upload MISSION`'s check of the vehicle's speed limit (`transfer.SPEED_LIMIT_PARAM`,
-    read after connecting), below the mission's speed (`_speed_verdict`): with `--map` the
+    read after connecting): `vehicle.speeds.mission_speed_check`, the check the Python
+    `upload_mission` applies by default, in the CLI's words (`--map`, `--force`), its
+    warnings on stderr and its note on stdout. Below the mission's speed: with `--map` the
     simulator's verdicts with every leg flown at the limit; without, a refusal for a sortie of
-    a sortie directory planned with a battery (its energy at the limit is unchecked,
-    `_sortie_with_battery`), else a warning (no battery known: no energy to check).
+    a sortie directory planned with a battery (its energy at the limit is unchecked), else a
+    warning (no battery known: no energy to check). The map is loaded only then.
 
     Args:
         path: the mission file.
@@ -434,82 +377,22 @@ def _mission_speed_check(path: str, mission: list, map_path: str | None, *, forc
     Returns:
         `check(parameter, limit)` for `upload_mission`'s speed_check: None to send, else the
         refusal line. With a map it replays the mission twice, O(legs).
+
+    Raises:
+        UsageError: (from `check`) a bad map or origin.
     """
     from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
-    from lamde_mission.vehicle.speeds import asked_speed, unflyable_limit
-    from sim import replay, verify
+    from lamde_mission.vehicle.speeds import MISSION_CLI_HINTS, mission_speed_check
 
-    asked = asked_speed(mission)
+    def load() -> object:
+        return with_origin_or_fail(load_map_or_fail(map_path), origin)
 
-    def check(name: str, limit: float) -> str | None:
-        bad = unflyable_limit(path, name, limit)
-        if bad is not None:
-            return bad
-        if asked is None or limit >= asked:
-            return None
-        unchecked = None if map_path is not None else _sortie_with_battery(path, asked)
-
-        def judge() -> tuple[list[str], str]:
-            m = with_origin_or_fail(load_map_or_fail(map_path), origin)
-            slow, planned = replay(mission, m, speed_limit=limit), replay(mission, m)
-            failed = [f"{v.name} {v.title}: FAIL, margin {v.margin:.4g} {v.unit}; {v.detail}"
-                      for v in verify(slow, m) if not v.passed]  # fmt: skip
-            return failed, (f"t_fly {slow.totals.t_fly:.0f} s instead of "
-                            f"{planned.totals.t_fly:.0f} s")
-
-        return _speed_verdict(path, name, limit, asked, map_path, judge, force=force,
-                              unchecked=unchecked)
-
-    return check
-
-
-def _sortie_with_battery(path: str, asked: float) -> tuple[str, str] | None:
-    """For a mission file that is a sortie of a sortie directory (`sorties.sortie_dir_of`)
-    planned with a battery: (its planned energy in words, the directory), else None (not a
-    sortie, or fleet.json says `"energy_wh": null`: a map without a battery). A sortie that
-    fleet.json does not list, or a fleet.json that cannot be read, counts as planned with a
-    battery. O(vehicles + sorties).
-
-    Args:
-        path: the mission file.
-        asked: the speed it was planned at, m/s.
-
-    Returns:
-        (words, directory) or None.
-    """
-    from pathlib import Path
-
-    from lamde_mission.sorties import sortie_dir_of
-    from lamde_mission.vehicle.speeds import planned_energy
-
-    folder = sortie_dir_of(path)
-    if folder is None:
-        return None
-    planned = _planned_sorties(str(folder))
-    s = planned.get(Path(path).name)
-    if s is not None and s.no_battery:
-        return None
-    return planned_energy(s, asked), str(folder)
-
-
-def _planned_sorties(directory: str) -> dict[str, FleetSortie]:
-    """{file name: its sortie} of a sortie directory's fleet.json, for the energies the
-    sorties were planned with; O(vehicles + sorties).
-
-    Args:
-        directory: the sortie directory.
-
-    Returns:
-        Every sortie fleet.json lists, by its file's name; empty when fleet.json cannot be
-        read (its reader's refusal comes from the upload itself).
-    """
-    from lamde_mission.formats.fleet import FleetDirError, read_fleet_dir
-
-    try:
-        fleet = read_fleet_dir(directory)
-    except FleetDirError:
-        return {}
-    return {s.path.name: s for v in fleet.vehicles for s in v.sorties}
+    return mission_speed_check(
+        mission, source=path, map=load if map_path is not None else None, map_label=map_path,
+        force=force, hints=MISSION_CLI_HINTS,
+        warn=lambda line: print(f"warning: {line}", file=sys.stderr),
+        note=lambda line: print(f"note: {line}", flush=True),
+    )  # fmt: skip
 
 
 def _fleet_speed_check(directory: str, missions: list, map_path: str | None, *, force: bool,

@@ -4,9 +4,10 @@
   `MockFleet` (`mock_fleet.py`): several, on one link (told apart by system id) or one each.
 - `upload_mission` (`upload.py`): mission + geofence up, read back, compared item by item,
   through MAVSDK (`via="mavsdk"`, the only module importing it) or our pymavlink client
-  (`via="pymavlink"`, `mavlink_client.py`); `upload_fleet` (`fleet.py`): each vehicle of a
-  fleet its own mission, addressed by system id, every vehicle heard before any upload and
-  its speed limit checked against its sortie's speed (`speeds.py`, as `upload DIR/ --fleet`).
+  (`via="pymavlink"`, `mavlink_client.py`), the vehicle's speed limit checked against the
+  mission's speed first (`speeds.py`, as `upload MISSION`); `upload_fleet` (`fleet.py`): each
+  vehicle of a fleet its own mission, addressed by system id, every vehicle heard before any
+  upload and its speed limit checked against its sortie's speed (as `upload DIR/ --fleet`).
 - `wire.py`: items as MAVLink carries them and the comparison; `transfer.py`: errors, report,
   and the retry loop both uploaders share; `connection.py`: the one connection syntax (UDP,
   TCP, serial), validated, and the byte links of the pymavlink client.

@@ -577,6 +577,7 @@ def upload_fleet(
                 fm.mission, fm.fence, connect=conn, via=via, timeout=timeout, attempts=attempts,
                 log=log, progress=progress, rally=fm.rally, autopilot=autopilot,
                 signing_key=signing_key, heartbeat_watch=0.0, system_id=sid,
+                speed_check=None,  # every limit was read and judged above, the fleet at once
             )  # fmt: skip
             result.report.speed_limit = limits.get(fm.vehicle)
         except DuplicateVehicleError as exc:

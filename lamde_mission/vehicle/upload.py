@@ -25,7 +25,7 @@ import math
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 from lamde_mission.items import MISSION_TYPE, MissionItem
 from lamde_mission.vehicle.claims import duplicate_error
@@ -620,7 +620,7 @@ def upload_mission(
     signing_key: bytes | None = None,
     heartbeat_watch: float | None = None,
     system_id: int | None = None,
-    speed_check: Callable[[str, float], str | None] | None = None,
+    speed_check: Callable[[str, float], str | None] | None | Literal["planned"] = "planned",
 ) -> UploadReport:
     """Upload a mission and its fence to the vehicle at `connect`, read both back, compare.
 
@@ -659,8 +659,17 @@ def upload_mission(
             vehicles share (a multi-vehicle radio or router; `upload_fleet`): its HEARTBEAT
             is waited for, and only its messages are listened to; None takes the first
             vehicle heard.
-        speed_check: reads the vehicle's horizontal speed limit after connecting and says
-            what the mission fails at it (`transfer.upload_and_verify`); None reads nothing.
+        speed_check: after connecting and before anything is sent, the vehicle's horizontal
+            speed limit is read (`transfer.SPEED_LIMIT_PARAM`, where its dialect has one;
+            `report.speed_limit`) and `speed_check(parameter, m/s)` judges it; a line refuses
+            the upload (`SpeedLimitError`, nothing sent). "planned" (the default):
+            `speeds.mission_speed_check(mission)`, the check of `upload MISSION` without
+            --map for a mission of no known file: a limit no mission flies at is refused, one
+            below the mission's DO_CHANGE_SPEED warned about (`speeds.SpeedLimitWarning`; no
+            battery known). `mission_speed_check(mission, source=path)` also refuses a sortie
+            of a directory planned with a battery, `map=m` judges the mission on the map at
+            the limit, `force=True` warns instead of refusing. None skips the check and reads
+            nothing.
 
     Returns:
         The report, with what the client ignored among its notes.
@@ -672,8 +681,8 @@ def upload_mission(
             (naming both addresses) when a second address claims the vehicle's system and
             component ids, during the watch or later (`claims`); `SpeedLimitError` (nothing
             sent) with `speed_check`'s line.
-        ValueError: bad arguments (timeout, via, connect, system_id, attempts, autopilot) or
-            items MAVLink cannot carry.
+        ValueError: bad arguments (timeout, via, connect, system_id, attempts, autopilot,
+            speed_check) or items MAVLink cannot carry.
     """
     if not (isinstance(timeout, int | float) and math.isfinite(timeout)
             and 0 < timeout <= MAX_TIMEOUT_S):  # fmt: skip
@@ -691,6 +700,13 @@ def upload_mission(
         wire_mission(rally, MISSION_TYPE.RALLY)
     if system_id is not None and not 1 <= int(system_id) <= 255:
         raise ValueError(f"system_id must be a MAVLink system id 1..255, got {system_id!r}")
+    if speed_check == "planned":
+        from lamde_mission.vehicle.speeds import mission_speed_check
+
+        speed_check = mission_speed_check(mission)
+    elif isinstance(speed_check, str):
+        raise ValueError(f'speed_check must be a function, "planned" or None, got '
+                         f"{speed_check!r}")
     client = make_client(via, conn, log=log, progress=progress, signing_key=signing_key,
                          heartbeat_watch=heartbeat_watch, system_id=system_id)  # fmt: skip
     try:
