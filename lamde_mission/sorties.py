@@ -908,6 +908,7 @@ def _figures_verdict(check: FleetCheck, fleet: Any) -> Any:
     from sim.checks import Verdict
 
     off: list[str] = []
+    unjudged: set[str] = set()
     n = 0
 
     def judge(who: str, key: str, given: float | None, found: float | None, unit: str,
@@ -916,7 +917,8 @@ def _figures_verdict(check: FleetCheck, fleet: Any) -> Any:
         if given is None and not null:
             return
         if found is None and unit == "Wh":
-            return  # the map verified on has no battery: not judged (`_battery_note` says so)
+            unjudged.add(key)  # the map verified on has no battery (`_battery_note` says so)
+            return
         n += 1
         if given is None or found is None:
             if given is not None or found is not None:
@@ -959,9 +961,11 @@ def _figures_verdict(check: FleetCheck, fleet: Any) -> Any:
         judge("", "timing_tolerance_s", fleet.timing_tolerance_s, check.timing_tolerance_s, "s",
               CLOCK_TOL_S)
     title = "fleet.json's durations, energies and sensors are the replays'"
+    skipped = (f" (not its {', '.join(sorted(unjudged))}: the map has no battery)" if unjudged
+               else "")  # fmt: skip
     if not off:
         return Verdict("FIGURES", title, True, 0.0, "figures",
-                       f"the {n} figures fleet.json gives are the replays'")
+                       f"the {n} figures fleet.json gives are the replays'{skipped}")
     more = f"; {len(off)} figures differ" if len(off) > 1 else ""
     return Verdict("FIGURES", title, False, -float(len(off)), "figures",
                    f"{off[0]}{more}: the crew reads fleet.json's figures, the vehicles fly the "

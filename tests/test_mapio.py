@@ -54,6 +54,15 @@ def test_missing_nan_nonpositive_empty(hand_map: dict) -> None:
     assert _problems({**hand_map2, "sensors": [{"id": "a", "x": 1, "y": 1}],
                       "end": [1, 2, 3]}) == [
         "end: must be a JSON array of two numbers [x, y] (metres), got [1, 2, 3] (an array)"]
+    # too short too: once, not pydantic's "start[1]: required field is missing" per item
+    for short in ([1], []):
+        assert _problems({**hand_map2, "sensors": [{"id": "a", "x": 1, "y": 1}],
+                          "start": short}) == [
+            f"start: must be a JSON array of two numbers [x, y] (metres), got {short} (an array)"]
+    pads = {**hand_map2, "sensors": [{"id": "a", "x": 1, "y": 1}],
+            "fleet": {"depots": [{"name": "d", "x": 5, "y": 5, "pads": [[6]]}]}}
+    assert _problems(pads) == ["fleet.depots[0].pads[0]: must be a JSON array of two numbers "
+                               "[x, y] (metres), got [6] (an array)"]
 
 
 def test_a_bound_of_zero_is_not_explained_by_the_caps_reason(hand_map: dict) -> None:

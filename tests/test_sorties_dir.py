@@ -239,6 +239,9 @@ def test_verify_notes_a_directory_planned_with_a_battery_on_a_map_without_one(di
     assert rc == 0, out
     assert err.strip() == f"note: {note}"
     assert "ENERGY" not in out
+    figures = next(ln for ln in out.splitlines() if ln.startswith("fleet FIGURES"))
+    assert "PASS" in figures and ("(not its above_reserve_wh, energy_wh, reserve_left_wh: the "
+                                  "map has no battery)") in figures, figures
     rc, out, err = _verify(capsys, bare, d, "--json")
     assert json.loads(out)["notes"] == [note]
     rc, out, err = _verify(capsys, map_path, d)  # the map it was planned on: no note

@@ -1453,12 +1453,33 @@ def _unprintable_problem(where: str, got: Any) -> str:
     return f"{where}: {allowed}"
 
 
+def _short_points(errors: list[Any]) -> set[tuple[Any, ...]]:
+    """The fields given as an array of fewer than two numbers where a point [x, y] belongs:
+    pydantic reports each missing item ("start[1]: required field is missing"); the house
+    style names the field once, as for an array too long. A field whose missing items reach
+    index 2 is a longer tuple, not a point. O(errors)."""
+    missing: dict[tuple[Any, ...], set[int]] = {}
+    for e in errors:
+        loc = tuple(e["loc"])
+        if e["type"] == "missing" and loc and isinstance(loc[-1], int):
+            missing.setdefault(loc[:-1], set()).add(loc[-1])
+    return {k for k, idx in missing.items() if idx and max(idx) < 2}
+
+
 def _pydantic_problems(err: ValidationError) -> list[str]:
     lines = []
-    for e in err.errors():
+    errors = err.errors()
+    points = _short_points(errors)
+    for e in errors:
         loc = tuple(e["loc"])
         where = _loc(loc)
         kind = e["type"]
+        if kind == "missing" and loc and isinstance(loc[-1], int) and loc[:-1] in points:
+            line = (f"{_loc(loc[:-1])}: must be a JSON array of two numbers [x, y] (metres), "
+                    f"got {_json_shown(e.get('input'))}")
+            if line not in lines:
+                lines.append(line)
+            continue
         if kind == "extra_forbidden":
             model = _model_at(loc)
             hint = ""
