@@ -385,8 +385,8 @@ def test_control_characters_never_split_a_message() -> None:
                                           {"name": "", "x": 6, "y": 6}]}),
      'fleet.depots[1].name: must be 1 to 100 characters long, got "" (an empty string)'),
     (lambda d: d.update(fleet={"depots": [{"name": "n" * 101, "x": 5, "y": 5}]}),
-     'fleet.depots[0].name: must be 1 to 100 characters long, got "' + "n" * 36
-     + '... (a string of 101 characters)'),
+     'fleet.depots[0].name: must be 1 to 100 characters long, got "' + "n" * 35
+     + '..." (a string of 101 characters)'),
     (lambda d: d.update(fleet={"depots": [{"name": f"d{k}", "x": 5, "y": 5}
                                           for k in range(101)]}),
      "fleet.depots: must hold 1 to 100 depots, got 101"),
@@ -396,7 +396,7 @@ def test_control_characters_never_split_a_message() -> None:
     (lambda d: d.update(name=""), 'name: must be 1 to 200 characters long, got "" (an empty '
                                   "string)"),
     (lambda d: d.update(name="m" * 201), "name: must be 1 to 200 characters long, got "
-     '"mmmmmmmmmmmmmmmmmmmmmmmmmmmmmmmmmmmm... (a string of 201 characters)'),
+     '"mmmmmmmmmmmmmmmmmmmmmmmmmmmmmmmmmmm..." (a string of 201 characters)'),
     (lambda d: d["sensors"][0].update(id=""),
      'sensors[0].id: must be 1 to 100 characters long, got "" (an empty string)'),
     (lambda d: d.update(witness={"hover_points": [[1, 1]] * 201, "hover_times": [1]}),
@@ -404,7 +404,7 @@ def test_control_characters_never_split_a_message() -> None:
     (lambda d: d["obstacles"].update(no_fly_zones=[{"vertices": [[1, 1], [2, 1], [2, 2]],
                                                     "name": "z" * 201}]),
      "obstacles.no_fly_zones[0].name: must be at most 200 characters long, got "
-     '"zzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzz... (a string of 201 characters)'),
+     '"zzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzz..." (a string of 201 characters)'),
 ])  # fmt: skip
 def test_length_errors_are_one_house_style_line(change, line) -> None:
     """A newcomer met pydantic's own words ("String should have at least 1 character", "List

@@ -1365,7 +1365,9 @@ def _json_shown(v: Any) -> str:
         text = repr(v)
     kind = {bool: "a boolean", str: "a string", type(None): "null", list: "an array",
             dict: "an object", int: "an integer", float: "a number"}.get(type(v), "a value")
-    return f"{text[:37] + '...' if len(text) > 40 else text} ({kind})"
+    if len(text) > 40:  # a string cut keeps its closing quote: "abc..." not "abc...
+        text = text[:36] + '..."' if isinstance(v, str) else text[:37] + "..."
+    return f"{text} ({kind})"
 
 
 #: what a list field holds, for its length messages ("must hold 1 to 100 depots")
