@@ -758,10 +758,17 @@ def _check(
 
     slack = timing_tolerance(placed, separation=sep)
     want = float(m.launch_tolerance_s)
+    asks = f"the map's fleet.launch_tolerance_s asks {want:g} s"
+    if slack <= 0.0:  # said as a failure, not as a claim read before its FAIL
+        said = f"SEPARATION or LINKS fail unless every sortie takes off on its time ({asks})"
+    elif slack < want:
+        said = (f"SEPARATION and LINKS hold only while each sortie takes off within "
+                f"+-{slack:g} s of its time ({asks})")
+    else:
+        said = (f"SEPARATION and LINKS hold while each sortie takes off within +-{slack:g} s "
+                f"of its time ({asks})")
     timing = Verdict("TIMING", f"take-offs may be {want:g} s off", bool(slack >= want),
-                     slack - want, "s", f"SEPARATION and LINKS hold while each sortie takes "
-                     f"off within +-{slack:g} s of its time (the map's fleet.launch_tolerance_s "
-                     f"asks {want:g} s)")  # fmt: skip
+                     slack - want, "s", said)
     return replace(check, fleet=(*check.fleet, timing), timing_tolerance_s=slack)
 
 

@@ -569,6 +569,11 @@ def test_plan_staggers_for_the_maps_launch_tolerance_and_verify_judges_it(tmp_pa
     # verify judges the edge directory against the 30 s the default asks: TIMING fails
     rc, out, _ = _verify(capsys, safe_map, tmp_path / "edge")
     assert rc == 1 and "fleet TIMING take-offs may be 30 s off: FAIL" in out
+    # a failing TIMING says it fails (a re-review read "hold while ... within +-0 s" as a pass)
+    line = next(ln for ln in out.splitlines() if ln.startswith("fleet TIMING"))
+    assert " hold while " not in line, line
+    assert ("fail unless every sortie takes off on its time" in line
+            or "hold only while each sortie takes off within" in line), line
     rc, out, _ = _verify(capsys, safe_map, tmp_path / "safe")
     assert rc == 0 and "fleet TIMING take-offs may be 30 s off: PASS" in out
     doc = json.loads((tmp_path / "safe" / "fleet.json").read_text())
