@@ -727,7 +727,8 @@ def _check(
     for v, k, f, a, b, items in rows:
         sm = sortie_map(m, a, b, name=f"{m.name} v{v} s{k}", pads=(rank[(v, a)], rank[(v, b)]))
         tl = replay(items, sm, speed_limit=(speed_limits or {}).get(v))
-        out.append(SortieCheck(v, k, f, a, b, tl, _sortie_verdicts(verify(tl, sm)),
+        ends = (f"its pad at '{a}'", f"its pad at '{b}'")  # the sortie map's start and end
+        out.append(SortieCheck(v, k, f, a, b, tl, _sortie_verdicts(verify(tl, sm, end_names=ends)),
                                _served(tl, req)))
     combined = combined_data_verdicts([s.timeline for s in out], m)
     shape = (_chain_verdict(m, rows), _uavs_verdict(m, vehicles),

@@ -340,7 +340,8 @@ def _c5_offenders(timeline: Timeline, legs: list[np.ndarray], obstacles: list[An
     return "".join(parts)
 
 
-def verify(timeline: Timeline, map: Any) -> Verdicts:  # noqa: A002
+def verify(timeline: Timeline, map: Any, *,  # noqa: A002
+           end_names: tuple[str, str] = ("start", "end")) -> Verdicts:
     """Judge a replayed mission against the map: C1..C5 of the paper (Sec. 3), CLEAR and
     MARGIN (the map's `safety`), ENDS, ALT (when the route has a stop or a take-off) and, on a
     map with a battery, ENERGY (`sim.energy.mission_energy`); module docstring.
@@ -349,6 +350,8 @@ def verify(timeline: Timeline, map: Any) -> Verdicts:  # noqa: A002
         timeline: the replay (`sim.replay.Timeline`).
         map: the loaded map the mission was planned for (area, sensors' required data,
             obstacles, start and end, `safety`, battery).
+        end_names: what ENDS's detail calls the map's start and end (a sortie's are the pads of
+            its depots: "its pad at 'home'").
 
     Returns:
         The verdicts in that order, with the replay's totals, each sensor's data margin,
@@ -478,7 +481,7 @@ def verify(timeline: Timeline, map: Any) -> Verdicts:  # noqa: A002
     margins = {ids[k]: float(frac[k]) for k in range(len(ids))}
     out.append(margin)
 
-    out.append(_ends_verdict(timeline, map))
+    out.append(_ends_verdict(timeline, map, end_names))
 
     # ALT: every stop and the take-off above the ground at home (a flat map: the paper's model
     # has no terrain); the LAND item itself comes down
@@ -503,7 +506,8 @@ def verify(timeline: Timeline, map: Any) -> Verdicts:  # noqa: A002
                     **(energy[1] if energy is not None else {}))  # fmt: skip
 
 
-def _ends_verdict(timeline: Timeline, map: Any) -> Verdict:  # noqa: A002
+def _ends_verdict(timeline: Timeline, map: Any,  # noqa: A002
+                  end_names: tuple[str, str] = ("start", "end")) -> Verdict:
     """ENDS: the mission takes off at the map's start and comes down at its end (module
     docstring). A mission with neither LAND nor RETURN_TO_LAUNCH fails whatever its last stop:
     the vehicle holds there until a failsafe (the battery's, or the operator's) brings it
@@ -513,16 +517,17 @@ def _ends_verdict(timeline: Timeline, map: Any) -> Verdict:  # noqa: A002
     route = timeline.route
     d0 = float(np.linalg.norm(route.launch - map.start))
     d1 = float(np.linalg.norm(timeline.path[-1] - map.end))
-    take_off = (f"take-off {d0:.3f} m from start" if route.takeoff_altitude is not None else
-                "no TAKEOFF item: take-off assumed at the start")
+    start, end = end_names
+    take_off = (f"take-off {d0:.3f} m from {start}" if route.takeoff_altitude is not None else
+                f"no TAKEOFF item: take-off assumed at {'the ' if start == 'start' else ''}{start}")
     if route.finish == "none":
         detail = (f"the mission does not land (no LAND or RETURN_TO_LAUNCH item): it holds at "
-                  f"its last stop, item {route.seqs[-1]}, {d1:.3f} m from end, until a failsafe; "
-                  f"{take_off}")  # fmt: skip
+                  f"its last stop, item {route.seqs[-1]}, {d1:.3f} m from {end}, until a "
+                  f"failsafe; {take_off}")  # fmt: skip
         return Verdict("ENDS", "start -> end", False, -math.inf, "m", detail)
     worst = max(d0, d1)
     worst = 0.0 if worst < GEOM_TOL else worst  # round-off of the lat/lon round trip
-    detail = f"{take_off}, last stop {d1:.3f} m from end (within {ENDS_TOL:g} m)"
+    detail = f"{take_off}, last stop {d1:.3f} m from {end} (within {ENDS_TOL:g} m)"
     # the margin is the slack, as for every check: >= 0 exactly when it holds
     return Verdict("ENDS", "start -> end", worst <= ENDS_TOL, ENDS_TOL - worst, "m", detail)
 

@@ -353,6 +353,13 @@ def test_ends_check(m):
            replace(items[-1], x=float(lat), y=float(lon))]  # fmt: skip
     v = verify(replay(out, m), m)
     assert "ENDS" in v.failed and v["ENDS"].margin == pytest.approx(ENDS_TOL - 900.0)
+    assert "m from start" in v["ENDS"].detail and "900.000 m from end" in v["ENDS"].detail
+    # a sortie's start and end are its depots' pads: the detail says so (a re-review read
+    # "take-off 2475.882 m from start" on a sortie that leaves a depot)
+    named = verify(replay(out, m), m, end_names=("its pad at 'home'", "its pad at 'north'"))
+    assert named["ENDS"].margin == v["ENDS"].margin
+    assert "from its pad at 'home'" in named["ENDS"].detail
+    assert "900.000 m from its pad at 'north'" in named["ENDS"].detail
 
 
 def test_sim_does_not_import_the_optimiser():

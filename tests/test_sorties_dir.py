@@ -92,6 +92,9 @@ def test_verify_fails_a_vehicle_taking_off_where_it_did_not_land(dirs, tmp_path,
     assert rc == 1 and not rep["passed"]
     (chain,) = [v for v in rep["fleet"] if v["name"] == "CHAIN"]
     assert not chain["passed"] and chain["margin"] == pytest.approx(-np.hypot(1800, 1700))
+    # a sortie's ENDS names its depots' pads, not the sortie map's "start" and "end"
+    ends = [v["detail"] for s in rep["sorties"] for v in s["verdicts"] if v["name"] == "ENDS"]
+    assert ends and all("m from its pad at '" in e and "from start" not in e for e in ends), ends
 
 
 def test_verify_of_one_sortie_file_says_it_is_one_sortie(dirs, tmp_path, capsys):
