@@ -35,7 +35,7 @@ import math
 import os
 import re
 import stat
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -60,6 +60,7 @@ __all__ = [
     "read_jsonl",
     "printable",
     "counted",
+    "did_you_mean",
     "for_count",
     "rounded_up",
     "quoted",
@@ -715,6 +716,24 @@ def for_count(n: int, one: str, many: str | None = None) -> str:
         `one` or `many`.
     """
     return one if n == 1 else (many or one + "s")
+
+
+def did_you_mean(word: object, known: Iterable[str]) -> str:
+    """The hint after an unknown field: " (did you mean 'x'?)" naming the known name nearest
+    to `word` (difflib's ratio, at least 0.6), "" when none is near. The one hint the map
+    reader and fleet.json's reader give. O(len(known)).
+
+    Args:
+        word: the field as given.
+        known: the names the place holds.
+
+    Returns:
+        The hint, with its leading space, or "".
+    """
+    import difflib
+
+    close = difflib.get_close_matches(str(word), list(known), n=1)
+    return f" (did you mean '{close[0]}'?)" if close else ""
 
 
 def counted(n: int, noun: str, plural: str | None = None) -> str:

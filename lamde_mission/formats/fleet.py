@@ -38,7 +38,6 @@ to the replays themselves (`lamde_mission.sorties`: TIMES, PLACES, FIGURES).
 
 from __future__ import annotations
 
-import difflib
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -47,7 +46,7 @@ from typing import Any
 
 from lamde_mission.sorties import FLEET_FILE, sortie_file  # the writer's names, one place
 from planner_core.defaults import MAX_FLEET_SORTIES, MAX_FLEET_VEHICLES
-from planner_core.textio import InputError, printable, quoted, read_json
+from planner_core.textio import InputError, did_you_mean, printable, quoted, read_json
 
 __all__ = ["FLEET_FILE", "MAX_FLEET_SORTIES", "MAX_FLEET_VEHICLES", "FleetDirError",
            "FleetSortie", "FleetVehicle", "FleetDir", "read_fleet_dir",
@@ -418,9 +417,8 @@ def _known(v: dict[str, Any], fields: Sequence[str], where: str) -> None:
     refuses one: "{where}{field}: unknown field (did you mean 'x'?)" where one is near."""
     for key in v:
         if key not in fields:
-            close = difflib.get_close_matches(str(key), list(fields), n=1)
-            hint = f" (did you mean '{close[0]}'?)" if close else ""
-            raise FleetDirError(f"{where}{printable(key)}: unknown field{hint}")
+            raise FleetDirError(f"{where}{printable(key)}: unknown field"
+                                f"{did_you_mean(key, fields)}")
 
 
 def _latlon(v: Any, where: str, fields: Sequence[str] = PLACE_FIELDS) -> tuple[float, float] | None:

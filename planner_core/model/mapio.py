@@ -7,7 +7,6 @@ the field, so a user can fix a map in one pass.
 
 from __future__ import annotations
 
-import difflib
 import math
 import re
 from collections.abc import Mapping
@@ -1484,10 +1483,7 @@ def _pydantic_problems(err: ValidationError) -> list[str]:
             continue
         if kind == "extra_forbidden":
             model = _model_at(loc)
-            hint = ""
-            if model is not None:
-                close = difflib.get_close_matches(str(loc[-1]), list(model.model_fields), n=1)
-                hint = f" (did you mean '{close[0]}'?)" if close else ""
+            hint = textio.did_you_mean(loc[-1], model.model_fields) if model is not None else ""
             lines.append(f"{where}: unknown field{hint}")
         elif kind == "missing":
             lines.append(f"{where}: required field is missing")
