@@ -762,12 +762,9 @@ def _check(
     asks = f"the map's fleet.launch_tolerance_s asks {want:g} s"
     if slack <= 0.0:  # said as a failure, not as a claim read before its FAIL
         said = f"SEPARATION or LINKS fail unless every sortie takes off on its time ({asks})"
-    elif slack < want:
-        said = (f"SEPARATION and LINKS hold only while each sortie takes off within "
-                f"+-{slack:g} s of its time ({asks})")
     else:
-        said = (f"SEPARATION and LINKS hold while each sortie takes off within +-{slack:g} s "
-                f"of its time ({asks})")
+        said = (f"SEPARATION and LINKS hold {'only ' if slack < want else ''}while each sortie "
+                f"takes off within +-{slack:g} s of its time ({asks})")
     timing = Verdict("TIMING", f"take-offs may be {want:g} s off", bool(slack >= want),
                      slack - want, "s", said)
     return replace(check, fleet=(*check.fleet, timing), timing_tolerance_s=slack)
