@@ -353,16 +353,14 @@ def depot_positions(m: Any, names: Sequence[str] | None = None) -> dict[str, dic
             if names is None or n in names}  # fmt: skip
 
 
-def _stands(directory: str | Path) -> list[tuple[int, float, float]]:
+def _stands(fleet: Any) -> list[tuple[int, float, float]]:
     """Every (vehicle, lat, lon) a directory's missions take off from or land at
     (`mission_stands` of the mission files fleet.json lists)."""
-    from lamde_mission.formats.fleet import read_fleet_dir
-
-    return [(v.vehicle, lat, lon) for v in read_fleet_dir(directory).vehicles
+    return [(v.vehicle, lat, lon) for v in fleet.vehicles
             for s in v.sorties for _, lat, lon in mission_stands(s.path)]  # fmt: skip
 
 
-def shared_spots(directory: str | Path) -> str | None:
+def shared_spots(fleet: Any) -> str | None:
     """Two vehicles of a sortie directory that take off or land at one spot (within
     `SHARED_SPOT_M`), as a directory planned before each vehicle had its own pad has them:
     one would land on, or take off beside, the other standing there. Judged from the mission
@@ -370,14 +368,15 @@ def shared_spots(directory: str | Path) -> str | None:
     for S take-offs and landings (2 per sortie, at most 2,000).
 
     Args:
-        directory: the sortie directory (fleet.json and its missions).
+        fleet: the sortie directory as read (`formats.fleet.read_fleet_dir`: the caller has
+            read fleet.json already).
 
     Returns:
         The sentence naming the two vehicles and the spot, or None.
     """
     from lamde_mission.geo import latlon_to_enu
 
-    stands = _stands(directory)
+    stands = _stands(fleet)
     if not stands:
         return None
     origin = (stands[0][1], stands[0][2], 0.0)

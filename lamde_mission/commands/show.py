@@ -82,7 +82,7 @@ def fleet_views(directory: str | Path, m: Any) -> list[Any]:
     if note is not None:
         print(f"note: {note}", file=sys.stderr)
     # drawn all the same: the picture is how one finds out
-    shared, off = shared_spots(directory), fleet.disagreement()
+    shared, off = shared_spots(fleet), fleet.disagreement()
     if shared is not None:
         print(f"note: {directory}: {shared}; `verify MAP DIR/` fails it", file=sys.stderr)
     if off is not None:  # it names fleet.json itself

@@ -603,7 +603,8 @@ def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
     # what upload prints for the crew (take-off times, pads) is fleet.json's: it must agree
     # with itself and with the missions sent (`FleetDir.disagreements`, without a map; with
     # --map, verify's TIMES, PLACES and FIGURES hold it to the replays instead)
-    off = None if args.map else read_fleet_dir(args.mission).disagreement()
+    fleet = read_fleet_dir(args.mission)
+    off = None if args.map else fleet.disagreement()
     if off is not None:
         if not args.force:
             print(f"lamde-mission upload: {off}; nothing sent (the crew goes by fleet.json: "
@@ -611,7 +612,7 @@ def _run_fleet(args: argparse.Namespace, key: bytes | None) -> int:
                   "holds it to the replays; --force sends it anyway)", file=sys.stderr)
             return 1
         print(f"warning: {off}; sent anyway (--force)", file=sys.stderr)
-    shared = shared_spots(args.mission)
+    shared = shared_spots(fleet)
     if shared is not None:
         if not args.force:
             print(f"lamde-mission upload: {printable(args.mission)}: {shared}; nothing sent "
