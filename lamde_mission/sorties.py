@@ -65,7 +65,7 @@ import numpy as np
 
 from planner_core.atomic import clean_stale_dirs, dir_beside
 from planner_core.defaults import MAX_FLEET_SORTIES, MAX_FLEET_VEHICLES
-from planner_core.textio import counted
+from planner_core.textio import counted, first_few
 
 __all__ = ["FLEET_FILE", "SortieCheck", "FleetCheck", "sortie_dir_refusal", "sortie_dir_of",
            "output_in_sortie_dir", "sortie_file", "sortie_map", "write_sortie_dir",
@@ -171,10 +171,9 @@ def sortie_dir_refusal(out_dir: str | Path) -> str | None:
     foreign = sorted(e.name for e in target.iterdir() if not (
         e.is_file() and (e.name == FLEET_FILE or _SORTIE_NAME.fullmatch(e.name))))
     if foreign:
-        more = f" and {len(foreign) - 3} more" if len(foreign) > 3 else ""
-        shown = ", ".join(foreign[:3]) + more
-        return (f"holds {shown}, which a sortie directory does not (writing it replaces the "
-                "folder whole); name a new or empty folder, or an earlier sortie directory")
+        return (f"holds {first_few(foreign)}, which a sortie directory does not (writing it "
+                "replaces the folder whole); name a new or empty folder, or an earlier sortie "
+                "directory")
     return None
 
 
@@ -885,8 +884,8 @@ def _sensor_words(ids: Sequence[str]) -> str:
     """'S1', 'S2' and 2 more: the first `SENSORS_NAMED` ids quoted, then a count."""
     from planner_core.textio import printable
 
-    shown = ", ".join(f"'{printable(x)}'" for x in ids[:SENSORS_NAMED])
-    return shown + (f" and {len(ids) - SENSORS_NAMED} more" if len(ids) > SENSORS_NAMED else "")
+    return first_few([f"'{printable(x)}'" for x in ids[:SENSORS_NAMED]], SENSORS_NAMED,
+                     len(ids))
 
 
 def _figures_verdict(check: FleetCheck, fleet: Any) -> Any:

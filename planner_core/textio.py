@@ -35,7 +35,7 @@ import math
 import os
 import re
 import stat
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -61,6 +61,7 @@ __all__ = [
     "printable",
     "counted",
     "did_you_mean",
+    "first_few",
     "for_count",
     "rounded_up",
     "quoted",
@@ -734,6 +735,23 @@ def did_you_mean(word: object, known: Iterable[str]) -> str:
 
     close = difflib.get_close_matches(str(word), list(known), n=1)
     return f" (did you mean '{close[0]}'?)" if close else ""
+
+
+def first_few(items: Sequence[str], most: int = 3, total: int | None = None) -> str:
+    """"a, b, c and 4 more": the first `most` of `items` joined by commas, then how many
+    more there are; the way a one-line message names a long list. O(most).
+
+    Args:
+        items: the names, already quoted or formatted as the message shows them.
+        most: how many to name.
+        total: how many there are in all (None: len(items)), where the caller holds only
+            the first few.
+
+    Returns:
+        The words ("" for no items).
+    """
+    n = len(items) if total is None else int(total)
+    return ", ".join(items[:most]) + (f" and {n - most} more" if n > most else "")
 
 
 def counted(n: int, noun: str, plural: str | None = None) -> str:

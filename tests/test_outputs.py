@@ -23,7 +23,7 @@ from planner_core.atomic import (
     dir_beside,
     write_text_atomic,
 )
-from planner_core.textio import counted, for_count, printable, rounded_up
+from planner_core.textio import counted, did_you_mean, first_few, for_count, printable, rounded_up
 from tests.conftest import MAPS, run_cli, run_cli_many
 
 DEMO = MAPS / "small-demo.json"
@@ -363,6 +363,17 @@ def test_counted_is_singular_for_one_only() -> None:
     assert for_count(1, "optimiser") == "optimiser" and for_count(2, "optimiser") == "optimisers"
     assert for_count(1, "replaces", "replace") == "replaces"
     assert for_count(0, "replaces", "replace") == "replace"
+
+
+def test_first_few_and_did_you_mean_are_the_messages_one_wording() -> None:
+    # a long list named in a one-line message, and the hint after an unknown field: each
+    # written out in several places before
+    assert first_few(["'a'", "'b'", "'c'", "'d'", "'e'"]) == "'a', 'b', 'c' and 2 more"
+    assert first_few(["a", "b"]) == "a, b" and first_few([]) == ""
+    assert first_few(["a", "b", "c"], total=7) == "a, b, c and 4 more"  # only the first held
+    assert first_few(["a", "b", "c"], 2) == "a, b and 1 more"
+    assert did_you_mean("energy_whh", ["energy_wh", "sensors"]) == " (did you mean 'energy_wh'?)"
+    assert did_you_mean("colour", ["energy_wh", "sensors"]) == ""
 
 
 def test_rounded_up_never_prints_less_than_the_value() -> None:

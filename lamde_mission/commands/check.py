@@ -134,14 +134,15 @@ def _witness_line(m: object) -> str:
 def _reduced_clearance(m: object) -> str:
     """', less where the start, end or a depot is closer: ...' naming the obstacles whose
     clearance in force (`Map.obstacle_clearances`) is below the asked one (up to three), or ''."""
+    from planner_core.textio import first_few
+
     asked = float(m.spec.safety.clearance)
     less = [(lab, c) for lab, c in zip(m.obstacle_labels, m.obstacle_clearances, strict=True)
             if c < asked]
     if not less:
         return ""
-    shown = ", ".join(f"{c:.3g} m at {lab}" for lab, c in less[:3])
-    more = f" and {len(less) - 3} more" if len(less) > 3 else ""
-    return f" (less where the start, end or a depot is closer: {shown}{more})"
+    shown = first_few([f"{c:.3g} m at {lab}" for lab, c in less[:3]], total=len(less))
+    return f" (less where the start, end or a depot is closer: {shown})"
 
 
 def _pads_json(m: Any) -> dict[str, list[dict[str, float]]] | None:

@@ -65,7 +65,7 @@ from planner_core.fleet.split import (
 from planner_core.model import energy as E
 from planner_core.model.mapio import sub_map_dict
 from planner_core.streams import stream_rng, stream_seed
-from planner_core.textio import counted, rounded_up
+from planner_core.textio import counted, first_few, rounded_up
 
 __all__ = ["SORTIE_BUDGET", "ROUNDS", "TRANSFER_NEIGHBOURS", "FleetResult", "plan_fleet",
            "route_first", "sortie_map_dict"]  # fmt: skip
@@ -365,9 +365,9 @@ class _Planner:
                                                                          strict=True))
                     if r > 0 and q > 0]  # fmt: skip
             heard = [ids[j] for _, j in sorted(take, key=lambda o: (-o[0], o[1]))[:3]]
-            many = f" and {len(take) - 3} more" if len(take) > 3 else ""
+            served = first_few([repr(x) for x in heard], total=len(take)) or "no sensor"
             at = (f"the single flight's hover point at ({P[i, 0]:.0f}, {P[i, 1]:.0f}), "
-                  f"serving {', '.join(repr(x) for x in heard) or 'no sensor'}{many}")
+                  f"serving {served}")
             if room[i] <= 0.0:
                 return (f"{at}: no sortie from any depot reaches it and comes back on one "
                         f"battery, even moved toward the depots{also}; "

@@ -77,7 +77,7 @@ from typing import Any
 import numpy as np
 
 from planner_core.model.formulas import ground_reach, link_rates
-from planner_core.textio import counted
+from planner_core.textio import counted, first_few, for_count
 
 __all__ = ["BandwidthBound", "Finding", "Diagnosis", "bandwidth_bound", "diagnose"]
 
@@ -722,9 +722,7 @@ def _bandwidth_findings(b: BandwidthBound, bw: float, t_max: float, i_max: int) 
                                f"least {b.alone[k]:.6g} s of {keep}", sid))
             continue
         others = [f"'{o}'" for o in b.short if o != sid]
-        named = ", ".join(others[:3]) + (f" and {len(others) - 3} more" if len(others) > 3
-                                         else "")  # fmt: skip
-        named = f"{'sensor' if len(others) == 1 else 'sensors'} {named}"
+        named = f"{for_count(len(others), 'sensor')} {first_few(others)}"
         out.append(Finding("C3_HOVER_TIME", True, f"sensor '{sid}': with {named} it needs at "
                            f"least {b.v_low:.6g} s of {keep}", sid))
     if not b.proven and b.v_grid > b.cap:
