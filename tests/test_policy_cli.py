@@ -363,3 +363,43 @@ def test_a_trainset_file_is_read_within_the_input_limits(tmp_path) -> None:  # n
     bad.write_bytes(b'{"problems": [\xff]}')
     with pytest.raises(ValueError, match=r"^--problems: .*bad\.json: "):
         read_trainset(bad)
+
+
+def test_train_ends_with_a_plan_command_that_plans_with_the_checkpoint(
+        tmp_path, capsys) -> None:  # noqa: ANN001
+    # the line `train` ends with is a command a user can paste (docs/learning.md): MAP and OUT
+    # filled in, it plans with the new policy
+    pytest.importorskip("torch")
+    import shlex
+
+    trainset = tmp_path / "set.json"
+    trainset.write_text(json.dumps({"problems": [{"kind": "map",
+                                                  "path": str(MAPS / "tiny.json")}]}))
+    ck = tmp_path / "my policy"
+    assert main(["train", "-o", str(ck), "--problems", str(trainset), "--epochs", "1",
+                 "--envs", "1", "--population", "6", "--budget", "30", "--set", "n_steps=2",
+                 "--set", "net.embed=8"]) == 0
+    last = capsys.readouterr().out.strip().splitlines()[-1]
+    assert last.startswith(f"wrote {ck} (plan with it: lamde-mission plan MAP -o OUT ")
+    command = last.split("plan with it: ", 1)[1].split("; in Python", 1)[0]
+    argv = shlex.split(command)[1:]  # without the console script's name
+    out = tmp_path / "m.plan"
+    argv = [str(MAPS / "tiny.json") if a == "MAP" else str(out) if a == "OUT" else a
+            for a in argv]
+    assert argv[argv.index("--policy") + 1] == str(ck)  # the space survives the quoting
+    rc = main([*argv, "--budget", "200", "--population", "6", "--quiet", "--allow-infeasible",
+               "--report", str(tmp_path / "r.json")])
+    assert rc in (0, 1) and out.exists()
+    got = json.loads((tmp_path / "r.json").read_text())["plan"]["configurator"]
+    assert got == f"lamde:{ck}"
+
+
+def test_a_plan_records_which_policy_configured_it() -> None:
+    # the record keeps the options it ran with: the shipped policy is "lamde", another
+    # checkpoint names itself (not the class name every checkpoint shares)
+    kw = {"seed": 0, "budget": 120, "population": 10, "polish": False, "starts": 0}
+    shipped = plan(MAPS / "tiny.json", configurator=PolicyConfigurator(), **kw)
+    assert shipped.configurator == "lamde" and shipped.config["configurator"] == "lamde"
+    moded = plan(MAPS / "tiny.json", configurator=PolicyConfigurator(mode=True), **kw)
+    assert moded.configurator == "lamde:mode"
+    assert PolicyConfigurator(checkpoint="/x/y", params={}, net=object()).name == "lamde:/x/y"

@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import shlex
 import sys
 from pathlib import Path
 
@@ -277,5 +278,7 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(str(exc)) from None
     finally:
         executor.close()
-    print(f"wrote {args.output} (plan with it: PolicyConfigurator(checkpoint={args.output!r}))")
+    print(f"wrote {args.output} (plan with it: lamde-mission plan MAP -o OUT --configurator "
+          f"lamde --policy {shlex.quote(str(args.output))}; in Python "
+          f"PolicyConfigurator(checkpoint={str(args.output)!r}))")
     return 0

@@ -96,13 +96,17 @@ class PlanConfig:
 
     @property
     def configurator_name(self) -> str:
-        """The configurator's registry name, or its class name for an object.
+        """The configurator's registry name; for an object its own ``name`` when it has one
+        (`PolicyConfigurator`: ``lamde:CHECKPOINT``), else its class name.
 
         Returns:
             The name.
         """
         c = self.configurator
-        return c if isinstance(c, str) else type(c).__name__
+        if isinstance(c, str):
+            return c
+        name = getattr(c, "name", None)
+        return name if isinstance(name, str) else type(c).__name__
 
     @property
     def final_trials(self) -> int:

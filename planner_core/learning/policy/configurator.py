@@ -61,6 +61,19 @@ class PolicyConfigurator:
             if eta is not None:
                 object.__setattr__(self, "eta", float(eta))
 
+    @property
+    def name(self) -> str:
+        """The name a plan's record gives this configurator (`PlanConfig.configurator_name`):
+        ``lamde`` for the shipped checkpoint, else ``lamde:CHECKPOINT`` (the folder or shipped
+        name it was given), with ``:mode`` when it takes the modes.
+
+        Returns:
+            The name.
+        """
+        ck = str(self.checkpoint)
+        base = "lamde" if ck == DEFAULT_CHECKPOINT else f"lamde:{ck}"
+        return base + (":mode" if self.mode else "")
+
     def init(self, state: DEState) -> FeatureMemory | None:
         """The run's context memory when the network reads it (``net.context``), else None.
 
