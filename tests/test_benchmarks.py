@@ -192,6 +192,44 @@ def test_search_table_prints_the_comparison(tmp_path) -> None:
     assert r.stdout.startswith("| map | planner | gap to best-known |")
 
 
+def test_search_table_without_the_compared_optimiser_or_a_feasible_run(tmp_path: Path) -> None:
+    """`search_table.py RUNS/results.jsonl` on records without a `planner` run said "planner has
+    the lower mean than cmaes on 0/2 maps" under a column of dashes: now it says the records
+    hold no run of it and how to pick another; and a map where every run of an optimiser is
+    infeasible got a gap of penalised scores ("+2987.30 %"): now "-", as `report` shows it,
+    the column keeping the feasible count."""
+    recs = [{"task": t, "optimiser": o, "seed": s, "f": f + s,
+             "phi": 2.0 if (o, t) == ("cmaes", "T05") else 0.0}
+            for t in ("T01", "T05") for s in range(3)
+            for o, f in (("de-adaptive", 296.0), ("cmaes", 297.0))]
+    res = tmp_path / "results.jsonl"
+    res.write_text("".join(json.dumps(r) + "\n" for r in recs))
+    bk = tmp_path / "bk.json"
+    bk.write_text(json.dumps({"tasks": {"T01": {"f": 296.0}, "T05": {"f": 296.0}}}))
+    r = _script("benchmarks/search_table.py", str(res), "--best-known", str(bk))
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.splitlines()
+    assert lines[0] == "| map | cmaes | de-adaptive |"  # no planner column, no p, no gap
+    assert lines[3] == "| T05 | 318.00 (0/3) | 297.00 (3/3) |"
+    assert "- no runs of planner (the optimiser compared with the others, --planner) in these " \
+        "records: nothing compared; they hold cmaes, de-adaptive: give --planner NAME to " \
+        "compare one of them with the others" in lines
+    assert not any("lower mean" in s or "within 1 %" in s for s in lines), r.stdout
+    r = _script("benchmarks/search_table.py", str(res), "--best-known", str(bk),
+                "--planner", "de-adaptive", "--gaps")
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.splitlines()
+    assert lines[0] == "| map | de-adaptive | cmaes | p vs cmaes | gap de-adaptive | gap cmaes |"
+    assert lines[2] == "| T01 | 297.00 (3/3) | 298.00 (3/3) | 0.25 | +0.34 % | +0.68 % |"
+    assert lines[3] == "| T05 | 297.00 (3/3) | 318.00 (0/3) | 0.25 | +0.34 % | - |"
+    assert "- gap \"-\" for cmaes on T05: no feasible run (its mean is of penalised scores " \
+        "only; its column counts the feasible runs)" in lines
+    assert "- cmaes's mean is within 1 % of the best-known on 1/2 maps (no gap on 1: no " \
+        "feasible run)" in lines
+    assert "- de-adaptive has the lower mean than cmaes on 2/2 maps (p < 0.05: better on 0, " \
+        "worse on 0)" in lines
+
+
 @pytest.mark.slow  # measured 22 s (issue 35: default suite <= 5 min)
 def test_bench_executor_runs() -> None:
     """The README's `python benchmarks/bench_executor.py`, one small sweep on the local pool."""
