@@ -106,7 +106,9 @@ def best_known_f(given: Path | None, first_results: Path) -> tuple[dict[str, flo
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("results", nargs="+", help="results JSONL, optionally PATH:NAME[=LABEL],...")
-    ap.add_argument("--planner", default="planner")
+    ap.add_argument("--planner", default="planner",
+                    help="the optimiser compared with every other, its first column (default "
+                    "planner)")
     ap.add_argument("--best-known", type=Path, default=None,
                     help="best-known file (default: beside the suite in the runs' meta.json, "
                     "else examples/maps/suite_best_known.json)")
