@@ -24,6 +24,12 @@ cmaes-seeded-lp as its own column).
 compared on the same seeds), `--optimizers` only these columns (the planner always),
 `--gaps` adds a row of every column's gap to the best-known below the table (mean over maps)
 and a gap column per optimiser.
+
+A gap is that of the mean score over all runs, infeasible ones penalised; an optimiser with no
+feasible run on a map has no gap there ("-", as `lamde-mission report` shows a ratio without a
+feasible run; its column keeps the count, e.g. "(0/25)"). Records with no run of the compared
+optimiser (`--planner`, default planner) give the table of the optimisers they hold and a line
+saying so, with no p values and no comparison lines.
 """
 
 from __future__ import annotations
@@ -100,7 +106,9 @@ def best_known_f(given: Path | None, first_results: Path) -> tuple[dict[str, flo
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("results", nargs="+", help="results JSONL, optionally PATH:NAME[=LABEL],...")
-    ap.add_argument("--planner", default="planner")
+    ap.add_argument("--planner", default="planner",
+                    help="the optimiser compared with every other, its first column (default "
+                    "planner)")
     ap.add_argument("--best-known", type=Path, default=None,
                     help="best-known file (default: beside the suite in the runs' meta.json, "
                     "else examples/maps/suite_best_known.json)")
@@ -141,9 +149,11 @@ def main() -> None:
     except (OSError, ValueError, KeyError, TypeError) as exc:
         sys.exit(f"search_table: best-known: {exc}")
     tasks = sorted({t for t, _ in runs})
-    opts = [a.planner] + sorted({o for _, o in runs} - {a.planner})
-    peers = opts[1:]
-    gap_cols = opts if a.gaps else [a.planner]
+    held = sorted({o for _, o in runs})
+    compared = a.planner in held  # else nothing to compare: no p values, no comparison lines
+    opts = [a.planner] + [o for o in held if o != a.planner] if compared else held
+    peers = opts[1:] if compared else []
+    gap_cols = opts if a.gaps else [a.planner] if compared else []
     head = ["map", *(f"{o}" for o in opts), *(f"p vs {o}" for o in peers),
             *(f"gap {o}" if a.gaps else "gap to best-known" for o in gap_cols)]
     print("| " + " | ".join(head) + " |")
@@ -152,6 +162,7 @@ def main() -> None:
     within: dict[str, int] = defaultdict(int)
     sig_better: dict[str, int] = defaultdict(int)
     sig_worse: dict[str, int] = defaultdict(int)
+    infeasible: dict[str, list[str]] = defaultdict(list)  # maps without a feasible run
     for t in tasks:
         cells = [t]
         for o in opts:
@@ -179,6 +190,10 @@ def main() -> None:
             if not bk:
                 cells.append("no best-known")
                 continue
+            if v and not feas[(t, o)]:  # penalised scores only: no gap, as `report` says it
+                cells.append("-")
+                infeasible[o].append(t)
+                continue
             gap = 100 * (m - bk) / bk
             within[o] += int(bool(np.isfinite(gap) and gap <= 1.0))
             cells.append(f"{gap:+.2f} %" if np.isfinite(gap) else "-")
@@ -186,17 +201,28 @@ def main() -> None:
     print()
     print(f"- {source}")
     unknown = [t for t in tasks if not best.get(t)]
-    if unknown:
+    if unknown and gap_cols:
         print(f"- no best-known f for {', '.join(unknown)} ({len(unknown)}/{len(tasks)} maps): "
               "no gap, not counted below; give --best-known FILE, or run `bench` with its "
               "best-known update on")
     known = len(tasks) - len(unknown)
+    if not compared:
+        mode = f" of start mode {a.init}" if a.init else ""
+        print(f"- no runs of {a.planner} (the optimiser compared with the others, --planner) "
+              f"in these records{mode}: nothing compared; "
+              + (f"they hold {', '.join(held)}: give --planner NAME to compare one of them "
+                 "with the others" if held else "they hold no runs"))
+    for o in gap_cols:
+        if infeasible[o]:
+            print(f"- gap \"-\" for {o} on {', '.join(infeasible[o])}: no feasible run (its "
+                  "mean is of penalised scores only; its column counts the feasible runs)")
     for o in peers:
         print(f"- {a.planner} has the lower mean than {o} on {wins[o]}/{len(tasks)} maps "
               f"(p < 0.05: better on {sig_better[o]}, worse on {sig_worse[o]})")
     for o in gap_cols:
         print(f"- {o}'s mean is within 1 % of the best-known on {within[o]}/{known} maps"
-              + (f" with a best-known ({len(unknown)} without)" if unknown else ""))
+              + (f" with a best-known ({len(unknown)} without)" if unknown else "")
+              + (f" (no gap on {len(infeasible[o])}: no feasible run)" if infeasible[o] else ""))
 
 
 if __name__ == "__main__":

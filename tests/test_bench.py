@@ -531,6 +531,44 @@ def test_cli_bench_then_report(suite: Path, tmp_path: Path) -> None:
     assert main(["bench", "--suite", str(suite), "--budget", "50", "--out", str(out)]) == 2
 
 
+def test_report_names_the_reference_it_falls_back_to(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """`report DIR` without --reference on records with no de-adaptive run took the first
+    optimiser as the reference silently; now a note on stderr names it, and --help says what
+    the default is and what happens when it has no runs."""
+    import gzip
+
+    from lamde_mission.cli import build_parser, main
+
+    runs = Path(__file__).resolve().parent.parent / "docs" / "reduced" / "runs"
+    recs = [json.loads(s) for s in gzip.decompress((runs / "results.jsonl.gz").read_bytes())
+            .decode().splitlines()]
+    folder = tmp_path / "runs"
+    folder.mkdir()
+    keep = ("scipy-de", "random-search", "cmaes")
+    (folder / RESULTS_FILE).write_text("".join(json.dumps(r) + "\n" for r in recs
+                                               if r["optimiser"] in keep and r["task"] == "T01"))
+    (folder / "meta.json").write_text((runs / "meta.json").read_text())
+    md = tmp_path / "r.md"
+    assert main(["report", str(folder), "-o", str(md), "--no-limits"]) == 0
+    err = capsys.readouterr().err
+    assert err.splitlines() == [f"note: {folder / RESULTS_FILE} holds no de-adaptive runs: the "
+                                "reference (--reference) is cmaes, the first optimiser present "
+                                "in the registry's order (`bench --list`)"]
+    assert "| Task | cmaes (ref) | scipy-de | random-search |" in md.read_text()
+    # an explicit reference: no note; one without runs: refused
+    assert main(["report", str(folder), "-o", str(md), "--no-limits",
+                 "--reference", "scipy-de"]) == 0
+    assert capsys.readouterr().err == ""
+    assert main(["report", str(folder), "-o", str(md), "--reference", "lsrtde"]) == 2
+    sub = next(a for a in build_parser()._actions if a.dest == "command")
+    (ref,) = [a for a in sub.choices["report"]._actions if a.dest == "reference"]
+    assert ref.help.startswith("the column the marks compare against (default de-adaptive; "
+                               "where RESULTS holds no de-adaptive runs, the first optimiser it "
+                               "holds in the order `bench --list` shows")
+    assert "named in a note on stderr" in ref.help and "refused (exit 2)" in ref.help
+
+
 def test_report_finds_the_suite_from_another_folder(
         suite: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """`bench --suite examples/maps/large --out /tmp/B` from the repository root, then `report

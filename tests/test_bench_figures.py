@@ -113,6 +113,54 @@ def test_paths_figure_one_map_per_optimiser(tmp_path: Path) -> None:
     assert not any("best-known" in t for t in _texts(bare))  # no route, no legend entry
 
 
+def _saved_layout(fig: Any, path: Path) -> dict[str, Any]:
+    """Save `fig` as the report does, then measure its text where the saved PNG has it (the
+    layout engine off, so drawing again moves nothing): panel tight boxes (title, tick and axis
+    labels) by row, top to bottom, and the figure title's and legend's boxes, in pixels."""
+    F.save(fig, path)
+    fig.set_layout_engine("none")
+    fig.set_dpi(F.DPI)
+    fig.canvas.draw()
+    r = fig.canvas.get_renderer()
+    rows: dict[float, list[Any]] = {}
+    for ax in fig.axes:
+        rows.setdefault(round(ax.get_position().y0, 3), []).append(ax.get_tightbbox(r))
+    return {"rows": [rows[y] for y in sorted(rows, reverse=True)],
+            "title": fig._suptitle.get_window_extent(r),
+            "legend": fig.legends[0].get_window_extent(r)}
+
+
+def test_paths_figure_of_few_tasks_keeps_its_rows_apart(tmp_path: Path,
+                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    """`report`'s best paths on 2 tasks: the top row's "x east (km)" overprinted the bottom
+    row's titles ("T05 · de-adaptive"), the figure title the top row's, the legend the bottom
+    row's axis labels (one pass of the constrained layout with fixed-aspect maps in a short
+    figure). Now every row clears the next, the title and the legend by 2 points or more; a
+    figure clear at once (3 tasks here, and a 16-row one like the committed figures) gets no extra
+    layout pass, so it saves as before."""
+    from planner_core.model.mapio import load_map
+
+    passes: list[int] = []
+    settle = F._settle_layout
+    monkeypatch.setattr(F, "_settle_layout", lambda fig: passes.append(settle(fig)))
+    tasks = ["T01", "T05", "T06"]
+    maps = {t: load_map(ROOT / "examples" / "maps" / "suite" / f"{t}.json") for t in tasks}
+    opts = ["de-adaptive", "cmaes", "random-search"]
+    best = {t: {o: {"hover_points": [[1_000.0, 1_000.0], [3_000.0, 2_000.0]], "score": 325.5,
+                    "feasible": o != "cmaes"} for o in opts} for t in tasks}
+    protocol = F.protocol_text("seeded", 300, 2)
+    gap = 2 * F.DPI / 72  # 2 points, in pixels
+    for n in (2, 3):
+        fig = F.paths_figure(tasks[:n], maps, best, opts, protocol=protocol, runs=2)
+        lay = _saved_layout(fig, tmp_path / f"p{n}.png")
+        assert len(lay["rows"]) == n
+        for upper, lower in zip(lay["rows"], lay["rows"][1:], strict=False):
+            assert min(b.y0 for b in upper) - max(b.y1 for b in lower) >= gap, n
+        assert lay["title"].y0 - max(b.y1 for b in lay["rows"][0]) >= gap, n
+        assert min(b.y0 for b in lay["rows"][-1]) - lay["legend"].y1 >= gap, n
+    assert passes[0] > 0 and passes[-1] == 0, passes
+
+
 def test_imax_figure(tmp_path: Path) -> None:
     tables = {"uniform": {"de-adaptive": {20: (0.28, 0.41, 48), 100: (0.16, 0.34, 48)},
                           "de-adaptive-fixedlen": {20: (0.34, 0.44, 48), 100: (0.08, 0.24, 48)}}}

@@ -33,9 +33,13 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="markdown file to write (default RESULTS/report.md, beside the "
                    "results: a report never lands in the working folder unasked; the "
                    "project's own table is `-o docs/results.md`)")
-    p.add_argument("--reference",
-                   help="the column the marks compare against (default de-adaptive; for an "
-                   "ablation folder written by benchmarks/ablations.py: its reference, LAMDE)")
+    p.add_argument("--reference", metavar="NAME",
+                   help="the column the marks compare against (default de-adaptive; where "
+                   "RESULTS holds no de-adaptive runs, the first optimiser it holds in the "
+                   "order `bench --list` shows (names not listed there after, alphabetically), "
+                   "named in a note on stderr; for an ablation folder written by "
+                   "benchmarks/ablations.py: its reference, LAMDE). Any other NAME without "
+                   "runs is refused (exit 2)")
     p.add_argument("--suite", help="map folder (default: the one recorded in RESULTS/meta.json)")
     p.add_argument("--figures", metavar="DIR",
                    help="folder for the PNGs (default: beside the report, e.g. docs/results/)")
@@ -137,7 +141,7 @@ def run(args: argparse.Namespace) -> int:
                            log=notes.append, update_lower_bounds=args.update_lower_bounds)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    for note in notes:  # as `bench` says them when it resumes the folder
+    for note in notes:  # as `bench` says them when it resumes the folder; the reference
         print(note, file=sys.stderr)
     pngs = figures_folder(args.output, args.figures)
     drawn = len(list(pngs.glob("*.png"))) if pngs.is_dir() else 0

@@ -415,6 +415,68 @@ def _draw_map(ax: Any, m: Any) -> None:
     ax.tick_params(labelsize=8)
 
 
+def _overprints(fig: Any) -> list[str]:
+    """Where the figure's text overprints, as it was last drawn: a panel (an axes with its
+    title, tick labels and axis labels) over, or within 2 points of, another panel, the
+    figure's title or its legend.
+
+    Args:
+        fig: a drawn matplotlib Figure (its layout as the last draw left it).
+
+    Returns:
+        One description per overlapping pair ("T05 · de-adaptive / T01 · de-adaptive"), empty
+        when every panel is clear. Cost grows with the square of the number of axes.
+    """
+    r = fig.canvas.get_renderer()
+    pad = fig.dpi / 72  # 1 point each side: boxes closer than 2 points touch
+
+    def name(ax: Any) -> str:
+        return ax.get_title().split("\n")[0] or f"axes {fig.axes.index(ax)}"
+
+    boxes = [(name(ax), ax.get_tightbbox(r).padded(pad)) for ax in fig.axes
+             if ax.get_visible()]
+    others = [(f"figure {what}", art.get_window_extent(r).padded(pad))
+              for what, art in (("title", fig._suptitle), *(("legend", g) for g in fig.legends))
+              if art is not None and art.get_visible()]
+    out = [f"{a} / {b}" for i, (a, ba) in enumerate(boxes) for b, bb in boxes[i + 1:]
+           if ba.overlaps(bb)]
+    return out + [f"{a} / {b}" for a, ba in boxes for b, bb in others if ba.overlaps(bb)]
+
+
+def _settle_layout(fig: Any, passes: int = 3) -> int:
+    """Lay `fig` out again until, drawn as `save` draws it, no text overprints (`_overprints`).
+
+    Constrained layout measures each panel's title and axis labels where the previous pass
+    left its fixed-aspect map; in a short figure (a grid of one to three rows) the first pass
+    can leave too little room between rows (a 2-task figure's x axis labels overprinted the
+    next row's titles, the figure's title the top row's). Each pass here is one more layout
+    from where the last one left the panels. A figure clear at once is left as it was, so it
+    saves as before (a 16-row one, as the committed figures, byte for byte).
+
+    Args:
+        fig: a Figure with the constrained layout engine.
+        passes: the most extra layout passes.
+
+    Returns:
+        The extra passes run (0: none were needed). Each costs a draw of the figure without
+        rendering, and the check one more, on a copy (pickle) drawn at `DPI`.
+    """
+    import pickle
+
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    extra = 0
+    while True:
+        probe = pickle.loads(pickle.dumps(fig))  # the next save's pass, on a copy
+        FigureCanvasAgg(probe)
+        probe.set_dpi(DPI)
+        probe.draw_without_rendering()
+        if extra == passes or not _overprints(probe):
+            return extra
+        fig.draw_without_rendering()
+        extra += 1
+
+
 def _route(m: Any, hover_points: Any) -> np.ndarray:
     hp = np.asarray(hover_points, float).reshape(-1, 2)
     return np.vstack([m.start, hp, m.end]) * 1e-3
@@ -427,7 +489,8 @@ def paths_figure(tasks: Sequence[str], maps: Mapping[str, Any],
     """One small map per task and optimiser with that optimiser's best route (solid when
     feasible, dotted and marked INFEASIBLE when not) over the best-known route (wide grey).
     Panels of one task fill rows of up to three; the panel title gives the task, optimiser
-    and score. Axes in km.
+    and score. Axes in km. Laid out until no text overprints (`_settle_layout`: a grid of few
+    rows needs more than one pass of the constrained layout).
 
     Args:
         tasks: the tasks to draw.
@@ -496,6 +559,7 @@ def paths_figure(tasks: Sequence[str], maps: Mapping[str, Any],
         Line2D([], [], ls="", marker="s", color="k", label="end"),
     ]
     fig.legend(handles=handles, loc="outside lower center", ncols=4, fontsize=9)
+    _settle_layout(fig)
     return fig
 
 

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from planner_core.bench._io import read_meta, write_text_atomic
+from planner_core.bench._io import read_meta, stored_path, write_text_atomic
 from planner_core.bench.records import (
     RESULTS_FILE,
     ReadReport,
@@ -32,6 +32,7 @@ from planner_core.bench.records import (
 )
 from planner_core.bench.stats import ALPHA, ScoreTable, score_table
 from planner_core.defaults import SCORE_FACTOR
+from planner_core.textio import printable
 
 __all__ = ["DEFAULT_REFERENCE", "LB_CACHE_FILE", "build_report", "cost_section",
            "figures_folder", "imax_section", "imax_table", "order_optimisers", "format_table",
@@ -208,8 +209,9 @@ def build_report(
         results_dir: the benchmark folder (results.jsonl or results.jsonl.gz, meta.json).
         output: the markdown file to write.
         reference: the Wilcoxon reference column; must be one of the optimisers present when
-            given explicitly; the default (or None) falls back to the first optimiser present
-            in `order_optimisers`' order.
+            given explicitly; the default (`DEFAULT_REFERENCE`), when absent, and None fall
+            back to the first optimiser present in `order_optimisers`' order (for the default,
+            `log` is told which).
         suite: the suite folder (default: meta.json's, found by `suite_folder` from here, the
             absolute path recorded or the results folder), for the maps, limits and safety
             margins.
@@ -228,7 +230,8 @@ def build_report(
         log: receives a note (`records.skipped_note`) for each results file read (this
             folder's and the studies') whose lines were not all read: a cut last line, an
             unreadable line, a duplicate run; their runs are left out of the report, which
-            says so too.
+            says so too; and a line naming the reference fallen back to when the default
+            reference has no runs.
         update_lower_bounds: where the limits section stores the lower bounds it computes
             (a map the cache beside the suite lacks, or whose file changed): False (default)
             in `results_dir`/lower_bounds.json (`LB_CACHE_FILE`), read back by the next
@@ -260,14 +263,19 @@ def build_report(
     ablation = meta.get(META_KEY)
     if ablation and reference == DEFAULT_REFERENCE:
         reference = str(ablation["reference"])
+    fell_back = False
     if reference is not None and reference not in present:
         if reference != DEFAULT_REFERENCE:
             raise ValueError(f"reference '{reference}' has no results (have {', '.join(present)})")
-        reference = None
+        reference, fell_back = None, True
     opts = order_optimisers(present, reference)
     if reference is None:
         reference = opts[0]
         opts = order_optimisers(present, reference)
+    if fell_back and log is not None:
+        log(f"note: {printable(str(stored_path(results_dir / RESULTS_FILE)))} holds no "
+            f"{DEFAULT_REFERENCE} runs: the reference (--reference) is {reference}, the first "
+            "optimiser present in the registry's order (`bench --list`)")
     if ablation:  # the variants in the study's order, the reference last (as the paper's table)
         named = [v for v in ablation.get("variants", {}) if v in present and v != reference]
         opts = named + [o for o in opts if o not in named and o != reference] + [reference]
