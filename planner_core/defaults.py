@@ -85,6 +85,7 @@ __all__ = [
     "check_run_args",
     "interval_text",
     "number_text",
+    "obstacle_label",
     "render_markdown",
     "update_readme",
     "with_table",
@@ -294,23 +295,46 @@ _RUN: tuple[Default, ...] = (
 )
 
 
-def number_text(v: float) -> str:
+def number_text(v: float, digits: int | None = None) -> str:
     """A number as the map's tables and error lines print it: a whole number in plain digits
     (1000000, not 1e+06; 86400), anything else as ``:g`` (6 significant digits: 0.01, 1e-09),
     in plain digits too where that would write a positive exponent (10200000, not 1.02e+07);
-    from 1e16 on as ``:g``.
+    from 1e16 on as ``:g``. With `digits`, first rounded to that many significant digits
+    (``number_text(25639.5, 3)`` is "25600", where ``:.3g`` writes "2.56e+04").
 
     Args:
         v: the number.
+        digits: significant digits to round to (>= 1); None: as given (whole numbers keep
+            every digit, others 6 significant).
 
     Returns:
         Its text.
     """
     f = float(v)
+    if digits is not None and math.isfinite(f):
+        f = float(f"{f:.{digits}g}")
     if f.is_integer() and abs(f) < 1e16:
         return str(int(f))  # every digit: a whole number is shown as it is
     g = f"{f:g}"
     return f"{float(g):.0f}" if "e+" in g and abs(float(g)) < 1e16 else g
+
+
+def obstacle_label(kind: str, index: int, name: str | None = None) -> str:
+    """An obstacle's name in messages, the one wording `check`, `plan` and `verify` share
+    (it lives here, in the one module of planner_core the simulator may import): "circle 0",
+    "rectangle 2", "no-fly-zone 1 'range'", "polygon 0 'barn'".
+
+    Args:
+        kind: "circle", "rectangle", "no_fly_zone" or "polygon" (its list in the map file,
+            '_' written '-').
+        index: its position in that list.
+        name: the name the map gives it (no-fly zones and polygons), or None.
+
+    Returns:
+        "<kind> <index>", then " '<name>'" when it has a name.
+    """
+    base = f"{kind.replace('_', '-')} {index}"
+    return f"{base} '{name}'" if name else base
 
 
 def interval_text(lo: float | None, hi: float | None, lo_open: bool = False,

@@ -22,6 +22,8 @@ import numpy as np
 import shapely
 from shapely.geometry import Point, Polygon
 
+from planner_core.defaults import obstacle_label
+
 __all__ = [
     "Obstacle",
     "obstacle_shapes",
@@ -73,10 +75,10 @@ class Obstacle:
 
         Returns:
             "<kind> <index>" (kind with '-' for '_', e.g. "no-fly-zone 0"), then " '<name>'"
-            when the map names it.
+            when the map names it (`planner_core.defaults.obstacle_label`, the wording `check`
+            uses too).
         """
-        base = f"{self.kind.replace('_', '-')} {self.index}"
-        return f"{base} '{self.name}'" if self.name else base
+        return obstacle_label(self.kind, self.index, self.name)
 
 
 def _rectangle(x: float, y: float, length: float, width: float, angle_deg: float) -> Polygon:

@@ -240,3 +240,80 @@ def test_the_inside_notes_name_every_obstacle_holding_a_sensor_in_map_order() ->
             dist = float(reach.distance(p))
             assert f"lies inside {', '.join(named)}: it can only be served from outside, " \
                    f"{dist:.1f} m away at best ({d.best_rate[sid]:.3g} Mbit/s)" in inside[sid]
+
+
+def test_inside_notes_name_the_shape_as_verify_does() -> None:
+    """A reviewer's sensor in the barn: check said "inside polygon 0" and "inside no-fly-zone
+    1" where verify says "polygon 0 'barn'" and the zone is named 'range': one wording
+    (`defaults.obstacle_label`, the sim's `Obstacle.label` too)."""
+    m = load_map({
+        "name": "farm", "area": {"width": 2000, "height": 1500},
+        "start": [50, 50], "end": [50, 80],
+        "sensors": [{"id": "soil-1", "x": 700, "y": 700}, {"id": "soil-2", "x": 1500, "y": 400},
+                    {"id": "pump", "x": 1000, "y": 700}],
+        "obstacles": {
+            "rectangles": [{"x": 1000, "y": 500, "length": 200, "width": 80, "angle_deg": 15}],
+            "polygons": [{"name": "barn", "vertices": [[600, 600], [750, 600], [750, 750],
+                                                      [650, 750], [650, 800], [600, 800]]}],
+            "no_fly_zones": [
+                {"vertices": [[1200, 900], [1500, 900], [1500, 1100], [1200, 1100]]},
+                {"name": "range", "vertices": [[1300, 150], [2000, 150], [2000, 1500],
+                                               [1300, 1500]]}],
+        },
+    })  # fmt: skip
+    inside = {f.sensor: f.message for f in diagnose(m).findings if f.kind == "INSIDE"}
+    assert inside["soil-1"].startswith("sensor 'soil-1' lies inside polygon 0 'barn': it can ")
+    assert inside["soil-2"].startswith("sensor 'soil-2' lies inside no-fly-zone 1 'range': ")
+
+
+def test_a_cannot_sensor_gets_no_inside_note_saying_how_it_can_be_served(tmp_path) -> None:
+    """A reviewer's sensor deep in a no-fly zone: a note "can only be served from outside,
+    1510.1 m away at best (0 Mbit/s)" beside a CANNOT for it; now the CANNOT alone, saying
+    where the sensor lies."""
+    doc = {"name": "deep", "area": {"width": 5000, "height": 5000},
+           "start": [100, 100], "end": [200, 100],
+           "sensors": [{"id": "ok", "x": 500, "y": 500}, {"id": "buried", "x": 2500, "y": 2500},
+                       {"id": "edge", "x": 1050, "y": 2500}],
+           "obstacles": {"no_fly_zones": [{"name": "range", "vertices": [
+               [1000, 1000], [4000, 1000], [4000, 4000], [1000, 4000]]}]}}  # fmt: skip
+    d = diagnose(load_map(doc))
+    about = [(f.kind, f.fatal, f.message) for f in d.findings if f.sensor == "buried"]
+    assert about == [("UNREACHABLE", True, (
+        "sensor 'buried': no reachable hover point gets any data from it: the nearest "
+        "reachable hover point is 1510.1 m away, beyond the link's ground reach of 995.0 m "
+        "(rate 0); it lies inside no-fly-zone 0 'range'"))]
+    # a sensor in the zone that can be served keeps its note
+    assert [f.kind for f in d.findings if f.sensor == "edge"] == ["INSIDE"]
+    path = tmp_path / "deep.json"
+    path.write_text(json.dumps(doc))
+    r = run_cli("check", path)
+    assert r.returncode == 1
+    lines = [ln for ln in r.stdout.splitlines() if "'buried'" in ln]
+    assert len(lines) == 1 and lines[0].startswith("  CANNOT  sensor 'buried'"), r.stdout
+
+
+def test_check_prints_large_figures_in_plain_digits(tmp_path) -> None:
+    """A 90,000 Wh battery: check printed "90000 Wh = 9e+04 Wh ... 7.2e+04 Wh usable ...
+    (2.56e+04 min of hover ...)"; numbers are plain digits (`defaults.number_text`), as are
+    the findings' (`planner_core.model.diagnose`)."""
+    doc = {"name": "big", "area": {"width": 2000, "height": 1500}, "start": [50, 50],
+           "end": [50, 80], "sensors": [{"id": "a", "x": 700, "y": 700}],
+           "uav": {"battery": {"energy_wh": 90000}}}  # fmt: skip
+    path = tmp_path / "big.json"
+    path.write_text(json.dumps(doc))
+    r = run_cli("check", path)
+    assert r.returncode == 0, r.stderr
+    (line,) = [ln for ln in r.stdout.splitlines() if ln.startswith("  battery")]
+    assert line.startswith("  battery         90000 Wh, reserve 20 %: 72000 Wh usable per "
+                           "sortie (25600 min of hover at P(0) "), line
+    assert "e+" not in r.stdout
+    # the findings too: 1e6 Mbit asked of one sensor ("needs 1.02e+06 Mbit ... at most
+    # 3.24e+04 Mbit" before)
+    far = {"name": "far", "area": {"width": 30000, "height": 30000}, "start": [50, 50],
+           "end": [50, 80], "sensors": [{"id": "a", "x": 29000, "y": 29000,
+                                         "required_data": 1_000_000}],
+           "uav": {"battery": {"energy_wh": 20}, "max_hover_time": 3600}}  # fmt: skip
+    said = " | ".join(f.message for f in diagnose(load_map(far)).findings)
+    assert "sensor 'a' needs 1020000 Mbit (required 1000000 plus the data margin); one hover " \
+           "point collects at most 32400 Mbit (T_max 3600 s x 9 Mbit/s)" in said, said
+    assert "e+" not in said, said

@@ -214,3 +214,15 @@ def test_a_population_above_max_population_is_refused_before_any_work(tmp_path, 
     err = capsys.readouterr().err
     assert status == 2 and len(err.splitlines()) == 1 and "population" in err, err
     assert not list(tmp_path.iterdir())
+
+
+def test_number_text_rounds_to_significant_digits_in_plain_digits() -> None:
+    """`check` printed "7.2e+04 Wh usable (2.56e+04 min ...)" with `:.4g` and `:.3g`: the same
+    rounding, written out."""
+    from planner_core.defaults import number_text
+
+    assert [number_text(v, d) for v, d in [(72000.0, 4), (25639.5, 3), (8.8333, 3),
+                                           (0.0123456, 3), (1.23456e-7, 3), (0.0, 3),
+                                           (-1234567.0, 2), (1e17, 3)]] == [
+        "72000", "25600", "8.83", "0.0123", "1.23e-07", "0", "-1200000", "1e+17"]
+    assert number_text(25639.5) == "25639.5" and number_text(90000) == "90000"  # as before

@@ -161,10 +161,10 @@ def test_depots_are_checked(hand_map: dict) -> None:
     lines = _problems(hand_map)
     assert len(lines) == 3, lines
     assert lines[0].startswith(
-        "fleet.depots[1]: depot 'bldg' at (610, 600) lies inside an obstacle or no-fly zone"
+        "fleet.depots[1]: depot 'bldg' at (610, 600) lies inside circle 0: no sortie can"
     )
     assert lines[1].startswith(
-        "fleet.depots[2]: depot 'nfz' at (850, 850) lies inside an obstacle or no-fly zone"
+        "fleet.depots[2]: depot 'nfz' at (850, 850) lies inside no-fly-zone 0 'airfield': no "
     )
     assert lines[2].startswith("fleet.depots[3]: depot 'edge'")
     assert "mm from an obstacle" in lines[2]

@@ -295,12 +295,41 @@ def test_a_stray_far_feature_is_named_as_the_cause(tmp_path) -> None:
     assert len(err.value.problems) == 1
     assert err.value.problems[0].startswith(
         "the features lie too far apart for one map (longitude -70.000000 to ")
+    # and which one: the rest fit one map without it (no swap brings it among them)
+    assert err.value.problems[0].endswith(
+        "far.geojson: features[3] 'far' at (lon -70.000000, lat -33.000000) lies far from the "
+        "others")
     # with an origin given the frame is the user's: only the stray sensor is outside it
     with pytest.raises(GisError) as err:
         build_map(layers, origin=(LAT - 0.5 * D, LON - 0.5 * D, 0.0))
     assert len(err.value.problems) == 1
     assert err.value.problems[0].endswith(
         "sensor (lon -70.000000, lat -33.000000) is outside the area")
+
+
+def test_a_feature_written_lat_lon_is_named_with_the_swap_asked(tmp_path) -> None:
+    """A reviewer's sensor written [lat, lon] among [lon, lat] ones: "the features lie too far
+    apart" named neither the feature nor the likely cause."""
+    doc = _fc(*_basics(), _feat("sensor", "Point", _pt(3, 2)[::-1], id="b"),
+              _feat("obstacle", "Polygon", [[_pt(2, 2), _pt(3, 2), _pt(3, 3), _pt(2, 2)]],
+                    name="barn"))  # fmt: skip
+    layers = read_layers([(_write(tmp_path, "swap.geojson", doc), None)])
+    with pytest.raises(GisError) as err:
+        build_map(layers)
+    (line,) = err.value.problems
+    lon, lat = _pt(3, 2)
+    assert line.startswith("the features lie too far apart for one map (longitude "), line
+    assert line.endswith(
+        f"swap.geojson: features[3] 'b' at (lon {lat:.6f}, lat {lon:.6f}) lies far from the "
+        "others; GeoJSON positions are [longitude, latitude]: is this one written [latitude, "
+        "longitude]?"), line
+    # a polygon written so is named by its name, around its vertices' mean
+    ring = [[p[::-1] for p in [_pt(2, 2), _pt(3, 2), _pt(3, 3), _pt(2, 2)]]]
+    doc = _fc(*_basics(), _feat("obstacle", "Polygon", ring, name="barn"))
+    with pytest.raises(GisError) as err:
+        build_map(read_layers([(_write(tmp_path, "swap2.geojson", doc), None)]))
+    assert "swap2.geojson: features[3] 'barn' around (lon 46.2" in err.value.problems[0]
+    assert err.value.problems[0].endswith("is this one written [latitude, longitude]?")
 
 
 @pytest.mark.slow  # measured 6 s (issue 35: default suite <= 5 min)

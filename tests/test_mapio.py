@@ -118,7 +118,41 @@ def test_points_outside_area_and_inside_obstacles(hand_map: dict) -> None:
     assert any(line.startswith("sensors[0]:") and "outside the area" in line for line in lines)
     hand_map["sensors"][0]["x"] = 10
     lines = _problems(hand_map)
-    assert lines == ["start: (0, 0) lies inside an obstacle or no-fly zone"]
+    assert lines == ["start: (0, 0) lies inside circle 0"]
+
+
+def test_an_end_inside_an_obstacle_names_it_as_verify_does(hand_map: dict) -> None:
+    """A reviewer's end point in the barn: "end: (700, 700) lies inside an obstacle or no-fly
+    zone" said not which; now each shape holding it, named as `verify` names it (the sim's
+    `Obstacle.label`), the same for a depot and a listed pad."""
+    from sim.obstacles import obstacle_shapes
+
+    barn = [[600, 600], [750, 600], [750, 750], [650, 750], [650, 800], [600, 800]]
+    hand_map["area"] = {"width": 2000, "height": 1500}
+    hand_map["end"] = [700, 700]
+    hand_map["start"] = [1010, 500]
+    hand_map["obstacles"] = {
+        "circles": [{"x": 1000, "y": 500, "radius": 30}],
+        "rectangles": [{"x": 1000, "y": 500, "length": 200, "width": 80, "angle_deg": 15}],
+        "polygons": [{"name": "barn", "vertices": barn}],
+        "no_fly_zones": [{"vertices": [[1200, 900], [1500, 900], [1500, 1100], [1200, 1100]]}],
+    }
+    assert _problems(hand_map) == ["start: (1010, 500) lies inside circle 0, rectangle 0",
+                                   "end: (700, 700) lies inside polygon 0 'barn'"]
+    hand_map["start"], hand_map["end"] = [50, 50], [50, 80]
+    hand_map["fleet"] = {"depots": [{"name": "yard", "x": 50, "y": 50},
+                                    {"name": "roof", "x": 1300, "y": 1000,
+                                     "pads": [[700, 610]]}]}  # fmt: skip
+    assert _problems(hand_map) == [
+        "fleet.depots[1]: depot 'roof' at (1300, 1000) lies inside no-fly-zone 0: no sortie "
+        "can take off or land there",
+        "fleet.depots[1].pads[0]: the pad of depot 'roof' at (700, 610) lies inside polygon 0 "
+        "'barn': no vehicle can stand there"]
+    # one wording: the map's labels are the sim's (what `verify` prints), names and all
+    del hand_map["fleet"]
+    m = load_map(hand_map)
+    assert m.obstacle_labels == tuple(o.label for o in obstacle_shapes(m)) == (
+        "circle 0", "rectangle 0", "no-fly-zone 0", "polygon 0 'barn'")
 
 
 def test_no_fly_zone_shapes(hand_map: dict) -> None:
@@ -247,3 +281,75 @@ def test_a_file_of_another_kind_given_as_a_map_is_named_as_such(tmp_path) -> Non
             load_map(path)
         assert len(info.value.problems) == 1 and needle in info.value.problems[0], name
     load_map(ROOT / "examples" / "maps" / "small-demo.json")  # a map is still a map
+
+
+def _degrees_map(origin: bool = True) -> dict:
+    """A reviewer's map with its positions typed as longitude, latitude (the origin's) in a
+    2000 m x 1500 m area: check said OK and plan flew a one-point mission."""
+    doc = {
+        "name": "deg", "area": {"width": 2000, "height": 1500},
+        "start": [5.1201, 52.0101], "end": [5.1201, 52.0101],
+        "sensors": [{"id": "a", "x": 5.1230, "y": 52.0130}, {"id": "b", "x": 5.1290, "y": 52.0150},
+                    {"id": "c", "x": 5.1250, "y": 52.0110}],
+    }  # fmt: skip
+    if origin:
+        doc["origin"] = {"lat": 52.0100, "lon": 5.1200}
+    return doc
+
+
+def _degree_notes(m: object) -> list[str]:
+    return [n for n in m.notes if "look like longitude, latitude" in n]
+
+
+def test_positions_typed_in_degrees_get_a_note_naming_the_field_and_the_fix(
+    tmp_path, capsys
+) -> None:
+    from lamde_mission.cli import main
+
+    assert _degree_notes(load_map(_degrees_map())) == [
+        "sensors: their x, y look like longitude, latitude (sensor 'a' at (5.123, 52.013) is "
+        "next to the origin's lon, lat (5.12, 52.01); the sensors, start and end all lie within "
+        "0.0089 m of one another in a 2000 m x 1500 m area): x, y are metres east and north of "
+        "the origin"]
+    # without an origin the points' spread alone says it
+    (note,) = _degree_notes(load_map(_degrees_map(origin=False)))
+    assert "(sensor 'a' at (5.123, 52.013); the sensors, start and end" in note
+    # a note, not an error: check still exits 0 and says it (on stderr, as every map note), and
+    # plan, which prints the map's notes, says it too
+    path = tmp_path / "deg.json"
+    path.write_text(json.dumps(_degrees_map()))
+    assert main(["check", str(path)]) == 0
+    err = capsys.readouterr().err
+    assert f"note: {path}: sensors: their x, y look like longitude, latitude" in err
+    from lamde_mission.commands._common import load_map_or_fail
+
+    load_map_or_fail(str(path))  # what plan loads its map with
+    assert "look like longitude, latitude" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("change", ["metres", "spread", "one-point", "beyond-90"])
+def test_maps_in_metres_near_5_52_get_no_degrees_note(change: str) -> None:
+    doc = _degrees_map()
+    if change == "metres":  # the same map in metres east and north of the origin
+        doc["start"] = doc["end"] = [7, 11]
+        for s, (x, y) in zip(doc["sensors"], [(205, 333), (615, 556), (342, 111)], strict=True):
+            s["x"], s["y"] = x, y
+    elif change == "spread":  # a real map may hold a point at (5, 52) m, the others elsewhere
+        doc["end"] = [1900, 1400]
+    elif change == "one-point":  # everything at one spot: no spread to judge by
+        doc["start"] = doc["end"] = [5.123, 52.013]
+        doc["sensors"] = [{"id": "a", "x": 5.123, "y": 52.013}]
+    else:  # close together, but y beyond any latitude (100 m north)
+        doc["start"] = doc["end"] = [5.1201, 100.0101]
+        for s in doc["sensors"]:
+            s["y"] += 48
+    assert _degree_notes(load_map(doc)) == []
+
+
+def test_no_committed_example_or_suite_map_gets_the_degrees_note() -> None:
+    from tests.conftest import MAPS
+
+    maps = [p for p in sorted(MAPS.rglob("*.json")) if "sensors" in json.loads(p.read_text())]
+    assert len(maps) >= 20  # the demos, the suite T01-T16 and the large L01-L08
+    for path in maps:
+        assert _degree_notes(load_map(path)) == [], path

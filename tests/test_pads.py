@@ -301,8 +301,8 @@ def test_a_listed_pad_outside_the_area_or_inside_an_obstacle_is_bad_input(uavs, 
     with pytest.raises(MapError) as err:
         load_map(doc)
     assert err.value.problems == [
-        "fleet.depots[1].pads[0]: the pad of depot 'north' at (1600, 500) lies inside an "
-        "obstacle or no-fly zone: no vehicle can stand there"]
+        "fleet.depots[1].pads[0]: the pad of depot 'north' at (1600, 500) lies inside "
+        "no-fly-zone 0: no vehicle can stand there"]
 
 
 def test_two_depots_nearer_than_the_pads_spacing_are_named():

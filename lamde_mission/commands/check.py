@@ -165,12 +165,16 @@ def _energy_lines(s: dict, m: object) -> None:
     home at the start, and the map's end as a landing site)."""
     b, f = s.get("battery"), s.get("fleet")
     if b is not None:
+        from planner_core.defaults import number_text
+
+        # plain digits (90000 Wh, not 9e+04 Wh), rounded as the `:.4g` and `:.3g` they replace
         hover_w = s["power"]["hover_w"]
-        given = (f"{b['endurance_s']:g} s of hover" if b["endurance_s"] is not None
-                 else f"{b['energy_wh']:g} Wh")  # fmt: skip
-        print(f"  battery         {given} = {b['energy_wh']:.4g} Wh, reserve "
-              f"{100 * b['reserve']:g} %: {b['usable_wh']:.4g} Wh usable per sortie "
-              f"({60 * b['usable_wh'] / hover_w:.3g} min of hover at P(0) {hover_w:g} W)")
+        given = (f"{number_text(b['endurance_s'])} s of hover = "
+                 if b["endurance_s"] is not None else "")  # fmt: skip
+        print(f"  battery         {given}{number_text(b['energy_wh'], 4)} Wh, reserve "
+              f"{100 * b['reserve']:g} %: {number_text(b['usable_wh'], 4)} Wh usable per sortie "
+              f"({number_text(60 * b['usable_wh'] / hover_w, 3)} min of hover at P(0) "
+              f"{hover_w:g} W)")
     if f is not None:
         from planner_core.textio import counted, printable
 

@@ -629,6 +629,84 @@ def _all_lonlat(layers: GisLayers) -> np.ndarray:
     return np.array(pts, dtype=float).reshape(-1, 2)
 
 
+def _labelled_lonlat(layers: GisLayers) -> list[tuple[str, np.ndarray]]:
+    """The positions `_all_lonlat` takes, per feature: (its label in messages, (n, 2) lon, lat);
+    a sensor's label names its id where the feature has no name."""
+    out: list[tuple[str, np.ndarray]] = []
+    for s in layers.sensors:
+        label = s["where"]
+        if s["id"] is not None and not label.endswith("'"):
+            label = f"{label} '{printable(str(s['id'])[:80])}'"
+        out.append((label, np.array([(s["lon"], s["lat"])], dtype=float)))
+    rect_polys = [r["poly"] for r in layers.rectangles]
+    for p in layers.obstacles + rect_polys + layers.no_fly_zones + layers.areas:
+        if p.rings:
+            out.append((p.where, np.asarray(p.rings[0], dtype=float).reshape(-1, 2)))
+    for c in layers.circles + layers.area_circles:
+        out.append((c["where"], np.array([(c["lon"], c["lat"])], dtype=float)))
+    for e in (layers.start, layers.end, layers.home, *layers.depots):
+        if e is not None:
+            out.append((e["where"], np.array([(e["lon"], e["lat"])], dtype=float)))
+    return out
+
+
+def _box_fits(lo: np.ndarray, hi: np.ndarray, side: float) -> bool:
+    """Whether the lon, lat box [lo, hi] (degrees) spans at most `side` metres each way (its
+    corners in the local frame of its south-west corner, as `_frame` measures the data)."""
+    if not (-90.0 <= lo[1] and hi[1] <= 90.0):
+        return False
+    corners = np.array([(lo[0], lo[1]), (hi[0], lo[1]), (lo[0], hi[1]), (hi[0], hi[1]),
+                        (lo[0], 0.5 * (lo[1] + hi[1])), (hi[0], 0.5 * (lo[1] + hi[1]))])
+    xy = _local(corners, (float(lo[1]), float(lo[0]), 0.0))
+    w, h = np.ptp(xy, axis=0)
+    return bool(w <= side and h <= side)
+
+
+def _stray(layers: GisLayers, side: float) -> str | None:
+    """The feature that alone keeps the others from fitting one map of at most `side` m a side,
+    as a clause for the message ("features[3] 'b' at (lon 52.014000, lat 5.129000) lies far
+    from the others; GeoJSON positions are [longitude, latitude]: is this one written
+    [latitude, longitude]?", the question where swapping its coordinates puts it among the
+    others); None when no one feature does. When several do (two features far apart), the one
+    a swap brings among the others, else the one farthest from the others' centre.
+
+    Cost: O(positions) (the box of all features but one from prefix and suffix boxes)."""
+    feats = _labelled_lonlat(layers)
+    if len(feats) < 2:
+        return None
+    lo = np.array([f.min(axis=0) for _, f in feats])
+    hi = np.array([f.max(axis=0) for _, f in feats])
+    n = len(feats)
+    pre_lo, pre_hi = np.minimum.accumulate(lo), np.maximum.accumulate(hi)
+    suf_lo = np.minimum.accumulate(lo[::-1])[::-1]
+    suf_hi = np.maximum.accumulate(hi[::-1])[::-1]
+    found = []  # (swap fits, distance from the others' centre, k)
+    for k in range(n):
+        parts_lo = [b for b in (pre_lo[k - 1] if k else None,
+                                suf_lo[k + 1] if k + 1 < n else None) if b is not None]
+        parts_hi = [b for b in (pre_hi[k - 1] if k else None,
+                                suf_hi[k + 1] if k + 1 < n else None) if b is not None]
+        r_lo, r_hi = np.min(parts_lo, axis=0), np.max(parts_hi, axis=0)
+        if not _box_fits(r_lo, r_hi, side):
+            continue
+        swapped = feats[k][1][:, ::-1]
+        swap = bool(np.all(np.abs(swapped[:, 1]) <= 90.0) and _box_fits(
+            np.minimum(r_lo, swapped.min(axis=0)), np.maximum(r_hi, swapped.max(axis=0)), side))
+        far = float(np.hypot(*(feats[k][1].mean(axis=0) - 0.5 * (r_lo + r_hi))))
+        found.append((swap, far, k))
+    if not found:
+        return None
+    swap, _, k = max(found)
+    label, pts = feats[k]
+    lon, lat = pts.mean(axis=0)
+    at = "at" if len(pts) == 1 else "around"
+    clause = f"{label} {at} (lon {lon:.6f}, lat {lat:.6f}) lies far from the others"
+    if swap:
+        clause += ("; GeoJSON positions are [longitude, latitude]: is this one written "
+                   "[latitude, longitude]?")
+    return clause
+
+
 def _lonlat(e: dict[str, Any]) -> str:
     """A point feature's own position as the file gives it: 'lon X, lat Y' (6 decimals)."""
     return f"lon {float(e['lon']):.6f}, lat {float(e['lat']):.6f}"
@@ -748,10 +826,11 @@ def _frame(layers: GisLayers, origin: tuple[float, float, float | None] | None,
 
     if w > MAX_SIDE or h > MAX_SIDE:  # a stray feature far from the others, usually
         lon, lat = data[:, 0], data[:, 1]
+        stray = _stray(layers, MAX_SIDE)
         raise GisError([f"the features lie too far apart for one map (longitude "
                         f"{lon.min():.6f} to {lon.max():.6f}, latitude {lat.min():.6f} to "
-                        f"{lat.max():.6f}; a map's side is at most {MAX_SIDE / 1000:g} km): is "
-                        "one feature far from the others?"])
+                        f"{lat.max():.6f}; a map's side is at most {MAX_SIDE / 1000:g} km): "
+                        + (stray or "is one feature far from the others?")])
     # round the area outward to the centimetre
     w, h = math.ceil(w * 100.0) / 100.0, math.ceil(h * 100.0) / 100.0
     if not (w > 0 and h > 0):

@@ -62,7 +62,8 @@ distances bound the flight from below, so:
   (`_agreed`).
 
 Findings that are no proof of infeasibility are notes: a sensor inside an obstacle or a no-fly
-zone (served by radio from outside it: the best rate says how well), a sensor needing more than
+zone (served by radio from outside it: the best rate says how well; where the sensor is CANNOT,
+its first CANNOT line says where it lies instead), a sensor needing more than
 one hover point, a bandwidth test that found no plan on its grid but could not prove it
 (C3_GRID). The checks are necessary conditions, not sufficient: a map that passes may still be
 infeasible (obstacles between the C3-respecting points, the flight between them).
@@ -71,11 +72,13 @@ infeasible (obstacles between the C3-respecting points, the flight between them)
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
+# numbers in plain digits (90000 Wh, not 9e+04 Wh), rounded as the `:.4g` they replace
+from planner_core.defaults import number_text as _num
 from planner_core.model.formulas import ground_reach, link_rates
 from planner_core.textio import counted, first_few, for_count
 
@@ -155,6 +158,7 @@ def diagnose(m: Any) -> Diagnosis:
     # one by one were most of `diagnose` on maps of a thousand obstacles)
     points = shapely.points(np.asarray(pm.sensors, dtype=float).reshape(-1, 2))
     holds: list[list[int]] = [[] for _ in range(len(points))]  # obstacles holding sensor j
+    held: dict[str, str] = {}  # sensor id -> the obstacles holding it, as messages name them
     if real:
         j_in, k_in = shapely.STRtree(real).query(points, predicate="within")
         for j, k in sorted(zip(j_in.tolist(), k_in.tolist(), strict=True)):  # map order
@@ -172,9 +176,10 @@ def diagnose(m: Any) -> Diagnosis:
             r = min(r, float(radio.bandwidth))
         best[sid] = r
         if inside:
+            held[sid] = ", ".join(inside)
             findings.append(Finding(
-                "INSIDE", False, f"sensor '{sid}' lies inside {', '.join(inside)}: it can only "
-                f"be served from outside, {d:.1f} m away at best ({r:.3g} Mbit/s)", sid))
+                "INSIDE", False, f"sensor '{sid}' lies inside {held[sid]}: it can only "
+                f"be served from outside, {d:.1f} m away at best ({_num(r, 3)} Mbit/s)", sid))
         if q <= 0:
             need[sid] = 0
             continue
@@ -182,7 +187,7 @@ def diagnose(m: Any) -> Diagnosis:
             overhead = float(radio.peak_rate) - float(radio.decay) * float(uav.altitude)
             if overhead <= 0.0:  # the link model reaches no ground point at this altitude
                 why = (f"even overhead the link rate R_c - xi H = {radio.peak_rate:g} - "
-                       f"{radio.decay:g} x {uav.altitude:g} m is {overhead:.4g} Mbit/s <= 0 "
+                       f"{radio.decay:g} x {uav.altitude:g} m is {_num(overhead, 4)} Mbit/s <= 0 "
                        "(radio.peak_rate, radio.decay, uav.altitude)")
             else:
                 why = (f"the nearest reachable hover point is {d:.1f} m away, beyond the "
@@ -196,9 +201,10 @@ def diagnose(m: Any) -> Diagnosis:
         need[sid] = k
         one = t_max * r
         if k > i_max and flights > 1:  # several flights (issue 33)
-            why = (f"sensor '{sid}' needs {q:g} Mbit (required {q_real:g} plus the data "
-                   f"margin); one hover point collects at most {one:.4g} Mbit (T_max "
-                   f"{t_max:g} s x {r:.3g} Mbit/s), so {k} hover points are needed")  # fmt: skip
+            why = (f"sensor '{sid}' needs {_num(q)} Mbit (required {_num(q_real)} plus the "
+                   f"data margin); one hover point collects at most {_num(one, 4)} Mbit (T_max "
+                   f"{t_max:g} s x {_num(r, 3)} Mbit/s), so {k} hover points are "
+                   "needed")  # fmt: skip
             if k > i_max * flights:
                 findings.append(Finding(
                     "TOO_MUCH_DATA", True, f"{why}, more than I_max = {i_max} in each of "
@@ -210,15 +216,16 @@ def diagnose(m: Any) -> Diagnosis:
                     sorties=math.ceil(k / i_max)))  # fmt: skip
         elif k > i_max:
             findings.append(Finding(
-                "TOO_MUCH_DATA", True, f"sensor '{sid}' needs {q:g} Mbit (required "
-                f"{q_real:g} plus the data margin); one hover point collects at most "
-                f"{one:.4g} Mbit (T_max {t_max:g} s x {r:.3g} Mbit/s), so {k} hover points "
-                f"would be needed, more than I_max = {i_max}", sid))
+                "TOO_MUCH_DATA", True, f"sensor '{sid}' needs {_num(q)} Mbit (required "
+                f"{_num(q_real)} plus the data margin); one hover point collects at most "
+                f"{_num(one, 4)} Mbit (T_max {t_max:g} s x {_num(r, 3)} Mbit/s), so {k} hover "
+                f"points would be needed, more than I_max = {i_max}", sid))
         elif k > 1:
             findings.append(Finding(
-                "SEVERAL_POINTS", False, f"sensor '{sid}' needs {q:g} Mbit: one hover point "
-                f"collects at most {one:.4g} Mbit (T_max {t_max:g} s x {r:.3g} Mbit/s), so at "
-                f"least {k} of the {i_max} hover points must serve it", sid))
+                "SEVERAL_POINTS", False, f"sensor '{sid}' needs {_num(q)} Mbit: one hover "
+                f"point collects at most {_num(one, 4)} Mbit (T_max {t_max:g} s x "
+                f"{_num(r, 3)} Mbit/s), so at least {k} of the {i_max} hover points must serve "
+                "it", sid))
     if math.isfinite(flights):
         findings.extend(_spread_findings(pm, hear, i_max, flights, m.uavs))
     access = getattr(radio, "access", "simultaneous")
@@ -242,8 +249,30 @@ def diagnose(m: Any) -> Diagnosis:
     if m.has_battery or m.has_fleet:
         findings.extend(_energy_findings(m, pm, pieces, hear))
         findings.extend(_pad_findings(m))
+    findings = _inside_into_cannot(findings, held)
     return Diagnosis(findings=tuple(_agreed(findings)), best_rate=best, points_needed=need,
                      bandwidth=bound)  # fmt: skip
+
+
+def _inside_into_cannot(findings: list[Finding], held: dict[str, str]) -> list[Finding]:
+    """The findings, where a sensor inside an obstacle (INSIDE, a note: "it can only be served
+    from outside, ... at best") is also CANNOT, without that note, its first fatal finding
+    saying where the sensor lies instead (a note of how it can be served beside a line saying
+    it cannot read as a contradiction); `held` maps each such sensor's id to the obstacles
+    holding it (`Map.obstacle_labels`' words). Cost: O(findings)."""
+    first: dict[str, int] = {}  # sensor -> index of its first fatal finding
+    for i, f in enumerate(findings):
+        if f.fatal and f.sensor in held:
+            first.setdefault(f.sensor, i)
+    out = []
+    for i, f in enumerate(findings):
+        if f.kind == "INSIDE" and f.sensor in first:
+            continue
+        if f.sensor is not None and first.get(f.sensor) == i:
+            who = "it" if f.message.startswith(f"sensor '{f.sensor}'") else f"sensor '{f.sensor}'"
+            f = replace(f, message=f"{f.message}; {who} lies inside {held[f.sensor]}")
+        out.append(f)
+    return out
 
 
 def _shared_hover(f: Finding, b: BandwidthBound) -> Finding:
@@ -508,7 +537,7 @@ def _energy_findings(m: Any, pm: Any, pieces: list[Any], hear: float) -> list[Fi
         if e_any >= cap:
             how = ("no depot's airspace comes within its radio range" if not name else
                    f"from the nearest, {name}, {d_site:.0f} m away, a sortie needs at "
-                   f"least {e_any:.4g} Wh to come within its radio range ({hear:.0f} m) "
+                   f"least {_num(e_any, 4)} Wh to come within its radio range ({hear:.0f} m) "
                    "and back")  # fmt: skip
             e_far, far, d_far, c_far = cheapest(j, stranded)
             also = ""
@@ -518,13 +547,13 @@ def _energy_findings(m: Any, pm: Any, pieces: list[Any], hear: float) -> list[Fi
                              default=(None, None))  # fmt: skip
                 why = ("obstacles wall it off" if a_ is None or not math.isfinite(ferry[a_, b_])
                        else f"the shortest flight there, {apart[a_, b_]:.0f} m from "
-                       f"{sites[a_][0]}, needs at least {ferry[a_, b_]:.4g} Wh")
+                       f"{sites[a_][0]}, needs at least {_num(ferry[a_, b_], 4)} Wh")
                 also = (f"; {far}, {d_far:.0f} m away, is within a sortie's reach of it, but "
                         f"no vehicle gets there to take off: {why}")
             out.append(Finding(
                 "ENERGY_RANGE", True, f"sensor '{sid}': no sortie can collect any of its "
-                f"data: {how}, more than the {cap:.4g} Wh usable (battery "
-                f"{m.battery_wh:.4g} Wh less the {100 * m.battery_reserve:g} % reserve)"
+                f"data: {how}, more than the {_num(cap, 4)} Wh usable (battery "
+                f"{_num(m.battery_wh, 4)} Wh less the {100 * m.battery_reserve:g} % reserve)"
                 f"{also}", sid))  # fmt: skip
             continue
         note = _split_note(j, sid, groups, near, dist, sites, hear, req[j], cap, vertical,
@@ -574,7 +603,8 @@ def _depot_findings(sites: list, where: list[int], comp: list[int],
         e, j = min(costs)
         if e >= cap:
             why[i] = (f"the cheapest, to sensor '{ids[j]}' ({dist[j, i]:.0f} m away) and on to "
-                      f"a depot, needs at least {e:.4g} Wh, more than the {cap:.4g} Wh usable")
+                      f"a depot, needs at least {_num(e, 4)} Wh, more than the "
+                      f"{_num(cap, 4)} Wh usable")
     left = [sites[i][1] for i in range(len(sites)) if i not in why]
     out = []
     for i, reason in why.items():
@@ -609,8 +639,8 @@ def _vertical_finding(m: Any, vertical: float, usable: float) -> Finding:
     seconds = math.floor(float(en.hover_endurance_s(least, m.power)))
     return Finding(
         "ENERGY_VERTICAL", True, f"uav: no sortie can fly: the take-off to {uav.altitude:g} m and "
-        f"the landing alone need {vertical:.4g} Wh ({t:.1f} s at hover power), more than the "
-        f"{usable:.4g} Wh usable (battery {m.battery_wh:.4g} Wh less the "
+        f"the landing alone need {_num(vertical, 4)} Wh ({t:.1f} s at hover power), more than the "
+        f"{_num(usable, 4)} Wh usable (battery {_num(m.battery_wh, 4)} Wh less the "
         f"{100 * reserve:g} % reserve); a battery of more than {wh:.2f} Wh "
         f"(uav.battery.energy_wh; or uav.endurance_s more than {seconds:d}) is needed, and "
         "more to fly to the sensors and hover there (or a lower uav.altitude, faster "
@@ -646,7 +676,7 @@ def _vehicle_findings(m: Any, serves: dict[int, set[int]], groups: dict[int, lis
              for cb in serves[y] if ca != cb for a in groups[ca] for b in groups[cb]]
     a, b = min(pairs, key=lambda ab: ferry[ab])
     why = (f"the shortest, {sites[a][0]} to {sites[b][0]}, {apart[a, b]:.0f} m, needs at "
-           f"least {ferry[a, b]:.4g} Wh, more than the {cap:.4g} Wh usable"
+           f"least {_num(ferry[a, b], 4)} Wh, more than the {_num(cap, 4)} Wh usable"
            if math.isfinite(ferry[a, b]) else "obstacles wall them apart")
     return [Finding(
         "VEHICLES", True, f"fleet.uavs: {counted(uavs, 'UAV')} cannot serve "
@@ -694,44 +724,44 @@ def _split_note(j: int, sid: str, groups: dict[int, list[int]], near: dict[int, 
     if sorties > SHARE_MAX:
         return Finding(
             "SORTIE_LIMIT", True, f"sensor '{sid}': the sortie planner cannot plan it: one "
-            f"sortie takes at most {most:.4g} Mbit of its {q:g} Mbit (from the best site, "
+            f"sortie takes at most {_num(most, 4)} Mbit of its {_num(q)} Mbit (from the best site, "
             f"{at}), so at least {sorties} sorties must share its data, more than the "
             f"{SHARE_MAX} the planner shares one sensor's data among "
             "(planner_core.fleet.split.SHARE_MAX)", sid, sorties=sorties)  # fmt: skip
     return Finding(
         "ENERGY_SPLIT", False, f"sensor '{sid}': one sortie cannot serve it alone: from the "
-        f"best site, {at}, that needs at least {need:.4g} Wh (the flight and {q:g} Mbit of "
-        f"hover), more than the {cap:.4g} Wh usable; its data must be shared by at least "
-        f"{sorties} sorties", sid, sorties=sorties)  # fmt: skip
+        f"best site, {at}, that needs at least {_num(need, 4)} Wh (the flight and {_num(q)} "
+        f"Mbit of hover), more than the {_num(cap, 4)} Wh usable; its data must be shared by "
+        f"at least {sorties} sorties", sid, sorties=sorties)  # fmt: skip
 
 
 def _bandwidth_findings(b: BandwidthBound, bw: float, t_max: float, i_max: int) -> list[Finding]:
     """One line per sensor the bandwidth test proves unservable; a note when inconclusive."""
     out = []
-    how = f"proven over the whole area on cells down to {b.cell:.3g} m"
+    how = f"proven over the whole area on cells down to {_num(b.cell, 3)} m"
     for sid in b.no_point:
         out.append(Finding(
             "C3_NO_POINT", True, f"sensor '{sid}': every hover point that receives from it "
             f"breaks C3: the sensors in range there send more than R_lambda = {bw:g} Mbit/s "
             f"at once ({how})", sid))  # fmt: skip
     keep = (f"hover time at hover points that keep C3 (sum of rates <= R_lambda = {bw:g} "
-            f"Mbit/s), more than I_max x T_max = {i_max} x {t_max:g} s = {b.cap:g} s ({how})")
+            f"Mbit/s), more than I_max x T_max = {i_max} x {t_max:g} s = {_num(b.cap)} s ({how})")
     for k, sid in enumerate(b.short):
         if b.alone:  # each of them alone needs more: no other sensor is to blame
             out.append(Finding("C3_HOVER_TIME", True, f"sensor '{sid}': it alone needs at "
-                               f"least {b.alone[k]:.6g} s of {keep}", sid))
+                               f"least {_num(b.alone[k], 6)} s of {keep}", sid))
             continue
         others = [f"'{o}'" for o in b.short if o != sid]
         named = f"{for_count(len(others), 'sensor')} {first_few(others)}"
         out.append(Finding("C3_HOVER_TIME", True, f"sensor '{sid}': with {named} it needs at "
-                           f"least {b.v_low:.6g} s of {keep}", sid))
+                           f"least {_num(b.v_low, 6)} s of {keep}", sid))
     if not b.proven and b.v_grid > b.cap:
-        need = "no plan at all" if not math.isfinite(b.v_grid) else f"{b.v_grid:.6g} s"
+        need = "no plan at all" if not math.isfinite(b.v_grid) else f"{_num(b.v_grid, 6)} s"
         out.append(Finding(
-            "C3_GRID", False, f"no hover points of a {b.cell:.3g} m grid that keep C3 (sum of "
+            "C3_GRID", False, f"no hover points of a {_num(b.cell, 3)} m grid that keep C3 (sum of "
             f"rates <= R_lambda = {bw:g} Mbit/s) serve every sensor within I_max x T_max = "
-            f"{b.cap:g} s (they need {need}; at least {b.v_low:.6g} s is proven): the map is "
-            "likely infeasible"))
+            f"{_num(b.cap)} s (they need {need}; at least {_num(b.v_low, 6)} s is proven): the "
+            "map is likely infeasible"))
     return out
 
 

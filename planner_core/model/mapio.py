@@ -26,6 +26,7 @@ from planner_core.defaults import (
     MAX_DEPOTS,
     interval_text,
     number_text,
+    obstacle_label,
 )
 from planner_core.model import energy as _energy
 from planner_core.model import pads as _pads
@@ -433,10 +434,9 @@ class PolygonShape:
 
         Returns:
             "no-fly-zone k" or "polygon k" (k its index in its list), then its name quoted
-            when it has one.
+            when it has one (`planner_core.defaults.obstacle_label`).
         """
-        base = f"{self.kind.replace('_', '-')} {self.index}"
-        return f"{base} '{self.name}'" if self.name else base
+        return obstacle_label(self.kind, self.index, self.name)
 
     def pieces(self) -> list[np.ndarray]:
         """Convex pieces (V, 2) counter-clockwise, disjoint interiors, union = the shape.
@@ -809,17 +809,14 @@ class Map:
     # --- safety margins (a transformation of the map; see `Safety`) ---
     @cached_property
     def obstacle_labels(self) -> tuple[str, ...]:
-        """A label per obstacle, in `obstacle_clearances`' order: "circle k", "rectangle k",
-        "no-fly-zone k", "polygon k" (k the index in its list of the map).
+        """A label per obstacle, in `obstacle_clearances`' order, as `verify` names it:
+        "circle k", "rectangle k", "no-fly-zone k 'name'", "polygon k 'name'" (k the index in
+        its list of the map; the name where the map gives one: `defaults.obstacle_label`).
 
         Returns:
             One label per obstacle, circles, rectangles, no-fly zones, then polygons.
         """
-        obs = self.spec.obstacles
-        return tuple([f"circle {k}" for k in range(len(obs.circles))]
-                     + [f"rectangle {k}" for k in range(len(obs.rectangles))]
-                     + [f"no-fly-zone {k}" for k in range(len(obs.no_fly_zones))]
-                     + [f"polygon {k}" for k in range(len(obs.polygons))])  # fmt: skip
+        return _obstacle_labels(self.spec)
 
     @cached_property
     def obstacle_clearances(self) -> tuple[float, ...]:
@@ -1276,6 +1273,73 @@ def _obstacle_polygons(m: Map) -> list[Any]:
     return out
 
 
+def _obstacle_labels(spec: MapFile) -> tuple[str, ...]:
+    """`Map.obstacle_labels` of the map file `spec`: circles, rectangles, no-fly zones, then
+    polygons, each as `defaults.obstacle_label` names it. Cost: O(obstacles)."""
+    obs = spec.obstacles
+    return tuple([obstacle_label("circle", k) for k in range(len(obs.circles))]
+                 + [obstacle_label("rectangle", k) for k in range(len(obs.rectangles))]
+                 + [obstacle_label("no_fly_zone", k, z.name)
+                    for k, z in enumerate(obs.no_fly_zones)]
+                 + [obstacle_label("polygon", k, z.name)
+                    for k, z in enumerate(obs.polygons)])  # fmt: skip
+
+
+def _holding(xy: tuple[float, float], spec: MapFile, shapes: tuple[PolygonShape, ...]) -> str:
+    """The obstacles that hold the point `xy` (m), as `verify` names them ("polygon 0 'barn'",
+    "circle 1, rectangle 0"; `_obstacle_labels`), for a point the kernel found inside one
+    (`points_inside`); "an obstacle or no-fly zone" should shapely's closed test find none.
+    Cost: O(obstacles) shapely tests, for the few points found inside."""
+    from shapely.geometry import Point, Polygon
+
+    p = Point(float(xy[0]), float(xy[1]))
+    obs = spec.obstacles
+    held = [obstacle_label("circle", k) for k, c in enumerate(obs.circles)
+            if math.hypot(p.x - c.x, p.y - c.y) < c.radius]  # fmt: skip
+    held += [obstacle_label("rectangle", k) for k, r in enumerate(obs.rectangles)
+             if Polygon(rectangle_vertices(r.x, r.y, r.length, r.width, r.angle_deg)).contains(p)]
+    # the cleaned shapes, no-fly zones then polygons, as the kernel holds them
+    held += [sh.label for sh in shapes if Polygon(sh.shell, sh.holes).contains(p)]
+    return ", ".join(held) if held else "an obstacle or no-fly zone"
+
+
+#: a map whose points (sensors, start, end) all lie within this share of the area's smaller
+#: side of one another, and within `DEGREES_SPREAD` units, looks written in degrees
+DEGREES_SHARE = 0.01
+#: the most the points of a map written in degrees spread: a 100 km map spans ~0.9 degrees of
+#: latitude, ~1.5 of longitude at 55 degrees north
+DEGREES_SPREAD = 2.0
+
+
+def _degrees_note(spec: MapFile) -> str | None:
+    """A note when the map's positions look like longitude, latitude rather than metres: the
+    sensors, start and end all lie within `DEGREES_SHARE` of the area's smaller side and
+    `DEGREES_SPREAD` of one another (not all at one point), every x a longitude (<= 180) and
+    every y a latitude (<= 90); said with the origin's lon, lat where the file gives one and
+    the points lie within a degree of it. Not an error: a real map may hold its points near
+    (5, 52) m. Cost: O(J)."""
+    pts = np.array([(s.x, s.y) for s in spec.sensors] + [tuple(spec.start), tuple(spec.end)],
+                   dtype=float)  # fmt: skip
+    if not len(spec.sensors) or not np.all(np.isfinite(pts)):
+        return None
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    spread = float(np.max(hi - lo))
+    side = min(float(spec.area.width), float(spec.area.height))
+    if not (0.0 < spread <= min(DEGREES_SHARE * side, DEGREES_SPREAD)):
+        return None
+    if hi[0] > 180.0 or hi[1] > 90.0:
+        return None
+    first = spec.sensors[0]
+    at = f"sensor '{first.id}' at ({first.x:g}, {first.y:g})"
+    o = spec.origin
+    if o is not None and abs(first.x - o.lon) <= 1.0 and abs(first.y - o.lat) <= 1.0:
+        at += f" is next to the origin's lon, lat ({o.lon:g}, {o.lat:g})"
+    return (f"sensors: their x, y look like longitude, latitude ({at}; the sensors, start and "
+            f"end all lie within {number_text(spread, 3)} m of one another in a "
+            f"{number_text(spec.area.width)} m x {number_text(spec.area.height)} m area): x, y "
+            "are metres east and north of the origin")
+
+
 # ----------------------------------------------------------------------------- validation
 
 
@@ -1566,6 +1630,9 @@ def _semantic_problems(
             problems.append(f"sensors[{j}].id: duplicate sensor id '{s.id}'")
         seen.add(s.id)
     problems += _margin_problems(spec)
+    degrees = _degrees_note(spec)
+    if degrees is not None:
+        notes.append(degrees)
     obs = spec.obstacles
     for k, c in enumerate(obs.circles):
         if not inside_area(c.x, c.y):
@@ -1622,7 +1689,8 @@ def _semantic_problems(
         for name, flag, gap in zip(("start", "end"), inside, gaps, strict=True):
             x, y = getattr(spec, name)
             if flag:
-                problems.append(f"{name}: ({x:g}, {y:g}) lies inside an obstacle or no-fly zone")
+                problems.append(f"{name}: ({x:g}, {y:g}) lies inside "
+                                f"{_holding((x, y), spec, tuple(shapes))}")
             elif gap < end_gap:
                 problems.append(
                     f"{name}: ({x:g}, {y:g}) lies {1000 * gap:.3g} mm from an obstacle's edge, "
@@ -1637,7 +1705,8 @@ def _semantic_problems(
             for k, (dp, flag, gap) in enumerate(zip(depots, inside, gaps, strict=True)):
                 at = f"fleet.depots[{k}]: depot '{dp.name}' at ({dp.x:g}, {dp.y:g})"
                 if flag:
-                    problems.append(f"{at} lies inside an obstacle or no-fly zone: no sortie "
+                    problems.append(f"{at} lies inside "
+                                    f"{_holding((dp.x, dp.y), spec, tuple(shapes))}: no sortie "
                                     "can take off or land there")  # fmt: skip
                 elif gap < end_gap:
                     problems.append(f"{at} lies {1000 * gap:.3g} mm from an obstacle's edge, "
@@ -1652,8 +1721,9 @@ def _semantic_problems(
                 for (k, i, name, (x, y)), flag in zip(listed, inside, strict=True):
                     if flag:
                         problems.append(f"fleet.depots[{k}].pads[{i}]: the pad of depot "
-                                        f"'{name}' at ({x:g}, {y:g}) lies inside an obstacle "
-                                        "or no-fly zone: no vehicle can stand there")
+                                        f"'{name}' at ({x:g}, {y:g}) lies inside "
+                                        f"{_holding((x, y), spec, tuple(shapes))}: no vehicle "
+                                        "can stand there")  # fmt: skip
         return problems, notes, shapes, obstacles
     return problems, notes, shapes, None
 
