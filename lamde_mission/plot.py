@@ -8,9 +8,12 @@ and end, each distinct leg, hover point and corner drawn once however often a DO
 it (a hover point flown k times labelled "order · seconds ×k"; `_visits`), a legend below the
 map and a scale bar in the corner where it covers the fewest markers; every label placed where
 it covers no other label (`_place_labels`, sensor ids left out where crowded and counted in the
-legend); with a replay, a panel of each sensor's data over the mission time against its
-requirement (the ten tightest named, in distinct colours) and, beyond ten sensors, a panel of
-sorted bars naming every sensor (up to `BARS`; the rest summarised).
+legend; a depot's name never on the side of a depot beside it); with a replay, a panel of
+each sensor's data over the mission time against its requirement (the ten tightest named, in
+distinct colours, their end labels spread apart: `_spread_end_labels`; a mission that gives no
+sensor data says why) and, beyond ten sensors, a panel of sorted bars naming every sensor (up
+to `BARS`; the rest summarised). A mission thousands of km from the map's area (the wrong map,
+another origin) is not drawn: the view stays on the map and the title says how far it is.
 Uses matplotlib's Agg canvas directly (no pyplot state), imported inside the functions so
 importing this module stays cheap. Drawn to be cheap on 400-sensor maps: obstacles, leader
 lines, direction arrows and the grey data lines are collections (not an artist each), each data
@@ -30,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from lamde_mission.atomic import write_bytes_atomic
-from planner_core.textio import counted
+from planner_core.textio import counted, first_few
 
 __all__ = ["mission_figure", "save_figure", "figure_bytes", "plot_mission", "IMAGE_SUFFIXES",
            "MAX_DPI",
@@ -155,6 +158,24 @@ def _timeline_visits(timeline: Any) -> _Visits:
                    stops.reshape(-1, 2)[ks], seqs[ks])  # fmt: skip
 
 
+def _far_km(timeline: Any, map_: Any) -> float | None:
+    """How far (km) a replayed mission lies from the map's area when every stop lies farther
+    than the area's size (`sim.replay.far_distance`: the wrong map, or another origin), else
+    None (no route: None). O(stops)."""
+    from sim.replay import far_distance
+
+    route = getattr(timeline, "route", None)
+    d = None if route is None else far_distance(route, map_)
+    return None if d is None else d / 1000.0
+
+
+def _far_title(title: str, where: str, ax: Any) -> str:
+    """`title` with a line saying where the mission lies (`where`: "the mission lies 6,336.0
+    km") and that it is not drawn (the view stays on the map), wrapped to the figure's width."""
+    note = f"{where} from this map's area, not drawn: the wrong map, or another origin?"
+    return title + "\n" + _fitted(ax, note, 10.0)
+
+
 def _mission_view(map_: Any, timeline: Any, plan: Any) -> dict[str, Any] | None:
     """Path, the distinct legs, hover points and corners (0-s points, written as NAV_WAYPOINT;
     `_visits`) and data collected, from a sim Timeline or a Plan."""
@@ -273,7 +294,9 @@ def _swap_text(who: list[tuple[int, int]]) -> str:
 @dataclass
 class _Label:
     """A label to place beside a marker: its text, anchor (x, y, m), text style, the marker's
-    radius there (points), and whether it may be left out when no place is free (sensor ids)."""
+    radius there (points), and whether it may be left out when no place is free (sensor ids);
+    `rivals` (k, 2; m), markers it could be taken for (another depot nearby): a place without a
+    leader line must be nearer its own marker than any of these."""
 
     text: str
     xy: tuple[float, float]
@@ -281,6 +304,7 @@ class _Label:
     radius: float
     optional: bool = False
     short: str | None = None  # a shorter text to try when the full one finds no free place
+    rivals: np.ndarray | None = None
 
 
 @dataclass
@@ -415,12 +439,14 @@ def _place_labels(ax: Any, renderer: Any, labels: Sequence[_Label], avoid: np.nd
     """Place each label beside its marker, greedily in the given order: the first candidate
     position (`_DIRECTIONS` x `_RINGS`, inside the axes) whose box overlaps no label placed
     before and no box of `avoid` (markers, the scale bar); past the first ring a thin leader
-    line joins label and marker. A label that is not optional, finding no free place, may cover
-    a marker, never another label: failing that, its shorter text is tried, then it is left
-    out; an optional one (a sensor id) is tried on the first two rings only, so long leader
-    lines do not crowd the map, and is left out when no place is free. Nothing is drawn here
-    (`_draw_labels` draws the places found); texts are measured once (`sizes`).
-    Deterministic; cost O(labels^2 + labels x markers).
+    line joins label and marker. A label with `rivals` (a depot beside another) takes a place
+    without a leader only where its box's centre is nearer its own marker than any rival's,
+    so that it cannot be read as the other's (where none is, the rule is dropped). A label that
+    is not optional, finding no free place, may cover a marker, never another label: failing
+    that, its shorter text is tried, then it is left out; an optional one (a sensor id) is
+    tried on the first two rings only, so long leader lines do not crowd the map, and is left
+    out when no place is free. Nothing is drawn here (`_draw_labels` draws the places found);
+    texts are measured once (`sizes`). Deterministic; cost O(labels^2 + labels x markers).
 
     Args:
         ax: the map panel, its layout fixed.
@@ -461,12 +487,21 @@ def _place_labels(ax: Any, renderer: Any, labels: Sequence[_Label], avoid: np.nd
                 & (boxes[:, 3] <= frame[3]))  # fmt: skip
         free &= ~_overlaps(boxes, placed).any(axis=1)
         clear = free & ~_overlaps(boxes, avoid).any(axis=1)
-        if clear.any():
-            i = int(np.argmax(clear))
-        elif free.any() and not lab.optional:  # a sensor id does not cover a marker
-            i = int(np.argmax(free))
-        else:
+        plain = np.ones(len(boxes), dtype=bool)  # not to be taken for a rival's label
+        if lab.rivals is not None and len(lab.rivals):
+            centre = (boxes[:, :2] + boxes[:, 2:]) / 2.0
+            rival = ax.transData.transform(np.asarray(lab.rivals, dtype=float).reshape(-1, 2))
+            nearest = np.min(np.hypot(centre[:, None, 0] - rival[None, :, 0],
+                                      centre[:, None, 1] - rival[None, :, 1]), axis=1)
+            led = np.arange(len(boxes)) >= len(_DIRECTIONS)  # past the first ring: a leader
+            plain = led | (np.hypot(*(centre - anchor).T) < nearest)
+        # a sensor id does not cover a marker
+        tiers = (clear & plain, clear) if lab.optional else (clear & plain, free & plain,
+                                                             clear, free)  # fmt: skip
+        tier = next((c for c in tiers if c.any()), None)
+        if tier is None:
             return None
+        i = int(np.argmax(tier))
         ring, k = divmod(i, len(_DIRECTIONS))
         _, _, ha, va = _DIRECTIONS[k]
         ox, oy = float(off[ring, k, 0]), float(off[ring, k, 1])
@@ -955,10 +990,15 @@ def mission_figure(
     mission time against its requirement (the `TIME_LINES` tightest sensors in distinct
     colours, named; the others grey), and with more than `TIME_LINES` sensors a third panel
     names every sensor with its final share as sorted bars (the `BARS` tightest; the rest
-    summarised as min / median / max). The figure's size follows the area's shape (no wide
-    white bands); `figsize` overrides it. Cost: O(J^2) for the label placement (J sensors plus
-    at most `HOVER_LABELS` hover points), O(J x samples) to find where the data lines bend, and
-    an artist per label; legs, arrows, obstacles and data lines are a few collections.
+    summarised as min / median / max); the end labels of the named lines are spread apart
+    once the layout is fixed (`_spread_end_labels`), and a mission that gives no sensor any
+    data says why in that panel's title. A replayed mission that lies thousands of km from the
+    map's area (`sim.replay.far_distance`: the wrong map, another origin) is not drawn: the
+    view stays on the map, and a second title line says how far the mission is. The figure's
+    size follows the area's shape (no wide white bands); `figsize` overrides it. Cost: O(J^2)
+    for the label placement (J sensors plus at most `HOVER_LABELS` hover points), O(J x
+    samples) to find where the data lines bend, and an artist per label; legs, arrows,
+    obstacles and data lines are a few collections.
 
     Args:
         map: the map (`planner_core.model.mapio.load_map`).
@@ -975,6 +1015,9 @@ def mission_figure(
     spec = map.spec
     W = spec.area.width
     view = _mission_view(map, timeline, plan)
+    # a mission thousands of km away (the wrong map, another origin) is not drawn: the view
+    # stays on the map, and the title says where the mission is
+    far_km = None if timeline is None else _far_km(timeline, map)
     has_time = timeline is not None and len(getattr(timeline, "t", ())) > 1
     has_bars = has_time and len(map.sensor_ids) > TIME_LINES
     fig, ax, ax_t, ax_b, handles = _map_axes(map, has_time=has_time, has_bars=has_bars,
@@ -988,7 +1031,9 @@ def mission_figure(
     hover_r = np.zeros(0)
     unlabelled = 0
     visits = None
-    if view is not None:
+    if view is not None and far_km is not None:
+        visits = view["visits"]  # the data panel numbers the hovers as they are
+    elif view is not None:
         visits = view["visits"]
         lengths, hover_r = _draw_route(ax, scene, map, visits, view["return_leg"],
                                        colour="tab:blue", linestyle="-", arrow_scale=14,
@@ -1035,13 +1080,18 @@ def mission_figure(
         title = f"map '{spec.name}'"
         if view is not None and view.get("f") is not None:
             title += f"  (f = {float(view['f']):.6g})"
+    if far_km is not None:
+        title = _far_title(title, f"the mission lies {far_km:,.1f} km", ax)
     ax.set_title(title)
+    ends: list[tuple[Any, float]] = []
     if ax_t is not None:
-        _data_panel(ax_t, timeline, map, None if visits is None else visits.number)
+        ends = _data_panel(ax_t, timeline, map, None if visits is None else visits.number)
     if ax_b is not None:
         _bars_panel(ax_b, timeline, map)
     _finish_map(fig, ax, W, handles, scene, len(sensors), named_below=ax_b is not None
                 and len(sensors) <= BARS, unlabelled=unlabelled)  # fmt: skip
+    if ends:  # the layout is fixed: the end labels are spread apart in its pixels
+        _spread_end_labels(ax_t, ends)
     return fig
 
 
@@ -1084,6 +1134,8 @@ def _bends(t: np.ndarray, y: np.ndarray, tol: Any, rtol: float = 1e-9) -> list[n
     dt = np.diff(t)
     dy = np.diff(y, axis=0)
     r, c = np.nonzero(dy)  # the (interval, column) pairs that change: NaN included
+    if not len(r):  # no column changes (no sensor gets data): each line its two ends
+        return [np.array([0, n - 1]) for _ in range(J)]
     order = np.lexsort((r, c))  # by column, then time
     r, c = r[order], c[order]
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -1155,14 +1207,21 @@ def _hover_run_numbers(timeline: Any, number: Any, n_runs: int) -> np.ndarray:
     return number[first]
 
 
-def _data_panel(ax: Any, timeline: Any, map_: Any, number: Any = None) -> None:
+def _data_panel(ax: Any, timeline: Any, map_: Any,
+                number: Any = None) -> list[tuple[Any, float]]:  # fmt: skip
     """Each sensor's data collected along the mission time, as a share of its requirement
-    (the simulator's replay samples); the requirement is the 100 % line. The `TIME_LINES`
-    sensors with the smallest final share are drawn in distinct colours and named at the
-    end; the others are thin grey lines, counted in the panel. The hovers are shaded, one
-    collection (spans less than 1/`SHADE_CELLS` of the mission time apart drawn as one), and
-    numbered as on the map (`number`: the map's number of each hover visit; numbers thinned
-    where they touch)."""
+    (the simulator's replay samples); the requirement is the 100 % line, drawn over the
+    mission's time (not under the end labels). The `TIME_LINES` sensors with the smallest
+    final share are drawn in distinct colours and named at the end (their labels spread apart
+    once the layout is fixed: `_spread_end_labels`); the others are thin grey lines, counted in
+    the panel. The hovers are shaded, one collection (spans less than 1/`SHADE_CELLS` of the
+    mission time apart drawn as one), and numbered as on the map (`number`: the map's number of
+    each hover visit; numbers thinned where they touch). A mission that gives no sensor any data
+    (no hover point, none in range) or a map that requires none says so in the panel's title.
+
+    Returns:
+        The end labels (Annotations) and the share each names, %, as (label, share) pairs.
+    """
     from matplotlib.collections import LineCollection, PolyCollection
 
     t = np.asarray(timeline.t, dtype=float)
@@ -1181,29 +1240,34 @@ def _data_panel(ax: Any, timeline: Any, map_: Any, number: Any = None) -> None:
     if others:  # the grey lines, one collection
         ax.add_collection(LineCollection([lines[j] for j in others], linewidths=0.7,
                                          colors="0.7", zorder=1))  # fmt: skip
-    # end labels spread apart vertically (at least 7 % of the axis) so close lines stay legible
-    ys: dict[int, float] = {}
-    for j in named:  # smallest final share first
-        y = float(final[j])
-        if ys:
-            y = max(y, max(ys.values()) + 0.07 * top)
-        ys[j] = y
-    for k, j in enumerate(named):
+    ends: list[tuple[Any, float]] = []
+    for k, j in enumerate(named):  # smallest final share first
         colour = _series_colour(k)
         ax.plot(lines[j][:, 0], lines[j][:, 1], linewidth=1.2, color=colour,
                 linestyle=_series_dash(k), zorder=2)  # fmt: skip
-        ax.annotate(f"{ids[j]} {final[j]:.0f} %", (t[-1], final[j]),
-                    xytext=(t[-1] + 0.01 * (t[-1] - t[0]), ys[j]), fontsize=7.5, color=colour,
-                    va="center", annotation_clip=False, ha="left")  # fmt: skip
+        # a thin line joins a label moved off its line's end to it (`_spread_end_labels`)
+        label = ax.annotate(f"{ids[j]} {final[j]:.0f} %", (t[-1], final[j]),
+                            xytext=(t[-1] + 0.01 * (t[-1] - t[0]), final[j]), fontsize=7.5,
+                            color=colour, va="center", annotation_clip=False, ha="left",
+                            arrowprops={"arrowstyle": "-", "color": colour, "linewidth": 0.6,
+                                        "shrinkA": 0.0, "shrinkB": 0.0,
+                                        "relpos": (0.0, 0.5)})  # fmt: skip
+        label.arrow_patch.set_visible(False)
+        ends.append((label, float(final[j])))
     title = "data collected over the mission (simulator replay; shaded: hovering)"
+    hover = np.asarray(timeline.phase) == "hover"
+    if np.all(required <= 0):
+        title += "\nevery sensor requires 0 Mbit: each is at 100 % from the start"
+    elif not np.any(data[-1][required > 0] > 0):
+        title += ("\nno sensor got any data: "
+                  + ("the mission has no hover point (LOITER)" if not hover.any()
+                     else "none within range of a hover point"))  # fmt: skip
     if others:
         lo, hi = float(final[others].min()), float(final[others].max())
         title += (f"\ngrey: {len(others)} more sensors, each {lo:.0f}-{hi:.0f} % at the end"
                   + (" (all named below)" if len(ids) <= BARS else ""))  # fmt: skip
-    ax.axhline(100.0, color="k", linestyle="--", linewidth=1.0)
+    ax.plot([t[0], t[-1]], [100.0, 100.0], color="k", linestyle="--", linewidth=1.0)
     ax.text(t[0], 101.0, "required", fontsize=7.5, va="bottom")
-    phase = np.asarray(timeline.phase)
-    hover = phase == "hover"
     if hover.any():  # shade the hovers, numbered like the map (numbers thinned where they touch)
         edges = np.flatnonzero(np.diff(np.r_[0, hover.astype(int), 0]))
         lo, hi = t[edges[::2]], t[edges[1::2] - 1]
@@ -1234,10 +1298,88 @@ def _data_panel(ax: Any, timeline: Any, map_: Any, number: Any = None) -> None:
         * 7.5 * 0.6 / 72.0 + 0.05
     room = min(label_in / width_in, 0.5)  # the labels' share of the axis, at most half
     ax.set_xlim(t[0], t[0] + max(1.1 * total, 1.01 * total / (1.0 - room)))
-    ax.set_ylim(0, max(top, max(ys.values(), default=0.0) + 0.05 * top))
+    ax.set_ylim(-0.02 * top, top)  # a line at 0 % (no data) above the frame, not under it
     ax.set_xlabel("mission time (s)")
     ax.set_ylabel("collected / required (%)")
     ax.set_title(_fitted(ax, title, 9.0), fontsize=9)
+    return ends
+
+
+def _spread(targets: np.ndarray, heights: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """Centres for labels of `heights` wanted at `targets` (display pixels along one axis),
+    in the targets' order, neighbours at least their mean height apart, all inside [lo, hi]:
+    the least-squares nearest such centres (pool adjacent violators on target - offset, then
+    the whole stack clamped into the range; where it does not fit, it starts at lo and runs
+    past hi). O(n log n).
+
+    Args:
+        targets: (n,) where each label's centre is wanted, px.
+        heights: (n,) each label's height, px, gaps included.
+        lo, hi: the range the labels' boxes should stay inside, px.
+
+    Returns:
+        (n,) the centres, px, in the order of `targets`.
+    """
+    targets = np.asarray(targets, dtype=float)
+    order = np.argsort(targets, kind="stable")
+    h = np.asarray(heights, dtype=float)[order]
+    offset = np.r_[0.0, np.cumsum((h[1:] + h[:-1]) / 2.0)]  # each centre above the first's
+    blocks: list[list[float]] = []  # [sum, count] of runs pooled to their mean
+    for v in targets[order] - offset:
+        blocks.append([float(v), 1.0])
+        while len(blocks) > 1 and blocks[-2][0] * blocks[-1][1] > blocks[-1][0] * blocks[-2][1]:
+            total, count = blocks.pop()
+            blocks[-1][0] += total
+            blocks[-1][1] += count
+    z = np.concatenate([np.full(int(c), s / c) for s, c in blocks])
+    first = lo + h[0] / 2.0
+    z = np.clip(z, first, max(hi - h[-1] / 2.0 - offset[-1], first))
+    out = np.empty_like(z)
+    out[order] = z + offset
+    return out
+
+
+#: the smallest font (points) the data panel's end labels shrink to where they do not fit
+#: its height at 7.5 points (a figure made small with `figsize`)
+_END_FONT_MIN = 5.0
+
+
+def _spread_end_labels(ax: Any, ends: Sequence[tuple[Any, float]]) -> None:
+    """Move the data panel's end labels (`_data_panel`: (label, share %) pairs) apart
+    vertically so that no two overlap and each stays inside the panel's frame, each as near
+    its line's end as that allows (`_spread`), in display pixels of the fixed layout; a label
+    moved off its line's end is joined to it by a thin line. Where the labels do not fit the
+    panel's height their font shrinks (to `_END_FONT_MIN`). Cost O(n log n) for n <= `TIME_LINES`
+    labels, each measured once or twice.
+
+    Args:
+        ax: the data panel, its layout fixed.
+        ends: the end labels and the share each names, %.
+    """
+    from matplotlib.text import Text
+
+    renderer = ax.figure.canvas.get_renderer()
+    frame = ax.get_window_extent(renderer)
+    gap = 1.0 * ax.figure.dpi / 72.0  # a point between two labels
+
+    def heights() -> np.ndarray:  # the text's own box, not its (hidden) line's
+        return np.array([Text.get_window_extent(lab, renderer).height + gap
+                         for lab, _ in ends])  # fmt: skip
+
+    h = heights()
+    if h.sum() > frame.height:  # too many for the panel's height at this size: smaller
+        size = float(ends[0][0].get_fontsize())
+        small = max(size * frame.height / h.sum(), _END_FONT_MIN)
+        for lab, _ in ends:
+            lab.set_fontsize(small)
+        h = heights()
+    x_end = ends[0][0].xy[0]
+    targets = ax.transData.transform([(x_end, share) for _, share in ends])[:, 1]
+    centres = _spread(targets, h, frame.y0, frame.y1)
+    inverse = ax.transData.inverted()
+    for (lab, _), y, target, height in zip(ends, centres, targets, h, strict=True):
+        lab.xyann = (lab.xyann[0], float(inverse.transform((0.0, y))[1]))
+        lab.arrow_patch.set_visible(abs(y - target) > 0.6 * height)  # off its line's end
 
 
 def _bars_panel(ax: Any, timeline: Any, map_: Any) -> None:
@@ -1482,10 +1624,13 @@ def fleet_figure(
     obstacles (C5) in red; depots (where sorties take off and land) as black-edged hexagons with
     their names, the map's depots no sortie uses as lighter grey ones (named beside them and in
     the legend), and each battery swap (a vehicle landing from sortie j and leaving on
-    sortie j + 1) as a star in the vehicle's colour with "v1 swap 1". Sensors are coloured by
-    the data collected over all sorties together (C4 over the whole plan). Cost: O(sorties x
-    samples) to read the replays, a few collections per sortie (its distinct legs' arrows,
-    hover points and corners) and at most `HOVER_LABELS` hover labels.
+    sortie j + 1) as a star in the vehicle's colour with "v1 swap 1"; a depot's label is placed
+    where it cannot be read as a nearby depot's (`_Label.rivals`). Sensors are coloured by the
+    data collected over all sorties together (C4 over the whole plan). A sortie that lies
+    thousands of km from the map's area (`sim.replay.far_distance`: the wrong map, or another
+    origin) is not drawn, so the view stays on the map; the title says which and how far.
+    Cost: O(sorties x samples) to read the replays, a few collections per sortie (its distinct
+    legs' arrows, hover points and corners) and at most `HOVER_LABELS` hover labels.
 
     Args:
         map: the map the sorties fly on.
@@ -1510,13 +1655,15 @@ def fleet_figure(
     _draw_obstacles(ax, map, handles)
     collected = np.sum([np.asarray(sv.timeline.collected, dtype=float) for sv in sorties], axis=0)
     sensors = _draw_sensors(fig, ax, map, collected, handles, scene)
-    visits = [_timeline_visits(sv.timeline) for sv in sorties]  # each distinct thing once
+    far = {id(sv): km for sv in sorties if (km := _far_km(sv.timeline, map)) is not None}
+    shown = [sv for sv in sorties if id(sv) not in far]  # drawn: near the map's area
+    visits = [_timeline_visits(sv.timeline) for sv in shown]  # each distinct thing once
     n_hover = sum(len(v.hover_points) for v in visits)
     labelled = 0
     bad: list[float] = []  # lengths (m) of the parts of legs inside obstacles, all sorties
     n_corner = 0
     vehicles = sorted({sv.vehicle for sv in sorties})
-    for sv, vis in zip(sorties, visits, strict=True):
+    for sv, vis in zip(shown, visits, strict=True):
         colour = _vehicle_colour(sv.vehicle)
         style = sortie_style(sv.sortie)
         lengths, radius = _draw_route(ax, scene, map, vis, sv.timeline.return_leg,
@@ -1557,6 +1704,10 @@ def fleet_figure(
         p = np.asarray(sv.timeline.path, dtype=float)
         for xy, name in ((p[0], sv.depot_start), (p[-1], sv.depot_end)):
             home = where.get(name) if name else None
+            if id(sv) in far:  # not drawn: only the map's depot it names
+                if home is not None:
+                    depots.setdefault((round(home[0], 1), round(home[1], 1)), set()).add(name)
+                continue
             if home is not None and np.hypot(xy[0] - home[0], xy[1] - home[1]) > 1.0:
                 pads[(round(float(xy[0]), 1), round(float(xy[1]), 1))] = sv.vehicle
                 xy = home
@@ -1564,6 +1715,16 @@ def fleet_figure(
             depots.setdefault(key, set())
             if name:
                 depots[key].add(name)
+    # the map's other depots, where no sortie takes off or lands: lighter, named in the legend
+    used = {n for names in depots.values() for n in names}
+    idle = [(name, xy) for name, xy in _map_depots(map) if name not in used and not any(
+        np.hypot(xy[0] - x, xy[1] - y) <= 1.0 for x, y in depots)]  # fmt: skip
+    # every depot's marker: a depot's label (and a swap's there) must not read as another's
+    depot_xy = np.array([*depots, *(xy for _, xy in idle)], dtype=float).reshape(-1, 2)
+
+    def rivals(xy: Any) -> np.ndarray:
+        return depot_xy[np.hypot(*(depot_xy - np.asarray(xy, dtype=float)).T) > 1.0]
+
     for (x, y), names in depots.items():
         ax.plot(x, y, marker="h", markersize=14, color="white", markeredgecolor="k",
                 markeredgewidth=1.6, zorder=7, linestyle="")  # fmt: skip
@@ -1571,25 +1732,23 @@ def fleet_figure(
         if names:
             scene.labels.append(_Label(" / ".join(sorted(names)), (x, y),
                                        {"fontsize": 8, "fontweight": "bold", "zorder": 9,
-                                        "bbox": _TEXT_BOX}, 7.5))  # fmt: skip
+                                        "bbox": _TEXT_BOX}, 7.5,
+                                       rivals=rivals((x, y))))  # fmt: skip
     for (x, y), v in pads.items():  # above the swap stars and depots drawn there
         ax.plot(x, y, marker="s", markersize=6, color=_vehicle_colour(v), markeredgecolor="k",
                 markeredgewidth=0.8, zorder=8.5, linestyle="")  # fmt: skip
         scene.labels.append(_Label(f"v{v} pad", (x, y), {"fontsize": 6.5, "zorder": 9,
                                                          "color": _vehicle_colour(v),
                                                          "bbox": _TEXT_BOX}, 3.0))  # fmt: skip
-    # the map's other depots, where no sortie takes off or lands: lighter, named in the legend
-    used = {n for names in depots.values() for n in names}
-    idle = [(name, xy) for name, xy in _map_depots(map) if name not in used and not any(
-        np.hypot(xy[0] - x, xy[1] - y) <= 1.0 for x, y in depots)]  # fmt: skip
     for name, (x, y) in idle:
         ax.plot(x, y, marker="h", markersize=12, color="0.93", markeredgecolor="0.55",
                 markeredgewidth=1.0, zorder=5, linestyle="")  # fmt: skip
         scene.marker((x, y), 6.5)
         scene.labels.append(_Label(name, (x, y), {"fontsize": 7.5, "color": "0.45", "zorder": 9,
-                                                  "bbox": _TEXT_BOX}, 6.5))  # fmt: skip
+                                                  "bbox": _TEXT_BOX}, 6.5,
+                                   rivals=rivals((x, y))))  # fmt: skip
     # swaps: a vehicle lands from sortie j and leaves on sortie j + 1
-    swaps = 0
+    swaps = stars = 0  # the swaps, and the stars drawn (none for a sortie not drawn)
     by_vehicle: dict[int, list[SortieView]] = {}
     for sv in sorties:
         by_vehicle.setdefault(sv.vehicle, []).append(sv)
@@ -1602,6 +1761,9 @@ def fleet_figure(
         for j, (a, b) in enumerate(zip(svs[:-1], svs[1:], strict=True), start=1):
             at = np.asarray(a.timeline.path, dtype=float)[-1]
             swaps += 1
+            if id(a) in far or id(b) in far:  # counted, not drawn: off the map's view
+                continue
+            stars += 1
             ax.plot(*at, marker="*", markersize=15, color=_vehicle_colour(v),
                     markeredgecolor="k", zorder=8, linestyle="")  # fmt: skip
             scene.marker(at, 7.5)
@@ -1621,7 +1783,7 @@ def fleet_figure(
             style = {"fontsize": 7.5, "color": colours.pop() if len(colours) == 1 else "k",
                      "zorder": 9, "bbox": _TEXT_BOX}  # fmt: skip
             scene.labels.append(_Label(_swap_text(who) + tail, (float(xy[0]), float(xy[1])),
-                                       style, 7.5))  # fmt: skip
+                                       style, 7.5, rivals=rivals(xy)))  # fmt: skip
     for v in vehicles:
         n = len(by_vehicle[v])
         handles.append(
@@ -1667,7 +1829,7 @@ def fleet_figure(
                               markerfacecolor="0.93", markeredgecolor="0.55",
                               label="depot no sortie uses: "
                               + ", ".join(n for n, _ in idle)))  # fmt: skip
-    if swaps:
+    if stars:
         handles.append(Line2D([], [], marker="*", linestyle="", markersize=13,
                               markerfacecolor="0.6", markeredgecolor="k",
                               label="battery swap"))  # fmt: skip
@@ -1691,6 +1853,13 @@ def fleet_figure(
         nv = len(vehicles)
         title = (f"map '{spec.name}': {counted(nv, 'vehicle')}, "
                  f"{counted(len(sorties), 'sortie')}, {counted(swaps, 'swap')}")  # fmt: skip
+    if far:
+        names = [f"{sv.vehicle}.{sv.sortie}" for sv in sorties if id(sv) in far]
+        what = ("every sortie lies" if len(names) == len(sorties) > 1
+                else f"sortie {names[0]} lies" if len(names) == 1
+                else f"sorties {first_few(names)} lie")  # fmt: skip
+        km = min(far.values())
+        title = _far_title(title, f"{what} {km:,.1f} km{' or more' if len(far) > 1 else ''}", ax)
     ax.set_title(title)
     _finish_map(fig, ax, W, handles, scene, len(sensors), named_below=False,
                 unlabelled=n_hover - labelled)

@@ -47,6 +47,7 @@ __all__ = [
     "scheduled_allocation",
     "vertical_time",
     "far_from_area",
+    "far_distance",
 ]
 
 #: the names a `Timeline` sample's phase takes, in flight order; `_Recorder.add` refuses any
@@ -204,18 +205,18 @@ def scheduled_allocation(
     return D
 
 
-def far_from_area(route: Route, map: Any) -> str | None:  # noqa: A002
-    """A note when every stop of the mission lies farther from the map's area [0, W] x [0, H]
-    than the area's size, max(W, H): a mission for another map, or a map with another origin,
-    whose verdicts measure kilometres of nothing. O(stops).
+def far_distance(route: Route, map: Any) -> float | None:  # noqa: A002
+    """How far the mission lies from the map's area [0, W] x [0, H] when every stop lies
+    farther from it than the area's size, max(W, H) (a mission for another map, or a map with
+    another origin). O(stops).
 
     Args:
         route: the mission as flown (its stops, local metres).
-        map: the map (its `spec.area`; its origin named in the note when it has one).
+        map: the map (its `spec.area`).
 
     Returns:
-        "the mission lies N km from this map's area (...): the wrong map, or another
-        origin?", or None when a stop lies within that distance (or the map has no area).
+        The distance of the nearest stop from the area, m; None when a stop lies within
+        max(W, H) of it (or the route has no stops, or the map no area).
     """
     area = getattr(map.spec, "area", None)
     if area is None or not len(route.stops):
@@ -225,7 +226,24 @@ def far_from_area(route: Route, map: Any) -> str | None:  # noqa: A002
     dx = np.maximum.reduce([np.zeros(len(xy)), -xy[:, 0], xy[:, 0] - w])
     dy = np.maximum.reduce([np.zeros(len(xy)), -xy[:, 1], xy[:, 1] - h])
     d = float(np.min(np.hypot(dx, dy)))
-    if not d > max(w, h):
+    return d if d > max(w, h) else None
+
+
+def far_from_area(route: Route, map: Any) -> str | None:  # noqa: A002
+    """A note when every stop of the mission lies farther from the map's area [0, W] x [0, H]
+    than the area's size, max(W, H) (`far_distance`): a mission for another map, or a map with
+    another origin, whose verdicts measure kilometres of nothing. O(stops).
+
+    Args:
+        route: the mission as flown (its stops, local metres).
+        map: the map (its `spec.area`; its origin named in the note when it has one).
+
+    Returns:
+        "the mission lies N km from this map's area (...): the wrong map, or another
+        origin?", or None when a stop lies within that distance (or the map has no area).
+    """
+    d = far_distance(route, map)
+    if d is None:
         return None
     origin = getattr(map.spec, "origin", None)
     where = (f" (origin lat {float(origin.lat):.6g}, lon {float(origin.lon):.6g})"
