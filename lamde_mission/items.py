@@ -58,6 +58,8 @@ __all__ = [
     "corner_radius",
     "corner_stops",
     "corner_indices",
+    "flown_again",
+    "end_point_index",
 ]
 
 _NAN = float("nan")
@@ -110,9 +112,45 @@ def corner_indices(route: Route) -> np.ndarray:
         (K,) integer indices; `route.seqs` at them names each corner's item (a DO_JUMP loop
         flies the same item again: the figure draws it once).
     """
-    ks = [k for k, (c, h) in enumerate(zip(route.commands, route.is_hover, strict=True))
-          if c == CMD.WAYPOINT and not h]  # fmt: skip
+    ks = _plain_waypoints(route)
     return np.asarray(ks[:-1], dtype=np.int64)  # the last: the end point's WAYPOINT
+
+
+def _plain_waypoints(route: Route) -> list[int]:
+    """The indices in `route.stops` of WAYPOINT stops without a hold, in flying order."""
+    return [k for k, (c, h) in enumerate(zip(route.commands, route.is_hover, strict=True))
+            if c == CMD.WAYPOINT and not h]  # fmt: skip
+
+
+def end_point_index(route: Route) -> int | None:
+    """The index in `route.stops` of the end point: the last WAYPOINT without a hold (the
+    one `corner_indices` leaves out; a DO_JUMP loop's last pass of it).
+
+    Args:
+        route: a mission read back by `items_to_route`.
+
+    Returns:
+        The index, or None when the mission flies no such WAYPOINT. O(len(route.stops)).
+    """
+    ks = _plain_waypoints(route)
+    return ks[-1] if ks else None
+
+
+def flown_again(route: Route) -> dict[int, int]:
+    """The items a DO_JUMP loop flies more than once: how many times each stop's item is flown.
+
+    Args:
+        route: a mission read back by `items_to_route` (a DO_JUMP loop repeats its items'
+            stops in `route.stops`, each pass one stop, `route.seqs` naming the item).
+
+    Returns:
+        {seq: passes} for the items flown two or more times, in seq order; empty without a
+        loop. O(len(route.seqs)).
+    """
+    counts: dict[int, int] = {}
+    for s in route.seqs:
+        counts[s] = counts.get(s, 0) + 1
+    return {s: n for s, n in sorted(counts.items()) if n > 1}
 
 
 # ----------------------------------------------------------------------------- plan -> items

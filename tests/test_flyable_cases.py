@@ -54,6 +54,50 @@ def test_do_jump_target_renumbered_and_repeats_flown():
     assert len(tl.hover_times) == 3
 
 
+def test_verify_counts_each_pass_of_a_do_jump_loop_and_says_so():
+    """The loop flies the LOITER_TIME and the WAYPOINT 3 times each; the WAYPOINT's last pass
+    is the end point, so 3 hover points + 2 corners: the line says why (it printed the counts
+    bare, which looked uneven), and --json gives the passes."""
+    r = cli("verify", CASES / "tiny-map.json", CASES / "do-jump.waypoints")
+    first = r.stdout.splitlines()[0]
+    assert first.endswith(": 3 hover points + 2 corners (NAV_WAYPOINT, flown through; not "
+                          "hover points), counting each pass of a DO_JUMP loop: items 1-2 "
+                          "flown 3 times; item 2's last pass is the end point, not a "
+                          "corner"), first  # fmt: skip
+    out = json.loads(cli("verify", CASES / "tiny-map.json", CASES / "do-jump.waypoints",
+                         "--json").stdout)  # fmt: skip
+    assert (out["hover_points"], out["corners"], out["flown_again"]) == (3, 2, {"1": 3, "2": 3})
+    # without a loop: nothing added
+    r = cli("verify", CASES / "speed-map.json", CASES / "speed-change.waypoints")
+    assert "DO_JUMP" not in r.stdout.splitlines()[0]
+
+
+def test_loop_words_name_each_run_of_items_flown_equally_often():
+    """Nested loops: runs of items by their passes, in seq order; a loop whose last WAYPOINT
+    is not the end point says nothing of it."""
+    from types import SimpleNamespace
+
+    from lamde_mission.commands.verify import loop_words
+    from lamde_mission.items import end_point_index, flown_again
+
+    W, L, LAND = CMD.WAYPOINT, CMD.LOITER_TIME, CMD.LAND
+
+    def route(seqs, cmds):
+        return SimpleNamespace(seqs=tuple(seqs), commands=tuple(cmds),
+                               is_hover=tuple(c == L for c in cmds))  # fmt: skip
+
+    # outer loop over items 1-5 twice, inner loop over 3-4 three times per outer pass
+    seqs = [1, 2, 3, 4, 3, 4, 3, 4, 5, 1, 2, 3, 4, 3, 4, 3, 4, 5, 6, 7]
+    cmds = [{1: L, 2: W, 3: L, 4: W, 5: L, 6: W, 7: LAND}[s] for s in seqs]
+    r = route(seqs, cmds)
+    assert flown_again(r) == {1: 2, 2: 2, 3: 6, 4: 6, 5: 2}
+    assert loop_words(r) == ("counting each pass of a DO_JUMP loop: items 1-2 flown twice, "
+                             "items 3-4 flown 6 times, item 5 flown twice")  # fmt: skip
+    assert end_point_index(r) == 18  # item 6, flown once
+    assert loop_words(route([1, 2, 3], [L, W, LAND])) == ""
+    assert flown_again(route([1, 2, 3], [L, W, LAND])) == {}
+
+
 def test_do_jump_forever_is_refused_clearly():
     from lamde_mission.items import MissionError
 

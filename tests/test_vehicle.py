@@ -80,6 +80,48 @@ def test_upload_and_read_back(via, port):
     assert "identical" in report.lines()[-1]
 
 
+def test_autopilot_and_vehicle_type_names_from_a_heartbeat():
+    """One vocabulary for both uploaders' connection line (a newcomer review: MAVSDK printed
+    "ARDUPILOT, multicopter" where pymavlink printed "ARDUPILOTMEGA, quadrotor")."""
+    from pymavlink.dialects.v20 import common as m
+
+    from lamde_mission.storage import dialect_for_autopilot
+    from lamde_mission.vehicle.transfer import autopilot_name, vehicle_type_name
+
+    assert autopilot_name(m.MAV_AUTOPILOT_PX4) == "PX4"
+    assert autopilot_name(m.MAV_AUTOPILOT_ARDUPILOTMEGA) == "ArduPilot"
+    assert autopilot_name(m.MAV_AUTOPILOT_GENERIC) == "generic"
+    assert autopilot_name(m.MAV_AUTOPILOT_SLUGS) == "SLUGS"
+    assert autopilot_name(m.MAV_AUTOPILOT_INVALID) is None and autopilot_name(200) is None
+    # the storage rules still follow from the names
+    assert [dialect_for_autopilot(autopilot_name(a)).name for a in (
+        m.MAV_AUTOPILOT_PX4, m.MAV_AUTOPILOT_ARDUPILOTMEGA, m.MAV_AUTOPILOT_GENERIC,
+        m.MAV_AUTOPILOT_SLUGS)] == ["px4", "ardupilot", "generic", "generic"]  # fmt: skip
+    assert vehicle_type_name(m.MAV_TYPE_QUADROTOR) == "quadrotor"
+    assert vehicle_type_name(m.MAV_TYPE_FIXED_WING) == "fixed wing"
+    assert vehicle_type_name(m.MAV_TYPE_VTOL_TILTROTOR) == "vtol tiltrotor"
+    assert vehicle_type_name(m.MAV_TYPE_ENUM_END) is None and vehicle_type_name(250) is None
+
+
+@pytest.mark.parametrize(("autopilot", "words", "mavsdk_timeout"),
+                         [("px4", "PX4, quadrotor", 1.0),
+                          ("ardupilot", "ArduPilot, quadrotor", 1.6)])  # fmt: skip
+def test_both_clients_name_the_same_vehicle_alike(port, autopilot, words, mavsdk_timeout):
+    """The same vehicle, the same `VehicleInfo` and line through either client: MAVSDK's
+    client names it from the HEARTBEAT its relay pinned, not MAVSDK's coarse classes."""
+    from lamde_mission.vehicle.upload import make_client
+
+    seen = {}
+    with mock_on(port, autopilot=autopilot):
+        for via in VIAS:
+            with make_client(via, listen_on(port)) as client:
+                seen[via] = client.connect(5.0)
+                if via == "mavsdk":  # MAVSDK's upload message timeout still by autopilot
+                    assert client.upload_message_timeout() == mavsdk_timeout
+    assert seen["mavsdk"] == seen["pymavlink"]
+    assert seen["mavsdk"].describe() == f"system 1, {words}"
+
+
 @pytest.mark.parametrize("via", VIAS)
 def test_fifty_items_round_trip(via, port):
     mission = hand_mission(46)

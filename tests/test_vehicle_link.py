@@ -95,10 +95,12 @@ def test_a_lost_final_ack_on_ardupilot_is_settled_by_the_read_back(via, port):
     assert any("but the read-back matches" in n for n in report.notes), report.notes
 
 
-@pytest.mark.slow  # measured 1.4 s on a loaded machine (default suite <= 5 min)
-def test_a_vehicle_that_never_answers_the_count_fails_each_attempt_without_a_read_back(port):
+@pytest.mark.parametrize("via", VIAS)
+@pytest.mark.slow  # measured 1.4 s (pymavlink) and 13 s (MAVSDK) (default suite <= 5 min)
+def test_a_vehicle_that_never_answers_the_count_fails_each_attempt_without_a_read_back(port, via):
     """Nothing of the list reached the vehicle, so no read-back can settle it: each attempt
-    ends after one wait (it used to wait again for the fence and for the read-back)."""
+    ends after one wait (it used to wait again for the fence and for the read-back). MAVSDK's
+    TIMEOUT does not tell; the MAVSDK client's relay counts the vehicle's answers (none)."""
     heard: list[str] = []
 
     def ignore_counts(msg) -> bool:
@@ -109,13 +111,34 @@ def test_a_vehicle_that_never_answers_the_count_fails_each_attempt_without_a_rea
     with mock_on(port, lose_in=ignore_counts) as v:
         with pytest.raises(TransferError) as info:
             upload_mission(hand_mission(3), hand_fence(), connect=listen_on(port),
-                           via="pymavlink", timeout=0.5, attempts=2, log=lines.append)  # fmt: skip
+                           via=via, timeout=0.5, attempts=2, log=lines.append)  # fmt: skip
         assert v.stats.uploads[MISSION_TYPE.MISSION] == 0
     err = info.value
     assert err.unanswered and err.report.attempts == 2
-    assert "waiting for the first item request (0 of 7 items sent" in str(err)
+    assert str(err).startswith("mission upload: no answer from the vehicle while waiting for "
+                               "the first item request (0 of 7 items sent"), str(err)  # fmt: skip
     assert "MISSION_REQUEST_LIST" not in heard  # no read-back asked for
     assert not any("read-back decides" in line for line in lines), lines
+
+
+def test_a_read_back_that_fails_after_an_unconfirmed_upload_names_both_steps(port):
+    """The vehicle takes every item but its final ACK is lost, and its answers to the
+    read-back too: the line names the upload first (it named only the download, as if
+    nothing had been sent)."""
+
+    def lose_acks_and_downloads(msg) -> bool:
+        return msg.get_type() in ("MISSION_ACK", "MISSION_COUNT")
+
+    with mock_on(port, lose_out=lose_acks_and_downloads) as v:
+        with pytest.raises(TransferError) as info:
+            upload_mission(hand_mission(1), [], connect=listen_on(port), via="pymavlink",
+                           timeout=0.4, attempts=1, speed_check=None)  # fmt: skip
+        assert v.stats.uploads[MISSION_TYPE.MISSION] >= 1
+    err = str(info.value)
+    assert err.startswith("mission upload: no answer from the vehicle while waiting for the "
+                          "final MISSION_ACK (5 of 5 items sent"), err  # fmt: skip
+    assert "; the read-back failed too: no answer from the vehicle to the mission list" in err
+    assert not info.value.unanswered
 
 
 @pytest.mark.parametrize("via", VIAS)

@@ -181,7 +181,7 @@ def run(args: argparse.Namespace) -> int:
     timeline = replay_mission_file(args.mission, m)
     verdicts = verify(timeline, m)
     t = timeline.totals
-    from lamde_mission.items import corner_stops
+    from lamde_mission.items import corner_stops, flown_again
 
     n_corner = len(corner_stops(timeline.route))
     from lamde_mission.sorties import looks_like_a_sortie, sortie_dir_of
@@ -196,6 +196,8 @@ def run(args: argparse.Namespace) -> int:
         # corners (NAV_WAYPOINT, flown through) are counted apart from the hover points
         out["hover_points"] = len(timeline.hover_times)
         out["corners"] = n_corner
+        # a DO_JUMP loop: each pass counted above; {seq: passes} of the items flown again
+        out["flown_again"] = {str(k): n for k, n in flown_again(timeline.route).items()}
         out["totals"] = {
             "t_fly": t.t_fly, "t_hover": t.t_hover, "f": t.f, "t_takeoff": t.t_takeoff,
             "t_land": t.t_land, "t_return": t.t_return, "t_total": t.t_total,
@@ -207,8 +209,10 @@ def run(args: argparse.Namespace) -> int:
 
         corners = (f" + {counted(n_corner, 'corner')} (NAV_WAYPOINT, flown through; not hover "
                    "points)" if n_corner else "")  # fmt: skip
+        loop = loop_words(timeline.route)
         print(f"mission {printable(args.mission)} on map '{printable(m.name)}': "
-              f"{counted(len(timeline.hover_times), 'hover point')}{corners}")  # fmt: skip
+              f"{counted(len(timeline.hover_times), 'hover point')}{corners}"
+              f"{', ' + loop if loop else ''}")  # fmt: skip
         print("\n".join(printable(r) for r in verdicts.table().splitlines()))
         sf = m.spec.safety
         print(f"safety: clearance {verdicts.clearance:.3f} m (asked {sf.clearance:g} m); data "
@@ -260,6 +264,48 @@ def _sortie_data(s: Any, m: Any) -> str:
     more = f" and {len(got) - MARGINS_LISTED} more" if len(got) > MARGINS_LISTED else ""
     return (f"data: collects {', '.join(parts)}{more}; C4 and MARGIN judge all sorties "
             "together (whole plan, below)")
+
+
+def loop_words(route: Any) -> str:
+    """What `verify`'s count line adds for a DO_JUMP loop: every pass of a stop counts (a loop
+    flying a hover point 3 times makes 3 hover points), and the last WAYPOINT's last pass is
+    the end point, not a corner, so a loop flying a LOITER_TIME and a WAYPOINT 3 times each
+    counts 3 hover points + 2 corners; the words say so.
+
+    Args:
+        route: a mission read back by `items_to_route` (`sim.mission.Route`).
+
+    Returns:
+        "" without a loop; else e.g. "counting each pass of a DO_JUMP loop: items 1-2 flown 3
+        times; item 2's last pass is the end point, not a corner" (items by seq; a run of
+        items flown equally often as one range, at most 3 runs named). O(n log n) in the
+        number of stops.
+    """
+    from lamde_mission.items import end_point_index, flown_again
+    from planner_core.textio import first_few
+
+    again = flown_again(route)
+    if not again:
+        return ""
+    seqs = sorted(set(route.seqs))
+    counts = {s: 1 for s in seqs} | again
+    runs: list[list[int]] = []  # [first seq, last seq, passes], passes > 1
+    last_n = 0  # the passes of the item before, in seq order
+    for s in seqs:
+        n = counts[s]
+        if n > 1 and n == last_n:
+            runs[-1][1] = s
+        elif n > 1:
+            runs.append([s, s, n])
+        last_n = n
+    times = {2: "twice"}
+    parts = [(f"item {a}" if a == b else f"items {a}-{b}") + f" flown {times.get(n, f'{n} times')}"
+             for a, b, n in runs]  # fmt: skip
+    out = f"counting each pass of a DO_JUMP loop: {first_few(parts, 3)}"
+    end = end_point_index(route)
+    if end is not None and route.seqs[end] in again:
+        out += f"; item {route.seqs[end]}'s last pass is the end point, not a corner"
+    return out
 
 
 def _time_line(timeline: Any) -> str:

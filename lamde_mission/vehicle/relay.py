@@ -14,6 +14,9 @@ scheme of `connection.Link`) and gives MAVSDK a UDP socket on 127.0.0.1 (`url`, 
 - notes every autopilot HEARTBEAT's source (`claims.ClaimWatch`): once the vehicle's ids are
   heard from a second address it passes nothing more either way and sets `conflict`, which
   `MavsdkClient` turns into `DuplicateVehicleError`;
+- counts the vehicle's answers in the mission protocol that it passes to MAVSDK
+  (MISSION_REQUEST_INT, MISSION_REQUEST, MISSION_ACK; `mission_answers`), by mission type:
+  MAVSDK's TIMEOUT does not say whether the vehicle answered an upload at all, this count does;
 - with a signing key, passes on only messages signed with it (checked by pymavlink; the rest
   are dropped and counted in `dropped`) and sends what MAVSDK sends re-packed and signed, with
   MAVSDK's own system/component ids and sequence numbers. Without a key MAVSDK's bytes go out
@@ -41,6 +44,10 @@ from lamde_mission.vehicle.signing import (
 __all__ = ["VehicleRelay"]
 
 Address = tuple[str, int]
+
+#: the vehicle's messages that answer a ground station's mission upload (a request for an item,
+#: or the ACK that ends or refuses the list)
+_MISSION_ANSWERS = frozenset({"MISSION_REQUEST_INT", "MISSION_REQUEST", "MISSION_ACK"})
 
 
 class VehicleRelay:
@@ -101,11 +108,17 @@ class VehicleRelay:
         self.vehicle_ids: tuple[int, int] | None = None
         #: whether the pinned vehicle's HEARTBEAT carried a MAVLink 2 signature
         self.vehicle_signed = False
+        #: the HEARTBEAT the vehicle was pinned by (set before any message reaches MAVSDK):
+        #: `MavsdkClient` names the vehicle from it as the pymavlink client does
+        self.vehicle_heartbeat: Any = None
         self.vehicle_addr: Address | None = None
         self._pinned = False
         #: the second address claiming the vehicle's ids, once heard (the relay then passes
         #: nothing more)
         self.conflict: Address | None = None
+        #: MISSION_REQUEST_INT / MISSION_REQUEST / MISSION_ACK passed from the vehicle to
+        #: MAVSDK, by MAV_MISSION_TYPE (written by the relay's thread only)
+        self._answers: dict[int, int] = {}
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="vehicle-relay", daemon=True)
         self._thread.start()
@@ -148,6 +161,7 @@ class VehicleRelay:
                 self._pinned = True
                 self.vehicle_ids = (msg.get_srcSystem(), msg.get_srcComponent())
                 self.vehicle_signed = carries_signature(msg)
+                self.vehicle_heartbeat = msg
                 self.vehicle_addr = addr
                 if self.link.conn.scheme == "udpin" and addr is not None:
                     self.link.peer = addr
@@ -162,6 +176,9 @@ class VehicleRelay:
             if self.system_id is not None and msg.get_srcSystem() != self.system_id:
                 self.other_systems += 1
                 continue
+            if msg.get_type() in _MISSION_ANSWERS:
+                t = int(getattr(msg, "mission_type", 0) or 0)
+                self._answers[t] = self._answers.get(t, 0) + 1
             if self._gcs_addr is not None:
                 with contextlib.suppress(OSError):
                     self._gcs.sendto(bytes(msg.get_msgbuf()), self._gcs_addr)
@@ -183,6 +200,18 @@ class VehicleRelay:
             self._sign.seq = msg.get_seq()
             with contextlib.suppress(OSError, ValueError):
                 self.link.send(msg.pack(self._sign))
+
+    def mission_answers(self, mission_type: int) -> int:
+        """How many of the vehicle's mission-protocol answers (an item request or a
+        MISSION_ACK) of `mission_type` the relay has passed to MAVSDK so far.
+
+        Args:
+            mission_type: MAV_MISSION_TYPE (mission, fence, rally).
+
+        Returns:
+            The count since the relay opened; compare two readings around a transfer.
+        """
+        return self._answers.get(int(mission_type), 0)
 
     def ignored_lines(self) -> list[str]:
         """One line per kind of message the relay kept from MAVSDK, with counts.

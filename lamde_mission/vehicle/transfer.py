@@ -47,6 +47,8 @@ __all__ = [
     "upload_and_verify",
     "DuplicateVehicleError",
     "no_vehicle_message",
+    "autopilot_name",
+    "vehicle_type_name",
 ]
 
 
@@ -177,36 +179,81 @@ class ReadbackMismatchError(VehicleError):
 RETRYABLE_ACKS = frozenset({mavlink2.MAV_MISSION_ERROR, mavlink2.MAV_MISSION_OPERATION_CANCELLED})
 
 
+#: the autopilots by the names their makers use (MAV_AUTOPILOT number -> name); any other
+#: MAV_AUTOPILOT is named by MAVLink's enum without "MAV_AUTOPILOT_" (`autopilot_name`)
+AUTOPILOT_NAMES: dict[int, str] = {
+    mavlink2.MAV_AUTOPILOT_PX4: "PX4",
+    mavlink2.MAV_AUTOPILOT_ARDUPILOTMEGA: "ArduPilot",
+    mavlink2.MAV_AUTOPILOT_GENERIC: "generic",
+}
+
+
+def autopilot_name(autopilot: int) -> str | None:
+    """The autopilot of a HEARTBEAT in the words both uploaders print.
+
+    Args:
+        autopilot: the HEARTBEAT's MAV_AUTOPILOT number.
+
+    Returns:
+        "PX4", "ArduPilot" (MAV_AUTOPILOT_ARDUPILOTMEGA) or "generic" (`AUTOPILOT_NAMES`);
+        another MAVLink autopilot by its enum name without "MAV_AUTOPILOT_" (e.g.
+        "SLUGS"); None for MAV_AUTOPILOT_INVALID (not an autopilot) and numbers MAVLink
+        lacks. `storage.dialect_for_autopilot` reads every one of these.
+    """
+    a = int(autopilot)
+    if a in AUTOPILOT_NAMES:
+        return AUTOPILOT_NAMES[a]
+    entry = mavlink2.enums["MAV_AUTOPILOT"].get(a)
+    if entry is None or a == mavlink2.MAV_AUTOPILOT_INVALID:
+        return None
+    return entry.name.removeprefix("MAV_AUTOPILOT_")
+
+
+def vehicle_type_name(mav_type: int) -> str | None:
+    """The vehicle type of a HEARTBEAT in the words both uploaders print: MAVLink's MAV_TYPE
+    name, lower case, without "MAV_TYPE_", words apart ("quadrotor", "hexarotor", "fixed
+    wing", "vtol tiltrotor", "ground rover").
+
+    Args:
+        mav_type: the HEARTBEAT's MAV_TYPE number.
+
+    Returns:
+        The name, or None for numbers MAVLink lacks.
+    """
+    entry = mavlink2.enums["MAV_TYPE"].get(int(mav_type))
+    if entry is None or entry.name.endswith("_ENUM_END"):
+        return None
+    return entry.name.removeprefix("MAV_TYPE_").lower().replace("_", " ")
+
+
 @dataclass(frozen=True)
 class VehicleInfo:
-    """Who answered: MAVLink system/component ids, autopilot and vehicle type (names)."""
+    """Who answered: MAVLink system/component ids, autopilot and vehicle type, named from the
+    vehicle's HEARTBEAT by both uploaders alike (`autopilot_name`, `vehicle_type_name`)."""
 
     system_id: int
     component_id: int = 1
-    autopilot: str | None = None  # e.g. "PX4", "ARDUPILOTMEGA"
-    vehicle_type: str | None = None  # e.g. "quadrotor", "multicopter"
+    autopilot: str | None = None  # "PX4", "ArduPilot", "generic", ... (`autopilot_name`)
+    vehicle_type: str | None = None  # "quadrotor", "fixed wing", ... (`vehicle_type_name`)
     signed: bool = False  # its HEARTBEAT carried a MAVLink 2 signature
 
     @classmethod
     def from_heartbeat(cls, msg: object) -> VehicleInfo:
-        """From a pymavlink HEARTBEAT message.
+        """From a pymavlink HEARTBEAT message (both uploaders: the MAVSDK client takes the
+        one its relay pinned the vehicle by).
 
         Args:
             msg: the HEARTBEAT (its source system and component, autopilot, type).
 
         Returns:
-            The `VehicleInfo`: autopilot without "MAV_AUTOPILOT_", vehicle type lower case
-            without "MAV_TYPE_" (None for numbers pymavlink lacks), `signed` when the message
-            carried a MAVLink 2 signature.
+            The `VehicleInfo`: autopilot by `autopilot_name`, vehicle type by
+            `vehicle_type_name`, `signed` when the message carried a MAVLink 2 signature.
         """
         from lamde_mission.vehicle.signing import carries_signature
 
-        ap = mavlink2.enums["MAV_AUTOPILOT"].get(int(msg.autopilot))
-        vt = mavlink2.enums["MAV_TYPE"].get(int(msg.type))
         return cls(
             system_id=int(msg.get_srcSystem()), component_id=int(msg.get_srcComponent()),
-            autopilot=ap.name.removeprefix("MAV_AUTOPILOT_") if ap else None,
-            vehicle_type=vt.name.removeprefix("MAV_TYPE_").lower() if vt else None,
+            autopilot=autopilot_name(msg.autopilot), vehicle_type=vehicle_type_name(msg.type),
             signed=carries_signature(msg),
         )  # fmt: skip
 
@@ -598,7 +645,8 @@ def _attempt(
     A list whose upload was not confirmed (TransferError: the final ACK may be what was lost)
     is read back at once, before the next list goes up: a vehicle that stopped answering fails
     the attempt after one more wait instead of one per list. A list the vehicle never answered
-    at all (`TransferError.unanswered`) fails the attempt with no read-back.
+    at all (`TransferError.unanswered`) fails the attempt with no read-back; a read-back that
+    fails after an unconfirmed upload fails it with a line naming both steps.
 
     Each client call is allowed `timeout` s without progress; the client's per-message
     timeouts and re-requests do the recovery (`MissionClient`), and its TransferError names
@@ -638,7 +686,10 @@ def _attempt(
             # the final ACK may be what was lost: this list's read-back decides, now
             say(f"{exc}; the read-back decides")
             t0 = time.monotonic()
-            found = read_back(t, items)
+            try:
+                found = read_back(t, items)
+            except TransferError as again:  # the line names both steps, the upload first
+                raise TransferError(f"{exc}; the read-back failed too: {again}") from None
             verify_s += time.monotonic() - t0
             if found:
                 report.differences = diffs + found

@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 from lamde_mission.items import MISSION_TYPE, MissionItem
+from lamde_mission.storage import dialect_for_autopilot
 from lamde_mission.vehicle.claims import duplicate_error
 from lamde_mission.vehicle.connection import Connection, parse_connection
 from lamde_mission.vehicle.transfer import (
@@ -42,6 +43,7 @@ from lamde_mission.vehicle.transfer import (
     upload_and_verify,
 )
 from lamde_mission.vehicle.wire import WireItem, mission_type_name
+from planner_core.textio import counted
 
 __all__ = ["MavsdkClient", "upload_mission", "make_client", "VIAS"]
 
@@ -64,6 +66,11 @@ _ACK_OF_RESULT = {
 
 
 _log = logging.getLogger("lamde_mission.vehicle.mavsdk")
+#: without it a program that configures no logging would get MAVSDK's errors on stderr anyway,
+#: through logging's last-resort handler (a bare "Retrying failed" from MAVSDK's parameter
+#: client, after an unanswered MPC_XY_VEL_MAX read): a library's loggers stay silent unless
+#: the program sets a handler (`upload --verbose` does, or `logging.basicConfig`)
+_log.addHandler(logging.NullHandler())
 
 
 #: s, the longest `timeout` an upload takes: an hour without progress is a dead link (MAVSDK
@@ -74,7 +81,8 @@ MAX_TIMEOUT_S = 3600.0
 def _route_mavsdk_log() -> None:
     """Send MAVSDK's own log lines to Python logging ("lamde_mission.vehicle.mavsdk") instead
     of the terminal: its errors as warnings, the rest at debug level (our report says what
-    failed)."""
+    failed). They reach stderr only through a handler the program sets (the logger has a
+    NullHandler, so logging's last resort does not print them)."""
     from mavsdk import LogLevel, log_subscribe
 
     def handler(level: Any, message: str, file: str | None, line: int) -> bool:
@@ -99,7 +107,7 @@ MAVSDK_RETRIES = 5
 #: (PX4 every 0.25 s, ArduPilot every 1 s; with MAVSDK's 0.5 s each missing ArduPilot item
 #: costs three of its five counts). Downloads keep MAVSDK's 0.5 s: there MAVSDK itself asks
 #: again after each timeout, and only the number of requests (5) limits it.
-MAVSDK_UPLOAD_TIMEOUT_S = {"PX4": 1.0, "ARDUPILOT": 1.6}
+MAVSDK_UPLOAD_TIMEOUT_S = {"px4": 1.0, "ardupilot": 1.6}
 MAVSDK_UPLOAD_TIMEOUT_DEFAULT_S = 1.6
 
 #: s, what MAVSDK gets beyond its own time-out to return while connecting (`first_autopilot`
@@ -114,11 +122,14 @@ class MavsdkClient:
     messages itself (re-requesting a download item or resending the count up to
     `MAVSDK_RETRIES` times, a message timeout apart; it never resends an upload item unasked,
     the vehicle re-requests), then fails the whole list with TIMEOUT; `upload_and_verify` then
-    retries the whole transfer. The count of 5 is a constant in MAVSDK. The message timeout is
-    `Mavsdk::set_timeout_s`, which MAVSDK-Python 4.1 does not wrap; this client calls the C
-    API under it (cmavsdk's `mavsdk_set_timeout_s`, in the library the package ships) before
-    each transfer: `MAVSDK_UPLOAD_TIMEOUT_S` for uploads, MAVSDK's 0.5 s for downloads. Where
-    that function is missing, MAVSDK's 0.5 s stays (`message_timeout_settable` is False).
+    retries the whole transfer. MAVSDK's TIMEOUT does not say whether the vehicle answered at
+    all; the relay's count of the vehicle's item requests and ACKs does (`upload`: a list
+    never answered is `TransferError.unanswered`, and no read-back is tried). The count of 5
+    is a constant in MAVSDK. The message timeout is `Mavsdk::set_timeout_s`, which
+    MAVSDK-Python 4.1 does not wrap; this client calls the C API under it (cmavsdk's
+    `mavsdk_set_timeout_s`, in the library the package ships) before each transfer:
+    `MAVSDK_UPLOAD_TIMEOUT_S` for uploads, MAVSDK's 0.5 s for downloads. Where that function
+    is missing, MAVSDK's 0.5 s stays (`message_timeout_settable` is False).
     """
 
     name = "mavsdk"
@@ -178,8 +189,10 @@ class MavsdkClient:
             Seconds: `MAVSDK_UPLOAD_TIMEOUT_S` for the connected vehicle's autopilot,
             `MAVSDK_UPLOAD_TIMEOUT_DEFAULT_S` for another autopilot or before `connect`.
         """
-        ap = self.vehicle.autopilot if self.vehicle is not None else None
-        return MAVSDK_UPLOAD_TIMEOUT_S.get(ap or "", MAVSDK_UPLOAD_TIMEOUT_DEFAULT_S)
+        if self.vehicle is None:
+            return MAVSDK_UPLOAD_TIMEOUT_DEFAULT_S
+        dialect = dialect_for_autopilot(self.vehicle.autopilot).name
+        return MAVSDK_UPLOAD_TIMEOUT_S.get(dialect, MAVSDK_UPLOAD_TIMEOUT_DEFAULT_S)
 
     # ------------------------------------------------------------------ plumbing
 
@@ -273,7 +286,8 @@ class MavsdkClient:
             timeout: seconds to wait for the first autopilot.
 
         Returns:
-            Who answered (autopilot and vehicle type None where MAVSDK says UNKNOWN).
+            Who answered, named from the HEARTBEAT the relay pinned the vehicle by
+            (`VehicleInfo.from_heartbeat`, the pymavlink client's words).
 
         Raises:
             VehicleError: MAVSDK cannot open its link to the relay, or does not return
@@ -307,17 +321,10 @@ class MavsdkClient:
         self._system = system
         self._raw = MissionRawAsync(system)
 
-        async def info() -> VehicleInfo:
-            ap, vt = await system.autopilot_type(), await system.vehicle_type()
-            return VehicleInfo(
-                system_id=int(await system.get_system_id()), component_id=1,
-                autopilot=None if ap.name == "UNKNOWN" else ap.name,
-                vehicle_type=None if vt.name == "UNKNOWN" else vt.name.lower(),
-                signed=bool(self._relay is not None and self._relay.vehicle_signed),
-            )  # fmt: skip
-
-        self.vehicle = step(info(), CONNECT_MARGIN_S,
-                            "asking for the vehicle's autopilot and type")
+        # named from the HEARTBEAT the relay pinned the vehicle by (MAVSDK hears the vehicle
+        # only through the relay, after the pin), as the pymavlink client names it: MAVSDK's
+        # own vehicle_type() knows only coarse classes ("multicopter" for a quadrotor)
+        self.vehicle = VehicleInfo.from_heartbeat(self._relay.vehicle_heartbeat)
         # the rest of the watch before anything is sent (`claims.HEARTBEAT_WATCH_S`)
         left = self._relay.watch.ends_at() - time.monotonic()
         if left > 0:
@@ -365,7 +372,28 @@ class MavsdkClient:
         timeout: float,
         fn: Callable[[], Any],
         cancel: Callable[[], Any] | None = None,
+        unanswered: Callable[[str], str | None] | None = None,
     ) -> Any:
+        """Run one MAVSDK transfer call `fn()` for at most `timeout` s.
+
+        Args:
+            what: the step, for messages ("upload", "download", "clear", "import").
+            mission_type: MAV_MISSION_TYPE of the list.
+            timeout: seconds for the whole call.
+            fn: makes the call's coroutine.
+            cancel: makes the coroutine that cancels the transfer (after a time-out).
+            unanswered: for a time-out (MAVSDK's TIMEOUT or ours), called with what timed
+                out; returns the TransferError's line when the vehicle answered nothing of
+                the transfer (the error is then `unanswered`), None when it did.
+
+        Returns:
+            What the call returns.
+
+        Raises:
+            TransferError: not connected, or a time-out.
+            MissionRejectedError: MAVSDK's other results (the vehicle's ACK code named).
+            DuplicateVehicleError: a second autopilot claims the vehicle's ids.
+        """
         from mavsdk.asyncio.plugins.geofence import GeofenceError
         from mavsdk.asyncio.plugins.mission_raw import MissionRawError
 
@@ -385,11 +413,18 @@ class MavsdkClient:
             if cancel is not None:
                 with contextlib.suppress(Exception):  # nothing left to cancel
                     self._run(cancel(), 5.0)
+            silent = unanswered(f"MAVSDK: no result within {timeout:.3g} s") if unanswered \
+                else None  # fmt: skip
+            if silent is not None:
+                raise TransferError(silent, unanswered=True) from None
             raise TransferError(f"{kind} {what}: no result within {timeout:.3g} s") from None
         except (MissionRawError, GeofenceError) as exc:
             name = exc.result.name
             source = "MissionRaw" if isinstance(exc, MissionRawError) else "Geofence"
             if name == "TIMEOUT":
+                silent = unanswered(f"{source} result TIMEOUT") if unanswered else None
+                if silent is not None:
+                    raise TransferError(silent, unanswered=True) from None
                 raise TransferError(f"{kind} {what} timed out ({source} result TIMEOUT)") from None
             ack = _ACK_OF_RESULT.get(name)
             shown = f"{name} ({source} result{'; ' + ack if ack else ''})"
@@ -408,7 +443,10 @@ class MavsdkClient:
                 item (`_limit`).
 
         Raises:
-            TransferError: not connected, or no result in time (or MAVSDK's TIMEOUT).
+            TransferError: not connected, or no result in time (or MAVSDK's TIMEOUT);
+                `unanswered` when the relay passed MAVSDK no item request and no
+                MISSION_ACK of this list meanwhile (nothing reached the vehicle: the line
+                says so, as the pymavlink client's does).
             MissionRejectedError: the vehicle (or MAVSDK) refused the list.
             DuplicateVehicleError: a second autopilot claims the vehicle's ids.
         """
@@ -425,14 +463,37 @@ class MavsdkClient:
         }[int(mission_type)]
         if per_message is not None:
             self._message_timeout(per_message)
+        t, n = int(mission_type), len(raw_items)
+        before = self._relay.mission_answers(t)
         self.sent = True
         try:
             self._call(
                 "upload", mission_type, timeout, lambda: up(raw_items),
                 self._raw.cancel_mission_upload,
+                lambda why: self._no_answer_line(t, n, before, why),
             )  # fmt: skip
         finally:
             self._message_timeout(MAVSDK_ITEM_TIMEOUT_S)
+
+    def _no_answer_line(self, mission_type: int, n: int, before: int, why: str) -> str | None:
+        """The line of an upload the vehicle never answered, or None when it answered.
+
+        Args:
+            mission_type: MAV_MISSION_TYPE of the list.
+            n: the list's items.
+            before: `relay.mission_answers(mission_type)` when the upload started.
+            why: what timed out (MAVSDK's result, or our limit).
+
+        Returns:
+            pymavlink's words for it ("mission upload: no answer from the vehicle while
+            waiting for the first item request (0 of 6 items sent; why)") when the relay
+            passed MAVSDK no item request and no MISSION_ACK of the list since `before`;
+            None when it did (the vehicle heard the count: the read-back decides).
+        """
+        if self._relay is None or self._relay.mission_answers(mission_type) != before:
+            return None
+        return (f"{mission_type_name(mission_type)} upload: no answer from the vehicle while "
+                f"waiting for the first item request (0 of {counted(n, 'item')} sent; {why})")
 
     @staticmethod
     def _limit(timeout: float, n: int, per_message: float | None = None) -> float:
