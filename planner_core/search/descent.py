@@ -34,8 +34,12 @@ backpropagation learning: the RPROP algorithm", ICNN 1993): point i moves `s_i` 
 its own gradient; after a kept trial s_i grows by `RPROP_UP` (1.2) where the point's gradient
 kept its direction (positive dot product with the last one) and shrinks by `RPROP_DOWN` (0.5)
 where it turned; a rejected trial halves every s_i; the descent stops when the largest s_i
-falls below `min_step`. A point a trial holds in place (C3 or C5) keeps its gradient's
-direction, so its step grows with the kept trials and it tries further the next time. With
+falls below `min_step`. A point whose step would break C3 is first projected back onto
+its bandwidth limit along the summed rate's gradient (`planner_core.search.trial.project_c3`:
+on a dense clustered field every point sits on that limit and the gradient pulls it across,
+so without the projection it would stay put); a point a trial still holds in place (C3 or
+C5) keeps its gradient's direction, so its step grows with the kept trials and it tries
+further the next time. With
 one step for all, the point with the steepest gradient sets every point's move. Descent by
 descent the two rules are about even (`benchmarks/bench_descent.py`: from kicked plans and
 from constructive starts of L06 and L08 each ends lower about half the time); over whole
@@ -69,7 +73,13 @@ from numba import njit
 
 from planner_core.model.formulas import deb_better, leg_time
 from planner_core.search.polish import hover_lp, scheduled_hover_lp
-from planner_core.search.trial import TRIAL_OK, held_points, path_nodes, trial_points
+from planner_core.search.trial import (
+    TRIAL_OK,
+    held_points,
+    path_nodes,
+    project_c3,
+    trial_points,
+)
 
 __all__ = [
     "GLOBAL",
@@ -399,6 +409,8 @@ def descend(
             if float(norm.max()) <= 0.0:
                 break
             move = g / np.where(norm > 0.0, norm, 1.0)[:, None] * s[:, None]
+            # a step across the bandwidth limit goes along it instead (C3 projection)
+            move = project_c3(problem, P, move, box)
             Pn, Rn, verdict = trial_points(problem, P, move, 1.0, 1.0, box)
         else:
             scale = float(np.abs(g).max())

@@ -35,6 +35,9 @@ from planner_core.model.formulas import (
 from planner_core.model.geometry import cut_legs, overlap_first
 
 __all__ = [
+    "C3_MARGIN",
+    "C3_TOLERANCE",
+    "PROJECT_STEPS",
     "SLIDE_ANGLES",
     "TRIAL_HELD",
     "TRIAL_OK",
@@ -43,6 +46,8 @@ __all__ = [
     "held_points",
     "held_points_reference",
     "path_nodes",
+    "project_c3",
+    "project_c3_reference",
     "trial_points",
     "trial_points_reference",
 ]
@@ -154,6 +159,192 @@ class HeldCheck:
         nodes = path_nodes(self.problem, P)
         self.cut[legs] = overlap_first(nodes[legs], nodes[legs + 1],
                                          self.problem.obstacles) > L_VIO_TOL
+
+
+#: the C3 projection (`project_c3`) puts a point below the bandwidth by at most this share
+#: of it (its Newton steps stop there) and at least `C3_MARGIN` of it, so that the trial's
+#: own C3 test (numpy's pairwise sum, `_SUM_SLACK`) passes it
+C3_TOLERANCE = 1e-4
+C3_MARGIN = 1e-9
+#: Newton steps of the C3 projection along the summed rate's gradient, at most
+PROJECT_STEPS = 6
+
+
+def project_c3(problem: Any, P: np.ndarray, move: np.ndarray, box: np.ndarray) -> np.ndarray:
+    """The per-point descent's move (I, 2) with each step that would break C3 projected back
+    onto the bandwidth limit: a gradient-projection step (Rosen, "The gradient projection
+    method for nonlinear programming. Part II: nonlinear constraints", J. SIAM 9(4), 1961)
+    for the one constraint of a point alone, its summed link rate S(p) = sum_j R_ij <=
+    R_lambda (paper Sec. 3: R_ij = max(R_c - xi sqrt(d_ij^2 + H^2), 0), C3). Point i's trial
+    position is q = clip(P_i - move_i) (the convention of `trial_points` with scale and step
+    1); where S(q) > R_lambda, q moves along -grad S(q) (u, unit) to q - t u, t found by
+    Newton's method on S(q - t u) = R_lambda (1 - `C3_MARGIN`) from t = 0 (S is concave along
+    the line while no link leaves the radio's range, so each step lands at or past the limit;
+    at most `PROJECT_STEPS`, stopped within `C3_TOLERANCE` of it), and move_i becomes
+    P_i - q'. A point no step takes under the limit keeps its move, for `trial_points`'
+    slides.
+
+    Why: on a dense clustered field every hover point sits on its bandwidth limit (L06: the
+    summed rate at 99-100 % of R_lambda at every point), the LP's gradient pulls it toward
+    its sensors, across the limit, and the slides' +-45 degree turns cross it too, so the
+    point stays where it is; projected, it moves along the limit (docs/search.md, "C3
+    projection"). Scheduled access (no C3: `ModelParams.c3_limit` inf) returns move as is.
+
+    One compiled call (`_project_kernel`); `project_c3_reference` is the same in numpy, and
+    tests hold the two equal to the bit.
+
+    Args:
+        problem: the UAV `Problem` (its model's sensors, rate model, sensor window, c3_limit).
+        P: hover points (I, 2), m.
+        move: the moves (I, 2), m: point i's trial position is clip(P_i - move_i).
+        box: the area (2,), m.
+
+    Returns:
+        (I, 2) moves, m (a new array).
+
+    Cost: per point, its summed rate and gradient over the sensors in its window (O(J) without
+    a finite window); per point over the limit, at most `PROJECT_STEPS` more (2-3 as a rule).
+    """
+    m = problem.model
+    if not m.c3_limit < math.inf:
+        return np.array(move, dtype=float)
+    win = m.window
+    return _project_kernel(
+        _writable(P), _writable(move), _writable(box), m.sensors, win.order, win.xs,
+        float(win.half), m.altitude**2, m.peak_rate, m.decay, math.isfinite(win.half),
+        float(m.c3_limit), C3_MARGIN, C3_TOLERANCE, PROJECT_STEPS,
+    )  # fmt: skip
+
+
+def project_c3_reference(problem: Any, P: np.ndarray, move: np.ndarray,
+                         box: np.ndarray) -> np.ndarray:
+    """`project_c3` the readable way (tests hold the two equal to the bit): each point's sum
+    and gradient from numpy arrays of its window's sensors (summed in the window's order, as
+    the kernel sums them), one point at a time.
+
+    Args:
+        problem, P, move, box: as `project_c3`'s.
+
+    Returns:
+        (I, 2) moves, m.
+    """
+    m = problem.model
+    out = np.array(move, dtype=float)
+    lim = m.c3_limit
+    if not lim < math.inf:
+        return out
+    P = np.asarray(P, dtype=float)
+    box = np.asarray(box, dtype=float)
+    win = m.window
+    S = np.asarray(m.sensors, dtype=float)
+    h2 = m.altitude**2
+
+    def sum_grad(x: float, y: float) -> tuple[float, float, float]:
+        if math.isfinite(win.half):
+            lo, hi = window_range(win.xs, float(win.half), x)
+            idx = np.asarray(win.order)[lo:hi]
+        else:
+            idx = np.arange(len(S))
+        dx, dy = x - S[idx, 0], y - S[idx, 1]
+        near = np.abs(dy) < win.half if math.isfinite(win.half) else np.ones(len(idx), bool)
+        r = np.sqrt((dx * dx + dy * dy) + h2)
+        rate = m.peak_rate - m.decay * r
+        on = near & (rate > 0.0)
+        s = gx = gy = 0.0
+        for q in np.flatnonzero(on):  # in the window's order, one term at a time
+            s += rate[q]
+            gx -= m.decay * dx[q] / r[q]
+            gy -= m.decay * dy[q] / r[q]
+        return s, gx, gy
+
+    for i in range(len(P)):
+        qx = float(np.clip(P[i, 0] - out[i, 0], 0.0, box[0]))
+        qy = float(np.clip(P[i, 1] - out[i, 1], 0.0, box[1]))
+        if not (math.isfinite(qx) and math.isfinite(qy)):
+            continue
+        s, gx, gy = sum_grad(qx, qy)
+        norm = math.sqrt(gx * gx + gy * gy)  # not hypot: numba's and CPython's differ
+        if not (s > lim and norm > 0.0 and math.isfinite(norm)):
+            continue
+        ux, uy = gx / norm, gy / norm
+        target = lim * (1.0 - C3_MARGIN)
+        t, slope, found = 0.0, norm, None
+        for _ in range(PROJECT_STEPS):
+            t += (s - target) / slope
+            x = float(np.clip(qx - ux * t, 0.0, box[0]))
+            y = float(np.clip(qy - uy * t, 0.0, box[1]))
+            s, gx, gy = sum_grad(x, y)
+            slope = gx * ux + gy * uy
+            if s <= target:
+                found = (x, y)
+                if target - s <= C3_TOLERANCE * lim:
+                    break
+            if not slope > 0.0:
+                break
+        if found is not None:
+            out[i, 0], out[i, 1] = P[i, 0] - found[0], P[i, 1] - found[1]
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _sum_grad(x, y, sensors, order, xs, half, h2, peak, decay, windowed):  # pragma: no cover
+    """The summed link rate S (Mbit/s) of the point (x, y) and its gradient (Mbit/s per m),
+    over the sensors of its window in the window's order (all of them in index order without
+    one), as `project_c3_reference` sums them. O(sensors in the window)."""
+    if windowed:
+        lo, hi = window_range(xs, half, x)
+    else:
+        lo, hi = 0, sensors.shape[0]
+    s, gx, gy = 0.0, 0.0, 0.0
+    for q in range(lo, hi):
+        j = order[q] if windowed else q
+        dx = x - sensors[j, 0]
+        dy = y - sensors[j, 1]
+        if windowed and not abs(dy) < half:
+            continue
+        r = math.sqrt((dx * dx + dy * dy) + h2)
+        rate = peak - decay * r
+        if rate > 0.0:
+            s += rate
+            gx -= decay * dx / r
+            gy -= decay * dy / r
+    return s, gx, gy
+
+
+@njit(cache=True, nogil=True)
+def _project_kernel(P, move, box, sensors, order, xs, half, h2, peak, decay, windowed, lim,
+                    margin, tolerance, steps):  # pragma: no cover - compiled
+    """`project_c3` (its docstring): `project_c3_reference`'s loop with the same arithmetic."""
+    out = move.copy()
+    target = lim * (1.0 - margin)
+    for i in range(P.shape[0]):
+        qx = _clip1(P[i, 0] - out[i, 0], 0.0, box[0])
+        qy = _clip1(P[i, 1] - out[i, 1], 0.0, box[1])
+        if not (math.isfinite(qx) and math.isfinite(qy)):
+            continue
+        s, gx, gy = _sum_grad(qx, qy, sensors, order, xs, half, h2, peak, decay, windowed)
+        norm = math.sqrt(gx * gx + gy * gy)  # not hypot: numba's and CPython's differ
+        if not (s > lim and norm > 0.0 and math.isfinite(norm)):
+            continue
+        ux, uy = gx / norm, gy / norm
+        t, slope = 0.0, norm
+        found = False
+        fx, fy = 0.0, 0.0
+        for _ in range(steps):
+            t += (s - target) / slope
+            x = _clip1(qx - ux * t, 0.0, box[0])
+            y = _clip1(qy - uy * t, 0.0, box[1])
+            s, gx, gy = _sum_grad(x, y, sensors, order, xs, half, h2, peak, decay, windowed)
+            slope = gx * ux + gy * uy
+            if s <= target:
+                found, fx, fy = True, x, y
+                if target - s <= tolerance * lim:
+                    break
+            if not slope > 0.0:
+                break
+        if found:
+            out[i, 0], out[i, 1] = P[i, 0] - fx, P[i, 1] - fy
+    return out
 
 
 #: the turns (degrees) a held point's step tries, in this order, each shortened to its
