@@ -37,6 +37,7 @@ from planner_core.model.geometry import cut_legs, overlap_first
 __all__ = [
     "C3_MARGIN",
     "C3_TOLERANCE",
+    "PROJECT_SLACK",
     "PROJECT_STEPS",
     "SLIDE_ANGLES",
     "TRIAL_HELD",
@@ -161,13 +162,16 @@ class HeldCheck:
                                          self.problem.obstacles) > L_VIO_TOL
 
 
-#: the C3 projection (`project_c3`) puts a point below the bandwidth by at most this share
-#: of it (its Newton steps stop there) and at least `C3_MARGIN` of it, so that the trial's
-#: own C3 test (numpy's pairwise sum, `_SUM_SLACK`) passes it
+#: the C3 projection (`project_c3`) aims a point at this share of the bandwidth below it (at
+#: least `C3_MARGIN` below, so that the trial's own C3 test, numpy's pairwise sum within
+#: `_SUM_SLACK`, passes it) and stops once it lies within `C3_TOLERANCE` of the bandwidth
 C3_TOLERANCE = 1e-4
 C3_MARGIN = 1e-9
-#: Newton steps of the C3 projection along the summed rate's gradient, at most
-PROJECT_STEPS = 6
+#: steps of the C3 projection's safeguarded Newton search along the summed rate's gradient
+PROJECT_STEPS = 8
+#: metres added to a step's length to give the farthest the projection may move its point back
+#: (the cap: a point no place within it takes under the limit keeps its move, for the slides)
+PROJECT_SLACK = 1.0
 
 
 def project_c3(problem: Any, P: np.ndarray, move: np.ndarray, box: np.ndarray) -> np.ndarray:
@@ -177,12 +181,18 @@ def project_c3(problem: Any, P: np.ndarray, move: np.ndarray, box: np.ndarray) -
     for the one constraint of a point alone, its summed link rate S(p) = sum_j R_ij <=
     R_lambda (paper Sec. 3: R_ij = max(R_c - xi sqrt(d_ij^2 + H^2), 0), C3). Point i's trial
     position is q = clip(P_i - move_i) (the convention of `trial_points` with scale and step
-    1); where S(q) > R_lambda, q moves along -grad S(q) (u, unit) to q - t u, t found by
-    Newton's method on S(q - t u) = R_lambda (1 - `C3_MARGIN`) from t = 0 (S is concave along
-    the line while no link leaves the radio's range, so each step lands at or past the limit;
-    at most `PROJECT_STEPS`, stopped within `C3_TOLERANCE` of it), and move_i becomes
-    P_i - q'. A point no step takes under the limit keeps its move, for `trial_points`'
-    slides.
+    1); where S(q) > R_lambda, q moves along -grad S(q) (u, unit) to q - t u, with t in
+    [0, cap], cap = |move_i| + `PROJECT_SLACK` m (the point goes back at most about as far as
+    its step took it). t solves S(q - t u) = R_lambda (1 - `C3_MARGIN`) by a safeguarded
+    Newton search (at most `PROJECT_STEPS` steps, stopped within `C3_TOLERANCE` of the
+    bandwidth): a Newton step from the last t, clipped to the cap while no t under the limit
+    is known, else bisection of the bracket [last t over the limit, least t under it] where
+    Newton leaves it. Along the line S is concave where its set of links does not change, so
+    Newton from t = 0 lands at or past the limit there; links entering or leaving the radio's
+    range and the area's edge (the box clip) break that, hence the bracket. The point taken is
+    the last one found under the limit (the nearest to it the search saw), and move_i becomes
+    P_i - q'. A point with no place under the limit within the cap keeps its move, for
+    `trial_points`' slides; its step (the per-point Rprop step) is not changed.
 
     Why: on a dense clustered field every hover point sits on its bandwidth limit (L06: the
     summed rate at 99-100 % of R_lambda at every point), the LP's gradient pulls it toward
@@ -203,7 +213,8 @@ def project_c3(problem: Any, P: np.ndarray, move: np.ndarray, box: np.ndarray) -
         (I, 2) moves, m (a new array).
 
     Cost: per point, its summed rate and gradient over the sensors in its window (O(J) without
-    a finite window); per point over the limit, at most `PROJECT_STEPS` more (2-3 as a rule).
+    a finite window); per point over the limit, at most `PROJECT_STEPS` more (2-3 on L04 and
+    L06, about 3 on the corridors).
     """
     m = problem.model
     if not m.c3_limit < math.inf:
@@ -212,7 +223,7 @@ def project_c3(problem: Any, P: np.ndarray, move: np.ndarray, box: np.ndarray) -
     return _project_kernel(
         _writable(P), _writable(move), _writable(box), m.sensors, win.order, win.xs,
         float(win.half), m.altitude**2, m.peak_rate, m.decay, math.isfinite(win.half),
-        float(m.c3_limit), C3_MARGIN, C3_TOLERANCE, PROJECT_STEPS,
+        float(m.c3_limit), C3_MARGIN, C3_TOLERANCE, PROJECT_STEPS, PROJECT_SLACK,
     )  # fmt: skip
 
 
@@ -268,19 +279,26 @@ def project_c3_reference(problem: Any, P: np.ndarray, move: np.ndarray,
             continue
         ux, uy = gx / norm, gy / norm
         target = lim * (1.0 - C3_MARGIN)
-        t, slope, found = 0.0, norm, None
+        cap = math.sqrt(out[i, 0] * out[i, 0] + out[i, 1] * out[i, 1]) + PROJECT_SLACK
+        lo, hi, t, slope, found = 0.0, math.inf, 0.0, norm, None
         for _ in range(PROJECT_STEPS):
-            t += (s - target) / slope
+            nxt = t + (s - target) / slope if slope > 0.0 else math.nan
+            if hi == math.inf:  # no place under the limit yet: Newton, at most to the cap
+                t = min(nxt, cap) if nxt > lo else cap
+            else:  # a bracket: Newton inside it, else its midpoint
+                t = nxt if lo < nxt < hi else 0.5 * (lo + hi)
             x = float(np.clip(qx - ux * t, 0.0, box[0]))
             y = float(np.clip(qy - uy * t, 0.0, box[1]))
             s, gx, gy = sum_grad(x, y)
             slope = gx * ux + gy * uy
             if s <= target:
-                found = (x, y)
+                hi, found = t, (x, y)
                 if target - s <= C3_TOLERANCE * lim:
                     break
-            if not slope > 0.0:
-                break
+            elif t >= cap:
+                break  # over the limit at the cap: no place within it
+            else:
+                lo = t
         if found is not None:
             out[i, 0], out[i, 1] = P[i, 0] - found[0], P[i, 1] - found[1]
     return out
@@ -313,7 +331,7 @@ def _sum_grad(x, y, sensors, order, xs, half, h2, peak, decay, windowed):  # pra
 
 @njit(cache=True, nogil=True)
 def _project_kernel(P, move, box, sensors, order, xs, half, h2, peak, decay, windowed, lim,
-                    margin, tolerance, steps):  # pragma: no cover - compiled
+                    margin, tolerance, steps, slack):  # pragma: no cover - compiled
     """`project_c3` (its docstring): `project_c3_reference`'s loop with the same arithmetic."""
     out = move.copy()
     target = lim * (1.0 - margin)
@@ -327,21 +345,28 @@ def _project_kernel(P, move, box, sensors, order, xs, half, h2, peak, decay, win
         if not (s > lim and norm > 0.0 and math.isfinite(norm)):
             continue
         ux, uy = gx / norm, gy / norm
-        t, slope = 0.0, norm
+        cap = math.sqrt(out[i, 0] * out[i, 0] + out[i, 1] * out[i, 1]) + slack
+        lo, hi, t, slope = 0.0, math.inf, 0.0, norm
         found = False
         fx, fy = 0.0, 0.0
         for _ in range(steps):
-            t += (s - target) / slope
+            nxt = t + (s - target) / slope if slope > 0.0 else math.nan
+            if hi == math.inf:
+                t = min(nxt, cap) if nxt > lo else cap
+            else:
+                t = nxt if lo < nxt < hi else 0.5 * (lo + hi)
             x = _clip1(qx - ux * t, 0.0, box[0])
             y = _clip1(qy - uy * t, 0.0, box[1])
             s, gx, gy = _sum_grad(x, y, sensors, order, xs, half, h2, peak, decay, windowed)
             slope = gx * ux + gy * uy
             if s <= target:
-                found, fx, fy = True, x, y
+                hi, found, fx, fy = t, True, x, y
                 if target - s <= tolerance * lim:
                     break
-            if not slope > 0.0:
+            elif t >= cap:
                 break
+            else:
+                lo = t
         if found:
             out[i, 0], out[i, 1] = P[i, 0] - fx, P[i, 1] - fy
     return out
