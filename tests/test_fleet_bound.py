@@ -66,6 +66,10 @@ def test_overhead_table_arithmetic(tmp_path):
     bk = json.loads((ROOT / "examples/maps/large_best_known.json").read_text())["tasks"]["L04"]
     single = fb.single_flight_s("L04")
     assert single == pytest.approx(2.0 * bk["f"], rel=1e-9)
+    # another best-known file of the same format (the copy tables before a refresh used)
+    old = ROOT / "docs/scaling/best-known-0f5cc8d.json"
+    was = json.loads(old.read_text())["tasks"]["L04"]
+    assert fb.single_flight_s("L04", old) == pytest.approx(2.0 * was["f"], rel=1e-9)
     st = FleetSettings.from_map(load_map(battery_map(ROOT / "examples/maps/large/L04.json")),
                                 "total")  # fmt: skip
     rec = {"map": "L04", "seed": 0, "uavs": 1,

@@ -35,11 +35,12 @@ its own gradient; after a kept trial s_i grows by `RPROP_UP` (1.2) where the poi
 kept its direction (positive dot product with the last one) and shrinks by `RPROP_DOWN` (0.5)
 where it turned; a rejected trial halves every s_i; the descent stops when the largest s_i
 falls below `min_step`. A point whose step would break C3 is first projected back onto
-its bandwidth limit along the summed rate's gradient (`planner_core.search.trial.project_c3`:
-on a dense clustered field every point sits on that limit and the gradient pulls it across,
-so without the projection it would stay put); a point a trial still holds in place (C3 or
-C5) keeps its gradient's direction, so its step grows with the kept trials and it tries
-further the next time. With
+its bandwidth limit along the summed rate's gradient, at most its step's length back
+(`planner_core.search.trial.project_c3`: on a dense clustered field every point sits on that
+limit and the gradient pulls it across, so without the projection it would stay put; its
+move is then where that line meets the limit, not s_i); a point a trial still holds in place
+(C3 or C5) keeps its gradient's direction, so its step grows with the kept trials and it
+tries further the next time. With
 one step for all, the point with the steepest gradient sets every point's move. Descent by
 descent the two rules are about even (`benchmarks/bench_descent.py`: from kicked plans and
 from constructive starts of L06 and L08 each ends lower about half the time); over whole
