@@ -92,6 +92,23 @@ def port() -> int:
     return free_udp_port()
 
 
+def drawn_figures(monkeypatch: pytest.MonkeyPatch) -> list:
+    """The figures `lamde_mission.plot.mission_figure` draws from now on in this test, in
+    order (it is wrapped, not replaced): for tests that run `show` or `plan --plot` in this
+    process and then read the figure."""
+    from lamde_mission import plot
+
+    drawn: list = []
+    real = plot.mission_figure
+
+    def keep(*args, **kw):
+        drawn.append(real(*args, **kw))
+        return drawn[-1]
+
+    monkeypatch.setattr(plot, "mission_figure", keep)
+    return drawn
+
+
 def plan_at(m, hover, times):
     """A Plan-like record of the given hover points and times on map `m` (breakdown by the
     model), for drawing and replay tests that need a known plan without running the DE."""

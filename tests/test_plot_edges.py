@@ -23,7 +23,7 @@ from lamde_mission.formats.qgc_plan import write_qgc_plan
 from lamde_mission.items import plan_to_items
 from planner_core.model.mapio import load_map
 from sim import replay
-from tests.conftest import plan_at
+from tests.conftest import drawn_figures, plan_at
 
 #: twelve sensors (past TIME_LINES: the bar panel is drawn too) on a 2 x 1.5 km area
 MAP = {
@@ -66,14 +66,7 @@ def _show(tmp_path: Path, case: str, monkeypatch, capsys) -> tuple[object, Path]
                              plan_to_items(plan_at(m, hover, times), m), home=home_of(m),
                              cruise_speed=20.0)  # fmt: skip
     (tmp_path / f"{case}.json").write_text(json.dumps(spec))
-    drawn = []
-    real = plot.mission_figure
-
-    def keep(*args, **kw):
-        drawn.append(real(*args, **kw))
-        return drawn[-1]
-
-    monkeypatch.setattr(plot, "mission_figure", keep)
+    drawn = drawn_figures(monkeypatch)
     out = tmp_path / f"{case}.png"
     assert main(["show", str(tmp_path / f"{case}.json"), str(mission), "-o", str(out)]) == 0
     assert "Traceback" not in capsys.readouterr().err

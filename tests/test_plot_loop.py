@@ -22,7 +22,7 @@ from lamde_mission.items import CMD, MissionItem, plan_to_items
 from planner_core.model.mapio import load_map
 from sim import replay
 from sim.obstacles import distinct_rows, unique_legs
-from tests.conftest import plan_at
+from tests.conftest import drawn_figures, plan_at
 
 MAP = {
     "name": "loop",
@@ -155,14 +155,7 @@ def _show(tmp_path: Path, passes: int, monkeypatch) -> tuple[object, Path]:
     mission = write_qgc_plan(tmp_path / f"loop{passes}.plan", _loop(m, passes),
                              home=home_of(m), cruise_speed=20.0)  # fmt: skip
     out = tmp_path / f"loop{passes}.png"
-    drawn = []
-    real = plot.mission_figure
-
-    def keep(*args, **kw):
-        drawn.append(real(*args, **kw))
-        return drawn[-1]
-
-    monkeypatch.setattr(plot, "mission_figure", keep)
+    drawn = drawn_figures(monkeypatch)
     assert main(["show", str(tmp_path / "map.json"), str(mission), "-o", str(out)]) == 0
     return drawn[0], out
 
