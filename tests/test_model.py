@@ -17,6 +17,7 @@ from planner_core.model.formulas import (
     link_rates,
     penalised_score,
     slant_rate,
+    slant_rate_grad,
     slant_rates,
 )
 from planner_core.model.mapio import load_map
@@ -41,6 +42,25 @@ def test_compiled_slant_rate_is_bit_equal_and_link_rates_clip() -> None:
     assert np.array_equal([slant_rate(float(x), 100.0 * 100.0, 10.0, 0.01) for x in d2], ref)
     R = link_rates(np.array([[0.0, 0.0], [2000.0, 0.0]]), np.array([[0.0, 0.0]]), 100.0, 10.0, 0.01)
     assert R[0, 0] == pytest.approx(9.0) and R[1, 0] == 0.0
+
+
+def test_slant_rate_grad_is_the_rate_and_its_gradient() -> None:
+    rng = np.random.default_rng(3)
+    h2, peak, decay = 100.0 * 100.0, 10.0, 0.01
+    for dx, dy in rng.uniform(-1500.0, 1500.0, (60, 2)):
+        rate, gx, gy = slant_rate_grad(float(dx), float(dy), h2, peak, decay)
+        # the rate is slant_rate's to the bit
+        assert rate == slant_rate(float(dx * dx + dy * dy), h2, peak, decay)
+        # the gradient against central differences of the rate (both axes)
+        e = 1e-3
+        fx = (slant_rate((dx + e) ** 2 + dy * dy, h2, peak, decay)
+              - slant_rate((dx - e) ** 2 + dy * dy, h2, peak, decay)) / (2 * e)
+        fy = (slant_rate(dx * dx + (dy + e) ** 2, h2, peak, decay)
+              - slant_rate(dx * dx + (dy - e) ** 2, h2, peak, decay)) / (2 * e)
+        assert gx == pytest.approx(fx, rel=1e-5, abs=1e-9)
+        assert gy == pytest.approx(fy, rel=1e-5, abs=1e-9)
+    # by hand: 300 m east of the sensor at H = 400 m, r = 500 m: R = 10 - 5, dR/dx = -0.006
+    assert slant_rate_grad(300.0, 0.0, 400.0**2, peak, decay) == pytest.approx((5.0, -0.006, 0.0))
 
 
 def test_deb_rule_and_score() -> None:

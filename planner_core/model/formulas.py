@@ -38,6 +38,7 @@ __all__ = [
     "numpy_sum",
     "ground_reach",
     "slant_rate",
+    "slant_rate_grad",
     "slant_rates",
     "collision_penalty",
     "penalised_score",
@@ -124,6 +125,28 @@ def slant_rate(d2: float, h2: float, peak_rate: float, decay: float) -> float:  
         R_c - xi * sqrt(d2 + h2) (Mbit/s), not clipped at 0.
     """
     return peak_rate - decay * math.sqrt(d2 + h2)
+
+
+@njit(cache=True, nogil=True)
+def slant_rate_grad(dx: float, dy: float, h2: float, peak_rate: float,
+                    decay: float) -> tuple[float, float, float]:  # pragma: no cover
+    """`slant_rate` of one pair and its gradient with respect to the hover point, for compiled
+    kernels: with r = sqrt(dx^2 + dy^2 + H^2), R = R_c - xi r and dR/dx = -xi dx / r, dR/dy =
+    -xi dy / r (paper Sec. 3.1's R_ij, not clipped at 0; the rate is `slant_rate`'s to the
+    bit, tests/test_model.py).
+
+    Args:
+        dx: point x minus sensor x (m).
+        dy: point y minus sensor y (m).
+        h2: squared altitude H^2 (m^2).
+        peak_rate: R_c (Mbit/s).
+        decay: xi (Mbit/s per m).
+
+    Returns:
+        (R (Mbit/s), dR/dx, dR/dy (Mbit/s per m)).
+    """
+    r = math.sqrt((dx * dx + dy * dy) + h2)
+    return peak_rate - decay * r, -(decay * dx / r), -(decay * dy / r)
 
 
 def ground_reach(

@@ -29,6 +29,7 @@ from planner_core.model.formulas import (
     _link_rates_2d,
     _link_rates_window,
     numpy_sum,
+    slant_rate_grad,
     window_pair_rate,
     window_range,
 )
@@ -258,14 +259,14 @@ def project_c3_reference(problem: Any, P: np.ndarray, move: np.ndarray,
             idx = np.arange(len(S))
         dx, dy = x - S[idx, 0], y - S[idx, 1]
         near = np.abs(dy) < win.half if math.isfinite(win.half) else np.ones(len(idx), bool)
-        r = np.sqrt((dx * dx + dy * dy) + h2)
-        rate = m.peak_rate - m.decay * r
-        on = near & (rate > 0.0)
         s = gx = gy = 0.0
-        for q in np.flatnonzero(on):  # in the window's order, one term at a time
-            s += rate[q]
-            gx -= m.decay * dx[q] / r[q]
-            gy -= m.decay * dy[q] / r[q]
+        for q in np.flatnonzero(near):  # in the window's order, one term at a time
+            rate, dgx, dgy = slant_rate_grad(float(dx[q]), float(dy[q]), h2, m.peak_rate,
+                                             m.decay)
+            if rate > 0.0:
+                s += rate
+                gx += dgx
+                gy += dgy
         return s, gx, gy
 
     for i in range(len(P)):
@@ -320,12 +321,11 @@ def _sum_grad(x, y, sensors, order, xs, half, h2, peak, decay, windowed):  # pra
         dy = y - sensors[j, 1]
         if windowed and not abs(dy) < half:
             continue
-        r = math.sqrt((dx * dx + dy * dy) + h2)
-        rate = peak - decay * r
+        rate, dgx, dgy = slant_rate_grad(dx, dy, h2, peak, decay)
         if rate > 0.0:
             s += rate
-            gx -= decay * dx / r
-            gy -= decay * dy / r
+            gx += dgx
+            gy += dgy
     return s, gx, gy
 
 
