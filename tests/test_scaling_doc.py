@@ -86,10 +86,16 @@ def _paired_runs(task: str, new: list, old: list, best: dict, feas: str, n: str,
 BEFORE_C3 = ROOT / "docs" / "scaling" / "best-known-0f5cc8d.json"
 
 
-def _best_known(current: bool = False) -> dict:
-    """The large suite's best-known file (`current`), else the copy of it the tables measured
-    before its last refresh used (docs/scaling/best-known-0f5cc8d.json, the same format)."""
-    path = ROOT / "examples" / "maps" / "large_best_known.json" if current else BEFORE_C3
+def _best_known(current: bool = False, snapshot: str | None = None) -> dict:
+    """The large suite's best-known file (`current`), else the copy of it a table's day used:
+    docs/scaling/best-known-<snapshot>.json (the file as of that commit), by default the copy
+    before the C3 projection's refresh (docs/scaling/best-known-0f5cc8d.json; same format)."""
+    if current:
+        path = ROOT / "examples" / "maps" / "large_best_known.json"
+    elif snapshot is not None:
+        path = ROOT / "docs" / "scaling" / f"best-known-{snapshot}.json"
+    else:
+        path = BEFORE_C3
     return json.loads(path.read_text())
 
 
@@ -220,18 +226,19 @@ PER_POINT_ROW = re.compile(r"^\| (L\d\d) \| (\d+) \| (\d+)/(\d+) \| ([\d.]+) \| 
 
 
 def _table_against_before(section: str, records: str, baseline: str | dict[str, str],
-                          maps: int, current: bool = False) -> None:
+                          maps: int, current: bool = False, snapshot: str | None = None
+                          ) -> None:
     """A `PER_POINT_ROW` table of docs/scaling.md's `section` (its first `maps` rows): every
     figure from the stored runs `records`, paired run by run with the runs `baseline` (file
     names under docs/scaling/; a dict: each map's own); gaps against the best-known of the
-    table's day (`current`: the stored file; else the snapshot before its last refresh)."""
+    table's day (`current`: the stored file; else `_best_known`'s `snapshot`)."""
     from scipy.stats import wilcoxon
 
     text = _doc()[_doc().index(section):]
     rows = PER_POINT_ROW.findall(text)[:maps]
     assert len(rows) == maps
     new = read_jsonl(ROOT / "docs" / "scaling" / records)
-    best = _best_known(current)["tasks"]
+    best = _best_known(current, snapshot)["tasks"]
     for task, _, feas, n, mean, gap, gap0, sd, cpu, cpu0, lower, higher, p in rows:
         old = read_jsonl(ROOT / "docs" / "scaling" / (
             baseline if isinstance(baseline, str) else baseline[task]))
@@ -340,19 +347,71 @@ def test_the_field_step_table_is_what_its_runs_give_against_the_runs_before() ->
 
 def test_the_c3_projection_table_is_what_its_runs_give_against_the_runs_before() -> None:
     """docs/scaling.md, 'The C3 projection': L04-L08 paired run by run with the coarser
-    steps' runs, gaps against today's best-known (the file these runs refreshed); L01-L03
-    plan as before run for run (L02 but one run)."""
+    steps' runs, gaps against the best-known these runs refreshed (the file as of 64b837d:
+    the budget runs lowered L06 since); L01-L03 plan as before run for run (L02 but one
+    run)."""
     _table_against_before("## The C3 projection", "large-suite-25-c3proj.jsonl.gz",
-                          "large-suite-25-fieldstep.jsonl.gz", 5, current=True)
+                          "large-suite-25-fieldstep.jsonl.gz", 5, snapshot="64b837d")
     new = read_jsonl(ROOT / "docs" / "scaling" / "large-suite-25-c3proj.jsonl.gz")
     old = read_jsonl(ROOT / "docs" / "scaling" / "large-suite-25-window-run.jsonl.gz")
     before = {(r["task"], r["run"]): r["f"] for r in old}
     changed = [(r["task"], r["run"]) for r in new
                if r["task"] in ("L01", "L02", "L03") and r["f"] != before[(r["task"], r["run"])]]
     assert changed == [("L02", 23)]
-    best = _best_known(current=True)["tasks"]
+    best = _best_known(snapshot="64b837d")["tasks"]
     text = _doc()[_doc().index("Against the refreshed best-known the suite's gaps are"):]
     for task in ("L01", "L02", "L03", "L04", "L05", "L06", "L07", "L08"):
         fs = [r["f"] for r in new if r["task"] == task]
         gap = 100 * (statistics.mean(fs) / best[task]["f"] - 1)
         assert f"{task} {gap:.2f}" in text[:400], task
+
+
+#: the budget table: map, budget, feasible, runs, mean f, change %, lower / higher, p, gap %
+#: against the file before, gap % against the refreshed file, sd %, least f, median CPU s
+BUDGET_ROW = re.compile(r"^\| (L\d\d) \| ([\d,]+) \| (\d+)/(\d+) \| ([\d.]+) \| ([+-][\d.]+|-) \| "
+                        r"(\d+ / \d+|-) \| ([\d.e-]+|-) \| ([\d.]+) \| ([\d.]+) \| ([\d.]+) \| "
+                        r"([\d.]+) \| ([\d.]+) \|$", re.M)  # fmt: skip
+
+
+def test_the_budget_table_is_what_its_runs_give_against_the_default() -> None:
+    """docs/scaling.md, 'More budget on L06 and L08': each row from the stored runs at 15,000
+    and 20,000 evaluations (the 10,000 rows: the C3 projection's runs), paired run by run with
+    those; gaps against the best-known as of 64b837d and the current file, which these runs
+    lowered on L06."""
+    from scipy.stats import wilcoxon
+
+    text = _doc()[_doc().index("### More budget on L06 and L08"):]
+    rows = BUDGET_ROW.findall(text)
+    assert [(r[0], r[1]) for r in rows] == [(t, b) for t in ("L06", "L08")
+                                             for b in ("10,000", "15,000", "20,000")]
+    new = read_jsonl(ROOT / "docs" / "scaling" / "large-budget-15k-20k.jsonl.gz")
+    old = read_jsonl(ROOT / "docs" / "scaling" / "large-suite-25-c3proj.jsonl.gz")
+    before_file = _best_known(snapshot="64b837d")["tasks"]
+    now = _best_known(current=True)["tasks"]
+    for task, budget, feas, n, mean, change, lohi, p, gap0, gap1, sd, least, cpu in rows:
+        base = sorted((r for r in old if r["task"] == task), key=lambda r: r["run"])
+        rs = base if budget == "10,000" else sorted(
+            (r for r in new if r["task"] == task and r["budget"] == int(budget.replace(",", ""))),
+            key=lambda r: r["run"])
+        fs, f0 = [r["f"] for r in rs], [r["f"] for r in base]
+        assert len(rs) == int(n) == 25 and sum(r["feasible"] for r in rs) == int(feas)
+        assert [r["run"] for r in rs] == [r["run"] for r in base]
+        assert f"{statistics.mean(fs):.1f}" == mean, (task, budget)
+        if budget != "10,000":
+            assert f"{100 * (statistics.mean(fs) / statistics.mean(f0) - 1):+.2f}" == change
+            assert lohi == (f"{sum(a < b for a, b in zip(fs, f0, strict=True))} / "
+                            f"{sum(a > b for a, b in zip(fs, f0, strict=True))}")
+            assert f"{wilcoxon(fs, f0, alternative='less').pvalue:.2g}" == p
+        assert f"{100 * (statistics.mean(fs) / before_file[task]['f'] - 1):.2f}" == gap0
+        assert f"{100 * (statistics.mean(fs) / now[task]['f'] - 1):.2f}" == gap1
+        assert f"{100 * statistics.pstdev(fs) / statistics.mean(fs):.2f}" == sd
+        assert f"{min(fs):.1f}" == least
+        assert f"{statistics.median(r['cpu_s'] for r in rs):.1f}" == cpu
+    # the refreshed L06 is the least of these runs; every other map kept its value
+    assert now["L06"]["f"] == min(r["f"] for r in new if r["task"] == "L06")
+    assert all(now[t]["f"] == before_file[t]["f"] for t in now if t != "L06")
+    text = " ".join(_doc()[_doc().index("The suite's gaps at the default are now"):].split())
+    runs = read_jsonl(ROOT / "docs" / "scaling" / "large-suite-25-c3proj.jsonl.gz")
+    for task in sorted(now):
+        fs = [r["f"] for r in runs if r["task"] == task]
+        assert f"{task} {100 * (statistics.mean(fs) / now[task]['f'] - 1):.2f}" in text[:200]
