@@ -81,21 +81,18 @@ def _paired_runs(task: str, new: list, old: list, best: dict, feas: str, n: str,
     return fs, [before[r["run"]] for r in rs]
 
 
-#: the best-known of the tables measured before the C3 projection's runs refreshed it: their
-#: gaps are against these (docs/scaling.md says so where the current best-known begins)
-BEFORE_C3 = ROOT / "docs" / "scaling" / "best-known-0f5cc8d.json"
+#: the best-known of the tables measured before the C3 projection's runs refreshed it (the file
+#: as of 0f5cc8d): their gaps are against it (docs/scaling.md says so where the current
+#: best-known begins)
+BEFORE_C3 = "0f5cc8d"
 
 
-def _best_known(current: bool = False, snapshot: str | None = None) -> dict:
-    """The large suite's best-known file (`current`), else the copy of it a table's day used:
-    docs/scaling/best-known-<snapshot>.json (the file as of that commit), by default the copy
-    before the C3 projection's refresh (docs/scaling/best-known-0f5cc8d.json; same format)."""
-    if current:
-        path = ROOT / "examples" / "maps" / "large_best_known.json"
-    elif snapshot is not None:
-        path = ROOT / "docs" / "scaling" / f"best-known-{snapshot}.json"
-    else:
-        path = BEFORE_C3
+def _best_known(snapshot: str | None = BEFORE_C3) -> dict:
+    """The copy of the large suite's best-known file a table's day used,
+    docs/scaling/best-known-<snapshot>.json (the file as of that commit; same format); None:
+    the stored file itself, examples/maps/large_best_known.json."""
+    path = (ROOT / "examples" / "maps" / "large_best_known.json" if snapshot is None
+            else ROOT / "docs" / "scaling" / f"best-known-{snapshot}.json")
     return json.loads(path.read_text())
 
 
@@ -171,7 +168,7 @@ def test_the_large_best_known_is_at_least_as_good_as_the_long_runs() -> None:
     the least f of its stored 100,000-evaluation runs, and those runs are what the page says."""
 
     runs = read_jsonl(ROOT / "docs" / "scaling" / "large-long-100k.jsonl.gz")
-    best = _best_known(current=True)
+    best = _best_known(None)
     assert {r["budget"] for r in runs} == {100_000} and all(r["feasible"] for r in runs)
     for task in {r["task"] for r in runs}:
         fs = sorted(r["f"] for r in runs if r["task"] == task)
@@ -226,19 +223,18 @@ PER_POINT_ROW = re.compile(r"^\| (L\d\d) \| (\d+) \| (\d+)/(\d+) \| ([\d.]+) \| 
 
 
 def _table_against_before(section: str, records: str, baseline: str | dict[str, str],
-                          maps: int, current: bool = False, snapshot: str | None = None
-                          ) -> None:
+                          maps: int, snapshot: str | None = BEFORE_C3) -> None:
     """A `PER_POINT_ROW` table of docs/scaling.md's `section` (its first `maps` rows): every
     figure from the stored runs `records`, paired run by run with the runs `baseline` (file
     names under docs/scaling/; a dict: each map's own); gaps against the best-known of the
-    table's day (`current`: the stored file; else `_best_known`'s `snapshot`)."""
+    table's day (`_best_known`'s `snapshot`; None: the stored file)."""
     from scipy.stats import wilcoxon
 
     text = _doc()[_doc().index(section):]
     rows = PER_POINT_ROW.findall(text)[:maps]
     assert len(rows) == maps
     new = read_jsonl(ROOT / "docs" / "scaling" / records)
-    best = _best_known(current, snapshot)["tasks"]
+    best = _best_known(snapshot)["tasks"]
     for task, _, feas, n, mean, gap, gap0, sd, cpu, cpu0, lower, higher, p in rows:
         old = read_jsonl(ROOT / "docs" / "scaling" / (
             baseline if isinstance(baseline, str) else baseline[task]))
@@ -387,7 +383,7 @@ def test_the_budget_table_is_what_its_runs_give_against_the_default() -> None:
     new = read_jsonl(ROOT / "docs" / "scaling" / "large-budget-15k-20k.jsonl.gz")
     old = read_jsonl(ROOT / "docs" / "scaling" / "large-suite-25-c3proj.jsonl.gz")
     before_file = _best_known(snapshot="64b837d")["tasks"]
-    now = _best_known(current=True)["tasks"]
+    now = _best_known(None)["tasks"]
     for task, budget, feas, n, mean, change, lohi, p, gap0, gap1, sd, least, cpu in rows:
         base = sorted((r for r in old if r["task"] == task), key=lambda r: r["run"])
         rs = base if budget == "10,000" else sorted(
@@ -411,7 +407,6 @@ def test_the_budget_table_is_what_its_runs_give_against_the_default() -> None:
     assert now["L06"]["f"] == min(r["f"] for r in new if r["task"] == "L06")
     assert all(now[t]["f"] == before_file[t]["f"] for t in now if t != "L06")
     text = " ".join(_doc()[_doc().index("The suite's gaps at the default are now"):].split())
-    runs = read_jsonl(ROOT / "docs" / "scaling" / "large-suite-25-c3proj.jsonl.gz")
     for task in sorted(now):
-        fs = [r["f"] for r in runs if r["task"] == task]
+        fs = [r["f"] for r in old if r["task"] == task]
         assert f"{task} {100 * (statistics.mean(fs) / now[task]['f'] - 1):.2f}" in text[:200]
