@@ -410,3 +410,13 @@ def test_the_budget_table_is_what_its_runs_give_against_the_default() -> None:
     for task in sorted(now):
         fs = [r["f"] for r in old if r["task"] == task]
         assert f"{task} {100 * (statistics.mean(fs) / now[task]['f'] - 1):.2f}" in text[:200]
+
+
+def test_the_l02_share_table_is_what_its_runs_give_against_the_c3_projection() -> None:
+    """docs/scaling.md, 'L02: the DE's share from 121 to 160 sensors, tried again': L02 x 25
+    at the share 0.3 with 5 seeder plans (not shipped), paired run by run with the C3
+    projection's runs; gaps against the stored best-known (L02's unchanged since 0f5cc8d)."""
+    assert _best_known(None)["tasks"]["L02"] == _best_known("0f5cc8d")["tasks"]["L02"]
+    _table_against_before("### L02: the DE's share from 121 to 160 sensors, tried again",
+                          "large-suite-25-l02-share03.jsonl.gz",
+                          "large-suite-25-c3proj.jsonl.gz", 1, snapshot=None)
