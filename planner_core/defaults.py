@@ -264,12 +264,12 @@ _RUN: tuple[Default, ...] = (
             "final stage and the improving rounds (kicks, structural search, restarts from "
             "other structures and fresh constructive plans; beyond the paper's sizes, rebuilt "
             "windows of hover points instead of the restarts), the stages that turn budget into "
-            "a better plan (docs/architecture.md, 'Where the budget goes'); on maps of more "
-            "than 160 sensors (with the large rounds: I_max above 20, variable length, "
-            "simultaneous access) the default scheduler makes the default 0: the DE runs its "
+            "a better plan (docs/architecture.md, 'Where the budget goes'); on maps with the "
+            "large rounds (I_max above 20 and variable length, either radio.access) the "
+            "default scheduler makes the default 0 beyond 160 sensors: the DE runs its "
             "population, one generation (`planner_core.pipeline.schedule.LARGE_DE_SHARE`; "
-            "docs/scaling.md, 'One DE generation beyond 160 sensors'), and on such maps of at "
-            "most 120 sensors 0.2 (`MID_DE_SHARE`)",
+            "docs/scaling.md, 'One DE generation beyond 160 sensors'), and 0.2 up to 120 "
+            "sensors (`MID_DE_SHARE`); from 121 to 160 it stays 0.6",
             "a number in [0, 1]", _share),
     Default("time_limit", None, "seconds after which the pipeline stops its improving stages "
             "and returns the best plan found (null: none; the kernel compile is not counted); "

@@ -41,6 +41,50 @@ def test_pads_keep_the_spacing_and_vehicle_1_keeps_the_depot(vehicles):
     assert np.array_equal(pads, again)
 
 
+def _pad_layout_reference(depots: np.ndarray, vehicles: int, spacing: float, free) -> np.ndarray:
+    """`pad_layout` without listed pads, written as its rule reads: each depot in turn takes
+    the first lattice spots its test frees that lie at least `spacing` from every depot and
+    every pad taken before, one pair at a time."""
+    from planner_core.model.pads import _lattice
+
+    out = np.repeat(depots[None], vehicles, axis=0).astype(float)
+    taken = [tuple(p) for p in depots]
+    for d, site in enumerate(depots):
+        cand = site + _lattice(MAX_RINGS) * spacing
+        ok = free(site, cand)
+        k = 1
+        for c, fine in zip(cand, ok, strict=True):
+            if k == vehicles:
+                break
+            if fine and all(float(np.hypot(c[0] - t[0], c[1] - t[1])) >= spacing - 1e-9
+                            for t in taken):
+                out[k, d] = c
+                taken.append(tuple(c))
+                k += 1
+    return out
+
+
+def test_pads_of_crowded_depots_are_those_the_rule_gives_pair_by_pair():
+    """Depots a few spacings apart share their ground: each pad is the first free lattice spot
+    clear of every pad taken before (the vectorised distance test, against the rule written
+    pair by pair); a depot's test that frees only its east half is kept."""
+    rng = np.random.default_rng(7)
+    depots = 500.0 + rng.uniform(0, 300, size=(12, 2))
+    depots = depots[np.argsort(depots[:, 0])]
+    keep = [0]
+    for i in range(1, len(depots)):  # depots at least the spacing apart (else refused)
+        if np.hypot(*(depots[keep] - depots[i]).T).min() >= 40.0:
+            keep.append(i)
+    depots = depots[keep]
+
+    def free(site, p):
+        return p[:, 0] >= site[0] - 1e-9 if site[1] < 650.0 else np.ones(len(p), bool)
+
+    got = pad_layout(depots, 30, 35.0, free)
+    assert np.array_equal(got, _pad_layout_reference(depots, 30, 35.0, free))
+    assert _every_pair_apart(got) >= 35.0 - 1e-9
+
+
 def test_pads_skip_what_the_test_refuses_and_say_when_there_is_no_room():
     depot = np.array([[1000.0, 1000.0]])
     # refuse everything west of the depot (a building there)
@@ -335,6 +379,30 @@ def test_check_lists_the_pads(tmp_path, capsys):
     path.write_text(json.dumps(_demo(1)))
     assert main(["check", str(path)]) == 0
     assert "pads " not in capsys.readouterr().out
+
+
+def test_check_names_the_first_depots_and_pads_of_a_large_fleet(tmp_path, capsys):
+    """A reviewer's 91 depots and 100 UAVs made check's fleet and pads lines thousands of
+    characters long (and the pads took 80 s): the lines name the first `SHOWN_SITES` depots
+    and `SHOWN_PADS` pads of each, then how many more; `--json` keeps every pad."""
+    from lamde_mission.cli import main
+    from lamde_mission.commands.check import SHOWN_PADS, SHOWN_SITES
+
+    doc = _demo(12)
+    doc["fleet"]["depots"] = [{"name": f"d{i}", "x": 100.0 + 220.0 * i, "y": 1850.0}
+                              for i in range(SHOWN_SITES + 2)]  # fmt: skip
+    path = tmp_path / "many.json"
+    path.write_text(json.dumps(doc))
+    assert main(["check", str(path)]) == 0
+    lines = {ln[:18].strip(): ln for ln in capsys.readouterr().out.splitlines()}
+    assert f"d{SHOWN_SITES - 1} (1200, 1850) and 2 more, swap" in lines["fleet"]
+    assert "d7 (" not in lines["fleet"]
+    pads = lines["pads"]
+    assert pads.count(f"; and {12 - 1 - SHOWN_PADS} more") == SHOWN_SITES
+    assert pads.endswith(" | and 2 more depots' (`check --json` lists every pad)")
+    assert main(["check", str(path), "--json"]) == 0
+    got = json.loads(capsys.readouterr().out)["fleet"]["pads"]
+    assert len(got) == SHOWN_SITES + 2 and all(len(ps) == 11 for ps in got.values())
 
 
 def test_pads_are_numbered_from_1_wherever_a_person_reads_them(capsys):

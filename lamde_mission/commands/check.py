@@ -176,11 +176,13 @@ def _energy_lines(s: dict, m: object) -> None:
               f"({number_text(60 * b['usable_wh'] / hover_w, 3)} min of hover at P(0) "
               f"{hover_w:g} W)")
     if f is not None:
-        from planner_core.textio import counted, printable
+        from planner_core.textio import counted, first_few, printable
 
         names, xy, _ = m.sortie_sites
         sites = [f"{printable(n)} ({x:g}, {y:g})" for n, (x, y) in zip(names, xy, strict=True)]
-        where = ", ".join(sites)
+        # a long list named by its first few (100 depots made a line of 2,500 characters);
+        # `check --json` lists them all
+        where = first_few(sites, SHOWN_SITES)
         if f["depots_default"]:
             where = f"{sites[0]} at the start (default)" + (
                 f" and {sites[1]} at the map's end (a landing site; a take-off site only "
@@ -194,15 +196,23 @@ def _energy_lines(s: dict, m: object) -> None:
 
             each = " | ".join(
                 f"{printable(n)}: " + "; ".join(
-                    f"pad {p['pad']} {offset_words(p['east_m'], p['north_m'])}" for p in ps)
-                for n, ps in pads.items())  # fmt: skip
+                    f"pad {p['pad']} {offset_words(p['east_m'], p['north_m'])}"
+                    for p in ps[:SHOWN_PADS]) + (
+                    f"; and {len(ps) - SHOWN_PADS} more" if len(ps) > SHOWN_PADS else "")
+                for n, ps in list(pads.items())[:SHOWN_SITES])  # fmt: skip
+            more = len(pads) - SHOWN_SITES
             print(f"  pads            beside each depot, taken by the vehicles that use it "
-                  f"in number order (pad 1, the first, is the depot): {each}")
+                  f"in number order (pad 1, the first, is the depot): {each}"
+                  + (f" | and {more} more depots' (`check --json` lists every pad)"
+                     if more > 0 else ""))
 
 
 #: findings of one kind about sensors printed in full; the rest of that kind (two or more)
 #: share one line naming them
 SHOWN_PER_KIND = 10
+#: depots `check`'s fleet and pads lines name, and pads per depot, before "and N more"
+SHOWN_SITES = 6
+SHOWN_PADS = 8
 
 
 def finding_lines(findings: Sequence[Any]) -> list[tuple[bool, str]]:

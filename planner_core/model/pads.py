@@ -19,8 +19,9 @@ that (`sim.fleet_time`). So each depot has pads, one for each vehicle that uses 
   `PAD_CLEAR_M` or the map's clearance of an obstacle, no clear straight leg from the depot).
 
 Deterministic for a map. Cost: O(D x C) tests for D depots and C lattice points looked at
-(C grows with the square of the rings needed: V for V vehicles on open ground), plus the
-caller's test (one batch per depot).
+(C grows with the square of the rings needed: V for V vehicles on open ground), each a vector
+operation over the pads given so far (at most D x V), plus the caller's test (one batch per
+depot): 91 depots x 100 vehicles in about a second where a Python loop over the pairs took 100 s.
 """
 
 from __future__ import annotations
@@ -142,9 +143,13 @@ def pad_layout(
     label = [names[d] if names is not None else f"depot {d}" for d in range(D)]
     rule = f"{spacing:g} m (fleet.separation_m + {PAD_MARGIN_M:g} m)"
     out = np.repeat(dep[None], V, axis=0)
-    # every spot a vehicle may stand on, with its words: each depot is its own pad 1 (index 0)
-    taken: list[tuple[np.ndarray, str]] = [(p, f"depot '{label[d]}'") for d, p in
-                                           enumerate(dep)]  # fmt: skip
+    # every spot a vehicle may stand on (the first `n` rows of `spots`), with its words: each
+    # depot is its own pad 1 (index 0); an array, so that a candidate's distance to all of them
+    # is one vector operation (91 depots x 100 vehicles: 9,191 spots)
+    spots = np.empty((D + (V - 1) * D + sum(len(g) for g in (given or [])), 2))
+    spots[:D] = dep
+    words = [f"depot '{label[d]}'" for d in range(D)]
+    n = D
     if V > 1:
         for a in range(D):
             for b in range(a + 1, D):
@@ -177,11 +182,14 @@ def pad_layout(
             if why_not == BEHIND:
                 raise ValueError(f"{where}: the straight leg from the depot crosses an "
                                  "obstacle or its clearance")
-            near, what = min(((float(np.hypot(*(c - t))), w) for t, w in taken),
-                             key=lambda o: o[0])  # fmt: skip
-            if near < spacing - 1e-9:
-                raise ValueError(f"{where} lies {near:.1f} m from {what}, nearer than {rule}")
-            taken.append((c, f"pad {i + 2} at ({c[0]:g}, {c[1]:g}) of depot '{who}'"))
+            dist = np.hypot(*(spots[:n] - c).T)
+            nearest = int(np.argmin(dist))  # the first of least distance, as the list's min
+            if dist[nearest] < spacing - 1e-9:
+                raise ValueError(f"{where} lies {float(dist[nearest]):.1f} m from "
+                                 f"{words[nearest]}, nearer than {rule}")
+            spots[n] = c
+            words.append(f"pad {i + 2} at ({c[0]:g}, {c[1]:g}) of depot '{who}'")
+            n += 1
             if k < V:
                 out[k, d] = c
                 k += 1
@@ -199,11 +207,13 @@ def pad_layout(
             looked += 1
             if w != FREE:
                 continue
-            if min(float(np.hypot(*(c - t))) for t, _ in taken) < spacing - 1e-9:
+            if np.hypot(*(spots[:n] - c).T).min() < spacing - 1e-9:
                 crowded += 1
                 continue
             out[k, d] = c
-            taken.append((c, f"pad {k + 1} at ({c[0]:g}, {c[1]:g}) of depot '{who}'"))
+            spots[n] = c
+            words.append(f"pad {k + 1} at ({c[0]:g}, {c[1]:g}) of depot '{who}'")
+            n += 1
             k += 1
         if k < V:
             counts = {code: int(np.sum(why == code))
