@@ -7,12 +7,15 @@ router delivers them) or with --ports on one link each.
     python examples/fleet_to_mock.py                       # pymavlink, one link for all
     python examples/fleet_to_mock.py --via mavsdk --ports  # MAVSDK, one link per vehicle
 
-Steps: load examples/maps/fleet-demo.json with its fleet set to 3 UAVs (objective: makespan),
-plan the sorties (`lamde_mission.plan_fleet`, a short run), write the sortie directory
+Steps: load examples/maps/L01-25min.json (80 sensors on 14 km, a 25-min battery, six depots)
+with its fleet set to 3 UAVs (objective: makespan), plan the sorties (`lamde_mission.plan_fleet`,
+a short run: about 5 s), write the sortie directory
 (`lamde_mission.sorties.write_sortie_dir`: mission-v{k}-s{j}.plan and fleet.json, every sortie
 replayed by the simulator), start the mock vehicles, upload each vehicle's first sortie by
 system id (`upload_fleet`), and check that every mock vehicle holds exactly the mission of its
-file. The same from a shell:
+file. (On examples/maps/fleet-demo.json, 4 sensors on 2 km, three UAVs would hear the same
+sensors and wait for each other to launch: the makespan goal flies two there, docs/sorties.md.)
+The same from a shell:
 
     lamde-mission plan MAP -o sorties/                 # a map with "fleet": {"uavs": 3, ...}
     lamde-mission mock-vehicle --vehicles 3 --param MPC_XY_VEL_MAX=20 &   # systems 1, 2, 3
@@ -42,7 +45,7 @@ from lamde_mission.vehicle.wire import compare_items, wire_mission
 from planner_core.model.mapio import load_map
 
 ROOT = Path(__file__).resolve().parent
-MAP = ROOT / "maps" / "fleet-demo.json"
+MAP = ROOT / "maps" / "L01-25min.json"
 UAVS = 3
 #: m/s, the mocks' MPC_XY_VEL_MAX: the map's uav.max_speed, the speed the sorties ask
 SPEED_LIMIT = 20.0
@@ -73,7 +76,8 @@ def main() -> int:
     doc.setdefault("objective", {})["goal"] = "makespan"
     m = load_map(doc)
     print(f"planning '{m.name}' for {UAVS} UAVs (objective makespan, seed {args.seed}) ...")
-    result = lamde_mission.plan_fleet(m, seed=args.seed, budget=args.budget, goal="makespan")
+    result = lamde_mission.plan_fleet(m, seed=args.seed, budget=args.budget, goal="makespan",
+                                      sortie_budget=500, rounds=1)
     plan = result.plan
 
     with tempfile.TemporaryDirectory() as tmp:

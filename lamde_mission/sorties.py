@@ -69,7 +69,7 @@ from planner_core.textio import counted, first_few
 
 __all__ = ["FLEET_FILE", "SortieCheck", "FleetCheck", "sortie_dir_refusal", "sortie_dir_of",
            "output_in_sortie_dir", "sortie_file", "sortie_map", "write_sortie_dir",
-           "verify_sortie_dir", "check_sortie_depots"]  # fmt: skip
+           "launch_check", "verify_sortie_dir", "check_sortie_depots"]  # fmt: skip
 
 #: the summary file of a sortie directory
 FLEET_FILE = "fleet.json"
@@ -702,14 +702,15 @@ def _files_verdict(directory: Path, listed: list[str]) -> Any:
 
 def _check(
     m: Any, rows: list[tuple[int, int, str, str, str, list[Any]]], vehicles: int,
-    directory: Path, launches: list[float] | None = None,
+    directory: Path | None, launches: list[float] | None = None,
     speed_limits: dict[int, float] | None = None,
 ) -> FleetCheck:
     """Replay each (vehicle, sortie, file, depot_start, depot_end, items) on its sortie map;
     judge the whole plan's data, its shape (`vehicles`: how many the plan lists; the mission
-    files in `directory`) and its vehicles in the air together (SEPARATION, LINKS at each
-    vehicle's launch: `launches[k - 1]` for vehicle k, as fleet.json lists them; None:
-    staggered by `lamde_mission.launches.stagger`, as a plan is written). Both stagger and
+    files in `directory`, None: none to judge) and its vehicles in the air together
+    (SEPARATION, LINKS at each vehicle's launch: `launches[k - 1]` for vehicle k, as
+    fleet.json lists them; None: staggered by `lamde_mission.launches.stagger`, as a plan is
+    written). Both stagger and
     SEPARATION keep the map's `fleet.separation_m` (`m.separation_m`, metres). `speed_limits`:
     {vehicle: m/s}, each such vehicle's sorties flown at most at its own speed limit
     (`sim.replay`'s speed_limit), on the same launch times."""
@@ -730,7 +731,7 @@ def _check(
                                _served(tl, req)))
     combined = combined_data_verdicts([s.timeline for s in out], m)
     shape = (_chain_verdict(m, rows), _uavs_verdict(m, vehicles),
-             _files_verdict(directory, [r[2] for r in rows]))  # fmt: skip
+             *(() if directory is None else (_files_verdict(directory, [r[2] for r in rows]),)))
     by_vehicle: dict[int, list[Any]] = {}
     for s in out:
         by_vehicle.setdefault(s.vehicle, []).append(s.timeline)
@@ -1229,6 +1230,58 @@ def summary_dict(m: Any, check: FleetCheck, goal: str) -> dict[str, Any]:
     return out
 
 
+def _stored_sorties(plan: Any, m: Any, autopilot: str) -> list[tuple[Any, ...]]:
+    """Each sortie of `plan` as it is stored (`write_sortie_dir`): (vehicle, sortie, file name,
+    start depot, end depot, its stored items, the stored plan, its sortie map and that map's
+    planning map), vehicle by vehicle. Cost: one storage (`storable_plan`) per sortie."""
+    from lamde_mission.items import plan_to_items
+    from lamde_mission.storage import storable_plan, stored_items
+    from planner_core.fleet import collected_by_sortie
+    from planner_core.model.formulas import ModelParams
+    from planner_core.model.pads import pad_ranks
+
+    st = plan.settings
+    shares = collected_by_sortie(plan, ModelParams.from_map(m.planning_map()))  # Mbit, margin in
+    margin = 1.0 + float(m.spec.safety.data_margin)
+    out = []
+    k = 0
+    # each vehicle's pads as verify finds them (the plan's own when it is on its pads:
+    # `planner_core.fleet.search.on_pads` counts them the same way)
+    rank = pad_ranks((v, st.depot_names[d]) for v, vs in enumerate(plan.vehicles, start=1)
+                     for s in vs for d in (s.start, s.end))  # fmt: skip
+    for v, vs in enumerate(plan.vehicles, start=1):
+        for n, s in enumerate(vs, start=1):
+            a, b = st.depot_names[s.start], st.depot_names[s.end]
+            sm = sortie_map(m, a, b, shares[k] / margin, name=f"{m.name} v{v} s{n}",
+                            pads=(rank[(v, a)], rank[(v, b)]))
+            k += 1
+            spm = sm.planning_map()
+            p = SimpleNamespace(hover_points=s.points, hover_times=s.times)
+            stored = storable_plan(p, sm, autopilot, planning_map=spm, finish="land")
+            items = stored_items(plan_to_items(stored, sm, finish="land"), stored.dialect)
+            out.append((v, n, sortie_file(v, n), a, b, items, stored, sm, spm))
+    return out
+
+
+def launch_check(plan: Any, m: Any, autopilot: str = "generic") -> FleetCheck:
+    """The verdicts `write_sortie_dir` would give `plan` on map `m`, nothing written: each
+    sortie stored and replayed, the vehicles' launches staggered (`lamde_mission.launches.
+    stagger`), so `max(check.makespan(v) for v in check.vehicles())` is the makespan the
+    operator flies, launches included. Cost: one storage and one replay per sortie, and the
+    stagger's (`lamde_mission.launches`).
+
+    Args:
+        plan: a `planner_core.fleet.FleetPlan` made on `m.planning_map()`.
+        m: the map.
+        autopilot: the stored missions' dialect ("generic", "px4" or "ardupilot").
+
+    Returns:
+        The `FleetCheck` (no FILES verdict: there is no directory).
+    """
+    rows = [r[:6] for r in _stored_sorties(plan, m, autopilot)]
+    return _check(m, rows, len(plan.vehicles), None)
+
+
 def write_sortie_dir(
     plan: Any,
     m: Any,
@@ -1272,11 +1325,6 @@ def write_sortie_dir(
             anything is written).
     """
     from lamde_mission.formats import write_mission
-    from lamde_mission.items import plan_to_items
-    from lamde_mission.storage import storable_plan, stored_items
-    from planner_core.fleet import collected_by_sortie
-    from planner_core.model.formulas import ModelParams
-    from planner_core.model.pads import pad_ranks
 
     st = plan.settings
     if goal is not None and goal != st.goal:
@@ -1289,8 +1337,6 @@ def write_sortie_dir(
                          f"{counted(len(plan.vehicles), 'vehicle')}, "
                          f"more than a sortie directory holds ({MAX_FLEET_SORTIES:,} sorties, "
                          f"{MAX_FLEET_VEHICLES} vehicles)")  # fmt: skip
-    shares = collected_by_sortie(plan, ModelParams.from_map(m.planning_map()))  # Mbit, margin in
-    margin = 1.0 + float(m.spec.safety.data_margin)
     refusal = sortie_dir_refusal(out_dir)
     if refusal is not None:
         raise FileExistsError(f"{out_dir}: {refusal}")
@@ -1302,32 +1348,10 @@ def write_sortie_dir(
     pending.mkdir(parents=False)
     try:
         rows = []
-        k = 0
-        # each vehicle's pads as verify finds them (the plan's own when it is on its pads:
-        # `planner_core.fleet.search.on_pads` counts them the same way)
-        rank = pad_ranks((v, st.depot_names[d]) for v, vs in enumerate(plan.vehicles, start=1)
-                         for s in vs for d in (s.start, s.end))  # fmt: skip
-        for v, vs in enumerate(plan.vehicles, start=1):
-            for n, s in enumerate(vs, start=1):
-                a, b = st.depot_names[s.start], st.depot_names[s.end]
-                sm = sortie_map(m, a, b, shares[k] / margin, name=f"{m.name} v{v} s{n}",
-                                pads=(rank[(v, a)], rank[(v, b)]))
-                k += 1
-                spm = sm.planning_map()
-                p = SimpleNamespace(hover_points=s.points, hover_times=s.times)
-                stored = storable_plan(p, sm, autopilot, planning_map=spm, finish="land")
-                items = stored_items(plan_to_items(stored, sm, finish="land"), stored.dialect)
-                f = sortie_file(v, n)
-                write_mission(
-                    pending / f,
-                    stored,
-                    sm,
-                    "plan",
-                    finish="land",
-                    autopilot=autopilot,
-                    planning_map=spm,
-                )
-                rows.append((v, n, f, a, b, items))
+        for v, n, f, a, b, items, stored, sm, spm in _stored_sorties(plan, m, autopilot):
+            write_mission(pending / f, stored, sm, "plan", finish="land", autopilot=autopilot,
+                          planning_map=spm)
+            rows.append((v, n, f, a, b, items))
         check = _check(m, rows, len(plan.vehicles), pending)
         if not check.passed and not allow_infeasible:
             return check, False
