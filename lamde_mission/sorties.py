@@ -559,6 +559,21 @@ class FleetCheck:
         return self.takeoff(vehicle, len(ss)) + ss[-1].duration_s
 
     @property
+    def fleet_makespan(self) -> tuple[float, int]:
+        """The fleet's makespan: from the first vehicle's take-off to the last landing of any
+        vehicle, launches included (what the makespan goal minimises, as flown), and the
+        vehicle that lands last (the lowest number of a tie).
+
+        Returns:
+            (seconds, the vehicle's number); (0.0, 0) without sorties.
+        """
+        got = [(self.makespan(v), -v) for v in self.vehicles()]
+        if not got:
+            return 0.0, 0
+        s, v = max(got)
+        return s, -v
+
+    @property
     def total_s(self) -> float:
         """All sorties' durations plus swap_s per swap (s); the launches' waits not counted.
 

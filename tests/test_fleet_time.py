@@ -353,6 +353,13 @@ def test_the_makespan_goal_plans_fewer_vehicles_when_the_launches_would_wait(tmp
     check, written = write_sortie_dir(got.plan, m, tmp_path / "f3")
     assert written and check.launches == launch_check(got.plan, m).launches
     assert max(check.makespan(v) for v in check.vehicles()) == flown(got.plan)
+    # plan and verify print it (a reviewer found no fleet makespan anywhere)
+    from lamde_mission.commands._common import fleet_makespan_words
+
+    s, last = check.fleet_makespan
+    assert s == flown(got.plan) and check.makespan(last) == s
+    assert fleet_makespan_words(check) == (f"; fleet makespan {s:.1f} s (vehicle {last} lands "
+                                           "last, launches included)")
     # one vehicle, or the total goal: the sortie planner's plan as it is
     assert plan_fleet(m.with_uavs(1), seed=0, budget=1000, sortie_budget=500,
                       goal="makespan").plan.notes[-1].endswith("LPs across sorties")

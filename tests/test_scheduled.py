@@ -107,6 +107,16 @@ def test_a_field_only_c3_rules_out_is_planned_with_scheduled_access(tmp_path) ->
     assert np.all(tl.allocation.sum(axis=1) <= 25.0 * tl.hover_times * (1 + 1e-6))
     v = verify(tl, m)
     assert v.passed, v.table()
+    c3 = next(x for x in v.items if x.name == "C3")  # a rate: the bandwidth left
+    assert c3.title == "sum_j D_ij / T_i <= R_lambda" and c3.unit == "Mbit/s"
+    # the tightest point's allocation over its bandwidth by a rounding residue (a reviewer's
+    # PASS printed -7.1e-15 Mbit/s): on the limit, margin 0; beyond the tolerance, a FAIL
+    k = int(np.argmin(25.0 - tl.allocation.sum(axis=1) / tl.hover_times))
+    for scale, passed, margin in ((1 + 1e-13, True, 0.0), (1 + 1e-3, False, None)):
+        D = tl.allocation.copy()
+        D[k] *= 25.0 * tl.hover_times[k] * scale / D[k].sum()
+        got = next(x for x in verify(replace(tl, allocation=D), m).items if x.name == "C3")
+        assert got.passed is passed and (margin is None or got.margin == margin), got
     cut = list(items)
     i = max(i for i, it in enumerate(cut) if it.command == CMD.LOITER_TIME)
     cut[i] = replace(cut[i], param1=0.8 * cut[i].param1)

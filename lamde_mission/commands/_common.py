@@ -237,3 +237,21 @@ def with_origin_or_fail(m: Any, origin: str | None) -> Any:
             '"alt": ...} to the map or pass --origin LAT,LON[,ALT]'
         )
     return m
+
+
+def fleet_makespan_words(check: Any) -> str:
+    """"; fleet makespan 344.0 s (vehicle 2 lands last, launches included)" for a sortie
+    directory's check of two vehicles or more (`lamde_mission.sorties.FleetCheck.
+    fleet_makespan`: what the makespan goal minimises, as flown), else "": `plan`'s and
+    `verify`'s total line.
+
+    Args:
+        check: the `FleetCheck`.
+
+    Returns:
+        The words, or "".
+    """
+    if len(check.vehicles()) < 2:
+        return ""
+    s, v = check.fleet_makespan
+    return f"; fleet makespan {s:.1f} s (vehicle {v} lands last, launches included)"

@@ -498,6 +498,7 @@ def _sortie_lines(check: Any, m: Any) -> list[str]:
     """Per sortie: depots, duration, energy, what is left above the reserve, sensors served;
     per vehicle its makespan; then the plan's totals (the sim's figures on the stored
     missions)."""
+    from lamde_mission.commands._common import fleet_makespan_words
     from lamde_mission.sorties import pad_words
     from planner_core.textio import counted
 
@@ -518,7 +519,7 @@ def _sortie_lines(check: Any, m: Any) -> list[str]:
                      f"{check.makespan(v):.1f} s")
     lines.append(f"  total {check.total_s:.1f} s over {counted(len(check.sorties), 'sortie')} "
                  f"with {counted(check.swaps, 'battery swap')}; f summed + swaps "
-                 f"{check.f_total:.2f}")
+                 f"{check.f_total:.2f}" + fleet_makespan_words(check))
     for v in check.combined:
         lines.append(f"  whole plan {v.name}: {'PASS' if v.passed else 'FAIL'} ({v.detail})")
     for v in check.fleet:

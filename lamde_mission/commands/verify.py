@@ -105,6 +105,7 @@ def check_sortie_dir(m: Any, path: str) -> Any:
 
 def _run_sorties(args: argparse.Namespace, m: Any) -> int:
     """`verify MAP DIR/`: every sortie of a sortie directory, and the whole plan."""
+    from lamde_mission.commands._common import fleet_makespan_words
     from lamde_mission.sorties import pad_words
     from planner_core.textio import counted, printable
 
@@ -121,6 +122,7 @@ def _run_sorties(args: argparse.Namespace, m: Any) -> int:
                "fleet": [v.to_dict() for v in check.fleet], "notes": list(check.notes),
                "launch_s": {str(v): check.launch(v) for v in check.vehicles()},
                "makespan_s": {str(v): check.makespan(v) for v in check.vehicles()},
+               "fleet_makespan_s": check.fleet_makespan[0],
                "total_s": check.total_s, "swaps": check.swaps, "f_total": check.f_total,
                "timing_tolerance_s": check.timing_tolerance_s, "passed": check.passed}
         print(json.dumps(out, indent=2))
@@ -150,7 +152,7 @@ def _run_sorties(args: argparse.Namespace, m: Any) -> int:
             print(f"fleet {v.name} {v.title}: {'PASS' if v.passed else 'FAIL'}; "
                   f"{printable(v.detail)}")
         print(f"total {check.total_s:.1f} s with {counted(check.swaps, 'battery swap')}; "
-              f"f summed + swaps {check.f_total:.3f}")
+              f"f summed + swaps {check.f_total:.3f}{fleet_makespan_words(check)}")
         print("result: " + ("all constraints hold" if check.passed
                             else "FAILED " + "; ".join(printable(x) for x in check.failed())))
     return 0 if check.passed else 1
