@@ -358,8 +358,7 @@ def _fewer_vehicles(m: Any, result: Any, plan_k: Callable[[int], Any],
     from lamde_mission.sorties import launch_check
 
     def flown(plan: Any) -> float:
-        check = launch_check(plan, m)
-        return max(check.makespan(v) for v in check.vehicles())
+        return launch_check(plan, m).fleet_makespan[0]
 
     best, best_s = result, flown(result.plan)
     n = len(result.plan.vehicles)

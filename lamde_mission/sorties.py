@@ -1281,8 +1281,8 @@ def _stored_sorties(plan: Any, m: Any, autopilot: str) -> list[tuple[Any, ...]]:
 def launch_check(plan: Any, m: Any, autopilot: str = "generic") -> FleetCheck:
     """The verdicts `write_sortie_dir` would give `plan` on map `m`, nothing written: each
     sortie stored and replayed, the vehicles' launches staggered (`lamde_mission.launches.
-    stagger`), so `max(check.makespan(v) for v in check.vehicles())` is the makespan the
-    operator flies, launches included. Cost: one storage and one replay per sortie, and the
+    stagger`), so its `fleet_makespan` is the makespan the operator flies, launches
+    included. Cost: one storage and one replay per sortie, and the
     stagger's (`lamde_mission.launches`).
 
     Args:

@@ -21,7 +21,8 @@ that (`sim.fleet_time`). So each depot has pads, one for each vehicle that uses 
 Deterministic for a map. Cost: O(D x C) tests for D depots and C lattice points looked at
 (C grows with the square of the rings needed: V for V vehicles on open ground), each a vector
 operation over the pads given so far (at most D x V), plus the caller's test (one batch per
-depot): 91 depots x 100 vehicles in about a second where a Python loop over the pairs took 100 s.
+depot): a reviewer's 91 depots x 100 vehicles took 1.2 s of CPU (`Map.pads_for`), 87 s when
+each distance was a Python call.
 """
 
 from __future__ import annotations
