@@ -343,7 +343,8 @@ def _fewer_vehicles(m: Any, result: Any, plan_k: Callable[[int], Any],
     than `STAGGER_SLACK`: then k = V - 1, V - 2, ... vehicles are planned (`plan_k(k)`) while
     each does better than the last, and not once the plan's flying and hovering shared by k
     vehicles (`total_time / k`) is already as long as the best makespan found. Each try is a
-    whole sortie planner's run; the notes of the plan returned say what was tried.
+    whole sortie planner's run; the notes of the plan returned say what was tried, and its
+    `evaluations` count every run's.
 
     Args:
         m: the map; result: the sortie planner's `FleetResult` for it.
@@ -368,6 +369,7 @@ def _fewer_vehicles(m: Any, result: Any, plan_k: Callable[[int], Any],
     notes = [f"makespan: {n} vehicles fly {best_s:.1f} s with staggered launches (planned "
              f"{planned:.1f} s)"]
     work = result.plan.total_time
+    spent = result.plan.evaluations  # every run's, the plans not kept too
     for k in range(n - 1, 0, -1):
         if work / k >= best_s:
             break
@@ -375,10 +377,11 @@ def _fewer_vehicles(m: Any, result: Any, plan_k: Callable[[int], Any],
             progress(f"the launches make {n} vehicles' makespan {best_s:,.1f} s: planning "
                      f"{k} vehicles")
         r = plan_k(k)
+        spent += r.plan.evaluations
         got = flown(r.plan)
         notes.append(f"makespan: {k} vehicles fly {got:.1f} s")
         if not got < best_s:
             break
         best, best_s = r, got
-    best.plan = replace(best.plan, notes=(*best.plan.notes, *notes))
+    best.plan = replace(best.plan, notes=(*best.plan.notes, *notes), evaluations=spent)
     return best

@@ -344,6 +344,8 @@ def test_the_makespan_goal_plans_fewer_vehicles_when_the_launches_would_wait(tmp
     assert len(alone.vehicles) == 3 and flown(alone) > (1.0 + STAGGER_SLACK) * alone.makespan
     got = plan_fleet(m, seed=0, budget=1000, sortie_budget=500, goal="makespan")
     assert len(got.plan.vehicles) == 2
+    two = search.plan_fleet(m.with_uavs(2), cfg, goal="makespan", sortie_budget=500).plan
+    assert got.plan.evaluations == alone.evaluations + two.evaluations  # the tries counted
     assert flown(got.plan) < 0.75 * flown(alone)
     assert got.plan.notes[-2].startswith("makespan: 3 vehicles fly ")
     assert got.plan.notes[-1] == f"makespan: 2 vehicles fly {flown(got.plan):.1f} s"
