@@ -167,7 +167,7 @@ def test_depots_are_checked(hand_map: dict) -> None:
         "fleet.depots[2]: depot 'nfz' at (850, 850) lies inside no-fly-zone 0 'airfield': no "
     )
     assert lines[2].startswith("fleet.depots[3]: depot 'edge'")
-    assert "mm from an obstacle" in lines[2]
+    assert "mm from the edge of circle 0, closer than 1 cm" in lines[2]
 
 
 def test_depot_near_an_obstacle_stays_outside_its_inflation(hand_map: dict) -> None:

@@ -308,7 +308,8 @@ def test_the_start_and_end_keep_clear_of_an_obstacles_edge(where, gap, ok, tmp_p
     with pytest.raises(MapError) as info:
         load_map(d)
     line = info.value.problems[0]
-    assert line.startswith(f"{where}: (") and "from an obstacle's edge, closer than 1 cm" in line
+    # the obstacle named, as "lies inside circle 0" names it (a reviewer)
+    assert line.startswith(f"{where}: (") and "from the edge of circle 0, closer than 1 cm" in line
     p = tmp_path / "e.json"
     p.write_text(json.dumps(d))
     out = run_cli(["check", str(p)])
@@ -320,7 +321,8 @@ def test_a_start_on_a_polygon_edge_is_refused() -> None:
     d["obstacles"]["no_fly_zones"] = [{"vertices": [[100, 100], [200, 100], [200, 200],
                                                     [100, 200]]}]  # fmt: skip
     d["start"] = [150.0, 100.0]
-    with pytest.raises(MapError, match=r"start: \(150, 100\) lies 0 mm from an obstacle"):
+    with pytest.raises(MapError,
+                       match=r"start: \(150, 100\) lies 0 mm from the edge of no-fly-zone 0"):
         load_map(d)
     d["start"] = [150.0, 99.98]
     load_map(d)

@@ -116,8 +116,12 @@ class Origin(BaseModel):
     """WGS84 position of the local (0, 0)."""
 
     model_config = _STRICT
-    lat: float = Field(ge=-90, le=90, strict=True, description="latitude, degrees")
-    lon: float = Field(ge=-180, le=180, strict=True, description="longitude, degrees")
+    # required, range and reason kept as every other bounded field's (a reviewer: lat 200 read
+    # "must be less than or equal to 90" where the others read "must be in [a, b]")
+    lat: float = _ranged(..., -90.0, 90.0, "latitude, degrees",
+                         "a WGS84 latitude lies in [-90, 90] degrees")
+    lon: float = _ranged(..., -180.0, 180.0, "longitude, degrees",
+                         "a WGS84 longitude lies in [-180, 180] degrees")
     alt: float = _ranged(
         0.0, -500.0, 9_000.0, "altitude above mean sea level of the take-off ground, m",
         "ground on Earth lies between the Dead Sea shore (-430 m) and Everest (8849 m)",
@@ -1320,6 +1324,25 @@ def _holding(xy: tuple[float, float], spec: MapFile, shapes: tuple[PolygonShape,
     return ", ".join(held) if held else "an obstacle or no-fly zone"
 
 
+def _nearest_label(xy: tuple[float, float], spec: MapFile,
+                   shapes: tuple[PolygonShape, ...]) -> str:
+    """The obstacle whose edge is nearest the point `xy` (m), as `verify` names it ("circle
+    0", "polygon 0 'barn'"; `_holding`'s labels), for a point found too close to one
+    (`_edge_distances`); "an obstacle" when there is none. Cost: O(obstacles) shapely
+    distances, for the few points found too close."""
+    from shapely.geometry import Point, Polygon
+
+    p = Point(float(xy[0]), float(xy[1]))
+    obs = spec.obstacles
+    near = [(abs(math.hypot(p.x - c.x, p.y - c.y) - c.radius), obstacle_label("circle", k))
+            for k, c in enumerate(obs.circles)]  # fmt: skip
+    near += [(Polygon(rectangle_vertices(r.x, r.y, r.length, r.width, r.angle_deg))
+              .exterior.distance(p), obstacle_label("rectangle", k))
+             for k, r in enumerate(obs.rectangles)]  # fmt: skip
+    near += [(Polygon(sh.shell, sh.holes).boundary.distance(p), sh.label) for sh in shapes]
+    return min(near)[1] if near else "an obstacle"
+
+
 #: a map whose points (sensors, start, end) all lie within this share of the area's smaller
 #: side of one another, and within `DEGREES_SPREAD` units, looks written in degrees
 DEGREES_SHARE = 0.01
@@ -1710,9 +1733,10 @@ def _semantic_problems(
                                 f"{_holding((x, y), spec, tuple(shapes))}")
             elif gap < end_gap:
                 problems.append(
-                    f"{name}: ({x:g}, {y:g}) lies {1000 * gap:.3g} mm from an obstacle's edge, "
-                    f"closer than {100 * end_gap:g} cm: a mission file keeps positions on a 1e-7 "
-                    "degree grid, which may move it up to 8 mm, into the obstacle"
+                    f"{name}: ({x:g}, {y:g}) lies {1000 * gap:.3g} mm from the edge of "
+                    f"{_nearest_label((x, y), spec, tuple(shapes))}, closer than "
+                    f"{100 * end_gap:g} cm: a mission file keeps positions on a 1e-7 degree "
+                    "grid, which may move it up to 8 mm, into the obstacle"
                 )
         if depots:
             where = np.array([(dp.x, dp.y) for dp in depots], dtype=float)
@@ -1726,7 +1750,8 @@ def _semantic_problems(
                                     f"{_holding((dp.x, dp.y), spec, tuple(shapes))}: no sortie "
                                     "can take off or land there")  # fmt: skip
                 elif gap < end_gap:
-                    problems.append(f"{at} lies {1000 * gap:.3g} mm from an obstacle's edge, "
+                    problems.append(f"{at} lies {1000 * gap:.3g} mm from the edge of "
+                                    f"{_nearest_label((dp.x, dp.y), spec, tuple(shapes))}, "
                                     f"closer than {100 * end_gap:g} cm: a mission file keeps "
                                     "positions on a 1e-7 degree grid, which may move it up to "
                                     "8 mm, into the obstacle")  # fmt: skip
