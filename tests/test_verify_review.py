@@ -192,3 +192,24 @@ def test_a_mission_just_outside_the_area_gets_no_wrong_map_note(m):
     tl = replay(items, m)
     assert not any("km from this map" in n for n in tl.notes), tl.notes
     assert "C1" in verify(tl, m).failed
+
+
+def test_a_clear_pass_beside_a_negative_margin_says_why(tmp_path, capsys):
+    """A reviewer: the start 2 cm outside a circle, and CLEAR printed PASS beside a margin of
+    -0.00125 m with nothing saying why. A stored mission may pass up to `CLEAR_TOL` inside the
+    clearance (its positions lie on the 1e-7 degree grid); the row now says so."""
+    from sim.checks import CLEAR_TOL
+    from tests.test_strict_inputs import TINY
+
+    doc = json.loads(TINY.read_text())
+    doc["start"] = [670.02, 600.0]  # the circle (600, 600) r 70: 2 cm outside it
+    path, mission = tmp_path / "near.json", tmp_path / "near.plan"
+    path.write_text(json.dumps(doc))
+    assert main(["plan", str(path), "-o", str(mission), "--budget", "2000", "--quiet"]) == 0
+    capsys.readouterr()
+    assert main(["verify", str(path), str(mission)]) == 0
+    row = next(ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("CLEAR"))
+    margin = float(row.split("PASS")[1].split()[0])
+    assert -CLEAR_TOL <= margin < 0.0, row
+    assert row.endswith(f"; within the {100 * CLEAR_TOL:g} cm a stored mission may pass inside "
+                        "it (positions on the 1e-7 degree grid)")
