@@ -453,6 +453,24 @@ def test_multipolygon_problem_names_the_part(tmp_path) -> None:
         build_map(layers)
 
 
+def test_an_import_problem_that_names_no_feature_names_the_file(tmp_path, capsys) -> None:
+    """A reviewer: "no features: nothing to build a map from" named no file, where every
+    problem of a feature names its file; now each such line leads with the inputs."""
+    from lamde_mission.cli import main
+
+    empty = _write(tmp_path, "empty.geojson", _fc())
+    assert main(["map", "from-geojson", str(empty), "-o", str(tmp_path / "e.json")]) == 2
+    err = capsys.readouterr().err
+    assert f"{empty}: no features: nothing to build a map from" in err
+    assert not (tmp_path / "e.json").exists()
+    sensors_only = _write(tmp_path, "s.geojson", _fc(*[f for f in _basics()
+                                                       if f["properties"]["kind"] == "sensor"]))
+    assert main(["map", "from-geojson", str(sensors_only), "-o", str(tmp_path / "e.json")]) == 2
+    err = capsys.readouterr().err
+    assert f"{sensors_only}: no start: add a Point feature" in err
+    assert f"{sensors_only}: no end: add a Point feature" in err
+
+
 @pytest.mark.slow  # measured 5 s (issue 35: default suite <= 5 min)
 def test_cli_map_campus_writes_the_benchmark_map(tmp_path) -> None:
     """The README's `lamde-mission map campus -o campus.json`: the seeded 500-footprint map."""

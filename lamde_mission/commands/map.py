@@ -168,7 +168,7 @@ def _from_geojson(args: argparse.Namespace) -> int:
         doc, notes = build_map(layers, origin=origin, margin=margin, name=args.name,
                                default_name=Path(inputs[0][0]).stem)  # fmt: skip
     except GisError as exc:
-        raise UsageError(_at_most(exc.problems)) from None
+        raise UsageError(_at_most(_in_files(exc.problems, [f for f, _ in inputs]))) from None
     try:
         m = load_map(doc)
     except MapError as exc:
@@ -183,6 +183,17 @@ def _from_geojson(args: argparse.Namespace) -> int:
     print(f"wrote {printable(path)}: {_contents(m)}; area {m.width:g} m x {m.height:g} m from "
           f"origin ({m.spec.origin.lat:.9f}, {m.spec.origin.lon:.9f})")
     return 0
+
+
+def _in_files(problems: list[str], files: list[str]) -> list[str]:
+    """Each import problem led by the input files it is about: one that names no input (a
+    reviewer's "no features: nothing to build a map from") gets them all, the others name
+    their feature's file already."""
+    from pathlib import Path
+
+    names = [str(f) for f in files] + [Path(f).name for f in files]
+    lead = ", ".join(str(f) for f in files)
+    return [p if any(p.startswith(n) for n in names) else f"{lead}: {p}" for p in problems]
 
 
 def _contents(m: Any) -> str:
