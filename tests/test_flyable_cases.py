@@ -70,6 +70,8 @@ def test_verify_counts_each_pass_of_a_do_jump_loop_and_says_so():
     # without a loop: nothing added
     r = cli("verify", CASES / "speed-map.json", CASES / "speed-change.waypoints")
     assert "DO_JUMP" not in r.stdout.splitlines()[0]
+    # a map without obstacles: no clearance to speak of (a reviewer read "clearance inf m")
+    assert "safety: clearance no obstacles (asked 10 m);" in r.stdout
 
 
 def test_loop_words_name_each_run_of_items_flown_equally_often():

@@ -255,3 +255,19 @@ def fleet_makespan_words(check: Any) -> str:
         return ""
     s, v = check.fleet_makespan
     return f"; fleet makespan {s:.1f} s (vehicle {v} lands last, launches included)"
+
+
+def clearance_words(clearance: float, fmt: str) -> str:
+    """"12.345 m" for the least distance a mission keeps from the obstacles (`Verdicts.
+    clearance`, m), "no obstacles" for a map without any (it read "clearance inf m").
+
+    Args:
+        clearance: metres, inf without obstacles.
+        fmt: the number's format (".3f").
+
+    Returns:
+        The words.
+    """
+    import math
+
+    return f"{clearance:{fmt}} m" if math.isfinite(clearance) else "no obstacles"

@@ -372,6 +372,7 @@ def _summary(
     plan: Any, m: Any, timeline: Any, verdicts: Any, out: str | list[str] | None,
     stored: Any = None, *, every_sensor: bool = False,
 ) -> str:
+    from lamde_mission.commands._common import clearance_words
     from planner_core.textio import counted, printable
 
     b = plan.breakdown
@@ -417,7 +418,8 @@ def _summary(
     lines.extend(_stage_table(plan))
     lines.extend(_sensor_lines(_sensor_rows(m, timeline), every=every_sensor))
     sf = m.spec.safety
-    lines.append(f"  safety: clearance {verdicts.clearance:.2f} m (asked {sf.clearance:g} m), "
+    kept = clearance_words(verdicts.clearance, ".2f")
+    lines.append(f"  safety: clearance {kept} (asked {sf.clearance:g} m), "
                  f"data margin asked {100 * sf.data_margin:g} %")
     lines.append("  constraints (simulator) of the stored mission:" if stored is not None
                  else "  constraints (simulator):")

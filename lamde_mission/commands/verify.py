@@ -173,7 +173,11 @@ def run(args: argparse.Namespace) -> int:
     """
     from pathlib import Path
 
-    from lamde_mission.commands._common import load_map_or_fail, with_origin_or_fail
+    from lamde_mission.commands._common import (
+        clearance_words,
+        load_map_or_fail,
+        with_origin_or_fail,
+    )
     from sim import verify
 
     m = load_map_or_fail(args.map)
@@ -217,7 +221,8 @@ def run(args: argparse.Namespace) -> int:
               f"{', ' + loop if loop else ''}")  # fmt: skip
         print("\n".join(printable(r) for r in verdicts.table().splitlines()))
         sf = m.spec.safety
-        print(f"safety: clearance {verdicts.clearance:.3f} m (asked {sf.clearance:g} m); data "
+        kept = clearance_words(verdicts.clearance, ".3f")
+        print(f"safety: clearance {kept} (asked {sf.clearance:g} m); data "
               f"margin per sensor (asked {100 * sf.data_margin:g} %): "
               f"{_margins(verdicts.data_margins)}")
         print(f"f = {t.f:.6f}  (alpha {t.alpha:g}: t_fly {t.t_fly:.3f} s, "
