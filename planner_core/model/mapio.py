@@ -118,10 +118,10 @@ class Origin(BaseModel):
     model_config = _STRICT
     # required, range and reason kept as every other bounded field's (a reviewer: lat 200 read
     # "must be less than or equal to 90" where the others read "must be in [a, b]")
-    lat: float = _ranged(..., -90.0, 90.0, "latitude, degrees",
-                         "a WGS84 latitude lies in [-90, 90] degrees")
-    lon: float = _ranged(..., -180.0, 180.0, "longitude, degrees",
-                         "a WGS84 longitude lies in [-180, 180] degrees")
+    lat: float = _ranged(..., -90.0, 90.0, "WGS84 latitude, degrees",
+                         "latitudes end at the poles")
+    lon: float = _ranged(..., -180.0, 180.0, "WGS84 longitude, degrees",
+                         "longitudes go once round the Earth, east and west of Greenwich")
     alt: float = _ranged(
         0.0, -500.0, 9_000.0, "altitude above mean sea level of the take-off ground, m",
         "ground on Earth lies between the Dead Sea shore (-430 m) and Everest (8849 m)",
