@@ -322,7 +322,7 @@ def plan_fleet(
     if (goal or m.goal) != "makespan" or len(result.plan.vehicles) < 2:
         return result
     return _fewer_vehicles(m, result, lambda k: search.plan_fleet(
-        m.with_uavs(k), config, goal=goal, sortie_budget=sb, rounds=r, progress=progress),
+        m, config, goal=goal, sortie_budget=sb, rounds=r, progress=progress, uavs=k),
         progress)
 
 
@@ -331,24 +331,30 @@ def plan_fleet(
 #: before it in the air and hears no sensor one of them hears) make the fleet's makespan more
 #: than this share longer than the sortie planner's, which plans each vehicle as if it flew
 #: alone: 3 UAVs on examples/maps/fleet-demo.json flew 494.5 s (launches at +160 and +260 s)
-#: where 2 flew 340.0 s
+#: where the plan of 2 flies 344.0 s
 STAGGER_SLACK = 0.1
+#: plans of fewer vehicles tried at most (each a whole sortie planner's run)
+FEWER_TRIES = 3
 
 
 def _fewer_vehicles(m: Any, result: Any, plan_k: Callable[[int], Any],
                     progress: Callable[..., None] | None) -> Any:
     """The plan of `result` (makespan goal, two vehicles or more) or one of fewer vehicles,
-    whichever the operator flies soonest with the launches staggered (`sorties.launch_check`,
-    the makespan fleet.json gives). Only when staggering lengthens the plan's makespan by more
-    than `STAGGER_SLACK`: then k = V - 1, V - 2, ... vehicles are planned (`plan_k(k)`) while
-    each does better than the last, and not once the plan's flying and hovering shared by k
-    vehicles (`total_time / k`) is already as long as the best makespan found. Each try is a
-    whole sortie planner's run; the notes of the plan returned say what was tried, and its
-    `evaluations` count every run's.
+    whichever the operator flies soonest with the launches staggered (`sorties.launch_check`:
+    the fleet's makespan as the written directory gives it) and whose verdicts pass where the
+    first plan's do. Only when staggering lengthens the plan's makespan by more than
+    `STAGGER_SLACK`: then k = V - 1, V - 2, ... vehicles (`plan_k(k)`, on the map's own pads)
+    are tried, at most `FEWER_TRIES`, while each flies sooner than the best so far. A
+    heuristic ends the tries early: once the best plan's flying, hovering and swaps shared
+    among k vehicles (`total_time / k`) take as long as its makespan, fewer vehicles are
+    unlikely to finish sooner. The plan returned says in its notes what was tried (`plan`
+    prints them) and counts every run's evaluations. A map without an origin is judged at
+    (0, 0) (the stagger does not depend on where the map lies). Cost: up to `FEWER_TRIES`
+    sortie planner runs, and a storage and replay of every sortie per plan judged.
 
     Args:
         m: the map; result: the sortie planner's `FleetResult` for it.
-        plan_k: plans the map with k UAVs (a `FleetResult`).
+        plan_k: plans the map flying at most k vehicles (a `FleetResult`).
         progress: the sortie planner's progress callback, or None.
 
     Returns:
@@ -357,30 +363,40 @@ def _fewer_vehicles(m: Any, result: Any, plan_k: Callable[[int], Any],
     from dataclasses import replace
 
     from lamde_mission.sorties import launch_check
+    from planner_core.textio import counted
 
-    def flown(plan: Any) -> float:
-        return launch_check(plan, m).fleet_makespan[0]
+    at = m if m.spec.origin is not None else m.with_origin(0.0, 0.0)
 
-    best, best_s = result, flown(result.plan)
+    def flown(plan: Any) -> tuple[float, bool]:
+        check = launch_check(plan, at)
+        return check.fleet_makespan[0], check.passed
+
+    best, (best_s, passed) = result, flown(result.plan)
     n = len(result.plan.vehicles)
     planned = result.plan.makespan
     if best_s <= planned * (1.0 + STAGGER_SLACK):
         return result
     notes = [f"makespan: {n} vehicles fly {best_s:.1f} s with staggered launches (planned "
-             f"{planned:.1f} s)"]
-    work = result.plan.total_time
+             f"{planned:.1f} s as if each flew alone)"]
     spent = result.plan.evaluations  # every run's, the plans not kept too
-    for k in range(n - 1, 0, -1):
-        if work / k >= best_s:
+    for k in range(n - 1, max(0, n - 1 - FEWER_TRIES), -1):
+        if best.plan.total_time / k >= best_s:
+            notes.append(f"makespan: {counted(k, 'vehicle')} not tried (the work shared among "
+                         f"them would take {best.plan.total_time / k:.1f} s)")
             break
         if progress is not None:
             progress(f"the launches make {n} vehicles' makespan {best_s:,.1f} s: planning "
                      f"{k} vehicles")
-        r = plan_k(k)
+        try:
+            r = plan_k(k)
+        except ValueError as exc:  # no plan of k vehicles: the plans so far stand
+            notes.append(f"makespan: {counted(k, 'vehicle')} not planned ({exc})")
+            break
         spent += r.plan.evaluations
-        got = flown(r.plan)
-        notes.append(f"makespan: {k} vehicles fly {got:.1f} s")
-        if not got < best_s:
+        got, ok = flown(r.plan)
+        notes.append(f"makespan: {counted(k, 'vehicle')} fly {got:.1f} s"
+                     + ("" if ok or not passed else " (a verdict fails: not kept)"))
+        if not (got < best_s and (ok or not passed)):
             break
         best, best_s = r, got
     best.plan = replace(best.plan, notes=(*best.plan.notes, *notes), evaluations=spent)

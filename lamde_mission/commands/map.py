@@ -193,7 +193,8 @@ def _in_files(problems: list[str], files: list[str]) -> list[str]:
 
     names = [str(f) for f in files] + [Path(f).name for f in files]
     lead = ", ".join(str(f) for f in files)
-    return [p if any(p.startswith(n) for n in names) else f"{lead}: {p}" for p in problems]
+    return [p if any(p.startswith(f"{n}:") for n in names) else f"{lead}: {p}"
+            for p in problems]
 
 
 def _contents(m: Any) -> str:

@@ -642,13 +642,22 @@ def _run_sorties(args: argparse.Namespace, loaded: Any = None) -> int:
     except ValueError as exc:  # more sorties than a sortie directory holds
         print(f"lamde-mission plan: {args.map}: {exc}", file=sys.stderr)
         return 1
+    # the sortie planner's runs: more than one where fewer vehicles were tried
+    runs = sum(n.startswith("makespan: ") and " fly " in n for n in plan.notes)
     if not args.quiet:
         print(f"map '{printable(m.name)}': {counted(len(plan.sorties), 'sortie')} on "
               f"{counted(len(plan.vehicles), 'vehicle')}, objective {goal}, "
               f"{plan.evaluations:,} evaluations in all: the single flight's "
               f"{args.budget:,} (--budget) and pipeline runs of "
               f"{args.sortie_budget or SORTIE_BUDGET:,} on "
-              f"sorties' sensors (--sortie-budget) (seed {args.seed})")
+              f"sorties' sensors (--sortie-budget)"
+              + (f", over {runs} runs of the sortie planner" if runs > 1 else "")
+              + f" (seed {args.seed})")
+        # why the plan flies fewer vehicles than the fleet has, when it does
+        # (`lamde_mission.api._fewer_vehicles`)
+        for note in plan.notes:
+            if note.startswith("makespan: "):
+                print(f"  {note}")
         print("\n".join(_sortie_lines(check, m)))
         if written:
             print(f"wrote {printable(str(out))}/ ({counted(len(check.sorties), 'mission')} and "

@@ -90,7 +90,8 @@ class FleetSettings:
     pad_wh: float = 0.0
 
     @classmethod
-    def from_map(cls, m: Any, goal: str | None = None) -> FleetSettings:
+    def from_map(cls, m: Any, goal: str | None = None,
+                 uavs: int | None = None) -> FleetSettings:
         """From a loaded map with a battery (`Map.usable_energy_wh`, `depots`, `uavs`,
         `swap_s`, `goal`); `goal` overrides the map's. Without `fleet.depots` the depots are
         the map's start ("home", where every vehicle starts) and, when it differs, its end.
@@ -100,6 +101,9 @@ class FleetSettings:
         Args:
             m: a loaded map (`planner_core.model.mapio.Map`).
             goal: "total" or "makespan"; None takes the map's `fleet.goal`.
+            uavs: the vehicles a plan may fly, at most the map's `fleet.uavs` (None: all of
+                them); the pads stay the map's layout for its whole fleet (`Map.vehicle_pads`),
+                the ones its files and `verify` give each vehicle.
 
         Returns:
             The settings.
@@ -114,8 +118,9 @@ class FleetSettings:
         if goal not in ("total", "makespan"):
             raise ValueError(f"goal: must be 'total' or 'makespan', got {goal!r}")
         names, dep, starts = m.sortie_sites
+        n = int(m.uavs) if uavs is None else max(1, min(int(uavs), int(m.uavs)))
         st = cls(depot_names=tuple(names), depots=dep, start_depots=starts,
-                 uavs=int(m.uavs), swap_s=float(m.swap_s), usable_wh=float(usable),
+                 uavs=n, swap_s=float(m.swap_s), usable_wh=float(usable),
                  power=m.power, uav=m.spec.uav, alpha=float(m.spec.objective.alpha),
                  goal=goal)  # fmt: skip
         if st.uavs < 2:

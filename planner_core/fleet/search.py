@@ -128,14 +128,15 @@ class _Planner:
     """One fleet planning run: the map, its planning map's problem, settings, counters."""
 
     def __init__(self, m: Any, config: Any, goal: str | None, sortie_budget: int,
-                 pad_wh: float | None = None) -> None:
+                 pad_wh: float | None = None, uavs: int | None = None) -> None:
         from planner_core.model.problem import Problem
 
         self.m = m
+        self.uavs = uavs
         self.pm = m.planning_map()
         self.problem = Problem(self.pm, variable_length=config.variable_length)
         self.model = self.problem.model
-        self.st = FleetSettings.from_map(m, goal)
+        self.st = FleetSettings.from_map(m, goal, uavs)
         if pad_wh is not None:  # less kept back for the pads: `_finish` pins and re-times
             self.st = replace(self.st, pad_wh=min(float(pad_wh), self.st.pad_wh))
         self.config = config
@@ -436,7 +437,7 @@ class _Planner:
         if not np.isfinite(self.st.usable_wh) or not len(single[0]):
             return None
         reserve = float(self.m.battery_reserve)
-        full = FleetSettings.from_map(self.m, self.st.goal).pad_wh
+        full = FleetSettings.from_map(self.m, self.st.goal, self.uavs).pad_wh
         allowances = sorted({0.0, float(full)})
         top = ENDURANCE_MAX_S
 
@@ -864,8 +865,8 @@ class _OffPads(Exception):
         self.excess = float(excess)
 
 
-def _next_allowance(m: Any, goal: str | None,
-                    tried: list[tuple[float, float]]) -> float | None:
+def _next_allowance(m: Any, goal: str | None, tried: list[tuple[float, float]],
+                    uavs: int | None = None) -> float | None:
     """The pads' allowance (Wh kept back per sortie) to plan with next (`plan_fleet`,
     `route_first`): none first (a vehicle alone at its depots stands on them; a little slack
     often fits the others' pads); after a plan that did not fit its pads, a half again what
@@ -876,11 +877,12 @@ def _next_allowance(m: Any, goal: str | None,
         m: the map.
         goal: the objective (for the settings).
         tried: (allowance planned with, Wh its worst sortie was over on its pads) so far.
+        uavs: the vehicles the plan may fly (`FleetSettings.from_map`).
 
     Returns:
         Wh, or None when the full allowance was tried.
     """
-    full = FleetSettings.from_map(m, goal).pad_wh
+    full = FleetSettings.from_map(m, goal, uavs).pad_wh
     if not tried:
         return 0.0
     last, excess = tried[-1]
@@ -913,7 +915,8 @@ def _finish(pl: _Planner, plan: FleetPlan, notes: list[str]) -> FleetPlan:
 
 
 def route_first(
-    m: Any, config: Any, *, goal: str | None = None, sortie_budget: int = SORTIE_BUDGET
+    m: Any, config: Any, *, goal: str | None = None, sortie_budget: int = SORTIE_BUDGET,
+    uavs: int | None = None,
 ) -> FleetResult:
     """Route first, cluster second (the benchmark's peer; module docstring, steps 1-2): the
     single-flight plan's tour cut into battery-sized sorties with returns to the depots,
@@ -925,6 +928,7 @@ def route_first(
         goal: "total" or "makespan" (default the map's `objective.goal`).
         sortie_budget: unused here (the peer plans no sortie on its own); kept so both
             planners take the same arguments.
+        uavs: the vehicles it may fly, at most the map's `fleet.uavs` (None: all).
 
     Returns:
         The `FleetResult` (its `peer` is None).
@@ -934,8 +938,8 @@ def route_first(
             reaches and returns from with its hover time), naming the problem.
     """
     tried: list[tuple[float, float]] = []
-    while (pad_wh := _next_allowance(m, goal, tried)) is not None:
-        pl = _Planner(m, config, goal, sortie_budget, pad_wh=pad_wh)
+    while (pad_wh := _next_allowance(m, goal, tried, uavs)) is not None:
+        pl = _Planner(m, config, goal, sortie_budget, pad_wh=pad_wh, uavs=uavs)
         single = pl.single()
         if single is None:
             raise ValueError("plan: the single flight found no feasible plan to cut into "
@@ -960,6 +964,7 @@ def plan_fleet(
     sortie_budget: int = SORTIE_BUDGET,
     rounds: int = ROUNDS,
     progress: Callable[..., None] | None = None,
+    uavs: int | None = None,
 ) -> FleetResult:
     """The sortie planner (module docstring): sorties and vehicles for a map with a battery.
 
@@ -970,6 +975,10 @@ def plan_fleet(
         goal: "total" or "makespan" (default the map's `objective.goal`).
         sortie_budget: evaluations of each pipeline run on one sortie's or depot's sensors.
         rounds: improving rounds at most (0: the better start only).
+        uavs: the vehicles the plan may fly, at most the map's `fleet.uavs` (None: all of
+            them), each on its pad of the map's layout for the whole fleet (what its files
+            and `verify` give it; `lamde_mission.plan_fleet` plans fewer vehicles where their
+            staggered launches make the fleet finish sooner).
         progress: called with a line saying what the search does next, at each phase (the
             single flight, the starts, each round, the pads) and, with `step=True`, at each
             move of a round (a terminal shows those; a log needs only the phases); None:
@@ -1000,10 +1009,10 @@ def plan_fleet(
     # only when no re-timing fits them on their pads, planned again with the pads' allowance
     # kept back from every sortie's battery (`FleetSettings.pad_wh`), which always fits
     tried: list[tuple[float, float]] = []
-    while (pad_wh := _next_allowance(m, goal, tried)) is not None:
+    while (pad_wh := _next_allowance(m, goal, tried, uavs)) is not None:
         try:
             return _plan_fleet(m, config, goal, sortie_budget, rounds, pad_wh=pad_wh,
-                               progress=progress)
+                               progress=progress, uavs=uavs)
         except _OffPads as off:
             tried.append((pad_wh, off.excess))
             if progress is not None:
@@ -1013,13 +1022,15 @@ def plan_fleet(
 
 
 def _plan_fleet(m: Any, config: Any, goal: str | None, sortie_budget: int, rounds: int, *,
-                pad_wh: float, progress: Callable[..., None] | None = None) -> FleetResult:
-    """`plan_fleet`'s search with `pad_wh` kept back for the pads (`_Planner`)."""
+                pad_wh: float, progress: Callable[..., None] | None = None,
+                uavs: int | None = None) -> FleetResult:
+    """`plan_fleet`'s search with `pad_wh` kept back for the pads (`_Planner`), flying at
+    most `uavs` vehicles (None: the map's)."""
     def say(line: str, step: bool = False) -> None:
         if progress is not None:
             progress(line, step=step)
 
-    pl = _Planner(m, config, goal, sortie_budget, pad_wh=pad_wh)
+    pl = _Planner(m, config, goal, sortie_budget, pad_wh=pad_wh, uavs=uavs)
     say(f"the single flight ({config.budget:,} evaluations)")
     single = pl.single()
     notes: list[str] = []
@@ -1040,7 +1051,8 @@ def _plan_fleet(m: Any, config: Any, goal: str | None, sortie_budget: int, round
         peer_plan = (_finish(pl, peer, ["route first, cluster second"]) if peer is not None
                      else None)  # fmt: skip
     except _OffPads:  # the peer on its own, which keeps the allowance where it must
-        peer_plan = route_first(m, config, goal=goal, sortie_budget=sortie_budget).plan
+        peer_plan = route_first(m, config, goal=goal, sortie_budget=sortie_budget,
+                                uavs=uavs).plan
     for rnd in range(int(rounds)):
         before = best.objective()
         say(f"round {rnd + 1} of at most {int(rounds)} (objective {before[0]:,.1f}, "

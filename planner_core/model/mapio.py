@@ -890,23 +890,6 @@ class Map:
         d["origin"] = {"lat": lat, "lon": lon, "alt": alt}
         return load_map(d)
 
-    def with_uavs(self, uavs: int) -> Map:
-        """This map with `fleet.uavs` set to `uavs` (the same depots, battery and the rest).
-
-        Args:
-            uavs: the UAVs flying at once, in `fleet.uavs`' range.
-
-        Returns:
-            A new, validated Map (`load_map`).
-
-        Raises:
-            MapError: `uavs` out of range.
-        """
-        d = self.spec.model_dump(mode="json")
-        _drop_unset_energy_fields(self.spec, d)
-        d["fleet"] = {**(d.get("fleet") or {}), "uavs": int(uavs)}
-        return load_map(d)
-
     def planning_map(self) -> Map:
         """The map the optimiser plans on: obstacles inflated by their clearance (plus
         `CLEARANCE_PAD`; circles exactly, other shapes by `outer_offset`, which holds every
