@@ -531,6 +531,7 @@ def test_cli_bench_then_report(suite: Path, tmp_path: Path) -> None:
     assert main(["bench", "--suite", str(suite), "--budget", "50", "--out", str(out)]) == 2
 
 
+@pytest.mark.slow  # measured 8 s beside a CI run (issue 35: default suite <= 5 min)
 def test_report_names_the_reference_it_falls_back_to(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """`report DIR` without --reference on records with no de-adaptive run took the first
@@ -762,6 +763,7 @@ def test_a_run_compiles_its_kernels_before_its_timer_starts_once_per_process(
                       "run lsrtde", "run de-fixed"]
 
 
+@pytest.mark.slow  # measured 4.5 s beside a CI run (issue 35: default suite <= 5 min)
 def test_report_keeps_its_lower_bounds_in_the_run_folder_not_beside_the_suite(
         suite: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """A report on a suite without a lower-bound cache wrote `<suite>_lower_bounds.json` beside

@@ -130,6 +130,7 @@ def _saved_layout(fig: Any, path: Path) -> dict[str, Any]:
             "legend": fig.legends[0].get_window_extent(r)}
 
 
+@pytest.mark.slow  # measured 5.4 s beside a CI run (issue 35: default suite <= 5 min)
 def test_paths_figure_of_few_tasks_keeps_its_rows_apart(tmp_path: Path,
                                                         monkeypatch: pytest.MonkeyPatch) -> None:
     """`report`'s best paths on 2 tasks: the top row's "x east (km)" overprinted the bottom
