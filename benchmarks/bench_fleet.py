@@ -105,7 +105,7 @@ def run(maps: list[str], seeds: list[int], out: Path, dirs: Path, endurance: flo
                             "swaps": p.swaps, "energy_ok": p.energy_ok(),
                             "evaluations": p.evaluations, "chained": p.chained(),
                             "sim_passed": chk.passed, "sim_total_s": chk.total_s,
-                            "sim_makespan_s": max(chk.makespan(v) for v in chk.vehicles()),
+                            "sim_makespan_s": chk.fleet_makespan[0],
                             "max_energy_frac": max(s.verdicts.energy_wh / s.verdicts.usable_wh
                                                    for s in chk.sorties),
                         }  # fmt: skip

@@ -335,7 +335,7 @@ def test_the_makespan_goal_plans_fewer_vehicles_when_the_launches_would_wait(tmp
     doc["fleet"]["uavs"] = 3
     m = load_map(doc)
 
-    def flown(plan) -> float:
+    def flown(plan) -> float:  # the latest landing, from the vehicles' own makespans
         check = launch_check(plan, m)
         return max(check.makespan(v) for v in check.vehicles())
 
